@@ -1,0 +1,132 @@
+"""Command line: `spectrace render | devices | bench`. Errors print as one line and exit non-zero."""
+
+import json
+import signal
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from spectrace.errors import SpectraceError
+
+app = typer.Typer(
+    help="spectrace: a physically based spectral path tracer (OpenCL on CPU or GPU).",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console(stderr=True)
+
+DeviceOption = Annotated[
+    Optional[str],
+    typer.Option("--device", "-d", help="Device key or substring (see `spectrace devices`); env SPECTRACE_DEVICE."),
+]
+
+
+def _interrupt_on_sigterm(signum, frame) -> None:
+    # SIGTERM ends a render like Ctrl-C does: the finished passes are still written.
+    raise KeyboardInterrupt
+
+
+@app.command()
+def render(
+    scene: Annotated[Path, typer.Argument(help="Scene file (TOML).")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="Output image: .png (sRGB) or .exr (linear).")],
+    spp: Annotated[Optional[int], typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
+    width: Annotated[Optional[int], typer.Option(help="Film width in pixels.", min=1)] = None,
+    height: Annotated[Optional[int], typer.Option(help="Film height in pixels.", min=1)] = None,
+    seed: Annotated[Optional[int], typer.Option(help="Sampler seed.", min=0)] = None,
+    max_depth: Annotated[Optional[int], typer.Option(help="Path segments from the camera; -1 = unbounded.")] = None,
+    device: DeviceOption = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+) -> None:
+    """Render SCENE to an image. Ctrl-C or SIGTERM stops early and still writes the samples done so far."""
+    from spectrace.render.renderer import Renderer
+    from spectrace.scene import load_scene
+
+    loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth)
+    renderer = Renderer(loaded, device)
+    console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False)
+    signal.signal(signal.SIGTERM, _interrupt_on_sigterm)
+    interrupted = False
+    with Progress(
+        TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
+        TimeElapsedColumn(), TimeRemainingColumn(), console=console, disable=quiet,
+    ) as bar:
+        task = bar.add_task("render", total=loaded.spp)
+        try:
+            renderer.render(progress=lambda done, total: bar.update(task, completed=done))
+        except KeyboardInterrupt:
+            interrupted = True
+    image = renderer.image()
+    if image.spp == 0:
+        raise SpectraceError("interrupted before the first pass finished; nothing written")
+    image.write(output)
+    pixels = image.width * image.height * image.spp
+    note = " (interrupted: partial image)" if interrupted else ""
+    console.print(
+        f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
+        f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}",
+        highlight=False,
+    )
+    if image.dropped_samples:
+        console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
+    if interrupted:
+        raise typer.Exit(130)
+
+
+@app.command()
+def devices(as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False) -> None:
+    """List every OpenCL platform and device found, with the build probe's result or why it failed."""
+    from dataclasses import asdict
+
+    from spectrace.device import device_table, discover_devices
+
+    reports = discover_devices()
+    if as_json:
+        print(json.dumps({"devices": [asdict(r) for r in reports]}, indent=2))
+        return
+    Console().print(device_table(reports))
+    if not any(r.ok for r in reports):
+        from spectrace.device import NoWorkingDeviceError
+
+        raise NoWorkingDeviceError(reports)
+
+
+@app.command()
+def bench(
+    size: Annotated[Optional[list[int]], typer.Option(help="Square image size(s) in pixels.")] = None,
+    spp: Annotated[int, typer.Option(help="Samples per pixel per measurement.", min=1)] = 16,
+    max_depth: Annotated[int, typer.Option(help="Path segments from the camera.")] = 8,
+    scene: Annotated[Optional[Path], typer.Option(help="Scene file (default: the Cornell box).")] = None,
+    device: DeviceOption = None,
+    all_devices: Annotated[bool, typer.Option("--all", help="Every working device in turn.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
+) -> None:
+    """Measure samples/s and rays/s (a benchmark, never a test)."""
+    from spectrace.bench import run_render_bench, render_bench_table
+
+    results = run_render_bench(scene, sizes=size or [256, 512], spp=spp, max_depth=max_depth, device=device,
+                               all_devices=all_devices, log=lambda text: console.print(text, highlight=False))
+    if as_json:
+        print(json.dumps({"render": results}, indent=2))
+    else:
+        Console().print(render_bench_table(results))
+
+
+def main() -> None:
+    try:
+        app()
+    except SpectraceError as exc:
+        console.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        console.print("interrupted", highlight=False)
+        sys.exit(130)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,212 @@
+"""An opened OpenCL device and its kernel builds, with an on-disk cache of program binaries.
+
+A binary is reused only when everything that could change it is unchanged: every ``*.cl``/``*.h`` file
+in the kernels folder, the entry file, the build options (defines included) and the device's identity
+(platform name and version, device name, driver version). pyopencl's own cache is bypassed so that only
+this one decides.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import re
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import pyopencl as cl
+
+from spectrace import resources
+from spectrace.device.discovery import cache_root
+from spectrace.device.report import DeviceReport
+from spectrace.errors import SpectraceError
+
+_CACHE_FORMAT = b"spectrace-program-cache-v1"
+_BASE_OPTIONS = ("-cl-std=CL1.2",)  # no -cl-fast-relaxed-math: the kernels rely on IEEE inf/nan
+_LOG_LINES = 40
+_DEFINE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+DefineValue = int | float | str
+
+
+class KernelBuildError(SpectraceError):
+    """The OpenCL compiler rejected a program; ``build_log`` holds its first lines."""
+
+    def __init__(self, message: str, build_log: str, where: str | None = None):
+        self.build_log = build_log
+        super().__init__(message, where=where)
+
+
+def first_error_line(log: str) -> str | None:
+    """The compiler's first error, without its location prefix: "unknown target CPU 'generic'"."""
+    lines = [line.strip() for line in log.splitlines() if line.strip()]
+    for line in lines:
+        match = re.search(r"error:\s*(.*)", line, flags=re.IGNORECASE)
+        if match and match.group(1):
+            return match.group(1)[:200]
+    return lines[0][:200] if lines else None
+
+
+def compiler_log(program, device) -> str:
+    """What the compiler said while building `program` for `device` (warnings included)."""
+    try:
+        return str(program.get_build_info(device, cl.program_build_info.LOG)).strip()
+    except cl.Error:
+        return ""
+
+
+def _build_quietly(program, device, options: str) -> None:
+    # pyopencl warns on any compiler output ("Compilation started", ...); callers read the log instead.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cl.CompilerWarning)
+        program.build(options.encode(), [device])
+
+
+def compile_source(context, device, source: str, options: str) -> cl.Program:
+    """Build `source` for one device; raises KernelBuildError with the compiler's log."""
+    # The low-level program object builds without pyopencl's cache and without its extra include path.
+    program = cl._cl._Program(context, source)  # noqa: SLF001
+    try:
+        _build_quietly(program, device, options)
+    except cl.Error as error:
+        log = compiler_log(program, device) or str(error)
+        raise KernelBuildError(first_error_line(log) or "build failed", log) from None
+    return cl.Program(program)
+
+
+def _load_binary(context, device, binary: bytes, options: str) -> cl.Program | None:
+    try:
+        program = cl._cl._Program(context, [device], [binary])  # noqa: SLF001
+        _build_quietly(program, device, options)
+    except cl.Error:
+        return None  # stale or foreign binary: rebuild from source
+    return cl.Program(program)
+
+
+def kernels_digest(kernels_dir: Path) -> str:
+    """Hash of every ``*.cl`` and ``*.h`` file under `kernels_dir` (names and contents)."""
+    digest = hashlib.sha256()
+    files = sorted(p for p in kernels_dir.rglob("*") if p.suffix in (".cl", ".h") and p.is_file())
+    for path in files:
+        content = path.read_bytes()
+        digest.update(path.relative_to(kernels_dir).as_posix().encode() + b"\0")
+        digest.update(len(content).to_bytes(8, "little") + content)
+    return digest.hexdigest()
+
+
+def _define_value(name: str, value: DefineValue) -> str:
+    if isinstance(value, bool) or isinstance(value, int):
+        return str(int(value))
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise SpectraceError(f"kernel define {name}={value} is not a finite number")
+        return f"{value!r}f"  # a float literal: double literals need fp64 in OpenCL C 1.2
+    if isinstance(value, str) and value and not any(c.isspace() for c in value):
+        return value
+    raise SpectraceError(f"kernel define {name}={value!r} must be an int, a float or a string without spaces")
+
+
+def build_options(kernels_dir: Path, defines: dict[str, DefineValue] | None, extra: list[str] | None) -> str:
+    include_dir = str(kernels_dir)
+    if any(c.isspace() for c in include_dir):
+        include_dir = f'"{include_dir}"'
+    options = [*_BASE_OPTIONS, "-I", include_dir]
+    for name in sorted(defines or {}):
+        if not _DEFINE_NAME.fullmatch(name):
+            raise SpectraceError(f"kernel define name '{name}' is not a C identifier")
+        options += ["-D", f"{name}={_define_value(name, defines[name])}"]
+    return " ".join(options + list(extra or []))
+
+
+def device_identity(report: DeviceReport) -> str:
+    return "\n".join((report.platform_name, report.platform_version, report.device_name, report.driver_version))
+
+
+def program_cache_key(sources_digest: str, entry: str, options: str, identity: str) -> str:
+    digest = hashlib.sha256(_CACHE_FORMAT)
+    for part in (sources_digest, entry, options, identity):
+        digest.update(b"\0" + part.encode())
+    return digest.hexdigest()[:40]
+
+
+def program_cache_dir() -> Path:
+    return cache_root() / "kernels"
+
+
+def _write_atomically(path: Path, data: bytes) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(prefix=f".{path.name}-", dir=path.parent)
+        with os.fdopen(handle, "wb") as stream:
+            stream.write(data)
+        os.replace(temporary, path)  # readers see the old file or the whole new one, never a part
+    except OSError:
+        pass  # an unwritable cache costs a rebuild next time, nothing more
+
+
+def _program_binary(program: cl.Program) -> bytes | None:
+    try:
+        binaries = program.get_info(cl.program_info.BINARIES)
+    except cl.Error:
+        return None
+    return bytes(binaries[0]) if binaries and binaries[0] else None
+
+
+class Device:
+    """One opened OpenCL device: its context, in-order queue, report, and cached program builds."""
+
+    def __init__(self, report: DeviceReport, cl_device: cl.Device):
+        self.report = report
+        self.cl_device = cl_device
+        self.context = cl.Context([cl_device])
+        self.queue = cl.CommandQueue(self.context)
+        self.last_build_seconds: float | None = None
+        self.last_build_cached: bool | None = None
+        self.last_build_log: str = ""  # the compiler's messages of the last source build
+
+    def __repr__(self) -> str:
+        return f"Device({self.report.key!r}, {self.report.device_name!r})"
+
+    def build_program(self, entry: str, defines: dict[str, DefineValue] | None = None,
+                      options: list[str] | None = None) -> cl.Program:
+        """Build ``kernels/<entry>`` with ``-I kernels`` and ``-D name=value`` for each define, reusing a
+        cached binary when sources, options and device are unchanged."""
+        started = time.perf_counter()
+        kernels_dir = resources.kernels_dir()
+        if not (kernels_dir / entry).is_file():
+            raise SpectraceError(f"kernel file '{entry}' not found in the kernels folder", where=entry)
+        option_text = build_options(kernels_dir, defines, options)
+        sources_digest = kernels_digest(kernels_dir)
+        key = program_cache_key(sources_digest, entry, option_text, device_identity(self.report))
+        cache_file = program_cache_dir() / f"{key}.bin"
+
+        program = None
+        if cache_file.is_file():
+            try:
+                program = _load_binary(self.context, self.cl_device, cache_file.read_bytes(), option_text)
+            except OSError:
+                program = None
+        cached = program is not None
+        if program is None:
+            program = self._build_from_source(entry, sources_digest, option_text)
+            self.last_build_log = compiler_log(program, self.cl_device)
+            binary = _program_binary(program)
+            if binary is not None:
+                _write_atomically(cache_file, binary)
+        self.last_build_seconds = time.perf_counter() - started
+        self.last_build_cached = cached
+        return program
+
+    def _build_from_source(self, entry: str, sources_digest: str, option_text: str) -> cl.Program:
+        # Including the entry (rather than pasting its text) keeps file names in compiler messages; the
+        # digest line makes any runtime's own source-keyed cache miss when an included header changes.
+        source = f'// spectrace kernels {sources_digest}\n#include "{entry}"\n'
+        try:
+            return compile_source(self.context, self.cl_device, source, option_text)
+        except KernelBuildError as error:
+            log = "\n".join(error.build_log.splitlines()[:_LOG_LINES])
+            raise KernelBuildError(f"kernel build failed on {self.report.key}: {error.message}\n{log}",
+                                   log, where=entry) from None

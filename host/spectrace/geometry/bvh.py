@@ -1,0 +1,474 @@
+"""Bounding volume hierarchy over triangles: a binned surface-area-heuristic build, vectorised with numpy.
+
+The tree is built breadth-first, one level at a time. Every node of a level is binned in the same numpy
+calls (each triangle carries the id of its node), so the Python work per level is a fixed number of array
+operations, whatever the number of nodes or triangles in it.
+
+Method: binned SAH over centroid bounds (Wald 2007, "On fast construction of SAH-based bounding volume
+hierarchies"; pbrt-v4, Sec. 7.3.2). Cost model: traversing a node costs 1, intersecting a triangle costs 1,
+so a split of node N into L and R costs 1 + (A(L) |L| + A(R) |R|) / A(N) against |N| for a leaf. A node
+becomes a leaf when it holds <= max_leaf_size triangles or no split beats the leaf, except that nodes above
+FORCED_SPLIT_LEAF_SIZE are always split. Where binning cannot separate the centroids (all coincide), or where
+the depth left before MAX_DEPTH runs short, the node is split at its centroid median instead.
+
+Layout (mirrors `BVHNode` in kernels/types.h): an interior node has count == 0 and its children at
+left_first and left_first + 1; a leaf has count > 0 triangles in slots prim_order[left_first : left_first +
+count]. Node 0 is the root. Bounds are float32 rounded outward, so they contain their float64 triangles and
+also those triangles' vertices rounded to the nearest float32.
+"""
+
+from dataclasses import dataclass
+from time import perf_counter
+
+import numpy as np
+
+BVH_NODE_DTYPE = np.dtype(
+    {
+        "names": ["bmin", "left_first", "bmax", "count"],
+        "formats": [("<f4", (3,)), "<i4", ("<f4", (3,)), "<i4"],
+        "offsets": [0, 12, 16, 28],
+        "itemsize": 32,
+    }
+)
+
+# Deepest root-to-leaf path, in edges, that the kernel's fixed traversal stack can hold.
+MAX_DEPTH = 64
+# Above this many triangles a node is split even where the SAH prefers a leaf, so leaf loops stay short.
+FORCED_SPLIT_LEAF_SIZE = 16
+# Nodes x bins evaluated per binning pass; bounds the temporary per-bin arrays to a few MB.
+_SAH_CHUNK_BIN_ENTRIES = 1 << 18
+
+
+@dataclass
+class BVH:
+    nodes: np.ndarray  # (K,) BVH_NODE_DTYPE, node 0 is the root
+    prim_order: np.ndarray  # (M,) int32: triangle index held by each leaf slot
+    depth: int  # edges on the longest root-to-leaf path (a root leaf has depth 0)
+    sah_cost: float  # see sah_cost()
+    build_seconds: float
+
+
+@dataclass
+class _Level:
+    """The triangles still to be split, grouped by node, with everything the binning reads."""
+
+    triangle_ids: np.ndarray  # (A,) int32
+    boxes: np.ndarray  # (6, A) float32 rows: min x, y, z, max x, y, z (rounded outward)
+    centroids: np.ndarray  # (3, A) float32, centres of the boxes
+    counts: np.ndarray  # (N,) int64 triangles per node, every one >= 1
+    slot_offsets: np.ndarray  # (N,) int64 first prim_order slot of each node
+
+
+@dataclass
+class _SplitPlan:
+    """Per-node outcome of the binned SAH: the cheapest split plane, as an axis and a last left bin."""
+
+    cost: np.ndarray  # (N,) float64 sum A(child) |child| of the best split, inf where none is valid
+    axis: np.ndarray  # (N,) int64
+    last_left_bin: np.ndarray  # (N,) int64
+
+
+@dataclass
+class _LevelSplits:
+    """What happens to each node of a level, and the binning that the partition must repeat exactly."""
+
+    is_split: np.ndarray  # (N,) bool: interior node (else leaf)
+    use_median: np.ndarray  # (N,) bool: split at the centroid median of widest_axis instead of the SAH plane
+    plan: _SplitPlan
+    bin_origin: np.ndarray  # (N, 3) float64 low corner of the centroid bounds
+    bin_scale: np.ndarray  # (N, 3) float64 bins per unit length (0 on axes where all centroids coincide)
+    widest_axis: np.ndarray  # (N,) int64 axis of the largest centroid extent
+
+
+def build_bvh(
+    v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf_size: int = 4, bins: int = 16
+) -> BVH:
+    """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units."""
+    start = perf_counter()
+    if max_leaf_size < 1:
+        raise ValueError(f"max_leaf_size must be >= 1, got {max_leaf_size}")
+    if bins < 2:
+        raise ValueError(f"bins must be >= 2, got {bins}")
+    boxes = _triangle_boxes_float32(v0, v1, v2)
+    triangle_count = boxes.shape[1]
+    forced_split_above = max(FORCED_SPLIT_LEAF_SIZE, max_leaf_size)
+
+    prim_order = np.empty(triangle_count, dtype=np.int32)
+    level = _Level(
+        triangle_ids=np.arange(triangle_count, dtype=np.int32),
+        boxes=boxes,
+        centroids=0.5 * (boxes[:3] + boxes[3:]),
+        counts=np.array([triangle_count], dtype=np.int64),
+        slot_offsets=np.zeros(1, dtype=np.int64),
+    )
+    level_nodes = []
+    first_node_of_level = 0
+    depth = -1
+    while level is not None:
+        depth += 1
+        nodes, level = _build_level(
+            level, depth, first_node_of_level, prim_order, max_leaf_size, forced_split_above, bins
+        )
+        level_nodes.append(nodes)
+        first_node_of_level += nodes.size
+    all_nodes = np.concatenate(level_nodes)
+    return BVH(
+        nodes=all_nodes,
+        prim_order=prim_order,
+        depth=depth,
+        sah_cost=sah_cost(all_nodes),
+        build_seconds=perf_counter() - start,
+    )
+
+
+def sah_cost(nodes: np.ndarray) -> float:
+    """Expected cost of a random ray: sum over interior nodes A(n)/A(root) + sum over leaves A(l)/A(root) * count.
+
+    A flat or point-like root (area 0) is scored with every area ratio equal to 1, the limit of shrinking a
+    scene uniformly."""
+    areas = _box_areas(nodes["bmin"].astype(np.float64), nodes["bmax"].astype(np.float64))
+    counts = nodes["count"].astype(np.float64)
+    per_node_cost = np.where(counts > 0, counts, 1.0)
+    root_area = areas[0]
+    if root_area <= 0.0:
+        return float(per_node_cost.sum())
+    return float((areas / root_area * per_node_cost).sum())
+
+
+def _triangle_boxes_float32(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
+    """(6, M) float32 triangle bounds, min rounded down and max rounded up so they hold the exact triangle."""
+    corners = [np.asarray(v, dtype=np.float64) for v in (v0, v1, v2)]
+    shape = corners[0].shape
+    if len(shape) != 2 or shape[1] != 3 or shape[0] == 0 or any(c.shape != shape for c in corners):
+        raise ValueError(f"build_bvh needs three (M, 3) vertex arrays with M >= 1, got {[c.shape for c in corners]}")
+    boxes = np.empty((6, shape[0]), dtype=np.float32)
+    # One coordinate at a time keeps the float64 temporaries to a single column.
+    for axis in range(3):
+        a, b, c = (corner[:, axis] for corner in corners)
+        if not (np.isfinite(a).all() and np.isfinite(b).all() and np.isfinite(c).all()):
+            raise ValueError("build_bvh got NaN or infinite vertex coordinates")
+        boxes[axis] = _round_float32(np.minimum(np.minimum(a, b), c), toward=-np.inf)
+        boxes[axis + 3] = _round_float32(np.maximum(np.maximum(a, b), c), toward=np.inf)
+    return boxes
+
+
+def _round_float32(values: np.ndarray, toward: float) -> np.ndarray:
+    """float64 -> float32, rounding toward -inf or +inf instead of to nearest."""
+    rounded = values.astype(np.float32)
+    overshot = rounded > values if toward < 0 else rounded < values
+    return np.where(overshot, np.nextafter(rounded, np.float32(toward)), rounded)
+
+
+def _box_areas(low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """Surface areas of boxes given as (..., 3) corner arrays, in float64."""
+    extent = np.maximum(high - low, 0.0)
+    x, y, z = extent[..., 0], extent[..., 1], extent[..., 2]
+    return 2.0 * (x * y + y * z + z * x)
+
+
+def _levels_to_leaf_by_halving(counts: np.ndarray, max_leaf_size: int) -> np.ndarray:
+    """Levels of object-median splits needed until every piece holds <= max_leaf_size triangles."""
+    pieces = -(-counts // max_leaf_size)
+    return np.ceil(np.log2(pieces.astype(np.float64))).astype(np.int64)
+
+
+def _build_level(
+    level: _Level,
+    depth: int,
+    first_node: int,
+    prim_order: np.ndarray,
+    max_leaf_size: int,
+    forced_split_above: int,
+    bins: int,
+) -> tuple[np.ndarray, "_Level | None"]:
+    """Make the nodes of one tree level; write leaf triangles into prim_order; return the next level."""
+    counts = level.counts
+    node_count = counts.size
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    node_of_triangle = np.repeat(np.arange(node_count, dtype=np.int32), counts)
+
+    nodes = np.zeros(node_count, dtype=BVH_NODE_DTYPE)
+    low = np.stack([np.minimum.reduceat(row, starts) for row in level.boxes[:3]], axis=1)
+    high = np.stack([np.maximum.reduceat(row, starts) for row in level.boxes[3:]], axis=1)
+    nodes["bmin"] = low
+    nodes["bmax"] = high
+
+    splits = _choose_splits(level, starts, low, high, depth, max_leaf_size, forced_split_above, bins)
+
+    _emit_leaves(level, starts, node_of_triangle, ~splits.is_split, prim_order)
+    nodes["count"] = np.where(splits.is_split, 0, counts)
+    nodes["left_first"] = level.slot_offsets
+    split_nodes = np.flatnonzero(splits.is_split)
+    if split_nodes.size == 0:
+        return nodes, None
+
+    if splits.use_median.any():
+        _sort_median_nodes_along_widest_axis(level, node_of_triangle, splits)
+    goes_right = _triangle_sides(level, starts, node_of_triangle, splits, bins)
+
+    first_child = first_node + node_count
+    nodes["left_first"][split_nodes] = first_child + 2 * np.arange(split_nodes.size)
+    return nodes, _partition(level, starts, splits.is_split, goes_right)
+
+
+def _choose_splits(
+    level: _Level,
+    starts: np.ndarray,
+    low: np.ndarray,
+    high: np.ndarray,
+    depth: int,
+    max_leaf_size: int,
+    forced_split_above: int,
+    bins: int,
+) -> _LevelSplits:
+    """Decide per node: leaf, SAH split, or object-median split (when binning cannot separate or depth runs out)."""
+    counts = level.counts
+    centroid_low = np.stack([np.minimum.reduceat(row, starts) for row in level.centroids], axis=1)
+    centroid_high = np.stack([np.maximum.reduceat(row, starts) for row in level.centroids], axis=1)
+    bin_origin = centroid_low.astype(np.float64)
+    centroid_extent = centroid_high.astype(np.float64) - bin_origin
+    # Finite in float64 even for float32 denormal extents.
+    with np.errstate(divide="ignore"):
+        bin_scale = np.where(centroid_extent > 0.0, bins / centroid_extent, 0.0)
+
+    may_split = counts > max_leaf_size
+    plan = _SplitPlan(
+        cost=np.full(counts.size, np.inf),
+        axis=np.zeros(counts.size, dtype=np.int64),
+        last_left_bin=np.zeros(counts.size, dtype=np.int64),
+    )
+    if may_split.any():
+        _binned_sah(level, may_split, bin_origin, bin_scale, bins, plan)
+
+    node_area = _box_areas(low.astype(np.float64), high.astype(np.float64))
+    # 1 + cost / A(node) < count, written without dividing so flat nodes (area 0) never prefer splitting.
+    sah_prefers_split = plan.cost < (counts - 1) * node_area
+    is_split = may_split & (sah_prefers_split | (counts > forced_split_above))
+    # Halving finishes within MAX_DEPTH from any node that keeps depth + levels_to_leaf <= MAX_DEPTH,
+    # which holds at the root; an SAH split can leave a child nearly as large as its parent, so it is
+    # only allowed while that bound has a level to spare.
+    depth_exhausted = depth + _levels_to_leaf_by_halving(counts, max_leaf_size) >= MAX_DEPTH
+    use_median = is_split & (~np.isfinite(plan.cost) | depth_exhausted)
+    return _LevelSplits(
+        is_split=is_split,
+        use_median=use_median,
+        plan=plan,
+        bin_origin=bin_origin,
+        bin_scale=bin_scale,
+        widest_axis=np.argmax(centroid_extent, axis=1),
+    )
+
+
+def _bin_of(values: np.ndarray, origin: np.ndarray, scale: np.ndarray, bins: int) -> np.ndarray:
+    """Bin index of each centroid coordinate; the one formula both binning and partitioning use."""
+    # Rounding is monotone, so (c - origin) <= extent and the product stays <= bins: the int32 cast is safe.
+    index = (np.subtract(values, origin, dtype=np.float64) * scale).astype(np.int32)
+    return np.minimum(index, bins - 1, out=index)
+
+
+def _binned_sah(
+    level: _Level,
+    may_split: np.ndarray,
+    bin_origin: np.ndarray,
+    bin_scale: np.ndarray,
+    bins: int,
+    plan: _SplitPlan,
+) -> None:
+    """Fill plan for the nodes in may_split, in chunks of nodes so the per-bin arrays stay small."""
+    candidates = np.flatnonzero(may_split)
+    counts = level.counts[candidates]
+    if candidates.size == level.counts.size:
+        centroids, boxes = level.centroids, level.boxes
+    else:
+        keep = np.flatnonzero(np.repeat(may_split, level.counts))
+        centroids, boxes = _take_columns(level.centroids, keep), _take_columns(level.boxes, keep)
+    ends = np.cumsum(counts)
+    nodes_per_chunk = max(1, _SAH_CHUNK_BIN_ENTRIES // bins)
+    for chunk_begin in range(0, candidates.size, nodes_per_chunk):
+        chunk = slice(chunk_begin, min(chunk_begin + nodes_per_chunk, candidates.size))
+        first = int(ends[chunk.start] - counts[chunk.start])
+        last = int(ends[chunk.stop - 1])
+        nodes = candidates[chunk]
+        cost, axis, last_left_bin = _best_binned_split(
+            centroids[:, first:last],
+            boxes[:, first:last],
+            counts[chunk],
+            bin_origin[nodes],
+            bin_scale[nodes],
+            bins,
+        )
+        plan.cost[nodes] = cost
+        plan.axis[nodes] = axis
+        plan.last_left_bin[nodes] = last_left_bin
+
+
+def _best_binned_split(
+    centroids: np.ndarray,
+    boxes: np.ndarray,
+    counts: np.ndarray,
+    bin_origin: np.ndarray,
+    bin_scale: np.ndarray,
+    bins: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Bin every node's triangles on each axis and sweep the bin boundaries for the cheapest SAH split."""
+    node_count = counts.size
+    node_of_triangle = np.repeat(np.arange(node_count, dtype=np.int32), counts)
+    best_cost = np.full(node_count, np.inf)
+    best_axis = np.zeros(node_count, dtype=np.int64)
+    best_bin = np.zeros(node_count, dtype=np.int64)
+    all_nodes = np.arange(node_count)
+    for axis in range(3):
+        bin_index = _bin_of(
+            centroids[axis], np.repeat(bin_origin[:, axis], counts), np.repeat(bin_scale[:, axis], counts), bins
+        )
+        # Node-major keys keep the scattered reductions local in memory; the sweeps then want bin-major rows.
+        node_bin = node_of_triangle.astype(np.intp) * bins + bin_index  # ufunc.at is fastest with intp indices
+        bin_counts = np.bincount(node_bin, minlength=node_count * bins).reshape(node_count, bins).T
+        bin_boxes = np.empty((6, node_count * bins), dtype=np.float32)
+        bin_boxes[:3] = np.inf
+        bin_boxes[3:] = -np.inf
+        for row in range(3):
+            np.minimum.at(bin_boxes[row], node_bin, boxes[row])
+            np.maximum.at(bin_boxes[row + 3], node_bin, boxes[row + 3])
+        bin_boxes = np.ascontiguousarray(bin_boxes.reshape(6, node_count, bins).transpose(0, 2, 1))
+        cost = _split_costs(bin_boxes, np.ascontiguousarray(bin_counts))
+        axis_best_bin = np.argmin(cost, axis=0)
+        axis_best_cost = cost[axis_best_bin, all_nodes]
+        better = axis_best_cost < best_cost
+        best_cost[better] = axis_best_cost[better]
+        best_axis[better] = axis
+        best_bin[better] = axis_best_bin[better]
+    return best_cost, best_axis, best_bin
+
+
+def _split_costs(bin_boxes: np.ndarray, bin_counts: np.ndarray) -> np.ndarray:
+    """(bins-1, N) cost A(L)|L| + A(R)|R| of splitting after each bin; inf where a side would be empty.
+
+    bin_boxes is (6, bins, N) (min xyz, max xyz; an empty bin is the +inf/-inf box), bin_counts (bins, N)."""
+    bins = bin_counts.shape[0]
+    # Running unions from the left (bins 0..k) and from the right (bins k+1..); a Python loop over the few
+    # bins is far faster than ufunc.accumulate along a short axis.
+    left = np.empty_like(bin_boxes[:, :-1])
+    right = np.empty_like(bin_boxes[:, :-1])
+    left[:, 0] = bin_boxes[:, 0]
+    right[:, -1] = bin_boxes[:, -1]
+    for k in range(1, bins - 1):
+        _union(left[:, k - 1], bin_boxes[:, k], out=left[:, k])
+        _union(right[:, -k], bin_boxes[:, -k - 1], out=right[:, -k - 1])
+    left_count = np.cumsum(bin_counts, axis=0)[:-1]
+    right_count = bin_counts.sum(axis=0) - left_count
+    with np.errstate(invalid="ignore"):
+        cost = _row_box_areas(left) * left_count + _row_box_areas(right) * right_count
+    return np.where((left_count > 0) & (right_count > 0), cost, np.inf)
+
+
+def _union(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """Union of boxes stored as (6, ...) rows: min xyz then max xyz."""
+    np.minimum(a[:3], b[:3], out=out[:3])
+    np.maximum(a[3:], b[3:], out=out[3:])
+
+
+def _row_box_areas(boxes: np.ndarray) -> np.ndarray:
+    """Surface areas (float64) of boxes stored as (6, ...) rows; the empty box gives +inf."""
+    x, y, z = (boxes[3:] - boxes[:3]).astype(np.float64)
+    return 2.0 * (x * y + y * z + z * x)
+
+
+def _emit_leaves(
+    level: _Level, starts: np.ndarray, node_of_triangle: np.ndarray, is_leaf: np.ndarray, prim_order: np.ndarray
+) -> None:
+    """Write the triangles of this level's leaves into their prim_order slots."""
+    in_leaf = is_leaf[node_of_triangle]
+    if not in_leaf.any():
+        return
+    triangles = np.flatnonzero(in_leaf)
+    nodes = node_of_triangle[triangles]
+    slots = level.slot_offsets[nodes] + (triangles - starts[nodes])
+    prim_order[slots] = level.triangle_ids[triangles]
+
+
+def _sort_median_nodes_along_widest_axis(level: _Level, node_of_triangle: np.ndarray, splits: _LevelSplits) -> None:
+    """Order the triangles of median-split nodes by centroid along the node's widest centroid axis, in place."""
+    triangles = np.flatnonzero(splits.use_median[node_of_triangle])
+    nodes = node_of_triangle[triangles]
+    coordinate = level.centroids[splits.widest_axis[nodes], triangles]
+    # Nodes occupy contiguous runs, so sorting by (node, coordinate) keeps each triangle inside its own run.
+    order = triangles[np.lexsort((coordinate, nodes))]
+    level.triangle_ids[triangles] = level.triangle_ids[order]
+    level.boxes[:, triangles] = _take_columns(level.boxes, order)
+    level.centroids[:, triangles] = _take_columns(level.centroids, order)
+
+
+def _triangle_sides(
+    level: _Level, starts: np.ndarray, node_of_triangle: np.ndarray, splits: _LevelSplits, bins: int
+) -> np.ndarray:
+    """True for each triangle that goes to the right child of its node (meaningless for leaves)."""
+    counts, plan = level.counts, splits.plan
+    triangle_count = node_of_triangle.size
+    nodes = np.arange(counts.size)
+    # Per-node values spread with np.repeat, and the centroids read through a flat index: both much
+    # cheaper than fancy indexing with a per-triangle node id.
+    axis = np.repeat(plan.axis, counts)
+    coordinate = np.take(level.centroids.ravel(), axis * triangle_count + np.arange(triangle_count))
+    bin_index = _bin_of(
+        coordinate,
+        np.repeat(splits.bin_origin[nodes, plan.axis], counts),
+        np.repeat(splits.bin_scale[nodes, plan.axis], counts),
+        bins,
+    )
+    goes_right = bin_index > np.repeat(plan.last_left_bin, counts)
+
+    median_triangles = np.flatnonzero(np.repeat(splits.use_median, counts))
+    median_nodes = node_of_triangle[median_triangles]
+    goes_right[median_triangles] = (median_triangles - starts[median_nodes]) >= counts[median_nodes] // 2
+    return goes_right
+
+
+def _partition(level: _Level, starts: np.ndarray, is_split: np.ndarray, goes_right: np.ndarray) -> _Level:
+    """Stable partition of the split nodes' triangles into (node, side) runs: the next level's input."""
+    counts = level.counts
+    # int32 throughout: these per-triangle arrays dominate the builder's peak memory.
+    rights_before = np.cumsum(goes_right, dtype=np.int32)
+    rights_before -= goes_right  # right-going triangles before each one, level-wide
+    right_counts = np.append(rights_before[starts[1:]], rights_before[-1] + goes_right[-1]) - rights_before[starts]
+    left_counts = counts - right_counts
+    split_nodes = np.flatnonzero(is_split)
+    child_counts = np.stack([left_counts[split_nodes], right_counts[split_nodes]], axis=1).ravel()
+    child_starts = np.concatenate(([0], np.cumsum(child_counts)[:-1]))
+
+    # Destination of each triangle in the next level, for every node (entries of leaves are dropped below):
+    # left child start + rank among the node's left-goers, or right child start + rank among its right-goers.
+    left_start = np.zeros(counts.size, dtype=np.int32)
+    right_start = np.zeros(counts.size, dtype=np.int32)
+    left_start[split_nodes] = child_starts[0::2]
+    right_start[split_nodes] = child_starts[1::2]
+    right_base = np.repeat(right_start - rights_before[starts], counts)
+    left_base = np.repeat((left_start - starts + rights_before[starts]).astype(np.int32), counts)
+    position = np.arange(goes_right.size, dtype=np.int32)
+    destination = np.where(goes_right, right_base + rights_before, left_base + position - rights_before)
+
+    if split_nodes.size < counts.size:
+        kept = np.flatnonzero(np.repeat(is_split, counts))
+        destination = destination[kept]
+    else:
+        kept = position
+    source = np.empty(kept.size, dtype=np.int32)
+    source[destination] = kept
+
+    parent_offsets = level.slot_offsets[split_nodes]
+    child_offsets = np.stack([parent_offsets, parent_offsets + left_counts[split_nodes]], axis=1).ravel()
+    return _Level(
+        triangle_ids=level.triangle_ids[source],
+        boxes=_take_columns(level.boxes, source),
+        centroids=_take_columns(level.centroids, source),
+        counts=child_counts,
+        slot_offsets=child_offsets,
+    )
+
+
+def _take_columns(rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """rows[:, columns], one contiguous row at a time (several times faster than 2-D fancy indexing)."""
+    gathered = np.empty((rows.shape[0], columns.size), dtype=rows.dtype)
+    for row, out in zip(rows, gathered):
+        np.take(row, columns, out=out)
+    return gathered

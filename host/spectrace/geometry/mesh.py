@@ -1,0 +1,75 @@
+"""Indexed triangle meshes, and reading them from any file format trimesh understands."""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from spectrace.errors import SpectraceError
+
+
+@dataclass
+class TriangleMesh:
+    """Triangles in scene units; face winding (counter-clockwise seen from the front) defines the front side.
+
+    The geometric normal of face i is (v1 - v0) x (v2 - v0), normalised, with vk = vertices[faces[i, k]].
+    """
+
+    vertices: np.ndarray  # (N, 3) float64
+    faces: np.ndarray  # (M, 3) int64 indices into vertices
+
+    def __post_init__(self) -> None:
+        self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64)
+        self.faces = np.ascontiguousarray(self.faces, dtype=np.int64)
+        if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
+            raise ValueError(f"vertices must be (N, 3), got {self.vertices.shape}")
+        if self.faces.ndim != 2 or self.faces.shape[1] != 3:
+            raise ValueError(f"faces must be (M, 3), got {self.faces.shape}")
+
+    def triangles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Corner positions (v0, v1, v2), each (M, 3) float64."""
+        return tuple(self.vertices[self.faces[:, k]] for k in range(3))
+
+    def triangle_areas(self) -> np.ndarray:
+        """(M,) area of each triangle, in scene units squared."""
+        v0, v1, v2 = self.triangles()
+        return 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
+
+    def area(self) -> float:
+        """Total surface area, in scene units squared."""
+        return float(self.triangle_areas().sum())
+
+
+def load_mesh(path: Path, where: str) -> TriangleMesh:
+    """Read a mesh file (OBJ, PLY, STL, GLB, OFF, ...); a file holding several meshes is merged into one.
+
+    Vertex order and face winding are kept as stored. Every failure raises SpectraceError naming `where`.
+    """
+    import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
+
+    path = Path(path)
+    if not path.is_file():
+        raise SpectraceError(f"mesh file '{path}' does not exist", where=where)
+    try:
+        # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
+        scene = trimesh.load_scene(path, process=False, maintain_order=True)
+        loaded = scene.to_mesh()
+    except Exception as error:  # trimesh raises many unrelated types for unreadable files
+        detail = " ".join(str(error).split()) or type(error).__name__
+        raise SpectraceError(f"cannot read mesh file '{path}': {detail}", where=where) from None
+    return _validated_mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), path, where)
+
+
+def _validated_mesh(vertices: np.ndarray, faces: np.ndarray, path: Path, where: str) -> TriangleMesh:
+    if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
+        raise SpectraceError(f"mesh file '{path}' contains no triangles", where=where)
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise SpectraceError(f"mesh file '{path}' has faces that index missing vertices", where=where)
+    bad = ~np.isfinite(vertices).all(axis=1)
+    if bad.any():
+        raise SpectraceError(
+            f"mesh file '{path}' has {int(bad.sum())} vertices with NaN or infinite coordinates "
+            f"(first: vertex {int(np.flatnonzero(bad)[0])})",
+            where=where,
+        )
+    return TriangleMesh(vertices=vertices, faces=faces)

@@ -1,0 +1,51 @@
+"""Built-in shapes, with Mitsuba 3's conventions so scenes port: rectangle, cube, sphere.
+
+All are centred on the origin with outward (front-side) winding: the geometric normal
+(v1 - v0) x (v2 - v0) points away from the interior, or along +z for the rectangle.
+"""
+
+import numpy as np
+
+from spectrace.errors import SpectraceError
+from spectrace.geometry.mesh import TriangleMesh
+
+# An icosphere with 8 subdivisions already has 1.3 million triangles.
+MAX_SPHERE_SUBDIVISIONS = 8
+
+
+def rectangle() -> TriangleMesh:
+    """The square [-1, 1]^2 in the plane z = 0, facing +z (2 triangles, area 4)."""
+    vertices = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=np.float64)
+    faces = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
+    return TriangleMesh(vertices=vertices, faces=faces)
+
+
+def cube() -> TriangleMesh:
+    """The cube [-1, 1]^3 with outward normals (12 triangles, area 24)."""
+    # Corner index = 4*(x>0) + 2*(y>0) + (z>0).
+    vertices = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
+    # Each quad lists its corners counter-clockwise seen from outside.
+    quads = [
+        (0, 1, 3, 2),  # x = -1
+        (4, 6, 7, 5),  # x = +1
+        (0, 4, 5, 1),  # y = -1
+        (2, 3, 7, 6),  # y = +1
+        (0, 2, 6, 4),  # z = -1
+        (1, 5, 7, 3),  # z = +1
+    ]
+    faces = np.array([tri for a, b, c, d in quads for tri in ((a, b, c), (a, c, d))], dtype=np.int64)
+    return TriangleMesh(vertices=vertices, faces=faces)
+
+
+def sphere(subdivisions: int = 4) -> TriangleMesh:
+    """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles, vertices on the sphere."""
+    import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
+
+    if isinstance(subdivisions, bool) or not isinstance(subdivisions, int) or not (
+        0 <= subdivisions <= MAX_SPHERE_SUBDIVISIONS
+    ):
+        raise SpectraceError(
+            f"sphere subdivisions must be an integer from 0 to {MAX_SPHERE_SUBDIVISIONS}, got {subdivisions!r}"
+        )
+    icosphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    return TriangleMesh(vertices=np.asarray(icosphere.vertices), faces=np.asarray(icosphere.faces))

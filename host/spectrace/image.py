@@ -1,0 +1,70 @@
+"""The rendered image: film XYZ (relative to ∫ȳ, so a constant radiance 1 has Y = 1) and how it was made."""
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from spectrace.errors import SpectraceError
+from spectrace.spectral.colorimetry import srgb_encode, xyz_to_linear_srgb
+
+
+@dataclass
+class Image:
+    xyz: np.ndarray  # (height, width, 3) float32, mean per pixel
+    spp: int
+    seed: int
+    device: str
+    render_seconds: float
+    dropped_samples: int = 0  # non-finite samples left out of the film
+    rays_traced: int = 0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def width(self) -> int:
+        return self.xyz.shape[1]
+
+    @property
+    def height(self) -> int:
+        return self.xyz.shape[0]
+
+    def to_linear_srgb(self) -> np.ndarray:
+        return xyz_to_linear_srgb(self.xyz).astype(np.float32)
+
+    def to_srgb(self) -> np.ndarray:
+        """Display-encoded sRGB in [0, 1] (out-of-gamut and over-bright values clipped)."""
+        return srgb_encode(np.clip(self.to_linear_srgb(), 0.0, 1.0))
+
+    def metadata(self) -> dict[str, str]:
+        return {
+            "spp": str(self.spp),
+            "seed": str(self.seed),
+            "device": self.device,
+            "render_seconds": f"{self.render_seconds:.3f}",
+            "dropped_samples": str(self.dropped_samples),
+            **{k: str(v) for k, v in self.extra.items()},
+        }
+
+    def write(self, path: str | Path, include_xyz: bool = True) -> None:
+        """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels) or .png (sRGB, 8 bit)."""
+        from spectrace.io.exr import write_exr
+        from spectrace.io.png import write_png
+
+        path = Path(path)
+        suffix = path.suffix.lower()
+        if suffix == ".exr":
+            write_exr(path, self.to_linear_srgb(), self.xyz if include_xyz else None, self.metadata())
+        elif suffix == ".png":
+            write_png(path, self.to_srgb(), self.metadata())
+        else:
+            raise SpectraceError(f"unknown image format '{suffix}' (use .exr or .png)", where=str(path))
+
+    def _repr_png_(self) -> bytes:
+        import io
+
+        from PIL import Image as PILImage
+
+        buffer = io.BytesIO()
+        pixels = np.rint(self.to_srgb() * 255).astype(np.uint8)
+        PILImage.fromarray(pixels, "RGB").save(buffer, format="PNG")
+        return buffer.getvalue()

@@ -1,0 +1,106 @@
+"""Progressive rendering on an OpenCL device: upload the scene once, then run passes of samples into the film."""
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+import pyopencl as cl
+
+from spectrace.device import Device, open_device
+from spectrace.image import Image
+from spectrace.render.scene_buffers import SceneBuffers, build_scene_buffers, render_params
+from spectrace.scene.model import Scene
+
+ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
+
+# Aim for passes of about this long: short enough for a live progress bar and prompt Ctrl-C, long enough that
+# launch overhead does not matter.
+TARGET_PASS_SECONDS = 0.5
+
+
+class Renderer:
+    def __init__(self, scene: Scene, device: Device | str | None = None):
+        self.scene = scene
+        self.device = device if isinstance(device, Device) else open_device(device)
+        self.buffers: SceneBuffers = build_scene_buffers(scene)
+        self.program = self.device.build_program("integrator_path.cl")
+        self.kernel = cl.Kernel(self.program, "render_pass")
+        ctx = self.device.context
+        ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+        b = self.buffers
+        self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, 0, 0, 0).nbytes)
+        self._inputs = [
+            cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
+            for a in (b.bvh.nodes, b.triangle_vertices, b.triangle_info, b.materials, b.lights, b.light_cdf,
+                      b.spectra, b.cmf)
+        ]
+        self.pixel_count = scene.width * scene.height
+        self._film = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 16)
+        self._ray_counts = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 4)
+        self.samples_done = 0
+        self.render_seconds = 0.0
+        self.reset()
+
+    @property
+    def light_count(self) -> int:
+        return int(np.count_nonzero(self.buffers.triangle_info["light"] >= 0))
+
+    def reset(self) -> None:
+        queue = self.device.queue
+        cl.enqueue_fill_buffer(queue, self._film, np.float32(0), 0, self.pixel_count * 16)
+        cl.enqueue_fill_buffer(queue, self._ray_counts, np.uint32(0), 0, self.pixel_count * 4)
+        queue.finish()
+        self.samples_done = 0
+        self.render_seconds = 0.0
+
+    def run_pass(self, sample_count: int) -> None:
+        """Add `sample_count` samples per pixel, continuing the sample sequence where the last pass stopped."""
+        queue = self.device.queue
+        params = render_params(self.scene, self.light_count, self.samples_done, sample_count)
+        start = time.perf_counter()
+        cl.enqueue_copy(queue, self._params, params)
+        self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts)
+        cl.enqueue_nd_range_kernel(queue, self.kernel, (self.pixel_count,), None)
+        queue.finish()
+        self.render_seconds += time.perf_counter() - start
+        self.samples_done += sample_count
+
+    def render(self, spp: int | None = None, pass_spp: int | None = None,
+               progress: ProgressCallback | None = None) -> Image:
+        """Render until `spp` samples per pixel (default: the scene's). Passes adapt their size to about
+        TARGET_PASS_SECONDS unless pass_spp fixes it; the image does not depend on the pass sizes."""
+        total = spp if spp is not None else self.scene.spp
+        chunk = pass_spp or 1
+        while self.samples_done < total:
+            count = min(chunk, total - self.samples_done)
+            start = time.perf_counter()
+            self.run_pass(count)
+            elapsed = time.perf_counter() - start
+            if pass_spp is None and elapsed > 0:
+                chunk = max(1, min(4 * chunk, int(count * TARGET_PASS_SECONDS / elapsed)))
+            if progress is not None:
+                progress(self.samples_done, total)
+        return self.image()
+
+    def read_film(self) -> tuple[np.ndarray, np.ndarray]:
+        film = np.empty((self.pixel_count, 4), np.float32)
+        rays = np.empty(self.pixel_count, np.uint32)
+        cl.enqueue_copy(self.device.queue, film, self._film)
+        cl.enqueue_copy(self.device.queue, rays, self._ray_counts)
+        self.device.queue.finish()
+        return film, rays
+
+    def image(self) -> Image:
+        film, rays = self.read_film()
+        count = max(self.samples_done, 1)
+        xyz = (film[:, :3] / np.float32(count)).reshape(self.scene.height, self.scene.width, 3)
+        return Image(
+            xyz=xyz,
+            spp=self.samples_done,
+            seed=self.scene.seed,
+            device=self.device.report.key,
+            render_seconds=self.render_seconds,
+            dropped_samples=int(film[:, 3].sum()),
+            rays_traced=int(rays.astype(np.uint64).sum()),
+            extra={"max_depth": self.scene.max_depth, "width": self.scene.width, "height": self.scene.height},
+        )

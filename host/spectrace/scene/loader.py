@@ -1,0 +1,221 @@
+"""TOML scene file -> resolved Scene. Every error names the file and the key path of the offending value."""
+
+import difflib
+import tomllib
+from pathlib import Path
+
+import numpy as np
+from pydantic import ValidationError
+
+from spectrace.errors import SpectraceError
+from spectrace.geometry import primitives
+from spectrace.geometry.mesh import load_mesh
+from spectrace.geometry.transforms import apply_transform, transform_matrix
+from spectrace.scene import schema
+from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
+from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
+
+_BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere}
+
+
+def key_path(location: tuple) -> str:
+    """('shapes', 2, 'material') -> 'shapes[2].material'."""
+    text = ""
+    for part in location:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += ("." if text else "") + str(part)
+    return text
+
+
+def _allowed_keys(model: type, location: tuple) -> list[str]:
+    """Field names valid at `location` in the schema, for 'did you mean' hints."""
+    current = model
+    for part in location[:-1]:
+        if isinstance(part, int) or current is None:
+            continue
+        fields = getattr(current, "model_fields", {})
+        if part not in fields:
+            return []
+        annotation = fields[part].annotation
+        current = _model_in(annotation)
+    return list(getattr(current, "model_fields", {}).keys()) if current else []
+
+
+def _model_in(annotation) -> type | None:
+    if isinstance(annotation, type) and hasattr(annotation, "model_fields"):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()) or ():
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _validation_error(path: Path, error: ValidationError) -> SpectraceError:
+    first = error.errors()[0]
+    location = tuple(p for p in first["loc"] if not (isinstance(p, str) and p.startswith("function-after")))
+    message = first["msg"].removeprefix("Value error, ")
+    if first["type"] == "extra_forbidden":
+        allowed = _allowed_keys(schema.SceneSpec, location)
+        close = difflib.get_close_matches(str(location[-1]), allowed, n=1)
+        message = f"unknown key '{location[-1]}'" + (f" (did you mean '{close[0]}'?)" if close else "")
+    elif first["type"] == "missing":
+        message = "required key is missing"
+    extra = f" ({len(error.errors()) - 1} more problem(s))" if len(error.errors()) > 1 else ""
+    return SpectraceError(message + extra, where=f"{path}: {key_path(location)}" if location else str(path))
+
+
+def read_scene_spec(path: Path) -> schema.SceneSpec:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise SpectraceError(f"cannot read scene file ({exc.strerror})", where=str(path)) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SpectraceError(f"TOML syntax error: {exc}", where=str(path)) from None
+    try:
+        return schema.SceneSpec.model_validate(data)
+    except ValidationError as exc:
+        raise _validation_error(path, exc) from None
+
+
+class _Resolver:
+    """Turns a validated spec into scene objects, resolving names and files relative to the scene file."""
+
+    def __init__(self, path: Path, spec: schema.SceneSpec):
+        self.path = path
+        self.folder = path.parent
+        self.spec = spec
+        self.named_spectra: dict[str, Spectrum] = {}
+
+    def where(self, key: str) -> str:
+        return f"{self.path}: {key}"
+
+    def named_spectrum(self, name: str, key: str) -> Spectrum:
+        if name in self.named_spectra:
+            return self.named_spectra[name]
+        entry = self.spec.spectra.get(name)
+        if entry is None:
+            if "/" in name or ":" in name:
+                try:
+                    return library_spectrum(name)
+                except SpectraceError as exc:
+                    raise SpectraceError(exc.message, where=self.where(key)) from None
+            known = sorted(self.spec.spectra)
+            close = difflib.get_close_matches(name, known, n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else (f"; defined: {', '.join(known)}" if known else "")
+            raise SpectraceError(f"undefined spectrum '{name}'{hint}", where=self.where(key))
+        entry_key = f"spectra.{name}"
+        if entry.values is not None:
+            spectrum = parse_inline_spectrum(entry.values, where=self.where(f"{entry_key}.values"))
+        elif entry.file is not None:
+            spectrum = load_spectrum_csv(self.folder / entry.file, column=entry.column, name=name)
+        else:
+            try:
+                spectrum = library_spectrum(entry.library)
+            except SpectraceError as exc:
+                raise SpectraceError(exc.message, where=self.where(f"{entry_key}.library")) from None
+        self.named_spectra[name] = spectrum
+        return spectrum
+
+    def spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
+        if spec.rgb is not None:
+            rgb = np.asarray(spec.rgb, float)
+            if np.any(rgb < 0):
+                raise SpectraceError(f"rgb components must be >= 0, got {list(spec.rgb)}", where=self.where(f"{key}.rgb"))
+            if emission:
+                result = uplift_illuminant(rgb)
+            else:
+                if np.any(rgb > 1):
+                    raise SpectraceError(
+                        f"a reflectance rgb must lie in [0, 1], got {list(spec.rgb)}", where=self.where(f"{key}.rgb")
+                    )
+                result = uplift_reflectance(rgb)[0]
+        elif spec.value is not None:
+            result = Spectrum(np.full_like(Spectrum.zeros().values, spec.value), name=f"constant {spec.value}")
+        elif spec.spectrum is not None:
+            result = self.named_spectrum(spec.spectrum, f"{key}.spectrum")
+        elif spec.values is not None:
+            result = parse_inline_spectrum(spec.values, where=self.where(f"{key}.values"))
+        else:
+            result = load_spectrum_csv(self.folder / spec.file, column=spec.column)
+        result = result * spec.scale if spec.scale != 1.0 else result
+        values = result.values
+        if np.any(values < 0):
+            raise SpectraceError("spectrum has negative values", where=self.where(key))
+        if not emission and np.any(values > 1.0 + 1e-6):
+            raise SpectraceError(
+                f"reflectance exceeds 1 (max {values.max():.4g}): it would create energy", where=self.where(key)
+            )
+        return result
+
+    def materials(self) -> dict[str, DiffuseMaterial]:
+        return {
+            name: DiffuseMaterial(self.spectrum(m.reflectance, f"materials.{name}.reflectance", emission=False))
+            for name, m in self.spec.materials.items()
+        }
+
+    def shapes(self, materials: dict[str, DiffuseMaterial]) -> list[Shape]:
+        shapes = []
+        for i, s in enumerate(self.spec.shapes):
+            key = f"shapes[{i}]"
+            if s.type == "mesh":
+                mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"))
+            else:
+                mesh = _BUILTIN_SHAPES[s.type]()
+            if s.transform:
+                steps = [step.model_dump(exclude_none=True) for step in s.transform]
+                mesh = apply_transform(mesh, transform_matrix(steps, where=self.where(f"{key}.transform")))
+            if s.material not in materials:
+                close = difflib.get_close_matches(s.material, list(materials), n=1)
+                hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
+                raise SpectraceError(f"undefined material '{s.material}'{hint}", where=self.where(f"{key}.material"))
+            emitter = None
+            if s.emitter is not None:
+                radiance = self.spectrum(s.emitter.radiance, f"{key}.emitter.radiance", emission=True)
+                emitter = AreaEmitter(radiance=radiance, two_sided=s.emitter.two_sided)
+            shapes.append(Shape(mesh=mesh, material=materials[s.material], emitter=emitter, name=s.name or f"{s.type}{i}"))
+        return shapes
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read, validate and resolve a TOML scene file; raises SpectraceError naming the file and key path."""
+    path = Path(path)
+    spec = read_scene_spec(path)
+    resolver = _Resolver(path, spec)
+    materials = resolver.materials()
+    shapes = resolver.shapes(materials)
+    for name in spec.spectra:
+        resolver.named_spectrum(name, f"spectra.{name}")
+    camera = Camera(
+        origin=spec.camera.origin,
+        target=spec.camera.target,
+        up=spec.camera.up,
+        fov_degrees=spec.camera.fov,
+        fov_axis=spec.camera.fov_axis,
+    )
+    _check_camera(camera, path)
+    return Scene(
+        camera=camera,
+        width=spec.film.width,
+        height=spec.film.height,
+        shapes=shapes,
+        max_depth=spec.integrator.max_depth,
+        rr_depth=spec.integrator.rr_depth,
+        spp=spec.sampler.spp,
+        seed=spec.sampler.seed,
+        source=path,
+    )
+
+
+def _check_camera(camera: Camera, path: Path) -> None:
+    forward = np.subtract(camera.target, camera.origin)
+    if np.linalg.norm(forward) == 0:
+        raise SpectraceError("camera target equals origin", where=f"{path}: camera.target")
+    if np.linalg.norm(np.cross(forward, camera.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
+        raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where=f"{path}: camera.up")

@@ -1,0 +1,155 @@
+"""The TOML scene format, as validated pydantic models. docs/scene-format.md documents every key and unit.
+
+Only the shape of the input is checked here; references between sections (a shape's material, a named spectrum)
+and files on disk are resolved by scene.loader, which reports errors with the same key paths.
+"""
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class CameraSpec(Strict):
+    type: Literal["perspective"] = "perspective"
+    origin: Vector3
+    target: Vector3
+    up: Vector3 = (0.0, 1.0, 0.0)
+    fov: FiniteFloat = Field(description="full field of view in degrees, along fov_axis")
+    fov_axis: Literal["x", "y"] = "x"
+
+    @field_validator("fov")
+    @classmethod
+    def _fov_in_range(cls, value: float) -> float:
+        if not 0.0 < value < 180.0:
+            raise ValueError(f"fov must lie in (0, 180) degrees, got {value}")
+        return value
+
+
+class FilmSpec(Strict):
+    width: int = Field(gt=0, le=16384)
+    height: int = Field(gt=0, le=16384)
+
+
+class IntegratorSpec(Strict):
+    type: Literal["path"] = "path"
+    max_depth: int = Field(default=8, ge=-1, description="path segments from the camera; -1 = unbounded")
+    rr_depth: int = Field(default=5, ge=1, description="bounces after which Russian roulette may end a path")
+
+    @field_validator("max_depth")
+    @classmethod
+    def _depth_not_zero(cls, value: int) -> int:
+        if value == 0:
+            raise ValueError("max_depth must be -1 (unbounded) or >= 1")
+        return value
+
+
+class SamplerSpec(Strict):
+    spp: int = Field(default=16, gt=0, le=1 << 20)
+    seed: int = Field(default=0, ge=0, lt=1 << 31)
+
+
+class SpectrumSpec(Strict):
+    """One spectrum, from exactly one source, times `scale`.
+
+    rgb: linear sRGB triple, uplifted (reflectance: bounded smooth spectrum; emission: D65-shaped white);
+    value: a constant; spectrum: the name of a [spectra.NAME] entry or a library spectrum ("cornell_box/light",
+    "cornell_box/reflectance:white", "cie:D65"); values: inline "wavelength:value" pairs; file (+ column): a CSV.
+    """
+
+    rgb: Vector3 | None = None
+    value: FiniteFloat | None = None
+    spectrum: str | None = None
+    values: str | list[tuple[FiniteFloat, FiniteFloat]] | None = None
+    file: str | None = None
+    column: str | None = None
+    scale: FiniteFloat = 1.0
+
+    @model_validator(mode="after")
+    def _exactly_one_source(self) -> "SpectrumSpec":
+        sources = [k for k in ("rgb", "value", "spectrum", "values", "file") if getattr(self, k) is not None]
+        if len(sources) != 1:
+            given = ", ".join(sources) if sources else "none"
+            raise ValueError(f"give exactly one of rgb, value, spectrum, values, file (given: {given})")
+        if self.column is not None and self.file is None:
+            raise ValueError("column is only meaningful with file")
+        if self.scale < 0:
+            raise ValueError(f"scale must be >= 0, got {self.scale}")
+        return self
+
+
+class NamedSpectrumSpec(Strict):
+    """A [spectra.NAME] entry: a spectrum defined once and referred to by name."""
+
+    values: str | list[tuple[FiniteFloat, FiniteFloat]] | None = None
+    file: str | None = None
+    column: str | None = None
+    library: str | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one_source(self) -> "NamedSpectrumSpec":
+        sources = [k for k in ("values", "file", "library") if getattr(self, k) is not None]
+        if len(sources) != 1:
+            raise ValueError("give exactly one of values, file, library")
+        return self
+
+
+class DiffuseMaterialSpec(Strict):
+    type: Literal["diffuse"]
+    reflectance: SpectrumSpec
+
+
+MaterialSpec = DiffuseMaterialSpec
+
+
+class EmitterSpec(Strict):
+    type: Literal["area"] = "area"
+    radiance: SpectrumSpec = Field(description="W/(m² sr nm) times scale")
+    two_sided: bool = False
+
+
+class TransformStep(Strict):
+    translate: Vector3 | None = None
+    scale: FiniteFloat | Vector3 | None = None
+    rotate: dict | None = None
+    matrix: list[list[FiniteFloat]] | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> "TransformStep":
+        given = [k for k in ("translate", "scale", "rotate", "matrix") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("each transform step has exactly one of translate, scale, rotate, matrix")
+        return self
+
+
+class ShapeSpec(Strict):
+    type: Literal["mesh", "rectangle", "cube", "sphere"]
+    file: str | None = None
+    material: str
+    emitter: EmitterSpec | None = None
+    transform: list[TransformStep] = []
+    name: str | None = None
+
+    @model_validator(mode="after")
+    def _file_for_meshes(self) -> "ShapeSpec":
+        if self.type == "mesh" and self.file is None:
+            raise ValueError("a mesh shape needs file")
+        if self.type != "mesh" and self.file is not None:
+            raise ValueError(f"a {self.type} shape takes no file")
+        return self
+
+
+class SceneSpec(Strict):
+    camera: CameraSpec
+    film: FilmSpec
+    integrator: IntegratorSpec = IntegratorSpec()
+    sampler: SamplerSpec = SamplerSpec()
+    spectra: dict[str, NamedSpectrumSpec] = {}
+    materials: dict[str, MaterialSpec]
+    shapes: list[ShapeSpec] = Field(min_length=1)

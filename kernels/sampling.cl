@@ -1,0 +1,42 @@
+/* Warps from the unit square to the domains the integrator samples, with their densities. */
+#ifndef SPECTRACE_SAMPLING_CL
+#define SPECTRACE_SAMPLING_CL
+
+#define INV_PI 0.31830988618379067f
+#define TWO_PI 6.283185307179586f
+
+/* Orthonormal basis around a unit normal (Duff et al. 2017, "Building an Orthonormal Basis, Revisited"). */
+inline void orthonormal_basis(float3 n, float3 *tangent, float3 *bitangent)
+{
+    float sign = copysign(1.0f, n.z);
+    float a = -1.0f / (sign + n.z);
+    float b = n.x * n.y * a;
+    *tangent = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    *bitangent = (float3)(b, sign + n.y * n.y * a, -n.y);
+}
+
+/* Cosine-weighted direction about +z (Malley's method: uniform disk point lifted to the hemisphere);
+ * pdf = cos θ / π per steradian. */
+inline float3 sample_cosine_hemisphere(float2 u)
+{
+    float r = sqrt(u.x);
+    float phi = TWO_PI * u.y;
+    float z = sqrt(fmax(0.0f, 1.0f - u.x));
+    return (float3)(r * cos(phi), r * sin(phi), z);
+}
+
+/* Uniform point on a triangle, as barycentrics of (v1, v2); pdf = 1 / area. */
+inline float2 sample_triangle_uniform(float2 u)
+{
+    float s = sqrt(u.x);
+    return (float2)(u.y * s, 1.0f - s);
+}
+
+inline float power_heuristic(float pdf_a, float pdf_b)
+{
+    float a = pdf_a * pdf_a;
+    float b = pdf_b * pdf_b;
+    return (a + b) > 0.0f ? a / (a + b) : 0.0f;
+}
+
+#endif

@@ -1,0 +1,26 @@
+/* Test harness: each work-item averages `samples_per_item` hero-wavelength estimates of the film XYZ of one
+ * tabulated spectrum, exactly as the path tracer forms them; the host compares the mean with colour-science and
+ * uses the spread between work-items for the standard error. */
+#include "rng.cl"
+#include "spectrum.cl"
+
+__kernel void estimate_spectrum_xyz(__global const float *spectra, int offset, __global const float4 *cmf,
+                                    uint seed, int samples_per_item, __global float4 *item_means)
+{
+    int item = get_global_id(0);
+    float4 sum = (float4)(0.0f);
+    for (int s = 0; s < samples_per_item; ++s) {
+        Sampler sampler = sampler_start(seed, (uint)item, (uint)s);
+        SampledWavelengths w = sample_wavelengths(sample_1d(&sampler));
+        sum += spectrum_to_xyz_estimate(spectrum_at(spectra, offset, &w), cmf, &w);
+    }
+    item_means[item] = sum / (float)samples_per_item;
+}
+
+/* The visible-wavelength sampler itself: λ and p(λ) for given uniform numbers. */
+__kernel void sample_wavelength_pdf(__global const float *u, __global float *lambda, __global float *pdf)
+{
+    int i = get_global_id(0);
+    lambda[i] = sample_visible_wavelength(u[i]);
+    pdf[i] = visible_wavelength_pdf(lambda[i]);
+}

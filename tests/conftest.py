@@ -1,0 +1,58 @@
+"""Shared fixtures. Every test that runs kernels uses one device for the whole session, chosen as the CLI
+chooses (SPECTRACE_DEVICE, else the automatic pick); the report header names it."""
+
+import numpy as np
+import pyopencl as cl
+import pytest
+
+from spectrace.device import open_device
+
+
+def pytest_report_header(config):
+    try:
+        device = open_device()
+    except Exception as exc:  # the header must not hide the real failure, which the tests then report
+        return [f"spectrace OpenCL device: none ({exc})"]
+    report = device.report
+    return [f"spectrace OpenCL device: {report.key} | platform: {report.platform_name} {report.platform_version} | "
+            f"device: {report.device_name}"]
+
+
+@pytest.fixture(scope="session")
+def device():
+    return open_device()
+
+
+class KernelRunner:
+    """Builds a harness kernel file and runs kernels on numpy arrays (inputs copied in, outputs copied back)."""
+
+    def __init__(self, device, entry: str):
+        self.device = device
+        self.program = device.build_program(entry)
+        self.kernels = {}
+
+    def buffer(self, array: np.ndarray, writable: bool = False) -> cl.Buffer:
+        flags = (cl.mem_flags.READ_WRITE if writable else cl.mem_flags.READ_ONLY) | cl.mem_flags.COPY_HOST_PTR
+        return cl.Buffer(self.device.context, flags, hostbuf=np.ascontiguousarray(array))
+
+    def run(self, name: str, global_size: int, args: list, outputs: dict[int, np.ndarray]) -> None:
+        """args: buffers or numpy scalars; outputs: {argument index: host array to read that buffer into}."""
+        if name not in self.kernels:
+            self.kernels[name] = cl.Kernel(self.program, name)
+        kernel = self.kernels[name]
+        kernel(self.device.queue, (global_size,), None, *args)
+        for index, host in outputs.items():
+            cl.enqueue_copy(self.device.queue, host, args[index])
+        self.device.queue.finish()
+
+
+@pytest.fixture(scope="session")
+def kernel_runner(device):
+    cache = {}
+
+    def get(entry: str) -> KernelRunner:
+        if entry not in cache:
+            cache[entry] = KernelRunner(device, entry)
+        return cache[entry]
+
+    return get

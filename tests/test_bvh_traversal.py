@@ -1,0 +1,122 @@
+"""The OpenCL BVH traversal and watertight triangle test against a float64 brute force over every triangle."""
+
+import numpy as np
+import pytest
+
+from raytracing_reference import brute_force_closest_hit
+from spectrace.geometry.bvh import build_bvh
+
+
+def _soup(rng, count):
+    centres = rng.uniform(-1, 1, (count, 1, 3))
+    return centres + rng.normal(0, 0.08, (count, 3, 3))
+
+
+def _rays(rng, count, triangles):
+    """Half the rays aim at a random point of a random triangle (so they hit something), half anywhere."""
+    origins = rng.uniform(-1.5, 1.5, (count, 3))
+    targets = rng.uniform(-0.8, 0.8, (count, 3))
+    aimed = rng.random(count) < 0.5
+    picked = triangles[rng.integers(0, len(triangles), aimed.sum())]
+    weights = rng.dirichlet(np.ones(3), aimed.sum())[:, :, None]
+    targets[aimed] = (weights * picked).sum(axis=1)
+    directions = targets - origins
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    return origins, directions
+
+
+def _as_float4(a):
+    out = np.zeros((len(a), 4), np.float32)
+    out[:, :3] = a
+    return out
+
+
+def _device_scene(triangles):
+    bvh = build_bvh(triangles[:, 0], triangles[:, 1], triangles[:, 2])
+    ordered = triangles[bvh.prim_order].astype(np.float32)
+    vertices = np.zeros((len(ordered), 3, 4), np.float32)
+    vertices[..., :3] = ordered
+    return bvh, vertices.reshape(-1, 4)
+
+
+@pytest.mark.parametrize("triangle_count", [1, 7, 3000])
+def test_closest_hits_equal_brute_force(kernel_runner, triangle_count):
+    rng = np.random.default_rng(triangle_count)
+    # Snap to float32 first so the kernel and the reference see the same triangles and rays.
+    triangles = _soup(rng, triangle_count).astype(np.float32).astype(np.float64)
+    origins, directions = (a.astype(np.float32).astype(np.float64) for a in _rays(rng, 4000, triangles))
+    bvh, vertices = _device_scene(triangles)
+
+    runner = kernel_runner("testing/closest_hit.cl")
+    t = np.empty(len(origins), np.float32)
+    hit = np.empty(len(origins), np.int32)
+    args = [runner.buffer(bvh.nodes), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+            runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
+            np.int32(len(origins))]
+    runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
+
+    ref_t, ref_prim = brute_force_closest_hit(origins, directions, triangles[:, 0], triangles[:, 1], triangles[:, 2])
+    kernel_prim = np.where(hit >= 0, bvh.prim_order[np.maximum(hit, 0)], -1)
+    ref_hit = ref_prim >= 0
+    assert ref_hit.sum() > 0.4 * len(origins), "the aimed rays should hit"
+    # Float32 cannot resolve rays that graze a triangle (|cos| ~ 1e-4): there hit/miss and t may differ from the
+    # float64 reference. Every other ray must agree.
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    hit_triangle = np.where(ref_hit, ref_prim, kernel_prim)
+    cosine = np.abs(np.einsum("ij,ij->i", normals[np.maximum(hit_triangle, 0)], directions))
+    clear = (hit_triangle < 0) | (cosine > 1e-2)
+    assert clear.mean() > 0.97
+    assert np.array_equal((hit >= 0)[clear], ref_hit[clear])
+    both = clear & ref_hit
+    np.testing.assert_allclose(t[both], ref_t[both], rtol=1e-4, atol=1e-5)
+    # Ties between triangles at (nearly) the same distance may pick either.
+    assert np.mean(kernel_prim[both] == ref_prim[both]) > 0.995
+
+def test_shared_edges_are_watertight(kernel_runner):
+    """Rays aimed exactly at the shared edges and vertices of a tessellated square never slip through."""
+    n = 16
+    xs = np.linspace(-1, 1, n + 1)
+    grid = np.stack(np.meshgrid(xs, xs, indexing="ij"), -1)
+    quads = []
+    for i in range(n):
+        for j in range(n):
+            a, b, c, d = grid[i, j], grid[i + 1, j], grid[i + 1, j + 1], grid[i, j + 1]
+            quads += [(a, b, c), (a, c, d)]
+    tri2 = np.array(quads)
+    triangles = np.concatenate([tri2, np.zeros(tri2.shape[:2] + (1,))], axis=-1)
+    bvh, vertices = _device_scene(triangles)
+    targets = np.stack(np.meshgrid(xs[1:-1], xs[1:-1], indexing="ij"), -1).reshape(-1, 2)
+    targets = np.concatenate([targets, (targets[:-1] + targets[1:]) / 2])  # vertices and edge midpoints
+    origins = np.column_stack([targets * 0.3, np.full(len(targets), 2.0)])
+    directions = np.column_stack([targets, np.zeros(len(targets))]) - origins
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+
+    runner = kernel_runner("testing/closest_hit.cl")
+    t = np.empty(len(origins), np.float32)
+    hit = np.empty(len(origins), np.int32)
+    args = [runner.buffer(bvh.nodes), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+            runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
+            np.int32(len(origins))]
+    runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
+    assert np.all(hit >= 0), f"{np.sum(hit < 0)} rays slipped through shared edges"
+
+
+def test_any_hit_respects_t_max(kernel_runner):
+    rng = np.random.default_rng(5)
+    triangles = _soup(rng, 500).astype(np.float32).astype(np.float64)
+    origins, directions = (a.astype(np.float32).astype(np.float64) for a in _rays(rng, 2000, triangles))
+    bvh, vertices = _device_scene(triangles)
+    ref_t, _ = brute_force_closest_hit(origins, directions, triangles[:, 0], triangles[:, 1], triangles[:, 2])
+    t_max = rng.uniform(0.1, 3.0, len(origins)).astype(np.float32)
+    # Leave out rays whose closest hit lies within float tolerance of t_max: either answer is right there.
+    clear = np.abs(ref_t - t_max) > 1e-3
+    runner = kernel_runner("testing/closest_hit.cl")
+    occluded = np.empty(len(origins), np.int32)
+    args = [runner.buffer(bvh.nodes), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+            runner.buffer(_as_float4(directions)), runner.buffer(t_max), runner.buffer(occluded, True),
+            np.int32(len(origins))]
+    runner.run("any_hit", len(origins), args, {5: occluded})
+    expected = ref_t < t_max
+    assert 0.1 < expected.mean() < 0.9
+    assert np.array_equal(occluded[clear].astype(bool), expected[clear])

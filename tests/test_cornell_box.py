@@ -1,0 +1,63 @@
+"""Whole renders of the Cornell box: finite, seed-independent in expectation, split-invariant bit for bit, and
+the right colours in the right places."""
+
+import numpy as np
+import pytest
+
+from spectrace.render.renderer import Renderer
+from spectrace.resources import scenes_dir
+from spectrace.scene import load_scene
+
+SIZE = 32
+
+
+@pytest.fixture(scope="module")
+def cornell():
+    return load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=SIZE, height=SIZE, spp=16)
+
+
+def test_render_is_finite_and_lit(cornell, device):
+    image = Renderer(cornell, device).render()
+    assert image.dropped_samples == 0
+    assert np.all(np.isfinite(image.xyz))
+    assert np.all(image.xyz >= 0)
+    assert image.xyz[..., 1].mean() > 0.01
+
+
+def test_mean_agrees_across_seeds(cornell, device):
+    """Per-pixel differences between two seeds are independent with mean zero if the estimator does not depend
+    on the seed; their mean must lie within 4 standard errors of zero."""
+    a = Renderer(cornell.with_overrides(seed=1), device).render().xyz
+    b = Renderer(cornell.with_overrides(seed=2), device).render().xyz
+    assert not np.array_equal(a, b)
+    difference = (a - b).reshape(-1, 3)
+    standard_error = difference.std(axis=0, ddof=1) / np.sqrt(len(difference))
+    assert np.all(np.abs(difference.mean(axis=0)) < 4 * standard_error)
+
+
+def test_pass_split_is_bit_identical(cornell, device):
+    one_pass = Renderer(cornell, device)
+    one_pass.run_pass(8)
+    split = Renderer(cornell, device)
+    for count in (1, 3, 4):
+        split.run_pass(count)
+    film_a, rays_a = one_pass.read_film()
+    film_b, rays_b = split.read_film()
+    assert np.array_equal(film_a, film_b)
+    assert np.array_equal(rays_a, rays_b)
+
+
+def test_walls_have_their_colours(device):
+    scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=24, height=24, spp=32)
+    rgb = Renderer(scene, device).render().to_linear_srgb()
+    left, right = rgb[8:16, 1:3].reshape(-1, 3).mean(0), rgb[8:16, -3:-1].reshape(-1, 3).mean(0)
+    assert left[0] > 2 * left[1], f"left wall should be red, got {left}"
+    assert right[1] > 1.5 * right[0], f"right wall should be green, got {right}"
+
+
+def test_max_depth_one_shows_only_the_light(device):
+    scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=32, height=32, spp=4, max_depth=1)
+    y = Renderer(scene, device).render().xyz[..., 1]
+    lit = y > 0
+    assert 0 < lit.sum() < 0.05 * lit.size, "only the light's pixels are non-zero"
+    assert lit[: SIZE // 4].any() and not lit[SIZE // 2 :].any(), "the light is in the ceiling, at the top"
