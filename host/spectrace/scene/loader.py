@@ -56,7 +56,9 @@ def _model_in(annotation) -> type | None:
 
 
 def _validation_error(path: Path, error: ValidationError) -> SpectraceError:
-    first = error.errors()[0]
+    # A misspelt key also shows up as a missing required one; the misspelling is the actionable report.
+    errors = sorted(error.errors(), key=lambda e: e["type"] != "extra_forbidden")
+    first = errors[0]
     location = tuple(p for p in first["loc"] if not (isinstance(p, str) and p.startswith("function-after")))
     message = first["msg"].removeprefix("Value error, ")
     if first["type"] == "extra_forbidden":
