@@ -41,6 +41,7 @@ def render(
     seed: Annotated[Optional[int], typer.Option(help="Sampler seed.", min=0)] = None,
     max_depth: Annotated[Optional[int], typer.Option(help="Path segments from the camera; -1 = unbounded.")] = None,
     device: DeviceOption = None,
+    xyz: Annotated[bool, typer.Option("--xyz/--no-xyz", help="EXR only: also store the film's X, Y, Z channels.")] = True,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops early and still writes the samples done so far."""
@@ -64,7 +65,7 @@ def render(
     image = renderer.image()
     if image.spp == 0:
         raise SpectraceError("interrupted before the first pass finished; nothing written")
-    image.write(output)
+    image.write(output, include_xyz=xyz)
     pixels = image.width * image.height * image.spp
     note = " (interrupted: partial image)" if interrupted else ""
     console.print(
