@@ -1,11 +1,26 @@
-/* Area lights: emitting triangles picked for next-event estimation by a discrete CDF built on the host
- * (proportional to each triangle's emitted power), then sampled uniformly over their area. */
+/* Lights for next-event estimation: one is picked by a discrete CDF built on the host (proportional to an
+ * estimate of its emitted power), then sampled. Area lights are emitting triangles sampled uniformly over their
+ * area; point, spot and distant lights are delta lights (reachable only by next-event estimation); the uniform
+ * environment is sampled uniformly over the sphere of directions. */
 #ifndef SPECTRACE_LIGHTS_CL
 #define SPECTRACE_LIGHTS_CL
 
 #include "types.h"
 #include "spectrum.cl"
 #include "sampling.cl"
+
+#define INV_FOUR_PI 0.07957747154594767f
+
+typedef struct {
+    float3 wi;         /* unit direction from the shaded point toward the light */
+    float distance;    /* to the light point; INFINITY for distant and environment lights */
+    float3 point;      /* the light point (finite lights), to aim the shadow ray at */
+    float3 normal;     /* LIGHT_TRIANGLE: its geometric normal, for the shadow ray's end offset */
+    float4 arriving;   /* radiance arriving along -wi (area, environment) or, for delta lights, the irradiance
+                          it produces on a surface facing it: I/d² or E (W/(m² nm)) */
+    float pdf;         /* solid-angle pdf including the pick probability; for delta lights the pick probability */
+    int is_delta;
+} LightSample;
 
 /* Smallest index i with u < cdf[i + 1]; cdf has light_count + 1 entries from 0 to 1. */
 inline int pick_light(__global const float *light_cdf, int light_count, float u)
@@ -18,19 +33,9 @@ inline int pick_light(__global const float *light_cdf, int light_count, float u)
     return lo;
 }
 
-/* Radiance leaving the light's surface toward `to_viewer` (unit), whose geometric normal is n. */
-inline float4 light_emitted(__global const Light *light, __global const float *spectra, const SampledWavelengths *w,
-                            float3 n, float3 to_viewer)
+inline float4 light_spectrum(__global const Light *light, __global const float *spectra, const SampledWavelengths *w)
 {
-    if (!light->two_sided && dot(n, to_viewer) <= 0.0f) return (float4)(0.0f);
-    return light->scale * spectrum_at(spectra, light->radiance_offset, w);
-}
-
-/* Solid-angle density of reaching a light point at `distance` whose normal makes |cos| with the ray. */
-inline float light_pdf_solid_angle(__global const Light *light, float distance, float abs_cos_light)
-{
-    if (abs_cos_light <= 0.0f) return 0.0f;
-    return light->pmf * distance * distance / (light->area * abs_cos_light);
+    return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
 }
 
 inline float3 triangle_normal(__global const float4 *triangle_vertices, int triangle)
@@ -45,6 +50,98 @@ inline float3 triangle_point(__global const float4 *triangle_vertices, int trian
     float3 v1 = triangle_vertices[3 * triangle + 1].xyz;
     float3 v2 = triangle_vertices[3 * triangle + 2].xyz;
     return (1.0f - b12.x - b12.y) * v0 + b12.x * v1 + b12.y * v2;
+}
+
+/* Radiance leaving an emitting triangle toward `to_viewer` (unit), whose geometric normal is n. */
+inline float4 area_light_emitted(__global const Light *light, __global const float *spectra, const SampledWavelengths *w,
+                                 float3 n, float3 to_viewer)
+{
+    if (!light->two_sided && dot(n, to_viewer) <= 0.0f) return (float4)(0.0f);
+    return light_spectrum(light, spectra, w);
+}
+
+/* Solid-angle density (pick probability included) of reaching a point of an emitting triangle at `distance`
+ * whose normal makes |cos| with the ray. */
+inline float area_light_pdf(__global const Light *light, float distance, float abs_cos_light)
+{
+    if (abs_cos_light <= 0.0f) return 0.0f;
+    return light->pmf * distance * distance / (light->area * abs_cos_light);
+}
+
+inline float environment_light_pdf(__global const Light *light)
+{
+    return light->pmf * INV_FOUR_PI;
+}
+
+/* Smooth spot falloff (smoothstep in cos θ between the cutoff and the falloff start). */
+inline float spot_falloff(__global const Light *light, float cos_theta)
+{
+    if (cos_theta >= light->cos_falloff_start) return 1.0f;
+    if (cos_theta <= light->cos_cutoff) return 0.0f;
+    float t = (cos_theta - light->cos_cutoff) / (light->cos_falloff_start - light->cos_cutoff);
+    return t * t * (3.0f - 2.0f * t);
+}
+
+inline float3 sample_uniform_sphere(float2 u)
+{
+    float z = 1.0f - 2.0f * u.x;
+    float r = sqrt(fmax(0.0f, 1.0f - z * z));
+    float phi = TWO_PI * u.y;
+    return (float3)(r * cos(phi), r * sin(phi), z);
+}
+
+/* Samples light `light` as seen from p. Returns 0 when the sample carries no light. */
+inline int sample_light(__global const Light *light, __global const float4 *triangle_vertices,
+                        __global const float *spectra, const SampledWavelengths *w, float3 p, float2 u,
+                        LightSample *s)
+{
+    s->is_delta = 0;
+    s->normal = (float3)(0.0f);
+    if (light->type == LIGHT_TRIANGLE) {
+        float3 q = triangle_point(triangle_vertices, light->triangle, sample_triangle_uniform(u));
+        float3 n_light = triangle_normal(triangle_vertices, light->triangle);
+        float3 to_light = q - p;
+        float d = length(to_light);
+        if (!(d > 0.0f)) return 0;
+        s->wi = to_light / d;
+        s->distance = d;
+        s->point = q;
+        s->normal = n_light;
+        s->arriving = area_light_emitted(light, spectra, w, n_light, -s->wi);
+        s->pdf = area_light_pdf(light, d, fabs(dot(n_light, s->wi)));
+        return s->pdf > 0.0f;
+    }
+    if (light->type == LIGHT_POINT || light->type == LIGHT_SPOT) {
+        float3 to_light = light->position.xyz - p;
+        float d2 = dot(to_light, to_light);
+        if (!(d2 > 0.0f)) return 0;
+        float d = sqrt(d2);
+        s->wi = to_light / d;
+        s->distance = d;
+        s->point = light->position.xyz;
+        float falloff = 1.0f;
+        if (light->type == LIGHT_SPOT) falloff = spot_falloff(light, dot(-s->wi, light->direction.xyz));
+        s->arriving = light_spectrum(light, spectra, w) * (falloff / d2);
+        s->pdf = light->pmf;
+        s->is_delta = 1;
+        return falloff > 0.0f;
+    }
+    if (light->type == LIGHT_DISTANT) {
+        s->wi = -light->direction.xyz;
+        s->distance = INFINITY;
+        s->point = p;
+        s->arriving = light_spectrum(light, spectra, w);
+        s->pdf = light->pmf;
+        s->is_delta = 1;
+        return 1;
+    }
+    /* LIGHT_ENVIRONMENT */
+    s->wi = sample_uniform_sphere(u);
+    s->distance = INFINITY;
+    s->point = p;
+    s->arriving = light_spectrum(light, spectra, w);
+    s->pdf = environment_light_pdf(light);
+    return 1;
 }
 
 #endif

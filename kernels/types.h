@@ -12,7 +12,21 @@
 #define GRID_MAX_NM 830.0f
 #define GRID_SAMPLES 471
 
+/* Material.type: which BSDF (kernels/material.cl dispatches on it; docs/materials.md lists the keys). */
 #define MATERIAL_DIFFUSE 0
+#define MATERIAL_CONDUCTOR 1
+#define MATERIAL_MIRROR 2
+#define MATERIAL_PLASTIC 3
+#define MATERIAL_DIELECTRIC 4
+#define MATERIAL_RETROREFLECTOR 5
+
+/* Material.ior_model: how a dielectric's interior index of refraction depends on the wavelength. */
+#define IOR_CONSTANT 0   /* Material.ior */
+#define IOR_SELLMEIER 1  /* n² = 1 + Σ B_i λ² / (λ² − C_i), λ in µm: coefficients B1 B2 B3 C1 C2 C3 (C in µm²) */
+#define IOR_CAUCHY 2     /* n = a + b / λ², λ in µm: coefficients a, b (b in µm²) */
+
+/* An offset that names no spectrum (only offsets documented as optional may hold it). */
+#define MATERIAL_NO_SPECTRUM (-1)
 
 /* Bounding volume hierarchy node (32 bytes). Interior: count == 0, children at left_first and left_first + 1.
  * Leaf: count > 0 triangles starting at slot left_first of the triangle arrays. */
@@ -29,23 +43,53 @@ typedef struct {
     int light;      /* index into the light array, or -1 when the triangle does not emit */
 } TriangleInfo;
 
+/* One material (80 bytes). Offsets are in floats into the spectrum table. reflectance_offset always names a
+ * valid spectrum (the constant 1 where a type has no reflectance), so a reader that only knows diffuse surfaces
+ * never reads outside the table. */
 typedef struct {
-    int type;                /* MATERIAL_* */
-    int reflectance_offset;  /* offset (floats) of the reflectance spectrum in the spectrum table */
+    int type;                         /* MATERIAL_* */
+    int reflectance_offset;           /* diffuse, mirror, retroreflector: reflectance; plastic: diffuse base
+                                         reflectance; conductor: specular tint (constant 1 when not given) */
+    int eta_offset;                   /* conductor: real part η of the complex index of refraction η + ik */
+    int k_offset;                     /* conductor: extinction coefficient k */
+    float roughness;                  /* GGX α of conductor, plastic, dielectric, retroreflector; below
+                                         GGX_SMOOTH_ALPHA (microfacet.cl) the lobe is a delta */
+    float ior;                        /* plastic: coat index; dielectric with IOR_CONSTANT: interior index */
+    float exterior_ior;               /* dielectric: index on the side the geometric normal points to */
+    int ior_model;                    /* dielectric: IOR_* */
+    float ior_coefficients[6];        /* dielectric: IOR_SELLMEIER B1 B2 B3 C1 C2 C3, IOR_CAUCHY a b */
+    int coat_albedo_offset;           /* plastic: offset of GRID_SAMPLES floats E(cos θ), cos θ = i / (GRID_SAMPLES − 1):
+                                         the coat's directional specular albedo (not a spectrum; it shares the table) */
+    float coat_internal_reflectance;  /* plastic: hemispherical reflectance of the coat seen from below (F_dr) */
+    float coat_mean_transmittance;    /* plastic: 2 ∫ (1 − E(μ)) μ dμ over μ in [0, 1] */
     int pad0;
     int pad1;
+    int pad2;
 } Material;
 
-/* An emitting triangle: radiance L(λ) = scale * table[radiance_offset + ...](λ), in W/(m² sr nm). */
+#define LIGHT_TRIANGLE 0     /* an emitting triangle of an area light: radiance, W/(m² sr nm) */
+#define LIGHT_POINT 1        /* isotropic point: intensity, W/(sr nm) */
+#define LIGHT_SPOT 2         /* point with a cone: intensity on the axis, W/(sr nm), smooth falloff to the cutoff */
+#define LIGHT_DISTANT 3      /* parallel light: irradiance on a surface facing it, W/(m² nm) */
+#define LIGHT_ENVIRONMENT 4  /* uniform environment at infinity: radiance, W/(m² sr nm) */
+
+/* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit its
+ * type states above. */
 typedef struct {
-    int triangle;          /* slot in the triangle arrays */
-    int radiance_offset;
+    float4 position;       /* point, spot */
+    float4 direction;      /* spot: unit axis; distant: unit direction the light travels */
+    int type;              /* LIGHT_* */
+    int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays */
+    int spectrum_offset;
     float scale;
     float pmf;             /* probability that next-event estimation picks this light */
-    float area;            /* m² */
-    int two_sided;
+    float area;            /* LIGHT_TRIANGLE: m² */
+    int two_sided;         /* LIGHT_TRIANGLE */
+    float cos_falloff_start;  /* LIGHT_SPOT: full intensity inside this cone */
+    float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int pad0;
     int pad1;
+    int pad2;
 } Light;
 
 /* Everything a render pass needs besides the buffers. */
@@ -59,9 +103,26 @@ typedef struct {
     int max_depth;           /* path segments from the camera (Mitsuba 3): 1 = emitters only; -1 = unbounded */
     int rr_depth;            /* segment count at which Russian roulette starts */
     int light_count;
+    int environment_light;   /* index of the LIGHT_ENVIRONMENT light, or -1 */
+    int triangle_count;
     int seed;
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
+    int pad0;
+    int pad1;
 } RenderParams;
+
+#define METER_IRRADIANCE 0  /* W/(m² nm) on a one-sided surface at `point` facing `direction` */
+#define METER_RADIANCE 1    /* W/(m² sr nm) arriving at `point` from `-direction` (along the ray point + t·direction) */
+#define METER_FLUX 2        /* W/nm leaving the sphere centred at point.xyz with radius point.w, from inside */
+
+typedef struct {
+    float4 point;
+    float4 direction;
+    int type;                /* METER_* */
+    int samples_per_item;
+    int seed;
+    int pad0;
+} MeterParams;
 
 #endif

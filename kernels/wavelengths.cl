@@ -55,4 +55,17 @@ inline SampledWavelengths sample_wavelengths(float u)
     return w;
 }
 
+/* Fixed wavelengths (sensors measure chosen wavelengths instead of sampling them); pdf is 1 (unused). */
+inline SampledWavelengths fixed_wavelengths(float4 lambda)
+{
+    SampledWavelengths w;
+    w.lambda = clamp(lambda, GRID_MIN_NM, GRID_MAX_NM);
+    w.pdf = (float4)(1.0f);
+    float4 position = w.lambda - GRID_MIN_NM;
+    float4 lower = clamp(floor(position), 0.0f, (float)(GRID_SAMPLES - 2));
+    w.grid_index = convert_int4(lower);
+    w.grid_frac = position - lower;
+    return w;
+}
+
 #endif

@@ -312,6 +312,18 @@ def test_root_split_is_the_cheapest_binned_plane():
     assert chosen == pytest.approx(best, rel=1e-9)
 
 
+@pytest.mark.parametrize(("gap", "expect_split"), [(0.5, False), (2.0, True)])
+def test_two_triangles_split_only_when_the_sah_says_so(gap, expect_split):
+    # Flat triangles with boxes [0,1]x[0,1] and [gap,gap+1]x[0,1] in z = 0: box areas 2, 2 and 2(1+gap).
+    # Leaf cost 2 against split cost 1 + (2 + 2) / (2 (1 + gap)): a split pays only once the boxes are apart.
+    assert (1 + 4 / (2 * (1 + gap)) < 2) == expect_split
+    corner = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    triangles = np.stack([corner, corner + [gap, 0.0, 0.0]])
+    bvh = build_bvh(*_corners(triangles), max_leaf_size=1)
+    assert_valid_bvh(bvh, triangles)
+    assert (bvh.nodes["count"][0] == 0) == expect_split
+
+
 def test_single_triangle_is_a_root_leaf():
     triangles = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
     bvh = build_bvh(*_corners(triangles))

@@ -106,6 +106,8 @@ def build_bvh(
     depth = -1
     while level is not None:
         depth += 1
+        if depth > MAX_DEPTH:  # the depth guard in _choose_splits makes this unreachable
+            raise RuntimeError(f"BVH build exceeded depth {MAX_DEPTH}")
         nodes, level = _build_level(
             level, depth, first_node_of_level, prim_order, max_leaf_size, forced_split_above, bins
         )
@@ -434,6 +436,8 @@ def _partition(level: _Level, starts: np.ndarray, is_split: np.ndarray, goes_rig
     left_counts = counts - right_counts
     split_nodes = np.flatnonzero(is_split)
     child_counts = np.stack([left_counts[split_nodes], right_counts[split_nodes]], axis=1).ravel()
+    if not np.all(child_counts > 0):  # every split plane was chosen to leave triangles on both sides
+        raise RuntimeError("BVH build produced an empty child")
     child_starts = np.concatenate(([0], np.cumsum(child_counts)[:-1]))
 
     # Destination of each triangle in the next level, for every node (entries of leaves are dropped below):

@@ -8,7 +8,19 @@ import numpy as np
 
 from spectrace.geometry.bvh import BVH_NODE_DTYPE
 
+# Material.type and Material.ior_model values (kernels/types.h).
 MATERIAL_DIFFUSE = 0
+MATERIAL_CONDUCTOR = 1
+MATERIAL_MIRROR = 2
+MATERIAL_PLASTIC = 3
+MATERIAL_DIELECTRIC = 4
+MATERIAL_RETROREFLECTOR = 5
+
+IOR_CONSTANT = 0
+IOR_SELLMEIER = 1
+IOR_CAUCHY = 2
+
+MATERIAL_NO_SPECTRUM = -1
 
 
 def _struct(fields: list[tuple[str, object]], itemsize: int) -> np.dtype:
@@ -28,21 +40,46 @@ def _struct(fields: list[tuple[str, object]], itemsize: int) -> np.dtype:
 TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4")], 8)
 
 MATERIAL_DTYPE = _struct(
-    [("type", "<i4"), ("reflectance_offset", "<i4"), ("pad0", "<i4"), ("pad1", "<i4")], 16
+    [
+        ("type", "<i4"),
+        ("reflectance_offset", "<i4"),
+        ("eta_offset", "<i4"),
+        ("k_offset", "<i4"),
+        ("roughness", "<f4"),
+        ("ior", "<f4"),
+        ("exterior_ior", "<f4"),
+        ("ior_model", "<i4"),
+        ("ior_coefficients", ("<f4", (6,))),
+        ("coat_albedo_offset", "<i4"),
+        ("coat_internal_reflectance", "<f4"),
+        ("coat_mean_transmittance", "<f4"),
+        ("pad0", "<i4"),
+        ("pad1", "<i4"),
+        ("pad2", "<i4"),
+    ],
+    80,
 )
+
+LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT = range(5)
 
 LIGHT_DTYPE = _struct(
     [
+        ("position", ("<f4", (4,))),
+        ("direction", ("<f4", (4,))),
+        ("type", "<i4"),
         ("triangle", "<i4"),
-        ("radiance_offset", "<i4"),
+        ("spectrum_offset", "<i4"),
         ("scale", "<f4"),
         ("pmf", "<f4"),
         ("area", "<f4"),
         ("two_sided", "<i4"),
+        ("cos_falloff_start", "<f4"),
+        ("cos_cutoff", "<f4"),
         ("pad0", "<i4"),
         ("pad1", "<i4"),
+        ("pad2", "<i4"),
     ],
-    32,
+    80,
 )
 
 RENDER_PARAMS_DTYPE = _struct(
@@ -56,11 +93,29 @@ RENDER_PARAMS_DTYPE = _struct(
         ("max_depth", "<i4"),
         ("rr_depth", "<i4"),
         ("light_count", "<i4"),
+        ("environment_light", "<i4"),
+        ("triangle_count", "<i4"),
         ("seed", "<i4"),
         ("sample_begin", "<i4"),
         ("sample_count", "<i4"),
+        ("pad0", "<i4"),
+        ("pad1", "<i4"),
     ],
-    96,
+    112,
+)
+
+METER_IRRADIANCE, METER_RADIANCE, METER_FLUX = range(3)
+
+METER_PARAMS_DTYPE = _struct(
+    [
+        ("point", ("<f4", (4,))),
+        ("direction", ("<f4", (4,))),
+        ("type", "<i4"),
+        ("samples_per_item", "<i4"),
+        ("seed", "<i4"),
+        ("pad0", "<i4"),
+    ],
+    48,
 )
 
 # struct name in types.h -> dtype; the layout test walks this table.
@@ -70,4 +125,5 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "Material": MATERIAL_DTYPE,
     "Light": LIGHT_DTYPE,
     "RenderParams": RENDER_PARAMS_DTYPE,
+    "MeterParams": METER_PARAMS_DTYPE,
 }

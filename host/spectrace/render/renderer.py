@@ -17,18 +17,20 @@ ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 # launch overhead does not matter.
 TARGET_PASS_SECONDS = 0.5
 
+INTEGRATOR_PROGRAMS = {"path": "integrator_path.cl", "direct": "integrator_direct.cl"}
+
 
 class Renderer:
     def __init__(self, scene: Scene, device: Device | str | None = None):
         self.scene = scene
         self.device = device if isinstance(device, Device) else open_device(device)
         self.buffers: SceneBuffers = build_scene_buffers(scene)
-        self.program = self.device.build_program("integrator_path.cl")
+        self.program = self.device.build_program(INTEGRATOR_PROGRAMS[scene.integrator])
         self.kernel = cl.Kernel(self.program, "render_pass")
         ctx = self.device.context
         ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
         b = self.buffers
-        self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, 0, 0, 0).nbytes)
+        self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._inputs = [
             cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
             for a in (b.bvh.nodes, b.triangle_vertices, b.triangle_info, b.materials, b.lights, b.light_cdf,
@@ -41,10 +43,6 @@ class Renderer:
         self.render_seconds = 0.0
         self.reset()
 
-    @property
-    def light_count(self) -> int:
-        return int(np.count_nonzero(self.buffers.triangle_info["light"] >= 0))
-
     def reset(self) -> None:
         queue = self.device.queue
         cl.enqueue_fill_buffer(queue, self._film, np.float32(0), 0, self.pixel_count * 16)
@@ -56,7 +54,7 @@ class Renderer:
     def run_pass(self, sample_count: int) -> None:
         """Add `sample_count` samples per pixel, continuing the sample sequence where the last pass stopped."""
         queue = self.device.queue
-        params = render_params(self.scene, self.light_count, self.samples_done, sample_count)
+        params = render_params(self.scene, self.buffers, self.samples_done, sample_count)
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
         self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts)

@@ -5,16 +5,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.errors import SpectraceError
-from spectrace.geometry.bvh import BVH, build_bvh
+from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.render.device_types import (
+    LIGHT_DISTANT,
     LIGHT_DTYPE,
+    LIGHT_ENVIRONMENT,
+    LIGHT_POINT,
+    LIGHT_SPOT,
+    LIGHT_TRIANGLE,
     MATERIAL_DIFFUSE,
     MATERIAL_DTYPE,
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
 )
-from spectrace.scene.model import Scene
+from spectrace.scene.model import ConstantEnvironment, DistantLight, PointLight, Scene, SpotLight
 from spectrace.spectral.colorimetry import cmf_table_normalised
+from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 
@@ -23,15 +29,14 @@ class SceneBuffers:
     bvh: BVH
     triangle_vertices: np.ndarray  # (3·M, 4) float32, BVH leaf order
     triangle_info: np.ndarray  # (M,) TRIANGLE_INFO_DTYPE
+    triangle_count: int  # arrays hold one dummy entry when there are no triangles
     materials: np.ndarray  # MATERIAL_DTYPE
     lights: np.ndarray  # LIGHT_DTYPE
+    light_count: int
+    environment_light: int  # index into lights, or -1
     light_cdf: np.ndarray  # (L + 1,) float32
     spectra: np.ndarray  # float32 table
     cmf: np.ndarray  # (471, 4) float32: x̄, ȳ, z̄ / ∫ȳ
-
-    @property
-    def triangle_count(self) -> int:
-        return len(self.triangle_info)
 
     def device_bytes(self) -> int:
         arrays = (self.bvh.nodes, self.triangle_vertices, self.triangle_info, self.materials, self.lights,
@@ -58,62 +63,109 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             emitter_id = len(emitters)
             emitters.append(shape.emitter)
         tri_emitter.append(np.full(len(v0), emitter_id, np.int32))
-    v0, v1, v2 = (np.concatenate(a) for a in (v0s, v1s, v2s))
-    if len(v0) == 0:
-        raise SpectraceError("the scene has no triangles")
-    tri_material = np.concatenate(tri_material)
-    tri_emitter = np.concatenate(tri_emitter)
 
-    bvh = build_bvh(v0, v1, v2)
-    order = bvh.prim_order
-    v0, v1, v2 = v0[order], v1[order], v2[order]
-    tri_material, tri_emitter = tri_material[order], tri_emitter[order]
+    if v0s and sum(len(v) for v in v0s):
+        v0, v1, v2 = (np.concatenate(a) for a in (v0s, v1s, v2s))
+        tri_material, tri_emitter = np.concatenate(tri_material), np.concatenate(tri_emitter)
+        bvh = build_bvh(v0, v1, v2)
+        order = bvh.prim_order
+        v0, v1, v2 = v0[order], v1[order], v2[order]
+        tri_material, tri_emitter = tri_material[order], tri_emitter[order]
+        scene_radius = 0.5 * float(np.linalg.norm(bvh.nodes[0]["bmax"] - bvh.nodes[0]["bmin"]))
+    else:
+        v0 = v1 = v2 = np.zeros((0, 3))
+        tri_material = tri_emitter = np.zeros(0, np.int32)
+        bvh = _empty_bvh()
+        scene_radius = 1.0
+    scene_radius = max(scene_radius, 1e-6)
 
-    vertices = np.zeros((len(v0), 3, 4), np.float32)
-    vertices[:, 0, :3], vertices[:, 1, :3], vertices[:, 2, :3] = v0, v1, v2
+    vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
+    vertices[: len(v0), 0, :3], vertices[: len(v0), 1, :3], vertices[: len(v0), 2, :3] = v0, v1, v2
 
+    rows, power = [], []
     areas = 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
     emitting = np.flatnonzero((tri_emitter >= 0) & (areas > 0))
-    lights = np.zeros(len(emitting), LIGHT_DTYPE)
     emitter_offsets = [table.add(e.radiance) for e in emitters]
-    # Next-event estimation picks a triangle in proportion to the power it emits (area x mean radiance x sides),
-    # so bright large lights get most samples; any positive weights would be unbiased.
-    power = np.zeros(len(emitting))
-    for j, t in enumerate(emitting):
+    for t in emitting:
         e = emitters[tri_emitter[t]]
-        lights[j] = (t, emitter_offsets[tri_emitter[t]], 1.0, 0.0, areas[t], int(e.two_sided), 0, 0)
-        power[j] = areas[t] * max(float(e.radiance.values.mean()), 0.0) * (2.0 if e.two_sided else 1.0)
+        rows.append(_light_row(LIGHT_TRIANGLE, emitter_offsets[tri_emitter[t]], triangle=t, area=areas[t],
+                               two_sided=e.two_sided))
+        power.append(np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0))
+    environment_light = -1
+    for light in scene.lights:
+        if isinstance(light, PointLight):
+            rows.append(_light_row(LIGHT_POINT, table.add(light.intensity), position=light.position))
+            power.append(4.0 * np.pi * light.intensity.mean())
+        elif isinstance(light, SpotLight):
+            rows.append(_light_row(LIGHT_SPOT, table.add(light.intensity), position=light.position,
+                                   direction=light.direction,
+                                   cos_falloff_start=np.cos(np.radians(light.falloff_start_degrees)),
+                                   cos_cutoff=np.cos(np.radians(light.cutoff_degrees))))
+            power.append(light.effective_solid_angle() * light.intensity.mean())
+        elif isinstance(light, DistantLight):
+            rows.append(_light_row(LIGHT_DISTANT, table.add(light.irradiance), direction=light.direction))
+            power.append(np.pi * scene_radius**2 * light.irradiance.mean())
+        elif isinstance(light, ConstantEnvironment):
+            environment_light = len(rows)
+            rows.append(_light_row(LIGHT_ENVIRONMENT, table.add(light.radiance)))
+            power.append(4.0 * np.pi**2 * scene_radius**2 * light.radiance.mean())
+        else:
+            raise SpectraceError(f"unsupported light {type(light).__name__}")
+
+    # Next-event estimation picks a light in proportion to an estimate of the power it emits (pbrt-v4's
+    # power light sampler); any positive weights would be unbiased, these put samples where the light is.
+    lights = np.array(rows, LIGHT_DTYPE) if rows else np.zeros(1, LIGHT_DTYPE)
     light_index = np.full(len(v0), -1, np.int32)
-    if len(emitting):
-        if power.sum() <= 0:
-            power[:] = areas[emitting]
-        pmf = power / power.sum()
-        lights["pmf"] = pmf
+    if rows:
+        weights = np.maximum(np.array(power, float), 0.0)
+        if weights.sum() <= 0:
+            weights[:] = 1.0
+        pmf = weights / weights.sum()
+        lights["pmf"][: len(rows)] = pmf
         light_index[emitting] = np.arange(len(emitting), dtype=np.int32)
         cdf = np.concatenate([[0.0], np.cumsum(pmf)])
         cdf[-1] = 1.0
     else:
         cdf = np.array([0.0, 1.0])
-    triangle_info = np.zeros(len(v0), TRIANGLE_INFO_DTYPE)
-    triangle_info["material"] = tri_material
-    triangle_info["light"] = light_index
+    triangle_info = np.zeros(max(len(v0), 1), TRIANGLE_INFO_DTYPE)
+    triangle_info["material"][: len(v0)] = tri_material
+    triangle_info["light"][: len(v0)] = light_index
 
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
     materials = np.array(material_rows, MATERIAL_DTYPE) if material_rows else np.zeros(1, MATERIAL_DTYPE)
+    if len(table) == 0:
+        table.add(Spectrum.zeros())
     return SceneBuffers(
         bvh=bvh,
         triangle_vertices=vertices.reshape(-1, 4),
         triangle_info=triangle_info,
+        triangle_count=len(v0),
         materials=materials,
-        lights=lights if len(lights) else np.zeros(1, LIGHT_DTYPE),
+        lights=lights,
+        light_count=len(rows),
+        environment_light=environment_light,
         light_cdf=cdf.astype(np.float32),
         spectra=table.data,
         cmf=cmf,
     )
 
 
-def render_params(scene: Scene, light_count: int, sample_begin: int, sample_count: int) -> np.ndarray:
+def _light_row(light_type: int, spectrum_offset: int, *, triangle: int = -1, area: float = 0.0,
+               two_sided: bool = False, position=(0.0, 0.0, 0.0), direction=(0.0, 0.0, 1.0),
+               cos_falloff_start: float = 1.0, cos_cutoff: float = 1.0) -> tuple:
+    return ((*position, 1.0), (*direction, 0.0), light_type, triangle, spectrum_offset, 1.0, 0.0, area,
+            int(two_sided), cos_falloff_start, cos_cutoff, 0, 0, 0)
+
+
+def _empty_bvh() -> BVH:
+    """A root whose box is inverted, so every ray misses it (the kernels also skip tracing entirely)."""
+    nodes = np.zeros(1, BVH_NODE_DTYPE)
+    nodes[0] = ((1.0, 1.0, 1.0), 0, (-1.0, -1.0, -1.0), 1)
+    return BVH(nodes=nodes, prim_order=np.zeros(0, np.int32), depth=0, sah_cost=0.0, build_seconds=0.0)
+
+
+def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample_count: int) -> np.ndarray:
     origin, forward, right, up = scene.camera.basis(scene.width / scene.height)
     params = np.zeros(1, RENDER_PARAMS_DTYPE)
     params["camera_origin"][0, :3] = origin
@@ -122,7 +174,9 @@ def render_params(scene: Scene, light_count: int, sample_begin: int, sample_coun
     params["camera_up"][0, :3] = up
     params["width"], params["height"] = scene.width, scene.height
     params["max_depth"], params["rr_depth"] = scene.max_depth, scene.rr_depth
-    params["light_count"] = light_count
+    params["light_count"] = buffers.light_count
+    params["environment_light"] = buffers.environment_light
+    params["triangle_count"] = buffers.triangle_count
     params["seed"] = scene.seed
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
     return params

@@ -12,7 +12,20 @@ from spectrace.geometry import primitives
 from spectrace.geometry.mesh import load_mesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.scene import schema
-from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
+from spectrace.scene.model import (
+    AreaEmitter,
+    Camera,
+    ConstantEnvironment,
+    DiffuseMaterial,
+    DistantLight,
+    Light,
+    PointLight,
+    Scene,
+    Shape,
+    SpotLight,
+)
+from spectrace.spectral.blackbody import blackbody
+from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
 from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
@@ -139,7 +152,9 @@ class _Resolver:
                     )
                 result = uplift_reflectance(rgb)[0]
         elif spec.value is not None:
-            result = Spectrum(np.full_like(Spectrum.zeros().values, spec.value), name=f"constant {spec.value}")
+            result = Spectrum.constant(spec.value, name=f"constant {spec.value}")
+        elif spec.blackbody is not None:
+            result = blackbody(spec.blackbody)
         elif spec.spectrum is not None:
             result = self.named_spectrum(spec.spectrum, f"{key}.spectrum")
         elif spec.values is not None:
@@ -185,6 +200,50 @@ class _Resolver:
         return shapes
 
 
+    def point_source_intensity(self, spec, key: str, solid_angle_sr: float) -> Spectrum:
+        """I(λ) in W/(sr nm) from `intensity`, or from `power` W spread over `solid_angle_sr` with the
+        spectral shape `spectrum` (equal energy by default) normalised to ∫Φ(λ)dλ = power."""
+        if spec.intensity is not None:
+            return self.spectrum(spec.intensity, f"{key}.intensity", emission=True)
+        shape = (self.spectrum(spec.spectrum, f"{key}.spectrum", emission=True) if spec.spectrum is not None
+                 else Spectrum.constant(1.0, name="equal energy"))
+        total = float(integrate_on_grid(shape.values))
+        if total <= 0:
+            raise SpectraceError("the spectrum of a light given by power must not be zero", where=self.where(key))
+        return shape * (spec.power / total / solid_angle_sr)
+
+    def lights(self) -> list[Light]:
+        lights: list[Light] = []
+        for i, spec in enumerate(self.spec.lights):
+            key = f"lights[{i}]"
+            if spec.type == "point":
+                lights.append(PointLight(spec.position, self.point_source_intensity(spec, key, 4.0 * np.pi)))
+            elif spec.type == "spot":
+                direction = _unit(np.subtract(spec.target, spec.position), self.where(f"{key}.target"))
+                cutoff = spec.cutoff_angle
+                start = spec.falloff_start if spec.falloff_start is not None else 0.75 * cutoff
+                if start > cutoff:
+                    raise SpectraceError(f"falloff_start ({start}) exceeds cutoff_angle ({cutoff})",
+                                         where=self.where(f"{key}.falloff_start"))
+                cone = SpotLight(spec.position, direction, Spectrum.zeros(), cutoff, start)
+                intensity = self.point_source_intensity(spec, key, cone.effective_solid_angle())
+                lights.append(SpotLight(spec.position, direction, intensity, cutoff, start))
+            elif spec.type == "distant":
+                direction = _unit(spec.direction, self.where(f"{key}.direction"))
+                lights.append(DistantLight(direction, self.spectrum(spec.irradiance, f"{key}.irradiance", True)))
+            else:
+                lights.append(ConstantEnvironment(self.spectrum(spec.radiance, f"{key}.radiance", emission=True)))
+        return lights
+
+
+def _unit(vector, where: str) -> tuple[float, float, float]:
+    v = np.asarray(vector, float)
+    norm = np.linalg.norm(v)
+    if not norm > 0:
+        raise SpectraceError("direction must not be zero", where=where)
+    return tuple(float(c) for c in v / norm)
+
+
 def load_scene(path: str | Path) -> Scene:
     """Read, validate and resolve a TOML scene file; raises SpectraceError naming the file and key path."""
     path = Path(path)
@@ -192,6 +251,7 @@ def load_scene(path: str | Path) -> Scene:
     resolver = _Resolver(path, spec)
     materials = resolver.materials()
     shapes = resolver.shapes(materials)
+    lights = resolver.lights()
     for name in spec.spectra:
         resolver.named_spectrum(name, f"spectra.{name}")
     camera = Camera(
@@ -207,6 +267,8 @@ def load_scene(path: str | Path) -> Scene:
         width=spec.film.width,
         height=spec.film.height,
         shapes=shapes,
+        lights=lights,
+        integrator=spec.integrator.type,
         max_depth=spec.integrator.max_depth,
         rr_depth=spec.integrator.rr_depth,
         spp=spec.sampler.spp,

@@ -57,6 +57,50 @@ class AreaEmitter:
 
 
 @dataclass(frozen=True)
+class PointLight:
+    """Isotropic point light: intensity I(λ) in W/(sr nm) (a flux Φ(λ) in W/nm gives I = Φ/4π)."""
+
+    position: tuple[float, float, float]
+    intensity: Spectrum
+
+
+@dataclass(frozen=True)
+class SpotLight:
+    """Point light emitting into a cone about `direction`: I(λ) on the axis in W/(sr nm), full up to
+    falloff_start_degrees from the axis, falling smoothly (smoothstep in cos θ) to 0 at cutoff_degrees."""
+
+    position: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    intensity: Spectrum
+    cutoff_degrees: float = 30.0
+    falloff_start_degrees: float = 25.0
+
+    def effective_solid_angle(self) -> float:
+        """∫ falloff dω over the sphere, sr: flux = intensity × this."""
+        cos_start = np.cos(np.radians(self.falloff_start_degrees))
+        cos_cut = np.cos(np.radians(self.cutoff_degrees))
+        return 2.0 * np.pi * ((1.0 - cos_start) + 0.5 * (cos_start - cos_cut))
+
+
+@dataclass(frozen=True)
+class DistantLight:
+    """Parallel light travelling along `direction`: irradiance E(λ) in W/(m² nm) on a surface facing it."""
+
+    direction: tuple[float, float, float]
+    irradiance: Spectrum
+
+
+@dataclass(frozen=True)
+class ConstantEnvironment:
+    """Uniform light from every direction at infinity: radiance L(λ) in W/(m² sr nm)."""
+
+    radiance: Spectrum
+
+
+Light = PointLight | SpotLight | DistantLight | ConstantEnvironment
+
+
+@dataclass(frozen=True)
 class Shape:
     mesh: TriangleMesh  # world space
     material: Material
@@ -70,6 +114,8 @@ class Scene:
     width: int
     height: int
     shapes: list[Shape]
+    lights: list[Light] = field(default_factory=list)
+    integrator: Literal["path", "direct"] = "path"
     max_depth: int = 8
     rr_depth: int = 5
     spp: int = 16

@@ -38,7 +38,7 @@ class FilmSpec(Strict):
 
 
 class IntegratorSpec(Strict):
-    type: Literal["path"] = "path"
+    type: Literal["path", "direct"] = "path"
     max_depth: int = Field(default=8, ge=-1, description="path segments from the camera; -1 = unbounded")
     rr_depth: int = Field(default=5, ge=1, description="bounces after which Russian roulette may end a path")
 
@@ -55,6 +55,9 @@ class SamplerSpec(Strict):
     seed: int = Field(default=0, ge=0, lt=1 << 31)
 
 
+SPECTRUM_SOURCES = ("rgb", "value", "blackbody", "spectrum", "values", "file")
+
+
 class SpectrumSpec(Strict):
     """One spectrum, from exactly one source, times `scale`.
 
@@ -65,6 +68,7 @@ class SpectrumSpec(Strict):
 
     rgb: Vector3 | None = None
     value: FiniteFloat | None = None
+    blackbody: FiniteFloat | None = Field(default=None, description="temperature in kelvin; peak normalised to 1")
     spectrum: str | None = None
     values: str | list[tuple[FiniteFloat, FiniteFloat]] | None = None
     file: str | None = None
@@ -73,10 +77,12 @@ class SpectrumSpec(Strict):
 
     @model_validator(mode="after")
     def _exactly_one_source(self) -> "SpectrumSpec":
-        sources = [k for k in ("rgb", "value", "spectrum", "values", "file") if getattr(self, k) is not None]
+        sources = [k for k in SPECTRUM_SOURCES if getattr(self, k) is not None]
         if len(sources) != 1:
             given = ", ".join(sources) if sources else "none"
-            raise ValueError(f"give exactly one of rgb, value, spectrum, values, file (given: {given})")
+            raise ValueError(f"give exactly one of {', '.join(SPECTRUM_SOURCES)} (given: {given})")
+        if self.blackbody is not None and self.blackbody <= 0:
+            raise ValueError(f"blackbody temperature must be > 0 K, got {self.blackbody}")
         if self.column is not None and self.file is None:
             raise ValueError("column is only meaningful with file")
         if self.scale < 0:
@@ -145,6 +151,53 @@ class ShapeSpec(Strict):
         return self
 
 
+class _PointSourceSpec(Strict):
+    """Give either `intensity` (W/(sr nm)) or `power` (total flux in W over 360–830 nm) with the spectral shape
+    `spectrum` (default: equal energy), which is normalised so that ∫Φ(λ)dλ = power."""
+
+    position: Vector3
+    intensity: SpectrumSpec | None = None
+    power: FiniteFloat | None = None
+    spectrum: SpectrumSpec | None = None
+
+    @model_validator(mode="after")
+    def _intensity_or_power(self):
+        if (self.intensity is None) == (self.power is None):
+            raise ValueError("give exactly one of intensity, power")
+        if self.spectrum is not None and self.power is None:
+            raise ValueError("spectrum sets the shape of power; with intensity, put the spectrum in intensity")
+        if self.power is not None and self.power < 0:
+            raise ValueError(f"power must be >= 0 W, got {self.power}")
+        return self
+
+
+class PointLightSpec(_PointSourceSpec):
+    type: Literal["point"]
+
+
+class SpotLightSpec(_PointSourceSpec):
+    type: Literal["spot"]
+    target: Vector3
+    cutoff_angle: FiniteFloat = Field(default=30.0, gt=0.0, le=90.0, description="degrees from the axis")
+    falloff_start: FiniteFloat | None = Field(default=None, ge=0.0, description="degrees; default 3/4 of cutoff")
+
+
+class DistantLightSpec(Strict):
+    type: Literal["distant"]
+    direction: Vector3 = Field(description="the direction the light travels")
+    irradiance: SpectrumSpec = Field(description="W/(m² nm) on a surface facing the light")
+
+
+class ConstantEnvironmentSpec(Strict):
+    type: Literal["constant"]
+    radiance: SpectrumSpec = Field(description="W/(m² sr nm) from every direction")
+
+
+LightSpec = Annotated[
+    PointLightSpec | SpotLightSpec | DistantLightSpec | ConstantEnvironmentSpec, Field(discriminator="type")
+]
+
+
 class SceneSpec(Strict):
     camera: CameraSpec
     film: FilmSpec
@@ -152,4 +205,13 @@ class SceneSpec(Strict):
     sampler: SamplerSpec = SamplerSpec()
     spectra: dict[str, NamedSpectrumSpec] = {}
     materials: dict[str, MaterialSpec]
-    shapes: list[ShapeSpec] = Field(min_length=1)
+    shapes: list[ShapeSpec] = []
+    lights: list[LightSpec] = []
+
+    @model_validator(mode="after")
+    def _something_emits(self) -> "SceneSpec":
+        if not self.shapes and not self.lights:
+            raise ValueError("the scene has neither shapes nor lights")
+        if sum(1 for light in self.lights if light.type == "constant") > 1:
+            raise ValueError("at most one environment light")
+        return self

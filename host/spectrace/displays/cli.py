@@ -1,0 +1,206 @@
+"""`spectrace display list | compare | match`: the same RGB on different displays (see docs/displays.md)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from spectrace.displays.catalog import load_all_displays, load_display
+from spectrace.displays.compare import Comparison, compare_displays
+from spectrace.displays.display import CHANNELS, Display
+from spectrace.displays.match import MatchResult, match_colour
+from spectrace.displays.observers import ALL_OBSERVERS, Observer
+from spectrace.displays.transfer import Encoding
+from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions
+
+display_app = typer.Typer(
+    help="Displays as spectral emitters: the same RGB on LCD, OLED and CRT displays.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+JsonOption = Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")]
+RgbOption = Annotated[
+    tuple[float, float, float],
+    typer.Option("--rgb", help="The triple R G B, each in [0, 1], read with --encoding."),
+]
+EncodingOption = Annotated[
+    Encoding,
+    typer.Option("--encoding", help="How the triple maps to linear drive: linear (the triple is the drive), "
+                 "srgb (IEC 61966-2-1 curve) or gamma2.2."),
+]
+WhiteLuminanceOption = Annotated[
+    float,
+    typer.Option("--white-luminance", help="cd/m² of every display's white (1,1,1) and of the D65 reference white."),
+]
+MeasuredOption = Annotated[
+    bool,
+    typer.Option("--measured-radiance", help="Displays with absolute data keep their measured radiance "
+                 "(relative ones are still set to --white-luminance)."),
+]
+
+
+PIPED_OUTPUT_WIDTH = 200  # columns for tables written to a file or a pipe, where no terminal width exists
+
+
+def _stdout_console() -> Console:
+    return Console() if sys.stdout.isatty() else Console(width=PIPED_OUTPUT_WIDTH)
+
+
+def _print_json(payload: dict) -> None:
+    print(json.dumps(payload, indent=2))
+
+
+def _xy_text(xy: np.ndarray) -> str:
+    return f"{xy[0]:.4f}, {xy[1]:.4f}"
+
+
+def _triple_text(values: np.ndarray, digits: int = 3) -> str:
+    return " ".join(f"{value:.{digits}f}" for value in values)
+
+
+def _displays_from_options(specs: list[str] | None, option: str) -> list[Display]:
+    if not specs:
+        return load_all_displays()
+    return [load_display(spec, where=option) for spec in specs]
+
+
+# ---------------------------------------------------------------- list
+
+
+def _listing_json(display: Display) -> dict:
+    return {
+        "name": display.name,
+        "technology": display.technology,
+        "absolute": display.absolute,
+        "radiance_scale": display.radiance_scale,
+        "white_luminance_cd_m2": display.white_luminance_cd_m2 if display.absolute else None,
+        "primaries_xy": dict(zip(CHANNELS, display.primaries_xy().tolist())),
+        "white_xy": display.white_xy().tolist(),
+        "source": display.source,
+    }
+
+
+@display_app.command("list")
+def list_displays(
+    extra: Annotated[
+        Optional[list[str]], typer.Option("--display", "-d", help="Also list this display CSV (repeatable).")
+    ] = None,
+    as_json: JsonOption = False,
+) -> None:
+    """Every known display: technology, primaries' and white's CIE 1931 xy, white luminance."""
+    displays = load_all_displays() + [load_display(spec, where="--display") for spec in extra or []]
+    if as_json:
+        _print_json({"displays": [_listing_json(display) for display in displays]})
+        return
+    table = Table(title="displays (CIE 1931 xy; white = RGB (1, 1, 1))")
+    for heading in ("display", "technology", "red xy", "green xy", "blue xy", "white xy", "white cd/m²"):
+        table.add_column(heading)
+    for display in displays:
+        luminance = f"{display.white_luminance_cd_m2:.1f}" if display.absolute else "relative"
+        table.add_row(display.name, display.technology, *(_xy_text(xy) for xy in display.primaries_xy()),
+                      _xy_text(display.white_xy()), luminance)
+    _stdout_console().print(table)
+
+
+# ---------------------------------------------------------------- compare
+
+
+def _comparison_tables(comparison: Comparison) -> tuple[Table, Table]:
+    rgb = ", ".join(f"{value:g}" for value in comparison.rgb)
+    white = comparison.viewing.white_luminance_cd_m2
+    colours = Table(title=f"RGB ({rgb}); CIELAB and sRGB relative to D65 at {white:g} cd/m²; * = outside sRGB, clipped")
+    for heading in ("display", "luminance scale", "X Y Z (cd/m²)", "x, y", "Y cd/m²", "sRGB", "L* a* b* (1931 2°)"):
+        colours.add_column(heading)
+    for item in comparison.colours:
+        colours.add_row(
+            item.display.name, item.display.radiance_scale, _triple_text(item.xyz_cd_m2, 2), _xy_text(item.xy),
+            f"{item.luminance_cd_m2:.2f}", _triple_text(item.srgb) + ("" if item.srgb_in_gamut else " *"),
+            _triple_text(item.lab[Observer.CIE_1931_2], 2),
+        )
+    pairs = Table(title="CIEDE2000 of every pair")
+    for heading in ("display", "display", *(f"ΔE00 {observer.label}" for observer in ALL_OBSERVERS)):
+        pairs.add_column(heading)
+    for pair in comparison.pairs:
+        pairs.add_row(pair.first, pair.second, *(f"{pair.delta_e_2000[observer]:.2f}" for observer in ALL_OBSERVERS))
+    return colours, pairs
+
+
+@display_app.command()
+def compare(
+    rgb: RgbOption,
+    display: Annotated[
+        Optional[list[str]],
+        typer.Option("--display", "-d", help="Display name or CSV file (repeatable; default: every known display)."),
+    ] = None,
+    encoding: EncodingOption = Encoding.LINEAR,
+    white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
+    measured_radiance: MeasuredOption = False,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="Also draw the comparison into this image file.")] = None,
+    as_json: JsonOption = False,
+) -> None:
+    """The same RGB on several displays: XYZ, xy, luminance, sRGB, CIELAB, and ΔE2000 of every pair."""
+    displays = [item.with_transfer(encoding) for item in _displays_from_options(display, "--display")]
+    viewing = ViewingConditions(white_luminance_cd_m2=white_luminance, keep_measured_radiance=measured_radiance)
+    comparison = compare_displays(displays, np.array(rgb), viewing)
+    if plot is not None:
+        from spectrace.displays.plots import plot_comparison
+
+        plot_comparison(comparison, plot)
+    if as_json:
+        payload = comparison.to_json() | {"encoding": encoding.value, "plot": str(plot) if plot else None}
+        _print_json(payload)
+        return
+    console = _stdout_console()
+    for table in _comparison_tables(comparison):
+        console.print(table)
+    if plot is not None:
+        console.print(f"wrote {plot}", highlight=False)
+
+
+# ---------------------------------------------------------------- match
+
+
+def _match_table(result: MatchResult) -> Table:
+    status = "exact (in gamut)" if result.in_gamut else "out of gamut: closest in [0, 1]³ by ΔE00 (1931 2°)"
+    table = Table(title=f"match from {result.source.name} to {result.target.name}: {status}")
+    table.add_column("")
+    table.add_column(result.source.name)
+    table.add_column(result.target.name)
+    table.add_row("RGB", _triple_text(result.rgb, 4), _triple_text(result.target_rgb, 4))
+    table.add_row("linear drive", _triple_text(result.source_drive, 4), _triple_text(result.target_drive, 4))
+    table.add_row("X Y Z (cd/m²)", _triple_text(result.source_xyz_cd_m2, 3), _triple_text(result.target_xyz_cd_m2, 3))
+    if not result.in_gamut:
+        table.add_row("exact drive (outside [0, 1])", "", _triple_text(result.exact_drive, 4))
+    for observer in ALL_OBSERVERS:
+        table.add_row(f"residual ΔE00 {observer.label}", "", f"{result.delta_e_2000[observer]:.3f}")
+    return table
+
+
+@display_app.command()
+def match(
+    rgb: RgbOption,
+    source: Annotated[str, typer.Option("--from", help="Display name or CSV file showing the triple.")],
+    target: Annotated[str, typer.Option("--to", help="Display name or CSV file to find the matching RGB on.")],
+    encoding: EncodingOption = Encoding.LINEAR,
+    white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
+    measured_radiance: MeasuredOption = False,
+    as_json: JsonOption = False,
+) -> None:
+    """The RGB on --to whose emission has the CIE 1931 XYZ of the triple on --from, and the residual ΔE2000."""
+    source_display = load_display(source, where="--from").with_transfer(encoding)
+    target_display = load_display(target, where="--to").with_transfer(encoding)
+    viewing = ViewingConditions(white_luminance_cd_m2=white_luminance, keep_measured_radiance=measured_radiance)
+    result = match_colour(source_display, np.array(rgb), target_display, viewing)
+    if as_json:
+        _print_json(result.to_json() | {"encoding": encoding.value, "viewing": viewing.to_json()})
+        return
+    _stdout_console().print(_match_table(result))

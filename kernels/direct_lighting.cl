@@ -1,0 +1,40 @@
+/* Next-event estimation: light arriving at a surface point from one sampled light, times the BSDF. */
+#ifndef SPECTRACE_DIRECT_LIGHTING_CL
+#define SPECTRACE_DIRECT_LIGHTING_CL
+
+#include "scene.cl"
+#include "lights.cl"
+#include "material.cl"
+#include "rng.cl"
+
+/* Radiance reflected toward wo by light from one sampled light: f·cos·L / pdf, weighted against BSDF sampling by
+ * the power heuristic when use_mis (delta lights always weigh 1: BSDF sampling cannot find them). */
+inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
+                                    float3 n_geometric, float3 wo, __global const Material *material, int use_mis,
+                                    uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    float u_pick = sample_1d(sampler);
+    float2 u_light = sample_2d(sampler);
+    if (params->light_count == 0) return (float4)(0.0f);
+    __global const Light *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
+    LightSample ls;
+    if (!sample_light(light, scene->triangle_vertices, scene->spectra, w, p, u_light, &ls)) return (float4)(0.0f);
+    if (all(ls.arriving == (float4)(0.0f))) return (float4)(0.0f);
+    float4 f_cos = material_eval(material, scene->spectra, w, n_geometric, wo, ls.wi);
+    if (all(f_cos == (float4)(0.0f))) return (float4)(0.0f);
+
+    float3 from = offset_ray_origin(p, n_geometric, ls.wi);
+    int to_infinity = isinf(ls.distance);
+    float3 to = ls.point;
+    if (light->type == LIGHT_TRIANGLE) to = offset_ray_origin(ls.point, ls.normal, -ls.wi);
+    if (scene_occluded(scene, from, to, ls.wi, to_infinity, rays_traced)) return (float4)(0.0f);
+
+    float weight = 1.0f;
+    if (use_mis && !ls.is_delta) {
+        weight = power_heuristic(ls.pdf, material_pdf(material, scene->spectra, w, n_geometric, wo, ls.wi));
+    }
+    return f_cos * ls.arriving * (weight / ls.pdf);
+}
+
+#endif

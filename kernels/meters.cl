@@ -1,0 +1,79 @@
+/* Measurement sensors: irradiance, radiance and flux meters, spectral and in SI units.
+ *
+ * Each work-item measures one wavelength (all four lanes carry it, so a dispersive event's termination of the
+ * secondary lanes leaves the lane average unbiased) over `samples_per_item` samples with its own random stream;
+ * the host combines the items of each wavelength into a mean and its standard error. */
+#include "path_tracer.cl"
+
+/* E(p, n) = ∫ L cos θ dω over the hemisphere of n = π × the radiance an albedo-1, one-sided Lambertian surface at p
+ * would reflect: next-event estimation plus a cosine-sampled path, weighted by MIS as on any diffuse surface. */
+inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
+                                  float3 n, uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    float4 reflected = (float4)(0.0f);
+    float u_pick = sample_1d(sampler);
+    float2 u_light = sample_2d(sampler);
+    if (params->light_count > 0) {
+        __global const Light *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
+        LightSample ls;
+        if (sample_light(light, scene->triangle_vertices, scene->spectra, w, p, u_light, &ls)) {
+            float cos_i = dot(n, ls.wi);
+            float3 to = light->type == LIGHT_TRIANGLE ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
+            if (cos_i > 0.0f && !scene_occluded(scene, p, to, ls.wi, isinf(ls.distance), rays_traced)) {
+                float weight = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, cos_i * INV_PI);
+                reflected += ls.arriving * (cos_i * INV_PI * weight / ls.pdf);
+            }
+        }
+    }
+    float3 wi = diffuse_sample(n, sample_2d(sampler));
+    float pdf = diffuse_pdf(dot(n, wi));
+    if (pdf > 0.0f) {
+        PathState s;
+        s.ray.origin = p;
+        s.ray.direction = wi;
+        s.throughput = (float4)(1.0f);  /* albedo 1: f cos / pdf = 1 */
+        s.previous_pdf = pdf;
+        s.previous_delta = 0;
+        s.previous_point = p;
+        s.segments = 1;
+        s.secondary_terminated = 0;
+        reflected += continue_path(scene, w, sampler, s, rays_traced);
+    }
+    return M_PI_F * reflected;
+}
+
+__kernel void measure(__global const RenderParams *params, __global const BVHNode *nodes,
+                      __global const float4 *triangle_vertices, __global const TriangleInfo *triangle_info,
+                      __global const Material *materials, __global const Light *lights,
+                      __global const float *light_cdf, __global const float *spectra,
+                      __global const MeterParams *meter, __global const float *wavelengths, int wavelength_count,
+                      __global float *item_means)
+{
+    int item = get_global_id(0);
+    Scene scene = {params, nodes, triangle_vertices, triangle_info, materials, lights, light_cdf, spectra};
+    SampledWavelengths w = fixed_wavelengths((float4)(wavelengths[item % wavelength_count]));
+    uint rays_traced = 0;
+    float sum = 0.0f;
+    for (int s = 0; s < meter->samples_per_item; ++s) {
+        Sampler sampler = sampler_start((uint)meter->seed, (uint)item, (uint)s);
+        float4 value;
+        if (meter->type == METER_RADIANCE) {
+            Ray ray;
+            ray.origin = meter->point.xyz;
+            ray.direction = normalize(meter->direction.xyz);
+            value = trace_path(&scene, &w, &sampler, ray, &rays_traced);
+        } else if (meter->type == METER_IRRADIANCE) {
+            value = estimate_irradiance(&scene, &w, &sampler, meter->point.xyz, normalize(meter->direction.xyz),
+                                        &rays_traced);
+        } else {
+            float radius = meter->point.w;
+            float3 outward = sample_uniform_sphere(sample_2d(&sampler));
+            float3 q = meter->point.xyz + radius * outward;
+            value = (4.0f * M_PI_F * radius * radius)
+                  * estimate_irradiance(&scene, &w, &sampler, q, -outward, &rays_traced);
+        }
+        sum += 0.25f * (value.x + value.y + value.z + value.w);
+    }
+    item_means[item] = sum / (float)meter->samples_per_item;
+}

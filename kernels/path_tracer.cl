@@ -1,0 +1,122 @@
+/* The global model: unidirectional path tracing with next-event estimation and multiple importance sampling
+ * (power heuristic), Russian roulette, four wavelengths per path. */
+#ifndef SPECTRACE_PATH_TRACER_CL
+#define SPECTRACE_PATH_TRACER_CL
+
+#include "direct_lighting.cl"
+
+/* Longest path when max_depth is unbounded (-1): Russian roulette ends paths long before this. */
+#define UNBOUNDED_DEPTH 1024
+
+/* Where a path stands between two bounces; lets sensors start paths at a surface point as well as a camera. */
+typedef struct {
+    Ray ray;
+    float4 throughput;
+    float previous_pdf;      /* solid-angle pdf of the direction that produced `ray`; 0 for a camera ray */
+    int previous_delta;      /* `ray` left a specular lobe (or a camera): emission found by it is not MIS-weighted */
+    float3 previous_point;
+    int segments;            /* the segment `ray` is: 1 for a camera ray */
+    int secondary_terminated;
+} PathState;
+
+inline PathState camera_path(Ray ray)
+{
+    PathState s;
+    s.ray = ray;
+    s.throughput = (float4)(1.0f);
+    s.previous_pdf = 0.0f;
+    s.previous_delta = 1;
+    s.previous_point = ray.origin;
+    s.segments = 1;
+    s.secondary_terminated = 0;
+    return s;
+}
+
+/* After a dispersive event only the hero wavelength goes on; scaling it by 4 keeps the 4-wavelength average
+ * unbiased (pbrt-v4's TerminateSecondary). */
+inline void terminate_secondary_wavelengths(PathState *s)
+{
+    if (s->secondary_terminated) return;
+    s->throughput = (float4)(4.0f * s->throughput.x, 0.0f, 0.0f, 0.0f);
+    s->secondary_terminated = 1;
+}
+
+inline int max_segments(__global const RenderParams *params)
+{
+    return params->max_depth < 0 ? UNBOUNDED_DEPTH : params->max_depth;
+}
+
+/* Radiance carried back along the path from state `s` onward, including emission met by s.ray. */
+inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState s,
+                            uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    int last_segment = max_segments(params);
+    float4 radiance = (float4)(0.0f);
+
+    for (; s.segments <= last_segment; ++s.segments) {
+        Hit hit = scene_intersect(scene, s.ray, rays_traced);
+        if (hit.triangle < 0) {
+            if (params->environment_light >= 0) {
+                __global const Light *env = &scene->lights[params->environment_light];
+                float weight = s.previous_delta ? 1.0f : power_heuristic(s.previous_pdf, environment_light_pdf(env));
+                radiance += s.throughput * light_spectrum(env, scene->spectra, w) * weight;
+            }
+            break;
+        }
+
+        TriangleInfo info = scene->triangle_info[hit.triangle];
+        float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+        float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
+        float3 wo = -s.ray.direction;
+
+        if (info.light >= 0) {
+            __global const Light *light = &scene->lights[info.light];
+            float4 emitted = area_light_emitted(light, scene->spectra, w, n, wo);
+            float weight = 1.0f;
+            if (!s.previous_delta) {
+                float pdf_light = area_light_pdf(light, distance(s.previous_point, p), fabs(dot(n, wo)));
+                weight = power_heuristic(s.previous_pdf, pdf_light);
+            }
+            radiance += s.throughput * emitted * weight;
+        }
+        if (s.segments >= last_segment) break;
+
+        __global const Material *material = &scene->materials[info.material];
+        if (material_has_non_delta_lobe(material)) {
+            radiance += s.throughput * estimate_direct_light(scene, w, sampler, p, n, wo, material, 1, rays_traced);
+        }
+
+        float uc = sample_1d(sampler);
+        float2 u = sample_2d(sampler);
+        BSDFSample bs;
+        if (!material_sample(material, scene->spectra, w, n, wo, uc, u, &bs)) break;
+        s.throughput *= bs.weight;
+        if (bs.terminate_secondary) terminate_secondary_wavelengths(&s);
+        s.previous_pdf = bs.pdf;
+        s.previous_delta = bs.is_delta;
+
+        /* Russian roulette once `segments` bounces have happened (Mitsuba 3's rr_depth). */
+        float u_rr = sample_1d(sampler);
+        if (s.segments >= params->rr_depth) {
+            float4 t = s.throughput;
+            float q = fmin(fmax(fmax(t.x, t.y), fmax(t.z, t.w)), 0.95f);
+            if (!(u_rr < q)) break;
+            s.throughput /= q;
+        }
+        if (all(s.throughput == (float4)(0.0f))) break;
+
+        s.previous_point = p;
+        s.ray.origin = offset_ray_origin(p, n, bs.wi);
+        s.ray.direction = bs.wi;
+    }
+    return radiance;
+}
+
+inline float4 trace_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray,
+                         uint *rays_traced)
+{
+    return continue_path(scene, w, sampler, camera_path(ray), rays_traced);
+}
+
+#endif

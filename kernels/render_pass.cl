@@ -1,0 +1,39 @@
+/* The render-pass kernel shared by the integrators: the including file defines TRACE_RADIANCE(scene, w,
+ * sampler, ray, rays_traced) first.
+ *
+ * One work-item per pixel runs the pass's samples in sample-index order and adds each to the film one at a
+ * time, so the float sums do not depend on how a render is split into passes. */
+#include "camera.cl"
+#include "scene.cl"
+
+/* film: per pixel (ΣX, ΣY, ΣZ, number of dropped non-finite samples); ray_counts: rays traced per pixel, for
+ * the benchmark's rays/s. */
+__kernel void render_pass(__global const RenderParams *params, __global const BVHNode *nodes,
+                          __global const float4 *triangle_vertices, __global const TriangleInfo *triangle_info,
+                          __global const Material *materials, __global const Light *lights,
+                          __global const float *light_cdf, __global const float *spectra,
+                          __global const float4 *cmf, __global float4 *film, __global uint *ray_counts)
+{
+    int pixel = get_global_id(0);
+    if (pixel >= params->width * params->height) return;
+    Scene scene = {params, nodes, triangle_vertices, triangle_info, materials, lights, light_cdf, spectra};
+    int pixel_x = pixel % params->width;
+    int pixel_y = pixel / params->width;
+
+    float4 accumulated = film[pixel];
+    uint rays_traced = 0;
+    for (int s = params->sample_begin; s < params->sample_begin + params->sample_count; ++s) {
+        Sampler sampler = sampler_start((uint)params->seed, (uint)pixel, (uint)s);
+        SampledWavelengths w = sample_wavelengths(sample_1d(&sampler));
+        Ray ray = camera_ray(params, pixel_x, pixel_y, sample_2d(&sampler));
+        float4 radiance = TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
+        float4 xyz = spectrum_to_xyz_estimate(radiance, cmf, &w);
+        if (isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z)) {
+            accumulated += xyz;
+        } else {
+            accumulated.w += 1.0f;
+        }
+    }
+    film[pixel] = accumulated;
+    ray_counts[pixel] += rays_traced;
+}

@@ -1,0 +1,54 @@
+/* The local model (Whitted-style ray tracing): light emitted toward the eye, direct light at every non-specular
+ * surface by next-event estimation, and perfect specular reflection/refraction followed recursively. No
+ * light bounces diffusely more than once. */
+#ifndef SPECTRACE_WHITTED_CL
+#define SPECTRACE_WHITTED_CL
+
+#include "path_tracer.cl"
+
+inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray,
+                           uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    int last_segment = max_segments(params);
+    PathState s = camera_path(ray);
+    float4 radiance = (float4)(0.0f);
+
+    for (; s.segments <= last_segment; ++s.segments) {
+        Hit hit = scene_intersect(scene, s.ray, rays_traced);
+        if (hit.triangle < 0) {
+            if (params->environment_light >= 0) {
+                __global const Light *env = &scene->lights[params->environment_light];
+                radiance += s.throughput * light_spectrum(env, scene->spectra, w);
+            }
+            break;
+        }
+        TriangleInfo info = scene->triangle_info[hit.triangle];
+        float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+        float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
+        float3 wo = -s.ray.direction;
+        if (info.light >= 0) {
+            radiance += s.throughput * area_light_emitted(&scene->lights[info.light], scene->spectra, w, n, wo);
+        }
+        if (s.segments >= last_segment) break;
+
+        __global const Material *material = &scene->materials[info.material];
+        if (material_has_non_delta_lobe(material)) {
+            radiance += s.throughput * estimate_direct_light(scene, w, sampler, p, n, wo, material, 0, rays_traced);
+        }
+        /* Follow the specular lobes only: a sampled non-specular direction ends the path (its light was counted
+         * by next-event estimation), which keeps the specular part unbiased. */
+        float uc = sample_1d(sampler);
+        float2 u = sample_2d(sampler);
+        BSDFSample bs;
+        if (!material_sample(material, scene->spectra, w, n, wo, uc, u, &bs) || !bs.is_delta) break;
+        s.throughput *= bs.weight;
+        if (bs.terminate_secondary) terminate_secondary_wavelengths(&s);
+        if (all(s.throughput == (float4)(0.0f))) break;
+        s.ray.origin = offset_ray_origin(p, n, bs.wi);
+        s.ray.direction = bs.wi;
+    }
+    return radiance;
+}
+
+#endif
