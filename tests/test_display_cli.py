@@ -75,7 +75,7 @@ def test_match_in_gamut_and_out_of_gamut():
 def test_user_csv_display_from_the_command_line(tmp_path):
     path = tmp_path / "three_lines.csv"
     wavelengths_nm = np.arange(380, 781, 10)
-    rows = [f"{nm},{np.exp(-((nm - 620) / 15) ** 2)},{np.exp(-((nm - 530) / 15) ** 2)},{np.exp(-((nm - 460) / 15) ** 2)}"
+    rows = [",".join([str(nm), *(str(np.exp(-(((nm - centre) / 15) ** 2))) for centre in (620, 530, 460))])
             for nm in wavelengths_nm]
     path.write_text("# units: W/(sr m^2 nm)\nwavelength_nm,red,green,blue\n" + "\n".join(rows) + "\n")
     listing = _json("list", "--display", str(path))["displays"]

@@ -117,7 +117,7 @@ def bench(
     if as_json:
         print(json.dumps({"render": results}, indent=2))
     else:
-        Console().print(render_bench_table(results))
+        Console(width=150).print(render_bench_table(results))
 
 
 @app.command()

@@ -115,7 +115,8 @@ def _comment_keys_and_header(path: Path) -> tuple[dict[str, str], list[str]]:
     except FileNotFoundError:
         raise SpectraceError("display file not found", where=str(path)) from None
     except (OSError, UnicodeDecodeError) as error:
-        raise SpectraceError(f"cannot read display file ({error.__class__.__name__}: {error})", where=str(path)) from None
+        problem = f"{error.__class__.__name__}: {error}"
+        raise SpectraceError(f"cannot read display file ({problem})", where=str(path)) from None
     keys: dict[str, str] = {}
     for line in lines:
         stripped = line.strip()

@@ -117,7 +117,9 @@ def list_displays(
 def _comparison_tables(comparison: Comparison) -> tuple[Table, Table]:
     rgb = ", ".join(f"{value:g}" for value in comparison.rgb)
     white = comparison.viewing.white_luminance_cd_m2
-    colours = Table(title=f"RGB ({rgb}); CIELAB and sRGB relative to D65 at {white:g} cd/m²; * = outside sRGB, clipped")
+    colours = Table(
+        title=f"RGB ({rgb}); CIELAB and sRGB relative to D65 at {white:g} cd/m²; * = outside sRGB, clipped"
+    )
     for heading in ("display", "luminance scale", "X Y Z (cd/m²)", "x, y", "Y cd/m²", "sRGB", "L* a* b* (1931 2°)"):
         colours.add_column(heading)
     for item in comparison.colours:
@@ -144,7 +146,9 @@ def compare(
     encoding: EncodingOption = Encoding.LINEAR,
     white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
     measured_radiance: MeasuredOption = False,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="Also draw the comparison into this image file.")] = None,
+    plot: Annotated[
+        Optional[Path], typer.Option("--plot", help="Also draw the comparison into this image file.")
+    ] = None,
     as_json: JsonOption = False,
 ) -> None:
     """The same RGB on several displays: XYZ, xy, luminance, sRGB, CIELAB, and ΔE2000 of every pair."""

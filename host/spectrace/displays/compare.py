@@ -38,7 +38,8 @@ class DisplayColour:
 
     @property
     def srgb_in_gamut(self) -> bool:
-        return bool(np.all((self.linear_srgb >= -SRGB_GAMUT_TOLERANCE) & (self.linear_srgb <= 1 + SRGB_GAMUT_TOLERANCE)))
+        low, high = -SRGB_GAMUT_TOLERANCE, 1 + SRGB_GAMUT_TOLERANCE
+        return bool(np.all((self.linear_srgb >= low) & (self.linear_srgb <= high)))
 
     @property
     def srgb(self) -> np.ndarray:
@@ -119,7 +120,9 @@ def compare_displays(
         PairDifference(
             first=a.display.name,
             second=b.display.name,
-            delta_e_2000={observer: float(delta_e_2000(a.lab[observer], b.lab[observer])) for observer in ALL_OBSERVERS},
+            delta_e_2000={
+                observer: float(delta_e_2000(a.lab[observer], b.lab[observer])) for observer in ALL_OBSERVERS
+            },
         )
         for a, b in combinations(colours, 2)
     ]
