@@ -19,7 +19,8 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
     if (params->light_count == 0) return (float4)(0.0f);
     __global const Light *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
     LightSample ls;
-    if (!sample_light(light, scene->triangle_vertices, scene->spectra, w, p, u_light, &ls)) return (float4)(0.0f);
+    LightBuffers buffers = light_buffers(scene);
+    if (!sample_light(light, &buffers, w, p, u_light, &ls)) return (float4)(0.0f);
     if (all(ls.arriving == (float4)(0.0f))) return (float4)(0.0f);
     float4 f_cos = material_eval(material, scene->spectra, w, n_geometric, wo, ls.wi);
     if (all(f_cos == (float4)(0.0f))) return (float4)(0.0f);

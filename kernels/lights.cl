@@ -8,8 +8,7 @@
 #include "types.h"
 #include "spectrum.cl"
 #include "sampling.cl"
-
-#define INV_FOUR_PI 0.07957747154594767f
+#include "environment.cl"
 
 typedef struct {
     float3 wi;         /* unit direction from the shaded point toward the light */
@@ -68,11 +67,6 @@ inline float area_light_pdf(__global const Light *light, float distance, float a
     return light->pmf * distance * distance / (light->area * abs_cos_light);
 }
 
-inline float environment_light_pdf(__global const Light *light)
-{
-    return light->pmf * INV_FOUR_PI;
-}
-
 /* Smooth spot falloff (smoothstep in cos θ between the cutoff and the falloff start). */
 inline float spot_falloff(__global const Light *light, float cos_theta)
 {
@@ -90,11 +84,20 @@ inline float3 sample_uniform_sphere(float2 u)
     return (float3)(r * cos(phi), r * sin(phi), z);
 }
 
+/* The scene-wide buffers that sampling a light may need besides the light itself. */
+typedef struct {
+    __global const float4 *triangle_vertices;
+    __global const float *spectra;
+    __global const float4 *map_texels;
+    __global const float *map_cdf;
+} LightBuffers;
+
 /* Samples light `light` as seen from p. Returns 0 when the sample carries no light. */
-inline int sample_light(__global const Light *light, __global const float4 *triangle_vertices,
-                        __global const float *spectra, const SampledWavelengths *w, float3 p, float2 u,
-                        LightSample *s)
+inline int sample_light(__global const Light *light, const LightBuffers *buffers, const SampledWavelengths *w,
+                        float3 p, float2 u, LightSample *s)
 {
+    __global const float4 *triangle_vertices = buffers->triangle_vertices;
+    __global const float *spectra = buffers->spectra;
     s->is_delta = 0;
     s->normal = (float3)(0.0f);
     if (light->type == LIGHT_TRIANGLE) {
@@ -135,13 +138,12 @@ inline int sample_light(__global const Light *light, __global const float4 *tria
         s->is_delta = 1;
         return 1;
     }
-    /* LIGHT_ENVIRONMENT */
-    s->wi = sample_uniform_sphere(u);
+    /* LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP */
+    s->wi = environment_sample(light, buffers->map_cdf, u, &s->pdf);
     s->distance = INFINITY;
     s->point = p;
-    s->arriving = light_spectrum(light, spectra, w);
-    s->pdf = environment_light_pdf(light);
-    return 1;
+    s->arriving = environment_radiance(light, spectra, buffers->map_texels, w, s->wi);
+    return s->pdf > 0.0f;
 }
 
 #endif

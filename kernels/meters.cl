@@ -17,7 +17,8 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
     if (params->light_count > 0) {
         __global const Light *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
         LightSample ls;
-        if (sample_light(light, scene->triangle_vertices, scene->spectra, w, p, u_light, &ls)) {
+        LightBuffers buffers = light_buffers(scene);
+        if (sample_light(light, &buffers, w, p, u_light, &ls)) {
             float cos_i = dot(n, ls.wi);
             float3 to = light->type == LIGHT_TRIANGLE ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
             if (cos_i > 0.0f && !scene_occluded(scene, p, to, ls.wi, isinf(ls.distance), rays_traced)) {
@@ -47,11 +48,13 @@ __kernel void measure(__global const RenderParams *params, __global const BVHNod
                       __global const float4 *triangle_vertices, __global const TriangleInfo *triangle_info,
                       __global const Material *materials, __global const Light *lights,
                       __global const float *light_cdf, __global const float *spectra,
+                      __global const float4 *map_texels, __global const float *map_cdf,
                       __global const MeterParams *meter, __global const float *wavelengths, int wavelength_count,
                       __global float *item_means)
 {
     int item = get_global_id(0);
-    Scene scene = {params, nodes, triangle_vertices, triangle_info, materials, lights, light_cdf, spectra};
+    Scene scene = {params,    nodes,   triangle_vertices, triangle_info, materials,
+                   lights,    light_cdf, spectra,         map_texels,    map_cdf};
     SampledWavelengths w = fixed_wavelengths((float4)(wavelengths[item % wavelength_count]));
     uint rays_traced = 0;
     float sum = 0.0f;

@@ -59,8 +59,10 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
         if (hit.triangle < 0) {
             if (params->environment_light >= 0) {
                 __global const Light *env = &scene->lights[params->environment_light];
-                float weight = s.previous_delta ? 1.0f : power_heuristic(s.previous_pdf, environment_light_pdf(env));
-                radiance += s.throughput * light_spectrum(env, scene->spectra, w) * weight;
+                float3 d = s.ray.direction;
+                float weight = s.previous_delta
+                             ? 1.0f : power_heuristic(s.previous_pdf, environment_pdf(env, scene->map_cdf, d));
+                radiance += s.throughput * environment_radiance(env, scene->spectra, scene->map_texels, w, d) * weight;
             }
             break;
         }

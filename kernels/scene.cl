@@ -4,6 +4,7 @@
 
 #include "types.h"
 #include "bvh.cl"
+#include "lights.cl"
 
 typedef struct {
     __global const RenderParams *params;
@@ -14,7 +15,15 @@ typedef struct {
     __global const Light *lights;
     __global const float *light_cdf;
     __global const float *spectra;
+    __global const float4 *map_texels;  /* environment map, if any (one dummy texel otherwise) */
+    __global const float *map_cdf;
 } Scene;
+
+inline LightBuffers light_buffers(const Scene *scene)
+{
+    LightBuffers b = {scene->triangle_vertices, scene->spectra, scene->map_texels, scene->map_cdf};
+    return b;
+}
 
 /* The closest surface along the ray (none in a scene without triangles). */
 inline Hit scene_intersect(const Scene *scene, Ray ray, uint *rays_traced)

@@ -43,28 +43,11 @@ typedef struct {
     int light;      /* index into the light array, or -1 when the triangle does not emit */
 } TriangleInfo;
 
-/* One material (80 bytes). Offsets are in floats into the spectrum table. reflectance_offset always names a
- * valid spectrum (the constant 1 where a type has no reflectance), so a reader that only knows diffuse surfaces
- * never reads outside the table. */
 typedef struct {
-    int type;                         /* MATERIAL_* */
-    int reflectance_offset;           /* diffuse, mirror, retroreflector: reflectance; plastic: diffuse base
-                                         reflectance; conductor: specular tint (constant 1 when not given) */
-    int eta_offset;                   /* conductor: real part η of the complex index of refraction η + ik */
-    int k_offset;                     /* conductor: extinction coefficient k */
-    float roughness;                  /* GGX α of conductor, plastic, dielectric, retroreflector; below
-                                         GGX_SMOOTH_ALPHA (microfacet.cl) the lobe is a delta */
-    float ior;                        /* plastic: coat index; dielectric with IOR_CONSTANT: interior index */
-    float exterior_ior;               /* dielectric: index on the side the geometric normal points to */
-    int ior_model;                    /* dielectric: IOR_* */
-    float ior_coefficients[6];        /* dielectric: IOR_SELLMEIER B1 B2 B3 C1 C2 C3, IOR_CAUCHY a b */
-    int coat_albedo_offset;           /* plastic: offset of GRID_SAMPLES floats E(cos θ), cos θ = i / (GRID_SAMPLES − 1):
-                                         the coat's directional specular albedo (not a spectrum; it shares the table) */
-    float coat_internal_reflectance;  /* plastic: hemispherical reflectance of the coat seen from below (F_dr) */
-    float coat_mean_transmittance;    /* plastic: 2 ∫ (1 − E(μ)) μ dμ over μ in [0, 1] */
+    int type;                /* MATERIAL_* */
+    int reflectance_offset;  /* offset (floats) of the reflectance spectrum in the spectrum table */
     int pad0;
     int pad1;
-    int pad2;
 } Material;
 
 #define LIGHT_TRIANGLE 0     /* an emitting triangle of an area light: radiance, W/(m² sr nm) */
@@ -72,6 +55,7 @@ typedef struct {
 #define LIGHT_SPOT 2         /* point with a cone: intensity on the axis, W/(sr nm), smooth falloff to the cutoff */
 #define LIGHT_DISTANT 3      /* parallel light: irradiance on a surface facing it, W/(m² nm) */
 #define LIGHT_ENVIRONMENT 4  /* uniform environment at infinity: radiance, W/(m² sr nm) */
+#define LIGHT_ENVIRONMENT_MAP 5  /* environment from a latitude-longitude RGB image, scaled: W/(m² sr nm) */
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit its
  * type states above. */
@@ -87,6 +71,10 @@ typedef struct {
     int two_sided;         /* LIGHT_TRIANGLE */
     float cos_falloff_start;  /* LIGHT_SPOT: full intensity inside this cone */
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
+    int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
+    int basis_blue_offset;    /*   spectrum_offset: the uplifted emission spectra of the three primaries */
+    int map_width;            /* LIGHT_ENVIRONMENT_MAP: texels, latitude-longitude */
+    int map_height;
     int pad0;
     int pad1;
     int pad2;

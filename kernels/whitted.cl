@@ -19,7 +19,8 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
         if (hit.triangle < 0) {
             if (params->environment_light >= 0) {
                 __global const Light *env = &scene->lights[params->environment_light];
-                radiance += s.throughput * light_spectrum(env, scene->spectra, w);
+                radiance += s.throughput * environment_radiance(env, scene->spectra, scene->map_texels, w,
+                                                                s.ray.direction);
             }
             break;
         }

@@ -40,27 +40,10 @@ def _struct(fields: list[tuple[str, object]], itemsize: int) -> np.dtype:
 TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4")], 8)
 
 MATERIAL_DTYPE = _struct(
-    [
-        ("type", "<i4"),
-        ("reflectance_offset", "<i4"),
-        ("eta_offset", "<i4"),
-        ("k_offset", "<i4"),
-        ("roughness", "<f4"),
-        ("ior", "<f4"),
-        ("exterior_ior", "<f4"),
-        ("ior_model", "<i4"),
-        ("ior_coefficients", ("<f4", (6,))),
-        ("coat_albedo_offset", "<i4"),
-        ("coat_internal_reflectance", "<f4"),
-        ("coat_mean_transmittance", "<f4"),
-        ("pad0", "<i4"),
-        ("pad1", "<i4"),
-        ("pad2", "<i4"),
-    ],
-    80,
+    [("type", "<i4"), ("reflectance_offset", "<i4"), ("pad0", "<i4"), ("pad1", "<i4")], 16
 )
 
-LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT = range(5)
+LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP = range(6)
 
 LIGHT_DTYPE = _struct(
     [
@@ -75,11 +58,15 @@ LIGHT_DTYPE = _struct(
         ("two_sided", "<i4"),
         ("cos_falloff_start", "<f4"),
         ("cos_cutoff", "<f4"),
+        ("basis_green_offset", "<i4"),
+        ("basis_blue_offset", "<i4"),
+        ("map_width", "<i4"),
+        ("map_height", "<i4"),
         ("pad0", "<i4"),
         ("pad1", "<i4"),
         ("pad2", "<i4"),
     ],
-    80,
+    96,
 )
 
 RENDER_PARAMS_DTYPE = _struct(

@@ -113,6 +113,7 @@ def measure(scene: Scene, meter: Meter, wavelengths_nm=DEFAULT_WAVELENGTHS_NM, s
     inputs = [cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
               for a in (render_params(scene, buffers, 0, 0), buffers.bvh.nodes, buffers.triangle_vertices,
                         buffers.triangle_info, buffers.materials, buffers.lights, buffers.light_cdf, buffers.spectra,
+                        buffers.map_texels, buffers.map_cdf,
                         _meter_params(meter, samples_per_item, seed), wavelengths)]
     items = streams * len(wavelengths)
     means = np.empty(items, np.float32)

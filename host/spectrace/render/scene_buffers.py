@@ -10,6 +10,7 @@ from spectrace.render.device_types import (
     LIGHT_DISTANT,
     LIGHT_DTYPE,
     LIGHT_ENVIRONMENT,
+    LIGHT_ENVIRONMENT_MAP,
     LIGHT_POINT,
     LIGHT_SPOT,
     LIGHT_TRIANGLE,
@@ -18,10 +19,11 @@ from spectrace.render.device_types import (
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
 )
-from spectrace.scene.model import ConstantEnvironment, DistantLight, PointLight, Scene, SpotLight
-from spectrace.spectral.colorimetry import cmf_table_normalised
+from spectrace.scene.model import ConstantEnvironment, DistantLight, EnvironmentMap, PointLight, Scene, SpotLight
+from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ, cmf_table_normalised
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
+from spectrace.spectral.uplift import uplift_illuminant
 
 
 @dataclass
@@ -35,6 +37,8 @@ class SceneBuffers:
     light_count: int
     environment_light: int  # index into lights, or -1
     light_cdf: np.ndarray  # (L + 1,) float32
+    map_texels: np.ndarray  # (W·H, 4) float32 linear sRGB of the environment map (one dummy texel without one)
+    map_cdf: np.ndarray  # marginal CDF over rows (H + 1), then each row's CDF (W + 1): see kernels/environment.cl
     spectra: np.ndarray  # float32 table
     cmf: np.ndarray  # (471, 4) float32: x̄, ȳ, z̄ / ∫ȳ
 
@@ -92,6 +96,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
                                two_sided=e.two_sided))
         power.append(np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0))
     environment_light = -1
+    map_texels, map_cdf = np.zeros((1, 4), np.float32), np.zeros(2, np.float32)
     for light in scene.lights:
         if isinstance(light, PointLight):
             rows.append(_light_row(LIGHT_POINT, table.add(light.intensity), position=light.position))
@@ -109,6 +114,14 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             environment_light = len(rows)
             rows.append(_light_row(LIGHT_ENVIRONMENT, table.add(light.radiance)))
             power.append(4.0 * np.pi**2 * scene_radius**2 * light.radiance.mean())
+        elif isinstance(light, EnvironmentMap):
+            environment_light = len(rows)
+            map_texels, map_cdf, mean_luminance = environment_map_tables(light.rgb)
+            basis = [table.add(uplift_illuminant(primary)) for primary in np.eye(3)]
+            height, width = light.rgb.shape[:2]
+            row = _light_row(LIGHT_ENVIRONMENT_MAP, basis[0], map_fields=(basis[1], basis[2], width, height))
+            rows.append(row[:5] + (light.scale,) + row[6:])
+            power.append(4.0 * np.pi**2 * scene_radius**2 * light.scale * mean_luminance)
         else:
             raise SpectraceError(f"unsupported light {type(light).__name__}")
 
@@ -146,16 +159,41 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         light_count=len(rows),
         environment_light=environment_light,
         light_cdf=cdf.astype(np.float32),
+        map_texels=map_texels,
+        map_cdf=map_cdf,
         spectra=table.data,
         cmf=cmf,
     )
 
 
+def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Texels, sampling CDFs and mean luminance of a latitude-longitude map: the sampling density is ∝ luminance ×
+    sin θ of the row's centre, so directions are drawn where light arrives and the poles' small texels are not
+    oversampled."""
+    height, width = rgb.shape[:2]
+    texels = np.zeros((height * width, 4), np.float32)
+    texels[:, :3] = np.maximum(rgb.reshape(-1, 3), 0.0)
+    luminance = (texels[:, :3] @ LINEAR_SRGB_TO_XYZ[1]).reshape(height, width).astype(np.float64)
+    sin_theta = np.sin(np.pi * (np.arange(height) + 0.5) / height)[:, None]
+    weights = luminance * sin_theta
+    if weights.sum() <= 0:
+        weights = np.broadcast_to(sin_theta, (height, width)).copy()
+    row_mass = weights.sum(axis=1)
+    row_cdf = np.zeros((height, width + 1))
+    row_cdf[:, 1:] = np.cumsum(weights, axis=1)
+    row_cdf = np.divide(row_cdf, row_cdf[:, -1:], out=np.tile(np.linspace(0, 1, width + 1), (height, 1)),
+                        where=row_cdf[:, -1:] > 0)
+    marginal = np.concatenate([[0.0], np.cumsum(row_mass)]) / row_mass.sum()
+    marginal[-1] = 1.0
+    row_cdf[:, -1] = 1.0
+    return texels, np.concatenate([marginal, row_cdf.ravel()]).astype(np.float32), float(luminance.mean())
+
+
 def _light_row(light_type: int, spectrum_offset: int, *, triangle: int = -1, area: float = 0.0,
                two_sided: bool = False, position=(0.0, 0.0, 0.0), direction=(0.0, 0.0, 1.0),
-               cos_falloff_start: float = 1.0, cos_cutoff: float = 1.0) -> tuple:
+               cos_falloff_start: float = 1.0, cos_cutoff: float = 1.0, map_fields=(0, 0, 0, 0)) -> tuple:
     return ((*position, 1.0), (*direction, 0.0), light_type, triangle, spectrum_offset, 1.0, 0.0, area,
-            int(two_sided), cos_falloff_start, cos_cutoff, 0, 0, 0)
+            int(two_sided), cos_falloff_start, cos_cutoff, *map_fields, 0, 0, 0)
 
 
 def _empty_bvh() -> BVH:

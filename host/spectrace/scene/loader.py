@@ -18,6 +18,7 @@ from spectrace.scene.model import (
     ConstantEnvironment,
     DiffuseMaterial,
     DistantLight,
+    EnvironmentMap,
     Light,
     PointLight,
     Scene,
@@ -231,9 +232,34 @@ class _Resolver:
             elif spec.type == "distant":
                 direction = _unit(spec.direction, self.where(f"{key}.direction"))
                 lights.append(DistantLight(direction, self.spectrum(spec.irradiance, f"{key}.irradiance", True)))
+            elif spec.type == "envmap":
+                lights.append(EnvironmentMap(read_environment_map(self.folder / spec.file,
+                                                                  self.where(f"{key}.file")), spec.scale))
             else:
                 lights.append(ConstantEnvironment(self.spectrum(spec.radiance, f"{key}.radiance", emission=True)))
         return lights
+
+
+def read_environment_map(path: Path, where: str) -> np.ndarray:
+    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map."""
+    from spectrace.io.exr import read_exr
+
+    if not path.is_file():
+        raise SpectraceError(f"environment map '{path}' does not exist", where=where)
+    try:
+        channels, _ = read_exr(path)
+    except Exception as exc:  # OpenEXR raises bare exceptions for unreadable files
+        raise SpectraceError(f"cannot read environment map '{path}': {exc}", where=where) from None
+    if "RGB" in channels:
+        rgb = channels["RGB"]
+    elif {"R", "G", "B"} <= set(channels):
+        rgb = np.stack([channels["R"], channels["G"], channels["B"]], axis=-1)
+    else:
+        raise SpectraceError(f"environment map '{path}' has no R, G, B channels", where=where)
+    rgb = np.asarray(rgb, np.float32)
+    if not np.all(np.isfinite(rgb)):
+        raise SpectraceError(f"environment map '{path}' has NaN or infinite pixels", where=where)
+    return rgb
 
 
 def _unit(vector, where: str) -> tuple[float, float, float]:

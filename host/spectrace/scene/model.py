@@ -97,7 +97,17 @@ class ConstantEnvironment:
     radiance: Spectrum
 
 
-Light = PointLight | SpotLight | DistantLight | ConstantEnvironment
+@dataclass(frozen=True, eq=False)
+class EnvironmentMap:
+    """Light from a latitude-longitude image at infinity: `rgb` (height, width, 3) linear sRGB, times `scale`;
+    each texel's radiance is the D65-based emission uplift of its colour (RGB (1,1,1) = D65 at Y = 1), in
+    W/(m² sr nm). +y is up; the image centre looks along −z (see kernels/environment.cl)."""
+
+    rgb: np.ndarray
+    scale: float = 1.0
+
+
+Light = PointLight | SpotLight | DistantLight | ConstantEnvironment | EnvironmentMap
 
 
 @dataclass(frozen=True)

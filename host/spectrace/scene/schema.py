@@ -193,8 +193,15 @@ class ConstantEnvironmentSpec(Strict):
     radiance: SpectrumSpec = Field(description="W/(m² sr nm) from every direction")
 
 
+class EnvironmentMapSpec(Strict):
+    type: Literal["envmap"]
+    file: str = Field(description="latitude-longitude OpenEXR image, linear sRGB")
+    scale: FiniteFloat = Field(default=1.0, ge=0.0)
+
+
 LightSpec = Annotated[
-    PointLightSpec | SpotLightSpec | DistantLightSpec | ConstantEnvironmentSpec, Field(discriminator="type")
+    PointLightSpec | SpotLightSpec | DistantLightSpec | ConstantEnvironmentSpec | EnvironmentMapSpec,
+    Field(discriminator="type"),
 ]
 
 
@@ -212,6 +219,6 @@ class SceneSpec(Strict):
     def _something_emits(self) -> "SceneSpec":
         if not self.shapes and not self.lights:
             raise ValueError("the scene has neither shapes nor lights")
-        if sum(1 for light in self.lights if light.type == "constant") > 1:
-            raise ValueError("at most one environment light")
+        if sum(1 for light in self.lights if light.type in ("constant", "envmap")) > 1:
+            raise ValueError("at most one environment light (constant or envmap)")
         return self
