@@ -42,6 +42,7 @@ def render(
     height: Annotated[Optional[int], typer.Option(help="Film height in pixels.", min=1)] = None,
     seed: Annotated[Optional[int], typer.Option(help="Sampler seed.", min=0)] = None,
     max_depth: Annotated[Optional[int], typer.Option(help="Path segments from the camera; -1 = unbounded.")] = None,
+    exposure: Annotated[Optional[float], typer.Option(help="Stops: RGB output x 2**exposure (film XYZ unscaled).")] = None,
     device: DeviceOption = None,
     xyz: Annotated[bool, typer.Option("--xyz/--no-xyz", help="EXR only: also store the film's X, Y, Z channels.")] = True,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
@@ -50,7 +51,8 @@ def render(
     from spectrace.render.renderer import Renderer
     from spectrace.scene import load_scene
 
-    loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth)
+    loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth,
+                                              exposure=exposure)
     renderer = Renderer(loaded, device)
     console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False)
     signal.signal(signal.SIGTERM, _interrupt_on_sigterm)

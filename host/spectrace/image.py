@@ -18,6 +18,7 @@ class Image:
     render_seconds: float
     dropped_samples: int = 0  # non-finite samples left out of the film
     rays_traced: int = 0
+    exposure: float = 0.0  # stops: the RGB outputs are scaled by 2**exposure; xyz is not
     extra: dict = field(default_factory=dict)
 
     @property
@@ -29,7 +30,8 @@ class Image:
         return self.xyz.shape[0]
 
     def to_linear_srgb(self) -> np.ndarray:
-        return xyz_to_linear_srgb(self.xyz).astype(np.float32)
+        """Linear sRGB of the film, times 2**exposure."""
+        return (xyz_to_linear_srgb(self.xyz) * 2.0**self.exposure).astype(np.float32)
 
     def to_srgb(self) -> np.ndarray:
         """Display-encoded sRGB in [0, 1] (out-of-gamut and over-bright values clipped)."""
@@ -42,6 +44,7 @@ class Image:
             "device": self.device,
             "render_seconds": f"{self.render_seconds:.3f}",
             "dropped_samples": str(self.dropped_samples),
+            "exposure": f"{self.exposure:g}",
             **{k: str(v) for k, v in self.extra.items()},
         }
 

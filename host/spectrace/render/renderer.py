@@ -100,5 +100,6 @@ class Renderer:
             render_seconds=self.render_seconds,
             dropped_samples=int(film[:, 3].sum()),
             rays_traced=int(rays.astype(np.uint64).sum()),
+            exposure=self.scene.exposure,
             extra={"max_depth": self.scene.max_depth, "width": self.scene.width, "height": self.scene.height},
         )

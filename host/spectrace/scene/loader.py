@@ -296,6 +296,7 @@ def load_scene(path: str | Path) -> Scene:
         lights=lights,
         integrator=spec.integrator.type,
         max_depth=spec.integrator.max_depth,
+        exposure=spec.film.exposure,
         rr_depth=spec.integrator.rr_depth,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,

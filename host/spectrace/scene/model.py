@@ -128,6 +128,7 @@ class Scene:
     integrator: Literal["path", "direct"] = "path"
     max_depth: int = 8
     rr_depth: int = 5
+    exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
     spp: int = 16
     seed: int = 0
     source: Path | None = None

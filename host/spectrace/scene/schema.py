@@ -35,6 +35,7 @@ class CameraSpec(Strict):
 class FilmSpec(Strict):
     width: int = Field(gt=0, le=16384)
     height: int = Field(gt=0, le=16384)
+    exposure: FiniteFloat = Field(default=0.0, ge=-64.0, le=64.0, description="stops: RGB output x 2**exposure")
 
 
 class IntegratorSpec(Strict):
