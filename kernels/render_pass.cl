@@ -6,6 +6,29 @@
 #include "camera.cl"
 #include "scene.cl"
 
+/* Optional spectral film: SPECTRAL_BINS equal bands over [SPECTRAL_MIN_NM, SPECTRAL_MAX_NM], each accumulating
+ * the band-averaged radiance (1/Δ)∫_band L dλ, estimated per lane as L(λ)·[λ in band] / (p(λ) Δ). */
+#ifndef SPECTRAL_BINS
+#define SPECTRAL_BINS 0
+#define SPECTRAL_MIN_NM 360.0f
+#define SPECTRAL_MAX_NM 830.0f
+#endif
+
+inline void add_to_spectral_film(__global float *spectral_film, int pixel, float4 radiance,
+                                 const SampledWavelengths *w)
+{
+#if SPECTRAL_BINS > 0
+    const float band = (SPECTRAL_MAX_NM - SPECTRAL_MIN_NM) / (float)SPECTRAL_BINS;
+    float4 value = 0.25f * radiance / (w->pdf * band);
+    float lambda[4] = {w->lambda.x, w->lambda.y, w->lambda.z, w->lambda.w};
+    float values[4] = {value.x, value.y, value.z, value.w};
+    for (int i = 0; i < 4; ++i) {
+        int bin = (int)floor((lambda[i] - SPECTRAL_MIN_NM) / band);
+        if (bin >= 0 && bin < SPECTRAL_BINS) spectral_film[pixel * SPECTRAL_BINS + bin] += values[i];
+    }
+#endif
+}
+
 /* film: per pixel (ΣX, ΣY, ΣZ, number of dropped non-finite samples); ray_counts: rays traced per pixel, for
  * the benchmark's rays/s. */
 __kernel void render_pass(__global const RenderParams *params, __global const BVHNode *nodes,
@@ -13,7 +36,8 @@ __kernel void render_pass(__global const RenderParams *params, __global const BV
                           __global const Material *materials, __global const Light *lights,
                           __global const float *light_cdf, __global const float *spectra,
                           __global const float4 *map_texels, __global const float *map_cdf,
-                          __global const float4 *cmf, __global float4 *film, __global uint *ray_counts)
+                          __global const float4 *cmf, __global float4 *film, __global uint *ray_counts,
+                          __global float *spectral_film)
 {
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
@@ -32,6 +56,7 @@ __kernel void render_pass(__global const RenderParams *params, __global const BV
         float4 xyz = spectrum_to_xyz_estimate(radiance, cmf, &w);
         if (isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z)) {
             accumulated += xyz;
+            add_to_spectral_film(spectral_film, pixel, radiance, &w);
         } else {
             accumulated.w += 1.0f;
         }

@@ -45,6 +45,9 @@ def render(
     exposure: Annotated[Optional[float], typer.Option(help="Stops: RGB output x 2**exposure (film XYZ unscaled).")] = None,
     device: DeviceOption = None,
     xyz: Annotated[bool, typer.Option("--xyz/--no-xyz", help="EXR only: also store the film's X, Y, Z channels.")] = True,
+    spectral_bins: Annotated[int, typer.Option(
+        help="EXR only: also store N equal wavelength bands over 360-830 nm (spectral EXR, Fichet et al. 2021 "
+             "layout; band-averaged radiance in W/(m² sr nm)).", min=0, max=471)] = 0,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops early and still writes the samples done so far."""
@@ -53,7 +56,9 @@ def render(
 
     loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth,
                                               exposure=exposure)
-    renderer = Renderer(loaded, device)
+    if spectral_bins and output.suffix.lower() != ".exr":
+        raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
+    renderer = Renderer(loaded, device, spectral_bins=spectral_bins)
     console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False)
     signal.signal(signal.SIGTERM, _interrupt_on_sigterm)
     interrupted = False

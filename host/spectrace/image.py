@@ -10,6 +10,19 @@ from spectrace.spectral.colorimetry import srgb_encode, xyz_to_linear_srgb
 
 
 @dataclass
+class SpectralBands:
+    """Band-averaged spectral radiance per pixel: band i spans edges_nm[i]..edges_nm[i+1] and holds
+    (1/Δλ)∫ L dλ over it, W/(m² sr nm)."""
+
+    edges_nm: np.ndarray  # (bins + 1,)
+    radiance: np.ndarray  # (height, width, bins) float32
+
+    @property
+    def centres_nm(self) -> np.ndarray:
+        return 0.5 * (self.edges_nm[:-1] + self.edges_nm[1:])
+
+
+@dataclass
 class Image:
     xyz: np.ndarray  # (height, width, 3) float32, mean per pixel
     spp: int
@@ -19,6 +32,7 @@ class Image:
     dropped_samples: int = 0  # non-finite samples left out of the film
     rays_traced: int = 0
     exposure: float = 0.0  # stops: the RGB outputs are scaled by 2**exposure; xyz is not
+    spectral: SpectralBands | None = None  # when rendered with spectral bins
     extra: dict = field(default_factory=dict)
 
     @property
@@ -49,14 +63,16 @@ class Image:
         }
 
     def write(self, path: str | Path, include_xyz: bool = True) -> None:
-        """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels) or .png (sRGB, 8 bit)."""
+        """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
+        Fichet et al. 2021 layout when the image has them) or .png (sRGB, 8 bit)."""
         from spectrace.io.exr import write_exr
         from spectrace.io.png import write_png
 
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix == ".exr":
-            write_exr(path, self.to_linear_srgb(), self.xyz if include_xyz else None, self.metadata())
+            write_exr(path, self.to_linear_srgb(), self.xyz if include_xyz else None, self.metadata(),
+                      spectral=self.spectral)
         elif suffix == ".png":
             write_png(path, self.to_srgb(), self.metadata())
         else:

@@ -48,14 +48,18 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise SpectraceError(f"mesh file '{path}' does not exist", where=where)
+    if not path.is_file():
+        raise SpectraceError(f"mesh file '{path}' is not a file", where=where)
     try:
         # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
         scene = trimesh.load_scene(path, process=False, maintain_order=True)
         loaded = scene.to_mesh()
     except Exception as error:  # trimesh raises many unrelated types for unreadable files
         detail = " ".join(str(error).split()) or type(error).__name__
+        if isinstance(error, (ImportError, UnicodeError)):  # trimesh guessing the text encoding of binary junk
+            detail = f"its content is not a valid {path.suffix.lstrip('.').upper() or 'mesh'} file"
         raise SpectraceError(f"cannot read mesh file '{path}': {detail}", where=where) from None
     return _validated_mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), path, where)
 

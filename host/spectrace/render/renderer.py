@@ -7,7 +7,8 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import Device, open_device
-from spectrace.image import Image
+from spectrace.errors import SpectraceError
+from spectrace.image import Image, SpectralBands
 from spectrace.render.scene_buffers import SceneBuffers, build_scene_buffers, render_params
 from spectrace.scene.model import Scene
 
@@ -21,11 +22,22 @@ INTEGRATOR_PROGRAMS = {"path": "integrator_path.cl", "direct": "integrator_direc
 
 
 class Renderer:
-    def __init__(self, scene: Scene, device: Device | str | None = None):
+    def __init__(self, scene: Scene, device: Device | str | None = None, spectral_bins: int = 0,
+                 spectral_range_nm: tuple[float, float] = (360.0, 830.0)):
+        """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (the band-
+        averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output."""
         self.scene = scene
         self.device = device if isinstance(device, Device) else open_device(device)
         self.buffers: SceneBuffers = build_scene_buffers(scene)
-        self.program = self.device.build_program(INTEGRATOR_PROGRAMS[scene.integrator])
+        self.spectral_bins = spectral_bins
+        self.spectral_range_nm = spectral_range_nm
+        defines = None
+        if spectral_bins > 0:
+            lo, hi = spectral_range_nm
+            if not (360.0 <= lo < hi <= 830.0):
+                raise SpectraceError(f"spectral range must lie within 360-830 nm, got {lo}-{hi}")
+            defines = {"SPECTRAL_BINS": int(spectral_bins), "SPECTRAL_MIN_NM": float(lo), "SPECTRAL_MAX_NM": float(hi)}
+        self.program = self.device.build_program(INTEGRATOR_PROGRAMS[scene.integrator], defines=defines)
         self.kernel = cl.Kernel(self.program, "render_pass")
         ctx = self.device.context
         ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
@@ -39,6 +51,7 @@ class Renderer:
         self.pixel_count = scene.width * scene.height
         self._film = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 16)
         self._ray_counts = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 4)
+        self._spectral_film = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, max(self.pixel_count * spectral_bins, 1) * 4)
         self.samples_done = 0
         self.render_seconds = 0.0
         self.reset()
@@ -47,6 +60,7 @@ class Renderer:
         queue = self.device.queue
         cl.enqueue_fill_buffer(queue, self._film, np.float32(0), 0, self.pixel_count * 16)
         cl.enqueue_fill_buffer(queue, self._ray_counts, np.uint32(0), 0, self.pixel_count * 4)
+        cl.enqueue_fill_buffer(queue, self._spectral_film, np.float32(0), 0, self._spectral_film.size)
         queue.finish()
         self.samples_done = 0
         self.render_seconds = 0.0
@@ -57,7 +71,7 @@ class Renderer:
         params = render_params(self.scene, self.buffers, self.samples_done, sample_count)
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
-        self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts)
+        self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts, self._spectral_film)
         cl.enqueue_nd_range_kernel(queue, self.kernel, (self.pixel_count,), None)
         queue.finish()
         self.render_seconds += time.perf_counter() - start
@@ -88,11 +102,24 @@ class Renderer:
         self.device.queue.finish()
         return film, rays
 
+    def read_spectral_film(self) -> np.ndarray:
+        """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
+        bands = np.empty(self.pixel_count * self.spectral_bins, np.float32)
+        cl.enqueue_copy(self.device.queue, bands, self._spectral_film)
+        self.device.queue.finish()
+        return bands.reshape(self.scene.height, self.scene.width, self.spectral_bins)
+
     def image(self) -> Image:
         film, rays = self.read_film()
         count = max(self.samples_done, 1)
         xyz = (film[:, :3] / np.float32(count)).reshape(self.scene.height, self.scene.width, 3)
+        spectral = None
+        if self.spectral_bins > 0:
+            lo, hi = self.spectral_range_nm
+            spectral = SpectralBands(np.linspace(lo, hi, self.spectral_bins + 1),
+                                     self.read_spectral_film() / np.float32(count))
         return Image(
+            spectral=spectral,
             xyz=xyz,
             spp=self.samples_done,
             seed=self.scene.seed,

@@ -11,7 +11,7 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import load_mesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.scene import schema
+from spectrace.scene import limits, schema
 from spectrace.scene.model import (
     AreaEmitter,
     Camera,
@@ -69,11 +69,27 @@ def _model_in(annotation) -> type | None:
     return None
 
 
-def _validation_error(path: Path, error: ValidationError) -> SpectraceError:
-    # A misspelt key also shows up as a missing required one; the misspelling is the actionable report.
-    errors = sorted(error.errors(), key=lambda e: e["type"] != "extra_forbidden")
-    first = errors[0]
-    location = tuple(p for p in first["loc"] if not (isinstance(p, str) and p.startswith("function-after")))
+def _location_in_data(data: object, location: tuple, missing: bool) -> tuple:
+    """The parts of a pydantic error location that are keys or indices of the input: pydantic also names
+    union members ('str', 'point', 'function-after[...]'), which the file does not contain."""
+    kept, node = [], data
+    for i, part in enumerate(location):
+        if isinstance(node, dict) and part in node:
+            kept.append(part)
+            node = node[part]
+        elif isinstance(node, list) and type(part) is int and 0 <= part < len(node):
+            kept.append(part)
+            node = node[part]
+        elif missing and i == len(location) - 1:
+            kept.append(part)
+    return tuple(kept)
+
+
+def _validation_error(path: Path, error: ValidationError, data: object = None) -> SpectraceError:
+    # A misspelt key also shows up as a missing required one; the misspelling is the actionable report. Among
+    # the rest, the deepest location is the most specific (a union reports every member's complaint).
+    located = [(e, _location_in_data(data, e["loc"], e["type"] == "missing")) for e in error.errors()]
+    first, location = min(located, key=lambda item: (item[0]["type"] != "extra_forbidden", -len(item[1])))
     message = first["msg"].removeprefix("Value error, ")
     if first["type"] == "extra_forbidden":
         allowed = _allowed_keys(schema.SceneSpec, location)
@@ -90,6 +106,9 @@ def read_scene_spec(path: Path) -> schema.SceneSpec:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise SpectraceError(f"cannot read scene file ({exc.strerror})", where=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise SpectraceError(f"not a UTF-8 text file (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})",
+                             where=str(path)) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -97,7 +116,7 @@ def read_scene_spec(path: Path) -> schema.SceneSpec:
     try:
         return schema.SceneSpec.model_validate(data)
     except ValidationError as exc:
-        raise _validation_error(path, exc) from None
+        raise _validation_error(path, exc, data) from None
 
 
 class _Resolver:
@@ -130,7 +149,7 @@ class _Resolver:
         if entry.values is not None:
             spectrum = parse_inline_spectrum(entry.values, where=self.where(f"{entry_key}.values"))
         elif entry.file is not None:
-            spectrum = load_spectrum_csv(self.folder / entry.file, column=entry.column, name=name)
+            spectrum = self.csv_spectrum(entry.file, entry.column, f"{entry_key}.file", name=name)
         else:
             try:
                 spectrum = library_spectrum(entry.library)
@@ -138,6 +157,13 @@ class _Resolver:
                 raise SpectraceError(exc.message, where=self.where(f"{entry_key}.library")) from None
         self.named_spectra[name] = spectrum
         return spectrum
+
+    def csv_spectrum(self, file: str, column: str | None, key: str, name: str | None = None) -> Spectrum:
+        """A spectrum CSV; its errors (which name the CSV and its line) also name the scene key that refers to it."""
+        try:
+            return load_spectrum_csv(self.folder / file, column=column, name=name)
+        except SpectraceError as exc:
+            raise SpectraceError(str(exc), where=self.where(key)) from None
 
     def spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
         if spec.rgb is not None:
@@ -161,7 +187,10 @@ class _Resolver:
         elif spec.values is not None:
             result = parse_inline_spectrum(spec.values, where=self.where(f"{key}.values"))
         else:
-            result = load_spectrum_csv(self.folder / spec.file, column=spec.column)
+            result = self.csv_spectrum(spec.file, spec.column, f"{key}.file")
+        with np.errstate(over="ignore"):  # an overflow to inf is reported just below
+            if problem := limits.spectrum_magnitude_problem(result.values * spec.scale):
+                raise SpectraceError(problem, where=self.where(key))
         result = result * spec.scale if spec.scale != 1.0 else result
         values = result.values
         if np.any(values < 0):
@@ -188,7 +217,11 @@ class _Resolver:
                 mesh = _BUILTIN_SHAPES[s.type]()
             if s.transform:
                 steps = [step.model_dump(exclude_none=True) for step in s.transform]
-                mesh = apply_transform(mesh, transform_matrix(steps, where=self.where(f"{key}.transform")))
+                with np.errstate(over="ignore", invalid="ignore"):  # overflows are reported just below
+                    mesh = apply_transform(mesh, transform_matrix(steps, where=self.where(f"{key}.transform")))
+            if problem := limits.coordinates_problem(mesh.vertices):
+                culprit = "transform" if s.transform else "file" if s.type == "mesh" else "type"
+                raise SpectraceError(f"mesh has {problem}", where=self.where(f"{key}.{culprit}"))
             if s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
@@ -211,12 +244,18 @@ class _Resolver:
         total = float(integrate_on_grid(shape.values))
         if total <= 0:
             raise SpectraceError("the spectrum of a light given by power must not be zero", where=self.where(key))
-        return shape * (spec.power / total / solid_angle_sr)
+        factor = spec.power / total / solid_angle_sr
+        with np.errstate(over="ignore"):
+            if problem := limits.spectrum_magnitude_problem(shape.values * factor):
+                raise SpectraceError(problem, where=self.where(f"{key}.power"))
+        return shape * factor
 
     def lights(self) -> list[Light]:
         lights: list[Light] = []
         for i, spec in enumerate(self.spec.lights):
             key = f"lights[{i}]"
+            if spec.type in ("point", "spot") and (problem := limits.coordinates_problem(spec.position)):
+                raise SpectraceError(f"position has {problem}", where=self.where(f"{key}.position"))
             if spec.type == "point":
                 lights.append(PointLight(spec.position, self.point_source_intensity(spec, key, 4.0 * np.pi)))
             elif spec.type == "spot":
@@ -305,8 +344,12 @@ def load_scene(path: str | Path) -> Scene:
 
 
 def _check_camera(camera: Camera, path: Path) -> None:
+    for name in ("origin", "target", "up"):
+        if problem := limits.coordinates_problem(getattr(camera, name)):
+            raise SpectraceError(f"camera {name} has {problem}", where=f"{path}: camera.{name}")
     forward = np.subtract(camera.target, camera.origin)
     if np.linalg.norm(forward) == 0:
         raise SpectraceError("camera target equals origin", where=f"{path}: camera.target")
-    if np.linalg.norm(np.cross(forward, camera.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
+    # Written as not (>) so that an up vector too small to survive the cross product counts as parallel.
+    if not np.linalg.norm(np.cross(forward, camera.up)) > 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
         raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where=f"{path}: camera.up")

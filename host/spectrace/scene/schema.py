@@ -8,6 +8,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from spectrace.scene import limits
+
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
 
@@ -33,9 +35,22 @@ class CameraSpec(Strict):
 
 
 class FilmSpec(Strict):
-    width: int = Field(gt=0, le=16384)
-    height: int = Field(gt=0, le=16384)
+    width: int = Field(gt=0)
+    height: int = Field(gt=0)
     exposure: FiniteFloat = Field(default=0.0, ge=-64.0, le=64.0, description="stops: RGB output x 2**exposure")
+
+    @field_validator("width", "height")
+    @classmethod
+    def _side_within_limit(cls, value: int, info) -> int:
+        if problem := limits.film_side_problem(info.field_name, value):
+            raise ValueError(problem)
+        return value
+
+    @model_validator(mode="after")
+    def _pixels_within_limit(self) -> "FilmSpec":
+        if problem := limits.film_size_problem(self.width, self.height):
+            raise ValueError(problem)
+        return self
 
 
 class IntegratorSpec(Strict):
@@ -52,8 +67,15 @@ class IntegratorSpec(Strict):
 
 
 class SamplerSpec(Strict):
-    spp: int = Field(default=16, gt=0, le=1 << 20)
+    spp: int = Field(default=16, gt=0)
     seed: int = Field(default=0, ge=0, lt=1 << 31)
+
+    @field_validator("spp")
+    @classmethod
+    def _spp_within_limit(cls, value: int) -> int:
+        if problem := limits.spp_problem(value):
+            raise ValueError(problem)
+        return value
 
 
 SPECTRUM_SOURCES = ("rgb", "value", "blackbody", "spectrum", "values", "file")

@@ -1,0 +1,100 @@
+"""Limits on sizes and magnitudes a render can honour, each with the reason it exists.
+
+The schema checks scene files against them, the command line checks its overrides, and the renderer checks any
+Scene built through the Python API; every message says what the request would cost.
+"""
+
+import numpy as np
+
+# A film side beyond this is almost certainly a typo (16384 px is the largest image most viewers open).
+MAX_FILM_SIDE_PX = 16384
+# 2^27 pixels (e.g. 16384 x 8192) need 2.5 GiB of device memory for the film and ray counts alone, and several
+# times that on the host while the image is converted and written.
+MAX_FILM_PIXELS = 1 << 27
+# Per-pixel sums are 32-bit floats: beyond 2^20 samples each new sample is below a few ulps of the running sum and
+# is effectively lost. Averaging images rendered with different seeds goes further without that loss.
+MAX_SPP = 1 << 20
+
+# Device bytes per pixel: the film (float4: ΣX, ΣY, ΣZ, dropped-sample count) and the ray count (uint32).
+FILM_BYTES_PER_PIXEL = 16
+RAY_COUNT_BYTES_PER_PIXEL = 4
+DEVICE_BYTES_PER_PIXEL = FILM_BYTES_PER_PIXEL + RAY_COUNT_BYTES_PER_PIXEL
+# Host bytes per pixel while an image is finished: film and ray counts read back (20), XYZ float32 (12), the
+# float64 colour conversion (24) and the float32 linear sRGB (12).
+HOST_BYTES_PER_PIXEL = DEVICE_BYTES_PER_PIXEL + 12 + 24 + 12
+
+# The watertight ray/triangle test forms products of three coordinate differences in 32-bit floats, which
+# overflow (3.4e38) near 7e12; 1e12 scene units keeps a margin (the Earth's orbit is 1.5e11 m).
+MAX_COORDINATE = 1e12
+# Spectral values reach the film multiplied by the CMFs and divided by the wavelength pdf (up to ~1e3 together)
+# and summed over up to MAX_SPP samples in 32-bit floats; 1e20 leaves that room. The Sun's spectral radiance is
+# about 3e4 W/(m² sr nm).
+MAX_SPECTRUM_VALUE = 1e20
+
+
+def format_bytes(count: float) -> str:
+    """1536 -> '1.5 KiB', in powers of 1024."""
+    value = float(count)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if value < 1024.0 or unit == "TiB":
+            return f"{value:.0f} {unit}" if unit == "B" else f"{value:.1f} {unit}"
+        value /= 1024.0
+    raise AssertionError("unreachable")
+
+
+def film_side_problem(name: str, pixels: int) -> str | None:
+    """Why a film side of `pixels` cannot be rendered, or None."""
+    if pixels < 1:
+        return f"film {name} must be at least 1 pixel, got {pixels}"
+    if pixels > MAX_FILM_SIDE_PX:
+        return f"film {name} {pixels} px exceeds the limit of {MAX_FILM_SIDE_PX} px"
+    return None
+
+
+def film_size_problem(width: int, height: int) -> str | None:
+    """Why a width x height film cannot be rendered, with the memory it would need, or None."""
+    problem = film_side_problem("width", width) or film_side_problem("height", height)
+    if problem is None and width * height <= MAX_FILM_PIXELS:
+        return None
+    pixels = max(width, 0) * max(height, 0)
+    cost = (f"a {width}x{height} film ({pixels / 1e6:.1f} Mpixels) would need "
+            f"{format_bytes(pixels * DEVICE_BYTES_PER_PIXEL)} of device memory and about "
+            f"{format_bytes(pixels * HOST_BYTES_PER_PIXEL)} of host memory")
+    if problem is not None:
+        return f"{problem}: {cost}"
+    return f"{cost}; at most {MAX_FILM_PIXELS / 1e6:.1f} Mpixels are allowed (e.g. 16384x8192)"
+
+
+def spp_problem(spp: int) -> str | None:
+    """Why `spp` samples per pixel cannot be rendered, or None."""
+    if spp < 1:
+        return f"spp must be at least 1, got {spp}"
+    if spp > MAX_SPP:
+        return (f"spp {spp} exceeds the limit of {MAX_SPP}: the film's 32-bit float sums stop gaining precision "
+                f"beyond it; average images rendered with different seeds instead")
+    return None
+
+
+def coordinates_problem(points: np.ndarray) -> str | None:
+    """Why these (N, 3) positions cannot be traced (NaN, infinite, or beyond ±MAX_COORDINATE), or None."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if points.size == 0:
+        return None
+    finite = np.isfinite(points).all(axis=1)
+    if not finite.all():
+        first = int(np.flatnonzero(~finite)[0])
+        return f"{int((~finite).sum())} point(s) with NaN or infinite coordinates (first: point {first})"
+    largest = float(np.abs(points).max())
+    if largest > MAX_COORDINATE:
+        return (f"coordinates reaching {largest:.3g}, beyond ±{MAX_COORDINATE:.0e} scene units, where the device's "
+                f"32-bit ray/triangle arithmetic overflows (use larger units, e.g. km instead of m)")
+    return None
+
+
+def spectrum_magnitude_problem(values: np.ndarray) -> str | None:
+    """Why a spectrum with these values would overflow on the device, or None."""
+    largest = float(np.max(np.abs(values))) if np.size(values) else 0.0
+    if largest > MAX_SPECTRUM_VALUE:
+        return (f"spectrum reaches {largest:.3g}, beyond {MAX_SPECTRUM_VALUE:.0e}, where the film's 32-bit sums "
+                f"would overflow (scale the scene's radiometric units down)")
+    return None
