@@ -342,3 +342,19 @@ def test_unknown_display_and_missing_file(tmp_path):
     with pytest.raises(SpectraceError, match="display file not found") as error:
         load_display(str(missing))
     assert error.value.where == str(missing)
+
+
+def test_illuminant_metamerism_of_matched_displays():
+    from spectrace.displays import load_display
+    from spectrace.displays.metamerism import patch_metamerism
+
+    dell = load_display("LCD-Dell_CCFL")
+    same = patch_metamerism(dell, (0.8, 0.8, 0.8), dell)
+    assert max(p.delta_e_2000 for p in same.patches) < 1e-6  # a display matched to itself lights alike
+
+    report = patch_metamerism(dell, (0.8, 0.8, 0.8), load_display("LCD-Apple_WLED"))
+    assert report.match.in_gamut
+    assert len(report.patches) == 24
+    neutrals = [p.delta_e_2000 for p in report.patches if p.patch.startswith(("white", "neutral", "black"))]
+    assert max(neutrals) < 0.5  # near-flat reflectances see little of the spectral difference
+    assert report.max_delta_e > 1.0  # chromatic patches do: CCFL lines vs a white LED's phosphor hump

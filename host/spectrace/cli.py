@@ -1,7 +1,6 @@
 """Command line: `spectrace render | devices | bench`. Errors print as one line and exit non-zero."""
 
 import json
-import signal
 import sys
 from pathlib import Path
 from typing import Annotated, Optional
@@ -28,11 +27,6 @@ DeviceOption = Annotated[
 ]
 
 
-def _interrupt_on_sigterm(signum, frame) -> None:
-    # SIGTERM ends a render like Ctrl-C does: the finished passes are still written.
-    raise KeyboardInterrupt
-
-
 @app.command()
 def render(
     scene: Annotated[Path, typer.Argument(help="Scene file (TOML).")],
@@ -49,32 +43,40 @@ def render(
         help="EXR only: also store N equal wavelength bands over 360-830 nm (spectral EXR, Fichet et al. 2021 "
              "layout; band-averaged radiance in W/(m² sr nm)).", min=0, max=471)] = 0,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    checkpoint: Annotated[Optional[Path], typer.Option(
+        help="Save the render's state to this file every --checkpoint-interval seconds, when stopped, and at the "
+             "end; --resume continues from it.")] = None,
+    checkpoint_interval: Annotated[float, typer.Option(
+        help="Seconds between checkpoints (0: after every pass).", min=0.0)] = 60.0,
+    resume: Annotated[Optional[Path], typer.Option(
+        help="Continue the render saved in this checkpoint (same scene, size and seed; --spp may be higher). "
+             "Checkpoints then go to this file unless --checkpoint names another.")] = None,
 ) -> None:
-    """Render SCENE to an image. Ctrl-C or SIGTERM stops early and still writes the samples done so far."""
+    """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
+    (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
+    from spectrace.render.checkpoint import read_checkpoint
     from spectrace.render.renderer import Renderer
+    from spectrace.render.stop_signals import StopOnSignals
     from spectrace.scene import load_scene
 
     loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth,
                                               exposure=exposure)
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
+    _check_render_options(loaded, output, width, height, spp)
+    saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
     renderer = Renderer(loaded, device, spectral_bins=spectral_bins)
     console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False)
-    signal.signal(signal.SIGTERM, _interrupt_on_sigterm)
-    interrupted = False
-    with Progress(
-        TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
-        TimeElapsedColumn(), TimeRemainingColumn(), console=console, disable=quiet,
-    ) as bar:
-        task = bar.add_task("render", total=loaded.spp)
-        try:
-            renderer.render(progress=lambda done, total: bar.update(task, completed=done))
-        except KeyboardInterrupt:
-            interrupted = True
-    image = renderer.image()
-    if image.spp == 0:
-        raise SpectraceError("interrupted before the first pass finished; nothing written")
-    image.write(output, include_xyz=xyz)
+    if saved is not None:
+        _resume(renderer, saved, resume)
+    state_file = checkpoint or resume
+    with StopOnSignals() as stop:
+        _render_passes(renderer, loaded.spp, stop, state_file, checkpoint_interval, quiet)
+        interrupted = stop.requested
+        image = renderer.image()
+        if image.spp == 0:
+            raise SpectraceError("interrupted before the first pass finished; nothing written")
+        _write_image(image, output, xyz, state_file)
     pixels = image.width * image.height * image.spp
     note = " (interrupted: partial image)" if interrupted else ""
     console.print(
@@ -86,6 +88,68 @@ def render(
         console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
     if interrupted:
         raise typer.Exit(130)
+
+
+def _check_render_options(scene, output: Path, width, height, spp) -> None:
+    """Refuse what would fail only after the render (unknown format, unwritable folder) or could never run."""
+    import os
+
+    from spectrace.scene import limits
+
+    if output.suffix.lower() not in (".exr", ".png"):
+        raise SpectraceError(f"unknown image format '{output.suffix}' (use .exr or .png)", where=str(output))
+    folder = output.parent if str(output.parent) else Path(".")
+    if folder.exists() and not (folder.is_dir() and os.access(folder, os.W_OK | os.X_OK)):
+        raise SpectraceError("the output folder is not a writable folder", where=str(folder))
+    if (width or height) and (problem := limits.film_size_problem(scene.width, scene.height)):
+        raise SpectraceError(problem, where="--width/--height")
+    if spp and (problem := limits.spp_problem(spp)):
+        raise SpectraceError(problem, where="--spp")
+
+
+def _resume(renderer, restored, path: Path) -> None:
+    from spectrace.render.checkpoint import restore_checkpoint
+
+    restore_checkpoint(renderer, restored, str(path))
+    done, target = restored.state.samples_done, renderer.scene.spp
+    note = f" (already at or beyond the {target} spp asked for)" if done >= target else ""
+    console.print(f"resumed {path}: {done} spp done{note}", highlight=False)
+    if restored.device != renderer.device.report.key:
+        console.print(f"warning: the checkpoint was rendered on {restored.device}; continuing on "
+                      f"{renderer.device.report.key} gives an equally valid image, but not bit for bit the one an "
+                      f"uninterrupted render would", highlight=False)
+
+
+def _render_passes(renderer, spp: int, stop, state_file: Optional[Path], interval: float, quiet: bool) -> None:
+    """Render to `spp` with a progress bar until done or asked to stop; checkpoint on the way and at the end."""
+    from spectrace.render.checkpoint import PeriodicCheckpoints
+
+    def warn(message: str) -> None:
+        console.print(f"warning: {message}", highlight=False, markup=False)
+
+    saver = PeriodicCheckpoints(state_file, renderer, interval, warn=warn) if state_file else None
+    with Progress(
+        TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
+        TimeElapsedColumn(), TimeRemainingColumn(), console=console, disable=quiet,
+    ) as bar:
+        task = bar.add_task("render", total=spp, completed=renderer.samples_done)
+
+        def on_pass(done: int, total: int) -> None:
+            bar.update(task, completed=done)
+            if saver is not None:
+                saver.maybe_save()
+
+        renderer.render(progress=on_pass, should_stop=stop)
+    if saver is not None and renderer.samples_done > 0:
+        saver.save()
+
+
+def _write_image(image, output: Path, include_xyz: bool, state_file: Optional[Path]) -> None:
+    try:
+        image.write(output, include_xyz=include_xyz)
+    except OSError as error:
+        kept = f"; the render's state is in {state_file} (continue with --resume)" if state_file else ""
+        raise SpectraceError(f"cannot write the image ({error.strerror or error}){kept}", where=str(output)) from None
 
 
 @app.command()
@@ -167,6 +231,18 @@ def main() -> None:
     except KeyboardInterrupt:
         console.print("interrupted", highlight=False)
         sys.exit(130)
+    except MemoryError:
+        console.print("error: out of host memory (a smaller film, --width/--height, needs less)", highlight=False)
+        sys.exit(2)
+    except Exception as exc:
+        opencl = sys.modules.get("pyopencl")
+        if opencl is None or not isinstance(exc, opencl.Error):
+            raise
+        from spectrace.render.opencl_errors import describe_opencl_error
+
+        console.print(f"error: {describe_opencl_error(exc, 'running', 'the OpenCL device')}", highlight=False,
+                      markup=False, soft_wrap=True)
+        sys.exit(2)
 
 
 if __name__ == "__main__":

@@ -5,8 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.colour_output import ColourSpace, WhiteBalance, encode_for_display, xyz_to_output
 from spectrace.errors import SpectraceError
-from spectrace.spectral.colorimetry import srgb_encode, xyz_to_linear_srgb
+from spectrace.spectral.colorimetry import srgb_encode
 
 
 @dataclass
@@ -34,6 +35,8 @@ class Image:
     exposure: float = 0.0  # stops: the RGB outputs are scaled by 2**exposure; xyz is not
     spectral: SpectralBands | None = None  # when rendered with spectral bins
     extra: dict = field(default_factory=dict)
+    colour_space: ColourSpace = ColourSpace.SRGB  # of the files `write` makes (see spectrace.colour_output)
+    white_balance: WhiteBalance | None = None  # chromatic adaptation applied to every RGB output
 
     @property
     def width(self) -> int:
@@ -44,12 +47,20 @@ class Image:
         return self.xyz.shape[0]
 
     def to_linear_srgb(self) -> np.ndarray:
-        """Linear sRGB of the film, times 2**exposure."""
-        return (xyz_to_linear_srgb(self.xyz) * 2.0**self.exposure).astype(np.float32)
+        """Linear sRGB of the film (white-balanced if asked), times 2**exposure."""
+        return xyz_to_output(self.xyz, ColourSpace.SRGB, self.white_balance, self.exposure)
 
     def to_srgb(self) -> np.ndarray:
         """Display-encoded sRGB in [0, 1] (out-of-gamut and over-bright values clipped)."""
         return srgb_encode(np.clip(self.to_linear_srgb(), 0.0, 1.0))
+
+    def to_rgb(self) -> np.ndarray:
+        """Linear values of `colour_space` (X, Y, Z for "xyz"), white-balanced if asked, times 2**exposure."""
+        return xyz_to_output(self.xyz, self.colour_space, self.white_balance, self.exposure)
+
+    def to_display(self) -> np.ndarray:
+        """`to_rgb()` clipped to [0, 1] and encoded with `colour_space`'s transfer curve (what PNG files hold)."""
+        return encode_for_display(self.to_rgb(), self.colour_space)
 
     def metadata(self) -> dict[str, str]:
         return {
@@ -59,22 +70,28 @@ class Image:
             "render_seconds": f"{self.render_seconds:.3f}",
             "dropped_samples": str(self.dropped_samples),
             "exposure": f"{self.exposure:g}",
+            "colour_space": ColourSpace(self.colour_space).value,
+            **({"white_balance": self.white_balance.describe()} if self.white_balance else {}),
             **{k: str(v) for k, v in self.extra.items()},
         }
 
     def write(self, path: str | Path, include_xyz: bool = True) -> None:
         """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
         Fichet et al. 2021 layout when the image has them) or .png (sRGB, 8 bit)."""
+        from spectrace.colour_output import exr_chromaticities, png_cicp
         from spectrace.io.exr import write_exr
         from spectrace.io.png import write_png
 
         path = Path(path)
         suffix = path.suffix.lower()
+        space = ColourSpace(self.colour_space)
         if suffix == ".exr":
-            write_exr(path, self.to_linear_srgb(), self.xyz if include_xyz else None, self.metadata(),
-                      spectral=self.spectral)
+            attributes = {} if space is ColourSpace.SRGB else {"chromaticities": exr_chromaticities(space)}
+            write_exr(path, self.to_rgb(), self.xyz if include_xyz else None, self.metadata(),
+                      spectral=self.spectral, attributes=attributes)
         elif suffix == ".png":
-            write_png(path, self.to_srgb(), self.metadata())
+            chunks = {} if space is ColourSpace.SRGB else {b"cICP": png_cicp(space)}
+            write_png(path, self.to_display(), self.metadata(), chunks=chunks)
         else:
             raise SpectraceError(f"unknown image format '{suffix}' (use .exr or .png)", where=str(path))
 

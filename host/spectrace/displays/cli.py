@@ -208,3 +208,36 @@ def match(
         _print_json(result.to_json() | {"encoding": encoding.value, "viewing": viewing.to_json()})
         return
     _stdout_console().print(_match_table(result))
+
+
+@display_app.command()
+def metamerism(
+    source: Annotated[str, typer.Option("--from", help="Display lighting the first half.")],
+    target: Annotated[str, typer.Option("--to", help="Display lighting the second half, matched to --from.")],
+    rgb: Annotated[tuple[float, float, float], typer.Option(
+        "--rgb", help="The triple --from shows (default a light grey, which most displays can match).")] = (0.8, 0.8, 0.8),
+    encoding: EncodingOption = Encoding.LINEAR,
+    white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
+    as_json: JsonOption = False,
+) -> None:
+    """Illuminant metamerism: the ColorChecker lit by --from showing the triple vs lit by --to showing the triple
+    that matches it (same CIE 1931 XYZ): the per-patch ΔE2000 between the two halves."""
+    from spectrace.displays.metamerism import patch_metamerism
+
+    report = patch_metamerism(load_display(source, where="--from").with_transfer(encoding), rgb,
+                              load_display(target, where="--to").with_transfer(encoding),
+                              ViewingConditions(white_luminance_cd_m2=white_luminance))
+    if as_json:
+        print(json.dumps(report.to_json(), indent=2))
+        return
+    screens = report.to_json()["screens_delta_e_2000"]
+    target_rgb = ", ".join(f"{v:.4f}" for v in report.match.target_drive)
+    table = Table(title=f"ColorChecker lit by {report.match.source.name} showing {tuple(rgb)} vs by "
+                        f"{report.match.target.name} showing ({target_rgb}); the screens differ by ΔE2000 {screens:.2f}")
+    for column in ("patch", "L*a*b* (first half)", "L*a*b* (second half)", "ΔE2000"):
+        table.add_column(column)
+    for p in report.patches:
+        table.add_row(p.patch, " ".join(f"{v:6.2f}" for v in p.lab_under_source),
+                      " ".join(f"{v:6.2f}" for v in p.lab_under_target), f"{p.delta_e_2000:.2f}")
+    table.add_row("mean / max", "", "", f"{report.mean_delta_e:.2f} / {report.max_delta_e:.2f}")
+    Console(width=140).print(table)

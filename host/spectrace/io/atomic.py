@@ -1,9 +1,20 @@
 """Atomic file output: readers see the old file or the complete new one, never a torn write."""
 
 import os
+import stat
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+
+
+def _mode_for(path: Path) -> int:
+    """The permission bits of the file being replaced, else those of a new file under the process's umask."""
+    try:
+        return stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def write_atomically(path: Path, write: Callable[[Path], None]) -> None:
@@ -18,6 +29,7 @@ def write_atomically(path: Path, write: Callable[[Path], None]) -> None:
     os.close(fd)
     temp = Path(temp_name)
     try:
+        os.chmod(temp, _mode_for(path))  # mkstemp makes 0600; the result should look like any other new file
         write(temp)
         with open(temp, "rb+") as handle:
             os.fsync(handle.fileno())

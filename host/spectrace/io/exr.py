@@ -21,9 +21,10 @@ def parse_spectral_channel(name: str) -> float | None:
 
 
 def write_exr(path: Path, linear_srgb: np.ndarray, xyz: np.ndarray | None, metadata: dict[str, str],
-              spectral=None) -> None:
+              spectral=None, attributes: dict | None = None) -> None:
     """spectral: SpectralBands (band-averaged radiance) written as one S0 channel per band centre, with the
-    layout's attributes (spectralLayoutVersion, emissiveUnits, polarisationHandedness)."""
+    layout's attributes (spectralLayoutVersion, emissiveUnits, polarisationHandedness). attributes: standard
+    header attributes, e.g. "chromaticities" when the RGB channels are not linear sRGB."""
     channels = {"RGB": np.ascontiguousarray(linear_srgb, dtype=np.float32)}
     header_extra = {}
     if spectral is not None:
@@ -39,6 +40,7 @@ def write_exr(path: Path, linear_srgb: np.ndarray, xyz: np.ndarray | None, metad
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     header.update({f"spectrace:{k}": str(v) for k, v in metadata.items()})
     header.update(header_extra)
+    header.update(attributes or {})
 
     def write(temp: Path) -> None:
         with OpenEXR.File(header, channels) as exr:

@@ -9,7 +9,11 @@ import pyopencl as cl
 from spectrace.device import Device, open_device
 from spectrace.errors import SpectraceError
 from spectrace.image import Image, SpectralBands
+from spectrace.render.checkpoint import RenderState
+from spectrace.render.memory import check_device_memory, device_memory_need
+from spectrace.render.opencl_errors import translate_opencl_errors
 from spectrace.render.scene_buffers import SceneBuffers, build_scene_buffers, render_params
+from spectrace.scene import limits
 from spectrace.scene.model import Scene
 
 ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
@@ -22,13 +26,18 @@ INTEGRATOR_PROGRAMS = {"path": "integrator_path.cl", "direct": "integrator_direc
 
 
 class Renderer:
+    @translate_opencl_errors("setting up the render")
     def __init__(self, scene: Scene, device: Device | str | None = None, spectral_bins: int = 0,
                  spectral_range_nm: tuple[float, float] = (360.0, 830.0)):
         """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (the band-
         averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output."""
         self.scene = scene
+        if problem := limits.render_settings_problem(scene.width, scene.height, scene.spp):
+            raise SpectraceError(problem)
         self.device = device if isinstance(device, Device) else open_device(device)
         self.buffers: SceneBuffers = build_scene_buffers(scene)
+        # Refuse before allocating anything: a failed allocation deep in the driver says far less.
+        check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
         self.spectral_bins = spectral_bins
         self.spectral_range_nm = spectral_range_nm
         defines = None
@@ -56,6 +65,7 @@ class Renderer:
         self.render_seconds = 0.0
         self.reset()
 
+    @translate_opencl_errors("clearing the film")
     def reset(self) -> None:
         queue = self.device.queue
         cl.enqueue_fill_buffer(queue, self._film, np.float32(0), 0, self.pixel_count * 16)
@@ -65,6 +75,7 @@ class Renderer:
         self.samples_done = 0
         self.render_seconds = 0.0
 
+    @translate_opencl_errors("running a render pass")
     def run_pass(self, sample_count: int) -> None:
         """Add `sample_count` samples per pixel, continuing the sample sequence where the last pass stopped."""
         queue = self.device.queue
@@ -78,12 +89,15 @@ class Renderer:
         self.samples_done += sample_count
 
     def render(self, spp: int | None = None, pass_spp: int | None = None,
-               progress: ProgressCallback | None = None) -> Image:
+               progress: ProgressCallback | None = None, should_stop: Callable[[], bool] | None = None) -> Image:
         """Render until `spp` samples per pixel (default: the scene's). Passes adapt their size to about
-        TARGET_PASS_SECONDS unless pass_spp fixes it; the image does not depend on the pass sizes."""
+        TARGET_PASS_SECONDS unless pass_spp fixes it; the image does not depend on the pass sizes.
+        `should_stop` is asked between passes; when it says True the image of the samples done so far is returned."""
         total = spp if spp is not None else self.scene.spp
+        if problem := limits.spp_problem(total):
+            raise SpectraceError(problem)
         chunk = pass_spp or 1
-        while self.samples_done < total:
+        while self.samples_done < total and not (should_stop is not None and should_stop()):
             count = min(chunk, total - self.samples_done)
             start = time.perf_counter()
             self.run_pass(count)
@@ -94,6 +108,7 @@ class Renderer:
                 progress(self.samples_done, total)
         return self.image()
 
+    @translate_opencl_errors("reading the film")
     def read_film(self) -> tuple[np.ndarray, np.ndarray]:
         film = np.empty((self.pixel_count, 4), np.float32)
         rays = np.empty(self.pixel_count, np.uint32)
@@ -102,6 +117,7 @@ class Renderer:
         self.device.queue.finish()
         return film, rays
 
+    @translate_opencl_errors("reading the spectral film")
     def read_spectral_film(self) -> np.ndarray:
         """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
         bands = np.empty(self.pixel_count * self.spectral_bins, np.float32)
@@ -125,8 +141,45 @@ class Renderer:
             seed=self.scene.seed,
             device=self.device.report.key,
             render_seconds=self.render_seconds,
-            dropped_samples=int(film[:, 3].sum()),
+            dropped_samples=int(film[:, 3].astype(np.float64).sum()),  # float32 would round totals above 2^24
             rays_traced=int(rays.astype(np.uint64).sum()),
             exposure=self.scene.exposure,
             extra={"max_depth": self.scene.max_depth, "width": self.scene.width, "height": self.scene.height},
         )
+
+    def _state_buffers(self) -> dict[str, cl.Buffer]:
+        """The device buffers that accumulate samples: with samples_done, the whole state of the render."""
+        buffers = {"film": self._film, "ray_counts": self._ray_counts}
+        if self.spectral_bins > 0:
+            buffers["spectral_film"] = self._spectral_film
+        return buffers
+
+    def save_state(self) -> RenderState:
+        """Host copies of the accumulation buffers and the sample count: restore_state() on a renderer of the same
+        scene and seed continues this render exactly (the sampler is counter-based; see render.checkpoint)."""
+        film, rays = self.read_film()
+        buffers = {"film": film, "ray_counts": rays}
+        if self.spectral_bins > 0:
+            buffers["spectral_film"] = self.read_spectral_film().reshape(-1)
+        return RenderState(self.samples_done, self.render_seconds, buffers)
+
+    @translate_opencl_errors("restoring the film from a checkpoint")
+    def restore_state(self, state: RenderState, where: str | None = None) -> None:
+        """Upload a saved state; it must hold exactly this renderer's buffers, sizes and types."""
+        targets = self._state_buffers()
+        if set(state.buffers) != set(targets):
+            raise SpectraceError(f"the saved state holds {', '.join(sorted(state.buffers)) or 'nothing'} but this "
+                                 f"render accumulates {', '.join(sorted(targets))}", where=where)
+        expected_types = {"film": np.float32, "ray_counts": np.uint32, "spectral_film": np.float32}
+        for name, array in state.buffers.items():
+            if array.dtype != expected_types[name] or array.nbytes != targets[name].size:
+                raise SpectraceError(f"saved {name} is {array.dtype} x {array.size}, this render needs "
+                                     f"{np.dtype(expected_types[name])} of {targets[name].size} bytes", where=where)
+        if not 0 <= state.samples_done <= limits.MAX_SPP:
+            raise SpectraceError(f"saved sample count {state.samples_done} is out of range", where=where)
+        queue = self.device.queue
+        for name, array in state.buffers.items():
+            cl.enqueue_copy(queue, targets[name], np.ascontiguousarray(array))
+        queue.finish()
+        self.samples_done = int(state.samples_done)
+        self.render_seconds = float(state.render_seconds)

@@ -98,3 +98,8 @@ def spectrum_magnitude_problem(values: np.ndarray) -> str | None:
         return (f"spectrum reaches {largest:.3g}, beyond {MAX_SPECTRUM_VALUE:.0e}, where the film's 32-bit sums "
                 f"would overflow (scale the scene's radiometric units down)")
     return None
+
+
+def render_settings_problem(width: int, height: int, spp: int) -> str | None:
+    """Why a render of this size cannot run (film size with its memory, or spp), or None."""
+    return film_size_problem(width, height) or spp_problem(spp)

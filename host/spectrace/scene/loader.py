@@ -166,7 +166,9 @@ class _Resolver:
             raise SpectraceError(str(exc), where=self.where(key)) from None
 
     def spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
-        if spec.rgb is not None:
+        if spec.display is not None:
+            result = self.display_spectrum(spec, key, emission)
+        elif spec.rgb is not None:
             rgb = np.asarray(spec.rgb, float)
             if np.any(rgb < 0):
                 raise SpectraceError(f"rgb components must be >= 0, got {list(spec.rgb)}", where=self.where(f"{key}.rgb"))
@@ -233,6 +235,28 @@ class _Resolver:
             shapes.append(Shape(mesh=mesh, material=materials[s.material], emitter=emitter, name=s.name or f"{s.type}{i}"))
         return shapes
 
+
+    def display_spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
+        """r·R(λ) + g·G(λ) + b·B(λ) of a display's primaries for the triple it shows (decoded by `encoding`). A
+        display keeps its measured radiance unless white_luminance rescales it; relative displays need one."""
+        from spectrace.displays import load_display
+        from spectrace.displays.transfer import parse_encoding
+
+        if not emission:
+            raise SpectraceError("a display spectrum is an emission, not a reflectance", where=self.where(key))
+        spec_path = self.folder / spec.display
+        name = str(spec_path) if spec.display.lower().endswith(".csv") else spec.display
+        display = load_display(name, where=self.where(f"{key}.display"))
+        if spec.white_luminance is not None:
+            display = display.scaled_to_white_luminance(spec.white_luminance)
+        elif not display.absolute:
+            raise SpectraceError(f"display '{display.name}' has relative data: give white_luminance (cd/m²)",
+                                 where=self.where(f"{key}.white_luminance"))
+        display = display.with_transfer(parse_encoding(spec.encoding, where=self.where(f"{key}.encoding")))
+        try:
+            return display.emission(spec.rgb)
+        except SpectraceError as exc:
+            raise SpectraceError(exc.message, where=self.where(f"{key}.rgb")) from None
 
     def point_source_intensity(self, spec, key: str, solid_angle_sr: float) -> Spectrum:
         """I(λ) in W/(sr nm) from `intensity`, or from `power` W spread over `solid_angle_sr` with the

@@ -92,6 +92,9 @@ class SpectrumSpec(Strict):
     rgb: Vector3 | None = None
     value: FiniteFloat | None = None
     blackbody: FiniteFloat | None = Field(default=None, description="temperature in kelvin; peak normalised to 1")
+    display: str | None = Field(default=None, description="emission only: a display name or CSV; rgb is its drive")
+    encoding: Literal["linear", "srgb", "gamma2.2"] = "linear"
+    white_luminance: FiniteFloat | None = Field(default=None, gt=0.0, description="cd/m² of the display's white")
     spectrum: str | None = None
     values: str | list[tuple[FiniteFloat, FiniteFloat]] | None = None
     file: str | None = None
@@ -104,6 +107,10 @@ class SpectrumSpec(Strict):
         if len(sources) != 1:
             given = ", ".join(sources) if sources else "none"
             raise ValueError(f"give exactly one of {', '.join(SPECTRUM_SOURCES)} (given: {given})")
+        if self.display is not None and self.rgb is None:
+            raise ValueError("a display spectrum needs rgb (the triple the display shows)")
+        if self.display is None and (self.encoding != "linear" or self.white_luminance is not None):
+            raise ValueError("encoding and white_luminance only apply to a display spectrum")
         if self.blackbody is not None and self.blackbody <= 0:
             raise ValueError(f"blackbody temperature must be > 0 K, got {self.blackbody}")
         if self.column is not None and self.file is None:

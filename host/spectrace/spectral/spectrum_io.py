@@ -280,13 +280,33 @@ def list_library_spectra() -> list[str]:
         else:
             names.extend(f"{file_name}{LIBRARY_COLUMN_SEPARATOR}{column}" for column in columns)
     names.extend(f"{CIE_ILLUMINANT_PREFIX}{illuminant}" for illuminant in cie_illuminant_names())
+    names.extend(f"{COLORCHECKER_PREFIX}{patch}" for patch in colorchecker_patch_names())
     return names
+
+
+# The 24 patches of the X-Rite ColorChecker as measured by N. Ohta (colour-science's "ColorChecker N Ohta",
+# 380-780 nm every 5 nm), read from colour-science at load time.
+COLORCHECKER_PREFIX = "colorchecker:"
+COLORCHECKER_DATASET = "ColorChecker N Ohta"
+
+
+def colorchecker_patch_names() -> list[str]:
+    return list(colour.SDS_COLOURCHECKERS[COLORCHECKER_DATASET].keys())
+
+
+def colorchecker_reflectance(patch: str, where: str | None = None) -> Spectrum:
+    patches = colour.SDS_COLOURCHECKERS[COLORCHECKER_DATASET]
+    if patch not in patches:
+        raise SpectraceError(f"unknown ColorChecker patch '{patch}' (patches: {', '.join(patches)})", where=where)
+    return spectrum_from_colour(patches[patch], name=f"{COLORCHECKER_PREFIX}{patch}")
 
 
 @cache
 def _load_library_spectrum(name: str, where: str | None) -> Spectrum:
     if name.casefold().startswith(CIE_ILLUMINANT_PREFIX):
         return cie_illuminant(name[len(CIE_ILLUMINANT_PREFIX) :], where=where)
+    if name.casefold().startswith(COLORCHECKER_PREFIX):
+        return colorchecker_reflectance(name[len(COLORCHECKER_PREFIX) :], where=where)
 
     file_name, _, column = name.partition(LIBRARY_COLUMN_SEPARATOR)
     files = _library_files()

@@ -1,0 +1,209 @@
+"""Checkpoints: the whole state of a render in one file, so that an interrupted render continues exactly.
+
+The sampler is counter-based (a sample's random numbers depend only on seed, pixel, sample index and dimension)
+and every pixel adds its samples to the film in sample order, so the accumulated buffers and the number of
+samples done are the entire state: a render continued from them produces the same floats, bit for bit, as one
+that never stopped (on the same device).
+
+A checkpoint is an uncompressed .npz (no pickled objects), written atomically, holding `format`, the identity
+of the render (`width`, `height`, `seed`, `scene_digest`, `kernels_digest`), `samples_done`, `render_seconds`,
+`device`, and one `state_<name>` array per accumulation buffer (`film`, `ray_counts`, `spectral_film`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from spectrace import resources
+from spectrace.device.program_cache import kernels_digest
+from spectrace.errors import SpectraceError
+from spectrace.io.atomic import write_atomically
+from spectrace.render.memory import scene_arrays
+from spectrace.render.scene_buffers import render_params
+
+if TYPE_CHECKING:
+    from spectrace.render.renderer import Renderer
+
+CHECKPOINT_FORMAT = "spectrace-checkpoint-1"
+_STATE_PREFIX = "state_"
+
+
+@dataclass
+class RenderState:
+    """The accumulation buffers of a render (host copies, by name) and how many samples per pixel they hold."""
+
+    samples_done: int
+    render_seconds: float
+    buffers: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class RenderIdentity:
+    """What a checkpoint must share with the render that resumes it. The spp target is not part of it: a resumed
+    render may go on to more samples than the interrupted one asked for."""
+
+    width: int
+    height: int
+    seed: int
+    scene_digest: str  # every array and parameter the kernels read (geometry, spectra, camera, depth, ...)
+    kernels_digest: str  # the kernel sources: other code would continue with other numbers
+
+
+@dataclass
+class Checkpoint:
+    identity: RenderIdentity
+    state: RenderState
+    device: str  # the device key the samples so far ran on
+
+
+def _update_with_array(digest, name: str, array: np.ndarray) -> None:
+    array = np.ascontiguousarray(array)
+    digest.update(f"\0{name}\0{array.dtype.str}\0{array.shape}\0".encode())
+    digest.update(array.tobytes())
+
+
+def scene_digest(renderer: Renderer) -> str:
+    """SHA-256 of everything the render's kernels read except the sample range, and of the program settings."""
+    digest = hashlib.sha256(CHECKPOINT_FORMAT.encode())
+    settings = (renderer.scene.integrator, renderer.spectral_bins, tuple(renderer.spectral_range_nm))
+    digest.update(repr(settings).encode())
+    _update_with_array(digest, "params", render_params(renderer.scene, renderer.buffers, 0, 0))
+    for name, array in scene_arrays(renderer.buffers).items():
+        _update_with_array(digest, name, array)
+    return digest.hexdigest()
+
+
+def render_identity(renderer: Renderer) -> RenderIdentity:
+    scene = renderer.scene
+    return RenderIdentity(scene.width, scene.height, scene.seed, scene_digest(renderer),
+                          kernels_digest(resources.kernels_dir()))
+
+
+def save_checkpoint(path: str | Path, renderer: Renderer) -> Checkpoint:
+    """Write the renderer's current state to `path` atomically (an older checkpoint survives any crash)."""
+    checkpoint = Checkpoint(render_identity(renderer), renderer.save_state(), renderer.device.report.key)
+    write_checkpoint(path, checkpoint)
+    return checkpoint
+
+
+def write_checkpoint(path: str | Path, checkpoint: Checkpoint) -> None:
+    identity, state = checkpoint.identity, checkpoint.state
+    payload = {
+        "format": np.array(CHECKPOINT_FORMAT),
+        "width": np.int64(identity.width),
+        "height": np.int64(identity.height),
+        "seed": np.int64(identity.seed),
+        "scene_digest": np.array(identity.scene_digest),
+        "kernels_digest": np.array(identity.kernels_digest),
+        "samples_done": np.int64(state.samples_done),
+        "render_seconds": np.float64(state.render_seconds),
+        "device": np.array(checkpoint.device),
+        **{_STATE_PREFIX + name: np.ascontiguousarray(array) for name, array in state.buffers.items()},
+    }
+
+    def write(temp: Path) -> None:
+        with open(temp, "wb") as stream:  # a stream: np.savez would append .npz to a file name
+            np.savez(stream, **payload)
+
+    write_atomically(Path(path), write)
+
+
+def read_checkpoint(path: str | Path) -> Checkpoint:
+    """Read a checkpoint file; SpectraceError naming the file if it is missing, damaged or not a checkpoint."""
+    path = Path(path)
+    if not path.is_file():
+        raise SpectraceError("checkpoint file does not exist" if not path.exists() else "checkpoint is not a file",
+                             where=str(path))
+    if not zipfile.is_zipfile(path):
+        raise SpectraceError("not a spectrace checkpoint (not an .npz archive, or truncated)", where=str(path))
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            fields = {name: data[name] for name in data.files}
+    except Exception as error:  # numpy and zipfile raise many types for damaged files
+        detail = " ".join(str(error).split()) or type(error).__name__
+        raise SpectraceError(f"not a readable spectrace checkpoint ({detail})", where=str(path)) from None
+    try:
+        if str(fields["format"]) != CHECKPOINT_FORMAT:
+            raise SpectraceError(f"checkpoint format '{fields['format']}' is not '{CHECKPOINT_FORMAT}'",
+                                 where=str(path))
+        identity = RenderIdentity(int(fields["width"]), int(fields["height"]), int(fields["seed"]),
+                                  str(fields["scene_digest"]), str(fields["kernels_digest"]))
+        buffers = {name[len(_STATE_PREFIX):]: array for name, array in fields.items()
+                   if name.startswith(_STATE_PREFIX)}
+        state = RenderState(int(fields["samples_done"]), float(fields["render_seconds"]), buffers)
+        device = str(fields["device"])
+    except (KeyError, TypeError, ValueError) as error:
+        raise SpectraceError(f"not a spectrace checkpoint (missing or malformed {error})", where=str(path)) from None
+    return Checkpoint(identity, state, device)
+
+
+def identity_mismatch(saved: RenderIdentity, current: RenderIdentity) -> str | None:
+    """Why a render with identity `current` cannot continue a checkpoint of `saved`, or None."""
+    if (saved.width, saved.height) != (current.width, current.height):
+        return (f"the checkpoint is of a {saved.width}x{saved.height} film but this render is "
+                f"{current.width}x{current.height}")
+    if saved.seed != current.seed:
+        return f"the checkpoint was rendered with seed {saved.seed} but this render uses seed {current.seed}"
+    if saved.kernels_digest != current.kernels_digest:
+        return ("the checkpoint was rendered by other kernel sources (spectrace was updated or its kernels edited), "
+                "so the samples would not continue the same sequence; render afresh without --resume")
+    if saved.scene_digest != current.scene_digest:
+        return ("the checkpoint belongs to another scene or other settings (scene file, meshes, spectra, camera, "
+                "max_depth, integrator, spectral bins); render afresh without --resume")
+    return None
+
+
+def restore_checkpoint(renderer: Renderer, checkpoint: Checkpoint, where: str) -> None:
+    """Load `checkpoint` into `renderer`, after checking that it belongs to this very render (`where` names the
+    checkpoint in errors)."""
+    if problem := identity_mismatch(checkpoint.identity, render_identity(renderer)):
+        raise SpectraceError(problem, where=where)
+    renderer.restore_state(checkpoint.state, where=where)
+
+
+def resume_render(renderer: Renderer, path: str | Path) -> Checkpoint:
+    """Read the checkpoint at `path` and load it into `renderer` (see restore_checkpoint)."""
+    checkpoint = read_checkpoint(path)
+    restore_checkpoint(renderer, checkpoint, str(path))
+    return checkpoint
+
+
+class PeriodicCheckpoints:
+    """Saves a renderer's state to one file at most every `interval_seconds` (0: whenever asked), for a render
+    loop's progress callback. A failed write is reported through `warn` and the render goes on: losing the
+    render because a checkpoint could not be written would defeat the checkpoint's purpose."""
+
+    def __init__(self, path: str | Path, renderer: Renderer, interval_seconds: float,
+                 warn=lambda message: None, clock=time.monotonic):
+        self.path = Path(path)
+        self.renderer = renderer
+        self.interval_seconds = interval_seconds
+        self.warn = warn
+        self.clock = clock
+        self.last_saved = clock()
+        self.saved_samples: int | None = None  # samples per pixel in the file, once this object wrote it
+
+    def maybe_save(self) -> bool:
+        if self.clock() - self.last_saved < self.interval_seconds:
+            return False
+        return self.save()
+
+    def save(self) -> bool:
+        """Write now; False (after a warning) if the file could not be written."""
+        self.last_saved = self.clock()
+        if self.saved_samples == self.renderer.samples_done:
+            return True  # the file already holds exactly this state
+        try:
+            save_checkpoint(self.path, self.renderer)
+        except OSError as error:
+            self.warn(f"could not write checkpoint {self.path} ({error.strerror or error}); rendering goes on")
+            return False
+        self.saved_samples = self.renderer.samples_done
+        return True

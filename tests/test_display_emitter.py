@@ -1,0 +1,79 @@
+"""Display emitters in scenes: a screen showing an RGB triple emits r·R(λ) + g·G(λ) + b·B(λ) of its primaries."""
+
+import textwrap
+
+import colour
+import numpy as np
+import pytest
+
+from spectrace.displays import load_display
+from spectrace.errors import SpectraceError
+from spectrace.render.renderer import Renderer
+from spectrace.scene import load_scene
+from spectrace.spectral.grid import GRID_NM
+
+SCREEN_SCENE = """
+[camera]
+origin = [0, 0, 3]
+target = [0, 0, 0]
+fov = 20
+
+[film]
+width = 16
+height = 16
+
+[integrator]
+max_depth = 1
+
+[sampler]
+spp = 64
+
+[materials.black]
+type = "diffuse"
+reflectance = {{ value = 0 }}
+
+[[shapes]]
+type = "rectangle"
+material = "black"
+emitter = {{ radiance = {{ {radiance} }} }}
+"""
+
+
+def _scene(tmp_path, radiance):
+    path = tmp_path / "screen.toml"
+    path.write_text(textwrap.dedent(SCREEN_SCENE.format(radiance=radiance)))
+    return load_scene(path)
+
+
+def test_rendered_screen_matches_colour_science(device, tmp_path):
+    rgb = (0.6, 0.3, 0.2)
+    scene = _scene(tmp_path, 'display = "LCD-Dell_CCFL", rgb = [0.6, 0.3, 0.2]')
+    y = Renderer(scene, device).render().xyz.reshape(-1, 3).astype(np.float64)
+    display = load_display("LCD-Dell_CCFL")
+    spectrum = sum(c * p.values for c, p in zip(rgb, display.primaries))
+    sd = colour.SpectralDistribution(dict(zip(GRID_NM, spectrum)))
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(360, 830, 1))
+    expected = colour.sd_to_XYZ(sd, cmfs=cmfs, method="Integration") / 100.0  # film XYZ: ∫L cmf / ∫ȳ
+    mean, standard_error = y.mean(axis=0), y.std(axis=0, ddof=1) / np.sqrt(len(y))
+    assert np.all(standard_error < 0.02 * expected)
+    assert np.all(np.abs(mean - expected) < 4 * standard_error), (mean, expected, standard_error)
+
+
+def test_display_spectrum_is_linear_in_the_triple(tmp_path):
+    def radiance(rgb):
+        scene = _scene(tmp_path, f'display = "OLED-SonyPVM2541", rgb = {list(rgb)}')
+        return scene.shapes[0].emitter.radiance.values
+    np.testing.assert_allclose(radiance((0.5, 0.25, 0.1)) + radiance((0.2, 0.5, 0.3)),
+                               radiance((0.7, 0.75, 0.4)), rtol=1e-12, atol=1e-15)
+
+
+def test_white_luminance_rescales_and_relative_displays_need_it(tmp_path):
+    scene = _scene(tmp_path, 'display = "LCD-CCFL_HDRVDP2", rgb = [1, 1, 1], white_luminance = 80')
+    values = scene.shapes[0].emitter.radiance.values
+    luminance = 683.0 * np.trapezoid(values * colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy()
+                                     .align(colour.SpectralShape(360, 830, 1)).values[:, 1], GRID_NM)
+    assert luminance == pytest.approx(80.0, rel=1e-3)
+    with pytest.raises(SpectraceError, match="white_luminance"):
+        _scene(tmp_path, 'display = "LCD-CCFL_HDRVDP2", rgb = [1, 1, 1]')
+    with pytest.raises(SpectraceError, match="unknown display 'nope'"):
+        _scene(tmp_path, 'display = "nope", rgb = [1, 1, 1]')
