@@ -7,12 +7,31 @@ Notebook use needs no CLI::
     image = spectrace.render(scene, spp=16)
     image.to_srgb()          # (H, W, 3) display sRGB
     image.write("cornell.exr")
+
+Scenes can also be built from Python objects (`spectrace.api`: spectrum, diffuse, shape, point_light, ...);
+docs/python-api.md shows how.
 """
 
+from spectrace.api import (
+    area_emitter,
+    constant_environment,
+    diffuse,
+    distant_light,
+    mesh_from_trimesh,
+    point_light,
+    render,
+    rgb_emission,
+    rgb_reflectance,
+    shape,
+    spectrum,
+    spot_light,
+    transformed,
+)
+from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_white_balance
 from spectrace.errors import SpectraceError
 from spectrace.image import Image
-from spectrace.render.api import render
 from spectrace.scene import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, load_scene
+from spectrace.spectral.spectrum import Spectrum
 
 __version__ = "0.1.0"
 
@@ -26,4 +45,21 @@ __all__ = [
     "DiffuseMaterial",
     "AreaEmitter",
     "SpectraceError",
+    "Spectrum",
+    "spectrum",
+    "rgb_reflectance",
+    "rgb_emission",
+    "mesh_from_trimesh",
+    "transformed",
+    "shape",
+    "diffuse",
+    "area_emitter",
+    "point_light",
+    "spot_light",
+    "distant_light",
+    "constant_environment",
+    "ColourSpace",
+    "Adaptation",
+    "WhiteBalance",
+    "parse_white_balance",
 ]

@@ -218,17 +218,31 @@ def metamerism(
         "--rgb", help="The triple --from shows (default a light grey, which most displays can match).")] = (0.8, 0.8, 0.8),
     encoding: EncodingOption = Encoding.LINEAR,
     white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
+    scene: Annotated[Optional[Path], typer.Option(
+        help="Also measure the two halves of a rendered scene (shapes named 'left <patch>' / 'right <patch>', "
+             "e.g. scenes/display_lcd_vs_led.toml) with radiance meters.")] = None,
+    device: Annotated[Optional[str], typer.Option("--device", "-d", help="OpenCL device for --scene.")] = None,
     as_json: JsonOption = False,
 ) -> None:
     """Illuminant metamerism: the ColorChecker lit by --from showing the triple vs lit by --to showing the triple
     that matches it (same CIE 1931 XYZ): the per-patch ΔE2000 between the two halves."""
-    from spectrace.displays.metamerism import patch_metamerism
+    from spectrace.displays.metamerism import measure_scene_patches, patch_metamerism
 
     report = patch_metamerism(load_display(source, where="--from").with_transfer(encoding), rgb,
                               load_display(target, where="--to").with_transfer(encoding),
                               ViewingConditions(white_luminance_cd_m2=white_luminance))
+    rendered = None
+    if scene is not None:
+        from spectrace.scene import load_scene
+
+        rendered = measure_scene_patches(load_scene(scene), device)
     if as_json:
-        print(json.dumps(report.to_json(), indent=2))
+        result = report.to_json()
+        if rendered is not None:
+            result["rendered"] = [{"patch": r.patch, "lab_left": r.lab_left.tolist(), "lab_right": r.lab_right.tolist(),
+                                   "delta_e_2000": r.delta_e_2000,
+                                   "delta_e_standard_error": r.delta_e_standard_error} for r in rendered]
+        print(json.dumps(result, indent=2))
         return
     screens = report.to_json()["screens_delta_e_2000"]
     target_rgb = ", ".join(f"{v:.4f}" for v in report.match.target_drive)
@@ -241,3 +255,12 @@ def metamerism(
                       " ".join(f"{v:6.2f}" for v in p.lab_under_target), f"{p.delta_e_2000:.2f}")
     table.add_row("mean / max", "", "", f"{report.mean_delta_e:.2f} / {report.max_delta_e:.2f}")
     Console(width=140).print(table)
+    if rendered is not None:
+        measured = Table(title=f"Measured in the render of {scene} (radiance meters from the camera)")
+        for column in ("patch", "L*a*b* left", "L*a*b* right", "ΔE2000 ± s.e."):
+            measured.add_column(column)
+        for r in rendered:
+            measured.add_row(r.patch, " ".join(f"{v:6.2f}" for v in r.lab_left),
+                             " ".join(f"{v:6.2f}" for v in r.lab_right),
+                             f"{r.delta_e_2000:.2f} ± {r.delta_e_standard_error:.2f}")
+        Console(width=140).print(measured)

@@ -67,3 +67,57 @@ def patch_metamerism(source: Display, rgb, target: Display, viewing: ViewingCond
         lab_b = colour.XYZ_to_Lab(photometric_xyz(reflectance * light_target) / white[1], white_xy)
         patches.append(PatchDifference(name, lab_a, lab_b, float(colour.delta_E(lab_a, lab_b, method="CIE 2000"))))
     return MetamerismReport(match, patches)
+
+
+@dataclass
+class RenderedPatch:
+    patch: str
+    lab_left: np.ndarray
+    lab_right: np.ndarray
+    delta_e_2000: float
+    delta_e_standard_error: float
+
+
+def measure_scene_patches(scene, device=None, streams: int = 32, samples_per_item: int = 32) -> list[RenderedPatch]:
+    """The renderer's view of a two-half metamerism scene: for every shape pair named "left <patch>" / "right
+    <patch>" (as in scenes/display_lcd_vs_led.toml), the radiance from the camera toward the patch's centre, by a
+    radiance meter (380-780 nm every 5 nm), as CIELAB relative to the left half's brightest neutral patch (one fixed
+    white for both halves, as one photograph would have) and the ΔE2000 between the halves. The ΔE's standard error
+    comes from re-evaluating it on the meter readings perturbed by their standard errors."""
+    from spectrace.render.meters import RadianceMeter, measure
+
+    wavelengths = np.arange(380.0, 781.0, 5.0)
+    origin = np.asarray(scene.camera.origin, float)
+    shapes = {shape.name: shape for shape in scene.shapes}
+    names = [name[len("left "):] for name in shapes if name.startswith("left ") and f"right {name[5:]}" in shapes]
+    names = [n for n in names if n in colorchecker_patch_names()]
+    readings = {}
+    for side in ("left", "right"):
+        for name in names:
+            centre = shapes[f"{side} {name}"].mesh.vertices.mean(axis=0)
+            reading = measure(scene, RadianceMeter(tuple(origin), tuple(centre - origin)), wavelengths_nm=wavelengths,
+                              streams=streams, samples_per_item=samples_per_item, device=device)
+            readings[side, name] = (reading.spectral, reading.spectral_standard_error)
+    white_name = max((n for n in names if n.startswith("white")), default=names[0])
+    white = photometric_xyz(np.interp(_grid(), wavelengths, readings["left", white_name][0]))
+    rng = np.random.default_rng(0)
+
+    def lab(values):
+        xyz = photometric_xyz(np.interp(_grid(), wavelengths, values))
+        return colour.XYZ_to_Lab(xyz / white[1], colour.XYZ_to_xy(white))
+
+    results = []
+    for name in names:
+        (left, left_se), (right, right_se) = readings["left", name], readings["right", name]
+        delta = float(colour.delta_E(lab(left), lab(right), method="CIE 2000"))
+        trials = [colour.delta_E(lab(left + rng.normal(0, 1, left.shape) * left_se),
+                                 lab(right + rng.normal(0, 1, right.shape) * right_se), method="CIE 2000")
+                  for _ in range(16)]
+        results.append(RenderedPatch(name, lab(left), lab(right), delta, float(np.std(trials, ddof=1))))
+    return results
+
+
+def _grid() -> np.ndarray:
+    from spectrace.spectral.grid import GRID_NM
+
+    return GRID_NM

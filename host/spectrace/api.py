@@ -1,0 +1,338 @@
+"""The Python API: build scenes from Python objects and render them, with no scene file and no command line.
+
+Every helper here produces the same model objects (`spectrace.scene.model`) the TOML loader produces, with the
+same meaning and units as the scene format's keys (docs/scene-format.md), so a scene built here renders exactly
+like the same scene written as TOML. docs/python-api.md shows it in use.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from contextlib import contextmanager
+from numbers import Real
+from typing import TYPE_CHECKING, Any, Literal, Union
+
+import numpy as np
+
+from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
+from spectrace.errors import SpectraceError
+from spectrace.geometry import primitives
+from spectrace.geometry.mesh import TriangleMesh
+from spectrace.geometry.transforms import apply_transform, transform_matrix
+from spectrace.image import Image
+# Imported here, not lazily: importing the spectrace.render package for the first time would rebind the name
+# `spectrace.render` from the function exported in spectrace/__init__.py to the package.
+from spectrace.render.renderer import Renderer
+from spectrace.scene.model import (
+    AreaEmitter,
+    ConstantEnvironment,
+    DiffuseMaterial,
+    DistantLight,
+    PointLight,
+    Scene,
+    Shape,
+    SpotLight,
+)
+from spectrace.spectral.grid import GRID_NM, integrate_on_grid
+from spectrace.spectral.spectrum import Spectrum
+
+if TYPE_CHECKING:
+    import colour
+    import trimesh
+
+    from spectrace.device import Device
+
+# What `spectrum` accepts: a Spectrum; a colour-science SpectralDistribution; a constant; a library name
+# ("cie:D65", "cornell_box/light"); (wavelengths_nm, values) arrays; an (N, 2) array or [[λ, v], ...] pairs;
+# a {wavelength_nm: value} mapping; or 471 values on the renderer's 360..830 nm, 1 nm grid.
+SpectrumLike = Union[Spectrum, "colour.SpectralDistribution", float, str, Sequence, np.ndarray, Mapping]
+ProgressOption = Union[bool, Literal["auto"], Callable[[int, int], None], None]
+
+BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere}
+
+
+# ---------------------------------------------------------------- spectra
+
+
+def spectrum(source: SpectrumLike, scale: float = 1.0, name: str | None = None) -> Spectrum:
+    """A `Spectrum` on the renderer's grid from any of the forms in `SpectrumLike`, times `scale`.
+
+    Tabulated data are joined linearly and their end values held outside their range, as in scene files.
+    """
+    result = _spectrum_unscaled(source, name)
+    if not isinstance(scale, Real) or not math.isfinite(scale) or scale < 0:
+        raise SpectraceError(f"scale must be a finite number >= 0, got {scale!r}", where=name)
+    return result if scale == 1.0 else result.scaled(float(scale))
+
+
+def _spectrum_unscaled(source: SpectrumLike, name: str | None) -> Spectrum:
+    from spectrace.spectral.spectrum_io import library_spectrum, parse_inline_spectrum, spectrum_from_colour
+
+    label = name or "spectrum"
+    if isinstance(source, Spectrum):
+        return source if name is None else source.scaled(1.0, name=name)
+    if type(source).__name__ == "SpectralDistribution":
+        return spectrum_from_colour(source, name=name)
+    if isinstance(source, Real) and not isinstance(source, bool):
+        return Spectrum.constant(float(source), name=name or "")
+    if isinstance(source, str):
+        return library_spectrum(source) if name is None else library_spectrum(source).scaled(1.0, name=name)
+    if isinstance(source, Mapping):
+        return parse_inline_spectrum({str(k): v for k, v in source.items()}, where=label, name=name)
+    if isinstance(source, tuple) and len(source) == 2 and all(np.ndim(part) == 1 for part in source):
+        wavelengths, values = (np.asarray(part, np.float64) for part in source)
+        if wavelengths.shape != values.shape:
+            raise SpectraceError(f"wavelengths ({wavelengths.size}) and values ({values.size}) differ in length",
+                                 where=label)
+        return parse_inline_spectrum(np.stack([wavelengths, values], axis=1).tolist(), where=label, name=name)
+    array = np.asarray(source, np.float64) if isinstance(source, (Sequence, np.ndarray)) else None
+    if array is not None and array.shape == GRID_NM.shape:
+        return Spectrum(array, name=name or "", source="array on the 360..830 nm grid")
+    if array is not None and array.ndim == 2 and array.shape[1] == 2:
+        return parse_inline_spectrum(array.tolist(), where=label, name=name)
+    raise SpectraceError(
+        f"cannot make a spectrum from {type(source).__name__}: give a Spectrum, a colour.SpectralDistribution, a "
+        "number, a library name, (wavelengths_nm, values), [[wavelength_nm, value], ...], a {wavelength_nm: value} "
+        f"mapping or {GRID_NM.size} values on the 360..830 nm grid",
+        where=label,
+    )
+
+
+def rgb_reflectance(rgb: Sequence[float]) -> Spectrum:
+    """A smooth reflectance in [0, 1] whose colour under D65 is the linear sRGB triple (Jakob & Hanika 2019), as
+    `{ rgb = [...] }` for a material in a scene file."""
+    from spectrace.spectral.uplift import uplift_reflectance
+
+    return uplift_reflectance(rgb)[0]
+
+
+def rgb_emission(rgb: Sequence[float], scale: float = 1.0) -> Spectrum:
+    """A D65-based emission spectrum whose linear sRGB is `rgb` x `scale` ((1, 1, 1) = D65 with film Y = 1), in
+    W/(m² sr nm), as `{ rgb = [...] }` for a radiance in a scene file."""
+    from spectrace.spectral.uplift import uplift_illuminant
+
+    return uplift_illuminant(rgb, scale=scale)
+
+
+def _reflectance(source: SpectrumLike, what: str) -> Spectrum:
+    if isinstance(source, (tuple, list)) and len(source) == 3 and all(isinstance(c, Real) for c in source):
+        return rgb_reflectance(source)
+    result = spectrum(source)
+    if result.min() < 0 or result.max() > 1.0 + 1e-6:
+        raise SpectraceError(f"a reflectance must lie in [0, 1], got {result.min():.4g}..{result.max():.4g}",
+                             where=what)
+    return result
+
+
+def _emission(source: SpectrumLike, what: str) -> Spectrum:
+    if isinstance(source, (tuple, list)) and len(source) == 3 and all(isinstance(c, Real) for c in source):
+        return rgb_emission(source)
+    result = spectrum(source)
+    if result.min() < 0:
+        raise SpectraceError(f"an emission spectrum must not be negative (min {result.min():.4g})", where=what)
+    return result
+
+
+# ---------------------------------------------------------------- geometry
+
+
+def mesh_from_trimesh(mesh: "trimesh.Trimesh | trimesh.Scene") -> TriangleMesh:
+    """A `TriangleMesh` with the vertices and faces of a trimesh mesh (a trimesh Scene is merged into one mesh,
+    with its node transforms applied). Vertex order and winding are kept: the front of a face is the side its
+    counter-clockwise winding faces."""
+    if hasattr(mesh, "to_mesh"):  # trimesh.Scene
+        mesh = mesh.to_mesh()
+    if not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
+        raise SpectraceError(f"expected a trimesh.Trimesh or trimesh.Scene, got {type(mesh).__name__}")
+    vertices, faces = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
+    if faces.ndim != 2 or faces.shape[1:] != (3,) or len(faces) == 0:
+        raise SpectraceError("the mesh has no triangles")
+    if not np.all(np.isfinite(vertices)):
+        raise SpectraceError("the mesh has NaN or infinite vertex coordinates")
+    return TriangleMesh(vertices=vertices, faces=faces)
+
+
+def transformed(mesh: TriangleMesh, steps: Iterable[Mapping[str, Any]]) -> TriangleMesh:
+    """`mesh` moved by transform steps written as in a scene file, applied first step first:
+    {"translate": [x, y, z]}, {"scale": s or [sx, sy, sz]}, {"rotate": {"axis": [x, y, z], "angle": degrees}},
+    {"matrix": 4x4 rows}."""
+    steps = [dict(step) for step in steps]
+    return apply_transform(mesh, transform_matrix(steps, where="transform")) if steps else mesh
+
+
+# ---------------------------------------------------------------- scene objects
+
+
+def diffuse(reflectance: SpectrumLike) -> DiffuseMaterial:
+    """Lambertian material, f = R(λ)/π, reflecting on both faces; `reflectance` in [0, 1] (a linear sRGB triple is
+    uplifted)."""
+    return DiffuseMaterial(_reflectance(reflectance, "reflectance"))
+
+
+def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
+    """Makes a shape a light of radiance L(λ) x scale, W/(m² sr nm); one-sided emitters shine toward the side
+    their triangles' winding faces."""
+    return AreaEmitter(radiance=_emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
+
+
+def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere"] | "trimesh.Trimesh", material,
+          emitter: AreaEmitter | None = None, transform: Iterable[Mapping[str, Any]] = (), name: str = "") -> Shape:
+    """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
+    "cube" [-1, 1]³, "sphere" of radius 1), moved by `transform` steps (see `transformed`)."""
+    if isinstance(geometry, str):
+        if geometry not in BUILTIN_SHAPES:
+            raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(BUILTIN_SHAPES)})")
+        mesh = BUILTIN_SHAPES[geometry]()
+        name = name or geometry
+    elif isinstance(geometry, TriangleMesh):
+        mesh = geometry
+    else:
+        mesh = mesh_from_trimesh(geometry)
+    return Shape(mesh=transformed(mesh, transform), material=material, emitter=emitter, name=name)
+
+
+def _intensity(intensity: SpectrumLike | None, power_w: float | None, shape_spectrum: SpectrumLike | None,
+               solid_angle_sr: float) -> Spectrum:
+    """I(λ), W/(sr nm): given, or `power_w` (W over 360..830 nm) spread over `solid_angle_sr` with the spectral
+    shape `shape_spectrum` (equal energy by default), as a scene file's `power` + `spectrum`."""
+    if (intensity is None) == (power_w is None):
+        raise SpectraceError("give exactly one of intensity, power_w")
+    if intensity is not None:
+        if shape_spectrum is not None:
+            raise SpectraceError("spectrum sets the shape of power_w; with intensity, put the spectrum in intensity")
+        return _emission(intensity, "intensity")
+    if not power_w >= 0:
+        raise SpectraceError(f"power must be >= 0 W, got {power_w}")
+    shape_values = _emission(shape_spectrum, "spectrum") if shape_spectrum is not None else Spectrum.constant(
+        1.0, name="equal energy")
+    total = float(integrate_on_grid(shape_values.values))
+    if total <= 0:
+        raise SpectraceError("the spectrum of a light given by power must not be zero")
+    return shape_values * (power_w / total / solid_angle_sr)
+
+
+def point_light(position: Sequence[float], intensity: SpectrumLike | None = None, power_w: float | None = None,
+                spectrum: SpectrumLike | None = None) -> PointLight:
+    """Isotropic point light: `intensity` I(λ) in W/(sr nm), or `power_w` (total flux over 360..830 nm, W) with
+    the spectral shape `spectrum` (equal energy by default): I = Φ(λ)/4π."""
+    return PointLight(_vector(position, "position"), _intensity(intensity, power_w, spectrum, 4.0 * np.pi))
+
+
+def spot_light(position: Sequence[float], target: Sequence[float], cutoff_angle: float = 30.0,
+               falloff_start: float | None = None, intensity: SpectrumLike | None = None,
+               power_w: float | None = None, spectrum: SpectrumLike | None = None) -> SpotLight:
+    """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
+    degrees from the axis (default ¾ of the cutoff), smooth fall to 0 at `cutoff_angle` degrees; or `power_w` W
+    spread over the cone's effective solid angle."""
+    origin = np.asarray(_vector(position, "position"))
+    axis = np.asarray(_vector(target, "target")) - origin
+    if not np.linalg.norm(axis) > 0:
+        raise SpectraceError("spot light target equals its position")
+    start = 0.75 * cutoff_angle if falloff_start is None else falloff_start
+    if not (0 < cutoff_angle <= 90 and 0 <= start <= cutoff_angle):
+        raise SpectraceError(f"need 0 <= falloff_start <= cutoff_angle <= 90 degrees, got {start}, {cutoff_angle}")
+    direction = tuple(float(c) for c in axis / np.linalg.norm(axis))
+    cone = SpotLight(tuple(origin), direction, Spectrum.zeros(), cutoff_angle, start)
+    return SpotLight(tuple(origin), direction, _intensity(intensity, power_w, spectrum, cone.effective_solid_angle()),
+                     cutoff_angle, start)
+
+
+def distant_light(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:
+    """Parallel light travelling along `direction`, irradiance E(λ) in W/(m² nm) on a surface facing it."""
+    vector = np.asarray(_vector(direction, "direction"))
+    if not np.linalg.norm(vector) > 0:
+        raise SpectraceError("direction must not be zero", where="direction")
+    return DistantLight(tuple(float(c) for c in vector / np.linalg.norm(vector)), _emission(irradiance, "irradiance"))
+
+
+def constant_environment(radiance: SpectrumLike) -> ConstantEnvironment:
+    """The same radiance L(λ), W/(m² sr nm), from every direction."""
+    return ConstantEnvironment(_emission(radiance, "radiance"))
+
+
+def _vector(value: Sequence[float], what: str) -> tuple[float, float, float]:
+    array = np.asarray(value, np.float64)
+    if array.shape != (3,) or not np.all(np.isfinite(array)):
+        raise SpectraceError(f"expected 3 finite numbers, got {value!r}", where=what)
+    return tuple(float(c) for c in array)
+
+
+# ---------------------------------------------------------------- rendering
+
+
+def _check_camera(scene: Scene) -> None:
+    camera = scene.camera
+    forward = np.subtract(camera.target, camera.origin)
+    if not np.linalg.norm(forward) > 0:
+        raise SpectraceError("camera target equals origin", where="camera.target")
+    if np.linalg.norm(np.cross(forward, camera.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
+        raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where="camera.up")
+    if not 0.0 < camera.fov_degrees < 180.0:
+        raise SpectraceError(f"fov must lie in (0, 180) degrees, got {camera.fov_degrees}", where="camera.fov")
+
+
+def _in_notebook() -> bool:
+    shell = sys.modules.get("IPython")
+    ipython = shell.get_ipython() if shell is not None and hasattr(shell, "get_ipython") else None
+    return ipython is not None and "IPKernelApp" in getattr(ipython, "config", {})
+
+
+@contextmanager
+def _progress_bar(total_spp: int, done_spp: int):
+    """A progress callback drawing a bar: tqdm's (a notebook widget under Jupyter, text elsewhere) when tqdm is
+    installed (`pip install "spectrace[notebook]"`), else rich's, which spectrace already depends on."""
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        tqdm = None
+    if tqdm is not None:
+        bar = tqdm(total=total_spp, initial=done_spp, unit="spp", desc="rendering")
+        try:
+            yield lambda done, total: bar.update(done - bar.n)
+        finally:
+            bar.close()
+        return
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    with Progress(TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
+                  TimeElapsedColumn(), TimeRemainingColumn()) as progress:
+        task = progress.add_task("render", total=total_spp, completed=done_spp)
+        yield lambda done, total: progress.update(task, completed=done)
+
+
+@contextmanager
+def _no_bar(callback: Callable[[int, int], None] | None):
+    yield callback
+
+
+def render(scene: Scene, spp: int | None = None, device: "Device | str | None" = None,
+           progress: ProgressOption = "auto", pass_spp: int | None = None, *, spectral_bins: int = 0,
+           colour_space: ColourSpace | str = ColourSpace.SRGB, white_balance: WhiteBalance | str | None = None,
+           adaptation: Adaptation | str = Adaptation.BRADFORD) -> Image:
+    """Render `scene` to `spp` samples per pixel (default: the scene's) and return the `Image`.
+
+    device: a Device, a selection string ("pocl", "gpu", a key from `spectrace devices`) or None (automatic).
+    progress: True draws a progress bar (a notebook widget under Jupyter when tqdm is installed), False or None
+    none, a callable is called as progress(samples_done, samples_total) after each pass; "auto" draws a bar
+    only inside Jupyter. spectral_bins > 0 also keeps that many equal wavelength bands over 360..830 nm per
+    pixel (`image.spectral`, band-averaged radiance in W/(m² sr nm)). colour_space, white_balance and
+    adaptation set how the image converts to RGB (see `spectrace.colour_output` and docs/colour.md).
+    """
+    if not isinstance(scene, Scene):
+        raise SpectraceError(f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) "
+                             "reads a file)")
+    _check_camera(scene)
+    space = parse_colour_space(colour_space) if isinstance(colour_space, str) else ColourSpace(colour_space)
+    balance = parse_white_balance(white_balance, adaptation) if isinstance(white_balance, str) else white_balance
+    renderer = Renderer(scene, device, spectral_bins=spectral_bins) if spectral_bins else Renderer(scene, device)
+    total = spp if spp is not None else scene.spp
+    show_bar = progress is True or (progress == "auto" and _in_notebook())
+    reporter = _progress_bar(total, renderer.samples_done) if show_bar else _no_bar(
+        progress if callable(progress) else None)
+    with reporter as callback:
+        image = renderer.render(spp=total, pass_spp=pass_spp, progress=callback)
+    image.colour_space = space
+    image.white_balance = balance
+    return image
