@@ -48,15 +48,21 @@ inline int map_texel(__global const Light *light, float2 uv)
     return row * light->map_width + column;
 }
 
-/* Radiance arriving from direction d (pointing away from the scene). */
-inline float4 environment_radiance(__global const Light *light, __global const float *spectra,
-                                   __global const float4 *map_texels, const SampledWavelengths *w, float3 d)
+/* r·R(λ) + g·G(λ) + b·B(λ) of a texel: the light's three basis spectra weighted by the texel's RGB. */
+inline float4 texel_radiance(__global const Light *light, __global const float *spectra, float4 rgb,
+                             const SampledWavelengths *w)
 {
-    if (light->type == LIGHT_ENVIRONMENT) return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
-    float4 rgb = map_texels[map_texel(light, direction_to_map_uv(d))];
     return light->scale * (rgb.x * spectrum_at(spectra, light->spectrum_offset, w)
                          + rgb.y * spectrum_at(spectra, light->basis_green_offset, w)
                          + rgb.z * spectrum_at(spectra, light->basis_blue_offset, w));
+}
+
+/* Radiance arriving from direction d (pointing away from the scene). */
+inline float4 environment_radiance(__global const Light *light, __global const float *spectra,
+                                   __global const float4 *texels, const SampledWavelengths *w, float3 d)
+{
+    if (light->type == LIGHT_ENVIRONMENT) return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
+    return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, direction_to_map_uv(d))], w);
 }
 
 /* Solid-angle pdf of sampling direction d, times the light's pick probability. map_cdf holds the marginal CDF

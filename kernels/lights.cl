@@ -51,11 +51,23 @@ inline float3 triangle_point(__global const float4 *triangle_vertices, int trian
     return (1.0f - b12.x - b12.y) * v0 + b12.x * v1 + b12.y * v2;
 }
 
-/* Radiance leaving an emitting triangle toward `to_viewer` (unit), whose geometric normal is n. */
-inline float4 area_light_emitted(__global const Light *light, __global const float *spectra, const SampledWavelengths *w,
-                                 float3 n, float3 to_viewer)
+inline float2 triangle_uv(__global const float2 *triangle_uvs, int triangle, float2 b12)
+{
+    return (1.0f - b12.x - b12.y) * triangle_uvs[3 * triangle] + b12.x * triangle_uvs[3 * triangle + 1]
+         + b12.y * triangle_uvs[3 * triangle + 2];
+}
+
+/* Radiance leaving an emitting triangle toward `to_viewer` (unit), whose geometric normal is n, at texture
+ * coordinates uv (used when the light shows an image). */
+inline float4 area_light_emitted(__global const Light *light, __global const float *spectra,
+                                 __global const float4 *texels, const SampledWavelengths *w, float3 n,
+                                 float3 to_viewer, float2 uv)
 {
     if (!light->two_sided && dot(n, to_viewer) <= 0.0f) return (float4)(0.0f);
+    if (light->map_width > 0) {
+        uv = uv - floor(uv);  /* the image repeats outside [0, 1)² */
+        return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, uv)], w);
+    }
     return light_spectrum(light, spectra, w);
 }
 
@@ -87,8 +99,9 @@ inline float3 sample_uniform_sphere(float2 u)
 /* The scene-wide buffers that sampling a light may need besides the light itself. */
 typedef struct {
     __global const float4 *triangle_vertices;
+    __global const float2 *triangle_uvs;
     __global const float *spectra;
-    __global const float4 *map_texels;
+    __global const float4 *texels;
     __global const float *map_cdf;
 } LightBuffers;
 
@@ -101,7 +114,8 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
     s->is_delta = 0;
     s->normal = (float3)(0.0f);
     if (light->type == LIGHT_TRIANGLE) {
-        float3 q = triangle_point(triangle_vertices, light->triangle, sample_triangle_uniform(u));
+        float2 b12 = sample_triangle_uniform(u);
+        float3 q = triangle_point(triangle_vertices, light->triangle, b12);
         float3 n_light = triangle_normal(triangle_vertices, light->triangle);
         float3 to_light = q - p;
         float d = length(to_light);
@@ -110,7 +124,8 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
         s->distance = d;
         s->point = q;
         s->normal = n_light;
-        s->arriving = area_light_emitted(light, spectra, w, n_light, -s->wi);
+        s->arriving = area_light_emitted(light, spectra, buffers->texels, w, n_light, -s->wi,
+                                         triangle_uv(buffers->triangle_uvs, light->triangle, b12));
         s->pdf = area_light_pdf(light, d, fabs(dot(n_light, s->wi)));
         return s->pdf > 0.0f;
     }
@@ -142,7 +157,7 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
     s->wi = environment_sample(light, buffers->map_cdf, u, &s->pdf);
     s->distance = INFINITY;
     s->point = p;
-    s->arriving = environment_radiance(light, spectra, buffers->map_texels, w, s->wi);
+    s->arriving = environment_radiance(light, spectra, buffers->texels, w, s->wi);
     return s->pdf > 0.0f;
 }
 

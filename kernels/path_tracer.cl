@@ -62,7 +62,7 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
                 float3 d = s.ray.direction;
                 float weight = s.previous_delta
                              ? 1.0f : power_heuristic(s.previous_pdf, environment_pdf(env, scene->map_cdf, d));
-                radiance += s.throughput * environment_radiance(env, scene->spectra, scene->map_texels, w, d) * weight;
+                radiance += s.throughput * environment_radiance(env, scene->spectra, scene->texels, w, d) * weight;
             }
             break;
         }
@@ -74,7 +74,8 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
 
         if (info.light >= 0) {
             __global const Light *light = &scene->lights[info.light];
-            float4 emitted = area_light_emitted(light, scene->spectra, w, n, wo);
+            float4 emitted = area_light_emitted(light, scene->spectra, scene->texels, w, n, wo,
+                                                 triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12));
             float weight = 1.0f;
             if (!s.previous_delta) {
                 float pdf_light = area_light_pdf(light, distance(s.previous_point, p), fabs(dot(n, wo)));

@@ -10,18 +10,19 @@ typedef struct {
     __global const RenderParams *params;
     __global const BVHNode *nodes;
     __global const float4 *triangle_vertices;
+    __global const float2 *triangle_uvs;
     __global const TriangleInfo *triangle_info;
     __global const Material *materials;
     __global const Light *lights;
     __global const float *light_cdf;
     __global const float *spectra;
-    __global const float4 *map_texels;  /* environment map, if any (one dummy texel otherwise) */
+    __global const float4 *texels;  /* images of environment maps and textured emitters (a dummy texel if none) */
     __global const float *map_cdf;
 } Scene;
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
-    LightBuffers b = {scene->triangle_vertices, scene->spectra, scene->map_texels, scene->map_cdf};
+    LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf};
     return b;
 }
 

@@ -73,9 +73,9 @@ typedef struct {
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
     int basis_blue_offset;    /*   spectrum_offset: the uplifted emission spectra of the three primaries */
-    int map_width;            /* LIGHT_ENVIRONMENT_MAP: texels, latitude-longitude */
-    int map_height;
-    int pad0;
+    int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude) and textured LIGHT_TRIANGLE (an image */
+    int map_height;           /*   shown on the surface, e.g. a screen): texels; 0 when not textured */
+    int texel_offset;         /* first texel of the image in the texel buffer */
     int pad1;
     int pad2;
 } Light;

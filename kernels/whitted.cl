@@ -19,7 +19,7 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
         if (hit.triangle < 0) {
             if (params->environment_light >= 0) {
                 __global const Light *env = &scene->lights[params->environment_light];
-                radiance += s.throughput * environment_radiance(env, scene->spectra, scene->map_texels, w,
+                radiance += s.throughput * environment_radiance(env, scene->spectra, scene->texels, w,
                                                                 s.ray.direction);
             }
             break;
@@ -29,7 +29,10 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
         float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
         float3 wo = -s.ray.direction;
         if (info.light >= 0) {
-            radiance += s.throughput * area_light_emitted(&scene->lights[info.light], scene->spectra, w, n, wo);
+            radiance += s.throughput * area_light_emitted(&scene->lights[info.light], scene->spectra, scene->texels,
+                                                                  w, n, wo,
+                                                                  triangle_uv(scene->triangle_uvs, hit.triangle,
+                                                                              hit.b12));
         }
         if (s.segments >= last_segment) break;
 

@@ -77,3 +77,47 @@ def test_white_luminance_rescales_and_relative_displays_need_it(tmp_path):
         _scene(tmp_path, 'display = "LCD-CCFL_HDRVDP2", rgb = [1, 1, 1]')
     with pytest.raises(SpectraceError, match="unknown display 'nope'"):
         _scene(tmp_path, 'display = "nope", rgb = [1, 1, 1]')
+
+
+def _picture(path, pixels):
+    from PIL import Image as PILImage
+
+    PILImage.fromarray(np.asarray(pixels, np.uint8), "RGB").save(path)
+
+
+def test_screen_shows_its_picture(device, tmp_path):
+    """Left half of the picture red, right half blue: the rendered screen's halves have the XYZ of the display's
+    red and blue primaries (the srgb encoding maps code 255 to drive 1)."""
+    picture = np.zeros((4, 8, 3))
+    picture[:, :4, 0] = 255
+    picture[:, 4:, 2] = 255
+    _picture(tmp_path / "picture.png", picture)
+    scene = _scene(tmp_path, 'display = "LCD-Dell_CCFL", image = "picture.png", encoding = "srgb"')
+    xyz = Renderer(scene.with_overrides(width=32, height=32), device).render().xyz.astype(np.float64)
+    display = load_display("LCD-Dell_CCFL")
+    # The 20° view spans x in ±0.53 at the screen; take columns well inside each half.
+    for columns, primary in ((slice(2, 12), 0), (slice(20, 30), 2)):
+        region = xyz[4:28, columns].reshape(-1, 3)
+        expected = display.film_xyz(np.eye(3)[primary])
+        mean, standard_error = region.mean(axis=0), region.std(axis=0, ddof=1) / np.sqrt(len(region))
+        assert np.all(np.abs(mean - expected) < 4 * standard_error + 1e-6 * expected.max()), (mean, expected)
+
+
+def test_half_lit_screen_gives_half_the_irradiance(device, tmp_path):
+    """Next-event estimation samples textured screens correctly: by symmetry a meter on the screen's axis
+    receives exactly half the irradiance when only one half of the picture is lit."""
+    from spectrace.render.meters import IrradianceMeter, measure
+
+    readings = {}
+    for name, lit_columns in (("full", slice(0, 8)), ("half", slice(0, 4))):
+        picture = np.zeros((4, 8, 3))
+        picture[:, lit_columns] = 255
+        _picture(tmp_path / f"{name}.png", picture)
+        scene = _scene(tmp_path, f'display = "LCD-Dell_CCFL", image = "{name}.png"')
+        readings[name] = measure(scene, IrradianceMeter((0.0, 0.0, 1.0), (0.0, 0.0, -1.0)), wavelengths_nm=[550.0],
+                                 streams=64, samples_per_item=64, device=device)
+    full, half = readings["full"], readings["half"]
+    difference = full.spectral[0] / 2 - half.spectral[0]
+    combined = np.hypot(full.spectral_standard_error[0] / 2, half.spectral_standard_error[0])
+    assert half.spectral_standard_error[0] < 0.02 * half.spectral[0]
+    assert abs(difference) < 4 * combined

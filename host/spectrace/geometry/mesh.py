@@ -17,10 +17,15 @@ class TriangleMesh:
 
     vertices: np.ndarray  # (N, 3) float64
     faces: np.ndarray  # (M, 3) int64 indices into vertices
+    uvs: np.ndarray | None = None  # (N, 2) texture coordinates per vertex: u to the right, v down the image
 
     def __post_init__(self) -> None:
         self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(self.faces, dtype=np.int64)
+        if self.uvs is not None:
+            self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float64)
+            if self.uvs.shape != (len(self.vertices), 2):
+                raise ValueError(f"uvs must be (N, 2) like the vertices, got {self.uvs.shape}")
         if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
             raise ValueError(f"vertices must be (N, 3), got {self.vertices.shape}")
         if self.faces.ndim != 2 or self.faces.shape[1] != 3:
@@ -29,6 +34,12 @@ class TriangleMesh:
     def triangles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Corner positions (v0, v1, v2), each (M, 3) float64."""
         return tuple(self.vertices[self.faces[:, k]] for k in range(3))
+
+    def triangle_uvs(self) -> np.ndarray:
+        """(M, 3, 2) texture coordinates of each triangle's corners (zeros when the mesh has none)."""
+        if self.uvs is None:
+            return np.zeros((len(self.faces), 3, 2))
+        return self.uvs[self.faces]
 
     def triangle_areas(self) -> np.ndarray:
         """(M,) area of each triangle, in scene units squared."""
@@ -61,7 +72,12 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
         if isinstance(error, (ImportError, UnicodeError)):  # trimesh guessing the text encoding of binary junk
             detail = f"its content is not a valid {path.suffix.lstrip('.').upper() or 'mesh'} file"
         raise SpectraceError(f"cannot read mesh file '{path}': {detail}", where=where) from None
-    return _validated_mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), path, where)
+    mesh = _validated_mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), path, where)
+    uv = getattr(getattr(loaded, "visual", None), "uv", None)
+    if uv is not None and len(uv) == len(mesh.vertices) and np.all(np.isfinite(uv)):
+        # Mesh files store v upward (OpenGL); spectrace's v runs down the image.
+        mesh.uvs = np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float64)
+    return mesh
 
 
 def _validated_mesh(vertices: np.ndarray, faces: np.ndarray, path: Path, where: str) -> TriangleMesh:

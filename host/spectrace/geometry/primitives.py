@@ -14,10 +14,12 @@ MAX_SPHERE_SUBDIVISIONS = 8
 
 
 def rectangle() -> TriangleMesh:
-    """The square [-1, 1]^2 in the plane z = 0, facing +z (2 triangles, area 4)."""
+    """The square [-1, 1]^2 in the plane z = 0, facing +z (2 triangles, area 4). Texture coordinates show an
+    image upright to a viewer on the +z side with +y up: u = (x + 1)/2, v = (1 - y)/2."""
     vertices = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=np.float64)
     faces = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
-    return TriangleMesh(vertices=vertices, faces=faces)
+    uvs = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], dtype=np.float64)
+    return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs)
 
 
 def cube() -> TriangleMesh:

@@ -47,7 +47,7 @@ def apply_transform(mesh: TriangleMesh, matrix: np.ndarray) -> TriangleMesh:
     linear, offset = matrix[:3, :3], matrix[:3, 3]
     vertices = mesh.vertices @ linear.T + offset
     faces = mesh.faces[:, ::-1] if np.linalg.det(linear) < 0 else mesh.faces
-    return TriangleMesh(vertices=vertices, faces=faces.copy())
+    return TriangleMesh(vertices=vertices, faces=faces.copy(), uvs=mesh.uvs)
 
 
 def _translate(value: object, where: str) -> np.ndarray:

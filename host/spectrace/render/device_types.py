@@ -62,7 +62,7 @@ LIGHT_DTYPE = _struct(
         ("basis_blue_offset", "<i4"),
         ("map_width", "<i4"),
         ("map_height", "<i4"),
-        ("pad0", "<i4"),
+        ("texel_offset", "<i4"),
         ("pad1", "<i4"),
         ("pad2", "<i4"),
     ],

@@ -54,8 +54,9 @@ class Renderer:
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._inputs = [
             cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
-            for a in (b.bvh.nodes, b.triangle_vertices, b.triangle_info, b.materials, b.lights, b.light_cdf,
-                      b.spectra, b.map_texels, b.map_cdf, b.cmf)
+            for a in (b.bvh.nodes, b.triangle_vertices, b.triangle_uvs, b.triangle_info, b.materials, b.lights,
+                      b.light_cdf,
+                      b.spectra, b.texels, b.map_cdf, b.cmf)
         ]
         self.pixel_count = scene.width * scene.height
         self._film = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 16)

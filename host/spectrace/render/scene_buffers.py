@@ -37,7 +37,8 @@ class SceneBuffers:
     light_count: int
     environment_light: int  # index into lights, or -1
     light_cdf: np.ndarray  # (L + 1,) float32
-    map_texels: np.ndarray  # (W·H, 4) float32 linear sRGB of the environment map (one dummy texel without one)
+    triangle_uvs: np.ndarray  # (3·M, 2) float32 texture coordinates, BVH leaf order
+    texels: np.ndarray  # (n, 4) float32: images of environment maps and textured emitters, after one dummy texel
     map_cdf: np.ndarray  # marginal CDF over rows (H + 1), then each row's CDF (W + 1): see kernels/environment.cl
     spectra: np.ndarray  # float32 table
     cmf: np.ndarray  # (471, 4) float32: x̄, ȳ, z̄ / ∫ȳ
@@ -52,7 +53,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     table = SpectrumTable()
     material_index: dict[int, int] = {}
     material_rows = []
-    v0s, v1s, v2s, tri_material, tri_emitter = [], [], [], [], []
+    v0s, v1s, v2s, uvs, tri_material, tri_emitter = [], [], [], [], [], []
     emitters = []
     for shape in scene.shapes:
         key = id(shape.material)
@@ -60,7 +61,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             material_index[key] = len(material_rows)
             material_rows.append((MATERIAL_DIFFUSE, table.add(shape.material.reflectance), 0, 0))
         v0, v1, v2 = shape.mesh.triangles()
-        v0s.append(v0), v1s.append(v1), v2s.append(v2)
+        v0s.append(v0), v1s.append(v1), v2s.append(v2), uvs.append(shape.mesh.triangle_uvs())
         tri_material.append(np.full(len(v0), material_index[key], np.int32))
         emitter_id = -1
         if shape.emitter is not None:
@@ -69,15 +70,16 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         tri_emitter.append(np.full(len(v0), emitter_id, np.int32))
 
     if v0s and sum(len(v) for v in v0s):
-        v0, v1, v2 = (np.concatenate(a) for a in (v0s, v1s, v2s))
+        v0, v1, v2, uv = (np.concatenate(a) for a in (v0s, v1s, v2s, uvs))
         tri_material, tri_emitter = np.concatenate(tri_material), np.concatenate(tri_emitter)
         bvh = build_bvh(v0, v1, v2)
         order = bvh.prim_order
-        v0, v1, v2 = v0[order], v1[order], v2[order]
+        v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
         tri_material, tri_emitter = tri_material[order], tri_emitter[order]
         scene_radius = 0.5 * float(np.linalg.norm(bvh.nodes[0]["bmax"] - bvh.nodes[0]["bmin"]))
     else:
         v0 = v1 = v2 = np.zeros((0, 3))
+        uv = np.zeros((0, 3, 2))
         tri_material = tri_emitter = np.zeros(0, np.int32)
         bvh = _empty_bvh()
         scene_radius = 1.0
@@ -86,17 +88,39 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
     vertices[: len(v0), 0, :3], vertices[: len(v0), 1, :3], vertices[: len(v0), 2, :3] = v0, v1, v2
 
+    triangle_uvs = np.zeros((max(len(v0), 1), 3, 2), np.float32)
+    triangle_uvs[: len(v0)] = uv
+
+    # Images shown by emitters and environment maps share one texel buffer; each light knows its offset.
+    texel_chunks = [np.zeros((1, 4), np.float32)]
+    def add_texels(rgb: np.ndarray) -> int:
+        offset = sum(len(c) for c in texel_chunks)
+        chunk = np.zeros((rgb.shape[0] * rgb.shape[1], 4), np.float32)
+        chunk[:, :3] = np.maximum(rgb.reshape(-1, 3), 0.0)
+        texel_chunks.append(chunk)
+        return offset
+
     rows, power = [], []
     areas = 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
     emitting = np.flatnonzero((tri_emitter >= 0) & (areas > 0))
-    emitter_offsets = [table.add(e.radiance) for e in emitters]
+    emitter_rows = []
+    for e in emitters:
+        if e.image is None:
+            emitter_rows.append({"spectrum_offset": table.add(e.radiance)})
+        else:
+            basis = [table.add(p) for p in e.image.primaries]
+            height, width = e.image.drive.shape[:2]
+            emitter_rows.append({"spectrum_offset": basis[0], "texel_offset": add_texels(e.image.drive),
+                                 "map_fields": (basis[1], basis[2], width, height)})
     for t in emitting:
         e = emitters[tri_emitter[t]]
-        rows.append(_light_row(LIGHT_TRIANGLE, emitter_offsets[tri_emitter[t]], triangle=t, area=areas[t],
-                               two_sided=e.two_sided))
+        fields = emitter_rows[tri_emitter[t]]
+        rows.append(_light_row(LIGHT_TRIANGLE, fields["spectrum_offset"], triangle=t, area=areas[t],
+                               two_sided=e.two_sided, map_fields=fields.get("map_fields", (0, 0, 0, 0)),
+                               texel_offset=fields.get("texel_offset", 0)))
         power.append(np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0))
     environment_light = -1
-    map_texels, map_cdf = np.zeros((1, 4), np.float32), np.zeros(2, np.float32)
+    map_cdf = np.zeros(2, np.float32)
     for light in scene.lights:
         if isinstance(light, PointLight):
             rows.append(_light_row(LIGHT_POINT, table.add(light.intensity), position=light.position))
@@ -119,7 +143,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             map_texels, map_cdf, mean_luminance = environment_map_tables(light.rgb)
             basis = [table.add(uplift_illuminant(primary)) for primary in np.eye(3)]
             height, width = light.rgb.shape[:2]
-            row = _light_row(LIGHT_ENVIRONMENT_MAP, basis[0], map_fields=(basis[1], basis[2], width, height))
+            row = _light_row(LIGHT_ENVIRONMENT_MAP, basis[0], map_fields=(basis[1], basis[2], width, height),
+                             texel_offset=add_texels(map_texels[:, :3].reshape(height, width, 3)))
             rows.append(row[:5] + (light.scale,) + row[6:])
             power.append(4.0 * np.pi**2 * scene_radius**2 * light.scale * mean_luminance)
         else:
@@ -159,7 +184,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         light_count=len(rows),
         environment_light=environment_light,
         light_cdf=cdf.astype(np.float32),
-        map_texels=map_texels,
+        texels=np.concatenate(texel_chunks),
+        triangle_uvs=triangle_uvs.reshape(-1, 2),
         map_cdf=map_cdf,
         spectra=table.data,
         cmf=cmf,
@@ -191,9 +217,10 @@ def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, flo
 
 def _light_row(light_type: int, spectrum_offset: int, *, triangle: int = -1, area: float = 0.0,
                two_sided: bool = False, position=(0.0, 0.0, 0.0), direction=(0.0, 0.0, 1.0),
-               cos_falloff_start: float = 1.0, cos_cutoff: float = 1.0, map_fields=(0, 0, 0, 0)) -> tuple:
+               cos_falloff_start: float = 1.0, cos_cutoff: float = 1.0, map_fields=(0, 0, 0, 0),
+               texel_offset: int = 0) -> tuple:
     return ((*position, 1.0), (*direction, 0.0), light_type, triangle, spectrum_offset, 1.0, 0.0, area,
-            int(two_sided), cos_falloff_start, cos_cutoff, *map_fields, 0, 0, 0)
+            int(two_sided), cos_falloff_start, cos_cutoff, *map_fields, texel_offset, 0, 0)
 
 
 def _empty_bvh() -> BVH:

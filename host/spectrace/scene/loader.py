@@ -18,6 +18,7 @@ from spectrace.scene.model import (
     ConstantEnvironment,
     DiffuseMaterial,
     DistantLight,
+    EmitterImage,
     EnvironmentMap,
     Light,
     PointLight,
@@ -97,6 +98,8 @@ def _validation_error(path: Path, error: ValidationError, data: object = None) -
         message = f"unknown key '{location[-1]}'" + (f" (did you mean '{close[0]}'?)" if close else "")
     elif first["type"] == "missing":
         message = "required key is missing"
+    elif first["type"] in ("model_type", "dict_type"):  # pydantic would name a schema class
+        message = f"expected a table, got {type(first['input']).__name__} {first['input']!r}"[:200]
     extra = f" ({len(error.errors()) - 1} more problem(s))" if len(error.errors()) > 1 else ""
     return SpectraceError(message + extra, where=f"{path}: {key_path(location)}" if location else str(path))
 
@@ -230,8 +233,15 @@ class _Resolver:
                 raise SpectraceError(f"undefined material '{s.material}'{hint}", where=self.where(f"{key}.material"))
             emitter = None
             if s.emitter is not None:
-                radiance = self.spectrum(s.emitter.radiance, f"{key}.emitter.radiance", emission=True)
-                emitter = AreaEmitter(radiance=radiance, two_sided=s.emitter.two_sided)
+                radiance_key = f"{key}.emitter.radiance"
+                if s.emitter.radiance.image is not None:
+                    image = self.emitter_image(s.emitter.radiance, radiance_key)
+                    mean_drive = image.drive.reshape(-1, 3).mean(axis=0)
+                    mean = Spectrum(sum(d * p.values for d, p in zip(mean_drive, image.primaries)), name="image mean")
+                    emitter = AreaEmitter(radiance=mean, two_sided=s.emitter.two_sided, image=image)
+                else:
+                    radiance = self.spectrum(s.emitter.radiance, radiance_key, emission=True)
+                    emitter = AreaEmitter(radiance=radiance, two_sided=s.emitter.two_sided)
             shapes.append(Shape(mesh=mesh, material=materials[s.material], emitter=emitter, name=s.name or f"{s.type}{i}"))
         return shapes
 
@@ -244,19 +254,37 @@ class _Resolver:
 
         if not emission:
             raise SpectraceError("a display spectrum is an emission, not a reflectance", where=self.where(key))
-        spec_path = self.folder / spec.display
-        name = str(spec_path) if spec.display.lower().endswith(".csv") else spec.display
+        if spec.image is not None:
+            raise SpectraceError("a display showing an image is only possible as an area emitter's radiance",
+                                 where=self.where(f"{key}.image"))
+        display = self.display(spec, key)
+        try:
+            return display.emission(spec.rgb)
+        except SpectraceError as exc:
+            raise SpectraceError(exc.message, where=self.where(f"{key}.rgb")) from None
+
+    def display(self, spec: schema.SpectrumSpec, key: str):
+        from spectrace.displays import load_display
+        from spectrace.displays.transfer import parse_encoding
+
+        name = str(self.folder / spec.display) if spec.display.lower().endswith(".csv") else spec.display
         display = load_display(name, where=self.where(f"{key}.display"))
         if spec.white_luminance is not None:
             display = display.scaled_to_white_luminance(spec.white_luminance)
         elif not display.absolute:
             raise SpectraceError(f"display '{display.name}' has relative data: give white_luminance (cd/m²)",
                                  where=self.where(f"{key}.white_luminance"))
-        display = display.with_transfer(parse_encoding(spec.encoding, where=self.where(f"{key}.encoding")))
-        try:
-            return display.emission(spec.rgb)
-        except SpectraceError as exc:
-            raise SpectraceError(exc.message, where=self.where(f"{key}.rgb")) from None
+        return display.with_transfer(parse_encoding(spec.encoding, where=self.where(f"{key}.encoding")))
+
+    def emitter_image(self, spec: schema.SpectrumSpec, key: str) -> EmitterImage:
+        """The picture a display shows: its encoded values decoded to linear drive by the display's encoding."""
+        from spectrace.displays.transfer import decode_to_drive
+
+        display = self.display(spec, key)
+        encoded = read_picture(self.folder / spec.image, self.where(f"{key}.image"))
+        drive = np.clip(decode_to_drive(encoded, display.transfer), 0.0, 1.0)
+        primaries = tuple(p * spec.scale for p in display.primaries)
+        return EmitterImage(drive=drive, primaries=primaries)
 
     def point_source_intensity(self, spec, key: str, solid_angle_sr: float) -> Spectrum:
         """I(λ) in W/(sr nm) from `intensity`, or from `power` W spread over `solid_angle_sr` with the
@@ -301,6 +329,26 @@ class _Resolver:
             else:
                 lights.append(ConstantEnvironment(self.spectrum(spec.radiance, f"{key}.radiance", emission=True)))
         return lights
+
+
+def read_picture(path: Path, where: str) -> np.ndarray:
+    """(height, width, 3) values of a picture in [0, 1]: 8/16-bit PNG or JPEG code values divided by their maximum,
+    or an EXR's R, G, B as stored."""
+    if path.suffix.lower() == ".exr":
+        return read_environment_map(path, where).astype(np.float64)
+    if not path.is_file():
+        raise SpectraceError(f"image '{path}' does not exist", where=where)
+    from PIL import Image as PILImage
+
+    try:
+        with PILImage.open(path) as picture:
+            bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
+            values = np.asarray(picture.convert("RGB") if not bits16 else picture, dtype=np.float64)
+    except Exception as exc:  # Pillow raises many types for unreadable files
+        raise SpectraceError(f"cannot read image '{path}': {exc}", where=where) from None
+    if values.ndim == 2:
+        values = np.repeat(values[..., None], 3, axis=-1)
+    return values / (65535.0 if bits16 else 255.0)
 
 
 def read_environment_map(path: Path, where: str) -> np.ndarray:

@@ -50,10 +50,20 @@ class DiffuseMaterial:
 Material = DiffuseMaterial
 
 
+@dataclass(frozen=True, eq=False)
+class EmitterImage:
+    """An image shown by an area light (a picture on a screen): each texel emits r·R(λ) + g·G(λ) + b·B(λ) of the
+    three primaries for its linear drive (r, g, b); texture coordinates place it (u right, v down)."""
+
+    drive: np.ndarray  # (height, width, 3) linear drive per texel, row 0 at the top
+    primaries: tuple[Spectrum, Spectrum, Spectrum]  # W/(m² sr nm) at full drive, scale applied
+
+
 @dataclass(frozen=True)
 class AreaEmitter:
-    radiance: Spectrum  # W/(m² sr nm), scale already applied
+    radiance: Spectrum  # W/(m² sr nm), scale applied; with an image, its mean emission
     two_sided: bool = False
+    image: EmitterImage | None = None
 
 
 @dataclass(frozen=True)

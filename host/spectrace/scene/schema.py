@@ -93,6 +93,7 @@ class SpectrumSpec(Strict):
     value: FiniteFloat | None = None
     blackbody: FiniteFloat | None = Field(default=None, description="temperature in kelvin; peak normalised to 1")
     display: str | None = Field(default=None, description="emission only: a display name or CSV; rgb is its drive")
+    image: str | None = Field(default=None, description="with display: a picture (PNG, JPEG, EXR) it shows")
     encoding: Literal["linear", "srgb", "gamma2.2"] = "linear"
     white_luminance: FiniteFloat | None = Field(default=None, gt=0.0, description="cd/m² of the display's white")
     spectrum: str | None = None
@@ -104,11 +105,14 @@ class SpectrumSpec(Strict):
     @model_validator(mode="after")
     def _exactly_one_source(self) -> "SpectrumSpec":
         sources = [k for k in SPECTRUM_SOURCES if getattr(self, k) is not None]
-        if len(sources) != 1:
+        if self.display is not None:
+            if (self.rgb is None) == (self.image is None) or sources not in (["rgb"], []):
+                raise ValueError("a display spectrum needs exactly one of rgb (a triple) or image (a picture)")
+        elif self.image is not None:
+            raise ValueError("image needs display (the display that shows it)")
+        elif len(sources) != 1:
             given = ", ".join(sources) if sources else "none"
             raise ValueError(f"give exactly one of {', '.join(SPECTRUM_SOURCES)} (given: {given})")
-        if self.display is not None and self.rgb is None:
-            raise ValueError("a display spectrum needs rgb (the triple the display shows)")
         if self.display is None and (self.encoding != "linear" or self.white_luminance is not None):
             raise ValueError("encoding and white_luminance only apply to a display spectrum")
         if self.blackbody is not None and self.blackbody <= 0:

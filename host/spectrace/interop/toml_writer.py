@@ -1,0 +1,62 @@
+"""A small TOML writer for scene data: tables, tables of tables, arrays of tables, inline tables and arrays of
+strings, numbers and booleans, which is all a spectrace scene uses (the standard library reads TOML only)."""
+
+import json
+import math
+import re
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def _key(key: str) -> str:
+    return key if _BARE_KEY.fullmatch(key) else json.dumps(key, ensure_ascii=False)
+
+
+def _value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"TOML scene values must be finite, got {value}")
+        return repr(value)
+    if isinstance(value, str):
+        # JSON's string escapes (\", \\, \n, \uXXXX) are valid in TOML basic strings.
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_value(item) for item in value) + "]"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in value.items()) + " }" if value else "{}"
+    raise TypeError(f"cannot write {type(value).__name__} to TOML")
+
+
+def _table_body(table: dict) -> list[str]:
+    return [f"{_key(key)} = {_value(value)}" for key, value in table.items()]
+
+
+def dumps(data: dict, header: str = "") -> str:
+    """TOML text for `data`: scalar and inline values at the top; each dict of plain values as a [table]; each dict
+    of dicts as [name.key] tables; each list of dicts as [[name]] arrays of tables. `header` becomes # comments."""
+    lines = [f"# {line}".rstrip() for line in header.splitlines()]
+    if lines:
+        lines.append("")
+    plain = {k: v for k, v in data.items() if not _is_section(v)}
+    lines += _table_body(plain)
+    for name, value in data.items():
+        if not _is_section(value):
+            continue
+        if isinstance(value, list):
+            for table in value:
+                lines += ["", f"[[{_key(name)}]]", *_table_body(table)]
+        elif value and all(isinstance(v, dict) for v in value.values()):
+            for sub_name, table in value.items():
+                lines += ["", f"[{_key(name)}.{_key(sub_name)}]", *_table_body(table)]
+        else:
+            lines += ["", f"[{_key(name)}]", *_table_body(value)]
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def _is_section(value) -> bool:
+    return (isinstance(value, dict) and value != {}) or (
+        isinstance(value, list) and bool(value) and all(isinstance(item, dict) for item in value))

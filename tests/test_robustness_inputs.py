@@ -1,0 +1,244 @@
+"""Bad input, case by case: `spectrace render` exits with status 2 and one line that names the file and the key
+path and says what is wrong, never a traceback.
+
+Every case runs through the command line's entry point in this process (fast); a few also run as a real
+subprocess, to show that nothing but that line reaches the terminal.
+"""
+
+import os
+import subprocess
+import sys
+from dataclasses import dataclass, field
+
+import pytest
+
+from spectrace import cli
+
+BASE = """\
+[camera]
+origin = [0, 0, 5]
+target = [0, 0, 0]
+fov = 40
+
+[film]
+width = 8
+height = 6
+
+[materials.grey]
+type = "diffuse"
+reflectance = { value = 0.5 }
+
+[[shapes]]
+type = "rectangle"
+material = "grey"
+emitter = { radiance = { value = 1.0 } }
+"""
+
+FILES = {
+    "garbage.obj": bytes(range(256)) * 8,
+    "garbage.ply": b"ply\nformat ascii 1.0\nelement vertex 3\n" + bytes(range(128, 256)),
+    "empty.obj": b"# an exported mesh with nothing in it\n",
+    "points.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\n",
+    "nan.obj": b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+    "inf.obj": b"v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n",
+    "far.obj": b"v 0 0 0\nv 1e15 0 0\nv 0 1 0\nf 1 2 3\n",
+    "nan.csv": b"wavelength_nm,r\n400,0.5\n500,nan\n",
+    "negative.csv": b"wavelength_nm,r\n400,0.5\n500,-0.2\n",
+    "descending.csv": b"wavelength_nm,r\n500,0.5\n400,0.2\n",
+    "binary.exr": bytes(range(256)) * 4,
+}
+
+
+@dataclass(frozen=True)
+class BadInput:
+    name: str
+    old: str  # replaced in BASE by `new`; "" appends `new`
+    new: str
+    where: str  # the key path after "<scene file>: "; "" for file-level errors
+    says: str  # a fragment of the message
+    argv: tuple = field(default=())  # extra command-line options
+
+
+def replace(name, old, new, where, says, argv=()):
+    return BadInput(name, old, new, where, says, tuple(argv))
+
+
+def append(name, text, where, says):
+    return BadInput(name, "", text, where, says)
+
+
+SHAPE = 'type = "rectangle"'
+REFLECTANCE = "reflectance = { value = 0.5 }"
+RADIANCE = "radiance = { value = 1.0 }"
+
+CASES = [
+    # syntax and structure
+    replace("toml-syntax", "fov = 40", "fov = = 40", "", "TOML syntax error: Invalid value (at line 4, column 7)"),
+    replace("toml-duplicate-key", "fov = 40", "fov = 40\nfov = 41", "", "Cannot overwrite a value (at line 5"),
+    replace("not-utf8", "fov = 40", "fov = 40 # \udcff", "", "not a UTF-8 text file"),
+    replace("unknown-key", "fov = 40", "fvo = 40", "camera.fvo", "unknown key 'fvo' (did you mean 'fov'?)"),
+    replace("unknown-nested-key", REFLECTANCE, "reflectance = { valeu = 0.5 }", "materials.grey.reflectance.valeu",
+            "unknown key 'valeu' (did you mean 'value'?)"),
+    replace("wrong-type-int", "width = 8", 'width = "eight"', "film.width", "valid integer"),
+    replace("wrong-type-fraction", "width = 8", "width = 8.5", "film.width", "fractional part"),
+    replace("wrong-type-vector", "origin = [0, 0, 5]", 'origin = "here"', "camera.origin", "valid tuple"),
+    replace("wrong-type-table", "[film]\nwidth = 8\nheight = 6", "film = 3", "film", "expected a table"),
+    replace("short-vector", "origin = [0, 0, 5]", "origin = [0, 5]", "camera.origin[2]", "required key is missing"),
+    replace("missing-required", "fov = 40", "", "camera.fov", "required key is missing"),
+    replace("missing-section", "[film]\nwidth = 8\nheight = 6", "", "film", "required key is missing"),
+    replace("unknown-shape-type", SHAPE, 'type = "torus"', "shapes[0].type", "'mesh', 'rectangle', 'cube'"),
+    append("unknown-light-type", '[[lights]]\ntype = "laser"\nposition = [0, 0, 0]\n', "lights[0]",
+           "Input tag 'laser'"),
+    replace("nothing-emits", '[[shapes]]\ntype = "rectangle"\nmaterial = "grey"\nemitter = { radiance = { value = 1.0 '
+            '} }\n', "", "", "the scene has neither shapes nor lights"),
+    # references
+    replace("undefined-material", 'material = "grey"', 'material = "gery"', "shapes[0].material",
+            "undefined material 'gery' (did you mean 'grey'?)"),
+    replace("undefined-spectrum", REFLECTANCE, 'reflectance = { spectrum = "whte" }',
+            "materials.grey.reflectance.spectrum", "undefined spectrum 'whte'"),
+    replace("undefined-library-column", REFLECTANCE, 'reflectance = { spectrum = "cornell_box/reflectance:blue" }',
+            "materials.grey.reflectance.spectrum", "unknown column 'blue' (available: white, red, green)"),
+    # files
+    replace("missing-mesh", SHAPE, 'type = "mesh"\nfile = "nope.obj"', "shapes[0].file", "nope.obj' does not exist"),
+    replace("mesh-is-a-folder", SHAPE, 'type = "mesh"\nfile = "."', "shapes[0].file", "is not a file"),
+    replace("garbage-mesh", SHAPE, 'type = "mesh"\nfile = "garbage.obj"', "shapes[0].file",
+            "its content is not a valid OBJ file"),
+    replace("garbage-ply", SHAPE, 'type = "mesh"\nfile = "garbage.ply"', "shapes[0].file", "cannot read mesh file"),
+    replace("empty-mesh", SHAPE, 'type = "mesh"\nfile = "empty.obj"', "shapes[0].file", "contains no triangles"),
+    replace("mesh-without-faces", SHAPE, 'type = "mesh"\nfile = "points.obj"', "shapes[0].file",
+            "contains no triangles"),
+    replace("missing-spectrum-file", REFLECTANCE, 'reflectance = { file = "nope.csv" }',
+            "materials.grey.reflectance.file", "nope.csv: spectrum file not found"),
+    replace("spectrum-file-is-a-folder", REFLECTANCE, 'reflectance = { file = "." }',
+            "materials.grey.reflectance.file", "cannot read spectrum file"),
+    replace("garbage-spectrum-file", REFLECTANCE, 'reflectance = { file = "garbage.obj" }',
+            "materials.grey.reflectance.file", "cannot read spectrum file"),
+    replace("descending-spectrum-file", REFLECTANCE, 'reflectance = { file = "descending.csv" }',
+            "materials.grey.reflectance.file", "strictly ascending"),
+    append("missing-texture", '[[lights]]\ntype = "envmap"\nfile = "sky.exr"\n', "lights[0].file",
+           "sky.exr' does not exist"),
+    append("garbage-texture", '[[lights]]\ntype = "envmap"\nfile = "binary.exr"\n', "lights[0].file",
+           "cannot read environment map"),
+    # non-physical values
+    replace("negative-reflectance", REFLECTANCE, "reflectance = { value = -0.1 }", "materials.grey.reflectance",
+            "spectrum has negative values"),
+    replace("reflectance-above-one", REFLECTANCE, "reflectance = { value = 1.2 }", "materials.grey.reflectance",
+            "reflectance exceeds 1 (max 1.2): it would create energy"),
+    replace("rgb-reflectance-above-one", REFLECTANCE, "reflectance = { rgb = [1.2, 0.5, 0.5] }",
+            "materials.grey.reflectance.rgb", "must lie in [0, 1]"),
+    replace("negative-spectrum-file", REFLECTANCE, 'reflectance = { file = "negative.csv" }',
+            "materials.grey.reflectance", "negative"),
+    replace("negative-radiance", RADIANCE, "radiance = { value = -1.0 }", "shapes[0].emitter.radiance",
+            "spectrum has negative values"),
+    replace("negative-scale", RADIANCE, "radiance = { value = 1.0, scale = -2 }", "shapes[0].emitter.radiance",
+            "scale must be >= 0"),
+    replace("overflowing-radiance", RADIANCE, "radiance = { value = 1e30 }", "shapes[0].emitter.radiance",
+            "beyond 1e+20"),
+    append("negative-power", '[[lights]]\ntype = "point"\nposition = [0, 1, 0]\npower = -5\n', "lights[0]",
+           "power must be >= 0 W"),
+    replace("zero-blackbody", RADIANCE, "radiance = { blackbody = 0 }", "shapes[0].emitter.radiance",
+            "blackbody temperature must be > 0 K"),
+    # NaN and infinity
+    replace("nan-number", "fov = 40", "fov = nan", "camera.fov", "finite number"),
+    replace("inf-in-vector", "origin = [0, 0, 5]", "origin = [0, inf, 5]", "camera.origin[1]", "finite number"),
+    replace("nan-reflectance", REFLECTANCE, "reflectance = { value = nan }", "materials.grey.reflectance.value",
+            "finite number"),
+    replace("nan-inline-spectrum", REFLECTANCE, 'reflectance = { values = "400:0.5, 500:nan" }',
+            "materials.grey.reflectance.values", "is nan; spectra must be finite"),
+    replace("inf-inline-spectrum-list", REFLECTANCE, "reflectance = { values = [[400, 0.5], [500, inf]] }",
+            "materials.grey.reflectance.values[1][1]", "finite number"),
+    replace("nan-spectrum-file", REFLECTANCE, 'reflectance = { file = "nan.csv" }',
+            "materials.grey.reflectance.file", "nan.csv:3: value in column 'r' is nan"),
+    replace("nan-mesh-vertex", SHAPE, 'type = "mesh"\nfile = "nan.obj"', "shapes[0].file",
+            "nan.obj' has 1 vertices with NaN or infinite coordinates"),
+    replace("inf-mesh-vertex", SHAPE, 'type = "mesh"\nfile = "inf.obj"', "shapes[0].file",
+            "inf.obj' has 1 vertices with NaN or infinite coordinates"),
+    replace("transform-overflow", 'material = "grey"', 'material = "grey"\ntransform = [{ scale = 1e300 }, '
+            '{ scale = 1e300 }]', "shapes[0].transform", "NaN or infinite coordinates"),
+    # sizes and ranges
+    replace("zero-width", "width = 8", "width = 0", "film.width", "greater than 0"),
+    replace("negative-height", "height = 6", "height = -6", "film.height", "greater than 0"),
+    replace("fov-zero", "fov = 40", "fov = 0", "camera.fov", "fov must lie in (0, 180) degrees"),
+    replace("fov-180", "fov = 40", "fov = 180", "camera.fov", "fov must lie in (0, 180) degrees"),
+    replace("absurd-width", "width = 8", "width = 1000000", "film.width", "exceeds the limit of 16384 px"),
+    replace("absurd-resolution", "width = 8\nheight = 6", "width = 16384\nheight = 16384", "film",
+            "would need 5.0 GiB of device memory"),
+    append("absurd-spp", "[sampler]\nspp = 100000000\n", "sampler.spp", "exceeds the limit of 1048576"),
+    replace("camera-target-is-origin", "target = [0, 0, 0]", "target = [0, 0, 5]", "camera.target",
+            "camera target equals origin"),
+    replace("camera-up-parallel", "fov = 40", "fov = 40\nup = [0, 0, 1]", "camera.up", "parallel"),
+    replace("huge-coordinates-file", SHAPE, 'type = "mesh"\nfile = "far.obj"', "shapes[0].file",
+            "beyond ±1e+12 scene units"),
+    replace("huge-camera", "origin = [0, 0, 5]", "origin = [0, 0, 1e14]", "camera.origin", "beyond ±1e+12"),
+    replace("singular-transform", 'material = "grey"', 'material = "grey"\ntransform = [{ scale = [1, 0, 1] }]',
+            "shapes[0].transform[0].scale", "non-zero"),
+    # command-line overrides
+    replace("override-absurd-size", "", "", "--width/--height", "would need 5.0 GiB of device memory",
+            argv=("--width", "16384", "--height", "16384")),
+    replace("override-absurd-spp", "", "", "--spp", "exceeds the limit of 1048576", argv=("--spp", "2000000")),
+    replace("unknown-output-format", "", "", "out.tiff", "unknown image format '.tiff'",
+            argv=("-o", "{folder}/out.tiff")),
+    replace("missing-checkpoint", "", "", "nope.npz", "checkpoint file does not exist",
+            argv=("--resume", "{folder}/nope.npz")),
+    replace("damaged-checkpoint", "", "", "garbage.obj", "not a spectrace checkpoint",
+            argv=("--resume", "{folder}/garbage.obj")),
+]
+# Which part of the message is the file: most name the scene, these name the file the option gave.
+NAMES_OTHER_FILE = {"unknown-output-format", "missing-checkpoint", "damaged-checkpoint", "override-absurd-size",
+                    "override-absurd-spp"}
+
+
+def _write_case(folder, case: BadInput):
+    for name, content in FILES.items():
+        (folder / name).write_bytes(content)
+    text = BASE + case.new if case.old == "" else BASE.replace(case.old, case.new)
+    assert case.old == "" or case.old in BASE, case.name
+    scene = folder / "scene.toml"
+    scene.write_bytes(text.encode("utf-8", "surrogateescape"))
+    argv = [a.format(folder=folder) for a in case.argv]
+    if "-o" not in argv:
+        argv += ["-o", str(folder / "out.png")]
+    return scene, ["render", str(scene), *argv, "-q"]
+
+
+def _run_in_process(monkeypatch, capsys, argv) -> tuple[int, str]:
+    monkeypatch.setattr(sys, "argv", ["spectrace", *argv])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    return exit_info.value.code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_bad_input_is_one_line_naming_file_and_key(case, tmp_path, monkeypatch, capsys):
+    scene, argv = _write_case(tmp_path, case)
+    status, stderr = _run_in_process(monkeypatch, capsys, argv)
+    assert status == 2, stderr
+    lines = [line for line in stderr.splitlines() if line.strip() and not line.startswith("device: ")]
+    assert len(lines) == 1, stderr
+    message = lines[0]
+    assert "Traceback" not in stderr
+    if case.name in NAMES_OTHER_FILE:
+        expected_place = f"{case.where}: "
+    else:
+        expected_place = f"{scene}: {case.where}: " if case.where else f"{scene}: "
+    assert message.startswith("error: ") and expected_place in message, message
+    assert case.says in message, message
+
+
+@pytest.mark.parametrize("name", ["toml-syntax", "nan-mesh-vertex", "override-absurd-size"])
+def test_a_real_process_prints_only_the_line(name, tmp_path):
+    case = next(c for c in CASES if c.name == name)
+    scene, argv = _write_case(tmp_path, case)
+    result = subprocess.run([sys.executable, "-m", "spectrace", *argv], capture_output=True, text=True,
+                            env=os.environ.copy(), timeout=300)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr and result.stdout == ""
+    assert result.stderr.count("\n") == 1 and result.stderr.startswith("error: "), result.stderr
+    assert case.says in result.stderr
+
+
+def test_a_missing_device_says_how_to_list_and_pick(tmp_path, monkeypatch, capsys):
+    scene, argv = _write_case(tmp_path, replace("fine", "", "", "", ""))
+    status, stderr = _run_in_process(monkeypatch, capsys, [*argv, "--device", "no-such-device"])
+    assert status == 2 and stderr.count("\n") == 1, stderr
+    assert "no OpenCL device matches 'no-such-device'; available devices:" in stderr
