@@ -4,6 +4,10 @@
 #ifndef SPECTRACE_TRIANGLE_CL
 #define SPECTRACE_TRIANGLE_CL
 
+/* The edge functions must be evaluated as written: fused multiply-adds round differently for the two products
+ * of each edge function, so a triangle collapsed to a point would get non-zero edge values and report hits. */
+#pragma OPENCL FP_CONTRACT OFF
+
 #include "ray.cl"
 
 /* Per-ray constants of the shear, computed once per ray. */

@@ -19,7 +19,11 @@ app = typer.Typer(
 )
 from spectrace.displays.cli import display_app
 app.add_typer(display_app, name="display")
-console = Console(stderr=True)
+from spectrace.spectra_cli import spectra_app
+app.add_typer(spectra_app, name="spectra")
+from spectrace.interop.cli import import_mitsuba_command
+app.command("import-mitsuba")(import_mitsuba_command)
+console = Console(stderr=True, soft_wrap=True)  # messages with long paths stay on one line
 
 DeviceOption = Annotated[
     Optional[str],
@@ -42,6 +46,17 @@ def render(
     spectral_bins: Annotated[int, typer.Option(
         help="EXR only: also store N equal wavelength bands over 360-830 nm (spectral EXR, Fichet et al. 2021 "
              "layout; band-averaged radiance in W/(m² sr nm)).", min=0, max=471)] = 0,
+    colour_space: Annotated[str, typer.Option("--colour-space", "--color-space", help=(
+        "Colour space of the output: srgb, display-p3, rec2020 (linear in EXR, with that space's curve in PNG) or "
+        "xyz (EXR only). See docs/colour.md."))] = "srgb",
+    white_balance: Annotated[Optional[str], typer.Option(help=(
+        "Adapt this white to the output's white (D65): a CIE illuminant (A, D50, FL2), a temperature (3200K), "
+        "a chromaticity 'x,y' or a library spectrum."))] = None,
+    adaptation: Annotated[str, typer.Option(help="White-balance transform: bradford or von-kries.")] = "bradford",
+    false_color: Annotated[Optional[Path], typer.Option("--false-color", "--false-colour", help=(
+        "Also write a false-colour map of the luminance (cd/m², 683 lm/W x integral of L ybar) with a scale bar "
+        "(.png, .pdf, .svg)."))] = None,
+    false_color_scale: Annotated[str, typer.Option(help="Scale of the false-colour map: log or linear.")] = "log",
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
     checkpoint: Annotated[Optional[Path], typer.Option(
         help="Save the render's state to this file every --checkpoint-interval seconds, when stopped, and at the "
@@ -54,6 +69,7 @@ def render(
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
     (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
+    from spectrace.output_options import RenderOutputOptions
     from spectrace.render.checkpoint import read_checkpoint
     from spectrace.render.renderer import Renderer
     from spectrace.render.stop_signals import StopOnSignals
@@ -64,6 +80,8 @@ def render(
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
     _check_render_options(loaded, output, width, height, spp)
+    outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color,
+                                        false_color_scale)
     saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
     renderer = Renderer(loaded, device, spectral_bins=spectral_bins)
     console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False)
@@ -76,7 +94,8 @@ def render(
         image = renderer.image()
         if image.spp == 0:
             raise SpectraceError("interrupted before the first pass finished; nothing written")
-        _write_image(image, output, xyz, state_file)
+        _write_image(outputs.apply(image), output, xyz, state_file)
+        outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False))
     pixels = image.width * image.height * image.spp
     note = " (interrupted: partial image)" if interrupted else ""
     console.print(
@@ -139,7 +158,15 @@ def _render_passes(renderer, spp: int, stop, state_file: Optional[Path], interva
             if saver is not None:
                 saver.maybe_save()
 
-        renderer.render(progress=on_pass, should_stop=stop)
+        try:
+            renderer.render(progress=on_pass, should_stop=stop)
+        except SpectraceError as error:
+            # An OpenCL failure mid-pass may leave part of a pass in the film: the film is not saved now, but the
+            # last checkpoint, written between passes, is sound.
+            if saver is None or saver.saved_samples is None:
+                raise
+            raise SpectraceError(f"{error.message}; {state_file} holds the last {saver.saved_samples} spp "
+                                 f"(continue with --resume)", where=error.where) from None
     if saver is not None and renderer.samples_done > 0:
         saver.save()
 

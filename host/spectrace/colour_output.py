@@ -195,7 +195,7 @@ def encode_for_display(linear_rgb: np.ndarray, space: ColourSpace) -> np.ndarray
     """Clip to [0, 1] and apply the space's transfer curve, for 8-bit files and screens."""
     space = ColourSpace(space)
     if space is ColourSpace.XYZ:
-        raise SpectraceError("XYZ has no display encoding: write XYZ output as .exr")
+        raise SpectraceError("xyz has no display encoding: write it as .exr")
     clipped = np.clip(np.asarray(linear_rgb, np.float64), 0.0, 1.0)
     if space is ColourSpace.REC2020:
         return np.asarray(colour.models.oetf_BT2020(clipped), np.float64)
@@ -204,7 +204,10 @@ def encode_for_display(linear_rgb: np.ndarray, space: ColourSpace) -> np.ndarray
 
 def png_cicp(space: ColourSpace) -> bytes:
     """The 4-byte payload of a PNG cICP chunk naming `space`'s primaries and transfer curve."""
-    return bytes(_PNG_CICP[ColourSpace(space)])
+    space = ColourSpace(space)
+    if space not in _PNG_CICP:
+        raise SpectraceError(f"{space.value} has no display encoding: write it as .exr")
+    return bytes(_PNG_CICP[space])
 
 
 def exr_chromaticities(space: ColourSpace) -> tuple[float, ...]:

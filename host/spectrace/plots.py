@@ -1,6 +1,6 @@
 """Figures: spectra on a wavelength axis, and false-colour luminance maps of rendered images with a scale bar.
 
-Luminance. The film's Y is ∫ L(λ) ȳ(λ) dλ / ∫ ȳ dλ (CIE 1931 2°; see `spectrace.spectral.colorimetry`), so for
+Luminance. The film's Y is ∫ L(λ) ȳ(λ) dλ / ∫ ȳ dλ (CIE 1931 2°; `spectrace.spectral.colorimetry`), so for
 radiance L in W/(m² sr nm) the photometric luminance is
 
     L_v = K_m ∫ L ȳ dλ = K_m · ∫ȳ dλ · Y_film,   K_m = 683 lm/W (CIE 15:2004), ∫ȳ dλ ≈ 106.857 nm,
@@ -17,7 +17,13 @@ from typing import Literal
 import numpy as np
 
 from spectrace.errors import SpectraceError
-from spectrace.spectral.colorimetry import CIE_1931_CMFS, CIE_Y_INTEGRAL, spectrum_to_xyz, srgb_encode, xyz_to_linear_srgb
+from spectrace.spectral.colorimetry import (
+    CIE_1931_CMFS,
+    CIE_Y_INTEGRAL,
+    spectrum_to_xyz,
+    srgb_encode,
+    xyz_to_linear_srgb,
+)
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.illuminants import cie_illuminant
 from spectrace.spectral.spectrum import Spectrum

@@ -99,7 +99,8 @@ def _select_candidates(spec: str, ordered: list[tuple[FoundDevice, DeviceReport]
     chosen = exact or [pair for pair in ordered if matches_spec(spec, pair[1])]
     if not chosen:
         keys = ", ".join(report.key for _, report in ordered) or f"none; {INSTALL_HINT}"
-        raise NoWorkingDeviceError(f"no OpenCL device matches {request}; available devices: {keys}")
+        raise NoWorkingDeviceError(f"no OpenCL device matches {request}; available devices: {keys} "
+                                   f"(pick one with --device KEY or {DEVICE_ENV}=KEY; `spectrace devices` shows each)")
     return chosen
 
 

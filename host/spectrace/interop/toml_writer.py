@@ -54,7 +54,10 @@ def dumps(data: dict, header: str = "") -> str:
                 lines += ["", f"[{_key(name)}.{_key(sub_name)}]", *_table_body(table)]
         else:
             lines += ["", f"[{_key(name)}]", *_table_body(value)]
-    return "\n".join(lines).lstrip("\n") + "\n"
+    text = "\n".join(lines).lstrip("\n")
+    while "\n\n\n" in text:
+        text = text.replace("\n\n\n", "\n\n")
+    return text + "\n"
 
 
 def _is_section(value) -> bool:

@@ -86,9 +86,11 @@ def render_identity(renderer: Renderer) -> RenderIdentity:
                           kernels_digest(resources.kernels_dir()))
 
 
-def save_checkpoint(path: str | Path, renderer: Renderer) -> Checkpoint:
-    """Write the renderer's current state to `path` atomically (an older checkpoint survives any crash)."""
-    checkpoint = Checkpoint(render_identity(renderer), renderer.save_state(), renderer.device.report.key)
+def save_checkpoint(path: str | Path, renderer: Renderer, identity: RenderIdentity | None = None) -> Checkpoint:
+    """Write the renderer's current state to `path` atomically (an older checkpoint survives any crash).
+    `identity`, when given, is render_identity(renderer) computed earlier (it hashes every scene array)."""
+    identity = identity if identity is not None else render_identity(renderer)
+    checkpoint = Checkpoint(identity, renderer.save_state(), renderer.device.report.key)
     write_checkpoint(path, checkpoint)
     return checkpoint
 
@@ -189,6 +191,7 @@ class PeriodicCheckpoints:
         self.clock = clock
         self.last_saved = clock()
         self.saved_samples: int | None = None  # samples per pixel in the file, once this object wrote it
+        self._identity: RenderIdentity | None = None  # the render does not change: hash its arrays once
 
     def maybe_save(self) -> bool:
         if self.clock() - self.last_saved < self.interval_seconds:
@@ -200,8 +203,10 @@ class PeriodicCheckpoints:
         self.last_saved = self.clock()
         if self.saved_samples == self.renderer.samples_done:
             return True  # the file already holds exactly this state
+        if self._identity is None:
+            self._identity = render_identity(self.renderer)
         try:
-            save_checkpoint(self.path, self.renderer)
+            save_checkpoint(self.path, self.renderer, self._identity)
         except OSError as error:
             self.warn(f"could not write checkpoint {self.path} ({error.strerror or error}); rendering goes on")
             return False

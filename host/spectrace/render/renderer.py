@@ -32,8 +32,10 @@ class Renderer:
         """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (the band-
         averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output."""
         self.scene = scene
-        if problem := limits.render_settings_problem(scene.width, scene.height, scene.spp):
-            raise SpectraceError(problem)
+        problem = (limits.render_settings_problem(scene.width, scene.height, scene.spp)
+                   or limits.scene_geometry_problem(scene))
+        if problem:
+            raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         self.device = device if isinstance(device, Device) else open_device(device)
         self.buffers: SceneBuffers = build_scene_buffers(scene)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.

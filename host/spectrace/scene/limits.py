@@ -103,3 +103,19 @@ def spectrum_magnitude_problem(values: np.ndarray) -> str | None:
 def render_settings_problem(width: int, height: int, spp: int) -> str | None:
     """Why a render of this size cannot run (film size with its memory, or spp), or None."""
     return film_size_problem(width, height) or spp_problem(spp)
+
+
+def scene_geometry_problem(scene) -> str | None:
+    """Why a resolved Scene (from a file or built in Python) cannot be traced: a shape, the camera or a point
+    light with NaN, infinite or overflowing coordinates; or None."""
+    for index, shape in enumerate(scene.shapes):
+        if problem := coordinates_problem(shape.mesh.vertices):
+            return f"shape {index} ('{shape.name}') has {problem}"
+    camera = scene.camera
+    if problem := coordinates_problem(np.array([camera.origin, camera.target, camera.up], dtype=np.float64)):
+        return f"the camera has {problem}"
+    for index, light in enumerate(scene.lights):
+        position = getattr(light, "position", None)
+        if position is not None and (problem := coordinates_problem(position)):
+            return f"light {index} has {problem}"
+    return None

@@ -2,6 +2,7 @@
 
 import difflib
 import tomllib
+import typing
 from pathlib import Path
 
 import numpy as np
@@ -47,27 +48,27 @@ def key_path(location: tuple) -> str:
 
 
 def _allowed_keys(model: type, location: tuple) -> list[str]:
-    """Field names valid at `location` in the schema, for 'did you mean' hints."""
-    current = model
+    """Field names valid at `location` in the schema, for 'did you mean' hints (every member of a union)."""
+    current = [model]
+    name_follows = False  # the part after a dict-typed field is a user-chosen name ([materials.NAME])
     for part in location[:-1]:
-        if isinstance(part, int) or current is None:
+        if isinstance(part, int):
             continue
-        fields = getattr(current, "model_fields", {})
-        if part not in fields:
+        if name_follows:
+            name_follows = False
+            continue
+        annotations = [m.model_fields[part].annotation for m in current if part in m.model_fields]
+        if not annotations:
             return []
-        annotation = fields[part].annotation
-        current = _model_in(annotation)
-    return list(getattr(current, "model_fields", {}).keys()) if current else []
+        name_follows = any(typing.get_origin(a) is dict for a in annotations)
+        current = [m for a in annotations for m in _models_in(a)]
+    return list(dict.fromkeys(key for m in current for key in m.model_fields))
 
 
-def _model_in(annotation) -> type | None:
+def _models_in(annotation) -> list[type]:
     if isinstance(annotation, type) and hasattr(annotation, "model_fields"):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()) or ():
-        found = _model_in(arg)
-        if found is not None:
-            return found
-    return None
+        return [annotation]
+    return [m for arg in getattr(annotation, "__args__", ()) or () for m in _models_in(arg)]
 
 
 def _location_in_data(data: object, location: tuple, missing: bool) -> tuple:

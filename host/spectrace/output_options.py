@@ -1,0 +1,56 @@
+"""The render command's output options beyond the image itself: colour space and white balance of the files
+(docs/colour.md), and the false-colour luminance map (spectrace.plots). Parsed before rendering, so a typo fails
+at once rather than after a long render."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from spectrace.colour_output import ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
+from spectrace.errors import SpectraceError
+from spectrace.image import Image
+
+FALSE_COLOUR_SCALES = ("log", "linear")
+
+
+@dataclass(frozen=True)
+class RenderOutputOptions:
+    colour_space: ColourSpace = ColourSpace.SRGB
+    white_balance: WhiteBalance | None = None
+    false_colour_path: Path | None = None
+    false_colour_scale: str = "log"
+
+    @classmethod
+    def parse(cls, output: Path, colour_space: str = "srgb", white_balance: str | None = None,
+              adaptation: str = "bradford", false_colour: Path | None = None,
+              false_colour_scale: str = "log") -> RenderOutputOptions:
+        space = parse_colour_space(colour_space)
+        if space is ColourSpace.XYZ and output.suffix.lower() == ".png":
+            raise SpectraceError("XYZ output needs an .exr file (PNG holds display-encoded RGB)",
+                                 where="--colour-space")
+        balance = parse_white_balance(white_balance, adaptation) if white_balance else None
+        if not white_balance and adaptation.strip().lower() != "bradford":
+            parse_white_balance("D65", adaptation)  # reports an unknown --adaptation even without --white-balance
+        if false_colour_scale not in FALSE_COLOUR_SCALES:
+            raise SpectraceError(f"unknown scale '{false_colour_scale}' (use {' or '.join(FALSE_COLOUR_SCALES)})",
+                                 where="--false-color-scale")
+        if false_colour is not None and false_colour.suffix.lower() not in (".png", ".pdf", ".svg"):
+            raise SpectraceError(f"unknown figure format '{false_colour.suffix}' (use .png, .pdf or .svg)",
+                                 where="--false-color")
+        return cls(space, balance, false_colour, false_colour_scale)
+
+    def apply(self, image: Image) -> Image:
+        """Set the image's colour space and white balance (its film XYZ is untouched)."""
+        image.colour_space = self.colour_space
+        image.white_balance = self.white_balance
+        return image
+
+    def write_false_colour(self, image: Image, log: Callable[[str], None] = print) -> None:
+        if self.false_colour_path is None:
+            return
+        from spectrace.plots import plot_false_colour_luminance
+
+        low, high = plot_false_colour_luminance(image.xyz, self.false_colour_path, scale=self.false_colour_scale)
+        log(f"wrote {self.false_colour_path}: luminance, {self.false_colour_scale} scale {low:.4g}..{high:.4g} cd/m²")

@@ -1,0 +1,187 @@
+"""Mitsuba 3 XML import: Mitsuba's own Cornell box scene, imported, against its stated geometry; conversions against
+closed forms; unsupported plugins named; and, where the `mitsuba` package is installed (the `mitsuba` extra), the
+imported scene rendered by spectrace against Mitsuba's own spectral render of the same file."""
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spectrace.errors import SpectraceError
+from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.spectral import spectrum_to_xyz, xyz_to_linear_srgb
+from spectrace.spectral.blackbody import planck_radiance
+
+CORNELL_XML = Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml"
+
+
+def _write(folder: Path, body: str, sensor: str | None = None) -> Path:
+    sensor = sensor or """<sensor type="perspective"><float name="fov" value="45"/>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film></sensor>"""
+    path = folder / "scene.xml"
+    path.write_text(f'<scene version="3.0.0">\n{sensor}\n{body}\n</scene>\n')
+    return path
+
+
+def test_cornell_box_geometry_and_light(device):
+    scene = load_mitsuba_scene(CORNELL_XML, parameters={"resx": "16", "resy": "16"})
+    assert (scene.width, scene.height, scene.spp, scene.max_depth) == (16, 16, 64, 8)
+    assert scene.camera.origin == pytest.approx((0, 0, 3.9)) and scene.camera.fov_degrees == pytest.approx(39.3077)
+    light = next(shape for shape in scene.shapes if shape.emitter is not None)
+    # Mitsuba's rectangle is [-1, 1]² at z = 0 facing +z; scaled by (0.23, 0.19) and turned 90° about x it faces
+    # down (-y) at y = 0.99.
+    assert light.mesh.area() == pytest.approx(4 * 0.23 * 0.19, rel=1e-6)
+    v0, v1, v2 = light.mesh.triangles()
+    normal = np.cross(v1 - v0, v2 - v0)[0]
+    np.testing.assert_allclose(normal / np.linalg.norm(normal), (0, -1, 0), atol=1e-6)
+    np.testing.assert_allclose(light.mesh.vertices[:, 1], 0.99, atol=1e-6)
+    # RGB radiance is uplifted so that its linear sRGB is the file's triple (18.387, 13.9873, 6.75357).
+    rgb = xyz_to_linear_srgb(spectrum_to_xyz(light.emitter.radiance))
+    np.testing.assert_allclose(rgb, (18.387, 13.9873, 6.75357), rtol=1e-4)
+    # Five walls: the faces of [-1, 1]³; the large box: a cube scaled by 0.61 in y, moved to y = -0.4, so it spans
+    # y = -1.01..0.21 (it reaches 1 cm into the floor in Mitsuba's scene too).
+    shapes = {shape.name: shape.mesh.vertices for shape in scene.shapes}
+    assert len(shapes) == 8
+    for wall in ("floor", "ceiling", "back", "green-wall", "red-wall"):
+        assert np.abs(shapes[wall]).max() == pytest.approx(1.0, abs=1e-6)
+    assert shapes["large-box"][:, 1].min() == pytest.approx(-1.01, abs=1e-6)
+    assert shapes["large-box"][:, 1].max() == pytest.approx(0.21, abs=1e-6)
+
+
+def test_import_command_writes_a_scene_that_renders(tmp_path):
+    out = tmp_path / "imported" / "cornell.toml"
+    run = [sys.executable, "-m", "spectrace"]
+    result = subprocess.run([*run, "import-mitsuba", str(CORNELL_XML), "-o", str(out), "-D", "spp=2"],
+                            capture_output=True, text=True, env=os.environ.copy(), timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert "reconstruction filter 'gaussian'" in result.stderr  # a difference spectrace reports, not hides
+    assert "spp = 2" in out.read_text()
+    image = tmp_path / "cornell.png"
+    rendered = subprocess.run([*run, "render", str(out), "-o", str(image), "--width", "8", "--height", "8", "-q"],
+                              capture_output=True, text=True, env=os.environ.copy(), timeout=600)
+    assert rendered.returncode == 0, rendered.stderr
+
+
+def test_unsupported_plugins_are_all_named(tmp_path):
+    path = _write(tmp_path, """
+        <bsdf type="roughconductor" id="metal"/>
+        <shape type="serialized"><string name="filename" value="x.serialized"/></shape>
+        <shape type="cube"><ref id="metal"/></shape>
+        <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""")
+    with pytest.raises(SpectraceError) as error:
+        mitsuba_scene_data(path)
+    message = str(error.value)
+    for named in ("shape 'serialized' (line 6)", "bsdf 'roughconductor' (not yet in spectrace) (line 5)",
+                  "emitter 'envmap' (line 8)"):
+        assert named in message
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize("fov_xml, aspect_width, expected_tan_half_x", [
+    ('<float name="fov" value="40"/><string name="fov_axis" value="y"/>', 16, 2 * math.tan(math.radians(20))),
+    ('<float name="fov" value="40"/><string name="fov_axis" value="smaller"/>', 16, 2 * math.tan(math.radians(20))),
+    ('<float name="fov" value="40"/><string name="fov_axis" value="larger"/>', 16, math.tan(math.radians(20))),
+    ('<float name="fov" value="40"/><string name="fov_axis" value="diagonal"/>', 16,
+     math.tan(math.radians(20)) * 2 / math.sqrt(5)),
+    # 35 mm equivalent: the 36 x 24 mm frame's diagonal at 50 mm, then as a diagonal fov.
+    ('<string name="focal_length" value="50mm"/>', 16, math.hypot(36, 24) / 100 * 2 / math.sqrt(5)),
+    ('<float name="fov" value="40"/><string name="fov_axis" value="smaller"/>', 4, math.tan(math.radians(20))),
+])
+def test_field_of_view_conversions(tmp_path, fov_xml, aspect_width, expected_tan_half_x):
+    sensor = f"""<sensor type="perspective">{fov_xml}
+        <film type="hdrfilm"><integer name="width" value="{aspect_width}"/><integer name="height" value="8"/></film>
+        </sensor>"""
+    data, _ = mitsuba_scene_data(_write(tmp_path, '<shape type="cube"/>', sensor))
+    assert math.tan(math.radians(data["camera"]["fov"]) / 2) == pytest.approx(expected_tan_half_x, rel=1e-12)
+
+
+def test_lookat_sensor_and_transforms(tmp_path):
+    sensor = """<sensor type="perspective"><float name="fov" value="30"/>
+        <transform name="to_world"><lookat origin="1, 2, 3" target="1, 2, 10" up="0, 1, 0"/></transform></sensor>"""
+    body = """<shape type="sphere"><point name="center" x="1" y="2" z="9"/><float name="radius" value="0.5"/></shape>
+        <shape type="rectangle"><boolean name="flip_normals" value="true"/>
+            <transform name="to_world"><translate value="0 0 12"/></transform></shape>"""
+    scene = load_mitsuba_scene(_write(tmp_path, body, sensor))
+    assert scene.camera.origin == pytest.approx((1, 2, 3))
+    np.testing.assert_allclose(np.subtract(scene.camera.target, scene.camera.origin), (0, 0, 1), atol=1e-12)
+    assert (scene.width, scene.height) == (768, 576)  # hdrfilm's defaults
+    sphere, rectangle = scene.shapes
+    np.testing.assert_allclose(np.linalg.norm(sphere.mesh.vertices - (1, 2, 9), axis=1), 0.5, rtol=1e-12)
+    v0, v1, v2 = rectangle.mesh.triangles()
+    assert np.cross(v1 - v0, v2 - v0)[0][2] < 0  # flip_normals: the rectangle faces -z, toward the camera
+    assert scene.max_depth == -1  # no <integrator>: Mitsuba's path tracer, unbounded depth
+
+
+def test_spectra_and_lights(tmp_path):
+    (tmp_path / "lamp.spd").write_text("# wavelength value\n400 1.0\n500 2.0\n700 3.0\n")
+    body = """
+        <shape type="cube"><bsdf type="twosided"><bsdf type="diffuse">
+            <spectrum name="reflectance" value="400:0.1, 700:0.9"/></bsdf></bsdf></shape>
+        <emitter type="point"><point name="position" value="0, 3, 0"/>
+            <spectrum name="intensity" filename="lamp.spd"/></emitter>
+        <emitter type="directional"><vector name="direction" x="0" y="-1" z="0"/>
+            <spectrum type="blackbody" name="irradiance"><float name="temperature" value="5000"/></spectrum></emitter>
+        <emitter type="constant"><float name="radiance" value="0.25"/></emitter>"""
+    scene = load_mitsuba_scene(_write(tmp_path, body))
+    reflectance = scene.shapes[0].material.reflectance
+    assert reflectance.evaluate(550.0) == pytest.approx(0.5) and reflectance.evaluate(380.0) == pytest.approx(0.1)
+    point, distant, environment = scene.lights
+    assert point.position == (0, 3, 0) and point.intensity.evaluate(600.0) == pytest.approx(2.5)
+    # Mitsuba's black body is Planck's law in W/(m² sr nm): 2hc²/λ⁵ / (exp(hc/λkT) - 1), CODATA constants.
+    h, c, k = 6.62607015e-34, 299792458.0, 1.380649e-23
+    lam = 555e-9
+    planck = 2 * h * c**2 / lam**5 / math.expm1(h * c / (lam * k * 5000.0)) * 1e-9
+    assert distant.irradiance.evaluate(555.0) == pytest.approx(planck, rel=1e-9)
+    assert planck_radiance(np.array([555.0]), 5000.0)[0] == pytest.approx(planck, rel=1e-12)
+    assert distant.direction == pytest.approx((0, -1, 0))
+    assert environment.radiance.mean() == pytest.approx(0.25)
+
+
+def _mitsuba_scalar_spectral():
+    mitsuba = pytest.importorskip("mitsuba", reason="the Mitsuba comparison needs `pip install spectrace[mitsuba]`")
+    if "scalar_spectral" not in mitsuba.variants():
+        pytest.skip("this mitsuba build has no scalar_spectral variant")
+    mitsuba.set_variant("scalar_spectral")
+    return mitsuba
+
+
+def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device):
+    """Mitsuba's Cornell box (its own scene dict, written as XML by its own serialiser, at 32 x 32 with a box pixel
+    filter so both renderers average over the same pixel areas) rendered by both in spectral mode. Each renderer
+    gives REPLICAS independent images of REPLICA_SPP samples; the mean over 8 x 8-pixel blocks and over the whole
+    image, in linear sRGB, must agree within 5 standard errors of the difference (from the replicas' spread)."""
+    mi = _mitsuba_scalar_spectral()
+    replicas, replica_spp, size, block = 24, 8, 32, 8
+    scene_dict = mi.cornell_box()
+    scene_dict["sensor"]["film"].update({"width": size, "height": size, "rfilter": {"type": "box"}})
+    config = mi.parser.ParserConfig("scalar_spectral")
+    xml_path = tmp_path / "cornell_box.xml"
+    xml_path.write_text(mi.parser.write_string(mi.parser.parse_dict(config, scene_dict)))
+
+    mitsuba_scene = mi.load_file(str(xml_path))
+    by_mitsuba = np.stack([np.array(mi.render(mitsuba_scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
+
+    from spectrace.render.renderer import Renderer
+
+    renderer = Renderer(load_mitsuba_scene(xml_path), device)
+    sums = []
+    for replica in range(1, replicas + 1):  # consecutive sample ranges of one render are independent replicas
+        renderer.render(spp=replica * replica_spp, pass_spp=replica_spp)
+        sums.append(renderer.image().xyz.astype(np.float64) * renderer.samples_done)
+    xyz_replicas = np.diff(np.stack([np.zeros_like(sums[0]), *sums]), axis=0) / replica_spp
+    by_spectrace = xyz_to_linear_srgb(xyz_replicas)
+
+    def block_means(images: np.ndarray) -> np.ndarray:
+        n = size // block
+        return images.reshape(len(images), n, block, n, block, 3).mean(axis=(2, 4))
+
+    for reduce in (block_means, lambda images: images.mean(axis=(1, 2))):
+        ours, theirs = reduce(by_spectrace), reduce(by_mitsuba)
+        difference = ours.mean(axis=0) - theirs.mean(axis=0)
+        standard_error = np.sqrt(ours.var(axis=0, ddof=1) / replicas + theirs.var(axis=0, ddof=1) / replicas)
+        assert np.all(np.abs(difference) <= 5 * standard_error), np.max(np.abs(difference) / standard_error)
+    assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image

@@ -1,0 +1,219 @@
+"""Faults at run time: a render too large for the device is refused before anything is allocated, with the
+amount; OpenCL errors become one actionable line; non-finite samples are dropped, counted and reported; a stop
+request ends the render between passes with the true sample count."""
+
+import os
+import signal
+import sys
+
+import numpy as np
+import pyopencl as cl
+import pytest
+
+from spectrace import cli
+from spectrace.errors import SpectraceError
+from spectrace.geometry import primitives
+from spectrace.geometry.transforms import apply_transform
+from spectrace.render import memory
+from spectrace.render import renderer as renderer_module
+from spectrace.render.checkpoint import read_checkpoint
+from spectrace.render.memory import device_memory_need
+from spectrace.render.opencl_errors import describe_opencl_error
+from spectrace.render.renderer import Renderer
+from spectrace.render.stop_signals import StopOnSignals
+from spectrace.resources import scenes_dir
+from spectrace.scene import load_scene
+from spectrace.scene.limits import format_bytes
+from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
+from spectrace.spectral.spectrum import Spectrum
+
+
+@pytest.fixture(scope="module")
+def cornell():
+    return load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=12, height=10, spp=4)
+
+
+def _allocated_bytes(renderer) -> int:
+    total = 0
+    for value in vars(renderer).values():
+        for item in value if isinstance(value, list) else [value]:
+            if isinstance(item, cl.Buffer):
+                total += item.size
+    return total
+
+
+@pytest.mark.parametrize("spectral_bins", [0, 5])
+def test_the_memory_estimate_is_what_the_renderer_allocates(cornell, device, spectral_bins):
+    renderer = Renderer(cornell, device, spectral_bins=spectral_bins)
+    need = device_memory_need(renderer.buffers, 12 * 10, spectral_bins)
+    assert need.total_bytes == _allocated_bytes(renderer)
+    assert need.buffers["film"] == 12 * 10 * 16 and need.buffers["ray counts"] == 12 * 10 * 4
+
+
+class _PyopenclWith:
+    """pyopencl as the renderer module sees it, with some functions replaced (the probe that opens devices keeps
+    the real ones, so its per-process cache of results is not spoiled)."""
+
+    def __init__(self, **replaced):
+        self.__dict__.update(replaced)
+
+    def __getattr__(self, name):
+        return getattr(cl, name)
+
+
+def _refuse_allocations(monkeypatch):
+    def no_allocation(*args, **kwargs):
+        raise AssertionError("a device buffer was allocated before the memory check")
+
+    monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(Buffer=no_allocation))
+
+
+def test_a_render_larger_than_the_device_is_refused_before_allocating(cornell, device, monkeypatch):
+    big = cornell.with_overrides(width=4000, height=3000)
+    expected = Renderer(cornell, device)  # the scene part of the need, measured on a render that fits
+    scene_bytes = _allocated_bytes(expected) - 12 * 10 * (16 + 4) - 4  # less film, ray counts, 1-float band buffer
+    need_bytes = 4000 * 3000 * (16 + 4) + 4 + scene_bytes
+    monkeypatch.setattr(memory, "device_memory_limits", lambda device: (need_bytes - 1, need_bytes))
+    _refuse_allocations(monkeypatch)
+    with pytest.raises(SpectraceError) as caught:
+        Renderer(big, device)
+    message = str(caught.value)
+    amounts = "film 183.1 MiB, ray counts 45.8 MiB"  # 4000 x 3000 x 16 and x 4 bytes
+    assert f"the render needs {format_bytes(need_bytes)} of device memory ({amounts}" in message
+    assert f"but {device.report.key} has {format_bytes(need_bytes - 1)}" in message and "\n" not in message
+
+
+def test_a_buffer_above_the_per_allocation_limit_is_refused(cornell, device, monkeypatch):
+    monkeypatch.setattr(memory, "device_memory_limits", lambda device: (1 << 40, 100_000))
+    _refuse_allocations(monkeypatch)
+    refusal = r"film buffer needs 156\.2 KiB but .* allows at most 97\.7 KiB per buffer"  # 100 x 100 x 16 bytes
+    with pytest.raises(SpectraceError, match=refusal):
+        Renderer(cornell.with_overrides(width=100, height=100), device)
+
+
+def test_absurd_sizes_from_python_are_refused_with_their_memory(cornell, device):
+    with pytest.raises(SpectraceError, match=r"16384x16384 film .* would need 5\.0 GiB of device memory"):
+        Renderer(cornell.with_overrides(width=16384, height=16384), device)
+    with pytest.raises(SpectraceError, match="spp 2000000 exceeds the limit of 1048576"):
+        Renderer(cornell, device).render(spp=2_000_000)
+
+
+def _opencl_error(kind, status: str):
+    return kind(cl._cl._ErrorRecord("clEnqueueNDRangeKernel", getattr(cl.status_code, status), ""))  # noqa: SLF001
+
+
+@pytest.mark.parametrize("kind, status, advice", [
+    (cl.RuntimeError, "OUT_OF_RESOURCES", "lower --width/--height, or choose another device"),
+    (cl.MemoryError, "MEM_OBJECT_ALLOCATION_FAILURE", "lower --width/--height"),
+    (cl.LogicError, "DEVICE_NOT_AVAILABLE", "resume from the last checkpoint with --resume"),
+    (cl.LogicError, "INVALID_KERNEL_ARGS", "see `spectrace devices`"),
+])
+def test_enqueue_errors_become_one_actionable_line(cornell, device, monkeypatch, kind, status, advice):
+    renderer = Renderer(cornell, device)
+
+    def failing_enqueue(*args, **kwargs):
+        raise _opencl_error(kind, status)
+
+    monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(enqueue_nd_range_kernel=failing_enqueue))
+    with pytest.raises(SpectraceError) as caught:
+        renderer.run_pass(1)
+    message = str(caught.value)
+    assert message.startswith(f"OpenCL error while running a render pass on {device.report.key}: "
+                              f"clEnqueueNDRangeKernel failed: {status}")
+    assert advice in message and "\n" not in message
+
+
+def test_an_opencl_error_in_the_command_line_is_one_line(tmp_path, monkeypatch, capsys):
+    def failing_enqueue(*args, **kwargs):
+        raise _opencl_error(cl.RuntimeError, "OUT_OF_RESOURCES")
+
+    monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(enqueue_nd_range_kernel=failing_enqueue))
+    monkeypatch.setattr(sys, "argv", ["spectrace", "render", str(scenes_dir() / "cornell_box.toml"), "-o",
+                                      str(tmp_path / "x.png"), "--width", "8", "--height", "8", "-q"])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    stderr = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "Traceback" not in stderr
+    error_lines = [line for line in stderr.splitlines() if line.startswith("error: ")]
+    assert len(error_lines) == 1 and "OUT_OF_RESOURCES" in error_lines[0]
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_host_memory_exhaustion_is_described():
+    text = describe_opencl_error(MemoryError(), "reading the film", "some-device")
+    assert text == "out of host memory while reading the film on some-device: lower --width/--height"
+
+
+def _overflowing_light_scene() -> Scene:
+    """A camera looking straight at an emitter so bright (3e38 W/(m² sr nm), the float32 limit) that every
+    sample's XYZ estimate, L·cmf/p(λ), overflows to infinity."""
+    wall = apply_transform(primitives.rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]))
+    light = Shape(wall, DiffuseMaterial(Spectrum.constant(0.5)), emitter=AreaEmitter(Spectrum.constant(3e38)),
+                  name="too bright")
+    return Scene(camera=Camera(origin=(0, 0, 5), target=(0, 0, 0), fov_degrees=30), width=6, height=5,
+                 shapes=[light], spp=3, max_depth=1)
+
+
+def test_non_finite_samples_are_dropped_counted_and_reported(device, tmp_path, monkeypatch, capsys):
+    scene = _overflowing_light_scene()
+    image = Renderer(scene, device).render()
+    assert image.dropped_samples == 6 * 5 * 3  # every sample overflowed...
+    assert np.all(image.xyz == 0.0)  # ...and none reached the film
+    image.write(tmp_path / "dropped.png")
+    from PIL import Image as PILImage
+
+    with PILImage.open(tmp_path / "dropped.png") as written:
+        assert written.text["spectrace:dropped_samples"] == "90"
+
+    monkeypatch.setattr("spectrace.scene.load_scene", lambda path: scene)
+    monkeypatch.setattr(sys, "argv", ["spectrace", "render", "ignored.toml", "-o", str(tmp_path / "cli.png"), "-q"])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    assert exit_info.value.code == 0
+    assert "warning: 90 non-finite samples were dropped" in " ".join(capsys.readouterr().err.split())
+
+
+def test_a_stop_request_ends_the_render_between_passes_with_the_true_count(cornell, device):
+    asked = []
+
+    def stop_after_two_passes() -> bool:
+        asked.append(1)
+        return len(asked) > 2
+
+    stopped = Renderer(cornell, device).render(spp=100, pass_spp=3, should_stop=stop_after_two_passes)
+    assert stopped.spp == 6
+    assert np.array_equal(stopped.xyz, Renderer(cornell, device).render(spp=6).xyz)
+
+
+def test_the_first_signal_asks_to_stop_and_the_second_interrupts():
+    previous = signal.getsignal(signal.SIGTERM)
+    with StopOnSignals() as stop:
+        assert not stop()
+        os.kill(os.getpid(), signal.SIGTERM)
+        assert stop() and stop.signal_name == "SIGTERM"
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGINT)
+    assert signal.getsignal(signal.SIGTERM) is previous
+
+
+def test_an_opencl_error_mid_render_points_at_the_last_checkpoint(tmp_path, monkeypatch, capsys):
+    calls = []
+
+    def enqueue_then_fail(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 2:
+            raise _opencl_error(cl.LogicError, "DEVICE_NOT_AVAILABLE")
+        return cl.enqueue_nd_range_kernel(*args, **kwargs)
+
+    monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(enqueue_nd_range_kernel=enqueue_then_fail))
+    state = tmp_path / "state.npz"
+    monkeypatch.setattr(sys, "argv", ["spectrace", "render", str(scenes_dir() / "cornell_box.toml"), "-o",
+                                      str(tmp_path / "x.png"), "--width", "8", "--height", "8", "--spp", "1000",
+                                      "--checkpoint", str(state), "--checkpoint-interval", "0", "-q"])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    error_lines = [line for line in capsys.readouterr().err.splitlines() if line.startswith("error: ")]
+    assert exit_info.value.code == 2 and len(error_lines) == 1
+    saved = read_checkpoint(state).state.samples_done
+    assert saved > 0 and "DEVICE_NOT_AVAILABLE" in error_lines[0]
+    assert error_lines[0].endswith(f"{state} holds the last {saved} spp (continue with --resume)")
