@@ -11,6 +11,7 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import Device, open_device
+from spectrace.render.launch import meter_work_group
 from spectrace.render.device_types import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
 from spectrace.render.scene_buffers import build_scene_buffers, render_params
 from spectrace.scene.model import Scene
@@ -119,10 +120,10 @@ def measure(scene: Scene, meter: Meter, wavelengths_nm=DEFAULT_WAVELENGTHS_NM, s
     items = streams * len(wavelengths)
     means = np.empty(items, np.float32)
     out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, means.nbytes)
-    # Intel's CPU runtime (2026.2) miscompiles this kernel when it vectorises it 16 wide: lanes 12-15 of each
-    # group come back zero (PoCL is right on the same source). Work-groups of one item keep it scalar there.
-    local_size = (1,) if "intel" in device.report.runtime.lower() and device.report.device_type == "CPU" else None
-    cl.Kernel(program, "measure")(queue, (items,), local_size, *inputs, np.int32(len(wavelengths)), out)
+    # Groups of one on Intel's CPU runtime: its 16-wide build of this kernel is wrong (see render/launch.py).
+    local = meter_work_group(device)
+    cl.Kernel(program, "measure")(queue, (items,), (local,) if local else None, *inputs, np.int32(len(wavelengths)),
+                                  out)
     cl.enqueue_copy(queue, means, out)
     queue.finish()
 

@@ -10,6 +10,7 @@ from spectrace.device import Device, open_device
 from spectrace.errors import SpectraceError
 from spectrace.image import Image, SpectralBands
 from spectrace.render.checkpoint import RenderState
+from spectrace.render.launch import launch_shape, render_work_group
 from spectrace.render.memory import check_device_memory, device_memory_need
 from spectrace.render.opencl_errors import translate_opencl_errors
 from spectrace.render.scene_buffers import SceneBuffers, build_scene_buffers, render_params
@@ -86,7 +87,8 @@ class Renderer:
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
         self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts, self._spectral_film)
-        cl.enqueue_nd_range_kernel(queue, self.kernel, (self.pixel_count,), None)
+        global_size, local_size = launch_shape(self.pixel_count, render_work_group(self.device))
+        cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
         queue.finish()
         self.render_seconds += time.perf_counter() - start
         self.samples_done += sample_count
