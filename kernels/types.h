@@ -43,11 +43,19 @@ typedef struct {
     int light;      /* index into the light array, or -1 when the triangle does not emit */
 } TriangleInfo;
 
+/* One material; which fields a BSDF reads is listed beside each (docs/scene-format.md gives the scene keys). */
 typedef struct {
-    int type;                /* MATERIAL_* */
-    int reflectance_offset;  /* offset (floats) of the reflectance spectrum in the spectrum table */
+    float4 ior_coefficients_b;  /* IOR_SELLMEIER: B1, B2, B3 (x, y, z); IOR_CAUCHY: a, b (µm²) in x, y */
+    float4 ior_coefficients_c;  /* IOR_SELLMEIER: C1, C2, C3 (µm²) in x, y, z */
+    int type;                   /* MATERIAL_* */
+    int reflectance_offset;     /* diffuse, plastic: base albedo; mirror, retroreflector: reflectance;
+                                   conductor, dielectric: optional specular tint (MATERIAL_NO_SPECTRUM: none) */
+    int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction */
+    int k_offset;               /* conductor: imaginary part k(λ) (absorption) */
+    float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe) */
+    int ior_model;              /* IOR_*: dielectric interior, plastic coating */
+    float ior;                  /* IOR_CONSTANT: interior index relative to the exterior */
     int pad0;
-    int pad1;
 } Material;
 
 #define LIGHT_TRIANGLE 0     /* an emitting triangle of an area light: radiance, W/(m² sr nm) */

@@ -40,7 +40,19 @@ def _struct(fields: list[tuple[str, object]], itemsize: int) -> np.dtype:
 TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4")], 8)
 
 MATERIAL_DTYPE = _struct(
-    [("type", "<i4"), ("reflectance_offset", "<i4"), ("pad0", "<i4"), ("pad1", "<i4")], 16
+    [
+        ("ior_coefficients_b", ("<f4", (4,))),
+        ("ior_coefficients_c", ("<f4", (4,))),
+        ("type", "<i4"),
+        ("reflectance_offset", "<i4"),
+        ("eta_offset", "<i4"),
+        ("k_offset", "<i4"),
+        ("alpha", "<f4"),
+        ("ior_model", "<i4"),
+        ("ior", "<f4"),
+        ("pad0", "<i4"),
+    ],
+    64,
 )
 
 LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP = range(6)

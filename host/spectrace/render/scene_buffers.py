@@ -16,6 +16,7 @@ from spectrace.render.device_types import (
     LIGHT_TRIANGLE,
     MATERIAL_DIFFUSE,
     MATERIAL_DTYPE,
+    MATERIAL_NO_SPECTRUM,
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
 )
@@ -59,7 +60,11 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         key = id(shape.material)
         if key not in material_index:
             material_index[key] = len(material_rows)
-            material_rows.append((MATERIAL_DIFFUSE, table.add(shape.material.reflectance), 0, 0))
+            row = np.zeros((), MATERIAL_DTYPE)
+            row["type"] = MATERIAL_DIFFUSE
+            row["reflectance_offset"] = table.add(shape.material.reflectance)
+            row["eta_offset"] = row["k_offset"] = MATERIAL_NO_SPECTRUM
+            material_rows.append(row)
         v0, v1, v2 = shape.mesh.triangles()
         v0s.append(v0), v1s.append(v1), v2s.append(v2), uvs.append(shape.mesh.triangle_uvs())
         tri_material.append(np.full(len(v0), material_index[key], np.int32))
