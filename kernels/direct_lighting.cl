@@ -29,13 +29,15 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
     int to_infinity = isinf(ls.distance);
     float3 to = ls.point;
     if (light->type == LIGHT_TRIANGLE) to = offset_ray_origin(ls.point, ls.normal, -ls.wi);
-    if (scene_occluded(scene, from, to, ls.wi, to_infinity, rays_traced)) return (float4)(0.0f);
+    /* Not scene_occluded: index-matched medium boundaries let light through, attenuated by the medium. */
+    float4 transmittance = scene_transmittance(scene, w, from, to, ls.wi, to_infinity, rays_traced);
+    if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
 
     float weight = 1.0f;
     if (use_mis && !ls.is_delta) {
         weight = power_heuristic(ls.pdf, material_pdf(material, scene->spectra, w, n_geometric, wo, ls.wi));
     }
-    return f_cos * ls.arriving * (weight / ls.pdf);
+    return f_cos * ls.arriving * transmittance * (weight / ls.pdf);
 }
 
 #endif

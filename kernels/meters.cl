@@ -21,9 +21,12 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
         if (sample_light(light, &buffers, w, p, u_light, &ls)) {
             float cos_i = dot(n, ls.wi);
             float3 to = light->type == LIGHT_TRIANGLE ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
-            if (cos_i > 0.0f && !scene_occluded(scene, p, to, ls.wi, isinf(ls.distance), rays_traced)) {
+            float4 transmittance = cos_i > 0.0f
+                                 ? scene_transmittance(scene, w, p, to, ls.wi, isinf(ls.distance), rays_traced)
+                                 : (float4)(0.0f);
+            if (any(transmittance != (float4)(0.0f))) {
                 float weight = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, cos_i * INV_PI);
-                reflected += ls.arriving * (cos_i * INV_PI * weight / ls.pdf);
+                reflected += transmittance * ls.arriving * (cos_i * INV_PI * weight / ls.pdf);
             }
         }
     }
@@ -39,6 +42,7 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
         s.previous_point = p;
         s.segments = 1;
         s.secondary_terminated = 0;
+        s.medium = -1;
         reflected += continue_path(scene, w, sampler, s, rays_traced);
     }
     return M_PI_F * reflected;
@@ -50,12 +54,13 @@ __kernel void measure(__global const RenderParams *params, __global const BVHNod
                       __global const Material *materials, __global const Light *lights,
                       __global const float *light_cdf, __global const float *spectra,
                       __global const float4 *texels, __global const float *map_cdf,
-                      __global const MeterParams *meter, __global const float *wavelengths, int wavelength_count,
+                      __global const Medium *media, __global const MeterParams *meter,
+                      __global const float *wavelengths, int wavelength_count,
                       __global float *item_means)
 {
     int item = get_global_id(0);
     Scene scene = {params, nodes,     triangle_vertices, triangle_uvs, triangle_info, materials,
-                   lights, light_cdf, spectra,           texels,       map_cdf};
+                   lights, light_cdf, spectra,           texels,       map_cdf,   media};
     SampledWavelengths w = fixed_wavelengths((float4)(wavelengths[item % wavelength_count]));
     uint rays_traced = 0;
     float sum = 0.0f;

@@ -17,6 +17,7 @@ typedef struct {
     float3 previous_point;
     int segments;            /* the segment `ray` is: 1 for a camera ray */
     int secondary_terminated;
+    int medium;              /* index of the medium `ray` travels in, -1 for none (kernels/medium.cl) */
 } PathState;
 
 inline PathState camera_path(Ray ray)
@@ -29,6 +30,7 @@ inline PathState camera_path(Ray ray)
     s.previous_point = ray.origin;
     s.segments = 1;
     s.secondary_terminated = 0;
+    s.medium = -1;  /* cameras and sensors stand outside every medium */
     return s;
 }
 
@@ -46,6 +48,54 @@ inline int max_segments(__global const RenderParams *params)
     return params->max_depth < 0 ? UNBOUNDED_DEPTH : params->max_depth;
 }
 
+/* Russian roulette once `segments` bounces have happened (Mitsuba 3's rr_depth): 0 ends the path. */
+inline int survives_russian_roulette(PathState *s, __global const RenderParams *params, float u_rr)
+{
+    if (s->segments < params->rr_depth) return 1;
+    float4 t = s->throughput;
+    float q = fmin(fmax(fmax(t.x, t.y), fmax(t.z, t.w)), 0.95f);
+    if (!(u_rr < q)) return 0;
+    s->throughput /= q;
+    return 1;
+}
+
+/* At a material-less (index-matched) medium boundary the ray goes on unchanged into or out of the shape's
+ * interior: no vertex, and the segment it is goes on too. */
+inline void cross_null_boundary(PathState *s, TriangleInfo info, float3 p, float3 n)
+{
+    s->medium = medium_beyond(info.interior, n, s->ray.direction);
+    s->ray.origin = offset_ray_origin(p, n, s->ray.direction);
+}
+
+/* Inside a medium: the flight toward the surface at hit_t may end at a scattering point instead. Returns 1 when
+ * it did and the path goes on from there (a new segment, drawn from the phase function), 0 otherwise; *ended
+ * says the path must stop (scattered on its last allowed segment, or killed by Russian roulette). */
+inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                             float hit_t, int last_segment, int *ended)
+{
+    *ended = 0;
+    if (s->medium < 0) return 0;
+    __global const Medium *medium = &scene->media[s->medium];
+    float u_lane = sample_1d(sampler);
+    float u_distance = sample_1d(sampler);
+    FreeFlight flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane,
+                                             u_distance);
+    s->throughput *= flight.weight;
+    if (!flight.scattered) return 0;
+    if (s->segments >= last_segment) {
+        *ended = 1;
+        return 1;
+    }
+    float3 x = s->ray.origin + flight.distance * s->ray.direction;
+    s->ray.direction = sample_henyey_greenstein(s->ray.direction, medium->g, sample_2d(sampler));
+    s->ray.origin = x;
+    s->previous_point = x;
+    s->previous_delta = 1;  /* no next-event estimation in media: light the next segment finds weighs fully */
+    *ended = !survives_russian_roulette(s, scene->params, sample_1d(sampler))
+          || all(s->throughput == (float4)(0.0f));
+    return 1;
+}
+
 /* Radiance carried back along the path from state `s` onward, including emission met by s.ray. */
 inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState s,
                             uint *rays_traced)
@@ -53,9 +103,14 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
     __global const RenderParams *params = scene->params;
     int last_segment = max_segments(params);
     float4 radiance = (float4)(0.0f);
+    int null_crossings = 0, ended = 0;
 
     for (; s.segments <= last_segment; ++s.segments) {
         Hit hit = scene_intersect(scene, s.ray, rays_traced);
+        if (scatter_in_medium(scene, w, sampler, &s, hit.t, last_segment, &ended)) {
+            if (ended) break;
+            continue;
+        }
         if (hit.triangle < 0) {
             if (params->environment_light >= 0) {
                 __global const Light *env = &scene->lights[params->environment_light];
@@ -83,6 +138,12 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
             }
             radiance += s.throughput * emitted * weight;
         }
+        if (info.material == TRIANGLE_NO_MATERIAL) {
+            if (++null_crossings > MAX_NULL_CROSSINGS) break;
+            cross_null_boundary(&s, info, p, n);
+            --s.segments;  /* undo the loop's count: the segment goes on */
+            continue;
+        }
         if (s.segments >= last_segment) break;
 
         __global const Material *material = &scene->materials[info.material];
@@ -98,15 +159,9 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
         if (bs.terminate_secondary) terminate_secondary_wavelengths(&s);
         s.previous_pdf = bs.pdf;
         s.previous_delta = bs.is_delta;
+        s.medium = medium_beyond(info.interior, n, bs.wi);
 
-        /* Russian roulette once `segments` bounces have happened (Mitsuba 3's rr_depth). */
-        float u_rr = sample_1d(sampler);
-        if (s.segments >= params->rr_depth) {
-            float4 t = s.throughput;
-            float q = fmin(fmax(fmax(t.x, t.y), fmax(t.z, t.w)), 0.95f);
-            if (!(u_rr < q)) break;
-            s.throughput /= q;
-        }
+        if (!survives_russian_roulette(&s, params, sample_1d(sampler))) break;
         if (all(s.throughput == (float4)(0.0f))) break;
 
         s.previous_point = p;

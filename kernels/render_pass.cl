@@ -37,13 +37,13 @@ __kernel void render_pass(__global const RenderParams *params, __global const BV
                           __global const Material *materials, __global const Light *lights,
                           __global const float *light_cdf, __global const float *spectra,
                           __global const float4 *texels, __global const float *map_cdf,
-                          __global const float4 *cmf, __global float4 *film, __global uint *ray_counts,
+                          __global const Medium *media, __global const float4 *cmf, __global float4 *film, __global uint *ray_counts,
                           __global float *spectral_film)
 {
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
     Scene scene = {params, nodes,     triangle_vertices, triangle_uvs, triangle_info, materials,
-                   lights, light_cdf, spectra,           texels,       map_cdf};
+                   lights, light_cdf, spectra,           texels,       map_cdf,   media};
     int pixel_x = pixel % params->width;
     int pixel_y = pixel / params->width;
 

@@ -5,6 +5,7 @@
 #include "types.h"
 #include "bvh.cl"
 #include "lights.cl"
+#include "medium.cl"
 
 typedef struct {
     __global const RenderParams *params;
@@ -18,6 +19,7 @@ typedef struct {
     __global const float *spectra;
     __global const float4 *texels;  /* images of environment maps and textured emitters (a dummy texel if none) */
     __global const float *map_cdf;
+    __global const Medium *media;
 } Scene;
 
 inline LightBuffers light_buffers(const Scene *scene)
@@ -60,6 +62,56 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
         t_max = length_d * 0.9999f;  /* stop just short of the light's own surface */
     }
     return trace_bvh(scene->nodes, scene->triangle_vertices, shadow, t_max, 1).triangle >= 0;
+}
+
+/* The fraction of light per wavelength that crosses the same segment as scene_occluded: 0 when a surface blocks
+ * it, else exp(−Σ σt·length) over the media whose material-less (index-matched) boundaries it passes, so shadow
+ * rays see what a path would (Beer–Lambert). Each stretch's medium follows from the boundary that ends it:
+ * leaving a shape along its outward normal means the stretch was inside the shape. */
+inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *w, float3 from, float3 to,
+                                  float3 direction, int to_infinity, uint *rays_traced)
+{
+    if (scene->params->medium_count == 0) {
+        return scene_occluded(scene, from, to, direction, to_infinity, rays_traced) ? (float4)(0.0f)
+                                                                                     : (float4)(1.0f);
+    }
+    if (scene->params->triangle_count == 0) return (float4)(1.0f);
+    Ray segment;
+    segment.origin = from;
+    float t_end = INFINITY;  /* along the whole segment, from `from` */
+    if (to_infinity) {
+        segment.direction = direction;
+    } else {
+        float3 d = to - from;
+        float length_d = length(d);
+        if (!(length_d > 0.0f)) return (float4)(1.0f);
+        segment.direction = d / length_d;
+        t_end = length_d * 0.9999f;  /* stop just short of the light's own surface */
+    }
+    float4 optical_depth = (float4)(0.0f);
+    int medium_ahead = -1;
+    float t_origin = 0.0f;
+    for (int crossing = 0; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
+        *rays_traced += 1;
+        Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, segment, fmax(t_end - t_origin, 0.0f), 0);
+        if (hit.triangle < 0) {
+            if (medium_ahead < 0) return exp(-optical_depth);
+            if (isinf(t_end)) return (float4)(0.0f);  /* a leak out of a closed medium: light cannot get through */
+            float4 sigma_t = medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w);
+            return exp(-(optical_depth + sigma_t * fmax(t_end - t_origin, 0.0f)));
+        }
+        TriangleInfo info = scene->triangle_info[hit.triangle];
+        if (info.material != TRIANGLE_NO_MATERIAL) return (float4)(0.0f);
+        float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
+        if (dot(n, segment.direction) > 0.0f && info.interior >= 0) {
+            optical_depth += medium_sigma_t(&scene->media[info.interior], scene->spectra, w) * hit.t;
+        }
+        medium_ahead = medium_beyond(info.interior, n, segment.direction);
+        float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+        segment.origin = offset_ray_origin(p, n, segment.direction);
+        t_origin = dot(segment.origin - from, segment.direction);
+    }
+    return (float4)(0.0f);
 }
 
 #endif

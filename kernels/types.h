@@ -39,9 +39,24 @@ typedef struct {
 
 /* Per-triangle shading data, in BVH leaf order. */
 typedef struct {
-    int material;   /* index into the material array */
+    int material;   /* index into the material array; TRIANGLE_NO_MATERIAL on an index-matched medium boundary */
     int light;      /* index into the light array, or -1 when the triangle does not emit */
+    int interior;   /* index into the medium array: the medium filling the closed shape this triangle bounds, on
+                       the side opposite its geometric normal (the winding's back side); -1 when none */
+    int pad0;
 } TriangleInfo;
+
+/* TriangleInfo.material of a boundary with no surface: rays cross it unchanged (docs/media.md). */
+#define TRIANGLE_NO_MATERIAL (-1)
+
+/* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already
+ * multiplied by the scene's `scale`, in 1/scene unit. */
+typedef struct {
+    int sigma_a_offset;  /* absorption coefficient σa(λ) */
+    int sigma_s_offset;  /* scattering coefficient σs(λ) */
+    float g;             /* Henyey–Greenstein asymmetry parameter in (−1, 1); 0 = isotropic */
+    int pad0;
+} Medium;
 
 /* One material; which fields a BSDF reads is listed beside each (docs/scene-format.md gives the scene keys). */
 typedef struct {
@@ -104,7 +119,7 @@ typedef struct {
     int seed;
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
-    int pad0;
+    int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
     int pad1;
 } RenderParams;
 

@@ -13,9 +13,14 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
     int last_segment = max_segments(params);
     PathState s = camera_path(ray);
     float4 radiance = (float4)(0.0f);
+    int null_crossings = 0;
 
     for (; s.segments <= last_segment; ++s.segments) {
         Hit hit = scene_intersect(scene, s.ray, rays_traced);
+        /* The local model carries only the light a medium does not scatter: its transmittance to the surface. */
+        if (s.medium >= 0) {
+            s.throughput *= beer_lambert(medium_sigma_t(&scene->media[s.medium], scene->spectra, w), hit.t);
+        }
         if (hit.triangle < 0) {
             if (params->environment_light >= 0) {
                 __global const Light *env = &scene->lights[params->environment_light];
@@ -34,6 +39,12 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
                                                                   triangle_uv(scene->triangle_uvs, hit.triangle,
                                                                               hit.b12));
         }
+        if (info.material == TRIANGLE_NO_MATERIAL) {
+            if (++null_crossings > MAX_NULL_CROSSINGS) break;
+            cross_null_boundary(&s, info, p, n);
+            --s.segments;  /* undo the loop's count: the segment goes on */
+            continue;
+        }
         if (s.segments >= last_segment) break;
 
         __global const Material *material = &scene->materials[info.material];
@@ -49,6 +60,7 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
         s.throughput *= bs.weight;
         if (bs.terminate_secondary) terminate_secondary_wavelengths(&s);
         if (all(s.throughput == (float4)(0.0f))) break;
+        s.medium = medium_beyond(info.interior, n, bs.wi);
         s.ray.origin = offset_ray_origin(p, n, bs.wi);
         s.ray.direction = bs.wi;
     }

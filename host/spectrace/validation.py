@@ -23,12 +23,14 @@ from spectrace.scene.model import (
     ConstantEnvironment,
     DiffuseMaterial,
     DistantLight,
+    Medium,
     PointLight,
     Scene,
     Shape,
     SpotLight,
 )
-from spectrace.spectral.colorimetry import xyz_to_xy
+from spectrace.spectral.colorimetry import cmf_table_normalised, xyz_to_xy
+from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.illuminants import d65_normalised
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.uplift import uplift_reflectance
@@ -202,6 +204,104 @@ def local_versus_global(device: Device) -> list[Check]:
                   float("nan"), share, 0.0, "fraction", reported_only=True)]
 
 
+# A scattering coefficient that varies with the wavelength (1/m), so the four wavelengths of a path see different
+# media and the random walk's weighting across them is exercised: from 0.5 to 2 times its mean.
+def _wavy_coefficient(mean: float) -> Spectrum:
+    return Spectrum(mean * (1.25 + 0.75 * np.sin((GRID_NM - 360.0) / 45.0)), name=f"wavy, mean {mean}")
+
+
+def _film_y(values_on_grid: np.ndarray) -> float:
+    """Film Y of a spectral radiance on the grid: ∫ L ȳ dλ / ∫ ȳ (trapezoid on the 1 nm grid, as the film)."""
+    ybar = cmf_table_normalised()[:, 1]
+    return float(np.trapezoid(values_on_grid * ybar, GRID_NM))
+
+
+def _mean_y(scene: Scene, device: Device) -> tuple[float, float]:
+    """Image mean of Y and its standard error (pixels are independent samples)."""
+    y = Renderer(scene, device).render().xyz[..., 1].astype(np.float64).ravel()
+    return float(y.mean()), float(y.std(ddof=1) / np.sqrt(y.size))
+
+
+def medium_furnace(device: Device) -> list[Check]:
+    """A closed, index-matched sphere of a medium that only scatters (σa = 0), in a uniform environment, scatters
+    light around but loses none: it renders as the environment, whatever σs(λ) and the phase function.
+
+    At one wavelength every path that leaves the sphere carries exactly k (a scattering weighs σs/σt = 1), so with
+    Russian roulette off the meter's estimate has no noise: the check is exact up to float rounding. The image
+    (four wavelengths per path, weighted against each other, Russian roulette on) is a Monte Carlo estimate."""
+    k = 1.0
+    environment = ConstantEnvironment(Spectrum.constant(k))
+    checks = []
+    for mean_sigma_s, g in ((0.5, 0.0), (3.0, 0.0), (3.0, 0.8), (3.0, -0.5)):
+        medium = Medium(sigma_a=Spectrum.zeros(), sigma_s=_wavy_coefficient(mean_sigma_s), g=g)
+        sphere = Shape(mesh=primitives.sphere(3), material=None, interior=medium)
+        # Unbounded depth without Russian roulette: the walk ends when it leaves (1024 segments at most, far
+        # beyond what an optical radius of 6 needs).
+        no_roulette = _scene(shapes=[sphere], lights=[environment]).with_overrides(rr_depth=2000)
+        reading = measure(no_roulette,
+                          RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)), wavelengths_nm=[450.0, 650.0],
+                          streams=32, samples_per_item=32, device=device)
+        for lam, value, se in zip(reading.wavelengths_nm, reading.spectral, reading.spectral_standard_error):
+            checks.append(Check("medium furnace", f"albedo-1 medium sphere renders as k: σs(λ) = "
+                                f"{mean_sigma_s * (1.25 + 0.75 * np.sin((lam - 360.0) / 45.0)):.3g}/m, g = {g:g}, "
+                                f"λ = {lam:g} nm", k, value, se, "W/(m² sr nm)"))
+    # An image samples four different wavelengths per path, so each free flight serves four σt at once.
+    medium = Medium(sigma_a=Spectrum.zeros(), sigma_s=_wavy_coefficient(1.0), g=0.3)
+    sphere = Shape(mesh=primitives.sphere(3), material=None, interior=medium)
+    camera = Camera(origin=(0.0, 0.0, -3.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0)
+    scene = Scene(camera=camera, width=16, height=16, shapes=[sphere], lights=[environment], max_depth=-1, spp=16,
+                  seed=5)
+    mean, se = _mean_y(scene, device)
+    checks.append(Check("medium furnace", "the same in an image: 4 wavelengths per path share each free flight "
+                        "(film Y = k)", k, mean, se, "Y"))
+    return checks
+
+
+def beer_lambert(device: Device) -> list[Check]:
+    """Light crossing a slab of thickness d unscattered keeps exp(−σt(λ) d) of its radiance: for a pure absorber
+    (σs = 0) that is all that arrives; for a scattering slab it is what arrives along a single segment
+    (max_depth 1), which the distance sampling must reproduce."""
+    k, thickness = 1.0, 0.5
+    environment = ConstantEnvironment(Spectrum.constant(k))
+    slab = apply_transform(primitives.cube(), transform_matrix([{"scale": [3.0, 3.0, thickness / 2]}],
+                                                               where="validation"))
+    wavelengths = np.array([450.0, 550.0, 650.0])
+    meter = RadianceMeter((0.1, -0.2, -3.0), (0.0, 0.0, 1.0))
+    checks = []
+    sigma_a = _wavy_coefficient(1.5)
+    for max_depth in (1, -1):
+        absorber = Shape(mesh=slab, material=None, interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()))
+        reading = measure(_scene(shapes=[absorber], lights=[environment], max_depth=max_depth), meter,
+                          wavelengths_nm=wavelengths, streams=4, samples_per_item=1, device=device)
+        for lam, value, se, sa in zip(wavelengths, reading.spectral, reading.spectral_standard_error,
+                                      sigma_a.evaluate(wavelengths)):
+            checks.append(Check("Beer-Lambert", f"absorbing slab: L = k exp(−σa d), σa = {sa:.3g}/m, d = "
+                                f"{thickness} m, λ = {lam:g} nm, max_depth {max_depth}", k * np.exp(-sa * thickness),
+                                value, se, "W/(m² sr nm)"))
+    sigma_s = _wavy_coefficient(1.0)
+    medium = Medium(sigma_a=sigma_a * 0.5, sigma_s=sigma_s, g=0.5)
+    scatterer = Shape(mesh=slab, material=None, interior=medium)
+    reading = measure(_scene(shapes=[scatterer], lights=[environment], max_depth=1), meter,
+                      wavelengths_nm=wavelengths, streams=64, samples_per_item=64, device=device)
+    sigma_t = 0.5 * sigma_a.evaluate(wavelengths) + sigma_s.evaluate(wavelengths)
+    for lam, value, se, st in zip(wavelengths, reading.spectral, reading.spectral_standard_error, sigma_t):
+        checks.append(Check("Beer-Lambert", f"scattering slab, unscattered part (max_depth 1): L = k exp(−σt d), "
+                            f"σt = {st:.3g}/m, λ = {lam:g} nm", k * np.exp(-st * thickness), value, se,
+                            "W/(m² sr nm)"))
+    # In images (4 wavelengths per path), the global and the local model: film Y of k exp(−σa(λ) d). The narrow
+    # field of view keeps every pixel's path through the slab within 1e-4 of d.
+    camera = Camera(origin=(0.0, 0.0, -3.0), target=(0.0, 0.0, 0.0), fov_degrees=1.0)
+    absorber = Shape(mesh=slab, material=None, interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()))
+    expected = _film_y(k * np.exp(-sigma_a.values * thickness))
+    for integrator in ("path", "direct"):
+        scene = Scene(camera=camera, width=16, height=16, shapes=[absorber], lights=[environment], spp=4, seed=7,
+                      integrator=integrator)
+        mean, se = _mean_y(scene, device)
+        checks.append(Check("Beer-Lambert", f"absorbing slab in an image ({integrator}): film Y of k exp(−σa(λ) d)",
+                            expected, mean, se, "Y"))
+    return checks
+
+
 CASES: dict[str, Callable[[Device], list[Check]]] = {
     "inverse-square": inverse_square_and_cosine,
     "spot": spot_light_cone,
@@ -211,6 +311,8 @@ CASES: dict[str, Callable[[Device], list[Check]]] = {
     "flux": flux_meters,
     "neutral-white": neutral_white,
     "local-vs-global": local_versus_global,
+    "medium-furnace": medium_furnace,
+    "beer-lambert": beer_lambert,
 }
 
 

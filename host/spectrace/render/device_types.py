@@ -37,7 +37,11 @@ def _struct(fields: list[tuple[str, object]], itemsize: int) -> np.dtype:
     return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": itemsize})
 
 
-TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4")], 8)
+TRIANGLE_NO_MATERIAL = -1  # TriangleInfo.material of an index-matched medium boundary
+
+TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4"), ("interior", "<i4"), ("pad0", "<i4")], 16)
+
+MEDIUM_DTYPE = _struct([("sigma_a_offset", "<i4"), ("sigma_s_offset", "<i4"), ("g", "<f4"), ("pad0", "<i4")], 16)
 
 MATERIAL_DTYPE = _struct(
     [
@@ -97,7 +101,7 @@ RENDER_PARAMS_DTYPE = _struct(
         ("seed", "<i4"),
         ("sample_begin", "<i4"),
         ("sample_count", "<i4"),
-        ("pad0", "<i4"),
+        ("medium_count", "<i4"),
         ("pad1", "<i4"),
     ],
     112,
@@ -122,6 +126,7 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "BVHNode": BVH_NODE_DTYPE,
     "TriangleInfo": TRIANGLE_INFO_DTYPE,
     "Material": MATERIAL_DTYPE,
+    "Medium": MEDIUM_DTYPE,
     "Light": LIGHT_DTYPE,
     "RenderParams": RENDER_PARAMS_DTYPE,
     "MeterParams": METER_PARAMS_DTYPE,

@@ -115,7 +115,7 @@ def measure(scene: Scene, meter: Meter, wavelengths_nm=DEFAULT_WAVELENGTHS_NM, s
               for a in (render_params(scene, buffers, 0, 0), buffers.bvh.nodes, buffers.triangle_vertices,
                         buffers.triangle_uvs,
                         buffers.triangle_info, buffers.materials, buffers.lights, buffers.light_cdf, buffers.spectra,
-                        buffers.texels, buffers.map_cdf,
+                        buffers.texels, buffers.map_cdf, buffers.media,
                         _meter_params(meter, samples_per_item, seed), wavelengths)]
     items = streams * len(wavelengths)
     means = np.empty(items, np.float32)

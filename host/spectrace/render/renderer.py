@@ -59,7 +59,7 @@ class Renderer:
             cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
             for a in (b.bvh.nodes, b.triangle_vertices, b.triangle_uvs, b.triangle_info, b.materials, b.lights,
                       b.light_cdf,
-                      b.spectra, b.texels, b.map_cdf, b.cmf)
+                      b.spectra, b.texels, b.map_cdf, b.media, b.cmf)
         ]
         self.pixel_count = scene.width * scene.height
         self._film = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 16)

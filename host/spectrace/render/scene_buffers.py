@@ -17,8 +17,10 @@ from spectrace.render.device_types import (
     MATERIAL_DIFFUSE,
     MATERIAL_DTYPE,
     MATERIAL_NO_SPECTRUM,
+    MEDIUM_DTYPE,
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
+    TRIANGLE_NO_MATERIAL,
 )
 from spectrace.scene.model import ConstantEnvironment, DistantLight, EnvironmentMap, PointLight, Scene, SpotLight
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ, cmf_table_normalised
@@ -43,10 +45,12 @@ class SceneBuffers:
     map_cdf: np.ndarray  # marginal CDF over rows (H + 1), then each row's CDF (W + 1): see kernels/environment.cl
     spectra: np.ndarray  # float32 table
     cmf: np.ndarray  # (471, 4) float32: x̄, ȳ, z̄ / ∫ȳ
+    media: np.ndarray  # MEDIUM_DTYPE (one dummy entry when there are none)
+    medium_count: int
 
     def device_bytes(self) -> int:
         arrays = (self.bvh.nodes, self.triangle_vertices, self.triangle_info, self.materials, self.lights,
-                  self.light_cdf, self.spectra, self.cmf)
+                  self.light_cdf, self.spectra, self.cmf, self.media)
         return sum(a.nbytes for a in arrays)
 
 
@@ -54,11 +58,23 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     table = SpectrumTable()
     material_index: dict[int, int] = {}
     material_rows = []
-    v0s, v1s, v2s, uvs, tri_material, tri_emitter = [], [], [], [], [], []
+    v0s, v1s, v2s, uvs, tri_material, tri_emitter, tri_interior = [], [], [], [], [], [], []
     emitters = []
+    medium_index: dict[int, int] = {}
+    medium_rows = []
     for shape in scene.shapes:
+        interior = -1
+        if shape.interior is not None:
+            interior = medium_index.setdefault(id(shape.interior), len(medium_rows))
+            if interior == len(medium_rows):
+                medium_rows.append((table.add(shape.interior.sigma_a), table.add(shape.interior.sigma_s),
+                                    float(shape.interior.g), 0))
         key = id(shape.material)
-        if key not in material_index:
+        if shape.material is None:
+            if shape.interior is None:
+                raise SpectraceError(f"shape '{shape.name}' has neither a material nor an interior")
+            material_index[key] = TRIANGLE_NO_MATERIAL
+        elif key not in material_index:
             material_index[key] = len(material_rows)
             row = np.zeros((), MATERIAL_DTYPE)
             row["type"] = MATERIAL_DIFFUSE
@@ -68,6 +84,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         v0, v1, v2 = shape.mesh.triangles()
         v0s.append(v0), v1s.append(v1), v2s.append(v2), uvs.append(shape.mesh.triangle_uvs())
         tri_material.append(np.full(len(v0), material_index[key], np.int32))
+        tri_interior.append(np.full(len(v0), interior, np.int32))
         emitter_id = -1
         if shape.emitter is not None:
             emitter_id = len(emitters)
@@ -77,15 +94,16 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     if v0s and sum(len(v) for v in v0s):
         v0, v1, v2, uv = (np.concatenate(a) for a in (v0s, v1s, v2s, uvs))
         tri_material, tri_emitter = np.concatenate(tri_material), np.concatenate(tri_emitter)
+        tri_interior = np.concatenate(tri_interior)
         bvh = build_bvh(v0, v1, v2)
         order = bvh.prim_order
         v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
-        tri_material, tri_emitter = tri_material[order], tri_emitter[order]
+        tri_material, tri_emitter, tri_interior = tri_material[order], tri_emitter[order], tri_interior[order]
         scene_radius = 0.5 * float(np.linalg.norm(bvh.nodes[0]["bmax"] - bvh.nodes[0]["bmin"]))
     else:
         v0 = v1 = v2 = np.zeros((0, 3))
         uv = np.zeros((0, 3, 2))
-        tri_material = tri_emitter = np.zeros(0, np.int32)
+        tri_material = tri_emitter = tri_interior = np.zeros(0, np.int32)
         bvh = _empty_bvh()
         scene_radius = 1.0
     scene_radius = max(scene_radius, 1e-6)
@@ -173,6 +191,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     triangle_info = np.zeros(max(len(v0), 1), TRIANGLE_INFO_DTYPE)
     triangle_info["material"][: len(v0)] = tri_material
     triangle_info["light"][: len(v0)] = light_index
+    triangle_info["interior"] = -1
+    triangle_info["interior"][: len(v0)] = tri_interior
 
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
@@ -194,6 +214,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         map_cdf=map_cdf,
         spectra=table.data,
         cmf=cmf,
+        media=np.array(medium_rows, MEDIUM_DTYPE) if medium_rows else np.zeros(1, MEDIUM_DTYPE),
+        medium_count=len(medium_rows),
     )
 
 
@@ -249,4 +271,5 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["triangle_count"] = buffers.triangle_count
     params["seed"] = scene.seed
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
+    params["medium_count"] = buffers.medium_count
     return params

@@ -22,6 +22,7 @@ from spectrace.scene.model import (
     EmitterImage,
     EnvironmentMap,
     Light,
+    Medium,
     PointLight,
     Scene,
     Shape,
@@ -228,7 +229,7 @@ class _Resolver:
             if problem := limits.coordinates_problem(mesh.vertices):
                 culprit = "transform" if s.transform else "file" if s.type == "mesh" else "type"
                 raise SpectraceError(f"mesh has {problem}", where=self.where(f"{key}.{culprit}"))
-            if s.material not in materials:
+            if s.material is not None and s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
                 raise SpectraceError(f"undefined material '{s.material}'{hint}", where=self.where(f"{key}.material"))
@@ -243,8 +244,40 @@ class _Resolver:
                 else:
                     radiance = self.spectrum(s.emitter.radiance, radiance_key, emission=True)
                     emitter = AreaEmitter(radiance=radiance, two_sided=s.emitter.two_sided)
-            shapes.append(Shape(mesh=mesh, material=materials[s.material], emitter=emitter, name=s.name or f"{s.type}{i}"))
+            interior = self.interior(s.interior, f"{key}.interior") if s.interior is not None else None
+            shapes.append(Shape(mesh=mesh, material=materials[s.material] if s.material is not None else None,
+                                emitter=emitter, name=s.name or f"{s.type}{i}", interior=interior))
         return shapes
+
+    def interior(self, spec: schema.InteriorSpec, key: str) -> Medium:
+        """σa, σs in 1/scene unit: a preset's 1/mm table or the given spectra (no upper bound), times scale."""
+        from spectrace.spectral.media_presets import preset_coefficients
+
+        if spec.preset is not None:
+            sigma_a, sigma_s = preset_coefficients(spec.preset, spec.scale, where=self.where(f"{key}.preset"))
+        else:
+            sigma_a, sigma_s = (self.coefficient(given, f"{key}.{name}", spec.scale)
+                                for name, given in (("sigma_a", spec.sigma_a), ("sigma_s", spec.sigma_s)))
+        for name, spectrum in (("sigma_a", sigma_a), ("sigma_s", sigma_s)):
+            if problem := limits.spectrum_magnitude_problem(spectrum.values):
+                raise SpectraceError(problem, where=self.where(f"{key}.{name}"))
+        return Medium(sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "")
+
+    def coefficient(self, spec: schema.SpectrumSpec | None, key: str, scale: float) -> Spectrum:
+        """A medium coefficient, 1/scene unit: like an emission it has no upper bound (rgb: a smooth spectrum
+        reproducing the triple, see media_presets.coefficient_spectrum)."""
+        from spectrace.spectral.media_presets import coefficient_spectrum
+
+        if spec is None:
+            return Spectrum.zeros()
+        if spec.display is not None or spec.blackbody is not None:
+            raise SpectraceError("a medium coefficient takes rgb, value, spectrum, values or file",
+                                 where=self.where(key))
+        if spec.rgb is not None:
+            result = coefficient_spectrum(spec.rgb, where=self.where(f"{key}.rgb")).scaled(spec.scale)
+        else:
+            result = self.spectrum(spec, key, emission=True)
+        return result.scaled(scale) if scale != 1.0 else result
 
 
     def display_spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:

@@ -121,11 +121,23 @@ Light = PointLight | SpotLight | DistantLight | ConstantEnvironment | Environmen
 
 
 @dataclass(frozen=True)
+class Medium:
+    """A homogeneous participating medium filling a closed shape (docs/media.md): absorption σa(λ) and scattering
+    σs(λ) coefficients in 1/scene unit, and the Henyey–Greenstein asymmetry g in (−1, 1) (0: isotropic)."""
+
+    sigma_a: Spectrum
+    sigma_s: Spectrum
+    g: float = 0.0
+    name: str = ""
+
+
+@dataclass(frozen=True)
 class Shape:
     mesh: TriangleMesh  # world space
-    material: Material
+    material: Material | None  # None only with an interior: an index-matched boundary that rays cross unchanged
     emitter: AreaEmitter | None = None
     name: str = ""
+    interior: Medium | None = None  # fills the closed mesh, on the back side of its faces (outward winding)
 
 
 @dataclass(frozen=True)

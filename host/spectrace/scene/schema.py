@@ -168,11 +168,31 @@ class TransformStep(Strict):
         return self
 
 
+class InteriorSpec(Strict):
+    """A homogeneous medium filling a closed shape (docs/media.md): coefficients sigma_a, sigma_s in 1/scene unit
+    (each a spectrum; an omitted one is 0), or a measured `preset` (its table is in 1/mm); either way times
+    `scale`. g: Henyey–Greenstein asymmetry (0 isotropic, > 0 forward)."""
+
+    preset: str | None = None
+    sigma_a: SpectrumSpec | None = None
+    sigma_s: SpectrumSpec | None = None
+    scale: FiniteFloat = Field(default=1.0, gt=0.0, description="multiplies the coefficients")
+    g: FiniteFloat = Field(default=0.0, gt=-1.0, lt=1.0)
+
+    @model_validator(mode="after")
+    def _preset_or_coefficients(self) -> "InteriorSpec":
+        coefficients = self.sigma_a is not None or self.sigma_s is not None
+        if (self.preset is not None) == coefficients:
+            raise ValueError("give either preset or sigma_a and/or sigma_s")
+        return self
+
+
 class ShapeSpec(Strict):
     type: Literal["mesh", "rectangle", "cube", "sphere"]
     file: str | None = None
-    material: str
+    material: str | None = None
     emitter: EmitterSpec | None = None
+    interior: InteriorSpec | None = None
     transform: list[TransformStep] = []
     name: str | None = None
 
@@ -182,6 +202,10 @@ class ShapeSpec(Strict):
             raise ValueError("a mesh shape needs file")
         if self.type != "mesh" and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
+        if self.material is None and self.interior is None:
+            raise ValueError("a shape needs material (only a shape with an interior may omit it)")
+        if self.type == "rectangle" and self.interior is not None:
+            raise ValueError("a rectangle encloses no volume: an interior needs a closed shape")
         return self
 
 

@@ -1,0 +1,63 @@
+"""Measured media for subsurface scattering: Jensen et al. 2001's table (spectra/media/jensen2001.csv).
+
+The table gives the reduced scattering coefficient σs' = σs(1 − g) and the absorption coefficient σa in 1/mm at
+the red, green and blue of a colour camera. A preset uses them as an isotropic medium (g = 0, so σs = σs'), the
+similarity relation that keeps the diffusion-regime look (Wyman et al. 1989); each RGB triple becomes a smooth
+spectrum whose linear sRGB is that triple (`coefficient_spectrum`).
+"""
+
+import csv
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from spectrace.errors import SpectraceError
+from spectrace.resources import spectra_dir
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.uplift import uplift_reflectance
+
+PRESETS_FILE = "media/jensen2001.csv"
+
+
+@dataclass(frozen=True)
+class MediumPreset:
+    name: str
+    sigma_s_prime_per_mm: tuple[float, float, float]  # reduced scattering, R, G, B
+    sigma_a_per_mm: tuple[float, float, float]
+
+
+@cache
+def medium_presets() -> dict[str, MediumPreset]:
+    path = spectra_dir() / PRESETS_FILE
+    lines = [line for line in path.read_text(encoding="utf-8").splitlines() if line and not line.startswith("#")]
+    presets = {}
+    for row in csv.DictReader(lines):
+        values = [float(row[f"{q}_{c}"]) for q in ("sigma_s_prime", "sigma_a") for c in "rgb"]
+        presets[row["name"]] = MediumPreset(row["name"], tuple(values[:3]), tuple(values[3:]))
+    return presets
+
+
+def coefficient_spectrum(rgb, name: str = "", where: str | None = None) -> Spectrum:
+    """A smooth spectrum ≥ 0 with no upper bound whose linear sRGB under D65 is `rgb`: the bounded reflectance
+    uplift (Jakob & Hanika 2019) of rgb / (2 max), times 2 max, as pbrt-v4's RGBUnboundedSpectrum does; halving
+    keeps the fit away from the gamut's edge, where it would turn into a box."""
+    values = np.asarray(rgb, np.float64)
+    if values.shape != (3,) or not np.all(np.isfinite(values)) or np.any(values < 0):
+        raise SpectraceError(f"expected 3 finite coefficients >= 0, got {list(np.ravel(rgb))}", where=where)
+    peak = float(values.max())
+    if peak == 0.0:
+        return Spectrum.zeros(name=name)
+    return uplift_reflectance(values / (2.0 * peak), where=where)[0].scaled(2.0 * peak, name=name)
+
+
+def preset_coefficients(name: str, scale: float, where: str | None = None) -> tuple[Spectrum, Spectrum]:
+    """(σa, σs) of a preset in 1/scene unit: the table's 1/mm values times `scale`, the millimetres in one scene
+    unit (1000 for a scene in metres)."""
+    presets = medium_presets()
+    if name not in presets:
+        raise SpectraceError(f"unknown medium preset '{name}' (presets: {', '.join(presets)})", where=where)
+    preset = presets[name]
+    sigma_a = coefficient_spectrum(preset.sigma_a_per_mm, name=f"{name} sigma_a", where=where)
+    sigma_s = coefficient_spectrum(preset.sigma_s_prime_per_mm, name=f"{name} sigma_s", where=where)
+    return sigma_a.scaled(scale), sigma_s.scaled(scale)
