@@ -40,4 +40,27 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
     return f_cos * ls.arriving * transmittance * (weight / ls.pdf);
 }
 
+/* The same at a scattering point x inside a medium, for light that travelled along `travel` before scattering:
+ * the phase function takes the place of f·cos, and the shadow ray's transmittance includes the stretch inside
+ * the medium. MIS weighs it against phase-function sampling. */
+inline float4 estimate_direct_light_in_medium(const Scene *scene, const SampledWavelengths *w, Sampler *sampler,
+                                              float3 x, float3 travel, float g, uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    float u_pick = sample_1d(sampler);
+    float2 u_light = sample_2d(sampler);
+    if (params->light_count == 0) return (float4)(0.0f);
+    __global const Light *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
+    LightSample ls;
+    LightBuffers buffers = light_buffers(scene);
+    if (!sample_light(light, &buffers, w, x, u_light, &ls)) return (float4)(0.0f);
+    if (all(ls.arriving == (float4)(0.0f))) return (float4)(0.0f);
+    float phase = henyey_greenstein(dot(travel, ls.wi), g);
+    float3 to = light->type == LIGHT_TRIANGLE ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
+    float4 transmittance = scene_transmittance(scene, w, x, to, ls.wi, isinf(ls.distance), rays_traced);
+    if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
+    float weight = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, phase);
+    return ls.arriving * transmittance * (phase * weight / ls.pdf);
+}
+
 #endif

@@ -68,10 +68,11 @@ inline void cross_null_boundary(PathState *s, TriangleInfo info, float3 p, float
 }
 
 /* Inside a medium: the flight toward the surface at hit_t may end at a scattering point instead. Returns 1 when
- * it did and the path goes on from there (a new segment, drawn from the phase function), 0 otherwise; *ended
- * says the path must stop (scattered on its last allowed segment, or killed by Russian roulette). */
+ * it did and the path goes on from there (next-event estimation added to *radiance, then a new segment drawn
+ * from the phase function), 0 otherwise; *ended says the path must stop (scattered on its last allowed segment,
+ * or killed by Russian roulette). */
 inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
-                             float hit_t, int last_segment, int *ended)
+                             float hit_t, int last_segment, float4 *radiance, int *ended, uint *rays_traced)
 {
     *ended = 0;
     if (s->medium < 0) return 0;
@@ -87,10 +88,14 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
         return 1;
     }
     float3 x = s->ray.origin + flight.distance * s->ray.direction;
-    s->ray.direction = sample_henyey_greenstein(s->ray.direction, medium->g, sample_2d(sampler));
+    float3 travel = s->ray.direction;
+    *radiance += s->throughput * estimate_direct_light_in_medium(scene, w, sampler, x, travel, medium->g,
+                                                                 rays_traced);
+    s->ray.direction = sample_henyey_greenstein(travel, medium->g, sample_2d(sampler));
     s->ray.origin = x;
     s->previous_point = x;
-    s->previous_delta = 1;  /* no next-event estimation in media: light the next segment finds weighs fully */
+    s->previous_pdf = henyey_greenstein(dot(travel, s->ray.direction), medium->g);
+    s->previous_delta = 0;
     *ended = !survives_russian_roulette(s, scene->params, sample_1d(sampler))
           || all(s->throughput == (float4)(0.0f));
     return 1;
@@ -107,7 +112,7 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
 
     for (; s.segments <= last_segment; ++s.segments) {
         Hit hit = scene_intersect(scene, s.ray, rays_traced);
-        if (scatter_in_medium(scene, w, sampler, &s, hit.t, last_segment, &ended)) {
+        if (scatter_in_medium(scene, w, sampler, &s, hit.t, last_segment, &radiance, &ended, rays_traced)) {
             if (ended) break;
             continue;
         }

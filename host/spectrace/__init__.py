@@ -17,6 +17,7 @@ from spectrace.api import (
     constant_environment,
     diffuse,
     distant_light,
+    medium,
     mesh_from_trimesh,
     point_light,
     render,
@@ -30,7 +31,7 @@ from spectrace.api import (
 from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_white_balance
 from spectrace.errors import SpectraceError
 from spectrace.image import Image
-from spectrace.scene import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, load_scene
+from spectrace.scene import AreaEmitter, Camera, DiffuseMaterial, Medium, Scene, Shape, load_scene
 from spectrace.spectral.spectrum import Spectrum
 
 __version__ = "0.1.0"
@@ -44,6 +45,7 @@ __all__ = [
     "Shape",
     "DiffuseMaterial",
     "AreaEmitter",
+    "Medium",
     "SpectraceError",
     "Spectrum",
     "spectrum",
@@ -53,6 +55,7 @@ __all__ = [
     "transformed",
     "shape",
     "diffuse",
+    "medium",
     "area_emitter",
     "point_light",
     "spot_light",

@@ -30,6 +30,7 @@ from spectrace.scene.model import (
     ConstantEnvironment,
     DiffuseMaterial,
     DistantLight,
+    Medium,
     PointLight,
     Scene,
     Shape,
@@ -177,10 +178,52 @@ def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float =
     return AreaEmitter(radiance=_emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
 
 
-def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere"] | "trimesh.Trimesh", material,
-          emitter: AreaEmitter | None = None, transform: Iterable[Mapping[str, Any]] = (), name: str = "") -> Shape:
+def medium(sigma_a: SpectrumLike = 0.0, sigma_s: SpectrumLike = 0.0, scale: float = 1.0, g: float = 0.0,
+           preset: str | None = None) -> Medium:
+    """A homogeneous medium for a closed shape's `interior` (docs/media.md), as a scene file's `interior` key:
+    absorption σa(λ) and scattering σs(λ) in 1/scene unit (a linear sRGB triple becomes a smooth spectrum with
+    that colour, unbounded), or a measured `preset` ("skin1", "marble", "wholemilk", ...: Jensen et al. 2001,
+    in 1/mm); either times `scale`. g: Henyey–Greenstein asymmetry in (−1, 1), 0 isotropic."""
+    from spectrace.spectral.media_presets import coefficient_spectrum, preset_coefficients
+
+    if not (isinstance(scale, Real) and math.isfinite(scale) and scale > 0):
+        raise SpectraceError(f"scale must be a finite number > 0, got {scale!r}", where="scale")
+    if not (isinstance(g, Real) and -1.0 < g < 1.0):
+        raise SpectraceError(f"g must lie in (-1, 1), got {g!r}", where="g")
+    if preset is not None:
+        if not (_is_zero(sigma_a) and _is_zero(sigma_s)):
+            raise SpectraceError("give either preset or sigma_a/sigma_s", where="preset")
+        sigma_a_spectrum, sigma_s_spectrum = preset_coefficients(preset, float(scale), where="preset")
+        return Medium(sigma_a=sigma_a_spectrum, sigma_s=sigma_s_spectrum, g=float(g), name=preset)
+
+    def coefficient(source: SpectrumLike, what: str) -> Spectrum:
+        if isinstance(source, (tuple, list)) and len(source) == 3 and all(isinstance(c, Real) for c in source):
+            result = coefficient_spectrum(source, name=what, where=what)
+        else:
+            result = spectrum(source)
+        if result.min() < 0:
+            raise SpectraceError(f"a medium coefficient must not be negative (min {result.min():.4g})", where=what)
+        return result.scaled(float(scale))
+
+    return Medium(sigma_a=coefficient(sigma_a, "sigma_a"), sigma_s=coefficient(sigma_s, "sigma_s"), g=float(g))
+
+
+def _is_zero(source: SpectrumLike) -> bool:
+    return isinstance(source, Real) and source == 0
+
+
+def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere"] | "trimesh.Trimesh", material=None,
+          emitter: AreaEmitter | None = None, transform: Iterable[Mapping[str, Any]] = (), name: str = "",
+          interior: Medium | None = None) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
-    "cube" [-1, 1]³, "sphere" of radius 1), moved by `transform` steps (see `transformed`)."""
+    "cube" [-1, 1]³, "sphere" of radius 1), moved by `transform` steps (see `transformed`). `interior` (see
+    `medium`) fills a closed shape, whose faces must wind outward; without a material its boundary is
+    index-matched (rays cross it unchanged)."""
+    if material is None and interior is None:
+        raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
+    if interior is not None and not isinstance(interior, Medium):
+        raise SpectraceError(f"interior must be a Medium (see medium()), got {type(interior).__name__}",
+                             where="interior")
     if isinstance(geometry, str):
         if geometry not in BUILTIN_SHAPES:
             raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(BUILTIN_SHAPES)})")
@@ -190,7 +233,7 @@ def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere"] | "tri
         mesh = geometry
     else:
         mesh = mesh_from_trimesh(geometry)
-    return Shape(mesh=transformed(mesh, transform), material=material, emitter=emitter, name=name)
+    return Shape(mesh=transformed(mesh, transform), material=material, emitter=emitter, name=name, interior=interior)
 
 
 def _intensity(intensity: SpectrumLike | None, power_w: float | None, shape_spectrum: SpectrumLike | None,

@@ -226,9 +226,9 @@ def medium_furnace(device: Device) -> list[Check]:
     """A closed, index-matched sphere of a medium that only scatters (σa = 0), in a uniform environment, scatters
     light around but loses none: it renders as the environment, whatever σs(λ) and the phase function.
 
-    At one wavelength every path that leaves the sphere carries exactly k (a scattering weighs σs/σt = 1), so with
-    Russian roulette off the meter's estimate has no noise: the check is exact up to float rounding. The image
-    (four wavelengths per path, weighted against each other, Russian roulette on) is a Monte Carlo estimate."""
+    The meter (one wavelength per path) runs without Russian roulette, whose growing weights in a long walk would
+    make the standard error unreliable; the image (four wavelengths per path sharing each free flight, weighted
+    against each other) runs with it. Both use next-event estimation at every scattering point."""
     k = 1.0
     environment = ConstantEnvironment(Spectrum.constant(k))
     checks = []
@@ -240,7 +240,7 @@ def medium_furnace(device: Device) -> list[Check]:
         no_roulette = _scene(shapes=[sphere], lights=[environment]).with_overrides(rr_depth=2000)
         reading = measure(no_roulette,
                           RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)), wavelengths_nm=[450.0, 650.0],
-                          streams=32, samples_per_item=32, device=device)
+                          streams=64, samples_per_item=64, device=device)
         for lam, value, se in zip(reading.wavelengths_nm, reading.spectral, reading.spectral_standard_error):
             checks.append(Check("medium furnace", f"albedo-1 medium sphere renders as k: σs(λ) = "
                                 f"{mean_sigma_s * (1.25 + 0.75 * np.sin((lam - 360.0) / 45.0)):.3g}/m, g = {g:g}, "
