@@ -282,6 +282,9 @@ def test_api_builds_the_same_medium_as_a_scene_file(tmp_path):
     from_file = _load(tmp_path, 'interior = { preset = "wholemilk", scale = 5, g = 0.2 }').shapes[0].interior
     from_api = spectrace.medium(preset="wholemilk", scale=5, g=0.2)
     assert from_api.sigma_a == from_file.sigma_a and from_api.sigma_s == from_file.sigma_s and from_api.g == 0.2
+    # a preset keeps its reduced scattering coefficient σs' = σs (1 − g)
+    isotropic = spectrace.medium(preset="wholemilk", scale=5)
+    assert from_api.sigma_s.values * (1 - 0.2) == pytest.approx(isotropic.sigma_s.values)
     custom = spectrace.medium(sigma_a=0.1, sigma_s=(1.0, 2.0, 3.0), scale=2.0)
     assert custom.sigma_a.values == pytest.approx(0.2)
     assert custom.sigma_s == coefficient_spectrum((1.0, 2.0, 3.0)).scaled(2.0)
@@ -291,3 +294,12 @@ def test_api_builds_the_same_medium_as_a_scene_file(tmp_path):
         spectrace.shape("sphere")
     with pytest.raises(SpectraceError, match="g must lie"):
         spectrace.medium(preset="marble", g=-1.0)
+
+
+def test_spectra_listing_shows_coefficients_as_written(tmp_path):
+    from spectrace.scene.spectra_index import scene_spectra
+
+    _load(tmp_path, "interior = { sigma_a = { value = 0.25 }, sigma_s = { rgb = [1, 2, 3] }, scale = 4 }")
+    spectra = scene_spectra(tmp_path / "scene.toml")
+    assert spectra["shapes[0].interior.sigma_a"].values == pytest.approx(0.25)
+    assert spectra["shapes[0].interior.sigma_s"] == coefficient_spectrum((1, 2, 3))

@@ -193,7 +193,7 @@ def medium(sigma_a: SpectrumLike = 0.0, sigma_s: SpectrumLike = 0.0, scale: floa
     if preset is not None:
         if not (_is_zero(sigma_a) and _is_zero(sigma_s)):
             raise SpectraceError("give either preset or sigma_a/sigma_s", where="preset")
-        sigma_a_spectrum, sigma_s_spectrum = preset_coefficients(preset, float(scale), where="preset")
+        sigma_a_spectrum, sigma_s_spectrum = preset_coefficients(preset, float(scale), float(g), where="preset")
         return Medium(sigma_a=sigma_a_spectrum, sigma_s=sigma_s_spectrum, g=float(g), name=preset)
 
     def coefficient(source: SpectrumLike, what: str) -> Spectrum:

@@ -254,7 +254,8 @@ class _Resolver:
         from spectrace.spectral.media_presets import preset_coefficients
 
         if spec.preset is not None:
-            sigma_a, sigma_s = preset_coefficients(spec.preset, spec.scale, where=self.where(f"{key}.preset"))
+            sigma_a, sigma_s = preset_coefficients(spec.preset, spec.scale, spec.g,
+                                                   where=self.where(f"{key}.preset"))
         else:
             sigma_a, sigma_s = (self.coefficient(given, f"{key}.{name}", spec.scale)
                                 for name, given in (("sigma_a", spec.sigma_a), ("sigma_s", spec.sigma_s)))

@@ -12,6 +12,8 @@ from spectrace.spectral.spectrum import Spectrum
 # Spectra whose field name says they are reflectances (bounded by 1, RGB uplifted as a reflectance); every other
 # spectrum (radiance, intensity, irradiance, an index of refraction, ...) is read without that bound.
 _REFLECTANCE_WORDS = ("reflectance", "transmittance", "albedo")
+# A medium's coefficients (1/scene unit): unbounded, RGB made into a spectrum of that colour, not an emission.
+_MEDIUM_COEFFICIENTS = ("sigma_a", "sigma_s")
 
 
 def _spectrum_specs(node: object, key: str):
@@ -40,6 +42,9 @@ def scene_spectra(path: str | Path) -> dict[str, Spectrum]:
         if key.startswith("spectra."):
             continue
         field = key.rsplit(".", 1)[-1]
+        if field in _MEDIUM_COEFFICIENTS:  # as written, before the interior's own `scale`
+            found[key] = resolver.coefficient(spectrum_spec, key, 1.0).scaled(1.0, name=key)
+            continue
         emission = not any(word in field for word in _REFLECTANCE_WORDS)
         found[key] = resolver.spectrum(spectrum_spec, key, emission=emission).scaled(1.0, name=key)
     return found

@@ -1,9 +1,10 @@
 """Measured media for subsurface scattering: Jensen et al. 2001's table (spectra/media/jensen2001.csv).
 
 The table gives the reduced scattering coefficient σs' = σs(1 − g) and the absorption coefficient σa in 1/mm at
-the red, green and blue of a colour camera. A preset uses them as an isotropic medium (g = 0, so σs = σs'), the
-similarity relation that keeps the diffusion-regime look (Wyman et al. 1989); each RGB triple becomes a smooth
-spectrum whose linear sRGB is that triple (`coefficient_spectrum`).
+the red, green and blue of a colour camera. A preset keeps σs' whatever phase function it is given:
+σs = σs' / (1 − g), so g = 0 (the default) uses σs = σs' in an isotropic medium; by the similarity relation
+(Wyman, Patterson & Wilson 1989) media of equal σs' look alike once light has scattered many times. Each RGB
+triple becomes a smooth spectrum whose linear sRGB is that triple (`coefficient_spectrum`).
 """
 
 import csv
@@ -51,13 +52,14 @@ def coefficient_spectrum(rgb, name: str = "", where: str | None = None) -> Spect
     return uplift_reflectance(values / (2.0 * peak), where=where)[0].scaled(2.0 * peak, name=name)
 
 
-def preset_coefficients(name: str, scale: float, where: str | None = None) -> tuple[Spectrum, Spectrum]:
-    """(σa, σs) of a preset in 1/scene unit: the table's 1/mm values times `scale`, the millimetres in one scene
-    unit (1000 for a scene in metres)."""
+def preset_coefficients(name: str, scale: float, g: float = 0.0,
+                        where: str | None = None) -> tuple[Spectrum, Spectrum]:
+    """(σa, σs) of a preset in 1/scene unit for the Henyey–Greenstein asymmetry g: the table's 1/mm values times
+    `scale`, the millimetres in one scene unit (1000 for a scene in metres), with σs = σs' / (1 − g)."""
     presets = medium_presets()
     if name not in presets:
         raise SpectraceError(f"unknown medium preset '{name}' (presets: {', '.join(presets)})", where=where)
     preset = presets[name]
     sigma_a = coefficient_spectrum(preset.sigma_a_per_mm, name=f"{name} sigma_a", where=where)
     sigma_s = coefficient_spectrum(preset.sigma_s_prime_per_mm, name=f"{name} sigma_s", where=where)
-    return sigma_a.scaled(scale), sigma_s.scaled(scale)
+    return sigma_a.scaled(scale), sigma_s.scaled(scale / (1.0 - g))
