@@ -282,7 +282,7 @@ def beer_lambert(device: Device) -> list[Check]:
     medium = Medium(sigma_a=sigma_a * 0.5, sigma_s=sigma_s, g=0.5)
     scatterer = Shape(mesh=slab, material=None, interior=medium)
     reading = measure(_scene(shapes=[scatterer], lights=[environment], max_depth=1), meter,
-                      wavelengths_nm=wavelengths, streams=64, samples_per_item=64, device=device)
+                      wavelengths_nm=wavelengths, streams=128, samples_per_item=128, device=device)
     sigma_t = 0.5 * sigma_a.evaluate(wavelengths) + sigma_s.evaluate(wavelengths)
     for lam, value, se, st in zip(wavelengths, reading.spectral, reading.spectral_standard_error, sigma_t):
         checks.append(Check("Beer-Lambert", f"scattering slab, unscattered part (max_depth 1): L = k exp(−σt d), "
