@@ -14,13 +14,17 @@ docs/python-api.md shows how.
 
 from spectrace.api import (
     area_emitter,
+    conductor,
     constant_environment,
     diffuse,
     distant_light,
     medium,
     mesh_from_trimesh,
+    mirror,
+    plastic,
     point_light,
     render,
+    retroreflector,
     rgb_emission,
     rgb_reflectance,
     shape,
@@ -31,7 +35,19 @@ from spectrace.api import (
 from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_white_balance
 from spectrace.errors import SpectraceError
 from spectrace.image import Image
-from spectrace.scene import AreaEmitter, Camera, DiffuseMaterial, Medium, Scene, Shape, load_scene
+from spectrace.scene import (
+    AreaEmitter,
+    Camera,
+    ConductorMaterial,
+    DiffuseMaterial,
+    Medium,
+    MirrorMaterial,
+    PlasticMaterial,
+    RetroreflectorMaterial,
+    Scene,
+    Shape,
+    load_scene,
+)
 from spectrace.spectral.spectrum import Spectrum
 
 __version__ = "0.1.0"
@@ -44,6 +60,10 @@ __all__ = [
     "Camera",
     "Shape",
     "DiffuseMaterial",
+    "MirrorMaterial",
+    "ConductorMaterial",
+    "PlasticMaterial",
+    "RetroreflectorMaterial",
     "AreaEmitter",
     "Medium",
     "SpectraceError",
@@ -56,6 +76,10 @@ __all__ = [
     "shape",
     "diffuse",
     "medium",
+    "mirror",
+    "conductor",
+    "plastic",
+    "retroreflector",
     "area_emitter",
     "point_light",
     "spot_light",

@@ -1,6 +1,18 @@
 """Scenes: the TOML format (schema), its loader, and the resolved objects the renderer draws."""
 
 from spectrace.scene.loader import load_scene
-from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Medium, Scene, Shape
+from spectrace.scene.model import (
+    AreaEmitter,
+    Camera,
+    ConductorMaterial,
+    DiffuseMaterial,
+    Medium,
+    MirrorMaterial,
+    PlasticMaterial,
+    RetroreflectorMaterial,
+    Scene,
+    Shape,
+)
 
-__all__ = ["load_scene", "Scene", "Camera", "Shape", "DiffuseMaterial", "AreaEmitter", "Medium"]
+__all__ = ["load_scene", "Scene", "Camera", "Shape", "DiffuseMaterial", "MirrorMaterial", "ConductorMaterial",
+           "PlasticMaterial", "RetroreflectorMaterial", "AreaEmitter", "Medium"]
