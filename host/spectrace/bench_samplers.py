@@ -81,7 +81,7 @@ def sampler_bench_command(scene_path: Path | None, sizes: list[int] | None, devi
     """`spectrace bench --samplers`: the table on the terminal, or one JSON object on stdout."""
 
     result = run_sampler_bench(scene_path, size=(sizes or [32])[0], spp_list=[4, 16, 64], reference_spp=4096,
-                               seeds=4, device=device, log=lambda text: console.print(text, highlight=False))
+                               seeds=16, device=device, log=lambda text: console.print(text, highlight=False))
     if as_json:
         print(json.dumps({"samplers": result}, indent=2))
     else:

@@ -159,7 +159,7 @@ def identity_mismatch(saved: RenderIdentity, current: RenderIdentity) -> str | N
                 "so the samples would not continue the same sequence; render afresh without --resume")
     if saved.scene_digest != current.scene_digest:
         return ("the checkpoint belongs to another scene or other settings (scene file, meshes, spectra, camera, "
-                "max_depth, integrator, spectral bins); render afresh without --resume")
+                "max_depth, integrator, sampler, spectral bins); render afresh without --resume")
     return None
 
 
