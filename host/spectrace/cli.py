@@ -76,7 +76,6 @@ def render(
     from spectrace.render.renderer import Renderer
     from spectrace.render.stop_signals import StopOnSignals
     from spectrace.scene import load_scene
-
     from spectrace.scene.model import SAMPLER_TYPES
 
     if sampler is not None and sampler not in SAMPLER_TYPES:
