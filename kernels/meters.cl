@@ -2,7 +2,8 @@
  *
  * Each work-item measures one wavelength (all four lanes carry it, so a dispersive event's termination of the
  * secondary lanes leaves the lane average unbiased) over `samples_per_item` samples with its own random stream;
- * the host combines the items of each wavelength into a mean and its standard error. */
+ * the host combines the items of each wavelength into a mean and its standard error. The program is built without
+ * SAMPLER_SOBOL, so sensors use the independent sampler (rng.cl). */
 #include "path_tracer.cl"
 
 /* E(p, n) = ∫ L cos θ dω over the hemisphere of n = π × the radiance an albedo-1, one-sided Lambertian surface at p

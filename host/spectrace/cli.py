@@ -40,6 +40,8 @@ def render(
     height: Annotated[Optional[int], typer.Option(help="Film height in pixels.", min=1)] = None,
     seed: Annotated[Optional[int], typer.Option(help="Sampler seed.", min=0)] = None,
     max_depth: Annotated[Optional[int], typer.Option(help="Path segments from the camera; -1 = unbounded.")] = None,
+    sampler: Annotated[Optional[str], typer.Option(
+        help="Sampler: sobol or independent (default: the scene's; see docs/sampling.md).")] = None,
     exposure: Annotated[Optional[float], typer.Option(help="Stops: RGB output x 2**exposure (film XYZ unscaled).")] = None,
     device: DeviceOption = None,
     xyz: Annotated[bool, typer.Option("--xyz/--no-xyz", help="EXR only: also store the film's X, Y, Z channels.")] = True,
@@ -74,9 +76,12 @@ def render(
     from spectrace.render.renderer import Renderer
     from spectrace.render.stop_signals import StopOnSignals
     from spectrace.scene import load_scene
+    from spectrace.scene.model import SAMPLER_TYPES
 
+    if sampler is not None and sampler not in SAMPLER_TYPES:
+        raise SpectraceError(f"unknown sampler '{sampler}' (use {' or '.join(SAMPLER_TYPES)})", where="--sampler")
     loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth,
-                                              exposure=exposure)
+                                              exposure=exposure, sampler=sampler)
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
     _check_render_options(loaded, output, width, height, spp)
@@ -206,8 +211,14 @@ def bench(
     device: DeviceOption = None,
     all_devices: Annotated[bool, typer.Option("--all", help="Every working device in turn.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
+    samplers: Annotated[bool, typer.Option("--samplers", help=(
+        "Instead compare the samplers: RMSE of independent and sobol at 4, 16, 64 spp against a long reference "
+        "render (default size 32; see docs/sampling.md)."))] = False,
 ) -> None:
     """Measure samples/s and rays/s (a benchmark, never a test)."""
+    if samplers:
+        from spectrace.bench_samplers import sampler_bench_command
+        return sampler_bench_command(scene, size, device, as_json, console)
     from spectrace.bench import run_render_bench, render_bench_table
 
     results = run_render_bench(scene, sizes=size or [256, 512], spp=spp, max_depth=max_depth, device=device,

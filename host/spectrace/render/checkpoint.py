@@ -1,6 +1,6 @@
 """Checkpoints: the whole state of a render in one file, so that an interrupted render continues exactly.
 
-The sampler is counter-based (a sample's random numbers depend only on seed, pixel, sample index and dimension)
+Both samplers are counter-based (a sample's random numbers depend only on seed, pixel, sample index and draw)
 and every pixel adds its samples to the film in sample order, so the accumulated buffers and the number of
 samples done are the entire state: a render continued from them produces the same floats, bit for bit, as one
 that never stopped (on the same device).
@@ -72,7 +72,8 @@ def _update_with_array(digest, name: str, array: np.ndarray) -> None:
 def scene_digest(renderer: Renderer) -> str:
     """SHA-256 of everything the render's kernels read except the sample range, and of the program settings."""
     digest = hashlib.sha256(CHECKPOINT_FORMAT.encode())
-    settings = (renderer.scene.integrator, renderer.spectral_bins, tuple(renderer.spectral_range_nm))
+    settings = (renderer.scene.integrator, renderer.spectral_bins, tuple(renderer.spectral_range_nm),
+                renderer.scene.sampler)
     digest.update(repr(settings).encode())
     _update_with_array(digest, "params", render_params(renderer.scene, renderer.buffers, 0, 0))
     for name, array in scene_arrays(renderer.buffers).items():
@@ -158,7 +159,7 @@ def identity_mismatch(saved: RenderIdentity, current: RenderIdentity) -> str | N
                 "so the samples would not continue the same sequence; render afresh without --resume")
     if saved.scene_digest != current.scene_digest:
         return ("the checkpoint belongs to another scene or other settings (scene file, meshes, spectra, camera, "
-                "max_depth, integrator, spectral bins); render afresh without --resume")
+                "max_depth, integrator, sampler, spectral bins); render afresh without --resume")
     return None
 
 

@@ -15,7 +15,7 @@ from spectrace.render.memory import check_device_memory, device_memory_need
 from spectrace.render.opencl_errors import translate_opencl_errors
 from spectrace.render.scene_buffers import SceneBuffers, build_scene_buffers, render_params
 from spectrace.scene import limits
-from spectrace.scene.model import Scene
+from spectrace.scene.model import SAMPLER_TYPES, Scene
 
 ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 
@@ -24,6 +24,13 @@ ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 TARGET_PASS_SECONDS = 0.5
 
 INTEGRATOR_PROGRAMS = {"path": "integrator_path.cl", "direct": "integrator_direct.cl"}
+
+
+def sampler_defines(sampler: str) -> dict[str, int]:
+    """Build defines selecting the sampler of kernels/rng.cl (the independent one needs none)."""
+    if sampler not in SAMPLER_TYPES:
+        raise SpectraceError(f"unknown sampler '{sampler}' (use {' or '.join(SAMPLER_TYPES)})")
+    return {"SAMPLER_SOBOL": 1} if sampler == "sobol" else {}
 
 
 class Renderer:
@@ -43,13 +50,13 @@ class Renderer:
         check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
         self.spectral_bins = spectral_bins
         self.spectral_range_nm = spectral_range_nm
-        defines = None
+        defines = sampler_defines(scene.sampler)
         if spectral_bins > 0:
             lo, hi = spectral_range_nm
             if not (360.0 <= lo < hi <= 830.0):
                 raise SpectraceError(f"spectral range must lie within 360-830 nm, got {lo}-{hi}")
-            defines = {"SPECTRAL_BINS": int(spectral_bins), "SPECTRAL_MIN_NM": float(lo), "SPECTRAL_MAX_NM": float(hi)}
-        self.program = self.device.build_program(INTEGRATOR_PROGRAMS[scene.integrator], defines=defines)
+            defines |= {"SPECTRAL_BINS": int(spectral_bins), "SPECTRAL_MIN_NM": float(lo), "SPECTRAL_MAX_NM": float(hi)}
+        self.program = self.device.build_program(INTEGRATOR_PROGRAMS[scene.integrator], defines=defines or None)
         self.kernel = cl.Kernel(self.program, "render_pass")
         ctx = self.device.context
         ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
@@ -149,7 +156,8 @@ class Renderer:
             dropped_samples=int(film[:, 3].astype(np.float64).sum()),  # float32 would round totals above 2^24
             rays_traced=int(rays.astype(np.uint64).sum()),
             exposure=self.scene.exposure,
-            extra={"max_depth": self.scene.max_depth, "width": self.scene.width, "height": self.scene.height},
+            extra={"max_depth": self.scene.max_depth, "width": self.scene.width, "height": self.scene.height,
+                   "sampler": self.scene.sampler},
         )
 
     def _state_buffers(self) -> dict[str, cl.Buffer]:

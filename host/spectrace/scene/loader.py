@@ -488,6 +488,7 @@ def load_scene(path: str | Path) -> Scene:
         rr_depth=spec.integrator.rr_depth,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
+        sampler=spec.sampler.type,
         source=path,
     )
 

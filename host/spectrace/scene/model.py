@@ -14,6 +14,12 @@ from spectrace.geometry.mesh import TriangleMesh
 from spectrace.spectral.spectrum import Spectrum
 
 
+SamplerType = Literal["independent", "sobol"]
+SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
+# Lower error than the independent sampler at equal spp on every scene measured (docs/sampling.md).
+DEFAULT_SAMPLER: SamplerType = "sobol"
+
+
 @dataclass(frozen=True)
 class Camera:
     origin: tuple[float, float, float]
@@ -194,6 +200,7 @@ class Scene:
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
     spp: int = 16
     seed: int = 0
+    sampler: SamplerType = DEFAULT_SAMPLER
     source: Path | None = None
     notes: dict = field(default_factory=dict)
 

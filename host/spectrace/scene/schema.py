@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from spectrace.scene import limits
+from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
@@ -68,6 +69,7 @@ class IntegratorSpec(Strict):
 
 
 class SamplerSpec(Strict):
+    type: SamplerType = Field(default=DEFAULT_SAMPLER, description="see docs/sampling.md")
     spp: int = Field(default=16, gt=0)
     seed: int = Field(default=0, ge=0, lt=1 << 31)
 
