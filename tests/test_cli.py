@@ -28,7 +28,7 @@ def test_render_writes_exr_with_metadata(tmp_path):
     assert channels["RGB"].shape == (12, 16, 3)
     assert {"X", "Y", "Z"} <= set(channels)
     assert header["spectrace:spp"] == "2" and header["spectrace:seed"] == "7"
-    assert header["spectrace:device"]
+    assert header["spectrace:device"] and float(header["spectrace:render_seconds"]) >= 0
     assert np.all(np.isfinite(channels["RGB"])) and channels["Y"].mean() > 0
 
 
@@ -40,7 +40,8 @@ def test_render_png(tmp_path):
          "--height", "8", "-q")
     with Image.open(out) as image:
         assert image.size == (8, 8) and image.mode == "RGB"
-        assert image.text["spectrace:spp"] == "1"
+        assert image.text["spectrace:spp"] == "1" and image.text["spectrace:device"]
+        assert float(image.text["spectrace:render_seconds"]) >= 0  # 3 decimals: a tiny render may show 0.000
 
 
 def test_bad_scene_is_one_line_without_traceback(tmp_path):

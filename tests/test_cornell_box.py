@@ -1,6 +1,8 @@
 """Whole renders of the Cornell box: finite, seed-independent in expectation, split-invariant bit for bit, and
 the right colours in the right places."""
 
+import csv
+
 import numpy as np
 import pytest
 
@@ -61,3 +63,27 @@ def test_max_depth_one_shows_only_the_light(device):
     lit = y > 0
     assert 0 < lit.sum() < 0.05 * lit.size, "only the light's pixels are non-zero"
     assert lit[: SIZE // 4].any() and not lit[SIZE // 2 :].any(), "the light is in the ceiling, at the top"
+
+
+def test_the_bundled_scene_is_the_published_box():
+    """scenes/cornell_box.toml holds the Cornell Program of Computer Graphics' published geometry (millimetres in
+    geometry_mm.csv, each quad split (0, 1, 2), (0, 2, 3); the light lowered 0.5 mm off the ceiling) and camera
+    (at (278, 273, -800) mm looking along +z; 35 mm lens, 25 mm film)."""
+    scene = load_scene(scenes_dir() / "cornell_box.toml")
+    with open(scenes_dir() / "cornell_box" / "geometry_mm.csv", encoding="utf-8") as stream:
+        rows = list(csv.DictReader(line for line in stream if not line.startswith("#")))
+    by_surface = {"white": "white surfaces", "red": "left wall", "green": "right wall", "light": "light"}
+    for surface, shape_name in by_surface.items():
+        quads = np.array([[[row[f"{axis}{corner}"] for axis in "xyz"] for corner in range(4)]
+                          for row in rows if row["surface"] == surface], dtype=float) / 1000.0
+        if surface == "light":
+            quads[..., 1] -= 0.0005
+        expected = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]], axis=0)
+        mesh = next(shape.mesh for shape in scene.shapes if shape.name == shape_name)
+        found = np.stack(mesh.triangles(), axis=1)
+        key = lambda triangles: sorted(map(tuple, np.round(triangles.reshape(len(triangles), 9), 6)))
+        assert key(found) == key(expected), shape_name
+    np.testing.assert_allclose(scene.camera.origin, (0.278, 0.273, -0.800))
+    direction = np.subtract(scene.camera.target, scene.camera.origin)
+    np.testing.assert_allclose(direction / np.linalg.norm(direction), (0, 0, 1))
+    assert scene.camera.fov_degrees == pytest.approx(np.degrees(2 * np.arctan(12.5 / 35.0)), abs=1e-4)

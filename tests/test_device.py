@@ -233,6 +233,27 @@ def test_no_working_device_says_what_to_install(monkeypatch):
     assert str(NoWorkingDeviceError(discover_devices())) == message
 
 
+def test_no_opencl_runtime_at_all_says_what_to_install(monkeypatch, tmp_path, capsys):
+    from spectrace import cli
+    from spectrace.device import selection
+
+    monkeypatch.setattr(selection, "find_devices", lambda: [])
+    monkeypatch.delenv("SPECTRACE_DEVICE", raising=False)
+    with pytest.raises(NoWorkingDeviceError) as caught:
+        open_device()
+    message = str(caught.value)
+    assert "no OpenCL runtime found" in message and "\n" not in message
+    assert 'pip install "spectrace[cpu]"' in message and "apt-get install -y pocl-opencl-icd" in message
+
+    scene = spectrace.resources.scenes_dir() / "cornell_box.toml"
+    monkeypatch.setattr(sys, "argv", ["spectrace", "render", str(scene), "-o", str(tmp_path / "x.png"), "-q"])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    stderr = capsys.readouterr().err
+    assert exit_info.value.code == 2 and stderr.count("\n") == 1 and "Traceback" not in stderr
+    assert stderr.startswith("error: no OpenCL runtime found"), stderr
+
+
 def test_unknown_device_spec_lists_the_available_keys():
     with pytest.raises(NoWorkingDeviceError) as caught:
         open_device("no-such-device")

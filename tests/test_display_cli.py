@@ -92,3 +92,45 @@ def test_bad_input_is_one_line_without_traceback(tmp_path):
 
     result = _run("match", "--rgb", "0.5", "0.5", "1.5", "--from", "CRT-Dell", "--to", "CRT-HP", check=False)
     assert result.returncode == 2 and "[0, 1]" in result.stderr and "Traceback" not in result.stderr
+
+
+def _file_primaries_on_grid(name: str, white_cd_m2: float) -> np.ndarray:
+    """The shipped CSV's three columns on the 1 nm grid (linear, end values held), scaled so that the white has
+    `white_cd_m2` by colour-science's integration: an independent route to the display's emission."""
+    from spectrace.resources import spectra_dir
+
+    path = spectra_dir() / "displays" / f"{name}.csv"
+    rows = np.genfromtxt([line for line in open(path) if not line.startswith("#")], delimiter=",", names=True)
+    grid = np.arange(360.0, 831.0)
+    primaries = np.array([np.interp(grid, rows["wavelength_nm"], rows[c]) for c in ("red", "green", "blue")])
+    white = colour.SpectralDistribution(primaries.sum(axis=0), grid)
+    return primaries * white_cd_m2 / _xyz_683(white)[1]
+
+
+def _xyz_683(sd: colour.SpectralDistribution) -> np.ndarray:
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    return colour.sd_to_XYZ(sd, cmfs=cmfs, k=683, method="Integration")
+
+
+@pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
+def test_metamerism_per_patch_delta_e_matches_colour_science():
+    """`display metamerism` in a subprocess: the two matched lights have one XYZ, and every patch's ΔE2000 is the
+    one colour-science gives for Ohta's ColorChecker reflectance times each light, relative to the light itself."""
+    report = _json("metamerism", "--from", "LCD-Dell_CCFL", "--to", "LCD-Apple_WLED")
+    grid = np.arange(360.0, 831.0)
+    lights = [np.asarray(report[drive]) @ _file_primaries_on_grid(report[name], 100.0)
+              for drive, name in (("source_drive", "source"), ("target_drive", "target"))]
+    xyz_lights = [_xyz_683(colour.SpectralDistribution(light, grid)) for light in lights]
+    np.testing.assert_allclose(xyz_lights[0], xyz_lights[1], rtol=1e-4)  # a metameric pair of lights
+
+    white = xyz_lights[0]
+    checker = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
+    assert [patch["patch"] for patch in report["patches"]] == list(checker)
+    for patch in report["patches"]:
+        reflectance = checker[patch["patch"]]
+        on_grid = np.interp(grid, reflectance.wavelengths, reflectance.values)
+        lab = [colour.XYZ_to_Lab(_xyz_683(colour.SpectralDistribution(on_grid * light, grid)) / white[1],
+                                 colour.XYZ_to_xy(white)) for light in lights]
+        expected = colour.delta_E(*lab, method="CIE 2000")
+        assert patch["delta_e_2000"] == pytest.approx(expected, abs=1e-3), patch["patch"]
+    assert report["max_delta_e_2000"] > 1.0  # the lights match, the lit charts do not

@@ -121,3 +121,25 @@ def test_half_lit_screen_gives_half_the_irradiance(device, tmp_path):
     combined = np.hypot(full.spectral_standard_error[0] / 2, half.spectral_standard_error[0])
     assert half.spectral_standard_error[0] < 0.02 * half.spectral[0]
     assert abs(difference) < 4 * combined
+
+
+@pytest.mark.parametrize("encoding, decode", [
+    ("srgb", lambda encoded: colour.cctf_decoding(encoded, function="sRGB")),  # IEC 61966-2-1, by colour-science
+    ("gamma2.2", lambda encoded: encoded**2.2),
+    ("linear", lambda encoded: encoded),
+])
+def test_encoded_values_are_decoded_by_the_stated_curve(tmp_path, encoding, decode):
+    """A triple and a picture's code values are encoded: the screen emits the primaries at the decoded drive.
+    Mid-range values, where the curves differ (codes 0 and 255 decode alike under every curve)."""
+    display = load_display("OLED-SonyPVM2541")
+    triple = np.array([0.5, 0.25, 0.1])
+    scene = _scene(tmp_path, f'display = "OLED-SonyPVM2541", rgb = {triple.tolist()}, encoding = "{encoding}"')
+    np.testing.assert_allclose(scene.shapes[0].emitter.radiance.values, decode(triple) @ display.primaries_values,
+                               rtol=1e-12, atol=0)
+
+    codes = np.array([128, 64, 26])
+    _picture(tmp_path / "mid.png", np.broadcast_to(codes, (2, 3, 3)))
+    scene = _scene(tmp_path, f'display = "OLED-SonyPVM2541", image = "mid.png", encoding = "{encoding}"')
+    drive = scene.shapes[0].emitter.image.drive
+    assert drive.shape == (2, 3, 3)
+    np.testing.assert_allclose(drive, np.broadcast_to(decode(codes / 255.0), drive.shape), rtol=1e-6)

@@ -110,9 +110,10 @@ CASES = [
     replace("missing-spectrum-file", REFLECTANCE, 'reflectance = { file = "nope.csv" }',
             "materials.grey.reflectance.file", "nope.csv: spectrum file not found"),
     replace("spectrum-file-is-a-folder", REFLECTANCE, 'reflectance = { file = "." }',
-            "materials.grey.reflectance.file", "cannot read spectrum file"),
+            "materials.grey.reflectance.file", "cannot read spectrum file: it is a folder"),
     replace("garbage-spectrum-file", REFLECTANCE, 'reflectance = { file = "garbage.obj" }',
-            "materials.grey.reflectance.file", "cannot read spectrum file"),
+            "materials.grey.reflectance.file",
+            "cannot read spectrum file: not a UTF-8 text file (byte 0x80 at offset 128)"),
     replace("descending-spectrum-file", REFLECTANCE, 'reflectance = { file = "descending.csv" }',
             "materials.grey.reflectance.file", "strictly ascending"),
     append("missing-texture", '[[lights]]\ntype = "envmap"\nfile = "sky.exr"\n', "lights[0].file",
@@ -176,6 +177,8 @@ CASES = [
     replace("override-absurd-size", "", "", "--width/--height", "would need 5.0 GiB of device memory",
             argv=("--width", "16384", "--height", "16384")),
     replace("override-absurd-spp", "", "", "--spp", "exceeds the limit of 1048576", argv=("--spp", "2000000")),
+    replace("override-zero-spp", "", "", "--spp", "greater than or equal to 1", argv=("--spp", "0")),
+    replace("override-non-integer-width", "", "", "--width", "valid integer", argv=("--width", "wide")),
     replace("unknown-output-format", "", "", "out.tiff", "unknown image format '.tiff'",
             argv=("-o", "{folder}/out.tiff")),
     replace("missing-checkpoint", "", "", "nope.npz", "checkpoint file does not exist",
@@ -183,9 +186,9 @@ CASES = [
     replace("damaged-checkpoint", "", "", "garbage.obj", "not a spectrace checkpoint",
             argv=("--resume", "{folder}/garbage.obj")),
 ]
-# Which part of the message is the file: most name the scene, these name the file the option gave.
+# Which part of the message is the place: most name the scene, these the option or the file it gave.
 NAMES_OTHER_FILE = {"unknown-output-format", "missing-checkpoint", "damaged-checkpoint", "override-absurd-size",
-                    "override-absurd-spp"}
+                    "override-absurd-spp", "override-zero-spp", "override-non-integer-width"}
 
 
 def _write_case(folder, case: BadInput):

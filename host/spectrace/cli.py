@@ -260,9 +260,43 @@ def validate(
         raise typer.Exit(1)
 
 
-def main() -> None:
+def _usage_error_type() -> type[Exception]:
+    """Click's UsageError (bad option values, unknown options, missing arguments); recent typer versions carry
+    their own copy of click."""
     try:
-        app()
+        from typer._click.exceptions import UsageError
+    except ImportError:
+        from click.exceptions import UsageError
+    return UsageError
+
+
+def _usage_error_line(exc: Exception) -> str:
+    """One line, like every other error: the option, what is wrong with its value, and where the help is."""
+    param, reason = getattr(exc, "param", None), getattr(exc, "message", "")
+    if param is not None and param.opts and reason:
+        message = f"{param.opts[0]}: {reason}"
+    else:  # unknown options, missing arguments: click's own sentence names them
+        message = exc.format_message()
+    message = " ".join(message.split())
+    context = getattr(exc, "ctx", None)
+    if context is not None:
+        message += f" (see `{context.command_path} --help`)"
+    return f"error: {message}"
+
+
+def main() -> None:
+    usage_error = _usage_error_type()
+    try:
+        # Not standalone, so that a bad option value reaches the handler below instead of click's framed box.
+        status = app(standalone_mode=False)
+        sys.exit(status if isinstance(status, int) else 0)
+    except usage_error as exc:
+        if type(exc).__name__ != "NoArgsIsHelpError":  # that one has already printed the help
+            console.print(_usage_error_line(exc), highlight=False, markup=False, soft_wrap=True)
+        sys.exit(exc.exit_code)
+    except typer.Abort:
+        console.print("aborted", highlight=False)
+        sys.exit(1)
     except SpectraceError as exc:
         console.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)

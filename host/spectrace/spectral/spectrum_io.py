@@ -83,9 +83,13 @@ def _read_csv_table(path: Path) -> _CsvTable:
         lines = path.read_text(encoding="utf-8").splitlines()
     except FileNotFoundError:
         raise SpectraceError("spectrum file not found", where=str(path)) from None
-    except (OSError, UnicodeDecodeError) as error:
-        problem = f"{error.__class__.__name__}: {error}"
-        raise SpectraceError(f"cannot read spectrum file ({problem})", where=str(path)) from None
+    except IsADirectoryError:
+        raise SpectraceError("cannot read spectrum file: it is a folder", where=str(path)) from None
+    except UnicodeDecodeError as error:
+        problem = f"not a UTF-8 text file (byte 0x{error.object[error.start]:02x} at offset {error.start})"
+        raise SpectraceError(f"cannot read spectrum file: {problem}", where=str(path)) from None
+    except OSError as error:
+        raise SpectraceError(f"cannot read spectrum file: {error.strerror or error}", where=str(path)) from None
 
     header: list[str] | None = None
     rows: list[tuple[int, list[str]]] = []
