@@ -1,28 +1,45 @@
-/* Lambertian reflection f = R(λ)/π. Both faces reflect: the shading normal is flipped to the side the light
- * arrives from, so meshes work whatever their winding (Mitsuba 3 needs a `twosided` wrapper for this). */
+/* Lambertian reflection f = R(λ)/π, in the local shading frame (material.cl flips the normal toward the
+ * outgoing direction, so both faces reflect and meshes work whatever their winding; Mitsuba 3 needs a `twosided`
+ * wrapper for this). Every bsdf_*.cl file has the same shape: params from the Material, then eval (f·cos θi),
+ * pdf (solid angle) and sample, all on local directions with wo.z ≥ 0. */
 #ifndef SPECTRACE_BSDF_DIFFUSE_CL
 #define SPECTRACE_BSDF_DIFFUSE_CL
 
+#include "bsdf_sample.cl"
 #include "sampling.cl"
+#include "spectrum.cl"
 
-/* n faces the outgoing direction; cos_i = dot(n, ωi). Returns f(ωo, ωi) without the cosine. */
-inline float4 diffuse_eval(float4 reflectance, float cos_i)
+typedef struct {
+    float4 reflectance;
+} DiffuseParams;
+
+inline DiffuseParams diffuse_params(__global const Material *m, __global const float *spectra,
+                                    const SampledWavelengths *w)
 {
-    return cos_i > 0.0f ? reflectance * INV_PI : (float4)(0.0f);
+    DiffuseParams p;
+    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    return p;
 }
 
-inline float diffuse_pdf(float cos_i)
+inline float4 diffuse_eval(const DiffuseParams *p, float3 wo, float3 wi)
 {
-    return cos_i > 0.0f ? cos_i * INV_PI : 0.0f;
+    return wi.z > 0.0f ? p->reflectance * (INV_PI * wi.z) : (float4)(0.0f);
 }
 
-/* Samples ωi about n; the weight f cos / pdf of a Lambertian surface is its reflectance. */
-inline float3 diffuse_sample(float3 n, float2 u)
+inline float diffuse_pdf(const DiffuseParams *p, float3 wo, float3 wi)
 {
-    float3 t, b;
-    orthonormal_basis(n, &t, &b);
-    float3 d = sample_cosine_hemisphere(u);
-    return d.x * t + d.y * b + d.z * n;
+    return wi.z > 0.0f ? wi.z * INV_PI : 0.0f;
+}
+
+/* Cosine-weighted: the weight f cos / pdf of a Lambertian surface is its reflectance. */
+inline int diffuse_sample(const DiffuseParams *p, float3 wo, float2 u, BSDFSample *s)
+{
+    s->wi = sample_cosine_hemisphere(u);
+    s->pdf = s->wi.z * INV_PI;
+    s->weight = p->reflectance;
+    s->is_delta = 0;
+    s->terminate_secondary = 0;
+    return s->pdf > 0.0f;
 }
 
 #endif

@@ -1,19 +1,20 @@
-/* Material dispatch: the integrators see every BSDF through these four functions.
- * (Diffuse only so far; the BSDF library adds its types here.) */
+/* Material dispatch: the integrators see every BSDF through the functions below, in world space. Each BSDF lives
+ * in its own bsdf_<name>.cl and works in the local shading frame (frame.cl) with the same four functions:
+ * <name>_params (its inputs at the path's wavelengths), <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample.
+ * Adding a BSDF: that file, its MATERIAL_* value in types.h, and one case in each switch here (plus
+ * material_frame if it does not reflect on both faces). docs/materials.md describes each model. */
 #ifndef SPECTRACE_MATERIAL_CL
 #define SPECTRACE_MATERIAL_CL
 
 #include "types.h"
+#include "frame.cl"
 #include "spectrum.cl"
+#include "bsdf_sample.cl"
 #include "bsdf_diffuse.cl"
-
-typedef struct {
-    float3 wi;                /* sampled direction, world space, unit */
-    float4 weight;            /* f(wo,wi)·|cos θi| / pdf per wavelength: the throughput multiplier */
-    float pdf;                /* solid-angle pdf of wi (for MIS); for a delta lobe, the probability of picking it */
-    int is_delta;             /* 1 when wi came from a specular (delta) lobe: no MIS, no NEE at this event */
-    int terminate_secondary;  /* 1 when the event was dispersive: keep only the hero wavelength */
-} BSDFSample;
+#include "bsdf_mirror.cl"
+#include "bsdf_conductor.cl"
+#include "bsdf_plastic.cl"
+#include "bsdf_retroreflector.cl"
 
 /* n faces wo for two-sided reflectors. */
 inline float3 facing(float3 n, float3 wo)
@@ -21,34 +22,95 @@ inline float3 facing(float3 n, float3 wo)
     return dot(n, wo) >= 0.0f ? n : -n;
 }
 
+/* The local frame of material m at a surface of normal n seen from wo. Every reflector reflects on both faces,
+ * so its frame's normal is turned toward wo (local wo.z ≥ 0). */
+inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 wo)
+{
+    return shading_frame(facing(n, wo));
+}
+
+/* f(wo, wi)·|cos θi| per wavelength, local directions. */
+inline float4 material_eval_local(__global const Material *m, __global const float *spectra,
+                                  const SampledWavelengths *w, float3 wo, float3 wi)
+{
+    switch (m->type) {
+    case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_eval(&p, wo, wi); }
+    case MATERIAL_CONDUCTOR: { ConductorParams p = conductor_params(m, spectra, w); return conductor_eval(&p, wo, wi); }
+    case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_eval(&p, wo, wi); }
+    case MATERIAL_RETROREFLECTOR: {
+        RetroreflectorParams p = retroreflector_params(m, spectra, w);
+        return retroreflector_eval(&p, wo, wi);
+    }
+    default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_eval(&p, wo, wi); }
+    }
+}
+
+/* Solid-angle pdf with which material_sample_local proposes wi (delta lobes contribute nothing). */
+inline float material_pdf_local(__global const Material *m, __global const float *spectra,
+                                const SampledWavelengths *w, float3 wo, float3 wi)
+{
+    switch (m->type) {
+    case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_pdf(&p, wo, wi); }
+    case MATERIAL_CONDUCTOR: { ConductorParams p = conductor_params(m, spectra, w); return conductor_pdf(&p, wo, wi); }
+    case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_pdf(&p, wo, wi); }
+    case MATERIAL_RETROREFLECTOR: {
+        RetroreflectorParams p = retroreflector_params(m, spectra, w);
+        return retroreflector_pdf(&p, wo, wi);
+    }
+    default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_pdf(&p, wo, wi); }
+    }
+}
+
+/* uc picks a lobe, u samples within it. Returns 0 when no direction was produced. */
+inline int material_sample_local(__global const Material *m, __global const float *spectra,
+                                 const SampledWavelengths *w, float3 wo, float uc, float2 u, BSDFSample *s)
+{
+    switch (m->type) {
+    case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_sample(&p, wo, s); }
+    case MATERIAL_CONDUCTOR: {
+        ConductorParams p = conductor_params(m, spectra, w);
+        return conductor_sample(&p, wo, u, s);
+    }
+    case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_sample(&p, wo, uc, u, s); }
+    case MATERIAL_RETROREFLECTOR: {
+        RetroreflectorParams p = retroreflector_params(m, spectra, w);
+        return retroreflector_sample(&p, wo, u, s);
+    }
+    default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_sample(&p, wo, u, s); }
+    }
+}
+
+/* 0 when every lobe is a delta lobe: next-event estimation cannot contribute there and is skipped. */
+inline int material_has_non_delta_lobe(__global const Material *m)
+{
+    switch (m->type) {
+    case MATERIAL_MIRROR: return 0;
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_RETROREFLECTOR: return !ggx_is_smooth(m->alpha);
+    default: return 1;
+    }
+}
+
 inline float4 material_eval(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
                             float3 n, float3 wo, float3 wi)
 {
-    float3 nf = facing(n, wo);
-    float cos_i = dot(nf, wi);
-    return diffuse_eval(spectrum_at(spectra, m->reflectance_offset, w), cos_i) * fmax(cos_i, 0.0f);
+    ShadingFrame frame = material_frame(m, n, wo);
+    return material_eval_local(m, spectra, w, to_local(&frame, wo), to_local(&frame, wi));
 }
 
 inline float material_pdf(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
                           float3 n, float3 wo, float3 wi)
 {
-    return diffuse_pdf(dot(facing(n, wo), wi));
+    ShadingFrame frame = material_frame(m, n, wo);
+    return material_pdf_local(m, spectra, w, to_local(&frame, wo), to_local(&frame, wi));
 }
 
 inline int material_sample(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
                            float3 n, float3 wo, float uc, float2 u, BSDFSample *s)
 {
-    float3 nf = facing(n, wo);
-    s->wi = diffuse_sample(nf, u);
-    s->pdf = diffuse_pdf(dot(nf, s->wi));
-    s->weight = spectrum_at(spectra, m->reflectance_offset, w);
-    s->is_delta = 0;
-    s->terminate_secondary = 0;
-    return s->pdf > 0.0f;
-}
-
-inline int material_has_non_delta_lobe(__global const Material *m)
-{
+    ShadingFrame frame = material_frame(m, n, wo);
+    if (!material_sample_local(m, spectra, w, to_local(&frame, wo), uc, u, s)) return 0;
+    s->wi = to_world(&frame, s->wi);
     return 1;
 }
 

@@ -27,8 +27,8 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
             }
         }
     }
-    float3 wi = diffuse_sample(n, sample_2d(sampler));
-    float pdf = diffuse_pdf(dot(n, wi));
+    float3 wi = sample_cosine_about(n, sample_2d(sampler));
+    float pdf = cosine_hemisphere_pdf(dot(n, wi));
     if (pdf > 0.0f) {
         PathState s;
         s.ray.origin = p;

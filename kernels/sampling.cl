@@ -25,6 +25,20 @@ inline float3 sample_cosine_hemisphere(float2 u)
     return (float3)(r * cos(phi), r * sin(phi), z);
 }
 
+/* Cosine-weighted direction about the unit vector n, world space; pdf = cos θ / π (cosine_hemisphere_pdf). */
+inline float3 sample_cosine_about(float3 n, float2 u)
+{
+    float3 t, b;
+    orthonormal_basis(n, &t, &b);
+    float3 d = sample_cosine_hemisphere(u);
+    return d.x * t + d.y * b + d.z * n;
+}
+
+inline float cosine_hemisphere_pdf(float cos_theta)
+{
+    return cos_theta > 0.0f ? cos_theta * INV_PI : 0.0f;
+}
+
 /* Uniform point on a triangle, as barycentrics of (v1, v2); pdf = 1 / area. */
 inline float2 sample_triangle_uniform(float2 u)
 {

@@ -14,12 +14,16 @@ docs/python-api.md shows how.
 
 from spectrace.api import (
     area_emitter,
+    conductor,
     constant_environment,
     diffuse,
     distant_light,
     mesh_from_trimesh,
+    mirror,
+    plastic,
     point_light,
     render,
+    retroreflector,
     rgb_emission,
     rgb_reflectance,
     shape,
@@ -30,7 +34,18 @@ from spectrace.api import (
 from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_white_balance
 from spectrace.errors import SpectraceError
 from spectrace.image import Image
-from spectrace.scene import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, load_scene
+from spectrace.scene import (
+    AreaEmitter,
+    Camera,
+    ConductorMaterial,
+    DiffuseMaterial,
+    MirrorMaterial,
+    PlasticMaterial,
+    RetroreflectorMaterial,
+    Scene,
+    Shape,
+    load_scene,
+)
 from spectrace.spectral.spectrum import Spectrum
 
 __version__ = "0.1.0"
@@ -43,6 +58,10 @@ __all__ = [
     "Camera",
     "Shape",
     "DiffuseMaterial",
+    "MirrorMaterial",
+    "ConductorMaterial",
+    "PlasticMaterial",
+    "RetroreflectorMaterial",
     "AreaEmitter",
     "SpectraceError",
     "Spectrum",
@@ -53,6 +72,10 @@ __all__ = [
     "transformed",
     "shape",
     "diffuse",
+    "mirror",
+    "conductor",
+    "plastic",
+    "retroreflector",
     "area_emitter",
     "point_light",
     "spot_light",

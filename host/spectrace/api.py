@@ -27,10 +27,14 @@ from spectrace.image import Image
 from spectrace.render.renderer import Renderer
 from spectrace.scene.model import (
     AreaEmitter,
+    ConductorMaterial,
     ConstantEnvironment,
     DiffuseMaterial,
     DistantLight,
+    MirrorMaterial,
+    PlasticMaterial,
     PointLight,
+    RetroreflectorMaterial,
     Scene,
     Shape,
     SpotLight,
@@ -169,6 +173,56 @@ def diffuse(reflectance: SpectrumLike) -> DiffuseMaterial:
     """Lambertian material, f = R(λ)/π, reflecting on both faces; `reflectance` in [0, 1] (a linear sRGB triple is
     uplifted)."""
     return DiffuseMaterial(_reflectance(reflectance, "reflectance"))
+
+
+def mirror(reflectance: SpectrumLike = 1.0) -> MirrorMaterial:
+    """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1), on both faces."""
+    return MirrorMaterial(_reflectance(reflectance, "reflectance"))
+
+
+def _roughness(value: float, what: str = "roughness") -> float:
+    if not isinstance(value, Real) or not 0.0 <= value <= 1.0:
+        raise SpectraceError(f"roughness (GGX alpha) must lie in [0, 1], got {value!r}", where=what)
+    return float(value)
+
+
+def _optical_constant(source: SpectrumLike, what: str, positive: bool) -> Spectrum:
+    result = spectrum(source)
+    if result.min() < 0 or (positive and not result.min() > 0):
+        raise SpectraceError(f"must be {'> 0' if positive else '>= 0'} at every wavelength (min "
+                             f"{result.min():.4g})", where=what)
+    return result
+
+
+def conductor(metal: str | None = None, *, eta: SpectrumLike | None = None, k: SpectrumLike | None = None,
+              roughness: float = 0.0, specular_tint: SpectrumLike | None = None) -> ConductorMaterial:
+    """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
+    index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
+    mirror-like metal); `specular_tint` (a reflectance) multiplies the Fresnel term."""
+    from spectrace.spectral.metals import metal_ior
+
+    if (metal is None) == (eta is None or k is None) or (metal is not None and (eta is not None or k is not None)):
+        raise SpectraceError("give either metal or both eta and k")
+    if metal is not None:
+        eta_spectrum, k_spectrum = metal_ior(metal, where="metal")
+    else:
+        eta_spectrum, k_spectrum = _optical_constant(eta, "eta", True), _optical_constant(k, "k", False)
+    tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
+    return ConductorMaterial(eta_spectrum, k_spectrum, roughness=_roughness(roughness), specular_tint=tint)
+
+
+def plastic(reflectance: SpectrumLike, ior: float = 1.5, roughness: float = 0.0) -> PlasticMaterial:
+    """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
+    smooth or GGX-rough (`roughness` = α)."""
+    if not isinstance(ior, Real) or not 1.0 < ior <= 4.0:
+        raise SpectraceError(f"ior must lie in (1, 4], got {ior!r}", where="ior")
+    return PlasticMaterial(_reflectance(reflectance, "reflectance"), ior=float(ior), roughness=_roughness(roughness))
+
+
+def retroreflector(reflectance: SpectrumLike = 1.0, roughness: float = 0.1) -> RetroreflectorMaterial:
+    """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
+    incident direction, scaled by `reflectance`."""
+    return RetroreflectorMaterial(_reflectance(reflectance, "reflectance"), roughness=_roughness(roughness))
 
 
 def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:

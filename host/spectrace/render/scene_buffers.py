@@ -14,12 +14,11 @@ from spectrace.render.device_types import (
     LIGHT_POINT,
     LIGHT_SPOT,
     LIGHT_TRIANGLE,
-    MATERIAL_DIFFUSE,
     MATERIAL_DTYPE,
-    MATERIAL_NO_SPECTRUM,
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
 )
+from spectrace.render.material_rows import material_row
 from spectrace.scene.model import ConstantEnvironment, DistantLight, EnvironmentMap, PointLight, Scene, SpotLight
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ, cmf_table_normalised
 from spectrace.spectral.spectrum import Spectrum
@@ -60,11 +59,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         key = id(shape.material)
         if key not in material_index:
             material_index[key] = len(material_rows)
-            row = np.zeros((), MATERIAL_DTYPE)
-            row["type"] = MATERIAL_DIFFUSE
-            row["reflectance_offset"] = table.add(shape.material.reflectance)
-            row["eta_offset"] = row["k_offset"] = MATERIAL_NO_SPECTRUM
-            material_rows.append(row)
+            material_rows.append(material_row(shape.material, table))
         v0, v1, v2 = shape.mesh.triangles()
         v0s.append(v0), v1s.append(v1), v2s.append(v2), uvs.append(shape.mesh.triangle_uvs())
         tri_material.append(np.full(len(v0), material_index[key], np.int32))

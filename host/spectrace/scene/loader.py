@@ -16,19 +16,25 @@ from spectrace.scene import limits, schema
 from spectrace.scene.model import (
     AreaEmitter,
     Camera,
+    ConductorMaterial,
     ConstantEnvironment,
     DiffuseMaterial,
     DistantLight,
     EmitterImage,
     EnvironmentMap,
     Light,
+    Material,
+    MirrorMaterial,
+    PlasticMaterial,
     PointLight,
+    RetroreflectorMaterial,
     Scene,
     Shape,
     SpotLight,
 )
 from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.grid import integrate_on_grid
+from spectrace.spectral.metals import metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
 from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
@@ -98,6 +104,10 @@ def _validation_error(path: Path, error: ValidationError, data: object = None) -
         close = difflib.get_close_matches(str(location[-1]), allowed, n=1)
         message = f"unknown key '{location[-1]}'" + (f" (did you mean '{close[0]}'?)" if close else "")
     elif first["type"] == "missing":
+        message = "required key is missing"
+    elif first["type"] == "union_tag_not_found":  # e.g. a material without `type`
+        discriminator = str(first.get("ctx", {}).get("discriminator", "type")).strip("'")
+        location = (*location, discriminator)
         message = "required key is missing"
     elif first["type"] in ("model_type", "dict_type"):  # pydantic would name a schema class
         message = f"expected a table, got {type(first['input']).__name__} {first['input']!r}"[:200]
@@ -207,13 +217,42 @@ class _Resolver:
             )
         return result
 
-    def materials(self) -> dict[str, DiffuseMaterial]:
-        return {
-            name: DiffuseMaterial(self.spectrum(m.reflectance, f"materials.{name}.reflectance", emission=False))
-            for name, m in self.spec.materials.items()
-        }
+    def materials(self) -> dict[str, Material]:
+        return {name: self.material(m, f"materials.{name}") for name, m in self.spec.materials.items()}
 
-    def shapes(self, materials: dict[str, DiffuseMaterial]) -> list[Shape]:
+    def material(self, spec, key: str) -> Material:
+        def reflectance(field: str = "reflectance"):
+            return self.spectrum(getattr(spec, field), f"{key}.{field}", emission=False)
+
+        if spec.type == "mirror":
+            return MirrorMaterial(reflectance())
+        if spec.type == "conductor":
+            if spec.metal is not None:
+                eta, k = metal_ior(spec.metal, where=self.where(f"{key}.metal"))
+            else:
+                eta = self.optical_constant(spec.eta, f"{key}.eta", positive=True)
+                k = self.optical_constant(spec.k, f"{key}.k", positive=False)
+            tint = reflectance("specular_tint") if spec.specular_tint is not None else None
+            return ConductorMaterial(eta, k, roughness=spec.roughness, specular_tint=tint)
+        if spec.type == "plastic":
+            return PlasticMaterial(reflectance(), ior=spec.ior, roughness=spec.roughness)
+        if spec.type == "retroreflector":
+            return RetroreflectorMaterial(reflectance(), roughness=spec.roughness)
+        return DiffuseMaterial(reflectance())
+
+    def optical_constant(self, spec: schema.SpectrumSpec, key: str, positive: bool) -> Spectrum:
+        """η or k of a complex index of refraction: a spectrum without the reflectance bound (rgb has no meaning
+        here); η must be > 0, k ≥ 0."""
+        if spec.rgb is not None or spec.display is not None:
+            raise SpectraceError("an index of refraction needs a spectrum (value, values, spectrum or file), not a "
+                                 "colour", where=self.where(key))
+        result = self.spectrum(spec, key, emission=True)
+        if positive and not result.values.min() > 0:
+            raise SpectraceError(f"must be > 0 at every wavelength (min {result.values.min():.4g})",
+                                 where=self.where(key))
+        return result
+
+    def shapes(self, materials: dict[str, Material]) -> list[Shape]:
         shapes = []
         for i, s in enumerate(self.spec.shapes):
             key = f"shapes[{i}]"

@@ -42,12 +42,53 @@ class Camera:
         return origin, forward, right * tan_x, up * tan_y
 
 
+# Materials: one dataclass per BSDF (docs/materials.md gives each model, kernels/bsdf_<name>.cl implements it).
+# `roughness` is the GGX α (Mitsuba 3's `alpha`); 0 (below 1e-3) means a smooth surface with a delta lobe.
+
+
 @dataclass(frozen=True)
 class DiffuseMaterial:
+    """Lambertian, f = R(λ)/π, reflecting on both faces."""
+
     reflectance: Spectrum
 
 
-Material = DiffuseMaterial
+@dataclass(frozen=True)
+class MirrorMaterial:
+    """Perfect specular reflection of reflectance R(λ)."""
+
+    reflectance: Spectrum
+
+
+@dataclass(frozen=True)
+class ConductorMaterial:
+    """Metal of complex index of refraction η(λ) + i k(λ) relative to the outside, smooth or GGX-rough; the Fresnel
+    reflectance is multiplied by `specular_tint` when given."""
+
+    eta: Spectrum
+    k: Spectrum
+    roughness: float = 0.0
+    specular_tint: Spectrum | None = None
+
+
+@dataclass(frozen=True)
+class PlasticMaterial:
+    """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside."""
+
+    reflectance: Spectrum
+    ior: float = 1.5
+    roughness: float = 0.0
+
+
+@dataclass(frozen=True)
+class RetroreflectorMaterial:
+    """Returns light toward where it came from: a GGX lobe of width `roughness` about the incident direction."""
+
+    reflectance: Spectrum
+    roughness: float = 0.1
+
+
+Material = DiffuseMaterial | MirrorMaterial | ConductorMaterial | PlasticMaterial | RetroreflectorMaterial
 
 
 @dataclass(frozen=True, eq=False)

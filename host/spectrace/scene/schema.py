@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from spectrace.scene import limits
+from spectrace.spectral.metals import METALS
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
@@ -140,12 +141,57 @@ class NamedSpectrumSpec(Strict):
         return self
 
 
+# Materials: one spec per BSDF, told apart by `type` (docs/materials.md describes each model). Adding a BSDF adds
+# a class here and a member to MaterialSpec.
+
+Roughness = Annotated[FiniteFloat, Field(ge=0.0, le=1.0, description="GGX alpha; below 1e-3 the surface is smooth")]
+
+
 class DiffuseMaterialSpec(Strict):
     type: Literal["diffuse"]
     reflectance: SpectrumSpec
 
 
-MaterialSpec = DiffuseMaterialSpec
+class MirrorMaterialSpec(Strict):
+    type: Literal["mirror"]
+    reflectance: SpectrumSpec = SpectrumSpec(value=1.0)
+
+
+class ConductorMaterialSpec(Strict):
+    type: Literal["conductor"]
+    metal: Literal[METALS] | None = Field(default=None, description="measured eta and k of a metal")
+    eta: SpectrumSpec | None = Field(default=None, description="real part of the complex index of refraction")
+    k: SpectrumSpec | None = Field(default=None, description="imaginary part (extinction coefficient)")
+    roughness: Roughness = 0.0
+    specular_tint: SpectrumSpec | None = None
+
+    @model_validator(mode="after")
+    def _metal_or_constants(self) -> "ConductorMaterialSpec":
+        if self.metal is not None and (self.eta is not None or self.k is not None):
+            raise ValueError("give either metal or eta and k, not both")
+        if self.metal is None and (self.eta is None or self.k is None):
+            raise ValueError(f"give metal ({', '.join(METALS)}) or both eta and k")
+        return self
+
+
+class PlasticMaterialSpec(Strict):
+    type: Literal["plastic"]
+    reflectance: SpectrumSpec
+    ior: FiniteFloat = Field(default=1.5, gt=1.0, le=4.0, description="coat index relative to the outside")
+    roughness: Roughness = 0.0
+
+
+class RetroreflectorMaterialSpec(Strict):
+    type: Literal["retroreflector"]
+    reflectance: SpectrumSpec = SpectrumSpec(value=1.0)
+    roughness: Roughness = 0.1
+
+
+MaterialSpec = Annotated[
+    DiffuseMaterialSpec | MirrorMaterialSpec | ConductorMaterialSpec | PlasticMaterialSpec
+    | RetroreflectorMaterialSpec,
+    Field(discriminator="type"),
+]
 
 
 class EmitterSpec(Strict):

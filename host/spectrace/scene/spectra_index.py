@@ -11,7 +11,7 @@ from spectrace.spectral.spectrum import Spectrum
 
 # Spectra whose field name says they are reflectances (bounded by 1, RGB uplifted as a reflectance); every other
 # spectrum (radiance, intensity, irradiance, an index of refraction, ...) is read without that bound.
-_REFLECTANCE_WORDS = ("reflectance", "transmittance", "albedo")
+_REFLECTANCE_WORDS = ("reflectance", "transmittance", "albedo", "tint")
 
 
 def _spectrum_specs(node: object, key: str):

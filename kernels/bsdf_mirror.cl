@@ -1,0 +1,37 @@
+/* Perfect specular reflection with a reflectance spectrum R(λ): f = R δ(ωi − reflect(ωo)) / |cos θi|, a delta
+ * lobe (eval and pdf are zero for every direction a sampler of another lobe or a light could propose). */
+#ifndef SPECTRACE_BSDF_MIRROR_CL
+#define SPECTRACE_BSDF_MIRROR_CL
+
+#include "bsdf_sample.cl"
+#include "frame.cl"
+#include "spectrum.cl"
+
+typedef struct {
+    float4 reflectance;
+} MirrorParams;
+
+inline MirrorParams mirror_params(__global const Material *m, __global const float *spectra,
+                                  const SampledWavelengths *w)
+{
+    MirrorParams p;
+    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    return p;
+}
+
+inline float4 mirror_eval(const MirrorParams *p, float3 wo, float3 wi)
+{
+    return (float4)(0.0f);
+}
+
+inline float mirror_pdf(const MirrorParams *p, float3 wo, float3 wi)
+{
+    return 0.0f;
+}
+
+inline int mirror_sample(const MirrorParams *p, float3 wo, BSDFSample *s)
+{
+    return delta_sample(reflect_local(wo), p->reflectance, 1.0f, s);
+}
+
+#endif

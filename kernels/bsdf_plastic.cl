@@ -1,0 +1,101 @@
+/* Plastic: a diffuse base of albedo ρ(λ) under a clear dielectric coat of relative index η (outside → coat),
+ * smooth or rough. The model is a sum of two reciprocal lobes,
+ *     f = f_coat + c ρ/π (1 − F(cos θi)) (1 − F(cos θo)),   c = s / (1 − F̄),   F̄ = 2∫₀¹ F(μ) μ dμ,
+ * where F is the smooth interface's Fresnel reflectance (fresnel_dielectric) and f_coat is the coat's specular
+ * reflection: a delta lobe F(cos θo) when smooth, the GGX microfacet lobe F(ωo·h) D G2 / (4 cos θo cos θi) when
+ * rough. The base term is symmetric in ωi and ωo, so f is reciprocal; its albedo is c ρ (1 − F(θo)) (1 − F̄).
+ * Smooth: with s = 1 the albedo is F(θo) + ρ (1 − F(θo)), exactly 1 for ρ = 1 (a white plastic loses nothing)
+ * and less otherwise. Rough: the microfacet coat's albedo can exceed F(θo) by up to 7e-4 near Brewster's angle
+ * for small α (measured for η ∈ [1.2, 3], α ∈ [0.01, 1]; for larger α it is lower), so s = 0.998 keeps
+ * ∫ f cos dωi ≤ 1. This is the energy-conserving symmetric coupling of Ashikhmin & Shirley 2000 ("An
+ * anisotropic Phong BRDF model") with the exact Fresnel term and its exact hemispherical average in place of
+ * Schlick's approximation and its 28/23 constant.
+ *
+ * Sampling picks the coat with probability P = F(θo) / (F(θo) + (1 − F(θo)) ρ̄) (ρ̄: the mean base albedo over the
+ * path's wavelengths), else the cosine-weighted base lobe; rough plastic reports the mixture pdf
+ * P pdf_coat + (1 − P) pdf_base (the one-sample MIS of the two lobes) and weights by f cos / that pdf. */
+#ifndef SPECTRACE_BSDF_PLASTIC_CL
+#define SPECTRACE_BSDF_PLASTIC_CL
+
+#include "bsdf_sample.cl"
+#include "frame.cl"
+#include "fresnel.cl"
+#include "microfacet.cl"
+#include "spectrum.cl"
+
+#define PLASTIC_ROUGH_BASE_SCALE 0.998f
+
+typedef struct {
+    float4 reflectance;
+    float eta;
+    float alpha;
+    float base_scale;  /* c of the header comment */
+} PlasticParams;
+
+inline PlasticParams plastic_params(__global const Material *m, __global const float *spectra,
+                                    const SampledWavelengths *w)
+{
+    PlasticParams p;
+    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    p.eta = m->ior;
+    p.alpha = m->alpha;
+    float s = ggx_is_smooth(m->alpha) ? 1.0f : PLASTIC_ROUGH_BASE_SCALE;
+    p.base_scale = s / (1.0f - fresnel_dielectric_average(m->ior));
+    return p;
+}
+
+/* Probability of sampling the coat for light leaving toward wo. */
+inline float plastic_coat_probability(const PlasticParams *p, float3 wo)
+{
+    float f = fresnel_dielectric(wo.z, p->eta);
+    float base = (1.0f - f) * dot(p->reflectance, (float4)(0.25f));
+    return f + base > 0.0f ? f / (f + base) : 1.0f;
+}
+
+inline float4 plastic_base_eval(const PlasticParams *p, float3 wo, float3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return (float4)(0.0f);
+    float transmitted = (1.0f - fresnel_dielectric(wi.z, p->eta)) * (1.0f - fresnel_dielectric(wo.z, p->eta));
+    return p->reflectance * (p->base_scale * transmitted * INV_PI * wi.z);
+}
+
+inline float4 plastic_coat_eval(const PlasticParams *p, float3 wo, float3 wi)
+{
+    if (ggx_is_smooth(p->alpha) || wo.z <= 0.0f || wi.z <= 0.0f) return (float4)(0.0f);
+    float3 h = reflection_half_vector(wo, wi);
+    return (float4)(fresnel_dielectric(dot(wo, h), p->eta) * ggx_reflection_cos(wo, wi, p->alpha));
+}
+
+inline float4 plastic_eval(const PlasticParams *p, float3 wo, float3 wi)
+{
+    return plastic_base_eval(p, wo, wi) + plastic_coat_eval(p, wo, wi);
+}
+
+inline float plastic_pdf(const PlasticParams *p, float3 wo, float3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
+    float coat = plastic_coat_probability(p, wo);
+    float pdf = (1.0f - coat) * wi.z * INV_PI;
+    if (!ggx_is_smooth(p->alpha)) pdf += coat * ggx_reflection_pdf(wo, reflection_half_vector(wo, wi), p->alpha);
+    return pdf;
+}
+
+inline int plastic_sample(const PlasticParams *p, float3 wo, float uc, float2 u, BSDFSample *s)
+{
+    if (wo.z <= 0.0f) return 0;
+    float coat = plastic_coat_probability(p, wo);
+    float3 wi;
+    if (uc < coat) {
+        if (ggx_is_smooth(p->alpha)) {
+            return delta_sample(reflect_local(wo), (float4)(fresnel_dielectric(wo.z, p->eta) / coat), coat, s);
+        }
+        float3 h = ggx_sample_visible_normal(wo, p->alpha, u);
+        wi = 2.0f * dot(wo, h) * h - wo;
+        if (wi.z <= 0.0f) return 0;
+    } else {
+        wi = sample_cosine_hemisphere(u);
+    }
+    return continuous_sample(wi, plastic_eval(p, wo, wi), plastic_pdf(p, wo, wi), s);
+}
+
+#endif
