@@ -14,10 +14,11 @@
 #ifndef SPECTRACE_BSDF_DIELECTRIC_CL
 #define SPECTRACE_BSDF_DIELECTRIC_CL
 
-#include "ggx.cl"
-
-/* Below this roughness the GGX lobes are narrower than float arithmetic resolves: such surfaces are smooth. */
-#define DIELECTRIC_SMOOTH_ALPHA 1e-3f
+#include "bsdf_sample.cl"
+#include "fresnel.cl"
+#include "ior.cl"
+#include "microfacet.cl"
+#include "spectrum.cl"
 
 typedef struct {
     float3 wi;      /* local frame, unit */
@@ -25,25 +26,6 @@ typedef struct {
     float pdf;      /* solid-angle pdf; for a delta lobe the probability of choosing that lobe */
     int is_delta;
 } DielectricSample;
-
-/* Fresnel reflectance of unpolarised light (the mean of the s and p reflectances, Born & Wolf sec. 1.5.2).
- * cos_i ≥ 0 on the side light travels in; eta = n_transmitted / n_incident. *cos_t receives the refracted
- * cosine, 0 under total internal reflection (where the reflectance is 1). */
-inline float fresnel_dielectric(float cos_i, float eta, float *cos_t)
-{
-    cos_i = clamp(cos_i, 0.0f, 1.0f);
-    /* cos²θt = 1 − sin²θi/η², arranged so that it does not cancel when η is near 1 ((η − 1) is exact then). */
-    float cos2_t = (cos_i * cos_i + (eta - 1.0f) * (eta + 1.0f)) / (eta * eta);
-    if (cos2_t <= 0.0f) {
-        *cos_t = 0.0f;
-        return 1.0f;
-    }
-    float ct = sqrt(cos2_t);
-    *cos_t = ct;
-    float r_parallel = (eta * cos_i - ct) / (eta * cos_i + ct);
-    float r_perpendicular = (cos_i - eta * ct) / (cos_i + eta * ct);
-    return 0.5f * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
-}
 
 /* e seen from ωo: n on the far side over n on ωo's side. */
 inline float dielectric_eta_from(float cos_o, float eta)
@@ -65,7 +47,7 @@ inline int smooth_dielectric_sample(float3 wo, float eta, float uc, DielectricSa
     if (wo.z == 0.0f) return 0;
     float e = dielectric_eta_from(wo.z, eta);
     float cos_t;
-    float f = fresnel_dielectric(fabs(wo.z), e, &cos_t);
+    float f = fresnel_dielectric_refracting(fabs(wo.z), e, &cos_t);
     s->is_delta = 1;
     if (uc < f) {
         s->wi = (float3)(-wo.x, -wo.y, wo.z);
@@ -116,8 +98,8 @@ inline float rough_dielectric_eval(float3 wo, float3 wi, float eta, float alpha)
     if (!ok) return 0.0f;
     float wo_h = dot(wo, h);
     float cos_t;
-    float f = fresnel_dielectric(wo_h, e, &cos_t);
-    float dg = ggx_ndf(h, alpha) * ggx_g(wo, wi, alpha);
+    float f = fresnel_dielectric_refracting(wo_h, e, &cos_t);
+    float dg = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha);
     if (wi.z > 0.0f) return dg * f / (4.0f * wo.z);
     float wi_h = dot(wi, h);
     float denominator = wo_h + e * wi_h;
@@ -138,8 +120,8 @@ inline float rough_dielectric_pdf(float3 wo, float3 wi, float eta, float alpha)
     if (!ok) return 0.0f;
     float wo_h = dot(wo, h);
     float cos_t;
-    float f = fresnel_dielectric(wo_h, e, &cos_t);
-    float visible = ggx_visible_ndf(wo, h, alpha);
+    float f = fresnel_dielectric_refracting(wo_h, e, &cos_t);
+    float visible = ggx_g1(wo, alpha) * wo_h * ggx_d(h, alpha) / wo.z;  /* D_wo(h), Heitz 2018 */
     if (wi.z > 0.0f) return visible * f / (4.0f * wo_h);
     float wi_h = dot(wi, h);
     float denominator = wo_h + e * wi_h;
@@ -160,7 +142,7 @@ inline int rough_dielectric_sample(float3 wo, float eta, float alpha, float uc, 
     float wo_h = dot(wo, h);
     if (wo_h <= 0.0f) return 0;
     float cos_t;
-    float f = fresnel_dielectric(wo_h, e, &cos_t);
+    float f = fresnel_dielectric_refracting(wo_h, e, &cos_t);
     float3 wi;
     int reflection = uc < f;
     if (reflection) {
@@ -170,7 +152,7 @@ inline int rough_dielectric_sample(float3 wo, float eta, float alpha, float uc, 
         wi = normalize((wo_h / e - cos_t) * h - wo / e);
         if (wi.z >= 0.0f) return 0;
     }
-    float weight = ggx_g(wo, wi, alpha) / ggx_g1(wo, alpha);
+    float weight = ggx_g2(wo, wi, alpha) / ggx_g1(wo, alpha);
     if (!reflection) weight /= e * e;
 
     /* In the turned frame ωo.z > 0, so e is the eta the pdf expects. */
@@ -180,6 +162,58 @@ inline int rough_dielectric_sample(float3 wo, float eta, float alpha, float uc, 
     s->pdf = pdf;
     s->is_delta = 0;
     return pdf > 0.0f;
+}
+
+/* ---------------------------------------------------------------- the material: Material row → BSDF */
+
+typedef struct {
+    float eta;    /* n_interior / n_exterior at the hero wavelength, which steers the path */
+    float alpha;
+    float4 tint;  /* optional specular tint on both lobes (1 without one) */
+} DielectricParams;
+
+inline DielectricParams dielectric_params(__global const Material *m, __global const float *spectra,
+                                          const SampledWavelengths *w)
+{
+    DielectricParams p;
+    p.eta = material_ior(m, w->lambda.x);
+    p.alpha = m->alpha;
+    p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM ? (float4)(1.0f)
+                                                           : spectrum_at(spectra, m->reflectance_offset, w);
+    return p;
+}
+
+/* Whether the wavelengths of this path would leave the surface in different directions, so that only the hero
+ * may go on (Wilkie et al. 2014). Sensors put one wavelength in all four lanes: they go on together. */
+inline int dielectric_disperses(__global const Material *m, const SampledWavelengths *w)
+{
+    return material_ior_is_dispersive(m) && any(w->lambda != (float4)(w->lambda.x));
+}
+
+inline float4 dielectric_eval(const DielectricParams *p, float3 wo, float3 wi)
+{
+    if (ggx_is_smooth(p->alpha)) return (float4)(0.0f);
+    return p->tint * rough_dielectric_eval(wo, wi, p->eta, p->alpha);
+}
+
+inline float dielectric_pdf(const DielectricParams *p, float3 wo, float3 wi)
+{
+    if (ggx_is_smooth(p->alpha)) return 0.0f;
+    return rough_dielectric_pdf(wo, wi, p->eta, p->alpha);
+}
+
+inline int dielectric_sample(const DielectricParams *p, float3 wo, float uc, float2 u, BSDFSample *s)
+{
+    DielectricSample d;
+    int ok = ggx_is_smooth(p->alpha) ? smooth_dielectric_sample(wo, p->eta, uc, &d)
+                                     : rough_dielectric_sample(wo, p->eta, p->alpha, uc, u, &d);
+    if (!ok) return 0;
+    s->wi = d.wi;
+    s->weight = p->tint * d.weight;
+    s->pdf = d.pdf;
+    s->is_delta = d.is_delta;
+    s->terminate_secondary = 0;
+    return 1;
 }
 
 #endif

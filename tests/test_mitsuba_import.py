@@ -141,6 +141,36 @@ def test_spectra_and_lights(tmp_path):
     assert environment.radiance.mean() == pytest.approx(0.25)
 
 
+def test_dielectrics(tmp_path):
+    """Mitsuba's dielectric index is int_ior / ext_ior, named (its table, Hecht's values) or numeric; bk7 in air
+    by default; roughdielectric's alpha (default 0.1) becomes the GGX roughness."""
+    body = """
+        <shape type="sphere"><bsdf type="dielectric"/></shape>
+        <shape type="sphere"><bsdf type="dielectric"><string name="int_ior" value="water"/>
+            <float name="ext_ior" value="1.0"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
+            <float name="alpha" value="0.25"/><float name="int_ior" value="1.7"/>
+            <rgb name="specular_reflectance" value="0.9"/><rgb name="specular_transmittance" value="0.9"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"/></shape>"""
+    data, notes = mitsuba_scene_data(_write(tmp_path, body))
+    materials = list(data["materials"].values())
+    assert materials[0] == {"type": "dielectric", "ior": pytest.approx(1.5046 / 1.000277)}
+    assert materials[1] == {"type": "dielectric", "ior": pytest.approx(1.333)}
+    assert materials[2] == {"type": "dielectric", "ior": pytest.approx(1.7 / 1.000277), "roughness": 0.25,
+                            "specular_tint": {"rgb": [0.9, 0.9, 0.9]}}
+    assert materials[3]["roughness"] == 0.1
+    assert any("'beckmann' microfacet distribution imported as GGX" in note for note in notes)
+    scene = load_mitsuba_scene(_write(tmp_path, body))
+    assert scene.shapes[1].material.ior.at(500.0) == pytest.approx(1.333)
+
+    bad = _write(tmp_path, """<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="air"/>
+        <string name="ext_ior" value="water"/></bsdf></shape>
+        <shape type="cube"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/></bsdf></shape>""")
+    with pytest.raises(SpectraceError) as error:
+        mitsuba_scene_data(bad)
+    assert "int_ior not above ext_ior" in str(error.value) and "anisotropic" in str(error.value)
+
+
 def _mitsuba_scalar_spectral():
     mitsuba = pytest.importorskip("mitsuba", reason="the Mitsuba comparison needs `pip install spectrace[mitsuba]`")
     if "scalar_spectral" not in mitsuba.variants():

@@ -29,6 +29,7 @@ from spectrace.scene.model import (
     AreaEmitter,
     ConductorMaterial,
     ConstantEnvironment,
+    DielectricMaterial,
     DiffuseMaterial,
     DistantLight,
     MirrorMaterial,
@@ -54,7 +55,8 @@ if TYPE_CHECKING:
 SpectrumLike = Union[Spectrum, "colour.SpectralDistribution", float, str, Sequence, np.ndarray, Mapping]
 ProgressOption = Union[bool, Literal["auto"], Callable[[int, int], None], None]
 
-BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere}
+BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere,
+                  "prism": primitives.prism}
 
 
 # ---------------------------------------------------------------- spectra
@@ -225,16 +227,30 @@ def retroreflector(reflectance: SpectrumLike = 1.0, roughness: float = 0.1) -> R
     return RetroreflectorMaterial(_reflectance(reflectance, "reflectance"), roughness=_roughness(roughness))
 
 
+def dielectric(ior: float | str | dict = 1.5, roughness: float = 0.0,
+               specular_tint: SpectrumLike | None = None) -> DielectricMaterial:
+    """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
+    exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
+    C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
+    face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance) multiplies both lobes."""
+    from spectrace.spectral.glasses import index_of_refraction
+
+    tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
+    return DielectricMaterial(index_of_refraction(ior, where="ior"), roughness=_roughness(roughness),
+                              specular_tint=tint)
+
+
 def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
     """Makes a shape a light of radiance L(λ) x scale, W/(m² sr nm); one-sided emitters shine toward the side
     their triangles' winding faces."""
     return AreaEmitter(radiance=_emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
 
 
-def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere"] | "trimesh.Trimesh", material,
+def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism"] | "trimesh.Trimesh", material,
           emitter: AreaEmitter | None = None, transform: Iterable[Mapping[str, Any]] = (), name: str = "") -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
-    "cube" [-1, 1]³, "sphere" of radius 1), moved by `transform` steps (see `transformed`)."""
+    "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z), moved by
+    `transform` steps (see `transformed`). Built-ins face outward, as a dielectric needs."""
     if isinstance(geometry, str):
         if geometry not in BUILTIN_SHAPES:
             raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(BUILTIN_SHAPES)})")

@@ -19,7 +19,7 @@ __kernel void fresnel(__global const float *cos_i, __global const float *eta, __
 {
     int i = get_global_id(0);
     float ct;
-    reflectance[i] = fresnel_dielectric(cos_i[i], eta[i], &ct);
+    reflectance[i] = fresnel_dielectric_refracting(cos_i[i], eta[i], &ct);
     cos_t[i] = ct;
 }
 

@@ -1,7 +1,8 @@
 """Mitsuba 3 XML scenes -> spectrace scene TOML, for the subset spectrace represents exactly.
 
 Imported: shapes obj, ply, rectangle, cube, sphere (center, radius); BSDFs diffuse and twosided around a diffuse
-(spectrace's diffuse material already reflects on both faces); emitters area, point, constant, directional; the
+(spectrace's diffuse material already reflects on both faces), dielectric and roughdielectric (int_ior/ext_ior as
+names or numbers, isotropic alpha); emitters area, point, constant, directional; the
 perspective sensor (fov with any fov_axis, or focal_length; to_world with lookat/translate/rotate/scale/matrix);
 hdrfilm width/height; the sampler's sample_count and seed; integrators path (max_depth, rr_depth), direct (as path
 with max_depth 2) and volpath/volpathmis (as path: spectrace has no media). Spectra: rgb (uplifted exactly as
@@ -28,18 +29,28 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
+from spectrace.spectral.glasses import IOR_RANGE
 
 SUPPORTED = {
     "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
-    "bsdf": ("diffuse", "twosided"),
+    "bsdf": ("diffuse", "twosided", "dielectric", "roughdielectric"),
     "emitter": ("area", "point", "constant", "directional"),
     "sensor": ("perspective",),
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis"),
 }
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
-_PLANNED_BSDFS = ("conductor", "roughconductor", "dielectric", "roughdielectric", "thindielectric", "plastic",
-                  "roughplastic")
+_PLANNED_BSDFS = ("conductor", "roughconductor", "thindielectric", "plastic", "roughplastic")
+# Mitsuba 3's named indices of refraction (its dielectric plugins' documentation; values from Hecht, "Optics",
+# 4th ed., at about 589 nm and 0–20 °C). Its dielectrics default to int_ior = "bk7", ext_ior = "air".
+MITSUBA_NAMED_IOR = {
+    "vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.000277, "carbon dioxide": 1.00045,
+    "water": 1.3330, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
+    "benzene": 1.501, "silicone oil": 1.52045, "bromine": 1.661, "water ice": 1.31, "fused quartz": 1.458,
+    "pyrex": 1.470, "acrylic glass": 1.49, "polypropylene": 1.49, "bk7": 1.5046, "sodium chloride": 1.544,
+    "amber": 1.55, "pet": 1.5750, "diamond": 2.419,
+}
+MITSUBA_ROUGH_DIELECTRIC_ALPHA = 0.1  # roughdielectric's default alpha
 _OBJECT_TAGS = ("scene", "shape", "bsdf", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture",
                 "medium", "phase", "volume", "spectrum")
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
@@ -349,8 +360,54 @@ class _Importer:
             reflectance = properties.get("reflectance")
             spectrum = self.spectrum(reflectance, "reflectance") if reflectance is not None else {"value": 0.5}
             return None if spectrum is None else {"type": "diffuse", "reflectance": spectrum}
+        if kind in ("dielectric", "roughdielectric"):
+            return self.dielectric_table(bsdf, kind, properties)
         self.unsupported_plugin(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
+
+    def named_ior(self, properties: dict[str, Element], key: str, default: str) -> float:
+        element = properties.get(key)
+        if element is None:
+            return MITSUBA_NAMED_IOR[default]
+        if element.tag == "float":
+            return self.number(element)
+        name = (self.attribute(element, "value") or "").lower()
+        if name not in MITSUBA_NAMED_IOR:
+            raise SpectraceError(f"unknown {key} '{name}' (Mitsuba's names: {', '.join(MITSUBA_NAMED_IOR)})",
+                                 where=self.where(element))
+        return MITSUBA_NAMED_IOR[name]
+
+    def dielectric_table(self, bsdf: Element, kind: str, properties: dict[str, Element]) -> dict | None:
+        """Mitsuba's dielectrics have one index per side, constant in λ: spectrace's ior is their ratio."""
+        ior = self.named_ior(properties, "int_ior", "bk7") / self.named_ior(properties, "ext_ior", "air")
+        if ior < IOR_RANGE[0]:
+            self.unsupported_plugin(bsdf, " with int_ior not above ext_ior (flip the shape's normals instead)")
+            return None
+        table: dict = {"type": "dielectric", "ior": ior}
+        if kind == "roughdielectric":
+            if "alpha_u" in properties or "alpha_v" in properties:
+                self.unsupported_plugin(bsdf, " with anisotropic alpha_u, alpha_v")
+                return None
+            alpha = properties.get("alpha")
+            if alpha is not None and self.resolve(alpha).tag != "float":
+                self.unsupported_plugin(bsdf, " with a textured alpha")
+                return None
+            table["roughness"] = self.number(alpha) if alpha is not None else MITSUBA_ROUGH_DIELECTRIC_ALPHA
+            distribution = (self.attribute(properties["distribution"], "value")
+                            if "distribution" in properties else "beckmann")
+            if distribution != "ggx":
+                self.notes.append(f"line {bsdf.line}: roughdielectric's '{distribution}' microfacet distribution "
+                                  "imported as GGX with the same alpha")
+        tints = {key: self.spectrum(properties[key], key) for key in ("specular_reflectance", "specular_transmittance")
+                 if key in properties}
+        if None in tints.values():
+            return None
+        if len(tints) == 1 or (len(tints) == 2 and tints["specular_reflectance"] != tints["specular_transmittance"]):
+            self.unsupported_plugin(bsdf, " with specular_reflectance different from specular_transmittance")
+            return None
+        if tints:
+            table["specular_tint"] = tints["specular_reflectance"]
+        return table
 
     # -------------------------------------------------- scene parts
 

@@ -5,6 +5,7 @@ from spectrace.scene.model import (
     AreaEmitter,
     Camera,
     ConductorMaterial,
+    DielectricMaterial,
     DiffuseMaterial,
     MirrorMaterial,
     PlasticMaterial,
@@ -14,4 +15,4 @@ from spectrace.scene.model import (
 )
 
 __all__ = ["load_scene", "Scene", "Camera", "Shape", "DiffuseMaterial", "MirrorMaterial", "ConductorMaterial",
-           "PlasticMaterial", "RetroreflectorMaterial", "AreaEmitter"]
+           "PlasticMaterial", "RetroreflectorMaterial", "DielectricMaterial", "AreaEmitter"]
