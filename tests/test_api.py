@@ -194,3 +194,119 @@ def test_progress_bar_draws_and_finishes(device):
     # tqdm's bar when tqdm is installed (the notebook extra), else rich's; either must reach the full count.
     image = spectrace.render(_scene_in_python().with_overrides(spp=3), device=device, progress=True, pass_spp=1)
     assert image.spp == 3
+
+
+MATERIALS_TOML = """
+[camera]
+origin = [0.0, 0.0, -6.0]
+target = [0.0, 0.0, 0.0]
+fov = 60.0
+
+[film]
+width = 16
+height = 8
+
+[sampler]
+spp = 2
+seed = 5
+
+[materials.mirror]
+type = "mirror"
+reflectance = { value = 0.9 }
+
+[materials.gold]
+type = "conductor"
+metal = "Au"
+roughness = 0.3
+
+[materials.custom_metal]
+type = "conductor"
+eta = { values = "400:1.2, 700:0.3" }
+k = { value = 3.0 }
+specular_tint = { value = 0.8 }
+
+[materials.plastic]
+type = "plastic"
+reflectance = { rgb = [0.2, 0.5, 0.7] }
+ior = 1.6
+roughness = 0.2
+
+[materials.sign]
+type = "retroreflector"
+reflectance = { value = 0.7 }
+roughness = 0.2
+
+[[shapes]]
+type = "sphere"
+material = "mirror"
+transform = [{ translate = [-3.0, 0.0, 0.0] }]
+
+[[shapes]]
+type = "sphere"
+material = "gold"
+transform = [{ translate = [-1.0, 0.0, 0.0] }]
+
+[[shapes]]
+type = "sphere"
+material = "custom_metal"
+transform = [{ translate = [1.0, 0.0, 0.0] }]
+
+[[shapes]]
+type = "sphere"
+material = "plastic"
+transform = [{ translate = [3.0, 0.0, 0.0] }]
+
+[[shapes]]
+type = "rectangle"
+material = "sign"
+transform = [{ scale = 5.0 }, { translate = [0.0, 0.0, 2.0] }]
+
+[[lights]]
+type = "constant"
+radiance = { value = 0.5 }
+
+[[lights]]
+type = "point"
+position = [0.0, 2.0, -5.0]
+intensity = { value = 3.0 }
+"""
+
+
+def test_reflective_materials_render_like_the_same_toml_scene(tmp_path, device):
+    (tmp_path / "materials.toml").write_text(MATERIALS_TOML)
+    from_toml = Renderer(spectrace.load_scene(tmp_path / "materials.toml"), device).render()
+    materials = [
+        spectrace.mirror(0.9),
+        spectrace.conductor("Au", roughness=0.3),
+        spectrace.conductor(eta={400: 1.2, 700: 0.3}, k=3.0, specular_tint=0.8),
+        spectrace.plastic((0.2, 0.5, 0.7), ior=1.6, roughness=0.2),
+    ]
+    shapes = [spectrace.shape("sphere", m, transform=[{"translate": [x, 0.0, 0.0]}])
+              for m, x in zip(materials, (-3.0, -1.0, 1.0, 3.0))]
+    shapes.append(spectrace.shape("rectangle", spectrace.retroreflector(0.7, roughness=0.2),
+                                  transform=[{"scale": 5.0}, {"translate": [0.0, 0.0, 2.0]}]))
+    lights = [spectrace.constant_environment(0.5), spectrace.point_light((0.0, 2.0, -5.0), intensity=3.0)]
+    scene = spectrace.Scene(camera=spectrace.Camera(origin=(0.0, 0.0, -6.0), target=(0.0, 0.0, 0.0), fov_degrees=60.0),
+                            width=16, height=8, shapes=shapes, lights=lights, spp=2, seed=5)
+    from_python = spectrace.render(scene, device=device, progress=False)
+    assert from_toml.xyz[..., 1].mean() > 0
+    np.testing.assert_array_equal(from_python.xyz, from_toml.xyz)
+
+
+def test_bad_material_input_is_a_spectrace_error():
+    with pytest.raises(SpectraceError, match="roughness"):
+        spectrace.conductor("Au", roughness=1.5)
+    with pytest.raises(SpectraceError, match="unknown metal"):
+        spectrace.conductor("Pt")
+    with pytest.raises(SpectraceError, match="either metal or both eta and k"):
+        spectrace.conductor("Au", eta=1.5, k=2.0)
+    with pytest.raises(SpectraceError, match="either metal or both eta and k"):
+        spectrace.conductor(eta=1.5)
+    with pytest.raises(SpectraceError, match="eta"):
+        spectrace.conductor(eta=0.0, k=1.0)
+    with pytest.raises(SpectraceError, match="ior"):
+        spectrace.plastic(0.5, ior=1.0)
+    with pytest.raises(SpectraceError, match="reflectance"):
+        spectrace.mirror(1.2)
+    with pytest.raises(SpectraceError, match="reflectance"):
+        spectrace.retroreflector(-0.1)

@@ -50,7 +50,8 @@ SCALARS = st.one_of(
     st.sampled_from([0, -1, 1, 0.0, -0.0, 1e-320, 1e308, -1e308, 1e39, 16385, 1 << 27, 1 << 31, math.nan, math.inf]),
     st.booleans(),
     st.text(max_size=12),
-    st.sampled_from(["mesh", "rectangle", "cube", "sphere", "diffuse", "path", "direct", "point", "spot",
+    st.sampled_from(["mesh", "rectangle", "cube", "sphere", "diffuse", "mirror", "conductor", "plastic",
+                     "retroreflector", "Au", "Ag", "metals/Cu:eta", "path", "direct", "point", "spot",
                      "distant", "constant", "envmap", "area", "white", "light", "cie:D65", "cornell_box/light",
                      "cornell_box/reflectance:red", "spectrum.csv", "triangle.obj", "empty.obj", "missing.obj",
                      "cornell_box/white.obj", "400:0.5, 700:0.7", "x", ""]),
@@ -59,7 +60,8 @@ KEY_NAMES = st.sampled_from(["type", "file", "material", "rgb", "value", "values
                              "origin", "target", "up", "width", "height", "spp", "seed", "emitter", "radiance",
                              "transform", "translate", "rotate", "matrix", "axis", "angle", "power", "position",
                              "intensity", "direction", "irradiance", "column", "library", "blackbody", "two_sided",
-                             "max_depth", "rr_depth", "name", "fvo", "materail", "bogus", "cutoff_angle"])
+                             "max_depth", "rr_depth", "name", "fvo", "materail", "bogus", "cutoff_angle", "metal",
+                             "eta", "k", "roughness", "ior", "specular_tint"])
 
 
 def _values(depth: int = 2):
@@ -105,8 +107,14 @@ GENERATED_SCENES = st.fixed_dictionaries({
     "camera": st.fixed_dictionaries({"origin": VECTORS, "target": VECTORS, "fov": st.floats(1, 179)}),
     "film": st.fixed_dictionaries({"width": st.integers(1, 64), "height": st.integers(1, 64)}),
     "sampler": st.fixed_dictionaries({"spp": st.integers(1, 64), "seed": st.integers(0, 100)}),
-    "materials": st.fixed_dictionaries({"m": st.fixed_dictionaries({"type": st.just("diffuse"),
-                                                                    "reflectance": SPECTRA})}),
+    "materials": st.fixed_dictionaries({"m": st.one_of(
+        st.fixed_dictionaries({"type": st.sampled_from(["diffuse", "mirror", "retroreflector"]),
+                               "reflectance": SPECTRA}),
+        st.fixed_dictionaries({"type": st.just("plastic"), "reflectance": SPECTRA, "ior": st.floats(1.01, 4.0),
+                               "roughness": st.floats(0, 1)}),
+        st.fixed_dictionaries({"type": st.just("conductor"), "metal": st.sampled_from(["Au", "Ag", "Cu", "Al"]),
+                               "roughness": st.floats(0, 1)}),
+    )}),
     "shapes": st.lists(SHAPES, max_size=3),
     "lights": st.lists(LIGHTS, max_size=2),
 })

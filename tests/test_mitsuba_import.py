@@ -68,17 +68,60 @@ def test_import_command_writes_a_scene_that_renders(tmp_path):
 
 def test_unsupported_plugins_are_all_named(tmp_path):
     path = _write(tmp_path, """
-        <bsdf type="roughconductor" id="metal"/>
+        <bsdf type="thindielectric" id="metal"/>
         <shape type="serialized"><string name="filename" value="x.serialized"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
         <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""")
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
     message = str(error.value)
-    for named in ("shape 'serialized' (line 6)", "bsdf 'roughconductor' (not yet in spectrace) (line 5)",
+    for named in ("shape 'serialized' (line 6)", "bsdf 'thindielectric' (not yet in spectrace) (line 5)",
                   "emitter 'envmap' (line 8)"):
         assert named in message
     assert "\n" not in message
+
+
+def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
+    path = _write(tmp_path, """
+        <bsdf type="roughconductor" id="gold"><string name="material" value="Au"/>
+            <float name="alpha" value="0.2"/><string name="distribution" value="ggx"/></bsdf>
+        <bsdf type="conductor" id="mirror"><float name="specular_reflectance" value="0.8"/></bsdf>
+        <bsdf type="conductor" id="measured"><spectrum name="eta" value="400:1.2, 700:0.2"/>
+            <spectrum name="k" value="400:2.2, 700:3.5"/></bsdf>
+        <bsdf type="twosided" id="red"><bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.5, 0.1, 0.1"/>
+            <string name="int_ior" value="bk7"/></bsdf></bsdf>
+        <bsdf type="plastic" id="white"><float name="int_ior" value="1.6"/><float name="ext_ior" value="1.0"/></bsdf>
+        <shape type="sphere"><ref id="gold"/></shape>
+        <shape type="sphere"><ref id="mirror"/></shape>
+        <shape type="sphere"><ref id="measured"/></shape>
+        <shape type="sphere"><ref id="red"/></shape>
+        <shape type="sphere"><ref id="white"/></shape>
+        <emitter type="constant"/>""")
+    data, notes = mitsuba_scene_data(path)
+    materials = data["materials"]
+    assert materials["gold"] == {"type": "conductor", "metal": "Au", "roughness": 0.2}
+    assert materials["mirror"] == {"type": "mirror", "reflectance": {"value": 0.8}}  # Mitsuba's material "none"
+    assert materials["measured"]["eta"] == {"values": [[400.0, 1.2], [700.0, 0.2]]}
+    # Mitsuba's roughplastic defaults: alpha 0.1, Beckmann (imported as GGX, with a note); ior = bk7 / air.
+    assert materials["red"] == {"type": "plastic", "reflectance": {"rgb": [0.5, 0.1, 0.1]},
+                                "ior": pytest.approx(1.5046 / 1.000277), "roughness": 0.1}
+    assert materials["white"] == {"type": "plastic", "reflectance": {"value": 0.5}, "ior": 1.6}
+    assert any("beckmann" in note for note in notes)
+    scene = load_mitsuba_scene(path)
+    assert {type(shape.material).__name__ for shape in scene.shapes} == {"ConductorMaterial", "MirrorMaterial",
+                                                                          "PlasticMaterial"}
+
+
+def test_unrepresentable_conductors_are_named(tmp_path):
+    path = _write(tmp_path, """
+        <bsdf type="conductor" id="chrome"><string name="material" value="Cr"/></bsdf>
+        <bsdf type="roughconductor" id="brushed"><string name="material" value="Al"/>
+            <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>
+        <shape type="cube"><ref id="chrome"/></shape>
+        <shape type="cube"><ref id="brushed"/></shape>""")
+    with pytest.raises(SpectraceError) as error:
+        mitsuba_scene_data(path)
+    assert "with material 'Cr'" in str(error.value) and "anisotropic roughness" in str(error.value)
 
 
 @pytest.mark.parametrize("fov_xml, aspect_width, expected_tan_half_x", [
@@ -159,13 +202,14 @@ def test_dielectrics(tmp_path):
     assert materials[2] == {"type": "dielectric", "ior": pytest.approx(1.7 / 1.000277), "roughness": 0.25,
                             "specular_tint": {"rgb": [0.9, 0.9, 0.9]}}
     assert materials[3]["roughness"] == 0.1
-    assert any("'beckmann' microfacet distribution imported as GGX" in note for note in notes)
+    assert any("beckmann distribution; imported as GGX" in note for note in notes)
     scene = load_mitsuba_scene(_write(tmp_path, body))
     assert scene.shapes[1].material.ior.at(500.0) == pytest.approx(1.333)
 
     bad = _write(tmp_path, """<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="air"/>
         <string name="ext_ior" value="water"/></bsdf></shape>
-        <shape type="cube"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/></bsdf></shape>""")
+        <shape type="cube"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>
+            <float name="alpha_v" value="0.2"/></bsdf></shape>""")
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(bad)
     assert "int_ior not above ext_ior" in str(error.value) and "anisotropic" in str(error.value)

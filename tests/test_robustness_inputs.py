@@ -87,7 +87,7 @@ CASES = [
     replace("missing-required", "fov = 40", "", "camera.fov", "required key is missing"),
     replace("missing-section", "[film]\nwidth = 8\nheight = 6", "", "film", "required key is missing"),
     replace("unknown-shape-type", SHAPE, 'type = "torus"', "shapes[0].type", "'mesh', 'rectangle', 'cube'"),
-    append("unknown-light-type", '[[lights]]\ntype = "laser"\nposition = [0, 0, 0]\n', "lights[0]",
+    append("unknown-light-type", '[[lights]]\ntype = "laser"\nposition = [0, 0, 0]\n', "lights[0].type",
            "Input tag 'laser'"),
     replace("nothing-emits", '[[shapes]]\ntype = "rectangle"\nmaterial = "grey"\nemitter = { radiance = { value = 1.0 '
             '} }\n', "", "", "the scene has neither shapes nor lights"),

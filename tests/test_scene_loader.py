@@ -121,3 +121,55 @@ def test_named_spectra_and_library_references(tmp_path):
     )
     spectrum = load_scene(_write(tmp_path, text=text)).shapes[0].material.reflectance
     assert spectrum.evaluate(595.0) == pytest.approx(0.4)
+
+
+def _with_material(tmp_path, material: str):
+    """MINIMAL with [materials.grey] replaced by `material` (its keys after the table header)."""
+    text = MINIMAL.format(reflectance="value = 0.5", extra="").replace(
+        'type = "diffuse"\nreflectance = { value = 0.5 }', textwrap.dedent(material).strip())
+    return _write(tmp_path, text=text)
+
+
+def test_reflective_materials_resolve(tmp_path):
+    gold = load_scene(_with_material(tmp_path, 'type = "conductor"\nmetal = "Au"\nroughness = 0.25'))
+    material = gold.shapes[0].material
+    assert type(material).__name__ == "ConductorMaterial" and material.roughness == 0.25
+    # Gold's measured index at 600 nm (spectra/metals/Au.csv lies between these rows).
+    assert 0.2 < material.eta.evaluate(600.0) < 0.3 and 2.9 < material.k.evaluate(600.0) < 3.1
+    custom = load_scene(_with_material(tmp_path, 'type = "conductor"\neta = { value = 1.5 }\nk = { value = 2.0 }\n'
+                                                 'specular_tint = { value = 0.5 }')).shapes[0].material
+    assert custom.k.evaluate(500.0) == 2.0 and custom.specular_tint.evaluate(500.0) == 0.5
+    plastic = load_scene(_with_material(tmp_path, 'type = "plastic"\nreflectance = { value = 0.3 }')).shapes[0].material
+    assert (plastic.ior, plastic.roughness) == (1.5, 0.0)
+    mirror = load_scene(_with_material(tmp_path, 'type = "mirror"')).shapes[0].material
+    assert mirror.reflectance.evaluate(550.0) == 1.0
+    retro = load_scene(_with_material(tmp_path, 'type = "retroreflector"')).shapes[0].material
+    assert retro.roughness == 0.1
+
+
+@pytest.mark.parametrize(
+    "material, where, message",
+    [
+        ('type = "conductor"\nmetal = "Pt"', "materials.grey.metal", "'Au', 'Ag', 'Cu' or 'Al'"),
+        ('type = "conductor"', "materials.grey", "give metal"),
+        ('type = "conductor"\nmetal = "Au"\neta = { value = 1 }', "materials.grey", "not both"),
+        ('type = "conductor"\neta = { rgb = [1, 1, 1] }\nk = { value = 1 }', "materials.grey.eta", "not a colour"),
+        ('type = "conductor"\neta = { value = 0 }\nk = { value = 1 }', "materials.grey.eta", "> 0"),
+        ('type = "conductor"\neta = { value = 1 }\nk = { value = -1 }', "materials.grey.k", "negative"),
+        ('type = "conductor"\nmetal = "Au"\nroughness = 2', "materials.grey.roughness", "less than or equal to 1"),
+        ('type = "conductor"\nmetal = "Au"\nspecular_tint = { value = 2 }', "materials.grey.specular_tint",
+         "exceeds 1"),
+        ('type = "plastic"\nreflectance = { value = 0.5 }\nior = 1.0', "materials.grey.ior", "greater than 1"),
+        ('type = "plastic"\nreflectance = { value = 0.5 }\nroughnes = 0.1', "materials.grey.roughnes",
+         "did you mean 'roughness'"),
+        ('type = "mirror"\nreflectance = { value = 1.5 }', "materials.grey.reflectance", "exceeds 1"),
+        ('type = "glass"', "materials.grey.type", "Input tag 'glass' found using 'type' does not match any of the expected tags: 'diffuse', 'mirror'"),
+        ('reflectance = { value = 0.5 }', "materials.grey.type", "required key is missing"),
+    ],
+)
+def test_bad_material_names_file_and_key(tmp_path, material, where, message):
+    with pytest.raises(SpectraceError) as info:
+        load_scene(_with_material(tmp_path, material))
+    text = str(info.value)
+    assert "\n" not in text
+    assert f"scene.toml: {where}" in text and message in text, text

@@ -1,8 +1,10 @@
 """Mitsuba 3 XML scenes -> spectrace scene TOML, for the subset spectrace represents exactly.
 
-Imported: shapes obj, ply, rectangle, cube, sphere (center, radius); BSDFs diffuse and twosided around a diffuse
-(spectrace's diffuse material already reflects on both faces), dielectric and roughdielectric (int_ior/ext_ior as
-names or numbers, isotropic alpha); emitters area, point, constant, directional; the
+Imported: shapes obj, ply, rectangle, cube, sphere (center, radius); BSDFs diffuse, conductor and roughconductor
+(material "Au", "Ag", "Cu", "Al" or "none", eta and k, alpha, specular_reflectance), plastic and roughplastic
+(diffuse_reflectance, int_ior / ext_ior as numbers or Mitsuba's names, alpha), dielectric and roughdielectric
+(int_ior / ext_ior, alpha, equal specular_reflectance and specular_transmittance), and twosided around one of them
+(spectrace's materials already reflect on both faces); emitters area, point, constant, directional; the
 perspective sensor (fov with any fov_axis, or focal_length; to_world with lookat/translate/rotate/scale/matrix);
 hdrfilm width/height; the sampler's sample_count and seed; integrators path (max_depth, rr_depth), direct (as path
 with max_depth 2) and volpath/volpathmis (as path: spectrace has no media). Spectra: rgb (uplifted exactly as
@@ -33,24 +35,23 @@ from spectrace.spectral.glasses import IOR_RANGE
 
 SUPPORTED = {
     "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
-    "bsdf": ("diffuse", "twosided", "dielectric", "roughdielectric"),
+    "bsdf": ("diffuse", "twosided", "conductor", "roughconductor", "plastic", "roughplastic", "dielectric",
+             "roughdielectric"),
     "emitter": ("area", "point", "constant", "directional"),
     "sensor": ("perspective",),
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis"),
 }
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
-_PLANNED_BSDFS = ("conductor", "roughconductor", "thindielectric", "plastic", "roughplastic")
-# Mitsuba 3's named indices of refraction (its dielectric plugins' documentation; values from Hecht, "Optics",
-# 4th ed., at about 589 nm and 0–20 °C). Its dielectrics default to int_ior = "bk7", ext_ior = "air".
-MITSUBA_NAMED_IOR = {
-    "vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.000277, "carbon dioxide": 1.00045,
-    "water": 1.3330, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
-    "benzene": 1.501, "silicone oil": 1.52045, "bromine": 1.661, "water ice": 1.31, "fused quartz": 1.458,
-    "pyrex": 1.470, "acrylic glass": 1.49, "polypropylene": 1.49, "bk7": 1.5046, "sodium chloride": 1.544,
-    "amber": 1.55, "pet": 1.5750, "diamond": 2.419,
-}
-MITSUBA_ROUGH_DIELECTRIC_ALPHA = 0.1  # roughdielectric's default alpha
+_PLANNED_BSDFS = ("thindielectric",)
+# Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
+_CONDUCTOR_MATERIALS = ("Au", "Ag", "Cu", "Al")
+# Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
+_NAMED_IOR = {"vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.000277, "carbon dioxide": 1.00045,
+              "water": 1.333, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
+              "benzene": 1.501, "silicone oil": 1.52045, "bromine": 1.661, "water ice": 1.31, "fused quartz": 1.458,
+              "pyrex": 1.470, "acrylic glass": 1.49, "polypropylene": 1.49, "bk7": 1.5046, "sodium chloride": 1.544,
+              "amber": 1.55, "pet": 1.575, "diamond": 2.419}
 _OBJECT_TAGS = ("scene", "shape", "bsdf", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture",
                 "medium", "phase", "volume", "spectrum")
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
@@ -360,44 +361,132 @@ class _Importer:
             reflectance = properties.get("reflectance")
             spectrum = self.spectrum(reflectance, "reflectance") if reflectance is not None else {"value": 0.5}
             return None if spectrum is None else {"type": "diffuse", "reflectance": spectrum}
+        if kind in ("conductor", "roughconductor"):
+            return self.conductor_table(bsdf, properties, rough=kind == "roughconductor")
+        if kind in ("plastic", "roughplastic"):
+            return self.plastic_table(bsdf, properties, rough=kind == "roughplastic")
         if kind in ("dielectric", "roughdielectric"):
-            return self.dielectric_table(bsdf, kind, properties)
+            return self.dielectric_table(bsdf, properties, rough=kind == "roughdielectric")
         self.unsupported_plugin(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
 
-    def named_ior(self, properties: dict[str, Element], key: str, default: str) -> float:
-        element = properties.get(key)
-        if element is None:
-            return MITSUBA_NAMED_IOR[default]
-        if element.tag == "float":
-            return self.number(element)
-        name = (self.attribute(element, "value") or "").lower()
-        if name not in MITSUBA_NAMED_IOR:
-            raise SpectraceError(f"unknown {key} '{name}' (Mitsuba's names: {', '.join(MITSUBA_NAMED_IOR)})",
-                                 where=self.where(element))
-        return MITSUBA_NAMED_IOR[name]
+    def text(self, element: Element) -> str:
+        return self.attribute(self.resolve(element), "value") or ""
 
-    def dielectric_table(self, bsdf: Element, kind: str, properties: dict[str, Element]) -> dict | None:
-        """Mitsuba's dielectrics have one index per side, constant in λ: spectrace's ior is their ratio."""
-        ior = self.named_ior(properties, "int_ior", "bk7") / self.named_ior(properties, "ext_ior", "air")
+    def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | None:
+        """GGX α of a rough Mitsuba BSDF (its default 0.1); None when spectrace cannot represent it (recorded)."""
+        if "alpha_u" in properties or "alpha_v" in properties:
+            alpha_u = self.number(self.resolve(properties.get("alpha_u", properties.get("alpha_v"))))
+            alpha_v = self.number(self.resolve(properties.get("alpha_v", properties.get("alpha_u"))))
+            if alpha_u != alpha_v:
+                self.unsupported_plugin(bsdf, " with anisotropic roughness")
+                return None
+            alpha = alpha_u
+        elif "alpha" in properties:
+            element = self.resolve(properties["alpha"])
+            if element.tag == "texture":
+                self.unsupported_plugin(element, " as alpha")
+                return None
+            alpha = self.number(element)
+        else:
+            alpha = 0.1
+        distribution = self.text(properties["distribution"]) if "distribution" in properties else "beckmann"
+        if distribution != "ggx":
+            self.notes.append(f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
+                              f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)")
+        if not 0.0 <= alpha <= 1.0:
+            raise SpectraceError(f"alpha must lie in [0, 1] for spectrace, got {alpha}", where=self.where(bsdf))
+        return alpha
+
+    def conductor_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
+        tint = None
+        if "specular_reflectance" in properties:
+            tint = self.spectrum(properties["specular_reflectance"], "specular_reflectance")
+            if tint is None:
+                return None
+        roughness = self.roughness(bsdf, properties) if rough else 0.0
+        if roughness is None:
+            return None
+        if "eta" in properties or "k" in properties:
+            if "eta" not in properties or "k" not in properties:
+                raise SpectraceError("a conductor needs both eta and k", where=self.where(bsdf))
+            eta, k = self.spectrum(properties["eta"], "eta"), self.spectrum(properties["k"], "k")
+            if eta is None or k is None:
+                return None
+            if "rgb" in eta or "rgb" in k:
+                self.unsupported_plugin(bsdf, " with eta or k given as rgb")
+                return None
+            table = {"type": "conductor", "eta": eta, "k": k}
+        else:
+            material = self.text(properties["material"]) if "material" in properties else "none"
+            if material == "none":  # Mitsuba's default: a perfect mirror scaled by specular_reflectance
+                if roughness > 0.0:
+                    self.unsupported_plugin(bsdf, " with material 'none' and roughness")
+                    return None
+                return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
+            if material not in _CONDUCTOR_MATERIALS:
+                self.unsupported_plugin(bsdf, f" with material '{material}' (spectrace has "
+                                              f"{', '.join(_CONDUCTOR_MATERIALS)})")
+                return None
+            table = {"type": "conductor", "metal": material}
+        if roughness > 0.0:
+            table["roughness"] = roughness
+        if tint is not None:
+            table["specular_tint"] = tint
+        return table
+
+    def ior(self, bsdf: Element, properties: dict[str, Element], key: str, default: float) -> float:
+        if key not in properties:
+            return default
+        element = self.resolve(properties[key])
+        if element.tag == "string":
+            name = self.text(element)
+            if name.lower() not in _NAMED_IOR:
+                raise SpectraceError(f"unknown {key} '{name}' (Mitsuba names: {', '.join(_NAMED_IOR)})",
+                                     where=self.where(element))
+            return _NAMED_IOR[name.lower()]
+        return self.number(element)
+
+    def plastic_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
+        reflectance = (self.spectrum(properties["diffuse_reflectance"], "diffuse_reflectance")
+                       if "diffuse_reflectance" in properties else {"value": 0.5})
+        if reflectance is None:
+            return None
+        if "specular_reflectance" in properties:
+            specular = self.spectrum(properties["specular_reflectance"], "specular_reflectance")
+            if specular is not None and specular != {"value": 1.0}:
+                self.unsupported_plugin(bsdf, " with specular_reflectance other than 1")
+                return None
+        if "nonlinear" in properties and self.text(properties["nonlinear"]) == "true":
+            self.unsupported_plugin(bsdf, " with nonlinear = true")
+            return None
+        ior = self.ior(bsdf, properties, "int_ior", 1.49) / self.ior(bsdf, properties, "ext_ior", 1.000277)
+        if not 1.0 < ior <= 4.0:
+            raise SpectraceError(f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in (1, 4]",
+                                 where=self.where(bsdf))
+        roughness = self.roughness(bsdf, properties) if rough else 0.0
+        if roughness is None:
+            return None
+        self.notes.append(f"line {bsdf.line}: {bsdf.label()}: spectrace's plastic couples coat and base "
+                          "differently from Mitsuba's (an energy-conserving symmetric "
+                          "coupling instead of internal scattering; see docs/materials.md), so the brightness of "
+                          "its diffuse part differs")
+        table = {"type": "plastic", "reflectance": reflectance, "ior": round(ior, 6)}
+        if roughness > 0.0:
+            table["roughness"] = roughness
+        return table
+
+    def dielectric_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
+        """Mitsuba's dielectrics have one constant index per side (default bk7 inside, air outside): spectrace's ior
+        is their ratio. One tint on both lobes stands for equal specular_reflectance and specular_transmittance."""
+        ior = self.ior(bsdf, properties, "int_ior", _NAMED_IOR["bk7"]) / self.ior(bsdf, properties, "ext_ior",
+                                                                                  _NAMED_IOR["air"])
         if ior < IOR_RANGE[0]:
             self.unsupported_plugin(bsdf, " with int_ior not above ext_ior (flip the shape's normals instead)")
             return None
-        table: dict = {"type": "dielectric", "ior": ior}
-        if kind == "roughdielectric":
-            if "alpha_u" in properties or "alpha_v" in properties:
-                self.unsupported_plugin(bsdf, " with anisotropic alpha_u, alpha_v")
-                return None
-            alpha = properties.get("alpha")
-            if alpha is not None and self.resolve(alpha).tag != "float":
-                self.unsupported_plugin(bsdf, " with a textured alpha")
-                return None
-            table["roughness"] = self.number(alpha) if alpha is not None else MITSUBA_ROUGH_DIELECTRIC_ALPHA
-            distribution = (self.attribute(properties["distribution"], "value")
-                            if "distribution" in properties else "beckmann")
-            if distribution != "ggx":
-                self.notes.append(f"line {bsdf.line}: roughdielectric's '{distribution}' microfacet distribution "
-                                  "imported as GGX with the same alpha")
+        roughness = self.roughness(bsdf, properties) if rough else 0.0
+        if roughness is None:
+            return None
         tints = {key: self.spectrum(properties[key], key) for key in ("specular_reflectance", "specular_transmittance")
                  if key in properties}
         if None in tints.values():
@@ -405,6 +494,9 @@ class _Importer:
         if len(tints) == 1 or (len(tints) == 2 and tints["specular_reflectance"] != tints["specular_transmittance"]):
             self.unsupported_plugin(bsdf, " with specular_reflectance different from specular_transmittance")
             return None
+        table: dict = {"type": "dielectric", "ior": round(ior, 6)}
+        if roughness > 0.0:
+            table["roughness"] = roughness
         if tints:
             table["specular_tint"] = tints["specular_reflectance"]
         return table

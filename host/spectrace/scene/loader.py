@@ -112,6 +112,9 @@ def _validation_error(path: Path, error: ValidationError, data: object = None) -
         discriminator = str(first.get("ctx", {}).get("discriminator", "type")).strip("'")
         location = (*location, discriminator)
         message = "required key is missing"
+    elif first["type"] == "union_tag_invalid":  # e.g. a material of an unknown `type`
+        context = first.get("ctx", {})
+        location = (*location, str(context.get("discriminator", "type")).strip("'"))
     elif first["type"] in ("model_type", "dict_type"):  # pydantic would name a schema class
         message = f"expected a table, got {type(first['input']).__name__} {first['input']!r}"[:200]
     extra = f" ({len(error.errors()) - 1} more problem(s))" if len(error.errors()) > 1 else ""

@@ -1,0 +1,58 @@
+/* Test harness: one Material (with its spectrum table) evaluated, sampled and queried for its pdf on arrays of
+ * directions and random numbers, at four fixed wavelengths. The surface normal is +z in world space, so world and
+ * local directions differ only by a rotation about the normal. */
+#include "material.cl"
+
+inline SampledWavelengths harness_wavelengths(__global const float *lambda)
+{
+    return fixed_wavelengths((float4)(lambda[0], lambda[1], lambda[2], lambda[3]));
+}
+
+#define HARNESS_NORMAL ((float3)(0.0f, 0.0f, 1.0f))
+
+/* f(wo, wi)·|cos θi| and the pdf of wi given wo. */
+__kernel void bsdf_eval_pdf(__global const Material *material, __global const float *spectra,
+                            __global const float *lambda, __global const float4 *wo, __global const float4 *wi,
+                            __global float4 *f_cos, __global float *pdf)
+{
+    int i = get_global_id(0);
+    SampledWavelengths w = harness_wavelengths(lambda);
+    f_cos[i] = material_eval(material, spectra, &w, HARNESS_NORMAL, wo[i].xyz, wi[i].xyz);
+    pdf[i] = material_pdf(material, spectra, &w, HARNESS_NORMAL, wo[i].xyz, wi[i].xyz);
+}
+
+/* One sample per item from u = (uc, u.x, u.y); wi.w = 1 when a direction was produced. */
+__kernel void bsdf_sample(__global const Material *material, __global const float *spectra,
+                          __global const float *lambda, __global const float4 *wo, __global const float4 *u,
+                          __global float4 *wi, __global float4 *weight, __global float *pdf, __global int *is_delta)
+{
+    int i = get_global_id(0);
+    SampledWavelengths w = harness_wavelengths(lambda);
+    BSDFSample s;
+    int ok = material_sample(material, spectra, &w, HARNESS_NORMAL, wo[i].xyz, u[i].x, u[i].yz, &s);
+    wi[i] = ok ? (float4)(s.wi, 1.0f) : (float4)(0.0f);
+    weight[i] = ok ? s.weight : (float4)(0.0f);
+    pdf[i] = ok ? s.pdf : 0.0f;
+    is_delta[i] = ok ? s.is_delta : 0;
+}
+
+/* The pdf of one wo on a grid of cell centres over the upper hemisphere, uniform in cos θ (n_cos cells) and φ
+ * (n_phi cells), for integrating it over bins: item = i_cos * n_phi + i_phi. */
+__kernel void bsdf_pdf_grid(__global const Material *material, __global const float *spectra,
+                            __global const float *lambda, float4 wo, int n_cos, int n_phi, __global float *pdf)
+{
+    int item = get_global_id(0);
+    int i_cos = item / n_phi;
+    int i_phi = item - i_cos * n_phi;
+    float cos_theta = ((float)i_cos + 0.5f) / (float)n_cos;
+    float phi = TWO_PI * ((float)i_phi + 0.5f) / (float)n_phi;
+    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+    float3 wi = (float3)(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
+    SampledWavelengths w = harness_wavelengths(lambda);
+    pdf[item] = material_pdf(material, spectra, &w, HARNESS_NORMAL, wo.xyz, wi);
+}
+
+__kernel void bsdf_has_non_delta_lobe(__global const Material *material, __global int *result)
+{
+    result[0] = material_has_non_delta_lobe(material);
+}
