@@ -104,3 +104,16 @@ def test_glass_sphere_in_a_furnace_renders_as_the_environment(device, ior):
     assert abs(mean - k) < 4 * standard_error + 1e-4 * k, (mean, standard_error)
     if ior == 1.5:
         assert standard_error < 0.002 * k  # no dispersion: the four wavelengths move together, little noise
+
+
+@pytest.mark.parametrize("name", ["cube", "sphere", "prism"])
+def test_built_in_closed_shapes_face_outward(name):
+    """A dielectric takes its exterior from the winding, so the closed built-ins must be wound outward: every face's
+    (v1 − v0) × (v2 − v0) points away from the (convex) shape's centre. The prism also has the stated size."""
+    mesh = spectrace.api.BUILTIN_SHAPES[name]()
+    v0, v1, v2 = mesh.triangles()
+    normals = np.cross(v1 - v0, v2 - v0)
+    centroids = (v0 + v1 + v2) / 3 - mesh.vertices.mean(axis=0)
+    assert np.all(np.einsum("ij,ij->i", normals, centroids) > 0)
+    if name == "prism":
+        assert mesh.area() == pytest.approx(2 * np.sqrt(3) + 3 * 4)  # two caps of side 2, three 2 x 2 sides
