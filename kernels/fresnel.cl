@@ -4,16 +4,28 @@
 #define SPECTRACE_FRESNEL_CL
 
 /* Dielectric interface: light arrives at cos θi ∈ [0, 1] from the side of index n_i, and eta = n_t / n_i.
- * Returns 1 under total internal reflection. */
-inline float fresnel_dielectric(float cos_i, float eta)
+ * Returns 1 under total internal reflection. *cos_t receives the cosine of the refracted direction (0 under total
+ * internal reflection), which Snell's law needs next. */
+inline float fresnel_dielectric_refracting(float cos_i, float eta, float *cos_t)
 {
     cos_i = clamp(cos_i, 0.0f, 1.0f);
-    float sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
-    if (sin2_t >= 1.0f) return 1.0f;
-    float cos_t = sqrt(1.0f - sin2_t);
-    float r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    float r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    /* cos²θt = 1 − sin²θi/η², arranged so that it does not cancel when η is near 1 ((η − 1) is exact there). */
+    float cos2_t = (cos_i * cos_i + (eta - 1.0f) * (eta + 1.0f)) / (eta * eta);
+    if (cos2_t <= 0.0f) {
+        *cos_t = 0.0f;
+        return 1.0f;
+    }
+    float ct = sqrt(cos2_t);
+    *cos_t = ct;
+    float r_parallel = (eta * cos_i - ct) / (eta * cos_i + ct);
+    float r_perpendicular = (cos_i - eta * ct) / (cos_i + eta * ct);
     return 0.5f * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
+}
+
+inline float fresnel_dielectric(float cos_i, float eta)
+{
+    float cos_t;
+    return fresnel_dielectric_refracting(cos_i, eta, &cos_t);
 }
 
 /* Cosine-weighted hemispherical average 2∫₀¹ F(μ) μ dμ of fresnel_dielectric for light arriving from outside

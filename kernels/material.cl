@@ -15,6 +15,7 @@
 #include "bsdf_conductor.cl"
 #include "bsdf_plastic.cl"
 #include "bsdf_retroreflector.cl"
+#include "bsdf_dielectric.cl"
 
 /* n faces wo for two-sided reflectors. */
 inline float3 facing(float3 n, float3 wo)
@@ -23,10 +24,11 @@ inline float3 facing(float3 n, float3 wo)
 }
 
 /* The local frame of material m at a surface of normal n seen from wo. Every reflector reflects on both faces,
- * so its frame's normal is turned toward wo (local wo.z ≥ 0). */
+ * so its frame's normal is turned toward wo (local wo.z ≥ 0). A dielectric keeps the geometric normal: which side
+ * is the interior (so the sign of the refraction) comes from the winding, so closed meshes need outward normals. */
 inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 wo)
 {
-    return shading_frame(facing(n, wo));
+    return shading_frame(m->type == MATERIAL_DIELECTRIC ? n : facing(n, wo));
 }
 
 /* f(wo, wi)·|cos θi| per wavelength, local directions. */
@@ -41,6 +43,7 @@ inline float4 material_eval_local(__global const Material *m, __global const flo
         RetroreflectorParams p = retroreflector_params(m, spectra, w);
         return retroreflector_eval(&p, wo, wi);
     }
+    case MATERIAL_DIELECTRIC: { DielectricParams p = dielectric_params(m, spectra, w); return dielectric_eval(&p, wo, wi); }
     default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_eval(&p, wo, wi); }
     }
 }
@@ -57,6 +60,7 @@ inline float material_pdf_local(__global const Material *m, __global const float
         RetroreflectorParams p = retroreflector_params(m, spectra, w);
         return retroreflector_pdf(&p, wo, wi);
     }
+    case MATERIAL_DIELECTRIC: { DielectricParams p = dielectric_params(m, spectra, w); return dielectric_pdf(&p, wo, wi); }
     default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_pdf(&p, wo, wi); }
     }
 }
@@ -76,6 +80,12 @@ inline int material_sample_local(__global const Material *m, __global const floa
         RetroreflectorParams p = retroreflector_params(m, spectra, w);
         return retroreflector_sample(&p, wo, u, s);
     }
+    case MATERIAL_DIELECTRIC: {
+        DielectricParams p = dielectric_params(m, spectra, w);
+        if (!dielectric_sample(&p, wo, uc, u, s)) return 0;
+        s->terminate_secondary = dielectric_disperses(m, w);
+        return 1;
+    }
     default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_sample(&p, wo, u, s); }
     }
 }
@@ -86,9 +96,17 @@ inline int material_has_non_delta_lobe(__global const Material *m)
     switch (m->type) {
     case MATERIAL_MIRROR: return 0;
     case MATERIAL_CONDUCTOR:
-    case MATERIAL_RETROREFLECTOR: return !ggx_is_smooth(m->alpha);
+    case MATERIAL_RETROREFLECTOR:
+    case MATERIAL_DIELECTRIC: return !ggx_is_smooth(m->alpha);
     default: return 1;
     }
+}
+
+/* 1 when the event steers each wavelength its own way: the integrators then keep only the hero wavelength, before
+ * next-event estimation as well as before following the sampled direction. */
+inline int material_disperses(__global const Material *m, const SampledWavelengths *w)
+{
+    return m->type == MATERIAL_DIELECTRIC && dielectric_disperses(m, w);
 }
 
 inline float4 material_eval(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,

@@ -152,6 +152,9 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
         if (s.segments >= last_segment) break;
 
         __global const Material *material = &scene->materials[info.material];
+        /* A dispersive surface keeps only the hero wavelength for everything that follows, direct light included
+         * (its BSDF is evaluated at the hero's index of refraction). */
+        if (material_disperses(material, w)) terminate_secondary_wavelengths(&s);
         if (material_has_non_delta_lobe(material)) {
             radiance += s.throughput * estimate_direct_light(scene, w, sampler, p, n, wo, material, 1, rays_traced);
         }

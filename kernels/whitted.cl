@@ -48,6 +48,9 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
         if (s.segments >= last_segment) break;
 
         __global const Material *material = &scene->materials[info.material];
+        /* A dispersive surface keeps only the hero wavelength for everything that follows, direct light included
+         * (its BSDF is evaluated at the hero's index of refraction). */
+        if (material_disperses(material, w)) terminate_secondary_wavelengths(&s);
         if (material_has_non_delta_lobe(material)) {
             radiance += s.throughput * estimate_direct_light(scene, w, sampler, p, n, wo, material, 0, rays_traced);
         }

@@ -68,14 +68,14 @@ def test_import_command_writes_a_scene_that_renders(tmp_path):
 
 def test_unsupported_plugins_are_all_named(tmp_path):
     path = _write(tmp_path, """
-        <bsdf type="roughdielectric" id="metal"/>
+        <bsdf type="thindielectric" id="metal"/>
         <shape type="serialized"><string name="filename" value="x.serialized"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
         <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""")
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
     message = str(error.value)
-    for named in ("shape 'serialized' (line 6)", "bsdf 'roughdielectric' (not yet in spectrace) (line 5)",
+    for named in ("shape 'serialized' (line 6)", "bsdf 'thindielectric' (not yet in spectrace) (line 5)",
                   "emitter 'envmap' (line 8)"):
         assert named in message
     assert "\n" not in message
@@ -182,6 +182,37 @@ def test_spectra_and_lights(tmp_path):
     assert planck_radiance(np.array([555.0]), 5000.0)[0] == pytest.approx(planck, rel=1e-12)
     assert distant.direction == pytest.approx((0, -1, 0))
     assert environment.radiance.mean() == pytest.approx(0.25)
+
+
+def test_dielectrics(tmp_path):
+    """Mitsuba's dielectric index is int_ior / ext_ior, named (its table, Hecht's values) or numeric; bk7 in air
+    by default; roughdielectric's alpha (default 0.1) becomes the GGX roughness."""
+    body = """
+        <shape type="sphere"><bsdf type="dielectric"/></shape>
+        <shape type="sphere"><bsdf type="dielectric"><string name="int_ior" value="water"/>
+            <float name="ext_ior" value="1.0"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
+            <float name="alpha" value="0.25"/><float name="int_ior" value="1.7"/>
+            <rgb name="specular_reflectance" value="0.9"/><rgb name="specular_transmittance" value="0.9"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"/></shape>"""
+    data, notes = mitsuba_scene_data(_write(tmp_path, body))
+    materials = list(data["materials"].values())
+    assert materials[0] == {"type": "dielectric", "ior": pytest.approx(1.5046 / 1.000277)}
+    assert materials[1] == {"type": "dielectric", "ior": pytest.approx(1.333)}
+    assert materials[2] == {"type": "dielectric", "ior": pytest.approx(1.7 / 1.000277), "roughness": 0.25,
+                            "specular_tint": {"rgb": [0.9, 0.9, 0.9]}}
+    assert materials[3]["roughness"] == 0.1
+    assert any("beckmann distribution; imported as GGX" in note for note in notes)
+    scene = load_mitsuba_scene(_write(tmp_path, body))
+    assert scene.shapes[1].material.ior.at(500.0) == pytest.approx(1.333)
+
+    bad = _write(tmp_path, """<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="air"/>
+        <string name="ext_ior" value="water"/></bsdf></shape>
+        <shape type="cube"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>
+            <float name="alpha_v" value="0.2"/></bsdf></shape>""")
+    with pytest.raises(SpectraceError) as error:
+        mitsuba_scene_data(bad)
+    assert "int_ior not above ext_ior" in str(error.value) and "anisotropic" in str(error.value)
 
 
 def _mitsuba_scalar_spectral():

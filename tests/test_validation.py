@@ -10,7 +10,9 @@ import sys
 
 import pytest
 
-from spectrace.validation import CASES, run_validation
+import numpy as np
+
+from spectrace.validation import CASES, prism_deviation_degrees, prism_window_centre_degrees, run_validation
 
 
 @pytest.mark.parametrize("case", list(CASES))
@@ -28,3 +30,15 @@ def test_validate_command_reports_every_case():
     checks = json.loads(result.stdout)["checks"]
     assert {c["case"] for c in checks} == {"point light", "flux meter"}
     assert all(c["passed"] for c in checks)
+
+
+@pytest.mark.parametrize("n", [1.5168, 1.78472])
+def test_prism_deviation_meets_the_minimum_deviation_formula(n):
+    """The dispersion case's analytic side: at the symmetric passage, sin θ1 = n sin(A/2), the deviation is the
+    textbook minimum 2θ1 − A, and any other incidence deviates more; a vanishing source's window centre is δ."""
+    theta1 = np.degrees(np.arcsin(n * np.sin(np.radians(30.0))))
+    minimum = prism_deviation_degrees(n, theta1)
+    assert minimum == pytest.approx(2 * theta1 - 60.0, abs=1e-9)
+    assert prism_deviation_degrees(n, theta1 - 1.0) > minimum < prism_deviation_degrees(n, theta1 + 1.0)
+    assert prism_window_centre_degrees(n, theta1 + 5.0, 1e-4) == pytest.approx(
+        prism_deviation_degrees(n, theta1 + 5.0), abs=1e-7)

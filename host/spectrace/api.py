@@ -29,6 +29,7 @@ from spectrace.scene.model import (
     AreaEmitter,
     ConductorMaterial,
     ConstantEnvironment,
+    DielectricMaterial,
     DiffuseMaterial,
     DistantLight,
     Medium,
@@ -55,7 +56,8 @@ if TYPE_CHECKING:
 SpectrumLike = Union[Spectrum, "colour.SpectralDistribution", float, str, Sequence, np.ndarray, Mapping]
 ProgressOption = Union[bool, Literal["auto"], Callable[[int, int], None], None]
 
-BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere}
+BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere,
+                  "prism": primitives.prism}
 
 
 # ---------------------------------------------------------------- spectra
@@ -226,6 +228,19 @@ def retroreflector(reflectance: SpectrumLike = 1.0, roughness: float = 0.1) -> R
     return RetroreflectorMaterial(_reflectance(reflectance, "reflectance"), roughness=_roughness(roughness))
 
 
+def dielectric(ior: float | str | dict = 1.5, roughness: float = 0.0,
+               specular_tint: SpectrumLike | None = None) -> DielectricMaterial:
+    """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
+    exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
+    C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
+    face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance) multiplies both lobes."""
+    from spectrace.spectral.glasses import index_of_refraction
+
+    tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
+    return DielectricMaterial(index_of_refraction(ior, where="ior"), roughness=_roughness(roughness),
+                              specular_tint=tint)
+
+
 def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
     """Makes a shape a light of radiance L(λ) x scale, W/(m² sr nm); one-sided emitters shine toward the side
     their triangles' winding faces."""
@@ -266,13 +281,14 @@ def _is_zero(source: SpectrumLike) -> bool:
     return isinstance(source, Real) and source == 0
 
 
-def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere"] | "trimesh.Trimesh", material=None,
-          emitter: AreaEmitter | None = None, transform: Iterable[Mapping[str, Any]] = (), name: str = "",
-          interior: Medium | None = None) -> Shape:
+def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism"] | "trimesh.Trimesh",
+          material=None, emitter: AreaEmitter | None = None, transform: Iterable[Mapping[str, Any]] = (),
+          name: str = "", interior: Medium | None = None) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
-    "cube" [-1, 1]³, "sphere" of radius 1), moved by `transform` steps (see `transformed`). `interior` (see
-    `medium`) fills a closed shape, whose faces must wind outward; without a material its boundary is
-    index-matched (rays cross it unchanged)."""
+    "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z), moved by
+    `transform` steps (see `transformed`). Built-ins face outward, as a dielectric needs. `interior` (see `medium`)
+    fills a closed shape, whose faces must wind outward; without a material its boundary is index-matched (rays
+    cross it unchanged)."""
     if material is None and interior is None:
         raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
     if interior is not None and not isinstance(interior, Medium):

@@ -14,6 +14,7 @@ import numpy as np
 
 from spectrace.device import Device, open_device
 from spectrace.geometry import primitives
+from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.render.meters import FluxMeter, IrradianceMeter, RadianceMeter, measure
 from spectrace.render.renderer import Renderer
@@ -24,6 +25,7 @@ from spectrace.scene.model import (
     Camera,
     ConductorMaterial,
     ConstantEnvironment,
+    DielectricMaterial,
     DiffuseMaterial,
     DistantLight,
     Medium,
@@ -36,6 +38,7 @@ from spectrace.scene.model import (
     SpotLight,
 )
 from spectrace.spectral.colorimetry import cmf_table_normalised, xyz_to_xy
+from spectrace.spectral.glasses import glass
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.illuminants import d65_normalised
 from spectrace.spectral.metals import metal_ior
@@ -375,6 +378,120 @@ def beer_lambert(device: Device) -> list[Check]:
     return checks
 
 
+# ---------------------------------------------------------------- dispersion by a prism
+
+PRISM_GLASS = "SF11"
+PRISM_APEX_DEGREES = 60.0
+PRISM_INCIDENCE_DEGREES = 63.5816  # minimum deviation at 550 nm for SF11: sin θ = n(550 nm) sin(A/2)
+_SOURCE_DISTANCE = 1.0e4  # scene units; the prism's side is 2
+_SOURCE_HALF_WIDTH = 50.0  # the source subtends ±0.005 rad
+_SCAN_STEP_DEGREES = 0.25  # below the window width 2 × 0.29°, so no window falls between two scan angles
+_SCAN_DEGREES = (60.0, 76.0)
+_BISECTIONS = 12
+_HIT_RADIANCE = 0.25  # a direction sees the source (radiance 1 times two Fresnel transmittances, ≈ 0.8) or not (0)
+
+
+def prism_deviation_degrees(n: float, incidence_degrees: float, apex_degrees: float = PRISM_APEX_DEGREES) -> float:
+    """Deviation of a ray refracted by both faces of a prism of apex angle A (Snell's law at each face):
+    θ2 = asin(sin θ1 / n), θ3 = A − θ2, θ4 = asin(n sin θ3), δ = θ1 + θ4 − A."""
+    theta1, apex = np.radians(incidence_degrees), np.radians(apex_degrees)
+    theta2 = np.arcsin(np.sin(theta1) / n)
+    theta4 = np.arcsin(n * np.sin(apex - theta2))
+    return float(np.degrees(theta1 + theta4 - apex))
+
+
+def prism_window_centre_degrees(n: float, incidence_degrees: float, source_radius_degrees: float) -> float:
+    """Centre of the range of deviations under which a source of angular radius ρ is seen through the prism: its
+    edge rays arrive at incidence θ1 ± ρ and leave turned by δ(θ1 ± ρ) ∓ ρ from the central ray's direction. It
+    tends to δ(θ1) as ρ → 0; for ρ = 0.005 rad it differs by δ''ρ²/2, about 0.004° here."""
+    rho = source_radius_degrees
+    return 0.5 * (prism_deviation_degrees(n, incidence_degrees + rho) - rho
+                  + prism_deviation_degrees(n, incidence_degrees - rho) + rho)
+
+
+def _rotated(vector: np.ndarray, degrees: float) -> np.ndarray:
+    """`vector` (in the xy plane) turned counter-clockwise about +z."""
+    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
+    return np.array([c * vector[0] - s * vector[1], s * vector[0] + c * vector[1], 0.0])
+
+
+def _facing_square(centre: np.ndarray, normal: np.ndarray, half_width: float) -> TriangleMesh:
+    """A square of the given half width centred at `centre` whose front (winding) faces `normal` (in the xy plane)."""
+    across = np.array([-normal[1], normal[0], 0.0]) * half_width
+    up = np.array([0.0, 0.0, half_width])
+    vertices = np.array([centre - across - up, centre + across - up, centre + across + up, centre - across + up])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    v0, v1, v2 = vertices[faces[0]]
+    if np.dot(np.cross(v1 - v0, v2 - v0), normal) < 0:
+        faces = faces[:, ::-1]
+    return TriangleMesh(vertices=vertices, faces=faces)
+
+
+def prism_dispersion(device: Device) -> list[Check]:
+    """A parallel beam meets the built-in equilateral prism (side 2, apex on +y, cross-section in the xy plane) at
+    a fixed incidence on its left face. The source is a square emitter of radiance 1, 10⁴ units away, subtending
+    ±0.005 rad. A radiance meter looks back into the right face's midpoint from direction angles φ (the deviation
+    of the beam it would see); at one fixed wavelength it sees the source only inside a window of φ about the
+    deviation δ(λ). A coarse scan finds each window, bisection finds its edges, and the measured deviation is the
+    window's centre. The analytic deviation is Snell's law at both faces with the glass's Sellmeier index."""
+    g = glass(PRISM_GLASS)
+    outward_left = np.array([-np.sqrt(3.0) / 2.0, 0.5, 0.0])
+    outward_right = np.array([np.sqrt(3.0) / 2.0, 0.5, 0.0])
+    entry = np.array([-0.5, 0.5 / np.sqrt(3.0), 0.0])  # midpoints of the left and right faces
+    exit_point = np.array([0.5, 0.5 / np.sqrt(3.0), 0.0])
+    # The beam travels at θ1 from the left face's inward normal, turned toward the apex.
+    beam = _rotated(-outward_left, PRISM_INCIDENCE_DEGREES)
+    source = Shape(mesh=_facing_square(entry - _SOURCE_DISTANCE * beam, beam, _SOURCE_HALF_WIDTH),
+                   material=DiffuseMaterial(Spectrum.zeros()), emitter=AreaEmitter(Spectrum.constant(1.0)))
+    prism = Shape(mesh=primitives.prism(), material=DielectricMaterial(g.index_of_refraction()))
+    scene = _scene(shapes=[prism, source])
+    source_radius = float(np.degrees(np.arctan(_SOURCE_HALF_WIDTH / _SOURCE_DISTANCE)))
+
+    def sees_source(deviation_degrees: float, wavelengths: list[float]) -> np.ndarray:
+        leaving = _rotated(beam, -deviation_degrees)  # deviation turns the beam clockwise, toward the base
+        assert np.dot(leaving, outward_right) > 0
+        reading = measure(scene, RadianceMeter(tuple(exit_point + 0.5 * leaving), tuple(-leaving)),
+                          wavelengths_nm=wavelengths, streams=2, samples_per_item=8, seed=5, device=device)
+        return reading.spectral > _HIT_RADIANCE
+
+    def edge(inside: float, outside: float, wavelength: float) -> float:
+        for _ in range(_BISECTIONS):
+            middle = 0.5 * (inside + outside)
+            if sees_source(middle, [wavelength])[0]:
+                inside = middle
+            else:
+                outside = middle
+        return 0.5 * (inside + outside)
+
+    wavelengths = [450.0, 650.0]
+    angles = np.arange(_SCAN_DEGREES[0], _SCAN_DEGREES[1] + 1e-9, _SCAN_STEP_DEGREES)
+    hits = np.array([sees_source(angle, wavelengths) for angle in angles])
+    # The angular resolution: the bisection's last interval, plus parallax (the meter's ray leaves the first face up
+    # to ~0.1 from the point the source is aimed at, 10⁴ away: 1e-5 rad = 6e-4°).
+    allowance = _SCAN_STEP_DEGREES / 2**_BISECTIONS + 6e-4
+    checks, measured = [], {}
+    for column, wavelength in enumerate(wavelengths):
+        inside = np.flatnonzero(hits[:, column])
+        analytic = prism_window_centre_degrees(float(g.ior(wavelength)), PRISM_INCIDENCE_DEGREES, source_radius)
+        if len(inside) == 0 or inside[0] == 0 or inside[-1] == len(angles) - 1 or np.any(np.diff(inside) != 1):
+            value = float("nan")  # no single window inside the scan: fails the check
+        else:
+            low = edge(angles[inside[0]], angles[inside[0] - 1], wavelength)
+            high = edge(angles[inside[-1]], angles[inside[-1] + 1], wavelength)
+            value = 0.5 * (low + high)
+        measured[wavelength] = value
+        n = float(g.ior(wavelength))
+        checks.append(Check("dispersion", f"{PRISM_GLASS} prism, incidence {PRISM_INCIDENCE_DEGREES:g}°, {wavelength:g} "
+                            f"nm (n = {n:.5f}): deviation by Snell's law at both faces, δ = "
+                            f"{prism_deviation_degrees(n, PRISM_INCIDENCE_DEGREES):.4f}°, seen as the centre of the "
+                            "source's window", analytic, value, allowance / SIGMAS, "degrees"))
+    spread = (prism_window_centre_degrees(float(g.ior(450.0)), PRISM_INCIDENCE_DEGREES, source_radius)
+              - prism_window_centre_degrees(float(g.ior(650.0)), PRISM_INCIDENCE_DEGREES, source_radius))
+    checks.append(Check("dispersion", "angular spread of 450 nm and 650 nm light", spread,
+                        measured[450.0] - measured[650.0], 2 * allowance / SIGMAS, "degrees"))
+    return checks
+
+
 CASES: dict[str, Callable[[Device], list[Check]]] = {
     "inverse-square": inverse_square_and_cosine,
     "spot": spot_light_cone,
@@ -388,6 +505,7 @@ CASES: dict[str, Callable[[Device], list[Check]]] = {
     "local-vs-global": local_versus_global,
     "medium-furnace": medium_furnace,
     "beer-lambert": beer_lambert,
+    "dispersion": prism_dispersion,
 }
 
 

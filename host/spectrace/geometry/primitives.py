@@ -1,4 +1,4 @@
-"""Built-in shapes, with Mitsuba 3's conventions so scenes port: rectangle, cube, sphere.
+"""Built-in shapes, with Mitsuba 3's conventions so scenes port: rectangle, cube, sphere; and an equilateral prism.
 
 All are centred on the origin with outward (front-side) winding: the geometric normal
 (v1 - v0) x (v2 - v0) points away from the interior, or along +z for the rectangle.
@@ -37,6 +37,21 @@ def cube() -> TriangleMesh:
     ]
     faces = np.array([tri for a, b, c, d in quads for tri in ((a, b, c), (a, c, d))], dtype=np.int64)
     return TriangleMesh(vertices=vertices, faces=faces)
+
+
+def prism() -> TriangleMesh:
+    """The equilateral triangular prism with outward normals (8 triangles): its cross-section in the xy plane has
+    side 2, centroid at the origin, apex on +y at y = 2/√3 and base at y = −1/√3; it spans z ∈ [−1, 1]. The apex
+    angle between the two slanted faces is 60°, as in a dispersing prism."""
+    apex_y, base_y = 2.0 / np.sqrt(3.0), -1.0 / np.sqrt(3.0)
+    corners = [(-1.0, base_y), (1.0, base_y), (0.0, apex_y)]  # counter-clockwise seen from +z
+    vertices = np.array([[x, y, z] for z in (-1.0, 1.0) for x, y in corners], dtype=np.float64)
+    # 0-2: back (z = -1), 3-5: front (z = +1).
+    faces = [(0, 2, 1), (3, 4, 5)]
+    for i in range(3):
+        j = (i + 1) % 3
+        faces += [(i, j, j + 3), (i, j + 3, i + 3)]  # side from corner i to j, counter-clockwise from outside
+    return TriangleMesh(vertices=vertices, faces=np.array(faces, dtype=np.int64))
 
 
 def sphere(subdivisions: int = 4) -> TriangleMesh:

@@ -2,7 +2,8 @@
 
 Imported: shapes obj, ply, rectangle, cube, sphere (center, radius); BSDFs diffuse, conductor and roughconductor
 (material "Au", "Ag", "Cu", "Al" or "none", eta and k, alpha, specular_reflectance), plastic and roughplastic
-(diffuse_reflectance, int_ior / ext_ior as numbers or Mitsuba's names, alpha), and twosided around one of them
+(diffuse_reflectance, int_ior / ext_ior as numbers or Mitsuba's names, alpha), dielectric and roughdielectric
+(int_ior / ext_ior, alpha, equal specular_reflectance and specular_transmittance), and twosided around one of them
 (spectrace's materials already reflect on both faces); emitters area, point, constant, directional; the
 perspective sensor (fov with any fov_axis, or focal_length; to_world with lookat/translate/rotate/scale/matrix);
 hdrfilm width/height; the sampler's sample_count and seed; integrators path (max_depth, rr_depth), direct (as path
@@ -30,17 +31,19 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
+from spectrace.spectral.glasses import IOR_RANGE
 
 SUPPORTED = {
     "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
-    "bsdf": ("diffuse", "twosided", "conductor", "roughconductor", "plastic", "roughplastic"),
+    "bsdf": ("diffuse", "twosided", "conductor", "roughconductor", "plastic", "roughplastic", "dielectric",
+             "roughdielectric"),
     "emitter": ("area", "point", "constant", "directional"),
     "sensor": ("perspective",),
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis"),
 }
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
-_PLANNED_BSDFS = ("dielectric", "roughdielectric", "thindielectric")
+_PLANNED_BSDFS = ("thindielectric",)
 # Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
 _CONDUCTOR_MATERIALS = ("Au", "Ag", "Cu", "Al")
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
@@ -362,6 +365,8 @@ class _Importer:
             return self.conductor_table(bsdf, properties, rough=kind == "roughconductor")
         if kind in ("plastic", "roughplastic"):
             return self.plastic_table(bsdf, properties, rough=kind == "roughplastic")
+        if kind in ("dielectric", "roughdielectric"):
+            return self.dielectric_table(bsdf, properties, rough=kind == "roughdielectric")
         self.unsupported_plugin(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
 
@@ -469,6 +474,31 @@ class _Importer:
         table = {"type": "plastic", "reflectance": reflectance, "ior": round(ior, 6)}
         if roughness > 0.0:
             table["roughness"] = roughness
+        return table
+
+    def dielectric_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
+        """Mitsuba's dielectrics have one constant index per side (default bk7 inside, air outside): spectrace's ior
+        is their ratio. One tint on both lobes stands for equal specular_reflectance and specular_transmittance."""
+        ior = self.ior(bsdf, properties, "int_ior", _NAMED_IOR["bk7"]) / self.ior(bsdf, properties, "ext_ior",
+                                                                                  _NAMED_IOR["air"])
+        if ior < IOR_RANGE[0]:
+            self.unsupported_plugin(bsdf, " with int_ior not above ext_ior (flip the shape's normals instead)")
+            return None
+        roughness = self.roughness(bsdf, properties) if rough else 0.0
+        if roughness is None:
+            return None
+        tints = {key: self.spectrum(properties[key], key) for key in ("specular_reflectance", "specular_transmittance")
+                 if key in properties}
+        if None in tints.values():
+            return None
+        if len(tints) == 1 or (len(tints) == 2 and tints["specular_reflectance"] != tints["specular_transmittance"]):
+            self.unsupported_plugin(bsdf, " with specular_reflectance different from specular_transmittance")
+            return None
+        table: dict = {"type": "dielectric", "ior": round(ior, 6)}
+        if roughness > 0.0:
+            table["roughness"] = roughness
+        if tints:
+            table["specular_tint"] = tints["specular_reflectance"]
         return table
 
     # -------------------------------------------------- scene parts

@@ -9,8 +9,11 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.render.device_types import (
+    IOR_CAUCHY,
     IOR_CONSTANT,
+    IOR_SELLMEIER,
     MATERIAL_CONDUCTOR,
+    MATERIAL_DIELECTRIC,
     MATERIAL_DIFFUSE,
     MATERIAL_DTYPE,
     MATERIAL_MIRROR,
@@ -20,6 +23,7 @@ from spectrace.render.device_types import (
 )
 from spectrace.scene.model import (
     ConductorMaterial,
+    DielectricMaterial,
     DiffuseMaterial,
     MirrorMaterial,
     PlasticMaterial,
@@ -61,12 +65,31 @@ def _retroreflector(row: np.ndarray, material: RetroreflectorMaterial, table: Sp
     row["alpha"] = material.roughness
 
 
+def _dielectric(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
+    row["type"] = MATERIAL_DIELECTRIC
+    ior = material.ior
+    if ior.model == "sellmeier":
+        row["ior_model"] = IOR_SELLMEIER
+        row["ior_coefficients_b"][:3] = ior.coefficients[:3]
+        row["ior_coefficients_c"][:3] = ior.coefficients[3:]
+    elif ior.model == "cauchy":
+        row["ior_model"] = IOR_CAUCHY
+        row["ior_coefficients_b"][:2] = ior.coefficients
+    else:
+        row["ior_model"] = IOR_CONSTANT
+        row["ior"] = ior.coefficients[0]
+    if material.specular_tint is not None:
+        row["reflectance_offset"] = table.add(material.specular_tint)
+    row["alpha"] = material.roughness
+
+
 _ROW_WRITERS: dict[type, Callable] = {
     DiffuseMaterial: _diffuse,
     MirrorMaterial: _mirror,
     ConductorMaterial: _conductor,
     PlasticMaterial: _plastic,
     RetroreflectorMaterial: _retroreflector,
+    DielectricMaterial: _dielectric,
 }
 
 

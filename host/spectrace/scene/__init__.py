@@ -5,6 +5,7 @@ from spectrace.scene.model import (
     AreaEmitter,
     Camera,
     ConductorMaterial,
+    DielectricMaterial,
     DiffuseMaterial,
     Medium,
     MirrorMaterial,
@@ -15,4 +16,4 @@ from spectrace.scene.model import (
 )
 
 __all__ = ["load_scene", "Scene", "Camera", "Shape", "DiffuseMaterial", "MirrorMaterial", "ConductorMaterial",
-           "PlasticMaterial", "RetroreflectorMaterial", "AreaEmitter", "Medium"]
+           "PlasticMaterial", "RetroreflectorMaterial", "DielectricMaterial", "AreaEmitter", "Medium"]

@@ -18,6 +18,7 @@ from spectrace.scene.model import (
     Camera,
     ConductorMaterial,
     ConstantEnvironment,
+    DielectricMaterial,
     DiffuseMaterial,
     DistantLight,
     EmitterImage,
@@ -34,13 +35,15 @@ from spectrace.scene.model import (
     SpotLight,
 )
 from spectrace.spectral.blackbody import blackbody
+from spectrace.spectral.glasses import index_of_refraction
 from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.metals import metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
 from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
 
-_BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere}
+_BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere,
+                   "prism": primitives.prism}
 
 
 def key_path(location: tuple) -> str:
@@ -242,6 +245,11 @@ class _Resolver:
             return PlasticMaterial(reflectance(), ior=spec.ior, roughness=spec.roughness)
         if spec.type == "retroreflector":
             return RetroreflectorMaterial(reflectance(), roughness=spec.roughness)
+        if spec.type == "dielectric":
+            ior = spec.ior if isinstance(spec.ior, (float, str)) else spec.ior.model_dump()
+            tint = reflectance("specular_tint") if spec.specular_tint is not None else None
+            return DielectricMaterial(index_of_refraction(ior, where=self.where(f"{key}.ior")),
+                                      roughness=spec.roughness, specular_tint=tint)
         return DiffuseMaterial(reflectance())
 
     def optical_constant(self, spec: schema.SpectrumSpec, key: str, positive: bool) -> Spectrum:

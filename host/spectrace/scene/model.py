@@ -11,6 +11,7 @@ from typing import Literal
 import numpy as np
 
 from spectrace.geometry.mesh import TriangleMesh
+from spectrace.spectral.glasses import IndexOfRefraction
 from spectrace.spectral.spectrum import Spectrum
 
 
@@ -94,7 +95,19 @@ class RetroreflectorMaterial:
     roughness: float = 0.1
 
 
-Material = DiffuseMaterial | MirrorMaterial | ConductorMaterial | PlasticMaterial | RetroreflectorMaterial
+@dataclass(frozen=True)
+class DielectricMaterial:
+    """Glass, water: Fresnel reflection and Snell refraction at an interface to an interior of index `ior` relative
+    to the exterior (air), which may depend on the wavelength (dispersion); smooth or GGX-rough. The geometric
+    normal (the winding) points to the exterior. `specular_tint` multiplies both lobes when given."""
+
+    ior: IndexOfRefraction
+    roughness: float = 0.0
+    specular_tint: Spectrum | None = None
+
+
+Material = (DiffuseMaterial | MirrorMaterial | ConductorMaterial | PlasticMaterial | RetroreflectorMaterial
+            | DielectricMaterial)
 
 
 @dataclass(frozen=True, eq=False)

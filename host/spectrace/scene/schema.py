@@ -189,9 +189,27 @@ class RetroreflectorMaterialSpec(Strict):
     roughness: Roughness = 0.1
 
 
+class SellmeierSpec(Strict):
+    sellmeier: tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat] = Field(
+        description="B1, B2, B3, C1, C2, C3 of n² = 1 + Σ B λ²/(λ² − C), λ in µm, C in µm²")
+
+
+class CauchySpec(Strict):
+    cauchy: tuple[FiniteFloat, FiniteFloat] = Field(description="a, b of n = a + b/λ², λ in µm, b in µm²")
+
+
+class DielectricMaterialSpec(Strict):
+    type: Literal["dielectric"]
+    ior: FiniteFloat | str | SellmeierSpec | CauchySpec = Field(
+        default=1.5, description="interior index relative to the exterior (air): a number, a glass name, "
+                                 "{ sellmeier = [...] } or { cauchy = [...] }")
+    roughness: Roughness = 0.0
+    specular_tint: SpectrumSpec | None = None
+
+
 MaterialSpec = Annotated[
     DiffuseMaterialSpec | MirrorMaterialSpec | ConductorMaterialSpec | PlasticMaterialSpec
-    | RetroreflectorMaterialSpec,
+    | RetroreflectorMaterialSpec | DielectricMaterialSpec,
     Field(discriminator="type"),
 ]
 
@@ -236,7 +254,7 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "prism"]
     file: str | None = None
     material: str | None = None
     emitter: EmitterSpec | None = None
