@@ -25,6 +25,7 @@ typedef struct {
     float weight;   /* f(ωo, ωi) |cos θi| / pdf */
     float pdf;      /* solid-angle pdf; for a delta lobe the probability of choosing that lobe */
     int is_delta;
+    float radiance_scale;  /* the 1/e² that `weight` carries after refraction, 1 after reflection */
 } DielectricSample;
 
 /* e seen from ωo: n on the far side over n on ωo's side. */
@@ -53,11 +54,13 @@ inline int smooth_dielectric_sample(float3 wo, float eta, float uc, DielectricSa
         s->wi = (float3)(-wo.x, -wo.y, wo.z);
         s->weight = 1.0f;
         s->pdf = f;
+        s->radiance_scale = 1.0f;
     } else {
         /* Snell: the tangential component shrinks by 1/e, the path crosses to the other side. */
         s->wi = (float3)(-wo.x / e, -wo.y / e, wo.z > 0.0f ? -cos_t : cos_t);
         s->weight = 1.0f / (e * e);
         s->pdf = 1.0f - f;
+        s->radiance_scale = s->weight;
     }
     return 1;
 }
@@ -153,7 +156,8 @@ inline int rough_dielectric_sample(float3 wo, float eta, float alpha, float uc, 
         if (wi.z >= 0.0f) return 0;
     }
     float weight = ggx_g2(wo, wi, alpha) / ggx_g1(wo, alpha);
-    if (!reflection) weight /= e * e;
+    float radiance_scale = reflection ? 1.0f : 1.0f / (e * e);
+    weight *= radiance_scale;
 
     /* In the turned frame ωo.z > 0, so e is the eta the pdf expects. */
     float pdf = rough_dielectric_pdf(wo, wi, e, alpha);
@@ -161,6 +165,7 @@ inline int rough_dielectric_sample(float3 wo, float eta, float alpha, float uc, 
     s->weight = weight;
     s->pdf = pdf;
     s->is_delta = 0;
+    s->radiance_scale = radiance_scale;
     return pdf > 0.0f;
 }
 
@@ -213,6 +218,7 @@ inline int dielectric_sample(const DielectricParams *p, float3 wo, float uc, flo
     s->pdf = d.pdf;
     s->is_delta = d.is_delta;
     s->terminate_secondary = 0;
+    s->radiance_scale = d.radiance_scale;
     return 1;
 }
 

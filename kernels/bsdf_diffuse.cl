@@ -39,6 +39,7 @@ inline int diffuse_sample(const DiffuseParams *p, float3 wo, float2 u, BSDFSampl
     s->weight = p->reflectance;
     s->is_delta = 0;
     s->terminate_secondary = 0;
+    s->radiance_scale = 1.0f;
     return s->pdf > 0.0f;
 }
 

@@ -34,16 +34,12 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
     float3 wi = sample_cosine_about(n, sample_2d(sampler));
     float pdf = cosine_hemisphere_pdf(dot(n, wi));
     if (pdf > 0.0f) {
-        PathState s;
-        s.ray.origin = p;
-        s.ray.direction = wi;
-        s.throughput = (float4)(1.0f);  /* albedo 1: f cos / pdf = 1 */
+        Ray ray;
+        ray.origin = p;
+        ray.direction = wi;
+        PathState s = camera_path(ray);  /* throughput 1: albedo 1, f cos / pdf = 1 */
         s.previous_pdf = pdf;
         s.previous_delta = 0;
-        s.previous_point = p;
-        s.segments = 1;
-        s.secondary_terminated = 0;
-        s.medium = -1;
         reflected += continue_path(scene, w, sampler, s, rays_traced);
     }
     return M_PI_F * reflected;

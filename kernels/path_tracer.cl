@@ -18,6 +18,7 @@ typedef struct {
     int segments;            /* the segment `ray` is: 1 for a camera ray */
     int secondary_terminated;
     int medium;              /* index of the medium `ray` travels in, -1 for none (kernels/medium.cl) */
+    float radiance_scale;    /* product of the refractions' (n_o/n_i)² factors in `throughput` */
 } PathState;
 
 inline PathState camera_path(Ray ray)
@@ -31,6 +32,7 @@ inline PathState camera_path(Ray ray)
     s.segments = 1;
     s.secondary_terminated = 0;
     s.medium = -1;  /* cameras and sensors stand outside every medium */
+    s.radiance_scale = 1.0f;
     return s;
 }
 
@@ -48,11 +50,13 @@ inline int max_segments(__global const RenderParams *params)
     return params->max_depth < 0 ? UNBOUNDED_DEPTH : params->max_depth;
 }
 
-/* Russian roulette once `segments` bounces have happened (Mitsuba 3's rr_depth): 0 ends the path. */
+/* Russian roulette once `segments` bounces have happened (Mitsuba 3's rr_depth): 0 ends the path. The survival
+ * probability follows the throughput without the radiance compression of refraction, which light undoes when it
+ * leaves the glass again: otherwise a path inside glass (throughput 1/n²) would be culled as if it carried little. */
 inline int survives_russian_roulette(PathState *s, __global const RenderParams *params, float u_rr)
 {
     if (s->segments < params->rr_depth) return 1;
-    float4 t = s->throughput;
+    float4 t = s->throughput / s->radiance_scale;
     float q = fmin(fmax(fmax(t.x, t.y), fmax(t.z, t.w)), 0.95f);
     if (!(u_rr < q)) return 0;
     s->throughput /= q;
@@ -164,6 +168,7 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
         BSDFSample bs;
         if (!material_sample(material, scene->spectra, w, n, wo, uc, u, &bs)) break;
         s.throughput *= bs.weight;
+        s.radiance_scale *= bs.radiance_scale;
         if (bs.terminate_secondary) terminate_secondary_wavelengths(&s);
         s.previous_pdf = bs.pdf;
         s.previous_delta = bs.is_delta;
