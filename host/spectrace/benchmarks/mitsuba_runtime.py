@@ -64,7 +64,7 @@ def usable_variants(wanted: list[str] | None = None) -> MitsubaVariants:
 @dataclass
 class MitsubaRender:
     variant: str
-    xyz: np.ndarray  # (height, width, 3) film XYZ
+    xyz: np.ndarray  # (height, width, 3) film XYZ in spectrace's normalisation (see mitsuba_film_xyz)
     load_seconds: float
     first_render_seconds: float | None  # the warm-up: JIT compilation (or Dr.Jit's disk cache) and the render
     seconds: float  # the timed render, wall clock, film included
@@ -94,4 +94,6 @@ def render_with_mitsuba(scene_dict: dict, variant: str, spp: int, seed: int = 0,
         xyz = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)
         best = min(best, time.perf_counter() - start)
     threads = int(dr.thread_count()) if hasattr(dr, "thread_count") else os.cpu_count() or 1
-    return MitsubaRender(variant, xyz[..., :3], load_seconds, first, best, threads)
+    from spectrace.interop.mitsuba_export import mitsuba_film_xyz
+
+    return MitsubaRender(variant, mitsuba_film_xyz(xyz[..., :3], mi), load_seconds, first, best, threads)

@@ -19,6 +19,7 @@ from spectrace.benchmarks.image_agreement import compare_regions, region_mean_an
 from spectrace.benchmarks.peer_mitsuba import bench_scene
 from spectrace.device import open_device
 from spectrace.render.renderer import Renderer
+from spectrace.scene import limits
 
 REFERENCE_SEED_OFFSET = 1_000_003
 
@@ -51,7 +52,7 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
     renderer.run_pass(1)
     renderer.reset()
     start = time.perf_counter()
-    image = renderer.render(spp=1 << 30, pass_spp=1, should_stop=lambda: time.perf_counter() - start >= seconds)
+    image = renderer.render(spp=limits.MAX_SPP, pass_spp=1, should_stop=lambda: time.perf_counter() - start >= seconds)
     elapsed = time.perf_counter() - start
     result["renderers"].append({"renderer": "spectrace", "runtime": device.report.key, "spp": image.spp,
                                 "seconds": elapsed, "rmse": _rmse(image.xyz, reference)})
