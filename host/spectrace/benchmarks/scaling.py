@@ -2,10 +2,13 @@
 
 Triangle count grows by putting an icosphere of increasing subdivision (20·4^s triangles) into the Cornell box;
 with a BVH the cost of a sample should grow about with log(triangles), not in proportion to them. Each row is
-one warm render (after a 1-spp warm-up pass) of `spp` samples per pixel, timed around the kernel passes.
+one warm render (after a 1-spp warm-up pass) of `spp` samples per pixel, timed around the kernel passes, with
+the process CPU time of the same render (all the runtime's threads) as a figure that a shared machine's load
+disturbs less; the cost column compares CPU time per sample with the first row's.
 """
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -37,13 +40,16 @@ def _measure(scene: Scene, device, spp: int) -> dict:
     renderer = Renderer(scene, device)
     renderer.run_pass(1)
     renderer.reset()
+    cpu = time.process_time()
     image = renderer.render(spp=spp)
+    cpu = time.process_time() - cpu
     samples = scene.width * scene.height * image.spp
     return {"width": scene.width, "height": scene.height, "spp": image.spp, "max_depth": scene.max_depth,
             "triangles": int(renderer.buffers.triangle_vertices.shape[0] // 3),
             "bvh_build_seconds": renderer.buffers.bvh.build_seconds, "seconds": image.render_seconds,
             "samples_per_second": samples / image.render_seconds,
-            "rays_per_second": image.rays_traced / image.render_seconds}
+            "rays_per_second": image.rays_traced / image.render_seconds, "cpu_seconds": cpu,
+            "samples_per_cpu_second": samples / cpu}
 
 
 def run_scaling_bench(scene_path, sizes: list[int] | None, spp: int, max_depth: int, device_key: str | None,
@@ -75,13 +81,14 @@ def scaling_tables(result: dict) -> list:
 
     def table(title: str, key: str, rows: list[dict], extra: str | None = None) -> Table:
         t = Table(title=title)
-        for column in (key, "M samples/s", "M rays/s", "cost per sample vs first", *([extra] if extra else [])):
+        for column in (key, "M samples/s", "M rays/s", "M samples/CPU s", "cost per sample vs first (CPU)",
+                       *([extra] if extra else [])):
             t.add_column(column, justify="right")
-        first = rows[0]["samples_per_second"]
+        first = rows[0]["samples_per_cpu_second"]
         for r in rows:
             cells = [str(r[key]) if key != "size" else f"{r['width']}x{r['height']}",
                      f"{r['samples_per_second'] / 1e6:.3f}", f"{r['rays_per_second'] / 1e6:.3f}",
-                     f"{first / r['samples_per_second']:.2f}"]
+                     f"{r['samples_per_cpu_second'] / 1e6:.3f}", f"{first / r['samples_per_cpu_second']:.2f}"]
             if extra:
                 cells.append(f"{r['bvh_build_seconds']:.2f}")
             t.add_row(*cells)
