@@ -2,10 +2,10 @@
 
 A converged reference is a long spectrace render (its own seed, so its noise is independent of the images
 judged), cross-checked region by region against a long Mitsuba render of the exported scene. Then each
-renderer gets the same wall-clock budget: spectrace renders 1-spp passes until the budget is spent; Mitsuba,
-whose render call takes a fixed spp, gets the spp its warm throughput fits into the budget. The error is the
-RMSE of film XYZ over all pixels and channels against the reference, and relative to the reference's mean Y.
-The reference's own noise (estimated from neighbouring pixels) is reported: RMSE² includes it.
+renderer gets the same wall-clock budget, in the same way: a warm 4-spp probe render measures its throughput,
+then it renders the spp that fit the budget (the time actually taken is reported). The error is the RMSE of
+film XYZ over all pixels and channels against the reference, and relative to the reference's mean Y. The
+reference's own noise RMS (from its two independent halves) is reported: RMSE² includes its square.
 """
 
 import tempfile
@@ -15,24 +15,22 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.benchmarks.image_agreement import compare_regions, region_mean_and_error, regions_for
+from spectrace.benchmarks.image_agreement import compare_regions, regions_for
 from spectrace.benchmarks.peer_mitsuba import bench_scene
 from spectrace.device import open_device
 from spectrace.render.renderer import Renderer
 from spectrace.scene import limits
 
 REFERENCE_SEED_OFFSET = 1_000_003
+PROBE_SPP = 4
 
 
 def _rmse(image: np.ndarray, reference: np.ndarray) -> float:
     return float(np.sqrt(np.mean((image.astype(np.float64) - reference) ** 2)))
 
 
-def _noise_rms(image: np.ndarray) -> float:
-    """RMS per-pixel noise of an image, from neighbour differences (see image_agreement)."""
-    _, standard_error = region_mean_and_error(image)
-    pixels = image.shape[0] * image.shape[1]
-    return float(np.sqrt(np.mean((standard_error * np.sqrt(pixels)) ** 2)))
+def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: float) -> int:
+    return max(1, int(round(budget_seconds * probe_spp / max(seconds_for_probe, 1e-9))))
 
 
 def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, seconds: float, reference_spp: int,
@@ -41,18 +39,24 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
     device = open_device(device_key)
     log(f"reference: spectrace, {reference_spp} spp")
     reference_renderer = Renderer(scene.with_overrides(seed=scene.seed + REFERENCE_SEED_OFFSET), device)
+    half = reference_renderer.render(spp=max(1, reference_spp // 2)).xyz.astype(np.float64)
     reference = reference_renderer.render(spp=reference_spp).xyz.astype(np.float64)
+    # The reference is the mean of two independent halves a and b: its own noise is RMS(a - b) / 2.
+    other_half = (reference * reference_spp - half * (reference_spp // 2)) / (reference_spp - reference_spp // 2)
     result = {"scene": str(scene.source), "width": size, "height": size, "max_depth": max_depth,
               "budget_seconds": seconds, "runtime": device.report.key,
-              "reference": {"spp": reference_spp, "noise_rms": _noise_rms(reference),
+              "reference": {"spp": reference_spp, "noise_rms": _rmse(half, other_half) / 2.0,
                             "mean_y": float(reference[..., 1].mean())},
               "renderers": [], "cross_check": None, "notes": []}
 
     renderer = Renderer(scene, device)
     renderer.run_pass(1)
     renderer.reset()
+    probe = renderer.render(spp=PROBE_SPP)
+    spp = min(_spp_for_budget(probe.render_seconds, PROBE_SPP, seconds), limits.MAX_SPP)
+    renderer.reset()
     start = time.perf_counter()
-    image = renderer.render(spp=limits.MAX_SPP, pass_spp=1, should_stop=lambda: time.perf_counter() - start >= seconds)
+    image = renderer.render(spp=spp)
     elapsed = time.perf_counter() - start
     result["renderers"].append({"renderer": "spectrace", "runtime": device.report.key, "spp": image.spp,
                                 "seconds": elapsed, "rmse": _rmse(image.xyz, reference)})
@@ -68,16 +72,14 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
         usable = None
     if usable is not None:
         result["notes"] += usable.notes
-        pixels = size * size
         with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
             for index, variant in enumerate(usable.available):
                 import mitsuba as mi
 
                 mi.set_variant(variant)
                 scene_dict = scene_to_mitsuba_dict(scene, Path(folder))
-                probe = render_with_mitsuba(scene_dict, variant, spp=4)
-                rate = pixels * 4 / probe.seconds
-                spp = max(1, int(round(seconds * rate / pixels)))
+                probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
+                spp = _spp_for_budget(probe.seconds, PROBE_SPP, seconds)
                 timed = render_with_mitsuba(scene_dict, variant, spp=spp, warm_up=False)
                 result["renderers"].append({"renderer": "mitsuba", "runtime": variant, "spp": spp,
                                             "seconds": timed.seconds, "rmse": _rmse(timed.xyz, reference)})
