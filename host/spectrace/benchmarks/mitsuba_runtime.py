@@ -67,36 +67,66 @@ class MitsubaRender:
     xyz: np.ndarray  # (height, width, 3) film XYZ in spectrace's normalisation (see mitsuba_film_xyz)
     load_seconds: float
     first_render_seconds: float | None  # the warm-up: JIT compilation (or Dr.Jit's disk cache) and the render
-    seconds: float  # the timed render, wall clock, film included
+    seconds: float  # the best timed render, wall clock, film included
     cpu_seconds: float  # process CPU time (all threads) of that render
     threads: int
 
 
+class MitsubaContestant:
+    """A loaded Mitsuba scene that renders on demand, for timing rounds interleaved with other renderers.
+
+    For JIT variants one identical warm-up render comes first, so the timed ones reuse the compiled kernels
+    (the same seed gives the same kernel and the same image). Dr.Jit launches asynchronously: the clock stops
+    once the image is copied out, which waits for the render."""
+
+    def __init__(self, scene_dict: dict, variant: str, spp: int, seed: int = 0, warm_up: bool | None = None):
+        import mitsuba as mi
+
+        self.variant, self.spp, self.seed = variant, spp, seed
+        mi.set_variant(variant)
+        start = time.perf_counter()
+        self.scene = mi.load_dict(scene_dict)
+        self.load_seconds = time.perf_counter() - start
+        self.first_render_seconds = None
+        if warm_up if warm_up is not None else not variant.startswith("scalar"):
+            start = time.perf_counter()
+            self._render()
+            self.first_render_seconds = time.perf_counter() - start
+        self.seconds, self.cpu_seconds, self.xyz = float("inf"), float("inf"), None
+
+    def _render(self) -> np.ndarray:
+        import mitsuba as mi
+
+        mi.set_variant(self.variant)
+        return np.array(mi.render(self.scene, spp=self.spp, seed=self.seed), dtype=np.float64)
+
+    def render_untimed(self) -> None:
+        self._render()
+
+    def render_once(self) -> None:
+        """One timed render; keeps the fastest."""
+        start, cpu = time.perf_counter(), time.process_time()
+        xyz = self._render()
+        seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+        if seconds < self.seconds:
+            self.seconds, self.cpu_seconds, self.xyz = seconds, cpu, xyz
+
+    def result(self) -> MitsubaRender:
+        import mitsuba as mi
+        import drjit as dr
+
+        from spectrace.interop.mitsuba_export import mitsuba_film_xyz
+
+        mi.set_variant(self.variant)
+        threads = int(dr.thread_count()) if hasattr(dr, "thread_count") else os.cpu_count() or 1
+        return MitsubaRender(self.variant, mitsuba_film_xyz(self.xyz[..., :3], mi), self.load_seconds,
+                             self.first_render_seconds, self.seconds, self.cpu_seconds, threads)
+
+
 def render_with_mitsuba(scene_dict: dict, variant: str, spp: int, seed: int = 0, warm_up: bool | None = None,
                         repeats: int = 1) -> MitsubaRender:
-    """Load and render; for JIT variants one identical warm-up render first, so the timed ones reuse the
-    compiled kernels. The time is the best of `repeats` identical renders (the same seed gives the same image).
-    Dr.Jit launches asynchronously: the clock stops once the image is copied out, which waits for the render."""
-    import mitsuba as mi
-    import drjit as dr
-
-    mi.set_variant(variant)
-    start = time.perf_counter()
-    scene = mi.load_dict(scene_dict)
-    load_seconds = time.perf_counter() - start
-    first = None
-    if warm_up if warm_up is not None else not variant.startswith("scalar"):
-        start = time.perf_counter()
-        np.asarray(mi.render(scene, spp=spp, seed=seed))
-        first = time.perf_counter() - start
-    best, best_cpu = float("inf"), float("inf")
+    """Load, warm up (JIT variants) and render `repeats` times; the fastest render's figures and image."""
+    contestant = MitsubaContestant(scene_dict, variant, spp, seed, warm_up)
     for _ in range(max(1, repeats)):
-        start, cpu = time.perf_counter(), time.process_time()
-        xyz = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)
-        if time.perf_counter() - start < best:
-            best, best_cpu = time.perf_counter() - start, time.process_time() - cpu
-    threads = int(dr.thread_count()) if hasattr(dr, "thread_count") else os.cpu_count() or 1
-    from spectrace.interop.mitsuba_export import mitsuba_film_xyz
-
-    return MitsubaRender(variant, mitsuba_film_xyz(xyz[..., :3], mi), load_seconds, first, best, best_cpu,
-                         threads)
+        contestant.render_once()
+    return contestant.result()

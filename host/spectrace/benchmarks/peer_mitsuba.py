@@ -2,11 +2,12 @@
 
 Both render the scene exported by spectrace.interop.mitsuba_export (same triangles, camera, measured spectra,
 resolution, spp, max_depth and Russian roulette start). Figures are wall-clock times of warm renders, film
-read-back included, the best of `repeats` identical renders (default 2; the CPU may be shared): spectrace's
-after its kernel build and one 1-spp warm-up pass, Mitsuba's JIT variant after one identical warm-up render
-(its first render compiles kernels, or loads them from Dr.Jit's disk cache). samples/s = pixels × spp / time. The
-images must agree (mean XYZ of a few regions within 4 standard errors), so that the ratio compares equal work.
-On a shared machine the process CPU time of the same renders (all threads) gives a second, load-robust ratio.
+read-back included, the best of `repeats` identical renders (default 3) in rounds that alternate spectrace and
+Mitsuba, as the CPU may be shared. spectrace's renders follow its kernel build and one 1-spp warm-up pass;
+Mitsuba's JIT variant follows one identical warm-up render (its first render compiles kernels, or loads them
+from Dr.Jit's disk cache). samples/s = pixels × spp / time. The images must agree (mean XYZ of a few regions
+within 4 standard errors), so that the ratio compares equal work. The process CPU time of the same renders (all
+threads) gives a second ratio, which a shared machine's load disturbs less.
 """
 
 import tempfile
@@ -31,66 +32,85 @@ def device_keys(device: str | None, all_devices: bool) -> list[str | None]:
     return [r.key for r in discover_devices() if r.ok] if all_devices else [device]
 
 
-def render_with_spectrace(scene: Scene, device_key: str | None, repeats: int = 1) -> tuple[dict, object]:
-    """The best of `repeats` warm renders (each the same image): the row of figures and the image."""
-    device = open_device(device_key)
-    start = time.perf_counter()
-    renderer = Renderer(scene, device)
-    setup_seconds = time.perf_counter() - start
-    renderer.run_pass(1)  # warm-up: PoCL compiles kernels lazily at the first launch
-    seconds, cpu_seconds = float("inf"), float("inf")
-    for _ in range(max(1, repeats)):
-        renderer.reset()
+class SpectraceContestant:
+    """A renderer with its kernels built and warmed up, rendering the scene on demand; keeps the fastest run."""
+
+    def __init__(self, scene: Scene, device_key: str | None):
+        self.scene = scene
+        self.device = open_device(device_key)
+        start = time.perf_counter()
+        self.renderer = Renderer(scene, self.device)
+        self.setup_seconds = time.perf_counter() - start
+        self.build_seconds, self.build_cached = self.device.last_build_seconds, self.device.last_build_cached
+        self.renderer.run_pass(1)  # warm-up: PoCL compiles kernels lazily at the first launch
+        self.seconds, self.cpu_seconds, self.image = float("inf"), float("inf"), None
+
+    def render_once(self) -> None:
+        self.renderer.reset()
         start, cpu = time.perf_counter(), time.process_time()
-        image = renderer.render(spp=scene.spp)
-        if time.perf_counter() - start < seconds:
-            seconds, cpu_seconds = time.perf_counter() - start, time.process_time() - cpu
-    row = {
-        "renderer": "spectrace", "runtime": device.report.key, "device_name": device.report.device_name,
-        "width": scene.width, "height": scene.height, "spp": image.spp, "max_depth": scene.max_depth,
-        "seconds": seconds, "samples_per_second": scene.width * scene.height * image.spp / seconds,
-        "cpu_seconds": cpu_seconds, "samples_per_cpu_second": scene.width * scene.height * image.spp / cpu_seconds,
-        "setup_seconds": setup_seconds, "kernel_build_seconds": device.last_build_seconds,
-        "kernel_build_cached": device.last_build_cached,
-    }
-    return row, image
+        image = self.renderer.render(spp=self.scene.spp)
+        seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+        if seconds < self.seconds:
+            self.seconds, self.cpu_seconds, self.image = seconds, cpu, image
+
+    def row(self) -> dict:
+        scene, samples = self.scene, self.scene.width * self.scene.height * self.image.spp
+        return {
+            "renderer": "spectrace", "runtime": self.device.report.key, "device_name": self.device.report.device_name,
+            "width": scene.width, "height": scene.height, "spp": self.image.spp, "max_depth": scene.max_depth,
+            "seconds": self.seconds, "samples_per_second": samples / self.seconds, "cpu_seconds": self.cpu_seconds,
+            "samples_per_cpu_second": samples / self.cpu_seconds, "setup_seconds": self.setup_seconds,
+            "kernel_build_seconds": self.build_seconds, "kernel_build_cached": self.build_cached,
+        }
 
 
 def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int, device: str | None,
-                   all_devices: bool, variants: list[str] | None = None, repeats: int = 2,
+                   all_devices: bool, variants: list[str] | None = None, repeats: int = 3,
                    log: Callable[[str], None] = lambda text: None) -> dict:
-    from spectrace.benchmarks.mitsuba_runtime import render_with_mitsuba, usable_variants
+    from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant, usable_variants
     from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
 
     scene = bench_scene(scene_path, size, spp, max_depth)
     usable = usable_variants(variants)  # before any render: it may set DRJIT_LIBLLVM_PATH
     notes = list(usable.notes)
-    ours, images = [], {}
-    for key in device_keys(device, all_devices):
-        row, image = render_with_spectrace(scene, key, repeats)
-        log(f"spectrace {row['runtime']}: {row['samples_per_second'] / 1e6:.3f} M samples/s ({row['seconds']:.2f} s)")
-        ours.append(row)
-        images[row["runtime"]] = image.xyz
-    theirs, their_images = [], {}
+    ours = [SpectraceContestant(scene, key) for key in device_keys(device, all_devices)]
     with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
+        theirs = []
         for variant in usable.available:
             import mitsuba as mi
 
             mi.set_variant(variant)
-            result = render_with_mitsuba(scene_to_mitsuba_dict(scene, Path(folder), spp=spp), variant, spp,
-                                         seed=scene.seed, repeats=repeats)
-            row = {
-                "renderer": "mitsuba", "runtime": variant, "width": scene.width, "height": scene.height, "spp": spp,
-                "max_depth": scene.max_depth, "seconds": result.seconds,
-                "samples_per_second": scene.width * scene.height * spp / result.seconds,
-                "cpu_seconds": result.cpu_seconds,
-                "samples_per_cpu_second": scene.width * scene.height * spp / result.cpu_seconds,
-                "scene_load_seconds": result.load_seconds, "first_render_seconds": result.first_render_seconds,
-                "threads": result.threads, "mitsuba_version": mi.__version__,
-            }
-            log(f"mitsuba {variant}: {row['samples_per_second'] / 1e6:.3f} M samples/s ({row['seconds']:.2f} s)")
-            theirs.append(row)
-            their_images[variant] = result.xyz
+            theirs.append(MitsubaContestant(scene_to_mitsuba_dict(scene, Path(folder), spp=spp), variant, spp,
+                                            seed=scene.seed))
+    # Interleaved rounds, spectrace then one Mitsuba variant, so a shared machine's load falls on both alike.
+    # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so each
+    # variant gets its rounds in one go, after one untimed render.
+    for peer in theirs or [None]:
+        if peer is not None:
+            peer.render_untimed()
+        for round_index in range(max(1, repeats)):
+            for contestant in [*ours, *([peer] if peer else [])]:
+                contestant.render_once()
+                name = contestant.variant if contestant is peer else contestant.device.report.key
+                log(f"round {round_index + 1}: {name} {contestant.seconds:.2f} s (best so far)")
+    images = {c.device.report.key: c.image.xyz for c in ours}
+    ours = [c.row() for c in ours]
+    their_images, their_rows = {}, []
+    for contestant in theirs:
+        result = contestant.result()
+        import mitsuba as mi
+
+        their_rows.append({
+            "renderer": "mitsuba", "runtime": result.variant, "width": scene.width, "height": scene.height,
+            "spp": spp, "max_depth": scene.max_depth, "seconds": result.seconds,
+            "samples_per_second": scene.width * scene.height * spp / result.seconds,
+            "cpu_seconds": result.cpu_seconds,
+            "samples_per_cpu_second": scene.width * scene.height * spp / result.cpu_seconds,
+            "scene_load_seconds": result.load_seconds, "first_render_seconds": result.first_render_seconds,
+            "threads": result.threads, "mitsuba_version": mi.__version__,
+        })
+        their_images[result.variant] = result.xyz
+    theirs = their_rows
     if not theirs:
         notes.append("no Mitsuba variant ran: only spectrace's figures are shown")
     ratios = [{"spectrace": a["runtime"], "mitsuba": b["runtime"],
