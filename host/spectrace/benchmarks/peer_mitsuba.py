@@ -2,7 +2,7 @@
 
 Both render the scene exported by spectrace.interop.mitsuba_export (same triangles, camera, measured spectra,
 resolution, spp, max_depth and Russian roulette start). Figures are wall-clock times of warm renders, film
-read-back included, the best of `repeats` identical renders (default 3) in rounds that alternate spectrace and
+read-back included, the best of `repeats` identical renders (default 2) in rounds that alternate spectrace and
 Mitsuba, as the CPU may be shared. spectrace's renders follow its kernel build and one 1-spp warm-up pass;
 Mitsuba's JIT variant follows one identical warm-up render (its first render compiles kernels, or loads them
 from Dr.Jit's disk cache). samples/s = pixels × spp / time. The images must agree (mean XYZ of a few regions
@@ -65,7 +65,7 @@ class SpectraceContestant:
 
 
 def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int, device: str | None,
-                   all_devices: bool, variants: list[str] | None = None, repeats: int = 3,
+                   all_devices: bool, variants: list[str] | None = None, repeats: int = 2,
                    log: Callable[[str], None] = lambda text: None) -> dict:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant, usable_variants
     from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
