@@ -5,7 +5,8 @@ judged), cross-checked region by region against a long Mitsuba render of the exp
 renderer gets the same wall-clock budget, in the same way: a warm 4-spp probe render measures its throughput,
 then it renders the spp that fit the budget (the time actually taken is reported). The error is the RMSE of
 film XYZ over all pixels and channels against the reference, and relative to the reference's mean Y. The
-reference's own noise RMS (from its two independent halves) is reported: RMSE² includes its square.
+reference's own noise RMS (from its two independent halves) is reported: RMSE² includes its square. "RMSE at
+budget" takes that out and scales to exactly the budget (variance ∝ 1/time), since a renderer may overrun it.
 """
 
 import tempfile
@@ -91,8 +92,12 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
                     result["cross_check"] = {"mitsuba": variant, "spp": max(1, reference_spp // 4),
                                              "agrees": all(r.agrees for r in regions),
                                              "regions": [r.as_dict() for r in regions]}
+    noise = result["reference"]["noise_rms"]
     for row in result["renderers"]:
         row["relative_rmse"] = row["rmse"] / max(result["reference"]["mean_y"], 1e-30)
+        # Monte Carlo variance falls as 1/time: the error each would have had in exactly the budget, with the
+        # reference's own noise taken out (RMSE² = error² + reference noise², the two being independent).
+        row["rmse_at_budget"] = float(np.sqrt(max(row["rmse"] ** 2 - noise**2, 0.0) * row["seconds"] / seconds))
     return result
 
 
@@ -103,11 +108,11 @@ def quality_tables(result: dict) -> list:
     table = Table(title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
                         f"max_depth {result['max_depth']}; reference {ref['spp']} spp (its noise RMS "
                         f"{ref['noise_rms']:.3g})")
-    for column in ("renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y"):
+    for column in ("renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE at budget"):
         table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
     for r in result["renderers"]:
         table.add_row(r["renderer"], r["runtime"], str(r["spp"]), f"{r['seconds']:.2f}", f"{r['rmse']:.4g}",
-                      f"{100 * r['relative_rmse']:.2f} %")
+                      f"{100 * r['relative_rmse']:.2f} %", f"{r['rmse_at_budget']:.4g}")
     tables = [table]
     check = result["cross_check"]
     if check:
