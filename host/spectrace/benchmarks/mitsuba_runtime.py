@@ -58,6 +58,8 @@ def usable_variants(wanted: list[str] | None = None) -> MitsubaVariants:
             notes.append(f"{variant}: unusable here: {str(error).splitlines()[0]}{hint}")
             continue
         available.append(variant)
+    if LLVM_VARIANT not in available and available:
+        notes.append(f"comparing with {', '.join(available)} only; Mitsuba's fast CPU variant is {LLVM_VARIANT}")
     return MitsubaVariants(available, notes)
 
 

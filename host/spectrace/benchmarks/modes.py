@@ -89,4 +89,7 @@ def run_bench_modes(request: BenchRequest, log: Callable[[str], None]) -> tuple[
                                    request.triangles, log=log)
         output["scaling"] = result
         tables += scaling_tables(result)
+    for mode, result in output.items():
+        for note in result.get("notes", []) if isinstance(result, dict) else []:
+            log(f"note ({mode}): {note}")
     return output, tables
