@@ -46,18 +46,18 @@ def run_bench_modes(request: BenchRequest, log: Callable[[str], None]) -> tuple[
     output, tables = {}, []
     first_size = request.sizes[0] if request.sizes else None
     if request.cold:
-        from spectrace.bench import render_bench_table, run_render_bench
+        from spectrace.bench import render_bench_table
         from spectrace.benchmarks.cold_start import run_cold_bench
 
-        size = first_size or 256
-        log("cold start: empty kernel caches, in a fresh process")
-        cold = run_cold_bench(size, request.spp, request.max_depth, request.device,
-                              str(request.scene) if request.scene else None)
-        warm = run_render_bench(request.scene, [size], request.spp, request.max_depth, request.device, False)
+        log("cold start (empty kernel caches), then warm start, each in a fresh process")
+        cold, warm = run_cold_bench(first_size or 256, request.spp, request.max_depth, request.device,
+                                    str(request.scene) if request.scene else None)
         output["cold"] = {"cold": cold, "warm": warm}
         tables += [render_bench_table(cold), render_bench_table(warm)]
         tables[-2].title = "cold start (empty kernel caches): build s and to 1st pass s are the cold figures"
-        tables[-1].title = "warm start (cached kernel binaries)"
+        tables[-1].title = "warm start (a fresh process, the cold run's cached binaries)"
+        log(f"whole processes (interpreter, imports, devices, scene, build, passes): cold "
+            f"{cold[0]['process_seconds']:.2f} s, warm {warm[0]['process_seconds']:.2f} s")
     if request.peer == "mitsuba":
         from spectrace.benchmarks.peer_mitsuba import peer_tables, run_peer_bench
 
