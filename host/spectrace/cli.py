@@ -214,13 +214,33 @@ def bench(
     samplers: Annotated[bool, typer.Option("--samplers", help=(
         "Instead compare the samplers: RMSE of independent and sobol at 4, 16, 64 spp against a long reference "
         "render (default size 32; see docs/sampling.md)."))] = False,
+    peer: Annotated[Optional[str], typer.Option(help="Also render with this peer and compare: mitsuba.")] = None,
+    quality: Annotated[bool, typer.Option("--quality", help="Error at equal time against a reference.")] = False,
+    rays: Annotated[bool, typer.Option("--rays", help="Closest-hit rays/s on a large mesh, vs Embree.")] = False,
+    scaling: Annotated[bool, typer.Option("--scaling", help="Throughput vs size, depth, triangles.")] = False,
+    cold: Annotated[bool, typer.Option("--cold", help="Kernel build with empty caches, then warm.")] = False,
+    triangles: Annotated[int, typer.Option(help="Largest mesh for --rays/--scaling.", min=20)] = 1_000_000,
+    ray_count: Annotated[int, typer.Option(help="Rays for --rays.", min=1)] = 1_000_000,
+    seconds: Annotated[float, typer.Option(help="Time budget per renderer for --quality.", min=0.0)] = 2.0,
 ) -> None:
-    """Measure samples/s and rays/s (a benchmark, never a test)."""
+    """Measure samples/s and rays/s (a benchmark, never a test); modes compare with Mitsuba 3 and Embree
+    (docs/performance.md)."""
     if samplers:
-        from spectrace.bench_samplers import sampler_bench_command
+        from spectrace.benchmarks.samplers import sampler_bench_command
         return sampler_bench_command(scene, size, device, as_json, console)
     from spectrace.bench import run_render_bench, render_bench_table
+    from spectrace.benchmarks.modes import BenchRequest, run_bench_modes
 
+    request = BenchRequest(scene, size, spp, max_depth, device, all_devices, peer, quality, rays, scaling, cold,
+                           triangles, ray_count, seconds)
+    if request.any_mode():
+        output, tables = run_bench_modes(request, log=lambda text: console.print(text, highlight=False))
+        if as_json:
+            print(json.dumps(output, indent=2))
+        else:
+            for table in tables:
+                Console(width=160).print(table)
+        return
     results = run_render_bench(scene, sizes=size or [256, 512], spp=spp, max_depth=max_depth, device=device,
                                all_devices=all_devices, log=lambda text: console.print(text, highlight=False))
     if as_json:

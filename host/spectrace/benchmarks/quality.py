@@ -1,0 +1,126 @@
+"""`spectrace bench --quality`: error at equal wall time, spectrace against Mitsuba 3.
+
+A converged reference is a long spectrace render (its own seed, so its noise is independent of the images
+judged), cross-checked region by region against a long Mitsuba render of the exported scene. Then each
+renderer gets the same wall-clock budget, in the same way: a warm 4-spp probe render measures its throughput,
+then it renders the spp that fit the budget (the time actually taken is reported). The error is the RMSE of
+film XYZ over all pixels and channels against the reference, and relative to the reference's mean Y. The
+reference's own noise RMS (from its two independent halves) is reported: RMSE² includes its square. "RMSE at
+budget" takes that out and scales to exactly the budget (variance ∝ 1/time), since a renderer may overrun it.
+"""
+
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from spectrace.benchmarks.image_agreement import compare_regions, regions_for
+from spectrace.benchmarks.peer_mitsuba import bench_scene
+from spectrace.device import open_device
+from spectrace.render.renderer import Renderer
+from spectrace.scene import limits
+
+REFERENCE_SEED_OFFSET = 1_000_003
+PROBE_SPP = 4
+
+
+def _rmse(image: np.ndarray, reference: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((image.astype(np.float64) - reference) ** 2)))
+
+
+def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: float) -> int:
+    return max(1, int(round(budget_seconds * probe_spp / max(seconds_for_probe, 1e-9))))
+
+
+def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, seconds: float, reference_spp: int,
+                      device_key: str | None, log: Callable[[str], None] = lambda text: None) -> dict:
+    scene = bench_scene(scene_path, size, 1, max_depth)
+    device = open_device(device_key)
+    log(f"reference: spectrace, {reference_spp} spp")
+    reference_renderer = Renderer(scene.with_overrides(seed=scene.seed + REFERENCE_SEED_OFFSET), device)
+    half = reference_renderer.render(spp=max(1, reference_spp // 2)).xyz.astype(np.float64)
+    reference = reference_renderer.render(spp=reference_spp).xyz.astype(np.float64)
+    # The reference is the mean of two independent halves a and b: its own noise is RMS(a - b) / 2.
+    other_half = (reference * reference_spp - half * (reference_spp // 2)) / (reference_spp - reference_spp // 2)
+    result = {"scene": str(scene.source), "width": size, "height": size, "max_depth": max_depth,
+              "budget_seconds": seconds, "runtime": device.report.key,
+              "reference": {"spp": reference_spp, "noise_rms": _rmse(half, other_half) / 2.0,
+                            "mean_y": float(reference[..., 1].mean())},
+              "renderers": [], "cross_check": None, "notes": []}
+
+    renderer = Renderer(scene, device)
+    renderer.run_pass(1)
+    renderer.reset()
+    probe = renderer.render(spp=PROBE_SPP)
+    spp = min(_spp_for_budget(probe.render_seconds, PROBE_SPP, seconds), limits.MAX_SPP)
+    renderer.reset()
+    start = time.perf_counter()
+    image = renderer.render(spp=spp)
+    elapsed = time.perf_counter() - start
+    result["renderers"].append({"renderer": "spectrace", "runtime": device.report.key, "spp": image.spp,
+                                "seconds": elapsed, "rmse": _rmse(image.xyz, reference)})
+    log(f"spectrace: {image.spp} spp in {elapsed:.2f} s")
+
+    try:
+        from spectrace.benchmarks.mitsuba_runtime import render_with_mitsuba, usable_variants
+        from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+
+        usable = usable_variants()
+    except ImportError:
+        result["notes"].append("mitsuba is not installed (pip install 'spectrace[bench]'): spectrace only")
+        usable = None
+    if usable is not None:
+        result["notes"] += usable.notes
+        with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
+            for index, variant in enumerate(usable.available):
+                import mitsuba as mi
+
+                mi.set_variant(variant)
+                scene_dict = scene_to_mitsuba_dict(scene, Path(folder))
+                probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
+                spp = _spp_for_budget(probe.seconds, PROBE_SPP, seconds)
+                timed = render_with_mitsuba(scene_dict, variant, spp=spp, warm_up=False)
+                result["renderers"].append({"renderer": "mitsuba", "runtime": variant, "spp": spp,
+                                            "seconds": timed.seconds, "rmse": _rmse(timed.xyz, reference)})
+                log(f"mitsuba {variant}: {spp} spp in {timed.seconds:.2f} s")
+                if index == 0:  # cross-check the reference against the fastest peer, at a quarter of its spp
+                    check = render_with_mitsuba(scene_dict, variant, spp=max(1, reference_spp // 4), seed=7,
+                                                warm_up=False)
+                    regions = compare_regions(reference, check.xyz, regions_for(scene.source))
+                    result["cross_check"] = {"mitsuba": variant, "spp": max(1, reference_spp // 4),
+                                             "agrees": all(r.agrees for r in regions),
+                                             "regions": [r.as_dict() for r in regions]}
+    noise = result["reference"]["noise_rms"]
+    for row in result["renderers"]:
+        row["relative_rmse"] = row["rmse"] / max(result["reference"]["mean_y"], 1e-30)
+        # Monte Carlo variance falls as 1/time: the error each would have had in exactly the budget, with the
+        # reference's own noise taken out (RMSE² = error² + reference noise², the two being independent).
+        row["rmse_at_budget"] = float(np.sqrt(max(row["rmse"] ** 2 - noise**2, 0.0) * row["seconds"] / seconds))
+    return result
+
+
+def quality_tables(result: dict) -> list:
+    from rich.table import Table
+
+    ref = result["reference"]
+    table = Table(title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
+                        f"max_depth {result['max_depth']}; reference {ref['spp']} spp (its noise RMS "
+                        f"{ref['noise_rms']:.3g})")
+    for column in ("renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE at budget"):
+        table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
+    for r in result["renderers"]:
+        table.add_row(r["renderer"], r["runtime"], str(r["spp"]), f"{r['seconds']:.2f}", f"{r['rmse']:.4g}",
+                      f"{100 * r['relative_rmse']:.2f} %", f"{r['rmse_at_budget']:.4g}")
+    tables = [table]
+    check = result["cross_check"]
+    if check:
+        cross = Table(title=f"reference cross-check against Mitsuba {check['mitsuba']} at {check['spp']} spp")
+        for column in ("region", "spectrace reference Y", "mitsuba Y", "max |Δ|/σ", "agrees"):
+            cross.add_column(column)
+        for r in check["regions"]:
+            cross.add_row(r["region"], f"{r['ours'][1]:.4g}", f"{r['theirs'][1]:.4g}", f"{r['sigmas']:.2f}",
+                          "pass" if r["agrees"] else "FAIL")
+        tables.append(cross)
+    return tables

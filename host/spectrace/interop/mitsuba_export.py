@@ -1,0 +1,138 @@
+"""A loaded spectrace `Scene` as a Mitsuba 3 scene dictionary (`mitsuba.load_dict`), for side-by-side renders.
+
+The export is meant to make Mitsuba do exactly the work spectrace does, so that timings and images compare:
+- geometry: every shape's world-space triangles, float32, flat-shaded (face normals from the winding, which is
+  also what decides the front side in both renderers), as binary PLY files in a folder the caller owns;
+- spectra: every spectrum as Mitsuba's `regular` spectrum on spectrace's own 1 nm grid (360-830 nm), so both
+  interpolate the same samples linearly;
+- materials: spectrace's diffuse reflects on both faces, so it becomes `twosided` around `diffuse`;
+- area lights: Mitsuba's `area` emitter is one-sided toward the face normal, as spectrace's default;
+- camera: the same origin/target/up (Mitsuba's `lookat` puts image-right along forward x up, as spectrace does),
+  fov and fov_axis; a box pixel filter, because spectrace averages samples uniformly inside each pixel;
+- film: `hdrfilm` with pixel_format "xyz". Both renderers estimate ∫ L (x̄, ȳ, z̄) dλ with the CIE 1931 2°
+  functions on 360-830 nm and the same wavelength pdf, but divide by different constants: spectrace by ∫ ȳ dλ of
+  its table (trapezoid rule, 106.857), Mitsuba 3 by its fixed MI_CIE_Y_NORMALIZATION (1/106.750), so Mitsuba's
+  XYZ is 0.1 % higher for every spectrum (measured: 1.00098 ± 0.00003 for a constant radiance 1).
+  `mitsuba_film_xyz` rescales Mitsuba's image to spectrace's convention before any comparison;
+- integrator: `path` with the same max_depth and rr_depth. Both count max_depth in path segments and start
+  Russian roulette once `rr_depth` bounces have happened, with survival probability min(max throughput, 0.95).
+
+What has no faithful counterpart (spot lights: Mitsuba's falloff profile differs; pictures on lights, environment
+maps from images, two-sided area lights, the `direct` integrator) is refused with a SpectraceError naming it.
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+from spectrace.errors import SpectraceError
+from spectrace.geometry.mesh import TriangleMesh
+from spectrace.scene.model import ConstantEnvironment, DiffuseMaterial, DistantLight, PointLight, Scene
+from spectrace.spectral.grid import GRID_NM
+from spectrace.spectral.spectrum import Spectrum
+
+
+def regular_spectrum(spectrum: Spectrum) -> dict:
+    """Mitsuba's piecewise-linear spectrum on spectrace's uniform 1 nm grid (its `regular` plugin: an O(1) lookup,
+    where `irregular` searches the wavelength list, so the peer is not slowed by the export)."""
+    return {
+        "type": "regular",
+        "wavelength_min": float(GRID_NM[0]),
+        "wavelength_max": float(GRID_NM[-1]),
+        "values": ", ".join(f"{v:.9g}" for v in spectrum.values),
+    }
+
+
+def write_binary_ply(mesh: TriangleMesh, path: Path) -> None:
+    """Float32 positions and int32 triangles, no normals: Mitsuba then shades with the face normal."""
+    vertices = np.ascontiguousarray(mesh.vertices, dtype="<f4")
+    faces = np.empty(len(mesh.faces), dtype=[("n", "u1"), ("index", "<i4", (3,))])
+    faces["n"] = 3
+    faces["index"] = mesh.faces
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        f"element vertex {len(vertices)}\nproperty float x\nproperty float y\nproperty float z\n"
+        f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    with open(path, "wb") as out:
+        out.write(header.encode("ascii"))
+        out.write(vertices.tobytes())
+        out.write(faces.tobytes())
+
+
+def _refuse(what: str, scene: Scene) -> SpectraceError:
+    return SpectraceError(f"cannot export to Mitsuba 3 faithfully: {what}",
+                          where=str(scene.source) if scene.source else None)
+
+
+def _light_entry(light, scene: Scene) -> dict:
+    if isinstance(light, PointLight):
+        return {"type": "point", "position": list(light.position), "intensity": regular_spectrum(light.intensity)}
+    if isinstance(light, DistantLight):
+        return {"type": "directional", "direction": list(light.direction),
+                "irradiance": regular_spectrum(light.irradiance)}
+    if isinstance(light, ConstantEnvironment):
+        return {"type": "constant", "radiance": regular_spectrum(light.radiance)}
+    raise _refuse(f"{type(light).__name__} has no equivalent Mitsuba emitter", scene)
+
+
+def scene_to_mitsuba_dict(scene: Scene, mesh_folder: Path, spp: int | None = None) -> dict:
+    """The scene as a `mitsuba.load_dict` dictionary; meshes are written into `mesh_folder` (kept by the caller
+    until Mitsuba has loaded them)."""
+    if scene.integrator != "path":
+        raise _refuse(f"integrator '{scene.integrator}' (only 'path' maps onto Mitsuba's path tracer)", scene)
+    mesh_folder = Path(mesh_folder)
+    mesh_folder.mkdir(parents=True, exist_ok=True)
+    camera = scene.camera
+    entries: dict = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": int(scene.max_depth), "rr_depth": int(scene.rr_depth),
+                       "hide_emitters": False},
+        "sensor": {
+            "type": "perspective",
+            "fov": float(camera.fov_degrees),
+            "fov_axis": camera.fov_axis,
+            "to_world": _lookat(camera.origin, camera.target, camera.up),
+            "sampler": {"type": "independent", "sample_count": int(spp or scene.spp)},
+            "film": {"type": "hdrfilm", "width": int(scene.width), "height": int(scene.height),
+                     "pixel_format": "xyz", "rfilter": {"type": "box"}},
+        },
+    }
+    materials: dict[int, str] = {}
+    for index, shape in enumerate(scene.shapes):
+        if not isinstance(shape.material, DiffuseMaterial):
+            raise _refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet", scene)
+        reflectance_key = id(shape.material)
+        if reflectance_key not in materials:
+            name = f"material_{len(materials)}"
+            entries[name] = {"type": "twosided",
+                             "bsdf": {"type": "diffuse", "reflectance": regular_spectrum(shape.material.reflectance)}}
+            materials[reflectance_key] = name
+        path = mesh_folder / f"shape_{index}.ply"
+        write_binary_ply(shape.mesh, path)
+        entry = {"type": "ply", "filename": str(path), "face_normals": True,
+                 "bsdf": {"type": "ref", "id": materials[reflectance_key]}}
+        if shape.emitter is not None:
+            if shape.emitter.image is not None:
+                raise _refuse(f"shape '{shape.name}' shows an image; Mitsuba's area light has one spectrum", scene)
+            if shape.emitter.two_sided:
+                raise _refuse(f"shape '{shape.name}' emits on both faces; Mitsuba's area light is one-sided", scene)
+            entry["emitter"] = {"type": "area", "radiance": regular_spectrum(shape.emitter.radiance)}
+        entries[f"shape_{index}"] = entry
+    for index, light in enumerate(scene.lights):
+        entries[f"light_{index}"] = _light_entry(light, scene)
+    return entries
+
+
+def mitsuba_film_xyz(xyz: np.ndarray, mi) -> np.ndarray:
+    """Mitsuba's film XYZ (`mi` with a spectral variant set) in spectrace's normalisation, ∫ L cmf dλ / ∫ ȳ dλ."""
+    from spectrace.spectral.colorimetry import CIE_Y_INTEGRAL
+
+    return np.asarray(xyz, dtype=np.float64) / (float(mi.MI_CIE_Y_NORMALIZATION) * CIE_Y_INTEGRAL)
+
+
+def _lookat(origin, target, up):
+    import mitsuba as mi  # the caller has chosen a variant
+
+    return mi.ScalarTransform4f().look_at(origin=list(map(float, origin)), target=list(map(float, target)),
+                                          up=list(map(float, up)))

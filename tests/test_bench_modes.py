@@ -1,0 +1,80 @@
+"""`spectrace bench` modes run as a user runs them, on tiny sizes, with --json: the object parses and its figures
+are consistent with what was asked (triangle counts, ray counts, spp). Speed is never asserted. Where Mitsuba or
+Embree is installed (the `bench` extra) the comparisons they feed run too and must agree with spectrace."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+
+def _bench(*args) -> dict:
+    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--json", *args], capture_output=True,
+                            text=True, env=os.environ.copy(), timeout=600)
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)
+
+
+def _has(module: str) -> bool:
+    try:
+        __import__(module)
+    except ImportError:
+        return False
+    return True
+
+
+def test_scaling_rays_and_quality_modes():
+    out = _bench("--scaling", "--rays", "--quality", "--size", "8", "--spp", "1", "--triangles", "100",
+                 "--ray-count", "3000", "--seconds", "0.05")
+    scaling = out["scaling"]
+    assert [r["width"] for r in scaling["resolution"]] == [8]
+    assert [r["max_depth"] for r in scaling["depth"]] == [1, 2, 4, 8, 16]
+    # The box alone, then the box plus an icosphere of 20 * 4**2 triangles (the smallest with >= 100).
+    box, with_sphere = (r["triangles"] for r in scaling["triangles"])
+    assert with_sphere - box == 320
+    assert all(r["spp"] == 1 and r["samples_per_second"] > 0 for r in scaling["resolution"] + scaling["depth"])
+
+    rays = out["rays"]
+    assert rays["triangles"] == 320 and rays["rays"] == 3000
+    assert rays["bvh"]["sah_cost"] > 0 and rays["bvh"]["nodes"] >= 1
+    assert len(rays["spectrace"]) == 1 and rays["spectrace"][0]["rays_per_second"] > 0
+    if _has("embreex"):
+        agreement = rays["agreement"][0]
+        assert agreement["rays"] == 3000
+        # Same rays, same mesh: a ray may disagree only where it grazes an edge.
+        assert agreement["same_hit_or_miss"] >= 0.998 and agreement["within_1e-4"] >= 0.998
+
+    quality = out["quality"]
+    assert quality["reference"]["spp"] == 1024
+    ours = quality["renderers"][0]
+    assert ours["renderer"] == "spectrace" and ours["spp"] >= 1 and ours["rmse"] > 0
+    if _has("mitsuba") and quality["cross_check"] is not None:
+        assert quality["cross_check"]["agrees"], quality["cross_check"]
+
+
+def test_cold_mode_builds_without_caches():
+    out = _bench("--cold", "--size", "8", "--spp", "1")
+    cold, warm = out["cold"]["cold"][0], out["cold"]["warm"][0]
+    assert cold["kernel_build_cached"] is False  # empty caches: a real build from source
+    assert warm["kernel_build_cached"] is True  # the cold run's binary or an earlier one answers now
+    assert cold["spp"] == warm["spp"] == 1
+
+
+def test_peer_mitsuba_mode_agrees():
+    pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
+    out = _bench("--peer", "mitsuba", "--size", "32", "--spp", "16", "--max-depth", "4")
+    peer = out["peer"]
+    assert peer["width"] == 32 and peer["spp"] == 16 and peer["max_depth"] == 4
+    assert peer["mitsuba"], peer["notes"]  # scalar_spectral needs no LLVM, so at least it runs
+    assert len(peer["ratios"]) == len(peer["spectrace"]) * len(peer["mitsuba"])
+    for pair in peer["agreement"]:
+        assert pair["agrees"], pair
+
+
+def test_unknown_peer_is_one_line_error():
+    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--peer", "blender"], capture_output=True,
+                            text=True, env=os.environ.copy(), timeout=600)
+    assert result.returncode != 0
+    assert "unknown peer 'blender'" in result.stderr and "Traceback" not in result.stderr
