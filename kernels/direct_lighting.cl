@@ -7,21 +7,30 @@
 #include "material.cl"
 #include "rng.cl"
 
+/* Picks one light by its pmf and samples a point of it as seen from x: 0 when nothing arrives. Draws three
+ * numbers (pick, then the point) whether or not a light exists, so the sampler's dimensions stay aligned. */
+inline int sample_one_light(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 x,
+                            __global const Light **light, LightSample *ls)
+{
+    __global const RenderParams *params = scene->params;
+    float u_pick = sample_1d(sampler);
+    float2 u_light = sample_2d(sampler);
+    if (params->light_count == 0) return 0;
+    *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
+    LightBuffers buffers = light_buffers(scene);
+    if (!sample_light(*light, &buffers, w, x, u_light, ls)) return 0;
+    return any(ls->arriving != (float4)(0.0f));
+}
+
 /* Radiance reflected toward wo by light from one sampled light: f·cos·L / pdf, weighted against BSDF sampling by
  * the power heuristic when use_mis (delta lights always weigh 1: BSDF sampling cannot find them). */
 inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
                                     float3 n_geometric, float3 wo, __global const Material *material, int use_mis,
                                     uint *rays_traced)
 {
-    __global const RenderParams *params = scene->params;
-    float u_pick = sample_1d(sampler);
-    float2 u_light = sample_2d(sampler);
-    if (params->light_count == 0) return (float4)(0.0f);
-    __global const Light *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
+    __global const Light *light;
     LightSample ls;
-    LightBuffers buffers = light_buffers(scene);
-    if (!sample_light(light, &buffers, w, p, u_light, &ls)) return (float4)(0.0f);
-    if (all(ls.arriving == (float4)(0.0f))) return (float4)(0.0f);
+    if (!sample_one_light(scene, w, sampler, p, &light, &ls)) return (float4)(0.0f);
     float4 f_cos = material_eval(material, scene->spectra, w, n_geometric, wo, ls.wi);
     if (all(f_cos == (float4)(0.0f))) return (float4)(0.0f);
 
@@ -46,15 +55,9 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
 inline float4 estimate_direct_light_in_medium(const Scene *scene, const SampledWavelengths *w, Sampler *sampler,
                                               float3 x, float3 travel, float g, uint *rays_traced)
 {
-    __global const RenderParams *params = scene->params;
-    float u_pick = sample_1d(sampler);
-    float2 u_light = sample_2d(sampler);
-    if (params->light_count == 0) return (float4)(0.0f);
-    __global const Light *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
+    __global const Light *light;
     LightSample ls;
-    LightBuffers buffers = light_buffers(scene);
-    if (!sample_light(light, &buffers, w, x, u_light, &ls)) return (float4)(0.0f);
-    if (all(ls.arriving == (float4)(0.0f))) return (float4)(0.0f);
+    if (!sample_one_light(scene, w, sampler, x, &light, &ls)) return (float4)(0.0f);
     float phase = henyey_greenstein(dot(travel, ls.wi), g);
     float3 to = light->type == LIGHT_TRIANGLE ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
     float4 transmittance = scene_transmittance(scene, w, x, to, ls.wi, isinf(ls.distance), rays_traced);
