@@ -86,49 +86,58 @@ inline float3 dielectric_half_vector(float3 wo, float3 wi, float e, int *ok)
     return h;
 }
 
-/* f(ωo, ωi) |cos θi|. Reflection: D G F / (4 |cos θo|) (Walter eq. 20 times cos θi); refraction (eq. 21 times
- * |cos θi|, its n_o² over the squared denominator divided through by n_o²):
- *     D G (1 − F) |ωi·h| (ωo·h) / (|cos θo| (ωo·h + e ωi·h)²). */
-inline float rough_dielectric_eval(float3 wo, float3 wi, float eta, float alpha)
+/* What eval and pdf share for a pair (ωo, ωi): the frame turned so ωo.z > 0, e, the linking microfacet normal
+ * and the Fresnel reflectance on it. */
+typedef struct {
+    float3 wo, wi, h;
+    float e;
+    float wo_h, wi_h;
+    float fresnel;
+} RoughDielectricPair;
+
+/* 0 when the pair cannot be linked by a microfacet (then f and pdf are 0). */
+inline int rough_dielectric_pair(float3 wo, float3 wi, float eta, RoughDielectricPair *q)
 {
-    float e = dielectric_eta_from(wo.z, eta);
+    q->e = dielectric_eta_from(wo.z, eta);
     if (wo.z < 0.0f) {
         wo = mirror_z(wo);
         wi = mirror_z(wi);
     }
     int ok;
-    float3 h = dielectric_half_vector(wo, wi, e, &ok);
-    if (!ok) return 0.0f;
-    float wo_h = dot(wo, h);
+    q->h = dielectric_half_vector(wo, wi, q->e, &ok);
+    if (!ok) return 0;
+    q->wo = wo;
+    q->wi = wi;
+    q->wo_h = dot(wo, q->h);
+    q->wi_h = dot(wi, q->h);
     float cos_t;
-    float f = fresnel_dielectric_refracting(wo_h, e, &cos_t);
-    float dg = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha);
-    if (wi.z > 0.0f) return dg * f / (4.0f * wo.z);
-    float wi_h = dot(wi, h);
-    float denominator = wo_h + e * wi_h;
-    return dg * (1.0f - f) * fabs(wi_h) * wo_h / (wo.z * denominator * denominator);
+    q->fresnel = fresnel_dielectric_refracting(q->wo_h, q->e, &cos_t);
+    return 1;
+}
+
+/* f(ωo, ωi) |cos θi|. Reflection: D G F / (4 |cos θo|) (Walter eq. 20 times cos θi); refraction (eq. 21 times
+ * |cos θi|, its n_o² over the squared denominator divided through by n_o²):
+ *     D G (1 − F) |ωi·h| (ωo·h) / (|cos θo| (ωo·h + e ωi·h)²). */
+inline float rough_dielectric_eval(float3 wo, float3 wi, float eta, float alpha)
+{
+    RoughDielectricPair q;
+    if (!rough_dielectric_pair(wo, wi, eta, &q)) return 0.0f;
+    float dg = ggx_d(q.h, alpha) * ggx_g2(q.wo, q.wi, alpha);
+    if (q.wi.z > 0.0f) return dg * q.fresnel / (4.0f * q.wo.z);
+    float denominator = q.wo_h + q.e * q.wi_h;
+    return dg * (1.0f - q.fresnel) * fabs(q.wi_h) * q.wo_h / (q.wo.z * denominator * denominator);
 }
 
 /* pdf of rough_dielectric_sample: the visible-normal density times the lobe choice (F or 1 − F) times the
  * Jacobian of h → ωi: 1 / (4 ωo·h) for reflection, e² |ωi·h| / (ωo·h + e ωi·h)² for refraction (Walter eq. 14, 17). */
 inline float rough_dielectric_pdf(float3 wo, float3 wi, float eta, float alpha)
 {
-    float e = dielectric_eta_from(wo.z, eta);
-    if (wo.z < 0.0f) {
-        wo = mirror_z(wo);
-        wi = mirror_z(wi);
-    }
-    int ok;
-    float3 h = dielectric_half_vector(wo, wi, e, &ok);
-    if (!ok) return 0.0f;
-    float wo_h = dot(wo, h);
-    float cos_t;
-    float f = fresnel_dielectric_refracting(wo_h, e, &cos_t);
-    float visible = ggx_g1(wo, alpha) * wo_h * ggx_d(h, alpha) / wo.z;  /* D_wo(h), Heitz 2018 */
-    if (wi.z > 0.0f) return visible * f / (4.0f * wo_h);
-    float wi_h = dot(wi, h);
-    float denominator = wo_h + e * wi_h;
-    return visible * (1.0f - f) * e * e * fabs(wi_h) / (denominator * denominator);
+    RoughDielectricPair q;
+    if (!rough_dielectric_pair(wo, wi, eta, &q)) return 0.0f;
+    float visible = ggx_g1(q.wo, alpha) * q.wo_h * ggx_d(q.h, alpha) / q.wo.z;  /* D_wo(h), Heitz 2018 */
+    if (q.wi.z > 0.0f) return visible * q.fresnel / (4.0f * q.wo_h);
+    float denominator = q.wo_h + q.e * q.wi_h;
+    return visible * (1.0f - q.fresnel) * q.e * q.e * fabs(q.wi_h) / (denominator * denominator);
 }
 
 /* A microfacet normal from the visible normals, then reflection off it with probability F(ωo·h), else refraction
