@@ -43,6 +43,7 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
         s.segments = 1;
         s.secondary_terminated = 0;
         s.medium = -1;
+        s.null_crossings = 0;
         reflected += continue_path(scene, w, sampler, s, rays_traced);
     }
     return M_PI_F * reflected;
