@@ -14,7 +14,7 @@ import pyopencl as cl
 
 from spectrace.device import Device
 from spectrace.errors import SpectraceError
-from spectrace.render.launch import launch_shape
+from spectrace.render.launch import launch_shape, wavefront_work_group
 from spectrace.render.memory import check_device_memory, device_memory_need
 from spectrace.render.opencl_errors import translate_opencl_errors
 from spectrace.render.renderer import Renderer
@@ -46,7 +46,7 @@ class WavefrontRenderer(Renderer):
         self._queues = [cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * QUEUE_ENTRY_BYTES)
                         for _ in range(2)]
         self._queue_lengths = [cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 4) for _ in range(2)]
-        self.launches = 0  # advance launches so far, for the benchmark
+        self.work_group = wavefront_work_group(self.device)
 
     def _program_file(self, scene: Scene) -> str:
         return "integrator_path_wavefront.cl"
@@ -78,7 +78,6 @@ class WavefrontRenderer(Renderer):
                                  self._slots, self._queues[current], self._queue_lengths[current],
                                  self._queues[following], self._queue_lengths[following])
             cl.enqueue_nd_range_kernel(queue, self.kernel, *launch_shape(int(live[0]), self.work_group))
-            self.launches += 1
             current = following
         queue.finish()
         self.render_seconds += time.perf_counter() - start
