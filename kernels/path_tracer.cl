@@ -19,6 +19,7 @@ typedef struct {
     int secondary_terminated;
     int medium;              /* index of the medium `ray` travels in, -1 for none (kernels/medium.cl) */
     float radiance_scale;    /* product of the refractions' (n_o/n_i)² factors in `throughput` */
+    int null_crossings;      /* medium boundaries crossed without a vertex, bounded by MAX_NULL_CROSSINGS */
 } PathState;
 
 inline PathState camera_path(Ray ray)
@@ -33,6 +34,7 @@ inline PathState camera_path(Ray ray)
     s.secondary_terminated = 0;
     s.medium = -1;  /* cameras and sensors stand outside every medium */
     s.radiance_scale = 1.0f;
+    s.null_crossings = 0;
     return s;
 }
 
@@ -105,82 +107,94 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     return 1;
 }
 
+/* One segment of a path: trace s->ray, add the light it finds (emission met, next-event estimation at the vertex
+ * or scattering point) to *radiance, then draw the next segment. Returns 1 when the path goes on from the updated
+ * state, 0 when it has ended. Call it only while s->segments <= max_segments(params).
+ *
+ * Both kernel shapes run paths through this one function: the megakernel loops over it in a work-item
+ * (continue_path), the wavefront keeps the state in a global buffer and calls it once per launch
+ * (kernels/wavefront_pass.cl). */
+inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                        float4 *radiance, uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    int last_segment = max_segments(params);
+    int ended = 0;
+
+    Hit hit = scene_intersect(scene, s->ray, rays_traced);
+    if (scatter_in_medium(scene, w, sampler, s, hit.t, last_segment, radiance, &ended, rays_traced)) {
+        return !ended && ++s->segments <= last_segment;
+    }
+    if (hit.triangle < 0) {
+        if (params->environment_light >= 0) {
+            __global const Light *env = &scene->lights[params->environment_light];
+            float3 d = s->ray.direction;
+            float weight = s->previous_delta
+                         ? 1.0f : power_heuristic(s->previous_pdf, environment_pdf(env, scene->map_cdf, d));
+            *radiance += s->throughput * environment_radiance(env, scene->spectra, scene->texels, w, d) * weight;
+        }
+        return 0;
+    }
+
+    TriangleInfo info = scene->triangle_info[hit.triangle];
+    float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+    float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
+    float3 wo = -s->ray.direction;
+
+    if (info.light >= 0) {
+        __global const Light *light = &scene->lights[info.light];
+        float4 emitted = area_light_emitted(light, scene->spectra, scene->texels, w, n, wo,
+                                             triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12));
+        float weight = 1.0f;
+        if (!s->previous_delta) {
+            float pdf_light = area_light_pdf(light, distance(s->previous_point, p), fabs(dot(n, wo)));
+            weight = power_heuristic(s->previous_pdf, pdf_light);
+        }
+        *radiance += s->throughput * emitted * weight;
+    }
+    if (info.material == TRIANGLE_NO_MATERIAL) {
+        if (++s->null_crossings > MAX_NULL_CROSSINGS) return 0;
+        cross_null_boundary(s, info, p, n);
+        return 1;  /* the same segment goes on beyond the boundary */
+    }
+    if (s->segments >= last_segment) return 0;
+
+    __global const Material *material = &scene->materials[info.material];
+    /* A dispersive surface keeps only the hero wavelength for everything that follows, direct light included
+     * (its BSDF is evaluated at the hero's index of refraction). */
+    if (material_disperses(material, w)) terminate_secondary_wavelengths(s);
+    if (material_has_non_delta_lobe(material)) {
+        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, p, n, wo, material, 1, rays_traced);
+    }
+
+    float uc = sample_1d(sampler);
+    float2 u = sample_2d(sampler);
+    BSDFSample bs;
+    if (!material_sample(material, scene->spectra, w, n, wo, uc, u, &bs)) return 0;
+    s->throughput *= bs.weight;
+    s->radiance_scale *= bs.radiance_scale;
+    if (bs.terminate_secondary) terminate_secondary_wavelengths(s);
+    s->previous_pdf = bs.pdf;
+    s->previous_delta = bs.is_delta;
+    s->medium = medium_beyond(info.interior, n, bs.wi);
+
+    if (!survives_russian_roulette(s, params, sample_1d(sampler))) return 0;
+    if (all(s->throughput == (float4)(0.0f))) return 0;
+
+    s->previous_point = p;
+    s->ray.origin = offset_ray_origin(p, n, bs.wi);
+    s->ray.direction = bs.wi;
+    ++s->segments;  /* below last_segment here, so the next one is allowed */
+    return 1;
+}
+
 /* Radiance carried back along the path from state `s` onward, including emission met by s.ray. */
 inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState s,
                             uint *rays_traced)
 {
-    __global const RenderParams *params = scene->params;
-    int last_segment = max_segments(params);
     float4 radiance = (float4)(0.0f);
-    int null_crossings = 0, ended = 0;
-
-    for (; s.segments <= last_segment; ++s.segments) {
-        Hit hit = scene_intersect(scene, s.ray, rays_traced);
-        if (scatter_in_medium(scene, w, sampler, &s, hit.t, last_segment, &radiance, &ended, rays_traced)) {
-            if (ended) break;
-            continue;
-        }
-        if (hit.triangle < 0) {
-            if (params->environment_light >= 0) {
-                __global const Light *env = &scene->lights[params->environment_light];
-                float3 d = s.ray.direction;
-                float weight = s.previous_delta
-                             ? 1.0f : power_heuristic(s.previous_pdf, environment_pdf(env, scene->map_cdf, d));
-                radiance += s.throughput * environment_radiance(env, scene->spectra, scene->texels, w, d) * weight;
-            }
-            break;
-        }
-
-        TriangleInfo info = scene->triangle_info[hit.triangle];
-        float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
-        float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
-        float3 wo = -s.ray.direction;
-
-        if (info.light >= 0) {
-            __global const Light *light = &scene->lights[info.light];
-            float4 emitted = area_light_emitted(light, scene->spectra, scene->texels, w, n, wo,
-                                                 triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12));
-            float weight = 1.0f;
-            if (!s.previous_delta) {
-                float pdf_light = area_light_pdf(light, distance(s.previous_point, p), fabs(dot(n, wo)));
-                weight = power_heuristic(s.previous_pdf, pdf_light);
-            }
-            radiance += s.throughput * emitted * weight;
-        }
-        if (info.material == TRIANGLE_NO_MATERIAL) {
-            if (++null_crossings > MAX_NULL_CROSSINGS) break;
-            cross_null_boundary(&s, info, p, n);
-            --s.segments;  /* undo the loop's count: the segment goes on */
-            continue;
-        }
-        if (s.segments >= last_segment) break;
-
-        __global const Material *material = &scene->materials[info.material];
-        /* A dispersive surface keeps only the hero wavelength for everything that follows, direct light included
-         * (its BSDF is evaluated at the hero's index of refraction). */
-        if (material_disperses(material, w)) terminate_secondary_wavelengths(&s);
-        if (material_has_non_delta_lobe(material)) {
-            radiance += s.throughput * estimate_direct_light(scene, w, sampler, p, n, wo, material, 1, rays_traced);
-        }
-
-        float uc = sample_1d(sampler);
-        float2 u = sample_2d(sampler);
-        BSDFSample bs;
-        if (!material_sample(material, scene->spectra, w, n, wo, uc, u, &bs)) break;
-        s.throughput *= bs.weight;
-        s.radiance_scale *= bs.radiance_scale;
-        if (bs.terminate_secondary) terminate_secondary_wavelengths(&s);
-        s.previous_pdf = bs.pdf;
-        s.previous_delta = bs.is_delta;
-        s.medium = medium_beyond(info.interior, n, bs.wi);
-
-        if (!survives_russian_roulette(&s, params, sample_1d(sampler))) break;
-        if (all(s.throughput == (float4)(0.0f))) break;
-
-        s.previous_point = p;
-        s.ray.origin = offset_ray_origin(p, n, bs.wi);
-        s.ray.direction = bs.wi;
-    }
+    int goes_on = s.segments <= max_segments(scene->params);
+    while (goes_on) goes_on = path_segment(scene, w, sampler, &s, &radiance, rays_traced);
     return radiance;
 }
 

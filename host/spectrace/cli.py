@@ -68,13 +68,16 @@ def render(
     resume: Annotated[Optional[Path], typer.Option(
         help="Continue the render saved in this checkpoint (same scene, size and seed; --spp may be higher). "
              "Checkpoints then go to this file unless --checkpoint names another.")] = None,
+    kernel: Annotated[str, typer.Option(
+        help="Kernel shape: megakernel (the default, fastest on CPU runtimes as measured) or wavefront (one launch "
+             "per path segment; path integrator only). Both give the same image.")] = "megakernel",
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
     (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
     from spectrace.output_options import RenderOutputOptions
     from spectrace.render.checkpoint import read_checkpoint
-    from spectrace.render.renderer import Renderer
     from spectrace.render.stop_signals import StopOnSignals
+    from spectrace.render.wavefront import make_renderer
     from spectrace.scene import load_scene
     from spectrace.scene.model import SAMPLER_TYPES
 
@@ -88,7 +91,7 @@ def render(
     outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color,
                                         false_color_scale)
     saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
-    renderer = Renderer(loaded, device, spectral_bins=spectral_bins)
+    renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
     console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False)
     if saved is not None:
         _resume(renderer, saved, resume)
@@ -222,6 +225,9 @@ def bench(
     triangles: Annotated[int, typer.Option(help="Largest mesh for --rays/--scaling.", min=20)] = 1_000_000,
     ray_count: Annotated[int, typer.Option(help="Rays for --rays.", min=1)] = 1_000_000,
     seconds: Annotated[float, typer.Option(help="Time budget per renderer for --quality.", min=0.0)] = 2.0,
+    kernel_shapes: Annotated[bool, typer.Option(
+        "--kernel-shapes", help="Compare the megakernel and the wavefront at work-group sizes 1-32 and the "
+                                "runtime's choice (medians of alternating repeats; one device, --device).")] = False,
 ) -> None:
     """Measure samples/s and rays/s (a benchmark, never a test); modes compare with Mitsuba 3 and Embree
     (docs/performance.md)."""
@@ -231,6 +237,17 @@ def bench(
     from spectrace.bench import run_render_bench, render_bench_table
     from spectrace.benchmarks.modes import BenchRequest, run_bench_modes
 
+    if kernel_shapes:
+        from spectrace.benchmarks.kernel_shapes import (kernel_shape_table, kernel_shape_variants,
+                                                        run_kernel_shape_bench)
+
+        results = run_kernel_shape_bench(scene, size or [256, 512], spp, max_depth, device, kernel_shape_variants(),
+                                         log=lambda text: console.print(text, highlight=False))
+        if as_json:
+            print(json.dumps({"kernel_shapes": results}, indent=2))
+        else:
+            Console(width=150).print(kernel_shape_table(results))
+        return
     request = BenchRequest(scene, size, spp, max_depth, device, all_devices, peer, quality, rays, scaling, cold,
                            triangles, ray_count, seconds)
     if request.any_mode():

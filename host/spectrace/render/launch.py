@@ -1,15 +1,18 @@
 """How kernels are launched on each kind of device: work-group sizes chosen by measurement, not by the runtime.
 
-Intel's CPU runtime (2026.2) vectorises a work-group of 16 or more work-items 16 wide. On the path-tracing
+Intel's CPU runtime (2026.2) may vectorise a work-group of 16 or more work-items 16 wide. On the path-tracing
 megakernel, whose work-items diverge after the first bounce, that ran 3.6x slower than groups of at most 8, which it
 runs narrower (Cornell box, 256x256, 4 spp, 2 cores: 0.37 vs 1.34 M samples/s; PoCL 3.1 on the same machine: 1.11
-to 1.20 M samples/s whatever the size). The 16-wide build of the sensor kernel also returned wrong values in lanes
-12-15 (PoCL is right on the same source), so sensors run in groups of one there.
+to 1.20 M samples/s whatever the size). Since the kernels grew media and more materials its vectoriser leaves the
+path tracer scalar at any size (forcing 16 wide is again 3.6x slower), so groups of 8 cost nothing and keep that
+from coming back (docs/devices.md, "Kernel shape (measured)"). The 16-wide build of the sensor kernel also returned
+wrong values in lanes 12-15 (PoCL is right on the same source), so sensors run in groups of one there.
 """
 
 from spectrace.device import Device
 
 INTEL_CPU_RENDER_GROUP = 8
+WAVEFRONT_GROUP = 32  # wavefront groups of 8, 16 and 32 ran within 5% of each other on PoCL and Intel's runtime
 
 
 def _is_intel_cpu(device: Device) -> bool:
@@ -19,6 +22,12 @@ def _is_intel_cpu(device: Device) -> bool:
 def render_work_group(device: Device) -> int | None:
     """Work-items per group for render passes; None lets the runtime choose."""
     return INTEL_CPU_RENDER_GROUP if _is_intel_cpu(device) else None
+
+
+def wavefront_work_group(device: Device) -> int:
+    """Work-items per group for the wavefront's launches. Always fixed: their sizes follow the number of live paths,
+    and PoCL compiles the kernel anew for every local size it would pick for them."""
+    return render_work_group(device) or WAVEFRONT_GROUP
 
 
 def meter_work_group(device: Device) -> int | None:

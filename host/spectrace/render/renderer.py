@@ -56,8 +56,10 @@ class Renderer:
             if not (360.0 <= lo < hi <= 830.0):
                 raise SpectraceError(f"spectral range must lie within 360-830 nm, got {lo}-{hi}")
             defines |= {"SPECTRAL_BINS": int(spectral_bins), "SPECTRAL_MIN_NM": float(lo), "SPECTRAL_MAX_NM": float(hi)}
-        self.program = self.device.build_program(INTEGRATOR_PROGRAMS[scene.integrator], defines=defines or None)
-        self.kernel = cl.Kernel(self.program, "render_pass")
+        self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
+        self.kernel = self._create_kernels()
+        # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
+        self.work_group = render_work_group(self.device)
         ctx = self.device.context
         ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
         b = self.buffers
@@ -75,6 +77,12 @@ class Renderer:
         self.samples_done = 0
         self.render_seconds = 0.0
         self.reset()
+
+    def _program_file(self, scene: Scene) -> str:
+        return INTEGRATOR_PROGRAMS[scene.integrator]
+
+    def _create_kernels(self) -> cl.Kernel:
+        return cl.Kernel(self.program, "render_pass")
 
     @translate_opencl_errors("clearing the film")
     def reset(self) -> None:
@@ -94,7 +102,7 @@ class Renderer:
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
         self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts, self._spectral_film)
-        global_size, local_size = launch_shape(self.pixel_count, render_work_group(self.device))
+        global_size, local_size = launch_shape(self.pixel_count, self.work_group)
         cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
         queue.finish()
         self.render_seconds += time.perf_counter() - start
