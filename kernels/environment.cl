@@ -88,9 +88,9 @@ inline float3 environment_sample(__global const Light *light, __global const flo
     if (light->type == LIGHT_ENVIRONMENT) {
         float z = 1.0f - 2.0f * u.x;
         float r = sqrt(fmax(0.0f, 1.0f - z * z));
-        float phi = TWO_PI * u.y;
+        float2 circle = r * cos_sin_turns(u.y);
         *pdf = light->pmf * INV_FOUR_PI;
-        return (float3)(r * cos(phi), r * sin(phi), z);
+        return (float3)(circle.x, circle.y, z);
     }
     int width = light->map_width, height = light->map_height;
     int row = cdf_search(map_cdf, height, u.x);

@@ -92,8 +92,8 @@ inline float3 sample_uniform_sphere(float2 u)
 {
     float z = 1.0f - 2.0f * u.x;
     float r = sqrt(fmax(0.0f, 1.0f - z * z));
-    float phi = TWO_PI * u.y;
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    float2 circle = r * cos_sin_turns(u.y);
+    return (float3)(circle.x, circle.y, z);
 }
 
 /* The scene-wide buffers that sampling a light may need besides the light itself. */

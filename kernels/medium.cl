@@ -107,10 +107,10 @@ inline float3 sample_henyey_greenstein(float3 direction, float g, float2 u)
     }
     cos_theta = clamp(cos_theta, -1.0f, 1.0f);
     float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
-    float phi = TWO_PI * u.y;
+    float2 around = sin_theta * cos_sin_turns(u.y);
     float3 tangent, bitangent;
     orthonormal_basis(direction, &tangent, &bitangent);
-    return normalize(sin_theta * cos(phi) * tangent + sin_theta * sin(phi) * bitangent + cos_theta * direction);
+    return normalize(around.x * tangent + around.y * bitangent + cos_theta * direction);
 }
 
 #endif

@@ -55,9 +55,9 @@ inline float3 ggx_sample_visible_normal(float3 wo, float alpha, float2 u)
     float3 t1 = len2 > 0.0f ? (float3)(-v.y, v.x, 0.0f) * rsqrt(len2) : (float3)(1.0f, 0.0f, 0.0f);
     float3 t2 = cross(v, t1);
     float r = sqrt(u.x);
-    float phi = TWO_PI * u.y;
-    float p1 = r * cos(phi);
-    float p2 = r * sin(phi);
+    float2 disk = r * cos_sin_turns(u.y);
+    float p1 = disk.x;
+    float p2 = disk.y;
     float s = 0.5f * (1.0f + v.z);
     p2 = mad(1.0f - s, sqrt(fmax(1.0f - p1 * p1, 0.0f)), s * p2);
     float3 nh = p1 * t1 + p2 * t2 + sqrt(fmax(1.0f - p1 * p1 - p2 * p2, 0.0f)) * v;

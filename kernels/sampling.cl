@@ -15,14 +15,21 @@ inline void orthonormal_basis(float3 n, float3 *tangent, float3 *bitangent)
     *bitangent = (float3)(b, sign + n.y * n.y * a, -n.y);
 }
 
+/* (cos 2πt, sin 2πt): cospi and sinpi reduce their argument exactly and cheaply, where cos and sin of 2πt would
+ * each run a general argument reduction. */
+inline float2 cos_sin_turns(float t)
+{
+    return (float2)(cospi(2.0f * t), sinpi(2.0f * t));
+}
+
 /* Cosine-weighted direction about +z (Malley's method: uniform disk point lifted to the hemisphere);
  * pdf = cos θ / π per steradian. */
 inline float3 sample_cosine_hemisphere(float2 u)
 {
     float r = sqrt(u.x);
-    float phi = TWO_PI * u.y;
+    float2 disk = r * cos_sin_turns(u.y);
     float z = sqrt(fmax(0.0f, 1.0f - u.x));
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    return (float3)(disk.x, disk.y, z);
 }
 
 /* Cosine-weighted direction about the unit vector n, world space; pdf = cos θ / π (cosine_hemisphere_pdf). */

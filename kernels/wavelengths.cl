@@ -2,7 +2,7 @@
  * rotations of it in sample space, each distributed by the visible-range pdf
  *     p(λ) ∝ 1 / cosh²(b (λ − 538 nm)),  b = 0.0072 / nm,  λ ∈ [360, 830] nm
  * (the shape pbrt-v4 uses, Sec. 4.6.5). Its CDF is a tanh, so sampling inverts it in closed form; here the
- * normalisation is computed exactly for the truncated range instead of using rounded constants. */
+ * normalisation is exact for the truncated range instead of using rounded constants. */
 #ifndef SPECTRACE_WAVELENGTHS_CL
 #define SPECTRACE_WAVELENGTHS_CL
 
@@ -10,6 +10,12 @@
 
 #define VISIBLE_PDF_CENTER_NM 538.0f
 #define VISIBLE_PDF_SHARPNESS 0.0072f
+/* The unnormalised CDF tanh(b (λ − 538 nm)) at the range's ends, 360 and 830 nm, with b the float 0.0072f,
+ * evaluated in double precision and rounded to float. Sampling and pdf both use these two numbers, so they stay an
+ * exact pair whatever the last bit; a last-bit change would only move the range's ends by ~1e-4 nm. */
+#define VISIBLE_CDF_LO (-0x1.b6bcfep-1f)
+#define VISIBLE_CDF_HI 0x1.f0f15ap-1f
+#define VISIBLE_CDF_SPAN (VISIBLE_CDF_HI - VISIBLE_CDF_LO)
 
 typedef struct {
     float4 lambda;  /* nm */
@@ -18,24 +24,26 @@ typedef struct {
     float4 grid_frac; /* position between grid_index and grid_index + 1 */
 } SampledWavelengths;
 
-inline float visible_cdf_at(float lambda_nm)
-{
-    return tanh(VISIBLE_PDF_SHARPNESS * (lambda_nm - VISIBLE_PDF_CENTER_NM));
-}
-
+/* p(λ) = b / (span cosh²x), x = b (λ − 538). With e = exp(−2|x|) ≤ 1, 1/cosh²x = 4e / (1 + e)²: one exp, no
+ * overflow. */
 inline float visible_wavelength_pdf(float lambda_nm)
 {
     if (lambda_nm < GRID_MIN_NM || lambda_nm > GRID_MAX_NM) return 0.0f;
-    float span = visible_cdf_at(GRID_MAX_NM) - visible_cdf_at(GRID_MIN_NM);
-    float c = cosh(VISIBLE_PDF_SHARPNESS * (lambda_nm - VISIBLE_PDF_CENTER_NM));
-    return VISIBLE_PDF_SHARPNESS / (span * c * c);
+    float e = exp(-2.0f * fabs(VISIBLE_PDF_SHARPNESS * (lambda_nm - VISIBLE_PDF_CENTER_NM)));
+    float one_plus_e = 1.0f + e;
+    return (4.0f * VISIBLE_PDF_SHARPNESS / VISIBLE_CDF_SPAN) * e / (one_plus_e * one_plus_e);
 }
 
-inline float sample_visible_wavelength(float u)
+/* Inverts the CDF at four uniform numbers. t = tanh x is where the CDF lands, so x = atanh t = ½ log((1 + t)/(1 − t))
+ * and, since 1/cosh²x = 1 − tanh²x, the pdf there is b (1 − t)(1 + t) / span: one log per wavelength, no hyperbolic
+ * function, and the pdf comes from the same t as λ (t ≥ −0.86 and ≤ 0.98, so 1 − t² loses no precision). */
+inline float4 sample_visible_wavelengths(float4 u, float4 *pdf)
 {
-    float lo = visible_cdf_at(GRID_MIN_NM);
-    float hi = visible_cdf_at(GRID_MAX_NM);
-    float lambda = VISIBLE_PDF_CENTER_NM + atanh(mad(u, hi - lo, lo)) / VISIBLE_PDF_SHARPNESS;
+    float4 t = mad(u, (float4)(VISIBLE_CDF_SPAN), (float4)(VISIBLE_CDF_LO));
+    float4 one_minus_t = 1.0f - t;
+    float4 one_plus_t = 1.0f + t;
+    *pdf = (VISIBLE_PDF_SHARPNESS / VISIBLE_CDF_SPAN) * one_minus_t * one_plus_t;
+    float4 lambda = VISIBLE_PDF_CENTER_NM + (0.5f / VISIBLE_PDF_SHARPNESS) * log(one_plus_t / one_minus_t);
     return clamp(lambda, GRID_MIN_NM, GRID_MAX_NM);
 }
 
@@ -44,10 +52,7 @@ inline SampledWavelengths sample_wavelengths(float u)
     float4 us = (float4)(u, u + 0.25f, u + 0.5f, u + 0.75f);
     us = us - floor(us);
     SampledWavelengths w;
-    w.lambda = (float4)(sample_visible_wavelength(us.x), sample_visible_wavelength(us.y),
-                        sample_visible_wavelength(us.z), sample_visible_wavelength(us.w));
-    w.pdf = (float4)(visible_wavelength_pdf(w.lambda.x), visible_wavelength_pdf(w.lambda.y),
-                     visible_wavelength_pdf(w.lambda.z), visible_wavelength_pdf(w.lambda.w));
+    w.lambda = sample_visible_wavelengths(us, &w.pdf);
     float4 position = w.lambda - GRID_MIN_NM;
     float4 lower = clamp(floor(position), 0.0f, (float)(GRID_SAMPLES - 2));
     w.grid_index = convert_int4(lower);

@@ -52,14 +52,29 @@ def test_estimator_converges_to_colour_science(kernel_runner, case):
     assert np.all(np.abs(mean - expected) < 4 * standard_error), (mean, expected, standard_error)
 
 
-def test_visible_pdf_integrates_to_one_and_matches_histogram(kernel_runner):
+def _analytic_visible_pdf(lam: np.ndarray) -> np.ndarray:
+    """p(λ) = b / (cosh²(b (λ − 538)) (tanh(b (830 − 538)) − tanh(b (360 − 538)))), in double precision, with b the
+    kernel's float 0.0072."""
+    b = float(np.float32(0.0072))
+    span = np.tanh(b * (830 - 538)) - np.tanh(b * (360 - 538))
+    return b / (np.cosh(b * (lam.astype(np.float64) - 538)) ** 2 * span)
+
+
+def _sample_wavelengths(kernel_runner, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     runner = kernel_runner("testing/wavelength_estimator.cl")
+    n = len(u)
+    lam, sampled_pdf, evaluated_pdf = (np.empty(n, np.float32) for _ in range(3))
+    runner.run("sample_wavelength_pdf", n,
+               [runner.buffer(u), runner.buffer(lam, True), runner.buffer(sampled_pdf, True),
+                runner.buffer(evaluated_pdf, True)],
+               {1: lam, 2: sampled_pdf, 3: evaluated_pdf})
+    return lam, sampled_pdf, evaluated_pdf
+
+
+def test_visible_pdf_integrates_to_one_and_matches_histogram(kernel_runner):
     n = 200_000
     u = ((np.arange(n) + 0.5) / n).astype(np.float32)
-    lam = np.empty(n, np.float32)
-    pdf = np.empty(n, np.float32)
-    runner.run("sample_wavelength_pdf", n, [runner.buffer(u), runner.buffer(lam, True), runner.buffer(pdf, True)],
-               {1: lam, 2: pdf})
+    lam, pdf, _ = _sample_wavelengths(kernel_runner, u)
     assert lam.min() >= 360 and lam.max() <= 830
     assert np.all(np.diff(lam) >= 0), "inverse CDF must be monotonic"
     # Stratified u: the fraction of samples in each 10 nm bin equals the pdf's integral over the bin.
@@ -72,3 +87,15 @@ def test_visible_pdf_integrates_to_one_and_matches_histogram(kernel_runner):
     bin_mass = np.array([np.trapezoid(pdf_fine[(fine >= a) & (fine <= b)], fine[(fine >= a) & (fine <= b)])
                          for a, b in zip(edges[:-1], edges[1:])])
     np.testing.assert_allclose(counts / n, bin_mass, atol=2e-4)
+
+
+def test_sampled_pdf_is_the_visible_pdf_at_the_sampled_wavelength(kernel_runner):
+    """The pdf the estimator divides by (computed from the CDF value, not from λ) and p(λ) evaluated at the λ the
+    sampler returned both equal the analytic pdf at that λ, to float rounding; u spans [0, 1) including its ends."""
+    u = np.concatenate([np.linspace(0, 1, 100_001, dtype=np.float32)[:-1],
+                        np.array([np.nextafter(np.float32(1), np.float32(0))], np.float32)])
+    lam, sampled_pdf, evaluated_pdf = _sample_wavelengths(kernel_runner, u)
+    expected = _analytic_visible_pdf(lam)
+    np.testing.assert_allclose(sampled_pdf, expected, rtol=1e-5)
+    np.testing.assert_allclose(evaluated_pdf, expected, rtol=1e-5)
+    assert lam[0] == pytest.approx(360, abs=1e-3) and lam[-1] == pytest.approx(830, abs=1e-3)

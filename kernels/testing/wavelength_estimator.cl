@@ -17,10 +17,14 @@ __kernel void estimate_spectrum_xyz(__global const float *spectra, int offset, _
     item_means[item] = sum / (float)samples_per_item;
 }
 
-/* The visible-wavelength sampler itself: λ and p(λ) for given uniform numbers. */
-__kernel void sample_wavelength_pdf(__global const float *u, __global float *lambda, __global float *pdf)
+/* The visible-wavelength sampler itself: λ for given uniform numbers, the pdf the estimator divides by (the
+ * sampler's), and p(λ) evaluated at that λ. */
+__kernel void sample_wavelength_pdf(__global const float *u, __global float *lambda, __global float *sampled_pdf,
+                                    __global float *evaluated_pdf)
 {
     int i = get_global_id(0);
-    lambda[i] = sample_visible_wavelength(u[i]);
-    pdf[i] = visible_wavelength_pdf(lambda[i]);
+    SampledWavelengths w = sample_wavelengths(u[i]);
+    lambda[i] = w.lambda.x;
+    sampled_pdf[i] = w.pdf.x;
+    evaluated_pdf[i] = visible_wavelength_pdf(w.lambda.x);
 }
