@@ -26,6 +26,8 @@ from spectrace.spectral.media_presets import coefficient_spectrum, medium_preset
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
+from scene_text import CAMERA_FILM_GREY
+
 LANES_NM = np.array([420.0, 500.0, 580.0, 680.0])
 
 
@@ -204,29 +206,15 @@ def test_a_null_boundary_costs_no_path_segment(device):
 
 # ---------------------------------------------------------------- scene files, presets, API
 
-SCENE = """
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-
-[film]
-width = 8
-height = 6
-
-[materials.grey]
-type = "diffuse"
-reflectance = {{ value = 0.5 }}
-
+SCENE = CAMERA_FILM_GREY + """
 [[shapes]]
 type = "sphere"
-{shape}
 """
 
 
 def _load(tmp_path, shape: str):
     path = tmp_path / "scene.toml"
-    path.write_text(SCENE.format(shape=textwrap.dedent(shape)))
+    path.write_text(SCENE + textwrap.dedent(shape) + "\n")
     return load_scene(path)
 
 
@@ -273,7 +261,7 @@ def test_bad_interiors_are_reported_with_their_key_path(tmp_path, shape, key, me
 
 def test_a_rectangle_cannot_have_an_interior(tmp_path):
     path = tmp_path / "scene.toml"
-    path.write_text(SCENE.format(shape='interior = { preset = "marble" }').replace('"sphere"', '"rectangle"'))
+    path.write_text((SCENE + 'interior = { preset = "marble" }\n').replace('"sphere"', '"rectangle"'))
     with pytest.raises(SpectraceError, match="encloses no volume"):
         load_scene(path)
 

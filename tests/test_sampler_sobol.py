@@ -19,6 +19,7 @@ from spectrace.scene import load_scene
 from spectrace.scene.model import DEFAULT_SAMPLER
 
 from conftest import KernelRunner
+from scene_text import CAMERA_FILM_GREY
 
 DRAWS = (1, 2, 1, 2, 2, 1)  # an integrator's interleaving of sample_1d and sample_2d calls
 COORDINATES = [(d, c) for d, dims in enumerate(DRAWS) for c in range(dims)]
@@ -211,20 +212,7 @@ def test_checkpoints_of_one_sampler_do_not_resume_with_the_other(cornell, device
     assert len(identities) == 2
 
 
-SCENE = """
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-
-[film]
-width = 8
-height = 6
-
-[materials.grey]
-type = "diffuse"
-reflectance = { value = 0.5 }
-
+SCENE = CAMERA_FILM_GREY + """
 [[shapes]]
 type = "rectangle"
 material = "grey"
