@@ -30,9 +30,8 @@ inline float ray_box_entry(__global const BVHNode *node, float3 origin, float3 i
 /* any_hit: stop at the first hit closer than t_max (shadow rays).
  * Both children's boxes are tested from the parent and the nearer is entered first; the farther one is pushed
  * with its entry distance, so a pop drops it without reading its box again once a closer hit is known.
- * (Measured and rejected on both CPU runtimes: float4 loads of the node, 5 % slower, and carrying the child's
- * node data down instead of re-reading it, 20 % slower on PoCL: both vectorise across work-items, where
- * scalar loads gather better.) */
+ * Scalar reads of the node on purpose: reading it as two float4, or carrying the child's node data down from the
+ * parent's test, measured slower on at least one CPU runtime (docs/performance.md). */
 inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
                      int any_hit)
 {
