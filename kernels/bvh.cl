@@ -27,7 +27,11 @@ inline float ray_box_entry(__global const BVHNode *node, float3 origin, float3 i
     return enter <= leave ? enter : INFINITY;
 }
 
-/* any_hit: stop at the first hit closer than t_max (shadow rays). */
+/* any_hit: stop at the first hit closer than t_max (shadow rays).
+ * Both children's boxes are tested from the parent and the nearer is entered first; the farther one is pushed
+ * with its entry distance, so a pop drops it without reading its box again once a closer hit is known.
+ * Scalar reads of the node on purpose: reading it as two float4, or carrying the child's node data down from the
+ * parent's test, measured slower on at least one CPU runtime (docs/performance.md). */
 inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
                      int any_hit)
 {
@@ -43,6 +47,7 @@ inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *trian
     float4 origin4 = (float4)(ray.origin, 0.0f);
     RayShear shear = ray_shear(ray.direction);
     int stack[BVH_STACK_SIZE];
+    float stack_entry[BVH_STACK_SIZE];  /* where the ray enters each pushed node's box */
     int top = 0;
     int index = 0;
     if (ray_box_entry(&nodes[0], ray.origin, inv_direction, t_max) == INFINITY) return hit;
@@ -67,16 +72,21 @@ inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *trian
             if (t_left != INFINITY || t_right != INFINITY) {
                 int near_child = t_left <= t_right ? left : left + 1;
                 int far_child = t_left <= t_right ? left + 1 : left;
-                if (fmax(t_left, t_right) != INFINITY) stack[top++] = far_child;
+                if (fmax(t_left, t_right) != INFINITY) {
+                    stack[top] = far_child;
+                    stack_entry[top] = fmax(t_left, t_right);
+                    ++top;
+                }
                 index = near_child;
                 continue;
             }
         }
-        /* Pop, skipping nodes that a closer hit found since has made irrelevant. */
+        /* Pop, skipping nodes that a closer hit found since has made irrelevant. Entering before hit.t is the
+         * whole test: the box's exit was checked against a t_max no smaller than hit.t when it was pushed. */
         while (true) {
             if (top == 0) return hit;
-            index = stack[--top];
-            if (ray_box_entry(&nodes[index], ray.origin, inv_direction, hit.t) != INFINITY) break;
+            --top;
+            if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
         }
     }
 }
