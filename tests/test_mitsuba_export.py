@@ -107,3 +107,17 @@ def test_ply_files_hold_the_triangles(tmp_path):
     loaded = trimesh.load(path, process=False, maintain_order=True)
     np.testing.assert_array_equal(np.asarray(loaded.faces), mesh.faces)
     np.testing.assert_array_equal(np.asarray(loaded.vertices), mesh.vertices.astype(np.float32))
+
+
+def test_peer_sampler_is_exported_and_checked(tmp_path):
+    """The bench may give Mitsuba any of its samplers (stratified ones are the fair match for spectrace's Sobol);
+    the export carries the choice, and a misspelt one is refused in one line naming the option."""
+    mi = _mitsuba_scalar_spectral()
+    scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=8, height=8)
+    for sampler in ("independent", "multijitter"):
+        scene_dict = scene_to_mitsuba_dict(scene, tmp_path, spp=4, sampler=sampler)
+        assert scene_dict["sensor"]["sampler"] == {"type": sampler, "sample_count": 4}
+        assert mi.load_dict(scene_dict).sensors()[0].sampler().sample_count() == 4
+    with pytest.raises(SpectraceError, match="unknown Mitsuba sampler 'sobol'") as error:
+        scene_to_mitsuba_dict(scene, tmp_path, sampler="sobol")
+    assert error.value.where == "--peer-sampler"

@@ -225,6 +225,9 @@ def bench(
     triangles: Annotated[int, typer.Option(help="Largest mesh for --rays/--scaling.", min=20)] = 1_000_000,
     ray_count: Annotated[int, typer.Option(help="Rays for --rays.", min=1)] = 1_000_000,
     seconds: Annotated[float, typer.Option(help="Time budget per renderer for --quality.", min=0.0)] = 2.0,
+    peer_sampler: Annotated[str, typer.Option(help=(
+        "Mitsuba's sampler for --peer and --quality: independent (its default), stratified, multijitter, "
+        "orthogonal, ldsampler."))] = "independent",
     kernel_shapes: Annotated[bool, typer.Option(
         "--kernel-shapes", help="Compare the megakernel and the wavefront at work-group sizes 1-32 and the "
                                 "runtime's choice (medians of alternating repeats; one device, --device).")] = False,
@@ -249,7 +252,7 @@ def bench(
             Console(width=150).print(kernel_shape_table(results))
         return
     request = BenchRequest(scene, size, spp, max_depth, device, all_devices, peer, quality, rays, scaling, cold,
-                           triangles, ray_count, seconds)
+                           triangles, ray_count, seconds, peer_sampler)
     if request.any_mode():
         output, tables = run_bench_modes(request, log=lambda text: console.print(text, highlight=False))
         if as_json:

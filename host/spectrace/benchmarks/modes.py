@@ -28,6 +28,7 @@ class BenchRequest:
     triangles: int = 1_000_000
     ray_count: int = 1_000_000
     seconds: float = 2.0
+    peer_sampler: str = "independent"
 
     def any_mode(self) -> bool:
         return bool(self.peer or self.quality or self.rays or self.scaling or self.cold)
@@ -63,7 +64,8 @@ def run_bench_modes(request: BenchRequest, log: Callable[[str], None]) -> tuple[
 
         try:
             result = run_peer_bench(request.scene, first_size or PEER_DEFAULT_SIZE, request.spp, request.max_depth,
-                                    request.device, request.all_devices, log=log)
+                                    request.device, request.all_devices, log=log,
+                                    peer_sampler=request.peer_sampler)
         except ImportError:
             raise SpectraceError("the Mitsuba comparison needs mitsuba: pip install 'spectrace[bench]'",
                                  where="--peer") from None
@@ -73,7 +75,8 @@ def run_bench_modes(request: BenchRequest, log: Callable[[str], None]) -> tuple[
         from spectrace.benchmarks.quality import quality_tables, run_quality_bench
 
         result = run_quality_bench(request.scene, first_size or QUALITY_DEFAULT_SIZE, request.max_depth,
-                                   request.seconds, QUALITY_REFERENCE_SPP, request.device, log=log)
+                                   request.seconds, QUALITY_REFERENCE_SPP, request.device, log=log,
+                                   peer_sampler=request.peer_sampler)
         output["quality"] = result
         tables += quality_tables(result)
     if request.rays:

@@ -66,13 +66,13 @@ class SpectraceContestant:
 
 def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int, device: str | None,
                    all_devices: bool, variants: list[str] | None = None, repeats: int = 2,
-                   log: Callable[[str], None] = lambda text: None) -> dict:
+                   log: Callable[[str], None] = lambda text: None, peer_sampler: str = "independent") -> dict:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant, usable_variants
     from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
 
     scene = bench_scene(scene_path, size, spp, max_depth)
     usable = usable_variants(variants)  # before any render: it may set DRJIT_LIBLLVM_PATH
-    notes = list(usable.notes)
+    notes = list(usable.notes) + [f"Mitsuba's sampler: {peer_sampler}; spectrace's: {scene.sampler}"]
     ours = [SpectraceContestant(scene, key) for key in device_keys(device, all_devices)]
     with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
         theirs = []
@@ -80,8 +80,8 @@ def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int,
             import mitsuba as mi
 
             mi.set_variant(variant)
-            theirs.append(MitsubaContestant(scene_to_mitsuba_dict(scene, Path(folder), spp=spp), variant, spp,
-                                            seed=scene.seed))
+            scene_dict = scene_to_mitsuba_dict(scene, Path(folder), spp=spp, sampler=peer_sampler)
+            theirs.append(MitsubaContestant(scene_dict, variant, spp, seed=scene.seed))
     # Interleaved rounds, spectrace then one Mitsuba variant, so a shared machine's load falls on both alike.
     # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so each
     # variant gets its rounds in one go, after one untimed render.

@@ -35,7 +35,8 @@ def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: fl
 
 
 def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, seconds: float, reference_spp: int,
-                      device_key: str | None, log: Callable[[str], None] = lambda text: None) -> dict:
+                      device_key: str | None, log: Callable[[str], None] = lambda text: None,
+                      peer_sampler: str = "independent") -> dict:
     scene = bench_scene(scene_path, size, 1, max_depth)
     device = open_device(device_key)
     log(f"reference: spectrace, {reference_spp} spp")
@@ -45,6 +46,7 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
     # The reference is the mean of two independent halves a and b: its own noise is RMS(a - b) / 2.
     other_half = (reference * reference_spp - half * (reference_spp // 2)) / (reference_spp - reference_spp // 2)
     result = {"scene": str(scene.source), "width": size, "height": size, "max_depth": max_depth,
+              "samplers": {"spectrace": scene.sampler, "mitsuba": peer_sampler},
               "budget_seconds": seconds, "runtime": device.report.key,
               "reference": {"spp": reference_spp, "noise_rms": _rmse(half, other_half) / 2.0,
                             "mean_y": float(reference[..., 1].mean())},
@@ -72,13 +74,13 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
         result["notes"].append("mitsuba is not installed (pip install 'spectrace[bench]'): spectrace only")
         usable = None
     if usable is not None:
-        result["notes"] += usable.notes
+        result["notes"] += usable.notes + [f"Mitsuba's sampler: {peer_sampler}; spectrace's: {scene.sampler}"]
         with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
             for index, variant in enumerate(usable.available):
                 import mitsuba as mi
 
                 mi.set_variant(variant)
-                scene_dict = scene_to_mitsuba_dict(scene, Path(folder))
+                scene_dict = scene_to_mitsuba_dict(scene, Path(folder), sampler=peer_sampler)
                 probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
                 spp = _spp_for_budget(probe.seconds, PROBE_SPP, seconds)
                 timed = render_with_mitsuba(scene_dict, variant, spp=spp, warm_up=False)
@@ -107,7 +109,8 @@ def quality_tables(result: dict) -> list:
     ref = result["reference"]
     table = Table(title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
                         f"max_depth {result['max_depth']}; reference {ref['spp']} spp (its noise RMS "
-                        f"{ref['noise_rms']:.3g})")
+                        f"{ref['noise_rms']:.3g}); samplers: spectrace {result['samplers']['spectrace']}, "
+                        f"Mitsuba {result['samplers']['mitsuba']}")
     for column in ("renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE at budget"):
         table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
     for r in result["renderers"]:
