@@ -16,9 +16,10 @@ def import_mitsuba_command(
         "--define", "-D", help="Set a $parameter, NAME=VALUE (repeatable), as Mitsuba's -D.")] = None,
 ) -> None:
     """Convert a Mitsuba 3 XML scene to a spectrace TOML scene (shapes obj, ply, rectangle, cube, sphere; BSDFs
-    diffuse, twosided; emitters area, point, constant, directional; the perspective sensor). Unsupported plugins
-    are all named in one error; choices spectrace makes differently (pixel filter, sampler) are printed as notes.
-    The TOML is checked by loading it; render it with `spectrace render OUT.toml`."""
+    diffuse, twosided, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric; emitters
+    area, point, constant, directional; the perspective sensor). Unsupported plugins are all named in one error;
+    choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML is checked by loading
+    it; render it with `spectrace render OUT.toml`."""
     from spectrace.interop.mitsuba_xml import import_mitsuba
 
     parameters = {}
