@@ -36,6 +36,7 @@ def collapse_to_bvh4(bvh: BVH) -> tuple[np.ndarray, int]:
     box_min = binary["bmin"].astype(np.float64)
     box_max = binary["bmax"].astype(np.float64)
     extent = np.maximum(box_max - box_min, 0.0)
+    # Half the surface area: only its ranking matters, to pick which child to open.
     area = extent[:, 0] * extent[:, 1] + extent[:, 1] * extent[:, 2] + extent[:, 2] * extent[:, 0]
 
     if is_leaf[0]:
