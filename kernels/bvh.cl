@@ -27,13 +27,104 @@ inline float ray_box_entry(__global const BVHNode *node, float3 origin, float3 i
     return enter <= leave ? enter : INFINITY;
 }
 
+#ifndef BVH4_STACK_SIZE
+/* Up to three pushes per 4-wide level, over at most MAX_DEPTH (64) levels: geometry/bvh4.py. A larger stack than
+ * needed measured no slower than a 96-entry one on either CPU runtime. */
+#define BVH4_STACK_SIZE 193
+#endif
+
+/* Orders two (entry, reference) pairs by entry: one compare-exchange of the sorting network below. */
+#define BVH4_ORDER(ta, ra, tb, rb)                                                 \
+    {                                                                              \
+        if (tb < ta) {                                                             \
+            float t_swap = ta; ta = tb; tb = t_swap;                               \
+            int r_swap = ra; ra = rb; rb = r_swap;                                 \
+        }                                                                          \
+    }
+
+/* 4-wide traversal (types.h BVH4Node): one visit slab-tests the four children's boxes as float4, sorts the hit ones
+ * near to far with a 5-comparator network, enters the nearest and pushes the rest with their entry distances.
+ * Stack references: a 4-wide node index (>= 0), or ~(4 * node + k) for the leaf in slot k of a node. */
+inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *triangle_vertices, Ray ray,
+                      float t_max, int any_hit)
+{
+    Hit hit;
+    hit.t = t_max;
+    hit.triangle = -1;
+    hit.b12 = (float2)(0.0f);
+    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
+    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
+    float4 origin4 = (float4)(ray.origin, 0.0f);
+    RayShear shear = ray_shear(ray.direction);
+    float4 ox = (float4)(ray.origin.x), oy = (float4)(ray.origin.y), oz = (float4)(ray.origin.z);
+    float4 ix = (float4)(inv_direction.x), iy = (float4)(inv_direction.y), iz = (float4)(inv_direction.z);
+    int stack[BVH4_STACK_SIZE];
+    float stack_entry[BVH4_STACK_SIZE];
+    int top = 0;
+    int reference = 0;
+    while (true) {
+        if (reference < 0) {
+            int slot = ~reference;
+            __global const BVH4Node *owner = &nodes[slot >> 2];
+            int k = slot & 3;
+            int first = k == 0 ? owner->child.s0 : k == 1 ? owner->child.s1 : k == 2 ? owner->child.s2 : owner->child.s3;
+            int count = k == 0 ? owner->count.s0 : k == 1 ? owner->count.s1 : k == 2 ? owner->count.s2 : owner->count.s3;
+            for (int i = first; i < first + count; ++i) {
+                float2 b12;
+                float t = intersect_triangle(origin4, &shear, triangle_vertices[3 * i], triangle_vertices[3 * i + 1],
+                                             triangle_vertices[3 * i + 2], hit.t, &b12);
+                if (t < hit.t) {
+                    hit.t = t;
+                    hit.triangle = i;
+                    hit.b12 = b12;
+                    if (any_hit) return hit;
+                }
+            }
+        } else {
+            __global const BVH4Node *node = &nodes[reference];
+            float4 lx = (node->child_min[0] - ox) * ix, hx = (node->child_max[0] - ox) * ix;
+            float4 ly = (node->child_min[1] - oy) * iy, hy = (node->child_max[1] - oy) * iy;
+            float4 lz = (node->child_min[2] - oz) * iz, hz = (node->child_max[2] - oz) * iz;
+            float4 enter = fmax(fmax(fmin(lx, hx), fmin(ly, hy)), fmax(fmin(lz, hz), (float4)(0.0f)));
+            /* Exit widened by 2γ₃ as in ray_box_entry (Ize 2013). */
+            float4 leave = fmin(fmin(fmax(lx, hx), fmax(ly, hy)), fmax(lz, hz)) * 1.0000004f;
+            leave = fmin(leave, (float4)(hit.t));
+            int4 counts = node->count;
+            int4 entered = (enter <= leave) & (counts >= (int4)(0));
+            float4 t4 = select((float4)(INFINITY), enter, entered);
+            int4 child = node->child;
+            int base = ~(4 * reference);
+            int4 refs = select(child, (int4)(base, base - 1, base - 2, base - 3), counts > (int4)(0));
+            float t0 = t4.s0, t1 = t4.s1, t2 = t4.s2, t3 = t4.s3;
+            int r0 = refs.s0, r1 = refs.s1, r2 = refs.s2, r3 = refs.s3;
+            BVH4_ORDER(t0, r0, t1, r1);
+            BVH4_ORDER(t2, r2, t3, r3);
+            BVH4_ORDER(t0, r0, t2, r2);
+            BVH4_ORDER(t1, r1, t3, r3);
+            BVH4_ORDER(t1, r1, t2, r2);
+            if (t0 != INFINITY) {
+                if (t3 != INFINITY) { stack[top] = r3; stack_entry[top] = t3; ++top; }
+                if (t2 != INFINITY) { stack[top] = r2; stack_entry[top] = t2; ++top; }
+                if (t1 != INFINITY) { stack[top] = r1; stack_entry[top] = t1; ++top; }
+                reference = r0;
+                continue;
+            }
+        }
+        while (true) {
+            if (top == 0) return hit;
+            --top;
+            if (stack_entry[top] <= hit.t) { reference = stack[top]; break; }
+        }
+    }
+}
+
 /* any_hit: stop at the first hit closer than t_max (shadow rays).
  * Both children's boxes are tested from the parent and the nearer is entered first; the farther one is pushed
  * with its entry distance, so a pop drops it without reading its box again once a closer hit is known.
  * Scalar reads of the node on purpose: reading it as two float4, or carrying the child's node data down from the
  * parent's test, measured slower on at least one CPU runtime (docs/performance.md). */
-inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
-                     int any_hit)
+inline Hit trace_bvh_binary(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray,
+                            float t_max, int any_hit)
 {
     Hit hit;
     hit.t = t_max;
@@ -89,6 +180,18 @@ inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *trian
             if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
         }
     }
+}
+
+/* The traversal the build selected: BVH_WIDTH == 4 when the host uploaded 4-wide nodes (geometry/bvh4.py) in the
+ * node buffer, whose kernel arguments keep the binary node type. */
+inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
+                     int any_hit)
+{
+#if defined(BVH_WIDTH) && BVH_WIDTH == 4
+    return trace_bvh4((__global const BVH4Node *)nodes, triangle_vertices, ray, t_max, any_hit);
+#else
+    return trace_bvh_binary(nodes, triangle_vertices, ray, t_max, any_hit);
+#endif
 }
 
 #endif

@@ -37,6 +37,16 @@ typedef struct {
     int count;
 } BVHNode;
 
+/* 4-wide BVH node (128 bytes), collapsed from the binary tree on the host (geometry/bvh4.py). The four children's
+ * boxes in SoA form: child_min[axis] holds that axis' lower bound of children 0..3. Child k is a 4-wide node index
+ * when count[k] == 0, a leaf of count[k] triangles starting at slot child[k] when count[k] > 0, unused when -1. */
+typedef struct {
+    float4 child_min[3];
+    float4 child_max[3];
+    int4 child;
+    int4 count;
+} BVH4Node;
+
 /* Per-triangle shading data, in BVH leaf order. */
 typedef struct {
     int material;   /* index into the material array; TRIANGLE_NO_MATERIAL on an index-matched medium boundary */

@@ -26,9 +26,9 @@ def device():
 class KernelRunner:
     """Builds a harness kernel file and runs kernels on numpy arrays (inputs copied in, outputs copied back)."""
 
-    def __init__(self, device, entry: str):
+    def __init__(self, device, entry: str, defines: dict | None = None):
         self.device = device
-        self.program = device.build_program(entry)
+        self.program = device.build_program(entry, defines=defines or None)
         self.kernels = {}
 
     def buffer(self, array: np.ndarray, writable: bool = False) -> cl.Buffer:
@@ -50,9 +50,10 @@ class KernelRunner:
 def kernel_runner(device):
     cache = {}
 
-    def get(entry: str) -> KernelRunner:
-        if entry not in cache:
-            cache[entry] = KernelRunner(device, entry)
-        return cache[entry]
+    def get(entry: str, defines: dict | None = None) -> KernelRunner:
+        key = (entry, tuple(sorted((defines or {}).items())))
+        if key not in cache:
+            cache[key] = KernelRunner(device, entry, defines)
+        return cache[key]
 
     return get

@@ -5,6 +5,10 @@ import pytest
 
 from raytracing_reference import brute_force_closest_hit
 from spectrace.geometry.bvh import build_bvh
+from spectrace.geometry.bvh4 import device_nodes, traversal_defines
+
+# Both traversals: the binary tree, and its 4-wide collapse (geometry/bvh4.py).
+WIDTHS = [2, 4]
 
 
 def _soup(rng, count):
@@ -39,18 +43,19 @@ def _device_scene(triangles):
     return bvh, vertices.reshape(-1, 4)
 
 
+@pytest.mark.parametrize("width", WIDTHS)
 @pytest.mark.parametrize("triangle_count", [1, 7, 3000])
-def test_closest_hits_equal_brute_force(kernel_runner, triangle_count):
+def test_closest_hits_equal_brute_force(kernel_runner, triangle_count, width):
     rng = np.random.default_rng(triangle_count)
     # Snap to float32 first so the kernel and the reference see the same triangles and rays.
     triangles = _soup(rng, triangle_count).astype(np.float32).astype(np.float64)
     origins, directions = (a.astype(np.float32).astype(np.float64) for a in _rays(rng, 4000, triangles))
     bvh, vertices = _device_scene(triangles)
 
-    runner = kernel_runner("testing/closest_hit.cl")
+    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     t = np.empty(len(origins), np.float32)
     hit = np.empty(len(origins), np.int32)
-    args = [runner.buffer(bvh.nodes), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+    args = [runner.buffer(device_nodes(bvh, width)), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
             runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
             np.int32(len(origins))]
     runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
@@ -73,7 +78,8 @@ def test_closest_hits_equal_brute_force(kernel_runner, triangle_count):
     # Ties between triangles at (nearly) the same distance may pick either.
     assert np.mean(kernel_prim[both] == ref_prim[both]) > 0.995
 
-def test_shared_edges_are_watertight(kernel_runner):
+@pytest.mark.parametrize("width", WIDTHS)
+def test_shared_edges_are_watertight(kernel_runner, width):
     """Rays aimed exactly at the shared edges and vertices of a tessellated square never slip through."""
     n = 16
     xs = np.linspace(-1, 1, n + 1)
@@ -92,17 +98,18 @@ def test_shared_edges_are_watertight(kernel_runner):
     directions = np.column_stack([targets, np.zeros(len(targets))]) - origins
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
 
-    runner = kernel_runner("testing/closest_hit.cl")
+    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     t = np.empty(len(origins), np.float32)
     hit = np.empty(len(origins), np.int32)
-    args = [runner.buffer(bvh.nodes), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+    args = [runner.buffer(device_nodes(bvh, width)), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
             runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
             np.int32(len(origins))]
     runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
     assert np.all(hit >= 0), f"{np.sum(hit < 0)} rays slipped through shared edges"
 
 
-def test_any_hit_respects_t_max(kernel_runner):
+@pytest.mark.parametrize("width", WIDTHS)
+def test_any_hit_respects_t_max(kernel_runner, width):
     rng = np.random.default_rng(5)
     triangles = _soup(rng, 500).astype(np.float32).astype(np.float64)
     origins, directions = (a.astype(np.float32).astype(np.float64) for a in _rays(rng, 2000, triangles))
@@ -111,9 +118,9 @@ def test_any_hit_respects_t_max(kernel_runner):
     t_max = rng.uniform(0.1, 3.0, len(origins)).astype(np.float32)
     # Leave out rays whose closest hit lies within float tolerance of t_max: either answer is right there.
     clear = np.abs(ref_t - t_max) > 1e-3
-    runner = kernel_runner("testing/closest_hit.cl")
+    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     occluded = np.empty(len(origins), np.int32)
-    args = [runner.buffer(bvh.nodes), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+    args = [runner.buffer(device_nodes(bvh, width)), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
             runner.buffer(_as_float4(directions)), runner.buffer(t_max), runner.buffer(occluded, True),
             np.int32(len(origins))]
     runner.run("any_hit", len(origins), args, {5: occluded})

@@ -22,6 +22,7 @@ import pyopencl as cl
 
 from spectrace.device import open_device
 from spectrace.geometry.bvh import build_bvh
+from spectrace.geometry.bvh4 import device_nodes, traversal_defines
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, sphere
 from spectrace.render.launch import launch_shape, render_work_group
@@ -93,12 +94,12 @@ def trace_with_spectrace(device_key: str | None, mesh: TriangleMesh, bvh, origin
     ordered = mesh.vertices[mesh.faces[bvh.prim_order]].astype(np.float32)  # (M, 3, 3) in leaf order
     vertices = np.zeros((len(ordered), 3, 4), np.float32)
     vertices[..., :3] = ordered
-    program = device.build_program("testing/closest_hit.cl")
+    program = device.build_program("testing/closest_hit.cl", defines=traversal_defines() or None)
     kernel = cl.Kernel(program, "closest_hit")
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     count = len(origins)
-    buffers = [cl.Buffer(ctx, ro, hostbuf=bvh.nodes), cl.Buffer(ctx, ro, hostbuf=vertices.reshape(-1, 4)),
+    buffers = [cl.Buffer(ctx, ro, hostbuf=device_nodes(bvh)), cl.Buffer(ctx, ro, hostbuf=vertices.reshape(-1, 4)),
                cl.Buffer(ctx, ro, hostbuf=_float4(origins)), cl.Buffer(ctx, ro, hostbuf=_float4(directions))]
     t_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
     hit_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)

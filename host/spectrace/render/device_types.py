@@ -7,6 +7,7 @@ compares them with these dtypes.
 import numpy as np
 
 from spectrace.geometry.bvh import BVH_NODE_DTYPE
+from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE
 
 # Material.type and Material.ior_model values (kernels/types.h).
 MATERIAL_DIFFUSE = 0
@@ -124,6 +125,7 @@ METER_PARAMS_DTYPE = _struct(
 # struct name in types.h -> dtype; the layout test walks this table.
 DEVICE_STRUCTS: dict[str, np.dtype] = {
     "BVHNode": BVH_NODE_DTYPE,
+    "BVH4Node": BVH4_NODE_DTYPE,
     "TriangleInfo": TRIANGLE_INFO_DTYPE,
     "Material": MATERIAL_DTYPE,
     "Medium": MEDIUM_DTYPE,

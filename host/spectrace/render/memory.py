@@ -44,11 +44,11 @@ class DeviceMemoryNeed:
 
 def scene_arrays(buffers: SceneBuffers) -> dict[str, np.ndarray]:
     """Every array of the scene that goes to the device, by name."""
-    arrays = {"bvh nodes": buffers.bvh.nodes}
+    arrays = {}
     for field in dataclasses.fields(buffers):
         value = getattr(buffers, field.name)
         if isinstance(value, np.ndarray):
-            arrays[field.name.replace("_", " ")] = value
+            arrays["bvh nodes" if field.name == "nodes" else field.name.replace("_", " ")] = value
     return arrays
 
 

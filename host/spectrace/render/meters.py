@@ -11,6 +11,7 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import Device, open_device
+from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.render.launch import meter_work_group
 from spectrace.render.device_types import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
 from spectrace.render.scene_buffers import build_scene_buffers, render_params
@@ -108,11 +109,11 @@ def measure(scene: Scene, meter: Meter, wavelengths_nm=DEFAULT_WAVELENGTHS_NM, s
     device = device if isinstance(device, Device) else open_device(device)
     wavelengths = np.asarray(wavelengths_nm, np.float32)
     buffers = build_scene_buffers(scene)
-    program = device.build_program("meters.cl")
+    program = device.build_program("meters.cl", defines=traversal_defines() or None)
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     inputs = [cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
-              for a in (render_params(scene, buffers, 0, 0), buffers.bvh.nodes, buffers.triangle_vertices,
+              for a in (render_params(scene, buffers, 0, 0), buffers.nodes, buffers.triangle_vertices,
                         buffers.triangle_uvs,
                         buffers.triangle_info, buffers.materials, buffers.lights, buffers.light_cdf, buffers.spectra,
                         buffers.texels, buffers.map_cdf, buffers.media,

@@ -8,6 +8,7 @@ import pyopencl as cl
 
 from spectrace.device import Device, open_device
 from spectrace.errors import SpectraceError
+from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.image import Image, SpectralBands
 from spectrace.render.checkpoint import RenderState
 from spectrace.render.launch import launch_shape, render_work_group
@@ -50,7 +51,7 @@ class Renderer:
         check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
         self.spectral_bins = spectral_bins
         self.spectral_range_nm = spectral_range_nm
-        defines = sampler_defines(scene.sampler)
+        defines = sampler_defines(scene.sampler) | traversal_defines()
         if spectral_bins > 0:
             lo, hi = spectral_range_nm
             if not (360.0 <= lo < hi <= 830.0):
@@ -66,7 +67,7 @@ class Renderer:
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._inputs = [
             cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
-            for a in (b.bvh.nodes, b.triangle_vertices, b.triangle_uvs, b.triangle_info, b.materials, b.lights,
+            for a in (b.nodes, b.triangle_vertices, b.triangle_uvs, b.triangle_info, b.materials, b.lights,
                       b.light_cdf,
                       b.spectra, b.texels, b.map_cdf, b.media, b.cmf)
         ]

@@ -6,6 +6,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
+from spectrace.geometry.bvh4 import device_nodes
 from spectrace.render.device_types import (
     LIGHT_DISTANT,
     LIGHT_DTYPE,
@@ -32,6 +33,7 @@ from spectrace.spectral.uplift import uplift_illuminant
 @dataclass
 class SceneBuffers:
     bvh: BVH
+    nodes: np.ndarray  # what the traversal reads: bvh.nodes, or their 4-wide collapse (geometry/bvh4.py)
     triangle_vertices: np.ndarray  # (3·M, 4) float32, BVH leaf order
     triangle_info: np.ndarray  # (M,) TRIANGLE_INFO_DTYPE
     triangle_count: int  # arrays hold one dummy entry when there are no triangles
@@ -49,7 +51,7 @@ class SceneBuffers:
     medium_count: int
 
     def device_bytes(self) -> int:
-        arrays = (self.bvh.nodes, self.triangle_vertices, self.triangle_info, self.materials, self.lights,
+        arrays = (self.nodes, self.triangle_vertices, self.triangle_info, self.materials, self.lights,
                   self.light_cdf, self.spectra, self.cmf, self.media)
         return sum(a.nbytes for a in arrays)
 
@@ -197,6 +199,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         table.add(Spectrum.zeros())
     return SceneBuffers(
         bvh=bvh,
+        nodes=device_nodes(bvh),
         triangle_vertices=vertices.reshape(-1, 4),
         triangle_info=triangle_info,
         triangle_count=len(v0),

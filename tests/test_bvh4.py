@@ -1,0 +1,59 @@
+"""The 4-wide collapse of the binary BVH: same leaves, boxes that bound their subtrees, a tree (not a DAG)."""
+
+import numpy as np
+import pytest
+
+from spectrace.geometry.bvh import build_bvh
+from spectrace.geometry.bvh4 import collapse_to_bvh4
+
+
+def _soup(seed, count):
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(-1, 1, (count, 1, 3))
+    return centres + rng.normal(0, 0.05, (count, 3, 3))
+
+
+@pytest.mark.parametrize("count", [1, 2, 5, 37, 2000])
+def test_collapse_keeps_every_leaf_and_bounds_every_subtree(count):
+    triangles = _soup(count, count)
+    bvh = build_bvh(triangles[:, 0], triangles[:, 1], triangles[:, 2])
+    nodes, depth = collapse_to_bvh4(bvh)
+    assert 1 <= depth <= max(bvh.depth, 1)
+
+    child, counts = nodes["child"], nodes["count"]
+    low, high = nodes["child_min"], nodes["child_max"]  # (K, 3, 4)
+    # Every non-root node is the child of exactly one slot: the collapse makes a tree.
+    referenced = np.sort(child[counts == 0])
+    np.testing.assert_array_equal(referenced, np.arange(1, len(nodes)))
+    # The leaves cover every triangle slot once, with the binary tree's leaf ranges.
+    leaf_first, leaf_count = child[counts > 0], counts[counts > 0]
+    slots = np.concatenate([np.arange(f, f + c) for f, c in zip(leaf_first, leaf_count)])
+    np.testing.assert_array_equal(np.sort(slots), np.arange(count))
+    binary_leaves = bvh.nodes[bvh.nodes["count"] > 0]
+    assert sorted(zip(leaf_first, leaf_count)) == sorted(zip(binary_leaves["left_first"], binary_leaves["count"]))
+    # A leaf's box holds its triangles' vertices; an inner child's box holds every box of its own children.
+    vertices = triangles[bvh.prim_order]
+    for node, slot in zip(*np.nonzero(counts > 0)):
+        held = vertices[child[node, slot]:child[node, slot] + counts[node, slot]].reshape(-1, 3)
+        assert np.all(held >= low[node, :, slot]) and np.all(held <= high[node, :, slot])
+    for node, slot in zip(*np.nonzero(counts == 0)):
+        inner = child[node, slot]
+        used = counts[inner] >= 0
+        assert used.any()
+        assert np.all(low[inner][:, used] >= low[node, :, slot, None])
+        assert np.all(high[inner][:, used] <= high[node, :, slot, None])
+    # Unused slots are empty boxes, and used ones come first.
+    unused = counts < 0
+    assert np.all(low.transpose(0, 2, 1)[unused] > high.transpose(0, 2, 1)[unused])
+    assert np.all(np.diff(unused.astype(int), axis=1) >= 0)
+
+
+def test_interior_nodes_fill_their_four_slots_while_they_can():
+    """A balanced tree of 64 well separated triangles, one per leaf, collapses to full nodes of four."""
+    grid = np.stack(np.meshgrid(*[np.arange(4.0)] * 3, indexing="ij"), -1).reshape(-1, 1, 3) * 10.0
+    small = np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]])
+    triangles = grid + small
+    bvh = build_bvh(triangles[:, 0], triangles[:, 1], triangles[:, 2], max_leaf_size=1)
+    nodes, depth = collapse_to_bvh4(bvh)
+    assert np.all(nodes["count"] >= 0)
+    assert depth == 3 and len(nodes) == 1 + 4 + 16
