@@ -27,6 +27,53 @@ inline float ray_box_entry(__global const BVHNode *node, float3 origin, float3 i
     return enter <= leave ? enter : INFINITY;
 }
 
+/* What both traversals precompute for a ray. A zero direction component would give 0 * inf = NaN for an origin on
+ * a slab plane; a tiny one of the same sign keeps every product finite and treats the ray as leaning to that side,
+ * which the edge-inclusive triangle test agrees with. */
+typedef struct {
+    float3 inv_direction;
+    float4 origin4;
+    RayShear shear;
+} TraversalRay;
+
+inline TraversalRay traversal_ray(Ray ray)
+{
+    TraversalRay r;
+    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
+    r.inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
+    r.origin4 = (float4)(ray.origin, 0.0f);
+    r.shear = ray_shear(ray.direction);
+    return r;
+}
+
+inline Hit no_hit(float t_max)
+{
+    Hit hit;
+    hit.t = t_max;
+    hit.triangle = -1;
+    hit.b12 = (float2)(0.0f);
+    return hit;
+}
+
+/* Tests the leaf's triangles [first, first + count) and keeps the closest hit before hit->t; returns 1 when an
+ * any-hit query is answered. */
+inline int intersect_leaf(__global const float4 *triangle_vertices, const TraversalRay *r, int first, int count,
+                          int any_hit, Hit *hit)
+{
+    for (int i = first; i < first + count; ++i) {
+        float2 b12;
+        float t = intersect_triangle(r->origin4, &r->shear, triangle_vertices[3 * i], triangle_vertices[3 * i + 1],
+                                     triangle_vertices[3 * i + 2], hit->t, &b12);
+        if (t < hit->t) {
+            hit->t = t;
+            hit->triangle = i;
+            hit->b12 = b12;
+            if (any_hit) return 1;
+        }
+    }
+    return 0;
+}
+
 #ifndef BVH4_STACK_SIZE
 /* Up to three pushes per 4-wide level, over at most MAX_DEPTH (64) levels: geometry/bvh4.py. A larger stack than
  * needed measured no slower than a 96-entry one on either CPU runtime. */
@@ -48,14 +95,9 @@ inline float ray_box_entry(__global const BVHNode *node, float3 origin, float3 i
 inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *triangle_vertices, Ray ray,
                       float t_max, int any_hit)
 {
-    Hit hit;
-    hit.t = t_max;
-    hit.triangle = -1;
-    hit.b12 = (float2)(0.0f);
-    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
-    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
-    float4 origin4 = (float4)(ray.origin, 0.0f);
-    RayShear shear = ray_shear(ray.direction);
+    Hit hit = no_hit(t_max);
+    TraversalRay r = traversal_ray(ray);
+    float3 inv_direction = r.inv_direction;
     float4 ox = (float4)(ray.origin.x), oy = (float4)(ray.origin.y), oz = (float4)(ray.origin.z);
     float4 ix = (float4)(inv_direction.x), iy = (float4)(inv_direction.y), iz = (float4)(inv_direction.z);
     int stack[BVH4_STACK_SIZE];
@@ -69,17 +111,7 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
             int k = slot & 3;
             int first = k == 0 ? owner->child.s0 : k == 1 ? owner->child.s1 : k == 2 ? owner->child.s2 : owner->child.s3;
             int count = k == 0 ? owner->count.s0 : k == 1 ? owner->count.s1 : k == 2 ? owner->count.s2 : owner->count.s3;
-            for (int i = first; i < first + count; ++i) {
-                float2 b12;
-                float t = intersect_triangle(origin4, &shear, triangle_vertices[3 * i], triangle_vertices[3 * i + 1],
-                                             triangle_vertices[3 * i + 2], hit.t, &b12);
-                if (t < hit.t) {
-                    hit.t = t;
-                    hit.triangle = i;
-                    hit.b12 = b12;
-                    if (any_hit) return hit;
-                }
-            }
+            if (intersect_leaf(triangle_vertices, &r, first, count, any_hit, &hit)) return hit;
         } else {
             __global const BVH4Node *node = &nodes[reference];
             float4 lx = (node->child_min[0] - ox) * ix, hx = (node->child_max[0] - ox) * ix;
@@ -126,17 +158,9 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
 inline Hit trace_bvh_binary(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray,
                             float t_max, int any_hit)
 {
-    Hit hit;
-    hit.t = t_max;
-    hit.triangle = -1;
-    hit.b12 = (float2)(0.0f);
-    /* A zero direction component would give 0 * inf = NaN for an origin on a slab plane; a tiny one of the same
-     * sign keeps every product finite and treats the ray as leaning to that side, which the edge-inclusive
-     * triangle test agrees with. */
-    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
-    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
-    float4 origin4 = (float4)(ray.origin, 0.0f);
-    RayShear shear = ray_shear(ray.direction);
+    Hit hit = no_hit(t_max);
+    TraversalRay r = traversal_ray(ray);
+    float3 inv_direction = r.inv_direction;
     int stack[BVH_STACK_SIZE];
     float stack_entry[BVH_STACK_SIZE];  /* where the ray enters each pushed node's box */
     int top = 0;
@@ -145,17 +169,7 @@ inline Hit trace_bvh_binary(__global const BVHNode *nodes, __global const float4
     while (true) {
         __global const BVHNode *node = &nodes[index];
         if (node->count > 0) {
-            for (int i = node->left_first; i < node->left_first + node->count; ++i) {
-                float2 b12;
-                float t = intersect_triangle(origin4, &shear, triangle_vertices[3 * i], triangle_vertices[3 * i + 1],
-                                             triangle_vertices[3 * i + 2], hit.t, &b12);
-                if (t < hit.t) {
-                    hit.t = t;
-                    hit.triangle = i;
-                    hit.b12 = b12;
-                    if (any_hit) return hit;
-                }
-            }
+            if (intersect_leaf(triangle_vertices, &r, node->left_first, node->count, any_hit, &hit)) return hit;
         } else {
             int left = node->left_first;
             float t_left = ray_box_entry(&nodes[left], ray.origin, inv_direction, hit.t);
