@@ -57,3 +57,14 @@ def kernel_runner(device):
         return cache[key]
 
     return get
+
+
+@pytest.fixture
+def mitsuba_scalar_spectral():
+    """Mitsuba 3 set to its scalar_spectral variant, for tests that compare with it (a test extra, never needed to
+    render); skips when it is missing."""
+    mitsuba = pytest.importorskip("mitsuba", reason="the Mitsuba comparison needs `pip install spectrace[test]`")
+    if "scalar_spectral" not in mitsuba.variants():
+        pytest.skip("this mitsuba build has no scalar_spectral variant")
+    mitsuba.set_variant("scalar_spectral")
+    return mitsuba

@@ -19,21 +19,14 @@ from spectrace.spectral import spectrum_to_xyz
 from spectrace.spectral.spectrum import Spectrum
 
 
-def _mitsuba_scalar_spectral():
-    mitsuba = pytest.importorskip("mitsuba", reason="the Mitsuba comparison needs `pip install spectrace[bench]`")
-    if "scalar_spectral" not in mitsuba.variants():
-        pytest.skip("this mitsuba build has no scalar_spectral variant")
-    mitsuba.set_variant("scalar_spectral")
-    return mitsuba
 
-
-def test_exported_cornell_box_renders_like_spectrace(tmp_path, device):
+def test_exported_cornell_box_renders_like_spectrace(tmp_path, device, mitsuba_scalar_spectral):
     """REPLICAS independent images of REPLICA_SPP samples from each renderer, depth 5 with Russian roulette from
     bounce 2 (so the roulette's semantics matter); film XYZ means over 8 x 8-pixel blocks and over the whole image
     must agree within 5 standard errors of the difference (from the replicas' spread). The light is inside the
     top-middle blocks, so its measured emission spectrum is compared too. Measured: whole-image means within
     2.5 standard errors; the light's radiance scaled by 1.03 in the export fails at 8 standard errors."""
-    mi = _mitsuba_scalar_spectral()
+    mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 24, 32, 32, 8
     scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=size, height=size, max_depth=5,
                                                                          rr_depth=2)
@@ -61,11 +54,11 @@ def test_exported_cornell_box_renders_like_spectrace(tmp_path, device):
 
 
 @pytest.mark.parametrize("emission", ["constant 1", "Cornell box light"])
-def test_film_xyz_normalisation_matches_the_integral(tmp_path, device, emission):
+def test_film_xyz_normalisation_matches_the_integral(tmp_path, device, emission, mitsuba_scalar_spectral):
     """A view filled by one emitter, emitters only (max_depth 1): each renderer's mean film XYZ must equal the
     emission's ∫ L cmf dλ / ∫ ȳ dλ within 5 standard errors (per-pixel spread; only the wavelengths are random).
     Without mitsuba_film_xyz Mitsuba's Y is 0.1 % high, which fails here."""
-    mi = _mitsuba_scalar_spectral()
+    mi = mitsuba_scalar_spectral
     if emission == "constant 1":
         radiance = Spectrum.constant(1.0)
     else:
@@ -84,8 +77,7 @@ def test_film_xyz_normalisation_matches_the_integral(tmp_path, device, emission)
             (image.mean(axis=0) / expected, standard_error / expected)
 
 
-def test_what_mitsuba_cannot_match_is_refused(tmp_path):
-    _mitsuba_scalar_spectral()
+def test_what_mitsuba_cannot_match_is_refused(tmp_path, mitsuba_scalar_spectral):
     scene = load_scene(scenes_dir() / "cornell_box.toml")
     spot = SpotLight(position=(0.3, 0.5, 0.3), direction=(0, -1, 0), intensity=Spectrum.constant(1.0))
     with pytest.raises(SpectraceError, match="SpotLight has no equivalent Mitsuba emitter"):
@@ -109,10 +101,10 @@ def test_ply_files_hold_the_triangles(tmp_path):
     np.testing.assert_array_equal(np.asarray(loaded.vertices), mesh.vertices.astype(np.float32))
 
 
-def test_peer_sampler_is_exported_and_checked(tmp_path):
+def test_peer_sampler_is_exported_and_checked(tmp_path, mitsuba_scalar_spectral):
     """The bench may give Mitsuba any of its samplers (stratified ones are the fair match for spectrace's Sobol);
     the export carries the choice, and a misspelt one is refused in one line naming the option."""
-    mi = _mitsuba_scalar_spectral()
+    mi = mitsuba_scalar_spectral
     scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=8, height=8)
     for sampler in ("independent", "multijitter"):
         scene_dict = scene_to_mitsuba_dict(scene, tmp_path, spp=4, sampler=sampler)

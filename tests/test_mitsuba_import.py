@@ -215,20 +215,13 @@ def test_dielectrics(tmp_path):
     assert "int_ior not above ext_ior" in str(error.value) and "anisotropic" in str(error.value)
 
 
-def _mitsuba_scalar_spectral():
-    mitsuba = pytest.importorskip("mitsuba", reason="the Mitsuba comparison needs `pip install spectrace[mitsuba]`")
-    if "scalar_spectral" not in mitsuba.variants():
-        pytest.skip("this mitsuba build has no scalar_spectral variant")
-    mitsuba.set_variant("scalar_spectral")
-    return mitsuba
 
-
-def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device):
+def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
     """Mitsuba's Cornell box (its own scene dict, written as XML by its own serialiser, at 32 x 32 with a box pixel
     filter so both renderers average over the same pixel areas) rendered by both in spectral mode. Each renderer
     gives REPLICAS independent images of REPLICA_SPP samples; the mean over 8 x 8-pixel blocks and over the whole
     image, in linear sRGB, must agree within 5 standard errors of the difference (from the replicas' spread)."""
-    mi = _mitsuba_scalar_spectral()
+    mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 24, 8, 32, 8
     scene_dict = mi.cornell_box()
     scene_dict["sensor"]["film"].update({"width": size, "height": size, "rfilter": {"type": "box"}})
