@@ -61,7 +61,7 @@ inline float4 texel_radiance(__global const Light *light, __global const float *
 inline float4 environment_radiance(__global const Light *light, __global const float *spectra,
                                    __global const float4 *texels, const SampledWavelengths *w, float3 d)
 {
-    if (light->type == LIGHT_ENVIRONMENT) return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
+    if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
     return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, direction_to_map_uv(d))], w);
 }
 
@@ -69,7 +69,7 @@ inline float4 environment_radiance(__global const Light *light, __global const f
  * over rows (height + 1 floats), then each row's conditional CDF (width + 1 floats). */
 inline float environment_pdf(__global const Light *light, __global const float *map_cdf, float3 d)
 {
-    if (light->type == LIGHT_ENVIRONMENT) return light->pmf * INV_FOUR_PI;
+    if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) return light->pmf * INV_FOUR_PI;
     float2 uv = direction_to_map_uv(d);
     int width = light->map_width, height = light->map_height;
     int row = clamp((int)(uv.y * (float)height), 0, height - 1);
@@ -85,7 +85,7 @@ inline float environment_pdf(__global const Light *light, __global const float *
 /* Samples a direction toward the environment; returns it with its pdf (pick probability included). */
 inline float3 environment_sample(__global const Light *light, __global const float *map_cdf, float2 u, float *pdf)
 {
-    if (light->type == LIGHT_ENVIRONMENT) {
+    if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) {
         float z = 1.0f - 2.0f * u.x;
         float r = sqrt(fmax(0.0f, 1.0f - z * z));
         float2 circle = r * cos_sin_turns(u.y);

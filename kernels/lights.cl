@@ -64,7 +64,7 @@ inline float4 area_light_emitted(__global const Light *light, __global const flo
                                  float3 to_viewer, float2 uv)
 {
     if (!light->two_sided && dot(n, to_viewer) <= 0.0f) return (float4)(0.0f);
-    if (light->map_width > 0) {
+    if (SCENE_HAS_LIGHT_IMAGES && light->map_width > 0) {
         uv = uv - floor(uv);  /* the image repeats outside [0, 1)² */
         return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, uv)], w);
     }
@@ -113,7 +113,7 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
     __global const float *spectra = buffers->spectra;
     s->is_delta = 0;
     s->normal = (float3)(0.0f);
-    if (light->type == LIGHT_TRIANGLE) {
+    if (LIGHT_IS(light, LIGHT_TRIANGLE)) {
         float2 b12 = sample_triangle_uniform(u);
         float3 q = triangle_point(triangle_vertices, light->triangle, b12);
         float3 n_light = triangle_normal(triangle_vertices, light->triangle);
@@ -129,7 +129,7 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
         s->pdf = area_light_pdf(light, d, fabs(dot(n_light, s->wi)));
         return s->pdf > 0.0f;
     }
-    if (light->type == LIGHT_POINT || light->type == LIGHT_SPOT) {
+    if (LIGHT_IS(light, LIGHT_POINT) || LIGHT_IS(light, LIGHT_SPOT)) {
         float3 to_light = light->position.xyz - p;
         float d2 = dot(to_light, to_light);
         if (!(d2 > 0.0f)) return 0;
@@ -138,13 +138,13 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
         s->distance = d;
         s->point = light->position.xyz;
         float falloff = 1.0f;
-        if (light->type == LIGHT_SPOT) falloff = spot_falloff(light, dot(-s->wi, light->direction.xyz));
+        if (LIGHT_IS(light, LIGHT_SPOT)) falloff = spot_falloff(light, dot(-s->wi, light->direction.xyz));
         s->arriving = light_spectrum(light, spectra, w) * (falloff / d2);
         s->pdf = light->pmf;
         s->is_delta = 1;
         return falloff > 0.0f;
     }
-    if (light->type == LIGHT_DISTANT) {
+    if (LIGHT_IS(light, LIGHT_DISTANT)) {
         s->wi = -light->direction.xyz;
         s->distance = INFINITY;
         s->point = p;
@@ -154,6 +154,9 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
         return 1;
     }
     /* LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP */
+#if !SCENE_HAS_ENVIRONMENT
+    return 0;
+#endif
     s->wi = environment_sample(light, buffers->map_cdf, u, &s->pdf);
     s->distance = INFINITY;
     s->point = p;

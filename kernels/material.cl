@@ -28,7 +28,7 @@ inline float3 facing(float3 n, float3 wo)
  * is the interior (so the sign of the refraction) comes from the winding, so closed meshes need outward normals. */
 inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 wo)
 {
-    return shading_frame(m->type == MATERIAL_DIELECTRIC ? n : facing(n, wo));
+    return shading_frame(MATERIAL_IS(m, MATERIAL_DIELECTRIC) ? n : facing(n, wo));
 }
 
 /* f(wo, wi)·|cos θi| per wavelength, local directions. */
@@ -36,14 +36,24 @@ inline float4 material_eval_local(__global const Material *m, __global const flo
                                   const SampledWavelengths *w, float3 wo, float3 wi)
 {
     switch (m->type) {
+#if SCENE_USES_MATERIAL(MATERIAL_MIRROR)
     case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_eval(&p, wo, wi); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_CONDUCTOR)
     case MATERIAL_CONDUCTOR: { ConductorParams p = conductor_params(m, spectra, w); return conductor_eval(&p, wo, wi); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_PLASTIC)
     case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_eval(&p, wo, wi); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_RETROREFLECTOR)
     case MATERIAL_RETROREFLECTOR: {
         RetroreflectorParams p = retroreflector_params(m, spectra, w);
         return retroreflector_eval(&p, wo, wi);
     }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_DIELECTRIC)
     case MATERIAL_DIELECTRIC: { DielectricParams p = dielectric_params(m, spectra, w); return dielectric_eval(&p, wo, wi); }
+#endif
     default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_eval(&p, wo, wi); }
     }
 }
@@ -53,14 +63,24 @@ inline float material_pdf_local(__global const Material *m, __global const float
                                 const SampledWavelengths *w, float3 wo, float3 wi)
 {
     switch (m->type) {
+#if SCENE_USES_MATERIAL(MATERIAL_MIRROR)
     case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_pdf(&p, wo, wi); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_CONDUCTOR)
     case MATERIAL_CONDUCTOR: { ConductorParams p = conductor_params(m, spectra, w); return conductor_pdf(&p, wo, wi); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_PLASTIC)
     case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_pdf(&p, wo, wi); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_RETROREFLECTOR)
     case MATERIAL_RETROREFLECTOR: {
         RetroreflectorParams p = retroreflector_params(m, spectra, w);
         return retroreflector_pdf(&p, wo, wi);
     }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_DIELECTRIC)
     case MATERIAL_DIELECTRIC: { DielectricParams p = dielectric_params(m, spectra, w); return dielectric_pdf(&p, wo, wi); }
+#endif
     default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_pdf(&p, wo, wi); }
     }
 }
@@ -70,22 +90,32 @@ inline int material_sample_local(__global const Material *m, __global const floa
                                  const SampledWavelengths *w, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     switch (m->type) {
+#if SCENE_USES_MATERIAL(MATERIAL_MIRROR)
     case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_sample(&p, wo, s); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_CONDUCTOR)
     case MATERIAL_CONDUCTOR: {
         ConductorParams p = conductor_params(m, spectra, w);
         return conductor_sample(&p, wo, u, s);
     }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_PLASTIC)
     case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_sample(&p, wo, uc, u, s); }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_RETROREFLECTOR)
     case MATERIAL_RETROREFLECTOR: {
         RetroreflectorParams p = retroreflector_params(m, spectra, w);
         return retroreflector_sample(&p, wo, u, s);
     }
+#endif
+#if SCENE_USES_MATERIAL(MATERIAL_DIELECTRIC)
     case MATERIAL_DIELECTRIC: {
         DielectricParams p = dielectric_params(m, spectra, w);
         if (!dielectric_sample(&p, wo, uc, u, s)) return 0;
         s->terminate_secondary = dielectric_disperses(m, w);
         return 1;
     }
+#endif
     default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_sample(&p, wo, u, s); }
     }
 }
@@ -93,20 +123,19 @@ inline int material_sample_local(__global const Material *m, __global const floa
 /* 0 when every lobe is a delta lobe: next-event estimation cannot contribute there and is skipped. */
 inline int material_has_non_delta_lobe(__global const Material *m)
 {
-    switch (m->type) {
-    case MATERIAL_MIRROR: return 0;
-    case MATERIAL_CONDUCTOR:
-    case MATERIAL_RETROREFLECTOR:
-    case MATERIAL_DIELECTRIC: return !ggx_is_smooth(m->alpha);
-    default: return 1;
+    if (MATERIAL_IS(m, MATERIAL_MIRROR)) return 0;
+    if (MATERIAL_IS(m, MATERIAL_CONDUCTOR) || MATERIAL_IS(m, MATERIAL_RETROREFLECTOR)
+        || MATERIAL_IS(m, MATERIAL_DIELECTRIC)) {
+        return !ggx_is_smooth(m->alpha);
     }
+    return 1;
 }
 
 /* 1 when the event steers each wavelength its own way: the integrators then keep only the hero wavelength, before
  * next-event estimation as well as before following the sampled direction. */
 inline int material_disperses(__global const Material *m, const SampledWavelengths *w)
 {
-    return m->type == MATERIAL_DIELECTRIC && dielectric_disperses(m, w);
+    return MATERIAL_IS(m, MATERIAL_DIELECTRIC) && dielectric_disperses(m, w);
 }
 
 inline float4 material_eval(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,

@@ -81,7 +81,7 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
                              float hit_t, int last_segment, float4 *radiance, int *ended, uint *rays_traced)
 {
     *ended = 0;
-    if (s->medium < 0) return 0;
+    if (!SCENE_HAS_MEDIA || s->medium < 0) return 0;
     __global const Medium *medium = &scene->media[s->medium];
     float u_lane = sample_1d(sampler);
     float u_distance = sample_1d(sampler);
@@ -126,7 +126,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
         return !ended && ++s->segments <= last_segment;
     }
     if (hit.triangle < 0) {
-        if (params->environment_light >= 0) {
+        if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0) {
             __global const Light *env = &scene->lights[params->environment_light];
             float3 d = s->ray.direction;
             float weight = s->previous_delta

@@ -7,6 +7,8 @@
 #ifndef SPECTRACE_TYPES_H
 #define SPECTRACE_TYPES_H
 
+#include "scene_features.h"
+
 /* Wavelength grid of every tabulated spectrum (nm). Must match spectrace.spectral.grid. */
 #define GRID_MIN_NM 360.0f
 #define GRID_MAX_NM 830.0f

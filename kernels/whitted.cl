@@ -22,7 +22,7 @@ inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Samp
             s.throughput *= beer_lambert(medium_sigma_t(&scene->media[s.medium], scene->spectra, w), hit.t);
         }
         if (hit.triangle < 0) {
-            if (params->environment_light >= 0) {
+            if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0) {
                 __global const Light *env = &scene->lights[params->environment_light];
                 radiance += s.throughput * environment_radiance(env, scene->spectra, scene->texels, w,
                                                                 s.ray.direction);

@@ -13,6 +13,7 @@ import pytest
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
 from spectrace.benchmarks.kernel_shapes import Variant, run_kernel_shape_bench
+from spectrace.render.launch import render_work_group
 from spectrace.render.renderer import Renderer
 from spectrace.render.wavefront import WavefrontRenderer, make_renderer
 from spectrace.resources import scenes_dir
@@ -121,5 +122,7 @@ def test_render_command_refuses_an_unknown_kernel_shape_in_one_line(tmp_path):
 def test_kernel_shape_bench_reports_every_variant(device):
     variants = [Variant("megakernel", None), Variant("wavefront", 32)]  # the sizes the other tests compile
     rows = run_kernel_shape_bench(None, [SIZE], 1, 3, device.report.key, variants, repeats=2)
-    assert [(r["kernel"], r["work_group"]) for r in rows] == [("megakernel", None), ("wavefront", 32)]
+    generic = ("megakernel", render_work_group(device), False)  # added: the kernel built for every scene
+    assert [(r["kernel"], r["work_group"], r["specialised"]) for r in rows] == [
+        ("megakernel", None, True), ("wavefront", 32, True), generic]
     assert all(r["samples_per_second"] > 0 and r["repeats"] == 2 for r in rows)

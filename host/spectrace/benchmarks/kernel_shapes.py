@@ -1,4 +1,5 @@
-"""`spectrace bench --kernel-shapes`: samples/s of each kernel shape and work-group size, on the same scene.
+"""`spectrace bench --kernel-shapes`: samples/s of each kernel shape and work-group size, on the same scene, and of
+the default megakernel built for every scene instead of for this one (scene_features).
 
 The variants run alternately, each repeat timing every variant once in turn, and each figure is the median over
 the repeats, so a machine whose load changes during the run (other work on a shared CPU) shifts every variant
@@ -25,10 +26,11 @@ WORK_GROUPS = (None, 1, 4, 8, 16, 32)  # None: the runtime chooses
 class Variant:
     kernel: str
     work_group: int | None
+    specialised: bool = True  # built for the scene's features only (spectrace.render.scene_features)
 
     @property
     def label(self) -> str:
-        return f"{self.kernel} wg {self.work_group or 'runtime'}"
+        return f"{self.kernel} wg {self.work_group or 'runtime'}" + ("" if self.specialised else " generic")
 
 
 def kernel_shape_variants(kernels: tuple[str, ...] = ("megakernel", "wavefront"),
@@ -42,12 +44,15 @@ def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, 
     scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml")
     dev = open_device(device)
     default_group = render_work_group(dev)
+    generic = Variant("megakernel", default_group, specialised=False)
+    if any(v.kernel == "megakernel" for v in variants) and generic not in variants:
+        variants = [*variants, generic]
     results = []
     for size in sizes:
         sized = scene.with_overrides(width=size, height=size, max_depth=max_depth)
         renderers = {}
         for variant in variants:
-            renderer = make_renderer(sized, dev, variant.kernel)
+            renderer = make_renderer(sized, dev, variant.kernel, specialise=variant.specialised)
             renderer.work_group = variant.work_group
             renderer.run_pass(1)  # warm-up: PoCL compiles for the launch's group size here
             renderers[variant] = renderer
@@ -70,7 +75,8 @@ def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, 
                 "spp": spp,
                 "kernel": variant.kernel,
                 "work_group": variant.work_group,
-                "is_default": variant.kernel == "megakernel" and variant.work_group == default_group,
+                "specialised": variant.specialised,
+                "is_default": variant == Variant("megakernel", default_group),
                 "repeats": repeats,
                 "median_seconds": median,
                 "samples_per_second": size * size * spp / median,
@@ -90,6 +96,7 @@ def kernel_shape_table(results: list[dict]) -> Table:
     for r in results:
         group = str(r["work_group"] or "runtime") + (" (default)" if r["is_default"] else "")
         relative = f"{r['relative_to_default']:.2f}x" if r["relative_to_default"] else ""
-        table.add_row(r["device"], r["scene"], f"{r['width']}x{r['height']}", str(r["max_depth"]), r["kernel"],
+        kernel = r["kernel"] + ("" if r["specialised"] else " (generic)")
+        table.add_row(r["device"], r["scene"], f"{r['width']}x{r['height']}", str(r["max_depth"]), kernel,
                       group, f"{r['samples_per_second'] / 1e6:.3f}", relative)
     return table

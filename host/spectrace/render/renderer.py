@@ -15,6 +15,7 @@ from spectrace.render.launch import launch_shape, render_work_group
 from spectrace.render.memory import check_device_memory, device_memory_need
 from spectrace.render.opencl_errors import translate_opencl_errors
 from spectrace.render.scene_buffers import SceneBuffers, build_scene_buffers, render_params
+from spectrace.render.scene_features import scene_feature_defines
 from spectrace.scene import limits
 from spectrace.scene.model import SAMPLER_TYPES, Scene
 
@@ -37,9 +38,10 @@ def sampler_defines(sampler: str) -> dict[str, int]:
 class Renderer:
     @translate_opencl_errors("setting up the render")
     def __init__(self, scene: Scene, device: Device | str | None = None, spectral_bins: int = 0,
-                 spectral_range_nm: tuple[float, float] = (360.0, 830.0)):
+                 spectral_range_nm: tuple[float, float] = (360.0, 830.0), specialise: bool = True):
         """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (the band-
-        averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output."""
+        averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output. specialise=False builds the kernels
+        that handle every scene instead of ones carrying only this scene's features (for comparisons)."""
         self.scene = scene
         problem = (limits.render_settings_problem(scene.width, scene.height, scene.spp)
                    or limits.scene_geometry_problem(scene))
@@ -52,6 +54,8 @@ class Renderer:
         self.spectral_bins = spectral_bins
         self.spectral_range_nm = spectral_range_nm
         defines = sampler_defines(scene.sampler) | traversal_defines()
+        if specialise:
+            defines |= scene_feature_defines(self.buffers)
         if spectral_bins > 0:
             lo, hi = spectral_range_nm
             if not (360.0 <= lo < hi <= 830.0):

@@ -1,0 +1,20 @@
+"""Build defines that tell the kernels which features a scene uses (kernels/scene_features.h), so each scene's
+kernels carry code only for its own materials, lights and media. Derived from the uploaded buffers, which are
+exactly what the kernels will read; any row (dummy rows included) keeps its type's code in."""
+
+import numpy as np
+
+from spectrace.render.scene_buffers import SceneBuffers
+
+
+def _type_bits(types: np.ndarray) -> int:
+    return int(sum(1 << int(t) for t in np.unique(types)))
+
+
+def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
+    return {
+        "SCENE_MATERIAL_TYPES": _type_bits(buffers.materials["type"]),
+        "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
+        "SCENE_HAS_MEDIA": int(buffers.medium_count > 0),
+        "SCENE_HAS_LIGHT_IMAGES": int(bool(np.any(buffers.lights["map_width"] > 0))),
+    }

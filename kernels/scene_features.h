@@ -1,0 +1,33 @@
+/* What a scene uses, fixed when its kernels are built (spectrace.render.scene_features writes the defines), so a
+ * kernel carries no code for materials, lights or media the scene lacks. On CPU runtimes that matters beyond the
+ * branches themselves: a smaller kernel keeps more of a path's state in registers, and a vectoriser that runs
+ * work-items in SIMD lanes executes every branch some lane takes. A kernel built without these defines handles
+ * every scene. */
+#ifndef SPECTRACE_SCENE_FEATURES_H
+#define SPECTRACE_SCENE_FEATURES_H
+
+/* Bit t set: some material of type MATERIAL_t (types.h) / some light of type LIGHT_t is in the scene. */
+#ifndef SCENE_MATERIAL_TYPES
+#define SCENE_MATERIAL_TYPES 0x3F
+#endif
+#ifndef SCENE_LIGHT_TYPES
+#define SCENE_LIGHT_TYPES 0x3F
+#endif
+/* Participating media (and with them index-matched boundaries). */
+#ifndef SCENE_HAS_MEDIA
+#define SCENE_HAS_MEDIA 1
+#endif
+/* Lights showing an image (environment maps, pictures on area lights). */
+#ifndef SCENE_HAS_LIGHT_IMAGES
+#define SCENE_HAS_LIGHT_IMAGES 1
+#endif
+
+#define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
+#define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
+#define SCENE_HAS_ENVIRONMENT (SCENE_USES_LIGHT(LIGHT_ENVIRONMENT) || SCENE_USES_LIGHT(LIGHT_ENVIRONMENT_MAP))
+
+/* Type tests that fold to constants when the scene has none of that type, or nothing else. */
+#define MATERIAL_IS(m, t) (SCENE_USES_MATERIAL(t) && (SCENE_MATERIAL_TYPES == (1 << (t)) || (m)->type == (t)))
+#define LIGHT_IS(light, t) (SCENE_USES_LIGHT(t) && (SCENE_LIGHT_TYPES == (1 << (t)) || (light)->type == (t)))
+
+#endif
