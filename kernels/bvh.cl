@@ -4,6 +4,7 @@
 
 #include "types.h"
 #include "triangle.cl"
+#include "triangle4.cl"
 
 #define BVH_STACK_SIZE 64
 
@@ -33,6 +34,7 @@ inline float ray_box_entry(__global const BVHNode *node, float3 origin, float3 i
 typedef struct {
     float3 inv_direction;
     float4 origin4;
+    float3 origin_k;  /* the origin's coordinates in the shear's axis order, for the 4-triangle leaf test */
     RayShear shear;
 } TraversalRay;
 
@@ -43,6 +45,7 @@ inline TraversalRay traversal_ray(Ray ray)
     r.inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
     r.origin4 = (float4)(ray.origin, 0.0f);
     r.shear = ray_shear(ray.direction);
+    r.origin_k = shuffle(r.origin4, r.shear.permutation).xyz;
     return r;
 }
 
@@ -90,8 +93,9 @@ inline int intersect_leaf(__global const float4 *triangle_vertices, const Traver
     }
 
 /* 4-wide traversal (types.h BVH4Node): one visit slab-tests the four children's boxes as float4, sorts the hit ones
- * near to far with a 5-comparator network, enters the nearest and pushes the rest with their entry distances.
- * Stack references: a 4-wide node index (>= 0), or ~(4 * node + k) for the leaf in slot k of a node. */
+ * near to far with a 5-comparator network, enters the nearest and pushes the rest with their entry distances. A
+ * leaf is a run of blocks of four triangles (triangle4.cl) after the nodes in the same buffer. Stack references: a
+ * 4-wide node index (>= 0), or ~(float4 offset of a leaf's first block in the node buffer). */
 inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *triangle_vertices, Ray ray,
                       float t_max, int any_hit)
 {
@@ -106,12 +110,16 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
     int reference = 0;
     while (true) {
         if (reference < 0) {
-            int slot = ~reference;
-            __global const BVH4Node *owner = &nodes[slot >> 2];
-            int k = slot & 3;
-            int first = k == 0 ? owner->child.s0 : k == 1 ? owner->child.s1 : k == 2 ? owner->child.s2 : owner->child.s3;
-            int count = k == 0 ? owner->count.s0 : k == 1 ? owner->count.s1 : k == 2 ? owner->count.s2 : owner->count.s3;
-            if (intersect_leaf(triangle_vertices, &r, first, count, any_hit, &hit)) return hit;
+            __global const float4 *block = (__global const float4 *)nodes + ~reference;
+            while (true) {
+                int4 meta = as_int4(block[LEAF_BLOCK_FLOAT4S - 1]);
+                if (intersect_triangles4(block, r.origin_k, &r.shear, meta, &hit.t, &hit.triangle, &hit.b12)
+                    && any_hit) {
+                    return hit;
+                }
+                if (!meta.z) break;
+                block += LEAF_BLOCK_FLOAT4S;
+            }
         } else {
             __global const BVH4Node *node = &nodes[reference];
             float4 lx = (node->child_min[0] - ox) * ix, hx = (node->child_max[0] - ox) * ix;
@@ -125,8 +133,7 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
             int4 entered = (enter <= leave) & (counts >= (int4)(0));
             float4 t4 = select((float4)(INFINITY), enter, entered);
             int4 child = node->child;
-            int base = ~(4 * reference);
-            int4 refs = select(child, (int4)(base, base - 1, base - 2, base - 3), counts > (int4)(0));
+            int4 refs = select(child, ~child, counts > (int4)(0));
             float t0 = t4.s0, t1 = t4.s1, t2 = t4.s2, t3 = t4.s3;
             int r0 = refs.s0, r1 = refs.s1, r2 = refs.s2, r3 = refs.s3;
             BVH4_ORDER(t0, r0, t1, r1);

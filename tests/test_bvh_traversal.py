@@ -35,8 +35,8 @@ def _as_float4(a):
     return out
 
 
-def _device_scene(triangles):
-    bvh = build_bvh(triangles[:, 0], triangles[:, 1], triangles[:, 2])
+def _device_scene(triangles, max_leaf_size=4):
+    bvh = build_bvh(triangles[:, 0], triangles[:, 1], triangles[:, 2], max_leaf_size=max_leaf_size)
     ordered = triangles[bvh.prim_order].astype(np.float32)
     vertices = np.zeros((len(ordered), 3, 4), np.float32)
     vertices[..., :3] = ordered
@@ -44,18 +44,22 @@ def _device_scene(triangles):
 
 
 @pytest.mark.parametrize("width", WIDTHS)
-@pytest.mark.parametrize("triangle_count", [1, 7, 3000])
-def test_closest_hits_equal_brute_force(kernel_runner, triangle_count, width):
+@pytest.mark.parametrize("triangle_count, max_leaf_size", [(1, 4), (7, 4), (3000, 4), (3000, 16)])
+def test_closest_hits_equal_brute_force(kernel_runner, triangle_count, max_leaf_size, width):
+    """Leaves of up to 16 triangles take several four-triangle blocks in the 4-wide layout (triangle_blocks.py)."""
     rng = np.random.default_rng(triangle_count)
     # Snap to float32 first so the kernel and the reference see the same triangles and rays.
     triangles = _soup(rng, triangle_count).astype(np.float32).astype(np.float64)
     origins, directions = (a.astype(np.float32).astype(np.float64) for a in _rays(rng, 4000, triangles))
-    bvh, vertices = _device_scene(triangles)
+    bvh, vertices = _device_scene(triangles, max_leaf_size)
+    if max_leaf_size > 4:
+        assert bvh.nodes["count"].max() > 8, "the big-leaf case must chain three or more blocks"
 
     runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     t = np.empty(len(origins), np.float32)
     hit = np.empty(len(origins), np.int32)
-    args = [runner.buffer(device_nodes(bvh, width)), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+    args = [runner.buffer(device_nodes(bvh, vertices, width)), runner.buffer(vertices),
+            runner.buffer(_as_float4(origins)),
             runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
             np.int32(len(origins))]
     runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
@@ -101,7 +105,8 @@ def test_shared_edges_are_watertight(kernel_runner, width):
     runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     t = np.empty(len(origins), np.float32)
     hit = np.empty(len(origins), np.int32)
-    args = [runner.buffer(device_nodes(bvh, width)), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+    args = [runner.buffer(device_nodes(bvh, vertices, width)), runner.buffer(vertices),
+            runner.buffer(_as_float4(origins)),
             runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
             np.int32(len(origins))]
     runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
@@ -120,7 +125,8 @@ def test_any_hit_respects_t_max(kernel_runner, width):
     clear = np.abs(ref_t - t_max) > 1e-3
     runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     occluded = np.empty(len(origins), np.int32)
-    args = [runner.buffer(device_nodes(bvh, width)), runner.buffer(vertices), runner.buffer(_as_float4(origins)),
+    args = [runner.buffer(device_nodes(bvh, vertices, width)), runner.buffer(vertices),
+            runner.buffer(_as_float4(origins)),
             runner.buffer(_as_float4(directions)), runner.buffer(t_max), runner.buffer(occluded, True),
             np.int32(len(origins))]
     runner.run("any_hit", len(origins), args, {5: occluded})

@@ -99,7 +99,8 @@ def trace_with_spectrace(device_key: str | None, mesh: TriangleMesh, bvh, origin
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     count = len(origins)
-    buffers = [cl.Buffer(ctx, ro, hostbuf=device_nodes(bvh)), cl.Buffer(ctx, ro, hostbuf=vertices.reshape(-1, 4)),
+    vertices = vertices.reshape(-1, 4)
+    buffers = [cl.Buffer(ctx, ro, hostbuf=device_nodes(bvh, vertices)), cl.Buffer(ctx, ro, hostbuf=vertices),
                cl.Buffer(ctx, ro, hostbuf=_float4(origins)), cl.Buffer(ctx, ro, hostbuf=_float4(directions))]
     t_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
     hit_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)

@@ -16,6 +16,7 @@ with that leaf as its only child. The leaf triangle slots are the binary tree's,
 import numpy as np
 
 from spectrace.geometry.bvh import BVH, MAX_DEPTH
+from spectrace.geometry.triangle_blocks import node_buffer, pack_leaf_blocks
 
 BVH4_NODE_DTYPE = np.dtype(
     {
@@ -100,8 +101,10 @@ TRAVERSAL_WIDTH = 4
 BVH4_STACK_SIZE = 3 * MAX_DEPTH + 1
 
 
-def device_nodes(bvh: BVH, width: int | None = None) -> np.ndarray:
-    """The node array the traversal of `width` (default TRAVERSAL_WIDTH) reads."""
+def device_nodes(bvh: BVH, triangle_vertices: np.ndarray, width: int | None = None) -> np.ndarray:
+    """The node buffer the traversal of `width` (default TRAVERSAL_WIDTH) reads: the binary nodes, or the 4-wide
+    nodes followed by their leaves' triangle blocks (geometry/triangle_blocks.py). triangle_vertices: (3·M, 4)
+    float32 in leaf slot order, as uploaded for shading."""
     width = TRAVERSAL_WIDTH if width is None else width
     if width == 2:
         return bvh.nodes
@@ -110,7 +113,7 @@ def device_nodes(bvh: BVH, width: int | None = None) -> np.ndarray:
     nodes, depth = collapse_to_bvh4(bvh)
     if 3 * depth + 1 > BVH4_STACK_SIZE:
         raise RuntimeError(f"4-wide BVH depth {depth} exceeds what the traversal stack holds")  # unreachable
-    return nodes
+    return node_buffer(*pack_leaf_blocks(nodes, triangle_vertices))
 
 
 def traversal_defines(width: int | None = None) -> dict[str, int]:

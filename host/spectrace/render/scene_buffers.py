@@ -33,7 +33,7 @@ from spectrace.spectral.uplift import uplift_illuminant
 @dataclass
 class SceneBuffers:
     bvh: BVH
-    nodes: np.ndarray  # what the traversal reads: bvh.nodes, or their 4-wide collapse (geometry/bvh4.py)
+    nodes: np.ndarray  # what the traversal reads: bvh.nodes, or their 4-wide collapse and leaf blocks (geometry/bvh4.py)
     triangle_vertices: np.ndarray  # (3·M, 4) float32, BVH leaf order
     triangle_info: np.ndarray  # (M,) TRIANGLE_INFO_DTYPE
     triangle_count: int  # arrays hold one dummy entry when there are no triangles
@@ -199,7 +199,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         table.add(Spectrum.zeros())
     return SceneBuffers(
         bvh=bvh,
-        nodes=device_nodes(bvh),
+        nodes=device_nodes(bvh, vertices.reshape(-1, 4)),
         triangle_vertices=vertices.reshape(-1, 4),
         triangle_info=triangle_info,
         triangle_count=len(v0),
