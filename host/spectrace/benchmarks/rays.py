@@ -22,7 +22,7 @@ import pyopencl as cl
 
 from spectrace.device import open_device
 from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh4 import device_nodes, traversal_defines
+from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes, traversal_defines
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, sphere
 from spectrace.render.launch import launch_shape, render_work_group
@@ -78,11 +78,11 @@ def build_with_memory(mesh: TriangleMesh):
     """(BVH, CPU seconds of an untraced build, peak traced bytes of a second, traced build)."""
     v0, v1, v2 = mesh.triangles()
     cpu = time.process_time()
-    bvh = build_bvh(v0, v1, v2)
+    bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
     cpu = time.process_time() - cpu
     tracemalloc.start()
     try:
-        build_bvh(v0, v1, v2)
+        build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()

@@ -96,6 +96,11 @@ def _open_children(parents: np.ndarray, binary: np.ndarray, is_leaf: np.ndarray,
 # The 4-wide one traces 1.5-1.9x the closest-hit rays/s of the binary one on both CPU runtimes
 # (docs/performance.md, "Traversal changes, measured").
 TRAVERSAL_WIDTH = 4
+# Largest leaf the SAH build may make for the 4-wide traversal: its leaves are tested four triangles at a time
+# (geometry/triangle_blocks.py), so a leaf of 5-8 costs two block tests, not up to eight triangle tests. Against
+# leaves of 4, measured in alternating runs on both CPU runtimes: the Cornell box 3-7 % more samples/s, closest-hit
+# rays on 20,480 triangles 7-12 % more, on 1.3 M triangles within the runs' noise (docs/performance.md).
+LEAF_SIZE = 8
 # Entries of the 4-wide kernel's stack (kernels/bvh.cl BVH4_STACK_SIZE): a visit pushes at most three, and the
 # collapse never makes a path longer than the binary tree's (<= MAX_DEPTH), so the stack cannot overflow.
 BVH4_STACK_SIZE = 3 * MAX_DEPTH + 1

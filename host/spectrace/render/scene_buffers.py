@@ -6,7 +6,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
-from spectrace.geometry.bvh4 import device_nodes
+from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
 from spectrace.render.device_types import (
     LIGHT_DISTANT,
     LIGHT_DTYPE,
@@ -93,7 +93,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         v0, v1, v2, uv = (np.concatenate(a) for a in (v0s, v1s, v2s, uvs))
         tri_material, tri_emitter = np.concatenate(tri_material), np.concatenate(tri_emitter)
         tri_interior = np.concatenate(tri_interior)
-        bvh = build_bvh(v0, v1, v2)
+        bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
         order = bvh.prim_order
         v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
         tri_material, tri_emitter, tri_interior = tri_material[order], tri_emitter[order], tri_interior[order]
