@@ -7,16 +7,16 @@
 #include "material.cl"
 #include "rng.cl"
 
-/* Picks one light by its pmf and samples a point of it as seen from x: 0 when nothing arrives. Draws three
- * numbers (pick, then the point) whether or not a light exists, so the sampler's dimensions stay aligned. */
+/* Picks one light by its pmf and samples a point of it as seen from x, both from one 2D draw (pick_light_reusing):
+ * 0 when nothing arrives. The draw is made whether or not a light exists, so the sampler's dimensions stay
+ * aligned. */
 inline int sample_one_light(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 x,
                             __global const Light **light, LightSample *ls)
 {
     __global const RenderParams *params = scene->params;
-    float u_pick = sample_1d(sampler);
     float2 u_light = sample_2d(sampler);
     if (params->light_count == 0) return 0;
-    *light = &scene->lights[pick_light(scene->light_cdf, params->light_count, u_pick)];
+    *light = &scene->lights[pick_light_reusing(scene->light_cdf, params->light_count, &u_light)];
     LightBuffers buffers = light_buffers(scene);
     if (!sample_light(*light, &buffers, w, x, u_light, ls)) return 0;
     return any(ls->arriving != (float4)(0.0f));

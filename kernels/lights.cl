@@ -32,6 +32,18 @@ inline int pick_light(__global const float *light_cdf, int light_count, float u)
     return lo;
 }
 
+/* pick_light driven by u.x, which is then rescaled to [0, 1) within the picked light's share of the CDF, so one 2D
+ * sample both picks the light and places the point on it (the "sample reuse" of Mitsuba 3 and pbrt). A stratified
+ * 2D pattern then stays stratified over all the lights together, e.g. across the two triangles of a quad, where a
+ * separate pick number would hand each triangle an unrelated subset of the points. */
+inline int pick_light_reusing(__global const float *light_cdf, int light_count, float2 *u)
+{
+    int i = pick_light(light_cdf, light_count, u->x);
+    float lo = light_cdf[i], share = light_cdf[i + 1] - lo;
+    u->x = share > 0.0f ? clamp((u->x - lo) / share, 0.0f, 0x1.fffffep-1f) : 0.0f;
+    return i;
+}
+
 inline float4 light_spectrum(__global const Light *light, __global const float *spectra, const SampledWavelengths *w)
 {
     return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
