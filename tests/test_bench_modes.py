@@ -73,6 +73,19 @@ def test_peer_mitsuba_mode_agrees():
         assert pair["agrees"], pair
 
 
+def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it_rendered():
+    """Mitsuba's multi-jittered sampler rounds 5 spp up to 6 and logs a warning: the warning must not reach stdout
+    (one JSON object there), and Mitsuba's samples/s must count the 6 samples it rendered."""
+    pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
+    out = _bench("--peer", "mitsuba", "--size", "8", "--spp", "5", "--max-depth", "2", "--peer-sampler",
+                 "multijitter")
+    peer = out["peer"]
+    assert [row["spp"] for row in peer["spectrace"]] == [5]
+    assert peer["mitsuba"] and all(row["spp"] == 6 for row in peer["mitsuba"])
+    for row in peer["mitsuba"]:
+        assert row["samples_per_second"] == pytest.approx(8 * 8 * 6 / row["seconds"])
+
+
 def test_unknown_peer_is_one_line_error():
     result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--peer", "blender"], capture_output=True,
                             text=True, env=os.environ.copy(), timeout=600)

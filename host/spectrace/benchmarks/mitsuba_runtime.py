@@ -8,6 +8,7 @@ DRJIT_LIBLLVM_PATH is unset we look for one in the usual system folders before M
 
 import glob
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -31,6 +32,22 @@ def find_libllvm() -> str | None:
     return None
 
 
+def _log_to_stderr(mi) -> None:
+    """Sends Mitsuba's log (e.g. a sampler rounding its sample count) to stderr, where spectrace's progress goes:
+    by default Mitsuba writes it to stdout, which `spectrace bench --json` keeps for its one JSON object."""
+
+    class StderrAppender(mi.Appender):
+        def append(self, level, text):
+            print(text, file=sys.stderr)
+
+        def log_progress(self, progress, name, formatted, eta, ptr=None):
+            pass
+
+    logger = mi.logger()
+    logger.clear_appenders()
+    logger.add_appender(StderrAppender())
+
+
 @dataclass
 class MitsubaVariants:
     available: list[str]
@@ -45,6 +62,7 @@ def usable_variants(wanted: list[str] | None = None) -> MitsubaVariants:
         os.environ["DRJIT_LIBLLVM_PATH"] = path  # read by Dr.Jit when its LLVM backend first starts
     import mitsuba as mi
 
+    _log_to_stderr(mi)
     available = []
     for variant in wanted or [LLVM_VARIANT, SCALAR_VARIANT]:
         if variant not in mi.variants():
@@ -72,6 +90,7 @@ class MitsubaRender:
     seconds: float  # the best timed render, wall clock, film included
     cpu_seconds: float  # process CPU time (all threads) of that render
     threads: int
+    spp: int  # samples per pixel rendered: some samplers round the count asked for (multijitter, stratified)
 
 
 class MitsubaContestant:
@@ -100,7 +119,9 @@ class MitsubaContestant:
         import mitsuba as mi
 
         mi.set_variant(self.variant)
-        return np.array(mi.render(self.scene, spp=self.spp, seed=self.seed), dtype=np.float64)
+        image = np.array(mi.render(self.scene, spp=self.spp, seed=self.seed), dtype=np.float64)
+        self.rendered_spp = int(self.scene.sensors()[0].sampler().sample_count())
+        return image
 
     def render_untimed(self) -> None:
         self._render()
@@ -122,7 +143,7 @@ class MitsubaContestant:
         mi.set_variant(self.variant)
         threads = int(dr.thread_count()) if hasattr(dr, "thread_count") else os.cpu_count() or 1
         return MitsubaRender(self.variant, mitsuba_film_xyz(self.xyz[..., :3], mi), self.load_seconds,
-                             self.first_render_seconds, self.seconds, self.cpu_seconds, threads)
+                             self.first_render_seconds, self.seconds, self.cpu_seconds, threads, self.rendered_spp)
 
 
 def render_with_mitsuba(scene_dict: dict, variant: str, spp: int, seed: int = 0, warm_up: bool | None = None,

@@ -102,10 +102,10 @@ def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int,
 
         their_rows.append({
             "renderer": "mitsuba", "runtime": result.variant, "width": scene.width, "height": scene.height,
-            "spp": spp, "max_depth": scene.max_depth, "seconds": result.seconds,
-            "samples_per_second": scene.width * scene.height * spp / result.seconds,
+            "spp": result.spp, "max_depth": scene.max_depth, "seconds": result.seconds,
+            "samples_per_second": scene.width * scene.height * result.spp / result.seconds,
             "cpu_seconds": result.cpu_seconds,
-            "samples_per_cpu_second": scene.width * scene.height * spp / result.cpu_seconds,
+            "samples_per_cpu_second": scene.width * scene.height * result.spp / result.cpu_seconds,
             "scene_load_seconds": result.load_seconds, "first_render_seconds": result.first_render_seconds,
             "threads": result.threads, "mitsuba_version": mi.__version__,
         })

@@ -84,9 +84,9 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
                 probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
                 spp = _spp_for_budget(probe.seconds, PROBE_SPP, seconds)
                 timed = render_with_mitsuba(scene_dict, variant, spp=spp, warm_up=False)
-                result["renderers"].append({"renderer": "mitsuba", "runtime": variant, "spp": spp,
+                result["renderers"].append({"renderer": "mitsuba", "runtime": variant, "spp": timed.spp,
                                             "seconds": timed.seconds, "rmse": _rmse(timed.xyz, reference)})
-                log(f"mitsuba {variant}: {spp} spp in {timed.seconds:.2f} s")
+                log(f"mitsuba {variant}: {timed.spp} spp in {timed.seconds:.2f} s")
                 if index == 0:  # cross-check the reference against the fastest peer, at a quarter of its spp
                     check = render_with_mitsuba(scene_dict, variant, spp=max(1, reference_spp // 4), seed=7,
                                                 warm_up=False)
