@@ -49,10 +49,12 @@ inline float4 light_spectrum(__global const Light *light, __global const float *
     return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
 }
 
+/* The unit geometric normal of the winding, which the host stores in the w of the triangle's three vertices
+ * (render/scene_buffers.py). */
 inline float3 triangle_normal(__global const float4 *triangle_vertices, int triangle)
 {
-    float3 v0 = triangle_vertices[3 * triangle].xyz;
-    return normalize(cross(triangle_vertices[3 * triangle + 1].xyz - v0, triangle_vertices[3 * triangle + 2].xyz - v0));
+    return (float3)(triangle_vertices[3 * triangle].w, triangle_vertices[3 * triangle + 1].w,
+                    triangle_vertices[3 * triangle + 2].w);
 }
 
 inline float3 triangle_point(__global const float4 *triangle_vertices, int triangle, float2 b12)

@@ -56,6 +56,13 @@ class SceneBuffers:
         return sum(a.nbytes for a in arrays)
 
 
+def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
+    """(M, 3) unit normals of the winding (v0, v1, v2), computed in float64; zero for a degenerate triangle."""
+    n = np.cross(np.asarray(v1, np.float64) - v0, np.asarray(v2, np.float64) - v0)
+    length = np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
 def build_scene_buffers(scene: Scene) -> SceneBuffers:
     table = SpectrumTable()
     material_index: dict[int, int] = {}
@@ -108,6 +115,9 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
 
     vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
     vertices[: len(v0), 0, :3], vertices[: len(v0), 1, :3], vertices[: len(v0), 2, :3] = v0, v1, v2
+    # The spare w of each triangle's three vertices holds its unit geometric normal (x, y, z), so shading reads it
+    # with the vertices instead of computing cross and normalize at every hit and light sample (kernels/lights.cl).
+    vertices[: len(v0), :, 3] = _unit_normals(v0, v1, v2)
 
     triangle_uvs = np.zeros((max(len(v0), 1), 3, 2), np.float32)
     triangle_uvs[: len(v0)] = uv
