@@ -50,6 +50,7 @@ def test_scaling_rays_and_quality_modes():
     assert quality["reference"]["spp"] == 1024
     ours = quality["renderers"][0]
     assert ours["renderer"] == "spectrace" and ours["spp"] >= 1 and ours["rmse"] > 0
+    assert ours["spp"] & (ours["spp"] - 1) == 0  # the default Sobol sampler renders a power of two
     if _has("mitsuba") and quality["cross_check"] is not None:
         assert quality["cross_check"]["agrees"], quality["cross_check"]
 
