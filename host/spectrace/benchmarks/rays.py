@@ -22,7 +22,8 @@ import pyopencl as cl
 
 from spectrace.device import open_device
 from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes, traversal_defines
+from spectrace.geometry.bvh4 import LEAF_SIZE, collapse_to_bvh4, device_nodes, traversal_defines
+from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, sphere
 from spectrace.render.launch import launch_shape, render_work_group
@@ -89,17 +90,31 @@ def build_with_memory(mesh: TriangleMesh):
     return bvh, cpu, peak
 
 
-def trace_with_spectrace(device_key: str | None, mesh: TriangleMesh, bvh, origins, directions) -> dict:
-    device = open_device(device_key)
-    ordered = mesh.vertices[mesh.faces[bvh.prim_order]].astype(np.float32)  # (M, 3, 3) in leaf order
+def _leaf_order_vertices(mesh: TriangleMesh, bvh) -> np.ndarray:
+    """(3·M, 4) float32 vertices in BVH leaf order, as the kernels read them."""
+    ordered = mesh.vertices[mesh.faces[bvh.prim_order]].astype(np.float32)  # (M, 3, 3)
     vertices = np.zeros((len(ordered), 3, 4), np.float32)
     vertices[..., :3] = ordered
+    return vertices.reshape(-1, 4)
+
+
+def traversal_tree_stats(mesh: TriangleMesh, bvh) -> dict:
+    """The tree the kernel traverses: the 4-wide collapse and its leaf blocks, and the node buffer's size."""
+    nodes4, depth4 = collapse_to_bvh4(bvh)
+    buffer = device_nodes(bvh, _leaf_order_vertices(mesh, bvh))
+    blocks = (buffer.nbytes - nodes4.nbytes) // (16 * LEAF_BLOCK_FLOAT4S)
+    return {"nodes_4wide": int(len(nodes4)), "depth_4wide": int(depth4), "leaf_blocks": int(blocks),
+            "node_buffer_bytes": int(buffer.nbytes)}
+
+
+def trace_with_spectrace(device_key: str | None, mesh: TriangleMesh, bvh, origins, directions) -> dict:
+    device = open_device(device_key)
+    vertices = _leaf_order_vertices(mesh, bvh)
     program = device.build_program("testing/closest_hit.cl", defines=traversal_defines() or None)
     kernel = cl.Kernel(program, "closest_hit")
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     count = len(origins)
-    vertices = vertices.reshape(-1, 4)
     buffers = [cl.Buffer(ctx, ro, hostbuf=device_nodes(bvh, vertices)), cl.Buffer(ctx, ro, hostbuf=vertices),
                cl.Buffer(ctx, ro, hostbuf=_float4(origins)), cl.Buffer(ctx, ro, hostbuf=_float4(directions))]
     t_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
@@ -168,7 +183,8 @@ def run_rays_bench(triangles: int, ray_count: int, device_keys: list[str | None]
         "bvh": {"build_seconds": bvh.build_seconds, "build_cpu_seconds": build_cpu_seconds,
                 "peak_traced_bytes": int(peak_bytes),
                 "peak_resident_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
-                "nodes": int(len(bvh.nodes)), "depth": int(bvh.depth), "sah_cost": bvh.sah_cost},
+                "nodes": int(len(bvh.nodes)), "depth": int(bvh.depth), "sah_cost": bvh.sah_cost,
+                **traversal_tree_stats(mesh, bvh)},
         "spectrace": [], "embree": None, "agreement": [], "notes": [],
     }
     log(f"BVH: {bvh.build_seconds:.2f} s ({build_cpu_seconds:.2f} s CPU), peak {peak_bytes / 2**20:.0f} MiB traced")
@@ -199,11 +215,13 @@ def rays_tables(result: dict) -> list:
 
     bvh = result["bvh"]
     build = Table(title=f"BVH build: {result['triangles']} triangles (binned SAH, numpy)")
-    for column in ("build s", "build CPU s", "peak traced MiB", "peak RSS MiB", "nodes", "depth", "SAH cost"):
+    for column in ("build s", "build CPU s", "peak traced MiB", "peak RSS MiB", "nodes", "depth", "SAH cost",
+                   "4-wide nodes", "4-wide depth", "leaf blocks", "node buffer MiB"):
         build.add_column(column, justify="right")
     build.add_row(f"{bvh['build_seconds']:.2f}", f"{bvh['build_cpu_seconds']:.2f}", f"{bvh['peak_traced_bytes'] / 2**20:.0f}",
                   f"{bvh['peak_resident_bytes'] / 2**20:.0f}", str(bvh["nodes"]), str(bvh["depth"]),
-                  f"{bvh['sah_cost']:.1f}")
+                  f"{bvh['sah_cost']:.1f}", str(bvh["nodes_4wide"]), str(bvh["depth_4wide"]), str(bvh["leaf_blocks"]),
+                  f"{bvh['node_buffer_bytes'] / 2**20:.0f}")
     rays = Table(title=f"closest-hit rays: {result['rays']} random rays, {result['triangles']} triangles")
     for column in ("tracer", "M rays/s", "cores used", "M rays/s per core", "time s"):
         rays.add_column(column, justify="left" if column == "tracer" else "right")
