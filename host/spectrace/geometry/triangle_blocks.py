@@ -2,7 +2,7 @@
 
 A leaf's triangles are tested one after the other in the binary traversal; in the 4-wide one they are tested four
 at a time, each lane one triangle (Wald et al. 2008 pack leaves the same way, for the same reason), which measured
-cheaper than the scalar loop on both CPU runtimes here (docs/performance.md, "Leaf blocks").
+cheaper than the scalar loop on both CPU runtimes here (docs/performance.md, "Current figures").
 
 Block layout (LEAF_BLOCK_FLOAT4S float4, read by kernels/triangle4.cl): float4 `3 * vertex + axis` holds that
 coordinate of the triangle's vertex 0, 1 or 2 in lanes 0-3, one triangle per lane; the last float4 is an int4
