@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
 from spectrace.geometry.primitives import rectangle, sphere
 from spectrace.geometry.transforms import apply_transform
@@ -34,22 +35,8 @@ def test_exported_cornell_box_renders_like_spectrace(tmp_path, device, mitsuba_s
     by_mitsuba = np.stack([mitsuba_film_xyz(mi.render(mitsuba_scene, spp=replica_spp, seed=seed), mi)
                            for seed in range(replicas)])
 
-    renderer = Renderer(scene, device)
-    sums = []
-    for replica in range(1, replicas + 1):  # consecutive sample ranges of one render are independent replicas
-        renderer.render(spp=replica * replica_spp, pass_spp=replica_spp)
-        sums.append(renderer.image().xyz.astype(np.float64) * renderer.samples_done)
-    by_spectrace = np.diff(np.stack([np.zeros_like(sums[0]), *sums]), axis=0) / replica_spp
-
-    def block_means(images: np.ndarray) -> np.ndarray:
-        n = size // block
-        return images.reshape(len(images), n, block, n, block, 3).mean(axis=(2, 4))
-
-    for reduce in (block_means, lambda images: images.mean(axis=(1, 2))):
-        ours, theirs = reduce(by_spectrace), reduce(by_mitsuba)
-        difference = ours.mean(axis=0) - theirs.mean(axis=0)
-        standard_error = np.sqrt(ours.var(axis=0, ddof=1) / replicas + theirs.var(axis=0, ddof=1) / replicas)
-        assert np.all(np.abs(difference) <= 5 * standard_error), np.max(np.abs(difference) / standard_error)
+    by_spectrace = spectrace_replicas(Renderer(scene, device), replicas, replica_spp)
+    assert_replicas_agree(by_spectrace, by_mitsuba, block)
     assert by_mitsuba[..., 1].mean() > 0.05  # the comparison saw a lit image
 
 

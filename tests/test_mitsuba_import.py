@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.spectral import spectrum_to_xyz, xyz_to_linear_srgb
@@ -234,21 +235,6 @@ def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_sca
 
     from spectrace.render.renderer import Renderer
 
-    renderer = Renderer(load_mitsuba_scene(xml_path), device)
-    sums = []
-    for replica in range(1, replicas + 1):  # consecutive sample ranges of one render are independent replicas
-        renderer.render(spp=replica * replica_spp, pass_spp=replica_spp)
-        sums.append(renderer.image().xyz.astype(np.float64) * renderer.samples_done)
-    xyz_replicas = np.diff(np.stack([np.zeros_like(sums[0]), *sums]), axis=0) / replica_spp
-    by_spectrace = xyz_to_linear_srgb(xyz_replicas)
-
-    def block_means(images: np.ndarray) -> np.ndarray:
-        n = size // block
-        return images.reshape(len(images), n, block, n, block, 3).mean(axis=(2, 4))
-
-    for reduce in (block_means, lambda images: images.mean(axis=(1, 2))):
-        ours, theirs = reduce(by_spectrace), reduce(by_mitsuba)
-        difference = ours.mean(axis=0) - theirs.mean(axis=0)
-        standard_error = np.sqrt(ours.var(axis=0, ddof=1) / replicas + theirs.var(axis=0, ddof=1) / replicas)
-        assert np.all(np.abs(difference) <= 5 * standard_error), np.max(np.abs(difference) / standard_error)
+    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(xml_path), device), replicas, replica_spp)
+    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
     assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image
