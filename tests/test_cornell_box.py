@@ -37,10 +37,12 @@ def test_mean_agrees_across_seeds(cornell, device):
     assert np.all(np.abs(difference.mean(axis=0)) < 4 * standard_error)
 
 
-def test_pass_split_is_bit_identical(cornell, device):
-    one_pass = Renderer(cornell, device)
+@pytest.mark.parametrize("sampler", ["sobol", "independent"])
+def test_pass_split_is_bit_identical(cornell, device, sampler):
+    scene = cornell.with_overrides(sampler=sampler)
+    one_pass = Renderer(scene, device)
     one_pass.run_pass(8)
-    split = Renderer(cornell, device)
+    split = Renderer(scene, device)
     for count in (1, 3, 4):
         split.run_pass(count)
     film_a, rays_a = one_pass.read_film()
