@@ -98,24 +98,24 @@ def _leaf_order_vertices(mesh: TriangleMesh, bvh) -> np.ndarray:
     return vertices.reshape(-1, 4)
 
 
-def traversal_tree_stats(mesh: TriangleMesh, bvh) -> dict:
+def traversal_tree_stats(bvh, node_buffer: np.ndarray) -> dict:
     """The tree the kernel traverses: the 4-wide collapse and its leaf blocks, and the node buffer's size."""
     nodes4, depth4 = collapse_to_bvh4(bvh)
-    buffer = device_nodes(bvh, _leaf_order_vertices(mesh, bvh))
-    blocks = (buffer.nbytes - nodes4.nbytes) // (16 * LEAF_BLOCK_FLOAT4S)
+    blocks = (node_buffer.nbytes - nodes4.nbytes) // (16 * LEAF_BLOCK_FLOAT4S)
     return {"nodes_4wide": int(len(nodes4)), "depth_4wide": int(depth4), "leaf_blocks": int(blocks),
-            "node_buffer_bytes": int(buffer.nbytes)}
+            "node_buffer_bytes": int(node_buffer.nbytes)}
 
 
-def trace_with_spectrace(device_key: str | None, mesh: TriangleMesh, bvh, origins, directions) -> dict:
+def trace_with_spectrace(device_key: str | None, bvh, vertices: np.ndarray, node_buffer: np.ndarray, origins,
+                         directions) -> dict:
+    """vertices, node_buffer: the kernel's triangle and node buffers (_leaf_order_vertices, device_nodes)."""
     device = open_device(device_key)
-    vertices = _leaf_order_vertices(mesh, bvh)
     program = device.build_program("testing/closest_hit.cl", defines=traversal_defines() or None)
     kernel = cl.Kernel(program, "closest_hit")
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     count = len(origins)
-    buffers = [cl.Buffer(ctx, ro, hostbuf=device_nodes(bvh, vertices)), cl.Buffer(ctx, ro, hostbuf=vertices),
+    buffers = [cl.Buffer(ctx, ro, hostbuf=node_buffer), cl.Buffer(ctx, ro, hostbuf=vertices),
                cl.Buffer(ctx, ro, hostbuf=_float4(origins)), cl.Buffer(ctx, ro, hostbuf=_float4(directions))]
     t_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
     hit_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
@@ -183,14 +183,17 @@ def run_rays_bench(triangles: int, ray_count: int, device_keys: list[str | None]
         "bvh": {"build_seconds": bvh.build_seconds, "build_cpu_seconds": build_cpu_seconds,
                 "peak_traced_bytes": int(peak_bytes),
                 "peak_resident_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
-                "nodes": int(len(bvh.nodes)), "depth": int(bvh.depth), "sah_cost": bvh.sah_cost,
-                **traversal_tree_stats(mesh, bvh)},
+                "nodes": int(len(bvh.nodes)), "depth": int(bvh.depth), "sah_cost": bvh.sah_cost},
         "spectrace": [], "embree": None, "agreement": [], "notes": [],
     }
+    # After the build's peak resident size was read: the kernel's buffers, made once for every runtime.
+    vertices = _leaf_order_vertices(mesh, bvh)
+    node_buffer = device_nodes(bvh, vertices)
+    result["bvh"].update(traversal_tree_stats(bvh, node_buffer))
     log(f"BVH: {bvh.build_seconds:.2f} s ({build_cpu_seconds:.2f} s CPU), peak {peak_bytes / 2**20:.0f} MiB traced")
     traced = []
     for key in device_keys:
-        row = trace_with_spectrace(key, mesh, bvh, origins, directions)
+        row = trace_with_spectrace(key, bvh, vertices, node_buffer, origins, directions)
         log(f"spectrace {row['runtime']}: {row['rays_per_second'] / 1e6:.2f} M rays/s")
         traced.append(row)
     if with_embree:
