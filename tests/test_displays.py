@@ -339,7 +339,7 @@ def test_unknown_display_and_missing_file(tmp_path):
     with pytest.raises(SpectraceError, match="unknown display 'LCD-Nope'.*CRT-Dell"):
         load_display("LCD-Nope", where="--display")
     missing = tmp_path / "missing.csv"
-    with pytest.raises(SpectraceError, match="display file not found") as error:
+    with pytest.raises(SpectraceError, match="display file does not exist") as error:
         load_display(str(missing))
     assert error.value.where == str(missing)
 

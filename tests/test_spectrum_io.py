@@ -94,7 +94,7 @@ def test_csv_errors_name_the_file_and_line(tmp_path, text, column, message, line
 
 
 def test_missing_csv_names_the_path(tmp_path):
-    with pytest.raises(SpectraceError, match="not found") as error:
+    with pytest.raises(SpectraceError, match="spectrum file does not exist") as error:
         load_spectrum_csv(tmp_path / "absent.csv")
     assert error.value.where == str(tmp_path / "absent.csv")
 

@@ -22,6 +22,7 @@ import colour
 
 from spectrace.displays.display import CHANNELS, Display
 from spectrace.errors import SpectraceError
+from spectrace.io.input_files import regular_file
 from spectrace.resources import spectra_dir
 from spectrace.spectral import load_spectrum_csv, spectrum_from_colour
 
@@ -110,10 +111,9 @@ def _colour_science_display(name: str) -> Display:
 
 def _comment_keys_and_header(path: Path) -> tuple[dict[str, str], list[str]]:
     """`# key: text` comment lines (first occurrence of each key) and the header's data columns."""
+    regular_file(path, what="display file")
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except FileNotFoundError:
-        raise SpectraceError("display file not found", where=str(path)) from None
+        lines = path.read_text(encoding="utf-8-sig").splitlines()
     except (OSError, UnicodeDecodeError) as error:
         problem = f"{error.__class__.__name__}: {error}"
         raise SpectraceError(f"cannot read display file ({problem})", where=str(path)) from None

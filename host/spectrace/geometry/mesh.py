@@ -1,11 +1,15 @@
 """Indexed triangle meshes, and reading them from any file format trimesh understands."""
 
+import os
+import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.io.input_files import regular_file
 
 
 @dataclass
@@ -51,21 +55,93 @@ class TriangleMesh:
         return float(self.triangle_areas().sum())
 
 
+# Files at least this large announce themselves on stderr with their size, then say how long they took: a
+# mesh of some million triangles takes seconds to parse, which should not look like a hang.
+PROGRESS_MIN_BYTES = 50 * 2**20
+PROGRESS_ENVIRONMENT = "SPECTRACE_MESH_PROGRESS_MB"  # overrides the threshold, in MB (0: always)
+
+# OBJ indices start at 1; trimesh silently reads a face index 0 as the first vertex, making a degenerate
+# triangle. The file is scanned for it in chunks with numpy (Python's re takes seconds per 50 MB).
+_OBJ_SCAN_CHUNK = 32 * 2**20
+
+
+def _is_any(values: np.ndarray, characters: bytes) -> np.ndarray:
+    result = values == characters[0]
+    for character in characters[1:]:
+        result |= values == character
+    return result
+
+
+def _zero_index_in_face_line(chunk: np.ndarray) -> int | None:
+    """Offset in `chunk` (whole lines) of the first face-line field that reads 0, or None. Fields of a face
+    line are separated by blanks (corners) and '/' (v/vt/vn of a corner)."""
+    if len(chunk) < 2:
+        return None
+    starts_field = chunk[1:] == ord("0")
+    starts_field &= _is_any(chunk[:-1], b" \t/")
+    zeros = np.flatnonzero(starts_field) + 1
+    after = np.append(chunk, np.uint8(ord("\n")))[zeros + 1]
+    zeros = zeros[_is_any(after, b" \t/\r\n")]
+    if len(zeros) == 0:
+        return None
+    newlines = np.flatnonzero(chunk == ord("\n"))
+    previous = np.searchsorted(newlines, zeros) - 1
+    line_starts = np.where(previous >= 0, newlines[np.maximum(previous, 0)] + 1, 0)
+    padded = np.append(chunk, np.zeros(2, np.uint8))
+    in_face = (padded[line_starts] == ord("f")) & _is_any(padded[line_starts + 1], b" \t")
+    return int(zeros[in_face][0]) if in_face.any() else None
+
+
+def _scan_obj(path: Path, where: str) -> bool:
+    """Refuses a face index 0 (naming its line); says whether the file has texture coordinates (vt)."""
+    has_texture_coordinates, lines_before, carry = False, 0, b""
+    with open(path, "rb") as stream:
+        while True:
+            block = stream.read(_OBJ_SCAN_CHUNK)
+            text = carry + block
+            cut = len(text) if not block else text.rfind(b"\n") + 1  # whole lines only, but all at the end
+            lines, carry = text[:cut], text[cut:]
+            chunk = np.frombuffer(lines, np.uint8)
+            if (offset := _zero_index_in_face_line(chunk)) is not None:
+                line = lines_before + lines.count(b"\n", 0, offset) + 1
+                raise SpectraceError(f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)",
+                                     where=where)
+            lines_before += lines.count(b"\n")
+            has_texture_coordinates |= lines.startswith((b"vt ", b"vt\t")) or b"\nvt " in lines or b"\nvt\t" in lines
+            if not block:
+                return has_texture_coordinates
+
+
+def _progress_min_bytes() -> float:
+    text = os.environ.get(PROGRESS_ENVIRONMENT)
+    try:
+        return float(text) * 1e6 if text else PROGRESS_MIN_BYTES
+    except ValueError:
+        return PROGRESS_MIN_BYTES
+
+
 def load_mesh(path: Path, where: str) -> TriangleMesh:
     """Read a mesh file (OBJ, PLY, STL, GLB, OFF, ...); a file holding several meshes is merged into one.
 
-    Vertex order and face winding are kept as stored. Every failure raises SpectraceError naming `where`.
+    Vertex order and face winding are kept as stored, except that an OBJ vertex used with several texture
+    coordinates becomes one vertex per coordinate. Every failure raises SpectraceError naming `where`.
     """
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
-    path = Path(path)
-    if not path.exists():
-        raise SpectraceError(f"mesh file '{path}' does not exist", where=where)
-    if not path.is_file():
-        raise SpectraceError(f"mesh file '{path}' is not a file", where=where)
+    path = regular_file(path, where, what="mesh file")
+    size = path.stat().st_size
+    announce = size >= _progress_min_bytes()
+    if announce:
+        print(f"loading mesh '{path}' ({size / 1e6:.1f} MB)...", file=sys.stderr, flush=True)
+    started = time.perf_counter()
+    options = {}
+    if path.suffix.lower() == ".obj":
+        # With vt, trimesh keeps the stored order only by giving a vertex one of its texture coordinates (at a
+        # texture seam the others are lost); splitting such vertices keeps every corner's own coordinate.
+        options = {"maintain_order": not _scan_obj(path, where), "skip_materials": True}
     try:
         # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
-        scene = trimesh.load_scene(path, process=False, maintain_order=True)
+        scene = trimesh.load_scene(path, process=False, **{"maintain_order": True, **options})
         loaded = scene.to_mesh()
     except Exception as error:  # trimesh raises many unrelated types for unreadable files
         detail = " ".join(str(error).split()) or type(error).__name__
@@ -77,6 +153,9 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     if uv is not None and len(uv) == len(mesh.vertices) and np.all(np.isfinite(uv)):
         # Mesh files store v upward (OpenGL); spectrace's v runs down the image.
         mesh.uvs = np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float64)
+    if announce:
+        print(f"loaded mesh '{path}': {len(mesh.faces):,} triangles in {time.perf_counter() - started:.1f} s",
+              file=sys.stderr, flush=True)
     return mesh
 
 

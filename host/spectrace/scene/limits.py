@@ -23,6 +23,17 @@ DEVICE_BYTES_PER_PIXEL = FILM_BYTES_PER_PIXEL + RAY_COUNT_BYTES_PER_PIXEL
 # float64 colour conversion (24) and the float32 linear sRGB (12).
 HOST_BYTES_PER_PIXEL = DEVICE_BYTES_PER_PIXEL + 12 + 24 + 12
 
+# Images read from files (pictures on screens, environment maps): the same pixel limit as the film. Their header
+# gives the size before anything is decoded, so a small file claiming a huge image (a PNG of zeros compresses
+# a thousandfold) is refused without the memory it would take.
+MAX_IMAGE_PIXELS = MAX_FILM_PIXELS
+# Host bytes per pixel at the peak of loading an image and building its texels (decoded pixels, float64 RGB
+# and the drive or luminance tables derived from it, the float32 texel buffer), measured as the growth of the
+# peak resident memory: 72 for a 2048x2048 PNG on a screen, 64 for a 4096x2048 EXR environment map.
+IMAGE_HOST_BYTES_PER_PIXEL = 72
+# On the device every texel is a float4, and a map adds its sampling tables (about 4 bytes per texel).
+IMAGE_DEVICE_BYTES_PER_PIXEL = 16
+
 # The watertight ray/triangle test forms products of three coordinate differences in 32-bit floats, which
 # overflow (3.4e38) near 7e12; 1e12 scene units keeps a margin (the Earth's orbit is 1.5e11 m).
 MAX_COORDINATE = 1e12
@@ -63,6 +74,17 @@ def film_size_problem(width: int, height: int) -> str | None:
     if problem is not None:
         return f"{problem}: {cost}"
     return f"{cost}; at most {MAX_FILM_PIXELS / 1e6:.1f} Mpixels are allowed (e.g. 16384x8192)"
+
+
+def image_size_problem(width: int, height: int) -> str | None:
+    """Why an image of width x height read from a file is refused, with the memory it would need, or None."""
+    pixels = width * height
+    if pixels <= MAX_IMAGE_PIXELS:
+        return None
+    return (f"a {width}x{height} image ({pixels / 1e6:.1f} Mpixels) would need about "
+            f"{format_bytes(pixels * IMAGE_HOST_BYTES_PER_PIXEL)} of host memory and "
+            f"{format_bytes(pixels * IMAGE_DEVICE_BYTES_PER_PIXEL)} of device memory; at most "
+            f"{MAX_IMAGE_PIXELS / 1e6:.1f} Mpixels are allowed (e.g. 16384x8192)")
 
 
 def spp_problem(spp: int) -> str | None:

@@ -12,6 +12,7 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import load_mesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
+from spectrace.io.input_files import regular_file
 from spectrace.scene import limits, schema
 from spectrace.scene.model import (
     AreaEmitter,
@@ -122,9 +123,29 @@ def _validation_error(path: Path, error: ValidationError, data: object = None) -
     return SpectraceError(message + extra, where=f"{path}: {key_path(location)}" if location else str(path))
 
 
+# Real scenes nest tables and arrays a few levels deep (shapes[0].transform[1].matrix[2] is the deepest); far
+# deeper input is malformed or hostile, and recursive code further on (validation, error messages) would
+# exhaust Python's stack on it.
+MAX_NESTING = 64
+
+
+def _too_deep(data: object) -> tuple | None:
+    """The key path of a value nested beyond MAX_NESTING tables or arrays, or None (iterative: no recursion)."""
+    stack = [(data, ())]
+    while stack:
+        node, location = stack.pop()
+        if len(location) > MAX_NESTING:
+            return location
+        children = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+        stack.extend((child, (*location, key)) for key, child in children)
+    return None
+
+
 def read_scene_spec(path: Path) -> schema.SceneSpec:
+    regular_file(path, what="scene file")
     try:
-        text = path.read_text(encoding="utf-8")
+        # utf-8-sig: editors on Windows may start the file with a byte order mark, which TOML does not allow.
+        text = path.read_text(encoding="utf-8-sig")
     except OSError as exc:
         raise SpectraceError(f"cannot read scene file ({exc.strerror})", where=str(path)) from None
     except UnicodeDecodeError as exc:
@@ -134,6 +155,12 @@ def read_scene_spec(path: Path) -> schema.SceneSpec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SpectraceError(f"TOML syntax error: {exc}", where=str(path)) from None
+    except RecursionError:  # tomllib parses arrays and inline tables recursively
+        raise SpectraceError(f"arrays or inline tables nested too deep to parse (a scene needs at most "
+                             f"{MAX_NESTING} levels)", where=str(path)) from None
+    if (location := _too_deep(data)) is not None:
+        raise SpectraceError(f"values nested more than {MAX_NESTING} levels deep (a scene needs only a few)",
+                             where=f"{path}: {key_path(location[:3])}") from None
     try:
         return schema.SceneSpec.model_validate(data)
     except ValidationError as exc:
@@ -353,7 +380,13 @@ class _Resolver:
         from spectrace.displays.transfer import parse_encoding
 
         name = str(self.folder / spec.display) if spec.display.lower().endswith(".csv") else spec.display
-        display = load_display(name, where=self.where(f"{key}.display"))
+        try:
+            display = load_display(name, where=self.where(f"{key}.display"))
+        except SpectraceError as exc:
+            if exc.where == self.where(f"{key}.display"):
+                raise
+            # A display CSV's own error names the CSV (and its line); the scene key says who asked for it.
+            raise SpectraceError(str(exc), where=self.where(f"{key}.display")) from None
         if spec.white_luminance is not None:
             display = display.scaled_to_white_luminance(spec.white_luminance)
         elif not display.absolute:
@@ -418,17 +451,25 @@ class _Resolver:
 
 def read_picture(path: Path, where: str) -> np.ndarray:
     """(height, width, 3) values of a picture in [0, 1]: 8/16-bit PNG or JPEG code values divided by their maximum,
-    or an EXR's R, G, B as stored."""
+    or an EXR's R, G, B as stored. The size in the file's header is checked before anything is decoded."""
     if path.suffix.lower() == ".exr":
-        return read_environment_map(path, where).astype(np.float64)
-    if not path.is_file():
-        raise SpectraceError(f"image '{path}' does not exist", where=where)
+        return read_environment_map(path, where, what="image").astype(np.float64)
+    regular_file(path, where, what="image")
+    import warnings
+
     from PIL import Image as PILImage
 
     try:
-        with PILImage.open(path) as picture:
-            bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
-            values = np.asarray(picture.convert("RGB") if not bits16 else picture, dtype=np.float64)
+        # Pillow warns of "decompression bombs" by its own measure; image_size_problem is the limit here.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
+            with PILImage.open(path) as picture:  # reads the header only
+                if problem := limits.image_size_problem(*picture.size):
+                    raise SpectraceError(f"image '{path}': {problem}", where=where)
+                bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
+                values = np.asarray(picture.convert("RGB") if not bits16 else picture, dtype=np.float64)
+    except SpectraceError:
+        raise
     except Exception as exc:  # Pillow raises many types for unreadable files
         raise SpectraceError(f"cannot read image '{path}': {exc}", where=where) from None
     if values.ndim == 2:
@@ -436,25 +477,39 @@ def read_picture(path: Path, where: str) -> np.ndarray:
     return values / (65535.0 if bits16 else 255.0)
 
 
-def read_environment_map(path: Path, where: str) -> np.ndarray:
-    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map."""
+def _exr_size(path: Path) -> tuple[int, int]:
+    """(width, height) of an OpenEXR file's data window, from its header alone."""
+    import OpenEXR
+
+    with OpenEXR.File(str(path), header_only=True) as exr:
+        (x_min, y_min), (x_max, y_max) = (np.asarray(corner).tolist() for corner in exr.header()["dataWindow"])
+    return int(x_max) - int(x_min) + 1, int(y_max) - int(y_min) + 1
+
+
+def read_environment_map(path: Path, where: str, what: str = "environment map") -> np.ndarray:
+    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map (or a picture's EXR)."""
     from spectrace.io.exr import read_exr
 
-    if not path.is_file():
-        raise SpectraceError(f"environment map '{path}' does not exist", where=where)
+    regular_file(path, where, what=what)
+    try:
+        size = _exr_size(path)
+    except Exception as exc:  # OpenEXR raises bare exceptions for unreadable files
+        raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
+    if problem := limits.image_size_problem(*size):
+        raise SpectraceError(f"{what} '{path}': {problem}", where=where)
     try:
         channels, _ = read_exr(path)
-    except Exception as exc:  # OpenEXR raises bare exceptions for unreadable files
-        raise SpectraceError(f"cannot read environment map '{path}': {exc}", where=where) from None
+    except Exception as exc:
+        raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
     if "RGB" in channels:
         rgb = channels["RGB"]
     elif {"R", "G", "B"} <= set(channels):
         rgb = np.stack([channels["R"], channels["G"], channels["B"]], axis=-1)
     else:
-        raise SpectraceError(f"environment map '{path}' has no R, G, B channels", where=where)
+        raise SpectraceError(f"{what} '{path}' has no R, G, B channels", where=where)
     rgb = np.asarray(rgb, np.float32)
     if not np.all(np.isfinite(rgb)):
-        raise SpectraceError(f"environment map '{path}' has NaN or infinite pixels", where=where)
+        raise SpectraceError(f"{what} '{path}' has NaN or infinite pixels", where=where)
     return rgb
 
 

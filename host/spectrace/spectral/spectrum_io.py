@@ -12,6 +12,7 @@ then rows of numbers with the wavelength in nm, strictly ascending.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -22,6 +23,7 @@ import colour
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.io.input_files import regular_file
 from spectrace.resources import spectra_dir
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, resample_to_grid
 from spectrace.spectral.illuminants import CIE_ILLUMINANT_PREFIX, cie_illuminant, cie_illuminant_names
@@ -51,13 +53,23 @@ def _spectrum_from_samples(
     return Spectrum(resample_to_grid(np.array(wavelengths_nm), np.array(values)), name=name, source=source)
 
 
+# What a CSV or a spectrum string may hold as a number: ASCII digits, an optional sign, point and exponent.
+# Python's float() accepts more that nobody writing a spectrum means: '0_5' is 5.0 (a digit separator), and
+# other scripts' digits ('５') are digits to it. nan and inf are recognised only to say that they are not finite.
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_NOT_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+
+
 def _parse_number(text: str, what: str, where: str) -> float:
-    try:
-        number = float(text)
-    except ValueError:
-        raise SpectraceError(f"'{text}' is not a number ({what})", where=where) from None
-    if not math.isfinite(number):
-        raise SpectraceError(f"{what} is {text.strip()}; spectra must be finite", where=where)
+    text = text.strip()
+    if _NOT_FINITE.fullmatch(text):
+        raise SpectraceError(f"{what} is {text}; spectra must be finite", where=where)
+    if not _NUMBER.fullmatch(text):
+        hint = ": '_' is not a digit separator here" if "_" in text and _NUMBER.fullmatch(text.replace("_", "")) else ""
+        raise SpectraceError(f"'{text}' is not a number ({what}){hint}", where=where)
+    number = float(text)
+    if not math.isfinite(number):  # e.g. 1e999
+        raise SpectraceError(f"{what} is {text}, beyond the range of a float; spectra must be finite", where=where)
     return number
 
 
@@ -79,12 +91,10 @@ class _CsvTable:
 
 
 def _read_csv_table(path: Path) -> _CsvTable:
+    regular_file(path, what="spectrum file")
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except FileNotFoundError:
-        raise SpectraceError("spectrum file not found", where=str(path)) from None
-    except IsADirectoryError:
-        raise SpectraceError("cannot read spectrum file: it is a folder", where=str(path)) from None
+        # utf-8-sig: a byte order mark (spreadsheets on Windows write one) is not part of the header.
+        lines = path.read_text(encoding="utf-8-sig").splitlines()
     except UnicodeDecodeError as error:
         problem = f"not a UTF-8 text file (byte 0x{error.object[error.start]:02x} at offset {error.start})"
         raise SpectraceError(f"cannot read spectrum file: {problem}", where=str(path)) from None
@@ -104,6 +114,10 @@ def _read_csv_table(path: Path) -> _CsvTable:
                     f"header must be '{WAVELENGTH_COLUMN},<column>[,<column>...]', got '{stripped}'",
                     where=f"{path}:{line_number}",
                 )
+            repeated = next((name for i, name in enumerate(fields) if name in fields[:i]), None)
+            if repeated is not None:
+                # Which of the two a scene's `column` would pick is a guess; the file must say.
+                raise SpectraceError(f"column '{repeated}' appears twice in the header", where=f"{path}:{line_number}")
             header = fields
         else:
             rows.append((line_number, fields))
