@@ -12,7 +12,12 @@ Scenes can also be built from Python objects (`spectrace.api`: spectrum, diffuse
 docs/python-api.md shows how.
 """
 
-from spectrace.api import (
+from spectrace.cache_folder import ensure_usable_cache_folder
+
+# Before the imports below: matplotlib (through colour) and, later, PoCL and pyopencl set up caches under it.
+ensure_usable_cache_folder()
+
+from spectrace.api import (  # noqa: E402
     area_emitter,
     conductor,
     constant_environment,
