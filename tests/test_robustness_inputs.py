@@ -46,7 +46,33 @@ FILES = {
     "negative.csv": b"wavelength_nm,r\n400,0.5\n500,-0.2\n",
     "descending.csv": b"wavelength_nm,r\n500,0.5\n400,0.2\n",
     "binary.exr": bytes(range(256)) * 4,
+    "underscore.csv": b"wavelength_nm,r\n400,0.5\n500,0_5\n",
+    "repeated.csv": b"wavelength_nm,r,g,r\n400,0.5,0.5,0.1\n500,0.5,0.5,0.1\n",
+    "zero-index.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 0\n",
 }
+
+
+def _huge_header_exr() -> bytes:
+    """A 2x2 OpenEXR whose header claims 20000x20000 pixels (what a damaged or hostile file can do)."""
+    import struct
+    import tempfile
+
+    import numpy as np
+    import OpenEXR
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = f"{folder}/small.exr"
+        with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                          {"RGB": np.ones((2, 2, 3), np.float32)}) as exr:
+            exr.write(path)
+        with open(path, "rb") as stream:
+            data = stream.read()
+    # The attribute is its name, its type, a 4-byte size and the box: x_min, y_min, x_max, y_max (int32).
+    box = data.index(b"dataWindow\0box2i\0") + len(b"dataWindow\0box2i\0") + 4
+    return data[:box] + struct.pack("<4i", 0, 0, 19999, 19999) + data[box + 16:]
+
+
+FILES["huge.exr"] = _huge_header_exr()
 
 
 @dataclass(frozen=True)
@@ -91,6 +117,10 @@ CASES = [
            "Input tag 'laser'"),
     replace("nothing-emits", '[[shapes]]\ntype = "rectangle"\nmaterial = "grey"\nemitter = { radiance = { value = 1.0 '
             '} }\n', "", "", "the scene has neither shapes nor lights"),
+    replace("toml-nested-too-deep", "fov = 40", "fov = 40\nx = " + "[" * 5000 + "]" * 5000, "",
+            "arrays or inline tables nested too deep to parse"),
+    append("toml-tables-nested-too-deep", "[x" + ".a" * 5000 + "]\n", "x.a.a",
+           "values nested more than 64 levels deep"),
     # references
     replace("undefined-material", 'material = "grey"', 'material = "gery"', "shapes[0].material",
             "undefined material 'gery' (did you mean 'grey'?)"),
@@ -120,6 +150,15 @@ CASES = [
            "sky.exr' does not exist"),
     append("garbage-texture", '[[lights]]\ntype = "envmap"\nfile = "binary.exr"\n', "lights[0].file",
            "cannot read environment map"),
+    replace("spectrum-file-underscore", REFLECTANCE, 'reflectance = { file = "underscore.csv" }',
+            "materials.grey.reflectance.file", "underscore.csv:3: '0_5' is not a number (value in column 'r')"),
+    replace("spectrum-file-repeated-column", REFLECTANCE, 'reflectance = { file = "repeated.csv", column = "r" }',
+            "materials.grey.reflectance.file", "repeated.csv:1: column 'r' appears twice in the header"),
+    replace("mesh-face-index-zero", SHAPE, 'type = "mesh"\nfile = "zero-index.obj"', "shapes[0].file",
+            "zero-index.obj' line 6: face index 0 (OBJ indices start at 1)"),
+    append("huge-environment-map", '[[lights]]\ntype = "envmap"\nfile = "huge.exr"\n', "lights[0].file",
+           "a 20000x20000 image (400.0 Mpixels) would need about 26.8 GiB of host memory and 6.0 GiB of device "
+           "memory; at most 134.2 Mpixels are allowed"),
     # non-physical values
     replace("negative-reflectance", REFLECTANCE, "reflectance = { value = -0.1 }", "materials.grey.reflectance",
             "spectrum has negative values"),

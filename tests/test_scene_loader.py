@@ -112,6 +112,28 @@ def test_toml_syntax_error_gives_line_and_column(tmp_path):
         load_scene(path)
 
 
+def test_a_byte_order_mark_is_accepted(tmp_path):
+    """Notepad and other Windows editors start UTF-8 files with a BOM, which TOML itself does not allow."""
+    plain = load_scene(_write(tmp_path, reflectance="value = 0.25"))
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + MINIMAL.format(reflectance="value = 0.25", extra="").encode())
+    with_bom = load_scene(path)
+    np.testing.assert_array_equal(with_bom.shapes[0].mesh.vertices, plain.shapes[0].mesh.vertices)
+    assert with_bom.shapes[0].material.reflectance.evaluate(550.0) == pytest.approx(0.25)
+
+
+@pytest.mark.parametrize("nested", [
+    "[" * 5000 + "]" * 5000,  # arrays: tomllib recurses and runs out of stack
+    "{ a = " * 5000 + "1" + " }" * 5000,  # inline tables: likewise
+    "[" * 65 + "]" * 65,  # parses, but deeper than any scene
+])
+def test_deep_nesting_is_one_line(tmp_path, nested):
+    path = _write(tmp_path, extra=f"deep = {nested}")
+    with pytest.raises(SpectraceError, match="nested (too deep to parse|more than 64 levels deep)") as caught:
+        load_scene(path)
+    assert str(caught.value).startswith(str(path)) and "\n" not in str(caught.value)
+
+
 def test_named_spectra_and_library_references(tmp_path):
     text = textwrap.dedent(MINIMAL.format(reflectance='spectrum = "mine"', extra="")) + textwrap.dedent(
         """

@@ -84,6 +84,18 @@ def test_csv_with_one_column_needs_no_column_name(tmp_path):
         ("# only comments\n", None, "no header", None),
         ("lambda,v\n400,0.1\n500,0.2\n", None, "header must be", 1),
         ("wavelength_nm,v\n0.4,0.1\n0.7,0.2\n", None, "micrometres", None),
+        # Python's float() reads these; a CSV author does not mean them
+        ("wavelength_nm,v\n400,0.1\n500,0_5\n", None, r"'0_5' is not a number \(value in column 'v'\): '_' is not", 3),
+        ("wavelength_nm,v\n400,0.1\n5_00,0.5\n", None, r"'5_00' is not a number \(wavelength_nm\)", 3),
+        ("wavelength_nm,v\n400,0.1\n500,\uff15\n", None, "'\uff15' is not a number", 3),  # fullwidth 5
+        ("wavelength_nm,v\n400,0.1\n500,\u0665\n", None, "'\u0665' is not a number", 3),  # Arabic-Indic 5
+        ("wavelength_nm,v\n400,0.1\n500,Infinity\n", None, "is Infinity; spectra must be finite", 3),
+        ("wavelength_nm,v\n400,0.1\n500,-NaN\n", None, "is -NaN; spectra must be finite", 3),
+        ("wavelength_nm,v\n400,0.1\n500,1e999\n", None, "beyond the range of a float", 3),
+        ("wavelength_nm,v\n400,0.1\n500,0x1\n", None, "'0x1' is not a number", 3),
+        # a repeated column: which one a scene's `column` means is a guess
+        ("# c\nwavelength_nm,v,w,v\n400,0.1,0,0.9\n500,0.2,0,0.8\n", "v", "column 'v' appears twice", 2),
+        ("wavelength_nm,v,wavelength_nm\n400,0.1,1\n500,0.2,2\n", "v", "column 'wavelength_nm' appears twice", 1),
     ],
 )
 def test_csv_errors_name_the_file_and_line(tmp_path, text, column, message, line):
@@ -91,6 +103,21 @@ def test_csv_errors_name_the_file_and_line(tmp_path, text, column, message, line
     with pytest.raises(SpectraceError, match=message) as error:
         load_spectrum_csv(path, column=column)
     assert error.value.where == (f"{path}:{line}" if line else str(path))
+
+
+def test_numbers_in_the_usual_forms_are_read(tmp_path):
+    spectrum = load_spectrum_csv(write(tmp_path, "wavelength_nm,v\n+4e2,.25\n500.,5E-1\n 600 , 0.75 \n"))
+    assert [at(spectrum, nm) for nm in (400, 450, 500, 600)] == pytest.approx([0.25, 0.375, 0.5, 0.75])
+
+
+def test_a_byte_order_mark_is_not_part_of_the_header(tmp_path):
+    """Spreadsheets on Windows save UTF-8 CSV files with a BOM; the file then reads as without one."""
+    plain = load_spectrum_csv(write(tmp_path, THREE_COLUMNS), column="red")
+    path = tmp_path / "bom.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + THREE_COLUMNS.encode())
+    np.testing.assert_array_equal(load_spectrum_csv(path, column="red").values, plain.values)
+    path.write_bytes(b"\xef\xbb\xbfwavelength_nm,v\n400,0.1\n500,0.2\n")
+    assert at(load_spectrum_csv(path), 450) == pytest.approx(0.15)
 
 
 def test_missing_csv_names_the_path(tmp_path):
