@@ -107,7 +107,8 @@ def _scan_obj(path: Path, where: str) -> bool:
                 raise SpectraceError(f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)",
                                      where=where)
             lines_before += lines.count(b"\n")
-            has_texture_coordinates |= lines.startswith((b"vt ", b"vt\t")) or b"\nvt " in lines or b"\nvt\t" in lines
+            has_texture_coordinates |= (lines.startswith((b"vt ", b"vt\t")) or b"\nvt " in lines
+                                        or b"\nvt\t" in lines)
             if not block:
                 return has_texture_coordinates
 
@@ -134,14 +135,15 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     if announce:
         print(f"loading mesh '{path}' ({size / 1e6:.1f} MB)...", file=sys.stderr, flush=True)
     started = time.perf_counter()
-    options = {}
+    # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
+    options = {"process": False, "maintain_order": True}
     if path.suffix.lower() == ".obj":
         # With vt, trimesh keeps the stored order only by giving a vertex one of its texture coordinates (at a
         # texture seam the others are lost); splitting such vertices keeps every corner's own coordinate.
-        options = {"maintain_order": not _scan_obj(path, where), "skip_materials": True}
+        # Materials are not used, and skipping them spares decoding the textures an .mtl names.
+        options |= {"maintain_order": not _scan_obj(path, where), "skip_materials": True}
     try:
-        # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
-        scene = trimesh.load_scene(path, process=False, **{"maintain_order": True, **options})
+        scene = trimesh.load_scene(path, **options)
         loaded = scene.to_mesh()
     except Exception as error:  # trimesh raises many unrelated types for unreadable files
         detail = " ".join(str(error).split()) or type(error).__name__

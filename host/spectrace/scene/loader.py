@@ -160,7 +160,7 @@ def read_scene_spec(path: Path) -> schema.SceneSpec:
                              f"{MAX_NESTING} levels)", where=str(path)) from None
     if (location := _too_deep(data)) is not None:
         raise SpectraceError(f"values nested more than {MAX_NESTING} levels deep (a scene needs only a few)",
-                             where=f"{path}: {key_path(location[:3])}") from None
+                             where=f"{path}: {key_path(location[:3])}")
     try:
         return schema.SceneSpec.model_validate(data)
     except ValidationError as exc:
