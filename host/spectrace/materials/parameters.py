@@ -111,7 +111,7 @@ class Parameter:
         if self.unit:
             text += f", {self.unit}"
         if self.range is not None and not self.range.bounded:
-            text += f", {self.range}"
+            text += f", {self.range}".replace(">=", "≥").replace("<=", "≤")
         return text
 
     def doc_default(self) -> str:
