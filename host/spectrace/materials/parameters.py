@@ -131,9 +131,12 @@ class Parameter:
         return f"`{self.default!r}`"
 
 
+ROUGHNESS_RANGE = Range(0.0, 1.0)
+
+
 def roughness(default: float, doc: str) -> Parameter:
     """The GGX α every rough material shares (Mitsuba 3's `alpha`)."""
-    return Parameter("roughness", "float", default=default, range=Range(0.0, 1.0), doc=doc)
+    return Parameter("roughness", "float", default=default, range=ROUGHNESS_RANGE, doc=doc)
 
 
 def reflectance(default: object, doc: str, name: str = "reflectance", default_doc: str | None = None) -> Parameter:
