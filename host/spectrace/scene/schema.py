@@ -208,8 +208,6 @@ def _spec_model(module, name: str, type_default=...) -> type[Strict]:
 
 
 MATERIAL_SPECS = {name: _spec_model(module, f"{name.capitalize()}MaterialSpec") for name, module in MATERIALS.items()}
-DiffuseMaterialSpec, MirrorMaterialSpec, ConductorMaterialSpec, PlasticMaterialSpec, RetroreflectorMaterialSpec, \
-    DielectricMaterialSpec = MATERIAL_SPECS.values()
 MaterialSpec = Annotated[functools.reduce(operator.or_, MATERIAL_SPECS.values()), Field(discriminator="type")]
 
 EmitterSpec = _spec_model(area, "EmitterSpec", type_default="area")  # a shape's area light
@@ -273,7 +271,6 @@ class ShapeSpec(Strict):
 _LIGHT_SPEC_NAMES = {"constant": "ConstantEnvironmentSpec", "envmap": "EnvironmentMapSpec"}
 LIGHT_SPECS = {name: _spec_model(module, _LIGHT_SPEC_NAMES.get(name, f"{name.capitalize()}LightSpec"))
                for name, module in LIGHTS.items()}
-PointLightSpec, SpotLightSpec, DistantLightSpec, ConstantEnvironmentSpec, EnvironmentMapSpec = LIGHT_SPECS.values()
 LightSpec = Annotated[functools.reduce(operator.or_, LIGHT_SPECS.values()), Field(discriminator="type")]
 
 
