@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from spectrace.render.material_rows import material_row
+from spectrace.materials import material_row
 from spectrace.resources import spectra_dir
 from spectrace.scene.model import (
     ConductorMaterial,

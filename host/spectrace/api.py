@@ -16,12 +16,14 @@ from typing import TYPE_CHECKING, Any, Literal, Union
 
 import numpy as np
 
+from spectrace import lights, materials
 from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
+from spectrace.lights.base import unit_direction
 # Imported here, not lazily: importing the spectrace.render package for the first time would rebind the name
 # `spectrace.render` from the function exported in spectrace/__init__.py to the package.
 from spectrace.render.renderer import Renderer
@@ -41,7 +43,7 @@ from spectrace.scene.model import (
     Shape,
     SpotLight,
 )
-from spectrace.spectral.grid import GRID_NM, integrate_on_grid
+from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
 
 if TYPE_CHECKING:
@@ -175,18 +177,12 @@ def transformed(mesh: TriangleMesh, steps: Iterable[Mapping[str, Any]]) -> Trian
 def diffuse(reflectance: SpectrumLike) -> DiffuseMaterial:
     """Lambertian material, f = R(λ)/π, reflecting on both faces; `reflectance` in [0, 1] (a linear sRGB triple is
     uplifted)."""
-    return DiffuseMaterial(_reflectance(reflectance, "reflectance"))
+    return materials.diffuse.make(_reflectance(reflectance, "reflectance"))
 
 
-def mirror(reflectance: SpectrumLike = 1.0) -> MirrorMaterial:
+def mirror(reflectance: SpectrumLike = materials.mirror.PARAMETERS[0].default) -> MirrorMaterial:
     """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1), on both faces."""
-    return MirrorMaterial(_reflectance(reflectance, "reflectance"))
-
-
-def _roughness(value: float, what: str = "roughness") -> float:
-    if not isinstance(value, Real) or not 0.0 <= value <= 1.0:
-        raise SpectraceError(f"roughness (GGX alpha) must lie in [0, 1], got {value!r}", where=what)
-    return float(value)
+    return materials.mirror.make(_reflectance(reflectance, "reflectance"))
 
 
 def _optical_constant(source: SpectrumLike, what: str, positive: bool) -> Spectrum:
@@ -198,47 +194,46 @@ def _optical_constant(source: SpectrumLike, what: str, positive: bool) -> Spectr
 
 
 def conductor(metal: str | None = None, *, eta: SpectrumLike | None = None, k: SpectrumLike | None = None,
-              roughness: float = 0.0, specular_tint: SpectrumLike | None = None) -> ConductorMaterial:
+              roughness: float = materials.conductor.ROUGHNESS.default,
+              specular_tint: SpectrumLike | None = None) -> ConductorMaterial:
     """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
     index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
     mirror-like metal); `specular_tint` (a reflectance) multiplies the Fresnel term."""
     from spectrace.spectral.metals import metal_ior
 
-    if (metal is None) == (eta is None or k is None) or (metal is not None and (eta is not None or k is not None)):
-        raise SpectraceError("give either metal or both eta and k")
+    if problem := materials.conductor.source_problem(metal, eta, k):
+        raise SpectraceError(problem)
     if metal is not None:
         eta_spectrum, k_spectrum = metal_ior(metal, where="metal")
     else:
         eta_spectrum, k_spectrum = _optical_constant(eta, "eta", True), _optical_constant(k, "k", False)
     tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
-    return ConductorMaterial(eta_spectrum, k_spectrum, roughness=_roughness(roughness), specular_tint=tint)
+    return materials.conductor.make(eta_spectrum, k_spectrum, roughness=roughness, specular_tint=tint)
 
 
-def plastic(reflectance: SpectrumLike, ior: float = 1.5, roughness: float = 0.0) -> PlasticMaterial:
+def plastic(reflectance: SpectrumLike, ior: float = materials.plastic.IOR.default,
+            roughness: float = materials.plastic.ROUGHNESS.default) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
     smooth or GGX-rough (`roughness` = α)."""
-    if not isinstance(ior, Real) or not 1.0 < ior <= 4.0:
-        raise SpectraceError(f"ior must lie in (1, 4], got {ior!r}", where="ior")
-    return PlasticMaterial(_reflectance(reflectance, "reflectance"), ior=float(ior), roughness=_roughness(roughness))
+    return materials.plastic.make(_reflectance(reflectance, "reflectance"), ior=ior, roughness=roughness)
 
 
-def retroreflector(reflectance: SpectrumLike = 1.0, roughness: float = 0.1) -> RetroreflectorMaterial:
+def retroreflector(reflectance: SpectrumLike = materials.retroreflector.PARAMETERS[0].default,
+                   roughness: float = materials.retroreflector.ROUGHNESS.default) -> RetroreflectorMaterial:
     """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
     incident direction, scaled by `reflectance`."""
-    return RetroreflectorMaterial(_reflectance(reflectance, "reflectance"), roughness=_roughness(roughness))
+    return materials.retroreflector.make(_reflectance(reflectance, "reflectance"), roughness=roughness)
 
 
-def dielectric(ior: float | str | dict = 1.5, roughness: float = 0.0,
+def dielectric(ior: float | str | dict = materials.dielectric.IOR.default,
+               roughness: float = materials.dielectric.ROUGHNESS.default,
                specular_tint: SpectrumLike | None = None) -> DielectricMaterial:
     """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
     exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
     C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
     face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance) multiplies both lobes."""
-    from spectrace.spectral.glasses import index_of_refraction
-
     tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
-    return DielectricMaterial(index_of_refraction(ior, where="ior"), roughness=_roughness(roughness),
-                              specular_tint=tint)
+    return materials.dielectric.make(ior, roughness=roughness, specular_tint=tint)
 
 
 def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
@@ -310,54 +305,41 @@ def _intensity(intensity: SpectrumLike | None, power_w: float | None, shape_spec
                solid_angle_sr: float) -> Spectrum:
     """I(λ), W/(sr nm): given, or `power_w` (W over 360..830 nm) spread over `solid_angle_sr` with the spectral
     shape `shape_spectrum` (equal energy by default), as a scene file's `power` + `spectrum`."""
-    if (intensity is None) == (power_w is None):
-        raise SpectraceError("give exactly one of intensity, power_w")
+    if problem := lights.point.source_problem(intensity, power_w, shape_spectrum, power_name="power_w"):
+        raise SpectraceError(problem)
     if intensity is not None:
-        if shape_spectrum is not None:
-            raise SpectraceError("spectrum sets the shape of power_w; with intensity, put the spectrum in intensity")
         return _emission(intensity, "intensity")
-    if not power_w >= 0:
-        raise SpectraceError(f"power must be >= 0 W, got {power_w}")
-    shape_values = _emission(shape_spectrum, "spectrum") if shape_spectrum is not None else Spectrum.constant(
-        1.0, name="equal energy")
-    total = float(integrate_on_grid(shape_values.values))
-    if total <= 0:
-        raise SpectraceError("the spectrum of a light given by power must not be zero")
-    return shape_values * (power_w / total / solid_angle_sr)
+    shape_values = _emission(shape_spectrum, "spectrum") if shape_spectrum is not None else None
+    return lights.point.intensity_from_power(power_w, shape_values, solid_angle_sr)
 
 
 def point_light(position: Sequence[float], intensity: SpectrumLike | None = None, power_w: float | None = None,
                 spectrum: SpectrumLike | None = None) -> PointLight:
     """Isotropic point light: `intensity` I(λ) in W/(sr nm), or `power_w` (total flux over 360..830 nm, W) with
     the spectral shape `spectrum` (equal energy by default): I = Φ(λ)/4π."""
-    return PointLight(_vector(position, "position"), _intensity(intensity, power_w, spectrum, 4.0 * np.pi))
+    return PointLight(_vector(position, "position"),
+                      _intensity(intensity, power_w, spectrum, lights.point.FULL_SPHERE_SR))
 
 
-def spot_light(position: Sequence[float], target: Sequence[float], cutoff_angle: float = 30.0,
-               falloff_start: float | None = None, intensity: SpectrumLike | None = None,
-               power_w: float | None = None, spectrum: SpectrumLike | None = None) -> SpotLight:
+def spot_light(position: Sequence[float], target: Sequence[float],
+               cutoff_angle: float = lights.spot.CUTOFF_ANGLE.default, falloff_start: float | None = None,
+               intensity: SpectrumLike | None = None, power_w: float | None = None,
+               spectrum: SpectrumLike | None = None) -> SpotLight:
     """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
     degrees from the axis (default ¾ of the cutoff), smooth fall to 0 at `cutoff_angle` degrees; or `power_w` W
     spread over the cone's effective solid angle."""
     origin = np.asarray(_vector(position, "position"))
-    axis = np.asarray(_vector(target, "target")) - origin
-    if not np.linalg.norm(axis) > 0:
-        raise SpectraceError("spot light target equals its position")
-    start = 0.75 * cutoff_angle if falloff_start is None else falloff_start
-    if not (0 < cutoff_angle <= 90 and 0 <= start <= cutoff_angle):
-        raise SpectraceError(f"need 0 <= falloff_start <= cutoff_angle <= 90 degrees, got {start}, {cutoff_angle}")
-    direction = tuple(float(c) for c in axis / np.linalg.norm(axis))
-    cone = SpotLight(tuple(origin), direction, Spectrum.zeros(), cutoff_angle, start)
-    return SpotLight(tuple(origin), direction, _intensity(intensity, power_w, spectrum, cone.effective_solid_angle()),
-                     cutoff_angle, start)
+    direction = unit_direction(np.asarray(_vector(target, "target")) - origin, None,
+                               "spot light target equals its position")
+    cutoff, start = lights.spot.cone(cutoff_angle, falloff_start, "cutoff_angle", "falloff_start")
+    solid_angle = lights.spot.effective_solid_angle(cutoff, start)
+    return SpotLight(tuple(origin), direction, _intensity(intensity, power_w, spectrum, solid_angle), cutoff, start)
 
 
 def distant_light(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:
     """Parallel light travelling along `direction`, irradiance E(λ) in W/(m² nm) on a surface facing it."""
-    vector = np.asarray(_vector(direction, "direction"))
-    if not np.linalg.norm(vector) > 0:
-        raise SpectraceError("direction must not be zero", where="direction")
-    return DistantLight(tuple(float(c) for c in vector / np.linalg.norm(vector)), _emission(irradiance, "irradiance"))
+    return DistantLight(unit_direction(_vector(direction, "direction"), "direction"),
+                        _emission(irradiance, "irradiance"))
 
 
 def constant_environment(radiance: SpectrumLike) -> ConstantEnvironment:

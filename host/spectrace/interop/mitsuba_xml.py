@@ -31,6 +31,8 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
+from spectrace.materials import plastic
+from spectrace.materials.parameters import ROUGHNESS_RANGE
 from spectrace.spectral.glasses import IOR_RANGE
 
 SUPPORTED = {
@@ -394,8 +396,9 @@ class _Importer:
         if distribution != "ggx":
             self.notes.append(f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
                               f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)")
-        if not 0.0 <= alpha <= 1.0:
-            raise SpectraceError(f"alpha must lie in [0, 1] for spectrace, got {alpha}", where=self.where(bsdf))
+        if not ROUGHNESS_RANGE.contains(alpha):
+            raise SpectraceError(f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha}",
+                                 where=self.where(bsdf))
         return alpha
 
     def conductor_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
@@ -461,9 +464,9 @@ class _Importer:
             self.unsupported_plugin(bsdf, " with nonlinear = true")
             return None
         ior = self.ior(bsdf, properties, "int_ior", 1.49) / self.ior(bsdf, properties, "ext_ior", 1.000277)
-        if not 1.0 < ior <= 4.0:
-            raise SpectraceError(f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in (1, 4]",
-                                 where=self.where(bsdf))
+        if not plastic.IOR.range.contains(ior):
+            raise SpectraceError(f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in "
+                                 f"{plastic.IOR.range}", where=self.where(bsdf))
         roughness = self.roughness(bsdf, properties) if rough else 0.0
         if roughness is None:
             return None

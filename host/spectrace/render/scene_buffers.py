@@ -7,27 +7,22 @@ import numpy as np
 from spectrace.errors import SpectraceError
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
+from spectrace.lights import area as area_light
+from spectrace.lights import light_module
+from spectrace.lights.base import LightRows
+from spectrace.materials import material_row
 from spectrace.render.device_types import (
-    LIGHT_DISTANT,
     LIGHT_DTYPE,
-    LIGHT_ENVIRONMENT,
-    LIGHT_ENVIRONMENT_MAP,
-    LIGHT_POINT,
-    LIGHT_SPOT,
-    LIGHT_TRIANGLE,
     MATERIAL_DTYPE,
-    MATERIAL_NO_SPECTRUM,
     MEDIUM_DTYPE,
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
     TRIANGLE_NO_MATERIAL,
 )
-from spectrace.render.material_rows import material_row
-from spectrace.scene.model import ConstantEnvironment, DistantLight, EnvironmentMap, PointLight, Scene, SpotLight
-from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ, cmf_table_normalised
+from spectrace.scene.model import Scene
+from spectrace.spectral.colorimetry import cmf_table_normalised
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
-from spectrace.spectral.uplift import uplift_illuminant
 
 
 @dataclass
@@ -122,64 +117,14 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     triangle_uvs = np.zeros((max(len(v0), 1), 3, 2), np.float32)
     triangle_uvs[: len(v0)] = uv
 
-    # Images shown by emitters and environment maps share one texel buffer; each light knows its offset.
-    texel_chunks = [np.zeros((1, 4), np.float32)]
-    def add_texels(rgb: np.ndarray) -> int:
-        offset = sum(len(c) for c in texel_chunks)
-        chunk = np.zeros((rgb.shape[0] * rgb.shape[1], 4), np.float32)
-        chunk[:, :3] = np.maximum(rgb.reshape(-1, 3), 0.0)
-        texel_chunks.append(chunk)
-        return offset
-
-    rows, power = [], []
+    # Each light writes its own rows (spectrace.lights); images shown by emitters and environment maps share one
+    # texel buffer, each light knowing its offset.
+    out = LightRows(table, scene_radius)
     areas = 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
-    emitting = np.flatnonzero((tri_emitter >= 0) & (areas > 0))
-    emitter_rows = []
-    for e in emitters:
-        if e.image is None:
-            emitter_rows.append({"spectrum_offset": table.add(e.radiance)})
-        else:
-            basis = [table.add(p) for p in e.image.primaries]
-            height, width = e.image.drive.shape[:2]
-            emitter_rows.append({"spectrum_offset": basis[0], "texel_offset": add_texels(e.image.drive),
-                                 "map_fields": (basis[1], basis[2], width, height)})
-    for t in emitting:
-        e = emitters[tri_emitter[t]]
-        fields = emitter_rows[tri_emitter[t]]
-        rows.append(_light_row(LIGHT_TRIANGLE, fields["spectrum_offset"], triangle=t, area=areas[t],
-                               two_sided=e.two_sided, map_fields=fields.get("map_fields", (0, 0, 0, 0)),
-                               texel_offset=fields.get("texel_offset", 0)))
-        power.append(np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0))
-    environment_light = -1
-    map_cdf = np.zeros(2, np.float32)
+    emitting = area_light.write_rows(emitters, tri_emitter, areas, out)
     for light in scene.lights:
-        if isinstance(light, PointLight):
-            rows.append(_light_row(LIGHT_POINT, table.add(light.intensity), position=light.position))
-            power.append(4.0 * np.pi * light.intensity.mean())
-        elif isinstance(light, SpotLight):
-            rows.append(_light_row(LIGHT_SPOT, table.add(light.intensity), position=light.position,
-                                   direction=light.direction,
-                                   cos_falloff_start=np.cos(np.radians(light.falloff_start_degrees)),
-                                   cos_cutoff=np.cos(np.radians(light.cutoff_degrees))))
-            power.append(light.effective_solid_angle() * light.intensity.mean())
-        elif isinstance(light, DistantLight):
-            rows.append(_light_row(LIGHT_DISTANT, table.add(light.irradiance), direction=light.direction))
-            power.append(np.pi * scene_radius**2 * light.irradiance.mean())
-        elif isinstance(light, ConstantEnvironment):
-            environment_light = len(rows)
-            rows.append(_light_row(LIGHT_ENVIRONMENT, table.add(light.radiance)))
-            power.append(4.0 * np.pi**2 * scene_radius**2 * light.radiance.mean())
-        elif isinstance(light, EnvironmentMap):
-            environment_light = len(rows)
-            map_texels, map_cdf, mean_luminance = environment_map_tables(light.rgb)
-            basis = [table.add(uplift_illuminant(primary)) for primary in np.eye(3)]
-            height, width = light.rgb.shape[:2]
-            row = _light_row(LIGHT_ENVIRONMENT_MAP, basis[0], map_fields=(basis[1], basis[2], width, height),
-                             texel_offset=add_texels(map_texels[:, :3].reshape(height, width, 3)))
-            rows.append(row[:5] + (light.scale,) + row[6:])
-            power.append(4.0 * np.pi**2 * scene_radius**2 * light.scale * mean_luminance)
-        else:
-            raise SpectraceError(f"unsupported light {type(light).__name__}")
+        light_module(light).write_rows(light, out)
+    rows, power = out.rows, out.power
 
     # Next-event estimation picks a light in proportion to an estimate of the power it emits (pbrt-v4's
     # power light sampler); any positive weights would be unbiased, these put samples where the light is.
@@ -216,47 +161,16 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         materials=materials,
         lights=lights,
         light_count=len(rows),
-        environment_light=environment_light,
+        environment_light=out.environment_light,
         light_cdf=cdf.astype(np.float32),
-        texels=np.concatenate(texel_chunks),
+        texels=np.concatenate(out.texel_chunks),
         triangle_uvs=triangle_uvs.reshape(-1, 2),
-        map_cdf=map_cdf,
+        map_cdf=out.map_cdf,
         spectra=table.data,
         cmf=cmf,
         media=np.array(medium_rows, MEDIUM_DTYPE) if medium_rows else np.zeros(1, MEDIUM_DTYPE),
         medium_count=len(medium_rows),
     )
-
-
-def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """Texels, sampling CDFs and mean luminance of a latitude-longitude map: the sampling density is ∝ luminance ×
-    sin θ of the row's centre, so directions are drawn where light arrives and the poles' small texels are not
-    oversampled."""
-    height, width = rgb.shape[:2]
-    texels = np.zeros((height * width, 4), np.float32)
-    texels[:, :3] = np.maximum(rgb.reshape(-1, 3), 0.0)
-    luminance = (texels[:, :3] @ LINEAR_SRGB_TO_XYZ[1]).reshape(height, width).astype(np.float64)
-    sin_theta = np.sin(np.pi * (np.arange(height) + 0.5) / height)[:, None]
-    weights = luminance * sin_theta
-    if weights.sum() <= 0:
-        weights = np.broadcast_to(sin_theta, (height, width)).copy()
-    row_mass = weights.sum(axis=1)
-    row_cdf = np.zeros((height, width + 1))
-    row_cdf[:, 1:] = np.cumsum(weights, axis=1)
-    row_cdf = np.divide(row_cdf, row_cdf[:, -1:], out=np.tile(np.linspace(0, 1, width + 1), (height, 1)),
-                        where=row_cdf[:, -1:] > 0)
-    marginal = np.concatenate([[0.0], np.cumsum(row_mass)]) / row_mass.sum()
-    marginal[-1] = 1.0
-    row_cdf[:, -1] = 1.0
-    return texels, np.concatenate([marginal, row_cdf.ravel()]).astype(np.float32), float(luminance.mean())
-
-
-def _light_row(light_type: int, spectrum_offset: int, *, triangle: int = -1, area: float = 0.0,
-               two_sided: bool = False, position=(0.0, 0.0, 0.0), direction=(0.0, 0.0, 1.0),
-               cos_falloff_start: float = 1.0, cos_cutoff: float = 1.0, map_fields=(0, 0, 0, 0),
-               texel_offset: int = 0) -> tuple:
-    return ((*position, 1.0), (*direction, 0.0), light_type, triangle, spectrum_offset, 1.0, 0.0, area,
-            int(two_sided), cos_falloff_start, cos_cutoff, *map_fields, texel_offset, 0, 0)
 
 
 def _empty_bvh() -> BVH:

@@ -13,32 +13,11 @@ from spectrace.geometry import primitives
 from spectrace.geometry.mesh import load_mesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.input_files import regular_file
+from spectrace.lights import LIGHTS
+from spectrace.materials import MATERIALS
 from spectrace.scene import limits, schema
-from spectrace.scene.model import (
-    AreaEmitter,
-    Camera,
-    ConductorMaterial,
-    ConstantEnvironment,
-    DielectricMaterial,
-    DiffuseMaterial,
-    DistantLight,
-    EmitterImage,
-    EnvironmentMap,
-    Light,
-    Medium,
-    Material,
-    MirrorMaterial,
-    PlasticMaterial,
-    PointLight,
-    RetroreflectorMaterial,
-    Scene,
-    Shape,
-    SpotLight,
-)
+from spectrace.scene.model import AreaEmitter, Camera, EmitterImage, Light, Material, Medium, Scene, Shape
 from spectrace.spectral.blackbody import blackbody
-from spectrace.spectral.glasses import index_of_refraction
-from spectrace.spectral.grid import integrate_on_grid
-from spectrace.spectral.metals import metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
 from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
@@ -255,29 +234,7 @@ class _Resolver:
         return {name: self.material(m, f"materials.{name}") for name, m in self.spec.materials.items()}
 
     def material(self, spec, key: str) -> Material:
-        def reflectance(field: str = "reflectance"):
-            return self.spectrum(getattr(spec, field), f"{key}.{field}", emission=False)
-
-        if spec.type == "mirror":
-            return MirrorMaterial(reflectance())
-        if spec.type == "conductor":
-            if spec.metal is not None:
-                eta, k = metal_ior(spec.metal, where=self.where(f"{key}.metal"))
-            else:
-                eta = self.optical_constant(spec.eta, f"{key}.eta", positive=True)
-                k = self.optical_constant(spec.k, f"{key}.k", positive=False)
-            tint = reflectance("specular_tint") if spec.specular_tint is not None else None
-            return ConductorMaterial(eta, k, roughness=spec.roughness, specular_tint=tint)
-        if spec.type == "plastic":
-            return PlasticMaterial(reflectance(), ior=spec.ior, roughness=spec.roughness)
-        if spec.type == "retroreflector":
-            return RetroreflectorMaterial(reflectance(), roughness=spec.roughness)
-        if spec.type == "dielectric":
-            ior = spec.ior if isinstance(spec.ior, (float, str)) else spec.ior.model_dump()
-            tint = reflectance("specular_tint") if spec.specular_tint is not None else None
-            return DielectricMaterial(index_of_refraction(ior, where=self.where(f"{key}.ior")),
-                                      roughness=spec.roughness, specular_tint=tint)
-        return DiffuseMaterial(reflectance())
+        return MATERIALS[spec.type].from_spec(spec, self, key)
 
     def optical_constant(self, spec: schema.SpectrumSpec, key: str, positive: bool) -> Spectrum:
         """η or k of a complex index of refraction: a spectrum without the reflectance bound (rgb has no meaning
@@ -404,49 +361,8 @@ class _Resolver:
         primaries = tuple(p * spec.scale for p in display.primaries)
         return EmitterImage(drive=drive, primaries=primaries)
 
-    def point_source_intensity(self, spec, key: str, solid_angle_sr: float) -> Spectrum:
-        """I(λ) in W/(sr nm) from `intensity`, or from `power` W spread over `solid_angle_sr` with the
-        spectral shape `spectrum` (equal energy by default) normalised to ∫Φ(λ)dλ = power."""
-        if spec.intensity is not None:
-            return self.spectrum(spec.intensity, f"{key}.intensity", emission=True)
-        shape = (self.spectrum(spec.spectrum, f"{key}.spectrum", emission=True) if spec.spectrum is not None
-                 else Spectrum.constant(1.0, name="equal energy"))
-        total = float(integrate_on_grid(shape.values))
-        if total <= 0:
-            raise SpectraceError("the spectrum of a light given by power must not be zero", where=self.where(key))
-        factor = spec.power / total / solid_angle_sr
-        with np.errstate(over="ignore"):
-            if problem := limits.spectrum_magnitude_problem(shape.values * factor):
-                raise SpectraceError(problem, where=self.where(f"{key}.power"))
-        return shape * factor
-
     def lights(self) -> list[Light]:
-        lights: list[Light] = []
-        for i, spec in enumerate(self.spec.lights):
-            key = f"lights[{i}]"
-            if spec.type in ("point", "spot") and (problem := limits.coordinates_problem(spec.position)):
-                raise SpectraceError(f"position has {problem}", where=self.where(f"{key}.position"))
-            if spec.type == "point":
-                lights.append(PointLight(spec.position, self.point_source_intensity(spec, key, 4.0 * np.pi)))
-            elif spec.type == "spot":
-                direction = _unit(np.subtract(spec.target, spec.position), self.where(f"{key}.target"))
-                cutoff = spec.cutoff_angle
-                start = spec.falloff_start if spec.falloff_start is not None else 0.75 * cutoff
-                if start > cutoff:
-                    raise SpectraceError(f"falloff_start ({start}) exceeds cutoff_angle ({cutoff})",
-                                         where=self.where(f"{key}.falloff_start"))
-                cone = SpotLight(spec.position, direction, Spectrum.zeros(), cutoff, start)
-                intensity = self.point_source_intensity(spec, key, cone.effective_solid_angle())
-                lights.append(SpotLight(spec.position, direction, intensity, cutoff, start))
-            elif spec.type == "distant":
-                direction = _unit(spec.direction, self.where(f"{key}.direction"))
-                lights.append(DistantLight(direction, self.spectrum(spec.irradiance, f"{key}.irradiance", True)))
-            elif spec.type == "envmap":
-                lights.append(EnvironmentMap(read_environment_map(self.folder / spec.file,
-                                                                  self.where(f"{key}.file")), spec.scale))
-            else:
-                lights.append(ConstantEnvironment(self.spectrum(spec.radiance, f"{key}.radiance", emission=True)))
-        return lights
+        return [LIGHTS[spec.type].from_spec(spec, self, f"lights[{i}]") for i, spec in enumerate(self.spec.lights)]
 
 
 def read_picture(path: Path, where: str) -> np.ndarray:
@@ -511,14 +427,6 @@ def read_environment_map(path: Path, where: str, what: str = "environment map") 
     if not np.all(np.isfinite(rgb)):
         raise SpectraceError(f"{what} '{path}' has NaN or infinite pixels", where=where)
     return rgb
-
-
-def _unit(vector, where: str) -> tuple[float, float, float]:
-    v = np.asarray(vector, float)
-    norm = np.linalg.norm(v)
-    if not norm > 0:
-        raise SpectraceError("direction must not be zero", where=where)
-    return tuple(float(c) for c in v / norm)
 
 
 def load_scene(path: str | Path) -> Scene:

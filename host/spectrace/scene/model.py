@@ -4,6 +4,8 @@ These are the objects the Python API builds directly and the TOML loader produce
 these, never the file format.
 """
 
+import functools
+import operator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -11,7 +13,20 @@ from typing import Literal
 import numpy as np
 
 from spectrace.geometry.mesh import TriangleMesh
-from spectrace.spectral.glasses import IndexOfRefraction
+from spectrace.lights import LIGHTS
+from spectrace.lights.area import AreaEmitter, EmitterImage
+from spectrace.lights.constant import ConstantEnvironment
+from spectrace.lights.distant import DistantLight
+from spectrace.lights.envmap import EnvironmentMap
+from spectrace.lights.point import PointLight
+from spectrace.lights.spot import SpotLight
+from spectrace.materials import MATERIALS
+from spectrace.materials.conductor import ConductorMaterial
+from spectrace.materials.dielectric import DielectricMaterial
+from spectrace.materials.diffuse import DiffuseMaterial
+from spectrace.materials.mirror import MirrorMaterial
+from spectrace.materials.plastic import PlasticMaterial
+from spectrace.materials.retroreflector import RetroreflectorMaterial
 from spectrace.spectral.spectrum import Spectrum
 
 
@@ -49,135 +64,10 @@ class Camera:
         return origin, forward, right * tan_x, up * tan_y
 
 
-# Materials: one dataclass per BSDF (docs/materials.md gives each model, kernels/bsdf_<name>.cl implements it).
-# `roughness` is the GGX α (Mitsuba 3's `alpha`); 0 (below 1e-3) means a smooth surface with a delta lobe.
-
-
-@dataclass(frozen=True)
-class DiffuseMaterial:
-    """Lambertian, f = R(λ)/π, reflecting on both faces."""
-
-    reflectance: Spectrum
-
-
-@dataclass(frozen=True)
-class MirrorMaterial:
-    """Perfect specular reflection of reflectance R(λ)."""
-
-    reflectance: Spectrum
-
-
-@dataclass(frozen=True)
-class ConductorMaterial:
-    """Metal of complex index of refraction η(λ) + i k(λ) relative to the outside, smooth or GGX-rough; the Fresnel
-    reflectance is multiplied by `specular_tint` when given."""
-
-    eta: Spectrum
-    k: Spectrum
-    roughness: float = 0.0
-    specular_tint: Spectrum | None = None
-
-
-@dataclass(frozen=True)
-class PlasticMaterial:
-    """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside."""
-
-    reflectance: Spectrum
-    ior: float = 1.5
-    roughness: float = 0.0
-
-
-@dataclass(frozen=True)
-class RetroreflectorMaterial:
-    """Returns light toward where it came from: a GGX lobe of width `roughness` about the incident direction."""
-
-    reflectance: Spectrum
-    roughness: float = 0.1
-
-
-@dataclass(frozen=True)
-class DielectricMaterial:
-    """Glass, water: Fresnel reflection and Snell refraction at an interface to an interior of index `ior` relative
-    to the exterior (air), which may depend on the wavelength (dispersion); smooth or GGX-rough. The geometric
-    normal (the winding) points to the exterior. `specular_tint` multiplies both lobes when given."""
-
-    ior: IndexOfRefraction
-    roughness: float = 0.0
-    specular_tint: Spectrum | None = None
-
-
-Material = (DiffuseMaterial | MirrorMaterial | ConductorMaterial | PlasticMaterial | RetroreflectorMaterial
-            | DielectricMaterial)
-
-
-@dataclass(frozen=True, eq=False)
-class EmitterImage:
-    """An image shown by an area light (a picture on a screen): each texel emits r·R(λ) + g·G(λ) + b·B(λ) of the
-    three primaries for its linear drive (r, g, b); texture coordinates place it (u right, v down)."""
-
-    drive: np.ndarray  # (height, width, 3) linear drive per texel, row 0 at the top
-    primaries: tuple[Spectrum, Spectrum, Spectrum]  # W/(m² sr nm) at full drive, scale applied
-
-
-@dataclass(frozen=True)
-class AreaEmitter:
-    radiance: Spectrum  # W/(m² sr nm), scale applied; with an image, its mean emission
-    two_sided: bool = False
-    image: EmitterImage | None = None
-
-
-@dataclass(frozen=True)
-class PointLight:
-    """Isotropic point light: intensity I(λ) in W/(sr nm) (a flux Φ(λ) in W/nm gives I = Φ/4π)."""
-
-    position: tuple[float, float, float]
-    intensity: Spectrum
-
-
-@dataclass(frozen=True)
-class SpotLight:
-    """Point light emitting into a cone about `direction`: I(λ) on the axis in W/(sr nm), full up to
-    falloff_start_degrees from the axis, falling smoothly (smoothstep in cos θ) to 0 at cutoff_degrees."""
-
-    position: tuple[float, float, float]
-    direction: tuple[float, float, float]
-    intensity: Spectrum
-    cutoff_degrees: float = 30.0
-    falloff_start_degrees: float = 25.0
-
-    def effective_solid_angle(self) -> float:
-        """∫ falloff dω over the sphere, sr: flux = intensity × this."""
-        cos_start = np.cos(np.radians(self.falloff_start_degrees))
-        cos_cut = np.cos(np.radians(self.cutoff_degrees))
-        return 2.0 * np.pi * ((1.0 - cos_start) + 0.5 * (cos_start - cos_cut))
-
-
-@dataclass(frozen=True)
-class DistantLight:
-    """Parallel light travelling along `direction`: irradiance E(λ) in W/(m² nm) on a surface facing it."""
-
-    direction: tuple[float, float, float]
-    irradiance: Spectrum
-
-
-@dataclass(frozen=True)
-class ConstantEnvironment:
-    """Uniform light from every direction at infinity: radiance L(λ) in W/(m² sr nm)."""
-
-    radiance: Spectrum
-
-
-@dataclass(frozen=True, eq=False)
-class EnvironmentMap:
-    """Light from a latitude-longitude image at infinity: `rgb` (height, width, 3) linear sRGB, times `scale`;
-    each texel's radiance is the D65-based emission uplift of its colour (RGB (1,1,1) = D65 at Y = 1), in
-    W/(m² sr nm). +y is up; the image centre looks along −z (see kernels/environment.cl)."""
-
-    rgb: np.ndarray
-    scale: float = 1.0
-
-
-Light = PointLight | SpotLight | DistantLight | ConstantEnvironment | EnvironmentMap
+# Materials and lights live in their own modules (spectrace.materials, spectrace.lights), each with its parameter
+# table; their dataclasses are the scene model's, named here too.
+Material = functools.reduce(operator.or_, (m.MODEL for m in MATERIALS.values()))
+Light = functools.reduce(operator.or_, (m.MODEL for m in LIGHTS.values()))
 
 
 @dataclass(frozen=True)

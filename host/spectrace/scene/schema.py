@@ -4,10 +4,15 @@ Only the shape of the input is checked here; references between sections (a shap
 and files on disk are resolved by scene.loader, which reports errors with the same key paths.
 """
 
+import functools
+import operator
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
+from spectrace.lights import LIGHTS, area
+from spectrace.materials import MATERIALS
+from spectrace.materials.parameters import Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
@@ -143,52 +148,6 @@ class NamedSpectrumSpec(Strict):
         return self
 
 
-# Materials: one spec per BSDF, told apart by `type` (docs/materials.md describes each model). Adding a BSDF adds
-# a class here and a member to MaterialSpec.
-
-Roughness = Annotated[FiniteFloat, Field(ge=0.0, le=1.0, description="GGX alpha; below 1e-3 the surface is smooth")]
-
-
-class DiffuseMaterialSpec(Strict):
-    type: Literal["diffuse"]
-    reflectance: SpectrumSpec
-
-
-class MirrorMaterialSpec(Strict):
-    type: Literal["mirror"]
-    reflectance: SpectrumSpec = SpectrumSpec(value=1.0)
-
-
-class ConductorMaterialSpec(Strict):
-    type: Literal["conductor"]
-    metal: Literal[METALS] | None = Field(default=None, description="measured eta and k of a metal")
-    eta: SpectrumSpec | None = Field(default=None, description="real part of the complex index of refraction")
-    k: SpectrumSpec | None = Field(default=None, description="imaginary part (extinction coefficient)")
-    roughness: Roughness = 0.0
-    specular_tint: SpectrumSpec | None = None
-
-    @model_validator(mode="after")
-    def _metal_or_constants(self) -> "ConductorMaterialSpec":
-        if self.metal is not None and (self.eta is not None or self.k is not None):
-            raise ValueError("give either metal or eta and k, not both")
-        if self.metal is None and (self.eta is None or self.k is None):
-            raise ValueError(f"give metal ({', '.join(METALS)}) or both eta and k")
-        return self
-
-
-class PlasticMaterialSpec(Strict):
-    type: Literal["plastic"]
-    reflectance: SpectrumSpec
-    ior: FiniteFloat = Field(default=1.5, gt=1.0, le=4.0, description="coat index relative to the outside")
-    roughness: Roughness = 0.0
-
-
-class RetroreflectorMaterialSpec(Strict):
-    type: Literal["retroreflector"]
-    reflectance: SpectrumSpec = SpectrumSpec(value=1.0)
-    roughness: Roughness = 0.1
-
-
 class SellmeierSpec(Strict):
     sellmeier: tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat] = Field(
         description="B1, B2, B3, C1, C2, C3 of n² = 1 + Σ B λ²/(λ² − C), λ in µm, C in µm²")
@@ -198,26 +157,60 @@ class CauchySpec(Strict):
     cauchy: tuple[FiniteFloat, FiniteFloat] = Field(description="a, b of n = a + b/λ², λ in µm, b in µm²")
 
 
-class DielectricMaterialSpec(Strict):
-    type: Literal["dielectric"]
-    ior: FiniteFloat | str | SellmeierSpec | CauchySpec = Field(
-        default=1.5, description="interior index relative to the exterior (air): a number, a glass name, "
-                                 "{ sellmeier = [...] } or { cauchy = [...] }")
-    roughness: Roughness = 0.0
-    specular_tint: SpectrumSpec | None = None
+# Materials and lights: one spec per module of spectrace.materials / spectrace.lights, told apart by `type`, its
+# fields made from the module's parameter table (docs/materials.md describes each model).
+_ANNOTATIONS = {
+    "spectrum": SpectrumSpec,
+    "float": FiniteFloat,
+    "vector": Vector3,
+    "string": str,
+    "bool": bool,
+    "metal": Literal[METALS],
+    "ior": FiniteFloat | str | SellmeierSpec | CauchySpec,
+}
 
 
-MaterialSpec = Annotated[
-    DiffuseMaterialSpec | MirrorMaterialSpec | ConductorMaterialSpec | PlasticMaterialSpec
-    | RetroreflectorMaterialSpec | DielectricMaterialSpec,
-    Field(discriminator="type"),
-]
+def _field(parameter: Parameter) -> tuple:
+    annotation = _ANNOTATIONS[parameter.type]
+    if parameter.required:
+        default = ...
+    elif parameter.default is None:
+        annotation, default = annotation | None, None
+    elif parameter.type == "spectrum":
+        default = SpectrumSpec(value=parameter.default)
+    else:
+        default = parameter.default
+    constraints = (parameter.range.constraints()
+                   if parameter.type == "float" and parameter.range is not None and parameter.schema_range else {})
+    description = f"{parameter.unit}: {parameter.doc}" if parameter.unit else parameter.doc
+    return annotation, Field(default=default, description=description, **constraints)
 
 
-class EmitterSpec(Strict):
-    type: Literal["area"] = "area"
-    radiance: SpectrumSpec = Field(description="W/(m² sr nm) times scale")
-    two_sided: bool = False
+def _after(check):
+    """A module's check of a whole table as a model validator: it raises ValueError, as pydantic expects."""
+
+    def validate(self):
+        check(self)
+        return self
+
+    return model_validator(mode="after")(validate)
+
+
+def _spec_model(module, name: str, type_default=...) -> type[Strict]:
+    return create_model(
+        name,
+        __base__=Strict,
+        __doc__=module.__doc__,
+        __validators__={check.__name__: _after(check) for check in getattr(module, "SPEC_CHECKS", ())},
+        type=(Literal[module.NAME], type_default),
+        **{parameter.name: _field(parameter) for parameter in module.PARAMETERS},
+    )
+
+
+MATERIAL_SPECS = {name: _spec_model(module, f"{name.capitalize()}MaterialSpec") for name, module in MATERIALS.items()}
+MaterialSpec = Annotated[functools.reduce(operator.or_, MATERIAL_SPECS.values()), Field(discriminator="type")]
+
+EmitterSpec = _spec_model(area, "EmitterSpec", type_default="area")  # a shape's area light
 
 
 class TransformStep(Strict):
@@ -275,58 +268,10 @@ class ShapeSpec(Strict):
         return self
 
 
-class _PointSourceSpec(Strict):
-    """Give either `intensity` (W/(sr nm)) or `power` (total flux in W over 360–830 nm) with the spectral shape
-    `spectrum` (default: equal energy), which is normalised so that ∫Φ(λ)dλ = power."""
-
-    position: Vector3
-    intensity: SpectrumSpec | None = None
-    power: FiniteFloat | None = None
-    spectrum: SpectrumSpec | None = None
-
-    @model_validator(mode="after")
-    def _intensity_or_power(self):
-        if (self.intensity is None) == (self.power is None):
-            raise ValueError("give exactly one of intensity, power")
-        if self.spectrum is not None and self.power is None:
-            raise ValueError("spectrum sets the shape of power; with intensity, put the spectrum in intensity")
-        if self.power is not None and self.power < 0:
-            raise ValueError(f"power must be >= 0 W, got {self.power}")
-        return self
-
-
-class PointLightSpec(_PointSourceSpec):
-    type: Literal["point"]
-
-
-class SpotLightSpec(_PointSourceSpec):
-    type: Literal["spot"]
-    target: Vector3
-    cutoff_angle: FiniteFloat = Field(default=30.0, gt=0.0, le=90.0, description="degrees from the axis")
-    falloff_start: FiniteFloat | None = Field(default=None, ge=0.0, description="degrees; default 3/4 of cutoff")
-
-
-class DistantLightSpec(Strict):
-    type: Literal["distant"]
-    direction: Vector3 = Field(description="the direction the light travels")
-    irradiance: SpectrumSpec = Field(description="W/(m² nm) on a surface facing the light")
-
-
-class ConstantEnvironmentSpec(Strict):
-    type: Literal["constant"]
-    radiance: SpectrumSpec = Field(description="W/(m² sr nm) from every direction")
-
-
-class EnvironmentMapSpec(Strict):
-    type: Literal["envmap"]
-    file: str = Field(description="latitude-longitude OpenEXR image, linear sRGB")
-    scale: FiniteFloat = Field(default=1.0, ge=0.0)
-
-
-LightSpec = Annotated[
-    PointLightSpec | SpotLightSpec | DistantLightSpec | ConstantEnvironmentSpec | EnvironmentMapSpec,
-    Field(discriminator="type"),
-]
+_LIGHT_SPEC_NAMES = {"constant": "ConstantEnvironmentSpec", "envmap": "EnvironmentMapSpec"}
+LIGHT_SPECS = {name: _spec_model(module, _LIGHT_SPEC_NAMES.get(name, f"{name.capitalize()}LightSpec"))
+               for name, module in LIGHTS.items()}
+LightSpec = Annotated[functools.reduce(operator.or_, LIGHT_SPECS.values()), Field(discriminator="type")]
 
 
 class SceneSpec(Strict):
@@ -343,6 +288,6 @@ class SceneSpec(Strict):
     def _something_emits(self) -> "SceneSpec":
         if not self.shapes and not self.lights:
             raise ValueError("the scene has neither shapes nor lights")
-        if sum(1 for light in self.lights if light.type in ("constant", "envmap")) > 1:
+        if sum(1 for light in self.lights if LIGHTS[light.type].IS_ENVIRONMENT) > 1:
             raise ValueError("at most one environment light (constant or envmap)")
         return self

@@ -1,0 +1,23 @@
+"""Lights' host side: one module per light, listed in LIGHTS (the `[[lights]]` types) plus `area` (a shape's
+emitter).
+
+Each module opens with its parameter table (PARAMETERS, spectrace.materials.parameters) and holds its resolved
+dataclass (MODEL), `from_spec` (a validated scene-file table to the dataclass), SPEC_CHECKS for rules spanning
+several keys, IS_ENVIRONMENT (a scene has at most one environment) and `write_rows`, which adds its Light rows
+(kernels/types.h) with an estimate of the power each emits to a LightRows (base.py).
+"""
+
+from spectrace.errors import SpectraceError
+from spectrace.lights import area, constant, distant, envmap, point, spot
+
+# Scene-file `type` -> module, in the order the schema lists them.
+LIGHTS = {m.NAME: m for m in (point, spot, distant, constant, envmap)}
+_BY_MODEL = {m.MODEL: m for m in LIGHTS.values()}
+
+
+def light_module(light):
+    """The module of a resolved light."""
+    module = _BY_MODEL.get(type(light))
+    if module is None:
+        raise SpectraceError(f"unsupported light {type(light).__name__}")
+    return module

@@ -1,0 +1,33 @@
+"""`constant`: a uniform environment, the same radiance from every direction (kernels/environment.cl)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.lights.base import LightRows, light_row
+from spectrace.materials.parameters import REQUIRED, Parameter
+from spectrace.render.device_types import LIGHT_ENVIRONMENT
+from spectrace.spectral.spectrum import Spectrum
+
+NAME = "constant"
+IS_ENVIRONMENT = True
+PARAMETERS = (Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="from every direction"),)
+
+
+@dataclass(frozen=True)
+class ConstantEnvironment:
+    """Uniform light from every direction at infinity: radiance L(λ) in W/(m² sr nm)."""
+
+    radiance: Spectrum
+
+
+MODEL = ConstantEnvironment
+
+
+def from_spec(spec, resolver, key: str) -> ConstantEnvironment:
+    return ConstantEnvironment(resolver.spectrum(spec.radiance, f"{key}.radiance", emission=True))
+
+
+def write_rows(light: ConstantEnvironment, out: LightRows) -> None:
+    out.add(light_row(LIGHT_ENVIRONMENT, out.table.add(light.radiance)),
+            4.0 * np.pi**2 * out.scene_radius**2 * light.radiance.mean(), environment=True)

@@ -1,0 +1,39 @@
+"""`distant`: parallel light from infinity, e.g. the sun (kernels/lights.cl)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.lights.base import LightRows, light_row, unit_direction
+from spectrace.materials.parameters import REQUIRED, Parameter
+from spectrace.render.device_types import LIGHT_DISTANT
+from spectrace.spectral.spectrum import Spectrum
+
+NAME = "distant"
+IS_ENVIRONMENT = False
+PARAMETERS = (
+    Parameter("direction", "vector", "", REQUIRED, doc="the direction the light travels"),
+    Parameter("irradiance", "spectrum", "W/(m² nm)", REQUIRED, doc="on a surface facing the light"),
+)
+
+
+@dataclass(frozen=True)
+class DistantLight:
+    """Parallel light travelling along `direction`: irradiance E(λ) in W/(m² nm) on a surface facing it."""
+
+    direction: tuple[float, float, float]
+    irradiance: Spectrum
+
+
+MODEL = DistantLight
+
+
+def from_spec(spec, resolver, key: str) -> DistantLight:
+    direction = unit_direction(spec.direction, resolver.where(f"{key}.direction"))
+    return DistantLight(direction, resolver.spectrum(spec.irradiance, f"{key}.irradiance", True))
+
+
+def write_rows(light: DistantLight, out: LightRows) -> None:
+    # The flux through the disc the scene's bounding sphere shows the light.
+    out.add(light_row(LIGHT_DISTANT, out.table.add(light.irradiance), direction=light.direction),
+            np.pi * out.scene_radius**2 * light.irradiance.mean())

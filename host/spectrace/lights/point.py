@@ -1,0 +1,92 @@
+"""`point`: an isotropic point light, given by its intensity or by its power (kernels/lights.cl).
+
+Also the one place a power (total flux, W) becomes an intensity (W/(sr nm)), for spot lights too.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.errors import SpectraceError
+from spectrace.lights.base import LightRows, check_position, light_row
+from spectrace.materials.parameters import REQUIRED, Parameter, Range
+from spectrace.render.device_types import LIGHT_POINT
+from spectrace.spectral.grid import integrate_on_grid
+from spectrace.spectral.spectrum import Spectrum
+
+NAME = "point"
+IS_ENVIRONMENT = False
+FULL_SPHERE_SR = 4.0 * np.pi
+POSITION = Parameter("position", "vector", "scene units", REQUIRED, doc="where the light is")
+INTENSITY = Parameter("intensity", "spectrum", "W/(sr nm)", None, doc="I(λ); give either intensity or power")
+# Its range is reported with the other rules of intensity and power (source_problem), at the light's key.
+POWER = Parameter("power", "float", "W", None, Range(0.0), doc="total flux over 360–830 nm", api_name="power_w",
+                  schema_range=False)
+SPECTRUM = Parameter("spectrum", "spectrum", "", None, default_doc="equal energy",
+                     doc="the spectral shape of power, normalised so that ∫Φ(λ)dλ = power")
+PARAMETERS = (POSITION, INTENSITY, POWER, SPECTRUM)
+
+
+@dataclass(frozen=True)
+class PointLight:
+    """Isotropic point light: intensity I(λ) in W/(sr nm) (a flux Φ(λ) in W/nm gives I = Φ/4π)."""
+
+    position: tuple[float, float, float]
+    intensity: Spectrum
+
+
+MODEL = PointLight
+
+
+def source_problem(intensity, power, spectrum, power_name: str = "power") -> str | None:
+    """Why the given intensity / power / spectrum do not set one intensity, or None."""
+    if (intensity is None) == (power is None):
+        return f"give exactly one of intensity, {power_name}"
+    if spectrum is not None and power is None:
+        return f"spectrum sets the shape of {power_name}; with intensity, put the spectrum in intensity"
+    return POWER.range_problem(power) if power is not None else None
+
+
+def check_spec(spec) -> None:
+    if problem := source_problem(spec.intensity, spec.power, spec.spectrum):
+        raise ValueError(problem)
+
+
+SPEC_CHECKS = (check_spec,)
+
+
+def intensity_from_power(power: float, shape: Spectrum | None, solid_angle_sr: float, where: str | None = None,
+                         power_where: str | None = None) -> Spectrum:
+    """I(λ), W/(sr nm): `power` W spread over `solid_angle_sr` with the spectral shape `shape` (equal energy when
+    None) normalised to ∫Φ(λ)dλ = power."""
+    from spectrace.scene import limits  # the scene package imports the light modules
+
+    if shape is None:
+        shape = Spectrum.constant(1.0, name="equal energy")
+    total = float(integrate_on_grid(shape.values))
+    if total <= 0:
+        raise SpectraceError("the spectrum of a light given by power must not be zero", where=where)
+    factor = power / total / solid_angle_sr
+    with np.errstate(over="ignore"):
+        if problem := limits.spectrum_magnitude_problem(shape.values * factor):
+            raise SpectraceError(problem, where=power_where)
+    return shape * factor
+
+
+def spec_intensity(spec, resolver, key: str, solid_angle_sr: float) -> Spectrum:
+    """The intensity a point or spot light's table gives, directly or through its power."""
+    if spec.intensity is not None:
+        return resolver.spectrum(spec.intensity, f"{key}.intensity", emission=True)
+    shape = resolver.spectrum(spec.spectrum, f"{key}.spectrum", emission=True) if spec.spectrum is not None else None
+    return intensity_from_power(spec.power, shape, solid_angle_sr, where=resolver.where(key),
+                                power_where=resolver.where(f"{key}.power"))
+
+
+def from_spec(spec, resolver, key: str) -> PointLight:
+    check_position(spec.position, resolver.where(f"{key}.position"))
+    return PointLight(spec.position, spec_intensity(spec, resolver, key, FULL_SPHERE_SR))
+
+
+def write_rows(light: PointLight, out: LightRows) -> None:
+    out.add(light_row(LIGHT_POINT, out.table.add(light.intensity), position=light.position),
+            4.0 * np.pi * light.intensity.mean())

@@ -1,0 +1,91 @@
+"""`conductor`: a metal of complex index η + ik, smooth or GGX-rough (docs/materials.md,
+kernels/bsdf_conductor.cl)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
+from spectrace.render.device_types import MATERIAL_CONDUCTOR
+from spectrace.spectral.metals import METALS, metal_ior
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.table import SpectrumTable
+
+NAME = "conductor"
+ROUGHNESS = roughness(0.0, "GGX α; 0 = polished")
+PARAMETERS = (
+    Parameter("metal", "metal", default=None, default_doc="—",
+              type_doc=", ".join(f'`"{m}"`' for m in METALS[:-1]) + f' or `"{METALS[-1]}"`',
+              doc="measured complex index of refraction η + ik (`spectra/metals/`); give `metal` or both `eta` and "
+                  "`k`"),
+    Parameter("eta", "spectrum", "dimensionless", default=None, range=Range(0.0, low_open=True),
+              doc="real part η(λ) of the metal's index of refraction relative to the outside"),
+    Parameter("k", "spectrum", "dimensionless", default=None, range=Range(0.0),
+              doc="imaginary part k(λ) (extinction coefficient)"),
+    ROUGHNESS,
+    reflectance(None, "multiplies the Fresnel reflectance (an artistic control; physical metals leave it out)",
+                name="specular_tint", default_doc="none (1)"),
+)
+
+
+@dataclass(frozen=True)
+class ConductorMaterial:
+    """Metal of complex index of refraction η(λ) + i k(λ) relative to the outside, smooth or GGX-rough; the Fresnel
+    reflectance is multiplied by `specular_tint` when given."""
+
+    eta: Spectrum
+    k: Spectrum
+    roughness: float = ROUGHNESS.default
+    specular_tint: Spectrum | None = None
+
+    has_transmission = False
+    is_dispersive = False
+
+    @property
+    def is_delta(self) -> bool:
+        return self.roughness < SMOOTH_ALPHA
+
+
+MODEL = ConductorMaterial
+
+
+def source_problem(metal, eta, k) -> str | None:
+    """Why the given metal / eta / k do not name one index of refraction, or None."""
+    if metal is not None and (eta is not None or k is not None):
+        return "give either metal or eta and k, not both"
+    if metal is None and (eta is None or k is None):
+        return f"give metal ({', '.join(METALS)}) or both eta and k"
+    return None
+
+
+def check_spec(spec) -> None:
+    if problem := source_problem(spec.metal, spec.eta, spec.k):
+        raise ValueError(problem)
+
+
+SPEC_CHECKS = (check_spec,)
+
+
+def from_spec(spec, resolver, key: str) -> ConductorMaterial:
+    if spec.metal is not None:
+        eta, k = metal_ior(spec.metal, where=resolver.where(f"{key}.metal"))
+    else:
+        eta = resolver.optical_constant(spec.eta, f"{key}.eta", positive=True)
+        k = resolver.optical_constant(spec.k, f"{key}.k", positive=False)
+    tint = (resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
+            if spec.specular_tint is not None else None)
+    return ConductorMaterial(eta, k, roughness=spec.roughness, specular_tint=tint)
+
+
+def make(eta: Spectrum, k: Spectrum, roughness: float = ROUGHNESS.default,
+         specular_tint: Spectrum | None = None) -> ConductorMaterial:
+    return ConductorMaterial(eta, k, roughness=ROUGHNESS.check(roughness), specular_tint=specular_tint)
+
+
+def write_row(row: np.ndarray, material: ConductorMaterial, table: SpectrumTable) -> None:
+    row["type"] = MATERIAL_CONDUCTOR
+    row["eta_offset"] = table.add(material.eta)
+    row["k_offset"] = table.add(material.k)
+    if material.specular_tint is not None:
+        row["reflectance_offset"] = table.add(material.specular_tint)
+    row["alpha"] = material.roughness

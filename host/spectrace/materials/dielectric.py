@@ -1,0 +1,83 @@
+"""`dielectric`: glass, water: Fresnel reflection and Snell refraction into an interior of index n(λ), smooth or
+GGX-rough, dispersive when n depends on λ (docs/materials.md, kernels/bsdf_dielectric.cl, kernels/ior.cl)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
+from spectrace.render.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
+from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.table import SpectrumTable
+
+NAME = "dielectric"
+ROUGHNESS = roughness(0.0, "GGX α; 0 = polished glass")
+# A number, a glass name or Sellmeier/Cauchy coefficients: spectral.glasses.index_of_refraction checks the
+# range over the whole grid.
+IOR = Parameter("ior", "ior", "dimensionless", default=1.5, range=Range(*IOR_RANGE),
+                type_doc=f"see below, dimensionless, in {Range(*IOR_RANGE)} over 360–830 nm",
+                doc="index of refraction of the interior relative to the exterior, which is air (n = 1); a dispersive "
+                    "`ior` splits white light")
+PARAMETERS = (
+    IOR,
+    ROUGHNESS,
+    reflectance(None, "multiplies both reflection and transmission (an artistic control; clear glass leaves it out)",
+                name="specular_tint", default_doc="none (1)"),
+)
+
+
+@dataclass(frozen=True)
+class DielectricMaterial:
+    """Glass, water: Fresnel reflection and Snell refraction at an interface to an interior of index `ior` relative
+    to the exterior (air), which may depend on the wavelength (dispersion); smooth or GGX-rough. The geometric
+    normal (the winding) points to the exterior. `specular_tint` multiplies both lobes when given."""
+
+    ior: IndexOfRefraction
+    roughness: float = ROUGHNESS.default
+    specular_tint: Spectrum | None = None
+
+    has_transmission = True
+
+    @property
+    def is_delta(self) -> bool:
+        return self.roughness < SMOOTH_ALPHA
+
+    @property
+    def is_dispersive(self) -> bool:
+        return self.ior.model != "constant"
+
+
+MODEL = DielectricMaterial
+
+
+def from_spec(spec, resolver, key: str) -> DielectricMaterial:
+    ior = spec.ior if isinstance(spec.ior, (float, str)) else spec.ior.model_dump()
+    tint = (resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
+            if spec.specular_tint is not None else None)
+    return DielectricMaterial(index_of_refraction(ior, where=resolver.where(f"{key}.ior")),
+                              roughness=spec.roughness, specular_tint=tint)
+
+
+def make(ior: float | str | dict = IOR.default, roughness: float = ROUGHNESS.default,
+         specular_tint: Spectrum | None = None) -> DielectricMaterial:
+    return DielectricMaterial(index_of_refraction(ior, where="ior"), roughness=ROUGHNESS.check(roughness),
+                              specular_tint=specular_tint)
+
+
+def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
+    row["type"] = MATERIAL_DIELECTRIC
+    ior = material.ior
+    if ior.model == "sellmeier":
+        row["ior_model"] = IOR_SELLMEIER
+        row["ior_coefficients_b"][:3] = ior.coefficients[:3]
+        row["ior_coefficients_c"][:3] = ior.coefficients[3:]
+    elif ior.model == "cauchy":
+        row["ior_model"] = IOR_CAUCHY
+        row["ior_coefficients_b"][:2] = ior.coefficients
+    else:
+        row["ior_model"] = IOR_CONSTANT
+        row["ior"] = ior.coefficients[0]
+    if material.specular_tint is not None:
+        row["reflectance_offset"] = table.add(material.specular_tint)
+    row["alpha"] = material.roughness

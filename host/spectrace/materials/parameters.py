@@ -1,0 +1,144 @@
+"""The parameter tables that materials and lights open with: one `Parameter` per scene key.
+
+A table is the one place a key's type, unit, default and allowed range are written. The scene schema builds its
+fields from it (scene/schema.py), the Python API takes its defaults and checks its ranges with it (api.py), and
+tests check that docs/scene-format.md and docs/materials.md say the same (tests/materials, tests/lights).
+"""
+
+from dataclasses import dataclass
+from numbers import Real
+
+from spectrace.errors import SpectraceError
+
+# GGX α below which a surface is smooth, a delta lobe (GGX_SMOOTH_ALPHA in kernels/microfacet.cl).
+SMOOTH_ALPHA = 1e-3
+
+
+class _Required:
+    def __repr__(self) -> str:
+        return "REQUIRED"
+
+
+REQUIRED = _Required()  # a key without a default
+
+
+@dataclass(frozen=True)
+class Range:
+    """An interval of numbers; an end that is None is unbounded."""
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+
+    def __str__(self) -> str:
+        if self.high is None:
+            return f"{'>' if self.low_open else '>='} {self.low:g}"
+        if self.low is None:
+            return f"{'<' if self.high_open else '<='} {self.high:g}"
+        return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+
+    @property
+    def bounded(self) -> bool:
+        return self.low is not None and self.high is not None
+
+    def contains(self, value: float) -> bool:
+        if self.low is not None and not (value > self.low if self.low_open else value >= self.low):
+            return False
+        return self.high is None or (value < self.high if self.high_open else value <= self.high)
+
+    def constraints(self) -> dict:
+        """The same interval as pydantic Field constraints (gt/ge, lt/le)."""
+        bounds = {}
+        if self.low is not None:
+            bounds["gt" if self.low_open else "ge"] = self.low
+        if self.high is not None:
+            bounds["lt" if self.high_open else "le"] = self.high
+        return bounds
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One key of a material or light.
+
+    type: "spectrum", "float", "vector" (3 floats), "string", "bool", or a kind the schema knows ("metal", "ior").
+    unit: as the docs write it ("" when a plain number needs none). default: REQUIRED, None (optional, no value),
+    or the value (a spectrum's default is the constant it equals). range: the allowed numbers (for a spectrum:
+    what every wavelength's value must satisfy). doc: the meaning, as the docs' table says it. type_doc /
+    default_doc: how the docs' table writes the type and default where the generated text would not do.
+    api_name: the Python API's name for the key when it differs. schema_range: False where a check of the whole
+    table (the module's SPEC_CHECKS) reports the range instead of the field's own constraint.
+    """
+
+    name: str
+    type: str
+    unit: str = ""
+    default: object = REQUIRED
+    range: Range | None = None
+    doc: str = ""
+    type_doc: str | None = None
+    default_doc: str | None = None
+    api_name: str | None = None
+    schema_range: bool = True
+
+    @property
+    def required(self) -> bool:
+        return self.default is REQUIRED
+
+    def range_problem(self, value) -> str | None:
+        """Why `value` is not a number within the range, or None."""
+        if not isinstance(value, bool) and isinstance(value, Real) and (
+                self.range is None or self.range.contains(value)):
+            return None
+        if self.range is None:
+            return f"{self.name} must be a number, got {value!r}"
+        unit = f" {self.unit}" if self.unit and self.unit != "dimensionless" else ""
+        return f"{self.name} must {'lie in' if self.range.bounded else 'be'} {self.range}{unit}, got {value!r}"
+
+    def check(self, value, where: str | None = None) -> float:
+        """`value` as a float, or a SpectraceError naming the key when it is not a number within the range."""
+        if problem := self.range_problem(value):
+            raise SpectraceError(problem, where=where or self.api_name or self.name)
+        return float(value)
+
+    def doc_type(self) -> str:
+        """The docs' "type, unit" column."""
+        if self.type_doc is not None:
+            return self.type_doc
+        text = self.type
+        if self.range is not None and self.range.bounded:
+            text += f" in {self.range}"
+        if self.unit:
+            text += f", {self.unit}"
+        if self.range is not None and not self.range.bounded:
+            text += f", {self.range}".replace(">=", "≥").replace("<=", "≤")
+        return text
+
+    def doc_default(self) -> str:
+        """The docs' "default" column."""
+        if self.default_doc is not None:
+            return self.default_doc
+        if self.required:
+            return "required"
+        if self.default is None:
+            return "—"
+        if self.type == "spectrum":
+            return f"`{{ value = {self.default:g} }}`"
+        if isinstance(self.default, bool):
+            return str(self.default).lower()
+        if isinstance(self.default, float):
+            return f"{self.default:g}"
+        return f"`{self.default!r}`"
+
+
+ROUGHNESS_RANGE = Range(0.0, 1.0)
+
+
+def roughness(default: float, doc: str) -> Parameter:
+    """The GGX α every rough material shares (Mitsuba 3's `alpha`)."""
+    return Parameter("roughness", "float", default=default, range=ROUGHNESS_RANGE, doc=doc)
+
+
+def reflectance(default: object, doc: str, name: str = "reflectance", default_doc: str | None = None) -> Parameter:
+    """A spectrum bounded by [0, 1] at every wavelength."""
+    return Parameter(name, "spectrum", default=default, range=Range(0.0, 1.0), doc=doc, default_doc=default_doc)

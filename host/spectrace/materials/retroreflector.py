@@ -1,0 +1,48 @@
+"""`retroreflector`: a GGX lobe about the direction light came from (docs/materials.md,
+kernels/bsdf_retroreflector.cl)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.materials.parameters import SMOOTH_ALPHA, reflectance, roughness
+from spectrace.render.device_types import MATERIAL_RETROREFLECTOR
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.table import SpectrumTable
+
+NAME = "retroreflector"
+ROUGHNESS = roughness(0.1, "GGX α: the width of the lobe around the direction light came from")
+PARAMETERS = (reflectance(1.0, "how much comes back"), ROUGHNESS)
+
+
+@dataclass(frozen=True)
+class RetroreflectorMaterial:
+    """Returns light toward where it came from: a GGX lobe of width `roughness` about the incident direction."""
+
+    reflectance: Spectrum
+    roughness: float = ROUGHNESS.default
+
+    has_transmission = False
+    is_dispersive = False
+
+    @property
+    def is_delta(self) -> bool:
+        return self.roughness < SMOOTH_ALPHA
+
+
+MODEL = RetroreflectorMaterial
+
+
+def from_spec(spec, resolver, key: str) -> RetroreflectorMaterial:
+    return RetroreflectorMaterial(resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False),
+                                  roughness=spec.roughness)
+
+
+def make(reflectance: Spectrum, roughness: float = ROUGHNESS.default) -> RetroreflectorMaterial:
+    return RetroreflectorMaterial(reflectance, roughness=ROUGHNESS.check(roughness))
+
+
+def write_row(row: np.ndarray, material: RetroreflectorMaterial, table: SpectrumTable) -> None:
+    row["type"] = MATERIAL_RETROREFLECTOR
+    row["reflectance_offset"] = table.add(material.reflectance)
+    row["alpha"] = material.roughness

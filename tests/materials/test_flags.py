@@ -1,0 +1,49 @@
+"""The flags each material states on the host (is_delta, has_transmission, is_dispersive) agree with the kernels:
+is_delta with the dispatch's material_has_non_delta_lobe (kernels/material.cl), which decides whether next-event
+estimation runs at a hit, and has_transmission / is_dispersive with what the BSDF's samples do."""
+
+import numpy as np
+import pytest
+
+from spectrace.materials import material_row
+from spectrace.scene.model import (
+    ConductorMaterial,
+    DielectricMaterial,
+    DiffuseMaterial,
+    MirrorMaterial,
+    PlasticMaterial,
+    RetroreflectorMaterial,
+)
+from spectrace.spectral.glasses import index_of_refraction
+from spectrace.spectral.metals import metal_ior
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.table import SpectrumTable
+
+GREY = Spectrum.constant(0.8)
+CASES = [
+    ("diffuse", DiffuseMaterial(GREY)),
+    ("mirror", MirrorMaterial(GREY)),
+    *[(f"conductor-a{a}", ConductorMaterial(*metal_ior("Cu"), roughness=a)) for a in (0.0, 0.0009, 0.001, 0.3)],
+    *[(f"plastic-a{a}", PlasticMaterial(GREY, roughness=a)) for a in (0.0, 0.3)],
+    *[(f"retroreflector-a{a}", RetroreflectorMaterial(GREY, roughness=a)) for a in (0.0, 0.2)],
+    *[(f"dielectric-{ior}-a{a}", DielectricMaterial(index_of_refraction(ior), roughness=a))
+      for ior in (1.5, "SF11") for a in (0.0, 0.2)],
+]
+
+
+@pytest.mark.parametrize("name, material", CASES, ids=[c[0] for c in CASES])
+def test_is_delta_is_the_kernels_verdict(kernel_runner, name, material):
+    runner = kernel_runner("testing/bsdf.cl")
+    table = SpectrumTable()
+    row = material_row(material, table)
+    result = np.zeros(1, np.int32)
+    runner.run("bsdf_has_non_delta_lobe", 1, [runner.buffer(np.array([row])), runner.buffer(result, True)],
+               {1: result})
+    assert material.is_delta == (not result[0])
+
+
+def test_only_the_dielectric_transmits_and_disperses():
+    for name, material in CASES:
+        assert material.has_transmission == name.startswith("dielectric"), name
+        # A constant index steers every wavelength alike; SF11's Sellmeier index does not.
+        assert material.is_dispersive == ("SF11" in name), name

@@ -1,0 +1,115 @@
+"""Each material's parameter table agrees with what is written by hand elsewhere: the scene-format reference table,
+the model descriptions in docs/materials.md, the Python API's helpers, and the ranges the loader enforces (the
+documented ranges, read from the docs, tried at their ends)."""
+
+import inspect
+import re
+from pathlib import Path
+
+import pytest
+
+import spectrace
+from spectrace.errors import SpectraceError
+from spectrace.materials import MATERIALS
+from spectrace.materials.parameters import REQUIRED
+from spectrace.scene.loader import load_scene
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE_FORMAT = (ROOT / "docs" / "scene-format.md").read_text(encoding="utf-8")
+MATERIALS_DOC = (ROOT / "docs" / "materials.md").read_text(encoding="utf-8")
+
+
+def _documented_rows() -> list[tuple[str, str, str, str, str]]:
+    """(type, key, type and unit, default, meaning) of each row of scene-format.md's materials table."""
+    section = SCENE_FORMAT.split("## `[materials.NAME]`", 1)[1].split("\n## ", 1)[0]
+    lines = [line for line in section.splitlines() if line.startswith("| ")]
+    rows, current = [], None
+    for line in lines[1:]:  # after the header
+        cells = [cell.strip() for cell in line.strip("|").split(" | ")]
+        if len(cells) != 5 or not cells[1].startswith("`"):
+            break  # the table of dielectric ior forms follows
+        current = cells[0].strip('`"') or current
+        rows.append((current, cells[1].strip("`"), cells[2], cells[3], cells[4]))
+    return rows
+
+
+def test_scene_format_table_is_the_parameter_tables():
+    tables = [(name, p.name, p.doc_type(), p.doc_default(), p.doc)
+              for name, module in MATERIALS.items() for p in module.PARAMETERS]
+    assert _documented_rows() == tables
+
+
+@pytest.mark.parametrize("name", list(MATERIALS))
+def test_materials_doc_describes_every_parameter(name):
+    section = MATERIALS_DOC.split(f"## `{name}`\n", 1)[1].split("\n## ", 1)[0]
+    for parameter in MATERIALS[name].PARAMETERS:
+        assert f"`{parameter.name}`" in section, f"docs/materials.md, {name}: {parameter.name}"
+
+
+@pytest.mark.parametrize("name", list(MATERIALS))
+def test_api_helper_takes_the_parameters_with_their_defaults(name):
+    signature = inspect.signature(getattr(spectrace, name))
+    for parameter in MATERIALS[name].PARAMETERS:
+        given = signature.parameters[parameter.api_name or parameter.name]
+        expected = inspect.Parameter.empty if parameter.default is REQUIRED else parameter.default
+        assert given.default == expected, f"spectrace.{name}({given.name}=...)"
+
+
+def _material_scene(tmp_path, name: str, key: str, value: float) -> Path:
+    required = {"reflectance": "{ value = 0.5 }"} if name in ("diffuse", "plastic") else {}
+    if name == "conductor":
+        required = {"metal": '"Au"'}
+    lines = "".join(f"{k} = {v}\n" for k, v in {**required, key: repr(value)}.items())
+    path = tmp_path / "scene.toml"
+    path.write_text(f"""
+[camera]
+origin = [0, 0, 5]
+target = [0, 0, 0]
+fov = 40
+[film]
+width = 4
+height = 4
+[materials.m]
+type = "{name}"
+{lines}
+[[shapes]]
+type = "sphere"
+material = "m"
+""", encoding="utf-8")
+    return path
+
+
+def _documented_float_ranges():
+    """(material, key, low, high, low_open, high_open) for every row documented as `float in <interval>`."""
+    for name, key, kind, _, _ in _documented_rows():
+        match = re.fullmatch(r"float in ([\[(])([-\d.]+), ([-\d.]+)([\])])(, .*)?", kind)
+        if match:
+            yield name, key, float(match[2]), float(match[3]), match[1] == "(", match[4] == ")"
+
+
+@pytest.mark.parametrize("name, key, low, high, low_open, high_open", list(_documented_float_ranges()))
+def test_loader_enforces_the_documented_range(tmp_path, name, key, low, high, low_open, high_open):
+    step = 1e-6 * max(1.0, abs(high))
+    cases = [(low, not low_open), (low - step, False), (low + step, True),
+             (high, not high_open), (high + step, False), (high - step, True)]
+    for value, accepted in cases:
+        path = _material_scene(tmp_path, name, key, value)
+        if accepted:
+            load_scene(path)
+        else:
+            with pytest.raises(SpectraceError) as error:
+                load_scene(path)
+            assert error.value.where == f"{path}: materials.m.{key}", (value, error.value)
+
+
+def test_plastic_ior_range_is_one_rule_in_the_api_and_the_loader(tmp_path):
+    """The rule written once holds the same way through both doors."""
+    for ior, accepted in ((1.0, False), (1.01, True), (4.0, True), (4.01, False)):
+        path = _material_scene(tmp_path, "plastic", "ior", ior)
+        if accepted:
+            assert load_scene(path).shapes[0].material == spectrace.plastic(0.5, ior=ior)
+        else:
+            with pytest.raises(SpectraceError, match="ior"):
+                spectrace.plastic(0.5, ior=ior)
+            with pytest.raises(SpectraceError):
+                load_scene(path)
