@@ -346,9 +346,10 @@ class _Importer:
         element = properties.get("to_world")
         if element is None:
             return np.eye(4)
+        steps = self.transform_steps(element)
         try:
             with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported just below
-                matrix = transform_matrix(self.transform_steps(element), where="")
+                matrix = transform_matrix(steps, where="")
         except SpectraceError as error:
             raise self.fail(element, error.message) from None
         if not np.isfinite(matrix).all():
