@@ -54,6 +54,8 @@ _NAMED_IOR = {"vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.
               "amber": 1.55, "pet": 1.575, "diamond": 2.419}
 _OBJECT_TAGS = ("scene", "shape", "bsdf", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture",
                 "medium", "phase", "volume", "spectrum")
+# Elements that set a named property of the object holding them.
+_PROPERTY_TAGS = ("float", "integer", "string", "boolean", "rgb", "point", "vector", "transform")
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
 MITSUBA_DEFAULT_FILM = (768, 576)  # hdrfilm's default width and height
 MITSUBA_DEFAULT_FOCAL_LENGTH_MM = 50.0  # the perspective sensor's, when neither fov nor focal_length is given
@@ -193,6 +195,10 @@ class _Importer:
             raise self.fail(element, f"<{_shown(element.tag)}> needs the attribute '{key}'", key)
         return value
 
+    def kind(self, element: Element) -> str:
+        """The plugin type of an object element (shape, bsdf, emitter, ...), which Mitsuba requires."""
+        return self.required(element, "type")
+
     def child(self, properties: dict[str, Element], key: str, owner: Element) -> Element:
         if key not in properties:
             raise self.fail(owner, f"{owner.label()} needs a property named '{key}'")
@@ -280,6 +286,8 @@ class _Importer:
         found: dict[str, Element] = {}
         for index, child in enumerate(element.children):
             name = child.get("name")
+            if name is None and child.tag in _PROPERTY_TAGS:
+                raise self.fail(child, f"<{child.tag}> needs the attribute 'name' (the property it sets)", "name")
             if name is None and child.tag in _OBJECT_TAGS:
                 name = child.tag if child.tag not in found else f"{child.tag}#{index}"
             found[name or f"#{index}"] = child
@@ -538,7 +546,7 @@ class _Importer:
             self.leave()
 
     def _material_table(self, bsdf: Element) -> dict | None:
-        kind = bsdf.get("type")
+        kind = self.kind(bsdf) if bsdf.tag == "bsdf" else None
         properties = self.properties(bsdf)
         if kind == "twosided":
             nested = [self.resolve(child) for child in properties.values() if self.resolve(child).tag == "bsdf"]
@@ -695,7 +703,7 @@ class _Importer:
     # -------------------------------------------------- scene parts
 
     def shape(self, element: Element, index: int) -> dict | None:
-        kind = element.get("type")
+        kind = self.kind(element)
         if kind not in SUPPORTED["shape"]:
             self.unsupported_plugin(element)
             return None
@@ -735,7 +743,7 @@ class _Importer:
         table["material"] = self.material(bsdf, name)
         emitter = next((self.resolve(c) for c in properties.values() if self.resolve(c).tag == "emitter"), None)
         if emitter is not None:
-            if emitter.get("type") != "area":
+            if self.kind(emitter) != "area":
                 self.unsupported_plugin(emitter, " on a shape")
             else:
                 radiance = self.child(self.properties(emitter), "radiance", emitter)
@@ -745,7 +753,7 @@ class _Importer:
         return table if table["material"] is not None else None
 
     def light(self, element: Element) -> dict | None:
-        kind = element.get("type")
+        kind = self.kind(element)
         properties = self.properties(element)
         matrix = self.to_world(properties)
         white = {"rgb": [1.0, 1.0, 1.0]}  # Mitsuba's default emission: d65 with unit luminance
@@ -767,7 +775,7 @@ class _Importer:
         return None
 
     def sensor(self, element: Element, data: dict) -> None:
-        if element.get("type") != "perspective":
+        if self.kind(element) != "perspective":
             self.unsupported_plugin(element)
             return
         properties = self.properties(element)
@@ -779,7 +787,7 @@ class _Importer:
         self.origins["film"] = element
         if film is not None:
             self.origins["film"] = film
-            if film.get("type") not in SUPPORTED["film"]:
+            if self.kind(film) not in SUPPORTED["film"]:
                 self.unsupported_plugin(film)
             film_properties = self.properties(film)
             width = self.integer(film_properties["width"], low=1) if "width" in film_properties else width
@@ -817,7 +825,7 @@ class _Importer:
                 data["sampler"]["spp"] = self.integer(sampler_properties["sample_count"], low=1)
             if "seed" in sampler_properties:
                 data["sampler"]["seed"] = self.integer(sampler_properties["seed"], low=0)
-            if sampler.get("type") != "independent":
+            if self.kind(sampler) != "independent":
                 self.notes.append(f"line {sampler.line}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
                                   "spectrace uses its own sampler (same sample count)")
 
@@ -852,7 +860,7 @@ class _Importer:
         return math.degrees(2.0 * math.atan(tan_half))
 
     def integrator(self, element: Element, data: dict) -> None:
-        kind = element.get("type")
+        kind = self.kind(element)
         if kind not in SUPPORTED["integrator"]:
             self.unsupported_plugin(element)
             return
