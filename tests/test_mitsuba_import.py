@@ -439,7 +439,8 @@ def test_numbers_are_written_as_in_the_xml_and_read_back_exactly(tmp_path):
     body = """<shape type="cube"><transform name="to_world">
             <translate x="0.1" y="3.9000000953674316" z="-1.2345678901234567"/></transform></shape>
         <emitter type="directional"><vector name="direction" value="0, -1, 0"/>
-            <spectrum name="irradiance" type="blackbody"><float name="temperature" value="6504"/></spectrum></emitter>"""
+            <spectrum name="irradiance" type="blackbody"><float name="temperature" value="6504"/></spectrum>
+        </emitter>"""
     xml = _write(tmp_path, body, sensor)
     out = tmp_path / "out.toml"
     import_mitsuba(xml, out)

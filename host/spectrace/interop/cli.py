@@ -22,7 +22,8 @@ def import_mitsuba_command(
     diffuse, twosided, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric; emitters
     area, point, constant, directional; the perspective sensor). Unsupported plugins are all named in one error;
     choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML is checked by loading
-    it; render it with `spectrace render OUT.toml`."""
+    it before it replaces OUT.toml (a failed import leaves an existing file as it was); render it with
+    `spectrace render OUT.toml`."""
     from spectrace.interop.mitsuba_xml import import_mitsuba
 
     if output.endswith(("/", os.sep)) or not Path(output).name:

@@ -12,9 +12,11 @@ Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as
 wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular, blackbody, d65 and srgb.
 `$name` parameters and <default> are substituted as Mitsuba does.
 
-Anything else (another plugin type, textures, media, include) is reported in one error naming each unsupported
-plugin and its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as
-notes. Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
+Bad values are reported as one SpectraceError naming the file and the element path
+(`scene.xml: shape[2]/transform/translate@x`, docs/mitsuba.md "Bad input"). Anything else (another plugin type,
+textures, media, include) is reported in one error naming each unsupported plugin and its line; choices
+spectrace makes differently (the reconstruction filter, the sampler) are returned as notes. Parameters are
+documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
 """
 
 from __future__ import annotations
@@ -183,8 +185,8 @@ class _Importer:
         def substitute(match: re.Match) -> str:
             name = match.group(1)
             if name not in self.parameters:
-                raise self.fail(element, f"undefined parameter ${name} (add <default name=\"{name}\" value=\"...\"/> or "
-                                         f"-D {name}=...)", key)
+                raise self.fail(element, f"undefined parameter ${name} (add <default name=\"{name}\" "
+                                         f"value=\"...\"/> or -D {name}=...)", key)
             return self.parameters[name]
 
         return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", substitute, value)
@@ -1014,8 +1016,8 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
     importer = _Importer(xml_path, toml_path.parent, parameters or {})
     try:
         data = importer.run(parse_xml(xml_path))
-        header = "\n".join([f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by `spectrace import-mitsuba`.",
-                            *(f"note: {note}" for note in importer.notes)])
+        header = "\n".join([f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by "
+                             "`spectrace import-mitsuba`.", *(f"note: {note}" for note in importer.notes)])
         text = dumps(data, header=header)
 
         def write_and_check(temp: Path) -> None:

@@ -35,10 +35,10 @@ def _value(value) -> str:
 
 
 def float_text(value: float) -> str:
-    """The shortest text that reads back as `value` at the precision it carries. A value that is exactly a float32 (as every number written by
-    a single-precision program is: Mitsuba's 3.9 is 3.9000000953674316) is written as the shortest text of that
-    float32 ("3.9"), which reads back as the same float32; any other value as Python's shortest repr, which reads
-    back as exactly the same double."""
+    """The shortest text that reads back as `value` at the precision it carries. A value that is exactly a float32
+    (as every number written by a single-precision program is: Mitsuba's 3.9 is 3.9000000953674316) is written as
+    the shortest text of that float32 ("3.9"), which reads back as the same float32; any other value as Python's
+    shortest repr, which reads back as exactly the same double."""
     if abs(value) <= _FLOAT32_MAX:
         single = np.float32(value)
         if float(single) == value:
