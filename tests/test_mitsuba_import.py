@@ -238,3 +238,238 @@ def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_sca
     xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(xml_path), device), replicas, replica_spp)
     assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
     assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image
+
+
+# ---------------------------------------------------------------- bad input: one line, file and element path
+
+CUBE = '<shape type="cube"/>'
+BAD_INPUT = [
+    # (name, body, element/attribute path, what the line says)
+    ("non-numeric", CUBE * 2 + '<shape type="cube"><transform name="to_world"><translate x="abc"/></transform></shape>',
+     "shape[2]/transform/translate@x", "expected a finite number, got 'abc'"),
+    ("word-angle", '<shape type="cube"><transform name="to_world"><rotate y="1" angle="ninety"/></transform></shape>',
+     "shape/transform/rotate@angle", "expected a finite number, got 'ninety'"),
+    ("integer-overflow", CUBE + '<integrator type="path"><integer name="max_depth" value="1e400"/></integrator>',
+     "integrator/integer@value", "1e400 is beyond the float32 range"),
+    ("integer-not-integral", CUBE + '<integrator type="path"><integer name="max_depth" value="2.5"/></integrator>',
+     "integrator/integer@value", "expected an integer, got '2.5'"),
+    ("integer-beyond-64-bit", CUBE + '<integrator type="path"><integer name="max_depth" '
+     'value="99999999999999999999"/></integrator>', "integrator/integer@value", "is out of range"),
+    ("nan", '<shape type="sphere"><float name="radius" value="nan"/></shape>',
+     "shape/float@value", "expected a finite number, got 'nan'"),
+    ("inf", '<shape type="sphere"><point name="center" x="0" y="inf" z="0"/></shape>',
+     "shape/point@y", "expected a finite number, got 'inf'"),
+    ("float32-overflow", '<shape type="sphere"><float name="radius" value="1e39"/></shape>',
+     "shape/float@value", "1e39 is beyond the float32 range"),
+    ("float64-overflow", '<shape type="cube"><transform name="to_world"><scale value="2 1e400 2"/></transform></shape>',
+     "shape/transform/scale@value", "1e400 is beyond the float32 range"),
+    ("spectrum-three-fields", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
+     'value="400:1:2"/></bsdf></shape>', "shape/bsdf/spectrum@value", "expected 'wavelength:value' pairs"),
+    ("spectrum-word", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value="abc:2"/></bsdf>'
+     '</shape>', "shape/bsdf/spectrum@value", "expected a finite number, got 'abc'"),
+    ("spectrum-empty", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value=""/></bsdf>'
+     '</shape>', "shape/bsdf/spectrum@value", "expected numbers, got an empty value"),
+    ("spectrum-unsorted", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
+     'value="700:0.5, 400:0.2"/></bsdf></shape>', "shape/bsdf/spectrum@value",
+     "wavelengths must increase, got 700 then 400"),
+    ("spectrum-duplicate", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
+     'value="400:0.5, 550:0.3, 550:0.2"/></bsdf></shape>', "shape/bsdf/spectrum@value",
+     "wavelengths must increase, got 550 then 550"),
+    ("spectrum-negative", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
+     'value="400:-0.5, 700:0.2"/></bsdf></shape>', "shape/bsdf/spectrum@value", "negative value -0.5"),
+    ("rgb-negative", '<shape type="cube"><emitter type="area"><rgb name="radiance" value="1, -2, 1"/></emitter>'
+     '</shape>', "shape/emitter/rgb@value", "negative value -2"),
+    ("irregular-lengths", '<emitter type="constant"><spectrum name="radiance" type="irregular">'
+     '<string name="wavelengths" value="400, 500, 600"/><string name="values" value="1, 2"/></spectrum></emitter>',
+     "emitter/spectrum/string[1]@value", "3 wavelengths but 2 values"),
+    ("blackbody-zero", '<emitter type="constant"><spectrum name="radiance" type="blackbody">'
+     '<float name="temperature" value="0"/></spectrum></emitter>', "emitter/spectrum/float@value",
+     "temperature must be > 0 K, got 0"),
+    ("blackbody-negative", '<emitter type="constant"><spectrum name="radiance" type="blackbody">'
+     '<float name="temperature" value="-300"/></spectrum></emitter>', "emitter/spectrum/float@value",
+     "temperature must be > 0 K, got -300"),
+    ("blackbody-missing", '<emitter type="constant"><spectrum name="radiance" type="blackbody"/></emitter>',
+     "emitter/spectrum", "spectrum 'blackbody' needs a property named 'temperature'"),
+    ("missing-value", '<shape type="sphere"><float name="radius"/></shape>', "shape/float@value",
+     "<float> needs the attribute 'value'"),
+    ("missing-type", CUBE + '<shape><float name="radius" value="2"/></shape>', "shape[1]@type",
+     "<shape> needs the attribute 'type'"),
+    ("missing-name", '<shape type="sphere"><float value="2"/></shape>', "shape/float@name",
+     "<float> needs the attribute 'name'"),
+    ("missing-ref-id", '<shape type="cube"><ref name="bsdf"/></shape>', "shape/ref@id",
+     "<ref> needs the attribute 'id'"),
+    ("missing-default-value", '<default name="r"/>' + CUBE, "default@value", "<default> needs the attribute 'value'"),
+    ("missing-filename", '<shape type="obj"/>', "shape", "shape 'obj' needs a property named 'filename'"),
+    ("unknown-parameter", '<shape type="sphere"><float name="radius" value="$r"/></shape>', "shape/float@value",
+     "undefined parameter $r"),
+    ("reference-cycle", '<bsdf type="twosided" id="a"><ref id="a"/></bsdf><shape type="cube"><ref id="a"/></shape>',
+     "bsdf", "bsdf 'twosided' refers to itself"),
+    ("zero-width", CUBE, "sensor/film/integer[0]@value", "must be at least 1, got 0"),
+    ("reflectance-above-one", '<shape type="cube"><bsdf type="diffuse" id="hot"><rgb name="reflectance" '
+     'value="1.5, 0.2, 0.2"/></bsdf></shape>', "shape/bsdf",
+     "a reflectance rgb must lie in [0, 1], got [1.5, 0.2, 0.2] (imported as materials.hot.reflectance.rgb)"),
+    ("spd-line", '<emitter type="point"><spectrum name="intensity" filename="bad.spd"/></emitter>',
+     "emitter/spectrum@filename", "line 3 of 'bad.spd': expected 'wavelength value', got '500 2 7'"),
+]
+ZERO_WIDTH_SENSOR = """<sensor type="perspective"><float name="fov" value="45"/>
+    <film type="hdrfilm"><integer name="width" value="0"/><integer name="height" value="6"/></film></sensor>"""
+
+
+def _run_in_process(monkeypatch, capsys, argv) -> tuple[int, str]:
+    from spectrace import cli
+
+    monkeypatch.setattr(sys, "argv", ["spectrace", *argv])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    return exit_info.value.code, capsys.readouterr().err
+
+
+def _assert_one_error_line(status: int, stderr: str, place: str, says: str) -> None:
+    assert status == 2, stderr
+    assert "Traceback" not in stderr and stderr.count("\n") == 1, stderr
+    assert stderr.startswith(f"error: {place}: "), stderr
+    assert says in stderr, stderr
+
+
+@pytest.mark.parametrize("name, body, path, says", BAD_INPUT, ids=[case[0] for case in BAD_INPUT])
+def test_bad_input_is_one_line_naming_file_and_element(tmp_path, monkeypatch, capsys, name, body, path, says):
+    (tmp_path / "bad.spd").write_text("400 1\n# a comment\n500 2 7\n")
+    xml = _write(tmp_path, body, ZERO_WIDTH_SENSOR if name == "zero-width" else None)
+    out = tmp_path / "out.toml"
+    status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(out)])
+    _assert_one_error_line(status, stderr, f"{xml}: {path}", says)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("text, says", [
+    ('<scene version="3.0.0"><shape type="cube"></scene>', "XML syntax error: mismatched tag (line 1, column "),
+    ("<scene>" + "<bsdf>" * 2000 + "</bsdf>" * 2000 + "</scene>", "elements nested more than 64 deep (line 1)"),
+    ('<shape type="cube"/>', "not a Mitsuba scene: the root element must be <scene>"),
+], ids=["malformed", "nested-2000-deep", "not-a-scene"])
+def test_unreadable_xml_is_one_line(tmp_path, monkeypatch, capsys, text, says):
+    xml = tmp_path / "scene.xml"
+    xml.write_text(text)
+    status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(tmp_path / "o.toml")])
+    _assert_one_error_line(status, stderr, str(xml), says)
+
+
+def test_a_real_process_prints_only_the_line_and_keeps_the_old_output(tmp_path):
+    """A failed import (elements 2000 deep, once a RecursionError; a value the loader refuses in the final check)
+    exits with status 2 and one line, and the TOML already there is left as it was, with no temporary file."""
+    out = tmp_path / "scene.toml"
+    out.write_text("# the previous import\n")
+    run = [sys.executable, "-m", "spectrace", "import-mitsuba"]
+    for body, says in [
+        ("<bsdf>" * 2000 + "</bsdf>" * 2000 + CUBE, "elements nested more than 64 deep"),
+        ('<shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="2"/></bsdf></shape>',
+         "reflectance exceeds 1"),
+    ]:
+        xml = _write(tmp_path, body)
+        result = subprocess.run([*run, str(xml), "-o", str(out)], capture_output=True, text=True,
+                                env=os.environ.copy(), timeout=300)
+        assert result.returncode == 2 and result.stdout == "", result.stderr
+        assert result.stderr.count("\n") == 1 and result.stderr.startswith(f"error: {xml}"), result.stderr
+        assert says in result.stderr and "Traceback" not in result.stderr
+        assert out.read_text() == "# the previous import\n"
+        assert sorted(path.name for path in tmp_path.iterdir()) == ["scene.toml", "scene.xml"]
+
+
+def test_outputs_that_cannot_be_written_are_refused_before_the_import(tmp_path, monkeypatch, capsys):
+    xml = _write(tmp_path, CUBE)
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "file.txt").write_text("")
+    for output, place, says in [
+        (tmp_path / "folder", tmp_path / "folder", "is a folder; give the path of the TOML file to write"),
+        (f"{tmp_path / 'new'}/", f"{tmp_path / 'new'}/", "names a folder"),
+        (tmp_path / "file.txt" / "out.toml", tmp_path / "file.txt" / "out.toml", "is not a folder"),
+        (xml, xml, "is the Mitsuba scene being imported"),
+    ]:
+        status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(output)])
+        _assert_one_error_line(status, stderr, str(place), says)
+    assert xml.read_text().startswith("<scene")
+    # A missing folder is created, as `spectrace render` creates the image's.
+    status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o",
+                                                           str(tmp_path / "a" / "b" / "out.toml")])
+    assert status == 0 and (tmp_path / "a" / "b" / "out.toml").is_file(), stderr
+
+
+def test_a_read_only_folder_is_refused_before_the_import(tmp_path, monkeypatch, capsys):
+    xml = _write(tmp_path, '<shape type="cube"><float name="fov" value="nan"/></shape>')  # never read
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    try:
+        # root may write to a read-only folder; Linux's /proc/sys is read-only even for root.
+        folder = next((f for f in (locked, Path("/proc/sys")) if f.is_dir() and not os.access(f, os.W_OK)), None)
+        if folder is None:
+            pytest.skip("no read-only folder for this user")
+        status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o",
+                                                               str(folder / "out.toml")])
+        _assert_one_error_line(status, stderr, str(folder / "out.toml"), f"the folder '{folder}' is not writable")
+    finally:
+        locked.chmod(0o755)
+
+
+def test_a_failed_check_leaves_the_existing_output(tmp_path):
+    """The import succeeds but the loader refuses the result (a film too large): the old file stays."""
+    from spectrace.interop.mitsuba_xml import import_mitsuba
+
+    sensor = """<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="100000"/></film>
+        </sensor>"""
+    xml = _write(tmp_path, CUBE, sensor)
+    out = tmp_path / "out.toml"
+    out.write_text("# keep\n")
+    with pytest.raises(SpectraceError) as error:
+        import_mitsuba(xml, out)
+    assert error.value.where == f"{xml}: sensor/film" and "(imported as film.width" in error.value.message
+    assert out.read_text() == "# keep\n" and sorted(p.name for p in tmp_path.iterdir()) == ["out.toml", "scene.xml"]
+
+
+# ---------------------------------------------------------------- numbers read back as written
+
+
+def test_numbers_are_written_as_in_the_xml_and_read_back_exactly(tmp_path):
+    """3.9 stays 3.9; Mitsuba's serialiser writes the float32 nearest 3.9 as 3.9000000953674316, which comes out
+    as 3.9 too, and reads back as the same float32. Values that are not float32 read back as the same double."""
+    import tomllib
+
+    from spectrace.interop.mitsuba_xml import import_mitsuba
+
+    sensor = """<sensor type="perspective"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 3.9" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film></sensor>"""
+    body = """<shape type="cube"><transform name="to_world">
+            <translate x="0.1" y="3.9000000953674316" z="-1.2345678901234567"/></transform></shape>
+        <emitter type="directional"><vector name="direction" value="0, -1, 0"/>
+            <spectrum name="irradiance" type="blackbody"><float name="temperature" value="6504"/></spectrum>
+        </emitter>"""
+    xml = _write(tmp_path, body, sensor)
+    out = tmp_path / "out.toml"
+    import_mitsuba(xml, out)
+    text = out.read_text()
+    assert "origin = [0.0, 0.0, 3.9]" in text
+    assert "translate = [0.1, 3.9, -1.2345678901234567]" in text
+    assert "3.9000000953674316" not in text
+    data = tomllib.loads(text)
+    assert data["camera"]["origin"][2] == 3.9  # exactly the double the XML's text means
+    translate = data["shapes"][0]["transform"][0]["translate"]
+    assert translate[0] == 0.1 and translate[2] == -1.2345678901234567
+    assert np.float32(translate[1]) == np.float32(3.9000000953674316)
+    expected, _ = mitsuba_scene_data(xml)
+    assert data["lights"][0]["irradiance"]["scale"] == expected["lights"][0]["irradiance"]["scale"]
+
+
+def test_float_text_reads_back_at_the_precision_of_the_value():
+    from spectrace.interop.toml_writer import float_text
+
+    rng = np.random.default_rng(7)
+    doubles = rng.standard_normal(2000) * 10.0 ** rng.integers(-30, 30, 2000)
+    singles = doubles.astype(np.float32).astype(float)
+    for value in doubles:
+        assert float(float_text(float(value))) == value
+    for value in singles:
+        text = float_text(float(value))
+        assert np.float32(float(text)) == np.float32(value)
+        assert len(text) <= len(repr(float(value)))
+    assert float_text(0.1) == "0.1" and float_text(float(np.float32(0.1))) == "0.1"
+    assert float_text(1e300) == "1e+300" and float_text(-0.0) == "-0.0"

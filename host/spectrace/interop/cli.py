@@ -1,5 +1,6 @@
 """`spectrace import-mitsuba SCENE.xml -o OUT.toml`: a Mitsuba 3 scene as a spectrace scene file."""
 
+import os
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -11,7 +12,9 @@ from spectrace.errors import SpectraceError
 
 def import_mitsuba_command(
     scene: Annotated[Path, typer.Argument(help="Mitsuba 3 scene (XML).")],
-    output: Annotated[Path, typer.Option("--output", "-o", help="spectrace scene file to write (TOML).")],
+    # A string, not a Path: a Path would drop the trailing slash of "-o folder/", which names a folder.
+    output: Annotated[str, typer.Option("--output", "-o", metavar="OUT.toml",
+                                        help="spectrace scene file to write (TOML).")],
     define: Annotated[Optional[list[str]], typer.Option(
         "--define", "-D", help="Set a $parameter, NAME=VALUE (repeatable), as Mitsuba's -D.")] = None,
 ) -> None:
@@ -19,17 +22,20 @@ def import_mitsuba_command(
     diffuse, twosided, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric; emitters
     area, point, constant, directional; the perspective sensor). Unsupported plugins are all named in one error;
     choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML is checked by loading
-    it; render it with `spectrace render OUT.toml`."""
+    it before it replaces OUT.toml (a failed import leaves an existing file as it was); render it with
+    `spectrace render OUT.toml`."""
     from spectrace.interop.mitsuba_xml import import_mitsuba
 
+    if output.endswith(("/", os.sep)) or not Path(output).name:
+        raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
     parameters = {}
     for item in define or []:
         name, separator, value = item.partition("=")
         if not separator or not name:
             raise SpectraceError(f"expected NAME=VALUE, got '{item}'", where="--define")
         parameters[name] = value
-    notes = import_mitsuba(scene, output, parameters)
-    console = Console(stderr=True)
+    notes = import_mitsuba(scene, Path(output), parameters)
+    console = Console(stderr=True, soft_wrap=True)  # each note on one line
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
     console.print(f"wrote {output}", highlight=False)

@@ -12,9 +12,11 @@ Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as
 wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular, blackbody, d65 and srgb.
 `$name` parameters and <default> are substituted as Mitsuba does.
 
-Anything else (another plugin type, textures, media, include) is reported in one error naming each unsupported
-plugin and its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as
-notes. Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
+Bad values are reported as one SpectraceError naming the file and the element path
+(`scene.xml: shape[2]/transform/translate@x`, docs/mitsuba.md "Bad input"). Anything else (another plugin type,
+textures, media, include) is reported in one error naming each unsupported plugin and its line; choices
+spectrace makes differently (the reconstruction filter, the sampler) are returned as notes. Parameters are
+documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
+from spectrace.io.input_files import regular_file
 from spectrace.materials import plastic
 from spectrace.materials.parameters import ROUGHNESS_RANGE
 from spectrace.spectral.glasses import IOR_RANGE
@@ -56,9 +59,14 @@ _NAMED_IOR = {"vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.
               "amber": 1.55, "pet": 1.575, "diamond": 2.419}
 _OBJECT_TAGS = ("scene", "shape", "bsdf", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture",
                 "medium", "phase", "volume", "spectrum")
+# Elements that set a named property of the object holding them.
+_PROPERTY_TAGS = ("float", "integer", "string", "boolean", "rgb", "point", "vector", "transform")
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
 MITSUBA_DEFAULT_FILM = (768, 576)  # hdrfilm's default width and height
 MITSUBA_DEFAULT_FOCAL_LENGTH_MM = 50.0  # the perspective sensor's, when neither fov nor focal_length is given
+# Deepest element nesting accepted. Real scenes need about six levels (scene/shape/bsdf/bsdf/spectrum/...); the
+# limit keeps absurd files from exhausting the stack.
+MAX_NESTING = 64
 
 
 @dataclass
@@ -67,22 +75,47 @@ class Element:
     attributes: dict[str, str]
     line: int
     children: list[Element] = field(default_factory=list)
+    path: str = ""  # e.g. "shape[2]/transform/translate", for messages
 
     def get(self, key: str, default: str | None = None) -> str | None:
         return self.attributes.get(key, default)
 
     def label(self) -> str:
         kind = self.get("type")
-        return f"{self.tag} '{kind}'" if kind else self.tag
+        return f"{self.tag} '{_shown(kind)}'" if kind else _shown(self.tag)
+
+
+def _shown(text: str, limit: int = 60) -> str:
+    """Text from the file as it may appear in a one-line message: shortened, line breaks and other unprintable
+    characters escaped."""
+    short = text if len(text) <= limit else text[:limit] + "..."
+    return "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in short)
+
+
+def read_input_file(path: Path, where: str) -> bytes:
+    """The bytes of the scene or of a file it refers to: every input file is read here, so that what may be read
+    is decided in one place."""
+    # A FIFO or a device would block or never end: only regular files are read.
+    regular_file(path, None if where == str(path) else where,
+                 what="Mitsuba scene file" if where == str(path) else "file")
+    try:
+        return path.read_bytes()
+    except OSError as error:
+        raise SpectraceError(f"cannot read '{_shown(str(path), 200)}' ({error.strerror or error})",
+                             where=where) from None
 
 
 def parse_xml(path: Path) -> Element:
-    """The XML tree with each element's line number (for messages)."""
+    """The XML tree with each element's line number and path (for messages)."""
+    data = read_input_file(path, str(path))
     parser = expat.ParserCreate()
     stack: list[Element] = []
     root: list[Element] = []
 
     def start(tag: str, attributes: dict[str, str]) -> None:
+        if len(stack) >= MAX_NESTING:
+            raise SpectraceError(f"elements nested more than {MAX_NESTING} deep (line {parser.CurrentLineNumber}); "
+                                 "Mitsuba scenes need a handful of levels", where=str(path))
         element = Element(tag, dict(attributes), parser.CurrentLineNumber)
         (stack[-1].children if stack else root).append(element)
         stack.append(element)
@@ -90,25 +123,40 @@ def parse_xml(path: Path) -> Element:
     parser.StartElementHandler = start
     parser.EndElementHandler = lambda tag: stack.pop()
     try:
-        parser.Parse(path.read_bytes(), True)
-    except OSError as error:
-        raise SpectraceError(f"cannot read ({error.strerror or error})", where=str(path)) from None
+        parser.Parse(data, True)
     except expat.ExpatError as error:
-        raise SpectraceError(f"XML syntax error: {expat.ErrorString(error.code)}",
-                             where=f"{path}:{error.lineno}") from None
+        raise SpectraceError(f"XML syntax error: {expat.ErrorString(error.code)} (line {error.lineno}, column "
+                             f"{error.offset + 1})", where=str(path)) from None
     if not root or root[0].tag != "scene":
         raise SpectraceError("not a Mitsuba scene: the root element must be <scene>", where=str(path))
+    _name_paths(root[0])
     return root[0]
+
+
+def _name_paths(root: Element) -> None:
+    """Each element's path below the root: tags joined by '/', with the index among siblings of the same tag
+    (from 0, as spectrace's own key paths count) where there are several."""
+    root.path = "scene"
+    pending = [(root, "")]
+    while pending:
+        parent, prefix = pending.pop()
+        counts: dict[str, int] = {}
+        for child in parent.children:
+            counts[child.tag] = counts.get(child.tag, 0) + 1
+        seen: dict[str, int] = {}
+        for child in parent.children:
+            index = seen.get(child.tag, 0)
+            seen[child.tag] = index + 1
+            child.path = prefix + (f"{child.tag}[{index}]" if counts[child.tag] > 1 else child.tag)
+            pending.append((child, child.path + "/"))
 
 
 # ---------------------------------------------------------------- values
 
-
-def _numbers(text: str, where: str) -> list[float]:
-    try:
-        return [float(part) for part in re.split(r"[,\s]+", text.strip()) if part]
-    except ValueError:
-        raise SpectraceError(f"expected numbers, got '{text}'", where=where) from None
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
+_INTEGER_LIMIT = 2**63  # TOML's integers are 64-bit
 
 
 class _Importer:
@@ -121,11 +169,18 @@ class _Importer:
         self.notes: list[str] = []
         self.materials: dict[str, dict] = {}
         self._material_of_element: dict[int, str] = {}
+        self._resolving: list[int] = []  # elements being converted, to stop reference cycles
+        self.origins: dict[str, Element] = {}  # TOML key path -> the element it was imported from
 
     # -------------------------------------------------- helpers
 
+    def fail(self, element: Element, message: str, attribute: str | None = None) -> SpectraceError:
+        """The error for a problem at an element (or one of its attributes): where names the file and the path."""
+        place = f"{element.path}@{_shown(attribute)}" if attribute else element.path
+        return SpectraceError(f"{message} (line {element.line})", where=f"{self.xml_path}: {place}")
+
     def where(self, element: Element) -> str:
-        return f"{self.xml_path}:{element.line}"
+        return f"{self.xml_path}: {element.path}"
 
     def attribute(self, element: Element, key: str, default: str | None = None) -> str | None:
         """An attribute with $parameters substituted."""
@@ -136,47 +191,111 @@ class _Importer:
         def substitute(match: re.Match) -> str:
             name = match.group(1)
             if name not in self.parameters:
-                raise SpectraceError(f"undefined parameter ${name} (add <default name=\"{name}\" value=\"...\"/>)",
-                                     where=self.where(element))
+                raise self.fail(element, f"undefined parameter ${name} (add <default name=\"{name}\" "
+                                         f"value=\"...\"/> or -D {name}=...)", key)
             return self.parameters[name]
 
         return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", substitute, value)
 
+    def required(self, element: Element, key: str) -> str:
+        value = self.attribute(element, key)
+        if value is None:
+            raise self.fail(element, f"<{_shown(element.tag)}> needs the attribute '{key}'", key)
+        return value
+
+    def kind(self, element: Element) -> str:
+        """The plugin type of an object element (shape, bsdf, emitter, ...), which Mitsuba requires."""
+        return self.required(element, "type")
+
+    def child(self, properties: dict[str, Element], key: str, owner: Element) -> Element:
+        if key not in properties:
+            raise self.fail(owner, f"{owner.label()} needs a property named '{key}'")
+        return properties[key]
+
     def unsupported_plugin(self, element: Element, detail: str = "") -> None:
         self.unsupported.append(f"{element.label()}{detail} (line {element.line})")
 
+    def parse_number(self, text: str, element: Element, key: str) -> float:
+        """A finite number that float32 (Mitsuba's and the renderer's precision) holds."""
+        text = text.strip()
+        if not _NUMBER.fullmatch(text):
+            raise self.fail(element, f"expected a finite number, got '{_shown(text)}'", key)
+        value = float(text)
+        if not abs(value) <= _FLOAT32_MAX:
+            raise self.fail(element, f"{_shown(text)} is beyond the float32 range (±3.4e38)", key)
+        return value
+
+    def numbers(self, element: Element, key: str = "value", default: str | None = None) -> list[float]:
+        text = self.attribute(element, key, default)
+        if text is None:
+            raise self.fail(element, f"<{_shown(element.tag)}> needs the attribute '{key}'", key)
+        parts = [part for part in re.split(r"[,\s]+", text.strip()) if part]
+        if not parts:
+            raise self.fail(element, "expected numbers, got an empty value", key)
+        return [self.parse_number(part, element, key) for part in parts]
+
     def number(self, element: Element, key: str = "value") -> float:
-        values = _numbers(self.attribute(element, key) or "", self.where(element))
+        values = self.numbers(self.resolve(element), key)
         if len(values) != 1:
-            raise SpectraceError(f"<{element.tag} name=\"{element.get('name')}\"> needs one number",
-                                 where=self.where(element))
+            raise self.fail(element, f"<{_shown(element.tag)} name=\"{_shown(element.get('name') or '')}\"> needs one "
+                                     f"number, got {len(values)}", key)
         return values[0]
+
+    def integer(self, element: Element, low: int | None = None) -> int:
+        """An integer property (<integer>, or an integral <float>) within TOML's 64-bit range."""
+        element = self.resolve(element)
+        text = self.required(element, "value").strip()
+        if _INTEGER.fullmatch(text):
+            value = int(text)
+        else:
+            number = self.number(element)
+            if number != int(number):
+                raise self.fail(element, f"expected an integer, got '{_shown(text)}'", "value")
+            value = int(number)
+        if not -_INTEGER_LIMIT < value < _INTEGER_LIMIT:
+            raise self.fail(element, f"integer {_shown(text)} is out of range", "value")
+        if low is not None and value < low:
+            raise self.fail(element, f"<{element.tag} name=\"{_shown(element.get('name') or '')}\"> must be at least "
+                                     f"{low}, got {value}", "value")
+        return value
 
     def vector(self, element: Element, default: float = 0.0) -> list[float]:
         """<point>/<vector> (x, y, z attributes or value="x, y, z")."""
         if element.get("value") is not None:
-            values = _numbers(self.attribute(element, "value"), self.where(element))
+            values = self.numbers(element, "value")
             if len(values) == 1:
                 values *= 3
-        else:
-            values = [float(self.attribute(element, axis, str(default))) for axis in "xyz"]
-        if len(values) != 3:
-            raise SpectraceError(f"<{element.tag}> needs 3 numbers", where=self.where(element))
-        return values
+            if len(values) != 3:
+                raise self.fail(element, f"<{_shown(element.tag)}> needs 3 numbers, got {len(values)}", "value")
+            return values
+        return [self.parse_number(self.attribute(element, axis, repr(default)), element, axis) for axis in "xyz"]
 
     def resolve(self, element: Element) -> Element:
         if element.tag != "ref":
             return element
-        identifier = self.attribute(element, "id")
+        identifier = self.required(element, "id")
         if identifier not in self.ids:
-            raise SpectraceError(f"reference to undefined id '{identifier}'", where=self.where(element))
+            raise self.fail(element, f"reference to undefined id '{_shown(identifier)}'", "id")
         return self.ids[identifier]
+
+    def enter(self, element: Element) -> None:
+        """Mark an element being converted: references may nest, but not loop or run deeper than elements may."""
+        if id(element) in self._resolving:
+            raise self.fail(element, f"{element.label()} refers to itself (through <ref>)")
+        if len(self._resolving) >= MAX_NESTING:
+            raise self.fail(element, f"references nested more than {MAX_NESTING} deep")
+        self._resolving.append(id(element))
+
+    def leave(self) -> None:
+        self._resolving.pop()
 
     def properties(self, element: Element) -> dict[str, Element]:
         """Named children (property elements, references, nested objects); unnamed nested objects by tag."""
         found: dict[str, Element] = {}
         for index, child in enumerate(element.children):
             name = child.get("name")
+            if name is None and child.tag in _PROPERTY_TAGS:
+                raise self.fail(child, f"<{child.tag}> needs the attribute 'name' (the property it sets)", "name")
             if name is None and child.tag in _OBJECT_TAGS:
                 name = child.tag if child.tag not in found else f"{child.tag}#{index}"
             found[name or f"#{index}"] = child
@@ -188,24 +307,32 @@ class _Importer:
         """A <transform> as spectrace transform steps, first step first (Mitsuba applies them in file order)."""
         steps = []
         for step in element.children:
-            where = self.where(step)
             if step.tag == "translate":
                 steps.append({"translate": self.vector(step)})
             elif step.tag == "scale":
                 if step.get("value") is not None:
-                    values = _numbers(self.attribute(step, "value"), where)
+                    values = self.numbers(step, "value")
+                    if len(values) not in (1, 3):
+                        raise self.fail(step, f"scale needs 1 or 3 numbers, got {len(values)}", "value")
+                    factors = values * 3 if len(values) == 1 else values
                     steps.append({"scale": values[0] if len(values) == 1 else values})
                 else:
-                    steps.append({"scale": self.vector(step, default=1.0)})
+                    factors = self.vector(step, default=1.0)
+                    steps.append({"scale": factors})
+                if 0.0 in factors:
+                    raise self.fail(step, "scale factors must be non-zero (a zero scale flattens the shape)")
             elif step.tag == "rotate":
-                angle = float(self.attribute(step, "angle", "0"))
-                steps.append({"rotate": {"axis": self.vector(step), "angle": angle}})
+                angle = self.parse_number(self.attribute(step, "angle", "0"), step, "angle")
+                axis = self.vector(step)
+                if not any(axis):
+                    raise self.fail(step, "the rotation axis (x, y, z) must not be zero")
+                steps.append({"rotate": {"axis": axis, "angle": angle}})
             elif step.tag == "matrix":
-                values = _numbers(self.attribute(step, "value"), where)
+                values = self.numbers(step, "value")
                 if len(values) == 9:
                     values = values[0:3] + [0.0] + values[3:6] + [0.0] + values[6:9] + [0.0, 0.0, 0.0, 0.0, 1.0]
                 if len(values) != 16:
-                    raise SpectraceError("a matrix needs 16 (or 9) numbers", where=where)
+                    raise self.fail(step, f"a matrix needs 16 (or 9) numbers, got {len(values)}", "value")
                 steps.append({"matrix": [values[i:i + 4] for i in range(0, 16, 4)]})
             elif step.tag == "lookat":
                 steps.append({"matrix": self.look_at(step).tolist()})
@@ -215,14 +342,16 @@ class _Importer:
 
     def look_at(self, element: Element) -> np.ndarray:
         """Mitsuba's look_at: columns left = up × dir, up' = dir × left, dir, and the origin."""
-        where = self.where(element)
-        origin = np.array(_numbers(self.attribute(element, "origin"), where))
-        target = np.array(_numbers(self.attribute(element, "target"), where))
-        up = np.array(_numbers(self.attribute(element, "up", "0, 1, 0"), where))
+        vectors = {}
+        for key, default in (("origin", None), ("target", None), ("up", "0, 1, 0")):
+            vectors[key] = np.array(self.numbers(element, key, default))
+            if len(vectors[key]) != 3:
+                raise self.fail(element, f"{key} needs 3 numbers, got {len(vectors[key])}", key)
+        origin, target, up = vectors["origin"], vectors["target"], vectors["up"]
         direction = target - origin
         left = np.cross(up, direction)
         if not (np.linalg.norm(direction) > 0 and np.linalg.norm(left) > 0):
-            raise SpectraceError("lookat needs target != origin and up not parallel to the view", where=where)
+            raise self.fail(element, "lookat needs target != origin and up not parallel to the view")
         direction /= np.linalg.norm(direction)
         left /= np.linalg.norm(left)
         matrix = np.eye(4)
@@ -233,61 +362,117 @@ class _Importer:
         element = properties.get("to_world")
         if element is None:
             return np.eye(4)
-        return transform_matrix(self.transform_steps(element), where=self.where(element))
+        steps = self.transform_steps(element)
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported just below
+                matrix = transform_matrix(steps, where="")
+        except SpectraceError as error:
+            raise self.fail(element, error.message) from None
+        if not np.isfinite(matrix).all():
+            raise self.fail(element, "the transform overflows (its product is not finite)")
+        return matrix
 
     # -------------------------------------------------- spectra
 
     def spectrum(self, element: Element, key: str) -> dict | None:
         """A spectrace spectrum table for a Mitsuba colour/spectrum property, or None (unsupported, recorded)."""
         element = self.resolve(element)
-        where = self.where(element)
+        self.enter(element)
+        try:
+            return self._spectrum(element, key)
+        finally:
+            self.leave()
+
+    def _spectrum(self, element: Element, key: str) -> dict | None:
         if element.tag == "rgb":
-            values = _numbers(self.attribute(element, "value"), where)
+            values = self.numbers(element, "value")
+            if len(values) not in (1, 3):
+                raise self.fail(element, f"an rgb colour needs 3 numbers (or 1), got {len(values)}", "value")
+            self.non_negative(values, element, "value")
             return {"rgb": values * 3 if len(values) == 1 else values}
         if element.tag == "float":
-            return {"value": self.number(element)}
+            value = self.number(element)
+            self.non_negative([value], element, "value")
+            return {"value": value}
         if element.tag == "spectrum":
             return self.spectrum_element(element)
         if element.tag == "texture":
             self.unsupported_plugin(element, f" as {key}")
             return None
-        raise SpectraceError(f"'{key}' must be a colour or spectrum, got <{element.tag}>", where=where)
+        raise self.fail(element, f"'{key}' must be a colour or spectrum, got <{_shown(element.tag)}>")
+
+    def non_negative(self, values: list[float], element: Element, key: str) -> None:
+        """Reflectances, emission and optical constants are never negative."""
+        if any(value < 0.0 for value in values):
+            raise self.fail(element, f"negative value {min(values):g}; spectra must be >= 0", key)
 
     def spectrum_element(self, element: Element) -> dict | None:
-        where = self.where(element)
         kind = element.get("type")
         if kind is None:
             if element.get("filename") is not None:
                 return {"values": self.spd_file(element)}
             if element.get("wavelengths") is not None:
-                return {"values": self.pairs(element, "wavelengths", "values")}
-            text = self.attribute(element, "value") or ""
+                wavelengths = self.numbers(element, "wavelengths")
+                values = self.numbers(element, "values")
+                return {"values": self.pairs(element, wavelengths, values, "values")}
+            text = self.required(element, "value")
             if ":" in text:
-                pairs = [entry.split(":") for entry in text.split(",") if entry.strip()]
-                return {"values": [[float(w), float(v)] for w, v in pairs]}
-            return {"value": self.number(element)}
+                wavelengths, values = [], []
+                for entry in (entry.strip() for entry in text.split(",")):
+                    parts = entry.split(":")
+                    if len(parts) != 2:
+                        raise self.fail(element, f"expected 'wavelength:value' pairs separated by commas, got "
+                                                 f"'{_shown(entry)}'", "value")
+                    wavelengths.append(self.parse_number(parts[0], element, "value"))
+                    values.append(self.parse_number(parts[1], element, "value"))
+                return {"values": self.pairs(element, wavelengths, values, "value")}
+            value = self.number(element)
+            self.non_negative([value], element, "value")
+            return {"value": value}
         properties = self.properties(element)
         if kind == "uniform":
-            return {"value": self.number(properties["value"])} if "value" in properties else {"value": 1.0}
+            if "value" not in properties:
+                return {"value": 1.0}
+            value = self.number(properties["value"])
+            self.non_negative([value], properties["value"], "value")
+            return {"value": value}
         if kind == "irregular":
-            return {"values": self.pairs_from_strings(properties, where)}
+            wavelengths_element = self.child(properties, "wavelengths", element)
+            values_element = self.child(properties, "values", element)
+            wavelengths = self.numbers(wavelengths_element, "value")
+            values = self.numbers(values_element, "value")
+            return {"values": self.pairs(values_element, wavelengths, values, "value")}
         if kind == "regular":
-            low = self.number(properties["wavelength_min"])
-            high = self.number(properties["wavelength_max"])
-            values = _numbers(self.attribute(properties["values"], "value"), where)
-            return {"values": [[float(w), v] for w, v in zip(np.linspace(low, high, len(values)), values)]}
+            low = self.number(self.child(properties, "wavelength_min", element))
+            high = self.number(self.child(properties, "wavelength_max", element))
+            values_element = self.child(properties, "values", element)
+            values = self.numbers(values_element, "value")
+            if not 0.0 < low < high:
+                raise self.fail(element, f"needs 0 < wavelength_min < wavelength_max, got {low:g} and {high:g}")
+            wavelengths = [float(w) for w in np.linspace(low, high, len(values))] if len(values) > 1 else [low]
+            return {"values": self.pairs(values_element, wavelengths, values, "value")}
         if kind == "blackbody":
             from spectrace.spectral.blackbody import WIEN_DISPLACEMENT, planck_radiance
 
-            temperature = self.number(properties["temperature"])
+            temperature_element = self.child(properties, "temperature", element)
+            temperature = self.number(temperature_element)
+            if not temperature > 0.0:
+                raise self.fail(temperature_element, f"a black body's temperature must be > 0 K, got {temperature:g}",
+                                "value")
             # Mitsuba's black body is Planck's law in W/(m² sr nm); spectrace's is normalised to a peak of 1.
-            peak = float(planck_radiance(np.array([WIEN_DISPLACEMENT / temperature * 1e9]), temperature)[0])
+            with np.errstate(all="ignore"):
+                peak = float(planck_radiance(np.array([WIEN_DISPLACEMENT / temperature * 1e9]), temperature)[0])
+            if not (math.isfinite(peak) and peak > 0.0):
+                raise self.fail(temperature_element, f"a black body of {temperature:g} K has no finite radiance",
+                                "value")
             return {"blackbody": temperature, "scale": peak}
         if kind == "d65":
             from spectrace.spectral.colorimetry import spectrum_to_xyz
             from spectrace.spectral.illuminants import cie_illuminant
 
             scale = self.number(properties["scale"]) if "scale" in properties else 1.0
+            if "scale" in properties:
+                self.non_negative([scale], properties["scale"], "value")
             if "color" in properties:
                 self.unsupported_plugin(element, " with a color")
                 return None
@@ -298,38 +483,48 @@ class _Importer:
         self.unsupported_plugin(element)
         return None
 
-    def pairs(self, element: Element, wavelengths_key: str, values_key: str) -> list[list[float]]:
-        where = self.where(element)
-        wavelengths = _numbers(self.attribute(element, wavelengths_key), where)
-        values = _numbers(self.attribute(element, values_key), where)
+    def pairs(self, element: Element, wavelengths: list[float], values: list[float], key: str) -> list[list[float]]:
+        """(wavelength, value) pairs, checked: as many wavelengths as values, wavelengths positive and increasing,
+        values not negative."""
         if len(wavelengths) != len(values):
-            raise SpectraceError("wavelengths and values differ in length", where=where)
-        return [[w, v] for w, v in zip(wavelengths, values)]
-
-    def pairs_from_strings(self, properties: dict[str, Element], where: str) -> list[list[float]]:
-        wavelengths = _numbers(self.attribute(properties["wavelengths"], "value"), where)
-        values = _numbers(self.attribute(properties["values"], "value"), where)
-        if len(wavelengths) != len(values):
-            raise SpectraceError("wavelengths and values differ in length", where=where)
+            raise self.fail(element, f"{len(wavelengths)} wavelengths but {len(values)} values", key)
+        if wavelengths[0] <= 0.0:
+            raise self.fail(element, f"wavelengths must be > 0 nm, got {wavelengths[0]:g}", key)
+        for before, after in zip(wavelengths, wavelengths[1:]):
+            if not after > before:
+                raise self.fail(element, f"wavelengths must increase, got {before:g} then {after:g}", key)
+        self.non_negative(values, element, key)
         return [[w, v] for w, v in zip(wavelengths, values)]
 
     def spd_file(self, element: Element) -> list[list[float]]:
         """An .spd file: lines 'wavelength value' (nm), '#' comments."""
-        path = self.xml_path.parent / self.attribute(element, "filename")
+        name = self.required(element, "filename")
+        path = self.xml_path.parent / name
+        where = f"{self.where(element)}@filename"
+        data = read_input_file(path, where)
         try:
-            lines = path.read_text(encoding="utf-8").splitlines()
-        except OSError as error:
-            raise SpectraceError(f"cannot read spectrum file '{path}' ({error.strerror or error})",
-                                 where=self.where(element)) from None
-        pairs = []
+            lines = data.decode("utf-8").splitlines()
+        except UnicodeDecodeError as error:
+            raise self.fail(element, f"spectrum file '{_shown(name)}' is not UTF-8 text (byte {error.start})",
+                            "filename") from None
+        wavelengths, values = [], []
         for number, line in enumerate(lines, start=1):
             text = line.split("#", 1)[0].strip()
-            if text:
-                values = _numbers(text, f"{path}:{number}")
-                if len(values) != 2:
-                    raise SpectraceError("expected 'wavelength value'", where=f"{path}:{number}")
-                pairs.append(values)
-        return pairs
+            if not text:
+                continue
+            parts = text.split()
+            if len(parts) != 2 or not all(_NUMBER.fullmatch(part) for part in parts):
+                raise self.fail(element, f"line {number} of '{_shown(name)}': expected 'wavelength value', got "
+                                         f"'{_shown(text)}'", "filename")
+            pair = [float(part) for part in parts]
+            if not all(abs(value) <= _FLOAT32_MAX for value in pair):
+                raise self.fail(element, f"line {number} of '{_shown(name)}': beyond the float32 range (±3.4e38)",
+                                "filename")
+            wavelengths.append(pair[0])
+            values.append(pair[1])
+        if not wavelengths:
+            raise self.fail(element, f"spectrum file '{_shown(name)}' holds no 'wavelength value' lines", "filename")
+        return self.pairs(element, wavelengths, values, "filename")
 
     # -------------------------------------------------- materials
 
@@ -348,10 +543,18 @@ class _Importer:
             return None
         self.materials[name] = table
         self._material_of_element[id(bsdf)] = name
+        self.origins[f"materials.{name}"] = bsdf
         return name
 
     def material_table(self, bsdf: Element) -> dict | None:
-        kind = bsdf.get("type")
+        self.enter(bsdf)
+        try:
+            return self._material_table(bsdf)
+        finally:
+            self.leave()
+
+    def _material_table(self, bsdf: Element) -> dict | None:
+        kind = self.kind(bsdf) if bsdf.tag == "bsdf" else None
         properties = self.properties(bsdf)
         if kind == "twosided":
             nested = [self.resolve(child) for child in properties.values() if self.resolve(child).tag == "bsdf"]
@@ -397,8 +600,7 @@ class _Importer:
             self.notes.append(f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
                               f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)")
         if not ROUGHNESS_RANGE.contains(alpha):
-            raise SpectraceError(f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha}",
-                                 where=self.where(bsdf))
+            raise self.fail(bsdf, f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha:g}")
         return alpha
 
     def conductor_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
@@ -412,7 +614,7 @@ class _Importer:
             return None
         if "eta" in properties or "k" in properties:
             if "eta" not in properties or "k" not in properties:
-                raise SpectraceError("a conductor needs both eta and k", where=self.where(bsdf))
+                raise self.fail(bsdf, "a conductor needs both eta and k")
             eta, k = self.spectrum(properties["eta"], "eta"), self.spectrum(properties["k"], "k")
             if eta is None or k is None:
                 return None
@@ -445,10 +647,13 @@ class _Importer:
         if element.tag == "string":
             name = self.text(element)
             if name.lower() not in _NAMED_IOR:
-                raise SpectraceError(f"unknown {key} '{name}' (Mitsuba names: {', '.join(_NAMED_IOR)})",
-                                     where=self.where(element))
+                raise self.fail(element, f"unknown {key} '{_shown(name)}' (Mitsuba names: {', '.join(_NAMED_IOR)})",
+                                "value")
             return _NAMED_IOR[name.lower()]
-        return self.number(element)
+        value = self.number(element)
+        if not value > 0.0:
+            raise self.fail(element, f"{key} must be > 0, got {value:g}", "value")
+        return value
 
     def plastic_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
         reflectance = (self.spectrum(properties["diffuse_reflectance"], "diffuse_reflectance")
@@ -465,8 +670,8 @@ class _Importer:
             return None
         ior = self.ior(bsdf, properties, "int_ior", 1.49) / self.ior(bsdf, properties, "ext_ior", 1.000277)
         if not plastic.IOR.range.contains(ior):
-            raise SpectraceError(f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in "
-                                 f"{plastic.IOR.range}", where=self.where(bsdf))
+            raise self.fail(bsdf, f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in "
+                                  f"{plastic.IOR.range}")
         roughness = self.roughness(bsdf, properties) if rough else 0.0
         if roughness is None:
             return None
@@ -507,7 +712,7 @@ class _Importer:
     # -------------------------------------------------- scene parts
 
     def shape(self, element: Element, index: int) -> dict | None:
-        kind = element.get("type")
+        kind = self.kind(element)
         if kind not in SUPPORTED["shape"]:
             self.unsupported_plugin(element)
             return None
@@ -516,19 +721,27 @@ class _Importer:
         table: dict = {"name": name}
         steps: list[dict] = []
         if kind in ("obj", "ply"):
-            mesh_path = self.xml_path.parent / self.attribute(properties["filename"], "value")
-            if not mesh_path.is_file():
-                raise SpectraceError(f"mesh file '{mesh_path}' does not exist", where=self.where(element))
+            filename = self.child(properties, "filename", element)
+            mesh_path = self.xml_path.parent / self.required(filename, "value")
+            try:
+                found = mesh_path.is_file()
+            except (OSError, ValueError):  # e.g. a name too long for the file system
+                found = False
+            if not found:
+                raise self.fail(filename, f"mesh file '{_shown(str(mesh_path), 200)}' does not exist or is not a "
+                                          "file", "value")
             table |= {"type": "mesh", "file": _relative_path(mesh_path, self.toml_folder)}
         else:
             table["type"] = kind
         if kind == "sphere":
             radius = self.number(properties["radius"]) if "radius" in properties else 1.0
+            if not radius > 0.0:
+                raise self.fail(properties["radius"], f"a sphere's radius must be > 0, got {radius:g}", "value")
             centre = self.vector(properties["center"]) if "center" in properties else [0.0, 0.0, 0.0]
             steps += [{"scale": radius}, {"translate": centre}]
         if "to_world" in properties:
             steps += self.transform_steps(properties["to_world"])
-        flip = "flip_normals" in properties and self.attribute(properties["flip_normals"], "value") == "true"
+        flip = "flip_normals" in properties and self.text(properties["flip_normals"]) == "true"
         if flip:
             if kind != "rectangle":
                 self.unsupported_plugin(element, " with flip_normals")
@@ -539,19 +752,17 @@ class _Importer:
         table["material"] = self.material(bsdf, name)
         emitter = next((self.resolve(c) for c in properties.values() if self.resolve(c).tag == "emitter"), None)
         if emitter is not None:
-            if emitter.get("type") != "area":
+            if self.kind(emitter) != "area":
                 self.unsupported_plugin(emitter, " on a shape")
             else:
-                radiance = self.properties(emitter).get("radiance")
-                if radiance is None:
-                    raise SpectraceError("an area emitter needs radiance", where=self.where(emitter))
+                radiance = self.child(self.properties(emitter), "radiance", emitter)
                 spectrum = self.spectrum(radiance, "radiance")
                 if spectrum is not None:
                     table["emitter"] = {"radiance": spectrum}
         return table if table["material"] is not None else None
 
     def light(self, element: Element) -> dict | None:
-        kind = element.get("type")
+        kind = self.kind(element)
         properties = self.properties(element)
         matrix = self.to_world(properties)
         white = {"rgb": [1.0, 1.0, 1.0]}  # Mitsuba's default emission: d65 with unit luminance
@@ -565,39 +776,44 @@ class _Importer:
         if kind == "directional":
             direction = (self.vector(properties["direction"]) if "direction" in properties
                          else (matrix[:3, :3] @ [0.0, 0.0, 1.0]).tolist())
+            if not any(direction):
+                raise self.fail(properties.get("direction", element), "the direction must not be zero")
             irradiance = self.spectrum(properties["irradiance"], "irradiance") if "irradiance" in properties else white
             return None if irradiance is None else {"type": "distant", "direction": direction, "irradiance": irradiance}
         self.unsupported_plugin(element)
         return None
 
     def sensor(self, element: Element, data: dict) -> None:
-        if element.get("type") != "perspective":
+        if self.kind(element) != "perspective":
             self.unsupported_plugin(element)
             return
         properties = self.properties(element)
         for key, child in properties.items():
             if key.startswith("principal_point_offset") and self.number(child) != 0.0:
-                self.unsupported_plugin(element, f" with {key}")
+                self.unsupported_plugin(element, f" with {_shown(key)}")
         film = properties.get("film")
         width, height = MITSUBA_DEFAULT_FILM
+        self.origins["film"] = element
         if film is not None:
-            if film.get("type") not in SUPPORTED["film"]:
+            self.origins["film"] = film
+            if self.kind(film) not in SUPPORTED["film"]:
                 self.unsupported_plugin(film)
             film_properties = self.properties(film)
-            width = int(self.number(film_properties["width"])) if "width" in film_properties else width
-            height = int(self.number(film_properties["height"])) if "height" in film_properties else height
+            width = self.integer(film_properties["width"], low=1) if "width" in film_properties else width
+            height = self.integer(film_properties["height"], low=1) if "height" in film_properties else height
             for key in film_properties:
                 if key.startswith("crop_"):
-                    self.unsupported_plugin(film, f" with {key}")
+                    self.unsupported_plugin(film, f" with {_shown(key)}")
             rfilter = film_properties.get("rfilter")
             if rfilter is not None and rfilter.get("type") != "box":
-                self.notes.append(f"line {rfilter.line}: reconstruction filter '{rfilter.get('type')}' not "
-                                  "imported: spectrace averages the samples inside each pixel (a box filter)")
+                self.notes.append(f"line {rfilter.line}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
+                                  "not imported: spectrace averages the samples inside each pixel (a box filter)")
         data["film"] = {"width": width, "height": height}
         matrix = self.to_world(properties)
         linear = matrix[:3, :3]
-        if np.linalg.det(linear) <= 0:
-            self.unsupported_plugin(element, " with a mirroring to_world")
+        if not np.linalg.det(linear) > 0:
+            self.unsupported_plugin(element, " with a mirroring or singular to_world")
+            return
         origin = matrix[:3, 3]
         forward = linear @ [0.0, 0.0, 1.0]
         up = linear @ [0.0, 1.0, 0.0]
@@ -608,28 +824,35 @@ class _Importer:
             "fov": self.fov_x(properties, width / height, element),
             "fov_axis": "x",
         }
+        self.origins["camera"] = element
         sampler = properties.get("sampler")
         if sampler is not None:
             sampler_properties = self.properties(sampler)
             data["sampler"] = {}
+            self.origins["sampler"] = sampler
             if "sample_count" in sampler_properties:
-                data["sampler"]["spp"] = int(self.number(sampler_properties["sample_count"]))
+                data["sampler"]["spp"] = self.integer(sampler_properties["sample_count"], low=1)
             if "seed" in sampler_properties:
-                data["sampler"]["seed"] = int(self.number(sampler_properties["seed"]))
-            if sampler.get("type") != "independent":
-                self.notes.append(f"line {sampler.line}: sampler '{sampler.get('type')}' not imported: spectrace "
-                                  "uses its own sampler (same sample count)")
+                data["sampler"]["seed"] = self.integer(sampler_properties["seed"], low=0)
+            if self.kind(sampler) != "independent":
+                self.notes.append(f"line {sampler.line}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
+                                  "spectrace uses its own sampler (same sample count)")
 
     def fov_x(self, properties: dict[str, Element], aspect: float, element: Element) -> float:
         """Horizontal field of view in degrees, as Mitsuba derives it from fov + fov_axis or focal_length."""
         if "fov" in properties:
             fov = self.number(properties["fov"])
-            axis = self.attribute(properties["fov_axis"], "value") if "fov_axis" in properties else "x"
+            if not 0.0 < fov < 180.0:
+                raise self.fail(properties["fov"], f"fov must lie in (0, 180) degrees, got {fov:g}", "value")
+            axis = self.text(properties["fov_axis"]) if "fov_axis" in properties else "x"
         else:
             focal = MITSUBA_DEFAULT_FOCAL_LENGTH_MM
             if "focal_length" in properties:
-                text = self.attribute(properties["focal_length"], "value")
-                focal = float(text.removesuffix("mm"))
+                focal_element = self.resolve(properties["focal_length"])
+                text = self.required(focal_element, "value").strip().removesuffix("mm")
+                focal = self.parse_number(text, focal_element, "value")
+                if not focal > 0.0:
+                    raise self.fail(focal_element, f"focal_length must be > 0 mm, got {focal:g}", "value")
             fov, axis = math.degrees(2.0 * math.atan(_FILM_DIAGONAL_MM / (2.0 * focal))), "diagonal"
         tan_half = math.tan(math.radians(fov) / 2.0)
         if axis == "smaller":
@@ -641,20 +864,21 @@ class _Importer:
         elif axis == "diagonal":
             tan_half *= aspect / math.hypot(aspect, 1.0)
         elif axis != "x":
-            raise SpectraceError(f"unknown fov_axis '{axis}'", where=self.where(element))
+            raise self.fail(properties["fov_axis"], f"unknown fov_axis '{_shown(axis)}' (x, y, diagonal, smaller or "
+                                                    "larger)", "value")
         return math.degrees(2.0 * math.atan(tan_half))
 
     def integrator(self, element: Element, data: dict) -> None:
-        kind = element.get("type")
+        kind = self.kind(element)
         if kind not in SUPPORTED["integrator"]:
             self.unsupported_plugin(element)
             return
         properties = self.properties(element)
         settings = {"type": "path", "max_depth": -1}  # Mitsuba's path tracers default to unbounded depth
         if "max_depth" in properties:
-            settings["max_depth"] = int(self.number(properties["max_depth"]))
+            settings["max_depth"] = self.integer(properties["max_depth"])
         if "rr_depth" in properties:
-            settings["rr_depth"] = int(self.number(properties["rr_depth"]))
+            settings["rr_depth"] = self.integer(properties["rr_depth"])
         if kind == "direct":
             settings["max_depth"] = 2
             self.notes.append(f"line {element.line}: integrator 'direct' imported as path tracing with max_depth 2 "
@@ -662,13 +886,14 @@ class _Importer:
         elif kind.startswith("volpath"):
             self.notes.append(f"line {element.line}: integrator '{kind}' imported as 'path' (spectrace has no media)")
         data["integrator"] = settings
+        self.origins["integrator"] = element
 
     # -------------------------------------------------- the scene
 
     def run(self, root: Element) -> dict:
         for child in root.children:
             if child.tag == "default":
-                self.parameters.setdefault(child.get("name"), child.get("value"))
+                self.parameters.setdefault(self.required(child, "name"), self.required(child, "value"))
         self._collect_ids(root)
         data: dict = {"integrator": {"type": "path", "max_depth": -1}}
         shapes, lights = [], []
@@ -681,9 +906,11 @@ class _Importer:
         for index, child in enumerate(root.children):
             if child.tag == "shape":
                 if (table := self.shape(child, index)) is not None:
+                    self.origins[f"shapes[{len(shapes)}]"] = child
                     shapes.append(table)
             elif child.tag == "emitter":
                 if (table := self.light(child)) is not None:
+                    self.origins[f"lights[{len(lights)}]"] = child
                     lights.append(table)
             elif child.tag == "integrator":
                 self.integrator(child, data)
@@ -695,21 +922,36 @@ class _Importer:
             supported = "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
             raise SpectraceError(f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports "
                                  f"{supported})", where=str(self.xml_path))
-        environments = [light for light in lights if light["type"] == "constant"]
+        environments = [self.origins[f"lights[{i}]"] for i, light in enumerate(lights) if light["type"] == "constant"]
         if len(environments) > 1:
-            raise SpectraceError("more than one constant emitter; spectrace takes one environment light",
-                                 where=str(self.xml_path))
+            raise self.fail(environments[1], "a second constant emitter; spectrace takes one environment light")
         data["materials"] = self.materials
         data["shapes"] = shapes
         data["lights"] = lights
         return {key: data[key] for key in ("camera", "film", "integrator", "sampler", "materials", "shapes", "lights")
                 if key in data and data[key] != []}
 
-    def _collect_ids(self, element: Element) -> None:
-        for child in element.children:
-            if child.get("id") is not None and child.tag != "ref":
-                self.ids[child.get("id")] = child
-            self._collect_ids(child)
+    def _collect_ids(self, root: Element) -> None:
+        pending = [root]
+        while pending:
+            element = pending.pop()
+            for child in element.children:
+                if child.get("id") is not None and child.tag != "ref":
+                    self.ids.setdefault(child.get("id"), child)
+                pending.append(child)
+
+    def imported_error(self, error: SpectraceError, toml_path: Path) -> SpectraceError:
+        """A loader's complaint about the imported TOML, told at the XML element the value came from."""
+        where = error.where or ""
+        key = where[len(str(toml_path)) + 2:] if where.startswith(f"{toml_path}: ") else ""
+        matches = [prefix for prefix in self.origins
+                   if key == prefix or key.startswith(prefix + ".") or key.startswith(prefix + "[")]
+        element = self.origins[max(matches, key=len)] if matches else None
+        detail = f" (imported as {key})" if key else ""
+        if element is None:
+            return SpectraceError(f"the imported scene does not load: {error.message}{detail}",
+                                  where=str(self.xml_path))
+        return self.fail(element, f"{error.message}{detail}")
 
 
 def _unique_name(base: str, taken: dict) -> str:
@@ -727,6 +969,29 @@ def _relative_path(path: Path, folder: Path) -> str:
         return path.resolve().as_posix()
 
 
+def _one_line(error: SpectraceError) -> SpectraceError:
+    """The error with anything that would break its single line (a line break from a file name) escaped."""
+    message, where = _shown(error.message, 10_000), _shown(error.where, 10_000) if error.where else None
+    return error if (message, where) == (error.message, error.where) else SpectraceError(message, where=where)
+
+
+def check_output_path(toml_path: Path, xml_path: Path | None = None) -> None:
+    """Refuse, before any work, an output that could not be written or would destroy the input: a folder, a place
+    under a file or in a read-only folder, the XML itself. Missing folders are created when the TOML is written."""
+    where = str(toml_path)
+    if toml_path.is_dir():
+        raise SpectraceError("is a folder; give the path of the TOML file to write", where=where)
+    if xml_path is not None and toml_path.exists() and xml_path.exists() and toml_path.samefile(xml_path):
+        raise SpectraceError("is the Mitsuba scene being imported; writing it would destroy the input", where=where)
+    folder = toml_path.parent if str(toml_path.parent) else Path(".")
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise SpectraceError(f"'{folder}' is not a folder, so the TOML cannot be written there", where=where)
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise SpectraceError(f"the folder '{folder}' is not writable", where=where)
+
+
 # ---------------------------------------------------------------- public API
 
 
@@ -737,24 +1002,45 @@ def mitsuba_scene_data(xml_path: str | Path, toml_folder: str | Path | None = No
     Raises SpectraceError naming every unsupported plugin."""
     xml_path = Path(xml_path)
     importer = _Importer(xml_path, Path(toml_folder) if toml_folder else xml_path.parent, parameters or {})
-    return importer.run(parse_xml(xml_path)), importer.notes
+    try:
+        return importer.run(parse_xml(xml_path)), importer.notes
+    except SpectraceError as error:
+        raise _one_line(error) from None
 
 
 def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None
                    ) -> list[str]:
-    """Write the spectrace TOML scene for a Mitsuba 3 XML scene and check that it loads; returns the notes."""
+    """Write the spectrace TOML scene for a Mitsuba 3 XML scene and check that it loads; returns the notes.
+
+    The output is checked first (a folder, a read-only place) and replaced only by a complete TOML that loads: a
+    failed import leaves any existing file as it was."""
     from spectrace.interop.toml_writer import dumps
     from spectrace.io.atomic import write_atomically
     from spectrace.scene import load_scene
 
     xml_path, toml_path = Path(xml_path), Path(toml_path)
-    data, notes = mitsuba_scene_data(xml_path, toml_path.parent, parameters)
-    header = "\n".join([f"Imported from the Mitsuba 3 scene {xml_path.name} by `spectrace import-mitsuba`.",
-                        *(f"note: {note}" for note in notes)])
-    text = dumps(data, header=header)
-    write_atomically(toml_path, lambda temp: temp.write_text(text, encoding="utf-8"))
-    load_scene(toml_path)
-    return notes
+    check_output_path(toml_path, xml_path)
+    importer = _Importer(xml_path, toml_path.parent, parameters or {})
+    try:
+        data = importer.run(parse_xml(xml_path))
+        header = "\n".join([f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by "
+                             "`spectrace import-mitsuba`.", *(f"note: {note}" for note in importer.notes)])
+        text = dumps(data, header=header)
+
+        def write_and_check(temp: Path) -> None:
+            temp.write_text(text, encoding="utf-8")
+            try:
+                load_scene(temp)  # from the output's folder, where its relative mesh paths lead
+            except SpectraceError as error:
+                raise importer.imported_error(error, temp) from None
+
+        try:
+            write_atomically(toml_path, write_and_check)
+        except OSError as error:
+            raise SpectraceError(f"cannot write the TOML ({error.strerror or error})", where=str(toml_path)) from None
+    except SpectraceError as error:
+        raise _one_line(error) from None
+    return importer.notes
 
 
 def load_mitsuba_scene(xml_path: str | Path, parameters: dict[str, str] | None = None):

@@ -5,7 +5,10 @@ import json
 import math
 import re
 
+import numpy as np
+
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def _key(key: str) -> str:
@@ -20,15 +23,29 @@ def _value(value) -> str:
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ValueError(f"TOML scene values must be finite, got {value}")
-        return repr(value)
+        return float_text(value)
     if isinstance(value, str):
-        # JSON's string escapes (\", \\, \n, \uXXXX) are valid in TOML basic strings.
-        return json.dumps(value, ensure_ascii=False)
+        # JSON's string escapes (\", \\, \n, \uXXXX) are valid in TOML basic strings; TOML also wants DEL escaped.
+        return json.dumps(value, ensure_ascii=False).replace("\x7f", "\\u007f")
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_value(item) for item in value) + "]"
     if isinstance(value, dict):
         return "{ " + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in value.items()) + " }" if value else "{}"
     raise TypeError(f"cannot write {type(value).__name__} to TOML")
+
+
+def float_text(value: float) -> str:
+    """The shortest text that reads back as `value` at the precision it carries. A value that is exactly a float32
+    (as every number written by a single-precision program is: Mitsuba's 3.9 is 3.9000000953674316) is written as
+    the shortest text of that float32 ("3.9"), which reads back as the same float32; any other value as Python's
+    shortest repr, which reads back as exactly the same double."""
+    if abs(value) <= _FLOAT32_MAX:
+        single = np.float32(value)
+        if float(single) == value:
+            text = repr(float(str(single)))
+            if np.float32(float(text)) == single:
+                return text
+    return repr(value)
 
 
 def _table_body(table: dict) -> list[str]:
