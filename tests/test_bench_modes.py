@@ -113,7 +113,7 @@ def test_peer_uses_mitsubas_llvm_variant_where_a_libllvm_works():
     """Where a libLLVM that Dr.Jit accepts is installed (found in the usual folders or DRJIT_LIBLLVM_PATH), the
     peer bench picks it up by itself and Mitsuba's fast variant runs and agrees."""
     _llvm_variant_or_skip()
-    out = _bench("--peer", "mitsuba", "--size", "16", "--spp", "16", "--max-depth", "3")
+    out = _bench("--peer", "mitsuba", "--size", "8", "--spp", "16", "--max-depth", "2")
     peer = out["peer"]
     assert "llvm_ad_spectral" in [row["runtime"] for row in peer["mitsuba"]], peer["notes"]
     for pair in peer["agreement"]:
