@@ -56,13 +56,15 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
 
     Vertex order and face winding are kept as stored. Every failure raises SpectraceError naming `where`.
     """
-    import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
-
     path = Path(path)
     if not path.exists():
         raise SpectraceError(f"mesh file '{path}' does not exist", where=where)
     if not path.is_file():
         raise SpectraceError(f"mesh file '{path}' is not a file", where=where)
+    if path.suffix.lower() == ".obj" and (simple := _plain_triangle_obj(path)) is not None:
+        return _validated_mesh(*simple, path, where)
+    import trimesh  # deferred: importing trimesh (and with it SciPy) costs about half a second
+
     try:
         # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
         scene = trimesh.load_scene(path, process=False, maintain_order=True)
@@ -78,6 +80,34 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
         # Mesh files store v upward (OpenGL); spectrace's v runs down the image.
         mesh.uvs = np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float64)
     return mesh
+
+
+def _plain_triangle_obj(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """Vertices and faces of an OBJ file holding only `v x y z` and `f i j k` lines (positive indices, no
+    texture coordinates or normals) and comments, read directly, as trimesh reads them with process=False and
+    maintain_order=True (a test checks the bundled meshes both ways); None for anything else, which trimesh
+    reads. Importing trimesh costs more than a small render."""
+    vertices, faces = [], []
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeError):
+        return None
+    try:
+        for line in text.splitlines():
+            fields = line.split()
+            if not fields or fields[0].startswith("#"):
+                continue
+            if fields[0] == "v" and len(fields) == 4:
+                vertices.append([float(x) for x in fields[1:]])
+            elif fields[0] == "f" and len(fields) == 4 and all(field.isdigit() for field in fields[1:]):
+                faces.append([int(i) - 1 for i in fields[1:]])
+            else:
+                return None
+    except ValueError:
+        return None
+    if not vertices or not faces:
+        return None
+    return np.array(vertices, dtype=np.float64), np.array(faces, dtype=np.int64)
 
 
 def _validated_mesh(vertices: np.ndarray, faces: np.ndarray, path: Path, where: str) -> TriangleMesh:

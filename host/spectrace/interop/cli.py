@@ -29,7 +29,7 @@ def import_mitsuba_command(
             raise SpectraceError(f"expected NAME=VALUE, got '{item}'", where="--define")
         parameters[name] = value
     notes = import_mitsuba(scene, output, parameters)
-    console = Console(stderr=True)
+    console = Console(stderr=True, markup=False)
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
     console.print(f"wrote {output}", highlight=False)
