@@ -12,50 +12,49 @@ Scenes can also be built from Python objects (`spectrace.api`: spectrum, diffuse
 docs/python-api.md shows how.
 """
 
+import importlib
+
 from spectrace.cache_folder import ensure_usable_cache_folder
 
-# Before the imports below: matplotlib (through colour) and, later, PoCL and pyopencl set up caches under it.
+# Before anything else: matplotlib (through colour) and, later, PoCL and pyopencl set up caches under it.
 ensure_usable_cache_folder()
 
-from spectrace.api import (  # noqa: E402
-    area_emitter,
-    conductor,
-    constant_environment,
-    dielectric,
-    diffuse,
-    distant_light,
-    medium,
-    mesh_from_trimesh,
-    mirror,
-    plastic,
-    point_light,
-    render,
-    retroreflector,
-    rgb_emission,
-    rgb_reflectance,
-    shape,
-    spectrum,
-    spot_light,
-    transformed,
-)
-from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_white_balance
-from spectrace.errors import SpectraceError
-from spectrace.image import Image
-from spectrace.scene import (
-    AreaEmitter,
-    Camera,
-    ConductorMaterial,
-    DielectricMaterial,
-    DiffuseMaterial,
-    Medium,
-    MirrorMaterial,
-    PlasticMaterial,
-    RetroreflectorMaterial,
-    Scene,
-    Shape,
-    load_scene,
-)
-from spectrace.spectral.spectrum import Spectrum
+# The names below load on first use (PEP 562), so that `spectrace --help` and `import spectrace.cli` do not pay for
+# colour-science, SciPy and the OpenCL host code. Where each name lives:
+_LAZY = {
+    **dict.fromkeys(["area_emitter", "conductor", "constant_environment", "dielectric", "diffuse", "distant_light",
+                     "medium", "mesh_from_trimesh", "mirror", "plastic", "point_light", "render", "retroreflector",
+                     "rgb_emission", "rgb_reflectance", "shape", "spectrum", "spot_light", "transformed"],
+                    "spectrace.api"),
+    **dict.fromkeys(["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.colour_output"),
+    "SpectraceError": "spectrace.errors",
+    "Image": "spectrace.image",
+    **dict.fromkeys(["AreaEmitter", "Camera", "ConductorMaterial", "DielectricMaterial", "DiffuseMaterial", "Medium",
+                     "MirrorMaterial", "PlasticMaterial", "RetroreflectorMaterial", "Scene", "Shape"],
+                    "spectrace.scene.model"),
+    "load_scene": "spectrace.scene",
+    "Spectrum": "spectrace.spectral.spectrum",
+}
+
+# Bound now, before anything imports a submodule of the package: the first import of `spectrace.render` sets the
+# attribute `render` of this module to that package, which would hide the function `render` of the API. With the
+# package loaded first, the name is free for the function.
+importlib.import_module("spectrace.render")
+del render  # noqa: F821 (bound by the import above)
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'spectrace' has no attribute '{name}'")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __version__ = "0.1.0"
 

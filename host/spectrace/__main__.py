@@ -1,3 +1,3 @@
-from spectrace.cli import main
+from spectrace.launch import main
 
 main()

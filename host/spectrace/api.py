@@ -374,10 +374,41 @@ def _in_notebook() -> bool:
     return ipython is not None and "IPKernelApp" in getattr(ipython, "config", {})
 
 
+def _has_ipywidgets() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("ipywidgets") is not None
+
+
+@contextmanager
+def _text_bar(total_spp: int, done_spp: int, stream=None):
+    """A one-line text bar redrawn with a carriage return: what Jupyter shows without ipywidgets, where tqdm's and
+    rich's notebook bars print a warning and an empty widget."""
+    stream = stream or sys.stderr
+    width = 30
+
+    def draw(done: int, total: int) -> None:
+        filled = width * min(done, total) // max(total, 1)
+        stream.write(f"\rrendering |{'#' * filled}{'.' * (width - filled)}| {done}/{total} spp")
+        stream.flush()
+
+    draw(done_spp, total_spp)
+    try:
+        yield draw
+    finally:
+        stream.write("\n")
+        stream.flush()
+
+
 @contextmanager
 def _progress_bar(total_spp: int, done_spp: int):
     """A progress callback drawing a bar: tqdm's (a notebook widget under Jupyter, text elsewhere) when tqdm is
-    installed (`pip install "spectrace[notebook]"`), else rich's, which spectrace already depends on."""
+    installed (`pip install "spectrace[notebook]"`), else rich's, which spectrace already depends on; plain text
+    inside Jupyter without ipywidgets, which both need there."""
+    if _in_notebook() and not _has_ipywidgets():
+        with _text_bar(total_spp, done_spp) as draw:
+            yield draw
+        return
     try:
         from tqdm.auto import tqdm
     except ImportError:

@@ -1,5 +1,6 @@
 """Command line: `spectrace render | devices | bench`. Errors print as one line and exit non-zero."""
 
+import importlib
 import json
 import sys
 from pathlib import Path
@@ -7,23 +8,54 @@ from typing import Annotated, Optional
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from typer.core import TyperGroup
 
 from spectrace.errors import SpectraceError
 
+# Sub-commands whose modules import colour-science, SciPy or the Mitsuba importer: listed in `--help` from these
+# lines and imported only when run. name -> (module, attribute: a Typer app or a command function, help line).
+LAZY_COMMANDS = {
+    "display": ("spectrace.displays.cli", "display_app",
+                "Displays as spectral emitters: the same RGB on LCD, OLED and CRT displays."),
+    "spectra": ("spectrace.spectra_cli", "spectra_app",
+                "Spectra: list the library's and a scene's spectra, and plot any of them."),
+    "import-mitsuba": ("spectrace.interop.cli", "import_mitsuba_command",
+                       "Convert a Mitsuba 3 XML scene to a spectrace TOML scene (docs/mitsuba.md)."),
+}
+
+
+def _load_command(name: str):
+    module, attribute, _ = LAZY_COMMANDS[name]
+    target = getattr(importlib.import_module(module), attribute)
+    if not isinstance(target, typer.Typer):
+        target, function = typer.Typer(add_completion=False, pretty_exceptions_enable=False), target
+        target.command(name)(function)
+    return typer.main.get_command(target)
+
+
+class _LazyGroup(TyperGroup):
+    """The top-level group: the lazy sub-commands stand as placeholders (name and help line) until one is run."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        for name, (_, _, help_line) in LAZY_COMMANDS.items():
+            self.add_command(typer.core.TyperCommand(name, help=help_line), name)
+
+    def resolve_command(self, ctx, args):
+        name, command, rest = super().resolve_command(ctx, args)
+        if name in LAZY_COMMANDS:
+            command = self.commands[name] = _load_command(name)
+        return name, command, rest
+
+
 app = typer.Typer(
+    cls=_LazyGroup,
     help="spectrace: a physically based spectral path tracer (OpenCL on CPU or GPU).",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-from spectrace.displays.cli import display_app
-app.add_typer(display_app, name="display")
-from spectrace.spectra_cli import spectra_app
-app.add_typer(spectra_app, name="spectra")
-from spectrace.interop.cli import import_mitsuba_command
-app.command("import-mitsuba")(import_mitsuba_command)
-console = Console(stderr=True, soft_wrap=True)  # messages with long paths stay on one line
+console = Console(stderr=True, soft_wrap=True, markup=False)  # messages with long paths stay on one line
 
 DeviceOption = Annotated[
     Optional[str],
@@ -149,6 +181,8 @@ def _resume(renderer, restored, path: Path) -> None:
 
 def _render_passes(renderer, spp: int, stop, state_file: Optional[Path], interval: float, quiet: bool) -> None:
     """Render to `spp` with a progress bar until done or asked to stop; checkpoint on the way and at the end."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
     from spectrace.render.checkpoint import PeriodicCheckpoints
 
     def warn(message: str) -> None:
@@ -198,7 +232,7 @@ def devices(as_json: Annotated[bool, typer.Option("--json", help="One JSON objec
     if as_json:
         print(json.dumps({"devices": [asdict(r) for r in reports]}, indent=2))
         return
-    Console().print(device_table(reports))
+    Console(markup=False).print(device_table(reports))
     if not any(r.ok for r in reports):
         from spectrace.device import NoWorkingDeviceError
 
@@ -249,7 +283,7 @@ def bench(
         if as_json:
             print(json.dumps({"kernel_shapes": results}, indent=2))
         else:
-            Console(width=150).print(kernel_shape_table(results))
+            Console(width=150, markup=False).print(kernel_shape_table(results))
         return
     request = BenchRequest(scene, size, spp, max_depth, device, all_devices, peer, quality, rays, scaling, cold,
                            triangles, ray_count, seconds, peer_sampler)
@@ -259,14 +293,14 @@ def bench(
             print(json.dumps(output, indent=2))
         else:
             for table in tables:
-                Console(width=160).print(table)
+                Console(width=160, markup=False).print(table)
         return
     results = run_render_bench(scene, sizes=size or [256, 512], spp=spp, max_depth=max_depth, device=device,
                                all_devices=all_devices, log=lambda text: console.print(text, highlight=False))
     if as_json:
         print(json.dumps({"render": results}, indent=2))
     else:
-        Console(width=150).print(render_bench_table(results))
+        Console(width=150, markup=False).print(render_bench_table(results))
 
 
 @app.command()
@@ -295,7 +329,7 @@ def validate(
             result = {True: "pass", False: "FAIL", None: "(figure)"}[c.passed]
             analytic = "" if c.reported_only else f"{c.analytic:.6g}"
             table.add_row(c.case, c.law, analytic, f"{c.measured:.6g} ± {c.standard_error:.2g}", c.unit, result)
-        Console(width=160).print(table)
+        Console(width=160, markup=False).print(table)
     if any(c.passed is False for c in checks):
         raise typer.Exit(1)
 
@@ -324,12 +358,33 @@ def _usage_error_line(exc: Exception) -> str:
     return f"error: {message}"
 
 
+# Help printed to a pipe or a file: rich would assume 80 columns and cut long option names ("--colour-space,-…").
+PIPED_HELP_COLUMNS = 120
+
+
+def _set_help_width() -> None:
+    """Read by typer when it first formats help: COLUMNS when set (what rich itself honours), else wide enough for
+    every option name when stdout is no terminal; a terminal's own width otherwise."""
+    import os
+
+    if "TERMINAL_WIDTH" in os.environ:
+        return
+    if columns := os.environ.get("COLUMNS"):
+        os.environ["TERMINAL_WIDTH"] = columns
+    elif not sys.stdout.isatty():
+        os.environ["TERMINAL_WIDTH"] = str(PIPED_HELP_COLUMNS)
+
+
 def main() -> None:
-    usage_error = _usage_error_type()
     try:
+        _set_help_width()
+        usage_error = _usage_error_type()
         # Not standalone, so that a bad option value reaches the handler below instead of click's framed box.
         status = app(standalone_mode=False)
         sys.exit(status if isinstance(status, int) else 0)
+    except KeyboardInterrupt:  # first: `usage_error` is unbound if Ctrl-C came before it was
+        console.print("interrupted", highlight=False)
+        sys.exit(130)
     except usage_error as exc:
         if type(exc).__name__ != "NoArgsIsHelpError":  # that one has already printed the help
             console.print(_usage_error_line(exc), highlight=False, markup=False, soft_wrap=True)
@@ -340,9 +395,6 @@ def main() -> None:
     except SpectraceError as exc:
         console.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)
-    except KeyboardInterrupt:
-        console.print("interrupted", highlight=False)
-        sys.exit(130)
     except MemoryError:
         console.print("error: out of host memory (a smaller film, --width/--height, needs less)", highlight=False)
         sys.exit(2)

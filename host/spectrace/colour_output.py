@@ -22,7 +22,6 @@ from dataclasses import dataclass
 from enum import StrEnum
 from functools import cache
 
-import colour
 import numpy as np
 
 from spectrace.errors import SpectraceError
@@ -68,6 +67,8 @@ def xyz_to_rgb_matrix(space: ColourSpace) -> np.ndarray:
     elif space is ColourSpace.SRGB:
         matrix = np.array(XYZ_TO_LINEAR_SRGB)
     else:
+        import colour  # here, not at module import: it takes about a second, and sRGB needs none of it
+
         matrix = np.array(colour.RGB_COLOURSPACES[_COLOURSPACE_DATASETS[space]].matrix_XYZ_to_RGB, dtype=np.float64)
     matrix.setflags(write=False)
     return matrix
@@ -102,6 +103,8 @@ def adaptation_matrix(source_white_xyz: np.ndarray, target_white_xyz: np.ndarray
                       method: Adaptation = Adaptation.BRADFORD) -> np.ndarray:
     """Von Kries-type chromatic adaptation: M⁻¹ diag(LMS_target / LMS_source) M on XYZ, with the cone matrix M of
     `method` (Bradford: Lam 1985; von Kries: Hunt–Pointer–Estévez, normalised to D65), from colour-science."""
+    import colour
+
     return colour.adaptation.matrix_chromatic_adaptation_VonKries(
         np.asarray(source_white_xyz, float), np.asarray(target_white_xyz, float),
         transform=_ADAPTATION_DATASETS[Adaptation(method)],
@@ -198,6 +201,8 @@ def encode_for_display(linear_rgb: np.ndarray, space: ColourSpace) -> np.ndarray
         raise SpectraceError("xyz has no display encoding: write it as .exr")
     clipped = np.clip(np.asarray(linear_rgb, np.float64), 0.0, 1.0)
     if space is ColourSpace.REC2020:
+        import colour
+
         return np.asarray(colour.models.oetf_BT2020(clipped), np.float64)
     return srgb_encode(clipped)
 
@@ -216,5 +221,7 @@ def exr_chromaticities(space: ColourSpace) -> tuple[float, ...]:
     space = ColourSpace(space)
     if space is ColourSpace.XYZ:
         return (1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0 / 3.0, 1.0 / 3.0)
+    import colour
+
     dataset = colour.RGB_COLOURSPACES["sRGB" if space is ColourSpace.SRGB else _COLOURSPACE_DATASETS[space]]
     return tuple(float(v) for v in (*np.ravel(dataset.primaries), *dataset.whitepoint))

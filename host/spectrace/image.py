@@ -38,6 +38,15 @@ class Image:
     colour_space: ColourSpace = ColourSpace.SRGB  # of the files `write` makes (see spectrace.colour_output)
     white_balance: WhiteBalance | None = None  # chromatic adaptation applied to every RGB output
 
+    def __repr__(self) -> str:
+        # The dataclass's own repr would print every pixel (tens of kilobytes in a notebook).
+        extras = [f"spectral_bins={len(self.spectral.edges_nm) - 1}"] if self.spectral is not None else []
+        extras += [f"dropped_samples={self.dropped_samples}"] if self.dropped_samples else []
+        extras += [f"exposure={self.exposure:g}"] if self.exposure else []
+        return (f"Image({self.width}x{self.height}, spp={self.spp}, seed={self.seed}, device={self.device!r}, "
+                f"render_seconds={self.render_seconds:.3g}, colour_space={str(self.colour_space)!r}"
+                + "".join(f", {extra}" for extra in extras) + ")")
+
     @property
     def width(self) -> int:
         return self.xyz.shape[1]

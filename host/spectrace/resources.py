@@ -25,3 +25,27 @@ def spectra_dir() -> Path:
 
 def scenes_dir() -> Path:
     return _data_root("scenes")
+
+
+def bundled_scene_names() -> list[str]:
+    return sorted(path.stem for path in scenes_dir().glob("*.toml"))
+
+
+def resolve_scene_path(scene: "str | Path") -> Path:
+    """A scene argument as a file: the path itself when it exists, else, for a bare name such as `cornell_box`
+    or `cornell_box.toml`, the bundled scene of that name, so that the bundled scenes load from any folder.
+    A bare name that is neither raises SpectraceError listing the bundled scenes; a missing path is returned
+    as it is, for the loader to report."""
+    from spectrace.errors import SpectraceError
+
+    path = Path(scene)
+    if path.exists() or path.parent != Path(".") or str(path) in ("", "."):
+        return path
+    name = path.name if path.suffix else f"{path.name}.toml"
+    if Path(name).is_file():
+        return Path(name)
+    bundled = scenes_dir() / name
+    if path.suffix.lower() in ("", ".toml") and bundled.is_file():
+        return bundled
+    raise SpectraceError(f"no such scene file, and no bundled scene of that name (bundled: "
+                         f"{', '.join(bundled_scene_names())})", where=str(scene))

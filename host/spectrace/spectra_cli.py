@@ -78,7 +78,7 @@ def list_spectra(
         xyz = spectrum_to_xyz(spectrum)
         xy = "" if not xyz.sum() > 0 else "{:.4f}, {:.4f}".format(*xyz_to_xy(xyz))
         table.add_row(name, origin, f"{spectrum.min():.4g}", f"{spectrum.max():.4g}", xy)
-    Console(width=160).print(table)
+    Console(width=160, markup=False).print(table)
 
 
 @spectra_app.command()
@@ -98,4 +98,4 @@ def plot(
     known = _known_spectra(scene)
     spectra = {name: _resolve(name, known) for name in names}
     plot_spectra(spectra, output, normalise=normalise, title=title)
-    Console(stderr=True).print(f"wrote {output}", highlight=False)
+    Console(stderr=True, markup=False).print(f"wrote {output}", highlight=False)

@@ -85,4 +85,4 @@ def sampler_bench_command(scene_path: Path | None, sizes: list[int] | None, devi
     if as_json:
         print(json.dumps({"samplers": result}, indent=2))
     else:
-        Console(width=150).print(sampler_bench_table(result))
+        Console(width=150, markup=False).print(sampler_bench_table(result))

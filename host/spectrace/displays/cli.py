@@ -52,7 +52,7 @@ PIPED_OUTPUT_WIDTH = 200  # columns for tables written to a file or a pipe, wher
 
 
 def _stdout_console() -> Console:
-    return Console() if sys.stdout.isatty() else Console(width=PIPED_OUTPUT_WIDTH)
+    return Console(markup=False) if sys.stdout.isatty() else Console(width=PIPED_OUTPUT_WIDTH, markup=False)
 
 
 def _print_json(payload: dict) -> None:
@@ -254,7 +254,7 @@ def metamerism(
         table.add_row(p.patch, " ".join(f"{v:6.2f}" for v in p.lab_under_source),
                       " ".join(f"{v:6.2f}" for v in p.lab_under_target), f"{p.delta_e_2000:.2f}")
     table.add_row("mean / max", "", "", f"{report.mean_delta_e:.2f} / {report.max_delta_e:.2f}")
-    Console(width=140).print(table)
+    Console(width=140, markup=False).print(table)
     if rendered is not None:
         measured = Table(title=f"Measured in the render of {scene} (radiance meters from the camera)")
         for column in ("patch", "L*a*b* left", "L*a*b* right", "ΔE2000 ± s.e."):
@@ -263,4 +263,4 @@ def metamerism(
             measured.add_row(r.patch, " ".join(f"{v:6.2f}" for v in r.lab_left),
                              " ".join(f"{v:6.2f}" for v in r.lab_right),
                              f"{r.delta_e_2000:.2f} ± {r.delta_e_standard_error:.2f}")
-        Console(width=140).print(measured)
+        Console(width=140, markup=False).print(measured)

@@ -113,6 +113,9 @@ def _scan_obj(path: Path, where: str) -> bool:
                 return has_texture_coordinates
 
 
+_PLAIN_OBJ_MAX_BYTES = 4_000_000
+
+
 def _progress_min_bytes() -> float:
     text = os.environ.get(PROGRESS_ENVIRONMENT)
     try:
@@ -127,14 +130,28 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     Vertex order and face winding are kept as stored, except that an OBJ vertex used with several texture
     coordinates becomes one vertex per coordinate. Every failure raises SpectraceError naming `where`.
     """
-    import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
-
     path = regular_file(path, where, what="mesh file")
     size = path.stat().st_size
     announce = size >= _progress_min_bytes()
     if announce:
         print(f"loading mesh '{path}' ({size / 1e6:.1f} MB)...", file=sys.stderr, flush=True)
     started = time.perf_counter()
+    # Small plain OBJ files are read here: importing trimesh costs more than a small render. Large ones go to
+    # trimesh, whose vectorised reader beats a Python loop over millions of lines.
+    small_obj = path.suffix.lower() == ".obj" and size <= _PLAIN_OBJ_MAX_BYTES
+    if small_obj and (simple := _plain_triangle_obj(path)) is not None:
+        mesh = _validated_mesh(*simple, path, where)
+    else:
+        mesh = _mesh_through_trimesh(path, where)
+    if announce:
+        print(f"loaded mesh '{path}': {len(mesh.faces):,} triangles in {time.perf_counter() - started:.1f} s",
+              file=sys.stderr, flush=True)
+    return mesh
+
+
+def _mesh_through_trimesh(path: Path, where: str) -> TriangleMesh:
+    import trimesh  # deferred: importing trimesh (and with it SciPy) costs about half a second
+
     # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
     options = {"process": False, "maintain_order": True}
     if path.suffix.lower() == ".obj":
@@ -155,10 +172,35 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     if uv is not None and len(uv) == len(mesh.vertices) and np.all(np.isfinite(uv)):
         # Mesh files store v upward (OpenGL); spectrace's v runs down the image.
         mesh.uvs = np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float64)
-    if announce:
-        print(f"loaded mesh '{path}': {len(mesh.faces):,} triangles in {time.perf_counter() - started:.1f} s",
-              file=sys.stderr, flush=True)
     return mesh
+
+
+def _plain_triangle_obj(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """Vertices and faces of an OBJ file holding only `v x y z` and `f i j k` lines (positive indices, no
+    texture coordinates or normals) and comments, read directly, as trimesh reads them with process=False and
+    maintain_order=True (a test checks the bundled meshes both ways); None for anything else, which trimesh
+    reads. Importing trimesh costs more than a small render."""
+    vertices, faces = [], []
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeError):
+        return None
+    try:
+        for line in text.splitlines():
+            fields = line.split()
+            if not fields or fields[0].startswith("#"):
+                continue
+            if fields[0] == "v" and len(fields) == 4:
+                vertices.append([float(x) for x in fields[1:]])
+            elif fields[0] == "f" and len(fields) == 4 and all(f.isdigit() and int(f) > 0 for f in fields[1:]):
+                faces.append([int(i) - 1 for i in fields[1:]])
+            else:
+                return None
+    except ValueError:
+        return None
+    if not vertices or not faces:
+        return None
+    return np.array(vertices, dtype=np.float64), np.array(faces, dtype=np.int64)
 
 
 def _validated_mesh(vertices: np.ndarray, faces: np.ndarray, path: Path, where: str) -> TriangleMesh:

@@ -35,7 +35,7 @@ def import_mitsuba_command(
             raise SpectraceError(f"expected NAME=VALUE, got '{item}'", where="--define")
         parameters[name] = value
     notes = import_mitsuba(scene, Path(output), parameters)
-    console = Console(stderr=True, soft_wrap=True)  # each note on one line
+    console = Console(stderr=True, soft_wrap=True, markup=False)  # each note on one line
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
     console.print(f"wrote {output}", highlight=False)

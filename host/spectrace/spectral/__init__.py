@@ -3,10 +3,9 @@ device spectrum table. See the modules for the conventions (grid, film XYZ norma
 
 import warnings
 
-with warnings.catch_warnings():
-    # colour-science warns on import that matplotlib, which only its plotting needs, is missing.
-    warnings.filterwarnings("ignore", message=".*Matplotlib.* related API features are not available")
-    import colour  # noqa: F401  (imported here once so that the submodules' imports stay quiet)
+# colour-science warns on import that matplotlib, which only its plotting needs, is missing. It is imported late,
+# where first needed (it takes about a second), so the filter stays for the process rather than around one import.
+warnings.filterwarnings("ignore", message=".*Matplotlib.* related API features are not available")
 
 from spectrace.spectral.colorimetry import (
     CIE_1931_CMFS,

@@ -11,9 +11,9 @@ they are the sRGB/D65 matrices of IEC 61966-2-1 at 6 decimals, as also printed i
 colour-science's sRGB colourspace.
 """
 
-import colour
 import numpy as np
 
+from spectrace.resources import spectra_dir
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_STEP_NM, TRAPEZOID_WEIGHTS_NM, integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
 
@@ -34,16 +34,23 @@ LINEAR_SRGB_TO_XYZ = _read_only(
 CIE_1931_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 
 
-def _cie_1931_cmfs_on_grid() -> np.ndarray:
-    """CIE 1931 2 degree colour matching functions from colour-science (`colour.MSDS_CMFS`), on the grid.
+CMF_TABLE = "observers/cie1931_2deg.csv"  # under spectra/
 
-    colour-science tabulates them at 1 nm over 360..830 nm (from CVRL's "Older CIE Standards" tables,
-    cvrl.org), which is exactly our grid, so `align` only checks the shape; if a future dataset had another sampling it
-    would interpolate with the dataset's own interpolator (Sprague, CIE's recommendation for CMFs).
+
+def _cie_1931_cmfs_on_grid() -> np.ndarray:
+    """CIE 1931 2 degree colour matching functions on the grid, from the table shipped in spectra/.
+
+    The table is colour-science's (`colour.MSDS_CMFS`, from CVRL's "Older CIE Standards" tables, cvrl.org), at
+    1 nm over 360..830 nm, exactly our grid, written out once so that a render does not import colour-science
+    (about a second); tests/test_startup.py checks it equals colour-science's.
     """
-    shape = colour.SpectralShape(GRID_MIN_NM, GRID_MAX_NM, GRID_STEP_NM)
-    cmfs = colour.MSDS_CMFS[CIE_1931_OBSERVER].copy().align(shape)
-    values = np.array(cmfs.values, dtype=np.float64)
+    lines = [line for line in (spectra_dir() / CMF_TABLE).read_text(encoding="utf-8").splitlines()
+             if line.strip() and not line.startswith("#")]
+    table = np.array([[float(field) for field in line.split(",")] for line in lines[1:]], dtype=np.float64)
+    if table.shape != (GRID_MAX_NM - GRID_MIN_NM + 1, 4) or not np.array_equal(
+            table[:, 0], np.arange(GRID_MIN_NM, GRID_MAX_NM + GRID_STEP_NM, GRID_STEP_NM)):
+        raise RuntimeError(f"{CMF_TABLE} is not on the {GRID_MIN_NM}..{GRID_MAX_NM} nm, 1 nm grid")
+    values = np.ascontiguousarray(table[:, 1:])
     values.setflags(write=False)
     return values
 

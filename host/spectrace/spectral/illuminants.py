@@ -9,7 +9,6 @@ Values keep CIE's relative scale (100 at 560 nm); `d65_normalised` rescales D65 
 
 from functools import cache
 
-import colour
 import numpy as np
 
 from spectrace.errors import SpectraceError
@@ -22,11 +21,15 @@ CIE_ILLUMINANT_PREFIX = "cie:"
 
 def cie_illuminant_names() -> list[str]:
     """Names `cie_illuminant` accepts (colour-science's keys: "A", "D65", "FL2", "LED-B1", ...)."""
+    import colour  # here, not at module import: it takes about a second
+
     return sorted(colour.SDS_ILLUMINANTS.keys())
 
 
 @cache
 def _cie_illuminant_values(canonical_name: str) -> np.ndarray:
+    import colour
+
     if canonical_name == "A":
         shape = colour.SpectralShape(GRID_MIN_NM, GRID_MAX_NM, GRID_STEP_NM)
         values = np.asarray(colour.sd_CIE_standard_illuminant_A(shape).values, dtype=np.float64)
@@ -40,6 +43,8 @@ def _cie_illuminant_values(canonical_name: str) -> np.ndarray:
 
 def cie_illuminant(name: str, where: str | None = None) -> Spectrum:
     """A CIE illuminant by name ("D65", "A", "FL2", case-insensitive), relative spectral power (100 at 560 nm)."""
+    import colour
+
     by_folded_name = {key.casefold(): key for key in colour.SDS_ILLUMINANTS.keys()}
     canonical_name = by_folded_name.get(name.strip().casefold())
     if canonical_name is None:

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 from functools import cache
 from numbers import Real
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import colour
 import numpy as np
 
 from spectrace.errors import SpectraceError
@@ -28,6 +28,9 @@ from spectrace.resources import spectra_dir
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, resample_to_grid
 from spectrace.spectral.illuminants import CIE_ILLUMINANT_PREFIX, cie_illuminant, cie_illuminant_names
 from spectrace.spectral.spectrum import Spectrum
+
+if TYPE_CHECKING:
+    import colour
 
 WAVELENGTH_COLUMN = "wavelength_nm"
 COMMENT_PREFIX = "#"
@@ -258,6 +261,8 @@ def spectrum_from_colour(sd: colour.SpectralDistribution, name: str | None = Non
     Joined linearly between its samples (not with the distribution's own interpolator: Sprague, the
     default for evenly spaced data, can overshoot below zero near sharp features), ends held.
     """
+    import colour  # here, not at module import: it takes about a second
+
     if not isinstance(sd, colour.SpectralDistribution):
         raise TypeError(f"expected a colour.SpectralDistribution, got {type(sd).__name__}")
     label = name or str(sd.name)
@@ -309,10 +314,14 @@ COLORCHECKER_DATASET = "ColorChecker N Ohta"
 
 
 def colorchecker_patch_names() -> list[str]:
+    import colour
+
     return list(colour.SDS_COLOURCHECKERS[COLORCHECKER_DATASET].keys())
 
 
 def colorchecker_reflectance(patch: str, where: str | None = None) -> Spectrum:
+    import colour
+
     patches = colour.SDS_COLOURCHECKERS[COLORCHECKER_DATASET]
     if patch not in patches:
         raise SpectraceError(f"unknown ColorChecker patch '{patch}' (patches: {', '.join(patches)})", where=where)
