@@ -6,6 +6,7 @@ on); a broken runtime is simulated by replacing the probe function.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shutil
@@ -379,3 +380,30 @@ def test_a_missing_entry_or_bad_define_is_a_spectrace_error(device, kernels_fold
         device.build_program("tests/affine.cl", {"OFFSET": float("nan")})
     with pytest.raises(SpectraceError):
         device.build_program("tests/affine.cl", {"OFF SET": 1})
+
+
+def test_the_probe_answer_is_remembered_per_runtime_version(monkeypatch, tmp_path):
+    """The probe's build is paid once per runtime version, not by every `spectrace devices` and render; a remembered
+    answer is used only while the runtime library and versions are the ones it was measured on."""
+    monkeypatch.setenv("SPECTRACE_CACHE_DIR", str(tmp_path))
+    found = next(f for f in find_devices() if f.device is not None and f.library and os.path.isabs(f.library))
+    calls = []
+    real_run = probing._run_probe_kernel
+    monkeypatch.setattr(probing, "_run_probe_kernel", lambda device: calls.append(1) or real_run(device))
+    monkeypatch.setattr(probing, "probe_function", probing.probe_kernel_on_device)  # the file's fixture memoises
+    probing.forget_probe_results()
+    assert probing.probe(found).ok and len(calls) == 1
+    probing.forget_probe_results()
+    assert probing.probe(found).ok and len(calls) == 1  # from disk: no second build
+
+    # Another library file is another runtime version: probed again (the device object stays the same here).
+    copy = tmp_path / Path(found.library).name
+    shutil.copyfile(found.library, copy)
+    probing.forget_probe_results()
+    assert probing.probe(dataclasses.replace(found, library=str(copy))).ok and len(calls) == 2
+
+    # A damaged file is ignored, never an error.
+    (tmp_path / "probes.json").write_text("{not json", encoding="utf-8")
+    probing.forget_probe_results()
+    assert probing.probe(found).ok and len(calls) == 3
+    probing.forget_probe_results()

@@ -1,7 +1,10 @@
 """Does a device really work? Build a tiny kernel, run it once and check its numbers.
 
 Listing a device proves little: the PyPI PoCL, for instance, lists every CPU but fails to compile any
-kernel on CPUs its LLVM does not know ("unknown target CPU 'generic'"). Results are kept per process.
+kernel on CPUs its LLVM does not know ("unknown target CPU 'generic'"). Results are kept per process and on disk
+(`probes.json` in the cache folder), keyed by everything that could change the answer: the runtime library's path,
+size and modification time, the platform and driver versions, the device's name and pyopencl's version. A build
+costs a few tenths of a second per runtime, which `spectrace devices` and every render would otherwise pay.
 
 Tests replace ``probe_function`` to simulate a broken runtime, then call ``forget_probe_results()``.
 """
@@ -9,6 +12,8 @@ Tests replace ``probe_function`` to simulate a broken runtime, then call ``forge
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import json
 import os
 import sys
 import tempfile
@@ -114,10 +119,70 @@ _results: dict[str, ProbeResult] = {}
 
 
 def probe(found: FoundDevice) -> ProbeResult:
-    """The probe result for `found`, measured once per process."""
+    """The probe result for `found`, measured once per process (and once per runtime version on disk)."""
     if found.key not in _results:
-        _results[found.key] = probe_function(found)
+        _results[found.key] = _remembered_or_probed(found)
     return _results[found.key]
+
+
+def _remembered_or_probed(found: FoundDevice) -> ProbeResult:
+    # Tests that swap in their own probe function must see it called, so only the real probe is remembered.
+    fingerprint = _fingerprint(found) if probe_function is probe_kernel_on_device else None
+    if fingerprint is None:
+        return probe_function(found)
+    remembered = _read_remembered().get(fingerprint)
+    if isinstance(remembered, dict) and isinstance(remembered.get("ok"), bool):
+        return ProbeResult(remembered["ok"], remembered.get("reason"), 0.0)
+    result = probe_function(found)
+    # A build the compiler refuses fails again next time; other failures (memory, a busy device) may not.
+    if result.ok or (result.reason or "").startswith("kernel build failed"):
+        _remember(fingerprint, result)
+    return result
+
+
+def _fingerprint(found: FoundDevice) -> str | None:
+    """A digest of what could change the probe's answer, or None when something of it cannot be known."""
+    if found.device is None or found.platform is None:
+        return None
+    try:
+        import pyopencl as cl
+
+        parts = [found.key, cl.VERSION_TEXT, found.platform.name, found.platform.version, found.device.name,
+                 found.device.version, found.device.driver_version]
+        if found.library and os.path.isabs(found.library):
+            status = os.stat(found.library)
+            parts += [found.library, str(status.st_size), str(status.st_mtime_ns)]
+        else:  # a soname: the loader's search decides which file, so the answer cannot be tied to one
+            return None
+    except Exception:  # noqa: BLE001 - any doubt means probing again, never a failure
+        return None
+    return hashlib.sha256("\n".join(map(str, parts)).encode()).hexdigest()
+
+
+def _remembered_path():
+    from spectrace.device.discovery import cache_root
+
+    return cache_root() / "probes.json"
+
+
+def _read_remembered() -> dict:
+    try:
+        data = json.loads(_remembered_path().read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _remember(fingerprint: str, result: ProbeResult) -> None:
+    from spectrace.io.atomic import write_atomically
+
+    remembered = _read_remembered()
+    remembered[fingerprint] = {"ok": result.ok, "reason": result.reason}
+    text = json.dumps(remembered, indent=1, sort_keys=True)
+    try:
+        write_atomically(_remembered_path(), lambda temp: temp.write_text(text, encoding="utf-8"))
+    except OSError:
+        pass  # an unwritable cache only costs the probe again next time
 
 
 def forget_probe_results() -> None:
