@@ -73,8 +73,8 @@ class WavefrontRenderer(Renderer):
                 break
             following = 1 - current
             cl.enqueue_copy(queue, self._queue_lengths[following], zero)
-            self.kernel.set_args(self._params, *self._scene, self._cmf, self._film, self._ray_counts, self._spectral_film,
-                                 self._slots, self._queues[current], self._queue_lengths[current],
+            self.kernel.set_args(self._params, *self._scene, self._cmf, self._film, self._ray_counts,
+                                 self._spectral_film, self._slots, self._queues[current], self._queue_lengths[current],
                                  self._queues[following], self._queue_lengths[following])
             cl.enqueue_nd_range_kernel(queue, self.kernel, *launch_shape(int(live[0]), self.work_group))
             current = following
