@@ -20,6 +20,11 @@ typedef struct {
     float alpha;
 } ConductorParams;
 
+inline int conductor_flags(__global const Material *m)
+{
+    return ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA;
+}
+
 inline ConductorParams conductor_params(__global const Material *m, __global const float *spectra,
                                         const SampledWavelengths *w)
 {
@@ -50,7 +55,7 @@ inline float conductor_pdf(const ConductorParams *p, float3 wo, float3 wi)
     return ggx_reflection_pdf(wo, reflection_half_vector(wo, wi), p->alpha);
 }
 
-inline int conductor_sample(const ConductorParams *p, float3 wo, float2 u, BSDFSample *s)
+inline int conductor_sample(const ConductorParams *p, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     if (ggx_is_smooth(p->alpha)) return delta_sample(reflect_local(wo), conductor_fresnel(p, wo.z), 1.0f, s);
     if (wo.z <= 0.0f) return 0;

@@ -186,6 +186,14 @@ typedef struct {
     float4 tint;  /* optional specular tint on both lobes (1 without one) */
 } DielectricParams;
 
+/* Dispersive when the index depends on λ: then the four wavelengths of a path would leave the surface in different
+ * directions, and only the hero may go on (Wilkie et al. 2014; the integrators see to it). */
+inline int dielectric_flags(__global const Material *m)
+{
+    return (ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA) | BSDF_TRANSMISSION
+         | (material_ior_is_dispersive(m) ? BSDF_DISPERSIVE : 0);
+}
+
 inline DielectricParams dielectric_params(__global const Material *m, __global const float *spectra,
                                           const SampledWavelengths *w)
 {
@@ -195,13 +203,6 @@ inline DielectricParams dielectric_params(__global const Material *m, __global c
     p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM ? (float4)(1.0f)
                                                            : spectrum_at(spectra, m->reflectance_offset, w);
     return p;
-}
-
-/* Whether the wavelengths of this path would leave the surface in different directions, so that only the hero
- * may go on (Wilkie et al. 2014). Sensors put one wavelength in all four lanes: they go on together. */
-inline int dielectric_disperses(__global const Material *m, const SampledWavelengths *w)
-{
-    return material_ior_is_dispersive(m) && any(w->lambda != (float4)(w->lambda.x));
 }
 
 inline float4 dielectric_eval(const DielectricParams *p, float3 wo, float3 wi)
@@ -226,7 +227,6 @@ inline int dielectric_sample(const DielectricParams *p, float3 wo, float uc, flo
     s->weight = p->tint * d.weight;
     s->pdf = d.pdf;
     s->is_delta = d.is_delta;
-    s->terminate_secondary = 0;
     s->radiance_scale = d.radiance_scale;
     return 1;
 }

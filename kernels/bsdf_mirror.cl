@@ -11,6 +11,11 @@ typedef struct {
     float4 reflectance;
 } MirrorParams;
 
+inline int mirror_flags(__global const Material *m)
+{
+    return BSDF_DELTA;
+}
+
 inline MirrorParams mirror_params(__global const Material *m, __global const float *spectra,
                                   const SampledWavelengths *w)
 {
@@ -29,7 +34,7 @@ inline float mirror_pdf(const MirrorParams *p, float3 wo, float3 wi)
     return 0.0f;
 }
 
-inline int mirror_sample(const MirrorParams *p, float3 wo, BSDFSample *s)
+inline int mirror_sample(const MirrorParams *p, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     return delta_sample(reflect_local(wo), p->reflectance, 1.0f, s);
 }

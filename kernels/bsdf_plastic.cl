@@ -32,6 +32,12 @@ typedef struct {
     float base_scale;  /* c of the header comment */
 } PlasticParams;
 
+/* The base is diffuse; a smooth coat adds a delta lobe. */
+inline int plastic_flags(__global const Material *m)
+{
+    return ggx_is_smooth(m->alpha) ? BSDF_NON_DELTA | BSDF_DELTA : BSDF_NON_DELTA;
+}
+
 inline PlasticParams plastic_params(__global const Material *m, __global const float *spectra,
                                     const SampledWavelengths *w)
 {

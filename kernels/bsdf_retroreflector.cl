@@ -17,6 +17,11 @@ typedef struct {
     float alpha;
 } RetroreflectorParams;
 
+inline int retroreflector_flags(__global const Material *m)
+{
+    return ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA;
+}
+
 inline RetroreflectorParams retroreflector_params(__global const Material *m, __global const float *spectra,
                                                   const SampledWavelengths *w)
 {
@@ -44,7 +49,7 @@ inline float retroreflector_pdf(const RetroreflectorParams *p, float3 wo, float3
     return ggx_reflection_pdf(wo, reflection_half_vector(wo, retro_rotate(wi)), p->alpha);
 }
 
-inline int retroreflector_sample(const RetroreflectorParams *p, float3 wo, float2 u, BSDFSample *s)
+inline int retroreflector_sample(const RetroreflectorParams *p, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     if (ggx_is_smooth(p->alpha)) return delta_sample(wo, p->reflectance, 1.0f, s);
     if (wo.z <= 0.0f) return 0;

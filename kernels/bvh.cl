@@ -6,7 +6,8 @@
 #include "triangle.cl"
 #include "triangle4.cl"
 
-#define BVH_STACK_SIZE 64
+/* BVH_STACK_SIZE, BVH4_STACK_SIZE: the traversal stacks' entries, from the depth the host's builder guarantees
+ * (spectrace.geometry.bvh MAX_DEPTH; bvh4.py), passed as build defines (spectrace.render.device_types). */
 
 typedef struct {
     float t;         /* distance along the ray; t_max when nothing was hit */
@@ -77,11 +78,8 @@ inline int intersect_leaf(__global const float4 *triangle_vertices, const Traver
     return 0;
 }
 
-#ifndef BVH4_STACK_SIZE
-/* Up to three pushes per 4-wide level, over at most MAX_DEPTH (64) levels: geometry/bvh4.py. A larger stack than
- * needed measured no slower than a 96-entry one on either CPU runtime. */
-#define BVH4_STACK_SIZE 193
-#endif
+/* BVH4_STACK_SIZE: up to three pushes per 4-wide level, over at most MAX_DEPTH levels (geometry/bvh4.py). A larger
+ * stack than needed measured no slower than a 96-entry one on either CPU runtime. */
 
 /* Orders two (entry, reference) pairs by entry: one compare-exchange of the sorting network below. */
 #define BVH4_ORDER(ta, ra, tb, rb)                                                 \

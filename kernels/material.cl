@@ -1,8 +1,9 @@
 /* Material dispatch: the integrators see every BSDF through the functions below, in world space. Each BSDF lives
- * in its own bsdf_<name>.cl and works in the local shading frame (frame.cl) with the same four functions:
- * <name>_params (its inputs at the path's wavelengths), <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample.
- * Adding a BSDF: that file, its MATERIAL_* value in types.h, and one case in each switch here (plus
- * material_frame if it does not reflect on both faces). docs/materials.md describes each model. */
+ * in its own bsdf_<name>.cl and works in the local shading frame (frame.cl) with the same five functions:
+ * <name>_flags (what its lobes are, bsdf_sample.cl), <name>_params (its inputs at the path's wavelengths),
+ * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. Adding a BSDF: that file, its code in
+ * spectrace.render.device_types.MATERIAL_TYPES, and its line in MATERIAL_LIST. docs/materials.md describes each
+ * model. */
 #ifndef SPECTRACE_MATERIAL_CL
 #define SPECTRACE_MATERIAL_CL
 
@@ -17,6 +18,42 @@
 #include "bsdf_retroreflector.cl"
 #include "bsdf_dielectric.cl"
 
+/* Every BSDF: its Material.type code, the prefix of its functions and its params struct. Each dispatch below is
+ * this list expanded, one test per type; a type the scene lacks tests as a constant 0 (MATERIAL_IS,
+ * scene_features.h), so its code is not compiled in, and a scene of one type dispatches without a test. */
+#define MATERIAL_LIST(X)                                          \
+    X(MATERIAL_DIFFUSE, diffuse, DiffuseParams)                   \
+    X(MATERIAL_CONDUCTOR, conductor, ConductorParams)             \
+    X(MATERIAL_MIRROR, mirror, MirrorParams)                      \
+    X(MATERIAL_PLASTIC, plastic, PlasticParams)                   \
+    X(MATERIAL_DIELECTRIC, dielectric, DielectricParams)          \
+    X(MATERIAL_RETROREFLECTOR, retroreflector, RetroreflectorParams)
+
+#define MATERIAL_FLAGS_CASE(type, name, Params) \
+    if (MATERIAL_IS(m, type)) return name##_flags(m);
+#define MATERIAL_EVAL_CASE(type, name, Params)          \
+    if (MATERIAL_IS(m, type)) {                         \
+        Params p = name##_params(m, spectra, w);        \
+        return name##_eval(&p, wo, wi);                 \
+    }
+#define MATERIAL_PDF_CASE(type, name, Params)           \
+    if (MATERIAL_IS(m, type)) {                         \
+        Params p = name##_params(m, spectra, w);        \
+        return name##_pdf(&p, wo, wi);                  \
+    }
+#define MATERIAL_SAMPLE_CASE(type, name, Params)        \
+    if (MATERIAL_IS(m, type)) {                         \
+        Params p = name##_params(m, spectra, w);        \
+        return name##_sample(&p, wo, uc, u, s);         \
+    }
+
+/* BSDF_* flags of material m (0 for a type code no BSDF has). */
+inline int material_flags(__global const Material *m)
+{
+    MATERIAL_LIST(MATERIAL_FLAGS_CASE)
+    return 0;
+}
+
 /* n faces wo for two-sided reflectors. */
 inline float3 facing(float3 n, float3 wo)
 {
@@ -24,118 +61,50 @@ inline float3 facing(float3 n, float3 wo)
 }
 
 /* The local frame of material m at a surface of normal n seen from wo. Every reflector reflects on both faces,
- * so its frame's normal is turned toward wo (local wo.z ≥ 0). A dielectric keeps the geometric normal: which side
- * is the interior (so the sign of the refraction) comes from the winding, so closed meshes need outward normals. */
+ * so its frame's normal is turned toward wo (local wo.z ≥ 0). A transmitting one keeps the geometric normal: which
+ * side is the interior (so the sign of the refraction) comes from the winding, so closed meshes need outward
+ * normals. */
 inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 wo)
 {
-    return shading_frame(MATERIAL_IS(m, MATERIAL_DIELECTRIC) ? n : facing(n, wo));
+    return shading_frame((material_flags(m) & BSDF_TRANSMISSION) ? n : facing(n, wo));
 }
 
 /* f(wo, wi)·|cos θi| per wavelength, local directions. */
 inline float4 material_eval_local(__global const Material *m, __global const float *spectra,
                                   const SampledWavelengths *w, float3 wo, float3 wi)
 {
-    switch (m->type) {
-#if SCENE_USES_MATERIAL(MATERIAL_MIRROR)
-    case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_eval(&p, wo, wi); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_CONDUCTOR)
-    case MATERIAL_CONDUCTOR: { ConductorParams p = conductor_params(m, spectra, w); return conductor_eval(&p, wo, wi); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_PLASTIC)
-    case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_eval(&p, wo, wi); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_RETROREFLECTOR)
-    case MATERIAL_RETROREFLECTOR: {
-        RetroreflectorParams p = retroreflector_params(m, spectra, w);
-        return retroreflector_eval(&p, wo, wi);
-    }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_DIELECTRIC)
-    case MATERIAL_DIELECTRIC: { DielectricParams p = dielectric_params(m, spectra, w); return dielectric_eval(&p, wo, wi); }
-#endif
-    default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_eval(&p, wo, wi); }
-    }
+    MATERIAL_LIST(MATERIAL_EVAL_CASE)
+    return (float4)(0.0f);
 }
 
 /* Solid-angle pdf with which material_sample_local proposes wi (delta lobes contribute nothing). */
 inline float material_pdf_local(__global const Material *m, __global const float *spectra,
                                 const SampledWavelengths *w, float3 wo, float3 wi)
 {
-    switch (m->type) {
-#if SCENE_USES_MATERIAL(MATERIAL_MIRROR)
-    case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_pdf(&p, wo, wi); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_CONDUCTOR)
-    case MATERIAL_CONDUCTOR: { ConductorParams p = conductor_params(m, spectra, w); return conductor_pdf(&p, wo, wi); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_PLASTIC)
-    case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_pdf(&p, wo, wi); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_RETROREFLECTOR)
-    case MATERIAL_RETROREFLECTOR: {
-        RetroreflectorParams p = retroreflector_params(m, spectra, w);
-        return retroreflector_pdf(&p, wo, wi);
-    }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_DIELECTRIC)
-    case MATERIAL_DIELECTRIC: { DielectricParams p = dielectric_params(m, spectra, w); return dielectric_pdf(&p, wo, wi); }
-#endif
-    default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_pdf(&p, wo, wi); }
-    }
+    MATERIAL_LIST(MATERIAL_PDF_CASE)
+    return 0.0f;
 }
 
 /* uc picks a lobe, u samples within it. Returns 0 when no direction was produced. */
 inline int material_sample_local(__global const Material *m, __global const float *spectra,
                                  const SampledWavelengths *w, float3 wo, float uc, float2 u, BSDFSample *s)
 {
-    switch (m->type) {
-#if SCENE_USES_MATERIAL(MATERIAL_MIRROR)
-    case MATERIAL_MIRROR: { MirrorParams p = mirror_params(m, spectra, w); return mirror_sample(&p, wo, s); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_CONDUCTOR)
-    case MATERIAL_CONDUCTOR: {
-        ConductorParams p = conductor_params(m, spectra, w);
-        return conductor_sample(&p, wo, u, s);
-    }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_PLASTIC)
-    case MATERIAL_PLASTIC: { PlasticParams p = plastic_params(m, spectra, w); return plastic_sample(&p, wo, uc, u, s); }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_RETROREFLECTOR)
-    case MATERIAL_RETROREFLECTOR: {
-        RetroreflectorParams p = retroreflector_params(m, spectra, w);
-        return retroreflector_sample(&p, wo, u, s);
-    }
-#endif
-#if SCENE_USES_MATERIAL(MATERIAL_DIELECTRIC)
-    case MATERIAL_DIELECTRIC: {
-        DielectricParams p = dielectric_params(m, spectra, w);
-        if (!dielectric_sample(&p, wo, uc, u, s)) return 0;
-        s->terminate_secondary = dielectric_disperses(m, w);
-        return 1;
-    }
-#endif
-    default: { DiffuseParams p = diffuse_params(m, spectra, w); return diffuse_sample(&p, wo, u, s); }
-    }
+    MATERIAL_LIST(MATERIAL_SAMPLE_CASE)
+    return 0;
 }
 
 /* 0 when every lobe is a delta lobe: next-event estimation cannot contribute there and is skipped. */
 inline int material_has_non_delta_lobe(__global const Material *m)
 {
-    if (MATERIAL_IS(m, MATERIAL_MIRROR)) return 0;
-    if (MATERIAL_IS(m, MATERIAL_CONDUCTOR) || MATERIAL_IS(m, MATERIAL_RETROREFLECTOR)
-        || MATERIAL_IS(m, MATERIAL_DIELECTRIC)) {
-        return !ggx_is_smooth(m->alpha);
-    }
-    return 1;
+    return (material_flags(m) & BSDF_NON_DELTA) != 0;
 }
 
-/* 1 when the event steers each wavelength its own way: the integrators then keep only the hero wavelength, before
- * next-event estimation as well as before following the sampled direction. */
+/* 1 when the event steers each of the path's wavelengths its own way: the integrators then keep only the hero
+ * wavelength (terminate_secondary, wavelengths.cl), before next-event estimation as well as before following the
+ * sampled direction. Sensors put one wavelength in all four lanes: those go on together. */
 inline int material_disperses(__global const Material *m, const SampledWavelengths *w)
 {
-    return MATERIAL_IS(m, MATERIAL_DIELECTRIC) && dielectric_disperses(m, w);
+    return (material_flags(m) & BSDF_DISPERSIVE) && wavelengths_differ(w);
 }
 
 inline float4 material_eval(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,

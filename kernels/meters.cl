@@ -45,19 +45,11 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
     return M_PI_F * reflected;
 }
 
-__kernel void measure(__global const RenderParams *params, __global const BVHNode *nodes,
-                      __global const float4 *triangle_vertices, __global const float2 *triangle_uvs,
-                          __global const TriangleInfo *triangle_info,
-                      __global const Material *materials, __global const Light *lights,
-                      __global const float *light_cdf, __global const float *spectra,
-                      __global const float4 *texels, __global const float *map_cdf,
-                      __global const Medium *media, __global const MeterParams *meter,
-                      __global const float *wavelengths, int wavelength_count,
-                      __global float *item_means)
+__kernel void measure(SCENE_KERNEL_PARAMS, __global const MeterParams *meter, __global const float *wavelengths,
+                      int wavelength_count, __global float *item_means)
 {
     int item = get_global_id(0);
-    Scene scene = {params, nodes,     triangle_vertices, triangle_uvs, triangle_info, materials,
-                   lights, light_cdf, spectra,           texels,       map_cdf,   media};
+    Scene scene = SCENE_FROM_KERNEL_PARAMS;
     SampledWavelengths w = fixed_wavelengths((float4)(wavelengths[item % wavelength_count]));
     uint rays_traced = 0;
     float sum = 0.0f;

@@ -7,19 +7,12 @@
 
 /* film: per pixel (ΣX, ΣY, ΣZ, number of dropped non-finite samples); ray_counts: rays traced per pixel, for
  * the benchmark's rays/s. */
-__kernel void render_pass(__global const RenderParams *params, __global const BVHNode *nodes,
-                          __global const float4 *triangle_vertices, __global const float2 *triangle_uvs,
-                          __global const TriangleInfo *triangle_info,
-                          __global const Material *materials, __global const Light *lights,
-                          __global const float *light_cdf, __global const float *spectra,
-                          __global const float4 *texels, __global const float *map_cdf,
-                          __global const Medium *media, __global const float4 *cmf, __global float4 *film, __global uint *ray_counts,
-                          __global float *spectral_film)
+__kernel void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
+                          __global uint *ray_counts, __global float *spectral_film)
 {
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
-    Scene scene = {params, nodes,     triangle_vertices, triangle_uvs, triangle_info, materials,
-                   lights, light_cdf, spectra,           texels,       map_cdf,   media};
+    Scene scene = SCENE_FROM_KERNEL_PARAMS;
 
     float4 accumulated = film[pixel];
     uint rays_traced = 0;

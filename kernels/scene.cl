@@ -22,6 +22,19 @@ typedef struct {
     __global const Medium *media;
 } Scene;
 
+/* The parameters every scene kernel starts with: the render's parameters, then the scene's buffers in the order
+ * spectrace.render.device_types.SCENE_KERNEL_BUFFERS names them (the host sets them from that list). A kernel
+ * declared with them makes its Scene with `Scene scene = SCENE_FROM_KERNEL_PARAMS;`. */
+#define SCENE_KERNEL_PARAMS                                                                                        \
+    __global const RenderParams *params, __global const BVHNode *nodes, __global const float4 *triangle_vertices, \
+        __global const float2 *triangle_uvs, __global const TriangleInfo *triangle_info,                          \
+        __global const Material *materials, __global const Light *lights, __global const float *light_cdf,        \
+        __global const float *spectra, __global const float4 *texels, __global const float *map_cdf,              \
+        __global const Medium *media
+#define SCENE_FROM_KERNEL_PARAMS                                                                                   \
+    {params, nodes, triangle_vertices, triangle_uvs, triangle_info, materials, lights, light_cdf, spectra, texels, \
+     map_cdf, media}
+
 inline LightBuffers light_buffers(const Scene *scene)
 {
     LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf};

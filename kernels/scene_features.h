@@ -6,12 +6,13 @@
 #ifndef SPECTRACE_SCENE_FEATURES_H
 #define SPECTRACE_SCENE_FEATURES_H
 
-/* Bit t set: some material of type MATERIAL_t (types.h) / some light of type LIGHT_t is in the scene. */
+/* Bit t set: some material of type MATERIAL_t / some light of type LIGHT_t is in the scene (the codes:
+ * spectrace.render.device_types). */
 #ifndef SCENE_MATERIAL_TYPES
-#define SCENE_MATERIAL_TYPES 0x3F
+#define SCENE_MATERIAL_TYPES ((1 << MATERIAL_TYPE_COUNT) - 1)
 #endif
 #ifndef SCENE_LIGHT_TYPES
-#define SCENE_LIGHT_TYPES 0x3F
+#define SCENE_LIGHT_TYPES ((1 << LIGHT_TYPE_COUNT) - 1)
 #endif
 /* Participating media (and with them index-matched boundaries). */
 #ifndef SCENE_HAS_MEDIA

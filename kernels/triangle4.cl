@@ -10,7 +10,7 @@
 
 #include "triangle.cl"
 
-#define LEAF_BLOCK_FLOAT4S 10
+/* A block is LEAF_BLOCK_FLOAT4S float4 (a build define: spectrace.geometry.triangle_blocks owns the layout). */
 
 /* Tests one block against hits closer than *t_hit; on a hit updates *t_hit, *triangle and *b12 and returns 1.
  * origin_k: the ray origin's coordinates in the shear's order (kx, ky, kz). */

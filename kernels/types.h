@@ -9,26 +9,12 @@
 
 #include "scene_features.h"
 
-/* Wavelength grid of every tabulated spectrum (nm). Must match spectrace.spectral.grid. */
-#define GRID_MIN_NM 360.0f
-#define GRID_MAX_NM 830.0f
-#define GRID_SAMPLES 471
-
-/* Material.type: which BSDF (kernels/material.cl dispatches on it; docs/materials.md lists the keys). */
-#define MATERIAL_DIFFUSE 0
-#define MATERIAL_CONDUCTOR 1
-#define MATERIAL_MIRROR 2
-#define MATERIAL_PLASTIC 3
-#define MATERIAL_DIELECTRIC 4
-#define MATERIAL_RETROREFLECTOR 5
-
-/* Material.ior_model: how a dielectric's interior index of refraction depends on the wavelength. */
-#define IOR_CONSTANT 0   /* Material.ior */
-#define IOR_SELLMEIER 1  /* n² = 1 + Σ B_i λ² / (λ² − C_i), λ in µm: coefficients B1 B2 B3 C1 C2 C3 (C in µm²) */
-#define IOR_CAUCHY 2     /* n = a + b / λ², λ in µm: coefficients a, b (b in µm²) */
-
-/* An offset that names no spectrum (only offsets documented as optional may hold it). */
-#define MATERIAL_NO_SPECTRUM (-1)
+/* The numbers both sides must agree on (the wavelength grid GRID_MIN_NM, GRID_MAX_NM, GRID_SAMPLES; the MATERIAL_*,
+ * IOR_*, LIGHT_* and METER_* codes; MATERIAL_NO_SPECTRUM, TRIANGLE_NO_MATERIAL; buffer layouts) have one home,
+ * host/spectrace/render/device_types.py, and reach every kernel build as defines. */
+#ifndef GRID_SAMPLES
+#error "built without the host/device contract defines (spectrace.render.device_types.device_contract_defines)"
+#endif
 
 /* Bounding volume hierarchy node (32 bytes). Interior: count == 0, children at left_first and left_first + 1.
  * Leaf: count > 0 triangles starting at slot left_first of the triangle arrays. */
@@ -51,15 +37,13 @@ typedef struct {
 
 /* Per-triangle shading data, in BVH leaf order. */
 typedef struct {
-    int material;   /* index into the material array; TRIANGLE_NO_MATERIAL on an index-matched medium boundary */
+    int material;   /* index into the material array; TRIANGLE_NO_MATERIAL on an index-matched medium boundary, which
+                       rays cross unchanged (docs/media.md) */
     int light;      /* index into the light array, or -1 when the triangle does not emit */
     int interior;   /* index into the medium array: the medium filling the closed shape this triangle bounds, on
                        the side opposite its geometric normal (the winding's back side); -1 when none */
     int pad0;
 } TriangleInfo;
-
-/* TriangleInfo.material of a boundary with no surface: rays cross it unchanged (docs/media.md). */
-#define TRIANGLE_NO_MATERIAL (-1)
 
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already
  * multiplied by the scene's `scale`, in 1/scene unit. */
@@ -85,15 +69,8 @@ typedef struct {
     int pad0;
 } Material;
 
-#define LIGHT_TRIANGLE 0     /* an emitting triangle of an area light: radiance, W/(m² sr nm) */
-#define LIGHT_POINT 1        /* isotropic point: intensity, W/(sr nm) */
-#define LIGHT_SPOT 2         /* point with a cone: intensity on the axis, W/(sr nm), smooth falloff to the cutoff */
-#define LIGHT_DISTANT 3      /* parallel light: irradiance on a surface facing it, W/(m² nm) */
-#define LIGHT_ENVIRONMENT 4  /* uniform environment at infinity: radiance, W/(m² sr nm) */
-#define LIGHT_ENVIRONMENT_MAP 5  /* environment from a latitude-longitude RGB image, scaled: W/(m² sr nm) */
-
-/* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit its
- * type states above. */
+/* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
+ * type (listed with LIGHT_TYPES in spectrace.render.device_types). */
 typedef struct {
     float4 position;       /* point, spot */
     float4 direction;      /* spot: unit axis; distant: unit direction the light travels */
@@ -134,10 +111,6 @@ typedef struct {
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
     int pad1;
 } RenderParams;
-
-#define METER_IRRADIANCE 0  /* W/(m² nm) on a one-sided surface at `point` facing `direction` */
-#define METER_RADIANCE 1    /* W/(m² sr nm) arriving at `point` from `-direction` (along the ray point + t·direction) */
-#define METER_FLUX 2        /* W/nm leaving the sphere centred at point.xyz with radius point.w, from inside */
 
 typedef struct {
     float4 point;

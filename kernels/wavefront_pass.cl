@@ -61,21 +61,14 @@ __kernel void wavefront_start(__global const RenderParams *params, __global cons
 
 /* One segment of every path in `queue` (its first *queue_length entries); the paths still live after it go to
  * next_queue. */
-__kernel void wavefront_advance(__global const RenderParams *params, __global const BVHNode *nodes,
-                                __global const float4 *triangle_vertices, __global const float2 *triangle_uvs,
-                                __global const TriangleInfo *triangle_info,
-                                __global const Material *materials, __global const Light *lights,
-                                __global const float *light_cdf, __global const float *spectra,
-                                __global const float4 *texels, __global const float *map_cdf,
-                                __global const Medium *media, __global const float4 *cmf, __global float4 *film,
+__kernel void wavefront_advance(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
                                 __global uint *ray_counts, __global float *spectral_film, __global PathSlot *slots,
                                 __global const int *queue, __global const int *queue_length,
                                 __global int *next_queue, __global int *next_queue_length)
 {
     int item = get_global_id(0);
     if (item >= *queue_length) return;
-    Scene scene = {params, nodes,     triangle_vertices, triangle_uvs, triangle_info, materials,
-                   lights, light_cdf, spectra,           texels,       map_cdf,   media};
+    Scene scene = SCENE_FROM_KERNEL_PARAMS;
     int pixel = queue[item];
     PathSlot slot = slots[pixel];
     int live = path_segment(&scene, &slot.w, &slot.sampler, &slot.path, &slot.radiance, &slot.rays_traced);

@@ -60,6 +60,25 @@ inline SampledWavelengths sample_wavelengths(float u)
     return w;
 }
 
+/* Whether the four wavelengths differ: sensors put one wavelength in all four lanes, which then go on together
+ * through dispersive events. */
+inline int wavelengths_differ(const SampledWavelengths *w)
+{
+    return any(w->lambda != (float4)(w->lambda.x));
+}
+
+/* Hero-only continuation after an event that sends each wavelength its own way (dispersion): the secondary
+ * wavelengths' lanes of the path's per-wavelength weight `throughput` end, and the hero's counts 4 times, so the
+ * four-lane average the film takes stays unbiased (pbrt-v4's TerminateSecondary reaches the same through the pdfs).
+ * Light already gathered on the secondary lanes stays. *hero_only records that it happened (the free-flight
+ * sampling of media follows the hero alone from then on); a second call changes nothing. */
+inline void terminate_secondary(float4 *throughput, int *hero_only)
+{
+    if (*hero_only) return;
+    *throughput = (float4)(4.0f * throughput->x, 0.0f, 0.0f, 0.0f);
+    *hero_only = 1;
+}
+
 /* Fixed wavelengths (sensors measure chosen wavelengths instead of sampling them); pdf is 1 (unused). */
 inline SampledWavelengths fixed_wavelengths(float4 lambda)
 {

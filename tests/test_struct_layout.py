@@ -1,6 +1,9 @@
-"""Host dtypes and kernels/types.h agree: a kernel reports sizeof and offsetof of every field on the device."""
+"""The host/device contract: the host dtypes and kernels/types.h agree (a kernel reports sizeof and offsetof of every
+field on the device), every build sees the contract values the host defines and no kernel file keeps a copy, and the
+scene kernels take the scene buffers in the order the host sets them."""
 
 import numpy as np
+import pytest
 
 from spectrace.render.device_types import DEVICE_STRUCTS
 
@@ -32,3 +35,78 @@ def test_device_struct_layout_matches_numpy(device, tmp_path):
     cl.enqueue_copy(device.queue, out, buffer)
     device.queue.finish()
     assert out.tolist() == expected
+
+
+def _contract_report_source(names: list[str]) -> str:
+    lines = ['#include "types.h"', "__kernel void report_contract(__global float *out)", "{"]
+    lines += [f"    out[{k}] = (float)({name});" for k, name in enumerate(names)]
+    lines.append("}")
+    return "\n".join(lines)
+
+
+def test_kernels_see_every_contract_value_the_host_defines(device, tmp_path):
+    """Each value of the host/device contract reaches a kernel build with its value (a negative code stays one
+    number inside an expression, a float keeps every digit)."""
+    import pyopencl as cl
+
+    from spectrace.render.device_types import device_contract_defines
+    from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
+
+    contract = device_contract_defines()
+    names = sorted(contract)
+    source = tmp_path / "report_contract.cl"
+    source.write_text(_contract_report_source(names))
+    program = device.build_program(str(source))
+    out = np.zeros(len(names), np.float32)
+    buffer = cl.Buffer(device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
+    program.report_contract(device.queue, (1,), None, buffer)
+    cl.enqueue_copy(device.queue, out, buffer)
+    device.queue.finish()
+    seen = dict(zip(names, out.tolist()))
+    expected = {name: float(str(value).strip("()")) for name, value in contract.items()}
+    assert seen == expected
+    # The grid the spectrum tables are built on is the one the kernels interpolate on.
+    assert (seen["GRID_MIN_NM"], seen["GRID_MAX_NM"], seen["GRID_SAMPLES"]) == (GRID_MIN_NM, GRID_MAX_NM, GRID_SIZE)
+    assert seen["MATERIAL_NO_SPECTRUM"] == seen["TRIANGLE_NO_MATERIAL"] == -1
+
+
+def test_no_kernel_file_keeps_its_own_copy_of_a_contract_value():
+    import re
+
+    from spectrace import resources
+    from spectrace.render.device_types import device_contract_defines
+
+    names = set(device_contract_defines())
+    copies = []
+    for path in sorted(resources.kernels_dir().rglob("*")):
+        if path.suffix in (".cl", ".h"):
+            for name in re.findall(r"^\s*#\s*define\s+([A-Za-z_]\w*)", path.read_text(), flags=re.MULTILINE):
+                if name in names:
+                    copies.append(f"{path.name}: {name}")
+    assert copies == []
+
+
+def test_a_build_without_the_contract_stops_with_a_clear_error(device):
+    from spectrace import resources
+    from spectrace.device.program_cache import KernelBuildError, build_options, compile_source
+
+    options = build_options(resources.kernels_dir(), None, None)
+    with pytest.raises(KernelBuildError, match="contract"):
+        compile_source(device.context, device.cl_device, '#include "types.h"\n', options)
+
+
+@pytest.mark.parametrize(("entry", "kernel"), [("integrator_path.cl", "render_pass"),
+                                               ("integrator_direct.cl", "render_pass"),
+                                               ("integrator_path_wavefront.cl", "wavefront_advance"),
+                                               ("meters.cl", "measure")])
+def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device, entry, kernel):
+    """The host sets a scene kernel's first arguments from SCENE_KERNEL_BUFFERS; the kernel's own parameter names,
+    as the compiler reports them, must be those buffers in that order."""
+    import pyopencl as cl
+
+    from spectrace.render.device_types import SCENE_KERNEL_BUFFERS
+
+    program = device.build_program(entry, options=["-cl-kernel-arg-info"])
+    k = cl.Kernel(program, kernel)
+    names = [k.get_arg_info(i, cl.kernel_arg_info.NAME) for i in range(1 + len(SCENE_KERNEL_BUFFERS))]
+    assert names == ["params", *SCENE_KERNEL_BUFFERS]

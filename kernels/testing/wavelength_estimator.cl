@@ -2,6 +2,7 @@
  * tabulated spectrum, exactly as the path tracer forms them; the host compares the mean with colour-science and
  * uses the spread between work-items for the standard error. */
 #include "rng.cl"
+#include "film.cl"
 #include "spectrum.cl"
 
 __kernel void estimate_spectrum_xyz(__global const float *spectra, int offset, __global const float4 *cmf,

@@ -121,6 +121,18 @@ def build_options(kernels_dir: Path, defines: dict[str, DefineValue] | None, ext
     return " ".join(options + list(extra or []))
 
 
+def _with_contract(defines: dict[str, DefineValue] | None) -> dict[str, DefineValue]:
+    """`defines` plus the host/device contract (type codes, wavelength grid, buffer layouts), which every build
+    gets: the kernels keep no copy of those numbers."""
+    from spectrace.render.device_types import device_contract_defines  # not at import: it loads numpy tables
+
+    contract = device_contract_defines()
+    clash = sorted(set(contract) & set(defines or {}))
+    if clash:
+        raise SpectraceError(f"kernel define {clash[0]} is fixed by the host/device contract")
+    return contract | dict(defines or {})
+
+
 def device_identity(report: DeviceReport) -> str:
     return "\n".join((report.platform_name, report.platform_version, report.device_name, report.driver_version))
 
@@ -172,13 +184,14 @@ class Device:
 
     def build_program(self, entry: str, defines: dict[str, DefineValue] | None = None,
                       options: list[str] | None = None) -> cl.Program:
-        """Build ``kernels/<entry>`` with ``-I kernels`` and ``-D name=value`` for each define, reusing a
-        cached binary when sources, options and device are unchanged."""
+        """Build ``kernels/<entry>`` with ``-I kernels`` and ``-D name=value`` for each define and each value of the
+        host/device contract (spectrace.render.device_types), reusing a cached binary when sources, options and
+        device are unchanged."""
         started = time.perf_counter()
         kernels_dir = resources.kernels_dir()
         if not (kernels_dir / entry).is_file():
             raise SpectraceError(f"kernel file '{entry}' not found in the kernels folder", where=entry)
-        option_text = build_options(kernels_dir, defines, options)
+        option_text = build_options(kernels_dir, _with_contract(defines), options)
         sources_digest = kernels_digest(kernels_dir)
         key = program_cache_key(sources_digest, entry, option_text, device_identity(self.report))
         cache_file = program_cache_dir() / f"{key}.bin"

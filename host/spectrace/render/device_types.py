@@ -1,26 +1,30 @@
-"""numpy mirrors of the structs in kernels/types.h, with explicit offsets.
+"""The host/device contract: numpy mirrors of the structs in kernels/types.h (explicit offsets), and the one home
+of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts).
 
-tests/test_struct_layout.py compiles a kernel that reports each struct's sizeof and offsetof on the device and
-compares them with these dtypes.
+The kernels hold no copy of those numbers: every kernel build gets them as defines (`device_contract_defines`,
+added by spectrace.device's program builds). tests/test_struct_layout.py compiles a kernel that reports each
+struct's sizeof and offsetof, and every contract value as the kernels see it, and compares them with this module.
 """
 
 import numpy as np
 
-from spectrace.geometry.bvh import BVH_NODE_DTYPE
-from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE
+from spectrace.geometry.bvh import BVH_NODE_DTYPE, MAX_DEPTH
+from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE, BVH4_STACK_SIZE
+from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
+from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
-# Material.type and Material.ior_model values (kernels/types.h).
-MATERIAL_DIFFUSE = 0
-MATERIAL_CONDUCTOR = 1
-MATERIAL_MIRROR = 2
-MATERIAL_PLASTIC = 3
-MATERIAL_DIELECTRIC = 4
-MATERIAL_RETROREFLECTOR = 5
+# Material.type: which BSDF (kernels/material.cl's MATERIAL_LIST names each one's functions; docs/materials.md lists
+# the keys).
+MATERIAL_TYPES = ("diffuse", "conductor", "mirror", "plastic", "dielectric", "retroreflector")
+(MATERIAL_DIFFUSE, MATERIAL_CONDUCTOR, MATERIAL_MIRROR, MATERIAL_PLASTIC, MATERIAL_DIELECTRIC,
+ MATERIAL_RETROREFLECTOR) = range(len(MATERIAL_TYPES))
 
-IOR_CONSTANT = 0
-IOR_SELLMEIER = 1
-IOR_CAUCHY = 2
+# Material.ior_model: how a dielectric's interior index of refraction depends on the wavelength (kernels/ior.cl).
+IOR_CONSTANT = 0  # Material.ior
+IOR_SELLMEIER = 1  # n² = 1 + Σ B_i λ² / (λ² − C_i), λ in µm: coefficients B1 B2 B3 C1 C2 C3 (C in µm²)
+IOR_CAUCHY = 2  # n = a + b / λ², λ in µm: coefficients a, b (b in µm²)
 
+# An offset that names no spectrum (only offsets documented as optional in types.h may hold it).
 MATERIAL_NO_SPECTRUM = -1
 
 
@@ -60,7 +64,14 @@ MATERIAL_DTYPE = _struct(
     64,
 )
 
-LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP = range(6)
+# Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
+LIGHT_TYPES = ("triangle", "point", "spot", "distant", "environment", "environment_map")
+LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP = range(
+    len(LIGHT_TYPES))
+# LIGHT_TRIANGLE: an emitting triangle of an area light, radiance W/(m² sr nm); LIGHT_POINT: isotropic, intensity
+# W/(sr nm); LIGHT_SPOT: intensity on the axis W/(sr nm), smooth falloff to the cutoff; LIGHT_DISTANT: irradiance
+# on a surface facing it, W/(m² nm); LIGHT_ENVIRONMENT: uniform at infinity, radiance W/(m² sr nm);
+# LIGHT_ENVIRONMENT_MAP: a latitude-longitude RGB image, scaled, W/(m² sr nm).
 
 LIGHT_DTYPE = _struct(
     [
@@ -108,6 +119,9 @@ RENDER_PARAMS_DTYPE = _struct(
     112,
 )
 
+# MeterParams.type (kernels/meters.cl). IRRADIANCE: W/(m² nm) on a one-sided surface at `point` facing
+# `direction`; RADIANCE: W/(m² sr nm) arriving at `point` from `-direction`; FLUX: W/nm leaving the sphere centred
+# at point.xyz with radius point.w, from inside.
 METER_IRRADIANCE, METER_RADIANCE, METER_FLUX = range(3)
 
 METER_PARAMS_DTYPE = _struct(
@@ -122,6 +136,11 @@ METER_PARAMS_DTYPE = _struct(
     48,
 )
 
+# The scene buffers every scene kernel takes after the RenderParams buffer, in order: the SceneBuffers fields that
+# kernels/scene.cl's SCENE_KERNEL_PARAMS declares (spectrace.render.renderer.upload_scene uploads them so).
+SCENE_KERNEL_BUFFERS = ("nodes", "triangle_vertices", "triangle_uvs", "triangle_info", "materials", "lights",
+                        "light_cdf", "spectra", "texels", "map_cdf", "media")
+
 # struct name in types.h -> dtype; the layout test walks this table.
 DEVICE_STRUCTS: dict[str, np.dtype] = {
     "BVHNode": BVH_NODE_DTYPE,
@@ -133,3 +152,36 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "RenderParams": RENDER_PARAMS_DTYPE,
     "MeterParams": METER_PARAMS_DTYPE,
 }
+
+
+def _c_value(value: int | float) -> int | float | str:
+    # A negative number is parenthesised so the define expands safely anywhere (x-MATERIAL_NO_SPECTRUM).
+    return f"({value})" if isinstance(value, int) and value < 0 else value
+
+
+def device_contract_defines() -> dict[str, int | float | str]:
+    """Every number the kernels share with the host, as build defines: each kernel build gets all of them, and the
+    kernels define none of them themselves."""
+    values: dict[str, int | float] = {
+        # The wavelength grid of every tabulated spectrum (nm): spectrace.spectral.grid.
+        "GRID_MIN_NM": float(GRID_MIN_NM),
+        "GRID_MAX_NM": float(GRID_MAX_NM),
+        "GRID_SAMPLES": int(GRID_SIZE),
+        "MATERIAL_NO_SPECTRUM": MATERIAL_NO_SPECTRUM,
+        "TRIANGLE_NO_MATERIAL": TRIANGLE_NO_MATERIAL,
+        "IOR_CONSTANT": IOR_CONSTANT,
+        "IOR_SELLMEIER": IOR_SELLMEIER,
+        "IOR_CAUCHY": IOR_CAUCHY,
+        "METER_IRRADIANCE": METER_IRRADIANCE,
+        "METER_RADIANCE": METER_RADIANCE,
+        "METER_FLUX": METER_FLUX,
+        "MATERIAL_TYPE_COUNT": len(MATERIAL_TYPES),
+        "LIGHT_TYPE_COUNT": len(LIGHT_TYPES),
+        # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
+        "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
+        "BVH_STACK_SIZE": MAX_DEPTH,
+        "BVH4_STACK_SIZE": BVH4_STACK_SIZE,
+    }
+    values |= {f"MATERIAL_{name.upper()}": code for code, name in enumerate(MATERIAL_TYPES)}
+    values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
+    return {name: _c_value(value) for name, value in values.items()}

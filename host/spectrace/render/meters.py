@@ -14,6 +14,7 @@ from spectrace.device import Device, open_device
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.render.launch import meter_work_group
 from spectrace.render.device_types import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
+from spectrace.render.renderer import upload_scene
 from spectrace.render.scene_buffers import build_scene_buffers, render_params
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
@@ -112,12 +113,10 @@ def measure(scene: Scene, meter: Meter, wavelengths_nm=DEFAULT_WAVELENGTHS_NM, s
     program = device.build_program("meters.cl", defines=traversal_defines() or None)
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-    inputs = [cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
-              for a in (render_params(scene, buffers, 0, 0), buffers.nodes, buffers.triangle_vertices,
-                        buffers.triangle_uvs,
-                        buffers.triangle_info, buffers.materials, buffers.lights, buffers.light_cdf, buffers.spectra,
-                        buffers.texels, buffers.map_cdf, buffers.media,
-                        _meter_params(meter, samples_per_item, seed), wavelengths)]
+    params, meter_params, wavelength_buffer = (
+        cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
+        for a in (render_params(scene, buffers, 0, 0), _meter_params(meter, samples_per_item, seed), wavelengths))
+    inputs = [params, *upload_scene(ctx, buffers), meter_params, wavelength_buffer]
     items = streams * len(wavelengths)
     means = np.empty(items, np.float32)
     out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, means.nbytes)

@@ -11,6 +11,7 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.image import Image, SpectralBands
 from spectrace.render.checkpoint import RenderState
+from spectrace.render.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.render.launch import launch_shape, render_work_group
 from spectrace.render.memory import check_device_memory, device_memory_need
 from spectrace.render.opencl_errors import translate_opencl_errors
@@ -33,6 +34,14 @@ def sampler_defines(sampler: str) -> dict[str, int]:
     if sampler not in SAMPLER_TYPES:
         raise SpectraceError(f"unknown sampler '{sampler}' (use {' or '.join(SAMPLER_TYPES)})")
     return {"SAMPLER_SOBOL": 1} if sampler == "sobol" else {}
+
+
+def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
+    """Read-only device copies of the scene's buffers in the order every scene kernel takes them after the
+    RenderParams buffer (SCENE_KERNEL_BUFFERS; kernels/scene.cl's SCENE_KERNEL_PARAMS)."""
+    flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+    return [cl.Buffer(context, flags, hostbuf=np.ascontiguousarray(getattr(buffers, name)))
+            for name in SCENE_KERNEL_BUFFERS]
 
 
 class Renderer:
@@ -69,12 +78,8 @@ class Renderer:
         ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
         b = self.buffers
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
-        self._inputs = [
-            cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
-            for a in (b.nodes, b.triangle_vertices, b.triangle_uvs, b.triangle_info, b.materials, b.lights,
-                      b.light_cdf,
-                      b.spectra, b.texels, b.map_cdf, b.media, b.cmf)
-        ]
+        self._scene = upload_scene(ctx, b)
+        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(b.cmf))
         self.pixel_count = scene.width * scene.height
         self._film = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 16)
         self._ray_counts = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * 4)
@@ -106,7 +111,7 @@ class Renderer:
         params = render_params(self.scene, self.buffers, self.samples_done, sample_count)
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
-        self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts, self._spectral_film)
+        self.kernel.set_args(self._params, *self._scene, self._cmf, self._film, self._ray_counts, self._spectral_film)
         global_size, local_size = launch_shape(self.pixel_count, self.work_group)
         cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
         queue.finish()

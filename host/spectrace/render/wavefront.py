@@ -59,13 +59,12 @@ class WavefrontRenderer(Renderer):
     def run_pass(self, sample_count: int) -> None:
         queue = self.device.queue
         params = render_params(self.scene, self.buffers, self.samples_done, sample_count)
-        cmf = self._inputs[-1]
         zero = np.zeros(1, np.int32)
         live = np.zeros(1, np.int32)
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
         cl.enqueue_copy(queue, self._queue_lengths[0], zero)
-        self._start_kernel(queue, *launch_shape(self.pixel_count, self.work_group), self._params, cmf, self._film,
+        self._start_kernel(queue, *launch_shape(self.pixel_count, self.work_group), self._params, self._cmf, self._film,
                            self._spectral_film, self._slots, self._queues[0], self._queue_lengths[0])
         current = 0
         while True:
@@ -74,8 +73,8 @@ class WavefrontRenderer(Renderer):
                 break
             following = 1 - current
             cl.enqueue_copy(queue, self._queue_lengths[following], zero)
-            self.kernel.set_args(self._params, *self._inputs, self._film, self._ray_counts, self._spectral_film,
-                                 self._slots, self._queues[current], self._queue_lengths[current],
+            self.kernel.set_args(self._params, *self._scene, self._cmf, self._film, self._ray_counts,
+                                 self._spectral_film, self._slots, self._queues[current], self._queue_lengths[current],
                                  self._queues[following], self._queue_lengths[following])
             cl.enqueue_nd_range_kernel(queue, self.kernel, *launch_shape(int(live[0]), self.work_group))
             current = following

@@ -1,0 +1,110 @@
+/* A camera path between two vertices, and the steps both integrators take along it (path_tracer.cl: the global
+ * model; whitted.cl: the local model). Sensors start paths at a surface point as well as at a camera (meters.cl),
+ * and the wavefront keeps the state in a buffer between launches (wavefront_pass.cl). */
+#ifndef SPECTRACE_PATH_STATE_CL
+#define SPECTRACE_PATH_STATE_CL
+
+#include "direct_lighting.cl"
+
+/* Longest path when max_depth is unbounded (-1): Russian roulette ends paths long before this. */
+#define UNBOUNDED_DEPTH 1024
+
+typedef struct {
+    Ray ray;
+    float4 throughput;
+    float previous_pdf;      /* solid-angle pdf of the direction that produced `ray`; 0 for a camera ray */
+    int previous_delta;      /* `ray` left a specular lobe (or a camera): emission found by it is not MIS-weighted */
+    float3 previous_point;
+    int segments;            /* the segment `ray` is: 1 for a camera ray */
+    int secondary_terminated;  /* only the hero wavelength goes on (terminate_secondary, wavelengths.cl) */
+    int medium;              /* index of the medium `ray` travels in, -1 for none (kernels/medium.cl) */
+    float radiance_scale;    /* product of the refractions' (n_o/n_i)² factors in `throughput` */
+    int null_crossings;      /* medium boundaries crossed without a vertex, bounded by MAX_NULL_CROSSINGS */
+} PathState;
+
+inline PathState camera_path(Ray ray)
+{
+    PathState s;
+    s.ray = ray;
+    s.throughput = (float4)(1.0f);
+    s.previous_pdf = 0.0f;
+    s.previous_delta = 1;
+    s.previous_point = ray.origin;
+    s.segments = 1;
+    s.secondary_terminated = 0;
+    s.medium = -1;  /* cameras and sensors stand outside every medium */
+    s.radiance_scale = 1.0f;
+    s.null_crossings = 0;
+    return s;
+}
+
+inline int max_segments(__global const RenderParams *params)
+{
+    return params->max_depth < 0 ? UNBOUNDED_DEPTH : params->max_depth;
+}
+
+/* Where a path's ray met a surface. */
+typedef struct {
+    TriangleInfo info;
+    float3 p;
+    float3 n;   /* geometric normal (the winding's front) */
+    float3 wo;  /* back along the ray */
+} PathVertex;
+
+inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
+{
+    PathVertex v;
+    v.info = scene->triangle_info[hit.triangle];
+    v.p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+    v.n = triangle_normal(scene->triangle_vertices, hit.triangle);
+    v.wo = -ray.direction;
+    return v;
+}
+
+/* Radiance the vertex's area light (v.info.light >= 0) sends back along the ray. */
+inline float4 vertex_emission(const Scene *scene, const SampledWavelengths *w, const PathVertex *v, Hit hit)
+{
+    return area_light_emitted(&scene->lights[v->info.light], scene->spectra, scene->texels, w, v->n, v->wo,
+                              triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12));
+}
+
+/* At a material-less (index-matched) medium boundary the ray goes on unchanged into or out of the shape's
+ * interior: no vertex, and the segment it is goes on too. Returns 0 when the path has crossed too many (a ray
+ * caught on a boundary by rounding). */
+inline int cross_null_boundary(PathState *s, const PathVertex *v)
+{
+    if (++s->null_crossings > MAX_NULL_CROSSINGS) return 0;
+    s->medium = medium_beyond(v->info.interior, v->n, s->ray.direction);
+    s->ray.origin = offset_ray_origin(v->p, v->n, s->ray.direction);
+    return 1;
+}
+
+/* What a path does at a surface before choosing where to go: a dispersive surface keeps only the hero wavelength
+ * for everything that follows, direct light included (its BSDF is evaluated at the hero's index of refraction);
+ * then next-event estimation, MIS-weighted when use_mis, unless every lobe is a delta lobe. */
+inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                         const PathVertex *v, __global const Material *material, int use_mis, float4 *radiance,
+                         uint *rays_traced)
+{
+    if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
+    if (material_has_non_delta_lobe(material)) {
+        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->wo, material, use_mis,
+                                                           rays_traced);
+    }
+}
+
+/* The path leaves the vertex along a BSDF sample: its weight and radiance compression join the throughput, and
+ * the next ray starts off the surface in the medium on that side. */
+inline void follow_bsdf_sample(PathState *s, const PathVertex *v, const BSDFSample *bs)
+{
+    s->throughput *= bs->weight;
+    s->radiance_scale *= bs->radiance_scale;
+    s->previous_pdf = bs->pdf;
+    s->previous_delta = bs->is_delta;
+    s->medium = medium_beyond(v->info.interior, v->n, bs->wi);
+    s->previous_point = v->p;
+    s->ray.origin = offset_ray_origin(v->p, v->n, bs->wi);
+    s->ray.direction = bs->wi;
+}
+
+#endif
