@@ -130,7 +130,8 @@ def scene_to_mitsuba_dict(scene: Scene, mesh_folder: Path, spp: int | None = Non
     for index, shape in enumerate(scene.shapes):
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
-            raise _refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet", scene)
+            raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported "
+                                  "yet")
         material_key = id(shape.material)
         if material_key not in materials:
             name = f"material_{len(materials)}"
