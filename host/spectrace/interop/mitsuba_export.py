@@ -5,8 +5,9 @@ The export is meant to make Mitsuba do exactly the work spectrace does, so that 
   also what decides the front side in both renderers), as binary PLY files in a folder the caller owns;
 - spectra: every spectrum as Mitsuba's `regular` spectrum on spectrace's own 1 nm grid (360-830 nm), so both
   interpolate the same samples linearly;
-- materials: spectrace's diffuse reflects on both faces, so it becomes `twosided` around `diffuse`;
-- area lights: Mitsuba's `area` emitter is one-sided toward the face normal, as spectrace's default;
+- materials and lights: each module's `to_mitsuba` (spectrace.materials.<name>, spectrace.lights.<name>) gives its
+  entry; spectrace's diffuse reflects on both faces, so it becomes `twosided` around `diffuse`; Mitsuba's `area`
+  emitter is one-sided toward the face normal, as spectrace's default;
 - camera: the same origin/target/up (Mitsuba's `lookat` puts image-right along forward x up, as spectrace does),
   fov and fov_axis; a box pixel filter, because spectrace averages samples uniformly inside each pixel;
 - film: `hdrfilm` with pixel_format "xyz". Both renderers estimate ∫ L (x̄, ȳ, z̄) dλ with the CIE 1931 2°
@@ -17,8 +18,9 @@ The export is meant to make Mitsuba do exactly the work spectrace does, so that 
 - integrator: `path` with the same max_depth and rr_depth. Both count max_depth in path segments and start
   Russian roulette once `rr_depth` bounces have happened, with survival probability min(max throughput, 0.95).
 
-What has no faithful counterpart (spot lights: Mitsuba's falloff profile differs; pictures on lights, environment
-maps from images, two-sided area lights, the `direct` integrator) is refused with a SpectraceError naming it.
+What has no faithful counterpart (a material or light whose module has no `to_mitsuba`: spot lights, whose falloff
+profile differs in Mitsuba, environment maps from images, the materials other than diffuse; pictures on lights,
+two-sided area lights, the `direct` integrator) is refused with a SpectraceError naming it.
 """
 
 from pathlib import Path
@@ -27,7 +29,9 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
-from spectrace.scene.model import ConstantEnvironment, DiffuseMaterial, DistantLight, PointLight, Scene
+from spectrace.lights import LIGHTS, area
+from spectrace.materials import MATERIALS
+from spectrace.scene.model import Scene
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
 
@@ -65,15 +69,29 @@ def _refuse(what: str, scene: Scene) -> SpectraceError:
                           where=str(scene.source) if scene.source else None)
 
 
-def _light_entry(light, scene: Scene) -> dict:
-    if isinstance(light, PointLight):
-        return {"type": "point", "position": list(light.position), "intensity": regular_spectrum(light.intensity)}
-    if isinstance(light, DistantLight):
-        return {"type": "directional", "direction": list(light.direction),
-                "irradiance": regular_spectrum(light.irradiance)}
-    if isinstance(light, ConstantEnvironment):
-        return {"type": "constant", "radiance": regular_spectrum(light.radiance)}
-    raise _refuse(f"{type(light).__name__} has no equivalent Mitsuba emitter", scene)
+class MitsubaExport:
+    """What the modules' `to_mitsuba(model, exporter)` use: `spectrum` (a Mitsuba spectrum entry) and `refuse` (the
+    error for what has no faithful counterpart)."""
+
+    spectrum = staticmethod(regular_spectrum)
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+
+    def refuse(self, what: str) -> SpectraceError:
+        return _refuse(what, self.scene)
+
+
+# Resolved model -> its module's `to_mitsuba`; a model without one is refused.
+_MATERIAL_EXPORTS = {m.MODEL: m.to_mitsuba for m in MATERIALS.values() if hasattr(m, "to_mitsuba")}
+_LIGHT_EXPORTS = {m.MODEL: m.to_mitsuba for m in LIGHTS.values() if hasattr(m, "to_mitsuba")}
+
+
+def _light_entry(light, exporter: MitsubaExport) -> dict:
+    to_mitsuba = _LIGHT_EXPORTS.get(type(light))
+    if to_mitsuba is None:
+        raise exporter.refuse(f"{type(light).__name__} has no equivalent Mitsuba emitter")
+    return to_mitsuba(light, exporter)
 
 
 # Mitsuba 3's samplers; "independent" is its default, the stratified ones are its counterparts of spectrace's Sobol.
@@ -107,29 +125,27 @@ def scene_to_mitsuba_dict(scene: Scene, mesh_folder: Path, spp: int | None = Non
                      "pixel_format": "xyz", "rfilter": {"type": "box"}},
         },
     }
+    exporter = MitsubaExport(scene)
     materials: dict[int, str] = {}
     for index, shape in enumerate(scene.shapes):
-        if not isinstance(shape.material, DiffuseMaterial):
-            raise _refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet", scene)
-        reflectance_key = id(shape.material)
-        if reflectance_key not in materials:
+        to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
+        if to_mitsuba is None:
+            raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported "
+                                  "yet")
+        material_key = id(shape.material)
+        if material_key not in materials:
             name = f"material_{len(materials)}"
-            entries[name] = {"type": "twosided",
-                             "bsdf": {"type": "diffuse", "reflectance": regular_spectrum(shape.material.reflectance)}}
-            materials[reflectance_key] = name
+            entries[name] = to_mitsuba(shape.material, exporter)
+            materials[material_key] = name
         path = mesh_folder / f"shape_{index}.ply"
         write_binary_ply(shape.mesh, path)
         entry = {"type": "ply", "filename": str(path), "face_normals": True,
-                 "bsdf": {"type": "ref", "id": materials[reflectance_key]}}
+                 "bsdf": {"type": "ref", "id": materials[material_key]}}
         if shape.emitter is not None:
-            if shape.emitter.image is not None:
-                raise _refuse(f"shape '{shape.name}' shows an image; Mitsuba's area light has one spectrum", scene)
-            if shape.emitter.two_sided:
-                raise _refuse(f"shape '{shape.name}' emits on both faces; Mitsuba's area light is one-sided", scene)
-            entry["emitter"] = {"type": "area", "radiance": regular_spectrum(shape.emitter.radiance)}
+            entry["emitter"] = area.to_mitsuba(shape.emitter, exporter, f"shape '{shape.name}'")
         entries[f"shape_{index}"] = entry
     for index, light in enumerate(scene.lights):
-        entries[f"light_{index}"] = _light_entry(light, scene)
+        entries[f"light_{index}"] = _light_entry(light, exporter)
     return entries
 
 

@@ -1,13 +1,17 @@
 """Mitsuba 3 XML scenes -> spectrace scene TOML, for the subset spectrace represents exactly.
 
-Imported: shapes obj, ply, rectangle, cube, sphere (center, radius); BSDFs diffuse, conductor and roughconductor
-(material "Au", "Ag", "Cu", "Al" or "none", eta and k, alpha, specular_reflectance), plastic and roughplastic
-(diffuse_reflectance, int_ior / ext_ior as numbers or Mitsuba's names, alpha), dielectric and roughdielectric
-(int_ior / ext_ior, alpha, equal specular_reflectance and specular_transmittance), and twosided around one of them
-(spectrace's materials already reflect on both faces); emitters area, point, constant, directional; the
-perspective sensor (fov with any fov_axis, or focal_length; to_world with lookat/translate/rotate/scale/matrix);
-hdrfilm width/height; the sampler's sample_count and seed; integrators path (max_depth, rr_depth), direct (as path
-with max_depth 2) and volpath/volpathmis (as path: spectrace has no media). Spectra: rgb (uplifted exactly as
+This module is the machinery every plugin shares: the XML with each element's path, property values, spectra,
+transforms, references, errors and notes, and the plugins that are no material or light (shapes, twosided, the
+sensor, film, sampler and integrator). Each BSDF and emitter is mapped by its spectrace module, which names the
+Mitsuba plugins it imports (MITSUBA_PLUGINS) and converts them (`from_mitsuba`): spectrace.materials.<name> for
+BSDFs, spectrace.lights.<name> for emitters (lights.area for a shape's). The plugin -> module tables are built from
+the registries (MATERIALS, LIGHTS).
+
+Imported here: shapes obj, ply, rectangle, cube, sphere (center, radius); twosided around one BSDF (spectrace's
+materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
+with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
+path (max_depth, rr_depth), direct (as path with max_depth 2) and volpath/volpathmis (as path: spectrace has no
+media). Spectra: rgb (uplifted exactly as
 Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as a value, "λ:v" pairs,
 wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular, blackbody, d65 and srgb.
 `$name` parameters and <default> are substituted as Mitsuba does.
@@ -34,23 +38,31 @@ import numpy as np
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
 from spectrace.io.input_files import regular_file
-from spectrace.materials import plastic
+from spectrace.lights import LIGHTS, area
+from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import ROUGHNESS_RANGE
-from spectrace.spectral.glasses import IOR_RANGE
 
+
+def _modules_by_plugin(modules) -> dict:
+    """Mitsuba plugin name -> the material or light module that imports it (its MITSUBA_PLUGINS)."""
+    return {plugin: module for module in modules for plugin in module.MITSUBA_PLUGINS}
+
+
+BSDF_MODULES = _modules_by_plugin(MATERIALS.values())
+EMITTER_MODULES = _modules_by_plugin(LIGHTS.values())  # emitters of their own, <emitter> children of <scene>
+SHAPE_EMITTER_MODULES = _modules_by_plugin((area,))  # emitters on a shape
+# `twosided` wraps one BSDF: spectrace's materials already reflect on both faces.
+BSDF_WRAPPERS = ("twosided",)
 SUPPORTED = {
     "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
-    "bsdf": ("diffuse", "twosided", "conductor", "roughconductor", "plastic", "roughplastic", "dielectric",
-             "roughdielectric"),
-    "emitter": ("area", "point", "constant", "directional"),
+    "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
+    "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "sensor": ("perspective",),
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis"),
 }
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 _PLANNED_BSDFS = ("thindielectric",)
-# Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
-_CONDUCTOR_MATERIALS = ("Au", "Ag", "Cu", "Al")
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
 _NAMED_IOR = {"vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.000277, "carbon dioxide": 1.00045,
               "water": 1.333, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
@@ -159,7 +171,16 @@ _FLOAT32_MAX = float(np.finfo(np.float32).max)
 _INTEGER_LIMIT = 2**63  # TOML's integers are 64-bit
 
 
-class _Importer:
+class MitsubaImporter:
+    """One import of an XML scene. The material and light modules' `from_mitsuba` functions get it, and use its
+    helpers: property values (`spectrum`, `number`, `integer`, `vector`, `text`, `properties`, `child`, `resolve`),
+    the rough BSDFs' shared `roughness` and `ior`, `fail(element, message, attribute)` for the one-line error naming
+    the file and element path, `unsupported_plugin(element, detail)` for what spectrace cannot represent (they return
+    None then), and `notes` for what it represents differently."""
+
+    # Mitsuba 3's named indices of refraction, for int_ior / ext_ior and their defaults.
+    NAMED_IOR = _NAMED_IOR
+
     def __init__(self, xml_path: Path, toml_folder: Path, parameters: dict[str, str]):
         self.xml_path = xml_path
         self.toml_folder = toml_folder
@@ -401,6 +422,10 @@ class _Importer:
             return None
         raise self.fail(element, f"'{key}' must be a colour or spectrum, got <{_shown(element.tag)}>")
 
+    def default_emission(self) -> dict:
+        """What an emitter emits when its spectrum is not given: Mitsuba's d65 of unit luminance."""
+        return {"rgb": [1.0, 1.0, 1.0]}
+
     def non_negative(self, values: list[float], element: Element, key: str) -> None:
         """Reflectances, emission and optical constants are never negative."""
         if any(value < 0.0 for value in values):
@@ -562,16 +587,8 @@ class _Importer:
                 self.unsupported_plugin(bsdf, " with two different sides")
                 return None
             return self.material_table(nested[0])
-        if kind == "diffuse":
-            reflectance = properties.get("reflectance")
-            spectrum = self.spectrum(reflectance, "reflectance") if reflectance is not None else {"value": 0.5}
-            return None if spectrum is None else {"type": "diffuse", "reflectance": spectrum}
-        if kind in ("conductor", "roughconductor"):
-            return self.conductor_table(bsdf, properties, rough=kind == "roughconductor")
-        if kind in ("plastic", "roughplastic"):
-            return self.plastic_table(bsdf, properties, rough=kind == "roughplastic")
-        if kind in ("dielectric", "roughdielectric"):
-            return self.dielectric_table(bsdf, properties, rough=kind == "roughdielectric")
+        if kind in BSDF_MODULES:
+            return BSDF_MODULES[kind].from_mitsuba(self, bsdf, properties)
         self.unsupported_plugin(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
 
@@ -603,44 +620,8 @@ class _Importer:
             raise self.fail(bsdf, f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha:g}")
         return alpha
 
-    def conductor_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
-        tint = None
-        if "specular_reflectance" in properties:
-            tint = self.spectrum(properties["specular_reflectance"], "specular_reflectance")
-            if tint is None:
-                return None
-        roughness = self.roughness(bsdf, properties) if rough else 0.0
-        if roughness is None:
-            return None
-        if "eta" in properties or "k" in properties:
-            if "eta" not in properties or "k" not in properties:
-                raise self.fail(bsdf, "a conductor needs both eta and k")
-            eta, k = self.spectrum(properties["eta"], "eta"), self.spectrum(properties["k"], "k")
-            if eta is None or k is None:
-                return None
-            if "rgb" in eta or "rgb" in k:
-                self.unsupported_plugin(bsdf, " with eta or k given as rgb")
-                return None
-            table = {"type": "conductor", "eta": eta, "k": k}
-        else:
-            material = self.text(properties["material"]) if "material" in properties else "none"
-            if material == "none":  # Mitsuba's default: a perfect mirror scaled by specular_reflectance
-                if roughness > 0.0:
-                    self.unsupported_plugin(bsdf, " with material 'none' and roughness")
-                    return None
-                return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
-            if material not in _CONDUCTOR_MATERIALS:
-                self.unsupported_plugin(bsdf, f" with material '{material}' (spectrace has "
-                                              f"{', '.join(_CONDUCTOR_MATERIALS)})")
-                return None
-            table = {"type": "conductor", "metal": material}
-        if roughness > 0.0:
-            table["roughness"] = roughness
-        if tint is not None:
-            table["specular_tint"] = tint
-        return table
-
     def ior(self, bsdf: Element, properties: dict[str, Element], key: str, default: float) -> float:
+        """An index of refraction property (int_ior, ext_ior): a number or one of Mitsuba's names."""
         if key not in properties:
             return default
         element = self.resolve(properties[key])
@@ -654,60 +635,6 @@ class _Importer:
         if not value > 0.0:
             raise self.fail(element, f"{key} must be > 0, got {value:g}", "value")
         return value
-
-    def plastic_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
-        reflectance = (self.spectrum(properties["diffuse_reflectance"], "diffuse_reflectance")
-                       if "diffuse_reflectance" in properties else {"value": 0.5})
-        if reflectance is None:
-            return None
-        if "specular_reflectance" in properties:
-            specular = self.spectrum(properties["specular_reflectance"], "specular_reflectance")
-            if specular is not None and specular != {"value": 1.0}:
-                self.unsupported_plugin(bsdf, " with specular_reflectance other than 1")
-                return None
-        if "nonlinear" in properties and self.text(properties["nonlinear"]) == "true":
-            self.unsupported_plugin(bsdf, " with nonlinear = true")
-            return None
-        ior = self.ior(bsdf, properties, "int_ior", 1.49) / self.ior(bsdf, properties, "ext_ior", 1.000277)
-        if not plastic.IOR.range.contains(ior):
-            raise self.fail(bsdf, f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in "
-                                  f"{plastic.IOR.range}")
-        roughness = self.roughness(bsdf, properties) if rough else 0.0
-        if roughness is None:
-            return None
-        self.notes.append(f"line {bsdf.line}: {bsdf.label()}: spectrace's plastic couples coat and base "
-                          "differently from Mitsuba's (an energy-conserving symmetric "
-                          "coupling instead of internal scattering; see docs/materials.md), so the brightness of "
-                          "its diffuse part differs")
-        table = {"type": "plastic", "reflectance": reflectance, "ior": round(ior, 6)}
-        if roughness > 0.0:
-            table["roughness"] = roughness
-        return table
-
-    def dielectric_table(self, bsdf: Element, properties: dict[str, Element], rough: bool) -> dict | None:
-        """Mitsuba's dielectrics have one constant index per side (default bk7 inside, air outside): spectrace's ior
-        is their ratio. One tint on both lobes stands for equal specular_reflectance and specular_transmittance."""
-        ior = self.ior(bsdf, properties, "int_ior", _NAMED_IOR["bk7"]) / self.ior(bsdf, properties, "ext_ior",
-                                                                                  _NAMED_IOR["air"])
-        if ior < IOR_RANGE[0]:
-            self.unsupported_plugin(bsdf, " with int_ior not above ext_ior (flip the shape's normals instead)")
-            return None
-        roughness = self.roughness(bsdf, properties) if rough else 0.0
-        if roughness is None:
-            return None
-        tints = {key: self.spectrum(properties[key], key) for key in ("specular_reflectance", "specular_transmittance")
-                 if key in properties}
-        if None in tints.values():
-            return None
-        if len(tints) == 1 or (len(tints) == 2 and tints["specular_reflectance"] != tints["specular_transmittance"]):
-            self.unsupported_plugin(bsdf, " with specular_reflectance different from specular_transmittance")
-            return None
-        table: dict = {"type": "dielectric", "ior": round(ior, 6)}
-        if roughness > 0.0:
-            table["roughness"] = roughness
-        if tints:
-            table["specular_tint"] = tints["specular_reflectance"]
-        return table
 
     # -------------------------------------------------- scene parts
 
@@ -752,34 +679,19 @@ class _Importer:
         table["material"] = self.material(bsdf, name)
         emitter = next((self.resolve(c) for c in properties.values() if self.resolve(c).tag == "emitter"), None)
         if emitter is not None:
-            if self.kind(emitter) != "area":
+            module = SHAPE_EMITTER_MODULES.get(self.kind(emitter))
+            if module is None:
                 self.unsupported_plugin(emitter, " on a shape")
-            else:
-                radiance = self.child(self.properties(emitter), "radiance", emitter)
-                spectrum = self.spectrum(radiance, "radiance")
-                if spectrum is not None:
-                    table["emitter"] = {"radiance": spectrum}
+            elif (emitter_table := module.from_mitsuba(self, emitter, self.properties(emitter))) is not None:
+                table["emitter"] = emitter_table
         return table if table["material"] is not None else None
 
     def light(self, element: Element) -> dict | None:
         kind = self.kind(element)
         properties = self.properties(element)
         matrix = self.to_world(properties)
-        white = {"rgb": [1.0, 1.0, 1.0]}  # Mitsuba's default emission: d65 with unit luminance
-        if kind == "point":
-            position = self.vector(properties["position"]) if "position" in properties else matrix[:3, 3].tolist()
-            intensity = self.spectrum(properties["intensity"], "intensity") if "intensity" in properties else white
-            return None if intensity is None else {"type": "point", "position": position, "intensity": intensity}
-        if kind == "constant":
-            radiance = self.spectrum(properties["radiance"], "radiance") if "radiance" in properties else white
-            return None if radiance is None else {"type": "constant", "radiance": radiance}
-        if kind == "directional":
-            direction = (self.vector(properties["direction"]) if "direction" in properties
-                         else (matrix[:3, :3] @ [0.0, 0.0, 1.0]).tolist())
-            if not any(direction):
-                raise self.fail(properties.get("direction", element), "the direction must not be zero")
-            irradiance = self.spectrum(properties["irradiance"], "irradiance") if "irradiance" in properties else white
-            return None if irradiance is None else {"type": "distant", "direction": direction, "irradiance": irradiance}
+        if kind in EMITTER_MODULES:
+            return EMITTER_MODULES[kind].from_mitsuba(self, element, properties, matrix)
         self.unsupported_plugin(element)
         return None
 
@@ -1001,7 +913,7 @@ def mitsuba_scene_data(xml_path: str | Path, toml_folder: str | Path | None = No
     to `toml_folder` (default: the XML's folder). `parameters` set `$name` values, as `mitsuba -D name=value`.
     Raises SpectraceError naming every unsupported plugin."""
     xml_path = Path(xml_path)
-    importer = _Importer(xml_path, Path(toml_folder) if toml_folder else xml_path.parent, parameters or {})
+    importer = MitsubaImporter(xml_path, Path(toml_folder) if toml_folder else xml_path.parent, parameters or {})
     try:
         return importer.run(parse_xml(xml_path)), importer.notes
     except SpectraceError as error:
@@ -1020,7 +932,7 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
 
     xml_path, toml_path = Path(xml_path), Path(toml_path)
     check_output_path(toml_path, xml_path)
-    importer = _Importer(xml_path, toml_path.parent, parameters or {})
+    importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
     try:
         data = importer.run(parse_xml(xml_path))
         header = "\n".join([f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by "

@@ -3,8 +3,10 @@ emitter).
 
 Each module opens with its parameter table (PARAMETERS, spectrace.materials.parameters) and holds its resolved
 dataclass (MODEL), `from_spec` (a validated scene-file table to the dataclass), SPEC_CHECKS for rules spanning
-several keys, IS_ENVIRONMENT (a scene has at most one environment) and `write_rows`, which adds its Light rows
-(kernels/types.h) with an estimate of the power each emits to a LightRows (base.py).
+several keys, IS_ENVIRONMENT (a scene has at most one environment), `write_rows`, which adds its Light rows
+(kernels/types.h) with an estimate of the power each emits to a LightRows (base.py), and its Mitsuba 3 mapping as a
+material's: MITSUBA_PLUGINS with `from_mitsuba(importer, emitter, properties, to_world)` (area's without to_world:
+it is on a shape) or MITSUBA_NONE, and `to_mitsuba` where the export has one.
 """
 
 from spectrace.errors import SpectraceError

@@ -11,6 +11,7 @@ from spectrace.render.device_types import LIGHT_TRIANGLE
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "area"
+MITSUBA_PLUGINS = ("area",)  # on a shape only
 PARAMETERS = (
     Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="times scale"),
     Parameter("two_sided", "bool", "", False,
@@ -59,3 +60,19 @@ def write_rows(emitters: list[AreaEmitter], triangle_emitter: np.ndarray, areas:
                           texel_offset=fields.get("texel_offset", 0)),
                 np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0))
     return emitting
+
+
+def from_mitsuba(importer, emitter, properties) -> dict | None:
+    """A shape's emitter table (one-sided toward the face normal, as Mitsuba's area light)."""
+    radiance = importer.child(properties, "radiance", emitter)
+    spectrum = importer.spectrum(radiance, "radiance")
+    return None if spectrum is None else {"radiance": spectrum}
+
+
+def to_mitsuba(emitter: AreaEmitter, exporter, owner: str) -> dict:
+    """Mitsuba's area light has one spectrum and emits on the front face only; `owner` names the shape."""
+    if emitter.image is not None:
+        raise exporter.refuse(f"{owner} shows an image; Mitsuba's area light has one spectrum")
+    if emitter.two_sided:
+        raise exporter.refuse(f"{owner} emits on both faces; Mitsuba's area light is one-sided")
+    return {"type": "area", "radiance": exporter.spectrum(emitter.radiance)}

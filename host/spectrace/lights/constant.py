@@ -10,6 +10,7 @@ from spectrace.render.device_types import LIGHT_ENVIRONMENT
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "constant"
+MITSUBA_PLUGINS = ("constant",)
 IS_ENVIRONMENT = True
 PARAMETERS = (Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="from every direction"),)
 
@@ -31,3 +32,13 @@ def from_spec(spec, resolver, key: str) -> ConstantEnvironment:
 def write_rows(light: ConstantEnvironment, out: LightRows) -> None:
     out.add(light_row(LIGHT_ENVIRONMENT, out.table.add(light.radiance)),
             4.0 * np.pi**2 * out.scene_radius**2 * light.radiance.mean(), environment=True)
+
+
+def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
+    radiance = (importer.spectrum(properties["radiance"], "radiance") if "radiance" in properties
+                else importer.default_emission())
+    return None if radiance is None else {"type": "constant", "radiance": radiance}
+
+
+def to_mitsuba(light: ConstantEnvironment, exporter) -> dict:
+    return {"type": "constant", "radiance": exporter.spectrum(light.radiance)}

@@ -12,6 +12,8 @@ from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 
 NAME = "envmap"
+MITSUBA_PLUGINS = ()
+MITSUBA_NONE = "not mapped yet: the importer refuses Mitsuba 3's envmap and the export this light"
 IS_ENVIRONMENT = True
 PARAMETERS = (
     Parameter("file", "string", "", REQUIRED, doc="latitude-longitude OpenEXR image, linear sRGB"),

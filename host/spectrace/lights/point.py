@@ -15,6 +15,7 @@ from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "point"
+MITSUBA_PLUGINS = ("point",)
 IS_ENVIRONMENT = False
 FULL_SPHERE_SR = 4.0 * np.pi
 POSITION = Parameter("position", "vector", "scene units", REQUIRED, doc="where the light is")
@@ -90,3 +91,14 @@ def from_spec(spec, resolver, key: str) -> PointLight:
 def write_rows(light: PointLight, out: LightRows) -> None:
     out.add(light_row(LIGHT_POINT, out.table.add(light.intensity), position=light.position),
             4.0 * np.pi * light.intensity.mean())
+
+
+def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
+    position = importer.vector(properties["position"]) if "position" in properties else to_world[:3, 3].tolist()
+    intensity = (importer.spectrum(properties["intensity"], "intensity") if "intensity" in properties
+                 else importer.default_emission())
+    return None if intensity is None else {"type": "point", "position": position, "intensity": intensity}
+
+
+def to_mitsuba(light: PointLight, exporter) -> dict:
+    return {"type": "point", "position": list(light.position), "intensity": exporter.spectrum(light.intensity)}

@@ -12,6 +12,8 @@ from spectrace.render.device_types import LIGHT_SPOT
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "spot"
+MITSUBA_PLUGINS = ()
+MITSUBA_NONE = "Mitsuba 3's spot falls off with a different profile: neither is imported or exported as the other"
 IS_ENVIRONMENT = False
 CUTOFF_ANGLE = Parameter("cutoff_angle", "float", "degrees", 30.0, Range(0.0, 90.0, low_open=True),
                          doc="from the axis, where the intensity reaches 0")

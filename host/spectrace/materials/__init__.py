@@ -3,8 +3,10 @@
 Each module opens with its parameter table (PARAMETERS, see parameters.py) and holds the rest of what the host
 knows about the material: its resolved dataclass (MODEL) with the flags the kernels' dispatch also states
 (is_delta: only delta lobes; has_transmission; is_dispersive), `from_spec` (a validated scene-file table to the
-dataclass), `make` (the Python API's checks), `write_row` (its Material row, kernels/types.h) and, where a rule
-spans several keys, SPEC_CHECKS for the scene schema. The BSDF itself is kernels/bsdf_<name>.cl.
+dataclass), `make` (the Python API's checks), `write_row` (its Material row, kernels/types.h), where a rule
+spans several keys SPEC_CHECKS for the scene schema, and its Mitsuba 3 mapping: MITSUBA_PLUGINS with `from_mitsuba`
+(or MITSUBA_NONE, why it has none) for the importer, `to_mitsuba` for the export where Mitsuba can do the same work
+(spectrace.interop dispatches to them through MATERIALS). The BSDF itself is kernels/bsdf_<name>.cl.
 
 Adding a BSDF: its module here, one entry in MATERIALS, its kernel file and case in kernels/material.cl, tests.
 """

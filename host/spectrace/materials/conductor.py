@@ -12,6 +12,9 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "conductor"
+MITSUBA_PLUGINS = ("conductor", "roughconductor")
+# Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
+MITSUBA_METALS = ("Au", "Ag", "Cu", "Al")
 ROUGHNESS = roughness(0.0, "GGX α; 0 = polished")
 PARAMETERS = (
     Parameter("metal", "metal", default=None, default_doc="—",
@@ -89,3 +92,42 @@ def write_row(row: np.ndarray, material: ConductorMaterial, table: SpectrumTable
     if material.specular_tint is not None:
         row["reflectance_offset"] = table.add(material.specular_tint)
     row["alpha"] = material.roughness
+
+
+def from_mitsuba(importer, bsdf, properties) -> dict | None:
+    """A conductor (or, for Mitsuba's material "none", a mirror) table; None when not representable (recorded)."""
+    tint = None
+    if "specular_reflectance" in properties:
+        tint = importer.spectrum(properties["specular_reflectance"], "specular_reflectance")
+        if tint is None:
+            return None
+    roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughconductor" else 0.0
+    if roughness is None:
+        return None
+    if "eta" in properties or "k" in properties:
+        if "eta" not in properties or "k" not in properties:
+            raise importer.fail(bsdf, "a conductor needs both eta and k")
+        eta, k = importer.spectrum(properties["eta"], "eta"), importer.spectrum(properties["k"], "k")
+        if eta is None or k is None:
+            return None
+        if "rgb" in eta or "rgb" in k:
+            importer.unsupported_plugin(bsdf, " with eta or k given as rgb")
+            return None
+        table = {"type": "conductor", "eta": eta, "k": k}
+    else:
+        material = importer.text(properties["material"]) if "material" in properties else "none"
+        if material == "none":  # Mitsuba's default: a perfect mirror scaled by specular_reflectance
+            if roughness > 0.0:
+                importer.unsupported_plugin(bsdf, " with material 'none' and roughness")
+                return None
+            return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
+        if material not in MITSUBA_METALS:
+            importer.unsupported_plugin(bsdf, f" with material '{material}' (spectrace has "
+                                              f"{', '.join(MITSUBA_METALS)})")
+            return None
+        table = {"type": "conductor", "metal": material}
+    if roughness > 0.0:
+        table["roughness"] = roughness
+    if tint is not None:
+        table["specular_tint"] = tint
+    return table

@@ -12,6 +12,7 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "dielectric"
+MITSUBA_PLUGINS = ("dielectric", "roughdielectric")
 ROUGHNESS = roughness(0.0, "GGX α; 0 = polished glass")
 # A number, a glass name or Sellmeier/Cauchy coefficients: spectral.glasses.index_of_refraction checks the
 # range over the whole grid.
@@ -81,3 +82,30 @@ def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTabl
     if material.specular_tint is not None:
         row["reflectance_offset"] = table.add(material.specular_tint)
     row["alpha"] = material.roughness
+
+
+def from_mitsuba(importer, bsdf, properties) -> dict | None:
+    """Mitsuba's dielectrics have one constant index per side (default bk7 inside, air outside): spectrace's ior
+    is their ratio. One tint on both lobes stands for equal specular_reflectance and specular_transmittance."""
+    named = importer.NAMED_IOR
+    ior = importer.ior(bsdf, properties, "int_ior", named["bk7"]) / importer.ior(bsdf, properties, "ext_ior",
+                                                                                   named["air"])
+    if ior < IOR_RANGE[0]:
+        importer.unsupported_plugin(bsdf, " with int_ior not above ext_ior (flip the shape's normals instead)")
+        return None
+    roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughdielectric" else 0.0
+    if roughness is None:
+        return None
+    tints = {key: importer.spectrum(properties[key], key)
+             for key in ("specular_reflectance", "specular_transmittance") if key in properties}
+    if None in tints.values():
+        return None
+    if len(tints) == 1 or (len(tints) == 2 and tints["specular_reflectance"] != tints["specular_transmittance"]):
+        importer.unsupported_plugin(bsdf, " with specular_reflectance different from specular_transmittance")
+        return None
+    table: dict = {"type": "dielectric", "ior": round(ior, 6)}
+    if roughness > 0.0:
+        table["roughness"] = roughness
+    if tints:
+        table["specular_tint"] = tints["specular_reflectance"]
+    return table

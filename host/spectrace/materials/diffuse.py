@@ -10,6 +10,7 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "diffuse"
+MITSUBA_PLUGINS = ("diffuse",)
 PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π"),)
 
 
@@ -38,3 +39,14 @@ def make(reflectance: Spectrum) -> DiffuseMaterial:
 def write_row(row: np.ndarray, material: DiffuseMaterial, table: SpectrumTable) -> None:
     row["type"] = MATERIAL_DIFFUSE
     row["reflectance_offset"] = table.add(material.reflectance)
+
+
+def from_mitsuba(importer, bsdf, properties) -> dict | None:
+    reflectance = properties.get("reflectance")
+    spectrum = importer.spectrum(reflectance, "reflectance") if reflectance is not None else {"value": 0.5}
+    return None if spectrum is None else {"type": "diffuse", "reflectance": spectrum}
+
+
+def to_mitsuba(material: DiffuseMaterial, exporter) -> dict:
+    # Mitsuba's diffuse is black from behind; spectrace's reflects on both faces.
+    return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": exporter.spectrum(material.reflectance)}}

@@ -11,6 +11,7 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "plastic"
+MITSUBA_PLUGINS = ("plastic", "roughplastic")
 # Above 4 the coat's hemispherical Fresnel average leaves the range its quadrature is exact for (docs/materials.md).
 IOR = Parameter("ior", "float", "dimensionless", default=1.5, range=Range(1.0, 4.0, low_open=True),
                 doc="index of refraction of the clear coat relative to the outside")
@@ -49,3 +50,33 @@ def write_row(row: np.ndarray, material: PlasticMaterial, table: SpectrumTable) 
     row["ior_model"] = IOR_CONSTANT
     row["ior"] = material.ior
     row["alpha"] = material.roughness
+
+
+def from_mitsuba(importer, bsdf, properties) -> dict | None:
+    reflectance = (importer.spectrum(properties["diffuse_reflectance"], "diffuse_reflectance")
+                   if "diffuse_reflectance" in properties else {"value": 0.5})
+    if reflectance is None:
+        return None
+    if "specular_reflectance" in properties:
+        specular = importer.spectrum(properties["specular_reflectance"], "specular_reflectance")
+        if specular is not None and specular != {"value": 1.0}:
+            importer.unsupported_plugin(bsdf, " with specular_reflectance other than 1")
+            return None
+    if "nonlinear" in properties and importer.text(properties["nonlinear"]) == "true":
+        importer.unsupported_plugin(bsdf, " with nonlinear = true")
+        return None
+    ior = importer.ior(bsdf, properties, "int_ior", 1.49) / importer.ior(bsdf, properties, "ext_ior", 1.000277)
+    if not IOR.range.contains(ior):
+        raise importer.fail(bsdf, f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in "
+                                  f"{IOR.range}")
+    roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughplastic" else 0.0
+    if roughness is None:
+        return None
+    importer.notes.append(f"line {bsdf.line}: {bsdf.label()}: spectrace's plastic couples coat and base "
+                          "differently from Mitsuba's (an energy-conserving symmetric "
+                          "coupling instead of internal scattering; see docs/materials.md), so the brightness of "
+                          "its diffuse part differs")
+    table = {"type": "plastic", "reflectance": reflectance, "ior": round(ior, 6)}
+    if roughness > 0.0:
+        table["roughness"] = roughness
+    return table

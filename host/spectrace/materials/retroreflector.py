@@ -11,6 +11,8 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "retroreflector"
+MITSUBA_PLUGINS = ()
+MITSUBA_NONE = "Mitsuba 3 has no retroreflecting BSDF"
 ROUGHNESS = roughness(0.1, "GGX α: the width of the lobe around the direction light came from")
 PARAMETERS = (reflectance(1.0, "how much comes back"), ROUGHNESS)
 

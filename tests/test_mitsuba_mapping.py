@@ -1,0 +1,105 @@
+"""Every material and light module maps Mitsuba 3 or says why it does not: its MITSUBA_PLUGINS (with `from_mitsuba`)
+or MITSUBA_NONE, so a new module cannot silently lack a mapping. Each declared plugin imports with Mitsuba's
+defaults into a scene that loads, and the importer's list of what it supports is the modules' declarations."""
+
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spectrace.errors import SpectraceError
+from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.lights import LIGHTS, area
+from spectrace.materials import MATERIALS
+from spectrace.spectral import spectrum_to_xyz
+from spectrace.spectral.spectrum import Spectrum
+
+MODULES = [*MATERIALS.values(), *LIGHTS.values(), area]
+SENSOR = """<sensor type="perspective"><float name="fov" value="45"/>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film></sensor>"""
+
+
+def _scene(folder: Path, body: str) -> Path:
+    path = folder / "scene.xml"
+    path.write_text(f'<scene version="3.0.0">\n{SENSOR}\n{body}\n</scene>\n')
+    return path
+
+
+def _plugins(modules) -> list[tuple[str, object]]:
+    return [(plugin, module) for module in modules for plugin in module.MITSUBA_PLUGINS]
+
+
+@pytest.mark.parametrize("module", MODULES, ids=[m.NAME for m in MODULES])
+def test_every_module_declares_its_mitsuba_plugins_or_why_it_has_none(module):
+    plugins = module.MITSUBA_PLUGINS
+    assert isinstance(plugins, tuple) and all(isinstance(p, str) and p for p in plugins), plugins
+    if plugins:
+        assert callable(getattr(module, "from_mitsuba", None)), f"{module.NAME} declares plugins but no from_mitsuba"
+        assert not hasattr(module, "MITSUBA_NONE")
+    else:
+        assert isinstance(getattr(module, "MITSUBA_NONE", None), str) and module.MITSUBA_NONE.strip(), \
+            f"{module.NAME}: MITSUBA_PLUGINS is empty and MITSUBA_NONE does not say why"
+        assert not hasattr(module, "from_mitsuba")
+
+
+@pytest.mark.parametrize("modules", [list(MATERIALS.values()), [*LIGHTS.values(), area]], ids=["bsdf", "emitter"])
+def test_no_plugin_is_claimed_twice(modules):
+    names = [plugin for plugin, _ in _plugins(modules)]
+    assert len(names) == len(set(names)), names
+
+
+def test_the_unsupported_message_lists_the_declared_plugins(tmp_path):
+    xml = _scene(tmp_path, '<shape type="cube"><bsdf type="no-such-bsdf"/></shape>')
+    with pytest.raises(SpectraceError) as caught:
+        mitsuba_scene_data(xml)
+    listed = dict(part.split(" ", 1) for part in re.search(r"\(spectrace imports (.*)\)$", caught.value.message)
+                  .group(1).split("; "))
+    assert set(listed["bsdf"].split(", ")) == {p for p, _ in _plugins(MATERIALS.values())} | {"twosided"}
+    assert set(listed["emitter"].split(", ")) == {p for p, _ in _plugins([*LIGHTS.values(), area])}
+
+
+@pytest.mark.parametrize("plugin, module", _plugins(MATERIALS.values()),
+                         ids=[p for p, _ in _plugins(MATERIALS.values())])
+def test_each_declared_bsdf_reaches_its_module(tmp_path, plugin, module):
+    """With Mitsuba's defaults the BSDF imports into a scene that loads, or is refused for a stated reason (a
+    roughconductor's default material "none" is a mirror, which spectrace has only smooth), never as an unknown
+    plugin."""
+    try:
+        scene = load_mitsuba_scene(_scene(tmp_path, f'<shape type="cube"><bsdf type="{plugin}"/></shape>'))
+    except SpectraceError as error:
+        assert f"bsdf '{plugin}' with " in error.message, error.message
+    else:
+        assert type(scene.shapes[0].material) in {m.MODEL for m in MATERIALS.values()}
+
+
+def _d65_of_unit_luminance(spectrum: Spectrum) -> None:
+    """Mitsuba's default emission: D65 (x, y = 0.3127, 0.3290) with luminance 1, film Y = 1 in spectrace."""
+    x, y, z = spectrum_to_xyz(spectrum)
+    assert y == pytest.approx(1.0, rel=1e-3)
+    np.testing.assert_allclose((x / (x + y + z), y / (x + y + z)), (0.3127, 0.3290), atol=1e-3)
+
+
+def _spectra(model) -> list[Spectrum]:
+    return [getattr(model, f.name) for f in dataclasses.fields(model) if isinstance(getattr(model, f.name), Spectrum)]
+
+
+@pytest.mark.parametrize("plugin, module", _plugins(LIGHTS.values()), ids=[p for p, _ in _plugins(LIGHTS.values())])
+def test_each_declared_emitter_imports_with_mitsubas_default_emission(tmp_path, plugin, module):
+    body = f'<shape type="cube"/><emitter type="{plugin}"/>'
+    light, = load_mitsuba_scene(_scene(tmp_path, body)).lights
+    assert isinstance(light, module.MODEL)
+    spectra = _spectra(light)
+    assert len(spectra) == 1
+    _d65_of_unit_luminance(spectra[0])
+
+
+def test_the_shape_emitter_imports_on_a_shape(tmp_path):
+    """The area emitter needs its radiance (Mitsuba has no default for it); RGB (1, 1, 1) emission is the same
+    white of unit luminance."""
+    plugin, = area.MITSUBA_PLUGINS
+    body = f'<shape type="rectangle"><emitter type="{plugin}"><rgb name="radiance" value="1, 1, 1"/></emitter></shape>'
+    shape, = load_mitsuba_scene(_scene(tmp_path, body)).shapes
+    assert isinstance(shape.emitter, area.MODEL)
+    _d65_of_unit_luminance(shape.emitter.radiance)
