@@ -176,6 +176,8 @@ def _save(figure, path: str | Path) -> Path:
         raise SpectraceError(f"unknown figure format '{path.suffix}' (use .png, .pdf or .svg)", where=str(path))
     try:
         write_atomically(path, lambda temp: figure.savefig(temp, dpi=150, bbox_inches="tight"))
+    except OSError as error:
+        raise SpectraceError(f"cannot write the figure ({error.strerror or error})", where=str(path)) from None
     finally:
         figure.canvas.figure.clf()
         _pyplot().close(figure)

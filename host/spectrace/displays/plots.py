@@ -10,6 +10,7 @@ import numpy as np
 
 from spectrace.displays.compare import Comparison
 from spectrace.errors import SpectraceError
+from spectrace.io.atomic import write_atomically
 from spectrace.spectral import GRID_NM
 
 CHANNEL_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
@@ -116,9 +117,9 @@ def plot_comparison(comparison: Comparison, path: str | Path) -> Path:
     _plot_patches(figure, layout[1, 1], comparison)
     figure.suptitle("primaries at full drive (red, green, blue) and the triple's emission (black)", x=0.3, fontsize=10)
     try:
-        figure.savefig(path, dpi=120, bbox_inches="tight")
+        write_atomically(path, lambda temp: figure.savefig(temp, dpi=120, bbox_inches="tight"))
     except OSError as error:
-        raise SpectraceError(f"cannot write the plot ({error.__class__.__name__}: {error})", where=str(path)) from None
+        raise SpectraceError(f"cannot write the plot ({error.strerror or error})", where=str(path)) from None
     finally:
         pyplot.close(figure)
     return path
