@@ -346,3 +346,26 @@ def test_bench_applies_the_render_limits(argv, says, monkeypatch, capsys):
     monkeypatch.setattr(importlib.import_module("spectrace.render.wavefront"), "make_renderer", _no_device)
     status, stderr = _run_in_process(monkeypatch, capsys, ["bench", *argv])
     assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
+
+
+@pytest.mark.parametrize("luminance", ["nan", "0", "5e-324", "1e-7", "2e10", "1e300"])
+def test_white_luminance_outside_any_display_is_refused(luminance, monkeypatch, capsys):
+    status, stderr = _run_in_process(monkeypatch, capsys, ["display", "metamerism", "--from", "CRT-Dell", "--to",
+                                                           "LCD-Apple_WLED", "--white-luminance", luminance])
+    assert status == 2 and stderr.count("\n") == 1 and stderr.startswith("error: --white-luminance: "), stderr
+
+
+@pytest.mark.parametrize("luminance", ["1e-6", "1e10"])
+def test_the_ends_of_the_white_luminance_range_give_finite_figures(luminance, monkeypatch, capsys):
+    import json
+    import math
+
+    monkeypatch.setattr(sys, "argv", ["spectrace", "display", "metamerism", "--from", "CRT-Dell", "--to",
+                                      "LCD-Apple_WLED", "--white-luminance", luminance, "--json"])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    captured = capsys.readouterr()
+    assert exit_info.value.code == 0, captured.err
+    report = json.loads(captured.out)
+    differences = [patch["delta_e_2000"] for patch in report["patches"]]
+    assert differences and all(math.isfinite(d) for d in differences)
