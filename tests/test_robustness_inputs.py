@@ -369,3 +369,14 @@ def test_the_ends_of_the_white_luminance_range_give_finite_figures(luminance, mo
     report = json.loads(captured.out)
     differences = [patch["delta_e_2000"] for patch in report["patches"]]
     assert differences and all(math.isfinite(d) for d in differences)
+
+
+@pytest.mark.parametrize("title, says", [
+    ("$$", "error: --title: cannot typeset '$$': ParseException: Expected end of text, found '$'"),
+    ("$^$", "error: --title: cannot typeset '$^$': ParseSyntaxException: Expected ..., found end of text"),
+])
+def test_a_title_matplotlib_cannot_typeset_is_one_line(title, says, tmp_path, monkeypatch, capsys):
+    status, stderr = _run_in_process(monkeypatch, capsys, ["spectra", "plot", "cie:D65", "-o",
+                                                           str(tmp_path / "x.png"), "--title", title])
+    assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
+    assert "write \\$ for a dollar sign" in stderr and not (tmp_path / "x.png").exists()
