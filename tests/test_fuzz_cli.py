@@ -104,8 +104,9 @@ BENCH_OPTIONS = {
 }
 BENCH_FLAGS = ["--samplers", "--quality", "--rays", "--scaling", "--cold", "--kernel-shapes", "--json", "--all"]
 
-DISPLAYS = st.one_of(st.sampled_from(["CRT-Dell", "OLED-SamsungNote3", "LCD-Apple_WLED"]), TEXT)
-RGB = st.tuples(*[st.one_of(st.sampled_from(["0", "0.5", "1"]), FLOATS, JUNK)] * 3)
+DISPLAYS = st.one_of(st.sampled_from(["CRT-Dell", "OLED-SamsungNote3"]), st.sampled_from(["LCD-Apple_WLED"]), TEXT)
+RGB = st.one_of(st.tuples(*[st.sampled_from(["0", "0.25", "1"])] * 3),
+                st.tuples(*[st.one_of(st.sampled_from(["0", "0.5", "1"]), FLOATS, JUNK)] * 3))
 DISPLAY_OPTIONS = {
     "--white-luminance": st.one_of(st.sampled_from(["100", "0.01"]), FLOATS, JUNK),
     "--encoding": st.one_of(st.sampled_from(["linear", "srgb", "gamma2.2"]), TEXT),
@@ -252,7 +253,7 @@ def test_bench_options(stubbed_bench, options):
             assert math.isfinite(float(seconds)), argv
 
 
-@_settings(150)
+@_settings(100)
 @given(command=st.sampled_from(["compare", "match", "metamerism"]), rgb=RGB, source=DISPLAYS, target=DISPLAYS,
        options=_options(DISPLAY_OPTIONS, ["--measured-radiance", "--json"], max_size=3),
        plot=st.one_of(st.none(), FILE_NAMES))
@@ -270,7 +271,8 @@ def test_display_options(workspace, command, rgb, source, target, options, plot)
     _run("display", argv)
 
 
-@_settings(60)
+@pytest.mark.filterwarnings("ignore:Glyph .* missing from font")  # odd characters in titles draw as boxes
+@_settings(40)
 @given(names=st.lists(st.one_of(st.sampled_from(["cie:D65", "cie:A", "cornell_box/light"]), TEXT), min_size=1,
                       max_size=3),
        output=FILE_NAMES, title=st.one_of(st.none(), TEXT, st.sampled_from(["$", "$x^$", r"\frac", "a$b$c"])),

@@ -380,3 +380,11 @@ def test_a_title_matplotlib_cannot_typeset_is_one_line(title, says, tmp_path, mo
                                                            str(tmp_path / "x.png"), "--title", title])
     assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
     assert "write \\$ for a dollar sign" in stderr and not (tmp_path / "x.png").exists()
+
+
+def test_a_file_name_with_line_breaks_still_gives_one_line(tmp_path, monkeypatch, capsys):
+    scene, argv = _write_case(tmp_path, replace("fine", "", "", "", ""))
+    odd = tmp_path / "line\nbreak\x85\u2028.tiff"
+    status, stderr = _run_in_process(monkeypatch, capsys, [*argv, "-o", str(odd)])
+    assert status == 2 and stderr.count("\n") == 1 and len(stderr.splitlines()) == 1, stderr
+    assert f"error: {tmp_path}/line\\nbreak\\x85\\u2028.tiff: unknown image format '.tiff'" in stderr

@@ -2,8 +2,9 @@
 
 import re
 
-# Line breaks and other control characters (in a file name, say) would split the line or move the cursor.
-_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+# Line breaks and other control characters (in a file name, say) would split the line or move the cursor: the C0
+# and C1 controls (NEL, U+0085, is a line break to Python and many terminals) and the Unicode line separators.
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 
 def one_line(text: str) -> str:
