@@ -388,3 +388,18 @@ def test_a_file_name_with_line_breaks_still_gives_one_line(tmp_path, monkeypatch
     status, stderr = _run_in_process(monkeypatch, capsys, [*argv, "-o", str(odd)])
     assert status == 2 and stderr.count("\n") == 1 and len(stderr.splitlines()) == 1, stderr
     assert f"error: {tmp_path}/line\\nbreak\\x85\\u2028.tiff: unknown image format '.tiff'" in stderr
+
+
+def test_import_mitsuba_checks_its_output_first(tmp_path, monkeypatch, capsys):
+    from pathlib import Path
+
+    xml = tmp_path / "scene.xml"
+    xml.write_bytes((Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes())
+    (tmp_path / "folder.toml").mkdir()
+    for output, says in [(xml, f"error: {xml}: --output names the Mitsuba scene, which it would overwrite"),
+                         (tmp_path / "folder.toml", f"error: {tmp_path}/folder.toml: --output names a folder"),
+                         (tmp_path / "nope" / "x.toml", f"error: {tmp_path}/nope/x.toml: the folder {tmp_path}/nope "
+                                                        f"for --output does not exist")]:
+        status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(output)])
+        assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
+    assert xml.read_bytes() == (Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes()

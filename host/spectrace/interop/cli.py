@@ -20,8 +20,11 @@ def import_mitsuba_command(
     area, point, constant, directional; the perspective sensor). Unsupported plugins are all named in one error;
     choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML is checked by loading
     it; render it with `spectrace render OUT.toml`."""
+    from spectrace.cli_checks import check_distinct_files, check_output_file
     from spectrace.interop.mitsuba_xml import import_mitsuba
 
+    check_distinct_files({"--output": output}, {"the Mitsuba scene": scene})
+    check_output_file(output, "--output")
     parameters = {}
     for item in define or []:
         name, separator, value = item.partition("=")
@@ -32,4 +35,4 @@ def import_mitsuba_command(
     console = Console(stderr=True)
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
-    console.print(f"wrote {output}", highlight=False)
+    console.print(f"wrote {output}", highlight=False, markup=False)

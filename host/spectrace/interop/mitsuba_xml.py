@@ -749,7 +749,10 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
     header = "\n".join([f"Imported from the Mitsuba 3 scene {xml_path.name} by `spectrace import-mitsuba`.",
                         *(f"note: {note}" for note in notes)])
     text = dumps(data, header=header)
-    write_atomically(toml_path, lambda temp: temp.write_text(text, encoding="utf-8"))
+    try:
+        write_atomically(toml_path, lambda temp: temp.write_text(text, encoding="utf-8"))
+    except OSError as error:
+        raise SpectraceError(f"cannot write the scene ({error.strerror or error})", where=str(toml_path)) from None
     load_scene(toml_path)
     return notes
 
