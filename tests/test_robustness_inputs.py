@@ -403,3 +403,20 @@ def test_import_mitsuba_checks_its_output_first(tmp_path, monkeypatch, capsys):
         status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(output)])
         assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
     assert xml.read_bytes() == (Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes()
+
+
+def test_black_on_the_displays(tmp_path, monkeypatch, capsys):
+    """Black emits nothing: `compare` shows it (no chromaticity) and plots it without numpy warnings; `metamerism`,
+    which needs the light as its white, refuses it in one line. (Both failed with a traceback once.)"""
+    import warnings
+
+    plot = tmp_path / "black.png"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        status, stderr = _run_in_process(monkeypatch, capsys, ["display", "compare", "--rgb", "0", "0", "0", "-d",
+                                                               "CRT-Dell", "-d", "LCD-Apple_WLED", "--plot", str(plot)])
+    assert status == 0 and stderr == "" and plot.stat().st_size > 0
+    status, stderr = _run_in_process(monkeypatch, capsys, ["display", "metamerism", "--from", "CRT-Dell", "--to",
+                                                           "LCD-Apple_WLED", "--rgb", "0", "0", "0"])
+    assert status == 2 and stderr == ("error: --rgb: the triple (0.0, 0.0, 0.0) on CRT-Dell gives no light to see "
+                                      "the patches by\n"), stderr

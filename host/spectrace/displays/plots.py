@@ -64,10 +64,12 @@ def _plot_chromaticities(figure, grid_cell, comparison: Comparison) -> None:
             panel.plot(*colour_on_display.xy, marker=MARKERS[index % len(MARKERS)], color=palette[index],
                        markeredgecolor="black", markersize=size, linestyle="none")
     points = np.array([item.xy for item in comparison.colours])
-    centre, half_width = points.mean(axis=0), max(np.ptp(points, axis=0).max() * 0.6, 0.01)
-    zoom.set_xlim(centre[0] - half_width, centre[0] + half_width)
-    zoom.set_ylim(centre[1] - half_width, centre[1] + half_width)
-    zoom.set_title("the triple (zoomed)", fontsize=7)
+    points = points[np.isfinite(points).all(axis=1)]  # black (0, 0, 0) emits nothing and has no chromaticity
+    if len(points):
+        centre, half_width = points.mean(axis=0), max(np.ptp(points, axis=0).max() * 0.6, 0.01)
+        zoom.set_xlim(centre[0] - half_width, centre[0] + half_width)
+        zoom.set_ylim(centre[1] - half_width, centre[1] + half_width)
+    zoom.set_title("the triple (zoomed)" if len(points) else "the triple: black, no chromaticity", fontsize=7)
     zoom.tick_params(labelsize=6)
     axes.set_xlim(-0.05, 0.8)
     axes.set_ylim(-0.05, 0.9)
