@@ -398,8 +398,7 @@ def test_import_mitsuba_checks_its_output_first(tmp_path, monkeypatch, capsys):
     (tmp_path / "folder.toml").mkdir()
     for output, says in [(xml, f"error: {xml}: --output names the Mitsuba scene, which it would overwrite"),
                          (tmp_path / "folder.toml", f"error: {tmp_path}/folder.toml: --output names a folder"),
-                         (tmp_path / "nope" / "x.toml", f"error: {tmp_path}/nope/x.toml: the folder {tmp_path}/nope "
-                                                        f"for --output does not exist")]:
+                         (xml / "sub" / "x.toml", f"error: {xml}/sub/x.toml: {xml} is not a folder")]:
         status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(output)])
         assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
     assert xml.read_bytes() == (Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes()

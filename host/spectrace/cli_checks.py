@@ -42,10 +42,10 @@ def _read_only(path: Path) -> bool:
     return not os.access(path, os.W_OK) or stat.S_IMODE(path.stat().st_mode) & 0o222 == 0
 
 
-def check_output_file(path: Path, option: str) -> None:
+def check_output_file(path: Path, option: str, create_folders: bool = False) -> None:
     """Refuse an output file that could not be written at the end: a folder or other non-file, a read-only file,
-    a missing folder, or a folder where no file can be created (tried, since permission bits do not tell the
-    superuser's rights or a read-only mount's)."""
+    a missing folder (unless `create_folders`: then the nearest existing one is checked), or a folder where no
+    file can be created (tried, since permission bits do not tell the superuser's rights or a read-only mount's)."""
     where = str(path)
     if path.is_dir():
         raise SpectraceError(f"{option} names a folder; name a file in it", where=where)
@@ -57,6 +57,8 @@ def check_output_file(path: Path, option: str) -> None:
             raise SpectraceError(f"{option} names a read-only file; make it writable or choose another name",
                                  where=where)
     folder = path.parent if str(path.parent) else Path(".")
+    while create_folders and not folder.exists() and folder.parent != folder:
+        folder = folder.parent
     if not folder.exists():
         raise SpectraceError(f"the folder {folder} for {option} does not exist", where=where)
     if not folder.is_dir():

@@ -24,7 +24,7 @@ def import_mitsuba_command(
     from spectrace.interop.mitsuba_xml import import_mitsuba
 
     check_distinct_files({"--output": output}, {"the Mitsuba scene": scene})
-    check_output_file(output, "--output")
+    check_output_file(output, "--output", create_folders=True)  # the scene's folder may be new, for its meshes
     parameters = {}
     for item in define or []:
         name, separator, value = item.partition("=")
