@@ -110,11 +110,27 @@ def test_other_scene_content_or_kernels_are_refused(device, tmp_path, monkeypatc
         resume_render(Renderer(scene, device), path)
 
 
+def _rewrite(source, target, replaced=None, dropped=()):
+    """A copy of the checkpoint archive `source` with some entries replaced or dropped, and the rest untouched."""
+    replaced = replaced or {}
+    with zipfile.ZipFile(source) as archive, zipfile.ZipFile(target, "w") as copy:
+        for item in archive.namelist():
+            name = item.removesuffix(".npy")
+            if name in dropped:
+                continue
+            if name in replaced:
+                with copy.open(item, "w") as stream:
+                    np.save(stream, replaced[name])
+            else:
+                copy.writestr(item, archive.read(item))
+    return target
+
+
 def test_damaged_checkpoints_are_refused(device, tmp_path):
     renderer = Renderer(_cornell(), device)
     renderer.run_pass(1)
     good = tmp_path / "good.npz"
-    save_checkpoint(good, renderer)
+    saved = save_checkpoint(good, renderer)
     data = good.read_bytes()
 
     truncated = tmp_path / "truncated.npz"
@@ -127,15 +143,56 @@ def test_damaged_checkpoints_are_refused(device, tmp_path):
     with pytest.raises(SpectraceError, match="missing or malformed 'format'"):
         read_checkpoint(other)
 
-    wrong_shape = tmp_path / "wrong_shape.npz"
-    with zipfile.ZipFile(good) as archive, zipfile.ZipFile(wrong_shape, "w") as copy:
-        for item in archive.namelist():
-            if item != "state_film.npy":
-                copy.writestr(item, archive.read(item))
-        with copy.open("state_film.npy", "w") as stream:
-            np.save(stream, np.zeros((5, 4), np.float32))
-    with pytest.raises(SpectraceError, match="saved film is float32 x 20"):
-        resume_render(Renderer(_cornell(), device), wrong_shape)
+    def refused(path, says):
+        with pytest.raises(SpectraceError) as caught:
+            read_checkpoint(path)
+        assert str(caught.value).startswith(f"{path}: ") and says in str(caught.value), str(caught.value)
+        assert "\n" not in str(caught.value)
+
+    # One float of the film turned into NaN (a bit flipped on disk, an edit): the checksum no longer holds.
+    film = saved.state.buffers["film"].copy()
+    film[7, 1] = np.nan
+    refused(_rewrite(good, tmp_path / "nan.npz", {"state_film": film}), "checksum does not match its contents")
+    wrong_shape = np.zeros((5, 4), np.float32)
+    refused(_rewrite(good, tmp_path / "shape.npz", {"state_film": wrong_shape}), "checksum does not match")
+    refused(_rewrite(good, tmp_path / "no_sum.npz", dropped={"checksum"}), "missing or malformed 'checksum'")
+    refused(_rewrite(good, tmp_path / "future.npz", {"format": np.array("spectrace-checkpoint-9")}),
+            "written by another version of spectrace")
+
+    # Consistent files (the checksum matches) whose numbers cannot be a render's state.
+    def written(name, **state_changes):
+        state = dataclasses.replace(saved.state, **state_changes)
+        path = tmp_path / name
+        checkpoints.write_checkpoint(path, dataclasses.replace(saved, state=state))
+        return path
+
+    refused(written("nan_sums.npz", buffers={**saved.state.buffers, "film": film}),
+            "damaged checkpoint: the film buffer holds 1 NaN or infinite values")
+    refused(written("wrong_shape.npz", buffers={**saved.state.buffers, "film": wrong_shape}),
+            "the film buffer is float32 of shape (5, 4); a 20x14 film needs float32 of shape (280, 4)")
+    refused(written("wrong_type.npz", buffers={**saved.state.buffers, "ray_counts": np.zeros(280, np.float64)}),
+            "the ray_counts buffer is float64 of shape (280,)")
+    refused(written("no_rays.npz", buffers={"film": saved.state.buffers["film"]}), "the ray_counts buffer is missing")
+    refused(written("count.npz", samples_done=-3), "sample count -3 is outside 0..1048576")
+    refused(written("time.npz", render_seconds=float("inf")), "render time inf s is not a finite")
+
+
+def test_checkpoints_of_the_first_format_still_resume(device, tmp_path):
+    """Format 1 had no checksum: such files are read with the explicit checks only, and continue exactly."""
+    renderer = Renderer(_cornell(), device)
+    renderer.run_pass(2)
+    save_checkpoint(tmp_path / "new.npz", renderer)
+    old = _rewrite(tmp_path / "new.npz", tmp_path / "old.npz", {"format": np.array("spectrace-checkpoint-1")},
+                   dropped={"checksum"})
+    resumed = Renderer(_cornell(), device)
+    resume_render(resumed, old)
+    assert resumed.samples_done == 2
+    assert np.array_equal(resumed.read_film()[0], renderer.read_film()[0])
+    film = renderer.read_film()[0]
+    film[0, 0] = np.inf
+    damaged = _rewrite(old, tmp_path / "old_damaged.npz", {"state_film": film})
+    with pytest.raises(SpectraceError, match="the film buffer holds 1 NaN or infinite values"):
+        read_checkpoint(damaged)
 
 
 def test_periodic_checkpoints_follow_the_interval_and_survive_a_failed_write(device, tmp_path):
@@ -202,6 +259,71 @@ def test_sigterm_writes_the_true_partial_image_and_the_render_resumes_exactly(de
     assert all(np.array_equal(resumed_channels[c], uninterrupted.xyz[..., i]) for i, c in enumerate("XYZ"))
 
 
+def _one_error_line(result) -> str:
+    assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    return lines[0]
+
+
+def _cli(monkeypatch, capsys, *argv) -> tuple[int, str]:
+    """`spectrace ARGV` in this process: exit status and stderr."""
+    from spectrace import cli
+
+    monkeypatch.setattr(sys, "argv", ["spectrace", *argv])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    return exit_info.value.code, capsys.readouterr().err
+
+
+def test_a_fresh_render_never_replaces_an_existing_checkpoint(device, tmp_path, monkeypatch, capsys):
+    """A fresh render naming an existing checkpoint would replace its samples with its own first pass: refused
+    (in a real process: status, one line naming --resume and --overwrite); --overwrite starts again; the same file
+    under --resume, spelled another way, continues it."""
+    state = tmp_path / "state.npz"
+    renderer = Renderer(_cornell(width=8, height=6), device)
+    renderer.run_pass(6)
+    save_checkpoint(state, renderer)
+    before = state.read_bytes()
+    size = ["--width", "8", "--height", "6", "--seed", "5", "-q", "--checkpoint-interval", "0"]
+
+    again = subprocess.run(_spectrace("render", str(CORNELL), "-o", "b.png", "--spp", "2", "--checkpoint",
+                                      str(state), *size), capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    line = _one_error_line(again)
+    assert line.startswith(f"error: {state}: ") and f"use --resume {state} to continue" in line
+    assert "--overwrite to start again" in line
+    assert state.read_bytes() == before and not (tmp_path / "b.png").exists()
+
+    monkeypatch.chdir(tmp_path)
+    status, stderr = _cli(monkeypatch, capsys, "render", str(CORNELL), "-o", "c.png", "--spp", "8", "--resume",
+                          str(state), "--checkpoint", "./state.npz", *size)
+    assert status == 0, stderr
+    assert read_checkpoint(state).state.samples_done == 8
+    status, stderr = _cli(monkeypatch, capsys, "render", str(CORNELL), "-o", "d.png", "--spp", "2",
+                          "--checkpoint", "state.npz", "--overwrite", *size)
+    assert status == 0, stderr
+    assert read_checkpoint(state).state.samples_done == 2
+    status, stderr = _cli(monkeypatch, capsys, "render", str(CORNELL), "-o", "e.png", "--resume", "state.npz",
+                          "--overwrite", *size)
+    assert status == 2 and stderr == "error: --overwrite: starts the render afresh, so it cannot go with --resume\n"
+
+
+def test_resuming_a_damaged_checkpoint_is_one_line_naming_it(device, tmp_path):
+    renderer = Renderer(_cornell(width=8, height=6), device)
+    renderer.run_pass(1)
+    good = tmp_path / "good.npz"
+    saved = save_checkpoint(good, renderer)
+    film = saved.state.buffers["film"].copy()
+    film[3] = np.nan
+    damaged = _rewrite(good, tmp_path / "damaged.npz", {"state_film": film})
+    result = subprocess.run(_spectrace("render", str(CORNELL), "-o", str(tmp_path / "x.png"), "--width", "8",
+                                       "--height", "6", "--seed", "5", "--resume", str(damaged), "-q"),
+                            capture_output=True, text=True, timeout=300)
+    line = _one_error_line(result)
+    assert line == f"error: {damaged}: the checkpoint's checksum does not match its contents: the file is damaged"
+    assert not (tmp_path / "x.png").exists()
+
+
 # A child that writes the old version of three files, then, in forked grandchildren killed with SIGKILL at chosen
 # moments, writes a new version over and over; after each kill it copies the files aside for the test to open.
 # Writing happens only in forked children, so no library state is shared across a fork after use.
@@ -223,7 +345,8 @@ def write_all(version):
     rgb = pixels(version)
     write_exr(folder / "image.exr", rgb, rgb, {"version": str(version)})
     write_png(folder / "image.png", rgb, {"version": str(version)})
-    state = RenderState(version, 0.0, {"film": rgb.reshape(-1, 3)})
+    film = np.concatenate([rgb.reshape(-1, 3), np.zeros((rgb.shape[0] * rgb.shape[1], 1), np.float32)], axis=1)
+    state = RenderState(version, 0.0, {"film": film, "ray_counts": np.full(len(film), version, np.uint32)})
     write_checkpoint(folder / "state.npz", Checkpoint(RenderIdentity(160, 120, version, "s", "k"), state, "d"))
 
 def in_child(work):
@@ -273,7 +396,7 @@ def _version_of(path) -> int:
     else:
         saved = read_checkpoint(path)
         version = saved.identity.seed
-        assert np.array_equal(saved.state.buffers["film"], expected[version].reshape(-1, 3))
+        assert np.array_equal(saved.state.buffers["film"][:, :3], expected[version].reshape(-1, 3))
     return version
 
 

@@ -5,6 +5,7 @@ Every case runs through the command line's entry point in this process (fast); a
 subprocess, to show that nothing but that line reaches the terminal.
 """
 
+import importlib
 import os
 import subprocess
 import sys
@@ -222,17 +223,73 @@ CASES = [
             argv=("-o", "{folder}/out.tiff")),
     replace("missing-checkpoint", "", "", "nope.npz", "checkpoint file does not exist",
             argv=("--resume", "{folder}/nope.npz")),
-    replace("damaged-checkpoint", "", "", "garbage.obj", "not a spectrace checkpoint",
+    replace("damaged-checkpoint", "", "", "{folder}/garbage.obj", "not a spectrace checkpoint",
             argv=("--resume", "{folder}/garbage.obj")),
+    # options no scene file sets, at the limits the kernels and the outputs can take
+    replace("override-seed-beyond-int32", "", "", "--seed", "seed must lie in 0..2147483647 (the kernels take it as "
+            "a 32-bit signed integer), got 2147483648", argv=("--seed", "2147483648")),
+    replace("override-negative-seed", "", "", "--seed", "greater than or equal to 0", argv=("--seed", "-1")),
+    replace("override-huge-depth", "", "", "--max-depth", "max_depth must be at most 2147483647",
+            argv=("--max-depth", "99999999999")),
+    replace("override-zero-depth", "", "", "--max-depth", "max_depth must be -1 (unbounded) or >= 1, got 0",
+            argv=("--max-depth", "0")),
+    replace("override-negative-depth", "", "", "--max-depth", "max_depth must be -1 (unbounded) or >= 1, got -5",
+            argv=("--max-depth", "-5")),
+    replace("override-nan-exposure", "", "", "--exposure", "exposure must be a finite number of stops, got nan",
+            argv=("--exposure", "nan")),
+    replace("override-inf-exposure", "", "", "--exposure", "finite number of stops, got inf",
+            argv=("--exposure", "inf")),
+    replace("override-huge-exposure", "", "", "--exposure", "exposure 1e+308 stops is beyond ±64",
+            argv=("--exposure", "1e308")),
+    append("huge-depth", "[integrator]\nmax_depth = 99999999999\n", "integrator.max_depth",
+           "less than or equal to 2147483647"),
+    append("seed-beyond-int32", "[sampler]\nseed = 2147483648\n", "sampler.seed", "less than or equal to 2147483647"),
+    # outputs that could not be written, or would replace something, are refused before the render
+    replace("output-is-a-folder", "", "", "{folder}/a-folder.png", "--output names a folder",
+            argv=("-o", "{folder}/a-folder.png")),
+    replace("output-folder-missing", "", "", "{folder}/nope/out.png", "the folder {folder}/nope for --output does not "
+            "exist", argv=("-o", "{folder}/nope/out.png")),
+    replace("output-folder-is-a-file", "", "", "{folder}/garbage.obj/out.png", "is not a folder",
+            argv=("-o", "{folder}/garbage.obj/out.png")),
+    replace("output-read-only", "", "", "{folder}/read-only.png", "--output names a read-only file",
+            argv=("-o", "{folder}/read-only.png")),
+    replace("false-colour-is-a-folder", "", "", "{folder}/a-folder.png", "--false-color names a folder",
+            argv=("--false-color", "{folder}/a-folder.png")),
+    replace("false-colour-folder-missing", "", "", "{folder}/nope/map.png", "for --false-color does not exist",
+            argv=("--false-color", "{folder}/nope/map.png")),
+    replace("false-colour-read-only", "", "", "{folder}/read-only.png", "--false-color names a read-only file",
+            argv=("--false-color", "{folder}/read-only.png")),
+    replace("checkpoint-is-a-folder", "", "", "{folder}/a-folder.npz", "--checkpoint names a folder",
+            argv=("--checkpoint", "{folder}/a-folder.npz")),
+    replace("checkpoint-folder-missing", "", "", "{folder}/nope/state.npz", "for --checkpoint does not exist",
+            argv=("--checkpoint", "{folder}/nope/state.npz")),
+    replace("output-is-false-colour", "", "", "{folder}/out.png", "--output and --false-color name the same file",
+            argv=("--false-color", "{folder}/out.png")),
+    replace("output-is-checkpoint", "", "", "{folder}/x.png", "--output and --checkpoint name the same file",
+            argv=("-o", "{folder}/x.png", "--checkpoint", "{folder}/a-folder.png/../x.png")),
+    replace("output-is-resumed-checkpoint", "", "", "{folder}/garbage.png", "--output and --resume name the same file",
+            argv=("-o", "{folder}/garbage.png", "--resume", "{folder}/garbage.png")),
+    replace("false-colour-is-checkpoint", "", "", "{folder}/map.png", "--false-color and --checkpoint name the same "
+            "file", argv=("--false-color", "{folder}/map.png", "--checkpoint", "{folder}/link-to-map.png")),
+    replace("checkpoint-is-the-scene", "", "", "{folder}/scene.toml", "--checkpoint names the scene file",
+            argv=("--checkpoint", "{folder}/scene.toml")),
+    replace("overwrite-with-resume", "", "", "--overwrite", "cannot go with --resume",
+            argv=("--resume", "{folder}/garbage.obj", "--overwrite")),
 ]
 # Which part of the message is the place: most name the scene, these the option or the file it gave.
 NAMES_OTHER_FILE = {"unknown-output-format", "missing-checkpoint", "damaged-checkpoint", "override-absurd-size",
                     "override-absurd-spp", "override-zero-spp", "override-non-integer-width"}
+NAMES_OTHER_FILE |= {c.name for c in CASES if c.argv and c.name not in ("huge-depth", "seed-beyond-int32")}
 
 
 def _write_case(folder, case: BadInput):
     for name, content in FILES.items():
         (folder / name).write_bytes(content)
+    for name in ("a-folder.png", "a-folder.npz"):
+        (folder / name).mkdir()
+    (folder / "read-only.png").write_bytes(b"a picture to keep")
+    (folder / "read-only.png").chmod(0o444)
+    (folder / "link-to-map.png").symlink_to(folder / "map.png")  # dangling until the map is written
     text = BASE + case.new if case.old == "" else BASE.replace(case.old, case.new)
     assert case.old == "" or case.old in BASE, case.name
     scene = folder / "scene.toml"
@@ -250,9 +307,16 @@ def _run_in_process(monkeypatch, capsys, argv) -> tuple[int, str]:
     return exit_info.value.code, capsys.readouterr().err
 
 
+def _no_device(*args, **kwargs):
+    raise AssertionError("the device was opened before the input was refused")
+
+
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_bad_input_is_one_line_naming_file_and_key(case, tmp_path, monkeypatch, capsys):
     scene, argv = _write_case(tmp_path, case)
+    before = {path: path.read_bytes() for path in tmp_path.iterdir() if path.is_file()}
+    # refused before any device work
+    monkeypatch.setattr(importlib.import_module("spectrace.render.wavefront"), "make_renderer", _no_device)
     status, stderr = _run_in_process(monkeypatch, capsys, argv)
     assert status == 2, stderr
     lines = [line for line in stderr.splitlines() if line.strip() and not line.startswith("device: ")]
@@ -260,11 +324,12 @@ def test_bad_input_is_one_line_naming_file_and_key(case, tmp_path, monkeypatch, 
     message = lines[0]
     assert "Traceback" not in stderr
     if case.name in NAMES_OTHER_FILE:
-        expected_place = f"{case.where}: "
+        expected_place = f"{case.where.format(folder=tmp_path)}: "
     else:
         expected_place = f"{scene}: {case.where}: " if case.where else f"{scene}: "
     assert message.startswith("error: ") and expected_place in message, message
-    assert case.says in message, message
+    assert case.says.format(folder=tmp_path) in message, message
+    assert {path: path.read_bytes() for path in tmp_path.iterdir() if path.is_file()} == before  # nothing replaced
 
 
 def test_a_real_process_prints_only_the_line(tmp_path):
@@ -284,3 +349,112 @@ def test_a_missing_device_says_how_to_list_and_pick(tmp_path, monkeypatch, capsy
     assert status == 2 and stderr.count("\n") == 1, stderr
     assert "no OpenCL device matches 'no-such-device'; available devices:" in stderr
     assert "pick one with --device KEY or SPECTRACE_DEVICE=KEY; `spectrace devices` shows each" in stderr
+
+
+@pytest.mark.skipif(hasattr(os, "geteuid") and os.geteuid() == 0,
+                    reason="the superuser can create files in a read-only folder: there is nothing to refuse")
+def test_a_read_only_folder_is_refused_before_rendering(tmp_path, monkeypatch, capsys):
+    scene, argv = _write_case(tmp_path, replace("fine", "", "", "", ""))
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    monkeypatch.setattr(importlib.import_module("spectrace.render.wavefront"), "make_renderer", _no_device)
+    try:
+        for option in ("-o", "--false-color", "--checkpoint"):
+            status, stderr = _run_in_process(monkeypatch, capsys, [*argv, option, str(locked / "file.png")])
+            assert status == 2 and stderr.count("\n") == 1, stderr
+            assert f"cannot create files in the folder {locked} for " in stderr
+    finally:
+        locked.chmod(0o755)
+
+
+def test_unbounded_depth_stays_valid(tmp_path, monkeypatch, capsys):
+    scene, argv = _write_case(tmp_path, replace("fine", "", "", "", ""))
+    status, stderr = _run_in_process(monkeypatch, capsys, [*argv, "--max-depth", "-1", "--spp", "1"])
+    assert status == 0, stderr
+    assert (tmp_path / "out.png").is_file()
+
+
+@pytest.mark.parametrize("argv, says", [
+    (("--max-depth", "0"), "error: --max-depth: max_depth must be -1 (unbounded) or >= 1, got 0"),
+    (("--max-depth", "99999999999"), "error: --max-depth: max_depth must be at most 2147483647"),
+    (("--size", "100000"), "error: --size: film width 100000 px exceeds the limit of 16384 px"),
+    (("--quality", "--seconds", "inf"), "error: --seconds: must be a finite number, got inf"),
+])
+def test_bench_applies_the_render_limits(argv, says, monkeypatch, capsys):
+    monkeypatch.setattr(importlib.import_module("spectrace.render.wavefront"), "make_renderer", _no_device)
+    status, stderr = _run_in_process(monkeypatch, capsys, ["bench", *argv])
+    assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
+
+
+@pytest.mark.parametrize("luminance", ["nan", "0", "5e-324", "1e-7", "2e10", "1e300"])
+def test_white_luminance_outside_any_display_is_refused(luminance, monkeypatch, capsys):
+    status, stderr = _run_in_process(monkeypatch, capsys, ["display", "metamerism", "--from", "CRT-Dell", "--to",
+                                                           "LCD-Apple_WLED", "--white-luminance", luminance])
+    assert status == 2 and stderr.count("\n") == 1 and stderr.startswith("error: --white-luminance: "), stderr
+
+
+@pytest.mark.parametrize("luminance", ["1e-6", "1e10"])
+def test_the_ends_of_the_white_luminance_range_give_finite_figures(luminance, monkeypatch, capsys):
+    import json
+    import math
+
+    monkeypatch.setattr(sys, "argv", ["spectrace", "display", "metamerism", "--from", "CRT-Dell", "--to",
+                                      "LCD-Apple_WLED", "--white-luminance", luminance, "--json"])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    captured = capsys.readouterr()
+    assert exit_info.value.code == 0, captured.err
+    report = json.loads(captured.out)
+    differences = [patch["delta_e_2000"] for patch in report["patches"]]
+    assert differences and all(math.isfinite(d) for d in differences)
+
+
+@pytest.mark.parametrize("title, says", [
+    ("$$", "error: --title: cannot typeset '$$': ParseException: Expected end of text, found '$'"),
+    ("$^$", "error: --title: cannot typeset '$^$': ParseSyntaxException: Expected ..., found end of text"),
+])
+def test_a_title_matplotlib_cannot_typeset_is_one_line(title, says, tmp_path, monkeypatch, capsys):
+    status, stderr = _run_in_process(monkeypatch, capsys, ["spectra", "plot", "cie:D65", "-o",
+                                                           str(tmp_path / "x.png"), "--title", title])
+    assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
+    assert "write \\$ for a dollar sign" in stderr and not (tmp_path / "x.png").exists()
+
+
+def test_a_file_name_with_line_breaks_still_gives_one_line(tmp_path, monkeypatch, capsys):
+    scene, argv = _write_case(tmp_path, replace("fine", "", "", "", ""))
+    odd = tmp_path / "line\nbreak\x85\u2028.tiff"
+    status, stderr = _run_in_process(monkeypatch, capsys, [*argv, "-o", str(odd)])
+    assert status == 2 and stderr.count("\n") == 1 and len(stderr.splitlines()) == 1, stderr
+    assert f"error: {tmp_path}/line\\nbreak\\x85\\u2028.tiff: unknown image format '.tiff'" in stderr
+
+
+def test_import_mitsuba_checks_its_output_first(tmp_path, monkeypatch, capsys):
+    from pathlib import Path
+
+    xml = tmp_path / "scene.xml"
+    xml.write_bytes((Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes())
+    (tmp_path / "folder.toml").mkdir()
+    for output, says in [(xml, f"error: {xml}: --output names the Mitsuba scene, which it would overwrite"),
+                         (tmp_path / "folder.toml", f"error: {tmp_path}/folder.toml: --output names a folder"),
+                         (xml / "sub" / "x.toml", f"error: {xml}/sub/x.toml: {xml} is not a folder")]:
+        status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(output)])
+        assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
+    assert xml.read_bytes() == (Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes()
+
+
+def test_black_on_the_displays(tmp_path, monkeypatch, capsys):
+    """Black emits nothing: `compare` shows it (no chromaticity) and plots it without numpy warnings; `metamerism`,
+    which needs the light as its white, refuses it in one line. (Both failed with a traceback once.)"""
+    import warnings
+
+    plot = tmp_path / "black.png"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        status, stderr = _run_in_process(monkeypatch, capsys, ["display", "compare", "--rgb", "0", "0", "0", "-d",
+                                                               "CRT-Dell", "-d", "LCD-Apple_WLED", "--plot", str(plot)])
+    assert status == 0 and stderr == "" and plot.stat().st_size > 0
+    status, stderr = _run_in_process(monkeypatch, capsys, ["display", "metamerism", "--from", "CRT-Dell", "--to",
+                                                           "LCD-Apple_WLED", "--rgb", "0", "0", "0"])
+    assert status == 2 and stderr == ("error: --rgb: the triple (0.0, 0.0, 0.0) on CRT-Dell gives no light to see "
+                                      "the patches by\n"), stderr

@@ -2,9 +2,13 @@
 amount; OpenCL errors become one actionable line; non-finite samples are dropped, counted and reported; a stop
 request ends the render between passes with the true sample count."""
 
+import errno
+import json
 import os
 import signal
+import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pyopencl as cl
@@ -217,3 +221,174 @@ def test_an_opencl_error_mid_render_points_at_the_last_checkpoint(tmp_path, monk
     saved = read_checkpoint(state).state.samples_done
     assert saved > 0 and "DEVICE_NOT_AVAILABLE" in error_lines[0]
     assert error_lines[0].endswith(f"{state} holds the last {saved} spp (continue with --resume)")
+
+
+# ---------------------------------------------------------------- every writer, when the disk fills up
+
+_ENOSPC = os.strerror(errno.ENOSPC)
+
+
+def _fill_the_disk_in(monkeypatch, kind: str) -> None:
+    """Make one writer fail as on a full disk, after writing part of its temporary file: OpenEXR with its own
+    RuntimeError (which names the system's reason), Pillow and matplotlib with OSError."""
+    def partial_then_full(path):
+        Path(path).write_bytes(b"partial")
+        return OSError(errno.ENOSPC, _ENOSPC)
+
+    if kind == "exr":
+        from spectrace.io import exr
+
+        class FullFile:
+            def __init__(self, header, channels):
+                pass
+
+            def __enter__(self):
+                return self
+
+            def __exit__(self, *exc):
+                return False
+
+            def write(self, path):
+                partial_then_full(path)
+                raise RuntimeError(f'Failed to write pixel data to image file "{path}". {_ENOSPC}.')
+
+        monkeypatch.setattr(exr, "OpenEXR", _Namespace(exr.OpenEXR, File=FullFile))
+    elif kind == "png":
+        from spectrace.io import png
+
+        class FullImage:
+            def save(self, path, **kwargs):
+                raise partial_then_full(path)
+
+        monkeypatch.setattr(png, "PILImage", _Namespace(png.PILImage, fromarray=lambda *args: FullImage()))
+    else:
+        from matplotlib.figure import Figure
+
+        def savefig(self, path, **kwargs):
+            raise partial_then_full(path)
+
+        monkeypatch.setattr(Figure, "savefig", savefig)
+
+
+class _Namespace:
+    """A module with some attributes replaced."""
+
+    def __init__(self, module, **replaced):
+        self._module = module
+        self.__dict__.update(replaced)
+
+    def __getattr__(self, name):
+        return getattr(self._module, name)
+
+
+def _render_cli(monkeypatch, capsys, *argv) -> tuple[int, str]:
+    monkeypatch.setattr(sys, "argv", ["spectrace", "render", str(scenes_dir() / "cornell_box.toml"), "--width", "8",
+                                      "--height", "6", "--spp", "1", "-q", *argv])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    return exit_info.value.code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("suffix", ["exr", "png"])
+def test_a_full_disk_is_one_line_and_the_old_image_survives(suffix, tmp_path, monkeypatch, capsys):
+    out, state = tmp_path / f"out.{suffix}", tmp_path / "state.npz"
+    out.write_bytes(b"the previous image")
+    _fill_the_disk_in(monkeypatch, suffix)
+    status, stderr = _render_cli(monkeypatch, capsys, "-o", str(out), "--checkpoint", str(state))
+    errors = [line for line in stderr.splitlines() if not line.startswith("device: ")]
+    assert status == 2 and "Traceback" not in stderr, stderr
+    assert errors == [f"error: {out}: cannot write the image ({_ENOSPC}); the render's state is in {state} "
+                      f"(continue with --resume)"]
+    assert out.read_bytes() == b"the previous image"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out." + suffix, "state.npz"]  # no temporary file left
+
+
+def test_a_full_disk_for_the_false_colour_map_is_one_line(tmp_path, monkeypatch, capsys):
+    out, figure = tmp_path / "out.png", tmp_path / "map.png"
+    figure.write_bytes(b"the previous map")
+    _fill_the_disk_in(monkeypatch, "figure")
+    status, stderr = _render_cli(monkeypatch, capsys, "-o", str(out), "--false-color", str(figure))
+    errors = [line for line in stderr.splitlines() if not line.startswith("device: ")]
+    assert status == 2 and errors == [f"error: {figure}: cannot write the figure ({_ENOSPC})"], stderr
+    assert figure.read_bytes() == b"the previous map" and out.is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["map.png", "out.png"]
+
+
+def test_figure_commands_refuse_unwritable_outputs_and_survive_a_full_disk(tmp_path, monkeypatch, capsys):
+    (tmp_path / "folder.png").mkdir()
+    commands = {"spectra plot": (["spectra", "plot", "cie:D65", "-o"], "--output"),
+                "display compare": (["display", "compare", "--rgb", "0.5", "0.5", "0.5", "-d", "CRT-Dell", "--plot"],
+                                    "--plot")}
+    for name, (argv, option) in commands.items():
+        for target, says in [(tmp_path / "folder.png", f"{option} names a folder; name a file in it"),
+                             (tmp_path / "nope" / "x.png", f"the folder {tmp_path / 'nope'} for {option} does not exist")]:
+            monkeypatch.setattr(sys, "argv", ["spectrace", *argv, str(target)])
+            with pytest.raises(SystemExit) as exit_info:
+                cli.main()
+            stderr = capsys.readouterr().err
+            assert exit_info.value.code == 2 and stderr == f"error: {target}: {says}\n", (name, stderr)
+
+    _fill_the_disk_in(monkeypatch, "figure")
+    for name, (argv, option) in commands.items():
+        target = tmp_path / "kept.png"
+        target.write_bytes(b"the previous figure")
+        monkeypatch.setattr(sys, "argv", ["spectrace", *argv, str(target)])
+        with pytest.raises(SystemExit) as exit_info:
+            cli.main()
+        stderr = capsys.readouterr().err
+        assert exit_info.value.code == 2 and stderr.count("\n") == 1, (name, stderr)
+        assert stderr.startswith(f"error: {target}: cannot write the ") and f"({_ENOSPC})" in stderr, stderr
+        assert target.read_bytes() == b"the previous figure"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.png", "kept.png"]
+
+
+# A real write failure, not an imitation: the file size limit makes the operating system refuse the write (EFBIG),
+# as a full disk refuses it (ENOSPC), and OpenEXR reports it in its own words.
+_SIZE_LIMITED_WRITE = r"""
+import json, resource, signal, sys
+import numpy as np
+from pathlib import Path
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write beyond the limit then fails instead of killing
+resource.setrlimit(resource.RLIMIT_FSIZE, (16384, 16384))
+from spectrace.io.exr import write_exr
+from spectrace.io.png import write_png
+out = Path(sys.argv[1])
+pixels = np.random.default_rng(1).random((128, 128, 3), dtype=np.float32)
+try:
+    if out.suffix == ".exr":
+        write_exr(out, pixels, pixels, {})
+    else:
+        write_png(out, pixels, {})
+except OSError as error:
+    print(json.dumps([error.errno, error.strerror]))
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGXFSZ"), reason="needs a file size limit (POSIX)")
+@pytest.mark.parametrize("suffix", ["exr", "png"])
+def test_a_real_failed_write_is_an_os_error_and_leaves_the_old_file(suffix, tmp_path):
+    out = tmp_path / f"image.{suffix}"
+    out.write_bytes(b"the previous image")
+    result = subprocess.run([sys.executable, "-c", _SIZE_LIMITED_WRITE, str(out)], capture_output=True, text=True,
+                            env=os.environ.copy(), timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout) == [errno.EFBIG, os.strerror(errno.EFBIG)]
+    assert out.read_bytes() == b"the previous image" and [p.name for p in tmp_path.iterdir()] == [out.name]
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGXFSZ"), reason="needs a file size limit (POSIX)")
+def test_a_real_process_whose_figure_cannot_be_written_prints_one_line(tmp_path):
+    import resource
+
+    def limit_file_size():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+    out = tmp_path / "spectra.png"
+    out.write_bytes(b"the previous figure")
+    result = subprocess.run([sys.executable, "-m", "spectrace", "spectra", "plot", "cie:D65", "cie:A", "-o",
+                             str(out)], capture_output=True, text=True, env=os.environ.copy(),
+                            preexec_fn=limit_file_size, timeout=300)
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert result.stderr == f"error: {out}: cannot write the figure ({os.strerror(errno.EFBIG)})\n"
+    assert out.read_bytes() == b"the previous figure" and [p.name for p in tmp_path.iterdir()] == [out.name]

@@ -100,12 +100,16 @@ def render(
     resume: Annotated[Optional[Path], typer.Option(
         help="Continue the render saved in this checkpoint (same scene, size and seed; --spp may be higher). "
              "Checkpoints then go to this file unless --checkpoint names another.")] = None,
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="Start afresh although --checkpoint names an existing checkpoint, which is then "
+                            "replaced (without it, such a render is refused: --resume continues it).")] = False,
     kernel: Annotated[str, typer.Option(
         help="Kernel shape: megakernel (the default, fastest on CPU runtimes as measured) or wavefront (one launch "
              "per path segment; path integrator only). Both give the same image.")] = "megakernel",
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
     (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
+    from spectrace import cli_checks
     from spectrace.output_options import RenderOutputOptions
     from spectrace.render.checkpoint import read_checkpoint
     from spectrace.render.stop_signals import StopOnSignals
@@ -115,6 +119,9 @@ def render(
 
     if sampler is not None and sampler not in SAMPLER_TYPES:
         raise SpectraceError(f"unknown sampler '{sampler}' (use {' or '.join(SAMPLER_TYPES)})", where="--sampler")
+    cli_checks.check_seed(seed)
+    cli_checks.check_max_depth(max_depth)
+    cli_checks.check_exposure(exposure)
     loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth,
                                               exposure=exposure, sampler=sampler)
     if spectral_bins and output.suffix.lower() != ".exr":
@@ -122,12 +129,14 @@ def render(
     _check_render_options(loaded, output, width, height, spp)
     outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color,
                                         false_color_scale)
+    state_file = checkpoint or resume
+    _check_output_files(scene, output, false_color, checkpoint, resume, overwrite)
     saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
     renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
-    console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False)
+    console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False,
+                  markup=False)
     if saved is not None:
         _resume(renderer, saved, resume)
-    state_file = checkpoint or resume
     with StopOnSignals() as stop:
         _render_passes(renderer, loaded.spp, stop, state_file, checkpoint_interval, quiet)
         interrupted = stop.requested
@@ -135,13 +144,13 @@ def render(
         if image.spp == 0:
             raise SpectraceError("interrupted before the first pass finished; nothing written")
         _write_image(outputs.apply(image), output, xyz, state_file)
-        outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False))
+        outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False, markup=False))
     pixels = image.width * image.height * image.spp
     note = " (interrupted: partial image)" if interrupted else ""
     console.print(
         f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
         f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}",
-        highlight=False,
+        highlight=False, markup=False,
     )
     if image.dropped_samples:
         console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
@@ -150,20 +159,38 @@ def render(
 
 
 def _check_render_options(scene, output: Path, width, height, spp) -> None:
-    """Refuse what would fail only after the render (unknown format, unwritable folder) or could never run."""
-    import os
-
+    """Refuse what would fail only after the render (unknown format) or could never run."""
     from spectrace.scene import limits
 
     if output.suffix.lower() not in (".exr", ".png"):
         raise SpectraceError(f"unknown image format '{output.suffix}' (use .exr or .png)", where=str(output))
-    folder = output.parent if str(output.parent) else Path(".")
-    if folder.exists() and not (folder.is_dir() and os.access(folder, os.W_OK | os.X_OK)):
-        raise SpectraceError("the output folder is not a writable folder", where=str(folder))
     if (width or height) and (problem := limits.film_size_problem(scene.width, scene.height)):
         raise SpectraceError(problem, where="--width/--height")
     if spp and (problem := limits.spp_problem(spp)):
         raise SpectraceError(problem, where="--spp")
+
+
+def _check_output_files(scene: Path, output: Path, false_color: Optional[Path], checkpoint: Optional[Path],
+                        resume: Optional[Path], overwrite: bool) -> None:
+    """Before any device work: every file the render will write can be written, no two name the same file, none
+    is the scene, and a fresh render does not replace a checkpoint that holds another render's samples."""
+    from spectrace import cli_checks
+
+    state_option, state_file = ("--checkpoint", checkpoint) if checkpoint is not None else ("--resume", resume)
+    if overwrite and resume is not None:
+        raise SpectraceError("starts the render afresh, so it cannot go with --resume", where="--overwrite")
+    cli_checks.check_distinct_files({"--output": output, "--false-color": false_color, state_option: state_file},
+                                    {"the scene file": scene})
+    cli_checks.check_output_file(output, "--output")
+    if false_color is not None:
+        cli_checks.check_output_file(false_color, "--false-color")
+    if state_file is not None:
+        cli_checks.check_output_file(state_file, state_option)
+    continued = resume is not None and checkpoint is not None and cli_checks.same_file(checkpoint, resume)
+    if checkpoint is not None and checkpoint.exists() and not continued and not overwrite:
+        raise SpectraceError(f"--checkpoint names a file that already exists; use --resume {checkpoint} to continue "
+                             f"the render it holds, or --overwrite to start again and replace it",
+                             where=str(checkpoint))
 
 
 def _resume(renderer, restored, path: Path) -> None:
@@ -172,11 +199,11 @@ def _resume(renderer, restored, path: Path) -> None:
     restore_checkpoint(renderer, restored, str(path))
     done, target = restored.state.samples_done, renderer.scene.spp
     note = f" (already at or beyond the {target} spp asked for)" if done >= target else ""
-    console.print(f"resumed {path}: {done} spp done{note}", highlight=False)
+    console.print(f"resumed {path}: {done} spp done{note}", highlight=False, markup=False)
     if restored.device != renderer.device.report.key:
         console.print(f"warning: the checkpoint was rendered on {restored.device}; continuing on "
                       f"{renderer.device.report.key} gives an equally valid image, but not bit for bit the one an "
-                      f"uninterrupted render would", highlight=False)
+                      f"uninterrupted render would", highlight=False, markup=False)
 
 
 def _render_passes(renderer, spp: int, stop, state_file: Optional[Path], interval: float, quiet: bool) -> None:
@@ -268,6 +295,7 @@ def bench(
 ) -> None:
     """Measure samples/s and rays/s (a benchmark, never a test); modes compare with Mitsuba 3 and Embree
     (docs/performance.md)."""
+    _check_bench_options(size, max_depth, seconds)
     if samplers:
         from spectrace.benchmarks.samplers import sampler_bench_command
         return sampler_bench_command(scene, size, device, as_json, console)
@@ -301,6 +329,18 @@ def bench(
         print(json.dumps({"render": results}, indent=2))
     else:
         Console(width=150, markup=False).print(render_bench_table(results))
+
+
+def _check_bench_options(sizes: Optional[list[int]], max_depth: int, seconds: float) -> None:
+    """The limits the render command applies, for the options bench shares with it."""
+    from spectrace import cli_checks
+    from spectrace.scene import limits
+
+    cli_checks.check_max_depth(max_depth)
+    cli_checks.check_finite(seconds, "--seconds")
+    for size in sizes or []:
+        if problem := limits.film_size_problem(size, size):
+            raise SpectraceError(problem, where="--size")
 
 
 @app.command()

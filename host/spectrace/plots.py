@@ -10,6 +10,7 @@ in cd/m² (= lm/(m² sr)). Exposure does not enter: it only scales the RGB outpu
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Literal
@@ -71,6 +72,24 @@ def _visible_strip(axes) -> None:
     axes.imshow(srgb_encode(rgb)[None, :, :], extent=(GRID_NM[0], GRID_NM[-1], 0, 1), aspect="auto")
     axes.set_yticks([])
     axes.set_xlabel("wavelength (nm)")
+
+
+def text_problem(text: str) -> str | None:
+    """Why matplotlib cannot typeset `text` (text between two $ signs is math, which may not parse), or None."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(1, 1))
+    FigureCanvasAgg(figure)
+    figure.text(0, 0, text)
+    try:
+        figure.canvas.draw()
+    except ValueError as error:
+        reason = [line.strip() for line in str(error).splitlines() if line.strip()]
+        reason = re.sub(r"Expected \{.*\}, found", "Expected ..., found", reason[-1]) if reason else "math error"
+        return (f"cannot typeset {text!r}: {reason} (text between $ signs is "
+                f"math; write \\$ for a dollar sign)")
+    return None
 
 
 def plot_spectra(spectra: Mapping[str, Spectrum] | Sequence[Spectrum], path: str | Path, normalise: bool = False,
@@ -176,6 +195,8 @@ def _save(figure, path: str | Path) -> Path:
         raise SpectraceError(f"unknown figure format '{path.suffix}' (use .png, .pdf or .svg)", where=str(path))
     try:
         write_atomically(path, lambda temp: figure.savefig(temp, dpi=150, bbox_inches="tight"))
+    except OSError as error:
+        raise SpectraceError(f"cannot write the figure ({error.strerror or error})", where=str(path)) from None
     finally:
         figure.canvas.figure.clf()
         _pyplot().close(figure)

@@ -93,8 +93,14 @@ def plot(
 ) -> None:
     """Draw spectra against wavelength (360-830 nm, as the renderer samples them: linear between data points,
     end values held) into a figure file; each line takes the spectrum's own colour."""
-    from spectrace.plots import plot_spectra
+    from spectrace.cli_checks import check_output_file
+    from spectrace.plots import plot_spectra, text_problem
 
+    if title and (problem := text_problem(title)):
+        raise SpectraceError(problem, where="--title")
+    if output.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise SpectraceError(f"unknown figure format '{output.suffix}' (use .png, .pdf or .svg)", where=str(output))
+    check_output_file(output, "--output")
     known = _known_spectra(scene)
     spectra = {name: _resolve(name, known) for name in names}
     plot_spectra(spectra, output, normalise=normalise, title=title)

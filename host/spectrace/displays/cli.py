@@ -152,6 +152,10 @@ def compare(
     as_json: JsonOption = False,
 ) -> None:
     """The same RGB on several displays: XYZ, xy, luminance, sRGB, CIELAB, and ΔE2000 of every pair."""
+    if plot is not None:
+        from spectrace.cli_checks import check_output_file
+
+        check_output_file(plot, "--plot")  # before the work, like every output
     displays = [item.with_transfer(encoding) for item in _displays_from_options(display, "--display")]
     viewing = ViewingConditions(white_luminance_cd_m2=white_luminance, keep_measured_radiance=measured_radiance)
     comparison = compare_displays(displays, np.array(rgb), viewing)
@@ -167,7 +171,7 @@ def compare(
     for table in _comparison_tables(comparison):
         console.print(table)
     if plot is not None:
-        console.print(f"wrote {plot}", highlight=False)
+        console.print(f"wrote {plot}", highlight=False, markup=False)
 
 
 # ---------------------------------------------------------------- match

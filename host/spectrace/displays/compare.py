@@ -30,7 +30,9 @@ class DisplayColour:
 
     @property
     def xy(self) -> np.ndarray:
-        return xyz_to_xy(self.xyz_cd_m2)
+        """NaN for black, which has no chromaticity."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return xyz_to_xy(self.xyz_cd_m2)
 
     @property
     def luminance_cd_m2(self) -> float:

@@ -11,6 +11,7 @@ from spectrace.displays.display import Display
 from spectrace.displays.match import MatchResult, match_colour
 from spectrace.displays.observers import photometric_xyz
 from spectrace.displays.viewing import ViewingConditions
+from spectrace.errors import SpectraceError
 from spectrace.spectral.spectrum_io import colorchecker_patch_names, colorchecker_reflectance
 
 
@@ -59,6 +60,9 @@ def patch_metamerism(source: Display, rgb, target: Display, viewing: ViewingCond
     light_source = match.source.emission_from_drive(match.source_drive)
     light_target = match.target.emission_from_drive(match.target_drive)
     white = photometric_xyz(light_source)
+    if not white[1] > 0:  # CIELAB needs the light as its white
+        raise SpectraceError(f"the triple {tuple(float(v) for v in rgb)} on {source.name} gives no light to see the "
+                             f"patches by", where="--rgb")
     white_xy = colour.XYZ_to_xy(white)
     patches = []
     for name in colorchecker_patch_names():

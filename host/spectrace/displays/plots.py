@@ -10,6 +10,7 @@ import numpy as np
 
 from spectrace.displays.compare import Comparison
 from spectrace.errors import SpectraceError
+from spectrace.io.atomic import write_atomically
 from spectrace.spectral import GRID_NM
 
 CHANNEL_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
@@ -63,10 +64,12 @@ def _plot_chromaticities(figure, grid_cell, comparison: Comparison) -> None:
             panel.plot(*colour_on_display.xy, marker=MARKERS[index % len(MARKERS)], color=palette[index],
                        markeredgecolor="black", markersize=size, linestyle="none")
     points = np.array([item.xy for item in comparison.colours])
-    centre, half_width = points.mean(axis=0), max(np.ptp(points, axis=0).max() * 0.6, 0.01)
-    zoom.set_xlim(centre[0] - half_width, centre[0] + half_width)
-    zoom.set_ylim(centre[1] - half_width, centre[1] + half_width)
-    zoom.set_title("the triple (zoomed)", fontsize=7)
+    points = points[np.isfinite(points).all(axis=1)]  # black (0, 0, 0) emits nothing and has no chromaticity
+    if len(points):
+        centre, half_width = points.mean(axis=0), max(np.ptp(points, axis=0).max() * 0.6, 0.01)
+        zoom.set_xlim(centre[0] - half_width, centre[0] + half_width)
+        zoom.set_ylim(centre[1] - half_width, centre[1] + half_width)
+    zoom.set_title("the triple (zoomed)" if len(points) else "the triple: black, no chromaticity", fontsize=7)
     zoom.tick_params(labelsize=6)
     axes.set_xlim(-0.05, 0.8)
     axes.set_ylim(-0.05, 0.9)
@@ -116,9 +119,9 @@ def plot_comparison(comparison: Comparison, path: str | Path) -> Path:
     _plot_patches(figure, layout[1, 1], comparison)
     figure.suptitle("primaries at full drive (red, green, blue) and the triple's emission (black)", x=0.3, fontsize=10)
     try:
-        figure.savefig(path, dpi=120, bbox_inches="tight")
+        write_atomically(path, lambda temp: figure.savefig(temp, dpi=120, bbox_inches="tight"))
     except OSError as error:
-        raise SpectraceError(f"cannot write the plot ({error.__class__.__name__}: {error})", where=str(path)) from None
+        raise SpectraceError(f"cannot write the plot ({error.strerror or error})", where=str(path)) from None
     finally:
         pyplot.close(figure)
     return path

@@ -26,6 +26,9 @@ from spectrace.errors import SpectraceError
 from spectrace.spectral import cie_illuminant, srgb_encode, xyz_to_linear_srgb
 
 DEFAULT_WHITE_LUMINANCE_CD_M2 = 100.0
+# From about the absolute threshold of vision to beyond the Sun's disc (1.6e9 cd/m²): outside, no display exists,
+# and far outside the spectra under- or overflow and every figure becomes NaN.
+WHITE_LUMINANCE_RANGE_CD_M2 = (1e-6, 1e10)
 REFERENCE_WHITE_NAME = "CIE D65"
 
 
@@ -43,11 +46,16 @@ class ViewingConditions:
     keep_measured_radiance: bool = False
 
     def __post_init__(self) -> None:
+        low, high = WHITE_LUMINANCE_RANGE_CD_M2
         if not (np.isfinite(self.white_luminance_cd_m2) and self.white_luminance_cd_m2 > 0):
             raise SpectraceError(
                 f"white luminance must be a positive number of cd/m², got {self.white_luminance_cd_m2:g}",
                 where="--white-luminance",
             )
+        if not low <= self.white_luminance_cd_m2 <= high:
+            raise SpectraceError(f"white luminance must lie in {low:g}..{high:g} cd/m² (from the threshold of vision "
+                                 f"to beyond the Sun's disc), got {self.white_luminance_cd_m2:g}",
+                                 where="--white-luminance")
 
     def as_viewed(self, display: Display) -> Display:
         """The display on this comparison's luminance scale (see the module docstring)."""

@@ -1,5 +1,7 @@
 """OpenEXR output: linear sRGB as 32-bit float R, G, B, optionally the film's X, Y, Z, plus render metadata."""
 
+import errno
+import os
 import re
 from pathlib import Path
 
@@ -43,10 +45,23 @@ def write_exr(path: Path, linear_srgb: np.ndarray, xyz: np.ndarray | None, metad
     header.update(attributes or {})
 
     def write(temp: Path) -> None:
-        with OpenEXR.File(header, channels) as exr:
-            exr.write(str(temp))
+        try:
+            with OpenEXR.File(header, channels) as exr:
+                exr.write(str(temp))
+        except RuntimeError as error:
+            raise _os_error(error, temp) from None
 
     write_atomically(path, write)
+
+
+def _os_error(error: RuntimeError, temp: Path) -> OSError:
+    """OpenEXR reports a failed write (disk full, file too large, I/O error) as a RuntimeError whose text ends
+    with the system's reason; as an OSError with that errno, callers handle it like any other failed write."""
+    text = " ".join(str(error).split())
+    for code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS, errno.EACCES):
+        if os.strerror(code) in text:
+            return OSError(code, os.strerror(code), str(temp))
+    return OSError(errno.EIO, f"OpenEXR: {text}", str(temp))
 
 
 def read_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:

@@ -7,7 +7,10 @@ that never stopped (on the same device).
 
 A checkpoint is an uncompressed .npz (no pickled objects), written atomically, holding `format`, the identity
 of the render (`width`, `height`, `seed`, `scene_digest`, `kernels_digest`), `samples_done`, `render_seconds`,
-`device`, and one `state_<name>` array per accumulation buffer (`film`, `ray_counts`, `spectral_film`).
+`device`, one `state_<name>` array per accumulation buffer (`film`, `ray_counts`, `spectral_film`), and `checksum`,
+a SHA-256 of every other entry (name, type, shape and bytes): a file damaged on disk or edited by hand is refused
+rather than continued into a render. Reading also checks each buffer's type and shape against the film size and
+that the sums are finite. Files of format 1 (no checksum) are still read, with those explicit checks only.
 """
 
 from __future__ import annotations
@@ -25,14 +28,22 @@ from spectrace import resources
 from spectrace.device.program_cache import kernels_digest
 from spectrace.errors import SpectraceError
 from spectrace.io.atomic import write_atomically
+from spectrace.scene import limits
 from spectrace.render.memory import scene_arrays
 from spectrace.render.scene_buffers import render_params
 
 if TYPE_CHECKING:
     from spectrace.render.renderer import Renderer
 
-CHECKPOINT_FORMAT = "spectrace-checkpoint-1"
+CHECKPOINT_FORMAT = "spectrace-checkpoint-2"
+_FORMAT_WITHOUT_CHECKSUM = "spectrace-checkpoint-1"
+# The scene digest starts from this fixed string, not from the format's name: a new file format must not make
+# every checkpoint already saved look like one of another scene.
+_SCENE_DIGEST_SALT = "spectrace-checkpoint-1"
 _STATE_PREFIX = "state_"
+_CHECKSUM = "checksum"
+# Accumulation buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
+_STATE_LAYOUT = {"film": (np.float32, 4), "ray_counts": (np.uint32, 1), "spectral_film": (np.float32, None)}
 
 
 @dataclass
@@ -71,7 +82,7 @@ def _update_with_array(digest, name: str, array: np.ndarray) -> None:
 
 def scene_digest(renderer: Renderer) -> str:
     """SHA-256 of everything the render's kernels read except the sample range, and of the program settings."""
-    digest = hashlib.sha256(CHECKPOINT_FORMAT.encode())
+    digest = hashlib.sha256(_SCENE_DIGEST_SALT.encode())
     settings = (renderer.scene.integrator, renderer.spectral_bins, tuple(renderer.spectral_range_nm),
                 renderer.scene.sampler)
     digest.update(repr(settings).encode())
@@ -110,12 +121,21 @@ def write_checkpoint(path: str | Path, checkpoint: Checkpoint) -> None:
         "device": np.array(checkpoint.device),
         **{_STATE_PREFIX + name: np.ascontiguousarray(array) for name, array in state.buffers.items()},
     }
+    payload[_CHECKSUM] = np.array(_checksum(payload))
 
     def write(temp: Path) -> None:
         with open(temp, "wb") as stream:  # a stream: np.savez would append .npz to a file name
             np.savez(stream, **payload)
 
     write_atomically(Path(path), write)
+
+
+def _checksum(fields: dict) -> str:
+    digest = hashlib.sha256()
+    for name in sorted(fields):
+        if name != _CHECKSUM:
+            _update_with_array(digest, name, np.asarray(fields[name]))
+    return digest.hexdigest()
 
 
 def read_checkpoint(path: str | Path) -> Checkpoint:
@@ -133,8 +153,12 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
         detail = " ".join(str(error).split()) or type(error).__name__
         raise SpectraceError(f"not a readable spectrace checkpoint ({detail})", where=str(path)) from None
     try:
-        if str(fields["format"]) != CHECKPOINT_FORMAT:
-            raise SpectraceError(f"checkpoint format '{fields['format']}' is not '{CHECKPOINT_FORMAT}'",
+        file_format = str(fields["format"])
+        if file_format not in (CHECKPOINT_FORMAT, _FORMAT_WITHOUT_CHECKSUM):
+            raise SpectraceError(f"checkpoint format '{file_format}' is not '{CHECKPOINT_FORMAT}' (written by "
+                                 f"another version of spectrace?)", where=str(path))
+        if file_format == CHECKPOINT_FORMAT and str(fields[_CHECKSUM]) != _checksum(fields):
+            raise SpectraceError("the checkpoint's checksum does not match its contents: the file is damaged",
                                  where=str(path))
         identity = RenderIdentity(int(fields["width"]), int(fields["height"]), int(fields["seed"]),
                                   str(fields["scene_digest"]), str(fields["kernels_digest"]))
@@ -144,7 +168,41 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
         device = str(fields["device"])
     except (KeyError, TypeError, ValueError) as error:
         raise SpectraceError(f"not a spectrace checkpoint (missing or malformed {error})", where=str(path)) from None
+    if problem := _state_problem(identity, state):
+        raise SpectraceError(f"damaged checkpoint: {problem}", where=str(path))
     return Checkpoint(identity, state, device)
+
+
+def _state_problem(identity: RenderIdentity, state: RenderState) -> str | None:
+    """Why a checkpoint's numbers cannot be the state of a render, or None (checked even when the checksum holds:
+    a file written by a faulty run, or by hand, can be consistent and still wrong)."""
+    if problem := (limits.film_size_problem(identity.width, identity.height) or limits.seed_problem(identity.seed)):
+        return problem
+    if not 0 <= state.samples_done <= limits.MAX_SPP:
+        return f"sample count {state.samples_done} is outside 0..{limits.MAX_SPP}"
+    if not (np.isfinite(state.render_seconds) and state.render_seconds >= 0):
+        return f"render time {state.render_seconds} s is not a finite non-negative number"
+    pixels = identity.width * identity.height
+    for name in ("film", "ray_counts"):
+        if name not in state.buffers:
+            return f"the {name} buffer is missing"
+    for name, array in state.buffers.items():
+        if name not in _STATE_LAYOUT:
+            return f"unknown buffer '{name}'"
+        dtype, per_pixel = _STATE_LAYOUT[name]
+        shape = (pixels, per_pixel) if per_pixel and per_pixel > 1 else (pixels,)
+        if per_pixel is None:
+            fits = array.ndim == 1 and array.size > 0 and array.size % pixels == 0
+            needs = f"a positive multiple of {pixels} values"
+        else:
+            fits = array.shape == shape
+            needs = f"shape {shape}"
+        if array.dtype != dtype or not fits:
+            return (f"the {name} buffer is {array.dtype} of shape {array.shape}; a {identity.width}x{identity.height} "
+                    f"film needs {np.dtype(dtype)} of {needs}")
+        if array.dtype.kind == "f" and not np.isfinite(array).all():
+            return f"the {name} buffer holds {int((~np.isfinite(array)).sum())} NaN or infinite values"
+    return None
 
 
 def identity_mismatch(saved: RenderIdentity, current: RenderIdentity) -> str | None:

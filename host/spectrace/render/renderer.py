@@ -53,7 +53,7 @@ class Renderer:
         that handle every scene instead of ones carrying only this scene's features (for comparisons)."""
         self.scene = scene
         problem = (limits.render_settings_problem(scene.width, scene.height, scene.spp)
-                   or limits.scene_geometry_problem(scene))
+                   or limits.scene_settings_problem(scene) or limits.scene_geometry_problem(scene))
         if problem:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         self.device = device if isinstance(device, Device) else open_device(device)

@@ -14,6 +14,13 @@ MAX_FILM_PIXELS = 1 << 27
 # Per-pixel sums are 32-bit floats: beyond 2^20 samples each new sample is below a few ulps of the running sum and
 # is effectively lost. Averaging images rendered with different seeds goes further without that loss.
 MAX_SPP = 1 << 20
+# The kernels read the seed, max_depth and rr_depth as 32-bit signed ints (RenderParams in kernels/types.h); the
+# seed is cast to uint32 there, so negative seeds would only alias positive ones.
+MAX_SEED = (1 << 31) - 1
+MAX_DEPTH = (1 << 31) - 1
+# Exposure scales the RGB outputs by 2**stops: beyond ±64 stops a float32 pixel of any rendered scene is 0 or
+# infinite, so a larger value is a typo.
+MAX_EXPOSURE_STOPS = 64.0
 
 # Device bytes per pixel: the film (float4: ΣX, ΣY, ΣZ, dropped-sample count) and the ray count (uint32).
 FILM_BYTES_PER_PIXEL = 16
@@ -95,6 +102,41 @@ def spp_problem(spp: int) -> str | None:
         return (f"spp {spp} exceeds the limit of {MAX_SPP}: the film's 32-bit float sums stop gaining precision "
                 f"beyond it; average images rendered with different seeds instead")
     return None
+
+
+def seed_problem(seed: int) -> str | None:
+    """Why `seed` cannot seed the kernels' samplers, or None."""
+    if not 0 <= seed <= MAX_SEED:
+        return (f"seed must lie in 0..{MAX_SEED} (the kernels take it as a 32-bit signed integer), got {seed}")
+    return None
+
+
+def max_depth_problem(depth: int, name: str = "max_depth") -> str | None:
+    """Why a path depth cannot be rendered, or None; -1 means unbounded (Russian roulette ends the paths)."""
+    if depth == -1 or 1 <= depth <= MAX_DEPTH:
+        return None
+    if depth > MAX_DEPTH:
+        return (f"{name} must be at most {MAX_DEPTH} (the kernels take it as a 32-bit signed integer; "
+                f"-1 means unbounded), got {depth}")
+    return f"{name} must be -1 (unbounded) or >= 1, got {depth}"
+
+
+def exposure_problem(stops: float) -> str | None:
+    """Why an exposure in stops cannot be applied to the outputs, or None."""
+    if not np.isfinite(stops):
+        return f"exposure must be a finite number of stops, got {stops}"
+    if abs(stops) > MAX_EXPOSURE_STOPS:
+        return (f"exposure {stops:g} stops is beyond ±{MAX_EXPOSURE_STOPS:g}, where every output pixel would be 0 "
+                f"or infinite")
+    return None
+
+
+def scene_settings_problem(scene) -> str | None:
+    """Why a Scene's seed, depths or exposure cannot be used (for scenes built in Python), or None."""
+    return (seed_problem(scene.seed) or max_depth_problem(scene.max_depth)
+            or (f"rr_depth must lie in 1..{MAX_DEPTH}, got {scene.rr_depth}"
+                if not 1 <= scene.rr_depth <= MAX_DEPTH else None)
+            or exposure_problem(scene.exposure))
 
 
 def coordinates_problem(points: np.ndarray) -> str | None:

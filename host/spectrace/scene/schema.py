@@ -44,7 +44,8 @@ class CameraSpec(Strict):
 class FilmSpec(Strict):
     width: int = Field(gt=0)
     height: int = Field(gt=0)
-    exposure: FiniteFloat = Field(default=0.0, ge=-64.0, le=64.0, description="stops: RGB output x 2**exposure")
+    exposure: FiniteFloat = Field(default=0.0, ge=-limits.MAX_EXPOSURE_STOPS, le=limits.MAX_EXPOSURE_STOPS,
+                                  description="stops: RGB output x 2**exposure")
 
     @field_validator("width", "height")
     @classmethod
@@ -62,8 +63,10 @@ class FilmSpec(Strict):
 
 class IntegratorSpec(Strict):
     type: Literal["path", "direct"] = "path"
-    max_depth: int = Field(default=8, ge=-1, description="path segments from the camera; -1 = unbounded")
-    rr_depth: int = Field(default=5, ge=1, description="bounces after which Russian roulette may end a path")
+    max_depth: int = Field(default=8, ge=-1, le=limits.MAX_DEPTH,
+                           description="path segments from the camera; -1 = unbounded")
+    rr_depth: int = Field(default=5, ge=1, le=limits.MAX_DEPTH,
+                          description="bounces after which Russian roulette may end a path")
 
     @field_validator("max_depth")
     @classmethod
@@ -76,7 +79,7 @@ class IntegratorSpec(Strict):
 class SamplerSpec(Strict):
     type: SamplerType = Field(default=DEFAULT_SAMPLER, description="see docs/sampling.md")
     spp: int = Field(default=16, gt=0)
-    seed: int = Field(default=0, ge=0, lt=1 << 31)
+    seed: int = Field(default=0, ge=0, le=limits.MAX_SEED)
 
     @field_validator("spp")
     @classmethod
