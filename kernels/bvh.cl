@@ -7,7 +7,7 @@
 #include "triangle4.cl"
 
 /* BVH_STACK_SIZE, BVH4_STACK_SIZE: the traversal stacks' entries, from the depth the host's builder guarantees
- * (spectrace.geometry.bvh MAX_DEPTH; bvh4.py), passed as build defines (spectrace.render.device_types). */
+ * (spectrace.geometry.bvh MAX_DEPTH; bvh4.py), passed as build defines (spectrace.engine.device_types). */
 
 typedef struct {
     float t;         /* distance along the ray; t_max when nothing was hit */

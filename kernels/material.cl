@@ -2,7 +2,7 @@
  * in its own bsdf_<name>.cl and works in the local shading frame (frame.cl) with the same five functions:
  * <name>_flags (what its lobes are, bsdf_sample.cl), <name>_params (its inputs at the path's wavelengths),
  * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. Adding a BSDF: that file, its code in
- * spectrace.render.device_types.MATERIAL_TYPES, and its line in MATERIAL_LIST. docs/materials.md describes each
+ * spectrace.engine.device_types.MATERIAL_TYPES, and its line in MATERIAL_LIST. docs/materials.md describes each
  * model. */
 #ifndef SPECTRACE_MATERIAL_CL
 #define SPECTRACE_MATERIAL_CL

@@ -1,4 +1,4 @@
-/* What a scene uses, fixed when its kernels are built (spectrace.render.scene_features writes the defines), so a
+/* What a scene uses, fixed when its kernels are built (spectrace.engine.scene_features writes the defines), so a
  * kernel carries no code for materials, lights or media the scene lacks. On CPU runtimes that matters beyond the
  * branches themselves: a smaller kernel keeps more of a path's state in registers, and a vectoriser that runs
  * work-items in SIMD lanes executes every branch some lane takes. A kernel built without these defines handles
@@ -7,7 +7,7 @@
 #define SPECTRACE_SCENE_FEATURES_H
 
 /* Bit t set: some material of type MATERIAL_t / some light of type LIGHT_t is in the scene (the codes:
- * spectrace.render.device_types). */
+ * spectrace.engine.device_types). */
 #ifndef SCENE_MATERIAL_TYPES
 #define SCENE_MATERIAL_TYPES ((1 << MATERIAL_TYPE_COUNT) - 1)
 #endif

@@ -11,7 +11,7 @@ from PIL import Image as PILImage
 
 import spectrace
 from spectrace.errors import SpectraceError
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.spectral.grid import GRID_NM
 
 SCENE_TOML = """

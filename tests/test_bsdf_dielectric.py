@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from spectrace.render.device_types import (
+from spectrace.engine.device_types import (
     IOR_CAUCHY,
     IOR_CONSTANT,
     IOR_SELLMEIER,

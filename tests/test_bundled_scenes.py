@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 

@@ -15,14 +15,14 @@ import pytest
 
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
-from spectrace.render import checkpoint as checkpoints
-from spectrace.render.checkpoint import (
+from spectrace.engine import checkpoint as checkpoints
+from spectrace.engine.checkpoint import (
     PeriodicCheckpoints,
     read_checkpoint,
     resume_render,
     save_checkpoint,
 )
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 
@@ -333,7 +333,7 @@ from pathlib import Path
 import numpy as np
 from spectrace.io.exr import write_exr
 from spectrace.io.png import write_png
-from spectrace.render.checkpoint import Checkpoint, RenderIdentity, RenderState, write_checkpoint
+from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, RenderState, write_checkpoint
 
 folder, delays = Path(sys.argv[1]), json.loads(sys.argv[2])
 NAMES = ("image.exr", "image.png", "state.npz")

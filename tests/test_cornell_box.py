@@ -6,7 +6,7 @@ import csv
 import numpy as np
 import pytest
 
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 

@@ -11,7 +11,7 @@ import pytest
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Shape

@@ -8,9 +8,9 @@ import pytest
 
 import spectrace
 from spectrace.errors import SpectraceError
-from spectrace.render.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
+from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
 from spectrace.materials import material_row
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.scene import load_scene
 from spectrace.scene.model import Camera, ConstantEnvironment, Scene
 from spectrace.spectral.glasses import glass

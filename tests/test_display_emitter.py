@@ -8,7 +8,7 @@ import pytest
 
 from spectrace.displays import load_display
 from spectrace.errors import SpectraceError
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.scene import load_scene
 from spectrace.spectral.grid import GRID_NM
 
@@ -106,7 +106,7 @@ def test_screen_shows_its_picture(device, tmp_path):
 def test_half_lit_screen_gives_half_the_irradiance(device, tmp_path):
     """Next-event estimation samples textured screens correctly: by symmetry a meter on the screen's axis
     receives exactly half the irradiance when only one half of the picture is lit."""
-    from spectrace.render.meters import IrradianceMeter, measure
+    from spectrace.engine.meters import IrradianceMeter, measure
 
     readings = {}
     for name, lit_columns in (("full", slice(0, 8)), ("half", slice(0, 4))):

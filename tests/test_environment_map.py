@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from spectrace.io.exr import write_exr
-from spectrace.render.meters import IrradianceMeter, measure
+from spectrace.engine.meters import IrradianceMeter, measure
 from spectrace.scene import load_scene
 from spectrace.scene.model import Camera, EnvironmentMap, Scene
 from spectrace.spectral.grid import GRID_NM

@@ -18,7 +18,7 @@ import pytest
 from spectrace.displays import load_display
 from spectrace.geometry import mesh as mesh_module
 from spectrace.geometry.mesh import load_mesh
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.scene import load_scene
 
 SCENE = """\

@@ -13,9 +13,9 @@ import pytest
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
 from spectrace.benchmarks.kernel_shapes import Variant, run_kernel_shape_bench
-from spectrace.render.launch import render_work_group
-from spectrace.render.renderer import Renderer
-from spectrace.render.wavefront import WavefrontRenderer, make_renderer
+from spectrace.engine.launch import render_work_group
+from spectrace.engine.renderer import Renderer
+from spectrace.engine.wavefront import WavefrontRenderer, make_renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 

@@ -15,8 +15,8 @@ import spectrace
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.render.device_types import MEDIUM_DTYPE
-from spectrace.render.meters import IrradianceMeter, RadianceMeter, measure
+from spectrace.engine.device_types import MEDIUM_DTYPE
+from spectrace.engine.meters import IrradianceMeter, RadianceMeter, measure
 from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Camera, ConstantEnvironment, DiffuseMaterial, Medium, Scene, Shape
 from spectrace.spectral.colorimetry import reflectance_to_xyz, xyz_to_linear_srgb

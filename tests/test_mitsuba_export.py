@@ -12,7 +12,7 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry.primitives import rectangle, sphere
 from spectrace.geometry.transforms import apply_transform
 from spectrace.interop.mitsuba_export import mitsuba_film_xyz, scene_to_mitsuba_dict, write_binary_ply
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, SpotLight

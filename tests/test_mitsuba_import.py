@@ -233,7 +233,7 @@ def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_sca
     mitsuba_scene = mi.load_file(str(xml_path))
     by_mitsuba = np.stack([np.array(mi.render(mitsuba_scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
 
-    from spectrace.render.renderer import Renderer
+    from spectrace.engine.renderer import Renderer
 
     xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(xml_path), device), replicas, replica_spp)
     assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)

@@ -11,7 +11,7 @@ import pytest
 
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum

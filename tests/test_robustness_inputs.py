@@ -316,7 +316,7 @@ def test_bad_input_is_one_line_naming_file_and_key(case, tmp_path, monkeypatch, 
     scene, argv = _write_case(tmp_path, case)
     before = {path: path.read_bytes() for path in tmp_path.iterdir() if path.is_file()}
     # refused before any device work
-    monkeypatch.setattr(importlib.import_module("spectrace.render.wavefront"), "make_renderer", _no_device)
+    monkeypatch.setattr(importlib.import_module("spectrace.engine.wavefront"), "make_renderer", _no_device)
     status, stderr = _run_in_process(monkeypatch, capsys, argv)
     assert status == 2, stderr
     lines = [line for line in stderr.splitlines() if line.strip() and not line.startswith("device: ")]
@@ -358,7 +358,7 @@ def test_a_read_only_folder_is_refused_before_rendering(tmp_path, monkeypatch, c
     locked = tmp_path / "locked"
     locked.mkdir()
     locked.chmod(0o555)
-    monkeypatch.setattr(importlib.import_module("spectrace.render.wavefront"), "make_renderer", _no_device)
+    monkeypatch.setattr(importlib.import_module("spectrace.engine.wavefront"), "make_renderer", _no_device)
     try:
         for option in ("-o", "--false-color", "--checkpoint"):
             status, stderr = _run_in_process(monkeypatch, capsys, [*argv, option, str(locked / "file.png")])
@@ -382,7 +382,7 @@ def test_unbounded_depth_stays_valid(tmp_path, monkeypatch, capsys):
     (("--quality", "--seconds", "inf"), "error: --seconds: must be a finite number, got inf"),
 ])
 def test_bench_applies_the_render_limits(argv, says, monkeypatch, capsys):
-    monkeypatch.setattr(importlib.import_module("spectrace.render.wavefront"), "make_renderer", _no_device)
+    monkeypatch.setattr(importlib.import_module("spectrace.engine.wavefront"), "make_renderer", _no_device)
     status, stderr = _run_in_process(monkeypatch, capsys, ["bench", *argv])
     assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
 

@@ -18,13 +18,13 @@ from spectrace import cli
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform
-from spectrace.render import memory
-from spectrace.render import renderer as renderer_module
-from spectrace.render.checkpoint import read_checkpoint
-from spectrace.render.memory import device_memory_need
-from spectrace.render.opencl_errors import describe_opencl_error
-from spectrace.render.renderer import Renderer
-from spectrace.render.stop_signals import StopOnSignals
+from spectrace.engine import memory
+from spectrace.engine import renderer as renderer_module
+from spectrace.engine.checkpoint import read_checkpoint
+from spectrace.engine.memory import device_memory_need
+from spectrace.engine.opencl_errors import describe_opencl_error
+from spectrace.engine.renderer import Renderer
+from spectrace.engine.stop_signals import StopOnSignals
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.limits import format_bytes

@@ -12,8 +12,8 @@ from scipy import stats
 
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
-from spectrace.render.checkpoint import render_identity
-from spectrace.render.renderer import Renderer, sampler_defines
+from spectrace.engine.checkpoint import render_identity
+from spectrace.engine.renderer import Renderer, sampler_defines
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import DEFAULT_SAMPLER

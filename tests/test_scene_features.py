@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import spectrace
-from spectrace.render.renderer import Renderer
-from spectrace.render.scene_buffers import build_scene_buffers
-from spectrace.render.scene_features import scene_feature_defines
+from spectrace.engine.renderer import Renderer
+from spectrace.engine.scene_buffers import build_scene_buffers
+from spectrace.engine.scene_features import scene_feature_defines
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import EnvironmentMap

@@ -5,7 +5,7 @@ scene kernels take the scene buffers in the order the host sets them."""
 import numpy as np
 import pytest
 
-from spectrace.render.device_types import DEVICE_STRUCTS
+from spectrace.engine.device_types import DEVICE_STRUCTS
 
 
 def _layout_kernel_source() -> str:
@@ -49,7 +49,7 @@ def test_kernels_see_every_contract_value_the_host_defines(device, tmp_path):
     number inside an expression, a float keeps every digit)."""
     import pyopencl as cl
 
-    from spectrace.render.device_types import device_contract_defines
+    from spectrace.engine.device_types import device_contract_defines
     from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
     contract = device_contract_defines()
@@ -74,7 +74,7 @@ def test_no_kernel_file_keeps_its_own_copy_of_a_contract_value():
     import re
 
     from spectrace import resources
-    from spectrace.render.device_types import device_contract_defines
+    from spectrace.engine.device_types import device_contract_defines
 
     names = set(device_contract_defines())
     copies = []
@@ -104,7 +104,7 @@ def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device, entry, 
     as the compiler reports them, must be those buffers in that order."""
     import pyopencl as cl
 
-    from spectrace.render.device_types import SCENE_KERNEL_BUFFERS
+    from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 
     program = device.build_program(entry, options=["-cl-kernel-arg-info"])
     k = cl.Kernel(program, kernel)

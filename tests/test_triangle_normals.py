@@ -4,7 +4,7 @@ read as the geometric normal: it must be the normal of the winding, recomputed h
 import numpy as np
 
 import spectrace
-from spectrace.render.scene_buffers import build_scene_buffers
+from spectrace.engine.scene_buffers import build_scene_buffers
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 

@@ -36,11 +36,6 @@ _LAZY = {
     "Spectrum": "spectrace.spectral.spectrum",
 }
 
-# Bound now, before anything imports a submodule of the package: the first import of `spectrace.render` sets the
-# attribute `render` of this module to that package, which would hide the function `render` of the API. With the
-# package loaded first, the name is free for the function.
-importlib.import_module("spectrace.render")
-del render  # noqa: F821 (bound by the import above)
 
 
 def __getattr__(name: str):

@@ -24,9 +24,7 @@ from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
 from spectrace.lights.base import unit_direction
-# Imported here, not lazily: importing the spectrace.render package for the first time would rebind the name
-# `spectrace.render` from the function exported in spectrace/__init__.py to the package.
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.scene.model import (
     AreaEmitter,
     ConductorMaterial,

@@ -13,7 +13,7 @@ from pathlib import Path
 from rich.table import Table
 
 from spectrace.device import discover_devices, open_device
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 

@@ -111,9 +111,9 @@ def render(
     (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
     from spectrace import cli_checks
     from spectrace.output_options import RenderOutputOptions
-    from spectrace.render.checkpoint import read_checkpoint
-    from spectrace.render.stop_signals import StopOnSignals
-    from spectrace.render.wavefront import make_renderer
+    from spectrace.engine.checkpoint import read_checkpoint
+    from spectrace.engine.stop_signals import StopOnSignals
+    from spectrace.engine.wavefront import make_renderer
     from spectrace.scene import load_scene
     from spectrace.scene.model import SAMPLER_TYPES
 
@@ -194,7 +194,7 @@ def _check_output_files(scene: Path, output: Path, false_color: Optional[Path], 
 
 
 def _resume(renderer, restored, path: Path) -> None:
-    from spectrace.render.checkpoint import restore_checkpoint
+    from spectrace.engine.checkpoint import restore_checkpoint
 
     restore_checkpoint(renderer, restored, str(path))
     done, target = restored.state.samples_done, renderer.scene.spp
@@ -210,7 +210,7 @@ def _render_passes(renderer, spp: int, stop, state_file: Optional[Path], interva
     """Render to `spp` with a progress bar until done or asked to stop; checkpoint on the way and at the end."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    from spectrace.render.checkpoint import PeriodicCheckpoints
+    from spectrace.engine.checkpoint import PeriodicCheckpoints
 
     def warn(message: str) -> None:
         console.print(f"warning: {message}", highlight=False, markup=False)
@@ -442,7 +442,7 @@ def main() -> None:
         opencl = sys.modules.get("pyopencl")
         if opencl is None or not isinstance(exc, opencl.Error):
             raise
-        from spectrace.render.opencl_errors import describe_opencl_error
+        from spectrace.engine.opencl_errors import describe_opencl_error
 
         console.print(f"error: {describe_opencl_error(exc, 'running', 'the OpenCL device')}", highlight=False,
                       markup=False, soft_wrap=True)

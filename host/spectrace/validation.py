@@ -16,8 +16,8 @@ from spectrace.device import Device, open_device
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.render.meters import FluxMeter, IrradianceMeter, RadianceMeter, measure
-from spectrace.render.renderer import Renderer
+from spectrace.engine.meters import FluxMeter, IrradianceMeter, RadianceMeter, measure
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import (

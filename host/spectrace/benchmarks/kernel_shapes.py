@@ -14,8 +14,8 @@ from pathlib import Path
 from rich.table import Table
 
 from spectrace.device import open_device
-from spectrace.render.launch import render_work_group
-from spectrace.render.wavefront import make_renderer
+from spectrace.engine.launch import render_work_group
+from spectrace.engine.wavefront import make_renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 
@@ -26,7 +26,7 @@ WORK_GROUPS = (None, 1, 4, 8, 16, 32)  # None: the runtime chooses
 class Variant:
     kernel: str
     work_group: int | None
-    specialised: bool = True  # built for the scene's features only (spectrace.render.scene_features)
+    specialised: bool = True  # built for the scene's features only (spectrace.engine.scene_features)
 
     @property
     def label(self) -> str:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from spectrace.benchmarks.image_agreement import SIGMA_LIMIT, compare_regions, regions_for
 from spectrace.device import discover_devices, open_device
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import Scene

@@ -26,7 +26,7 @@ from spectrace.geometry.bvh4 import LEAF_SIZE, collapse_to_bvh4, device_nodes, t
 from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, sphere
-from spectrace.render.launch import launch_shape, render_work_group
+from spectrace.engine.launch import launch_shape, render_work_group
 
 DISTANCE_CHECK_RAYS = 20000
 

@@ -17,7 +17,7 @@ from rich.console import Console
 from rich.table import Table
 
 from spectrace.device import open_device
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import SAMPLER_TYPES

@@ -17,7 +17,7 @@ import numpy as np
 from spectrace.device import open_device
 from spectrace.geometry.primitives import sphere
 from spectrace.geometry.transforms import apply_transform
-from spectrace.render.renderer import Renderer
+from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import Scene, Shape

@@ -124,7 +124,7 @@ def build_options(kernels_dir: Path, defines: dict[str, DefineValue] | None, ext
 def _with_contract(defines: dict[str, DefineValue] | None) -> dict[str, DefineValue]:
     """`defines` plus the host/device contract (type codes, wavelength grid, buffer layouts), which every build
     gets: the kernels keep no copy of those numbers."""
-    from spectrace.render.device_types import device_contract_defines  # not at import: it loads numpy tables
+    from spectrace.engine.device_types import device_contract_defines  # not at import: it loads numpy tables
 
     contract = device_contract_defines()
     clash = sorted(set(contract) & set(defines or {}))
@@ -185,7 +185,7 @@ class Device:
     def build_program(self, entry: str, defines: dict[str, DefineValue] | None = None,
                       options: list[str] | None = None) -> cl.Program:
         """Build ``kernels/<entry>`` with ``-I kernels`` and ``-D name=value`` for each define and each value of the
-        host/device contract (spectrace.render.device_types), reusing a cached binary when sources, options and
+        host/device contract (spectrace.engine.device_types), reusing a cached binary when sources, options and
         device are unchanged."""
         started = time.perf_counter()
         kernels_dir = resources.kernels_dir()

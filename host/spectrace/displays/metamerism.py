@@ -88,7 +88,7 @@ def measure_scene_patches(scene, device=None, streams: int = 32, samples_per_ite
     radiance meter (380-780 nm every 5 nm), as CIELAB relative to the left half's brightest neutral patch (one fixed
     white for both halves, as one photograph would have) and the ΔE2000 between the halves. The ΔE's standard error
     comes from re-evaluating it on the meter readings perturbed by their standard errors."""
-    from spectrace.render.meters import RadianceMeter, measure
+    from spectrace.engine.meters import RadianceMeter, measure
 
     wavelengths = np.arange(380.0, 781.0, 5.0)
     origin = np.asarray(scene.camera.origin, float)

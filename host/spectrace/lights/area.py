@@ -7,7 +7,7 @@ import numpy as np
 
 from spectrace.lights.base import LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter
-from spectrace.render.device_types import LIGHT_TRIANGLE
+from spectrace.engine.device_types import LIGHT_TRIANGLE
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "area"

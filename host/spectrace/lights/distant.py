@@ -6,7 +6,7 @@ import numpy as np
 
 from spectrace.lights.base import LightRows, light_row, unit_direction
 from spectrace.materials.parameters import REQUIRED, Parameter
-from spectrace.render.device_types import LIGHT_DISTANT
+from spectrace.engine.device_types import LIGHT_DISTANT
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "distant"

@@ -7,7 +7,7 @@ import numpy as np
 
 from spectrace.lights.base import LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
-from spectrace.render.device_types import LIGHT_ENVIRONMENT_MAP
+from spectrace.engine.device_types import LIGHT_ENVIRONMENT_MAP
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 

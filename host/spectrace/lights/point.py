@@ -10,7 +10,7 @@ import numpy as np
 from spectrace.errors import SpectraceError
 from spectrace.lights.base import LightRows, check_position, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
-from spectrace.render.device_types import LIGHT_POINT
+from spectrace.engine.device_types import LIGHT_POINT
 from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
 

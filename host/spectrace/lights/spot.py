@@ -8,7 +8,7 @@ from spectrace.errors import SpectraceError
 from spectrace.lights import point
 from spectrace.lights.base import LightRows, check_position, light_row, unit_direction
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
-from spectrace.render.device_types import LIGHT_SPOT
+from spectrace.engine.device_types import LIGHT_SPOT
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "spot"

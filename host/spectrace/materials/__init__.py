@@ -15,7 +15,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.materials import conductor, dielectric, diffuse, mirror, plastic, retroreflector
-from spectrace.render.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM
+from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM
 from spectrace.spectral.table import SpectrumTable
 
 # Scene-file `type` -> module, in the order the schema lists them.

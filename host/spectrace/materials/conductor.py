@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
-from spectrace.render.device_types import MATERIAL_CONDUCTOR
+from spectrace.engine.device_types import MATERIAL_CONDUCTOR
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable

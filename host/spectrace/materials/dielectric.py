@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
-from spectrace.render.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
+from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
 from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.materials.parameters import reflectance
-from spectrace.render.device_types import MATERIAL_MIRROR
+from spectrace.engine.device_types import MATERIAL_MIRROR
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.materials.parameters import REQUIRED, Parameter, Range, reflectance, roughness
-from spectrace.render.device_types import IOR_CONSTANT, MATERIAL_PLASTIC
+from spectrace.engine.device_types import IOR_CONSTANT, MATERIAL_PLASTIC
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 

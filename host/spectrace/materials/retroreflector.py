@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.materials.parameters import SMOOTH_ALPHA, reflectance, roughness
-from spectrace.render.device_types import MATERIAL_RETROREFLECTOR
+from spectrace.engine.device_types import MATERIAL_RETROREFLECTOR
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 

@@ -10,13 +10,13 @@ from spectrace.device import Device, open_device
 from spectrace.errors import SpectraceError
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.image import Image, SpectralBands
-from spectrace.render.checkpoint import RenderState
-from spectrace.render.device_types import SCENE_KERNEL_BUFFERS
-from spectrace.render.launch import launch_shape, render_work_group
-from spectrace.render.memory import check_device_memory, device_memory_need
-from spectrace.render.opencl_errors import translate_opencl_errors
-from spectrace.render.scene_buffers import SceneBuffers, build_scene_buffers, render_params
-from spectrace.render.scene_features import scene_feature_defines
+from spectrace.engine.checkpoint import RenderState
+from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
+from spectrace.engine.launch import launch_shape, render_work_group
+from spectrace.engine.memory import check_device_memory, device_memory_need
+from spectrace.engine.opencl_errors import translate_opencl_errors
+from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
+from spectrace.engine.scene_features import scene_feature_defines
 from spectrace.scene import limits
 from spectrace.scene.model import SAMPLER_TYPES, Scene
 

@@ -2,7 +2,7 @@
 
 from spectrace.device import Device
 from spectrace.image import Image
-from spectrace.render.renderer import ProgressCallback, Renderer
+from spectrace.engine.renderer import ProgressCallback, Renderer
 from spectrace.scene.model import Scene
 
 

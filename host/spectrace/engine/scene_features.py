@@ -4,7 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.render.scene_buffers import SceneBuffers
+from spectrace.engine.scene_buffers import SceneBuffers
 
 
 def _type_bits(types: np.ndarray) -> int:

@@ -11,7 +11,7 @@ from spectrace.lights import area as area_light
 from spectrace.lights import light_module
 from spectrace.lights.base import LightRows
 from spectrace.materials import material_row
-from spectrace.render.device_types import (
+from spectrace.engine.device_types import (
     LIGHT_DTYPE,
     MATERIAL_DTYPE,
     MEDIUM_DTYPE,

@@ -137,7 +137,7 @@ METER_PARAMS_DTYPE = _struct(
 )
 
 # The scene buffers every scene kernel takes after the RenderParams buffer, in order: the SceneBuffers fields that
-# kernels/scene.cl's SCENE_KERNEL_PARAMS declares (spectrace.render.renderer.upload_scene uploads them so).
+# kernels/scene.cl's SCENE_KERNEL_PARAMS declares (spectrace.engine.renderer.upload_scene uploads them so).
 SCENE_KERNEL_BUFFERS = ("nodes", "triangle_vertices", "triangle_uvs", "triangle_info", "materials", "lights",
                         "light_cdf", "spectra", "texels", "map_cdf", "media")
 

@@ -14,11 +14,11 @@ import pyopencl as cl
 
 from spectrace.device import Device
 from spectrace.errors import SpectraceError
-from spectrace.render.launch import launch_shape, wavefront_work_group
-from spectrace.render.memory import check_device_memory, device_memory_need
-from spectrace.render.opencl_errors import translate_opencl_errors
-from spectrace.render.renderer import Renderer
-from spectrace.render.scene_buffers import render_params
+from spectrace.engine.launch import launch_shape, wavefront_work_group
+from spectrace.engine.memory import check_device_memory, device_memory_need
+from spectrace.engine.opencl_errors import translate_opencl_errors
+from spectrace.engine.renderer import Renderer
+from spectrace.engine.scene_buffers import render_params
 from spectrace.scene.model import Scene
 
 KERNEL_SHAPES = ("megakernel", "wavefront")

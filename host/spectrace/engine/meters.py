@@ -12,10 +12,10 @@ import pyopencl as cl
 
 from spectrace.device import Device, open_device
 from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.render.launch import meter_work_group
-from spectrace.render.device_types import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
-from spectrace.render.renderer import upload_scene
-from spectrace.render.scene_buffers import build_scene_buffers, render_params
+from spectrace.engine.launch import meter_work_group
+from spectrace.engine.device_types import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
+from spectrace.engine.renderer import upload_scene
+from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
 from spectrace.spectral.grid import GRID_NM

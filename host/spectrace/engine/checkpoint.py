@@ -27,13 +27,14 @@ import numpy as np
 from spectrace import resources
 from spectrace.device.program_cache import kernels_digest
 from spectrace.errors import SpectraceError
+from spectrace.io.input_files import regular_file
 from spectrace.io.atomic import write_atomically
 from spectrace.scene import limits
-from spectrace.render.memory import scene_arrays
-from spectrace.render.scene_buffers import render_params
+from spectrace.engine.memory import scene_arrays
+from spectrace.engine.scene_buffers import render_params
 
 if TYPE_CHECKING:
-    from spectrace.render.renderer import Renderer
+    from spectrace.engine.renderer import Renderer
 
 CHECKPOINT_FORMAT = "spectrace-checkpoint-2"
 _FORMAT_WITHOUT_CHECKSUM = "spectrace-checkpoint-1"
@@ -140,10 +141,7 @@ def _checksum(fields: dict) -> str:
 
 def read_checkpoint(path: str | Path) -> Checkpoint:
     """Read a checkpoint file; SpectraceError naming the file if it is missing, damaged or not a checkpoint."""
-    path = Path(path)
-    if not path.is_file():
-        raise SpectraceError("checkpoint file does not exist" if not path.exists() else "checkpoint is not a file",
-                             where=str(path))
+    path = regular_file(path, what="checkpoint file")
     if not zipfile.is_zipfile(path):
         raise SpectraceError("not a spectrace checkpoint (not an .npz archive, or truncated)", where=str(path))
     try:
