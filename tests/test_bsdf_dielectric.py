@@ -10,7 +10,6 @@ index of the medium ω lies in, and a refracted radiance sample carries (n(ωo)/
 
 import numpy as np
 import pytest
-from scipy.stats import chi2
 
 from spectrace.render.device_types import (
     IOR_CAUCHY,
@@ -21,6 +20,13 @@ from spectrace.render.device_types import (
     MATERIAL_NO_SPECTRUM,
 )
 from spectrace.spectral.glasses import glass
+from stats_toolkit import (
+    assert_chi_square_fits,
+    assert_furnace,
+    assert_reciprocal,
+    assert_within_standard_errors,
+    mean_and_standard_error,
+)
 
 HARNESS = "testing/bsdf_dielectric.cl"
 D_LINE_NM = 587.5618  # helium d line, where catalogues quote n_d
@@ -236,7 +242,7 @@ def test_smooth_dielectric_picks_reflection_with_fresnel_frequency(kernel_runner
     reflected = np.mean(wi[:, 2] > 0)
     expected = _fresnel_angles(np.array([np.cos(theta)]), eta)[0]
     sigma = np.sqrt(expected * (1 - expected) / n)
-    assert abs(reflected - expected) < 4 * sigma, (reflected, expected, sigma)
+    assert_within_standard_errors(reflected, expected, sigma)
 
 
 # ---------------------------------------------------------------- rough dielectric
@@ -266,9 +272,8 @@ def test_rough_dielectric_conserves_energy(kernel_runner, eta):
                 wi, weight, _, ok = _rough_sample(kernel_runner, wo, eta, alpha, u)
                 assert np.all(np.isfinite(weight)) and np.all(weight >= 0)
                 flux = _flux_weights(wo, wi, weight, eta)
-                mean, sigma = flux.mean(), flux.std(ddof=1) / np.sqrt(n)
                 where = f"eta={eta} alpha={alpha} theta={theta_deg} side={side}"
-                assert mean <= 1 + 4 * sigma + 1e-6, (where, mean, sigma)
+                mean, _ = assert_furnace(flux, 1.0, slack=1e-6, what=where, at_most=True)
                 if alpha <= 0.05 and theta_deg <= 60:
                     # A nearly smooth interface loses almost nothing to masking...
                     assert mean > 0.97, (where, mean)
@@ -276,7 +281,8 @@ def test_rough_dielectric_conserves_energy(kernel_runner, eta):
                     # ...and reflects about Fresnel's F (from outside: inside, the critical angle is too near).
                     reflected = np.where(wi[:, 2] * wo[:, 2] > 0, flux, 0.0)
                     fresnel = _fresnel_angles(np.array([np.cos(np.radians(theta_deg))]), eta)[0]
-                    assert abs(reflected.mean() - fresnel) < 0.01 + 4 * reflected.std(ddof=1) / np.sqrt(n), where
+                    reflected_mean, reflected_se = mean_and_standard_error(reflected)
+                    assert_within_standard_errors(reflected_mean, fresnel, reflected_se, slack=0.01, what=where)
 
 
 @pytest.mark.parametrize("eta", ROUGH_ETAS)
@@ -295,7 +301,7 @@ def test_rough_dielectric_generalised_reciprocity(kernel_runner, eta, alpha):
     rhs = f_backward / _index_of_side(wi[:, 2], eta) ** 2
     transmission = wo[:, 2] * wi[:, 2] < 0
     assert np.count_nonzero(lhs[transmission] > 0) > n // 10, "most refracting pairs carry light"
-    np.testing.assert_allclose(lhs, rhs, rtol=2e-3, atol=1e-6 * max(lhs.max(), 1))
+    assert_reciprocal(lhs, rhs, rtol=2e-3, what=f"eta={eta} alpha={alpha}")
 
 
 @pytest.mark.parametrize("eta", ROUGH_ETAS)
@@ -341,26 +347,6 @@ def _binned_pdf_mass(kernel_runner, wo_single, eta, alpha):
     return fine.reshape(CHI2_BINS_COS, s, CHI2_BINS_PHI, s).sum(axis=(1, 3))
 
 
-def _pooled_chi_square(observed, expected, minimum=5.0):
-    """Pearson's statistic after pooling the bins whose expected count is below `minimum` (smallest first)."""
-    order = np.argsort(expected)
-    observed, expected = observed[order], expected[order]
-    pooled_o, pooled_e, acc_o, acc_e = [], [], 0.0, 0.0
-    for o, e in zip(observed, expected):
-        acc_o += o
-        acc_e += e
-        if acc_e >= minimum:
-            pooled_o.append(acc_o)
-            pooled_e.append(acc_e)
-            acc_o = acc_e = 0.0
-    if acc_e > 0 and pooled_e:
-        pooled_o[-1] += acc_o
-        pooled_e[-1] += acc_e
-    pooled_o, pooled_e = np.array(pooled_o), np.array(pooled_e)
-    statistic = np.sum((pooled_o - pooled_e) ** 2 / pooled_e)
-    return statistic, len(pooled_e) - 1
-
-
 @pytest.mark.parametrize("eta, alpha, theta_deg", CHI2_CASES)
 def test_rough_dielectric_sampler_matches_pdf_chi_square(kernel_runner, eta, alpha, theta_deg):
     rng = np.random.default_rng(int(1000 * alpha + theta_deg))
@@ -379,6 +365,4 @@ def test_rough_dielectric_sampler_matches_pdf_chi_square(kernel_runner, eta, alp
     assert mass.sum() <= 1.0 + 2e-3
     observed = np.append(observed.ravel(), np.count_nonzero(~valid))
     expected = np.append(mass.ravel(), max(1.0 - mass.sum(), 0.0)) * CHI2_SAMPLES
-    statistic, dof = _pooled_chi_square(observed, expected)
-    p_value = chi2.sf(statistic, dof)
-    assert p_value > 0.01 / len(CHI2_CASES), (statistic, dof, p_value)
+    assert_chi_square_fits(observed, expected, 0.01 / len(CHI2_CASES))

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from scipy import stats
 
 from spectrace.materials import material_row
 from spectrace.resources import spectra_dir
@@ -24,6 +23,12 @@ from spectrace.scene.model import (
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
+from stats_toolkit import (
+    assert_chi_square_fits,
+    assert_furnace,
+    assert_reciprocal,
+    assert_within_standard_errors,
+)
 
 HARNESS = "testing/bsdf.cl"
 LAMBDA_NM = np.array([420.0, 510.0, 600.0, 690.0], np.float32)  # whole nanometres: grid points of the table
@@ -151,10 +156,7 @@ def test_reciprocity(bsdf, name, material):
     device = bsdf(material)
     f_ab, _ = device.eval_pdf(a, b)
     f_ba, _ = device.eval_pdf(b, a)
-    f_ab /= b[:, 2:3]
-    f_ba /= a[:, 2:3]
-    assert np.any(f_ab > 0)
-    np.testing.assert_allclose(f_ab, f_ba, rtol=2e-4, atol=1e-6 * f_ab.max())
+    assert_reciprocal(f_ab / b[:, 2:3], f_ba / a[:, 2:3], rtol=2e-4, what=name)
 
 
 @pytest.mark.parametrize("name, material", EVERY, ids=[c[0] for c in EVERY])
@@ -175,10 +177,7 @@ def test_energy_conservation(bsdf, name, material):
     for theta in INCIDENT_DEGREES:
         s = device.sample(_wo(theta), n, seed=int(theta) + 10)
         weight = np.where(s.ok[:, None], s.weight, 0.0)
-        assert np.all(np.isfinite(weight)) and np.all(weight >= 0)
-        albedo = weight.mean(axis=0)
-        se = weight.std(axis=0, ddof=1) / np.sqrt(n)
-        assert np.all(albedo <= 1.0 + SIGMAS * se + 1e-6), (theta, albedo, se)
+        assert_furnace(weight, 1.0, SIGMAS, slack=1e-6, what=theta, at_most=True)
 
 
 @pytest.mark.parametrize("theta", INCIDENT_DEGREES)
@@ -188,8 +187,7 @@ def test_white_smooth_plastic_and_white_diffuse_lose_nothing(bsdf, theta):
         n = 40000
         s = bsdf(material).sample(_wo(theta), n, seed=3)
         weight = np.where(s.ok[:, None], s.weight, 0.0)
-        albedo, se = weight.mean(axis=0), weight.std(axis=0, ddof=1) / np.sqrt(n)
-        assert np.all(np.abs(albedo - 1.0) <= SIGMAS * se + 1e-5), (material, theta, albedo, se)
+        assert_furnace(weight, 1.0, SIGMAS, slack=1e-5, what=(material, theta))
 
 
 def test_smooth_mirror_with_unit_reflectance_conserves_energy_exactly(bsdf):
@@ -250,21 +248,6 @@ def _bin_probabilities(device: Bsdf, wo: np.ndarray) -> np.ndarray:
         axis=(1, 3))
 
 
-def _chi_square_p_value(observed: np.ndarray, expected: np.ndarray) -> float:
-    """Pearson's test after pooling the bins expected to hold fewer than 5 samples into one."""
-    observed, expected = observed.ravel(), expected.ravel()
-    low = expected < 5.0
-    obs = np.append(observed[~low], observed[low].sum())
-    exp = np.append(expected[~low], expected[low].sum())
-    if exp[-1] < 5.0:  # the pooled bin is itself too small: fold it into the smallest remaining bin
-        smallest = np.argmin(exp[:-1])
-        obs[smallest] += obs[-1]
-        exp[smallest] += exp[-1]
-        obs, exp = obs[:-1], exp[:-1]
-    statistic = float(np.sum((obs - exp) ** 2 / exp))
-    return float(stats.chi2.sf(statistic, len(exp) - 1))
-
-
 @pytest.mark.parametrize("name, material", CHI2_CASES, ids=[c[0] for c in CHI2_CASES])
 def test_sampler_matches_its_pdf_chi_square(bsdf, name, material):
     """Histogram of sampled directions (plus one bin for 'no continuous direction': failures and delta picks)
@@ -286,8 +269,7 @@ def test_sampler_matches_its_pdf_chi_square(bsdf, name, material):
         expected_missing = CHI2_SAMPLES * max(1.0 - probabilities.sum(), 0.0)
         observed_all = np.append(observed.ravel(), missing)
         expected_all = np.append(expected.ravel(), expected_missing)
-        p = _chi_square_p_value(observed_all, expected_all)
-        assert p > CHI2_SIGNIFICANCE, (theta, p)
+        assert_chi_square_fits(observed_all, expected_all, CHI2_SIGNIFICANCE, what=theta)
 
 
 @pytest.mark.parametrize("name, material", NON_DELTA, ids=[c[0] for c in NON_DELTA])
@@ -303,7 +285,7 @@ def test_pdf_integrates_to_the_samplers_success_rate(bsdf, name, material):
         rate = np.mean(s.ok & ~s.is_delta)
         se = max(np.sqrt(rate * (1.0 - rate) / n), 1.0 / n)
         assert integral <= 1.0 + 1e-3, (theta, integral)
-        assert abs(integral - rate) <= SIGMAS * se + 2e-3, (theta, integral, rate)
+        assert_within_standard_errors(rate, integral, se, SIGMAS, slack=2e-3, what=theta)
 
 
 # ---------------------------------------------------------------- conductor Fresnel

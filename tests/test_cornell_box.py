@@ -9,6 +9,7 @@ import pytest
 from spectrace.render.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
+from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
 SIZE = 32
 
@@ -32,9 +33,8 @@ def test_mean_agrees_across_seeds(cornell, device):
     a = Renderer(cornell.with_overrides(seed=1), device).render().xyz
     b = Renderer(cornell.with_overrides(seed=2), device).render().xyz
     assert not np.array_equal(a, b)
-    difference = (a - b).reshape(-1, 3)
-    standard_error = difference.std(axis=0, ddof=1) / np.sqrt(len(difference))
-    assert np.all(np.abs(difference.mean(axis=0)) < 4 * standard_error)
+    mean, standard_error = mean_and_standard_error((a - b).reshape(-1, 3))
+    assert_within_standard_errors(mean, 0.0, standard_error, what="X, Y, Z")
 
 
 @pytest.mark.parametrize("sampler", ["sobol", "independent"])

@@ -9,7 +9,6 @@ import textwrap
 
 import numpy as np
 import pytest
-from scipy import stats
 
 import spectrace
 from spectrace.errors import SpectraceError
@@ -27,6 +26,7 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 from scene_text import CAMERA_FILM_GREY
+from stats_toolkit import assert_chi_square_fits, assert_within_standard_errors, mean_and_standard_error
 
 LANES_NM = np.array([420.0, 500.0, 580.0, 680.0])
 
@@ -59,9 +59,8 @@ def test_free_flight_weights_give_each_lane_its_own_transport(kernel_runner, her
     alive = np.array([1.0, 0.0, 0.0, 0.0]) if hero_only else np.ones(4)
     reached, scattered_share = np.exp(-st * t_surface), ss / st * (1 - np.exp(-st * t_surface))
     for weights, expected in ((surface, reached), (scattered, scattered_share)):
-        values = weights.astype(np.float64)
-        mean, se = values.mean(axis=0), values.std(axis=0, ddof=1) / np.sqrt(n)
-        assert np.all(np.abs(mean - alive * expected) <= 4 * se + 1e-6), (mean, alive * expected, se)
+        mean, se = mean_and_standard_error(weights)
+        assert_within_standard_errors(mean, alive * expected, se, slack=1e-6)
         assert np.all(se[alive > 0] < 0.02 * expected[alive > 0])  # tight enough to mean something
 
 
@@ -86,15 +85,11 @@ def test_phase_sampling_follows_henyey_greenstein(kernel_runner, g):
 
     edges = np.linspace(-1.0, 1.0, 41)
     expected = np.diff(cdf(edges)) * n
-    keep = expected > 5  # chi-square needs populated bins; merge the thin tail into one
-    observed = np.histogram(mu, edges)[0]
-    obs = np.append(observed[keep], observed[~keep].sum())
-    exp = np.append(expected[keep], expected[~keep].sum())
-    obs, exp = (obs, exp) if exp[-1] > 0 else (obs[:-1], exp[:-1])
-    assert stats.chisquare(obs, exp).pvalue > 1e-4
+    assert_chi_square_fits(np.histogram(mu, edges)[0], expected, 1e-4, what="cos θ")
     phi_counts = np.histogram(np.arctan2(d[:, 1], d[:, 0]), np.linspace(-np.pi, np.pi, 17))[0]
-    assert stats.chisquare(phi_counts).pvalue > 1e-4
-    assert abs(mu.mean() - g) < 4 * mu.std() / np.sqrt(n)
+    assert_chi_square_fits(phi_counts, np.full(16, n / 16), 1e-4, what="φ")
+    mu_mean, mu_se = mean_and_standard_error(mu)
+    assert_within_standard_errors(mu_mean, g, mu_se, what="mean cosine")
     formula = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * mu) ** 1.5)
     assert np.allclose(phase, formula, rtol=2e-4)
 

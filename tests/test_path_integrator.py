@@ -15,6 +15,7 @@ from spectrace.render.renderer import Renderer
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
+from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
 EMITTED = 0.5
 ALBEDO = 0.6
@@ -34,8 +35,7 @@ def _furnace_box(max_depth: int, seed: int = 3) -> Scene:
 
 
 def _measured_y(scene: Scene, device) -> tuple[float, float]:
-    y = Renderer(scene, device).render().xyz[..., 1].ravel().astype(np.float64)
-    return y.mean(), y.std(ddof=1) / np.sqrt(y.size)
+    return mean_and_standard_error(Renderer(scene, device).render().xyz[..., 1].ravel())
 
 
 @pytest.mark.parametrize("max_depth", [1, 2, 3, 6])
@@ -43,11 +43,11 @@ def test_enclosure_radiance_truncated(device, max_depth):
     expected = EMITTED * (1 - ALBEDO**max_depth) / (1 - ALBEDO)
     mean, standard_error = _measured_y(_furnace_box(max_depth), device)
     assert standard_error < 0.01 * expected
-    assert abs(mean - expected) < 4 * standard_error, (mean, expected, standard_error)
+    assert_within_standard_errors(mean, expected, standard_error)
 
 
 def test_enclosure_radiance_unbounded_with_russian_roulette(device):
     expected = EMITTED / (1 - ALBEDO)
     mean, standard_error = _measured_y(_furnace_box(-1), device)
     assert standard_error < 0.01 * expected
-    assert abs(mean - expected) < 4 * standard_error, (mean, expected, standard_error)
+    assert_within_standard_errors(mean, expected, standard_error)

@@ -8,7 +8,6 @@ import sys
 
 import numpy as np
 import pytest
-from scipy import stats
 
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
@@ -20,6 +19,7 @@ from spectrace.scene.model import DEFAULT_SAMPLER
 
 from conftest import KernelRunner
 from scene_text import CAMERA_FILM_GREY
+from stats_toolkit import assert_chi_square_fits, assert_within_standard_errors, mean_and_standard_error
 
 DRAWS = (1, 2, 1, 2, 2, 1)  # an integrator's interleaving of sample_1d and sample_2d calls
 COORDINATES = [(d, c) for d, dims in enumerate(DRAWS) for c in range(dims)]
@@ -124,8 +124,8 @@ def test_each_sample_is_uniform_in_all_its_dimensions(sobol, sample_index):
     pairs = [(a, b) for i, a in enumerate(COORDINATES) for b in COORDINATES[i + 1:]]
     for a, b in pairs:
         counts, _, _ = np.histogram2d(draws[:, a[0], a[1]], draws[:, b[0], b[1]], bins=8, range=[[0, 1], [0, 1]])
-        p_value = stats.chisquare(counts.ravel()).pvalue
-        assert p_value > 1e-3 / len(pairs), (sample_index, a, b, p_value)
+        assert_chi_square_fits(counts, np.full(counts.size, len(draws) / counts.size), 1e-3 / len(pairs),
+                               what=(sample_index, a, b))
 
 
 def _integrand(d: np.ndarray) -> tuple[np.ndarray, float]:
@@ -148,8 +148,8 @@ def test_estimates_are_unbiased_at_any_sample_count(sobol, spp):
     """Pixels are independent replicates: their mean lies within 4 standard errors of the exact integral, for
     sample counts that are powers of two or not."""
     estimates, exact = _estimates(sobol, seed=4, pixels=4096, spp=spp)
-    standard_error = estimates.std(ddof=1) / np.sqrt(len(estimates))
-    assert abs(estimates.mean() - exact) < 4 * standard_error
+    mean, standard_error = mean_and_standard_error(estimates)
+    assert_within_standard_errors(mean, exact, standard_error)
 
 
 def test_error_at_equal_spp_is_lower_than_independent(sobol, independent):
@@ -178,9 +178,8 @@ def test_render_mean_agrees_with_the_independent_sampler(cornell, device):
     sobol_xyz = Renderer(cornell.with_overrides(seed=1), device).render(spp=12).xyz.astype(np.float64)
     independent_xyz = Renderer(cornell.with_overrides(seed=2, sampler="independent"),
                                device).render(spp=12).xyz.astype(np.float64)
-    difference = (sobol_xyz - independent_xyz).reshape(-1, 3)
-    standard_error = difference.std(axis=0, ddof=1) / np.sqrt(len(difference))
-    assert np.all(np.abs(difference.mean(axis=0)) < 4 * standard_error), (difference.mean(0), standard_error)
+    mean, standard_error = mean_and_standard_error((sobol_xyz - independent_xyz).reshape(-1, 3))
+    assert_within_standard_errors(mean, 0.0, standard_error, what="X, Y, Z")
 
 
 def test_render_error_at_equal_spp_is_lower_than_independent(cornell, device):
