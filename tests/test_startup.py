@@ -12,6 +12,7 @@ import pytest
 from spectrace.resources import scenes_dir
 
 
+@pytest.mark.subprocess
 def test_importing_the_command_line_does_not_import_heavy_modules():
     code = ("import sys, spectrace.cli; "
             "print(' '.join(m for m in ('colour', 'matplotlib', 'scipy', 'trimesh', 'pyopencl') if m in sys.modules))")
@@ -22,7 +23,7 @@ def test_importing_the_command_line_does_not_import_heavy_modules():
 
 
 def test_the_shipped_cmf_table_equals_colour_sciences():
-    colour = pytest.importorskip("colour")
+    import colour  # a dependency: missing, the test fails rather than skips
     from spectrace.spectral.colorimetry import CIE_1931_CMFS, CIE_1931_OBSERVER
     from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_STEP_NM
 
@@ -33,7 +34,7 @@ def test_the_shipped_cmf_table_equals_colour_sciences():
 
 @pytest.mark.parametrize("name", sorted(p.name for p in (scenes_dir() / "cornell_box").glob("*.obj")))
 def test_plain_obj_files_read_as_trimesh_reads_them(name):
-    trimesh = pytest.importorskip("trimesh")
+    import trimesh  # a dependency: missing, the test fails rather than skips
     from spectrace.geometry.mesh import _plain_triangle_obj, load_mesh
 
     path = scenes_dir() / "cornell_box" / name
@@ -55,6 +56,7 @@ def test_obj_files_with_more_than_plain_triangles_go_to_trimesh(tmp_path):
     assert len(load_mesh(quad, where="test").faces) == 2
 
 
+@pytest.mark.subprocess
 def test_ctrl_c_during_start_up_is_one_line_and_status_130():
     """SIGINT while the command line's modules import (held there by the test hook) gets the one line that Ctrl-C
     gets later on, not Python's traceback."""
