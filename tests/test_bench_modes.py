@@ -9,6 +9,8 @@ import sys
 
 import pytest
 
+pytestmark = pytest.mark.subprocess
+
 
 def _bench(*args) -> dict:
     result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--json", *args], capture_output=True,
@@ -60,6 +62,7 @@ def test_scaling_rays_and_quality_modes(modes):
     assert ours["spp"] & (ours["spp"] - 1) == 0  # the default Sobol sampler renders a power of two
 
 
+@pytest.mark.peer
 def test_rays_agree_with_embree(modes):
     pytest.importorskip("embreex", reason="the Embree comparison needs `pip install spectrace[bench]`")
     agreement = modes["rays"]["agreement"][0]
@@ -68,6 +71,7 @@ def test_rays_agree_with_embree(modes):
     assert agreement["same_hit_or_miss"] >= 0.998 and agreement["within_1e-4"] >= 0.998
 
 
+@pytest.mark.peer
 def test_quality_reference_agrees_with_mitsuba(modes):
     pytest.importorskip("mitsuba", reason="the Mitsuba cross-check needs `pip install spectrace[bench]`")
     quality = modes["quality"]
@@ -85,6 +89,7 @@ def test_cold_mode_builds_without_caches():
     assert cold["spp"] == warm["spp"] == 1
 
 
+@pytest.mark.peer
 def test_peer_mitsuba_mode_agrees():
     pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
     out = _bench("--peer", "mitsuba", "--size", "32", "--spp", "16", "--max-depth", "4")
@@ -96,6 +101,7 @@ def test_peer_mitsuba_mode_agrees():
         assert pair["agrees"], pair
 
 
+@pytest.mark.peer
 def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it_rendered():
     """Mitsuba's multi-jittered sampler rounds 5 spp up to 6 and logs a warning: the warning must not reach stdout
     (one JSON object there), and Mitsuba's samples/s must count the 6 samples it rendered."""
@@ -109,6 +115,7 @@ def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it
         assert row["samples_per_second"] == pytest.approx(8 * 8 * 6 / row["seconds"])
 
 
+@pytest.mark.peer
 def test_peer_uses_mitsubas_llvm_variant_where_a_libllvm_works():
     """Where a libLLVM that Dr.Jit accepts is installed (found in the usual folders or DRJIT_LIBLLVM_PATH), the
     peer bench picks it up by itself and Mitsuba's fast variant runs and agrees."""

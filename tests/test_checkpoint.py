@@ -160,6 +160,7 @@ def _spectrace(*args):
     return [sys.executable, "-m", "spectrace", *args]
 
 
+@pytest.mark.subprocess
 def test_sigterm_writes_the_true_partial_image_and_the_render_resumes_exactly(device, tmp_path):
     """A real `spectrace render`, stopped by SIGTERM: the image's spp is the number of samples in it, and the
     checkpoint continues the render to the same floats as an uninterrupted render."""
@@ -277,6 +278,7 @@ def _version_of(path) -> int:
     return version
 
 
+@pytest.mark.subprocess
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork()")
 def test_sigkill_at_any_moment_leaves_the_old_or_the_new_file(tmp_path):
     rng = np.random.default_rng(2024)

@@ -6,9 +6,12 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from spectrace.io.exr import read_exr
 from spectrace.resources import scenes_dir
+
+pytestmark = pytest.mark.subprocess
 
 
 def _run(*args, check=True):

@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import pytest
 import typer.main
 from typer.testing import CliRunner
 
@@ -38,6 +39,7 @@ def test_help_of_every_command_prints():
         assert "Usage" in result.output
 
 
+@pytest.mark.subprocess
 def test_top_level_help_lists_every_command():
     result = subprocess.run([sys.executable, "-m", "spectrace", "--help"], capture_output=True, text=True,
                             env={**os.environ, "COLUMNS": "200"}, timeout=600)

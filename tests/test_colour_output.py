@@ -150,6 +150,7 @@ def test_xyz_output_keeps_the_film(tmp_path):
         image.write(tmp_path / "xyz.png")
 
 
+@pytest.mark.subprocess
 def test_render_command_colour_options(tmp_path):
     from spectrace.resources import scenes_dir
 

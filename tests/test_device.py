@@ -116,6 +116,7 @@ def test_the_two_pocls_are_told_apart():
         assert report.key.startswith("pocl-pypi:" if from_pyopencl_wheel else "pocl-system:")
 
 
+@pytest.mark.subprocess
 def test_elf_needed_libraries_match_readelf():
     readelf = shutil.which("readelf")
     if readelf is None:
@@ -134,6 +135,7 @@ def _fresh_python(code: str, tmp_path: Path) -> subprocess.CompletedProcess:
                           env=environment, timeout=120)
 
 
+@pytest.mark.subprocess
 @pytest.mark.skipif(not pip_intel_cpu_libraries(), reason="Intel's CPU runtime is not pip-installed")
 def test_pip_intel_runtime_works_in_a_fresh_process(tmp_path):
     result = _fresh_python("""
@@ -147,6 +149,7 @@ def test_pip_intel_runtime_works_in_a_fresh_process(tmp_path):
     assert intel and all(ok for _, _, ok, _ in intel), reports
 
 
+@pytest.mark.subprocess
 def test_a_runtime_that_cannot_load_is_listed_with_the_reason(tmp_path):
     vendors = tmp_path / "vendors"
     vendors.mkdir()
@@ -163,6 +166,7 @@ def test_a_runtime_that_cannot_load_is_listed_with_the_reason(tmp_path):
     assert broken[1] is False and "runtime did not load" in broken[2] and "libbrokenvendor-opencl.so" in broken[2]
 
 
+@pytest.mark.subprocess
 @pytest.mark.skipif(not pip_intel_cpu_libraries(), reason="Intel's CPU runtime is not pip-installed")
 def test_preloading_dependencies_rescues_a_runtime_its_run_path_misses(tmp_path):
     # A symlink elsewhere makes $ORIGIN point to the wrong folder: the plain dlopen fails.

@@ -11,6 +11,8 @@ import pytest
 
 from spectrace.displays import display_names
 
+pytestmark = pytest.mark.subprocess
+
 TRIPLE = ["0.6", "0.3", "0.2"]
 
 

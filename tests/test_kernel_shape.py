@@ -101,6 +101,7 @@ def _cli(*args):
                           env=os.environ.copy(), timeout=600)
 
 
+@pytest.mark.subprocess
 def test_render_command_runs_the_wavefront(tmp_path):
     out = tmp_path / "wavefront.exr"
     result = _cli("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(out), "--spp", "2", "--width", "16",
@@ -111,6 +112,7 @@ def test_render_command_runs_the_wavefront(tmp_path):
     assert np.all(np.isfinite(channels["RGB"])) and channels["Y"].mean() > 0
 
 
+@pytest.mark.subprocess
 def test_render_command_refuses_an_unknown_kernel_shape_in_one_line(tmp_path):
     result = _cli("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(tmp_path / "x.png"), "--kernel",
                   "persistent")

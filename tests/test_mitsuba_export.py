@@ -21,6 +21,7 @@ from spectrace.spectral.spectrum import Spectrum
 
 
 
+@pytest.mark.peer
 def test_exported_cornell_box_renders_like_spectrace(tmp_path, device, mitsuba_scalar_spectral):
     """REPLICAS independent images of REPLICA_SPP samples from each renderer, depth 5 with Russian roulette from
     bounce 2 (so the roulette's semantics matter); film XYZ means over 8 x 8-pixel blocks and over the whole image
@@ -40,6 +41,7 @@ def test_exported_cornell_box_renders_like_spectrace(tmp_path, device, mitsuba_s
     assert by_mitsuba[..., 1].mean() > 0.05  # the comparison saw a lit image
 
 
+@pytest.mark.peer
 @pytest.mark.parametrize("emission", ["constant 1", "Cornell box light"])
 def test_film_xyz_normalisation_matches_the_integral(tmp_path, device, emission, mitsuba_scalar_spectral):
     """A view filled by one emitter, emitters only (max_depth 1): each renderer's mean film XYZ must equal the
@@ -64,6 +66,7 @@ def test_film_xyz_normalisation_matches_the_integral(tmp_path, device, emission,
             (image.mean(axis=0) / expected, standard_error / expected)
 
 
+@pytest.mark.peer
 def test_what_mitsuba_cannot_match_is_refused(tmp_path, mitsuba_scalar_spectral):
     scene = load_scene(scenes_dir() / "cornell_box.toml")
     spot = SpotLight(position=(0.3, 0.5, 0.3), direction=(0, -1, 0), intensity=Spectrum.constant(1.0))
@@ -88,6 +91,7 @@ def test_ply_files_hold_the_triangles(tmp_path):
     np.testing.assert_array_equal(np.asarray(loaded.vertices), mesh.vertices.astype(np.float32))
 
 
+@pytest.mark.peer
 def test_peer_sampler_is_exported_and_checked(tmp_path, mitsuba_scalar_spectral):
     """The bench may give Mitsuba any of its samplers (stratified ones are the fair match for spectrace's Sobol);
     the export carries the choice, and a misspelt one is refused in one line naming the option."""

@@ -53,6 +53,7 @@ def test_cornell_box_geometry_and_light(device):
     assert shapes["large-box"][:, 1].max() == pytest.approx(0.21, abs=1e-6)
 
 
+@pytest.mark.subprocess
 def test_import_command_writes_a_scene_that_renders(tmp_path):
     out = tmp_path / "imported" / "cornell.toml"
     run = [sys.executable, "-m", "spectrace"]
@@ -217,6 +218,7 @@ def test_dielectrics(tmp_path):
 
 
 
+@pytest.mark.peer
 def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
     """Mitsuba's Cornell box (its own scene dict, written as XML by its own serialiser, at 32 x 32 with a box pixel
     filter so both renderers average over the same pixel areas) rendered by both in spectral mode. Each renderer
@@ -353,6 +355,7 @@ def test_unreadable_xml_is_one_line(tmp_path, monkeypatch, capsys, text, says):
     _assert_one_error_line(status, stderr, str(xml), says)
 
 
+@pytest.mark.subprocess
 def test_a_real_process_prints_only_the_line_and_keeps_the_old_output(tmp_path):
     """A failed import (elements 2000 deep, once a RecursionError; a value the loader refuses in the final check)
     exits with status 2 and one line, and the TOML already there is left as it was, with no temporary file."""

@@ -7,6 +7,8 @@ import pytest
 
 from spectrace.benchmarks import mitsuba_runtime
 
+pytestmark = pytest.mark.subprocess
+
 ABORTS = r"""
 import os, sys
 print("libllvm: /opt/old/libLLVM-15.so.1", flush=True)

@@ -45,6 +45,7 @@ def test_a_note_with_brackets_prints_whole():
     assert "spectrace[bench]" in captured.get()
 
 
+@pytest.mark.subprocess
 def test_piped_help_names_every_option_whole():
     import typer
 
@@ -91,6 +92,7 @@ def test_a_local_file_comes_before_the_bundled_scene(tmp_path, monkeypatch):
     assert resolve_scene_path("cornell_box") == Path("cornell_box.toml")
 
 
+@pytest.mark.subprocess
 def test_render_a_bundled_scene_by_name_from_another_folder(tmp_path):
     result = _spectrace("render", "cornell_box", "-o", "x.png", "--width", "8", "--height", "8", "--spp", "1",
                         "-q", cwd=tmp_path)

@@ -82,6 +82,7 @@ def test_plot_spectra_file(tmp_path):
         plot_spectra([], tmp_path / "none.png")
 
 
+@pytest.mark.subprocess
 def test_spectra_commands(tmp_path):
     scene = str(scenes_dir() / "cornell_box.toml")
     listing = _run("spectra", "list", "--scene", scene, "--json")
@@ -100,6 +101,7 @@ def test_spectra_commands(tmp_path):
     assert unknown.returncode == 2 and "did you mean 'cie:D65'" in unknown.stderr and "Traceback" not in unknown.stderr
 
 
+@pytest.mark.subprocess
 def test_render_false_colour(tmp_path):
     out, figure = tmp_path / "box.exr", tmp_path / "luminance.png"
     result = _run("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(out), "--spp", "1", "--width", "8",

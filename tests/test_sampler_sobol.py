@@ -224,6 +224,7 @@ def test_scene_selects_the_sampler(tmp_path):
     assert "scene.toml: sampler.type" in str(error.value)
 
 
+@pytest.mark.subprocess
 def test_cli_sampler_option(tmp_path):
     def run(*args):
         return subprocess.run([sys.executable, "-m", "spectrace", "render", str(scenes_dir() / "cornell_box.toml"),

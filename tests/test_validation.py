@@ -23,6 +23,7 @@ def test_law_holds(device, case):
         assert check.passed is not False, check.as_dict()
 
 
+@pytest.mark.subprocess
 def test_validate_command_reports_every_case():
     result = subprocess.run([sys.executable, "-m", "spectrace", "validate", "--case", "inverse-square", "--case",
                              "flux", "--json"], capture_output=True, text=True, env=os.environ.copy(), timeout=600)
