@@ -36,6 +36,7 @@ def _llvm_variant_or_skip() -> None:
         pytest.skip(f"{LLVM_VARIANT}: variant unavailable: {probe.reason}")
 
 
+@pytest.mark.slow
 def test_scaling_rays_and_quality_modes(modes):
     out = modes
     scaling = out["scaling"]
@@ -62,6 +63,7 @@ def test_scaling_rays_and_quality_modes(modes):
     assert ours["spp"] & (ours["spp"] - 1) == 0  # the default Sobol sampler renders a power of two
 
 
+@pytest.mark.slow
 @pytest.mark.peer
 def test_rays_agree_with_embree(modes):
     pytest.importorskip("embreex", reason="the Embree comparison needs `pip install spectrace[bench]`")
@@ -71,6 +73,7 @@ def test_rays_agree_with_embree(modes):
     assert agreement["same_hit_or_miss"] >= 0.998 and agreement["within_1e-4"] >= 0.998
 
 
+@pytest.mark.slow
 @pytest.mark.peer
 def test_quality_reference_agrees_with_mitsuba(modes):
     pytest.importorskip("mitsuba", reason="the Mitsuba cross-check needs `pip install spectrace[bench]`")
@@ -81,6 +84,7 @@ def test_quality_reference_agrees_with_mitsuba(modes):
     assert {row["runtime"] for row in quality["renderers"] if row["renderer"] == "mitsuba"}
 
 
+@pytest.mark.slow
 def test_cold_mode_builds_without_caches():
     out = _bench("--cold", "--size", "8", "--spp", "1")
     cold, warm = out["cold"]["cold"][0], out["cold"]["warm"][0]
@@ -115,6 +119,7 @@ def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it
         assert row["samples_per_second"] == pytest.approx(8 * 8 * 6 / row["seconds"])
 
 
+@pytest.mark.slow
 @pytest.mark.peer
 def test_peer_uses_mitsubas_llvm_variant_where_a_libllvm_works():
     """Where a libLLVM that Dr.Jit accepts is installed (found in the usual folders or DRJIT_LIBLLVM_PATH), the

@@ -62,6 +62,7 @@ def test_compare_table_of_all_displays():
     assert "CIEDE2000" in output
 
 
+@pytest.mark.slow
 def test_match_in_gamut_and_out_of_gamut():
     exact = _json("match", "--rgb", *TRIPLE, "--from", "CRT-Dell", "--to", "LCD-HP_narrowband", "--encoding", "srgb")
     assert exact["in_gamut"] and exact["delta_e_2000"]["cie1931_2"] < 0.5
@@ -84,6 +85,7 @@ def test_user_csv_display_from_the_command_line(tmp_path):
     assert listing[-1]["name"] == "three_lines" and listing[-1]["absolute"]
 
 
+@pytest.mark.slow
 def test_bad_input_is_one_line_without_traceback(tmp_path):
     path = tmp_path / "bad_display.csv"
     path.write_text("wavelength_nm,red,green\n400,1,1\n500,1,1\n")

@@ -155,6 +155,7 @@ def assert_imports_or_reports(xml: Path, out: Path) -> None:
     assert [path.name for path in out.parent.glob(".out.*")] == []  # no temporary file left behind
 
 
+@pytest.mark.slow
 @FUZZ_SETTINGS
 @given(data=mutated_scenes())
 def test_the_importer_imports_or_raises_its_own_one_line_error(scene_folder, data):

@@ -257,6 +257,7 @@ INPUTS = st.one_of(
 )
 
 
+@pytest.mark.slow
 @FUZZ_SETTINGS
 @given(data=INPUTS)
 def test_the_loader_loads_or_raises_its_own_one_line_error(scene_folder, data):

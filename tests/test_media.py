@@ -102,6 +102,7 @@ def _scene(shapes, lights=(), max_depth=-1):
                  lights=list(lights), max_depth=max_depth)
 
 
+@pytest.mark.slow
 def test_an_absorbing_medium_darkens_but_never_brightens_the_environment(device):
     """σa > 0: less than the environment's k comes out, yet at least the unscattered part along the chord."""
     k, radius = 1.0, 1.0

@@ -53,6 +53,7 @@ def test_cornell_box_geometry_and_light(device):
     assert shapes["large-box"][:, 1].max() == pytest.approx(0.21, abs=1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_import_command_writes_a_scene_that_renders(tmp_path):
     out = tmp_path / "imported" / "cornell.toml"

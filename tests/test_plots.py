@@ -82,6 +82,7 @@ def test_plot_spectra_file(tmp_path):
         plot_spectra([], tmp_path / "none.png")
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_spectra_commands(tmp_path):
     scene = str(scenes_dir() / "cornell_box.toml")

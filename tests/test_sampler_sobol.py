@@ -172,6 +172,7 @@ def cornell():
 # A render's pass-split invariance with either sampler: tests/test_cornell_box.py.
 
 
+@pytest.mark.slow
 def test_render_mean_agrees_with_the_independent_sampler(cornell, device):
     """Per-pixel differences between a Sobol and an independent render (12 spp, not a power of two) have mean zero
     if both are unbiased: the image mean difference lies within 4 standard errors of zero in X, Y and Z."""

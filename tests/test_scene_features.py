@@ -75,6 +75,7 @@ SCENES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SCENES)
 @pytest.mark.parametrize("integrator", ["path", "direct"])
 def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name, integrator):

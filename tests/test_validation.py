@@ -15,7 +15,10 @@ import numpy as np
 from spectrace.validation import CASES, prism_deviation_degrees, prism_window_centre_degrees, run_validation
 
 
-@pytest.mark.parametrize("case", list(CASES))
+SLOW_CASES = {"dispersion", "medium-furnace"}  # over 5 s each on a loaded two-core machine
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW_CASES else c for c in CASES])
 def test_law_holds(device, case):
     checks = run_validation([case], device)
     assert checks
