@@ -9,7 +9,7 @@ from pydantic import BaseModel
 
 from spectrace.scene import schema
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _scene_keys(model: type[BaseModel], seen: set) -> typing.Iterator[tuple[str, str]]:

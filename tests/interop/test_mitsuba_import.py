@@ -17,7 +17,7 @@ from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.spectral import spectrum_to_xyz, xyz_to_linear_srgb
 from spectrace.spectral.blackbody import planck_radiance
 
-CORNELL_XML = Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml"
+CORNELL_XML = Path(__file__).resolve().parents[1] / "data" / "mitsuba" / "cornell_box.xml"
 
 
 def _write(folder: Path, body: str, sensor: str | None = None) -> Path:

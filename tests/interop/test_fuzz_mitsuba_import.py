@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import import_mitsuba
 
-DATA = Path(__file__).parent / "data" / "mitsuba"
+DATA = Path(__file__).resolve().parents[1] / "data" / "mitsuba"
 BASES = [(DATA / name).read_text() for name in ("cornell_box.xml", "features.xml")]
 REFERENCED = ("triangle.obj", "lamp.spd")  # files the scenes refer to, next to the XML
 PREVIOUS = "# an earlier import that a failed one must not destroy\n"
