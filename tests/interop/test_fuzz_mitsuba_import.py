@@ -7,7 +7,7 @@ duplicated, dropped or wrapped in others, nesting far beyond any real scene; and
 random bytes or Unicode.
 
 CI runs 1000 examples, derandomised (the same ones every run). A longer, random search:
-    SPECTRACE_FUZZ_EXAMPLES=100000 python -m pytest tests/test_fuzz_mitsuba_import.py
+    SPECTRACE_FUZZ_EXAMPLES=100000 python -m pytest tests/interop/test_fuzz_mitsuba_import.py
 """
 
 import copy

@@ -1,6 +1,6 @@
 """Homogeneous media inside closed shapes (docs/media.md), against closed-form transport and numpy quadrature.
 
-The validation cases `medium-furnace` and `beer-lambert` (tests/test_validation.py runs them) check energy
+The validation cases `medium-furnace` and `beer-lambert` (tests/render/test_validation.py runs them) check energy
 conservation of the random walk and Beer–Lambert through whole renders; here the free-flight sampler and the
 phase function are checked on their own, and shadow rays through index-matched boundaries against quadrature.
 """

@@ -169,7 +169,7 @@ def cornell():
     return load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=16, height=16, sampler="sobol")
 
 
-# A render's pass-split invariance with either sampler: tests/test_cornell_box.py.
+# A render's pass-split invariance with either sampler: tests/render/test_cornell_box.py.
 
 
 @pytest.mark.slow

@@ -6,7 +6,7 @@ duplicated under other names or retyped, values replaced by random ones, NaN, in
 numbers, and the text itself truncated, spliced with bytes, lines dropped or repeated.
 
 CI runs 1000 examples, derandomised (the same ones every run). A longer, random search:
-    SPECTRACE_FUZZ_EXAMPLES=100000 python -m pytest tests/test_fuzz_scene_loader.py
+    SPECTRACE_FUZZ_EXAMPLES=100000 python -m pytest tests/scene/test_fuzz_scene_loader.py
 """
 
 import copy

@@ -1,6 +1,6 @@
 """numpy mirrors of the structs in kernels/types.h, with explicit offsets.
 
-tests/test_struct_layout.py compiles a kernel that reports each struct's sizeof and offsetof on the device and
+tests/device/test_struct_layout.py compiles a kernel that reports each struct's sizeof and offsetof on the device and
 compares them with these dtypes.
 """
 
