@@ -1,7 +1,7 @@
 /* Structs shared by the host and the device.
  *
  * Each struct is mirrored by a numpy structured dtype in host/spectrace/engine/device_types.py with explicit
- * offsets; tests/test_struct_layout.py compiles a kernel that reports sizeof/offsetof and compares.
+ * offsets; tests/device/test_struct_layout.py compiles a kernel that reports sizeof/offsetof and compares.
  * Only float4 and 4-byte scalars are used, float4 first, so every compiler lays them out identically
  * (float3 is avoided: it occupies 16 bytes in buffers). */
 #ifndef SPECTRACE_TYPES_H

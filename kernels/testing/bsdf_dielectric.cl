@@ -1,5 +1,5 @@
 /* Test harness: the index-of-refraction models and the dielectric BSDF's eval, pdf and sample on arrays, so that
- * tests/test_bsdf_dielectric.py can check them against numpy references and statistics. Directions are float4
+ * tests/materials/test_bsdf_dielectric.py can check them against numpy references and statistics. Directions are float4
  * with w unused, in the BSDF's local frame (+z = geometric normal, to the exterior). */
 #include "types.h"
 #include "ior.cl"

@@ -2,7 +2,7 @@
 of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts).
 
 The kernels hold no copy of those numbers: every kernel build gets them as defines (`device_contract_defines`,
-added by spectrace.device's program builds). tests/test_struct_layout.py compiles a kernel that reports each
+added by spectrace.device's program builds). tests/device/test_struct_layout.py compiles a kernel that reports each
 struct's sizeof and offsetof, and every contract value as the kernels see it, and compares them with this module.
 """
 

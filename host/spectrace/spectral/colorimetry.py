@@ -42,7 +42,7 @@ def _cie_1931_cmfs_on_grid() -> np.ndarray:
 
     The table is colour-science's (`colour.MSDS_CMFS`, from CVRL's "Older CIE Standards" tables, cvrl.org), at
     1 nm over 360..830 nm, exactly our grid, written out once so that a render does not import colour-science
-    (about a second); tests/test_startup.py checks it equals colour-science's.
+    (about a second); tests/cli/test_startup.py checks it equals colour-science's.
     """
     lines = [line for line in (spectra_dir() / CMF_TABLE).read_text(encoding="utf-8").splitlines()
              if line.strip() and not line.startswith("#")]

@@ -1,0 +1,139 @@
+"""`spectrace bench` modes run as a user runs them, on tiny sizes, with --json: the object parses and its figures
+are consistent with what was asked (triangle counts, ray counts, spp). Speed is never asserted. Where Mitsuba or
+Embree is installed (the `bench` extra) the comparisons they feed run too and must agree with spectrace."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.subprocess
+
+
+def _bench(*args) -> dict:
+    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--json", *args], capture_output=True,
+                            text=True, env=os.environ.copy(), timeout=600)
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)
+
+
+@pytest.fixture(scope="module")
+def modes() -> dict:
+    """--scaling, --rays and --quality in one run: each mode's checks below read their part."""
+    return _bench("--scaling", "--rays", "--quality", "--size", "8", "--spp", "1", "--triangles", "100",
+                  "--ray-count", "3000", "--seconds", "0.05")
+
+
+def _llvm_variant_or_skip() -> None:
+    """Skips, with the probe's reason, where Mitsuba's LLVM variant cannot run (no libLLVM Dr.Jit accepts)."""
+    pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
+    from spectrace.benchmarks.mitsuba_runtime import LLVM_VARIANT, probe_variant
+
+    probe = probe_variant(LLVM_VARIANT)  # in a child process, and cached: the bench below reuses the answer
+    if not probe.ok:
+        pytest.skip(f"{LLVM_VARIANT}: variant unavailable: {probe.reason}")
+
+
+@pytest.mark.slow
+def test_scaling_rays_and_quality_modes(modes):
+    out = modes
+    scaling = out["scaling"]
+    assert [r["width"] for r in scaling["resolution"]] == [8]
+    assert [r["max_depth"] for r in scaling["depth"]] == [1, 2, 4, 8, 16]
+    # The box alone, then the box plus an icosphere of 20 * 4**2 triangles (the smallest with >= 100).
+    box, with_sphere = (r["triangles"] for r in scaling["triangles"])
+    assert with_sphere - box == 320
+    assert all(r["spp"] == 1 and r["samples_per_second"] > 0 for r in scaling["resolution"] + scaling["depth"])
+
+    rays = out["rays"]
+    assert rays["triangles"] == 320 and rays["rays"] == 3000
+    assert rays["bvh"]["sah_cost"] > 0 and rays["bvh"]["nodes"] >= 1
+    # The tree the kernel walks: 4-wide nodes, and leaves of up to 8 triangles in blocks of four, so at least
+    # ceil(320 / 8) leaves' worth of blocks and at most one block per triangle.
+    assert 1 <= rays["bvh"]["nodes_4wide"] < rays["bvh"]["nodes"] and rays["bvh"]["depth_4wide"] <= rays["bvh"]["depth"]
+    assert 320 // 8 <= rays["bvh"]["leaf_blocks"] <= 320
+    assert len(rays["spectrace"]) == 1 and rays["spectrace"][0]["rays_per_second"] > 0
+
+    quality = out["quality"]
+    assert quality["reference"]["spp"] == 1024
+    ours = quality["renderers"][0]
+    assert ours["renderer"] == "spectrace" and ours["spp"] >= 1 and ours["rmse"] > 0
+    assert ours["spp"] & (ours["spp"] - 1) == 0  # the default Sobol sampler renders a power of two
+
+
+@pytest.mark.slow
+@pytest.mark.peer
+def test_rays_agree_with_embree(modes):
+    pytest.importorskip("embreex", reason="the Embree comparison needs `pip install spectrace[bench]`")
+    agreement = modes["rays"]["agreement"][0]
+    assert agreement["rays"] == 3000
+    # Same rays, same mesh: a ray may disagree only where it grazes an edge.
+    assert agreement["same_hit_or_miss"] >= 0.998 and agreement["within_1e-4"] >= 0.998
+
+
+@pytest.mark.slow
+@pytest.mark.peer
+def test_quality_reference_agrees_with_mitsuba(modes):
+    pytest.importorskip("mitsuba", reason="the Mitsuba cross-check needs `pip install spectrace[bench]`")
+    quality = modes["quality"]
+    # scalar_spectral needs no LLVM, so some variant always runs; a variant that cannot is a note, not a crash.
+    assert quality["cross_check"] is not None, quality["notes"]
+    assert quality["cross_check"]["agrees"], quality["cross_check"]
+    assert {row["runtime"] for row in quality["renderers"] if row["renderer"] == "mitsuba"}
+
+
+@pytest.mark.slow
+def test_cold_mode_builds_without_caches():
+    out = _bench("--cold", "--size", "8", "--spp", "1")
+    cold, warm = out["cold"]["cold"][0], out["cold"]["warm"][0]
+    assert cold["kernel_build_cached"] is False  # empty caches: a real build from source
+    assert warm["kernel_build_cached"] is True  # the cold run's binary or an earlier one answers now
+    assert cold["spp"] == warm["spp"] == 1
+
+
+@pytest.mark.peer
+def test_peer_mitsuba_mode_agrees():
+    pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
+    out = _bench("--peer", "mitsuba", "--size", "32", "--spp", "16", "--max-depth", "4")
+    peer = out["peer"]
+    assert peer["width"] == 32 and peer["spp"] == 16 and peer["max_depth"] == 4
+    assert peer["mitsuba"], peer["notes"]  # scalar_spectral needs no LLVM, so at least it runs
+    assert len(peer["ratios"]) == len(peer["spectrace"]) * len(peer["mitsuba"])
+    for pair in peer["agreement"]:
+        assert pair["agrees"], pair
+
+
+@pytest.mark.peer
+def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it_rendered():
+    """Mitsuba's multi-jittered sampler rounds 5 spp up to 6 and logs a warning: the warning must not reach stdout
+    (one JSON object there), and Mitsuba's samples/s must count the 6 samples it rendered."""
+    pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
+    out = _bench("--peer", "mitsuba", "--size", "8", "--spp", "5", "--max-depth", "2", "--peer-sampler",
+                 "multijitter")
+    peer = out["peer"]
+    assert [row["spp"] for row in peer["spectrace"]] == [5]
+    assert peer["mitsuba"] and all(row["spp"] == 6 for row in peer["mitsuba"])
+    for row in peer["mitsuba"]:
+        assert row["samples_per_second"] == pytest.approx(8 * 8 * 6 / row["seconds"])
+
+
+@pytest.mark.slow
+@pytest.mark.peer
+def test_peer_uses_mitsubas_llvm_variant_where_a_libllvm_works():
+    """Where a libLLVM that Dr.Jit accepts is installed (found in the usual folders or DRJIT_LIBLLVM_PATH), the
+    peer bench picks it up by itself and Mitsuba's fast variant runs and agrees."""
+    _llvm_variant_or_skip()
+    out = _bench("--peer", "mitsuba", "--size", "8", "--spp", "16", "--max-depth", "2")
+    peer = out["peer"]
+    assert "llvm_ad_spectral" in [row["runtime"] for row in peer["mitsuba"]], peer["notes"]
+    for pair in peer["agreement"]:
+        assert pair["agrees"], pair
+
+
+def test_unknown_peer_is_one_line_error():
+    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--peer", "blender"], capture_output=True,
+                            text=True, env=os.environ.copy(), timeout=600)
+    assert result.returncode != 0
+    assert "unknown peer 'blender'" in result.stderr and "Traceback" not in result.stderr

@@ -1,0 +1,86 @@
+"""Kernels built for one scene's features (kernels/scene_features.h) only leave out code for the materials, lights
+and media that scene lacks, so they must render exactly the image of the kernels built for every scene: same
+samples, same arithmetic, the same bits. A feature left out wrongly changes or zeroes what that feature contributes,
+which a bit-for-bit comparison catches in every scene below."""
+
+import tomllib
+
+import numpy as np
+import pytest
+
+import spectrace
+from spectrace.engine.renderer import Renderer
+from spectrace.engine.scene_buffers import build_scene_buffers
+from spectrace.engine.scene_features import scene_feature_defines
+from spectrace.resources import scenes_dir
+from spectrace.scene import load_scene
+from spectrace.scene.model import EnvironmentMap
+
+# Values of kernels/types.h, written out here so the test does not read them from the code under test.
+MATERIAL_BITS = {"diffuse": 1, "conductor": 2, "mirror": 4, "plastic": 8, "dielectric": 16, "retroreflector": 32}
+LIGHT_BITS = {"area": 1, "point": 2, "spot": 4, "distant": 8, "environment": 16, "environment_map": 32}
+
+
+def _bundled(name: str) -> spectrace.Scene:
+    return load_scene(scenes_dir() / f"{name}.toml")
+
+
+def _material_bits_named_in(name: str) -> int:
+    """The material types a bundled scene's TOML names (every material table has a `type`)."""
+    text = tomllib.loads((scenes_dir() / f"{name}.toml").read_text())
+    types = {material["type"] for material in text.get("materials", {}).values()}
+    return sum(MATERIAL_BITS[t] for t in types)
+
+
+@pytest.mark.parametrize("name", ["cornell_box", "material_showcase", "subsurface", "prism", "point_light_room"])
+def test_defines_name_the_materials_of_the_scene_file(name):
+    defines = scene_feature_defines(build_scene_buffers(_bundled(name)))
+    assert defines["SCENE_MATERIAL_TYPES"] == _material_bits_named_in(name)
+
+
+def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
+    cornell = scene_feature_defines(build_scene_buffers(_bundled("cornell_box")))
+    assert cornell == {"SCENE_MATERIAL_TYPES": MATERIAL_BITS["diffuse"], "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
+                       "SCENE_HAS_MEDIA": 0, "SCENE_HAS_LIGHT_IMAGES": 0}
+    assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
+    lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
+    assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
+
+
+def _environment_map_scene() -> spectrace.Scene:
+    rgb = np.random.default_rng(5).uniform(0.0, 1.0, (8, 16, 3)).astype(np.float32)
+    ground = spectrace.shape("rectangle", spectrace.plastic((0.6, 0.5, 0.3)),
+                             transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 2}])
+    return spectrace.Scene(camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
+                           shapes=[ground], lights=[EnvironmentMap(rgb, 1.0)], width=16, height=16, spp=4)
+
+
+def _distant_and_spot_scene() -> spectrace.Scene:
+    ground = spectrace.shape("rectangle", spectrace.conductor("Au", roughness=0.3),
+                             transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 2}])
+    lights = [spectrace.distant_light((0.3, -1.0, 0.2), irradiance=2.0),
+              spectrace.spot_light((0.0, 2.0, 0.0), (0.0, 0.0, 0.0), cutoff_angle=40.0, power_w=20.0)]
+    return spectrace.Scene(camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
+                           shapes=[ground], lights=lights, width=16, height=16, spp=4)
+
+
+SCENES = {
+    "cornell_box": lambda: _bundled("cornell_box"),
+    "material_showcase": lambda: _bundled("material_showcase"),
+    "subsurface": lambda: _bundled("subsurface").with_overrides(max_depth=16),
+    "prism": lambda: _bundled("prism"),
+    "point_light_room": lambda: _bundled("point_light_room"),
+    "environment_map": _environment_map_scene,
+    "distant_and_spot": _distant_and_spot_scene,
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("integrator", ["path", "direct"])
+def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name, integrator):
+    scene = SCENES[name]().with_overrides(width=16, height=16, spp=4, integrator=integrator)
+    specialised = Renderer(scene, device).render().xyz
+    general = Renderer(scene, device, specialise=False).render().xyz
+    assert np.all(np.isfinite(specialised)) and specialised[..., 1].mean() > 0
+    assert np.array_equal(specialised.view(np.uint32), general.view(np.uint32))
