@@ -430,20 +430,6 @@ def test_a_file_name_with_line_breaks_still_gives_one_line(tmp_path, monkeypatch
     assert f"error: {tmp_path}/line\\nbreak\\x85\\u2028.tiff: unknown image format '.tiff'" in stderr
 
 
-def test_import_mitsuba_checks_its_output_first(tmp_path, monkeypatch, capsys):
-    from pathlib import Path
-
-    xml = tmp_path / "scene.xml"
-    xml.write_bytes((Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes())
-    (tmp_path / "folder.toml").mkdir()
-    for output, says in [(xml, f"error: {xml}: --output names the Mitsuba scene, which it would overwrite"),
-                         (tmp_path / "folder.toml", f"error: {tmp_path}/folder.toml: --output names a folder"),
-                         (xml / "sub" / "x.toml", f"error: {xml}/sub/x.toml: {xml} is not a folder")]:
-        status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(output)])
-        assert status == 2 and stderr.count("\n") == 1 and stderr.startswith(says), stderr
-    assert xml.read_bytes() == (Path(__file__).parent / "data" / "mitsuba" / "cornell_box.xml").read_bytes()
-
-
 def test_black_on_the_displays(tmp_path, monkeypatch, capsys):
     """Black emits nothing: `compare` shows it (no chromaticity) and plots it without numpy warnings; `metamerism`,
     which needs the light as its white, refuses it in one line. (Both failed with a traceback once.)"""
