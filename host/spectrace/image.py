@@ -5,7 +5,14 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.colour_output import ColourSpace, WhiteBalance, encode_for_display, xyz_to_output
+from spectrace.colour_output import (
+    ColourSpace,
+    WhiteBalance,
+    encode_for_display,
+    exr_chromaticities,
+    png_cicp,
+    xyz_to_output,
+)
 from spectrace.errors import SpectraceError
 from spectrace.spectral.colorimetry import srgb_encode
 
@@ -87,7 +94,6 @@ class Image:
     def write(self, path: str | Path, include_xyz: bool = True) -> None:
         """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
         Fichet et al. 2021 layout when the image has them) or .png (sRGB, 8 bit)."""
-        from spectrace.colour_output import exr_chromaticities, png_cicp
         from spectrace.io.exr import write_exr
         from spectrace.io.png import write_png
 

@@ -38,8 +38,9 @@ def cornell():
 
 
 def _allocated_bytes(renderer) -> int:
+    """Bytes of the device buffers the renderer holds, its film's included."""
     total = 0
-    for value in vars(renderer).values():
+    for value in [*vars(renderer).values(), *vars(renderer.film).values()]:
         for item in value if isinstance(value, list) else [value]:
             if isinstance(item, cl.Buffer):
                 total += item.size

@@ -11,6 +11,8 @@ of the render (`width`, `height`, `seed`, `scene_digest`, `kernels_digest`), `sa
 a SHA-256 of every other entry (name, type, shape and bytes): a file damaged on disk or edited by hand is refused
 rather than continued into a render. Reading also checks each buffer's type and shape against the film size and
 that the sums are finite. Files of format 1 (no checksum) are still read, with those explicit checks only.
+What the state is (its buffers, their layout, saving it from and restoring it to the device) is the film's
+(spectrace.film); this module adds the render's identity and the file.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import numpy as np
 from spectrace import resources
 from spectrace.device.program_cache import kernels_digest
 from spectrace.errors import SpectraceError
+from spectrace.film import RenderState, state_problem
 from spectrace.io.input_files import regular_file
 from spectrace.io.atomic import write_atomically
 from spectrace.scene import limits
@@ -43,17 +46,6 @@ _FORMAT_WITHOUT_CHECKSUM = "spectrace-checkpoint-1"
 _SCENE_DIGEST_SALT = "spectrace-checkpoint-1"
 _STATE_PREFIX = "state_"
 _CHECKSUM = "checksum"
-# Accumulation buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
-_STATE_LAYOUT = {"film": (np.float32, 4), "ray_counts": (np.uint32, 1), "spectral_film": (np.float32, None)}
-
-
-@dataclass
-class RenderState:
-    """The accumulation buffers of a render (host copies, by name) and how many samples per pixel they hold."""
-
-    samples_done: int
-    render_seconds: float
-    buffers: dict[str, np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -103,7 +95,7 @@ def save_checkpoint(path: str | Path, renderer: Renderer, identity: RenderIdenti
     """Write the renderer's current state to `path` atomically (an older checkpoint survives any crash).
     `identity`, when given, is render_identity(renderer) computed earlier (it hashes every scene array)."""
     identity = identity if identity is not None else render_identity(renderer)
-    checkpoint = Checkpoint(identity, renderer.save_state(), renderer.device.report.key)
+    checkpoint = Checkpoint(identity, renderer.film.save_state(), renderer.device.report.key)
     write_checkpoint(path, checkpoint)
     return checkpoint
 
@@ -176,31 +168,7 @@ def _state_problem(identity: RenderIdentity, state: RenderState) -> str | None:
     a file written by a faulty run, or by hand, can be consistent and still wrong)."""
     if problem := (limits.film_size_problem(identity.width, identity.height) or limits.seed_problem(identity.seed)):
         return problem
-    if not 0 <= state.samples_done <= limits.MAX_SPP:
-        return f"sample count {state.samples_done} is outside 0..{limits.MAX_SPP}"
-    if not (np.isfinite(state.render_seconds) and state.render_seconds >= 0):
-        return f"render time {state.render_seconds} s is not a finite non-negative number"
-    pixels = identity.width * identity.height
-    for name in ("film", "ray_counts"):
-        if name not in state.buffers:
-            return f"the {name} buffer is missing"
-    for name, array in state.buffers.items():
-        if name not in _STATE_LAYOUT:
-            return f"unknown buffer '{name}'"
-        dtype, per_pixel = _STATE_LAYOUT[name]
-        shape = (pixels, per_pixel) if per_pixel and per_pixel > 1 else (pixels,)
-        if per_pixel is None:
-            fits = array.ndim == 1 and array.size > 0 and array.size % pixels == 0
-            needs = f"a positive multiple of {pixels} values"
-        else:
-            fits = array.shape == shape
-            needs = f"shape {shape}"
-        if array.dtype != dtype or not fits:
-            return (f"the {name} buffer is {array.dtype} of shape {array.shape}; a {identity.width}x{identity.height} "
-                    f"film needs {np.dtype(dtype)} of {needs}")
-        if array.dtype.kind == "f" and not np.isfinite(array).all():
-            return f"the {name} buffer holds {int((~np.isfinite(array)).sum())} NaN or infinite values"
-    return None
+    return state_problem(state, identity.width, identity.height)
 
 
 def identity_mismatch(saved: RenderIdentity, current: RenderIdentity) -> str | None:
@@ -224,7 +192,7 @@ def restore_checkpoint(renderer: Renderer, checkpoint: Checkpoint, where: str) -
     checkpoint in errors)."""
     if problem := identity_mismatch(checkpoint.identity, render_identity(renderer)):
         raise SpectraceError(problem, where=where)
-    renderer.restore_state(checkpoint.state, where=where)
+    renderer.film.restore_state(checkpoint.state, where=where)
 
 
 def resume_render(renderer: Renderer, path: str | Path) -> Checkpoint:

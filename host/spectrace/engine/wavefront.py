@@ -64,8 +64,9 @@ class WavefrontRenderer(Renderer):
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
         cl.enqueue_copy(queue, self._queue_lengths[0], zero)
-        self._start_kernel(queue, *launch_shape(self.pixel_count, self.work_group), self._params, self._cmf, self._film,
-                           self._spectral_film, self._slots, self._queues[0], self._queue_lengths[0])
+        film = self.film
+        self._start_kernel(queue, *launch_shape(self.pixel_count, self.work_group), self._params, self._cmf,
+                           film.xyz_buffer, film.spectral_buffer, self._slots, self._queues[0], self._queue_lengths[0])
         current = 0
         while True:
             cl.enqueue_copy(queue, live, self._queue_lengths[current])  # blocking: sizes the next launch
@@ -73,14 +74,13 @@ class WavefrontRenderer(Renderer):
                 break
             following = 1 - current
             cl.enqueue_copy(queue, self._queue_lengths[following], zero)
-            self.kernel.set_args(self._params, *self._scene, self._cmf, self._film, self._ray_counts,
-                                 self._spectral_film, self._slots, self._queues[current], self._queue_lengths[current],
+            self.kernel.set_args(self._params, *self._scene, self._cmf, film.xyz_buffer, film.ray_count_buffer,
+                                 film.spectral_buffer, self._slots, self._queues[current], self._queue_lengths[current],
                                  self._queues[following], self._queue_lengths[following])
             cl.enqueue_nd_range_kernel(queue, self.kernel, *launch_shape(int(live[0]), self.work_group))
             current = following
         queue.finish()
-        self.render_seconds += time.perf_counter() - start
-        self.samples_done += sample_count
+        film.add_pass(sample_count, time.perf_counter() - start)
 
 
 def make_renderer(scene: Scene, device: Device | str | None = None, kernel: str = "megakernel",

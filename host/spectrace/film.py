@@ -1,0 +1,190 @@
+"""The film on the host: the device buffers the render kernels add pixel samples to (kernels/film.cl), clearing
+them, reading them back into an `Image`, and their saved state, the whole of a render's progress that a checkpoint
+stores (spectrace.engine.checkpoint writes and reads the file; what goes in it and back to the device is here).
+
+Per pixel the film holds four float32 sums (X, Y, Z and the count of non-finite samples left out), a uint32 count
+of rays traced, and, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`. Together with the
+number of samples per pixel added so far they are the entire state of a render: the samplers are counter-based and
+every pixel adds its samples in sample order, so restoring them continues the render bit for bit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyopencl as cl
+
+from spectrace.device import Device
+from spectrace.engine.memory import SPECTRAL_BAND_BYTES
+from spectrace.engine.opencl_errors import translate_opencl_errors
+from spectrace.errors import SpectraceError
+from spectrace.image import Image, SpectralBands
+from spectrace.scene import limits
+
+SPECTRAL_LIMITS_NM = (360.0, 830.0)  # the wavelengths the renders sample
+# Saved-state buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
+STATE_LAYOUT = {"film": (np.float32, 4), "ray_counts": (np.uint32, 1), "spectral_film": (np.float32, None)}
+
+
+@dataclass
+class RenderState:
+    """The film's accumulation buffers (host copies, by name) and how many samples per pixel they hold."""
+
+    samples_done: int
+    render_seconds: float
+    buffers: dict[str, np.ndarray]
+
+
+def spectral_defines(bins: int, range_nm: tuple[float, float]) -> dict[str, int | float]:
+    """Kernel defines that make kernels/film.cl accumulate `bins` equal bands over `range_nm` (none for 0 bins)."""
+    if bins <= 0:
+        return {}
+    lo, hi = range_nm
+    if not (SPECTRAL_LIMITS_NM[0] <= lo < hi <= SPECTRAL_LIMITS_NM[1]):
+        raise SpectraceError(f"spectral range must lie within 360-830 nm, got {lo}-{hi}")
+    return {"SPECTRAL_BINS": int(bins), "SPECTRAL_MIN_NM": float(lo), "SPECTRAL_MAX_NM": float(hi)}
+
+
+def state_problem(state: RenderState, width: int, height: int) -> str | None:
+    """Why `state` cannot be the saved state of a width x height film, or None (any number of spectral bands)."""
+    if not 0 <= state.samples_done <= limits.MAX_SPP:
+        return f"sample count {state.samples_done} is outside 0..{limits.MAX_SPP}"
+    if not (np.isfinite(state.render_seconds) and state.render_seconds >= 0):
+        return f"render time {state.render_seconds} s is not a finite non-negative number"
+    pixels = width * height
+    for name in ("film", "ray_counts"):
+        if name not in state.buffers:
+            return f"the {name} buffer is missing"
+    for name, array in state.buffers.items():
+        if name not in STATE_LAYOUT:
+            return f"unknown buffer '{name}'"
+        dtype, per_pixel = STATE_LAYOUT[name]
+        shape = (pixels, per_pixel) if per_pixel and per_pixel > 1 else (pixels,)
+        if per_pixel is None:
+            fits = array.ndim == 1 and array.size > 0 and array.size % pixels == 0
+            needs = f"a positive multiple of {pixels} values"
+        else:
+            fits = array.shape == shape
+            needs = f"shape {shape}"
+        if array.dtype != dtype or not fits:
+            return (f"the {name} buffer is {array.dtype} of shape {array.shape}; a {width}x{height} "
+                    f"film needs {np.dtype(dtype)} of {needs}")
+        if array.dtype.kind == "f" and not np.isfinite(array).all():
+            return f"the {name} buffer holds {int((~np.isfinite(array)).sum())} NaN or infinite values"
+    return None
+
+
+class Film:
+    """The device film of one render and the count of samples per pixel it holds."""
+
+    def __init__(self, device: Device, width: int, height: int, spectral_bins: int = 0,
+                 spectral_range_nm: tuple[float, float] = SPECTRAL_LIMITS_NM):
+        self.device = device
+        self.width = width
+        self.height = height
+        self.pixel_count = width * height
+        self.spectral_bins = spectral_bins
+        self.spectral_range_nm = spectral_range_nm
+        ctx = device.context
+        rw = cl.mem_flags.READ_WRITE
+        self.xyz_buffer = cl.Buffer(ctx, rw, self.pixel_count * limits.FILM_BYTES_PER_PIXEL)
+        self.ray_count_buffer = cl.Buffer(ctx, rw, self.pixel_count * limits.RAY_COUNT_BYTES_PER_PIXEL)
+        # Allocated even without bands (one float), since the kernels always take the argument.
+        self.spectral_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * spectral_bins, 1) * SPECTRAL_BAND_BYTES)
+        self.samples_done = 0
+        self.render_seconds = 0.0
+        self.reset()
+
+    @translate_opencl_errors("clearing the film")
+    def reset(self) -> None:
+        queue = self.device.queue
+        cl.enqueue_fill_buffer(queue, self.xyz_buffer, np.float32(0), 0, self.xyz_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.ray_count_buffer, np.uint32(0), 0, self.ray_count_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.spectral_buffer, np.float32(0), 0, self.spectral_buffer.size)
+        queue.finish()
+        self.samples_done = 0
+        self.render_seconds = 0.0
+
+    def add_pass(self, sample_count: int, seconds: float) -> None:
+        """Record a finished pass that added `sample_count` samples to every pixel in `seconds`."""
+        self.render_seconds += seconds
+        self.samples_done += sample_count
+
+    @translate_opencl_errors("reading the film")
+    def read(self) -> tuple[np.ndarray, np.ndarray]:
+        """(pixels, 4) float32 sums of X, Y, Z and dropped samples, and (pixels,) uint32 rays traced."""
+        film = np.empty((self.pixel_count, 4), np.float32)
+        rays = np.empty(self.pixel_count, np.uint32)
+        cl.enqueue_copy(self.device.queue, film, self.xyz_buffer)
+        cl.enqueue_copy(self.device.queue, rays, self.ray_count_buffer)
+        self.device.queue.finish()
+        return film, rays
+
+    @translate_opencl_errors("reading the spectral film")
+    def read_spectral(self) -> np.ndarray:
+        """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
+        bands = np.empty(self.pixel_count * self.spectral_bins, np.float32)
+        cl.enqueue_copy(self.device.queue, bands, self.spectral_buffer)
+        self.device.queue.finish()
+        return bands.reshape(self.height, self.width, self.spectral_bins)
+
+    def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
+        """The mean of the samples so far per pixel, labelled with how it was made."""
+        film, rays = self.read()
+        count = max(self.samples_done, 1)
+        xyz = (film[:, :3] / np.float32(count)).reshape(self.height, self.width, 3)
+        spectral = None
+        if self.spectral_bins > 0:
+            lo, hi = self.spectral_range_nm
+            spectral = SpectralBands(np.linspace(lo, hi, self.spectral_bins + 1),
+                                     self.read_spectral() / np.float32(count))
+        return Image(
+            spectral=spectral,
+            xyz=xyz,
+            spp=self.samples_done,
+            seed=seed,
+            device=device,
+            render_seconds=self.render_seconds,
+            dropped_samples=int(film[:, 3].astype(np.float64).sum()),  # float32 would round totals above 2^24
+            rays_traced=int(rays.astype(np.uint64).sum()),
+            exposure=exposure,
+            extra=extra or {},
+        )
+
+    def _state_buffers(self) -> dict[str, cl.Buffer]:
+        """The device buffers that accumulate samples: with samples_done, the whole state of the render."""
+        buffers = {"film": self.xyz_buffer, "ray_counts": self.ray_count_buffer}
+        if self.spectral_bins > 0:
+            buffers["spectral_film"] = self.spectral_buffer
+        return buffers
+
+    def save_state(self) -> RenderState:
+        """Host copies of the accumulation buffers and the sample count: restore_state() on the film of a render of
+        the same scene and seed continues this render exactly."""
+        film, rays = self.read()
+        buffers = {"film": film, "ray_counts": rays}
+        if self.spectral_bins > 0:
+            buffers["spectral_film"] = self.read_spectral().reshape(-1)
+        return RenderState(self.samples_done, self.render_seconds, buffers)
+
+    @translate_opencl_errors("restoring the film from a checkpoint")
+    def restore_state(self, state: RenderState, where: str | None = None) -> None:
+        """Upload a saved state; it must hold exactly this film's buffers, sizes and types."""
+        targets = self._state_buffers()
+        if set(state.buffers) != set(targets):
+            raise SpectraceError(f"the saved state holds {', '.join(sorted(state.buffers)) or 'nothing'} but this "
+                                 f"render accumulates {', '.join(sorted(targets))}", where=where)
+        for name, array in state.buffers.items():
+            dtype = STATE_LAYOUT[name][0]
+            if array.dtype != dtype or array.nbytes != targets[name].size:
+                raise SpectraceError(f"saved {name} is {array.dtype} x {array.size}, this render needs "
+                                     f"{np.dtype(dtype)} of {targets[name].size} bytes", where=where)
+        if not 0 <= state.samples_done <= limits.MAX_SPP:
+            raise SpectraceError(f"saved sample count {state.samples_done} is out of range", where=where)
+        queue = self.device.queue
+        for name, array in state.buffers.items():
+            cl.enqueue_copy(queue, targets[name], np.ascontiguousarray(array))
+        queue.finish()
+        self.samples_done = int(state.samples_done)
+        self.render_seconds = float(state.render_seconds)

@@ -1,0 +1,89 @@
+"""The film, the render engine, the image and the Python API import one another without a circle. Imports inside
+functions and under TYPE_CHECKING count too: such an import hides a circle from import time, not from the design."""
+
+import ast
+from pathlib import Path
+
+import spectrace
+
+PACKAGE = Path(spectrace.__file__).parent
+# The modules that must stay out of every circle (a prefix ending in "." covers a package's modules).
+ACYCLIC = ("spectrace.film", "spectrace.image", "spectrace.api", "spectrace.colour_output",
+           "spectrace.output_options", "spectrace.engine.")
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the package's modules it imports anywhere in its source. `from pkg import name` counts as an
+    import of pkg.name when that is a module, else of pkg."""
+    modules = {_module_name(path): path for path in PACKAGE.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                targets |= {alias.name for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                submodules = {f"{node.module}.{alias.name}" for alias in node.names} & modules.keys()
+                targets |= submodules
+                if len(submodules) < len(node.names):
+                    targets.add(node.module)
+        graph[name] = {target for target in targets if target in modules and target != name}
+    return graph
+
+
+def circles(graph: dict[str, set[str]]) -> list[set[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm, iterative)."""
+    index, low, on_stack, stack, found = {}, {}, set(), [], []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, successors = work[-1]
+            for successor in successors:
+                if successor not in index:
+                    index[successor] = low[successor] = len(index)
+                    stack.append(successor)
+                    on_stack.add(successor)
+                    work.append((successor, iter(sorted(graph[successor]))))
+                    break
+                if successor in on_stack:
+                    low[node] = min(low[node], index[successor])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[node])
+                if low[node] == index[node]:
+                    component = set()
+                    while True:
+                        member = stack.pop()
+                        on_stack.discard(member)
+                        component.add(member)
+                        if member == node:
+                            break
+                    if len(component) > 1:
+                        found.append(component)
+    return found
+
+
+def test_the_circle_finder_finds_circles():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": {"e"}}
+    assert circles(graph) == [{"a", "b", "c"}]
+
+
+def test_the_film_engine_image_and_api_modules_are_in_no_import_circle():
+    graph = import_graph()
+    assert {"spectrace.film", "spectrace.engine.renderer", "spectrace.engine.checkpoint"} <= graph.keys()
+    assert "spectrace.film" in graph["spectrace.engine.renderer"]  # the graph sees imports at all
+    offending = [sorted(component) for component in circles(graph)
+                 if any(module == prefix or (prefix.endswith(".") and module.startswith(prefix))
+                        for module in component for prefix in ACYCLIC)]
+    assert offending == []
