@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.io.images import read_environment_map
 from spectrace.lights.base import LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.engine.device_types import LIGHT_ENVIRONMENT_MAP
@@ -35,8 +36,6 @@ MODEL = EnvironmentMap
 
 
 def from_spec(spec, resolver, key: str) -> EnvironmentMap:
-    from spectrace.scene.loader import read_environment_map  # the scene package imports the light modules
-
     return EnvironmentMap(read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file")),
                           spec.scale)
 

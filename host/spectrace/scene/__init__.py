@@ -1,29 +1,34 @@
-"""Scenes: the TOML format (schema), its loader, and the resolved objects the renderer draws."""
+"""Scenes: the TOML format (schema), its loader, and the resolved objects the renderer draws.
 
+The names below load on first use, so that the leaf modules of this package (`limits`, `model`) can be imported by
+lower layers (image readers, light modules) without pulling in the loader, which imports those layers back.
+"""
+
+import importlib
 from pathlib import Path
 
-from spectrace.scene.loader import load_scene as load_scene_file
-from spectrace.scene.model import (
-    AreaEmitter,
-    Camera,
-    ConductorMaterial,
-    DielectricMaterial,
-    DiffuseMaterial,
-    Medium,
-    MirrorMaterial,
-    PlasticMaterial,
-    RetroreflectorMaterial,
-    Scene,
-    Shape,
-)
+_MODEL_NAMES = ["Scene", "Camera", "Shape", "DiffuseMaterial", "MirrorMaterial", "ConductorMaterial", "PlasticMaterial",
+                "RetroreflectorMaterial", "DielectricMaterial", "AreaEmitter", "Medium"]
 
-__all__ = ["load_scene", "Scene", "Camera", "Shape", "DiffuseMaterial", "MirrorMaterial", "ConductorMaterial",
-           "PlasticMaterial", "RetroreflectorMaterial", "DielectricMaterial", "AreaEmitter", "Medium"]
+__all__ = ["load_scene", *_MODEL_NAMES]
 
 
-def load_scene(path: str | Path) -> Scene:
+def load_scene(path: str | Path):
     """Read, validate and resolve a TOML scene file; a bare name (`cornell_box`, `cornell_box.toml`) that is no file
     here names a bundled scene. Raises SpectraceError naming the file and key path."""
     from spectrace.resources import resolve_scene_path
+    from spectrace.scene.loader import load_scene as load_scene_file
 
     return load_scene_file(resolve_scene_path(path))
+
+
+def __getattr__(name: str):
+    if name in _MODEL_NAMES:
+        value = getattr(importlib.import_module("spectrace.scene.model"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'spectrace.scene' has no attribute '{name}'")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_MODEL_NAMES))

@@ -12,6 +12,7 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import load_mesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
+from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
 from spectrace.materials import MATERIALS
@@ -363,70 +364,6 @@ class _Resolver:
 
     def lights(self) -> list[Light]:
         return [LIGHTS[spec.type].from_spec(spec, self, f"lights[{i}]") for i, spec in enumerate(self.spec.lights)]
-
-
-def read_picture(path: Path, where: str) -> np.ndarray:
-    """(height, width, 3) values of a picture in [0, 1]: 8/16-bit PNG or JPEG code values divided by their maximum,
-    or an EXR's R, G, B as stored. The size in the file's header is checked before anything is decoded."""
-    if path.suffix.lower() == ".exr":
-        return read_environment_map(path, where, what="image").astype(np.float64)
-    regular_file(path, where, what="image")
-    import warnings
-
-    from PIL import Image as PILImage
-
-    try:
-        # Pillow warns of "decompression bombs" by its own measure; image_size_problem is the limit here.
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
-            with PILImage.open(path) as picture:  # reads the header only
-                if problem := limits.image_size_problem(*picture.size):
-                    raise SpectraceError(f"image '{path}': {problem}", where=where)
-                bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
-                values = np.asarray(picture.convert("RGB") if not bits16 else picture, dtype=np.float64)
-    except SpectraceError:
-        raise
-    except Exception as exc:  # Pillow raises many types for unreadable files
-        raise SpectraceError(f"cannot read image '{path}': {exc}", where=where) from None
-    if values.ndim == 2:
-        values = np.repeat(values[..., None], 3, axis=-1)
-    return values / (65535.0 if bits16 else 255.0)
-
-
-def _exr_size(path: Path) -> tuple[int, int]:
-    """(width, height) of an OpenEXR file's data window, from its header alone."""
-    import OpenEXR
-
-    with OpenEXR.File(str(path), header_only=True) as exr:
-        (x_min, y_min), (x_max, y_max) = (np.asarray(corner).tolist() for corner in exr.header()["dataWindow"])
-    return int(x_max) - int(x_min) + 1, int(y_max) - int(y_min) + 1
-
-
-def read_environment_map(path: Path, where: str, what: str = "environment map") -> np.ndarray:
-    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map (or a picture's EXR)."""
-    from spectrace.io.exr import read_exr
-
-    regular_file(path, where, what=what)
-    try:
-        size = _exr_size(path)
-    except Exception as exc:  # OpenEXR raises bare exceptions for unreadable files
-        raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
-    if problem := limits.image_size_problem(*size):
-        raise SpectraceError(f"{what} '{path}': {problem}", where=where)
-    try:
-        channels, _ = read_exr(path)
-    except Exception as exc:
-        raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
-    if "RGB" in channels:
-        rgb = channels["RGB"]
-    elif {"R", "G", "B"} <= set(channels):
-        rgb = np.stack([channels["R"], channels["G"], channels["B"]], axis=-1)
-    else:
-        raise SpectraceError(f"{what} '{path}' has no R, G, B channels", where=where)
-    rgb = np.asarray(rgb, np.float32)
-    if not np.all(np.isfinite(rgb)):
-        raise SpectraceError(f"{what} '{path}' has NaN or infinite pixels", where=where)
-    return rgb
 
 
 def load_scene(path: str | Path) -> Scene:
