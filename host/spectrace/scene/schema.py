@@ -213,10 +213,12 @@ def _spec_model(module, name: str, type_default=...) -> type[Strict]:
 
 
 class TableSpec(Protocol):
-    """A model built from a parameter table (its fields are known only once it is made): its `type`."""
+    """A model built from a parameter table: its `type`, and fields known only once the table has made it."""
 
     @property
     def type(self) -> str: ...
+
+    def __getattr__(self, name: str) -> Any: ...
 
 
 MATERIAL_SPECS = {name: _spec_model(module, f"{name.capitalize()}MaterialSpec") for name, module in MATERIALS.items()}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from numbers import Real
+from typing import overload
 
 import numpy as np
 
@@ -47,6 +48,12 @@ class Spectrum:
     @property
     def wavelengths_nm(self) -> np.ndarray:
         return GRID_NM
+
+    @overload
+    def evaluate(self, wavelengths_nm: float) -> float: ...
+
+    @overload
+    def evaluate(self, wavelengths_nm: np.ndarray) -> np.ndarray: ...
 
     def evaluate(self, wavelengths_nm: np.ndarray | float) -> np.ndarray | float:
         """Linear interpolation between grid samples, as the kernels do; held constant outside the grid."""
