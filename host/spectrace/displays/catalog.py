@@ -152,7 +152,8 @@ def load_display_csv(path: str | Path, name: str | None = None) -> Display:
             where=str(path),
         )
     display_name = name or path.stem
-    red, green, blue = (load_spectrum_csv(path, column=channel, name=f"{display_name}:{channel}") for channel in CHANNELS)
+    red, green, blue = (load_spectrum_csv(path, column=channel, name=f"{display_name}:{channel}")
+                        for channel in CHANNELS)
     absolute = is_absolute_units(keys.get("units", ""))
     return Display(
         name=display_name,

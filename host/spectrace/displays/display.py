@@ -107,7 +107,8 @@ class Display:
             raise SpectraceError(f"white luminance must be a positive number of cd/m², got {white_cd_m2:g}")
         factor = white_cd_m2 / self.white_luminance_cd_m2
         red, green, blue = (primary.scaled(factor) for primary in self.primaries)
-        return replace(self, primaries=(red, green, blue), absolute=True, radiance_scale=f"white set to {white_cd_m2:g} cd/m²")
+        return replace(self, primaries=(red, green, blue), absolute=True,
+                       radiance_scale=f"white set to {white_cd_m2:g} cd/m²")
 
     def with_transfer(self, transfer: Encoding) -> Display:
         """The same display reading RGB triples with another transfer curve."""
