@@ -6,13 +6,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Literal
 
 from spectrace.colour_output import ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.errors import SpectraceError
 from spectrace.image import Image
 
-FALSE_COLOUR_SCALES = ("log", "linear")
+FalseColourScale = Literal["log", "linear"]
+FALSE_COLOUR_SCALES: tuple[FalseColourScale, ...] = ("log", "linear")
 
 
 @dataclass(frozen=True)
@@ -20,7 +21,7 @@ class RenderOutputOptions:
     colour_space: ColourSpace = ColourSpace.SRGB
     white_balance: WhiteBalance | None = None
     false_colour_path: Path | None = None
-    false_colour_scale: str = "log"
+    false_colour_scale: FalseColourScale = "log"
 
     @classmethod
     def parse(cls, output: Path, colour_space: str = "srgb", white_balance: str | None = None,

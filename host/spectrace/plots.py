@@ -62,7 +62,8 @@ def _line_colour(spectrum: Spectrum) -> tuple[float, float, float]:
     encoded = srgb_encode(rgb / rgb.max())
     if encoded.max() - encoded.min() < 0.15:
         return (0.35, 0.35, 0.35)
-    return tuple(float(c) for c in 0.85 * encoded)
+    r, g, b = 0.85 * encoded
+    return float(r), float(g), float(b)
 
 
 def _visible_strip(axes) -> None:
@@ -85,8 +86,8 @@ def text_problem(text: str) -> str | None:
     try:
         figure.canvas.draw()
     except ValueError as error:
-        reason = [line.strip() for line in str(error).splitlines() if line.strip()]
-        reason = re.sub(r"Expected \{.*\}, found", "Expected ..., found", reason[-1]) if reason else "math error"
+        lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+        reason = re.sub(r"Expected \{.*\}, found", "Expected ..., found", lines[-1]) if lines else "math error"
         return (f"cannot typeset {text!r}: {reason} (text between $ signs is "
                 f"math; write \\$ for a dollar sign)")
     return None

@@ -28,6 +28,7 @@ from spectrace.scene.model import (
     DielectricMaterial,
     DiffuseMaterial,
     DistantLight,
+    Material,
     Medium,
     MirrorMaterial,
     PlasticMaterial,
@@ -174,11 +175,11 @@ def bsdf_furnace(device: Device) -> list[Check]:
     k = 1.0
     white = Spectrum.constant(1.0)
     sf11 = glass("SF11").index_of_refraction()
-    lossless = {"mirror R = 1": MirrorMaterial(white), "smooth plastic ρ = 1": PlasticMaterial(white, ior=1.5),
+    lossless: dict[str, Material] = {"mirror R = 1": MirrorMaterial(white), "smooth plastic ρ = 1": PlasticMaterial(white, ior=1.5),
                 "smooth glass n = 1.5": DielectricMaterial(IndexOfRefraction.constant(1.5)),
                 "smooth SF11 glass (dispersive)": DielectricMaterial(sf11)}
     gold, silver = metal_ior("Au"), metal_ior("Ag")
-    absorbing = {
+    absorbing: dict[str, Material] = {
         "rough plastic ρ = 1, α = 0.3": PlasticMaterial(white, ior=1.5, roughness=0.3),
         "smooth silver": ConductorMaterial(*silver),
         "rough gold, α = 0.3": ConductorMaterial(*gold, roughness=0.3),

@@ -8,6 +8,7 @@ alike and the ratios stay comparable. Each variant's first pass is a warm-up and
 
 import statistics
 from collections.abc import Callable
+from typing import Any
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,7 +57,7 @@ def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, 
             renderer.work_group = variant.work_group
             renderer.run_pass(1)  # warm-up: PoCL compiles for the launch's group size here
             renderers[variant] = renderer
-        seconds = {variant: [] for variant in variants}
+        seconds: dict[Variant, list[float]] = {variant: [] for variant in variants}
         for _ in range(repeats):
             for variant, renderer in renderers.items():
                 renderer.reset()
@@ -66,7 +67,7 @@ def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, 
             if Variant("megakernel", default_group) in seconds else None
         for variant in variants:
             median = statistics.median(seconds[variant])
-            row = {
+            row: dict[str, Any] = {
                 "device": dev.report.key,
                 "scene": (scene_path or Path("cornell_box.toml")).name,
                 "width": size,

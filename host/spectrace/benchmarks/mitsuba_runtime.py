@@ -247,13 +247,16 @@ class MitsubaContestant:
             start = time.perf_counter()
             self._render()
             self.first_render_seconds = time.perf_counter() - start
-        self.seconds, self.cpu_seconds, self.xyz = float("inf"), float("inf"), None
+        self.seconds, self.cpu_seconds = float("inf"), float("inf")
+        self.xyz: np.ndarray | None = None
 
     def _render(self) -> np.ndarray:
         import mitsuba as mi
 
         mi.set_variant(self.variant)
-        image = np.array(mi.render(self.scene, spp=self.spp, seed=self.seed), dtype=np.float64)
+        # Mitsuba's stubs type the seed as its UInt32 array; a Python int converts implicitly.
+        image = np.array(mi.render(self.scene, spp=self.spp, seed=self.seed),  # type: ignore[arg-type]
+                         dtype=np.float64)
         self.rendered_spp = int(self.scene.sensors()[0].sampler().sample_count())
         return image
 
@@ -274,6 +277,8 @@ class MitsubaContestant:
 
         from spectrace.interop.mitsuba_export import mitsuba_film_xyz
 
+        if self.xyz is None:
+            raise RuntimeError("result() needs a timed render first (render_once)")
         mi.set_variant(self.variant)
         threads = int(dr.thread_count()) if hasattr(dr, "thread_count") else os.cpu_count() or 1
         return MitsubaRender(self.variant, mitsuba_film_xyz(self.xyz[..., :3], mi), self.load_seconds,

@@ -10,10 +10,15 @@ within 4 standard errors), so that the ratio compares equal work. The process CP
 threads) gives a second ratio, which a shared machine's load disturbs less.
 """
 
+from __future__ import annotations
+
 import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from spectrace.benchmarks.image_agreement import SIGMA_LIMIT, compare_regions, regions_for
 from spectrace.device import discover_devices, open_device
@@ -21,6 +26,10 @@ from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import Scene
+
+if TYPE_CHECKING:
+    from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant
+    from spectrace.image import Image
 
 
 def bench_scene(scene_path: Path | None, size: int, spp: int, max_depth: int) -> Scene:
@@ -43,7 +52,8 @@ class SpectraceContestant:
         self.setup_seconds = time.perf_counter() - start
         self.build_seconds, self.build_cached = self.device.last_build_seconds, self.device.last_build_cached
         self.renderer.run_pass(1)  # warm-up: PoCL compiles kernels lazily at the first launch
-        self.seconds, self.cpu_seconds, self.image = float("inf"), float("inf"), None
+        self.seconds, self.cpu_seconds = float("inf"), float("inf")
+        self.image: Image | None = None
 
     def render_once(self) -> None:
         self.renderer.reset()
@@ -53,11 +63,18 @@ class SpectraceContestant:
         if seconds < self.seconds:
             self.seconds, self.cpu_seconds, self.image = seconds, cpu, image
 
+    @property
+    def best_image(self) -> Image:
+        """The image of the fastest timed render."""
+        if self.image is None:
+            raise RuntimeError("no timed render yet (render_once)")
+        return self.image
+
     def row(self) -> dict:
-        scene, samples = self.scene, self.scene.width * self.scene.height * self.image.spp
+        scene, samples = self.scene, self.scene.width * self.scene.height * self.best_image.spp
         return {
             "renderer": "spectrace", "runtime": self.device.report.key, "device_name": self.device.report.device_name,
-            "width": scene.width, "height": scene.height, "spp": self.image.spp, "max_depth": scene.max_depth,
+            "width": scene.width, "height": scene.height, "spp": self.best_image.spp, "max_depth": scene.max_depth,
             "seconds": self.seconds, "samples_per_second": samples / self.seconds, "cpu_seconds": self.cpu_seconds,
             "samples_per_cpu_second": samples / self.cpu_seconds, "setup_seconds": self.setup_seconds,
             "kernel_build_seconds": self.build_seconds, "kernel_build_cached": self.build_cached,
@@ -75,7 +92,7 @@ def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int,
     notes = list(usable.notes) + [f"Mitsuba's sampler: {peer_sampler}; spectrace's: {scene.sampler}"]
     ours = [SpectraceContestant(scene, key) for key in device_keys(device, all_devices)]
     with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
-        theirs = []
+        theirs: list[MitsubaContestant] = []
         for variant in usable.available:
             import mitsuba as mi
 
@@ -85,17 +102,21 @@ def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int,
     # Interleaved rounds, spectrace then one Mitsuba variant, so a shared machine's load falls on both alike.
     # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so each
     # variant gets its rounds in one go, after one untimed render.
-    for peer in theirs or [None]:
+    peers: list[MitsubaContestant | None] = [*theirs] or [None]
+    for peer in peers:
         if peer is not None:
             peer.render_untimed()
         for round_index in range(max(1, repeats)):
-            for contestant in [*ours, *([peer] if peer else [])]:
+            contestants: list[SpectraceContestant | MitsubaContestant] = [*ours, *([peer] if peer else [])]
+            for contestant in contestants:
                 contestant.render_once()
-                name = contestant.variant if contestant is peer else contestant.device.report.key
+                name = (contestant.variant if isinstance(contestant, MitsubaContestant)
+                        else contestant.device.report.key)
                 log(f"round {round_index + 1}: {name} {contestant.seconds:.2f} s (best so far)")
-    images = {c.device.report.key: c.image.xyz for c in ours}
-    ours = [c.row() for c in ours]
-    their_images, their_rows = {}, []
+    images = {c.device.report.key: c.best_image.xyz for c in ours}
+    our_rows = [c.row() for c in ours]
+    their_images: dict[str, np.ndarray] = {}
+    their_rows: list[dict[str, Any]] = []
     for contestant in theirs:
         result = contestant.result()
         import mitsuba as mi
@@ -110,21 +131,20 @@ def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int,
             "threads": result.threads, "mitsuba_version": mi.__version__,
         })
         their_images[result.variant] = result.xyz
-    theirs = their_rows
-    if not theirs:
+    if not their_rows:
         notes.append("no Mitsuba variant ran: only spectrace's figures are shown")
     ratios = [{"spectrace": a["runtime"], "mitsuba": b["runtime"],
                "ratio": a["samples_per_second"] / b["samples_per_second"],
                "cpu_time_ratio": a["samples_per_cpu_second"] / b["samples_per_cpu_second"]}
-              for a in ours for b in theirs]
+              for a in our_rows for b in their_rows]
     regions = regions_for(scene.source)
-    agreement = [{"spectrace": a, "mitsuba": b, "regions": [r.as_dict() for r in compare_regions(
+    agreement: list[dict[str, Any]] = [{"spectrace": a, "mitsuba": b, "regions": [r.as_dict() for r in compare_regions(
         images[a], their_images[b], regions)]} for a in images for b in their_images]
     for pair in agreement:
         pair["agrees"] = all(r["agrees"] for r in pair["regions"])
     return {"scene": str(scene.source), "width": size, "height": size, "spp": spp, "max_depth": max_depth,
-            "rr_depth": scene.rr_depth, "repeats": repeats, "spectrace": ours, "mitsuba": theirs, "ratios": ratios,
-            "agreement": agreement, "sigma_limit": SIGMA_LIMIT, "notes": notes}
+            "rr_depth": scene.rr_depth, "repeats": repeats, "spectrace": our_rows, "mitsuba": their_rows,
+            "ratios": ratios, "agreement": agreement, "sigma_limit": SIGMA_LIMIT, "notes": notes}
 
 
 def peer_tables(result: dict) -> list:

@@ -15,6 +15,7 @@ budget" takes that out and scales to exactly the budget (variance ∝ 1/time), s
 import tempfile
 import time
 from collections.abc import Callable
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -48,7 +49,7 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
     reference = reference_renderer.render(spp=reference_spp).xyz.astype(np.float64)
     # The reference is the mean of two independent halves a and b: its own noise is RMS(a - b) / 2.
     other_half = (reference * reference_spp - half * (reference_spp // 2)) / (reference_spp - reference_spp // 2)
-    result = {"scene": str(scene.source), "width": size, "height": size, "max_depth": max_depth,
+    result: dict[str, Any] = {"scene": str(scene.source), "width": size, "height": size, "max_depth": max_depth,
               "samplers": {"spectrace": scene.sampler, "mitsuba": peer_sampler},
               "budget_seconds": seconds, "runtime": device.report.key,
               "reference": {"spp": reference_spp, "noise_rms": _rmse(half, other_half) / 2.0,
@@ -86,8 +87,8 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
 
                 mi.set_variant(variant)
                 scene_dict = scene_to_mitsuba_dict(scene, Path(folder), sampler=peer_sampler)
-                probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
-                spp = _spp_for_budget(probe.seconds, PROBE_SPP, seconds)
+                peer_probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
+                spp = _spp_for_budget(peer_probe.seconds, PROBE_SPP, seconds)
                 timed = render_with_mitsuba(scene_dict, variant, spp=spp, warm_up=False)
                 result["renderers"].append({"renderer": "mitsuba", "runtime": variant, "spp": timed.spp,
                                             "seconds": timed.seconds, "rmse": _rmse(timed.xyz, reference)})

@@ -16,6 +16,7 @@ import resource
 import time
 import tracemalloc
 from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 import pyopencl as cl
@@ -61,7 +62,10 @@ def random_rays(count: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return starts.astype(np.float32), directions.astype(np.float32)
 
 
-def _timed(work: Callable[[], object]) -> tuple[object, float, float]:
+T = TypeVar("T")
+
+
+def _timed(work: Callable[[], T]) -> tuple[T, float, float]:
     """(result, wall seconds, cores used = CPU seconds / wall seconds)."""
     cpu, wall = time.process_time(), time.perf_counter()
     result = work()
@@ -178,7 +182,7 @@ def run_rays_bench(triangles: int, ray_count: int, device_keys: list[str | None]
     log(f"mesh: displaced icosphere, {len(mesh.faces)} triangles; building the BVH")
     bvh, build_cpu_seconds, peak_bytes = build_with_memory(mesh)
     origins, directions = random_rays(ray_count)
-    result = {
+    result: dict[str, Any] = {
         "triangles": int(len(mesh.faces)), "rays": int(ray_count),
         "bvh": {"build_seconds": bvh.build_seconds, "build_cpu_seconds": build_cpu_seconds,
                 "peak_traced_bytes": int(peak_bytes),

@@ -42,7 +42,7 @@ def run_sampler_bench(scene_path: Path | None, size: int, spp_list: list[int], r
         f"({time.perf_counter() - start:.1f} s)")
     rows = []
     for spp in spp_list:
-        row = {"spp": spp}
+        row: dict[str, float] = {"spp": spp}
         for sampler in SAMPLER_TYPES:
             squared_errors = [np.mean((_render_xyz(scene, dev, sampler, seed, spp) - reference) ** 2)
                               for seed in range(seeds)]

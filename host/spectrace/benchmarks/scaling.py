@@ -10,6 +10,7 @@ disturbs less; the cost column compares CPU time per sample with the first row's
 import math
 import time
 from collections.abc import Callable
+from typing import Any
 from dataclasses import replace
 
 import numpy as np
@@ -58,7 +59,7 @@ def run_scaling_bench(scene_path, sizes: list[int] | None, spp: int, max_depth: 
     base = load_scene(scene_path or scenes_dir() / "cornell_box.toml").with_overrides(max_depth=max_depth)
     sizes = sizes or RESOLUTIONS
     table_size = TABLE_SIZE if TABLE_SIZE in sizes else min(sizes)
-    result = {"runtime": device.report.key, "spp": spp, "max_depth": max_depth, "table_size": table_size,
+    result: dict[str, Any] = {"runtime": device.report.key, "spp": spp, "max_depth": max_depth, "table_size": table_size,
               "resolution": [], "depth": [], "triangles": []}
     for size in sizes:
         result["resolution"].append(_measure(base.with_overrides(width=size, height=size), device, spp))

@@ -21,6 +21,10 @@ import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pyopencl is imported only once the OpenCL environment is prepared
+    import pyopencl as cl
 
 _DEFAULT_VENDORS_DIR = Path("/etc/OpenCL/vendors")
 _INTEL_CPU_LIBRARY = "libintelocl.so"
@@ -351,8 +355,8 @@ class FoundDevice:
     key: str  # stable short id for the command line, e.g. "pocl-system:cpu:0"
     runtime: str  # label, e.g. "PoCL (system)"
     library: str | None  # the ICD library that provides it, when known
-    platform: object | None  # pyopencl.Platform
-    device: object | None  # pyopencl.Device
+    platform: cl.Platform | None
+    device: cl.Device | None
     load_error: str | None = None
 
 
@@ -387,6 +391,8 @@ def _platform_pointers(library: str) -> list[int] | str:
         try:
             address = ctypes.cast(runtime.clIcdGetPlatformIDsKHR, ctypes.c_void_p).value
         except AttributeError:
+            return []
+        if not address:
             return []
     query = query_type(address)
     count = ctypes.c_uint32(0)
@@ -450,12 +456,12 @@ def _enumerate_devices(prepared: PreparedEnvironment) -> list[FoundDevice]:
         if identity in seen_identities:
             continue  # the same runtime installed twice: one copy is enough
         seen_identities.add(identity)
-        entry = owner_of.get(platform.int_ptr)
+        owner = owner_of.get(platform.int_ptr)
         has_cpu = any(device_kind(d.type) == "CPU" for d in devices)
-        slug, label = runtime_identity(platform.name, platform.vendor, entry.library if entry else None,
-                                       has_cpu, entry.from_pip if entry else False)
+        slug, label = runtime_identity(platform.name, platform.vendor, owner.library if owner else None,
+                                       has_cpu, owner.from_pip if owner else False)
         slug = _unique_slug(slug, identity, slug_owners)
-        library = entry.library if entry else None
+        library = owner.library if owner else None
         if not devices:
             reason = listing_error or "platform offers no devices"
             found.append(FoundDevice(f"{slug}:none:0", label, library, platform, None, reason))

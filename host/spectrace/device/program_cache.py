@@ -15,7 +15,9 @@ import re
 import tempfile
 import time
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
+from typing import cast
 
 import pyopencl as cl
 
@@ -109,19 +111,19 @@ def _define_value(name: str, value: DefineValue) -> str:
     raise SpectraceError(f"kernel define {name}={value!r} must be an int, a float or a string without spaces")
 
 
-def build_options(kernels_dir: Path, defines: dict[str, DefineValue] | None, extra: list[str] | None) -> str:
+def build_options(kernels_dir: Path, defines: Mapping[str, DefineValue] | None, extra: list[str] | None) -> str:
     include_dir = str(kernels_dir)
     if any(c.isspace() for c in include_dir):
         include_dir = f'"{include_dir}"'
     options = [*_BASE_OPTIONS, "-I", include_dir]
-    for name in sorted(defines or {}):
+    for name, value in sorted((defines or {}).items()):
         if not _DEFINE_NAME.fullmatch(name):
             raise SpectraceError(f"kernel define name '{name}' is not a C identifier")
-        options += ["-D", f"{name}={_define_value(name, defines[name])}"]
+        options += ["-D", f"{name}={_define_value(name, value)}"]
     return " ".join(options + list(extra or []))
 
 
-def _with_contract(defines: dict[str, DefineValue] | None) -> dict[str, DefineValue]:
+def _with_contract(defines: Mapping[str, DefineValue] | None) -> dict[str, DefineValue]:
     """`defines` plus the host/device contract (type codes, wavelength grid, buffer layouts), which every build
     gets: the kernels keep no copy of those numbers."""
     from spectrace.engine.device_types import device_contract_defines  # not at import: it loads numpy tables
@@ -161,7 +163,8 @@ def _write_atomically(path: Path, data: bytes) -> None:
 
 def _program_binary(program: cl.Program) -> bytes | None:
     try:
-        binaries = program.get_info(cl.program_info.BINARIES)
+        # get_info's answer depends on the query: BINARIES is one bytes object per device.
+        binaries = cast("list[bytes]", program.get_info(cl.program_info.BINARIES))
     except cl.Error:
         return None
     return bytes(binaries[0]) if binaries and binaries[0] else None
@@ -182,7 +185,7 @@ class Device:
     def __repr__(self) -> str:
         return f"Device({self.report.key!r}, {self.report.device_name!r})"
 
-    def build_program(self, entry: str, defines: dict[str, DefineValue] | None = None,
+    def build_program(self, entry: str, defines: Mapping[str, DefineValue] | None = None,
                       options: list[str] | None = None) -> cl.Program:
         """Build ``kernels/<entry>`` with ``-I kernels`` and ``-D name=value`` for each define and each value of the
         host/device contract (spectrace.engine.device_types), reusing a cached binary when sources, options and

@@ -97,11 +97,11 @@ def _load_named_display(name: str) -> Display:
 def _colour_science_display(name: str) -> Display:
     key, technology, reference = _COLOUR_SCIENCE_DISPLAYS[name]
     multi_sd = colour.MSDS_DISPLAY_PRIMARIES[key]
-    primaries = tuple(
+    red, green, blue = (
         spectrum_from_colour(sd, name=f"{name}:{channel}") for channel, sd in zip(CHANNELS, multi_sd.to_sds())
     )
     return Display(
-        name=name, technology=technology, primaries=primaries, absolute=False, radiance_scale=RELATIVE,
+        name=name, technology=technology, primaries=(red, green, blue), absolute=False, radiance_scale=RELATIVE,
         source=reference,
     )
 
@@ -152,12 +152,13 @@ def load_display_csv(path: str | Path, name: str | None = None) -> Display:
             where=str(path),
         )
     display_name = name or path.stem
-    primaries = tuple(load_spectrum_csv(path, column=channel, name=f"{display_name}:{channel}") for channel in CHANNELS)
+    red, green, blue = (load_spectrum_csv(path, column=channel, name=f"{display_name}:{channel}")
+                        for channel in CHANNELS)
     absolute = is_absolute_units(keys.get("units", ""))
     return Display(
         name=display_name,
         technology=short_technology(keys.get("technology", "unknown")),
-        primaries=primaries,
+        primaries=(red, green, blue),
         absolute=absolute,
         radiance_scale=MEASURED if absolute else RELATIVE,
         source=str(path),

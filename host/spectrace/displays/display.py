@@ -106,8 +106,9 @@ class Display:
         if not (np.isfinite(white_cd_m2) and white_cd_m2 > 0):
             raise SpectraceError(f"white luminance must be a positive number of cd/m², got {white_cd_m2:g}")
         factor = white_cd_m2 / self.white_luminance_cd_m2
-        primaries = tuple(primary.scaled(factor) for primary in self.primaries)
-        return replace(self, primaries=primaries, absolute=True, radiance_scale=f"white set to {white_cd_m2:g} cd/m²")
+        red, green, blue = (primary.scaled(factor) for primary in self.primaries)
+        return replace(self, primaries=(red, green, blue), absolute=True,
+                       radiance_scale=f"white set to {white_cd_m2:g} cd/m²")
 
     def with_transfer(self, transfer: Encoding) -> Display:
         """The same display reading RGB triples with another transfer curve."""

@@ -6,7 +6,10 @@ added by spectrace.device's program builds). tests/device/test_struct_layout.py 
 struct's sizeof and offsetof, and every contract value as the kernels see it, and compares them with this module.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import DTypeLike
 
 from spectrace.geometry.bvh import BVH_NODE_DTYPE, MAX_DEPTH
 from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE, BVH4_STACK_SIZE
@@ -28,7 +31,7 @@ IOR_CAUCHY = 2  # n = a + b / λ², λ in µm: coefficients a, b (b in µm²)
 MATERIAL_NO_SPECTRUM = -1
 
 
-def _struct(fields: list[tuple[str, object]], itemsize: int) -> np.dtype:
+def _struct(fields: Sequence[tuple[str, DTypeLike]], itemsize: int) -> np.dtype:
     names, formats, offsets = [], [], []
     offset = 0
     for name, fmt in fields:

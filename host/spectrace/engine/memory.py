@@ -31,7 +31,7 @@ class DeviceMemoryNeed:
 
     @property
     def largest(self) -> tuple[str, int]:
-        name = max(self.buffers, key=self.buffers.get)
+        name = max(self.buffers, key=lambda buffer: self.buffers[buffer])
         return name, self.buffers[name]
 
     def summary(self) -> str:

@@ -28,7 +28,8 @@ def status_name(error: cl.Error) -> str:
         code = error.code
     except (AttributeError, IndexError, TypeError):
         return ""
-    return cl.status_code.to_string(code, "<unknown error %d>")
+    # pyopencl's stub declares to_string inside the enum, where a type checker takes it for a member.
+    return cl.status_code.to_string(code, "<unknown error %d>")  # type: ignore[operator]
 
 
 def describe_opencl_error(error: BaseException, action: str, device: str) -> str:

@@ -9,6 +9,7 @@ from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
 from spectrace.lights import area as area_light
 from spectrace.lights import light_module
+from spectrace.lights.area import AreaEmitter
 from spectrace.lights.base import LightRows
 from spectrace.materials import material_row
 from spectrace.engine.device_types import (
@@ -61,11 +62,17 @@ def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
 def build_scene_buffers(scene: Scene) -> SceneBuffers:
     table = SpectrumTable()
     material_index: dict[int, int] = {}
-    material_rows = []
-    v0s, v1s, v2s, uvs, tri_material, tri_emitter, tri_interior = [], [], [], [], [], [], []
-    emitters = []
+    material_rows: list[np.ndarray] = []
+    v0s: list[np.ndarray] = []
+    v1s: list[np.ndarray] = []
+    v2s: list[np.ndarray] = []
+    uvs: list[np.ndarray] = []
+    material_parts: list[np.ndarray] = []
+    emitter_parts: list[np.ndarray] = []
+    interior_parts: list[np.ndarray] = []
+    emitters: list[AreaEmitter] = []
     medium_index: dict[int, int] = {}
-    medium_rows = []
+    medium_rows: list[tuple[int, int, float, int]] = []
     for shape in scene.shapes:
         interior = -1
         if shape.interior is not None:
@@ -82,19 +89,22 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             material_index[key] = len(material_rows)
             material_rows.append(material_row(shape.material, table))
         v0, v1, v2 = shape.mesh.triangles()
-        v0s.append(v0), v1s.append(v1), v2s.append(v2), uvs.append(shape.mesh.triangle_uvs())
-        tri_material.append(np.full(len(v0), material_index[key], np.int32))
-        tri_interior.append(np.full(len(v0), interior, np.int32))
+        v0s.append(v0)
+        v1s.append(v1)
+        v2s.append(v2)
+        uvs.append(shape.mesh.triangle_uvs())
+        material_parts.append(np.full(len(v0), material_index[key], np.int32))
+        interior_parts.append(np.full(len(v0), interior, np.int32))
         emitter_id = -1
         if shape.emitter is not None:
             emitter_id = len(emitters)
             emitters.append(shape.emitter)
-        tri_emitter.append(np.full(len(v0), emitter_id, np.int32))
+        emitter_parts.append(np.full(len(v0), emitter_id, np.int32))
 
     if v0s and sum(len(v) for v in v0s):
         v0, v1, v2, uv = (np.concatenate(a) for a in (v0s, v1s, v2s, uvs))
-        tri_material, tri_emitter = np.concatenate(tri_material), np.concatenate(tri_emitter)
-        tri_interior = np.concatenate(tri_interior)
+        tri_material, tri_emitter = np.concatenate(material_parts), np.concatenate(emitter_parts)
+        tri_interior = np.concatenate(interior_parts)
         bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
         order = bvh.prim_order
         v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]

@@ -8,9 +8,13 @@ KeyboardInterrupt at once, for a user who does not want to wait for the pass to 
 
 import signal
 import threading
+from collections.abc import Callable
 from types import FrameType
+from typing import Any
 
 _STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+# What signal.signal returns and takes back: a handler, SIG_DFL/SIG_IGN, or None (installed outside Python).
+_Handler = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
 
 class StopOnSignals:
@@ -21,7 +25,7 @@ class StopOnSignals:
     def __init__(self) -> None:
         self.requested = False
         self.signal_name: str | None = None
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, _Handler] = {}
 
     def __call__(self) -> bool:
         return self.requested

@@ -94,7 +94,7 @@ def build_bvh(
     forced_split_above = max(FORCED_SPLIT_LEAF_SIZE, max_leaf_size)
 
     prim_order = np.empty(triangle_count, dtype=np.int32)
-    level = _Level(
+    level: _Level | None = _Level(
         triangle_ids=np.arange(triangle_count, dtype=np.int32),
         boxes=boxes,
         centroids=0.5 * (boxes[:3] + boxes[3:]),
@@ -452,7 +452,7 @@ def _partition(level: _Level, starts: np.ndarray, is_split: np.ndarray, goes_rig
     destination = np.where(goes_right, right_base + rights_before, left_base + position - rights_before)
 
     if split_nodes.size < counts.size:
-        kept = np.flatnonzero(np.repeat(is_split, counts))
+        kept: np.ndarray = np.flatnonzero(np.repeat(is_split, counts))
         destination = destination[kept]
     else:
         kept = position

@@ -5,6 +5,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -153,7 +154,7 @@ def _mesh_through_trimesh(path: Path, where: str) -> TriangleMesh:
     import trimesh  # deferred: importing trimesh (and with it SciPy) costs about half a second
 
     # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
-    options = {"process": False, "maintain_order": True}
+    options: dict[str, Any] = {"process": False, "maintain_order": True}
     if path.suffix.lower() == ".obj":
         # With vt, trimesh keeps the stored order only by giving a vertex one of its texture coordinates (at a
         # texture seam the others are lost); splitting such vertices keeps every corner's own coordinate.

@@ -7,6 +7,7 @@ the origin (right-handed), as in Mitsuba 3.
 
 from collections.abc import Callable
 from numbers import Real
+from typing import TypeGuard
 
 import numpy as np
 
@@ -107,7 +108,7 @@ _STEP_BUILDERS: dict[str, Callable[[object, str], np.ndarray]] = {
 }
 
 
-def _is_number(value: object) -> bool:
+def _is_number(value: object) -> TypeGuard[Real]:
     return isinstance(value, Real) and not isinstance(value, bool)
 
 

@@ -31,6 +31,7 @@ import re
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import overload
 from xml.parsers import expat
 
 import numpy as np
@@ -203,6 +204,12 @@ class MitsubaImporter:
     def where(self, element: Element) -> str:
         return f"{self.xml_path}: {element.path}"
 
+    @overload
+    def attribute(self, element: Element, key: str, default: str) -> str: ...
+
+    @overload
+    def attribute(self, element: Element, key: str, default: None = None) -> str | None: ...
+
     def attribute(self, element: Element, key: str, default: str | None = None) -> str | None:
         """An attribute with $parameters substituted."""
         value = element.get(key, default)
@@ -326,7 +333,7 @@ class MitsubaImporter:
 
     def transform_steps(self, element: Element) -> list[dict]:
         """A <transform> as spectrace transform steps, first step first (Mitsuba applies them in file order)."""
-        steps = []
+        steps: list[dict] = []
         for step in element.children:
             if step.tag == "translate":
                 steps.append({"translate": self.vector(step)})
@@ -598,8 +605,11 @@ class MitsubaImporter:
     def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | None:
         """GGX α of a rough Mitsuba BSDF (its default 0.1); None when spectrace cannot represent it (recorded)."""
         if "alpha_u" in properties or "alpha_v" in properties:
-            alpha_u = self.number(self.resolve(properties.get("alpha_u", properties.get("alpha_v"))))
-            alpha_v = self.number(self.resolve(properties.get("alpha_v", properties.get("alpha_u"))))
+            u_element = properties.get("alpha_u", properties.get("alpha_v"))
+            v_element = properties.get("alpha_v", properties.get("alpha_u"))
+            assert u_element is not None and v_element is not None  # one of them is given, standing for both
+            alpha_u = self.number(self.resolve(u_element))
+            alpha_v = self.number(self.resolve(v_element))
             if alpha_u != alpha_v:
                 self.unsupported_plugin(bsdf, " with anisotropic roughness")
                 return None
@@ -808,7 +818,8 @@ class MitsubaImporter:
                 self.parameters.setdefault(self.required(child, "name"), self.required(child, "value"))
         self._collect_ids(root)
         data: dict = {"integrator": {"type": "path", "max_depth": -1}}
-        shapes, lights = [], []
+        shapes: list[dict] = []
+        lights: list[dict] = []
         sensors = [c for c in root.children if c.tag == "sensor"]
         if not sensors:
             raise SpectraceError("the scene has no <sensor>; spectrace needs a camera", where=str(self.xml_path))
@@ -848,8 +859,8 @@ class MitsubaImporter:
         while pending:
             element = pending.pop()
             for child in element.children:
-                if child.get("id") is not None and child.tag != "ref":
-                    self.ids.setdefault(child.get("id"), child)
+                if (identifier := child.get("id")) is not None and child.tag != "ref":
+                    self.ids.setdefault(identifier, child)
                 pending.append(child)
 
     def imported_error(self, error: SpectraceError, toml_path: Path) -> SpectraceError:

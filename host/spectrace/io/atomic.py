@@ -17,7 +17,7 @@ def _mode_for(path: Path) -> int:
         return 0o666 & ~umask
 
 
-def write_atomically(path: Path, write: Callable[[Path], None]) -> None:
+def write_atomically(path: Path, write: Callable[[Path], object]) -> None:
     """Call write(temp_path) on a temporary file in path's folder, fsync it, then rename it over path.
 
     The temporary name keeps path's suffix, since some writers choose the format from it.

@@ -2,6 +2,7 @@
 (kernels/lights.cl)."""
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -43,7 +44,7 @@ def write_rows(emitters: list[AreaEmitter], triangle_emitter: np.ndarray, areas:
     """One row per emitting triangle of non-zero area (triangle_emitter: each triangle's index into `emitters`,
     or -1); returns those triangles' indices, in row order."""
     emitting = np.flatnonzero((triangle_emitter >= 0) & (areas > 0))
-    emitter_rows = []
+    emitter_rows: list[dict[str, Any]] = []
     for e in emitters:
         if e.image is None:
             emitter_rows.append({"spectrum_offset": out.table.add(e.radiance)})
@@ -55,7 +56,7 @@ def write_rows(emitters: list[AreaEmitter], triangle_emitter: np.ndarray, areas:
     for t in emitting:
         e = emitters[triangle_emitter[t]]
         fields = emitter_rows[triangle_emitter[t]]
-        out.add(light_row(LIGHT_TRIANGLE, fields["spectrum_offset"], triangle=t, area=areas[t],
+        out.add(light_row(LIGHT_TRIANGLE, fields["spectrum_offset"], triangle=int(t), area=areas[t],
                           two_sided=e.two_sided, map_fields=fields.get("map_fields", (0, 0, 0, 0)),
                           texel_offset=fields.get("texel_offset", 0)),
                 np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0))

@@ -48,7 +48,8 @@ def unit_direction(vector, where: str | None, message: str = "direction must not
     norm = np.linalg.norm(v)
     if not norm > 0:
         raise SpectraceError(message, where=where)
-    return tuple(float(c) for c in v / norm)
+    x, y, z = v / norm
+    return float(x), float(y), float(z)
 
 
 def check_position(position, where: str) -> None:

@@ -39,7 +39,7 @@ class SpotLight:
     position: tuple[float, float, float]
     direction: tuple[float, float, float]
     intensity: Spectrum
-    cutoff_degrees: float = CUTOFF_ANGLE.default
+    cutoff_degrees: float = CUTOFF_ANGLE.number_default
     falloff_start_degrees: float = 25.0
 
     def effective_solid_angle(self) -> float:

@@ -38,7 +38,7 @@ class ConductorMaterial:
 
     eta: Spectrum
     k: Spectrum
-    roughness: float = ROUGHNESS.default
+    roughness: float = ROUGHNESS.number_default
     specular_tint: Spectrum | None = None
 
     has_transmission = False
@@ -80,7 +80,7 @@ def from_spec(spec, resolver, key: str) -> ConductorMaterial:
     return ConductorMaterial(eta, k, roughness=spec.roughness, specular_tint=tint)
 
 
-def make(eta: Spectrum, k: Spectrum, roughness: float = ROUGHNESS.default,
+def make(eta: Spectrum, k: Spectrum, roughness: float = ROUGHNESS.number_default,
          specular_tint: Spectrum | None = None) -> ConductorMaterial:
     return ConductorMaterial(eta, k, roughness=ROUGHNESS.check(roughness), specular_tint=specular_tint)
 

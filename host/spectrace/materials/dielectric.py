@@ -35,7 +35,7 @@ class DielectricMaterial:
     normal (the winding) points to the exterior. `specular_tint` multiplies both lobes when given."""
 
     ior: IndexOfRefraction
-    roughness: float = ROUGHNESS.default
+    roughness: float = ROUGHNESS.number_default
     specular_tint: Spectrum | None = None
 
     has_transmission = True
@@ -60,7 +60,7 @@ def from_spec(spec, resolver, key: str) -> DielectricMaterial:
                               roughness=spec.roughness, specular_tint=tint)
 
 
-def make(ior: float | str | dict = IOR.default, roughness: float = ROUGHNESS.default,
+def make(ior: float | str | dict = IOR.number_default, roughness: float = ROUGHNESS.number_default,
          specular_tint: Spectrum | None = None) -> DielectricMaterial:
     return DielectricMaterial(index_of_refraction(ior, where="ior"), roughness=ROUGHNESS.check(roughness),
                               specular_tint=specular_tint)

@@ -85,10 +85,17 @@ class Parameter:
     def required(self) -> bool:
         return self.default is REQUIRED
 
+    @property
+    def number_default(self) -> float:
+        """The default of a key whose default is a number, typed as one (dataclass fields, the API's signatures)."""
+        if isinstance(self.default, bool) or not isinstance(self.default, (int, float)):
+            raise TypeError(f"{self.name}'s default {self.default!r} is not a number")
+        return self.default
+
     def range_problem(self, value) -> str | None:
         """Why `value` is not a number within the range, or None."""
         if not isinstance(value, bool) and isinstance(value, Real) and (
-                self.range is None or self.range.contains(value)):
+                self.range is None or self.range.contains(float(value))):
             return None
         if self.range is None:
             return f"{self.name} must be a number, got {value!r}"

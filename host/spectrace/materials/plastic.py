@@ -24,8 +24,8 @@ class PlasticMaterial:
     """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside."""
 
     reflectance: Spectrum
-    ior: float = IOR.default
-    roughness: float = ROUGHNESS.default
+    ior: float = IOR.number_default
+    roughness: float = ROUGHNESS.number_default
 
     is_delta = False  # the base is diffuse whatever the coat
     has_transmission = False
@@ -40,7 +40,7 @@ def from_spec(spec, resolver, key: str) -> PlasticMaterial:
                            roughness=spec.roughness)
 
 
-def make(reflectance: Spectrum, ior: float = IOR.default, roughness: float = ROUGHNESS.default) -> PlasticMaterial:
+def make(reflectance: Spectrum, ior: float = IOR.number_default, roughness: float = ROUGHNESS.number_default) -> PlasticMaterial:
     return PlasticMaterial(reflectance, ior=IOR.check(ior), roughness=ROUGHNESS.check(roughness))
 
 
@@ -66,7 +66,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         importer.unsupported_plugin(bsdf, " with nonlinear = true")
         return None
     ior = importer.ior(bsdf, properties, "int_ior", 1.49) / importer.ior(bsdf, properties, "ext_ior", 1.000277)
-    if not IOR.range.contains(ior):
+    if IOR.range_problem(ior):
         raise importer.fail(bsdf, f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in "
                                   f"{IOR.range}")
     roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughplastic" else 0.0

@@ -22,7 +22,7 @@ class RetroreflectorMaterial:
     """Returns light toward where it came from: a GGX lobe of width `roughness` about the incident direction."""
 
     reflectance: Spectrum
-    roughness: float = ROUGHNESS.default
+    roughness: float = ROUGHNESS.number_default
 
     has_transmission = False
     is_dispersive = False
@@ -40,7 +40,7 @@ def from_spec(spec, resolver, key: str) -> RetroreflectorMaterial:
                                   roughness=spec.roughness)
 
 
-def make(reflectance: Spectrum, roughness: float = ROUGHNESS.default) -> RetroreflectorMaterial:
+def make(reflectance: Spectrum, roughness: float = ROUGHNESS.number_default) -> RetroreflectorMaterial:
     return RetroreflectorMaterial(reflectance, roughness=ROUGHNESS.check(roughness))
 
 

@@ -6,7 +6,7 @@ import typing
 from pathlib import Path
 
 import numpy as np
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
@@ -38,7 +38,7 @@ def key_path(location: tuple) -> str:
     return text
 
 
-def _allowed_keys(model: type, location: tuple) -> list[str]:
+def _allowed_keys(model: type[BaseModel], location: tuple) -> list[str]:
     """Field names valid at `location` in the schema, for 'did you mean' hints (every member of a union)."""
     current = [model]
     name_follows = False  # the part after a dict-typed field is a user-chosen name ([materials.NAME])
@@ -56,8 +56,8 @@ def _allowed_keys(model: type, location: tuple) -> list[str]:
     return list(dict.fromkeys(key for m in current for key in m.model_fields))
 
 
-def _models_in(annotation) -> list[type]:
-    if isinstance(annotation, type) and hasattr(annotation, "model_fields"):
+def _models_in(annotation) -> list[type[BaseModel]]:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
     return [m for arg in getattr(annotation, "__args__", ()) or () for m in _models_in(arg)]
 
@@ -111,7 +111,7 @@ MAX_NESTING = 64
 
 def _too_deep(data: object) -> tuple | None:
     """The key path of a value nested beyond MAX_NESTING tables or arrays, or None (iterative: no recursion)."""
-    stack = [(data, ())]
+    stack: list[tuple[object, tuple]] = [(data, ())]
     while stack:
         node, location = stack.pop()
         if len(location) > MAX_NESTING:
@@ -179,6 +179,7 @@ class _Resolver:
         elif entry.file is not None:
             spectrum = self.csv_spectrum(entry.file, entry.column, f"{entry_key}.file", name=name)
         else:
+            assert entry.library is not None  # the schema wants exactly one of values, file, library
             try:
                 spectrum = library_spectrum(entry.library)
             except SpectraceError as exc:
@@ -217,6 +218,7 @@ class _Resolver:
         elif spec.values is not None:
             result = parse_inline_spectrum(spec.values, where=self.where(f"{key}.values"))
         else:
+            assert spec.file is not None  # the schema wants exactly one source
             result = self.csv_spectrum(spec.file, spec.column, f"{key}.file")
         with np.errstate(over="ignore"):  # an overflow to inf is reported just below
             if problem := limits.spectrum_magnitude_problem(result.values * spec.scale):
@@ -254,6 +256,7 @@ class _Resolver:
         for i, s in enumerate(self.spec.shapes):
             key = f"shapes[{i}]"
             if s.type == "mesh":
+                assert s.file is not None  # the schema wants a file for a mesh
                 mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"))
             else:
                 mesh = _BUILTIN_SHAPES[s.type]()
@@ -337,6 +340,7 @@ class _Resolver:
         from spectrace.displays import load_display
         from spectrace.displays.transfer import parse_encoding
 
+        assert spec.display is not None  # asked only for a spectrum that names a display
         name = str(self.folder / spec.display) if spec.display.lower().endswith(".csv") else spec.display
         try:
             display = load_display(name, where=self.where(f"{key}.display"))
@@ -356,6 +360,7 @@ class _Resolver:
         """The picture a display shows: its encoded values decoded to linear drive by the display's encoding."""
         from spectrace.displays.transfer import decode_to_drive
 
+        assert spec.image is not None  # asked only for a radiance that names an image
         display = self.display(spec, key)
         encoded = read_picture(self.folder / spec.image, self.where(f"{key}.image"))
         drive = np.clip(decode_to_drive(encoded, display.transfer), 0.0, 1.0)

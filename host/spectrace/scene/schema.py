@@ -6,7 +6,7 @@ and files on disk are resolved by scene.loader, which reports errors with the sa
 
 import functools
 import operator
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Protocol, TypeAlias
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
@@ -174,13 +174,14 @@ _ANNOTATIONS = {
 
 
 def _field(parameter: Parameter) -> tuple:
-    annotation = _ANNOTATIONS[parameter.type]
+    annotation: Any = _ANNOTATIONS[parameter.type]
+    default: object
     if parameter.required:
         default = ...
     elif parameter.default is None:
         annotation, default = annotation | None, None
     elif parameter.type == "spectrum":
-        default = SpectrumSpec(value=parameter.default)
+        default = SpectrumSpec(value=parameter.number_default)
     else:
         default = parameter.default
     constraints = (parameter.range.constraints()
@@ -200,20 +201,33 @@ def _after(check):
 
 
 def _spec_model(module, name: str, type_default=...) -> type[Strict]:
+    fields: dict[str, Any] = {"type": (Literal[module.NAME], type_default)}
+    fields.update((parameter.name, _field(parameter)) for parameter in module.PARAMETERS)
     return create_model(
         name,
         __base__=Strict,
         __doc__=module.__doc__,
         __validators__={check.__name__: _after(check) for check in getattr(module, "SPEC_CHECKS", ())},
-        type=(Literal[module.NAME], type_default),
-        **{parameter.name: _field(parameter) for parameter in module.PARAMETERS},
+        **fields,
     )
 
 
-MATERIAL_SPECS = {name: _spec_model(module, f"{name.capitalize()}MaterialSpec") for name, module in MATERIALS.items()}
-MaterialSpec = Annotated[functools.reduce(operator.or_, MATERIAL_SPECS.values()), Field(discriminator="type")]
+class TableSpec(Protocol):
+    """A model built from a parameter table: its `type`, and fields known only once the table has made it."""
 
-EmitterSpec = _spec_model(area, "EmitterSpec", type_default="area")  # a shape's area light
+    @property
+    def type(self) -> str: ...
+
+    def __getattr__(self, name: str) -> Any: ...
+
+
+MATERIAL_SPECS = {name: _spec_model(module, f"{name.capitalize()}MaterialSpec") for name, module in MATERIALS.items()}
+if TYPE_CHECKING:  # the models are made at import, so a type checker sees them only as tables with a type
+    MaterialSpec: TypeAlias = TableSpec
+    EmitterSpec: TypeAlias = TableSpec
+else:
+    MaterialSpec = Annotated[functools.reduce(operator.or_, MATERIAL_SPECS.values()), Field(discriminator="type")]
+    EmitterSpec = _spec_model(area, "EmitterSpec", type_default="area")  # a shape's area light
 
 
 class TransformStep(Strict):
@@ -274,7 +288,10 @@ class ShapeSpec(Strict):
 _LIGHT_SPEC_NAMES = {"constant": "ConstantEnvironmentSpec", "envmap": "EnvironmentMapSpec"}
 LIGHT_SPECS = {name: _spec_model(module, _LIGHT_SPEC_NAMES.get(name, f"{name.capitalize()}LightSpec"))
                for name, module in LIGHTS.items()}
-LightSpec = Annotated[functools.reduce(operator.or_, LIGHT_SPECS.values()), Field(discriminator="type")]
+if TYPE_CHECKING:
+    LightSpec: TypeAlias = TableSpec
+else:
+    LightSpec = Annotated[functools.reduce(operator.or_, LIGHT_SPECS.values()), Field(discriminator="type")]
 
 
 class SceneSpec(Strict):

@@ -35,7 +35,8 @@ def medium_presets() -> dict[str, MediumPreset]:
     presets = {}
     for row in csv.DictReader(lines):
         values = [float(row[f"{q}_{c}"]) for q in ("sigma_s_prime", "sigma_a") for c in "rgb"]
-        presets[row["name"]] = MediumPreset(row["name"], tuple(values[:3]), tuple(values[3:]))
+        presets[row["name"]] = MediumPreset(row["name"], (values[0], values[1], values[2]),
+                                            (values[3], values[4], values[5]))
     return presets
 
 

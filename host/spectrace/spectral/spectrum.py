@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from numbers import Real
+from typing import overload
 
 import numpy as np
 
@@ -48,7 +49,13 @@ class Spectrum:
     def wavelengths_nm(self) -> np.ndarray:
         return GRID_NM
 
-    def evaluate(self, wavelengths_nm: np.ndarray | float) -> np.ndarray:
+    @overload
+    def evaluate(self, wavelengths_nm: float) -> float: ...
+
+    @overload
+    def evaluate(self, wavelengths_nm: np.ndarray) -> np.ndarray: ...
+
+    def evaluate(self, wavelengths_nm: np.ndarray | float) -> np.ndarray | float:
         """Linear interpolation between grid samples, as the kernels do; held constant outside the grid."""
         return np.interp(wavelengths_nm, GRID_NM, self._values)
 
@@ -65,7 +72,7 @@ class Spectrum:
     def scaled(self, factor: float, name: str | None = None) -> Spectrum:
         return Spectrum(self._values * float(factor), name=self.name if name is None else name, source=self.source)
 
-    def __mul__(self, other: Real | Spectrum) -> Spectrum:
+    def __mul__(self, other: float | Real | Spectrum) -> Spectrum:
         if isinstance(other, Spectrum):
             return Spectrum(self._values * other._values, name=f"{self.name}*{other.name}", source=self.source)
         if isinstance(other, Real) and not isinstance(other, bool):
@@ -74,7 +81,7 @@ class Spectrum:
 
     __rmul__ = __mul__
 
-    def __truediv__(self, divisor: Real) -> Spectrum:
+    def __truediv__(self, divisor: float | Real) -> Spectrum:
         if isinstance(divisor, Real) and not isinstance(divisor, bool):
             return self.scaled(1.0 / float(divisor))
         return NotImplemented

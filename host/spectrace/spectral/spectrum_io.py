@@ -339,7 +339,7 @@ def _load_library_spectrum(name: str, where: str | None) -> Spectrum:
     files = _library_files()
     path = files.get(file_name)
     columns = _spectrum_columns(path) if path is not None else None
-    if columns is None:
+    if path is None or columns is None:
         raise SpectraceError(
             f"unknown library spectrum '{name}' (files: {', '.join(files) or 'none'}; or cie:<illuminant>)",
             where=where,

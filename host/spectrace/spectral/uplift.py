@@ -57,7 +57,7 @@ def sigmoid(x: np.ndarray) -> np.ndarray:
     return 0.5 + 0.5 * x / np.sqrt(1.0 + x * x)
 
 
-def sigmoid_polynomial_spectrum(coefficients_nm: Sequence[float]) -> np.ndarray:
+def sigmoid_polynomial_spectrum(coefficients_nm: Sequence[float] | np.ndarray) -> np.ndarray:
     """S(c0 lambda^2 + c1 lambda + c2) at every grid wavelength (lambda in nm), in Horner form as a kernel would."""
     c0, c1, c2 = (float(c) for c in coefficients_nm)
     return sigmoid((c0 * GRID_NM + c1) * GRID_NM + c2)
@@ -150,7 +150,7 @@ def _fit_dimensionless(rgb: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------- public API
 
 
-def _validated_rgb(rgb: Sequence[float], what: str, where: str | None) -> np.ndarray:
+def _validated_rgb(rgb: Sequence[float] | np.ndarray, what: str, where: str | None) -> np.ndarray:
     channels = list(rgb) if isinstance(rgb, (Sequence, np.ndarray)) and not isinstance(rgb, (str, bytes)) else None
     if channels is None or len(channels) != 3 or not all(_is_number(channel) for channel in channels):
         raise SpectraceError(f"{what} must be three numbers, got {rgb!r}", where=where)
@@ -184,7 +184,7 @@ def _uplift_rounded(rgb: tuple[float, float, float]) -> tuple[Spectrum, np.ndarr
     return spectrum, _read_only(coefficients)
 
 
-def uplift_reflectance(rgb: Sequence[float], where: str | None = None) -> tuple[Spectrum, np.ndarray]:
+def uplift_reflectance(rgb: Sequence[float] | np.ndarray, where: str | None = None) -> tuple[Spectrum, np.ndarray]:
     """Linear sRGB reflectance in [0, 1]^3 -> (smooth spectrum in [0, 1], coefficients (c0, c1, c2), lambda in nm).
 
     Under D65 (reflectance times D65, normalised by the integral of D65 * ybar, then the lecture's
@@ -201,7 +201,7 @@ def uplift_reflectance(rgb: Sequence[float], where: str | None = None) -> tuple[
     return _uplift_rounded(rounded)
 
 
-def illuminant_coefficients(rgb: Sequence[float], where: str | None = None) -> tuple[np.ndarray, float]:
+def illuminant_coefficients(rgb: Sequence[float] | np.ndarray, where: str | None = None) -> tuple[np.ndarray, float]:
     """(coefficients in nm, multiplier) of an RGB emission: spectrum = multiplier * S(poly) * D65_normalised.
 
     pbrt-v4's RGBIlluminantSpectrum scheme: with m = max(rgb), the reflectance fitted to rgb / (2 m)
@@ -218,7 +218,7 @@ def illuminant_coefficients(rgb: Sequence[float], where: str | None = None) -> t
     return coefficients, 2.0 * largest
 
 
-def uplift_illuminant(rgb: Sequence[float], scale: float = 1.0, where: str | None = None) -> Spectrum:
+def uplift_illuminant(rgb: Sequence[float] | np.ndarray, scale: float = 1.0, where: str | None = None) -> Spectrum:
     """Linear sRGB emission (any non-negative magnitude) -> emission spectrum, D65-shaped for greys.
 
     spectrum(lambda) = scale * 2 m * S(poly fitted to rgb / (2 m))(lambda) * D65_normalised(lambda), m = max(rgb),
