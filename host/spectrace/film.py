@@ -99,9 +99,9 @@ class Film:
     @translate_opencl_errors("clearing the film")
     def reset(self) -> None:
         queue = self.device.queue
-        cl.enqueue_fill_buffer(queue, self.xyz_buffer, np.float32(0), 0, self.xyz_buffer.size)
-        cl.enqueue_fill_buffer(queue, self.ray_count_buffer, np.uint32(0), 0, self.ray_count_buffer.size)
-        cl.enqueue_fill_buffer(queue, self.spectral_buffer, np.float32(0), 0, self.spectral_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.xyz_buffer, np.zeros(1, np.float32), 0, self.xyz_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.ray_count_buffer, np.zeros(1, np.uint32), 0, self.ray_count_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.spectral_buffer, np.zeros(1, np.float32), 0, self.spectral_buffer.size)
         queue.finish()
         self.samples_done = 0
         self.render_seconds = 0.0

@@ -22,7 +22,7 @@ import time
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -102,7 +102,7 @@ def save_checkpoint(path: str | Path, renderer: Renderer, identity: RenderIdenti
 
 def write_checkpoint(path: str | Path, checkpoint: Checkpoint) -> None:
     identity, state = checkpoint.identity, checkpoint.state
-    payload = {
+    payload: dict[str, Any] = {
         "format": np.array(CHECKPOINT_FORMAT),
         "width": np.int64(identity.width),
         "height": np.int64(identity.height),

@@ -62,7 +62,7 @@ class Renderer:
         check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
         self.spectral_bins = spectral_bins
         self.spectral_range_nm = spectral_range_nm
-        defines = sampler_defines(scene.sampler) | traversal_defines()
+        defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
         if specialise:
             defines |= scene_feature_defines(self.buffers)
         defines |= spectral_defines(spectral_bins, spectral_range_nm)
