@@ -153,7 +153,7 @@ def compare(
 ) -> None:
     """The same RGB on several displays: XYZ, xy, luminance, sRGB, CIELAB, and ΔE2000 of every pair."""
     if plot is not None:
-        from spectrace.cli_checks import check_output_file
+        from spectrace.cli.checks import check_output_file
 
         check_output_file(plot, "--plot")  # before the work, like every output
     displays = [item.with_transfer(encoding) for item in _displays_from_options(display, "--display")]

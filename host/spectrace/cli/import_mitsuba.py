@@ -24,7 +24,7 @@ def import_mitsuba_command(
     choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML is checked by loading
     it before it replaces OUT.toml (a failed import leaves an existing file as it was); render it with
     `spectrace render OUT.toml`."""
-    from spectrace.cli_checks import check_distinct_files
+    from spectrace.cli.checks import check_distinct_files
     from spectrace.interop.mitsuba_xml import import_mitsuba
 
     if output.endswith(("/", os.sep)) or not Path(output).name:
