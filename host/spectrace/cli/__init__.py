@@ -57,7 +57,7 @@ app = typer.Typer(
 # The light command modules (typer and rich at import) register at once, in the order `--help` lists them.
 app.command("render")(render.render)
 app.command("devices")(devices.devices)
-app.command("bench")(bench.bench)
+app.add_typer(bench.bench_app, name="bench")
 app.command("validate")(validate.validate)
 
 
