@@ -83,7 +83,7 @@ def render(
     if saved is not None:
         _resume(renderer, saved, resume)
     with StopOnSignals() as stop:
-        _render_passes(renderer, loaded.spp, stop, state_file, checkpoint_interval, quiet)
+        _render_passes(renderer, stop, state_file, checkpoint_interval, quiet)
         interrupted = stop.requested
         image = renderer.image()
         if image.spp == 0:
@@ -151,38 +151,24 @@ def _resume(renderer, restored, path: Path) -> None:
                       f"uninterrupted render would", highlight=False, markup=False)
 
 
-def _render_passes(renderer, spp: int, stop, state_file: Optional[Path], interval: float, quiet: bool) -> None:
-    """Render to `spp` with a progress bar until done or asked to stop; checkpoint on the way and at the end."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-
+def _render_passes(renderer, stop, state_file: Optional[Path], interval: float, quiet: bool) -> None:
+    """The API's render loop with the bar on this console (none with -q) and checkpoints to `state_file`."""
+    from spectrace.api import render_passes
     from spectrace.engine.checkpoint import PeriodicCheckpoints
 
     def warn(message: str) -> None:
         console.print(f"warning: {message}", highlight=False, markup=False)
 
     saver = PeriodicCheckpoints(state_file, renderer, interval, warn=warn) if state_file else None
-    with Progress(
-        TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
-        TimeElapsedColumn(), TimeRemainingColumn(), console=console, disable=quiet,
-    ) as bar:
-        task = bar.add_task("render", total=spp, completed=renderer.samples_done)
-
-        def on_pass(done: int, total: int) -> None:
-            bar.update(task, completed=done)
-            if saver is not None:
-                saver.maybe_save()
-
-        try:
-            renderer.render(progress=on_pass, should_stop=stop)
-        except SpectraceError as error:
-            # An OpenCL failure mid-pass may leave part of a pass in the film: the film is not saved now, but the
-            # last checkpoint, written between passes, is sound.
-            if saver is None or saver.saved_samples is None:
-                raise
-            raise SpectraceError(f"{error.message}; {state_file} holds the last {saver.saved_samples} spp "
-                                 f"(continue with --resume)", where=error.where) from None
-    if saver is not None and renderer.samples_done > 0:
-        saver.save()
+    try:
+        render_passes(renderer, progress=not quiet, stop=stop, checkpoints=saver, console=console)
+    except SpectraceError as error:
+        # An OpenCL failure mid-pass may leave part of a pass in the film: the film is not saved now, but the
+        # last checkpoint, written between passes, is sound.
+        if saver is None or saver.saved_samples is None:
+            raise
+        raise SpectraceError(f"{error.message}; {state_file} holds the last {saver.saved_samples} spp "
+                             f"(continue with --resume)", where=error.where) from None
 
 
 def _write_image(image, output: Path, include_xyz: bool, state_file: Optional[Path]) -> None:
