@@ -12,12 +12,12 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from spectrace.displays.catalog import load_all_displays, load_display
+from spectrace.spectral.display_catalog import load_all_displays, load_display
 from spectrace.displays.compare import Comparison, compare_displays
-from spectrace.displays.display import CHANNELS, Display
+from spectrace.spectral.display import CHANNELS, Display
 from spectrace.displays.match import MatchResult, match_colour
-from spectrace.displays.observers import ALL_OBSERVERS, Observer
-from spectrace.displays.transfer import Encoding
+from spectrace.spectral.observers import ALL_OBSERVERS, Observer
+from spectrace.spectral.display_transfer import Encoding
 from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions
 
 display_app = typer.Typer(

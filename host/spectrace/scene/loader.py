@@ -318,8 +318,8 @@ class _Resolver:
     def display_spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
         """r·R(λ) + g·G(λ) + b·B(λ) of a display's primaries for the triple it shows (decoded by `encoding`). A
         display keeps its measured radiance unless white_luminance rescales it; relative displays need one."""
-        from spectrace.displays import load_display
-        from spectrace.displays.transfer import parse_encoding
+        from spectrace.spectral.display_catalog import load_display
+        from spectrace.spectral.display_transfer import parse_encoding
 
         if not emission:
             raise SpectraceError("a display spectrum is an emission, not a reflectance", where=self.where(key))
@@ -333,8 +333,8 @@ class _Resolver:
             raise SpectraceError(exc.message, where=self.where(f"{key}.rgb")) from None
 
     def display(self, spec: schema.SpectrumSpec, key: str):
-        from spectrace.displays import load_display
-        from spectrace.displays.transfer import parse_encoding
+        from spectrace.spectral.display_catalog import load_display
+        from spectrace.spectral.display_transfer import parse_encoding
 
         name = str(self.folder / spec.display) if spec.display.lower().endswith(".csv") else spec.display
         try:
@@ -353,7 +353,7 @@ class _Resolver:
 
     def emitter_image(self, spec: schema.SpectrumSpec, key: str) -> EmitterImage:
         """The picture a display shows: its encoded values decoded to linear drive by the display's encoding."""
-        from spectrace.displays.transfer import decode_to_drive
+        from spectrace.spectral.display_transfer import decode_to_drive
 
         display = self.display(spec, key)
         encoded = read_picture(self.folder / spec.image, self.where(f"{key}.image"))
