@@ -8,7 +8,6 @@ like the same scene written as TOML. docs/python-api.md shows it in use.
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import contextmanager
 from numbers import Real
@@ -46,9 +45,12 @@ from spectrace.spectral.spectrum import Spectrum
 
 if TYPE_CHECKING:
     import colour
+    import rich.console
     import trimesh
 
     from spectrace.device import Device
+    from spectrace.engine.checkpoint import PeriodicCheckpoints
+    from spectrace.engine.meters import MeterReading
 
 # What `spectrum` accepts: a Spectrum; a colour-science SpectralDistribution; a constant; a library name
 # ("cie:D65", "cornell_box/light"); (wavelengths_nm, values) arrays; an (N, 2) array or [[λ, v], ...] pairs;
@@ -366,69 +368,40 @@ def _check_camera(scene: Scene) -> None:
         raise SpectraceError(f"fov must lie in (0, 180) degrees, got {camera.fov_degrees}", where="camera.fov")
 
 
-def _in_notebook() -> bool:
-    shell = sys.modules.get("IPython")
-    ipython = shell.get_ipython() if shell is not None and hasattr(shell, "get_ipython") else None
-    return ipython is not None and "IPKernelApp" in getattr(ipython, "config", {})
-
-
-def _has_ipywidgets() -> bool:
-    import importlib.util
-
-    return importlib.util.find_spec("ipywidgets") is not None
-
-
-@contextmanager
-def _text_bar(total_spp: int, done_spp: int, stream=None):
-    """A one-line text bar redrawn with a carriage return: what Jupyter shows without ipywidgets, where tqdm's and
-    rich's notebook bars print a warning and an empty widget."""
-    stream = stream or sys.stderr
-    width = 30
-
-    def draw(done: int, total: int) -> None:
-        filled = width * min(done, total) // max(total, 1)
-        stream.write(f"\rrendering |{'#' * filled}{'.' * (width - filled)}| {done}/{total} spp")
-        stream.flush()
-
-    draw(done_spp, total_spp)
-    try:
-        yield draw
-    finally:
-        stream.write("\n")
-        stream.flush()
-
-
-@contextmanager
-def _progress_bar(total_spp: int, done_spp: int):
-    """A progress callback drawing a bar: tqdm's (a notebook widget under Jupyter, text elsewhere) when tqdm is
-    installed (`pip install "spectrace[notebook]"`), else rich's, which spectrace already depends on; plain text
-    inside Jupyter without ipywidgets, which both need there."""
-    if _in_notebook() and not _has_ipywidgets():
-        with _text_bar(total_spp, done_spp) as draw:
-            yield draw
-        return
-    try:
-        from tqdm.auto import tqdm
-    except ImportError:
-        tqdm = None
-    if tqdm is not None:
-        bar = tqdm(total=total_spp, initial=done_spp, unit="spp", desc="rendering")
-        try:
-            yield lambda done, total: bar.update(done - bar.n)
-        finally:
-            bar.close()
-        return
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-
-    with Progress(TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
-                  TimeElapsedColumn(), TimeRemainingColumn()) as progress:
-        task = progress.add_task("render", total=total_spp, completed=done_spp)
-        yield lambda done, total: progress.update(task, completed=done)
-
-
 @contextmanager
 def _no_bar(callback: Callable[[int, int], None] | None):
     yield callback
+
+
+def render_passes(renderer: Renderer, spp: int | None = None, *, pass_spp: int | None = None,
+                  progress: ProgressOption = "auto", stop: Callable[[], bool] | None = None,
+                  checkpoints: "PeriodicCheckpoints | None" = None, console: "rich.console.Console | None" = None
+                  ) -> Image:
+    """The render loop that `render()` and `spectrace render` share: run `renderer`'s passes up to `spp` samples
+    per pixel (default: its scene's) and return the `Image` of the samples done.
+
+    progress: as in `render()` (the bar: `spectrace.progress`, drawn on `console` outside Jupyter). stop: asked
+    between passes; when it says True the loop ends early with the samples done so far. checkpoints: a
+    `spectrace.engine.checkpoint.PeriodicCheckpoints`, offered the state after every pass and saved at the end
+    (also after a stop), so that the file always holds whole passes.
+    """
+    from spectrace.progress import in_notebook, progress_bar
+
+    total = spp if spp is not None else renderer.scene.spp
+    show_bar = progress is True or (progress == "auto" and in_notebook())
+    reporter = progress_bar(total, renderer.samples_done, console) if show_bar else _no_bar(
+        progress if callable(progress) else None)
+    with reporter as draw:
+        def on_pass(done: int, total: int) -> None:
+            if draw is not None:
+                draw(done, total)
+            if checkpoints is not None:
+                checkpoints.maybe_save()
+
+        image = renderer.render(spp=total, pass_spp=pass_spp, progress=on_pass, should_stop=stop)
+    if checkpoints is not None and renderer.samples_done > 0:
+        checkpoints.save()
+    return image
 
 
 def render(scene: Scene, spp: int | None = None, device: "Device | str | None" = None,
@@ -451,12 +424,22 @@ def render(scene: Scene, spp: int | None = None, device: "Device | str | None" =
     space = parse_colour_space(colour_space) if isinstance(colour_space, str) else ColourSpace(colour_space)
     balance = parse_white_balance(white_balance, adaptation) if isinstance(white_balance, str) else white_balance
     renderer = Renderer(scene, device, spectral_bins=spectral_bins) if spectral_bins else Renderer(scene, device)
-    total = spp if spp is not None else scene.spp
-    show_bar = progress is True or (progress == "auto" and _in_notebook())
-    reporter = _progress_bar(total, renderer.samples_done) if show_bar else _no_bar(
-        progress if callable(progress) else None)
-    with reporter as callback:
-        image = renderer.render(spp=total, pass_spp=pass_spp, progress=callback)
+    image = render_passes(renderer, spp, pass_spp=pass_spp, progress=progress)
     image.colour_space = space
     image.white_balance = balance
     return image
+
+
+def measure_radiance(scene: Scene, origin: Sequence[float], direction: Sequence[float],
+                     wavelengths_nm: Sequence[float] | np.ndarray | None = None, *, streams: int = 64,
+                     samples_per_item: int = 32, seed: int = 0, device: "Device | str | None" = None
+                     ) -> "MeterReading":
+    """The spectral radiance arriving at `origin` seen looking along `direction`, W/(m² sr nm), at each of
+    `wavelengths_nm` (default every 5 nm over 360-830 nm), with standard errors from `streams` independent
+    estimates; the reading's Y is the luminance in cd/m² (a radiance meter, `spectrace.engine.meters`)."""
+    from spectrace.engine.meters import DEFAULT_WAVELENGTHS_NM, RadianceMeter, measure
+
+    meter = RadianceMeter(_vector(origin, "origin"), _vector(direction, "direction"))
+    wavelengths = DEFAULT_WAVELENGTHS_NM if wavelengths_nm is None else wavelengths_nm
+    return measure(scene, meter, wavelengths_nm=wavelengths, streams=streams, samples_per_item=samples_per_item,
+                   seed=seed, device=device)

@@ -12,8 +12,8 @@ import pytest
 pytestmark = pytest.mark.subprocess
 
 
-def _bench(*args) -> dict:
-    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--json", *args], capture_output=True,
+def _bench(mode: str, *args) -> dict:
+    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", mode, "--json", *args], capture_output=True,
                             text=True, env=os.environ.copy(), timeout=600)
     assert result.returncode == 0, result.stderr
     return json.loads(result.stdout)
@@ -21,9 +21,10 @@ def _bench(*args) -> dict:
 
 @pytest.fixture(scope="module")
 def modes() -> dict:
-    """--scaling, --rays and --quality in one run: each mode's checks below read their part."""
-    return _bench("--scaling", "--rays", "--quality", "--size", "8", "--spp", "1", "--triangles", "100",
-                  "--ray-count", "3000", "--seconds", "0.05")
+    """The scaling, rays and quality modes, each its own run: the checks below read their parts."""
+    return {**_bench("scaling", "--size", "8", "--spp", "1", "--triangles", "100"),
+            **_bench("rays", "--triangles", "100", "--ray-count", "3000"),
+            **_bench("quality", "--size", "8", "--seconds", "0.05")}
 
 
 def _llvm_variant_or_skip() -> None:
@@ -86,7 +87,7 @@ def test_quality_reference_agrees_with_mitsuba(modes):
 
 @pytest.mark.slow
 def test_cold_mode_builds_without_caches():
-    out = _bench("--cold", "--size", "8", "--spp", "1")
+    out = _bench("cold", "--size", "8", "--spp", "1")
     cold, warm = out["cold"]["cold"][0], out["cold"]["warm"][0]
     assert cold["kernel_build_cached"] is False  # empty caches: a real build from source
     assert warm["kernel_build_cached"] is True  # the cold run's binary or an earlier one answers now
@@ -96,7 +97,7 @@ def test_cold_mode_builds_without_caches():
 @pytest.mark.peer
 def test_peer_mitsuba_mode_agrees():
     pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
-    out = _bench("--peer", "mitsuba", "--size", "32", "--spp", "16", "--max-depth", "4")
+    out = _bench("peer", "--size", "32", "--spp", "16", "--max-depth", "4")
     peer = out["peer"]
     assert peer["width"] == 32 and peer["spp"] == 16 and peer["max_depth"] == 4
     assert peer["mitsuba"], peer["notes"]  # scalar_spectral needs no LLVM, so at least it runs
@@ -110,7 +111,7 @@ def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it
     """Mitsuba's multi-jittered sampler rounds 5 spp up to 6 and logs a warning: the warning must not reach stdout
     (one JSON object there), and Mitsuba's samples/s must count the 6 samples it rendered."""
     pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
-    out = _bench("--peer", "mitsuba", "--size", "8", "--spp", "5", "--max-depth", "2", "--peer-sampler",
+    out = _bench("peer", "--size", "8", "--spp", "5", "--max-depth", "2", "--peer-sampler",
                  "multijitter")
     peer = out["peer"]
     assert [row["spp"] for row in peer["spectrace"]] == [5]
@@ -125,15 +126,21 @@ def test_peer_uses_mitsubas_llvm_variant_where_a_libllvm_works():
     """Where a libLLVM that Dr.Jit accepts is installed (found in the usual folders or DRJIT_LIBLLVM_PATH), the
     peer bench picks it up by itself and Mitsuba's fast variant runs and agrees."""
     _llvm_variant_or_skip()
-    out = _bench("--peer", "mitsuba", "--size", "8", "--spp", "16", "--max-depth", "2")
+    out = _bench("peer", "--size", "8", "--spp", "16", "--max-depth", "2")
     peer = out["peer"]
     assert "llvm_ad_spectral" in [row["runtime"] for row in peer["mitsuba"]], peer["notes"]
     for pair in peer["agreement"]:
         assert pair["agrees"], pair
 
 
-def test_unknown_peer_is_one_line_error():
-    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", "--peer", "blender"], capture_output=True,
-                            text=True, env=os.environ.copy(), timeout=600)
-    assert result.returncode != 0
-    assert "unknown peer 'blender'" in result.stderr and "Traceback" not in result.stderr
+@pytest.mark.parametrize("argv, says", [
+    (["--peer", "mitsuba"], "error: No such option: --peer"),  # the modes were flags once
+    (["--quality"], "error: No such option: --quality"),
+    (["--size", "8", "rays"], "error: --size: belongs to the plain render bench"),  # read by nothing: refused
+    (["rays", "--size", "8"], "error: No such option: --size"),  # each mode takes only its own options
+])
+def test_options_outside_their_mode_are_one_line_errors(argv, says):
+    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", *argv], capture_output=True, text=True,
+                            env=os.environ.copy(), timeout=600)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.startswith(says) and result.stderr.count("\n") == 1, result.stderr

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import spectrace
-from spectrace import api
+from spectrace import progress
 from spectrace.resources import bundled_scene_names
 
 PACKAGE = Path(spectrace.__file__).parent
@@ -63,8 +63,8 @@ def test_piped_help_names_every_option_whole():
 
 
 def test_progress_auto_in_jupyter_without_ipywidgets_is_a_text_bar(device, monkeypatch, capsys):
-    monkeypatch.setattr(api, "_in_notebook", lambda: True)
-    monkeypatch.setattr(api, "_has_ipywidgets", lambda: False)
+    monkeypatch.setattr(progress, "in_notebook", lambda: True)
+    monkeypatch.setattr(progress, "has_ipywidgets", lambda: False)
     scene = spectrace.load_scene("cornell_box").with_overrides(width=8, height=8, spp=2)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # tqdm's and rich's notebook bars warn without ipywidgets

@@ -104,7 +104,17 @@ BENCH_OPTIONS = {
     "--triangles": st.one_of(INTEGERS, JUNK), "--ray-count": st.one_of(INTEGERS, JUNK),
     "--seconds": st.one_of(FLOATS, JUNK), "--peer-sampler": TEXT,
 }
-BENCH_FLAGS = ["--samplers", "--quality", "--rays", "--scaling", "--cold", "--kernel-shapes", "--json", "--all"]
+# Each mode's own options and flags ("" is the plain render bench); the others are click's usage errors.
+BENCH_MODES = {
+    "": (["--size", "--spp", "--max-depth"], ["--all"]),
+    "peer": (["--size", "--spp", "--max-depth", "--peer-sampler"], ["--all"]),
+    "quality": (["--size", "--seconds", "--max-depth", "--peer-sampler"], []),
+    "rays": (["--triangles", "--ray-count"], ["--all"]),
+    "scaling": (["--size", "--spp", "--max-depth", "--triangles"], []),
+    "cold": (["--size", "--spp", "--max-depth"], []),
+    "samplers": (["--size"], []),
+    "kernel-shapes": (["--size", "--spp", "--max-depth"], []),
+}
 
 DISPLAYS = st.one_of(st.sampled_from(["CRT-Dell", "OLED-SamsungNote3"]), st.sampled_from(["LCD-Apple_WLED"]), TEXT)
 RGB = st.one_of(st.tuples(*[st.sampled_from(["0", "0.25", "1"])] * 3),
@@ -228,28 +238,44 @@ def stubbed_bench(monkeypatch):
             return result
         return stub
 
-    modules = {name: importlib.import_module(name) for name in (
-        "spectrace.bench", "spectrace.benchmarks.modes", "spectrace.benchmarks.kernel_shapes",
-        "spectrace.benchmarks.samplers")}
-    monkeypatch.setattr(modules["spectrace.bench"], "run_render_bench", record("render", []))
-    monkeypatch.setattr(modules["spectrace.benchmarks.modes"], "run_bench_modes", record("modes", ({}, [])))
-    monkeypatch.setattr(modules["spectrace.benchmarks.kernel_shapes"], "run_kernel_shape_bench",
-                        record("shapes", []))
-    monkeypatch.setattr(modules["spectrace.benchmarks.samplers"], "sampler_bench_command", record("samplers", None))
+    stubs = {
+        "render": {"run_render_bench": []},
+        "peer_mitsuba": {"run_peer_bench": {}, "peer_tables": [], "device_keys": [None]},
+        "quality": {"run_quality_bench": {}, "quality_tables": []},
+        "rays": {"run_rays_bench": {}, "rays_tables": []},
+        "scaling": {"run_scaling_bench": {}, "scaling_tables": []},
+        "cold_start": {"run_cold_bench": ([], []), "cold_tables": []},
+        "kernel_shapes": {"run_kernel_shape_bench": []},
+        "samplers": {"sampler_bench_command": None},
+    }
+    for module, functions in stubs.items():
+        loaded = importlib.import_module(f"spectrace.benchmarks.{module}")
+        for function, result in functions.items():
+            monkeypatch.setattr(loaded, function, record(function, result))
     return asked
 
 
+def _bench_argv(mode: str):
+    names, flags = BENCH_MODES[mode]
+    table = {name: BENCH_OPTIONS[name] for name in names}
+    return _options(table, [*flags, "--json"], max_size=4).map(lambda options: [*([(mode,)] if mode else []),
+                                                                                 *options])
+
+
 @_settings(150)
-@given(options=_options(BENCH_OPTIONS, BENCH_FLAGS, max_size=4))
-def test_bench_options(stubbed_bench, options):
-    argv = ["bench", *_absolute(Path("."), options)]
+@given(argv=st.sampled_from(list(BENCH_MODES)).flatmap(_bench_argv))
+def test_bench_options(stubbed_bench, argv):
+    argv = ["bench", *_absolute(Path("."), argv)]
     stubbed_bench.clear()
     status, _ = _run("bench", argv)
     if status == 0:
         assert stubbed_bench, argv
         if (depth := _last(argv, "--max-depth")) is not None:
             assert int(depth) == -1 or 1 <= int(depth) < 2**31, argv
-        sizes = [int(argv[i + 1]) for i, token in enumerate(argv[:-1]) if token == "--size"]
+        sizes = [argv[i + 1] for i, token in enumerate(argv[:-1]) if token == "--size"]
+        if argv[1:2] and argv[1] in ("peer", "quality", "cold", "samplers"):  # one size: the last --size given
+            sizes = sizes[-1:]
+        sizes = [int(size) for size in sizes]
         assert all(1 <= size <= 16384 for size in sizes), argv
         if (seconds := _last(argv, "--seconds")) is not None:
             assert math.isfinite(float(seconds)), argv

@@ -46,3 +46,12 @@ def run_cold_bench(size: int, spp: int, max_depth: int, device: str | None, scen
         cold = _child_bench(env, size, spp, max_depth, device, scene)
         warm = _child_bench(env, size, spp, max_depth, device, scene)
     return cold, warm
+
+
+def cold_tables(cold: list[dict], warm: list[dict]) -> list:
+    from spectrace.benchmarks.render import render_bench_table
+
+    tables = [render_bench_table(cold), render_bench_table(warm)]
+    tables[0].title = "cold start (empty kernel caches): build s and to 1st pass s are the cold figures"
+    tables[1].title = "warm start (a fresh process, the cold run's cached binaries)"
+    return tables

@@ -1,4 +1,4 @@
-"""`spectrace bench --kernel-shapes`: samples/s of each kernel shape and work-group size, on the same scene, and of
+"""`spectrace bench kernel-shapes`: samples/s of each kernel shape and work-group size, on the same scene, and of
 the default megakernel built for every scene instead of for this one (scene_features).
 
 The variants run alternately, each repeat timing every variant once in turn, and each figure is the median over
@@ -91,7 +91,7 @@ def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, 
 
 
 def kernel_shape_table(results: list[dict]) -> Table:
-    table = Table(title="spectrace bench --kernel-shapes: median samples/s by kernel shape and work-group size")
+    table = Table(title="spectrace bench kernel-shapes: median samples/s by kernel shape and work-group size")
     for column in ("device", "scene", "size", "depth", "kernel", "work group", "M samples/s", "vs default"):
         table.add_column(column, justify="left" if column in ("device", "scene", "kernel") else "right")
     for r in results:

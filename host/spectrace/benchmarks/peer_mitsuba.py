@@ -1,4 +1,4 @@
-"""`spectrace bench --peer mitsuba`: the same scene rendered by spectrace and by Mitsuba 3, timed side by side.
+"""`spectrace bench peer`: the same scene rendered by spectrace and by Mitsuba 3, timed side by side.
 
 Both render the scene exported by spectrace.interop.mitsuba_export (same triangles, camera, measured spectra,
 resolution, spp, max_depth and Russian roulette start). Figures are wall-clock times of warm renders, film

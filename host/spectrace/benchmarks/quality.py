@@ -1,4 +1,4 @@
-"""`spectrace bench --quality`: error at equal wall time, spectrace against Mitsuba 3.
+"""`spectrace bench quality`: error at equal wall time, spectrace against Mitsuba 3.
 
 A converged reference is a long spectrace render (its own seed, so its noise is independent of the images
 judged), cross-checked region by region against a long Mitsuba render of the exported scene. Then each

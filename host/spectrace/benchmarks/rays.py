@@ -1,4 +1,4 @@
-"""`spectrace bench --rays`: closest-hit rays/s on a large mesh, against Embree on the same rays.
+"""`spectrace bench rays`: closest-hit rays/s on a large mesh, against Embree on the same rays.
 
 The mesh is a noise-displaced icosphere (20·4^s triangles; s = 8 gives 1.3 M), the rays start on a sphere of
 radius 3 around it and aim at uniform points inside the unit ball (fixed seed), so nearly all hit and they

@@ -1,4 +1,4 @@
-"""`spectrace bench --samplers`: the error of each sampler at equal samples per pixel.
+"""`spectrace bench samplers`: the error of each sampler at equal samples per pixel.
 
 A small Cornell box is rendered at a few sample counts with the independent and the Sobol sampler, and each image
 is compared with a long reference render: RMSE over every pixel and X, Y, Z channel, averaged (as mean squared
@@ -66,7 +66,7 @@ def run_sampler_bench(scene_path: Path | None, size: int, spp_list: list[int], r
 
 
 def sampler_bench_table(result: dict) -> Table:
-    table = Table(title=f"spectrace bench --samplers: RMSE of film XYZ against a {result['reference_spp']}-spp "
+    table = Table(title=f"spectrace bench samplers: RMSE of film XYZ against a {result['reference_spp']}-spp "
                         f"reference ({result['width']}x{result['height']}, mean Y {result['mean_y']:.3g}, "
                         f"{result['seeds']} seeds, reference's own RMSE ~{result['reference_rmse']:.2g})")
     for column in ("spp", "RMSE independent", "RMSE sobol", "ratio sobol/independent"):
@@ -78,7 +78,7 @@ def sampler_bench_table(result: dict) -> Table:
 
 def sampler_bench_command(scene_path: Path | None, sizes: list[int] | None, device: str | None, as_json: bool,
                           console) -> None:
-    """`spectrace bench --samplers`: the table on the terminal, or one JSON object on stdout."""
+    """`spectrace bench samplers`: the table on the terminal, or one JSON object on stdout."""
 
     result = run_sampler_bench(scene_path, size=(sizes or [32])[0], spp_list=[4, 16, 64], reference_spp=4096,
                                seeds=16, device=device, log=lambda text: console.print(text, highlight=False))

@@ -1,4 +1,4 @@
-"""`spectrace bench --scaling`: how path-tracing throughput changes with resolution, max_depth and triangle count.
+"""`spectrace bench scaling`: how path-tracing throughput changes with resolution, max_depth and triangle count.
 
 Triangle count grows by putting an icosphere of increasing subdivision (20·4^s triangles) into the Cornell box;
 with a BVH the cost of a sample should grow about with log(triangles), not in proportion to them. Each row is

@@ -8,9 +8,9 @@ from itertools import combinations
 
 import numpy as np
 
-from spectrace.displays.display import Display
-from spectrace.displays.observers import ALL_OBSERVERS, Observer
-from spectrace.displays.transfer import checked_rgb
+from spectrace.spectral.display import Display
+from spectrace.spectral.observers import ALL_OBSERVERS, Observer
+from spectrace.spectral.display_transfer import checked_rgb
 from spectrace.displays.viewing import ViewingConditions, delta_e_2000, encoded_srgb_for_screen
 from spectrace.spectral import xyz_to_xy
 

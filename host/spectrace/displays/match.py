@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import lsq_linear, minimize
 
-from spectrace.displays.display import Display
-from spectrace.displays.observers import ALL_OBSERVERS, Observer
-from spectrace.displays.transfer import checked_rgb, encode_drive
+from spectrace.spectral.display import Display
+from spectrace.spectral.observers import ALL_OBSERVERS, Observer
+from spectrace.spectral.display_transfer import checked_rgb, encode_drive
 from spectrace.displays.viewing import ViewingConditions, delta_e_2000
 
 MATCH_OBSERVER = Observer.CIE_1931_2

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 import colour
 import numpy as np
 
-from spectrace.displays.display import Display
+from spectrace.spectral.display import Display
 from spectrace.displays.match import MatchResult, match_colour
-from spectrace.displays.observers import photometric_xyz
+from spectrace.spectral.observers import photometric_xyz
 from spectrace.displays.viewing import ViewingConditions
 from spectrace.errors import SpectraceError
 from spectrace.spectral.spectrum_io import colorchecker_patch_names, colorchecker_reflectance
@@ -88,7 +88,7 @@ def measure_scene_patches(scene, device=None, streams: int = 32, samples_per_ite
     radiance meter (380-780 nm every 5 nm), as CIELAB relative to the left half's brightest neutral patch (one fixed
     white for both halves, as one photograph would have) and the ΔE2000 between the halves. The ΔE's standard error
     comes from re-evaluating it on the meter readings perturbed by their standard errors."""
-    from spectrace.engine.meters import RadianceMeter, measure
+    from spectrace.api import measure_radiance
 
     wavelengths = np.arange(380.0, 781.0, 5.0)
     origin = np.asarray(scene.camera.origin, float)
@@ -99,8 +99,8 @@ def measure_scene_patches(scene, device=None, streams: int = 32, samples_per_ite
     for side in ("left", "right"):
         for name in names:
             centre = shapes[f"{side} {name}"].mesh.vertices.mean(axis=0)
-            reading = measure(scene, RadianceMeter(tuple(origin), tuple(centre - origin)), wavelengths_nm=wavelengths,
-                              streams=streams, samples_per_item=samples_per_item, device=device)
+            reading = measure_radiance(scene, origin, centre - origin, wavelengths, streams=streams,
+                                       samples_per_item=samples_per_item, device=device)
             readings[side, name] = (reading.spectral, reading.spectral_standard_error)
     white_name = max((n for n in names if n.startswith("white")), default=names[0])
     white = photometric_xyz(np.interp(_grid(), wavelengths, readings["left", white_name][0]))

@@ -20,8 +20,8 @@ from functools import cache
 import colour
 import numpy as np
 
-from spectrace.displays.display import Display
-from spectrace.displays.observers import Observer, luminance_cd_m2, photometric_xyz
+from spectrace.spectral.display import Display
+from spectrace.spectral.observers import Observer, luminance_cd_m2, photometric_xyz
 from spectrace.errors import SpectraceError
 from spectrace.spectral import cie_illuminant, srgb_encode, xyz_to_linear_srgb
 

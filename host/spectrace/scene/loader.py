@@ -322,8 +322,8 @@ class _Resolver:
     def display_spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
         """r·R(λ) + g·G(λ) + b·B(λ) of a display's primaries for the triple it shows (decoded by `encoding`). A
         display keeps its measured radiance unless white_luminance rescales it; relative displays need one."""
-        from spectrace.displays import load_display
-        from spectrace.displays.transfer import parse_encoding
+        from spectrace.spectral.display_catalog import load_display
+        from spectrace.spectral.display_transfer import parse_encoding
 
         if not emission:
             raise SpectraceError("a display spectrum is an emission, not a reflectance", where=self.where(key))
@@ -337,8 +337,8 @@ class _Resolver:
             raise SpectraceError(exc.message, where=self.where(f"{key}.rgb")) from None
 
     def display(self, spec: schema.SpectrumSpec, key: str):
-        from spectrace.displays import load_display
-        from spectrace.displays.transfer import parse_encoding
+        from spectrace.spectral.display_catalog import load_display
+        from spectrace.spectral.display_transfer import parse_encoding
 
         assert spec.display is not None  # asked only for a spectrum that names a display
         name = str(self.folder / spec.display) if spec.display.lower().endswith(".csv") else spec.display
@@ -358,7 +358,7 @@ class _Resolver:
 
     def emitter_image(self, spec: schema.SpectrumSpec, key: str) -> EmitterImage:
         """The picture a display shows: its encoded values decoded to linear drive by the display's encoding."""
-        from spectrace.displays.transfer import decode_to_drive
+        from spectrace.spectral.display_transfer import decode_to_drive
 
         assert spec.image is not None  # asked only for a radiance that names an image
         display = self.display(spec, key)

@@ -1,4 +1,4 @@
-"""`spectrace bench`: throughput of the path tracer on a scene (the Cornell box by default).
+"""`spectrace bench` (no mode): throughput of the path tracer on a scene (the Cornell box by default).
 
 Figures are samples/s (pixel samples, each a full path) and rays/s (closest-hit and shadow rays traced), timed
 around the kernel passes only, after one warm-up pass. The program build time says whether it came from the

@@ -12,12 +12,12 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from spectrace.displays.catalog import load_all_displays, load_display
+from spectrace.spectral.display_catalog import load_all_displays, load_display
 from spectrace.displays.compare import Comparison, compare_displays
-from spectrace.displays.display import CHANNELS, Display
+from spectrace.spectral.display import CHANNELS, Display
 from spectrace.displays.match import MatchResult, match_colour
-from spectrace.displays.observers import ALL_OBSERVERS, Observer
-from spectrace.displays.transfer import Encoding
+from spectrace.spectral.observers import ALL_OBSERVERS, Observer
+from spectrace.spectral.display_transfer import Encoding
 from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions
 
 display_app = typer.Typer(
@@ -153,7 +153,7 @@ def compare(
 ) -> None:
     """The same RGB on several displays: XYZ, xy, luminance, sRGB, CIELAB, and ΔE2000 of every pair."""
     if plot is not None:
-        from spectrace.cli_checks import check_output_file
+        from spectrace.cli.checks import check_output_file
 
         check_output_file(plot, "--plot")  # before the work, like every output
     displays = [item.with_transfer(encoding) for item in _displays_from_options(display, "--display")]

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import colour
 
-from spectrace.displays.display import CHANNELS, Display
+from spectrace.spectral.display import CHANNELS, Display
 from spectrace.errors import SpectraceError
 from spectrace.io.input_files import regular_file
 from spectrace.resources import spectra_dir

@@ -13,8 +13,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spectrace.displays.observers import Observer, luminance_cd_m2, photometric_xyz
-from spectrace.displays.transfer import Encoding, checked_rgb, decode_to_drive
+from spectrace.spectral.observers import Observer, luminance_cd_m2, photometric_xyz
+from spectrace.spectral.display_transfer import Encoding, checked_rgb, decode_to_drive
 from spectrace.errors import SpectraceError
 from spectrace.spectral import Spectrum, spectrum_to_xyz, xyz_to_xy
 
@@ -29,7 +29,7 @@ class Display:
         `absolute`, else on an arbitrary relative scale.
     absolute: whether the primaries carry a radiance scale (measured, or set by `scaled_to_white_luminance`).
     radiance_scale: how that scale came about, for reports ("measured", "relative", "white set to 100 cd/m²").
-    transfer: how `emission`/`drive` read an RGB triple (see `spectrace.displays.transfer`).
+    transfer: how `emission`/`drive` read an RGB triple (see `spectrace.spectral.display_transfer`).
     technology: a short label ("LCD with CCFL backlight (inferred)"); source: where the data come from.
     """
 

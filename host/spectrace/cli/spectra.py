@@ -93,7 +93,7 @@ def plot(
 ) -> None:
     """Draw spectra against wavelength (360-830 nm, as the renderer samples them: linear between data points,
     end values held) into a figure file; each line takes the spectrum's own colour."""
-    from spectrace.cli_checks import check_output_file
+    from spectrace.cli.checks import check_output_file
     from spectrace.plots import plot_spectra, text_problem
 
     if title and (problem := text_problem(title)):

@@ -1,0 +1,140 @@
+"""Command line: `spectrace render | devices | bench | validate | display | spectra | import-mitsuba`, one module
+per command group in this package. Errors print as one line and exit non-zero."""
+
+import importlib
+import sys
+
+import typer
+from typer.core import TyperGroup
+
+from spectrace.cli import bench, devices, render, validate
+from spectrace.cli.common import console
+from spectrace.errors import SpectraceError
+
+# Sub-commands whose modules import colour-science, SciPy or the Mitsuba importer: listed in `--help` from these
+# lines and imported only when run. name -> (module, attribute: a Typer app or a command function, help line).
+LAZY_COMMANDS = {
+    "display": ("spectrace.cli.display", "display_app",
+                "Displays as spectral emitters: the same RGB on LCD, OLED and CRT displays."),
+    "spectra": ("spectrace.cli.spectra", "spectra_app",
+                "Spectra: list the library's and a scene's spectra, and plot any of them."),
+    "import-mitsuba": ("spectrace.cli.import_mitsuba", "import_mitsuba_command",
+                       "Convert a Mitsuba 3 XML scene to a spectrace TOML scene (docs/mitsuba.md)."),
+}
+
+
+def _load_command(name: str):
+    module, attribute, _ = LAZY_COMMANDS[name]
+    target = getattr(importlib.import_module(module), attribute)
+    if not isinstance(target, typer.Typer):
+        target, function = typer.Typer(add_completion=False, pretty_exceptions_enable=False), target
+        target.command(name)(function)
+    return typer.main.get_command(target)
+
+
+class _LazyGroup(TyperGroup):
+    """The top-level group: the lazy sub-commands stand as placeholders (name and help line) until one is run."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        for name, (_, _, help_line) in LAZY_COMMANDS.items():
+            self.add_command(typer.core.TyperCommand(name, help=help_line), name)
+
+    def resolve_command(self, ctx, args):
+        name, command, rest = super().resolve_command(ctx, args)
+        if name in LAZY_COMMANDS:
+            command = self.commands[name] = _load_command(name)
+        return name, command, rest
+
+
+app = typer.Typer(
+    cls=_LazyGroup,
+    help="spectrace: a physically based spectral path tracer (OpenCL on CPU or GPU).",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+# The light command modules (typer and rich at import) register at once, in the order `--help` lists them.
+app.command("render")(render.render)
+app.command("devices")(devices.devices)
+app.add_typer(bench.bench_app, name="bench")
+app.command("validate")(validate.validate)
+
+
+def _usage_error_type() -> type[Exception]:
+    """Click's UsageError (bad option values, unknown options, missing arguments); recent typer versions carry
+    their own copy of click."""
+    try:
+        from typer._click.exceptions import UsageError
+    except ImportError:
+        from click.exceptions import UsageError
+    return UsageError
+
+
+def _usage_error_line(exc: Exception) -> str:
+    """One line, like every other error: the option, what is wrong with its value, and where the help is."""
+    param, reason = getattr(exc, "param", None), getattr(exc, "message", "")
+    if param is not None and param.opts and reason:
+        message = f"{param.opts[0]}: {reason}"
+    else:  # unknown options, missing arguments: click's own sentence names them
+        message = exc.format_message()
+    message = " ".join(message.split())
+    context = getattr(exc, "ctx", None)
+    if context is not None:
+        message += f" (see `{context.command_path} --help`)"
+    return f"error: {message}"
+
+
+# Help printed to a pipe or a file: rich would assume 80 columns and cut long option names ("--colour-space,-…").
+PIPED_HELP_COLUMNS = 120
+
+
+def _set_help_width() -> None:
+    """Read by typer when it first formats help: COLUMNS when set (what rich itself honours), else wide enough for
+    every option name when stdout is no terminal; a terminal's own width otherwise."""
+    import os
+
+    if "TERMINAL_WIDTH" in os.environ:
+        return
+    if columns := os.environ.get("COLUMNS"):
+        os.environ["TERMINAL_WIDTH"] = columns
+    elif not sys.stdout.isatty():
+        os.environ["TERMINAL_WIDTH"] = str(PIPED_HELP_COLUMNS)
+
+
+def main() -> None:
+    try:
+        _set_help_width()
+        usage_error = _usage_error_type()
+        # Not standalone, so that a bad option value reaches the handler below instead of click's framed box.
+        status = app(standalone_mode=False)
+        sys.exit(status if isinstance(status, int) else 0)
+    except KeyboardInterrupt:  # first: `usage_error` is unbound if Ctrl-C came before it was
+        console.print("interrupted", highlight=False)
+        sys.exit(130)
+    except usage_error as exc:
+        if type(exc).__name__ != "NoArgsIsHelpError":  # that one has already printed the help
+            console.print(_usage_error_line(exc), highlight=False, markup=False, soft_wrap=True)
+        sys.exit(exc.exit_code)
+    except typer.Abort:
+        console.print("aborted", highlight=False)
+        sys.exit(1)
+    except SpectraceError as exc:
+        console.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
+        sys.exit(2)
+    except MemoryError:
+        console.print("error: out of host memory (a smaller film, --width/--height, needs less)", highlight=False)
+        sys.exit(2)
+    except Exception as exc:
+        opencl = sys.modules.get("pyopencl")
+        if opencl is None or not isinstance(exc, opencl.Error):
+            raise
+        from spectrace.engine.opencl_errors import describe_opencl_error
+
+        console.print(f"error: {describe_opencl_error(exc, 'running', 'the OpenCL device')}", highlight=False,
+                      markup=False, soft_wrap=True)
+        sys.exit(2)
+
+
+if __name__ == "__main__":
+    main()

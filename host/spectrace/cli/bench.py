@@ -1,0 +1,246 @@
+"""`spectrace bench [MODE]`: throughput measurements and comparisons with peers (docs/performance.md).
+
+`spectrace bench` alone is the plain render bench, with its options; each mode is a subcommand with only the
+options it reads. The plain bench is the group's callback (typer's `invoke_without_command`), so its options stand
+before any mode name: given there with a mode, they would be read by nothing, and are refused."""
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+from rich.console import Console
+
+from spectrace.cli.common import DeviceOption, JsonOption, console
+from spectrace.errors import SpectraceError
+
+PEER_DEFAULT_SIZE = 512
+QUALITY_DEFAULT_SIZE = 128
+QUALITY_REFERENCE_SPP = 1024
+COLD_DEFAULT_SIZE = 256
+SAMPLERS_DEFAULT_SIZE = 32
+RENDER_DEFAULT_SIZES = [256, 512]
+
+SizesOption = Annotated[Optional[list[int]], typer.Option("--size", help="Square image size(s) in pixels, repeatable.")]
+SppOption = Annotated[int, typer.Option(help="Samples per pixel per measurement.", min=1)]
+MaxDepthOption = Annotated[int, typer.Option(help="Path segments from the camera.")]
+SceneOption = Annotated[Optional[Path], typer.Option(help="Scene file (default: the Cornell box).")]
+AllOption = Annotated[bool, typer.Option("--all", help="Every working device in turn.")]
+TrianglesOption = Annotated[int, typer.Option(help="Triangles of the largest mesh.", min=20)]
+PeerSamplerOption = Annotated[str, typer.Option(help=(
+    "Mitsuba's sampler: independent (its default), stratified, multijitter, orthogonal, ldsampler."))]
+
+
+def _size_option(default: int) -> object:
+    return Annotated[Optional[int], typer.Option("--size", help=f"Square image size in pixels (default {default}).")]
+
+
+def _one(size: Optional[int]) -> Optional[list[int]]:
+    return None if size is None else [size]
+
+
+def _or(size: Optional[int], default: int) -> int:
+    return default if size is None else size
+
+
+def _log(text: str) -> None:
+    console.print(text, highlight=False)
+
+
+def _check(sizes: Optional[list[int]] = None, max_depth: Optional[int] = None, seconds: Optional[float] = None
+           ) -> None:
+    """The limits the render command applies, for the options a bench shares with it."""
+    from spectrace.cli import checks
+    from spectrace.scene import limits
+
+    checks.check_max_depth(max_depth)
+    checks.check_finite(seconds, "--seconds")
+    for size in sizes or []:
+        if problem := limits.film_size_problem(size, size):
+            raise SpectraceError(problem, where="--size")
+
+
+def _emit(mode: str, result, tables: Callable[[], list], as_json: bool) -> None:
+    """One JSON object {mode: result} on stdout, or the mode's tables; notes a mode left go to stderr first."""
+    for note in result.get("notes", []) if isinstance(result, dict) else []:
+        _log(f"note ({mode}): {note}")
+    if as_json:
+        print(json.dumps({mode: result}, indent=2))
+        return
+    for table in tables():
+        Console(width=160, markup=False).print(table)
+
+
+bench_app = typer.Typer(
+    help="Measure samples/s and rays/s (a benchmark, never a test). Alone, it times the Cornell box (or --scene) "
+         "at each --size; a mode compares with Mitsuba 3 or Embree or measures one thing more (docs/performance.md).",
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+@bench_app.callback(invoke_without_command=True)
+def render_bench(
+    ctx: typer.Context,
+    size: SizesOption = None,
+    spp: SppOption = 16,
+    max_depth: MaxDepthOption = 8,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    all_devices: AllOption = False,
+    as_json: JsonOption = False,
+) -> None:
+    if ctx.invoked_subcommand is not None:
+        given = [param for param in ctx.command.params
+                 if getattr(ctx.get_parameter_source(param.name), "name", "DEFAULT") != "DEFAULT"]
+        if given:
+            option = given[0].opts[0]
+            raise SpectraceError(f"belongs to the plain render bench; give `spectrace bench "
+                                 f"{ctx.invoked_subcommand}` its own options after the mode's name", where=option)
+        return
+    _check(size, max_depth)
+    from spectrace.benchmarks.render import render_bench_table, run_render_bench
+
+    results = run_render_bench(scene, sizes=size or RENDER_DEFAULT_SIZES, spp=spp, max_depth=max_depth,
+                               device=device, all_devices=all_devices, log=_log)
+    if as_json:
+        print(json.dumps({"render": results}, indent=2))
+    else:
+        Console(width=150, markup=False).print(render_bench_table(results))
+
+
+@bench_app.command("peer")
+def peer_bench(
+    size: _size_option(PEER_DEFAULT_SIZE) = None,
+    spp: SppOption = 16,
+    max_depth: MaxDepthOption = 8,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    all_devices: AllOption = False,
+    peer_sampler: PeerSamplerOption = "independent",
+    as_json: JsonOption = False,
+) -> None:
+    """The same scene rendered by spectrace and by Mitsuba 3 (needs the bench extra), timed side by side, with a
+    check that the images agree."""
+    _check(_one(size), max_depth)
+    from spectrace.benchmarks.peer_mitsuba import peer_tables, run_peer_bench
+
+    try:
+        result = run_peer_bench(scene, _or(size, PEER_DEFAULT_SIZE), spp, max_depth, device, all_devices, log=_log,
+                                peer_sampler=peer_sampler)
+    except ImportError:
+        raise SpectraceError("the Mitsuba comparison needs mitsuba: pip install 'spectrace[bench]'",
+                             where="bench peer") from None
+    _emit("peer", result, lambda: peer_tables(result), as_json)
+
+
+@bench_app.command("quality")
+def quality_bench(
+    size: _size_option(QUALITY_DEFAULT_SIZE) = None,
+    seconds: Annotated[float, typer.Option(help="Time budget per renderer.", min=0.0)] = 2.0,
+    max_depth: MaxDepthOption = 8,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    peer_sampler: PeerSamplerOption = "independent",
+    as_json: JsonOption = False,
+) -> None:
+    """Error at equal wall time against a long reference render: spectrace, and Mitsuba 3 where installed."""
+    _check(_one(size), max_depth, seconds)
+    from spectrace.benchmarks.quality import quality_tables, run_quality_bench
+
+    result = run_quality_bench(scene, _or(size, QUALITY_DEFAULT_SIZE), max_depth, seconds, QUALITY_REFERENCE_SPP,
+                               device, log=_log, peer_sampler=peer_sampler)
+    _emit("quality", result, lambda: quality_tables(result), as_json)
+
+
+@bench_app.command("rays")
+def rays_bench(
+    triangles: TrianglesOption = 1_000_000,
+    ray_count: Annotated[int, typer.Option(help="Random rays to trace.", min=1)] = 1_000_000,
+    device: DeviceOption = None,
+    all_devices: AllOption = False,
+    as_json: JsonOption = False,
+) -> None:
+    """Closest-hit rays/s on a large mesh, against Embree on the same rays where installed."""
+    from spectrace.benchmarks.peer_mitsuba import device_keys
+    from spectrace.benchmarks.rays import rays_tables, run_rays_bench
+
+    result = run_rays_bench(triangles, ray_count, device_keys(device, all_devices), log=_log)
+    _emit("rays", result, lambda: rays_tables(result), as_json)
+
+
+@bench_app.command("scaling")
+def scaling_bench(
+    size: SizesOption = None,
+    spp: SppOption = 16,
+    max_depth: MaxDepthOption = 8,
+    triangles: TrianglesOption = 1_000_000,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """Throughput against resolution, max_depth and triangle count."""
+    _check(size, max_depth)
+    from spectrace.benchmarks.scaling import run_scaling_bench, scaling_tables
+
+    result = run_scaling_bench(scene, size, spp, max_depth, device, triangles, log=_log)
+    _emit("scaling", result, lambda: scaling_tables(result), as_json)
+
+
+@bench_app.command("cold")
+def cold_bench(
+    size: _size_option(COLD_DEFAULT_SIZE) = None,
+    spp: SppOption = 16,
+    max_depth: MaxDepthOption = 8,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """The plain bench in a fresh process with empty kernel caches, then in another that finds them filled."""
+    _check(_one(size), max_depth)
+    from spectrace.benchmarks.cold_start import cold_tables, run_cold_bench
+
+    _log("cold start (empty kernel caches), then warm start, each in a fresh process")
+    cold, warm = run_cold_bench(_or(size, COLD_DEFAULT_SIZE), spp, max_depth, device, str(scene) if scene else None)
+    if cold and warm:
+        _log(f"whole processes (interpreter, imports, devices, scene, build, passes): cold "
+             f"{cold[0]['process_seconds']:.2f} s, warm {warm[0]['process_seconds']:.2f} s")
+    _emit("cold", {"cold": cold, "warm": warm}, lambda: cold_tables(cold, warm), as_json)
+
+
+@bench_app.command("samplers")
+def samplers_bench(
+    size: _size_option(SAMPLERS_DEFAULT_SIZE) = None,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """The samplers compared: RMSE of independent and sobol at 4, 16, 64 spp against a long reference render
+    (docs/sampling.md)."""
+    _check(_one(size))
+    from spectrace.benchmarks.samplers import sampler_bench_command
+
+    sampler_bench_command(scene, [_or(size, SAMPLERS_DEFAULT_SIZE)], device, as_json, console)
+
+
+@bench_app.command("kernel-shapes")
+def kernel_shapes_bench(
+    size: SizesOption = None,
+    spp: SppOption = 16,
+    max_depth: MaxDepthOption = 8,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """The megakernel and the wavefront at work-group sizes 1-32 and the runtime's choice (medians of alternating
+    repeats; one device, --device; docs/devices.md)."""
+    _check(size, max_depth)
+    from spectrace.benchmarks.kernel_shapes import kernel_shape_table, kernel_shape_variants, run_kernel_shape_bench
+
+    results = run_kernel_shape_bench(scene, size or RENDER_DEFAULT_SIZES, spp, max_depth, device,
+                                     kernel_shape_variants(), log=_log)
+    if as_json:
+        print(json.dumps({"kernel_shapes": results}, indent=2))
+    else:
+        Console(width=150, markup=False).print(kernel_shape_table(results))

@@ -1,0 +1,24 @@
+"""`spectrace devices`: the OpenCL platforms and devices found, and whether each builds the kernels."""
+
+import json
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+
+def devices(as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False) -> None:
+    """List every OpenCL platform and device found, with the build probe's result or why it failed."""
+    from dataclasses import asdict
+
+    from spectrace.device import device_table, discover_devices
+
+    reports = discover_devices()
+    if as_json:
+        print(json.dumps({"devices": [asdict(r) for r in reports]}, indent=2))
+        return
+    Console(markup=False).print(device_table(reports))
+    if not any(r.ok for r in reports):
+        from spectrace.device import NoWorkingDeviceError
+
+        raise NoWorkingDeviceError(reports)
