@@ -11,7 +11,7 @@ import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import contextmanager
 from numbers import Real
-from typing import TYPE_CHECKING, Any, Literal, Union
+from typing import TYPE_CHECKING, Any, Literal, Union, cast
 
 import numpy as np
 
@@ -83,7 +83,7 @@ def _spectrum_unscaled(source: SpectrumLike, name: str | None) -> Spectrum:
     if isinstance(source, Spectrum):
         return source if name is None else source.scaled(1.0, name=name)
     if type(source).__name__ == "SpectralDistribution":
-        return spectrum_from_colour(source, name=name)
+        return spectrum_from_colour(cast("colour.SpectralDistribution", source), name=name)
     if isinstance(source, Real) and not isinstance(source, bool):
         return Spectrum.constant(float(source), name=name or "")
     if isinstance(source, str):
@@ -151,11 +151,10 @@ def mesh_from_trimesh(mesh: "trimesh.Trimesh | trimesh.Scene") -> TriangleMesh:
     """A `TriangleMesh` with the vertices and faces of a trimesh mesh (a trimesh Scene is merged into one mesh,
     with its node transforms applied). Vertex order and winding are kept: the front of a face is the side its
     counter-clockwise winding faces."""
-    if hasattr(mesh, "to_mesh"):  # trimesh.Scene
-        mesh = mesh.to_mesh()
-    if not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
-        raise SpectraceError(f"expected a trimesh.Trimesh or trimesh.Scene, got {type(mesh).__name__}")
-    vertices, faces = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
+    single: Any = mesh.to_mesh() if hasattr(mesh, "to_mesh") else mesh  # a trimesh.Scene merged, or anything else
+    if not (hasattr(single, "vertices") and hasattr(single, "faces")):
+        raise SpectraceError(f"expected a trimesh.Trimesh or trimesh.Scene, got {type(single).__name__}")
+    vertices, faces = np.asarray(single.vertices, np.float64), np.asarray(single.faces, np.int64)
     if faces.ndim != 2 or faces.shape[1:] != (3,) or len(faces) == 0:
         raise SpectraceError("the mesh has no triangles")
     if not np.all(np.isfinite(vertices)):
@@ -167,8 +166,8 @@ def transformed(mesh: TriangleMesh, steps: Iterable[Mapping[str, Any]]) -> Trian
     """`mesh` moved by transform steps written as in a scene file, applied first step first:
     {"translate": [x, y, z]}, {"scale": s or [sx, sy, sz]}, {"rotate": {"axis": [x, y, z], "angle": degrees}},
     {"matrix": 4x4 rows}."""
-    steps = [dict(step) for step in steps]
-    return apply_transform(mesh, transform_matrix(steps, where="transform")) if steps else mesh
+    as_dicts = [dict(step) for step in steps]
+    return apply_transform(mesh, transform_matrix(as_dicts, where="transform")) if as_dicts else mesh
 
 
 # ---------------------------------------------------------------- scene objects
@@ -180,7 +179,7 @@ def diffuse(reflectance: SpectrumLike) -> DiffuseMaterial:
     return materials.diffuse.make(_reflectance(reflectance, "reflectance"))
 
 
-def mirror(reflectance: SpectrumLike = materials.mirror.PARAMETERS[0].default) -> MirrorMaterial:
+def mirror(reflectance: SpectrumLike = materials.mirror.PARAMETERS[0].number_default) -> MirrorMaterial:
     """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1), on both faces."""
     return materials.mirror.make(_reflectance(reflectance, "reflectance"))
 
@@ -194,7 +193,7 @@ def _optical_constant(source: SpectrumLike, what: str, positive: bool) -> Spectr
 
 
 def conductor(metal: str | None = None, *, eta: SpectrumLike | None = None, k: SpectrumLike | None = None,
-              roughness: float = materials.conductor.ROUGHNESS.default,
+              roughness: float = materials.conductor.ROUGHNESS.number_default,
               specular_tint: SpectrumLike | None = None) -> ConductorMaterial:
     """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
     index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
@@ -206,27 +205,28 @@ def conductor(metal: str | None = None, *, eta: SpectrumLike | None = None, k: S
     if metal is not None:
         eta_spectrum, k_spectrum = metal_ior(metal, where="metal")
     else:
+        assert eta is not None and k is not None  # source_problem has refused every other combination
         eta_spectrum, k_spectrum = _optical_constant(eta, "eta", True), _optical_constant(k, "k", False)
     tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
     return materials.conductor.make(eta_spectrum, k_spectrum, roughness=roughness, specular_tint=tint)
 
 
-def plastic(reflectance: SpectrumLike, ior: float = materials.plastic.IOR.default,
-            roughness: float = materials.plastic.ROUGHNESS.default) -> PlasticMaterial:
+def plastic(reflectance: SpectrumLike, ior: float = materials.plastic.IOR.number_default,
+            roughness: float = materials.plastic.ROUGHNESS.number_default) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
     smooth or GGX-rough (`roughness` = α)."""
     return materials.plastic.make(_reflectance(reflectance, "reflectance"), ior=ior, roughness=roughness)
 
 
-def retroreflector(reflectance: SpectrumLike = materials.retroreflector.PARAMETERS[0].default,
-                   roughness: float = materials.retroreflector.ROUGHNESS.default) -> RetroreflectorMaterial:
+def retroreflector(reflectance: SpectrumLike = materials.retroreflector.PARAMETERS[0].number_default,
+                   roughness: float = materials.retroreflector.ROUGHNESS.number_default) -> RetroreflectorMaterial:
     """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
     incident direction, scaled by `reflectance`."""
     return materials.retroreflector.make(_reflectance(reflectance, "reflectance"), roughness=roughness)
 
 
-def dielectric(ior: float | str | dict = materials.dielectric.IOR.default,
-               roughness: float = materials.dielectric.ROUGHNESS.default,
+def dielectric(ior: float | str | dict = materials.dielectric.IOR.number_default,
+               roughness: float = materials.dielectric.ROUGHNESS.number_default,
                specular_tint: SpectrumLike | None = None) -> DielectricMaterial:
     """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
     exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
@@ -309,6 +309,7 @@ def _intensity(intensity: SpectrumLike | None, power_w: float | None, shape_spec
         raise SpectraceError(problem)
     if intensity is not None:
         return _emission(intensity, "intensity")
+    assert power_w is not None  # source_problem has refused giving neither
     shape_values = _emission(shape_spectrum, "spectrum") if shape_spectrum is not None else None
     return lights.point.intensity_from_power(power_w, shape_values, solid_angle_sr)
 
@@ -322,7 +323,7 @@ def point_light(position: Sequence[float], intensity: SpectrumLike | None = None
 
 
 def spot_light(position: Sequence[float], target: Sequence[float],
-               cutoff_angle: float = lights.spot.CUTOFF_ANGLE.default, falloff_start: float | None = None,
+               cutoff_angle: float = lights.spot.CUTOFF_ANGLE.number_default, falloff_start: float | None = None,
                intensity: SpectrumLike | None = None, power_w: float | None = None,
                spectrum: SpectrumLike | None = None) -> SpotLight:
     """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
@@ -347,11 +348,11 @@ def constant_environment(radiance: SpectrumLike) -> ConstantEnvironment:
     return ConstantEnvironment(_emission(radiance, "radiance"))
 
 
-def _vector(value: Sequence[float], what: str) -> tuple[float, float, float]:
+def _vector(value: Sequence[float] | np.ndarray, what: str) -> tuple[float, float, float]:
     array = np.asarray(value, np.float64)
     if array.shape != (3,) or not np.all(np.isfinite(array)):
         raise SpectraceError(f"expected 3 finite numbers, got {value!r}", where=what)
-    return tuple(float(c) for c in array)
+    return float(array[0]), float(array[1]), float(array[2])
 
 
 # ---------------------------------------------------------------- rendering
@@ -430,7 +431,7 @@ def render(scene: Scene, spp: int | None = None, device: "Device | str | None" =
     return image
 
 
-def measure_radiance(scene: Scene, origin: Sequence[float], direction: Sequence[float],
+def measure_radiance(scene: Scene, origin: Sequence[float] | np.ndarray, direction: Sequence[float] | np.ndarray,
                      wavelengths_nm: Sequence[float] | np.ndarray | None = None, *, streams: int = 64,
                      samples_per_item: int = 32, seed: int = 0, device: "Device | str | None" = None
                      ) -> "MeterReading":

@@ -9,6 +9,7 @@ kernel compilation (run with empty SPECTRACE_CACHE_DIR and POCL_CACHE_DIR folder
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from rich.table import Table
 
@@ -36,7 +37,7 @@ def run_render_bench(scene_path: Path | None, sizes: list[int], spp: int, max_de
             renderer.reset()
             image = renderer.render(spp=spp)
             samples = size * size * image.spp
-            row = {
+            row: dict[str, Any] = {
                 "device": dev.report.key,
                 "device_name": dev.report.device_name,
                 "width": size,

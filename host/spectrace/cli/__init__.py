@@ -64,11 +64,13 @@ app.command("validate")(validate.validate)
 def _usage_error_type() -> type[Exception]:
     """Click's UsageError (bad option values, unknown options, missing arguments); recent typer versions carry
     their own copy of click."""
+    import importlib
+
     try:
-        from typer._click.exceptions import UsageError
+        exceptions = importlib.import_module("typer._click.exceptions")
     except ImportError:
-        from click.exceptions import UsageError
-    return UsageError
+        exceptions = importlib.import_module("click.exceptions")
+    return exceptions.UsageError
 
 
 def _usage_error_line(exc: Exception) -> str:
@@ -77,7 +79,7 @@ def _usage_error_line(exc: Exception) -> str:
     if param is not None and param.opts and reason:
         message = f"{param.opts[0]}: {reason}"
     else:  # unknown options, missing arguments: click's own sentence names them
-        message = exc.format_message()
+        message = exc.format_message()  # type: ignore[attr-defined]  # a click UsageError, by the caller
     message = " ".join(message.split())
     context = getattr(exc, "ctx", None)
     if context is not None:
@@ -115,7 +117,7 @@ def main() -> None:
     except usage_error as exc:
         if type(exc).__name__ != "NoArgsIsHelpError":  # that one has already printed the help
             console.print(_usage_error_line(exc), highlight=False, markup=False, soft_wrap=True)
-        sys.exit(exc.exit_code)
+        sys.exit(getattr(exc, "exit_code", 2))
     except typer.Abort:
         console.print("aborted", highlight=False)
         sys.exit(1)

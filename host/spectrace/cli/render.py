@@ -80,7 +80,7 @@ def render(
     renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
     console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False,
                   markup=False)
-    if saved is not None:
+    if saved is not None and resume is not None:
         _resume(renderer, saved, resume)
     with StopOnSignals() as stop:
         _render_passes(renderer, stop, state_file, checkpoint_interval, quiet)
