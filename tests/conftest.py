@@ -14,8 +14,10 @@ def pytest_report_header(config):
     except Exception as exc:  # the header must not hide the real failure, which the tests then report
         return [f"spectrace OpenCL device: none ({exc})"]
     report = device.report
-    return [f"spectrace OpenCL device: {report.key} | platform: {report.platform_name} {report.platform_version} | "
-            f"device: {report.device_name}"]
+    return [
+        f"spectrace OpenCL device: {report.key} | platform: {report.platform_name} {report.platform_version} | "
+        f"device: {report.device_name}"
+    ]
 
 
 @pytest.fixture(scope="session")

@@ -30,27 +30,32 @@ def mean_and_standard_error(values, axis=0) -> tuple[np.ndarray, np.ndarray]:
     return values.mean(axis=axis), values.std(axis=axis, ddof=1) / np.sqrt(n)
 
 
-def assert_within_standard_errors(mean, expected, standard_error, sigmas: float = SIGMAS, slack: float = 0.0,
-                                  what: object = "") -> None:
+def assert_within_standard_errors(
+    mean, expected, standard_error, sigmas: float = SIGMAS, slack: float = 0.0, what: object = ""
+) -> None:
     """|mean − expected| ≤ sigmas × standard error + slack, element-wise. `slack` absorbs a known deterministic error
     (float32 rounding, a quadrature's), never the noise."""
     mean, expected, standard_error = (np.asarray(x, dtype=np.float64) for x in (mean, expected, standard_error))
     deviation = np.abs(mean - expected)
     assert np.all(deviation <= sigmas * standard_error + slack), (
         f"{what}: mean {mean} expected {expected} standard error {standard_error} "
-        f"(deviation {np.max(deviation / np.maximum(standard_error, 1e-300)):.3g} standard errors)")
+        f"(deviation {np.max(deviation / np.maximum(standard_error, 1e-300)):.3g} standard errors)"
+    )
 
 
-def assert_at_most_within_standard_errors(mean, bound, standard_error, sigmas: float = SIGMAS, slack: float = 0.0,
-                                          what: object = "") -> None:
+def assert_at_most_within_standard_errors(
+    mean, bound, standard_error, sigmas: float = SIGMAS, slack: float = 0.0, what: object = ""
+) -> None:
     """mean ≤ bound + sigmas × standard error + slack, element-wise: a one-sided bound such as energy conservation."""
     mean, bound, standard_error = (np.asarray(x, dtype=np.float64) for x in (mean, bound, standard_error))
     assert np.all(mean <= bound + sigmas * standard_error + slack), (
-        f"{what}: mean {mean} above {bound} by more than {sigmas} standard errors {standard_error}")
+        f"{what}: mean {mean} above {bound} by more than {sigmas} standard errors {standard_error}"
+    )
 
 
-def assert_furnace(weights, albedo, sigmas: float = SIGMAS, slack: float = 0.0, what: object = "",
-                   at_most: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def assert_furnace(
+    weights, albedo, sigmas: float = SIGMAS, slack: float = 0.0, what: object = "", at_most: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """Weights of one sample per row (a column per wavelength, if any; a failed sample weighs 0) must be finite and
     non-negative and average to `albedo` within `sigmas` standard errors, or, with `at_most`, not above it. Returns
     the mean and its standard error for further checks."""
@@ -70,8 +75,9 @@ def assert_reciprocal(forward, backward, rtol: float, what: object = "") -> None
     would pass on an all-zero BSDF."""
     forward, backward = np.asarray(forward, dtype=np.float64), np.asarray(backward, dtype=np.float64)
     assert np.any(forward > 0), f"{what}: no pair carries light"
-    np.testing.assert_allclose(forward, backward, rtol=rtol, atol=1e-6 * max(float(forward.max()), 1e-300),
-                               err_msg=str(what))
+    np.testing.assert_allclose(
+        forward, backward, rtol=rtol, atol=1e-6 * max(float(forward.max()), 1e-300), err_msg=str(what)
+    )
 
 
 def pooled_bins(observed, expected, minimum: float = MIN_EXPECTED) -> tuple[np.ndarray, np.ndarray]:
@@ -98,7 +104,8 @@ def chi_square_p_value(observed, expected, minimum: float = MIN_EXPECTED) -> tup
     assert len(exp) >= 2, "the chi-square test needs at least two bins expected to hold enough samples"
     # A quadrature of the pdf is off by a little; more than 1 % means a bin (such as the samples that fail) is missing.
     assert abs(obs.sum() - exp.sum()) <= 1e-2 * exp.sum(), (
-        f"observed total {obs.sum()} differs from expected total {exp.sum()}: give the missing mass its own bin")
+        f"observed total {obs.sum()} differs from expected total {exp.sum()}: give the missing mass its own bin"
+    )
     exp = exp * (obs.sum() / exp.sum())
     statistic = float(np.sum((obs - exp) ** 2 / exp))
     dof = len(exp) - 1

@@ -32,7 +32,7 @@ def _imports(name: str, top_level_only: bool) -> list[tuple[str, str, int]]:
         elif isinstance(node, ast.ImportFrom):
             base = node.module or ""
             if node.level:
-                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
                 base = ".".join(anchor + ([base] if base else []))
             found += [(base, alias.name, node.lineno) for alias in node.names]
     return found
@@ -56,15 +56,25 @@ def test_the_module_list_is_the_package():
 
 
 def test_the_scene_layer_does_not_import_the_display_experiments():
-    found = [f"{name} imports {target}" for name in MODULES if _in(name, "spectrace.scene")
-             for target in _targets(name, top_level_only=False) if _in(target, "spectrace.displays")]
+    found = [
+        f"{name} imports {target}"
+        for name in MODULES
+        if _in(name, "spectrace.scene")
+        for target in _targets(name, top_level_only=False)
+        if _in(target, "spectrace.displays")
+    ]
     assert found == []
 
 
 def test_the_spectral_layer_imports_no_layer_above_it():
     above = ("spectrace.scene", "spectrace.displays", "spectrace.engine", "spectrace.api", "spectrace.cli")
-    found = [f"{name} imports {target}" for name in MODULES if _in(name, "spectrace.spectral")
-             for target in _targets(name, top_level_only=False) if any(_in(target, layer) for layer in above)]
+    found = [
+        f"{name} imports {target}"
+        for name in MODULES
+        if _in(name, "spectrace.spectral")
+        for target in _targets(name, top_level_only=False)
+        if any(_in(target, layer) for layer in above)
+    ]
     assert found == []
 
 

@@ -28,7 +28,7 @@ def _linear_density_samples(rng, n: int, factor_on_first_half: float = 1.0) -> n
 
 
 def _linear_expected(n: int) -> np.ndarray:
-    return n * np.diff(EDGES ** 2)
+    return n * np.diff(EDGES**2)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -79,8 +79,12 @@ def test_p_values_of_a_right_sampler_are_uniform():
     too many give 0.025)."""
     n, trials = 2000, 2000
     expected = _tail_expected(n)
-    p_values = np.array([chi_square_p_value(np.histogram(_tail_samples(np.random.default_rng(seed), n),
-                                                         TAIL_EDGES)[0], expected)[0] for seed in range(trials)])
+    p_values = np.array(
+        [
+            chi_square_p_value(np.histogram(_tail_samples(np.random.default_rng(seed), n), TAIL_EDGES)[0], expected)[0]
+            for seed in range(trials)
+        ]
+    )
     share = np.mean(p_values < 0.05)
     assert abs(share - 0.05) < 4 * np.sqrt(0.05 * 0.95 / trials), share
 

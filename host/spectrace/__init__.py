@@ -22,20 +22,52 @@ ensure_usable_cache_folder()
 # The names below load on first use (PEP 562), so that `spectrace --help` and `import spectrace.cli` do not pay for
 # colour-science, SciPy and the OpenCL host code. Where each name lives:
 _LAZY = {
-    **dict.fromkeys(["area_emitter", "conductor", "constant_environment", "dielectric", "diffuse", "distant_light",
-                     "medium", "mesh_from_trimesh", "mirror", "plastic", "point_light", "render", "retroreflector",
-                     "rgb_emission", "rgb_reflectance", "shape", "spectrum", "spot_light", "transformed"],
-                    "spectrace.api"),
+    **dict.fromkeys(
+        [
+            "area_emitter",
+            "conductor",
+            "constant_environment",
+            "dielectric",
+            "diffuse",
+            "distant_light",
+            "medium",
+            "mesh_from_trimesh",
+            "mirror",
+            "plastic",
+            "point_light",
+            "render",
+            "retroreflector",
+            "rgb_emission",
+            "rgb_reflectance",
+            "shape",
+            "spectrum",
+            "spot_light",
+            "transformed",
+        ],
+        "spectrace.api",
+    ),
     **dict.fromkeys(["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.colour_output"),
     "SpectraceError": "spectrace.errors",
     "Image": "spectrace.image",
-    **dict.fromkeys(["AreaEmitter", "Camera", "ConductorMaterial", "DielectricMaterial", "DiffuseMaterial", "Medium",
-                     "MirrorMaterial", "PlasticMaterial", "RetroreflectorMaterial", "Scene", "Shape"],
-                    "spectrace.scene.model"),
+    **dict.fromkeys(
+        [
+            "AreaEmitter",
+            "Camera",
+            "ConductorMaterial",
+            "DielectricMaterial",
+            "DiffuseMaterial",
+            "Medium",
+            "MirrorMaterial",
+            "PlasticMaterial",
+            "RetroreflectorMaterial",
+            "Scene",
+            "Shape",
+        ],
+        "spectrace.scene.model",
+    ),
     "load_scene": "spectrace.scene",
     "Spectrum": "spectrace.spectral.spectrum",
 }
-
 
 
 def __getattr__(name: str):

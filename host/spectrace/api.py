@@ -17,13 +17,13 @@ import numpy as np
 
 from spectrace import lights, materials
 from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
+from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
 from spectrace.lights.base import unit_direction
-from spectrace.engine.renderer import Renderer
 from spectrace.scene.model import (
     AreaEmitter,
     ConductorMaterial,
@@ -55,11 +55,15 @@ if TYPE_CHECKING:
 # What `spectrum` accepts: a Spectrum; a colour-science SpectralDistribution; a constant; a library name
 # ("cie:D65", "cornell_box/light"); (wavelengths_nm, values) arrays; an (N, 2) array or [[λ, v], ...] pairs;
 # a {wavelength_nm: value} mapping; or 471 values on the renderer's 360..830 nm, 1 nm grid.
-SpectrumLike = Union[Spectrum, "colour.SpectralDistribution", float, str, Sequence, np.ndarray, Mapping]
-ProgressOption = Union[bool, Literal["auto"], Callable[[int, int], None], None]
+SpectrumLike = Union[Spectrum, "colour.SpectralDistribution", float, str, Sequence, np.ndarray, Mapping]  # noqa: UP007 (a quoted member)
+ProgressOption = bool | Literal["auto"] | Callable[[int, int], None] | None
 
-BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere,
-                  "prism": primitives.prism}
+BUILTIN_SHAPES = {
+    "rectangle": primitives.rectangle,
+    "cube": primitives.cube,
+    "sphere": primitives.sphere,
+    "prism": primitives.prism,
+}
 
 
 # ---------------------------------------------------------------- spectra
@@ -93,8 +97,9 @@ def _spectrum_unscaled(source: SpectrumLike, name: str | None) -> Spectrum:
     if isinstance(source, tuple) and len(source) == 2 and all(np.ndim(part) == 1 for part in source):
         wavelengths, values = (np.asarray(part, np.float64) for part in source)
         if wavelengths.shape != values.shape:
-            raise SpectraceError(f"wavelengths ({wavelengths.size}) and values ({values.size}) differ in length",
-                                 where=label)
+            raise SpectraceError(
+                f"wavelengths ({wavelengths.size}) and values ({values.size}) differ in length", where=label
+            )
         return parse_inline_spectrum(np.stack([wavelengths, values], axis=1).tolist(), where=label, name=name)
     array = np.asarray(source, np.float64) if isinstance(source, (Sequence, np.ndarray)) else None
     if array is not None and array.shape == GRID_NM.shape:
@@ -130,8 +135,9 @@ def _reflectance(source: SpectrumLike, what: str) -> Spectrum:
         return rgb_reflectance(source)
     result = spectrum(source)
     if result.min() < 0 or result.max() > 1.0 + 1e-6:
-        raise SpectraceError(f"a reflectance must lie in [0, 1], got {result.min():.4g}..{result.max():.4g}",
-                             where=what)
+        raise SpectraceError(
+            f"a reflectance must lie in [0, 1], got {result.min():.4g}..{result.max():.4g}", where=what
+        )
     return result
 
 
@@ -147,7 +153,7 @@ def _emission(source: SpectrumLike, what: str) -> Spectrum:
 # ---------------------------------------------------------------- geometry
 
 
-def mesh_from_trimesh(mesh: "trimesh.Trimesh | trimesh.Scene") -> TriangleMesh:
+def mesh_from_trimesh(mesh: trimesh.Trimesh | trimesh.Scene) -> TriangleMesh:
     """A `TriangleMesh` with the vertices and faces of a trimesh mesh (a trimesh Scene is merged into one mesh,
     with its node transforms applied). Vertex order and winding are kept: the front of a face is the side its
     counter-clockwise winding faces."""
@@ -187,14 +193,20 @@ def mirror(reflectance: SpectrumLike = materials.mirror.PARAMETERS[0].number_def
 def _optical_constant(source: SpectrumLike, what: str, positive: bool) -> Spectrum:
     result = spectrum(source)
     if result.min() < 0 or (positive and not result.min() > 0):
-        raise SpectraceError(f"must be {'> 0' if positive else '>= 0'} at every wavelength (min "
-                             f"{result.min():.4g})", where=what)
+        raise SpectraceError(
+            f"must be {'> 0' if positive else '>= 0'} at every wavelength (min {result.min():.4g})", where=what
+        )
     return result
 
 
-def conductor(metal: str | None = None, *, eta: SpectrumLike | None = None, k: SpectrumLike | None = None,
-              roughness: float = materials.conductor.ROUGHNESS.number_default,
-              specular_tint: SpectrumLike | None = None) -> ConductorMaterial:
+def conductor(
+    metal: str | None = None,
+    *,
+    eta: SpectrumLike | None = None,
+    k: SpectrumLike | None = None,
+    roughness: float = materials.conductor.ROUGHNESS.number_default,
+    specular_tint: SpectrumLike | None = None,
+) -> ConductorMaterial:
     """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
     index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
     mirror-like metal); `specular_tint` (a reflectance) multiplies the Fresnel term."""
@@ -211,23 +223,30 @@ def conductor(metal: str | None = None, *, eta: SpectrumLike | None = None, k: S
     return materials.conductor.make(eta_spectrum, k_spectrum, roughness=roughness, specular_tint=tint)
 
 
-def plastic(reflectance: SpectrumLike, ior: float = materials.plastic.IOR.number_default,
-            roughness: float = materials.plastic.ROUGHNESS.number_default) -> PlasticMaterial:
+def plastic(
+    reflectance: SpectrumLike,
+    ior: float = materials.plastic.IOR.number_default,
+    roughness: float = materials.plastic.ROUGHNESS.number_default,
+) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
     smooth or GGX-rough (`roughness` = α)."""
     return materials.plastic.make(_reflectance(reflectance, "reflectance"), ior=ior, roughness=roughness)
 
 
-def retroreflector(reflectance: SpectrumLike = materials.retroreflector.PARAMETERS[0].number_default,
-                   roughness: float = materials.retroreflector.ROUGHNESS.number_default) -> RetroreflectorMaterial:
+def retroreflector(
+    reflectance: SpectrumLike = materials.retroreflector.PARAMETERS[0].number_default,
+    roughness: float = materials.retroreflector.ROUGHNESS.number_default,
+) -> RetroreflectorMaterial:
     """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
     incident direction, scaled by `reflectance`."""
     return materials.retroreflector.make(_reflectance(reflectance, "reflectance"), roughness=roughness)
 
 
-def dielectric(ior: float | str | dict = materials.dielectric.IOR.number_default,
-               roughness: float = materials.dielectric.ROUGHNESS.number_default,
-               specular_tint: SpectrumLike | None = None) -> DielectricMaterial:
+def dielectric(
+    ior: float | str | dict = materials.dielectric.IOR.number_default,
+    roughness: float = materials.dielectric.ROUGHNESS.number_default,
+    specular_tint: SpectrumLike | None = None,
+) -> DielectricMaterial:
     """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
     exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
     C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
@@ -242,8 +261,13 @@ def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float =
     return AreaEmitter(radiance=_emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
 
 
-def medium(sigma_a: SpectrumLike = 0.0, sigma_s: SpectrumLike = 0.0, scale: float = 1.0, g: float = 0.0,
-           preset: str | None = None) -> Medium:
+def medium(
+    sigma_a: SpectrumLike = 0.0,
+    sigma_s: SpectrumLike = 0.0,
+    scale: float = 1.0,
+    g: float = 0.0,
+    preset: str | None = None,
+) -> Medium:
     """A homogeneous medium for a closed shape's `interior` (docs/media.md), as a scene file's `interior` key:
     absorption σa(λ) and scattering σs(λ) in 1/scene unit (a linear sRGB triple becomes a smooth spectrum with
     that colour, unbounded), or a measured `preset` ("skin1", "marble", "wholemilk", ...: Jensen et al. 2001,
@@ -276,9 +300,14 @@ def _is_zero(source: SpectrumLike) -> bool:
     return isinstance(source, Real) and source == 0
 
 
-def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism"] | "trimesh.Trimesh",
-          material=None, emitter: AreaEmitter | None = None, transform: Iterable[Mapping[str, Any]] = (),
-          name: str = "", interior: Medium | None = None) -> Shape:
+def shape(
+    geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism"] | trimesh.Trimesh,
+    material=None,
+    emitter: AreaEmitter | None = None,
+    transform: Iterable[Mapping[str, Any]] = (),
+    name: str = "",
+    interior: Medium | None = None,
+) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
     "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z), moved by
     `transform` steps (see `transformed`). Built-ins face outward, as a dielectric needs. `interior` (see `medium`)
@@ -287,8 +316,9 @@ def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism
     if material is None and interior is None:
         raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
     if interior is not None and not isinstance(interior, Medium):
-        raise SpectraceError(f"interior must be a Medium (see medium()), got {type(interior).__name__}",
-                             where="interior")
+        raise SpectraceError(
+            f"interior must be a Medium (see medium()), got {type(interior).__name__}", where="interior"
+        )
     if isinstance(geometry, str):
         if geometry not in BUILTIN_SHAPES:
             raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(BUILTIN_SHAPES)})")
@@ -301,8 +331,9 @@ def shape(geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism
     return Shape(mesh=transformed(mesh, transform), material=material, emitter=emitter, name=name, interior=interior)
 
 
-def _intensity(intensity: SpectrumLike | None, power_w: float | None, shape_spectrum: SpectrumLike | None,
-               solid_angle_sr: float) -> Spectrum:
+def _intensity(
+    intensity: SpectrumLike | None, power_w: float | None, shape_spectrum: SpectrumLike | None, solid_angle_sr: float
+) -> Spectrum:
     """I(λ), W/(sr nm): given, or `power_w` (W over 360..830 nm) spread over `solid_angle_sr` with the spectral
     shape `shape_spectrum` (equal energy by default), as a scene file's `power` + `spectrum`."""
     if problem := lights.point.source_problem(intensity, power_w, shape_spectrum, power_name="power_w"):
@@ -314,24 +345,35 @@ def _intensity(intensity: SpectrumLike | None, power_w: float | None, shape_spec
     return lights.point.intensity_from_power(power_w, shape_values, solid_angle_sr)
 
 
-def point_light(position: Sequence[float], intensity: SpectrumLike | None = None, power_w: float | None = None,
-                spectrum: SpectrumLike | None = None) -> PointLight:
+def point_light(
+    position: Sequence[float],
+    intensity: SpectrumLike | None = None,
+    power_w: float | None = None,
+    spectrum: SpectrumLike | None = None,
+) -> PointLight:
     """Isotropic point light: `intensity` I(λ) in W/(sr nm), or `power_w` (total flux over 360..830 nm, W) with
     the spectral shape `spectrum` (equal energy by default): I = Φ(λ)/4π."""
-    return PointLight(_vector(position, "position"),
-                      _intensity(intensity, power_w, spectrum, lights.point.FULL_SPHERE_SR))
+    return PointLight(
+        _vector(position, "position"), _intensity(intensity, power_w, spectrum, lights.point.FULL_SPHERE_SR)
+    )
 
 
-def spot_light(position: Sequence[float], target: Sequence[float],
-               cutoff_angle: float = lights.spot.CUTOFF_ANGLE.number_default, falloff_start: float | None = None,
-               intensity: SpectrumLike | None = None, power_w: float | None = None,
-               spectrum: SpectrumLike | None = None) -> SpotLight:
+def spot_light(
+    position: Sequence[float],
+    target: Sequence[float],
+    cutoff_angle: float = lights.spot.CUTOFF_ANGLE.number_default,
+    falloff_start: float | None = None,
+    intensity: SpectrumLike | None = None,
+    power_w: float | None = None,
+    spectrum: SpectrumLike | None = None,
+) -> SpotLight:
     """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
     degrees from the axis (default ¾ of the cutoff), smooth fall to 0 at `cutoff_angle` degrees; or `power_w` W
     spread over the cone's effective solid angle."""
     origin = np.asarray(_vector(position, "position"))
-    direction = unit_direction(np.asarray(_vector(target, "target")) - origin, None,
-                               "spot light target equals its position")
+    direction = unit_direction(
+        np.asarray(_vector(target, "target")) - origin, None, "spot light target equals its position"
+    )
     cutoff, start = lights.spot.cone(cutoff_angle, falloff_start, "cutoff_angle", "falloff_start")
     solid_angle = lights.spot.effective_solid_angle(cutoff, start)
     return SpotLight(tuple(origin), direction, _intensity(intensity, power_w, spectrum, solid_angle), cutoff, start)
@@ -339,8 +381,9 @@ def spot_light(position: Sequence[float], target: Sequence[float],
 
 def distant_light(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:
     """Parallel light travelling along `direction`, irradiance E(λ) in W/(m² nm) on a surface facing it."""
-    return DistantLight(unit_direction(_vector(direction, "direction"), "direction"),
-                        _emission(irradiance, "irradiance"))
+    return DistantLight(
+        unit_direction(_vector(direction, "direction"), "direction"), _emission(irradiance, "irradiance")
+    )
 
 
 def constant_environment(radiance: SpectrumLike) -> ConstantEnvironment:
@@ -374,10 +417,16 @@ def _no_bar(callback: Callable[[int, int], None] | None):
     yield callback
 
 
-def render_passes(renderer: Renderer, spp: int | None = None, *, pass_spp: int | None = None,
-                  progress: ProgressOption = "auto", stop: Callable[[], bool] | None = None,
-                  checkpoints: "PeriodicCheckpoints | None" = None, console: "rich.console.Console | None" = None
-                  ) -> Image:
+def render_passes(
+    renderer: Renderer,
+    spp: int | None = None,
+    *,
+    pass_spp: int | None = None,
+    progress: ProgressOption = "auto",
+    stop: Callable[[], bool] | None = None,
+    checkpoints: PeriodicCheckpoints | None = None,
+    console: rich.console.Console | None = None,
+) -> Image:
     """The render loop that `render()` and `spectrace render` share: run `renderer`'s passes up to `spp` samples
     per pixel (default: its scene's) and return the `Image` of the samples done.
 
@@ -390,9 +439,13 @@ def render_passes(renderer: Renderer, spp: int | None = None, *, pass_spp: int |
 
     total = spp if spp is not None else renderer.scene.spp
     show_bar = progress is True or (progress == "auto" and in_notebook())
-    reporter = progress_bar(total, renderer.samples_done, console) if show_bar else _no_bar(
-        progress if callable(progress) else None)
+    reporter = (
+        progress_bar(total, renderer.samples_done, console)
+        if show_bar
+        else _no_bar(progress if callable(progress) else None)
+    )
     with reporter as draw:
+
         def on_pass(done: int, total: int) -> None:
             if draw is not None:
                 draw(done, total)
@@ -405,10 +458,18 @@ def render_passes(renderer: Renderer, spp: int | None = None, *, pass_spp: int |
     return image
 
 
-def render(scene: Scene, spp: int | None = None, device: "Device | str | None" = None,
-           progress: ProgressOption = "auto", pass_spp: int | None = None, *, spectral_bins: int = 0,
-           colour_space: ColourSpace | str = ColourSpace.SRGB, white_balance: WhiteBalance | str | None = None,
-           adaptation: Adaptation | str = Adaptation.BRADFORD) -> Image:
+def render(
+    scene: Scene,
+    spp: int | None = None,
+    device: Device | str | None = None,
+    progress: ProgressOption = "auto",
+    pass_spp: int | None = None,
+    *,
+    spectral_bins: int = 0,
+    colour_space: ColourSpace | str = ColourSpace.SRGB,
+    white_balance: WhiteBalance | str | None = None,
+    adaptation: Adaptation | str = Adaptation.BRADFORD,
+) -> Image:
     """Render `scene` to `spp` samples per pixel (default: the scene's) and return the `Image`.
 
     device: a Device, a selection string ("pocl", "gpu", a key from `spectrace devices`) or None (automatic).
@@ -419,8 +480,9 @@ def render(scene: Scene, spp: int | None = None, device: "Device | str | None" =
     adaptation set how the image converts to RGB (see `spectrace.colour_output` and docs/colour.md).
     """
     if not isinstance(scene, Scene):
-        raise SpectraceError(f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) "
-                             "reads a file)")
+        raise SpectraceError(
+            f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) reads a file)"
+        )
     _check_camera(scene)
     space = parse_colour_space(colour_space) if isinstance(colour_space, str) else ColourSpace(colour_space)
     balance = parse_white_balance(white_balance, adaptation) if isinstance(white_balance, str) else white_balance
@@ -431,10 +493,17 @@ def render(scene: Scene, spp: int | None = None, device: "Device | str | None" =
     return image
 
 
-def measure_radiance(scene: Scene, origin: Sequence[float] | np.ndarray, direction: Sequence[float] | np.ndarray,
-                     wavelengths_nm: Sequence[float] | np.ndarray | None = None, *, streams: int = 64,
-                     samples_per_item: int = 32, seed: int = 0, device: "Device | str | None" = None
-                     ) -> "MeterReading":
+def measure_radiance(
+    scene: Scene,
+    origin: Sequence[float] | np.ndarray,
+    direction: Sequence[float] | np.ndarray,
+    wavelengths_nm: Sequence[float] | np.ndarray | None = None,
+    *,
+    streams: int = 64,
+    samples_per_item: int = 32,
+    seed: int = 0,
+    device: Device | str | None = None,
+) -> MeterReading:
     """The spectral radiance arriving at `origin` seen looking along `direction`, W/(m² sr nm), at each of
     `wavelengths_nm` (default every 5 nm over 360-830 nm), with standard errors from `streams` independent
     estimates; the reading's Y is the luminance in cd/m² (a radiance meter, `spectrace.engine.meters`)."""
@@ -442,5 +511,12 @@ def measure_radiance(scene: Scene, origin: Sequence[float] | np.ndarray, directi
 
     meter = RadianceMeter(_vector(origin, "origin"), _vector(direction, "direction"))
     wavelengths = DEFAULT_WAVELENGTHS_NM if wavelengths_nm is None else wavelengths_nm
-    return measure(scene, meter, wavelengths_nm=wavelengths, streams=streams, samples_per_item=samples_per_item,
-                   seed=seed, device=device)
+    return measure(
+        scene,
+        meter,
+        wavelengths_nm=wavelengths,
+        streams=streams,
+        samples_per_item=samples_per_item,
+        seed=seed,
+        device=device,
+    )

@@ -64,5 +64,9 @@ def ensure_usable_cache_folder() -> None:
             continue
         stand_in = str(_private_temporary_folder() / inside)
         os.environ[variable] = stand_in
-        print(f"warning: cache folder '{folder or '~/.cache'}' cannot be written ({reason}); using '{stand_in}' "
-              f"instead ({variable}), so compiled kernels last only until it is cleared", file=sys.stderr, flush=True)
+        print(
+            f"warning: cache folder '{folder or '~/.cache'}' cannot be written ({reason}); using '{stand_in}' "
+            f"instead ({variable}), so compiled kernels last only until it is cleared",
+            file=sys.stderr,
+            flush=True,
+        )

@@ -99,14 +99,16 @@ class WhiteBalance:
         return f"{self.label} ({self.method.value})"
 
 
-def adaptation_matrix(source_white_xyz: np.ndarray, target_white_xyz: np.ndarray,
-                      method: Adaptation = Adaptation.BRADFORD) -> np.ndarray:
+def adaptation_matrix(
+    source_white_xyz: np.ndarray, target_white_xyz: np.ndarray, method: Adaptation = Adaptation.BRADFORD
+) -> np.ndarray:
     """Von Kries-type chromatic adaptation: M⁻¹ diag(LMS_target / LMS_source) M on XYZ, with the cone matrix M of
     `method` (Bradford: Lam 1985; von Kries: Hunt–Pointer–Estévez, normalised to D65), from colour-science."""
     import colour
 
     return colour.adaptation.matrix_chromatic_adaptation_VonKries(
-        np.asarray(source_white_xyz, float), np.asarray(target_white_xyz, float),
+        np.asarray(source_white_xyz, float),
+        np.asarray(target_white_xyz, float),
         transform=_ADAPTATION_DATASETS[Adaptation(method)],
     )
 
@@ -120,8 +122,9 @@ def _chromaticity_white(text: str) -> np.ndarray | None:
     except ValueError:
         return None
     if not (0.0 < x < 1.0 and 0.0 < y < 1.0 and x + y < 1.0):
-        raise SpectraceError(f"chromaticity x, y = {x:g}, {y:g} is not a colour (need x, y > 0, x + y < 1)",
-                             where="--white-balance")
+        raise SpectraceError(
+            f"chromaticity x, y = {x:g}, {y:g} is not a colour (need x, y > 0, x + y < 1)", where="--white-balance"
+        )
     return np.array([x / y, 1.0, (1.0 - x - y) / y])
 
 
@@ -133,8 +136,9 @@ def _blackbody_white(text: str) -> np.ndarray | None:
     except ValueError:
         return None
     if not 500.0 <= temperature_k <= 100000.0:
-        raise SpectraceError(f"black-body temperature must lie in 500..100000 K, got {temperature_k:g} K",
-                             where="--white-balance")
+        raise SpectraceError(
+            f"black-body temperature must lie in 500..100000 K, got {temperature_k:g} K", where="--white-balance"
+        )
     from spectrace.spectral.blackbody import blackbody
 
     return spectrum_to_xyz(blackbody(temperature_k))
@@ -164,8 +168,9 @@ def parse_white_balance(text: str, method: Adaptation | str = Adaptation.BRADFOR
     try:
         method = Adaptation(method)
     except ValueError:
-        raise SpectraceError(f"unknown adaptation '{method}' (use {', '.join(a.value for a in Adaptation)})",
-                             where="--adaptation") from None
+        raise SpectraceError(
+            f"unknown adaptation '{method}' (use {', '.join(a.value for a in Adaptation)})", where="--adaptation"
+        ) from None
     white = _chromaticity_white(text)
     if white is None:
         white = _blackbody_white(text)
@@ -180,12 +185,17 @@ def parse_colour_space(text: str) -> ColourSpace:
     try:
         return ColourSpace(text.strip().lower())
     except ValueError:
-        raise SpectraceError(f"unknown colour space '{text}' (use {', '.join(s.value for s in ColourSpace)})",
-                             where="--colour-space") from None
+        raise SpectraceError(
+            f"unknown colour space '{text}' (use {', '.join(s.value for s in ColourSpace)})", where="--colour-space"
+        ) from None
 
 
-def xyz_to_output(xyz: np.ndarray, space: ColourSpace = ColourSpace.SRGB, white_balance: WhiteBalance | None = None,
-                  exposure_stops: float = 0.0) -> np.ndarray:
+def xyz_to_output(
+    xyz: np.ndarray,
+    space: ColourSpace = ColourSpace.SRGB,
+    white_balance: WhiteBalance | None = None,
+    exposure_stops: float = 0.0,
+) -> np.ndarray:
     """Linear values of `space` (XYZ on the last axis in, float32 out): white balance, matrix, 2**exposure."""
     space = ColourSpace(space)
     matrix = xyz_to_rgb_matrix(space)

@@ -68,8 +68,10 @@ def state_problem(state: RenderState, width: int, height: int) -> str | None:
             fits = array.shape == shape
             needs = f"shape {shape}"
         if array.dtype != dtype or not fits:
-            return (f"the {name} buffer is {array.dtype} of shape {array.shape}; a {width}x{height} "
-                    f"film needs {np.dtype(dtype)} of {needs}")
+            return (
+                f"the {name} buffer is {array.dtype} of shape {array.shape}; a {width}x{height} "
+                f"film needs {np.dtype(dtype)} of {needs}"
+            )
         if array.dtype.kind == "f" and not np.isfinite(array).all():
             return f"the {name} buffer holds {int((~np.isfinite(array)).sum())} NaN or infinite values"
     return None
@@ -78,8 +80,14 @@ def state_problem(state: RenderState, width: int, height: int) -> str | None:
 class Film:
     """The device film of one render and the count of samples per pixel it holds."""
 
-    def __init__(self, device: Device, width: int, height: int, spectral_bins: int = 0,
-                 spectral_range_nm: tuple[float, float] = SPECTRAL_LIMITS_NM):
+    def __init__(
+        self,
+        device: Device,
+        width: int,
+        height: int,
+        spectral_bins: int = 0,
+        spectral_range_nm: tuple[float, float] = SPECTRAL_LIMITS_NM,
+    ):
         self.device = device
         self.width = width
         self.height = height
@@ -137,8 +145,9 @@ class Film:
         spectral = None
         if self.spectral_bins > 0:
             lo, hi = self.spectral_range_nm
-            spectral = SpectralBands(np.linspace(lo, hi, self.spectral_bins + 1),
-                                     self.read_spectral() / np.float32(count))
+            spectral = SpectralBands(
+                np.linspace(lo, hi, self.spectral_bins + 1), self.read_spectral() / np.float32(count)
+            )
         return Image(
             spectral=spectral,
             xyz=xyz,
@@ -173,13 +182,19 @@ class Film:
         """Upload a saved state; it must hold exactly this film's buffers, sizes and types."""
         targets = self._state_buffers()
         if set(state.buffers) != set(targets):
-            raise SpectraceError(f"the saved state holds {', '.join(sorted(state.buffers)) or 'nothing'} but this "
-                                 f"render accumulates {', '.join(sorted(targets))}", where=where)
+            raise SpectraceError(
+                f"the saved state holds {', '.join(sorted(state.buffers)) or 'nothing'} but this "
+                f"render accumulates {', '.join(sorted(targets))}",
+                where=where,
+            )
         for name, array in state.buffers.items():
             dtype = STATE_LAYOUT[name][0]
             if array.dtype != dtype or array.nbytes != targets[name].size:
-                raise SpectraceError(f"saved {name} is {array.dtype} x {array.size}, this render needs "
-                                     f"{np.dtype(dtype)} of {targets[name].size} bytes", where=where)
+                raise SpectraceError(
+                    f"saved {name} is {array.dtype} x {array.size}, this render needs "
+                    f"{np.dtype(dtype)} of {targets[name].size} bytes",
+                    where=where,
+                )
         if not 0 <= state.samples_done <= limits.MAX_SPP:
             raise SpectraceError(f"saved sample count {state.samples_done} is out of range", where=where)
         queue = self.device.queue

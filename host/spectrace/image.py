@@ -50,9 +50,12 @@ class Image:
         extras = [f"spectral_bins={len(self.spectral.edges_nm) - 1}"] if self.spectral is not None else []
         extras += [f"dropped_samples={self.dropped_samples}"] if self.dropped_samples else []
         extras += [f"exposure={self.exposure:g}"] if self.exposure else []
-        return (f"Image({self.width}x{self.height}, spp={self.spp}, seed={self.seed}, device={self.device!r}, "
-                f"render_seconds={self.render_seconds:.3g}, colour_space={str(self.colour_space)!r}"
-                + "".join(f", {extra}" for extra in extras) + ")")
+        return (
+            f"Image({self.width}x{self.height}, spp={self.spp}, seed={self.seed}, device={self.device!r}, "
+            f"render_seconds={self.render_seconds:.3g}, colour_space={str(self.colour_space)!r}"
+            + "".join(f", {extra}" for extra in extras)
+            + ")"
+        )
 
     @property
     def width(self) -> int:
@@ -102,8 +105,14 @@ class Image:
         space = ColourSpace(self.colour_space)
         if suffix == ".exr":
             attributes = {} if space is ColourSpace.SRGB else {"chromaticities": exr_chromaticities(space)}
-            write_exr(path, self.to_rgb(), self.xyz if include_xyz else None, self.metadata(),
-                      spectral=self.spectral, attributes=attributes)
+            write_exr(
+                path,
+                self.to_rgb(),
+                self.xyz if include_xyz else None,
+                self.metadata(),
+                spectral=self.spectral,
+                attributes=attributes,
+            )
         elif suffix == ".png":
             chunks = {} if space is ColourSpace.SRGB else {b"cICP": png_cicp(space)}
             write_png(path, self.to_display(), self.metadata(), chunks=chunks)

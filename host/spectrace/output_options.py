@@ -4,9 +4,10 @@ at once rather than after a long render."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Literal
+from typing import Literal
 
 from spectrace.colour_output import ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.errors import SpectraceError
@@ -24,22 +25,32 @@ class RenderOutputOptions:
     false_colour_scale: FalseColourScale = "log"
 
     @classmethod
-    def parse(cls, output: Path, colour_space: str = "srgb", white_balance: str | None = None,
-              adaptation: str = "bradford", false_colour: Path | None = None,
-              false_colour_scale: str = "log") -> RenderOutputOptions:
+    def parse(
+        cls,
+        output: Path,
+        colour_space: str = "srgb",
+        white_balance: str | None = None,
+        adaptation: str = "bradford",
+        false_colour: Path | None = None,
+        false_colour_scale: str = "log",
+    ) -> RenderOutputOptions:
         space = parse_colour_space(colour_space)
         if space is ColourSpace.XYZ and output.suffix.lower() == ".png":
-            raise SpectraceError("XYZ output needs an .exr file (PNG holds display-encoded RGB)",
-                                 where="--colour-space")
+            raise SpectraceError(
+                "XYZ output needs an .exr file (PNG holds display-encoded RGB)", where="--colour-space"
+            )
         balance = parse_white_balance(white_balance, adaptation) if white_balance else None
         if not white_balance and adaptation.strip().lower() != "bradford":
             parse_white_balance("D65", adaptation)  # reports an unknown --adaptation even without --white-balance
         if false_colour_scale not in FALSE_COLOUR_SCALES:
-            raise SpectraceError(f"unknown scale '{false_colour_scale}' (use {' or '.join(FALSE_COLOUR_SCALES)})",
-                                 where="--false-color-scale")
+            raise SpectraceError(
+                f"unknown scale '{false_colour_scale}' (use {' or '.join(FALSE_COLOUR_SCALES)})",
+                where="--false-color-scale",
+            )
         if false_colour is not None and false_colour.suffix.lower() not in (".png", ".pdf", ".svg"):
-            raise SpectraceError(f"unknown figure format '{false_colour.suffix}' (use .png, .pdf or .svg)",
-                                 where="--false-color")
+            raise SpectraceError(
+                f"unknown figure format '{false_colour.suffix}' (use .png, .pdf or .svg)", where="--false-color"
+            )
         return cls(space, balance, false_colour, false_colour_scale)
 
     def apply(self, image: Image) -> Image:

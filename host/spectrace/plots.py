@@ -88,27 +88,38 @@ def text_problem(text: str) -> str | None:
     except ValueError as error:
         lines = [line.strip() for line in str(error).splitlines() if line.strip()]
         reason = re.sub(r"Expected \{.*\}, found", "Expected ..., found", lines[-1]) if lines else "math error"
-        return (f"cannot typeset {text!r}: {reason} (text between $ signs is "
-                f"math; write \\$ for a dollar sign)")
+        return f"cannot typeset {text!r}: {reason} (text between $ signs is math; write \\$ for a dollar sign)"
     return None
 
 
-def plot_spectra(spectra: Mapping[str, Spectrum] | Sequence[Spectrum], path: str | Path, normalise: bool = False,
-                 title: str | None = None, y_label: str | None = None) -> Path:
+def plot_spectra(
+    spectra: Mapping[str, Spectrum] | Sequence[Spectrum],
+    path: str | Path,
+    normalise: bool = False,
+    title: str | None = None,
+    y_label: str | None = None,
+) -> Path:
     """Draw spectra (by label, or a list labelled by their names) on one wavelength axis into an image file
     (.png, .pdf, .svg). normalise=True divides each by its peak, to compare shapes of different units."""
     items = list(spectra.items()) if isinstance(spectra, Mapping) else [(s.name, s) for s in spectra]
     if not items:
         raise SpectraceError("no spectra to plot")
     pyplot = _pyplot()
-    figure, (axes, strip) = pyplot.subplots(2, 1, figsize=(7.5, 4.8), sharex=True,
-                                            gridspec_kw={"height_ratios": [14, 1], "hspace": 0.06})
+    figure, (axes, strip) = pyplot.subplots(
+        2, 1, figsize=(7.5, 4.8), sharex=True, gridspec_kw={"height_ratios": [14, 1], "hspace": 0.06}
+    )
     for index, (label, spectrum) in enumerate(items):
         values = spectrum.values
         if normalise and values.max() > 0:
             values = values / values.max()
-        axes.plot(GRID_NM, values, color=_line_colour(spectrum), linestyle=_LINE_STYLES[index % len(_LINE_STYLES)],
-                  linewidth=1.6, label=label)
+        axes.plot(
+            GRID_NM,
+            values,
+            color=_line_colour(spectrum),
+            linestyle=_LINE_STYLES[index % len(_LINE_STYLES)],
+            linewidth=1.6,
+            label=label,
+        )
     axes.set_xlim(GRID_NM[0], GRID_NM[-1])
     axes.set_ylim(bottom=0)
     axes.set_ylabel(y_label or ("value / peak" if normalise else "value (in the spectrum's own unit)"))
@@ -159,9 +170,13 @@ def false_colour(values: np.ndarray, limits: tuple[float, float], scale: Scale =
     return rgba
 
 
-def plot_false_colour_luminance(xyz_film: np.ndarray, path: str | Path, scale: Scale = "log",
-                                limits_cd_m2: tuple[float, float] | None = None, title: str | None = None
-                                ) -> tuple[float, float]:
+def plot_false_colour_luminance(
+    xyz_film: np.ndarray,
+    path: str | Path,
+    scale: Scale = "log",
+    limits_cd_m2: tuple[float, float] | None = None,
+    title: str | None = None,
+) -> tuple[float, float]:
     """Write a false-colour map of the luminance (cd/m²) of film XYZ, one cell per pixel, with a scale bar in
     cd/m², to an image file; returns the (low, high) range of the scale."""
     if scale not in ("log", "linear"):
@@ -179,9 +194,10 @@ def plot_false_colour_luminance(xyz_film: np.ndarray, path: str | Path, scale: S
     figure, axes = pyplot.subplots(figsize=(max(width * inches, 3.0) + 1.8, max(height * inches, 3.0) + 0.8))
     axes.imshow(false_colour(luminance, limits, scale), interpolation="nearest")
     axes.set_axis_off()
-    norm = (matplotlib.colors.LogNorm(low, high) if scale == "log" else matplotlib.colors.Normalize(low, high))
-    bar = figure.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=FALSE_COLOUR_MAP), ax=axes, fraction=0.046,
-                          pad=0.04, extend="both")
+    norm = matplotlib.colors.LogNorm(low, high) if scale == "log" else matplotlib.colors.Normalize(low, high)
+    bar = figure.colorbar(
+        matplotlib.cm.ScalarMappable(norm=norm, cmap=FALSE_COLOUR_MAP), ax=axes, fraction=0.046, pad=0.04, extend="both"
+    )
     bar.set_label("luminance (cd/m²)")
     axes.set_title(title or f"luminance, {scale} scale; mean {np.nanmean(luminance):.4g} cd/m²", fontsize=9)
     _save(figure, path)

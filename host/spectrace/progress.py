@@ -74,8 +74,13 @@ def progress_bar(total_spp: int, done_spp: int, console: Console | None = None) 
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    with Progress(TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
-                  TimeElapsedColumn(), TimeRemainingColumn(),
-                  console=console or Console(stderr=True, soft_wrap=True, markup=False)) as progress:
+    with Progress(
+        TextColumn("rendering"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total} spp"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=console or Console(stderr=True, soft_wrap=True, markup=False),
+    ) as progress:
         task = progress.add_task("render", total=total_spp, completed=done_spp)
         yield lambda done, total: progress.update(task, completed=done)

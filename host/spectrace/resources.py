@@ -47,5 +47,7 @@ def resolve_scene_path(scene: "str | Path") -> Path:
     bundled = scenes_dir() / name
     if path.suffix.lower() in ("", ".toml") and bundled.is_file():
         return bundled
-    raise SpectraceError(f"no such scene file, and no bundled scene of that name (bundled: "
-                         f"{', '.join(bundled_scene_names())})", where=str(scene))
+    raise SpectraceError(
+        f"no such scene file, and no bundled scene of that name (bundled: {', '.join(bundled_scene_names())})",
+        where=str(scene),
+    )

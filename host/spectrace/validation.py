@@ -13,11 +13,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from spectrace.device import Device, open_device
+from spectrace.engine.meters import FluxMeter, IrradianceMeter, RadianceMeter, measure
+from spectrace.engine.renderer import Renderer
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.engine.meters import FluxMeter, IrradianceMeter, RadianceMeter, measure
-from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import (
@@ -101,26 +101,53 @@ def inverse_square_and_cosine(device: Device) -> list[Check]:
     checks = []
     for r in (0.5, 1.0, 2.0):
         for theta in (0.0, 60.0):
-            reading = measure(_scene(lights=[light]), IrradianceMeter((0.0, 0.0, r), _tilted_normal(theta)),
-                              streams=4, samples_per_item=1, device=device)
+            reading = measure(
+                _scene(lights=[light]),
+                IrradianceMeter((0.0, 0.0, r), _tilted_normal(theta)),
+                streams=4,
+                samples_per_item=1,
+                device=device,
+            )
             analytic = power * np.cos(np.radians(theta)) / (4.0 * np.pi * r * r)
-            checks.append(Check("point light", f"E = Φ cos θ / (4π r²), r = {r} m, θ = {theta:g}°", analytic,
-                                reading.total, reading.total_standard_error, "W/m²"))
+            checks.append(
+                Check(
+                    "point light",
+                    f"E = Φ cos θ / (4π r²), r = {r} m, θ = {theta:g}°",
+                    analytic,
+                    reading.total,
+                    reading.total_standard_error,
+                    "W/m²",
+                )
+            )
     return checks
 
 
 def spot_light_cone(device: Device) -> list[Check]:
     intensity = 2.0  # W/(sr nm)
-    spot = SpotLight((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), Spectrum.constant(intensity), cutoff_degrees=30.0,
-                     falloff_start_degrees=20.0)
+    spot = SpotLight(
+        (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), Spectrum.constant(intensity), cutoff_degrees=30.0, falloff_start_degrees=20.0
+    )
     checks = []
     for angle, falloff in ((0.0, 1.0), (15.0, 1.0), (35.0, 0.0)):
         direction = np.array([np.sin(np.radians(angle)), 0.0, np.cos(np.radians(angle))])
-        reading = measure(_scene(lights=[spot]), IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
-                          wavelengths_nm=[550.0], streams=4, samples_per_item=1, device=device)
-        checks.append(Check("spot light", f"E = I·falloff / r² at {angle:g}° off axis (cutoff 30°)",
-                            intensity * falloff / 4.0, reading.spectral[0], reading.spectral_standard_error[0],
-                            "W/(m² nm)"))
+        reading = measure(
+            _scene(lights=[spot]),
+            IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
+            wavelengths_nm=[550.0],
+            streams=4,
+            samples_per_item=1,
+            device=device,
+        )
+        checks.append(
+            Check(
+                "spot light",
+                f"E = I·falloff / r² at {angle:g}° off axis (cutoff 30°)",
+                intensity * falloff / 4.0,
+                reading.spectral[0],
+                reading.spectral_standard_error[0],
+                "W/(m² nm)",
+            )
+        )
     return checks
 
 
@@ -129,21 +156,43 @@ def distant_light_cosine(device: Device) -> list[Check]:
     light = DistantLight((0.0, 0.0, 1.0), Spectrum.constant(irradiance))
     checks = []
     for theta in (0.0, 45.0, 80.0):
-        reading = measure(_scene(lights=[light]), IrradianceMeter((0.0, 0.0, 0.0), _tilted_normal(theta)),
-                          wavelengths_nm=[550.0], streams=4, samples_per_item=1, device=device)
-        checks.append(Check("distant light", f"E = E⊥ cos θ, θ = {theta:g}°", irradiance * np.cos(np.radians(theta)),
-                            reading.spectral[0], reading.spectral_standard_error[0], "W/(m² nm)"))
+        reading = measure(
+            _scene(lights=[light]),
+            IrradianceMeter((0.0, 0.0, 0.0), _tilted_normal(theta)),
+            wavelengths_nm=[550.0],
+            streams=4,
+            samples_per_item=1,
+            device=device,
+        )
+        checks.append(
+            Check(
+                "distant light",
+                f"E = E⊥ cos θ, θ = {theta:g}°",
+                irradiance * np.cos(np.radians(theta)),
+                reading.spectral[0],
+                reading.spectral_standard_error[0],
+                "W/(m² nm)",
+            )
+        )
     return checks
 
 
 def constant_environment(device: Device) -> list[Check]:
     k = 0.5
-    reading = measure(_scene(lights=[ConstantEnvironment(Spectrum.constant(k))]),
-                      IrradianceMeter((0.0, 0.0, 0.0), (0.3, -0.2, 0.9)), wavelengths_nm=[450.0, 550.0, 650.0],
-                      streams=64, samples_per_item=32, device=device)
-    return [Check("environment", f"E = k π for constant radiance k = {k}, λ = {lam:g} nm", k * np.pi, value, se,
-                  "W/(m² nm)")
-            for lam, value, se in zip(reading.wavelengths_nm, reading.spectral, reading.spectral_standard_error)]
+    reading = measure(
+        _scene(lights=[ConstantEnvironment(Spectrum.constant(k))]),
+        IrradianceMeter((0.0, 0.0, 0.0), (0.3, -0.2, 0.9)),
+        wavelengths_nm=[450.0, 550.0, 650.0],
+        streams=64,
+        samples_per_item=32,
+        device=device,
+    )
+    return [
+        Check(
+            "environment", f"E = k π for constant radiance k = {k}, λ = {lam:g} nm", k * np.pi, value, se, "W/(m² nm)"
+        )
+        for lam, value, se in zip(reading.wavelengths_nm, reading.spectral, reading.spectral_standard_error)
+    ]
 
 
 def white_furnace(device: Device) -> list[Check]:
@@ -152,16 +201,33 @@ def white_furnace(device: Device) -> list[Check]:
     for albedo in (1.0, 0.5):
         sphere = Shape(mesh=primitives.sphere(3), material=DiffuseMaterial(Spectrum.constant(albedo)))
         scene = _scene(shapes=[sphere], lights=[ConstantEnvironment(Spectrum.constant(k))])
-        reading = measure(scene, RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)), wavelengths_nm=[550.0],
-                          streams=64, samples_per_item=64, device=device)
+        reading = measure(
+            scene,
+            RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)),
+            wavelengths_nm=[550.0],
+            streams=64,
+            samples_per_item=64,
+            device=device,
+        )
         value, se = reading.spectral[0], reading.spectral_standard_error[0]
         if albedo == 1.0:
-            checks.append(Check("white furnace", "albedo-1 diffuse sphere in radiance k renders as k", k, value, se,
-                                "W/(m² sr nm)"))
+            checks.append(
+                Check(
+                    "white furnace", "albedo-1 diffuse sphere in radiance k renders as k", k, value, se, "W/(m² sr nm)"
+                )
+            )
         else:
             # A closed convex body sees no other surface: L = albedo·k exactly.
-            checks.append(Check("furnace, absorbing", f"albedo-{albedo} convex sphere renders as albedo·k < k",
-                                albedo * k, value, se, "W/(m² sr nm)"))
+            checks.append(
+                Check(
+                    "furnace, absorbing",
+                    f"albedo-{albedo} convex sphere renders as albedo·k < k",
+                    albedo * k,
+                    value,
+                    se,
+                    "W/(m² sr nm)",
+                )
+            )
     return checks
 
 
@@ -175,9 +241,12 @@ def bsdf_furnace(device: Device) -> list[Check]:
     k = 1.0
     white = Spectrum.constant(1.0)
     sf11 = glass("SF11").index_of_refraction()
-    lossless: dict[str, Material] = {"mirror R = 1": MirrorMaterial(white), "smooth plastic ρ = 1": PlasticMaterial(white, ior=1.5),
-                "smooth glass n = 1.5": DielectricMaterial(IndexOfRefraction.constant(1.5)),
-                "smooth SF11 glass (dispersive)": DielectricMaterial(sf11)}
+    lossless: dict[str, Material] = {
+        "mirror R = 1": MirrorMaterial(white),
+        "smooth plastic ρ = 1": PlasticMaterial(white, ior=1.5),
+        "smooth glass n = 1.5": DielectricMaterial(IndexOfRefraction.constant(1.5)),
+        "smooth SF11 glass (dispersive)": DielectricMaterial(sf11),
+    }
     gold, silver = metal_ior("Au"), metal_ior("Ag")
     absorbing: dict[str, Material] = {
         "rough plastic ρ = 1, α = 0.3": PlasticMaterial(white, ior=1.5, roughness=0.3),
@@ -196,14 +265,22 @@ def bsdf_furnace(device: Device) -> list[Check]:
             # would gain 1/0.95 a bounce, a heavy tail the standard error cannot see; without it each path
             # through clear glass carries exactly k.
             scene = _scene(shapes=[sphere], lights=[ConstantEnvironment(Spectrum.constant(k))]).with_overrides(
-                rr_depth=2000)
+                rr_depth=2000
+            )
             for view, (origin, direction) in views.items():
-                reading = measure(scene, RadianceMeter(origin, direction), wavelengths_nm=[550.0], streams=64,
-                                  samples_per_item=64, device=device)
+                reading = measure(
+                    scene,
+                    RadianceMeter(origin, direction),
+                    wavelengths_nm=[550.0],
+                    streams=64,
+                    samples_per_item=64,
+                    device=device,
+                )
                 value, se = reading.spectral[0], reading.spectral_standard_error[0]
                 if lossy:
-                    checks.append(Check("BSDF furnace", f"{name}: L ≤ k ({view})", k, value, se, "W/(m² sr nm)",
-                                        at_most=True))
+                    checks.append(
+                        Check("BSDF furnace", f"{name}: L ≤ k ({view})", k, value, se, "W/(m² sr nm)", at_most=True)
+                    )
                 else:
                     checks.append(Check("BSDF furnace", f"{name}: L = k ({view})", k, value, se, "W/(m² sr nm)"))
     return checks
@@ -225,34 +302,72 @@ def conductor_fresnel(device: Device) -> list[Check]:
         # The meter looks down at the plate (z = 0, facing +z) from the side the reflected ray leaves toward.
         direction = (np.sin(t), 0.0, -np.cos(t))
         origin = tuple(-2.0 * np.asarray(direction))
-        reading = measure(scene, RadianceMeter(origin, direction), wavelengths_nm=wavelengths, streams=4,
-                          samples_per_item=4, device=device)
+        reading = measure(
+            scene,
+            RadianceMeter(origin, direction),
+            wavelengths_nm=wavelengths,
+            streams=4,
+            samples_per_item=4,
+            device=device,
+        )
         cos_t = np.sqrt(1.0 - (np.sin(t) / n) ** 2)
         r_s = (np.cos(t) - n * cos_t) / (np.cos(t) + n * cos_t)
         r_p = (n * np.cos(t) - cos_t) / (n * np.cos(t) + cos_t)
         fresnel = 0.5 * (np.abs(r_s) ** 2 + np.abs(r_p) ** 2)
         for lam, expected, value, se in zip(wavelengths, fresnel, reading.spectral, reading.spectral_standard_error):
-            checks.append(Check("conductor Fresnel", f"gold at θ = {theta:g}°, λ = {lam:g} nm: L = F k", k_env * expected,
-                                value, se, "W/(m² sr nm)"))
+            checks.append(
+                Check(
+                    "conductor Fresnel",
+                    f"gold at θ = {theta:g}°, λ = {lam:g} nm: L = F k",
+                    k_env * expected,
+                    value,
+                    se,
+                    "W/(m² sr nm)",
+                )
+            )
     return checks
 
 
 def flux_meters(device: Device) -> list[Check]:
     power = 10.0
     point = PointLight((0.1, -0.05, 0.2), _equal_energy_flux(power) * (1.0 / (4.0 * np.pi)))
-    reading = measure(_scene(lights=[point]), FluxMeter((0.0, 0.0, 0.0), 1.0), streams=32, samples_per_item=32,
-                      device=device)
-    checks = [Check("flux meter", "integrating sphere around a point light of Φ W reads Φ", power, reading.total,
-                    reading.total_standard_error, "W")]
+    reading = measure(
+        _scene(lights=[point]), FluxMeter((0.0, 0.0, 0.0), 1.0), streams=32, samples_per_item=32, device=device
+    )
+    checks = [
+        Check(
+            "flux meter",
+            "integrating sphere around a point light of Φ W reads Φ",
+            power,
+            reading.total,
+            reading.total_standard_error,
+            "W",
+        )
+    ]
     radiance, half_size = 2.0, 0.2
     panel = apply_transform(primitives.rectangle(), transform_matrix([{"scale": half_size}], where="validation"))
     area = (2 * half_size) ** 2
-    lamp = Shape(mesh=panel, material=DiffuseMaterial(Spectrum.zeros()),
-                 emitter=AreaEmitter(Spectrum.constant(radiance)))
-    reading = measure(_scene(shapes=[lamp]), FluxMeter((0.0, 0.0, 0.0), 1.0), wavelengths_nm=[550.0], streams=128,
-                      samples_per_item=256, device=device)
-    checks.append(Check("flux meter", f"one-sided Lambertian area light: Φ = π L A (A = {area:g} m²)",
-                        np.pi * radiance * area, reading.spectral[0], reading.spectral_standard_error[0], "W/nm"))
+    lamp = Shape(
+        mesh=panel, material=DiffuseMaterial(Spectrum.zeros()), emitter=AreaEmitter(Spectrum.constant(radiance))
+    )
+    reading = measure(
+        _scene(shapes=[lamp]),
+        FluxMeter((0.0, 0.0, 0.0), 1.0),
+        wavelengths_nm=[550.0],
+        streams=128,
+        samples_per_item=256,
+        device=device,
+    )
+    checks.append(
+        Check(
+            "flux meter",
+            f"one-sided Lambertian area light: Φ = π L A (A = {area:g} m²)",
+            np.pi * radiance * area,
+            reading.spectral[0],
+            reading.spectral_standard_error[0],
+            "W/nm",
+        )
+    )
     return checks
 
 
@@ -260,34 +375,61 @@ def neutral_white(device: Device) -> list[Check]:
     white = uplift_reflectance((1.0, 1.0, 1.0))[0]
     plane = Shape(mesh=primitives.rectangle(), material=DiffuseMaterial(white))
     scene = _scene(shapes=[plane], lights=[DistantLight((0.0, 0.0, -1.0), d65_normalised())], max_depth=2)
-    reading = measure(scene, RadianceMeter((0.1, 0.0, 1.0), (-0.1, 0.0, -1.0)), streams=4, samples_per_item=4,
-                      wavelengths_nm=np.arange(360.0, 831.0, 1.0), device=device)
+    reading = measure(
+        scene,
+        RadianceMeter((0.1, 0.0, 1.0), (-0.1, 0.0, -1.0)),
+        streams=4,
+        samples_per_item=4,
+        wavelengths_nm=np.arange(360.0, 831.0, 1.0),
+        device=device,
+    )
     x, y = xyz_to_xy(reading.xyz)
     # CIE 15:2004 D65 chromaticity for the 1931 2° observer, published to 5 decimals: the allowance of 1.25e-4 per
     # "standard error" (5e-4 at 4σ) covers that rounding and the 1 nm quadrature; a tint (pbrt-v4#54) is ~1e-2.
     allowance = 1.25e-4
-    return [Check("colour", "RGB (1,1,1) reflectance under D65 is neutral: x = x_D65", 0.31272, x, allowance,
-                  "chromaticity"),
-            Check("colour", "RGB (1,1,1) reflectance under D65 is neutral: y = y_D65", 0.32903, y, allowance,
-                  "chromaticity")]
+    return [
+        Check(
+            "colour", "RGB (1,1,1) reflectance under D65 is neutral: x = x_D65", 0.31272, x, allowance, "chromaticity"
+        ),
+        Check(
+            "colour", "RGB (1,1,1) reflectance under D65 is neutral: y = y_D65", 0.32903, y, allowance, "chromaticity"
+        ),
+    ]
 
 
 def local_versus_global(device: Device) -> list[Check]:
     """On the Cornell box (diffuse only), `direct` equals `path` at max_depth 2; the global model adds the rest."""
     base = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=32, height=32, spp=128)
+
     def mean_y(scene: Scene) -> tuple[float, float, np.ndarray]:
         y = Renderer(scene, device).render().xyz[..., 1].astype(np.float64)
         return float(y.mean()), float(y.std(ddof=1) / np.sqrt(y.size)), y
+
     direct_mean, _, direct_y = mean_y(base.with_overrides(integrator="direct", max_depth=2, seed=1))
     path2_mean, _, path2_y = mean_y(base.with_overrides(integrator="path", max_depth=2, seed=2))
     global_mean, _, _ = mean_y(base.with_overrides(integrator="path", max_depth=-1, seed=3))
     difference = (direct_y - path2_y).ravel()
     se = float(difference.std(ddof=1) / np.sqrt(difference.size))
     share = 1.0 - path2_mean / global_mean
-    return [Check("local vs global", "direct (local model) = path at max_depth 2 (mean Y of the Cornell box)",
-                  path2_mean, direct_mean, se, "Y"),
-            Check("local vs global", "share of the Cornell box's light that only the global model carries",
-                  float("nan"), share, 0.0, "fraction", reported_only=True)]
+    return [
+        Check(
+            "local vs global",
+            "direct (local model) = path at max_depth 2 (mean Y of the Cornell box)",
+            path2_mean,
+            direct_mean,
+            se,
+            "Y",
+        ),
+        Check(
+            "local vs global",
+            "share of the Cornell box's light that only the global model carries",
+            float("nan"),
+            share,
+            0.0,
+            "fraction",
+            reported_only=True,
+        ),
+    ]
 
 
 # A scattering coefficient that varies with the wavelength (1/m), so the four wavelengths of a path see different
@@ -324,22 +466,45 @@ def medium_furnace(device: Device) -> list[Check]:
         # Unbounded depth without Russian roulette: the walk ends when it leaves (1024 segments at most, far
         # beyond what an optical radius of 6 needs).
         no_roulette = _scene(shapes=[sphere], lights=[environment]).with_overrides(rr_depth=2000)
-        reading = measure(no_roulette,
-                          RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)), wavelengths_nm=[450.0, 650.0],
-                          streams=64, samples_per_item=64, device=device)
+        reading = measure(
+            no_roulette,
+            RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)),
+            wavelengths_nm=[450.0, 650.0],
+            streams=64,
+            samples_per_item=64,
+            device=device,
+        )
         for lam, value, se in zip(reading.wavelengths_nm, reading.spectral, reading.spectral_standard_error):
-            checks.append(Check("medium furnace", f"albedo-1 medium sphere renders as k: σs(λ) = "
-                                f"{mean_sigma_s * (1.25 + 0.75 * np.sin((lam - 360.0) / 45.0)):.3g}/m, g = {g:g}, "
-                                f"λ = {lam:g} nm", k, value, se, "W/(m² sr nm)"))
+            checks.append(
+                Check(
+                    "medium furnace",
+                    f"albedo-1 medium sphere renders as k: σs(λ) = "
+                    f"{mean_sigma_s * (1.25 + 0.75 * np.sin((lam - 360.0) / 45.0)):.3g}/m, g = {g:g}, "
+                    f"λ = {lam:g} nm",
+                    k,
+                    value,
+                    se,
+                    "W/(m² sr nm)",
+                )
+            )
     # An image samples four different wavelengths per path, so each free flight serves four σt at once.
     medium = Medium(sigma_a=Spectrum.zeros(), sigma_s=_wavy_coefficient(1.0), g=0.3)
     sphere = Shape(mesh=primitives.sphere(3), material=None, interior=medium)
     camera = Camera(origin=(0.0, 0.0, -3.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0)
-    scene = Scene(camera=camera, width=16, height=16, shapes=[sphere], lights=[environment], max_depth=-1, spp=16,
-                  seed=5)
+    scene = Scene(
+        camera=camera, width=16, height=16, shapes=[sphere], lights=[environment], max_depth=-1, spp=16, seed=5
+    )
     mean, se = _mean_y(scene, device)
-    checks.append(Check("medium furnace", "the same in an image: 4 wavelengths per path share each free flight "
-                        "(film Y = k)", k, mean, se, "Y"))
+    checks.append(
+        Check(
+            "medium furnace",
+            "the same in an image: 4 wavelengths per path share each free flight (film Y = k)",
+            k,
+            mean,
+            se,
+            "Y",
+        )
+    )
     return checks
 
 
@@ -349,42 +514,87 @@ def beer_lambert(device: Device) -> list[Check]:
     (max_depth 1), which the distance sampling must reproduce."""
     k, thickness = 1.0, 0.5
     environment = ConstantEnvironment(Spectrum.constant(k))
-    slab = apply_transform(primitives.cube(), transform_matrix([{"scale": [3.0, 3.0, thickness / 2]}],
-                                                               where="validation"))
+    slab = apply_transform(
+        primitives.cube(), transform_matrix([{"scale": [3.0, 3.0, thickness / 2]}], where="validation")
+    )
     wavelengths = np.array([450.0, 550.0, 650.0])
     meter = RadianceMeter((0.1, -0.2, -3.0), (0.0, 0.0, 1.0))
     checks = []
     sigma_a = _wavy_coefficient(1.5)
     for max_depth in (1, -1):
         absorber = Shape(mesh=slab, material=None, interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()))
-        reading = measure(_scene(shapes=[absorber], lights=[environment], max_depth=max_depth), meter,
-                          wavelengths_nm=wavelengths, streams=4, samples_per_item=1, device=device)
-        for lam, value, se, sa in zip(wavelengths, reading.spectral, reading.spectral_standard_error,
-                                      sigma_a.evaluate(wavelengths)):
-            checks.append(Check("Beer-Lambert", f"absorbing slab: L = k exp(−σa d), σa = {sa:.3g}/m, d = "
-                                f"{thickness} m, λ = {lam:g} nm, max_depth {max_depth}", k * np.exp(-sa * thickness),
-                                value, se, "W/(m² sr nm)"))
+        reading = measure(
+            _scene(shapes=[absorber], lights=[environment], max_depth=max_depth),
+            meter,
+            wavelengths_nm=wavelengths,
+            streams=4,
+            samples_per_item=1,
+            device=device,
+        )
+        for lam, value, se, sa in zip(
+            wavelengths, reading.spectral, reading.spectral_standard_error, sigma_a.evaluate(wavelengths)
+        ):
+            checks.append(
+                Check(
+                    "Beer-Lambert",
+                    f"absorbing slab: L = k exp(−σa d), σa = {sa:.3g}/m, d = "
+                    f"{thickness} m, λ = {lam:g} nm, max_depth {max_depth}",
+                    k * np.exp(-sa * thickness),
+                    value,
+                    se,
+                    "W/(m² sr nm)",
+                )
+            )
     sigma_s = _wavy_coefficient(1.0)
     medium = Medium(sigma_a=sigma_a * 0.5, sigma_s=sigma_s, g=0.5)
     scatterer = Shape(mesh=slab, material=None, interior=medium)
-    reading = measure(_scene(shapes=[scatterer], lights=[environment], max_depth=1), meter,
-                      wavelengths_nm=wavelengths, streams=128, samples_per_item=128, device=device)
+    reading = measure(
+        _scene(shapes=[scatterer], lights=[environment], max_depth=1),
+        meter,
+        wavelengths_nm=wavelengths,
+        streams=128,
+        samples_per_item=128,
+        device=device,
+    )
     sigma_t = 0.5 * sigma_a.evaluate(wavelengths) + sigma_s.evaluate(wavelengths)
     for lam, value, se, st in zip(wavelengths, reading.spectral, reading.spectral_standard_error, sigma_t):
-        checks.append(Check("Beer-Lambert", f"scattering slab, unscattered part (max_depth 1): L = k exp(−σt d), "
-                            f"σt = {st:.3g}/m, λ = {lam:g} nm", k * np.exp(-st * thickness), value, se,
-                            "W/(m² sr nm)"))
+        checks.append(
+            Check(
+                "Beer-Lambert",
+                f"scattering slab, unscattered part (max_depth 1): L = k exp(−σt d), σt = {st:.3g}/m, λ = {lam:g} nm",
+                k * np.exp(-st * thickness),
+                value,
+                se,
+                "W/(m² sr nm)",
+            )
+        )
     # In images (4 wavelengths per path), the global and the local model: film Y of k exp(−σa(λ) d). The narrow
     # field of view keeps every pixel's path through the slab within 1e-4 of d.
     camera = Camera(origin=(0.0, 0.0, -3.0), target=(0.0, 0.0, 0.0), fov_degrees=1.0)
     absorber = Shape(mesh=slab, material=None, interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()))
     expected = _film_y(k * np.exp(-sigma_a.values * thickness))
     for integrator in ("path", "direct"):
-        scene = Scene(camera=camera, width=16, height=16, shapes=[absorber], lights=[environment], spp=4, seed=7,
-                      integrator=integrator)
+        scene = Scene(
+            camera=camera,
+            width=16,
+            height=16,
+            shapes=[absorber],
+            lights=[environment],
+            spp=4,
+            seed=7,
+            integrator=integrator,
+        )
         mean, se = _mean_y(scene, device)
-        checks.append(Check("Beer-Lambert", f"absorbing slab in an image ({integrator}): film Y of k exp(−σa(λ) d)",
-                            expected, mean, se, "Y"))
+        checks.append(
+            Check(
+                "Beer-Lambert",
+                f"absorbing slab in an image ({integrator}): film Y of k exp(−σa(λ) d)",
+                expected,
+                mean,
+                se,
+                "Y",
+            )
+        )
     return checks
 
 
@@ -415,8 +625,12 @@ def prism_window_centre_degrees(n: float, incidence_degrees: float, source_radiu
     edge rays arrive at incidence θ1 ± ρ and leave turned by δ(θ1 ± ρ) ∓ ρ from the central ray's direction. It
     tends to δ(θ1) as ρ → 0; for ρ = 0.005 rad it differs by δ''ρ²/2, about 0.004° here."""
     rho = source_radius_degrees
-    return 0.5 * (prism_deviation_degrees(n, incidence_degrees + rho) - rho
-                  + prism_deviation_degrees(n, incidence_degrees - rho) + rho)
+    return 0.5 * (
+        prism_deviation_degrees(n, incidence_degrees + rho)
+        - rho
+        + prism_deviation_degrees(n, incidence_degrees - rho)
+        + rho
+    )
 
 
 def _rotated(vector: np.ndarray, degrees: float) -> np.ndarray:
@@ -451,8 +665,11 @@ def prism_dispersion(device: Device) -> list[Check]:
     exit_point = np.array([0.5, 0.5 / np.sqrt(3.0), 0.0])
     # The beam travels at θ1 from the left face's inward normal, turned toward the apex.
     beam = _rotated(-outward_left, PRISM_INCIDENCE_DEGREES)
-    source = Shape(mesh=_facing_square(entry - _SOURCE_DISTANCE * beam, beam, _SOURCE_HALF_WIDTH),
-                   material=DiffuseMaterial(Spectrum.zeros()), emitter=AreaEmitter(Spectrum.constant(1.0)))
+    source = Shape(
+        mesh=_facing_square(entry - _SOURCE_DISTANCE * beam, beam, _SOURCE_HALF_WIDTH),
+        material=DiffuseMaterial(Spectrum.zeros()),
+        emitter=AreaEmitter(Spectrum.constant(1.0)),
+    )
     prism = Shape(mesh=primitives.prism(), material=DielectricMaterial(g.index_of_refraction()))
     scene = _scene(shapes=[prism, source])
     source_radius = float(np.degrees(np.arctan(_SOURCE_HALF_WIDTH / _SOURCE_DISTANCE)))
@@ -460,8 +677,15 @@ def prism_dispersion(device: Device) -> list[Check]:
     def sees_source(deviation_degrees: float, wavelengths: list[float]) -> np.ndarray:
         leaving = _rotated(beam, -deviation_degrees)  # deviation turns the beam clockwise, toward the base
         assert np.dot(leaving, outward_right) > 0
-        reading = measure(scene, RadianceMeter(tuple(exit_point + 0.5 * leaving), tuple(-leaving)),
-                          wavelengths_nm=wavelengths, streams=2, samples_per_item=8, seed=5, device=device)
+        reading = measure(
+            scene,
+            RadianceMeter(tuple(exit_point + 0.5 * leaving), tuple(-leaving)),
+            wavelengths_nm=wavelengths,
+            streams=2,
+            samples_per_item=8,
+            seed=5,
+            device=device,
+        )
         return reading.spectral > _HIT_RADIANCE
 
     def edge(inside: float, outside: float, wavelength: float) -> float:
@@ -491,14 +715,32 @@ def prism_dispersion(device: Device) -> list[Check]:
             value = 0.5 * (low + high)
         measured[wavelength] = value
         n = float(g.ior(wavelength))
-        checks.append(Check("dispersion", f"{PRISM_GLASS} prism, incidence {PRISM_INCIDENCE_DEGREES:g}°, {wavelength:g} "
-                            f"nm (n = {n:.5f}): deviation by Snell's law at both faces, δ = "
-                            f"{prism_deviation_degrees(n, PRISM_INCIDENCE_DEGREES):.4f}°, seen as the centre of the "
-                            "source's window", analytic, value, allowance / SIGMAS, "degrees"))
-    spread = (prism_window_centre_degrees(float(g.ior(450.0)), PRISM_INCIDENCE_DEGREES, source_radius)
-              - prism_window_centre_degrees(float(g.ior(650.0)), PRISM_INCIDENCE_DEGREES, source_radius))
-    checks.append(Check("dispersion", "angular spread of 450 nm and 650 nm light", spread,
-                        measured[450.0] - measured[650.0], 2 * allowance / SIGMAS, "degrees"))
+        checks.append(
+            Check(
+                "dispersion",
+                f"{PRISM_GLASS} prism, incidence {PRISM_INCIDENCE_DEGREES:g}°, {wavelength:g} "
+                f"nm (n = {n:.5f}): deviation by Snell's law at both faces, δ = "
+                f"{prism_deviation_degrees(n, PRISM_INCIDENCE_DEGREES):.4f}°, seen as the centre of the "
+                "source's window",
+                analytic,
+                value,
+                allowance / SIGMAS,
+                "degrees",
+            )
+        )
+    spread = prism_window_centre_degrees(
+        float(g.ior(450.0)), PRISM_INCIDENCE_DEGREES, source_radius
+    ) - prism_window_centre_degrees(float(g.ior(650.0)), PRISM_INCIDENCE_DEGREES, source_radius)
+    checks.append(
+        Check(
+            "dispersion",
+            "angular spread of 450 nm and 650 nm light",
+            spread,
+            measured[450.0] - measured[650.0],
+            2 * allowance / SIGMAS,
+            "degrees",
+        )
+    )
     return checks
 
 

@@ -13,8 +13,13 @@ pytestmark = pytest.mark.subprocess
 
 
 def _bench(mode: str, *args) -> dict:
-    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", mode, "--json", *args], capture_output=True,
-                            text=True, env=os.environ.copy(), timeout=600)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "bench", mode, "--json", *args],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=600,
+    )
     assert result.returncode == 0, result.stderr
     return json.loads(result.stdout)
 
@@ -22,9 +27,11 @@ def _bench(mode: str, *args) -> dict:
 @pytest.fixture(scope="module")
 def modes() -> dict:
     """The scaling, rays and quality modes, each its own run: the checks below read their parts."""
-    return {**_bench("scaling", "--size", "8", "--spp", "1", "--triangles", "100"),
-            **_bench("rays", "--triangles", "100", "--ray-count", "3000"),
-            **_bench("quality", "--size", "8", "--seconds", "0.05")}
+    return {
+        **_bench("scaling", "--size", "8", "--spp", "1", "--triangles", "100"),
+        **_bench("rays", "--triangles", "100", "--ray-count", "3000"),
+        **_bench("quality", "--size", "8", "--seconds", "0.05"),
+    }
 
 
 def _llvm_variant_or_skip() -> None:
@@ -111,8 +118,7 @@ def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it
     """Mitsuba's multi-jittered sampler rounds 5 spp up to 6 and logs a warning: the warning must not reach stdout
     (one JSON object there), and Mitsuba's samples/s must count the 6 samples it rendered."""
     pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
-    out = _bench("peer", "--size", "8", "--spp", "5", "--max-depth", "2", "--peer-sampler",
-                 "multijitter")
+    out = _bench("peer", "--size", "8", "--spp", "5", "--max-depth", "2", "--peer-sampler", "multijitter")
     peer = out["peer"]
     assert [row["spp"] for row in peer["spectrace"]] == [5]
     assert peer["mitsuba"] and all(row["spp"] == 6 for row in peer["mitsuba"])
@@ -133,14 +139,22 @@ def test_peer_uses_mitsubas_llvm_variant_where_a_libllvm_works():
         assert pair["agrees"], pair
 
 
-@pytest.mark.parametrize("argv, says", [
-    (["--peer", "mitsuba"], "error: No such option: --peer"),  # the modes were flags once
-    (["--quality"], "error: No such option: --quality"),
-    (["--size", "8", "rays"], "error: --size: belongs to the plain render bench"),  # read by nothing: refused
-    (["rays", "--size", "8"], "error: No such option: --size"),  # each mode takes only its own options
-])
+@pytest.mark.parametrize(
+    "argv, says",
+    [
+        (["--peer", "mitsuba"], "error: No such option: --peer"),  # the modes were flags once
+        (["--quality"], "error: No such option: --quality"),
+        (["--size", "8", "rays"], "error: --size: belongs to the plain render bench"),  # read by nothing: refused
+        (["rays", "--size", "8"], "error: No such option: --size"),  # each mode takes only its own options
+    ],
+)
 def test_options_outside_their_mode_are_one_line_errors(argv, says):
-    result = subprocess.run([sys.executable, "-m", "spectrace", "bench", *argv], capture_output=True, text=True,
-                            env=os.environ.copy(), timeout=600)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "bench", *argv],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=600,
+    )
     assert result.returncode == 2, result.stderr
     assert result.stderr.startswith(says) and result.stderr.count("\n") == 1, result.stderr

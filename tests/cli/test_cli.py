@@ -15,8 +15,9 @@ pytestmark = pytest.mark.subprocess
 
 
 def _run(*args, check=True):
-    result = subprocess.run([sys.executable, "-m", "spectrace", *args], capture_output=True, text=True,
-                            env=os.environ.copy(), timeout=600)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, env=os.environ.copy(), timeout=600
+    )
     if check:
         assert result.returncode == 0, result.stderr
     return result
@@ -24,8 +25,21 @@ def _run(*args, check=True):
 
 def test_render_writes_exr_with_metadata(tmp_path):
     out = tmp_path / "cornell.exr"
-    result = _run("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(out), "--spp", "2",
-                  "--width", "16", "--height", "12", "--seed", "7", "-q")
+    result = _run(
+        "render",
+        str(scenes_dir() / "cornell_box.toml"),
+        "-o",
+        str(out),
+        "--spp",
+        "2",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--seed",
+        "7",
+        "-q",
+    )
     assert "wrote" in result.stderr
     channels, header = read_exr(out)
     assert channels["RGB"].shape == (12, 16, 3)
@@ -39,8 +53,19 @@ def test_render_png(tmp_path):
     from PIL import Image
 
     out = tmp_path / "cornell.png"
-    _run("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(out), "--spp", "1", "--width", "8",
-         "--height", "8", "-q")
+    _run(
+        "render",
+        str(scenes_dir() / "cornell_box.toml"),
+        "-o",
+        str(out),
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-q",
+    )
     with Image.open(out) as image:
         assert image.size == (8, 8) and image.mode == "RGB"
         assert image.text["spectrace:spp"] == "1" and image.text["spectrace:device"]

@@ -26,14 +26,17 @@ def test_every_command_and_parameter_has_help():
     for path, command in ALL_COMMANDS:
         if not (command.help or "").strip():
             missing.append(" ".join(path) or "spectrace")
-        missing += [f"{' '.join(path)} {param.name}" for param in command.params
-                    if not (getattr(param, "help", None) or "").strip()]
+        missing += [
+            f"{' '.join(path)} {param.name}"
+            for param in command.params
+            if not (getattr(param, "help", None) or "").strip()
+        ]
     assert not missing, missing
 
 
 def test_help_of_every_command_prints():
     runner = CliRunner()
-    for path, command in ALL_COMMANDS:
+    for path, _command in ALL_COMMANDS:
         result = runner.invoke(app, [*path, "--help"])
         assert result.exit_code == 0, (path, result.output)
         assert "Usage" in result.output
@@ -41,8 +44,13 @@ def test_help_of_every_command_prints():
 
 @pytest.mark.subprocess
 def test_top_level_help_lists_every_command():
-    result = subprocess.run([sys.executable, "-m", "spectrace", "--help"], capture_output=True, text=True,
-                            env={**os.environ, "COLUMNS": "200"}, timeout=600)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "--help"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "COLUMNS": "200"},
+        timeout=600,
+    )
     assert result.returncode == 0, result.stderr
     for path, _ in ALL_COMMANDS:
         if len(path) == 1:

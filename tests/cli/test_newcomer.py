@@ -19,8 +19,14 @@ PACKAGE = Path(spectrace.__file__).parent
 
 
 def _spectrace(*args, cwd=None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, cwd=cwd,
-                          env=os.environ.copy(), timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "spectrace", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=os.environ.copy(),
+        timeout=300,
+    )
 
 
 def test_every_rich_console_prints_text_as_it_is():
@@ -33,8 +39,11 @@ def test_every_rich_console_prints_text_as_it_is():
                 markup = [k.value for k in node.keywords if k.arg == "markup"]
                 consoles.append((f"{path.relative_to(PACKAGE)}:{node.lineno}", markup))
     assert consoles
-    assert [where for where, markup in consoles
-            if not (len(markup) == 1 and isinstance(markup[0], ast.Constant) and markup[0].value is False)] == []
+    assert [
+        where
+        for where, markup in consoles
+        if not (len(markup) == 1 and isinstance(markup[0], ast.Constant) and markup[0].value is False)
+    ] == []
 
 
 def test_a_note_with_brackets_prints_whole():
@@ -54,8 +63,9 @@ def test_piped_help_names_every_option_whole():
     render = typer.main.get_command(app).commands["render"]
     names = [name for param in render.params for name in (*param.opts, *param.secondary_opts) if name.startswith("-")]
     env = {k: v for k, v in os.environ.items() if k not in ("COLUMNS", "TERMINAL_WIDTH")}
-    result = subprocess.run([sys.executable, "-m", "spectrace", "render", "--help"], capture_output=True, text=True,
-                            env=env, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "render", "--help"], capture_output=True, text=True, env=env, timeout=120
+    )
     assert result.returncode == 0, result.stderr
     assert "…" not in result.stdout
     words = set(result.stdout.replace(",", " ").split())
@@ -94,8 +104,9 @@ def test_a_local_file_comes_before_the_bundled_scene(tmp_path, monkeypatch):
 
 @pytest.mark.subprocess
 def test_render_a_bundled_scene_by_name_from_another_folder(tmp_path):
-    result = _spectrace("render", "cornell_box", "-o", "x.png", "--width", "8", "--height", "8", "--spp", "1",
-                        "-q", cwd=tmp_path)
+    result = _spectrace(
+        "render", "cornell_box", "-o", "x.png", "--width", "8", "--height", "8", "--spp", "1", "-q", cwd=tmp_path
+    )
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "x.png").is_file()
     unknown = _spectrace("render", "no_such_scene", "-o", "x.png", cwd=tmp_path)
@@ -106,8 +117,9 @@ def test_render_a_bundled_scene_by_name_from_another_folder(tmp_path):
 
 
 def test_image_repr_is_short():
-    image = spectrace.Image(xyz=np.zeros((64, 64, 3), np.float32), spp=16, seed=7, device="pocl:cpu:0",
-                            render_seconds=0.25)
+    image = spectrace.Image(
+        xyz=np.zeros((64, 64, 3), np.float32), spp=16, seed=7, device="pocl:cpu:0", render_seconds=0.25
+    )
     text = repr(image)
     assert len(text) < 200
     assert "64x64" in text and "spp=16" in text and "seed=7" in text

@@ -14,16 +14,20 @@ from spectrace.resources import scenes_dir
 
 @pytest.mark.subprocess
 def test_importing_the_command_line_does_not_import_heavy_modules():
-    code = ("import sys, spectrace.cli; "
-            "print(' '.join(m for m in ('colour', 'matplotlib', 'scipy', 'trimesh', 'pyopencl') if m in sys.modules))")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=os.environ.copy(),
-                            timeout=120)
+    code = (
+        "import sys, spectrace.cli; "
+        "print(' '.join(m for m in ('colour', 'matplotlib', 'scipy', 'trimesh', 'pyopencl') if m in sys.modules))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=os.environ.copy(), timeout=120
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == []
 
 
 def test_the_shipped_cmf_table_equals_colour_sciences():
     import colour  # a dependency: missing, the test fails rather than skips
+
     from spectrace.spectral.colorimetry import CIE_1931_CMFS, CIE_1931_OBSERVER
     from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_STEP_NM
 
@@ -35,6 +39,7 @@ def test_the_shipped_cmf_table_equals_colour_sciences():
 @pytest.mark.parametrize("name", sorted(p.name for p in (scenes_dir() / "cornell_box").glob("*.obj")))
 def test_plain_obj_files_read_as_trimesh_reads_them(name):
     import trimesh  # a dependency: missing, the test fails rather than skips
+
     from spectrace.geometry.mesh import _plain_triangle_obj, load_mesh
 
     path = scenes_dir() / "cornell_box" / name
@@ -61,8 +66,13 @@ def test_ctrl_c_during_start_up_is_one_line_and_status_130():
     """SIGINT while the command line's modules import (held there by the test hook) gets the one line that Ctrl-C
     gets later on, not Python's traceback."""
     env = dict(os.environ, SPECTRACE_STARTUP_PAUSE_S="60")
-    process = subprocess.Popen([sys.executable, "-m", "spectrace", "devices"], stderr=subprocess.PIPE,
-                               stdout=subprocess.PIPE, text=True, env=env)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "spectrace", "devices"],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     try:
         assert process.stderr.readline().strip() == "start-up paused"
         process.send_signal(signal.SIGINT)

@@ -101,8 +101,11 @@ def test_platforms_are_deduplicated_and_none_is_lost():
     assert len(identities) == len(set(identities))
     assert len({r.key for r in reports}) == len(reports)
     # Reference: the loader's own listing, which may name one runtime twice.
-    loader_listing = {(p.name.strip(), p.version.strip(), d.name.strip(), d.driver_version.strip())
-                      for p in cl.get_platforms() for d in p.get_devices()}
+    loader_listing = {
+        (p.name.strip(), p.version.strip(), d.name.strip(), d.driver_version.strip())
+        for p in cl.get_platforms()
+        for d in p.get_devices()
+    }
     assert set(identities) == loader_listing
 
 
@@ -131,18 +134,22 @@ def _fresh_python(code: str, tmp_path: Path) -> subprocess.CompletedProcess:
     environment = {k: v for k, v in os.environ.items() if k not in ("LD_LIBRARY_PATH", "OCL_ICD_VENDORS")}
     environment["PYTHONPATH"] = os.pathsep.join([str(HOST_DIR), environment.get("PYTHONPATH", "")])
     environment["SPECTRACE_CACHE_DIR"] = str(tmp_path / "fresh-cache")
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
-                          env=environment, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, env=environment, timeout=120
+    )
 
 
 @pytest.mark.subprocess
 @pytest.mark.skipif(not pip_intel_cpu_libraries(), reason="Intel's CPU runtime is not pip-installed")
 def test_pip_intel_runtime_works_in_a_fresh_process(tmp_path):
-    result = _fresh_python("""
+    result = _fresh_python(
+        """
         import json
         from spectrace.device import discover_devices
         print(json.dumps([[r.key, r.runtime, r.ok, r.reason] for r in discover_devices()]))
-        """, tmp_path)
+        """,
+        tmp_path,
+    )
     assert result.returncode == 0, result.stderr
     reports = json.loads(result.stdout.strip().splitlines()[-1])
     intel = [r for r in reports if r[1] == "Intel CPU runtime (pip)"]
@@ -154,12 +161,15 @@ def test_a_runtime_that_cannot_load_is_listed_with_the_reason(tmp_path):
     vendors = tmp_path / "vendors"
     vendors.mkdir()
     (vendors / "broken.icd").write_text(str(tmp_path / "libbrokenvendor-opencl.so") + "\n")
-    result = _fresh_python(f"""
+    result = _fresh_python(
+        f"""
         import json, os
         os.environ["OCL_ICD_VENDORS"] = {str(vendors)!r}
         from spectrace.device import discover_devices
         print(json.dumps([[r.key, r.ok, r.reason] for r in discover_devices()]))
-        """, tmp_path)
+        """,
+        tmp_path,
+    )
     assert result.returncode == 0, result.stderr
     reports = json.loads(result.stdout.strip().splitlines()[-1])
     [broken] = [r for r in reports if r[0].startswith("brokenvendor:")]
@@ -175,13 +185,16 @@ def test_preloading_dependencies_rescues_a_runtime_its_run_path_misses(tmp_path)
     plain = _fresh_python(f"import ctypes; ctypes.CDLL({str(link)!r})", tmp_path)
     if plain.returncode == 0:
         pytest.skip("this dynamic loader resolves the run path through the symlink")
-    rescued = _fresh_python(f"""
+    rescued = _fresh_python(
+        f"""
         import ctypes
         from pathlib import Path
         from spectrace.device.discovery import preload_dependencies
         assert preload_dependencies(Path({str(link)!r})) == []
         ctypes.CDLL({str(link)!r})
-        """, tmp_path)
+        """,
+        tmp_path,
+    )
     assert rescued.returncode == 0, rescued.stderr
 
 
@@ -189,9 +202,19 @@ def test_preloading_dependencies_rescues_a_runtime_its_run_path_misses(tmp_path)
 
 
 def _report(key: str, runtime: str, device_type: str) -> DeviceReport:
-    return DeviceReport(key=key, runtime=runtime, platform_name="", platform_version="", device_name="",
-                        device_type=device_type, driver_version="", compute_units=1, global_mem_bytes=1,
-                        ok=True, reason=None)
+    return DeviceReport(
+        key=key,
+        runtime=runtime,
+        platform_name="",
+        platform_version="",
+        device_name="",
+        device_type=device_type,
+        driver_version="",
+        compute_units=1,
+        global_mem_bytes=1,
+        ok=True,
+        reason=None,
+    )
 
 
 def test_preference_is_gpu_then_intel_then_system_pocl_then_pypi_pocl():
@@ -302,14 +325,16 @@ def kernels_folder(tmp_path, monkeypatch) -> Path:
     folder = tmp_path / "kernels"
     (folder / "tests").mkdir(parents=True)
     (folder / "scale.h").write_text("#define SCALE_FACTOR 3.0f\n")
-    (folder / "tests" / "affine.cl").write_text(textwrap.dedent("""\
+    (folder / "tests" / "affine.cl").write_text(
+        textwrap.dedent("""\
         #include "scale.h"
         __kernel void affine(__global float* out)
         {
             const size_t i = get_global_id(0);
             out[i] = (float)i * SCALE_FACTOR + OFFSET;
         }
-        """))
+        """)
+    )
     monkeypatch.setattr(spectrace.resources, "kernels_dir", lambda: folder)
     return folder
 

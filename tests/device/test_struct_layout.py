@@ -95,10 +95,15 @@ def test_a_build_without_the_contract_stops_with_a_clear_error(device):
         compile_source(device.context, device.cl_device, '#include "types.h"\n', options)
 
 
-@pytest.mark.parametrize(("entry", "kernel"), [("integrator_path.cl", "render_pass"),
-                                               ("integrator_direct.cl", "render_pass"),
-                                               ("integrator_path_wavefront.cl", "wavefront_advance"),
-                                               ("meters.cl", "measure")])
+@pytest.mark.parametrize(
+    ("entry", "kernel"),
+    [
+        ("integrator_path.cl", "render_pass"),
+        ("integrator_direct.cl", "render_pass"),
+        ("integrator_path_wavefront.cl", "wavefront_advance"),
+        ("meters.cl", "measure"),
+    ],
+)
 def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device, entry, kernel):
     """The host sets a scene kernel's first arguments from SCENE_KERNEL_BUFFERS; the kernel's own parameter names,
     as the compiler reports them, must be those buffers in that order."""

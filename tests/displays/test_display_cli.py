@@ -17,8 +17,13 @@ TRIPLE = ["0.6", "0.3", "0.2"]
 
 
 def _run(*args, check=True):
-    result = subprocess.run([sys.executable, "-m", "spectrace", "display", *args], capture_output=True, text=True,
-                            env=os.environ.copy(), timeout=300)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "display", *args],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=300,
+    )
     if check:
         assert result.returncode == 0, result.stderr
     return result
@@ -43,8 +48,9 @@ def test_list_shows_every_display_with_its_chromaticities():
 
 def test_compare_json_and_plot(tmp_path):
     plot = tmp_path / "compare.png"
-    result = _json("compare", "--rgb", *TRIPLE, "-d", "CRT-Dell", "-d", "OLED-SonyPVM2541", "-d", "CRT-Dell",
-                   "--plot", str(plot))
+    result = _json(
+        "compare", "--rgb", *TRIPLE, "-d", "CRT-Dell", "-d", "OLED-SonyPVM2541", "-d", "CRT-Dell", "--plot", str(plot)
+    )
     first, second, again = result["displays"]
     assert first["xyz_cd_m2"][1] == pytest.approx(first["luminance_cd_m2"])
     assert first["xy"] == pytest.approx(colour.XYZ_to_xy(np.array(first["xyz_cd_m2"])), abs=1e-12)
@@ -78,8 +84,10 @@ def test_match_in_gamut_and_out_of_gamut():
 def test_user_csv_display_from_the_command_line(tmp_path):
     path = tmp_path / "three_lines.csv"
     wavelengths_nm = np.arange(380, 781, 10)
-    rows = [",".join([str(nm), *(str(np.exp(-(((nm - centre) / 15) ** 2))) for centre in (620, 530, 460))])
-            for nm in wavelengths_nm]
+    rows = [
+        ",".join([str(nm), *(str(np.exp(-(((nm - centre) / 15) ** 2))) for centre in (620, 530, 460))])
+        for nm in wavelengths_nm
+    ]
     path.write_text("# units: W/(sr m^2 nm)\nwavelength_nm,red,green,blue\n" + "\n".join(rows) + "\n")
     listing = _json("list", "--display", str(path))["displays"]
     assert listing[-1]["name"] == "three_lines" and listing[-1]["absolute"]
@@ -104,7 +112,8 @@ def _file_primaries_on_grid(name: str, white_cd_m2: float) -> np.ndarray:
     from spectrace.resources import spectra_dir
 
     path = spectra_dir() / "displays" / f"{name}.csv"
-    rows = np.genfromtxt([line for line in open(path) if not line.startswith("#")], delimiter=",", names=True)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    rows = np.genfromtxt([line for line in lines if not line.startswith("#")], delimiter=",", names=True)
     grid = np.arange(360.0, 831.0)
     primaries = np.array([np.interp(grid, rows["wavelength_nm"], rows[c]) for c in ("red", "green", "blue")])
     white = colour.SpectralDistribution(primaries.sum(axis=0), grid)
@@ -122,8 +131,10 @@ def test_metamerism_per_patch_delta_e_matches_colour_science():
     one colour-science gives for Ohta's ColorChecker reflectance times each light, relative to the light itself."""
     report = _json("metamerism", "--from", "LCD-Dell_CCFL", "--to", "LCD-Apple_WLED")
     grid = np.arange(360.0, 831.0)
-    lights = [np.asarray(report[drive]) @ _file_primaries_on_grid(report[name], 100.0)
-              for drive, name in (("source_drive", "source"), ("target_drive", "target"))]
+    lights = [
+        np.asarray(report[drive]) @ _file_primaries_on_grid(report[name], 100.0)
+        for drive, name in (("source_drive", "source"), ("target_drive", "target"))
+    ]
     xyz_lights = [_xyz_683(colour.SpectralDistribution(light, grid)) for light in lights]
     np.testing.assert_allclose(xyz_lights[0], xyz_lights[1], rtol=1e-4)  # a metameric pair of lights
 
@@ -133,8 +144,12 @@ def test_metamerism_per_patch_delta_e_matches_colour_science():
     for patch in report["patches"]:
         reflectance = checker[patch["patch"]]
         on_grid = np.interp(grid, reflectance.wavelengths, reflectance.values)
-        lab = [colour.XYZ_to_Lab(_xyz_683(colour.SpectralDistribution(on_grid * light, grid)) / white[1],
-                                 colour.XYZ_to_xy(white)) for light in lights]
+        lab = [
+            colour.XYZ_to_Lab(
+                _xyz_683(colour.SpectralDistribution(on_grid * light, grid)) / white[1], colour.XYZ_to_xy(white)
+            )
+            for light in lights
+        ]
         expected = colour.delta_E(*lab, method="CIE 2000")
         assert patch["delta_e_2000"] == pytest.approx(expected, abs=1e-3), patch["patch"]
     assert report["max_delta_e_2000"] > 1.0  # the lights match, the lit charts do not

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from spectrace.displays import load_display
-from spectrace.errors import SpectraceError
 from spectrace.engine.renderer import Renderer
+from spectrace.errors import SpectraceError
 from spectrace.scene import load_scene
 from spectrace.spectral.grid import GRID_NM
 
@@ -63,15 +63,23 @@ def test_display_spectrum_is_linear_in_the_triple(tmp_path):
     def radiance(rgb):
         scene = _scene(tmp_path, f'display = "OLED-SonyPVM2541", rgb = {list(rgb)}')
         return scene.shapes[0].emitter.radiance.values
-    np.testing.assert_allclose(radiance((0.5, 0.25, 0.1)) + radiance((0.2, 0.5, 0.3)),
-                               radiance((0.7, 0.75, 0.4)), rtol=1e-12, atol=1e-15)
+
+    np.testing.assert_allclose(
+        radiance((0.5, 0.25, 0.1)) + radiance((0.2, 0.5, 0.3)), radiance((0.7, 0.75, 0.4)), rtol=1e-12, atol=1e-15
+    )
 
 
 def test_white_luminance_rescales_and_relative_displays_need_it(tmp_path):
     scene = _scene(tmp_path, 'display = "LCD-CCFL_HDRVDP2", rgb = [1, 1, 1], white_luminance = 80')
     values = scene.shapes[0].emitter.radiance.values
-    luminance = 683.0 * np.trapezoid(values * colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy()
-                                     .align(colour.SpectralShape(360, 830, 1)).values[:, 1], GRID_NM)
+    luminance = 683.0 * np.trapezoid(
+        values
+        * colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+        .copy()
+        .align(colour.SpectralShape(360, 830, 1))
+        .values[:, 1],
+        GRID_NM,
+    )
     assert luminance == pytest.approx(80.0, rel=1e-3)
     with pytest.raises(SpectraceError, match="white_luminance"):
         _scene(tmp_path, 'display = "LCD-CCFL_HDRVDP2", rgb = [1, 1, 1]')
@@ -114,8 +122,14 @@ def test_half_lit_screen_gives_half_the_irradiance(device, tmp_path):
         picture[:, lit_columns] = 255
         _picture(tmp_path / f"{name}.png", picture)
         scene = _scene(tmp_path, f'display = "LCD-Dell_CCFL", image = "{name}.png"')
-        readings[name] = measure(scene, IrradianceMeter((0.0, 0.0, 1.0), (0.0, 0.0, -1.0)), wavelengths_nm=[550.0],
-                                 streams=64, samples_per_item=64, device=device)
+        readings[name] = measure(
+            scene,
+            IrradianceMeter((0.0, 0.0, 1.0), (0.0, 0.0, -1.0)),
+            wavelengths_nm=[550.0],
+            streams=64,
+            samples_per_item=64,
+            device=device,
+        )
     full, half = readings["full"], readings["half"]
     difference = full.spectral[0] / 2 - half.spectral[0]
     combined = np.hypot(full.spectral_standard_error[0] / 2, half.spectral_standard_error[0])
@@ -123,19 +137,23 @@ def test_half_lit_screen_gives_half_the_irradiance(device, tmp_path):
     assert abs(difference) < 4 * combined
 
 
-@pytest.mark.parametrize("encoding, decode", [
-    ("srgb", lambda encoded: colour.cctf_decoding(encoded, function="sRGB")),  # IEC 61966-2-1, by colour-science
-    ("gamma2.2", lambda encoded: encoded**2.2),
-    ("linear", lambda encoded: encoded),
-])
+@pytest.mark.parametrize(
+    "encoding, decode",
+    [
+        ("srgb", lambda encoded: colour.cctf_decoding(encoded, function="sRGB")),  # IEC 61966-2-1, by colour-science
+        ("gamma2.2", lambda encoded: encoded**2.2),
+        ("linear", lambda encoded: encoded),
+    ],
+)
 def test_encoded_values_are_decoded_by_the_stated_curve(tmp_path, encoding, decode):
     """A triple and a picture's code values are encoded: the screen emits the primaries at the decoded drive.
     Mid-range values, where the curves differ (codes 0 and 255 decode alike under every curve)."""
     display = load_display("OLED-SonyPVM2541")
     triple = np.array([0.5, 0.25, 0.1])
     scene = _scene(tmp_path, f'display = "OLED-SonyPVM2541", rgb = {triple.tolist()}, encoding = "{encoding}"')
-    np.testing.assert_allclose(scene.shapes[0].emitter.radiance.values, decode(triple) @ display.primaries_values,
-                               rtol=1e-12, atol=0)
+    np.testing.assert_allclose(
+        scene.shapes[0].emitter.radiance.values, decode(triple) @ display.primaries_values, rtol=1e-12, atol=0
+    )
 
     codes = np.array([128, 64, 26])
     _picture(tmp_path / "mid.png", np.broadcast_to(codes, (2, 3, 3)))

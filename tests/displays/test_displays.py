@@ -2,6 +2,7 @@
 and matching (spectrace.displays)."""
 
 import itertools
+from pathlib import Path
 
 import colour
 import numpy as np
@@ -57,7 +58,8 @@ def _luminance_683(values_on_grid: np.ndarray) -> float:
 
 
 def _csv_columns(path):
-    rows = np.genfromtxt([line for line in open(path) if not line.startswith("#")], delimiter=",", names=True)
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    rows = np.genfromtxt([line for line in lines if not line.startswith("#")], delimiter=",", names=True)
     return rows["wavelength_nm"], [rows[channel] for channel in ("red", "green", "blue")]
 
 
@@ -82,10 +84,11 @@ def test_catalogue_has_every_shipped_file_and_the_colour_science_displays(displa
 def test_shipped_primaries_are_the_file_columns(path, displays):
     wavelengths_nm, columns = _csv_columns(path)
     display = displays[path.stem]
-    inside = (GRID_NM >= wavelengths_nm[0]) & (GRID_NM <= wavelengths_nm[-1])
+    inside = (wavelengths_nm[0] <= GRID_NM) & (wavelengths_nm[-1] >= GRID_NM)
     for primary, column in zip(display.primaries, columns):
-        np.testing.assert_allclose(primary.values[inside], np.interp(GRID_NM[inside], wavelengths_nm, column),
-                                   rtol=1e-12, atol=0)
+        np.testing.assert_allclose(
+            primary.values[inside], np.interp(GRID_NM[inside], wavelengths_nm, column), rtol=1e-12, atol=0
+        )
 
 
 @pytest.mark.parametrize("name", sorted(COLOUR_SCIENCE_KEYS))
@@ -124,8 +127,9 @@ def test_emission_of_a_sum_of_triples_is_the_sum_of_emissions(displays):
     a, b = np.array([0.25, 0.1, 0.4]), np.array([0.35, 0.55, 0.2])
     for display in displays.values():
         total = display.emission(a + b).values
-        np.testing.assert_allclose(total, display.emission(a).values + display.emission(b).values,
-                                   rtol=1e-12, atol=1e-12 * total.max())
+        np.testing.assert_allclose(
+            total, display.emission(a).values + display.emission(b).values, rtol=1e-12, atol=1e-12 * total.max()
+        )
         np.testing.assert_array_equal(display.emission((0, 0, 0)).values, 0.0)
         np.testing.assert_allclose(display.emission((1, 1, 1)).values, np.sum(display.primaries_values, axis=0))
 
@@ -163,10 +167,14 @@ def test_transfer_curves_match_the_standard_formulas(displays):
     display = displays["OLED-SamsungNote3"]
     encoded = np.array(TRIPLE)
     srgb_linear = colour.cctf_decoding(encoded, function="sRGB")
-    np.testing.assert_allclose(display.with_transfer(Encoding.SRGB).emission(encoded).values,
-                               display.emission(srgb_linear).values, rtol=1e-12)
-    np.testing.assert_allclose(display.with_transfer(Encoding.GAMMA_2_2).emission(encoded).values,
-                               display.emission(encoded**2.2).values, rtol=1e-12)
+    np.testing.assert_allclose(
+        display.with_transfer(Encoding.SRGB).emission(encoded).values, display.emission(srgb_linear).values, rtol=1e-12
+    )
+    np.testing.assert_allclose(
+        display.with_transfer(Encoding.GAMMA_2_2).emission(encoded).values,
+        display.emission(encoded**2.2).values,
+        rtol=1e-12,
+    )
     for encoding in Encoding:
         np.testing.assert_allclose(encode_drive(decode_to_drive(encoded, encoding), encoding), encoded, rtol=1e-12)
 

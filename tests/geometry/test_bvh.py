@@ -299,9 +299,7 @@ def test_root_split_is_the_cheapest_binned_plane():
             left = bins <= last_left
             if left.all() or not left.any():
                 continue
-            cost = sum(
-                _box_area(low[side].min(axis=0), high[side].max(axis=0)) * side.sum() for side in (left, ~left)
-            )
+            cost = sum(_box_area(low[side].min(axis=0), high[side].max(axis=0)) * side.sum() for side in (left, ~left))
             best = min(best, cost)
     first = int(bvh.nodes["left_first"][0])
     chosen = sum(

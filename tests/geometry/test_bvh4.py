@@ -34,7 +34,7 @@ def test_collapse_keeps_every_leaf_and_bounds_every_subtree(count):
     # A leaf's box holds its triangles' vertices; an inner child's box holds every box of its own children.
     vertices = triangles[bvh.prim_order]
     for node, slot in zip(*np.nonzero(counts > 0)):
-        held = vertices[child[node, slot]:child[node, slot] + counts[node, slot]].reshape(-1, 3)
+        held = vertices[child[node, slot] : child[node, slot] + counts[node, slot]].reshape(-1, 3)
         assert np.all(held >= low[node, :, slot]) and np.all(held <= high[node, :, slot])
     for node, slot in zip(*np.nonzero(counts == 0)):
         inner = child[node, slot]

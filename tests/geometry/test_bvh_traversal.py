@@ -58,10 +58,15 @@ def test_closest_hits_equal_brute_force(kernel_runner, triangle_count, max_leaf_
     runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     t = np.empty(len(origins), np.float32)
     hit = np.empty(len(origins), np.int32)
-    args = [runner.buffer(device_nodes(bvh, vertices, width)), runner.buffer(vertices),
-            runner.buffer(_as_float4(origins)),
-            runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
-            np.int32(len(origins))]
+    args = [
+        runner.buffer(device_nodes(bvh, vertices, width)),
+        runner.buffer(vertices),
+        runner.buffer(_as_float4(origins)),
+        runner.buffer(_as_float4(directions)),
+        runner.buffer(t, True),
+        runner.buffer(hit, True),
+        np.int32(len(origins)),
+    ]
     runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
 
     ref_t, ref_prim = brute_force_closest_hit(origins, directions, triangles[:, 0], triangles[:, 1], triangles[:, 2])
@@ -81,6 +86,7 @@ def test_closest_hits_equal_brute_force(kernel_runner, triangle_count, max_leaf_
     np.testing.assert_allclose(t[both], ref_t[both], rtol=1e-4, atol=1e-5)
     # Ties between triangles at (nearly) the same distance may pick either.
     assert np.mean(kernel_prim[both] == ref_prim[both]) > 0.995
+
 
 @pytest.mark.parametrize("width", WIDTHS)
 def test_shared_edges_are_watertight(kernel_runner, width):
@@ -105,10 +111,15 @@ def test_shared_edges_are_watertight(kernel_runner, width):
     runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     t = np.empty(len(origins), np.float32)
     hit = np.empty(len(origins), np.int32)
-    args = [runner.buffer(device_nodes(bvh, vertices, width)), runner.buffer(vertices),
-            runner.buffer(_as_float4(origins)),
-            runner.buffer(_as_float4(directions)), runner.buffer(t, True), runner.buffer(hit, True),
-            np.int32(len(origins))]
+    args = [
+        runner.buffer(device_nodes(bvh, vertices, width)),
+        runner.buffer(vertices),
+        runner.buffer(_as_float4(origins)),
+        runner.buffer(_as_float4(directions)),
+        runner.buffer(t, True),
+        runner.buffer(hit, True),
+        np.int32(len(origins)),
+    ]
     runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
     assert np.all(hit >= 0), f"{np.sum(hit < 0)} rays slipped through shared edges"
 
@@ -125,10 +136,15 @@ def test_any_hit_respects_t_max(kernel_runner, width):
     clear = np.abs(ref_t - t_max) > 1e-3
     runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     occluded = np.empty(len(origins), np.int32)
-    args = [runner.buffer(device_nodes(bvh, vertices, width)), runner.buffer(vertices),
-            runner.buffer(_as_float4(origins)),
-            runner.buffer(_as_float4(directions)), runner.buffer(t_max), runner.buffer(occluded, True),
-            np.int32(len(origins))]
+    args = [
+        runner.buffer(device_nodes(bvh, vertices, width)),
+        runner.buffer(vertices),
+        runner.buffer(_as_float4(origins)),
+        runner.buffer(_as_float4(directions)),
+        runner.buffer(t_max),
+        runner.buffer(occluded, True),
+        np.int32(len(origins)),
+    ]
     runner.run("any_hit", len(origins), args, {5: occluded})
     expected = ref_t < t_max
     assert 0.1 < expected.mean() < 0.9

@@ -8,10 +8,10 @@ import dataclasses
 import numpy as np
 import pytest
 
+from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform
-from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Shape
@@ -44,8 +44,11 @@ def _transformed(scene, scale: float, offset: float):
     matrix[:3, :3] *= scale
     matrix[:3, 3] = offset
     shapes = [dataclasses.replace(s, mesh=apply_transform(s.mesh, matrix)) for s in scene.shapes]
-    camera = dataclasses.replace(scene.camera, origin=tuple(np.multiply(scene.camera.origin, scale) + offset),
-                                 target=tuple(np.multiply(scene.camera.target, scale) + offset))
+    camera = dataclasses.replace(
+        scene.camera,
+        origin=tuple(np.multiply(scene.camera.origin, scale) + offset),
+        target=tuple(np.multiply(scene.camera.target, scale) + offset),
+    )
     return dataclasses.replace(scene, shapes=shapes, camera=camera)
 
 
@@ -56,8 +59,11 @@ def test_zero_area_triangles_change_nothing(cornell, reference, device):
     collinear_and_pinched = TriangleMesh(INSIDE_BOX, np.array([[0, 1, 2], [0, 0, 3], [3, 1, 3]]))
     white = cornell.shapes[0].material
     emitter = AreaEmitter(cornell.shapes[3].emitter.radiance)
-    scene = _with_shapes(cornell, Shape(collinear_and_pinched, white, name="zero area"),
-                         Shape(collinear_and_pinched, white, emitter=emitter, name="zero-area light"))
+    scene = _with_shapes(
+        cornell,
+        Shape(collinear_and_pinched, white, name="zero area"),
+        Shape(collinear_and_pinched, white, emitter=emitter, name="zero-area light"),
+    )
     assert np.array_equal(_render(scene, device).xyz, reference.xyz)
 
 
@@ -120,9 +126,11 @@ def test_metre_scale_geometry_a_million_metres_away_renders_finite(cornell, devi
 def test_nan_vertices_in_a_mesh_file_name_the_file(tmp_path):
     (tmp_path / "broken.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
     scene = tmp_path / "scene.toml"
-    scene.write_text('[camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 4\nheight = 4\n'
-                     '[materials.m]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
-                     '[[shapes]]\ntype = "mesh"\nfile = "broken.obj"\nmaterial = "m"\n')
+    scene.write_text(
+        "[camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 4\nheight = 4\n"
+        '[materials.m]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
+        '[[shapes]]\ntype = "mesh"\nfile = "broken.obj"\nmaterial = "m"\n'
+    )
     with pytest.raises(SpectraceError) as caught:
         load_scene(scene)
     message = str(caught.value)

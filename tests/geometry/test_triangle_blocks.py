@@ -33,7 +33,7 @@ def test_blocks_hold_every_leaf_triangle_once(count, max_leaf_size):
     for first, triangle_count, offset in zip(nodes4["child"][leaf], nodes4["count"][leaf], nodes["child"][leaf]):
         slots = []
         while True:
-            block = buffer[offset:offset + LEAF_BLOCK_FLOAT4S]
+            block = buffer[offset : offset + LEAF_BLOCK_FLOAT4S]
             block_first, lanes, more, _ = block[-1].view(np.int32)
             for lane in range(lanes):
                 corners = block[:9, lane].reshape(3, 3)  # (vertex, axis)

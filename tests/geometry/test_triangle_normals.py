@@ -26,12 +26,20 @@ def test_bundled_scenes_carry_their_winding_normals():
 
 
 def test_a_flipped_winding_flips_the_normal():
-    floor = spectrace.shape("rectangle", spectrace.diffuse((0.5, 0.5, 0.5)),
-                            transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}])
-    flipped = spectrace.shape("rectangle", spectrace.diffuse((0.5, 0.5, 0.5)),
-                              transform=[{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 1, 0]}])
-    scene = spectrace.Scene(camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
-                            shapes=[floor, flipped], width=4, height=4)
+    floor = spectrace.shape(
+        "rectangle", spectrace.diffuse((0.5, 0.5, 0.5)), transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}]
+    )
+    flipped = spectrace.shape(
+        "rectangle",
+        spectrace.diffuse((0.5, 0.5, 0.5)),
+        transform=[{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 1, 0]}],
+    )
+    scene = spectrace.Scene(
+        camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
+        shapes=[floor, flipped],
+        width=4,
+        height=4,
+    )
     buffers = build_scene_buffers(scene)
     _check(buffers)
     normals_y = buffers.triangle_vertices.reshape(-1, 3, 4)[: buffers.triangle_count, 1, 3]

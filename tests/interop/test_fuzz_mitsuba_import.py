@@ -42,25 +42,138 @@ FUZZ_SETTINGS = settings(
 
 ATTRIBUTE_VALUES = st.one_of(
     st.text(max_size=12),
-    st.sampled_from([
-        "nan", "-nan", "NaN", "inf", "-inf", "infinity", "1e400", "-1e400", "1e39", "-3.5e38", "3.4e38", "1e-400",
-        "1e30", "-1", "-0.5", "0", "-0", "2.5", "99999999999999999999", "0x10", "1_000", "١٢", "ninety", "abc", "",
-        " ", "1, 2", "1 2 3 4", "1,,2", "400:1:2", "abc:2", "400:", ":", "700:1, 400:2", "400:1, 400:2",
-        "400:-1, 700:2", "400:0.5,", "-400:1, 700:1", "$spp", "$undefined", "$", "true", "false", "Au", "Cr", "none",
-        "bk7", "water", "ggx", "beckmann", "smaller", "larger", "diagonal", "z", "50mm", "-5mm", "0mm", "lamp.spd",
-        "triangle.obj", "missing.obj", "features.xml", "out.toml", "..", "white", "gold", "ramp", "glass",
-    ]),
+    st.sampled_from(
+        [
+            "nan",
+            "-nan",
+            "NaN",
+            "inf",
+            "-inf",
+            "infinity",
+            "1e400",
+            "-1e400",
+            "1e39",
+            "-3.5e38",
+            "3.4e38",
+            "1e-400",
+            "1e30",
+            "-1",
+            "-0.5",
+            "0",
+            "-0",
+            "2.5",
+            "99999999999999999999",
+            "0x10",
+            "1_000",
+            "١٢",
+            "ninety",
+            "abc",
+            "",
+            " ",
+            "1, 2",
+            "1 2 3 4",
+            "1,,2",
+            "400:1:2",
+            "abc:2",
+            "400:",
+            ":",
+            "700:1, 400:2",
+            "400:1, 400:2",
+            "400:-1, 700:2",
+            "400:0.5,",
+            "-400:1, 700:1",
+            "$spp",
+            "$undefined",
+            "$",
+            "true",
+            "false",
+            "Au",
+            "Cr",
+            "none",
+            "bk7",
+            "water",
+            "ggx",
+            "beckmann",
+            "smaller",
+            "larger",
+            "diagonal",
+            "z",
+            "50mm",
+            "-5mm",
+            "0mm",
+            "lamp.spd",
+            "triangle.obj",
+            "missing.obj",
+            "features.xml",
+            "out.toml",
+            "..",
+            "white",
+            "gold",
+            "ramp",
+            "glass",
+        ]
+    ),
     st.floats().map(repr),
     st.integers(min_value=-(2**70), max_value=2**70).map(str),
     st.lists(st.floats(), max_size=17).map(lambda xs: " ".join(map(repr, xs))),
 )
-TYPES = st.sampled_from(["obj", "ply", "rectangle", "cube", "sphere", "serialized", "diffuse", "twosided",
-                         "conductor", "roughconductor", "plastic", "roughplastic", "dielectric", "roughdielectric",
-                         "thindielectric", "area", "point", "constant", "directional", "spot", "perspective",
-                         "hdrfilm", "path", "direct", "volpath", "independent", "box", "uniform", "regular",
-                         "irregular", "blackbody", "d65", "srgb", "bitmap", ""])
-ATTRIBUTE_NAMES = st.sampled_from(["value", "name", "type", "id", "x", "y", "z", "angle", "origin", "target", "up",
-                                   "filename", "wavelengths", "values"])
+TYPES = st.sampled_from(
+    [
+        "obj",
+        "ply",
+        "rectangle",
+        "cube",
+        "sphere",
+        "serialized",
+        "diffuse",
+        "twosided",
+        "conductor",
+        "roughconductor",
+        "plastic",
+        "roughplastic",
+        "dielectric",
+        "roughdielectric",
+        "thindielectric",
+        "area",
+        "point",
+        "constant",
+        "directional",
+        "spot",
+        "perspective",
+        "hdrfilm",
+        "path",
+        "direct",
+        "volpath",
+        "independent",
+        "box",
+        "uniform",
+        "regular",
+        "irregular",
+        "blackbody",
+        "d65",
+        "srgb",
+        "bitmap",
+        "",
+    ]
+)
+ATTRIBUTE_NAMES = st.sampled_from(
+    [
+        "value",
+        "name",
+        "type",
+        "id",
+        "x",
+        "y",
+        "z",
+        "angle",
+        "origin",
+        "target",
+        "up",
+        "filename",
+        "wavelengths",
+        "values",
+    ]
+)
 WRAPPERS = st.sampled_from(["bsdf", "shape", "transform", "spectrum", "ref", "scene", "float"])
 MUTATIONS = st.sampled_from(["delete", "value", "value", "value", "type", "add", "duplicate", "drop", "wrap"])
 # Most files stay well-formed XML, so that most mutations reach the importer rather than the XML parser.
@@ -118,8 +231,9 @@ def text_mutation(draw, text: str) -> bytes:
         depth = draw(st.sampled_from([70, 500, 2000, 5000]))
         tag = draw(WRAPPERS)
         end_of_tag = data.find(b">", data.find(b"<shape") if b"<shape" in data else 0)
-        return data[:end_of_tag + 1] + f"<{tag}>".encode() * depth + f"</{tag}>".encode() * depth + \
-            data[end_of_tag + 1:]
+        return (
+            data[: end_of_tag + 1] + f"<{tag}>".encode() * depth + f"</{tag}>".encode() * depth + data[end_of_tag + 1 :]
+        )
     return data
 
 

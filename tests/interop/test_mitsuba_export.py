@@ -8,17 +8,16 @@ import numpy as np
 import pytest
 
 from replica_agreement import assert_replicas_agree, spectrace_replicas
+from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry.primitives import rectangle, sphere
 from spectrace.geometry.transforms import apply_transform
 from spectrace.interop.mitsuba_export import mitsuba_film_xyz, scene_to_mitsuba_dict, write_binary_ply
-from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, SpotLight
 from spectrace.spectral import spectrum_to_xyz
 from spectrace.spectral.spectrum import Spectrum
-
 
 
 @pytest.mark.peer
@@ -30,11 +29,13 @@ def test_exported_cornell_box_renders_like_spectrace(tmp_path, device, mitsuba_s
     2.5 standard errors; the light's radiance scaled by 1.03 in the export fails at 8 standard errors."""
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 24, 32, 32, 8
-    scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=size, height=size, max_depth=5,
-                                                                         rr_depth=2)
+    scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(
+        width=size, height=size, max_depth=5, rr_depth=2
+    )
     mitsuba_scene = mi.load_dict(scene_to_mitsuba_dict(scene, tmp_path, spp=replica_spp))
-    by_mitsuba = np.stack([mitsuba_film_xyz(mi.render(mitsuba_scene, spp=replica_spp, seed=seed), mi)
-                           for seed in range(replicas)])
+    by_mitsuba = np.stack(
+        [mitsuba_film_xyz(mi.render(mitsuba_scene, spp=replica_spp, seed=seed), mi) for seed in range(replicas)]
+    )
 
     by_spectrace = spectrace_replicas(Renderer(scene, device), replicas, replica_spp)
     assert_replicas_agree(by_spectrace, by_mitsuba, block)
@@ -54,16 +55,23 @@ def test_film_xyz_normalisation_matches_the_integral(tmp_path, device, emission,
         cornell = load_scene(scenes_dir() / "cornell_box.toml")
         radiance = next(shape for shape in cornell.shapes if shape.emitter is not None).emitter.radiance
     wall = apply_transform(rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]))
-    scene = Scene(camera=Camera(origin=(0, 0, 2), target=(0, 0, 0), fov_degrees=30), width=48, height=48,
-                  shapes=[Shape(mesh=wall, material=DiffuseMaterial(Spectrum.constant(0.5)),
-                                emitter=AreaEmitter(radiance))], max_depth=1, spp=128)
+    scene = Scene(
+        camera=Camera(origin=(0, 0, 2), target=(0, 0, 0), fov_degrees=30),
+        width=48,
+        height=48,
+        shapes=[Shape(mesh=wall, material=DiffuseMaterial(Spectrum.constant(0.5)), emitter=AreaEmitter(radiance))],
+        max_depth=1,
+        spp=128,
+    )
     expected = spectrum_to_xyz(radiance)
     ours = Renderer(scene, device).render().xyz.reshape(-1, 3).astype(np.float64)
     theirs = mitsuba_film_xyz(mi.render(mi.load_dict(scene_to_mitsuba_dict(scene, tmp_path))), mi).reshape(-1, 3)
     for image in (ours, theirs):
         standard_error = image.std(axis=0, ddof=1) / np.sqrt(len(image))
-        assert np.all(np.abs(image.mean(axis=0) - expected) <= 5 * standard_error), \
-            (image.mean(axis=0) / expected, standard_error / expected)
+        assert np.all(np.abs(image.mean(axis=0) - expected) <= 5 * standard_error), (
+            image.mean(axis=0) / expected,
+            standard_error / expected,
+        )
 
 
 @pytest.mark.peer

@@ -21,8 +21,11 @@ CORNELL_XML = Path(__file__).resolve().parents[1] / "data" / "mitsuba" / "cornel
 
 
 def _write(folder: Path, body: str, sensor: str | None = None) -> Path:
-    sensor = sensor or """<sensor type="perspective"><float name="fov" value="45"/>
+    sensor = (
+        sensor
+        or """<sensor type="perspective"><float name="fov" value="45"/>
         <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film></sensor>"""
+    )
     path = folder / "scene.xml"
     path.write_text(f'<scene version="3.0.0">\n{sensor}\n{body}\n</scene>\n')
     return path
@@ -58,34 +61,52 @@ def test_cornell_box_geometry_and_light(device):
 def test_import_command_writes_a_scene_that_renders(tmp_path):
     out = tmp_path / "imported" / "cornell.toml"
     run = [sys.executable, "-m", "spectrace"]
-    result = subprocess.run([*run, "import-mitsuba", str(CORNELL_XML), "-o", str(out), "-D", "spp=2"],
-                            capture_output=True, text=True, env=os.environ.copy(), timeout=600)
+    result = subprocess.run(
+        [*run, "import-mitsuba", str(CORNELL_XML), "-o", str(out), "-D", "spp=2"],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=600,
+    )
     assert result.returncode == 0, result.stderr
     assert "reconstruction filter 'gaussian'" in result.stderr  # a difference spectrace reports, not hides
     assert "spp = 2" in out.read_text()
     image = tmp_path / "cornell.png"
-    rendered = subprocess.run([*run, "render", str(out), "-o", str(image), "--width", "8", "--height", "8", "-q"],
-                              capture_output=True, text=True, env=os.environ.copy(), timeout=600)
+    rendered = subprocess.run(
+        [*run, "render", str(out), "-o", str(image), "--width", "8", "--height", "8", "-q"],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=600,
+    )
     assert rendered.returncode == 0, rendered.stderr
 
 
 def test_unsupported_plugins_are_all_named(tmp_path):
-    path = _write(tmp_path, """
+    path = _write(
+        tmp_path,
+        """
         <bsdf type="thindielectric" id="metal"/>
         <shape type="serialized"><string name="filename" value="x.serialized"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
-        <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""")
+        <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""",
+    )
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
     message = str(error.value)
-    for named in ("shape 'serialized' (line 6)", "bsdf 'thindielectric' (not yet in spectrace) (line 5)",
-                  "emitter 'envmap' (line 8)"):
+    for named in (
+        "shape 'serialized' (line 6)",
+        "bsdf 'thindielectric' (not yet in spectrace) (line 5)",
+        "emitter 'envmap' (line 8)",
+    ):
         assert named in message
     assert "\n" not in message
 
 
 def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
-    path = _write(tmp_path, """
+    path = _write(
+        tmp_path,
+        """
         <bsdf type="roughconductor" id="gold"><string name="material" value="Au"/>
             <float name="alpha" value="0.2"/><string name="distribution" value="ggx"/></bsdf>
         <bsdf type="conductor" id="mirror"><float name="specular_reflectance" value="0.8"/></bsdf>
@@ -99,44 +120,61 @@ def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
         <shape type="sphere"><ref id="measured"/></shape>
         <shape type="sphere"><ref id="red"/></shape>
         <shape type="sphere"><ref id="white"/></shape>
-        <emitter type="constant"/>""")
+        <emitter type="constant"/>""",
+    )
     data, notes = mitsuba_scene_data(path)
     materials = data["materials"]
     assert materials["gold"] == {"type": "conductor", "metal": "Au", "roughness": 0.2}
     assert materials["mirror"] == {"type": "mirror", "reflectance": {"value": 0.8}}  # Mitsuba's material "none"
     assert materials["measured"]["eta"] == {"values": [[400.0, 1.2], [700.0, 0.2]]}
     # Mitsuba's roughplastic defaults: alpha 0.1, Beckmann (imported as GGX, with a note); ior = bk7 / air.
-    assert materials["red"] == {"type": "plastic", "reflectance": {"rgb": [0.5, 0.1, 0.1]},
-                                "ior": pytest.approx(1.5046 / 1.000277), "roughness": 0.1}
+    assert materials["red"] == {
+        "type": "plastic",
+        "reflectance": {"rgb": [0.5, 0.1, 0.1]},
+        "ior": pytest.approx(1.5046 / 1.000277),
+        "roughness": 0.1,
+    }
     assert materials["white"] == {"type": "plastic", "reflectance": {"value": 0.5}, "ior": 1.6}
     assert any("beckmann" in note for note in notes)
     scene = load_mitsuba_scene(path)
-    assert {type(shape.material).__name__ for shape in scene.shapes} == {"ConductorMaterial", "MirrorMaterial",
-                                                                          "PlasticMaterial"}
+    assert {type(shape.material).__name__ for shape in scene.shapes} == {
+        "ConductorMaterial",
+        "MirrorMaterial",
+        "PlasticMaterial",
+    }
 
 
 def test_unrepresentable_conductors_are_named(tmp_path):
-    path = _write(tmp_path, """
+    path = _write(
+        tmp_path,
+        """
         <bsdf type="conductor" id="chrome"><string name="material" value="Cr"/></bsdf>
         <bsdf type="roughconductor" id="brushed"><string name="material" value="Al"/>
             <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>
         <shape type="cube"><ref id="chrome"/></shape>
-        <shape type="cube"><ref id="brushed"/></shape>""")
+        <shape type="cube"><ref id="brushed"/></shape>""",
+    )
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
     assert "with material 'Cr'" in str(error.value) and "anisotropic roughness" in str(error.value)
 
 
-@pytest.mark.parametrize("fov_xml, aspect_width, expected_tan_half_x", [
-    ('<float name="fov" value="40"/><string name="fov_axis" value="y"/>', 16, 2 * math.tan(math.radians(20))),
-    ('<float name="fov" value="40"/><string name="fov_axis" value="smaller"/>', 16, 2 * math.tan(math.radians(20))),
-    ('<float name="fov" value="40"/><string name="fov_axis" value="larger"/>', 16, math.tan(math.radians(20))),
-    ('<float name="fov" value="40"/><string name="fov_axis" value="diagonal"/>', 16,
-     math.tan(math.radians(20)) * 2 / math.sqrt(5)),
-    # 35 mm equivalent: the 36 x 24 mm frame's diagonal at 50 mm, then as a diagonal fov.
-    ('<string name="focal_length" value="50mm"/>', 16, math.hypot(36, 24) / 100 * 2 / math.sqrt(5)),
-    ('<float name="fov" value="40"/><string name="fov_axis" value="smaller"/>', 4, math.tan(math.radians(20))),
-])
+@pytest.mark.parametrize(
+    "fov_xml, aspect_width, expected_tan_half_x",
+    [
+        ('<float name="fov" value="40"/><string name="fov_axis" value="y"/>', 16, 2 * math.tan(math.radians(20))),
+        ('<float name="fov" value="40"/><string name="fov_axis" value="smaller"/>', 16, 2 * math.tan(math.radians(20))),
+        ('<float name="fov" value="40"/><string name="fov_axis" value="larger"/>', 16, math.tan(math.radians(20))),
+        (
+            '<float name="fov" value="40"/><string name="fov_axis" value="diagonal"/>',
+            16,
+            math.tan(math.radians(20)) * 2 / math.sqrt(5),
+        ),
+        # 35 mm equivalent: the 36 x 24 mm frame's diagonal at 50 mm, then as a diagonal fov.
+        ('<string name="focal_length" value="50mm"/>', 16, math.hypot(36, 24) / 100 * 2 / math.sqrt(5)),
+        ('<float name="fov" value="40"/><string name="fov_axis" value="smaller"/>', 4, math.tan(math.radians(20))),
+    ],
+)
 def test_field_of_view_conversions(tmp_path, fov_xml, aspect_width, expected_tan_half_x):
     sensor = f"""<sensor type="perspective">{fov_xml}
         <film type="hdrfilm"><integer name="width" value="{aspect_width}"/><integer name="height" value="8"/></film>
@@ -196,27 +234,34 @@ def test_dielectrics(tmp_path):
             <float name="ext_ior" value="1.0"/></bsdf></shape>
         <shape type="sphere"><bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
             <float name="alpha" value="0.25"/><float name="int_ior" value="1.7"/>
-            <rgb name="specular_reflectance" value="0.9"/><rgb name="specular_transmittance" value="0.9"/></bsdf></shape>
+            <rgb name="specular_reflectance" value="0.9"/>
+            <rgb name="specular_transmittance" value="0.9"/></bsdf></shape>
         <shape type="sphere"><bsdf type="roughdielectric"/></shape>"""
     data, notes = mitsuba_scene_data(_write(tmp_path, body))
     materials = list(data["materials"].values())
     assert materials[0] == {"type": "dielectric", "ior": pytest.approx(1.5046 / 1.000277)}
     assert materials[1] == {"type": "dielectric", "ior": pytest.approx(1.333)}
-    assert materials[2] == {"type": "dielectric", "ior": pytest.approx(1.7 / 1.000277), "roughness": 0.25,
-                            "specular_tint": {"rgb": [0.9, 0.9, 0.9]}}
+    assert materials[2] == {
+        "type": "dielectric",
+        "ior": pytest.approx(1.7 / 1.000277),
+        "roughness": 0.25,
+        "specular_tint": {"rgb": [0.9, 0.9, 0.9]},
+    }
     assert materials[3]["roughness"] == 0.1
     assert any("beckmann distribution; imported as GGX" in note for note in notes)
     scene = load_mitsuba_scene(_write(tmp_path, body))
     assert scene.shapes[1].material.ior.at(500.0) == pytest.approx(1.333)
 
-    bad = _write(tmp_path, """<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="air"/>
+    bad = _write(
+        tmp_path,
+        """<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="air"/>
         <string name="ext_ior" value="water"/></bsdf></shape>
         <shape type="cube"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>
-            <float name="alpha_v" value="0.2"/></bsdf></shape>""")
+            <float name="alpha_v" value="0.2"/></bsdf></shape>""",
+    )
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(bad)
     assert "int_ior not above ext_ior" in str(error.value) and "anisotropic" in str(error.value)
-
 
 
 @pytest.mark.peer
@@ -248,71 +293,184 @@ def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_sca
 CUBE = '<shape type="cube"/>'
 BAD_INPUT = [
     # (name, body, element/attribute path, what the line says)
-    ("non-numeric", CUBE * 2 + '<shape type="cube"><transform name="to_world"><translate x="abc"/></transform></shape>',
-     "shape[2]/transform/translate@x", "expected a finite number, got 'abc'"),
-    ("word-angle", '<shape type="cube"><transform name="to_world"><rotate y="1" angle="ninety"/></transform></shape>',
-     "shape/transform/rotate@angle", "expected a finite number, got 'ninety'"),
-    ("integer-overflow", CUBE + '<integrator type="path"><integer name="max_depth" value="1e400"/></integrator>',
-     "integrator/integer@value", "1e400 is beyond the float32 range"),
-    ("integer-not-integral", CUBE + '<integrator type="path"><integer name="max_depth" value="2.5"/></integrator>',
-     "integrator/integer@value", "expected an integer, got '2.5'"),
-    ("integer-beyond-64-bit", CUBE + '<integrator type="path"><integer name="max_depth" '
-     'value="99999999999999999999"/></integrator>', "integrator/integer@value", "is out of range"),
-    ("nan", '<shape type="sphere"><float name="radius" value="nan"/></shape>',
-     "shape/float@value", "expected a finite number, got 'nan'"),
-    ("inf", '<shape type="sphere"><point name="center" x="0" y="inf" z="0"/></shape>',
-     "shape/point@y", "expected a finite number, got 'inf'"),
-    ("float32-overflow", '<shape type="sphere"><float name="radius" value="1e39"/></shape>',
-     "shape/float@value", "1e39 is beyond the float32 range"),
-    ("float64-overflow", '<shape type="cube"><transform name="to_world"><scale value="2 1e400 2"/></transform></shape>',
-     "shape/transform/scale@value", "1e400 is beyond the float32 range"),
-    ("spectrum-three-fields", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
-     'value="400:1:2"/></bsdf></shape>', "shape/bsdf/spectrum@value", "expected 'wavelength:value' pairs"),
-    ("spectrum-word", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value="abc:2"/></bsdf>'
-     '</shape>', "shape/bsdf/spectrum@value", "expected a finite number, got 'abc'"),
-    ("spectrum-empty", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value=""/></bsdf>'
-     '</shape>', "shape/bsdf/spectrum@value", "expected numbers, got an empty value"),
-    ("spectrum-unsorted", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
-     'value="700:0.5, 400:0.2"/></bsdf></shape>', "shape/bsdf/spectrum@value",
-     "wavelengths must increase, got 700 then 400"),
-    ("spectrum-duplicate", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
-     'value="400:0.5, 550:0.3, 550:0.2"/></bsdf></shape>', "shape/bsdf/spectrum@value",
-     "wavelengths must increase, got 550 then 550"),
-    ("spectrum-negative", '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
-     'value="400:-0.5, 700:0.2"/></bsdf></shape>', "shape/bsdf/spectrum@value", "negative value -0.5"),
-    ("rgb-negative", '<shape type="cube"><emitter type="area"><rgb name="radiance" value="1, -2, 1"/></emitter>'
-     '</shape>', "shape/emitter/rgb@value", "negative value -2"),
-    ("irregular-lengths", '<emitter type="constant"><spectrum name="radiance" type="irregular">'
-     '<string name="wavelengths" value="400, 500, 600"/><string name="values" value="1, 2"/></spectrum></emitter>',
-     "emitter/spectrum/string[1]@value", "3 wavelengths but 2 values"),
-    ("blackbody-zero", '<emitter type="constant"><spectrum name="radiance" type="blackbody">'
-     '<float name="temperature" value="0"/></spectrum></emitter>', "emitter/spectrum/float@value",
-     "temperature must be > 0 K, got 0"),
-    ("blackbody-negative", '<emitter type="constant"><spectrum name="radiance" type="blackbody">'
-     '<float name="temperature" value="-300"/></spectrum></emitter>', "emitter/spectrum/float@value",
-     "temperature must be > 0 K, got -300"),
-    ("blackbody-missing", '<emitter type="constant"><spectrum name="radiance" type="blackbody"/></emitter>',
-     "emitter/spectrum", "spectrum 'blackbody' needs a property named 'temperature'"),
-    ("missing-value", '<shape type="sphere"><float name="radius"/></shape>', "shape/float@value",
-     "<float> needs the attribute 'value'"),
-    ("missing-type", CUBE + '<shape><float name="radius" value="2"/></shape>', "shape[1]@type",
-     "<shape> needs the attribute 'type'"),
-    ("missing-name", '<shape type="sphere"><float value="2"/></shape>', "shape/float@name",
-     "<float> needs the attribute 'name'"),
-    ("missing-ref-id", '<shape type="cube"><ref name="bsdf"/></shape>', "shape/ref@id",
-     "<ref> needs the attribute 'id'"),
+    (
+        "non-numeric",
+        CUBE * 2 + '<shape type="cube"><transform name="to_world"><translate x="abc"/></transform></shape>',
+        "shape[2]/transform/translate@x",
+        "expected a finite number, got 'abc'",
+    ),
+    (
+        "word-angle",
+        '<shape type="cube"><transform name="to_world"><rotate y="1" angle="ninety"/></transform></shape>',
+        "shape/transform/rotate@angle",
+        "expected a finite number, got 'ninety'",
+    ),
+    (
+        "integer-overflow",
+        CUBE + '<integrator type="path"><integer name="max_depth" value="1e400"/></integrator>',
+        "integrator/integer@value",
+        "1e400 is beyond the float32 range",
+    ),
+    (
+        "integer-not-integral",
+        CUBE + '<integrator type="path"><integer name="max_depth" value="2.5"/></integrator>',
+        "integrator/integer@value",
+        "expected an integer, got '2.5'",
+    ),
+    (
+        "integer-beyond-64-bit",
+        CUBE + '<integrator type="path"><integer name="max_depth" value="99999999999999999999"/></integrator>',
+        "integrator/integer@value",
+        "is out of range",
+    ),
+    (
+        "nan",
+        '<shape type="sphere"><float name="radius" value="nan"/></shape>',
+        "shape/float@value",
+        "expected a finite number, got 'nan'",
+    ),
+    (
+        "inf",
+        '<shape type="sphere"><point name="center" x="0" y="inf" z="0"/></shape>',
+        "shape/point@y",
+        "expected a finite number, got 'inf'",
+    ),
+    (
+        "float32-overflow",
+        '<shape type="sphere"><float name="radius" value="1e39"/></shape>',
+        "shape/float@value",
+        "1e39 is beyond the float32 range",
+    ),
+    (
+        "float64-overflow",
+        '<shape type="cube"><transform name="to_world"><scale value="2 1e400 2"/></transform></shape>',
+        "shape/transform/scale@value",
+        "1e400 is beyond the float32 range",
+    ),
+    (
+        "spectrum-three-fields",
+        '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value="400:1:2"/></bsdf></shape>',
+        "shape/bsdf/spectrum@value",
+        "expected 'wavelength:value' pairs",
+    ),
+    (
+        "spectrum-word",
+        '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value="abc:2"/></bsdf></shape>',
+        "shape/bsdf/spectrum@value",
+        "expected a finite number, got 'abc'",
+    ),
+    (
+        "spectrum-empty",
+        '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value=""/></bsdf></shape>',
+        "shape/bsdf/spectrum@value",
+        "expected numbers, got an empty value",
+    ),
+    (
+        "spectrum-unsorted",
+        '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
+        'value="700:0.5, 400:0.2"/></bsdf></shape>',
+        "shape/bsdf/spectrum@value",
+        "wavelengths must increase, got 700 then 400",
+    ),
+    (
+        "spectrum-duplicate",
+        '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
+        'value="400:0.5, 550:0.3, 550:0.2"/></bsdf></shape>',
+        "shape/bsdf/spectrum@value",
+        "wavelengths must increase, got 550 then 550",
+    ),
+    (
+        "spectrum-negative",
+        '<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" '
+        'value="400:-0.5, 700:0.2"/></bsdf></shape>',
+        "shape/bsdf/spectrum@value",
+        "negative value -0.5",
+    ),
+    (
+        "rgb-negative",
+        '<shape type="cube"><emitter type="area"><rgb name="radiance" value="1, -2, 1"/></emitter></shape>',
+        "shape/emitter/rgb@value",
+        "negative value -2",
+    ),
+    (
+        "irregular-lengths",
+        '<emitter type="constant"><spectrum name="radiance" type="irregular">'
+        '<string name="wavelengths" value="400, 500, 600"/><string name="values" value="1, 2"/></spectrum></emitter>',
+        "emitter/spectrum/string[1]@value",
+        "3 wavelengths but 2 values",
+    ),
+    (
+        "blackbody-zero",
+        '<emitter type="constant"><spectrum name="radiance" type="blackbody">'
+        '<float name="temperature" value="0"/></spectrum></emitter>',
+        "emitter/spectrum/float@value",
+        "temperature must be > 0 K, got 0",
+    ),
+    (
+        "blackbody-negative",
+        '<emitter type="constant"><spectrum name="radiance" type="blackbody">'
+        '<float name="temperature" value="-300"/></spectrum></emitter>',
+        "emitter/spectrum/float@value",
+        "temperature must be > 0 K, got -300",
+    ),
+    (
+        "blackbody-missing",
+        '<emitter type="constant"><spectrum name="radiance" type="blackbody"/></emitter>',
+        "emitter/spectrum",
+        "spectrum 'blackbody' needs a property named 'temperature'",
+    ),
+    (
+        "missing-value",
+        '<shape type="sphere"><float name="radius"/></shape>',
+        "shape/float@value",
+        "<float> needs the attribute 'value'",
+    ),
+    (
+        "missing-type",
+        CUBE + '<shape><float name="radius" value="2"/></shape>',
+        "shape[1]@type",
+        "<shape> needs the attribute 'type'",
+    ),
+    (
+        "missing-name",
+        '<shape type="sphere"><float value="2"/></shape>',
+        "shape/float@name",
+        "<float> needs the attribute 'name'",
+    ),
+    (
+        "missing-ref-id",
+        '<shape type="cube"><ref name="bsdf"/></shape>',
+        "shape/ref@id",
+        "<ref> needs the attribute 'id'",
+    ),
     ("missing-default-value", '<default name="r"/>' + CUBE, "default@value", "<default> needs the attribute 'value'"),
     ("missing-filename", '<shape type="obj"/>', "shape", "shape 'obj' needs a property named 'filename'"),
-    ("unknown-parameter", '<shape type="sphere"><float name="radius" value="$r"/></shape>', "shape/float@value",
-     "undefined parameter $r"),
-    ("reference-cycle", '<bsdf type="twosided" id="a"><ref id="a"/></bsdf><shape type="cube"><ref id="a"/></shape>',
-     "bsdf", "bsdf 'twosided' refers to itself"),
+    (
+        "unknown-parameter",
+        '<shape type="sphere"><float name="radius" value="$r"/></shape>',
+        "shape/float@value",
+        "undefined parameter $r",
+    ),
+    (
+        "reference-cycle",
+        '<bsdf type="twosided" id="a"><ref id="a"/></bsdf><shape type="cube"><ref id="a"/></shape>',
+        "bsdf",
+        "bsdf 'twosided' refers to itself",
+    ),
     ("zero-width", CUBE, "sensor/film/integer[0]@value", "must be at least 1, got 0"),
-    ("reflectance-above-one", '<shape type="cube"><bsdf type="diffuse" id="hot"><rgb name="reflectance" '
-     'value="1.5, 0.2, 0.2"/></bsdf></shape>', "shape/bsdf",
-     "a reflectance rgb must lie in [0, 1], got [1.5, 0.2, 0.2] (imported as materials.hot.reflectance.rgb)"),
-    ("spd-line", '<emitter type="point"><spectrum name="intensity" filename="bad.spd"/></emitter>',
-     "emitter/spectrum@filename", "line 3 of 'bad.spd': expected 'wavelength value', got '500 2 7'"),
+    (
+        "reflectance-above-one",
+        '<shape type="cube"><bsdf type="diffuse" id="hot"><rgb name="reflectance" '
+        'value="1.5, 0.2, 0.2"/></bsdf></shape>',
+        "shape/bsdf",
+        "a reflectance rgb must lie in [0, 1], got [1.5, 0.2, 0.2] (imported as materials.hot.reflectance.rgb)",
+    ),
+    (
+        "spd-line",
+        '<emitter type="point"><spectrum name="intensity" filename="bad.spd"/></emitter>',
+        "emitter/spectrum@filename",
+        "line 3 of 'bad.spd': expected 'wavelength value', got '500 2 7'",
+    ),
 ]
 ZERO_WIDTH_SENSOR = """<sensor type="perspective"><float name="fov" value="45"/>
     <film type="hdrfilm"><integer name="width" value="0"/><integer name="height" value="6"/></film></sensor>"""
@@ -344,11 +502,15 @@ def test_bad_input_is_one_line_naming_file_and_element(tmp_path, monkeypatch, ca
     assert not out.exists()
 
 
-@pytest.mark.parametrize("text, says", [
-    ('<scene version="3.0.0"><shape type="cube"></scene>', "XML syntax error: mismatched tag (line 1, column "),
-    ("<scene>" + "<bsdf>" * 2000 + "</bsdf>" * 2000 + "</scene>", "elements nested more than 64 deep (line 1)"),
-    ('<shape type="cube"/>', "not a Mitsuba scene: the root element must be <scene>"),
-], ids=["malformed", "nested-2000-deep", "not-a-scene"])
+@pytest.mark.parametrize(
+    "text, says",
+    [
+        ('<scene version="3.0.0"><shape type="cube"></scene>', "XML syntax error: mismatched tag (line 1, column "),
+        ("<scene>" + "<bsdf>" * 2000 + "</bsdf>" * 2000 + "</scene>", "elements nested more than 64 deep (line 1)"),
+        ('<shape type="cube"/>', "not a Mitsuba scene: the root element must be <scene>"),
+    ],
+    ids=["malformed", "nested-2000-deep", "not-a-scene"],
+)
 def test_unreadable_xml_is_one_line(tmp_path, monkeypatch, capsys, text, says):
     xml = tmp_path / "scene.xml"
     xml.write_text(text)
@@ -365,12 +527,15 @@ def test_a_real_process_prints_only_the_line_and_keeps_the_old_output(tmp_path):
     run = [sys.executable, "-m", "spectrace", "import-mitsuba"]
     for body, says in [
         ("<bsdf>" * 2000 + "</bsdf>" * 2000 + CUBE, "elements nested more than 64 deep"),
-        ('<shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="2"/></bsdf></shape>',
-         "reflectance exceeds 1"),
+        (
+            '<shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="2"/></bsdf></shape>',
+            "reflectance exceeds 1",
+        ),
     ]:
         xml = _write(tmp_path, body)
-        result = subprocess.run([*run, str(xml), "-o", str(out)], capture_output=True, text=True,
-                                env=os.environ.copy(), timeout=300)
+        result = subprocess.run(
+            [*run, str(xml), "-o", str(out)], capture_output=True, text=True, env=os.environ.copy(), timeout=300
+        )
         assert result.returncode == 2 and result.stdout == "", result.stderr
         assert result.stderr.count("\n") == 1 and result.stderr.startswith(f"error: {xml}"), result.stderr
         assert says in result.stderr and "Traceback" not in result.stderr
@@ -392,8 +557,9 @@ def test_outputs_that_cannot_be_written_are_refused_before_the_import(tmp_path, 
         _assert_one_error_line(status, stderr, str(place), says)
     assert xml.read_text().startswith("<scene")
     # A missing folder is created, as `spectrace render` creates the image's.
-    status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o",
-                                                           str(tmp_path / "a" / "b" / "out.toml")])
+    status, stderr = _run_in_process(
+        monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(tmp_path / "a" / "b" / "out.toml")]
+    )
     assert status == 0 and (tmp_path / "a" / "b" / "out.toml").is_file(), stderr
 
 
@@ -407,8 +573,9 @@ def test_a_read_only_folder_is_refused_before_the_import(tmp_path, monkeypatch, 
         folder = next((f for f in (locked, Path("/proc/sys")) if f.is_dir() and not os.access(f, os.W_OK)), None)
         if folder is None:
             pytest.skip("no read-only folder for this user")
-        status, stderr = _run_in_process(monkeypatch, capsys, ["import-mitsuba", str(xml), "-o",
-                                                               str(folder / "out.toml")])
+        status, stderr = _run_in_process(
+            monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(folder / "out.toml")]
+        )
         _assert_one_error_line(status, stderr, str(folder / "out.toml"), f"the folder '{folder}' is not writable")
     finally:
         locked.chmod(0o755)

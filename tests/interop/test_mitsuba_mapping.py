@@ -39,8 +39,9 @@ def test_every_module_declares_its_mitsuba_plugins_or_why_it_has_none(module):
         assert callable(getattr(module, "from_mitsuba", None)), f"{module.NAME} declares plugins but no from_mitsuba"
         assert not hasattr(module, "MITSUBA_NONE")
     else:
-        assert isinstance(getattr(module, "MITSUBA_NONE", None), str) and module.MITSUBA_NONE.strip(), \
+        assert isinstance(getattr(module, "MITSUBA_NONE", None), str) and module.MITSUBA_NONE.strip(), (
             f"{module.NAME}: MITSUBA_PLUGINS is empty and MITSUBA_NONE does not say why"
+        )
         assert not hasattr(module, "from_mitsuba")
 
 
@@ -54,14 +55,17 @@ def test_the_unsupported_message_lists_the_declared_plugins(tmp_path):
     xml = _scene(tmp_path, '<shape type="cube"><bsdf type="no-such-bsdf"/></shape>')
     with pytest.raises(SpectraceError) as caught:
         mitsuba_scene_data(xml)
-    listed = dict(part.split(" ", 1) for part in re.search(r"\(spectrace imports (.*)\)$", caught.value.message)
-                  .group(1).split("; "))
+    listed = dict(
+        part.split(" ", 1)
+        for part in re.search(r"\(spectrace imports (.*)\)$", caught.value.message).group(1).split("; ")
+    )
     assert set(listed["bsdf"].split(", ")) == {p for p, _ in _plugins(MATERIALS.values())} | {"twosided"}
     assert set(listed["emitter"].split(", ")) == {p for p, _ in _plugins([*LIGHTS.values(), area])}
 
 
-@pytest.mark.parametrize("plugin, module", _plugins(MATERIALS.values()),
-                         ids=[p for p, _ in _plugins(MATERIALS.values())])
+@pytest.mark.parametrize(
+    "plugin, module", _plugins(MATERIALS.values()), ids=[p for p, _ in _plugins(MATERIALS.values())]
+)
 def test_each_declared_bsdf_reaches_its_module(tmp_path, plugin, module):
     """With Mitsuba's defaults the BSDF imports into a scene that loads, or is refused for a stated reason (a
     roughconductor's default material "none" is a mirror, which spectrace has only smooth), never as an unknown
@@ -88,7 +92,7 @@ def _spectra(model) -> list[Spectrum]:
 @pytest.mark.parametrize("plugin, module", _plugins(LIGHTS.values()), ids=[p for p, _ in _plugins(LIGHTS.values())])
 def test_each_declared_emitter_imports_with_mitsubas_default_emission(tmp_path, plugin, module):
     body = f'<shape type="cube"/><emitter type="{plugin}"/>'
-    light, = load_mitsuba_scene(_scene(tmp_path, body)).lights
+    (light,) = load_mitsuba_scene(_scene(tmp_path, body)).lights
     assert isinstance(light, module.MODEL)
     spectra = _spectra(light)
     assert len(spectra) == 1
@@ -98,8 +102,8 @@ def test_each_declared_emitter_imports_with_mitsubas_default_emission(tmp_path, 
 def test_the_shape_emitter_imports_on_a_shape(tmp_path):
     """The area emitter needs its radiance (Mitsuba has no default for it); RGB (1, 1, 1) emission is the same
     white of unit luminance."""
-    plugin, = area.MITSUBA_PLUGINS
+    (plugin,) = area.MITSUBA_PLUGINS
     body = f'<shape type="rectangle"><emitter type="{plugin}"><rgb name="radiance" value="1, 1, 1"/></emitter></shape>'
-    shape, = load_mitsuba_scene(_scene(tmp_path, body)).shapes
+    (shape,) = load_mitsuba_scene(_scene(tmp_path, body)).shapes
     assert isinstance(shape.emitter, area.MODEL)
     _d65_of_unit_luminance(shape.emitter.radiance)

@@ -6,8 +6,8 @@ inconsistent with the sampling routine, or a wrong direction mapping, biases it 
 import numpy as np
 import pytest
 
-from spectrace.io.exr import write_exr
 from spectrace.engine.meters import IrradianceMeter, measure
+from spectrace.io.exr import write_exr
 from spectrace.scene import load_scene
 from spectrace.scene.model import Camera, EnvironmentMap, Scene
 from spectrace.spectral.grid import GRID_NM
@@ -47,8 +47,14 @@ def test_uniform_map_gives_pi_times_radiance(device):
     k = 0.7
     rgb = np.full((8, 16, 3), k, np.float32)
     scene = Scene(camera=CAMERA, width=1, height=1, shapes=[], lights=[EnvironmentMap(rgb, 1.0)])
-    reading = measure(scene, IrradianceMeter((0.0, 0.0, 0.0), (0.2, 0.9, -0.3)), wavelengths_nm=[450.0, 600.0],
-                      streams=64, samples_per_item=32, device=device)
+    reading = measure(
+        scene,
+        IrradianceMeter((0.0, 0.0, 0.0), (0.2, 0.9, -0.3)),
+        wavelengths_nm=[450.0, 600.0],
+        streams=64,
+        samples_per_item=32,
+        device=device,
+    )
     expected = np.pi * k * np.array([_basis_at(lam).sum() for lam in (450.0, 600.0)])
     assert np.all(np.abs(reading.spectral - expected) < 4 * reading.spectral_standard_error + 1e-4 * expected)
     assert np.all(reading.spectral_standard_error < 0.01 * expected)
@@ -63,12 +69,19 @@ def test_structured_map_matches_quadrature(device, tmp_path, normal):
     path = tmp_path / "sky.exr"
     write_exr(path, rgb, None, {})
     (tmp_path / "scene.toml").write_text(
-        '[camera]\norigin = [0, 0, -1]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 1\nheight = 1\n'
-        '[materials]\n[[lights]]\ntype = "envmap"\nfile = "sky.exr"\nscale = 0.5\n')
+        "[camera]\norigin = [0, 0, -1]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 1\nheight = 1\n"
+        '[materials]\n[[lights]]\ntype = "envmap"\nfile = "sky.exr"\nscale = 0.5\n'
+    )
     scene = load_scene(tmp_path / "scene.toml")
     normal = tuple(np.asarray(normal) / np.linalg.norm(normal))
-    reading = measure(scene, IrradianceMeter((0.0, 0.0, 0.0), normal), wavelengths_nm=[550.0], streams=64,
-                      samples_per_item=64, device=device)
+    reading = measure(
+        scene,
+        IrradianceMeter((0.0, 0.0, 0.0), normal),
+        wavelengths_nm=[550.0],
+        streams=64,
+        samples_per_item=64,
+        device=device,
+    )
     expected = _quadrature_irradiance(rgb, 0.5, normal, 550.0)
     value, standard_error = reading.spectral[0], reading.spectral_standard_error[0]
     assert standard_error < 0.02 * expected

@@ -17,8 +17,14 @@ def test_pick_follows_the_pmf_and_the_rescaled_number_is_uniform(kernel_runner):
     runner = kernel_runner("testing/light_pick.cl")
     picked = np.empty(n, np.int32)
     rescaled = np.empty((n, 2), np.float32)
-    args = [runner.buffer(cdf), np.int32(len(pmf)), runner.buffer(u), runner.buffer(picked, True),
-            runner.buffer(rescaled, True), np.int32(n)]
+    args = [
+        runner.buffer(cdf),
+        np.int32(len(pmf)),
+        runner.buffer(u),
+        runner.buffer(picked, True),
+        runner.buffer(rescaled, True),
+        np.int32(n),
+    ]
     runner.run("pick_reusing", n, args, {3: picked, 4: rescaled})
 
     # The light whose float32 CDF interval [cdf[i], cdf[i + 1]) holds u.x, and so (up to that rounding) its pmf share.

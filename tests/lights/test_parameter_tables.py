@@ -12,8 +12,13 @@ from spectrace.materials.parameters import REQUIRED
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE_FORMAT = (ROOT / "docs" / "scene-format.md").read_text(encoding="utf-8")
-API_HELPERS = {"point": spectrace.point_light, "spot": spectrace.spot_light, "distant": spectrace.distant_light,
-               "constant": spectrace.constant_environment, "area": spectrace.area_emitter}
+API_HELPERS = {
+    "point": spectrace.point_light,
+    "spot": spectrace.spot_light,
+    "distant": spectrace.distant_light,
+    "constant": spectrace.constant_environment,
+    "area": spectrace.area_emitter,
+}
 
 
 def _row(first_cell: str) -> str:
@@ -37,9 +42,11 @@ def test_scene_format_row_names_every_key_with_its_unit_and_default(first_cell, 
 
 
 def test_every_light_type_has_a_row():
-    documented = {line.split("|")[1].strip().strip('`"') for line in
-                  SCENE_FORMAT.split("## `[[lights]]`", 1)[1].split("\n## ", 1)[0].splitlines()
-                  if line.startswith('| `"')}
+    documented = {
+        line.split("|")[1].strip().strip('`"')
+        for line in SCENE_FORMAT.split("## `[[lights]]`", 1)[1].split("\n## ", 1)[0].splitlines()
+        if line.startswith('| `"')
+    }
     assert documented == set(LIGHTS)
 
 

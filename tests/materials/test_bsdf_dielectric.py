@@ -82,8 +82,13 @@ def _sellmeier_material(name):
 def _device_ior(kernel_runner, materials, index, lambda_nm):
     index = np.asarray(index, np.int32)
     lambda_nm = np.asarray(lambda_nm, np.float32)
-    n, dispersive = _run(kernel_runner, "material_ior_at", len(index), [np.array(materials), index, lambda_nm],
-                         [(np.float32, len(index)), (np.int32, len(index))])
+    n, dispersive = _run(
+        kernel_runner,
+        "material_ior_at",
+        len(index),
+        [np.array(materials), index, lambda_nm],
+        [(np.float32, len(index)), (np.int32, len(index))],
+    )
     return n.astype(np.float64), dispersive
 
 
@@ -112,16 +117,27 @@ def _fresnel_angles(cos_i, eta):
 
 def _rough_sample(kernel_runner, wo, eta, alpha, u):
     n = len(wo)
-    wi, weight, pdf, ok = _run(kernel_runner, "rough_sample", n, [wo, u], [
-        (np.float32, (n, 4)), (np.float32, n), (np.float32, n), (np.int32, n)],
-        scalars=(np.float32(eta), np.float32(alpha)))
+    wi, weight, pdf, ok = _run(
+        kernel_runner,
+        "rough_sample",
+        n,
+        [wo, u],
+        [(np.float32, (n, 4)), (np.float32, n), (np.float32, n), (np.int32, n)],
+        scalars=(np.float32(eta), np.float32(alpha)),
+    )
     return wi, weight.astype(np.float64), pdf.astype(np.float64), ok
 
 
 def _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha):
     n = len(wo)
-    f_cos, pdf = _run(kernel_runner, "rough_eval_pdf", n, [wo, wi], [(np.float32, n), (np.float32, n)],
-                      scalars=(np.float32(eta), np.float32(alpha)))
+    f_cos, pdf = _run(
+        kernel_runner,
+        "rough_eval_pdf",
+        n,
+        [wo, wi],
+        [(np.float32, n), (np.float32, n)],
+        scalars=(np.float32(eta), np.float32(alpha)),
+    )
     return f_cos.astype(np.float64), pdf.astype(np.float64)
 
 
@@ -150,8 +166,10 @@ def test_ior_models_match_numpy_formulas(kernel_runner):
     assert np.all(np.diff(n[:4], axis=1) < 0), "normal dispersion: the index falls with wavelength"
 
 
-@pytest.mark.parametrize("name, nd, abbe", [("BK7", 1.5168, 64.17), ("N-BK7", 1.5168, 64.17),
-                                            ("SF11", 1.78472, 25.76), ("N-SF11", 1.78472, 25.68)])
+@pytest.mark.parametrize(
+    "name, nd, abbe",
+    [("BK7", 1.5168, 64.17), ("N-BK7", 1.5168, 64.17), ("SF11", 1.78472, 25.76), ("N-SF11", 1.78472, 25.68)],
+)
 def test_ior_meets_glass_catalogue(kernel_runner, name, nd, abbe):
     """Independent anchors: the SCHOTT catalogue's n_d and Abbe number V_d = (n_d − 1)/(n_F − n_C)."""
     n, _ = _device_ior(kernel_runner, [_sellmeier_material(name)], [0, 0, 0], [D_LINE_NM, F_LINE_NM, C_LINE_NM])
@@ -179,8 +197,11 @@ def test_fresnel_matches_angle_form(kernel_runner):
     np.testing.assert_allclose(reflectance, expected, atol=2e-5)
     normal = cos_i == 1.0
     etas_as_given = np.array(etas, np.float32).astype(np.float64)
-    np.testing.assert_allclose(reflectance.reshape(len(etas), -1)[:, normal].ravel(),
-                               ((etas_as_given - 1) / (etas_as_given + 1)) ** 2, rtol=1e-5)
+    np.testing.assert_allclose(
+        reflectance.reshape(len(etas), -1)[:, normal].ravel(),
+        ((etas_as_given - 1) / (etas_as_given + 1)) ** 2,
+        rtol=1e-5,
+    )
     sin_t = np.sqrt(1 - c.astype(np.float64) ** 2) / e
     refracts = sin_t < 1
     np.testing.assert_allclose(cos_t[refracts], np.sqrt(1 - sin_t[refracts] ** 2), atol=1e-5)
@@ -194,10 +215,12 @@ def test_smooth_dielectric_obeys_snell_and_fresnel(kernel_runner, eta):
     wo = np.concatenate([wo_outside, wo_outside * np.array([1, 1, -1, 1], np.float32)])
     n = len(wo)
     outputs = [(np.float32, (n, 4)), (np.float32, n), (np.float32, n), (np.int32, n)]
-    reflect = _run(kernel_runner, "smooth_sample", n, [wo, np.zeros(n, np.float32)], outputs,
-                   scalars=(np.float32(eta),))
-    refract = _run(kernel_runner, "smooth_sample", n, [wo, np.full(n, 0.9999999, np.float32)], outputs,
-                   scalars=(np.float32(eta),))
+    reflect = _run(
+        kernel_runner, "smooth_sample", n, [wo, np.zeros(n, np.float32)], outputs, scalars=(np.float32(eta),)
+    )
+    refract = _run(
+        kernel_runner, "smooth_sample", n, [wo, np.full(n, 0.9999999, np.float32)], outputs, scalars=(np.float32(eta),)
+    )
     n_o = _index_of_side(wo[:, 2], eta)
     n_t = _index_of_side(-wo[:, 2], eta)
     cos_o = np.abs(wo[:, 2].astype(np.float64))
@@ -220,8 +243,7 @@ def test_smooth_dielectric_obeys_snell_and_fresnel(kernel_runner, eta):
     sin_t = np.hypot(wi[:, 0], wi[:, 1])
     np.testing.assert_allclose(n_t_t * sin_t, n_o_t * sin_o, atol=3e-6)
     moving = sin_o > 1e-3
-    np.testing.assert_allclose(wi[moving, :2] / sin_t[moving, None], -wo_t[moving, :2] / sin_o[moving, None],
-                               atol=1e-5)
+    np.testing.assert_allclose(wi[moving, :2] / sin_t[moving, None], -wo_t[moving, :2] / sin_o[moving, None], atol=1e-5)
     np.testing.assert_allclose(pdf, 1 - fresnel[~total_internal], atol=2e-5)
     # Radiance crossing into index n_o from n_t scales by (n_o/n_t)² (L/n² is invariant along a refracted ray).
     np.testing.assert_allclose(weight, (n_o_t / n_t_t) ** 2, rtol=1e-6)
@@ -237,8 +259,14 @@ def test_smooth_dielectric_picks_reflection_with_fresnel_frequency(kernel_runner
     theta = np.radians(75.0)
     wo = np.repeat(_directions(np.array([theta]), 0.0), n, axis=0)
     uc = rng.random(n).astype(np.float32)
-    wi, weight, pdf, ok = _run(kernel_runner, "smooth_sample", n, [wo, uc], [
-        (np.float32, (n, 4)), (np.float32, n), (np.float32, n), (np.int32, n)], scalars=(np.float32(eta),))
+    wi, weight, pdf, ok = _run(
+        kernel_runner,
+        "smooth_sample",
+        n,
+        [wo, uc],
+        [(np.float32, (n, 4)), (np.float32, n), (np.float32, n), (np.int32, n)],
+        scalars=(np.float32(eta),),
+    )
     reflected = np.mean(wi[:, 2] > 0)
     expected = _fresnel_angles(np.array([np.cos(theta)]), eta)[0]
     sigma = np.sqrt(expected * (1 - expected) / n)
@@ -333,8 +361,9 @@ def _binned_pdf_mass(kernel_runner, wo_single, eta, alpha):
     (where cos θ barely changes) are still resolved."""
     s = CHI2_SUBDIVISIONS
     cos_edges = np.linspace(-1.0, 1.0, CHI2_BINS_COS + 1)
-    theta_edges = np.concatenate([np.linspace(a, b, s + 1)[:-1] for a, b in
-                                  zip(np.arccos(cos_edges[:-1]), np.arccos(cos_edges[1:]))] + [[0.0]])
+    theta_edges = np.concatenate(
+        [np.linspace(a, b, s + 1)[:-1] for a, b in zip(np.arccos(cos_edges[:-1]), np.arccos(cos_edges[1:]))] + [[0.0]]
+    )
     theta_mid = 0.5 * (theta_edges[:-1] + theta_edges[1:])
     cell_cos = np.abs(np.cos(theta_edges[1:]) - np.cos(theta_edges[:-1]))
     nphi = CHI2_BINS_PHI * s

@@ -58,8 +58,10 @@ DELTA_ONLY = [
     ("retroreflector-smooth", RetroreflectorMaterial(_constant(0.9), roughness=0.0)),
 ]
 EVERY = NON_DELTA + DELTA_ONLY
-ENERGY_CASES = EVERY + [("plastic-white-smooth", PlasticMaterial(_constant(1.0), ior=1.5)),
-                        ("conductor-Ag-a1", ConductorMaterial(*metal_ior("Ag"), roughness=1.0))]
+ENERGY_CASES = EVERY + [
+    ("plastic-white-smooth", PlasticMaterial(_constant(1.0), ior=1.5)),
+    ("conductor-Ag-a1", ConductorMaterial(*metal_ior("Ag"), roughness=1.0)),
+]
 INCIDENT_DEGREES = (0.0, 30.0, 60.0, 80.0, 89.0)
 
 
@@ -106,8 +108,15 @@ class Bsdf:
         n = len(wi)
         wo = np.broadcast_to(wo, wi.shape)
         f_cos, pdf = np.zeros((n, 4), np.float32), np.zeros(n, np.float32)
-        args = [self.material, self.spectra, self.lam, self.runner.buffer(_float4(wo)),
-                self.runner.buffer(_float4(wi)), self.runner.buffer(f_cos, True), self.runner.buffer(pdf, True)]
+        args = [
+            self.material,
+            self.spectra,
+            self.lam,
+            self.runner.buffer(_float4(wo)),
+            self.runner.buffer(_float4(wi)),
+            self.runner.buffer(f_cos, True),
+            self.runner.buffer(pdf, True),
+        ]
         self.runner.run("bsdf_eval_pdf", n, args, {5: f_cos, 6: pdf})
         return f_cos.astype(np.float64), pdf.astype(np.float64)
 
@@ -116,20 +125,40 @@ class Bsdf:
         wos = np.broadcast_to(wo, (n, 3)) if np.ndim(wo) == 1 else wo
         wi, weight = np.zeros((n, 4), np.float32), np.zeros((n, 4), np.float32)
         pdf, delta = np.zeros(n, np.float32), np.zeros(n, np.int32)
-        args = [self.material, self.spectra, self.lam, self.runner.buffer(_float4(wos)), self.runner.buffer(u),
-                self.runner.buffer(wi, True), self.runner.buffer(weight, True), self.runner.buffer(pdf, True),
-                self.runner.buffer(delta, True)]
+        args = [
+            self.material,
+            self.spectra,
+            self.lam,
+            self.runner.buffer(_float4(wos)),
+            self.runner.buffer(u),
+            self.runner.buffer(wi, True),
+            self.runner.buffer(weight, True),
+            self.runner.buffer(pdf, True),
+            self.runner.buffer(delta, True),
+        ]
         self.runner.run("bsdf_sample", n, args, {5: wi, 6: weight, 7: pdf, 8: delta})
-        return Samples(wi[:, :3].astype(np.float64), wi[:, 3] > 0, weight.astype(np.float64), pdf.astype(np.float64),
-                       delta.astype(bool))
+        return Samples(
+            wi[:, :3].astype(np.float64),
+            wi[:, 3] > 0,
+            weight.astype(np.float64),
+            pdf.astype(np.float64),
+            delta.astype(bool),
+        )
 
     def pdf_grid(self, wo: np.ndarray, n_cos: int, n_phi: int) -> np.ndarray:
         """pdf at cell centres, (n_cos, n_phi), uniform in cos θ ∈ [0, 1] and φ ∈ [0, 2π)."""
         pdf = np.zeros(n_cos * n_phi, np.float32)
         wo4 = np.zeros(4, np.float32)
         wo4[:3] = wo
-        args = [self.material, self.spectra, self.lam, wo4, np.int32(n_cos), np.int32(n_phi),
-                self.runner.buffer(pdf, True)]
+        args = [
+            self.material,
+            self.spectra,
+            self.lam,
+            wo4,
+            np.int32(n_cos),
+            np.int32(n_phi),
+            self.runner.buffer(pdf, True),
+        ]
         self.runner.run("bsdf_pdf_grid", n_cos * n_phi, args, {6: pdf})
         return pdf.reshape(n_cos, n_phi).astype(np.float64)
 
@@ -232,7 +261,8 @@ def test_sample_weight_is_eval_over_pdf(bsdf, name, material):
 
 
 # Bins of the chi-square test, uniform in cos θ and φ; each bin's expected probability integrates the pdf on a
-# fine grid of cells (midpoint rule), fine enough for the narrowest lobe tested (α = 0.1 near grazing incidence spans only a few hundredths of a radian in φ).
+# fine grid of cells (midpoint rule), fine enough for the narrowest lobe tested (α = 0.1 near grazing incidence
+# spans only a few hundredths of a radian in φ).
 CHI2_COS_BINS, CHI2_PHI_BINS = 10, 16
 GRID_COS, GRID_PHI = 1000, 1024
 CHI2_SAMPLES = 200_000
@@ -245,7 +275,8 @@ def _bin_probabilities(device: Bsdf, wo: np.ndarray) -> np.ndarray:
     cell = (1.0 / GRID_COS) * (2.0 * np.pi / GRID_PHI)
     grid = device.pdf_grid(wo, GRID_COS, GRID_PHI) * cell
     return grid.reshape(CHI2_COS_BINS, GRID_COS // CHI2_COS_BINS, CHI2_PHI_BINS, GRID_PHI // CHI2_PHI_BINS).sum(
-        axis=(1, 3))
+        axis=(1, 3)
+    )
 
 
 @pytest.mark.parametrize("name, material", CHI2_CASES, ids=[c[0] for c in CHI2_CASES])

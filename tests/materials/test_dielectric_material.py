@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 import spectrace
-from spectrace.errors import SpectraceError
 from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
-from spectrace.materials import material_row
 from spectrace.engine.renderer import Renderer
+from spectrace.errors import SpectraceError
+from spectrace.materials import material_row
 from spectrace.scene import load_scene
 from spectrace.scene.model import Camera, ConstantEnvironment, Scene
 from spectrace.spectral.glasses import glass
@@ -44,15 +44,21 @@ def _load(tmp_path, material_lines: str):
     return load_scene(path)
 
 
-@pytest.mark.parametrize("lines, model, n_at_d", [
-    ("", IOR_CONSTANT, 1.5),
-    ("ior = 1.33", IOR_CONSTANT, 1.33),
-    ('ior = "BK7"', IOR_SELLMEIER, 1.5168),
-    ('ior = "SF11"\nroughness = 0.2', IOR_SELLMEIER, 1.78472),
-    ("ior = { sellmeier = [1.03961212, 0.231792344, 1.01046945, 0.00600069867, 0.0200179144, 103.560653] }",
-     IOR_SELLMEIER, 1.5168),
-    ("ior = { cauchy = [1.5046, 0.00420] }", IOR_CAUCHY, 1.5046 + 0.00420 / 0.5875618**2),
-])
+@pytest.mark.parametrize(
+    "lines, model, n_at_d",
+    [
+        ("", IOR_CONSTANT, 1.5),
+        ("ior = 1.33", IOR_CONSTANT, 1.33),
+        ('ior = "BK7"', IOR_SELLMEIER, 1.5168),
+        ('ior = "SF11"\nroughness = 0.2', IOR_SELLMEIER, 1.78472),
+        (
+            "ior = { sellmeier = [1.03961212, 0.231792344, 1.01046945, 0.00600069867, 0.0200179144, 103.560653] }",
+            IOR_SELLMEIER,
+            1.5168,
+        ),
+        ("ior = { cauchy = [1.5046, 0.00420] }", IOR_CAUCHY, 1.5046 + 0.00420 / 0.5875618**2),
+    ],
+)
 def test_ior_forms_load_into_material_rows(tmp_path, lines, model, n_at_d):
     material = _load(tmp_path, lines).shapes[0].material
     assert material.ior.at(587.5618) == pytest.approx(n_at_d, abs=5e-5)
@@ -64,14 +70,17 @@ def test_ior_forms_load_into_material_rows(tmp_path, lines, model, n_at_d):
         assert row["ior_coefficients_c"][:3] == pytest.approx(material.ior.coefficients[3:])
 
 
-@pytest.mark.parametrize("lines, message", [
-    ('ior = "BK8"', "materials.glass.ior: unknown glass 'BK8'"),
-    ("ior = 0.9", "materials.glass.ior: the index of refraction must lie in"),
-    ("ior = { cauchy = [1.5] }", "materials.glass.ior"),
-    ("ior = { sellmeier = [1, 1, 1, 0.2, 0.1, 0.3] }", "materials.glass.ior: the index of refraction must lie in"),
-    ("roughness = 2", "materials.glass.roughness"),
-    ("colour = 1", "unknown key 'colour'"),
-])
+@pytest.mark.parametrize(
+    "lines, message",
+    [
+        ('ior = "BK8"', "materials.glass.ior: unknown glass 'BK8'"),
+        ("ior = 0.9", "materials.glass.ior: the index of refraction must lie in"),
+        ("ior = { cauchy = [1.5] }", "materials.glass.ior"),
+        ("ior = { sellmeier = [1, 1, 1, 0.2, 0.1, 0.3] }", "materials.glass.ior: the index of refraction must lie in"),
+        ("roughness = 2", "materials.glass.roughness"),
+        ("colour = 1", "unknown key 'colour'"),
+    ],
+)
 def test_bad_dielectrics_name_the_key(tmp_path, lines, message):
     with pytest.raises(SpectraceError) as error:
         _load(tmp_path, lines)
@@ -101,10 +110,16 @@ def test_glass_sphere_in_a_furnace_renders_as_the_environment(device, ior):
     heavy tail that the image's standard error cannot see. Without it every path through clear glass carries
     exactly k, and the only noise left is the wavelengths' (and, with dispersion, the hero's weight of 4)."""
     k = 0.8
-    scene = Scene(camera=Camera(origin=(0.0, 0.0, -4.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0),
-                  width=FURNACE_SIDE, height=FURNACE_SIDE, spp=FURNACE_SPP, max_depth=-1, seed=3,
-                  shapes=[spectrace.shape("sphere", spectrace.dielectric(ior))],
-                  lights=[ConstantEnvironment(Spectrum.constant(k))]).with_overrides(rr_depth=2000)
+    scene = Scene(
+        camera=Camera(origin=(0.0, 0.0, -4.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0),
+        width=FURNACE_SIDE,
+        height=FURNACE_SIDE,
+        spp=FURNACE_SPP,
+        max_depth=-1,
+        seed=3,
+        shapes=[spectrace.shape("sphere", spectrace.dielectric(ior))],
+        lights=[ConstantEnvironment(Spectrum.constant(k))],
+    ).with_overrides(rr_depth=2000)
     y = Renderer(scene, device).render().xyz[..., 1].ravel()
     _, standard_error = assert_furnace(y, k, slack=1e-4 * k, what=ior)
     if ior == 1.5:

@@ -26,8 +26,11 @@ CASES = [
     *[(f"conductor-a{a}", ConductorMaterial(*metal_ior("Cu"), roughness=a)) for a in (0.0, 0.0009, 0.001, 0.3)],
     *[(f"plastic-a{a}", PlasticMaterial(GREY, roughness=a)) for a in (0.0, 0.3)],
     *[(f"retroreflector-a{a}", RetroreflectorMaterial(GREY, roughness=a)) for a in (0.0, 0.2)],
-    *[(f"dielectric-{ior}-a{a}", DielectricMaterial(index_of_refraction(ior), roughness=a))
-      for ior in (1.5, "SF11") for a in (0.0, 0.2)],
+    *[
+        (f"dielectric-{ior}-a{a}", DielectricMaterial(index_of_refraction(ior), roughness=a))
+        for ior in (1.5, "SF11")
+        for a in (0.0, 0.2)
+    ],
 ]
 
 
@@ -37,8 +40,7 @@ def test_is_delta_is_the_kernels_verdict(kernel_runner, name, material):
     table = SpectrumTable()
     row = material_row(material, table)
     result = np.zeros(1, np.int32)
-    runner.run("bsdf_has_non_delta_lobe", 1, [runner.buffer(np.array([row])), runner.buffer(result, True)],
-               {1: result})
+    runner.run("bsdf_has_non_delta_lobe", 1, [runner.buffer(np.array([row])), runner.buffer(result, True)], {1: result})
     assert material.is_delta == (not result[0])
 
 

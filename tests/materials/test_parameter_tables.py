@@ -34,8 +34,11 @@ def _documented_rows() -> list[tuple[str, str, str, str, str]]:
 
 
 def test_scene_format_table_is_the_parameter_tables():
-    tables = [(name, p.name, p.doc_type(), p.doc_default(), p.doc)
-              for name, module in MATERIALS.items() for p in module.PARAMETERS]
+    tables = [
+        (name, p.name, p.doc_type(), p.doc_default(), p.doc)
+        for name, module in MATERIALS.items()
+        for p in module.PARAMETERS
+    ]
     assert _documented_rows() == tables
 
 
@@ -61,7 +64,8 @@ def _material_scene(tmp_path, name: str, key: str, value: float) -> Path:
         required = {"metal": '"Au"'}
     lines = "".join(f"{k} = {v}\n" for k, v in {**required, key: repr(value)}.items())
     path = tmp_path / "scene.toml"
-    path.write_text(f"""
+    path.write_text(
+        f"""
 [camera]
 origin = [0, 0, 5]
 target = [0, 0, 0]
@@ -75,7 +79,9 @@ type = "{name}"
 [[shapes]]
 type = "sphere"
 material = "m"
-""", encoding="utf-8")
+""",
+        encoding="utf-8",
+    )
     return path
 
 
@@ -90,8 +96,14 @@ def _documented_float_ranges():
 @pytest.mark.parametrize("name, key, low, high, low_open, high_open", list(_documented_float_ranges()))
 def test_loader_enforces_the_documented_range(tmp_path, name, key, low, high, low_open, high_open):
     step = 1e-6 * max(1.0, abs(high))
-    cases = [(low, not low_open), (low - step, False), (low + step, True),
-             (high, not high_open), (high + step, False), (high - step, True)]
+    cases = [
+        (low, not low_open),
+        (low - step, False),
+        (low + step, True),
+        (high, not high_open),
+        (high + step, False),
+        (high - step, True),
+    ]
     for value, accepted in cases:
         path = _material_scene(tmp_path, name, key, value)
         if accepted:

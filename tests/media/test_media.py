@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 import spectrace
+from scene_text import CAMERA_FILM_GREY
+from spectrace.engine.device_types import MEDIUM_DTYPE
+from spectrace.engine.meters import IrradianceMeter, RadianceMeter, measure
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.engine.device_types import MEDIUM_DTYPE
-from spectrace.engine.meters import IrradianceMeter, RadianceMeter, measure
 from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Camera, ConstantEnvironment, DiffuseMaterial, Medium, Scene, Shape
 from spectrace.spectral.colorimetry import reflectance_to_xyz, xyz_to_linear_srgb
@@ -24,8 +25,6 @@ from spectrace.spectral.illuminants import d65_normalised
 from spectrace.spectral.media_presets import coefficient_spectrum, medium_presets
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
-
-from scene_text import CAMERA_FILM_GREY
 from stats_toolkit import assert_chi_square_fits, assert_within_standard_errors, mean_and_standard_error
 
 LANES_NM = np.array([420.0, 500.0, 580.0, 680.0])
@@ -51,8 +50,16 @@ def test_free_flight_weights_give_each_lane_its_own_transport(kernel_runner, her
     n, t_surface = 200_000, 0.7
     scattered = np.empty((n, 4), np.float32)
     surface = np.empty((n, 4), np.float32)
-    args = [runner.buffer(table.data), runner.buffer(medium), LANES_NM.astype(np.float32), np.float32(t_surface),
-            np.int32(hero_only), np.uint32(3), runner.buffer(scattered, True), runner.buffer(surface, True)]
+    args = [
+        runner.buffer(table.data),
+        runner.buffer(medium),
+        LANES_NM.astype(np.float32),
+        np.float32(t_surface),
+        np.int32(hero_only),
+        np.uint32(3),
+        runner.buffer(scattered, True),
+        runner.buffer(surface, True),
+    ]
     runner.run("free_flights", n, args, {6: scattered, 7: surface})
     sa, ss = sigma_a.evaluate(LANES_NM), sigma_s.evaluate(LANES_NM)
     st = sa + ss
@@ -72,8 +79,12 @@ def test_phase_sampling_follows_henyey_greenstein(kernel_runner, g):
     n = 100_000
     directions = np.empty((n, 4), np.float32)
     phase = np.empty(n, np.float32)
-    runner.run("phase_samples", n, [np.float32(g), np.uint32(5), runner.buffer(directions, True),
-                                    runner.buffer(phase, True)], {2: directions, 3: phase})
+    runner.run(
+        "phase_samples",
+        n,
+        [np.float32(g), np.uint32(5), runner.buffer(directions, True), runner.buffer(phase, True)],
+        {2: directions, 3: phase},
+    )
     d = directions[:, :3].astype(np.float64)
     assert np.allclose(np.linalg.norm(d, axis=1), 1.0, atol=1e-5)
     mu = d[:, 2]
@@ -98,8 +109,14 @@ def test_phase_sampling_follows_henyey_greenstein(kernel_runner, g):
 
 
 def _scene(shapes, lights=(), max_depth=-1):
-    return Scene(camera=Camera((0.0, 0.0, -1.0), (0.0, 0.0, 0.0)), width=1, height=1, shapes=list(shapes),
-                 lights=list(lights), max_depth=max_depth)
+    return Scene(
+        camera=Camera((0.0, 0.0, -1.0), (0.0, 0.0, 0.0)),
+        width=1,
+        height=1,
+        shapes=list(shapes),
+        lights=list(lights),
+        max_depth=max_depth,
+    )
 
 
 @pytest.mark.slow
@@ -109,8 +126,14 @@ def test_an_absorbing_medium_darkens_but_never_brightens_the_environment(device)
     medium = Medium(sigma_a=_wavy(0.4), sigma_s=_wavy(2.0, 2.0), g=0.5)
     sphere = Shape(mesh=primitives.sphere(3), material=None, interior=medium)
     scene = _scene([sphere], [ConstantEnvironment(Spectrum.constant(k))]).with_overrides(rr_depth=2000)
-    reading = measure(scene, RadianceMeter((0.0, 0.0, -3.0), (0.0, 0.0, 1.0)), wavelengths_nm=LANES_NM,
-                      streams=32, samples_per_item=32, device=device)
+    reading = measure(
+        scene,
+        RadianceMeter((0.0, 0.0, -3.0), (0.0, 0.0, 1.0)),
+        wavelengths_nm=LANES_NM,
+        streams=32,
+        samples_per_item=32,
+        device=device,
+    )
     value, se = reading.spectral, reading.spectral_standard_error
     unscattered = k * np.exp(-(medium.sigma_a.evaluate(LANES_NM) + medium.sigma_s.evaluate(LANES_NM)) * 2 * radius)
     assert np.all(value + 4 * se < k), (value, se)
@@ -118,9 +141,13 @@ def test_an_absorbing_medium_darkens_but_never_brightens_the_environment(device)
 
 
 def _slab(half_width: float, bottom: float, thickness: float):
-    return apply_transform(primitives.cube(), transform_matrix(
-        [{"scale": [half_width, thickness / 2, half_width]}, {"translate": [0.0, bottom + thickness / 2, 0.0]}],
-        where="test"))
+    return apply_transform(
+        primitives.cube(),
+        transform_matrix(
+            [{"scale": [half_width, thickness / 2, half_width]}, {"translate": [0.0, bottom + thickness / 2, 0.0]}],
+            where="test",
+        ),
+    )
 
 
 def _path_length_in_slab(dx, dy, dz, half_width, bottom, thickness):
@@ -137,12 +164,21 @@ def test_shadow_rays_through_an_index_matched_absorber_carry_its_transmittance(d
     weighs it against the cosine-sampled rays; a blocking slab would lose the light-sampled share."""
     k, half_width, bottom, thickness = 1.0, 1.5, 0.2, 0.3
     sigma_a = _wavy(2.0)
-    slab = Shape(mesh=_slab(half_width, bottom, thickness), material=None,
-                 interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()))
+    slab = Shape(
+        mesh=_slab(half_width, bottom, thickness),
+        material=None,
+        interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()),
+    )
     scene = _scene([slab], [ConstantEnvironment(Spectrum.constant(k))])
     wavelengths = LANES_NM[:2]
-    reading = measure(scene, IrradianceMeter((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)), wavelengths_nm=wavelengths,
-                      streams=64, samples_per_item=64, device=device)
+    reading = measure(
+        scene,
+        IrradianceMeter((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+        wavelengths_nm=wavelengths,
+        streams=64,
+        samples_per_item=64,
+        device=device,
+    )
     mu = (np.arange(1000) + 0.5) / 1000
     phi = (np.arange(1000) + 0.5) / 1000 * 2 * np.pi
     mu, phi = np.meshgrid(mu, phi, indexing="ij")
@@ -151,7 +187,10 @@ def test_shadow_rays_through_an_index_matched_absorber_carry_its_transmittance(d
     for i, sa in enumerate(sigma_a.evaluate(wavelengths)):
         expected = k * np.mean(np.exp(-sa * length) * mu) * 2 * np.pi
         assert abs(reading.spectral[i] - expected) <= 4 * reading.spectral_standard_error[i] + 1e-3 * expected, (
-            reading.spectral[i], expected, reading.spectral_standard_error[i])
+            reading.spectral[i],
+            expected,
+            reading.spectral_standard_error[i],
+        )
         assert expected < 0.8 * np.pi * k  # the slab matters
 
 
@@ -161,16 +200,30 @@ def test_an_area_light_behind_an_absorber_is_attenuated_for_both_strategies(devi
     radiance, light_half, height = 2.0, 0.5, 1.0
     half_width, bottom, thickness = 1.5, 0.3, 0.25
     sigma_a = _wavy(1.5, 1.0)
-    lamp_mesh = apply_transform(primitives.rectangle(), transform_matrix(
-        [{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"scale": light_half}, {"translate": [0.0, height, 0.0]}],
-        where="test"))
-    lamp = Shape(mesh=lamp_mesh, material=DiffuseMaterial(Spectrum.zeros()),
-                 emitter=AreaEmitter(Spectrum.constant(radiance)))
-    slab = Shape(mesh=_slab(half_width, bottom, thickness), material=None,
-                 interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()))
+    lamp_mesh = apply_transform(
+        primitives.rectangle(),
+        transform_matrix(
+            [{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"scale": light_half}, {"translate": [0.0, height, 0.0]}],
+            where="test",
+        ),
+    )
+    lamp = Shape(
+        mesh=lamp_mesh, material=DiffuseMaterial(Spectrum.zeros()), emitter=AreaEmitter(Spectrum.constant(radiance))
+    )
+    slab = Shape(
+        mesh=_slab(half_width, bottom, thickness),
+        material=None,
+        interior=Medium(sigma_a=sigma_a, sigma_s=Spectrum.zeros()),
+    )
     wavelengths = LANES_NM[2:]
-    reading = measure(_scene([lamp, slab]), IrradianceMeter((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
-                      wavelengths_nm=wavelengths, streams=64, samples_per_item=64, device=device)
+    reading = measure(
+        _scene([lamp, slab]),
+        IrradianceMeter((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+        wavelengths_nm=wavelengths,
+        streams=64,
+        samples_per_item=64,
+        device=device,
+    )
     grid = (np.arange(400) + 0.5) / 400 * 2 * light_half - light_half
     x, z = np.meshgrid(grid, grid, indexing="ij")
     r = np.sqrt(x**2 + z**2 + height**2)
@@ -180,7 +233,10 @@ def test_an_area_light_behind_an_absorber_is_attenuated_for_both_strategies(devi
     for i, sa in enumerate(sigma_a.evaluate(wavelengths)):
         expected = radiance * np.mean(np.exp(-sa * length) * cos * cos / r**2) * area
         assert abs(reading.spectral[i] - expected) <= 4 * reading.spectral_standard_error[i] + 1e-3 * expected, (
-            reading.spectral[i], expected, reading.spectral_standard_error[i])
+            reading.spectral[i],
+            expected,
+            reading.spectral_standard_error[i],
+        )
 
 
 def test_a_null_boundary_costs_no_path_segment(device):
@@ -188,13 +244,23 @@ def test_a_null_boundary_costs_no_path_segment(device):
     also when seen through an index-matched box of vacuum (σa = σs = 0) that also hangs between it and half of
     its sky: crossing the boundaries adds no segment and blocks nothing."""
     plane = Shape(mesh=primitives.rectangle(), material=DiffuseMaterial(Spectrum.constant(0.5)))
-    box = apply_transform(primitives.cube(), transform_matrix([{"scale": 0.5}, {"translate": [0, 0, 0.7]}],
-                                                              where="test"))
+    box = apply_transform(
+        primitives.cube(), transform_matrix([{"scale": 0.5}, {"translate": [0, 0, 0.7]}], where="test")
+    )
     vacuum = Shape(mesh=box, material=None, interior=Medium(Spectrum.zeros(), Spectrum.zeros()))
     light = ConstantEnvironment(Spectrum.constant(1.0))
     meter = RadianceMeter((0.0, 0.0, 2.0), (0.0, 0.0, -1.0))
-    readings = [measure(_scene(shapes, [light], max_depth=2), meter, wavelengths_nm=[550.0], streams=16,
-                        samples_per_item=16, device=device) for shapes in ([plane], [plane, vacuum])]
+    readings = [
+        measure(
+            _scene(shapes, [light], max_depth=2),
+            meter,
+            wavelengths_nm=[550.0],
+            streams=16,
+            samples_per_item=16,
+            device=device,
+        )
+        for shapes in ([plane], [plane, vacuum])
+    ]
     for reading in readings:
         assert abs(reading.spectral[0] - 0.5) <= 4 * reading.spectral_standard_error[0], reading.spectral
         assert reading.spectral_standard_error[0] < 0.01
@@ -202,10 +268,13 @@ def test_a_null_boundary_costs_no_path_segment(device):
 
 # ---------------------------------------------------------------- scene files, presets, API
 
-SCENE = CAMERA_FILM_GREY + """
+SCENE = (
+    CAMERA_FILM_GREY
+    + """
 [[shapes]]
 type = "sphere"
 """
+)
 
 
 def _load(tmp_path, shape: str):
@@ -215,8 +284,9 @@ def _load(tmp_path, shape: str):
 
 
 def test_interior_coefficients_load_in_inverse_scene_units(tmp_path):
-    scene = _load(tmp_path, 'interior = { sigma_a = { value = 0.5 }, sigma_s = { rgb = [1, 2, 3] }, scale = 10, '
-                            'g = 0.4 }')
+    scene = _load(
+        tmp_path, "interior = { sigma_a = { value = 0.5 }, sigma_s = { rgb = [1, 2, 3] }, scale = 10, g = 0.4 }"
+    )
     shape = scene.shapes[0]
     assert shape.material is None
     assert shape.interior.sigma_a.values == pytest.approx(5.0)
@@ -237,17 +307,20 @@ def test_presets_reproduce_the_published_table(tmp_path):
     assert set(medium_presets()) >= {"skin1", "skin2", "marble", "wholemilk", "skimmilk", "ketchup", "apple"}
 
 
-@pytest.mark.parametrize("shape, key, message", [
-    ("", "shapes[0]", "needs material"),
-    ('interior = { preset = "marbel" }', "shapes[0].interior.preset", "unknown medium preset 'marbel'"),
-    ('interior = { preset = "marble", sigma_a = { value = 1 } }', "shapes[0].interior", "either preset or"),
-    ("interior = { scale = 2 }", "shapes[0].interior", "either preset or"),
-    ('interior = { preset = "marble", g = 1.0 }', "shapes[0].interior.g", "less than 1"),
-    ('interior = { preset = "marble", scale = 0 }', "shapes[0].interior.scale", "greater than 0"),
-    ('interior = { preset = "marble", sigma = 1 }', "shapes[0].interior.sigma", "unknown key 'sigma'"),
-    ("interior = { sigma_a = { value = -1 } }", "shapes[0].interior.sigma_a", "negative"),
-    ("interior = { sigma_s = { blackbody = 3000 } }", "shapes[0].interior.sigma_s", "medium coefficient"),
-])
+@pytest.mark.parametrize(
+    "shape, key, message",
+    [
+        ("", "shapes[0]", "needs material"),
+        ('interior = { preset = "marbel" }', "shapes[0].interior.preset", "unknown medium preset 'marbel'"),
+        ('interior = { preset = "marble", sigma_a = { value = 1 } }', "shapes[0].interior", "either preset or"),
+        ("interior = { scale = 2 }", "shapes[0].interior", "either preset or"),
+        ('interior = { preset = "marble", g = 1.0 }', "shapes[0].interior.g", "less than 1"),
+        ('interior = { preset = "marble", scale = 0 }', "shapes[0].interior.scale", "greater than 0"),
+        ('interior = { preset = "marble", sigma = 1 }', "shapes[0].interior.sigma", "unknown key 'sigma'"),
+        ("interior = { sigma_a = { value = -1 } }", "shapes[0].interior.sigma_a", "negative"),
+        ("interior = { sigma_s = { blackbody = 3000 } }", "shapes[0].interior.sigma_s", "medium coefficient"),
+    ],
+)
 def test_bad_interiors_are_reported_with_their_key_path(tmp_path, shape, key, message):
     with pytest.raises(SpectraceError) as error:
         _load(tmp_path, shape)

@@ -13,8 +13,6 @@ import zipfile
 import numpy as np
 import pytest
 
-from spectrace.errors import SpectraceError
-from spectrace.io.exr import read_exr
 from spectrace.engine import checkpoint as checkpoints
 from spectrace.engine.checkpoint import (
     PeriodicCheckpoints,
@@ -23,6 +21,8 @@ from spectrace.engine.checkpoint import (
     save_checkpoint,
 )
 from spectrace.engine.renderer import Renderer
+from spectrace.errors import SpectraceError
+from spectrace.io.exr import read_exr
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 
@@ -81,11 +81,14 @@ def test_the_partial_image_has_its_true_sample_count(device):
     assert stopped.spp == 6 and np.array_equal(stopped.xyz, fresh.xyz)
 
 
-@pytest.mark.parametrize("change, says", [
-    ({"seed": 6}, "rendered with seed 5 but this render uses seed 6"),
-    ({"width": 21}, "is of a 20x14 film but this render is 21x14"),
-    ({"max_depth": 3}, "belongs to another scene or other settings"),
-])
+@pytest.mark.parametrize(
+    "change, says",
+    [
+        ({"seed": 6}, "rendered with seed 5 but this render uses seed 6"),
+        ({"width": 21}, "is of a 20x14 film but this render is 21x14"),
+        ({"max_depth": 3}, "belongs to another scene or other settings"),
+    ],
+)
 def test_a_checkpoint_of_another_render_is_refused(device, tmp_path, change, says):
     path = tmp_path / "state.npz"
     first = Renderer(_cornell(), device)
@@ -156,8 +159,10 @@ def test_damaged_checkpoints_are_refused(device, tmp_path):
     wrong_shape = np.zeros((5, 4), np.float32)
     refused(_rewrite(good, tmp_path / "shape.npz", {"state_film": wrong_shape}), "checksum does not match")
     refused(_rewrite(good, tmp_path / "no_sum.npz", dropped={"checksum"}), "missing or malformed 'checksum'")
-    refused(_rewrite(good, tmp_path / "future.npz", {"format": np.array("spectrace-checkpoint-9")}),
-            "written by another version of spectrace")
+    refused(
+        _rewrite(good, tmp_path / "future.npz", {"format": np.array("spectrace-checkpoint-9")}),
+        "written by another version of spectrace",
+    )
 
     # Consistent files (the checksum matches) whose numbers cannot be a render's state.
     def written(name, **state_changes):
@@ -166,12 +171,18 @@ def test_damaged_checkpoints_are_refused(device, tmp_path):
         checkpoints.write_checkpoint(path, dataclasses.replace(saved, state=state))
         return path
 
-    refused(written("nan_sums.npz", buffers={**saved.state.buffers, "film": film}),
-            "damaged checkpoint: the film buffer holds 1 NaN or infinite values")
-    refused(written("wrong_shape.npz", buffers={**saved.state.buffers, "film": wrong_shape}),
-            "the film buffer is float32 of shape (5, 4); a 20x14 film needs float32 of shape (280, 4)")
-    refused(written("wrong_type.npz", buffers={**saved.state.buffers, "ray_counts": np.zeros(280, np.float64)}),
-            "the ray_counts buffer is float64 of shape (280,)")
+    refused(
+        written("nan_sums.npz", buffers={**saved.state.buffers, "film": film}),
+        "damaged checkpoint: the film buffer holds 1 NaN or infinite values",
+    )
+    refused(
+        written("wrong_shape.npz", buffers={**saved.state.buffers, "film": wrong_shape}),
+        "the film buffer is float32 of shape (5, 4); a 20x14 film needs float32 of shape (280, 4)",
+    )
+    refused(
+        written("wrong_type.npz", buffers={**saved.state.buffers, "ray_counts": np.zeros(280, np.float64)}),
+        "the ray_counts buffer is float64 of shape (280,)",
+    )
     refused(written("no_rays.npz", buffers={"film": saved.state.buffers["film"]}), "the ray_counts buffer is missing")
     refused(written("count.npz", samples_done=-3), "sample count -3 is outside 0..1048576")
     refused(written("time.npz", render_seconds=float("inf")), "render time inf s is not a finite")
@@ -182,8 +193,9 @@ def test_checkpoints_of_the_first_format_still_resume(device, tmp_path):
     renderer = Renderer(_cornell(), device)
     renderer.run_pass(2)
     save_checkpoint(tmp_path / "new.npz", renderer)
-    old = _rewrite(tmp_path / "new.npz", tmp_path / "old.npz", {"format": np.array("spectrace-checkpoint-1")},
-                   dropped={"checksum"})
+    old = _rewrite(
+        tmp_path / "new.npz", tmp_path / "old.npz", {"format": np.array("spectrace-checkpoint-1")}, dropped={"checksum"}
+    )
     resumed = Renderer(_cornell(), device)
     resume_render(resumed, old)
     assert resumed.samples_done == 2
@@ -224,9 +236,23 @@ def test_sigterm_writes_the_true_partial_image_and_the_render_resumes_exactly(de
     partial, resumed, state = tmp_path / "partial.exr", tmp_path / "resumed.exr", tmp_path / "state.npz"
     size = ["--width", "16", "--height", "12", "--seed", "3", "-q"]
     process = subprocess.Popen(
-        _spectrace("render", str(CORNELL), "-o", str(partial), "--spp", "1000000", *size, "--checkpoint", str(state),
-                   "--checkpoint-interval", "0"),
-        stderr=subprocess.PIPE, text=True, env=os.environ.copy())
+        _spectrace(
+            "render",
+            str(CORNELL),
+            "-o",
+            str(partial),
+            "--spp",
+            "1000000",
+            *size,
+            "--checkpoint",
+            str(state),
+            "--checkpoint-interval",
+            "0",
+        ),
+        stderr=subprocess.PIPE,
+        text=True,
+        env=os.environ.copy(),
+    )
     try:
         while not process.stderr.readline().startswith("device: "):  # the device is open, the render starts
             assert process.poll() is None
@@ -246,8 +272,12 @@ def test_sigterm_writes_the_true_partial_image_and_the_render_resumes_exactly(de
     assert 0 < done < 1000000 and read_checkpoint(state).state.samples_done == done
 
     target = done + 5
-    result = subprocess.run(_spectrace("render", str(CORNELL), "-o", str(resumed), "--spp", str(target), *size,
-                                       "--resume", str(state)), capture_output=True, text=True, timeout=300)
+    result = subprocess.run(
+        _spectrace("render", str(CORNELL), "-o", str(resumed), "--spp", str(target), *size, "--resume", str(state)),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert result.returncode == 0, result.stderr
     assert f"resumed {state}: {done} spp done" in " ".join(result.stderr.split())
     resumed_channels, resumed_header = read_exr(resumed)
@@ -288,24 +318,55 @@ def test_a_fresh_render_never_replaces_an_existing_checkpoint(device, tmp_path, 
     before = state.read_bytes()
     size = ["--width", "8", "--height", "6", "--seed", "5", "-q", "--checkpoint-interval", "0"]
 
-    again = subprocess.run(_spectrace("render", str(CORNELL), "-o", "b.png", "--spp", "2", "--checkpoint",
-                                      str(state), *size), capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    again = subprocess.run(
+        _spectrace("render", str(CORNELL), "-o", "b.png", "--spp", "2", "--checkpoint", str(state), *size),
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=300,
+    )
     line = _one_error_line(again)
     assert line.startswith(f"error: {state}: ") and f"use --resume {state} to continue" in line
     assert "--overwrite to start again" in line
     assert state.read_bytes() == before and not (tmp_path / "b.png").exists()
 
     monkeypatch.chdir(tmp_path)
-    status, stderr = _cli(monkeypatch, capsys, "render", str(CORNELL), "-o", "c.png", "--spp", "8", "--resume",
-                          str(state), "--checkpoint", "./state.npz", *size)
+    status, stderr = _cli(
+        monkeypatch,
+        capsys,
+        "render",
+        str(CORNELL),
+        "-o",
+        "c.png",
+        "--spp",
+        "8",
+        "--resume",
+        str(state),
+        "--checkpoint",
+        "./state.npz",
+        *size,
+    )
     assert status == 0, stderr
     assert read_checkpoint(state).state.samples_done == 8
-    status, stderr = _cli(monkeypatch, capsys, "render", str(CORNELL), "-o", "d.png", "--spp", "2",
-                          "--checkpoint", "state.npz", "--overwrite", *size)
+    status, stderr = _cli(
+        monkeypatch,
+        capsys,
+        "render",
+        str(CORNELL),
+        "-o",
+        "d.png",
+        "--spp",
+        "2",
+        "--checkpoint",
+        "state.npz",
+        "--overwrite",
+        *size,
+    )
     assert status == 0, stderr
     assert read_checkpoint(state).state.samples_done == 2
-    status, stderr = _cli(monkeypatch, capsys, "render", str(CORNELL), "-o", "e.png", "--resume", "state.npz",
-                          "--overwrite", *size)
+    status, stderr = _cli(
+        monkeypatch, capsys, "render", str(CORNELL), "-o", "e.png", "--resume", "state.npz", "--overwrite", *size
+    )
     assert status == 2 and stderr == "error: --overwrite: starts the render afresh, so it cannot go with --resume\n"
 
 
@@ -317,9 +378,26 @@ def test_resuming_a_damaged_checkpoint_is_one_line_naming_it(device, tmp_path):
     film = saved.state.buffers["film"].copy()
     film[3] = np.nan
     damaged = _rewrite(good, tmp_path / "damaged.npz", {"state_film": film})
-    result = subprocess.run(_spectrace("render", str(CORNELL), "-o", str(tmp_path / "x.png"), "--width", "8",
-                                       "--height", "6", "--seed", "5", "--resume", str(damaged), "-q"),
-                            capture_output=True, text=True, timeout=300)
+    result = subprocess.run(
+        _spectrace(
+            "render",
+            str(CORNELL),
+            "-o",
+            str(tmp_path / "x.png"),
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "--seed",
+            "5",
+            "--resume",
+            str(damaged),
+            "-q",
+        ),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     line = _one_error_line(result)
     assert line == f"error: {damaged}: the checkpoint's checksum does not match its contents: the file is damaged"
     assert not (tmp_path / "x.png").exists()
@@ -407,8 +485,12 @@ def test_sigkill_at_any_moment_leaves_the_old_or_the_new_file(tmp_path):
     rng = np.random.default_rng(2024)
     # 0 s: killed before writing anything; 0.5 s: long after the first complete write; the rest: during writes.
     delays = [0.0, 0.0, 0.5, 0.5] + list(rng.uniform(0.0, 0.08, 26))
-    harness = subprocess.run([sys.executable, "-c", _KILL_HARNESS, str(tmp_path), json.dumps(delays)],
-                             capture_output=True, text=True, timeout=300)
+    harness = subprocess.run(
+        [sys.executable, "-c", _KILL_HARNESS, str(tmp_path), json.dumps(delays)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert harness.returncode == 0, harness.stderr
     orphaned_temporaries = json.loads(harness.stdout)
     seen = {}

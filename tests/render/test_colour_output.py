@@ -29,12 +29,12 @@ pytestmark = pytest.mark.filterwarnings("ignore:Aligning")
 # whites D65 = (0.95047, 1, 1.08883) and D50 = (0.96422, 1, 0.82521), to 7 decimals.
 LINDBLOOM_D65 = np.array([0.95047, 1.0, 1.08883])
 LINDBLOOM_D50 = np.array([0.96422, 1.0, 0.82521])
-LINDBLOOM_BRADFORD_D65_TO_D50 = np.array([[1.0478112, 0.0228866, -0.0501270],
-                                          [0.0295424, 0.9904844, -0.0170491],
-                                          [-0.0092345, 0.0150436, 0.7521316]])
-LINDBLOOM_VON_KRIES_D65_TO_D50 = np.array([[1.0160803, 0.0552297, -0.0521326],
-                                           [0.0060666, 0.9955661, -0.0012235],
-                                           [0.0, 0.0, 0.7578869]])
+LINDBLOOM_BRADFORD_D65_TO_D50 = np.array(
+    [[1.0478112, 0.0228866, -0.0501270], [0.0295424, 0.9904844, -0.0170491], [-0.0092345, 0.0150436, 0.7521316]]
+)
+LINDBLOOM_VON_KRIES_D65_TO_D50 = np.array(
+    [[1.0160803, 0.0552297, -0.0521326], [0.0060666, 0.9955661, -0.0012235], [0.0, 0.0, 0.7578869]]
+)
 
 # Primaries and white (CIE 1931 xy) as the standards publish them: SMPTE EG 432-1 (Display P3: the DCI-P3
 # primaries with D65) and ITU-R BT.2020 Table 3.
@@ -51,8 +51,10 @@ def xy_to_xyz(xy) -> np.ndarray:
     return np.array([x / y, 1.0, (1.0 - x - y) / y])
 
 
-@pytest.mark.parametrize("method, published", [(Adaptation.BRADFORD, LINDBLOOM_BRADFORD_D65_TO_D50),
-                                                (Adaptation.VON_KRIES, LINDBLOOM_VON_KRIES_D65_TO_D50)])
+@pytest.mark.parametrize(
+    "method, published",
+    [(Adaptation.BRADFORD, LINDBLOOM_BRADFORD_D65_TO_D50), (Adaptation.VON_KRIES, LINDBLOOM_VON_KRIES_D65_TO_D50)],
+)
 def test_adaptation_matrices_match_published_ones(method, published):
     np.testing.assert_allclose(adaptation_matrix(LINDBLOOM_D65, LINDBLOOM_D50, method), published, atol=6e-8)
 
@@ -83,11 +85,14 @@ def _white_diffuser_xyz(illuminant: colour.SpectralDistribution) -> np.ndarray:
     return xyz / xyz[1]
 
 
-@pytest.mark.parametrize("white, illuminant", [
-    ("A", colour.SDS_ILLUMINANTS["A"]),
-    ("FL2", colour.SDS_ILLUMINANTS["FL2"]),
-    ("3200K", colour.sd_blackbody(3200, colour.SpectralShape(360, 830, 1))),
-])
+@pytest.mark.parametrize(
+    "white, illuminant",
+    [
+        ("A", colour.SDS_ILLUMINANTS["A"]),
+        ("FL2", colour.SDS_ILLUMINANTS["FL2"]),
+        ("3200K", colour.sd_blackbody(3200, colour.SpectralShape(360, 830, 1))),
+    ],
+)
 @pytest.mark.parametrize("space", [ColourSpace.SRGB, ColourSpace.DISPLAY_P3, ColourSpace.REC2020])
 @pytest.mark.parametrize("method", list(Adaptation))
 def test_white_balance_makes_the_illuminant_neutral(white, illuminant, space, method):
@@ -117,8 +122,9 @@ def test_rec2020_curve_is_the_published_oetf():
     linear = np.array([0.0, 0.01, 0.018, 0.1, 0.5, 1.0])
     alpha, beta = 1.099, 0.018
     expected = np.where(linear < beta, 4.5 * linear, alpha * linear**0.45 - (alpha - 1.0))
-    np.testing.assert_allclose(encode_for_display(linear[:, None].repeat(3, 1), ColourSpace.REC2020)[:, 0],
-                               expected, atol=1e-9)
+    np.testing.assert_allclose(
+        encode_for_display(linear[:, None].repeat(3, 1), ColourSpace.REC2020)[:, 0], expected, atol=1e-9
+    )
 
 
 def test_p3_files_say_what_they_hold(tmp_path):
@@ -155,9 +161,28 @@ def test_render_command_colour_options(tmp_path):
     from spectrace.resources import scenes_dir
 
     out = tmp_path / "balanced.exr"
-    args = [sys.executable, "-m", "spectrace", "render", str(scenes_dir() / "cornell_box.toml"), "-o", str(out),
-            "--spp", "1", "--width", "8", "--height", "6", "-q", "--colour-space", "rec2020",
-            "--white-balance", "cornell_box/light", "--adaptation", "von-kries"]
+    args = [
+        sys.executable,
+        "-m",
+        "spectrace",
+        "render",
+        str(scenes_dir() / "cornell_box.toml"),
+        "-o",
+        str(out),
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "-q",
+        "--colour-space",
+        "rec2020",
+        "--white-balance",
+        "cornell_box/light",
+        "--adaptation",
+        "von-kries",
+    ]
     result = subprocess.run(args, capture_output=True, text=True, env=os.environ.copy(), timeout=600)
     assert result.returncode == 0, result.stderr
     channels, header = read_exr(out)
@@ -165,8 +190,12 @@ def test_render_command_colour_options(tmp_path):
     assert header["spectrace:white_balance"] == "cornell_box/light (von-kries)"
     film = np.stack([channels["X"], channels["Y"], channels["Z"]], axis=-1)
     balance = parse_white_balance("cornell_box/light", "von-kries")
-    np.testing.assert_allclose(channels["RGB"], xyz_to_output(film, ColourSpace.REC2020, balance), rtol=1e-5,
-                               atol=1e-7)
-    bad = subprocess.run(args[:-4] + ["--colour-space", "xyz", "-o", str(tmp_path / "x.png")], capture_output=True,
-                         text=True, env=os.environ.copy(), timeout=600)
+    np.testing.assert_allclose(channels["RGB"], xyz_to_output(film, ColourSpace.REC2020, balance), rtol=1e-5, atol=1e-7)
+    bad = subprocess.run(
+        args[:-4] + ["--colour-space", "xyz", "-o", str(tmp_path / "x.png")],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=600,
+    )
     assert bad.returncode == 2 and "--colour-space" in bad.stderr and "Traceback" not in bad.stderr

@@ -76,14 +76,26 @@ def test_the_bundled_scene_is_the_published_box():
         rows = list(csv.DictReader(line for line in stream if not line.startswith("#")))
     by_surface = {"white": "white surfaces", "red": "left wall", "green": "right wall", "light": "light"}
     for surface, shape_name in by_surface.items():
-        quads = np.array([[[row[f"{axis}{corner}"] for axis in "xyz"] for corner in range(4)]
-                          for row in rows if row["surface"] == surface], dtype=float) / 1000.0
+        quads = (
+            np.array(
+                [
+                    [[row[f"{axis}{corner}"] for axis in "xyz"] for corner in range(4)]
+                    for row in rows
+                    if row["surface"] == surface
+                ],
+                dtype=float,
+            )
+            / 1000.0
+        )
         if surface == "light":
             quads[..., 1] -= 0.0005
         expected = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]], axis=0)
         mesh = next(shape.mesh for shape in scene.shapes if shape.name == shape_name)
         found = np.stack(mesh.triangles(), axis=1)
-        key = lambda triangles: sorted(map(tuple, np.round(triangles.reshape(len(triangles), 9), 6)))
+
+        def key(triangles):
+            return sorted(map(tuple, np.round(triangles.reshape(len(triangles), 9), 6)))
+
         assert key(found) == key(expected), shape_name
     np.testing.assert_allclose(scene.camera.origin, (0.278, 0.273, -0.800))
     direction = np.subtract(scene.camera.target, scene.camera.origin)

@@ -10,12 +10,12 @@ import sys
 import numpy as np
 import pytest
 
-from spectrace.errors import SpectraceError
-from spectrace.io.exr import read_exr
 from spectrace.benchmarks.kernel_shapes import Variant, run_kernel_shape_bench
 from spectrace.engine.launch import render_work_group
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.wavefront import WavefrontRenderer, make_renderer
+from spectrace.errors import SpectraceError
+from spectrace.io.exr import read_exr
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 
@@ -36,7 +36,7 @@ SCENES = {
 def _region_differences(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per region and XYZ channel: the mean of the per-pixel differences and its standard error. The pixels'
     differences are independent with mean zero when both images estimate the same expectation."""
-    d = (a.astype(np.float64) - b.astype(np.float64))
+    d = a.astype(np.float64) - b.astype(np.float64)
     blocks = d.reshape(SIZE // REGION, REGION, SIZE // REGION, REGION, 3).transpose(0, 2, 1, 3, 4)
     blocks = blocks.reshape(-1, REGION * REGION, 3)
     return blocks.mean(axis=1), blocks.std(axis=1, ddof=1) / np.sqrt(REGION * REGION)
@@ -97,15 +97,29 @@ def test_unknown_kernel_shape_is_refused(device):
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "spectrace", *args], capture_output=True, text=True,
-                          env=os.environ.copy(), timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, env=os.environ.copy(), timeout=600
+    )
 
 
 @pytest.mark.subprocess
 def test_render_command_runs_the_wavefront(tmp_path):
     out = tmp_path / "wavefront.exr"
-    result = _cli("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(out), "--spp", "2", "--width", "16",
-                  "--height", "12", "--kernel", "wavefront", "-q")
+    result = _cli(
+        "render",
+        str(scenes_dir() / "cornell_box.toml"),
+        "-o",
+        str(out),
+        "--spp",
+        "2",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--kernel",
+        "wavefront",
+        "-q",
+    )
     assert result.returncode == 0, result.stderr
     channels, header = read_exr(out)
     assert header["spectrace:spp"] == "2"
@@ -114,8 +128,9 @@ def test_render_command_runs_the_wavefront(tmp_path):
 
 @pytest.mark.subprocess
 def test_render_command_refuses_an_unknown_kernel_shape_in_one_line(tmp_path):
-    result = _cli("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(tmp_path / "x.png"), "--kernel",
-                  "persistent")
+    result = _cli(
+        "render", str(scenes_dir() / "cornell_box.toml"), "-o", str(tmp_path / "x.png"), "--kernel", "persistent"
+    )
     assert result.returncode == 2
     assert result.stderr.strip().count("\n") == 0 and "unknown kernel shape 'persistent'" in result.stderr
     assert "Traceback" not in result.stderr
@@ -126,5 +141,8 @@ def test_kernel_shape_bench_reports_every_variant(device):
     rows = run_kernel_shape_bench(None, [SIZE], 1, 3, device.report.key, variants, repeats=2)
     generic = ("megakernel", render_work_group(device), False)  # added: the kernel built for every scene
     assert [(r["kernel"], r["work_group"], r["specialised"]) for r in rows] == [
-        ("megakernel", None, True), ("wavefront", 32, True), generic]
+        ("megakernel", None, True),
+        ("wavefront", 32, True),
+        generic,
+    ]
     assert all(r["samples_per_second"] > 0 and r["repeats"] == 2 for r in rows)

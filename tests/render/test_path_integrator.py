@@ -9,9 +9,9 @@ estimation, MIS, BSDF sampling and Russian roulette together; any bias in one of
 import numpy as np
 import pytest
 
+from spectrace.engine.renderer import Renderer
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.engine.renderer import Renderer
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
@@ -27,11 +27,11 @@ def _constant(value: float) -> Spectrum:
 
 def _furnace_box(max_depth: int, seed: int = 3) -> Scene:
     box = apply_transform(primitives.cube(), transform_matrix([{"scale": [1.0, 0.7, 1.3]}], where="test"))
-    shape = Shape(mesh=box, material=DiffuseMaterial(_constant(ALBEDO)),
-                  emitter=AreaEmitter(_constant(EMITTED), two_sided=True))
+    shape = Shape(
+        mesh=box, material=DiffuseMaterial(_constant(ALBEDO)), emitter=AreaEmitter(_constant(EMITTED), two_sided=True)
+    )
     camera = Camera(origin=(0.1, -0.2, 0.3), target=(0.5, 0.1, -1.0), fov_degrees=100.0)
-    return Scene(camera=camera, width=32, height=32, shapes=[shape], max_depth=max_depth, rr_depth=3, spp=16,
-                 seed=seed)
+    return Scene(camera=camera, width=32, height=32, shapes=[shape], max_depth=max_depth, rr_depth=3, spp=16, seed=seed)
 
 
 def _measured_y(scene: Scene, device) -> tuple[float, float]:

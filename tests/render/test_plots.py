@@ -28,8 +28,9 @@ pytestmark = pytest.mark.filterwarnings("ignore:Aligning")
 
 
 def _run(*args):
-    return subprocess.run([sys.executable, "-m", "spectrace", *args], capture_output=True, text=True,
-                          env=os.environ.copy(), timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, env=os.environ.copy(), timeout=600
+    )
 
 
 def test_luminance_is_photometric():
@@ -92,7 +93,8 @@ def test_spectra_commands(tmp_path):
     assert "cie:D65" in data["library"] and "cornell_box/light" in data["library"]
     # The scene's white wall: its measured reflectance (spectra/cornell_box) as the scene uses it.
     assert data["scene"]["materials.white.reflectance"]["max"] == pytest.approx(
-        library_spectrum("cornell_box/reflectance:white").max())
+        library_spectrum("cornell_box/reflectance:white").max()
+    )
     out = tmp_path / "walls.png"
     result = _run("spectra", "plot", "materials.red.reflectance", "cie:D65", "--scene", scene, "-o", str(out))
     assert result.returncode == 0, result.stderr
@@ -105,8 +107,23 @@ def test_spectra_commands(tmp_path):
 @pytest.mark.subprocess
 def test_render_false_colour(tmp_path):
     out, figure = tmp_path / "box.exr", tmp_path / "luminance.png"
-    result = _run("render", str(scenes_dir() / "cornell_box.toml"), "-o", str(out), "--spp", "1", "--width", "8",
-                  "--height", "6", "-q", "--false-color", str(figure), "--false-color-scale", "linear")
+    result = _run(
+        "render",
+        str(scenes_dir() / "cornell_box.toml"),
+        "-o",
+        str(out),
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "-q",
+        "--false-color",
+        str(figure),
+        "--false-color-scale",
+        "linear",
+    )
     assert result.returncode == 0, result.stderr
     assert "cd/m²" in result.stderr
     with PILImage.open(figure) as image:

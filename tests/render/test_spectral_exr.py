@@ -4,8 +4,8 @@ reproduce the film's XYZ."""
 import numpy as np
 import OpenEXR
 
-from spectrace.io.exr import read_exr, read_spectral_exr
 from spectrace.engine.renderer import Renderer
+from spectrace.io.exr import read_exr, read_spectral_exr
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS, CIE_Y_INTEGRAL

@@ -9,9 +9,9 @@ coat with a diffuse base (next-event estimation, MIS against the mixture pdf, lo
 import numpy as np
 import pytest
 
+from spectrace.engine.renderer import Renderer
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.engine.renderer import Renderer
 from spectrace.scene.model import AreaEmitter, Camera, MirrorMaterial, PlasticMaterial, Scene, Shape
 from spectrace.spectral.spectrum import Spectrum
 
@@ -22,8 +22,17 @@ def _box(material, integrator: str, max_depth: int, spp: int = 4) -> Scene:
     box = apply_transform(primitives.cube(), transform_matrix([{"scale": [1.0, 0.7, 1.3]}], where="test"))
     shape = Shape(mesh=box, material=material, emitter=AreaEmitter(Spectrum.constant(EMITTED), two_sided=True))
     camera = Camera(origin=(0.1, -0.2, 0.3), target=(0.5, 0.1, -1.0), fov_degrees=100.0)
-    return Scene(camera=camera, width=24, height=24, shapes=[shape], integrator=integrator, max_depth=max_depth,
-                 rr_depth=16, spp=spp, seed=7)
+    return Scene(
+        camera=camera,
+        width=24,
+        height=24,
+        shapes=[shape],
+        integrator=integrator,
+        max_depth=max_depth,
+        rr_depth=16,
+        spp=spp,
+        seed=7,
+    )
 
 
 def _measured_y(scene: Scene, device) -> tuple[float, float]:
@@ -36,8 +45,9 @@ def _measured_y(scene: Scene, device) -> tuple[float, float]:
 def test_mirror_enclosure(device, integrator, max_depth):
     reflectance = 0.6
     expected = EMITTED * (1 - reflectance**max_depth) / (1 - reflectance)
-    mean, standard_error = _measured_y(_box(MirrorMaterial(Spectrum.constant(reflectance)), integrator, max_depth),
-                                       device)
+    mean, standard_error = _measured_y(
+        _box(MirrorMaterial(Spectrum.constant(reflectance)), integrator, max_depth), device
+    )
     # Delta paths from a constant spectrum carry no noise: only float rounding remains.
     assert abs(mean - expected) <= 1e-4 * expected + 4 * standard_error, (mean, expected, standard_error)
 

@@ -8,12 +8,10 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
-import numpy as np
-
 from spectrace.validation import CASES, prism_deviation_degrees, prism_window_centre_degrees, run_validation
-
 
 SLOW_CASES = {"dispersion", "medium-furnace"}  # over 5 s each on a loaded two-core machine
 
@@ -28,8 +26,13 @@ def test_law_holds(device, case):
 
 @pytest.mark.subprocess
 def test_validate_command_reports_every_case():
-    result = subprocess.run([sys.executable, "-m", "spectrace", "validate", "--case", "inverse-square", "--case",
-                             "flux", "--json"], capture_output=True, text=True, env=os.environ.copy(), timeout=600)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "validate", "--case", "inverse-square", "--case", "flux", "--json"],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=600,
+    )
     assert result.returncode == 0, result.stderr
     checks = json.loads(result.stdout)["checks"]
     assert {c["case"] for c in checks} == {"point light", "flux meter"}
@@ -45,4 +48,5 @@ def test_prism_deviation_meets_the_minimum_deviation_formula(n):
     assert minimum == pytest.approx(2 * theta1 - 60.0, abs=1e-9)
     assert prism_deviation_degrees(n, theta1 - 1.0) > minimum < prism_deviation_degrees(n, theta1 + 1.0)
     assert prism_window_centre_degrees(n, theta1 + 5.0, 1e-4) == pytest.approx(
-        prism_deviation_degrees(n, theta1 + 5.0), abs=1e-7)
+        prism_deviation_degrees(n, theta1 + 5.0), abs=1e-7
+    )

@@ -33,8 +33,12 @@ LONG_RUN_EXAMPLES = int(os.environ.get("SPECTRACE_FUZZ_EXAMPLES", "0"))
 
 
 def _settings(examples: int):
-    return settings(max_examples=LONG_RUN_EXAMPLES or examples, deadline=None, derandomize=not LONG_RUN_EXAMPLES,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+    return settings(
+        max_examples=LONG_RUN_EXAMPLES or examples,
+        deadline=None,
+        derandomize=not LONG_RUN_EXAMPLES,
+        suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+    )
 
 
 SCENE = """\
@@ -69,10 +73,27 @@ FLOATS = st.one_of(
 TEXT = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=16)
 SUFFIXES = st.sampled_from([".png", ".exr", ".tiff", "", ".npz", ".pdf", ".svg", ".PNG"])
 FILE_NAMES = st.one_of(
-    st.sampled_from(["out.png", "out.exr", "a-folder.png", "missing/out.png", "existing.png", "read-only.png",
-                     "scene.toml", "garbage.npz", "", ".", "..", "existing.png/x.png", "link-to-out.png"]),
-    st.tuples(st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00/"), min_size=1,
-                      max_size=12), SUFFIXES).map("".join),
+    st.sampled_from(
+        [
+            "out.png",
+            "out.exr",
+            "a-folder.png",
+            "missing/out.png",
+            "existing.png",
+            "read-only.png",
+            "scene.toml",
+            "garbage.npz",
+            "",
+            ".",
+            "..",
+            "existing.png/x.png",
+            "link-to-out.png",
+        ]
+    ),
+    st.tuples(
+        st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00/"), min_size=1, max_size=12),
+        SUFFIXES,
+    ).map("".join),
 )
 
 
@@ -84,9 +105,13 @@ def small(valid: list[int]):
 PATH = object()  # a file name, made absolute under the example's folder
 
 RENDER_OPTIONS = {
-    "--width": small([1, 2, 4]), "--height": small([1, 3, 4]), "--spp": small([1, 2]),
-    "--seed": st.one_of(INTEGERS, JUNK), "--max-depth": st.one_of(INTEGERS, JUNK),
-    "--exposure": st.one_of(FLOATS, JUNK), "--checkpoint-interval": st.one_of(FLOATS, JUNK),
+    "--width": small([1, 2, 4]),
+    "--height": small([1, 3, 4]),
+    "--spp": small([1, 2]),
+    "--seed": st.one_of(INTEGERS, JUNK),
+    "--max-depth": st.one_of(INTEGERS, JUNK),
+    "--exposure": st.one_of(FLOATS, JUNK),
+    "--checkpoint-interval": st.one_of(FLOATS, JUNK),
     "--spectral-bins": st.one_of(st.sampled_from(["0", "3", "-1", "471", "472"]), INTEGERS, JUNK),
     "--sampler": st.one_of(st.sampled_from(["sobol", "independent"]), TEXT),
     "--kernel": st.one_of(st.sampled_from(["megakernel", "wavefront"]), TEXT),
@@ -95,14 +120,21 @@ RENDER_OPTIONS = {
     "--adaptation": st.one_of(st.sampled_from(["bradford", "von-kries"]), TEXT),
     "--false-color-scale": st.one_of(st.sampled_from(["log", "linear"]), TEXT),
     "--device": TEXT,
-    "-o": PATH, "--false-color": PATH, "--checkpoint": PATH, "--resume": PATH,
+    "-o": PATH,
+    "--false-color": PATH,
+    "--checkpoint": PATH,
+    "--resume": PATH,
 }
 RENDER_FLAGS = ["--no-xyz", "--overwrite", "--xyz"]
 
 BENCH_OPTIONS = {
-    "--size": small([1, 4, 16]), "--spp": small([1]), "--max-depth": st.one_of(INTEGERS, JUNK),
-    "--triangles": st.one_of(INTEGERS, JUNK), "--ray-count": st.one_of(INTEGERS, JUNK),
-    "--seconds": st.one_of(FLOATS, JUNK), "--peer-sampler": TEXT,
+    "--size": small([1, 4, 16]),
+    "--spp": small([1]),
+    "--max-depth": st.one_of(INTEGERS, JUNK),
+    "--triangles": st.one_of(INTEGERS, JUNK),
+    "--ray-count": st.one_of(INTEGERS, JUNK),
+    "--seconds": st.one_of(FLOATS, JUNK),
+    "--peer-sampler": TEXT,
 }
 # Each mode's own options and flags ("" is the plain render bench); the others are click's usage errors.
 BENCH_MODES = {
@@ -117,8 +149,10 @@ BENCH_MODES = {
 }
 
 DISPLAYS = st.one_of(st.sampled_from(["CRT-Dell", "OLED-SamsungNote3"]), st.sampled_from(["LCD-Apple_WLED"]), TEXT)
-RGB = st.one_of(st.tuples(*[st.sampled_from(["0", "0.25", "1"])] * 3),
-                st.tuples(*[st.one_of(st.sampled_from(["0", "0.5", "1"]), FLOATS, JUNK)] * 3))
+RGB = st.one_of(
+    st.tuples(*[st.sampled_from(["0", "0.25", "1"])] * 3),
+    st.tuples(*[st.one_of(st.sampled_from(["0", "0.5", "1"]), FLOATS, JUNK)] * 3),
+)
 DISPLAY_OPTIONS = {
     "--white-luminance": st.one_of(st.sampled_from(["100", "0.01"]), FLOATS, JUNK),
     "--encoding": st.one_of(st.sampled_from(["linear", "srgb", "gamma2.2"]), TEXT),
@@ -126,8 +160,10 @@ DISPLAY_OPTIONS = {
 
 
 def _options(table: dict, flags: list[str], max_size: int):
-    choices = [st.tuples(st.just(name), value) if value is not PATH else st.tuples(st.just(name), FILE_NAMES)
-               for name, value in table.items()]
+    choices = [
+        st.tuples(st.just(name), value) if value is not PATH else st.tuples(st.just(name), FILE_NAMES)
+        for name, value in table.items()
+    ]
     choices += [st.just((flag,)) for flag in flags]
     return st.lists(st.one_of(choices), max_size=max_size)
 
@@ -180,8 +216,11 @@ def _run(command: str, argv: list[str]) -> tuple[int, str]:
     COUNTS[command][status] += 1
     assert status in (0, 2), (argv, status, text)
     assert "Traceback" not in text, (argv, text)
-    messages = [line for line in text.splitlines()
-                if line.strip() and not line.startswith(("device: ", "resumed ", "warning: ", "wrote "))]
+    messages = [
+        line
+        for line in text.splitlines()
+        if line.strip() and not line.startswith(("device: ", "resumed ", "warning: ", "wrote "))
+    ]
     errors = [line for line in messages if line.startswith("error: ")]
     if status == 2:
         assert len(errors) == 1 and errors == [line for line in messages if "Warning" not in line], (argv, text)
@@ -212,8 +251,20 @@ def workspace(tmp_path_factory):
 @given(options=_options(RENDER_OPTIONS, RENDER_FLAGS, max_size=4))
 def test_render_options(workspace, options):
     folder = _example_folder(workspace)
-    argv = ["render", str(folder / "scene.toml"), "-o", str(folder / "out.png"), "--width", "4", "--height", "4",
-            "--spp", "1", "-q", *_absolute(folder, options)]
+    argv = [
+        "render",
+        str(folder / "scene.toml"),
+        "-o",
+        str(folder / "out.png"),
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--spp",
+        "1",
+        "-q",
+        *_absolute(folder, options),
+    ]
     status, _ = _run("render", argv)
     if status == 0:  # whatever got through is within the limits, and the image is there
         if (seed := _last(argv, "--seed")) is not None:
@@ -236,6 +287,7 @@ def stubbed_bench(monkeypatch):
         def stub(*args, **kwargs):
             asked.append((name, args, kwargs))
             return result
+
         return stub
 
     stubs = {
@@ -258,8 +310,7 @@ def stubbed_bench(monkeypatch):
 def _bench_argv(mode: str):
     names, flags = BENCH_MODES[mode]
     table = {name: BENCH_OPTIONS[name] for name in names}
-    return _options(table, [*flags, "--json"], max_size=4).map(lambda options: [*([(mode,)] if mode else []),
-                                                                                 *options])
+    return _options(table, [*flags, "--json"], max_size=4).map(lambda options: [*([(mode,)] if mode else []), *options])
 
 
 @_settings(150)
@@ -282,9 +333,14 @@ def test_bench_options(stubbed_bench, argv):
 
 
 @_settings(100)
-@given(command=st.sampled_from(["compare", "match", "metamerism"]), rgb=RGB, source=DISPLAYS, target=DISPLAYS,
-       options=_options(DISPLAY_OPTIONS, ["--measured-radiance", "--json"], max_size=3),
-       plot=st.one_of(st.none(), FILE_NAMES))
+@given(
+    command=st.sampled_from(["compare", "match", "metamerism"]),
+    rgb=RGB,
+    source=DISPLAYS,
+    target=DISPLAYS,
+    options=_options(DISPLAY_OPTIONS, ["--measured-radiance", "--json"], max_size=3),
+    plot=st.one_of(st.none(), FILE_NAMES),
+)
 def test_display_options(workspace, command, rgb, source, target, options, plot):
     folder = _example_folder(workspace)
     argv = ["display", command, "--rgb", *rgb, *_absolute(folder, options)]
@@ -301,10 +357,12 @@ def test_display_options(workspace, command, rgb, source, target, options, plot)
 
 @pytest.mark.filterwarnings("ignore:Glyph .* missing from font")  # odd characters in titles draw as boxes
 @_settings(40)
-@given(names=st.lists(st.one_of(st.sampled_from(["cie:D65", "cie:A", "cornell_box/light"]), TEXT), min_size=1,
-                      max_size=3),
-       output=FILE_NAMES, title=st.one_of(st.none(), TEXT, st.sampled_from(["$", "$x^$", r"\frac", "a$b$c"])),
-       normalise=st.booleans())
+@given(
+    names=st.lists(st.one_of(st.sampled_from(["cie:D65", "cie:A", "cornell_box/light"]), TEXT), min_size=1, max_size=3),
+    output=FILE_NAMES,
+    title=st.one_of(st.none(), TEXT, st.sampled_from(["$", "$x^$", r"\frac", "a$b$c"])),
+    normalise=st.booleans(),
+)
 def test_spectra_plot_options(workspace, names, output, title, normalise):
     folder = _example_folder(workspace)
     argv = ["spectra", "plot", *names, "-o", str(folder / output)]

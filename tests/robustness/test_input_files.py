@@ -9,16 +9,15 @@ import os
 import struct
 import subprocess
 import sys
-import textwrap
 import zlib
 
 import numpy as np
 import pytest
 
 from spectrace.displays import load_display
+from spectrace.engine.renderer import Renderer
 from spectrace.geometry import mesh as mesh_module
 from spectrace.geometry.mesh import load_mesh
-from spectrace.engine.renderer import Renderer
 from spectrace.scene import load_scene
 
 SCENE = """\
@@ -48,10 +47,12 @@ emitter = {{ radiance = {{ {radiance} }} }}
 {extra}"""
 
 
-def _scene_text(reflectance="value = 0", shape='type = "rectangle"', radiance="value = 1", extra="",
-                width=8, height=8, fov=20):
-    return SCENE.format(reflectance=reflectance, shape=shape, radiance=radiance, extra=extra, width=width,
-                        height=height, fov=fov)
+def _scene_text(
+    reflectance="value = 0", shape='type = "rectangle"', radiance="value = 1", extra="", width=8, height=8, fov=20
+):
+    return SCENE.format(
+        reflectance=reflectance, shape=shape, radiance=radiance, extra=extra, width=width, height=height, fov=fov
+    )
 
 
 # ---------------------------------------------------------------- pipes, devices, and an image bomb
@@ -86,18 +87,28 @@ print(json.dumps({"errors": results, "peak_bytes": peak, "cli_status": status, "
 # FIFO (its extension picks the reader).
 SPECIAL_CASES = {
     "spectrum": (_scene_text(reflectance='file = "{bad}"'), "materials.black.reflectance.file", "r.csv"),
-    "display": (_scene_text(radiance='display = "{bad}", rgb = [1, 1, 1], white_luminance = 100'),
-                "shapes[0].emitter.radiance.display", "screen.csv"),
+    "display": (
+        _scene_text(radiance='display = "{bad}", rgb = [1, 1, 1], white_luminance = 100'),
+        "shapes[0].emitter.radiance.display",
+        "screen.csv",
+    ),
     "mesh": (_scene_text(shape='type = "mesh"\nfile = "{bad}"'), "shapes[0].file", "m.obj"),
-    "picture": (_scene_text(radiance='display = "LCD-Dell_CCFL", image = "{bad}"'),
-                "shapes[0].emitter.radiance.image", "p.png"),
-    "environment map": (_scene_text(extra='[[lights]]\ntype = "envmap"\nfile = "{bad}"\n'), "lights[0].file",
-                        "sky.exr"),
+    "picture": (
+        _scene_text(radiance='display = "LCD-Dell_CCFL", image = "{bad}"'),
+        "shapes[0].emitter.radiance.image",
+        "p.png",
+    ),
+    "environment map": (
+        _scene_text(extra='[[lights]]\ntype = "envmap"\nfile = "{bad}"\n'),
+        "lights[0].file",
+        "sky.exr",
+    ),
 }
 
 
 def _png_claiming(width: int, height: int) -> bytes:
     """A valid 1-bit greyscale PNG of zeros: width x height pixels in a file of a few tens of kilobytes."""
+
     def chunk(kind: bytes, data: bytes) -> bytes:
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
@@ -127,8 +138,13 @@ def special_loads(tmp_path_factory):
     bomb = folder / "bomb.toml"
     bomb.write_text(_scene_text(radiance='display = "LCD-Dell_CCFL", image = "bomb.png"'))
     scenes = [str(folder / "scene.toml"), *scenes, "/dev/zero", str(bomb)]
-    result = subprocess.run([sys.executable, "-c", LOADER, str(folder / "out.png"), *scenes], capture_output=True,
-                            text=True, timeout=180, cwd=folder)
+    result = subprocess.run(
+        [sys.executable, "-c", LOADER, str(folder / "out.png"), *scenes],
+        capture_output=True,
+        text=True,
+        timeout=180,
+        cwd=folder,
+    )
     assert result.returncode == 0, result.stderr
     return json.loads(result.stdout), expected, str(bomb), folder
 
@@ -152,9 +168,11 @@ def test_an_image_whose_header_claims_a_huge_size_is_refused_before_decoding(spe
     loaded, _, bomb, folder = special_loads
     assert (folder / "bomb.png").stat().st_size < 100_000
     message = loaded["errors"][bomb]
-    assert message == (f"{bomb}: shapes[0].emitter.radiance.image: image '{folder / 'bomb.png'}': a 12000x12000 "
-                       "image (144.0 Mpixels) would need about 9.7 GiB of host memory and 2.1 GiB of device memory; "
-                       "at most 134.2 Mpixels are allowed (e.g. 16384x8192)")
+    assert message == (
+        f"{bomb}: shapes[0].emitter.radiance.image: image '{folder / 'bomb.png'}': a 12000x12000 "
+        "image (144.0 Mpixels) would need about 9.7 GiB of host memory and 2.1 GiB of device memory; "
+        "at most 134.2 Mpixels are allowed (e.g. 16384x8192)"
+    )
     assert loaded["peak_bytes"] < 1.5 * 2**30, loaded["peak_bytes"]
 
 
@@ -173,8 +191,12 @@ def test_a_fifo_scene_on_the_command_line_is_one_line(special_loads):
 # a texture seam, as on every UV-unwrapped model.
 SEAM_POSITIONS = [(-1, -1, 0), (0, -1, 0), (0, 1, 0), (-1, 1, 0), (1, -1, 0), (1, 1, 0)]
 SEAM_VT = [(0, 0), (1, 0), (1, 1), (0, 1)]  # OBJ: v up
-SEAM_FACES = [((1, 1), (2, 2), (3, 3)), ((1, 1), (3, 3), (4, 4)),  # (position, vt) indices, 1-based
-              ((2, 1), (5, 2), (6, 3)), ((2, 1), (6, 3), (3, 4))]
+SEAM_FACES = [
+    ((1, 1), (2, 2), (3, 3)),
+    ((1, 1), (3, 3), (4, 4)),  # (position, vt) indices, 1-based
+    ((2, 1), (5, 2), (6, 3)),
+    ((2, 1), (6, 3), (3, 4)),
+]
 
 
 def _write_seam_obj(path):
@@ -203,8 +225,15 @@ def test_a_picture_on_an_obj_screen_follows_its_texture_coordinates(device, tmp_
     PILImage.fromarray(np.array([[[255, 0, 0], [0, 0, 255]]], np.uint8), "RGB").save(tmp_path / "picture.png")
     width, fov = 64, 40
     path = tmp_path / "screen.toml"
-    path.write_text(_scene_text(shape='type = "mesh"\nfile = "seam.obj"', width=width, height=16, fov=fov,
-                                radiance='display = "LCD-Dell_CCFL", image = "picture.png", encoding = "srgb"'))
+    path.write_text(
+        _scene_text(
+            shape='type = "mesh"\nfile = "seam.obj"',
+            width=width,
+            height=16,
+            fov=fov,
+            radiance='display = "LCD-Dell_CCFL", image = "picture.png", encoding = "srgb"',
+        )
+    )
     xyz = Renderer(load_scene(path), device).render().xyz.astype(np.float64)
     display = load_display("LCD-Dell_CCFL")
     # Image right is +x; pixel centres sit at x = ((column + 0.5) / width * 2 - 1) * 3 tan(fov / 2).
@@ -247,8 +276,13 @@ def test_an_unwritable_cache_folder_falls_back_and_rendering_works(tmp_path):
     scene.write_text(_scene_text(reflectance="value = 0.5"))
     # The usual kernel cache stays in use, so that only the broken XDG_CACHE_HOME is at stake (and no rebuild).
     environment = dict(os.environ, XDG_CACHE_HOME=str(not_a_folder), SPECTRACE_CACHE_DIR=str(cache_root()))
-    result = subprocess.run([sys.executable, "-m", "spectrace", "render", str(scene), "-o", str(tmp_path / "x.png"),
-                             "--spp", "1", "-q"], capture_output=True, text=True, timeout=300, env=environment)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "render", str(scene), "-o", str(tmp_path / "x.png"), "--spp", "1", "-q"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=environment,
+    )
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "x.png").stat().st_size > 0
     warnings = [line for line in result.stderr.splitlines() if line.startswith("warning:")]

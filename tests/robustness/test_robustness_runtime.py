@@ -15,9 +15,6 @@ import pyopencl as cl
 import pytest
 
 from spectrace import cli
-from spectrace.errors import SpectraceError
-from spectrace.geometry import primitives
-from spectrace.geometry.transforms import apply_transform
 from spectrace.engine import memory
 from spectrace.engine import renderer as renderer_module
 from spectrace.engine.checkpoint import read_checkpoint
@@ -25,6 +22,9 @@ from spectrace.engine.memory import device_memory_need
 from spectrace.engine.opencl_errors import describe_opencl_error
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.stop_signals import StopOnSignals
+from spectrace.errors import SpectraceError
+from spectrace.geometry import primitives
+from spectrace.geometry.transforms import apply_transform
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.limits import format_bytes
@@ -107,12 +107,15 @@ def _opencl_error(kind, status: str):
     return kind(cl._cl._ErrorRecord("clEnqueueNDRangeKernel", getattr(cl.status_code, status), ""))  # noqa: SLF001
 
 
-@pytest.mark.parametrize("kind, status, advice", [
-    (cl.RuntimeError, "OUT_OF_RESOURCES", "lower --width/--height, or choose another device"),
-    (cl.MemoryError, "MEM_OBJECT_ALLOCATION_FAILURE", "lower --width/--height"),
-    (cl.LogicError, "DEVICE_NOT_AVAILABLE", "resume from the last checkpoint with --resume"),
-    (cl.LogicError, "INVALID_KERNEL_ARGS", "see `spectrace devices`"),
-])
+@pytest.mark.parametrize(
+    "kind, status, advice",
+    [
+        (cl.RuntimeError, "OUT_OF_RESOURCES", "lower --width/--height, or choose another device"),
+        (cl.MemoryError, "MEM_OBJECT_ALLOCATION_FAILURE", "lower --width/--height"),
+        (cl.LogicError, "DEVICE_NOT_AVAILABLE", "resume from the last checkpoint with --resume"),
+        (cl.LogicError, "INVALID_KERNEL_ARGS", "see `spectrace devices`"),
+    ],
+)
 def test_enqueue_errors_become_one_actionable_line(cornell, device, monkeypatch, kind, status, advice):
     renderer = Renderer(cornell, device)
 
@@ -123,8 +126,9 @@ def test_enqueue_errors_become_one_actionable_line(cornell, device, monkeypatch,
     with pytest.raises(SpectraceError) as caught:
         renderer.run_pass(1)
     message = str(caught.value)
-    assert message.startswith(f"OpenCL error while running a render pass on {device.report.key}: "
-                              f"clEnqueueNDRangeKernel failed: {status}")
+    assert message.startswith(
+        f"OpenCL error while running a render pass on {device.report.key}: clEnqueueNDRangeKernel failed: {status}"
+    )
     assert advice in message and "\n" not in message
 
 
@@ -133,8 +137,22 @@ def test_an_opencl_error_in_the_command_line_is_one_line(tmp_path, monkeypatch, 
         raise _opencl_error(cl.RuntimeError, "OUT_OF_RESOURCES")
 
     monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(enqueue_nd_range_kernel=failing_enqueue))
-    monkeypatch.setattr(sys, "argv", ["spectrace", "render", str(scenes_dir() / "cornell_box.toml"), "-o",
-                                      str(tmp_path / "x.png"), "--width", "8", "--height", "8", "-q"])
+    monkeypatch.setattr(
+        sys,
+        "argv",
+        [
+            "spectrace",
+            "render",
+            str(scenes_dir() / "cornell_box.toml"),
+            "-o",
+            str(tmp_path / "x.png"),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-q",
+        ],
+    )
     with pytest.raises(SystemExit) as exit_info:
         cli.main()
     stderr = capsys.readouterr().err
@@ -153,10 +171,17 @@ def _overflowing_light_scene() -> Scene:
     """A camera looking straight at an emitter so bright (3e38 W/(m² sr nm), the float32 limit) that every
     sample's XYZ estimate, L·cmf/p(λ), overflows to infinity."""
     wall = apply_transform(primitives.rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]))
-    light = Shape(wall, DiffuseMaterial(Spectrum.constant(0.5)), emitter=AreaEmitter(Spectrum.constant(3e38)),
-                  name="too bright")
-    return Scene(camera=Camera(origin=(0, 0, 5), target=(0, 0, 0), fov_degrees=30), width=6, height=5,
-                 shapes=[light], spp=3, max_depth=1)
+    light = Shape(
+        wall, DiffuseMaterial(Spectrum.constant(0.5)), emitter=AreaEmitter(Spectrum.constant(3e38)), name="too bright"
+    )
+    return Scene(
+        camera=Camera(origin=(0, 0, 5), target=(0, 0, 0), fov_degrees=30),
+        width=6,
+        height=5,
+        shapes=[light],
+        spp=3,
+        max_depth=1,
+    )
 
 
 def test_non_finite_samples_are_dropped_counted_and_reported(device, tmp_path, monkeypatch, capsys):
@@ -212,9 +237,28 @@ def test_an_opencl_error_mid_render_points_at_the_last_checkpoint(tmp_path, monk
 
     monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(enqueue_nd_range_kernel=enqueue_then_fail))
     state = tmp_path / "state.npz"
-    monkeypatch.setattr(sys, "argv", ["spectrace", "render", str(scenes_dir() / "cornell_box.toml"), "-o",
-                                      str(tmp_path / "x.png"), "--width", "8", "--height", "8", "--spp", "1000",
-                                      "--checkpoint", str(state), "--checkpoint-interval", "0", "-q"])
+    monkeypatch.setattr(
+        sys,
+        "argv",
+        [
+            "spectrace",
+            "render",
+            str(scenes_dir() / "cornell_box.toml"),
+            "-o",
+            str(tmp_path / "x.png"),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "1000",
+            "--checkpoint",
+            str(state),
+            "--checkpoint-interval",
+            "0",
+            "-q",
+        ],
+    )
     with pytest.raises(SystemExit) as exit_info:
         cli.main()
     error_lines = [line for line in capsys.readouterr().err.splitlines() if line.startswith("error: ")]
@@ -232,6 +276,7 @@ _ENOSPC = os.strerror(errno.ENOSPC)
 def _fill_the_disk_in(monkeypatch, kind: str) -> None:
     """Make one writer fail as on a full disk, after writing part of its temporary file: OpenEXR with its own
     RuntimeError (which names the system's reason), Pillow and matplotlib with OSError."""
+
     def partial_then_full(path):
         Path(path).write_bytes(b"partial")
         return OSError(errno.ENOSPC, _ENOSPC)
@@ -283,8 +328,23 @@ class _Namespace:
 
 
 def _render_cli(monkeypatch, capsys, *argv) -> tuple[int, str]:
-    monkeypatch.setattr(sys, "argv", ["spectrace", "render", str(scenes_dir() / "cornell_box.toml"), "--width", "8",
-                                      "--height", "6", "--spp", "1", "-q", *argv])
+    monkeypatch.setattr(
+        sys,
+        "argv",
+        [
+            "spectrace",
+            "render",
+            str(scenes_dir() / "cornell_box.toml"),
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "--spp",
+            "1",
+            "-q",
+            *argv,
+        ],
+    )
     with pytest.raises(SystemExit) as exit_info:
         cli.main()
     return exit_info.value.code, capsys.readouterr().err
@@ -298,8 +358,9 @@ def test_a_full_disk_is_one_line_and_the_old_image_survives(suffix, tmp_path, mo
     status, stderr = _render_cli(monkeypatch, capsys, "-o", str(out), "--checkpoint", str(state))
     errors = [line for line in stderr.splitlines() if not line.startswith("device: ")]
     assert status == 2 and "Traceback" not in stderr, stderr
-    assert errors == [f"error: {out}: cannot write the image ({_ENOSPC}); the render's state is in {state} "
-                      f"(continue with --resume)"]
+    assert errors == [
+        f"error: {out}: cannot write the image ({_ENOSPC}); the render's state is in {state} (continue with --resume)"
+    ]
     assert out.read_bytes() == b"the previous image"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out." + suffix, "state.npz"]  # no temporary file left
 
@@ -317,12 +378,15 @@ def test_a_full_disk_for_the_false_colour_map_is_one_line(tmp_path, monkeypatch,
 
 def test_figure_commands_refuse_unwritable_outputs_and_survive_a_full_disk(tmp_path, monkeypatch, capsys):
     (tmp_path / "folder.png").mkdir()
-    commands = {"spectra plot": (["spectra", "plot", "cie:D65", "-o"], "--output"),
-                "display compare": (["display", "compare", "--rgb", "0.5", "0.5", "0.5", "-d", "CRT-Dell", "--plot"],
-                                    "--plot")}
+    commands = {
+        "spectra plot": (["spectra", "plot", "cie:D65", "-o"], "--output"),
+        "display compare": (["display", "compare", "--rgb", "0.5", "0.5", "0.5", "-d", "CRT-Dell", "--plot"], "--plot"),
+    }
     for name, (argv, option) in commands.items():
-        for target, says in [(tmp_path / "folder.png", f"{option} names a folder; name a file in it"),
-                             (tmp_path / "nope" / "x.png", f"the folder {tmp_path / 'nope'} for {option} does not exist")]:
+        for target, says in [
+            (tmp_path / "folder.png", f"{option} names a folder; name a file in it"),
+            (tmp_path / "nope" / "x.png", f"the folder {tmp_path / 'nope'} for {option} does not exist"),
+        ]:
             monkeypatch.setattr(sys, "argv", ["spectrace", *argv, str(target)])
             with pytest.raises(SystemExit) as exit_info:
                 cli.main()
@@ -330,7 +394,7 @@ def test_figure_commands_refuse_unwritable_outputs_and_survive_a_full_disk(tmp_p
             assert exit_info.value.code == 2 and stderr == f"error: {target}: {says}\n", (name, stderr)
 
     _fill_the_disk_in(monkeypatch, "figure")
-    for name, (argv, option) in commands.items():
+    for name, (argv, _option) in commands.items():
         target = tmp_path / "kept.png"
         target.write_bytes(b"the previous figure")
         monkeypatch.setattr(sys, "argv", ["spectrace", *argv, str(target)])
@@ -370,8 +434,13 @@ except OSError as error:
 def test_a_real_failed_write_is_an_os_error_and_leaves_the_old_file(suffix, tmp_path):
     out = tmp_path / f"image.{suffix}"
     out.write_bytes(b"the previous image")
-    result = subprocess.run([sys.executable, "-c", _SIZE_LIMITED_WRITE, str(out)], capture_output=True, text=True,
-                            env=os.environ.copy(), timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-c", _SIZE_LIMITED_WRITE, str(out)],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=120,
+    )
     assert result.returncode == 0, result.stderr
     assert json.loads(result.stdout) == [errno.EFBIG, os.strerror(errno.EFBIG)]
     assert out.read_bytes() == b"the previous image" and [p.name for p in tmp_path.iterdir()] == [out.name]
@@ -387,9 +456,14 @@ def test_a_real_process_whose_figure_cannot_be_written_prints_one_line(tmp_path)
 
     out = tmp_path / "spectra.png"
     out.write_bytes(b"the previous figure")
-    result = subprocess.run([sys.executable, "-m", "spectrace", "spectra", "plot", "cie:D65", "cie:A", "-o",
-                             str(out)], capture_output=True, text=True, env=os.environ.copy(),
-                            preexec_fn=limit_file_size, timeout=300)
+    result = subprocess.run(
+        [sys.executable, "-m", "spectrace", "spectra", "plot", "cie:D65", "cie:A", "-o", str(out)],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        preexec_fn=limit_file_size,
+        timeout=300,
+    )
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert result.stderr == f"error: {out}: cannot write the figure ({os.strerror(errno.EFBIG)})\n"
     assert out.read_bytes() == b"the previous figure" and [p.name for p in tmp_path.iterdir()] == [out.name]

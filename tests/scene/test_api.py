@@ -10,8 +10,8 @@ import trimesh
 from PIL import Image as PILImage
 
 import spectrace
-from spectrace.errors import SpectraceError
 from spectrace.engine.renderer import Renderer
+from spectrace.errors import SpectraceError
 from spectrace.spectral.grid import GRID_NM
 
 SCENE_TOML = """
@@ -77,20 +77,24 @@ def _scene_in_python() -> spectrace.Scene:
     clay = spectrace.diffuse((0.7, 0.3, 0.2))
     shapes = [
         spectrace.shape("rectangle", floor, transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 3}]),
-        spectrace.shape(_box(), clay, transform=[{"rotate": {"axis": [0, 1, 0], "angle": 30}},
-                                                 {"translate": [0.3, 0.5, 0.5]}]),
-        spectrace.shape("rectangle", floor, emitter=spectrace.area_emitter(spectrace.spectrum("cie:A", scale=0.05)),
-                        transform=[{"scale": 0.4}, {"rotate": {"axis": [1, 0, 0], "angle": 90}},
-                                   {"translate": [0, 2.5, 0]}]),
+        spectrace.shape(
+            _box(), clay, transform=[{"rotate": {"axis": [0, 1, 0], "angle": 30}}, {"translate": [0.3, 0.5, 0.5]}]
+        ),
+        spectrace.shape(
+            "rectangle",
+            floor,
+            emitter=spectrace.area_emitter(spectrace.spectrum("cie:A", scale=0.05)),
+            transform=[{"scale": 0.4}, {"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 2.5, 0]}],
+        ),
     ]
     lights = [
-        spectrace.point_light((-1.5, 2.0, -1.0), power_w=30.0,
-                              spectrum=(np.array([400.0, 600.0, 700.0]), np.array([1.0, 2.0, 0.5]))),
+        spectrace.point_light(
+            (-1.5, 2.0, -1.0), power_w=30.0, spectrum=(np.array([400.0, 600.0, 700.0]), np.array([1.0, 2.0, 0.5]))
+        ),
         spectrace.constant_environment(0.02),
     ]
     camera = spectrace.Camera(origin=(0.0, 1.0, -4.0), target=(0.0, 0.6, 0.0), fov_degrees=50.0)
-    return spectrace.Scene(camera=camera, width=20, height=15, shapes=shapes, lights=lights, max_depth=5, spp=4,
-                           seed=3)
+    return spectrace.Scene(camera=camera, width=20, height=15, shapes=shapes, lights=lights, max_depth=5, spp=4, seed=3)
 
 
 def test_python_scene_renders_like_the_same_toml_scene(tmp_path, device):
@@ -98,8 +102,9 @@ def test_python_scene_renders_like_the_same_toml_scene(tmp_path, device):
     (tmp_path / "scene.toml").write_text(SCENE_TOML)
     from_toml = Renderer(spectrace.load_scene(tmp_path / "scene.toml"), device).render()
     calls = []
-    from_python = spectrace.render(_scene_in_python(), device=device, progress=lambda done, total: calls.append(
-        (done, total)))
+    from_python = spectrace.render(
+        _scene_in_python(), device=device, progress=lambda done, total: calls.append((done, total))
+    )
     assert from_toml.xyz[..., 1].mean() > 0
     np.testing.assert_array_equal(from_python.xyz, from_toml.xyz)  # the sampler is deterministic: bit for bit
     assert calls and calls[-1] == (4, 4) and [done for done, _ in calls] == sorted(done for done, _ in calls)
@@ -150,8 +155,7 @@ def test_mesh_from_trimesh_keeps_geometry_and_winding():
     assert mesh.area() == pytest.approx(source.area)
     v0, v1, v2 = mesh.triangles()
     normals = np.cross(v1 - v0, v2 - v0)
-    np.testing.assert_allclose(normals / np.linalg.norm(normals, axis=1, keepdims=True), source.face_normals,
-                               atol=1e-9)
+    np.testing.assert_allclose(normals / np.linalg.norm(normals, axis=1, keepdims=True), source.face_normals, atol=1e-9)
     merged = spectrace.mesh_from_trimesh(trimesh.Scene([source, _box()]))
     assert len(merged.faces) == len(source.faces) + 12
 
@@ -187,7 +191,7 @@ def test_image_shows_in_a_notebook(device):
     image = spectrace.render(_scene_in_python().with_overrides(spp=1), device=device, progress=False)
     with PILImage.open(io.BytesIO(image._repr_png_())) as png:
         assert png.size == (20, 15) and png.mode == "RGB"
-    assert image.to_srgb().shape == (15, 20, 3) and 0 <= image.to_srgb().min() and image.to_srgb().max() <= 1
+    assert image.to_srgb().shape == (15, 20, 3) and image.to_srgb().min() >= 0 and image.to_srgb().max() <= 1
 
 
 def test_progress_bar_draws_and_finishes(device):
@@ -281,13 +285,27 @@ def test_reflective_materials_render_like_the_same_toml_scene(tmp_path, device):
         spectrace.conductor(eta={400: 1.2, 700: 0.3}, k=3.0, specular_tint=0.8),
         spectrace.plastic((0.2, 0.5, 0.7), ior=1.6, roughness=0.2),
     ]
-    shapes = [spectrace.shape("sphere", m, transform=[{"translate": [x, 0.0, 0.0]}])
-              for m, x in zip(materials, (-3.0, -1.0, 1.0, 3.0))]
-    shapes.append(spectrace.shape("rectangle", spectrace.retroreflector(0.7, roughness=0.2),
-                                  transform=[{"scale": 5.0}, {"translate": [0.0, 0.0, 2.0]}]))
+    shapes = [
+        spectrace.shape("sphere", m, transform=[{"translate": [x, 0.0, 0.0]}])
+        for m, x in zip(materials, (-3.0, -1.0, 1.0, 3.0))
+    ]
+    shapes.append(
+        spectrace.shape(
+            "rectangle",
+            spectrace.retroreflector(0.7, roughness=0.2),
+            transform=[{"scale": 5.0}, {"translate": [0.0, 0.0, 2.0]}],
+        )
+    )
     lights = [spectrace.constant_environment(0.5), spectrace.point_light((0.0, 2.0, -5.0), intensity=3.0)]
-    scene = spectrace.Scene(camera=spectrace.Camera(origin=(0.0, 0.0, -6.0), target=(0.0, 0.0, 0.0), fov_degrees=60.0),
-                            width=16, height=8, shapes=shapes, lights=lights, spp=2, seed=5)
+    scene = spectrace.Scene(
+        camera=spectrace.Camera(origin=(0.0, 0.0, -6.0), target=(0.0, 0.0, 0.0), fov_degrees=60.0),
+        width=16,
+        height=8,
+        shapes=shapes,
+        lights=lights,
+        spp=2,
+        seed=5,
+    )
     from_python = spectrace.render(scene, device=device, progress=False)
     assert from_toml.xyz[..., 1].mean() > 0
     np.testing.assert_array_equal(from_python.xyz, from_toml.xyz)

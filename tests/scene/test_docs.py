@@ -28,8 +28,11 @@ def _scene_keys(model: type[BaseModel], seen: set) -> typing.Iterator[tuple[str,
 
 def test_every_scene_key_is_documented():
     text = (ROOT / "docs" / "scene-format.md").read_text(encoding="utf-8")
-    missing = [f"{model}.{key}" for model, key in _scene_keys(schema.SceneSpec, set())
-               if not any(form in text for form in (f"`{key}`", f"{key} =", f"[{key}", f"[[{key}"))]
+    missing = [
+        f"{model}.{key}"
+        for model, key in _scene_keys(schema.SceneSpec, set())
+        if not any(form in text for form in (f"`{key}`", f"{key} =", f"[{key}", f"[[{key}"))
+    ]
     assert not missing, f"keys missing from docs/scene-format.md: {missing}"
 
 

@@ -50,18 +50,98 @@ SCALARS = st.one_of(
     st.sampled_from([0, -1, 1, 0.0, -0.0, 1e-320, 1e308, -1e308, 1e39, 16385, 1 << 27, 1 << 31, math.nan, math.inf]),
     st.booleans(),
     st.text(max_size=12),
-    st.sampled_from(["mesh", "rectangle", "cube", "sphere", "prism", "diffuse", "mirror", "conductor", "plastic",
-                     "retroreflector", "dielectric", "BK7", "SF11", "Au", "Ag", "metals/Cu:eta", "path", "direct", "point", "spot",
-                     "distant", "constant", "envmap", "area", "white", "light", "cie:D65", "cornell_box/light",
-                     "cornell_box/reflectance:red", "spectrum.csv", "triangle.obj", "empty.obj", "missing.obj",
-                     "cornell_box/white.obj", "400:0.5, 700:0.7", "x", ""]),
+    st.sampled_from(
+        [
+            "mesh",
+            "rectangle",
+            "cube",
+            "sphere",
+            "prism",
+            "diffuse",
+            "mirror",
+            "conductor",
+            "plastic",
+            "retroreflector",
+            "dielectric",
+            "BK7",
+            "SF11",
+            "Au",
+            "Ag",
+            "metals/Cu:eta",
+            "path",
+            "direct",
+            "point",
+            "spot",
+            "distant",
+            "constant",
+            "envmap",
+            "area",
+            "white",
+            "light",
+            "cie:D65",
+            "cornell_box/light",
+            "cornell_box/reflectance:red",
+            "spectrum.csv",
+            "triangle.obj",
+            "empty.obj",
+            "missing.obj",
+            "cornell_box/white.obj",
+            "400:0.5, 700:0.7",
+            "x",
+            "",
+        ]
+    ),
 )
-KEY_NAMES = st.sampled_from(["type", "file", "material", "rgb", "value", "values", "spectrum", "scale", "fov",
-                             "origin", "target", "up", "width", "height", "spp", "seed", "emitter", "radiance",
-                             "transform", "translate", "rotate", "matrix", "axis", "angle", "power", "position",
-                             "intensity", "direction", "irradiance", "column", "library", "blackbody", "two_sided",
-                             "max_depth", "rr_depth", "name", "fvo", "materail", "bogus", "cutoff_angle", "metal",
-                             "eta", "k", "roughness", "ior", "specular_tint"])
+KEY_NAMES = st.sampled_from(
+    [
+        "type",
+        "file",
+        "material",
+        "rgb",
+        "value",
+        "values",
+        "spectrum",
+        "scale",
+        "fov",
+        "origin",
+        "target",
+        "up",
+        "width",
+        "height",
+        "spp",
+        "seed",
+        "emitter",
+        "radiance",
+        "transform",
+        "translate",
+        "rotate",
+        "matrix",
+        "axis",
+        "angle",
+        "power",
+        "position",
+        "intensity",
+        "direction",
+        "irradiance",
+        "column",
+        "library",
+        "blackbody",
+        "two_sided",
+        "max_depth",
+        "rr_depth",
+        "name",
+        "fvo",
+        "materail",
+        "bogus",
+        "cutoff_angle",
+        "metal",
+        "eta",
+        "k",
+        "roughness",
+        "ior",
+        "specular_tint",
+    ]
+)
 
 
 def _values(depth: int = 2):
@@ -92,36 +172,70 @@ SPECTRA = st.one_of(
 SHAPES = st.one_of(
     st.builds(lambda t: {"type": t, "material": "m"}, st.sampled_from(["rectangle", "cube", "sphere"])),
     st.just({"type": "mesh", "file": "triangle.obj", "material": "m"}),
-    st.builds(lambda s, r: {"type": "rectangle", "material": "m", "emitter": {"radiance": r},
-                            "transform": [{"scale": s}, {"rotate": {"axis": [1, 0, 0], "angle": 90}}]},
-              st.floats(0.1, 3), SPECTRA),
+    st.builds(
+        lambda s, r: {
+            "type": "rectangle",
+            "material": "m",
+            "emitter": {"radiance": r},
+            "transform": [{"scale": s}, {"rotate": {"axis": [1, 0, 0], "angle": 90}}],
+        },
+        st.floats(0.1, 3),
+        SPECTRA,
+    ),
 )
 LIGHTS = st.one_of(
     st.builds(lambda p, w: {"type": "point", "position": p, "power": w}, VECTORS, st.floats(0, 100)),
-    st.builds(lambda p, t: {"type": "spot", "position": p, "target": t, "intensity": {"value": 1}}, VECTORS,
-              VECTORS),
+    st.builds(lambda p, t: {"type": "spot", "position": p, "target": t, "intensity": {"value": 1}}, VECTORS, VECTORS),
     st.builds(lambda d: {"type": "distant", "direction": d, "irradiance": {"value": 1}}, VECTORS),
     st.just({"type": "constant", "radiance": {"blackbody": 6500}}),
 )
-GENERATED_SCENES = st.fixed_dictionaries({
-    "camera": st.fixed_dictionaries({"origin": VECTORS, "target": VECTORS, "fov": st.floats(1, 179)}),
-    "film": st.fixed_dictionaries({"width": st.integers(1, 64), "height": st.integers(1, 64)}),
-    "sampler": st.fixed_dictionaries({"spp": st.integers(1, 64), "seed": st.integers(0, 100)}),
-    "materials": st.fixed_dictionaries({"m": st.one_of(
-        st.fixed_dictionaries({"type": st.sampled_from(["diffuse", "mirror", "retroreflector"]),
-                               "reflectance": SPECTRA}),
-        st.fixed_dictionaries({"type": st.just("plastic"), "reflectance": SPECTRA, "ior": st.floats(1.01, 4.0),
-                               "roughness": st.floats(0, 1)}),
-        st.fixed_dictionaries({"type": st.just("conductor"), "metal": st.sampled_from(["Au", "Ag", "Cu", "Al"]),
-                               "roughness": st.floats(0, 1)}),
-        st.fixed_dictionaries({"type": st.just("dielectric"), "roughness": st.floats(0, 1), "ior": st.one_of(
-            st.floats(0.5, 5.0), st.sampled_from(["BK7", "N-BK7", "SF11", "N-SF11", "BK8"]),
-            st.fixed_dictionaries({"sellmeier": st.lists(st.floats(-2, 200), min_size=5, max_size=7)}),
-            st.fixed_dictionaries({"cauchy": st.lists(st.floats(-1, 3), min_size=1, max_size=3)}))}),
-    )}),
-    "shapes": st.lists(SHAPES, max_size=3),
-    "lights": st.lists(LIGHTS, max_size=2),
-})
+GENERATED_SCENES = st.fixed_dictionaries(
+    {
+        "camera": st.fixed_dictionaries({"origin": VECTORS, "target": VECTORS, "fov": st.floats(1, 179)}),
+        "film": st.fixed_dictionaries({"width": st.integers(1, 64), "height": st.integers(1, 64)}),
+        "sampler": st.fixed_dictionaries({"spp": st.integers(1, 64), "seed": st.integers(0, 100)}),
+        "materials": st.fixed_dictionaries(
+            {
+                "m": st.one_of(
+                    st.fixed_dictionaries(
+                        {"type": st.sampled_from(["diffuse", "mirror", "retroreflector"]), "reflectance": SPECTRA}
+                    ),
+                    st.fixed_dictionaries(
+                        {
+                            "type": st.just("plastic"),
+                            "reflectance": SPECTRA,
+                            "ior": st.floats(1.01, 4.0),
+                            "roughness": st.floats(0, 1),
+                        }
+                    ),
+                    st.fixed_dictionaries(
+                        {
+                            "type": st.just("conductor"),
+                            "metal": st.sampled_from(["Au", "Ag", "Cu", "Al"]),
+                            "roughness": st.floats(0, 1),
+                        }
+                    ),
+                    st.fixed_dictionaries(
+                        {
+                            "type": st.just("dielectric"),
+                            "roughness": st.floats(0, 1),
+                            "ior": st.one_of(
+                                st.floats(0.5, 5.0),
+                                st.sampled_from(["BK7", "N-BK7", "SF11", "N-SF11", "BK8"]),
+                                st.fixed_dictionaries(
+                                    {"sellmeier": st.lists(st.floats(-2, 200), min_size=5, max_size=7)}
+                                ),
+                                st.fixed_dictionaries({"cauchy": st.lists(st.floats(-1, 3), min_size=1, max_size=3)}),
+                            ),
+                        }
+                    ),
+                )
+            }
+        ),
+        "shapes": st.lists(SHAPES, max_size=3),
+        "lights": st.lists(LIGHTS, max_size=2),
+    }
+)
 
 # ---------------------------------------------------------------- TOML output (inline tables only)
 
@@ -210,8 +324,11 @@ def mutated_texts(draw, text: str):
         elif action == "insert_bytes":
             data = data[:position] + draw(st.binary(min_size=1, max_size=8)) + data[position:]
         elif action == "replace_char":
-            data = data[:position] + draw(st.sampled_from([b"=", b"[", b"]", b"{", b'"', b"\n", b"-", b"9",
-                                                           b"nan", b"inf", b"e99"])) + data[position + 1:]
+            data = (
+                data[:position]
+                + draw(st.sampled_from([b"=", b"[", b"]", b"{", b'"', b"\n", b"-", b"9", b"nan", b"inf", b"e99"]))
+                + data[position + 1 :]
+            )
         else:
             lines = data.split(b"\n")
             index = draw(st.integers(0, max(len(lines) - 1, 0)))
@@ -268,6 +385,6 @@ def test_the_loader_loads_or_raises_its_own_one_line_error(scene_folder, data):
 
 def test_the_toml_writer_round_trips():
     """The fuzzer's own TOML output parses back to the same document (else its mutations would be untested)."""
-    document = {"a": {"b": [1, 2.5, "x\"y"], "c": {"d": True}}, "e": [{"f": -1e300}], "odd key": "é"}
+    document = {"a": {"b": [1, 2.5, 'x"y'], "c": {"d": True}}, "e": [{"f": -1e300}], "odd key": "é"}
     assert tomllib.loads(to_toml(document)) == document
     assert math.isnan(tomllib.loads(to_toml({"n": math.nan}))["n"])

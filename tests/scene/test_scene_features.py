@@ -40,8 +40,12 @@ def test_defines_name_the_materials_of_the_scene_file(name):
 
 def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     cornell = scene_feature_defines(build_scene_buffers(_bundled("cornell_box")))
-    assert cornell == {"SCENE_MATERIAL_TYPES": MATERIAL_BITS["diffuse"], "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
-                       "SCENE_HAS_MEDIA": 0, "SCENE_HAS_LIGHT_IMAGES": 0}
+    assert cornell == {
+        "SCENE_MATERIAL_TYPES": MATERIAL_BITS["diffuse"],
+        "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
+        "SCENE_HAS_MEDIA": 0,
+        "SCENE_HAS_LIGHT_IMAGES": 0,
+    }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
@@ -49,19 +53,39 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
 
 def _environment_map_scene() -> spectrace.Scene:
     rgb = np.random.default_rng(5).uniform(0.0, 1.0, (8, 16, 3)).astype(np.float32)
-    ground = spectrace.shape("rectangle", spectrace.plastic((0.6, 0.5, 0.3)),
-                             transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 2}])
-    return spectrace.Scene(camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
-                           shapes=[ground], lights=[EnvironmentMap(rgb, 1.0)], width=16, height=16, spp=4)
+    ground = spectrace.shape(
+        "rectangle",
+        spectrace.plastic((0.6, 0.5, 0.3)),
+        transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 2}],
+    )
+    return spectrace.Scene(
+        camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
+        shapes=[ground],
+        lights=[EnvironmentMap(rgb, 1.0)],
+        width=16,
+        height=16,
+        spp=4,
+    )
 
 
 def _distant_and_spot_scene() -> spectrace.Scene:
-    ground = spectrace.shape("rectangle", spectrace.conductor("Au", roughness=0.3),
-                             transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 2}])
-    lights = [spectrace.distant_light((0.3, -1.0, 0.2), irradiance=2.0),
-              spectrace.spot_light((0.0, 2.0, 0.0), (0.0, 0.0, 0.0), cutoff_angle=40.0, power_w=20.0)]
-    return spectrace.Scene(camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
-                           shapes=[ground], lights=lights, width=16, height=16, spp=4)
+    ground = spectrace.shape(
+        "rectangle",
+        spectrace.conductor("Au", roughness=0.3),
+        transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 2}],
+    )
+    lights = [
+        spectrace.distant_light((0.3, -1.0, 0.2), irradiance=2.0),
+        spectrace.spot_light((0.0, 2.0, 0.0), (0.0, 0.0, 0.0), cutoff_angle=40.0, power_w=20.0),
+    ]
+    return spectrace.Scene(
+        camera=spectrace.Camera(origin=(0.0, 1.0, -3.0), target=(0.0, 0.0, 0.0)),
+        shapes=[ground],
+        lights=lights,
+        width=16,
+        height=16,
+        spp=4,
+    )
 
 
 SCENES = {

@@ -48,7 +48,9 @@ def test_cornell_box_loads_with_measured_spectra():
     assert red.evaluate(650.0) > 4 * red.evaluate(500.0)  # the measured red wall reflects long wavelengths
     light = scene.shapes[3].emitter
     assert light is not None and not light.two_sided
-    assert light.radiance.evaluate(500.0) == pytest.approx(8.0) and light.radiance.evaluate(600.0) == pytest.approx(15.6)
+    assert light.radiance.evaluate(500.0) == pytest.approx(8.0) and light.radiance.evaluate(600.0) == pytest.approx(
+        15.6
+    )
 
 
 def test_transforms_apply_in_order(tmp_path):
@@ -122,11 +124,14 @@ def test_a_byte_order_mark_is_accepted(tmp_path):
     assert with_bom.shapes[0].material.reflectance.evaluate(550.0) == pytest.approx(0.25)
 
 
-@pytest.mark.parametrize("nested", [
-    "[" * 5000 + "]" * 5000,  # arrays: tomllib recurses and runs out of stack
-    "{ a = " * 5000 + "1" + " }" * 5000,  # inline tables: likewise
-    "[" * 65 + "]" * 65,  # parses, but deeper than any scene
-])
+@pytest.mark.parametrize(
+    "nested",
+    [
+        "[" * 5000 + "]" * 5000,  # arrays: tomllib recurses and runs out of stack
+        "{ a = " * 5000 + "1" + " }" * 5000,  # inline tables: likewise
+        "[" * 65 + "]" * 65,  # parses, but deeper than any scene
+    ],
+)
 def test_deep_nesting_is_one_line(tmp_path, nested):
     path = _write(tmp_path, extra=f"deep = {nested}")
     with pytest.raises(SpectraceError, match="nested (too deep to parse|more than 64 levels deep)") as caught:
@@ -148,7 +153,8 @@ def test_named_spectra_and_library_references(tmp_path):
 def _with_material(tmp_path, material: str):
     """MINIMAL with [materials.grey] replaced by `material` (its keys after the table header)."""
     text = MINIMAL.format(reflectance="value = 0.5", extra="").replace(
-        'type = "diffuse"\nreflectance = { value = 0.5 }', textwrap.dedent(material).strip())
+        'type = "diffuse"\nreflectance = { value = 0.5 }', textwrap.dedent(material).strip()
+    )
     return _write(tmp_path, text=text)
 
 
@@ -158,8 +164,16 @@ def test_reflective_materials_resolve(tmp_path):
     assert type(material).__name__ == "ConductorMaterial" and material.roughness == 0.25
     # Gold's measured index at 600 nm (spectra/metals/Au.csv lies between these rows).
     assert 0.2 < material.eta.evaluate(600.0) < 0.3 and 2.9 < material.k.evaluate(600.0) < 3.1
-    custom = load_scene(_with_material(tmp_path, 'type = "conductor"\neta = { value = 1.5 }\nk = { value = 2.0 }\n'
-                                                 'specular_tint = { value = 0.5 }')).shapes[0].material
+    custom = (
+        load_scene(
+            _with_material(
+                tmp_path,
+                'type = "conductor"\neta = { value = 1.5 }\nk = { value = 2.0 }\nspecular_tint = { value = 0.5 }',
+            )
+        )
+        .shapes[0]
+        .material
+    )
     assert custom.k.evaluate(500.0) == 2.0 and custom.specular_tint.evaluate(500.0) == 0.5
     plastic = load_scene(_with_material(tmp_path, 'type = "plastic"\nreflectance = { value = 0.3 }')).shapes[0].material
     assert (plastic.ior, plastic.roughness) == (1.5, 0.0)
@@ -179,14 +193,24 @@ def test_reflective_materials_resolve(tmp_path):
         ('type = "conductor"\neta = { value = 0 }\nk = { value = 1 }', "materials.grey.eta", "> 0"),
         ('type = "conductor"\neta = { value = 1 }\nk = { value = -1 }', "materials.grey.k", "negative"),
         ('type = "conductor"\nmetal = "Au"\nroughness = 2', "materials.grey.roughness", "less than or equal to 1"),
-        ('type = "conductor"\nmetal = "Au"\nspecular_tint = { value = 2 }', "materials.grey.specular_tint",
-         "exceeds 1"),
+        (
+            'type = "conductor"\nmetal = "Au"\nspecular_tint = { value = 2 }',
+            "materials.grey.specular_tint",
+            "exceeds 1",
+        ),
         ('type = "plastic"\nreflectance = { value = 0.5 }\nior = 1.0', "materials.grey.ior", "greater than 1"),
-        ('type = "plastic"\nreflectance = { value = 0.5 }\nroughnes = 0.1', "materials.grey.roughnes",
-         "did you mean 'roughness'"),
+        (
+            'type = "plastic"\nreflectance = { value = 0.5 }\nroughnes = 0.1',
+            "materials.grey.roughnes",
+            "did you mean 'roughness'",
+        ),
         ('type = "mirror"\nreflectance = { value = 1.5 }', "materials.grey.reflectance", "exceeds 1"),
-        ('type = "glass"', "materials.grey.type", "Input tag 'glass' found using 'type' does not match any of the expected tags: 'diffuse', 'mirror'"),
-        ('reflectance = { value = 0.5 }', "materials.grey.type", "required key is missing"),
+        (
+            'type = "glass"',
+            "materials.grey.type",
+            "Input tag 'glass' found using 'type' does not match any of the expected tags: 'diffuse', 'mirror'",
+        ),
+        ("reflectance = { value = 0.5 }", "materials.grey.type", "required key is missing"),
     ],
 )
 def test_bad_material_names_file_and_key(tmp_path, material, where, message):

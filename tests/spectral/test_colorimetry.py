@@ -69,7 +69,7 @@ def test_srgb_transfer_curve_matches_colour_science():
 
 def test_y_integral_matches_pbrt_v4_constant():
     # pbrt-v4 src/pbrt/util/spectrum.h: CIE_Y_integral = 106.856895 (same CMFs, 1 nm, 360..830 nm).
-    assert CIE_Y_INTEGRAL == pytest.approx(106.856895, rel=1e-6)
+    assert pytest.approx(106.856895, rel=1e-6) == CIE_Y_INTEGRAL
 
 
 def test_constant_unit_spectrum_has_y_one_and_equal_energy_chromaticity():

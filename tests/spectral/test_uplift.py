@@ -54,7 +54,7 @@ def colour_science_linear_srgb_of_emission(values: np.ndarray) -> np.ndarray:
 def test_colorchecker_round_trip_through_colour_science(patch):
     rgb = COLORCHECKER[patch]
     spectrum, _ = uplift_reflectance(rgb)
-    assert 0.0 <= spectrum.min() and spectrum.max() <= 1.0
+    assert spectrum.min() >= 0.0 and spectrum.max() <= 1.0
     np.testing.assert_allclose(colour_science_linear_srgb_under_d65(spectrum.values), rgb, atol=0.01)
     # In the renderer's own integration (which colour-science matches to ~1e-3 in test_colorimetry) the fit is exact.
     ours = XYZ_TO_LINEAR_SRGB @ reflectance_to_xyz(spectrum, cie_illuminant("D65"))
@@ -90,7 +90,7 @@ def test_coefficients_are_for_wavelength_in_nm():
 @given(st.tuples(*[st.floats(0.0, 1.0, allow_nan=False)] * 3))
 def test_any_rgb_in_the_cube_gives_a_bounded_spectrum_that_round_trips(rgb):
     spectrum, _ = uplift_reflectance(rgb)
-    assert 0.0 <= spectrum.min() and spectrum.max() <= 1.0
+    assert spectrum.min() >= 0.0 and spectrum.max() <= 1.0
     back = XYZ_TO_LINEAR_SRGB @ reflectance_to_xyz(spectrum, cie_illuminant("D65"))
     # 1e-4: white maps to the constant 1, whose sRGB through the lecture matrix is (1.00001, 0.99999, 1.00008).
     np.testing.assert_allclose(back, np.round(rgb, uplift.RGB_CACHE_DECIMALS), atol=1e-4)

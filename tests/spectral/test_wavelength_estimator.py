@@ -30,8 +30,14 @@ def _kernel_estimate(kernel_runner, values: np.ndarray, seed: int) -> tuple[np.n
     cmf[:, :3] = cmf_table_normalised()
     runner = kernel_runner("testing/wavelength_estimator.cl")
     means = np.empty((ITEMS, 4), np.float32)
-    args = [runner.buffer(table.data), np.int32(offset), runner.buffer(cmf), np.uint32(seed),
-            np.int32(SAMPLES_PER_ITEM), runner.buffer(means, True)]
+    args = [
+        runner.buffer(table.data),
+        np.int32(offset),
+        runner.buffer(cmf),
+        np.uint32(seed),
+        np.int32(SAMPLES_PER_ITEM),
+        runner.buffer(means, True),
+    ]
     runner.run("estimate_spectrum_xyz", ITEMS, args, {5: means})
     xyz = means[:, :3].astype(np.float64)
     return xyz.mean(axis=0), xyz.std(axis=0, ddof=1) / np.sqrt(ITEMS)
@@ -64,10 +70,17 @@ def _sample_wavelengths(kernel_runner, u: np.ndarray) -> tuple[np.ndarray, np.nd
     runner = kernel_runner("testing/wavelength_estimator.cl")
     n = len(u)
     lam, sampled_pdf, evaluated_pdf = (np.empty(n, np.float32) for _ in range(3))
-    runner.run("sample_wavelength_pdf", n,
-               [runner.buffer(u), runner.buffer(lam, True), runner.buffer(sampled_pdf, True),
-                runner.buffer(evaluated_pdf, True)],
-               {1: lam, 2: sampled_pdf, 3: evaluated_pdf})
+    runner.run(
+        "sample_wavelength_pdf",
+        n,
+        [
+            runner.buffer(u),
+            runner.buffer(lam, True),
+            runner.buffer(sampled_pdf, True),
+            runner.buffer(evaluated_pdf, True),
+        ],
+        {1: lam, 2: sampled_pdf, 3: evaluated_pdf},
+    )
     return lam, sampled_pdf, evaluated_pdf
 
 
@@ -84,16 +97,24 @@ def test_visible_pdf_integrates_to_one_and_matches_histogram(kernel_runner):
     fine = np.linspace(360, 830, 47001)
     pdf_fine = np.interp(fine, lam[order], pdf[order])
     assert abs(np.trapezoid(pdf_fine, fine) - 1.0) < 2e-3
-    bin_mass = np.array([np.trapezoid(pdf_fine[(fine >= a) & (fine <= b)], fine[(fine >= a) & (fine <= b)])
-                         for a, b in zip(edges[:-1], edges[1:])])
+    bin_mass = np.array(
+        [
+            np.trapezoid(pdf_fine[(fine >= a) & (fine <= b)], fine[(fine >= a) & (fine <= b)])
+            for a, b in zip(edges[:-1], edges[1:])
+        ]
+    )
     np.testing.assert_allclose(counts / n, bin_mass, atol=2e-4)
 
 
 def test_sampled_pdf_is_the_visible_pdf_at_the_sampled_wavelength(kernel_runner):
     """The pdf the estimator divides by (computed from the CDF value, not from λ) and p(λ) evaluated at the λ the
     sampler returned both equal the analytic pdf at that λ, to float rounding; u spans [0, 1) including its ends."""
-    u = np.concatenate([np.linspace(0, 1, 100_001, dtype=np.float32)[:-1],
-                        np.array([np.nextafter(np.float32(1), np.float32(0))], np.float32)])
+    u = np.concatenate(
+        [
+            np.linspace(0, 1, 100_001, dtype=np.float32)[:-1],
+            np.array([np.nextafter(np.float32(1), np.float32(0))], np.float32),
+        ]
+    )
     lam, sampled_pdf, evaluated_pdf = _sample_wavelengths(kernel_runner, u)
     expected = _analytic_visible_pdf(lam)
     np.testing.assert_allclose(sampled_pdf, expected, rtol=1e-5)

@@ -18,8 +18,19 @@ from spectrace.errors import SpectraceError
 
 
 def _child_bench(env: dict, size: int, spp: int, max_depth: int, device: str | None, scene: str | None) -> list[dict]:
-    command = [sys.executable, "-m", "spectrace", "bench", "--json", "--size", str(size), "--spp", str(spp),
-               "--max-depth", str(max_depth)]
+    command = [
+        sys.executable,
+        "-m",
+        "spectrace",
+        "bench",
+        "--json",
+        "--size",
+        str(size),
+        "--spp",
+        str(spp),
+        "--max-depth",
+        str(max_depth),
+    ]
     if device:
         command += ["--device", device]
     if scene:
@@ -37,12 +48,17 @@ def _child_bench(env: dict, size: int, spp: int, max_depth: int, device: str | N
     return rows
 
 
-def run_cold_bench(size: int, spp: int, max_depth: int, device: str | None, scene: str | None
-                   ) -> tuple[list[dict], list[dict]]:
+def run_cold_bench(
+    size: int, spp: int, max_depth: int, device: str | None, scene: str | None
+) -> tuple[list[dict], list[dict]]:
     """(cold rows, warm rows) of the plain bench."""
     with tempfile.TemporaryDirectory(prefix="spectrace-cold-") as folder:
-        env = dict(os.environ, SPECTRACE_CACHE_DIR=os.path.join(folder, "spectrace"),
-                   POCL_CACHE_DIR=os.path.join(folder, "pocl"), XDG_CACHE_HOME=os.path.join(folder, "xdg"))
+        env = dict(
+            os.environ,
+            SPECTRACE_CACHE_DIR=os.path.join(folder, "spectrace"),
+            POCL_CACHE_DIR=os.path.join(folder, "pocl"),
+            XDG_CACHE_HOME=os.path.join(folder, "xdg"),
+        )
         cold = _child_bench(env, size, spp, max_depth, device, scene)
         warm = _child_bench(env, size, spp, max_depth, device, scene)
     return cold, warm

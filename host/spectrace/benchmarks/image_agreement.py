@@ -82,8 +82,11 @@ def compare_regions(ours: np.ndarray, theirs: np.ndarray, regions: dict[str, tup
         with np.errstate(divide="ignore", invalid="ignore"):
             sigmas = np.where(error > 0, difference / error, np.where(difference > 0, np.inf, 0.0))
             relative = np.where(np.abs(mean_b) > 0, difference / np.abs(mean_b), 0.0)
-        rows.append(RegionComparison(name, mean_a.tolist(), mean_b.tolist(), error.tolist(), float(sigmas.max()),
-                                     float(relative.max())))
+        rows.append(
+            RegionComparison(
+                name, mean_a.tolist(), mean_b.tolist(), error.tolist(), float(sigmas.max()), float(relative.max())
+            )
+        )
     return rows
 
 

@@ -8,9 +8,9 @@ alike and the ratios stay comparable. Each variant's first pass is a warm-up and
 
 import statistics
 from collections.abc import Callable
-from typing import Any
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from rich.table import Table
 
@@ -34,14 +34,22 @@ class Variant:
         return f"{self.kernel} wg {self.work_group or 'runtime'}" + ("" if self.specialised else " generic")
 
 
-def kernel_shape_variants(kernels: tuple[str, ...] = ("megakernel", "wavefront"),
-                          work_groups: tuple[int | None, ...] = WORK_GROUPS) -> list[Variant]:
+def kernel_shape_variants(
+    kernels: tuple[str, ...] = ("megakernel", "wavefront"), work_groups: tuple[int | None, ...] = WORK_GROUPS
+) -> list[Variant]:
     return [Variant(kernel, group) for kernel in kernels for group in work_groups]
 
 
-def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, max_depth: int, device: str | None,
-                           variants: list[Variant], repeats: int = 3,
-                           log: Callable[[str], None] = lambda text: None) -> list[dict]:
+def run_kernel_shape_bench(
+    scene_path: Path | None,
+    sizes: list[int],
+    spp: int,
+    max_depth: int,
+    device: str | None,
+    variants: list[Variant],
+    repeats: int = 3,
+    log: Callable[[str], None] = lambda text: None,
+) -> list[dict]:
     scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml")
     dev = open_device(device)
     default_group = render_work_group(dev)
@@ -63,8 +71,11 @@ def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, 
                 renderer.reset()
                 renderer.run_pass(spp)
                 seconds[variant].append(renderer.render_seconds)
-        baseline = statistics.median(seconds[Variant("megakernel", default_group)]) \
-            if Variant("megakernel", default_group) in seconds else None
+        baseline = (
+            statistics.median(seconds[Variant("megakernel", default_group)])
+            if Variant("megakernel", default_group) in seconds
+            else None
+        )
         for variant in variants:
             median = statistics.median(seconds[variant])
             row: dict[str, Any] = {
@@ -83,8 +94,10 @@ def run_kernel_shape_bench(scene_path: Path | None, sizes: list[int], spp: int, 
                 "samples_per_second": size * size * spp / median,
                 "relative_to_default": baseline / median if baseline else None,
             }
-            log(f"{row['device']} {row['scene']} {size}x{size} depth {max_depth}: {variant.label}: "
-                f"{row['samples_per_second'] / 1e6:.3f} M samples/s")
+            log(
+                f"{row['device']} {row['scene']} {size}x{size} depth {max_depth}: {variant.label}: "
+                f"{row['samples_per_second'] / 1e6:.3f} M samples/s"
+            )
             results.append(row)
         del renderers
     return results
@@ -98,6 +111,14 @@ def kernel_shape_table(results: list[dict]) -> Table:
         group = str(r["work_group"] or "runtime") + (" (default)" if r["is_default"] else "")
         relative = f"{r['relative_to_default']:.2f}x" if r["relative_to_default"] else ""
         kernel = r["kernel"] + ("" if r["specialised"] else " (generic)")
-        table.add_row(r["device"], r["scene"], f"{r['width']}x{r['height']}", str(r["max_depth"]), kernel,
-                      group, f"{r['samples_per_second'] / 1e6:.3f}", relative)
+        table.add_row(
+            r["device"],
+            r["scene"],
+            f"{r['width']}x{r['height']}",
+            str(r["max_depth"]),
+            kernel,
+            group,
+            f"{r['samples_per_second'] / 1e6:.3f}",
+            relative,
+        )
     return table

@@ -23,8 +23,12 @@ import numpy as np
 LLVM_VARIANT = "llvm_ad_spectral"
 SCALAR_VARIANT = "scalar_spectral"
 # Newest first: Dr.Jit wants a recent LLVM.
-_LIBLLVM_PATTERNS = ["/usr/lib/llvm-{v}/lib/libLLVM*.so*", "/usr/lib/x86_64-linux-gnu/libLLVM-{v}.so*",
-                     "/usr/lib/x86_64-linux-gnu/libLLVM.so.{v}*", "/usr/lib64/libLLVM-{v}.so*"]
+_LIBLLVM_PATTERNS = [
+    "/usr/lib/llvm-{v}/lib/libLLVM*.so*",
+    "/usr/lib/x86_64-linux-gnu/libLLVM-{v}.so*",
+    "/usr/lib/x86_64-linux-gnu/libLLVM.so.{v}*",
+    "/usr/lib64/libLLVM-{v}.so*",
+]
 _NEWEST_FIRST = range(22, 15, -1)
 
 
@@ -38,8 +42,10 @@ def find_libllvm() -> str | None:
     return None
 
 
-LIBLLVM_HINT = ("Dr.Jit needs a recent shared libLLVM: install one (Debian/Ubuntu: `apt-get install libllvm19`) "
-                "or point DRJIT_LIBLLVM_PATH at one")
+LIBLLVM_HINT = (
+    "Dr.Jit needs a recent shared libLLVM: install one (Debian/Ubuntu: `apt-get install libllvm19`) "
+    "or point DRJIT_LIBLLVM_PATH at one"
+)
 
 # Run in a child process: Dr.Jit compiles the first kernel with whatever libLLVM it loaded, and an LLVM that cannot
 # select one of the instructions it emits (LLVM 15 and `fminimum`, measured) aborts the whole process, which no
@@ -102,12 +108,18 @@ def _probe_key(variant: str, libllvm: str) -> str:
 def _probe_in_child(variant: str, libllvm: str) -> VariantProbe:
     env = dict(os.environ, **({"DRJIT_LIBLLVM_PATH": libllvm} if libllvm else {}))
     try:
-        result = subprocess.run([sys.executable, "-c", _PROBE_CODE, variant], capture_output=True, text=True,
-                                timeout=_PROBE_TIMEOUT_SECONDS, env=env)
+        result = subprocess.run(
+            [sys.executable, "-c", _PROBE_CODE, variant],
+            capture_output=True,
+            text=True,
+            timeout=_PROBE_TIMEOUT_SECONDS,
+            env=env,
+        )
     except subprocess.TimeoutExpired:
         return VariantProbe(False, f"a 4x4 test render took over {_PROBE_TIMEOUT_SECONDS} s", timed_out=True)
-    libllvm = next((line.split(":", 1)[1].strip() for line in result.stdout.splitlines()
-                    if line.startswith("libllvm:")), "")
+    libllvm = next(
+        (line.split(":", 1)[1].strip() for line in result.stdout.splitlines() if line.startswith("libllvm:")), ""
+    )
     if result.returncode == 0 and "ok" in result.stdout.split():
         return VariantProbe(True, libllvm=libllvm)
     lines = [line.strip() for line in result.stderr.splitlines() if line.strip()]
@@ -255,8 +267,10 @@ class MitsubaContestant:
 
         mi.set_variant(self.variant)
         # Mitsuba's stubs type the seed as its UInt32 array; a Python int converts implicitly.
-        image = np.array(mi.render(self.scene, spp=self.spp, seed=self.seed),  # type: ignore[arg-type]
-                         dtype=np.float64)
+        image = np.array(
+            mi.render(self.scene, spp=self.spp, seed=self.seed),  # type: ignore[arg-type]
+            dtype=np.float64,
+        )
         self.rendered_spp = int(self.scene.sensors()[0].sampler().sample_count())
         return image
 
@@ -272,8 +286,8 @@ class MitsubaContestant:
             self.seconds, self.cpu_seconds, self.xyz = seconds, cpu, xyz
 
     def result(self) -> MitsubaRender:
-        import mitsuba as mi
         import drjit as dr
+        import mitsuba as mi
 
         from spectrace.interop.mitsuba_export import mitsuba_film_xyz
 
@@ -281,12 +295,21 @@ class MitsubaContestant:
             raise RuntimeError("result() needs a timed render first (render_once)")
         mi.set_variant(self.variant)
         threads = int(dr.thread_count()) if hasattr(dr, "thread_count") else os.cpu_count() or 1
-        return MitsubaRender(self.variant, mitsuba_film_xyz(self.xyz[..., :3], mi), self.load_seconds,
-                             self.first_render_seconds, self.seconds, self.cpu_seconds, threads, self.rendered_spp)
+        return MitsubaRender(
+            self.variant,
+            mitsuba_film_xyz(self.xyz[..., :3], mi),
+            self.load_seconds,
+            self.first_render_seconds,
+            self.seconds,
+            self.cpu_seconds,
+            threads,
+            self.rendered_spp,
+        )
 
 
-def render_with_mitsuba(scene_dict: dict, variant: str, spp: int, seed: int = 0, warm_up: bool | None = None,
-                        repeats: int = 1) -> MitsubaRender:
+def render_with_mitsuba(
+    scene_dict: dict, variant: str, spp: int, seed: int = 0, warm_up: bool | None = None, repeats: int = 1
+) -> MitsubaRender:
     """Load, warm up (JIT variants) and render `repeats` times; the fastest render's figures and image."""
     contestant = MitsubaContestant(scene_dict, variant, spp, seed, warm_up)
     for _ in range(max(1, repeats)):

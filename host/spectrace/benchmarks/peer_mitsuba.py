@@ -73,17 +73,35 @@ class SpectraceContestant:
     def row(self) -> dict:
         scene, samples = self.scene, self.scene.width * self.scene.height * self.best_image.spp
         return {
-            "renderer": "spectrace", "runtime": self.device.report.key, "device_name": self.device.report.device_name,
-            "width": scene.width, "height": scene.height, "spp": self.best_image.spp, "max_depth": scene.max_depth,
-            "seconds": self.seconds, "samples_per_second": samples / self.seconds, "cpu_seconds": self.cpu_seconds,
-            "samples_per_cpu_second": samples / self.cpu_seconds, "setup_seconds": self.setup_seconds,
-            "kernel_build_seconds": self.build_seconds, "kernel_build_cached": self.build_cached,
+            "renderer": "spectrace",
+            "runtime": self.device.report.key,
+            "device_name": self.device.report.device_name,
+            "width": scene.width,
+            "height": scene.height,
+            "spp": self.best_image.spp,
+            "max_depth": scene.max_depth,
+            "seconds": self.seconds,
+            "samples_per_second": samples / self.seconds,
+            "cpu_seconds": self.cpu_seconds,
+            "samples_per_cpu_second": samples / self.cpu_seconds,
+            "setup_seconds": self.setup_seconds,
+            "kernel_build_seconds": self.build_seconds,
+            "kernel_build_cached": self.build_cached,
         }
 
 
-def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int, device: str | None,
-                   all_devices: bool, variants: list[str] | None = None, repeats: int = 2,
-                   log: Callable[[str], None] = lambda text: None, peer_sampler: str = "independent") -> dict:
+def run_peer_bench(
+    scene_path: Path | None,
+    size: int,
+    spp: int,
+    max_depth: int,
+    device: str | None,
+    all_devices: bool,
+    variants: list[str] | None = None,
+    repeats: int = 2,
+    log: Callable[[str], None] = lambda text: None,
+    peer_sampler: str = "independent",
+) -> dict:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant, usable_variants
     from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
 
@@ -110,8 +128,7 @@ def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int,
             contestants: list[SpectraceContestant | MitsubaContestant] = [*ours, *([peer] if peer else [])]
             for contestant in contestants:
                 contestant.render_once()
-                name = (contestant.variant if isinstance(contestant, MitsubaContestant)
-                        else contestant.device.report.key)
+                name = contestant.variant if isinstance(contestant, MitsubaContestant) else contestant.device.report.key
                 log(f"round {round_index + 1}: {name} {contestant.seconds:.2f} s (best so far)")
     images = {c.device.report.key: c.best_image.xyz for c in ours}
     our_rows = [c.row() for c in ours]
@@ -121,49 +138,97 @@ def run_peer_bench(scene_path: Path | None, size: int, spp: int, max_depth: int,
         result = contestant.result()
         import mitsuba as mi
 
-        their_rows.append({
-            "renderer": "mitsuba", "runtime": result.variant, "width": scene.width, "height": scene.height,
-            "spp": result.spp, "max_depth": scene.max_depth, "seconds": result.seconds,
-            "samples_per_second": scene.width * scene.height * result.spp / result.seconds,
-            "cpu_seconds": result.cpu_seconds,
-            "samples_per_cpu_second": scene.width * scene.height * result.spp / result.cpu_seconds,
-            "scene_load_seconds": result.load_seconds, "first_render_seconds": result.first_render_seconds,
-            "threads": result.threads, "mitsuba_version": mi.__version__,
-        })
+        their_rows.append(
+            {
+                "renderer": "mitsuba",
+                "runtime": result.variant,
+                "width": scene.width,
+                "height": scene.height,
+                "spp": result.spp,
+                "max_depth": scene.max_depth,
+                "seconds": result.seconds,
+                "samples_per_second": scene.width * scene.height * result.spp / result.seconds,
+                "cpu_seconds": result.cpu_seconds,
+                "samples_per_cpu_second": scene.width * scene.height * result.spp / result.cpu_seconds,
+                "scene_load_seconds": result.load_seconds,
+                "first_render_seconds": result.first_render_seconds,
+                "threads": result.threads,
+                "mitsuba_version": mi.__version__,
+            }
+        )
         their_images[result.variant] = result.xyz
     if not their_rows:
         notes.append("no Mitsuba variant ran: only spectrace's figures are shown")
-    ratios = [{"spectrace": a["runtime"], "mitsuba": b["runtime"],
-               "ratio": a["samples_per_second"] / b["samples_per_second"],
-               "cpu_time_ratio": a["samples_per_cpu_second"] / b["samples_per_cpu_second"]}
-              for a in our_rows for b in their_rows]
+    ratios = [
+        {
+            "spectrace": a["runtime"],
+            "mitsuba": b["runtime"],
+            "ratio": a["samples_per_second"] / b["samples_per_second"],
+            "cpu_time_ratio": a["samples_per_cpu_second"] / b["samples_per_cpu_second"],
+        }
+        for a in our_rows
+        for b in their_rows
+    ]
     regions = regions_for(scene.source)
-    agreement: list[dict[str, Any]] = [{"spectrace": a, "mitsuba": b, "regions": [r.as_dict() for r in compare_regions(
-        images[a], their_images[b], regions)]} for a in images for b in their_images]
+    agreement: list[dict[str, Any]] = [
+        {
+            "spectrace": a,
+            "mitsuba": b,
+            "regions": [r.as_dict() for r in compare_regions(images[a], their_images[b], regions)],
+        }
+        for a in images
+        for b in their_images
+    ]
     for pair in agreement:
         pair["agrees"] = all(r["agrees"] for r in pair["regions"])
-    return {"scene": str(scene.source), "width": size, "height": size, "spp": spp, "max_depth": max_depth,
-            "rr_depth": scene.rr_depth, "repeats": repeats, "spectrace": our_rows, "mitsuba": their_rows,
-            "ratios": ratios, "agreement": agreement, "sigma_limit": SIGMA_LIMIT, "notes": notes}
+    return {
+        "scene": str(scene.source),
+        "width": size,
+        "height": size,
+        "spp": spp,
+        "max_depth": max_depth,
+        "rr_depth": scene.rr_depth,
+        "repeats": repeats,
+        "spectrace": our_rows,
+        "mitsuba": their_rows,
+        "ratios": ratios,
+        "agreement": agreement,
+        "sigma_limit": SIGMA_LIMIT,
+        "notes": notes,
+    }
 
 
 def peer_tables(result: dict) -> list:
     from rich.table import Table
 
-    timing = Table(title=f"spectrace vs Mitsuba 3: {result['width']}x{result['height']}, {result['spp']} spp, "
-                         f"max_depth {result['max_depth']}, rr_depth {result['rr_depth']} (warm renders, best of "
-                         f"{result['repeats']})")
+    timing = Table(
+        title=f"spectrace vs Mitsuba 3: {result['width']}x{result['height']}, {result['spp']} spp, "
+        f"max_depth {result['max_depth']}, rr_depth {result['rr_depth']} (warm renders, best of "
+        f"{result['repeats']})"
+    )
     for column in ("renderer", "runtime", "M samples/s", "wall s", "CPU s", "notes"):
         timing.add_column(column, justify="left" if column in ("renderer", "runtime", "notes") else "right")
     for row in result["spectrace"]:
         build = f"build {row['kernel_build_seconds']:.2f} s" + (" (cached)" if row["kernel_build_cached"] else "")
-        timing.add_row("spectrace", row["runtime"], f"{row['samples_per_second'] / 1e6:.3f}",
-                       f"{row['seconds']:.2f}", f"{row['cpu_seconds']:.2f}", build)
+        timing.add_row(
+            "spectrace",
+            row["runtime"],
+            f"{row['samples_per_second'] / 1e6:.3f}",
+            f"{row['seconds']:.2f}",
+            f"{row['cpu_seconds']:.2f}",
+            build,
+        )
     for row in result["mitsuba"]:
         first = row["first_render_seconds"]
         note = (f"first (JIT) render {first:.2f} s" if first is not None else "no JIT") + f", {row['threads']} threads"
-        timing.add_row(f"mitsuba {row['mitsuba_version']}", row["runtime"], f"{row['samples_per_second'] / 1e6:.3f}",
-                       f"{row['seconds']:.2f}", f"{row['cpu_seconds']:.2f}", note)
+        timing.add_row(
+            f"mitsuba {row['mitsuba_version']}",
+            row["runtime"],
+            f"{row['samples_per_second'] / 1e6:.3f}",
+            f"{row['seconds']:.2f}",
+            f"{row['cpu_seconds']:.2f}",
+            note,
+        )
     tables = [timing]
     if result["ratios"]:
         ratios = Table(title="ratio = spectrace samples/s ÷ Mitsuba samples/s (and per CPU second)")
@@ -173,13 +238,20 @@ def peer_tables(result: dict) -> list:
             ratios.add_row(r["spectrace"], r["mitsuba"], f"{r['ratio']:.2f}x", f"{r['cpu_time_ratio']:.2f}x")
         tables.append(ratios)
     for pair in result["agreement"]:
-        table = Table(title=f"do the images agree? {pair['spectrace']} vs {pair['mitsuba']}: mean XYZ per region, "
-                            f"pass when |difference| <= {result['sigma_limit']:g} standard errors")
+        table = Table(
+            title=f"do the images agree? {pair['spectrace']} vs {pair['mitsuba']}: mean XYZ per region, "
+            f"pass when |difference| <= {result['sigma_limit']:g} standard errors"
+        )
         for column in ("region", "spectrace X Y Z", "mitsuba X Y Z", "max |Δ|/σ", "max |Δ|/value", "agrees"):
             table.add_column(column)
         for r in pair["regions"]:
-            table.add_row(r["region"], " ".join(f"{v:.4g}" for v in r["ours"]),
-                          " ".join(f"{v:.4g}" for v in r["theirs"]), f"{r['sigmas']:.2f}",
-                          f"{100 * r['relative_difference']:.2f} %", "pass" if r["agrees"] else "FAIL")
+            table.add_row(
+                r["region"],
+                " ".join(f"{v:.4g}" for v in r["ours"]),
+                " ".join(f"{v:.4g}" for v in r["theirs"]),
+                f"{r['sigmas']:.2f}",
+                f"{100 * r['relative_difference']:.2f} %",
+                "pass" if r["agrees"] else "FAIL",
+            )
         tables.append(table)
     return tables

@@ -15,8 +15,8 @@ budget" takes that out and scales to exactly the budget (variance ∝ 1/time), s
 import tempfile
 import time
 from collections.abc import Callable
-from typing import Any
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -38,9 +38,16 @@ def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: fl
     return max(1, int(round(budget_seconds * probe_spp / max(seconds_for_probe, 1e-9))))
 
 
-def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, seconds: float, reference_spp: int,
-                      device_key: str | None, log: Callable[[str], None] = lambda text: None,
-                      peer_sampler: str = "independent") -> dict:
+def run_quality_bench(
+    scene_path: Path | None,
+    size: int,
+    max_depth: int,
+    seconds: float,
+    reference_spp: int,
+    device_key: str | None,
+    log: Callable[[str], None] = lambda text: None,
+    peer_sampler: str = "independent",
+) -> dict:
     scene = bench_scene(scene_path, size, 1, max_depth)
     device = open_device(device_key)
     log(f"reference: spectrace, {reference_spp} spp")
@@ -49,12 +56,23 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
     reference = reference_renderer.render(spp=reference_spp).xyz.astype(np.float64)
     # The reference is the mean of two independent halves a and b: its own noise is RMS(a - b) / 2.
     other_half = (reference * reference_spp - half * (reference_spp // 2)) / (reference_spp - reference_spp // 2)
-    result: dict[str, Any] = {"scene": str(scene.source), "width": size, "height": size, "max_depth": max_depth,
-              "samplers": {"spectrace": scene.sampler, "mitsuba": peer_sampler},
-              "budget_seconds": seconds, "runtime": device.report.key,
-              "reference": {"spp": reference_spp, "noise_rms": _rmse(half, other_half) / 2.0,
-                            "mean_y": float(reference[..., 1].mean())},
-              "renderers": [], "cross_check": None, "notes": []}
+    result: dict[str, Any] = {
+        "scene": str(scene.source),
+        "width": size,
+        "height": size,
+        "max_depth": max_depth,
+        "samplers": {"spectrace": scene.sampler, "mitsuba": peer_sampler},
+        "budget_seconds": seconds,
+        "runtime": device.report.key,
+        "reference": {
+            "spp": reference_spp,
+            "noise_rms": _rmse(half, other_half) / 2.0,
+            "mean_y": float(reference[..., 1].mean()),
+        },
+        "renderers": [],
+        "cross_check": None,
+        "notes": [],
+    }
 
     renderer = Renderer(scene, device)
     renderer.run_pass(1)
@@ -67,8 +85,15 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
     start = time.perf_counter()
     image = renderer.render(spp=spp)
     elapsed = time.perf_counter() - start
-    result["renderers"].append({"renderer": "spectrace", "runtime": device.report.key, "spp": image.spp,
-                                "seconds": elapsed, "rmse": _rmse(image.xyz, reference)})
+    result["renderers"].append(
+        {
+            "renderer": "spectrace",
+            "runtime": device.report.key,
+            "spp": image.spp,
+            "seconds": elapsed,
+            "rmse": _rmse(image.xyz, reference),
+        }
+    )
     log(f"spectrace: {image.spp} spp in {elapsed:.2f} s")
 
     try:
@@ -90,16 +115,27 @@ def run_quality_bench(scene_path: Path | None, size: int, max_depth: int, second
                 peer_probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
                 spp = _spp_for_budget(peer_probe.seconds, PROBE_SPP, seconds)
                 timed = render_with_mitsuba(scene_dict, variant, spp=spp, warm_up=False)
-                result["renderers"].append({"renderer": "mitsuba", "runtime": variant, "spp": timed.spp,
-                                            "seconds": timed.seconds, "rmse": _rmse(timed.xyz, reference)})
+                result["renderers"].append(
+                    {
+                        "renderer": "mitsuba",
+                        "runtime": variant,
+                        "spp": timed.spp,
+                        "seconds": timed.seconds,
+                        "rmse": _rmse(timed.xyz, reference),
+                    }
+                )
                 log(f"mitsuba {variant}: {timed.spp} spp in {timed.seconds:.2f} s")
                 if index == 0:  # cross-check the reference against the fastest peer, at a quarter of its spp
-                    check = render_with_mitsuba(scene_dict, variant, spp=max(1, reference_spp // 4), seed=7,
-                                                warm_up=False)
+                    check = render_with_mitsuba(
+                        scene_dict, variant, spp=max(1, reference_spp // 4), seed=7, warm_up=False
+                    )
                     regions = compare_regions(reference, check.xyz, regions_for(scene.source))
-                    result["cross_check"] = {"mitsuba": variant, "spp": max(1, reference_spp // 4),
-                                             "agrees": all(r.agrees for r in regions),
-                                             "regions": [r.as_dict() for r in regions]}
+                    result["cross_check"] = {
+                        "mitsuba": variant,
+                        "spp": max(1, reference_spp // 4),
+                        "agrees": all(r.agrees for r in regions),
+                        "regions": [r.as_dict() for r in regions],
+                    }
     noise = result["reference"]["noise_rms"]
     for row in result["renderers"]:
         row["relative_rmse"] = row["rmse"] / max(result["reference"]["mean_y"], 1e-30)
@@ -113,15 +149,24 @@ def quality_tables(result: dict) -> list:
     from rich.table import Table
 
     ref = result["reference"]
-    table = Table(title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
-                        f"max_depth {result['max_depth']}; reference {ref['spp']} spp (its noise RMS "
-                        f"{ref['noise_rms']:.3g}); samplers: spectrace {result['samplers']['spectrace']}, "
-                        f"Mitsuba {result['samplers']['mitsuba']}")
+    table = Table(
+        title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
+        f"max_depth {result['max_depth']}; reference {ref['spp']} spp (its noise RMS "
+        f"{ref['noise_rms']:.3g}); samplers: spectrace {result['samplers']['spectrace']}, "
+        f"Mitsuba {result['samplers']['mitsuba']}"
+    )
     for column in ("renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE at budget"):
         table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
     for r in result["renderers"]:
-        table.add_row(r["renderer"], r["runtime"], str(r["spp"]), f"{r['seconds']:.2f}", f"{r['rmse']:.4g}",
-                      f"{100 * r['relative_rmse']:.2f} %", f"{r['rmse_at_budget']:.4g}")
+        table.add_row(
+            r["renderer"],
+            r["runtime"],
+            str(r["spp"]),
+            f"{r['seconds']:.2f}",
+            f"{r['rmse']:.4g}",
+            f"{100 * r['relative_rmse']:.2f} %",
+            f"{r['rmse_at_budget']:.4g}",
+        )
     tables = [table]
     check = result["cross_check"]
     if check:
@@ -129,7 +174,12 @@ def quality_tables(result: dict) -> list:
         for column in ("region", "spectrace reference Y", "mitsuba Y", "max |Δ|/σ", "agrees"):
             cross.add_column(column)
         for r in check["regions"]:
-            cross.add_row(r["region"], f"{r['ours'][1]:.4g}", f"{r['theirs'][1]:.4g}", f"{r['sigmas']:.2f}",
-                          "pass" if r["agrees"] else "FAIL")
+            cross.add_row(
+                r["region"],
+                f"{r['ours'][1]:.4g}",
+                f"{r['theirs'][1]:.4g}",
+                f"{r['sigmas']:.2f}",
+                "pass" if r["agrees"] else "FAIL",
+            )
         tables.append(cross)
     return tables

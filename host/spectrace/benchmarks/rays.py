@@ -22,12 +22,12 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import open_device
+from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.geometry.bvh import build_bvh
 from spectrace.geometry.bvh4 import LEAF_SIZE, collapse_to_bvh4, device_nodes, traversal_defines
-from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, sphere
-from spectrace.engine.launch import launch_shape, render_work_group
+from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 
 DISTANCE_CHECK_RAYS = 20000
 
@@ -106,12 +106,17 @@ def traversal_tree_stats(bvh, node_buffer: np.ndarray) -> dict:
     """The tree the kernel traverses: the 4-wide collapse and its leaf blocks, and the node buffer's size."""
     nodes4, depth4 = collapse_to_bvh4(bvh)
     blocks = (node_buffer.nbytes - nodes4.nbytes) // (16 * LEAF_BLOCK_FLOAT4S)
-    return {"nodes_4wide": int(len(nodes4)), "depth_4wide": int(depth4), "leaf_blocks": int(blocks),
-            "node_buffer_bytes": int(node_buffer.nbytes)}
+    return {
+        "nodes_4wide": int(len(nodes4)),
+        "depth_4wide": int(depth4),
+        "leaf_blocks": int(blocks),
+        "node_buffer_bytes": int(node_buffer.nbytes),
+    }
 
 
-def trace_with_spectrace(device_key: str | None, bvh, vertices: np.ndarray, node_buffer: np.ndarray, origins,
-                         directions) -> dict:
+def trace_with_spectrace(
+    device_key: str | None, bvh, vertices: np.ndarray, node_buffer: np.ndarray, origins, directions
+) -> dict:
     """vertices, node_buffer: the kernel's triangle and node buffers (_leaf_order_vertices, device_nodes)."""
     device = open_device(device_key)
     program = device.build_program("testing/closest_hit.cl", defines=traversal_defines() or None)
@@ -119,8 +124,12 @@ def trace_with_spectrace(device_key: str | None, bvh, vertices: np.ndarray, node
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     count = len(origins)
-    buffers = [cl.Buffer(ctx, ro, hostbuf=node_buffer), cl.Buffer(ctx, ro, hostbuf=vertices),
-               cl.Buffer(ctx, ro, hostbuf=_float4(origins)), cl.Buffer(ctx, ro, hostbuf=_float4(directions))]
+    buffers = [
+        cl.Buffer(ctx, ro, hostbuf=node_buffer),
+        cl.Buffer(ctx, ro, hostbuf=vertices),
+        cl.Buffer(ctx, ro, hostbuf=_float4(origins)),
+        cl.Buffer(ctx, ro, hostbuf=_float4(directions)),
+    ]
     t_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
     hit_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
     kernel.set_args(*buffers, t_out, hit_out, np.int32(count))
@@ -138,9 +147,16 @@ def trace_with_spectrace(device_key: str | None, bvh, vertices: np.ndarray, node
     cl.enqueue_copy(queue, hit, hit_out)
     queue.finish()
     triangle = np.where(hit >= 0, bvh.prim_order[np.maximum(hit, 0)], -1)
-    return {"runtime": device.report.key, "seconds": seconds, "rays_per_second": count / seconds,
-            "cores_used": cores, "rays_per_second_per_core": count / seconds / max(cores, 1e-9),
-            "kernel_build_cached": device.last_build_cached, "t": np.where(hit >= 0, t, np.inf), "triangle": triangle}
+    return {
+        "runtime": device.report.key,
+        "seconds": seconds,
+        "rays_per_second": count / seconds,
+        "cores_used": cores,
+        "rays_per_second_per_core": count / seconds / max(cores, 1e-9),
+        "kernel_build_cached": device.last_build_cached,
+        "t": np.where(hit >= 0, t, np.inf),
+        "triangle": triangle,
+    }
 
 
 def trace_with_embree(mesh: TriangleMesh, origins, directions) -> dict:
@@ -159,9 +175,16 @@ def trace_with_embree(mesh: TriangleMesh, origins, directions) -> dict:
     hit = result["primID"].astype(np.int64)
     hit = np.where(result["geomID"] >= 0, hit, -1)  # a miss has geomID -1 (RTC_INVALID_GEOMETRY_ID)
     t = np.where(hit >= 0, result["tfar"], np.inf)
-    return {"runtime": "embree (embreex)", "build_seconds": build_seconds, "seconds": seconds,
-            "rays_per_second": len(origins) / seconds, "cores_used": cores,
-            "rays_per_second_per_core": len(origins) / seconds / max(cores, 1e-9), "t": t, "triangle": hit}
+    return {
+        "runtime": "embree (embreex)",
+        "build_seconds": build_seconds,
+        "seconds": seconds,
+        "rays_per_second": len(origins) / seconds,
+        "cores_used": cores,
+        "rays_per_second_per_core": len(origins) / seconds / max(cores, 1e-9),
+        "t": t,
+        "triangle": hit,
+    }
 
 
 def distance_agreement(ours: dict, theirs: dict, count: int) -> dict:
@@ -169,26 +192,43 @@ def distance_agreement(ours: dict, theirs: dict, count: int) -> dict:
     a_t, b_t = ours["t"][:count], theirs["t"][:count]
     both = np.isfinite(a_t) & np.isfinite(b_t)
     relative = np.abs(a_t[both] - b_t[both]) / np.maximum(b_t[both], 1e-6)
-    return {"rays": int(count), "same_hit_or_miss": float(np.mean(np.isfinite(a_t) == np.isfinite(b_t))),
-            "same_triangle": float(np.mean(ours["triangle"][:count] == theirs["triangle"][:count])),
-            "median_relative_distance_difference": float(np.median(relative)) if both.any() else 0.0,
-            "within_1e-4": float(np.mean(relative <= 1e-4)) if both.any() else 1.0}
+    return {
+        "rays": int(count),
+        "same_hit_or_miss": float(np.mean(np.isfinite(a_t) == np.isfinite(b_t))),
+        "same_triangle": float(np.mean(ours["triangle"][:count] == theirs["triangle"][:count])),
+        "median_relative_distance_difference": float(np.median(relative)) if both.any() else 0.0,
+        "within_1e-4": float(np.mean(relative <= 1e-4)) if both.any() else 1.0,
+    }
 
 
-def run_rays_bench(triangles: int, ray_count: int, device_keys: list[str | None], with_embree: bool = True,
-                   log: Callable[[str], None] = lambda text: None) -> dict:
+def run_rays_bench(
+    triangles: int,
+    ray_count: int,
+    device_keys: list[str | None],
+    with_embree: bool = True,
+    log: Callable[[str], None] = lambda text: None,
+) -> dict:
     subdivisions = subdivisions_for(triangles)
     mesh = displaced_sphere(subdivisions)
     log(f"mesh: displaced icosphere, {len(mesh.faces)} triangles; building the BVH")
     bvh, build_cpu_seconds, peak_bytes = build_with_memory(mesh)
     origins, directions = random_rays(ray_count)
     result: dict[str, Any] = {
-        "triangles": int(len(mesh.faces)), "rays": int(ray_count),
-        "bvh": {"build_seconds": bvh.build_seconds, "build_cpu_seconds": build_cpu_seconds,
-                "peak_traced_bytes": int(peak_bytes),
-                "peak_resident_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
-                "nodes": int(len(bvh.nodes)), "depth": int(bvh.depth), "sah_cost": bvh.sah_cost},
-        "spectrace": [], "embree": None, "agreement": [], "notes": [],
+        "triangles": int(len(mesh.faces)),
+        "rays": int(ray_count),
+        "bvh": {
+            "build_seconds": bvh.build_seconds,
+            "build_cpu_seconds": build_cpu_seconds,
+            "peak_traced_bytes": int(peak_bytes),
+            "peak_resident_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
+            "nodes": int(len(bvh.nodes)),
+            "depth": int(bvh.depth),
+            "sah_cost": bvh.sah_cost,
+        },
+        "spectrace": [],
+        "embree": None,
+        "agreement": [],
+        "notes": [],
     }
     # After the build's peak resident size was read: the kernel's buffers, made once for every runtime.
     vertices = _leaf_order_vertices(mesh, bvh)
@@ -222,13 +262,33 @@ def rays_tables(result: dict) -> list:
 
     bvh = result["bvh"]
     build = Table(title=f"BVH build: {result['triangles']} triangles (binned SAH, numpy)")
-    for column in ("build s", "build CPU s", "peak traced MiB", "peak RSS MiB", "nodes", "depth", "SAH cost",
-                   "4-wide nodes", "4-wide depth", "leaf blocks", "node buffer MiB"):
+    for column in (
+        "build s",
+        "build CPU s",
+        "peak traced MiB",
+        "peak RSS MiB",
+        "nodes",
+        "depth",
+        "SAH cost",
+        "4-wide nodes",
+        "4-wide depth",
+        "leaf blocks",
+        "node buffer MiB",
+    ):
         build.add_column(column, justify="right")
-    build.add_row(f"{bvh['build_seconds']:.2f}", f"{bvh['build_cpu_seconds']:.2f}", f"{bvh['peak_traced_bytes'] / 2**20:.0f}",
-                  f"{bvh['peak_resident_bytes'] / 2**20:.0f}", str(bvh["nodes"]), str(bvh["depth"]),
-                  f"{bvh['sah_cost']:.1f}", str(bvh["nodes_4wide"]), str(bvh["depth_4wide"]), str(bvh["leaf_blocks"]),
-                  f"{bvh['node_buffer_bytes'] / 2**20:.0f}")
+    build.add_row(
+        f"{bvh['build_seconds']:.2f}",
+        f"{bvh['build_cpu_seconds']:.2f}",
+        f"{bvh['peak_traced_bytes'] / 2**20:.0f}",
+        f"{bvh['peak_resident_bytes'] / 2**20:.0f}",
+        str(bvh["nodes"]),
+        str(bvh["depth"]),
+        f"{bvh['sah_cost']:.1f}",
+        str(bvh["nodes_4wide"]),
+        str(bvh["depth_4wide"]),
+        str(bvh["leaf_blocks"]),
+        f"{bvh['node_buffer_bytes'] / 2**20:.0f}",
+    )
     rays = Table(title=f"closest-hit rays: {result['rays']} random rays, {result['triangles']} triangles")
     for column in ("tracer", "M rays/s", "cores used", "M rays/s per core", "time s"):
         rays.add_column(column, justify="left" if column == "tracer" else "right")
@@ -236,16 +296,26 @@ def rays_tables(result: dict) -> list:
     if result["embree"]:
         rows.append(("embree (embreex)", result["embree"]))
     for name, r in rows:
-        rays.add_row(name, f"{r['rays_per_second'] / 1e6:.2f}", f"{r['cores_used']:.2f}",
-                     f"{r['rays_per_second_per_core'] / 1e6:.2f}", f"{r['seconds']:.3f}")
+        rays.add_row(
+            name,
+            f"{r['rays_per_second'] / 1e6:.2f}",
+            f"{r['cores_used']:.2f}",
+            f"{r['rays_per_second_per_core'] / 1e6:.2f}",
+            f"{r['seconds']:.3f}",
+        )
     tables = [build, rays]
     if result["agreement"]:
         check = Table(title="same rays, same answers? (spectrace vs Embree)")
         for column in ("spectrace", "rays", "same hit/miss", "same triangle", "|Δt|/t ≤ 1e-4", "per-core ratio"):
             check.add_column(column, justify="left" if column == "spectrace" else "right")
         for a in result["agreement"]:
-            check.add_row(a["spectrace"], str(a["rays"]), f"{100 * a['same_hit_or_miss']:.3f} %",
-                          f"{100 * a['same_triangle']:.3f} %", f"{100 * a['within_1e-4']:.3f} %",
-                          f"{a['per_core_ratio']:.2f}x")
+            check.add_row(
+                a["spectrace"],
+                str(a["rays"]),
+                f"{100 * a['same_hit_or_miss']:.3f} %",
+                f"{100 * a['same_triangle']:.3f} %",
+                f"{100 * a['within_1e-4']:.3f} %",
+                f"{a['per_core_ratio']:.2f}x",
+            )
         tables.append(check)
     return tables

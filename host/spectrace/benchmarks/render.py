@@ -19,8 +19,15 @@ from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 
 
-def run_render_bench(scene_path: Path | None, sizes: list[int], spp: int, max_depth: int, device: str | None,
-                     all_devices: bool, log: Callable[[str], None] = lambda text: None) -> list[dict]:
+def run_render_bench(
+    scene_path: Path | None,
+    sizes: list[int],
+    spp: int,
+    max_depth: int,
+    device: str | None,
+    all_devices: bool,
+    log: Callable[[str], None] = lambda text: None,
+) -> list[dict]:
     scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml")
     keys = [r.key for r in discover_devices() if r.ok] if all_devices else [device]
     results = []
@@ -53,20 +60,29 @@ def run_render_bench(scene_path: Path | None, sizes: list[int], spp: int, max_de
                 "first_pass_seconds": first_pass_seconds,
                 "start_to_first_pass_seconds": setup_seconds + first_pass_seconds,
             }
-            log(f"{row['device']} {size}x{size}: {row['samples_per_second'] / 1e6:.3f} M samples/s, "
-                f"{row['rays_per_second'] / 1e6:.3f} M rays/s")
+            log(
+                f"{row['device']} {size}x{size}: {row['samples_per_second'] / 1e6:.3f} M samples/s, "
+                f"{row['rays_per_second'] / 1e6:.3f} M rays/s"
+            )
             results.append(row)
     return results
 
 
 def render_bench_table(results: list[dict]) -> Table:
     table = Table(title="spectrace bench: path tracer throughput")
-    for column in ("device", "size", "spp", "depth", "M samples/s", "M rays/s", "time s", "build s",
-                   "to 1st pass s"):
+    for column in ("device", "size", "spp", "depth", "M samples/s", "M rays/s", "time s", "build s", "to 1st pass s"):
         table.add_column(column, justify="right" if column != "device" else "left")
     for r in results:
         build = f"{r['kernel_build_seconds']:.2f}" + (" (cached)" if r["kernel_build_cached"] else "")
-        table.add_row(r["device"], f"{r['width']}x{r['height']}", str(r["spp"]), str(r["max_depth"]),
-                      f"{r['samples_per_second'] / 1e6:.3f}", f"{r['rays_per_second'] / 1e6:.3f}",
-                      f"{r['seconds']:.2f}", build, f"{r['start_to_first_pass_seconds']:.2f}")
+        table.add_row(
+            r["device"],
+            f"{r['width']}x{r['height']}",
+            str(r["spp"]),
+            str(r["max_depth"]),
+            f"{r['samples_per_second'] / 1e6:.3f}",
+            f"{r['rays_per_second'] / 1e6:.3f}",
+            f"{r['seconds']:.2f}",
+            build,
+            f"{r['start_to_first_pass_seconds']:.2f}",
+        )
     return table

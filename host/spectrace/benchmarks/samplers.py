@@ -29,8 +29,15 @@ def _render_xyz(scene, device, sampler: str, seed: int, spp: int) -> np.ndarray:
     return Renderer(scene.with_overrides(sampler=sampler, seed=seed), device).render(spp=spp).xyz.astype(np.float64)
 
 
-def run_sampler_bench(scene_path: Path | None, size: int, spp_list: list[int], reference_spp: int, seeds: int,
-                      device: str | None, log: Callable[[str], None] = lambda text: None) -> dict:
+def run_sampler_bench(
+    scene_path: Path | None,
+    size: int,
+    spp_list: list[int],
+    reference_spp: int,
+    seeds: int,
+    device: str | None,
+    log: Callable[[str], None] = lambda text: None,
+) -> dict:
     dev = open_device(device)
     scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml").with_overrides(width=size, height=size)
     start = time.perf_counter()
@@ -38,18 +45,23 @@ def run_sampler_bench(scene_path: Path | None, size: int, spp_list: list[int], r
     reference = 0.5 * (halves[0] + halves[1])
     # Var(reference) = Var(half) / 2 and Var(half_a - half_b) = 2 Var(half).
     reference_rmse = float(np.sqrt(np.mean((halves[0] - halves[1]) ** 2) / 4.0))
-    log(f"reference: {size}x{size}, {2 * max(reference_spp // 2, 1)} spp, own RMSE ~{reference_rmse:.3g} "
-        f"({time.perf_counter() - start:.1f} s)")
+    log(
+        f"reference: {size}x{size}, {2 * max(reference_spp // 2, 1)} spp, own RMSE ~{reference_rmse:.3g} "
+        f"({time.perf_counter() - start:.1f} s)"
+    )
     rows = []
     for spp in spp_list:
         row: dict[str, float] = {"spp": spp}
         for sampler in SAMPLER_TYPES:
-            squared_errors = [np.mean((_render_xyz(scene, dev, sampler, seed, spp) - reference) ** 2)
-                              for seed in range(seeds)]
+            squared_errors = [
+                np.mean((_render_xyz(scene, dev, sampler, seed, spp) - reference) ** 2) for seed in range(seeds)
+            ]
             row[f"rmse_{sampler}"] = float(np.sqrt(np.mean(squared_errors)))
         row["ratio"] = row["rmse_sobol"] / row["rmse_independent"]
-        log(f"{spp} spp: RMSE independent {row['rmse_independent']:.4g}, sobol {row['rmse_sobol']:.4g}, "
-            f"ratio {row['ratio']:.3f}")
+        log(
+            f"{spp} spp: RMSE independent {row['rmse_independent']:.4g}, sobol {row['rmse_sobol']:.4g}, "
+            f"ratio {row['ratio']:.3f}"
+        )
         rows.append(row)
     return {
         "device": dev.report.key,
@@ -66,9 +78,11 @@ def run_sampler_bench(scene_path: Path | None, size: int, spp_list: list[int], r
 
 
 def sampler_bench_table(result: dict) -> Table:
-    table = Table(title=f"spectrace bench samplers: RMSE of film XYZ against a {result['reference_spp']}-spp "
-                        f"reference ({result['width']}x{result['height']}, mean Y {result['mean_y']:.3g}, "
-                        f"{result['seeds']} seeds, reference's own RMSE ~{result['reference_rmse']:.2g})")
+    table = Table(
+        title=f"spectrace bench samplers: RMSE of film XYZ against a {result['reference_spp']}-spp "
+        f"reference ({result['width']}x{result['height']}, mean Y {result['mean_y']:.3g}, "
+        f"{result['seeds']} seeds, reference's own RMSE ~{result['reference_rmse']:.2g})"
+    )
     for column in ("spp", "RMSE independent", "RMSE sobol", "ratio sobol/independent"):
         table.add_column(column, justify="right")
     for r in result["rows"]:
@@ -76,12 +90,20 @@ def sampler_bench_table(result: dict) -> Table:
     return table
 
 
-def sampler_bench_command(scene_path: Path | None, sizes: list[int] | None, device: str | None, as_json: bool,
-                          console) -> None:
+def sampler_bench_command(
+    scene_path: Path | None, sizes: list[int] | None, device: str | None, as_json: bool, console
+) -> None:
     """`spectrace bench samplers`: the table on the terminal, or one JSON object on stdout."""
 
-    result = run_sampler_bench(scene_path, size=(sizes or [32])[0], spp_list=[4, 16, 64], reference_spp=4096,
-                               seeds=16, device=device, log=lambda text: console.print(text, highlight=False))
+    result = run_sampler_bench(
+        scene_path,
+        size=(sizes or [32])[0],
+        spp_list=[4, 16, 64],
+        reference_spp=4096,
+        seeds=16,
+        device=device,
+        log=lambda text: console.print(text, highlight=False),
+    )
     if as_json:
         print(json.dumps({"samplers": result}, indent=2))
     else:

@@ -14,12 +14,21 @@ from spectrace.errors import SpectraceError
 # Sub-commands whose modules import colour-science, SciPy or the Mitsuba importer: listed in `--help` from these
 # lines and imported only when run. name -> (module, attribute: a Typer app or a command function, help line).
 LAZY_COMMANDS = {
-    "display": ("spectrace.cli.display", "display_app",
-                "Displays as spectral emitters: the same RGB on LCD, OLED and CRT displays."),
-    "spectra": ("spectrace.cli.spectra", "spectra_app",
-                "Spectra: list the library's and a scene's spectra, and plot any of them."),
-    "import-mitsuba": ("spectrace.cli.import_mitsuba", "import_mitsuba_command",
-                       "Convert a Mitsuba 3 XML scene to a spectrace TOML scene (docs/mitsuba.md)."),
+    "display": (
+        "spectrace.cli.display",
+        "display_app",
+        "Displays as spectral emitters: the same RGB on LCD, OLED and CRT displays.",
+    ),
+    "spectra": (
+        "spectrace.cli.spectra",
+        "spectra_app",
+        "Spectra: list the library's and a scene's spectra, and plot any of them.",
+    ),
+    "import-mitsuba": (
+        "spectrace.cli.import_mitsuba",
+        "import_mitsuba_command",
+        "Convert a Mitsuba 3 XML scene to a spectrace TOML scene (docs/mitsuba.md).",
+    ),
 }
 
 
@@ -133,8 +142,12 @@ def main() -> None:
             raise
         from spectrace.engine.opencl_errors import describe_opencl_error
 
-        console.print(f"error: {describe_opencl_error(exc, 'running', 'the OpenCL device')}", highlight=False,
-                      markup=False, soft_wrap=True)
+        console.print(
+            f"error: {describe_opencl_error(exc, 'running', 'the OpenCL device')}",
+            highlight=False,
+            markup=False,
+            soft_wrap=True,
+        )
         sys.exit(2)
 
 

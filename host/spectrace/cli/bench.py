@@ -7,7 +7,7 @@ before any mode name: given there with a mode, they would be read by nothing, an
 import json
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -22,14 +22,18 @@ COLD_DEFAULT_SIZE = 256
 SAMPLERS_DEFAULT_SIZE = 32
 RENDER_DEFAULT_SIZES = [256, 512]
 
-SizesOption = Annotated[Optional[list[int]], typer.Option("--size", help="Square image size(s) in pixels, repeatable.")]
+SizesOption = Annotated[list[int] | None, typer.Option("--size", help="Square image size(s) in pixels, repeatable.")]
 SppOption = Annotated[int, typer.Option(help="Samples per pixel per measurement.", min=1)]
 MaxDepthOption = Annotated[int, typer.Option(help="Path segments from the camera.")]
-SceneOption = Annotated[Optional[Path], typer.Option(help="Scene file (default: the Cornell box).")]
+SceneOption = Annotated[Path | None, typer.Option(help="Scene file (default: the Cornell box).")]
 AllOption = Annotated[bool, typer.Option("--all", help="Every working device in turn.")]
 TrianglesOption = Annotated[int, typer.Option(help="Triangles of the largest mesh.", min=20)]
-PeerSamplerOption = Annotated[str, typer.Option(help=(
-    "Mitsuba's sampler: independent (its default), stratified, multijitter, orthogonal, ldsampler."))]
+PeerSamplerOption = Annotated[
+    str,
+    typer.Option(
+        help=("Mitsuba's sampler: independent (its default), stratified, multijitter, orthogonal, ldsampler.")
+    ),
+]
 
 
 def _size_help(default: int) -> str:
@@ -37,17 +41,17 @@ def _size_help(default: int) -> str:
 
 
 # One alias per mode: a type checker takes only names, not calls, as annotations.
-PeerSizeOption = Annotated[Optional[int], typer.Option("--size", help=_size_help(PEER_DEFAULT_SIZE))]
-QualitySizeOption = Annotated[Optional[int], typer.Option("--size", help=_size_help(QUALITY_DEFAULT_SIZE))]
-ColdSizeOption = Annotated[Optional[int], typer.Option("--size", help=_size_help(COLD_DEFAULT_SIZE))]
-SamplersSizeOption = Annotated[Optional[int], typer.Option("--size", help=_size_help(SAMPLERS_DEFAULT_SIZE))]
+PeerSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(PEER_DEFAULT_SIZE))]
+QualitySizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(QUALITY_DEFAULT_SIZE))]
+ColdSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(COLD_DEFAULT_SIZE))]
+SamplersSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(SAMPLERS_DEFAULT_SIZE))]
 
 
-def _one(size: Optional[int]) -> Optional[list[int]]:
+def _one(size: int | None) -> list[int] | None:
     return None if size is None else [size]
 
 
-def _or(size: Optional[int], default: int) -> int:
+def _or(size: int | None, default: int) -> int:
     return default if size is None else size
 
 
@@ -55,8 +59,7 @@ def _log(text: str) -> None:
     console.print(text, highlight=False)
 
 
-def _check(sizes: Optional[list[int]] = None, max_depth: Optional[int] = None, seconds: Optional[float] = None
-           ) -> None:
+def _check(sizes: list[int] | None = None, max_depth: int | None = None, seconds: float | None = None) -> None:
     """The limits the render command applies, for the options a bench shares with it."""
     from spectrace.cli import checks
     from spectrace.scene import limits
@@ -81,7 +84,7 @@ def _emit(mode: str, result, tables: Callable[[], list], as_json: bool) -> None:
 
 bench_app = typer.Typer(
     help="Measure samples/s and rays/s (a benchmark, never a test). Alone, it times the Cornell box (or --scene) "
-         "at each --size; a mode compares with Mitsuba 3 or Embree or measures one thing more (docs/performance.md).",
+    "at each --size; a mode compares with Mitsuba 3 or Embree or measures one thing more (docs/performance.md).",
     add_completion=False,
     pretty_exceptions_enable=False,
 )
@@ -99,18 +102,31 @@ def render_bench(
     as_json: JsonOption = False,
 ) -> None:
     if ctx.invoked_subcommand is not None:
-        given = [param for param in ctx.command.params
-                 if getattr(ctx.get_parameter_source(param.name), "name", "DEFAULT") != "DEFAULT"]
+        given = [
+            param
+            for param in ctx.command.params
+            if getattr(ctx.get_parameter_source(param.name), "name", "DEFAULT") != "DEFAULT"
+        ]
         if given:
             option = given[0].opts[0]
-            raise SpectraceError(f"belongs to the plain render bench; give `spectrace bench "
-                                 f"{ctx.invoked_subcommand}` its own options after the mode's name", where=option)
+            raise SpectraceError(
+                f"belongs to the plain render bench; give `spectrace bench "
+                f"{ctx.invoked_subcommand}` its own options after the mode's name",
+                where=option,
+            )
         return
     _check(size, max_depth)
     from spectrace.benchmarks.render import render_bench_table, run_render_bench
 
-    results = run_render_bench(scene, sizes=size or RENDER_DEFAULT_SIZES, spp=spp, max_depth=max_depth,
-                               device=device, all_devices=all_devices, log=_log)
+    results = run_render_bench(
+        scene,
+        sizes=size or RENDER_DEFAULT_SIZES,
+        spp=spp,
+        max_depth=max_depth,
+        device=device,
+        all_devices=all_devices,
+        log=_log,
+    )
     if as_json:
         print(json.dumps({"render": results}, indent=2))
     else:
@@ -134,11 +150,20 @@ def peer_bench(
     from spectrace.benchmarks.peer_mitsuba import peer_tables, run_peer_bench
 
     try:
-        result = run_peer_bench(scene, _or(size, PEER_DEFAULT_SIZE), spp, max_depth, device, all_devices, log=_log,
-                                peer_sampler=peer_sampler)
+        result = run_peer_bench(
+            scene,
+            _or(size, PEER_DEFAULT_SIZE),
+            spp,
+            max_depth,
+            device,
+            all_devices,
+            log=_log,
+            peer_sampler=peer_sampler,
+        )
     except ImportError:
-        raise SpectraceError("the Mitsuba comparison needs mitsuba: pip install 'spectrace[bench]'",
-                             where="bench peer") from None
+        raise SpectraceError(
+            "the Mitsuba comparison needs mitsuba: pip install 'spectrace[bench]'", where="bench peer"
+        ) from None
     _emit("peer", result, lambda: peer_tables(result), as_json)
 
 
@@ -156,8 +181,16 @@ def quality_bench(
     _check(_one(size), max_depth, seconds)
     from spectrace.benchmarks.quality import quality_tables, run_quality_bench
 
-    result = run_quality_bench(scene, _or(size, QUALITY_DEFAULT_SIZE), max_depth, seconds, QUALITY_REFERENCE_SPP,
-                               device, log=_log, peer_sampler=peer_sampler)
+    result = run_quality_bench(
+        scene,
+        _or(size, QUALITY_DEFAULT_SIZE),
+        max_depth,
+        seconds,
+        QUALITY_REFERENCE_SPP,
+        device,
+        log=_log,
+        peer_sampler=peer_sampler,
+    )
     _emit("quality", result, lambda: quality_tables(result), as_json)
 
 
@@ -211,8 +244,10 @@ def cold_bench(
     _log("cold start (empty kernel caches), then warm start, each in a fresh process")
     cold, warm = run_cold_bench(_or(size, COLD_DEFAULT_SIZE), spp, max_depth, device, str(scene) if scene else None)
     if cold and warm:
-        _log(f"whole processes (interpreter, imports, devices, scene, build, passes): cold "
-             f"{cold[0]['process_seconds']:.2f} s, warm {warm[0]['process_seconds']:.2f} s")
+        _log(
+            f"whole processes (interpreter, imports, devices, scene, build, passes): cold "
+            f"{cold[0]['process_seconds']:.2f} s, warm {warm[0]['process_seconds']:.2f} s"
+        )
     _emit("cold", {"cold": cold, "warm": warm}, lambda: cold_tables(cold, warm), as_json)
 
 
@@ -245,8 +280,9 @@ def kernel_shapes_bench(
     _check(size, max_depth)
     from spectrace.benchmarks.kernel_shapes import kernel_shape_table, kernel_shape_variants, run_kernel_shape_bench
 
-    results = run_kernel_shape_bench(scene, size or RENDER_DEFAULT_SIZES, spp, max_depth, device,
-                                     kernel_shape_variants(), log=_log)
+    results = run_kernel_shape_bench(
+        scene, size or RENDER_DEFAULT_SIZES, spp, max_depth, device, kernel_shape_variants(), log=_log
+    )
     if as_json:
         print(json.dumps({"kernel_shapes": results}, indent=2))
     else:

@@ -51,11 +51,13 @@ def check_output_file(path: Path, option: str, create_folders: bool = False) -> 
         raise SpectraceError(f"{option} names a folder; name a file in it", where=where)
     if path.exists() or path.is_symlink():
         if not path.is_file():
-            raise SpectraceError(f"{option} names something that is not a regular file (it would be replaced)",
-                                 where=where)
+            raise SpectraceError(
+                f"{option} names something that is not a regular file (it would be replaced)", where=where
+            )
         if _read_only(path):
-            raise SpectraceError(f"{option} names a read-only file; make it writable or choose another name",
-                                 where=where)
+            raise SpectraceError(
+                f"{option} names a read-only file; make it writable or choose another name", where=where
+            )
     folder = path.parent if str(path.parent) else Path(".")
     while create_folders and not folder.exists() and folder.parent != folder:
         folder = folder.parent
@@ -68,8 +70,9 @@ def check_output_file(path: Path, option: str, create_folders: bool = False) -> 
         os.close(fd)
         os.unlink(probe)
     except OSError as error:
-        raise SpectraceError(f"cannot create files in the folder {folder} for {option} "
-                             f"({error.strerror or error})", where=where) from None
+        raise SpectraceError(
+            f"cannot create files in the folder {folder} for {option} ({error.strerror or error})", where=where
+        ) from None
 
 
 def same_file(first: Path, second: Path) -> bool:
@@ -87,10 +90,11 @@ def check_distinct_files(outputs: Mapping[str, Path | None], inputs: Mapping[str
     an input. Keys are the options (or descriptions of the inputs) shown in the message."""
     named = [(option, path) for option, path in outputs.items() if path is not None]
     for index, (option, path) in enumerate(named):
-        for other_option, other in named[index + 1:]:
+        for other_option, other in named[index + 1 :]:
             if same_file(path, other):
-                raise SpectraceError(f"{option} and {other_option} name the same file; give each its own",
-                                     where=str(path))
+                raise SpectraceError(
+                    f"{option} and {other_option} name the same file; give each its own", where=str(path)
+                )
         for what, source in (inputs or {}).items():
             if source is not None and same_file(path, source):
                 raise SpectraceError(f"{option} names {what}, which it would overwrite", where=str(path))

@@ -1,6 +1,6 @@
 """What the commands share: the message console (stderr) and the options several of them take."""
 
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -8,7 +8,7 @@ from rich.console import Console
 console = Console(stderr=True, soft_wrap=True, markup=False)  # messages with long paths stay on one line
 
 DeviceOption = Annotated[
-    Optional[str],
+    str | None,
     typer.Option("--device", "-d", help="Device key or substring (see `spectrace devices`); env SPECTRACE_DEVICE."),
 ]
 JsonOption = Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")]

@@ -5,20 +5,20 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from spectrace.spectral.display_catalog import load_all_displays, load_display
 from spectrace.displays.compare import Comparison, compare_displays
-from spectrace.spectral.display import CHANNELS, Display
 from spectrace.displays.match import MatchResult, match_colour
-from spectrace.spectral.observers import ALL_OBSERVERS, Observer
-from spectrace.spectral.display_transfer import Encoding
 from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions
+from spectrace.spectral.display import CHANNELS, Display
+from spectrace.spectral.display_catalog import load_all_displays, load_display
+from spectrace.spectral.display_transfer import Encoding
+from spectrace.spectral.observers import ALL_OBSERVERS, Observer
 
 display_app = typer.Typer(
     help="Displays as spectral emitters: the same RGB on LCD, OLED and CRT displays.",
@@ -34,8 +34,11 @@ RgbOption = Annotated[
 ]
 EncodingOption = Annotated[
     Encoding,
-    typer.Option("--encoding", help="How the triple maps to linear drive: linear (the triple is the drive), "
-                 "srgb (IEC 61966-2-1 curve) or gamma2.2."),
+    typer.Option(
+        "--encoding",
+        help="How the triple maps to linear drive: linear (the triple is the drive), "
+        "srgb (IEC 61966-2-1 curve) or gamma2.2.",
+    ),
 ]
 WhiteLuminanceOption = Annotated[
     float,
@@ -43,8 +46,11 @@ WhiteLuminanceOption = Annotated[
 ]
 MeasuredOption = Annotated[
     bool,
-    typer.Option("--measured-radiance", help="Displays with absolute data keep their measured radiance "
-                 "(relative ones are still set to --white-luminance)."),
+    typer.Option(
+        "--measured-radiance",
+        help="Displays with absolute data keep their measured radiance "
+        "(relative ones are still set to --white-luminance).",
+    ),
 ]
 
 
@@ -92,7 +98,7 @@ def _listing_json(display: Display) -> dict:
 @display_app.command("list")
 def list_displays(
     extra: Annotated[
-        Optional[list[str]], typer.Option("--display", "-d", help="Also list this display CSV (repeatable).")
+        list[str] | None, typer.Option("--display", "-d", help="Also list this display CSV (repeatable).")
     ] = None,
     as_json: JsonOption = False,
 ) -> None:
@@ -106,8 +112,13 @@ def list_displays(
         table.add_column(heading)
     for display in displays:
         luminance = f"{display.white_luminance_cd_m2:.1f}" if display.absolute else "relative"
-        table.add_row(display.name, display.technology, *(_xy_text(xy) for xy in display.primaries_xy()),
-                      _xy_text(display.white_xy()), luminance)
+        table.add_row(
+            display.name,
+            display.technology,
+            *(_xy_text(xy) for xy in display.primaries_xy()),
+            _xy_text(display.white_xy()),
+            luminance,
+        )
     _stdout_console().print(table)
 
 
@@ -117,15 +128,17 @@ def list_displays(
 def _comparison_tables(comparison: Comparison) -> tuple[Table, Table]:
     rgb = ", ".join(f"{value:g}" for value in comparison.rgb)
     white = comparison.viewing.white_luminance_cd_m2
-    colours = Table(
-        title=f"RGB ({rgb}); CIELAB and sRGB relative to D65 at {white:g} cd/m²; * = outside sRGB, clipped"
-    )
+    colours = Table(title=f"RGB ({rgb}); CIELAB and sRGB relative to D65 at {white:g} cd/m²; * = outside sRGB, clipped")
     for heading in ("display", "luminance scale", "X Y Z (cd/m²)", "x, y", "Y cd/m²", "sRGB", "L* a* b* (1931 2°)"):
         colours.add_column(heading)
     for item in comparison.colours:
         colours.add_row(
-            item.display.name, item.display.radiance_scale, _triple_text(item.xyz_cd_m2, 2), _xy_text(item.xy),
-            f"{item.luminance_cd_m2:.2f}", _triple_text(item.srgb) + ("" if item.srgb_in_gamut else " *"),
+            item.display.name,
+            item.display.radiance_scale,
+            _triple_text(item.xyz_cd_m2, 2),
+            _xy_text(item.xy),
+            f"{item.luminance_cd_m2:.2f}",
+            _triple_text(item.srgb) + ("" if item.srgb_in_gamut else " *"),
             _triple_text(item.lab[Observer.CIE_1931_2], 2),
         )
     pairs = Table(title="CIEDE2000 of every pair")
@@ -140,15 +153,13 @@ def _comparison_tables(comparison: Comparison) -> tuple[Table, Table]:
 def compare(
     rgb: RgbOption,
     display: Annotated[
-        Optional[list[str]],
+        list[str] | None,
         typer.Option("--display", "-d", help="Display name or CSV file (repeatable; default: every known display)."),
     ] = None,
     encoding: EncodingOption = Encoding.LINEAR,
     white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
     measured_radiance: MeasuredOption = False,
-    plot: Annotated[
-        Optional[Path], typer.Option("--plot", help="Also draw the comparison into this image file.")
-    ] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the comparison into this image file.")] = None,
     as_json: JsonOption = False,
 ) -> None:
     """The same RGB on several displays: XYZ, xy, luminance, sRGB, CIELAB, and ΔE2000 of every pair."""
@@ -218,23 +229,32 @@ def match(
 def metamerism(
     source: Annotated[str, typer.Option("--from", help="Display lighting the first half.")],
     target: Annotated[str, typer.Option("--to", help="Display lighting the second half, matched to --from.")],
-    rgb: Annotated[tuple[float, float, float], typer.Option(
-        "--rgb", help="The triple --from shows (default a light grey, which most displays can match).")] = (0.8, 0.8, 0.8),
+    rgb: Annotated[
+        tuple[float, float, float],
+        typer.Option("--rgb", help="The triple --from shows (default a light grey, which most displays can match)."),
+    ] = (0.8, 0.8, 0.8),
     encoding: EncodingOption = Encoding.LINEAR,
     white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
-    scene: Annotated[Optional[Path], typer.Option(
-        help="Also measure the two halves of a rendered scene (shapes named 'left <patch>' / 'right <patch>', "
-             "e.g. scenes/display_lcd_vs_led.toml) with radiance meters.")] = None,
-    device: Annotated[Optional[str], typer.Option("--device", "-d", help="OpenCL device for --scene.")] = None,
+    scene: Annotated[
+        Path | None,
+        typer.Option(
+            help="Also measure the two halves of a rendered scene (shapes named 'left <patch>' / 'right <patch>', "
+            "e.g. scenes/display_lcd_vs_led.toml) with radiance meters."
+        ),
+    ] = None,
+    device: Annotated[str | None, typer.Option("--device", "-d", help="OpenCL device for --scene.")] = None,
     as_json: JsonOption = False,
 ) -> None:
     """Illuminant metamerism: the ColorChecker lit by --from showing the triple vs lit by --to showing the triple
     that matches it (same CIE 1931 XYZ): the per-patch ΔE2000 between the two halves."""
     from spectrace.displays.metamerism import measure_scene_patches, patch_metamerism
 
-    report = patch_metamerism(load_display(source, where="--from").with_transfer(encoding), rgb,
-                              load_display(target, where="--to").with_transfer(encoding),
-                              ViewingConditions(white_luminance_cd_m2=white_luminance))
+    report = patch_metamerism(
+        load_display(source, where="--from").with_transfer(encoding),
+        rgb,
+        load_display(target, where="--to").with_transfer(encoding),
+        ViewingConditions(white_luminance_cd_m2=white_luminance),
+    )
     rendered = None
     if scene is not None:
         from spectrace.scene import load_scene
@@ -243,20 +263,33 @@ def metamerism(
     if as_json:
         result = report.to_json()
         if rendered is not None:
-            result["rendered"] = [{"patch": r.patch, "lab_left": r.lab_left.tolist(), "lab_right": r.lab_right.tolist(),
-                                   "delta_e_2000": r.delta_e_2000,
-                                   "delta_e_standard_error": r.delta_e_standard_error} for r in rendered]
+            result["rendered"] = [
+                {
+                    "patch": r.patch,
+                    "lab_left": r.lab_left.tolist(),
+                    "lab_right": r.lab_right.tolist(),
+                    "delta_e_2000": r.delta_e_2000,
+                    "delta_e_standard_error": r.delta_e_standard_error,
+                }
+                for r in rendered
+            ]
         print(json.dumps(result, indent=2))
         return
     screens = report.to_json()["screens_delta_e_2000"]
     target_rgb = ", ".join(f"{v:.4f}" for v in report.match.target_drive)
-    table = Table(title=f"ColorChecker lit by {report.match.source.name} showing {tuple(rgb)} vs by "
-                        f"{report.match.target.name} showing ({target_rgb}); the screens differ by ΔE2000 {screens:.2f}")
+    table = Table(
+        title=f"ColorChecker lit by {report.match.source.name} showing {tuple(rgb)} vs by "
+        f"{report.match.target.name} showing ({target_rgb}); the screens differ by ΔE2000 {screens:.2f}"
+    )
     for column in ("patch", "L*a*b* (first half)", "L*a*b* (second half)", "ΔE2000"):
         table.add_column(column)
     for p in report.patches:
-        table.add_row(p.patch, " ".join(f"{v:6.2f}" for v in p.lab_under_source),
-                      " ".join(f"{v:6.2f}" for v in p.lab_under_target), f"{p.delta_e_2000:.2f}")
+        table.add_row(
+            p.patch,
+            " ".join(f"{v:6.2f}" for v in p.lab_under_source),
+            " ".join(f"{v:6.2f}" for v in p.lab_under_target),
+            f"{p.delta_e_2000:.2f}",
+        )
     table.add_row("mean / max", "", "", f"{report.mean_delta_e:.2f} / {report.max_delta_e:.2f}")
     Console(width=140, markup=False).print(table)
     if rendered is not None:
@@ -264,7 +297,10 @@ def metamerism(
         for column in ("patch", "L*a*b* left", "L*a*b* right", "ΔE2000 ± s.e."):
             measured.add_column(column)
         for r in rendered:
-            measured.add_row(r.patch, " ".join(f"{v:6.2f}" for v in r.lab_left),
-                             " ".join(f"{v:6.2f}" for v in r.lab_right),
-                             f"{r.delta_e_2000:.2f} ± {r.delta_e_standard_error:.2f}")
+            measured.add_row(
+                r.patch,
+                " ".join(f"{v:6.2f}" for v in r.lab_left),
+                " ".join(f"{v:6.2f}" for v in r.lab_right),
+                f"{r.delta_e_2000:.2f} ± {r.delta_e_standard_error:.2f}",
+            )
         Console(width=140, markup=False).print(measured)

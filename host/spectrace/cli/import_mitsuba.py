@@ -2,7 +2,7 @@
 
 import os
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -13,10 +13,13 @@ from spectrace.errors import SpectraceError
 def import_mitsuba_command(
     scene: Annotated[Path, typer.Argument(help="Mitsuba 3 scene (XML).")],
     # A string, not a Path: a Path would drop the trailing slash of "-o folder/", which names a folder.
-    output: Annotated[str, typer.Option("--output", "-o", metavar="OUT.toml",
-                                        help="spectrace scene file to write (TOML).")],
-    define: Annotated[Optional[list[str]], typer.Option(
-        "--define", "-D", help="Set a $parameter, NAME=VALUE (repeatable), as Mitsuba's -D.")] = None,
+    output: Annotated[
+        str, typer.Option("--output", "-o", metavar="OUT.toml", help="spectrace scene file to write (TOML).")
+    ],
+    define: Annotated[
+        list[str] | None,
+        typer.Option("--define", "-D", help="Set a $parameter, NAME=VALUE (repeatable), as Mitsuba's -D."),
+    ] = None,
 ) -> None:
     """Convert a Mitsuba 3 XML scene to a spectrace TOML scene (shapes obj, ply, rectangle, cube, sphere; BSDFs
     diffuse, twosided, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric; emitters

@@ -1,7 +1,7 @@
 """`spectrace render`: a scene file to an image, with checkpoints and a clean stop on Ctrl-C or SIGTERM."""
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -12,53 +12,102 @@ from spectrace.errors import SpectraceError
 def render(
     scene: Annotated[Path, typer.Argument(help="Scene file (TOML).")],
     output: Annotated[Path, typer.Option("--output", "-o", help="Output image: .png (sRGB) or .exr (linear).")],
-    spp: Annotated[Optional[int], typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
-    width: Annotated[Optional[int], typer.Option(help="Film width in pixels.", min=1)] = None,
-    height: Annotated[Optional[int], typer.Option(help="Film height in pixels.", min=1)] = None,
-    seed: Annotated[Optional[int], typer.Option(help="Sampler seed.", min=0)] = None,
-    max_depth: Annotated[Optional[int], typer.Option(help="Path segments from the camera; -1 = unbounded.")] = None,
-    sampler: Annotated[Optional[str], typer.Option(
-        help="Sampler: sobol or independent (default: the scene's; see docs/sampling.md).")] = None,
-    exposure: Annotated[Optional[float], typer.Option(help="Stops: RGB output x 2**exposure (film XYZ unscaled).")] = None,
+    spp: Annotated[int | None, typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
+    width: Annotated[int | None, typer.Option(help="Film width in pixels.", min=1)] = None,
+    height: Annotated[int | None, typer.Option(help="Film height in pixels.", min=1)] = None,
+    seed: Annotated[int | None, typer.Option(help="Sampler seed.", min=0)] = None,
+    max_depth: Annotated[int | None, typer.Option(help="Path segments from the camera; -1 = unbounded.")] = None,
+    sampler: Annotated[
+        str | None, typer.Option(help="Sampler: sobol or independent (default: the scene's; see docs/sampling.md).")
+    ] = None,
+    exposure: Annotated[float | None, typer.Option(help="Stops: RGB output x 2**exposure (film XYZ unscaled).")] = None,
     device: DeviceOption = None,
-    xyz: Annotated[bool, typer.Option("--xyz/--no-xyz", help="EXR only: also store the film's X, Y, Z channels.")] = True,
-    spectral_bins: Annotated[int, typer.Option(
-        help="EXR only: also store N equal wavelength bands over 360-830 nm (spectral EXR, Fichet et al. 2021 "
-             "layout; band-averaged radiance in W/(m² sr nm)).", min=0, max=471)] = 0,
-    colour_space: Annotated[str, typer.Option("--colour-space", "--color-space", help=(
-        "Colour space of the output: srgb, display-p3, rec2020 (linear in EXR, with that space's curve in PNG) or "
-        "xyz (EXR only). See docs/colour.md."))] = "srgb",
-    white_balance: Annotated[Optional[str], typer.Option(help=(
-        "Adapt this white to the output's white (D65): a CIE illuminant (A, D50, FL2), a temperature (3200K), "
-        "a chromaticity 'x,y' or a library spectrum."))] = None,
+    xyz: Annotated[
+        bool, typer.Option("--xyz/--no-xyz", help="EXR only: also store the film's X, Y, Z channels.")
+    ] = True,
+    spectral_bins: Annotated[
+        int,
+        typer.Option(
+            help="EXR only: also store N equal wavelength bands over 360-830 nm (spectral EXR, Fichet et al. 2021 "
+            "layout; band-averaged radiance in W/(m² sr nm)).",
+            min=0,
+            max=471,
+        ),
+    ] = 0,
+    colour_space: Annotated[
+        str,
+        typer.Option(
+            "--colour-space",
+            "--color-space",
+            help=(
+                "Colour space of the output: srgb, display-p3, rec2020 (linear in EXR, with that space's curve in "
+                "PNG) or xyz (EXR only). See docs/colour.md."
+            ),
+        ),
+    ] = "srgb",
+    white_balance: Annotated[
+        str | None,
+        typer.Option(
+            help=(
+                "Adapt this white to the output's white (D65): a CIE illuminant (A, D50, FL2), a temperature (3200K), "
+                "a chromaticity 'x,y' or a library spectrum."
+            )
+        ),
+    ] = None,
     adaptation: Annotated[str, typer.Option(help="White-balance transform: bradford or von-kries.")] = "bradford",
-    false_color: Annotated[Optional[Path], typer.Option("--false-color", "--false-colour", help=(
-        "Also write a false-colour map of the luminance (cd/m², 683 lm/W x integral of L ybar) with a scale bar "
-        "(.png, .pdf, .svg)."))] = None,
+    false_color: Annotated[
+        Path | None,
+        typer.Option(
+            "--false-color",
+            "--false-colour",
+            help=(
+                "Also write a false-colour map of the luminance (cd/m², 683 lm/W x integral of L ybar) with a scale "
+                "bar (.png, .pdf, .svg)."
+            ),
+        ),
+    ] = None,
     false_color_scale: Annotated[str, typer.Option(help="Scale of the false-colour map: log or linear.")] = "log",
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
-    checkpoint: Annotated[Optional[Path], typer.Option(
-        help="Save the render's state to this file every --checkpoint-interval seconds, when stopped, and at the "
-             "end; --resume continues from it.")] = None,
-    checkpoint_interval: Annotated[float, typer.Option(
-        help="Seconds between checkpoints (0: after every pass).", min=0.0)] = 60.0,
-    resume: Annotated[Optional[Path], typer.Option(
-        help="Continue the render saved in this checkpoint (same scene, size and seed; --spp may be higher). "
-             "Checkpoints then go to this file unless --checkpoint names another.")] = None,
-    overwrite: Annotated[bool, typer.Option(
-        "--overwrite", help="Start afresh although --checkpoint names an existing checkpoint, which is then "
-                            "replaced (without it, such a render is refused: --resume continues it).")] = False,
-    kernel: Annotated[str, typer.Option(
-        help="Kernel shape: megakernel (the default, fastest on CPU runtimes as measured) or wavefront (one launch "
-             "per path segment; path integrator only). Both give the same image.")] = "megakernel",
+    checkpoint: Annotated[
+        Path | None,
+        typer.Option(
+            help="Save the render's state to this file every --checkpoint-interval seconds, when stopped, and at the "
+            "end; --resume continues from it."
+        ),
+    ] = None,
+    checkpoint_interval: Annotated[
+        float, typer.Option(help="Seconds between checkpoints (0: after every pass).", min=0.0)
+    ] = 60.0,
+    resume: Annotated[
+        Path | None,
+        typer.Option(
+            help="Continue the render saved in this checkpoint (same scene, size and seed; --spp may be higher). "
+            "Checkpoints then go to this file unless --checkpoint names another."
+        ),
+    ] = None,
+    overwrite: Annotated[
+        bool,
+        typer.Option(
+            "--overwrite",
+            help="Start afresh although --checkpoint names an existing checkpoint, which is then "
+            "replaced (without it, such a render is refused: --resume continues it).",
+        ),
+    ] = False,
+    kernel: Annotated[
+        str,
+        typer.Option(
+            help="Kernel shape: megakernel (the default, fastest on CPU runtimes as measured) or wavefront (one launch "
+            "per path segment; path integrator only). Both give the same image."
+        ),
+    ] = "megakernel",
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
     (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
     from spectrace.cli import checks as cli_checks
-    from spectrace.output_options import RenderOutputOptions
     from spectrace.engine.checkpoint import read_checkpoint
     from spectrace.engine.stop_signals import StopOnSignals
     from spectrace.engine.wavefront import make_renderer
+    from spectrace.output_options import RenderOutputOptions
     from spectrace.scene import load_scene
     from spectrace.scene.model import SAMPLER_TYPES
 
@@ -67,19 +116,20 @@ def render(
     cli_checks.check_seed(seed)
     cli_checks.check_max_depth(max_depth)
     cli_checks.check_exposure(exposure)
-    loaded = load_scene(scene).with_overrides(spp=spp, width=width, height=height, seed=seed, max_depth=max_depth,
-                                              exposure=exposure, sampler=sampler)
+    loaded = load_scene(scene).with_overrides(
+        spp=spp, width=width, height=height, seed=seed, max_depth=max_depth, exposure=exposure, sampler=sampler
+    )
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
     _check_render_options(loaded, output, width, height, spp)
-    outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color,
-                                        false_color_scale)
+    outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color, false_color_scale)
     state_file = checkpoint or resume
     _check_output_files(scene, output, false_color, checkpoint, resume, overwrite)
     saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
     renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
-    console.print(f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False,
-                  markup=False)
+    console.print(
+        f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False, markup=False
+    )
     if saved is not None and resume is not None:
         _resume(renderer, saved, resume)
     with StopOnSignals() as stop:
@@ -95,7 +145,8 @@ def render(
     console.print(
         f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
         f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}",
-        highlight=False, markup=False,
+        highlight=False,
+        markup=False,
     )
     if image.dropped_samples:
         console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
@@ -115,8 +166,9 @@ def _check_render_options(scene, output: Path, width, height, spp) -> None:
         raise SpectraceError(problem, where="--spp")
 
 
-def _check_output_files(scene: Path, output: Path, false_color: Optional[Path], checkpoint: Optional[Path],
-                        resume: Optional[Path], overwrite: bool) -> None:
+def _check_output_files(
+    scene: Path, output: Path, false_color: Path | None, checkpoint: Path | None, resume: Path | None, overwrite: bool
+) -> None:
     """Before any device work: every file the render will write can be written, no two name the same file, none
     is the scene, and a fresh render does not replace a checkpoint that holds another render's samples."""
     from spectrace.cli import checks as cli_checks
@@ -124,8 +176,9 @@ def _check_output_files(scene: Path, output: Path, false_color: Optional[Path], 
     state_option, state_file = ("--checkpoint", checkpoint) if checkpoint is not None else ("--resume", resume)
     if overwrite and resume is not None:
         raise SpectraceError("starts the render afresh, so it cannot go with --resume", where="--overwrite")
-    cli_checks.check_distinct_files({"--output": output, "--false-color": false_color, state_option: state_file},
-                                    {"the scene file": scene})
+    cli_checks.check_distinct_files(
+        {"--output": output, "--false-color": false_color, state_option: state_file}, {"the scene file": scene}
+    )
     cli_checks.check_output_file(output, "--output")
     if false_color is not None:
         cli_checks.check_output_file(false_color, "--false-color")
@@ -133,9 +186,11 @@ def _check_output_files(scene: Path, output: Path, false_color: Optional[Path], 
         cli_checks.check_output_file(state_file, state_option)
     continued = resume is not None and checkpoint is not None and cli_checks.same_file(checkpoint, resume)
     if checkpoint is not None and checkpoint.exists() and not continued and not overwrite:
-        raise SpectraceError(f"--checkpoint names a file that already exists; use --resume {checkpoint} to continue "
-                             f"the render it holds, or --overwrite to start again and replace it",
-                             where=str(checkpoint))
+        raise SpectraceError(
+            f"--checkpoint names a file that already exists; use --resume {checkpoint} to continue "
+            f"the render it holds, or --overwrite to start again and replace it",
+            where=str(checkpoint),
+        )
 
 
 def _resume(renderer, restored, path: Path) -> None:
@@ -146,12 +201,16 @@ def _resume(renderer, restored, path: Path) -> None:
     note = f" (already at or beyond the {target} spp asked for)" if done >= target else ""
     console.print(f"resumed {path}: {done} spp done{note}", highlight=False, markup=False)
     if restored.device != renderer.device.report.key:
-        console.print(f"warning: the checkpoint was rendered on {restored.device}; continuing on "
-                      f"{renderer.device.report.key} gives an equally valid image, but not bit for bit the one an "
-                      f"uninterrupted render would", highlight=False, markup=False)
+        console.print(
+            f"warning: the checkpoint was rendered on {restored.device}; continuing on "
+            f"{renderer.device.report.key} gives an equally valid image, but not bit for bit the one an "
+            f"uninterrupted render would",
+            highlight=False,
+            markup=False,
+        )
 
 
-def _render_passes(renderer, stop, state_file: Optional[Path], interval: float, quiet: bool) -> None:
+def _render_passes(renderer, stop, state_file: Path | None, interval: float, quiet: bool) -> None:
     """The API's render loop with the bar on this console (none with -q) and checkpoints to `state_file`."""
     from spectrace.api import render_passes
     from spectrace.engine.checkpoint import PeriodicCheckpoints
@@ -167,11 +226,13 @@ def _render_passes(renderer, stop, state_file: Optional[Path], interval: float, 
         # last checkpoint, written between passes, is sound.
         if saver is None or saver.saved_samples is None:
             raise
-        raise SpectraceError(f"{error.message}; {state_file} holds the last {saver.saved_samples} spp "
-                             f"(continue with --resume)", where=error.where) from None
+        raise SpectraceError(
+            f"{error.message}; {state_file} holds the last {saver.saved_samples} spp (continue with --resume)",
+            where=error.where,
+        ) from None
 
 
-def _write_image(image, output: Path, include_xyz: bool, state_file: Optional[Path]) -> None:
+def _write_image(image, output: Path, include_xyz: bool, state_file: Path | None) -> None:
     try:
         image.write(output, include_xyz=include_xyz)
     except OSError as error:

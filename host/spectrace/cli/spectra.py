@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -20,13 +20,17 @@ spectra_app = typer.Typer(
 )
 
 SceneOption = Annotated[
-    Optional[Path],
-    typer.Option("--scene", "-s", help="Also the spectra of this scene file, by key path "
-                 "(spectra.NAME, materials.NAME.reflectance, shapes[I].emitter.radiance, lights[I].intensity, ...)."),
+    Path | None,
+    typer.Option(
+        "--scene",
+        "-s",
+        help="Also the spectra of this scene file, by key path "
+        "(spectra.NAME, materials.NAME.reflectance, shapes[I].emitter.radiance, lights[I].intensity, ...).",
+    ),
 ]
 
 
-def _known_spectra(scene: Optional[Path]) -> dict:
+def _known_spectra(scene: Path | None) -> dict:
     from spectrace.scene.spectra_index import scene_spectra
 
     return scene_spectra(scene) if scene is not None else {}
@@ -47,8 +51,9 @@ def _resolve(name: str, scene_spectra: dict):
 
         close = difflib.get_close_matches(name, list(scene_spectra) + list_library_spectra(), n=1)
         hint = f" (did you mean '{close[0]}'?)" if close else ""
-        raise SpectraceError(f"unknown spectrum '{name}'{hint}; `spectrace spectra list` shows them",
-                             where="NAME") from None
+        raise SpectraceError(
+            f"unknown spectrum '{name}'{hint}; `spectrace spectra list` shows them", where="NAME"
+        ) from None
 
 
 @spectra_app.command("list")
@@ -65,8 +70,15 @@ def list_spectra(
     rows = [(key, "scene", spectrum) for key, spectrum in in_scene.items()]
     rows += [(name, "library", None) for name in list_library_spectra()]
     if as_json:
-        print(json.dumps({"scene": {key: {"min": s.min(), "max": s.max()} for key, _, s in rows if s is not None},
-                          "library": [name for name, origin, _ in rows if origin == "library"]}, indent=2))
+        print(
+            json.dumps(
+                {
+                    "scene": {key: {"min": s.min(), "max": s.max()} for key, _, s in rows if s is not None},
+                    "library": [name for name, origin, _ in rows if origin == "library"],
+                },
+                indent=2,
+            )
+        )
         return
     table = Table(title="spectra (plot with `spectrace spectra plot NAME... -o FILE.png`)")
     for heading in ("name", "from", "min", "max", "x, y (as light)"):
@@ -83,13 +95,18 @@ def list_spectra(
 
 @spectra_app.command()
 def plot(
-    names: Annotated[list[str], typer.Argument(help="Spectra to draw: library names (cie:D65, cornell_box/light) "
-                                                    "or, with --scene, the scene's key paths.")],
+    names: Annotated[
+        list[str],
+        typer.Argument(
+            help="Spectra to draw: library names (cie:D65, cornell_box/light) or, with --scene, the scene's key paths."
+        ),
+    ],
     output: Annotated[Path, typer.Option("--output", "-o", help="Figure file: .png, .pdf or .svg.")],
     scene: SceneOption = None,
-    normalise: Annotated[bool, typer.Option("--normalise", "--normalize",
-                                            help="Divide each spectrum by its peak (compare shapes).")] = False,
-    title: Annotated[Optional[str], typer.Option(help="Figure title.")] = None,
+    normalise: Annotated[
+        bool, typer.Option("--normalise", "--normalize", help="Divide each spectrum by its peak (compare shapes).")
+    ] = False,
+    title: Annotated[str | None, typer.Option(help="Figure title.")] = None,
 ) -> None:
     """Draw spectra against wavelength (360-830 nm, as the renderer samples them: linear between data points,
     end values held) into a figure file; each line takes the spectrum's own colour."""

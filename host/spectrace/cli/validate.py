@@ -1,7 +1,7 @@
 """`spectrace validate`: the laws of radiometry checked numerically against the renderer."""
 
 import json
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -11,7 +11,7 @@ from spectrace.errors import SpectraceError
 
 
 def validate(
-    case: Annotated[Optional[list[str]], typer.Option(help="Run only these cases (default: all).")] = None,
+    case: Annotated[list[str] | None, typer.Option(help="Run only these cases (default: all).")] = None,
     device: DeviceOption = None,
     as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
 ) -> None:

@@ -234,10 +234,11 @@ def elf_needed_libraries(library: Path) -> list[str]:
         return []
     if data[:4] != b"\x7fELF" or data[4] != 2 or data[5] != 1:
         return []
-    section_offset, = struct.unpack_from("<Q", data, 0x28)
+    (section_offset,) = struct.unpack_from("<Q", data, 0x28)
     section_size, section_count = struct.unpack_from("<HH", data, 0x3A)
-    sections = [struct.unpack_from("<IIQQQQIIQQ", data, section_offset + i * section_size)
-                for i in range(section_count)]
+    sections = [
+        struct.unpack_from("<IIQQQQIIQQ", data, section_offset + i * section_size) for i in range(section_count)
+    ]
     dynamic_type = 6
     needed_tag = 1
     names: list[str] = []
@@ -251,7 +252,7 @@ def elf_needed_libraries(library: Path) -> list[str]:
                 break
             if tag == needed_tag:
                 end = data.index(b"\0", strings_offset + value)
-                names.append(data[strings_offset + value:end].decode())
+                names.append(data[strings_offset + value : end].decode())
     return names
 
 
@@ -331,8 +332,9 @@ def prepare_opencl_environment() -> PreparedEnvironment:
     return _prepared
 
 
-def runtime_identity(platform_name: str, vendor: str, library: str | None, has_cpu: bool,
-                     library_from_pip: bool) -> tuple[str, str]:
+def runtime_identity(
+    platform_name: str, vendor: str, library: str | None, has_cpu: bool, library_from_pip: bool
+) -> tuple[str, str]:
     """(slug, label) telling the user which runtime a platform is, e.g. ("pocl-pypi", "PoCL (PyPI)")."""
     is_pip = library_from_pip or (library is not None and ("site-packages" in library or "dist-packages" in library))
     if "portable computing language" in platform_name.lower() or (library and "libpocl" in library):
@@ -364,7 +366,7 @@ _found_devices: list[FoundDevice] | None = None
 
 
 def device_kind(type_bits: int) -> str:
-    """"GPU", "CPU", "ACCELERATOR" or "OTHER" from a cl_device_type bit field."""
+    """ "GPU", "CPU", "ACCELERATOR" or "OTHER" from a cl_device_type bit field."""
     for bit, name in ((1 << 2, "GPU"), (1 << 3, "ACCELERATOR"), (1 << 1, "CPU")):
         if type_bits & bit:
             return name
@@ -378,8 +380,9 @@ def _platform_pointers(library: str) -> list[int] | str:
         runtime = ctypes.CDLL(library)
     except OSError as error:
         return str(error)
-    query_type = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_uint32, ctypes.POINTER(ctypes.c_void_p),
-                                  ctypes.POINTER(ctypes.c_uint32))
+    query_type = ctypes.CFUNCTYPE(
+        ctypes.c_int32, ctypes.c_uint32, ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_uint32)
+    )
     address = None
     try:
         lookup = runtime.clGetExtensionFunctionAddress
@@ -458,8 +461,13 @@ def _enumerate_devices(prepared: PreparedEnvironment) -> list[FoundDevice]:
         seen_identities.add(identity)
         owner = owner_of.get(platform.int_ptr)
         has_cpu = any(device_kind(d.type) == "CPU" for d in devices)
-        slug, label = runtime_identity(platform.name, platform.vendor, owner.library if owner else None,
-                                       has_cpu, owner.from_pip if owner else False)
+        slug, label = runtime_identity(
+            platform.name,
+            platform.vendor,
+            owner.library if owner else None,
+            has_cpu,
+            owner.from_pip if owner else False,
+        )
         slug = _unique_slug(slug, identity, slug_owners)
         library = owner.library if owner else None
         if not devices:

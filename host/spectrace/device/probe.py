@@ -147,8 +147,15 @@ def _fingerprint(found: FoundDevice) -> str | None:
     try:
         import pyopencl as cl
 
-        parts = [found.key, cl.VERSION_TEXT, found.platform.name, found.platform.version, found.device.name,
-                 found.device.version, found.device.driver_version]
+        parts = [
+            found.key,
+            cl.VERSION_TEXT,
+            found.platform.name,
+            found.platform.version,
+            found.device.name,
+            found.device.version,
+            found.device.driver_version,
+        ]
         if found.library and os.path.isabs(found.library):
             status = os.stat(found.library)
             parts += [found.library, str(status.st_size), str(status.st_mtime_ns)]
@@ -179,10 +186,8 @@ def _remember(fingerprint: str, result: ProbeResult) -> None:
     remembered = _read_remembered()
     remembered[fingerprint] = {"ok": result.ok, "reason": result.reason}
     text = json.dumps(remembered, indent=1, sort_keys=True)
-    try:
+    with contextlib.suppress(OSError):  # an unwritable cache only costs the probe again next time
         write_atomically(_remembered_path(), lambda temp: temp.write_text(text, encoding="utf-8"))
-    except OSError:
-        pass  # an unwritable cache only costs the probe again next time
 
 
 def forget_probe_results() -> None:

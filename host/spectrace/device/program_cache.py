@@ -100,7 +100,7 @@ def kernels_digest(kernels_dir: Path) -> str:
 
 
 def _define_value(name: str, value: DefineValue) -> str:
-    if isinstance(value, bool) or isinstance(value, int):
+    if isinstance(value, (bool, int)):
         return str(int(value))
     if isinstance(value, float):
         if not math.isfinite(value):
@@ -185,8 +185,9 @@ class Device:
     def __repr__(self) -> str:
         return f"Device({self.report.key!r}, {self.report.device_name!r})"
 
-    def build_program(self, entry: str, defines: Mapping[str, DefineValue] | None = None,
-                      options: list[str] | None = None) -> cl.Program:
+    def build_program(
+        self, entry: str, defines: Mapping[str, DefineValue] | None = None, options: list[str] | None = None
+    ) -> cl.Program:
         """Build ``kernels/<entry>`` with ``-I kernels`` and ``-D name=value`` for each define and each value of the
         host/device contract (spectrace.engine.device_types), reusing a cached binary when sources, options and
         device are unchanged."""
@@ -224,5 +225,6 @@ class Device:
             return compile_source(self.context, self.cl_device, source, option_text)
         except KernelBuildError as error:
             log = "\n".join(error.build_log.splitlines()[:_LOG_LINES])
-            raise KernelBuildError(f"kernel build failed on {self.report.key}: {error.message}\n{log}",
-                                   log, where=entry) from None
+            raise KernelBuildError(
+                f"kernel build failed on {self.report.key}: {error.message}\n{log}", log, where=entry
+            ) from None

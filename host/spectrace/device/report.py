@@ -68,6 +68,12 @@ def device_table(reports: list[DeviceReport]) -> Table:
     for report in reports:
         probe = Text("ok", style="green") if report.ok else Text(f"failed: {report.reason}", style="red")
         # Text, not markup: device names and compiler messages may contain square brackets.
-        table.add_row(Text(report.key), Text(report.runtime), Text(report.device_name), Text(report.device_type),
-                      Text(_short_opencl_version(report.opencl_version)), probe)
+        table.add_row(
+            Text(report.key),
+            Text(report.runtime),
+            Text(report.device_name),
+            Text(report.device_type),
+            Text(_short_opencl_version(report.opencl_version)),
+            probe,
+        )
     return table

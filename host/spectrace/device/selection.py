@@ -93,14 +93,17 @@ def _failure_list(reports: list[DeviceReport]) -> str:
     return "; ".join(f"{r.key} ({r.reason})" for r in reports)
 
 
-def _select_candidates(spec: str, ordered: list[tuple[FoundDevice, DeviceReport]],
-                       request: str) -> list[tuple[FoundDevice, DeviceReport]]:
+def _select_candidates(
+    spec: str, ordered: list[tuple[FoundDevice, DeviceReport]], request: str
+) -> list[tuple[FoundDevice, DeviceReport]]:
     exact = [pair for pair in ordered if pair[1].key.lower() == spec.strip().lower()]
     chosen = exact or [pair for pair in ordered if matches_spec(spec, pair[1])]
     if not chosen:
         keys = ", ".join(report.key for _, report in ordered) or f"none; {INSTALL_HINT}"
-        raise NoWorkingDeviceError(f"no OpenCL device matches {request}; available devices: {keys} "
-                                   f"(pick one with --device KEY or {DEVICE_ENV}=KEY; `spectrace devices` shows each)")
+        raise NoWorkingDeviceError(
+            f"no OpenCL device matches {request}; available devices: {keys} "
+            f"(pick one with --device KEY or {DEVICE_ENV}=KEY; `spectrace devices` shows each)"
+        )
     return chosen
 
 
@@ -129,6 +132,8 @@ def open_device(spec: str | None = None) -> Device:
     if spec:
         failed = {report.key for report in failures}
         working = [f.key for f, _ in ordered if f.key not in failed and probing.probe(f).ok]
-        raise NoWorkingDeviceError(f"no working OpenCL device matches {request}: {_failure_list(failures)}; "
-                                   f"working devices: {', '.join(working) or 'none'}")
+        raise NoWorkingDeviceError(
+            f"no working OpenCL device matches {request}: {_failure_list(failures)}; "
+            f"working devices: {', '.join(working) or 'none'}"
+        )
     raise NoWorkingDeviceError(failures)

@@ -1,10 +1,12 @@
 """Displays as spectral emitters: measured primaries, the same RGB on different displays, matching across
 displays, and observer metamerism. See docs/displays.md for the experiment and its conventions."""
 
-from spectrace.spectral.display_catalog import display_names, load_all_displays, load_display, load_display_csv
 from spectrace.displays.compare import Comparison, DisplayColour, PairDifference, compare_displays
-from spectrace.spectral.display import CHANNELS, Display
 from spectrace.displays.match import MatchResult, match_colour
+from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions, delta_e_2000
+from spectrace.spectral.display import CHANNELS, Display
+from spectrace.spectral.display_catalog import display_names, load_all_displays, load_display, load_display_csv
+from spectrace.spectral.display_transfer import Encoding, decode_to_drive, encode_drive, parse_encoding
 from spectrace.spectral.observers import (
     ALL_OBSERVERS,
     LUMINOUS_EFFICACY_LM_PER_W,
@@ -13,8 +15,6 @@ from spectrace.spectral.observers import (
     observer_cmfs,
     photometric_xyz,
 )
-from spectrace.spectral.display_transfer import Encoding, decode_to_drive, encode_drive, parse_encoding
-from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions, delta_e_2000
 
 __all__ = [
     "ALL_OBSERVERS",

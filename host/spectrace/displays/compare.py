@@ -8,11 +8,11 @@ from itertools import combinations
 
 import numpy as np
 
-from spectrace.spectral.display import Display
-from spectrace.spectral.observers import ALL_OBSERVERS, Observer
-from spectrace.spectral.display_transfer import checked_rgb
 from spectrace.displays.viewing import ViewingConditions, delta_e_2000, encoded_srgb_for_screen
 from spectrace.spectral import xyz_to_xy
+from spectrace.spectral.display import Display
+from spectrace.spectral.display_transfer import checked_rgb
+from spectrace.spectral.observers import ALL_OBSERVERS, Observer
 
 # Linear sRGB this far outside [0, 1] still counts as inside the gamut (rounding of the matrices).
 SRGB_GAMUT_TOLERANCE = 1e-6

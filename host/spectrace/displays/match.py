@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import lsq_linear, minimize
 
-from spectrace.spectral.display import Display
-from spectrace.spectral.observers import ALL_OBSERVERS, Observer
-from spectrace.spectral.display_transfer import checked_rgb, encode_drive
 from spectrace.displays.viewing import ViewingConditions, delta_e_2000
+from spectrace.spectral.display import Display
+from spectrace.spectral.display_transfer import checked_rgb, encode_drive
+from spectrace.spectral.observers import ALL_OBSERVERS, Observer
 
 MATCH_OBSERVER = Observer.CIE_1931_2
 # A solved drive this far outside [0, 1] is rounding, still in gamut.
@@ -75,8 +75,10 @@ def _closest_drive_in_gamut(target: Display, xyz_goal: np.ndarray, viewing: View
         np.full(3, 0.5),
     ]
     best = min(
-        (minimize(difference, start, method="L-BFGS-B", bounds=[(0.0, 1.0)] * 3, options={"ftol": 1e-12})
-         for start in starts),
+        (
+            minimize(difference, start, method="L-BFGS-B", bounds=[(0.0, 1.0)] * 3, options={"ftol": 1e-12})
+            for start in starts
+        ),
         key=lambda result: result.fun,
     )
     return np.clip(best.x, 0.0, 1.0)

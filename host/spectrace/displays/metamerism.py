@@ -7,11 +7,11 @@ from dataclasses import dataclass
 import colour
 import numpy as np
 
-from spectrace.spectral.display import Display
 from spectrace.displays.match import MatchResult, match_colour
-from spectrace.spectral.observers import photometric_xyz
 from spectrace.displays.viewing import ViewingConditions
 from spectrace.errors import SpectraceError
+from spectrace.spectral.display import Display
+from spectrace.spectral.observers import photometric_xyz
 from spectrace.spectral.spectrum_io import colorchecker_patch_names, colorchecker_reflectance
 
 
@@ -43,16 +43,23 @@ class MetamerismReport:
             "source_drive": self.match.source_drive.tolist(),
             "target_drive": self.match.target_drive.tolist(),
             "screens_delta_e_2000": float(self.match.delta_e_2000[list(self.match.delta_e_2000)[0]]),
-            "patches": [{"patch": p.patch, "lab_under_source": p.lab_under_source.tolist(),
-                         "lab_under_target": p.lab_under_target.tolist(), "delta_e_2000": p.delta_e_2000}
-                        for p in self.patches],
+            "patches": [
+                {
+                    "patch": p.patch,
+                    "lab_under_source": p.lab_under_source.tolist(),
+                    "lab_under_target": p.lab_under_target.tolist(),
+                    "delta_e_2000": p.delta_e_2000,
+                }
+                for p in self.patches
+            ],
             "mean_delta_e_2000": self.mean_delta_e,
             "max_delta_e_2000": self.max_delta_e,
         }
 
 
-def patch_metamerism(source: Display, rgb, target: Display, viewing: ViewingConditions | None = None
-                     ) -> MetamerismReport:
+def patch_metamerism(
+    source: Display, rgb, target: Display, viewing: ViewingConditions | None = None
+) -> MetamerismReport:
     """Each ColorChecker patch lit by `source` showing `rgb` vs lit by `target` showing the matching triple.
     CIELAB uses the light itself as the white (a perfect reflector under it), the same for both halves, since the
     matched lights have the same XYZ."""
@@ -61,8 +68,10 @@ def patch_metamerism(source: Display, rgb, target: Display, viewing: ViewingCond
     light_target = match.target.emission_from_drive(match.target_drive)
     white = photometric_xyz(light_source)
     if not white[1] > 0:  # CIELAB needs the light as its white
-        raise SpectraceError(f"the triple {tuple(float(v) for v in rgb)} on {source.name} gives no light to see the "
-                             f"patches by", where="--rgb")
+        raise SpectraceError(
+            f"the triple {tuple(float(v) for v in rgb)} on {source.name} gives no light to see the patches by",
+            where="--rgb",
+        )
     white_xy = colour.XYZ_to_xy(white)
     patches = []
     for name in colorchecker_patch_names():
@@ -93,14 +102,21 @@ def measure_scene_patches(scene, device=None, streams: int = 32, samples_per_ite
     wavelengths = np.arange(380.0, 781.0, 5.0)
     origin = np.asarray(scene.camera.origin, float)
     shapes = {shape.name: shape for shape in scene.shapes}
-    names = [name[len("left "):] for name in shapes if name.startswith("left ") and f"right {name[5:]}" in shapes]
+    names = [name[len("left ") :] for name in shapes if name.startswith("left ") and f"right {name[5:]}" in shapes]
     names = [n for n in names if n in colorchecker_patch_names()]
     readings = {}
     for side in ("left", "right"):
         for name in names:
             centre = shapes[f"{side} {name}"].mesh.vertices.mean(axis=0)
-            reading = measure_radiance(scene, origin, centre - origin, wavelengths, streams=streams,
-                                       samples_per_item=samples_per_item, device=device)
+            reading = measure_radiance(
+                scene,
+                origin,
+                centre - origin,
+                wavelengths,
+                streams=streams,
+                samples_per_item=samples_per_item,
+                device=device,
+            )
             readings[side, name] = (reading.spectral, reading.spectral_standard_error)
     white_name = max((n for n in names if n.startswith("white")), default=names[0])
     white = photometric_xyz(np.interp(_grid(), wavelengths, readings["left", white_name][0]))
@@ -114,9 +130,14 @@ def measure_scene_patches(scene, device=None, streams: int = 32, samples_per_ite
     for name in names:
         (left, left_se), (right, right_se) = readings["left", name], readings["right", name]
         delta = float(colour.delta_E(lab(left), lab(right), method="CIE 2000"))
-        trials = [colour.delta_E(lab(left + rng.normal(0, 1, left.shape) * left_se),
-                                 lab(right + rng.normal(0, 1, right.shape) * right_se), method="CIE 2000")
-                  for _ in range(16)]
+        trials = [
+            colour.delta_E(
+                lab(left + rng.normal(0, 1, left.shape) * left_se),
+                lab(right + rng.normal(0, 1, right.shape) * right_se),
+                method="CIE 2000",
+            )
+            for _ in range(16)
+        ]
         results.append(RenderedPatch(name, lab(left), lab(right), delta, float(np.std(trials, ddof=1))))
     return results
 

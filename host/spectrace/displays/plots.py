@@ -50,7 +50,11 @@ def _plot_chromaticities(figure, grid_cell, comparison: Comparison) -> None:
 
     axes = figure.add_subplot(grid_cell)
     plot_chromaticity_diagram_CIE1931(
-        figure=figure, axes=axes, show=False, tight_layout=False, transparent_background=False,
+        figure=figure,
+        axes=axes,
+        show=False,
+        tight_layout=False,
+        transparent_background=False,
     )
     axes.set_title("gamuts and the triple's chromaticity (CIE 1931)", pad=16)
     zoom = axes.inset_axes((0.52, 0.52, 0.46, 0.46))
@@ -61,8 +65,14 @@ def _plot_chromaticities(figure, grid_cell, comparison: Comparison) -> None:
         name = colour_on_display.display.name
         axes.plot(closed[:, 0], closed[:, 1], linewidth=0.9, color=palette[index], label=name)
         for panel, size in ((axes, 5), (zoom, 8)):
-            panel.plot(*colour_on_display.xy, marker=MARKERS[index % len(MARKERS)], color=palette[index],
-                       markeredgecolor="black", markersize=size, linestyle="none")
+            panel.plot(
+                *colour_on_display.xy,
+                marker=MARKERS[index % len(MARKERS)],
+                color=palette[index],
+                markeredgecolor="black",
+                markersize=size,
+                linestyle="none",
+            )
     points = np.array([item.xy for item in comparison.colours])
     points = points[np.isfinite(points).all(axis=1)]  # black (0, 0, 0) emits nothing and has no chromaticity
     if len(points):

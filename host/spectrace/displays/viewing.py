@@ -20,10 +20,10 @@ from functools import cache
 import colour
 import numpy as np
 
-from spectrace.spectral.display import Display
-from spectrace.spectral.observers import Observer, luminance_cd_m2, photometric_xyz
 from spectrace.errors import SpectraceError
 from spectrace.spectral import cie_illuminant, srgb_encode, xyz_to_linear_srgb
+from spectrace.spectral.display import Display
+from spectrace.spectral.observers import Observer, luminance_cd_m2, photometric_xyz
 
 DEFAULT_WHITE_LUMINANCE_CD_M2 = 100.0
 # From about the absolute threshold of vision to beyond the Sun's disc (1.6e9 cd/m²): outside, no display exists,
@@ -53,9 +53,11 @@ class ViewingConditions:
                 where="--white-luminance",
             )
         if not low <= self.white_luminance_cd_m2 <= high:
-            raise SpectraceError(f"white luminance must lie in {low:g}..{high:g} cd/m² (from the threshold of vision "
-                                 f"to beyond the Sun's disc), got {self.white_luminance_cd_m2:g}",
-                                 where="--white-luminance")
+            raise SpectraceError(
+                f"white luminance must lie in {low:g}..{high:g} cd/m² (from the threshold of vision "
+                f"to beyond the Sun's disc), got {self.white_luminance_cd_m2:g}",
+                where="--white-luminance",
+            )
 
     def as_viewed(self, display: Display) -> Display:
         """The display on this comparison's luminance scale (see the module docstring)."""

@@ -28,13 +28,13 @@ import numpy as np
 
 from spectrace import resources
 from spectrace.device.program_cache import kernels_digest
-from spectrace.errors import SpectraceError
-from spectrace.film import RenderState, state_problem
-from spectrace.io.input_files import regular_file
-from spectrace.io.atomic import write_atomically
-from spectrace.scene import limits
 from spectrace.engine.memory import scene_arrays
 from spectrace.engine.scene_buffers import render_params
+from spectrace.errors import SpectraceError
+from spectrace.film import RenderState, state_problem
+from spectrace.io.atomic import write_atomically
+from spectrace.io.input_files import regular_file
+from spectrace.scene import limits
 
 if TYPE_CHECKING:
     from spectrace.engine.renderer import Renderer
@@ -76,8 +76,12 @@ def _update_with_array(digest, name: str, array: np.ndarray) -> None:
 def scene_digest(renderer: Renderer) -> str:
     """SHA-256 of everything the render's kernels read except the sample range, and of the program settings."""
     digest = hashlib.sha256(_SCENE_DIGEST_SALT.encode())
-    settings = (renderer.scene.integrator, renderer.spectral_bins, tuple(renderer.spectral_range_nm),
-                renderer.scene.sampler)
+    settings = (
+        renderer.scene.integrator,
+        renderer.spectral_bins,
+        tuple(renderer.spectral_range_nm),
+        renderer.scene.sampler,
+    )
     digest.update(repr(settings).encode())
     _update_with_array(digest, "params", render_params(renderer.scene, renderer.buffers, 0, 0))
     for name, array in scene_arrays(renderer.buffers).items():
@@ -87,8 +91,9 @@ def scene_digest(renderer: Renderer) -> str:
 
 def render_identity(renderer: Renderer) -> RenderIdentity:
     scene = renderer.scene
-    return RenderIdentity(scene.width, scene.height, scene.seed, scene_digest(renderer),
-                          kernels_digest(resources.kernels_dir()))
+    return RenderIdentity(
+        scene.width, scene.height, scene.seed, scene_digest(renderer), kernels_digest(resources.kernels_dir())
+    )
 
 
 def save_checkpoint(path: str | Path, renderer: Renderer, identity: RenderIdentity | None = None) -> Checkpoint:
@@ -145,15 +150,25 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
     try:
         file_format = str(fields["format"])
         if file_format not in (CHECKPOINT_FORMAT, _FORMAT_WITHOUT_CHECKSUM):
-            raise SpectraceError(f"checkpoint format '{file_format}' is not '{CHECKPOINT_FORMAT}' (written by "
-                                 f"another version of spectrace?)", where=str(path))
+            raise SpectraceError(
+                f"checkpoint format '{file_format}' is not '{CHECKPOINT_FORMAT}' (written by "
+                f"another version of spectrace?)",
+                where=str(path),
+            )
         if file_format == CHECKPOINT_FORMAT and str(fields[_CHECKSUM]) != _checksum(fields):
-            raise SpectraceError("the checkpoint's checksum does not match its contents: the file is damaged",
-                                 where=str(path))
-        identity = RenderIdentity(int(fields["width"]), int(fields["height"]), int(fields["seed"]),
-                                  str(fields["scene_digest"]), str(fields["kernels_digest"]))
-        buffers = {name[len(_STATE_PREFIX):]: array for name, array in fields.items()
-                   if name.startswith(_STATE_PREFIX)}
+            raise SpectraceError(
+                "the checkpoint's checksum does not match its contents: the file is damaged", where=str(path)
+            )
+        identity = RenderIdentity(
+            int(fields["width"]),
+            int(fields["height"]),
+            int(fields["seed"]),
+            str(fields["scene_digest"]),
+            str(fields["kernels_digest"]),
+        )
+        buffers = {
+            name[len(_STATE_PREFIX) :]: array for name, array in fields.items() if name.startswith(_STATE_PREFIX)
+        }
         state = RenderState(int(fields["samples_done"]), float(fields["render_seconds"]), buffers)
         device = str(fields["device"])
     except (KeyError, TypeError, ValueError) as error:
@@ -174,16 +189,22 @@ def _state_problem(identity: RenderIdentity, state: RenderState) -> str | None:
 def identity_mismatch(saved: RenderIdentity, current: RenderIdentity) -> str | None:
     """Why a render with identity `current` cannot continue a checkpoint of `saved`, or None."""
     if (saved.width, saved.height) != (current.width, current.height):
-        return (f"the checkpoint is of a {saved.width}x{saved.height} film but this render is "
-                f"{current.width}x{current.height}")
+        return (
+            f"the checkpoint is of a {saved.width}x{saved.height} film but this render is "
+            f"{current.width}x{current.height}"
+        )
     if saved.seed != current.seed:
         return f"the checkpoint was rendered with seed {saved.seed} but this render uses seed {current.seed}"
     if saved.kernels_digest != current.kernels_digest:
-        return ("the checkpoint was rendered by other kernel sources (spectrace was updated or its kernels edited), "
-                "so the samples would not continue the same sequence; render afresh without --resume")
+        return (
+            "the checkpoint was rendered by other kernel sources (spectrace was updated or its kernels edited), "
+            "so the samples would not continue the same sequence; render afresh without --resume"
+        )
     if saved.scene_digest != current.scene_digest:
-        return ("the checkpoint belongs to another scene or other settings (scene file, meshes, spectra, camera, "
-                "max_depth, integrator, sampler, spectral bins); render afresh without --resume")
+        return (
+            "the checkpoint belongs to another scene or other settings (scene file, meshes, spectra, camera, "
+            "max_depth, integrator, sampler, spectral bins); render afresh without --resume"
+        )
     return None
 
 
@@ -207,8 +228,14 @@ class PeriodicCheckpoints:
     loop's progress callback. A failed write is reported through `warn` and the render goes on: losing the
     render because a checkpoint could not be written would defeat the checkpoint's purpose."""
 
-    def __init__(self, path: str | Path, renderer: Renderer, interval_seconds: float,
-                 warn=lambda message: None, clock=time.monotonic):
+    def __init__(
+        self,
+        path: str | Path,
+        renderer: Renderer,
+        interval_seconds: float,
+        warn=lambda message: None,
+        clock=time.monotonic,
+    ):
         self.path = Path(path)
         self.renderer = renderer
         self.interval_seconds = interval_seconds

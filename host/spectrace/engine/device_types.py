@@ -19,8 +19,14 @@ from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 # Material.type: which BSDF (kernels/material.cl's MATERIAL_LIST names each one's functions; docs/materials.md lists
 # the keys).
 MATERIAL_TYPES = ("diffuse", "conductor", "mirror", "plastic", "dielectric", "retroreflector")
-(MATERIAL_DIFFUSE, MATERIAL_CONDUCTOR, MATERIAL_MIRROR, MATERIAL_PLASTIC, MATERIAL_DIELECTRIC,
- MATERIAL_RETROREFLECTOR) = range(len(MATERIAL_TYPES))
+(
+    MATERIAL_DIFFUSE,
+    MATERIAL_CONDUCTOR,
+    MATERIAL_MIRROR,
+    MATERIAL_PLASTIC,
+    MATERIAL_DIELECTRIC,
+    MATERIAL_RETROREFLECTOR,
+) = range(len(MATERIAL_TYPES))
 
 # Material.ior_model: how a dielectric's interior index of refraction depends on the wavelength (kernels/ior.cl).
 IOR_CONSTANT = 0  # Material.ior
@@ -70,7 +76,8 @@ MATERIAL_DTYPE = _struct(
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
 LIGHT_TYPES = ("triangle", "point", "spot", "distant", "environment", "environment_map")
 LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP = range(
-    len(LIGHT_TYPES))
+    len(LIGHT_TYPES)
+)
 # LIGHT_TRIANGLE: an emitting triangle of an area light, radiance W/(m² sr nm); LIGHT_POINT: isotropic, intensity
 # W/(sr nm); LIGHT_SPOT: intensity on the axis W/(sr nm), smooth falloff to the cutoff; LIGHT_DISTANT: irradiance
 # on a surface facing it, W/(m² nm); LIGHT_ENVIRONMENT: uniform at infinity, radiance W/(m² sr nm);
@@ -141,8 +148,19 @@ METER_PARAMS_DTYPE = _struct(
 
 # The scene buffers every scene kernel takes after the RenderParams buffer, in order: the SceneBuffers fields that
 # kernels/scene.cl's SCENE_KERNEL_PARAMS declares (spectrace.engine.renderer.upload_scene uploads them so).
-SCENE_KERNEL_BUFFERS = ("nodes", "triangle_vertices", "triangle_uvs", "triangle_info", "materials", "lights",
-                        "light_cdf", "spectra", "texels", "map_cdf", "media")
+SCENE_KERNEL_BUFFERS = (
+    "nodes",
+    "triangle_vertices",
+    "triangle_uvs",
+    "triangle_info",
+    "materials",
+    "lights",
+    "light_cdf",
+    "spectra",
+    "texels",
+    "map_cdf",
+    "media",
+)
 
 # struct name in types.h -> dtype; the layout test walks this table.
 DEVICE_STRUCTS: dict[str, np.dtype] = {

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.device import Device
-from spectrace.errors import SpectraceError
 from spectrace.engine.device_types import RENDER_PARAMS_DTYPE
 from spectrace.engine.scene_buffers import SceneBuffers
+from spectrace.errors import SpectraceError
 from spectrace.scene.limits import FILM_BYTES_PER_PIXEL, RAY_COUNT_BYTES_PER_PIXEL, format_bytes
 
 SPECTRAL_BAND_BYTES = 4  # one float32 sum per band and pixel
@@ -75,9 +75,13 @@ def check_device_memory(need: DeviceMemoryNeed, device: Device) -> None:
     key = device.report.key
     advice = "lower --width/--height, or choose another device (`spectrace devices`, --device)"
     if need.total_bytes > global_bytes:
-        raise SpectraceError(f"the render needs {format_bytes(need.total_bytes)} of device memory "
-                             f"({need.summary()}) but {key} has {format_bytes(global_bytes)}; {advice}")
+        raise SpectraceError(
+            f"the render needs {format_bytes(need.total_bytes)} of device memory "
+            f"({need.summary()}) but {key} has {format_bytes(global_bytes)}; {advice}"
+        )
     name, size = need.largest
     if size > max_alloc_bytes:
-        raise SpectraceError(f"the render's {name} buffer needs {format_bytes(size)} but {key} allows at most "
-                             f"{format_bytes(max_alloc_bytes)} per buffer ({need.summary()}); {advice}")
+        raise SpectraceError(
+            f"the render's {name} buffer needs {format_bytes(size)} but {key} allows at most "
+            f"{format_bytes(max_alloc_bytes)} per buffer ({need.summary()}); {advice}"
+        )

@@ -11,11 +11,11 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import Device, open_device
-from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.engine.launch import meter_work_group
 from spectrace.engine.device_types import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
+from spectrace.engine.launch import meter_work_group
 from spectrace.engine.renderer import upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
+from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
 from spectrace.spectral.grid import GRID_NM
@@ -103,8 +103,15 @@ def _meter_params(meter: Meter, samples_per_item: int, seed: int) -> np.ndarray:
     return params
 
 
-def measure(scene: Scene, meter: Meter, wavelengths_nm=DEFAULT_WAVELENGTHS_NM, streams: int = 64,
-            samples_per_item: int = 32, seed: int = 0, device: Device | str | None = None) -> MeterReading:
+def measure(
+    scene: Scene,
+    meter: Meter,
+    wavelengths_nm=DEFAULT_WAVELENGTHS_NM,
+    streams: int = 64,
+    samples_per_item: int = 32,
+    seed: int = 0,
+    device: Device | str | None = None,
+) -> MeterReading:
     """Measure with `streams` independent estimates of `samples_per_item` samples per wavelength (the global
     model, `scene.max_depth` segments from the meter). The standard errors come from the spread of the streams."""
     device = device if isinstance(device, Device) else open_device(device)
@@ -115,15 +122,17 @@ def measure(scene: Scene, meter: Meter, wavelengths_nm=DEFAULT_WAVELENGTHS_NM, s
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     params, meter_params, wavelength_buffer = (
         cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a))
-        for a in (render_params(scene, buffers, 0, 0), _meter_params(meter, samples_per_item, seed), wavelengths))
+        for a in (render_params(scene, buffers, 0, 0), _meter_params(meter, samples_per_item, seed), wavelengths)
+    )
     inputs = [params, *upload_scene(ctx, buffers), meter_params, wavelength_buffer]
     items = streams * len(wavelengths)
     means = np.empty(items, np.float32)
     out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, means.nbytes)
     # Groups of one on Intel's CPU runtime: its 16-wide build of this kernel is wrong (see render/launch.py).
     local = meter_work_group(device)
-    cl.Kernel(program, "measure")(queue, (items,), (local,) if local else None, *inputs, np.int32(len(wavelengths)),
-                                  out)
+    cl.Kernel(program, "measure")(
+        queue, (items,), (local,) if local else None, *inputs, np.int32(len(wavelengths)), out
+    )
     cl.enqueue_copy(queue, means, out)
     queue.finish()
 

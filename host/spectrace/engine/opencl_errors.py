@@ -14,10 +14,14 @@ from spectrace.errors import SpectraceError
 _OUT_OF_MEMORY = {"MEM_OBJECT_ALLOCATION_FAILURE", "OUT_OF_RESOURCES", "OUT_OF_HOST_MEMORY", "INVALID_BUFFER_SIZE"}
 _DEVICE_LOST = {"DEVICE_NOT_AVAILABLE", "INVALID_COMMAND_QUEUE", "INVALID_CONTEXT", "INVALID_DEVICE"}
 
-_OUT_OF_MEMORY_HINT = ("the device ran out of memory or resources: lower --width/--height, or choose another device "
-                       "(`spectrace devices` lists them; pick one with --device or SPECTRACE_DEVICE)")
-_DEVICE_LOST_HINT = ("the device stopped responding (driver reset, GPU watchdog or a lost device): resume from the "
-                     "last checkpoint with --resume, on this device or another one (--device)")
+_OUT_OF_MEMORY_HINT = (
+    "the device ran out of memory or resources: lower --width/--height, or choose another device "
+    "(`spectrace devices` lists them; pick one with --device or SPECTRACE_DEVICE)"
+)
+_DEVICE_LOST_HINT = (
+    "the device stopped responding (driver reset, GPU watchdog or a lost device): resume from the "
+    "last checkpoint with --resume, on this device or another one (--device)"
+)
 
 Method = TypeVar("Method", bound=Callable)
 
@@ -38,8 +42,13 @@ def describe_opencl_error(error: BaseException, action: str, device: str) -> str
     if isinstance(error, MemoryError):
         return f"out of host memory while {action} on {device}: lower --width/--height"
     name = status_name(error) if isinstance(error, cl.Error) else ""
-    hint = _OUT_OF_MEMORY_HINT if name in _OUT_OF_MEMORY else _DEVICE_LOST_HINT if name in _DEVICE_LOST else (
-        "see `spectrace devices` for the device's state, or try another one with --device")
+    hint = (
+        _OUT_OF_MEMORY_HINT
+        if name in _OUT_OF_MEMORY
+        else _DEVICE_LOST_HINT
+        if name in _DEVICE_LOST
+        else ("see `spectrace devices` for the device's state, or try another one with --device")
+    )
     return f"OpenCL error while {action} on {device}: {said}; {hint}"
 
 

@@ -7,16 +7,16 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import Device, open_device
-from spectrace.errors import SpectraceError
-from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.film import Film, spectral_defines
-from spectrace.image import Image
 from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
 from spectrace.engine.scene_features import scene_feature_defines
+from spectrace.errors import SpectraceError
+from spectrace.film import Film, spectral_defines
+from spectrace.geometry.bvh4 import traversal_defines
+from spectrace.image import Image
 from spectrace.scene import limits
 from spectrace.scene.model import SAMPLER_TYPES, Scene
 
@@ -40,20 +40,30 @@ def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
     """Read-only device copies of the scene's buffers in the order every scene kernel takes them after the
     RenderParams buffer (SCENE_KERNEL_BUFFERS; kernels/scene.cl's SCENE_KERNEL_PARAMS)."""
     flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-    return [cl.Buffer(context, flags, hostbuf=np.ascontiguousarray(getattr(buffers, name)))
-            for name in SCENE_KERNEL_BUFFERS]
+    return [
+        cl.Buffer(context, flags, hostbuf=np.ascontiguousarray(getattr(buffers, name))) for name in SCENE_KERNEL_BUFFERS
+    ]
 
 
 class Renderer:
     @translate_opencl_errors("setting up the render")
-    def __init__(self, scene: Scene, device: Device | str | None = None, spectral_bins: int = 0,
-                 spectral_range_nm: tuple[float, float] = (360.0, 830.0), specialise: bool = True):
+    def __init__(
+        self,
+        scene: Scene,
+        device: Device | str | None = None,
+        spectral_bins: int = 0,
+        spectral_range_nm: tuple[float, float] = (360.0, 830.0),
+        specialise: bool = True,
+    ):
         """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (the band-
         averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output. specialise=False builds the kernels
         that handle every scene instead of ones carrying only this scene's features (for comparisons)."""
         self.scene = scene
-        problem = (limits.render_settings_problem(scene.width, scene.height, scene.spp)
-                   or limits.scene_settings_problem(scene) or limits.scene_geometry_problem(scene))
+        problem = (
+            limits.render_settings_problem(scene.width, scene.height, scene.spp)
+            or limits.scene_settings_problem(scene)
+            or limits.scene_geometry_problem(scene)
+        )
         if problem:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         self.device = device if isinstance(device, Device) else open_device(device)
@@ -105,15 +115,21 @@ class Renderer:
         start = time.perf_counter()
         cl.enqueue_copy(queue, self._params, params)
         film = self.film
-        self.kernel.set_args(self._params, *self._scene, self._cmf, film.xyz_buffer, film.ray_count_buffer,
-                             film.spectral_buffer)
+        self.kernel.set_args(
+            self._params, *self._scene, self._cmf, film.xyz_buffer, film.ray_count_buffer, film.spectral_buffer
+        )
         global_size, local_size = launch_shape(self.pixel_count, self.work_group)
         cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
         queue.finish()
         film.add_pass(sample_count, time.perf_counter() - start)
 
-    def render(self, spp: int | None = None, pass_spp: int | None = None,
-               progress: ProgressCallback | None = None, should_stop: Callable[[], bool] | None = None) -> Image:
+    def render(
+        self,
+        spp: int | None = None,
+        pass_spp: int | None = None,
+        progress: ProgressCallback | None = None,
+        should_stop: Callable[[], bool] | None = None,
+    ) -> Image:
         """Render until `spp` samples per pixel (default: the scene's). Passes adapt their size to about
         TARGET_PASS_SECONDS unless pass_spp fixes it; the image does not depend on the pass sizes.
         `should_stop` is asked between passes; when it says True the image of the samples done so far is returned."""
@@ -142,6 +158,14 @@ class Renderer:
 
     def image(self) -> Image:
         scene = self.scene
-        return self.film.image(seed=scene.seed, device=self.device.report.key, exposure=scene.exposure,
-                               extra={"max_depth": scene.max_depth, "width": scene.width, "height": scene.height,
-                                      "sampler": scene.sampler})
+        return self.film.image(
+            seed=scene.seed,
+            device=self.device.report.key,
+            exposure=scene.exposure,
+            extra={
+                "max_depth": scene.max_depth,
+                "width": scene.width,
+                "height": scene.height,
+                "sampler": scene.sampler,
+            },
+        )

@@ -4,14 +4,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.errors import SpectraceError
-from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
-from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
-from spectrace.lights import area as area_light
-from spectrace.lights import light_module
-from spectrace.lights.area import AreaEmitter
-from spectrace.lights.base import LightRows
-from spectrace.materials import material_row
 from spectrace.engine.device_types import (
     LIGHT_DTYPE,
     MATERIAL_DTYPE,
@@ -20,6 +12,14 @@ from spectrace.engine.device_types import (
     TRIANGLE_INFO_DTYPE,
     TRIANGLE_NO_MATERIAL,
 )
+from spectrace.errors import SpectraceError
+from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
+from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
+from spectrace.lights import area as area_light
+from spectrace.lights import light_module
+from spectrace.lights.area import AreaEmitter
+from spectrace.lights.base import LightRows
+from spectrace.materials import material_row
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import cmf_table_normalised
 from spectrace.spectral.spectrum import Spectrum
@@ -29,7 +29,9 @@ from spectrace.spectral.table import SpectrumTable
 @dataclass
 class SceneBuffers:
     bvh: BVH
-    nodes: np.ndarray  # what the traversal reads: bvh.nodes, or their 4-wide collapse and leaf blocks (geometry/bvh4.py)
+    nodes: (
+        np.ndarray
+    )  # what the traversal reads: bvh.nodes, or their 4-wide collapse and leaf blocks (geometry/bvh4.py)
     triangle_vertices: np.ndarray  # (3·M, 4) float32, BVH leaf order
     triangle_info: np.ndarray  # (M,) TRIANGLE_INFO_DTYPE
     triangle_count: int  # arrays hold one dummy entry when there are no triangles
@@ -47,8 +49,17 @@ class SceneBuffers:
     medium_count: int
 
     def device_bytes(self) -> int:
-        arrays = (self.nodes, self.triangle_vertices, self.triangle_info, self.materials, self.lights,
-                  self.light_cdf, self.spectra, self.cmf, self.media)
+        arrays = (
+            self.nodes,
+            self.triangle_vertices,
+            self.triangle_info,
+            self.materials,
+            self.lights,
+            self.light_cdf,
+            self.spectra,
+            self.cmf,
+            self.media,
+        )
         return sum(a.nbytes for a in arrays)
 
 
@@ -78,8 +89,9 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         if shape.interior is not None:
             interior = medium_index.setdefault(id(shape.interior), len(medium_rows))
             if interior == len(medium_rows):
-                medium_rows.append((table.add(shape.interior.sigma_a), table.add(shape.interior.sigma_s),
-                                    float(shape.interior.g), 0))
+                medium_rows.append(
+                    (table.add(shape.interior.sigma_a), table.add(shape.interior.sigma_s), float(shape.interior.g), 0)
+                )
         key = id(shape.material)
         if shape.material is None:
             if shape.interior is None:

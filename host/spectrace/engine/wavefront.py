@@ -13,12 +13,12 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import Device
-from spectrace.errors import SpectraceError
 from spectrace.engine.launch import launch_shape, wavefront_work_group
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.scene_buffers import render_params
+from spectrace.errors import SpectraceError
 from spectrace.scene.model import Scene
 
 KERNEL_SHAPES = ("megakernel", "wavefront")
@@ -27,11 +27,19 @@ QUEUE_ENTRY_BYTES = 4  # one int (a pixel index) per live path
 
 class WavefrontRenderer(Renderer):
     @translate_opencl_errors("setting up the render")
-    def __init__(self, scene: Scene, device: Device | str | None = None, spectral_bins: int = 0,
-                 spectral_range_nm: tuple[float, float] = (360.0, 830.0), specialise: bool = True):
+    def __init__(
+        self,
+        scene: Scene,
+        device: Device | str | None = None,
+        spectral_bins: int = 0,
+        spectral_range_nm: tuple[float, float] = (360.0, 830.0),
+        specialise: bool = True,
+    ):
         if scene.integrator != "path":
-            raise SpectraceError(f"the wavefront kernel runs the path integrator only, not {scene.integrator!r}",
-                                 where=str(scene.source) if scene.source else None)
+            raise SpectraceError(
+                f"the wavefront kernel runs the path integrator only, not {scene.integrator!r}",
+                where=str(scene.source) if scene.source else None,
+            )
         super().__init__(scene, device, spectral_bins, spectral_range_nm, specialise)
         ctx = self.device.context
         slot_size = np.zeros(1, np.uint32)
@@ -43,8 +51,7 @@ class WavefrontRenderer(Renderer):
         need.buffers["path queues"] = 2 * self.pixel_count * QUEUE_ENTRY_BYTES
         check_device_memory(need, self.device)
         self._slots = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, need.buffers["path slots"])
-        self._queues = [cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * QUEUE_ENTRY_BYTES)
-                        for _ in range(2)]
+        self._queues = [cl.Buffer(ctx, cl.mem_flags.READ_WRITE, self.pixel_count * QUEUE_ENTRY_BYTES) for _ in range(2)]
         self._queue_lengths = [cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 4) for _ in range(2)]
         self.work_group = wavefront_work_group(self.device)
 
@@ -65,8 +72,17 @@ class WavefrontRenderer(Renderer):
         cl.enqueue_copy(queue, self._params, params)
         cl.enqueue_copy(queue, self._queue_lengths[0], zero)
         film = self.film
-        self._start_kernel(queue, *launch_shape(self.pixel_count, self.work_group), self._params, self._cmf,
-                           film.xyz_buffer, film.spectral_buffer, self._slots, self._queues[0], self._queue_lengths[0])
+        self._start_kernel(
+            queue,
+            *launch_shape(self.pixel_count, self.work_group),
+            self._params,
+            self._cmf,
+            film.xyz_buffer,
+            film.spectral_buffer,
+            self._slots,
+            self._queues[0],
+            self._queue_lengths[0],
+        )
         current = 0
         while True:
             cl.enqueue_copy(queue, live, self._queue_lengths[current])  # blocking: sizes the next launch
@@ -74,17 +90,26 @@ class WavefrontRenderer(Renderer):
                 break
             following = 1 - current
             cl.enqueue_copy(queue, self._queue_lengths[following], zero)
-            self.kernel.set_args(self._params, *self._scene, self._cmf, film.xyz_buffer, film.ray_count_buffer,
-                                 film.spectral_buffer, self._slots, self._queues[current], self._queue_lengths[current],
-                                 self._queues[following], self._queue_lengths[following])
+            self.kernel.set_args(
+                self._params,
+                *self._scene,
+                self._cmf,
+                film.xyz_buffer,
+                film.ray_count_buffer,
+                film.spectral_buffer,
+                self._slots,
+                self._queues[current],
+                self._queue_lengths[current],
+                self._queues[following],
+                self._queue_lengths[following],
+            )
             cl.enqueue_nd_range_kernel(queue, self.kernel, *launch_shape(int(live[0]), self.work_group))
             current = following
         queue.finish()
         film.add_pass(sample_count, time.perf_counter() - start)
 
 
-def make_renderer(scene: Scene, device: Device | str | None = None, kernel: str = "megakernel",
-                  **options) -> Renderer:
+def make_renderer(scene: Scene, device: Device | str | None = None, kernel: str = "megakernel", **options) -> Renderer:
     """A renderer of the chosen kernel shape (KERNEL_SHAPES)."""
     if kernel not in KERNEL_SHAPES:
         raise SpectraceError(f"unknown kernel shape {kernel!r}; choose one of {', '.join(KERNEL_SHAPES)}")

@@ -80,9 +80,7 @@ class _LevelSplits:
     widest_axis: np.ndarray  # (N,) int64 axis of the largest centroid extent
 
 
-def build_bvh(
-    v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf_size: int = 4, bins: int = 16
-) -> BVH:
+def build_bvh(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf_size: int = 4, bins: int = 16) -> BVH:
     """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units."""
     start = perf_counter()
     if max_leaf_size < 1:

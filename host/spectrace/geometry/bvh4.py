@@ -62,7 +62,7 @@ def collapse_to_bvh4(bvh: BVH) -> tuple[np.ndarray, int]:
         inner = used & ~leaf
         # 4-wide nodes of the next level are numbered in the order their binary nodes appear here (row-major).
         next_index = first + count + np.cumsum(inner.ravel()).reshape(inner.shape) - 1
-        block = nodes[first:first + count]
+        block = nodes[first : first + count]
         block["child"] = np.where(leaf, binary["left_first"][source], np.where(inner, next_index, 0))
         block["count"] = np.where(leaf, binary["count"][source], np.where(inner, 0, -1))
         for axis in range(3):

@@ -105,11 +105,11 @@ def _scan_obj(path: Path, where: str) -> bool:
             chunk = np.frombuffer(lines, np.uint8)
             if (offset := _zero_index_in_face_line(chunk)) is not None:
                 line = lines_before + lines.count(b"\n", 0, offset) + 1
-                raise SpectraceError(f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)",
-                                     where=where)
+                raise SpectraceError(
+                    f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)", where=where
+                )
             lines_before += lines.count(b"\n")
-            has_texture_coordinates |= (lines.startswith((b"vt ", b"vt\t")) or b"\nvt " in lines
-                                        or b"\nvt\t" in lines)
+            has_texture_coordinates |= lines.startswith((b"vt ", b"vt\t")) or b"\nvt " in lines or b"\nvt\t" in lines
             if not block:
                 return has_texture_coordinates
 
@@ -145,8 +145,11 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     else:
         mesh = _mesh_through_trimesh(path, where)
     if announce:
-        print(f"loaded mesh '{path}': {len(mesh.faces):,} triangles in {time.perf_counter() - started:.1f} s",
-              file=sys.stderr, flush=True)
+        print(
+            f"loaded mesh '{path}': {len(mesh.faces):,} triangles in {time.perf_counter() - started:.1f} s",
+            file=sys.stderr,
+            flush=True,
+        )
     return mesh
 
 

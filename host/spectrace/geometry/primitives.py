@@ -58,8 +58,10 @@ def sphere(subdivisions: int = 4) -> TriangleMesh:
     """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles, vertices on the sphere."""
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
-    if isinstance(subdivisions, bool) or not isinstance(subdivisions, int) or not (
-        0 <= subdivisions <= MAX_SPHERE_SUBDIVISIONS
+    if (
+        isinstance(subdivisions, bool)
+        or not isinstance(subdivisions, int)
+        or not (0 <= subdivisions <= MAX_SPHERE_SUBDIVISIONS)
     ):
         raise SpectraceError(
             f"sphere subdivisions must be an integer from 0 to {MAX_SPHERE_SUBDIVISIONS}, got {subdivisions!r}"

@@ -31,7 +31,7 @@ def transform_matrix(ops: list[dict], where: str) -> np.ndarray:
                 f"each transform step must be a table with exactly one of {', '.join(_STEP_BUILDERS)}",
                 where=step_where,
             )
-        (kind, value), = step.items()
+        ((kind, value),) = step.items()
         if kind not in _STEP_BUILDERS:
             raise SpectraceError(
                 f"unknown transform step '{kind}'; expected one of {', '.join(_STEP_BUILDERS)}", where=step_where

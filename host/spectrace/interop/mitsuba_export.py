@@ -65,8 +65,9 @@ def write_binary_ply(mesh: TriangleMesh, path: Path) -> None:
 
 
 def _refuse(what: str, scene: Scene) -> SpectraceError:
-    return SpectraceError(f"cannot export to Mitsuba 3 faithfully: {what}",
-                          where=str(scene.source) if scene.source else None)
+    return SpectraceError(
+        f"cannot export to Mitsuba 3 faithfully: {what}", where=str(scene.source) if scene.source else None
+    )
 
 
 class MitsubaExport:
@@ -98,14 +99,16 @@ def _light_entry(light, exporter: MitsubaExport) -> dict:
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
 
 
-def scene_to_mitsuba_dict(scene: Scene, mesh_folder: Path, spp: int | None = None,
-                          sampler: str = "independent") -> dict:
+def scene_to_mitsuba_dict(
+    scene: Scene, mesh_folder: Path, spp: int | None = None, sampler: str = "independent"
+) -> dict:
     """The scene as a `mitsuba.load_dict` dictionary; meshes are written into `mesh_folder` (kept by the caller
     until Mitsuba has loaded them). `sampler` is one of MITSUBA_SAMPLERS: the samplers differ in error at equal spp,
     not in what they estimate."""
     if sampler not in MITSUBA_SAMPLERS:
-        raise SpectraceError(f"unknown Mitsuba sampler '{sampler}'; samplers: {', '.join(MITSUBA_SAMPLERS)}",
-                             where="--peer-sampler")
+        raise SpectraceError(
+            f"unknown Mitsuba sampler '{sampler}'; samplers: {', '.join(MITSUBA_SAMPLERS)}", where="--peer-sampler"
+        )
     if scene.integrator != "path":
         raise _refuse(f"integrator '{scene.integrator}' (only 'path' maps onto Mitsuba's path tracer)", scene)
     mesh_folder = Path(mesh_folder)
@@ -113,16 +116,25 @@ def scene_to_mitsuba_dict(scene: Scene, mesh_folder: Path, spp: int | None = Non
     camera = scene.camera
     entries: dict = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": int(scene.max_depth), "rr_depth": int(scene.rr_depth),
-                       "hide_emitters": False},
+        "integrator": {
+            "type": "path",
+            "max_depth": int(scene.max_depth),
+            "rr_depth": int(scene.rr_depth),
+            "hide_emitters": False,
+        },
         "sensor": {
             "type": "perspective",
             "fov": float(camera.fov_degrees),
             "fov_axis": camera.fov_axis,
             "to_world": _lookat(camera.origin, camera.target, camera.up),
             "sampler": {"type": sampler, "sample_count": int(spp or scene.spp)},
-            "film": {"type": "hdrfilm", "width": int(scene.width), "height": int(scene.height),
-                     "pixel_format": "xyz", "rfilter": {"type": "box"}},
+            "film": {
+                "type": "hdrfilm",
+                "width": int(scene.width),
+                "height": int(scene.height),
+                "pixel_format": "xyz",
+                "rfilter": {"type": "box"},
+            },
         },
     }
     exporter = MitsubaExport(scene)
@@ -130,8 +142,7 @@ def scene_to_mitsuba_dict(scene: Scene, mesh_folder: Path, spp: int | None = Non
     for index, shape in enumerate(scene.shapes):
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
-            raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported "
-                                  "yet")
+            raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
         material_key = id(shape.material)
         if material_key not in materials:
             name = f"material_{len(materials)}"
@@ -139,8 +150,12 @@ def scene_to_mitsuba_dict(scene: Scene, mesh_folder: Path, spp: int | None = Non
             materials[material_key] = name
         path = mesh_folder / f"shape_{index}.ply"
         write_binary_ply(shape.mesh, path)
-        entry = {"type": "ply", "filename": str(path), "face_normals": True,
-                 "bsdf": {"type": "ref", "id": materials[material_key]}}
+        entry = {
+            "type": "ply",
+            "filename": str(path),
+            "face_normals": True,
+            "bsdf": {"type": "ref", "id": materials[material_key]},
+        }
         if shape.emitter is not None:
             entry["emitter"] = area.to_mitsuba(shape.emitter, exporter, f"shape '{shape.name}'")
         entries[f"shape_{index}"] = entry
@@ -159,5 +174,6 @@ def mitsuba_film_xyz(xyz: np.ndarray, mi) -> np.ndarray:
 def _lookat(origin, target, up):
     import mitsuba as mi  # the caller has chosen a variant
 
-    return mi.ScalarTransform4f().look_at(origin=list(map(float, origin)), target=list(map(float, target)),
-                                          up=list(map(float, up)))
+    return mi.ScalarTransform4f().look_at(
+        origin=list(map(float, origin)), target=list(map(float, target)), up=list(map(float, up))
+    )

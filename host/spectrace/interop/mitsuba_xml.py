@@ -65,13 +65,47 @@ SUPPORTED = {
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 _PLANNED_BSDFS = ("thindielectric",)
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
-_NAMED_IOR = {"vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.000277, "carbon dioxide": 1.00045,
-              "water": 1.333, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
-              "benzene": 1.501, "silicone oil": 1.52045, "bromine": 1.661, "water ice": 1.31, "fused quartz": 1.458,
-              "pyrex": 1.470, "acrylic glass": 1.49, "polypropylene": 1.49, "bk7": 1.5046, "sodium chloride": 1.544,
-              "amber": 1.55, "pet": 1.575, "diamond": 2.419}
-_OBJECT_TAGS = ("scene", "shape", "bsdf", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture",
-                "medium", "phase", "volume", "spectrum")
+_NAMED_IOR = {
+    "vacuum": 1.0,
+    "helium": 1.000036,
+    "hydrogen": 1.000132,
+    "air": 1.000277,
+    "carbon dioxide": 1.00045,
+    "water": 1.333,
+    "acetone": 1.36,
+    "ethanol": 1.361,
+    "carbon tetrachloride": 1.461,
+    "glycerol": 1.4729,
+    "benzene": 1.501,
+    "silicone oil": 1.52045,
+    "bromine": 1.661,
+    "water ice": 1.31,
+    "fused quartz": 1.458,
+    "pyrex": 1.470,
+    "acrylic glass": 1.49,
+    "polypropylene": 1.49,
+    "bk7": 1.5046,
+    "sodium chloride": 1.544,
+    "amber": 1.55,
+    "pet": 1.575,
+    "diamond": 2.419,
+}
+_OBJECT_TAGS = (
+    "scene",
+    "shape",
+    "bsdf",
+    "emitter",
+    "sensor",
+    "film",
+    "sampler",
+    "integrator",
+    "rfilter",
+    "texture",
+    "medium",
+    "phase",
+    "volume",
+    "spectrum",
+)
 # Elements that set a named property of the object holding them.
 _PROPERTY_TAGS = ("float", "integer", "string", "boolean", "rgb", "point", "vector", "transform")
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
@@ -109,13 +143,15 @@ def read_input_file(path: Path, where: str) -> bytes:
     """The bytes of the scene or of a file it refers to: every input file is read here, so that what may be read
     is decided in one place."""
     # A FIFO or a device would block or never end: only regular files are read.
-    regular_file(path, None if where == str(path) else where,
-                 what="Mitsuba scene file" if where == str(path) else "file")
+    regular_file(
+        path, None if where == str(path) else where, what="Mitsuba scene file" if where == str(path) else "file"
+    )
     try:
         return path.read_bytes()
     except OSError as error:
-        raise SpectraceError(f"cannot read '{_shown(str(path), 200)}' ({error.strerror or error})",
-                             where=where) from None
+        raise SpectraceError(
+            f"cannot read '{_shown(str(path), 200)}' ({error.strerror or error})", where=where
+        ) from None
 
 
 def parse_xml(path: Path) -> Element:
@@ -127,8 +163,11 @@ def parse_xml(path: Path) -> Element:
 
     def start(tag: str, attributes: dict[str, str]) -> None:
         if len(stack) >= MAX_NESTING:
-            raise SpectraceError(f"elements nested more than {MAX_NESTING} deep (line {parser.CurrentLineNumber}); "
-                                 "Mitsuba scenes need a handful of levels", where=str(path))
+            raise SpectraceError(
+                f"elements nested more than {MAX_NESTING} deep (line {parser.CurrentLineNumber}); "
+                "Mitsuba scenes need a handful of levels",
+                where=str(path),
+            )
         element = Element(tag, dict(attributes), parser.CurrentLineNumber)
         (stack[-1].children if stack else root).append(element)
         stack.append(element)
@@ -138,8 +177,10 @@ def parse_xml(path: Path) -> Element:
     try:
         parser.Parse(data, True)
     except expat.ExpatError as error:
-        raise SpectraceError(f"XML syntax error: {expat.ErrorString(error.code)} (line {error.lineno}, column "
-                             f"{error.offset + 1})", where=str(path)) from None
+        raise SpectraceError(
+            f"XML syntax error: {expat.ErrorString(error.code)} (line {error.lineno}, column {error.offset + 1})",
+            where=str(path),
+        ) from None
     if not root or root[0].tag != "scene":
         raise SpectraceError("not a Mitsuba scene: the root element must be <scene>", where=str(path))
     _name_paths(root[0])
@@ -219,8 +260,11 @@ class MitsubaImporter:
         def substitute(match: re.Match) -> str:
             name = match.group(1)
             if name not in self.parameters:
-                raise self.fail(element, f"undefined parameter ${name} (add <default name=\"{name}\" "
-                                         f"value=\"...\"/> or -D {name}=...)", key)
+                raise self.fail(
+                    element,
+                    f'undefined parameter ${name} (add <default name="{name}" value="..."/> or -D {name}=...)',
+                    key,
+                )
             return self.parameters[name]
 
         return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", substitute, value)
@@ -265,8 +309,12 @@ class MitsubaImporter:
     def number(self, element: Element, key: str = "value") -> float:
         values = self.numbers(self.resolve(element), key)
         if len(values) != 1:
-            raise self.fail(element, f"<{_shown(element.tag)} name=\"{_shown(element.get('name') or '')}\"> needs one "
-                                     f"number, got {len(values)}", key)
+            raise self.fail(
+                element,
+                f'<{_shown(element.tag)} name="{_shown(element.get("name") or "")}"> needs one '
+                f"number, got {len(values)}",
+                key,
+            )
         return values[0]
 
     def integer(self, element: Element, low: int | None = None) -> int:
@@ -283,8 +331,11 @@ class MitsubaImporter:
         if not -_INTEGER_LIMIT < value < _INTEGER_LIMIT:
             raise self.fail(element, f"integer {_shown(text)} is out of range", "value")
         if low is not None and value < low:
-            raise self.fail(element, f"<{element.tag} name=\"{_shown(element.get('name') or '')}\"> must be at least "
-                                     f"{low}, got {value}", "value")
+            raise self.fail(
+                element,
+                f'<{element.tag} name="{_shown(element.get("name") or "")}"> must be at least {low}, got {value}',
+                "value",
+            )
         return value
 
     def vector(self, element: Element, default: float = 0.0) -> list[float]:
@@ -361,7 +412,7 @@ class MitsubaImporter:
                     values = values[0:3] + [0.0] + values[3:6] + [0.0] + values[6:9] + [0.0, 0.0, 0.0, 0.0, 1.0]
                 if len(values) != 16:
                     raise self.fail(step, f"a matrix needs 16 (or 9) numbers, got {len(values)}", "value")
-                steps.append({"matrix": [values[i:i + 4] for i in range(0, 16, 4)]})
+                steps.append({"matrix": [values[i : i + 4] for i in range(0, 16, 4)]})
             elif step.tag == "lookat":
                 steps.append({"matrix": self.look_at(step).tolist()})
             else:
@@ -453,8 +504,11 @@ class MitsubaImporter:
                 for entry in (entry.strip() for entry in text.split(",")):
                     parts = entry.split(":")
                     if len(parts) != 2:
-                        raise self.fail(element, f"expected 'wavelength:value' pairs separated by commas, got "
-                                                 f"'{_shown(entry)}'", "value")
+                        raise self.fail(
+                            element,
+                            f"expected 'wavelength:value' pairs separated by commas, got '{_shown(entry)}'",
+                            "value",
+                        )
                     wavelengths.append(self.parse_number(parts[0], element, "value"))
                     values.append(self.parse_number(parts[1], element, "value"))
                 return {"values": self.pairs(element, wavelengths, values, "value")}
@@ -489,14 +543,16 @@ class MitsubaImporter:
             temperature_element = self.child(properties, "temperature", element)
             temperature = self.number(temperature_element)
             if not temperature > 0.0:
-                raise self.fail(temperature_element, f"a black body's temperature must be > 0 K, got {temperature:g}",
-                                "value")
+                raise self.fail(
+                    temperature_element, f"a black body's temperature must be > 0 K, got {temperature:g}", "value"
+                )
             # Mitsuba's black body is Planck's law in W/(m² sr nm); spectrace's is normalised to a peak of 1.
             with np.errstate(all="ignore"):
                 peak = float(planck_radiance(np.array([WIEN_DISPLACEMENT / temperature * 1e9]), temperature)[0])
             if not (math.isfinite(peak) and peak > 0.0):
-                raise self.fail(temperature_element, f"a black body of {temperature:g} K has no finite radiance",
-                                "value")
+                raise self.fail(
+                    temperature_element, f"a black body of {temperature:g} K has no finite radiance", "value"
+                )
             return {"blackbody": temperature, "scale": peak}
         if kind == "d65":
             from spectrace.spectral.colorimetry import spectrum_to_xyz
@@ -537,8 +593,9 @@ class MitsubaImporter:
         try:
             lines = data.decode("utf-8").splitlines()
         except UnicodeDecodeError as error:
-            raise self.fail(element, f"spectrum file '{_shown(name)}' is not UTF-8 text (byte {error.start})",
-                            "filename") from None
+            raise self.fail(
+                element, f"spectrum file '{_shown(name)}' is not UTF-8 text (byte {error.start})", "filename"
+            ) from None
         wavelengths, values = [], []
         for number, line in enumerate(lines, start=1):
             text = line.split("#", 1)[0].strip()
@@ -546,12 +603,16 @@ class MitsubaImporter:
                 continue
             parts = text.split()
             if len(parts) != 2 or not all(_NUMBER.fullmatch(part) for part in parts):
-                raise self.fail(element, f"line {number} of '{_shown(name)}': expected 'wavelength value', got "
-                                         f"'{_shown(text)}'", "filename")
+                raise self.fail(
+                    element,
+                    f"line {number} of '{_shown(name)}': expected 'wavelength value', got '{_shown(text)}'",
+                    "filename",
+                )
             pair = [float(part) for part in parts]
             if not all(abs(value) <= _FLOAT32_MAX for value in pair):
-                raise self.fail(element, f"line {number} of '{_shown(name)}': beyond the float32 range (±3.4e38)",
-                                "filename")
+                raise self.fail(
+                    element, f"line {number} of '{_shown(name)}': beyond the float32 range (±3.4e38)", "filename"
+                )
             wavelengths.append(pair[0])
             values.append(pair[1])
         if not wavelengths:
@@ -624,8 +685,10 @@ class MitsubaImporter:
             alpha = 0.1
         distribution = self.text(properties["distribution"]) if "distribution" in properties else "beckmann"
         if distribution != "ggx":
-            self.notes.append(f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
-                              f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)")
+            self.notes.append(
+                f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
+                f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)"
+            )
         if not ROUGHNESS_RANGE.contains(alpha):
             raise self.fail(bsdf, f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha:g}")
         return alpha
@@ -638,8 +701,9 @@ class MitsubaImporter:
         if element.tag == "string":
             name = self.text(element)
             if name.lower() not in _NAMED_IOR:
-                raise self.fail(element, f"unknown {key} '{_shown(name)}' (Mitsuba names: {', '.join(_NAMED_IOR)})",
-                                "value")
+                raise self.fail(
+                    element, f"unknown {key} '{_shown(name)}' (Mitsuba names: {', '.join(_NAMED_IOR)})", "value"
+                )
             return _NAMED_IOR[name.lower()]
         value = self.number(element)
         if not value > 0.0:
@@ -665,8 +729,9 @@ class MitsubaImporter:
             except (OSError, ValueError):  # e.g. a name too long for the file system
                 found = False
             if not found:
-                raise self.fail(filename, f"mesh file '{_shown(str(mesh_path), 200)}' does not exist or is not a "
-                                          "file", "value")
+                raise self.fail(
+                    filename, f"mesh file '{_shown(str(mesh_path), 200)}' does not exist or is not a file", "value"
+                )
             table |= {"type": "mesh", "file": _relative_path(mesh_path, self.toml_folder)}
         else:
             table["type"] = kind
@@ -728,8 +793,10 @@ class MitsubaImporter:
                     self.unsupported_plugin(film, f" with {_shown(key)}")
             rfilter = film_properties.get("rfilter")
             if rfilter is not None and rfilter.get("type") != "box":
-                self.notes.append(f"line {rfilter.line}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
-                                  "not imported: spectrace averages the samples inside each pixel (a box filter)")
+                self.notes.append(
+                    f"line {rfilter.line}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
+                    "not imported: spectrace averages the samples inside each pixel (a box filter)"
+                )
         data["film"] = {"width": width, "height": height}
         matrix = self.to_world(properties)
         linear = matrix[:3, :3]
@@ -757,8 +824,10 @@ class MitsubaImporter:
             if "seed" in sampler_properties:
                 data["sampler"]["seed"] = self.integer(sampler_properties["seed"], low=0)
             if self.kind(sampler) != "independent":
-                self.notes.append(f"line {sampler.line}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
-                                  "spectrace uses its own sampler (same sample count)")
+                self.notes.append(
+                    f"line {sampler.line}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
+                    "spectrace uses its own sampler (same sample count)"
+                )
 
     def fov_x(self, properties: dict[str, Element], aspect: float, element: Element) -> float:
         """Horizontal field of view in degrees, as Mitsuba derives it from fov + fov_axis or focal_length."""
@@ -786,8 +855,11 @@ class MitsubaImporter:
         elif axis == "diagonal":
             tan_half *= aspect / math.hypot(aspect, 1.0)
         elif axis != "x":
-            raise self.fail(properties["fov_axis"], f"unknown fov_axis '{_shown(axis)}' (x, y, diagonal, smaller or "
-                                                    "larger)", "value")
+            raise self.fail(
+                properties["fov_axis"],
+                f"unknown fov_axis '{_shown(axis)}' (x, y, diagonal, smaller or larger)",
+                "value",
+            )
         return math.degrees(2.0 * math.atan(tan_half))
 
     def integrator(self, element: Element, data: dict) -> None:
@@ -803,8 +875,10 @@ class MitsubaImporter:
             settings["rr_depth"] = self.integer(properties["rr_depth"])
         if kind == "direct":
             settings["max_depth"] = 2
-            self.notes.append(f"line {element.line}: integrator 'direct' imported as path tracing with max_depth 2 "
-                              "(emitters seen directly and direct light)")
+            self.notes.append(
+                f"line {element.line}: integrator 'direct' imported as path tracing with max_depth 2 "
+                "(emitters seen directly and direct light)"
+            )
         elif kind.startswith("volpath"):
             self.notes.append(f"line {element.line}: integrator '{kind}' imported as 'path' (spectrace has no media)")
         data["integrator"] = settings
@@ -843,16 +917,21 @@ class MitsubaImporter:
                 self.unsupported_plugin(child)
         if self.unsupported:
             supported = "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
-            raise SpectraceError(f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports "
-                                 f"{supported})", where=str(self.xml_path))
+            raise SpectraceError(
+                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported})",
+                where=str(self.xml_path),
+            )
         environments = [self.origins[f"lights[{i}]"] for i, light in enumerate(lights) if light["type"] == "constant"]
         if len(environments) > 1:
             raise self.fail(environments[1], "a second constant emitter; spectrace takes one environment light")
         data["materials"] = self.materials
         data["shapes"] = shapes
         data["lights"] = lights
-        return {key: data[key] for key in ("camera", "film", "integrator", "sampler", "materials", "shapes", "lights")
-                if key in data and data[key] != []}
+        return {
+            key: data[key]
+            for key in ("camera", "film", "integrator", "sampler", "materials", "shapes", "lights")
+            if key in data and data[key] != []
+        }
 
     def _collect_ids(self, root: Element) -> None:
         pending = [root]
@@ -866,14 +945,18 @@ class MitsubaImporter:
     def imported_error(self, error: SpectraceError, toml_path: Path) -> SpectraceError:
         """A loader's complaint about the imported TOML, told at the XML element the value came from."""
         where = error.where or ""
-        key = where[len(str(toml_path)) + 2:] if where.startswith(f"{toml_path}: ") else ""
-        matches = [prefix for prefix in self.origins
-                   if key == prefix or key.startswith(prefix + ".") or key.startswith(prefix + "[")]
+        key = where[len(str(toml_path)) + 2 :] if where.startswith(f"{toml_path}: ") else ""
+        matches = [
+            prefix
+            for prefix in self.origins
+            if key == prefix or key.startswith(prefix + ".") or key.startswith(prefix + "[")
+        ]
         element = self.origins[max(matches, key=len)] if matches else None
         detail = f" (imported as {key})" if key else ""
         if element is None:
-            return SpectraceError(f"the imported scene does not load: {error.message}{detail}",
-                                  where=str(self.xml_path))
+            return SpectraceError(
+                f"the imported scene does not load: {error.message}{detail}", where=str(self.xml_path)
+            )
         return self.fail(element, f"{error.message}{detail}")
 
 
@@ -918,8 +1001,9 @@ def check_output_path(toml_path: Path, xml_path: Path | None = None) -> None:
 # ---------------------------------------------------------------- public API
 
 
-def mitsuba_scene_data(xml_path: str | Path, toml_folder: str | Path | None = None,
-                       parameters: dict[str, str] | None = None) -> tuple[dict, list[str]]:
+def mitsuba_scene_data(
+    xml_path: str | Path, toml_folder: str | Path | None = None, parameters: dict[str, str] | None = None
+) -> tuple[dict, list[str]]:
     """(scene data in the TOML format's structure, notes) for a Mitsuba 3 XML scene. Mesh paths are written relative
     to `toml_folder` (default: the XML's folder). `parameters` set `$name` values, as `mitsuba -D name=value`.
     Raises SpectraceError naming every unsupported plugin."""
@@ -931,8 +1015,7 @@ def mitsuba_scene_data(xml_path: str | Path, toml_folder: str | Path | None = No
         raise _one_line(error) from None
 
 
-def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None
-                   ) -> list[str]:
+def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None) -> list[str]:
     """Write the spectrace TOML scene for a Mitsuba 3 XML scene and check that it loads; returns the notes.
 
     The output is checked first (a folder, a read-only place) and replaced only by a complete TOML that loads: a
@@ -946,8 +1029,12 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
     try:
         data = importer.run(parse_xml(xml_path))
-        header = "\n".join([f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by "
-                             "`spectrace import-mitsuba`.", *(f"note: {note}" for note in importer.notes)])
+        header = "\n".join(
+            [
+                f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by `spectrace import-mitsuba`.",
+                *(f"note: {note}" for note in importer.notes),
+            ]
+        )
         text = dumps(data, header=header)
 
         def write_and_check(temp: Path) -> None:

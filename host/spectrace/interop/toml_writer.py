@@ -79,4 +79,5 @@ def dumps(data: dict, header: str = "") -> str:
 
 def _is_section(value) -> bool:
     return (isinstance(value, dict) and value != {}) or (
-        isinstance(value, list) and bool(value) and all(isinstance(item, dict) for item in value))
+        isinstance(value, list) and bool(value) and all(isinstance(item, dict) for item in value)
+    )

@@ -22,8 +22,14 @@ def parse_spectral_channel(name: str) -> float | None:
     return float(match.group(1).replace(",", ".")) if match else None
 
 
-def write_exr(path: Path, linear_srgb: np.ndarray, xyz: np.ndarray | None, metadata: dict[str, str],
-              spectral=None, attributes: dict | None = None) -> None:
+def write_exr(
+    path: Path,
+    linear_srgb: np.ndarray,
+    xyz: np.ndarray | None,
+    metadata: dict[str, str],
+    spectral=None,
+    attributes: dict | None = None,
+) -> None:
     """spectral: SpectralBands (band-averaged radiance) written as one S0 channel per band centre, with the
     layout's attributes (spectralLayoutVersion, emissiveUnits, polarisationHandedness). attributes: standard
     header attributes, e.g. "chromaticities" when the RGB channels are not linear sRGB."""
@@ -33,9 +39,12 @@ def write_exr(path: Path, linear_srgb: np.ndarray, xyz: np.ndarray | None, metad
         for i, centre in enumerate(spectral.centres_nm):
             channels[spectral_channel_name(centre)] = np.ascontiguousarray(spectral.radiance[..., i], np.float32)
         # Values are spectral radiance per nm; the unit string follows the layout's reference files.
-        header_extra = {"spectralLayoutVersion": "1.0", "emissiveUnits": "W.m^-2.sr^-1",
-                        "polarisationHandedness": "right",
-                        "spectrace:spectral_band_edges_nm": ",".join(f"{e:g}" for e in spectral.edges_nm)}
+        header_extra = {
+            "spectralLayoutVersion": "1.0",
+            "emissiveUnits": "W.m^-2.sr^-1",
+            "polarisationHandedness": "right",
+            "spectrace:spectral_band_edges_nm": ",".join(f"{e:g}" for e in spectral.edges_nm),
+        }
     if xyz is not None:
         for i, name in enumerate("XYZ"):
             channels[name] = np.ascontiguousarray(xyz[..., i], dtype=np.float32)
@@ -74,9 +83,7 @@ def read_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
 def read_spectral_exr(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """(wavelengths_nm (bins,), radiance (height, width, bins)) from the S0 channels of a spectral EXR."""
     channels, _ = read_exr(path)
-    bands = sorted((wavelength, name) for name in channels
-                   if (wavelength := parse_spectral_channel(name)) is not None)
+    bands = sorted((wavelength, name) for name in channels if (wavelength := parse_spectral_channel(name)) is not None)
     if not bands:
         raise ValueError(f"{path} has no spectral (S0.*nm) channels")
-    return (np.array([w for w, _ in bands]),
-            np.stack([channels[name] for _, name in bands], axis=-1))
+    return (np.array([w for w, _ in bands]), np.stack([channels[name] for _, name in bands], axis=-1))

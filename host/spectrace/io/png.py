@@ -9,8 +9,9 @@ from PIL.PngImagePlugin import PngInfo
 from spectrace.io.atomic import write_atomically
 
 
-def write_png(path: Path, encoded_srgb: np.ndarray, metadata: dict[str, str],
-              chunks: dict[bytes, bytes] | None = None) -> None:
+def write_png(
+    path: Path, encoded_srgb: np.ndarray, metadata: dict[str, str], chunks: dict[bytes, bytes] | None = None
+) -> None:
     """chunks: extra PNG chunks by type (e.g. b"cICP" naming a colour space other than sRGB), before the pixels."""
     pixels = np.clip(np.rint(np.clip(encoded_srgb, 0.0, 1.0) * 255.0), 0, 255).astype(np.uint8)
     info = PngInfo()

@@ -12,6 +12,8 @@ it is on a shape) or MITSUBA_NONE, and `to_mitsuba` where the export has one.
 from spectrace.errors import SpectraceError
 from spectrace.lights import area, constant, distant, envmap, point, spot
 
+__all__ = ["LIGHTS", "area", "constant", "distant", "envmap", "point", "spot"]
+
 # Scene-file `type` -> module, in the order the schema lists them.
 LIGHTS = {m.NAME: m for m in (point, spot, distant, constant, envmap)}
 _BY_MODEL = {m.MODEL: m for m in LIGHTS.values()}

@@ -6,17 +6,22 @@ from typing import Any
 
 import numpy as np
 
+from spectrace.engine.device_types import LIGHT_TRIANGLE
 from spectrace.lights.base import LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter
-from spectrace.engine.device_types import LIGHT_TRIANGLE
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "area"
 MITSUBA_PLUGINS = ("area",)  # on a shape only
 PARAMETERS = (
     Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="times scale"),
-    Parameter("two_sided", "bool", "", False,
-              doc="emit on both faces; by default only on the side the triangles' winding faces"),
+    Parameter(
+        "two_sided",
+        "bool",
+        "",
+        False,
+        doc="emit on both faces; by default only on the side the triangles' winding faces",
+    ),
 )
 
 
@@ -39,8 +44,9 @@ class AreaEmitter:
 MODEL = AreaEmitter
 
 
-def write_rows(emitters: list[AreaEmitter], triangle_emitter: np.ndarray, areas: np.ndarray,
-               out: LightRows) -> np.ndarray:
+def write_rows(
+    emitters: list[AreaEmitter], triangle_emitter: np.ndarray, areas: np.ndarray, out: LightRows
+) -> np.ndarray:
     """One row per emitting triangle of non-zero area (triangle_emitter: each triangle's index into `emitters`,
     or -1); returns those triangles' indices, in row order."""
     emitting = np.flatnonzero((triangle_emitter >= 0) & (areas > 0))
@@ -51,15 +57,28 @@ def write_rows(emitters: list[AreaEmitter], triangle_emitter: np.ndarray, areas:
         else:
             basis = [out.table.add(p) for p in e.image.primaries]
             height, width = e.image.drive.shape[:2]
-            emitter_rows.append({"spectrum_offset": basis[0], "texel_offset": out.add_texels(e.image.drive),
-                                 "map_fields": (basis[1], basis[2], width, height)})
+            emitter_rows.append(
+                {
+                    "spectrum_offset": basis[0],
+                    "texel_offset": out.add_texels(e.image.drive),
+                    "map_fields": (basis[1], basis[2], width, height),
+                }
+            )
     for t in emitting:
         e = emitters[triangle_emitter[t]]
         fields = emitter_rows[triangle_emitter[t]]
-        out.add(light_row(LIGHT_TRIANGLE, fields["spectrum_offset"], triangle=int(t), area=areas[t],
-                          two_sided=e.two_sided, map_fields=fields.get("map_fields", (0, 0, 0, 0)),
-                          texel_offset=fields.get("texel_offset", 0)),
-                np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0))
+        out.add(
+            light_row(
+                LIGHT_TRIANGLE,
+                fields["spectrum_offset"],
+                triangle=int(t),
+                area=areas[t],
+                two_sided=e.two_sided,
+                map_fields=fields.get("map_fields", (0, 0, 0, 0)),
+                texel_offset=fields.get("texel_offset", 0),
+            ),
+            np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0),
+        )
     return emitting
 
 

@@ -6,13 +6,39 @@ from spectrace.errors import SpectraceError
 from spectrace.spectral.table import SpectrumTable
 
 
-def light_row(light_type: int, spectrum_offset: int, *, triangle: int = -1, area: float = 0.0,
-              two_sided: bool = False, position=(0.0, 0.0, 0.0), direction=(0.0, 0.0, 1.0), scale: float = 1.0,
-              cos_falloff_start: float = 1.0, cos_cutoff: float = 1.0, map_fields=(0, 0, 0, 0),
-              texel_offset: int = 0) -> tuple:
+def light_row(
+    light_type: int,
+    spectrum_offset: int,
+    *,
+    triangle: int = -1,
+    area: float = 0.0,
+    two_sided: bool = False,
+    position=(0.0, 0.0, 0.0),
+    direction=(0.0, 0.0, 1.0),
+    scale: float = 1.0,
+    cos_falloff_start: float = 1.0,
+    cos_cutoff: float = 1.0,
+    map_fields=(0, 0, 0, 0),
+    texel_offset: int = 0,
+) -> tuple:
     """One Light row as a tuple in LIGHT_DTYPE's field order; pmf is filled in once every light's power is known."""
-    return ((*position, 1.0), (*direction, 0.0), light_type, triangle, spectrum_offset, scale, 0.0, area,
-            int(two_sided), cos_falloff_start, cos_cutoff, *map_fields, texel_offset, 0, 0)
+    return (
+        (*position, 1.0),
+        (*direction, 0.0),
+        light_type,
+        triangle,
+        spectrum_offset,
+        scale,
+        0.0,
+        area,
+        int(two_sided),
+        cos_falloff_start,
+        cos_cutoff,
+        *map_fields,
+        texel_offset,
+        0,
+        0,
+    )
 
 
 class LightRows:
@@ -43,7 +69,9 @@ class LightRows:
         return offset
 
 
-def unit_direction(vector, where: str | None, message: str = "direction must not be zero") -> tuple[float, float, float]:
+def unit_direction(
+    vector, where: str | None, message: str = "direction must not be zero"
+) -> tuple[float, float, float]:
     v = np.asarray(vector, float)
     norm = np.linalg.norm(v)
     if not norm > 0:

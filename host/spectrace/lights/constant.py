@@ -4,9 +4,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.engine.device_types import LIGHT_ENVIRONMENT
 from spectrace.lights.base import LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter
-from spectrace.engine.device_types import LIGHT_ENVIRONMENT
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "constant"
@@ -30,13 +30,19 @@ def from_spec(spec, resolver, key: str) -> ConstantEnvironment:
 
 
 def write_rows(light: ConstantEnvironment, out: LightRows) -> None:
-    out.add(light_row(LIGHT_ENVIRONMENT, out.table.add(light.radiance)),
-            4.0 * np.pi**2 * out.scene_radius**2 * light.radiance.mean(), environment=True)
+    out.add(
+        light_row(LIGHT_ENVIRONMENT, out.table.add(light.radiance)),
+        4.0 * np.pi**2 * out.scene_radius**2 * light.radiance.mean(),
+        environment=True,
+    )
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
-    radiance = (importer.spectrum(properties["radiance"], "radiance") if "radiance" in properties
-                else importer.default_emission())
+    radiance = (
+        importer.spectrum(properties["radiance"], "radiance")
+        if "radiance" in properties
+        else importer.default_emission()
+    )
     return None if radiance is None else {"type": "constant", "radiance": radiance}
 
 

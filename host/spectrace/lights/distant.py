@@ -4,9 +4,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.engine.device_types import LIGHT_DISTANT
 from spectrace.lights.base import LightRows, light_row, unit_direction
 from spectrace.materials.parameters import REQUIRED, Parameter
-from spectrace.engine.device_types import LIGHT_DISTANT
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "distant"
@@ -36,20 +36,31 @@ def from_spec(spec, resolver, key: str) -> DistantLight:
 
 def write_rows(light: DistantLight, out: LightRows) -> None:
     # The flux through the disc the scene's bounding sphere shows the light.
-    out.add(light_row(LIGHT_DISTANT, out.table.add(light.irradiance), direction=light.direction),
-            np.pi * out.scene_radius**2 * light.irradiance.mean())
+    out.add(
+        light_row(LIGHT_DISTANT, out.table.add(light.irradiance), direction=light.direction),
+        np.pi * out.scene_radius**2 * light.irradiance.mean(),
+    )
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
-    direction = (importer.vector(properties["direction"]) if "direction" in properties
-                 else (to_world[:3, :3] @ [0.0, 0.0, 1.0]).tolist())
+    direction = (
+        importer.vector(properties["direction"])
+        if "direction" in properties
+        else (to_world[:3, :3] @ [0.0, 0.0, 1.0]).tolist()
+    )
     if not any(direction):
         raise importer.fail(properties.get("direction", emitter), "the direction must not be zero")
-    irradiance = (importer.spectrum(properties["irradiance"], "irradiance") if "irradiance" in properties
-                  else importer.default_emission())
+    irradiance = (
+        importer.spectrum(properties["irradiance"], "irradiance")
+        if "irradiance" in properties
+        else importer.default_emission()
+    )
     return None if irradiance is None else {"type": "distant", "direction": direction, "irradiance": irradiance}
 
 
 def to_mitsuba(light: DistantLight, exporter) -> dict:
-    return {"type": "directional", "direction": list(light.direction),
-            "irradiance": exporter.spectrum(light.irradiance)}
+    return {
+        "type": "directional",
+        "direction": list(light.direction),
+        "irradiance": exporter.spectrum(light.irradiance),
+    }

@@ -1,14 +1,14 @@
-"""`envmap`: an environment from a latitude-longitude image, importance-sampled by luminance (kernels/environment.cl).
-"""
+"""`envmap`: an environment from a latitude-longitude image, importance-sampled by luminance
+(kernels/environment.cl)."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.engine.device_types import LIGHT_ENVIRONMENT_MAP
 from spectrace.io.images import read_environment_map
 from spectrace.lights.base import LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
-from spectrace.engine.device_types import LIGHT_ENVIRONMENT_MAP
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 
@@ -36,8 +36,7 @@ MODEL = EnvironmentMap
 
 
 def from_spec(spec, resolver, key: str) -> EnvironmentMap:
-    return EnvironmentMap(read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file")),
-                          spec.scale)
+    return EnvironmentMap(read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file")), spec.scale)
 
 
 def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -55,8 +54,9 @@ def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, flo
     row_mass = weights.sum(axis=1)
     row_cdf = np.zeros((height, width + 1))
     row_cdf[:, 1:] = np.cumsum(weights, axis=1)
-    row_cdf = np.divide(row_cdf, row_cdf[:, -1:], out=np.tile(np.linspace(0, 1, width + 1), (height, 1)),
-                        where=row_cdf[:, -1:] > 0)
+    row_cdf = np.divide(
+        row_cdf, row_cdf[:, -1:], out=np.tile(np.linspace(0, 1, width + 1), (height, 1)), where=row_cdf[:, -1:] > 0
+    )
     marginal = np.concatenate([[0.0], np.cumsum(row_mass)]) / row_mass.sum()
     marginal[-1] = 1.0
     row_cdf[:, -1] = 1.0
@@ -67,6 +67,14 @@ def write_rows(light: EnvironmentMap, out: LightRows) -> None:
     map_texels, out.map_cdf, mean_luminance = environment_map_tables(light.rgb)
     basis = [out.table.add(uplift_illuminant(primary)) for primary in np.eye(3)]
     height, width = light.rgb.shape[:2]
-    out.add(light_row(LIGHT_ENVIRONMENT_MAP, basis[0], map_fields=(basis[1], basis[2], width, height),
-                      texel_offset=out.add_texels(map_texels[:, :3].reshape(height, width, 3)), scale=light.scale),
-            4.0 * np.pi**2 * out.scene_radius**2 * light.scale * mean_luminance, environment=True)
+    out.add(
+        light_row(
+            LIGHT_ENVIRONMENT_MAP,
+            basis[0],
+            map_fields=(basis[1], basis[2], width, height),
+            texel_offset=out.add_texels(map_texels[:, :3].reshape(height, width, 3)),
+            scale=light.scale,
+        ),
+        4.0 * np.pi**2 * out.scene_radius**2 * light.scale * mean_luminance,
+        environment=True,
+    )

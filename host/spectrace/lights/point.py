@@ -7,10 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.engine.device_types import LIGHT_POINT
 from spectrace.errors import SpectraceError
 from spectrace.lights.base import LightRows, check_position, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
-from spectrace.engine.device_types import LIGHT_POINT
 from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
 
@@ -21,10 +21,17 @@ FULL_SPHERE_SR = 4.0 * np.pi
 POSITION = Parameter("position", "vector", "scene units", REQUIRED, doc="where the light is")
 INTENSITY = Parameter("intensity", "spectrum", "W/(sr nm)", None, doc="I(λ); give either intensity or power")
 # Its range is reported with the other rules of intensity and power (source_problem), at the light's key.
-POWER = Parameter("power", "float", "W", None, Range(0.0), doc="total flux over 360–830 nm", api_name="power_w",
-                  schema_range=False)
-SPECTRUM = Parameter("spectrum", "spectrum", "", None, default_doc="equal energy",
-                     doc="the spectral shape of power, normalised so that ∫Φ(λ)dλ = power")
+POWER = Parameter(
+    "power", "float", "W", None, Range(0.0), doc="total flux over 360–830 nm", api_name="power_w", schema_range=False
+)
+SPECTRUM = Parameter(
+    "spectrum",
+    "spectrum",
+    "",
+    None,
+    default_doc="equal energy",
+    doc="the spectral shape of power, normalised so that ∫Φ(λ)dλ = power",
+)
 PARAMETERS = (POSITION, INTENSITY, POWER, SPECTRUM)
 
 
@@ -56,8 +63,13 @@ def check_spec(spec) -> None:
 SPEC_CHECKS = (check_spec,)
 
 
-def intensity_from_power(power: float, shape: Spectrum | None, solid_angle_sr: float, where: str | None = None,
-                         power_where: str | None = None) -> Spectrum:
+def intensity_from_power(
+    power: float,
+    shape: Spectrum | None,
+    solid_angle_sr: float,
+    where: str | None = None,
+    power_where: str | None = None,
+) -> Spectrum:
     """I(λ), W/(sr nm): `power` W spread over `solid_angle_sr` with the spectral shape `shape` (equal energy when
     None) normalised to ∫Φ(λ)dλ = power."""
     from spectrace.scene import limits  # the scene package imports the light modules
@@ -79,8 +91,9 @@ def spec_intensity(spec, resolver, key: str, solid_angle_sr: float) -> Spectrum:
     if spec.intensity is not None:
         return resolver.spectrum(spec.intensity, f"{key}.intensity", emission=True)
     shape = resolver.spectrum(spec.spectrum, f"{key}.spectrum", emission=True) if spec.spectrum is not None else None
-    return intensity_from_power(spec.power, shape, solid_angle_sr, where=resolver.where(key),
-                                power_where=resolver.where(f"{key}.power"))
+    return intensity_from_power(
+        spec.power, shape, solid_angle_sr, where=resolver.where(key), power_where=resolver.where(f"{key}.power")
+    )
 
 
 def from_spec(spec, resolver, key: str) -> PointLight:
@@ -89,14 +102,19 @@ def from_spec(spec, resolver, key: str) -> PointLight:
 
 
 def write_rows(light: PointLight, out: LightRows) -> None:
-    out.add(light_row(LIGHT_POINT, out.table.add(light.intensity), position=light.position),
-            4.0 * np.pi * light.intensity.mean())
+    out.add(
+        light_row(LIGHT_POINT, out.table.add(light.intensity), position=light.position),
+        4.0 * np.pi * light.intensity.mean(),
+    )
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     position = importer.vector(properties["position"]) if "position" in properties else to_world[:3, 3].tolist()
-    intensity = (importer.spectrum(properties["intensity"], "intensity") if "intensity" in properties
-                 else importer.default_emission())
+    intensity = (
+        importer.spectrum(properties["intensity"], "intensity")
+        if "intensity" in properties
+        else importer.default_emission()
+    )
     return None if intensity is None else {"type": "point", "position": position, "intensity": intensity}
 
 

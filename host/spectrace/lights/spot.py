@@ -4,24 +4,40 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.engine.device_types import LIGHT_SPOT
 from spectrace.errors import SpectraceError
 from spectrace.lights import point
 from spectrace.lights.base import LightRows, check_position, light_row, unit_direction
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
-from spectrace.engine.device_types import LIGHT_SPOT
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "spot"
 MITSUBA_PLUGINS = ()
 MITSUBA_NONE = "Mitsuba 3's spot falls off with a different profile: neither is imported or exported as the other"
 IS_ENVIRONMENT = False
-CUTOFF_ANGLE = Parameter("cutoff_angle", "float", "degrees", 30.0, Range(0.0, 90.0, low_open=True),
-                         doc="from the axis, where the intensity reaches 0")
-FALLOFF_START = Parameter("falloff_start", "float", "degrees", None, Range(0.0), default_doc="¾ of the cutoff",
-                          doc="from the axis, where the intensity starts to fall")
-PARAMETERS = (*point.PARAMETERS,
-              Parameter("target", "vector", "scene units", REQUIRED, doc="the point the axis goes through"),
-              CUTOFF_ANGLE, FALLOFF_START)
+CUTOFF_ANGLE = Parameter(
+    "cutoff_angle",
+    "float",
+    "degrees",
+    30.0,
+    Range(0.0, 90.0, low_open=True),
+    doc="from the axis, where the intensity reaches 0",
+)
+FALLOFF_START = Parameter(
+    "falloff_start",
+    "float",
+    "degrees",
+    None,
+    Range(0.0),
+    default_doc="¾ of the cutoff",
+    doc="from the axis, where the intensity starts to fall",
+)
+PARAMETERS = (
+    *point.PARAMETERS,
+    Parameter("target", "vector", "scene units", REQUIRED, doc="the point the axis goes through"),
+    CUTOFF_ANGLE,
+    FALLOFF_START,
+)
 
 
 def effective_solid_angle(cutoff_degrees: float, falloff_start_degrees: float) -> float:
@@ -51,8 +67,9 @@ MODEL = SpotLight
 SPEC_CHECKS = point.SPEC_CHECKS
 
 
-def cone(cutoff_angle: float, falloff_start: float | None, where_cutoff: str | None = None,
-         where_start: str | None = None) -> tuple[float, float]:
+def cone(
+    cutoff_angle: float, falloff_start: float | None, where_cutoff: str | None = None, where_start: str | None = None
+) -> tuple[float, float]:
     """(cutoff, falloff start) in degrees: the start defaults to ¾ of the cutoff and must not exceed it."""
     cutoff = CUTOFF_ANGLE.check(cutoff_angle, where_cutoff)
     start = 0.75 * cutoff if falloff_start is None else FALLOFF_START.check(falloff_start, where_start)
@@ -64,15 +81,25 @@ def cone(cutoff_angle: float, falloff_start: float | None, where_cutoff: str | N
 def from_spec(spec, resolver, key: str) -> SpotLight:
     check_position(spec.position, resolver.where(f"{key}.position"))
     direction = unit_direction(np.subtract(spec.target, spec.position), resolver.where(f"{key}.target"))
-    cutoff, start = cone(spec.cutoff_angle, spec.falloff_start, resolver.where(f"{key}.cutoff_angle"),
-                         resolver.where(f"{key}.falloff_start"))
+    cutoff, start = cone(
+        spec.cutoff_angle,
+        spec.falloff_start,
+        resolver.where(f"{key}.cutoff_angle"),
+        resolver.where(f"{key}.falloff_start"),
+    )
     intensity = point.spec_intensity(spec, resolver, key, effective_solid_angle(cutoff, start))
     return SpotLight(spec.position, direction, intensity, cutoff, start)
 
 
 def write_rows(light: SpotLight, out: LightRows) -> None:
-    out.add(light_row(LIGHT_SPOT, out.table.add(light.intensity), position=light.position,
-                      direction=light.direction,
-                      cos_falloff_start=np.cos(np.radians(light.falloff_start_degrees)),
-                      cos_cutoff=np.cos(np.radians(light.cutoff_degrees))),
-            light.effective_solid_angle() * light.intensity.mean())
+    out.add(
+        light_row(
+            LIGHT_SPOT,
+            out.table.add(light.intensity),
+            position=light.position,
+            direction=light.direction,
+            cos_falloff_start=np.cos(np.radians(light.falloff_start_degrees)),
+            cos_cutoff=np.cos(np.radians(light.cutoff_degrees)),
+        ),
+        light.effective_solid_angle() * light.intensity.mean(),
+    )

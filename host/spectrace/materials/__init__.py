@@ -13,9 +13,9 @@ Adding a BSDF: its module here, one entry in MATERIALS, its kernel file and case
 
 import numpy as np
 
+from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM
 from spectrace.errors import SpectraceError
 from spectrace.materials import conductor, dielectric, diffuse, mirror, plastic, retroreflector
-from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM
 from spectrace.spectral.table import SpectrumTable
 
 # Scene-file `type` -> module, in the order the schema lists them.

@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
 from spectrace.engine.device_types import MATERIAL_CONDUCTOR
+from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
@@ -17,17 +17,37 @@ MITSUBA_PLUGINS = ("conductor", "roughconductor")
 MITSUBA_METALS = ("Au", "Ag", "Cu", "Al")
 ROUGHNESS = roughness(0.0, "GGX α; 0 = polished")
 PARAMETERS = (
-    Parameter("metal", "metal", default=None, default_doc="—",
-              type_doc=", ".join(f'`"{m}"`' for m in METALS[:-1]) + f' or `"{METALS[-1]}"`',
-              doc="measured complex index of refraction η + ik (`spectra/metals/`); give `metal` or both `eta` and "
-                  "`k`"),
-    Parameter("eta", "spectrum", "dimensionless", default=None, range=Range(0.0, low_open=True),
-              doc="real part η(λ) of the metal's index of refraction relative to the outside"),
-    Parameter("k", "spectrum", "dimensionless", default=None, range=Range(0.0),
-              doc="imaginary part k(λ) (extinction coefficient)"),
+    Parameter(
+        "metal",
+        "metal",
+        default=None,
+        default_doc="—",
+        type_doc=", ".join(f'`"{m}"`' for m in METALS[:-1]) + f' or `"{METALS[-1]}"`',
+        doc="measured complex index of refraction η + ik (`spectra/metals/`); give `metal` or both `eta` and `k`",
+    ),
+    Parameter(
+        "eta",
+        "spectrum",
+        "dimensionless",
+        default=None,
+        range=Range(0.0, low_open=True),
+        doc="real part η(λ) of the metal's index of refraction relative to the outside",
+    ),
+    Parameter(
+        "k",
+        "spectrum",
+        "dimensionless",
+        default=None,
+        range=Range(0.0),
+        doc="imaginary part k(λ) (extinction coefficient)",
+    ),
     ROUGHNESS,
-    reflectance(None, "multiplies the Fresnel reflectance (an artistic control; physical metals leave it out)",
-                name="specular_tint", default_doc="none (1)"),
+    reflectance(
+        None,
+        "multiplies the Fresnel reflectance (an artistic control; physical metals leave it out)",
+        name="specular_tint",
+        default_doc="none (1)",
+    ),
 )
 
 
@@ -75,13 +95,17 @@ def from_spec(spec, resolver, key: str) -> ConductorMaterial:
     else:
         eta = resolver.optical_constant(spec.eta, f"{key}.eta", positive=True)
         k = resolver.optical_constant(spec.k, f"{key}.k", positive=False)
-    tint = (resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
-            if spec.specular_tint is not None else None)
+    tint = (
+        resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
+        if spec.specular_tint is not None
+        else None
+    )
     return ConductorMaterial(eta, k, roughness=spec.roughness, specular_tint=tint)
 
 
-def make(eta: Spectrum, k: Spectrum, roughness: float = ROUGHNESS.number_default,
-         specular_tint: Spectrum | None = None) -> ConductorMaterial:
+def make(
+    eta: Spectrum, k: Spectrum, roughness: float = ROUGHNESS.number_default, specular_tint: Spectrum | None = None
+) -> ConductorMaterial:
     return ConductorMaterial(eta, k, roughness=ROUGHNESS.check(roughness), specular_tint=specular_tint)
 
 
@@ -122,8 +146,9 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
                 return None
             return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
         if material not in MITSUBA_METALS:
-            importer.unsupported_plugin(bsdf, f" with material '{material}' (spectrace has "
-                                              f"{', '.join(MITSUBA_METALS)})")
+            importer.unsupported_plugin(
+                bsdf, f" with material '{material}' (spectrace has {', '.join(MITSUBA_METALS)})"
+            )
             return None
         table = {"type": "conductor", "metal": material}
     if roughness > 0.0:

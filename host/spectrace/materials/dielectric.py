@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
 from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
+from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
 from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
@@ -16,15 +16,25 @@ MITSUBA_PLUGINS = ("dielectric", "roughdielectric")
 ROUGHNESS = roughness(0.0, "GGX α; 0 = polished glass")
 # A number, a glass name or Sellmeier/Cauchy coefficients: spectral.glasses.index_of_refraction checks the
 # range over the whole grid.
-IOR = Parameter("ior", "ior", "dimensionless", default=1.5, range=Range(*IOR_RANGE),
-                type_doc=f"see below, dimensionless, in {Range(*IOR_RANGE)} over 360–830 nm",
-                doc="index of refraction of the interior relative to the exterior, which is air (n = 1); a dispersive "
-                    "`ior` splits white light")
+IOR = Parameter(
+    "ior",
+    "ior",
+    "dimensionless",
+    default=1.5,
+    range=Range(*IOR_RANGE),
+    type_doc=f"see below, dimensionless, in {Range(*IOR_RANGE)} over 360–830 nm",
+    doc="index of refraction of the interior relative to the exterior, which is air (n = 1); a dispersive "
+    "`ior` splits white light",
+)
 PARAMETERS = (
     IOR,
     ROUGHNESS,
-    reflectance(None, "multiplies both reflection and transmission (an artistic control; clear glass leaves it out)",
-                name="specular_tint", default_doc="none (1)"),
+    reflectance(
+        None,
+        "multiplies both reflection and transmission (an artistic control; clear glass leaves it out)",
+        name="specular_tint",
+        default_doc="none (1)",
+    ),
 )
 
 
@@ -54,16 +64,24 @@ MODEL = DielectricMaterial
 
 def from_spec(spec, resolver, key: str) -> DielectricMaterial:
     ior = spec.ior if isinstance(spec.ior, (float, str)) else spec.ior.model_dump()
-    tint = (resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
-            if spec.specular_tint is not None else None)
-    return DielectricMaterial(index_of_refraction(ior, where=resolver.where(f"{key}.ior")),
-                              roughness=spec.roughness, specular_tint=tint)
+    tint = (
+        resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
+        if spec.specular_tint is not None
+        else None
+    )
+    return DielectricMaterial(
+        index_of_refraction(ior, where=resolver.where(f"{key}.ior")), roughness=spec.roughness, specular_tint=tint
+    )
 
 
-def make(ior: float | str | dict = IOR.number_default, roughness: float = ROUGHNESS.number_default,
-         specular_tint: Spectrum | None = None) -> DielectricMaterial:
-    return DielectricMaterial(index_of_refraction(ior, where="ior"), roughness=ROUGHNESS.check(roughness),
-                              specular_tint=specular_tint)
+def make(
+    ior: float | str | dict = IOR.number_default,
+    roughness: float = ROUGHNESS.number_default,
+    specular_tint: Spectrum | None = None,
+) -> DielectricMaterial:
+    return DielectricMaterial(
+        index_of_refraction(ior, where="ior"), roughness=ROUGHNESS.check(roughness), specular_tint=specular_tint
+    )
 
 
 def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
@@ -88,16 +106,20 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's dielectrics have one constant index per side (default bk7 inside, air outside): spectrace's ior
     is their ratio. One tint on both lobes stands for equal specular_reflectance and specular_transmittance."""
     named = importer.NAMED_IOR
-    ior = importer.ior(bsdf, properties, "int_ior", named["bk7"]) / importer.ior(bsdf, properties, "ext_ior",
-                                                                                   named["air"])
+    ior = importer.ior(bsdf, properties, "int_ior", named["bk7"]) / importer.ior(
+        bsdf, properties, "ext_ior", named["air"]
+    )
     if ior < IOR_RANGE[0]:
         importer.unsupported_plugin(bsdf, " with int_ior not above ext_ior (flip the shape's normals instead)")
         return None
     roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughdielectric" else 0.0
     if roughness is None:
         return None
-    tints = {key: importer.spectrum(properties[key], key)
-             for key in ("specular_reflectance", "specular_transmittance") if key in properties}
+    tints = {
+        key: importer.spectrum(properties[key], key)
+        for key in ("specular_reflectance", "specular_transmittance")
+        if key in properties
+    }
     if None in tints.values():
         return None
     if len(tints) == 1 or (len(tints) == 2 and tints["specular_reflectance"] != tints["specular_transmittance"]):

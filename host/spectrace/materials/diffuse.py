@@ -4,8 +4,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.materials.parameters import REQUIRED, reflectance
 from spectrace.engine.device_types import MATERIAL_DIFFUSE
+from spectrace.materials.parameters import REQUIRED, reflectance
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 

@@ -4,14 +4,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.materials.parameters import reflectance
 from spectrace.engine.device_types import MATERIAL_MIRROR
+from spectrace.materials.parameters import reflectance
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "mirror"
 MITSUBA_PLUGINS = ()
-MITSUBA_NONE = "Mitsuba 3's mirror is a conductor of material \"none\", which conductor.py imports as a mirror"
+MITSUBA_NONE = 'Mitsuba 3\'s mirror is a conductor of material "none", which conductor.py imports as a mirror'
 PARAMETERS = (reflectance(1.0, "perfect specular reflection scaled by R(λ)"),)
 
 

@@ -94,8 +94,11 @@ class Parameter:
 
     def range_problem(self, value) -> str | None:
         """Why `value` is not a number within the range, or None."""
-        if not isinstance(value, bool) and isinstance(value, Real) and (
-                self.range is None or self.range.contains(float(value))):
+        if (
+            not isinstance(value, bool)
+            and isinstance(value, Real)
+            and (self.range is None or self.range.contains(float(value)))
+        ):
             return None
         if self.range is None:
             return f"{self.name} must be a number, got {value!r}"

@@ -5,16 +5,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.materials.parameters import REQUIRED, Parameter, Range, reflectance, roughness
 from spectrace.engine.device_types import IOR_CONSTANT, MATERIAL_PLASTIC
+from spectrace.materials.parameters import REQUIRED, Parameter, Range, reflectance, roughness
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "plastic"
 MITSUBA_PLUGINS = ("plastic", "roughplastic")
 # Above 4 the coat's hemispherical Fresnel average leaves the range its quadrature is exact for (docs/materials.md).
-IOR = Parameter("ior", "float", "dimensionless", default=1.5, range=Range(1.0, 4.0, low_open=True),
-                doc="index of refraction of the clear coat relative to the outside")
+IOR = Parameter(
+    "ior",
+    "float",
+    "dimensionless",
+    default=1.5,
+    range=Range(1.0, 4.0, low_open=True),
+    doc="index of refraction of the clear coat relative to the outside",
+)
 ROUGHNESS = roughness(0.0, "GGX α of the coat")
 PARAMETERS = (reflectance(REQUIRED, "albedo of the diffuse base under the coat"), IOR, ROUGHNESS)
 
@@ -36,11 +42,16 @@ MODEL = PlasticMaterial
 
 
 def from_spec(spec, resolver, key: str) -> PlasticMaterial:
-    return PlasticMaterial(resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False), ior=spec.ior,
-                           roughness=spec.roughness)
+    return PlasticMaterial(
+        resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False),
+        ior=spec.ior,
+        roughness=spec.roughness,
+    )
 
 
-def make(reflectance: Spectrum, ior: float = IOR.number_default, roughness: float = ROUGHNESS.number_default) -> PlasticMaterial:
+def make(
+    reflectance: Spectrum, ior: float = IOR.number_default, roughness: float = ROUGHNESS.number_default
+) -> PlasticMaterial:
     return PlasticMaterial(reflectance, ior=IOR.check(ior), roughness=ROUGHNESS.check(roughness))
 
 
@@ -53,8 +64,11 @@ def write_row(row: np.ndarray, material: PlasticMaterial, table: SpectrumTable) 
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
-    reflectance = (importer.spectrum(properties["diffuse_reflectance"], "diffuse_reflectance")
-                   if "diffuse_reflectance" in properties else {"value": 0.5})
+    reflectance = (
+        importer.spectrum(properties["diffuse_reflectance"], "diffuse_reflectance")
+        if "diffuse_reflectance" in properties
+        else {"value": 0.5}
+    )
     if reflectance is None:
         return None
     if "specular_reflectance" in properties:
@@ -67,15 +81,18 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         return None
     ior = importer.ior(bsdf, properties, "int_ior", 1.49) / importer.ior(bsdf, properties, "ext_ior", 1.000277)
     if IOR.range_problem(ior):
-        raise importer.fail(bsdf, f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in "
-                                  f"{IOR.range}")
+        raise importer.fail(
+            bsdf, f"int_ior / ext_ior = {ior:.4g}: spectrace's plastic needs a coat index in {IOR.range}"
+        )
     roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughplastic" else 0.0
     if roughness is None:
         return None
-    importer.notes.append(f"line {bsdf.line}: {bsdf.label()}: spectrace's plastic couples coat and base "
-                          "differently from Mitsuba's (an energy-conserving symmetric "
-                          "coupling instead of internal scattering; see docs/materials.md), so the brightness of "
-                          "its diffuse part differs")
+    importer.notes.append(
+        f"line {bsdf.line}: {bsdf.label()}: spectrace's plastic couples coat and base "
+        "differently from Mitsuba's (an energy-conserving symmetric "
+        "coupling instead of internal scattering; see docs/materials.md), so the brightness of "
+        "its diffuse part differs"
+    )
     table = {"type": "plastic", "reflectance": reflectance, "ior": round(ior, 6)}
     if roughness > 0.0:
         table["roughness"] = roughness

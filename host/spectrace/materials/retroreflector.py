@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.materials.parameters import SMOOTH_ALPHA, reflectance, roughness
 from spectrace.engine.device_types import MATERIAL_RETROREFLECTOR
+from spectrace.materials.parameters import SMOOTH_ALPHA, reflectance, roughness
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
@@ -36,8 +36,9 @@ MODEL = RetroreflectorMaterial
 
 
 def from_spec(spec, resolver, key: str) -> RetroreflectorMaterial:
-    return RetroreflectorMaterial(resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False),
-                                  roughness=spec.roughness)
+    return RetroreflectorMaterial(
+        resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False), roughness=spec.roughness
+    )
 
 
 def make(reflectance: Spectrum, roughness: float = ROUGHNESS.number_default) -> RetroreflectorMaterial:

@@ -7,8 +7,19 @@ lower layers (image readers, light modules) without pulling in the loader, which
 import importlib
 from pathlib import Path
 
-_MODEL_NAMES = ["Scene", "Camera", "Shape", "DiffuseMaterial", "MirrorMaterial", "ConductorMaterial", "PlasticMaterial",
-                "RetroreflectorMaterial", "DielectricMaterial", "AreaEmitter", "Medium"]
+_MODEL_NAMES = [
+    "Scene",
+    "Camera",
+    "Shape",
+    "DiffuseMaterial",
+    "MirrorMaterial",
+    "ConductorMaterial",
+    "PlasticMaterial",
+    "RetroreflectorMaterial",
+    "DielectricMaterial",
+    "AreaEmitter",
+    "Medium",
+]
 
 __all__ = ["load_scene", *_MODEL_NAMES]
 

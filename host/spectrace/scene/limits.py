@@ -75,9 +75,11 @@ def film_size_problem(width: int, height: int) -> str | None:
     if problem is None and width * height <= MAX_FILM_PIXELS:
         return None
     pixels = max(width, 0) * max(height, 0)
-    cost = (f"a {width}x{height} film ({pixels / 1e6:.1f} Mpixels) would need "
-            f"{format_bytes(pixels * DEVICE_BYTES_PER_PIXEL)} of device memory and about "
-            f"{format_bytes(pixels * HOST_BYTES_PER_PIXEL)} of host memory")
+    cost = (
+        f"a {width}x{height} film ({pixels / 1e6:.1f} Mpixels) would need "
+        f"{format_bytes(pixels * DEVICE_BYTES_PER_PIXEL)} of device memory and about "
+        f"{format_bytes(pixels * HOST_BYTES_PER_PIXEL)} of host memory"
+    )
     if problem is not None:
         return f"{problem}: {cost}"
     return f"{cost}; at most {MAX_FILM_PIXELS / 1e6:.1f} Mpixels are allowed (e.g. 16384x8192)"
@@ -88,10 +90,12 @@ def image_size_problem(width: int, height: int) -> str | None:
     pixels = width * height
     if pixels <= MAX_IMAGE_PIXELS:
         return None
-    return (f"a {width}x{height} image ({pixels / 1e6:.1f} Mpixels) would need about "
-            f"{format_bytes(pixels * IMAGE_HOST_BYTES_PER_PIXEL)} of host memory and "
-            f"{format_bytes(pixels * IMAGE_DEVICE_BYTES_PER_PIXEL)} of device memory; at most "
-            f"{MAX_IMAGE_PIXELS / 1e6:.1f} Mpixels are allowed (e.g. 16384x8192)")
+    return (
+        f"a {width}x{height} image ({pixels / 1e6:.1f} Mpixels) would need about "
+        f"{format_bytes(pixels * IMAGE_HOST_BYTES_PER_PIXEL)} of host memory and "
+        f"{format_bytes(pixels * IMAGE_DEVICE_BYTES_PER_PIXEL)} of device memory; at most "
+        f"{MAX_IMAGE_PIXELS / 1e6:.1f} Mpixels are allowed (e.g. 16384x8192)"
+    )
 
 
 def spp_problem(spp: int) -> str | None:
@@ -99,15 +103,17 @@ def spp_problem(spp: int) -> str | None:
     if spp < 1:
         return f"spp must be at least 1, got {spp}"
     if spp > MAX_SPP:
-        return (f"spp {spp} exceeds the limit of {MAX_SPP}: the film's 32-bit float sums stop gaining precision "
-                f"beyond it; average images rendered with different seeds instead")
+        return (
+            f"spp {spp} exceeds the limit of {MAX_SPP}: the film's 32-bit float sums stop gaining precision "
+            f"beyond it; average images rendered with different seeds instead"
+        )
     return None
 
 
 def seed_problem(seed: int) -> str | None:
     """Why `seed` cannot seed the kernels' samplers, or None."""
     if not 0 <= seed <= MAX_SEED:
-        return (f"seed must lie in 0..{MAX_SEED} (the kernels take it as a 32-bit signed integer), got {seed}")
+        return f"seed must lie in 0..{MAX_SEED} (the kernels take it as a 32-bit signed integer), got {seed}"
     return None
 
 
@@ -116,8 +122,10 @@ def max_depth_problem(depth: int, name: str = "max_depth") -> str | None:
     if depth == -1 or 1 <= depth <= MAX_DEPTH:
         return None
     if depth > MAX_DEPTH:
-        return (f"{name} must be at most {MAX_DEPTH} (the kernels take it as a 32-bit signed integer; "
-                f"-1 means unbounded), got {depth}")
+        return (
+            f"{name} must be at most {MAX_DEPTH} (the kernels take it as a 32-bit signed integer; "
+            f"-1 means unbounded), got {depth}"
+        )
     return f"{name} must be -1 (unbounded) or >= 1, got {depth}"
 
 
@@ -126,17 +134,25 @@ def exposure_problem(stops: float) -> str | None:
     if not np.isfinite(stops):
         return f"exposure must be a finite number of stops, got {stops}"
     if abs(stops) > MAX_EXPOSURE_STOPS:
-        return (f"exposure {stops:g} stops is beyond ±{MAX_EXPOSURE_STOPS:g}, where every output pixel would be 0 "
-                f"or infinite")
+        return (
+            f"exposure {stops:g} stops is beyond ±{MAX_EXPOSURE_STOPS:g}, where every output pixel would be 0 "
+            f"or infinite"
+        )
     return None
 
 
 def scene_settings_problem(scene) -> str | None:
     """Why a Scene's seed, depths or exposure cannot be used (for scenes built in Python), or None."""
-    return (seed_problem(scene.seed) or max_depth_problem(scene.max_depth)
-            or (f"rr_depth must lie in 1..{MAX_DEPTH}, got {scene.rr_depth}"
-                if not 1 <= scene.rr_depth <= MAX_DEPTH else None)
-            or exposure_problem(scene.exposure))
+    return (
+        seed_problem(scene.seed)
+        or max_depth_problem(scene.max_depth)
+        or (
+            f"rr_depth must lie in 1..{MAX_DEPTH}, got {scene.rr_depth}"
+            if not 1 <= scene.rr_depth <= MAX_DEPTH
+            else None
+        )
+        or exposure_problem(scene.exposure)
+    )
 
 
 def coordinates_problem(points: np.ndarray) -> str | None:
@@ -150,8 +166,10 @@ def coordinates_problem(points: np.ndarray) -> str | None:
         return f"{int((~finite).sum())} point(s) with NaN or infinite coordinates (first: point {first})"
     largest = float(np.abs(points).max())
     if largest > MAX_COORDINATE:
-        return (f"coordinates reaching {largest:.3g}, beyond ±{MAX_COORDINATE:.0e} scene units, where the device's "
-                f"32-bit ray/triangle arithmetic overflows (use larger units, e.g. km instead of m)")
+        return (
+            f"coordinates reaching {largest:.3g}, beyond ±{MAX_COORDINATE:.0e} scene units, where the device's "
+            f"32-bit ray/triangle arithmetic overflows (use larger units, e.g. km instead of m)"
+        )
     return None
 
 
@@ -159,8 +177,10 @@ def spectrum_magnitude_problem(values: np.ndarray) -> str | None:
     """Why a spectrum with these values would overflow on the device, or None."""
     largest = float(np.max(np.abs(values))) if np.size(values) else 0.0
     if largest > MAX_SPECTRUM_VALUE:
-        return (f"spectrum reaches {largest:.3g}, beyond {MAX_SPECTRUM_VALUE:.0e}, where the film's 32-bit sums "
-                f"would overflow (scale the scene's radiometric units down)")
+        return (
+            f"spectrum reaches {largest:.3g}, beyond {MAX_SPECTRUM_VALUE:.0e}, where the film's 32-bit sums "
+            f"would overflow (scale the scene's radiometric units down)"
+        )
     return None
 
 

@@ -23,8 +23,12 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
 from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
 
-_BUILTIN_SHAPES = {"rectangle": primitives.rectangle, "cube": primitives.cube, "sphere": primitives.sphere,
-                   "prism": primitives.prism}
+_BUILTIN_SHAPES = {
+    "rectangle": primitives.rectangle,
+    "cube": primitives.cube,
+    "sphere": primitives.sphere,
+    "prism": primitives.prism,
+}
 
 
 def key_path(location: tuple) -> str:
@@ -67,10 +71,13 @@ def _location_in_data(data: object, location: tuple, missing: bool) -> tuple:
     union members ('str', 'point', 'function-after[...]'), which the file does not contain."""
     kept, node = [], data
     for i, part in enumerate(location):
-        if isinstance(node, dict) and part in node:
-            kept.append(part)
-            node = node[part]
-        elif isinstance(node, list) and type(part) is int and 0 <= part < len(node):
+        if (
+            isinstance(node, dict)
+            and part in node
+            or isinstance(node, list)
+            and type(part) is int
+            and 0 <= part < len(node)
+        ):
             kept.append(part)
             node = node[part]
         elif missing and i == len(location) - 1:
@@ -129,18 +136,23 @@ def read_scene_spec(path: Path) -> schema.SceneSpec:
     except OSError as exc:
         raise SpectraceError(f"cannot read scene file ({exc.strerror})", where=str(path)) from None
     except UnicodeDecodeError as exc:
-        raise SpectraceError(f"not a UTF-8 text file (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})",
-                             where=str(path)) from None
+        raise SpectraceError(
+            f"not a UTF-8 text file (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})", where=str(path)
+        ) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SpectraceError(f"TOML syntax error: {exc}", where=str(path)) from None
     except RecursionError:  # tomllib parses arrays and inline tables recursively
-        raise SpectraceError(f"arrays or inline tables nested too deep to parse (a scene needs at most "
-                             f"{MAX_NESTING} levels)", where=str(path)) from None
+        raise SpectraceError(
+            f"arrays or inline tables nested too deep to parse (a scene needs at most {MAX_NESTING} levels)",
+            where=str(path),
+        ) from None
     if (location := _too_deep(data)) is not None:
-        raise SpectraceError(f"values nested more than {MAX_NESTING} levels deep (a scene needs only a few)",
-                             where=f"{path}: {key_path(location[:3])}")
+        raise SpectraceError(
+            f"values nested more than {MAX_NESTING} levels deep (a scene needs only a few)",
+            where=f"{path}: {key_path(location[:3])}",
+        )
     try:
         return schema.SceneSpec.model_validate(data)
     except ValidationError as exc:
@@ -200,7 +212,9 @@ class _Resolver:
         elif spec.rgb is not None:
             rgb = np.asarray(spec.rgb, float)
             if np.any(rgb < 0):
-                raise SpectraceError(f"rgb components must be >= 0, got {list(spec.rgb)}", where=self.where(f"{key}.rgb"))
+                raise SpectraceError(
+                    f"rgb components must be >= 0, got {list(spec.rgb)}", where=self.where(f"{key}.rgb")
+                )
             if emission:
                 result = uplift_illuminant(rgb)
             else:
@@ -243,12 +257,15 @@ class _Resolver:
         """η or k of a complex index of refraction: a spectrum without the reflectance bound (rgb has no meaning
         here); η must be > 0, k ≥ 0."""
         if spec.rgb is not None or spec.display is not None:
-            raise SpectraceError("an index of refraction needs a spectrum (value, values, spectrum or file), not a "
-                                 "colour", where=self.where(key))
+            raise SpectraceError(
+                "an index of refraction needs a spectrum (value, values, spectrum or file), not a colour",
+                where=self.where(key),
+            )
         result = self.spectrum(spec, key, emission=True)
         if positive and not result.values.min() > 0:
-            raise SpectraceError(f"must be > 0 at every wavelength (min {result.values.min():.4g})",
-                                 where=self.where(key))
+            raise SpectraceError(
+                f"must be > 0 at every wavelength (min {result.values.min():.4g})", where=self.where(key)
+            )
         return result
 
     def shapes(self, materials: dict[str, Material]) -> list[Shape]:
@@ -283,8 +300,15 @@ class _Resolver:
                     radiance = self.spectrum(s.emitter.radiance, radiance_key, emission=True)
                     emitter = AreaEmitter(radiance=radiance, two_sided=s.emitter.two_sided)
             interior = self.interior(s.interior, f"{key}.interior") if s.interior is not None else None
-            shapes.append(Shape(mesh=mesh, material=materials[s.material] if s.material is not None else None,
-                                emitter=emitter, name=s.name or f"{s.type}{i}", interior=interior))
+            shapes.append(
+                Shape(
+                    mesh=mesh,
+                    material=materials[s.material] if s.material is not None else None,
+                    emitter=emitter,
+                    name=s.name or f"{s.type}{i}",
+                    interior=interior,
+                )
+            )
         return shapes
 
     def interior(self, spec: schema.InteriorSpec, key: str) -> Medium:
@@ -292,11 +316,12 @@ class _Resolver:
         from spectrace.spectral.media_presets import preset_coefficients
 
         if spec.preset is not None:
-            sigma_a, sigma_s = preset_coefficients(spec.preset, spec.scale, spec.g,
-                                                   where=self.where(f"{key}.preset"))
+            sigma_a, sigma_s = preset_coefficients(spec.preset, spec.scale, spec.g, where=self.where(f"{key}.preset"))
         else:
-            sigma_a, sigma_s = (self.coefficient(given, f"{key}.{name}", spec.scale)
-                                for name, given in (("sigma_a", spec.sigma_a), ("sigma_s", spec.sigma_s)))
+            sigma_a, sigma_s = (
+                self.coefficient(given, f"{key}.{name}", spec.scale)
+                for name, given in (("sigma_a", spec.sigma_a), ("sigma_s", spec.sigma_s))
+            )
         for name, spectrum in (("sigma_a", sigma_a), ("sigma_s", sigma_s)):
             if problem := limits.spectrum_magnitude_problem(spectrum.values):
                 raise SpectraceError(problem, where=self.where(f"{key}.{name}"))
@@ -310,26 +335,26 @@ class _Resolver:
         if spec is None:
             return Spectrum.zeros()
         if spec.display is not None or spec.blackbody is not None:
-            raise SpectraceError("a medium coefficient takes rgb, value, spectrum, values or file",
-                                 where=self.where(key))
+            raise SpectraceError(
+                "a medium coefficient takes rgb, value, spectrum, values or file", where=self.where(key)
+            )
         if spec.rgb is not None:
             result = coefficient_spectrum(spec.rgb, where=self.where(f"{key}.rgb")).scaled(spec.scale)
         else:
             result = self.spectrum(spec, key, emission=True)
         return result.scaled(scale) if scale != 1.0 else result
 
-
     def display_spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
         """r·R(λ) + g·G(λ) + b·B(λ) of a display's primaries for the triple it shows (decoded by `encoding`). A
         display keeps its measured radiance unless white_luminance rescales it; relative displays need one."""
-        from spectrace.spectral.display_catalog import load_display
-        from spectrace.spectral.display_transfer import parse_encoding
 
         if not emission:
             raise SpectraceError("a display spectrum is an emission, not a reflectance", where=self.where(key))
         if spec.image is not None:
-            raise SpectraceError("a display showing an image is only possible as an area emitter's radiance",
-                                 where=self.where(f"{key}.image"))
+            raise SpectraceError(
+                "a display showing an image is only possible as an area emitter's radiance",
+                where=self.where(f"{key}.image"),
+            )
         display = self.display(spec, key)
         try:
             return display.emission(spec.rgb)
@@ -352,8 +377,10 @@ class _Resolver:
         if spec.white_luminance is not None:
             display = display.scaled_to_white_luminance(spec.white_luminance)
         elif not display.absolute:
-            raise SpectraceError(f"display '{display.name}' has relative data: give white_luminance (cd/m²)",
-                                 where=self.where(f"{key}.white_luminance"))
+            raise SpectraceError(
+                f"display '{display.name}' has relative data: give white_luminance (cd/m²)",
+                where=self.where(f"{key}.white_luminance"),
+            )
         return display.with_transfer(parse_encoding(spec.encoding, where=self.where(f"{key}.encoding")))
 
     def emitter_image(self, spec: schema.SpectrumSpec, key: str) -> EmitterImage:

@@ -11,7 +11,7 @@ from typing import Literal
 import numpy as np
 
 from spectrace.geometry.mesh import TriangleMesh
-from spectrace.lights.area import AreaEmitter, EmitterImage
+from spectrace.lights.area import AreaEmitter, EmitterImage  # noqa: F401 (part of the model's names)
 from spectrace.lights.constant import ConstantEnvironment
 from spectrace.lights.distant import DistantLight
 from spectrace.lights.envmap import EnvironmentMap
@@ -24,7 +24,6 @@ from spectrace.materials.mirror import MirrorMaterial
 from spectrace.materials.plastic import PlasticMaterial
 from spectrace.materials.retroreflector import RetroreflectorMaterial
 from spectrace.spectral.spectrum import Spectrum
-
 
 SamplerType = Literal["independent", "sobol"]
 SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
@@ -64,8 +63,9 @@ class Camera:
 # table; their dataclasses are the scene model's, named here too.
 # Spelled out (in MATERIALS' and LIGHTS' order) so that a type checker sees the unions; tests/test_scene_model.py
 # checks that they hold every module's MODEL.
-Material = (DiffuseMaterial | MirrorMaterial | ConductorMaterial | PlasticMaterial | RetroreflectorMaterial
-            | DielectricMaterial)
+Material = (
+    DiffuseMaterial | MirrorMaterial | ConductorMaterial | PlasticMaterial | RetroreflectorMaterial | DielectricMaterial
+)
 Light = PointLight | SpotLight | DistantLight | ConstantEnvironment | EnvironmentMap
 
 

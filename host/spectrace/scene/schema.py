@@ -44,8 +44,12 @@ class CameraSpec(Strict):
 class FilmSpec(Strict):
     width: int = Field(gt=0)
     height: int = Field(gt=0)
-    exposure: FiniteFloat = Field(default=0.0, ge=-limits.MAX_EXPOSURE_STOPS, le=limits.MAX_EXPOSURE_STOPS,
-                                  description="stops: RGB output x 2**exposure")
+    exposure: FiniteFloat = Field(
+        default=0.0,
+        ge=-limits.MAX_EXPOSURE_STOPS,
+        le=limits.MAX_EXPOSURE_STOPS,
+        description="stops: RGB output x 2**exposure",
+    )
 
     @field_validator("width", "height")
     @classmethod
@@ -63,10 +67,12 @@ class FilmSpec(Strict):
 
 class IntegratorSpec(Strict):
     type: Literal["path", "direct"] = "path"
-    max_depth: int = Field(default=8, ge=-1, le=limits.MAX_DEPTH,
-                           description="path segments from the camera; -1 = unbounded")
-    rr_depth: int = Field(default=5, ge=1, le=limits.MAX_DEPTH,
-                          description="bounces after which Russian roulette may end a path")
+    max_depth: int = Field(
+        default=8, ge=-1, le=limits.MAX_DEPTH, description="path segments from the camera; -1 = unbounded"
+    )
+    rr_depth: int = Field(
+        default=5, ge=1, le=limits.MAX_DEPTH, description="bounces after which Russian roulette may end a path"
+    )
 
     @field_validator("max_depth")
     @classmethod
@@ -153,7 +159,8 @@ class NamedSpectrumSpec(Strict):
 
 class SellmeierSpec(Strict):
     sellmeier: tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat] = Field(
-        description="B1, B2, B3, C1, C2, C3 of n² = 1 + Σ B λ²/(λ² − C), λ in µm, C in µm²")
+        description="B1, B2, B3, C1, C2, C3 of n² = 1 + Σ B λ²/(λ² − C), λ in µm, C in µm²"
+    )
 
 
 class CauchySpec(Strict):
@@ -184,8 +191,11 @@ def _field(parameter: Parameter) -> tuple:
         default = SpectrumSpec(value=parameter.number_default)
     else:
         default = parameter.default
-    constraints = (parameter.range.constraints()
-                   if parameter.type == "float" and parameter.range is not None and parameter.schema_range else {})
+    constraints = (
+        parameter.range.constraints()
+        if parameter.type == "float" and parameter.range is not None and parameter.schema_range
+        else {}
+    )
     description = f"{parameter.unit}: {parameter.doc}" if parameter.unit else parameter.doc
     return annotation, Field(default=default, description=description, **constraints)
 
@@ -286,8 +296,10 @@ class ShapeSpec(Strict):
 
 
 _LIGHT_SPEC_NAMES = {"constant": "ConstantEnvironmentSpec", "envmap": "EnvironmentMapSpec"}
-LIGHT_SPECS = {name: _spec_model(module, _LIGHT_SPEC_NAMES.get(name, f"{name.capitalize()}LightSpec"))
-               for name, module in LIGHTS.items()}
+LIGHT_SPECS = {
+    name: _spec_model(module, _LIGHT_SPEC_NAMES.get(name, f"{name.capitalize()}LightSpec"))
+    for name, module in LIGHTS.items()
+}
 if TYPE_CHECKING:
     LightSpec: TypeAlias = TableSpec
 else:

@@ -44,11 +44,15 @@ def _cie_1931_cmfs_on_grid() -> np.ndarray:
     1 nm over 360..830 nm, exactly our grid, written out once so that a render does not import colour-science
     (about a second); tests/cli/test_startup.py checks it equals colour-science's.
     """
-    lines = [line for line in (spectra_dir() / CMF_TABLE).read_text(encoding="utf-8").splitlines()
-             if line.strip() and not line.startswith("#")]
+    lines = [
+        line
+        for line in (spectra_dir() / CMF_TABLE).read_text(encoding="utf-8").splitlines()
+        if line.strip() and not line.startswith("#")
+    ]
     table = np.array([[float(field) for field in line.split(",")] for line in lines[1:]], dtype=np.float64)
     if table.shape != (GRID_MAX_NM - GRID_MIN_NM + 1, 4) or not np.array_equal(
-            table[:, 0], np.arange(GRID_MIN_NM, GRID_MAX_NM + GRID_STEP_NM, GRID_STEP_NM)):
+        table[:, 0], np.arange(GRID_MIN_NM, GRID_MAX_NM + GRID_STEP_NM, GRID_STEP_NM)
+    ):
         raise RuntimeError(f"{CMF_TABLE} is not on the {GRID_MIN_NM}..{GRID_MAX_NM} nm, 1 nm grid")
     values = np.ascontiguousarray(table[:, 1:])
     values.setflags(write=False)

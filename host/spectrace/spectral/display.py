@@ -13,10 +13,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spectrace.spectral.observers import Observer, luminance_cd_m2, photometric_xyz
-from spectrace.spectral.display_transfer import Encoding, checked_rgb, decode_to_drive
 from spectrace.errors import SpectraceError
 from spectrace.spectral import Spectrum, spectrum_to_xyz, xyz_to_xy
+from spectrace.spectral.display_transfer import Encoding, checked_rgb, decode_to_drive
+from spectrace.spectral.observers import Observer, luminance_cd_m2, photometric_xyz
 
 CHANNELS = ("red", "green", "blue")
 
@@ -107,8 +107,9 @@ class Display:
             raise SpectraceError(f"white luminance must be a positive number of cd/m², got {white_cd_m2:g}")
         factor = white_cd_m2 / self.white_luminance_cd_m2
         red, green, blue = (primary.scaled(factor) for primary in self.primaries)
-        return replace(self, primaries=(red, green, blue), absolute=True,
-                       radiance_scale=f"white set to {white_cd_m2:g} cd/m²")
+        return replace(
+            self, primaries=(red, green, blue), absolute=True, radiance_scale=f"white set to {white_cd_m2:g} cd/m²"
+        )
 
     def with_transfer(self, transfer: Encoding) -> Display:
         """The same display reading RGB triples with another transfer curve."""

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import colour
 
-from spectrace.spectral.display import CHANNELS, Display
 from spectrace.errors import SpectraceError
 from spectrace.io.input_files import regular_file
 from spectrace.resources import spectra_dir
 from spectrace.spectral import load_spectrum_csv, spectrum_from_colour
+from spectrace.spectral.display import CHANNELS, Display
 
 DISPLAYS_FOLDER = "displays"
 RELATIVE = "relative"
@@ -101,7 +101,11 @@ def _colour_science_display(name: str) -> Display:
         spectrum_from_colour(sd, name=f"{name}:{channel}") for channel, sd in zip(CHANNELS, multi_sd.to_sds())
     )
     return Display(
-        name=name, technology=technology, primaries=(red, green, blue), absolute=False, radiance_scale=RELATIVE,
+        name=name,
+        technology=technology,
+        primaries=(red, green, blue),
+        absolute=False,
+        radiance_scale=RELATIVE,
         source=reference,
     )
 
@@ -132,7 +136,7 @@ def _comment_keys_and_header(path: Path) -> tuple[dict[str, str], list[str]]:
 
 
 def short_technology(text: str) -> str:
-    """"LCD with CCFL backlight (INFERRED from ...)" -> "LCD with CCFL backlight (inferred)"."""
+    """ "LCD with CCFL backlight (INFERRED from ...)" -> "LCD with CCFL backlight (inferred)"."""
     label = _TECHNOLOGY_END.split(text, maxsplit=1)[0].strip() or "unknown"
     return f"{label} (inferred)" if "inferred" in text.casefold() else label
 
@@ -152,8 +156,9 @@ def load_display_csv(path: str | Path, name: str | None = None) -> Display:
             where=str(path),
         )
     display_name = name or path.stem
-    red, green, blue = (load_spectrum_csv(path, column=channel, name=f"{display_name}:{channel}")
-                        for channel in CHANNELS)
+    red, green, blue = (
+        load_spectrum_csv(path, column=channel, name=f"{display_name}:{channel}") for channel in CHANNELS
+    )
     absolute = is_absolute_units(keys.get("units", ""))
     return Display(
         name=display_name,

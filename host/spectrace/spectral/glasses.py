@@ -136,14 +136,19 @@ def index_of_refraction(value, where: str | None = None) -> IndexOfRefraction:
             raise SpectraceError(f"{model} needs {count} finite numbers, got {coefficients!r}", where=where)
         ior = IndexOfRefraction(model, numbers)
     else:
-        raise SpectraceError(f"ior must be a number, a glass name ({', '.join(glass_names())}), "
-                             f"{{ sellmeier = [B1, B2, B3, C1, C2, C3] }} or {{ cauchy = [a, b] }}; got {value!r}",
-                             where=where)
+        raise SpectraceError(
+            f"ior must be a number, a glass name ({', '.join(glass_names())}), "
+            f"{{ sellmeier = [B1, B2, B3, C1, C2, C3] }} or {{ cauchy = [a, b] }}; got {value!r}",
+            where=where,
+        )
     n = ior.at(_CHECK_WAVELENGTHS_NM)
     low, high = IOR_RANGE
     bad = ~(np.isfinite(n) & (n >= low) & (n <= high))
     if np.any(bad):
         first = int(np.argmax(bad))
-        raise SpectraceError(f"the index of refraction must lie in [{low}, {high:g}] over 360–830 nm; it is "
-                             f"{n[first]:.6g} at {_CHECK_WAVELENGTHS_NM[first]:g} nm", where=where)
+        raise SpectraceError(
+            f"the index of refraction must lie in [{low}, {high:g}] over 360–830 nm; it is "
+            f"{n[first]:.6g} at {_CHECK_WAVELENGTHS_NM[first]:g} nm",
+            where=where,
+        )
     return ior

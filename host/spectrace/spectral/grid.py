@@ -13,7 +13,7 @@ GRID_STEP_NM = 1.0
 GRID_NM = np.arange(360, 831, dtype=np.float64)
 GRID_SIZE = GRID_NM.size  # 471
 
-assert GRID_SIZE == round((GRID_MAX_NM - GRID_MIN_NM) / GRID_STEP_NM) + 1
+assert round((GRID_MAX_NM - GRID_MIN_NM) / GRID_STEP_NM) + 1 == GRID_SIZE
 
 
 def _trapezoid_weights() -> np.ndarray:

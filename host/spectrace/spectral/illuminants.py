@@ -45,7 +45,7 @@ def cie_illuminant(name: str, where: str | None = None) -> Spectrum:
     """A CIE illuminant by name ("D65", "A", "FL2", case-insensitive), relative spectral power (100 at 560 nm)."""
     import colour
 
-    by_folded_name = {key.casefold(): key for key in colour.SDS_ILLUMINANTS.keys()}
+    by_folded_name = {key.casefold(): key for key in colour.SDS_ILLUMINANTS}
     canonical_name = by_folded_name.get(name.strip().casefold())
     if canonical_name is None:
         raise SpectraceError(

@@ -35,8 +35,9 @@ def medium_presets() -> dict[str, MediumPreset]:
     presets = {}
     for row in csv.DictReader(lines):
         values = [float(row[f"{q}_{c}"]) for q in ("sigma_s_prime", "sigma_a") for c in "rgb"]
-        presets[row["name"]] = MediumPreset(row["name"], (values[0], values[1], values[2]),
-                                            (values[3], values[4], values[5]))
+        presets[row["name"]] = MediumPreset(
+            row["name"], (values[0], values[1], values[2]), (values[3], values[4], values[5])
+        )
     return presets
 
 
@@ -53,8 +54,7 @@ def coefficient_spectrum(rgb, name: str = "", where: str | None = None) -> Spect
     return uplift_reflectance(values / (2.0 * peak), where=where)[0].scaled(2.0 * peak, name=name)
 
 
-def preset_coefficients(name: str, scale: float, g: float = 0.0,
-                        where: str | None = None) -> tuple[Spectrum, Spectrum]:
+def preset_coefficients(name: str, scale: float, g: float = 0.0, where: str | None = None) -> tuple[Spectrum, Spectrum]:
     """(σa, σs) of a preset in 1/scene unit for the Henyey–Greenstein asymmetry g: the table's 1/mm values times
     `scale`, the millimetres in one scene unit (1000 for a scene in metres), with σs = σs' / (1 − g)."""
     presets = medium_presets()

@@ -98,7 +98,6 @@ class Spectrum:
         return GRID_SIZE
 
     def __repr__(self) -> str:
-        return (
-            f"Spectrum({self.name!r}, min={self.min():.4g}, mean={self.mean():.4g}, max={self.max():.4g}"
-            + (f", source={self.source!r})" if self.source else ")")
+        return f"Spectrum({self.name!r}, min={self.min():.4g}, mean={self.mean():.4g}, max={self.max():.4g}" + (
+            f", source={self.source!r})" if self.source else ")"
         )
