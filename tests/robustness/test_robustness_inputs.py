@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import pytest
 
+from cli_runner import run_in_process as _run_in_process
 from spectrace import cli
 
 BASE = """\
@@ -635,13 +636,6 @@ def _write_case(folder, case: BadInput):
     if "-o" not in argv:
         argv += ["-o", str(folder / "out.png")]
     return scene, ["render", str(scene), *argv, "-q"]
-
-
-def _run_in_process(monkeypatch, capsys, argv) -> tuple[int, str]:
-    monkeypatch.setattr(sys, "argv", ["spectrace", *argv])
-    with pytest.raises(SystemExit) as exit_info:
-        cli.main()
-    return exit_info.value.code, capsys.readouterr().err
 
 
 def _no_device(*args, **kwargs):
