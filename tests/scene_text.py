@@ -49,3 +49,23 @@ material = "black"
 emitter = {{ radiance = {{ {radiance} }} }}
 {extra}"""
     )
+
+
+def glowing_rectangle(width="8", height="6") -> str:
+    """A grey rectangle that emits 1 everywhere, in front of the shared camera. The film comes first: tests that
+    break this text expect their errors on the lines where they are now."""
+    return f"""\
+[film]
+width = {width}
+height = {height}
+
+[camera]
+origin = [0, 0, 5]
+target = [0, 0, 0]
+fov = 40
+{diffuse()}
+[[shapes]]
+type = "rectangle"
+material = "grey"
+emitter = {{ radiance = {{ value = 1.0 }} }}
+"""

@@ -14,27 +14,10 @@ from dataclasses import dataclass, field
 import pytest
 
 from cli_runner import run_in_process as _run_in_process
+from scene_text import glowing_rectangle
 from spectrace import cli
 
-BASE = """\
-[film]
-width = 8
-height = 6
-
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-
-[materials.grey]
-type = "diffuse"
-reflectance = { value = 0.5 }
-
-[[shapes]]
-type = "rectangle"
-material = "grey"
-emitter = { radiance = { value = 1.0 } }
-"""
+BASE = glowing_rectangle()
 
 FILES = {
     "garbage.obj": bytes(range(256)) * 8,
