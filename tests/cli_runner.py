@@ -10,10 +10,14 @@ import pytest
 from spectrace.resources import scenes_dir
 
 
-def run_spectrace(*args: str) -> subprocess.CompletedProcess:
+def run_spectrace(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
     """`python -m spectrace ARGS` as a user would run it; the result, whatever its exit status."""
     return subprocess.run(
-        [sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, env=os.environ.copy(), timeout=600
+        [sys.executable, "-m", "spectrace", *args],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=timeout,
     )
 
 
