@@ -1,17 +1,71 @@
-"""Scene-file text shared by tests that write small scenes: a camera, a tiny film and a grey diffuse material, to
-which a test appends its shapes and settings."""
+"""Scene-file text shared by tests that write small scenes: a camera and a tiny film, optionally a diffuse
+material, to which a test appends its shapes and settings. Values are given as TOML text, so a test keeps the
+exact literals (integers or floats) it always wrote."""
 
-CAMERA_FILM_GREY = """
+
+def camera_film(origin="[0, 0, 5]", target="[0, 0, 0]", fov="40", width="8", height="6") -> str:
+    """The [camera] and [film] tables."""
+    return f"""
+[camera]
+origin = {origin}
+target = {target}
+fov = {fov}
+
+[film]
+width = {width}
+height = {height}
+"""
+
+
+def diffuse(name="grey", reflectance="value = 0.5") -> str:
+    """A diffuse material table; `reflectance` is the text inside its inline table."""
+    return f"""
+[materials.{name}]
+type = "diffuse"
+reflectance = {{ {reflectance} }}
+"""
+
+
+CAMERA_FILM_GREY = camera_film() + diffuse()
+
+
+def emitting_screen(
+    reflectance="value = 0", shape='type = "rectangle"', radiance="value = 1", extra="", width=8, height=8, fov=20
+) -> str:
+    """One emitting shape, black itself, filling a narrow camera's view: one bounce, 64 samples a pixel.
+    `radiance` is the text inside the emitter's radiance table; `extra` follows the shape."""
+    return (
+        camera_film(origin="[0, 0, 3]", fov=fov, width=width, height=height)
+        + f"""
+[integrator]
+max_depth = 1
+
+[sampler]
+spp = 64
+{diffuse("black", reflectance)}
+[[shapes]]
+{shape}
+material = "black"
+emitter = {{ radiance = {{ {radiance} }} }}
+{extra}"""
+    )
+
+
+def glowing_rectangle(width="8", height="6") -> str:
+    """A grey rectangle that emits 1 everywhere, in front of the shared camera. The film comes first: tests that
+    break this text expect their errors on the lines where they are now."""
+    return f"""\
+[film]
+width = {width}
+height = {height}
+
 [camera]
 origin = [0, 0, 5]
 target = [0, 0, 0]
 fov = 40
-
-[film]
-width = 8
-height = 6
-
-[materials.grey]
-type = "diffuse"
-reflectance = { value = 0.5 }
+{diffuse()}
+[[shapes]]
+type = "rectangle"
+material = "grey"
+emitter = {{ radiance = {{ value = 1.0 }} }}
 """

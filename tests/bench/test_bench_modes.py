@@ -9,6 +9,8 @@ import sys
 
 import pytest
 
+from cli_runner import run_spectrace
+
 pytestmark = pytest.mark.subprocess
 
 
@@ -149,12 +151,6 @@ def test_peer_uses_mitsubas_llvm_variant_where_a_libllvm_works():
     ],
 )
 def test_options_outside_their_mode_are_one_line_errors(argv, says):
-    result = subprocess.run(
-        [sys.executable, "-m", "spectrace", "bench", *argv],
-        capture_output=True,
-        text=True,
-        env=os.environ.copy(),
-        timeout=600,
-    )
+    result = run_spectrace("bench", *argv)
     assert result.returncode == 2, result.stderr
     assert result.stderr.startswith(says) and result.stderr.count("\n") == 1, result.stderr

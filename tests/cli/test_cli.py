@@ -1,23 +1,18 @@
 """Every CLI subcommand, run as a user would, in a subprocess."""
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
+from cli_runner import render_cornell_box, run_spectrace
 from spectrace.io.exr import read_exr
-from spectrace.resources import scenes_dir
 
 pytestmark = pytest.mark.subprocess
 
 
 def _run(*args, check=True):
-    result = subprocess.run(
-        [sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, env=os.environ.copy(), timeout=600
-    )
+    result = run_spectrace(*args)
     if check:
         assert result.returncode == 0, result.stderr
     return result
@@ -26,16 +21,7 @@ def _run(*args, check=True):
 def test_render_writes_exr_with_metadata(tmp_path):
     out = tmp_path / "cornell.exr"
     result = _run(
-        "render",
-        str(scenes_dir() / "cornell_box.toml"),
-        "-o",
-        str(out),
-        "--spp",
-        "2",
-        "--width",
-        "16",
-        "--height",
-        "12",
+        *render_cornell_box(out, 2, 16, 12),
         "--seed",
         "7",
         "-q",
@@ -54,16 +40,7 @@ def test_render_png(tmp_path):
 
     out = tmp_path / "cornell.png"
     _run(
-        "render",
-        str(scenes_dir() / "cornell_box.toml"),
-        "-o",
-        str(out),
-        "--spp",
-        "1",
-        "--width",
-        "8",
-        "--height",
-        "8",
+        *render_cornell_box(out, 1, 8, 8),
         "-q",
     )
     with Image.open(out) as image:

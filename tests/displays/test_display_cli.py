@@ -1,14 +1,12 @@
 """`spectrace display list | compare | match`, run as a user would, in a subprocess."""
 
 import json
-import os
-import subprocess
-import sys
 
 import colour
 import numpy as np
 import pytest
 
+from cli_runner import run_spectrace
 from spectrace.displays import display_names
 
 pytestmark = pytest.mark.subprocess
@@ -17,13 +15,7 @@ TRIPLE = ["0.6", "0.3", "0.2"]
 
 
 def _run(*args, check=True):
-    result = subprocess.run(
-        [sys.executable, "-m", "spectrace", "display", *args],
-        capture_output=True,
-        text=True,
-        env=os.environ.copy(),
-        timeout=300,
-    )
+    result = run_spectrace("display", *args, timeout=300)
     if check:
         assert result.returncode == 0, result.stderr
     return result

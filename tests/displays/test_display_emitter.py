@@ -1,47 +1,20 @@
 """Display emitters in scenes: a screen showing an RGB triple emits r·R(λ) + g·G(λ) + b·B(λ) of its primaries."""
 
-import textwrap
-
 import colour
 import numpy as np
 import pytest
 
+from scene_text import emitting_screen
 from spectrace.displays import load_display
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.scene import load_scene
 from spectrace.spectral.grid import GRID_NM
 
-SCREEN_SCENE = """
-[camera]
-origin = [0, 0, 3]
-target = [0, 0, 0]
-fov = 20
-
-[film]
-width = 16
-height = 16
-
-[integrator]
-max_depth = 1
-
-[sampler]
-spp = 64
-
-[materials.black]
-type = "diffuse"
-reflectance = {{ value = 0 }}
-
-[[shapes]]
-type = "rectangle"
-material = "black"
-emitter = {{ radiance = {{ {radiance} }} }}
-"""
-
 
 def _scene(tmp_path, radiance):
     path = tmp_path / "screen.toml"
-    path.write_text(textwrap.dedent(SCREEN_SCENE.format(radiance=radiance)))
+    path.write_text(emitting_screen(radiance=radiance, width=16, height=16))
     return load_scene(path)
 
 

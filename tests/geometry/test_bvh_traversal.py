@@ -43,6 +43,23 @@ def _device_scene(triangles, max_leaf_size=4):
     return bvh, vertices.reshape(-1, 4)
 
 
+def _trace(kernel_runner, kernel, width, bvh, vertices, origins, directions, read=(), written=()):
+    """Run `kernel` of the traversal test program over the rays; its arguments after the scene and the rays are
+    `read` then `written`, and the `written` arrays are filled in."""
+    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
+    inputs = [device_nodes(bvh, vertices, width), vertices, _as_float4(origins), _as_float4(directions), *read]
+    args = [runner.buffer(a) for a in inputs] + [runner.buffer(a, True) for a in written]
+    runner.run(kernel, len(origins), [*args, np.int32(len(origins))], dict(enumerate(written, len(inputs))))
+
+
+def _closest_hits(kernel_runner, width, bvh, vertices, origins, directions):
+    """The distance and (BVH-order) triangle index of each ray's closest hit; -1 for a miss."""
+    t = np.empty(len(origins), np.float32)
+    hit = np.empty(len(origins), np.int32)
+    _trace(kernel_runner, "closest_hit", width, bvh, vertices, origins, directions, written=[t, hit])
+    return t, hit
+
+
 @pytest.mark.parametrize("width", WIDTHS)
 @pytest.mark.parametrize("triangle_count, max_leaf_size", [(1, 4), (7, 4), (3000, 4), (3000, 16)])
 def test_closest_hits_equal_brute_force(kernel_runner, triangle_count, max_leaf_size, width):
@@ -55,19 +72,7 @@ def test_closest_hits_equal_brute_force(kernel_runner, triangle_count, max_leaf_
     if max_leaf_size > 4:
         assert bvh.nodes["count"].max() > 8, "the big-leaf case must chain three or more blocks"
 
-    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
-    t = np.empty(len(origins), np.float32)
-    hit = np.empty(len(origins), np.int32)
-    args = [
-        runner.buffer(device_nodes(bvh, vertices, width)),
-        runner.buffer(vertices),
-        runner.buffer(_as_float4(origins)),
-        runner.buffer(_as_float4(directions)),
-        runner.buffer(t, True),
-        runner.buffer(hit, True),
-        np.int32(len(origins)),
-    ]
-    runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
+    t, hit = _closest_hits(kernel_runner, width, bvh, vertices, origins, directions)
 
     ref_t, ref_prim = brute_force_closest_hit(origins, directions, triangles[:, 0], triangles[:, 1], triangles[:, 2])
     kernel_prim = np.where(hit >= 0, bvh.prim_order[np.maximum(hit, 0)], -1)
@@ -108,19 +113,7 @@ def test_shared_edges_are_watertight(kernel_runner, width):
     directions = np.column_stack([targets, np.zeros(len(targets))]) - origins
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
 
-    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
-    t = np.empty(len(origins), np.float32)
-    hit = np.empty(len(origins), np.int32)
-    args = [
-        runner.buffer(device_nodes(bvh, vertices, width)),
-        runner.buffer(vertices),
-        runner.buffer(_as_float4(origins)),
-        runner.buffer(_as_float4(directions)),
-        runner.buffer(t, True),
-        runner.buffer(hit, True),
-        np.int32(len(origins)),
-    ]
-    runner.run("closest_hit", len(origins), args, {4: t, 5: hit})
+    t, hit = _closest_hits(kernel_runner, width, bvh, vertices, origins, directions)
     assert np.all(hit >= 0), f"{np.sum(hit < 0)} rays slipped through shared edges"
 
 
@@ -134,18 +127,8 @@ def test_any_hit_respects_t_max(kernel_runner, width):
     t_max = rng.uniform(0.1, 3.0, len(origins)).astype(np.float32)
     # Leave out rays whose closest hit lies within float tolerance of t_max: either answer is right there.
     clear = np.abs(ref_t - t_max) > 1e-3
-    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
     occluded = np.empty(len(origins), np.int32)
-    args = [
-        runner.buffer(device_nodes(bvh, vertices, width)),
-        runner.buffer(vertices),
-        runner.buffer(_as_float4(origins)),
-        runner.buffer(_as_float4(directions)),
-        runner.buffer(t_max),
-        runner.buffer(occluded, True),
-        np.int32(len(origins)),
-    ]
-    runner.run("any_hit", len(origins), args, {5: occluded})
+    _trace(kernel_runner, "any_hit", width, bvh, vertices, origins, directions, [t_max], [occluded])
     expected = ref_t < t_max
     assert 0.1 < expected.mean() < 0.9
     assert np.array_equal(occluded[clear].astype(bool), expected[clear])

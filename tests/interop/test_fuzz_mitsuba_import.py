@@ -11,16 +11,16 @@ CI runs 1000 examples, derandomised (the same ones every run). A longer, random 
 """
 
 import copy
-import os
 import shutil
 import tomllib
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, given
 from hypothesis import strategies as st
 
+from fuzz_settings import fuzz_settings
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import import_mitsuba
 
@@ -29,13 +29,8 @@ BASES = [(DATA / name).read_text() for name in ("cornell_box.xml", "features.xml
 REFERENCED = ("triangle.obj", "lamp.spd")  # files the scenes refer to, next to the XML
 PREVIOUS = "# an earlier import that a failed one must not destroy\n"
 
-LONG_RUN_EXAMPLES = int(os.environ.get("SPECTRACE_FUZZ_EXAMPLES", "0"))
-FUZZ_SETTINGS = settings(
-    max_examples=LONG_RUN_EXAMPLES or 1000,
-    deadline=None,
-    derandomize=not LONG_RUN_EXAMPLES,
-    database=None,
-    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow, HealthCheck.data_too_large],
+FUZZ_SETTINGS = fuzz_settings(
+    1000, [HealthCheck.function_scoped_fixture, HealthCheck.too_slow, HealthCheck.data_too_large], database=None
 )
 
 # ---------------------------------------------------------------- values

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_runner import run_in_process as _run_in_process
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
@@ -474,15 +475,6 @@ BAD_INPUT = [
 ]
 ZERO_WIDTH_SENSOR = """<sensor type="perspective"><float name="fov" value="45"/>
     <film type="hdrfilm"><integer name="width" value="0"/><integer name="height" value="6"/></film></sensor>"""
-
-
-def _run_in_process(monkeypatch, capsys, argv) -> tuple[int, str]:
-    from spectrace import cli
-
-    monkeypatch.setattr(sys, "argv", ["spectrace", *argv])
-    with pytest.raises(SystemExit) as exit_info:
-        cli.main()
-    return exit_info.value.code, capsys.readouterr().err
 
 
 def _assert_one_error_line(status: int, stderr: str, place: str, says: str) -> None:

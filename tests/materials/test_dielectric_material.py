@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import spectrace
+from scene_text import camera_film
 from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
@@ -18,15 +19,9 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 from stats_toolkit import assert_furnace
 
-SCENE = """
-[camera]
-origin = [0, 0, -4]
-target = [0, 0, 0]
-fov = 30
-[film]
-width = 4
-height = 4
-[materials.glass]
+SCENE = (
+    camera_film(origin="[0, 0, -4]", fov="30", width="4", height="4")
+    + """[materials.glass]
 type = "dielectric"
 {material}
 [[shapes]]
@@ -36,6 +31,7 @@ material = "glass"
 type = "constant"
 radiance = {{ value = 1 }}
 """
+)
 
 
 def _load(tmp_path, material_lines: str):

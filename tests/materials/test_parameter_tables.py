@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 import spectrace
+from scene_text import camera_film
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import REQUIRED
@@ -65,14 +66,8 @@ def _material_scene(tmp_path, name: str, key: str, value: float) -> Path:
     lines = "".join(f"{k} = {v}\n" for k, v in {**required, key: repr(value)}.items())
     path = tmp_path / "scene.toml"
     path.write_text(
-        f"""
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-[film]
-width = 4
-height = 4
+        camera_film(width="4", height="4")
+        + f"""
 [materials.m]
 type = "{name}"
 {lines}

@@ -13,6 +13,7 @@ import zipfile
 import numpy as np
 import pytest
 
+from cli_runner import run_in_process
 from spectrace.engine import checkpoint as checkpoints
 from spectrace.engine.checkpoint import (
     PeriodicCheckpoints,
@@ -297,16 +298,6 @@ def _one_error_line(result) -> str:
     return lines[0]
 
 
-def _cli(monkeypatch, capsys, *argv) -> tuple[int, str]:
-    """`spectrace ARGV` in this process: exit status and stderr."""
-    from spectrace import cli
-
-    monkeypatch.setattr(sys, "argv", ["spectrace", *argv])
-    with pytest.raises(SystemExit) as exit_info:
-        cli.main()
-    return exit_info.value.code, capsys.readouterr().err
-
-
 def test_a_fresh_render_never_replaces_an_existing_checkpoint(device, tmp_path, monkeypatch, capsys):
     """A fresh render naming an existing checkpoint would replace its samples with its own first pass: refused
     (in a real process: status, one line naming --resume and --overwrite); --overwrite starts again; the same file
@@ -317,6 +308,9 @@ def test_a_fresh_render_never_replaces_an_existing_checkpoint(device, tmp_path, 
     save_checkpoint(state, renderer)
     before = state.read_bytes()
     size = ["--width", "8", "--height", "6", "--seed", "5", "-q", "--checkpoint-interval", "0"]
+
+    def render_here(*argv):
+        return run_in_process(monkeypatch, capsys, ["render", str(CORNELL), *argv, *size])
 
     again = subprocess.run(
         _spectrace("render", str(CORNELL), "-o", "b.png", "--spp", "2", "--checkpoint", str(state), *size),
@@ -331,42 +325,13 @@ def test_a_fresh_render_never_replaces_an_existing_checkpoint(device, tmp_path, 
     assert state.read_bytes() == before and not (tmp_path / "b.png").exists()
 
     monkeypatch.chdir(tmp_path)
-    status, stderr = _cli(
-        monkeypatch,
-        capsys,
-        "render",
-        str(CORNELL),
-        "-o",
-        "c.png",
-        "--spp",
-        "8",
-        "--resume",
-        str(state),
-        "--checkpoint",
-        "./state.npz",
-        *size,
-    )
+    status, stderr = render_here("-o", "c.png", "--spp", "8", "--resume", str(state), "--checkpoint", "./state.npz")
     assert status == 0, stderr
     assert read_checkpoint(state).state.samples_done == 8
-    status, stderr = _cli(
-        monkeypatch,
-        capsys,
-        "render",
-        str(CORNELL),
-        "-o",
-        "d.png",
-        "--spp",
-        "2",
-        "--checkpoint",
-        "state.npz",
-        "--overwrite",
-        *size,
-    )
+    status, stderr = render_here("-o", "d.png", "--spp", "2", "--checkpoint", "state.npz", "--overwrite")
     assert status == 0, stderr
     assert read_checkpoint(state).state.samples_done == 2
-    status, stderr = _cli(
-        monkeypatch, capsys, "render", str(CORNELL), "-o", "e.png", "--resume", "state.npz", "--overwrite", *size
-    )
+    status, stderr = render_here("-o", "e.png", "--resume", "state.npz", "--overwrite")
     assert status == 2 and stderr == "error: --overwrite: starts the render afresh, so it cannot go with --resume\n"
 
 

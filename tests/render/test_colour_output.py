@@ -1,14 +1,11 @@
 """Output colour spaces and white balance against published matrices, the standards' primaries and curves, and
 colour-science's independent colorimetry."""
 
-import os
-import subprocess
-import sys
-
 import colour
 import numpy as np
 import pytest
 
+from cli_runner import render_cornell_box, run_spectrace
 from spectrace.colour_output import (
     Adaptation,
     ColourSpace,
@@ -158,23 +155,10 @@ def test_xyz_output_keeps_the_film(tmp_path):
 
 @pytest.mark.subprocess
 def test_render_command_colour_options(tmp_path):
-    from spectrace.resources import scenes_dir
 
     out = tmp_path / "balanced.exr"
     args = [
-        sys.executable,
-        "-m",
-        "spectrace",
-        "render",
-        str(scenes_dir() / "cornell_box.toml"),
-        "-o",
-        str(out),
-        "--spp",
-        "1",
-        "--width",
-        "8",
-        "--height",
-        "6",
+        *render_cornell_box(out, 1, 8, 6),
         "-q",
         "--colour-space",
         "rec2020",
@@ -183,7 +167,7 @@ def test_render_command_colour_options(tmp_path):
         "--adaptation",
         "von-kries",
     ]
-    result = subprocess.run(args, capture_output=True, text=True, env=os.environ.copy(), timeout=600)
+    result = run_spectrace(*args)
     assert result.returncode == 0, result.stderr
     channels, header = read_exr(out)
     assert header["spectrace:colour_space"] == "rec2020"
@@ -191,11 +175,5 @@ def test_render_command_colour_options(tmp_path):
     film = np.stack([channels["X"], channels["Y"], channels["Z"]], axis=-1)
     balance = parse_white_balance("cornell_box/light", "von-kries")
     np.testing.assert_allclose(channels["RGB"], xyz_to_output(film, ColourSpace.REC2020, balance), rtol=1e-5, atol=1e-7)
-    bad = subprocess.run(
-        args[:-4] + ["--colour-space", "xyz", "-o", str(tmp_path / "x.png")],
-        capture_output=True,
-        text=True,
-        env=os.environ.copy(),
-        timeout=600,
-    )
+    bad = run_spectrace(*args[:-4], "--colour-space", "xyz", "-o", str(tmp_path / "x.png"))
     assert bad.returncode == 2 and "--colour-space" in bad.stderr and "Traceback" not in bad.stderr

@@ -3,13 +3,11 @@ must estimate the same image (checked per region with independent seeds, within 
 megakernel's determinism and pass-split invariance. The subsurface scene takes paths through medium boundaries
 and scattering points, whose state the wavefront carries between launches."""
 
-import os
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
+from cli_runner import render_cornell_box
+from cli_runner import run_spectrace as _cli
 from spectrace.benchmarks.kernel_shapes import Variant, run_kernel_shape_bench
 from spectrace.engine.launch import render_work_group
 from spectrace.engine.renderer import Renderer
@@ -96,26 +94,11 @@ def test_unknown_kernel_shape_is_refused(device):
         make_renderer(_scene("cornell_box"), device, "persistent")
 
 
-def _cli(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, env=os.environ.copy(), timeout=600
-    )
-
-
 @pytest.mark.subprocess
 def test_render_command_runs_the_wavefront(tmp_path):
     out = tmp_path / "wavefront.exr"
     result = _cli(
-        "render",
-        str(scenes_dir() / "cornell_box.toml"),
-        "-o",
-        str(out),
-        "--spp",
-        "2",
-        "--width",
-        "16",
-        "--height",
-        "12",
+        *render_cornell_box(out, 2, 16, 12),
         "--kernel",
         "wavefront",
         "-q",

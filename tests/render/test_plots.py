@@ -2,9 +2,6 @@
 itself, and the `spectra` commands and `render --false-color` as a user runs them."""
 
 import json
-import os
-import subprocess
-import sys
 
 import colour
 import matplotlib
@@ -12,6 +9,8 @@ import numpy as np
 import pytest
 from PIL import Image as PILImage
 
+from cli_runner import render_cornell_box
+from cli_runner import run_spectrace as _run
 from spectrace.errors import SpectraceError
 from spectrace.plots import (
     FALSE_COLOUR_MAP,
@@ -25,12 +24,6 @@ from spectrace.resources import scenes_dir
 from spectrace.spectral import Spectrum, library_spectrum, spectrum_to_xyz
 
 pytestmark = pytest.mark.filterwarnings("ignore:Aligning")
-
-
-def _run(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "spectrace", *args], capture_output=True, text=True, env=os.environ.copy(), timeout=600
-    )
 
 
 def test_luminance_is_photometric():
@@ -108,16 +101,7 @@ def test_spectra_commands(tmp_path):
 def test_render_false_colour(tmp_path):
     out, figure = tmp_path / "box.exr", tmp_path / "luminance.png"
     result = _run(
-        "render",
-        str(scenes_dir() / "cornell_box.toml"),
-        "-o",
-        str(out),
-        "--spp",
-        "1",
-        "--width",
-        "8",
-        "--height",
-        "6",
+        *render_cornell_box(out, 1, 8, 6),
         "-q",
         "--false-color",
         str(figure),

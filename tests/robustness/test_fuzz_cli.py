@@ -16,50 +16,26 @@ import contextlib
 import importlib
 import io
 import math
-import os
 import sys
 import tempfile
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, given
 from hypothesis import strategies as st
 
+from fuzz_settings import fuzz_settings
+from scene_text import glowing_rectangle
 from spectrace import cli
 
 pytestmark = pytest.mark.slow  # about a minute: the other fuzzers are marked so too
 
-LONG_RUN_EXAMPLES = int(os.environ.get("SPECTRACE_FUZZ_EXAMPLES", "0"))
-
 
 def _settings(examples: int):
-    return settings(
-        max_examples=LONG_RUN_EXAMPLES or examples,
-        deadline=None,
-        derandomize=not LONG_RUN_EXAMPLES,
-        suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
-    )
+    return fuzz_settings(examples, [HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 
-SCENE = """\
-[film]
-width = 4
-height = 4
-
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-
-[materials.grey]
-type = "diffuse"
-reflectance = { value = 0.5 }
-
-[[shapes]]
-type = "rectangle"
-material = "grey"
-emitter = { radiance = { value = 1.0 } }
-"""
+SCENE = glowing_rectangle(width="4", height="4")
 
 # ---------------------------------------------------------------- value strategies
 

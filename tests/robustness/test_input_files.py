@@ -14,46 +14,12 @@ import zlib
 import numpy as np
 import pytest
 
+from scene_text import emitting_screen as _scene_text
 from spectrace.displays import load_display
 from spectrace.engine.renderer import Renderer
 from spectrace.geometry import mesh as mesh_module
 from spectrace.geometry.mesh import load_mesh
 from spectrace.scene import load_scene
-
-SCENE = """\
-[camera]
-origin = [0, 0, 3]
-target = [0, 0, 0]
-fov = {fov}
-
-[film]
-width = {width}
-height = {height}
-
-[integrator]
-max_depth = 1
-
-[sampler]
-spp = 64
-
-[materials.black]
-type = "diffuse"
-reflectance = {{ {reflectance} }}
-
-[[shapes]]
-{shape}
-material = "black"
-emitter = {{ radiance = {{ {radiance} }} }}
-{extra}"""
-
-
-def _scene_text(
-    reflectance="value = 0", shape='type = "rectangle"', radiance="value = 1", extra="", width=8, height=8, fov=20
-):
-    return SCENE.format(
-        reflectance=reflectance, shape=shape, radiance=radiance, extra=extra, width=width, height=height, fov=fov
-    )
-
 
 # ---------------------------------------------------------------- pipes, devices, and an image bomb
 

@@ -13,27 +13,11 @@ from dataclasses import dataclass, field
 
 import pytest
 
+from cli_runner import run_in_process as _run_in_process
+from scene_text import glowing_rectangle
 from spectrace import cli
 
-BASE = """\
-[film]
-width = 8
-height = 6
-
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-
-[materials.grey]
-type = "diffuse"
-reflectance = { value = 0.5 }
-
-[[shapes]]
-type = "rectangle"
-material = "grey"
-emitter = { radiance = { value = 1.0 } }
-"""
+BASE = glowing_rectangle()
 
 FILES = {
     "garbage.obj": bytes(range(256)) * 8,
@@ -635,13 +619,6 @@ def _write_case(folder, case: BadInput):
     if "-o" not in argv:
         argv += ["-o", str(folder / "out.png")]
     return scene, ["render", str(scene), *argv, "-q"]
-
-
-def _run_in_process(monkeypatch, capsys, argv) -> tuple[int, str]:
-    monkeypatch.setattr(sys, "argv", ["spectrace", *argv])
-    with pytest.raises(SystemExit) as exit_info:
-        cli.main()
-    return exit_info.value.code, capsys.readouterr().err
 
 
 def _no_device(*args, **kwargs):

@@ -14,6 +14,7 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
+from cli_runner import run_in_process
 from spectrace import cli
 from spectrace.engine import memory
 from spectrace.engine import renderer as renderer_module
@@ -137,26 +138,10 @@ def test_an_opencl_error_in_the_command_line_is_one_line(tmp_path, monkeypatch, 
         raise _opencl_error(cl.RuntimeError, "OUT_OF_RESOURCES")
 
     monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(enqueue_nd_range_kernel=failing_enqueue))
-    monkeypatch.setattr(
-        sys,
-        "argv",
-        [
-            "spectrace",
-            "render",
-            str(scenes_dir() / "cornell_box.toml"),
-            "-o",
-            str(tmp_path / "x.png"),
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "-q",
-        ],
+    status, stderr = _render_cornell(
+        monkeypatch, capsys, "-o", str(tmp_path / "x.png"), "--width", "8", "--height", "8", "-q"
     )
-    with pytest.raises(SystemExit) as exit_info:
-        cli.main()
-    stderr = capsys.readouterr().err
-    assert exit_info.value.code == 2 and "Traceback" not in stderr
+    assert status == 2 and "Traceback" not in stderr
     error_lines = [line for line in stderr.splitlines() if line.startswith("error: ")]
     assert len(error_lines) == 1 and "OUT_OF_RESOURCES" in error_lines[0]
     assert not (tmp_path / "x.png").exists()
@@ -237,32 +222,25 @@ def test_an_opencl_error_mid_render_points_at_the_last_checkpoint(tmp_path, monk
 
     monkeypatch.setattr(renderer_module, "cl", _PyopenclWith(enqueue_nd_range_kernel=enqueue_then_fail))
     state = tmp_path / "state.npz"
-    monkeypatch.setattr(
-        sys,
-        "argv",
-        [
-            "spectrace",
-            "render",
-            str(scenes_dir() / "cornell_box.toml"),
-            "-o",
-            str(tmp_path / "x.png"),
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--spp",
-            "1000",
-            "--checkpoint",
-            str(state),
-            "--checkpoint-interval",
-            "0",
-            "-q",
-        ],
+    status, stderr = _render_cornell(
+        monkeypatch,
+        capsys,
+        "-o",
+        str(tmp_path / "x.png"),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1000",
+        "--checkpoint",
+        str(state),
+        "--checkpoint-interval",
+        "0",
+        "-q",
     )
-    with pytest.raises(SystemExit) as exit_info:
-        cli.main()
-    error_lines = [line for line in capsys.readouterr().err.splitlines() if line.startswith("error: ")]
-    assert exit_info.value.code == 2 and len(error_lines) == 1
+    error_lines = [line for line in stderr.splitlines() if line.startswith("error: ")]
+    assert status == 2 and len(error_lines) == 1
     saved = read_checkpoint(state).state.samples_done
     assert saved > 0 and "DEVICE_NOT_AVAILABLE" in error_lines[0]
     assert error_lines[0].endswith(f"{state} holds the last {saved} spp (continue with --resume)")
@@ -327,27 +305,13 @@ class _Namespace:
         return getattr(self._module, name)
 
 
+def _render_cornell(monkeypatch, capsys, *argv) -> tuple[int, str]:
+    """`spectrace render` of the bundled Cornell box with ARGV, in this process: exit status and stderr."""
+    return run_in_process(monkeypatch, capsys, ["render", str(scenes_dir() / "cornell_box.toml"), *argv])
+
+
 def _render_cli(monkeypatch, capsys, *argv) -> tuple[int, str]:
-    monkeypatch.setattr(
-        sys,
-        "argv",
-        [
-            "spectrace",
-            "render",
-            str(scenes_dir() / "cornell_box.toml"),
-            "--width",
-            "8",
-            "--height",
-            "6",
-            "--spp",
-            "1",
-            "-q",
-            *argv,
-        ],
-    )
-    with pytest.raises(SystemExit) as exit_info:
-        cli.main()
-    return exit_info.value.code, capsys.readouterr().err
+    return _render_cornell(monkeypatch, capsys, "--width", "8", "--height", "6", "--spp", "1", "-q", *argv)
 
 
 @pytest.mark.parametrize("suffix", ["exr", "png"])
@@ -387,21 +351,15 @@ def test_figure_commands_refuse_unwritable_outputs_and_survive_a_full_disk(tmp_p
             (tmp_path / "folder.png", f"{option} names a folder; name a file in it"),
             (tmp_path / "nope" / "x.png", f"the folder {tmp_path / 'nope'} for {option} does not exist"),
         ]:
-            monkeypatch.setattr(sys, "argv", ["spectrace", *argv, str(target)])
-            with pytest.raises(SystemExit) as exit_info:
-                cli.main()
-            stderr = capsys.readouterr().err
-            assert exit_info.value.code == 2 and stderr == f"error: {target}: {says}\n", (name, stderr)
+            status, stderr = run_in_process(monkeypatch, capsys, [*argv, str(target)])
+            assert status == 2 and stderr == f"error: {target}: {says}\n", (name, stderr)
 
     _fill_the_disk_in(monkeypatch, "figure")
     for name, (argv, _option) in commands.items():
         target = tmp_path / "kept.png"
         target.write_bytes(b"the previous figure")
-        monkeypatch.setattr(sys, "argv", ["spectrace", *argv, str(target)])
-        with pytest.raises(SystemExit) as exit_info:
-            cli.main()
-        stderr = capsys.readouterr().err
-        assert exit_info.value.code == 2 and stderr.count("\n") == 1, (name, stderr)
+        status, stderr = run_in_process(monkeypatch, capsys, [*argv, str(target)])
+        assert status == 2 and stderr.count("\n") == 1, (name, stderr)
         assert stderr.startswith(f"error: {target}: cannot write the ") and f"({_ENOSPC})" in stderr, stderr
         assert target.read_bytes() == b"the previous figure"
         assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.png", "kept.png"]

@@ -10,20 +10,14 @@ import trimesh
 from PIL import Image as PILImage
 
 import spectrace
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.spectral.grid import GRID_NM
 
-SCENE_TOML = """
-[camera]
-origin = [0.0, 1.0, -4.0]
-target = [0.0, 0.6, 0.0]
-fov = 50.0
-
-[film]
-width = 20
-height = 15
-
+SCENE_TOML = (
+    camera_film(origin="[0.0, 1.0, -4.0]", target="[0.0, 0.6, 0.0]", fov="50.0", width="20", height="15")
+    + """
 [integrator]
 max_depth = 5
 
@@ -66,6 +60,7 @@ spectrum = { values = [[400, 1.0], [600, 2.0], [700, 0.5]] }
 type = "constant"
 radiance = { value = 0.02 }
 """
+)
 
 
 def _box() -> trimesh.Trimesh:
@@ -200,16 +195,9 @@ def test_progress_bar_draws_and_finishes(device):
     assert image.spp == 3
 
 
-MATERIALS_TOML = """
-[camera]
-origin = [0.0, 0.0, -6.0]
-target = [0.0, 0.0, 0.0]
-fov = 60.0
-
-[film]
-width = 16
-height = 8
-
+MATERIALS_TOML = (
+    camera_film(origin="[0.0, 0.0, -6.0]", target="[0.0, 0.0, 0.0]", fov="60.0", width="16", height="8")
+    + """
 [sampler]
 spp = 2
 seed = 5
@@ -274,6 +262,7 @@ type = "point"
 position = [0.0, 2.0, -5.0]
 intensity = { value = 3.0 }
 """
+)
 
 
 def test_reflective_materials_render_like_the_same_toml_scene(tmp_path, device):

@@ -12,27 +12,22 @@ CI runs 1000 examples, derandomised (the same ones every run). A longer, random 
 import copy
 import json
 import math
-import os
 import re
 import shutil
 import tomllib
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, given
 from hypothesis import strategies as st
 
+from fuzz_settings import fuzz_settings
 from spectrace.errors import SpectraceError
 from spectrace.resources import scenes_dir
 from spectrace.scene import Scene, load_scene
 
-LONG_RUN_EXAMPLES = int(os.environ.get("SPECTRACE_FUZZ_EXAMPLES", "0"))
-FUZZ_SETTINGS = settings(
-    max_examples=LONG_RUN_EXAMPLES or 1000,
-    deadline=None,
-    derandomize=not LONG_RUN_EXAMPLES,
-    database=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much],
+FUZZ_SETTINGS = fuzz_settings(
+    1000, [HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much], database=None
 )
 
 CORNELL_TEXT = (scenes_dir() / "cornell_box.toml").read_text()

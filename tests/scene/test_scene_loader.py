@@ -5,37 +5,33 @@ import textwrap
 import numpy as np
 import pytest
 
+from scene_text import camera_film, diffuse
 from spectrace.errors import SpectraceError
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.spectral.colorimetry import reflectance_to_xyz, xyz_to_linear_srgb
 from spectrace.spectral.illuminants import d65_normalised
 
-MINIMAL = """
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
 
-[film]
-width = 8
-height = 6
-
-[materials.grey]
-type = "diffuse"
-reflectance = {{ {reflectance} }}
-
+def _minimal(reflectance="value = 0.5", extra=""):
+    """A grey rectangle seen by the shared camera, with `reflectance` inside its material's inline table."""
+    return (
+        camera_film()
+        + diffuse("grey", reflectance)
+        + """
 [[shapes]]
 type = "rectangle"
 material = "grey"
-transform = [{{ scale = 2 }}, {{ translate = [0, 0, -1] }}]
-{extra}
+transform = [{ scale = 2 }, { translate = [0, 0, -1] }]
 """
+        + extra
+        + "\n"
+    )
 
 
 def _write(tmp_path, reflectance="value = 0.5", extra="", text=None):
     path = tmp_path / "scene.toml"
-    path.write_text(text if text is not None else MINIMAL.format(reflectance=reflectance, extra=extra))
+    path.write_text(text if text is not None else _minimal(reflectance=reflectance, extra=extra))
     return path
 
 
@@ -97,13 +93,13 @@ def test_bad_input_names_file_and_key(tmp_path, reflectance, extra, where, messa
 
 
 def test_camera_errors(tmp_path):
-    text = MINIMAL.format(reflectance="value = 0.5", extra="").replace("fov = 40", "fov = 180")
+    text = _minimal(reflectance="value = 0.5", extra="").replace("fov = 40", "fov = 180")
     with pytest.raises(SpectraceError, match=r"scene.toml: camera.fov: .*\(0, 180\)"):
         load_scene(_write(tmp_path, text=text))
-    text = MINIMAL.format(reflectance="value = 0.5", extra="").replace("origin = [0, 0, 5]", "origin = [0, 0, 0]")
+    text = _minimal(reflectance="value = 0.5", extra="").replace("origin = [0, 0, 5]", "origin = [0, 0, 0]")
     with pytest.raises(SpectraceError, match="camera.target: camera target equals origin"):
         load_scene(_write(tmp_path, text=text))
-    text = MINIMAL.format(reflectance="value = 0.5", extra="").replace("fov = 40", "fov = 40\nup = [0, 0, 1]")
+    text = _minimal(reflectance="value = 0.5", extra="").replace("fov = 40", "fov = 40\nup = [0, 0, 1]")
     with pytest.raises(SpectraceError, match="camera.up: .*parallel"):
         load_scene(_write(tmp_path, text=text))
 
@@ -118,7 +114,7 @@ def test_a_byte_order_mark_is_accepted(tmp_path):
     """Notepad and other Windows editors start UTF-8 files with a BOM, which TOML itself does not allow."""
     plain = load_scene(_write(tmp_path, reflectance="value = 0.25"))
     path = tmp_path / "bom.toml"
-    path.write_bytes(b"\xef\xbb\xbf" + MINIMAL.format(reflectance="value = 0.25", extra="").encode())
+    path.write_bytes(b"\xef\xbb\xbf" + _minimal(reflectance="value = 0.25", extra="").encode())
     with_bom = load_scene(path)
     np.testing.assert_array_equal(with_bom.shapes[0].mesh.vertices, plain.shapes[0].mesh.vertices)
     assert with_bom.shapes[0].material.reflectance.evaluate(550.0) == pytest.approx(0.25)
@@ -140,7 +136,7 @@ def test_deep_nesting_is_one_line(tmp_path, nested):
 
 
 def test_named_spectra_and_library_references(tmp_path):
-    text = textwrap.dedent(MINIMAL.format(reflectance='spectrum = "mine"', extra="")) + textwrap.dedent(
+    text = textwrap.dedent(_minimal(reflectance='spectrum = "mine"', extra="")) + textwrap.dedent(
         """
         [spectra.mine]
         values = "360:0.2, 830:0.6"
@@ -151,8 +147,8 @@ def test_named_spectra_and_library_references(tmp_path):
 
 
 def _with_material(tmp_path, material: str):
-    """MINIMAL with [materials.grey] replaced by `material` (its keys after the table header)."""
-    text = MINIMAL.format(reflectance="value = 0.5", extra="").replace(
+    """The minimal scene with [materials.grey] replaced by `material` (its keys after the table header)."""
+    text = _minimal(reflectance="value = 0.5", extra="").replace(
         'type = "diffuse"\nreflectance = { value = 0.5 }', textwrap.dedent(material).strip()
     )
     return _write(tmp_path, text=text)
