@@ -1,22 +1,16 @@
 """`diffuse`: Lambertian reflection, f = R(λ)/π, on both faces (docs/materials.md, kernels/bsdf_diffuse.cl)."""
 
-from dataclasses import dataclass
-
 from spectrace.engine.device_types import MATERIAL_DIFFUSE
-from spectrace.materials.opaque import Opaque, reflectance_only
+from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
 from spectrace.materials.parameters import REQUIRED, reflectance
-from spectrace.spectral.spectrum import Spectrum
 
 NAME = "diffuse"
 MITSUBA_PLUGINS = ("diffuse",)
 PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π"),)
 
 
-@dataclass(frozen=True)
-class DiffuseMaterial(Opaque):
+class DiffuseMaterial(ReflectanceOnly):
     """Lambertian, f = R(λ)/π, reflecting on both faces."""
-
-    reflectance: Spectrum
 
     is_delta = False
 

@@ -1,11 +1,8 @@
 """`mirror`: perfect specular reflection of reflectance R(λ) (docs/materials.md, kernels/bsdf_mirror.cl)."""
 
-from dataclasses import dataclass
-
 from spectrace.engine.device_types import MATERIAL_MIRROR
-from spectrace.materials.opaque import Opaque, reflectance_only
+from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
 from spectrace.materials.parameters import reflectance
-from spectrace.spectral.spectrum import Spectrum
 
 NAME = "mirror"
 MITSUBA_PLUGINS = ()
@@ -13,11 +10,8 @@ MITSUBA_NONE = 'Mitsuba 3\'s mirror is a conductor of material "none", which con
 PARAMETERS = (reflectance(1.0, "perfect specular reflection scaled by R(λ)"),)
 
 
-@dataclass(frozen=True)
-class MirrorMaterial(Opaque):
+class MirrorMaterial(ReflectanceOnly):
     """Perfect specular reflection of reflectance R(λ)."""
-
-    reflectance: Spectrum
 
     is_delta = True
 

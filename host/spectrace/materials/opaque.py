@@ -2,6 +2,7 @@
 (diffuse, mirror) the whole host side but the flag is_delta and the kernel's material type."""
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -26,6 +27,13 @@ class RoughOpaque(Opaque):
     @property
     def is_delta(self) -> bool:
         return self.roughness < SMOOTH_ALPHA
+
+
+@dataclass(frozen=True)
+class ReflectanceOnly(Opaque):
+    """A material described by its reflectance R(λ) alone; a subclass states is_delta."""
+
+    reflectance: Spectrum
 
 
 def reflectance_only(model: Callable[[Spectrum], Any], material_type: int) -> tuple[Callable, Callable, Callable]:
