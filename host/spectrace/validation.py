@@ -97,6 +97,12 @@ def _measure_550(scene: Scene, meter, device: Device, streams: int, samples_per_
     return reading.spectral[0], reading.spectral_standard_error[0]
 
 
+def _light_irradiance(name: str, law: str, analytic: float, light, meter, device: Device) -> Check:
+    """The irradiance a light alone in the scene gives a meter at 550 nm, against the law."""
+    value, se = _measure_550(_scene(lights=[light]), meter, device, streams=4, samples_per_item=1)
+    return Check(name, law, analytic, value, se, "W/(m² nm)")
+
+
 def _tilted_normal(theta_degrees: float) -> tuple[float, float, float]:
     """A meter normal facing -z (toward a light on the -z side) tilted by θ about the x axis."""
     t = np.radians(theta_degrees)
@@ -138,21 +144,14 @@ def spot_light_cone(device: Device) -> list[Check]:
     checks = []
     for angle, falloff in ((0.0, 1.0), (15.0, 1.0), (35.0, 0.0)):
         direction = np.array([np.sin(np.radians(angle)), 0.0, np.cos(np.radians(angle))])
-        value, se = _measure_550(
-            _scene(lights=[spot]),
-            IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
-            device,
-            streams=4,
-            samples_per_item=1,
-        )
         checks.append(
-            Check(
+            _light_irradiance(
                 "spot light",
                 f"E = I·falloff / r² at {angle:g}° off axis (cutoff 30°)",
                 intensity * falloff / 4.0,
-                value,
-                se,
-                "W/(m² nm)",
+                spot,
+                IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
+                device,
             )
         )
     return checks
@@ -163,21 +162,14 @@ def distant_light_cosine(device: Device) -> list[Check]:
     light = DistantLight((0.0, 0.0, 1.0), Spectrum.constant(irradiance))
     checks = []
     for theta in (0.0, 45.0, 80.0):
-        value, se = _measure_550(
-            _scene(lights=[light]),
-            IrradianceMeter((0.0, 0.0, 0.0), _tilted_normal(theta)),
-            device,
-            streams=4,
-            samples_per_item=1,
-        )
         checks.append(
-            Check(
+            _light_irradiance(
                 "distant light",
                 f"E = E⊥ cos θ, θ = {theta:g}°",
                 irradiance * np.cos(np.radians(theta)),
-                value,
-                se,
-                "W/(m² nm)",
+                light,
+                IrradianceMeter((0.0, 0.0, 0.0), _tilted_normal(theta)),
+                device,
             )
         )
     return checks
