@@ -203,23 +203,11 @@ def white_furnace(device: Device) -> list[Check]:
             scene, RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)), device, streams=64, samples_per_item=64
         )
         if albedo == 1.0:
-            checks.append(
-                Check(
-                    "white furnace", "albedo-1 diffuse sphere in radiance k renders as k", k, value, se, "W/(m² sr nm)"
-                )
-            )
+            case, law = "white furnace", "albedo-1 diffuse sphere in radiance k renders as k"
         else:
             # A closed convex body sees no other surface: L = albedo·k exactly.
-            checks.append(
-                Check(
-                    "furnace, absorbing",
-                    f"albedo-{albedo} convex sphere renders as albedo·k < k",
-                    albedo * k,
-                    value,
-                    se,
-                    "W/(m² sr nm)",
-                )
-            )
+            case, law = "furnace, absorbing", f"albedo-{albedo} convex sphere renders as albedo·k < k"
+        checks.append(Check(case, law, albedo * k, value, se, "W/(m² sr nm)"))
     return checks
 
 
