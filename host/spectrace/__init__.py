@@ -12,9 +12,9 @@ Scenes can also be built from Python objects (`spectrace.api`: spectrum, diffuse
 docs/python-api.md shows how.
 """
 
-import importlib
-
 from spectrace.cache_folder import ensure_usable_cache_folder
+from spectrace.lazy_names import lazy_names
+from spectrace.scene import MODEL_NAMES
 
 # Before anything else: matplotlib (through colour) and, later, PoCL and pyopencl set up caches under it.
 ensure_usable_cache_folder()
@@ -49,39 +49,13 @@ _LAZY = {
     **dict.fromkeys(["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.colour_output"),
     "SpectraceError": "spectrace.errors",
     "Image": "spectrace.image",
-    **dict.fromkeys(
-        [
-            "AreaEmitter",
-            "Camera",
-            "ConductorMaterial",
-            "DielectricMaterial",
-            "DiffuseMaterial",
-            "Medium",
-            "MirrorMaterial",
-            "PlasticMaterial",
-            "RetroreflectorMaterial",
-            "Scene",
-            "Shape",
-        ],
-        "spectrace.scene.model",
-    ),
+    **dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"),
     "load_scene": "spectrace.scene",
     "Spectrum": "spectrace.spectral.spectrum",
 }
 
 
-def __getattr__(name: str):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'spectrace' has no attribute '{name}'")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
-
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)
 
 __version__ = "0.1.0"
 
@@ -89,17 +63,7 @@ __all__ = [
     "load_scene",
     "render",
     "Image",
-    "Scene",
-    "Camera",
-    "Shape",
-    "DiffuseMaterial",
-    "MirrorMaterial",
-    "ConductorMaterial",
-    "PlasticMaterial",
-    "RetroreflectorMaterial",
-    "DielectricMaterial",
-    "AreaEmitter",
-    "Medium",
+    *MODEL_NAMES,
     "SpectraceError",
     "Spectrum",
     "spectrum",

@@ -89,6 +89,20 @@ def _equal_energy_flux(power_w: float) -> Spectrum:
     return Spectrum.constant(power_w / VISIBLE_RANGE_NM)
 
 
+def _measure_550(scene: Scene, meter, device: Device, streams: int, samples_per_item: int) -> tuple[float, float]:
+    """A meter's reading at 550 nm and its standard error."""
+    reading = measure(
+        scene, meter, wavelengths_nm=[550.0], streams=streams, samples_per_item=samples_per_item, device=device
+    )
+    return reading.spectral[0], reading.spectral_standard_error[0]
+
+
+def _light_irradiance(name: str, law: str, analytic: float, light, meter, device: Device) -> Check:
+    """The irradiance a light alone in the scene gives a meter at 550 nm, against the law."""
+    value, se = _measure_550(_scene(lights=[light]), meter, device, streams=4, samples_per_item=1)
+    return Check(name, law, analytic, value, se, "W/(m² nm)")
+
+
 def _tilted_normal(theta_degrees: float) -> tuple[float, float, float]:
     """A meter normal facing -z (toward a light on the -z side) tilted by θ about the x axis."""
     t = np.radians(theta_degrees)
@@ -130,22 +144,14 @@ def spot_light_cone(device: Device) -> list[Check]:
     checks = []
     for angle, falloff in ((0.0, 1.0), (15.0, 1.0), (35.0, 0.0)):
         direction = np.array([np.sin(np.radians(angle)), 0.0, np.cos(np.radians(angle))])
-        reading = measure(
-            _scene(lights=[spot]),
-            IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
-            wavelengths_nm=[550.0],
-            streams=4,
-            samples_per_item=1,
-            device=device,
-        )
         checks.append(
-            Check(
+            _light_irradiance(
                 "spot light",
                 f"E = I·falloff / r² at {angle:g}° off axis (cutoff 30°)",
                 intensity * falloff / 4.0,
-                reading.spectral[0],
-                reading.spectral_standard_error[0],
-                "W/(m² nm)",
+                spot,
+                IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
+                device,
             )
         )
     return checks
@@ -156,22 +162,14 @@ def distant_light_cosine(device: Device) -> list[Check]:
     light = DistantLight((0.0, 0.0, 1.0), Spectrum.constant(irradiance))
     checks = []
     for theta in (0.0, 45.0, 80.0):
-        reading = measure(
-            _scene(lights=[light]),
-            IrradianceMeter((0.0, 0.0, 0.0), _tilted_normal(theta)),
-            wavelengths_nm=[550.0],
-            streams=4,
-            samples_per_item=1,
-            device=device,
-        )
         checks.append(
-            Check(
+            _light_irradiance(
                 "distant light",
                 f"E = E⊥ cos θ, θ = {theta:g}°",
                 irradiance * np.cos(np.radians(theta)),
-                reading.spectral[0],
-                reading.spectral_standard_error[0],
-                "W/(m² nm)",
+                light,
+                IrradianceMeter((0.0, 0.0, 0.0), _tilted_normal(theta)),
+                device,
             )
         )
     return checks
@@ -201,33 +199,15 @@ def white_furnace(device: Device) -> list[Check]:
     for albedo in (1.0, 0.5):
         sphere = Shape(mesh=primitives.sphere(3), material=DiffuseMaterial(Spectrum.constant(albedo)))
         scene = _scene(shapes=[sphere], lights=[ConstantEnvironment(Spectrum.constant(k))])
-        reading = measure(
-            scene,
-            RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)),
-            wavelengths_nm=[550.0],
-            streams=64,
-            samples_per_item=64,
-            device=device,
+        value, se = _measure_550(
+            scene, RadianceMeter((0.2, 0.1, -3.0), (-0.06, -0.03, 1.0)), device, streams=64, samples_per_item=64
         )
-        value, se = reading.spectral[0], reading.spectral_standard_error[0]
         if albedo == 1.0:
-            checks.append(
-                Check(
-                    "white furnace", "albedo-1 diffuse sphere in radiance k renders as k", k, value, se, "W/(m² sr nm)"
-                )
-            )
+            case, law = "white furnace", "albedo-1 diffuse sphere in radiance k renders as k"
         else:
             # A closed convex body sees no other surface: L = albedo·k exactly.
-            checks.append(
-                Check(
-                    "furnace, absorbing",
-                    f"albedo-{albedo} convex sphere renders as albedo·k < k",
-                    albedo * k,
-                    value,
-                    se,
-                    "W/(m² sr nm)",
-                )
-            )
+            case, law = "furnace, absorbing", f"albedo-{albedo} convex sphere renders as albedo·k < k"
+        checks.append(Check(case, law, albedo * k, value, se, "W/(m² sr nm)"))
     return checks
 
 
@@ -268,15 +248,9 @@ def bsdf_furnace(device: Device) -> list[Check]:
                 rr_depth=2000
             )
             for view, (origin, direction) in views.items():
-                reading = measure(
-                    scene,
-                    RadianceMeter(origin, direction),
-                    wavelengths_nm=[550.0],
-                    streams=64,
-                    samples_per_item=64,
-                    device=device,
+                value, se = _measure_550(
+                    scene, RadianceMeter(origin, direction), device, streams=64, samples_per_item=64
                 )
-                value, se = reading.spectral[0], reading.spectral_standard_error[0]
                 if lossy:
                     checks.append(
                         Check("BSDF furnace", f"{name}: L ≤ k ({view})", k, value, se, "W/(m² sr nm)", at_most=True)
@@ -350,21 +324,16 @@ def flux_meters(device: Device) -> list[Check]:
     lamp = Shape(
         mesh=panel, material=DiffuseMaterial(Spectrum.zeros()), emitter=AreaEmitter(Spectrum.constant(radiance))
     )
-    reading = measure(
-        _scene(shapes=[lamp]),
-        FluxMeter((0.0, 0.0, 0.0), 1.0),
-        wavelengths_nm=[550.0],
-        streams=128,
-        samples_per_item=256,
-        device=device,
+    value, se = _measure_550(
+        _scene(shapes=[lamp]), FluxMeter((0.0, 0.0, 0.0), 1.0), device, streams=128, samples_per_item=256
     )
     checks.append(
         Check(
             "flux meter",
             f"one-sided Lambertian area light: Φ = π L A (A = {area:g} m²)",
             np.pi * radiance * area,
-            reading.spectral[0],
-            reading.spectral_standard_error[0],
+            value,
+            se,
             "W/nm",
         )
     )

@@ -10,21 +10,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# The bundled Cornell box as seen from its camera: (left, top, right, bottom) as fractions of the image.
+# Regions are (left, top, right, bottom) as fractions of the image; every set ends with the whole image.
+WHOLE_IMAGE = {"whole image": (0.0, 0.0, 1.0, 1.0)}
+# The bundled Cornell box as seen from its camera.
 CORNELL_BOX_REGIONS = {
     "left wall (red)": (0.03, 0.30, 0.17, 0.70),
     "right wall (green)": (0.83, 0.30, 0.97, 0.70),
     "back wall": (0.55, 0.25, 0.75, 0.55),
     "floor": (0.08, 0.88, 0.46, 0.96),
     "light": (0.43, 0.125, 0.57, 0.15),
-    "whole image": (0.0, 0.0, 1.0, 1.0),
+    **WHOLE_IMAGE,
 }
 QUADRANT_REGIONS = {
     "top left": (0.0, 0.0, 0.5, 0.5),
     "top right": (0.5, 0.0, 1.0, 0.5),
     "bottom left": (0.0, 0.5, 0.5, 1.0),
     "bottom right": (0.5, 0.5, 1.0, 1.0),
-    "whole image": (0.0, 0.0, 1.0, 1.0),
+    **WHOLE_IMAGE,
 }
 SIGMA_LIMIT = 4.0
 

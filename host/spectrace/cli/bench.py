@@ -71,7 +71,7 @@ def _check(sizes: list[int] | None = None, max_depth: int | None = None, seconds
             raise SpectraceError(problem, where="--size")
 
 
-def _emit(mode: str, result, tables: Callable[[], list], as_json: bool) -> None:
+def _emit(mode: str, result, tables: Callable[[], list], as_json: bool, width: int = 160) -> None:
     """One JSON object {mode: result} on stdout, or the mode's tables; notes a mode left go to stderr first."""
     for note in result.get("notes", []) if isinstance(result, dict) else []:
         _log(f"note ({mode}): {note}")
@@ -79,7 +79,7 @@ def _emit(mode: str, result, tables: Callable[[], list], as_json: bool) -> None:
         print(json.dumps({mode: result}, indent=2))
         return
     for table in tables():
-        Console(width=160, markup=False).print(table)
+        Console(width=width, markup=False).print(table)
 
 
 bench_app = typer.Typer(
@@ -127,10 +127,7 @@ def render_bench(
         all_devices=all_devices,
         log=_log,
     )
-    if as_json:
-        print(json.dumps({"render": results}, indent=2))
-    else:
-        Console(width=150, markup=False).print(render_bench_table(results))
+    _emit("render", results, lambda: [render_bench_table(results)], as_json, width=150)
 
 
 @bench_app.command("peer")
@@ -283,7 +280,4 @@ def kernel_shapes_bench(
     results = run_kernel_shape_bench(
         scene, size or RENDER_DEFAULT_SIZES, spp, max_depth, device, kernel_shape_variants(), log=_log
     )
-    if as_json:
-        print(json.dumps({"kernel_shapes": results}, indent=2))
-    else:
-        Console(width=150, markup=False).print(kernel_shape_table(results))
+    _emit("kernel_shapes", results, lambda: [kernel_shape_table(results)], as_json, width=150)

@@ -59,6 +59,7 @@ class Renderer:
         averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output. specialise=False builds the kernels
         that handle every scene instead of ones carrying only this scene's features (for comparisons)."""
         self.scene = scene
+        self._check_scene(scene)
         problem = (
             limits.render_settings_problem(scene.width, scene.height, scene.spp)
             or limits.scene_settings_problem(scene)
@@ -88,6 +89,13 @@ class Renderer:
         self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(b.cmf))
         self.pixel_count = scene.width * scene.height
         self.film = Film(self.device, scene.width, scene.height, spectral_bins, spectral_range_nm)
+        self._allocate(spectral_bins)
+
+    def _check_scene(self, scene: Scene) -> None:
+        """Refuses a scene this kernel shape cannot render, before any other check."""
+
+    def _allocate(self, spectral_bins: int) -> None:
+        """The device buffers this kernel shape needs beyond the film and the scene."""
 
     def _program_file(self, scene: Scene) -> str:
         return INTEGRATOR_PROGRAMS[scene.integrator]

@@ -26,21 +26,14 @@ QUEUE_ENTRY_BYTES = 4  # one int (a pixel index) per live path
 
 
 class WavefrontRenderer(Renderer):
-    @translate_opencl_errors("setting up the render")
-    def __init__(
-        self,
-        scene: Scene,
-        device: Device | str | None = None,
-        spectral_bins: int = 0,
-        spectral_range_nm: tuple[float, float] = (360.0, 830.0),
-        specialise: bool = True,
-    ):
+    def _check_scene(self, scene: Scene) -> None:
         if scene.integrator != "path":
             raise SpectraceError(
                 f"the wavefront kernel runs the path integrator only, not {scene.integrator!r}",
                 where=str(scene.source) if scene.source else None,
             )
-        super().__init__(scene, device, spectral_bins, spectral_range_nm, specialise)
+
+    def _allocate(self, spectral_bins: int) -> None:
         ctx = self.device.context
         slot_size = np.zeros(1, np.uint32)
         size_buffer = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4)

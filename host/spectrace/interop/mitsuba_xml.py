@@ -484,6 +484,10 @@ class MitsubaImporter:
         """What an emitter emits when its spectrum is not given: Mitsuba's d65 of unit luminance."""
         return {"rgb": [1.0, 1.0, 1.0]}
 
+    def emission(self, properties: dict, key: str) -> dict | None:
+        """An emitter's spectrum `key`, or the default emission where it is not given."""
+        return self.spectrum(properties[key], key) if key in properties else self.default_emission()
+
     def non_negative(self, values: list[float], element: Element, key: str) -> None:
         """Reflectances, emission and optical constants are never negative."""
         if any(value < 0.0 for value in values):

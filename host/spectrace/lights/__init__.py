@@ -9,19 +9,11 @@ material's: MITSUBA_PLUGINS with `from_mitsuba(importer, emitter, properties, to
 it is on a shape) or MITSUBA_NONE, and `to_mitsuba` where the export has one.
 """
 
-from spectrace.errors import SpectraceError
+from spectrace.dispatch import module_by_model
 from spectrace.lights import area, constant, distant, envmap, point, spot
 
 __all__ = ["LIGHTS", "area", "constant", "distant", "envmap", "point", "spot"]
 
 # Scene-file `type` -> module, in the order the schema lists them.
 LIGHTS = {m.NAME: m for m in (point, spot, distant, constant, envmap)}
-_BY_MODEL = {m.MODEL: m for m in LIGHTS.values()}
-
-
-def light_module(light):
-    """The module of a resolved light."""
-    module = _BY_MODEL.get(type(light))
-    if module is None:
-        raise SpectraceError(f"unsupported light {type(light).__name__}")
-    return module
+light_module = module_by_model(LIGHTS.values(), "light")

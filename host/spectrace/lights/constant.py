@@ -38,11 +38,7 @@ def write_rows(light: ConstantEnvironment, out: LightRows) -> None:
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
-    radiance = (
-        importer.spectrum(properties["radiance"], "radiance")
-        if "radiance" in properties
-        else importer.default_emission()
-    )
+    radiance = importer.emission(properties, "radiance")
     return None if radiance is None else {"type": "constant", "radiance": radiance}
 
 

@@ -50,11 +50,7 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     )
     if not any(direction):
         raise importer.fail(properties.get("direction", emitter), "the direction must not be zero")
-    irradiance = (
-        importer.spectrum(properties["irradiance"], "irradiance")
-        if "irradiance" in properties
-        else importer.default_emission()
-    )
+    irradiance = importer.emission(properties, "irradiance")
     return None if irradiance is None else {"type": "distant", "direction": direction, "irradiance": irradiance}
 
 

@@ -110,11 +110,7 @@ def write_rows(light: PointLight, out: LightRows) -> None:
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     position = importer.vector(properties["position"]) if "position" in properties else to_world[:3, 3].tolist()
-    intensity = (
-        importer.spectrum(properties["intensity"], "intensity")
-        if "intensity" in properties
-        else importer.default_emission()
-    )
+    intensity = importer.emission(properties, "intensity")
     return None if intensity is None else {"type": "point", "position": position, "intensity": intensity}
 
 

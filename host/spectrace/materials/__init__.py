@@ -13,22 +13,14 @@ Adding a BSDF: its module here, one entry in MATERIALS, its kernel file and case
 
 import numpy as np
 
+from spectrace.dispatch import module_by_model
 from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM
-from spectrace.errors import SpectraceError
 from spectrace.materials import conductor, dielectric, diffuse, mirror, plastic, retroreflector
 from spectrace.spectral.table import SpectrumTable
 
 # Scene-file `type` -> module, in the order the schema lists them.
 MATERIALS = {m.NAME: m for m in (diffuse, mirror, conductor, plastic, retroreflector, dielectric)}
-_BY_MODEL = {m.MODEL: m for m in MATERIALS.values()}
-
-
-def material_module(material):
-    """The module of a resolved material."""
-    module = _BY_MODEL.get(type(material))
-    if module is None:
-        raise SpectraceError(f"unsupported material {type(material).__name__}")
-    return module
+material_module = module_by_model(MATERIALS.values(), "material")
 
 
 def material_row(material, table: SpectrumTable) -> np.ndarray:

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import MATERIAL_CONDUCTOR
-from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
+from spectrace.materials.opaque import RoughOpaque
+from spectrace.materials.parameters import Parameter, Range, reflectance, roughness
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
@@ -52,7 +53,7 @@ PARAMETERS = (
 
 
 @dataclass(frozen=True)
-class ConductorMaterial:
+class ConductorMaterial(RoughOpaque):
     """Metal of complex index of refraction η(λ) + i k(λ) relative to the outside, smooth or GGX-rough; the Fresnel
     reflectance is multiplied by `specular_tint` when given."""
 
@@ -60,13 +61,6 @@ class ConductorMaterial:
     k: Spectrum
     roughness: float = ROUGHNESS.number_default
     specular_tint: Spectrum | None = None
-
-    has_transmission = False
-    is_dispersive = False
-
-    @property
-    def is_delta(self) -> bool:
-        return self.roughness < SMOOTH_ALPHA
 
 
 MODEL = ConductorMaterial

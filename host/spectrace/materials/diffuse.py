@@ -1,44 +1,24 @@
 """`diffuse`: Lambertian reflection, f = R(λ)/π, on both faces (docs/materials.md, kernels/bsdf_diffuse.cl)."""
 
-from dataclasses import dataclass
-
-import numpy as np
-
 from spectrace.engine.device_types import MATERIAL_DIFFUSE
+from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
 from spectrace.materials.parameters import REQUIRED, reflectance
-from spectrace.spectral.spectrum import Spectrum
-from spectrace.spectral.table import SpectrumTable
 
 NAME = "diffuse"
 MITSUBA_PLUGINS = ("diffuse",)
 PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π"),)
 
 
-@dataclass(frozen=True)
-class DiffuseMaterial:
+class DiffuseMaterial(ReflectanceOnly):
     """Lambertian, f = R(λ)/π, reflecting on both faces."""
 
-    reflectance: Spectrum
-
     is_delta = False
-    has_transmission = False
-    is_dispersive = False
 
 
 MODEL = DiffuseMaterial
 
 
-def from_spec(spec, resolver, key: str) -> DiffuseMaterial:
-    return DiffuseMaterial(resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False))
-
-
-def make(reflectance: Spectrum) -> DiffuseMaterial:
-    return DiffuseMaterial(reflectance)
-
-
-def write_row(row: np.ndarray, material: DiffuseMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_DIFFUSE
-    row["reflectance_offset"] = table.add(material.reflectance)
+from_spec, make, write_row = reflectance_only(DiffuseMaterial, MATERIAL_DIFFUSE)
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:

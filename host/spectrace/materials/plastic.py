@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import IOR_CONSTANT, MATERIAL_PLASTIC
+from spectrace.materials.opaque import Opaque
 from spectrace.materials.parameters import REQUIRED, Parameter, Range, reflectance, roughness
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
@@ -26,7 +27,7 @@ PARAMETERS = (reflectance(REQUIRED, "albedo of the diffuse base under the coat")
 
 
 @dataclass(frozen=True)
-class PlasticMaterial:
+class PlasticMaterial(Opaque):
     """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside."""
 
     reflectance: Spectrum
@@ -34,8 +35,6 @@ class PlasticMaterial:
     roughness: float = ROUGHNESS.number_default
 
     is_delta = False  # the base is diffuse whatever the coat
-    has_transmission = False
-    is_dispersive = False
 
 
 MODEL = PlasticMaterial

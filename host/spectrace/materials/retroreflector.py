@@ -6,7 +6,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import MATERIAL_RETROREFLECTOR
-from spectrace.materials.parameters import SMOOTH_ALPHA, reflectance, roughness
+from spectrace.materials.opaque import RoughOpaque
+from spectrace.materials.parameters import reflectance, roughness
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
@@ -18,18 +19,11 @@ PARAMETERS = (reflectance(1.0, "how much comes back"), ROUGHNESS)
 
 
 @dataclass(frozen=True)
-class RetroreflectorMaterial:
+class RetroreflectorMaterial(RoughOpaque):
     """Returns light toward where it came from: a GGX lobe of width `roughness` about the incident direction."""
 
     reflectance: Spectrum
     roughness: float = ROUGHNESS.number_default
-
-    has_transmission = False
-    is_dispersive = False
-
-    @property
-    def is_delta(self) -> bool:
-        return self.roughness < SMOOTH_ALPHA
 
 
 MODEL = RetroreflectorMaterial

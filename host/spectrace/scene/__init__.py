@@ -4,10 +4,11 @@ The names below load on first use, so that the leaf modules of this package (`li
 lower layers (image readers, light modules) without pulling in the loader, which imports those layers back.
 """
 
-import importlib
 from pathlib import Path
 
-_MODEL_NAMES = [
+from spectrace.lazy_names import lazy_names
+
+MODEL_NAMES = [
     "Scene",
     "Camera",
     "Shape",
@@ -21,7 +22,7 @@ _MODEL_NAMES = [
     "Medium",
 ]
 
-__all__ = ["load_scene", *_MODEL_NAMES]
+__all__ = ["load_scene", *MODEL_NAMES]
 
 
 def load_scene(path: str | Path):
@@ -33,13 +34,4 @@ def load_scene(path: str | Path):
     return load_scene_file(resolve_scene_path(path))
 
 
-def __getattr__(name: str):
-    if name in _MODEL_NAMES:
-        value = getattr(importlib.import_module("spectrace.scene.model"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'spectrace.scene' has no attribute '{name}'")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODEL_NAMES))
+__getattr__, __dir__ = lazy_names(__name__, dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"))

@@ -9,6 +9,7 @@ a display's own transfer curve is unknown here. A triple is therefore read in on
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from enum import StrEnum
 
 import numpy as np
@@ -44,21 +45,22 @@ def checked_rgb(rgb: np.ndarray | tuple[float, float, float], where: str = "rgb"
     return array
 
 
+def _transfer(
+    values: np.ndarray, encoding: Encoding, srgb: Callable[[np.ndarray], np.ndarray], gamma: float
+) -> np.ndarray:
+    values = np.asarray(values, dtype=np.float64)
+    if encoding is Encoding.LINEAR:
+        return values.copy()
+    if encoding is Encoding.SRGB:
+        return srgb(values)
+    return np.power(values, gamma)
+
+
 def decode_to_drive(encoded: np.ndarray, encoding: Encoding) -> np.ndarray:
     """Encoded values in [0, 1] (last axis RGB) -> linear drive in [0, 1]."""
-    encoded = np.asarray(encoded, dtype=np.float64)
-    if encoding is Encoding.LINEAR:
-        return encoded.copy()
-    if encoding is Encoding.SRGB:
-        return srgb_decode(encoded)
-    return np.power(encoded, DISPLAY_GAMMA)
+    return _transfer(encoded, encoding, srgb_decode, DISPLAY_GAMMA)
 
 
 def encode_drive(drive: np.ndarray, encoding: Encoding) -> np.ndarray:
     """Inverse of `decode_to_drive`: linear drive in [0, 1] -> encoded values."""
-    drive = np.asarray(drive, dtype=np.float64)
-    if encoding is Encoding.LINEAR:
-        return drive.copy()
-    if encoding is Encoding.SRGB:
-        return srgb_encode(drive)
-    return np.power(drive, 1.0 / DISPLAY_GAMMA)
+    return _transfer(drive, encoding, srgb_encode, 1.0 / DISPLAY_GAMMA)
