@@ -93,6 +93,19 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     }
 }
 
+/* A surface vertex, as both integrators meet it: its direct light (light_vertex), then a direction from its
+ * material's BSDF drawn with the next 1D and 2D numbers. Returns 0 when the BSDF gives no direction. */
+inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                                   const PathVertex *v, int use_mis, float4 *radiance, uint *rays_traced,
+                                   BSDFSample *bs)
+{
+    __global const Material *material = &scene->materials[v->info.material];
+    light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
+    float uc = sample_1d(sampler);
+    float2 u = sample_2d(sampler);
+    return material_sample(material, scene->spectra, w, v->n, v->wo, uc, u, bs);
+}
+
 /* The path leaves the vertex along a BSDF sample: its weight and radiance compression join the throughput, and
  * the next ray starts off the surface in the medium on that side. */
 inline void follow_bsdf_sample(PathState *s, const PathVertex *v, const BSDFSample *bs)

@@ -97,13 +97,8 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
     if (s->segments >= last_segment) return 0;
 
-    __global const Material *material = &scene->materials[v.info.material];
-    light_vertex(scene, w, sampler, s, &v, material, 1, radiance, rays_traced);
-
-    float uc = sample_1d(sampler);
-    float2 u = sample_2d(sampler);
     BSDFSample bs;
-    if (!material_sample(material, scene->spectra, w, v.n, v.wo, uc, u, &bs)) return 0;
+    if (!light_and_sample_vertex(scene, w, sampler, s, &v, 1, radiance, rays_traced, &bs)) return 0;
     follow_bsdf_sample(s, &v, &bs);
     if (!survives_russian_roulette(s, params, sample_1d(sampler))) return 0;
     if (all(s->throughput == (float4)(0.0f))) return 0;

@@ -30,14 +30,10 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
     if (s->segments >= last_segment) return 0;
 
-    __global const Material *material = &scene->materials[v.info.material];
-    light_vertex(scene, w, sampler, s, &v, material, 0, radiance, rays_traced);
     /* Follow the specular lobes only: a sampled non-specular direction ends the path (its light was counted
      * by next-event estimation), which keeps the specular part unbiased. */
-    float uc = sample_1d(sampler);
-    float2 u = sample_2d(sampler);
     BSDFSample bs;
-    if (!material_sample(material, scene->spectra, w, v.n, v.wo, uc, u, &bs) || !bs.is_delta) return 0;
+    if (!light_and_sample_vertex(scene, w, sampler, s, &v, 0, radiance, rays_traced, &bs) || !bs.is_delta) return 0;
     follow_bsdf_sample(s, &v, &bs);
     if (all(s->throughput == (float4)(0.0f))) return 0;
     ++s->segments;
