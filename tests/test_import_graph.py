@@ -1,36 +1,12 @@
 """The package's modules import one another without a circle. Imports inside functions and under TYPE_CHECKING
 count too: such an import hides a circle from import time, not from the design."""
 
-import ast
-from pathlib import Path
-
-import spectrace
-
-PACKAGE = Path(spectrace.__file__).parent
-
-
-def _module_name(path: Path) -> str:
-    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+from package_imports import MODULES, targets
 
 
 def import_graph() -> dict[str, set[str]]:
-    """Module -> the package's modules it imports anywhere in its source. `from pkg import name` counts as an
-    import of pkg.name when that is a module, else of pkg."""
-    modules = {_module_name(path): path for path in PACKAGE.rglob("*.py")}
-    graph = {}
-    for name, path in modules.items():
-        targets = set()
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if isinstance(node, ast.Import):
-                targets |= {alias.name for alias in node.names}
-            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                submodules = {f"{node.module}.{alias.name}" for alias in node.names} & modules.keys()
-                targets |= submodules
-                if len(submodules) < len(node.names):
-                    targets.add(node.module)
-        graph[name] = {target for target in targets if target in modules and target != name}
-    return graph
+    """Module -> the package's modules it imports anywhere in its source."""
+    return {name: targets(name) - {name} for name in MODULES}
 
 
 def circles(graph: dict[str, set[str]]) -> list[set[str]]:

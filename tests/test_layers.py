@@ -2,49 +2,7 @@
 the display experiments; the display experiments reach the renderer through the public API only. (That no modules
 import each other around a loop is tests/test_import_graph.py's.)"""
 
-import ast
-from pathlib import Path
-
-import spectrace
-
-ROOT = Path(spectrace.__file__).parent
-
-
-def _module_name(path: Path) -> str:
-    parts = ["spectrace", *path.relative_to(ROOT).with_suffix("").parts]
-    return ".".join(parts[:-1]) if parts[-1] == "__init__" else ".".join(parts)
-
-
-MODULES = {_module_name(path): path for path in sorted(ROOT.rglob("*.py"))}
-
-
-def _imports(name: str, top_level_only: bool) -> list[tuple[str, str, int]]:
-    """(module imported, name taken from it or "", line) for each import in module `name`: every one, or only
-    those run when the module is first imported (the module's own statements, not functions or TYPE_CHECKING)."""
-    path = MODULES[name]
-    tree = ast.parse(path.read_text(encoding="utf-8"))
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    nodes = tree.body if top_level_only else list(ast.walk(tree))
-    found = []
-    for node in nodes:
-        if isinstance(node, ast.Import):
-            found += [(alias.name, "", node.lineno) for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
-                base = ".".join(anchor + ([base] if base else []))
-            found += [(base, alias.name, node.lineno) for alias in node.names]
-    return found
-
-
-def _targets(name: str, top_level_only: bool) -> set[str]:
-    """The package's modules that module `name` imports (`from package import module` names the module)."""
-    targets = set()
-    for module, attribute, _ in _imports(name, top_level_only):
-        submodule = f"{module}.{attribute}"
-        targets.add(submodule if submodule in MODULES else module)
-    return {target for target in targets if target in MODULES}
+from package_imports import MODULES, imports, targets
 
 
 def _in(module: str, package: str) -> bool:
@@ -60,7 +18,7 @@ def test_the_scene_layer_does_not_import_the_display_experiments():
         f"{name} imports {target}"
         for name in MODULES
         if _in(name, "spectrace.scene")
-        for target in _targets(name, top_level_only=False)
+        for target in targets(name)
         if _in(target, "spectrace.displays")
     ]
     assert found == []
@@ -72,7 +30,7 @@ def test_the_spectral_layer_imports_no_layer_above_it():
         f"{name} imports {target}"
         for name in MODULES
         if _in(name, "spectrace.spectral")
-        for target in _targets(name, top_level_only=False)
+        for target in targets(name)
         if any(_in(target, layer) for layer in above)
     ]
     assert found == []
@@ -83,7 +41,7 @@ def test_the_display_experiments_reach_the_renderer_through_the_public_api_only(
     for name in MODULES:
         if not _in(name, "spectrace.displays"):
             continue
-        for module, attribute, line in _imports(name, top_level_only=False):
+        for module, attribute, line in imports(name):
             if _in(module, "spectrace.engine"):
                 found.append(f"{name}:{line} imports {module}")
             elif module == "spectrace.api" and attribute.startswith("_"):
