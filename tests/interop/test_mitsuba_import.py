@@ -4,14 +4,13 @@ imported scene rendered by spectrace against Mitsuba's own spectral render of th
 
 import math
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cli_runner import run_in_process as _run_in_process
+from cli_runner import run_spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
@@ -61,25 +60,12 @@ def test_cornell_box_geometry_and_light(device):
 @pytest.mark.subprocess
 def test_import_command_writes_a_scene_that_renders(tmp_path):
     out = tmp_path / "imported" / "cornell.toml"
-    run = [sys.executable, "-m", "spectrace"]
-    result = subprocess.run(
-        [*run, "import-mitsuba", str(CORNELL_XML), "-o", str(out), "-D", "spp=2"],
-        capture_output=True,
-        text=True,
-        env=os.environ.copy(),
-        timeout=600,
-    )
+    result = run_spectrace("import-mitsuba", str(CORNELL_XML), "-o", str(out), "-D", "spp=2")
     assert result.returncode == 0, result.stderr
     assert "reconstruction filter 'gaussian'" in result.stderr  # a difference spectrace reports, not hides
     assert "spp = 2" in out.read_text()
     image = tmp_path / "cornell.png"
-    rendered = subprocess.run(
-        [*run, "render", str(out), "-o", str(image), "--width", "8", "--height", "8", "-q"],
-        capture_output=True,
-        text=True,
-        env=os.environ.copy(),
-        timeout=600,
-    )
+    rendered = run_spectrace("render", str(out), "-o", str(image), "--width", "8", "--height", "8", "-q")
     assert rendered.returncode == 0, rendered.stderr
 
 
@@ -516,7 +502,6 @@ def test_a_real_process_prints_only_the_line_and_keeps_the_old_output(tmp_path):
     exits with status 2 and one line, and the TOML already there is left as it was, with no temporary file."""
     out = tmp_path / "scene.toml"
     out.write_text("# the previous import\n")
-    run = [sys.executable, "-m", "spectrace", "import-mitsuba"]
     for body, says in [
         ("<bsdf>" * 2000 + "</bsdf>" * 2000 + CUBE, "elements nested more than 64 deep"),
         (
@@ -525,9 +510,7 @@ def test_a_real_process_prints_only_the_line_and_keeps_the_old_output(tmp_path):
         ),
     ]:
         xml = _write(tmp_path, body)
-        result = subprocess.run(
-            [*run, str(xml), "-o", str(out)], capture_output=True, text=True, env=os.environ.copy(), timeout=300
-        )
+        result = run_spectrace("import-mitsuba", str(xml), "-o", str(out), timeout=300)
         assert result.returncode == 2 and result.stdout == "", result.stderr
         assert result.stderr.count("\n") == 1 and result.stderr.startswith(f"error: {xml}"), result.stderr
         assert says in result.stderr and "Traceback" not in result.stderr

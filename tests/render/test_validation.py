@@ -4,13 +4,11 @@ The analytic side of each case is the closed-form law (E = Φ cos θ / 4πr², E
 independently of the renderer; the measured side comes from the renderer's sensors and images."""
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
+from cli_runner import run_spectrace
 from spectrace.validation import CASES, prism_deviation_degrees, prism_window_centre_degrees, run_validation
 
 SLOW_CASES = {"dispersion", "medium-furnace"}  # over 5 s each on a loaded two-core machine
@@ -26,13 +24,7 @@ def test_law_holds(device, case):
 
 @pytest.mark.subprocess
 def test_validate_command_reports_every_case():
-    result = subprocess.run(
-        [sys.executable, "-m", "spectrace", "validate", "--case", "inverse-square", "--case", "flux", "--json"],
-        capture_output=True,
-        text=True,
-        env=os.environ.copy(),
-        timeout=600,
-    )
+    result = run_spectrace("validate", "--case", "inverse-square", "--case", "flux", "--json")
     assert result.returncode == 0, result.stderr
     checks = json.loads(result.stdout)["checks"]
     assert {c["case"] for c in checks} == {"point light", "flux meter"}

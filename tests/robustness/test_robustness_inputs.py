@@ -7,13 +7,13 @@ subprocess, to show that nothing but that line reaches the terminal.
 
 import importlib
 import os
-import subprocess
 import sys
 from dataclasses import dataclass, field
 
 import pytest
 
 from cli_runner import run_in_process as _run_in_process
+from cli_runner import run_spectrace
 from scene_text import glowing_rectangle
 from spectrace import cli
 
@@ -650,9 +650,7 @@ def test_bad_input_is_one_line_naming_file_and_key(case, tmp_path, monkeypatch, 
 def test_a_real_process_prints_only_the_line(tmp_path):
     case = next(c for c in CASES if c.name == "nan-mesh-vertex")
     scene, argv = _write_case(tmp_path, case)
-    result = subprocess.run(
-        [sys.executable, "-m", "spectrace", *argv], capture_output=True, text=True, env=os.environ.copy(), timeout=300
-    )
+    result = run_spectrace(*argv, timeout=300)
     assert result.returncode == 2
     assert "Traceback" not in result.stderr and result.stdout == ""
     assert result.stderr.count("\n") == 1 and result.stderr.startswith("error: "), result.stderr
