@@ -71,8 +71,6 @@ class Renderer:
         self.buffers: SceneBuffers = build_scene_buffers(scene)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
         check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
-        self.spectral_bins = spectral_bins
-        self.spectral_range_nm = spectral_range_nm
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
         if specialise:
             defines |= scene_feature_defines(self.buffers)
@@ -87,7 +85,6 @@ class Renderer:
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._scene = upload_scene(ctx, b)
         self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(b.cmf))
-        self.pixel_count = scene.width * scene.height
         self.film = Film(self.device, scene.width, scene.height, spectral_bins, spectral_range_nm)
         self._allocate(spectral_bins)
 
@@ -102,6 +99,19 @@ class Renderer:
 
     def _create_kernels(self) -> cl.Kernel:
         return cl.Kernel(self.program, "render_pass")
+
+    # The film's size and bands, which the film holds (one copy, no drift).
+    @property
+    def pixel_count(self) -> int:
+        return self.film.pixel_count
+
+    @property
+    def spectral_bins(self) -> int:
+        return self.film.spectral_bins
+
+    @property
+    def spectral_range_nm(self) -> tuple[float, float]:
+        return self.film.spectral_range_nm
 
     @property
     def samples_done(self) -> int:
