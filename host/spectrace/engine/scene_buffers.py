@@ -48,20 +48,6 @@ class SceneBuffers:
     media: np.ndarray  # MEDIUM_DTYPE (one dummy entry when there are none)
     medium_count: int
 
-    def device_bytes(self) -> int:
-        arrays = (
-            self.nodes,
-            self.triangle_vertices,
-            self.triangle_info,
-            self.materials,
-            self.lights,
-            self.light_cdf,
-            self.spectra,
-            self.cmf,
-            self.media,
-        )
-        return sum(a.nbytes for a in arrays)
-
 
 def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
     """(M, 3) unit normals of the winding (v0, v1, v2), computed in float64; zero for a degenerate triangle."""
