@@ -22,16 +22,14 @@ def in_notebook() -> bool:
     return ipython is not None and "IPKernelApp" in getattr(ipython, "config", {})
 
 
+def _installed(name: str) -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec(name) is not None
+
+
 def has_ipywidgets() -> bool:
-    import importlib.util
-
-    return importlib.util.find_spec("ipywidgets") is not None
-
-
-def _has_tqdm() -> bool:
-    import importlib.util
-
-    return importlib.util.find_spec("tqdm") is not None
+    return _installed("ipywidgets")
 
 
 @contextmanager
@@ -59,7 +57,7 @@ def progress_bar(total_spp: int, done_spp: int, console: Console | None = None) 
     `console`: the rich console to draw on outside Jupyter (default: a new one on stderr), so that messages the
     caller prints on it during the render stay above the bar."""
     if in_notebook():
-        if not (has_ipywidgets() and _has_tqdm()):
+        if not (has_ipywidgets() and _installed("tqdm")):
             with text_bar(total_spp, done_spp) as draw:
                 yield draw
             return

@@ -73,8 +73,6 @@ app.command("validate")(validate.validate)
 def _usage_error_type() -> type[Exception]:
     """Click's UsageError (bad option values, unknown options, missing arguments); recent typer versions carry
     their own copy of click."""
-    import importlib
-
     try:
         exceptions = importlib.import_module("typer._click.exceptions")
     except ImportError:
