@@ -42,6 +42,7 @@ from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import ROUGHNESS_RANGE
+from spectrace.scene import limits
 
 
 def _modules_by_plugin(modules) -> dict:
@@ -111,9 +112,7 @@ _PROPERTY_TAGS = ("float", "integer", "string", "boolean", "rgb", "point", "vect
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
 MITSUBA_DEFAULT_FILM = (768, 576)  # hdrfilm's default width and height
 MITSUBA_DEFAULT_FOCAL_LENGTH_MM = 50.0  # the perspective sensor's, when neither fov nor focal_length is given
-# Deepest element nesting accepted. Real scenes need about six levels (scene/shape/bsdf/bsdf/spectrum/...); the
-# limit keeps absurd files from exhausting the stack.
-MAX_NESTING = 64
+MAX_NESTING = limits.MAX_NESTING
 
 
 @dataclass

@@ -6,6 +6,11 @@ Scene built through the Python API; every message says what the request would co
 
 import numpy as np
 
+# Deepest nesting accepted in an input file (TOML tables and arrays, Mitsuba XML elements and references). Real
+# scenes nest a few levels (shapes[0].transform[1].matrix[2]; scene/shape/bsdf/bsdf/spectrum); far deeper input is
+# malformed or hostile, and recursive code further on (validation, error messages) would exhaust Python's stack.
+MAX_NESTING = 64
+
 # A film side beyond this is almost certainly a typo (16384 px is the largest image most viewers open).
 MAX_FILM_SIDE_PX = 16384
 # 2^27 pixels (e.g. 16384 x 8192) need 2.5 GiB of device memory for the film and ray counts alone, and several

@@ -110,10 +110,7 @@ def _validation_error(path: Path, error: ValidationError, data: object = None) -
     return SpectraceError(message + extra, where=f"{path}: {key_path(location)}" if location else str(path))
 
 
-# Real scenes nest tables and arrays a few levels deep (shapes[0].transform[1].matrix[2] is the deepest); far
-# deeper input is malformed or hostile, and recursive code further on (validation, error messages) would
-# exhaust Python's stack on it.
-MAX_NESTING = 64
+MAX_NESTING = limits.MAX_NESTING
 
 
 def _too_deep(data: object) -> tuple | None:
