@@ -1,11 +1,47 @@
-"""What the commands share: the message console (stderr) and the options several of them take."""
+"""What the commands share: the message console (stderr), the settings of every command group and the options
+several of them take."""
 
-from typing import Annotated
+import os
+import sys
+from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 
-console = Console(stderr=True, soft_wrap=True, markup=False)  # messages with long paths stay on one line
+# Help in click's plain layout rather than typer's rich panels: rendering those imports rich's markdown, syntax and
+# traceback modules, about a third of `spectrace --help`'s whole run. No shell-completion commands, no rich
+# tracebacks (errors are one line, cli/__init__.py).
+GROUP_SETTINGS: dict[str, Any] = {"add_completion": False, "pretty_exceptions_enable": False, "rich_markup_mode": None}
+
+# Help printed to a pipe or a file: click would assume 80 columns when no terminal says otherwise.
+PIPED_HELP_COLUMNS = 120
+
+
+def help_width() -> int | None:
+    """COLUMNS when set, else wide enough for the option tables when stdout is no terminal; None (the terminal's own
+    width) otherwise."""
+    if columns := os.environ.get("COLUMNS", "").strip():
+        return int(columns) if columns.isdigit() and int(columns) > 0 else None
+    return None if sys.stdout.isatty() else PIPED_HELP_COLUMNS
+
+
+class _MessageConsole:
+    """rich's Console on stderr, made on first use: importing rich costs more than a `--help` should."""
+
+    _console: Any = None
+
+    def rich(self) -> Any:
+        """The Console itself, for what keeps it (a progress bar)."""
+        if _MessageConsole._console is None:
+            from rich.console import Console
+
+            _MessageConsole._console = Console(stderr=True, soft_wrap=True, markup=False)  # long paths: one line
+        return _MessageConsole._console
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.rich(), name)
+
+
+console: Any = _MessageConsole()
 
 DeviceOption = Annotated[
     str | None,
