@@ -25,7 +25,9 @@ def help_width() -> int | None:
 
 
 class _MessageConsole:
-    """rich's Console on stderr, made on first use: importing rich costs more than a `--help` should."""
+    """Messages on stderr: plain lines until something needs rich's Console (a progress bar asks for it with
+    `rich()`), then through that Console, so that a message printed while a bar is drawn does not tear it. Importing
+    rich costs more than a small render's messages are worth."""
 
     _console: Any = None
 
@@ -36,6 +38,13 @@ class _MessageConsole:
 
             _MessageConsole._console = Console(stderr=True, soft_wrap=True, markup=False)  # long paths: one line
         return _MessageConsole._console
+
+    def print(self, *objects: Any, sep: str = " ", end: str = "\n", **options: Any) -> None:
+        """Like Console.print for plain text (messages are never markup, never highlighted, one line each)."""
+        if _MessageConsole._console is not None:
+            _MessageConsole._console.print(*objects, sep=sep, end=end, **options)
+        else:
+            print(*objects, sep=sep, end=end, file=sys.stderr, flush=True)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.rich(), name)
