@@ -21,7 +21,7 @@ import re
 import site
 import struct
 import sys
-import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -209,13 +209,22 @@ def _icd_file_name(index: int, library: str) -> str:
     return f"{index:02d}-{stem}.icd"
 
 
+def _vendors_dir_roots() -> Iterator[Path]:
+    yield cache_root()
+    import tempfile  # only when the cache folder will not do: a listing need not import it
+
+    yield Path(tempfile.gettempdir()) / f"spectrace-{os.getuid()}"
+
+
 def _write_vendors_dir(libraries: list[IcdLibrary]) -> Path:
     listing = "\n".join(entry.library for entry in libraries)
     digest = hashlib.sha256(listing.encode()).hexdigest()[:16]
-    for root in (cache_root(), Path(tempfile.gettempdir()) / f"spectrace-{os.getuid()}"):
+    for root in _vendors_dir_roots():
         target = root / "icd" / digest
         if target.is_dir():
             return target  # content is fully determined by the digest
+        import tempfile
+
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
             staging = Path(tempfile.mkdtemp(prefix=f".{digest}-", dir=target.parent))

@@ -18,7 +18,6 @@ import hashlib
 import json
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -58,6 +57,8 @@ def _captured_stderr() -> Iterator[Callable[[], str]]:
     except OSError:
         yield lambda: ""
         return
+    import tempfile
+
     with tempfile.TemporaryFile(mode="w+b") as capture:
         sys.stderr.flush()
         os.dup2(capture.fileno(), 2)
