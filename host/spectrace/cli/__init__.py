@@ -8,7 +8,13 @@ import typer
 from typer.core import TyperGroup
 
 from spectrace.cli import bench, devices, render, validate
-from spectrace.cli.common import GROUP_SETTINGS, console, help_width
+from spectrace.cli.common import (
+    GROUP_SETTINGS,
+    PlainHelpFlagCommand,
+    console,
+    help_flag_defaulting_to_false,
+    help_width,
+)
 from spectrace.errors import SpectraceError
 
 # Sub-commands whose modules import colour-science, SciPy or the Mitsuba importer: listed in `--help` from these
@@ -49,6 +55,9 @@ class _LazyGroup(TyperGroup):
         for name, (_, _, help_line) in LAZY_COMMANDS.items():
             self.add_command(typer.core.TyperCommand(name, help=help_line), name)
 
+    def get_help_option(self, ctx):
+        return help_flag_defaulting_to_false(super().get_help_option(ctx))
+
     def resolve_command(self, ctx, args):
         name, command, rest = super().resolve_command(ctx, args)
         if name in LAZY_COMMANDS:
@@ -65,7 +74,7 @@ app = typer.Typer(
 )
 # The light command modules (typer and rich at import) register at once, in the order `--help` lists them.
 app.command("render")(render.render)
-app.command("devices")(devices.devices)
+app.command("devices", cls=PlainHelpFlagCommand)(devices.devices)
 app.add_typer(bench.bench_app, name="bench")
 app.command("validate")(validate.validate)
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+
 from spectrace.cli.common import GROUP_SETTINGS, DeviceOption, JsonOption, console
 from spectrace.errors import SpectraceError
 
