@@ -113,7 +113,9 @@ def main() -> None:
         console.print("interrupted", highlight=False)
         sys.exit(130)
     except usage_error as exc:
-        if type(exc).__name__ != "NoArgsIsHelpError":  # that one has already printed the help
+        if type(exc).__name__ == "NoArgsIsHelpError":  # a group run without a command: its help, as click would
+            print(exc.format_message(), file=sys.stderr)  # type: ignore[attr-defined]  # a click UsageError
+        else:
             console.print(_usage_error_line(exc), highlight=False, markup=False, soft_wrap=True)
         sys.exit(getattr(exc, "exit_code", 2))
     except typer.Abort:
