@@ -257,7 +257,9 @@ def _trimesh_scene_normals(scene: Any) -> np.ndarray | None:
         if "vertex_normals" not in geometry._cache:
             return None
         normals = np.asarray(geometry.vertex_normals, np.float64)
-        parts.append(normals @ np.linalg.inv(np.asarray(transform, np.float64)[:3, :3]))
+        turned = normals @ np.linalg.inv(np.asarray(transform, np.float64)[:3, :3])
+        length = np.linalg.norm(turned, axis=-1, keepdims=True)
+        parts.append(np.divide(turned, length, out=np.zeros_like(turned), where=length > 0))
     return np.concatenate(parts) if parts else None
 
 
