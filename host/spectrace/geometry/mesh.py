@@ -56,8 +56,8 @@ class TriangleMesh:
         return self.uvs[self.faces]
 
     def triangle_normals(self) -> np.ndarray | None:
-        """(M, 3, 3) unit shading normals of each triangle's corners; None when the mesh has no vertex normals. A zero normal becomes the face's geometric normal (a degenerate face's
-        corners keep zero)."""
+        """(M, 3, 3) unit shading normals of each triangle's corners; None when the mesh has no vertex normals.
+        A zero normal becomes the face's geometric normal (a degenerate face's corners keep zero)."""
         if self.normals is None:
             return None
         corners = self.normals[self.faces]
@@ -166,10 +166,8 @@ def _scan_obj(path: Path, where: str) -> bool:
                     f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)", where=where
                 )
             lines_before += lines.count(b"\n")
-            for tag in (b"vt", b"vn"):
-                has_corner_attributes |= (
-                    lines.startswith((tag + b" ", tag + b"\t")) or b"\n" + tag + b" " in lines or b"\n" + tag + b"\t" in lines
-                )
+            for tag in (b"vt ", b"vt\t", b"vn ", b"vn\t"):
+                has_corner_attributes |= lines.startswith(tag) or b"\n" + tag in lines
             if not block:
                 return has_corner_attributes
 
@@ -269,7 +267,10 @@ def _plain_triangle_obj(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray 
     reads them with process=False (a test checks the bundled meshes both ways); None for anything else, which
     trimesh reads. Importing trimesh costs more than a small render. A position used with several normals becomes
     one vertex per normal, the extra ones after the stored vertices."""
-    vertices, normals, faces, face_normals = [], [], [], []
+    vertices: list[list[float]] = []
+    normals: list[list[float]] = []
+    faces: list[list[int]] = []
+    face_normals: list[list[int] | None] = []
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeError):
@@ -297,7 +298,7 @@ def _plain_triangle_obj(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray 
     with_normals = [n is not None for n in face_normals]
     if not any(with_normals):
         return positions, face_array, None
-    if not all(with_normals) or not normals:
+    if not all(with_normals) or not normals or face_array.max() >= len(positions):
         return None
     normal_index = np.array(face_normals, dtype=np.int64)
     if normal_index.max() >= len(normals):
@@ -306,17 +307,14 @@ def _plain_triangle_obj(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray 
     pairs: dict[tuple[int, int], int] = {}
     first_normal = np.full(len(positions), -1, np.int64)
     extra: list[int] = []
-    for face, (corners, corner_normals) in enumerate(zip(faces, face_normals)):
-        for k, (p, n) in enumerate(zip(corners, corner_normals)):  # type: ignore[arg-type]
-            if p >= len(positions):
-                return None
-            if first_normal[p] < 0:
-                first_normal[p] = n
-            if first_normal[p] != n:
-                if (p, n) not in pairs:
-                    pairs[p, n] = len(positions) + len(extra)
-                    extra.append(p)
-                face_array[face, k] = pairs[p, n]
+    for corner, (p, n) in enumerate(zip(face_array.ravel().tolist(), normal_index.ravel().tolist())):
+        if first_normal[p] < 0:
+            first_normal[p] = n
+        if first_normal[p] != n:
+            if (p, n) not in pairs:
+                pairs[p, n] = len(positions) + len(extra)
+                extra.append(p)
+            face_array.reshape(-1)[corner] = pairs[p, n]
     extra_normals = [n for (_, n) in pairs]
     vertex_normals = np.zeros((len(positions) + len(extra), 3))
     file_normals = np.array(normals, dtype=np.float64)
