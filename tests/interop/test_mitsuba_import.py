@@ -194,7 +194,9 @@ def test_face_normals_follow_mitsuba(tmp_path):
         f"v {np.cos(a) * np.cos(b):.9f} {np.sin(b):.9f} {np.sin(a) * np.cos(b):.9f}\n"
         for b in (-0.5, 0.0, 0.5)
         for a in np.linspace(0, 2 * np.pi, 9)[:-1]
-    ) + "".join(f"f {r * 8 + i + 1} {r * 8 + (i + 1) % 8 + 1} {(r + 1) * 8 + i + 1}\n" for r in (0, 1) for i in range(8))
+    ) + "".join(
+        f"f {r * 8 + i + 1} {r * 8 + (i + 1) % 8 + 1} {(r + 1) * 8 + i + 1}\n" for r in (0, 1) for i in range(8)
+    )
     (tmp_path / "band.obj").write_text(ball)
     body = """<shape type="obj"><string name="filename" value="band.obj"/></shape>
         <shape type="obj"><string name="filename" value="band.obj"/><boolean name="face_normals" value="true"/></shape>
