@@ -55,7 +55,8 @@ def prism() -> TriangleMesh:
 
 
 def sphere(subdivisions: int = 4) -> TriangleMesh:
-    """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles, vertices on the sphere."""
+    """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles, vertices on the sphere, and the
+    sphere's exact radial normals at its vertices, so it shades smoothly."""
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
     if (
@@ -67,4 +68,6 @@ def sphere(subdivisions: int = 4) -> TriangleMesh:
             f"sphere subdivisions must be an integer from 0 to {MAX_SPHERE_SUBDIVISIONS}, got {subdivisions!r}"
         )
     icosphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    return TriangleMesh(vertices=np.asarray(icosphere.vertices), faces=np.asarray(icosphere.faces))
+    vertices = np.asarray(icosphere.vertices, dtype=np.float64)
+    normals = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
+    return TriangleMesh(vertices=vertices, faces=np.asarray(icosphere.faces), normals=normals)

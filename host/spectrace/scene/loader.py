@@ -10,7 +10,7 @@ from pydantic import BaseModel, ValidationError
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
-from spectrace.geometry.mesh import load_mesh
+from spectrace.geometry.mesh import load_mesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
@@ -281,6 +281,7 @@ class _Resolver:
             if problem := limits.coordinates_problem(mesh.vertices):
                 culprit = "transform" if s.transform else "file" if s.type == "mesh" else "type"
                 raise SpectraceError(f"mesh has {problem}", where=self.where(f"{key}.{culprit}"))
+            mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
             if s.material is not None and s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
