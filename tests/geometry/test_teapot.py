@@ -40,3 +40,16 @@ def test_area_converges():
     # A smooth surface's flat tessellation errs by O(h^2): each halving of the quads cuts the error about 4-fold.
     steps = np.abs(np.diff(areas))
     assert steps[1] < 0.4 * steps[0] and steps[2] < 0.4 * steps[1]
+
+
+def test_the_built_in_teapot_stands_on_the_origin_y_up():
+    from spectrace.geometry.primitives import BUILTIN_SHAPES
+
+    mesh = BUILTIN_SHAPES["teapot"]()
+    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    assert np.isclose(low[1], 0.0) and np.isclose(high[1], 1.575)  # base on y = 0, the knob at half of 3.15
+    assert np.isclose(low[2], -1.0) and np.isclose(high[2], 1.0)  # body radius 1 across the spout's plane
+    assert high[0] > 1.5 and low[0] < -1.4  # spout towards +x, handle towards -x
+    # The normals turned with the vertices: on the body's widest ring they point straight out.
+    widest = np.abs(mesh.vertices[:, 2]) > 0.999
+    assert np.allclose(mesh.normals[widest][:, 2], np.sign(mesh.vertices[widest][:, 2]), atol=1e-6)

@@ -23,13 +23,6 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
 from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
 
-_BUILTIN_SHAPES = {
-    "rectangle": primitives.rectangle,
-    "cube": primitives.cube,
-    "sphere": primitives.sphere,
-    "prism": primitives.prism,
-}
-
 
 def key_path(location: tuple) -> str:
     """('shapes', 2, 'material') -> 'shapes[2].material'."""
@@ -273,7 +266,7 @@ class _Resolver:
                 assert s.file is not None  # the schema wants a file for a mesh
                 mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"))
             else:
-                mesh = _BUILTIN_SHAPES[s.type]()
+                mesh = primitives.BUILTIN_SHAPES[s.type]()
             if s.transform:
                 steps = [step.model_dump(exclude_none=True) for step in s.transform]
                 with np.errstate(over="ignore", invalid="ignore"):  # overflows are reported just below

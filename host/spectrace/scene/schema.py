@@ -274,7 +274,7 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere", "prism"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "prism", "teapot"]
     file: str | None = None
     material: str | None = None
     emitter: EmitterSpec | None = None
