@@ -121,6 +121,30 @@ def test_a_colour_gives_the_same_bits_alone_or_in_any_batch():
     np.testing.assert_array_equal(reflectance_coefficients(rgb[shuffled]), together[shuffled])
 
 
+def test_repeated_colours_are_computed_once_with_the_same_bits(monkeypatch):
+    rng = np.random.default_rng(12)
+    palette = rng.random((200, 3))
+    texture = palette[rng.integers(0, len(palette), (256, 160))]  # 40960 texels, 200 colours
+    computed = []
+    original = rgb_texture._distinct_reflectance_rows
+    monkeypatch.setattr(
+        rgb_texture, "_distinct_reflectance_rows", lambda rgb: computed.append(len(rgb)) or original(rgb)
+    )
+    coefficients = reflectance_coefficients(texture)
+    assert computed == [len(np.unique(texture.reshape(-1, 3), axis=0))]
+    one_by_one = np.array([reflectance_coefficients(colour_rgb) for colour_rgb in palette])
+    index = np.array([[np.flatnonzero((palette == texel).all(axis=1))[0] for texel in row] for row in texture[:4]])
+    np.testing.assert_array_equal(coefficients[:4], one_by_one[index])
+    # A noise-like texture (every texel its own colour) is not grouped; a hash collision falls back to no grouping.
+    computed.clear()
+    noise = rng.random((40000, 3))
+    expected = reflectance_coefficients(noise)
+    monkeypatch.setattr(rgb_texture, "_colour_keys", lambda rgb: np.zeros(len(rgb), dtype=np.uint64))
+    np.testing.assert_array_equal(reflectance_coefficients(noise), expected)
+    np.testing.assert_array_equal(reflectance_coefficients(texture), coefficients)
+    assert computed == [40000, 40000, texture.shape[0] * texture.shape[1]]
+
+
 @pytest.mark.parametrize(
     "bad, message",
     [

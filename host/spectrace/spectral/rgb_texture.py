@@ -147,7 +147,7 @@ def illuminant_texture_coefficients(rgb: np.ndarray, where: str | None = None) -
 _MAGIC = b"spectrace texture coefficients\n"
 _FORMAT = 1
 MEMORY_CACHE_BYTES = 512 << 20
-DISK_CACHE_BYTES = 2 << 30
+DISK_CACHE_BYTES = 1 << 30
 
 
 def texture_cache_dir() -> Path:

@@ -8,9 +8,10 @@ Parametrisation: a colour is filed under its largest channel i (the "brightness"
 channels divided by it, u = rgb[(i + 1) % 3] / z and v = rgb[(i + 2) % 3] / z, both in [0, 1]. For fixed (i, u, v)
 the coefficients change smoothly with z except near its ends, where they grow without bound (a reflectance
 reaching 0 or 1 needs an infinitely steep sigmoid), so the z nodes are packed towards both ends by a doubled
-smoothstep. Near black the model has a closed form instead: far below zero S(x) ~ 1 / (4 x^2), so scaling the
-reflectance by k scales every coefficient by 1 / sqrt(k); below the first non-zero node the table's coefficients
-there are scaled that way rather than interpolated towards a black that no finite coefficients reach.
+smoothstep. Towards black the growth has a closed form: far below zero S(x) ~ 1 / (4 x^2), so scaling the
+reflectance by k scales every coefficient by 1 / sqrt(k). The table therefore holds coefficients * sqrt(z), which
+tends to a constant there, interpolates that and divides by sqrt(z); below the first non-zero node it holds that
+node's value, which is the closed form, instead of interpolating towards a black no finite coefficients reach.
 
 The coefficients are stored in the dimensionless t = (lambda - 595 nm) / 235 nm of `uplift.py`'s solve (their
 magnitudes are alike, which trilinear interpolation wants) and converted to lambda in nm on the way out.
@@ -177,10 +178,10 @@ def node_colours(resolution: int, z_index: int) -> np.ndarray:
 
 
 def build_table(resolution: int = TABLE_RESOLUTION) -> np.ndarray:
-    """Coefficients (dimensionless) at every node: (3, n z, n v, n u, 3), fitted in float64, kept in float32
-    (their rounding moves a colour by Delta E ~1e-6, the table's interpolation by ~0.1).
+    """Coefficients (dimensionless) times sqrt(z) at every node: (3, n z, n v, n u, 3), fitted in float64, kept in
+    float32 (the rounding leaves the Delta E figures of the module docstring unchanged in their 4 digits).
 
-    The slice z = 0 (black, which no finite coefficients reach) holds the first non-zero slice's values;
+    The slice z = 0 (black, which no finite coefficients reach) repeats the first non-zero slice;
     `coefficients_from_table` never interpolates towards it.
     """
     table = np.zeros((3, resolution, resolution, resolution, 3))
@@ -206,7 +207,6 @@ def build_table(resolution: int = TABLE_RESOLUTION) -> np.ndarray:
             start = np.where((error_extrapolated < error_near)[:, None], extrapolated, near)
         table[:, z_index] = solve(target_lab(colours), start).reshape(3, resolution, resolution, 3)
     table[:, 0] = table[:, 1]
-    # Stored as coefficients * sqrt(z), which near black tends to a constant (see the module docstring).
     scale = np.sqrt(np.maximum(z_nodes(resolution), z_nodes(resolution)[1]))
     return (table * scale[None, :, None, None, None]).astype(np.float32)
 
