@@ -15,6 +15,17 @@ from pathlib import Path
 _checked = False
 
 
+def cache_root() -> Path:
+    """spectrace's per-user cache folder: ``$SPECTRACE_CACHE_DIR``, else ``$XDG_CACHE_HOME/spectrace``,
+    else ``~/.cache/spectrace``."""
+    explicit = os.environ.get("SPECTRACE_CACHE_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    return base / "spectrace"
+
+
 def _unwritable(folder: Path) -> str | None:
     """Why files cannot be created in `folder` (made if missing), or None when they can."""
     if folder.exists() and not folder.is_dir():

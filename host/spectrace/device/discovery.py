@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from spectrace.cache_folder import cache_root
 from spectrace.device.icd_query import DeviceInfo, PlatformInfo, PlatformListing, library_platforms
 from spectrace.errors import SpectraceError
 
@@ -41,17 +42,6 @@ POCL_SYSTEM = ("pocl-system", "PoCL (system)")
 POCL_PYPI = ("pocl-pypi", "PoCL (PyPI)")
 INTEL_CPU_PIP = ("intel-cpu", "Intel CPU runtime (pip)")
 INTEL_CPU_SYSTEM = ("intel-cpu-system", "Intel CPU runtime (system)")
-
-
-def cache_root() -> Path:
-    """spectrace's per-user cache folder: ``$SPECTRACE_CACHE_DIR``, else ``$XDG_CACHE_HOME/spectrace``,
-    else ``~/.cache/spectrace``."""
-    explicit = os.environ.get("SPECTRACE_CACHE_DIR")
-    if explicit:
-        return Path(explicit).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
-    return base / "spectrace"
 
 
 @dataclass(frozen=True)
