@@ -57,6 +57,7 @@ _LEAST_DAMPING = 1e-12  # of Levenberg-Marquardt: no more than rounding, yet no 
 _COARSE_KNOT_NM = 5.0
 _COARSE_ORDER = 10
 _COARSE_DELTA_E = 1e-7  # solved this tightly under the coarse rule, most colours are fitted under the exact one
+_COARSE_ITERATIONS = 20  # beyond this the coarse rule cannot resolve the sigmoid: the exact solve takes over
 _EXACT_STEPS = 3  # Newton steps on the exact residual before a colour is solved exactly
 _BUFFER_VALUES = 1 << 17  # float64 values per temporary in `_xyz`: 1 MB, which stays in the CPU's cache
 
@@ -201,6 +202,10 @@ def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("in,in->n", u, v)
 
 
+def _squared_norms(columns: np.ndarray) -> np.ndarray:
+    return _dot(columns, columns)
+
+
 def _damped_step(jacobian: np.ndarray, residual: np.ndarray, damping: np.ndarray | float) -> np.ndarray:
     """The Levenberg-Marquardt step of each colour, (J^T J + damping diag(J^T J)) step = -J^T r, by Cramer's rule
     on the system scaled to a unit diagonal. A colour whose system is singular gets a step of NaN or infinity,
@@ -239,12 +244,13 @@ def solve(
         delta_e,
         max_iterations,
         rule or _exact_rule(),
-    ).T
+    )[0].T
 
 
 def _solve_columns(
     target: np.ndarray, start: np.ndarray, delta_e: float, max_iterations: int, rule: _Rule
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
+    """`solve` on columns; also says which colours converged (to within `delta_e`)."""
     coefficients = np.array(start, dtype=np.float64)
     lab, jacobian = _lab_under(rule, coefficients, jacobian=True)
     residual = lab - target
@@ -271,7 +277,7 @@ def _solve_columns(
         # Converged, or no descent direction left (the best fit the model allows).
         going = (e >= delta_e**2) & (damping <= 1e12)
         if not going.all():
-            coefficients[:, index[~going]] = c[:, ~going]
+            coefficients[:, index[~going]], error[index[~going]] = c[:, ~going], e[~going]
             index, c, j, r, t, e, damping = (
                 index[going],
                 c[:, going],
@@ -282,7 +288,7 @@ def _solve_columns(
                 damping[going],
             )
     coefficients[:, index] = c
-    return coefficients
+    return coefficients, error < delta_e**2
 
 
 def _fit(target: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, int]:
@@ -293,10 +299,13 @@ def _fit(target: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, int]:
     steep for the coarse rule, solved exactly from where they got to. Returns the coefficients and how many
     colours needed that."""
     coarse = _coarse_rule()
-    coefficients = _solve_columns(target, start, _COARSE_DELTA_E, _MAX_ITERATIONS, coarse)
+    coefficients, converged = _solve_columns(target, start, _COARSE_DELTA_E, _COARSE_ITERATIONS, coarse)
     residual = _lab_under(_exact_rule(), coefficients) - target
     error = _dot(residual, residual)
-    open_ = np.flatnonzero(error >= _BUILD_DELTA_E**2)
+    # Where the coarse rule found no fit, its result can lie in another valley: those start again, exactly.
+    coefficients[:, ~converged] = start[:, ~converged]
+    error[~converged] = np.inf
+    open_ = np.flatnonzero(converged & (error >= _BUILD_DELTA_E**2))
     for _ in range(_EXACT_STEPS):
         if open_.size == 0:
             break
@@ -311,7 +320,7 @@ def _fit(target: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, int]:
         open_ = accepted[trial_error[better] >= _BUILD_DELTA_E**2]
     open_ = np.flatnonzero(error >= _BUILD_DELTA_E**2)
     if open_.size:
-        coefficients[:, open_] = _solve_columns(
+        coefficients[:, open_], _ = _solve_columns(
             target[:, open_], coefficients[:, open_], _BUILD_DELTA_E, _MAX_ITERATIONS, _exact_rule()
         )
     return coefficients, open_.size
@@ -364,14 +373,22 @@ def build_table(resolution: int = TABLE_RESOLUTION) -> np.ndarray:
     for z_index in order:
         target = target_lab(node_colours(resolution, z_index).reshape(-1, 3)).T
         step = 1 if z_index > middle else -1
-        if z_index == middle:
-            start = np.zeros(target.shape)
-        elif abs(z_index - middle) == 1:
-            start = table[:, z_index - step].reshape(-1, 3).T / scale[z_index]
-        else:
-            near, far = table[:, z_index - step].reshape(-1, 3).T, table[:, z_index - 2 * step].reshape(-1, 3).T
-            ratio = (nodes[z_index] - nodes[z_index - step]) / (nodes[z_index - step] - nodes[z_index - 2 * step])
-            start = (near + ratio * (near - far)) / scale[z_index]
+        # The slices solved before this one, nearest first (up to three).
+        solved = [k for k in range(z_index - step, z_index - 4 * step, -step) if (k - middle) * step >= 0]
+        start = np.zeros(target.shape)
+        for k in solved:  # the polynomial in z through them, evaluated here
+            weight = np.prod([(nodes[z_index] - nodes[o]) / (nodes[k] - nodes[o]) for o in solved if o != k])
+            start += weight * table[:, k].reshape(-1, 3).T
+        if solved and nodes[z_index] < 0.5 * nodes[solved[0]]:
+            # Towards black each slice is several times darker than the last, and where a colour is not yet on the
+            # dark asymptote the extrapolation can overshoot into another fit: the last slice's values, which the
+            # asymptote holds constant, compete.
+            held = table[:, solved[0]].reshape(-1, 3).T
+            coarse = _coarse_rule()
+            error_start = _squared_norms(_lab_under(coarse, start / scale[z_index]) - target)
+            error_held = _squared_norms(_lab_under(coarse, held / scale[z_index]) - target)
+            start = np.where(error_held < error_start, held, start)
+        start /= scale[z_index]
         coefficients, _ = _fit(target, start)
         table[:, z_index] = (coefficients.T * scale[z_index]).reshape(3, resolution, resolution, 3)
     table[:, 0] = table[:, 1]
