@@ -64,6 +64,44 @@ def cube_edges(points_per_edge: int = 33) -> np.ndarray:
     return np.concatenate(edges)
 
 
+@pytest.fixture(scope="module", autouse=True)
+def cold_built_table(tmp_path_factory):
+    """The real coefficient table, built here from an empty cache folder as on a fresh machine (and in CI), so that
+    every test below uses what the build makes today rather than a table some older build left on disk."""
+    folder = tmp_path_factory.mktemp("cold-cache")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("SPECTRACE_CACHE_DIR", str(folder))
+        uplift_table.coefficient_table.cache_clear()
+        assert not uplift_table.table_path().exists()
+        yield uplift_table.coefficient_table()
+    uplift_table.coefficient_table.cache_clear()
+
+
+def test_cold_build_writes_the_table_it_returns(cold_built_table):
+    path = uplift_table.table_path()
+    assert path.is_file()
+    np.testing.assert_array_equal(
+        uplift_table._deserialise(path.read_bytes(), uplift_table.TABLE_RESOLUTION), cold_built_table
+    )
+
+
+def test_table_nodes_are_the_one_colour_fits(cold_built_table):
+    """Each node is fitted to the colorimetry `uplift_reflectance` fits one colour to: at nodes whose spectrum the
+    colour pins down (not the darkest, where many spectra give one colour, nor next to white) both give the same
+    spectrum, to the float32 rounding of the stored coefficients."""
+    resolution = uplift_table.TABLE_RESOLUTION
+    nodes = uplift_table.z_nodes(resolution)
+    rng = np.random.default_rng(13)
+    for _ in range(40):
+        largest, z_index = rng.integers(0, 3), rng.integers(16, resolution)  # z from 0.07 up
+        v_index, u_index = rng.integers(0, resolution - 2, size=2)  # u, v below 0.998
+        rgb = uplift_table.node_colours(resolution, z_index)[largest, v_index, u_index]
+        stored = cold_built_table[largest, z_index, v_index, u_index].astype(np.float64) / np.sqrt(nodes[z_index])
+        table_spectrum = spectra(rgb_texture._dimensionless_to_nm(stored[None]))[0]
+        fitted, _ = uplift_reflectance(rgb)
+        assert np.abs(table_spectrum - fitted.values).max() < 2e-4, rgb
+
+
 def test_array_integration_is_colour_science_sd_to_xyz():
     values = np.random.default_rng(3).random((3, GRID_NM.size))
     bulk = colour.colorimetry.sd_to_XYZ_integration(values, CMFS, D65, shape=GRID_SHAPE)
@@ -79,6 +117,19 @@ def test_random_colours_round_trip():
     assert values.min() >= 0.0 and values.max() <= 1.0
     delta_e = colour_science_delta_e(values, rgb)
     assert delta_e.max() < TABLE_DELTA_E
+
+
+@pytest.mark.parametrize("kind", ["near white", "saturated"])
+def test_hard_colours_round_trip(kind):
+    rng = np.random.default_rng(14)
+    if kind == "near white":
+        rgb = 1.0 - 0.02 * rng.random((1500, 3))
+    else:
+        rgb = rng.random((1500, 3))
+        rgb[np.arange(len(rgb)), rng.integers(0, 3, len(rgb))] *= 0.01
+    values = spectra(reflectance_coefficients(rgb))
+    assert values.min() >= 0.0 and values.max() <= 1.0
+    assert colour_science_delta_e(values, rgb).max() < TABLE_DELTA_E
 
 
 def test_corners_and_edges_round_trip():
