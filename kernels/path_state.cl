@@ -49,6 +49,7 @@ typedef struct {
     float3 p;
     float3 n;   /* geometric normal (the winding's front) */
     float3 wo;  /* back along the ray */
+    float2 uv;  /* texture coordinates (only in scenes with material textures) */
 } PathVertex;
 
 inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
@@ -58,6 +59,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     v.p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
     v.n = triangle_normal(scene->triangle_vertices, hit.triangle);
     v.wo = -ray.direction;
+    v.uv = SCENE_HAS_TEXTURES ? triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12) : (float2)(0.0f);
     return v;
 }
 
@@ -88,8 +90,9 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
 {
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
-        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->wo, material, use_mis,
-                                                           rays_traced);
+        SurfaceContext sc = surface_context(scene, v->uv);
+        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->wo, material, &sc,
+                                                           use_mis, rays_traced);
     }
 }
 
@@ -103,7 +106,8 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
-    return material_sample(material, scene->spectra, w, v->n, v->wo, uc, u, bs);
+    SurfaceContext sc = surface_context(scene, v->uv);
+    return material_sample(material, &sc, w, v->n, v->wo, uc, u, bs);
 }
 
 /* The path leaves the vertex along a BSDF sample: its weight and radiance compression join the throughput, and

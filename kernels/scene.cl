@@ -6,6 +6,7 @@
 #include "bvh.cl"
 #include "lights.cl"
 #include "medium.cl"
+#include "texture.cl"
 
 typedef struct {
     __global const RenderParams *params;
@@ -20,6 +21,7 @@ typedef struct {
     __global const float4 *texels;  /* images of environment maps and textured emitters (a dummy texel if none) */
     __global const float *map_cdf;
     __global const Medium *media;
+    __global const Texture *textures;  /* material textures, whose texels share `texels` (a dummy row if none) */
 } Scene;
 
 /* The parameters every scene kernel starts with: the render's parameters, then the scene's buffers in the order
@@ -30,15 +32,28 @@ typedef struct {
         __global const float2 *triangle_uvs, __global const TriangleInfo *triangle_info,                          \
         __global const Material *materials, __global const Light *lights, __global const float *light_cdf,        \
         __global const float *spectra, __global const float4 *texels, __global const float *map_cdf,              \
-        __global const Medium *media
+        __global const Medium *media, __global const Texture *textures
 #define SCENE_FROM_KERNEL_PARAMS                                                                                   \
     {params, nodes, triangle_vertices, triangle_uvs, triangle_info, materials, lights, light_cdf, spectra, texels, \
-     map_cdf, media}
+     map_cdf, media, textures}
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
     LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf};
     return b;
+}
+
+/* The lookups of a surface point's material parameters at texture coordinates uv (texture.cl). No ray
+ * differentials exist yet, so the footprint is 0: textures are read at their finest level. */
+inline SurfaceContext surface_context(const Scene *scene, float2 uv)
+{
+    SurfaceContext sc;
+    sc.buffers.textures = scene->textures;
+    sc.buffers.texels = (__global const float *)scene->texels;
+    sc.buffers.spectra = scene->spectra;
+    sc.uv = uv;
+    sc.footprint = 0.0f;
+    return sc;
 }
 
 /* The closest surface along the ray (none in a scene without triangles). */

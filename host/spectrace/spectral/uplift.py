@@ -236,3 +236,13 @@ def uplift_illuminant(rgb: Sequence[float] | np.ndarray, scale: float = 1.0, whe
         name=name,
         source="RGB illuminant uplift (Jakob & Hanika 2019, pbrt-v4 scheme)",
     )
+
+
+def reflectance_coefficients(rgb: np.ndarray) -> np.ndarray:
+    """Coefficients (c0, c1, c2), lambda in nm, of many linear sRGB reflectances in [0, 1]: rgb (..., 3) ->
+    (..., 3) float64, each as `uplift_reflectance` fits it (a loop over the distinct colours)."""
+    values = np.asarray(rgb, dtype=np.float64)
+    flat = np.round(values.reshape(-1, 3), RGB_CACHE_DECIMALS)
+    unique, inverse = np.unique(flat, axis=0, return_inverse=True)
+    fitted = np.array([uplift_reflectance(colour)[1] for colour in unique]).reshape(-1, 3)
+    return fitted[inverse.reshape(-1)].reshape(values.shape)

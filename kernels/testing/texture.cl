@@ -1,0 +1,30 @@
+/* Test harness: texture lookups (texture.cl) at arrays of points, and the sigmoid spectrum (rgb_spectrum.cl) of
+ * arrays of coefficients, at four fixed wavelengths. */
+#include "../texture.cl"  /* not this file, which has the same name */
+
+inline SampledWavelengths harness_wavelengths(__global const float *lambda)
+{
+    return fixed_wavelengths((float4)(lambda[0], lambda[1], lambda[2], lambda[3]));
+}
+
+/* Texture `index` at uv = point.xy with footprint point.z (uv units). */
+__kernel void texture_lookup(__global const Texture *textures, __global const float4 *texels,
+                             __global const float *spectra, int index, __global const float *lambda,
+                             __global const float4 *point, __global float4 *value)
+{
+    int i = get_global_id(0);
+    TextureBuffers b;
+    b.textures = textures;
+    b.texels = (__global const float *)texels;
+    b.spectra = spectra;
+    SampledWavelengths w = harness_wavelengths(lambda);
+    value[i] = texture_spectrum(&b, index, point[i].xy, point[i].z, &w);
+}
+
+/* S(c0 λ² + c1 λ + c2) of coefficients.xyz at the four wavelengths. */
+__kernel void sigmoid_spectrum(__global const float4 *coefficients, __global const float *lambda,
+                               __global float4 *value)
+{
+    int i = get_global_id(0);
+    value[i] = sigmoid_polynomial(coefficients[i].xyz, (float4)(lambda[0], lambda[1], lambda[2], lambda[3]));
+}
