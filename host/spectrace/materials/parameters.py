@@ -117,7 +117,7 @@ class Parameter:
         """The docs' "type, unit" column."""
         if self.type_doc is not None:
             return self.type_doc
-        text = self.type
+        text = f"{self.type} or texture" if self.textured and self.type == "spectrum" else self.type
         if self.range is not None and self.range.bounded:
             text += f" in {self.range}"
         if self.unit:

@@ -18,7 +18,7 @@ PARAMETERS = (
         doc="the squares where floor(s) + floor(t) is even",
         textured=True,
     ),
-    Parameter("color1", "spectrum", default=0.2, range=Range(0.0, 1.0), doc="the others", textured=True),
+    Parameter("color1", "spectrum", default=0.2, range=Range(0.0, 1.0), doc="the other squares", textured=True),
     uv_scale(2.0),
     UV_OFFSET,
 )

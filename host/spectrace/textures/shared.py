@@ -28,6 +28,7 @@ WRAP = Parameter(
     default="repeat",
     doc="outside [0, 1)²: `repeat` tiles the image, `mirror` tiles it mirrored, `clamp` holds the edge texels",
     type_doc='`"repeat"`, `"mirror"` or `"clamp"`',
+    default_doc='`"repeat"`',
 )
 FILTER = Parameter(
     "filter",
@@ -36,12 +37,13 @@ FILTER = Parameter(
     doc="`nearest`: the texel containing the point; `bilinear`: the four around it, blended; `trilinear`: bilinear "
     "on the two MIP levels that bracket the lookup's footprint, blended (builds the pyramid)",
     type_doc='`"nearest"`, `"bilinear"` or `"trilinear"`',
+    default_doc='`"bilinear"`',
 )
 UV_OFFSET = Parameter(
     "uv_offset",
     "uv",
     default=(0.0, 0.0),
-    doc="added after uv_scale: the image is looked up at st = uv · uv_scale + uv_offset",
+    doc="added after uv_scale: the texture is looked up at st = uv · uv_scale + uv_offset",
     type_doc="2 floats",
     default_doc="`[0, 0]`",
 )
