@@ -28,3 +28,18 @@ __kernel void sigmoid_spectrum(__global const float4 *coefficients, __global con
     int i = get_global_id(0);
     value[i] = sigmoid_polynomial(coefficients[i].xyz, (float4)(lambda[0], lambda[1], lambda[2], lambda[3]));
 }
+
+#include "../scene.cl"
+
+/* scene.cl's camera_footprint at points p = point.xyz of triangle (int)point.w, with the camera of `params`. */
+__kernel void footprint_at(__global const RenderParams *params, __global const float4 *triangle_vertices,
+                           __global const float2 *triangle_uvs, __global const float4 *point, __global float *out)
+{
+    int i = get_global_id(0);
+    Scene scene = {0};
+    scene.params = params;
+    scene.triangle_vertices = triangle_vertices;
+    scene.triangle_uvs = triangle_uvs;
+    int triangle = (int)point[i].w;
+    out[i] = camera_footprint(&scene, triangle, point[i].xyz, triangle_normal(triangle_vertices, triangle));
+}
