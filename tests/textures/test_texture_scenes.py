@@ -197,3 +197,19 @@ def test_textured_materials_are_not_exported_to_mitsuba(tmp_path, mitsuba_scalar
     )
     with pytest.raises(SpectraceError, match="textured reflectance is not exported yet"):
         scene_to_mitsuba_dict(scene, tmp_path)
+
+
+def test_spectra_listing_reads_checkerboard_sides_as_reflectances(tmp_path):
+    """`spectrace spectra` lists a checkerboard's spectrum sides under their key paths, an rgb one uplifted as a
+    reflectance (bounded by 1), not as an emission."""
+    from spectrace.scene.spectra_index import scene_spectra
+    from spectrace.spectral.uplift import uplift_reflectance
+
+    path = _scene(
+        tmp_path, '{ texture = "checkerboard", color0 = { value = 0.3 }, color1 = { rgb = [0.2, 0.5, 0.9] } }'
+    )
+    listed = scene_spectra(path)
+    np.testing.assert_allclose(listed["materials.m.reflectance.color0"].values, 0.3)
+    np.testing.assert_allclose(
+        listed["materials.m.reflectance.color1"].values, uplift_reflectance((0.2, 0.5, 0.9))[0].values
+    )

@@ -13,7 +13,6 @@ import numpy as np
 
 from spectrace.engine.device_types import (
     NO_TEXTURE,
-    TEXEL_SIGMOID,
     TEXTURE_BITMAP,
     TEXTURE_CHECKERBOARD,
     TEXTURE_DTYPE,
@@ -115,6 +114,3 @@ class TextureRows:
         self.rows.append(row)
         self.index[key] = len(self.rows) - 1
         return len(self.rows) - 1
-
-
-__all__ = ["TEXTURES", "Texture", "TextureRows", "is_texture", "texture_module", "TEXEL_SIGMOID"]

@@ -12,7 +12,17 @@ import numpy as np
 from spectrace.engine.device_types import TEXEL_SCALAR, TEXEL_SIGMOID
 from spectrace.errors import SpectraceError
 from spectrace.materials.parameters import Parameter
-from spectrace.textures.shared import FILE, FILTER, UV_OFFSET, WRAP, Placement, mip_pyramid, placement, uv_scale
+from spectrace.textures.shared import (
+    FILE,
+    FILTER,
+    UV_OFFSET,
+    WRAP,
+    Placement,
+    checked_placement,
+    mip_pyramid,
+    placement,
+    uv_scale,
+)
 
 NAME = "bitmap"
 RAW = Parameter(
@@ -54,18 +64,13 @@ def from_spec(spec, resolver, key: str) -> BitmapTexture:
     )
 
 
-class _Arguments:
-    def __init__(self, **kwargs):
-        self.__dict__.update(kwargs)
-
-
 def make(
     source,
     *,
     srgb: bool | None = None,
     raw: bool = False,
-    wrap: str = WRAP.default,  # type: ignore[assignment]
-    filter: str = FILTER.default,  # type: ignore[assignment]
+    wrap: str = "repeat",
+    filter: str = "bilinear",
     uv_scale: float | tuple[float, float] = 1.0,
     uv_offset: tuple[float, float] = (0.0, 0.0),
 ) -> BitmapTexture:
@@ -93,8 +98,9 @@ def make(
         raise SpectraceError(
             f"a texture is a file path, a numpy array or a PIL image, got {type(source).__name__}", where
         )
-    args = _Arguments(wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
-    return BitmapTexture(_read_only(decoded(values, encoded, raw)), placement(args, None), source=name)
+    return BitmapTexture(
+        _read_only(decoded(values, encoded, raw)), checked_placement(uv_scale, uv_offset, wrap, filter), source=name
+    )
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:

@@ -95,13 +95,18 @@ class Placement:
         return (*self.uv_scale, *self.uv_offset)
 
 
-def placement(spec_or_args, where) -> Placement:
-    """The Placement of a validated scene table or of the API's keyword arguments (an object with the four names)."""
+def placement(spec, where: str) -> Placement:
+    """The Placement of a validated scene table; `where` (file and key path) is named in errors."""
+    return checked_placement(spec.uv_scale, spec.uv_offset, spec.wrap, spec.filter, where)
+
+
+def checked_placement(uv_scale, uv_offset, wrap: str, filter: str, where: str | None = None) -> Placement:
+    """A Placement from its four values (the Python API's keyword arguments when `where` is None)."""
     return Placement(
-        uv_scale=uv_pair(spec_or_args.uv_scale, "uv_scale", where and f"{where}.uv_scale"),
-        uv_offset=uv_pair(spec_or_args.uv_offset, "uv_offset", where and f"{where}.uv_offset"),
-        wrap=choice(spec_or_args.wrap, WRAPS, "wrap", where and f"{where}.wrap"),
-        filter=choice(spec_or_args.filter, FILTERS, "filter", where and f"{where}.filter"),
+        uv_scale=uv_pair(uv_scale, "uv_scale", where and f"{where}.uv_scale"),
+        uv_offset=uv_pair(uv_offset, "uv_offset", where and f"{where}.uv_offset"),
+        wrap=choice(wrap, WRAPS, "wrap", where and f"{where}.wrap"),
+        filter=choice(filter, FILTERS, "filter", where and f"{where}.filter"),
     )
 
 

@@ -11,7 +11,17 @@ import numpy as np
 
 from spectrace.engine.device_types import TEXEL_BANDS
 from spectrace.errors import SpectraceError
-from spectrace.textures.shared import FILE, FILTER, UV_OFFSET, WRAP, Placement, mip_pyramid, placement, uv_scale
+from spectrace.textures.shared import (
+    FILE,
+    FILTER,
+    UV_OFFSET,
+    WRAP,
+    Placement,
+    checked_placement,
+    mip_pyramid,
+    placement,
+    uv_scale,
+)
 
 NAME = "spectral"
 PARAMETERS = (FILE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
@@ -84,11 +94,6 @@ def from_spec(spec, resolver, key: str) -> SpectralTexture:
     return SpectralTexture(wavelengths, _read_only(values), placement(spec, resolver.where(key)), source=str(path))
 
 
-class _Arguments:
-    def __init__(self, **kwargs):
-        self.__dict__.update(kwargs)
-
-
 def make(
     source,
     wavelengths_nm=None,
@@ -113,8 +118,9 @@ def make(
             raise SpectraceError("a spectral texture needs finite values and ascending wavelengths", where)
         wavelengths, values = _equally_spaced(given, values)
         name = "array"
-    args = _Arguments(wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
-    return SpectralTexture(wavelengths, _read_only(values), placement(args, None), source=name)
+    return SpectralTexture(
+        wavelengths, _read_only(values), checked_placement(uv_scale, uv_offset, wrap, filter), source=name
+    )
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
