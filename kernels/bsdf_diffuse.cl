@@ -9,6 +9,7 @@
 #include "bsdf_sample.cl"
 #include "sampling.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 
 typedef struct {
     float4 reflectance;
@@ -19,11 +20,11 @@ inline int diffuse_flags(__global const Material *m)
     return BSDF_NON_DELTA;
 }
 
-inline DiffuseParams diffuse_params(__global const Material *m, __global const float *spectra,
+inline DiffuseParams diffuse_params(__global const Material *m, const SurfaceContext *sc,
                                     const SampledWavelengths *w)
 {
     DiffuseParams p;
-    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    p.reflectance = surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
     return p;
 }
 

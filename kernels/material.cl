@@ -1,6 +1,8 @@
 /* Material dispatch: the integrators see every BSDF through the functions below, in world space. Each BSDF lives
  * in its own bsdf_<name>.cl and works in the local shading frame (frame.cl) with the same five functions:
- * <name>_flags (what its lobes are, bsdf_sample.cl), <name>_params (its inputs at the path's wavelengths),
+ * <name>_flags (what its lobes are, bsdf_sample.cl), <name>_params (its inputs at the path's wavelengths, looked
+ * up in the spectrum table or, for textured parameters, the textures at the surface point: texture.cl's
+ * SurfaceContext),
  * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. Adding a BSDF: that file, its code in
  * spectrace.engine.device_types.MATERIAL_TYPES, and its line in MATERIAL_LIST. docs/materials.md describes each
  * model. */
@@ -10,6 +12,7 @@
 #include "types.h"
 #include "frame.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 #include "bsdf_sample.cl"
 #include "bsdf_diffuse.cl"
 #include "bsdf_mirror.cl"
@@ -33,17 +36,17 @@
     if (MATERIAL_IS(m, type)) return name##_flags(m);
 #define MATERIAL_EVAL_CASE(type, name, Params)          \
     if (MATERIAL_IS(m, type)) {                         \
-        Params p = name##_params(m, spectra, w);        \
+        Params p = name##_params(m, sc, w);            \
         return name##_eval(&p, wo, wi);                 \
     }
 #define MATERIAL_PDF_CASE(type, name, Params)           \
     if (MATERIAL_IS(m, type)) {                         \
-        Params p = name##_params(m, spectra, w);        \
+        Params p = name##_params(m, sc, w);            \
         return name##_pdf(&p, wo, wi);                  \
     }
 #define MATERIAL_SAMPLE_CASE(type, name, Params)        \
     if (MATERIAL_IS(m, type)) {                         \
-        Params p = name##_params(m, spectra, w);        \
+        Params p = name##_params(m, sc, w);            \
         return name##_sample(&p, wo, uc, u, s);         \
     }
 
@@ -70,7 +73,7 @@ inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 
 }
 
 /* f(wo, wi)·|cos θi| per wavelength, local directions. */
-inline float4 material_eval_local(__global const Material *m, __global const float *spectra,
+inline float4 material_eval_local(__global const Material *m, const SurfaceContext *sc,
                                   const SampledWavelengths *w, float3 wo, float3 wi)
 {
     MATERIAL_LIST(MATERIAL_EVAL_CASE)
@@ -78,7 +81,7 @@ inline float4 material_eval_local(__global const Material *m, __global const flo
 }
 
 /* Solid-angle pdf with which material_sample_local proposes wi (delta lobes contribute nothing). */
-inline float material_pdf_local(__global const Material *m, __global const float *spectra,
+inline float material_pdf_local(__global const Material *m, const SurfaceContext *sc,
                                 const SampledWavelengths *w, float3 wo, float3 wi)
 {
     MATERIAL_LIST(MATERIAL_PDF_CASE)
@@ -86,7 +89,7 @@ inline float material_pdf_local(__global const Material *m, __global const float
 }
 
 /* uc picks a lobe, u samples within it. Returns 0 when no direction was produced. */
-inline int material_sample_local(__global const Material *m, __global const float *spectra,
+inline int material_sample_local(__global const Material *m, const SurfaceContext *sc,
                                  const SampledWavelengths *w, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     MATERIAL_LIST(MATERIAL_SAMPLE_CASE)
@@ -107,25 +110,25 @@ inline int material_disperses(__global const Material *m, const SampledWavelengt
     return (material_flags(m) & BSDF_DISPERSIVE) && wavelengths_differ(w);
 }
 
-inline float4 material_eval(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
+inline float4 material_eval(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                             float3 n, float3 wo, float3 wi)
 {
     ShadingFrame frame = material_frame(m, n, wo);
-    return material_eval_local(m, spectra, w, to_local(&frame, wo), to_local(&frame, wi));
+    return material_eval_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
 }
 
-inline float material_pdf(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
+inline float material_pdf(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                           float3 n, float3 wo, float3 wi)
 {
     ShadingFrame frame = material_frame(m, n, wo);
-    return material_pdf_local(m, spectra, w, to_local(&frame, wo), to_local(&frame, wi));
+    return material_pdf_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
 }
 
-inline int material_sample(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
+inline int material_sample(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                            float3 n, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     ShadingFrame frame = material_frame(m, n, wo);
-    if (!material_sample_local(m, spectra, w, to_local(&frame, wo), uc, u, s)) return 0;
+    if (!material_sample_local(m, sc, w, to_local(&frame, wo), uc, u, s)) return 0;
     s->wi = to_world(&frame, s->wi);
     return 1;
 }

@@ -25,10 +25,15 @@ _LAZY = {
     **dict.fromkeys(
         [
             "area_emitter",
+            "bitmap",
+            "checkerboard",
             "conductor",
             "constant_environment",
             "dielectric",
             "diffuse",
+            "bitmap",
+            "spectral_texture",
+            "checkerboard",
             "distant_light",
             "medium",
             "mesh_from_trimesh",
@@ -40,6 +45,7 @@ _LAZY = {
             "rgb_emission",
             "rgb_reflectance",
             "shape",
+            "spectral_texture",
             "spectrum",
             "spot_light",
             "transformed",

@@ -134,6 +134,67 @@ def _reflectance(source: SpectrumLike, what: str) -> Spectrum:
     return result
 
 
+def _reflectance_or_texture(source, what: str):
+    """A textured reflectance's value: a texture (checked: values in [0, 1]) or a reflectance spectrum."""
+    from spectrace.scene.loader import check_texture_values
+    from spectrace.textures import is_texture
+
+    if is_texture(source):
+        check_texture_values(source, "spectrum", what)
+        return source
+    return _reflectance(source, what)
+
+
+def bitmap(
+    source,
+    *,
+    srgb: bool | None = None,
+    raw: bool = False,
+    wrap: str = "repeat",
+    filter: str = "bilinear",
+    uv_scale: float | tuple[float, float] = 1.0,
+    uv_offset: tuple[float, float] = (0.0, 0.0),
+):
+    """An image texture (docs/textures.md) for a textured parameter such as a diffuse or plastic `reflectance`: a
+    file path (PNG, JPEG, TIFF, OpenEXR; integer-coded files are sRGB-decoded unless raw), a numpy array (H, W),
+    (H, W, 1) or (H, W, 3) of linear values (srgb=True: sRGB-encoded values in [0, 1]), or a PIL image (decoded
+    from sRGB unless raw). st = uv · uv_scale + uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest",
+    "bilinear" or "trilinear"."""
+    from spectrace.textures import bitmap as module
+
+    return module.make(source, srgb=srgb, raw=raw, wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
+
+
+def spectral_texture(
+    source,
+    wavelengths_nm=None,
+    *,
+    wrap: str = "repeat",
+    filter: str = "bilinear",
+    uv_scale: float | tuple[float, float] = 1.0,
+    uv_offset: tuple[float, float] = (0.0, 0.0),
+):
+    """A spectral texture: a spectral OpenEXR file (S0.<λ>nm channels, as spectrace writes them) or an array
+    (H, W, bands) with the bands' wavelengths in nm; each texel's spectrum is interpolated at the path's
+    wavelengths, with no RGB round trip (docs/textures.md)."""
+    from spectrace.textures import spectral
+
+    return spectral.make(source, wavelengths_nm, wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
+
+
+def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)):
+    """Squares of color0 and color1 (reflectances: anything `spectrum` takes, an RGB triple, or an image texture)
+    over the texture coordinates: color0 where floor(s) + floor(t) is even, st = uv · uv_scale + uv_offset."""
+    from spectrace.textures import IMAGE_TEXTURES
+    from spectrace.textures import checkerboard as module
+
+    sides = [
+        side if isinstance(side, IMAGE_TEXTURES) else _reflectance(side, name)
+        for side, name in ((color0, "color0"), (color1, "color1"))
+    ]
+    return module.make(sides[0], sides[1], uv_scale=uv_scale, uv_offset=uv_offset)
+
+
 def _emission(source: SpectrumLike, what: str) -> Spectrum:
     if isinstance(source, (tuple, list)) and len(source) == 3 and all(isinstance(c, Real) for c in source):
         return rgb_emission(source)
@@ -175,7 +236,7 @@ def transformed(mesh: TriangleMesh, steps: Iterable[Mapping[str, Any]]) -> Trian
 def diffuse(reflectance: SpectrumLike) -> DiffuseMaterial:
     """Lambertian material, f = R(λ)/π, reflecting on both faces; `reflectance` in [0, 1] (a linear sRGB triple is
     uplifted)."""
-    return materials.diffuse.make(_reflectance(reflectance, "reflectance"))
+    return materials.diffuse.make(_reflectance_or_texture(reflectance, "reflectance"))
 
 
 def mirror(reflectance: SpectrumLike = materials.mirror.PARAMETERS[0].number_default) -> MirrorMaterial:
@@ -223,7 +284,7 @@ def plastic(
 ) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
     smooth or GGX-rough (`roughness` = α)."""
-    return materials.plastic.make(_reflectance(reflectance, "reflectance"), ior=ior, roughness=roughness)
+    return materials.plastic.make(_reflectance_or_texture(reflectance, "reflectance"), ior=ior, roughness=roughness)
 
 
 def retroreflector(

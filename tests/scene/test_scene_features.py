@@ -4,6 +4,7 @@ samples, same arithmetic, the same bits. A feature left out wrongly changes or z
 which a bit-for-bit comparison catches in every scene below."""
 
 import tomllib
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -45,10 +46,17 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
         "SCENE_HAS_MEDIA": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
+        "SCENE_HAS_TEXTURES": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
+    assert lights["SCENE_HAS_TEXTURES"] == 0
+    textured = replace(
+        _environment_map_scene(),
+        shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.bitmap(np.full((2, 2), 0.5))))],
+    )
+    assert scene_feature_defines(build_scene_buffers(textured))["SCENE_HAS_TEXTURES"] == 1
 
 
 def _environment_map_scene() -> spectrace.Scene:

@@ -68,9 +68,47 @@ MATERIAL_DTYPE = _struct(
         ("alpha", "<f4"),
         ("ior_model", "<i4"),
         ("ior", "<f4"),
-        ("pad0", "<i4"),
+        ("reflectance_texture", "<i4"),
     ],
     64,
+)
+
+# Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
+# TEXEL_SCALAR); SPECTRAL: an image of spectral bands (TEXEL_BANDS); CHECKERBOARD: two sides, each a spectrum or a
+# texture of another type.
+TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard")
+TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES))
+# Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
+# S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
+# per band, at band centres band_first_nm + i·band_step_nm.
+TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS = range(3)
+# Texture.wrap: where st outside [0, 1)² looks.
+WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
+# Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
+# level; TRILINEAR: bilinear on the two levels around the footprint, blended.
+FILTER_NEAREST, FILTER_BILINEAR, FILTER_TRILINEAR = range(3)
+# A material parameter without a texture (Material.reflectance_texture), and a checkerboard side without one.
+NO_TEXTURE = -1
+
+TEXTURE_DTYPE = _struct(
+    [
+        ("uv_transform", ("<f4", (4,))),
+        ("type", "<i4"),
+        ("texel_format", "<i4"),
+        ("channels", "<i4"),
+        ("width", "<i4"),
+        ("height", "<i4"),
+        ("levels", "<i4"),
+        ("data_offset", "<i4"),
+        ("wrap", "<i4"),
+        ("filter", "<i4"),
+        ("band_first_nm", "<f4"),
+        ("band_step_nm", "<f4"),
+        ("side_spectrum", ("<i4", (2,))),
+        ("side_texture", ("<i4", (2,))),
+        ("pad0", "<i4"),
+    ],
+    80,
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
@@ -161,6 +199,7 @@ SCENE_KERNEL_BUFFERS = (
     "texels",
     "map_cdf",
     "media",
+    "textures",
 )
 
 # struct name in types.h -> dtype; the layout test walks this table.
@@ -170,6 +209,7 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "TriangleInfo": TRIANGLE_INFO_DTYPE,
     "Material": MATERIAL_DTYPE,
     "Medium": MEDIUM_DTYPE,
+    "Texture": TEXTURE_DTYPE,
     "Light": LIGHT_DTYPE,
     "RenderParams": RENDER_PARAMS_DTYPE,
     "MeterParams": METER_PARAMS_DTYPE,
@@ -197,6 +237,16 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "METER_IRRADIANCE": METER_IRRADIANCE,
         "METER_RADIANCE": METER_RADIANCE,
         "METER_FLUX": METER_FLUX,
+        "NO_TEXTURE": NO_TEXTURE,
+        "TEXEL_SIGMOID": TEXEL_SIGMOID,
+        "TEXEL_SCALAR": TEXEL_SCALAR,
+        "TEXEL_BANDS": TEXEL_BANDS,
+        "WRAP_REPEAT": WRAP_REPEAT,
+        "WRAP_MIRROR": WRAP_MIRROR,
+        "WRAP_CLAMP": WRAP_CLAMP,
+        "FILTER_NEAREST": FILTER_NEAREST,
+        "FILTER_BILINEAR": FILTER_BILINEAR,
+        "FILTER_TRILINEAR": FILTER_TRILINEAR,
         "MATERIAL_TYPE_COUNT": len(MATERIAL_TYPES),
         "LIGHT_TYPE_COUNT": len(LIGHT_TYPES),
         # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
@@ -206,4 +256,5 @@ def device_contract_defines() -> dict[str, int | float | str]:
     }
     values |= {f"MATERIAL_{name.upper()}": code for code, name in enumerate(MATERIAL_TYPES)}
     values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
+    values |= {f"TEXTURE_{name.upper()}": code for code, name in enumerate(TEXTURE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

@@ -31,7 +31,7 @@ import numpy as np
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.lights import LIGHTS, area
-from spectrace.materials import MATERIALS
+from spectrace.materials import MATERIALS, material_textures
 from spectrace.scene.model import Scene
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
@@ -149,6 +149,9 @@ def scene_to_mitsuba_dict(
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
             raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
+        if shape.material is not None and material_textures(shape.material):
+            textured = ", ".join(material_textures(shape.material))
+            raise exporter.refuse(f"shape '{shape.name}': textured {textured} is not exported yet")
         material_key = id(shape.material)
         if material_key not in materials:
             name = f"material_{len(materials)}"

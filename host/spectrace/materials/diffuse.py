@@ -6,7 +6,7 @@ from spectrace.materials.parameters import REQUIRED, reflectance
 
 NAME = "diffuse"
 MITSUBA_PLUGINS = ("diffuse",)
-PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π"),)
+PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π", textured=True),)
 
 
 class DiffuseMaterial(ReflectanceOnly):

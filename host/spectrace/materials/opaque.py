@@ -33,14 +33,14 @@ class RoughOpaque(Opaque):
 class ReflectanceOnly(Opaque):
     """A material described by its reflectance R(λ) alone; a subclass states is_delta."""
 
-    reflectance: Spectrum
+    reflectance: Spectrum  # or, where the parameter table says textured, a texture (spectrace.textures)
 
 
 def reflectance_only(model: Callable[[Spectrum], Any], material_type: int) -> tuple[Callable, Callable, Callable]:
     """`from_spec`, `make` and `write_row` of a material whose one parameter is its reflectance."""
 
     def from_spec(spec, resolver, key: str):
-        return model(resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False))
+        return model(resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"))
 
     def make(reflectance: Spectrum):
         return model(reflectance)

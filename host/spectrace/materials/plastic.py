@@ -23,14 +23,14 @@ IOR = Parameter(
     doc="index of refraction of the clear coat relative to the outside",
 )
 ROUGHNESS = roughness(0.0, "GGX α of the coat")
-PARAMETERS = (reflectance(REQUIRED, "albedo of the diffuse base under the coat"), IOR, ROUGHNESS)
+PARAMETERS = (reflectance(REQUIRED, "albedo of the diffuse base under the coat", textured=True), IOR, ROUGHNESS)
 
 
 @dataclass(frozen=True)
 class PlasticMaterial(Opaque):
     """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside."""
 
-    reflectance: Spectrum
+    reflectance: Spectrum  # or a texture (spectrace.textures)
     ior: float = IOR.number_default
     roughness: float = ROUGHNESS.number_default
 
@@ -42,7 +42,7 @@ MODEL = PlasticMaterial
 
 def from_spec(spec, resolver, key: str) -> PlasticMaterial:
     return PlasticMaterial(
-        resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False),
+        resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"),
         ior=spec.ior,
         roughness=spec.roughness,
     )

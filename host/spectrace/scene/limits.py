@@ -46,6 +46,10 @@ IMAGE_HOST_BYTES_PER_PIXEL = 72
 # On the device every texel is a float4, and a map adds its sampling tables (about 4 bytes per texel).
 IMAGE_DEVICE_BYTES_PER_PIXEL = 16
 
+# Every texture of a scene together, on the device (texels and MIP levels): beyond this a scene is refused before
+# anything is converted, with the amount (docs/textures.md).
+MAX_TEXTURE_BYTES = 1 << 30
+
 # The watertight ray/triangle test forms products of three coordinate differences in 32-bit floats, which
 # overflow (3.4e38) near 7e12; 1e12 scene units keeps a margin (the Earth's orbit is 1.5e11 m).
 MAX_COORDINATE = 1e12

@@ -1,0 +1,67 @@
+"""`checkerboard`: two spectra (or image textures) alternating in squares of the texture coordinates: side 0 where
+floor(s) + floor(t) is even, st = uv · uv_scale + uv_offset (the default uv_scale 2 gives 2 × 2 squares on the unit
+square, as Mitsuba 3's checkerboard). Evaluated exactly at the point, without filtering its edges. docs/textures.md."""
+
+from dataclasses import dataclass
+
+from spectrace.materials.parameters import Parameter, Range
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures.shared import UV_OFFSET, Placement, uv_pair, uv_scale
+
+NAME = "checkerboard"
+PARAMETERS = (
+    Parameter(
+        "color0",
+        "spectrum",
+        default=0.4,
+        range=Range(0.0, 1.0),
+        doc="the squares where floor(s) + floor(t) is even",
+        textured=True,
+    ),
+    Parameter("color1", "spectrum", default=0.2, range=Range(0.0, 1.0), doc="the other squares", textured=True),
+    uv_scale(2.0),
+    UV_OFFSET,
+)
+
+
+@dataclass(frozen=True, eq=False)
+class CheckerboardTexture:
+    """Two sides, each a spectrum or an image texture (a bitmap or spectral texture, not another checkerboard)."""
+
+    color0: object
+    color1: object
+    placement: Placement = Placement(uv_scale=(2.0, 2.0))
+    source: str = "checkerboard"
+
+
+def from_spec(spec, resolver, key: str) -> CheckerboardTexture:
+    sides = [
+        resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
+        for name in ("color0", "color1")
+    ]
+    where = resolver.where(key)
+    return CheckerboardTexture(
+        sides[0],
+        sides[1],
+        placement=Placement(
+            uv_scale=uv_pair(spec.uv_scale, "uv_scale", f"{where}.uv_scale"),
+            uv_offset=uv_pair(spec.uv_offset, "uv_offset", f"{where}.uv_offset"),
+        ),
+    )
+
+
+def make(color0, color1, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)) -> CheckerboardTexture:
+    """color0 and color1: spectra (a Spectrum, a number or an RGB triple: reflectances) or image textures."""
+    return CheckerboardTexture(
+        color0,
+        color1,
+        Placement(uv_scale=uv_pair(uv_scale, "uv_scale", None), uv_offset=uv_pair(uv_offset, "uv_offset", None)),
+    )
+
+
+def sides(texture: CheckerboardTexture) -> tuple:
+    return texture.color0, texture.color1
+
+
+def is_spectrum(value) -> bool:
+    return isinstance(value, Spectrum)
