@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from tests.textures.lookup import HARNESS, TextureHarness, bilinear, nearest, pyramid, trilinear
 
-from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.rgb_texture import reflectance_coefficients
+from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.uplift import sigmoid_polynomial_spectrum, uplift_reflectance
 from spectrace.textures import bitmap, checkerboard, spectral
 
