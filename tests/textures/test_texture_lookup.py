@@ -91,7 +91,7 @@ def test_sigmoid_matches_the_host_spectrum(runner):
 
 def test_rgb_bilinear_blends_the_texels_spectra(runner):
     """A 2 × 2 RGB reflectance texture: between texel centres the value is the bilinear blend of the four texels'
-    SPECTRA (each S(poly) of its own fit), not the spectrum of blended coefficients."""
+    SPECTRA (each S(poly) of its own coefficients, as textures fit them), not the spectrum of blended coefficients."""
     rgb = np.array([[[0.9, 0.1, 0.1], [0.1, 0.9, 0.1]], [[0.1, 0.1, 0.9], [0.9, 0.9, 0.2]]])
     texture = bitmap.make(rgb, wrap="clamp")
     rng = np.random.default_rng(7)
@@ -99,18 +99,9 @@ def test_rgb_bilinear_blends_the_texels_spectra(runner):
     got = TextureHarness(runner, [(texture, "spectrum")]).lookup(0, uv, lambdas=GRID_LAMBDAS)
     grid_index = np.array(GRID_LAMBDAS).astype(int) - 360
     spectra = np.array(
-        [[sigmoid_polynomial_spectrum(uplift_reflectance(c)[1])[grid_index] for c in row] for row in rgb]
+        [[sigmoid_polynomial_spectrum(reflectance_coefficients(np.array(c)))[grid_index] for c in row] for row in rgb]
     )
     np.testing.assert_allclose(got, bilinear(spectra, uv, "clamp"), atol=5e-5)
-
-
-def test_reflectance_coefficients_match_the_scalar_fit():
-    """The array form fits each colour as uplift_reflectance does, repeated colours included."""
-    rgb = np.array([[[0.2, 0.4, 0.6], [0.9, 0.1, 0.0]], [[0.2, 0.4, 0.6], [1.0, 1.0, 1.0]]])
-    coefficients = reflectance_coefficients(rgb)
-    assert coefficients.shape == (2, 2, 3)
-    for index in np.ndindex(2, 2):
-        np.testing.assert_array_equal(coefficients[index], uplift_reflectance(rgb[index])[1])
 
 
 def test_spectral_bands_are_interpolated_per_wavelength(runner):
@@ -139,6 +130,8 @@ def test_checkerboard_alternates_its_sides(runner):
     st = uv * 4.0
     clear = np.all(np.abs(st - np.round(st)) > 1e-4, axis=1)
     even = (np.floor(st[:, 0]) + np.floor(st[:, 1])) % 2 == 0
-    grey = sigmoid_polynomial_spectrum(uplift_reflectance((0.5, 0.5, 0.5))[1])[np.array(GRID_LAMBDAS).astype(int) - 360]
+    grey = sigmoid_polynomial_spectrum(reflectance_coefficients(np.full(3, 0.5)))[
+        np.array(GRID_LAMBDAS).astype(int) - 360
+    ]
     np.testing.assert_allclose(got[clear & even], 0.25, atol=1e-6)
     np.testing.assert_allclose(got[clear & ~even], np.broadcast_to(grey, got[clear & ~even].shape), atol=5e-5)
