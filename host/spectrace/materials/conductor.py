@@ -5,7 +5,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import MATERIAL_CONDUCTOR
 from spectrace.materials.opaque import RoughOpaque
 from spectrace.materials.parameters import Parameter, Range, reflectance, roughness
 from spectrace.spectral.metals import METALS, metal_ior
@@ -104,7 +103,6 @@ def make(
 
 
 def write_row(row: np.ndarray, material: ConductorMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_CONDUCTOR
     row["eta_offset"] = table.add(material.eta)
     row["k_offset"] = table.add(material.k)
     if material.specular_tint is not None:

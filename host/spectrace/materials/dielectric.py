@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
+from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER
 from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
 from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
@@ -85,7 +85,6 @@ def make(
 
 
 def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_DIELECTRIC
     ior = material.ior
     if ior.model == "sellmeier":
         row["ior_model"] = IOR_SELLMEIER

@@ -1,6 +1,5 @@
 """`diffuse`: Lambertian reflection, f = R(λ)/π, on both faces (docs/materials.md, kernels/bsdf_diffuse.cl)."""
 
-from spectrace.engine.device_types import MATERIAL_DIFFUSE
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
 from spectrace.materials.parameters import REQUIRED, reflectance
 
@@ -18,7 +17,7 @@ class DiffuseMaterial(ReflectanceOnly):
 MODEL = DiffuseMaterial
 
 
-from_spec, make, write_row = reflectance_only(DiffuseMaterial, MATERIAL_DIFFUSE)
+from_spec, make, write_row = reflectance_only(DiffuseMaterial)
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:

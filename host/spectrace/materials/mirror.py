@@ -1,6 +1,5 @@
 """`mirror`: perfect specular reflection of reflectance R(λ) (docs/materials.md, kernels/bsdf_mirror.cl)."""
 
-from spectrace.engine.device_types import MATERIAL_MIRROR
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
 from spectrace.materials.parameters import reflectance
 
@@ -19,4 +18,4 @@ class MirrorMaterial(ReflectanceOnly):
 MODEL = MirrorMaterial
 
 
-from_spec, make, write_row = reflectance_only(MirrorMaterial, MATERIAL_MIRROR)
+from_spec, make, write_row = reflectance_only(MirrorMaterial)

@@ -1,5 +1,5 @@
 """What the materials that only reflect share: their flags, and for those described by one reflectance alone
-(diffuse, mirror) the whole host side but the flag is_delta and the kernel's material type."""
+(diffuse, mirror) the whole host side but the flag is_delta."""
 
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -36,7 +36,7 @@ class ReflectanceOnly(Opaque):
     reflectance: Spectrum
 
 
-def reflectance_only(model: Callable[[Spectrum], Any], material_type: int) -> tuple[Callable, Callable, Callable]:
+def reflectance_only(model: Callable[[Spectrum], Any]) -> tuple[Callable, Callable, Callable]:
     """`from_spec`, `make` and `write_row` of a material whose one parameter is its reflectance."""
 
     def from_spec(spec, resolver, key: str):
@@ -46,7 +46,6 @@ def reflectance_only(model: Callable[[Spectrum], Any], material_type: int) -> tu
         return model(reflectance)
 
     def write_row(row: np.ndarray, material, table: SpectrumTable) -> None:
-        row["type"] = material_type
         row["reflectance_offset"] = table.add(material.reflectance)
 
     return from_spec, make, write_row

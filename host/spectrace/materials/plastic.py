@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CONSTANT, MATERIAL_PLASTIC
+from spectrace.engine.device_types import IOR_CONSTANT
 from spectrace.materials.opaque import Opaque
 from spectrace.materials.parameters import REQUIRED, Parameter, Range, reflectance, roughness
 from spectrace.spectral.spectrum import Spectrum
@@ -55,7 +55,6 @@ def make(
 
 
 def write_row(row: np.ndarray, material: PlasticMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_PLASTIC
     row["reflectance_offset"] = table.add(material.reflectance)
     row["ior_model"] = IOR_CONSTANT
     row["ior"] = material.ior

@@ -5,7 +5,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import MATERIAL_RETROREFLECTOR
 from spectrace.materials.opaque import RoughOpaque
 from spectrace.materials.parameters import reflectance, roughness
 from spectrace.spectral.spectrum import Spectrum
@@ -40,6 +39,5 @@ def make(reflectance: Spectrum, roughness: float = ROUGHNESS.number_default) -> 
 
 
 def write_row(row: np.ndarray, material: RetroreflectorMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_RETROREFLECTOR
     row["reflectance_offset"] = table.add(material.reflectance)
     row["alpha"] = material.roughness
