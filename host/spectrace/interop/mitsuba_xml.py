@@ -64,6 +64,14 @@ SUPPORTED = {
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis"),
 }
+
+
+def supported_text() -> str:
+    """The plugins spectrace imports, per element: "shape obj, ply, ...; bsdf diffuse, ...; ..." (the modules'
+    MITSUBA_PLUGINS through the registries, and what the importer itself reads)."""
+    return "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
+
+
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 _PLANNED_BSDFS = ("thindielectric",)
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
@@ -919,9 +927,8 @@ class MitsubaImporter:
             elif child.tag in _OBJECT_TAGS or child.tag == "include":
                 self.unsupported_plugin(child)
         if self.unsupported:
-            supported = "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
             raise SpectraceError(
-                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported})",
+                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported_text()})",
                 where=str(self.xml_path),
             )
         environments = [self.origins[f"lights[{i}]"] for i, light in enumerate(lights) if light["type"] == "constant"]
