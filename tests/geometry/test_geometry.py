@@ -231,7 +231,9 @@ def test_an_obj_file_that_goes_to_trimesh_is_read_from_disk_once(tmp_path, monke
     import io
 
     path = tmp_path / "seam.obj"
-    path.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0.5 0.5\nf 1/1 2/2 3/3\nf 1/4 3/3 4/1\n")
+    path.write_text(
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0.5 0.5\nf 1/1 2/2 3/3\nf 1/4 3/3 4/1\n"
+    )
     opened = []
     for module, name in ((builtins, "open"), (io, "open")):
         original = getattr(module, name)
