@@ -49,10 +49,10 @@ inline float3 facing(float3 n, float3 wo)
     return dot(n, wo) >= 0.0f ? n : -n;
 }
 
-/* The local frame of material m at a surface of normal n seen from wo. Every reflector reflects on both faces,
- * so its frame's normal is turned toward wo (local wo.z ≥ 0). A transmitting one keeps the geometric normal: which
- * side is the interior (so the sign of the refraction) comes from the winding, so closed meshes need outward
- * normals. */
+/* The local frame of material m at a surface of (shading) normal n seen from wo. Every reflector reflects on both
+ * faces, so its frame's normal is turned toward wo (local wo.z ≥ 0). A transmitting one keeps n on the winding's
+ * front: which side is the interior (so the sign of the refraction) comes from the winding, so closed meshes need
+ * outward normals. */
 inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 wo)
 {
     return shading_frame((material_flags(m) & BSDF_TRANSMISSION) ? n : facing(n, wo));

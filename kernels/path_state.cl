@@ -47,7 +47,8 @@ inline int max_segments(__global const RenderParams *params)
 typedef struct {
     TriangleInfo info;
     float3 p;
-    float3 n;   /* geometric normal (the winding's front) */
+    float3 n;   /* geometric normal (the winding's front): sides, ray offsets, media, emission */
+    float3 ns;  /* shading normal, the BSDF's frame: n itself on a flat triangle (shading_normal.cl) */
     float3 wo;  /* back along the ray */
 } PathVertex;
 
@@ -58,6 +59,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     v.p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
     v.n = triangle_normal(scene->triangle_vertices, hit.triangle);
     v.wo = -ray.direction;
+    v.ns = v.info.normals < 0 ? v.n : shading_normal(scene, v.info.normals, hit.b12, v.n, v.wo);
     return v;
 }
 
@@ -88,13 +90,14 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
 {
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
-        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->wo, material, use_mis,
-                                                           rays_traced);
+        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material,
+                                                           use_mis, rays_traced);
     }
 }
 
 /* A surface vertex, as both integrators meet it: its direct light (light_vertex), then a direction from its
- * material's BSDF drawn with the next 1D and 2D numbers. Returns 0 when the BSDF gives no direction. */
+ * material's BSDF drawn with the next 1D and 2D numbers. Returns 0 when the BSDF gives no direction, or one on
+ * different sides of the shading and the geometric normal (shading_normal.cl). */
 inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
                                    const PathVertex *v, int use_mis, float4 *radiance, uint *rays_traced,
                                    BSDFSample *bs)
@@ -103,7 +106,8 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
-    return material_sample(material, scene->spectra, w, v->n, v->wo, uc, u, bs);
+    return material_sample(material, scene->spectra, w, v->ns, v->wo, uc, u, bs)
+        && shading_side_agrees(v->n, v->ns, bs->wi);
 }
 
 /* The path leaves the vertex along a BSDF sample: its weight and radiance compression join the throughput, and

@@ -12,6 +12,7 @@ typedef struct {
     __global const BVHNode *nodes;
     __global const float4 *triangle_vertices;
     __global const float2 *triangle_uvs;
+    __global const float4 *triangle_normals;  /* shading normals of the smooth triangles' corners (TriangleInfo) */
     __global const TriangleInfo *triangle_info;
     __global const Material *materials;
     __global const Light *lights;
@@ -27,13 +28,13 @@ typedef struct {
  * declared with them makes its Scene with `Scene scene = SCENE_FROM_KERNEL_PARAMS;`. */
 #define SCENE_KERNEL_PARAMS                                                                                        \
     __global const RenderParams *params, __global const BVHNode *nodes, __global const float4 *triangle_vertices, \
-        __global const float2 *triangle_uvs, __global const TriangleInfo *triangle_info,                          \
-        __global const Material *materials, __global const Light *lights, __global const float *light_cdf,        \
-        __global const float *spectra, __global const float4 *texels, __global const float *map_cdf,              \
-        __global const Medium *media
+        __global const float2 *triangle_uvs, __global const float4 *triangle_normals,                             \
+        __global const TriangleInfo *triangle_info, __global const Material *materials,                           \
+        __global const Light *lights, __global const float *light_cdf, __global const float *spectra,             \
+        __global const float4 *texels, __global const float *map_cdf, __global const Medium *media
 #define SCENE_FROM_KERNEL_PARAMS                                                                                   \
-    {params, nodes, triangle_vertices, triangle_uvs, triangle_info, materials, lights, light_cdf, spectra, texels, \
-     map_cdf, media}
+    {params, nodes, triangle_vertices, triangle_uvs, triangle_normals, triangle_info, materials, lights,           \
+     light_cdf, spectra, texels, map_cdf, media}
 
 inline LightBuffers light_buffers(const Scene *scene)
 {

@@ -42,7 +42,8 @@ typedef struct {
     int light;      /* index into the light array, or -1 when the triangle does not emit */
     int interior;   /* index into the medium array: the medium filling the closed shape this triangle bounds, on
                        the side opposite its geometric normal (the winding's back side); -1 when none */
-    int pad0;
+    int normals;    /* its corners' shading normals are entries 3·normals .. 3·normals + 2 of triangle_normals; -1
+                       when it shades with its geometric normal (flat) */
 } TriangleInfo;
 
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already

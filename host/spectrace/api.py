@@ -20,7 +20,7 @@ from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
-from spectrace.geometry.mesh import TriangleMesh
+from spectrace.geometry.mesh import TriangleMesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
 from spectrace.lights.base import unit_direction
@@ -47,13 +47,6 @@ if TYPE_CHECKING:
     from spectrace.engine.meters import MeterReading
 
 ProgressOption = bool | Literal["auto"] | Callable[[int, int], None] | None
-
-BUILTIN_SHAPES = {
-    "rectangle": primitives.rectangle,
-    "cube": primitives.cube,
-    "sphere": primitives.sphere,
-    "prism": primitives.prism,
-}
 
 
 # ---------------------------------------------------------------- spectra
@@ -145,34 +138,41 @@ def _is_zero(source: SpectrumLike) -> bool:
 
 
 def shape(
-    geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism"] | trimesh.Trimesh,
+    geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism", "teapot"] | trimesh.Trimesh,
     material=None,
     emitter: AreaEmitter | None = None,
     transform: Iterable[Mapping[str, Any]] = (),
     name: str = "",
     interior: Medium | None = None,
+    face_normals: bool | None = None,
 ) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
-    "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z), moved by
+    "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the
+    Utah teapot standing on the origin, y up, body radius 1), moved by
     `transform` steps (see `transformed`). Built-ins face outward, as a dielectric needs. `interior` (see `medium`)
     fills a closed shape, whose faces must wind outward; without a material its boundary is index-matched (rays
-    cross it unchanged)."""
+    cross it unchanged). `face_normals` as the scene key: True shades with the face normals (facets), False
+    smoothly (normals computed for a mesh without its own), None keeps the mesh's own normals (the sphere's are
+    radial, the teapot's its surface's; the other built-ins have none)."""
     if material is None and interior is None:
         raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
     if interior is not None and not isinstance(interior, Medium):
         raise SpectraceError(
             f"interior must be a Medium (see medium()), got {type(interior).__name__}", where="interior"
         )
+    if face_normals is not None and not isinstance(face_normals, bool):
+        raise SpectraceError(f"face_normals must be True, False or None, got {face_normals!r}", where="face_normals")
     if isinstance(geometry, str):
-        if geometry not in BUILTIN_SHAPES:
-            raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(BUILTIN_SHAPES)})")
-        mesh = BUILTIN_SHAPES[geometry]()
+        if geometry not in primitives.BUILTIN_SHAPES:
+            raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(primitives.BUILTIN_SHAPES)})")
+        mesh = primitives.BUILTIN_SHAPES[geometry]()
         name = name or geometry
     elif isinstance(geometry, TriangleMesh):
         mesh = geometry
     else:
         mesh = mesh_from_trimesh(geometry)
-    return Shape(mesh=transformed(mesh, transform), material=material, emitter=emitter, name=name, interior=interior)
+    mesh = shading_normals(transformed(mesh, transform), face_normals, computed=not isinstance(geometry, str))
+    return Shape(mesh=mesh, material=material, emitter=emitter, name=name, interior=interior)
 
 
 def _intensity(

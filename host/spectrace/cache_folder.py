@@ -10,10 +10,20 @@ variables at a private temporary folder instead keeps rendering working; kernels
 import os
 import stat
 import sys
-import tempfile
 from pathlib import Path
 
 _checked = False
+
+
+def cache_root() -> Path:
+    """spectrace's per-user cache folder: ``$SPECTRACE_CACHE_DIR``, else ``$XDG_CACHE_HOME/spectrace``,
+    else ``~/.cache/spectrace``."""
+    explicit = os.environ.get("SPECTRACE_CACHE_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    return base / "spectrace"
 
 
 def _unwritable(folder: Path) -> str | None:
@@ -22,8 +32,11 @@ def _unwritable(folder: Path) -> str | None:
         return "it is not a folder"
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=folder):
-            pass
+        # A file of our own made and removed (not the tempfile module: this runs at every start, and importing
+        # tempfile and shutil costs more than the check).
+        probe = folder / f".spectrace-probe-{os.getpid()}"
+        os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+        os.unlink(probe)
     except OSError as error:
         return error.strerror or str(error)
     return None
@@ -32,6 +45,8 @@ def _unwritable(folder: Path) -> str | None:
 def _private_temporary_folder() -> Path:
     """$TMPDIR/spectrace-cache-UID when it is ours alone (so a cache outlives the process), else a fresh one:
     kernel binaries are loaded from it, so nobody else may be able to write there."""
+    import tempfile
+
     folder = Path(tempfile.gettempdir()) / f"spectrace-cache-{os.getuid()}"
     try:
         folder.mkdir(mode=0o700, exist_ok=True)

@@ -97,13 +97,13 @@ class Image:
     def write(self, path: str | Path, include_xyz: bool = True) -> None:
         """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
         Fichet et al. 2021 layout when the image has them) or .png (sRGB, 8 bit)."""
-        from spectrace.io.exr import write_exr
-        from spectrace.io.png import write_png
-
         path = Path(path)
         suffix = path.suffix.lower()
         space = ColourSpace(self.colour_space)
+        # Each writer imported only when used: OpenEXR's module takes longer to import than a small PNG to write.
         if suffix == ".exr":
+            from spectrace.io.exr import write_exr
+
             attributes = {} if space is ColourSpace.SRGB else {"chromaticities": exr_chromaticities(space)}
             write_exr(
                 path,
@@ -114,6 +114,8 @@ class Image:
                 attributes=attributes,
             )
         elif suffix == ".png":
+            from spectrace.io.png import write_png
+
             chunks = {} if space is ColourSpace.SRGB else {b"cICP": png_cicp(space)}
             write_png(path, self.to_display(), self.metadata(), chunks=chunks)
         else:

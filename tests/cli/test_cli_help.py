@@ -9,6 +9,7 @@ import pytest
 import typer.main
 from typer.testing import CliRunner
 
+from cli_runner import run_spectrace
 from spectrace.cli import app
 
 
@@ -55,3 +56,11 @@ def test_top_level_help_lists_every_command():
     for path, _ in ALL_COMMANDS:
         if len(path) == 1:
             assert path[0] in result.stdout
+
+
+@pytest.mark.subprocess
+@pytest.mark.parametrize("group", [[], ["spectra"], ["display"]])
+def test_a_group_without_a_command_prints_its_help(group):
+    result = run_spectrace(*group)
+    assert result.returncode == 2
+    assert "Usage" in result.stderr and "Commands" in result.stderr, result.stderr

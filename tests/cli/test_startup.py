@@ -1,6 +1,7 @@
 """Start-up: the command line and the renderer's colour tables load without colour-science, SciPy and matplotlib
 (about a second of imports), and what replaced them gives the same values."""
 
+import json
 import os
 import signal
 import subprocess
@@ -17,6 +18,56 @@ def test_importing_the_command_line_does_not_import_heavy_modules():
     code = (
         "import sys, spectrace.cli; "
         "print(' '.join(m for m in ('colour', 'matplotlib', 'scipy', 'trimesh', 'pyopencl') if m in sys.modules))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=os.environ.copy(), timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == []
+
+
+def _imported_modules(importtime_log: str) -> set[str]:
+    """The modules `python -X importtime` reports ("import time: self | cumulative | name", nested names indented)."""
+    names = set()
+    for line in importtime_log.splitlines():
+        fields = line.split("|")
+        if line.startswith("import time:") and len(fields) == 3 and fields[0].split()[-1].isdigit():
+            names.add(fields[2].strip())
+    return names
+
+
+def _heavy(modules: set[str]) -> set[str]:
+    return {m for m in modules if m.split(".")[0] in ("numpy", "pyopencl", "pydantic")}
+
+
+@pytest.mark.subprocess
+def test_spectrace_devices_with_remembered_probes_imports_neither_numpy_nor_pyopencl(tmp_path):
+    """The listing is read through ctypes and the probes' answers come from the cache folder, so only a probe that
+    really runs (the first time) loads numpy and pyopencl; pydantic (typer's option coercion) is not loaded either."""
+    env = {**os.environ, "SPECTRACE_CACHE_DIR": str(tmp_path / "cache")}
+    env.pop("SPECTRACE_DEVICE", None)
+
+    def run(*args: str) -> subprocess.CompletedProcess:
+        command = [sys.executable, "-X", "importtime", "-m", "spectrace", "devices", *args]
+        result = subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
+        assert result.returncode == 0, result.stderr[-2000:]
+        return result
+
+    first = run("--json")
+    assert _heavy(_imported_modules(first.stderr)) >= {"numpy", "pyopencl"}  # probed: the log is read right
+    again = run("--json")
+    assert _heavy(_imported_modules(again.stderr)) == set()
+    assert json.loads(again.stdout) == json.loads(first.stdout)
+    table = run()
+    assert _heavy(_imported_modules(table.stderr)) == set()
+    assert all(device["key"] in table.stdout for device in json.loads(first.stdout)["devices"])
+
+
+@pytest.mark.subprocess
+def test_importing_the_device_package_does_not_import_numpy_or_pyopencl():
+    code = (
+        "import sys, spectrace.device, spectrace.device.selection; "
+        "print(' '.join(m for m in ('numpy', 'pyopencl', 'spectrace.device.program_cache') if m in sys.modules))"
     )
     result = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, env=os.environ.copy(), timeout=120

@@ -109,6 +109,44 @@ def test_platforms_are_deduplicated_and_none_is_lost():
     assert set(identities) == loader_listing
 
 
+def test_the_listing_read_without_pyopencl_equals_pyopencls():
+    """Platforms and devices are read from the runtime libraries through ctypes; pyopencl's own enumeration through
+    its loader is the reference for every value, for the platforms' order, and for the Device a probe or render
+    gets."""
+    listed = [found for found in find_devices() if found.device is not None]  # first: it prepares the loader
+    assert listed, "no OpenCL device to compare"
+    reference = {}
+    loader_order = []
+    for platform in cl.get_platforms():
+        if platform.int_ptr not in loader_order:
+            loader_order.append(platform.int_ptr)
+        for device in platform.get_devices():
+            reference[platform.int_ptr, device.int_ptr] = (platform, device)
+    for found in listed:
+        platform, device = reference[found.platform.handle, found.device.handle]
+        assert (found.platform.name, found.platform.vendor, found.platform.version) == (
+            platform.name,
+            platform.vendor,
+            platform.version,
+        )
+        info = found.device
+        assert (info.name, info.type_bits, info.version, info.driver_version) == (
+            device.name,
+            device.type,
+            device.version,
+            device.driver_version,
+        )
+        assert (info.max_compute_units, info.global_mem_size) == (device.max_compute_units, device.global_mem_size)
+        opened = found.opencl_device()
+        assert opened == device and opened.int_ptr == device.int_ptr
+    # Every device of the loader's is listed, less copies of a runtime listed twice (same name and versions).
+    identities = {(found.platform.name, found.platform.version, found.device.name) for found in listed}
+    assert {(p.name, p.version, d.name) for p, d in reference.values()} == identities
+    # In the loader's order: it decides which copy of a duplicated runtime is kept and how ties are preferred.
+    listed_platforms = list(dict.fromkeys(found.platform.handle for found in listed))
+    assert listed_platforms == [handle for handle in loader_order if handle in listed_platforms]
+
+
 def test_the_two_pocls_are_told_apart():
     bundled = (Path(cl.__file__).parent / ".libs").resolve()
     for report in discover_devices():

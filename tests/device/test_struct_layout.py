@@ -111,7 +111,7 @@ def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device, entry, 
 
     from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 
-    program = device.build_program(entry, options=["-cl-kernel-arg-info"])
+    program = device.build_program(entry, options=["-cl-kernel-arg-info"], from_source=True)
     k = cl.Kernel(program, kernel)
     names = [k.get_arg_info(i, cl.kernel_arg_info.NAME) for i in range(1 + len(SCENE_KERNEL_BUFFERS))]
     assert names == ["params", *SCENE_KERNEL_BUFFERS]

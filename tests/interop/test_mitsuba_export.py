@@ -97,6 +97,11 @@ def test_ply_files_hold_the_triangles(tmp_path):
     loaded = trimesh.load(path, process=False, maintain_order=True)
     np.testing.assert_array_equal(np.asarray(loaded.faces), mesh.faces)
     np.testing.assert_array_equal(np.asarray(loaded.vertices), mesh.vertices.astype(np.float32))
+    # the sphere's vertex normals go along (smooth shading in both renderers); a flat mesh has none
+    np.testing.assert_allclose(np.asarray(loaded.vertex_normals), mesh.normals, atol=1e-6)
+    flat = tmp_path / "flat.ply"
+    write_binary_ply(mesh.with_normals(None), flat)
+    assert b"property float nx" in path.read_bytes()[:400] and b"property float nx" not in flat.read_bytes()[:400]
 
 
 @pytest.mark.peer

@@ -187,6 +187,29 @@ def test_lookat_sensor_and_transforms(tmp_path):
     assert scene.max_depth == -1  # no <integrator>: Mitsuba's path tracer, unbounded depth
 
 
+def test_face_normals_follow_mitsuba(tmp_path):
+    """Mitsuba 3 shades obj and ply meshes smoothly (computing normals for a file without them) unless face_normals
+    is set; its sphere is smooth. The import writes spectrace's key so that the same holds."""
+    ball = "".join(
+        f"v {np.cos(a) * np.cos(b):.9f} {np.sin(b):.9f} {np.sin(a) * np.cos(b):.9f}\n"
+        for b in (-0.5, 0.0, 0.5)
+        for a in np.linspace(0, 2 * np.pi, 9)[:-1]
+    ) + "".join(
+        f"f {r * 8 + i + 1} {r * 8 + (i + 1) % 8 + 1} {(r + 1) * 8 + i + 1}\n" for r in (0, 1) for i in range(8)
+    )
+    (tmp_path / "band.obj").write_text(ball)
+    body = """<shape type="obj"><string name="filename" value="band.obj"/></shape>
+        <shape type="obj"><string name="filename" value="band.obj"/><boolean name="face_normals" value="true"/></shape>
+        <shape type="sphere"/>
+        <shape type="sphere"><boolean name="face_normals" value="true"/></shape>"""
+    xml = _write(tmp_path, body)
+    tables = mitsuba_scene_data(xml)[0]["shapes"]
+    assert [t.get("face_normals") for t in tables] == [False, True, None, True]
+    smooth_mesh, faceted_mesh, smooth_sphere, faceted_sphere = (s.mesh for s in load_mitsuba_scene(xml).shapes)
+    assert smooth_mesh.normals is not None and smooth_sphere.normals is not None
+    assert faceted_mesh.normals is None and faceted_sphere.normals is None
+
+
 def test_spectra_and_lights(tmp_path):
     (tmp_path / "lamp.spd").write_text("# wavelength value\n400 1.0\n500 2.0\n700 3.0\n")
     body = """
@@ -445,6 +468,12 @@ BAD_INPUT = [
         "bsdf 'twosided' refers to itself",
     ),
     ("zero-width", CUBE, "sensor/film/integer[0]@value", "must be at least 1, got 0"),
+    (
+        "face-normals-not-boolean",
+        '<shape type="sphere"><boolean name="face_normals" value="yes"/></shape>',
+        "shape/boolean@value",
+        "expected true or false, got 'yes'",
+    ),
     (
         "reflectance-above-one",
         '<shape type="cube"><bsdf type="diffuse" id="hot"><rgb name="reflectance" '

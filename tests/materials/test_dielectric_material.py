@@ -126,7 +126,7 @@ def test_glass_sphere_in_a_furnace_renders_as_the_environment(device, ior):
 def test_built_in_closed_shapes_face_outward(name):
     """A dielectric takes its exterior from the winding, so the closed built-ins must be wound outward: every face's
     (v1 − v0) × (v2 − v0) points away from the (convex) shape's centre. The prism also has the stated size."""
-    mesh = spectrace.api.BUILTIN_SHAPES[name]()
+    mesh = spectrace.geometry.primitives.BUILTIN_SHAPES[name]()
     v0, v1, v2 = mesh.triangles()
     normals = np.cross(v1 - v0, v2 - v0)
     centroids = (v0 + v1 + v2) / 3 - mesh.vertices.mean(axis=0)

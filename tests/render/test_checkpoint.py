@@ -393,21 +393,29 @@ def write_all(version):
     state = RenderState(version, 0.0, {"film": film, "ray_counts": np.full(len(film), version, np.uint32)})
     write_checkpoint(folder / "state.npz", Checkpoint(RenderIdentity(160, 120, version, "s", "k"), state, "d"))
 
-def in_child(work):
+def in_child(work, started=None):
     pid = os.fork()
     if pid == 0:
+        if started is not None:
+            os.write(started, b"x")
         work()
         os._exit(0)
     return pid
 
+began = time.perf_counter()
 os.waitpid(in_child(lambda: write_all(0)), 0)
+period = time.perf_counter() - began  # one write of all three files (and a fork), on this machine, now
 orphans = []
 for trial, delay in enumerate(delays):
     def forever():
         while True:
             write_all(1)
-    pid = in_child(forever)
-    time.sleep(delay)
+    read_end, write_end = os.pipe()
+    pid = in_child(forever, write_end)
+    os.read(read_end, 1)  # the child runs: a loaded machine may take longer to schedule it than a delay lasts
+    os.close(read_end)
+    os.close(write_end)
+    time.sleep(delay if delay >= 0 else -delay * period)
     os.kill(pid, signal.SIGKILL)
     os.waitpid(pid, 0)
     temps = [p for p in folder.iterdir() if p.name.startswith(".") and ".tmp" in p.name]
@@ -448,8 +456,9 @@ def _version_of(path) -> int:
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork()")
 def test_sigkill_at_any_moment_leaves_the_old_or_the_new_file(tmp_path):
     rng = np.random.default_rng(2024)
-    # 0 s: killed before writing anything; 0.5 s: long after the first complete write; the rest: during writes.
-    delays = [0.0, 0.0, 0.5, 0.5] + list(rng.uniform(0.0, 0.08, 26))
+    # A negative delay is in units of the time one write of the three files takes on this machine, now. 0: killed
+    # before writing anything; three writes' time: long after the first complete write; the rest: during writes.
+    delays = [0.0, 0.0, -3.0, -3.0] + list(-rng.uniform(0.0, 1.0, 26))
     harness = subprocess.run(
         [sys.executable, "-c", _KILL_HARNESS, str(tmp_path), json.dumps(delays)],
         capture_output=True,

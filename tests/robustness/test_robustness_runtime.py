@@ -253,7 +253,7 @@ _ENOSPC = os.strerror(errno.ENOSPC)
 
 def _fill_the_disk_in(monkeypatch, kind: str) -> None:
     """Make one writer fail as on a full disk, after writing part of its temporary file: OpenEXR with its own
-    RuntimeError (which names the system's reason), Pillow and matplotlib with OSError."""
+    RuntimeError (which names the system's reason), the PNG writer and matplotlib with OSError."""
 
     def partial_then_full(path):
         Path(path).write_bytes(b"partial")
@@ -280,11 +280,10 @@ def _fill_the_disk_in(monkeypatch, kind: str) -> None:
     elif kind == "png":
         from spectrace.io import png
 
-        class FullImage:
-            def save(self, path, **kwargs):
-                raise partial_then_full(path)
+        def write_file(path, data):
+            raise partial_then_full(path)
 
-        monkeypatch.setattr(png, "PILImage", _Namespace(png.PILImage, fromarray=lambda *args: FullImage()))
+        monkeypatch.setattr(png, "_write_file", write_file)
     else:
         from matplotlib.figure import Figure
 

@@ -8,7 +8,13 @@ import typer
 from typer.core import TyperGroup
 
 from spectrace.cli import bench, devices, render, validate
-from spectrace.cli.common import console
+from spectrace.cli.common import (
+    GROUP_SETTINGS,
+    PlainHelpFlagCommand,
+    console,
+    help_flag_defaulting_to_false,
+    help_width,
+)
 from spectrace.errors import SpectraceError
 
 # Sub-commands whose modules import colour-science, SciPy or the Mitsuba importer: listed in `--help` from these
@@ -36,7 +42,7 @@ def _load_command(name: str):
     module, attribute, _ = LAZY_COMMANDS[name]
     target = getattr(importlib.import_module(module), attribute)
     if not isinstance(target, typer.Typer):
-        target, function = typer.Typer(add_completion=False, pretty_exceptions_enable=False), target
+        target, function = typer.Typer(**GROUP_SETTINGS), target
         target.command(name)(function)
     return typer.main.get_command(target)
 
@@ -49,6 +55,9 @@ class _LazyGroup(TyperGroup):
         for name, (_, _, help_line) in LAZY_COMMANDS.items():
             self.add_command(typer.core.TyperCommand(name, help=help_line), name)
 
+    def get_help_option(self, ctx):
+        return help_flag_defaulting_to_false(super().get_help_option(ctx))
+
     def resolve_command(self, ctx, args):
         name, command, rest = super().resolve_command(ctx, args)
         if name in LAZY_COMMANDS:
@@ -60,12 +69,12 @@ app = typer.Typer(
     cls=_LazyGroup,
     help="spectrace: a physically based spectral path tracer (OpenCL on CPU or GPU).",
     no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
+    context_settings={"max_content_width": 200},
+    **GROUP_SETTINGS,
 )
 # The light command modules (typer and rich at import) register at once, in the order `--help` lists them.
 app.command("render")(render.render)
-app.command("devices")(devices.devices)
+app.command("devices", cls=PlainHelpFlagCommand)(devices.devices)
 app.add_typer(bench.bench_app, name="bench")
 app.command("validate")(validate.validate)
 
@@ -94,35 +103,19 @@ def _usage_error_line(exc: Exception) -> str:
     return f"error: {message}"
 
 
-# Help printed to a pipe or a file: rich would assume 80 columns and cut long option names ("--colour-space,-…").
-PIPED_HELP_COLUMNS = 120
-
-
-def _set_help_width() -> None:
-    """Read by typer when it first formats help: COLUMNS when set (what rich itself honours), else wide enough for
-    every option name when stdout is no terminal; a terminal's own width otherwise."""
-    import os
-
-    if "TERMINAL_WIDTH" in os.environ:
-        return
-    if columns := os.environ.get("COLUMNS"):
-        os.environ["TERMINAL_WIDTH"] = columns
-    elif not sys.stdout.isatty():
-        os.environ["TERMINAL_WIDTH"] = str(PIPED_HELP_COLUMNS)
-
-
 def main() -> None:
     try:
-        _set_help_width()
         usage_error = _usage_error_type()
         # Not standalone, so that a bad option value reaches the handler below instead of click's framed box.
-        status = app(standalone_mode=False)
+        status = app(standalone_mode=False, terminal_width=help_width())
         sys.exit(status if isinstance(status, int) else 0)
     except KeyboardInterrupt:  # first: `usage_error` is unbound if Ctrl-C came before it was
         console.print("interrupted", highlight=False)
         sys.exit(130)
     except usage_error as exc:
-        if type(exc).__name__ != "NoArgsIsHelpError":  # that one has already printed the help
+        if type(exc).__name__ == "NoArgsIsHelpError":  # a group run without a command: its help, as click would
+            print(exc.format_message(), file=sys.stderr)  # type: ignore[attr-defined]  # a click UsageError
+        else:
             console.print(_usage_error_line(exc), highlight=False, markup=False, soft_wrap=True)
         sys.exit(getattr(exc, "exit_code", 2))
     except typer.Abort:

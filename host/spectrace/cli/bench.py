@@ -10,9 +10,8 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 
-from spectrace.cli.common import DeviceOption, JsonOption, console
+from spectrace.cli.common import GROUP_SETTINGS, DeviceOption, JsonOption, console
 from spectrace.errors import SpectraceError
 
 PEER_DEFAULT_SIZE = 512
@@ -78,6 +77,8 @@ def _emit(mode: str, result, tables: Callable[[], list], as_json: bool, width: i
     if as_json:
         print(json.dumps({mode: result}, indent=2))
         return
+    from rich.console import Console
+
     for table in tables():
         Console(width=width, markup=False).print(table)
 
@@ -85,8 +86,7 @@ def _emit(mode: str, result, tables: Callable[[], list], as_json: bool, width: i
 bench_app = typer.Typer(
     help="Measure samples/s and rays/s (a benchmark, never a test). Alone, it times the Cornell box (or --scene) "
     "at each --size; a mode compares with Mitsuba 3 or Embree or measures one thing more (docs/performance.md).",
-    add_completion=False,
-    pretty_exceptions_enable=False,
+    **GROUP_SETTINGS,
 )
 
 
@@ -260,7 +260,7 @@ def samplers_bench(
     _check(_one(size))
     from spectrace.benchmarks.samplers import sampler_bench_command
 
-    sampler_bench_command(scene, [_or(size, SAMPLERS_DEFAULT_SIZE)], device, as_json, console)
+    sampler_bench_command(scene, [_or(size, SAMPLERS_DEFAULT_SIZE)], device, as_json, console.rich())
 
 
 @bench_app.command("kernel-shapes")

@@ -4,7 +4,6 @@ import json
 from typing import Annotated
 
 import typer
-from rich.console import Console
 
 
 def devices(as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False) -> None:
@@ -17,6 +16,8 @@ def devices(as_json: Annotated[bool, typer.Option("--json", help="One JSON objec
     if as_json:
         print(json.dumps({"devices": [asdict(r) for r in reports]}, indent=2))
         return
+    from rich.console import Console
+
     Console(markup=False).print(device_table(reports))
     if not any(r.ok for r in reports):
         from spectrace.device import NoWorkingDeviceError

@@ -12,6 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from spectrace.cli.common import GROUP_SETTINGS
 from spectrace.displays.compare import Comparison, compare_displays
 from spectrace.displays.match import MatchResult, match_colour
 from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions
@@ -23,8 +24,7 @@ from spectrace.spectral.observers import ALL_OBSERVERS, Observer
 display_app = typer.Typer(
     help="Displays as spectral emitters: the same RGB on LCD, OLED and CRT displays.",
     no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
+    **GROUP_SETTINGS,
 )
 
 JsonOption = Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")]

@@ -222,7 +222,7 @@ def _render_passes(renderer, stop, state_file: Path | None, interval: float, qui
 
     saver = PeriodicCheckpoints(state_file, renderer, interval, warn=warn, identity=identity) if state_file else None
     try:
-        render_passes(renderer, progress=not quiet, stop=stop, checkpoints=saver, console=console)
+        render_passes(renderer, progress=not quiet, stop=stop, checkpoints=saver, console=console.rich())
     except SpectraceError as error:
         # An OpenCL failure mid-pass may leave part of a pass in the film: the film is not saved now, but the
         # last checkpoint, written between passes, is sound.

@@ -10,13 +10,13 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from spectrace.cli.common import GROUP_SETTINGS
 from spectrace.errors import SpectraceError
 
 spectra_app = typer.Typer(
     help="Spectra: list the library's and a scene's spectra, and plot any of them.",
     no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
+    **GROUP_SETTINGS,
 )
 
 SceneOption = Annotated[

@@ -4,7 +4,6 @@ import json
 from typing import Annotated
 
 import typer
-from rich.console import Console
 
 from spectrace.cli.common import DeviceOption
 from spectrace.errors import SpectraceError
@@ -17,6 +16,7 @@ def validate(
 ) -> None:
     """Check the laws of radiometry numerically: each law, its analytic value, the renderer's measurement ±
     its standard error, and pass/fail (|difference| <= 4 standard errors). Exits 1 if any check fails."""
+    from rich.console import Console
     from rich.table import Table
 
     from spectrace.validation import CASES, run_validation

@@ -6,6 +6,9 @@ runtime stays invisible: its shipped ``.icd`` files name a path that does not ex
 platform query we therefore write one private folder of ``.icd`` files naming every library we found
 by full path, and point ``OCL_ICD_VENDORS`` at it. The loader reads that variable once, lazily, at the
 first OpenCL call, so this must run before anything enumerates platforms in this process.
+
+The listing itself is read from the runtime libraries without pyopencl (icd_query.py), in the loader's order;
+pyopencl's objects are made only for a device that is to be probed or used.
 """
 
 from __future__ import annotations
@@ -18,12 +21,16 @@ import re
 import site
 import struct
 import sys
-import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # pyopencl is imported only once the OpenCL environment is prepared
+from spectrace.cache_folder import cache_root
+from spectrace.device.icd_query import DeviceInfo, PlatformInfo, PlatformListing, library_platforms
+from spectrace.errors import SpectraceError
+
+if TYPE_CHECKING:  # pyopencl is imported only once the OpenCL environment is prepared, and only to use a device
     import pyopencl as cl
 
 _DEFAULT_VENDORS_DIR = Path("/etc/OpenCL/vendors")
@@ -35,17 +42,6 @@ POCL_SYSTEM = ("pocl-system", "PoCL (system)")
 POCL_PYPI = ("pocl-pypi", "PoCL (PyPI)")
 INTEL_CPU_PIP = ("intel-cpu", "Intel CPU runtime (pip)")
 INTEL_CPU_SYSTEM = ("intel-cpu-system", "Intel CPU runtime (system)")
-
-
-def cache_root() -> Path:
-    """spectrace's per-user cache folder: ``$SPECTRACE_CACHE_DIR``, else ``$XDG_CACHE_HOME/spectrace``,
-    else ``~/.cache/spectrace``."""
-    explicit = os.environ.get("SPECTRACE_CACHE_DIR")
-    if explicit:
-        return Path(explicit).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
-    return base / "spectrace"
 
 
 @dataclass(frozen=True)
@@ -88,13 +84,19 @@ def _icd_files_in(folder: Path) -> list[Path]:
         return []
 
 
-def _pyopencl_libs_dir() -> Path | None:
-    # Located without importing pyopencl, so nothing can touch the loader before we are done.
+def pyopencl_dir() -> Path | None:
+    """pyopencl's package folder, located without importing it (so nothing can touch the loader before we are done,
+    and `spectrace devices` need not pay for the import)."""
     spec = importlib.util.find_spec("pyopencl")
     if spec is None or not spec.submodule_search_locations:
         return None
-    libs = Path(list(spec.submodule_search_locations)[0]) / ".libs"
-    return libs if libs.is_dir() else None
+    return Path(list(spec.submodule_search_locations)[0])
+
+
+def _pyopencl_libs_dir() -> Path | None:
+    package = pyopencl_dir()
+    libs = package / ".libs" if package else None
+    return libs if libs and libs.is_dir() else None
 
 
 def _entries_beside_pyopencl() -> list[IcdLibrary]:
@@ -197,13 +199,22 @@ def _icd_file_name(index: int, library: str) -> str:
     return f"{index:02d}-{stem}.icd"
 
 
+def _vendors_dir_roots() -> Iterator[Path]:
+    yield cache_root()
+    import tempfile  # only when the cache folder will not do: a listing need not import it
+
+    yield Path(tempfile.gettempdir()) / f"spectrace-{os.getuid()}"
+
+
 def _write_vendors_dir(libraries: list[IcdLibrary]) -> Path:
     listing = "\n".join(entry.library for entry in libraries)
     digest = hashlib.sha256(listing.encode()).hexdigest()[:16]
-    for root in (cache_root(), Path(tempfile.gettempdir()) / f"spectrace-{os.getuid()}"):
+    for root in _vendors_dir_roots():
         target = root / "icd" / digest
         if target.is_dir():
             return target  # content is fully determined by the digest
+        import tempfile
+
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
             staging = Path(tempfile.mkdtemp(prefix=f".{digest}-", dir=target.parent))
@@ -350,19 +361,52 @@ def runtime_identity(
 # Enumerating platforms and devices
 
 
+class DeviceNotListedError(SpectraceError):
+    """pyopencl's loader does not list a device the runtime library offers (the vendors folder could not be written,
+    so the loader sees fewer runtimes than the listing)."""
+
+
 @dataclass(frozen=True, eq=False)
 class FoundDevice:
-    """One OpenCL device (or, with ``device`` None, a runtime that failed before offering one)."""
+    """One OpenCL device (or, with ``device`` None, a runtime that failed before offering one): what the runtime
+    says about it, read without pyopencl; ``opencl_device()`` gives pyopencl's object when it is to be used."""
 
     key: str  # stable short id for the command line, e.g. "pocl-system:cpu:0"
     runtime: str  # label, e.g. "PoCL (system)"
     library: str | None  # the ICD library that provides it, when known
-    platform: cl.Platform | None
-    device: cl.Device | None
+    platform: PlatformInfo | None
+    device: DeviceInfo | None
     load_error: str | None = None
+
+    def opencl_device(self) -> cl.Device:
+        """pyopencl's Device for this device: the one its loader lists with the same handle."""
+        if self.platform is None or self.device is None:
+            raise DeviceNotListedError(f"{self.key} has no device ({self.load_error or 'none listed'})")
+        return _opencl_device(self.key, self.platform.handle, self.device.handle)
 
 
 _found_devices: list[FoundDevice] | None = None
+_opencl_devices: dict[tuple[int, int], cl.Device] = {}
+
+
+def _opencl_device(key: str, platform_handle: int, device_handle: int) -> cl.Device:
+    if (platform_handle, device_handle) not in _opencl_devices:
+        prepare_opencl_environment()
+        import pyopencl as cl
+
+        # Found in the loader's own listing rather than made from the number: the loader must have opened the
+        # runtime (it does so at its first call), and a handle it does not list would not be safe to use.
+        try:
+            platforms = cl.get_platforms()
+        except cl.Error:
+            platforms = []  # no runtime at all: the loader reports PLATFORM_NOT_FOUND_KHR
+        for platform in platforms:
+            if platform.int_ptr == platform_handle:
+                for device in platform.get_devices():
+                    _opencl_devices.setdefault((platform_handle, device.int_ptr), device)
+        if (platform_handle, device_handle) not in _opencl_devices:
+            raise DeviceNotListedError(f"the OpenCL loader does not list {key}")
+    return _opencl_devices[(platform_handle, device_handle)]
 
 
 def device_kind(type_bits: int) -> str:
@@ -371,40 +415,6 @@ def device_kind(type_bits: int) -> str:
         if type_bits & bit:
             return name
     return "OTHER"
-
-
-def _platform_pointers(library: str) -> list[int] | str:
-    """The platform handles `library` gives the ICD loader (its ``clIcdGetPlatformIDsKHR``), or why it
-    cannot be loaded. The same dlopen handle as the loader's, so the handles equal pyopencl's."""
-    try:
-        runtime = ctypes.CDLL(library)
-    except OSError as error:
-        return str(error)
-    query_type = ctypes.CFUNCTYPE(
-        ctypes.c_int32, ctypes.c_uint32, ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_uint32)
-    )
-    address = None
-    try:
-        lookup = runtime.clGetExtensionFunctionAddress
-        lookup.restype, lookup.argtypes = ctypes.c_void_p, [ctypes.c_char_p]
-        address = lookup(b"clIcdGetPlatformIDsKHR")
-    except AttributeError:
-        pass
-    if not address:
-        try:
-            address = ctypes.cast(runtime.clIcdGetPlatformIDsKHR, ctypes.c_void_p).value
-        except AttributeError:
-            return []
-        if not address:
-            return []
-    query = query_type(address)
-    count = ctypes.c_uint32(0)
-    if query(0, None, ctypes.byref(count)) != 0 or count.value == 0:
-        return []
-    handles = (ctypes.c_void_p * count.value)()
-    if query(count.value, handles, None) != 0:
-        return []
-    return [int(h) for h in handles if h]
 
 
 def _unique_slug(slug: str, identity: tuple, owners: dict[str, tuple]) -> str:
@@ -425,59 +435,67 @@ def _failed_library_device(entry: IcdLibrary, error: str, owners: dict[str, tupl
     return FoundDevice(f"{slug}:none:0", label, entry.library, None, None, f"runtime did not load: {error}")
 
 
-def _enumerate_devices(prepared: PreparedEnvironment) -> list[FoundDevice]:
-    import pyopencl as cl
-
+def _loader_order(prepared: PreparedEnvironment) -> list[IcdLibrary]:
+    """The libraries in the order the ICD loader opens them: its vendors folder as the directory lists it (ocl-icd
+    reads it with readdir, unsorted), then any it does not name."""
+    by_identity = {_library_identity(entry.library): entry for entry in prepared.libraries}
+    ordered: list[IcdLibrary] = []
     try:
-        platforms = cl.get_platforms()
-    except cl.Error:
-        platforms = []  # no runtime at all: the loader reports PLATFORM_NOT_FOUND_KHR
-    owner_of: dict[int, IcdLibrary] = {}
+        names = os.listdir(prepared.vendors_dir)
+    except OSError:
+        names = []
+    for name in names:
+        library = _read_icd_file(prepared.vendors_dir / name) if name.endswith(".icd") else None
+        entry = by_identity.get(_library_identity(library)) if library else None
+        if entry is not None and entry not in ordered:
+            ordered.append(entry)
+    return ordered + [entry for entry in prepared.libraries if entry not in ordered]
+
+
+def _device_counts(listing: PlatformListing) -> tuple[int, int, int]:
+    """ocl-icd's platform order: most GPUs first, then most CPUs, then most devices (a stable sort)."""
+    bits = [device.type_bits or 0 for device in listing.devices]
+    gpus = sum(1 for b in bits if b & (1 << 2))
+    cpus = sum(1 for b in bits if b & (1 << 1))
+    return -gpus, -cpus, -len(bits)
+
+
+def _enumerate_devices(prepared: PreparedEnvironment) -> list[FoundDevice]:
+    listings: list[tuple[IcdLibrary, PlatformListing]] = []
     failed: list[tuple[IcdLibrary, str]] = []
-    for entry in prepared.libraries:
-        pointers = _platform_pointers(entry.library)
-        if isinstance(pointers, str):
-            failed.append((entry, pointers))
-            continue
-        for pointer in pointers:
-            owner_of.setdefault(pointer, entry)
+    for entry in _loader_order(prepared):
+        result = library_platforms(entry.library)
+        if isinstance(result, str):
+            failed.append((entry, result))
+        else:
+            listings += [(entry, listing) for listing in result]
+    listings.sort(key=lambda pair: _device_counts(pair[1]))
 
     found: list[FoundDevice] = []
     seen_handles: set[int] = set()
     seen_identities: set[tuple] = set()
     slug_owners: dict[str, tuple] = {}
-    for platform in platforms:
-        # The bundled loader also reads the folder beside itself, so one library can appear twice.
-        if platform.int_ptr in seen_handles:
+    for owner, listing in listings:
+        platform, devices = listing.platform, listing.devices
+        # A library named twice (by path and by soname) gives the same platform twice.
+        if platform.handle in seen_handles:
             continue
-        seen_handles.add(platform.int_ptr)
-        try:
-            devices, listing_error = platform.get_devices(), None
-        except cl.Error as error:
-            devices, listing_error = [], str(error).splitlines()[0]
+        seen_handles.add(platform.handle)
         identity = (platform.name, platform.version, tuple((d.name, d.driver_version) for d in devices))
         if identity in seen_identities:
             continue  # the same runtime installed twice: one copy is enough
         seen_identities.add(identity)
-        owner = owner_of.get(platform.int_ptr)
-        has_cpu = any(device_kind(d.type) == "CPU" for d in devices)
-        slug, label = runtime_identity(
-            platform.name,
-            platform.vendor,
-            owner.library if owner else None,
-            has_cpu,
-            owner.from_pip if owner else False,
-        )
+        has_cpu = any(device_kind(d.type_bits or 0) == "CPU" for d in devices)
+        slug, label = runtime_identity(platform.name, platform.vendor, owner.library, has_cpu, owner.from_pip)
         slug = _unique_slug(slug, identity, slug_owners)
-        library = owner.library if owner else None
         if not devices:
-            reason = listing_error or "platform offers no devices"
-            found.append(FoundDevice(f"{slug}:none:0", label, library, platform, None, reason))
+            reason = listing.error or "platform offers no devices"
+            found.append(FoundDevice(f"{slug}:none:0", label, owner.library, platform, None, reason))
         counters: dict[str, int] = {}
         for device in devices:
-            kind = device_kind(device.type).lower()
+            kind = device_kind(device.type_bits or 0).lower()
             index = counters[kind] = counters.get(kind, -1) + 1
-            found.append(FoundDevice(f"{slug}:{kind}:{index}", label, library, platform, device))
+            found.append(FoundDevice(f"{slug}:{kind}:{index}", label, owner.library, platform, device))
     found += [_failed_library_device(entry, error, slug_owners) for entry, error in failed]
     return found
 

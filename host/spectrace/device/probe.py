@@ -3,8 +3,10 @@
 Listing a device proves little: the PyPI PoCL, for instance, lists every CPU but fails to compile any
 kernel on CPUs its LLVM does not know ("unknown target CPU 'generic'"). Results are kept per process and on disk
 (`probes.json` in the cache folder), keyed by everything that could change the answer: the runtime library's path,
-size and modification time, the platform and driver versions, the device's name and pyopencl's version. A build
-costs a few tenths of a second per runtime, which `spectrace devices` and every render would otherwise pay.
+size and modification time, the platform and driver versions, the device's name and pyopencl's compiled module
+(its file's size and modification time, known without importing it). A build costs a few tenths of a second per
+runtime, which `spectrace devices` and every render would otherwise pay; with every answer remembered, the listing
+imports neither numpy nor pyopencl.
 
 Tests replace ``probe_function`` to simulate a broken runtime, then call ``forget_probe_results()``.
 """
@@ -16,15 +18,16 @@ import hashlib
 import json
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
+from spectrace.device.discovery import FoundDevice, pyopencl_dir
 
-from spectrace.device.discovery import FoundDevice
-from spectrace.device.program_cache import KernelBuildError, compile_source, first_error_line
+if TYPE_CHECKING:
+    from spectrace.device.program_cache import KernelBuildError
 
 _PROBE_SOURCE = """
 __kernel void spectrace_probe(__global const float* values, __global float* results, const float scale)
@@ -34,6 +37,7 @@ __kernel void spectrace_probe(__global const float* values, __global float* resu
 }
 """
 _PROBE_SIZE = 64
+_FINGERPRINT_FORMAT = "probe-v2"
 _PROBE_SCALE = 2.0
 
 
@@ -53,6 +57,8 @@ def _captured_stderr() -> Iterator[Callable[[], str]]:
     except OSError:
         yield lambda: ""
         return
+    import tempfile
+
     with tempfile.TemporaryFile(mode="w+b") as capture:
         sys.stderr.flush()
         os.dup2(capture.fileno(), 2)
@@ -71,7 +77,10 @@ def _first_line(error: BaseException) -> str:
 
 def _run_probe_kernel(device) -> str | None:
     """Build and run the probe kernel on `device`; the failure reason, or None when it works."""
+    import numpy as np
     import pyopencl as cl
+
+    from spectrace.device.program_cache import compile_source
 
     context = cl.Context([device])
     queue = cl.CommandQueue(context)
@@ -96,10 +105,12 @@ def probe_kernel_on_device(found: FoundDevice) -> ProbeResult:
     """The real probe: context, build, run, check."""
     if found.device is None:
         return ProbeResult(False, found.load_error or "no device")
+    from spectrace.device.program_cache import KernelBuildError
+
     started = time.perf_counter()
     with _captured_stderr() as stderr_text:
         try:
-            reason = _run_probe_kernel(found.device)
+            reason = _run_probe_kernel(found.opencl_device())
         except KernelBuildError as error:
             reason = f"kernel build failed: {_build_failure_cause(error, stderr_text())}"
         except Exception as error:  # noqa: BLE001 - any runtime failure makes the device unusable
@@ -108,6 +119,8 @@ def probe_kernel_on_device(found: FoundDevice) -> ProbeResult:
 
 
 def _build_failure_cause(error: KernelBuildError, printed: str) -> str:
+    from spectrace.device.program_cache import first_error_line
+
     # Some runtimes leave the build log empty or generic and print the compiler's error to stderr.
     if "error" not in error.build_log.lower() and "error" in printed.lower():
         return first_error_line(printed) or error.message
@@ -145,11 +158,10 @@ def _fingerprint(found: FoundDevice) -> str | None:
     if found.device is None or found.platform is None:
         return None
     try:
-        import pyopencl as cl
-
         parts = [
+            _FINGERPRINT_FORMAT,
             found.key,
-            cl.VERSION_TEXT,
+            *_pyopencl_stamp(),
             found.platform.name,
             found.platform.version,
             found.device.name,
@@ -166,7 +178,22 @@ def _fingerprint(found: FoundDevice) -> str | None:
     return hashlib.sha256("\n".join(map(str, parts)).encode()).hexdigest()
 
 
-def _remembered_path():
+def _pyopencl_stamp() -> list[str]:
+    """pyopencl's compiled module (name, size, modification time), which a new pyopencl release replaces: its
+    version without importing it."""
+    folder = pyopencl_dir()
+    if folder is None:
+        raise FileNotFoundError("pyopencl is not installed")
+    stamp = []
+    for module in sorted(folder.glob("_cl.*")):
+        status = module.stat()
+        stamp += [module.name, str(status.st_size), str(status.st_mtime_ns)]
+    if not stamp:
+        raise FileNotFoundError(f"no compiled pyopencl module in {folder}")
+    return stamp
+
+
+def _remembered_path() -> Path:
     from spectrace.device.discovery import cache_root
 
     return cache_root() / "probes.json"

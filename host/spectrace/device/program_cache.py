@@ -233,11 +233,17 @@ class Device:
         return f"Device({self.report.key!r}, {self.report.device_name!r})"
 
     def build_program(
-        self, entry: str, defines: Mapping[str, DefineValue] | None = None, options: list[str] | None = None
+        self,
+        entry: str,
+        defines: Mapping[str, DefineValue] | None = None,
+        options: list[str] | None = None,
+        from_source: bool = False,
     ) -> cl.Program:
         """Build ``kernels/<entry>`` with ``-I kernels``, ``-I`` the folder of the generated headers and
         ``-D name=value`` for each define and each value of the host/device contract (`kernel_contract`), reusing a
-        cached binary when sources, generated headers, options and device are unchanged."""
+        cached binary when sources, generated headers, options and device are unchanged, unless `from_source` (a
+        program loaded from a binary may lack what only the compiler knows: Intel's CPU runtime then reports no
+        kernel argument names although built with -cl-kernel-arg-info)."""
         started = time.perf_counter()
         kernels_dir = resources.kernels_dir()
         if not (kernels_dir / entry).is_file():
@@ -251,7 +257,7 @@ class Device:
         cache_file = program_cache_dir() / f"{key}.bin"
 
         program = None
-        if cache_file.is_file():
+        if cache_file.is_file() and not from_source:
             try:
                 program = _load_binary(self.context, self.cl_device, cache_file.read_bytes(), option_text)
             except OSError:

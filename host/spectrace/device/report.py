@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-from rich.table import Table
-from rich.text import Text
+from typing import TYPE_CHECKING
 
 from spectrace.device.discovery import FoundDevice, device_kind
+from spectrace.device.icd_query import DeviceInfo
+
+if TYPE_CHECKING:  # rich is imported only to draw the table: `spectrace devices --json` does without it
+    from rich.table import Table
 
 
 @dataclass(frozen=True)
@@ -27,12 +29,15 @@ class DeviceReport:
     library: str | None = None  # the ICD library that provides the device, when known
 
 
-def _info(read, fallback):
-    # A broken runtime may fail even on info queries; the report must still be shown.
-    try:
-        return read()
-    except Exception:  # noqa: BLE001 - any vendor error means "unknown"
-        return fallback
+def _text(value: str | None, fallback: str) -> str:
+    # A broken runtime may fail even on info queries (None); the report must still be shown.
+    return fallback if value is None else value.strip()
+
+
+def _device_type(device: DeviceInfo | None) -> str:
+    if device is None:
+        return "NONE"
+    return "OTHER" if device.type_bits is None else device_kind(device.type_bits)
 
 
 def describe_device(found: FoundDevice, ok: bool, reason: str | None) -> DeviceReport:
@@ -40,16 +45,16 @@ def describe_device(found: FoundDevice, ok: bool, reason: str | None) -> DeviceR
     return DeviceReport(
         key=found.key,
         runtime=found.runtime,
-        platform_name=_info(lambda: platform.name.strip(), "") if platform else "",
-        platform_version=_info(lambda: platform.version.strip(), "") if platform else "",
-        device_name=_info(lambda: device.name.strip(), "?") if device else "(none)",
-        device_type=_info(lambda: device_kind(device.type), "OTHER") if device else "NONE",
-        driver_version=_info(lambda: device.driver_version.strip(), "") if device else "",
-        compute_units=_info(lambda: int(device.max_compute_units), 0) if device else 0,
-        global_mem_bytes=_info(lambda: int(device.global_mem_size), 0) if device else 0,
+        platform_name=platform.name.strip() if platform else "",
+        platform_version=platform.version.strip() if platform else "",
+        device_name=_text(device.name, "?") if device else "(none)",
+        device_type=_device_type(device),
+        driver_version=_text(device.driver_version, "") if device else "",
+        compute_units=(device.max_compute_units or 0) if device else 0,
+        global_mem_bytes=(device.global_mem_size or 0) if device else 0,
         ok=ok,
         reason=None if ok else (reason or "unknown failure"),
-        opencl_version=_info(lambda: device.version.strip(), "") if device else "",
+        opencl_version=_text(device.version, "") if device else "",
         library=found.library,
     )
 
@@ -62,6 +67,9 @@ def _short_opencl_version(version: str) -> str:
 
 def device_table(reports: list[DeviceReport]) -> Table:
     """One row per device: key, runtime, device, type, OpenCL version, probe result or failure reason."""
+    from rich.table import Table
+    from rich.text import Text
+
     table = Table(title="OpenCL devices")
     for column in ("Key", "Runtime", "Device", "Type", "OpenCL", "Probe"):
         table.add_column(column, overflow="fold")

@@ -8,7 +8,9 @@ generic CPU, or none). Only devices that pass the probe are ever chosen.
 
 from __future__ import annotations
 
+import dataclasses
 import os
+from typing import TYPE_CHECKING
 
 from spectrace.device import probe as probing
 from spectrace.device.discovery import (
@@ -16,12 +18,15 @@ from spectrace.device.discovery import (
     INTEL_CPU_SYSTEM,
     POCL_PYPI,
     POCL_SYSTEM,
+    DeviceNotListedError,
     FoundDevice,
     find_devices,
 )
-from spectrace.device.program_cache import Device
 from spectrace.device.report import DeviceReport, describe_device
 from spectrace.errors import SpectraceError
+
+if TYPE_CHECKING:  # pyopencl is imported only when a device is opened, not to list them
+    from spectrace.device.program_cache import Device
 
 DEVICE_ENV = "SPECTRACE_DEVICE"
 
@@ -108,11 +113,16 @@ def _select_candidates(
 
 
 def _open_first_working(candidates: list[tuple[FoundDevice, DeviceReport]]) -> tuple[Device | None, list]:
+    from spectrace.device.program_cache import Device
+
     failures: list[DeviceReport] = []
     for found, _ in candidates:
         report = _probed_report(found)
         if report.ok and found.device is not None:
-            return Device(report, found.device), failures
+            try:
+                return Device(report, found.opencl_device()), failures
+            except DeviceNotListedError as error:  # a remembered probe answer, but the loader cannot reach it
+                report = dataclasses.replace(report, ok=False, reason=str(error))
         failures.append(report)
     return None, failures
 

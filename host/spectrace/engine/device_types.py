@@ -45,7 +45,7 @@ def _struct(fields: Sequence[tuple[str, DTypeLike]], itemsize: int) -> np.dtype:
 
 TRIANGLE_NO_MATERIAL = -1  # TriangleInfo.material of an index-matched medium boundary
 
-TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4"), ("interior", "<i4"), ("pad0", "<i4")], 16)
+TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4"), ("interior", "<i4"), ("normals", "<i4")], 16)
 
 MEDIUM_DTYPE = _struct([("sigma_a_offset", "<i4"), ("sigma_s_offset", "<i4"), ("g", "<f4"), ("pad0", "<i4")], 16)
 
@@ -144,6 +144,7 @@ SCENE_KERNEL_BUFFERS = (
     "nodes",
     "triangle_vertices",
     "triangle_uvs",
+    "triangle_normals",
     "triangle_info",
     "materials",
     "lights",

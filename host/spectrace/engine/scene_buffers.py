@@ -41,6 +41,10 @@ class SceneBuffers:
     environment_light: int  # index into lights, or -1
     light_cdf: np.ndarray  # (L + 1,) float32
     triangle_uvs: np.ndarray  # (3·M, 2) float32 texture coordinates, BVH leaf order
+    # (3·S, 4) float32 unit shading normals (x, y, z, 0) at the corners of the S triangles that have vertex normals,
+    # in BVH leaf order; a triangle's TriangleInfo.normals is its index here, -1 for flat shading (one dummy entry
+    # when no triangle has any)
+    triangle_normals: np.ndarray
     texels: np.ndarray  # (n, 4) float32: images of environment maps and textured emitters, after one dummy texel
     map_cdf: np.ndarray  # marginal CDF over rows (H + 1), then each row's CDF (W + 1): see kernels/environment.cl
     spectra: np.ndarray  # float32 table
@@ -56,6 +60,14 @@ def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
     return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
+def _corner_normals(parts: list[np.ndarray | None], counts: list[int]) -> np.ndarray | None:
+    """(M, 3, 3) corner normals of all shapes' triangles, NaN for the flat shapes'; None when every shape is flat
+    (the usual case, which then costs no host memory either)."""
+    if all(part is None for part in parts):
+        return None
+    return np.concatenate([np.full((n, 3, 3), np.nan) if part is None else part for part, n in zip(parts, counts)])
+
+
 def build_scene_buffers(scene: Scene) -> SceneBuffers:
     table = SpectrumTable()
     material_index: dict[int, int] = {}
@@ -64,6 +76,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     v1s: list[np.ndarray] = []
     v2s: list[np.ndarray] = []
     uvs: list[np.ndarray] = []
+    normal_parts: list[np.ndarray | None] = []
     material_parts: list[np.ndarray] = []
     emitter_parts: list[np.ndarray] = []
     interior_parts: list[np.ndarray] = []
@@ -91,6 +104,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         v1s.append(v1)
         v2s.append(v2)
         uvs.append(shape.mesh.triangle_uvs())
+        normal_parts.append(shape.mesh.triangle_normals())
         material_parts.append(np.full(len(v0), material_index[key], np.int32))
         interior_parts.append(np.full(len(v0), interior, np.int32))
         emitter_id = -1
@@ -101,16 +115,19 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
 
     if v0s and sum(len(v) for v in v0s):
         v0, v1, v2, uv = (np.concatenate(a) for a in (v0s, v1s, v2s, uvs))
+        corner_normals = _corner_normals(normal_parts, [len(v) for v in v0s])
         tri_material, tri_emitter = np.concatenate(material_parts), np.concatenate(emitter_parts)
         tri_interior = np.concatenate(interior_parts)
         bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
         order = bvh.prim_order
         v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
+        corner_normals = corner_normals[order] if corner_normals is not None else None
         tri_material, tri_emitter, tri_interior = tri_material[order], tri_emitter[order], tri_interior[order]
         scene_radius = 0.5 * float(np.linalg.norm(bvh.nodes[0]["bmax"] - bvh.nodes[0]["bmin"]))
     else:
         v0 = v1 = v2 = np.zeros((0, 3))
         uv = np.zeros((0, 3, 2))
+        corner_normals = None
         tri_material = tri_emitter = tri_interior = np.zeros(0, np.int32)
         bvh = _empty_bvh()
         scene_radius = 1.0
@@ -124,6 +141,18 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
 
     triangle_uvs = np.zeros((max(len(v0), 1), 3, 2), np.float32)
     triangle_uvs[: len(v0)] = uv
+
+    # Only the triangles with vertex normals store them, so flat meshes take no memory and their hits read nothing
+    # more (kernels/path_state.cl). A degenerate triangle has no face normal to stand in for a zero vertex normal:
+    # it shades flat (it is never hit anyway).
+    smooth = np.zeros(len(v0), bool)
+    if corner_normals is not None:
+        smooth = ~np.isnan(corner_normals).any(axis=(1, 2)) & (np.linalg.norm(corner_normals, axis=-1) > 0).all(axis=1)
+    normal_slot = np.full(len(v0), -1, np.int32)
+    normal_slot[smooth] = np.arange(int(smooth.sum()), dtype=np.int32)
+    triangle_normals = np.zeros((max(int(smooth.sum()), 1), 3, 4), np.float32)
+    if corner_normals is not None:
+        triangle_normals[: int(smooth.sum()), :, :3] = corner_normals[smooth]
 
     # Each light writes its own rows (spectrace.lights); images shown by emitters and environment maps share one
     # texel buffer, each light knowing its offset.
@@ -154,6 +183,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     triangle_info["light"][: len(v0)] = light_index
     triangle_info["interior"] = -1
     triangle_info["interior"][: len(v0)] = tri_interior
+    triangle_info["normals"] = -1
+    triangle_info["normals"][: len(v0)] = normal_slot
 
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
@@ -173,6 +204,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         light_cdf=cdf.astype(np.float32),
         texels=np.concatenate(out.texel_chunks),
         triangle_uvs=triangle_uvs.reshape(-1, 2),
+        triangle_normals=triangle_normals.reshape(-1, 4),
         map_cdf=out.map_cdf,
         spectra=table.data,
         cmf=cmf,

@@ -24,6 +24,9 @@ class TriangleMesh:
     vertices: np.ndarray  # (N, 3) float64
     faces: np.ndarray  # (M, 3) int64 indices into vertices
     uvs: np.ndarray | None = None  # (N, 2) texture coordinates per vertex: u to the right, v down the image
+    # (N, 3) shading normals per vertex, interpolated across each face (smooth shading); None: every face shades
+    # with its geometric normal. Any length; a zero one stands for the face normal at that corner.
+    normals: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64)
@@ -32,6 +35,12 @@ class TriangleMesh:
             self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float64)
             if self.uvs.shape != (len(self.vertices), 2):
                 raise ValueError(f"uvs must be (N, 2) like the vertices, got {self.uvs.shape}")
+        if self.normals is not None:
+            self.normals = np.ascontiguousarray(self.normals, dtype=np.float64)
+            if self.normals.shape != (len(self.vertices), 3):
+                raise ValueError(f"normals must be (N, 3) like the vertices, got {self.normals.shape}")
+            if not np.all(np.isfinite(self.normals)):
+                raise ValueError("normals must be finite")
         if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
             raise ValueError(f"vertices must be (N, 3), got {self.vertices.shape}")
         if self.faces.ndim != 2 or self.faces.shape[1] != 3:
@@ -47,6 +56,42 @@ class TriangleMesh:
             return np.zeros((len(self.faces), 3, 2))
         return self.uvs[self.faces]
 
+    def triangle_normals(self) -> np.ndarray | None:
+        """(M, 3, 3) unit shading normals of each triangle's corners; None when the mesh has no vertex normals.
+        A zero normal becomes the face's geometric normal (a degenerate face's corners keep zero)."""
+        if self.normals is None:
+            return None
+        corners = self.normals[self.faces]
+        length = np.linalg.norm(corners, axis=-1, keepdims=True)
+        corners = np.divide(corners, length, out=np.zeros_like(corners), where=length > 0)
+        v0, v1, v2 = self.triangles()
+        face = np.cross(v1 - v0, v2 - v0)
+        face_length = np.linalg.norm(face, axis=-1, keepdims=True)
+        face = np.divide(face, face_length, out=np.zeros_like(face), where=face_length > 0)
+        return np.where(length > 0, corners, face[:, None, :])
+
+    def with_normals(self, normals: np.ndarray | None) -> "TriangleMesh":
+        """The same mesh with other vertex normals (None: flat shading)."""
+        return TriangleMesh(vertices=self.vertices, faces=self.faces, uvs=self.uvs, normals=normals)
+
+    def smooth_normals(self) -> np.ndarray:
+        """(N, 3) vertex normals computed from the faces: each face's unit normal weighted by the angle of its corner
+        at the vertex (Thürrner & Wüthrich 1998), so a vertex's normal does not depend on how its neighbourhood is
+        split into triangles. Only faces sharing a vertex index are averaged: a file that repeats a vertex per
+        face keeps its facets. Zero for a vertex that only degenerate faces use."""
+        v = self.triangles()
+        normals = np.zeros_like(self.vertices)
+        face = np.cross(v[1] - v[0], v[2] - v[0])
+        face_length = np.linalg.norm(face, axis=-1, keepdims=True)
+        face = np.divide(face, face_length, out=np.zeros_like(face), where=face_length > 0)
+        for k in range(3):
+            a = v[(k + 1) % 3] - v[k]
+            b = v[(k + 2) % 3] - v[k]
+            angle = np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("ij,ij->i", a, b))
+            np.add.at(normals, self.faces[:, k], face * angle[:, None])
+        length = np.linalg.norm(normals, axis=-1, keepdims=True)
+        return np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+
     def triangle_areas(self) -> np.ndarray:
         """(M,) area of each triangle, in scene units squared."""
         v0, v1, v2 = self.triangles()
@@ -55,6 +100,17 @@ class TriangleMesh:
     def area(self) -> float:
         """Total surface area, in scene units squared."""
         return float(self.triangle_areas().sum())
+
+
+def shading_normals(mesh: TriangleMesh, face_normals: bool | None, computed: bool = True) -> TriangleMesh:
+    """`mesh` with the normals a shape's `face_normals` setting asks for: True drops any (flat facets); False keeps
+    the mesh's own or, when it has none and `computed`, makes smooth ones (Mitsuba 3's default for its mesh
+    shapes); None keeps what the mesh has and makes none up."""
+    if face_normals:
+        return mesh.with_normals(None) if mesh.normals is not None else mesh
+    if face_normals is False and computed and mesh.normals is None:
+        return mesh.with_normals(mesh.smooth_normals())
+    return mesh
 
 
 # Files at least this large announce themselves on stderr with their size, then say how long they took: a
@@ -96,7 +152,8 @@ def _zero_index_in_face_line(chunk: np.ndarray) -> int | None:
 
 def _scan_obj(data: bytes, path: Path, where: str) -> bool:
     """Refuses a face index 0 in the OBJ text `data` (naming its line); says whether it has texture coordinates
-    (vt). Scanned in chunks of whole lines, so that numpy's temporary arrays stay small."""
+    (vt) or normals (vn), either of which may give one position several values. Scanned in chunks of whole lines,
+    so that numpy's temporary arrays stay small."""
     start, lines_before = 0, 0
     while start < len(data):
         end = min(start + _OBJ_SCAN_CHUNK, len(data))
@@ -109,7 +166,7 @@ def _scan_obj(data: bytes, path: Path, where: str) -> bool:
             raise SpectraceError(f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)", where=where)
         lines_before += data.count(b"\n", start, end)
         start = end
-    return data.startswith((b"vt ", b"vt\t")) or b"\nvt " in data or b"\nvt\t" in data
+    return any(data.startswith(tag) or b"\n" + tag in data for tag in (b"vt ", b"vt\t", b"vn ", b"vn\t"))
 
 
 _PLAIN_OBJ_MAX_BYTES = 4_000_000
@@ -127,7 +184,8 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     """Read a mesh file (OBJ, PLY, STL, GLB, OFF, ...); a file holding several meshes is merged into one.
 
     Vertex order and face winding are kept as stored, except that an OBJ vertex used with several texture
-    coordinates becomes one vertex per coordinate. Every failure raises SpectraceError naming `where`.
+    coordinates or normals becomes one vertex per coordinate or normal. The file's vertex normals come along
+    (none are made up when it has none). Every failure raises SpectraceError naming `where`.
     """
     path = regular_file(path, where, what="mesh file")
     size = path.stat().st_size
@@ -140,7 +198,7 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     # Small plain OBJ files are read here: importing trimesh costs more than a small render. Large ones go to
     # trimesh, whose vectorised reader beats a Python loop over millions of lines.
     if data is not None and size <= _PLAIN_OBJ_MAX_BYTES and (simple := _plain_triangle_obj(path, data)) is not None:
-        mesh = _validated_mesh(*simple, path, where)
+        mesh = _validated_mesh(simple[0], simple[1], path, where, normals=simple[2])
     else:
         mesh = _mesh_through_trimesh(path, where, data)
     if announce:
@@ -160,15 +218,18 @@ def _read_bytes(path: Path, where: str) -> bytes:
 
 
 def _mesh_through_trimesh(path: Path, where: str, obj_data: bytes | None = None) -> TriangleMesh:
-    """The mesh trimesh reads from `path`, or, for an OBJ file, from its bytes `obj_data` already read."""
+    """The mesh trimesh reads from `path`; an OBJ file from its bytes, `obj_data` when already read."""
     import trimesh  # deferred: importing trimesh (and with it SciPy) costs about half a second
+
+    if obj_data is None and path.suffix.lower() == ".obj":
+        obj_data = _read_bytes(path, where)
 
     # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
     options: dict[str, Any] = {"process": False, "maintain_order": True}
     source: Any = path
     if obj_data is not None:
-        # With vt, trimesh keeps the stored order only by giving a vertex one of its texture coordinates (at a
-        # texture seam the others are lost); splitting such vertices keeps every corner's own coordinate.
+        # With vt or vn, trimesh keeps the stored order only by giving a vertex one of its texture coordinates or
+        # normals (at a seam or crease the others are lost); splitting such vertices keeps every corner's own.
         # Materials are not used, and skipping them spares decoding the textures an .mtl names.
         options |= {"maintain_order": not _scan_obj(obj_data, path, where), "skip_materials": True}
         options |= {"file_type": "obj", "resolver": trimesh.resolvers.FilePathResolver(str(path))}
@@ -181,7 +242,9 @@ def _mesh_through_trimesh(path: Path, where: str, obj_data: bytes | None = None)
         if isinstance(error, (ImportError, UnicodeError)):  # trimesh guessing the text encoding of binary junk
             detail = f"its content is not a valid {path.suffix.lstrip('.').upper() or 'mesh'} file"
         raise SpectraceError(f"cannot read mesh file '{path}': {detail}", where=where) from None
-    mesh = _validated_mesh(np.asarray(loaded.vertices), np.asarray(loaded.faces), path, where)
+    mesh = _validated_mesh(
+        np.asarray(loaded.vertices), np.asarray(loaded.faces), path, where, _trimesh_scene_normals(scene)
+    )
     uv = getattr(getattr(loaded, "visual", None), "uv", None)
     if uv is not None and len(uv) == len(mesh.vertices) and np.all(np.isfinite(uv)):
         # Mesh files store v upward (OpenGL); spectrace's v runs down the image.
@@ -189,12 +252,39 @@ def _mesh_through_trimesh(path: Path, where: str, obj_data: bytes | None = None)
     return mesh
 
 
-def _plain_triangle_obj(path: Path, data: bytes | None = None) -> tuple[np.ndarray, np.ndarray] | None:
-    """Vertices and faces of an OBJ file holding only `v x y z` and `f i j k` lines (positive indices, no
-    texture coordinates or normals) and comments, read directly, as trimesh reads them with process=False and
-    maintain_order=True (a test checks the bundled meshes both ways); None for anything else, which trimesh
-    reads. Importing trimesh costs more than a small render. `data`: the file's bytes, when already read."""
-    vertices, faces = [], []
+def _trimesh_scene_normals(scene: Any) -> np.ndarray | None:
+    """The vertex normals a trimesh Scene's file stored, in the order Scene.to_mesh concatenates its vertices and
+    turned by each node's transform (inverse transpose); None unless every part stored some. trimesh computes
+    normals on demand, so whether the file had them shows only in its cache; to_mesh drops them."""
+    import trimesh
+
+    parts = []
+    for node in scene.graph.nodes_geometry:
+        transform, name = scene.graph[node]
+        geometry = scene.geometry[name]
+        if not isinstance(geometry, trimesh.Trimesh):
+            continue
+        if "vertex_normals" not in geometry._cache:
+            return None
+        normals = np.asarray(geometry.vertex_normals, np.float64)
+        turned = normals @ np.linalg.inv(np.asarray(transform, np.float64)[:3, :3])
+        length = np.linalg.norm(turned, axis=-1, keepdims=True)
+        parts.append(np.divide(turned, length, out=np.zeros_like(turned), where=length > 0))
+    return np.concatenate(parts) if parts else None
+
+
+def _plain_triangle_obj(
+    path: Path, data: bytes | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None] | None:
+    """Vertices, faces and vertex normals (or None) of an OBJ file holding only `v x y z` and `f i j k` lines
+    (positive indices), or `v`, `vn x y z` and `f i//n j//n k//n` lines, and comments, read directly, as trimesh
+    reads them with process=False (a test checks the bundled meshes both ways); None for anything else, which
+    trimesh reads. Importing trimesh costs more than a small render. A position used with several normals becomes
+    one vertex per normal, the extra ones after the stored vertices. `data`: the file's bytes, when already read."""
+    vertices: list[list[float]] = []
+    normals: list[list[float]] = []
+    faces: list[list[int]] = []
+    face_normals: list[list[int] | None] = []
     try:
         text = (data if data is not None else path.read_bytes()).decode("utf-8")
     except (OSError, UnicodeError):
@@ -204,20 +294,53 @@ def _plain_triangle_obj(path: Path, data: bytes | None = None) -> tuple[np.ndarr
             fields = line.split()
             if not fields or fields[0].startswith("#"):
                 continue
-            if fields[0] == "v" and len(fields) == 4:
-                vertices.append([float(x) for x in fields[1:]])
-            elif fields[0] == "f" and len(fields) == 4 and all(f.isdigit() and int(f) > 0 for f in fields[1:]):
-                faces.append([int(i) - 1 for i in fields[1:]])
+            if fields[0] in ("v", "vn") and len(fields) == 4:
+                (vertices if fields[0] == "v" else normals).append([float(x) for x in fields[1:]])
+            elif fields[0] == "f" and len(fields) == 4:
+                corners = [corner.split("//") for corner in fields[1:]]
+                if not all(len(c) == len(corners[0]) and all(i.isdigit() and int(i) > 0 for i in c) for c in corners):
+                    return None
+                faces.append([int(c[0]) - 1 for c in corners])
+                face_normals.append([int(c[1]) - 1 for c in corners] if len(corners[0]) == 2 else None)
             else:
                 return None
     except ValueError:
         return None
     if not vertices or not faces:
         return None
-    return np.array(vertices, dtype=np.float64), np.array(faces, dtype=np.int64)
+    positions, face_array = np.array(vertices, dtype=np.float64), np.array(faces, dtype=np.int64)
+    with_normals = [n is not None for n in face_normals]
+    if not any(with_normals):
+        return positions, face_array, None
+    if not all(with_normals) or not normals or face_array.max() >= len(positions):
+        return None
+    normal_index = np.array(face_normals, dtype=np.int64)
+    if normal_index.max() >= len(normals):
+        return None
+    # Each (position, normal) pair is one vertex: a position's first pair keeps its index.
+    pairs: dict[tuple[int, int], int] = {}
+    first_normal = np.full(len(positions), -1, np.int64)
+    extra: list[int] = []
+    for corner, (p, n) in enumerate(zip(face_array.ravel().tolist(), normal_index.ravel().tolist())):
+        if first_normal[p] < 0:
+            first_normal[p] = n
+        if first_normal[p] != n:
+            if (p, n) not in pairs:
+                pairs[p, n] = len(positions) + len(extra)
+                extra.append(p)
+            face_array.reshape(-1)[corner] = pairs[p, n]
+    extra_normals = [n for (_, n) in pairs]
+    vertex_normals = np.zeros((len(positions) + len(extra), 3))
+    file_normals = np.array(normals, dtype=np.float64)
+    used = first_normal >= 0
+    vertex_normals[: len(positions)][used] = file_normals[first_normal[used]]
+    vertex_normals[len(positions) :] = file_normals[np.array(extra_normals, np.int64)].reshape(-1, 3)
+    return np.concatenate([positions, positions[np.array(extra, np.int64)].reshape(-1, 3)]), face_array, vertex_normals
 
 
-def _validated_mesh(vertices: np.ndarray, faces: np.ndarray, path: Path, where: str) -> TriangleMesh:
+def _validated_mesh(
+    vertices: np.ndarray, faces: np.ndarray, path: Path, where: str, normals: np.ndarray | None = None
+) -> TriangleMesh:
     if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
         raise SpectraceError(f"mesh file '{path}' contains no triangles", where=where)
     if faces.min() < 0 or faces.max() >= len(vertices):
@@ -229,4 +352,16 @@ def _validated_mesh(vertices: np.ndarray, faces: np.ndarray, path: Path, where: 
             f"(first: vertex {int(np.flatnonzero(bad)[0])})",
             where=where,
         )
-    return TriangleMesh(vertices=vertices, faces=faces)
+    if normals is not None:
+        if normals.shape != vertices.shape:
+            raise SpectraceError(
+                f"mesh file '{path}' has {len(normals)} vertex normals for {len(vertices)} vertices", where=where
+            )
+        bad = ~np.isfinite(normals).all(axis=1)
+        if bad.any():
+            raise SpectraceError(
+                f"mesh file '{path}' has {int(bad.sum())} vertex normals with NaN or infinite components "
+                f"(first: vertex {int(np.flatnonzero(bad)[0])})",
+                where=where,
+            )
+    return TriangleMesh(vertices=vertices, faces=faces, normals=normals)

@@ -1,7 +1,8 @@
-"""Built-in shapes, with Mitsuba 3's conventions so scenes port: rectangle, cube, sphere; and an equilateral prism.
+"""Built-in shapes, with Mitsuba 3's conventions so scenes port: rectangle, cube, sphere; and an equilateral prism
+and the Utah teapot. BUILTIN_SHAPES lists them for the scene loader and the Python API.
 
-All are centred on the origin with outward (front-side) winding: the geometric normal
-(v1 - v0) x (v2 - v0) points away from the interior, or along +z for the rectangle.
+All have outward (front-side) winding: the geometric normal (v1 - v0) x (v2 - v0) points away from the interior,
+or along +z for the rectangle. All but the teapot (which stands on the origin) are centred on it.
 """
 
 import numpy as np
@@ -11,6 +12,8 @@ from spectrace.geometry.mesh import TriangleMesh
 
 # An icosphere with 8 subdivisions already has 1.3 million triangles.
 MAX_SPHERE_SUBDIVISIONS = 8
+# Quads per side of each of the teapot's 32 patches: 32 768 triangles, smooth to the eye at any size in the frame.
+TEAPOT_SUBDIVISIONS = 16
 
 
 def rectangle() -> TriangleMesh:
@@ -55,7 +58,8 @@ def prism() -> TriangleMesh:
 
 
 def sphere(subdivisions: int = 4) -> TriangleMesh:
-    """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles, vertices on the sphere."""
+    """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles, vertices on the sphere, and the
+    sphere's exact radial normals at its vertices, so it shades smoothly."""
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
     if (
@@ -67,4 +71,23 @@ def sphere(subdivisions: int = 4) -> TriangleMesh:
             f"sphere subdivisions must be an integer from 0 to {MAX_SPHERE_SUBDIVISIONS}, got {subdivisions!r}"
         )
     icosphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    return TriangleMesh(vertices=np.asarray(icosphere.vertices), faces=np.asarray(icosphere.faces))
+    vertices = np.asarray(icosphere.vertices, dtype=np.float64)
+    normals = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
+    return TriangleMesh(vertices=vertices, faces=np.asarray(icosphere.faces), normals=normals)
+
+
+def teapot(subdivisions: int = TEAPOT_SUBDIVISIONS) -> TriangleMesh:
+    """The Utah teapot (geometry/teapot.py), y up, standing on the origin: body radius 1, height 1.575, the spout
+    towards +x; exact normals at its vertices (it shades smoothly) and texture coordinates around it."""
+    from spectrace.geometry.teapot import newell_teapot
+
+    vertices, faces, uvs, normals = newell_teapot(subdivisions)
+    z_up_to_y_up = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # (x, y, z) -> (x, z, -y)
+    scale = 0.5  # the data's body radius is 2
+    return TriangleMesh(
+        vertices=scale * vertices @ z_up_to_y_up.T, faces=faces, uvs=uvs, normals=normals @ z_up_to_y_up.T
+    )
+
+
+# A shape's `type` in scene files and the Python API -> its mesh.
+BUILTIN_SHAPES = {"rectangle": rectangle, "cube": cube, "sphere": sphere, "prism": prism, "teapot": teapot}

@@ -41,14 +41,21 @@ def transform_matrix(ops: list[dict], where: str) -> np.ndarray:
 
 
 def apply_transform(mesh: TriangleMesh, matrix: np.ndarray) -> TriangleMesh:
-    """Transformed copy of mesh; a mirroring matrix (det < 0) also reverses the winding, keeping fronts outward."""
+    """Transformed copy of mesh; a mirroring matrix (det < 0) also reverses the winding, keeping fronts outward.
+    Vertex normals are turned by the inverse transpose of the linear part, which keeps them perpendicular to the
+    transformed surface under non-uniform scales and shears, and normalised again."""
     matrix = np.asarray(matrix, dtype=np.float64)
     if matrix.shape != (4, 4):
         raise ValueError(f"transform must be 4x4, got {matrix.shape}")
     linear, offset = matrix[:3, :3], matrix[:3, 3]
     vertices = mesh.vertices @ linear.T + offset
     faces = mesh.faces[:, ::-1] if np.linalg.det(linear) < 0 else mesh.faces
-    return TriangleMesh(vertices=vertices, faces=faces.copy(), uvs=mesh.uvs)
+    normals = None
+    if mesh.normals is not None:
+        normals = mesh.normals @ np.linalg.inv(linear)  # rows: (L⁻ᵀ n)ᵀ = nᵀ L⁻¹
+        length = np.linalg.norm(normals, axis=-1, keepdims=True)
+        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    return TriangleMesh(vertices=vertices, faces=faces.copy(), uvs=mesh.uvs, normals=normals)
 
 
 def _translate(value: object, where: str) -> np.ndarray:

@@ -1,8 +1,9 @@
 """A loaded spectrace `Scene` as a Mitsuba 3 scene dictionary (`mitsuba.load_dict`), for side-by-side renders.
 
 The export is meant to make Mitsuba do exactly the work spectrace does, so that timings and images compare:
-- geometry: every shape's world-space triangles, float32, flat-shaded (face normals from the winding, which is
-  also what decides the front side in both renderers), as binary PLY files in a folder the caller owns;
+- geometry: every shape's world-space triangles, float32, as binary PLY files in a folder the caller owns, with
+  its vertex normals when it has them (smooth shading) and `face_normals` otherwise (flat, as spectrace; the
+  winding decides the front side in both renderers);
 - spectra: every spectrum as Mitsuba's `regular` spectrum on spectrace's own 1 nm grid (360-830 nm), so both
   interpolate the same samples linearly;
 - materials and lights: each module's `to_mitsuba` (spectrace.materials.<name>, spectrace.lights.<name>) gives its
@@ -48,14 +49,19 @@ def regular_spectrum(spectrum: Spectrum) -> dict:
 
 
 def write_binary_ply(mesh: TriangleMesh, path: Path) -> None:
-    """Float32 positions and int32 triangles, no normals: Mitsuba then shades with the face normal."""
-    vertices = np.ascontiguousarray(mesh.vertices, dtype="<f4")
+    """Float32 positions (and unit normals nx, ny, nz when the mesh has vertex normals) and int32 triangles."""
+    columns = [mesh.vertices]
+    if mesh.normals is not None:
+        length = np.linalg.norm(mesh.normals, axis=1, keepdims=True)
+        columns.append(np.divide(mesh.normals, length, out=np.zeros_like(mesh.normals), where=length > 0))
+    vertices = np.ascontiguousarray(np.concatenate(columns, axis=1), dtype="<f4")
     faces = np.empty(len(mesh.faces), dtype=[("n", "u1"), ("index", "<i4", (3,))])
     faces["n"] = 3
     faces["index"] = mesh.faces
+    properties = "".join(f"property float {name}\n" for name in ("x", "y", "z", "nx", "ny", "nz")[: vertices.shape[1]])
     header = (
         "ply\nformat binary_little_endian 1.0\n"
-        f"element vertex {len(vertices)}\nproperty float x\nproperty float y\nproperty float z\n"
+        f"element vertex {len(vertices)}\n{properties}"
         f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
     )
     with open(path, "wb") as out:
@@ -153,7 +159,7 @@ def scene_to_mitsuba_dict(
         entry = {
             "type": "ply",
             "filename": str(path),
-            "face_normals": True,
+            "face_normals": shape.mesh.normals is None,
             "bsdf": {"type": "ref", "id": materials[material_key]},
         }
         if shape.emitter is not None:

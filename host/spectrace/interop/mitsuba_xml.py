@@ -7,7 +7,8 @@ Mitsuba plugins it imports (MITSUBA_PLUGINS) and converts them (`from_mitsuba`):
 BSDFs, spectrace.lights.<name> for emitters (lights.area for a shape's). The plugin -> module tables are built from
 the registries (MATERIALS, LIGHTS).
 
-Imported here: shapes obj, ply, rectangle, cube, sphere (center, radius); twosided around one BSDF (spectrace's
+Imported here: shapes obj, ply, rectangle, cube, sphere (center, radius; face_normals on obj, ply and sphere);
+twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
 path (max_depth, rr_depth), direct (as path with max_depth 2) and volpath/volpathmis (as path: spectrace has no
@@ -674,6 +675,12 @@ class MitsubaImporter:
     def text(self, element: Element) -> str:
         return self.attribute(self.resolve(element), "value") or ""
 
+    def boolean(self, element: Element) -> bool:
+        value = self.text(element)
+        if value not in ("true", "false"):
+            raise self.fail(element, f"expected true or false, got '{_shown(value)}'", "value")
+        return value == "true"
+
     def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | None:
         """GGX α of a rough Mitsuba BSDF (its default 0.1); None when spectrace cannot represent it (recorded)."""
         if "alpha_u" in properties or "alpha_v" in properties:
@@ -761,6 +768,13 @@ class MitsubaImporter:
             steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring the flat square reverses its winding
         if steps:
             table["transform"] = steps
+        if kind in ("obj", "ply", "sphere"):
+            face_normals = self.boolean(properties["face_normals"]) if "face_normals" in properties else False
+            # Mitsuba 3 shades its meshes smoothly, computing vertex normals when the file has none, unless
+            # face_normals is set; spectrace makes none up unless asked (face_normals = false) and shades the sphere
+            # smoothly by default.
+            if face_normals or kind != "sphere":
+                table["face_normals"] = face_normals
         bsdf = properties.get("bsdf") or next((c for c in properties.values() if self.resolve(c).tag == "bsdf"), None)
         table["material"] = self.material(bsdf, name)
         emitter = next((self.resolve(c) for c in properties.values() if self.resolve(c).tag == "emitter"), None)

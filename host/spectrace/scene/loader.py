@@ -10,7 +10,7 @@ from pydantic import BaseModel, ValidationError
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
-from spectrace.geometry.mesh import load_mesh
+from spectrace.geometry.mesh import load_mesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
@@ -22,13 +22,6 @@ from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
-
-_BUILTIN_SHAPES = {
-    "rectangle": primitives.rectangle,
-    "cube": primitives.cube,
-    "sphere": primitives.sphere,
-    "prism": primitives.prism,
-}
 
 
 def key_path(location: tuple) -> str:
@@ -249,7 +242,7 @@ class _Resolver:
                 assert s.file is not None  # the schema wants a file for a mesh
                 mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"))
             else:
-                mesh = _BUILTIN_SHAPES[s.type]()
+                mesh = primitives.BUILTIN_SHAPES[s.type]()
             if s.transform:
                 steps = [step.model_dump(exclude_none=True) for step in s.transform]
                 with np.errstate(over="ignore", invalid="ignore"):  # overflows are reported just below
@@ -257,6 +250,7 @@ class _Resolver:
             if problem := limits.coordinates_problem(mesh.vertices):
                 culprit = "transform" if s.transform else "file" if s.type == "mesh" else "type"
                 raise SpectraceError(f"mesh has {problem}", where=self.where(f"{key}.{culprit}"))
+            mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
             if s.material is not None and s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"

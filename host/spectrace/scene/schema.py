@@ -8,7 +8,7 @@ import functools
 import operator
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Protocol, TypeAlias
 
-from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, create_model, field_validator, model_validator
 
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
@@ -274,13 +274,16 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere", "prism"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "prism", "teapot"]
     file: str | None = None
     material: str | None = None
     emitter: EmitterSpec | None = None
     interior: InteriorSpec | None = None
     transform: list[TransformStep] = []
     name: str | None = None
+    # true: shade with the face normals (facets); false: smooth, with normals computed when a mesh file has none;
+    # unset: a mesh file's own normals if it has any, the sphere's radial ones (docs/scene-format.md)
+    face_normals: StrictBool | None = None
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":

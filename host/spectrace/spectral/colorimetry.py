@@ -11,6 +11,8 @@ they are the sRGB/D65 matrices of IEC 61966-2-1 at 6 decimals, as also printed i
 colour-science's sRGB colourspace.
 """
 
+from functools import cache
+
 import numpy as np
 
 from spectrace.resources import spectra_dir
@@ -132,8 +134,35 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
     return np.where(linear <= _SRGB_LINEAR_LIMIT, _SRGB_SLOPE * linear, power)
 
 
-def srgb_decode(encoded: np.ndarray) -> np.ndarray:
-    """Inverse of `srgb_encode`: encoded sRGB -> linear."""
+def srgb_decode(encoded: np.ndarray, bits: int | None = None) -> np.ndarray:
+    """Inverse of `srgb_encode`: encoded sRGB -> linear (float64).
+
+    With `bits` (8 or 16), `encoded` holds integer codes 0 .. 2^bits - 1 (an 8- or 16-bit image), decoded as
+    code / (2^bits - 1) through a lookup table of every code, so an image costs one gather.
+    """
+    if bits is None:
+        return _srgb_decode_float(encoded)
+    codes = np.asarray(encoded)
+    if bits not in _CODE_BITS:
+        raise ValueError(f"sRGB integer codes must have 8 or 16 bits, not {bits!r}")
+    if codes.dtype.kind not in "ui":
+        raise ValueError(f"{bits}-bit sRGB codes must be integers, got {codes.dtype}")
+    if codes.size and (int(codes.min()) < 0 or int(codes.max()) >= 1 << bits):
+        raise ValueError(f"{bits}-bit sRGB codes must lie in 0..{(1 << bits) - 1}")
+    return _srgb_code_table(bits)[codes]
+
+
+_CODE_BITS = (8, 16)
+
+
+def _srgb_decode_float(encoded: np.ndarray) -> np.ndarray:
     encoded = np.asarray(encoded, dtype=np.float64)
     base = (np.maximum(encoded, _SRGB_ENCODED_LIMIT) + _SRGB_OFFSET) / (1 + _SRGB_OFFSET)
     return np.where(encoded <= _SRGB_ENCODED_LIMIT, encoded / _SRGB_SLOPE, np.power(base, _SRGB_GAMMA))
+
+
+@cache
+def _srgb_code_table(bits: int) -> np.ndarray:
+    table = _srgb_decode_float(np.arange(1 << bits) / ((1 << bits) - 1))
+    table.setflags(write=False)
+    return table
