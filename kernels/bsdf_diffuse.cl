@@ -2,7 +2,8 @@
  * outgoing direction, so both faces reflect and meshes work whatever their winding; Mitsuba 3 needs a `twosided`
  * wrapper for this). Every bsdf_*.cl file has the same shape: flags (bsdf_sample.cl) and params from the
  * Material, then eval (f·cos θi), pdf (solid angle) and sample(params, wo, uc, u, sample), uc choosing a lobe and u
- * a direction in it, all on local directions with wo.z ≥ 0; material.cl's MATERIAL_LIST names each file's prefix. */
+ * a direction in it, all on local directions with wo.z ≥ 0; material.cl's MATERIAL_LIST (generated
+ * from the host's registry of materials) names each file's prefix. */
 #ifndef SPECTRACE_BSDF_DIFFUSE_CL
 #define SPECTRACE_BSDF_DIFFUSE_CL
 

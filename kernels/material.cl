@@ -3,9 +3,10 @@
  * <name>_flags (what its lobes are, bsdf_sample.cl), <name>_params (its inputs at the path's wavelengths, looked
  * up in the spectrum table or, for textured parameters, the textures at the surface point: texture.cl's
  * SurfaceContext),
- * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. Adding a BSDF: that file, its code in
- * spectrace.engine.device_types.MATERIAL_TYPES, and its line in MATERIAL_LIST. docs/materials.md describes each
- * model. */
+ * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. The list of BSDFs is not kept here: the host writes
+ * material_list.h from its registry (spectrace.materials.MATERIALS) for every build, with each bsdf_<name>.cl
+ * included and MATERIAL_LIST, and defines each MATERIAL_<NAME> code. Adding a BSDF: that file and its host module
+ * (docs/materials.md, "Adding a BSDF"); nothing here changes. docs/materials.md describes each model. */
 #ifndef SPECTRACE_MATERIAL_CL
 #define SPECTRACE_MATERIAL_CL
 
@@ -14,24 +15,12 @@
 #include "spectrum.cl"
 #include "texture.cl"
 #include "bsdf_sample.cl"
-#include "bsdf_diffuse.cl"
-#include "bsdf_mirror.cl"
-#include "bsdf_conductor.cl"
-#include "bsdf_plastic.cl"
-#include "bsdf_retroreflector.cl"
-#include "bsdf_dielectric.cl"
+#include "material_list.h"
 
-/* Every BSDF: its Material.type code, the prefix of its functions and its params struct. Each dispatch below is
- * this list expanded, one test per type; a type the scene lacks tests as a constant 0 (MATERIAL_IS,
- * scene_features.h), so its code is not compiled in, and a scene of one type dispatches without a test. */
-#define MATERIAL_LIST(X)                                          \
-    X(MATERIAL_DIFFUSE, diffuse, DiffuseParams)                   \
-    X(MATERIAL_CONDUCTOR, conductor, ConductorParams)             \
-    X(MATERIAL_MIRROR, mirror, MirrorParams)                      \
-    X(MATERIAL_PLASTIC, plastic, PlasticParams)                   \
-    X(MATERIAL_DIELECTRIC, dielectric, DielectricParams)          \
-    X(MATERIAL_RETROREFLECTOR, retroreflector, RetroreflectorParams)
-
+/* MATERIAL_LIST(X) (material_list.h) holds X(code, name, Params) for every BSDF: its Material.type code, the prefix
+ * of its functions and its params struct. Each dispatch below is this list expanded, one test per type; a type the
+ * scene lacks tests as a constant 0 (MATERIAL_IS, scene_features.h), so its code is not compiled in, and a scene of
+ * one type dispatches without a test. */
 #define MATERIAL_FLAGS_CASE(type, name, Params) \
     if (MATERIAL_IS(m, type)) return name##_flags(m);
 #define MATERIAL_EVAL_CASE(type, name, Params)          \

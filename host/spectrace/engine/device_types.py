@@ -1,5 +1,6 @@
 """The host/device contract: numpy mirrors of the structs in kernels/types.h (explicit offsets), and the one home
-of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts).
+of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts)
+but the materials' type codes, which come from their registry (spectrace.materials.MATERIALS).
 
 The kernels hold no copy of those numbers: every kernel build gets them as defines (`device_contract_defines`,
 added by spectrace.device's program builds). tests/device/test_struct_layout.py compiles a kernel that reports each
@@ -16,17 +17,8 @@ from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE, BVH4_STACK_SIZE
 from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
-# Material.type: which BSDF (kernels/material.cl's MATERIAL_LIST names each one's functions; docs/materials.md lists
-# the keys).
-MATERIAL_TYPES = ("diffuse", "conductor", "mirror", "plastic", "dielectric", "retroreflector")
-(
-    MATERIAL_DIFFUSE,
-    MATERIAL_CONDUCTOR,
-    MATERIAL_MIRROR,
-    MATERIAL_PLASTIC,
-    MATERIAL_DIELECTRIC,
-    MATERIAL_RETROREFLECTOR,
-) = range(len(MATERIAL_TYPES))
+# Material.type: which BSDF. The codes (MATERIAL_<NAME>, MATERIAL_TYPE_COUNT) are each BSDF's position in
+# spectrace.materials.MATERIALS, which spectrace.device adds to every build with this contract.
 
 # Material.ior_model: how a dielectric's interior index of refraction depends on the wavelength (kernels/ior.cl).
 IOR_CONSTANT = 0  # Material.ior
@@ -247,14 +239,12 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "FILTER_NEAREST": FILTER_NEAREST,
         "FILTER_BILINEAR": FILTER_BILINEAR,
         "FILTER_TRILINEAR": FILTER_TRILINEAR,
-        "MATERIAL_TYPE_COUNT": len(MATERIAL_TYPES),
         "LIGHT_TYPE_COUNT": len(LIGHT_TYPES),
         # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
         "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
         "BVH_STACK_SIZE": MAX_DEPTH,
         "BVH4_STACK_SIZE": BVH4_STACK_SIZE,
     }
-    values |= {f"MATERIAL_{name.upper()}": code for code, name in enumerate(MATERIAL_TYPES)}
     values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
     values |= {f"TEXTURE_{name.upper()}": code for code, name in enumerate(TEXTURE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

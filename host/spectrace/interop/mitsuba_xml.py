@@ -37,9 +37,10 @@ from xml.parsers import expat
 
 import numpy as np
 
-from spectrace.errors import SpectraceError
+from spectrace.errors import SpectraceError, one_line
 from spectrace.geometry.transforms import transform_matrix
 from spectrace.io.input_files import regular_file
+from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import ROUGHNESS_RANGE
@@ -64,6 +65,14 @@ SUPPORTED = {
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis"),
 }
+
+
+def supported_text() -> str:
+    """The plugins spectrace imports, per element: "shape obj, ply, ...; bsdf diffuse, ...; ..." (the modules'
+    MITSUBA_PLUGINS through the registries, and what the importer itself reads)."""
+    return "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
+
+
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 _PLANNED_BSDFS = ("thindielectric",)
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
@@ -135,8 +144,7 @@ class Element:
 def _shown(text: str, limit: int = 60) -> str:
     """Text from the file as it may appear in a one-line message: shortened, line breaks and other unprintable
     characters escaped."""
-    short = text if len(text) <= limit else text[:limit] + "..."
-    return "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in short)
+    return one_line(text if len(text) <= limit else text[:limit] + "...")
 
 
 def read_input_file(path: Path, where: str) -> bytes:
@@ -933,9 +941,8 @@ class MitsubaImporter:
             elif child.tag in _OBJECT_TAGS or child.tag == "include":
                 self.unsupported_plugin(child)
         if self.unsupported:
-            supported = "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
             raise SpectraceError(
-                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported})",
+                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported_text()})",
                 where=str(self.xml_path),
             )
         environments = [self.origins[f"lights[{i}]"] for i, light in enumerate(lights) if light["type"] == "constant"]
@@ -992,27 +999,14 @@ def _relative_path(path: Path, folder: Path) -> str:
         return path.resolve().as_posix()
 
 
-def _one_line(error: SpectraceError) -> SpectraceError:
-    """The error with anything that would break its single line (a line break from a file name) escaped."""
-    message, where = _shown(error.message, 10_000), _shown(error.where, 10_000) if error.where else None
-    return error if (message, where) == (error.message, error.where) else SpectraceError(message, where=where)
-
-
 def check_output_path(toml_path: Path, xml_path: Path | None = None) -> None:
-    """Refuse, before any work, an output that could not be written or would destroy the input: a folder, a place
-    under a file or in a read-only folder, the XML itself. Missing folders are created when the TOML is written."""
+    """Refuse, before any work, an output that could not be written or would destroy the input: what every output
+    is refused for (spectrace.io.output_files), and the XML itself. Missing folders are created when the TOML is
+    written."""
     where = str(toml_path)
-    if toml_path.is_dir():
-        raise SpectraceError("is a folder; give the path of the TOML file to write", where=where)
     if xml_path is not None and toml_path.exists() and xml_path.exists() and toml_path.samefile(xml_path):
         raise SpectraceError("is the Mitsuba scene being imported; writing it would destroy the input", where=where)
-    folder = toml_path.parent if str(toml_path.parent) else Path(".")
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
-    if not folder.is_dir():
-        raise SpectraceError(f"'{folder}' is not a folder, so the TOML cannot be written there", where=where)
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise SpectraceError(f"the folder '{folder}' is not writable", where=where)
+    check_output_file(toml_path, "the TOML file", create_folders=True)
 
 
 # ---------------------------------------------------------------- public API
@@ -1026,10 +1020,7 @@ def mitsuba_scene_data(
     Raises SpectraceError naming every unsupported plugin."""
     xml_path = Path(xml_path)
     importer = MitsubaImporter(xml_path, Path(toml_folder) if toml_folder else xml_path.parent, parameters or {})
-    try:
-        return importer.run(parse_xml(xml_path)), importer.notes
-    except SpectraceError as error:
-        raise _one_line(error) from None
+    return importer.run(parse_xml(xml_path)), importer.notes
 
 
 def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None) -> list[str]:
@@ -1044,29 +1035,26 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
     xml_path, toml_path = Path(xml_path), Path(toml_path)
     check_output_path(toml_path, xml_path)
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
-    try:
-        data = importer.run(parse_xml(xml_path))
-        header = "\n".join(
-            [
-                f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by `spectrace import-mitsuba`.",
-                *(f"note: {note}" for note in importer.notes),
-            ]
-        )
-        text = dumps(data, header=header)
+    data = importer.run(parse_xml(xml_path))
+    header = "\n".join(
+        [
+            f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by `spectrace import-mitsuba`.",
+            *(f"note: {note}" for note in importer.notes),
+        ]
+    )
+    text = dumps(data, header=header)
 
-        def write_and_check(temp: Path) -> None:
-            temp.write_text(text, encoding="utf-8")
-            try:
-                load_scene(temp)  # from the output's folder, where its relative mesh paths lead
-            except SpectraceError as error:
-                raise importer.imported_error(error, temp) from None
-
+    def write_and_check(temp: Path) -> None:
+        temp.write_text(text, encoding="utf-8")
         try:
-            write_atomically(toml_path, write_and_check)
-        except OSError as error:
-            raise SpectraceError(f"cannot write the TOML ({error.strerror or error})", where=str(toml_path)) from None
-    except SpectraceError as error:
-        raise _one_line(error) from None
+            load_scene(temp)  # from the output's folder, where its relative mesh paths lead
+        except SpectraceError as error:
+            raise importer.imported_error(error, temp) from None
+
+    try:
+        write_atomically(toml_path, write_and_check)
+    except OSError as error:
+        raise SpectraceError(f"cannot write the TOML ({error.strerror or error})", where=str(toml_path)) from None
     return importer.notes
 
 

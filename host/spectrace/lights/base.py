@@ -1,9 +1,14 @@
-"""What every light module shares: its Light rows (kernels/types.h) and the checks of positions and directions."""
+"""What every light module shares: the scene model's `Light`, its Light rows (kernels/types.h) and the checks of
+positions and directions."""
 
 import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.spectral.table import SpectrumTable
+
+
+class Light:
+    """A `[[lights]]` light of the scene model: what every light module's MODEL is (a shape's AreaEmitter is not)."""
 
 
 def light_row(

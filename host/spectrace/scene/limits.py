@@ -119,6 +119,12 @@ def spp_problem(spp: int) -> str | None:
     return None
 
 
+def offset_seed(seed: int, offset: int) -> int:
+    """Another valid seed `offset` away from `seed` (a render whose noise is independent of the seed's), wrapped
+    into 0..MAX_SEED: a seed near the top plus the offset would not fit the kernels' 32-bit signed seed."""
+    return (seed + offset) % (MAX_SEED + 1)
+
+
 def seed_problem(seed: int) -> str | None:
     """Why `seed` cannot seed the kernels' samplers, or None."""
     if not 0 <= seed <= MAX_SEED:

@@ -20,11 +20,9 @@ from spectrace.scene import limits, schema
 from spectrace.scene.model import AreaEmitter, Camera, EmitterImage, Light, Material, Medium, Scene, Shape
 from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
-from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
-from spectrace.textures import IMAGE_TEXTURES, TEXTURES, is_texture
-from spectrace.textures.bitmap import BitmapTexture
-from spectrace.textures.shared import value_problem
+from spectrace.textures import IMAGE_TEXTURES, TEXTURES, check_texture_values, is_texture
 
 
 def key_path(location: tuple) -> str:
@@ -204,19 +202,7 @@ class _Resolver:
         if spec.display is not None:
             result = self.display_spectrum(spec, key, emission)
         elif spec.rgb is not None:
-            rgb = np.asarray(spec.rgb, float)
-            if np.any(rgb < 0):
-                raise SpectraceError(
-                    f"rgb components must be >= 0, got {list(spec.rgb)}", where=self.where(f"{key}.rgb")
-                )
-            if emission:
-                result = uplift_illuminant(rgb)
-            else:
-                if np.any(rgb > 1):
-                    raise SpectraceError(
-                        f"a reflectance rgb must lie in [0, 1], got {list(spec.rgb)}", where=self.where(f"{key}.rgb")
-                    )
-                result = uplift_reflectance(rgb)[0]
+            result = from_rgb(spec.rgb, emission, self.where(f"{key}.rgb"))
         elif spec.value is not None:
             result = Spectrum.constant(spec.value, name=f"constant {spec.value}")
         elif spec.blackbody is not None:
@@ -232,14 +218,7 @@ class _Resolver:
             if problem := limits.spectrum_magnitude_problem(result.values * spec.scale):
                 raise SpectraceError(problem, where=self.where(key))
         result = result * spec.scale if spec.scale != 1.0 else result
-        values = result.values
-        if np.any(values < 0):
-            raise SpectraceError("spectrum has negative values", where=self.where(key))
-        if not emission and np.any(values > 1.0 + 1e-6):
-            raise SpectraceError(
-                f"reflectance exceeds 1 (max {values.max():.4g}): it would create energy", where=self.where(key)
-            )
-        return result
+        return within_bounds(result, emission, self.where(key))
 
     def spectrum_or_texture(self, spec, key: str, kind: str, inner: bool = False):
         """A textured parameter's value (kind "spectrum": a reflectance, or "float": a scalar): a Spectrum, or a
@@ -286,12 +265,7 @@ class _Resolver:
                 "an index of refraction needs a spectrum (value, values, spectrum or file), not a colour",
                 where=self.where(key),
             )
-        result = self.spectrum(spec, key, emission=True)
-        if positive and not result.values.min() > 0:
-            raise SpectraceError(
-                f"must be > 0 at every wavelength (min {result.values.min():.4g})", where=self.where(key)
-            )
-        return result
+        return optical_constant(self.spectrum(spec, key, emission=True), positive, self.where(key))
 
     def shapes(self, materials: dict[str, Material]) -> list[Shape]:
         shapes = []
@@ -432,19 +406,6 @@ class _Resolver:
 
 def is_texture_image(texture) -> bool:
     return isinstance(texture, IMAGE_TEXTURES)
-
-
-def check_texture_values(texture, kind: str, where: str) -> None:
-    """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture has one channel."""
-    if not isinstance(texture, IMAGE_TEXTURES):
-        return  # a checkerboard's sides were checked as they were resolved
-    if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
-        raise SpectraceError(
-            f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
-            where=where,
-        )
-    if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else None):
-        raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
 
 
 TEXTURE_TYPE_NAMES = tuple(TEXTURES)

@@ -25,7 +25,7 @@ from spectrace.spectral.table import SpectrumTable
 from spectrace.textures import bitmap, checkerboard, spectral
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
-from spectrace.textures.shared import FILTERS, WRAPS
+from spectrace.textures.shared import FILTERS, WRAPS, value_problem
 from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module.
@@ -37,6 +37,19 @@ _DEVICE_TYPES = {BitmapTexture: TEXTURE_BITMAP, SpectralTexture: TEXTURE_SPECTRA
 
 def is_texture(value: object) -> bool:
     return isinstance(value, (BitmapTexture, SpectralTexture, CheckerboardTexture))
+
+
+def check_texture_values(texture, kind: str, where: str) -> None:
+    """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture has one channel."""
+    if not isinstance(texture, IMAGE_TEXTURES):
+        return  # a checkerboard's sides were checked as they were resolved
+    if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
+        raise SpectraceError(
+            f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
+            where=where,
+        )
+    if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else None):
+        raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
 
 
 def texture_module(texture):
