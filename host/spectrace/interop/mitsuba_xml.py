@@ -554,7 +554,7 @@ class MitsubaImporter:
             # Mitsuba keeps the 2D affine part of the 4 x 4 matrix (x and y rows and columns, and the translation).
             if matrix[0, 1] != 0.0 or matrix[1, 0] != 0.0:
                 self.unsupported_plugin(
-                    element, " to_uv with a rotation or shear (spectrace's textures take uv_scale and uv_offset)"
+                    texture, " with a to_uv that rotates or shears (spectrace's textures take uv_scale and uv_offset)"
                 )
                 return None
             scale, offset = [matrix[0, 0], matrix[1, 1]], [matrix[0, 3], matrix[1, 3]]
