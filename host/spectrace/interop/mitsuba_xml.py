@@ -4,8 +4,13 @@ This module is the machinery every plugin shares: the XML with each element's pa
 transforms, references, errors and notes, and the plugins that are no material or light (shapes, twosided, the
 sensor, film, sampler and integrator). Each BSDF and emitter is mapped by its spectrace module, which names the
 Mitsuba plugins it imports (MITSUBA_PLUGINS) and converts them (`from_mitsuba`): spectrace.materials.<name> for
-BSDFs, spectrace.lights.<name> for emitters (lights.area for a shape's). The plugin -> module tables are built from
-the registries (MATERIALS, LIGHTS).
+BSDFs, spectrace.lights.<name> for emitters (lights.area for a shape's), spectrace.textures.<name> for textures
+(bitmap, checkerboard). The plugin -> module tables are built from the registries (MATERIALS, LIGHTS, TEXTURES).
+
+A <texture> (by id or inline) becomes a [textures] table wherever a spectrum may be; it is kept exactly where the
+material's or light's parameter table marks the parameter `textured` (`checked_textures`), so a parameter that
+becomes textured there imports textures without a change here. Mitsuba's rectangle and PLY texture coordinates run
+v up where spectrace's run down: textures on those shapes are imported with v flipped, as a material of their own.
 
 Imported here: shapes obj, ply, rectangle, cube, sphere (center, radius; face_normals on obj, ply and sphere);
 twosided around one BSDF (spectrace's
@@ -19,7 +24,7 @@ wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, i
 
 Bad values are reported as one SpectraceError naming the file and the element path
 (`scene.xml: shape[2]/transform/translate@x`, docs/mitsuba.md "Bad input"). Anything else (another plugin type,
-textures, media, include) is reported in one error naming each unsupported plugin and its line; choices
+a texture where spectrace takes none, media, include) is reported in one error naming each unsupported plugin and its line; choices
 spectrace makes differently (the reconstruction filter, the sampler) are returned as notes. Parameters are
 documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
 """
