@@ -24,9 +24,9 @@ wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, i
 
 Bad values are reported as one SpectraceError naming the file and the element path
 (`scene.xml: shape[2]/transform/translate@x`, docs/mitsuba.md "Bad input"). Anything else (another plugin type,
-a texture where spectrace takes none, media, include) is reported in one error naming each unsupported plugin and its line; choices
-spectrace makes differently (the reconstruction filter, the sampler) are returned as notes. Parameters are
-documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
+a texture where spectrace takes none, media, include) is reported in one error naming each unsupported plugin and
+its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as notes.
+Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
 """
 
 from __future__ import annotations
