@@ -184,21 +184,6 @@ def test_textures_beyond_a_gibibyte_are_refused_before_conversion():
         build_scene_buffers(scene)
 
 
-def test_textured_materials_are_not_exported_to_mitsuba(tmp_path, mitsuba_scalar_spectral):
-    import spectrace
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
-    from spectrace.scene.model import Camera, Scene
-
-    scene = Scene(
-        camera=Camera(origin=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0)),
-        width=4,
-        height=4,
-        shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.bitmap(np.full((2, 2), 0.5))))],
-    )
-    with pytest.raises(SpectraceError, match="textured reflectance is not exported yet"):
-        scene_to_mitsuba_dict(scene, tmp_path)
-
-
 def test_spectra_listing_reads_checkerboard_sides_as_reflectances(tmp_path):
     """`spectrace spectra` lists a checkerboard's spectrum sides under their key paths, an rgb one uplifted as a
     reflectance (bounded by 1), not as an emission."""

@@ -32,6 +32,12 @@ RAW = Parameter(
     doc="use the code values as they are (data such as a roughness map) instead of decoding the sRGB curve",
 )
 PARAMETERS = (FILE, RAW, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
+MITSUBA_PLUGINS = ("bitmap",)
+# Mitsuba 3's bitmap filters and wraps, by the names both use; Mitsuba has no MIP mapping (no trilinear).
+MITSUBA_FILTERS = ("bilinear", "nearest")
+MITSUBA_WRAPS = ("repeat", "mirror", "clamp")
+# Properties that change how Mitsuba stores or accelerates the texture, not what it looks like.
+_MITSUBA_STORAGE = ("format", "accel")
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,3 +131,38 @@ def device_texels(texture: BitmapTexture, kind: str) -> tuple[int, int, list[np.
         return TEXEL_SCALAR, 1, levels
     rgb = [np.repeat(level, 3, axis=-1) if texture.channels == 1 else level for level in levels]
     return TEXEL_SIGMOID, 3, [texture_reflectance_coefficients(np.clip(level, 0.0, 1.0)) for level in rgb]
+
+
+def from_mitsuba(importer, texture, properties) -> dict | None:
+    """Mitsuba 3's `bitmap`: filename (relative to the XML), raw, filter_type, wrap_mode, to_uv."""
+    table: dict = {"type": NAME, "file": importer.input_file(importer.child(properties, "filename", texture))}
+    if "raw" in properties:
+        table["raw"] = importer.boolean(properties["raw"])
+    for key, options in (("wrap_mode", MITSUBA_WRAPS), ("filter_type", MITSUBA_FILTERS)):
+        if key in properties:
+            table[key.split("_")[0]] = importer.choice(properties[key], options)  # spectrace's wrap, filter
+    for key in properties:
+        if key not in ("filename", "raw", "wrap_mode", "filter_type", "to_uv", *_MITSUBA_STORAGE):
+            importer.unsupported_plugin(texture, f" with {key}")
+    placement = importer.uv_placement(texture, properties)
+    return None if placement is None else table | placement
+
+
+def to_mitsuba(texture: BitmapTexture, exporter) -> dict:
+    """A bitmap reading the texture's linear values from a float OpenEXR that the export writes: Mitsuba then reads
+    the very texels spectrace decoded (however the source image was encoded) and uplifts them in its spectral
+    variants by the same method (its table differs slightly)."""
+    if texture.placement.filter not in MITSUBA_FILTERS:
+        raise exporter.refuse(
+            f"texture '{texture.source}': filter '{texture.placement.filter}' (Mitsuba 3's bitmap has no MIP mapping)"
+        )
+    values = np.asarray(texture.values, np.float32)
+    path = exporter.write_linear_image(np.repeat(values, 3, axis=-1) if texture.channels == 1 else values)
+    return {
+        "type": "bitmap",
+        "filename": str(path),
+        "raw": False,
+        "filter_type": texture.placement.filter,
+        "wrap_mode": texture.placement.wrap,
+        "to_uv": exporter.uv_transform(texture.placement.uv_scale, texture.placement.uv_offset),
+    }

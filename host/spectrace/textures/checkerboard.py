@@ -22,6 +22,10 @@ PARAMETERS = (
     uv_scale(2.0),
     UV_OFFSET,
 )
+MITSUBA_PLUGINS = ("checkerboard",)
+# Mitsuba 3's checkerboard changes colour where frac(uv') crosses 1/2, uv' = to_uv(uv): twice as many squares per
+# unit of uv' as spectrace's squares per unit of st, so st = 2 uv'.
+MITSUBA_SQUARES_PER_UNIT = 2.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,3 +69,34 @@ def sides(texture: CheckerboardTexture) -> tuple:
 
 def is_spectrum(value) -> bool:
     return isinstance(value, Spectrum)
+
+
+def from_mitsuba(importer, texture, properties) -> dict | None:
+    """Mitsuba 3's `checkerboard`: color0 and color1 (Mitsuba's defaults, 0.4 and 0.2, are spectrace's), to_uv."""
+    table: dict = {"type": NAME}
+    for parameter in PARAMETERS[:2]:
+        key = parameter.name
+        side = importer.spectrum(properties[key], key) if key in properties else {"value": parameter.default}
+        if side is None:
+            return None
+        if "texture" in side and importer.texture_type(side["texture"]) == NAME:
+            importer.unsupported_plugin(importer.resolve(properties[key]), f" as {key} of a checkerboard")
+            return None
+        table[key] = side
+    for key in properties:
+        if key not in ("color0", "color1", "to_uv"):
+            importer.unsupported_plugin(texture, f" with {key}")
+    placement = importer.uv_placement(texture, properties, MITSUBA_SQUARES_PER_UNIT)
+    return None if placement is None else table | placement
+
+
+def to_mitsuba(texture: CheckerboardTexture, exporter) -> dict:
+    scale, offset = texture.placement.uv_scale, texture.placement.uv_offset
+    return {
+        "type": "checkerboard",
+        "color0": exporter.spectrum(texture.color0),
+        "color1": exporter.spectrum(texture.color1),
+        "to_uv": exporter.uv_transform(
+            [s / MITSUBA_SQUARES_PER_UNIT for s in scale], [o / MITSUBA_SQUARES_PER_UNIT for o in offset]
+        ),
+    }

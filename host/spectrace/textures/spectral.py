@@ -27,6 +27,10 @@ NAME = "spectral"
 PARAMETERS = (FILE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
 # More bands than the 1 nm grid has samples would add nothing the renderer can resolve.
 MAX_BANDS = 471
+MITSUBA_PLUGINS: tuple[str, ...] = ()
+MITSUBA_NONE = (
+    "Mitsuba 3 has no spectral image texture (its bitmap holds RGB, uplifted to spectra in its spectral variants)"
+)
 
 
 @dataclass(frozen=True, eq=False)
