@@ -18,7 +18,7 @@ It writes, next to itself:
 The metamers are the check's spectrum plus a "metameric black" b (CIE 1931 XYZ of b under D65 zero, in the
 renderer's colorimetry: linear interpolation between the bands, the 1 nm grid, trapezoid integrals), found by a
 linear programme (scipy's HiGHS) that pushes the colour under illuminant A as far as it can along one direction while
-the reflectance stays in [0.03, 0.95] and moves at most 0.15 between neighbouring bands (smooth, paint-like spectra).
+the reflectance stays in [0.02, 0.97] and moves at most 0.15 between neighbouring bands (smooth, paint-like spectra).
 It prints each pair's CIELAB Delta E (1976) under D65 and under A, each relative to its illuminant's white.
 """
 
