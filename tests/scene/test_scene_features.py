@@ -34,7 +34,9 @@ def _material_bits_named_in(name: str) -> int:
     return sum(MATERIAL_BITS[t] for t in types)
 
 
-@pytest.mark.parametrize("name", ["cornell_box", "material_showcase", "subsurface", "prism", "point_light_room"])
+@pytest.mark.parametrize(
+    "name", ["cornell_box", "material_showcase", "subsurface", "prism", "point_light_room", "teapot"]
+)
 def test_defines_name_the_materials_of_the_scene_file(name):
     defines = scene_feature_defines(build_scene_buffers(_bundled(name)))
     assert defines["SCENE_MATERIAL_TYPES"] == _material_bits_named_in(name)
