@@ -12,6 +12,7 @@
 #include "fresnel.cl"
 #include "microfacet.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 
 typedef struct {
     float4 eta;
@@ -25,14 +26,14 @@ inline int conductor_flags(__global const Material *m)
     return ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA;
 }
 
-inline ConductorParams conductor_params(__global const Material *m, __global const float *spectra,
+inline ConductorParams conductor_params(__global const Material *m, const SurfaceContext *sc,
                                         const SampledWavelengths *w)
 {
     ConductorParams p;
-    p.eta = spectrum_at(spectra, m->eta_offset, w);
-    p.k = spectrum_at(spectra, m->k_offset, w);
+    p.eta = spectrum_at(sc->buffers.spectra, m->eta_offset, w);
+    p.k = spectrum_at(sc->buffers.spectra, m->k_offset, w);
     p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM ? (float4)(1.0f)
-                                                           : spectrum_at(spectra, m->reflectance_offset, w);
+                                                           : spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
     p.alpha = m->alpha;
     return p;
 }

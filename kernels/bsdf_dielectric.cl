@@ -19,6 +19,7 @@
 #include "ior.cl"
 #include "microfacet.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 
 typedef struct {
     float3 wi;      /* local frame, unit */
@@ -194,14 +195,14 @@ inline int dielectric_flags(__global const Material *m)
          | (material_ior_is_dispersive(m) ? BSDF_DISPERSIVE : 0);
 }
 
-inline DielectricParams dielectric_params(__global const Material *m, __global const float *spectra,
+inline DielectricParams dielectric_params(__global const Material *m, const SurfaceContext *sc,
                                           const SampledWavelengths *w)
 {
     DielectricParams p;
     p.eta = material_ior(m, w->lambda.x);
     p.alpha = m->alpha;
     p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM ? (float4)(1.0f)
-                                                           : spectrum_at(spectra, m->reflectance_offset, w);
+                                                           : spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
     return p;
 }
 

@@ -2,13 +2,15 @@
  * outgoing direction, so both faces reflect and meshes work whatever their winding; Mitsuba 3 needs a `twosided`
  * wrapper for this). Every bsdf_*.cl file has the same shape: flags (bsdf_sample.cl) and params from the
  * Material, then eval (f·cos θi), pdf (solid angle) and sample(params, wo, uc, u, sample), uc choosing a lobe and u
- * a direction in it, all on local directions with wo.z ≥ 0; material.cl's MATERIAL_LIST names each file's prefix. */
+ * a direction in it, all on local directions with wo.z ≥ 0; material.cl's MATERIAL_LIST (generated
+ * from the host's registry of materials) names each file's prefix. */
 #ifndef SPECTRACE_BSDF_DIFFUSE_CL
 #define SPECTRACE_BSDF_DIFFUSE_CL
 
 #include "bsdf_sample.cl"
 #include "sampling.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 
 typedef struct {
     float4 reflectance;
@@ -19,11 +21,11 @@ inline int diffuse_flags(__global const Material *m)
     return BSDF_NON_DELTA;
 }
 
-inline DiffuseParams diffuse_params(__global const Material *m, __global const float *spectra,
+inline DiffuseParams diffuse_params(__global const Material *m, const SurfaceContext *sc,
                                     const SampledWavelengths *w)
 {
     DiffuseParams p;
-    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    p.reflectance = surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
     return p;
 }
 

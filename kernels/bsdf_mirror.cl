@@ -6,6 +6,7 @@
 #include "bsdf_sample.cl"
 #include "frame.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 
 typedef struct {
     float4 reflectance;
@@ -16,11 +17,11 @@ inline int mirror_flags(__global const Material *m)
     return BSDF_DELTA;
 }
 
-inline MirrorParams mirror_params(__global const Material *m, __global const float *spectra,
+inline MirrorParams mirror_params(__global const Material *m, const SurfaceContext *sc,
                                   const SampledWavelengths *w)
 {
     MirrorParams p;
-    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    p.reflectance = spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
     return p;
 }
 

@@ -22,6 +22,7 @@
 #include "fresnel.cl"
 #include "microfacet.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 
 #define PLASTIC_ROUGH_BASE_SCALE 0.998f
 
@@ -38,11 +39,11 @@ inline int plastic_flags(__global const Material *m)
     return ggx_is_smooth(m->alpha) ? BSDF_NON_DELTA | BSDF_DELTA : BSDF_NON_DELTA;
 }
 
-inline PlasticParams plastic_params(__global const Material *m, __global const float *spectra,
+inline PlasticParams plastic_params(__global const Material *m, const SurfaceContext *sc,
                                     const SampledWavelengths *w)
 {
     PlasticParams p;
-    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    p.reflectance = surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
     p.eta = m->ior;
     p.alpha = m->alpha;
     float s = ggx_is_smooth(m->alpha) ? 1.0f : PLASTIC_ROUGH_BASE_SCALE;

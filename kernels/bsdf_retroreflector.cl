@@ -11,6 +11,7 @@
 #include "frame.cl"
 #include "microfacet.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 
 typedef struct {
     float4 reflectance;
@@ -22,11 +23,11 @@ inline int retroreflector_flags(__global const Material *m)
     return ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA;
 }
 
-inline RetroreflectorParams retroreflector_params(__global const Material *m, __global const float *spectra,
+inline RetroreflectorParams retroreflector_params(__global const Material *m, const SurfaceContext *sc,
                                                   const SampledWavelengths *w)
 {
     RetroreflectorParams p;
-    p.reflectance = spectrum_at(spectra, m->reflectance_offset, w);
+    p.reflectance = spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
     p.alpha = m->alpha;
     return p;
 }

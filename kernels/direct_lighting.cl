@@ -28,13 +28,14 @@ inline int sample_one_light(const Scene *scene, const SampledWavelengths *w, Sam
  * follows the shading normal, the shadow ray leaves by the geometric one (shading_normal.cl). */
 inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
                                     float3 n_geometric, float3 n_shading, float3 wo,
-                                    __global const Material *material, int use_mis, uint *rays_traced)
+                                    __global const Material *material, const SurfaceContext *sc, int use_mis,
+                                    uint *rays_traced)
 {
     __global const Light *light;
     LightSample ls;
     if (!sample_one_light(scene, w, sampler, p, &light, &ls)) return (float4)(0.0f);
     if (!shading_side_agrees(n_geometric, n_shading, ls.wi)) return (float4)(0.0f);
-    float4 f_cos = material_eval(material, scene->spectra, w, n_shading, wo, ls.wi);
+    float4 f_cos = material_eval(material, sc, w, n_shading, wo, ls.wi);
     if (all(f_cos == (float4)(0.0f))) return (float4)(0.0f);
 
     float3 from = offset_ray_origin(p, n_geometric, ls.wi);
@@ -47,7 +48,7 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
 
     float weight = 1.0f;
     if (use_mis && !ls.is_delta) {
-        weight = power_heuristic(ls.pdf, material_pdf(material, scene->spectra, w, n_shading, wo, ls.wi));
+        weight = power_heuristic(ls.pdf, material_pdf(material, sc, w, n_shading, wo, ls.wi));
     }
     return f_cos * ls.arriving * transmittance * (weight / ls.pdf);
 }

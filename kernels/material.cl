@@ -1,49 +1,41 @@
 /* Material dispatch: the integrators see every BSDF through the functions below, in world space. Each BSDF lives
  * in its own bsdf_<name>.cl and works in the local shading frame (frame.cl) with the same five functions:
- * <name>_flags (what its lobes are, bsdf_sample.cl), <name>_params (its inputs at the path's wavelengths),
- * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. Adding a BSDF: that file, its code in
- * spectrace.engine.device_types.MATERIAL_TYPES, and its line in MATERIAL_LIST. docs/materials.md describes each
- * model. */
+ * <name>_flags (what its lobes are, bsdf_sample.cl), <name>_params (its inputs at the path's wavelengths, looked
+ * up in the spectrum table or, for textured parameters, the textures at the surface point: texture.cl's
+ * SurfaceContext),
+ * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. The list of BSDFs is not kept here: the host writes
+ * material_list.h from its registry (spectrace.materials.MATERIALS) for every build, with each bsdf_<name>.cl
+ * included and MATERIAL_LIST, and defines each MATERIAL_<NAME> code. Adding a BSDF: that file and its host module
+ * (docs/materials.md, "Adding a BSDF"); nothing here changes. docs/materials.md describes each model. */
 #ifndef SPECTRACE_MATERIAL_CL
 #define SPECTRACE_MATERIAL_CL
 
 #include "types.h"
 #include "frame.cl"
 #include "spectrum.cl"
+#include "texture.cl"
 #include "bsdf_sample.cl"
-#include "bsdf_diffuse.cl"
-#include "bsdf_mirror.cl"
-#include "bsdf_conductor.cl"
-#include "bsdf_plastic.cl"
-#include "bsdf_retroreflector.cl"
-#include "bsdf_dielectric.cl"
+#include "material_list.h"
 
-/* Every BSDF: its Material.type code, the prefix of its functions and its params struct. Each dispatch below is
- * this list expanded, one test per type; a type the scene lacks tests as a constant 0 (MATERIAL_IS,
- * scene_features.h), so its code is not compiled in, and a scene of one type dispatches without a test. */
-#define MATERIAL_LIST(X)                                          \
-    X(MATERIAL_DIFFUSE, diffuse, DiffuseParams)                   \
-    X(MATERIAL_CONDUCTOR, conductor, ConductorParams)             \
-    X(MATERIAL_MIRROR, mirror, MirrorParams)                      \
-    X(MATERIAL_PLASTIC, plastic, PlasticParams)                   \
-    X(MATERIAL_DIELECTRIC, dielectric, DielectricParams)          \
-    X(MATERIAL_RETROREFLECTOR, retroreflector, RetroreflectorParams)
-
+/* MATERIAL_LIST(X) (material_list.h) holds X(code, name, Params) for every BSDF: its Material.type code, the prefix
+ * of its functions and its params struct. Each dispatch below is this list expanded, one test per type; a type the
+ * scene lacks tests as a constant 0 (MATERIAL_IS, scene_features.h), so its code is not compiled in, and a scene of
+ * one type dispatches without a test. */
 #define MATERIAL_FLAGS_CASE(type, name, Params) \
     if (MATERIAL_IS(m, type)) return name##_flags(m);
 #define MATERIAL_EVAL_CASE(type, name, Params)          \
     if (MATERIAL_IS(m, type)) {                         \
-        Params p = name##_params(m, spectra, w);        \
+        Params p = name##_params(m, sc, w);            \
         return name##_eval(&p, wo, wi);                 \
     }
 #define MATERIAL_PDF_CASE(type, name, Params)           \
     if (MATERIAL_IS(m, type)) {                         \
-        Params p = name##_params(m, spectra, w);        \
+        Params p = name##_params(m, sc, w);            \
         return name##_pdf(&p, wo, wi);                  \
     }
 #define MATERIAL_SAMPLE_CASE(type, name, Params)        \
     if (MATERIAL_IS(m, type)) {                         \
-        Params p = name##_params(m, spectra, w);        \
+        Params p = name##_params(m, sc, w);            \
         return name##_sample(&p, wo, uc, u, s);         \
     }
 
@@ -70,7 +62,7 @@ inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 
 }
 
 /* f(wo, wi)·|cos θi| per wavelength, local directions. */
-inline float4 material_eval_local(__global const Material *m, __global const float *spectra,
+inline float4 material_eval_local(__global const Material *m, const SurfaceContext *sc,
                                   const SampledWavelengths *w, float3 wo, float3 wi)
 {
     MATERIAL_LIST(MATERIAL_EVAL_CASE)
@@ -78,7 +70,7 @@ inline float4 material_eval_local(__global const Material *m, __global const flo
 }
 
 /* Solid-angle pdf with which material_sample_local proposes wi (delta lobes contribute nothing). */
-inline float material_pdf_local(__global const Material *m, __global const float *spectra,
+inline float material_pdf_local(__global const Material *m, const SurfaceContext *sc,
                                 const SampledWavelengths *w, float3 wo, float3 wi)
 {
     MATERIAL_LIST(MATERIAL_PDF_CASE)
@@ -86,7 +78,7 @@ inline float material_pdf_local(__global const Material *m, __global const float
 }
 
 /* uc picks a lobe, u samples within it. Returns 0 when no direction was produced. */
-inline int material_sample_local(__global const Material *m, __global const float *spectra,
+inline int material_sample_local(__global const Material *m, const SurfaceContext *sc,
                                  const SampledWavelengths *w, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     MATERIAL_LIST(MATERIAL_SAMPLE_CASE)
@@ -107,25 +99,25 @@ inline int material_disperses(__global const Material *m, const SampledWavelengt
     return (material_flags(m) & BSDF_DISPERSIVE) && wavelengths_differ(w);
 }
 
-inline float4 material_eval(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
+inline float4 material_eval(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                             float3 n, float3 wo, float3 wi)
 {
     ShadingFrame frame = material_frame(m, n, wo);
-    return material_eval_local(m, spectra, w, to_local(&frame, wo), to_local(&frame, wi));
+    return material_eval_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
 }
 
-inline float material_pdf(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
+inline float material_pdf(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                           float3 n, float3 wo, float3 wi)
 {
     ShadingFrame frame = material_frame(m, n, wo);
-    return material_pdf_local(m, spectra, w, to_local(&frame, wo), to_local(&frame, wi));
+    return material_pdf_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
 }
 
-inline int material_sample(__global const Material *m, __global const float *spectra, const SampledWavelengths *w,
+inline int material_sample(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                            float3 n, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     ShadingFrame frame = material_frame(m, n, wo);
-    if (!material_sample_local(m, spectra, w, to_local(&frame, wo), uc, u, s)) return 0;
+    if (!material_sample_local(m, sc, w, to_local(&frame, wo), uc, u, s)) return 0;
     s->wi = to_world(&frame, s->wi);
     return 1;
 }

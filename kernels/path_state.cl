@@ -50,6 +50,8 @@ typedef struct {
     float3 n;   /* geometric normal (the winding's front): sides, ray offsets, media, emission */
     float3 ns;  /* shading normal, the BSDF's frame: n itself on a flat triangle (shading_normal.cl) */
     float3 wo;  /* back along the ray */
+    float2 uv;  /* texture coordinates (only in scenes with material textures) */
+    float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; with the uv) */
 } PathVertex;
 
 inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
@@ -60,6 +62,12 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     v.n = triangle_normal(scene->triangle_vertices, hit.triangle);
     v.wo = -ray.direction;
     v.ns = v.info.normals < 0 ? v.n : shading_normal(scene, v.info.normals, hit.b12, v.n, v.wo);
+    v.uv = (float2)(0.0f);
+    v.footprint = 0.0f;
+    if (SCENE_HAS_TEXTURES) {
+        v.uv = triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
+        v.footprint = camera_footprint(scene, hit.triangle, v.p, v.n);
+    }
     return v;
 }
 
@@ -90,7 +98,8 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
 {
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
-        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material,
+        SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
                                                            use_mis, rays_traced);
     }
 }
@@ -106,7 +115,8 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
-    return material_sample(material, scene->spectra, w, v->ns, v->wo, uc, u, bs)
+    SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+    return material_sample(material, &sc, w, v->ns, v->wo, uc, u, bs)
         && shading_side_agrees(v->n, v->ns, bs->wi);
 }
 

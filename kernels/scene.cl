@@ -6,6 +6,7 @@
 #include "bvh.cl"
 #include "lights.cl"
 #include "medium.cl"
+#include "texture.cl"
 
 typedef struct {
     __global const RenderParams *params;
@@ -21,6 +22,7 @@ typedef struct {
     __global const float4 *texels;  /* images of environment maps and textured emitters (a dummy texel if none) */
     __global const float *map_cdf;
     __global const Medium *media;
+    __global const Texture *textures;  /* material textures, whose texels share `texels` (a dummy row if none) */
 } Scene;
 
 /* The parameters every scene kernel starts with: the render's parameters, then the scene's buffers in the order
@@ -31,15 +33,63 @@ typedef struct {
         __global const float2 *triangle_uvs, __global const float4 *triangle_normals,                             \
         __global const TriangleInfo *triangle_info, __global const Material *materials,                           \
         __global const Light *lights, __global const float *light_cdf, __global const float *spectra,             \
-        __global const float4 *texels, __global const float *map_cdf, __global const Medium *media
+        __global const float4 *texels, __global const float *map_cdf, __global const Medium *media,                \
+        __global const Texture *textures
 #define SCENE_FROM_KERNEL_PARAMS                                                                                   \
     {params, nodes, triangle_vertices, triangle_uvs, triangle_normals, triangle_info, materials, lights,           \
-     light_cdf, spectra, texels, map_cdf, media}
+     light_cdf, spectra, texels, map_cdf, media, textures}
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
     LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf};
     return b;
+}
+
+/* The lookups of a surface point's material parameters at texture coordinates uv with a footprint (texture.cl). */
+inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footprint)
+{
+    SurfaceContext sc;
+    sc.buffers.textures = scene->textures;
+    sc.buffers.texels = (__global const float *)scene->texels;
+    sc.buffers.spectra = scene->spectra;
+    sc.uv = uv;
+    sc.footprint = footprint;
+    return sc;
+}
+
+/* The texture footprint at point p of a triangle (normal n): how far uv moves between neighbouring pixels, estimated
+ * from the camera as pbrt-v4 does for every intersection (Pharr, Jakob & Humphreys, 4th ed., 10.1.3,
+ * Camera::Approximate_dp_dxy): the rays through p and through the points one pixel to the right and down, met
+ * with the tangent plane at p, give dp/dx and dp/dy; the triangle's positions and uvs map them to du/dx ... dv/dy;
+ * the footprint is 2 max(|du/dx|, |dv/dx|, |du/dy|, |dv/dy|) (a filter spans a pixel on either side). After
+ * reflections this is the camera's view of p, not the path's: an approximation that blurs no less than a primary
+ * hit would. 0 (the finest level) where it cannot be formed: behind the camera, or a degenerate triangle. */
+inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3 n)
+{
+    __global const RenderParams *camera = scene->params;
+    float3 origin = camera->camera_origin.xyz;
+    float3 to_p = p - origin;
+    float depth = dot(to_p, camera->camera_forward.xyz);
+    if (!(depth > 0.0f)) return 0.0f;
+    float3 d = to_p / depth;  /* the camera ray's direction with unit forward part, as camera.cl forms it */
+    float3 dx = d + camera->camera_right.xyz * (2.0f / (float)camera->width);
+    float3 dy = d + camera->camera_up.xyz * (2.0f / (float)camera->height);
+    float plane = dot(n, to_p);
+    float3 dpdx = origin + dx * (plane / dot(n, dx)) - p;
+    float3 dpdy = origin + dy * (plane / dot(n, dy)) - p;
+    /* p = v0 + a e1 + b e2 and uv = t0 + a d1 + b d2: an offset in the plane has (a, b) from the Gram system. */
+    __global const float4 *v = scene->triangle_vertices + 3 * triangle;
+    __global const float2 *t = scene->triangle_uvs + 3 * triangle;
+    float3 e1 = v[1].xyz - v[0].xyz, e2 = v[2].xyz - v[0].xyz;
+    float2 d1 = t[1] - t[0], d2 = t[2] - t[0];
+    float g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
+    float det = g11 * g22 - g12 * g12;
+    if (!(det > 0.0f)) return 0.0f;
+    float ax = (g22 * dot(e1, dpdx) - g12 * dot(e2, dpdx)) / det, bx = (g11 * dot(e2, dpdx) - g12 * dot(e1, dpdx)) / det;
+    float ay = (g22 * dot(e1, dpdy) - g12 * dot(e2, dpdy)) / det, by = (g11 * dot(e2, dpdy) - g12 * dot(e1, dpdy)) / det;
+    float2 duv_dx = ax * d1 + bx * d2, duv_dy = ay * d1 + by * d2;
+    float width = 2.0f * fmax(fmax(fabs(duv_dx.x), fabs(duv_dx.y)), fmax(fabs(duv_dy.x), fabs(duv_dy.y)));
+    return isfinite(width) ? width : 0.0f;
 }
 
 /* The closest surface along the ray (none in a scene without triangles). */

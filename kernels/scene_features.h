@@ -23,6 +23,11 @@
 #define SCENE_HAS_LIGHT_IMAGES 1
 #endif
 
+/* Material textures (kernels/texture.cl). */
+#ifndef SCENE_HAS_TEXTURES
+#define SCENE_HAS_TEXTURES 1
+#endif
+
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 #define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
 #define SCENE_HAS_ENVIRONMENT (SCENE_USES_LIGHT(LIGHT_ENVIRONMENT) || SCENE_USES_LIGHT(LIGHT_ENVIRONMENT_MAP))

@@ -67,8 +67,30 @@ typedef struct {
     float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe) */
     int ior_model;              /* IOR_*: dielectric interior, plastic coating */
     float ior;                  /* IOR_CONSTANT: interior index relative to the exterior */
-    int pad0;
+    int reflectance_texture;    /* diffuse, plastic: index into the texture array that replaces reflectance_offset,
+                                   or NO_TEXTURE */
 } Material;
+
+/* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the
+ * texel buffer, `channels` per texel, rows top to bottom; its MIP levels follow level 0 there, level l being
+ * max(1, width >> l) by max(1, height >> l) texels. */
+typedef struct {
+    float4 uv_transform;  /* the lookup point st = uv · (x, y) + (z, w): uv_scale, then uv_offset (image widths) */
+    int type;             /* TEXTURE_* */
+    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral) */
+    int channels;         /* floats per texel: 3, 1, or the band count */
+    int width;            /* level 0, texels */
+    int height;
+    int levels;           /* MIP levels (1: level 0 only) */
+    int data_offset;      /* first float of level 0 in the texel buffer */
+    int wrap;             /* WRAP_* */
+    int filter;           /* FILTER_* */
+    float band_first_nm;  /* TEXEL_BANDS: centre wavelength of band 0, nm */
+    float band_step_nm;   /* TEXEL_BANDS: spacing of the band centres, nm */
+    int side_spectrum[2]; /* TEXTURE_CHECKERBOARD: each side's spectrum offset, used when side_texture is NO_TEXTURE */
+    int side_texture[2];  /* TEXTURE_CHECKERBOARD: each side's texture (never a checkerboard), or NO_TEXTURE */
+    int pad0;
+} Texture;
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
  * type (listed with LIGHT_TYPES in spectrace.engine.device_types). */

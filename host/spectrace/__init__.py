@@ -14,32 +14,30 @@ docs/python-api.md shows how.
 
 from spectrace.cache_folder import ensure_usable_cache_folder
 from spectrace.lazy_names import lazy_names
-from spectrace.scene import MODEL_NAMES
+from spectrace.scene import MODEL_NAMES, material_model_names
 
 # Before anything else: matplotlib (through colour) and, later, PoCL and pyopencl set up caches under it.
 ensure_usable_cache_folder()
 
 # The names below load on first use (PEP 562), so that `spectrace --help` and `import spectrace.cli` do not pay for
-# colour-science, SciPy and the OpenCL host code. Where each name lives:
+# colour-science, SciPy and the OpenCL host code. Where each name lives (the materials' names: _registry_names):
 _LAZY = {
     **dict.fromkeys(
         [
             "area_emitter",
-            "conductor",
+            "bitmap",
+            "checkerboard",
             "constant_environment",
-            "dielectric",
-            "diffuse",
+            "spectral_texture",
             "distant_light",
             "medium",
             "mesh_from_trimesh",
-            "mirror",
-            "plastic",
             "point_light",
             "render",
-            "retroreflector",
             "rgb_emission",
             "rgb_reflectance",
             "shape",
+            "spectral_texture",
             "spectrum",
             "spot_light",
             "transformed",
@@ -55,37 +53,42 @@ _LAZY = {
 }
 
 
-__getattr__, __dir__ = lazy_names(__name__, _LAZY)
+def _registry_names() -> dict[str, str]:
+    """Names that come from the materials' registry: each material's constructor (`spectrace.diffuse`, ...: its
+    module's `make`, which spectrace.api exposes) and its dataclass."""
+    from spectrace.materials import MATERIALS
+
+    return dict.fromkeys(MATERIALS, "spectrace.api") | material_model_names()
+
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "load_scene",
-    "render",
-    "Image",
-    *MODEL_NAMES,
-    "SpectraceError",
-    "Spectrum",
-    "spectrum",
-    "rgb_reflectance",
-    "rgb_emission",
-    "mesh_from_trimesh",
-    "transformed",
-    "shape",
-    "diffuse",
-    "medium",
-    "mirror",
-    "conductor",
-    "plastic",
-    "retroreflector",
-    "dielectric",
-    "area_emitter",
-    "point_light",
-    "spot_light",
-    "distant_light",
-    "constant_environment",
-    "ColourSpace",
-    "Adaptation",
-    "WhiteBalance",
-    "parse_white_balance",
-]
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    _LAZY,
+    _registry_names,
+    public=[
+        "load_scene",
+        "render",
+        "Image",
+        *MODEL_NAMES,
+        "SpectraceError",
+        "Spectrum",
+        "spectrum",
+        "rgb_reflectance",
+        "rgb_emission",
+        "mesh_from_trimesh",
+        "transformed",
+        "shape",
+        "medium",
+        "area_emitter",
+        "point_light",
+        "spot_light",
+        "distant_light",
+        "constant_environment",
+        "ColourSpace",
+        "Adaptation",
+        "WhiteBalance",
+        "parse_white_balance",
+    ],
+)

@@ -11,7 +11,7 @@ import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import contextmanager
 from numbers import Real
-from typing import TYPE_CHECKING, Any, Literal, Union, cast
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
@@ -26,25 +26,19 @@ from spectrace.image import Image
 from spectrace.lights.base import unit_direction
 from spectrace.scene.model import (
     AreaEmitter,
-    ConductorMaterial,
     ConstantEnvironment,
-    DielectricMaterial,
-    DiffuseMaterial,
     DistantLight,
     Medium,
-    MirrorMaterial,
-    PlasticMaterial,
     PointLight,
-    RetroreflectorMaterial,
     Scene,
     Shape,
     SpotLight,
 )
-from spectrace.spectral.grid import GRID_NM
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike, rgb_emission, rgb_reflectance, spectrum  # noqa: F401
 
 if TYPE_CHECKING:
-    import colour
     import rich.console
     import trimesh
 
@@ -52,95 +46,68 @@ if TYPE_CHECKING:
     from spectrace.engine.checkpoint import PeriodicCheckpoints
     from spectrace.engine.meters import MeterReading
 
-# What `spectrum` accepts: a Spectrum; a colour-science SpectralDistribution; a constant; a library name
-# ("cie:D65", "cornell_box/light"); (wavelengths_nm, values) arrays; an (N, 2) array or [[λ, v], ...] pairs;
-# a {wavelength_nm: value} mapping; or 471 values on the renderer's 360..830 nm, 1 nm grid.
-SpectrumLike = Union[Spectrum, "colour.SpectralDistribution", float, str, Sequence, np.ndarray, Mapping]  # noqa: UP007 (a quoted member)
 ProgressOption = bool | Literal["auto"] | Callable[[int, int], None] | None
 
 
 # ---------------------------------------------------------------- spectra
 
 
-def spectrum(source: SpectrumLike, scale: float = 1.0, name: str | None = None) -> Spectrum:
-    """A `Spectrum` on the renderer's grid from any of the forms in `SpectrumLike`, times `scale`.
-
-    Tabulated data are joined linearly and their end values held outside their range, as in scene files.
-    """
-    result = _spectrum_unscaled(source, name)
-    if not isinstance(scale, Real) or not math.isfinite(scale) or scale < 0:
-        raise SpectraceError(f"scale must be a finite number >= 0, got {scale!r}", where=name)
-    return result if scale == 1.0 else result.scaled(float(scale))
-
-
-def _spectrum_unscaled(source: SpectrumLike, name: str | None) -> Spectrum:
-    from spectrace.spectral.spectrum_io import library_spectrum, parse_inline_spectrum, spectrum_from_colour
-
-    label = name or "spectrum"
-    if isinstance(source, Spectrum):
-        return source if name is None else source.scaled(1.0, name=name)
-    if type(source).__name__ == "SpectralDistribution":
-        return spectrum_from_colour(cast("colour.SpectralDistribution", source), name=name)
-    if isinstance(source, Real) and not isinstance(source, bool):
-        return Spectrum.constant(float(source), name=name or "")
-    if isinstance(source, str):
-        return library_spectrum(source) if name is None else library_spectrum(source).scaled(1.0, name=name)
-    if isinstance(source, Mapping):
-        return parse_inline_spectrum({str(k): v for k, v in source.items()}, where=label, name=name)
-    if isinstance(source, tuple) and len(source) == 2 and all(np.ndim(part) == 1 for part in source):
-        wavelengths, values = (np.asarray(part, np.float64) for part in source)
-        if wavelengths.shape != values.shape:
-            raise SpectraceError(
-                f"wavelengths ({wavelengths.size}) and values ({values.size}) differ in length", where=label
-            )
-        return parse_inline_spectrum(np.stack([wavelengths, values], axis=1).tolist(), where=label, name=name)
-    array = np.asarray(source, np.float64) if isinstance(source, (Sequence, np.ndarray)) else None
-    if array is not None and array.shape == GRID_NM.shape:
-        return Spectrum(array, name=name or "", source="array on the 360..830 nm grid")
-    if array is not None and array.ndim == 2 and array.shape[1] == 2:
-        return parse_inline_spectrum(array.tolist(), where=label, name=name)
-    raise SpectraceError(
-        f"cannot make a spectrum from {type(source).__name__}: give a Spectrum, a colour.SpectralDistribution, a "
-        "number, a library name, (wavelengths_nm, values), [[wavelength_nm, value], ...], a {wavelength_nm: value} "
-        f"mapping or {GRID_NM.size} values on the 360..830 nm grid",
-        where=label,
-    )
-
-
-def rgb_reflectance(rgb: Sequence[float]) -> Spectrum:
-    """A smooth reflectance in [0, 1] whose colour under D65 is the linear sRGB triple (Jakob & Hanika 2019), as
-    `{ rgb = [...] }` for a material in a scene file."""
-    from spectrace.spectral.uplift import uplift_reflectance
-
-    return uplift_reflectance(rgb)[0]
-
-
-def rgb_emission(rgb: Sequence[float], scale: float = 1.0) -> Spectrum:
-    """A D65-based emission spectrum whose linear sRGB is `rgb` x `scale` ((1, 1, 1) = D65 with film Y = 1), in
-    W/(m² sr nm), as `{ rgb = [...] }` for a radiance in a scene file."""
-    from spectrace.spectral.uplift import uplift_illuminant
-
-    return uplift_illuminant(rgb, scale=scale)
-
-
 def _reflectance(source: SpectrumLike, what: str) -> Spectrum:
-    if isinstance(source, (tuple, list)) and len(source) == 3 and all(isinstance(c, Real) for c in source):
-        return rgb_reflectance(source)
-    result = spectrum(source)
-    if result.min() < 0 or result.max() > 1.0 + 1e-6:
-        raise SpectraceError(
-            f"a reflectance must lie in [0, 1], got {result.min():.4g}..{result.max():.4g}", where=what
-        )
-    return result
+    return spectrum_input.reflectance(source, what)
+
+
+def bitmap(
+    source,
+    *,
+    srgb: bool | None = None,
+    raw: bool = False,
+    wrap: str = "repeat",
+    filter: str = "bilinear",
+    uv_scale: float | tuple[float, float] = 1.0,
+    uv_offset: tuple[float, float] = (0.0, 0.0),
+):
+    """An image texture (docs/textures.md) for a textured parameter such as a diffuse or plastic `reflectance`: a
+    file path (PNG, JPEG, TIFF, OpenEXR; integer-coded files are sRGB-decoded unless raw), a numpy array (H, W),
+    (H, W, 1) or (H, W, 3) of linear values (srgb=True: sRGB-encoded values in [0, 1]), or a PIL image (decoded
+    from sRGB unless raw). st = uv · uv_scale + uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest",
+    "bilinear" or "trilinear"."""
+    from spectrace.textures import bitmap as module
+
+    return module.make(source, srgb=srgb, raw=raw, wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
+
+
+def spectral_texture(
+    source,
+    wavelengths_nm=None,
+    *,
+    wrap: str = "repeat",
+    filter: str = "bilinear",
+    uv_scale: float | tuple[float, float] = 1.0,
+    uv_offset: tuple[float, float] = (0.0, 0.0),
+):
+    """A spectral texture: a spectral OpenEXR file (S0.<λ>nm channels, as spectrace writes them) or an array
+    (H, W, bands) with the bands' wavelengths in nm; each texel's spectrum is interpolated at the path's
+    wavelengths, with no RGB round trip (docs/textures.md)."""
+    from spectrace.textures import spectral
+
+    return spectral.make(source, wavelengths_nm, wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
+
+
+def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)):
+    """Squares of color0 and color1 (reflectances: anything `spectrum` takes, an RGB triple, or an image texture)
+    over the texture coordinates: color0 where floor(s) + floor(t) is even, st = uv · uv_scale + uv_offset."""
+    from spectrace.textures import IMAGE_TEXTURES
+    from spectrace.textures import checkerboard as module
+
+    sides = [
+        side if isinstance(side, IMAGE_TEXTURES) else _reflectance(side, name)
+        for side, name in ((color0, "color0"), (color1, "color1"))
+    ]
+    return module.make(sides[0], sides[1], uv_scale=uv_scale, uv_offset=uv_offset)
 
 
 def _emission(source: SpectrumLike, what: str) -> Spectrum:
-    if isinstance(source, (tuple, list)) and len(source) == 3 and all(isinstance(c, Real) for c in source):
-        return rgb_emission(source)
-    result = spectrum(source)
-    if result.min() < 0:
-        raise SpectraceError(f"an emission spectrum must not be negative (min {result.min():.4g})", where=what)
-    return result
+    return spectrum_input.emission(source, what)
 
 
 # ---------------------------------------------------------------- geometry
@@ -172,80 +139,9 @@ def transformed(mesh: TriangleMesh, steps: Iterable[Mapping[str, Any]]) -> Trian
 # ---------------------------------------------------------------- scene objects
 
 
-def diffuse(reflectance: SpectrumLike) -> DiffuseMaterial:
-    """Lambertian material, f = R(λ)/π, reflecting on both faces; `reflectance` in [0, 1] (a linear sRGB triple is
-    uplifted)."""
-    return materials.diffuse.make(_reflectance(reflectance, "reflectance"))
-
-
-def mirror(reflectance: SpectrumLike = materials.mirror.PARAMETERS[0].number_default) -> MirrorMaterial:
-    """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1), on both faces."""
-    return materials.mirror.make(_reflectance(reflectance, "reflectance"))
-
-
-def _optical_constant(source: SpectrumLike, what: str, positive: bool) -> Spectrum:
-    result = spectrum(source)
-    if result.min() < 0 or (positive and not result.min() > 0):
-        raise SpectraceError(
-            f"must be {'> 0' if positive else '>= 0'} at every wavelength (min {result.min():.4g})", where=what
-        )
-    return result
-
-
-def conductor(
-    metal: str | None = None,
-    *,
-    eta: SpectrumLike | None = None,
-    k: SpectrumLike | None = None,
-    roughness: float = materials.conductor.ROUGHNESS.number_default,
-    specular_tint: SpectrumLike | None = None,
-) -> ConductorMaterial:
-    """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
-    index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
-    mirror-like metal); `specular_tint` (a reflectance) multiplies the Fresnel term."""
-    from spectrace.spectral.metals import metal_ior
-
-    if problem := materials.conductor.source_problem(metal, eta, k):
-        raise SpectraceError(problem)
-    if metal is not None:
-        eta_spectrum, k_spectrum = metal_ior(metal, where="metal")
-    else:
-        assert eta is not None and k is not None  # source_problem has refused every other combination
-        eta_spectrum, k_spectrum = _optical_constant(eta, "eta", True), _optical_constant(k, "k", False)
-    tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
-    return materials.conductor.make(eta_spectrum, k_spectrum, roughness=roughness, specular_tint=tint)
-
-
-def plastic(
-    reflectance: SpectrumLike,
-    ior: float = materials.plastic.IOR.number_default,
-    roughness: float = materials.plastic.ROUGHNESS.number_default,
-) -> PlasticMaterial:
-    """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
-    smooth or GGX-rough (`roughness` = α)."""
-    return materials.plastic.make(_reflectance(reflectance, "reflectance"), ior=ior, roughness=roughness)
-
-
-def retroreflector(
-    reflectance: SpectrumLike = materials.retroreflector.PARAMETERS[0].number_default,
-    roughness: float = materials.retroreflector.ROUGHNESS.number_default,
-) -> RetroreflectorMaterial:
-    """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
-    incident direction, scaled by `reflectance`."""
-    return materials.retroreflector.make(_reflectance(reflectance, "reflectance"), roughness=roughness)
-
-
-def dielectric(
-    ior: float | str | dict = materials.dielectric.IOR.number_default,
-    roughness: float = materials.dielectric.ROUGHNESS.number_default,
-    specular_tint: SpectrumLike | None = None,
-) -> DielectricMaterial:
-    """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
-    exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
-    C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
-    face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance) multiplies both lobes."""
-    tint = _reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
-    return materials.dielectric.make(ior, roughness=roughness, specular_tint=tint)
+# One constructor per material, `spectrace.<type>(...)`: its module's `make`, which takes the parameters of its
+# table with their defaults (docs/scene-format.md) and spectra in any SpectrumLike form.
+globals().update({name: module.make for name, module in materials.MATERIALS.items()})
 
 
 def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
@@ -278,12 +174,10 @@ def medium(
         return Medium(sigma_a=sigma_a_spectrum, sigma_s=sigma_s_spectrum, g=float(g), name=preset)
 
     def coefficient(source: SpectrumLike, what: str) -> Spectrum:
-        if isinstance(source, (tuple, list)) and len(source) == 3 and all(isinstance(c, Real) for c in source):
-            result = coefficient_spectrum(source, name=what, where=what)
+        if spectrum_input.is_rgb(source):
+            result = coefficient_spectrum(cast("Sequence[float]", source), name=what, where=what)
         else:
-            result = spectrum(source)
-        if result.min() < 0:
-            raise SpectraceError(f"a medium coefficient must not be negative (min {result.min():.4g})", where=what)
+            result = spectrum_input.within_bounds(spectrum(source), True, what)
         return result.scaled(float(scale))
 
     return Medium(sigma_a=coefficient(sigma_a, "sigma_a"), sigma_s=coefficient(sigma_s, "sigma_s"), g=float(g))

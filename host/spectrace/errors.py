@@ -1,15 +1,13 @@
 """The project's own error type: every user-facing failure is one of these, shown as one line."""
 
-import re
-
-# Line breaks and other control characters (in a file name, say) would split the line or move the cursor: the C0
-# and C1 controls (NEL, U+0085, is a line break to Python and many terminals) and the Unicode line separators.
-_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
-
 
 def one_line(text: str) -> str:
-    """`text` with control characters written as escapes (a newline as \\n), so it prints as one line."""
-    return _CONTROL.sub(lambda match: repr(match.group())[1:-1], text)
+    """`text` with every character Python does not count as printable written as an escape (a newline as \\n), so
+    it prints as one line: line breaks and other controls (in a file name, say) would split the line or move the
+    cursor (NEL, U+0085, and the Unicode line separators break lines too), and invisible ones would hide."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 class SpectraceError(Exception):

@@ -35,18 +35,23 @@ def resolve_scene_path(scene: "str | Path") -> Path:
     """A scene argument as a file: the path itself when it exists, else, for a bare name such as `cornell_box`
     or `cornell_box.toml`, the bundled scene of that name, so that the bundled scenes load from any folder.
     A bare name that is neither raises SpectraceError listing the bundled scenes; a missing path is returned
-    as it is, for the loader to report."""
+    as it is, for the loader to report. A folder of that name does not hide the scene: a scene's meshes and
+    textures live in a folder named after it (scenes/teapot/ beside scenes/teapot.toml)."""
     from spectrace.errors import SpectraceError
 
     path = Path(scene)
-    if path.exists() or path.parent != Path(".") or str(path) in ("", "."):
+    if path.is_file() or path.parent != Path(".") or str(path) in ("", "."):
         return path
+    if path.exists() and not path.is_dir():
+        return path  # a pipe or device: the loader refuses it, naming it
     name = path.name if path.suffix else f"{path.name}.toml"
     if Path(name).is_file():
         return Path(name)
     bundled = scenes_dir() / name
     if path.suffix.lower() in ("", ".toml") and bundled.is_file():
         return bundled
+    if path.is_dir():
+        return path  # for the loader's "is a folder, not a file"
     raise SpectraceError(
         f"no such scene file, and no bundled scene of that name (bundled: {', '.join(bundled_scene_names())})",
         where=str(scene),

@@ -18,22 +18,22 @@ from spectrace.engine.renderer import Renderer
 from spectrace.geometry import primitives
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform, transform_matrix
+from spectrace.materials.conductor import ConductorMaterial
+from spectrace.materials.dielectric import DielectricMaterial
+from spectrace.materials.diffuse import DiffuseMaterial
+from spectrace.materials.mirror import MirrorMaterial
+from spectrace.materials.plastic import PlasticMaterial
+from spectrace.materials.retroreflector import RetroreflectorMaterial
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import (
     AreaEmitter,
     Camera,
-    ConductorMaterial,
     ConstantEnvironment,
-    DielectricMaterial,
-    DiffuseMaterial,
     DistantLight,
     Material,
     Medium,
-    MirrorMaterial,
-    PlasticMaterial,
     PointLight,
-    RetroreflectorMaterial,
     Scene,
     Shape,
     SpotLight,

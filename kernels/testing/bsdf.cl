@@ -10,6 +10,18 @@ inline SampledWavelengths harness_wavelengths(__global const float *lambda)
 
 #define HARNESS_NORMAL ((float3)(0.0f, 0.0f, 1.0f))
 
+/* A material without textures needs only the spectrum table. */
+inline SurfaceContext harness_context(__global const float *spectra)
+{
+    SurfaceContext sc;
+    sc.buffers.textures = 0;
+    sc.buffers.texels = 0;
+    sc.buffers.spectra = spectra;
+    sc.uv = (float2)(0.0f);
+    sc.footprint = 0.0f;
+    return sc;
+}
+
 /* f(wo, wi)·|cos θi| and the pdf of wi given wo. */
 __kernel void bsdf_eval_pdf(__global const Material *material, __global const float *spectra,
                             __global const float *lambda, __global const float4 *wo, __global const float4 *wi,
@@ -17,8 +29,9 @@ __kernel void bsdf_eval_pdf(__global const Material *material, __global const fl
 {
     int i = get_global_id(0);
     SampledWavelengths w = harness_wavelengths(lambda);
-    f_cos[i] = material_eval(material, spectra, &w, HARNESS_NORMAL, wo[i].xyz, wi[i].xyz);
-    pdf[i] = material_pdf(material, spectra, &w, HARNESS_NORMAL, wo[i].xyz, wi[i].xyz);
+    SurfaceContext sc = harness_context(spectra);
+    f_cos[i] = material_eval(material, &sc, &w, HARNESS_NORMAL, wo[i].xyz, wi[i].xyz);
+    pdf[i] = material_pdf(material, &sc, &w, HARNESS_NORMAL, wo[i].xyz, wi[i].xyz);
 }
 
 /* One sample per item from u = (uc, u.x, u.y); wi.w = 1 when a direction was produced. */
@@ -29,7 +42,8 @@ __kernel void bsdf_sample(__global const Material *material, __global const floa
     int i = get_global_id(0);
     SampledWavelengths w = harness_wavelengths(lambda);
     BSDFSample s;
-    int ok = material_sample(material, spectra, &w, HARNESS_NORMAL, wo[i].xyz, u[i].x, u[i].yz, &s);
+    SurfaceContext sc = harness_context(spectra);
+    int ok = material_sample(material, &sc, &w, HARNESS_NORMAL, wo[i].xyz, u[i].x, u[i].yz, &s);
     wi[i] = ok ? (float4)(s.wi, 1.0f) : (float4)(0.0f);
     weight[i] = ok ? s.weight : (float4)(0.0f);
     pdf[i] = ok ? s.pdf : 0.0f;
@@ -49,7 +63,8 @@ __kernel void bsdf_pdf_grid(__global const Material *material, __global const fl
     float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
     float3 wi = (float3)(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
     SampledWavelengths w = harness_wavelengths(lambda);
-    pdf[item] = material_pdf(material, spectra, &w, HARNESS_NORMAL, wo.xyz, wi);
+    SurfaceContext sc = harness_context(spectra);
+    pdf[item] = material_pdf(material, &sc, &w, HARNESS_NORMAL, wo.xyz, wi);
 }
 
 __kernel void bsdf_has_non_delta_lobe(__global const Material *material, __global int *result)

@@ -154,3 +154,15 @@ def test_options_outside_their_mode_are_one_line_errors(argv, says):
     result = run_spectrace("bench", *argv)
     assert result.returncode == 2, result.stderr
     assert result.stderr.startswith(says) and result.stderr.count("\n") == 1, result.stderr
+
+
+def test_the_quality_references_seed_stays_a_valid_seed_other_than_the_scenes():
+    """The reference renders with the scene's seed offset: wrapped into 0..MAX_SEED for any scene seed, even the
+    largest (the kernels take a 32-bit signed seed), and never equal to it."""
+    from spectrace.benchmarks.quality import REFERENCE_SEED_OFFSET
+    from spectrace.scene.limits import MAX_SEED, offset_seed, seed_problem
+
+    for seed in (0, 12345, MAX_SEED - REFERENCE_SEED_OFFSET, MAX_SEED - REFERENCE_SEED_OFFSET + 1, MAX_SEED):
+        reference = offset_seed(seed, REFERENCE_SEED_OFFSET)
+        assert seed_problem(reference) is None and reference != seed
+    assert offset_seed(MAX_SEED, REFERENCE_SEED_OFFSET) == REFERENCE_SEED_OFFSET - 1  # 2^31 - 1 + k wraps to k - 1

@@ -102,6 +102,17 @@ def test_a_local_file_comes_before_the_bundled_scene(tmp_path, monkeypatch):
     assert resolve_scene_path("cornell_box") == Path("cornell_box.toml")
 
 
+def test_a_folder_named_like_a_bundled_scene_does_not_hide_it(tmp_path, monkeypatch):
+    # Working in scenes/ (or beside a copy of a scene's folder), `cornell_box` is also the folder of its meshes.
+    from spectrace.resources import resolve_scene_path, scenes_dir
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "teapot").mkdir()
+    (tmp_path / "no_such_scene").mkdir()
+    assert resolve_scene_path("teapot") == scenes_dir() / "teapot.toml"
+    assert resolve_scene_path("no_such_scene") == Path("no_such_scene")  # the loader says it is a folder
+
+
 @pytest.mark.subprocess
 def test_render_a_bundled_scene_by_name_from_another_folder(tmp_path):
     result = _spectrace(

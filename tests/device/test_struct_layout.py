@@ -49,10 +49,10 @@ def test_kernels_see_every_contract_value_the_host_defines(device, tmp_path):
     number inside an expression, a float keeps every digit)."""
     import pyopencl as cl
 
-    from spectrace.engine.device_types import device_contract_defines
+    from spectrace.device.program_cache import kernel_contract
     from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
-    contract = device_contract_defines()
+    contract = kernel_contract()
     names = sorted(contract)
     source = tmp_path / "report_contract.cl"
     source.write_text(_contract_report_source(names))
@@ -74,9 +74,9 @@ def test_no_kernel_file_keeps_its_own_copy_of_a_contract_value():
     import re
 
     from spectrace import resources
-    from spectrace.engine.device_types import device_contract_defines
+    from spectrace.device.program_cache import kernel_contract
 
-    names = set(device_contract_defines())
+    names = set(kernel_contract())
     copies = []
     for path in sorted(resources.kernels_dir().rglob("*")):
         if path.suffix in (".cl", ".h"):

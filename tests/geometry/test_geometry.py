@@ -222,3 +222,28 @@ def test_unusable_files_raise_one_line_errors(tmp_path, name, content, message):
         load_mesh(path, where="scene.toml: shapes[1].file")
     assert caught.value.where == "scene.toml: shapes[1].file"
     assert "\n" not in str(caught.value)
+
+
+def test_an_obj_file_that_goes_to_trimesh_is_read_from_disk_once(tmp_path, monkeypatch):
+    """A textured OBJ (which the plain reader declines) is scanned for index 0 and vt, and parsed by trimesh: from
+    one read of the file. Its seam vertex still splits into one vertex per texture coordinate."""
+    import builtins
+    import io
+
+    path = tmp_path / "seam.obj"
+    path.write_text(
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0.5 0.5\nf 1/1 2/2 3/3\nf 1/4 3/3 4/1\n"
+    )
+    opened = []
+    for module, name in ((builtins, "open"), (io, "open")):
+        original = getattr(module, name)
+
+        def counting(file, *args, _original=original, **kwargs):
+            if str(file) == str(path):
+                opened.append(file)
+            return _original(file, *args, **kwargs)
+
+        monkeypatch.setattr(module, name, counting)
+    mesh = load_mesh(path, where="test")
+    assert len(opened) == 1
+    assert len(mesh.faces) == 2 and len(mesh.vertices) == 5  # vertex 1 has two texture coordinates

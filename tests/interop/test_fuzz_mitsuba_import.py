@@ -1,10 +1,11 @@
 """Property: whatever a Mitsuba XML file holds, `import_mitsuba` writes a TOML scene that loads, or raises
 SpectraceError as one line that names the XML file and leaves the output file as it was. Never another exception.
 
-The inputs are mutations of the test scenes (Mitsuba's Cornell box and tests/data/mitsuba/features.xml):
-attributes deleted or given random text, huge, NaN, infinite, negative or malformed numbers and spectra; elements
-duplicated, dropped or wrapped in others, nesting far beyond any real scene; and the text truncated or spliced with
-random bytes or Unicode.
+The inputs are mutations of the test scenes (Mitsuba's Cornell box, tests/data/mitsuba/features.xml and
+textures.xml): attributes deleted or given random text, huge, NaN, infinite, negative or malformed numbers and
+spectra; elements duplicated, dropped or wrapped in others, nesting far beyond any real scene; textures (bitmaps
+with random files, filters, wraps and to_uv, checkerboards, other types) put in place of properties or added
+anywhere; and the text truncated or spliced with random bytes or Unicode.
 
 CI runs 1000 examples, derandomised (the same ones every run). A longer, random search:
     SPECTRACE_FUZZ_EXAMPLES=100000 python -m pytest tests/interop/test_fuzz_mitsuba_import.py
@@ -25,8 +26,8 @@ from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import import_mitsuba
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "mitsuba"
-BASES = [(DATA / name).read_text() for name in ("cornell_box.xml", "features.xml")]
-REFERENCED = ("triangle.obj", "lamp.spd")  # files the scenes refer to, next to the XML
+BASES = [(DATA / name).read_text() for name in ("cornell_box.xml", "features.xml", "textures.xml")]
+REFERENCED = ("triangle.obj", "lamp.spd", "quad.obj", "texture.png")  # files the scenes refer to, next to the XML
 PREVIOUS = "# an earlier import that a failed one must not destroy\n"
 
 FUZZ_SETTINGS = fuzz_settings(
@@ -106,6 +107,20 @@ ATTRIBUTE_VALUES = st.one_of(
             "gold",
             "ramp",
             "glass",
+            "texture.png",
+            "quad.obj",
+            "nearest",
+            "bilinear",
+            "trilinear",
+            "repeat",
+            "mirror",
+            "clamp",
+            "to_uv",
+            "filter_type",
+            "wrap_mode",
+            "color0",
+            "tiles",
+            "tiled",
         ]
     ),
     st.floats().map(repr),
@@ -148,6 +163,8 @@ TYPES = st.sampled_from(
         "d65",
         "srgb",
         "bitmap",
+        "checkerboard",
+        "mesh_attribute",
         "",
     ]
 )
@@ -169,12 +186,49 @@ ATTRIBUTE_NAMES = st.sampled_from(
         "values",
     ]
 )
-WRAPPERS = st.sampled_from(["bsdf", "shape", "transform", "spectrum", "ref", "scene", "float"])
-MUTATIONS = st.sampled_from(["delete", "value", "value", "value", "type", "add", "duplicate", "drop", "wrap"])
+WRAPPERS = st.sampled_from(["bsdf", "shape", "transform", "spectrum", "ref", "scene", "float", "texture"])
+MUTATIONS = st.sampled_from(
+    ["delete", "value", "value", "value", "type", "add", "duplicate", "drop", "wrap", "texture", "texture"]
+)
+PROPERTY_NAMES = st.sampled_from(
+    ["reflectance", "diffuse_reflectance", "specular_reflectance", "color0", "color1", "radiance", "alpha", "eta"]
+)
 # Most files stay well-formed XML, so that most mutations reach the importer rather than the XML parser.
 TEXT_MUTATIONS = st.sampled_from(["none"] * 12 + ["truncate", "bytes", "unicode", "deep"])
 
 # ---------------------------------------------------------------- mutations
+
+
+@st.composite
+def texture_elements(draw, name: str | None) -> ET.Element:
+    """A <texture>: a bitmap with random settings, a checkerboard (perhaps with a bitmap side) or another type."""
+    kind = draw(st.sampled_from(["bitmap", "bitmap", "checkerboard", "mesh_attribute", "regular", ""]))
+    texture = ET.Element("texture", {"type": kind} | ({"name": name} if name is not None else {}))
+    if kind == "bitmap":
+        for key, values in [
+            ("filename", ["texture.png", "texture.png", "quad.obj", "missing.png", "", "lamp.spd"]),
+            ("filter_type", ["nearest", "bilinear", "trilinear", "cubic"]),
+            ("wrap_mode", ["repeat", "mirror", "clamp", "tile"]),
+        ]:
+            if draw(st.booleans()):
+                ET.SubElement(texture, "string", {"name": key, "value": draw(st.sampled_from(values))})
+        if draw(st.booleans()):
+            ET.SubElement(texture, "boolean", {"name": "raw", "value": draw(st.sampled_from(["true", "false", "1"]))})
+    elif kind == "checkerboard":
+        for side in ("color0", "color1"):
+            if draw(st.booleans()):
+                if draw(st.booleans()):
+                    texture.append(draw(texture_elements(side)))
+                else:
+                    ET.SubElement(texture, "rgb", {"name": side, "value": draw(ATTRIBUTE_VALUES)})
+    if draw(st.booleans()):
+        transform = ET.SubElement(texture, "transform", {"name": "to_uv"})
+        for step in draw(st.lists(st.sampled_from(["scale", "translate", "rotate", "matrix"]), max_size=3)):
+            attribute = {"rotate": "angle", "matrix": "value"}.get(step, draw(st.sampled_from(["x", "y", "value"])))
+            ET.SubElement(
+                transform, step, {attribute: draw(ATTRIBUTE_VALUES)} | ({"z": "1"} if step == "rotate" else {})
+            )
+    return texture
 
 
 def _parents(root: ET.Element) -> dict:
@@ -197,6 +251,14 @@ def tree_mutation(draw, root: ET.Element) -> None:
         element.set("type", draw(TYPES))
     elif kind == "add":
         element.set(draw(ATTRIBUTE_NAMES), draw(ATTRIBUTE_VALUES))
+    elif kind == "texture":
+        # In place of a property (keeping its name), or as a new child of any element.
+        if parent is not None and element.tag in ("rgb", "float", "spectrum", "ref", "texture") and draw(st.booleans()):
+            index = list(parent).index(element)
+            parent.remove(element)
+            parent.insert(index, draw(texture_elements(element.get("name"))))
+        else:
+            element.append(draw(texture_elements(draw(st.one_of(st.none(), PROPERTY_NAMES)))))
     elif parent is not None:
         index = list(parent).index(element)
         if kind == "duplicate":

@@ -552,7 +552,7 @@ def test_outputs_that_cannot_be_written_are_refused_before_the_import(tmp_path, 
     (tmp_path / "folder").mkdir()
     (tmp_path / "file.txt").write_text("")
     for output, place, says in [
-        (tmp_path / "folder", tmp_path / "folder", "is a folder; give the path of the TOML file to write"),
+        (tmp_path / "folder", tmp_path / "folder", "the TOML file names a folder; name a file in it"),
         (f"{tmp_path / 'new'}/", f"{tmp_path / 'new'}/", "names a folder"),
         (tmp_path / "file.txt" / "out.toml", tmp_path / "file.txt" / "out.toml", "is not a folder"),
         (xml, xml, "is the Mitsuba scene being imported"),
@@ -580,7 +580,9 @@ def test_a_read_only_folder_is_refused_before_the_import(tmp_path, monkeypatch, 
         status, stderr = _run_in_process(
             monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(folder / "out.toml")]
         )
-        _assert_one_error_line(status, stderr, str(folder / "out.toml"), f"the folder '{folder}' is not writable")
+        _assert_one_error_line(
+            status, stderr, str(folder / "out.toml"), f"cannot create files in the folder {folder} for the TOML file"
+        )
     finally:
         locked.chmod(0o755)
 

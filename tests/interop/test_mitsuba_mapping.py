@@ -107,3 +107,18 @@ def test_the_shape_emitter_imports_on_a_shape(tmp_path):
     (shape,) = load_mitsuba_scene(_scene(tmp_path, body)).shapes
     assert isinstance(shape.emitter, area.MODEL)
     _d65_of_unit_luminance(shape.emitter.radiance)
+
+
+def test_the_commands_help_lists_every_plugin_the_importer_takes():
+    """`import-mitsuba --help` is written from the importer's table (so from the registries), not by hand."""
+    from typer.testing import CliRunner
+
+    from spectrace.cli import app
+    from spectrace.interop.mitsuba_xml import SUPPORTED
+
+    result = CliRunner().invoke(app, ["import-mitsuba", "--help"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    words = set(re.findall(r"[\w-]+", result.output))
+    plugins = {plugin for plugin, _ in _plugins([*MATERIALS.values(), *LIGHTS.values(), area])}
+    assert plugins <= {kind for kinds in SUPPORTED.values() for kind in kinds}
+    assert {kind for kinds in SUPPORTED.values() for kind in kinds} <= words

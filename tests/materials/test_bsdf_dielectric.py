@@ -15,10 +15,10 @@ from spectrace.engine.device_types import (
     IOR_CAUCHY,
     IOR_CONSTANT,
     IOR_SELLMEIER,
-    MATERIAL_DIELECTRIC,
     MATERIAL_DTYPE,
     MATERIAL_NO_SPECTRUM,
 )
+from spectrace.materials import MATERIAL_CODES
 from spectrace.spectral.glasses import glass
 from stats_toolkit import (
     assert_chi_square_fits,
@@ -65,7 +65,7 @@ def _uniform_sphere(rng, n):
 
 def _material(model, b=(0, 0, 0, 0), c=(0, 0, 0, 0), ior=1.0):
     m = np.zeros((), MATERIAL_DTYPE)
-    m["type"] = MATERIAL_DIELECTRIC
+    m["type"] = MATERIAL_CODES["dielectric"]
     m["reflectance_offset"] = MATERIAL_NO_SPECTRUM
     m["ior_model"] = model
     m["ior_coefficients_b"] = b

@@ -8,10 +8,10 @@ import pytest
 
 import spectrace
 from scene_text import camera_film
-from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
+from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
-from spectrace.materials import material_row
+from spectrace.materials import MATERIAL_CODES, material_row
 from spectrace.scene import load_scene
 from spectrace.scene.model import Camera, ConstantEnvironment, Scene
 from spectrace.spectral.glasses import glass
@@ -59,7 +59,7 @@ def test_ior_forms_load_into_material_rows(tmp_path, lines, model, n_at_d):
     material = _load(tmp_path, lines).shapes[0].material
     assert material.ior.at(587.5618) == pytest.approx(n_at_d, abs=5e-5)
     row = material_row(material, SpectrumTable())
-    assert row["type"] == MATERIAL_DIELECTRIC and row["ior_model"] == model
+    assert row["type"] == MATERIAL_CODES["dielectric"] and row["ior_model"] == model
     assert row["alpha"] == pytest.approx(material.roughness)
     if model == IOR_SELLMEIER:
         assert row["ior_coefficients_b"][:3] == pytest.approx(material.ior.coefficients[:3])

@@ -317,3 +317,44 @@ def test_bad_material_input_is_a_spectrace_error():
         spectrace.mirror(1.2)
     with pytest.raises(SpectraceError, match="reflectance"):
         spectrace.retroreflector(-0.1)
+
+
+@pytest.mark.parametrize(
+    ("toml_value", "make"),
+    [
+        ("{ value = 1.5 }", lambda: spectrace.diffuse(1.5)),
+        ("{ value = -0.5 }", lambda: spectrace.plastic(-0.5)),
+        ("{ rgb = [1.2, 0.5, 0.5] }", lambda: spectrace.diffuse((1.2, 0.5, 0.5))),
+        ("{ rgb = [-0.1, 0.5, 0.5] }", lambda: spectrace.mirror([-0.1, 0.5, 0.5])),
+        ("{ values = [[400, 0.5], [700, 1.3]] }", lambda: spectrace.retroreflector([[400, 0.5], [700, 1.3]])),
+    ],
+)
+def test_the_api_and_the_loader_refuse_a_reflectance_with_the_same_message(tmp_path, toml_value, make):
+    """A reflectance goes through one path (spectral/spectrum_input.py) from a scene file and from Python."""
+    path = tmp_path / "scene.toml"
+    path.write_text(
+        camera_film()
+        + f'[materials.m]\ntype = "diffuse"\nreflectance = {toml_value}\n'
+        + '[[shapes]]\ntype = "sphere"\nmaterial = "m"\n',
+        encoding="utf-8",
+    )
+    with pytest.raises(SpectraceError) as from_file:
+        spectrace.load_scene(path)
+    with pytest.raises(SpectraceError) as from_python:
+        make()
+    assert from_python.value.message == from_file.value.message
+    assert from_python.value.where == "reflectance"
+    assert from_file.value.where.startswith(f"{path}: materials.m.reflectance")
+
+
+def test_the_api_and_the_loader_make_the_same_spectra(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text(
+        camera_film()
+        + '[materials.m]\ntype = "diffuse"\nreflectance = { rgb = [0.2, 0.5, 0.7] }\n'
+        + '[[shapes]]\ntype = "sphere"\nmaterial = "m"\nemitter = { radiance = { rgb = [2.0, 1.0, 0.5] } }\n',
+        encoding="utf-8",
+    )
+    loaded = spectrace.load_scene(path).shapes[0]
+    assert np.array_equal(spectrace.diffuse((0.2, 0.5, 0.7)).reflectance.values, loaded.material.reflectance.values)
+    assert np.array_equal(spectrace.area_emitter([2.0, 1.0, 0.5]).radiance.values, loaded.emitter.radiance.values)

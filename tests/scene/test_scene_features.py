@@ -4,6 +4,7 @@ samples, same arithmetic, the same bits. A feature left out wrongly changes or z
 which a bit-for-bit comparison catches in every scene below."""
 
 import tomllib
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -16,7 +17,8 @@ from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import EnvironmentMap
 
-# Values of kernels/types.h, written out here so the test does not read them from the code under test.
+# The type codes (materials: their order in spectrace.materials.MATERIALS), written out here so the test does not
+# read them from the code under test.
 MATERIAL_BITS = {"diffuse": 1, "conductor": 2, "mirror": 4, "plastic": 8, "dielectric": 16, "retroreflector": 32}
 LIGHT_BITS = {"area": 1, "point": 2, "spot": 4, "distant": 8, "environment": 16, "environment_map": 32}
 
@@ -32,7 +34,9 @@ def _material_bits_named_in(name: str) -> int:
     return sum(MATERIAL_BITS[t] for t in types)
 
 
-@pytest.mark.parametrize("name", ["cornell_box", "material_showcase", "subsurface", "prism", "point_light_room"])
+@pytest.mark.parametrize(
+    "name", ["cornell_box", "material_showcase", "subsurface", "prism", "point_light_room", "teapot"]
+)
 def test_defines_name_the_materials_of_the_scene_file(name):
     defines = scene_feature_defines(build_scene_buffers(_bundled(name)))
     assert defines["SCENE_MATERIAL_TYPES"] == _material_bits_named_in(name)
@@ -45,10 +49,17 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
         "SCENE_HAS_MEDIA": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
+        "SCENE_HAS_TEXTURES": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
+    assert lights["SCENE_HAS_TEXTURES"] == 0
+    textured = replace(
+        _environment_map_scene(),
+        shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.bitmap(np.full((2, 2), 0.5))))],
+    )
+    assert scene_feature_defines(build_scene_buffers(textured))["SCENE_HAS_TEXTURES"] == 1
 
 
 def _environment_map_scene() -> spectrace.Scene:

@@ -204,7 +204,7 @@ def test_reflective_materials_resolve(tmp_path):
         (
             'type = "glass"',
             "materials.grey.type",
-            "Input tag 'glass' found using 'type' does not match any of the expected tags: 'diffuse', 'mirror'",
+            "Input tag 'glass' found using 'type' does not match any of the expected tags: 'diffuse', 'conductor'",
         ),
         ("reflectance = { value = 0.5 }", "materials.grey.type", "required key is missing"),
     ],

@@ -51,7 +51,9 @@ def run_quality_bench(
     scene = bench_scene(scene_path, size, 1, max_depth)
     device = open_device(device_key)
     log(f"reference: spectrace, {reference_spp} spp")
-    reference_renderer = Renderer(scene.with_overrides(seed=scene.seed + REFERENCE_SEED_OFFSET), device)
+    reference_renderer = Renderer(
+        scene.with_overrides(seed=limits.offset_seed(scene.seed, REFERENCE_SEED_OFFSET)), device
+    )
     half = reference_renderer.render(spp=max(1, reference_spp // 2)).xyz.astype(np.float64)
     reference = reference_renderer.render(spp=reference_spp).xyz.astype(np.float64)
     # The reference is the mean of two independent halves a and b: its own noise is RMS(a - b) / 2.

@@ -8,6 +8,7 @@ import typer
 from rich.console import Console
 
 from spectrace.errors import SpectraceError
+from spectrace.interop.mitsuba_xml import import_mitsuba, supported_text
 
 
 def import_mitsuba_command(
@@ -21,14 +22,6 @@ def import_mitsuba_command(
         typer.Option("--define", "-D", help="Set a $parameter, NAME=VALUE (repeatable), as Mitsuba's -D."),
     ] = None,
 ) -> None:
-    """Convert a Mitsuba 3 XML scene to a spectrace TOML scene (shapes obj, ply, rectangle, cube, sphere; BSDFs
-    diffuse, twosided, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric; emitters
-    area, point, constant, directional; the perspective sensor). Unsupported plugins are all named in one error;
-    choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML is checked by loading
-    it before it replaces OUT.toml (a failed import leaves an existing file as it was); render it with
-    `spectrace render OUT.toml`."""
-    from spectrace.interop.mitsuba_xml import import_mitsuba
-
     if output.endswith(("/", os.sep)) or not Path(output).name:
         raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
     parameters = {}
@@ -42,3 +35,14 @@ def import_mitsuba_command(
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
     console.print(f"wrote {output}", highlight=False, markup=False)
+
+
+# The help lists the plugins from the importer's table (built from the materials' and lights' registries). This
+# module is imported only when the command runs (spectrace.cli.LAZY_COMMANDS), so the importer's imports cost
+# nothing elsewhere.
+import_mitsuba_command.__doc__ = (
+    f"Convert a Mitsuba 3 XML scene to a spectrace TOML scene ({supported_text()}). Unsupported plugins are all "
+    "named in one error; choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML "
+    "is checked by loading it before it replaces OUT.toml (a failed import leaves an existing file as it was); "
+    "render it with `spectrace render OUT.toml`."
+)

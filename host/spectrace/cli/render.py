@@ -130,10 +130,9 @@ def render(
     console.print(
         f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False, markup=False
     )
-    if saved is not None and resume is not None:
-        _resume(renderer, saved, resume)
+    identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
     with StopOnSignals() as stop:
-        _render_passes(renderer, stop, state_file, checkpoint_interval, quiet)
+        _render_passes(renderer, stop, state_file, checkpoint_interval, quiet, identity)
         interrupted = stop.requested
         image = renderer.image()
         if image.spp == 0:
@@ -193,10 +192,11 @@ def _check_output_files(
         )
 
 
-def _resume(renderer, restored, path: Path) -> None:
+def _resume(renderer, restored, path: Path):
+    """Load the checkpoint; returns the render's identity (see restore_checkpoint)."""
     from spectrace.engine.checkpoint import restore_checkpoint
 
-    restore_checkpoint(renderer, restored, str(path))
+    identity = restore_checkpoint(renderer, restored, str(path))
     done, target = restored.state.samples_done, renderer.scene.spp
     note = f" (already at or beyond the {target} spp asked for)" if done >= target else ""
     console.print(f"resumed {path}: {done} spp done{note}", highlight=False, markup=False)
@@ -208,17 +208,19 @@ def _resume(renderer, restored, path: Path) -> None:
             highlight=False,
             markup=False,
         )
+    return identity
 
 
-def _render_passes(renderer, stop, state_file: Path | None, interval: float, quiet: bool) -> None:
-    """The API's render loop with the bar on this console (none with -q) and checkpoints to `state_file`."""
+def _render_passes(renderer, stop, state_file: Path | None, interval: float, quiet: bool, identity=None) -> None:
+    """The API's render loop with the bar on this console (none with -q) and checkpoints to `state_file`
+    (`identity`: the render's, when --resume has computed it)."""
     from spectrace.api import render_passes
     from spectrace.engine.checkpoint import PeriodicCheckpoints
 
     def warn(message: str) -> None:
         console.print(f"warning: {message}", highlight=False, markup=False)
 
-    saver = PeriodicCheckpoints(state_file, renderer, interval, warn=warn) if state_file else None
+    saver = PeriodicCheckpoints(state_file, renderer, interval, warn=warn, identity=identity) if state_file else None
     try:
         render_passes(renderer, progress=not quiet, stop=stop, checkpoints=saver, console=console.rich())
     except SpectraceError as error:

@@ -1,9 +1,9 @@
 """An opened OpenCL device and its kernel builds, with an on-disk cache of program binaries.
 
 A binary is reused only when everything that could change it is unchanged: every ``*.cl``/``*.h`` file
-in the kernels folder, the entry file, the build options (defines included) and the device's identity
-(platform name and version, device name, driver version). pyopencl's own cache is bypassed so that only
-this one decides.
+in the kernels folder and every header generated from the host's registries (`generated_headers`), the entry file,
+the build options (defines included) and the device's identity (platform name and version, device name, driver
+version). pyopencl's own cache is bypassed so that only this one decides.
 """
 
 from __future__ import annotations
@@ -111,11 +111,20 @@ def _define_value(name: str, value: DefineValue) -> str:
     raise SpectraceError(f"kernel define {name}={value!r} must be an int, a float or a string without spaces")
 
 
-def build_options(kernels_dir: Path, defines: Mapping[str, DefineValue] | None, extra: list[str] | None) -> str:
-    include_dir = str(kernels_dir)
-    if any(c.isspace() for c in include_dir):
-        include_dir = f'"{include_dir}"'
-    options = [*_BASE_OPTIONS, "-I", include_dir]
+def _include_option(folder: Path) -> list[str]:
+    text = str(folder)
+    return ["-I", f'"{text}"' if any(c.isspace() for c in text) else text]
+
+
+def build_options(
+    kernels_dir: Path,
+    defines: Mapping[str, DefineValue] | None,
+    extra: list[str] | None,
+    generated_dir: Path | None = None,
+) -> str:
+    options = [*_BASE_OPTIONS, *_include_option(kernels_dir)]
+    if generated_dir is not None:
+        options += _include_option(generated_dir)
     for name, value in sorted((defines or {}).items()):
         if not _DEFINE_NAME.fullmatch(name):
             raise SpectraceError(f"kernel define name '{name}' is not a C identifier")
@@ -123,16 +132,54 @@ def build_options(kernels_dir: Path, defines: Mapping[str, DefineValue] | None, 
     return " ".join(options + list(extra or []))
 
 
-def _with_contract(defines: Mapping[str, DefineValue] | None) -> dict[str, DefineValue]:
-    """`defines` plus the host/device contract (type codes, wavelength grid, buffer layouts), which every build
-    gets: the kernels keep no copy of those numbers."""
-    from spectrace.engine.device_types import device_contract_defines  # not at import: it loads numpy tables
+def kernel_contract() -> dict[str, DefineValue]:
+    """Every value of the host/device contract, which every build gets as defines: the struct codes, wavelength
+    grid and buffer layouts (spectrace.engine.device_types) and the materials' type codes (their registry)."""
+    # Not at import: these load numpy tables and the material modules.
+    from spectrace.engine.device_types import device_contract_defines
+    from spectrace.materials import kernel_defines
 
-    contract = device_contract_defines()
+    return device_contract_defines() | kernel_defines()
+
+
+def generated_headers() -> dict[str, str]:
+    """The headers the kernels include that the host writes from its registries: file name -> text."""
+    from spectrace import materials
+
+    return {materials.KERNEL_HEADER_NAME: materials.kernel_header()}
+
+
+def _with_contract(defines: Mapping[str, DefineValue] | None) -> dict[str, DefineValue]:
+    """`defines` plus the host/device contract, which every build gets: the kernels keep no copy of those numbers."""
+    contract = kernel_contract()
     clash = sorted(set(contract) & set(defines or {}))
     if clash:
         raise SpectraceError(f"kernel define {clash[0]} is fixed by the host/device contract")
     return contract | dict(defines or {})
+
+
+def _headers_digest(headers: Mapping[str, str]) -> str:
+    digest = hashlib.sha256()
+    for name, text in sorted(headers.items()):
+        digest.update(name.encode() + b"\0" + text.encode() + b"\0")
+    return digest.hexdigest()
+
+
+def _write_generated_headers(headers: Mapping[str, str], digest: str) -> Path:
+    """The folder holding `headers`, named by their digest so that a build's options (and so its cache key) name
+    their content; written once, atomically."""
+    folder = program_cache_dir() / "generated" / digest[:24]
+    for name, text in headers.items():
+        path = folder / name
+        try:
+            present = path.is_file() and path.read_bytes() == text.encode()
+        except OSError:
+            present = False
+        if not present:
+            _write_atomically(path, text.encode())
+            if not path.is_file():
+                raise SpectraceError("cannot write a generated kernel header", where=str(path))
+    return folder
 
 
 def device_identity(report: DeviceReport) -> str:
@@ -192,16 +239,20 @@ class Device:
         options: list[str] | None = None,
         from_source: bool = False,
     ) -> cl.Program:
-        """Build ``kernels/<entry>`` with ``-I kernels`` and ``-D name=value`` for each define and each value of the
-        host/device contract (spectrace.engine.device_types), reusing a cached binary when sources, options and
-        device are unchanged, unless `from_source` (a program loaded from a binary may lack what only the compiler
-        knows: Intel's CPU runtime then reports no kernel argument names although built with -cl-kernel-arg-info)."""
+        """Build ``kernels/<entry>`` with ``-I kernels``, ``-I`` the folder of the generated headers and
+        ``-D name=value`` for each define and each value of the host/device contract (`kernel_contract`), reusing a
+        cached binary when sources, generated headers, options and device are unchanged, unless `from_source` (a
+        program loaded from a binary may lack what only the compiler knows: Intel's CPU runtime then reports no
+        kernel argument names although built with -cl-kernel-arg-info)."""
         started = time.perf_counter()
         kernels_dir = resources.kernels_dir()
         if not (kernels_dir / entry).is_file():
             raise SpectraceError(f"kernel file '{entry}' not found in the kernels folder", where=entry)
-        option_text = build_options(kernels_dir, _with_contract(defines), options)
-        sources_digest = kernels_digest(kernels_dir)
+        headers = generated_headers()
+        headers_digest = _headers_digest(headers)
+        generated_dir = _write_generated_headers(headers, headers_digest)
+        option_text = build_options(kernels_dir, _with_contract(defines), options, generated_dir)
+        sources_digest = hashlib.sha256(f"{kernels_digest(kernels_dir)} {headers_digest}".encode()).hexdigest()
         key = program_cache_key(sources_digest, entry, option_text, device_identity(self.report))
         cache_file = program_cache_dir() / f"{key}.bin"
 

@@ -208,12 +208,15 @@ def identity_mismatch(saved: RenderIdentity, current: RenderIdentity) -> str | N
     return None
 
 
-def restore_checkpoint(renderer: Renderer, checkpoint: Checkpoint, where: str) -> None:
+def restore_checkpoint(renderer: Renderer, checkpoint: Checkpoint, where: str) -> RenderIdentity:
     """Load `checkpoint` into `renderer`, after checking that it belongs to this very render (`where` names the
-    checkpoint in errors)."""
-    if problem := identity_mismatch(checkpoint.identity, render_identity(renderer)):
+    checkpoint in errors). Returns the render's identity, which hashes every scene array: for the checkpoints the
+    render goes on to write (PeriodicCheckpoints' `identity`)."""
+    identity = render_identity(renderer)
+    if problem := identity_mismatch(checkpoint.identity, identity):
         raise SpectraceError(problem, where=where)
     renderer.film.restore_state(checkpoint.state, where=where)
+    return identity
 
 
 def resume_render(renderer: Renderer, path: str | Path) -> Checkpoint:
@@ -225,8 +228,9 @@ def resume_render(renderer: Renderer, path: str | Path) -> Checkpoint:
 
 class PeriodicCheckpoints:
     """Saves a renderer's state to one file at most every `interval_seconds` (0: whenever asked), for a render
-    loop's progress callback. A failed write is reported through `warn` and the render goes on: losing the
-    render because a checkpoint could not be written would defeat the checkpoint's purpose."""
+    loop's progress callback (`identity`: the renderer's render_identity, when already computed). A failed write is
+    reported through `warn` and the render goes on: losing the render because a checkpoint could not be written
+    would defeat the checkpoint's purpose."""
 
     def __init__(
         self,
@@ -235,6 +239,7 @@ class PeriodicCheckpoints:
         interval_seconds: float,
         warn=lambda message: None,
         clock=time.monotonic,
+        identity: RenderIdentity | None = None,
     ):
         self.path = Path(path)
         self.renderer = renderer
@@ -243,7 +248,8 @@ class PeriodicCheckpoints:
         self.clock = clock
         self.last_saved = clock()
         self.saved_samples: int | None = None  # samples per pixel in the file, once this object wrote it
-        self._identity: RenderIdentity | None = None  # the render does not change: hash its arrays once
+        # The render does not change: its arrays are hashed once (here, or by restore_checkpoint on --resume).
+        self._identity = identity
 
     def maybe_save(self) -> bool:
         if self.clock() - self.last_saved < self.interval_seconds:

@@ -1,5 +1,6 @@
 """The host/device contract: numpy mirrors of the structs in kernels/types.h (explicit offsets), and the one home
-of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts).
+of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts)
+but the materials' type codes, which come from their registry (spectrace.materials.MATERIALS).
 
 The kernels hold no copy of those numbers: every kernel build gets them as defines (`device_contract_defines`,
 added by spectrace.device's program builds). tests/device/test_struct_layout.py compiles a kernel that reports each
@@ -16,17 +17,8 @@ from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE, BVH4_STACK_SIZE
 from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
-# Material.type: which BSDF (kernels/material.cl's MATERIAL_LIST names each one's functions; docs/materials.md lists
-# the keys).
-MATERIAL_TYPES = ("diffuse", "conductor", "mirror", "plastic", "dielectric", "retroreflector")
-(
-    MATERIAL_DIFFUSE,
-    MATERIAL_CONDUCTOR,
-    MATERIAL_MIRROR,
-    MATERIAL_PLASTIC,
-    MATERIAL_DIELECTRIC,
-    MATERIAL_RETROREFLECTOR,
-) = range(len(MATERIAL_TYPES))
+# Material.type: which BSDF. The codes (MATERIAL_<NAME>, MATERIAL_TYPE_COUNT) are each BSDF's position in
+# spectrace.materials.MATERIALS, which spectrace.device adds to every build with this contract.
 
 # Material.ior_model: how a dielectric's interior index of refraction depends on the wavelength (kernels/ior.cl).
 IOR_CONSTANT = 0  # Material.ior
@@ -68,9 +60,47 @@ MATERIAL_DTYPE = _struct(
         ("alpha", "<f4"),
         ("ior_model", "<i4"),
         ("ior", "<f4"),
-        ("pad0", "<i4"),
+        ("reflectance_texture", "<i4"),
     ],
     64,
+)
+
+# Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
+# TEXEL_SCALAR); SPECTRAL: an image of spectral bands (TEXEL_BANDS); CHECKERBOARD: two sides, each a spectrum or a
+# texture of another type.
+TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard")
+TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES))
+# Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
+# S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
+# per band, at band centres band_first_nm + i·band_step_nm.
+TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS = range(3)
+# Texture.wrap: where st outside [0, 1)² looks.
+WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
+# Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
+# level; TRILINEAR: bilinear on the two levels around the footprint, blended.
+FILTER_NEAREST, FILTER_BILINEAR, FILTER_TRILINEAR = range(3)
+# A material parameter without a texture (Material.reflectance_texture), and a checkerboard side without one.
+NO_TEXTURE = -1
+
+TEXTURE_DTYPE = _struct(
+    [
+        ("uv_transform", ("<f4", (4,))),
+        ("type", "<i4"),
+        ("texel_format", "<i4"),
+        ("channels", "<i4"),
+        ("width", "<i4"),
+        ("height", "<i4"),
+        ("levels", "<i4"),
+        ("data_offset", "<i4"),
+        ("wrap", "<i4"),
+        ("filter", "<i4"),
+        ("band_first_nm", "<f4"),
+        ("band_step_nm", "<f4"),
+        ("side_spectrum", ("<i4", (2,))),
+        ("side_texture", ("<i4", (2,))),
+        ("pad0", "<i4"),
+    ],
+    80,
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
@@ -161,6 +191,7 @@ SCENE_KERNEL_BUFFERS = (
     "texels",
     "map_cdf",
     "media",
+    "textures",
 )
 
 # struct name in types.h -> dtype; the layout test walks this table.
@@ -170,6 +201,7 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "TriangleInfo": TRIANGLE_INFO_DTYPE,
     "Material": MATERIAL_DTYPE,
     "Medium": MEDIUM_DTYPE,
+    "Texture": TEXTURE_DTYPE,
     "Light": LIGHT_DTYPE,
     "RenderParams": RENDER_PARAMS_DTYPE,
     "MeterParams": METER_PARAMS_DTYPE,
@@ -197,13 +229,22 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "METER_IRRADIANCE": METER_IRRADIANCE,
         "METER_RADIANCE": METER_RADIANCE,
         "METER_FLUX": METER_FLUX,
-        "MATERIAL_TYPE_COUNT": len(MATERIAL_TYPES),
+        "NO_TEXTURE": NO_TEXTURE,
+        "TEXEL_SIGMOID": TEXEL_SIGMOID,
+        "TEXEL_SCALAR": TEXEL_SCALAR,
+        "TEXEL_BANDS": TEXEL_BANDS,
+        "WRAP_REPEAT": WRAP_REPEAT,
+        "WRAP_MIRROR": WRAP_MIRROR,
+        "WRAP_CLAMP": WRAP_CLAMP,
+        "FILTER_NEAREST": FILTER_NEAREST,
+        "FILTER_BILINEAR": FILTER_BILINEAR,
+        "FILTER_TRILINEAR": FILTER_TRILINEAR,
         "LIGHT_TYPE_COUNT": len(LIGHT_TYPES),
         # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
         "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
         "BVH_STACK_SIZE": MAX_DEPTH,
         "BVH4_STACK_SIZE": BVH4_STACK_SIZE,
     }
-    values |= {f"MATERIAL_{name.upper()}": code for code, name in enumerate(MATERIAL_TYPES)}
     values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
+    values |= {f"TEXTURE_{name.upper()}": code for code, name in enumerate(TEXTURE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

@@ -19,11 +19,12 @@ from spectrace.lights import area as area_light
 from spectrace.lights import light_module
 from spectrace.lights.area import AreaEmitter
 from spectrace.lights.base import LightRows
-from spectrace.materials import material_row
+from spectrace.materials import material_row, material_textures
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import cmf_table_normalised
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import TextureRows
 
 
 @dataclass
@@ -45,12 +46,15 @@ class SceneBuffers:
     # in BVH leaf order; a triangle's TriangleInfo.normals is its index here, -1 for flat shading (one dummy entry
     # when no triangle has any)
     triangle_normals: np.ndarray
-    texels: np.ndarray  # (n, 4) float32: images of environment maps and textured emitters, after one dummy texel
+    texels: np.ndarray  # (n, 4) float32: images of environment maps and textured emitters, after one dummy texel;
+    # material textures' texels, addressed in floats (kernels/texture.cl)
     map_cdf: np.ndarray  # marginal CDF over rows (H + 1), then each row's CDF (W + 1): see kernels/environment.cl
     spectra: np.ndarray  # float32 table
     cmf: np.ndarray  # (471, 4) float32: x̄, ȳ, z̄ / ∫ȳ
     media: np.ndarray  # MEDIUM_DTYPE (one dummy entry when there are none)
     medium_count: int
+    textures: np.ndarray  # TEXTURE_DTYPE (one dummy entry when there are none)
+    texture_count: int
 
 
 def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
@@ -70,6 +74,8 @@ def _corner_normals(parts: list[np.ndarray | None], counts: list[int]) -> np.nda
 
 def build_scene_buffers(scene: Scene) -> SceneBuffers:
     table = SpectrumTable()
+    texel_chunks = [np.zeros((1, 4), np.float32)]
+    textures = TextureRows(table, texel_chunks)
     material_index: dict[int, int] = {}
     material_rows: list[np.ndarray] = []
     v0s: list[np.ndarray] = []
@@ -98,7 +104,12 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             material_index[key] = TRIANGLE_NO_MATERIAL
         elif key not in material_index:
             material_index[key] = len(material_rows)
-            material_rows.append(material_row(shape.material, table))
+            material_rows.append(material_row(shape.material, table, textures))
+        if shape.material is not None and shape.mesh.uvs is None and material_textures(shape.material):
+            raise SpectraceError(
+                f"shape '{shape.name}' has no texture coordinates, but its material has a texture "
+                f"({', '.join(material_textures(shape.material))})"
+            )
         v0, v1, v2 = shape.mesh.triangles()
         v0s.append(v0)
         v1s.append(v1)
@@ -156,7 +167,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
 
     # Each light writes its own rows (spectrace.lights); images shown by emitters and environment maps share one
     # texel buffer, each light knowing its offset.
-    out = LightRows(table, scene_radius)
+    out = LightRows(table, scene_radius, texel_chunks)
     areas = 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
     emitting = area_light.write_rows(emitters, tri_emitter, areas, out)
     for light in scene.lights:
@@ -210,6 +221,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         cmf=cmf,
         media=np.array(medium_rows, MEDIUM_DTYPE) if medium_rows else np.zeros(1, MEDIUM_DTYPE),
         medium_count=len(medium_rows),
+        textures=textures.array(),
+        texture_count=len(textures.rows),
     )
 
 

@@ -18,4 +18,5 @@ def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
         "SCENE_HAS_MEDIA": int(buffers.medium_count > 0),
         "SCENE_HAS_LIGHT_IMAGES": int(bool(np.any(buffers.lights["map_width"] > 0))),
+        "SCENE_HAS_TEXTURES": int(buffers.texture_count > 0),
     }

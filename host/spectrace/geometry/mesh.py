@@ -1,5 +1,6 @@
 """Indexed triangle meshes, and reading them from any file format trimesh understands."""
 
+import io
 import os
 import sys
 import time
@@ -149,27 +150,23 @@ def _zero_index_in_face_line(chunk: np.ndarray) -> int | None:
     return int(zeros[in_face][0]) if in_face.any() else None
 
 
-def _scan_obj(path: Path, where: str) -> bool:
-    """Refuses a face index 0 (naming its line); says whether the file has texture coordinates (vt) or normals
-    (vn), either of which may give one position several values."""
-    has_corner_attributes, lines_before, carry = False, 0, b""
-    with open(path, "rb") as stream:
-        while True:
-            block = stream.read(_OBJ_SCAN_CHUNK)
-            text = carry + block
-            cut = len(text) if not block else text.rfind(b"\n") + 1  # whole lines only, but all at the end
-            lines, carry = text[:cut], text[cut:]
-            chunk = np.frombuffer(lines, np.uint8)
-            if (offset := _zero_index_in_face_line(chunk)) is not None:
-                line = lines_before + lines.count(b"\n", 0, offset) + 1
-                raise SpectraceError(
-                    f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)", where=where
-                )
-            lines_before += lines.count(b"\n")
-            for tag in (b"vt ", b"vt\t", b"vn ", b"vn\t"):
-                has_corner_attributes |= lines.startswith(tag) or b"\n" + tag in lines
-            if not block:
-                return has_corner_attributes
+def _scan_obj(data: bytes, path: Path, where: str) -> bool:
+    """Refuses a face index 0 in the OBJ text `data` (naming its line); says whether it has texture coordinates
+    (vt) or normals (vn), either of which may give one position several values. Scanned in chunks of whole lines,
+    so that numpy's temporary arrays stay small."""
+    start, lines_before = 0, 0
+    while start < len(data):
+        end = min(start + _OBJ_SCAN_CHUNK, len(data))
+        if end < len(data):  # whole lines only: up to the chunk's last line break (or past a longer line)
+            last = data.rfind(b"\n", start, end)
+            end = last + 1 if last >= start else (data.find(b"\n", end) + 1 or len(data))
+        chunk = np.frombuffer(data, np.uint8, count=end - start, offset=start)
+        if (offset := _zero_index_in_face_line(chunk)) is not None:
+            line = lines_before + data.count(b"\n", start, start + offset) + 1
+            raise SpectraceError(f"mesh file '{path}' line {line}: face index 0 (OBJ indices start at 1)", where=where)
+        lines_before += data.count(b"\n", start, end)
+        start = end
+    return any(data.startswith(tag) or b"\n" + tag in data for tag in (b"vt ", b"vt\t", b"vn ", b"vn\t"))
 
 
 _PLAIN_OBJ_MAX_BYTES = 4_000_000
@@ -196,13 +193,14 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     if announce:
         print(f"loading mesh '{path}' ({size / 1e6:.1f} MB)...", file=sys.stderr, flush=True)
     started = time.perf_counter()
+    # An OBJ file is read once, here: its checks (_scan_obj), the plain reader and trimesh all parse these bytes.
+    data = _read_bytes(path, where) if path.suffix.lower() == ".obj" else None
     # Small plain OBJ files are read here: importing trimesh costs more than a small render. Large ones go to
     # trimesh, whose vectorised reader beats a Python loop over millions of lines.
-    small_obj = path.suffix.lower() == ".obj" and size <= _PLAIN_OBJ_MAX_BYTES
-    if small_obj and (simple := _plain_triangle_obj(path)) is not None:
+    if data is not None and size <= _PLAIN_OBJ_MAX_BYTES and (simple := _plain_triangle_obj(path, data)) is not None:
         mesh = _validated_mesh(simple[0], simple[1], path, where, normals=simple[2])
     else:
-        mesh = _mesh_through_trimesh(path, where)
+        mesh = _mesh_through_trimesh(path, where, data)
     if announce:
         print(
             f"loaded mesh '{path}': {len(mesh.faces):,} triangles in {time.perf_counter() - started:.1f} s",
@@ -212,18 +210,32 @@ def load_mesh(path: Path, where: str) -> TriangleMesh:
     return mesh
 
 
-def _mesh_through_trimesh(path: Path, where: str) -> TriangleMesh:
+def _read_bytes(path: Path, where: str) -> bytes:
+    try:
+        return path.read_bytes()
+    except OSError as error:
+        raise SpectraceError(f"cannot read mesh file '{path}' ({error.strerror or error})", where=where) from None
+
+
+def _mesh_through_trimesh(path: Path, where: str, obj_data: bytes | None = None) -> TriangleMesh:
+    """The mesh trimesh reads from `path`; an OBJ file from its bytes, `obj_data` when already read."""
     import trimesh  # deferred: importing trimesh (and with it SciPy) costs about half a second
+
+    if obj_data is None and path.suffix.lower() == ".obj":
+        obj_data = _read_bytes(path, where)
 
     # process=False and maintain_order=True: no merging, reordering or re-winding behind our back.
     options: dict[str, Any] = {"process": False, "maintain_order": True}
-    if path.suffix.lower() == ".obj":
+    source: Any = path
+    if obj_data is not None:
         # With vt or vn, trimesh keeps the stored order only by giving a vertex one of its texture coordinates or
         # normals (at a seam or crease the others are lost); splitting such vertices keeps every corner's own.
         # Materials are not used, and skipping them spares decoding the textures an .mtl names.
-        options |= {"maintain_order": not _scan_obj(path, where), "skip_materials": True}
+        options |= {"maintain_order": not _scan_obj(obj_data, path, where), "skip_materials": True}
+        options |= {"file_type": "obj", "resolver": trimesh.resolvers.FilePathResolver(str(path))}
+        source = io.BytesIO(obj_data)
     try:
-        scene = trimesh.load_scene(path, **options)
+        scene = trimesh.load_scene(source, **options)
         loaded = scene.to_mesh()
     except Exception as error:  # trimesh raises many unrelated types for unreadable files
         detail = " ".join(str(error).split()) or type(error).__name__
@@ -261,18 +273,20 @@ def _trimesh_scene_normals(scene: Any) -> np.ndarray | None:
     return np.concatenate(parts) if parts else None
 
 
-def _plain_triangle_obj(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None] | None:
+def _plain_triangle_obj(
+    path: Path, data: bytes | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None] | None:
     """Vertices, faces and vertex normals (or None) of an OBJ file holding only `v x y z` and `f i j k` lines
     (positive indices), or `v`, `vn x y z` and `f i//n j//n k//n` lines, and comments, read directly, as trimesh
     reads them with process=False (a test checks the bundled meshes both ways); None for anything else, which
     trimesh reads. Importing trimesh costs more than a small render. A position used with several normals becomes
-    one vertex per normal, the extra ones after the stored vertices."""
+    one vertex per normal, the extra ones after the stored vertices. `data`: the file's bytes, when already read."""
     vertices: list[list[float]] = []
     normals: list[list[float]] = []
     faces: list[list[int]] = []
     face_normals: list[list[int] | None] = []
     try:
-        text = path.read_text(encoding="utf-8")
+        text = (data if data is not None else path.read_bytes()).decode("utf-8")
     except (OSError, UnicodeError):
         return None
     try:

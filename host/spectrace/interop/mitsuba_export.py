@@ -3,7 +3,11 @@
 The export is meant to make Mitsuba do exactly the work spectrace does, so that timings and images compare:
 - geometry: every shape's world-space triangles, float32, as binary PLY files in a folder the caller owns, with
   its vertex normals when it has them (smooth shading) and `face_normals` otherwise (flat, as spectrace; the
-  winding decides the front side in both renderers);
+  winding decides the front side in both renderers), and its texture coordinates as spectrace uses them (Mitsuba
+  reads a PLY's u, v as stored, so both look textures up at the same st);
+- textures: each texture module's `to_mitsuba` (spectrace.textures.<name>): a bitmap becomes Mitsuba's `bitmap`
+  reading a float OpenEXR of the texels spectrace decoded, written next to the meshes; a checkerboard, Mitsuba's
+  `checkerboard`; a spectral texture has no Mitsuba counterpart and is refused;
 - spectra: every spectrum as Mitsuba's `regular` spectrum on spectrace's own 1 nm grid (360-830 nm), so both
   interpolate the same samples linearly;
 - materials and lights: each module's `to_mitsuba` (spectrace.materials.<name>, spectrace.lights.<name>) gives its
@@ -20,8 +24,8 @@ The export is meant to make Mitsuba do exactly the work spectrace does, so that 
   Russian roulette once `rr_depth` bounces have happened, with survival probability min(max throughput, 0.95).
 
 What has no faithful counterpart (a material or light whose module has no `to_mitsuba`: spot lights, whose falloff
-profile differs in Mitsuba, environment maps from images, the materials other than diffuse; pictures on lights,
-two-sided area lights, the `direct` integrator) is refused with a SpectraceError naming it.
+profile differs in Mitsuba, environment maps from images; spectral textures, trilinear filtering; pictures on
+lights, two-sided area lights, the `direct` integrator) is refused with a SpectraceError naming it.
 """
 
 from pathlib import Path
@@ -35,6 +39,7 @@ from spectrace.materials import MATERIALS
 from spectrace.scene.model import Scene
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures import is_texture, texture_module
 
 
 def regular_spectrum(spectrum: Spectrum) -> dict:
@@ -49,16 +54,21 @@ def regular_spectrum(spectrum: Spectrum) -> dict:
 
 
 def write_binary_ply(mesh: TriangleMesh, path: Path) -> None:
-    """Float32 positions (and unit normals nx, ny, nz when the mesh has vertex normals) and int32 triangles."""
-    columns = [mesh.vertices]
+    """Float32 positions (and unit normals nx, ny, nz when the mesh has vertex normals; texture coordinates u, v,
+    spectrace's, when it has them) and int32 triangles."""
+    columns, names = [mesh.vertices], ["x", "y", "z"]
     if mesh.normals is not None:
         length = np.linalg.norm(mesh.normals, axis=1, keepdims=True)
         columns.append(np.divide(mesh.normals, length, out=np.zeros_like(mesh.normals), where=length > 0))
+        names += ["nx", "ny", "nz"]
+    if mesh.uvs is not None:
+        columns.append(mesh.uvs)
+        names += ["u", "v"]
     vertices = np.ascontiguousarray(np.concatenate(columns, axis=1), dtype="<f4")
     faces = np.empty(len(mesh.faces), dtype=[("n", "u1"), ("index", "<i4", (3,))])
     faces["n"] = 3
     faces["index"] = mesh.faces
-    properties = "".join(f"property float {name}\n" for name in ("x", "y", "z", "nx", "ny", "nz")[: vertices.shape[1]])
+    properties = "".join(f"property float {name}\n" for name in names)
     header = (
         "ply\nformat binary_little_endian 1.0\n"
         f"element vertex {len(vertices)}\n{properties}"
@@ -77,16 +87,43 @@ def _refuse(what: str, scene: Scene) -> SpectraceError:
 
 
 class MitsubaExport:
-    """What the modules' `to_mitsuba(model, exporter)` use: `spectrum` (a Mitsuba spectrum entry) and `refuse` (the
-    error for what has no faithful counterpart)."""
+    """What the modules' `to_mitsuba(model, exporter)` use: `spectrum` (a Mitsuba spectrum entry, or a texture's
+    where a parameter holds one), `refuse` (the error for what has no faithful counterpart), and for the texture
+    modules `write_linear_image` and `uv_transform`."""
 
-    spectrum = staticmethod(regular_spectrum)
-
-    def __init__(self, scene: Scene):
+    def __init__(self, scene: Scene, folder: Path):
         self.scene = scene
+        self.folder = folder
+        self._images: dict[int, Path] = {}
+
+    def spectrum(self, value) -> dict:
+        if not is_texture(value):
+            return regular_spectrum(value)
+        module = texture_module(value)
+        if not hasattr(module, "to_mitsuba"):
+            raise self.refuse(f"a {module.NAME} texture ('{value.source}'): {module.MITSUBA_NONE}")
+        return module.to_mitsuba(value, self)
 
     def refuse(self, what: str) -> SpectraceError:
         return _refuse(what, self.scene)
+
+    def write_linear_image(self, values: np.ndarray) -> Path:
+        """A float OpenEXR (R, G, B) of linear values in the export's folder, once per array."""
+        from spectrace.io.exr import write_exr
+
+        if id(values) not in self._images:
+            path = self.folder / f"texture_{len(self._images)}.exr"
+            write_exr(path, np.asarray(values, np.float32), None, {})
+            self._images[id(values)] = path
+        return self._images[id(values)]
+
+    @staticmethod
+    def uv_transform(scale, offset):
+        """Mitsuba's to_uv for uv' = uv · scale + offset."""
+        import mitsuba as mi  # the caller has chosen a variant
+
+        translate = mi.ScalarTransform4f().translate([float(offset[0]), float(offset[1]), 0.0])
+        return translate @ mi.ScalarTransform4f().scale([float(scale[0]), float(scale[1]), 1.0])
 
 
 # Resolved model -> its module's `to_mitsuba`; a model without one is refused.
@@ -143,7 +180,7 @@ def scene_to_mitsuba_dict(
             },
         },
     }
-    exporter = MitsubaExport(scene)
+    exporter = MitsubaExport(scene, mesh_folder)
     materials: dict[int, str] = {}
     for index, shape in enumerate(scene.shapes):
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))

@@ -4,8 +4,13 @@ This module is the machinery every plugin shares: the XML with each element's pa
 transforms, references, errors and notes, and the plugins that are no material or light (shapes, twosided, the
 sensor, film, sampler and integrator). Each BSDF and emitter is mapped by its spectrace module, which names the
 Mitsuba plugins it imports (MITSUBA_PLUGINS) and converts them (`from_mitsuba`): spectrace.materials.<name> for
-BSDFs, spectrace.lights.<name> for emitters (lights.area for a shape's). The plugin -> module tables are built from
-the registries (MATERIALS, LIGHTS).
+BSDFs, spectrace.lights.<name> for emitters (lights.area for a shape's), spectrace.textures.<name> for textures
+(bitmap, checkerboard). The plugin -> module tables are built from the registries (MATERIALS, LIGHTS, TEXTURES).
+
+A <texture> (by id or inline) becomes a [textures] table wherever a spectrum may be; it is kept exactly where the
+material's or light's parameter table marks the parameter `textured` (`checked_textures`), so a parameter that
+becomes textured there imports textures without a change here. Mitsuba's rectangle and PLY texture coordinates run
+v up where spectrace's run down: textures on those shapes are imported with v flipped, as a material of their own.
 
 Imported here: shapes obj, ply, rectangle, cube, sphere (center, radius; face_normals on obj, ply and sphere);
 twosided around one BSDF (spectrace's
@@ -19,9 +24,9 @@ wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, i
 
 Bad values are reported as one SpectraceError naming the file and the element path
 (`scene.xml: shape[2]/transform/translate@x`, docs/mitsuba.md "Bad input"). Anything else (another plugin type,
-textures, media, include) is reported in one error naming each unsupported plugin and its line; choices
-spectrace makes differently (the reconstruction filter, the sampler) are returned as notes. Parameters are
-documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
+a texture where spectrace takes none, media, include) is reported in one error naming each unsupported plugin and
+its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as notes.
+Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
 """
 
 from __future__ import annotations
@@ -37,13 +42,15 @@ from xml.parsers import expat
 
 import numpy as np
 
-from spectrace.errors import SpectraceError
+from spectrace.errors import SpectraceError, one_line
 from spectrace.geometry.transforms import transform_matrix
 from spectrace.io.input_files import regular_file
+from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import ROUGHNESS_RANGE
 from spectrace.scene import limits
+from spectrace.textures import TEXTURES
 
 
 def _modules_by_plugin(modules) -> dict:
@@ -54,16 +61,26 @@ def _modules_by_plugin(modules) -> dict:
 BSDF_MODULES = _modules_by_plugin(MATERIALS.values())
 EMITTER_MODULES = _modules_by_plugin(LIGHTS.values())  # emitters of their own, <emitter> children of <scene>
 SHAPE_EMITTER_MODULES = _modules_by_plugin((area,))  # emitters on a shape
+TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
 # `twosided` wraps one BSDF: spectrace's materials already reflect on both faces.
 BSDF_WRAPPERS = ("twosided",)
 SUPPORTED = {
     "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
+    "texture": tuple(TEXTURE_MODULES),
     "sensor": ("perspective",),
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis"),
 }
+
+
+def supported_text() -> str:
+    """The plugins spectrace imports, per element: "shape obj, ply, ...; bsdf diffuse, ...; ..." (the modules'
+    MITSUBA_PLUGINS through the registries, and what the importer itself reads)."""
+    return "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
+
+
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 _PLANNED_BSDFS = ("thindielectric",)
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
@@ -114,6 +131,14 @@ _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm
 MITSUBA_DEFAULT_FILM = (768, 576)  # hdrfilm's default width and height
 MITSUBA_DEFAULT_FOCAL_LENGTH_MM = 50.0  # the perspective sensor's, when neither fov nor focal_length is given
 MAX_NESTING = limits.MAX_NESTING
+# The spectrum plugins imported as spectra (spectrum_element), also when written as <texture type="...">.
+_SPECTRUM_PLUGINS = ("uniform", "irregular", "regular", "blackbody", "d65", "srgb")
+# Shapes whose Mitsuba texture coordinates run v up the image where spectrace's (for the same surface) run down:
+# Mitsuba's rectangle has v = 0 at y = -1, spectrace's at y = +1; Mitsuba reads a PLY's v as stored, spectrace
+# flips it (as both do an OBJ's vt). Textures on them are imported with v flipped.
+_V_UP_SHAPES = ("rectangle", "ply")
+# Built-in shapes without texture coordinates in spectrace.
+_NO_UV_SHAPES = ("cube", "sphere")
 
 
 @dataclass
@@ -135,8 +160,7 @@ class Element:
 def _shown(text: str, limit: int = 60) -> str:
     """Text from the file as it may appear in a one-line message: shortened, line breaks and other unprintable
     characters escaped."""
-    short = text if len(text) <= limit else text[:limit] + "..."
-    return "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in short)
+    return one_line(text if len(text) <= limit else text[:limit] + "...")
 
 
 def read_input_file(path: Path, where: str) -> bytes:
@@ -231,7 +255,13 @@ class MitsubaImporter:
         self.unsupported: list[str] = []
         self.notes: list[str] = []
         self.materials: dict[str, dict] = {}
-        self._material_of_element: dict[int, str] = {}
+        self._material_of_element: dict[tuple[int, bool], str] = {}
+        self._textured_materials: set[str] = set()
+        self.textures: dict[str, dict] = {}
+        self._texture_of_element: dict[tuple[int, bool], str] = {}
+        self._texture_elements: dict[str, Element] = {}
+        self._flip_v = False  # textures being converted for a shape whose v runs up (_V_UP_SHAPES)
+        self._used_texture = False  # a texture was converted or reused since this was last reset
         self._resolving: list[int] = []  # elements being converted, to stop reference cycles
         self.origins: dict[str, Element] = {}  # TOML key path -> the element it was imported from
 
@@ -437,10 +467,11 @@ class MitsubaImporter:
         matrix[:3, 0], matrix[:3, 1], matrix[:3, 2], matrix[:3, 3] = left, np.cross(direction, left), direction, origin
         return matrix
 
-    def to_world(self, properties: dict[str, Element]) -> np.ndarray:
-        element = properties.get("to_world")
+    def to_world(self, properties: dict[str, Element], key: str = "to_world") -> np.ndarray:
+        element = properties.get(key)
         if element is None:
             return np.eye(4)
+        element = self.resolve(element)
         steps = self.transform_steps(element)
         try:
             with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported just below
@@ -476,9 +507,101 @@ class MitsubaImporter:
         if element.tag == "spectrum":
             return self.spectrum_element(element)
         if element.tag == "texture":
+            return self.texture(element, key)
+        raise self.fail(element, f"'{key}' must be a colour or spectrum, got <{_shown(element.tag)}>")
+
+    # -------------------------------------------------- textures
+
+    def texture(self, element: Element, key: str) -> dict | None:
+        """A <texture> where a spectrum may be: a reference to its [textures] table, converted by its module on
+        first use (once more, v flipped, for shapes whose v runs up). Whether the parameter takes a texture is
+        decided by the material's or light's parameter table (`checked_textures`), not here."""
+        if self.kind(element) in _SPECTRUM_PLUGINS:  # Mitsuba 3's spectra are textures; its serialiser says so
+            return self.spectrum_element(element)
+        self._used_texture = True
+        cache = (id(element), self._flip_v)
+        if cache in self._texture_of_element:
+            return {"texture": self._texture_of_element[cache]}
+        module = TEXTURE_MODULES.get(self.kind(element))
+        if module is None:
             self.unsupported_plugin(element, f" as {key}")
             return None
-        raise self.fail(element, f"'{key}' must be a colour or spectrum, got <{_shown(element.tag)}>")
+        table = module.from_mitsuba(self, element, self.properties(element))
+        if table is None:
+            return None
+        base = (self.attribute(element, "id") or f"{key}_texture") + ("_flipped_v" if self._flip_v else "")
+        name = _unique_name(base, {**self.textures, **TEXTURES})  # a texture named after a type is ambiguous
+        self.textures[name] = table
+        self._texture_of_element[cache] = name
+        self._texture_elements[name] = element
+        self.origins[f"textures.{name}"] = element
+        return {"texture": name}
+
+    def texture_type(self, name: str) -> str:
+        return self.textures[name]["type"]
+
+    def checked_textures(self, table: dict, module) -> bool:
+        """False, recording each, where a texture was given to a parameter that `module`'s parameter table does not
+        mark `textured`: marking one there is all it takes for the import to pass textures on to it."""
+        textured = {parameter.name for parameter in module.PARAMETERS if parameter.textured}
+        fine = True
+        for key, value in table.items():
+            if isinstance(value, dict) and list(value) == ["texture"] and key not in textured:
+                self.unsupported_plugin(
+                    self._texture_elements[value["texture"]],
+                    f" as {key} of {module.NAME} (spectrace's {module.NAME} takes no texture there)",
+                )
+                fine = False
+        return fine
+
+    def uv_placement(self, texture: Element, properties: dict[str, Element], squares: float = 1.0) -> dict | None:
+        """uv_scale and uv_offset for a texture's `to_uv`, which spectrace represents when it scales and translates
+        (st = uv · uv_scale + uv_offset); `squares` multiplies both (a checkerboard's squares per unit of Mitsuba's
+        uv'). Only what differs from the default (squares, 0) is written."""
+        scale, offset = [1.0, 1.0], [0.0, 0.0]
+        if "to_uv" in properties:
+            element = self.resolve(properties["to_uv"])
+            if element.tag != "transform":
+                raise self.fail(element, f"to_uv must be a <transform>, got <{_shown(element.tag)}>")
+            matrix = self.to_world(properties, "to_uv")
+            # Mitsuba keeps the 2D affine part of the 4 x 4 matrix (x and y rows and columns, and the translation).
+            if matrix[0, 1] != 0.0 or matrix[1, 0] != 0.0:
+                self.unsupported_plugin(
+                    texture, " with a to_uv that rotates or shears (spectrace's textures take uv_scale and uv_offset)"
+                )
+                return None
+            scale, offset = [matrix[0, 0], matrix[1, 1]], [matrix[0, 3], matrix[1, 3]]
+        if self._flip_v:  # the lookup at (u, 1 - v): st_v = -scale_v · v + scale_v + offset_v
+            scale, offset = [scale[0], -scale[1]], [offset[0], scale[1] + offset[1]]
+        table = {}
+        if scale != [1.0, 1.0]:
+            table["uv_scale"] = [float(squares * value) for value in scale]
+        if offset != [0.0, 0.0]:
+            table["uv_offset"] = [float(squares * value) for value in offset]
+        return table
+
+    def input_file(self, element: Element, what: str = "file") -> str:
+        """A file named by a property's value, relative to the XML: checked to exist, and written relative to the
+        TOML."""
+        path = self.xml_path.parent / self.required(element, "value")
+        try:
+            found = path.is_file()
+        except (OSError, ValueError):  # e.g. a name too long for the file system
+            found = False
+        if not found:
+            raise self.fail(element, f"{what} '{_shown(str(path), 200)}' does not exist or is not a file", "value")
+        return _relative_path(path, self.toml_folder)
+
+    def choice(self, element: Element, options: tuple[str, ...]) -> str:
+        """A string property that must be one of `options`."""
+        value = self.text(element)
+        if value not in options:
+            raise self.fail(
+                element,
+                f"unknown {_shown(element.get('name') or element.tag)} '{_shown(value)}' ({', '.join(options)})",
+                "value",
+            )
+        return value
 
     def default_emission(self) -> dict:
         """What an emitter emits when its spectrum is not given: Mitsuba's d65 of unit luminance."""
@@ -625,21 +748,41 @@ class MitsubaImporter:
 
     # -------------------------------------------------- materials
 
-    def material(self, element: Element | None, owner: str) -> str | None:
-        """The name of the spectrace material for a (possibly referenced) bsdf, defining it on first use."""
+    def material(self, element: Element | None, owner: str, flip_v: bool = False) -> str | None:
+        """The name of the spectrace material for a (possibly referenced) bsdf, defining it on first use. flip_v:
+        for a shape whose v runs up (_V_UP_SHAPES); a textured bsdf then becomes a material of its own, with its
+        textures' v flipped."""
         if element is None:
             if "default" not in self.materials:
                 self.materials["default"] = {"type": "diffuse", "reflectance": {"value": 0.5}}  # Mitsuba's default
             return "default"
         bsdf = self.resolve(element)
-        if id(bsdf) in self._material_of_element:
-            return self._material_of_element[id(bsdf)]
-        name = _unique_name(self.attribute(bsdf, "id") or f"{owner}_bsdf", self.materials)
-        table = self.material_table(bsdf)
+        if (id(bsdf), flip_v) in self._material_of_element:
+            return self._material_of_element[(id(bsdf), flip_v)]
+        base = self.attribute(bsdf, "id") or f"{owner}_bsdf"
+        name = _unique_name(base, self.materials)
+        saved = self._flip_v, self._used_texture
+        self._flip_v, self._used_texture = flip_v, False
+        try:
+            table = self.material_table(bsdf)
+            textured = self._used_texture
+        finally:
+            self._flip_v, self._used_texture = saved[0], saved[1] or self._used_texture
         if table is None:
             return None
+        if textured and flip_v:
+            name = _unique_name(f"{base}_flipped_v", self.materials)
+            self.notes.append(
+                f"line {bsdf.line}: {bsdf.label()} on a rectangle or PLY shape: their texture coordinates run v up "
+                f"in Mitsuba and down in spectrace, so it is imported as material '{name}' with its textures' v "
+                "flipped"
+            )
         self.materials[name] = table
-        self._material_of_element[id(bsdf)] = name
+        self._material_of_element[(id(bsdf), flip_v)] = name
+        if not textured:  # the same material whichever way v runs
+            self._material_of_element[(id(bsdf), not flip_v)] = name
+        else:
+            self._textured_materials.add(name)
         self.origins[f"materials.{name}"] = bsdf
         return name
 
@@ -660,7 +803,11 @@ class MitsubaImporter:
                 return None
             return self.material_table(nested[0])
         if kind in BSDF_MODULES:
-            return BSDF_MODULES[kind].from_mitsuba(self, bsdf, properties)
+            table = BSDF_MODULES[kind].from_mitsuba(self, bsdf, properties)
+            # A module may import a plugin as another material (conductor "none" as mirror): that one's table counts.
+            if table is None or not self.checked_textures(table, MATERIALS[table["type"]]):
+                return None
+            return table
         self.unsupported_plugin(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
 
@@ -733,16 +880,7 @@ class MitsubaImporter:
         steps: list[dict] = []
         if kind in ("obj", "ply"):
             filename = self.child(properties, "filename", element)
-            mesh_path = self.xml_path.parent / self.required(filename, "value")
-            try:
-                found = mesh_path.is_file()
-            except (OSError, ValueError):  # e.g. a name too long for the file system
-                found = False
-            if not found:
-                raise self.fail(
-                    filename, f"mesh file '{_shown(str(mesh_path), 200)}' does not exist or is not a file", "value"
-                )
-            table |= {"type": "mesh", "file": _relative_path(mesh_path, self.toml_folder)}
+            table |= {"type": "mesh", "file": self.input_file(filename, "mesh file")}
         else:
             table["type"] = kind
         if kind == "sphere":
@@ -768,13 +906,19 @@ class MitsubaImporter:
             if face_normals or kind != "sphere":
                 table["face_normals"] = face_normals
         bsdf = properties.get("bsdf") or next((c for c in properties.values() if self.resolve(c).tag == "bsdf"), None)
-        table["material"] = self.material(bsdf, name)
+        table["material"] = self.material(bsdf, name, flip_v=kind in _V_UP_SHAPES)
+        if kind in _NO_UV_SHAPES and table["material"] in self._textured_materials:
+            self.unsupported_plugin(
+                element, f" with a textured bsdf (spectrace's {kind} has no texture coordinates; use an obj or ply)"
+            )
         emitter = next((self.resolve(c) for c in properties.values() if self.resolve(c).tag == "emitter"), None)
         if emitter is not None:
             module = SHAPE_EMITTER_MODULES.get(self.kind(emitter))
             if module is None:
                 self.unsupported_plugin(emitter, " on a shape")
-            elif (emitter_table := module.from_mitsuba(self, emitter, self.properties(emitter))) is not None:
+            elif (
+                emitter_table := module.from_mitsuba(self, emitter, self.properties(emitter))
+            ) is not None and self.checked_textures(emitter_table, module):
                 table["emitter"] = emitter_table
         return table if table["material"] is not None else None
 
@@ -783,7 +927,8 @@ class MitsubaImporter:
         properties = self.properties(element)
         matrix = self.to_world(properties)
         if kind in EMITTER_MODULES:
-            return EMITTER_MODULES[kind].from_mitsuba(self, element, properties, matrix)
+            table = EMITTER_MODULES[kind].from_mitsuba(self, element, properties, matrix)
+            return table if table is None or self.checked_textures(table, LIGHTS[table["type"]]) else None
         self.unsupported_plugin(element)
         return None
 
@@ -933,20 +1078,21 @@ class MitsubaImporter:
             elif child.tag in _OBJECT_TAGS or child.tag == "include":
                 self.unsupported_plugin(child)
         if self.unsupported:
-            supported = "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
             raise SpectraceError(
-                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported})",
+                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported_text()})",
                 where=str(self.xml_path),
             )
         environments = [self.origins[f"lights[{i}]"] for i, light in enumerate(lights) if light["type"] == "constant"]
         if len(environments) > 1:
             raise self.fail(environments[1], "a second constant emitter; spectrace takes one environment light")
+        if self.textures:
+            data["textures"] = self.textures
         data["materials"] = self.materials
         data["shapes"] = shapes
         data["lights"] = lights
         return {
             key: data[key]
-            for key in ("camera", "film", "integrator", "sampler", "materials", "shapes", "lights")
+            for key in ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
             if key in data and data[key] != []
         }
 
@@ -992,27 +1138,14 @@ def _relative_path(path: Path, folder: Path) -> str:
         return path.resolve().as_posix()
 
 
-def _one_line(error: SpectraceError) -> SpectraceError:
-    """The error with anything that would break its single line (a line break from a file name) escaped."""
-    message, where = _shown(error.message, 10_000), _shown(error.where, 10_000) if error.where else None
-    return error if (message, where) == (error.message, error.where) else SpectraceError(message, where=where)
-
-
 def check_output_path(toml_path: Path, xml_path: Path | None = None) -> None:
-    """Refuse, before any work, an output that could not be written or would destroy the input: a folder, a place
-    under a file or in a read-only folder, the XML itself. Missing folders are created when the TOML is written."""
+    """Refuse, before any work, an output that could not be written or would destroy the input: what every output
+    is refused for (spectrace.io.output_files), and the XML itself. Missing folders are created when the TOML is
+    written."""
     where = str(toml_path)
-    if toml_path.is_dir():
-        raise SpectraceError("is a folder; give the path of the TOML file to write", where=where)
     if xml_path is not None and toml_path.exists() and xml_path.exists() and toml_path.samefile(xml_path):
         raise SpectraceError("is the Mitsuba scene being imported; writing it would destroy the input", where=where)
-    folder = toml_path.parent if str(toml_path.parent) else Path(".")
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
-    if not folder.is_dir():
-        raise SpectraceError(f"'{folder}' is not a folder, so the TOML cannot be written there", where=where)
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise SpectraceError(f"the folder '{folder}' is not writable", where=where)
+    check_output_file(toml_path, "the TOML file", create_folders=True)
 
 
 # ---------------------------------------------------------------- public API
@@ -1026,10 +1159,7 @@ def mitsuba_scene_data(
     Raises SpectraceError naming every unsupported plugin."""
     xml_path = Path(xml_path)
     importer = MitsubaImporter(xml_path, Path(toml_folder) if toml_folder else xml_path.parent, parameters or {})
-    try:
-        return importer.run(parse_xml(xml_path)), importer.notes
-    except SpectraceError as error:
-        raise _one_line(error) from None
+    return importer.run(parse_xml(xml_path)), importer.notes
 
 
 def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None) -> list[str]:
@@ -1044,29 +1174,26 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
     xml_path, toml_path = Path(xml_path), Path(toml_path)
     check_output_path(toml_path, xml_path)
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
-    try:
-        data = importer.run(parse_xml(xml_path))
-        header = "\n".join(
-            [
-                f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by `spectrace import-mitsuba`.",
-                *(f"note: {note}" for note in importer.notes),
-            ]
-        )
-        text = dumps(data, header=header)
+    data = importer.run(parse_xml(xml_path))
+    header = "\n".join(
+        [
+            f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by `spectrace import-mitsuba`.",
+            *(f"note: {note}" for note in importer.notes),
+        ]
+    )
+    text = dumps(data, header=header)
 
-        def write_and_check(temp: Path) -> None:
-            temp.write_text(text, encoding="utf-8")
-            try:
-                load_scene(temp)  # from the output's folder, where its relative mesh paths lead
-            except SpectraceError as error:
-                raise importer.imported_error(error, temp) from None
-
+    def write_and_check(temp: Path) -> None:
+        temp.write_text(text, encoding="utf-8")
         try:
-            write_atomically(toml_path, write_and_check)
-        except OSError as error:
-            raise SpectraceError(f"cannot write the TOML ({error.strerror or error})", where=str(toml_path)) from None
-    except SpectraceError as error:
-        raise _one_line(error) from None
+            load_scene(temp)  # from the output's folder, where its relative mesh paths lead
+        except SpectraceError as error:
+            raise importer.imported_error(error, temp) from None
+
+    try:
+        write_atomically(toml_path, write_and_check)
+    except OSError as error:
+        raise SpectraceError(f"cannot write the TOML ({error.strerror or error})", where=str(toml_path)) from None
     return importer.notes
 
 

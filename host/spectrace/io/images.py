@@ -73,3 +73,69 @@ def read_environment_map(path: Path, where: str, what: str = "environment map") 
     if not np.all(np.isfinite(rgb)):
         raise SpectraceError(f"{what} '{path}' has NaN or infinite pixels", where=where)
     return rgb
+
+
+def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
+    """(values (height, width, channels), encoded) of an image texture: channels 1 (grey) or 3 (an alpha channel is
+    dropped). PNG, JPEG, TIFF and the other formats Pillow reads give 8/16-bit code values divided by their maximum
+    (encoded = True: the caller decodes the transfer curve); 32-bit float images (TIFF mode F) and OpenEXR
+    (R, G, B, or Y) give their values as stored (encoded = False). The size in the header is checked before anything
+    is decoded; non-finite values are refused."""
+    regular_file(path, where, what="texture")
+    if path.suffix.lower() == ".exr":
+        try:
+            size = _exr_size(path)
+        except Exception as exc:  # OpenEXR raises bare exceptions for unreadable files
+            raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
+        if problem := limits.image_size_problem(*size):
+            raise SpectraceError(f"texture '{path}': {problem}", where=where)
+        from spectrace.io.exr import read_exr
+
+        try:
+            channels, _ = read_exr(path)
+        except Exception as exc:
+            raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
+        if "RGB" in channels or "RGBA" in channels:
+            values = np.asarray(channels.get("RGB", channels.get("RGBA")))[..., :3]
+        elif {"R", "G", "B"} <= set(channels):
+            values = np.stack([channels["R"], channels["G"], channels["B"]], axis=-1)
+        elif "Y" in channels:
+            values = np.asarray(channels["Y"])[..., None]
+        else:
+            names = ", ".join(sorted(channels)) or "none"
+            raise SpectraceError(f"texture '{path}' has no R, G, B (or Y) channels (it has {names})", where=where)
+        encoded = False
+        values = np.asarray(values, np.float64)
+    else:
+        import warnings
+
+        from PIL import Image as PILImage
+
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
+                with PILImage.open(path) as picture:  # reads the header only
+                    if problem := limits.image_size_problem(*picture.size):
+                        raise SpectraceError(f"texture '{path}': {problem}", where=where)
+                    values, encoded = pil_image_values(picture)
+        except SpectraceError:
+            raise
+        except Exception as exc:  # Pillow raises many types for unreadable files
+            raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
+    if not np.all(np.isfinite(values)):
+        raise SpectraceError(f"texture '{path}' has NaN or infinite values", where=where)
+    return values, encoded
+
+
+def pil_image_values(picture) -> tuple[np.ndarray, bool]:
+    """(values (height, width, 1 or 3), encoded) of a Pillow image: code values over their maximum (encoded) or,
+    for 32-bit float images, the values as stored."""
+    mode = picture.mode
+    if mode == "F":
+        return np.asarray(picture, np.float64)[..., None], False
+    if mode.startswith("I;16") or mode == "I":
+        return np.asarray(picture, np.float64)[..., None] / 65535.0, True
+    grey = mode in ("1", "L", "LA")
+    converted = picture.convert("L" if grey else "RGB")
+    values = np.asarray(converted, np.float64) / 255.0
+    return (values[..., None] if grey else values), True

@@ -1,9 +1,14 @@
-"""What every light module shares: its Light rows (kernels/types.h) and the checks of positions and directions."""
+"""What every light module shares: the scene model's `Light`, its Light rows (kernels/types.h) and the checks of
+positions and directions."""
 
 import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.spectral.table import SpectrumTable
+
+
+class Light:
+    """A `[[lights]]` light of the scene model: what every light module's MODEL is (a shape's AreaEmitter is not)."""
 
 
 def light_row(
@@ -45,14 +50,15 @@ class LightRows:
     """The rows the lights write, each with an estimate of the power it emits (for picking lights in proportion to
     it), and the buffers they share: the spectrum table and one texel buffer for every image a light shows."""
 
-    def __init__(self, table: SpectrumTable, scene_radius: float):
+    def __init__(self, table: SpectrumTable, scene_radius: float, texel_chunks: list[np.ndarray] | None = None):
         self.table = table
         self.scene_radius = scene_radius
         self.rows: list[tuple] = []
         self.power: list[float] = []
         self.environment_light = -1  # index of the environment's row, or -1
         self.map_cdf = np.zeros(2, np.float32)  # the environment map's sampling CDFs (kernels/environment.cl)
-        self.texel_chunks = [np.zeros((1, 4), np.float32)]
+        # The texel buffer, which material textures share (spectrace.textures.TextureRows): a dummy texel first.
+        self.texel_chunks = texel_chunks if texel_chunks is not None else [np.zeros((1, 4), np.float32)]
 
     def add(self, row: tuple, power: float, environment: bool = False) -> None:
         if environment:

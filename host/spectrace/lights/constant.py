@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import LIGHT_ENVIRONMENT
-from spectrace.lights.base import LightRows, light_row
+from spectrace.lights.base import Light, LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter
 from spectrace.spectral.spectrum import Spectrum
 
@@ -16,7 +16,7 @@ PARAMETERS = (Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="
 
 
 @dataclass(frozen=True)
-class ConstantEnvironment:
+class ConstantEnvironment(Light):
     """Uniform light from every direction at infinity: radiance L(λ) in W/(m² sr nm)."""
 
     radiance: Spectrum

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import LIGHT_DISTANT
-from spectrace.lights.base import LightRows, light_row, unit_direction
+from spectrace.lights.base import Light, LightRows, light_row, unit_direction
 from spectrace.materials.parameters import REQUIRED, Parameter
 from spectrace.spectral.spectrum import Spectrum
 
@@ -19,7 +19,7 @@ PARAMETERS = (
 
 
 @dataclass(frozen=True)
-class DistantLight:
+class DistantLight(Light):
     """Parallel light travelling along `direction`: irradiance E(λ) in W/(m² nm) on a surface facing it."""
 
     direction: tuple[float, float, float]

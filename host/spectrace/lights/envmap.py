@@ -7,7 +7,7 @@ import numpy as np
 
 from spectrace.engine.device_types import LIGHT_ENVIRONMENT_MAP
 from spectrace.io.images import read_environment_map
-from spectrace.lights.base import LightRows, light_row
+from spectrace.lights.base import Light, LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
@@ -23,7 +23,7 @@ PARAMETERS = (
 
 
 @dataclass(frozen=True, eq=False)
-class EnvironmentMap:
+class EnvironmentMap(Light):
     """Light from a latitude-longitude image at infinity: `rgb` (height, width, 3) linear sRGB, times `scale`;
     each texel's radiance is the D65-based emission uplift of its colour (RGB (1,1,1) = D65 at Y = 1), in
     W/(m² sr nm). +y is up; the image centre looks along −z (see kernels/environment.cl)."""

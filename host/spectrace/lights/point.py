@@ -9,7 +9,7 @@ import numpy as np
 
 from spectrace.engine.device_types import LIGHT_POINT
 from spectrace.errors import SpectraceError
-from spectrace.lights.base import LightRows, check_position, light_row
+from spectrace.lights.base import Light, LightRows, check_position, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
@@ -36,7 +36,7 @@ PARAMETERS = (POSITION, INTENSITY, POWER, SPECTRUM)
 
 
 @dataclass(frozen=True)
-class PointLight:
+class PointLight(Light):
     """Isotropic point light: intensity I(λ) in W/(sr nm) (a flux Φ(λ) in W/nm gives I = Φ/4π)."""
 
     position: tuple[float, float, float]

@@ -7,7 +7,7 @@ import numpy as np
 from spectrace.engine.device_types import LIGHT_SPOT
 from spectrace.errors import SpectraceError
 from spectrace.lights import point
-from spectrace.lights.base import LightRows, check_position, light_row, unit_direction
+from spectrace.lights.base import Light, LightRows, check_position, light_row, unit_direction
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
 
@@ -48,7 +48,7 @@ def effective_solid_angle(cutoff_degrees: float, falloff_start_degrees: float) -
 
 
 @dataclass(frozen=True)
-class SpotLight:
+class SpotLight(Light):
     """Point light emitting into a cone about `direction`: I(λ) on the axis in W/(sr nm), full up to
     falloff_start_degrees from the axis, falling smoothly (smoothstep in cos θ) to 0 at cutoff_degrees."""
 

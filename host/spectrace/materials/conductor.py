@@ -5,11 +5,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import MATERIAL_CONDUCTOR
+from spectrace.errors import SpectraceError
 from spectrace.materials.opaque import RoughOpaque
 from spectrace.materials.parameters import Parameter, Range, reflectance, roughness
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "conductor"
@@ -98,13 +100,29 @@ def from_spec(spec, resolver, key: str) -> ConductorMaterial:
 
 
 def make(
-    eta: Spectrum, k: Spectrum, roughness: float = ROUGHNESS.number_default, specular_tint: Spectrum | None = None
+    metal: str | None = None,
+    *,
+    eta: SpectrumLike | None = None,
+    k: SpectrumLike | None = None,
+    roughness: float = ROUGHNESS.number_default,
+    specular_tint: SpectrumLike | None = None,
 ) -> ConductorMaterial:
-    return ConductorMaterial(eta, k, roughness=ROUGHNESS.check(roughness), specular_tint=specular_tint)
+    """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
+    index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
+    mirror-like metal); `specular_tint` (a reflectance) multiplies the Fresnel term."""
+    if problem := source_problem(metal, eta, k):
+        raise SpectraceError(problem)
+    if metal is not None:
+        eta_spectrum, k_spectrum = metal_ior(metal, where="metal")
+    else:
+        assert eta is not None and k is not None  # source_problem has refused every other combination
+        eta_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(eta), True, "eta")
+        k_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(k), False, "k")
+    tint = spectrum_input.reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
+    return ConductorMaterial(eta_spectrum, k_spectrum, roughness=ROUGHNESS.check(roughness), specular_tint=tint)
 
 
 def write_row(row: np.ndarray, material: ConductorMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_CONDUCTOR
     row["eta_offset"] = table.add(material.eta)
     row["k_offset"] = table.add(material.k)
     if material.specular_tint is not None:

@@ -5,10 +5,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MATERIAL_DIELECTRIC
+from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER
+from spectrace.materials.base import Material
 from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "dielectric"
@@ -39,7 +42,7 @@ PARAMETERS = (
 
 
 @dataclass(frozen=True)
-class DielectricMaterial:
+class DielectricMaterial(Material):
     """Glass, water: Fresnel reflection and Snell refraction at an interface to an interior of index `ior` relative
     to the exterior (air), which may depend on the wavelength (dispersion); smooth or GGX-rough. The geometric
     normal (the winding) points to the exterior. `specular_tint` multiplies both lobes when given."""
@@ -77,15 +80,19 @@ def from_spec(spec, resolver, key: str) -> DielectricMaterial:
 def make(
     ior: float | str | dict = IOR.number_default,
     roughness: float = ROUGHNESS.number_default,
-    specular_tint: Spectrum | None = None,
+    specular_tint: SpectrumLike | None = None,
 ) -> DielectricMaterial:
+    """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
+    exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
+    C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
+    face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance) multiplies both lobes."""
+    tint = spectrum_input.reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
     return DielectricMaterial(
-        index_of_refraction(ior, where="ior"), roughness=ROUGHNESS.check(roughness), specular_tint=specular_tint
+        index_of_refraction(ior, where="ior"), roughness=ROUGHNESS.check(roughness), specular_tint=tint
     )
 
 
 def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_DIELECTRIC
     ior = material.ior
     if ior.model == "sellmeier":
         row["ior_model"] = IOR_SELLMEIER

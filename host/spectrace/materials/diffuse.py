@@ -1,12 +1,13 @@
 """`diffuse`: Lambertian reflection, f = R(λ)/π, on both faces (docs/materials.md, kernels/bsdf_diffuse.cl)."""
 
-from spectrace.engine.device_types import MATERIAL_DIFFUSE
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
 from spectrace.materials.parameters import REQUIRED, reflectance
+from spectrace.spectral import spectrum_input
+from spectrace.spectral.spectrum_input import SpectrumLike
 
 NAME = "diffuse"
 MITSUBA_PLUGINS = ("diffuse",)
-PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π"),)
+PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π", textured=True),)
 
 
 class DiffuseMaterial(ReflectanceOnly):
@@ -18,7 +19,13 @@ class DiffuseMaterial(ReflectanceOnly):
 MODEL = DiffuseMaterial
 
 
-from_spec, make, write_row = reflectance_only(DiffuseMaterial, MATERIAL_DIFFUSE)
+from_spec, write_row = reflectance_only(DiffuseMaterial)
+
+
+def make(reflectance: SpectrumLike) -> DiffuseMaterial:
+    """Lambertian material, f = R(λ)/π, reflecting on both faces; `reflectance` in [0, 1] (a linear sRGB triple is
+    uplifted)."""
+    return DiffuseMaterial(spectrum_input.reflectance_or_texture(reflectance, "reflectance"))
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:

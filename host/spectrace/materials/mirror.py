@@ -1,8 +1,9 @@
 """`mirror`: perfect specular reflection of reflectance R(λ) (docs/materials.md, kernels/bsdf_mirror.cl)."""
 
-from spectrace.engine.device_types import MATERIAL_MIRROR
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
 from spectrace.materials.parameters import reflectance
+from spectrace.spectral import spectrum_input
+from spectrace.spectral.spectrum_input import SpectrumLike
 
 NAME = "mirror"
 MITSUBA_PLUGINS = ()
@@ -19,4 +20,9 @@ class MirrorMaterial(ReflectanceOnly):
 MODEL = MirrorMaterial
 
 
-from_spec, make, write_row = reflectance_only(MirrorMaterial, MATERIAL_MIRROR)
+from_spec, write_row = reflectance_only(MirrorMaterial)
+
+
+def make(reflectance: SpectrumLike = PARAMETERS[0].number_default) -> MirrorMaterial:
+    """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1), on both faces."""
+    return MirrorMaterial(spectrum_input.reflectance(reflectance, "reflectance"))

@@ -1,5 +1,5 @@
 """What the materials that only reflect share: their flags, and for those described by one reflectance alone
-(diffuse, mirror) the whole host side but the flag is_delta and the kernel's material type."""
+(diffuse, mirror) the whole host side but the flag is_delta and the API's constructor."""
 
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -7,12 +7,13 @@ from typing import Any
 
 import numpy as np
 
+from spectrace.materials.base import Material
 from spectrace.materials.parameters import SMOOTH_ALPHA
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 
-class Opaque:
+class Opaque(Material):
     """Reflects only, with one index for every wavelength."""
 
     has_transmission = False
@@ -33,20 +34,16 @@ class RoughOpaque(Opaque):
 class ReflectanceOnly(Opaque):
     """A material described by its reflectance R(λ) alone; a subclass states is_delta."""
 
-    reflectance: Spectrum
+    reflectance: Spectrum  # or, where the parameter table says textured, a texture (spectrace.textures)
 
 
-def reflectance_only(model: Callable[[Spectrum], Any], material_type: int) -> tuple[Callable, Callable, Callable]:
-    """`from_spec`, `make` and `write_row` of a material whose one parameter is its reflectance."""
+def reflectance_only(model: Callable[[Spectrum], Any]) -> tuple[Callable, Callable]:
+    """`from_spec` and `write_row` of a material whose one parameter is its reflectance."""
 
     def from_spec(spec, resolver, key: str):
-        return model(resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False))
-
-    def make(reflectance: Spectrum):
-        return model(reflectance)
+        return model(resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"))
 
     def write_row(row: np.ndarray, material, table: SpectrumTable) -> None:
-        row["type"] = material_type
         row["reflectance_offset"] = table.add(material.reflectance)
 
-    return from_spec, make, write_row
+    return from_spec, write_row

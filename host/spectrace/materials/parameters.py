@@ -67,7 +67,8 @@ class Parameter:
     what every wavelength's value must satisfy). doc: the meaning, as the docs' table says it. type_doc /
     default_doc: how the docs' table writes the type and default where the generated text would not do.
     api_name: the Python API's name for the key when it differs. schema_range: False where a check of the whole
-    table (the module's SPEC_CHECKS) reports the range instead of the field's own constraint.
+    table (the module's SPEC_CHECKS) reports the range instead of the field's own constraint. textured: the key also
+    takes a texture (spectrace.textures), which the material's row refers to by its `<name>_texture` index.
     """
 
     name: str
@@ -80,6 +81,7 @@ class Parameter:
     default_doc: str | None = None
     api_name: str | None = None
     schema_range: bool = True
+    textured: bool = False
 
     @property
     def required(self) -> bool:
@@ -115,7 +117,7 @@ class Parameter:
         """The docs' "type, unit" column."""
         if self.type_doc is not None:
             return self.type_doc
-        text = self.type
+        text = f"{self.type} or texture" if self.textured and self.type == "spectrum" else self.type
         if self.range is not None and self.range.bounded:
             text += f" in {self.range}"
         if self.unit:
@@ -149,6 +151,10 @@ def roughness(default: float, doc: str) -> Parameter:
     return Parameter("roughness", "float", default=default, range=ROUGHNESS_RANGE, doc=doc)
 
 
-def reflectance(default: object, doc: str, name: str = "reflectance", default_doc: str | None = None) -> Parameter:
-    """A spectrum bounded by [0, 1] at every wavelength."""
-    return Parameter(name, "spectrum", default=default, range=Range(0.0, 1.0), doc=doc, default_doc=default_doc)
+def reflectance(
+    default: object, doc: str, name: str = "reflectance", default_doc: str | None = None, textured: bool = False
+) -> Parameter:
+    """A spectrum bounded by [0, 1] at every wavelength (or, when textured, a texture of such spectra)."""
+    return Parameter(
+        name, "spectrum", default=default, range=Range(0.0, 1.0), doc=doc, default_doc=default_doc, textured=textured
+    )

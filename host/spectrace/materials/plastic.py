@@ -5,10 +5,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CONSTANT, MATERIAL_PLASTIC
+from spectrace.engine.device_types import IOR_CONSTANT
 from spectrace.materials.opaque import Opaque
 from spectrace.materials.parameters import REQUIRED, Parameter, Range, reflectance, roughness
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "plastic"
@@ -23,14 +25,14 @@ IOR = Parameter(
     doc="index of refraction of the clear coat relative to the outside",
 )
 ROUGHNESS = roughness(0.0, "GGX α of the coat")
-PARAMETERS = (reflectance(REQUIRED, "albedo of the diffuse base under the coat"), IOR, ROUGHNESS)
+PARAMETERS = (reflectance(REQUIRED, "albedo of the diffuse base under the coat", textured=True), IOR, ROUGHNESS)
 
 
 @dataclass(frozen=True)
 class PlasticMaterial(Opaque):
     """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside."""
 
-    reflectance: Spectrum
+    reflectance: Spectrum  # or a texture (spectrace.textures)
     ior: float = IOR.number_default
     roughness: float = ROUGHNESS.number_default
 
@@ -42,20 +44,25 @@ MODEL = PlasticMaterial
 
 def from_spec(spec, resolver, key: str) -> PlasticMaterial:
     return PlasticMaterial(
-        resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False),
+        resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"),
         ior=spec.ior,
         roughness=spec.roughness,
     )
 
 
 def make(
-    reflectance: Spectrum, ior: float = IOR.number_default, roughness: float = ROUGHNESS.number_default
+    reflectance: SpectrumLike, ior: float = IOR.number_default, roughness: float = ROUGHNESS.number_default
 ) -> PlasticMaterial:
-    return PlasticMaterial(reflectance, ior=IOR.check(ior), roughness=ROUGHNESS.check(roughness))
+    """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
+    smooth or GGX-rough (`roughness` = α)."""
+    return PlasticMaterial(
+        spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
+        ior=IOR.check(ior),
+        roughness=ROUGHNESS.check(roughness),
+    )
 
 
 def write_row(row: np.ndarray, material: PlasticMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_PLASTIC
     row["reflectance_offset"] = table.add(material.reflectance)
     row["ior_model"] = IOR_CONSTANT
     row["ior"] = material.ior

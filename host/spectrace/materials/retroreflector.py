@@ -5,10 +5,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import MATERIAL_RETROREFLECTOR
 from spectrace.materials.opaque import RoughOpaque
 from spectrace.materials.parameters import reflectance, roughness
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "retroreflector"
@@ -35,11 +36,16 @@ def from_spec(spec, resolver, key: str) -> RetroreflectorMaterial:
     )
 
 
-def make(reflectance: Spectrum, roughness: float = ROUGHNESS.number_default) -> RetroreflectorMaterial:
-    return RetroreflectorMaterial(reflectance, roughness=ROUGHNESS.check(roughness))
+def make(
+    reflectance: SpectrumLike = PARAMETERS[0].number_default, roughness: float = ROUGHNESS.number_default
+) -> RetroreflectorMaterial:
+    """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
+    incident direction, scaled by `reflectance`."""
+    return RetroreflectorMaterial(
+        spectrum_input.reflectance(reflectance, "reflectance"), roughness=ROUGHNESS.check(roughness)
+    )
 
 
 def write_row(row: np.ndarray, material: RetroreflectorMaterial, table: SpectrumTable) -> None:
-    row["type"] = MATERIAL_RETROREFLECTOR
     row["reflectance_offset"] = table.add(material.reflectance)
     row["alpha"] = material.roughness

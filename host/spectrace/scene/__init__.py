@@ -8,21 +8,14 @@ from pathlib import Path
 
 from spectrace.lazy_names import lazy_names
 
-MODEL_NAMES = [
-    "Scene",
-    "Camera",
-    "Shape",
-    "DiffuseMaterial",
-    "MirrorMaterial",
-    "ConductorMaterial",
-    "PlasticMaterial",
-    "RetroreflectorMaterial",
-    "DielectricMaterial",
-    "AreaEmitter",
-    "Medium",
-]
+MODEL_NAMES = ["Scene", "Camera", "Shape", "AreaEmitter", "Medium"]
 
-__all__ = ["load_scene", *MODEL_NAMES]
+
+def material_model_names() -> dict[str, str]:
+    """Each material's dataclass (its module's MODEL) by name -> the module it lives in; imports the registry."""
+    from spectrace.materials import MATERIALS
+
+    return {module.MODEL.__name__: module.__name__ for module in MATERIALS.values()}
 
 
 def load_scene(path: str | Path):
@@ -34,4 +27,9 @@ def load_scene(path: str | Path):
     return load_scene_file(resolve_scene_path(path))
 
 
-__getattr__, __dir__ = lazy_names(__name__, dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"))
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"),
+    material_model_names,
+    public=["load_scene", *MODEL_NAMES],
+)

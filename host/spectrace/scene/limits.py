@@ -46,6 +46,10 @@ IMAGE_HOST_BYTES_PER_PIXEL = 72
 # On the device every texel is a float4, and a map adds its sampling tables (about 4 bytes per texel).
 IMAGE_DEVICE_BYTES_PER_PIXEL = 16
 
+# Every texture of a scene together, on the device (texels and MIP levels): beyond this a scene is refused before
+# anything is converted, with the amount (docs/textures.md).
+MAX_TEXTURE_BYTES = 1 << 30
+
 # The watertight ray/triangle test forms products of three coordinate differences in 32-bit floats, which
 # overflow (3.4e38) near 7e12; 1e12 scene units keeps a margin (the Earth's orbit is 1.5e11 m).
 MAX_COORDINATE = 1e12
@@ -113,6 +117,12 @@ def spp_problem(spp: int) -> str | None:
             f"beyond it; average images rendered with different seeds instead"
         )
     return None
+
+
+def offset_seed(seed: int, offset: int) -> int:
+    """Another valid seed `offset` away from `seed` (a render whose noise is independent of the seed's), wrapped
+    into 0..MAX_SEED: a seed near the top plus the offset would not fit the kernels' 32-bit signed seed."""
+    return (seed + offset) % (MAX_SEED + 1)
 
 
 def seed_problem(seed: int) -> str | None:

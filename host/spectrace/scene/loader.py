@@ -15,13 +15,14 @@ from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
-from spectrace.materials import MATERIALS
+from spectrace.materials import MATERIALS, material_textures
 from spectrace.scene import limits, schema
 from spectrace.scene.model import AreaEmitter, Camera, EmitterImage, Light, Material, Medium, Scene, Shape
 from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
-from spectrace.spectral.uplift import uplift_illuminant, uplift_reflectance
+from spectrace.textures import IMAGE_TEXTURES, TEXTURES, check_texture_values, is_texture
 
 
 def key_path(location: tuple) -> str:
@@ -157,6 +158,7 @@ class _Resolver:
         self.folder = path.parent
         self.spec = spec
         self.named_spectra: dict[str, Spectrum] = {}
+        self.named_textures: dict[str, object] = {}
 
     def where(self, key: str) -> str:
         return f"{self.path}: {key}"
@@ -200,19 +202,7 @@ class _Resolver:
         if spec.display is not None:
             result = self.display_spectrum(spec, key, emission)
         elif spec.rgb is not None:
-            rgb = np.asarray(spec.rgb, float)
-            if np.any(rgb < 0):
-                raise SpectraceError(
-                    f"rgb components must be >= 0, got {list(spec.rgb)}", where=self.where(f"{key}.rgb")
-                )
-            if emission:
-                result = uplift_illuminant(rgb)
-            else:
-                if np.any(rgb > 1):
-                    raise SpectraceError(
-                        f"a reflectance rgb must lie in [0, 1], got {list(spec.rgb)}", where=self.where(f"{key}.rgb")
-                    )
-                result = uplift_reflectance(rgb)[0]
+            result = from_rgb(spec.rgb, emission, self.where(f"{key}.rgb"))
         elif spec.value is not None:
             result = Spectrum.constant(spec.value, name=f"constant {spec.value}")
         elif spec.blackbody is not None:
@@ -228,14 +218,38 @@ class _Resolver:
             if problem := limits.spectrum_magnitude_problem(result.values * spec.scale):
                 raise SpectraceError(problem, where=self.where(key))
         result = result * spec.scale if spec.scale != 1.0 else result
-        values = result.values
-        if np.any(values < 0):
-            raise SpectraceError("spectrum has negative values", where=self.where(key))
-        if not emission and np.any(values > 1.0 + 1e-6):
-            raise SpectraceError(
-                f"reflectance exceeds 1 (max {values.max():.4g}): it would create energy", where=self.where(key)
-            )
-        return result
+        return within_bounds(result, emission, self.where(key))
+
+    def spectrum_or_texture(self, spec, key: str, kind: str, inner: bool = False):
+        """A textured parameter's value (kind "spectrum": a reflectance, or "float": a scalar): a Spectrum, or a
+        texture whose values are checked for that use. inner: a checkerboard's side, which takes no checkerboard."""
+        if isinstance(spec, schema.SpectrumSpec):
+            return self.spectrum(spec, key, emission=False)
+        if isinstance(spec, schema.TextureRefSpec):
+            texture = self.named_texture(spec.texture, f"{key}.texture")
+            if inner and not is_texture_image(texture):
+                raise SpectraceError(
+                    f"texture '{spec.texture}' is a checkerboard; a checkerboard's sides are spectra or image textures",
+                    where=self.where(f"{key}.texture"),
+                )
+        else:
+            texture = TEXTURES[spec.texture].from_spec(spec, self, key)
+        assert is_texture(texture)
+        check_texture_values(texture, kind, self.where(key))
+        return texture
+
+    def named_texture(self, name: str, key: str):
+        if name in self.named_textures:
+            return self.named_textures[name]
+        entry = self.spec.textures.get(name)
+        if entry is None:
+            known = sorted(self.spec.textures)
+            close = difflib.get_close_matches(name, known + list(TEXTURES), n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else (f"; defined: {', '.join(known)}" if known else "")
+            raise SpectraceError(f"undefined texture '{name}'{hint}", where=self.where(key))
+        texture = TEXTURES[entry.type].from_spec(entry, self, f"textures.{name}")
+        self.named_textures[name] = texture
+        return texture
 
     def materials(self) -> dict[str, Material]:
         return {name: self.material(m, f"materials.{name}") for name, m in self.spec.materials.items()}
@@ -251,12 +265,7 @@ class _Resolver:
                 "an index of refraction needs a spectrum (value, values, spectrum or file), not a colour",
                 where=self.where(key),
             )
-        result = self.spectrum(spec, key, emission=True)
-        if positive and not result.values.min() > 0:
-            raise SpectraceError(
-                f"must be > 0 at every wavelength (min {result.values.min():.4g})", where=self.where(key)
-            )
-        return result
+        return optical_constant(self.spectrum(spec, key, emission=True), positive, self.where(key))
 
     def shapes(self, materials: dict[str, Material]) -> list[Shape]:
         shapes = []
@@ -279,6 +288,12 @@ class _Resolver:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
                 raise SpectraceError(f"undefined material '{s.material}'{hint}", where=self.where(f"{key}.material"))
+            if s.material is not None and mesh.uvs is None and material_textures(materials[s.material]):
+                raise SpectraceError(
+                    f"shape '{s.name or f'{s.type}{i}'}' has no texture coordinates, but material '{s.material}' has "
+                    f"a texture ({', '.join(material_textures(materials[s.material]))})",
+                    where=self.where(f"{key}.material"),
+                )
             emitter = None
             if s.emitter is not None:
                 radiance_key = f"{key}.emitter.radiance"
@@ -389,16 +404,32 @@ class _Resolver:
         return [LIGHTS[spec.type].from_spec(spec, self, f"lights[{i}]") for i, spec in enumerate(self.spec.lights)]
 
 
+def is_texture_image(texture) -> bool:
+    return isinstance(texture, IMAGE_TEXTURES)
+
+
+TEXTURE_TYPE_NAMES = tuple(TEXTURES)
+
+
 def load_scene(path: str | Path) -> Scene:
     """Read, validate and resolve a TOML scene file; raises SpectraceError naming the file and key path."""
     path = Path(path)
     spec = read_scene_spec(path)
     resolver = _Resolver(path, spec)
+    for name in spec.textures:
+        if name in TEXTURE_TYPE_NAMES:
+            raise SpectraceError(
+                f"a texture may not be named after a texture type ({', '.join(TEXTURE_TYPE_NAMES)}): "
+                '{ texture = "NAME" } would be ambiguous',
+                where=f"{path}: textures.{name}",
+            )
     materials = resolver.materials()
     shapes = resolver.shapes(materials)
     lights = resolver.lights()
     for name in spec.spectra:
         resolver.named_spectrum(name, f"spectra.{name}")
+    for name in spec.textures:
+        resolver.named_texture(name, f"textures.{name}")
     camera = Camera(
         origin=spec.camera.origin,
         target=spec.camera.target,

@@ -12,17 +12,13 @@ import numpy as np
 
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.lights.area import AreaEmitter, EmitterImage  # noqa: F401 (part of the model's names)
-from spectrace.lights.constant import ConstantEnvironment
-from spectrace.lights.distant import DistantLight
-from spectrace.lights.envmap import EnvironmentMap
-from spectrace.lights.point import PointLight
-from spectrace.lights.spot import SpotLight
-from spectrace.materials.conductor import ConductorMaterial
-from spectrace.materials.dielectric import DielectricMaterial
-from spectrace.materials.diffuse import DiffuseMaterial
-from spectrace.materials.mirror import MirrorMaterial
-from spectrace.materials.plastic import PlasticMaterial
-from spectrace.materials.retroreflector import RetroreflectorMaterial
+from spectrace.lights.base import Light
+from spectrace.lights.constant import ConstantEnvironment  # noqa: F401 (the lights' models, part of the model's names)
+from spectrace.lights.distant import DistantLight  # noqa: F401
+from spectrace.lights.envmap import EnvironmentMap  # noqa: F401
+from spectrace.lights.point import PointLight  # noqa: F401
+from spectrace.lights.spot import SpotLight  # noqa: F401
+from spectrace.materials.base import Material
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
@@ -60,13 +56,19 @@ class Camera:
 
 
 # Materials and lights live in their own modules (spectrace.materials, spectrace.lights), each with its parameter
-# table; their dataclasses are the scene model's, named here too.
-# Spelled out (in MATERIALS' and LIGHTS' order) so that a type checker sees the unions; tests/test_scene_model.py
-# checks that they hold every module's MODEL.
-Material = (
-    DiffuseMaterial | MirrorMaterial | ConductorMaterial | PlasticMaterial | RetroreflectorMaterial | DielectricMaterial
-)
-Light = PointLight | SpotLight | DistantLight | ConstantEnvironment | EnvironmentMap
+# table; a shape's material is any module's MODEL (a subclass of Material), a light any light module's (of Light).
+# The materials' dataclasses are named here too, found through their registry.
+
+
+def __getattr__(name: str) -> type:
+    if name.startswith("__"):
+        raise AttributeError(f"module '{__name__}' has no attribute '{name}'")
+    from spectrace.materials import MATERIALS
+
+    for module in MATERIALS.values():
+        if module.MODEL.__name__ == name:
+            return module.MODEL
+    raise AttributeError(f"module '{__name__}' has no attribute '{name}'")
 
 
 @dataclass(frozen=True)

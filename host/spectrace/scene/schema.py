@@ -8,7 +8,17 @@ import functools
 import operator
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Protocol, TypeAlias
 
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, create_model, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    StrictBool,
+    Tag,
+    create_model,
+    field_validator,
+    model_validator,
+)
 
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
@@ -16,6 +26,7 @@ from spectrace.materials.parameters import Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
+from spectrace.textures import TEXTURES
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
@@ -177,7 +188,49 @@ _ANNOTATIONS = {
     "bool": bool,
     "metal": Literal[METALS],
     "ior": FiniteFloat | str | SellmeierSpec | CauchySpec,
+    "uv": FiniteFloat | tuple[FiniteFloat, FiniteFloat],
+    "wrap": Literal["repeat", "mirror", "clamp"],
+    "filter": Literal["nearest", "bilinear", "trilinear"],
 }
+
+
+# Textures (docs/textures.md): inline, `{ texture = "bitmap", file = "wood.png" }`, the key `texture` naming the type;
+# or a [textures.NAME] table with `type`, referred to as `{ texture = "NAME" }`. A texture's own textured keys (a
+# checkerboard's colours) take spectra or image textures, not another checkerboard.
+class TextureRefSpec(Strict):
+    """{ texture = "NAME" }: a [textures.NAME] entry of this file."""
+
+    texture: str
+
+
+def _texture_model(module, key: str, textured_annotation) -> type[Strict]:
+    fields: dict[str, Any] = {key: (Literal[module.NAME], ...)}
+    for parameter in module.PARAMETERS:
+        annotation, field = _field(parameter)
+        if parameter.textured:
+            annotation = textured_annotation
+        fields[parameter.name] = (annotation, field)
+    kind = "Named" if key == "type" else "Inline"
+    return create_model(
+        f"{kind}{module.NAME.capitalize()}TextureSpec", __base__=Strict, __doc__=module.__doc__, **fields
+    )
+
+
+def _spectrum_or_texture(inline: dict[str, type[Strict]]):
+    """A spectrum table, an inline texture (told apart by the type its `texture` names) or a reference."""
+
+    def tag(value) -> str:
+        if isinstance(value, dict):
+            kind = value.get("texture")
+        else:
+            kind = getattr(value, "texture", None)
+        if kind is None:
+            return "spectrum"
+        return kind if kind in inline else "reference"
+
+    members = [Annotated[SpectrumSpec, Tag("spectrum")], Annotated[TextureRefSpec, Tag("reference")]]
+    members += [Annotated[model, Tag(name)] for name, model in inline.items()]
+    return Annotated[functools.reduce(operator.or_, members), Discriminator(tag)]
 
 
 def _field(parameter: Parameter) -> tuple:
@@ -189,6 +242,8 @@ def _field(parameter: Parameter) -> tuple:
         annotation, default = annotation | None, None
     elif parameter.type == "spectrum":
         default = SpectrumSpec(value=parameter.number_default)
+    elif isinstance(parameter.default, tuple):
+        default = tuple(parameter.default)
     else:
         default = parameter.default
     constraints = (
@@ -210,9 +265,29 @@ def _after(check):
     return model_validator(mode="after")(validate)
 
 
+_IMAGE_TEXTURES = {name: m for name, m in TEXTURES.items() if name != "checkerboard"}
+if TYPE_CHECKING:
+    InnerSpectrumOrTexture: TypeAlias = Any
+    SpectrumOrTexture: TypeAlias = Any
+    NamedTextureSpec: TypeAlias = Any
+else:
+    InnerSpectrumOrTexture = _spectrum_or_texture(
+        {name: _texture_model(m, "texture", None) for name, m in _IMAGE_TEXTURES.items()}
+    )
+    SpectrumOrTexture = _spectrum_or_texture(
+        {name: _texture_model(m, "texture", InnerSpectrumOrTexture) for name, m in TEXTURES.items()}
+    )
+    NamedTextureSpec = Annotated[
+        functools.reduce(operator.or_, (_texture_model(m, "type", InnerSpectrumOrTexture) for m in TEXTURES.values())),
+        Field(discriminator="type"),
+    ]
+
+
 def _spec_model(module, name: str, type_default=...) -> type[Strict]:
     fields: dict[str, Any] = {"type": (Literal[module.NAME], type_default)}
-    fields.update((parameter.name, _field(parameter)) for parameter in module.PARAMETERS)
+    for parameter in module.PARAMETERS:
+        annotation, field = _field(parameter)
+        fields[parameter.name] = (SpectrumOrTexture if parameter.textured else annotation, field)
     return create_model(
         name,
         __base__=Strict,
@@ -315,6 +390,7 @@ class SceneSpec(Strict):
     integrator: IntegratorSpec = IntegratorSpec()
     sampler: SamplerSpec = SamplerSpec()
     spectra: dict[str, NamedSpectrumSpec] = {}
+    textures: dict[str, NamedTextureSpec] = {}
     materials: dict[str, MaterialSpec]
     shapes: list[ShapeSpec] = []
     lights: list[LightSpec] = []

@@ -11,7 +11,7 @@ from spectrace.spectral.spectrum import Spectrum
 
 # Spectra whose field name says they are reflectances (bounded by 1, RGB uplifted as a reflectance); every other
 # spectrum (radiance, intensity, irradiance, an index of refraction, ...) is read without that bound.
-_REFLECTANCE_WORDS = ("reflectance", "transmittance", "albedo", "tint")
+_REFLECTANCE_WORDS = ("reflectance", "transmittance", "albedo", "tint", "color")  # color: a checkerboard side
 # A medium's coefficients (1/scene unit): unbounded, RGB made into a spectrum of that colour, not an emission.
 _MEDIUM_COEFFICIENTS = ("sigma_a", "sigma_s")
 

@@ -1,0 +1,129 @@
+"""Textures: one module per type, listed in TEXTURES (docs/textures.md). Each opens with its parameter table
+(PARAMETERS, spectrace.materials.parameters), from which the scene schema builds the texture's keys, and holds its
+resolved dataclass, `from_spec` (a validated scene table to the dataclass), `make` (the Python API) and, for image
+textures, `device_texels` (its texels for one use: sigmoid coefficients of a reflectance, scalars, spectral bands,
+with the MIP pyramid when filtered trilinearly). The kernel side is kernels/texture.cl.
+
+A material parameter whose table entry says `textured` takes a texture wherever it takes a spectrum; its Material
+row then holds the texture's index in `<name>_texture` (kernels/types.h). TextureRows writes every texture of a
+scene into one Texture array and the shared texel buffer, each texture once however many materials use it.
+"""
+
+import numpy as np
+
+from spectrace.engine.device_types import (
+    NO_TEXTURE,
+    TEXTURE_BITMAP,
+    TEXTURE_CHECKERBOARD,
+    TEXTURE_DTYPE,
+    TEXTURE_SPECTRAL,
+)
+from spectrace.errors import SpectraceError
+from spectrace.scene.limits import MAX_TEXTURE_BYTES, format_bytes
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import bitmap, checkerboard, spectral
+from spectrace.textures.bitmap import BitmapTexture
+from spectrace.textures.checkerboard import CheckerboardTexture
+from spectrace.textures.shared import FILTERS, WRAPS, value_problem
+from spectrace.textures.spectral import SpectralTexture
+
+# Scene-file type -> module.
+TEXTURES = {m.NAME: m for m in (bitmap, spectral, checkerboard)}
+Texture = BitmapTexture | SpectralTexture | CheckerboardTexture
+IMAGE_TEXTURES = (BitmapTexture, SpectralTexture)
+_DEVICE_TYPES = {BitmapTexture: TEXTURE_BITMAP, SpectralTexture: TEXTURE_SPECTRAL}
+
+
+def is_texture(value: object) -> bool:
+    return isinstance(value, (BitmapTexture, SpectralTexture, CheckerboardTexture))
+
+
+def check_texture_values(texture, kind: str, where: str) -> None:
+    """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture has one channel."""
+    if not isinstance(texture, IMAGE_TEXTURES):
+        return  # a checkerboard's sides were checked as they were resolved
+    if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
+        raise SpectraceError(
+            f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
+            where=where,
+        )
+    if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else None):
+        raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
+
+
+def texture_module(texture):
+    return {BitmapTexture: bitmap, SpectralTexture: spectral, CheckerboardTexture: checkerboard}[type(texture)]
+
+
+def device_bytes(texture, kind: str) -> int:
+    """An estimate (exact for power-of-two sizes) of the texel bytes a texture takes on the device, from its size
+    alone: what the scene's texture budget is checked against before anything is converted."""
+    if isinstance(texture, CheckerboardTexture):
+        return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
+    height, width = texture.values.shape[:2]
+    channels = 3 if isinstance(texture, BitmapTexture) and kind == "spectrum" else texture.channels
+    pyramid = 4.0 / 3.0 if texture.placement.filter == "trilinear" else 1.0
+    return int(width * height * channels * 4 * pyramid)
+
+
+class TextureRows:
+    """The Texture rows of a scene and their texels, appended to the texel buffer the lights share (float4 chunks;
+    a texture's data starts on a float4 boundary and is addressed in floats)."""
+
+    def __init__(self, table: SpectrumTable, texel_chunks: list[np.ndarray]):
+        self.table = table
+        self.texel_chunks = texel_chunks
+        self.rows: list[np.ndarray] = []
+        self.index: dict[tuple[int, str], int] = {}
+        self.bytes = 0
+
+    def array(self) -> np.ndarray:
+        return np.array(self.rows, TEXTURE_DTYPE) if self.rows else np.zeros(1, TEXTURE_DTYPE)
+
+    def add(self, texture, kind: str, where: str | None = None) -> int:
+        """The index of `texture`'s row for a use of `kind` ("spectrum" or "float"), added when new."""
+        key = (id(texture), kind)
+        if key in self.index:
+            return self.index[key]
+        self.bytes += device_bytes(texture, kind)
+        if self.bytes > MAX_TEXTURE_BYTES:
+            raise SpectraceError(
+                f"the scene's textures need {format_bytes(self.bytes)} of device memory (texture '{texture.source}' "
+                f"brings it there); at most {format_bytes(MAX_TEXTURE_BYTES)} are allowed: use smaller images",
+                where=where,
+            )
+        row = np.zeros((), TEXTURE_DTYPE)
+        row["uv_transform"] = texture.placement.uv_transform
+        row["side_spectrum"] = -1
+        row["side_texture"] = NO_TEXTURE
+        if isinstance(texture, CheckerboardTexture):
+            row["type"] = TEXTURE_CHECKERBOARD
+            for i, side in enumerate((texture.color0, texture.color1)):
+                if isinstance(side, Spectrum):
+                    row["side_spectrum"][i] = self.table.add(side)
+                elif isinstance(side, IMAGE_TEXTURES):
+                    row["side_texture"][i] = self.add(side, kind, where)
+                else:
+                    raise SpectraceError("a checkerboard's sides are spectra or image textures", where=where)
+        else:
+            texel_format, channels, levels = texture_module(texture).device_texels(texture, kind)
+            row["type"] = _DEVICE_TYPES[type(texture)]
+            row["texel_format"], row["channels"] = texel_format, channels
+            row["height"], row["width"] = levels[0].shape[:2]
+            row["levels"] = len(levels)
+            row["wrap"] = WRAPS[texture.placement.wrap]
+            row["filter"] = FILTERS[texture.placement.filter]
+            if isinstance(texture, SpectralTexture):
+                row["band_first_nm"] = texture.wavelengths_nm[0]
+                row["band_step_nm"] = (
+                    texture.wavelengths_nm[1] - texture.wavelengths_nm[0] if texture.channels > 1 else 1.0
+                )
+            row["data_offset"] = 4 * sum(len(c) for c in self.texel_chunks)
+            flat = np.concatenate([np.asarray(level, np.float32).ravel() for level in levels])
+            chunk = np.zeros(((len(flat) + 3) // 4, 4), np.float32)
+            chunk.ravel()[: len(flat)] = flat
+            self.texel_chunks.append(chunk)
+        self.rows.append(row)
+        self.index[key] = len(self.rows) - 1
+        return len(self.rows) - 1

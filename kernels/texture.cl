@@ -1,0 +1,167 @@
+/* Textures: a value per wavelength that varies over a surface, looked up at its texture coordinates uv (v down the
+ * image, as the meshes store them). An image texture's texels are sigmoid coefficients of RGB reflectances (Jakob &
+ * Hanika 2019, rgb_spectrum.cl), spectral bands of a spectral OpenEXR, or plain scalars; the host prepares them
+ * (host/spectrace/textures) into the one texel buffer, with a MIP pyramid (Williams 1983, "Pyramidal
+ * Parametrics") for trilinear filtering. Filtering follows pbrt-v4 (Pharr, Jakob & Humphreys, 4th ed., ch. 10.4):
+ * bilinear interpolation between the four texels around the point, texel centres at half-integer positions, and
+ * trilinear blending of the two pyramid levels whose texel size brackets the footprint. Filters blend SPECTRA, not
+ * coefficients: each texel is evaluated at the path's wavelengths and the values blended, so a filtered
+ * reflectance stays a convex combination of the texels' (in [0, 1] when they are). */
+#ifndef SPECTRACE_TEXTURE_CL
+#define SPECTRACE_TEXTURE_CL
+
+#include "types.h"
+#include "rgb_spectrum.cl"
+#include "spectrum.cl"
+
+/* What a texture lookup reads: the texture rows, the texel buffer as floats, and the spectrum table (for a
+ * checkerboard side that is a spectrum). */
+typedef struct {
+    __global const Texture *textures;
+    __global const float *texels;
+    __global const float *spectra;
+} TextureBuffers;
+
+/* Beyond ±2^30 texels an int index would overflow; a texture repeated that often is a constant to any filter. */
+#define TEXTURE_MAX_COORDINATE 1.0e9f
+
+inline int texture_wrap(int i, int n, int wrap)
+{
+    if (wrap == WRAP_CLAMP) return clamp(i, 0, n - 1);
+    if (wrap == WRAP_MIRROR) {
+        int period = 2 * n;
+        int m = i % period;
+        if (m < 0) m += period;
+        return m < n ? m : period - 1 - m;
+    }
+    int m = i % n;
+    return m < 0 ? m + n : m;
+}
+
+/* The value of texel (x, y) of a level that starts at float `level_offset` and is `width` texels wide, at the
+ * path's wavelengths. BANDS are interpolated linearly between band centres, the end bands held beyond them. */
+inline float4 texel_spectrum(__global const Texture *t, __global const float *texels, int level_offset, int width,
+                             int x, int y, const SampledWavelengths *w)
+{
+    __global const float *texel = texels + level_offset + (y * width + x) * t->channels;
+    if (t->texel_format == TEXEL_SIGMOID) return sigmoid_polynomial(vload3(0, texel), w->lambda);
+    if (t->texel_format == TEXEL_SCALAR || t->channels == 1) return (float4)(texel[0]);
+    float4 position = clamp((w->lambda - t->band_first_nm) / t->band_step_nm, 0.0f, (float)(t->channels - 1));
+    int4 lower = min(convert_int4(position), (int4)(t->channels - 2));
+    float4 frac = position - convert_float4(lower);
+    float4 a = (float4)(texel[lower.x], texel[lower.y], texel[lower.z], texel[lower.w]);
+    float4 b = (float4)(texel[lower.x + 1], texel[lower.y + 1], texel[lower.z + 1], texel[lower.w + 1]);
+    return mad(frac, b - a, a);
+}
+
+/* Float offset and size of MIP level `level` (level l is max(1, width >> l) by max(1, height >> l)). */
+inline int texture_level(__global const Texture *t, int level, int *width, int *height)
+{
+    int offset = t->data_offset, lw = t->width, lh = t->height;
+    for (int l = 0; l < level; ++l) {
+        offset += lw * lh * t->channels;
+        lw = max(1, lw >> 1);
+        lh = max(1, lh >> 1);
+    }
+    *width = lw;
+    *height = lh;
+    return offset;
+}
+
+/* The texel containing st at one level. */
+inline float4 texture_nearest(__global const Texture *t, __global const float *texels, int level, float2 st,
+                              const SampledWavelengths *w)
+{
+    int width, height;
+    int offset = texture_level(t, level, &width, &height);
+    float2 p = clamp(st * (float2)(width, height), -TEXTURE_MAX_COORDINATE, TEXTURE_MAX_COORDINATE);
+    int x = texture_wrap((int)floor(p.x), width, t->wrap);
+    int y = texture_wrap((int)floor(p.y), height, t->wrap);
+    return texel_spectrum(t, texels, offset, width, x, y, w);
+}
+
+/* The four texels around st at one level, blended by their distance (texel centres at (i + ½) / width). */
+inline float4 texture_bilinear(__global const Texture *t, __global const float *texels, int level, float2 st,
+                               const SampledWavelengths *w)
+{
+    int width, height;
+    int offset = texture_level(t, level, &width, &height);
+    float2 p = clamp(st * (float2)(width, height) - 0.5f, -TEXTURE_MAX_COORDINATE, TEXTURE_MAX_COORDINATE);
+    float2 corner = floor(p);
+    float2 f = p - corner;
+    int x0 = (int)corner.x, y0 = (int)corner.y;
+    int xa = texture_wrap(x0, width, t->wrap), xb = texture_wrap(x0 + 1, width, t->wrap);
+    int ya = texture_wrap(y0, height, t->wrap), yb = texture_wrap(y0 + 1, height, t->wrap);
+    float4 top = mix(texel_spectrum(t, texels, offset, width, xa, ya, w),
+                     texel_spectrum(t, texels, offset, width, xb, ya, w), f.x);
+    float4 bottom = mix(texel_spectrum(t, texels, offset, width, xa, yb, w),
+                        texel_spectrum(t, texels, offset, width, xb, yb, w), f.x);
+    return mix(top, bottom, f.y);
+}
+
+/* The continuous MIP level whose texels are `footprint` wide in st units: texels of level l are 2^l / max(width,
+ * height) wide, so l = log2(footprint · max(width, height)), clamped to the pyramid (0 for a zero footprint). */
+inline float texture_mip_level(__global const Texture *t, float footprint_st)
+{
+    float finest = (float)max(t->width, t->height);
+    if (!(footprint_st * finest > 1.0f)) return 0.0f;
+    return fmin(log2(footprint_st * finest), (float)(t->levels - 1));
+}
+
+/* An image texture (bitmap or spectral) at uv; footprint: the width of the lookup's filter region in uv units
+ * (0: the finest level). */
+inline float4 image_texture_spectrum(__global const Texture *t, __global const float *texels, float2 uv,
+                                     float footprint, const SampledWavelengths *w)
+{
+    float2 st = uv * t->uv_transform.xy + t->uv_transform.zw;
+    if (t->filter == FILTER_NEAREST) return texture_nearest(t, texels, 0, st, w);
+    if (t->filter == FILTER_BILINEAR || t->levels == 1) return texture_bilinear(t, texels, 0, st, w);
+    float level = texture_mip_level(t, footprint * fmax(fabs(t->uv_transform.x), fabs(t->uv_transform.y)));
+    int lower = (int)floor(level);
+    float frac = level - (float)lower;
+    float4 value = texture_bilinear(t, texels, lower, st, w);
+    if (frac > 0.0f) value = mix(value, texture_bilinear(t, texels, lower + 1, st, w), frac);
+    return value;
+}
+
+/* Which side of a checkerboard st is on: 0 where floor(s) + floor(t) is even. */
+inline int checkerboard_side(float2 st)
+{
+    float k = floor(st.x) + floor(st.y);
+    return (k - 2.0f * floor(0.5f * k)) != 0.0f;
+}
+
+/* Texture `index` at uv, at the path's four wavelengths. */
+inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, float footprint,
+                               const SampledWavelengths *w)
+{
+    __global const Texture *t = &b->textures[index];
+    if (t->type == TEXTURE_CHECKERBOARD) {
+        int side = checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw);
+        int inner = t->side_texture[side];
+        if (inner == NO_TEXTURE) return spectrum_at(b->spectra, t->side_spectrum[side], w);
+        t = &b->textures[inner];
+    }
+    return image_texture_spectrum(t, b->texels, uv, footprint, w);
+}
+
+/* What a material's parameters are looked up with at a surface point: the buffers, the point's texture
+ * coordinates and the lookup's footprint (the width of its filter region in uv units; 0 reads the finest level). */
+typedef struct {
+    TextureBuffers buffers;
+    float2 uv;
+    float footprint;
+} SurfaceContext;
+
+/* A textured parameter: its texture when it has one, else its tabulated spectrum. In a scene without textures the
+ * test folds away (SCENE_HAS_TEXTURES) and this is the plain table lookup. */
+inline float4 surface_spectrum(const SurfaceContext *sc, int texture, int spectrum_offset,
+                               const SampledWavelengths *w)
+{
+    if (SCENE_HAS_TEXTURES && texture != NO_TEXTURE) {
+        return texture_spectrum(&sc->buffers, texture, sc->uv, sc->footprint, w);
+    }
+    return spectrum_at(sc->buffers.spectra, spectrum_offset, w);
+}
+
+#endif

@@ -1,0 +1,102 @@
+"""The texture harness (kernels/testing/texture.cl) driven from numpy, and an independent numpy reference of the
+lookups (wrap modes, nearest, bilinear, a 2 × 2-mean MIP pyramid, trilinear level choice) written from the
+definitions in docs/textures.md, not from spectrace's host preparation."""
+
+import numpy as np
+
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import TextureRows
+
+HARNESS = "testing/texture.cl"
+
+
+class TextureHarness:
+    """Textures written as a scene would write them, then looked up on the device."""
+
+    def __init__(self, runner, uses: list[tuple[object, str]]):
+        self.runner = runner
+        table = SpectrumTable()
+        chunks = [np.zeros((1, 4), np.float32)]
+        rows = TextureRows(table, chunks)
+        self.indices = [rows.add(texture, kind) for texture, kind in uses]
+        if len(table) == 0:
+            table.add(Spectrum.zeros())
+        self.textures = runner.buffer(rows.array())
+        self.texels = runner.buffer(np.concatenate(chunks))
+        self.spectra = runner.buffer(table.data)
+
+    def lookup(self, which: int, uv: np.ndarray, footprint=0.0, lambdas=(400.0, 500.0, 600.0, 700.0)) -> np.ndarray:
+        """(N, 4) values at uv (N, 2) with footprint (scalar or (N,)), at the four wavelengths."""
+        points = np.zeros((len(uv), 4), np.float32)
+        points[:, :2] = uv
+        points[:, 2] = footprint
+        out = np.zeros((len(uv), 4), np.float32)
+        args = [
+            self.textures,
+            self.texels,
+            self.spectra,
+            np.int32(self.indices[which]),
+            self.runner.buffer(np.asarray(lambdas, np.float32)),
+            self.runner.buffer(points),
+            self.runner.buffer(out, True),
+        ]
+        self.runner.run("texture_lookup", len(uv), args, {6: out})
+        return out.astype(np.float64)
+
+
+# ---------------------------------------------------------------- the reference
+
+
+def wrap_index(i: np.ndarray, n: int, mode: str) -> np.ndarray:
+    if mode == "clamp":
+        return np.clip(i, 0, n - 1)
+    if mode == "mirror":
+        m = np.mod(i, 2 * n)
+        return np.where(m < n, m, 2 * n - 1 - m)
+    return np.mod(i, n)
+
+
+def nearest(image: np.ndarray, st: np.ndarray, mode: str) -> np.ndarray:
+    """image (H, W, C); st (N, 2): the texel whose square contains the point."""
+    height, width = image.shape[:2]
+    x = wrap_index(np.floor(st[:, 0] * width).astype(int), width, mode)
+    y = wrap_index(np.floor(st[:, 1] * height).astype(int), height, mode)
+    return image[y, x]
+
+
+def bilinear(image: np.ndarray, st: np.ndarray, mode: str) -> np.ndarray:
+    """Texel centres at ((i + ½)/W, (j + ½)/H); the four around the point weighted by the tent."""
+    height, width = image.shape[:2]
+    x, y = st[:, 0] * width - 0.5, st[:, 1] * height - 0.5
+    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
+    xa, xb = wrap_index(x0, width, mode), wrap_index(x0 + 1, width, mode)
+    ya, yb = wrap_index(y0, height, mode), wrap_index(y0 + 1, height, mode)
+    top = image[ya, xa] * (1 - fx) + image[ya, xb] * fx
+    bottom = image[yb, xa] * (1 - fx) + image[yb, xb] * fx
+    return top * (1 - fy) + bottom * fy
+
+
+def pyramid(image: np.ndarray) -> list[np.ndarray]:
+    """A power-of-two image and its 2 × 2 means down to 1 × 1."""
+    levels = [np.asarray(image, np.float64)]
+    while levels[-1].shape[0] > 1 or levels[-1].shape[1] > 1:
+        a = levels[-1]
+        h, w = max(a.shape[0] // 2, 1), max(a.shape[1] // 2, 1)
+        a = a.reshape(h, a.shape[0] // h, w, a.shape[1] // w, -1)
+        levels.append(a.mean(axis=(1, 3)))
+    return levels
+
+
+def trilinear(levels: list[np.ndarray], st: np.ndarray, footprint_st: float, mode: str) -> np.ndarray:
+    """Level l = log2(footprint · max(W, H)) (texels of level l are 2^l/max(W, H) wide), clamped to the pyramid;
+    bilinear on floor(l) and floor(l) + 1, blended linearly."""
+    finest = max(levels[0].shape[:2])
+    level = 0.0 if footprint_st * finest <= 1 else min(np.log2(footprint_st * finest), len(levels) - 1)
+    lower = int(np.floor(level))
+    frac = level - lower
+    value = bilinear(levels[lower], st, mode)
+    if frac > 0:
+        value = (1 - frac) * value + frac * bilinear(levels[lower + 1], st, mode)
+    return value

@@ -1,0 +1,200 @@
+"""Textures in scene files: the inline and named forms, colour decoding (sRGB unless raw, checked against
+colour-science), and bad input reported as one line naming the file and key path, without a traceback."""
+
+import colour
+import numpy as np
+import OpenEXR
+import pytest
+from PIL import Image as PILImage
+
+from cli_runner import run_in_process, run_spectrace
+from spectrace.errors import SpectraceError
+from spectrace.scene import load_scene
+from spectrace.scene.loader import check_texture_values
+from spectrace.textures import bitmap, checkerboard
+
+SCENE = """
+[camera]
+origin = [0, 0, 3]
+target = [0, 0, 0]
+fov = 30
+[film]
+width = 8
+height = 8
+[sampler]
+spp = 2
+{textures}
+[materials.m]
+type = "diffuse"
+reflectance = {reflectance}
+[[shapes]]
+type = "{shape}"
+material = "m"
+[[lights]]
+type = "constant"
+radiance = {{ value = 1 }}
+"""
+
+
+def _scene(tmp_path, reflectance: str, textures: str = "", shape: str = "rectangle"):
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE.format(reflectance=reflectance, textures=textures, shape=shape))
+    return path
+
+
+def _png(path, array, mode=None):
+    PILImage.fromarray(array, mode=mode).save(path)
+    return path
+
+
+def _exr(path, rgb):
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {"RGB": np.ascontiguousarray(rgb, np.float32)}) as exr:
+        exr.write(str(path))
+    return path
+
+
+def test_inline_png_is_decoded_from_srgb_and_raw_keeps_code_values(tmp_path):
+    codes = np.array([[[0, 64, 128], [191, 255, 32]]], np.uint8)
+    _png(tmp_path / "wood.png", codes)
+    scene = load_scene(_scene(tmp_path, '{ texture = "bitmap", file = "wood.png", wrap = "mirror" }'))
+    texture = scene.shapes[0].material.reflectance
+    expected = colour.cctf_decoding(codes / 255.0, function="sRGB")
+    np.testing.assert_allclose(texture.values, expected, atol=1e-6)
+    assert texture.placement.wrap == "mirror"
+    raw = load_scene(_scene(tmp_path, '{ texture = "bitmap", file = "wood.png", raw = true }'))
+    np.testing.assert_allclose(raw.shapes[0].material.reflectance.values, codes / 255.0, atol=1e-7)
+
+
+def test_sixteen_bit_grey_png_keeps_its_precision(tmp_path):
+    codes = np.array([[0, 1000], [40000, 65535]], np.uint16)
+    _png(tmp_path / "grey.png", codes)
+    scene = load_scene(_scene(tmp_path, '{ texture = "bitmap", file = "grey.png", raw = true }'))
+    values = scene.shapes[0].material.reflectance.values
+    assert values.shape == (2, 2, 1)
+    np.testing.assert_allclose(values[..., 0], codes / 65535.0, atol=1e-7)
+
+
+def test_named_texture_is_shared_and_a_checkerboard_takes_it(tmp_path):
+    _exr(tmp_path / "a.exr", np.full((2, 2, 3), 0.25))
+    textures = '[textures.tiles]\ntype = "bitmap"\nfile = "a.exr"\nuv_scale = [2, 3]\n'
+    scene = load_scene(
+        _scene(
+            tmp_path,
+            '{ texture = "checkerboard", color0 = { texture = "tiles" }, color1 = { rgb = [0.1, 0.2, 0.3] } }',
+            textures,
+        )
+    )
+    board = scene.shapes[0].material.reflectance
+    assert isinstance(board, checkerboard.CheckerboardTexture)
+    assert isinstance(board.color0, bitmap.BitmapTexture) and board.color0.placement.uv_scale == (2.0, 3.0)
+    np.testing.assert_allclose(board.color0.values, 0.25)  # an EXR is linear: no decoding
+
+
+def test_textured_scene_renders_from_the_command_line(tmp_path):
+    _png(tmp_path / "wood.png", np.array([[[200, 120, 40], [90, 60, 30]]], np.uint8))
+    scene = _scene(tmp_path, '{ texture = "bitmap", file = "wood.png", filter = "trilinear" }')
+    result = run_spectrace("render", str(scene), "-o", str(tmp_path / "out.exr"), "-q")
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "out.exr").is_file()
+
+
+def _bad_inputs(tmp_path) -> list[tuple[str, str, str, str]]:
+    """(reflectance, [textures] text, shape, the key path and words the one line must hold)."""
+    (tmp_path / "garbage.png").write_bytes(b"not an image at all")
+    nan = np.full((2, 2, 3), 0.5)
+    nan[0, 0, 1] = np.nan
+    _exr(tmp_path / "nan.exr", nan)
+    _exr(tmp_path / "negative.exr", np.full((2, 2, 3), -0.5))
+    _exr(tmp_path / "bright.exr", np.full((2, 2, 3), 3.0))
+    _png(tmp_path / "ok.png", np.zeros((2, 2, 3), np.uint8))
+    board = '[textures.board]\ntype = "checkerboard"\n'
+    return [
+        ('{ texture = "bitmap", file = "missing.png" }', "", "rectangle", "materials.m.reflectance.file"),
+        ('{ texture = "bitmap", file = "garbage.png" }', "", "rectangle", "materials.m.reflectance.file"),
+        ('{ texture = "bitmap", file = "nan.exr" }', "", "rectangle", "materials.m.reflectance.file: texture"),
+        ('{ texture = "bitmap", file = "negative.exr" }', "", "rectangle", "materials.m.reflectance: texture"),
+        ('{ texture = "bitmap", file = "bright.exr" }', "", "rectangle", "materials.m.reflectance: texture"),
+        ('{ texture = "spectral", file = "nan.exr" }', "", "rectangle", "materials.m.reflectance.file: texture"),
+        ('{ texture = "bitmap", file = "ok.png", wrap = "tile" }', "", "rectangle", "materials.m.reflectance.wrap"),
+        ('{ texture = "wod" }', "", "rectangle", "materials.m.reflectance.texture: undefined texture"),
+        ('{ texture = "bitmap", file = "ok.png" }', "", "sphere", "shapes[0].material: shape 'sphere0' has no tex"),
+        (
+            '{ texture = "checkerboard", color0 = { texture = "board" } }',
+            board,
+            "rectangle",
+            "materials.m.reflectance.color0.texture",
+        ),
+        (
+            '{ texture = "bitmap", file = "ok.png" }',
+            '[textures.bitmap]\ntype = "bitmap"\nfile = "ok.png"\n',
+            "rectangle",
+            "textures.bitmap: a texture may not be named",
+        ),
+    ]
+
+
+def test_bad_texture_input_is_one_line(tmp_path, monkeypatch, capsys):
+    for reflectance, textures, shape, expected in _bad_inputs(tmp_path):
+        scene = _scene(tmp_path, reflectance, textures, shape)
+        code, err = run_in_process(monkeypatch, capsys, ["render", str(scene), "-o", str(tmp_path / "x.png")])
+        assert code != 0, reflectance
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in err, err
+        assert lines[0].startswith(f"error: {scene}: {expected}"), (reflectance, lines[0])
+        assert not (tmp_path / "x.png").exists()
+
+
+def test_bad_texture_is_one_line_from_a_real_process(tmp_path):
+    """The same through `python -m spectrace`: exit status 1 or 2, one line, nothing written."""
+    (tmp_path / "garbage.png").write_bytes(b"\x89PNG\r\n\x1a\nbroken")
+    scene = _scene(tmp_path, '{ texture = "bitmap", file = "garbage.png" }')
+    result = run_spectrace("render", str(scene), "-o", str(tmp_path / "x.png"))
+    assert result.returncode != 0
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr
+    assert lines[0].startswith(f"error: {scene}: materials.m.reflectance.file: cannot read texture")
+
+
+def test_a_scalar_use_needs_one_channel():
+    """A data texture (a future roughness map) must be grey: an RGB one is refused naming the key."""
+    rgb = bitmap.make(np.zeros((2, 2, 3)), raw=True)
+    with pytest.raises(SpectraceError, match="has 3 channels; this parameter needs one") as error:
+        check_texture_values(rgb, "float", "scene.toml: materials.m.roughness")
+    assert error.value.where == "scene.toml: materials.m.roughness"
+    check_texture_values(bitmap.make(np.zeros((2, 2)), raw=True), "float", "x")  # grey passes
+
+
+def test_textures_beyond_a_gibibyte_are_refused_before_conversion():
+    """The budget is checked from the image's size before any texel is converted: a 20000² texture (broadcast,
+    so the test allocates nothing) would need 4.5 GiB of coefficients."""
+    import spectrace
+    from spectrace.engine.scene_buffers import build_scene_buffers
+    from spectrace.scene.model import Camera, Scene
+    from spectrace.textures.bitmap import BitmapTexture
+
+    huge = BitmapTexture(np.broadcast_to(np.full((1, 1, 3), 0.5, np.float32), (20000, 20000, 3)))
+    scene = Scene(
+        camera=Camera(origin=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0)),
+        width=4,
+        height=4,
+        shapes=[spectrace.shape("rectangle", spectrace.diffuse(huge))],
+    )
+    with pytest.raises(SpectraceError, match=r"textures need 4\.5 GiB of device memory.*at most 1\.0 GiB"):
+        build_scene_buffers(scene)
+
+
+def test_spectra_listing_reads_checkerboard_sides_as_reflectances(tmp_path):
+    """`spectrace spectra` lists a checkerboard's spectrum sides under their key paths, an rgb one uplifted as a
+    reflectance (bounded by 1), not as an emission."""
+    from spectrace.scene.spectra_index import scene_spectra
+    from spectrace.spectral.uplift import uplift_reflectance
+
+    path = _scene(
+        tmp_path, '{ texture = "checkerboard", color0 = { value = 0.3 }, color1 = { rgb = [0.2, 0.5, 0.9] } }'
+    )
+    listed = scene_spectra(path)
+    np.testing.assert_allclose(listed["materials.m.reflectance.color0"].values, 0.3)
+    np.testing.assert_allclose(
+        listed["materials.m.reflectance.color1"].values, uplift_reflectance((0.2, 0.5, 0.9))[0].values
+    )
