@@ -64,9 +64,9 @@ _COARSE_KNOT_NM = 5.0
 _COARSE_ORDER = 10
 _COARSE_ITERATIONS = 20  # beyond this the coarse rule cannot resolve the sigmoid: the exact solve takes over
 _EXACT_STEPS = 3  # Newton steps on the exact residual before a colour is solved exactly
-# float64 values per temporary in `_xyz`: 128 kB, which stays in the CPU's cache, and matrix products small enough
-# that BLAS computes them on one thread (its threads, waiting beside a busy machine, cost more CPU than they save).
-_BUFFER_VALUES = 1 << 14
+# Multiply-adds per matrix product in `_xyz`: OpenBLAS runs products up to 2^18 on one thread, and its threads,
+# waiting beside a busy machine, cost more CPU than they save; the temporaries (under 700 kB) stay in the CPU's cache.
+_PRODUCT_SIZE = 1 << 18
 
 
 def z_nodes(resolution: int) -> np.ndarray:
@@ -159,12 +159,12 @@ def _xyz(rule: _Rule, coefficients: np.ndarray, jacobian: bool) -> tuple[np.ndar
     """XYZ (3, N) of S(basis @ coefficients), coefficients (3, N), under `rule`; with `jacobian`, also
     d XYZ / d coefficients (3, 3, N).
 
-    Tens to hundreds of colours at a time, in the same two buffers of `_BUFFER_VALUES`: temporaries that stay in the
+    Tens to hundreds of colours at a time (`_PRODUCT_SIZE`), in the same two buffers: temporaries that stay in the
     CPU's cache, where whole-batch ones would each be a fresh allocation streamed through memory.
     S(x) = 1/2 + y / 2 with y = x / sqrt(1 + x^2), and S'(x) = (1 + x^2)^(-3/2) / 2.
     """
     m, n = len(rule.basis), coefficients.shape[1]
-    columns = max(1, _BUFFER_VALUES // m)
+    columns = max(1, _PRODUCT_SIZE // (m * (9 if jacobian else 3)))
     xyz = np.empty((3, n))
     d_xyz = np.empty((9, n)) if jacobian else None
     x_buffer, y_buffer = np.empty(m * columns), np.empty(m * columns)
