@@ -27,10 +27,10 @@ The build fits one z slice of all three channels' (u, v) planes at a time, walki
 each slice starts from the polynomial in z through the three solved before it (coefficients * sqrt(z), smooth at
 both ends). Each slice is solved by Levenberg-Marquardt under a coarse rule (`_coarse_rule`: the reflectance on
 5 nm knots, interpolated, against the 1 nm weights; a fifth of the work per colour), then checked and finished
-under the exact 1 nm colorimetry (`_fit`), so every node meets `_BUILD_DELTA_E` in the colorimetry `uplift.py`
-fits; the few nodes too steep for the coarse rule (the darkest saturated ones, some corners) are solved under the
-exact rule throughout. That costs about 4 evaluations of a 95-point spectrum and 1.2 of a 471-point one per node,
-about 7 CPU-seconds for 3 x 64^3 nodes (the former all-exact solve took 110), and under 200 MB. The result does
+under the exact 1 nm colorimetry (`_fit`), so that a node meets `_BUILD_DELTA_E` (or is the best fit the model
+allows) in the colorimetry `uplift.py` fits; the few nodes too steep for the coarse rule (the darkest saturated ones, some corners) are solved under the
+exact rule throughout. That costs about 3.7 evaluations of a 95-point spectrum and 1.3 of a 471-point one per node,
+about 7 CPU-seconds for 3 x 64^3 nodes (the former all-exact solve took 110) and 40 MB. The result does
 not depend on the number of threads. The table is cached on disk all the same (`table_path`, 9.4 MB), checked on
 load (format, the colorimetry it was built for, a SHA-256 of its values, all finite), and rebuilt when the file is
 missing or damaged.
@@ -261,7 +261,7 @@ def _solve_columns(
     coefficients = np.array(start, dtype=np.float64)
     lab, jacobian = _lab_under(rule, coefficients, jacobian=True)
     residual = lab - target
-    error = _dot(residual, residual)
+    error = _squared_norms(residual)
     # The colours still being solved, packed: index, coefficients, Jacobian, residual, error, damping, target.
     index = np.flatnonzero(error >= delta_e**2)
     c, j, r, t = coefficients[:, index], jacobian[..., index], residual[:, index], target[:, index]
@@ -272,7 +272,7 @@ def _solve_columns(
         trial = c + _damped_step(j, r, damping)
         trial_lab, trial_jacobian = _lab_under(rule, trial, jacobian=True)
         trial_residual = trial_lab - t
-        trial_error = _dot(trial_residual, trial_residual)
+        trial_error = _squared_norms(trial_residual)
         better = trial_error < e
         for kept, tried in ((c, trial), (j, trial_jacobian), (r, trial_residual), (e, trial_error)):
             np.copyto(kept, tried, where=better)
@@ -294,17 +294,16 @@ def _solve_columns(
     return coefficients, error < delta_e**2
 
 
-def _fit(target: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, int]:
+def _fit(target: np.ndarray, start: np.ndarray) -> np.ndarray:
     """`_solve_columns` under the exact colorimetry (columns of Lab and coefficients), done mostly under the coarse
-    rule: solved there, then Newton steps on the exact residual with the coarse rule's Jacobian, which for most
-    colours is within `_BUILD_DELTA_E` already or after one step (the two rules' Jacobians differ by about as
-    little as their colours); the few left, at the cube's corners and darkest nodes, where the sigmoid is too
-    steep for the coarse rule, solved exactly from where they got to. Returns the coefficients and how many
-    colours needed that."""
+    rule: solved there, then Newton steps on the exact residual with the coarse rule's Jacobian, which leave most
+    colours within `_BUILD_DELTA_E` after none or one (the two rules' Jacobians differ by about as little as their
+    colours). The rest are solved under the exact rule: from where the steps got them, or from `start` where the
+    coarse rule found no fit (the darkest saturated nodes, some corners: sigmoids too steep for 5 nm knots)."""
     coarse = _coarse_rule()
     coefficients, converged = _solve_columns(target, start, _BUILD_DELTA_E, _COARSE_ITERATIONS, coarse)
     residual = _lab_under(_exact_rule(), coefficients) - target
-    error = _dot(residual, residual)
+    error = _squared_norms(residual)
     # Where the coarse rule found no fit, its result can lie in another valley: those start again, exactly.
     coefficients[:, ~converged] = start[:, ~converged]
     error[~converged] = np.inf
@@ -315,7 +314,7 @@ def _fit(target: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, int]:
         _, jacobian = _lab_under(coarse, coefficients[:, open_], jacobian=True)
         trial = coefficients[:, open_] + _damped_step(jacobian, residual[:, open_], _LEAST_DAMPING)
         trial_residual = _lab_under(_exact_rule(), trial) - target[:, open_]
-        trial_error = _dot(trial_residual, trial_residual)
+        trial_error = _squared_norms(trial_residual)
         better = trial_error < error[open_]
         accepted = open_[better]
         coefficients[:, accepted], residual[:, accepted] = trial[:, better], trial_residual[:, better]
@@ -326,7 +325,7 @@ def _fit(target: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, int]:
         coefficients[:, open_], _ = _solve_columns(
             target[:, open_], coefficients[:, open_], _BUILD_DELTA_E, _MAX_ITERATIONS, _exact_rule()
         )
-    return coefficients, open_.size
+    return coefficients
 
 
 # ---------------------------------------------------------------- the table
@@ -392,7 +391,7 @@ def build_table(resolution: int = TABLE_RESOLUTION) -> np.ndarray:
             error_held = _squared_norms(_lab_under(coarse, held / scale[z_index]) - target)
             start = np.where(error_held < error_start, held, start)
         start /= scale[z_index]
-        coefficients, _ = _fit(target, start)
+        coefficients = _fit(target, start)
         table[:, z_index] = (coefficients.T * scale[z_index]).reshape(3, resolution, resolution, 3)
     table[:, 0] = table[:, 1]
     return table.astype(np.float32)
