@@ -28,12 +28,12 @@ each slice starts from the polynomial in z through the three solved before it (c
 both ends). Each slice is solved by Levenberg-Marquardt under a coarse rule (`_coarse_rule`: the reflectance on
 5 nm knots, interpolated, against the 1 nm weights; a fifth of the work per colour), then checked and finished
 under the exact 1 nm colorimetry (`_fit`), so that a node meets `_BUILD_DELTA_E` (or is the best fit the model
-allows) in the colorimetry `uplift.py` fits; the few nodes too steep for the coarse rule (the darkest saturated ones, some corners) are solved under the
-exact rule throughout. That costs about 3.7 evaluations of a 95-point spectrum and 1.3 of a 471-point one per node,
-about 7 CPU-seconds for 3 x 64^3 nodes (the former all-exact solve took 110) and 40 MB. The result does
-not depend on the number of threads. The table is cached on disk all the same (`table_path`, 9.4 MB), checked on
-load (format, the colorimetry it was built for, a SHA-256 of its values, all finite), and rebuilt when the file is
-missing or damaged.
+allows) in the colorimetry `uplift.py` fits; the few nodes too steep for the coarse rule (the darkest saturated
+ones, some corners) are solved under the exact rule throughout. That costs about 3.7 evaluations of a 95-point
+spectrum and 1.3 of a 471-point one per node, about 7 CPU-seconds for 3 x 64^3 nodes (the former all-exact solve
+took 110) and 40 MB. The result does not depend on the number of threads. The table is cached on disk all the same
+(`table_path`, 9.4 MB), checked on load (format, the colorimetry it was built for, a SHA-256 of its values, all
+finite), and rebuilt when the file is missing or damaged.
 """
 
 from __future__ import annotations
@@ -166,7 +166,7 @@ def _xyz(rule: _Rule, coefficients: np.ndarray, jacobian: bool) -> tuple[np.ndar
     m, n = len(rule.basis), coefficients.shape[1]
     columns = max(1, _PRODUCT_SIZE // (m * (9 if jacobian else 3)))
     xyz = np.empty((3, n))
-    d_xyz = np.empty((9, n)) if jacobian else None
+    d_xyz = np.empty((9, n if jacobian else 0))
     x_buffer, y_buffer = np.empty(m * columns), np.empty(m * columns)
     for first in range(0, n, columns):
         chunk = slice(first, min(first + columns, n))
@@ -187,7 +187,7 @@ def _xyz(rule: _Rule, coefficients: np.ndarray, jacobian: bool) -> tuple[np.ndar
             np.divide(x, y, out=y)
             np.matmul(rule.half_weights, y, out=xyz[:, chunk])
     xyz += rule.half_white
-    return xyz, None if d_xyz is None else d_xyz.reshape(3, 3, n)
+    return xyz, d_xyz.reshape(3, 3, n) if jacobian else None
 
 
 def _lab_under(rule: _Rule, coefficients: np.ndarray, jacobian: bool = False):
