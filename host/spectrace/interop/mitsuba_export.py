@@ -152,6 +152,10 @@ def scene_to_mitsuba_dict(
         if shape.material is not None and material_textures(shape.material):
             textured = ", ".join(material_textures(shape.material))
             raise exporter.refuse(f"shape '{shape.name}': textured {textured} is not exported yet")
+        if shape.material is not None and shape.material.detail is not None:
+            raise exporter.refuse(
+                f"shape '{shape.name}': surface detail (normal or bump map, opacity) is not exported yet"
+            )
         material_key = id(shape.material)
         if material_key not in materials:
             name = f"material_{len(materials)}"
