@@ -55,6 +55,8 @@ __kernel void measure(SCENE_KERNEL_PARAMS, __global const MeterParams *meter, __
     float sum = 0.0f;
     for (int s = 0; s < meter->samples_per_item; ++s) {
         Sampler sampler = sampler_start((uint)meter->seed, (uint)item, (uint)s);
+        /* A sensor's rays can repeat exactly from sample to sample: its cut-out choices differ by the sample. */
+        scene.opacity_salt = hash_u32(hash_u32((uint)meter->seed ^ hash_u32((uint)item)) ^ (uint)s);
         float4 value;
         if (meter->type == METER_RADIANCE) {
             Ray ray;

@@ -5,6 +5,7 @@
 #define SPECTRACE_PATH_STATE_CL
 
 #include "direct_lighting.cl"
+#include "surface_detail.cl"
 
 /* Longest path when max_depth is unbounded (-1): Russian roulette ends paths long before this. */
 #define UNBOUNDED_DEPTH 1024
@@ -48,7 +49,8 @@ typedef struct {
     TriangleInfo info;
     float3 p;
     float3 n;   /* geometric normal (the winding's front): sides, ray offsets, media, emission */
-    float3 ns;  /* shading normal, the BSDF's frame: n itself on a flat triangle (shading_normal.cl) */
+    float3 ns;  /* shading normal, the BSDF's frame: n itself on a flat triangle (shading_normal.cl), turned by a
+                   normal or bump map (surface_detail.cl) */
     float3 wo;  /* back along the ray */
     float2 uv;  /* texture coordinates (only in scenes with material textures) */
     float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; with the uv) */
@@ -67,6 +69,10 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     if (SCENE_HAS_TEXTURES) {
         v.uv = triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
         v.footprint = camera_footprint(scene, hit.triangle, v.p, v.n);
+    }
+    if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
+        v.ns = detailed_normal(scene, &scene->materials[v.info.material], hit.triangle, v.uv, v.footprint, v.n,
+                               v.ns, v.wo);
     }
     return v;
 }

@@ -7,6 +7,7 @@
 #include "lights.cl"
 #include "medium.cl"
 #include "texture.cl"
+#include "hash.cl"
 
 typedef struct {
     __global const RenderParams *params;
@@ -23,6 +24,8 @@ typedef struct {
     __global const float *map_cdf;
     __global const Medium *media;
     __global const Texture *textures;  /* material textures, whose texels share `texels` (a dummy row if none) */
+    uint opacity_salt;  /* mixed into the hash that decides whether a ray meets a cut-out surface (surface_met); 0
+                           unless a sensor sets it per sample (SCENE_FROM_KERNEL_PARAMS leaves it 0) */
 } Scene;
 
 /* The parameters every scene kernel starts with: the render's parameters, then the scene's buffers in the order
@@ -92,7 +95,54 @@ inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3
     return isfinite(width) ? width : 0.0f;
 }
 
-/* The closest surface along the ray (none in a scene without triangles). */
+#if SCENE_HAS_OPACITY
+/* Cut-outs (docs/textures.md, "Opacity"): a ray meets a surface of opacity α with probability α and otherwise goes
+ * on as if it were not there, in every query (camera and BSDF rays, shadow rays, sensors). The choice is a hash of
+ * the query's ray and the triangle, not a sampler draw (as pbrt-v4 hashes the ray), so the sampler's dimensions stay
+ * what they were and a render stays the same however split; sensors add their sample's salt, since their rays can
+ * repeat exactly (a radiance meter's first ray, an irradiance meter's shadow ray to a point light). */
+#define MAX_OPACITY_CROSSINGS 64
+
+/* The opacity at barycentrics b12 of a triangle (1 for a material-less medium boundary), read at the finest level. */
+inline float surface_opacity(const Scene *scene, int triangle, float2 b12)
+{
+    int material = scene->triangle_info[triangle].material;
+    if (material == TRIANGLE_NO_MATERIAL) return 1.0f;
+    __global const Material *m = &scene->materials[material];
+    if (SCENE_HAS_TEXTURES && m->opacity_texture != NO_TEXTURE) {
+        SurfaceContext sc = surface_context(scene, triangle_uv(scene->triangle_uvs, triangle, b12), 0.0f);
+        return texture_numbers(&sc.buffers, m->opacity_texture, sc.uv, 0.0f).x;
+    }
+    return m->opacity;
+}
+
+/* Whether the query along `query` meets the surface of `hit`. */
+inline int surface_met(const Scene *scene, Ray query, Hit hit)
+{
+    float opacity = surface_opacity(scene, hit.triangle, hit.b12);
+    if (opacity >= 1.0f) return 1;
+    if (!(opacity > 0.0f)) return 0;
+    uint h = hash_u32(scene->opacity_salt ^ hash_u32((uint)hit.triangle));
+    h = hash_u32(h ^ as_uint(query.origin.x));
+    h = hash_u32(h ^ as_uint(query.origin.y));
+    h = hash_u32(h ^ as_uint(query.origin.z));
+    h = hash_u32(h ^ as_uint(query.direction.x));
+    h = hash_u32(h ^ as_uint(query.direction.y));
+    h = hash_u32(h ^ as_uint(query.direction.z));
+    return (float)(h >> 8) * 0x1.0p-24f < opacity;
+}
+
+/* The ray `ray` (first traced as `query`) started again just past the surface of `hit`. */
+inline Ray ray_past(const Scene *scene, Ray ray, Hit hit)
+{
+    float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+    ray.origin = offset_ray_origin(p, triangle_normal(scene->triangle_vertices, hit.triangle), ray.direction);
+    return ray;
+}
+#endif
+
+/* The closest surface along the ray (none in a scene without triangles) that the ray meets (a cut-out surface it
+ * passes through is skipped; the hit's distance is still from the ray's origin). */
 inline Hit scene_intersect(const Scene *scene, Ray ray, uint *rays_traced)
 {
     *rays_traced += 1;
@@ -103,7 +153,19 @@ inline Hit scene_intersect(const Scene *scene, Ray ray, uint *rays_traced)
         miss.b12 = (float2)(0.0f);
         return miss;
     }
-    return trace_bvh(scene->nodes, scene->triangle_vertices, ray, INFINITY, 0);
+    Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, ray, INFINITY, 0);
+#if SCENE_HAS_OPACITY
+    Ray past = ray;
+    for (int crossing = 0; hit.triangle >= 0 && crossing < MAX_OPACITY_CROSSINGS && !surface_met(scene, ray, hit);
+         ++crossing) {
+        past = ray_past(scene, past, hit);
+        float t_past = dot(past.origin - ray.origin, ray.direction);
+        *rays_traced += 1;
+        hit = trace_bvh(scene->nodes, scene->triangle_vertices, past, INFINITY, 0);
+        hit.t += t_past;
+    }
+#endif
+    return hit;
 }
 
 /* Whether anything blocks the segment from `from` (already offset off its surface) to `to`; `to` may be at
@@ -125,7 +187,23 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
         shadow.direction = d / length_d;
         t_max = length_d * 0.9999f;  /* stop just short of the light's own surface */
     }
+#if SCENE_HAS_OPACITY
+    /* Closest hits in turn, since an any-hit answer could be a cut-out surface behind one that blocks. */
+    Ray past = shadow;
+    float t_left = t_max;
+    for (int crossing = 0; crossing <= MAX_OPACITY_CROSSINGS; ++crossing) {
+        Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, past, t_left, 0);
+        if (hit.triangle < 0) return 0;
+        if (crossing == MAX_OPACITY_CROSSINGS || surface_met(scene, shadow, hit)) return 1;
+        past = ray_past(scene, past, hit);
+        t_left = t_max - dot(past.origin - shadow.origin, shadow.direction);
+        if (!(t_left > 0.0f)) return 0;
+        *rays_traced += 1;
+    }
+    return 1;
+#else
     return trace_bvh(scene->nodes, scene->triangle_vertices, shadow, t_max, 1).triangle >= 0;
+#endif
 }
 
 /* The fraction of light per wavelength that crosses the same segment as scene_occluded: 0 when a surface blocks
@@ -155,6 +233,13 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
     float4 optical_depth = (float4)(0.0f);
     int medium_ahead = -1;
     float t_origin = 0.0f;
+#if SCENE_HAS_OPACITY
+    Ray query = segment;
+    float carried = 0.0f;  /* the stretch since the last medium boundary before segment.origin (cut-outs passed) */
+#define STRETCH(t) ((t) + carried)
+#else
+#define STRETCH(t) (t)
+#endif
     for (int crossing = 0; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
         *rays_traced += 1;
         Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, segment, fmax(t_end - t_origin, 0.0f), 0);
@@ -162,20 +247,35 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
             if (medium_ahead < 0) return exp(-optical_depth);
             if (isinf(t_end)) return (float4)(0.0f);  /* a leak out of a closed medium: light cannot get through */
             float4 sigma_t = medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w);
-            return exp(-(optical_depth + sigma_t * fmax(t_end - t_origin, 0.0f)));
+            return exp(-(optical_depth + sigma_t * STRETCH(fmax(t_end - t_origin, 0.0f))));
         }
         TriangleInfo info = scene->triangle_info[hit.triangle];
+#if SCENE_HAS_OPACITY
+        if (info.material != TRIANGLE_NO_MATERIAL) {
+            if (surface_met(scene, query, hit)) return (float4)(0.0f);
+            segment = ray_past(scene, segment, hit);
+            float t_past = dot(segment.origin - from, segment.direction);
+            carried += t_past - t_origin;
+            t_origin = t_past;
+            continue;
+        }
+#else
         if (info.material != TRIANGLE_NO_MATERIAL) return (float4)(0.0f);
+#endif
         float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
         if (dot(n, segment.direction) > 0.0f && info.interior >= 0) {
-            optical_depth += medium_sigma_t(&scene->media[info.interior], scene->spectra, w) * hit.t;
+            optical_depth += medium_sigma_t(&scene->media[info.interior], scene->spectra, w) * STRETCH(hit.t);
         }
+#if SCENE_HAS_OPACITY
+        carried = 0.0f;
+#endif
         medium_ahead = medium_beyond(info.interior, n, segment.direction);
         float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
         segment.origin = offset_ray_origin(p, n, segment.direction);
         t_origin = dot(segment.origin - from, segment.direction);
     }
     return (float4)(0.0f);
+#undef STRETCH
 }
 
 #endif

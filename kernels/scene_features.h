@@ -28,6 +28,15 @@
 #define SCENE_HAS_TEXTURES 1
 #endif
 
+/* Normal or bump maps (kernels/surface_detail.cl). */
+#ifndef SCENE_HAS_SURFACE_NORMALS
+#define SCENE_HAS_SURFACE_NORMALS 1
+#endif
+/* Materials with an opacity below 1 (cut-outs): visibility queries may pass through surfaces (kernels/scene.cl). */
+#ifndef SCENE_HAS_OPACITY
+#define SCENE_HAS_OPACITY 1
+#endif
+
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 #define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
 #define SCENE_HAS_ENVIRONMENT (SCENE_USES_LIGHT(LIGHT_ENVIRONMENT) || SCENE_USES_LIGHT(LIGHT_ENVIRONMENT_MAP))

@@ -45,6 +45,7 @@ inline float4 texel_spectrum(__global const Texture *t, __global const float *te
 {
     __global const float *texel = texels + level_offset + (y * width + x) * t->channels;
     if (t->texel_format == TEXEL_SIGMOID) return sigmoid_polynomial(vload3(0, texel), w->lambda);
+    if (SCENE_HAS_SURFACE_NORMALS && t->texel_format == TEXEL_VECTOR) return (float4)(vload3(0, texel), 0.0f);
     if (t->texel_format == TEXEL_SCALAR || t->channels == 1) return (float4)(texel[0]);
     float4 position = clamp((w->lambda - t->band_first_nm) / t->band_step_nm, 0.0f, (float)(t->channels - 1));
     int4 lower = min(convert_int4(position), (int4)(t->channels - 2));
@@ -143,6 +144,15 @@ inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, fl
         t = &b->textures[inner];
     }
     return image_texture_spectrum(t, b->texels, uv, footprint, w);
+}
+
+/* A texture read as numbers rather than a spectrum: scalars (heights, opacity) and vectors (normal maps) are the
+ * same at every wavelength; a checkerboard side that is a spectrum is read at one fixed wavelength (a constant
+ * `{ value = ... }` is what such a side should be). */
+inline float4 texture_numbers(const TextureBuffers *b, int index, float2 uv, float footprint)
+{
+    SampledWavelengths w = fixed_wavelengths((float4)(560.0f));
+    return texture_spectrum(b, index, uv, footprint, &w);
 }
 
 /* What a material's parameters are looked up with at a surface point: the buffers, the point's texture

@@ -69,6 +69,13 @@ typedef struct {
     float ior;                  /* IOR_CONSTANT: interior index relative to the exterior */
     int reflectance_texture;    /* diffuse, plastic: index into the texture array that replaces reflectance_offset,
                                    or NO_TEXTURE */
+    /* Surface detail, every type (kernels/surface_detail.cl, scene.cl; host: spectrace.materials.surface). */
+    int normal_map;             /* a TEXEL_VECTOR texture of tangent-space normals, or NO_TEXTURE */
+    int bump_map;               /* a scalar texture of heights, or NO_TEXTURE */
+    float bump_scale;           /* scene units per bump map value */
+    float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
+    int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
+    int detail_pad[3];
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the
@@ -77,7 +84,8 @@ typedef struct {
 typedef struct {
     float4 uv_transform;  /* the lookup point st = uv · (x, y) + (z, w): uv_scale, then uv_offset (image widths) */
     int type;             /* TEXTURE_* */
-    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral) */
+    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral),
+                             VECTOR (three values as they are) */
     int channels;         /* floats per texel: 3, 1, or the band count */
     int width;            /* level 0, texels */
     int height;

@@ -61,8 +61,15 @@ MATERIAL_DTYPE = _struct(
         ("ior_model", "<i4"),
         ("ior", "<f4"),
         ("reflectance_texture", "<i4"),
+        # Surface detail (spectrace.materials.surface), last so that new parameters go before it.
+        ("normal_map", "<i4"),
+        ("bump_map", "<i4"),
+        ("bump_scale", "<f4"),
+        ("opacity", "<f4"),
+        ("opacity_texture", "<i4"),
+        ("detail_pad", ("<i4", (3,))),
     ],
-    64,
+    96,
 )
 
 # Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
@@ -72,8 +79,8 @@ TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard")
 TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES))
 # Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
 # S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
-# per band, at band centres band_first_nm + i·band_step_nm.
-TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS = range(3)
+# per band, at band centres band_first_nm + i·band_step_nm; VECTOR: three values read as they are (a normal map).
+TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS, TEXEL_VECTOR = range(4)
 # Texture.wrap: where st outside [0, 1)² looks.
 WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
 # Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
@@ -233,6 +240,7 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "TEXEL_SIGMOID": TEXEL_SIGMOID,
         "TEXEL_SCALAR": TEXEL_SCALAR,
         "TEXEL_BANDS": TEXEL_BANDS,
+        "TEXEL_VECTOR": TEXEL_VECTOR,
         "WRAP_REPEAT": WRAP_REPEAT,
         "WRAP_MIRROR": WRAP_MIRROR,
         "WRAP_CLAMP": WRAP_CLAMP,

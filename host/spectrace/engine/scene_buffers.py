@@ -19,7 +19,8 @@ from spectrace.lights import area as area_light
 from spectrace.lights import light_module
 from spectrace.lights.area import AreaEmitter
 from spectrace.lights.base import LightRows
-from spectrace.materials import material_row, material_textures
+from spectrace.materials import material_row, material_textures, write_detail
+from spectrace.materials.surface import cut_out_problem
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import cmf_table_normalised
 from spectrace.spectral.spectrum import Spectrum
@@ -105,6 +106,10 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         elif key not in material_index:
             material_index[key] = len(material_rows)
             material_rows.append(material_row(shape.material, table, textures))
+        if (
+            problem := cut_out_problem(shape.material, shape.emitter is not None, shape.interior is not None)
+        ) is not None:
+            raise SpectraceError(f"shape '{shape.name}': {problem}")
         if shape.material is not None and shape.mesh.uvs is None and material_textures(shape.material):
             raise SpectraceError(
                 f"shape '{shape.name}' has no texture coordinates, but its material has a texture "
@@ -200,6 +205,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
     materials = np.array(material_rows, MATERIAL_DTYPE) if material_rows else np.zeros(1, MATERIAL_DTYPE)
+    if not material_rows:
+        write_detail(materials[0], None, None)  # the dummy row asks for no surface detail
     if len(table) == 0:
         table.add(Spectrum.zeros())
     return SceneBuffers(

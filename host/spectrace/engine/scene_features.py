@@ -13,10 +13,13 @@ def _type_bits(types: np.ndarray) -> int:
 
 
 def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
+    materials = buffers.materials
     return {
         "SCENE_MATERIAL_TYPES": _type_bits(buffers.materials["type"]),
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
         "SCENE_HAS_MEDIA": int(buffers.medium_count > 0),
         "SCENE_HAS_LIGHT_IMAGES": int(bool(np.any(buffers.lights["map_width"] > 0))),
         "SCENE_HAS_TEXTURES": int(buffers.texture_count > 0),
+        "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any((materials["normal_map"] >= 0) | (materials["bump_map"] >= 0)))),
+        "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
     }

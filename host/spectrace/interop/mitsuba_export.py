@@ -186,6 +186,10 @@ def scene_to_mitsuba_dict(
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
             raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
+        if shape.material is not None and shape.material.detail is not None:
+            raise exporter.refuse(
+                f"shape '{shape.name}': surface detail (normal or bump map, opacity) is not exported yet"
+            )
         material_key = id(shape.material)
         if material_key not in materials:
             name = f"material_{len(materials)}"

@@ -21,7 +21,7 @@ import numpy as np
 
 from spectrace.dispatch import module_by_model
 from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE
-from spectrace.materials import conductor, dielectric, diffuse, mirror, plastic, retroreflector
+from spectrace.materials import conductor, dielectric, diffuse, mirror, plastic, retroreflector, surface
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
@@ -30,10 +30,12 @@ from spectrace.spectral.table import SpectrumTable
 MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector)}
 MATERIAL_CODES = {name: code for code, name in enumerate(MATERIALS)}
 material_module = module_by_model(MATERIALS.values(), "material")
+# Every material takes the surface-detail keys (surface.py) besides its own: its API constructor too.
+for _module in MATERIALS.values():
+    _module.make = surface.accepting_detail(_module.make)  # type: ignore[attr-defined]
 
 
-def material_textures(material) -> dict:
-    """The textured parameters of `material` that hold a texture, by name."""
+def _parameter_textures(material) -> dict:
     from spectrace.textures import is_texture
 
     module = material_module(material)
@@ -42,6 +44,12 @@ def material_textures(material) -> dict:
         for p in module.PARAMETERS
         if p.textured and is_texture(getattr(material, p.name))
     }
+
+
+def material_textures(material) -> dict:
+    """The textured parameters of `material` that hold a texture, and its surface detail's textures, by name."""
+    detail = material.detail
+    return _parameter_textures(material) | (detail.textures() if detail is not None else {})
 
 
 def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
@@ -54,14 +62,32 @@ def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
     row["reflectance_offset"] = row["eta_offset"] = row["k_offset"] = MATERIAL_NO_SPECTRUM
     row["ior"] = 1.0
     row["reflectance_texture"] = NO_TEXTURE
-    textured = material_textures(material)
+    textured = _parameter_textures(material)
     if textured:
         material = dataclasses.replace(material, **{name: Spectrum.zeros() for name in textured})
     module.write_row(row, material, table)
     for name, texture in textured.items():
         kind = next(p.type for p in module.PARAMETERS if p.name == name)
         row[f"{name}_texture"] = textures.add(texture, "float" if kind == "float" else "spectrum")
+    write_detail(row, material.detail, textures)
     return row
+
+
+def write_detail(row: np.ndarray, detail, textures) -> None:
+    """The surface-detail fields at the end of a Material row (kernels/types.h); their defaults change nothing."""
+    row["normal_map"] = row["bump_map"] = row["opacity_texture"] = NO_TEXTURE
+    row["bump_scale"], row["opacity"] = 0.0, 1.0
+    if detail is None:
+        return
+    if detail.normal_map is not None:
+        row["normal_map"] = textures.add(detail.normal_map, "vector")
+    if detail.bump_map is not None:
+        row["bump_map"] = textures.add(detail.bump_map, "float")
+        row["bump_scale"] = detail.bump_scale
+    if isinstance(detail.opacity, float):
+        row["opacity"] = detail.opacity
+    else:
+        row["opacity_texture"] = textures.add(detail.opacity, "float")
 
 
 def kernel_file(name: str) -> str:

@@ -15,7 +15,7 @@ from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
-from spectrace.materials import MATERIALS, material_textures
+from spectrace.materials import MATERIALS, material_textures, surface
 from spectrace.scene import limits, schema
 from spectrace.scene.model import AreaEmitter, Camera, EmitterImage, Light, Material, Medium, Scene, Shape
 from spectrace.spectral.blackbody import blackbody
@@ -255,7 +255,33 @@ class _Resolver:
         return {name: self.material(m, f"materials.{name}") for name, m in self.spec.materials.items()}
 
     def material(self, spec, key: str) -> Material:
-        return MATERIALS[spec.type].from_spec(spec, self, key)
+        return surface.with_detail(MATERIALS[spec.type].from_spec(spec, self, key), self.surface_detail(spec, key))
+
+    def surface_detail(self, spec, key: str):
+        """The keys every material takes besides its own (spectrace.materials.surface), resolved and checked."""
+        values = {}
+        for name in ("normal_map", "bump_map", "opacity"):
+            value = getattr(spec, name)
+            if value is None or isinstance(value, float):
+                values[name] = value
+            elif isinstance(value, schema.SpectrumSpec):
+                takes = "a number or a texture" if name == "opacity" else "a texture"
+                raise SpectraceError(f"{name} takes {takes}, not a spectrum", where=self.where(f"{key}.{name}"))
+            else:
+                values[name] = self.texture(value, f"{key}.{name}")
+        return surface.detail(
+            values["normal_map"],
+            values["bump_map"],
+            spec.bump_scale,
+            values["opacity"],
+            where=lambda name: self.where(f"{key}.{name}"),
+        )
+
+    def texture(self, spec, key: str):
+        """An inline texture or a reference to a named one, unchecked: its use checks it."""
+        if isinstance(spec, schema.TextureRefSpec):
+            return self.named_texture(spec.texture, f"{key}.texture")
+        return TEXTURES[spec.texture].from_spec(spec, self, key)
 
     def optical_constant(self, spec: schema.SpectrumSpec, key: str, positive: bool) -> Spectrum:
         """η or k of a complex index of refraction: a spectrum without the reflectance bound (rgb has no meaning
@@ -306,6 +332,12 @@ class _Resolver:
                     radiance = self.spectrum(s.emitter.radiance, radiance_key, emission=True)
                     emitter = AreaEmitter(radiance=radiance, two_sided=s.emitter.two_sided)
             interior = self.interior(s.interior, f"{key}.interior") if s.interior is not None else None
+            material = materials[s.material] if s.material is not None else None
+            if (problem := surface.cut_out_problem(material, emitter is not None, interior is not None)) is not None:
+                raise SpectraceError(
+                    f"shape '{s.name or f'{s.type}{i}'}': {problem} ('{s.material}')",
+                    where=self.where(f"{key}.material"),
+                )
             shapes.append(
                 Shape(
                     mesh=mesh,

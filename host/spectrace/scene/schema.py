@@ -21,7 +21,7 @@ from pydantic import (
 )
 
 from spectrace.lights import LIGHTS, area
-from spectrace.materials import MATERIALS
+from spectrace.materials import MATERIALS, surface
 from spectrace.materials.parameters import Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
@@ -283,11 +283,12 @@ else:
     ]
 
 
-def _spec_model(module, name: str, type_default=...) -> type[Strict]:
+def _spec_model(module, name: str, type_default=..., extra: dict | None = None) -> type[Strict]:
     fields: dict[str, Any] = {"type": (Literal[module.NAME], type_default)}
     for parameter in module.PARAMETERS:
         annotation, field = _field(parameter)
         fields[parameter.name] = (SpectrumOrTexture if parameter.textured else annotation, field)
+    fields |= extra or {}
     return create_model(
         name,
         __base__=Strict,
@@ -306,7 +307,25 @@ class TableSpec(Protocol):
     def __getattr__(self, name: str) -> Any: ...
 
 
-MATERIAL_SPECS = {name: _spec_model(module, f"{name.capitalize()}MaterialSpec") for name, module in MATERIALS.items()}
+def _surface_detail_fields() -> dict[str, Any]:
+    """The keys every material takes besides its own (spectrace.materials.surface): textures (normal_map,
+    bump_map), a number (bump_scale) and a number or texture (opacity), whose range the loader checks."""
+    fields: dict[str, Any] = {}
+    for parameter in surface.PARAMETERS:
+        annotation, field = _field(parameter) if parameter.type == "float" else (None, None)
+        if parameter.type == "texture":
+            annotation, field = SpectrumOrTexture | None, Field(default=None, description=parameter.doc)
+        elif parameter.textured:
+            annotation = FiniteFloat | SpectrumOrTexture
+            field = Field(default=parameter.default, description=parameter.doc)
+        fields[parameter.name] = (annotation, field)
+    return fields
+
+
+MATERIAL_SPECS = {
+    name: _spec_model(module, f"{name.capitalize()}MaterialSpec", extra=_surface_detail_fields())
+    for name, module in MATERIALS.items()
+}
 if TYPE_CHECKING:  # the models are made at import, so a type checker sees them only as tables with a type
     MaterialSpec: TypeAlias = TableSpec
     EmitterSpec: TypeAlias = TableSpec

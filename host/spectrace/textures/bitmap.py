@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.engine.device_types import TEXEL_SCALAR, TEXEL_SIGMOID
+from spectrace.engine.device_types import TEXEL_SCALAR, TEXEL_SIGMOID, TEXEL_VECTOR
 from spectrace.errors import SpectraceError
 from spectrace.materials.parameters import Parameter
 from spectrace.textures.shared import (
@@ -47,6 +47,7 @@ class BitmapTexture:
     values: np.ndarray
     placement: Placement = Placement()
     source: str = "array"  # the file, for messages
+    srgb_decoded: bool = False  # decoded from sRGB code values (so not data such as a normal map)
 
     @property
     def channels(self) -> int:
@@ -66,7 +67,10 @@ def from_spec(spec, resolver, key: str) -> BitmapTexture:
     path = resolver.folder / spec.file
     values, encoded = read_texture_image(path, resolver.where(f"{key}.file"))
     return BitmapTexture(
-        _read_only(decoded(values, encoded, spec.raw)), placement(spec, resolver.where(key)), source=str(path)
+        _read_only(decoded(values, encoded, spec.raw)),
+        placement(spec, resolver.where(key)),
+        source=str(path),
+        srgb_decoded=encoded and not spec.raw,
     )
 
 
@@ -105,7 +109,10 @@ def make(
             f"a texture is a file path, a numpy array or a PIL image, got {type(source).__name__}", where
         )
     return BitmapTexture(
-        _read_only(decoded(values, encoded, raw)), checked_placement(uv_scale, uv_offset, wrap, filter), source=name
+        _read_only(decoded(values, encoded, raw)),
+        checked_placement(uv_scale, uv_offset, wrap, filter),
+        source=name,
+        srgb_decoded=encoded and not raw,
     )
 
 
@@ -117,12 +124,15 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 
 def device_texels(texture: BitmapTexture, kind: str) -> tuple[int, int, list[np.ndarray]]:
     """(texel format, channels, levels) for a use of the texture: "spectrum" (a reflectance: each level's linear RGB
-    to sigmoid coefficients) or "float" (a scalar: one channel as stored). The pyramid is built in linear RGB, each
+    to sigmoid coefficients), "float" (a scalar: one channel as stored) or "vector" (a normal map: three channels
+    as stored). The pyramid is built in linear RGB, each
     level then converted: averaging coefficients would not average the colours."""
     from spectrace.spectral.rgb_texture import texture_reflectance_coefficients
 
     values = texture.values.astype(np.float64)
     levels = mip_pyramid(values) if texture.placement.filter == "trilinear" else [values]
+    if kind == "vector":
+        return TEXEL_VECTOR, 3, levels
     if kind == "float":
         if texture.channels != 1:
             raise SpectraceError(

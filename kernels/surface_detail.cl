@@ -1,0 +1,85 @@
+/* Normal and bump maps: the shading normal a material's surface detail turns (docs/textures.md, "Surface detail";
+ * host: spectrace.materials.surface). Both work in the triangle's tangent frame: dp/du and dp/dv from its corners'
+ * positions and texture coordinates, made orthogonal to the (smooth) shading normal. The turned normal takes the
+ * smooth one's place in the BSDF's frame, and the rules of shading_normal.cl hold for it as for the smooth one (a
+ * viewer on different sides of it and the geometric normal shades with the geometric normal; directions on
+ * different sides are dropped in next-event estimation and BSDF sampling alike). */
+#ifndef SPECTRACE_SURFACE_DETAIL_CL
+#define SPECTRACE_SURFACE_DETAIL_CL
+
+#include "scene.cl"
+#include "frame.cl"
+
+/* dp/du and dp/dv of a triangle: p = v0 + a e1 + b e2 and uv = t0 + a d1 + b d2 solved for (a, b). 0 when its
+ * texture coordinates do not span the plane (a degenerate parametrisation). */
+inline int triangle_dp_duv(const Scene *scene, int triangle, float3 *dpdu, float3 *dpdv)
+{
+    __global const float4 *v = scene->triangle_vertices + 3 * triangle;
+    __global const float2 *t = scene->triangle_uvs + 3 * triangle;
+    float3 e1 = v[1].xyz - v[0].xyz, e2 = v[2].xyz - v[0].xyz;
+    float2 d1 = t[1] - t[0], d2 = t[2] - t[0];
+    float det = d1.x * d2.y - d1.y * d2.x;
+    if (det == 0.0f) return 0;
+    *dpdu = (d2.y * e1 - d1.y * e2) / det;
+    *dpdv = (d1.x * e2 - d2.x * e1) / det;
+    return all(isfinite(*dpdu)) && all(isfinite(*dpdv));
+}
+
+/* The part of d in the plane normal to n. */
+inline float3 in_plane(float3 n, float3 d)
+{
+    return d - n * dot(n, d);
+}
+
+/* The uv steps of a bump map's finite differences: half the footprint (about a pixel's width, as pbrt-v4's BumpMap
+ * takes), else one texel of the map (a checkerboard has none: a small fixed step). */
+inline float2 bump_step(const TextureBuffers *b, int index, float footprint)
+{
+    if (footprint > 0.0f) return (float2)(0.5f * footprint);
+    __global const Texture *t = &b->textures[index];
+    float2 texel = 1.0f / ((float2)(t->width, t->height) * fabs(t->uv_transform.xy));
+    return t->type != TEXTURE_CHECKERBOARD && all(isfinite(texel)) ? texel : (float2)(5.0e-4f);
+}
+
+/* The shading normal of material m at a hit of `triangle` (texture coordinates uv, footprint), turned from ns by
+ * its normal map or bump map; ns itself when it has neither or the turn cannot be formed. */
+inline float3 detailed_normal(const Scene *scene, __global const Material *m, int triangle, float2 uv,
+                              float footprint, float3 n_geometric, float3 ns, float3 wo)
+{
+    if (m->normal_map == NO_TEXTURE && m->bump_map == NO_TEXTURE) return ns;
+    float3 dpdu, dpdv;
+    int parametrised = triangle_dp_duv(scene, triangle, &dpdu, &dpdv);
+    SurfaceContext sc = surface_context(scene, uv, footprint);
+    float3 n;
+    if (m->normal_map != NO_TEXTURE) {
+        /* x along +u, y = z × x, z = ns (Mitsuba 3's normalmap frame); any frame about ns where uv is degenerate. */
+        float3 mapped = 2.0f * texture_numbers(&sc.buffers, m->normal_map, uv, footprint).xyz - 1.0f;
+        ShadingFrame frame = shading_frame(ns);
+        float3 s = parametrised ? in_plane(ns, dpdu) : (float3)(0.0f);
+        float length_s = length(s);
+        if (length_s > 0.0f) {
+            frame.tangent = s / length_s;
+            frame.bitangent = cross(ns, frame.tangent);
+        }
+        n = to_world(&frame, mapped);
+    } else {
+        /* Blinn 1978: the surface displaced by h·bump_scale along ns has tangents dp/du + (dh/du)·bump_scale·ns and
+         * dp/dv + (dh/dv)·bump_scale·ns; forward differences of h give the derivatives. */
+        if (!parametrised) return ns;
+        float2 step = bump_step(&sc.buffers, m->bump_map, footprint);
+        float h = texture_numbers(&sc.buffers, m->bump_map, uv, footprint).x;
+        float h_u = texture_numbers(&sc.buffers, m->bump_map, uv + (float2)(step.x, 0.0f), footprint).x;
+        float h_v = texture_numbers(&sc.buffers, m->bump_map, uv + (float2)(0.0f, step.y), footprint).x;
+        float3 tu = in_plane(ns, dpdu) + ns * (m->bump_scale * (h_u - h) / step.x);
+        float3 tv = in_plane(ns, dpdv) + ns * (m->bump_scale * (h_v - h) / step.y);
+        n = cross(tu, tv);
+        /* The cross product's sign follows the uv layout's handedness; the surface's front is ns's side. */
+        if (dot(n, ns) < 0.0f) n = -n;
+    }
+    float length_n = length(n);
+    if (!(length_n > 0.0f) || !isfinite(length_n)) return ns;
+    n /= length_n;
+    return dot(n, wo) * dot(n_geometric, wo) > 0.0f ? n : n_geometric;
+}
+
+#endif

@@ -1,0 +1,376 @@
+"""Normal maps, bump maps and opacity against closed-form radiometry and independent geometry.
+
+A Lambertian plane of albedo ρ under a distant light of irradiance E reflects L = ρ/π · E · max(0, n·l): a normal
+map or bump map that tilts every normal by θ must give the value of the plane actually tilted by θ (the rectangle
+rotated), and the closed form. Lit by a distant light only (a delta light, which BSDF sampling cannot reach), a
+radiance meter's reading has no noise, so those comparisons are to float rounding. Opacity: a surface of opacity α
+between a light and a meter passes the fraction 1 − α of the light; the meters' standard errors (fixed seeds) set
+the tolerances.
+"""
+
+import dataclasses
+import inspect
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image as PILImage
+
+import spectrace
+from cli_runner import run_in_process, run_spectrace
+from scene_text import camera_film
+from spectrace.engine.meters import FluxMeter, IrradianceMeter, RadianceMeter, measure
+from spectrace.engine.renderer import Renderer
+from spectrace.engine.wavefront import make_renderer
+from spectrace.errors import SpectraceError
+from spectrace.geometry.mesh import TriangleMesh
+from spectrace.materials import MATERIALS, surface
+from spectrace.scene.model import Scene
+from stats_toolkit import assert_within_standard_errors
+
+ALBEDO = 0.5
+IRRADIANCE = 2.0
+THETA = np.radians(25.0)  # the tilt
+PHI = np.radians(40.0)  # the light's angle from the plane's normal
+CAMERA = spectrace.Camera(origin=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0)
+# The rectangle spans [-1, 1]² in z = 0, facing +z, u along +x and v down its image (so "up" in the image is +y).
+X, Y = np.eye(3)[0], np.eye(3)[1]
+
+
+def _plane_scene(material, toward_light, transform=(), lights=None) -> Scene:
+    plane = spectrace.shape("rectangle", material, transform=list(transform))
+    lights = lights if lights is not None else [spectrace.distant_light(tuple(-np.asarray(toward_light)), IRRADIANCE)]
+    return Scene(camera=CAMERA, width=4, height=4, shapes=[plane], lights=lights, max_depth=2, seed=1)
+
+
+def _radiance(scene: Scene, streams: int = 8, samples: int = 8, origin=(0.0, 0.0, 3.0)) -> tuple[float, float]:
+    """Radiance seen straight down onto the plane's centre (u = v = ½), at 550 nm."""
+    reading = measure(
+        scene, RadianceMeter(origin, (0.0, 0.0, -1.0)), wavelengths_nm=[550.0], streams=streams,
+        samples_per_item=samples, seed=3,
+    )  # fmt: skip
+    return float(reading.spectral[0]), float(reading.spectral_standard_error[0])
+
+
+def _constant_normal_map(normal) -> object:
+    """A raw 2 × 2 map whose every texel encodes `normal` (tangent space) as c = (n + 1) / 2."""
+    return spectrace.bitmap(np.full((2, 2, 3), (np.asarray(normal, float) + 1.0) / 2.0))
+
+
+def _toward(axis: np.ndarray, angle: float) -> np.ndarray:
+    return np.sin(angle) * axis + np.cos(angle) * np.array([0.0, 0.0, 1.0])
+
+
+# The red channel tilts toward +u (+x), the green toward the top of the image seen from the front (+y): OpenGL's
+# convention, and Mitsuba 3's frame (x along dp/du, y = n × x). Rotations that tilt +z the same way:
+TILTS = {
+    "red (+u)": (X, {"rotate": {"axis": [0, 1, 0], "angle": float(np.degrees(THETA))}}),
+    "green (up in the image)": (Y, {"rotate": {"axis": [1, 0, 0], "angle": -float(np.degrees(THETA))}}),
+}
+
+
+@pytest.mark.parametrize("name", list(TILTS))
+def test_constant_normal_map_shades_like_the_tilted_plane(name):
+    axis, rotation = TILTS[name]
+    light = _toward(axis, PHI)
+    expected = ALBEDO / np.pi * IRRADIANCE * np.cos(PHI - THETA)
+    mapped, mapped_se = _radiance(
+        _plane_scene(spectrace.diffuse(ALBEDO, normal_map=_constant_normal_map(_toward(axis, THETA))), light)
+    )
+    tilted, tilted_se = _radiance(_plane_scene(spectrace.diffuse(ALBEDO), light, [rotation]))
+    assert_within_standard_errors(mapped, expected, mapped_se, slack=2e-6, what=f"normal map {name}")
+    assert_within_standard_errors(tilted, expected, tilted_se, slack=2e-6, what=f"tilted plane {name}")
+    # The tilt's sense matters: the same light on the opposite side sees cos(φ + θ).
+    opposite, _ = _radiance(
+        _plane_scene(
+            spectrace.diffuse(ALBEDO, normal_map=_constant_normal_map(_toward(axis, THETA))), _toward(axis, -PHI)
+        )
+    )
+    assert opposite == pytest.approx(ALBEDO / np.pi * IRRADIANCE * np.cos(PHI + THETA), rel=1e-5)
+
+
+def test_constant_slope_bump_map_shades_like_the_tilted_plane():
+    """Heights falling along u: h = 1 − u (a raw ramp, texel centres exact, clamped) times bump_scale. On the
+    rectangle dp/du = 2, so the surface rises by −bump_scale / 2 per unit x: the normal tilts toward +x by θ when
+    bump_scale = 2 tan θ."""
+    width = 16
+    ramp = np.tile(1.0 - (np.arange(width) + 0.5) / width, (4, 1))
+    bumps = spectrace.bitmap(ramp, wrap="clamp")
+    light = _toward(X, PHI)
+    material = spectrace.diffuse(ALBEDO, bump_map=bumps, bump_scale=2.0 * np.tan(THETA))
+    bumped, bumped_se = _radiance(_plane_scene(material, light))
+    tilted, _ = _radiance(_plane_scene(spectrace.diffuse(ALBEDO), light, [TILTS["red (+u)"][1]]))
+    expected = ALBEDO / np.pi * IRRADIANCE * np.cos(PHI - THETA)
+    assert_within_standard_errors(bumped, expected, bumped_se, slack=2e-6, what="bump map")
+    assert bumped == pytest.approx(tilted, rel=1e-5)
+
+
+def test_normal_map_in_a_furnace_loses_only_the_wedge_below_the_surface():
+    """A white Lambertian plane in a uniform environment of radiance 1 with every normal tilted by θ: directions
+    above the tilted normal but below the plane are dropped (shading_normal.cl, rule 2), the cosine-weighted
+    fraction (1 − cos θ)/2 of them (the great circle of the plane projects onto the tilted normal's unit disk as a
+    half ellipse of semi-axes 1 and cos θ). So the reflected radiance is (1 + cos θ)/2: never above 1 (no energy is
+    created), and exactly 1 for an untilted map."""
+    furnace = [spectrace.constant_environment(1.0)]
+    for tilt, expected in ((0.0, 1.0), (THETA, (1.0 + np.cos(THETA)) / 2.0), (np.radians(60.0), 0.75)):
+        material = spectrace.diffuse(1.0, normal_map=_constant_normal_map(_toward(X, tilt)))
+        scene = _plane_scene(material, X, lights=furnace)
+        value, se = _radiance(dataclasses.replace(scene, max_depth=8), streams=32, samples=64)
+        assert_within_standard_errors(value, expected, se, slack=1e-5, what=f"furnace, tilt {np.degrees(tilt):.0f}°")
+
+
+def _view_factor_corner(a: float, b: float, c: float) -> float:
+    """Point-to-parallel-rectangle view factor: a × b rectangle at distance c, the point below one corner."""
+    A, B = a / c, b / c
+    return (
+        A / np.sqrt(1 + A * A) * np.arctan(B / np.sqrt(1 + A * A))
+        + B / np.sqrt(1 + B * B) * np.arctan(A / np.sqrt(1 + B * B))
+    ) / (2.0 * np.pi)
+
+
+def _downward_light(height: float, radiance: float = 1.0):
+    """A one-sided 2 × 2 emitting rectangle at z = height facing −z."""
+    return spectrace.shape(
+        "rectangle", spectrace.diffuse(0.0), emitter=spectrace.area_emitter(radiance),
+        transform=[{"rotate": {"axis": [1, 0, 0], "angle": 180}}, {"translate": [0, 0, height]}],
+    )  # fmt: skip
+
+
+def test_constant_opacity_passes_the_rest_of_an_area_lights_irradiance():
+    """E below the centre of a 2 × 2 light of radiance 1 at height 1 is π L · 4 F(1, 1, 1); a black sheet of opacity
+    0.3 between them leaves 0.7 of it (next-event and BSDF-sampled rays both pass through it)."""
+    sheet = spectrace.shape(
+        "rectangle", spectrace.diffuse(0.0, opacity=0.3), transform=[{"scale": 3.0}, {"translate": [0, 0, 0.5]}]
+    )
+    scene = Scene(camera=CAMERA, width=4, height=4, shapes=[_downward_light(1.0), sheet], lights=[], max_depth=2)
+    reading = measure(
+        scene, IrradianceMeter((0, 0, 0), (0, 0, 1)), wavelengths_nm=[550.0], streams=64, samples_per_item=64, seed=2
+    )
+    expected = 0.7 * np.pi * 4.0 * _view_factor_corner(1.0, 1.0, 1.0)
+    assert_within_standard_errors(reading.spectral[0], expected, reading.spectral_standard_error[0], what="E")
+
+
+def test_checker_opacity_in_front_of_a_light_passes_half_its_flux():
+    """A checkerboard of opacity 0 and 1 (2 × 2 squares) just below a one-sided light of radiance 1 and area 4
+    covers half of it: the flux leaving the sphere around both is ½ π L A = 2π."""
+    checker = spectrace.checkerboard(0.0, 1.0)
+    mask = spectrace.shape(
+        "rectangle", spectrace.diffuse(0.0, opacity=checker), transform=[{"translate": [0, 0, 0.999]}]
+    )
+    scene = Scene(camera=CAMERA, width=4, height=4, shapes=[_downward_light(1.0), mask], lights=[], max_depth=2)
+    reading = measure(
+        scene, FluxMeter((0.0, 0.0, 1.0), 3.0), wavelengths_nm=[550.0], streams=64, samples_per_item=64, seed=4
+    )
+    assert_within_standard_errors(
+        reading.spectral[0], 2.0 * np.pi, reading.spectral_standard_error[0], slack=5e-3, what="Φ"
+    )
+
+
+def test_half_transparent_occluder_halves_a_point_lights_irradiance():
+    """E = I cos θ / d² from a point light, halved by a sheet of opacity 0.5 in between. The meter's shadow ray is
+    the same ray every sample: the sensor's per-sample salt makes each sample's choice its own."""
+    light = spectrace.point_light((0.3, 0.0, 2.0), intensity=5.0)
+    sheet = spectrace.shape(
+        "rectangle", spectrace.diffuse(0.0, opacity=0.5), transform=[{"scale": 3.0}, {"translate": [0, 0, 1.0]}]
+    )
+    scene = Scene(camera=CAMERA, width=4, height=4, shapes=[sheet], lights=[light], max_depth=2)
+    reading = measure(
+        scene, IrradianceMeter((0, 0, 0), (0, 0, 1)), wavelengths_nm=[550.0], streams=64, samples_per_item=16, seed=5
+    )
+    d2 = 0.3**2 + 2.0**2
+    expected = 0.5 * 5.0 * (2.0 / np.sqrt(d2)) / d2
+    assert_within_standard_errors(reading.spectral[0], expected, reading.spectral_standard_error[0], what="E")
+
+
+def test_camera_rays_pass_a_cut_out_sheet_in_front_of_an_emitter(device):
+    """Looking at an emitter of radiance 1 (Y = 1) through a black sheet of opacity 0.3 that covers the whole view:
+    each sample sees 1 with probability 0.7. Passes of one sample are independent replicates."""
+    emitter = spectrace.shape(
+        "rectangle", spectrace.diffuse(0.0), emitter=spectrace.area_emitter(1.0), transform=[{"scale": 5.0}]
+    )
+    sheet = spectrace.shape(
+        "rectangle", spectrace.diffuse(0.0, opacity=0.3), transform=[{"scale": 5.0}, {"translate": [0, 0, 1.0]}]
+    )
+    scene = Scene(
+        camera=CAMERA, width=8, height=8, shapes=[emitter, sheet], lights=[], max_depth=2, seed=6, sampler="independent"
+    )
+    renderer = Renderer(scene, device)
+    passes, previous = [], 0.0
+    for _ in range(16):
+        renderer.run_pass(1)
+        total = float(renderer.read_film()[0][:, 1].astype(np.float64).sum())
+        passes.append((total - previous) / 64.0)
+        previous = total
+    passes = np.array(passes)
+    assert_within_standard_errors(passes.mean(), 0.7, passes.std(ddof=1) / np.sqrt(len(passes)), what="Y")
+
+
+def test_cut_outs_render_the_same_however_split(device):
+    sheet = spectrace.shape("rectangle", spectrace.diffuse(0.8, opacity=0.5), transform=[{"translate": [0, 0, 0.5]}])
+    floor = spectrace.shape("rectangle", spectrace.diffuse(0.5), transform=[{"scale": 3.0}])
+    scene = Scene(camera=CAMERA, width=8, height=8, shapes=[_downward_light(2.0), sheet, floor], spp=4, seed=2)
+    whole, split = Renderer(scene, device), Renderer(scene, device)
+    whole.run_pass(4)
+    split.run_pass(1)
+    split.run_pass(3)
+    assert np.array_equal(whole.read_film()[0], split.read_film()[0])
+
+
+# ---------------------------------------------------------------- bad input
+
+
+SCENE = (
+    camera_film(origin="[0, 0, 3]", target="[0, 0, 0]", fov="30", width="4", height="4")
+    + """
+[materials.m]
+type = "diffuse"
+reflectance = {{ value = 0.5 }}
+{detail}
+[[shapes]]
+type = "rectangle"
+material = "m"
+{emitter}
+[[lights]]
+type = "constant"
+radiance = {{ value = 1 }}
+"""
+)
+
+
+def _bad_inputs(tmp_path) -> list[tuple[str, str, str]]:
+    """(material keys, shape keys, what the one line must start with after the file)."""
+    PILImage.fromarray(np.full((2, 2), 128, np.uint8)).save(tmp_path / "grey.png")
+    PILImage.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "normals.png")
+    return [
+        (
+            'normal_map = { texture = "bitmap", file = "grey.png", raw = true }',
+            "",
+            "materials.m.normal_map: normal map",
+        ),
+        ('normal_map = { texture = "bitmap", file = "normals.png" }', "", "materials.m.normal_map: normal map"),
+        ("opacity = 1.5", "", "materials.m.opacity: opacity must lie in [0, 1]"),
+        ("opacity = -0.1", "", "materials.m.opacity: opacity must lie in [0, 1]"),
+        ('opacity = { texture = "bitmap", file = "normals.png", raw = true }', "", "materials.m.opacity: texture"),
+        (
+            'normal_map = { texture = "bitmap", file = "normals.png", raw = true }\n'
+            'bump_map = { texture = "bitmap", file = "grey.png", raw = true }',
+            "",
+            "materials.m.bump_map: a material takes a normal map or a bump map, not both",
+        ),
+        ("normal_map = { value = 0.5 }", "", "materials.m.normal_map: normal_map takes a texture"),
+        (
+            "opacity = 0.5",
+            "emitter = { radiance = { value = 1 } }",
+            "shapes[0].material: shape 'rectangle0': an emitter",
+        ),
+    ]
+
+
+def test_bad_surface_detail_is_one_line(tmp_path, monkeypatch, capsys):
+    for detail, emitter, expected in _bad_inputs(tmp_path):
+        scene = tmp_path / "scene.toml"
+        scene.write_text(SCENE.format(detail=detail, emitter=emitter))
+        code, err = run_in_process(monkeypatch, capsys, ["render", str(scene), "-o", str(tmp_path / "x.png")])
+        lines = err.strip().splitlines()
+        assert code != 0 and len(lines) == 1 and "Traceback" not in err, (detail, err)
+        assert lines[0].startswith(f"error: {scene}: {expected}"), (detail, lines[0])
+        assert not (tmp_path / "x.png").exists()
+
+
+def test_a_one_channel_normal_map_is_one_line_from_a_real_process(tmp_path):
+    PILImage.fromarray(np.full((2, 2), 128, np.uint8)).save(tmp_path / "grey.png")
+    scene = tmp_path / "scene.toml"
+    scene.write_text(
+        SCENE.format(detail='normal_map = { texture = "bitmap", file = "grey.png", raw = true }', emitter="")
+    )
+    result = run_spectrace("render", str(scene), "-o", str(tmp_path / "x.png"))
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode != 0 and len(lines) == 1 and "Traceback" not in result.stderr
+    assert lines[0].startswith(f"error: {scene}: materials.m.normal_map: normal map '{tmp_path / 'grey.png'}' has 1")
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_the_api_refuses_the_same():
+    grey = spectrace.bitmap(np.full((2, 2), 0.5))
+    with pytest.raises(SpectraceError, match="normal map 'array' has 1 channel"):
+        spectrace.diffuse(0.5, normal_map=grey)
+    with pytest.raises(SpectraceError, match="opacity must lie in"):
+        spectrace.plastic(0.5, opacity=2.0)
+    with pytest.raises(SpectraceError, match="not both"):
+        spectrace.conductor("Au", normal_map=_constant_normal_map((0, 0, 1)), bump_map=grey)
+
+
+# ---------------------------------------------------------------- docs
+
+
+def _documented_detail_rows(doc: str, start: str) -> list[tuple[str, ...]]:
+    section = doc.split(start, 1)[1]
+    table = section.split("| key | type, unit | default | meaning |", 1)[1].split("\n\n", 1)[0]
+    return [
+        tuple(cell.strip() for cell in row.strip("|").split(" | "))
+        for row in table.splitlines()
+        if row.startswith("| `")
+    ]
+
+
+@pytest.mark.parametrize(
+    "doc, start", [("textures.md", "## Surface detail"), ("scene-format.md", "Every material also takes these keys")]
+)
+def test_docs_tables_are_the_surface_detail_table(doc, start):
+    text = (Path(__file__).resolve().parents[2] / "docs" / doc).read_text(encoding="utf-8")
+    expected = [(f"`{p.name}`", p.doc_type(), p.doc_default(), p.doc) for p in surface.PARAMETERS]
+    assert _documented_detail_rows(text, start) == expected
+
+
+@pytest.mark.parametrize("name", list(MATERIALS))
+def test_every_material_constructor_takes_the_surface_detail_keys(name):
+    signature = inspect.signature(getattr(spectrace, name))
+    for parameter in surface.PARAMETERS:
+        given = signature.parameters[parameter.name]
+        assert given.kind is inspect.Parameter.KEYWORD_ONLY and given.default == parameter.default, name
+
+
+def test_degenerate_texture_coordinates_keep_the_normal_for_a_bump_map_and_stay_finite_for_a_normal_map():
+    """A quad whose corners all share one uv has no dp/du: a bump map leaves the shading normal alone (the plain
+    plane's radiance, exactly) and a normal map turns it in an arbitrary frame (by the map's angle: cos(φ − θ) or
+    anything down to cos(φ + θ), here a finite value in that range)."""
+    quad = TriangleMesh(
+        vertices=np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]),
+        faces=np.array([[0, 1, 2], [0, 2, 3]]),
+        uvs=np.full((4, 2), 0.5),
+    )
+    light = _toward(X, PHI)
+    ramp = spectrace.bitmap(np.tile(np.linspace(0.0, 1.0, 8), (4, 1)))
+
+    def seen(material) -> float:
+        scene = _plane_scene(spectrace.diffuse(ALBEDO), light)
+        return _radiance(dataclasses.replace(scene, shapes=[spectrace.shape(quad, material)]))[0]
+
+    plain = ALBEDO / np.pi * IRRADIANCE * np.cos(PHI)
+    assert seen(spectrace.diffuse(ALBEDO, bump_map=ramp, bump_scale=3.0)) == pytest.approx(plain, rel=1e-6)
+    mapped = seen(spectrace.diffuse(ALBEDO, normal_map=_constant_normal_map(_toward(X, THETA))))
+    scale = ALBEDO / np.pi * IRRADIANCE
+    assert scale * np.cos(PHI + THETA) - 1e-6 <= mapped <= scale * np.cos(PHI - THETA) + 1e-6
+
+
+@pytest.mark.parametrize("maps, opacity", [(True, 1.0), (False, 0.4)])
+def test_the_wavefront_renders_the_megakernels_image(device, maps, opacity):
+    """Both kernel shapes run paths through the same path_segment: a normal-mapped floor and a bump-mapped sheet,
+    or a cut-out sheet, give the same image. (Both together do not, yet: the two shapes' code rounds some normal
+    mapped directions differently in the last bit, and the cut-out's hash of the ray's bits turns that into a
+    different choice; docs/textures.md, "Opacity".)"""
+    normals = np.random.default_rng(3).uniform(0.2, 0.8, (4, 4, 3))
+    normals[..., 2] = 1.0
+    bumps = spectrace.bitmap(np.random.default_rng(4).uniform(0.0, 1.0, (4, 4)))
+    floor = spectrace.shape("rectangle", spectrace.plastic(0.5, normal_map=spectrace.bitmap(normals) if maps else None))
+    sheet = spectrace.shape(
+        "rectangle",
+        spectrace.diffuse(0.7, bump_map=bumps if maps else None, bump_scale=0.05, opacity=opacity),
+        transform=[{"scale": 0.6}, {"translate": [0, 0, 0.5]}],
+    )
+    camera = spectrace.Camera(origin=(0.0, -2.0, 2.0), target=(0.0, 0.0, 0.0))
+    scene = Scene(camera=camera, width=12, height=12, shapes=[floor, sheet, _downward_light(1.5)], spp=4, seed=3)
+    megakernel = make_renderer(scene, device).render().xyz
+    wavefront = make_renderer(scene, device, kernel="wavefront").render().xyz
+    assert megakernel[..., 1].mean() > 0
+    assert np.array_equal(megakernel.view(np.uint32), wavefront.view(np.uint32))
