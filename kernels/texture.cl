@@ -164,4 +164,13 @@ inline float4 surface_spectrum(const SurfaceContext *sc, int texture, int spectr
     return spectrum_at(sc->buffers.spectra, spectrum_offset, w);
 }
 
+/* A textured number (a roughness): its one-channel texture when it has one, else `value`. */
+inline float surface_scalar(const SurfaceContext *sc, int texture, float value, const SampledWavelengths *w)
+{
+    if (SCENE_HAS_TEXTURES && texture != NO_TEXTURE) {
+        return texture_spectrum(&sc->buffers, texture, sc->uv, sc->footprint, w).x;
+    }
+    return value;
+}
+
 #endif

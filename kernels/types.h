@@ -64,11 +64,17 @@ typedef struct {
                                    conductor, dielectric: optional specular tint (MATERIAL_NO_SPECTRUM: none) */
     int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction */
     int k_offset;               /* conductor: imaginary part k(λ) (absorption) */
-    float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe) */
+    float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe). With roughness_texture: the texture's
+                                   largest α, which decides the flags (smooth only if smooth everywhere) */
     int ior_model;              /* IOR_*: dielectric interior, plastic coating */
     float ior;                  /* IOR_CONSTANT: interior index relative to the exterior */
-    int reflectance_texture;    /* diffuse, plastic: index into the texture array that replaces reflectance_offset,
-                                   or NO_TEXTURE */
+    int reflectance_texture;    /* index into the texture array that replaces reflectance_offset (the reflectance, or
+                                   the conductor's and dielectric's specular tint), or NO_TEXTURE */
+    int roughness_texture;      /* conductor, plastic, dielectric, retroreflector: a scalar texture of α per point
+                                   that replaces alpha there, or NO_TEXTURE */
+    int pad0;
+    int pad1;
+    int pad2;
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the

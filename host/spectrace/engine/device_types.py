@@ -61,8 +61,12 @@ MATERIAL_DTYPE = _struct(
         ("ior_model", "<i4"),
         ("ior", "<f4"),
         ("reflectance_texture", "<i4"),
+        ("roughness_texture", "<i4"),
+        ("pad0", "<i4"),
+        ("pad1", "<i4"),
+        ("pad2", "<i4"),
     ],
-    64,
+    80,
 )
 
 # Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
@@ -79,7 +83,8 @@ WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
 # Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
 # level; TRILINEAR: bilinear on the two levels around the footprint, blended.
 FILTER_NEAREST, FILTER_BILINEAR, FILTER_TRILINEAR = range(3)
-# A material parameter without a texture (Material.reflectance_texture), and a checkerboard side without one.
+# A material parameter without a texture (Material.reflectance_texture, roughness_texture), a checkerboard side
+# without one, and an area light without an emission texture (Light.texture).
 NO_TEXTURE = -1
 
 TEXTURE_DTYPE = _struct(

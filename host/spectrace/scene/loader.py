@@ -238,6 +238,15 @@ class _Resolver:
         check_texture_values(texture, kind, self.where(key))
         return texture
 
+    def number_or_texture(self, spec, key: str, parameter):
+        """A textured number's value (a `roughness`): the number the schema checked, or a one-channel texture whose
+        values lie in the parameter's range."""
+        if isinstance(spec, (int, float)):
+            return float(spec)
+        texture = self.spectrum_or_texture(spec, key, "float")
+        check_texture_values(texture, "float", self.where(key), upper=parameter.range.high)
+        return texture
+
     def named_texture(self, name: str, key: str):
         if name in self.named_textures:
             return self.named_textures[name]

@@ -39,17 +39,45 @@ def is_texture(value: object) -> bool:
     return isinstance(value, (BitmapTexture, SpectralTexture, CheckerboardTexture))
 
 
-def check_texture_values(texture, kind: str, where: str) -> None:
-    """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture has one channel."""
-    if not isinstance(texture, IMAGE_TEXTURES):
-        return  # a checkerboard's sides were checked as they were resolved
+def check_texture_values(texture, kind: str, where: str, upper: float | None = None) -> None:
+    """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture ("float") has one channel
+    (a checkerboard's sides: constant spectra or one-channel images) and its values lie in [0, upper]."""
+    if isinstance(texture, CheckerboardTexture):
+        if kind == "float":
+            for side in (texture.color0, texture.color1):
+                if isinstance(side, Spectrum):
+                    if np.ptp(side.values) > 0.0:
+                        raise SpectraceError(
+                            "a scalar checkerboard's sides are numbers ({ value = ... }) or grey images, not spectra "
+                            "that vary with the wavelength",
+                            where=where,
+                        )
+                else:
+                    check_texture_values(side, kind, where, upper)
+            if upper is not None and (high := scalar_range(texture)[1]) > upper:
+                raise SpectraceError(f"checkerboard has values above {upper:g} (max {high:.4g})", where=where)
+        return  # a reflectance checkerboard's sides were checked as they were resolved
     if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
         raise SpectraceError(
             f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
             where=where,
         )
-    if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else None):
+    if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else upper, reflectance=kind == "spectrum"):
         raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
+
+
+def scalar_range(value) -> tuple[float, float]:
+    """The smallest and largest value a scalar parameter (a number, or a one-channel texture checked by
+    check_texture_values) takes anywhere on a surface: every filter blends texels with convex weights and every MIP
+    level averages the one before, so no lookup leaves the texels' range."""
+    if isinstance(value, CheckerboardTexture):
+        ranges = [scalar_range(side) for side in (value.color0, value.color1)]
+        return min(r[0] for r in ranges), max(r[1] for r in ranges)
+    if isinstance(value, Spectrum):
+        return float(value.values.min()), float(value.values.max())
+    if isinstance(value, IMAGE_TEXTURES):
+        return float(value.values.min()), float(value.values.max())
+    return float(value), float(value)
 
 
 def texture_module(texture):
