@@ -22,7 +22,8 @@ typedef struct {
     __global const float4 *texels;  /* images of environment maps and textured emitters (a dummy texel if none) */
     __global const float *map_cdf;
     __global const Medium *media;
-    __global const Texture *textures;  /* material textures, whose texels share `texels` (a dummy row if none) */
+    __global const Texture *textures;  /* material and emission textures, whose texels share `texels` (a dummy row
+                                          if none) */
 } Scene;
 
 /* The parameters every scene kernel starts with: the render's parameters, then the scene's buffers in the order
@@ -41,7 +42,8 @@ typedef struct {
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
-    LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf};
+    LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf,
+                      {scene->textures, (__global const float *)scene->texels, scene->spectra}};
     return b;
 }
 

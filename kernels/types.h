@@ -83,7 +83,8 @@ typedef struct {
 typedef struct {
     float4 uv_transform;  /* the lookup point st = uv · (x, y) + (z, w): uv_scale, then uv_offset (image widths) */
     int type;             /* TEXTURE_* */
-    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral) */
+    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral),
+                             RGB (linear r, g, b weighting the basis spectra: an emission) */
     int channels;         /* floats per texel: 3, 1, or the band count */
     int width;            /* level 0, texels */
     int height;
@@ -95,7 +96,9 @@ typedef struct {
     float band_step_nm;   /* TEXEL_BANDS: spacing of the band centres, nm */
     int side_spectrum[2]; /* TEXTURE_CHECKERBOARD: each side's spectrum offset, used when side_texture is NO_TEXTURE */
     int side_texture[2];  /* TEXTURE_CHECKERBOARD: each side's texture (never a checkerboard), or NO_TEXTURE */
+    int basis_offset[3];  /* TEXEL_RGB: the spectra R, G, B a texel's (r, g, b) weights: r·R(λ) + g·G(λ) + b·B(λ) */
     int pad0;
+    int pad1;
 } Texture;
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
@@ -114,10 +117,11 @@ typedef struct {
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
     int basis_blue_offset;    /*   spectrum_offset: the uplifted emission spectra of the three primaries */
-    int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude) and textured LIGHT_TRIANGLE (an image */
-    int map_height;           /*   shown on the surface, e.g. a screen): texels; 0 when not textured */
-    int texel_offset;         /* first texel of the image in the texel buffer */
-    int pad1;
+    int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude): texels */
+    int map_height;
+    int texel_offset;         /* LIGHT_ENVIRONMENT_MAP: first texel of the image in the texel buffer */
+    int texture;              /* LIGHT_TRIANGLE: its emission texture (an image on the surface, e.g. a screen's
+                                 picture), which replaces spectrum_offset, or NO_TEXTURE */
     int pad2;
 } Light;
 

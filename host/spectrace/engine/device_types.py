@@ -77,7 +77,9 @@ TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES
 # Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
 # S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
 # per band, at band centres band_first_nm + i·band_step_nm.
-TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS = range(3)
+# RGB: linear (r, g, b), the weights of three basis spectra (an emission: r·R(λ) + g·G(λ) + b·B(λ), the lights'
+# images).
+TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS, TEXEL_RGB = range(4)
 # Texture.wrap: where st outside [0, 1)² looks.
 WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
 # Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
@@ -103,9 +105,11 @@ TEXTURE_DTYPE = _struct(
         ("band_step_nm", "<f4"),
         ("side_spectrum", ("<i4", (2,))),
         ("side_texture", ("<i4", (2,))),
+        ("basis_offset", ("<i4", (3,))),
         ("pad0", "<i4"),
+        ("pad1", "<i4"),
     ],
-    80,
+    96,
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
@@ -136,7 +140,7 @@ LIGHT_DTYPE = _struct(
         ("map_width", "<i4"),
         ("map_height", "<i4"),
         ("texel_offset", "<i4"),
-        ("pad1", "<i4"),
+        ("texture", "<i4"),
         ("pad2", "<i4"),
     ],
     96,
@@ -238,6 +242,7 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "TEXEL_SIGMOID": TEXEL_SIGMOID,
         "TEXEL_SCALAR": TEXEL_SCALAR,
         "TEXEL_BANDS": TEXEL_BANDS,
+        "TEXEL_RGB": TEXEL_RGB,
         "WRAP_REPEAT": WRAP_REPEAT,
         "WRAP_MIRROR": WRAP_MIRROR,
         "WRAP_CLAMP": WRAP_CLAMP,

@@ -41,7 +41,10 @@ def is_texture(value: object) -> bool:
 
 def check_texture_values(texture, kind: str, where: str, upper: float | None = None) -> None:
     """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture ("float") has one channel
-    (a checkerboard's sides: constant spectra or one-channel images) and its values lie in [0, upper]."""
+    (a checkerboard's sides: constant spectra or one-channel images) and its values lie in [0, upper]; an emission
+    is an image texture (a bitmap or a spectral texture) of values >= 0."""
+    if kind == "emission" and not isinstance(texture, IMAGE_TEXTURES):
+        raise SpectraceError("an emission texture is a bitmap or a spectral texture, not a checkerboard", where=where)
     if isinstance(texture, CheckerboardTexture):
         if kind == "float":
             for side in (texture.color0, texture.color1):
@@ -90,7 +93,7 @@ def device_bytes(texture, kind: str) -> int:
     if isinstance(texture, CheckerboardTexture):
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
     height, width = texture.values.shape[:2]
-    channels = 3 if isinstance(texture, BitmapTexture) and kind == "spectrum" else texture.channels
+    channels = 3 if isinstance(texture, BitmapTexture) and kind != "float" else texture.channels
     pyramid = 4.0 / 3.0 if texture.placement.filter == "trilinear" else 1.0
     return int(width * height * channels * 4 * pyramid)
 
@@ -109,9 +112,11 @@ class TextureRows:
     def array(self) -> np.ndarray:
         return np.array(self.rows, TEXTURE_DTYPE) if self.rows else np.zeros(1, TEXTURE_DTYPE)
 
-    def add(self, texture, kind: str, where: str | None = None) -> int:
-        """The index of `texture`'s row for a use of `kind` ("spectrum" or "float"), added when new."""
-        key = (id(texture), kind)
+    def add(self, texture, kind: str, where: str | None = None, basis: list[int] | None = None) -> int:
+        """The index of `texture`'s row for a use of `kind` ("spectrum": a reflectance, "float": a scalar, or
+        "emission": a light's radiance, an RGB bitmap's texels weighting the spectra at the table offsets `basis`),
+        added when new."""
+        key = (id(texture), kind, tuple(basis or ()))
         if key in self.index:
             return self.index[key]
         self.bytes += device_bytes(texture, kind)
@@ -137,6 +142,8 @@ class TextureRows:
         else:
             texel_format, channels, levels = texture_module(texture).device_texels(texture, kind)
             row["type"] = _DEVICE_TYPES[type(texture)]
+            if basis is not None:
+                row["basis_offset"] = basis
             row["texel_format"], row["channels"] = texel_format, channels
             row["height"], row["width"] = levels[0].shape[:2]
             row["levels"] = len(levels)
