@@ -16,7 +16,7 @@ def _type_bits(types: np.ndarray) -> int:
 def _materials_have_textures(materials: np.ndarray) -> bool:
     """Some material reads a texture (any of its `*_texture` fields): only then do the path vertices need texture
     coordinates and footprints (the lights' images are looked up at the light's own uv)."""
-    fields = [name for name in materials.dtype.names if name.endswith("_texture")]
+    fields = [name for name in materials.dtype.names or () if name.endswith("_texture")]
     return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields)
 
 

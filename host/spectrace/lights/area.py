@@ -2,6 +2,7 @@
 texture, or a display's picture, which is one (kernels/lights.cl)."""
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,7 @@ class EmitterImage:
     texture, as an environment map's; a display's measured primaries for the picture it shows, its linear drive the
     texels); a spectral texture's texel is its radiance, and `primaries` is None."""
 
-    texture: object  # BitmapTexture | SpectralTexture
+    texture: Any  # a BitmapTexture or SpectralTexture (spectrace.textures is imported lazily here)
     primaries: tuple[Spectrum, Spectrum, Spectrum] | None  # W/(m² sr nm) at full drive
     scale: float = 1.0
 
@@ -78,8 +79,10 @@ def emission_image(texture, scale: float = 1.0) -> EmitterImage:
     from spectrace.spectral.uplift import uplift_illuminant
     from spectrace.textures import BitmapTexture
 
-    primaries = tuple(uplift_illuminant(primary) for primary in np.eye(3)) if isinstance(texture, BitmapTexture) else None
-    return EmitterImage(texture, primaries, float(scale))  # type: ignore[arg-type]
+    if not isinstance(texture, BitmapTexture):
+        return EmitterImage(texture, None, float(scale))
+    red, green, blue = (uplift_illuminant(primary) for primary in np.eye(3))
+    return EmitterImage(texture, (red, green, blue), float(scale))
 
 
 def emitter(radiance, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:

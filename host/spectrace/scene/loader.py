@@ -309,8 +309,9 @@ class _Resolver:
             if s.emitter is not None:
                 emitter = self.emitter(s.emitter, f"{key}.emitter")
                 if emitter.image is not None and mesh.uvs is None:
+                    name = s.name or f"{s.type}{i}"
                     raise SpectraceError(
-                        f"shape '{s.name or f'{s.type}{i}'}' has no texture coordinates, but its emitter shows an image",
+                        f"shape '{name}' has no texture coordinates, but its emitter shows an image",
                         where=self.where(f"{key}.emitter.radiance"),
                     )
             interior = self.interior(s.interior, f"{key}.interior") if s.interior is not None else None
@@ -407,8 +408,9 @@ class _Resolver:
             # The picture is an emission texture of the display's primaries, each texel the one containing the point.
             texture = BitmapTexture(_float32(drive), Placement(filter="nearest"), source=radiance.image)
             image = EmitterImage(texture, primaries, spec.scale)
-            return AreaEmitter(radiance=mean.scaled(spec.scale) if spec.scale != 1.0 else mean,
-                               two_sided=spec.two_sided, image=image)
+            return AreaEmitter(
+                radiance=mean.scaled(spec.scale) if spec.scale != 1.0 else mean, two_sided=spec.two_sided, image=image
+            )
         if isinstance(radiance, schema.SpectrumSpec):
             return area_emitter(self.spectrum(radiance, f"{key}.radiance", emission=True), spec.two_sided, spec.scale)
         texture = self.spectrum_or_texture(radiance, f"{key}.radiance", "emission")

@@ -106,7 +106,7 @@ class TextureRows:
         self.table = table
         self.texel_chunks = texel_chunks
         self.rows: list[np.ndarray] = []
-        self.index: dict[tuple[int, str], int] = {}
+        self.index: dict[tuple[int, str, tuple[int, ...]], int] = {}
         self.bytes = 0
 
     def array(self) -> np.ndarray:
