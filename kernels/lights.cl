@@ -72,6 +72,19 @@ inline float2 triangle_uv(__global const float2 *triangle_uvs, int triangle, flo
          + b12.y * triangle_uvs[3 * triangle + 2];
 }
 
+/* An emission texture at uv, at its finest level: a spectral texture's value, or for RGB texels the lookup's
+ * (r, g, b) weighting the texture's three basis spectra, r·R(λ) + g·G(λ) + b·B(λ). The weights are blended before
+ * they weight the spectra (texture.cl): the same, as the sum is linear in them, for fewer spectrum lookups. */
+inline float4 emission_texture_radiance(const TextureBuffers *b, int index, float2 uv, const SampledWavelengths *w)
+{
+    __global const Texture *t = &b->textures[index];
+    float4 value = texture_spectrum(b, index, uv, 0.0f, w);
+    if (t->texel_format != TEXEL_RGB) return value;
+    return value.x * spectrum_at(b->spectra, t->basis_offset[0], w)
+         + value.y * spectrum_at(b->spectra, t->basis_offset[1], w)
+         + value.z * spectrum_at(b->spectra, t->basis_offset[2], w);
+}
+
 /* Radiance leaving an emitting triangle toward `to_viewer` (unit), whose geometric normal is n, at texture
  * coordinates uv (read when the light has an emission texture: an RGB image weighting three basis spectra, or a
  * spectral one, looked up at its finest level, times the light's scale). */
@@ -80,7 +93,7 @@ inline float4 area_light_emitted(__global const Light *light, const TextureBuffe
 {
     if (!light->two_sided && dot(n, to_viewer) <= 0.0f) return (float4)(0.0f);
     if (SCENE_HAS_LIGHT_IMAGES && light->texture != NO_TEXTURE) {
-        return light->scale * texture_spectrum(textures, light->texture, uv, 0.0f, w);
+        return light->scale * emission_texture_radiance(textures, light->texture, uv, w);
     }
     return light_spectrum(light, textures->spectra, w);
 }

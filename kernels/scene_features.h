@@ -18,7 +18,7 @@
 #ifndef SCENE_HAS_MEDIA
 #define SCENE_HAS_MEDIA 1
 #endif
-/* Area lights showing an image (emission textures, pictures on screens). */
+/* Lights showing an image (environment maps; area lights' emission textures, pictures on screens among them). */
 #ifndef SCENE_HAS_LIGHT_IMAGES
 #define SCENE_HAS_LIGHT_IMAGES 1
 #endif

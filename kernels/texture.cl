@@ -1,7 +1,7 @@
 /* Textures: a value per wavelength that varies over a surface, looked up at its texture coordinates uv (v down the
  * image, as the meshes store them). An image texture's texels are sigmoid coefficients of RGB reflectances (Jakob &
  * Hanika 2019, rgb_spectrum.cl), spectral bands of a spectral OpenEXR, plain scalars, or the linear RGB of an
- * emission (the weights of three basis spectra: the lights' images, lights.cl); the host prepares them
+ * emission (the weights of three basis spectra, which lights.cl applies: the lights' images); the host prepares them
  * (host/spectrace/textures) into the one texel buffer, with a MIP pyramid (Williams 1983, "Pyramidal
  * Parametrics") for trilinear filtering. Filtering follows pbrt-v4 (Pharr, Jakob & Humphreys, 4th ed., ch. 10.4):
  * bilinear interpolation between the four texels around the point, texel centres at half-integer positions, and
@@ -46,11 +46,9 @@ inline float4 texel_spectrum(__global const Texture *t, const TextureBuffers *b,
 {
     __global const float *texel = b->texels + level_offset + (y * width + x) * t->channels;
     if (t->texel_format == TEXEL_SIGMOID) return sigmoid_polynomial(vload3(0, texel), w->lambda);
-    if (t->texel_format == TEXEL_RGB) {
-        return texel[0] * spectrum_at(b->spectra, t->basis_offset[0], w)
-             + texel[1] * spectrum_at(b->spectra, t->basis_offset[1], w)
-             + texel[2] * spectrum_at(b->spectra, t->basis_offset[2], w);
-    }
+    /* RGB weights are blended as they are, (r, g, b, 0): the caller weights the basis spectra with the result
+     * (lights.cl), which the blend commutes with. */
+    if (t->texel_format == TEXEL_RGB) return (float4)(vload3(0, texel), 0.0f);
     if (t->texel_format == TEXEL_SCALAR || t->channels == 1) return (float4)(texel[0]);
     float4 position = clamp((w->lambda - t->band_first_nm) / t->band_step_nm, 0.0f, (float)(t->channels - 1));
     int4 lower = min(convert_int4(position), (int4)(t->channels - 2));
