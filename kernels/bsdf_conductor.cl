@@ -23,7 +23,7 @@ typedef struct {
 
 inline int conductor_flags(__global const Material *m)
 {
-    return ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA;
+    return ggx_lobe_flags(m);
 }
 
 inline ConductorParams conductor_params(__global const Material *m, const SurfaceContext *sc,
@@ -32,9 +32,10 @@ inline ConductorParams conductor_params(__global const Material *m, const Surfac
     ConductorParams p;
     p.eta = spectrum_at(sc->buffers.spectra, m->eta_offset, w);
     p.k = spectrum_at(sc->buffers.spectra, m->k_offset, w);
-    p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM ? (float4)(1.0f)
-                                                           : spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
-    p.alpha = m->alpha;
+    p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM
+                 ? (float4)(1.0f)
+                 : surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
+    p.alpha = surface_scalar(sc, m->roughness_texture, m->alpha, w);
     return p;
 }
 

@@ -191,7 +191,7 @@ typedef struct {
  * directions, and only the hero may go on (Wilkie et al. 2014; the integrators see to it). */
 inline int dielectric_flags(__global const Material *m)
 {
-    return (ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA) | BSDF_TRANSMISSION
+    return ggx_lobe_flags(m) | BSDF_TRANSMISSION
          | (material_ior_is_dispersive(m) ? BSDF_DISPERSIVE : 0);
 }
 
@@ -200,9 +200,10 @@ inline DielectricParams dielectric_params(__global const Material *m, const Surf
 {
     DielectricParams p;
     p.eta = material_ior(m, w->lambda.x);
-    p.alpha = m->alpha;
-    p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM ? (float4)(1.0f)
-                                                           : spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
+    p.alpha = surface_scalar(sc, m->roughness_texture, m->alpha, w);
+    p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM
+                 ? (float4)(1.0f)
+                 : surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
     return p;
 }
 

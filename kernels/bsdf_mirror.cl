@@ -21,7 +21,7 @@ inline MirrorParams mirror_params(__global const Material *m, const SurfaceConte
                                   const SampledWavelengths *w)
 {
     MirrorParams p;
-    p.reflectance = spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
+    p.reflectance = surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
     return p;
 }
 

@@ -33,10 +33,10 @@ typedef struct {
     float base_scale;  /* c of the header comment */
 } PlasticParams;
 
-/* The base is diffuse; a smooth coat adds a delta lobe. */
+/* The base is diffuse; a smooth coat (anywhere) adds a delta lobe. */
 inline int plastic_flags(__global const Material *m)
 {
-    return ggx_is_smooth(m->alpha) ? BSDF_NON_DELTA | BSDF_DELTA : BSDF_NON_DELTA;
+    return ggx_lobe_flags(m) | BSDF_NON_DELTA;
 }
 
 inline PlasticParams plastic_params(__global const Material *m, const SurfaceContext *sc,
@@ -45,8 +45,8 @@ inline PlasticParams plastic_params(__global const Material *m, const SurfaceCon
     PlasticParams p;
     p.reflectance = surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
     p.eta = m->ior;
-    p.alpha = m->alpha;
-    float s = ggx_is_smooth(m->alpha) ? 1.0f : PLASTIC_ROUGH_BASE_SCALE;
+    p.alpha = surface_scalar(sc, m->roughness_texture, m->alpha, w);
+    float s = ggx_is_smooth(p.alpha) ? 1.0f : PLASTIC_ROUGH_BASE_SCALE;
     p.base_scale = s / (1.0f - fresnel_dielectric_average(m->ior));
     return p;
 }

@@ -20,15 +20,15 @@ typedef struct {
 
 inline int retroreflector_flags(__global const Material *m)
 {
-    return ggx_is_smooth(m->alpha) ? BSDF_DELTA : BSDF_NON_DELTA;
+    return ggx_lobe_flags(m);
 }
 
 inline RetroreflectorParams retroreflector_params(__global const Material *m, const SurfaceContext *sc,
                                                   const SampledWavelengths *w)
 {
     RetroreflectorParams p;
-    p.reflectance = spectrum_at(sc->buffers.spectra, m->reflectance_offset, w);
-    p.alpha = m->alpha;
+    p.reflectance = surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
+    p.alpha = surface_scalar(sc, m->roughness_texture, m->alpha, w);
     return p;
 }
 

@@ -9,6 +9,7 @@
 #include "spectrum.cl"
 #include "sampling.cl"
 #include "environment.cl"
+#include "texture.cl"
 
 typedef struct {
     float3 wi;         /* unit direction from the shaded point toward the light */
@@ -71,18 +72,30 @@ inline float2 triangle_uv(__global const float2 *triangle_uvs, int triangle, flo
          + b12.y * triangle_uvs[3 * triangle + 2];
 }
 
+/* An emission texture at uv, at its finest level: a spectral texture's value, or for RGB texels the lookup's
+ * (r, g, b) weighting the texture's three basis spectra, r·R(λ) + g·G(λ) + b·B(λ). The weights are blended before
+ * they weight the spectra (texture.cl): the same, as the sum is linear in them, for fewer spectrum lookups. */
+inline float4 emission_texture_radiance(const TextureBuffers *b, int index, float2 uv, const SampledWavelengths *w)
+{
+    __global const Texture *t = &b->textures[index];
+    float4 value = texture_spectrum(b, index, uv, 0.0f, w);
+    if (t->texel_format != TEXEL_RGB) return value;
+    return value.x * spectrum_at(b->spectra, t->basis_offset[0], w)
+         + value.y * spectrum_at(b->spectra, t->basis_offset[1], w)
+         + value.z * spectrum_at(b->spectra, t->basis_offset[2], w);
+}
+
 /* Radiance leaving an emitting triangle toward `to_viewer` (unit), whose geometric normal is n, at texture
- * coordinates uv (used when the light shows an image). */
-inline float4 area_light_emitted(__global const Light *light, __global const float *spectra,
-                                 __global const float4 *texels, const SampledWavelengths *w, float3 n,
-                                 float3 to_viewer, float2 uv)
+ * coordinates uv (read when the light has an emission texture: an RGB image weighting three basis spectra, or a
+ * spectral one, looked up at its finest level, times the light's scale). */
+inline float4 area_light_emitted(__global const Light *light, const TextureBuffers *textures,
+                                 const SampledWavelengths *w, float3 n, float3 to_viewer, float2 uv)
 {
     if (!light->two_sided && dot(n, to_viewer) <= 0.0f) return (float4)(0.0f);
-    if (SCENE_HAS_LIGHT_IMAGES && light->map_width > 0) {
-        uv = uv - floor(uv);  /* the image repeats outside [0, 1)² */
-        return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, uv)], w);
+    if (SCENE_HAS_LIGHT_IMAGES && light->texture != NO_TEXTURE) {
+        return light->scale * emission_texture_radiance(textures, light->texture, uv, w);
     }
-    return light_spectrum(light, spectra, w);
+    return light_spectrum(light, textures->spectra, w);
 }
 
 /* Solid-angle density (pick probability included) of reaching a point of an emitting triangle at `distance`
@@ -117,6 +130,7 @@ typedef struct {
     __global const float *spectra;
     __global const float4 *texels;
     __global const float *map_cdf;
+    TextureBuffers textures;  /* the emission textures' rows, the same texels as floats, the spectra */
 } LightBuffers;
 
 /* Samples light `light` as seen from p. Returns 0 when the sample carries no light. */
@@ -138,7 +152,7 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
         s->distance = d;
         s->point = q;
         s->normal = n_light;
-        s->arriving = area_light_emitted(light, spectra, buffers->texels, w, n_light, -s->wi,
+        s->arriving = area_light_emitted(light, &buffers->textures, w, n_light, -s->wi,
                                          triangle_uv(buffers->triangle_uvs, light->triangle, b12));
         s->pdf = area_light_pdf(light, d, fabs(dot(n_light, s->wi)));
         return s->pdf > 0.0f;

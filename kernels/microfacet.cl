@@ -6,6 +6,8 @@
 #ifndef SPECTRACE_MICROFACET_CL
 #define SPECTRACE_MICROFACET_CL
 
+#include "types.h"
+#include "bsdf_sample.cl"
 #include "sampling.cl"
 
 /* Below this α a GGX lobe is treated as a delta lobe: narrower lobes lose float precision (pbrt-v4 uses the
@@ -15,6 +17,15 @@
 inline int ggx_is_smooth(float alpha)
 {
     return alpha < GGX_SMOOTH_ALPHA;
+}
+
+/* The lobe flags (bsdf_sample.cl) of material m's GGX lobe. A textured roughness leaves its largest α in m->alpha
+ * (host/spectrace/materials): the lobe is a delta lobe only where α is below the limit, so it is one everywhere
+ * only when that largest α is, and a rough surface whose texture dips below the limit has delta points as well. */
+inline int ggx_lobe_flags(__global const Material *m)
+{
+    if (ggx_is_smooth(m->alpha)) return BSDF_DELTA;
+    return (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE) ? BSDF_NON_DELTA | BSDF_DELTA : BSDF_NON_DELTA;
 }
 
 /* D(h) = α² / (π ((α² − 1) cos²θh + 1)²), normalised so that ∫ D(h) cos θh dh = 1. */

@@ -80,7 +80,8 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
 /* Radiance the vertex's area light (v.info.light >= 0) sends back along the ray. */
 inline float4 vertex_emission(const Scene *scene, const SampledWavelengths *w, const PathVertex *v, Hit hit)
 {
-    return area_light_emitted(&scene->lights[v->info.light], scene->spectra, scene->texels, w, v->n, v->wo,
+    TextureBuffers textures = {scene->textures, (__global const float *)scene->texels, scene->spectra};
+    return area_light_emitted(&scene->lights[v->info.light], &textures, w, v->n, v->wo,
                               triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12));
 }
 

@@ -23,7 +23,8 @@ typedef struct {
     __global const float4 *texels;  /* images of environment maps and textured emitters (a dummy texel if none) */
     __global const float *map_cdf;
     __global const Medium *media;
-    __global const Texture *textures;  /* material textures, whose texels share `texels` (a dummy row if none) */
+    __global const Texture *textures;  /* material and emission textures, whose texels share `texels` (a dummy row
+                                          if none) */
     uint opacity_salt;  /* mixed into the hash that decides whether a ray meets a cut-out surface (surface_met); 0
                            unless a sensor sets it per sample (SCENE_FROM_KERNEL_PARAMS leaves it 0) */
 } Scene;
@@ -44,7 +45,8 @@ typedef struct {
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
-    LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf};
+    LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf,
+                      {scene->textures, (__global const float *)scene->texels, scene->spectra}};
     return b;
 }
 

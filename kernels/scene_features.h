@@ -18,7 +18,7 @@
 #ifndef SCENE_HAS_MEDIA
 #define SCENE_HAS_MEDIA 1
 #endif
-/* Lights showing an image (environment maps, pictures on area lights). */
+/* Lights showing an image (environment maps; area lights' emission textures, pictures on screens among them). */
 #ifndef SCENE_HAS_LIGHT_IMAGES
 #define SCENE_HAS_LIGHT_IMAGES 1
 #endif

@@ -1,6 +1,7 @@
 /* Textures: a value per wavelength that varies over a surface, looked up at its texture coordinates uv (v down the
  * image, as the meshes store them). An image texture's texels are sigmoid coefficients of RGB reflectances (Jakob &
- * Hanika 2019, rgb_spectrum.cl), spectral bands of a spectral OpenEXR, or plain scalars; the host prepares them
+ * Hanika 2019, rgb_spectrum.cl), spectral bands of a spectral OpenEXR, plain scalars, or the linear RGB of an
+ * emission (the weights of three basis spectra, which lights.cl applies: the lights' images); the host prepares them
  * (host/spectrace/textures) into the one texel buffer, with a MIP pyramid (Williams 1983, "Pyramidal
  * Parametrics") for trilinear filtering. Filtering follows pbrt-v4 (Pharr, Jakob & Humphreys, 4th ed., ch. 10.4):
  * bilinear interpolation between the four texels around the point, texel centres at half-integer positions, and
@@ -40,19 +41,22 @@ inline int texture_wrap(int i, int n, int wrap)
 
 /* The value of texel (x, y) of a level that starts at float `level_offset` and is `width` texels wide, at the
  * path's wavelengths. BANDS are interpolated linearly between band centres, the end bands held beyond them. */
-inline float4 texel_spectrum(__global const Texture *t, __global const float *texels, int level_offset, int width,
-                             int x, int y, const SampledWavelengths *w)
+inline float4 texel_spectrum(__global const Texture *t, const TextureBuffers *b, int level_offset, int width, int x,
+                             int y, const SampledWavelengths *w)
 {
-    __global const float *texel = texels + level_offset + (y * width + x) * t->channels;
+    __global const float *texel = b->texels + level_offset + (y * width + x) * t->channels;
     if (t->texel_format == TEXEL_SIGMOID) return sigmoid_polynomial(vload3(0, texel), w->lambda);
     if (SCENE_HAS_SURFACE_NORMALS && t->texel_format == TEXEL_VECTOR) return (float4)(vload3(0, texel), 0.0f);
+    /* RGB weights are blended as they are, (r, g, b, 0): the caller weights the basis spectra with the result
+     * (lights.cl), which the blend commutes with. */
+    if (t->texel_format == TEXEL_RGB) return (float4)(vload3(0, texel), 0.0f);
     if (t->texel_format == TEXEL_SCALAR || t->channels == 1) return (float4)(texel[0]);
     float4 position = clamp((w->lambda - t->band_first_nm) / t->band_step_nm, 0.0f, (float)(t->channels - 1));
     int4 lower = min(convert_int4(position), (int4)(t->channels - 2));
     float4 frac = position - convert_float4(lower);
-    float4 a = (float4)(texel[lower.x], texel[lower.y], texel[lower.z], texel[lower.w]);
-    float4 b = (float4)(texel[lower.x + 1], texel[lower.y + 1], texel[lower.z + 1], texel[lower.w + 1]);
-    return mad(frac, b - a, a);
+    float4 below = (float4)(texel[lower.x], texel[lower.y], texel[lower.z], texel[lower.w]);
+    float4 above = (float4)(texel[lower.x + 1], texel[lower.y + 1], texel[lower.z + 1], texel[lower.w + 1]);
+    return mad(frac, above - below, below);
 }
 
 /* Float offset and size of MIP level `level` (level l is max(1, width >> l) by max(1, height >> l)). */
@@ -70,7 +74,7 @@ inline int texture_level(__global const Texture *t, int level, int *width, int *
 }
 
 /* The texel containing st at one level. */
-inline float4 texture_nearest(__global const Texture *t, __global const float *texels, int level, float2 st,
+inline float4 texture_nearest(__global const Texture *t, const TextureBuffers *b, int level, float2 st,
                               const SampledWavelengths *w)
 {
     int width, height;
@@ -78,11 +82,11 @@ inline float4 texture_nearest(__global const Texture *t, __global const float *t
     float2 p = clamp(st * (float2)(width, height), -TEXTURE_MAX_COORDINATE, TEXTURE_MAX_COORDINATE);
     int x = texture_wrap((int)floor(p.x), width, t->wrap);
     int y = texture_wrap((int)floor(p.y), height, t->wrap);
-    return texel_spectrum(t, texels, offset, width, x, y, w);
+    return texel_spectrum(t, b, offset, width, x, y, w);
 }
 
 /* The four texels around st at one level, blended by their distance (texel centres at (i + ½) / width). */
-inline float4 texture_bilinear(__global const Texture *t, __global const float *texels, int level, float2 st,
+inline float4 texture_bilinear(__global const Texture *t, const TextureBuffers *b, int level, float2 st,
                                const SampledWavelengths *w)
 {
     int width, height;
@@ -93,10 +97,10 @@ inline float4 texture_bilinear(__global const Texture *t, __global const float *
     int x0 = (int)corner.x, y0 = (int)corner.y;
     int xa = texture_wrap(x0, width, t->wrap), xb = texture_wrap(x0 + 1, width, t->wrap);
     int ya = texture_wrap(y0, height, t->wrap), yb = texture_wrap(y0 + 1, height, t->wrap);
-    float4 top = mix(texel_spectrum(t, texels, offset, width, xa, ya, w),
-                     texel_spectrum(t, texels, offset, width, xb, ya, w), f.x);
-    float4 bottom = mix(texel_spectrum(t, texels, offset, width, xa, yb, w),
-                        texel_spectrum(t, texels, offset, width, xb, yb, w), f.x);
+    float4 top = mix(texel_spectrum(t, b, offset, width, xa, ya, w),
+                     texel_spectrum(t, b, offset, width, xb, ya, w), f.x);
+    float4 bottom = mix(texel_spectrum(t, b, offset, width, xa, yb, w),
+                        texel_spectrum(t, b, offset, width, xb, yb, w), f.x);
     return mix(top, bottom, f.y);
 }
 
@@ -111,17 +115,17 @@ inline float texture_mip_level(__global const Texture *t, float footprint_st)
 
 /* An image texture (bitmap or spectral) at uv; footprint: the width of the lookup's filter region in uv units
  * (0: the finest level). */
-inline float4 image_texture_spectrum(__global const Texture *t, __global const float *texels, float2 uv,
+inline float4 image_texture_spectrum(__global const Texture *t, const TextureBuffers *b, float2 uv,
                                      float footprint, const SampledWavelengths *w)
 {
     float2 st = uv * t->uv_transform.xy + t->uv_transform.zw;
-    if (t->filter == FILTER_NEAREST) return texture_nearest(t, texels, 0, st, w);
-    if (t->filter == FILTER_BILINEAR || t->levels == 1) return texture_bilinear(t, texels, 0, st, w);
+    if (t->filter == FILTER_NEAREST) return texture_nearest(t, b, 0, st, w);
+    if (t->filter == FILTER_BILINEAR || t->levels == 1) return texture_bilinear(t, b, 0, st, w);
     float level = texture_mip_level(t, footprint * fmax(fabs(t->uv_transform.x), fabs(t->uv_transform.y)));
     int lower = (int)floor(level);
     float frac = level - (float)lower;
-    float4 value = texture_bilinear(t, texels, lower, st, w);
-    if (frac > 0.0f) value = mix(value, texture_bilinear(t, texels, lower + 1, st, w), frac);
+    float4 value = texture_bilinear(t, b, lower, st, w);
+    if (frac > 0.0f) value = mix(value, texture_bilinear(t, b, lower + 1, st, w), frac);
     return value;
 }
 
@@ -143,7 +147,7 @@ inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, fl
         if (inner == NO_TEXTURE) return spectrum_at(b->spectra, t->side_spectrum[side], w);
         t = &b->textures[inner];
     }
-    return image_texture_spectrum(t, b->texels, uv, footprint, w);
+    return image_texture_spectrum(t, b, uv, footprint, w);
 }
 
 /* A texture read as numbers rather than a spectrum: scalars (heights, opacity) and vectors (normal maps) are the
@@ -172,6 +176,15 @@ inline float4 surface_spectrum(const SurfaceContext *sc, int texture, int spectr
         return texture_spectrum(&sc->buffers, texture, sc->uv, sc->footprint, w);
     }
     return spectrum_at(sc->buffers.spectra, spectrum_offset, w);
+}
+
+/* A textured number (a roughness): its one-channel texture when it has one, else `value`. */
+inline float surface_scalar(const SurfaceContext *sc, int texture, float value, const SampledWavelengths *w)
+{
+    if (SCENE_HAS_TEXTURES && texture != NO_TEXTURE) {
+        return texture_spectrum(&sc->buffers, texture, sc->uv, sc->footprint, w).x;
+    }
+    return value;
 }
 
 #endif

@@ -64,18 +64,21 @@ typedef struct {
                                    conductor, dielectric: optional specular tint (MATERIAL_NO_SPECTRUM: none) */
     int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction */
     int k_offset;               /* conductor: imaginary part k(λ) (absorption) */
-    float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe) */
+    float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe). With roughness_texture: the texture's
+                                   largest α, which decides the flags (smooth only if smooth everywhere) */
     int ior_model;              /* IOR_*: dielectric interior, plastic coating */
     float ior;                  /* IOR_CONSTANT: interior index relative to the exterior */
-    int reflectance_texture;    /* diffuse, plastic: index into the texture array that replaces reflectance_offset,
-                                   or NO_TEXTURE */
+    int reflectance_texture;    /* index into the texture array that replaces reflectance_offset (the reflectance, or
+                                   the conductor's and dielectric's specular tint), or NO_TEXTURE */
+    int roughness_texture;      /* conductor, plastic, dielectric, retroreflector: a scalar texture of α per point
+                                   that replaces alpha there, or NO_TEXTURE */
     /* Surface detail, every type (kernels/surface_detail.cl, scene.cl; host: spectrace.materials.surface). */
     int normal_map;             /* a TEXEL_VECTOR texture of tangent-space normals, or NO_TEXTURE */
     int bump_map;               /* a scalar texture of heights, or NO_TEXTURE */
     float bump_scale;           /* scene units per bump map value */
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
-    int detail_pad[3];
+    int detail_pad;
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the
@@ -85,7 +88,8 @@ typedef struct {
     float4 uv_transform;  /* the lookup point st = uv · (x, y) + (z, w): uv_scale, then uv_offset (image widths) */
     int type;             /* TEXTURE_* */
     int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral),
-                             VECTOR (three values as they are) */
+                             VECTOR (three values as they are), RGB (linear r, g, b weighting the basis
+                             spectra: an emission) */
     int channels;         /* floats per texel: 3, 1, or the band count */
     int width;            /* level 0, texels */
     int height;
@@ -97,7 +101,9 @@ typedef struct {
     float band_step_nm;   /* TEXEL_BANDS: spacing of the band centres, nm */
     int side_spectrum[2]; /* TEXTURE_CHECKERBOARD: each side's spectrum offset, used when side_texture is NO_TEXTURE */
     int side_texture[2];  /* TEXTURE_CHECKERBOARD: each side's texture (never a checkerboard), or NO_TEXTURE */
+    int basis_offset[3];  /* TEXEL_RGB: the spectra R, G, B a texel's (r, g, b) weights: r·R(λ) + g·G(λ) + b·B(λ) */
     int pad0;
+    int pad1;
 } Texture;
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
@@ -116,10 +122,11 @@ typedef struct {
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
     int basis_blue_offset;    /*   spectrum_offset: the uplifted emission spectra of the three primaries */
-    int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude) and textured LIGHT_TRIANGLE (an image */
-    int map_height;           /*   shown on the surface, e.g. a screen): texels; 0 when not textured */
-    int texel_offset;         /* first texel of the image in the texel buffer */
-    int pad1;
+    int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude): texels */
+    int map_height;
+    int texel_offset;         /* LIGHT_ENVIRONMENT_MAP: first texel of the image in the texel buffer */
+    int texture;              /* LIGHT_TRIANGLE: its emission texture (an image on the surface, e.g. a screen's
+                                 picture), which replaces spectrum_offset, or NO_TEXTURE */
     int pad2;
 } Light;
 

@@ -146,7 +146,15 @@ globals().update({name: module.make for name, module in materials.MATERIALS.item
 
 def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
     """Makes a shape a light of radiance L(λ) x scale, W/(m² sr nm); one-sided emitters shine toward the side
-    their triangles' winding faces."""
+    their triangles' winding faces. `radiance` may be an emission texture (docs/textures.md): a bitmap of linear
+    sRGB (each texel the D65-based emission of its colour) or a spectral texture (each texel its radiance)."""
+    from spectrace.lights import area
+    from spectrace.textures import check_texture_values, is_texture
+
+    scale = area.PARAMETERS[2].check(scale)
+    if is_texture(radiance):
+        check_texture_values(radiance, "emission", "radiance")
+        return area.emitter(radiance, two_sided, scale)
     return AreaEmitter(radiance=_emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
 
 

@@ -131,6 +131,6 @@ def test_encoded_values_are_decoded_by_the_stated_curve(tmp_path, encoding, deco
     codes = np.array([128, 64, 26])
     _picture(tmp_path / "mid.png", np.broadcast_to(codes, (2, 3, 3)))
     scene = _scene(tmp_path, f'display = "OLED-SonyPVM2541", image = "mid.png", encoding = "{encoding}"')
-    drive = scene.shapes[0].emitter.image.drive
+    drive = scene.shapes[0].emitter.image.texture.values  # the picture is an emission texture of linear drive
     assert drive.shape == (2, 3, 3)
     np.testing.assert_allclose(drive, np.broadcast_to(decode(codes / 255.0), drive.shape), rtol=1e-6)

@@ -18,8 +18,13 @@ from spectrace.spectral.glasses import index_of_refraction
 from spectrace.spectral.metals import metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import TextureRows
+from spectrace.textures.bitmap import make as bitmap
 
 GREY = Spectrum.constant(0.8)
+# Roughness textures: smooth everywhere (largest α below the 0.001 limit), and smooth in places only.
+SMOOTH_MAP = bitmap(np.array([[0.0, 0.0009]]))
+MIXED_MAP = bitmap(np.array([[0.0, 0.3]]))
 CASES = [
     ("diffuse", DiffuseMaterial(GREY)),
     ("mirror", MirrorMaterial(GREY)),
@@ -31,6 +36,16 @@ CASES = [
         for ior in (1.5, "SF11")
         for a in (0.0, 0.2)
     ],
+    *[
+        (f"{kind}-texture-{which}", make(texture))
+        for which, texture in (("smooth", SMOOTH_MAP), ("mixed", MIXED_MAP))
+        for kind, make in (
+            ("conductor", lambda t: ConductorMaterial(*metal_ior("Cu"), roughness=t)),
+            ("plastic", lambda t: PlasticMaterial(GREY, roughness=t)),
+            ("retroreflector", lambda t: RetroreflectorMaterial(GREY, roughness=t)),
+            ("dielectric-1.5", lambda t: DielectricMaterial(index_of_refraction(1.5), roughness=t)),
+        )
+    ],
 ]
 
 
@@ -38,7 +53,7 @@ CASES = [
 def test_is_delta_is_the_kernels_verdict(kernel_runner, name, material):
     runner = kernel_runner("testing/bsdf.cl")
     table = SpectrumTable()
-    row = material_row(material, table)
+    row = material_row(material, table, TextureRows(table, [np.zeros((1, 4), np.float32)]))
     result = np.zeros(1, np.int32)
     runner.run("bsdf_has_non_delta_lobe", 1, [runner.buffer(np.array([row])), runner.buffer(result, True)], {1: result})
     assert material.is_delta == (not result[0])

@@ -198,3 +198,80 @@ def test_spectra_listing_reads_checkerboard_sides_as_reflectances(tmp_path):
     np.testing.assert_allclose(
         listed["materials.m.reflectance.color1"].values, uplift_reflectance((0.2, 0.5, 0.9))[0].values
     )
+
+
+MORE = """
+[camera]
+origin = [0, 0, 3]
+target = [0, 0, 0]
+fov = 30
+[film]
+width = 8
+height = 8
+[sampler]
+spp = 2
+[materials.m]
+type = "conductor"
+metal = "Au"
+roughness = {roughness}
+specular_tint = {{ texture = "bitmap", file = "tint.png" }}
+[materials.black]
+type = "diffuse"
+reflectance = {{ value = 0 }}
+[[shapes]]
+type = "rectangle"
+material = "m"
+[[shapes]]
+type = "{emitter_shape}"
+material = "black"
+transform = [{{ translate = [0, 0, 2] }}]
+emitter = {{ radiance = {radiance}, scale = 4 }}
+"""
+
+
+def _more(tmp_path, roughness: str, radiance: str, emitter_shape: str = "rectangle"):
+    _png(tmp_path / "grey.png", np.array([[0, 255]], np.uint8), mode="L")
+    _png(tmp_path / "tint.png", np.full((2, 2, 3), 128, np.uint8))
+    _png(tmp_path / "rgb.png", np.full((2, 2, 3), 200, np.uint8))
+    path = tmp_path / "more.toml"
+    path.write_text(MORE.format(roughness=roughness, radiance=radiance, emitter_shape=emitter_shape))
+    return path
+
+
+def test_roughness_tint_and_emission_textures_in_a_scene_file(tmp_path):
+    """A raw grey roughness keeps its code values / 255, the tint and emission are decoded from sRGB, the
+    emitter's scale multiplies the image's mean radiance, and the scene renders."""
+    path = _more(
+        tmp_path, '{ texture = "bitmap", file = "grey.png", raw = true }', '{ texture = "bitmap", file = "rgb.png" }'
+    )
+    scene = load_scene(path)
+    material, emitter = scene.shapes[0].material, scene.shapes[1].emitter
+    np.testing.assert_allclose(material.roughness.values.ravel(), [0.0, 1.0])
+    assert not material.is_delta
+    linear = colour.cctf_decoding(200 / 255, function="sRGB")
+    np.testing.assert_allclose(emitter.image.texture.values, linear, rtol=1e-6)
+    assert emitter.image.scale == 4.0
+    # (1, 1, 1) emits D65 with Y = 1, whose mean over the grid is what the power estimate uses
+    white = sum(p.values for p in emitter.image.primaries)
+    np.testing.assert_allclose(emitter.radiance.values, 4.0 * linear * white, rtol=1e-5)
+    result = run_spectrace("render", str(path), "-o", str(tmp_path / "out.exr"), "-q")
+    assert result.returncode == 0, result.stderr
+
+
+@pytest.mark.parametrize(
+    "roughness, radiance, emitter_shape, expected",
+    [
+        ('{ texture = "bitmap", file = "tint.png" }', "{ value = 1 }", "rectangle", "materials.m.roughness: texture"),
+        ("1.5", "{ value = 1 }", "rectangle", "materials.m.roughness"),
+        ("0.1", '{ texture = "bitmap", file = "rgb.png" }', "sphere", "shapes[1].emitter.radiance: shape"),
+        ("0.1", '{ texture = "checkerboard" }', "rectangle", "shapes[1].emitter.radiance: an emission texture"),
+    ],
+)
+def test_bad_roughness_or_emission_texture_is_one_line(tmp_path, roughness, radiance, emitter_shape, expected):
+    path = _more(tmp_path, roughness, radiance, emitter_shape)
+    result = run_spectrace("render", str(path), "-o", str(tmp_path / "x.png"))
+    assert result.returncode != 0
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+    assert lines[0].startswith(f"error: {path}: {expected}"), lines[0]
+    assert not (tmp_path / "x.png").exists()

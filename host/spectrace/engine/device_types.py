@@ -61,13 +61,14 @@ MATERIAL_DTYPE = _struct(
         ("ior_model", "<i4"),
         ("ior", "<f4"),
         ("reflectance_texture", "<i4"),
+        ("roughness_texture", "<i4"),
         # Surface detail (spectrace.materials.surface), last so that new parameters go before it.
         ("normal_map", "<i4"),
         ("bump_map", "<i4"),
         ("bump_scale", "<f4"),
         ("opacity", "<f4"),
         ("opacity_texture", "<i4"),
-        ("detail_pad", ("<i4", (3,))),
+        ("detail_pad", "<i4"),
     ],
     96,
 )
@@ -79,14 +80,17 @@ TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard")
 TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES))
 # Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
 # S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
-# per band, at band centres band_first_nm + i·band_step_nm; VECTOR: three values read as they are (a normal map).
-TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS, TEXEL_VECTOR = range(4)
+# per band, at band centres band_first_nm + i·band_step_nm; VECTOR: three values read as they are (a normal map);
+# RGB: linear (r, g, b), the weights of three basis spectra (an emission: r·R(λ) + g·G(λ) + b·B(λ), the lights'
+# images).
+TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS, TEXEL_VECTOR, TEXEL_RGB = range(5)
 # Texture.wrap: where st outside [0, 1)² looks.
 WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
 # Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
 # level; TRILINEAR: bilinear on the two levels around the footprint, blended.
 FILTER_NEAREST, FILTER_BILINEAR, FILTER_TRILINEAR = range(3)
-# A material parameter without a texture (Material.reflectance_texture), and a checkerboard side without one.
+# A material parameter without a texture (Material.reflectance_texture, roughness_texture), a checkerboard side
+# without one, and an area light without an emission texture (Light.texture).
 NO_TEXTURE = -1
 
 TEXTURE_DTYPE = _struct(
@@ -105,9 +109,11 @@ TEXTURE_DTYPE = _struct(
         ("band_step_nm", "<f4"),
         ("side_spectrum", ("<i4", (2,))),
         ("side_texture", ("<i4", (2,))),
+        ("basis_offset", ("<i4", (3,))),
         ("pad0", "<i4"),
+        ("pad1", "<i4"),
     ],
-    80,
+    96,
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
@@ -138,7 +144,7 @@ LIGHT_DTYPE = _struct(
         ("map_width", "<i4"),
         ("map_height", "<i4"),
         ("texel_offset", "<i4"),
-        ("pad1", "<i4"),
+        ("texture", "<i4"),
         ("pad2", "<i4"),
     ],
     96,
@@ -241,6 +247,7 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "TEXEL_SCALAR": TEXEL_SCALAR,
         "TEXEL_BANDS": TEXEL_BANDS,
         "TEXEL_VECTOR": TEXEL_VECTOR,
+        "TEXEL_RGB": TEXEL_RGB,
         "WRAP_REPEAT": WRAP_REPEAT,
         "WRAP_MIRROR": WRAP_MIRROR,
         "WRAP_CLAMP": WRAP_CLAMP,

@@ -115,6 +115,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
                 f"shape '{shape.name}' has no texture coordinates, but its material has a texture "
                 f"({', '.join(material_textures(shape.material))})"
             )
+        if shape.emitter is not None and shape.emitter.image is not None and shape.mesh.uvs is None:
+            raise SpectraceError(f"shape '{shape.name}' has no texture coordinates, but its emitter shows an image")
         v0, v1, v2 = shape.mesh.triangles()
         v0s.append(v0)
         v1s.append(v1)
@@ -172,7 +174,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
 
     # Each light writes its own rows (spectrace.lights); images shown by emitters and environment maps share one
     # texel buffer, each light knowing its offset.
-    out = LightRows(table, scene_radius, texel_chunks)
+    out = LightRows(table, scene_radius, texel_chunks, textures)
     areas = 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
     emitting = area_light.write_rows(emitters, tri_emitter, areas, out)
     for light in scene.lights:

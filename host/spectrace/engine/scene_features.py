@@ -4,6 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
+from spectrace.engine.device_types import NO_TEXTURE
 from spectrace.engine.scene_buffers import SceneBuffers
 
 
@@ -12,14 +13,23 @@ def _type_bits(types: np.ndarray) -> int:
     return sum(1 << code for code in {int(t) for t in types.ravel()})
 
 
+def _materials_have_textures(materials: np.ndarray) -> bool:
+    """Some material reads a texture (any of its `*_texture` fields, or a normal or bump map): only then do the path
+    vertices need texture coordinates and footprints (the lights' images are looked up at the light's own uv)."""
+    fields = [name for name in materials.dtype.names or () if name.endswith("_texture")] + ["normal_map", "bump_map"]
+    return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields)
+
+
 def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
     materials = buffers.materials
     return {
         "SCENE_MATERIAL_TYPES": _type_bits(buffers.materials["type"]),
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
         "SCENE_HAS_MEDIA": int(buffers.medium_count > 0),
-        "SCENE_HAS_LIGHT_IMAGES": int(bool(np.any(buffers.lights["map_width"] > 0))),
-        "SCENE_HAS_TEXTURES": int(buffers.texture_count > 0),
+        "SCENE_HAS_LIGHT_IMAGES": int(
+            bool(np.any(buffers.lights["texture"] != NO_TEXTURE) or np.any(buffers.lights["map_width"] > 0))
+        ),
+        "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any((materials["normal_map"] >= 0) | (materials["bump_map"] >= 0)))),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
     }

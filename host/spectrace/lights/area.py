@@ -1,20 +1,28 @@
-"""Area lights: a shape's `emitter`, emitting from each of its triangles, optionally showing an image
-(kernels/lights.cl)."""
+"""Area lights: a shape's `emitter`, emitting from each of its triangles, optionally showing an image: an emission
+texture, or a display's picture, which is one (kernels/lights.cl)."""
 
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_TRIANGLE
+from spectrace.engine.device_types import LIGHT_TRIANGLE, NO_TEXTURE
 from spectrace.lights.base import LightRows, light_row
-from spectrace.materials.parameters import REQUIRED, Parameter
+from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "area"
 MITSUBA_PLUGINS = ("area",)  # on a shape only
 PARAMETERS = (
-    Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="times scale"),
+    Parameter(
+        "radiance",
+        "spectrum",
+        "W/(m² sr nm)",
+        REQUIRED,
+        doc="times scale; a texture: an RGB image (each texel the D65-based emission of its colour, as an `envmap`'s) "
+        "or a spectral one (each texel its radiance)",
+        textured=True,
+    ),
     Parameter(
         "two_sided",
         "bool",
@@ -22,16 +30,38 @@ PARAMETERS = (
         False,
         doc="emit on both faces; by default only on the side the triangles' winding faces",
     ),
+    Parameter("scale", "float", "", 1.0, Range(0.0), doc="multiplies the radiance"),
 )
 
 
 @dataclass(frozen=True, eq=False)
 class EmitterImage:
-    """An image shown by an area light (a picture on a screen): each texel emits r·R(λ) + g·G(λ) + b·B(λ) of the
-    three primaries for its linear drive (r, g, b); texture coordinates place it (u right, v down)."""
+    """An image shown by an area light, placed by the surface's texture coordinates (u right, v down): a texture
+    (spectrace.textures) looked up at its finest level, times `scale`. A bitmap's texel (r, g, b) emits
+    r·R(λ) + g·G(λ) + b·B(λ) of `primaries` (the D65-based emission uplifts of the sRGB primaries for an emission
+    texture, as an environment map's; a display's measured primaries for the picture it shows, its linear drive the
+    texels); a spectral texture's texel is its radiance, and `primaries` is None."""
 
-    drive: np.ndarray  # (height, width, 3) linear drive per texel, row 0 at the top
-    primaries: tuple[Spectrum, Spectrum, Spectrum]  # W/(m² sr nm) at full drive, scale applied
+    texture: Any  # a BitmapTexture or SpectralTexture (spectrace.textures is imported lazily here)
+    primaries: tuple[Spectrum, Spectrum, Spectrum] | None  # W/(m² sr nm) at full drive
+    scale: float = 1.0
+
+    def mean_radiance(self) -> Spectrum:
+        """The radiance averaged over the image's texels, W/(m² sr nm), scale applied: what the light's power
+        estimate uses."""
+        from spectrace.spectral.grid import GRID_NM
+        from spectrace.textures import SpectralTexture
+
+        values = np.asarray(self.texture.values, np.float64)
+        mean = values.reshape(-1, values.shape[-1]).mean(axis=0)
+        if isinstance(self.texture, SpectralTexture):
+            # The kernel interpolates linearly between band centres and holds the end bands, as np.interp does.
+            radiance = np.interp(GRID_NM, self.texture.wavelengths_nm, mean)
+        else:
+            assert self.primaries is not None  # a bitmap weights its primaries
+            rgb = np.repeat(mean, 3) if len(mean) == 1 else mean
+            radiance = sum(c * p.values for c, p in zip(rgb, self.primaries))
+        return Spectrum(self.scale * radiance, name="image mean")
 
 
 @dataclass(frozen=True)
@@ -44,38 +74,54 @@ class AreaEmitter:
 MODEL = AreaEmitter
 
 
+def emission_image(texture, scale: float = 1.0) -> EmitterImage:
+    """An emission texture (a bitmap of linear sRGB, or a spectral texture) as the image of an area light."""
+    from spectrace.spectral.uplift import uplift_illuminant
+    from spectrace.textures import BitmapTexture
+
+    if not isinstance(texture, BitmapTexture):
+        return EmitterImage(texture, None, float(scale))
+    red, green, blue = (uplift_illuminant(primary) for primary in np.eye(3))
+    return EmitterImage(texture, (red, green, blue), float(scale))
+
+
+def emitter(radiance, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
+    """An area emitter of a checked radiance: a Spectrum (scale applied here) or an emission texture."""
+    from spectrace.textures import is_texture
+
+    if is_texture(radiance):
+        image = emission_image(radiance, scale)
+        return AreaEmitter(radiance=image.mean_radiance(), two_sided=bool(two_sided), image=image)
+    return AreaEmitter(radiance=radiance.scaled(scale) if scale != 1.0 else radiance, two_sided=bool(two_sided))
+
+
 def write_rows(
     emitters: list[AreaEmitter], triangle_emitter: np.ndarray, areas: np.ndarray, out: LightRows
 ) -> np.ndarray:
     """One row per emitting triangle of non-zero area (triangle_emitter: each triangle's index into `emitters`,
-    or -1); returns those triangles' indices, in row order."""
+    or -1); returns those triangles' indices, in row order. A light showing an image refers to its texture row
+    (Light.texture); its power estimate uses the image's mean radiance."""
     emitting = np.flatnonzero((triangle_emitter >= 0) & (areas > 0))
-    emitter_rows: list[dict[str, Any]] = []
+    emitter_rows: list[tuple[int, int, float]] = []  # spectrum offset, texture, scale
     for e in emitters:
         if e.image is None:
-            emitter_rows.append({"spectrum_offset": out.table.add(e.radiance)})
+            emitter_rows.append((out.table.add(e.radiance), NO_TEXTURE, 1.0))
         else:
-            basis = [out.table.add(p) for p in e.image.primaries]
-            height, width = e.image.drive.shape[:2]
-            emitter_rows.append(
-                {
-                    "spectrum_offset": basis[0],
-                    "texel_offset": out.add_texels(e.image.drive),
-                    "map_fields": (basis[1], basis[2], width, height),
-                }
-            )
+            basis = None if e.image.primaries is None else [out.table.add(p) for p in e.image.primaries]
+            texture = out.textures.add(e.image.texture, "emission", basis=basis)
+            emitter_rows.append((basis[0] if basis else 0, texture, e.image.scale))
     for t in emitting:
         e = emitters[triangle_emitter[t]]
-        fields = emitter_rows[triangle_emitter[t]]
+        spectrum_offset, texture, scale = emitter_rows[triangle_emitter[t]]
         out.add(
             light_row(
                 LIGHT_TRIANGLE,
-                fields["spectrum_offset"],
+                spectrum_offset,
                 triangle=int(t),
                 area=areas[t],
                 two_sided=e.two_sided,
-                map_fields=fields.get("map_fields", (0, 0, 0, 0)),
-                texel_offset=fields.get("texel_offset", 0),
+                scale=scale,
+                texture=texture,
             ),
             np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0),
         )

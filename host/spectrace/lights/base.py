@@ -3,6 +3,7 @@ positions and directions."""
 
 import numpy as np
 
+from spectrace.engine.device_types import NO_TEXTURE
 from spectrace.errors import SpectraceError
 from spectrace.spectral.table import SpectrumTable
 
@@ -25,6 +26,7 @@ def light_row(
     cos_cutoff: float = 1.0,
     map_fields=(0, 0, 0, 0),
     texel_offset: int = 0,
+    texture: int = NO_TEXTURE,
 ) -> tuple:
     """One Light row as a tuple in LIGHT_DTYPE's field order; pmf is filled in once every light's power is known."""
     return (
@@ -41,7 +43,7 @@ def light_row(
         cos_cutoff,
         *map_fields,
         texel_offset,
-        0,
+        texture,
         0,
     )
 
@@ -50,7 +52,11 @@ class LightRows:
     """The rows the lights write, each with an estimate of the power it emits (for picking lights in proportion to
     it), and the buffers they share: the spectrum table and one texel buffer for every image a light shows."""
 
-    def __init__(self, table: SpectrumTable, scene_radius: float, texel_chunks: list[np.ndarray] | None = None):
+    def __init__(
+        self, table: SpectrumTable, scene_radius: float, texel_chunks: list[np.ndarray] | None = None, textures=None
+    ):
+        from spectrace.textures import TextureRows
+
         self.table = table
         self.scene_radius = scene_radius
         self.rows: list[tuple] = []
@@ -59,6 +65,8 @@ class LightRows:
         self.map_cdf = np.zeros(2, np.float32)  # the environment map's sampling CDFs (kernels/environment.cl)
         # The texel buffer, which material textures share (spectrace.textures.TextureRows): a dummy texel first.
         self.texel_chunks = texel_chunks if texel_chunks is not None else [np.zeros((1, 4), np.float32)]
+        # The texture rows of the images area lights show (the scene's, which the materials' textures share).
+        self.textures = textures if textures is not None else TextureRows(table, self.texel_chunks)
 
     def add(self, row: tuple, power: float, environment: bool = False) -> None:
         if environment:

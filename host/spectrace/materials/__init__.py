@@ -54,21 +54,31 @@ def material_textures(material) -> dict:
 
 def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
     """The Material row of `material`, adding its spectra to `table` and its textures to `textures` (a
-    spectrace.textures.TextureRows). A textured parameter's row field `<name>_texture` holds the texture's index;
-    the module's write_row sees a zero spectrum in its place, so it needs to know nothing of textures."""
+    spectrace.textures.TextureRows). A textured parameter's row field (Parameter.row_texture_field) holds the
+    texture's index; the module's write_row sees, in its place, a zero spectrum for a spectrum and the texture's
+    largest value for a number, so it needs to know nothing of textures. A textured roughness thus leaves its
+    largest α in the row's `alpha`, from which the BSDF's flags come: a surface is treated as smooth (delta) only
+    where every α it has is below the smooth limit, and otherwise the BSDF reads α per hit."""
+    from spectrace.textures import scalar_range
+
     module = material_module(material)
     row = np.zeros((), MATERIAL_DTYPE)
     row["type"] = MATERIAL_CODES[module.NAME]
     row["reflectance_offset"] = row["eta_offset"] = row["k_offset"] = MATERIAL_NO_SPECTRUM
     row["ior"] = 1.0
-    row["reflectance_texture"] = NO_TEXTURE
+    row["reflectance_texture"] = row["roughness_texture"] = NO_TEXTURE
     textured = _parameter_textures(material)
+    parameters = {p.name: p for p in module.PARAMETERS}
     if textured:
-        material = dataclasses.replace(material, **{name: Spectrum.zeros() for name in textured})
+        stand_ins = {
+            name: scalar_range(texture)[1] if parameters[name].type == "float" else Spectrum.zeros()
+            for name, texture in textured.items()
+        }
+        material = dataclasses.replace(material, **stand_ins)
     module.write_row(row, material, table)
     for name, texture in textured.items():
-        kind = next(p.type for p in module.PARAMETERS if p.name == name)
-        row[f"{name}_texture"] = textures.add(texture, "float" if kind == "float" else "spectrum")
+        parameter = parameters[name]
+        row[parameter.row_texture_field] = textures.add(texture, "float" if parameter.type == "float" else "spectrum")
     write_detail(row, material.detail, textures)
     return row
 

@@ -7,7 +7,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.materials.opaque import RoughOpaque
-from spectrace.materials.parameters import Parameter, Range, reflectance, roughness
+from spectrace.materials.parameters import Parameter, Range, roughness, specular_tint
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
@@ -45,12 +45,7 @@ PARAMETERS = (
         doc="imaginary part k(λ) (extinction coefficient)",
     ),
     ROUGHNESS,
-    reflectance(
-        None,
-        "multiplies the Fresnel reflectance (an artistic control; physical metals leave it out)",
-        name="specular_tint",
-        default_doc="none (1)",
-    ),
+    specular_tint("multiplies the Fresnel reflectance (an artistic control; physical metals leave it out)"),
 )
 
 
@@ -61,8 +56,8 @@ class ConductorMaterial(RoughOpaque):
 
     eta: Spectrum
     k: Spectrum
-    roughness: float = ROUGHNESS.number_default
-    specular_tint: Spectrum | None = None
+    roughness: float = ROUGHNESS.number_default  # or a one-channel texture
+    specular_tint: Spectrum | None = None  # or a texture
 
 
 MODEL = ConductorMaterial
@@ -92,11 +87,12 @@ def from_spec(spec, resolver, key: str) -> ConductorMaterial:
         eta = resolver.optical_constant(spec.eta, f"{key}.eta", positive=True)
         k = resolver.optical_constant(spec.k, f"{key}.k", positive=False)
     tint = (
-        resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
+        resolver.spectrum_or_texture(spec.specular_tint, f"{key}.specular_tint", "spectrum")
         if spec.specular_tint is not None
         else None
     )
-    return ConductorMaterial(eta, k, roughness=spec.roughness, specular_tint=tint)
+    roughness = resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS)
+    return ConductorMaterial(eta, k, roughness=roughness, specular_tint=tint)
 
 
 def make(
@@ -109,7 +105,8 @@ def make(
 ) -> ConductorMaterial:
     """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
     index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
-    mirror-like metal); `specular_tint` (a reflectance) multiplies the Fresnel term."""
+    mirror-like metal; a number or a grey texture); `specular_tint` (a reflectance or a texture) multiplies the
+    Fresnel term."""
     if problem := source_problem(metal, eta, k):
         raise SpectraceError(problem)
     if metal is not None:
@@ -118,8 +115,10 @@ def make(
         assert eta is not None and k is not None  # source_problem has refused every other combination
         eta_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(eta), True, "eta")
         k_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(k), False, "k")
-    tint = spectrum_input.reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
-    return ConductorMaterial(eta_spectrum, k_spectrum, roughness=ROUGHNESS.check(roughness), specular_tint=tint)
+    tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
+    return ConductorMaterial(
+        eta_spectrum, k_spectrum, roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS), specular_tint=tint
+    )
 
 
 def write_row(row: np.ndarray, material: ConductorMaterial, table: SpectrumTable) -> None:

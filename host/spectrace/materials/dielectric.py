@@ -7,7 +7,8 @@ import numpy as np
 
 from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER
 from spectrace.materials.base import Material
-from spectrace.materials.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance, roughness
+from spectrace.materials.opaque import smooth_everywhere
+from spectrace.materials.parameters import Parameter, Range, roughness, specular_tint
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
@@ -32,12 +33,7 @@ IOR = Parameter(
 PARAMETERS = (
     IOR,
     ROUGHNESS,
-    reflectance(
-        None,
-        "multiplies both reflection and transmission (an artistic control; clear glass leaves it out)",
-        name="specular_tint",
-        default_doc="none (1)",
-    ),
+    specular_tint("multiplies both reflection and transmission (an artistic control; clear glass leaves it out)"),
 )
 
 
@@ -48,14 +44,14 @@ class DielectricMaterial(Material):
     normal (the winding) points to the exterior. `specular_tint` multiplies both lobes when given."""
 
     ior: IndexOfRefraction
-    roughness: float = ROUGHNESS.number_default
-    specular_tint: Spectrum | None = None
+    roughness: float = ROUGHNESS.number_default  # or a one-channel texture
+    specular_tint: Spectrum | None = None  # or a texture
 
     has_transmission = True
 
     @property
     def is_delta(self) -> bool:
-        return self.roughness < SMOOTH_ALPHA
+        return smooth_everywhere(self.roughness)
 
     @property
     def is_dispersive(self) -> bool:
@@ -68,12 +64,14 @@ MODEL = DielectricMaterial
 def from_spec(spec, resolver, key: str) -> DielectricMaterial:
     ior = spec.ior if isinstance(spec.ior, (float, str)) else spec.ior.model_dump()
     tint = (
-        resolver.spectrum(spec.specular_tint, f"{key}.specular_tint", emission=False)
+        resolver.spectrum_or_texture(spec.specular_tint, f"{key}.specular_tint", "spectrum")
         if spec.specular_tint is not None
         else None
     )
     return DielectricMaterial(
-        index_of_refraction(ior, where=resolver.where(f"{key}.ior")), roughness=spec.roughness, specular_tint=tint
+        index_of_refraction(ior, where=resolver.where(f"{key}.ior")),
+        roughness=resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS),
+        specular_tint=tint,
     )
 
 
@@ -85,10 +83,13 @@ def make(
     """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
     exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
     C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
-    face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance) multiplies both lobes."""
-    tint = spectrum_input.reflectance(specular_tint, "specular_tint") if specular_tint is not None else None
+    face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance or a texture) multiplies
+    both lobes; `roughness` may be a grey texture."""
+    tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
     return DielectricMaterial(
-        index_of_refraction(ior, where="ior"), roughness=ROUGHNESS.check(roughness), specular_tint=tint
+        index_of_refraction(ior, where="ior"),
+        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
+        specular_tint=tint,
     )
 
 

@@ -8,7 +8,7 @@ from spectrace.spectral.spectrum_input import SpectrumLike
 NAME = "mirror"
 MITSUBA_PLUGINS = ()
 MITSUBA_NONE = 'Mitsuba 3\'s mirror is a conductor of material "none", which conductor.py imports as a mirror'
-PARAMETERS = (reflectance(1.0, "perfect specular reflection scaled by R(λ)"),)
+PARAMETERS = (reflectance(1.0, "perfect specular reflection scaled by R(λ)", textured=True),)
 
 
 class MirrorMaterial(ReflectanceOnly):
@@ -24,5 +24,6 @@ from_spec, write_row = reflectance_only(MirrorMaterial)
 
 
 def make(reflectance: SpectrumLike = PARAMETERS[0].number_default) -> MirrorMaterial:
-    """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1), on both faces."""
-    return MirrorMaterial(spectrum_input.reflectance(reflectance, "reflectance"))
+    """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1; a spectrum or a texture), on both
+    faces."""
+    return MirrorMaterial(spectrum_input.reflectance_or_texture(reflectance, "reflectance"))

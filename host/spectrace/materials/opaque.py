@@ -20,14 +20,23 @@ class Opaque(Material):
     is_dispersive = False
 
 
+def smooth_everywhere(roughness) -> bool:
+    """A GGX lobe of width `roughness` (a number or a one-channel texture) is a delta lobe at every point: its
+    largest α is below the kernels' smooth limit (kernels/microfacet.cl, ggx_lobe_flags)."""
+    from spectrace.textures import scalar_range
+
+    return scalar_range(roughness)[1] < SMOOTH_ALPHA
+
+
 class RoughOpaque(Opaque):
-    """A GGX lobe of width `roughness`: delta where it is narrower than the kernels' smooth limit."""
+    """A GGX lobe of width `roughness` (a number or a texture): delta where it is narrower than the kernels' smooth
+    limit; only delta lobes when it is that narrow everywhere."""
 
     roughness: float
 
     @property
     def is_delta(self) -> bool:
-        return self.roughness < SMOOTH_ALPHA
+        return smooth_everywhere(self.roughness)
 
 
 @dataclass(frozen=True)

@@ -68,7 +68,8 @@ class Parameter:
     default_doc: how the docs' table writes the type and default where the generated text would not do.
     api_name: the Python API's name for the key when it differs. schema_range: False where a check of the whole
     table (the module's SPEC_CHECKS) reports the range instead of the field's own constraint. textured: the key also
-    takes a texture (spectrace.textures), which the material's row refers to by its `<name>_texture` index.
+    takes a texture (spectrace.textures; a one-channel one for a "float"), which the material's row refers to by its
+    texture index, in the row field `texture_field` (default `<name>_texture`).
     """
 
     name: str
@@ -82,6 +83,12 @@ class Parameter:
     api_name: str | None = None
     schema_range: bool = True
     textured: bool = False
+    texture_field: str | None = None
+
+    @property
+    def row_texture_field(self) -> str:
+        """The Material row field that holds the index of this key's texture."""
+        return self.texture_field or f"{self.name}_texture"
 
     @property
     def required(self) -> bool:
@@ -117,7 +124,9 @@ class Parameter:
         """The docs' "type, unit" column."""
         if self.type_doc is not None:
             return self.type_doc
-        text = f"{self.type} or texture" if self.textured and self.type == "spectrum" else self.type
+        text = self.type
+        if self.textured:
+            text += " or texture" if self.type == "spectrum" else " or grey texture"
         if self.range is not None and self.range.bounded:
             text += f" in {self.range}"
         if self.unit:
@@ -147,14 +156,35 @@ ROUGHNESS_RANGE = Range(0.0, 1.0)
 
 
 def roughness(default: float, doc: str) -> Parameter:
-    """The GGX α every rough material shares (Mitsuba 3's `alpha`)."""
-    return Parameter("roughness", "float", default=default, range=ROUGHNESS_RANGE, doc=doc)
+    """The GGX α every rough material shares (Mitsuba 3's `alpha`); a one-channel texture makes it vary over the
+    surface (the Material row's `alpha` then holds the texture's largest value, which decides the BSDF's flags)."""
+    return Parameter("roughness", "float", default=default, range=ROUGHNESS_RANGE, doc=doc, textured=True)
 
 
 def reflectance(
-    default: object, doc: str, name: str = "reflectance", default_doc: str | None = None, textured: bool = False
+    default: object,
+    doc: str,
+    name: str = "reflectance",
+    default_doc: str | None = None,
+    textured: bool = False,
+    texture_field: str | None = None,
 ) -> Parameter:
     """A spectrum bounded by [0, 1] at every wavelength (or, when textured, a texture of such spectra)."""
     return Parameter(
-        name, "spectrum", default=default, range=Range(0.0, 1.0), doc=doc, default_doc=default_doc, textured=textured
+        name,
+        "spectrum",
+        default=default,
+        range=Range(0.0, 1.0),
+        doc=doc,
+        default_doc=default_doc,
+        textured=textured,
+        texture_field=texture_field,
+    )
+
+
+def specular_tint(doc: str) -> Parameter:
+    """The optional tint of a conductor's or dielectric's lobes: a reflectance or a texture, stored where the
+    reflectance of the other materials is (Material.reflectance_offset / reflectance_texture)."""
+    return reflectance(
+        None, doc, name="specular_tint", default_doc="none (1)", textured=True, texture_field="reflectance_texture"
     )

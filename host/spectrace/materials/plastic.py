@@ -34,7 +34,7 @@ class PlasticMaterial(Opaque):
 
     reflectance: Spectrum  # or a texture (spectrace.textures)
     ior: float = IOR.number_default
-    roughness: float = ROUGHNESS.number_default
+    roughness: float = ROUGHNESS.number_default  # or a one-channel texture
 
     is_delta = False  # the base is diffuse whatever the coat
 
@@ -46,7 +46,7 @@ def from_spec(spec, resolver, key: str) -> PlasticMaterial:
     return PlasticMaterial(
         resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"),
         ior=spec.ior,
-        roughness=spec.roughness,
+        roughness=resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS),
     )
 
 
@@ -54,11 +54,11 @@ def make(
     reflectance: SpectrumLike, ior: float = IOR.number_default, roughness: float = ROUGHNESS.number_default
 ) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
-    smooth or GGX-rough (`roughness` = α)."""
+    smooth or GGX-rough (`roughness` = α, a number or a grey texture)."""
     return PlasticMaterial(
         spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
         ior=IOR.check(ior),
-        roughness=ROUGHNESS.check(roughness),
+        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
     )
 
 

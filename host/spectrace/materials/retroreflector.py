@@ -16,15 +16,15 @@ NAME = "retroreflector"
 MITSUBA_PLUGINS = ()
 MITSUBA_NONE = "Mitsuba 3 has no retroreflecting BSDF"
 ROUGHNESS = roughness(0.1, "GGX α: the width of the lobe around the direction light came from")
-PARAMETERS = (reflectance(1.0, "how much comes back"), ROUGHNESS)
+PARAMETERS = (reflectance(1.0, "how much comes back", textured=True), ROUGHNESS)
 
 
 @dataclass(frozen=True)
 class RetroreflectorMaterial(RoughOpaque):
     """Returns light toward where it came from: a GGX lobe of width `roughness` about the incident direction."""
 
-    reflectance: Spectrum
-    roughness: float = ROUGHNESS.number_default
+    reflectance: Spectrum  # or a texture (spectrace.textures)
+    roughness: float = ROUGHNESS.number_default  # or a one-channel texture
 
 
 MODEL = RetroreflectorMaterial
@@ -32,7 +32,8 @@ MODEL = RetroreflectorMaterial
 
 def from_spec(spec, resolver, key: str) -> RetroreflectorMaterial:
     return RetroreflectorMaterial(
-        resolver.spectrum(spec.reflectance, f"{key}.reflectance", emission=False), roughness=spec.roughness
+        resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"),
+        roughness=resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS),
     )
 
 
@@ -40,9 +41,10 @@ def make(
     reflectance: SpectrumLike = PARAMETERS[0].number_default, roughness: float = ROUGHNESS.number_default
 ) -> RetroreflectorMaterial:
     """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
-    incident direction, scaled by `reflectance`."""
+    incident direction, scaled by `reflectance` (each a number or spectrum, or a texture)."""
     return RetroreflectorMaterial(
-        spectrum_input.reflectance(reflectance, "reflectance"), roughness=ROUGHNESS.check(roughness)
+        spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
+        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
     )
 
 

@@ -15,6 +15,7 @@ from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
+from spectrace.lights.area import emitter as area_emitter
 from spectrace.materials import MATERIALS, material_textures, surface
 from spectrace.scene import limits, schema
 from spectrace.scene.model import AreaEmitter, Camera, EmitterImage, Light, Material, Medium, Scene, Shape
@@ -22,7 +23,8 @@ from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
-from spectrace.textures import IMAGE_TEXTURES, TEXTURES, check_texture_values, is_texture
+from spectrace.textures import IMAGE_TEXTURES, TEXTURES, BitmapTexture, check_texture_values, is_texture
+from spectrace.textures.shared import Placement
 
 
 def key_path(location: tuple) -> str:
@@ -238,6 +240,15 @@ class _Resolver:
         check_texture_values(texture, kind, self.where(key))
         return texture
 
+    def number_or_texture(self, spec, key: str, parameter):
+        """A textured number's value (a `roughness`): the number the schema checked, or a one-channel texture whose
+        values lie in the parameter's range."""
+        if isinstance(spec, (int, float)):
+            return float(spec)
+        texture = self.spectrum_or_texture(spec, key, "float")
+        check_texture_values(texture, "float", self.where(key), upper=parameter.range.high)
+        return texture
+
     def named_texture(self, name: str, key: str):
         if name in self.named_textures:
             return self.named_textures[name]
@@ -322,15 +333,13 @@ class _Resolver:
                 )
             emitter = None
             if s.emitter is not None:
-                radiance_key = f"{key}.emitter.radiance"
-                if s.emitter.radiance.image is not None:
-                    image = self.emitter_image(s.emitter.radiance, radiance_key)
-                    mean_drive = image.drive.reshape(-1, 3).mean(axis=0)
-                    mean = Spectrum(sum(d * p.values for d, p in zip(mean_drive, image.primaries)), name="image mean")
-                    emitter = AreaEmitter(radiance=mean, two_sided=s.emitter.two_sided, image=image)
-                else:
-                    radiance = self.spectrum(s.emitter.radiance, radiance_key, emission=True)
-                    emitter = AreaEmitter(radiance=radiance, two_sided=s.emitter.two_sided)
+                emitter = self.emitter(s.emitter, f"{key}.emitter")
+                if emitter.image is not None and mesh.uvs is None:
+                    name = s.name or f"{s.type}{i}"
+                    raise SpectraceError(
+                        f"shape '{name}' has no texture coordinates, but its emitter shows an image",
+                        where=self.where(f"{key}.emitter.radiance"),
+                    )
             interior = self.interior(s.interior, f"{key}.interior") if s.interior is not None else None
             material = materials[s.material] if s.material is not None else None
             if (problem := surface.cut_out_problem(material, emitter is not None, interior is not None)) is not None:
@@ -421,8 +430,27 @@ class _Resolver:
             )
         return display.with_transfer(parse_encoding(spec.encoding, where=self.where(f"{key}.encoding")))
 
-    def emitter_image(self, spec: schema.SpectrumSpec, key: str) -> EmitterImage:
-        """The picture a display shows: its encoded values decoded to linear drive by the display's encoding."""
+    def emitter(self, spec, key: str) -> AreaEmitter:
+        """A shape's emitter: a radiance spectrum, a display's picture, or an emission texture, times scale."""
+        radiance = spec.radiance
+        if isinstance(radiance, schema.SpectrumSpec) and radiance.image is not None:
+            drive, primaries = self.emitter_image(radiance, f"{key}.radiance")
+            mean_drive = drive.reshape(-1, 3).mean(axis=0)
+            mean = Spectrum(sum(d * p.values for d, p in zip(mean_drive, primaries)), name="image mean")
+            # The picture is an emission texture of the display's primaries, each texel the one containing the point.
+            texture = BitmapTexture(_float32(drive), Placement(filter="nearest"), source=radiance.image)
+            image = EmitterImage(texture, primaries, spec.scale)
+            return AreaEmitter(
+                radiance=mean.scaled(spec.scale) if spec.scale != 1.0 else mean, two_sided=spec.two_sided, image=image
+            )
+        if isinstance(radiance, schema.SpectrumSpec):
+            return area_emitter(self.spectrum(radiance, f"{key}.radiance", emission=True), spec.two_sided, spec.scale)
+        texture = self.spectrum_or_texture(radiance, f"{key}.radiance", "emission")
+        return area_emitter(texture, spec.two_sided, spec.scale)
+
+    def emitter_image(self, spec: schema.SpectrumSpec, key: str) -> tuple[np.ndarray, tuple]:
+        """The picture a display shows: its encoded values decoded to linear drive by the display's encoding, and
+        the display's primaries (times the spectrum's scale)."""
         from spectrace.spectral.display_transfer import decode_to_drive
 
         assert spec.image is not None  # asked only for a radiance that names an image
@@ -430,10 +458,16 @@ class _Resolver:
         encoded = read_picture(self.folder / spec.image, self.where(f"{key}.image"))
         drive = np.clip(decode_to_drive(encoded, display.transfer), 0.0, 1.0)
         primaries = tuple(p * spec.scale for p in display.primaries)
-        return EmitterImage(drive=drive, primaries=primaries)
+        return drive, primaries
 
     def lights(self) -> list[Light]:
         return [LIGHTS[spec.type].from_spec(spec, self, f"lights[{i}]") for i, spec in enumerate(self.spec.lights)]
+
+
+def _float32(values: np.ndarray) -> np.ndarray:
+    array = np.ascontiguousarray(values, np.float32)
+    array.setflags(write=False)
+    return array
 
 
 def is_texture_image(texture) -> bool:

@@ -216,21 +216,36 @@ def _texture_model(module, key: str, textured_annotation) -> type[Strict]:
     )
 
 
-def _spectrum_or_texture(inline: dict[str, type[Strict]]):
-    """A spectrum table, an inline texture (told apart by the type its `texture` names) or a reference."""
+def _spectrum_or_texture(inline: dict[str, type[Strict]], spectrum: bool = True):
+    """A spectrum table, an inline texture (told apart by the type its `texture` names) or a reference; without
+    `spectrum`, a texture only."""
 
     def tag(value) -> str:
         if isinstance(value, dict):
             kind = value.get("texture")
         else:
             kind = getattr(value, "texture", None)
-        if kind is None:
+        if kind is None and spectrum:
             return "spectrum"
         return kind if kind in inline else "reference"
 
-    members = [Annotated[SpectrumSpec, Tag("spectrum")], Annotated[TextureRefSpec, Tag("reference")]]
+    members = [Annotated[SpectrumSpec, Tag("spectrum")]] if spectrum else []
+    members += [Annotated[TextureRefSpec, Tag("reference")]]
     members += [Annotated[model, Tag(name)] for name, model in inline.items()]
     return Annotated[functools.reduce(operator.or_, members), Discriminator(tag)]
+
+
+def _number_or_texture(number, textured):
+    """A textured number (a `roughness`): the number itself, or a texture, inline or by name (`textured`: the same
+    union for spectra, whose non-number members are the textures)."""
+
+    def tag(value) -> str:
+        return "number" if isinstance(value, (int, float)) else "texture"
+
+    return Annotated[
+        Annotated[number, Tag("number")] | Annotated[textured, Tag("texture")],
+        Discriminator(tag),
+    ]
 
 
 def _field(parameter: Parameter) -> tuple:
@@ -252,6 +267,9 @@ def _field(parameter: Parameter) -> tuple:
         else {}
     )
     description = f"{parameter.unit}: {parameter.doc}" if parameter.unit else parameter.doc
+    if parameter.textured and parameter.type == "float":
+        # The range constrains the number; a texture's values are checked as it is read.
+        annotation, constraints = _number_or_texture(Annotated[annotation, Field(**constraints)], TextureOnly), {}
     return annotation, Field(default=default, description=description, **constraints)
 
 
@@ -269,14 +287,15 @@ _IMAGE_TEXTURES = {name: m for name, m in TEXTURES.items() if name != "checkerbo
 if TYPE_CHECKING:
     InnerSpectrumOrTexture: TypeAlias = Any
     SpectrumOrTexture: TypeAlias = Any
+    TextureOnly: TypeAlias = Any
     NamedTextureSpec: TypeAlias = Any
 else:
     InnerSpectrumOrTexture = _spectrum_or_texture(
         {name: _texture_model(m, "texture", None) for name, m in _IMAGE_TEXTURES.items()}
     )
-    SpectrumOrTexture = _spectrum_or_texture(
-        {name: _texture_model(m, "texture", InnerSpectrumOrTexture) for name, m in TEXTURES.items()}
-    )
+    _INLINE_TEXTURES = {name: _texture_model(m, "texture", InnerSpectrumOrTexture) for name, m in TEXTURES.items()}
+    SpectrumOrTexture = _spectrum_or_texture(_INLINE_TEXTURES)
+    TextureOnly = _spectrum_or_texture(_INLINE_TEXTURES, spectrum=False)
     NamedTextureSpec = Annotated[
         functools.reduce(operator.or_, (_texture_model(m, "type", InnerSpectrumOrTexture) for m in TEXTURES.values())),
         Field(discriminator="type"),
@@ -287,7 +306,8 @@ def _spec_model(module, name: str, type_default=..., extra: dict | None = None) 
     fields: dict[str, Any] = {"type": (Literal[module.NAME], type_default)}
     for parameter in module.PARAMETERS:
         annotation, field = _field(parameter)
-        fields[parameter.name] = (SpectrumOrTexture if parameter.textured else annotation, field)
+        textured_spectrum = parameter.textured and parameter.type == "spectrum"
+        fields[parameter.name] = (SpectrumOrTexture if textured_spectrum else annotation, field)
     fields |= extra or {}
     return create_model(
         name,

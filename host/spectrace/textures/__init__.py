@@ -39,17 +39,48 @@ def is_texture(value: object) -> bool:
     return isinstance(value, (BitmapTexture, SpectralTexture, CheckerboardTexture))
 
 
-def check_texture_values(texture, kind: str, where: str) -> None:
-    """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture has one channel."""
-    if not isinstance(texture, IMAGE_TEXTURES):
-        return  # a checkerboard's sides were checked as they were resolved
+def check_texture_values(texture, kind: str, where: str, upper: float | None = None) -> None:
+    """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture ("float") has one channel
+    (a checkerboard's sides: constant spectra or one-channel images) and its values lie in [0, upper]; an emission
+    is an image texture (a bitmap or a spectral texture) of values >= 0."""
+    if kind == "emission" and not isinstance(texture, IMAGE_TEXTURES):
+        raise SpectraceError("an emission texture is a bitmap or a spectral texture, not a checkerboard", where=where)
+    if isinstance(texture, CheckerboardTexture):
+        if kind == "float":
+            for side in (texture.color0, texture.color1):
+                if isinstance(side, Spectrum):
+                    if np.ptp(side.values) > 0.0:
+                        raise SpectraceError(
+                            "a scalar checkerboard's sides are numbers ({ value = ... }) or grey images, not spectra "
+                            "that vary with the wavelength",
+                            where=where,
+                        )
+                else:
+                    check_texture_values(side, kind, where, upper)
+            if upper is not None and (high := scalar_range(texture)[1]) > upper:
+                raise SpectraceError(f"checkerboard has values above {upper:g} (max {high:.4g})", where=where)
+        return  # a reflectance checkerboard's sides were checked as they were resolved
     if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
         raise SpectraceError(
             f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
             where=where,
         )
-    if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else None):
+    if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else upper, reflectance=kind == "spectrum"):
         raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
+
+
+def scalar_range(value) -> tuple[float, float]:
+    """The smallest and largest value a scalar parameter (a number, or a one-channel texture checked by
+    check_texture_values) takes anywhere on a surface: every filter blends texels with convex weights and every MIP
+    level averages the one before, so no lookup leaves the texels' range."""
+    if isinstance(value, CheckerboardTexture):
+        ranges = [scalar_range(side) for side in (value.color0, value.color1)]
+        return min(r[0] for r in ranges), max(r[1] for r in ranges)
+    if isinstance(value, Spectrum):
+        return float(value.values.min()), float(value.values.max())
+    if isinstance(value, IMAGE_TEXTURES):
+        return float(value.values.min()), float(value.values.max())
+    return float(value), float(value)
 
 
 def texture_module(texture):
@@ -62,7 +93,7 @@ def device_bytes(texture, kind: str) -> int:
     if isinstance(texture, CheckerboardTexture):
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
     height, width = texture.values.shape[:2]
-    channels = 3 if isinstance(texture, BitmapTexture) and kind == "spectrum" else texture.channels
+    channels = 3 if isinstance(texture, BitmapTexture) and kind != "float" else texture.channels
     pyramid = 4.0 / 3.0 if texture.placement.filter == "trilinear" else 1.0
     return int(width * height * channels * 4 * pyramid)
 
@@ -75,15 +106,17 @@ class TextureRows:
         self.table = table
         self.texel_chunks = texel_chunks
         self.rows: list[np.ndarray] = []
-        self.index: dict[tuple[int, str], int] = {}
+        self.index: dict[tuple[int, str, tuple[int, ...]], int] = {}
         self.bytes = 0
 
     def array(self) -> np.ndarray:
         return np.array(self.rows, TEXTURE_DTYPE) if self.rows else np.zeros(1, TEXTURE_DTYPE)
 
-    def add(self, texture, kind: str, where: str | None = None) -> int:
-        """The index of `texture`'s row for a use of `kind` ("spectrum" or "float"), added when new."""
-        key = (id(texture), kind)
+    def add(self, texture, kind: str, where: str | None = None, basis: list[int] | None = None) -> int:
+        """The index of `texture`'s row for a use of `kind` ("spectrum": a reflectance, "float": a scalar, or
+        "emission": a light's radiance, an RGB bitmap's texels weighting the spectra at the table offsets `basis`),
+        added when new."""
+        key = (id(texture), kind, tuple(basis or ()))
         if key in self.index:
             return self.index[key]
         self.bytes += device_bytes(texture, kind)
@@ -109,6 +142,8 @@ class TextureRows:
         else:
             texel_format, channels, levels = texture_module(texture).device_texels(texture, kind)
             row["type"] = _DEVICE_TYPES[type(texture)]
+            if basis is not None:
+                row["basis_offset"] = basis
             row["texel_format"], row["channels"] = texel_format, channels
             row["height"], row["width"] = levels[0].shape[:2]
             row["levels"] = len(levels)

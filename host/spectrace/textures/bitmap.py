@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.engine.device_types import TEXEL_SCALAR, TEXEL_SIGMOID, TEXEL_VECTOR
+from spectrace.engine.device_types import TEXEL_RGB, TEXEL_SCALAR, TEXEL_SIGMOID, TEXEL_VECTOR
 from spectrace.errors import SpectraceError
 from spectrace.materials.parameters import Parameter
 from spectrace.textures.shared import (
@@ -124,9 +124,10 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 
 def device_texels(texture: BitmapTexture, kind: str) -> tuple[int, int, list[np.ndarray]]:
     """(texel format, channels, levels) for a use of the texture: "spectrum" (a reflectance: each level's linear RGB
-    to sigmoid coefficients), "float" (a scalar: one channel as stored) or "vector" (a normal map: three channels
-    as stored). The pyramid is built in linear RGB, each
-    level then converted: averaging coefficients would not average the colours."""
+    to sigmoid coefficients), "float" (a scalar: one channel as stored), "vector" (a normal map: three channels as
+    stored) or "emission" (linear RGB as stored, the weights of a light's three basis spectra; a grey image weights
+    all three alike). The pyramid is built in linear RGB, each level then converted: averaging coefficients would not
+    average the colours."""
     from spectrace.spectral.rgb_texture import texture_reflectance_coefficients
 
     values = texture.values.astype(np.float64)
@@ -140,6 +141,8 @@ def device_texels(texture: BitmapTexture, kind: str) -> tuple[int, int, list[np.
             )
         return TEXEL_SCALAR, 1, levels
     rgb = [np.repeat(level, 3, axis=-1) if texture.channels == 1 else level for level in levels]
+    if kind == "emission":
+        return TEXEL_RGB, 3, rgb
     return TEXEL_SIGMOID, 3, [texture_reflectance_coefficients(np.clip(level, 0.0, 1.0)) for level in rgb]
 
 

@@ -147,11 +147,12 @@ def mip_pyramid(level0: np.ndarray) -> list[np.ndarray]:
     return levels
 
 
-def value_problem(values: np.ndarray, upper: float | None) -> str | None:
-    """Why texel values cannot be used (negative, or beyond `upper` for a reflectance), or None."""
+def value_problem(values: np.ndarray, upper: float | None, reflectance: bool = True) -> str | None:
+    """Why texel values cannot be used (negative, or beyond `upper`: for a reflectance, 1), or None."""
     low, high = float(values.min()), float(values.max())
     if low < 0.0:
         return f"has negative values (min {low:.4g})"
     if upper is not None and high > upper + 1e-6:
-        return f"has values above {upper:g} (max {high:.4g}), which as a reflectance would create energy"
+        why = ", which as a reflectance would create energy" if reflectance else ""
+        return f"has values above {upper:g} (max {high:.4g}){why}"
     return None

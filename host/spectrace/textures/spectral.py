@@ -135,7 +135,7 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 
 def device_texels(texture: SpectralTexture, kind: str) -> tuple[int, int, list[np.ndarray]]:
     """(TEXEL_BANDS, bands, levels); the pyramid averages each band."""
-    if kind != "spectrum":
+    if kind not in ("spectrum", "emission"):
         raise SpectraceError(f"spectral texture '{texture.source}' can only give a spectrum")
     values = texture.values.astype(np.float64)
     levels = mip_pyramid(values) if texture.placement.filter == "trilinear" else [values]
