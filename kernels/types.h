@@ -78,7 +78,7 @@ typedef struct {
     float bump_scale;           /* scene units per bump map value */
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
-    int detail_pad;
+    int detail_pad[2];
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the
