@@ -8,6 +8,16 @@
 #include "material.cl"
 #include "rng.cl"
 
+/* The identity of a visibility query for the cut-outs' choices (scene.cl, surface_met): the point its sample has
+ * reached (sampler_identity: seed, pixel or sensor item, sample index, draws so far), the vertex along its path
+ * (segment and boundaries crossed, or 0 where the sampler's state alone tells it) and its kind (QUERY_PATH,
+ * QUERY_SHADOW). All are carried alike by both kernel shapes (the wavefront keeps the sampler and the path state in
+ * its slots), and none depends on a ray's bits. */
+inline uint opacity_query(const Sampler *sampler, uint vertex, uint kind)
+{
+    return hash_u32(hash_u32(sampler_identity(sampler) ^ kind) ^ vertex);
+}
+
 /* Picks one light by its pmf and samples a point of it as seen from x, both from one 2D draw (pick_light_reusing):
  * 0 when nothing arrives. The draw is made whether or not a light exists, so the sampler's dimensions stay
  * aligned. */
@@ -25,11 +35,12 @@ inline int sample_one_light(const Scene *scene, const SampledWavelengths *w, Sam
 
 /* Radiance reflected toward wo by light from one sampled light: f·cos·L / pdf, weighted against BSDF sampling by
  * the power heuristic when use_mis (delta lights always weigh 1: BSDF sampling cannot find them). The BSDF's frame
- * follows the shading normal, the shadow ray leaves by the geometric one (shading_normal.cl). */
+ * follows the shading normal, the shadow ray leaves by the geometric one (shading_normal.cl). `query` names the
+ * shadow ray (opacity_query). */
 inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
                                     float3 n_geometric, float3 n_shading, float3 wo,
                                     __global const Material *material, const SurfaceContext *sc, int use_mis,
-                                    uint *rays_traced)
+                                    uint query, uint *rays_traced)
 {
     __global const Light *light;
     LightSample ls;
@@ -43,7 +54,7 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
     float3 to = ls.point;
     if (LIGHT_IS(light, LIGHT_TRIANGLE)) to = offset_ray_origin(ls.point, ls.normal, -ls.wi);
     /* Not scene_occluded: index-matched medium boundaries let light through, attenuated by the medium. */
-    float4 transmittance = scene_transmittance(scene, w, from, to, ls.wi, to_infinity, rays_traced);
+    float4 transmittance = scene_transmittance(scene, w, from, to, ls.wi, to_infinity, query, rays_traced);
     if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
 
     float weight = 1.0f;
@@ -57,14 +68,14 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
  * the phase function takes the place of f·cos, and the shadow ray's transmittance includes the stretch inside
  * the medium. MIS weighs it against phase-function sampling. */
 inline float4 estimate_direct_light_in_medium(const Scene *scene, const SampledWavelengths *w, Sampler *sampler,
-                                              float3 x, float3 travel, float g, uint *rays_traced)
+                                              float3 x, float3 travel, float g, uint query, uint *rays_traced)
 {
     __global const Light *light;
     LightSample ls;
     if (!sample_one_light(scene, w, sampler, x, &light, &ls)) return (float4)(0.0f);
     float phase = henyey_greenstein(dot(travel, ls.wi), g);
     float3 to = LIGHT_IS(light, LIGHT_TRIANGLE) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
-    float4 transmittance = scene_transmittance(scene, w, x, to, ls.wi, isinf(ls.distance), rays_traced);
+    float4 transmittance = scene_transmittance(scene, w, x, to, ls.wi, isinf(ls.distance), query, rays_traced);
     if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
     float weight = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, phase);
     return ls.arriving * transmittance * (phase * weight / ls.pdf);

@@ -23,7 +23,8 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
             float cos_i = dot(n, ls.wi);
             float3 to = LIGHT_IS(light, LIGHT_TRIANGLE) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
             float4 transmittance = cos_i > 0.0f
-                                 ? scene_transmittance(scene, w, p, to, ls.wi, isinf(ls.distance), rays_traced)
+                                 ? scene_transmittance(scene, w, p, to, ls.wi, isinf(ls.distance),
+                                                       opacity_query(sampler, 0u, QUERY_SHADOW), rays_traced)
                                  : (float4)(0.0f);
             if (any(transmittance != (float4)(0.0f))) {
                 float weight = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, cos_i * INV_PI);
@@ -55,8 +56,8 @@ __kernel void measure(SCENE_KERNEL_PARAMS, __global const MeterParams *meter, __
     float sum = 0.0f;
     for (int s = 0; s < meter->samples_per_item; ++s) {
         Sampler sampler = sampler_start((uint)meter->seed, (uint)item, (uint)s);
-        /* A sensor's rays can repeat exactly from sample to sample: its cut-out choices differ by the sample. */
-        scene.opacity_salt = hash_u32(hash_u32((uint)meter->seed ^ hash_u32((uint)item)) ^ (uint)s);
+        /* A sensor's rays can repeat exactly from sample to sample; its cut-out choices still differ, since each
+         * query's identity holds the sample's (opacity_query). */
         float4 value;
         if (meter->type == METER_RADIANCE) {
             Ray ray;

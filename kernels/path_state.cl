@@ -39,6 +39,13 @@ inline PathState camera_path(Ray ray)
     return s;
 }
 
+/* A query of the path's from its current vertex (opacity_query): the segment and the boundaries crossed within it
+ * tell its queries apart even where no draw lies between them (a material-less boundary crossed outside media). */
+inline uint path_query(const Sampler *sampler, const PathState *s, uint kind)
+{
+    return opacity_query(sampler, ((uint)s->segments << 16) ^ (uint)s->null_crossings, kind);
+}
+
 inline int max_segments(__global const RenderParams *params)
 {
     return params->max_depth < 0 ? UNBOUNDED_DEPTH : params->max_depth;
@@ -107,7 +114,7 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     if (material_has_non_delta_lobe(material)) {
         SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
         *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
-                                                           use_mis, rays_traced);
+                                                           use_mis, path_query(sampler, s, QUERY_SHADOW), rays_traced);
     }
 }
 

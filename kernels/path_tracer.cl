@@ -42,7 +42,7 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     float3 x = s->ray.origin + flight.distance * s->ray.direction;
     float3 travel = s->ray.direction;
     *radiance += s->throughput * estimate_direct_light_in_medium(scene, w, sampler, x, travel, medium->g,
-                                                                 rays_traced);
+                                                                 path_query(sampler, s, QUERY_SHADOW), rays_traced);
     s->ray.direction = sample_henyey_greenstein(travel, medium->g, sample_2d(sampler));
     s->ray.origin = x;
     s->previous_point = x;
@@ -67,7 +67,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     int last_segment = max_segments(params);
     int ended = 0;
 
-    Hit hit = scene_intersect(scene, s->ray, rays_traced);
+    Hit hit = scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced);
     if (scatter_in_medium(scene, w, sampler, s, hit.t, last_segment, radiance, &ended, rays_traced)) {
         return !ended && ++s->segments <= last_segment;
     }

@@ -25,9 +25,12 @@ typedef struct {
     __global const Medium *media;
     __global const Texture *textures;  /* material and emission textures, whose texels share `texels` (a dummy row
                                           if none) */
-    uint opacity_salt;  /* mixed into the hash that decides whether a ray meets a cut-out surface (surface_met); 0
-                           unless a sensor sets it per sample (SCENE_FROM_KERNEL_PARAMS leaves it 0) */
 } Scene;
+
+/* The kinds of visibility query, told apart in a cut-out's choice (surface_met) so that a shadow ray and the path's
+ * own ray from one vertex choose independently. */
+#define QUERY_PATH 0x2c1b3c6dU    /* camera, BSDF- and phase-sampled rays: scene_intersect */
+#define QUERY_SHADOW 0x297a2d39U  /* shadow rays of next-event estimation: scene_occluded, scene_transmittance */
 
 /* The parameters every scene kernel starts with: the render's parameters, then the scene's buffers in the order
  * spectrace.engine.device_types.SCENE_KERNEL_BUFFERS names them (the host sets them from that list). A kernel
@@ -100,9 +103,10 @@ inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3
 #if SCENE_HAS_OPACITY
 /* Cut-outs (docs/textures.md, "Opacity"): a ray meets a surface of opacity α with probability α and otherwise goes
  * on as if it were not there, in every query (camera and BSDF rays, shadow rays, sensors). The choice is a hash of
- * the query's ray and the triangle, not a sampler draw (as pbrt-v4 hashes the ray), so the sampler's dimensions stay
- * what they were and a render stays the same however split; sensors add their sample's salt, since their rays can
- * repeat exactly (a radiance meter's first ray, an irradiance meter's shadow ray to a point light). */
+ * the query's identity (`query`: the sample, how far along its path, the kind of query; the callers' opacity_query),
+ * the triangle and the surfaces already crossed by the query; not a sampler draw, so the sampler's dimensions stay
+ * what they were, and not the ray's bits, so kernels that round a ray differently in its last bit (the wavefront
+ * and the megakernel, a scene's own kernels and the general ones) still choose alike. */
 #define MAX_OPACITY_CROSSINGS 64
 
 /* The opacity at barycentrics b12 of a triangle (1 for a material-less medium boundary), read at the finest level. */
@@ -118,19 +122,13 @@ inline float surface_opacity(const Scene *scene, int triangle, float2 b12)
     return m->opacity;
 }
 
-/* Whether the query along `query` meets the surface of `hit`. */
-inline int surface_met(const Scene *scene, Ray query, Hit hit)
+/* Whether query `query` meets the surface of `hit`, its `crossing`th surface (from 0). */
+inline int surface_met(const Scene *scene, uint query, int crossing, Hit hit)
 {
     float opacity = surface_opacity(scene, hit.triangle, hit.b12);
     if (opacity >= 1.0f) return 1;
     if (!(opacity > 0.0f)) return 0;
-    uint h = hash_u32(scene->opacity_salt ^ hash_u32((uint)hit.triangle));
-    h = hash_u32(h ^ as_uint(query.origin.x));
-    h = hash_u32(h ^ as_uint(query.origin.y));
-    h = hash_u32(h ^ as_uint(query.origin.z));
-    h = hash_u32(h ^ as_uint(query.direction.x));
-    h = hash_u32(h ^ as_uint(query.direction.y));
-    h = hash_u32(h ^ as_uint(query.direction.z));
+    uint h = hash_u32(hash_u32(query ^ hash_u32((uint)hit.triangle)) ^ (uint)crossing);
     return (float)(h >> 8) * 0x1.0p-24f < opacity;
 }
 
@@ -144,8 +142,9 @@ inline Ray ray_past(const Scene *scene, Ray ray, Hit hit)
 #endif
 
 /* The closest surface along the ray (none in a scene without triangles) that the ray meets (a cut-out surface it
- * passes through is skipped; the hit's distance is still from the ray's origin). */
-inline Hit scene_intersect(const Scene *scene, Ray ray, uint *rays_traced)
+ * passes through is skipped; the hit's distance is still from the ray's origin). `query` names the query for the
+ * cut-outs' choices (surface_met). */
+inline Hit scene_intersect(const Scene *scene, Ray ray, uint query, uint *rays_traced)
 {
     *rays_traced += 1;
     if (scene->params->triangle_count == 0) {
@@ -158,7 +157,8 @@ inline Hit scene_intersect(const Scene *scene, Ray ray, uint *rays_traced)
     Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, ray, INFINITY, 0);
 #if SCENE_HAS_OPACITY
     Ray past = ray;
-    for (int crossing = 0; hit.triangle >= 0 && crossing < MAX_OPACITY_CROSSINGS && !surface_met(scene, ray, hit);
+    for (int crossing = 0;
+         hit.triangle >= 0 && crossing < MAX_OPACITY_CROSSINGS && !surface_met(scene, query, crossing, hit);
          ++crossing) {
         past = ray_past(scene, past, hit);
         float t_past = dot(past.origin - ray.origin, ray.direction);
@@ -171,9 +171,9 @@ inline Hit scene_intersect(const Scene *scene, Ray ray, uint *rays_traced)
 }
 
 /* Whether anything blocks the segment from `from` (already offset off its surface) to `to`; `to` may be at
- * infinity (distant and environment lights), then `direction` is used. */
+ * infinity (distant and environment lights), then `direction` is used. `query` as for scene_intersect. */
 inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 direction, int to_infinity,
-                          uint *rays_traced)
+                          uint query, uint *rays_traced)
 {
     if (scene->params->triangle_count == 0) return 0;
     *rays_traced += 1;
@@ -196,7 +196,7 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
     for (int crossing = 0; crossing <= MAX_OPACITY_CROSSINGS; ++crossing) {
         Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, past, t_left, 0);
         if (hit.triangle < 0) return 0;
-        if (crossing == MAX_OPACITY_CROSSINGS || surface_met(scene, shadow, hit)) return 1;
+        if (crossing == MAX_OPACITY_CROSSINGS || surface_met(scene, query, crossing, hit)) return 1;
         past = ray_past(scene, past, hit);
         t_left = t_max - dot(past.origin - shadow.origin, shadow.direction);
         if (!(t_left > 0.0f)) return 0;
@@ -211,13 +211,14 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
 /* The fraction of light per wavelength that crosses the same segment as scene_occluded: 0 when a surface blocks
  * it, else exp(−Σ σt·length) over the media whose material-less (index-matched) boundaries it passes, so shadow
  * rays see what a path would (Beer–Lambert). Each stretch's medium follows from the boundary that ends it:
- * leaving a shape along its outward normal means the stretch was inside the shape. */
+ * leaving a shape along its outward normal means the stretch was inside the shape. `query` as for
+ * scene_intersect. */
 inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *w, float3 from, float3 to,
-                                  float3 direction, int to_infinity, uint *rays_traced)
+                                  float3 direction, int to_infinity, uint query, uint *rays_traced)
 {
     if (!SCENE_HAS_MEDIA || scene->params->medium_count == 0) {
-        return scene_occluded(scene, from, to, direction, to_infinity, rays_traced) ? (float4)(0.0f)
-                                                                                     : (float4)(1.0f);
+        return scene_occluded(scene, from, to, direction, to_infinity, query, rays_traced) ? (float4)(0.0f)
+                                                                                            : (float4)(1.0f);
     }
     if (scene->params->triangle_count == 0) return (float4)(1.0f);
     Ray segment;
@@ -236,7 +237,6 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
     int medium_ahead = -1;
     float t_origin = 0.0f;
 #if SCENE_HAS_OPACITY
-    Ray query = segment;
     float carried = 0.0f;  /* the stretch since the last medium boundary before segment.origin (cut-outs passed) */
 #define STRETCH(t) ((t) + carried)
 #else
@@ -254,7 +254,7 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
         TriangleInfo info = scene->triangle_info[hit.triangle];
 #if SCENE_HAS_OPACITY
         if (info.material != TRIANGLE_NO_MATERIAL) {
-            if (surface_met(scene, query, hit)) return (float4)(0.0f);
+            if (surface_met(scene, query, crossing, hit)) return (float4)(0.0f);
             segment = ray_past(scene, segment, hit);
             float t_past = dot(segment.origin - from, segment.direction);
             carried += t_past - t_origin;
