@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
-from spectrace import lights, materials
+from spectrace import lights, materials, textures
 from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
@@ -56,41 +56,9 @@ def _reflectance(source: SpectrumLike, what: str) -> Spectrum:
     return spectrum_input.reflectance(source, what)
 
 
-def bitmap(
-    source,
-    *,
-    srgb: bool | None = None,
-    raw: bool = False,
-    wrap: str = "repeat",
-    filter: str = "bilinear",
-    uv_scale: float | tuple[float, float] = 1.0,
-    uv_offset: tuple[float, float] = (0.0, 0.0),
-):
-    """An image texture (docs/textures.md) for a textured parameter such as a diffuse or plastic `reflectance`: a
-    file path (PNG, JPEG, TIFF, OpenEXR; integer-coded files are sRGB-decoded unless raw), a numpy array (H, W),
-    (H, W, 1) or (H, W, 3) of linear values (srgb=True: sRGB-encoded values in [0, 1]), or a PIL image (decoded
-    from sRGB unless raw). st = uv · uv_scale + uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest",
-    "bilinear" or "trilinear"."""
-    from spectrace.textures import bitmap as module
-
-    return module.make(source, srgb=srgb, raw=raw, wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
-
-
-def spectral_texture(
-    source,
-    wavelengths_nm=None,
-    *,
-    wrap: str = "repeat",
-    filter: str = "bilinear",
-    uv_scale: float | tuple[float, float] = 1.0,
-    uv_offset: tuple[float, float] = (0.0, 0.0),
-):
-    """A spectral texture: a spectral OpenEXR file (S0.<λ>nm channels, as spectrace writes them) or an array
-    (H, W, bands) with the bands' wavelengths in nm; each texel's spectrum is interpolated at the path's
-    wavelengths, with no RGB round trip (docs/textures.md)."""
-    from spectrace.textures import spectral
-
-    return spectral.make(source, wavelengths_nm, wrap=wrap, filter=filter, uv_scale=uv_scale, uv_offset=uv_offset)
+# Texture constructors (docs/textures.md): each texture module's `make`, as the materials' are theirs.
+bitmap = textures.bitmap.make
+spectral_texture = textures.spectral.make
 
 
 def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)):

@@ -48,8 +48,9 @@ def _exr_size(path: Path) -> tuple[int, int]:
     return int(x_max) - int(x_min) + 1, int(y_max) - int(y_min) + 1
 
 
-def read_environment_map(path: Path, where: str, what: str = "environment map") -> np.ndarray:
-    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map (or a picture's EXR)."""
+def read_exr_checked(path: Path, where: str, what: str) -> dict:
+    """The channels of an OpenEXR file once it is known to be a regular file whose header's size is within the
+    image limit (checked before any pixel is decoded); every failure one line naming `what`, the file and `where`."""
     from spectrace.io.exr import read_exr
 
     regular_file(path, where, what=what)
@@ -63,6 +64,12 @@ def read_environment_map(path: Path, where: str, what: str = "environment map") 
         channels, _ = read_exr(path)
     except Exception as exc:
         raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
+    return channels
+
+
+def read_environment_map(path: Path, where: str, what: str = "environment map") -> np.ndarray:
+    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map (or a picture's EXR)."""
+    channels = read_exr_checked(path, where, what)
     if "RGB" in channels:
         rgb = channels["RGB"]
     elif {"R", "G", "B"} <= set(channels):
@@ -83,18 +90,7 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
     is decoded; non-finite values are refused."""
     regular_file(path, where, what="texture")
     if path.suffix.lower() == ".exr":
-        try:
-            size = _exr_size(path)
-        except Exception as exc:  # OpenEXR raises bare exceptions for unreadable files
-            raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
-        if problem := limits.image_size_problem(*size):
-            raise SpectraceError(f"texture '{path}': {problem}", where=where)
-        from spectrace.io.exr import read_exr
-
-        try:
-            channels, _ = read_exr(path)
-        except Exception as exc:
-            raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
+        channels = read_exr_checked(path, where, "texture")
         if "RGB" in channels or "RGBA" in channels:
             values = np.asarray(channels.get("RGB", channels.get("RGBA")))[..., :3]
         elif {"R", "G", "B"} <= set(channels):

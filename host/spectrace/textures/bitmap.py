@@ -84,8 +84,10 @@ def make(
     uv_scale: float | tuple[float, float] = 1.0,
     uv_offset: tuple[float, float] = (0.0, 0.0),
 ) -> BitmapTexture:
-    """A bitmap from a file path, a numpy array (height, width) or (height, width, 1 or 3) of linear values (sRGB-
-    encoded ones with srgb=True), or a PIL image (decoded from sRGB unless raw)."""
+    """An image texture (docs/textures.md), `spectrace.bitmap`: a file path (PNG, JPEG, TIFF, OpenEXR; integer-coded
+    files are sRGB-decoded unless raw), a numpy array (H, W), (H, W, 1) or (H, W, 3) of linear values (srgb=True:
+    sRGB-encoded values in [0, 1]), or a PIL image (decoded from sRGB unless raw). st = uv · uv_scale + uv_offset;
+    wrap "repeat", "mirror" or "clamp"; filter "nearest", "bilinear" or "trilinear"."""
     from spectrace.io.images import pil_image_values, read_texture_image
 
     where = "texture"

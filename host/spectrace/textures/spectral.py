@@ -62,22 +62,10 @@ def _equally_spaced(wavelengths: np.ndarray, values: np.ndarray) -> tuple[np.nda
 
 def read_spectral_texture(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
     """(wavelengths_nm (bands,), values (height, width, bands)) of a spectral OpenEXR; errors name `where`."""
-    from spectrace.io.exr import parse_spectral_channel, read_exr
-    from spectrace.io.images import _exr_size
-    from spectrace.io.input_files import regular_file
-    from spectrace.scene import limits
+    from spectrace.io.exr import parse_spectral_channel
+    from spectrace.io.images import read_exr_checked
 
-    regular_file(path, where, what="texture")
-    try:
-        size = _exr_size(path)
-    except Exception as exc:  # OpenEXR raises bare exceptions for unreadable files
-        raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
-    if problem := limits.image_size_problem(*size):
-        raise SpectraceError(f"texture '{path}': {problem}", where=where)
-    try:
-        channels, _ = read_exr(path)
-    except Exception as exc:
-        raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
+    channels = read_exr_checked(path, where, "texture")
     bands = sorted((nm, name) for name in channels if (nm := parse_spectral_channel(name)) is not None)
     if not bands:
         raise SpectraceError(f"texture '{path}' has no spectral channels (S0.<λ>nm)", where=where)
@@ -107,8 +95,9 @@ def make(
     uv_scale: float | tuple[float, float] = 1.0,
     uv_offset: tuple[float, float] = (0.0, 0.0),
 ) -> SpectralTexture:
-    """A spectral texture from a spectral OpenEXR file, or from an array (height, width, bands) with the bands'
-    wavelengths in nm (ascending)."""
+    """A spectral texture, `spectrace.spectral_texture`: a spectral OpenEXR file (S0.<λ>nm channels, as spectrace
+    writes them) or an array (height, width, bands) with the bands' wavelengths in nm (ascending); each texel's
+    spectrum is interpolated at the path's wavelengths, with no RGB round trip (docs/textures.md)."""
     where = "texture"
     if isinstance(source, (str, Path)):
         wavelengths, values = read_spectral_texture(Path(source), where)
