@@ -13,7 +13,7 @@ from spectrace.scene import load_scene
 from spectrace.scene.loader import check_texture_values
 from spectrace.textures import bitmap, checkerboard
 
-SCENE = """
+HEADER = """
 [camera]
 origin = [0, 0, 3]
 target = [0, 0, 0]
@@ -23,7 +23,11 @@ width = 8
 height = 8
 [sampler]
 spp = 2
-{textures}
+"""
+
+SCENE = (
+    HEADER
+    + """{textures}
 [materials.m]
 type = "diffuse"
 reflectance = {reflectance}
@@ -34,6 +38,7 @@ material = "m"
 type = "constant"
 radiance = {{ value = 1 }}
 """
+)
 
 
 def _scene(tmp_path, reflectance: str, textures: str = "", shape: str = "rectangle"):
@@ -200,17 +205,9 @@ def test_spectra_listing_reads_checkerboard_sides_as_reflectances(tmp_path):
     )
 
 
-MORE = """
-[camera]
-origin = [0, 0, 3]
-target = [0, 0, 0]
-fov = 30
-[film]
-width = 8
-height = 8
-[sampler]
-spp = 2
-[materials.m]
+MORE = (
+    HEADER
+    + """[materials.m]
 type = "conductor"
 metal = "Au"
 roughness = {roughness}
@@ -227,6 +224,7 @@ material = "black"
 transform = [{{ translate = [0, 0, 2] }}]
 emitter = {{ radiance = {radiance}, scale = 4 }}
 """
+)
 
 
 def _more(tmp_path, roughness: str, radiance: str, emitter_shape: str = "rectangle"):
