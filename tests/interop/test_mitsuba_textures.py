@@ -275,15 +275,16 @@ UNSUPPORTED = [
     ),
     (
         "untextured-parameter",
-        QUAD.format('<bsdf type="conductor"><texture type="checkerboard" name="specular_reflectance"/></bsdf>'),
-        "texture 'checkerboard' as reflectance of mirror (spectrace's mirror takes no texture there)",
+        QUAD.format(
+            '<bsdf type="conductor"><texture type="checkerboard" name="eta"/><spectrum name="k" value="1"/></bsdf>'
+        ),
+        "texture 'checkerboard' as eta of conductor (spectrace's conductor takes no texture there)",
     ),
     (
-        "textured-emission",
-        """<shape type="rectangle"><emitter type="area">
-        <texture type="bitmap" name="radiance"><string name="filename" value="texture.png"/></texture>
-        </emitter></shape>""",
-        "texture 'bitmap' as radiance of area (spectrace's area takes no texture there)",
+        "textured-point-light",
+        """<emitter type="point"><point name="position" x="0" y="0" z="0"/>
+        <texture type="bitmap" name="intensity"><string name="filename" value="texture.png"/></texture></emitter>""",
+        "texture 'bitmap' as intensity of point (spectrace's point takes no texture there)",
     ),
     (
         "checkerboard-in-checkerboard",
