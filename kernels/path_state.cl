@@ -60,7 +60,7 @@ typedef struct {
                    normal or bump map (surface_detail.cl) */
     float3 wo;  /* back along the ray */
     float2 uv;  /* texture coordinates (only in scenes with material textures) */
-    float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; with the uv) */
+    float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; 0 unless SCENE_NEEDS_FOOTPRINT) */
 } PathVertex;
 
 inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
@@ -75,7 +75,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     v.footprint = 0.0f;
     if (SCENE_HAS_TEXTURES) {
         v.uv = triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
-        v.footprint = camera_footprint(scene, hit.triangle, v.p, v.n);
+        if (SCENE_NEEDS_FOOTPRINT) v.footprint = camera_footprint(scene, hit.triangle, v.p, v.n);
     }
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         v.ns = detailed_normal(scene, &scene->materials[v.info.material], hit.triangle, v.uv, v.footprint, v.n,

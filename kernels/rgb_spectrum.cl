@@ -2,14 +2,18 @@
  * Spectral Upsampling" (Computer Graphics Forum 38(2)). The host fits three coefficients per colour
  * (spectrace.spectral.uplift); the spectrum is the sigmoid S(x) = 1/2 + x / (2 sqrt(1 + x²)) of the quadratic
  * x = c0 λ² + c1 λ + c2 in λ (nm), evaluated in Horner form as the host's sigmoid_polynomial_spectrum does. S has
- * no exp, stays in (0, 1), and the host's saturated coefficients (c2 = ±1e6) give exactly 0 and 1 in float32. */
+ * no exp, stays in [0, 1], and the host's saturated coefficients (c2 = ±1e6) give exactly 0 and 1. */
 #ifndef SPECTRACE_RGB_SPECTRUM_CL
 #define SPECTRACE_RGB_SPECTRUM_CL
 
 inline float4 sigmoid_polynomial(float3 c, float4 lambda_nm)
 {
     float4 x = (c.x * lambda_nm + c.y) * lambda_nm + c.z;
-    return 0.5f + x / (2.0f * sqrt(1.0f + x * x));
+    /* x / sqrt(1 + x²) as one rsqrt (no division): as accurate (OpenCL allows rsqrt 2 ulp, sqrt 3 and a division
+     * 2.5), but an ulp's error could lift a value past 1 or a saturated one off 0 and 1. Beyond |x| = 10⁴, S is
+     * within 2.5e-9 of 0 or 1 (S(x) ≈ 1/(4x²) or 1 − 1/(4x²)): that end exactly. */
+    float4 s = clamp(mad(0.5f * x, rsqrt(mad(x, x, 1.0f)), 0.5f), 0.0f, 1.0f);
+    return select(s, step(0.0f, x), isgreater(fabs(x), (float4)(1.0e4f)));
 }
 
 #endif

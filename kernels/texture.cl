@@ -28,6 +28,7 @@ typedef struct {
 
 inline int texture_wrap(int i, int n, int wrap)
 {
+    if ((uint)i < (uint)n) return i;  /* inside the image, as nearly every lookup is: no integer division */
     if (wrap == WRAP_CLAMP) return clamp(i, 0, n - 1);
     if (wrap == WRAP_MIRROR) {
         int period = 2 * n;
@@ -97,6 +98,17 @@ inline float4 texture_bilinear(__global const Texture *t, const TextureBuffers *
     int x0 = (int)corner.x, y0 = (int)corner.y;
     int xa = texture_wrap(x0, width, t->wrap), xb = texture_wrap(x0 + 1, width, t->wrap);
     int ya = texture_wrap(y0, height, t->wrap), yb = texture_wrap(y0 + 1, height, t->wrap);
+    if (t->texel_format == TEXEL_SIGMOID) {
+        /* Most lookups of an image's flat regions find four equal texels: one spectrum then stands for the blend,
+         * which is exactly what blending four equal values gives (mix(a, a, f) = a). */
+        __global const float *level_texels = b->texels + offset;
+        float3 c00 = vload3(ya * width + xa, level_texels), c10 = vload3(ya * width + xb, level_texels);
+        float3 c01 = vload3(yb * width + xa, level_texels), c11 = vload3(yb * width + xb, level_texels);
+        if (all(c00 == c10) && all(c00 == c01) && all(c00 == c11)) return sigmoid_polynomial(c00, w->lambda);
+        float4 top_sigmoid = mix(sigmoid_polynomial(c00, w->lambda), sigmoid_polynomial(c10, w->lambda), f.x);
+        float4 bottom_sigmoid = mix(sigmoid_polynomial(c01, w->lambda), sigmoid_polynomial(c11, w->lambda), f.x);
+        return mix(top_sigmoid, bottom_sigmoid, f.y);
+    }
     float4 top = mix(texel_spectrum(t, b, offset, width, xa, ya, w),
                      texel_spectrum(t, b, offset, width, xb, ya, w), f.x);
     float4 bottom = mix(texel_spectrum(t, b, offset, width, xa, yb, w),

@@ -50,6 +50,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_MEDIA": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
         "SCENE_HAS_TEXTURES": 0,
+        "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_OPACITY": 0,
     }
@@ -72,6 +73,23 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         defines = scene_feature_defines(build_scene_buffers(scene))
         assert (defines["SCENE_HAS_SURFACE_NORMALS"], defines["SCENE_HAS_OPACITY"]) == (normals, opacity)
+
+
+def test_the_footprint_is_computed_only_for_the_lookups_that_read_it():
+    """Trilinear filtering chooses its level by the footprint and a bump map steps by it; nearest and bilinear
+    lookups, and a trilinear one on a 1 x 1 image (no pyramid), never read it."""
+    image = np.full((4, 4), 0.5)
+    for reflectance, bump_map, needs in (
+        (spectrace.bitmap(image, filter="nearest"), None, 0),
+        (spectrace.bitmap(image, filter="bilinear"), None, 0),
+        (spectrace.bitmap(np.full((1, 1), 0.5), filter="trilinear"), None, 0),
+        (spectrace.bitmap(image, filter="trilinear"), None, 1),
+        (spectrace.checkerboard(0.2, spectrace.bitmap(image, filter="trilinear")), None, 1),
+        (0.5, spectrace.bitmap(image), 1),
+    ):
+        material = spectrace.diffuse(reflectance, bump_map=bump_map)
+        scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
+        assert scene_feature_defines(build_scene_buffers(scene))["SCENE_NEEDS_FOOTPRINT"] == needs
 
 
 def _environment_map_scene() -> spectrace.Scene:
@@ -138,6 +156,20 @@ def _surface_detail_scene(cut_out: bool = True) -> spectrace.Scene:
     )
 
 
+def _textured_scene(filters: tuple[str, ...]) -> spectrace.Scene:
+    """Rectangles textured with random colours, one per filter, in the environment map's light."""
+    rng = np.random.default_rng(6)
+    shapes = [
+        spectrace.shape(
+            "rectangle",
+            spectrace.diffuse(spectrace.bitmap(rng.uniform(0.0, 1.0, (8, 8, 3)), filter=f, uv_scale=3)),
+            transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [1.0 * i - 0.5, 0.1 * i, 0]}],
+        )
+        for i, f in enumerate(filters)
+    ]
+    return replace(_environment_map_scene(), shapes=shapes)
+
+
 SCENES = {
     "cornell_box": lambda: _bundled("cornell_box"),
     "material_showcase": lambda: _bundled("material_showcase"),
@@ -148,6 +180,10 @@ SCENES = {
     "distant_and_spot": _distant_and_spot_scene,
     "normal_and_bump_maps": lambda: _surface_detail_scene(cut_out=False),
     "normal_and_bump_maps_and_cut_out": _surface_detail_scene,
+    # The scene's kernels leave the footprint out (0), the general ones compute it: the same bits say no nearest or
+    # bilinear lookup reads it.
+    "nearest_and_bilinear_textures": lambda: _textured_scene(("nearest", "bilinear")),
+    "trilinear_texture": lambda: _textured_scene(("trilinear",)),
 }
 
 

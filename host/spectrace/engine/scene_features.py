@@ -4,7 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.engine.device_types import NO_TEXTURE
+from spectrace.engine.device_types import FILTER_TRILINEAR, NO_TEXTURE
 from spectrace.engine.scene_buffers import SceneBuffers
 
 
@@ -22,6 +22,10 @@ def _materials_have_textures(materials: np.ndarray) -> bool:
 
 def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
     materials = buffers.materials
+    textures = buffers.textures[: buffers.texture_count]
+    bump_maps = bool(np.any(materials["bump_map"] >= 0))
+    # Only a trilinear lookup with a pyramid to choose from and a bump map's step read the footprint (texture.cl).
+    trilinear = bool(np.any((textures["filter"] == FILTER_TRILINEAR) & (textures["levels"] > 1)))
     return {
         "SCENE_MATERIAL_TYPES": _type_bits(buffers.materials["type"]),
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
@@ -30,6 +34,7 @@ def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
             bool(np.any(buffers.lights["texture"] != NO_TEXTURE) or np.any(buffers.lights["map_width"] > 0))
         ),
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
-        "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any((materials["normal_map"] >= 0) | (materials["bump_map"] >= 0)))),
+        "SCENE_NEEDS_FOOTPRINT": int(trilinear or bump_maps),
+        "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
     }
