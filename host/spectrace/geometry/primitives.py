@@ -60,9 +60,17 @@ def prism() -> TriangleMesh:
 def sphere(subdivisions: int = 4) -> TriangleMesh:
     """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles (and a few more where its texture
     seam cuts them), vertices on the sphere (but those cuts, on chords), and the sphere's radial normals at its
-    vertices, so it shades smoothly. Texture coordinates are Mitsuba 3's
-    sphere's: u = φ / 2π with φ = atan2(y, x) in [0, 2π), v = θ / π with θ the angle from +z (v = 0 at the +z pole,
-    the image's top row)."""
+    vertices, so it shades smoothly. Texture coordinates are Mitsuba 3's sphere's: u = φ / 2π with
+    φ = atan2(y, x) in [0, 2π), v = θ / π with θ the angle from +z (v = 0 at the +z pole, the image's top row)."""
+    plain = icosphere(subdivisions)
+    points, faces, normals = _cut_at_seam(plain.vertices, plain.faces)
+    vertices, faces, uvs, normals = _sphere_uvs(points, faces, normals)
+    return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs, normals=normals)
+
+
+def icosphere(subdivisions: int) -> TriangleMesh:
+    """The unit icosphere: exactly 20 * 4**subdivisions triangles, vertices on the sphere with its radial normals,
+    no texture coordinates (what the benchmarks count triangles on)."""
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
     if (
@@ -73,13 +81,10 @@ def sphere(subdivisions: int = 4) -> TriangleMesh:
         raise SpectraceError(
             f"sphere subdivisions must be an integer from 0 to {MAX_SPHERE_SUBDIVISIONS}, got {subdivisions!r}"
         )
-    icosphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    points = np.asarray(icosphere.vertices, dtype=np.float64)
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    points = np.asarray(mesh.vertices, dtype=np.float64)
     points /= np.linalg.norm(points, axis=1, keepdims=True)
-    faces = np.asarray(icosphere.faces, dtype=np.int64)
-    points, faces, normals = _cut_at_seam(points, faces)
-    vertices, faces, uvs, normals = _sphere_uvs(points, faces, normals)
-    return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs, normals=normals)
+    return TriangleMesh(vertices=points, faces=np.asarray(mesh.faces, dtype=np.int64), normals=points.copy())
 
 
 def _cut_at_seam(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -88,7 +93,7 @@ def _cut_at_seam(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
     the edge, so the surface is the same set of flat triangles and stays watertight. The new vertex's normal is
     its edge's normals interpolated, so smooth shading over the pieces is the shading over the whole triangle.
     Returns (points, faces, normals)."""
-    normals = points.copy()
+    normals = points / np.linalg.norm(points, axis=1, keepdims=True)
     side = np.where(np.abs(points[:, 1]) < 1e-12, 0, np.sign(points[:, 1])).astype(np.int64)
     new_points: list[np.ndarray] = []
     new_normals: list[np.ndarray] = []
@@ -111,8 +116,10 @@ def _cut_at_seam(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
                 new_normals.append(normal / np.linalg.norm(normal))
         return cut[key]
 
+    # Only triangles with corners on both sides of the plane can cross it; the rest are kept as they are.
+    straddles = (side[faces] > 0).any(axis=1) & (side[faces] < 0).any(axis=1)
     out: list[tuple[int, int, int]] = []
-    for face in faces:
+    for face in faces[straddles]:
         corners = [int(i) for i in face]
         cuts = [crossing(corners[k], corners[(k + 1) % 3]) for k in range(3)]
         count = sum(c is not None for c in cuts)
@@ -133,7 +140,12 @@ def _cut_at_seam(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
             out += [(a, ab, ca), (ab, b, c), (ab, c, ca)]
     if not new_points:
         return points, faces, normals
-    return np.vstack([points, new_points]), np.array(out, dtype=np.int64), np.vstack([normals, new_normals])
+    kept = faces[~straddles]
+    return (
+        np.vstack([points, new_points]),
+        np.vstack([kept, np.array(out, dtype=np.int64)]),
+        np.vstack([normals, new_normals]),
+    )
 
 
 def _sphere_uvs(
@@ -151,14 +163,26 @@ def _sphere_uvs(
     pole = (np.hypot(direction[:, 0], direction[:, 1]) < 1e-9)[faces]
     on_seam = ((np.abs(direction[:, 1]) < 1e-12) & (direction[:, 0] > 0.0))[faces]
     below = (direction[:, 1] < -1e-12)[faces].any(axis=1)
-    corner_u = np.where(on_seam & below[:, None], 1.0, np.where(on_seam, 0.0, u[faces]))
+    u = np.where((np.abs(direction[:, 1]) < 1e-12) & (direction[:, 0] > 0.0), 0.0, u)
+    corner_u = np.where(on_seam & below[:, None], 1.0, u[faces])
     pole_u = np.nanmean(np.where(pole, np.nan, corner_u), axis=1)
     corner_u = np.where(pole, pole_u[:, None], corner_u)
-    keys = np.stack([faces.ravel().astype(np.float64), corner_u.ravel()], axis=1)
+    # Corners whose u is not their vertex's get vertices of their own, one per distinct (vertex, u).
+    special = (on_seam & below[:, None]) | pole
+    keys = np.stack([faces[special].astype(np.float64), corner_u[special]], axis=1)
     unique, inverse = np.unique(keys, axis=0, return_inverse=True)
-    index = unique[:, 0].astype(np.int64)
-    uvs = np.stack([unique[:, 1], v[index]], axis=1)
-    return points[index], inverse.reshape(faces.shape).astype(np.int64), uvs, normals[index]
+    faces = faces.copy()
+    faces[special] = len(points) + inverse.ravel()
+    source = np.concatenate([np.arange(len(points)), unique[:, 0].astype(np.int64)])
+    all_uvs = np.concatenate([np.stack([u, v], axis=1), np.stack([unique[:, 1], v[source[len(points) :]]], axis=1)])
+    # Drop the vertices no corner uses any more (a pole's own, now one per triangle).
+    used, compact = np.unique(faces, return_inverse=True)
+    return (
+        points[source[used]],
+        compact.reshape(faces.shape).astype(np.int64),
+        all_uvs[used],
+        normals[source[used]],
+    )
 
 
 def teapot(subdivisions: int = TEAPOT_SUBDIVISIONS) -> TriangleMesh:
