@@ -295,11 +295,6 @@ UNSUPPORTED = [
         "texture 'checkerboard' as color0 of a checkerboard",
     ),
     (
-        "textured-sphere",
-        '<shape type="sphere"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf></shape>',
-        "shape 'sphere' with a textured bsdf (spectrace's sphere has no texture coordinates",
-    ),
-    (
         "textured-cube",
         '<shape type="cube"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf></shape>',
         "shape 'cube' with a textured bsdf (spectrace's cube has no texture coordinates",
@@ -390,6 +385,14 @@ def test_mitsuba_uv_conventions(folder, mitsuba_scalar_spectral):
         for x, y in [(-0.8, -0.6), (0.7, 0.3), (0.2, 0.9)]:
             hit = scene.ray_intersect(mi.Ray3f([x, y, 1.0], [0.0, 0.0, -1.0]))
             np.testing.assert_allclose(np.array(hit.uv), expected(x, y), atol=1e-5, err_msg=name)
+    # The sphere: u from the azimuth about +z from +x towards +y, v from the polar angle from +z (spectrace's
+    # sphere's vertices carry the same: tests/geometry/test_geometry.py).
+    scene = mi.load_dict({"type": "scene", "shape": {"type": "sphere"}})
+    for direction in [(0.3, 0.5, 0.8), (-0.6, 0.2, -0.1), (0.4, -0.7, 0.3), (-0.2, -0.3, -0.9)]:
+        d = np.array(direction) / np.linalg.norm(direction)
+        hit = scene.ray_intersect(mi.Ray3f(3.0 * d, -d))
+        expected = (np.mod(np.arctan2(d[1], d[0]), 2 * np.pi) / (2 * np.pi), np.arccos(d[2]) / np.pi)
+        np.testing.assert_allclose(np.array(hit.uv), expected, atol=1e-5, err_msg=f"sphere {direction}")
     mi.set_variant("scalar_rgb")  # texture values without spectra
     try:
         image = np.zeros((2, 2, 3), np.float32)
@@ -515,7 +518,8 @@ def _uplift_difference(mi, colours: np.ndarray) -> float:
 
 
 @pytest.mark.peer
-def test_textured_scene_renders_like_mitsuba(folder, device, mitsuba_scalar_spectral):
+@pytest.mark.parametrize("ball", ["obj", "sphere"])
+def test_textured_scene_renders_like_mitsuba(folder, device, mitsuba_scalar_spectral, ball):
     """COMPARISON rendered by Mitsuba's scalar_spectral variant and, imported, by spectrace: REPLICAS independent
     images of REPLICA_SPP samples from each; film XYZ means over 4 x 4-pixel blocks and over the whole image must
     agree within 5 standard errors of the difference (from the replicas' spread) plus an uplift allowance. Both
@@ -526,12 +530,19 @@ def test_textured_scene_renders_like_mitsuba(folder, device, mitsuba_scalar_spec
 
     Measured: blocks within 3.7 σ (mean 0.8 σ), whole-image X, Y, Z within 1.5 σ, at a block standard error of
     about 1.7 %. Textures not flipped in v on the rectangles fail at 83 σ; the ball shaded with its facets
-    (face_normals) instead of its vertex normals at 16 σ."""
+    (face_normals) instead of its vertex normals at 16 σ. With `ball = "sphere"` the ball is the built-in sphere
+    (Mitsuba's exact one, spectrace's icosphere with Mitsuba's uv)."""
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 16, 8, 32, 4
     _uv_sphere_obj(folder / "ball.obj")
     xml = folder / "comparison.xml"
-    xml.write_text(COMPARISON.format(size=size))
+    text = COMPARISON.format(size=size)
+    if ball == "sphere":
+        text = text.replace(
+            '<shape type="obj">\n        <string name="filename" value="ball.obj"/>', '<shape type="sphere">'
+        )
+        assert '<shape type="sphere">' in text
+    xml.write_text(text)
 
     scene = mi.load_file(str(xml))
     theirs = np.stack([mitsuba_film_xyz(mi.render(scene, spp=replica_spp, seed=seed), mi) for seed in range(replicas)])

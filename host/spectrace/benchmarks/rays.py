@@ -26,7 +26,7 @@ from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.geometry.bvh import build_bvh
 from spectrace.geometry.bvh4 import LEAF_SIZE, collapse_to_bvh4, device_nodes, traversal_defines
 from spectrace.geometry.mesh import TriangleMesh
-from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, sphere
+from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, icosphere
 from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 
 DISTANCE_CHECK_RAYS = 20000
@@ -40,7 +40,7 @@ def subdivisions_for(triangles: int) -> int:
 
 def displaced_sphere(subdivisions: int, seed: int = 1) -> TriangleMesh:
     """An icosphere with radial bumps (a sum of random plane waves, ±10 %), so the BVH sees an uneven surface."""
-    mesh = sphere(subdivisions)
+    mesh = icosphere(subdivisions)
     rng = np.random.default_rng(seed)
     directions = rng.normal(size=(6, 3))
     frequencies = rng.uniform(3.0, 12.0, 6)

@@ -17,7 +17,7 @@ import numpy as np
 
 from spectrace.device import open_device
 from spectrace.engine.renderer import Renderer
-from spectrace.geometry.primitives import sphere
+from spectrace.geometry.primitives import icosphere
 from spectrace.geometry.transforms import apply_transform
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
@@ -33,7 +33,7 @@ def scene_with_sphere(scene: Scene, subdivisions: int) -> Scene:
     matrix = np.diag([0.1, 0.1, 0.1, 1.0])
     matrix[:3, 3] = (0.42, 0.1, 0.12)
     white = next(shape.material for shape in scene.shapes if shape.emitter is None)
-    ball = Shape(mesh=apply_transform(sphere(subdivisions), matrix), material=white, name="sphere")
+    ball = Shape(mesh=apply_transform(icosphere(subdivisions), matrix), material=white, name="sphere")
     return replace(scene, shapes=[*scene.shapes, ball])
 
 

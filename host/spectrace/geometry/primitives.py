@@ -58,8 +58,19 @@ def prism() -> TriangleMesh:
 
 
 def sphere(subdivisions: int = 4) -> TriangleMesh:
-    """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles, vertices on the sphere, and the
-    sphere's exact radial normals at its vertices, so it shades smoothly."""
+    """Unit sphere at the origin: an icosphere with 20 * 4**subdivisions triangles (and a few more where its texture
+    seam cuts them), vertices on the sphere (but those cuts, on chords), and the sphere's radial normals at its
+    vertices, so it shades smoothly. Texture coordinates are Mitsuba 3's sphere's: u = φ / 2π with
+    φ = atan2(y, x) in [0, 2π), v = θ / π with θ the angle from +z (v = 0 at the +z pole, the image's top row)."""
+    plain = icosphere(subdivisions)
+    points, faces, normals = _cut_at_seam(plain.vertices, plain.faces)
+    vertices, faces, uvs, normals = _sphere_uvs(points, faces, normals)
+    return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs, normals=normals)
+
+
+def icosphere(subdivisions: int) -> TriangleMesh:
+    """The unit icosphere: exactly 20 * 4**subdivisions triangles, vertices on the sphere with its radial normals,
+    no texture coordinates (what the benchmarks count triangles on)."""
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
     if (
@@ -70,10 +81,108 @@ def sphere(subdivisions: int = 4) -> TriangleMesh:
         raise SpectraceError(
             f"sphere subdivisions must be an integer from 0 to {MAX_SPHERE_SUBDIVISIONS}, got {subdivisions!r}"
         )
-    icosphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    vertices = np.asarray(icosphere.vertices, dtype=np.float64)
-    normals = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
-    return TriangleMesh(vertices=vertices, faces=np.asarray(icosphere.faces), normals=normals)
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    points = np.asarray(mesh.vertices, dtype=np.float64)
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    return TriangleMesh(vertices=points, faces=np.asarray(mesh.faces, dtype=np.int64), normals=points.copy())
+
+
+def _cut_at_seam(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The triangles that cross the texture seam (the half-plane y = 0, x > 0, where u jumps from 1 back to 0) cut
+    along it: each crossing edge gets a vertex where it meets the plane, shared by the triangles on both sides of
+    the edge, so the surface is the same set of flat triangles and stays watertight. The new vertex's normal is
+    its edge's normals interpolated, so smooth shading over the pieces is the shading over the whole triangle.
+    Returns (points, faces, normals)."""
+    normals = points / np.linalg.norm(points, axis=1, keepdims=True)
+    side = np.where(np.abs(points[:, 1]) < 1e-12, 0, np.sign(points[:, 1])).astype(np.int64)
+    new_points: list[np.ndarray] = []
+    new_normals: list[np.ndarray] = []
+    cut: dict[tuple[int, int], int | None] = {}
+
+    def crossing(a: int, b: int) -> int | None:
+        if side[a] * side[b] >= 0:
+            return None
+        key = (min(a, b), max(a, b))
+        if key not in cut:
+            t = points[a, 1] / (points[a, 1] - points[b, 1])
+            point = points[a] + t * (points[b] - points[a])
+            if point[0] <= 0.0:  # the plane's other half (u = 1/2) is no seam
+                cut[key] = None
+            else:
+                point[1] = 0.0
+                normal = normals[a] + t * (normals[b] - normals[a])
+                cut[key] = len(points) + len(new_points)
+                new_points.append(point)
+                new_normals.append(normal / np.linalg.norm(normal))
+        return cut[key]
+
+    # Only triangles with corners on both sides of the plane can cross it; the rest are kept as they are.
+    straddles = (side[faces] > 0).any(axis=1) & (side[faces] < 0).any(axis=1)
+    out: list[tuple[int, int, int]] = []
+    for face in faces[straddles]:
+        corners = [int(i) for i in face]
+        cuts = [crossing(corners[k], corners[(k + 1) % 3]) for k in range(3)]
+        count = sum(c is not None for c in cuts)
+        if count == 0:
+            out.append((corners[0], corners[1], corners[2]))
+            continue
+        # Rotate the corners so that the first cut edge runs from a to b; winding is kept.
+        k = next(k for k in range(3) if cuts[k] is not None)
+        a, b, c = corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]
+        ab, bc, ca = cuts[k], cuts[(k + 1) % 3], cuts[(k + 2) % 3]
+        assert ab is not None
+        if count == 1:  # c lies on the seam
+            out += [(a, ab, c), (ab, b, c)]
+        elif bc is not None:  # b alone on its side
+            out += [(a, ab, c), (ab, bc, c), (ab, b, bc)]
+        else:  # a alone on its side
+            assert ca is not None
+            out += [(a, ab, ca), (ab, b, c), (ab, c, ca)]
+    if not new_points:
+        return points, faces, normals
+    kept = faces[~straddles]
+    return (
+        np.vstack([points, new_points]),
+        np.vstack([kept, np.array(out, dtype=np.int64)]),
+        np.vstack([normals, new_normals]),
+    )
+
+
+def _sphere_uvs(
+    points: np.ndarray, faces: np.ndarray, normals: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(vertices, faces, uvs, normals) of a triangulated unit sphere cut at the seam, with Mitsuba's spherical
+    coordinates of each vertex's direction. A vertex on the seam is u = 0 to the triangles on its y > 0 side and
+    u = 1 to those on its y < 0 side, so it gets a copy; a pole has no azimuth, so each triangle meeting one gets its
+    own copy there, at the mean u of its other two corners (the triangle's image is a thin wedge, as on a UV
+    sphere). Vertices that every triangle sees alike stay shared."""
+    direction = points / np.linalg.norm(points, axis=1, keepdims=True)
+    phi = np.arctan2(direction[:, 1], direction[:, 0])
+    u = np.where(phi < 0.0, phi + 2.0 * np.pi, phi) / (2.0 * np.pi)
+    v = np.arccos(np.clip(direction[:, 2], -1.0, 1.0)) / np.pi
+    pole = (np.hypot(direction[:, 0], direction[:, 1]) < 1e-9)[faces]
+    on_seam = ((np.abs(direction[:, 1]) < 1e-12) & (direction[:, 0] > 0.0))[faces]
+    below = (direction[:, 1] < -1e-12)[faces].any(axis=1)
+    u = np.where((np.abs(direction[:, 1]) < 1e-12) & (direction[:, 0] > 0.0), 0.0, u)
+    corner_u = np.where(on_seam & below[:, None], 1.0, u[faces])
+    pole_u = np.nanmean(np.where(pole, np.nan, corner_u), axis=1)
+    corner_u = np.where(pole, pole_u[:, None], corner_u)
+    # Corners whose u is not their vertex's get vertices of their own, one per distinct (vertex, u).
+    special = (on_seam & below[:, None]) | pole
+    keys = np.stack([faces[special].astype(np.float64), corner_u[special]], axis=1)
+    unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+    faces = faces.copy()
+    faces[special] = len(points) + inverse.ravel()
+    source = np.concatenate([np.arange(len(points)), unique[:, 0].astype(np.int64)])
+    all_uvs = np.concatenate([np.stack([u, v], axis=1), np.stack([unique[:, 1], v[source[len(points) :]]], axis=1)])
+    # Drop the vertices no corner uses any more (a pole's own, now one per triangle).
+    used, compact = np.unique(faces, return_inverse=True)
+    return (
+        points[source[used]],
+        compact.reshape(faces.shape).astype(np.int64),
+        all_uvs[used],
+        normals[source[used]],
+    )
 
 
 def teapot(subdivisions: int = TEAPOT_SUBDIVISIONS) -> TriangleMesh:

@@ -137,8 +137,8 @@ _SPECTRUM_PLUGINS = ("uniform", "irregular", "regular", "blackbody", "d65", "srg
 # Mitsuba's rectangle has v = 0 at y = -1, spectrace's at y = +1; Mitsuba reads a PLY's v as stored, spectrace
 # flips it (as both do an OBJ's vt). Textures on them are imported with v flipped.
 _V_UP_SHAPES = ("rectangle", "ply")
-# Built-in shapes without texture coordinates in spectrace.
-_NO_UV_SHAPES = ("cube", "sphere")
+# Built-in shapes without texture coordinates in spectrace (its sphere has Mitsuba's, as its rectangle has).
+_NO_UV_SHAPES = ("cube",)
 
 
 @dataclass
