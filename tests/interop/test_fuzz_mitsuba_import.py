@@ -137,6 +137,9 @@ TYPES = st.sampled_from(
         "serialized",
         "diffuse",
         "twosided",
+        "normalmap",
+        "bumpmap",
+        "mask",
         "conductor",
         "roughconductor",
         "plastic",
@@ -191,7 +194,18 @@ MUTATIONS = st.sampled_from(
     ["delete", "value", "value", "value", "type", "add", "duplicate", "drop", "wrap", "texture", "texture"]
 )
 PROPERTY_NAMES = st.sampled_from(
-    ["reflectance", "diffuse_reflectance", "specular_reflectance", "color0", "color1", "radiance", "alpha", "eta"]
+    [
+        "reflectance",
+        "diffuse_reflectance",
+        "specular_reflectance",
+        "color0",
+        "color1",
+        "radiance",
+        "alpha",
+        "eta",
+        "normalmap",
+        "opacity",
+    ]
 )
 # Most files stay well-formed XML, so that most mutations reach the importer rather than the XML parser.
 TEXT_MUTATIONS = st.sampled_from(["none"] * 12 + ["truncate", "bytes", "unicode", "deep"])

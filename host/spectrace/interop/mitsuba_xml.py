@@ -62,8 +62,10 @@ BSDF_MODULES = _modules_by_plugin(MATERIALS.values())
 EMITTER_MODULES = _modules_by_plugin(LIGHTS.values())  # emitters of their own, <emitter> children of <scene>
 SHAPE_EMITTER_MODULES = _modules_by_plugin((area,))  # emitters on a shape
 TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
-# `twosided` wraps one BSDF: spectrace's materials already reflect on both faces.
-BSDF_WRAPPERS = ("twosided",)
+# `twosided` wraps one BSDF: spectrace's materials already reflect on both faces. The surface-detail adapters wrap
+# one BSDF too, and become keys of its material (spectrace.materials.surface): normal_map, bump_map, opacity.
+SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
+BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 SUPPORTED = {
     "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
@@ -784,6 +786,10 @@ class MitsubaImporter:
         else:
             self._textured_materials.add(name)
         self.origins[f"materials.{name}"] = bsdf
+        for key, value in table.items():
+            # What the loader says of a texture a key takes (a normal map read as colours) is told at the texture.
+            if isinstance(value, dict) and list(value) == ["texture"]:
+                self.origins[f"materials.{name}.{key}"] = self._texture_elements[value["texture"]]
         return name
 
     def material_table(self, bsdf: Element) -> dict | None:
@@ -802,6 +808,8 @@ class MitsubaImporter:
                 self.unsupported_plugin(bsdf, " with two different sides")
                 return None
             return self.material_table(nested[0])
+        if kind in SURFACE_DETAIL_WRAPPERS:
+            return self.surface_detail(bsdf, kind, properties)
         if kind in BSDF_MODULES:
             table = BSDF_MODULES[kind].from_mitsuba(self, bsdf, properties)
             # A module may import a plugin as another material (conductor "none" as mirror): that one's table counts.
@@ -810,6 +818,69 @@ class MitsubaImporter:
             return table
         self.unsupported_plugin(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
+
+    def surface_detail(self, bsdf: Element, kind: str, properties: dict[str, Element]) -> dict | None:
+        """The material of the one bsdf that a normalmap, bumpmap or mask adapter wraps, with the adapter's key
+        added: normal_map (its `normalmap` texture), bump_map and bump_scale (its one texture, `scale`), opacity
+        (`opacity`, Mitsuba's default 0.5). Mitsuba's bumpmap displaces by scale · h along the normal (its tangents
+        are dp/du + scale · ∂h/∂u · n), which is spectrace's bump_scale."""
+        nested = [self.resolve(child) for child in properties.values() if self.resolve(child).tag == "bsdf"]
+        if len(nested) != 1:
+            raise self.fail(bsdf, f"{bsdf.label()} needs exactly one nested bsdf, got {len(nested)}")
+        expected = {"normalmap": "normalmap", "bumpmap": "scale", "mask": "opacity"}[kind]
+        textures = [key for key, child in properties.items() if self.resolve(child).tag == "texture"]
+        for key, child in properties.items():
+            # A bumpmap's texture may have any name.
+            if key != expected and self.resolve(child).tag != "bsdf" and not (kind == "bumpmap" and key in textures):
+                self.unsupported_plugin(bsdf, f" with {_shown(key)}")
+                return None
+        detail: dict = {}
+        if kind == "normalmap":
+            texture = self.resolve(self.child(properties, "normalmap", bsdf))
+            if texture.tag != "texture" or self.kind(texture) != "bitmap":
+                self.unsupported_plugin(texture, " as normalmap (spectrace's normal maps are bitmaps)")
+                return None
+            detail["normal_map"] = self.texture(texture, "normal_map")
+        elif kind == "bumpmap":
+            if len(textures) != 1:
+                raise self.fail(bsdf, f"{bsdf.label()} needs exactly one nested texture, got {len(textures)}")
+            texture = self.resolve(properties[textures[0]])
+            if self.kind(texture) in _SPECTRUM_PLUGINS:  # a constant height: no gradient, nothing to import
+                self.unsupported_plugin(texture, " as a bump map (spectrace's bump maps are bitmaps or checkerboards)")
+                return None
+            detail["bump_map"] = self.texture(texture, "bump_map")
+            if "scale" in properties:
+                detail["bump_scale"] = self.number(properties["scale"])
+        else:
+            detail["opacity"] = self.opacity(properties["opacity"]) if "opacity" in properties else 0.5
+        if any(value is None for value in detail.values()):
+            return None
+        table = self.material_table(nested[0])
+        if table is None:
+            return None
+        one_of = ("opacity",) if "opacity" in detail else ("normal_map", "bump_map")
+        taken = [key for key in one_of if key in table]
+        if taken:
+            self.unsupported_plugin(
+                bsdf,
+                f" around a bsdf with a {taken[0].replace('_', ' ')} already (a spectrace material takes one "
+                f"{'opacity' if one_of == ('opacity',) else 'normal map or bump map'})",
+            )
+            return None
+        return table | detail
+
+    def opacity(self, element: Element) -> float | dict | None:
+        """A mask's opacity: a number in [0, 1] or a texture."""
+        resolved = self.resolve(element)
+        if resolved.tag == "texture":
+            return self.texture(resolved, "opacity")
+        if resolved.tag != "float":
+            self.unsupported_plugin(resolved, " as opacity (spectrace's opacity is a number or a texture)")
+            return None
+        value = self.number(resolved)
+        if not 0.0 <= value <= 1.0:
+            raise self.fail(resolved, f"opacity must lie in [0, 1], got {value:g}", "value")
+        return value
 
     def text(self, element: Element) -> str:
         return self.attribute(self.resolve(element), "value") or ""
@@ -820,12 +891,17 @@ class MitsubaImporter:
             raise self.fail(element, f"expected true or false, got '{_shown(value)}'", "value")
         return value == "true"
 
-    def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | None:
-        """GGX α of a rough Mitsuba BSDF (its default 0.1); None when spectrace cannot represent it (recorded)."""
+    def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | dict | None:
+        """GGX α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None when
+        spectrace cannot represent it (recorded)."""
+        alpha: float | dict | None
         if "alpha_u" in properties or "alpha_v" in properties:
             u_element = properties.get("alpha_u", properties.get("alpha_v"))
             v_element = properties.get("alpha_v", properties.get("alpha_u"))
             assert u_element is not None and v_element is not None  # one of them is given, standing for both
+            if "texture" in (self.resolve(u_element).tag, self.resolve(v_element).tag):
+                self.unsupported_plugin(bsdf, " with a textured alpha_u or alpha_v (anisotropic roughness)")
+                return None
             alpha_u = self.number(self.resolve(u_element))
             alpha_v = self.number(self.resolve(v_element))
             if alpha_u != alpha_v:
@@ -834,10 +910,12 @@ class MitsubaImporter:
             alpha = alpha_u
         elif "alpha" in properties:
             element = self.resolve(properties["alpha"])
-            if element.tag == "texture":
-                self.unsupported_plugin(element, " as alpha")
+            # A texture's α is checked against the range when the scene loads, as any roughness texture is.
+            alpha = self.texture(element, "roughness") if element.tag == "texture" else self.number(element)
+            if alpha is None:
                 return None
-            alpha = self.number(element)
+            if isinstance(alpha, dict) and list(alpha) == ["value"]:  # a spectrum plugin standing for a number
+                alpha = float(alpha["value"])
         else:
             alpha = 0.1
         distribution = self.text(properties["distribution"]) if "distribution" in properties else "beckmann"
@@ -846,7 +924,7 @@ class MitsubaImporter:
                 f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
                 f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)"
             )
-        if not ROUGHNESS_RANGE.contains(alpha):
+        if isinstance(alpha, float) and not ROUGHNESS_RANGE.contains(alpha):
             raise self.fail(bsdf, f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha:g}")
         return alpha
 

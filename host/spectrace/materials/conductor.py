@@ -152,7 +152,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     else:
         material = importer.text(properties["material"]) if "material" in properties else "none"
         if material == "none":  # Mitsuba's default: a perfect mirror scaled by specular_reflectance
-            if roughness > 0.0:
+            if roughness != 0.0:  # a number above 0, or a texture
                 importer.unsupported_plugin(bsdf, " with material 'none' and roughness")
                 return None
             return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
@@ -162,7 +162,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
             )
             return None
         table = {"type": "conductor", "metal": material}
-    if roughness > 0.0:
+    if roughness != 0.0:  # a number above 0, or a texture
         table["roughness"] = roughness
     if tint is not None:
         table["specular_tint"] = tint

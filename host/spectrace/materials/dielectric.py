@@ -134,7 +134,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         importer.unsupported_plugin(bsdf, " with specular_reflectance different from specular_transmittance")
         return None
     table: dict = {"type": "dielectric", "ior": round(ior, 6)}
-    if roughness > 0.0:
+    if roughness != 0.0:  # a number above 0, or a texture
         table["roughness"] = roughness
     if tints:
         table["specular_tint"] = tints["specular_reflectance"]

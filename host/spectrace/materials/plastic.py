@@ -100,6 +100,6 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         "its diffuse part differs"
     )
     table = {"type": "plastic", "reflectance": reflectance, "ior": round(ior, 6)}
-    if roughness > 0.0:
+    if roughness != 0.0:  # a number above 0, or a texture
         table["roughness"] = roughness
     return table
