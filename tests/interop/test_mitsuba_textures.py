@@ -558,9 +558,9 @@ DETAIL_UNSUPPORTED = [
         "bsdf 'roughconductor' with a textured alpha_u or alpha_v (anisotropic roughness)",
     ),
     (
-        "normal-map-on-a-sphere",
-        f'<shape type="sphere"><bsdf type="normalmap">{NORMAL_MAP}{DIFFUSE}</bsdf></shape>',
-        "shape 'sphere' with a textured bsdf",
+        "normal-map-on-a-cube",
+        f'<shape type="cube"><bsdf type="normalmap">{NORMAL_MAP}{DIFFUSE}</bsdf></shape>',
+        "shape 'cube' with a textured bsdf",
     ),
 ]
 
