@@ -16,9 +16,9 @@ def devices(as_json: Annotated[bool, typer.Option("--json", help="One JSON objec
     if as_json:
         print(json.dumps({"devices": [asdict(r) for r in reports]}, indent=2))
         return
-    from rich.console import Console
+    import sys
 
-    Console(markup=False).print(device_table(reports))
+    print(device_table(reports, colour=sys.stdout.isatty()))
     if not any(r.ok for r in reports):
         from spectrace.device import NoWorkingDeviceError
 
