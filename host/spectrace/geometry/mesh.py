@@ -345,23 +345,20 @@ def _validated_mesh(
         raise SpectraceError(f"mesh file '{path}' contains no triangles", where=where)
     if faces.min() < 0 or faces.max() >= len(vertices):
         raise SpectraceError(f"mesh file '{path}' has faces that index missing vertices", where=where)
-    bad = ~np.isfinite(vertices).all(axis=1)
-    if bad.any():
-        raise SpectraceError(
-            f"mesh file '{path}' has {int(bad.sum())} vertices with NaN or infinite coordinates "
-            f"(first: vertex {int(np.flatnonzero(bad)[0])})",
-            where=where,
-        )
+    _refuse_non_finite(vertices, "vertices with NaN or infinite coordinates", path, where)
     if normals is not None:
         if normals.shape != vertices.shape:
             raise SpectraceError(
                 f"mesh file '{path}' has {len(normals)} vertex normals for {len(vertices)} vertices", where=where
             )
-        bad = ~np.isfinite(normals).all(axis=1)
-        if bad.any():
-            raise SpectraceError(
-                f"mesh file '{path}' has {int(bad.sum())} vertex normals with NaN or infinite components "
-                f"(first: vertex {int(np.flatnonzero(bad)[0])})",
-                where=where,
-            )
+        _refuse_non_finite(normals, "vertex normals with NaN or infinite components", path, where)
     return TriangleMesh(vertices=vertices, faces=faces, normals=normals)
+
+
+def _refuse_non_finite(rows: np.ndarray, what: str, path: Path, where: str) -> None:
+    bad = ~np.isfinite(rows).all(axis=1)
+    if bad.any():
+        raise SpectraceError(
+            f"mesh file '{path}' has {int(bad.sum())} {what} (first: vertex {int(np.flatnonzero(bad)[0])})",
+            where=where,
+        )

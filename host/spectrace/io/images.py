@@ -17,6 +17,20 @@ def read_picture(path: Path, where: str) -> np.ndarray:
     if path.suffix.lower() == ".exr":
         return read_environment_map(path, where, what="image").astype(np.float64)
     regular_file(path, where, what="image")
+
+    def decode(picture) -> tuple[np.ndarray, bool]:
+        bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
+        return np.asarray(picture.convert("RGB") if not bits16 else picture, dtype=np.float64), bits16
+
+    values, bits16 = _read_with_pillow(path, where, "image", decode)
+    if values.ndim == 2:
+        values = np.repeat(values[..., None], 3, axis=-1)
+    return values / (65535.0 if bits16 else 255.0)
+
+
+def _read_with_pillow(path: Path, where: str, what: str, decode):
+    """decode(picture) of an image Pillow reads, once its header's size is within the image limit; a failure is one
+    line naming `what`, the file and `where`."""
     import warnings
 
     from PIL import Image as PILImage
@@ -27,16 +41,12 @@ def read_picture(path: Path, where: str) -> np.ndarray:
             warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
             with PILImage.open(path) as picture:  # reads the header only
                 if problem := limits.image_size_problem(*picture.size):
-                    raise SpectraceError(f"image '{path}': {problem}", where=where)
-                bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
-                values = np.asarray(picture.convert("RGB") if not bits16 else picture, dtype=np.float64)
+                    raise SpectraceError(f"{what} '{path}': {problem}", where=where)
+                return decode(picture)
     except SpectraceError:
         raise
     except Exception as exc:  # Pillow raises many types for unreadable files
-        raise SpectraceError(f"cannot read image '{path}': {exc}", where=where) from None
-    if values.ndim == 2:
-        values = np.repeat(values[..., None], 3, axis=-1)
-    return values / (65535.0 if bits16 else 255.0)
+        raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
 
 
 def _exr_size(path: Path) -> tuple[int, int]:
@@ -103,21 +113,7 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
         encoded = False
         values = np.asarray(values, np.float64)
     else:
-        import warnings
-
-        from PIL import Image as PILImage
-
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
-                with PILImage.open(path) as picture:  # reads the header only
-                    if problem := limits.image_size_problem(*picture.size):
-                        raise SpectraceError(f"texture '{path}': {problem}", where=where)
-                    values, encoded = pil_image_values(picture)
-        except SpectraceError:
-            raise
-        except Exception as exc:  # Pillow raises many types for unreadable files
-            raise SpectraceError(f"cannot read texture '{path}': {exc}", where=where) from None
+        values, encoded = _read_with_pillow(path, where, "texture", pil_image_values)
     if not np.all(np.isfinite(values)):
         raise SpectraceError(f"texture '{path}' has NaN or infinite values", where=where)
     return values, encoded
