@@ -15,15 +15,17 @@ from spectrace.resources import scenes_dir
 
 @pytest.mark.subprocess
 def test_importing_the_command_line_does_not_import_heavy_modules():
-    code = (
-        "import sys, spectrace.cli; "
-        "print(' '.join(m for m in ('colour', 'matplotlib', 'scipy', 'trimesh', 'pyopencl') if m in sys.modules))"
-    )
+    assert _loaded_after("spectrace.cli", ("colour", "matplotlib", "scipy", "trimesh", "pyopencl")) == []
+
+
+def _loaded_after(imports: str, modules: tuple[str, ...]) -> list[str]:
+    """Which of `modules` a fresh interpreter has loaded after `import <imports>`."""
+    code = f"import sys, {imports}; print(' '.join(m for m in {modules!r} if m in sys.modules))"
     result = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, env=os.environ.copy(), timeout=120
     )
     assert result.returncode == 0, result.stderr
-    assert result.stdout.split() == []
+    return result.stdout.split()
 
 
 def _imported_modules(importtime_log: str) -> set[str]:
@@ -65,15 +67,8 @@ def test_spectrace_devices_with_remembered_probes_imports_neither_numpy_nor_pyop
 
 @pytest.mark.subprocess
 def test_importing_the_device_package_does_not_import_numpy_or_pyopencl():
-    code = (
-        "import sys, spectrace.device, spectrace.device.selection; "
-        "print(' '.join(m for m in ('numpy', 'pyopencl', 'spectrace.device.program_cache') if m in sys.modules))"
-    )
-    result = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=os.environ.copy(), timeout=120
-    )
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.split() == []
+    modules = ("numpy", "pyopencl", "spectrace.device.program_cache")
+    assert _loaded_after("spectrace.device, spectrace.device.selection", modules) == []
 
 
 def test_the_shipped_cmf_table_equals_colour_sciences():
