@@ -59,6 +59,30 @@ def test_cube_has_area_24_and_outward_faces():
     assert _signed_volume(mesh) == pytest.approx(8.0)
 
 
+def test_cube_faces_have_their_own_corners_spanning_the_whole_image():
+    """24 vertices, four per face (so its texture seams stay sharp), no normals (flat shading), the same surface as
+    the 8-corner cube once merged (watertight, outward). Each face maps the image once: its corners' uv are the four
+    corners of the unit square, each uv an affine function of position across the face (which Mitsuba's cube it is:
+    tests/interop/test_mitsuba_textures.py)."""
+    mesh = cube()
+    assert mesh.vertices.shape == (24, 3) and mesh.uvs is not None and mesh.uvs.shape == (24, 2)
+    assert mesh.normals is None
+    merged = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    merged.merge_vertices()
+    assert len(merged.vertices) == 8 and merged.is_watertight and merged.is_winding_consistent
+    normals = _unit_normals(mesh)
+    for pair in range(6):
+        triangles = mesh.faces[2 * pair : 2 * pair + 2]
+        np.testing.assert_array_equal(normals[2 * pair], normals[2 * pair + 1])
+        corners = np.unique(triangles)
+        assert len(corners) == 4
+        assert sorted(map(tuple, mesh.uvs[corners])) == [(0, 0), (0, 1), (1, 0), (1, 1)]
+        # An affine map of position fits all four corners' uv exactly (a square's image is a square, not skewed).
+        positions = np.column_stack([mesh.vertices[corners], np.ones(4)])
+        fit = np.linalg.lstsq(positions, mesh.uvs[corners], rcond=None)[0]
+        np.testing.assert_allclose(positions @ fit, mesh.uvs[corners], atol=1e-12)
+
+
 def test_sphere_area_within_the_inscribed_bound_and_outward():
     mesh = sphere()
     assert len(mesh.faces) >= 20 * 4**4  # and the few cut at the texture seam

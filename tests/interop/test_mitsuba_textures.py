@@ -18,6 +18,7 @@ from cli_runner import run_in_process
 from replica_agreement import spectrace_replicas
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.geometry import primitives
 from spectrace.interop.mitsuba_export import mitsuba_film_xyz
 from spectrace.interop.mitsuba_xml import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
 from spectrace.textures.bitmap import BitmapTexture
@@ -301,11 +302,6 @@ UNSUPPORTED = [
         ),
         "texture 'checkerboard' as color0 of a checkerboard",
     ),
-    (
-        "textured-cube",
-        '<shape type="cube"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf></shape>',
-        "shape 'cube' with a textured bsdf (spectrace's cube has no texture coordinates",
-    ),
 ]
 
 
@@ -557,12 +553,24 @@ DETAIL_UNSUPPORTED = [
         '<float name="alpha_v" value="0.2"/></bsdf>',
         "bsdf 'roughconductor' with a textured alpha_u or alpha_v (anisotropic roughness)",
     ),
-    (
-        "normal-map-on-a-cube",
-        f'<shape type="cube"><bsdf type="normalmap">{NORMAL_MAP}{DIFFUSE}</bsdf></shape>',
-        "shape 'cube' with a textured bsdf",
-    ),
 ]
+
+
+@pytest.mark.parametrize(
+    "bsdf",
+    [
+        '<bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf>',
+        f'<bsdf type="normalmap">{NORMAL_MAP}{DIFFUSE}</bsdf>',
+    ],
+)
+def test_a_textured_cube_imports_with_its_uvs_as_they_are(folder, bsdf):
+    """Spectrace's cube carries Mitsuba's cube's texture coordinates (test_mitsuba_uv_conventions), so a texture or
+    a normal map on it imports unflipped, as on the sphere."""
+    _detail_images(folder)
+    data, _ = mitsuba_scene_data(_write(folder, f'<shape type="cube">{bsdf}</shape>'))
+    (shape,) = data["shapes"]
+    assert shape["type"] == "cube" and not shape["material"].endswith("_flipped_v")
+    assert shape["material"] in data["materials"]
 
 
 @pytest.mark.parametrize("name, body, says", DETAIL_UNSUPPORTED, ids=[case[0] for case in DETAIL_UNSUPPORTED])
@@ -625,7 +633,8 @@ def test_bad_surface_detail_is_one_line(folder, monkeypatch, capsys, bsdf, path,
 @pytest.mark.peer
 def test_mitsuba_uv_conventions(folder, mitsuba_scalar_spectral):
     """The conventions this file states, measured in Mitsuba: the uv its rectangle, an OBJ and a PLY give a ray's
-    hit, which texel row a bitmap shows at small v, and which colour its checkerboard shows where."""
+    hit (and its sphere and cube, against spectrace's), which texel row a bitmap shows at small v, and which colour its
+    checkerboard shows where."""
     mi = mitsuba_scalar_spectral
     header = (
         "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
@@ -650,6 +659,34 @@ def test_mitsuba_uv_conventions(folder, mitsuba_scalar_spectral):
         hit = scene.ray_intersect(mi.Ray3f(3.0 * d, -d))
         expected = (np.mod(np.arctan2(d[1], d[0]), 2 * np.pi) / (2 * np.pi), np.arccos(d[2]) / np.pi)
         np.testing.assert_allclose(np.array(hit.uv), expected, atol=1e-5, err_msg=f"sphere {direction}")
+    # The cube: rays at a grid of points on every face of Mitsuba's cube; the uv of each hit against the uv that
+    # spectrace's cube interpolates at the same point (barycentric in the triangle of its face that holds it).
+    scene = mi.load_dict({"type": "scene", "shape": {"type": "cube"}})
+    mesh = primitives.cube()
+    corners = mesh.vertices[mesh.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    steps = np.linspace(-0.9, 0.9, 5)
+    hits = 0
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            outward = np.zeros(3)
+            outward[axis] = sign
+            for a in steps:
+                for b in steps:
+                    point = np.insert(np.array([a, b]), axis, sign)
+                    hit = scene.ray_intersect(mi.Ray3f(point + 2.0 * outward, -outward))
+                    assert hit.is_valid()
+                    on_face = np.flatnonzero(normals @ outward > 0)
+                    for triangle in on_face:
+                        p0, p1, p2 = corners[triangle]
+                        weights = np.linalg.lstsq(np.column_stack([p1 - p0, p2 - p0]), point - p0, rcond=None)[0]
+                        barycentric = np.array([1.0 - weights.sum(), *weights])
+                        if barycentric.min() >= -1e-9:
+                            break
+                    expected = barycentric @ mesh.uvs[mesh.faces[triangle]]
+                    np.testing.assert_allclose(np.array(hit.uv), expected, atol=1e-5, err_msg=f"cube {point}")
+                    hits += 1
+    assert hits == 6 * 25
     mi.set_variant("scalar_rgb")  # texture values without spectra
     try:
         image = np.zeros((2, 2, 3), np.float32)

@@ -123,7 +123,7 @@ def _bad_inputs(tmp_path) -> list[tuple[str, str, str, str]]:
         ('{ texture = "spectral", file = "nan.exr" }', "", "rectangle", "materials.m.reflectance.file: texture"),
         ('{ texture = "bitmap", file = "ok.png", wrap = "tile" }', "", "rectangle", "materials.m.reflectance.wrap"),
         ('{ texture = "wod" }', "", "rectangle", "materials.m.reflectance.texture: undefined texture"),
-        ('{ texture = "bitmap", file = "ok.png" }', "", "cube", "shapes[0].material: shape 'cube0' has no tex"),
+        ('{ texture = "bitmap", file = "ok.png" }', "", "prism", "shapes[0].material: shape 'prism0' has no tex"),
         (
             '{ texture = "checkerboard", color0 = { texture = "board" } }',
             board,
@@ -261,7 +261,7 @@ def test_roughness_tint_and_emission_textures_in_a_scene_file(tmp_path):
     [
         ('{ texture = "bitmap", file = "tint.png" }', "{ value = 1 }", "rectangle", "materials.m.roughness: texture"),
         ("1.5", "{ value = 1 }", "rectangle", "materials.m.roughness"),
-        ("0.1", '{ texture = "bitmap", file = "rgb.png" }', "cube", "shapes[1].emitter.radiance: shape"),
+        ("0.1", '{ texture = "bitmap", file = "rgb.png" }', "prism", "shapes[1].emitter.radiance: shape"),
         ("0.1", '{ texture = "checkerboard" }', "rectangle", "shapes[1].emitter.radiance: an emission texture"),
     ],
 )

@@ -26,20 +26,32 @@ def rectangle() -> TriangleMesh:
 
 
 def cube() -> TriangleMesh:
-    """The cube [-1, 1]^3 with outward normals (12 triangles, area 24)."""
-    # Corner index = 4*(x>0) + 2*(y>0) + (z>0).
-    vertices = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
-    # Each quad lists its corners counter-clockwise seen from outside.
+    """The cube [-1, 1]^3 with outward normals (12 triangles, area 24), flat-shaded. Each face has its own four
+    corners so it can carry Mitsuba 3's cube's texture coordinates: the image once across each face, with u and v
+    running along the face's axes as Mitsuba's own cube mesh has them (tests/interop measure them in Mitsuba)."""
+    # Corner of [-1, 1]^3 by index = 4*(x>0) + 2*(y>0) + (z>0).
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
+    # Each quad lists its corners counter-clockwise seen from outside, then the (axis, sign) that u and v each follow
+    # across it: u = (1 + sign * coordinate[axis]) / 2, likewise v.
     quads = [
-        (0, 1, 3, 2),  # x = -1
-        (4, 6, 7, 5),  # x = +1
-        (0, 4, 5, 1),  # y = -1
-        (2, 3, 7, 6),  # y = +1
-        (0, 2, 6, 4),  # z = -1
-        (1, 5, 7, 3),  # z = +1
+        ((0, 1, 3, 2), (1, 1), (2, 1)),  # x = -1
+        ((4, 6, 7, 5), (1, 1), (2, -1)),  # x = +1
+        ((0, 4, 5, 1), (2, 1), (0, 1)),  # y = -1
+        ((2, 3, 7, 6), (0, -1), (2, -1)),  # y = +1
+        ((0, 2, 6, 4), (1, -1), (0, 1)),  # z = -1
+        ((1, 5, 7, 3), (1, 1), (0, 1)),  # z = +1
     ]
-    faces = np.array([tri for a, b, c, d in quads for tri in ((a, b, c), (a, c, d))], dtype=np.int64)
-    return TriangleMesh(vertices=vertices, faces=faces)
+    vertices = np.concatenate([corners[list(quad)] for quad, _, _ in quads])
+    uvs = np.concatenate(
+        [
+            np.stack(
+                [(1 + u_sign * corners[list(quad), u_axis]) / 2, (1 + v_sign * corners[list(quad), v_axis]) / 2], 1
+            )
+            for quad, (u_axis, u_sign), (v_axis, v_sign) in quads
+        ]
+    )
+    faces = np.array([(a, a + 1, a + 2) if t == 0 else (a, a + 2, a + 3) for a in range(0, 24, 4) for t in (0, 1)])
+    return TriangleMesh(vertices=vertices, faces=faces.astype(np.int64), uvs=uvs)
 
 
 def prism() -> TriangleMesh:

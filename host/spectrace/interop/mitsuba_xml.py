@@ -139,8 +139,6 @@ _SPECTRUM_PLUGINS = ("uniform", "irregular", "regular", "blackbody", "d65", "srg
 # Mitsuba's rectangle has v = 0 at y = -1, spectrace's at y = +1; Mitsuba reads a PLY's v as stored, spectrace
 # flips it (as both do an OBJ's vt). Textures on them are imported with v flipped.
 _V_UP_SHAPES = ("rectangle", "ply")
-# Built-in shapes without texture coordinates in spectrace (its sphere has Mitsuba's, as its rectangle has).
-_NO_UV_SHAPES = ("cube",)
 
 
 @dataclass
@@ -258,7 +256,6 @@ class MitsubaImporter:
         self.notes: list[str] = []
         self.materials: dict[str, dict] = {}
         self._material_of_element: dict[tuple[int, bool], str] = {}
-        self._textured_materials: set[str] = set()
         self.textures: dict[str, dict] = {}
         self._texture_of_element: dict[tuple[int, bool], str] = {}
         self._texture_elements: dict[str, Element] = {}
@@ -783,8 +780,6 @@ class MitsubaImporter:
         self._material_of_element[(id(bsdf), flip_v)] = name
         if not textured:  # the same material whichever way v runs
             self._material_of_element[(id(bsdf), not flip_v)] = name
-        else:
-            self._textured_materials.add(name)
         self.origins[f"materials.{name}"] = bsdf
         for key, value in table.items():
             # What the loader says of a texture a key takes (a normal map read as colours) is told at the texture.
@@ -985,10 +980,6 @@ class MitsubaImporter:
                 table["face_normals"] = face_normals
         bsdf = properties.get("bsdf") or next((c for c in properties.values() if self.resolve(c).tag == "bsdf"), None)
         table["material"] = self.material(bsdf, name, flip_v=kind in _V_UP_SHAPES)
-        if kind in _NO_UV_SHAPES and table["material"] in self._textured_materials:
-            self.unsupported_plugin(
-                element, f" with a textured bsdf (spectrace's {kind} has no texture coordinates; use an obj or ply)"
-            )
         emitter = next((self.resolve(c) for c in properties.values() if self.resolve(c).tag == "emitter"), None)
         if emitter is not None:
             module = SHAPE_EMITTER_MODULES.get(self.kind(emitter))
