@@ -1,12 +1,11 @@
 """`spectrace devices`: the OpenCL platforms and devices found, and whether each builds the kernels."""
 
 import json
-from typing import Annotated
 
-import typer
+from spectrace.cli.common import JsonOption
 
 
-def devices(as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False) -> None:
+def devices(as_json: JsonOption = False) -> None:
     """List every OpenCL platform and device found, with the build probe's result or why it failed."""
     from dataclasses import asdict
 

@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from spectrace.cli.common import GROUP_SETTINGS
+from spectrace.cli.common import GROUP_SETTINGS, JsonOption
 from spectrace.displays.compare import Comparison, compare_displays
 from spectrace.displays.match import MatchResult, match_colour
 from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions
@@ -27,7 +27,6 @@ display_app = typer.Typer(
     **GROUP_SETTINGS,
 )
 
-JsonOption = Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")]
 RgbOption = Annotated[
     tuple[float, float, float],
     typer.Option("--rgb", help="The triple R G B, each in [0, 1], read with --encoding."),

@@ -10,7 +10,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from spectrace.cli.common import GROUP_SETTINGS
+from spectrace.cli.common import GROUP_SETTINGS, JsonOption
 from spectrace.errors import SpectraceError
 
 spectra_app = typer.Typer(
@@ -59,7 +59,7 @@ def _resolve(name: str, scene_spectra: dict):
 @spectra_app.command("list")
 def list_spectra(
     scene: SceneOption = None,
-    as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Every spectrum `plot` accepts: the library's (files under spectra/, CIE illuminants) and, with --scene, the
     scene's, each with its range of values and its colour (CIE 1931 x, y as light)."""

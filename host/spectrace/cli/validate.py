@@ -5,14 +5,14 @@ from typing import Annotated
 
 import typer
 
-from spectrace.cli.common import DeviceOption
+from spectrace.cli.common import DeviceOption, JsonOption
 from spectrace.errors import SpectraceError
 
 
 def validate(
     case: Annotated[list[str] | None, typer.Option(help="Run only these cases (default: all).")] = None,
     device: DeviceOption = None,
-    as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Check the laws of radiometry numerically: each law, its analytic value, the renderer's measurement ±
     its standard error, and pass/fail (|difference| <= 4 standard errors). Exits 1 if any check fails."""

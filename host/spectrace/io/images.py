@@ -98,9 +98,8 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
     (encoded = True: the caller decodes the transfer curve); 32-bit float images (TIFF mode F) and OpenEXR
     (R, G, B, or Y) give their values as stored (encoded = False). The size in the header is checked before anything
     is decoded; non-finite values are refused."""
-    regular_file(path, where, what="texture")
     if path.suffix.lower() == ".exr":
-        channels = read_exr_checked(path, where, "texture")
+        channels = read_exr_checked(path, where, "texture")  # which checks it is a regular file
         if "RGB" in channels or "RGBA" in channels:
             values = np.asarray(channels.get("RGB", channels.get("RGBA")))[..., :3]
         elif {"R", "G", "B"} <= set(channels):
@@ -113,6 +112,7 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
         encoded = False
         values = np.asarray(values, np.float64)
     else:
+        regular_file(path, where, what="texture")
         values, encoded = _read_with_pillow(path, where, "texture", pil_image_values)
     if not np.all(np.isfinite(values)):
         raise SpectraceError(f"texture '{path}' has NaN or infinite values", where=where)
