@@ -52,10 +52,6 @@ ProgressOption = bool | Literal["auto"] | Callable[[int, int], None] | None
 # ---------------------------------------------------------------- spectra
 
 
-def _reflectance(source: SpectrumLike, what: str) -> Spectrum:
-    return spectrum_input.reflectance(source, what)
-
-
 # Texture constructors (docs/textures.md): each texture module's `make`, as the materials' are theirs.
 bitmap = textures.bitmap.make
 spectral_texture = textures.spectral.make
@@ -68,14 +64,10 @@ def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float
     from spectrace.textures import checkerboard as module
 
     sides = [
-        side if isinstance(side, IMAGE_TEXTURES) else _reflectance(side, name)
+        side if isinstance(side, IMAGE_TEXTURES) else spectrum_input.reflectance(side, name)
         for side, name in ((color0, "color0"), (color1, "color1"))
     ]
     return module.make(sides[0], sides[1], uv_scale=uv_scale, uv_offset=uv_offset)
-
-
-def _emission(source: SpectrumLike, what: str) -> Spectrum:
-    return spectrum_input.emission(source, what)
 
 
 # ---------------------------------------------------------------- geometry
@@ -123,7 +115,7 @@ def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float =
     if is_texture(radiance):
         check_texture_values(radiance, "emission", "radiance")
         return area.emitter(radiance, two_sided, scale)
-    return AreaEmitter(radiance=_emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
+    return AreaEmitter(radiance=spectrum_input.emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
 
 
 def medium(
@@ -209,9 +201,9 @@ def _intensity(
     if problem := lights.point.source_problem(intensity, power_w, shape_spectrum, power_name="power_w"):
         raise SpectraceError(problem)
     if intensity is not None:
-        return _emission(intensity, "intensity")
+        return spectrum_input.emission(intensity, "intensity")
     assert power_w is not None  # source_problem has refused giving neither
-    shape_values = _emission(shape_spectrum, "spectrum") if shape_spectrum is not None else None
+    shape_values = spectrum_input.emission(shape_spectrum, "spectrum") if shape_spectrum is not None else None
     return lights.point.intensity_from_power(power_w, shape_values, solid_angle_sr)
 
 
@@ -252,13 +244,13 @@ def spot_light(
 def distant_light(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:
     """Parallel light travelling along `direction`, irradiance E(λ) in W/(m² nm) on a surface facing it."""
     return DistantLight(
-        unit_direction(_vector(direction, "direction"), "direction"), _emission(irradiance, "irradiance")
+        unit_direction(_vector(direction, "direction"), "direction"), spectrum_input.emission(irradiance, "irradiance")
     )
 
 
 def constant_environment(radiance: SpectrumLike) -> ConstantEnvironment:
     """The same radiance L(λ), W/(m² sr nm), from every direction."""
-    return ConstantEnvironment(_emission(radiance, "radiance"))
+    return ConstantEnvironment(spectrum_input.emission(radiance, "radiance"))
 
 
 def _vector(value: Sequence[float] | np.ndarray, what: str) -> tuple[float, float, float]:
