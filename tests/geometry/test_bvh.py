@@ -153,7 +153,8 @@ def _traverse_closest_hits(bvh, triangles, origins, directions):
             if count == 0:
                 stack += [first, first + 1]
                 continue
-            leaf_triangles = order[first : first + count]
+            # In index order, so that a tie inside the leaf also goes to the lower triangle index.
+            leaf_triangles = np.sort(order[first : first + count])
             t, local = brute_force_closest_hit(origin[None], direction[None], *_corners(triangles[leaf_triangles]))
             # Equal distances resolve to the lower triangle index, as the brute force does.
             if local[0] >= 0 and (t[0], leaf_triangles[local[0]]) < (best_t, best_prim if best_prim >= 0 else np.inf):

@@ -35,6 +35,10 @@ BVH_NODE_DTYPE = np.dtype(
 MAX_DEPTH = 64
 # Above this many triangles a node is split even where the SAH prefers a leaf, so leaf loops stay short.
 FORCED_SPLIT_LEAF_SIZE = 16
+# Nodes of more triangles fill their bins from an evenly spaced sample of this many of them (module docstring).
+SAMPLED_BINNING_TRIANGLES = 1024
+# Bits per axis of the Morton codes that order the triangles before the build (3 x 21 = 63 bits).
+MORTON_BITS = 21
 # Nodes x bins evaluated per binning pass; bounds the temporary per-bin arrays to a few MB.
 _SAH_CHUNK_BIN_ENTRIES = 1 << 18
 
@@ -54,7 +58,6 @@ class _Level:
 
     triangle_ids: np.ndarray  # (A,) int32
     boxes: np.ndarray  # (6, A) float32 rows: min x, y, z, max x, y, z (rounded outward)
-    centroids: np.ndarray  # (3, A) float32, centres of the boxes
     counts: np.ndarray  # (N,) int64 triangles per node, every one >= 1
     slot_offsets: np.ndarray  # (N,) int64 first prim_order slot of each node
 
@@ -73,11 +76,10 @@ class _LevelSplits:
     """What happens to each node of a level, and the binning that the partition must repeat exactly."""
 
     is_split: np.ndarray  # (N,) bool: interior node (else leaf)
-    use_median: np.ndarray  # (N,) bool: split at the centroid median of widest_axis instead of the SAH plane
+    use_median: np.ndarray  # (N,) bool: split at the middle of the node's triangles instead of the SAH plane
     plan: _SplitPlan
     bin_origin: np.ndarray  # (N, 3) float64 low corner of the centroid bounds
     bin_scale: np.ndarray  # (N, 3) float64 bins per unit length (0 on axes where all centroids coincide)
-    widest_axis: np.ndarray  # (N,) int64 axis of the largest centroid extent
 
 
 def build_bvh(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf_size: int = 4, bins: int = 16) -> BVH:
@@ -91,11 +93,13 @@ def build_bvh(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf_size: int
     triangle_count = boxes.shape[1]
     forced_split_above = max(FORCED_SPLIT_LEAF_SIZE, max_leaf_size)
 
+    # Morton order first: every later partition is stable, so each node keeps its triangles in this order, and an
+    # evenly spaced sample of them is spread over the node's whole surface.
+    morton = _morton_order(boxes)
     prim_order = np.empty(triangle_count, dtype=np.int32)
     level: _Level | None = _Level(
-        triangle_ids=np.arange(triangle_count, dtype=np.int32),
-        boxes=boxes,
-        centroids=0.5 * (boxes[:3] + boxes[3:]),
+        triangle_ids=morton,
+        boxes=_take_columns(boxes, morton),
         counts=np.array([triangle_count], dtype=np.int64),
         slot_offsets=np.zeros(1, dtype=np.int64),
     )
@@ -166,6 +170,29 @@ def _box_areas(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     return 2.0 * (x * y + y * z + z * x)
 
 
+def _morton_order(boxes: np.ndarray) -> np.ndarray:
+    """(M,) int32 order of the triangles along the Z-order curve through their box centres."""
+    centre = boxes[:3].astype(np.float64) + boxes[3:]
+    low = centre.min(axis=1, keepdims=True)
+    extent = centre.max(axis=1, keepdims=True) - low
+    cells = float(1 << MORTON_BITS)
+    with np.errstate(divide="ignore"):
+        scale = np.where(extent > 0.0, cells / extent, 0.0)
+    cell = np.minimum((centre - low) * scale, cells - 1.0).astype(np.uint64)
+    code = _spread_bits(cell[0]) << np.uint64(2)
+    code |= _spread_bits(cell[1]) << np.uint64(1)
+    code |= _spread_bits(cell[2])
+    return np.argsort(code, kind="stable").astype(np.int32)
+
+
+def _spread_bits(value: np.ndarray) -> np.ndarray:
+    """Each bit of a MORTON_BITS-bit integer moved to three times its position (two zero bits after each)."""
+    for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F)):
+        value = (value | (value << np.uint64(shift))) & np.uint64(mask)
+    value = (value | (value << np.uint64(4))) & np.uint64(0x10C30C30C30C30C3)
+    return (value | (value << np.uint64(2))) & np.uint64(0x1249249249249249)
+
+
 def _levels_to_leaf_by_halving(counts: np.ndarray, max_leaf_size: int) -> np.ndarray:
     """Levels of object-median splits needed until every piece holds <= max_leaf_size triangles."""
     pieces = -(-counts // max_leaf_size)
@@ -202,8 +229,6 @@ def _build_level(
     if split_nodes.size == 0:
         return nodes, None
 
-    if splits.use_median.any():
-        _sort_median_nodes_along_widest_axis(level, node_of_triangle, splits)
     goes_right = _triangle_sides(level, starts, node_of_triangle, splits, bins)
 
     first_child = first_node + node_count
@@ -221,24 +246,18 @@ def _choose_splits(
     forced_split_above: int,
     bins: int,
 ) -> _LevelSplits:
-    """Decide per node: leaf, SAH split, or object-median split (when binning cannot separate or depth runs out)."""
+    """Decide per node: leaf, SAH split, or a split at the middle (when binning cannot separate or depth runs out)."""
     counts = level.counts
-    centroid_low = np.stack([np.minimum.reduceat(row, starts) for row in level.centroids], axis=1)
-    centroid_high = np.stack([np.maximum.reduceat(row, starts) for row in level.centroids], axis=1)
-    bin_origin = centroid_low.astype(np.float64)
-    centroid_extent = centroid_high.astype(np.float64) - bin_origin
-    # Finite in float64 even for float32 denormal extents.
-    with np.errstate(divide="ignore"):
-        bin_scale = np.where(centroid_extent > 0.0, bins / centroid_extent, 0.0)
-
     may_split = counts > max_leaf_size
     plan = _SplitPlan(
         cost=np.full(counts.size, np.inf),
         axis=np.zeros(counts.size, dtype=np.int64),
         last_left_bin=np.zeros(counts.size, dtype=np.int64),
     )
+    bin_origin = np.zeros((counts.size, 3))
+    bin_scale = np.zeros((counts.size, 3))
     if may_split.any():
-        _binned_sah(level, may_split, bin_origin, bin_scale, bins, plan)
+        _binned_sah(level, starts, may_split, bin_origin, bin_scale, bins, plan)
 
     node_area = _box_areas(low.astype(np.float64), high.astype(np.float64))
     # 1 + cost / A(node) < count, written without dividing so flat nodes (area 0) never prefer splitting.
@@ -249,53 +268,59 @@ def _choose_splits(
     # only allowed while that bound has a level to spare.
     depth_exhausted = depth + _levels_to_leaf_by_halving(counts, max_leaf_size) >= MAX_DEPTH
     use_median = is_split & (~np.isfinite(plan.cost) | depth_exhausted)
-    return _LevelSplits(
-        is_split=is_split,
-        use_median=use_median,
-        plan=plan,
-        bin_origin=bin_origin,
-        bin_scale=bin_scale,
-        widest_axis=np.argmax(centroid_extent, axis=1),
-    )
+    return _LevelSplits(is_split=is_split, use_median=use_median, plan=plan, bin_origin=bin_origin, bin_scale=bin_scale)
 
 
 def _bin_of(values: np.ndarray, origin: np.ndarray, scale: np.ndarray, bins: int) -> np.ndarray:
-    """Bin index of each centroid coordinate; the one formula both binning and partitioning use."""
-    # Rounding is monotone, so (c - origin) <= extent and the product stays <= bins: the int32 cast is safe.
-    index = (np.subtract(values, origin, dtype=np.float64) * scale).astype(np.int32)
-    return np.minimum(index, bins - 1, out=index)
+    """Bin index of each centroid coordinate; the one formula both binning and partitioning use. A triangle left out
+    of a node's sample may lie outside the sample's centroid bounds: it goes to the first or the last bin."""
+    index = np.subtract(values, origin, dtype=np.float64)
+    index *= scale
+    np.clip(index, 0.0, bins - 1, out=index)
+    return index.astype(np.int32)
 
 
 def _binned_sah(
     level: _Level,
+    starts: np.ndarray,
     may_split: np.ndarray,
     bin_origin: np.ndarray,
     bin_scale: np.ndarray,
     bins: int,
     plan: _SplitPlan,
 ) -> None:
-    """Fill plan for the nodes in may_split, in chunks of nodes so the per-bin arrays stay small."""
+    """Fill plan, bin_origin and bin_scale for the nodes in may_split, from an evenly spaced sample of at most
+    SAMPLED_BINNING_TRIANGLES of each one's triangles, in chunks of nodes so the per-bin arrays stay small."""
     candidates = np.flatnonzero(may_split)
     counts = level.counts[candidates]
-    if candidates.size == level.counts.size:
-        centroids, boxes = level.centroids, level.boxes
+    sample_counts = np.minimum(counts, SAMPLED_BINNING_TRIANGLES)
+    sample_starts = np.cumsum(sample_counts) - sample_counts
+    if candidates.size == level.counts.size and np.array_equal(sample_counts, counts):
+        boxes = level.boxes
     else:
-        keep = np.flatnonzero(np.repeat(may_split, level.counts))
-        centroids, boxes = _take_columns(level.centroids, keep), _take_columns(level.boxes, keep)
-    ends = np.cumsum(counts)
+        node = np.repeat(np.arange(candidates.size), sample_counts)
+        rank = np.arange(int(sample_counts.sum())) - sample_starts[node]
+        boxes = _take_columns(level.boxes, starts[candidates][node] + rank * counts[node] // sample_counts[node])
+    # The partition recomputes these centres from the same float32 boxes by the same expression.
+    centroids = np.float32(0.5) * (boxes[:3] + boxes[3:])
+    centroid_low = np.stack([np.minimum.reduceat(row, sample_starts) for row in centroids], axis=1)
+    centroid_high = np.stack([np.maximum.reduceat(row, sample_starts) for row in centroids], axis=1)
+    origin = centroid_low.astype(np.float64)
+    extent = centroid_high.astype(np.float64) - origin
+    # Finite in float64 even for float32 denormal extents.
+    with np.errstate(divide="ignore"):
+        scale = np.where(extent > 0.0, bins / extent, 0.0)
+    bin_origin[candidates] = origin
+    bin_scale[candidates] = scale
+    ends = sample_starts + sample_counts
     nodes_per_chunk = max(1, _SAH_CHUNK_BIN_ENTRIES // bins)
     for chunk_begin in range(0, candidates.size, nodes_per_chunk):
         chunk = slice(chunk_begin, min(chunk_begin + nodes_per_chunk, candidates.size))
-        first = int(ends[chunk.start] - counts[chunk.start])
+        first = int(sample_starts[chunk.start])
         last = int(ends[chunk.stop - 1])
         nodes = candidates[chunk]
         cost, axis, last_left_bin = _best_binned_split(
-            centroids[:, first:last],
-            boxes[:, first:last],
-            counts[chunk],
-            bin_origin[nodes],
-            bin_scale[nodes],
-            bins,
+            centroids[:, first:last], boxes[:, first:last], sample_counts[chunk], origin[chunk], scale[chunk], bins
         )
         plan.cost[nodes] = cost
         plan.axis[nodes] = axis
@@ -387,18 +412,6 @@ def _emit_leaves(
     prim_order[slots] = level.triangle_ids[triangles]
 
 
-def _sort_median_nodes_along_widest_axis(level: _Level, node_of_triangle: np.ndarray, splits: _LevelSplits) -> None:
-    """Order the triangles of median-split nodes by centroid along the node's widest centroid axis, in place."""
-    triangles = np.flatnonzero(splits.use_median[node_of_triangle])
-    nodes = node_of_triangle[triangles]
-    coordinate = level.centroids[splits.widest_axis[nodes], triangles]
-    # Nodes occupy contiguous runs, so sorting by (node, coordinate) keeps each triangle inside its own run.
-    order = triangles[np.lexsort((coordinate, nodes))]
-    level.triangle_ids[triangles] = level.triangle_ids[order]
-    level.boxes[:, triangles] = _take_columns(level.boxes, order)
-    level.centroids[:, triangles] = _take_columns(level.centroids, order)
-
-
 def _triangle_sides(
     level: _Level, starts: np.ndarray, node_of_triangle: np.ndarray, splits: _LevelSplits, bins: int
 ) -> np.ndarray:
@@ -406,10 +419,12 @@ def _triangle_sides(
     counts, plan = level.counts, splits.plan
     triangle_count = node_of_triangle.size
     nodes = np.arange(counts.size)
-    # Per-node values spread with np.repeat, and the centroids read through a flat index: both much
-    # cheaper than fancy indexing with a per-triangle node id.
+    # Per-node values spread with np.repeat, and the box rows read through a flat index: both much cheaper than
+    # fancy indexing with a per-triangle node id.
     axis = np.repeat(plan.axis, counts)
-    coordinate = np.take(level.centroids.ravel(), axis * triangle_count + np.arange(triangle_count))
+    flat = level.boxes.ravel()
+    low_index = axis * triangle_count + np.arange(triangle_count)
+    coordinate = np.float32(0.5) * (np.take(flat, low_index) + np.take(flat, low_index + 3 * triangle_count))
     bin_index = _bin_of(
         coordinate,
         np.repeat(splits.bin_origin[nodes, plan.axis], counts),
@@ -462,7 +477,6 @@ def _partition(level: _Level, starts: np.ndarray, is_split: np.ndarray, goes_rig
     return _Level(
         triangle_ids=level.triangle_ids[source],
         boxes=_take_columns(level.boxes, source),
-        centroids=_take_columns(level.centroids, source),
         counts=child_counts,
         slot_offsets=child_offsets,
     )
