@@ -385,3 +385,30 @@ def test_bad_input_is_rejected():
         build_bvh(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
     with pytest.raises(ValueError):
         build_bvh(np.full((1, 3), np.nan), np.zeros((1, 3)), np.ones((1, 3)))
+
+
+def test_sampled_binning_keeps_the_tree_valid_and_good(monkeypatch):
+    """Nodes above the sample size bin an evenly spaced sample of their triangles: every triangle still lands in
+    exactly one leaf whose box holds it, and the tree still beats the median split by the same margin."""
+    rng = np.random.default_rng(3)
+    cluster_centres = rng.uniform(0.0, 20.0, (6, 1, 1, 3))
+    clusters = cluster_centres + rng.normal(0.0, 0.2, (6, 300, 3, 3))
+    sizes = [4, 10, 40, 80, 400, 1000]
+    clustered = np.concatenate([c[:n] for c, n in zip(clusters, sizes)] + [_soup(rng, 100, spread=20.0, size=0.5)])
+    monkeypatch.setattr(bvh_module, "SAMPLED_BINNING_TRIANGLES", 32)
+    bvh = build_bvh(*_corners(clustered))
+    assert_valid_bvh(bvh, clustered)
+    assert bvh.sah_cost < 0.8 * _naive_median_split_sah(clustered)
+
+
+@pytest.mark.parametrize("threads", [2, 3, 8])
+def test_threads_build_the_same_tree(monkeypatch, threads):
+    """Subtrees built on several threads, then joined level by level, give the single-thread tree bit for bit."""
+    monkeypatch.setattr(bvh_module, "PARALLEL_BUILD_TRIANGLES", 100)
+    triangles = _bumpy_sphere_and_torus(np.random.default_rng(5))
+    single = build_bvh(*_corners(triangles), threads=1)
+    shared = build_bvh(*_corners(triangles), threads=threads)
+    assert_valid_bvh(shared, triangles)
+    assert shared.depth == single.depth
+    np.testing.assert_array_equal(shared.nodes, single.nodes)
+    np.testing.assert_array_equal(shared.prim_order, single.prim_order)

@@ -17,6 +17,8 @@ count]. Node 0 is the root. Bounds are float32 rounded outward, so they contain 
 also those triangles' vertices rounded to the nearest float32.
 """
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from time import perf_counter
 
@@ -39,6 +41,8 @@ FORCED_SPLIT_LEAF_SIZE = 16
 SAMPLED_BINNING_TRIANGLES = 1024
 # Bits per axis of the Morton codes that order the triangles before the build (3 x 21 = 63 bits).
 MORTON_BITS = 21
+# Levels of at least this many triangles are shared out between threads, by subtree (module docstring).
+PARALLEL_BUILD_TRIANGLES = 65536
 # Nodes x bins evaluated per binning pass; bounds the temporary per-bin arrays to a few MB.
 _SAH_CHUNK_BIN_ENTRIES = 1 << 18
 
@@ -82,8 +86,16 @@ class _LevelSplits:
     bin_scale: np.ndarray  # (N, 3) float64 bins per unit length (0 on axes where all centroids coincide)
 
 
-def build_bvh(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf_size: int = 4, bins: int = 16) -> BVH:
-    """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units."""
+def build_bvh(
+    v0: np.ndarray,
+    v1: np.ndarray,
+    v2: np.ndarray,
+    max_leaf_size: int = 4,
+    bins: int = 16,
+    threads: int | None = None,
+) -> BVH:
+    """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units, on `threads`
+    threads (default: the CPUs this process may run on); the tree is the same for any number of threads."""
     start = perf_counter()
     if max_leaf_size < 1:
         raise ValueError(f"max_leaf_size must be >= 1, got {max_leaf_size}")
@@ -103,26 +115,91 @@ def build_bvh(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf_size: int
         counts=np.array([triangle_count], dtype=np.int64),
         slot_offsets=np.zeros(1, dtype=np.int64),
     )
-    level_nodes = []
-    first_node_of_level = 0
-    depth = -1
-    while level is not None:
-        depth += 1
-        if depth > MAX_DEPTH:  # the depth guard in _choose_splits makes this unreachable
-            raise RuntimeError(f"BVH build exceeded depth {MAX_DEPTH}")
-        nodes, level = _build_level(
-            level, depth, first_node_of_level, prim_order, max_leaf_size, forced_split_above, bins
-        )
-        level_nodes.append(nodes)
-        first_node_of_level += nodes.size
-    all_nodes = np.concatenate(level_nodes)
+    threads = _usable_cpus() if threads is None else max(1, threads)
+
+    def build_levels(top: _Level, top_depth: int, until_parallel: bool) -> tuple[list[np.ndarray], _Level | None]:
+        """Levels from `top` down, children numbered from 0 within each level (offset later): to the leaves, or
+        until a level is large enough and has a node for each thread."""
+        levels = []
+        current: _Level | None = top
+        while current is not None:
+            if (
+                until_parallel
+                and current.counts.size >= threads
+                and current.triangle_ids.size >= PARALLEL_BUILD_TRIANGLES
+            ):
+                break
+            depth = top_depth + len(levels)
+            if depth > MAX_DEPTH:  # the depth guard in _choose_splits makes this unreachable
+                raise RuntimeError(f"BVH build exceeded depth {MAX_DEPTH}")
+            nodes, current = _build_level(current, depth, prim_order, max_leaf_size, forced_split_above, bins)
+            levels.append(nodes)
+        return levels, current
+
+    top_levels, rest = build_levels(level, 0, until_parallel=threads > 1)
+    levels = [[nodes] for nodes in top_levels]  # each level as parts: one, or one per thread below the split
+    if rest is not None:
+        # Disjoint subtrees, in level order: each thread writes its own leaves' slots and its own nodes, and the
+        # levels are then joined in the same order, so the tree is the one a single thread builds.
+        with ThreadPoolExecutor(threads) as pool:
+            parts = list(
+                pool.map(lambda part: build_levels(part, len(top_levels), False)[0], _split_level(rest, threads))
+            )
+        empty = np.zeros(0, dtype=BVH_NODE_DTYPE)
+        levels += [[part[j] if j < len(part) else empty for part in parts] for j in range(max(map(len, parts)))]
+    _number_children(levels)
+    all_nodes = np.concatenate([part for parts in levels for part in parts])
     return BVH(
         nodes=all_nodes,
         prim_order=prim_order,
-        depth=depth,
+        depth=len(levels) - 1,
         sah_cost=sah_cost(all_nodes),
         build_seconds=perf_counter() - start,
     )
+
+
+def _usable_cpus() -> int:
+    """CPUs this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+def _split_level(level: _Level, parts: int) -> list[_Level]:
+    """The level's nodes cut into `parts` consecutive groups of about equal triangle counts (none empty)."""
+    ends = np.cumsum(level.counts)
+    total = int(ends[-1])
+    cuts = np.searchsorted(ends, total * np.arange(1, parts) / parts, side="left") + 1
+    cuts = np.unique(np.clip(cuts, 1, level.counts.size - 1)) if level.counts.size > 1 else np.zeros(0, np.int64)
+    groups = []
+    for first, last in zip(np.concatenate(([0], cuts)), np.concatenate((cuts, [level.counts.size]))):
+        begin = int(ends[first] - level.counts[first])
+        end = int(ends[last - 1])
+        groups.append(
+            _Level(
+                triangle_ids=level.triangle_ids[begin:end],
+                boxes=level.boxes[:, begin:end],
+                counts=level.counts[first:last],
+                slot_offsets=level.slot_offsets[first:last],
+            )
+        )
+    return groups
+
+
+def _number_children(levels: list[list[np.ndarray]]) -> None:
+    """Make the interior nodes' left_first (numbered from 0 within their part of the next level) global indices.
+    A level has either one part or as many as the next level, part k's children being in the next level's part k."""
+    start = 0
+    for depth, parts in enumerate(levels):
+        next_start = start + sum(part.size for part in parts)
+        if depth + 1 < len(levels):
+            following = levels[depth + 1]
+            offsets = [next_start]
+            if len(parts) == len(following):
+                offsets = list(next_start + np.cumsum([0] + [part.size for part in following[:-1]]))
+            for part, offset in zip(parts, offsets):
+                part["left_first"][part["count"] == 0] += offset
+        start = next_start
 
 
 def sah_cost(nodes: np.ndarray) -> float:
@@ -202,7 +279,6 @@ def _levels_to_leaf_by_halving(counts: np.ndarray, max_leaf_size: int) -> np.nda
 def _build_level(
     level: _Level,
     depth: int,
-    first_node: int,
     prim_order: np.ndarray,
     max_leaf_size: int,
     forced_split_above: int,
@@ -231,8 +307,8 @@ def _build_level(
 
     goes_right = _triangle_sides(level, starts, node_of_triangle, splits, bins)
 
-    first_child = first_node + node_count
-    nodes["left_first"][split_nodes] = first_child + 2 * np.arange(split_nodes.size)
+    # Numbered within the next level; _number_children makes them node indices.
+    nodes["left_first"][split_nodes] = 2 * np.arange(split_nodes.size)
     return nodes, _partition(level, starts, splits.is_split, goes_right)
 
 
