@@ -207,6 +207,26 @@ def rays_bench(
     _emit("rays", result, lambda: rays_tables(result), as_json)
 
 
+@bench_app.command("build")
+def build_bench(
+    triangles: TrianglesOption = 2_000_000,
+    mesh: Annotated[
+        list[Path] | None,
+        typer.Option(help="Mesh file(s) to build over instead (a folder: its .ply files), repeatable."),
+    ] = None,
+    rounds: Annotated[int, typer.Option(help="Alternating rounds of each; the best counts.", min=1)] = 2,
+    as_json: JsonOption = False,
+) -> None:
+    """BVH build time and memory on a large mesh, against Mitsuba 3 loading the same mesh where installed."""
+    from spectrace.benchmarks.build import build_tables, run_build_bench
+
+    for path in mesh or []:
+        if not path.exists():
+            raise SpectraceError("no such file or folder", where=str(path))
+    result = run_build_bench(triangles, list(mesh or []), rounds, log=_log)
+    _emit("build", result, lambda: build_tables(result), as_json)
+
+
 @bench_app.command("scaling")
 def scaling_bench(
     size: SizesOption = None,

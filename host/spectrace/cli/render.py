@@ -130,6 +130,13 @@ def render(
     console.print(
         f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False, markup=False
     )
+    buffers = renderer.buffers
+    peak = f", peak {buffers.bvh_peak_bytes / 2**20:.0f} MiB" if buffers.bvh_peak_bytes is not None else ""
+    console.print(
+        f"scene: {buffers.triangle_count} triangles, BVH built in {buffers.bvh_seconds:.2f} s{peak}",
+        highlight=False,
+        markup=False,
+    )
     identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
     with StopOnSignals() as stop:
         _render_passes(renderer, stop, state_file, checkpoint_interval, quiet, identity)

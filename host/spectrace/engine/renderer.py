@@ -185,5 +185,12 @@ class Renderer:
                 "width": scene.width,
                 "height": scene.height,
                 "sampler": scene.sampler,
+                "triangles": self.buffers.triangle_count,
+                "bvh_seconds": f"{self.buffers.bvh_seconds:.3f}",
+                **(
+                    {"bvh_peak_mib": f"{self.buffers.bvh_peak_bytes / 2**20:.1f}"}
+                    if self.buffers.bvh_peak_bytes is not None
+                    else {}
+                ),
             },
         )

@@ -109,12 +109,13 @@ def build_bvh(
     # evenly spaced sample of them is spread over the node's whole surface.
     morton = _morton_order(boxes)
     prim_order = np.empty(triangle_count, dtype=np.int32)
-    level: _Level | None = _Level(
+    root = _Level(
         triangle_ids=morton,
         boxes=_take_columns(boxes, morton),
         counts=np.array([triangle_count], dtype=np.int64),
         slot_offsets=np.zeros(1, dtype=np.int64),
     )
+    del boxes, morton  # the level holds them now, in Morton order; each level frees its parent's arrays
     threads = _usable_cpus() if threads is None else max(1, threads)
 
     def build_levels(top: _Level, top_depth: int, until_parallel: bool) -> tuple[list[np.ndarray], _Level | None]:
@@ -122,6 +123,7 @@ def build_bvh(
         until a level is large enough and has a node for each thread."""
         levels = []
         current: _Level | None = top
+        del top  # so that each level's arrays are freed once the next one is made
         while current is not None:
             if (
                 until_parallel
@@ -136,15 +138,17 @@ def build_bvh(
             levels.append(nodes)
         return levels, current
 
-    top_levels, rest = build_levels(level, 0, until_parallel=threads > 1)
+    holder = [root]
+    del root
+    top_levels, rest = build_levels(holder.pop(), 0, until_parallel=threads > 1)
     levels = [[nodes] for nodes in top_levels]  # each level as parts: one, or one per thread below the split
     if rest is not None:
         # Disjoint subtrees, in level order: each thread writes its own leaves' slots and its own nodes, and the
         # levels are then joined in the same order, so the tree is the one a single thread builds.
+        groups = _split_level(rest, threads)
+        del rest
         with ThreadPoolExecutor(threads) as pool:
-            parts = list(
-                pool.map(lambda part: build_levels(part, len(top_levels), False)[0], _split_level(rest, threads))
-            )
+            parts = list(pool.map(lambda part: build_levels(part, len(top_levels), False)[0], groups))
         empty = np.zeros(0, dtype=BVH_NODE_DTYPE)
         levels += [[part[j] if j < len(part) else empty for part in parts] for j in range(max(map(len, parts)))]
     _number_children(levels)

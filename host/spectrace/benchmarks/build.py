@@ -1,0 +1,200 @@
+"""`spectrace bench build`: the BVH build of a large mesh, against Mitsuba 3 loading the same mesh.
+
+spectrace's side is what a render pays before its first pass for geometry: the binary SAH build
+(spectrace.geometry.bvh) and the 4-wide node buffer with its leaf blocks (spectrace.geometry.bvh4), timed in wall
+and CPU seconds, with the most memory they allocated at once (tracemalloc, which numpy reports its arrays to).
+Mitsuba's side is its whole `load_dict` of the same triangles, written as binary PLY files (or the PLY files given):
+reading the files, merging the shapes and building its own BVH (Embree in the scalar variants). It runs in a child
+process, so its peak resident size is its own (reported above the child's size just before the load). The two
+alternate, round by round, so a shared machine's load falls on both; each side's best round is compared.
+"""
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+import tracemalloc
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from spectrace.benchmarks.rays import displaced_sphere, subdivisions_for
+from spectrace.geometry.bvh import build_bvh
+from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
+from spectrace.geometry.mesh import TriangleMesh
+
+MITSUBA_VARIANT = "scalar_rgb"
+
+# The child: load the PLY files as one scene, print seconds, CPU seconds, the resident peak before and after.
+_MITSUBA_CHILD = """
+import json, resource, sys, time
+import mitsuba as mi
+mi.set_variant(sys.argv[1])
+scene = {"type": "scene"}
+for i, name in enumerate(sys.argv[2:]):
+    scene[f"mesh{i}"] = {"type": "ply", "filename": name}
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+wall, cpu = time.perf_counter(), time.process_time()
+loaded = mi.load_dict(scene)
+wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+triangles = sum(shape.face_count() for shape in loaded.shapes())
+print(json.dumps({"seconds": wall, "cpu_seconds": cpu, "rss_before_kib": before, "rss_after_kib": after,
+                  "triangles": triangles, "version": mi.__version__}))
+"""
+
+
+def read_meshes(paths: list[Path]) -> tuple[TriangleMesh, list[Path]]:
+    """The triangles of every mesh file (a folder stands for the .ply files in it) as one mesh, and the files."""
+    import trimesh
+
+    files: list[Path] = []
+    for path in paths:
+        files += sorted(path.glob("*.ply")) if path.is_dir() else [path]
+    vertices, faces, offset = [], [], 0
+    for file in files:
+        mesh = trimesh.load(file, process=False, force="mesh")
+        vertices.append(np.asarray(mesh.vertices, np.float64))
+        faces.append(np.asarray(mesh.faces, np.int64) + offset)
+        offset += len(mesh.vertices)
+    return TriangleMesh(vertices=np.concatenate(vertices), faces=np.concatenate(faces)), files
+
+
+def spectrace_build(mesh: TriangleMesh) -> dict:
+    """The binary build and the 4-wide node buffer, as a render makes them; traced once more for the memory."""
+    v0, v1, v2 = mesh.triangles()
+
+    def work():
+        bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
+        ordered = np.zeros((len(v0), 3, 4), np.float32)
+        for corner, v in enumerate((v0, v1, v2)):
+            ordered[:, corner, :3] = v[bvh.prim_order]
+        return bvh, device_nodes(bvh, ordered.reshape(-1, 4))
+
+    wall, cpu = time.perf_counter(), time.process_time()
+    bvh, nodes = work()
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    tracemalloc.start()
+    try:
+        work()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return {
+        "seconds": wall,
+        "cpu_seconds": cpu,
+        "binary_build_seconds": bvh.build_seconds,
+        "peak_traced_bytes": int(peak),
+        "nodes": int(len(bvh.nodes)),
+        "depth": int(bvh.depth),
+        "sah_cost": bvh.sah_cost,
+        "node_buffer_bytes": int(nodes.nbytes),
+    }
+
+
+def mitsuba_load(files: list[Path], variant: str = MITSUBA_VARIANT) -> dict:
+    child = subprocess.run(
+        [sys.executable, "-c", _MITSUBA_CHILD, variant, *map(str, files)], capture_output=True, text=True
+    )
+    if child.returncode != 0:
+        raise RuntimeError(child.stderr.strip().splitlines()[-1] if child.stderr.strip() else "no output")
+    row = json.loads(child.stdout.strip().splitlines()[-1])
+    row["peak_rss_growth_bytes"] = max(0, row.pop("rss_after_kib") - row.pop("rss_before_kib")) * 1024
+    return row
+
+
+def run_build_bench(
+    triangles: int, meshes: list[Path], rounds: int, log: Callable[[str], None] = lambda text: None
+) -> dict:
+    with tempfile.TemporaryDirectory() as folder:
+        if meshes:
+            mesh, files = read_meshes(meshes)
+            source = f"{len(files)} mesh files"
+        else:
+            mesh = displaced_sphere(subdivisions_for(triangles))
+            files = [Path(folder) / "mesh.ply"]
+            _write_ply(mesh, files[0])
+            source = "displaced icosphere"
+        log(f"mesh: {source}, {len(mesh.faces)} triangles; {rounds} rounds of each")
+        result: dict[str, Any] = {
+            "triangles": int(len(mesh.faces)),
+            "source": source,
+            "spectrace": [],
+            "mitsuba": [],
+            "notes": [],
+        }
+        for round_index in range(rounds):
+            row = spectrace_build(mesh)
+            log(f"round {round_index + 1}: spectrace {row['seconds']:.2f} s ({row['cpu_seconds']:.2f} CPU s)")
+            result["spectrace"].append(row)
+            try:
+                import mitsuba  # noqa: F401  (only whether it is there; the child imports it)
+            except ImportError:
+                result["notes"].append("mitsuba is not installed (pip install 'spectrace[bench]'): no comparison")
+                continue
+            try:
+                peer = mitsuba_load(files)
+            except RuntimeError as error:
+                result["notes"].append(f"Mitsuba's load failed: {error}")
+                continue
+            log(f"round {round_index + 1}: Mitsuba {peer['seconds']:.2f} s ({peer['cpu_seconds']:.2f} CPU s)")
+            result["mitsuba"].append(peer)
+    best = min(result["spectrace"], key=lambda r: r["seconds"])
+    result["best"] = {"spectrace": best}
+    if result["mitsuba"]:
+        peer_best = min(result["mitsuba"], key=lambda r: r["seconds"])
+        result["best"]["mitsuba"] = peer_best
+        result["ratio_wall"] = best["seconds"] / peer_best["seconds"]
+        result["ratio_cpu"] = best["cpu_seconds"] / max(peer_best["cpu_seconds"], 1e-9)
+    return result
+
+
+def _write_ply(mesh: TriangleMesh, path: Path) -> None:
+    """Binary little-endian PLY: float32 vertices, int32 faces (what Mitsuba reads fastest)."""
+    vertices = np.asarray(mesh.vertices, "<f4")
+    faces = np.zeros(len(mesh.faces), np.dtype([("n", "u1"), ("v", "<i4", (3,))]))
+    faces["n"] = 3
+    faces["v"] = mesh.faces
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        f"element vertex {len(vertices)}\nproperty float x\nproperty float y\nproperty float z\n"
+        f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    with open(path, "wb") as out:
+        out.write(header.encode("ascii"))
+        out.write(vertices.tobytes())
+        out.write(faces.tobytes())
+
+
+def build_tables(result: dict) -> list:
+    from rich.table import Table
+
+    table = Table(title=f"BVH build vs Mitsuba 3 load ({MITSUBA_VARIANT}): {result['triangles']} triangles")
+    for column in ("", "wall s", "CPU s", "peak MiB", "SAH cost", "nodes", "node buffer MiB"):
+        table.add_column(column, justify="left" if not column else "right")
+    ours = result["best"]["spectrace"]
+    table.add_row(
+        "spectrace build + 4-wide nodes",
+        f"{ours['seconds']:.2f}",
+        f"{ours['cpu_seconds']:.2f}",
+        f"{ours['peak_traced_bytes'] / 2**20:.0f} (traced)",
+        f"{ours['sah_cost']:.1f}",
+        str(ours["nodes"]),
+        f"{ours['node_buffer_bytes'] / 2**20:.0f}",
+    )
+    peer = result["best"].get("mitsuba")
+    if peer:
+        table.add_row(
+            f"Mitsuba {peer['version']} load_dict (files, merge, BVH)",
+            f"{peer['seconds']:.2f}",
+            f"{peer['cpu_seconds']:.2f}",
+            f"{peer['peak_rss_growth_bytes'] / 2**20:.0f} (RSS growth)",
+            "",
+            "",
+            "",
+        )
+        table.add_row("ratio spectrace / Mitsuba", f"{result['ratio_wall']:.2f}x", f"{result['ratio_cpu']:.2f}x")
+    return [table]
