@@ -5,7 +5,8 @@ spectrace's side is what a render pays before its first pass for geometry: the b
 and CPU seconds, with the most memory they allocated at once (tracemalloc, which numpy reports its arrays to).
 Mitsuba's side is its whole `load_dict` of the same triangles, written as binary PLY files (or the PLY files given):
 reading the files, merging the shapes and building its own BVH (Embree in the scalar variants). It runs in a child
-process, so its peak resident size is its own (reported above the child's size just before the load). The two
+process, so its peak resident size is its own (reported above the child's resident size just before the load,
+where /proc tells it). The two
 alternate, round by round, so a shared machine's load falls on both; each side's best round is compared.
 """
 
@@ -36,7 +37,11 @@ mi.set_variant(sys.argv[1])
 scene = {"type": "scene"}
 for i, name in enumerate(sys.argv[2:]):
     scene[f"mesh{i}"] = {"type": "ply", "filename": name}
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+try:  # the resident size now (the import's peak may have been higher)
+    with open("/proc/self/status") as status:
+        before = next(int(line.split()[1]) for line in status if line.startswith("VmRSS:"))
+except OSError:
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 wall, cpu = time.perf_counter(), time.process_time()
 loaded = mi.load_dict(scene)
 wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
