@@ -70,12 +70,14 @@ class BVH:
 
 @dataclass
 class _Level:
-    """The triangles still to be split, grouped by node, with everything the binning reads."""
+    """The triangles still to be split, grouped by node, with everything the binning reads. The nodes are stored
+    in the order the last partition left them (every left child, then every right child), not in the tree's."""
 
     triangle_ids: np.ndarray  # (A,) int32
     boxes: np.ndarray  # (6, A) float32 rows: min x, y, z, max x, y, z (rounded outward)
     counts: np.ndarray  # (N,) int64 triangles per node, every one >= 1
     slot_offsets: np.ndarray  # (N,) int64 first prim_order slot of each node
+    tree_index: np.ndarray  # (N,) int64 each node's place in the tree's level (children of a node side by side)
 
 
 @dataclass
@@ -126,6 +128,7 @@ def build_bvh(
         boxes=_take_columns(boxes, morton),
         counts=np.array([triangle_count], dtype=np.int64),
         slot_offsets=np.zeros(1, dtype=np.int64),
+        tree_index=np.zeros(1, dtype=np.int64),
     )
     del boxes, morton  # the level holds them now, in Morton order; each level frees its parent's arrays
     threads = _usable_cpus() if threads is None else max(1, threads)
@@ -157,7 +160,7 @@ def build_bvh(
     if rest is not None:
         # Disjoint subtrees, in level order: each thread writes its own leaves' slots and its own nodes, and the
         # levels are then joined in the same order, so the tree is the one a single thread builds.
-        groups = _split_level(rest, threads)
+        groups = _split_level(_in_tree_order(rest), threads)
         del rest
         with ThreadPoolExecutor(threads) as pool:
             parts = list(pool.map(lambda part: build_levels(part, len(top_levels), False)[0], groups))
@@ -197,9 +200,26 @@ def _split_level(level: _Level, parts: int) -> list[_Level]:
                 boxes=level.boxes[:, begin:end],
                 counts=level.counts[first:last],
                 slot_offsets=level.slot_offsets[first:last],
+                tree_index=level.tree_index[first:last] - first,
             )
         )
     return groups
+
+
+def _in_tree_order(level: _Level) -> _Level:
+    """The level with its nodes (and their triangles) in the tree's order, so that consecutive nodes are
+    consecutive subtrees."""
+    order = np.argsort(level.tree_index)
+    counts = level.counts[order]
+    run_starts = (np.cumsum(level.counts) - level.counts)[order]
+    source = np.arange(int(counts.sum())) + np.repeat(run_starts - (np.cumsum(counts) - counts), counts)
+    return _Level(
+        triangle_ids=level.triangle_ids[source],
+        boxes=_take_columns(level.boxes, source),
+        counts=counts,
+        slot_offsets=level.slot_offsets[order],
+        tree_index=np.arange(counts.size),
+    )
 
 
 def _number_children(levels: list[list[np.ndarray]]) -> None:
@@ -306,26 +326,31 @@ def _build_level(
     starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
     node_of_triangle = np.repeat(np.arange(node_count, dtype=np.int32), counts)
 
-    nodes = np.zeros(node_count, dtype=BVH_NODE_DTYPE)
+    rows = np.zeros(node_count, dtype=BVH_NODE_DTYPE)  # in the level's order; `nodes` below in the tree's
     low = np.stack([np.minimum.reduceat(row, starts) for row in level.boxes[:3]], axis=1)
     high = np.stack([np.maximum.reduceat(row, starts) for row in level.boxes[3:]], axis=1)
-    nodes["bmin"] = low
-    nodes["bmax"] = high
+    rows["bmin"] = low
+    rows["bmax"] = high
 
     splits = _choose_splits(level, starts, low, high, depth, max_leaf_size, forced_split_above, bins)
 
     _emit_leaves(level, starts, node_of_triangle, ~splits.is_split, prim_order)
-    nodes["count"] = np.where(splits.is_split, 0, counts)
-    nodes["left_first"] = level.slot_offsets
+    rows["count"] = np.where(splits.is_split, 0, counts)
+    rows["left_first"] = level.slot_offsets
     split_nodes = np.flatnonzero(splits.is_split)
+    nodes = np.empty_like(rows)
+    nodes[level.tree_index] = rows
     if split_nodes.size == 0:
         return nodes, None
 
-    goes_right = _triangle_sides(level, starts, node_of_triangle, splits, bins)
+    goes_right, right_counts = _triangle_sides(level, starts, node_of_triangle, splits, bins)
 
-    # Numbered within the next level; _number_children makes them node indices.
-    nodes["left_first"][split_nodes] = 2 * np.arange(split_nodes.size)
-    return nodes, _partition(level, starts, splits.is_split, goes_right)
+    # Children side by side in the tree, numbered within the next level (_number_children makes them node
+    # indices), in the order of their parents there.
+    rank = np.empty(split_nodes.size, np.int64)
+    rank[np.argsort(level.tree_index[split_nodes])] = np.arange(split_nodes.size)
+    nodes["left_first"][level.tree_index[split_nodes]] = 2 * rank
+    return nodes, _partition(level, splits.is_split, goes_right, right_counts, 2 * rank)
 
 
 def _choose_splits(
@@ -506,8 +531,9 @@ def _emit_leaves(
 
 def _triangle_sides(
     level: _Level, starts: np.ndarray, node_of_triangle: np.ndarray, splits: _LevelSplits, bins: int
-) -> np.ndarray:
-    """True for each triangle that goes to the right child of its node (meaningless for leaves)."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """(goes_right, rights): for each triangle, whether it goes to the right child of its node (meaningless for
+    leaves), and how many go right in each node."""
     counts, plan = level.counts, splits.plan
     nodes = np.arange(counts.size)
     # A centroid c is in a bin after last_left_bin when (c - origin) * scale >= last_left_bin + 1, i.e. when c is
@@ -531,49 +557,31 @@ def _triangle_sides(
     median_triangles = np.flatnonzero(np.repeat(halve, counts))
     median_nodes = node_of_triangle[median_triangles]
     goes_right[median_triangles] = (median_triangles - starts[median_nodes]) >= counts[median_nodes] // 2
-    return goes_right
+    if halve.any():
+        rights[halve] = counts[halve] - counts[halve] // 2
+    return goes_right, rights
 
 
-def _partition(level: _Level, starts: np.ndarray, is_split: np.ndarray, goes_right: np.ndarray) -> _Level:
-    """Stable partition of the split nodes' triangles into (node, side) runs: the next level's input."""
-    counts = level.counts
-    # int32 throughout: these per-triangle arrays dominate the builder's peak memory.
-    rights_before = np.cumsum(goes_right, dtype=np.int32)
-    rights_before -= goes_right  # right-going triangles before each one, level-wide
-    right_counts = np.append(rights_before[starts[1:]], rights_before[-1] + goes_right[-1]) - rights_before[starts]
-    left_counts = counts - right_counts
+def _partition(
+    level: _Level, is_split: np.ndarray, goes_right: np.ndarray, right_counts: np.ndarray, left_tree_index: np.ndarray
+) -> _Level:
+    """The next level: the split nodes' triangles in one stable partition, every node's left-goers in node order,
+    then every node's right-goers, so the children come as all left children, then all right children.
+    left_tree_index: the place of each split node's left child in the next level of the tree."""
     split_nodes = np.flatnonzero(is_split)
-    child_counts = np.stack([left_counts[split_nodes], right_counts[split_nodes]], axis=1).ravel()
-    if not np.all(child_counts > 0):  # every split plane was chosen to leave triangles on both sides
+    right_counts = right_counts[split_nodes]
+    left_counts = level.counts[split_nodes] - right_counts
+    if not (np.all(left_counts > 0) and np.all(right_counts > 0)):  # every split leaves triangles on both sides
         raise RuntimeError("BVH build produced an empty child")
-    child_starts = np.concatenate(([0], np.cumsum(child_counts)[:-1]))
-
-    # Destination of each triangle in the next level, for every node (entries of leaves are dropped below):
-    # left child start + rank among the node's left-goers, or right child start + rank among its right-goers.
-    left_start = np.zeros(counts.size, dtype=np.int32)
-    right_start = np.zeros(counts.size, dtype=np.int32)
-    left_start[split_nodes] = child_starts[0::2]
-    right_start[split_nodes] = child_starts[1::2]
-    right_base = np.repeat(right_start - rights_before[starts], counts)
-    left_base = np.repeat((left_start - starts + rights_before[starts]).astype(np.int32), counts)
-    position = np.arange(goes_right.size, dtype=np.int32)
-    destination = np.where(goes_right, right_base + rights_before, left_base + position - rights_before)
-
-    if split_nodes.size < counts.size:
-        kept: np.ndarray = np.flatnonzero(np.repeat(is_split, counts))
-        destination = destination[kept]
-    else:
-        kept = position
-    source = np.empty(kept.size, dtype=np.int32)
-    source[destination] = kept
-
-    parent_offsets = level.slot_offsets[split_nodes]
-    child_offsets = np.stack([parent_offsets, parent_offsets + left_counts[split_nodes]], axis=1).ravel()
+    in_split = np.repeat(is_split, level.counts)
+    source = np.concatenate([np.flatnonzero(in_split & ~goes_right), np.flatnonzero(in_split & goes_right)])
+    parent_slots = level.slot_offsets[split_nodes]
     return _Level(
         triangle_ids=level.triangle_ids[source],
         boxes=_take_columns(level.boxes, source),
-        counts=child_counts,
-        slot_offsets=child_offsets,
+        counts=np.concatenate([left_counts, right_counts]),
+        slot_offsets=np.concatenate([parent_slots, parent_slots + left_counts]),
+        tree_index=np.concatenate([left_tree_index, left_tree_index + 1]),
     )
 
 
