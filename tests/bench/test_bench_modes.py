@@ -166,3 +166,25 @@ def test_the_quality_references_seed_stays_a_valid_seed_other_than_the_scenes():
         reference = offset_seed(seed, REFERENCE_SEED_OFFSET)
         assert seed_problem(reference) is None and reference != seed
     assert offset_seed(MAX_SEED, REFERENCE_SEED_OFFSET) == REFERENCE_SEED_OFFSET - 1  # 2^31 - 1 + k wraps to k - 1
+
+
+@pytest.fixture(scope="module")
+def build_mode() -> dict:
+    return _bench("build", "--triangles", "100", "--rounds", "1")["build"]
+
+
+def test_build_mode_reports_the_build_of_the_asked_mesh(build_mode):
+    assert build_mode["triangles"] == 320  # the smallest icosphere of at least 100 triangles: 20 * 4**2
+    ours = build_mode["best"]["spectrace"]
+    assert ours["seconds"] > 0 and ours["cpu_seconds"] > 0 and ours["peak_traced_bytes"] > 0
+    assert ours["nodes"] >= 2 * 320 // 16 - 1 and ours["sah_cost"] > 0  # leaves hold at most 16 triangles
+    assert ours["node_buffer_bytes"] > 0
+
+
+@pytest.mark.peer
+def test_build_mode_times_mitsuba_loading_the_same_mesh(build_mode):
+    pytest.importorskip("mitsuba", reason="the comparison needs `pip install spectrace[bench]`")
+    assert not build_mode["notes"], build_mode["notes"]
+    peer = build_mode["best"]["mitsuba"]
+    assert peer["triangles"] == build_mode["triangles"]  # it read the same triangles from the PLY written for it
+    assert peer["seconds"] > 0 and build_mode["ratio_wall"] > 0
