@@ -39,10 +39,11 @@ def pack_leaf_blocks(nodes4: np.ndarray, triangle_vertices: np.ndarray) -> tuple
 
     lane = np.arange(LANES)
     used = lane[None, :] < block_lanes[:, None]  # (B, lane)
-    triangle = np.where(used, block_first[:, None] + lane[None, :], 0)
-    coordinates = np.where(used[:, :, None, None], vertices[triangle], 0.0)  # (B, lane, vertex, axis)
+    coordinates = vertices[np.where(used, block_first[:, None] + lane[None, :], 0)]  # (B, lane, vertex, axis)
+    coordinates[~used] = 0.0  # the few unused lanes, in place: no second array of every block's corners
     blocks = np.zeros((block_count, LEAF_BLOCK_FLOAT4S, LANES), np.float32)
-    blocks[:, :9, :] = coordinates.transpose(0, 2, 3, 1).reshape(block_count, 9, LANES)
+    # Written through a (B, vertex, axis, lane) view of the first nine float4s: one strided copy, no temporary.
+    blocks[:, :9, :].reshape(block_count, 3, 3, LANES)[...] = coordinates.transpose(0, 2, 3, 1)
     meta = np.stack([block_first, block_lanes, more, np.zeros_like(more)], axis=1).astype(np.int32)
     blocks[:, 9, :] = meta.view(np.float32)
 
