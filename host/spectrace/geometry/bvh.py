@@ -19,9 +19,9 @@ What makes it fast on millions of triangles (docs/performance.md, "BVH build"):
   many of them (spread over the node's surface by the Morton order), then sends every triangle to the side of the
   chosen plane. On 2 M triangles this halves the binning work of the upper levels for an SAH cost within a few
   percent.
-- Once a level holds a node per thread, the subtrees below are built on threads (numpy's array loops run without
-  the GIL); each thread writes its own leaves' slots, and the levels are joined in order, so the tree is the one a
-  single thread builds.
+- With threads > 1, once a level holds a node per thread the subtrees below are built on threads (numpy's array
+  loops mostly run without the GIL); each thread writes its own leaves' slots, and the levels are joined in order,
+  so the tree is the one a single thread builds. Off by default: no gain was measurable here (see build_bvh).
 
 Layout (mirrors `BVHNode` in kernels/types.h): an interior node has count == 0 and its children at
 left_first and left_first + 1; a leaf has count > 0 triangles in slots prim_order[left_first : left_first +
@@ -29,7 +29,6 @@ count]. Node 0 is the root. Bounds are float32 rounded outward, so they contain 
 also those triangles' vertices rounded to the nearest float32.
 """
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from time import perf_counter
@@ -106,10 +105,11 @@ def build_bvh(
     v2: np.ndarray,
     max_leaf_size: int = 4,
     bins: int = 16,
-    threads: int | None = None,
+    threads: int = 1,
 ) -> BVH:
     """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units, on `threads`
-    threads (default: the CPUs this process may run on); the tree is the same for any number of threads."""
+    threads; the tree is the same for any number of threads. One by default: on a shared 2-core machine two
+    threads measured no faster (docs/performance.md, "BVH build"), and each costs a copy of the level it starts at."""
     start = perf_counter()
     if max_leaf_size < 1:
         raise ValueError(f"max_leaf_size must be >= 1, got {max_leaf_size}")
@@ -131,7 +131,7 @@ def build_bvh(
         tree_index=np.zeros(1, dtype=np.int64),
     )
     del boxes, morton  # the level holds them now, in Morton order; each level frees its parent's arrays
-    threads = _usable_cpus() if threads is None else max(1, threads)
+    threads = max(1, threads)
 
     def build_levels(top: _Level, top_depth: int, until_parallel: bool) -> tuple[list[np.ndarray], _Level | None]:
         """Levels from `top` down, children numbered from 0 within each level (offset later): to the leaves, or
@@ -175,13 +175,6 @@ def build_bvh(
         sah_cost=sah_cost(all_nodes),
         build_seconds=perf_counter() - start,
     )
-
-
-def _usable_cpus() -> int:
-    """CPUs this process may run on."""
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return max(1, os.cpu_count() or 1)
 
 
 def _split_level(level: _Level, parts: int) -> list[_Level]:
