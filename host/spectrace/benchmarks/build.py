@@ -4,10 +4,11 @@ spectrace's side is what a render pays, and reports, for its acceleration struct
 (spectrace.geometry.bvh) and the 4-wide node buffer with its leaf blocks (spectrace.geometry.bvh4), timed in wall
 and CPU seconds, with the most memory either allocated at once (tracemalloc, which numpy reports its arrays to).
 Mitsuba's side is its whole `load_dict` of the same triangles, written as binary PLY files (or the PLY files given):
-reading the files, merging the shapes and building its own BVH (Embree in the scalar variants). It runs in a child
-process, so its peak resident size is its own (reported above the child's resident size just before the load,
-where /proc tells it). The two
-alternate, round by round, so a shared machine's load falls on both; each side's best round is compared.
+reading the files, merging the shapes and building its own BVH (Embree in the scalar variants); or, given the
+Mitsuba scene file those PLY files come from, its `load_file` of the whole scene (materials, emitters, textures).
+It runs in a child process, so its peak resident size is its own (reported above the child's resident size just
+before the load, where /proc tells it). The two alternate, round by round, so a shared machine's load falls on
+both; each side's best round is compared.
 """
 
 import json
@@ -34,16 +35,20 @@ _MITSUBA_CHILD = """
 import json, resource, sys, time
 import mitsuba as mi
 mi.set_variant(sys.argv[1])
-scene = {"type": "scene"}
-for i, name in enumerate(sys.argv[2:]):
-    scene[f"mesh{i}"] = {"type": "ply", "filename": name}
+if sys.argv[2] == "--xml":  # the scene file itself: everything it declares is loaded too
+    load = lambda: mi.load_file(sys.argv[3])
+else:
+    scene = {"type": "scene"}
+    for i, name in enumerate(sys.argv[2:]):
+        scene[f"mesh{i}"] = {"type": "ply", "filename": name}
+    load = lambda: mi.load_dict(scene)
 try:  # the resident size now (the import's peak may have been higher)
     with open("/proc/self/status") as status:
         before = next(int(line.split()[1]) for line in status if line.startswith("VmRSS:"))
 except OSError:
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 wall, cpu = time.perf_counter(), time.process_time()
-loaded = mi.load_dict(scene)
+loaded = load()
 wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
 after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 triangles = sum(shape.face_count() for shape in loaded.shapes())
@@ -106,10 +111,10 @@ def spectrace_build(mesh: TriangleMesh) -> dict:
     }
 
 
-def mitsuba_load(files: list[Path], variant: str = MITSUBA_VARIANT) -> dict:
-    child = subprocess.run(
-        [sys.executable, "-c", _MITSUBA_CHILD, variant, *map(str, files)], capture_output=True, text=True
-    )
+def mitsuba_load(files: list[Path], scene_file: Path | None = None, variant: str = MITSUBA_VARIANT) -> dict:
+    """Mitsuba's load of the PLY files (load_dict), or of a whole scene file (load_file) when one is given."""
+    what = ["--xml", str(scene_file)] if scene_file is not None else [str(f) for f in files]
+    child = subprocess.run([sys.executable, "-c", _MITSUBA_CHILD, variant, *what], capture_output=True, text=True)
     if child.returncode != 0:
         raise RuntimeError(child.stderr.strip().splitlines()[-1] if child.stderr.strip() else "no output")
     row = json.loads(child.stdout.strip().splitlines()[-1])
@@ -118,8 +123,14 @@ def mitsuba_load(files: list[Path], variant: str = MITSUBA_VARIANT) -> dict:
 
 
 def run_build_bench(
-    triangles: int, meshes: list[Path], rounds: int, log: Callable[[str], None] = lambda text: None
+    triangles: int,
+    meshes: list[Path],
+    rounds: int,
+    log: Callable[[str], None] = lambda text: None,
+    mitsuba_scene: Path | None = None,
 ) -> dict:
+    """mitsuba_scene: a Mitsuba scene file that uses these meshes, loaded whole (materials, emitters and all)
+    instead of the meshes alone."""
     with tempfile.TemporaryDirectory() as folder:
         if meshes:
             mesh, files = read_meshes(meshes)
@@ -133,6 +144,7 @@ def run_build_bench(
         result: dict[str, Any] = {
             "triangles": int(len(mesh.faces)),
             "source": source,
+            "mitsuba_loads": str(mitsuba_scene) if mitsuba_scene is not None else "the mesh files (load_dict)",
             "spectrace": [],
             "mitsuba": [],
             "notes": [],
@@ -147,7 +159,7 @@ def run_build_bench(
                 result["notes"].append("mitsuba is not installed (pip install 'spectrace[bench]'): no comparison")
                 continue
             try:
-                peer = mitsuba_load(files)
+                peer = mitsuba_load(files, mitsuba_scene)
             except RuntimeError as error:
                 result["notes"].append(f"Mitsuba's load failed: {error}")
                 continue
@@ -199,7 +211,12 @@ def build_tables(result: dict) -> list:
     peer = result["best"].get("mitsuba")
     if peer:
         table.add_row(
-            f"Mitsuba {peer['version']} load_dict (files, merge, BVH)",
+            f"Mitsuba {peer['version']} "
+            + (
+                "load_file (whole scene)"
+                if result["mitsuba_loads"].endswith(".xml")
+                else "load_dict (files, merge, BVH)"
+            ),
             f"{peer['seconds']:.2f}",
             f"{peer['cpu_seconds']:.2f}",
             f"{peer['peak_rss_growth_bytes'] / 2**20:.0f} (RSS growth)",

@@ -215,15 +215,22 @@ def build_bench(
         typer.Option(help="Mesh file(s) to build over instead (a folder: its .ply files), repeatable."),
     ] = None,
     rounds: Annotated[int, typer.Option(help="Alternating rounds of each; the best counts.", min=1)] = 2,
+    mitsuba_scene: Annotated[
+        Path | None, typer.Option(help="Time Mitsuba loading this whole scene file (which uses the --mesh files).")
+    ] = None,
     as_json: JsonOption = False,
 ) -> None:
     """BVH build time and memory on a large mesh, against Mitsuba 3 loading the same mesh where installed."""
     from spectrace.benchmarks.build import build_tables, run_build_bench
 
-    for path in mesh or []:
+    for path in [*(mesh or []), *([mitsuba_scene] if mitsuba_scene else [])]:
         if not path.exists():
             raise SpectraceError("no such file or folder", where=str(path))
-    result = run_build_bench(triangles, list(mesh or []), rounds, log=_log)
+    if mitsuba_scene is not None and not mesh:
+        raise SpectraceError(
+            "needs the scene's meshes as --mesh, to build over the same triangles", where="--mitsuba-scene"
+        )
+    result = run_build_bench(triangles, list(mesh or []), rounds, log=_log, mitsuba_scene=mitsuba_scene)
     _emit("build", result, lambda: build_tables(result), as_json)
 
 
