@@ -5,7 +5,8 @@ calls (each triangle carries the id of its node), so the Python work per level i
 operations, whatever the number of nodes or triangles in it.
 
 Method: binned SAH over centroid bounds (Wald 2007, "On fast construction of SAH-based bounding volume
-hierarchies"; pbrt-v4, Sec. 7.3.2). Cost model: traversing a node costs 1, intersecting a triangle costs 1,
+hierarchies"; pbrt-v4, Sec. 7.3.2), 12 bins per axis by default as in pbrt-v4 (against 16: 10-17 % less build time
+on 1.3-2 M triangles for SAH costs 0.06-0.1 % higher). Cost model: traversing a node costs 1, intersecting a triangle costs 1,
 so a split of node N into L and R costs 1 + (A(L) |L| + A(R) |R|) / A(N) against |N| for a leaf. A node
 becomes a leaf when it holds <= max_leaf_size triangles or no split beats the leaf, except that nodes above
 FORCED_SPLIT_LEAF_SIZE are always split. Where binning cannot separate the centroids (all coincide), or where
@@ -104,7 +105,7 @@ def build_bvh(
     v1: np.ndarray,
     v2: np.ndarray,
     max_leaf_size: int = 4,
-    bins: int = 16,
+    bins: int = 12,
     threads: int = 1,
 ) -> BVH:
     """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units, on `threads`
