@@ -5,11 +5,11 @@ calls (each triangle carries the id of its node), so the Python work per level i
 operations, whatever the number of nodes or triangles in it.
 
 Method: binned SAH over centroid bounds (Wald 2007, "On fast construction of SAH-based bounding volume
-hierarchies"; pbrt-v4, Sec. 7.3.2), 12 bins per axis by default as in pbrt-v4 (against 16: 10-17 % less build time
-on 1.3-2 M triangles for SAH costs 0.06-0.1 % higher). Cost model: traversing a node costs 1, intersecting a triangle costs 1,
-so a split of node N into L and R costs 1 + (A(L) |L| + A(R) |R|) / A(N) against |N| for a leaf. A node
-becomes a leaf when it holds <= max_leaf_size triangles or no split beats the leaf, except that nodes above
-FORCED_SPLIT_LEAF_SIZE are always split. Where binning cannot separate the centroids (all coincide), or where
+hierarchies"; pbrt-v4, Sec. 7.3.2), 12 bins per axis by default as in pbrt-v4 (against 16: 10-17 % less build
+time on 1.3-2 M triangles for SAH costs 0.06-0.1 % higher). Cost model: traversing a node costs 1, intersecting a
+triangle costs 1, so a split of node N into L and R costs 1 + (A(L) |L| + A(R) |R|) / A(N) against |N| for a
+leaf. A node becomes a leaf when it holds <= max_leaf_size triangles or no split beats the leaf, except that nodes
+above FORCED_SPLIT_LEAF_SIZE are always split. Where binning cannot separate the centroids (all coincide), or where
 the depth left before MAX_DEPTH runs short, the node is split at the middle of its triangles in Morton order.
 
 What makes it fast on millions of triangles (docs/performance.md, "BVH build"):
