@@ -91,7 +91,7 @@ class _SplitPlan:
 
 @dataclass
 class _LevelSplits:
-    """What happens to each node of a level, and the binning that the partition must repeat exactly."""
+    """What happens to each node of a level, and the binning from which the partition finds each plane."""
 
     is_split: np.ndarray  # (N,) bool: interior node (else leaf)
     use_median: np.ndarray  # (N,) bool: split at the middle of the node's triangles instead of the SAH plane
@@ -383,8 +383,8 @@ def _choose_splits(
 
 
 def _bin_of(values: np.ndarray, origin: np.ndarray, scale: np.ndarray, bins: int) -> np.ndarray:
-    """Bin index of each centroid coordinate; the one formula both binning and partitioning use. A triangle left out
-    of a node's sample may lie outside the sample's centroid bounds: it goes to the first or the last bin."""
+    """Bin index of each centroid coordinate (the partition's planes are its bin boundaries). A triangle left out of
+    a node's sample may lie outside the sample's centroid bounds: it goes to the first or the last bin."""
     index = np.subtract(values, origin, dtype=np.float64)
     index *= scale
     np.clip(index, 0.0, bins - 1, out=index)
