@@ -26,11 +26,11 @@ import numpy as np
 from spectrace.benchmarks.rays import displaced_sphere, subdivisions_for
 from spectrace.geometry.bvh import build_bvh
 from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
-from spectrace.geometry.mesh import TriangleMesh
+from spectrace.geometry.mesh import TriangleMesh, load_mesh
 
 MITSUBA_VARIANT = "scalar_rgb"
 
-# The child: load the PLY files as one scene, print seconds, CPU seconds, the resident peak before and after.
+# The child: load the PLY files as one scene (or the scene file); print seconds, CPU seconds, memory.
 _MITSUBA_CHILD = """
 import json, resource, sys, time
 import mitsuba as mi
@@ -42,31 +42,39 @@ else:
     for i, name in enumerate(sys.argv[2:]):
         scene[f"mesh{i}"] = {"type": "ply", "filename": name}
     load = lambda: mi.load_dict(scene)
-try:  # the resident size now (the import's peak may have been higher)
-    with open("/proc/self/status") as status:
-        before = next(int(line.split()[1]) for line in status if line.startswith("VmRSS:"))
-except OSError:
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+def resident_kib():
+    try:
+        with open("/proc/self/status") as status:
+            return next(int(line.split()[1]) for line in status if line.startswith("VmRSS:"))
+    except OSError:
+        return None
+peak_before, now_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, resident_kib()
 wall, cpu = time.perf_counter(), time.process_time()
 loaded = load()
 wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+peak_after, now_after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, resident_kib()
+# The load's peak above the size before it, where the load set a new peak (else the import's peak hides it, and
+# what stays resident is the lower bound reported).
+if now_before is None:
+    growth = peak_after - peak_before
+else:
+    growth = peak_after - now_before if peak_after > peak_before else now_after - now_before
 triangles = sum(shape.face_count() for shape in loaded.shapes())
-print(json.dumps({"seconds": wall, "cpu_seconds": cpu, "rss_before_kib": before, "rss_after_kib": after,
+print(json.dumps({"seconds": wall, "cpu_seconds": cpu, "peak_rss_growth_bytes": max(0, growth) * 1024,
                   "triangles": triangles, "version": mi.__version__}))
 """
 
 
 def read_meshes(paths: list[Path]) -> tuple[TriangleMesh, list[Path]]:
     """The triangles of every mesh file (a folder stands for the .ply files in it) as one mesh, and the files."""
-    import trimesh
-
     files: list[Path] = []
     for path in paths:
         files += sorted(path.glob("*.ply")) if path.is_dir() else [path]
-    vertices, faces, offset = [], [], 0
+    vertices: list[np.ndarray] = []
+    faces: list[np.ndarray] = []
+    offset = 0
     for file in files:
-        mesh = trimesh.load(file, process=False, force="mesh")
+        mesh = load_mesh(file, where=str(file))  # as a scene's mesh is read
         vertices.append(np.asarray(mesh.vertices, np.float64))
         faces.append(np.asarray(mesh.faces, np.int64) + offset)
         offset += len(mesh.vertices)
@@ -118,7 +126,6 @@ def mitsuba_load(files: list[Path], scene_file: Path | None = None, variant: str
     if child.returncode != 0:
         raise RuntimeError(child.stderr.strip().splitlines()[-1] if child.stderr.strip() else "no output")
     row = json.loads(child.stdout.strip().splitlines()[-1])
-    row["peak_rss_growth_bytes"] = max(0, row.pop("rss_after_kib") - row.pop("rss_before_kib")) * 1024
     return row
 
 

@@ -137,7 +137,7 @@ def build_bvh(
     def build_levels(top: _Level, top_depth: int, until_parallel: bool) -> tuple[list[np.ndarray], _Level | None]:
         """Levels from `top` down, children numbered from 0 within each level (offset later): to the leaves, or
         until a level is large enough and has a node for each thread."""
-        levels = []
+        levels: list[np.ndarray] = []
         current: _Level | None = top
         del top  # so that each level's arrays are freed once the next one is made
         while current is not None:
