@@ -195,7 +195,7 @@ def _run(command: str, argv: list[str]) -> tuple[int, str]:
     messages = [
         line
         for line in text.splitlines()
-        if line.strip() and not line.startswith(("device: ", "resumed ", "warning: ", "wrote "))
+        if line.strip() and not line.startswith(("device: ", "scene: ", "resumed ", "warning: ", "wrote "))
     ]
     errors = [line for line in messages if line.startswith("error: ")]
     if status == 2:

@@ -633,7 +633,7 @@ def test_bad_input_is_one_line_naming_file_and_key(case, tmp_path, monkeypatch, 
     monkeypatch.setattr(importlib.import_module("spectrace.engine.wavefront"), "make_renderer", _no_device)
     status, stderr = _run_in_process(monkeypatch, capsys, argv)
     assert status == 2, stderr
-    lines = [line for line in stderr.splitlines() if line.strip() and not line.startswith("device: ")]
+    lines = [line for line in stderr.splitlines() if line.strip() and not line.startswith(("device: ", "scene: "))]
     assert len(lines) == 1, stderr
     message = lines[0]
     assert "Traceback" not in stderr

@@ -319,7 +319,7 @@ def test_a_full_disk_is_one_line_and_the_old_image_survives(suffix, tmp_path, mo
     out.write_bytes(b"the previous image")
     _fill_the_disk_in(monkeypatch, suffix)
     status, stderr = _render_cli(monkeypatch, capsys, "-o", str(out), "--checkpoint", str(state))
-    errors = [line for line in stderr.splitlines() if not line.startswith("device: ")]
+    errors = [line for line in stderr.splitlines() if not line.startswith(("device: ", "scene: "))]
     assert status == 2 and "Traceback" not in stderr, stderr
     assert errors == [
         f"error: {out}: cannot write the image ({_ENOSPC}); the render's state is in {state} (continue with --resume)"
@@ -333,7 +333,7 @@ def test_a_full_disk_for_the_false_colour_map_is_one_line(tmp_path, monkeypatch,
     figure.write_bytes(b"the previous map")
     _fill_the_disk_in(monkeypatch, "figure")
     status, stderr = _render_cli(monkeypatch, capsys, "-o", str(out), "--false-color", str(figure))
-    errors = [line for line in stderr.splitlines() if not line.startswith("device: ")]
+    errors = [line for line in stderr.splitlines() if not line.startswith(("device: ", "scene: "))]
     assert status == 2 and errors == [f"error: {figure}: cannot write the figure ({_ENOSPC})"], stderr
     assert figure.read_bytes() == b"the previous map" and out.is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["map.png", "out.png"]
