@@ -74,7 +74,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
         tmp_path,
         """
         <bsdf type="thindielectric" id="metal"/>
-        <shape type="serialized"><string name="filename" value="x.serialized"/></shape>
+        <shape type="bsplinecurve"><string name="filename" value="x.txt"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
         <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""",
     )
@@ -82,7 +82,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
         mitsuba_scene_data(path)
     message = str(error.value)
     for named in (
-        "shape 'serialized' (line 6)",
+        "shape 'bsplinecurve' (line 6)",
         "bsdf 'thindielectric' (not yet in spectrace) (line 5)",
         "emitter 'envmap' (line 8)",
     ):

@@ -12,7 +12,8 @@ material's or light's parameter table marks the parameter `textured` (`checked_t
 becomes textured there imports textures without a change here. Mitsuba's rectangle and PLY texture coordinates run
 v up where spectrace's run down: textures on those shapes are imported with v flipped, as a material of their own.
 
-Imported here: shapes obj, ply, rectangle, cube, sphere (center, radius; face_normals on obj, ply and sphere);
+Imported here: shapes obj, ply, serialized (shape_index), rectangle, cube, sphere (center, radius; face_normals on
+obj, ply, serialized and sphere);
 twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
@@ -67,7 +68,7 @@ TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
 SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 SUPPORTED = {
-    "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
+    "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),
@@ -138,7 +139,7 @@ _SPECTRUM_PLUGINS = ("uniform", "irregular", "regular", "blackbody", "d65", "srg
 # Shapes whose Mitsuba texture coordinates run v up the image where spectrace's (for the same surface) run down:
 # Mitsuba's rectangle has v = 0 at y = -1, spectrace's at y = +1; Mitsuba reads a PLY's v as stored, spectrace
 # flips it (as both do an OBJ's vt). Textures on them are imported with v flipped.
-_V_UP_SHAPES = ("rectangle", "ply")
+_V_UP_SHAPES = ("rectangle", "ply", "serialized")
 
 
 @dataclass
@@ -951,9 +952,11 @@ class MitsubaImporter:
         name = element.get("id") or element.get("name") or f"{kind}{index}"
         table: dict = {"name": name}
         steps: list[dict] = []
-        if kind in ("obj", "ply"):
+        if kind in ("obj", "ply", "serialized"):
             filename = self.child(properties, "filename", element)
             table |= {"type": "mesh", "file": self.input_file(filename, "mesh file")}
+            if kind == "serialized" and "shape_index" in properties:
+                table["shape_index"] = self.integer(properties["shape_index"], low=0)
         else:
             table["type"] = kind
         if kind == "sphere":
@@ -971,7 +974,7 @@ class MitsubaImporter:
             steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring the flat square reverses its winding
         if steps:
             table["transform"] = steps
-        if kind in ("obj", "ply", "sphere"):
+        if kind in ("obj", "ply", "serialized", "sphere"):
             face_normals = self.boolean(properties["face_normals"]) if "face_normals" in properties else False
             # Mitsuba 3 shades its meshes smoothly, computing vertex normals when the file has none, unless
             # face_normals is set; spectrace makes none up unless asked (face_normals = false) and shades the sphere

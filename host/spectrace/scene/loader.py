@@ -310,7 +310,7 @@ class _Resolver:
             key = f"shapes[{i}]"
             if s.type == "mesh":
                 assert s.file is not None  # the schema wants a file for a mesh
-                mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"))
+                mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"), shape_index=s.shape_index or 0)
             else:
                 mesh = primitives.BUILTIN_SHAPES[s.type]()
             if s.transform:

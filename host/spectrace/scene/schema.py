@@ -390,6 +390,7 @@ class InteriorSpec(Strict):
 class ShapeSpec(Strict):
     type: Literal["mesh", "rectangle", "cube", "sphere", "prism", "teapot"]
     file: str | None = None
+    shape_index: Annotated[int, Field(ge=0, strict=True)] | None = None  # which mesh of a .serialized file
     material: str | None = None
     emitter: EmitterSpec | None = None
     interior: InteriorSpec | None = None
@@ -405,6 +406,8 @@ class ShapeSpec(Strict):
             raise ValueError("a mesh shape needs file")
         if self.type != "mesh" and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
+        if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):
+            raise ValueError("shape_index picks a mesh of a Mitsuba .serialized file; this shape has none")
         if self.material is None and self.interior is None:
             raise ValueError("a shape needs material (only a shape with an interior may omit it)")
         if self.type == "rectangle" and self.interior is not None:
