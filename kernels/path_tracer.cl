@@ -88,7 +88,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
         float4 emitted = vertex_emission(scene, w, &v, hit);
         float weight = 1.0f;
         if (!s->previous_delta) {
-            float pdf_light = area_light_pdf(light, distance(s->previous_point, v.p), fabs(dot(v.n, v.wo)));
+            float pdf_light = emitter_hit_pdf(light, scene->shapes, s->previous_point, v.p, v.n, v.wo, hit.b12);
             weight = power_heuristic(s->previous_pdf, pdf_light);
         }
         *radiance += s->throughput * emitted * weight;

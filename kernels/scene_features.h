@@ -43,6 +43,11 @@
 #define SCENE_HAS_OPACITY 1
 #endif
 
+/* Analytic spheres, disks and cylinders (kernels/shapes.cl), tested beside the triangles' BVH. */
+#ifndef SCENE_HAS_SHAPES
+#define SCENE_HAS_SHAPES 1
+#endif
+
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 #define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
 #define SCENE_HAS_ENVIRONMENT (SCENE_USES_LIGHT(LIGHT_ENVIRONMENT) || SCENE_USES_LIGHT(LIGHT_ENVIRONMENT_MAP))

@@ -46,6 +46,19 @@ typedef struct {
                        when it shades with its geometric normal (flat) */
 } TriangleInfo;
 
+/* An analytic shape (kernels/shapes.cl): a sphere, disk or cylinder in its object space (Mitsuba 3's: the unit sphere
+ * at the origin; the unit disk in the plane z = 0 facing +z; the cylinder of radius 1 along z from 0 to 1, open),
+ * placed by an affine map. Its hits are slots triangle_count + index of the TriangleInfo array. */
+typedef struct {
+    float4 to_world[3];   /* rows of the object-to-world map: world coordinate i = dot(to_world[i], (p, 1)) */
+    float4 to_object[3];  /* rows of its inverse */
+    float4 sphere;        /* SHAPE_SPHERE: world centre (xyz) and radius (w), scene units (to_world is a similarity) */
+    int type;             /* SHAPE_* */
+    float abs_det;        /* |det| of to_world's linear part: world area = object area · abs_det · |M⁻ᵀ n_object| */
+    float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder) */
+    int pad0;
+} AnalyticShape;
+
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already
  * multiplied by the scene's `scale`, in 1/scene unit. */
 typedef struct {
@@ -109,15 +122,16 @@ typedef struct {
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
  * type (listed with LIGHT_TYPES in spectrace.engine.device_types). */
 typedef struct {
-    float4 position;       /* point, spot */
+    float4 position;       /* point, spot; LIGHT_SPHERE: centre (xyz) and radius (w) */
     float4 direction;      /* spot: unit axis; distant: unit direction the light travels */
     int type;              /* LIGHT_* */
-    int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays */
+    int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays; LIGHT_SPHERE, LIGHT_SHAPE: index of its
+                              AnalyticShape */
     int spectrum_offset;
     float scale;
     float pmf;             /* probability that next-event estimation picks this light */
-    float area;            /* LIGHT_TRIANGLE: m² */
-    int two_sided;         /* LIGHT_TRIANGLE */
+    float area;            /* LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_SHAPE: m² */
+    int two_sided;         /* LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_SHAPE */
     float cos_falloff_start;  /* LIGHT_SPOT: full intensity inside this cone */
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
@@ -147,7 +161,7 @@ typedef struct {
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
-    int pad1;
+    int shape_count;         /* analytic shapes (AnalyticShape rows) */
 } RenderParams;
 
 typedef struct {

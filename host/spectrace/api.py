@@ -20,6 +20,7 @@ from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
+from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
 from spectrace.geometry.mesh import TriangleMesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
@@ -156,22 +157,28 @@ def _is_zero(source: SpectrumLike) -> bool:
 
 
 def shape(
-    geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism", "teapot"] | trimesh.Trimesh,
+    geometry: TriangleMesh
+    | Literal["rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot"]
+    | trimesh.Trimesh,
     material=None,
     emitter: AreaEmitter | None = None,
     transform: Iterable[Mapping[str, Any]] = (),
     name: str = "",
     interior: Medium | None = None,
     face_normals: bool | None = None,
+    tessellated: bool = False,
 ) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
     "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the
-    Utah teapot standing on the origin, y up, body radius 1), moved by
+    Utah teapot standing on the origin, y up, body radius 1; "disk" of radius 1 at z = 0 facing +z, "cylinder" of
+    radius 1 along z from 0 to 1, open), moved by
     `transform` steps (see `transformed`). Built-ins face outward, as a dielectric needs. `interior` (see `medium`)
     fills a closed shape, whose faces must wind outward; without a material its boundary is index-matched (rays
     cross it unchanged). `face_normals` as the scene key: True shades with the face normals (facets), False
     smoothly (normals computed for a mesh without its own), None keeps the mesh's own normals (the sphere's are
-    radial, the teapot's its surface's; the other built-ins have none)."""
+    radial, the teapot's its surface's; the other built-ins have none). "sphere", "disk" and "cylinder" are exact
+    (analytic) surfaces, unless `tessellated` (or face_normals=True, which asks for facets) makes them triangles; an
+    analytic sphere's transform must scale uniformly."""
     if material is None and interior is None:
         raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
     if interior is not None and not isinstance(interior, Medium):
@@ -180,6 +187,25 @@ def shape(
         )
     if face_normals is not None and not isinstance(face_normals, bool):
         raise SpectraceError(f"face_normals must be True, False or None, got {face_normals!r}", where="face_normals")
+    if isinstance(geometry, str) and geometry in ANALYTIC_SHAPES:
+        if interior is not None and geometry != "sphere":
+            raise SpectraceError(f"a {geometry} encloses no volume: an interior needs a closed shape", where="interior")
+        steps = [dict(step) for step in transform]
+        matrix = transform_matrix(steps, where="transform") if steps else np.eye(4)
+        if not (tessellated or face_normals):
+            if geometry == "sphere" and (problem := similarity_problem(matrix)):
+                raise SpectraceError(f"{problem}; tessellated=True takes any", where="transform")
+            surface = AnalyticSurface(geometry, matrix)
+            return Shape(
+                mesh=surface.tessellation(),
+                material=material,
+                emitter=emitter,
+                name=name or geometry,
+                interior=interior,
+                analytic=surface,
+            )
+        mesh = shading_normals(apply_transform(object_tessellation(geometry), matrix), face_normals, computed=False)
+        return Shape(mesh=mesh, material=material, emitter=emitter, name=name or geometry, interior=interior)
     if isinstance(geometry, str):
         if geometry not in primitives.BUILTIN_SHAPES:
             raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(primitives.BUILTIN_SHAPES)})")

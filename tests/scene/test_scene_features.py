@@ -20,7 +20,16 @@ from spectrace.scene.model import EnvironmentMap
 # The type codes (materials: their order in spectrace.materials.MATERIALS), written out here so the test does not
 # read them from the code under test.
 MATERIAL_BITS = {"diffuse": 1, "conductor": 2, "mirror": 4, "plastic": 8, "dielectric": 16, "retroreflector": 32}
-LIGHT_BITS = {"area": 1, "point": 2, "spot": 4, "distant": 8, "environment": 16, "environment_map": 32}
+LIGHT_BITS = {
+    "area": 1,
+    "point": 2,
+    "spot": 4,
+    "distant": 8,
+    "environment": 16,
+    "environment_map": 32,
+    "sphere": 64,
+    "shape": 128,
+}
 
 
 def _bundled(name: str) -> spectrace.Scene:
@@ -52,9 +61,13 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
+        "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_OPACITY": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
+    analytic = scene_feature_defines(build_scene_buffers(_analytic_shapes_scene()))
+    assert analytic["SCENE_HAS_SHAPES"] == 1
+    assert analytic["SCENE_LIGHT_TYPES"] == LIGHT_BITS["sphere"] | LIGHT_BITS["shape"]
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
     assert lights["SCENE_HAS_TEXTURES"] == 0
@@ -156,6 +169,37 @@ def _surface_detail_scene(cut_out: bool = True) -> spectrace.Scene:
     )
 
 
+def _analytic_shapes_scene() -> spectrace.Scene:
+    """An analytic sphere light and a disk light over a bump-mapped disk floor, a glass sphere and a textured
+    cylinder."""
+    rng = np.random.default_rng(8)
+    floor = spectrace.shape(
+        "disk", spectrace.plastic(0.5, bump_map=spectrace.bitmap(rng.uniform(0, 1, (4, 4)))), transform=[{"scale": 3}]
+    )
+    glass = spectrace.shape("sphere", spectrace.dielectric(1.5), transform=[{"scale": 0.4}, {"translate": [0, 0, 0.4]}])
+    can = spectrace.shape(
+        "cylinder",
+        spectrace.diffuse(spectrace.bitmap(rng.uniform(0, 1, (4, 4, 3)))),
+        transform=[{"scale": [0.3, 0.5, 0.8]}, {"translate": [0.8, 0.2, 0]}],
+    )
+    bulb = spectrace.shape(
+        "sphere", spectrace.diffuse(0.0), emitter=spectrace.area_emitter(20.0), transform=[{"translate": [0, 0, 8]}]
+    )
+    panel = spectrace.shape(
+        "disk",
+        spectrace.diffuse(0.0),
+        emitter=spectrace.area_emitter(3.0),
+        transform=[{"scale": [0.5, 0.3, 1]}, {"rotate": {"axis": [0, 1, 0], "angle": -120}}, {"translate": [2, 0, 1]}],
+    )
+    return spectrace.Scene(
+        camera=spectrace.Camera(origin=(0.0, -3.0, 2.0), target=(0.0, 0.0, 0.3)),
+        shapes=[floor, glass, can, bulb, panel],
+        width=16,
+        height=16,
+        spp=4,
+    )
+
+
 def _textured_scene(filters: tuple[str, ...]) -> spectrace.Scene:
     """Rectangles textured with random colours, one per filter, in the environment map's light."""
     rng = np.random.default_rng(6)
@@ -184,6 +228,7 @@ SCENES = {
     # bilinear lookup reads it.
     "nearest_and_bilinear_textures": lambda: _textured_scene(("nearest", "bilinear")),
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
+    "analytic_shapes": _analytic_shapes_scene,
 }
 
 

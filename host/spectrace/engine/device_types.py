@@ -117,14 +117,40 @@ TEXTURE_DTYPE = _struct(
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
-LIGHT_TYPES = ("triangle", "point", "spot", "distant", "environment", "environment_map")
-LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP = range(
-    len(LIGHT_TYPES)
-)
+LIGHT_TYPES = ("triangle", "point", "spot", "distant", "environment", "environment_map", "sphere", "shape")
+(
+    LIGHT_TRIANGLE,
+    LIGHT_POINT,
+    LIGHT_SPOT,
+    LIGHT_DISTANT,
+    LIGHT_ENVIRONMENT,
+    LIGHT_ENVIRONMENT_MAP,
+    LIGHT_SPHERE,
+    LIGHT_SHAPE,
+) = range(len(LIGHT_TYPES))
 # LIGHT_TRIANGLE: an emitting triangle of an area light, radiance W/(m² sr nm); LIGHT_POINT: isotropic, intensity
 # W/(sr nm); LIGHT_SPOT: intensity on the axis W/(sr nm), smooth falloff to the cutoff; LIGHT_DISTANT: irradiance
 # on a surface facing it, W/(m² nm); LIGHT_ENVIRONMENT: uniform at infinity, radiance W/(m² sr nm);
-# LIGHT_ENVIRONMENT_MAP: a latitude-longitude RGB image, scaled, W/(m² sr nm).
+# LIGHT_ENVIRONMENT_MAP: a latitude-longitude RGB image, scaled, W/(m² sr nm); LIGHT_SPHERE: an emitting analytic
+# sphere, sampled by the solid angle it subtends, and LIGHT_SHAPE: an emitting analytic disk or cylinder, sampled by
+# area, both radiance W/(m² sr nm).
+
+# AnalyticShape.type (kernels/shapes.cl): Mitsuba 3's sphere, disk and cylinder in their object space.
+SHAPE_TYPES = ("sphere", "disk", "cylinder")
+SHAPE_SPHERE, SHAPE_DISK, SHAPE_CYLINDER = range(len(SHAPE_TYPES))
+
+ANALYTIC_SHAPE_DTYPE = _struct(
+    [
+        ("to_world", ("<f4", (3, 4))),
+        ("to_object", ("<f4", (3, 4))),
+        ("sphere", ("<f4", (4,))),
+        ("type", "<i4"),
+        ("abs_det", "<f4"),
+        ("object_area", "<f4"),
+        ("pad0", "<i4"),
+    ],
+    128,
+)
 
 LIGHT_DTYPE = _struct(
     [
@@ -167,7 +193,7 @@ RENDER_PARAMS_DTYPE = _struct(
         ("sample_begin", "<i4"),
         ("sample_count", "<i4"),
         ("medium_count", "<i4"),
-        ("pad1", "<i4"),
+        ("shape_count", "<i4"),
     ],
     112,
 )
@@ -205,6 +231,7 @@ SCENE_KERNEL_BUFFERS = (
     "map_cdf",
     "media",
     "textures",
+    "shapes",
 )
 
 # struct name in types.h -> dtype; the layout test walks this table.
@@ -216,6 +243,7 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "Medium": MEDIUM_DTYPE,
     "Texture": TEXTURE_DTYPE,
     "Light": LIGHT_DTYPE,
+    "AnalyticShape": ANALYTIC_SHAPE_DTYPE,
     "RenderParams": RENDER_PARAMS_DTYPE,
     "MeterParams": METER_PARAMS_DTYPE,
 }
@@ -262,4 +290,5 @@ def device_contract_defines() -> dict[str, int | float | str]:
     }
     values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
     values |= {f"TEXTURE_{name.upper()}": code for code, name in enumerate(TEXTURE_TYPES)}
+    values |= {f"SHAPE_{name.upper()}": code for code, name in enumerate(SHAPE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

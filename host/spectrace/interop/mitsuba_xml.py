@@ -12,8 +12,8 @@ material's or light's parameter table marks the parameter `textured` (`checked_t
 becomes textured there imports textures without a change here. Mitsuba's rectangle and PLY texture coordinates run
 v up where spectrace's run down: textures on those shapes are imported with v flipped, as a material of their own.
 
-Imported here: shapes obj, ply, serialized (shape_index), rectangle, cube, sphere (center, radius; face_normals on
-obj, ply, serialized and sphere);
+Imported here: shapes obj, ply, serialized (shape_index), rectangle, cube, and the analytic sphere (center, radius),
+disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sphere);
 twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
@@ -68,7 +68,7 @@ TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
 SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 SUPPORTED = {
-    "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere"),
+    "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),
@@ -965,13 +965,15 @@ class MitsubaImporter:
                 raise self.fail(properties["radius"], f"a sphere's radius must be > 0, got {radius:g}", "value")
             centre = self.vector(properties["center"]) if "center" in properties else [0.0, 0.0, 0.0]
             steps += [{"scale": radius}, {"translate": centre}]
+        if kind == "cylinder":
+            steps += self.cylinder_steps(properties)
         if "to_world" in properties:
             steps += self.transform_steps(properties["to_world"])
         flip = "flip_normals" in properties and self.text(properties["flip_normals"]) == "true"
         if flip:
-            if kind != "rectangle":
+            if kind not in ("rectangle", "disk"):
                 self.unsupported_plugin(element, " with flip_normals")
-            steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring the flat square reverses its winding
+            steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring a flat shape in z turns its face over
         if steps:
             table["transform"] = steps
         if kind in ("obj", "ply", "serialized", "sphere"):
@@ -993,6 +995,28 @@ class MitsubaImporter:
             ) is not None and self.checked_textures(emitter_table, module):
                 table["emitter"] = emitter_table
         return table if table["material"] is not None else None
+
+    def cylinder_steps(self, properties: dict[str, Element]) -> list[dict]:
+        """Mitsuba's cylinder from p0 to p1 of `radius`: the unit cylinder scaled by (r, r, |p1 − p0|), turned by the
+        frame Mitsuba builds around the axis (its coordinate_system, Duff et al. 2017, which sets where u = 0 is),
+        moved to p0."""
+        radius = self.number(properties["radius"]) if "radius" in properties else 1.0
+        if not radius > 0.0:
+            raise self.fail(properties["radius"], f"a cylinder's radius must be > 0, got {radius:g}", "value")
+        p0 = np.array(self.vector(properties["p0"]) if "p0" in properties else [0.0, 0.0, 0.0])
+        p1 = np.array(self.vector(properties["p1"]) if "p1" in properties else [0.0, 0.0, 1.0])
+        length = float(np.linalg.norm(p1 - p0))
+        if not length > 0.0:
+            raise self.fail(properties.get("p1") or properties["p0"], "a cylinder's p0 and p1 must differ", "x")
+        n = (p1 - p0) / length
+        sign = math.copysign(1.0, n[2])
+        a = -1.0 / (sign + n[2])
+        b = n[0] * n[1] * a
+        s = [1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]]
+        t = [b, sign + n[1] * n[1] * a, -n[1]]
+        frame = np.eye(4)
+        frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = s, t, n, p0
+        return [{"scale": [radius, radius, length]}, {"matrix": frame.tolist()}]
 
     def light(self, element: Element) -> dict | None:
         kind = self.kind(element)

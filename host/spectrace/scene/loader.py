@@ -10,6 +10,7 @@ from pydantic import BaseModel, ValidationError
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
+from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
 from spectrace.geometry.mesh import load_mesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
@@ -308,19 +309,33 @@ class _Resolver:
         shapes = []
         for i, s in enumerate(self.spec.shapes):
             key = f"shapes[{i}]"
+            # Analytic unless asked for triangles: facets (face_normals = true) exist only on a tessellation.
+            analytic = s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals)
             if s.type == "mesh":
                 assert s.file is not None  # the schema wants a file for a mesh
                 mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"), shape_index=s.shape_index or 0)
+            elif s.type in ANALYTIC_SHAPES:
+                mesh = object_tessellation(s.type)
             else:
                 mesh = primitives.BUILTIN_SHAPES[s.type]()
+            matrix = np.eye(4)
             if s.transform:
                 steps = [step.model_dump(exclude_none=True) for step in s.transform]
                 with np.errstate(over="ignore", invalid="ignore"):  # overflows are reported just below
-                    mesh = apply_transform(mesh, transform_matrix(steps, where=self.where(f"{key}.transform")))
+                    matrix = transform_matrix(steps, where=self.where(f"{key}.transform"))
+                    mesh = apply_transform(mesh, matrix)
             if problem := limits.coordinates_problem(mesh.vertices):
                 culprit = "transform" if s.transform else "file" if s.type == "mesh" else "type"
                 raise SpectraceError(f"mesh has {problem}", where=self.where(f"{key}.{culprit}"))
-            mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
+            surface_of = None
+            if analytic:
+                if s.type == "sphere" and (problem := similarity_problem(matrix)):
+                    raise SpectraceError(
+                        f"{problem}; tessellated = true takes any", where=self.where(f"{key}.transform")
+                    )
+                surface_of = AnalyticSurface(s.type, matrix)
+            else:
+                mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
             if s.material is not None and s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
@@ -354,6 +369,7 @@ class _Resolver:
                     emitter=emitter,
                     name=s.name or f"{s.type}{i}",
                     interior=interior,
+                    analytic=surface_of,
                 )
             )
         return shapes

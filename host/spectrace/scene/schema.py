@@ -388,7 +388,7 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere", "prism", "teapot"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot"]
     file: str | None = None
     shape_index: Annotated[int, Field(ge=0, strict=True)] | None = None  # which mesh of a .serialized file
     material: str | None = None
@@ -399,6 +399,9 @@ class ShapeSpec(Strict):
     # true: shade with the face normals (facets); false: smooth, with normals computed when a mesh file has none;
     # unset: a mesh file's own normals if it has any, the sphere's radial ones (docs/scene-format.md)
     face_normals: StrictBool | None = None
+    # sphere, disk, cylinder: true renders triangles (the icosphere, a polar grid, a ring of quads) instead of the
+    # exact surface (docs/scene-format.md)
+    tessellated: StrictBool | None = None
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
@@ -410,8 +413,10 @@ class ShapeSpec(Strict):
             raise ValueError("shape_index picks a mesh of a Mitsuba .serialized file; this shape has none")
         if self.material is None and self.interior is None:
             raise ValueError("a shape needs material (only a shape with an interior may omit it)")
-        if self.type == "rectangle" and self.interior is not None:
-            raise ValueError("a rectangle encloses no volume: an interior needs a closed shape")
+        if self.type in ("rectangle", "disk", "cylinder") and self.interior is not None:
+            raise ValueError(f"a {self.type} encloses no volume: an interior needs a closed shape")
+        if self.tessellated is not None and self.type not in ("sphere", "disk", "cylinder"):
+            raise ValueError(f"tessellated is for the analytic shapes (sphere, disk, cylinder), not a {self.type}")
         return self
 
 
