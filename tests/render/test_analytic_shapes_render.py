@@ -1,0 +1,83 @@
+"""Analytic shapes in whole renders, measured with the meters against closed forms: furnaces (an albedo-1 surface of
+any shape in a uniform environment of radiance k shows k; smooth glass too, as L/n² is conserved), shadow rays
+blocked by a disk and thinned by a cut-out one, and an absorbing medium inside an index-matched sphere
+(Beer–Lambert along a chord)."""
+
+import numpy as np
+import pytest
+
+import spectrace
+from spectrace.engine.meters import IrradianceMeter, RadianceMeter, measure
+from spectrace.scene.model import Scene
+from stats_toolkit import assert_within_standard_errors
+
+K = 1.0
+
+
+def _scene(shapes, lights, max_depth=-1) -> Scene:
+    camera = spectrace.Camera(origin=(0.0, 0.0, 5.0), target=(0.0, 0.0, 0.0))
+    return Scene(camera=camera, width=1, height=1, shapes=shapes, lights=lights, max_depth=max_depth)
+
+
+def _radiance_550(scene, origin, direction, device, streams=32, samples=32):
+    reading = measure(scene, RadianceMeter(origin, direction), [550.0], streams, samples, device=device)
+    return reading.spectral[0], reading.spectral_standard_error[0]
+
+
+@pytest.mark.parametrize(
+    "kind, transform",
+    [
+        ("sphere", [{"scale": 0.8}]),
+        ("cylinder", [{"scale": [0.6, 0.9, 1.2]}, {"rotate": {"axis": [1, 0, 0], "angle": 70}}]),
+        ("disk", [{"scale": [1.0, 0.5, 1.0]}, {"rotate": {"axis": [1, 0, 0], "angle": 40}}]),
+    ],
+)
+def test_white_furnace(device, kind, transform):
+    """Seen from outside at two angles (into the open cylinder's inside, whose light bounces many times)."""
+    shape = spectrace.shape(kind, spectrace.diffuse(1.0), transform=transform)
+    scene = _scene([shape], [spectrace.constant_environment(K)])
+    for origin in ((0.1, 0.05, 3.0), (0.05, 2.5, 0.6)):
+        direction = -np.asarray(origin) / np.linalg.norm(origin)
+        value, se = _radiance_550(scene, origin, tuple(direction), device)
+        assert_within_standard_errors(value, K, se, sigmas=4, slack=1e-4, what=f"{kind} from {origin}")
+
+
+def test_glass_sphere_furnace(device):
+    """A smooth n = 1.5 analytic sphere: every path through it refracts in and out, so L = k exactly; a sphere
+    hit from inside at the wrong side would darken or brighten it."""
+    scene = _scene([spectrace.shape("sphere", spectrace.dielectric(1.5))], [spectrace.constant_environment(K)], 64)
+    for origin in ((0.0, 0.0, 3.0), (0.0, 0.8, 3.0)):  # through the centre, and near the rim (grazing refraction)
+        value, se = _radiance_550(scene, origin, (0.0, 0.0, -1.0), device)
+        assert_within_standard_errors(value, K, se, sigmas=4, slack=1e-4, what=f"glass from {origin}")
+
+
+def test_shadow_rays_meet_disks_and_pass_cut_outs(device):
+    """A point light of intensity I 2 m above a meter: E = I / 4 unblocked; 0 behind an opaque disk; (1 − α) I / 4
+    behind a cut-out disk of opacity α."""
+    intensity = 4.0
+    light = spectrace.point_light((0.0, 0.0, 2.0), intensity=intensity)
+    meter = IrradianceMeter((0.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    for opacity in (None, 1.0, 0.25):
+        shapes = []
+        if opacity is not None:
+            material = spectrace.diffuse(0.0, opacity=opacity)
+            shapes = [spectrace.shape("disk", material, transform=[{"scale": 0.3}, {"translate": [0, 0, 1]}])]
+        reading = measure(_scene(shapes, [light], max_depth=2), meter, [550.0], 16, 64, device=device)
+        expected = intensity / 4.0 * (1.0 if opacity is None else 1.0 - opacity)
+        # Noiseless but for the cut-out, whose shadow rays each pass it or not.
+        se = reading.spectral_standard_error[0]
+        assert (se > 0) == (opacity == 0.25)
+        assert_within_standard_errors(reading.spectral[0], expected, se, sigmas=4, slack=1e-4 * expected, what=opacity)
+
+
+def test_absorbing_medium_inside_an_analytic_sphere(device):
+    """An index-matched sphere of radius R filled with an absorber σa: looking through it at offset h from its
+    centre, L = k exp(−σa · 2√(R² − h²)); the chord's two ends are the analytic sphere's crossings."""
+    sigma_a, radius = 0.9, 0.7
+    medium = spectrace.medium(sigma_a=sigma_a)
+    ball = spectrace.shape("sphere", interior=medium, transform=[{"scale": radius}])
+    scene = _scene([ball], [spectrace.constant_environment(K)])
+    for h in (0.0, 0.5):
+        value, se = _radiance_550(scene, (0.0, h, 3.0), (0.0, 0.0, -1.0), device, streams=8, samples=8)
+        expected = K * np.exp(-sigma_a * 2.0 * np.sqrt(radius**2 - h**2))
+        assert value == pytest.approx(expected, rel=2e-4), h
