@@ -25,7 +25,9 @@ typedef struct {
     __global const Medium *media;
     __global const Texture *textures;  /* material and emission textures, whose texels share `texels` (a dummy row
                                           if none) */
-    __global const AnalyticShape *shapes;  /* analytic spheres, disks and cylinders (a dummy row if none) */
+    __global const AnalyticShape *shapes;  /* analytic spheres, disks and cylinders (a dummy row if none), in the
+                                              leaf order of shape_nodes */
+    __global const BVHNode *shape_nodes;   /* binary BVH over their boxes (a root no ray enters if none) */
 } Scene;
 
 /* The kinds of visibility query, told apart in a cut-out's choice (surface_met) so that a shadow ray and the path's
@@ -42,10 +44,10 @@ typedef struct {
         __global const TriangleInfo *triangle_info, __global const Material *materials,                           \
         __global const Light *lights, __global const float *light_cdf, __global const float *spectra,             \
         __global const float4 *texels, __global const float *map_cdf, __global const Medium *media,                \
-        __global const Texture *textures, __global const AnalyticShape *shapes
+        __global const Texture *textures, __global const AnalyticShape *shapes, __global const BVHNode *shape_nodes
 #define SCENE_FROM_KERNEL_PARAMS                                                                                   \
     {params, nodes, triangle_vertices, triangle_uvs, triangle_normals, triangle_info, materials, lights,           \
-     light_cdf, spectra, texels, map_cdf, media, textures, shapes}
+     light_cdf, spectra, texels, map_cdf, media, textures, shapes, shape_nodes}
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
@@ -108,7 +110,7 @@ inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3
     return footprint_from_tangents(scene->params, p, n, e1, e2, d1, d2);
 }
 
-/* Analytic shapes (shapes.cl) are tested one by one beside the triangles' BVH: a hit of shape k is slot
+/* Analytic shapes (shapes.cl) have a BVH of their own beside the triangles': a hit of shape k is slot
  * triangle_count + k of the TriangleInfo array, with the shape's texture coordinates in b12. A scene without them
  * builds with SCENE_HAS_SHAPES 0 and traces exactly as before they existed. */
 inline int hit_is_shape(const Scene *scene, int slot)
@@ -128,22 +130,54 @@ inline __global const AnalyticShape *hit_shape(const Scene *scene, int slot)
     return &scene->shapes[slot - scene->params->triangle_count];
 }
 
-/* The closest analytic shape the ray meets before t_max (any of them when any_hit). */
+/* The closest analytic shape the ray meets before t_max (any of them when any_hit): bvh.cl's binary traversal
+ * (trace_bvh_binary) over the shapes' own BVH, whose leaves are runs of shapes. */
 inline Hit intersect_shapes(const Scene *scene, Ray ray, float t_max, int any_hit)
 {
     Hit hit = no_hit(t_max);
-    int count = scene->params->shape_count;
-    for (int k = 0; k < count; ++k) {
-        float2 uv;
-        float t = intersect_shape(&scene->shapes[k], ray.origin, ray.direction, hit.t, &uv);
-        if (t < hit.t) {
-            hit.t = t;
-            hit.triangle = scene->params->triangle_count + k;
-            hit.b12 = uv;
-            if (any_hit) break;
+    /* The empty BVH's inverted root box still admits rays (the slab test orders each axis' bounds). */
+    if (scene->params->shape_count == 0) return hit;
+    __global const BVHNode *nodes = scene->shape_nodes;
+    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
+    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
+    if (ray_box_entry(&nodes[0], ray.origin, inv_direction, t_max) == INFINITY) return hit;
+    int stack[BVH_STACK_SIZE];
+    float stack_entry[BVH_STACK_SIZE];
+    int top = 0;
+    int index = 0;
+    while (true) {
+        __global const BVHNode *node = &nodes[index];
+        if (node->count > 0) {
+            for (int k = node->left_first; k < node->left_first + node->count; ++k) {
+                float2 uv;
+                float t = intersect_shape(&scene->shapes[k], ray.origin, ray.direction, hit.t, &uv);
+                if (t < hit.t) {
+                    hit.t = t;
+                    hit.triangle = scene->params->triangle_count + k;
+                    hit.b12 = uv;
+                    if (any_hit) return hit;
+                }
+            }
+        } else {
+            int left = node->left_first;
+            float t_left = ray_box_entry(&nodes[left], ray.origin, inv_direction, hit.t);
+            float t_right = ray_box_entry(&nodes[left + 1], ray.origin, inv_direction, hit.t);
+            if (t_left != INFINITY || t_right != INFINITY) {
+                if (fmax(t_left, t_right) != INFINITY) {
+                    stack[top] = t_left <= t_right ? left + 1 : left;
+                    stack_entry[top] = fmax(t_left, t_right);
+                    ++top;
+                }
+                index = t_left <= t_right ? left : left + 1;
+                continue;
+            }
+        }
+        while (true) {
+            if (top == 0) return hit;
+            --top;
+            if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
         }
     }
-    return hit;
 }
 #endif
 

@@ -232,6 +232,7 @@ SCENE_KERNEL_BUFFERS = (
     "media",
     "textures",
     "shapes",
+    "shape_nodes",
 )
 
 # struct name in types.h -> dtype; the layout test walks this table.

@@ -61,6 +61,9 @@ class SceneBuffers:
     # ANALYTIC_SHAPE_DTYPE (one dummy entry when there are none); shape k's TriangleInfo is entry triangle_count + k
     shapes: np.ndarray = field(default_factory=lambda: np.zeros(1, ANALYTIC_SHAPE_DTYPE))
     shape_count: int = 0
+    # BVH_NODE_DTYPE: the binary BVH over the analytic shapes' boxes (kernels/scene.cl intersect_shapes); a root
+    # every ray misses when there are none
+    shape_nodes: np.ndarray = field(default_factory=lambda: _empty_bvh().nodes)
 
 
 def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
@@ -158,13 +161,17 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         tri_material = tri_emitter = tri_interior = np.zeros(0, np.int32)
         bvh = _empty_bvh()
         scene_radius = 1.0
+    shape_bvh = _empty_bvh()
     if analytic:
-        # The scene's bounds take in the analytic shapes' (from their tessellations, which enclose them but for the
-        # sphere's chords, a relative 1e-3 at most).
+        # The analytic shapes get a BVH of their own over their exact boxes, from the same builder (a box as the
+        # triangle (lower, upper, lower) has that box as its bounds); they are stored in its leaf order.
+        boxes = np.array([surface.bounds() for surface, *_ in analytic])
+        shape_bvh = build_bvh(boxes[:, 0], boxes[:, 1], boxes[:, 0], max_leaf_size=2)
+        analytic = [analytic[i] for i in shape_bvh.prim_order]
         corners = [np.array([bvh.nodes[0]["bmin"], bvh.nodes[0]["bmax"]])] if len(v0) else []
-        corners += [np.array([m.min(axis=0), m.max(axis=0)]) for m in (a.tessellation().vertices for a, *_ in analytic)]
+        corners.append(np.array([shape_bvh.nodes[0]["bmin"], shape_bvh.nodes[0]["bmax"]]))
         lo, hi = np.min([c[0] for c in corners], axis=0), np.max([c[1] for c in corners], axis=0)
-        scene_radius = 0.5 * float(np.linalg.norm(hi - lo)) * 1.001
+        scene_radius = 0.5 * float(np.linalg.norm(hi - lo))
     scene_radius = max(scene_radius, 1e-6)
 
     vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
@@ -262,6 +269,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         texture_count=len(textures.rows),
         shapes=shape_rows,
         shape_count=len(analytic),
+        shape_nodes=shape_bvh.nodes,
     )
 
 

@@ -64,6 +64,21 @@ class AnalyticSurface:
         normals = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
         return float(OBJECT_AREA["cylinder"] * self.normal_stretch(normals).mean())
 
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The exact axis-aligned box (lower, upper corner) of the placed shape, widened by a relative 1e-6 so that
+        float32 rounding never cuts it."""
+        matrix = np.asarray(self.to_world, float)
+        if self.kind == "sphere":
+            centre, radius = self.sphere_centre_radius()
+            lo, hi = centre - radius, centre + radius
+        else:
+            # A circle of radius 1 in the object's xy plane spans ±|row i of M's first two columns| along axis i.
+            half = np.hypot(matrix[:3, 0], matrix[:3, 1])
+            ends = [matrix[:3, 3]] + ([matrix[:3, 3] + matrix[:3, 2]] if self.kind == "cylinder" else [])
+            lo, hi = np.min(ends, axis=0) - half, np.max(ends, axis=0) + half
+        pad = 1e-6 * (np.abs(lo).max() + np.abs(hi).max() + (hi - lo).max())
+        return lo - pad, hi + pad
+
     def sphere_centre_radius(self) -> tuple[np.ndarray, float]:
         matrix = np.asarray(self.to_world, float)
         return matrix[:3, 3].copy(), float(abs(np.linalg.det(self.linear)) ** (1.0 / 3.0))
