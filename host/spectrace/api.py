@@ -167,6 +167,8 @@ def shape(
     interior: Medium | None = None,
     face_normals: bool | None = None,
     tessellated: bool = False,
+    center: Sequence[float] | None = None,
+    radius: float | None = None,
 ) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
     "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the
@@ -178,7 +180,7 @@ def shape(
     smoothly (normals computed for a mesh without its own), None keeps the mesh's own normals (the sphere's are
     radial, the teapot's its surface's; the other built-ins have none). "sphere", "disk" and "cylinder" are exact
     (analytic) surfaces, unless `tessellated` (or face_normals=True, which asks for facets) makes them triangles; an
-    analytic sphere's transform must scale uniformly."""
+    analytic sphere's transform must scale uniformly. A sphere's `radius` and `center` place it before `transform`."""
     if material is None and interior is None:
         raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
     if interior is not None and not isinstance(interior, Medium):
@@ -191,6 +193,14 @@ def shape(
         if interior is not None and geometry != "sphere":
             raise SpectraceError(f"a {geometry} encloses no volume: an interior needs a closed shape", where="interior")
         steps = [dict(step) for step in transform]
+        if (center is not None or radius is not None) and geometry != "sphere":
+            raise SpectraceError(f"center and radius are a sphere's, not a {geometry}'s (use transform)")
+        if center is not None:
+            steps.insert(0, {"translate": list(_vector(center, "center"))})
+        if radius is not None:
+            if not (isinstance(radius, Real) and math.isfinite(radius) and radius > 0):
+                raise SpectraceError(f"radius must be a finite number > 0, got {radius!r}", where="radius")
+            steps.insert(0, {"scale": float(radius)})
         matrix = transform_matrix(steps, where="transform") if steps else np.eye(4)
         if not (tessellated or face_normals):
             if geometry == "sphere" and (problem := similarity_problem(matrix)):

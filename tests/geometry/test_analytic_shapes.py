@@ -217,3 +217,48 @@ def test_area_sampling_density_integrates_to_the_area(kernel_runner):
     h = (a - b) ** 2 / (a + b) ** 2
     perimeter = np.pi * (a + b) * (1 + 3 * h / (10 + np.sqrt(4 - 3 * h)))
     assert surface.area() == pytest.approx(perimeter * 2.0, rel=1e-7)
+
+
+def test_scene_files_and_the_api_place_spheres_disks_and_cylinders(tmp_path):
+    from spectrace import shape
+    from spectrace.errors import SpectraceError
+    from spectrace.scene.loader import load_scene
+
+    head = "[camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 4\nheight = 4\n"
+    head += '[materials.m]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
+    body = """[[shapes]]
+type = "sphere"
+material = "m"
+center = [1, 2, 3]
+radius = 0.5
+transform = [{ rotate = { axis = [0, 0, 1], angle = 90 } }]
+[[shapes]]
+type = "disk"
+material = "m"
+transform = [{ scale = [2, 1, 1] }]
+[[shapes]]
+type = "cylinder"
+material = "m"
+tessellated = true
+"""
+    (tmp_path / "s.toml").write_text(head + body)
+    sphere, disk, cylinder = load_scene(tmp_path / "s.toml").shapes
+    # Rotating the sphere centred at (1, 2, 3) by 90° about z moves its centre to (-2, 1, 3).
+    centre, radius = sphere.analytic.sphere_centre_radius()
+    np.testing.assert_allclose(centre, [-2, 1, 3], atol=1e-12)
+    assert radius == pytest.approx(0.5) and sphere.analytic.area() == pytest.approx(np.pi)
+    assert disk.analytic.area() == pytest.approx(2 * np.pi)
+    assert cylinder.analytic is None and len(cylinder.mesh.faces) == 128  # 64 quads around
+    api = shape("sphere", "m", center=[1, 2, 3], radius=0.5, transform=[{"rotate": {"axis": [0, 0, 1], "angle": 90}}])
+    np.testing.assert_allclose(api.analytic.to_world, sphere.analytic.to_world, atol=1e-12)
+    for bad, message in (
+        (body.replace("radius = 0.5", "radius = 0.5\ntessellated = 1"), "tessellated"),
+        (body.replace('type = "disk"\n', 'type = "disk"\nradius = 2\n'), "center and radius are a sphere's"),
+        (body.replace("angle = 90 } }]", "angle = 90 } }, { scale = [1, 1, 2] }]"), "scale uniformly"),
+    ):
+        (tmp_path / "bad.toml").write_text(head + bad)
+        with pytest.raises(SpectraceError, match=message):
+            load_scene(tmp_path / "bad.toml")
+    with pytest.raises(SpectraceError, match="scale uniformly"):
+        shape("sphere", "m", transform=[{"scale": [1, 2, 1]}])
+    assert shape("sphere", "m", transform=[{"scale": [1, 2, 1]}], tessellated=True).analytic is None

@@ -319,8 +319,11 @@ class _Resolver:
             else:
                 mesh = primitives.BUILTIN_SHAPES[s.type]()
             matrix = np.eye(4)
-            if s.transform:
-                steps = [step.model_dump(exclude_none=True) for step in s.transform]
+            placement = ([{"scale": s.radius}] if s.radius is not None else []) + (
+                [{"translate": list(s.center)}] if s.center is not None else []
+            )
+            if s.transform or placement:
+                steps = placement + [step.model_dump(exclude_none=True) for step in s.transform]
                 with np.errstate(over="ignore", invalid="ignore"):  # overflows are reported just below
                     matrix = transform_matrix(steps, where=self.where(f"{key}.transform"))
                     mesh = apply_transform(mesh, matrix)
