@@ -20,7 +20,7 @@ SHAPES = """
 <shape type="cylinder" id="can">
   <point name="p0" x="0.6" y="-0.3" z="-0.5"/><point name="p1" x="0.8" y="0.1" z="0.6"/>
   <float name="radius" value="0.25"/>
-  <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf>
+  <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf></bsdf>
 </shape>
 <shape type="sphere" id="ball">
   <point name="center" x="-0.5" y="0.1" z="-0.1"/><float name="radius" value="0.4"/>
@@ -34,7 +34,40 @@ SHAPES = """
 """
 
 
-def _xml(folder: Path, size: int) -> Path:
+# The same shapes wearing textures and a normal map, which read the analytic shapes' uv and dp/du frame.
+TEXTURED = (
+    SHAPES.replace(
+        '<bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.3"/></bsdf>',
+        '<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="normal.png"/>'
+        '<boolean name="raw" value="true"/></texture>'
+        '<bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.3"/></bsdf></bsdf>',
+    )
+    .replace(
+        '<bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf>',
+        '<bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="stripes.png"/>'
+        "</texture></bsdf>",
+    )
+    .replace(
+        '<bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.55, 0.5"/></bsdf>',
+        '<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">'
+        '<rgb name="color0" value="0.7, 0.7, 0.6"/><rgb name="color1" value="0.1, 0.2, 0.1"/></texture></bsdf>',
+    )
+)
+
+
+def _images(folder: Path) -> None:
+    """normal.png: 8 x 8 tangent-space normals tilted up to about 35°; stripes.png: 4 coloured columns."""
+    from PIL import Image
+
+    rng = np.random.default_rng(21)
+    normals = np.concatenate([rng.uniform(-0.7, 0.7, (8, 8, 2)), np.ones((8, 8, 1))], axis=-1)
+    normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
+    Image.fromarray(np.round((normals + 1) / 2 * 255).astype(np.uint8)).save(folder / "normal.png")
+    stripes = np.array([[[230, 40, 40], [40, 200, 60], [50, 60, 220], [230, 220, 60]]], np.uint8).repeat(4, axis=0)
+    Image.fromarray(stripes).save(folder / "stripes.png")
+
+
+def _xml(folder: Path, size: int, shapes: str = SHAPES) -> Path:
     sensor = f"""<sensor type="perspective"><float name="fov" value="50"/>
       <transform name="to_world"><lookat origin="0, -3.2, 1.6" target="0, 0, -0.1" up="0, 0, 1"/></transform>
       <film type="hdrfilm"><integer name="width" value="{size}"/><integer name="height" value="{size}"/>
@@ -42,7 +75,7 @@ def _xml(folder: Path, size: int) -> Path:
     path = folder / "shapes.xml"
     path.write_text(
         f'<scene version="3.0.0">\n<integrator type="path"><integer name="max_depth" value="4"/>'
-        f"</integrator>\n{sensor}\n{SHAPES}\n</scene>\n"
+        f"</integrator>\n{sensor}\n{shapes}\n</scene>\n"
     )
     return path
 
@@ -84,12 +117,15 @@ def test_imported_shapes_meet_rays_where_mitsuba_does(tmp_path, kernel_runner, m
 
 @pytest.mark.peer
 @pytest.mark.slow
-def test_analytic_shapes_scene_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
+@pytest.mark.parametrize("textured", [False, True], ids=["plain", "textured"])
+def test_analytic_shapes_scene_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral, textured):
     """Both renderers, spectral, REPLICAS independent images each; 8 x 8-pixel block means and the image mean agree
-    within 5 standard errors (tests/replica_agreement.py)."""
+    within 5 standard errors (tests/replica_agreement.py). Textured: a normal-mapped sphere, a bitmap on the
+    cylinder, a checkerboard on the disk."""
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 16, 8, 32, 8
-    path = _xml(tmp_path, size)
+    _images(tmp_path)
+    path = _xml(tmp_path, size, TEXTURED if textured else SHAPES)
     scene = mi.load_file(str(path))
     by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
 
