@@ -139,8 +139,7 @@ inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 uv)
     float3 object_point, n_local, dpdu, dpdv;
     if (s->type == SHAPE_SPHERE) {
         float2 azimuth = cos_sin_turns(uv.x);
-        float sin_theta, cos_theta = cos(SHAPE_PI * uv.y);
-        sin_theta = sin(SHAPE_PI * uv.y);
+        float cos_theta = cos(SHAPE_PI * uv.y), sin_theta = sin(SHAPE_PI * uv.y);
         object_point = (float3)(sin_theta * azimuth.x, sin_theta * azimuth.y, cos_theta);
         n_local = object_point;
         dpdu = SHAPE_TWO_PI * (float3)(-object_point.y, object_point.x, 0.0f);
