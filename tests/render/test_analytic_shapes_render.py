@@ -155,3 +155,13 @@ def test_many_shapes_are_found_through_their_bvh(device):
     # The film's Y estimates a constant radiance through four sampled wavelengths per sample: within a few per cent
     # at 16 spp, far inside the 20 % between two shapes' radiances.
     np.testing.assert_allclose(y[clear], expected[clear], rtol=0.08, atol=1e-6)
+
+
+def test_a_scene_without_analytic_shapes_never_meets_the_empty_shape_bvh(device):
+    """The meters run the general kernels, which trace the (empty) analytic shapes' BVH too: a ray straight through
+    the origin, where the dummy row's sphere of radius 0 sits, sees only the floor, L = ρ E / π."""
+    albedo, irradiance = 0.6, 2.0
+    floor = spectrace.shape("rectangle", spectrace.diffuse(albedo), transform=[{"translate": [0.0, 0.0, -1.0]}])
+    light = spectrace.distant_light((0.0, 0.0, -1.0), irradiance=irradiance)
+    value, se = _radiance_550(_scene([floor], [light], max_depth=2), (0.0, 0.0, 3.0), (0.0, 0.0, -1.0), device, 4, 4)
+    assert value == pytest.approx(albedo * irradiance / np.pi, rel=1e-4) and se < 1e-4
