@@ -162,6 +162,7 @@ inline int sample_shape_light(__global const Light *light, const LightBuffers *b
     if (one_minus_cos > 0.0f) {
         q = sample_sphere_cone(light->position.xyz, light->position.w, p, u, &n, &pdf_solid_angle);
         uv = sphere_uv_of_normal(shape, n);
+        if (shape->flip_normals) n = -n;
     } else {
         uv = shape_sample_uv(shape, u);
         ShapeSurface g = shape_surface(shape, uv);

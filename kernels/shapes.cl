@@ -126,7 +126,8 @@ inline float intersect_shape(__global const AnalyticShape *s, float3 origin, flo
 /* A point of an analytic shape, in world space. */
 typedef struct {
     float3 p;
-    float3 n;          /* unit geometric normal: outward (the disk's: +z's image), the front side */
+    float3 n;          /* unit geometric normal: outward (the disk's: +z's image), the front side; the other way
+                          round with flip_normals */
     float3 dpdu;       /* tangents along the texture coordinates (Mitsuba 3's dp_du, dp_dv), for surface detail */
     float3 dpdv;
     float area_stretch;  /* world area per object-space area here: abs_det · |M⁻ᵀ n_object| */
@@ -161,7 +162,7 @@ inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 uv)
     g.p = shape_point_to_world(s, object_point);
     float3 n = shape_normal_to_world(s, n_local);
     float length_n = length(n);
-    g.n = n / length_n;
+    g.n = (s->flip_normals ? -1.0f : 1.0f) * n / length_n;
     g.area_stretch = s->abs_det * length_n;
     g.dpdu = shape_vector_to_world(s, dpdu);
     g.dpdv = shape_vector_to_world(s, dpdv);

@@ -56,7 +56,7 @@ typedef struct {
     int type;             /* SHAPE_* */
     float abs_det;        /* |det| of to_world's linear part: world area = object area · abs_det · |M⁻ᵀ n_object| */
     float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder) */
-    int pad0;
+    int flip_normals;     /* 1: the front (normal, emitting side) faces the other way: inward, the disk's −z */
 } AnalyticShape;
 
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already

@@ -169,6 +169,7 @@ def shape(
     tessellated: bool = False,
     center: Sequence[float] | None = None,
     radius: float | None = None,
+    flip_normals: bool = False,
 ) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
     "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the
@@ -180,7 +181,8 @@ def shape(
     smoothly (normals computed for a mesh without its own), None keeps the mesh's own normals (the sphere's are
     radial, the teapot's its surface's; the other built-ins have none). "sphere", "disk" and "cylinder" are exact
     (analytic) surfaces, unless `tessellated` (or face_normals=True, which asks for facets) makes them triangles; an
-    analytic sphere's transform must scale uniformly. A sphere's `radius` and `center` place it before `transform`."""
+    analytic sphere's transform must scale uniformly. A sphere's `radius` and `center` place it before `transform`;
+    `flip_normals` turns their front (normal, emitting side) inward (the disk's to -z)."""
     if material is None and interior is None:
         raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
     if interior is not None and not isinstance(interior, Medium):
@@ -205,7 +207,7 @@ def shape(
         if not (tessellated or face_normals):
             if geometry == "sphere" and (problem := similarity_problem(matrix)):
                 raise SpectraceError(f"{problem}; tessellated=True takes any", where="transform")
-            surface = AnalyticSurface(geometry, matrix)
+            surface = AnalyticSurface(geometry, matrix, flip_normals=bool(flip_normals))
             return Shape(
                 mesh=surface.tessellation(),
                 material=material,
@@ -214,7 +216,10 @@ def shape(
                 interior=interior,
                 analytic=surface,
             )
-        mesh = shading_normals(apply_transform(object_tessellation(geometry), matrix), face_normals, computed=False)
+        mesh = apply_transform(object_tessellation(geometry), matrix)
+        if flip_normals:
+            mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=mesh.normals)
+        mesh = shading_normals(mesh, face_normals, computed=False)
         return Shape(mesh=mesh, material=material, emitter=emitter, name=name or geometry, interior=interior)
     if isinstance(geometry, str):
         if geometry not in primitives.BUILTIN_SHAPES:

@@ -134,3 +134,36 @@ def test_analytic_shapes_scene_renders_like_mitsuba(tmp_path, device, mitsuba_sc
     xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
     assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
     assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image
+
+
+@pytest.mark.peer
+def test_flip_normals_turns_the_analytic_shapes_as_in_mitsuba(tmp_path, kernel_runner, mitsuba_scalar_spectral):
+    mi = mitsuba_scalar_spectral
+    body = "".join(
+        f'<shape type="{kind}" id="{kind}"><boolean name="flip_normals" value="true"/>'
+        '<transform name="to_world"><rotate x="1" angle="30"/></transform></shape>'
+        for kind in ("sphere", "disk", "cylinder")
+    )
+    path = tmp_path / "flip.xml"
+    path.write_text(f'<scene version="3.0.0"><sensor type="perspective"/>{body}</scene>')
+    ours = {shape.name: shape for shape in load_mitsuba_scene(path).shapes}
+    theirs = {shape.id(): shape for shape in mi.load_file(str(path)).shapes()}
+    runner = kernel_runner("testing/analytic_shapes.cl")
+    for kind in ("sphere", "disk", "cylinder"):
+        surface = ours[kind].analytic
+        assert surface.flip_normals
+        origins = np.array([[0.1, 0.2, 3.0], [2.5, 0.3, 0.5], [-0.2, -2.8, 0.4]])
+        directions = -origins / np.linalg.norm(origins, axis=1, keepdims=True)
+        n = len(origins)
+        outputs = [np.zeros((n, 4), np.float32) for _ in range(5)]
+        args = [runner.buffer(np.repeat(surface.device_row()[None], n).astype(ANALYTIC_SHAPE_DTYPE))]
+        args += [runner.buffer(np.hstack([a, np.zeros((n, 1))]).astype(np.float32)) for a in (origins, directions)]
+        args += [runner.buffer(o, writable=True) for o in outputs] + [np.int32(n)]
+        runner.run("shape_hits", n, args, {3 + k: o for k, o in enumerate(outputs)})
+        compared = 0
+        for i in range(n):
+            si = theirs[kind].ray_intersect(mi.Ray3f(origins[i].tolist(), directions[i].tolist()))
+            if si.is_valid():
+                compared += 1
+                np.testing.assert_allclose(outputs[2][i, :3], np.array(si.n), atol=1e-5, err_msg=kind)
+        assert compared >= 2, kind

@@ -165,3 +165,30 @@ def test_a_scene_without_analytic_shapes_never_meets_the_empty_shape_bvh(device)
     light = spectrace.distant_light((0.0, 0.0, -1.0), irradiance=irradiance)
     value, se = _radiance_550(_scene([floor], [light], max_depth=2), (0.0, 0.0, 3.0), (0.0, 0.0, -1.0), device, 4, 4)
     assert value == pytest.approx(albedo * irradiance / np.pi, rel=1e-4) and se < 1e-4
+
+
+def test_a_flipped_sphere_light_lights_its_inside(device):
+    """A sphere light of radiance L with flip_normals emits inward: inside it E = π L whichever way a meter faces (a
+    uniformly bright enclosure), outside nothing; unflipped, the reverse, with E = π L (R/d)² outside."""
+    radiance, radius = 2.0, 1.5
+    for flip in (True, False):
+        lamp = spectrace.shape(
+            "sphere", spectrace.diffuse(0.0), emitter=spectrace.area_emitter(radiance), radius=radius, flip_normals=flip
+        )
+        scene = _scene([lamp], [], max_depth=1)
+        inside = measure(scene, IrradianceMeter((0.3, -0.2, 0.4), (0.6, 0.0, 0.8)), [550.0], 8, 16, device=device)
+        outside = measure(scene, IrradianceMeter((0.0, 0.0, 3.0), (0.0, 0.0, -1.0)), [550.0], 8, 16, device=device)
+        if flip:
+            assert_within_standard_errors(
+                inside.spectral[0], np.pi * radiance, inside.spectral_standard_error[0], slack=1e-4, what="inside"
+            )
+            assert outside.spectral[0] == 0.0
+        else:
+            assert inside.spectral[0] == 0.0
+            assert_within_standard_errors(
+                outside.spectral[0],
+                np.pi * radiance * (radius / 3.0) ** 2,
+                outside.spectral_standard_error[0],
+                slack=1e-4,
+                what="outside",
+            )

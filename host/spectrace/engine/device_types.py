@@ -147,7 +147,7 @@ ANALYTIC_SHAPE_DTYPE = _struct(
         ("type", "<i4"),
         ("abs_det", "<f4"),
         ("object_area", "<f4"),
-        ("pad0", "<i4"),
+        ("flip_normals", "<i4"),
     ],
     128,
 )

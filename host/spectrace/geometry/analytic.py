@@ -44,6 +44,7 @@ def similarity_problem(matrix: np.ndarray) -> str | None:
 class AnalyticSurface:
     kind: str  # "sphere", "disk" or "cylinder"
     to_world: np.ndarray  # (4, 4) object -> world
+    flip_normals: bool = False  # the front (normal, emitting side) inward, or the disk's -z side
 
     @property
     def linear(self) -> np.ndarray:
@@ -92,14 +93,20 @@ class AnalyticSurface:
         row["type"] = SHAPE_TYPES.index(self.kind)
         row["abs_det"] = abs(np.linalg.det(self.linear))
         row["object_area"] = OBJECT_AREA[self.kind]
+        row["flip_normals"] = int(self.flip_normals)
         if self.kind == "sphere":
             centre, radius = self.sphere_centre_radius()
             row["sphere"] = (*centre, radius)
         return row
 
     def tessellation(self) -> TriangleMesh:
-        """Triangles close to the surface, in world space, outward, with its normals and texture coordinates."""
-        return apply_transform(object_tessellation(self.kind), self.to_world)
+        """Triangles close to the surface, in world space, facing as the surface does, with its normals and texture
+        coordinates."""
+        mesh = apply_transform(object_tessellation(self.kind), self.to_world)
+        if self.flip_normals:
+            assert mesh.normals is not None
+            mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=-mesh.normals)
+        return mesh
 
 
 def object_tessellation(kind: str) -> TriangleMesh:

@@ -970,10 +970,12 @@ class MitsubaImporter:
         if "to_world" in properties:
             steps += self.transform_steps(properties["to_world"])
         flip = "flip_normals" in properties and self.text(properties["flip_normals"]) == "true"
-        if flip:
-            if kind not in ("rectangle", "disk"):
+        if flip and kind in ("sphere", "disk", "cylinder"):
+            table["flip_normals"] = True
+        elif flip:
+            if kind != "rectangle":
                 self.unsupported_plugin(element, " with flip_normals")
-            steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring a flat shape in z turns its face over
+            steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring the flat square turns its face over
         if steps:
             table["transform"] = steps
         if kind in ("obj", "ply", "serialized", "sphere"):

@@ -11,7 +11,7 @@ from pydantic import BaseModel, ValidationError
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
-from spectrace.geometry.mesh import load_mesh, shading_normals
+from spectrace.geometry.mesh import TriangleMesh, load_mesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
@@ -336,8 +336,11 @@ class _Resolver:
                     raise SpectraceError(
                         f"{problem}; tessellated = true takes any", where=self.where(f"{key}.transform")
                     )
-                surface_of = AnalyticSurface(s.type, matrix)
+                surface_of = AnalyticSurface(s.type, matrix, flip_normals=bool(s.flip_normals))
+                mesh = surface_of.tessellation()
             else:
+                if s.flip_normals:
+                    mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=mesh.normals)
                 mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
             if s.material is not None and s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)

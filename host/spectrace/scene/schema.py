@@ -402,6 +402,8 @@ class ShapeSpec(Strict):
     # sphere, disk, cylinder: true renders triangles (the icosphere, a polar grid, a ring of quads) instead of the
     # exact surface (docs/scene-format.md)
     tessellated: StrictBool | None = None
+    # sphere, disk, cylinder: their front (normal, emitting side) faces inward, or the disk's -z side
+    flip_normals: StrictBool | None = None
     # sphere only: placed before `transform`, as Mitsuba 3's center and radius are before its to_world
     center: Vector3 | None = None
     radius: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
@@ -420,6 +422,10 @@ class ShapeSpec(Strict):
             raise ValueError(f"a {self.type} encloses no volume: an interior needs a closed shape")
         if (self.center is not None or self.radius is not None) and self.type != "sphere":
             raise ValueError(f"center and radius are a sphere's, not a {self.type}'s (use transform)")
+        if self.flip_normals is not None and self.type not in ("sphere", "disk", "cylinder"):
+            raise ValueError(
+                f"flip_normals is for sphere, disk and cylinder (a mirroring transform turns a {self.type})"
+            )
         if self.tessellated is not None and self.type not in ("sphere", "disk", "cylinder"):
             raise ValueError(f"tessellated is for the analytic shapes (sphere, disk, cylinder), not a {self.type}")
         return self
