@@ -199,6 +199,7 @@ def scene_to_mitsuba_dict(
             entry = {
                 "type": shape.analytic.kind,
                 "to_world": _transform(shape.analytic.to_world),
+                "flip_normals": shape.analytic.flip_normals,
                 "bsdf": {"type": "ref", "id": materials[material_key]},
             }
         else:
