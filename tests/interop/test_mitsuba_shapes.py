@@ -167,3 +167,25 @@ def test_flip_normals_turns_the_analytic_shapes_as_in_mitsuba(tmp_path, kernel_r
                 compared += 1
                 np.testing.assert_allclose(outputs[2][i, :3], np.array(si.n), atol=1e-5, err_msg=kind)
         assert compared >= 2, kind
+
+
+@pytest.mark.parametrize(
+    "body, path, says",
+    [
+        (
+            '<shape type="cylinder"><point name="p0" x="1" y="1" z="1"/><point name="p1" x="1" y="1" z="1"/></shape>',
+            "shape/point",
+            "a cylinder's p0 and p1 must differ",
+        ),
+        ('<shape type="cylinder"><float name="radius" value="-1"/></shape>', "shape/float", "radius must be > 0"),
+    ],
+)
+def test_bad_cylinders_are_one_line_naming_the_element(tmp_path, body, path, says):
+    from spectrace.errors import SpectraceError
+    from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+
+    xml = tmp_path / "bad.xml"
+    xml.write_text(f'<scene version="3.0.0"><sensor type="perspective"/>{body}</scene>')
+    with pytest.raises(SpectraceError) as error:
+        mitsuba_scene_data(xml)
+    assert path in str(error.value) and says in str(error.value) and "\n" not in str(error.value)
