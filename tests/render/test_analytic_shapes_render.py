@@ -192,3 +192,15 @@ def test_a_flipped_sphere_light_lights_its_inside(device):
                 slack=1e-4,
                 what="outside",
             )
+
+
+def test_an_air_bubble_in_glass_is_a_flipped_sphere(device):
+    """Inside an air bubble (a flipped n = 1.5 sphere) in a glass ball in radiance k, the radiance is k again (L/n² is
+    conserved and the bubble's inside is air); unflipped, the bubble would be glass within glass, n = 2.25, where
+    L = 2.25² k."""
+    for flip, expected in ((True, K), (False, 2.25**2 * K)):
+        glass = spectrace.shape("sphere", spectrace.dielectric(1.5), radius=1.0)
+        bubble = spectrace.shape("sphere", spectrace.dielectric(1.5), radius=0.5, flip_normals=flip)
+        scene = _scene([glass, bubble], [spectrace.constant_environment(K)], max_depth=64).with_overrides(rr_depth=64)
+        value, _ = _radiance_550(scene, (0.05, 0.1, 0.0), (0.3, 0.2, 0.93), device, streams=4, samples=8)
+        assert value == pytest.approx(expected, rel=1e-5), flip
