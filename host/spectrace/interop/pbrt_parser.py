@@ -151,7 +151,7 @@ def tokenize(text: str, path: Path):
                     index += 1
                     break
                 if char == "\n":
-                    raise error(Location(path, start_line), "a string runs past the end of its line")
+                    raise error(Location(path, start_line), "unterminated string (a string ends on its own line)")
                 if char == "\\" and index + 1 < size:
                     index += 1
                     escaped = text[index]
