@@ -387,3 +387,60 @@ def test_scene_renders_as_the_same_scene_imported_from_mitsuba_xml(tmp_path, dev
     theirs = spectrace_replicas(Renderer(from_xml, device), replicas=8, replica_spp=8)
     assert ours[..., 1].mean() > 0.05  # the scene is lit
     assert_replicas_agree(ours, theirs, block=4)
+
+
+# ---------------------------------------------------------------- image infinite lights
+
+
+def test_equal_area_square_covers_the_sphere_uniformly():
+    """Clarberg's map is equal-area: a uniform grid on the square gives z uniform on [-1, 1] (mean 0, mean z² 1/3);
+    its centre is +z, the corners -z, the edge midpoints the ±x and ±y axes; sphere_to_square inverts it."""
+    from spectrace.interop.pbrt_envmap import sphere_to_square, square_to_sphere
+
+    side = 200
+    grid = (np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2) + 0.5) / side
+    z = square_to_sphere(grid)[:, 2]
+    assert abs(z.mean()) < 1e-3 and z.var() == pytest.approx(1 / 3, abs=1e-3)
+    special = square_to_sphere(np.array([[0.5, 0.5], [0.0, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 0.5]]))
+    np.testing.assert_allclose(special, [[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, 1, 0], [-1, 0, 0]], atol=1e-12)
+    directions = square_to_sphere(grid)
+    np.testing.assert_allclose(sphere_to_square(directions), grid, atol=1e-9)
+
+
+def _square_map(path: Path, side: int, upper: float, lower: float) -> None:
+    """A square equal-area map: `upper` where the texel's direction has z > 0, `lower` elsewhere (grey)."""
+    from spectrace.interop.pbrt_envmap import square_to_sphere
+    from spectrace.io.exr import write_exr
+
+    grid = (np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2) + 0.5) / side
+    values = np.where(square_to_sphere(grid)[:, 2] > 0, upper, lower).reshape(side, side, 1)
+    write_exr(path, np.repeat(values, 3, axis=2).astype(np.float32), None, {})
+
+
+def test_image_infinite_light_becomes_a_latitude_longitude_map(tmp_path):
+    _square_map(tmp_path / "sky.exr", 64, 2.0, 0.0)
+    # pbrt scenes with y up turn the map's +z to +y.
+    body = 'AttributeBegin\nRotate -90 1 0 0\nLightSource "infinite" "string filename" "sky.exr" "float scale" 3\n'
+    body += "AttributeEnd\n" + PLANE
+    data, importer = pbrt_scene_data(_write(tmp_path, body), tmp_path / "out.toml")
+    (light,) = data["lights"]
+    assert light["type"] == "envmap" and light["scale"] == 3.0
+    image = importer.files[Path(light["file"]).name]
+    assert image.shape == (64, 128, 3)
+    # Rows run from the zenith (θ = 0) down: the upper half is the sky, the lower half the dark ground (the rows
+    # within 10° of the horizon blend the two: the square's texels along its horizon diamond are filtered).
+    assert np.all(image[:28] == 2.0) and np.all(image[36:] == 0.0)
+
+
+def test_environment_over_a_diffuse_plane_matches_the_closed_form(tmp_path, device):
+    """Under a uniform sky of radiance L (pbrt: RGB texels c, luminance c × scale) a Lambertian plane reflects ρ L."""
+    _square_map(tmp_path / "sky.exr", 32, 1.5, 1.5)
+    header = HEADER.replace('"float fov" 30', '"float fov" 5').replace(
+        "WorldBegin", 'Integrator "path" "integer maxdepth" 1\nWorldBegin'
+    )
+    body = 'LightSource "infinite" "string filename" "sky.exr" "float scale" 2\n'
+    body += 'Material "diffuse" "spectrum reflectance" [360 0.4 830 0.4]\n' + PLANE
+    y = _render_y(load_pbrt_scene(_write(tmp_path, body, header)), device, 32)
+    expected = 0.4 * 1.5 * 2.0
+    standard_error = y.std(ddof=1) / math.sqrt(y.size)
+    assert abs(y.mean() - expected) <= 4 * standard_error + 2e-3 * expected, (y.mean(), expected, standard_error)

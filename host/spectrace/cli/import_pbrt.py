@@ -35,7 +35,7 @@ def import_pbrt_command(
 import_pbrt_command.__doc__ = (
     f"Convert a pbrt-v4 scene to a spectrace TOML scene (shapes {', '.join(SHAPES)}; materials "
     f"{', '.join(MATERIALS)}; textures {', '.join(TEXTURES)}; lights {', '.join(LIGHTS)}, area "
-    f"{', '.join(AREA_LIGHTS)}). Meshes go to a folder OUT_meshes beside OUT.toml. Parameters and directives not "
-    "imported are listed as warnings (--strict: an error); entities spectrace cannot represent are an error naming "
-    "file:line. The TOML is checked by loading it before it replaces OUT.toml."
+    f"{', '.join(AREA_LIGHTS)}). Meshes and environment maps go to a folder OUT_assets beside OUT.toml. "
+    "Parameters and directives not imported are listed as warnings (--strict: an error); entities spectrace "
+    "cannot represent are an error naming file:line. The TOML is checked by loading it before it replaces OUT.toml."
 )

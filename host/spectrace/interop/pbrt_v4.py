@@ -122,6 +122,7 @@ class PbrtImporter:
         self.warnings: list[str] = list(scene.unsupported)
         self.notes: list[str] = []
         self.meshes: dict[str, MeshData] = {}  # file name in mesh_folder -> data
+        self.files: dict[str, np.ndarray] = {}  # environment maps (EXR) to write beside the meshes
         self._mesh_of: dict[tuple[int, bool], tuple[str, MeshData]] = {}
         self.materials: dict[str, dict] = {}
         self._material_of: dict[int | str, str | None] = {}
@@ -778,11 +779,8 @@ class PbrtImporter:
                 "irradiance": self.emission(entity, "L", scale),
             }
         if kind == "infinite":
-            if entity.find("filename") is not None:
-                raise error(
-                    entity.location,
-                    "an infinite light from an image: pbrt-v4's equal-area octahedral maps are not imported",
-                )
+            if entity.find("filename", "string") is not None:
+                return self.environment_map(entity, matrix, scale)
             if entity.find("portal") is not None:
                 self.warn(entity.location, '"portal" not imported')
             illuminance = self.one(entity, "illuminance", -1.0)
@@ -792,6 +790,34 @@ class PbrtImporter:
         raise error(
             entity.location, f"light '{shown(kind)}': spectrace imports {', '.join(LIGHTS)} and diffuse area lights"
         )
+
+    def environment_map(self, entity: Entity, matrix: np.ndarray, scale: float) -> dict:
+        """An image infinite light: its equal-area square resampled to a latitude-longitude EXR (pbrt_envmap)."""
+        from spectrace.interop.pbrt_envmap import to_latitude_longitude, upper_illuminance
+        from spectrace.io.images import read_environment_map
+
+        path = self.file_path(entity, "filename")
+        assert path is not None
+        if path.suffix.lower() != ".exr":
+            raise error(entity.location, f"infinite light image '{shown(path.name)}': spectrace reads OpenEXR maps")
+        square = read_environment_map(path, str(entity.location))
+        height, width = square.shape[:2]
+        if height != width:
+            raise error(entity.location, f"'{shown(path.name)}' is {width} x {height}: pbrt-v4's maps are square")
+        if entity.find("L") is not None:
+            raise error(entity.location, 'both "L" and "filename" given (pbrt-v4 refuses them too)')
+        if entity.find("portal") is not None:
+            self.warn(entity.location, '"portal" not imported')
+        illuminance = self.one(entity, "illuminance", -1.0)
+        if illuminance > 0:
+            scale *= illuminance / upper_illuminance(square)
+        # RGB texels are illuminants of the colour space's D65, normalised as an RGB light's L: spectrace's envmap
+        # texels are D65-based with RGB (1, 1, 1) at Y = 1, so pbrt's scale carries over.
+        linear = (self.world @ matrix)[:3, :3]
+        image = to_latitude_longitude(square, linear / np.cbrt(abs(np.linalg.det(linear))), min(height, 2048))
+        file = _name(path.stem, {Path(n).stem for n in self.files}) + ".exr"
+        self.files[file] = image
+        return {"type": "envmap", "file": f"{self.mesh_folder}/{file}", "scale": scale}
 
     # -------------------------------------------------- the scene
 
@@ -804,7 +830,7 @@ class PbrtImporter:
         self.sampler(data)
         shapes = [table for index, shape in enumerate(self.scene.shapes) if (table := self.shape(shape, index))]
         lights = [self.light(light) for light in self.scene.lights]
-        if sum(light["type"] == "constant" for light in lights) > 1:
+        if sum(light["type"] in ("constant", "envmap") for light in lights) > 1:
             extra = [light.entity for light in self.scene.lights if light.entity.kind == "infinite"][1]
             raise error(extra.location, "a second infinite light; spectrace takes one environment light")
         if not shapes and not lights:
@@ -911,7 +937,8 @@ def write_ply(path: Path, mesh: MeshData) -> None:
 
 
 def mesh_folder_name(toml_path: Path) -> str:
-    return f"{toml_path.stem}_meshes"
+    """The folder beside the TOML that holds the meshes and environment maps an import writes."""
+    return f"{toml_path.stem}_assets"
 
 
 def pbrt_scene_data(pbrt_path: str | Path, toml_path: str | Path | None = None) -> tuple[dict, PbrtImporter]:
@@ -953,11 +980,15 @@ def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = Fal
     )
     text = dumps(data, header=header)
     folder = toml_path.parent / importer.mesh_folder
-    if importer.meshes:
+    if importer.meshes or importer.files:
+        from spectrace.io.exr import write_exr
+
         try:
             folder.mkdir(parents=True, exist_ok=True)
             for name, mesh in importer.meshes.items():
                 write_ply(folder / name, mesh)
+            for name, image in importer.files.items():
+                write_exr(folder / name, image, None, {})
         except OSError as failure:
             raise SpectraceError(
                 f"cannot write the meshes ({failure.strerror or failure})", where=str(folder)
