@@ -444,3 +444,99 @@ def test_environment_over_a_diffuse_plane_matches_the_closed_form(tmp_path, devi
     expected = 0.4 * 1.5 * 2.0
     standard_error = y.std(ddof=1) / math.sqrt(y.size)
     assert abs(y.mean() - expected) <= 4 * standard_error + 2e-3 * expected, (y.mean(), expected, standard_error)
+
+
+# ---------------------------------------------------------------- textures
+
+TEXTURED_QUAD = """LookAt 0 0 -3  0 0 0  0 1 0
+Camera "perspective" "float fov" 60
+Film "rgb" "integer xresolution" 8 "integer yresolution" 8
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "point3 from" [0 0 -1] "point3 to" [0 0 0]
+"""
+QUAD = (
+    'Shape "trianglemesh" "point3 P" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] "integer indices" [0 1 2 0 2 3]\n'
+    '  "point2 uv" [0 0  1 0  1 1  0 1]\n'
+)
+
+
+def _quadrant_colours(scene, device) -> dict[str, np.ndarray]:
+    """Linear sRGB of the quad's four quadrants as they appear in the image (the quad spans pixels 1..6)."""
+    from spectrace.engine.renderer import Renderer
+    from spectrace.spectral import xyz_to_linear_srgb
+
+    renderer = Renderer(scene, device)
+    renderer.render(spp=4)
+    rgb = xyz_to_linear_srgb(renderer.image().xyz.astype(np.float64))
+    return {
+        "upper left": rgb[2:4, 2:4].mean(axis=(0, 1)),
+        "upper right": rgb[2:4, 4:6].mean(axis=(0, 1)),
+        "lower left": rgb[4:6, 2:4].mean(axis=(0, 1)),
+        "lower right": rgb[4:6, 4:6].mean(axis=(0, 1)),
+    }
+
+
+def _redder(colour: np.ndarray) -> bool:
+    return bool(colour[0] > 3 * colour[2])
+
+
+def test_image_texture_is_upright_as_in_pbrt(tmp_path, device):
+    """pbrt looks an image up at (s, 1 - t): its first row lies along t = 1, the quad's top (uv (0, 0) at its lower
+    left, world +x to the image's right: pbrt's camera +x)."""
+    from PIL import Image
+
+    Image.fromarray(np.array([[[255, 0, 0]] * 2, [[0, 0, 255]] * 2], np.uint8)).save(tmp_path / "rb.png")
+    body = 'Texture "t" "spectrum" "imagemap" "string filename" "rb.png" "string filter" "point"\n'
+    body += 'Material "diffuse" "texture reflectance" "t"\n' + QUAD
+    colours = _quadrant_colours(load_pbrt_scene(_write(tmp_path, body, TEXTURED_QUAD)), device)
+    assert _redder(colours["upper left"]) and _redder(colours["upper right"])
+    assert not _redder(colours["lower left"]) and not _redder(colours["lower right"])
+
+
+def test_checkerboard_starts_with_tex1_at_the_origin(tmp_path, device):
+    """pbrt's checkerboard takes tex1 where floor(s) + floor(t) is even: the quadrant at uv (0, 0) (lower left)."""
+    body = 'Texture "c" "spectrum" "checkerboard" "float uscale" 2 "float vscale" 2\n'
+    body += '  "rgb tex1" [0.8 0.05 0.05] "rgb tex2" [0.05 0.05 0.8]\nMaterial "diffuse" "texture reflectance" "c"\n'
+    colours = _quadrant_colours(load_pbrt_scene(_write(tmp_path, body + QUAD, TEXTURED_QUAD)), device)
+    assert _redder(colours["lower left"]) and _redder(colours["upper right"])
+    assert not _redder(colours["lower right"]) and not _redder(colours["upper left"])
+
+
+def test_scaled_image_texture_is_a_linear_copy(tmp_path):
+    """`scale` over an 8-bit sRGB image: the copy holds the decoded values (IEC 61966-2-1) times the scale."""
+    from PIL import Image
+
+    from spectrace.io.images import read_texture_image
+
+    codes = np.array([[[0, 64, 128], [192, 255, 10]]], np.uint8)
+    Image.fromarray(codes).save(tmp_path / "img.png")
+    body = 'Texture "i" "spectrum" "imagemap" "string filename" "img.png"\n'
+    body += 'Texture "s" "spectrum" "scale" "texture tex" "i" "float scale" 0.5\n'
+    body += 'Material "diffuse" "texture reflectance" "s"\n' + QUAD
+    toml = tmp_path / "out" / "scene.toml"
+    import_pbrt(_write(tmp_path, body), toml)
+    data, _ = pbrt_scene_data(tmp_path / "scene.pbrt", toml)
+    (texture,) = data["textures"].values()
+    values, encoded = read_texture_image(toml.parent / texture["file"], "x")
+    c = codes / 255.0
+    linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    assert not encoded
+    np.testing.assert_allclose(values, 0.5 * linear, rtol=1e-6, atol=1e-7)
+
+
+def test_meshes_without_uv_get_pbrt_default_coordinates(tmp_path):
+    """pbrt gives a triangle without uv (0, 0), (1, 0), (1, 1) at its corners, a bilinear patch (0, 0)..(1, 1)."""
+    from spectrace.scene import load_scene
+
+    body = 'Texture "c" "spectrum" "checkerboard"\nMaterial "diffuse" "texture reflectance" "c"\n'
+    body += 'Shape "trianglemesh" "point3 P" [0 0 0  2 0 0  2 2 0]\n'
+    body += 'Shape "bilinearmesh" "point3 P" [0 0 1  2 0 1  0 2 1  2 2 1]\n'
+    toml = tmp_path / "out" / "scene.toml"
+    import_pbrt(_write(tmp_path, body), toml)
+    triangle, patch = load_scene(toml).shapes
+    # spectrace stores v' = 1 - v; the scene is mirrored in x (pbrt's camera handedness), which keeps the corners.
+    uv_of = {tuple(np.round(v, 6)): tuple(uv) for v, uv in zip(triangle.mesh.vertices, triangle.mesh.uvs, strict=True)}
+    assert uv_of == {(0, 0, 0): (0, 1), (-2, 0, 0): (1, 1), (-2, 2, 0): (1, 0)}
+    uv_of = {tuple(np.round(v, 6)): tuple(uv) for v, uv in zip(patch.mesh.vertices, patch.mesh.uvs, strict=True)}
+    assert uv_of == {(0, 0, 1): (0, 1), (-2, 0, 1): (1, 1), (0, 2, 1): (0, 0), (-2, 2, 1): (1, 0)}

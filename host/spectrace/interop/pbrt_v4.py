@@ -123,12 +123,13 @@ class PbrtImporter:
         self.notes: list[str] = []
         self.meshes: dict[str, MeshData] = {}  # file name in mesh_folder -> data
         self.files: dict[str, np.ndarray] = {}  # environment maps (EXR) to write beside the meshes
-        self._mesh_of: dict[tuple[int, bool], tuple[str, MeshData]] = {}
+        self._mesh_of: dict[tuple[int, bool, bool], tuple[str, MeshData]] = {}
         self.materials: dict[str, dict] = {}
         self._material_of: dict[int | str, str | None] = {}
         self.textures: dict[str, dict] = {}
         self._texture_of: dict[tuple[str, str], str] = {}
         self.world = np.eye(4)  # spectrace world from pbrt world: the handedness mirror, or not
+        self.origins: dict[str, Location] = {}  # TOML key path -> where in the pbrt files it came from
 
     # -------------------------------------------------- parameters
 
@@ -386,20 +387,16 @@ class PbrtImporter:
         if key not in self._texture_of:
             texture = self.scene.textures[key].entity
             table = self.texture_table(texture)
-            if table is None or "texture" not in table:
+            if "texture" not in table:
                 return table
             self._texture_of[key] = _name(texture.name, self.textures)
             self.textures[self._texture_of[key]] = {"type": table.pop("texture"), **table}
         return {"texture": self._texture_of[key]}
 
-    def texture_table(self, texture: Entity) -> dict | None:
+    def texture_table(self, texture: Entity) -> dict:
         kind = texture.kind
         if kind == "scale":
-            inner = self.texture_reference(texture, "tex")
-            factor = self.one(texture, "scale", 1.0)
-            if inner is not None and "texture" not in inner and factor >= 0:
-                return inner | {"scale": inner.get("scale", 1.0) * factor}
-            raise error(texture.location, f"{texture.label()}: spectrace scales no image textures")
+            return self.scaled_texture(texture)
         if kind == "constant":
             return self.spectrum(texture, "value", "albedo") or {"value": 1.0}
         if kind not in TEXTURES:
@@ -450,6 +447,49 @@ class PbrtImporter:
         # pbrt looks images up at (s, 1 - t), t = vs v + vd; spectrace at (u', v') = uv_scale (u, 1 - v) + uv_offset.
         table |= {"uv_scale": [us, vs], "uv_offset": [ud, 1.0 - vs - vd]}
         return table
+
+    def scaled_texture(self, texture: Entity) -> dict:
+        """pbrt's `scale` texture: `tex` times a number. A scaled spectrum stays a spectrum; a scaled image becomes a
+        linear OpenEXR copy of it, multiplied, beside the TOML (pbrt scales the uplifted spectrum, spectrace uplifts
+        the scaled colour: the same colour under D65, docs/pbrt.md)."""
+        if (factor_texture := texture.find("scale", "texture")) is not None:
+            raise error(factor_texture.location, f'{texture.label()}: a texture as "scale" (spectrace takes a number)')
+        factor = self.one(texture, "scale", 1.0)
+        if factor < 0:
+            raise error(texture.location, f"{texture.label()}: a negative scale")
+        inner = self.spectrum(texture, "tex", "albedo")
+        if inner is None:
+            reference = texture.find("tex", "texture")
+            if reference is None:
+                inner = {"value": 1.0}
+            else:
+                key = ("spectrum", str(reference.values[0]))
+                if key not in self.scene.textures:
+                    raise error(
+                        reference.location, f"\"texture tex\" names '{shown(key[1])}', which no Texture defined"
+                    )
+                inner = self.texture_table(self.scene.textures[key].entity)
+        if inner.get("texture") == "bitmap":
+            return inner | {"file": self.scaled_image(inner, factor, texture), "raw": True}
+        if "texture" in inner:
+            raise error(texture.location, f"{texture.label()}: spectrace scales spectra and image textures only")
+        return inner | {"scale": inner.get("scale", 1.0) * factor}
+
+    def scaled_image(self, table: dict, factor: float, texture: Entity) -> str:
+        from spectrace.io.images import read_texture_image
+        from spectrace.textures.bitmap import decoded
+
+        source = (self.toml_folder / table["file"]).resolve()
+        values, encoded = read_texture_image(source, str(texture.location))
+        linear = decoded(values, encoded, bool(table.get("raw", False))) * factor
+        if linear.shape[-1] == 1:
+            linear = np.repeat(linear, 3, axis=-1)
+        if linear.max(initial=0.0) > 1.0:
+            self.warn(texture.location, f"{texture.label()}: texels above 1 after scaling clamped to 1 (a reflectance)")
+            linear = np.minimum(linear, 1.0)
+        file = _name(f"{source.stem}_x{factor:g}", {Path(n).stem for n in self.files}) + ".exr"
+        self.files[file] = linear.astype(np.float32)
+        return f"{self.mesh_folder}/{file}"
 
     def reflectance(self, entity: Entity, name: str, default: float) -> dict:
         return self.spectrum(entity, name, "albedo") or self.texture_reference(entity, name) or {"value": default}
@@ -567,7 +607,7 @@ class PbrtImporter:
 
     # -------------------------------------------------- shapes
 
-    def shape_geometry(self, shape: Shape) -> tuple[dict, MeshData | None]:
+    def shape_geometry(self, shape: Shape, needs_uv: bool = False) -> tuple[dict, MeshData | None]:
         """The spectrace geometry keys (type, file, transform) for a pbrt shape, and its mesh when one is written.
         The one place that decides how each pbrt shape becomes spectrace geometry (analytic shapes change it)."""
         entity = shape.entity
@@ -583,9 +623,11 @@ class PbrtImporter:
                 self.warn(entity.location, "ReverseOrientation on a sphere not imported (its normals face out)")
             steps = [{"scale": radius}, {"matrix": matrix.tolist()}]
             return {"type": "sphere", "transform": steps}, None
-        key = id(entity), shape.reverse_orientation
+        key = id(entity), shape.reverse_orientation, needs_uv
         if key not in self._mesh_of:
             mesh = self.mesh(shape)
+            if needs_uv and mesh.uvs is None:
+                mesh = with_default_uvs(mesh, entity.kind)
             if shape.reverse_orientation:
                 mesh.faces = mesh.faces[:, ::-1].copy()
                 mesh.normals = None if mesh.normals is None else -mesh.normals
@@ -695,13 +737,16 @@ class PbrtImporter:
         if material is None and shape.area_light is None:
             self.notes.append(f"{entity.location}: a shape with the interface material (no surface) left out")
             return None
-        geometry, mesh = self.shape_geometry(shape)
-        table: dict = {"name": f"{entity.kind}{index}", **geometry}
         if material is None:
             material = self.material(None, entity.location)
+        textured = any(isinstance(v, dict) and "texture" in v for v in self.materials.get(material or "", {}).values())
+        geometry, mesh = self.shape_geometry(shape, needs_uv=textured)
+        table: dict = {"name": f"{entity.kind}{index}", **geometry}
         table["material"] = material
         alpha = entity.find("alpha", "float")
-        if material is not None and alpha is not None and float(alpha.values[0]) < 1.0:
+        if alpha is not None and float(alpha.values[0]) < 1.0 and shape.area_light is not None:
+            self.warn(alpha.location, '"alpha" on an area light not imported (spectrace\'s emitters are opaque)')
+        elif material is not None and alpha is not None and float(alpha.values[0]) < 1.0:
             table["material"] = self._with_opacity(material, float(alpha.values[0]))
         if shape.area_light is not None:
             table["emitter"] = self.area_light(shape.area_light, mesh, self.world @ shape.world_from_object, entity)
@@ -828,8 +873,14 @@ class PbrtImporter:
         self.camera(data)
         self.integrator(data)
         self.sampler(data)
-        shapes = [table for index, shape in enumerate(self.scene.shapes) if (table := self.shape(shape, index))]
-        lights = [self.light(light) for light in self.scene.lights]
+        shapes, lights = [], []
+        for index, shape in enumerate(self.scene.shapes):
+            if (table := self.shape(shape, index)) is not None:
+                self.origins[f"shapes[{len(shapes)}]"] = shape.entity.location
+                shapes.append(table)
+        for light in self.scene.lights:
+            self.origins[f"lights[{len(lights)}]"] = light.entity.location
+            lights.append(self.light(light))
         if sum(light["type"] in ("constant", "envmap") for light in lights) > 1:
             extra = [light.entity for light in self.scene.lights if light.entity.kind == "infinite"][1]
             raise error(extra.location, "a second infinite light; spectrace takes one environment light")
@@ -847,6 +898,18 @@ class PbrtImporter:
         data["lights"] = lights
         order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
         return {key: data[key] for key in order if key in data and data[key] not in ([], {})}
+
+    def imported_error(self, failure: SpectraceError, toml_path: Path) -> SpectraceError:
+        """The loader's complaint about the written TOML, told at the pbrt line the value came from."""
+        where = failure.where or ""
+        key = where.split(": ", 1)[1] if where.startswith(f"{toml_path}: ") else ""
+        matches = [p for p in self.origins if key == p or key.startswith((p + ".", p + "["))]
+        detail = f" (imported as {key})" if key else ""
+        if not matches:
+            return SpectraceError(
+                f"the imported scene does not load: {failure.message}{detail}", where=str(self.source)
+            )
+        return error(self.origins[max(matches, key=len)], f"{failure.message}{detail}")
 
     def _was_imported(self, entity: Entity) -> bool:
         # Named materials and textures nobody uses are not read; their parameters are not reported.
@@ -900,6 +963,22 @@ def cylinder_mesh(radius: float, zmin: float, zmax: float, phimax_degrees: float
     normals = np.concatenate([np.column_stack([xy, np.zeros(n)])] * 2)
     uvs = np.column_stack([np.tile(phi / phi[-1], 2), np.repeat([0.0, 1.0], n)])
     return MeshData(vertices, faces, normals, uvs)
+
+
+def with_default_uvs(mesh: MeshData, kind: str) -> MeshData:
+    """The mesh with pbrt's texture coordinates for meshes without any: (0, 0), (1, 0), (1, 1) at each triangle's
+    corners; a bilinear patch's (0, 0)..(1, 1) at its corners (its second triangle p00, p11, p01). Each corner gets a
+    vertex of its own."""
+    count = len(mesh.faces)
+    corners = np.tile([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], (count, 1, 1))
+    if kind == "bilinearmesh":  # faces: the patches' first triangles, then their second ones
+        corners[count // 2 :] = [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+    return MeshData(
+        mesh.vertices[mesh.faces.ravel()],
+        np.arange(3 * count).reshape(count, 3),
+        None if mesh.normals is None else mesh.normals[mesh.faces.ravel()],
+        corners.reshape(-1, 2),
+    )
 
 
 def write_ply(path: Path, mesh: MeshData) -> None:
@@ -999,7 +1078,7 @@ def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = Fal
         try:
             load_scene(temp)
         except SpectraceError as failure:
-            raise SpectraceError(f"the imported scene does not load: {failure}", where=str(pbrt_path)) from None
+            raise importer.imported_error(failure, temp) from None
 
     try:
         write_atomically(toml_path, write_and_check)
