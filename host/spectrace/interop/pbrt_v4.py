@@ -873,7 +873,8 @@ class PbrtImporter:
         self.camera(data)
         self.integrator(data)
         self.sampler(data)
-        shapes, lights = [], []
+        shapes: list[dict] = []
+        lights: list[dict] = []
         for index, shape in enumerate(self.scene.shapes):
             if (table := self.shape(shape, index)) is not None:
                 self.origins[f"shapes[{len(shapes)}]"] = shape.entity.location
