@@ -130,6 +130,7 @@ class PbrtImporter:
         self._texture_of: dict[tuple[str, str], str] = {}
         self.world = np.eye(4)  # spectrace world from pbrt world: the handedness mirror, or not
         self.origins: dict[str, Location] = {}  # TOML key path -> where in the pbrt files it came from
+        self.read: set[int] = set()  # the entities mapped (their unread parameters are reported)
 
     # -------------------------------------------------- parameters
 
@@ -394,6 +395,7 @@ class PbrtImporter:
         return {"texture": self._texture_of[key]}
 
     def texture_table(self, texture: Entity) -> dict:
+        self.read.add(id(texture))
         kind = texture.kind
         if kind == "scale":
             return self.scaled_texture(texture)
@@ -532,6 +534,7 @@ class PbrtImporter:
         return name
 
     def material_table(self, material: Entity) -> dict | None:
+        self.read.add(id(material))
         kind = material.kind
         if material.directive == "MakeNamedMaterial":
             kind = self.string(material, "type") or ""
@@ -731,6 +734,7 @@ class PbrtImporter:
 
     def shape(self, shape: Shape, index: int) -> dict | None:
         entity = shape.entity
+        self.read.add(id(entity))
         if entity.kind not in SHAPES:
             raise error(entity.location, f"shape '{shown(entity.kind)}': spectrace imports {', '.join(SHAPES)}")
         material = self.material(shape.material, entity.location)
@@ -760,6 +764,7 @@ class PbrtImporter:
     # -------------------------------------------------- lights
 
     def area_light(self, light: Entity, mesh: MeshData | None, matrix: np.ndarray, shape: Entity) -> dict:
+        self.read.add(id(light))
         if light.kind not in AREA_LIGHTS:
             raise error(light.location, f"area light '{shown(light.kind)}' (pbrt-v4's only one is diffuse)")
         if light.find("filename") is not None:
@@ -784,6 +789,7 @@ class PbrtImporter:
 
     def light(self, light) -> dict:
         entity, matrix = light.entity, light.world_from_light
+        self.read.add(id(entity))
         kind = entity.kind
         scale = self.one(entity, "scale", 1.0)
         if kind == "point":
@@ -887,8 +893,11 @@ class PbrtImporter:
             raise error(extra.location, "a second infinite light; spectrace takes one environment light")
         if not shapes and not lights:
             raise SpectraceError("the scene has no shapes or lights spectrace imports", where=str(self.source))
+        for entity in (self.scene.camera, self.scene.film, self.scene.sampler, self.scene.integrator):
+            if entity is not None:
+                self.read.add(id(entity))
         for entity in self.scene.entities:
-            if self._was_imported(entity):
+            if id(entity) in self.read:
                 for parameter in entity.parameters:
                     if not parameter.used:
                         self.warn(parameter.location, f'{entity.label()}: parameter "{parameter.label()}" not imported')
@@ -898,7 +907,8 @@ class PbrtImporter:
         data["shapes"] = shapes
         data["lights"] = lights
         order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
-        return {key: data[key] for key in order if key in data and data[key] not in ([], {})}
+        # materials stays even when empty: the scene format asks for the table.
+        return {key: data[key] for key in order if key in data and (key == "materials" or data[key] not in ([], {}))}
 
     def imported_error(self, failure: SpectraceError, toml_path: Path) -> SpectraceError:
         """The loader's complaint about the written TOML, told at the pbrt line the value came from."""
@@ -911,19 +921,6 @@ class PbrtImporter:
                 f"the imported scene does not load: {failure.message}{detail}", where=str(self.source)
             )
         return error(self.origins[max(matches, key=len)], f"{failure.message}{detail}")
-
-    def _was_imported(self, entity: Entity) -> bool:
-        # Named materials and textures nobody uses are not read; their parameters are not reported.
-        return any(parameter.used for parameter in entity.parameters) or entity.directive in (
-            "Camera",
-            "Film",
-            "Sampler",
-            "Integrator",
-            "Shape",
-            "LightSource",
-            "AreaLightSource",
-            "Material",
-        )
 
 
 # ---------------------------------------------------------------- tessellation (until spectrace has analytic shapes)
