@@ -333,7 +333,8 @@ WorldBegin
 MITSUBA_XML = """<scene version="3.0.0">
 <sensor type="perspective"><float name="fov" value="45"/>
   <transform name="to_world"><lookat origin="0, 1, 4" target="0, 1, 0" up="0, 1, 0"/></transform>
-  <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+  <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/>
+    <rfilter type="box"/></film></sensor>
 <integrator type="path"><integer name="max_depth" value="4"/></integrator>
 <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
   <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.7, 0.7"/></bsdf></shape>
@@ -387,6 +388,23 @@ def test_scene_renders_as_the_same_scene_imported_from_mitsuba_xml(tmp_path, dev
     theirs = spectrace_replicas(Renderer(from_xml, device), replicas=8, replica_spp=8)
     assert ours[..., 1].mean() > 0.05  # the scene is lit
     assert_replicas_agree(ours, theirs, block=4)
+
+
+@pytest.mark.peer
+def test_scene_renders_as_mitsuba_renders_the_same_scene(tmp_path, device, mitsuba_scalar_spectral):
+    """The pbrt scene imported and rendered by spectrace against Mitsuba 3 (scalar_spectral) rendering the XML."""
+    from spectrace.engine.renderer import Renderer
+    from spectrace.spectral import xyz_to_linear_srgb
+
+    mi = mitsuba_scalar_spectral
+    (tmp_path / "scene.xml").write_text(MITSUBA_XML)
+    (tmp_path / "scene.pbrt").write_text(PBRT_SCENE)
+    replicas, replica_spp = 16, 8
+    mitsuba_scene = mi.load_file(str(tmp_path / "scene.xml"))
+    by_mitsuba = np.stack([np.array(mi.render(mitsuba_scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
+    ours = spectrace_replicas(Renderer(load_pbrt_scene(tmp_path / "scene.pbrt"), device), replicas, replica_spp)
+    assert by_mitsuba.mean() > 0.05
+    assert_replicas_agree(xyz_to_linear_srgb(ours), by_mitsuba, block=4)
 
 
 # ---------------------------------------------------------------- image infinite lights
