@@ -275,6 +275,21 @@ def test_what_spectrace_cannot_represent_is_refused_at_its_line(tmp_path, body, 
     assert message in failure.value.message
 
 
+def test_command_prints_warnings_and_strict_fails_in_one_line(tmp_path, monkeypatch, capsys):
+    # The first Material is replaced before any shape uses it: pbrt never reads it, nor is it reported.
+    body = 'Material "diffuse" "float frobs" 1\nMaterial "diffuse" "rgb reflectance" [.5 .5 .5] "float sigma" 20\n'
+    path = _write(tmp_path, body + PLANE)
+    out = tmp_path / "x.toml"
+    code, stderr = run_in_process(monkeypatch, capsys, ["import-pbrt", str(path), "-o", str(out)])
+    assert code == 0 and out.is_file()
+    lines = stderr.strip().splitlines()
+    assert f'warning: {path}:6: Material "diffuse": parameter "float sigma" not imported' in lines
+    assert not any("frobs" in line for line in lines)
+    assert lines[-1] == f"wrote {out}"
+    code, stderr = run_in_process(monkeypatch, capsys, ["import-pbrt", str(path), "-o", str(out), "--strict"])
+    assert code != 0 and len(stderr.strip().splitlines()) == 1 and "sigma" in stderr
+
+
 def test_orthographic_camera_is_one_line(tmp_path, monkeypatch, capsys):
     path = _write(tmp_path, PLANE, HEADER.replace('"perspective"', '"orthographic"'))
     code, stderr = run_in_process(monkeypatch, capsys, ["import-pbrt", str(path), "-o", str(tmp_path / "x.toml")])
