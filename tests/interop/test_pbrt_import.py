@@ -199,10 +199,46 @@ def test_lights_are_normalised_to_luminance_scale(tmp_path, spectrum):
     assert spectrum_to_xyz(light.intensity)[1] == pytest.approx(2.5, rel=1e-6)
 
 
+def test_blackbody_light_matches_planck_normalised_with_colour_science(tmp_path):
+    """pbrt-v4's I(λ) = scale · B(λ) / ∫ȳB: Planck's law written here, the luminance factor from colour-science's
+    CIE 1931 ȳ (spectrace's film: Y = ∫ȳL / ∫ȳ)."""
+    import colour
+
+    body = 'LightSource "point" "blackbody I" 2700 "float scale" 4\n' + PLANE
+    (light,) = load_pbrt_scene(_write(tmp_path, body)).lights
+    wavelengths = np.arange(360.0, 831.0)
+    h, c, k = 6.62607015e-34, 299792458.0, 1.380649e-23
+    metres = wavelengths * 1e-9
+    planck = 2 * h * c**2 / metres**5 / np.expm1(h * c / (metres * k * 2700.0))
+    ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(360, 830, 1))
+    ybar = ybar.values[:, 1]
+    expected = 4.0 * planck / (np.sum(ybar * planck) / np.sum(ybar))
+    np.testing.assert_allclose(light.intensity.values, expected, rtol=2e-3)
+
+
 def test_light_power_follows_pbrt(tmp_path):
     body = 'LightSource "point" "float power" 100 "rgb I" [1 1 1]\n' + PLANE
     data, _ = pbrt_scene_data(_write(tmp_path, body))
     assert data["lights"][0]["intensity"]["scale"] == pytest.approx(100 / (4 * math.pi))
+    # A spot's power spreads over 2π((1 - cos θs) + (cos θs - cos θc)/2), θc = coneangle, θs = coneangle - delta.
+    body = 'LightSource "spot" "float power" 50 "float coneangle" 40 "float conedeltaangle" 10 "rgb I" [1 1 1]\n'
+    data, _ = pbrt_scene_data(_write(tmp_path, body + PLANE))
+    cos_c, cos_s = math.cos(math.radians(40)), math.cos(math.radians(30))
+    spot = data["lights"][0]
+    assert spot["intensity"]["scale"] == pytest.approx(50 / (2 * math.pi * ((1 - cos_s) + (cos_s - cos_c) / 2)))
+    assert (spot["cutoff_angle"], spot["falloff_start"]) == (40, 30)
+    # An area light's power: over the shape's area (a 2 x 3 quad), π, and two sides.
+    body = 'AreaLightSource "diffuse" "float power" 60 "bool twosided" true "rgb L" [1 1 1]\n'
+    body += 'Shape "trianglemesh" "point3 P" [0 0 0  2 0 0  2 3 0  0 3 0] "integer indices" [0 1 2 0 2 3]\n'
+    data, _ = pbrt_scene_data(_write(tmp_path, body))
+    emitter = data["shapes"][0]["emitter"]
+    assert emitter["radiance"]["scale"] == pytest.approx(60 / (2 * 6 * math.pi)) and emitter["two_sided"]
+    # A distant light travels from `from` to `to`; `illuminance` multiplies its unit-luminance spectrum.
+    body = 'LightSource "distant" "point3 from" [0 5 0] "point3 to" [0 0 0] "float illuminance" 3 "rgb L" [1 1 1]\n'
+    data, _ = pbrt_scene_data(_write(tmp_path, body + PLANE))
+    distant = data["lights"][0]
+    np.testing.assert_allclose(distant["direction"], [0, -1, 0], atol=1e-12)
+    assert distant["irradiance"]["scale"] == pytest.approx(3.0)
 
 
 def test_named_spectra_map_to_spectrace_data(tmp_path):
