@@ -620,12 +620,13 @@ class PbrtImporter:
             if not radius > 0:
                 raise error(entity.location, f"a sphere's radius must be > 0, got {radius:g}")
             zmin, zmax = self.one(entity, "zmin", -radius), self.one(entity, "zmax", radius)
-            if zmin > -radius or zmax < radius or self.one(entity, "phimax", 360.0) < 360.0:
-                self.warn(entity.location, "a partial sphere (zmin, zmax, phimax) imported whole")
-            if shape.reverse_orientation:
-                self.warn(entity.location, "ReverseOrientation on a sphere not imported (its normals face out)")
-            steps = [{"scale": radius}, {"matrix": matrix.tolist()}]
-            return {"type": "sphere", "transform": steps}, None
+            phimax = self.one(entity, "phimax", 360.0)
+            whole = zmin <= -radius and zmax >= radius and phimax >= 360.0
+            # The built-in sphere (smooth, exact normals) for a whole, untextured, outward sphere; otherwise a
+            # tessellation with pbrt's parametrisation (partial spheres, texture coordinates, reversed fronts).
+            if whole and not needs_uv and not shape.reverse_orientation:
+                steps = [{"scale": radius}, {"matrix": matrix.tolist()}]
+                return {"type": "sphere", "transform": steps}, None
         key = id(entity), shape.reverse_orientation, needs_uv
         if key not in self._mesh_of:
             mesh = self.mesh(shape)
@@ -683,6 +684,14 @@ class PbrtImporter:
                     raise error(entity.location, f'"{name}" has {len(array)} values, "P" {len(vertices)}')
         elif kind == "plymesh":
             mesh = self.ply_mesh(entity)
+        elif kind == "sphere":
+            radius = self.one(entity, "radius", 1.0)
+            mesh = sphere_mesh(
+                radius,
+                max(self.one(entity, "zmin", -radius), -radius),
+                min(self.one(entity, "zmax", radius), radius),
+                self.one(entity, "phimax", 360.0),
+            )
         elif kind == "disk":
             mesh = disk_mesh(
                 self.one(entity, "height", 0.0),
@@ -945,6 +954,35 @@ def disk_mesh(height: float, radius: float, inner: float, phimax_degrees: float)
         faces = faces[:segments]
     normals = np.tile([0.0, 0.0, 1.0], (len(vertices), 1))
     return MeshData(vertices, faces, normals, uvs)
+
+
+def sphere_mesh(radius: float, zmin: float, zmax: float, phimax_degrees: float) -> MeshData:
+    """pbrt's (partial) sphere about z as a grid of triangles facing outward, with radial normals and pbrt's uv:
+    u = φ/φmax, v = (θ − θ(zmin)) / (θ(zmax) − θ(zmin)), θ = acos(z/r)."""
+    phimax = math.radians(min(max(phimax_degrees, 0.0), 360.0))
+    segments = max(3, int(math.ceil(TESSELLATION_SEGMENTS * phimax / (2 * math.pi))))
+    theta_start, theta_end = (
+        math.acos(max(-1.0, min(1.0, zmin / radius))),
+        math.acos(max(-1.0, min(1.0, zmax / radius))),
+    )
+    rings = max(2, int(math.ceil(TESSELLATION_SEGMENTS / 2 * abs(theta_start - theta_end) / math.pi)))
+    u = np.linspace(0.0, 1.0, segments + 1)
+    v = np.linspace(0.0, 1.0, rings + 1)
+    uu, vv = np.meshgrid(u, v)  # rows: v, from zmin up to zmax
+    phi, theta = uu * phimax, theta_start + vv * (theta_end - theta_start)
+    normals = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1).reshape(-1, 3)
+    columns = segments + 1
+    i, j = np.meshgrid(np.arange(rings), np.arange(segments), indexing="ij")
+    a = (i * columns + j).ravel()
+    b, c, d = a + 1, a + columns + 1, a + columns
+    # (a, b, c) winds with dp/dφ × dp/dz, outward, as pbrt's sphere faces.
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    vertices = radius * normals
+    area = 0.5 * np.linalg.norm(
+        np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]]), axis=1
+    )
+    faces = faces[area > 1e-12 * radius * radius]  # the poles' degenerate triangles
+    return MeshData(vertices, faces, normals, np.stack([uu.ravel(), vv.ravel()], 1))
 
 
 def cylinder_mesh(radius: float, zmin: float, zmax: float, phimax_degrees: float) -> MeshData:
