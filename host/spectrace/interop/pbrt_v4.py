@@ -19,9 +19,10 @@ Conventions it bridges (each checked by tests/interop/test_pbrt_import.py):
   to spectrace's data: metal-{Ag,Al,Au,Cu}-{eta,k} to spectra/metals, glass-BK7 to N-BK7 and glass-F11 to N-SF11
   (SCHOTT Sellmeier), stdillum-* to the CIE illuminants. Wavelength/value lists are zero outside their range, as in
   pbrt.
-- Meshes pbrt gives inline (trianglemesh, bilinearmesh) and the shapes spectrace has no built-in for (disk, cylinder)
-  are written as binary PLY files into a folder beside the TOML; PLY files a scene names are rewritten there too
-  (pbrt's ReverseOrientation and normal-facing rules applied, gzipped files read).
+- Files: meshes pbrt gives inline (trianglemesh, bilinearmesh) and the shapes spectrace has no built-in for (disk,
+  cylinder, partial or textured spheres) are written as binary PLY files into a folder beside the TOML; PLY files a
+  scene names are rewritten there too (pbrt's ReverseOrientation and normal-facing rules applied, gzipped files
+  read); environment maps (resampled, spectrace.interop.pbrt_envmap) and scaled image textures go there as OpenEXR.
 
 Anything the file states that is not imported is reported: a parameter no mapping read, or a directive spectrace
 has no counterpart for, as a warning naming file:line (an error with strict=True); an entity of a type spectrace
@@ -61,6 +62,8 @@ _NO_EQUIVALENT = {
     "hair": "spectrace has no hair model",
     "subsurface": "spectrace's subsurface scattering is a medium inside a shape, not a material",
 }
+# Unbiased integrators that converge to the path tracer's image.
+_SAME_IMAGE_INTEGRATORS = ("bdpt", "mlt", "sppm", "lightpath", "randomwalk")
 _METALS = ("Ag", "Al", "Au", "Cu")  # pbrt's metal-X-eta / metal-X-k that spectra/metals holds
 _GLASSES = {"glass-BK7": "N-BK7", "glass-F11": "N-SF11"}  # spectra/glasses/sellmeier.csv notes which pbrt table each is
 _ILLUMINANTS = {"stdillum-A": "A", "stdillum-D50": "D50", "stdillum-D65": "D65"} | {
@@ -352,18 +355,11 @@ class PbrtImporter:
         depth = PBRT_DEFAULT_MAXDEPTH
         if integrator is not None:
             depth = self.integer(integrator, "maxdepth", depth, low=0)
-            if integrator.kind not in ("volpath", "path", "simplepath", "simplevolpath"):
-                self.notes.append(
-                    f"{integrator.location}: integrator '{shown(integrator.kind)}' imported as path tracing "
-                    "(the same image, other noise)"
-                    if integrator.kind in ("bdpt", "mlt", "sppm", "lightpath", "randomwalk")
-                    else f"{integrator.location}: integrator '{shown(integrator.kind)}' imported as path tracing"
-                )
-                if integrator.kind not in ("bdpt", "mlt", "sppm", "lightpath", "randomwalk"):
-                    self.warn(
-                        integrator.location,
-                        f"integrator '{shown(integrator.kind)}' renders another quantity; path tracing imported",
-                    )
+            kind = shown(integrator.kind)
+            if integrator.kind in _SAME_IMAGE_INTEGRATORS:
+                self.notes.append(f"{integrator.location}: integrator '{kind}' imported as path tracing (same image)")
+            elif integrator.kind not in ("volpath", "path", "simplepath", "simplevolpath"):
+                self.warn(integrator.location, f"integrator '{kind}' renders another quantity; path tracing imported")
         # pbrt's maxdepth counts bounces (0: emitters only), spectrace's max_depth path segments (1: emitters only).
         data["integrator"] = {"type": "path", "max_depth": depth + 1}
 
@@ -734,10 +730,9 @@ class PbrtImporter:
                 loaded = load_mesh(plain, where)
         else:
             loaded = load_mesh(path, where)
-        for key in ("displacement", "edgelength"):
-            entity.find(key)
-        if entity.find("displacement") is not None:
-            self.warn(entity.location, "plymesh displacement not imported")
+        entity.find("edgelength")  # a displacement's dicing rate: nothing to do without the displacement
+        if (displacement := entity.find("displacement")) is not None:
+            self.warn(displacement.location, "plymesh displacement not imported")
         uvs = None if loaded.uvs is None else np.column_stack([loaded.uvs[:, 0], 1.0 - loaded.uvs[:, 1]])
         return MeshData(np.asarray(loaded.vertices), np.asarray(loaded.faces), loaded.normals, uvs)
 
