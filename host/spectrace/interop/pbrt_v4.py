@@ -219,8 +219,7 @@ class PbrtImporter:
                 bound = "[0, 1]" if role == "albedo" else ">= 0"
                 raise error(parameter.location, f'"{parameter.label()}" components must lie in {bound}, got {rgb}')
             if role == "unbounded":
-                self.warn(parameter.location, f'"{parameter.label()}": an RGB index of refraction is not imported')
-                return None
+                raise error(parameter.location, f'"{parameter.label()}": give an index of refraction as a spectrum')
             return {"rgb": rgb}
         if parameter.type == "blackbody":
             if not values[0] > 0:
