@@ -304,6 +304,10 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     warnings, _ = import_pbrt(path, tmp_path / "a.toml")
     assert f'{path}:6: Shape "sphere": parameter "float frobs" not imported' in warnings
     assert any(w.startswith(f"{path}:5: PixelFilter not imported") for w in warnings)
+    # The same message at many lines is one warning.
+    body = "".join(f'Shape "sphere" "float frobs" {i}\n' for i in range(50))
+    warnings, _ = import_pbrt(_write(tmp_path, body), tmp_path / "c.toml")
+    assert warnings == [f'{path}:5: Shape "sphere": parameter "float frobs" not imported (and 49 more like it)']
     with pytest.raises(SpectraceError, match="frobs"):
         import_pbrt(path, tmp_path / "b.toml", strict=True)
     assert not (tmp_path / "b.toml").exists()

@@ -98,6 +98,21 @@ def _name(base: str, taken) -> str:
     return candidate
 
 
+def _grouped(warnings: list[str]) -> list[str]:
+    """Warnings with the same message at several lines as one line: the first place, and how many more."""
+    groups: dict[str, list[str]] = {}
+    for warning in warnings:
+        match = re.match(r"(.*?:\d+): (.*)", warning)
+        place, message = (match.group(1), match.group(2)) if match else ("", warning)
+        groups.setdefault(message, []).append(place)
+    return [
+        f"{places[0]}: {message}" + (f" (and {len(places) - 1} more like it)" if len(places) > 1 else "")
+        if places[0]
+        else message
+        for message, places in groups.items()
+    ]
+
+
 def _luminance_factor(table: dict) -> float:
     """Y (spectrace's film: ∫ȳ L / ∫ȳ) of a spectrum table without its scale."""
     from spectrace.spectral import library_spectrum, parse_inline_spectrum, spectrum_to_xyz
@@ -904,6 +919,7 @@ class PbrtImporter:
                 for parameter in entity.parameters:
                     if not parameter.used:
                         self.warn(parameter.location, f'{entity.label()}: parameter "{parameter.label()}" not imported')
+        self.warnings = _grouped(self.warnings)
         if self.textures:
             data["textures"] = self.textures
         data["materials"] = self.materials
