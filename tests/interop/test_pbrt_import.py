@@ -34,20 +34,22 @@ def _write(folder: Path, body: str, header: str = HEADER, name: str = "scene.pbr
 
 
 def test_tokens_strings_numbers_brackets_and_comments():
-    text = 'Shape "sphere" # a comment "not a string"\n  "float radius" [ -1.5e2 ] "string n" "a \\"q\\" b"\n[.5]'
+    text = 'Shape "sphere" # a comment "not a string"\n  "float radius" [ -1.5e2 ] "string n" "a \\"q\\" b"\n'
+    text += '["s" 7 # note\n]\n[.5\n 2]\nWorldBegin'
     tokens = list(tokenize(text, Path("x.pbrt")))
     assert [(t.text, t.kind, t.location.line) for t in tokens] == [
         ("Shape", "word", 1),
         ("sphere", "string", 1),
         ("float radius", "string", 2),
-        ("[", "[", 2),
-        ("-1.5e2", "number", 2),
-        ("]", "]", 2),
+        (" -1.5e2 ", "array", 2),  # brackets without strings or comments: one token, split later
         ("string n", "string", 2),
         ('a "q" b', "string", 2),
         ("[", "[", 3),
-        (".5", "number", 3),
-        ("]", "]", 3),
+        ("s", "string", 3),
+        ("7", "number", 3),
+        ("]", "]", 4),
+        (".5\n 2", "array", 5),
+        ("WorldBegin", "word", 7),
     ]
 
 
@@ -78,6 +80,9 @@ def test_parameter_lists_with_and_without_brackets(tmp_path):
         ("AttributeBegin\nAttributeEnd\nAttributeEnd\n", 7, "AttributeEnd without a matching AttributeBegin"),
         ('Shape "sphere" "floot radius" 1\n', 5, "unknown parameter type 'floot'"),
         ('Shape "sphere" "rgb c" [1 2]\n', 5, "needs a multiple of 3 values"),
+        ('Shape "sphere" "point3 P" [1 2\n 3 x 5 6]\n', 5, "expected a number for \"point3 P\", got 'x'"),
+        ('Shape "sphere" "float r" [1.2.3]\n', 5, "got '1.2.3'"),
+        ("Transform [1 0 0 0  0 1 0 0  0 0 1 0]\n", 5, "Transform takes 16 numbers"),
         ('Include "missing.pbrt"\n', 5, "not a file"),
         ("AttributeBegin\n", 5, "AttributeBegin is never closed"),
         ('ObjectInstance "nothing"\n', 5, "which no ObjectBegin defined"),

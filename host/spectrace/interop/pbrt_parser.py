@@ -53,6 +53,9 @@ PARAMETER_TYPES = {
 }
 
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+# A bracketed list without strings or comments: scanned in one step (meshes hold millions of numbers).
+_PLAIN_ARRAY = re.compile(r"\[([^\]\[\"#]*)\]")
+_NUMBERS = re.compile(r"(?:\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?(?=\s|$))*\s*")
 # Directive -> its positional arguments: "n" a number, "s" a quoted string, "m" 16 numbers in brackets; and whether
 # a parameter list follows.
 _DIRECTIVES: dict[str, tuple[str, bool]] = {
@@ -121,7 +124,9 @@ def shown(text: str, limit: int = 60) -> str:
 @dataclass
 class Token:
     text: str
-    kind: str  # "string" (quoted, unescaped), "number", "word" (a keyword or bare true/false), "[" or "]"
+    # "string" (quoted, unescaped), "number", "word" (a keyword or bare true/false), "[" or "]", or "array": the
+    # text between a "[" and its "]" when it holds no strings or comments (numbers or bare words)
+    kind: str
     location: Location
 
 
@@ -138,6 +143,10 @@ def tokenize(text: str, path: Path):
         elif char == "#":
             end = text.find("\n", index)
             index = size if end < 0 else end
+        elif char == "[" and (plain := _PLAIN_ARRAY.match(text, index)) is not None:
+            yield Token(plain.group(1), "array", Location(path, line))
+            line += plain.group(1).count("\n")
+            index = plain.end()
         elif char in "[]":
             yield Token(char, char, Location(path, line))
             index += 1
@@ -232,6 +241,8 @@ def _parameter(stream: _TokenStream, declaration: Token) -> Parameter:
             f"(pbrt-v4 knows {', '.join(PARAMETER_TYPES)})",
         )
     token = stream.next(f'a value for "{shown(declaration.text)}"')
+    if token.kind == "array":
+        return Parameter(kind, name, _array_values(token, kind, declaration), declaration.location)
     raw: list[Token] = []
     if token.kind == "[":
         while (item := stream.next(f"']' closing the values of \"{shown(declaration.text)}\"")).kind != "]":
@@ -265,6 +276,31 @@ def _parameter(stream: _TokenStream, declaration: Token) -> Parameter:
     return Parameter(kind, name, values, declaration.location)
 
 
+def _array_values(token: Token, kind: str, declaration: Token) -> list:
+    """The values of a plain bracketed list, converted at once."""
+    label = shown(declaration.text)
+    if kind in ("string", "texture"):
+        raise error(token.location, f'"{label}" takes quoted strings')
+    items = token.text.split()
+    if kind == "bool":
+        if any(item not in ("true", "false") for item in items):
+            raise error(token.location, f'"{label}" takes true or false')
+        values: list = [item == "true" for item in items]
+    else:
+        if not _NUMBERS.fullmatch(token.text):
+            bad = next((item for item in items if not _NUMBER.fullmatch(item)), token.text)
+            raise error(token.location, f"expected a number for \"{label}\", got '{shown(bad)}'")
+        numbers = np.array(items, dtype=np.float64)
+        if not np.all(np.isfinite(numbers)):
+            raise error(token.location, f'"{label}" holds a number beyond the float range')
+        values = numbers.tolist()
+    size = PARAMETER_TYPES[kind]
+    if not values or (size and len(values) % size):
+        count = f"a multiple of {size}" if size > 1 else "at least one"
+        raise error(declaration.location, f'"{label}" needs {count} values, got {len(values)}')
+    return values
+
+
 def _directives(path: Path, depth: int = 0):
     """The directives of one file, Include and Import followed in place."""
     if depth > MAX_INCLUDE_DEPTH:
@@ -291,6 +327,12 @@ def _directives(path: Path, depth: int = 0):
                 arguments.append(_number(stream.next(f"a number after {token.text}"), f"a number after {token.text}"))
             elif slot == "m":
                 opening = stream.peek()
+                if opening is not None and opening.kind == "array":
+                    stream.next("[")
+                    if len(opening.text.split()) != 16 or not _NUMBERS.fullmatch(opening.text):
+                        raise error(opening.location, f"{token.text} takes 16 numbers in brackets")
+                    arguments.append([float(number) for number in opening.text.split()])
+                    continue
                 bracketed = opening is not None and opening.kind == "["
                 if bracketed:
                     stream.next("[")
