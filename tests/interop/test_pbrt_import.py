@@ -265,6 +265,18 @@ Shape "sphere"
     assert materials[3] == {"type": "plastic", "reflectance": {"rgb": [0.2, 0.3, 0.4]}, "ior": 1.4}
 
 
+def test_every_named_spectrum_pbrt_shares_with_spectrace_loads(tmp_path):
+    """pbrt-v4's stdillum-* and metal-{Ag,Al,Au,Cu}-* names (its spectrum.cpp table) all resolve to spectrace data."""
+    illuminants = ["stdillum-A", "stdillum-D50", "stdillum-D65", *(f"stdillum-F{i}" for i in range(1, 13))]
+    body = "".join(f'LightSource "point" "spectrum I" "{name}" "float scale" 2\n' for name in illuminants)
+    for metal in ("Ag", "Al", "Au", "Cu"):
+        body += f'Material "conductor" "spectrum eta" "metal-{metal}-eta" "spectrum k" "metal-{metal}-k"\n'
+        body += 'Shape "sphere"\n'
+    scene = load_pbrt_scene(_write(tmp_path, body))
+    assert [spectrum_to_xyz(light.intensity)[1] for light in scene.lights] == pytest.approx([2.0] * len(illuminants))
+    assert len({id(shape.material) for shape in scene.shapes}) == 4
+
+
 def test_reverse_orientation_and_bilinear_patches_keep_pbrt_fronts(tmp_path):
     body = """Shape "bilinearmesh" "point3 P" [0 0 0  1 0 0  0 1 0  1 1 0]
 ReverseOrientation
