@@ -315,6 +315,24 @@ def test_partial_and_reversed_spheres_are_tessellated_as_pbrt_defines_them(tmp_p
     assert hemisphere_mesh.vertices[:, 2].max() <= 1e-9 and hemisphere_mesh.vertices[:, 2].min() == pytest.approx(-2)
 
 
+def test_loop_subdivision_refines_the_control_mesh(tmp_path):
+    """Each Loop step adds a vertex per edge and splits each triangle in four (an octahedron: 6 vertices, 12 edges,
+    8 faces -> 18, 48, 32 -> 66 vertices, 128 faces); the surface stays inside the control mesh's hull and, closed
+    and convex, faces outward."""
+    body = """Shape "loopsubdiv" "integer levels" 2
+  "point3 P" [1 0 0  -1 0 0  0 1 0  0 -1 0  0 0 1  0 0 -1]
+  "integer indices" [0 2 4  2 1 4  1 3 4  3 0 4  2 0 5  1 2 5  3 1 5  0 3 5]
+"""
+    data, importer = pbrt_scene_data(_write(tmp_path, body))
+    mesh = importer.meshes[Path(data["shapes"][0]["file"]).name]
+    assert (len(mesh.vertices), len(mesh.faces)) == (66, 128)
+    assert np.abs(mesh.vertices).sum(axis=1).max() <= 1 + 1e-12  # inside the octahedron |x| + |y| + |z| <= 1
+    a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
+    assert np.all(np.einsum("ij,ij->i", np.cross(b - a, c - a), a + b + c) > 0)
+    assert np.all(np.einsum("ij,ij->i", mesh.normals, mesh.vertices) > 0)
+    assert any("loopsubdiv refined 2 times" in note for note in importer.notes)
+
+
 def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     body = 'PixelFilter "gaussian"\nShape "sphere" "float radius" 1 "float frobs" 3\n' + PLANE
     path = _write(tmp_path, body)
@@ -337,6 +355,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
         ('Material "thindielectric"\nShape "sphere"\n', 5, "spectrace has no thin dielectric"),
         ('Material "diffusetransmission"\nShape "sphere"\n', 5, "spectrace has no diffuse transmission"),
         ('Shape "curve"\n', 5, "shape 'curve'"),
+        ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),
         ('LightSource "goniometric"\n', 5, "light 'goniometric'"),
         # pbrt-v4 resolves named materials after reading the whole file: the shape using one is at fault.
         ('NamedMaterial "x"\nShape "sphere"\n', 6, "which no MakeNamedMaterial defined"),

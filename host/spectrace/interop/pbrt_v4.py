@@ -47,7 +47,7 @@ from spectrace.errors import SpectraceError
 from spectrace.interop.pbrt_parser import Entity, Location, PbrtScene, Shape, error, read_scene, shown
 from spectrace.io.output_files import check_output_file
 
-SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "sphere", "disk", "cylinder")
+SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
 MATERIALS = ("diffuse", "conductor", "dielectric", "coateddiffuse", "interface")
 LIGHTS = ("point", "spot", "distant", "infinite")
 AREA_LIGHTS = ("diffuse",)
@@ -694,6 +694,8 @@ class PbrtImporter:
                     raise error(entity.location, f'"{name}" has {len(array)} values, "P" {len(vertices)}')
         elif kind == "plymesh":
             mesh = self.ply_mesh(entity)
+        elif kind == "loopsubdiv":
+            mesh = self.subdivided_mesh(entity)
         elif kind == "sphere":
             radius = self.one(entity, "radius", 1.0)
             mesh = sphere_mesh(
@@ -725,6 +727,31 @@ class PbrtImporter:
             facing = np.einsum("ij,ij->i", np.cross(b - a, c - a), mesh.normals[mesh.faces].sum(axis=1))
             mesh.faces = np.where((facing < 0)[:, None], mesh.faces[:, ::-1], mesh.faces)
         return mesh
+
+    def subdivided_mesh(self, entity: Entity) -> MeshData:
+        """pbrt's `loopsubdiv`: the control mesh refined `levels` times by Loop's scheme (trimesh's), shaded with
+        vertex normals; pbrt then moves the vertices onto the limit surface, which this leaves out (a note)."""
+        from trimesh.remesh import subdivide_loop
+
+        points = self.floats(entity, "P", None, "point3", "point")
+        indices = entity.find("indices", "integer")
+        if points is None or indices is None:
+            raise error(entity.location, 'loopsubdiv needs "point3 P" and "integer indices"')
+        vertices = np.array(points).reshape(-1, 3)
+        faces = np.array(indices.values, dtype=np.float64)
+        if len(faces) % 3 or np.any(faces != np.round(faces)) or faces.min() < 0 or faces.max() >= len(vertices):
+            raise error(indices.location, f'"integer indices" must be whole numbers below {len(vertices)}, 3 a face')
+        levels = self.integer(entity, "levels", 3, low=0)
+        if levels > 6:
+            raise error(entity.location, f"loopsubdiv levels {levels}: spectrace refines at most 6 times")
+        entity.find("scheme", "string")  # pbrt-v4 reads it and uses Loop's scheme whatever it says
+        faces_int = faces.astype(np.int64).reshape(-1, 3)
+        if levels:
+            vertices, faces_int = subdivide_loop(vertices, faces_int, iterations=levels)
+        self.notes.append(
+            f"{entity.location}: loopsubdiv refined {levels} times without pbrt's last step onto the limit surface"
+        )
+        return MeshData(np.asarray(vertices), np.asarray(faces_int), _vertex_normals(vertices, faces_int), None)
 
     def ply_mesh(self, entity: Entity) -> MeshData:
         from spectrace.geometry.mesh import load_mesh
@@ -919,7 +946,7 @@ class PbrtImporter:
                 for parameter in entity.parameters:
                     if not parameter.used:
                         self.warn(parameter.location, f'{entity.label()}: parameter "{parameter.label()}" not imported')
-        self.warnings = _grouped(self.warnings)
+        self.warnings, self.notes = _grouped(self.warnings), _grouped(self.notes)
         if self.textures:
             data["textures"] = self.textures
         data["materials"] = self.materials
@@ -1009,6 +1036,17 @@ def cylinder_mesh(radius: float, zmin: float, zmax: float, phimax_degrees: float
     normals = np.concatenate([np.column_stack([xy, np.zeros(n)])] * 2)
     uvs = np.column_stack([np.tile(phi / phi[-1], 2), np.repeat([0.0, 1.0], n)])
     return MeshData(vertices, faces, normals, uvs)
+
+
+def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit vertex normals: the sum of the area-weighted normals of the faces around each vertex."""
+    a, b, c = (vertices[faces[:, i]] for i in range(3))
+    face_normals = np.cross(b - a, c - a)
+    normals = np.zeros_like(vertices, dtype=np.float64)
+    for corner in range(3):
+        np.add.at(normals, faces[:, corner], face_normals)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
 
 
 def with_default_uvs(mesh: MeshData, kind: str) -> MeshData:
