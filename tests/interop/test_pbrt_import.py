@@ -333,6 +333,69 @@ def test_loop_subdivision_refines_the_control_mesh(tmp_path):
     assert any("loopsubdiv refined 2 times" in note for note in importer.notes)
 
 
+def _cube(half: float) -> str:
+    """A pbrt trianglemesh of the cube [-half, half]³ with outward windings (checked here)."""
+    corners = np.array([[x, y, z] for z in (-half, half) for y in (-half, half) for x in (-half, half)])
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    faces = [tri for a, b, c, d in quads for tri in ((a, b, c), (a, c, d))]
+    for a, b, c in faces:
+        assert (
+            np.dot(np.cross(corners[b] - corners[a], corners[c] - corners[a]), corners[a] + corners[b] + corners[c]) > 0
+        )
+    points = " ".join(f"{v:g}" for v in corners.ravel())
+    return (
+        f'Shape "trianglemesh" "point3 P" [{points}] "integer indices" [{" ".join(str(i) for f in faces for i in f)}]\n'
+    )
+
+
+def test_media_and_attributes_map_onto_interiors(tmp_path):
+    body = """MakeNamedMedium "ink" "string type" "homogeneous" "rgb sigma_a" [0.5 1 2] "float scale" 3 "float g" 0.2
+MakeNamedMedium "skin" "string type" "homogeneous" "string preset" "Skin1"
+MakeNamedMedium "fog" "string type" "homogeneous"
+Attribute "shape" "float radius" 2
+AttributeBegin
+  MediumInterface "ink" ""
+  Material "interface"
+  Shape "sphere"
+  MediumInterface "skin" "fog"
+  Material "dielectric" "float eta" 1.4
+  Shape "sphere" "float radius" 3
+AttributeEnd
+MediumInterface "fog" ""
+Shape "sphere"
+"""
+    data, importer = pbrt_scene_data(_write(tmp_path, body))
+    ink, skin, fog = data["shapes"]
+    assert "material" not in ink and ink["interior"] == {
+        "sigma_a": {"rgb": [0.5, 1.0, 2.0]},
+        "sigma_s": {"value": 1.0},  # pbrt's default coefficient is 1, spectrace's 0
+        "scale": 3.0,
+        "g": 0.2,
+    }
+    assert ink["transform"][0] == {"scale": 2.0} and skin["transform"][0] == {"scale": 3.0}  # Attribute default
+    assert skin["interior"] == {"preset": "skin1"} and data["materials"][skin["material"]]["type"] == "dielectric"
+    assert fog["interior"] == {"sigma_a": {"value": 1.0}, "sigma_s": {"value": 1.0}}
+    assert any("outside medium 'fog' not imported" in warning for warning in importer.warnings)
+
+
+def test_absorbing_medium_transmits_exp_minus_sigma_d(tmp_path, device):
+    """Through a cube of side 2 filled with σa = 0.5, σs = 0 behind an index-matched boundary (pbrt's interface
+    material), a light of luminance 1 shows exp(-0.5 · 2)."""
+    header = """LookAt 0 0 -5  0 0 0  0 1 0
+Camera "perspective" "float fov" 5
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4
+WorldBegin
+"""
+    # AreaLightSource holds until AttributeEnd: the light's own block keeps it off the cube.
+    body = 'AttributeBegin\nAreaLightSource "diffuse" "rgb L" [1 1 1] "bool twosided" true\n'
+    body += 'Shape "bilinearmesh" "point3 P" [-5 -5 3  5 -5 3  -5 5 3  5 5 3]\nAttributeEnd\n'
+    body += 'MakeNamedMedium "ink" "string type" "homogeneous" "spectrum sigma_a" [360 0.5 830 0.5]\n'
+    body += '  "spectrum sigma_s" [360 0 830 0]\nMediumInterface "ink" ""\nMaterial "interface"\n' + _cube(1.0)
+    y = _render_y(load_pbrt_scene(_write(tmp_path, body, header)), device, 16)
+    standard_error = y.std(ddof=1) / math.sqrt(y.size)
+    assert abs(y.mean() - math.exp(-1.0)) <= 4 * standard_error + 2e-3, (y.mean(), math.exp(-1.0), standard_error)
+
+
 def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     body = 'PixelFilter "gaussian"\nShape "sphere" "float radius" 1 "float frobs" 3\n' + PLANE
     path = _write(tmp_path, body)

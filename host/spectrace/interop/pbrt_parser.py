@@ -463,6 +463,8 @@ class Shape:
     reverse_orientation: bool
     material: Entity | str | None  # an anonymous material, a named material's name, or None: pbrt's default
     area_light: Entity | None
+    inside_medium: str = ""  # a MakeNamedMedium name, or "" (none)
+    outside_medium: str = ""
 
 
 @dataclass
@@ -488,6 +490,8 @@ class PbrtScene:
     lights: list[Light] = field(default_factory=list)
     named_materials: dict[str, Entity] = field(default_factory=dict)
     textures: dict[tuple[str, str], Texture] = field(default_factory=dict)  # (value type, name)
+    media: dict[str, Entity] = field(default_factory=dict)  # MakeNamedMedium
+    camera_medium: str = ""  # the medium the camera sits in (MediumInterface's outside at Camera)
     entities: list[Entity] = field(default_factory=list)  # every entity read, for the unread-parameter report
     unsupported: list[str] = field(default_factory=list)  # "file:line: what" for directives not imported
     has_world: bool = False
@@ -501,10 +505,24 @@ class _State:
     area_light: Entity | None = None
     kind: str = "AttributeBegin"  # the directive that pushed it: AttributeBegin, TransformBegin or ObjectBegin
     opened: Location | None = None
+    inside: str = ""  # MediumInterface: the named media inside and outside what follows ("": none)
+    outside: str = ""
+    # `Attribute "shape" ...`: default parameters for what follows, per target (shape, light, material, texture)
+    attributes: dict[str, list[Parameter]] = field(default_factory=dict)
 
 
 def _saved(state: _State, directive: str, location: Location) -> _State:
-    return _State(state.ctm.copy(), state.reverse_orientation, state.material, state.area_light, directive, location)
+    return _State(
+        state.ctm.copy(),
+        state.reverse_orientation,
+        state.material,
+        state.area_light,
+        directive,
+        location,
+        state.inside,
+        state.outside,
+        {target: list(parameters) for target, parameters in state.attributes.items()},
+    )
 
 
 _IGNORED = {
@@ -515,9 +533,6 @@ _IGNORED = {
     "ActiveTransform": "motion blur is not imported",
     "ColorSpace": "RGB values are read as linear sRGB",
     "Option": "rendering options are not imported",
-    "Attribute": "default parameters per entity type are not imported",
-    "MakeNamedMedium": "participating media are not imported",
-    "MediumInterface": "participating media are not imported",
 }
 
 
@@ -530,8 +545,14 @@ def read_scene(path: str | Path) -> PbrtScene:
     instances: dict[str, list[Shape]] = {}
     defining: tuple[str, list[Shape]] | None = None
 
-    def entity(directive: Directive, kind: str, name: str = "") -> Entity:
-        made = Entity(directive.name, kind, directive.parameters, directive.location, name)
+    def entity(directive: Directive, kind: str, name: str = "", target: str = "") -> Entity:
+        parameters = list(directive.parameters)
+        # Attribute defaults fill in what the entity does not state; like pbrt, unread ones are not reported.
+        stated = {parameter.name for parameter in parameters}
+        for default in state.attributes.get(target, []):
+            if default.name not in stated:
+                parameters.append(Parameter(default.type, default.name, default.values, default.location, used=True))
+        made = Entity(directive.name, kind, parameters, directive.location, name)
         scene.entities.append(made)
         return made
 
@@ -575,6 +596,7 @@ def read_scene(path: str | Path) -> PbrtScene:
         elif name == "Camera":
             scene.camera = entity(directive, arguments[0])
             scene.camera_from_world = state.ctm.copy()
+            scene.camera_medium = state.outside
             named_systems["camera"] = np.linalg.inv(state.ctm)
         elif name in ("Film", "Sampler", "Integrator"):
             setattr(scene, name.lower(), entity(directive, arguments[0]))
@@ -585,9 +607,9 @@ def read_scene(path: str | Path) -> PbrtScene:
         elif name == "WorldEnd":
             continue
         elif name == "Material":
-            state.material = entity(directive, arguments[0])
+            state.material = entity(directive, arguments[0], target="material")
         elif name == "MakeNamedMaterial":
-            made = entity(directive, "", arguments[0])
+            made = entity(directive, "", arguments[0], target="material")
             if arguments[0] in scene.named_materials:
                 raise error(location, f"named material '{shown(arguments[0])}' defined twice")
             scene.named_materials[arguments[0]] = made
@@ -597,18 +619,38 @@ def read_scene(path: str | Path) -> PbrtScene:
             texture_name, value_type, kind = arguments
             if value_type not in ("spectrum", "float"):
                 raise error(location, f'texture type \'{shown(value_type)}\' (pbrt-v4 takes "spectrum" or "float")')
-            scene.textures[(value_type, texture_name)] = Texture(entity(directive, kind, texture_name), value_type)
+            scene.textures[(value_type, texture_name)] = Texture(
+                entity(directive, kind, texture_name, target="texture"), value_type
+            )
         elif name == "AreaLightSource":
-            state.area_light = entity(directive, arguments[0])
+            state.area_light = entity(directive, arguments[0], target="light")
         elif name == "LightSource":
-            scene.lights.append(Light(entity(directive, arguments[0]), state.ctm.copy()))
+            scene.lights.append(Light(entity(directive, arguments[0], target="light"), state.ctm.copy()))
+        elif name == "MakeNamedMedium":
+            if arguments[0] in scene.media:
+                raise error(location, f"medium '{shown(arguments[0])}' defined twice")
+            scene.media[arguments[0]] = entity(directive, "", arguments[0], target="medium")
+        elif name == "MediumInterface":
+            state.inside = arguments[0]
+            state.outside = arguments[1] if len(arguments) > 1 else arguments[0]
+        elif name == "Attribute":
+            if arguments[0] not in ("shape", "light", "material", "medium", "texture"):
+                raise error(
+                    location, f"Attribute target '{shown(arguments[0])}' (shape, light, material, medium or texture)"
+                )
+            state.attributes = {
+                **state.attributes,
+                arguments[0]: [*state.attributes.get(arguments[0], []), *directive.parameters],
+            }
         elif name == "Shape":
             shape = Shape(
-                entity(directive, arguments[0]),
+                entity(directive, arguments[0], target="shape"),
                 state.ctm.copy(),
                 state.reverse_orientation,
                 state.material,
                 state.area_light,
+                state.inside,
+                state.outside,
             )
             (defining[1] if defining else scene.shapes).append(shape)
         elif name == "ObjectBegin":

@@ -146,6 +146,7 @@ class PbrtImporter:
         self._material_of: dict[int | str, str | None] = {}
         self.textures: dict[str, dict] = {}
         self._texture_of: dict[tuple[str, str], str] = {}
+        self._interior_of: dict[str, dict] = {}
         self.world = np.eye(4)  # spectrace world from pbrt world: the handedness mirror, or not
         self.origins: dict[str, Location] = {}  # TOML key path -> where in the pbrt files it came from
         self.read: set[int] = set()  # the entities mapped (their unread parameters are reported)
@@ -233,6 +234,8 @@ class PbrtImporter:
             if min(rgb) < 0 or (role == "albedo" and max(rgb) > 1):
                 bound = "[0, 1]" if role == "albedo" else ">= 0"
                 raise error(parameter.location, f'"{parameter.label()}" components must lie in {bound}, got {rgb}')
+            if role == "medium":
+                return {"rgb": rgb}
             if role == "unbounded":
                 raise error(parameter.location, f'"{parameter.label()}": give an index of refraction as a spectrum')
             return {"rgb": rgb}
@@ -316,6 +319,8 @@ class PbrtImporter:
                 camera.location,
                 "the camera transform scales or shears unevenly: only its position and axes are imported",
             )
+        if scene.camera_medium:
+            self.warn(camera.location, f"the camera's medium '{shown(scene.camera_medium)}' not imported")
         origin = self.point(world_from_camera, [0.0, 0.0, 0.0])
         forward = self.direction(world_from_camera, [0.0, 0.0, 1.0])
         up = self.direction(world_from_camera, [0.0, 1.0, 0.0])
@@ -783,15 +788,19 @@ class PbrtImporter:
         if entity.kind not in SHAPES:
             raise error(entity.location, f"shape '{shown(entity.kind)}': spectrace imports {', '.join(SHAPES)}")
         material = self.material(shape.material, entity.location)
-        if material is None and shape.area_light is None:
+        interior = self.interior(shape)
+        if material is None and shape.area_light is None and interior is None:
             self.notes.append(f"{entity.location}: a shape with the interface material (no surface) left out")
             return None
-        if material is None:
+        if material is None and shape.area_light is not None:
             material = self.material(None, entity.location)
         textured = any(isinstance(v, dict) and "texture" in v for v in self.materials.get(material or "", {}).values())
         geometry, mesh = self.shape_geometry(shape, needs_uv=textured)
         table: dict = {"name": f"{entity.kind}{index}", **geometry}
-        table["material"] = material
+        if material is not None:  # an interface around a medium: an index-matched boundary in spectrace
+            table["material"] = material
+        if interior is not None:
+            table["interior"] = interior
         alpha = entity.find("alpha", "float")
         if alpha is not None and float(alpha.values[0]) < 1.0 and shape.area_light is not None:
             self.warn(alpha.location, '"alpha" on an area light not imported (spectrace\'s emitters are opaque)')
@@ -799,6 +808,57 @@ class PbrtImporter:
             table["material"] = self._with_opacity(material, float(alpha.values[0]))
         if shape.area_light is not None:
             table["emitter"] = self.area_light(shape.area_light, mesh, self.world @ shape.world_from_object, entity)
+        return table
+
+    def interior(self, shape: Shape) -> dict | None:
+        """The spectrace `interior` for the named medium inside a shape (MediumInterface's first name)."""
+        if shape.outside_medium:
+            self.warn(
+                shape.entity.location,
+                f"outside medium '{shown(shape.outside_medium)}' not imported (spectrace's media fill closed shapes)",
+            )
+        name = shape.inside_medium
+        if not name:
+            return None
+        if name not in self.scene.media:
+            raise error(
+                shape.entity.location, f"MediumInterface names '{shown(name)}', which no MakeNamedMedium defined"
+            )
+        if name not in self._interior_of:
+            self._interior_of[name] = self.medium_table(self.scene.media[name])
+        return self._interior_of[name]
+
+    def medium_table(self, medium: Entity) -> dict:
+        from spectrace.spectral.media_presets import medium_presets
+
+        self.read.add(id(medium))
+        kind = self.string(medium, "type", "")
+        if kind != "homogeneous":
+            raise error(medium.location, f"medium '{shown(kind or '')}': spectrace imports homogeneous media")
+        table: dict = {}
+        if (preset := self.string(medium, "preset")) is not None:
+            # pbrt's Jensen et al. presets are the same measurements as spectrace's, in 1/mm (pbrt: per scene unit
+            # times scale; spectrace: per mm times scale, its millimetres per scene unit: the same numbers).
+            if preset.lower() not in medium_presets():
+                raise error(
+                    medium.location, f"medium preset '{shown(preset)}' (spectrace has {', '.join(medium_presets())})"
+                )
+            table["preset"] = preset.lower()
+        else:
+            # pbrt's coefficients default to 1 per scene unit, spectrace's to 0.
+            table["sigma_a"] = self.spectrum(medium, "sigma_a", "medium") or {"value": 1.0}
+            table["sigma_s"] = self.spectrum(medium, "sigma_s", "medium") or {"value": 1.0}
+        scale = self.one(medium, "scale", 1.0)
+        if not scale > 0:
+            raise error(medium.location, f"a medium's scale must be > 0, got {scale:g}")
+        if scale != 1.0:
+            table["scale"] = scale
+        if (g := self.one(medium, "g", 0.0)) != 0.0:
+            table["g"] = g
+        emission = self.spectrum(medium, "Le", "medium")
+        medium.find("Lescale")
+        if emission is not None and emission not in ({"value": 0.0}, {"rgb": [0.0, 0.0, 0.0]}):
+            self.warn(medium.location, "a medium's emission (Le) not imported")
         return table
 
     def _with_opacity(self, material: str, opacity: float) -> str:
