@@ -109,8 +109,9 @@ typedef struct {
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
  * type (listed with LIGHT_TYPES in spectrace.engine.device_types). */
 typedef struct {
-    float4 position;       /* point, spot */
-    float4 direction;      /* spot: unit axis; distant: unit direction the light travels */
+    float4 position;       /* point, spot; LIGHT_ENVIRONMENT_MAP: row 0 of the world-to-map rotation */
+    float4 direction;      /* spot: unit axis; distant: unit direction the light travels; LIGHT_ENVIRONMENT_MAP:
+                              row 1 of the world-to-map rotation */
     int type;              /* LIGHT_* */
     int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays */
     int spectrum_offset;
