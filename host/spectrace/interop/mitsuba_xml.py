@@ -421,7 +421,15 @@ class MitsubaImporter:
                 axis = self.vector(step)
                 if not any(axis):
                     raise self.fail(step, "the rotation axis (x, y, z) must not be zero")
-                steps.append({"rotate": {"axis": axis, "angle": angle}})
+                if abs(float(np.linalg.norm(axis)) - 1.0) <= 1e-7:
+                    steps.append({"rotate": {"axis": axis, "angle": angle}})
+                else:
+                    # Mitsuba does not normalise the axis: its Rodrigues matrix with a longer axis also stretches.
+                    steps.append({"matrix": _unnormalised_rotation(axis, angle).tolist()})
+                    self.notes.append(
+                        f"line {step.line}: rotate axis {tuple(axis)} is not a unit vector; Mitsuba does not "
+                        "normalise it (the step also scales), and neither does the import"
+                    )
             elif step.tag == "matrix":
                 values = self.numbers(step, "value")
                 if len(values) == 9:
@@ -1247,6 +1255,17 @@ class MitsubaImporter:
                 f"the imported scene does not load: {error.message}{detail}", where=str(self.xml_path)
             )
         return self.fail(element, f"{error.message}{detail}")
+
+
+def _unnormalised_rotation(axis: list[float], degrees: float) -> np.ndarray:
+    """Mitsuba's rotate step as it builds it, axis a as given: cos θ I + sin θ [a]× + (1 − cos θ) a aᵀ (a rotation only
+    for a unit axis)."""
+    a = np.asarray(axis, np.float64)
+    cos, sin = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    cross = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    matrix = np.eye(4)
+    matrix[:3, :3] = cos * np.eye(3) + sin * cross + (1.0 - cos) * np.outer(a, a)
+    return matrix
 
 
 def _unique_name(base: str, taken: dict) -> str:
