@@ -148,7 +148,7 @@ typedef struct {
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
-    int pad1;
+    int hide_environment;    /* 1: camera rays that leave the scene see black (Mitsuba's hide_emitters) */
 } RenderParams;
 
 typedef struct {

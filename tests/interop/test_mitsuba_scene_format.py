@@ -229,7 +229,7 @@ def test_old_file_transforms_and_values_match_mitsuba(tmp_path, mitsuba_scalar_s
 # ---------------------------------------------------------------- integrators
 
 
-def test_moment_holds_the_integrator_it_renders_and_hide_emitters_is_named(tmp_path):
+def test_moment_holds_the_integrator_it_renders(tmp_path):
     path = _write(
         tmp_path,
         '<integrator type="moment"><integrator type="direct"/></integrator><shape type="cube"/>',
@@ -237,13 +237,51 @@ def test_moment_holds_the_integrator_it_renders_and_hide_emitters_is_named(tmp_p
     data, notes = mitsuba_scene_data(path)
     assert data["integrator"] == {"type": "path", "max_depth": 2}
     assert any("'moment' imported as the integrator it holds" in note for note in notes)
-    hidden = _write(
+
+
+HIDDEN = """<integrator type="path"><boolean name="hide_emitters" value="$hide"/></integrator>
+    <emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>
+    <shape type="cube"><transform name="to_world"><scale value="0.3"/><translate z="3"/></transform></shape>"""
+HIDDEN_SENSOR = """<sensor type="perspective"><float name="fov" value="30"/>
+    <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1"/></transform>
+    <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/></film></sensor>"""
+
+
+def test_hide_emitters_hides_the_environment_from_camera_rays_only(tmp_path, device):
+    """Mitsuba's hide_emitters: camera rays that leave the scene see black (measured with Mitsuba: its constant
+    environment disappears from the background); the light still reaches the cube, which renders the same bits as
+    without it (same seed, same samples)."""
+    from spectrace.engine.renderer import Renderer
+
+    path = _write(tmp_path, HIDDEN, sensor=HIDDEN_SENSOR)
+    images = {}
+    for hide in ("false", "true"):
+        scene = load_mitsuba_scene(path, parameters={"hide": hide}).with_overrides(spp=8)
+        assert scene.hide_environment == (hide == "true")
+        renderer = Renderer(scene, device)
+        renderer.render(spp=8, pass_spp=8)
+        images[hide] = renderer.image().xyz.astype(np.float64)
+    shown, hidden = images["false"], images["true"]
+    # The cube's front face covers the central 4 x 4 pixels whole (half-width 0.3 at 2.7: ±2.5 pixels of 12 at a
+    # 30° field): the same bits there; pixels on its edge lose their background samples; the rest is background.
+    np.testing.assert_array_equal(hidden[4:8, 4:8], shown[4:8, 4:8])
+    assert np.all(hidden <= shown)
+    background = hidden[..., 1] == 0.0
+    assert 50 < background.sum() < 144 - 16, background.sum()
+    # Without hide_emitters the background shows the environment: Y = 0.5 (RGB 0.5 emission has luminance 0.5),
+    # a Monte Carlo estimate over wavelengths: its mean within 4 standard errors.
+    luminance = shown[background][:, 1]
+    assert abs(luminance.mean() - 0.5) < 4 * luminance.std(ddof=1) / math.sqrt(luminance.size)
+
+
+def test_hide_emitters_with_area_lights_is_refused(tmp_path):
+    path = _write(
         tmp_path,
-        '<integrator type="path"><boolean name="hide_emitters" value="true"/></integrator><shape type="cube"/>',
-        name="hidden.xml",
+        HIDDEN.replace("$hide", "true")
+        + '<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>',
     )
-    with pytest.raises(SpectraceError, match=r"integrator 'path' with hide_emitters"):
-        mitsuba_scene_data(hidden)
+    with pytest.raises(SpectraceError, match=r"integrator 'path' with hide_emitters in a scene with area lights"):
+        mitsuba_scene_data(path)
 
 
 # ---------------------------------------------------------------- what is not imported

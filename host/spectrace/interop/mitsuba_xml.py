@@ -213,6 +213,7 @@ class MitsubaImporter:
         self.notes: list[str] = []
         self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
         self._properties: dict[int, Properties] = {}
+        self._hidden_emitters: Element | None = None  # the integrator asking for hide_emitters
         self.search_folders: list[Path] = [xml_path.parent]  # <path> folders, then the scene's
         self.materials: dict[str, dict] = {}
         self._material_of_element: dict[tuple[int, bool], str] = {}
@@ -1021,7 +1022,8 @@ class MitsubaImporter:
                 properties.understood(key)
                 if self.number(child) != 0.0:
                     self.unsupported_plugin(element, f" with {_shown(key)}")
-        film = properties.get("film")
+        # Nested or referenced (a scene may declare its film or sampler at the top and refer to it by id).
+        film = next(iter(self.nested(properties, "film")), None)
         width, height = MITSUBA_DEFAULT_FILM
         self.origins["film"] = element
         if film is not None:
@@ -1036,7 +1038,7 @@ class MitsubaImporter:
                 if key.startswith("crop_"):
                     film_properties.understood(key)
                     self.unsupported_plugin(film, f" with {_shown(key)}")
-            rfilter = film_properties.get("rfilter")
+            rfilter = next(iter(self.nested(film_properties, "rfilter")), None)
             if rfilter is not None and rfilter.get("type") != "box":
                 self.notes.append(
                     f"line {rfilter.line}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
@@ -1059,7 +1061,9 @@ class MitsubaImporter:
             "fov_axis": "x",
         }
         self.origins["camera"] = element
-        sampler = properties.get("sampler")
+        sampler = next(iter(self.nested(properties, "sampler")), None)
+        # A pinhole has no focus: Mitsuba's perspective sensor takes focus_distance and does nothing with it.
+        properties.understood("focus_distance")
         if sampler is not None:
             sampler_properties = self.properties(sampler)
             data["sampler"] = {}
@@ -1119,9 +1123,10 @@ class MitsubaImporter:
         if "rr_depth" in properties:
             settings["rr_depth"] = self.integer(properties["rr_depth"])
         if "hide_emitters" in properties and self.boolean(properties["hide_emitters"]):
-            self.unsupported_plugin(
-                element, " with hide_emitters (spectrace always shows the emitters and environment a camera ray meets)"
-            )
+            # Mitsuba's camera rays then see no environment (spectrace's hide_environment) and pass through area
+            # lights, which spectrace's cannot: a scene with area lights is refused in run().
+            settings["hide_environment"] = True
+            self._hidden_emitters = element
         if kind == "direct":
             settings["max_depth"] = 2
             self.notes.append(
@@ -1182,6 +1187,8 @@ class MitsubaImporter:
                 self.integrator(child, data)
             elif child.tag in ("bsdf", "texture", "spectrum", "rgb", "default", "sensor", "alias"):
                 continue  # declarations: imported where they are used
+            elif child.tag in ("film", "sampler", "rfilter") and child.get("id") in referenced:
+                continue  # the same, for what a sensor refers to
             elif child.tag in _OBJECT_TAGS:
                 self.unsupported_object(child)
         if self.unsupported:
@@ -1196,6 +1203,17 @@ class MitsubaImporter:
         ]
         if len(environments) > 1:
             raise self.fail(environments[1], "a second environment emitter; spectrace takes one environment light")
+        if self._hidden_emitters is not None and any("emitter" in shape for shape in shapes):
+            self.unsupported_plugin(
+                self._hidden_emitters,
+                " with hide_emitters in a scene with area lights (Mitsuba's camera rays pass through them; "
+                "spectrace hides only the environment)",
+            )
+        if self.unsupported:
+            raise SpectraceError(
+                f"unsupported Mitsuba 3 plugins: {self.unsupported_text()} (spectrace imports {supported_text()})",
+                where=str(self.xml_path),
+            )
         self.report_unread_properties()
         if self.textures:
             data["textures"] = self.textures
