@@ -460,3 +460,31 @@ def test_an_rgb_conductor_matches_mitsubas_rgb_variant(tmp_path, mitsuba_scalar_
     _, weight = bsdf.sample(mi.BSDFContext(), interaction, 0.5, mi.Point2f(0.5, 0.5))
     mi.set_variant("scalar_spectral")
     np.testing.assert_allclose(_normal_incidence_colour(_imported_gold(tmp_path)), np.array(weight), atol=1e-3)
+
+
+# ---------------------------------------------------------------- Radiance HDR maps (Mitsuba's envmap reads them)
+
+
+def test_a_flat_rgbe_file_decodes_by_its_definition(tmp_path):
+    """Mantissa · 2^(exponent − 136): (128, 64, 32) with exponent 129 is (1, 0.5, 0.25); exponent 0 is black."""
+    from spectrace.io.rgbe import read_rgbe
+
+    path = tmp_path / "flat.hdr"
+    path.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 2\n" + bytes([128, 64, 32, 129, 9, 9, 9, 0]))
+    np.testing.assert_array_equal(read_rgbe(path, "x"), [[[1.0, 0.5, 0.25], [0.0, 0.0, 0.0]]])
+    path.write_bytes(b"#?RADIANCE\n\n-Y 2 +X 2\n" + bytes(8))
+    with pytest.raises(SpectraceError, match="ends before its last row"):
+        read_rgbe(path, "x")
+
+
+@pytest.mark.peer
+def test_rgbe_files_mitsuba_writes_read_back_as_mitsuba_reads_them(tmp_path, mitsuba_scalar_spectral):
+    """Run-length encoded rows (Mitsuba writes them for widths of 8 and more): the same floats as Mitsuba's reader."""
+    from spectrace.io.rgbe import read_rgbe
+
+    mi = mitsuba_scalar_spectral
+    image = (np.random.default_rng(1).random((5, 40, 3)) ** 3 * 50).astype(np.float32)
+    image[0, :20] = 1.0  # runs
+    path = tmp_path / "map.hdr"
+    mi.Bitmap(image).write(str(path))
+    np.testing.assert_array_equal(read_rgbe(path, "x"), np.array(mi.Bitmap(str(path)))[..., :3])
