@@ -488,3 +488,42 @@ def test_rgbe_files_mitsuba_writes_read_back_as_mitsuba_reads_them(tmp_path, mit
     path = tmp_path / "map.hdr"
     mi.Bitmap(image).write(str(path))
     np.testing.assert_array_equal(read_rgbe(path, "x"), np.array(mi.Bitmap(str(path)))[..., :3])
+
+
+LIT_BY_ENVMAP = """<integrator type="path"><integer name="max_depth" value="3"/></integrator>
+  <emitter type="envmap"><string name="filename" value="sky.exr"/><float name="scale" value="0.7"/>
+    <transform name="to_world"><rotate x="0.6" y="0.8" angle="50"/><rotate y="1" angle="$turn"/></transform></emitter>
+  <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>"""
+LOOKING_DOWN = """<sensor type="perspective"><float name="fov" value="50"/>
+    <transform name="to_world"><lookat origin="0, 3, 0.01" target="0, 0, 0" up="0, 0, 1"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/>
+    <rfilter type="box"/></film></sensor>"""
+
+
+@pytest.mark.peer
+@pytest.mark.slow
+def test_a_floor_lit_by_a_turned_envmap_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
+    """A diffuse floor under a turned map with a small bright patch (light arriving through both the map's sampling
+    and BSDF sampling, so the lookup, its density and their rotation must agree): 16 replicas of 16 spp from each
+    renderer agree over 4 x 4-pixel blocks and the whole image within 5 standard errors (measured: whole-image
+    ratio 1.007; the map turned 180° the other way fails at 146 standard errors)."""
+    from replica_agreement import assert_replicas_agree, spectrace_replicas
+    from spectrace.engine.renderer import Renderer
+    from spectrace.io.exr import write_exr
+
+    mi = mitsuba_scalar_spectral
+    height, width = 32, 64
+    u, v = (np.arange(width) + 0.5) / width, (np.arange(height) + 0.5) / height
+    sky = np.zeros((height, width, 3), np.float32)
+    sky[..., 0] = 1 + 0.8 * np.sin(2 * np.pi * u)[None, :]
+    sky[..., 1] = 1 + 0.8 * np.cos(np.pi * v)[:, None]
+    sky[..., 2] = 0.5 + 0.4 * np.cos(2 * np.pi * u)[None, :] * np.sin(np.pi * v)[:, None]
+    sky[4:8, 40:48] = 20.0
+    write_exr(tmp_path / "sky.exr", sky, None, {})
+    path = _write(tmp_path, LIT_BY_ENVMAP.replace("$turn", "-100"), sensor=LOOKING_DOWN)
+    replicas, replica_spp = 16, 16
+    scene = mi.load_file(str(path))
+    theirs = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
+    ours = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
+    assert_replicas_agree(xyz_to_linear_srgb(ours), theirs, 4)
