@@ -527,3 +527,22 @@ def test_a_floor_lit_by_a_turned_envmap_renders_like_mitsuba(tmp_path, device, m
     theirs = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
     ours = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
     assert_replicas_agree(xyz_to_linear_srgb(ours), theirs, 4)
+
+
+def test_the_command_takes_defines_prints_warnings_and_refuses_with_strict(tmp_path, monkeypatch, capsys):
+    from cli_runner import run_in_process
+
+    path = _write(
+        tmp_path,
+        '<default name="kind" value="sphere"/><shape type="$kind"><float name="glow" value="1"/></shape>',
+    )
+    out = tmp_path / "out.toml"
+    argv = ["import-mitsuba", str(path), "-o", str(out), "-D", "kind=cube"]
+    status, stderr = run_in_process(monkeypatch, capsys, argv)
+    assert status == 0, stderr
+    assert 'type = "cube"' in out.read_text()
+    assert f"warning: {path}:4: shape 'cube': property 'glow' is not imported" in stderr
+    strict = tmp_path / "strict.toml"
+    status, stderr = run_in_process(monkeypatch, capsys, ["import-mitsuba", str(path), "-o", str(strict), "--strict"])
+    assert status == 2 and stderr.count("\n") == 1 and "1 property not imported (--strict)" in stderr, stderr
+    assert not strict.exists()

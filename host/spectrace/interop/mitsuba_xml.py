@@ -1322,7 +1322,8 @@ def _imported(importer: MitsubaImporter, strict: bool) -> dict:
     data = importer.run(read_scene(importer.xml_path, importer.parameters))
     if importer.warnings and strict:
         raise SpectraceError(
-            f"{len(importer.warnings)} properties not imported (--strict): {'; '.join(importer.warnings)}",
+            f"{len(importer.warnings)} {'property' if len(importer.warnings) == 1 else 'properties'} not imported "
+            f"(--strict): {'; '.join(importer.warnings)}",
             where=str(importer.xml_path),
         )
     importer.notes += [WARNING_PREFIX + warning for warning in importer.warnings]
