@@ -546,3 +546,13 @@ def test_the_command_takes_defines_prints_warnings_and_refuses_with_strict(tmp_p
     status, stderr = run_in_process(monkeypatch, capsys, ["import-mitsuba", str(path), "-o", str(strict), "--strict"])
     assert status == 2 and stderr.count("\n") == 1 and "1 property not imported (--strict)" in stderr, stderr
     assert not strict.exists()
+
+
+def test_a_duplicate_id_is_refused_and_notes_name_included_files(tmp_path):
+    path = _write(tmp_path, '<bsdf type="diffuse" id="a"/><shape type="cube"><bsdf type="diffuse" id="a"/></shape>')
+    with pytest.raises(SpectraceError, match=r"shape/bsdf@id: duplicate id 'a' \(also at line 4\)"):
+        mitsuba_scene_data(path)
+    _write(tmp_path, '<integrator type="direct"/>', name="parts/integrator.xml", sensor="")
+    path = _write(tmp_path, '<include filename="parts/integrator.xml"/><shape type="cube"/>', name="main.xml")
+    _, notes = mitsuba_scene_data(path)
+    assert any(note.startswith("line 3 of integrator.xml: integrator 'direct'") for note in notes), notes

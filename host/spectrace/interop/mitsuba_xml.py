@@ -285,12 +285,16 @@ class MitsubaImporter:
                 self.unsupported_plugin(child)
             pending += child.children
 
+    def at(self, element: Element) -> str:
+        """'line N' of an element, or 'line N of other.xml' for one from an <include>d file (notes, messages)."""
+        return f"line {element.line}" + (
+            f" of {_shown(element.file.name, 100)}" if element.file not in (None, self.xml_path) else ""
+        )
+
     def unsupported_text(self) -> str:
         parts = []
         for text, (count, element) in self.unsupported.items():
-            place = f"line {element.line}" + (
-                f" of {_shown(element.file.name, 100)}" if element.file not in (None, self.xml_path) else ""
-            )
+            place = self.at(element)
             parts.append(f"{text} ({place})" if count == 1 else f"{text} ({count} times, first at {place})")
         return ", ".join(parts)
 
@@ -428,7 +432,7 @@ class MitsubaImporter:
                     # Mitsuba does not normalise the axis: its Rodrigues matrix with a longer axis also stretches.
                     steps.append({"matrix": _unnormalised_rotation(axis, angle).tolist()})
                     self.notes.append(
-                        f"line {step.line}: rotate axis {tuple(axis)} is not a unit vector; Mitsuba does not "
+                        f"{self.at(step)}: rotate axis {tuple(axis)} is not a unit vector; Mitsuba does not "
                         "normalise it (the step also scales), and neither does the import"
                     )
             elif step.tag == "matrix":
@@ -782,7 +786,7 @@ class MitsubaImporter:
         if textured and flip_v:
             name = _unique_name(f"{base}_flipped_v", self.materials)
             self.notes.append(
-                f"line {bsdf.line}: {bsdf.label()} on a rectangle or PLY shape: their texture coordinates run v up "
+                f"{self.at(bsdf)}: {bsdf.label()} on a rectangle or PLY shape: their texture coordinates run v up "
                 f"in Mitsuba and down in spectrace, so it is imported as material '{name}' with its textures' v "
                 "flipped"
             )
@@ -927,7 +931,7 @@ class MitsubaImporter:
         distribution = self.text(properties["distribution"]) if "distribution" in properties else "beckmann"
         if distribution != "ggx":
             self.notes.append(
-                f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
+                f"{self.at(bsdf)}: {bsdf.label()} uses the {distribution} distribution; imported as "
                 f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)"
             )
         if isinstance(alpha, float) and not ROUGHNESS_RANGE.contains(alpha):
@@ -1041,7 +1045,7 @@ class MitsubaImporter:
             rfilter = next(iter(self.nested(film_properties, "rfilter")), None)
             if rfilter is not None and rfilter.get("type") != "box":
                 self.notes.append(
-                    f"line {rfilter.line}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
+                    f"{self.at(rfilter)}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
                     "not imported: spectrace averages the samples inside each pixel (a box filter)"
                 )
         data["film"] = {"width": width, "height": height}
@@ -1074,7 +1078,7 @@ class MitsubaImporter:
                 data["sampler"]["seed"] = self.integer(sampler_properties["seed"], low=0)
             if self.kind(sampler) != "independent":
                 self.notes.append(
-                    f"line {sampler.line}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
+                    f"{self.at(sampler)}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
                     "spectrace uses its own sampler (same sample count)"
                 )
 
@@ -1130,13 +1134,13 @@ class MitsubaImporter:
         if kind == "direct":
             settings["max_depth"] = 2
             self.notes.append(
-                f"line {element.line}: integrator 'direct' imported as path tracing with max_depth 2 "
+                f"{self.at(element)}: integrator 'direct' imported as path tracing with max_depth 2 "
                 "(emitters seen directly and direct light)"
             )
             # Mitsuba's direct integrator's sample counts per technique change the noise, not the mean.
             properties.understood("emitter_samples", "bsdf_samples", "shading_samples")
         elif kind.startswith("volpath"):
-            self.notes.append(f"line {element.line}: integrator '{kind}' imported as 'path' (spectrace has no media)")
+            self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path' (spectrace has no media)")
         elif kind == "moment":
             # Mitsuba's moment integrator renders its nested integrator's image with the second moment as extra
             # channels: the image is the nested one's.
@@ -1144,7 +1148,7 @@ class MitsubaImporter:
             if len(nested) != 1:
                 raise self.fail(element, f"integrator 'moment' needs exactly one nested integrator, got {len(nested)}")
             self.notes.append(
-                f"line {element.line}: integrator 'moment' imported as the integrator it holds (spectrace's image "
+                f"{self.at(element)}: integrator 'moment' imported as the integrator it holds (spectrace's image "
                 "has no moment channels)"
             )
             self.integrator(nested[0], data)
@@ -1170,7 +1174,7 @@ class MitsubaImporter:
         if not sensors:
             raise SpectraceError("the scene has no <sensor>; spectrace needs a camera", where=str(self.xml_path))
         if len(sensors) > 1:
-            self.notes.append(f"line {sensors[1].line}: only the first of {len(sensors)} sensors is imported")
+            self.notes.append(f"{self.at(sensors[1])}: only the first of {len(sensors)} sensors is imported")
         self.sensor(sensors[0], data)
         for index, child in enumerate(root.children):
             if child.tag == "shape":
@@ -1253,8 +1257,11 @@ class MitsubaImporter:
         while pending:
             element = pending.pop()
             for child in element.children:
-                if (identifier := child.get("id")) is not None and child.tag != "ref":
-                    self.ids.setdefault(identifier, child)
+                identifier = child.get("id") if child.tag not in ("ref", "alias") else None
+                # Mitsuba refuses a scene whose objects share an id: a <ref> could not tell them apart.
+                if identifier is not None and (other := self.ids.setdefault(identifier, child)) is not child:
+                    first, second = sorted((other, child), key=lambda e: (e.file != self.xml_path, e.line))
+                    raise self.fail(second, f"duplicate id '{_shown(identifier)}' (also at {self.at(first)})", "id")
                 pending.append(child)
 
     def imported_error(self, error: SpectraceError, toml_path: Path) -> SpectraceError:

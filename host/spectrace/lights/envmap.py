@@ -141,7 +141,7 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     if not np.allclose(up, DEFAULT_UP, atol=0.0) or not np.allclose(front, DEFAULT_FRONT, atol=0.0):
         table |= {"up": up, "front": front}
     importer.notes.append(
-        f"line {emitter.line}: envmap: spectrace looks the map up at the nearest texel (Mitsuba interpolates "
+        f"{importer.at(emitter)}: envmap: spectrace looks the map up at the nearest texel (Mitsuba interpolates "
         "bilinearly)"
     )
     return table

@@ -195,7 +195,7 @@ def _rgb_optical_constants(importer, bsdf, eta: dict, k: dict) -> tuple[dict, di
             uplift_unbounded(spectrum["rgb"], where) if "rgb" in spectrum else None for spectrum in (eta, k)
         )
     importer.notes.append(
-        f"line {bsdf.line}: {bsdf.label()}: eta and k given as rgb are uplifted to smooth spectra "
+        f"{importer.at(bsdf)}: {bsdf.label()}: eta and k given as rgb are uplifted to smooth spectra "
         "(docs/mitsuba.md, 'Conductors given in RGB')"
     )
     tables = [
