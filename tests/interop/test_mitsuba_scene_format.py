@@ -103,10 +103,13 @@ def test_include_path_and_references_to_top_level_objects(tmp_path):
         <path value="assets"/>
         <include filename="parts/lights.xml"/>
         <shape type="rectangle"><ref id="lamp"/><ref id="grey"/></shape>
-        <shape type="obj"><string name="filename" value="triangle.obj"/><include filename="parts/red.xml"/></shape>""",
+        <shape type="obj"><string name="filename" value="triangle.obj"/><include filename="parts/red.xml"/></shape>
+        <alias id="grey" as="stone"/>
+        <shape type="cube"><ref id="stone"/></shape>""",
     )
     data, _ = mitsuba_scene_data(path)
-    lamp, mesh = data["shapes"]
+    lamp, mesh, aliased = data["shapes"]
+    assert aliased["material"] == "grey"  # through <alias id="grey" as="stone"/>
     assert lamp["emitter"] == {"radiance": {"rgb": [2.0, 2.0, 2.0]}} and lamp["material"] == "grey"
     assert mesh["file"] == "assets/triangle.obj"
     assert data["materials"][mesh["material"]]["reflectance"] == {"rgb": [0.5, 0.1, 0.1]}
@@ -435,6 +438,17 @@ def _imported_gold(tmp_path: Path):
 def _normal_incidence_colour(material) -> np.ndarray:
     reflectance = normal_incidence_reflectance(material.eta.values, material.k.values)
     return xyz_to_linear_srgb(reflectance_to_xyz(Spectrum(reflectance), cie_illuminant("D65")))
+
+
+def test_a_number_beside_an_rgb_counts_as_a_grey_triple(tmp_path):
+    path = _write(
+        tmp_path,
+        """<shape type="cube"><bsdf type="conductor"><float name="eta" value="0.2"/>
+            <rgb name="k" value="3.9, 2.4, 2.1"/></bsdf></shape>""",
+    )
+    material = load_mitsuba_scene(path).shapes[0].material
+    expected = normal_incidence_reflectance((0.2, 0.2, 0.2), (3.9, 2.4, 2.1))
+    np.testing.assert_allclose(_normal_incidence_colour(material), expected, atol=1e-3)
 
 
 def test_an_rgb_conductor_has_the_rgb_renderers_colour_at_normal_incidence(tmp_path):

@@ -1253,6 +1253,7 @@ class MitsubaImporter:
         return found
 
     def _collect_ids(self, root: Element) -> None:
+        aliases: list[Element] = []
         pending = [root]
         while pending:
             element = pending.pop()
@@ -1262,7 +1263,16 @@ class MitsubaImporter:
                 if identifier is not None and (other := self.ids.setdefault(identifier, child)) is not child:
                     first, second = sorted((other, child), key=lambda e: (e.file != self.xml_path, e.line))
                     raise self.fail(second, f"duplicate id '{_shown(identifier)}' (also at {self.at(first)})", "id")
+                if child.tag == "alias":
+                    aliases.append(child)
                 pending.append(child)
+        for alias in sorted(aliases, key=lambda e: e.line):  # <alias id="a" as="b"/>: b names a's object too
+            source, target = self.required(alias, "id"), self.required(alias, "as")
+            if source not in self.ids:
+                raise self.fail(alias, f"alias of an undefined id '{_shown(source)}'", "id")
+            if target in self.ids:
+                raise self.fail(alias, f"alias '{_shown(target)}' names an id already taken", "as")
+            self.ids[target] = self.ids[source]
 
     def imported_error(self, error: SpectraceError, toml_path: Path) -> SpectraceError:
         """A loader's complaint about the imported TOML, told at the XML element the value came from."""
