@@ -954,8 +954,11 @@ class PbrtImporter:
 
         path = self.file_path(entity, "filename")
         assert path is not None
-        if path.suffix.lower() != ".exr":
-            raise error(entity.location, f"infinite light image '{shown(path.name)}': spectrace reads OpenEXR maps")
+        if path.suffix.lower() not in (".exr", ".hdr", ".rgbe"):
+            raise error(
+                entity.location,
+                f"infinite light image '{shown(path.name)}': spectrace reads OpenEXR and Radiance HDR maps",
+            )
         square = read_environment_map(path, str(entity.location))
         height, width = square.shape[:2]
         if height != width:
