@@ -396,6 +396,45 @@ WorldBegin
     assert abs(y.mean() - math.exp(-1.0)) <= 4 * standard_error + 2e-3, (y.mean(), math.exp(-1.0), standard_error)
 
 
+def test_plymesh_quads_normals_uv_and_gzip(tmp_path):
+    """A PLY quad (split in two triangles) with normals facing -z against its +z winding, and uv as stored: pbrt
+    turns the front toward the normals; the same file gzipped reads the same."""
+    import gzip
+
+    ply = """ply
+format ascii 1.0
+element vertex 4
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+property float u
+property float v
+element face 1
+property list uchar int vertex_indices
+end_header
+0 0 0 0 0 -1 0 0
+1 0 0 0 0 -1 1 0
+1 1 0 0 0 -1 1 1
+0 1 0 0 0 -1 0 1
+4 0 1 2 3
+"""
+    (tmp_path / "quad.ply").write_text(ply)
+    (tmp_path / "quad.ply.gz").write_bytes(gzip.compress(ply.encode()))
+    body = 'Shape "plymesh" "string filename" "quad.ply"\nShape "plymesh" "string filename" "quad.ply.gz"\n'
+    data, importer = pbrt_scene_data(_write(tmp_path, body))
+    meshes = [importer.meshes[Path(shape["file"]).name] for shape in data["shapes"]]
+    for mesh in meshes:
+        assert len(mesh.faces) == 2
+        a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
+        assert np.all(np.cross(b - a, c - a)[:, 2] < 0)  # toward the normals
+        uv_of = {tuple(v): tuple(uv) for v, uv in zip(mesh.vertices, mesh.uvs, strict=True)}
+        assert uv_of == {(0, 0, 0): (0, 0), (1, 0, 0): (1, 0), (1, 1, 0): (1, 1), (0, 1, 0): (0, 1)}
+    np.testing.assert_array_equal(meshes[0].faces, meshes[1].faces)
+
+
 def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     body = 'PixelFilter "gaussian"\nShape "sphere" "float radius" 1 "float frobs" 3\n' + PLANE
     path = _write(tmp_path, body)
