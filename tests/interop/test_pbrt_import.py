@@ -435,6 +435,17 @@ end_header
     np.testing.assert_array_equal(meshes[0].faces, meshes[1].faces)
 
 
+def test_written_meshes_keep_normals_and_uv(tmp_path):
+    """Through the PLY file the importer writes: the normals turned with the scene's mirror (x -> -x), v as
+    spectrace stores it (1 - v)."""
+    body = 'Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0] "normal N" [0 0 1  0.6 0 0.8  0 0.6 0.8]\n'
+    body += '  "point2 uv" [0 0  1 0  0 1]\n'
+    (shape,) = load_pbrt_scene(_write(tmp_path, body)).shapes
+    np.testing.assert_allclose(shape.mesh.vertices, [[0, 0, 0], [-1, 0, 0], [0, 1, 0]], atol=1e-7)
+    np.testing.assert_allclose(shape.mesh.normals, [[0, 0, 1], [-0.6, 0, 0.8], [0, 0.6, 0.8]], atol=1e-7)
+    np.testing.assert_allclose(shape.mesh.uvs, [[0, 1], [1, 1], [0, 0]], atol=1e-7)
+
+
 def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     body = 'PixelFilter "gaussian"\nShape "sphere" "float radius" 1 "float frobs" 3\n' + PLANE
     path = _write(tmp_path, body)
