@@ -171,8 +171,8 @@ def test_a_scalar_use_needs_one_channel():
 
 
 def test_textures_beyond_a_gibibyte_are_refused_before_conversion():
-    """The budget is checked from the image's size before any texel is converted: a 20000² texture (broadcast,
-    so the test allocates nothing) would need 4.5 GiB of coefficients."""
+    """The budget is checked from the image's size before any texel is converted: a 20000² RGB reflectance texture
+    (broadcast, so the test allocates nothing) would need 20000² × 3 half-float coefficients, 2.2 GiB."""
     import spectrace
     from spectrace.engine.scene_buffers import build_scene_buffers
     from spectrace.scene.model import Camera, Scene
@@ -185,7 +185,7 @@ def test_textures_beyond_a_gibibyte_are_refused_before_conversion():
         height=4,
         shapes=[spectrace.shape("rectangle", spectrace.diffuse(huge))],
     )
-    with pytest.raises(SpectraceError, match=r"textures need 4\.5 GiB of device memory.*at most 1\.0 GiB"):
+    with pytest.raises(SpectraceError, match=r"textures need 2\.2 GiB of device memory.*at most 1\.0 GiB"):
         build_scene_buffers(scene)
 
 

@@ -13,6 +13,11 @@ import numpy as np
 
 from spectrace.engine.device_types import (
     NO_TEXTURE,
+    TEXEL_BANDS,
+    TEXEL_RGB,
+    TEXEL_SCALAR,
+    TEXEL_SIGMOID,
+    TEXEL_VECTOR,
     TEXTURE_BITMAP,
     TEXTURE_CHECKERBOARD,
     TEXTURE_DTYPE,
@@ -22,7 +27,7 @@ from spectrace.errors import SpectraceError
 from spectrace.scene.limits import MAX_TEXTURE_BYTES, format_bytes
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
-from spectrace.textures import bitmap, checkerboard, spectral
+from spectrace.textures import bitmap, checkerboard, spectral, storage
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
 from spectrace.textures.shared import FILTERS, WRAPS, value_problem
@@ -87,20 +92,31 @@ def texture_module(texture):
     return {BitmapTexture: bitmap, SpectralTexture: spectral, CheckerboardTexture: checkerboard}[type(texture)]
 
 
+def texel_format_of(texture, kind: str) -> int:
+    """What an image texture's texels hold for a use of `kind` (as its module's device_texels makes them)."""
+    if isinstance(texture, SpectralTexture):
+        return TEXEL_BANDS
+    return {"float": TEXEL_SCALAR, "vector": TEXEL_VECTOR, "emission": TEXEL_RGB}.get(kind, TEXEL_SIGMOID)
+
+
 def device_bytes(texture, kind: str) -> int:
     """An estimate (exact for power-of-two sizes) of the texel bytes a texture takes on the device, from its size
-    alone: what the scene's texture budget is checked against before anything is converted."""
+    and values before anything is converted (its storage as `storage.predicted_storage` says: a sigmoid texture
+    predicted half may need float, twice this, once converted): what the scene's texture budget is checked
+    against before anything is converted."""
     if isinstance(texture, CheckerboardTexture):
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
     height, width = texture.values.shape[:2]
     channels = 3 if isinstance(texture, BitmapTexture) and kind != "float" else texture.channels
     pyramid = 4.0 / 3.0 if texture.placement.filter == "trilinear" else 1.0
-    return int(width * height * channels * 4 * pyramid)
+    value_bytes = storage.BYTES[storage.predicted_storage(texel_format_of(texture, kind), texture.values)]
+    return int(width * height * channels * value_bytes * pyramid)
 
 
 class TextureRows:
     """The Texture rows of a scene and their texels, appended to the texel buffer the lights share (float4 chunks;
-    a texture's data starts on a float4 boundary and is addressed in floats)."""
+    a texture's data starts on a float4 boundary, its values stored as `storage` chooses). `bytes` counts the texel
+    bytes of the textures added."""
 
     def __init__(self, table: SpectrumTable, texel_chunks: list[np.ndarray]):
         self.table = table
@@ -108,6 +124,14 @@ class TextureRows:
         self.rows: list[np.ndarray] = []
         self.index: dict[tuple[int, str, tuple[int, ...]], int] = {}
         self.bytes = 0
+
+    def _check_budget(self, total: int, texture, where: str | None) -> None:
+        if total > MAX_TEXTURE_BYTES:
+            raise SpectraceError(
+                f"the scene's textures need {format_bytes(total)} of device memory (texture '{texture.source}' "
+                f"brings it there); at most {format_bytes(MAX_TEXTURE_BYTES)} are allowed: use smaller images",
+                where=where,
+            )
 
     def array(self) -> np.ndarray:
         return np.array(self.rows, TEXTURE_DTYPE) if self.rows else np.zeros(1, TEXTURE_DTYPE)
@@ -119,13 +143,7 @@ class TextureRows:
         key = (id(texture), kind, tuple(basis or ()))
         if key in self.index:
             return self.index[key]
-        self.bytes += device_bytes(texture, kind)
-        if self.bytes > MAX_TEXTURE_BYTES:
-            raise SpectraceError(
-                f"the scene's textures need {format_bytes(self.bytes)} of device memory (texture '{texture.source}' "
-                f"brings it there); at most {format_bytes(MAX_TEXTURE_BYTES)} are allowed: use smaller images",
-                where=where,
-            )
+        self._check_budget(self.bytes + device_bytes(texture, kind), texture, where)
         row = np.zeros((), TEXTURE_DTYPE)
         row["uv_transform"] = texture.placement.uv_transform
         row["side_spectrum"] = -1
@@ -154,10 +172,13 @@ class TextureRows:
                 row["band_step_nm"] = (
                     texture.wavelengths_nm[1] - texture.wavelengths_nm[0] if texture.channels > 1 else 1.0
                 )
+            row["storage"] = storage.storage(texel_format, levels, texture.values)
             row["data_offset"] = 4 * sum(len(c) for c in self.texel_chunks)
-            flat = np.concatenate([np.asarray(level, np.float32).ravel() for level in levels])
-            chunk = np.zeros(((len(flat) + 3) // 4, 4), np.float32)
-            chunk.ravel()[: len(flat)] = flat
+            stored = storage.encode(texel_format, int(row["storage"]), levels)
+            chunk = np.zeros(((len(stored) + 15) // 16, 4), np.float32)
+            chunk.view(np.uint8).ravel()[: len(stored)] = stored
+            self._check_budget(self.bytes + len(stored), texture, where)
+            self.bytes += len(stored)
             self.texel_chunks.append(chunk)
         self.rows.append(row)
         self.index[key] = len(self.rows) - 1
