@@ -10,6 +10,8 @@ from spectrace.errors import SpectraceError
 from spectrace.io.input_files import regular_file
 from spectrace.scene import limits
 
+RGBE_SUFFIXES = (".hdr", ".rgbe")  # Radiance HDR: spectrace.io.rgbe
+
 
 def read_picture(path: Path, where: str) -> np.ndarray:
     """(height, width, 3) values of a picture in [0, 1]: 8/16-bit PNG or JPEG code values divided by their maximum,
@@ -80,7 +82,7 @@ def read_exr_checked(path: Path, where: str, what: str) -> dict:
 def read_environment_map(path: Path, where: str, what: str = "environment map") -> np.ndarray:
     """The (height, width, 3) linear sRGB pixels of an OpenEXR or Radiance HDR (.hdr, .rgbe) latitude-longitude map
     (or a picture's EXR)."""
-    if path.suffix.lower() in (".hdr", ".rgbe"):
+    if path.suffix.lower() in RGBE_SUFFIXES:
         from spectrace.io.rgbe import read_rgbe
 
         rgb = read_rgbe(path, where, what)
@@ -104,9 +106,13 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
     """(values (height, width, channels), encoded) of an image texture: channels 1 (grey) or 3 (an alpha channel is
     dropped). PNG, JPEG, TIFF and the other formats Pillow reads give 8/16-bit code values divided by their maximum
     (encoded = True: the caller decodes the transfer curve); 32-bit float images (TIFF mode F) and OpenEXR
-    (R, G, B, or Y) give their values as stored (encoded = False). The size in the header is checked before anything
-    is decoded; non-finite values are refused."""
-    if path.suffix.lower() == ".exr":
+    (R, G, B, or Y) and Radiance RGBE (.hdr) give their values as stored (encoded = False). The size in the header is
+    checked before anything is decoded; non-finite values are refused."""
+    if path.suffix.lower() in RGBE_SUFFIXES:
+        from spectrace.io.rgbe import read_rgbe
+
+        values, encoded = read_rgbe(path, where, "texture").astype(np.float64), False
+    elif path.suffix.lower() == ".exr":
         channels = read_exr_checked(path, where, "texture")  # which checks it is a regular file
         if "RGB" in channels or "RGBA" in channels:
             values = np.asarray(channels.get("RGB", channels.get("RGBA")))[..., :3]
