@@ -1,6 +1,7 @@
 """Image formats read for textures beyond what Pillow and OpenEXR give: Radiance HDR (.hdr), checked against files
 Mitsuba 3 writes and reads (an independent writer and reader) and against bytes laid out by hand from the format's
-description (Ward 1991, "Real Pixels"); bad files reported as one line naming the file and key."""
+description (Ward 1991, "Real Pixels"); 16-bit colour PNGs at their 16 bits, against Mitsuba's writer and files laid
+out by hand with every PNG filter; bad files reported as one line naming the file and key."""
 
 import numpy as np
 import pytest
@@ -88,3 +89,117 @@ def test_bad_hdr_texture_is_one_line(tmp_path, monkeypatch, capsys, content, wor
     assert len(lines) == 1 and "Traceback" not in err, err
     assert lines[0].startswith(f"error: {scene}: materials.m.reflectance.file: "), lines[0]
     assert words in lines[0] and "bad.hdr" in lines[0]
+
+
+# ---------------------------------------------------------------- 16-bit colour PNGs
+
+
+def _mitsuba_png16(path, samples: np.ndarray):
+    mi = _mitsuba("16-bit PNG")
+    formats = {2: mi.Bitmap.PixelFormat.YA, 3: mi.Bitmap.PixelFormat.RGB, 4: mi.Bitmap.PixelFormat.RGBA}
+    mi.Bitmap(np.ascontiguousarray(samples, np.uint16), formats[samples.shape[-1]]).write(str(path))
+    return path
+
+
+def test_16_bit_rgb_gradient_keeps_its_65536_levels(tmp_path):
+    """A 256 × 256 RGB gradient through every 16-bit code (red rising, green falling, blue constant), written by
+    Mitsuba 3: read as a bitmap texture (raw), each sample is its code over 65535 exactly, 65536 distinct levels."""
+    codes = np.arange(65536, dtype=np.uint16).reshape(256, 256)
+    samples = np.stack([codes, 65535 - codes, np.full_like(codes, 12345)], axis=-1)
+    _mitsuba_png16(tmp_path / "gradient.png", samples)
+    scene = load_scene(_scene(tmp_path, '{ texture = "bitmap", file = "gradient.png", raw = true }'))
+    values = scene.shapes[0].material.reflectance.values
+    assert values.shape == (256, 256, 3)
+    np.testing.assert_array_equal(values, (samples / 65535.0).astype(np.float32))
+    assert len(np.unique(values[..., 0])) == 65536
+
+
+@pytest.mark.parametrize("samples_per_pixel", [2, 4])
+def test_16_bit_png_with_alpha_drops_it_at_full_precision(tmp_path, samples_per_pixel):
+    """Grey + alpha and RGBA at 16 bits (random codes, Mitsuba's writer): the colour samples exactly, alpha dropped;
+    sRGB-decoded unless raw (colour-science's decoding of the codes over 65535)."""
+    import colour
+
+    samples = np.random.default_rng(42).integers(0, 65536, (13, 21, samples_per_pixel)).astype(np.uint16)
+    _mitsuba_png16(tmp_path / "a.png", samples)
+    colour_samples = samples[..., :1] if samples_per_pixel == 2 else samples[..., :3]
+    raw = load_scene(_scene(tmp_path, '{ texture = "bitmap", file = "a.png", raw = true }'))
+    expected = (colour_samples / 65535.0).astype(np.float32)
+    np.testing.assert_array_equal(raw.shapes[0].material.reflectance.values, expected)
+    decoded = load_scene(_scene(tmp_path, '{ texture = "bitmap", file = "a.png" }'))
+    np.testing.assert_allclose(
+        decoded.shapes[0].material.reflectance.values,
+        colour.cctf_decoding(colour_samples / 65535.0, function="sRGB"),
+        atol=1e-6,
+    )
+
+
+def _filtered_row(row: bytes, above: bytes, kind: int, bpp: int) -> bytes:
+    """One scanline filtered by PNG filter `kind` (W3C PNG, 3rd edition, section 7.3), from the definitions."""
+    out = bytearray()
+    for i, x in enumerate(row):
+        a = row[i - bpp] if i >= bpp else 0
+        b = above[i] if above else 0
+        c = above[i - bpp] if above and i >= bpp else 0
+        if kind == 0:
+            predictor = 0
+        elif kind == 1:
+            predictor = a
+        elif kind == 2:
+            predictor = b
+        elif kind == 3:
+            predictor = (a + b) // 2
+        else:
+            p = a + b - c
+            pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+            predictor = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+        out.append((x - predictor) % 256)
+    return bytes([kind]) + bytes(out)
+
+
+def _hand_png16(samples: np.ndarray, interlace: bool) -> bytes:
+    """A 16-bit RGB PNG laid out by hand: every filter type in turn, Adam7 passes when interlaced."""
+    import struct
+    import zlib
+
+    height, width, _ = samples.shape
+    passes = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), (1, 0, 2, 2), (0, 1, 1, 2))
+    images = [samples[y0::dy, x0::dx] for x0, y0, dx, dy in passes] if interlace else [samples]
+    data, kind = b"", 0
+    for image in images:
+        if image.size == 0:
+            continue
+        above = b""
+        for row in image:
+            raw = row.astype(">u2").tobytes()
+            data += _filtered_row(raw, above, kind % 5, 6)
+            above, kind = raw, kind + 1
+
+    def chunk(name: bytes, payload: bytes) -> bytes:
+        return struct.pack(">I", len(payload)) + name + payload + struct.pack(">I", zlib.crc32(name + payload))
+
+    header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, int(interlace))
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(data)) + chunk(b"IEND", b"")
+
+
+@pytest.mark.parametrize("interlace", [False, True])
+def test_16_bit_png_every_filter_and_adam7(tmp_path, interlace):
+    """Scanlines filtered by each of the five filters in turn, plain and Adam7-interlaced (an odd size, so some passes
+    are narrow): every sample read back exactly."""
+    from spectrace.io.png16 import read_png16
+
+    samples = np.random.default_rng(43).integers(0, 65536, (11, 13, 3)).astype(np.uint16)
+    samples[4:7] = samples[3]  # repeated rows: Up and Paeth predict exactly there
+    (tmp_path / "h.png").write_bytes(_hand_png16(samples, interlace))
+    np.testing.assert_array_equal(read_png16(tmp_path / "h.png"), samples)
+
+
+def test_bad_16_bit_png_is_one_line(tmp_path, monkeypatch, capsys):
+    good = _hand_png16(np.zeros((4, 4, 3), np.uint16), False)
+    (tmp_path / "cut.png").write_bytes(good[: len(good) // 2])
+    scene = _scene(tmp_path, '{ texture = "bitmap", file = "cut.png" }')
+    code, err = run_in_process(monkeypatch, capsys, ["render", str(scene), "-o", str(tmp_path / "x.png")])
+    assert code != 0
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith(f"error: {scene}: materials.m.reflectance.file: cannot read texture"), lines[0]

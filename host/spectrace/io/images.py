@@ -19,6 +19,8 @@ def read_picture(path: Path, where: str) -> np.ndarray:
     if path.suffix.lower() == ".exr":
         return read_environment_map(path, where, what="image").astype(np.float64)
     regular_file(path, where, what="image")
+    if (sixteen := _read_png16(path, where, "image")) is not None:
+        return np.repeat(sixteen, 3, axis=-1) if sixteen.shape[-1] == 1 else sixteen
 
     def decode(picture) -> tuple[np.ndarray, bool]:
         bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
@@ -49,6 +51,27 @@ def _read_with_pillow(path: Path, where: str, what: str, decode):
         raise
     except Exception as exc:  # Pillow raises many types for unreadable files
         raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
+
+
+def _read_png16(path: Path, where: str, what: str) -> np.ndarray | None:
+    """A 16-bit RGB, RGBA or grey + alpha PNG's samples over 65535, (height, width, 1 or 3) without alpha, read at
+    their 16 bits (spectrace.io.png16: Pillow reads them at 8); None for any other file."""
+    from spectrace.io import png16
+
+    try:
+        with open(path, "rb") as file:
+            header = png16.sixteen_bit_colour_header(file.read(33))
+        if header is None:
+            return None
+        if problem := limits.image_size_problem(header[0], header[1]):
+            raise SpectraceError(f"{what} '{path}': {problem}", where=where)
+        samples = png16.read_png16(path)
+    except SpectraceError:
+        raise
+    except Exception as exc:  # a malformed file: zlib, Pillow and the reader's own errors
+        raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
+    colour = samples[..., :1] if samples.shape[-1] == 2 else samples[..., :3]
+    return colour.astype(np.float64) / 65535.0
 
 
 def _exr_size(path: Path) -> tuple[int, int]:
@@ -127,7 +150,10 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
         values = np.asarray(values, np.float64)
     else:
         regular_file(path, where, what="texture")
-        values, encoded = _read_with_pillow(path, where, "texture", pil_image_values)
+        if (sixteen := _read_png16(path, where, "texture")) is not None:
+            values, encoded = sixteen, True
+        else:
+            values, encoded = _read_with_pillow(path, where, "texture", pil_image_values)
     if not np.all(np.isfinite(values)):
         raise SpectraceError(f"texture '{path}' has NaN or infinite values", where=where)
     return values, encoded
