@@ -187,16 +187,32 @@ inline int checkerboard_side(float2 st)
     return (k - 2.0f * floor(0.5f * k)) != 0.0f;
 }
 
-/* Texture `index` at uv, at the path's four wavelengths. */
+/* Side `side` of a composite texture: its image texture, or its spectrum. */
+inline float4 texture_side(const TextureBuffers *b, __global const Texture *t, int side, float2 uv, float footprint,
+                           const SampledWavelengths *w)
+{
+    int inner = t->side_texture[side];
+    if (inner == NO_TEXTURE) return spectrum_at(b->spectra, t->side_spectrum[side], w);
+    return image_texture_spectrum(&b->textures[inner], b, uv, footprint, w);
+}
+
+/* Texture `index` at uv, at the path's four wavelengths. Composites (checkerboard, scale, mix) read their operands,
+ * which are never composites, so nothing recurses. */
 inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, float footprint,
                                const SampledWavelengths *w)
 {
     __global const Texture *t = &b->textures[index];
     if (t->type == TEXTURE_CHECKERBOARD) {
-        int side = checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw);
-        int inner = t->side_texture[side];
-        if (inner == NO_TEXTURE) return spectrum_at(b->spectra, t->side_spectrum[side], w);
-        t = &b->textures[inner];
+        return texture_side(b, t, checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, footprint, w);
+    }
+    if (t->type == TEXTURE_SCALE || t->type == TEXTURE_MIX) {
+        /* The factor is a number, the same at every wavelength: a scalar texture's first lane. */
+        float factor = t->factor_texture == NO_TEXTURE
+                     ? t->factor
+                     : image_texture_spectrum(&b->textures[t->factor_texture], b, uv, footprint, w).x;
+        float4 first = texture_side(b, t, 0, uv, footprint, w);
+        if (t->type == TEXTURE_SCALE) return factor * first;
+        return mix(first, texture_side(b, t, 1, uv, footprint, w), factor);
     }
     return image_texture_spectrum(t, b, uv, footprint, w);
 }

@@ -99,11 +99,14 @@ typedef struct {
     int filter;           /* FILTER_* */
     float band_first_nm;  /* TEXEL_BANDS: centre wavelength of band 0, nm */
     float band_step_nm;   /* TEXEL_BANDS: spacing of the band centres, nm */
-    int side_spectrum[2]; /* TEXTURE_CHECKERBOARD: each side's spectrum offset, used when side_texture is NO_TEXTURE */
-    int side_texture[2];  /* TEXTURE_CHECKERBOARD: each side's texture (never a checkerboard), or NO_TEXTURE */
+    int side_spectrum[2]; /* TEXTURE_CHECKERBOARD, SCALE, MIX: each side's (operand's) spectrum offset, used when
+                             side_texture is NO_TEXTURE */
+    int side_texture[2];  /* each side's image texture (never a composite), or NO_TEXTURE */
     int basis_offset[3];  /* TEXEL_RGB: the spectra R, G, B a texel's (r, g, b) weights: r·R(λ) + g·G(λ) + b·B(λ) */
     int storage;          /* STORAGE_*: how each value is stored (float, half, 8- or 16-bit unsigned normalised) */
-    int pad1;
+    float factor;         /* TEXTURE_SCALE: the factor; TEXTURE_MIX: the amount (when factor_texture is NO_TEXTURE) */
+    int factor_texture;   /* TEXTURE_SCALE, TEXTURE_MIX: a scalar image texture giving the factor, or NO_TEXTURE */
+    int pad[3];
 } Texture;
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its

@@ -19,7 +19,7 @@ from spectrace.engine.device_types import STORAGE_FLOAT, STORAGE_HALF
 from spectrace.spectral.rgb_texture import reflectance_coefficients
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.uplift import sigmoid_polynomial_spectrum, uplift_reflectance
-from spectrace.textures import bitmap, checkerboard, spectral
+from spectrace.textures import bitmap, checkerboard, mix, scale, spectral
 
 GRID_LAMBDAS = (400.0, 470.0, 555.0, 690.0)  # on the 1 nm grid, where the host's table is exact
 
@@ -169,3 +169,35 @@ def test_checkerboard_alternates_its_sides(runner):
     grey = half_sigmoid_spectrum(reflectance_coefficients(np.full(3, 0.5)), GRID_LAMBDAS)
     np.testing.assert_allclose(got[clear & even], 0.25, atol=1e-6)
     np.testing.assert_allclose(got[clear & ~even], np.broadcast_to(grey, got[clear & ~even].shape), atol=5e-5)
+
+
+def test_scale_and_mix_compose_their_operands(runner):
+    """pbrt-v4's semantics: scale = tex · scale, mix = (1 − amount) · tex1 + amount · tex2, each operand looked up at
+    the point with its own placement and filter: an RGB bitmap scaled by a number and by a grey texture of another
+    size, a spectrum mixed with a bitmap by a grey amount texture, and two grey textures mixed as a scalar."""
+    rng = np.random.default_rng(12)
+    rgb = rng.uniform(0.05, 0.95, (3, 4, 3))
+    grey = rng.uniform(0.0, 1.0, (5, 2, 1))
+    other = rng.uniform(0.0, 1.0, (2, 3, 1))
+    image = bitmap.make(rgb, wrap="clamp")
+    factor = bitmap.make(grey, raw=True, wrap="mirror", uv_scale=2.0)
+    uses = [
+        (scale.make(image, 0.5), "spectrum"),
+        (scale.make(image, factor), "spectrum"),
+        (mix.make(Spectrum.constant(0.25), image, factor), "spectrum"),
+        (mix.make(bitmap.make(other, raw=True), factor, 0.3), "float"),
+    ]
+    harness = TextureHarness(runner, uses)
+    uv = rng.uniform(0.0, 1.0, (400, 2))
+    image_ref = bilinear(half_sigmoid_spectrum(reflectance_coefficients(rgb), GRID_LAMBDAS), uv, "clamp")
+    factor_ref = bilinear(grey, uv * 2.0, "mirror")[:, :1]
+    other_ref = bilinear(other, uv, "repeat")[:, :1]
+    expected = [
+        0.5 * image_ref,
+        factor_ref * image_ref,
+        (1.0 - factor_ref) * 0.25 + factor_ref * image_ref,
+        np.repeat(0.7 * other_ref + 0.3 * factor_ref, 4, axis=1),
+    ]
+    for which, reference in enumerate(expected):
+        got = harness.lookup(which, uv, lambdas=GRID_LAMBDAS)
+        np.testing.assert_allclose(got, reference, atol=6e-5, err_msg=f"use {which}")

@@ -76,8 +76,10 @@ MATERIAL_DTYPE = _struct(
 # Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
 # TEXEL_SCALAR); SPECTRAL: an image of spectral bands (TEXEL_BANDS); CHECKERBOARD: two sides, each a spectrum or a
 # texture of another type.
-TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard")
-TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES))
+# SCALE: side 0 (a spectrum or an image texture) times the factor (factor_texture's value, else `factor`); MIX:
+# sides 0 and 1 blended by the amount (factor_texture's value, else `factor`): (1 − a) side 0 + a side 1.
+TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard", "scale", "mix")
+TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD, TEXTURE_SCALE, TEXTURE_MIX = range(len(TEXTURE_TYPES))
 # Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
 # S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
 # per band, at band centres band_first_nm + i·band_step_nm; VECTOR: three values read as they are (a normal map);
@@ -119,9 +121,11 @@ TEXTURE_DTYPE = _struct(
         ("side_texture", ("<i4", (2,))),
         ("basis_offset", ("<i4", (3,))),
         ("storage", "<i4"),
-        ("pad1", "<i4"),
+        ("factor", "<f4"),
+        ("factor_texture", "<i4"),
+        ("pad", ("<i4", (3,))),
     ],
-    96,
+    112,
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
