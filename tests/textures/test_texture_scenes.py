@@ -277,7 +277,8 @@ def test_bad_roughness_or_emission_texture_is_one_line(tmp_path, roughness, radi
 
 def test_scale_and_mix_in_a_scene_file(tmp_path):
     """The docs' example: a named mix of a bitmap and an rgb by a raw grey amount, and an inline scale; a scaled
-    reflectance above 1, an amount above 1 and a checkerboard operand are one-line errors naming the key."""
+    reflectance above 1, an RGB amount, a factor that varies with the wavelength and a checkerboard operand are
+    one-line errors naming the key."""
     from spectrace.textures.mix import MixTexture
     from spectrace.textures.scale import ScaleTexture
 
@@ -296,12 +297,19 @@ def test_scale_and_mix_in_a_scene_file(tmp_path):
         .material.reflectance
     )
     assert isinstance(scaled, ScaleTexture) and scaled.scale == 0.6
+    constant = load_scene(_scene(tmp_path, '{ texture = "scale", tex = { value = 0.5 }, scale = { value = 0.8 } }'))
+    assert constant.shapes[0].material.reflectance.scale == 0.8  # a constant spectrum is its number
     bad = [
         ('{ texture = "scale", tex = { value = 0.6 }, scale = 2 }', "", "materials.m.reflectance: scale texture has"),
         (
             '{ texture = "mix", amount = { texture = "bitmap", file = "paint.png" } }',
             "",
             "materials.m.reflectance.amount: texture",
+        ),
+        (
+            '{ texture = "scale", tex = { value = 0.5 }, scale = { rgb = [0.2, 0.5, 0.9] } }',
+            "",
+            "materials.m.reflectance.scale: scale is a number or a grey texture",
         ),
         (
             '{ texture = "mix", tex1 = { texture = "board" } }',

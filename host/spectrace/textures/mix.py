@@ -7,7 +7,7 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.materials.parameters import Parameter, Range
-from spectrace.textures.shared import Placement
+from spectrace.textures.shared import Placement, composite_factor
 
 NAME = "mix"
 PARAMETERS = (
@@ -43,21 +43,11 @@ class MixTexture:
 
 
 def from_spec(spec, resolver, key: str) -> MixTexture:
-    from spectrace.errors import SpectraceError
-
     sides = [
-        resolver.spectrum_or_texture(getattr(spec, n), f"{key}.{n}", "spectrum", inner=True) for n in ("tex1", "tex2")
+        resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
+        for name in ("tex1", "tex2")
     ]
-    amount = spec.amount
-    if not isinstance(amount, (int, float)):
-        amount = resolver.spectrum_or_texture(amount, f"{key}.amount", "float", inner=True)
-        if (high := float(amount.values.max())) > 1.0 + 1e-6:
-            raise SpectraceError(
-                f"texture '{amount.source}' has values above 1 (max {high:.4g})", where=resolver.where(f"{key}.amount")
-            )
-    elif not 0.0 <= amount <= 1.0:
-        raise SpectraceError(f"amount must lie in [0, 1], got {amount}", where=resolver.where(f"{key}.amount"))
-    return MixTexture(sides[0], sides[1], float(amount) if isinstance(amount, (int, float)) else amount)
+    return MixTexture(sides[0], sides[1], composite_factor(spec.amount, resolver, f"{key}.amount", upper=1.0))
 
 
 def make(tex1=0.0, tex2=1.0, amount=0.5) -> MixTexture:

@@ -7,7 +7,7 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.materials.parameters import Parameter, Range
-from spectrace.textures.shared import Placement
+from spectrace.textures.shared import Placement, composite_factor
 
 NAME = "scale"
 PARAMETERS = (
@@ -41,14 +41,7 @@ class ScaleTexture:
 
 def from_spec(spec, resolver, key: str) -> ScaleTexture:
     tex = resolver.spectrum_or_texture(spec.tex, f"{key}.tex", "spectrum", inner=True)
-    scale = spec.scale
-    if not isinstance(scale, (int, float)):
-        scale = resolver.spectrum_or_texture(scale, f"{key}.scale", "float", inner=True)
-    elif scale < 0.0:
-        from spectrace.errors import SpectraceError
-
-        raise SpectraceError(f"scale must be >= 0, got {scale}", where=resolver.where(f"{key}.scale"))
-    return ScaleTexture(tex, float(scale) if isinstance(scale, (int, float)) else scale)
+    return ScaleTexture(tex, composite_factor(spec.scale, resolver, f"{key}.scale", upper=None))
 
 
 def make(tex, scale=1.0) -> ScaleTexture:
