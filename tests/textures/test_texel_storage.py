@@ -100,6 +100,27 @@ def test_float_data_is_half_only_when_exact(runner):
     )
 
 
+def test_emission_and_bands_storage_follows_the_stated_rule():
+    """Spectral bands and emission RGB: half when the largest value lies in [2^-4, 65504] (each value then within a
+    relative 2^-11 of itself) or when every value is a half already (a half OpenEXR: exact); float otherwise (a
+    dark texture in float, whose values would fall below half's normal range; values beyond 65504)."""
+    from spectrace.textures import spectral
+
+    rng = np.random.default_rng(36)
+    bands = np.arange(400.0, 701.0, 100.0)
+    cases = {
+        "bright": (rng.uniform(0.0, 0.9, (2, 3, 4)), STORAGE_HALF),
+        "dark float": (rng.uniform(0.0, 0.03, (2, 3, 4)), STORAGE_FLOAT),
+        "dark halves": (rng.uniform(0.0, 0.03, (2, 3, 4)).astype(np.float16).astype(np.float64), STORAGE_HALF),
+    }
+    rows = TextureRows(SpectrumTable(), [np.zeros((1, 4), np.float32)])
+    for name, (values, expected) in cases.items():
+        index = rows.add(spectral.make(values, bands), "spectrum")
+        assert rows.array()["storage"][index] == expected, name
+    index = rows.add(bitmap.make(np.full((2, 2, 3), 7e4)), "emission", basis=[0, 0, 0])
+    assert rows.array()["storage"][index] == STORAGE_FLOAT
+
+
 def _lab(coefficients: np.ndarray, dimensionless_form: bool) -> np.ndarray:
     """CIELAB under D65 (colour-science's CMFs and illuminant, 1 nm) of sigmoid spectra S(poly)."""
     shape = colour.SpectralShape(360, 830, 1)

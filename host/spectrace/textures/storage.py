@@ -5,13 +5,13 @@ kernels/texture.cl), chosen per texture where it is exact or within a measured b
   roughness, opacity and heights; normal maps) whose values are all such codes, as a raw 8- or 16-bit file gives:
   exact at level 0. A pyramid's coarser levels (averages) are rounded to the nearest code, within half a code step,
   as the file's own quantisation.
-- Half floats for the rest that tolerate them. Data textures only when every value is a half (an OpenEXR stored in
-  half): exact; a float height map stays float, since a bump map differentiates it. Sigmoid coefficients in their
-  dimensionless form (t = (λ − centre) / half span; in powers of λ in nm, half coefficients are off by up to ΔE2000
-  5.4), when they all fit in half's range: colour difference to the float texel at most ΔE2000 0.32 over the RGB
-  cube, 0.09 in photographs (docs/textures.md, Memory). Emission RGB and spectral bands whose largest value lies in
-  [2^-4, 65504]: each value within a relative 2^-11, or (below half's normal range, 2^10 times darker than the
-  brightest or more) within 2^-25 absolute; ΔE2000 at most 0.06 for emission images.
+- Half floats for the rest that tolerate them, and for any texture whose values are all halves (an OpenEXR stored
+  in half: exact). Other data textures stay float: a float height map, since a bump map differentiates it. Sigmoid
+  coefficients in their dimensionless form (t = (λ − centre) / half span; in powers of λ in nm, half coefficients
+  are off by up to ΔE2000 5.4), when they all fit in half's range: colour difference to the float texel at most
+  ΔE2000 0.32 over the RGB cube, 0.09 in photographs (docs/textures.md, Memory). Emission RGB and spectral bands
+  whose largest value lies in [2^-4, 65504]: each value within a relative 2^-11, or (below half's normal range,
+  2^10 times darker than the brightest or more) within 2^-25 absolute; ΔE2000 at most 0.06 for emission images.
 
 The choice depends only on the values, so a texture is stored alike in every scene and render.
 """
@@ -73,7 +73,9 @@ def predicted_storage(texel_format: int, values: np.ndarray) -> int:
     if texel_format == TEXEL_SIGMOID:
         return STORAGE_HALF
     peak = float(np.max(np.abs(values))) if np.size(values) else 0.0
-    return STORAGE_HALF if HALF_LEAST_PEAK <= peak <= HALF_MAX or peak == 0.0 else STORAGE_FLOAT
+    if HALF_LEAST_PEAK <= peak <= HALF_MAX or peak == 0.0 or _half_exact(values):
+        return STORAGE_HALF
+    return STORAGE_FLOAT
 
 
 def dimensionless(coefficients: np.ndarray) -> np.ndarray:
