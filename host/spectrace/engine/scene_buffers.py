@@ -295,5 +295,6 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["seed"] = scene.seed
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
     params["medium_count"] = buffers.medium_count
+    params["hide_environment"] = int(scene.hide_environment)
     params["shape_count"] = buffers.shape_count
     return params
