@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.geometry.analytic import similarity_problem
 from spectrace.interop.pbrt_parser import Entity, Location, PbrtScene, Shape, error, read_scene, shown
 from spectrace.io.output_files import check_output_file
 
@@ -641,7 +642,9 @@ class PbrtImporter:
             # tessellation with pbrt's parametrisation (partial spheres, texture coordinates, reversed fronts).
             if whole and not needs_uv and not shape.reverse_orientation:
                 steps = [{"scale": radius}, {"matrix": matrix.tolist()}]
-                return {"type": "sphere", "transform": steps}, None
+                # The analytic sphere, unless the placement is no similarity (an ellipsoid needs triangles).
+                tessellated = similarity_problem(matrix) is not None
+                return {"type": "sphere", "transform": steps} | ({"tessellated": True} if tessellated else {}), None
         key = id(entity), shape.reverse_orientation, needs_uv
         if key not in self._mesh_of:
             mesh = self.mesh(shape)
