@@ -31,6 +31,7 @@ typedef struct {
     float eta;
     float alpha;
     float base_scale;  /* c of the header comment */
+    int distribution;  /* MICROFACET_* of the rough coat */
 } PlasticParams;
 
 /* The base is diffuse; a smooth coat (anywhere) adds a delta lobe. */
@@ -47,7 +48,16 @@ inline PlasticParams plastic_params(__global const Material *m, const SurfaceCon
     p.eta = m->ior;
     p.alpha = surface_scalar(sc, m->roughness_texture, m->alpha, w);
     float s = ggx_is_smooth(p.alpha) ? 1.0f : PLASTIC_ROUGH_BASE_SCALE;
-    p.base_scale = s / (1.0f - fresnel_dielectric_average(m->ior));
+    float fresnel_average = fresnel_dielectric_average(m->ior);
+    p.base_scale = s / (1.0f - fresnel_average);
+    p.distribution = m->distribution;
+    if (SCENE_HAS_NONLINEAR_PLASTIC && m->nonlinear) {
+        /* Light reflected back down by the coat meets the base again: a geometric series in ρ F_dr, whose sum
+         * ρ/(1 − ρ F_dr) replaces ρ/(1 − F_dr). F_dr = 1 − (1 − F̄)/η² is the coat's diffuse reflectance from
+         * inside (reciprocity with F̄ from outside), so the base's albedo becomes ρ (1 − F_dr)/(1 − ρ F_dr). */
+        float fdr_inside = 1.0f - (1.0f - fresnel_average) / (m->ior * m->ior);
+        p.reflectance = p.reflectance * (1.0f - fdr_inside) / (1.0f - p.reflectance * fdr_inside);
+    }
     return p;
 }
 
@@ -70,7 +80,8 @@ inline float4 plastic_coat_eval(const PlasticParams *p, float3 wo, float3 wi)
 {
     if (ggx_is_smooth(p->alpha) || wo.z <= 0.0f || wi.z <= 0.0f) return (float4)(0.0f);
     float3 h = reflection_half_vector(wo, wi);
-    return (float4)(fresnel_dielectric(dot(wo, h), p->eta) * ggx_reflection_cos(wo, wi, p->alpha));
+    return (float4)(fresnel_dielectric(dot(wo, h), p->eta)
+                    * microfacet_reflection_cos(wo, wi, p->alpha, p->distribution));
 }
 
 inline float4 plastic_eval(const PlasticParams *p, float3 wo, float3 wi)
@@ -83,7 +94,8 @@ inline float plastic_pdf(const PlasticParams *p, float3 wo, float3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
     float coat = plastic_coat_probability(p, wo);
     float pdf = (1.0f - coat) * wi.z * INV_PI;
-    if (!ggx_is_smooth(p->alpha)) pdf += coat * ggx_reflection_pdf(wo, reflection_half_vector(wo, wi), p->alpha);
+    if (!ggx_is_smooth(p->alpha))
+        pdf += coat * microfacet_reflection_pdf(wo, reflection_half_vector(wo, wi), p->alpha, p->distribution);
     return pdf;
 }
 
@@ -96,8 +108,7 @@ inline int plastic_sample(const PlasticParams *p, float3 wo, float uc, float2 u,
         if (ggx_is_smooth(p->alpha)) {
             return delta_sample(reflect_local(wo), (float4)(fresnel_dielectric(wo.z, p->eta) / coat), coat, s);
         }
-        float3 h = ggx_sample_visible_normal(wo, p->alpha, u);
-        wi = 2.0f * dot(wo, h) * h - wo;
+        wi = microfacet_reflect(wo, microfacet_sample_normal(wo, p->alpha, p->distribution, u));
         if (wi.z <= 0.0f) return 0;
     } else {
         wi = sample_cosine_hemisphere(u);

@@ -114,15 +114,16 @@ def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
     assert materials["gold"] == {"type": "conductor", "metal": "Au", "roughness": 0.2}
     assert materials["mirror"] == {"type": "mirror", "reflectance": {"value": 0.8}}  # Mitsuba's material "none"
     assert materials["measured"]["eta"] == {"values": [[400.0, 1.2], [700.0, 0.2]]}
-    # Mitsuba's roughplastic defaults: alpha 0.1, Beckmann (imported as GGX, with a note); ior = bk7 / air.
+    # Mitsuba's roughplastic defaults: alpha 0.1, Beckmann; ior = bk7 / air.
     assert materials["red"] == {
         "type": "plastic",
         "reflectance": {"rgb": [0.5, 0.1, 0.1]},
         "ior": pytest.approx(1.5046 / 1.000277),
         "roughness": 0.1,
+        "distribution": "beckmann",
     }
     assert materials["white"] == {"type": "plastic", "reflectance": {"value": 0.5}, "ior": 1.6}
-    assert any("beckmann" in note for note in notes)
+    assert not any("GGX" in note for note in notes)
     scene = load_mitsuba_scene(path)
     assert {type(shape.material).__name__ for shape in scene.shapes} == {
         "ConductorMaterial",
@@ -239,7 +240,8 @@ def test_spectra_and_lights(tmp_path):
 
 def test_dielectrics(tmp_path):
     """Mitsuba's dielectric index is int_ior / ext_ior, named (its table, Hecht's values) or numeric; bk7 in air
-    by default; roughdielectric's alpha (default 0.1) becomes the GGX roughness."""
+    by default; roughdielectric's alpha (default 0.1) becomes the roughness of its distribution (default
+    beckmann)."""
     body = """
         <shape type="sphere"><bsdf type="dielectric"/></shape>
         <shape type="sphere"><bsdf type="dielectric"><string name="int_ior" value="water"/>
@@ -259,8 +261,7 @@ def test_dielectrics(tmp_path):
         "roughness": 0.25,
         "specular_tint": {"rgb": [0.9, 0.9, 0.9]},
     }
-    assert materials[3]["roughness"] == 0.1
-    assert any("beckmann distribution; imported as GGX" in note for note in notes)
+    assert materials[3]["roughness"] == 0.1 and materials[3]["distribution"] == "beckmann"  # Mitsuba's defaults
     scene = load_mitsuba_scene(_write(tmp_path, body))
     assert scene.shapes[1].material.ior.at(500.0) == pytest.approx(1.333)
 

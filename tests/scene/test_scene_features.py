@@ -49,6 +49,8 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
         "SCENE_HAS_MEDIA": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
+        "SCENE_HAS_BECKMANN": 0,
+        "SCENE_HAS_NONLINEAR_PLASTIC": 0,
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
@@ -73,6 +75,20 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         defines = scene_feature_defines(build_scene_buffers(scene))
         assert (defines["SCENE_HAS_SURFACE_NORMALS"], defines["SCENE_HAS_OPACITY"]) == (normals, opacity)
+
+
+def test_beckmann_lobes_and_nonlinear_plastics_are_features():
+    """Only a Beckmann lobe compiles Beckmann's code in, only a nonlinear plastic the albedo's remapping."""
+    for material, beckmann, nonlinear in (
+        (spectrace.conductor("Au", roughness=0.3), 0, 0),
+        (spectrace.conductor("Au", roughness=0.3, distribution="beckmann"), 1, 0),
+        (spectrace.dielectric(1.5, roughness=0.3, distribution="beckmann"), 1, 0),
+        (spectrace.plastic(0.5, roughness=0.2, distribution="beckmann", nonlinear=True), 1, 1),
+        (spectrace.plastic(0.5, nonlinear=True), 0, 1),
+    ):
+        scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
+        defines = scene_feature_defines(build_scene_buffers(scene))
+        assert (defines["SCENE_HAS_BECKMANN"], defines["SCENE_HAS_NONLINEAR_PLASTIC"]) == (beckmann, nonlinear)
 
 
 def test_the_footprint_is_computed_only_for_the_lookups_that_read_it():
@@ -170,6 +186,21 @@ def _textured_scene(filters: tuple[str, ...]) -> spectrace.Scene:
     return replace(_environment_map_scene(), shapes=shapes)
 
 
+def _beckmann_scene() -> spectrace.Scene:
+    """Rough Beckmann gold, glass and nonlinear plastic beside GGX ones, in the environment map's light."""
+    materials = [
+        spectrace.conductor("Au", roughness=0.3, distribution="beckmann"),
+        spectrace.dielectric(1.5, roughness=0.2, distribution="beckmann"),
+        spectrace.plastic((0.6, 0.2, 0.1), roughness=0.2, distribution="beckmann", nonlinear=True),
+        spectrace.conductor("Cu", roughness=0.3),
+    ]
+    shapes = [
+        spectrace.shape("sphere", material, transform=[{"scale": 0.4}, {"translate": [0.9 * i - 1.35, 0.4, 0]}])
+        for i, material in enumerate(materials)
+    ]
+    return replace(_environment_map_scene(), shapes=shapes)
+
+
 SCENES = {
     "cornell_box": lambda: _bundled("cornell_box"),
     "material_showcase": lambda: _bundled("material_showcase"),
@@ -184,6 +215,7 @@ SCENES = {
     # bilinear lookup reads it.
     "nearest_and_bilinear_textures": lambda: _textured_scene(("nearest", "bilinear")),
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
+    "beckmann_and_nonlinear_plastic": _beckmann_scene,
 }
 
 
