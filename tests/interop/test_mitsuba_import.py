@@ -132,6 +132,33 @@ def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
     }
 
 
+def test_distribution_and_nonlinear_are_mapped(tmp_path):
+    """Mitsuba's distribution (default beckmann) on every rough BSDF; plastic's nonlinear; an unknown distribution
+    is one error naming the element."""
+    body = """
+        <shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Cu"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughplastic"><string name="distribution" value="ggx"/>
+            <boolean name="nonlinear" value="true"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="plastic"><boolean name="nonlinear" value="false"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"><float name="alpha" value="0.3"/></bsdf></shape>"""
+    materials = list(mitsuba_scene_data(_write(tmp_path, body))[0]["materials"].values())
+    assert materials[0]["distribution"] == "beckmann" and materials[0]["roughness"] == 0.1
+    assert "distribution" not in materials[1] and materials[1]["nonlinear"] is True  # ggx: spectrace's default
+    assert "nonlinear" not in materials[2]
+    assert materials[3]["distribution"] == "beckmann"
+    scene = load_mitsuba_scene(_write(tmp_path, body))
+    kinds = [(shape.material.distribution, getattr(shape.material, "nonlinear", None)) for shape in scene.shapes]
+    assert kinds == [("beckmann", None), ("ggx", True), ("ggx", False), ("beckmann", None)]
+    bad = _write(
+        tmp_path,
+        '<shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/>'
+        '<string name="distribution" value="phong"/></bsdf></shape>',
+    )
+    with pytest.raises(SpectraceError, match="unknown distribution 'phong'") as error:
+        mitsuba_scene_data(bad)
+    assert "\n" not in str(error.value) and "line" in str(error.value)
+
+
 def test_unrepresentable_conductors_are_named(tmp_path):
     path = _write(
         tmp_path,
