@@ -73,7 +73,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
     path = _write(
         tmp_path,
         """
-        <bsdf type="thindielectric" id="metal"/>
+        <bsdf type="hair" id="metal"/>
         <shape type="serialized"><string name="filename" value="x.serialized"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
         <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""",
@@ -83,7 +83,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
     message = str(error.value)
     for named in (
         "shape 'serialized' (line 6)",
-        "bsdf 'thindielectric' (not yet in spectrace) (line 5)",
+        "bsdf 'hair' (line 5)",
         "emitter 'envmap' (line 8)",
     ):
         assert named in message

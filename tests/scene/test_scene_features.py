@@ -19,7 +19,15 @@ from spectrace.scene.model import EnvironmentMap
 
 # The type codes (materials: their order in spectrace.materials.MATERIALS), written out here so the test does not
 # read them from the code under test.
-MATERIAL_BITS = {"diffuse": 1, "conductor": 2, "mirror": 4, "plastic": 8, "dielectric": 16, "retroreflector": 32}
+MATERIAL_BITS = {
+    "diffuse": 1,
+    "conductor": 2,
+    "mirror": 4,
+    "plastic": 8,
+    "dielectric": 16,
+    "retroreflector": 32,
+    "thindielectric": 64,
+}
 LIGHT_BITS = {"area": 1, "point": 2, "spot": 4, "distant": 8, "environment": 16, "environment_map": 32}
 
 

@@ -84,7 +84,7 @@ def supported_text() -> str:
 
 
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
-_PLANNED_BSDFS = ("thindielectric",)
+_PLANNED_BSDFS: tuple[str, ...] = ()
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
 _NAMED_IOR = {
     "vacuum": 1.0,

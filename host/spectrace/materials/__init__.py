@@ -21,13 +21,22 @@ import numpy as np
 
 from spectrace.dispatch import module_by_model
 from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE
-from spectrace.materials import conductor, dielectric, diffuse, mirror, plastic, retroreflector, surface
+from spectrace.materials import (
+    conductor,
+    dielectric,
+    diffuse,
+    mirror,
+    plastic,
+    retroreflector,
+    surface,
+    thindielectric,
+)
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 # Scene-file `type` -> module. A module's position is its Material.type code (MATERIAL_<NAME> in the kernels), and
 # the order in which the schema lists the types and the kernels' dispatch tests them.
-MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector)}
+MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector, thindielectric)}
 MATERIAL_CODES = {name: code for code, name in enumerate(MATERIALS)}
 material_module = module_by_model(MATERIALS.values(), "material")
 # Every material takes the surface-detail keys (surface.py) besides its own: its API constructor too.
