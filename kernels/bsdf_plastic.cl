@@ -11,6 +11,13 @@
  * anisotropic Phong BRDF model") with the exact Fresnel term and its exact hemispherical average in place of
  * Schlick's approximation and its 28/23 constant.
  *
+ * Internal scattering: c = 1/(1 − F̄) is 1/(η² (1 − F_dr)), the series of light the coat reflects back down to the
+ * base (F_dr = 1 − (1 − F̄)/η², its diffuse reflectance from inside) with the radiance's 1/η² on leaving, which is
+ * Mitsuba 3's plastic. `nonlinear` (Mitsuba's too) lets the base's albedo into that series: ρ/(1 − ρ F_dr) for
+ * ρ/(1 − F_dr). A rough coat with its own transmission (Material.coat_table_offset, spectrace.materials.coat)
+ * replaces (1 − F(cos θ)) by the rough interface's tabulated t(cos θ) and F_dr by its R_int, with s = 1: Mitsuba's
+ * roughplastic.
+ *
  * Sampling picks the coat with probability P = F(θo) / (F(θo) + (1 − F(θo)) ρ̄) (ρ̄: the mean base albedo over the
  * path's wavelengths), else the cosine-weighted base lobe; rough plastic reports the mixture pdf
  * P pdf_coat + (1 − P) pdf_base (the one-sample MIS of the two lobes) and weights by f cos / that pdf. */
@@ -32,6 +39,8 @@ typedef struct {
     float alpha;
     float base_scale;  /* c of the header comment */
     int distribution;  /* MICROFACET_* of the rough coat */
+    __global const float *coat_table;  /* t(μ) of a rough coat that passes light by its own transmittance
+                                          (Material.coat_table_offset), or 0: the smooth interface's 1 − F */
 } PlasticParams;
 
 /* The base is diffuse; a smooth coat (anywhere) adds a delta lobe. */
@@ -51,11 +60,20 @@ inline PlasticParams plastic_params(__global const Material *m, const SurfaceCon
     float fresnel_average = fresnel_dielectric_average(m->ior);
     p.base_scale = s / (1.0f - fresnel_average);
     p.distribution = m->distribution;
+    p.coat_table = 0;
+    /* The coat's diffuse reflectance from inside: 1 − (1 − F̄)/η² for a smooth interface (reciprocity with F̄ from
+     * outside), R_int of the rough one where its own transmittance is used. */
+    float fdr_inside = 1.0f - (1.0f - fresnel_average) / (m->ior * m->ior);
+    if (SCENE_HAS_ROUGH_COAT && m->coat_table_offset != MATERIAL_NO_SPECTRUM) {
+        /* Light enters and leaves by the rough coat's t(μ), and the internal series sums to 1/(1 − R_int); with
+         * the radiance's 1/η² on leaving, c = 1/(η² (1 − R_int)) (the smooth c is this with R_int = F_dr). */
+        p.coat_table = sc->buffers.spectra + m->coat_table_offset;
+        fdr_inside = m->coat_internal_reflectance;
+        p.base_scale = 1.0f / (m->ior * m->ior * (1.0f - fdr_inside));
+    }
     if (SCENE_HAS_NONLINEAR_PLASTIC && m->nonlinear) {
         /* Light reflected back down by the coat meets the base again: a geometric series in ρ F_dr, whose sum
-         * ρ/(1 − ρ F_dr) replaces ρ/(1 − F_dr). F_dr = 1 − (1 − F̄)/η² is the coat's diffuse reflectance from
-         * inside (reciprocity with F̄ from outside), so the base's albedo becomes ρ (1 − F_dr)/(1 − ρ F_dr). */
-        float fdr_inside = 1.0f - (1.0f - fresnel_average) / (m->ior * m->ior);
+         * ρ/(1 − ρ F_dr) replaces ρ/(1 − F_dr), so the base's albedo becomes ρ (1 − F_dr)/(1 − ρ F_dr). */
         p.reflectance = p.reflectance * (1.0f - fdr_inside) / (1.0f - p.reflectance * fdr_inside);
     }
     return p;
@@ -69,9 +87,21 @@ inline float plastic_coat_probability(const PlasticParams *p, float3 wo)
     return f + base > 0.0f ? f / (f + base) : 1.0f;
 }
 
+/* t(μ) of a rough coat, interpolated linearly in its table. */
+inline float plastic_coat_transmittance(const PlasticParams *p, float mu)
+{
+    float x = clamp(mu, 0.0f, 1.0f) * (float)(GRID_SAMPLES - 1);
+    int i = min((int)x, GRID_SAMPLES - 2);
+    return mix(p->coat_table[i], p->coat_table[i + 1], x - (float)i);
+}
+
 inline float4 plastic_base_eval(const PlasticParams *p, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f) return (float4)(0.0f);
+    if (SCENE_HAS_ROUGH_COAT && p->coat_table) {
+        float through = plastic_coat_transmittance(p, wi.z) * plastic_coat_transmittance(p, wo.z);
+        return p->reflectance * (p->base_scale * through * INV_PI * wi.z);
+    }
     float transmitted = (1.0f - fresnel_dielectric(wi.z, p->eta)) * (1.0f - fresnel_dielectric(wo.z, p->eta));
     return p->reflectance * (p->base_scale * transmitted * INV_PI * wi.z);
 }

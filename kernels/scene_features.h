@@ -33,6 +33,11 @@
 #define SCENE_HAS_NONLINEAR_PLASTIC 1
 #endif
 
+/* Plastics whose rough coat passes light by its own tabulated transmittance (`coat_transmission = "rough"`). */
+#ifndef SCENE_HAS_ROUGH_COAT
+#define SCENE_HAS_ROUGH_COAT 1
+#endif
+
 /* Material textures (kernels/texture.cl). */
 #ifndef SCENE_HAS_TEXTURES
 #define SCENE_HAS_TEXTURES 1

@@ -77,13 +77,17 @@ typedef struct {
     int nonlinear;              /* plastic: 1 = the base's internal scattering depends on its albedo (Mitsuba's
                                    `nonlinear`), 0 = it does not */
     int transmittance_offset;   /* thindielectric: optional tint of its transmission (MATERIAL_NO_SPECTRUM: none) */
+    int coat_table_offset;      /* plastic with a rough coat's own transmission: GRID_SAMPLES values of t(cos θ) at
+                                   cos θ = i / (GRID_SAMPLES − 1) in the spectrum table (MATERIAL_NO_SPECTRUM: the
+                                   smooth interface's 1 − F instead) */
+    float coat_internal_reflectance; /* with coat_table_offset: the coat's diffuse reflectance from inside, R_int */
     /* Surface detail, every type (kernels/surface_detail.cl, scene.cl; host: spectrace.materials.surface). */
     int normal_map;             /* a TEXEL_VECTOR texture of tangent-space normals, or NO_TEXTURE */
     int bump_map;               /* a scalar texture of heights, or NO_TEXTURE */
     float bump_scale;           /* scene units per bump map value */
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
-    int detail_pad[3];
+    int detail_pad[1];
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the

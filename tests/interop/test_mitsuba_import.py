@@ -121,6 +121,7 @@ def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
         "ior": pytest.approx(1.5046 / 1.000277),
         "roughness": 0.1,
         "distribution": "beckmann",
+        "coat_transmission": "rough",
     }
     assert materials["white"] == {"type": "plastic", "reflectance": {"value": 0.5}, "ior": 1.6}
     assert not any("GGX" in note for note in notes)

@@ -56,6 +56,14 @@ NON_DELTA = [
         for a in (0.1, 0.3, 0.7)
     ],
     ("plastic-nonlinear-a0.2", PlasticMaterial(_constant(0.9), ior=1.5, roughness=0.2, nonlinear=True)),
+    (
+        "plastic-rough-coat-beckmann-a0.3",
+        PlasticMaterial(_constant(0.9), roughness=0.3, distribution="beckmann", coat_transmission="rough"),
+    ),
+    (
+        "plastic-rough-coat-nonlinear-a0.5",
+        PlasticMaterial(_constant(0.6), roughness=0.5, nonlinear=True, coat_transmission="rough"),
+    ),
     *[(f"retroreflector-a{a}", RetroreflectorMaterial(_constant(1.0), roughness=a)) for a in (0.1, 0.3, 0.7)],
 ]
 DELTA_ONLY = [
@@ -70,6 +78,13 @@ ENERGY_CASES = EVERY + [
     ("conductor-Ag-beckmann-a1", ConductorMaterial(*metal_ior("Ag"), roughness=1.0, distribution="beckmann")),
     ("plastic-white-beckmann-a0.05", PlasticMaterial(_constant(1.0), roughness=0.05, distribution="beckmann")),
     ("plastic-white-nonlinear", PlasticMaterial(_constant(1.0), ior=1.5, nonlinear=True)),
+    *[
+        (
+            f"plastic-white-rough-coat-{d}-a{a}",
+            PlasticMaterial(_constant(1.0), roughness=a, distribution=d, coat_transmission="rough"),
+        )
+        for d, a in (("beckmann", 0.05), ("beckmann", 0.3), ("ggx", 0.1), ("ggx", 1.0))
+    ],
 ]
 INCIDENT_DEGREES = (0.0, 30.0, 60.0, 80.0, 89.0)
 

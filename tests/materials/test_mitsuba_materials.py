@@ -8,6 +8,8 @@ would go through two different uplift tables).
   shape is the distribution's.
 - Mitsuba's smooth `plastic`, `nonlinear` false and true: its internal scattering term is spectrace's (the coat's
   diffuse reflectance from inside, F_dr), and `nonlinear` puts the albedo into it.
+- Mitsuba's `roughplastic`: the rough coat's own transmittance and internal reflectance (coat_transmission
+  "rough"), within an allowance for Mitsuba's coarser tables.
 - A `thindielectric` sheet, tilted in front of an area light: the light and the floor seen through it (T'), the
   sky reflected in it (R').
 
@@ -45,9 +47,12 @@ def _scene(body: str, size: int = SIZE, origin: str = "0, -3, 2.2", max_depth: i
 """
 
 
-def _compare(tmp_path: Path, device, mi, text: str, replicas: int, replica_spp: int, edit=None) -> None:
+def _compare(
+    tmp_path: Path, device, mi, text: str, replicas: int, replica_spp: int, edit=None, allowance: float = 0.0
+) -> None:
     """Both renderers' replicas of `text` agree block by block (`edit`, if given, changes spectrace's imported
-    scene: the tests' check that a wrong model fails)."""
+    scene: the tests' check that a wrong model fails); `allowance`: a known relative difference of the models that
+    each block and the whole image may show on top of 5 standard errors."""
     xml = tmp_path / "scene.xml"
     xml.write_text(text)
     scene = load_mitsuba_scene(xml)
@@ -59,7 +64,19 @@ def _compare(tmp_path: Path, device, mi, text: str, replicas: int, replica_spp: 
     )
     ours = spectrace_replicas(Renderer(scene, device), replicas, replica_spp)
     assert theirs[..., 1].mean() > 0.02  # a lit image
-    assert_replicas_agree(ours, theirs, BLOCK)
+    if allowance == 0.0:
+        assert_replicas_agree(ours, theirs, BLOCK)
+        return
+    n = SIZE // BLOCK
+    for reduce in (
+        lambda images: images.reshape(len(images), n, BLOCK, n, BLOCK, 3).mean(axis=(2, 4)),
+        lambda images: images.mean(axis=(1, 2)),
+    ):
+        a, b = reduce(ours), reduce(theirs)
+        difference = a.mean(axis=0) - b.mean(axis=0)
+        standard_error = np.sqrt(a.var(axis=0, ddof=1) / len(a) + b.var(axis=0, ddof=1) / len(b))
+        beyond = np.abs(difference) - allowance * np.abs(b.mean(axis=0))
+        assert np.all(beyond <= 5.0 * standard_error), (np.max(beyond / standard_error), allowance)
 
 
 FLOOR = """<shape type="rectangle">
@@ -87,6 +104,13 @@ def test_beckmann_rough_conductor_renders_like_mitsuba(tmp_path, device, mitsuba
 REFLECTANCE = '<spectrum name="diffuse_reflectance" value="400:0.15, 480:0.7, 560:0.45, 640:0.25, 700:0.6"/>'
 
 
+def _plastic_floor_and_wall(bsdf: str) -> str:
+    wall = f"""<shape type="cube">
+        <transform name="to_world"><scale x="3" y="0.02" z="1.5"/><translate value="0, 1.02, 1.5"/>
+        </transform>{bsdf}</shape>"""
+    return FLOOR.format(bsdf=bsdf) + wall + '<emitter type="constant"><spectrum name="radiance" value="1"/></emitter>'
+
+
 @pytest.mark.parametrize("nonlinear", ["false", "true"])
 def test_plastic_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral, nonlinear):
     """A floor and a wall of smooth coloured plastic (η = 1.5) meeting at a right angle, under a uniform sky, so
@@ -96,11 +120,9 @@ def test_plastic_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral,
     bsdf = f"""<bsdf type="plastic">{REFLECTANCE}<float name="int_ior" value="1.5"/>
         <float name="ext_ior" value="1"/><boolean name="nonlinear" value="{nonlinear}"/></bsdf>"""
     # A thin box, not an upright rectangle (see above).
-    wall = f"""<shape type="cube">
-        <transform name="to_world"><scale x="3" y="0.02" z="1.5"/><translate value="0, 1.02, 1.5"/>
-        </transform>{bsdf}</shape>"""
-    body = FLOOR.format(bsdf=bsdf) + wall + '<emitter type="constant"><spectrum name="radiance" value="1"/></emitter>'
-    _compare(tmp_path, device, mitsuba_scalar_spectral, _scene(body), replicas=12, replica_spp=16)
+    _compare(
+        tmp_path, device, mitsuba_scalar_spectral, _scene(_plastic_floor_and_wall(bsdf)), replicas=12, replica_spp=16
+    )
 
 
 def _write_quad(path: Path, corners: np.ndarray) -> None:
@@ -135,3 +157,34 @@ def test_thindielectric_sheet_renders_like_mitsuba(tmp_path, device, mitsuba_sca
     <emitter type="constant"><spectrum name="radiance" value="0.5"/></emitter>"""
     text = _scene(body, origin="0, -3, 0.9").replace('target="0, 0, 0"', 'target="0, 1, 0.6"')
     _compare(tmp_path, device, mitsuba_scalar_spectral, text, replicas=12, replica_spp=16)
+
+
+def _mitsuba_internal_reflectance_allowance(alpha: float, distribution: str, eta: float = 1.5) -> float:
+    """How much darker Mitsuba's diffuse part is for its estimate of R_int: the plain mean of 2 μ r_in(μ) at 64
+    equally spaced μ (from 0 to 1) instead of the integral, with r_in the rough interface's reflectance from inside
+    (spectrace.materials.coat, itself checked against Monte Carlo of the device's BSDF in test_bsdf_dielectric.py):
+    (1 − R_mean) / (1 − R_int) − 1, a known difference of the two renderers' tables, not of the model."""
+    from spectrace.materials.coat import _albedos, rough_coat
+
+    mu = np.maximum(np.linspace(0.0, 1.0, 64), 1e-6)
+    reflected, _ = _albedos(mu, 1.0 / eta, alpha, distribution)
+    mean_estimate = float(2.0 * np.mean(reflected * mu))
+    return abs((1.0 - mean_estimate) / (1.0 - rough_coat(eta, alpha, distribution)[1]) - 1.0)
+
+
+@pytest.mark.parametrize("alpha, distribution", [(0.1, "beckmann"), (0.3, "ggx")])
+def test_rough_plastic_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral, alpha, distribution):
+    """The floor and wall of the plastic test in Mitsuba's roughplastic (imported with coat_transmission "rough":
+    the rough coat's own transmittance and internal reflectance). Each block may differ by the allowance for
+    Mitsuba's coarser R_int (2.1 % for Beckmann α = 0.1, 1.0 % for GGX α = 0.3) plus 1 % for the other differences
+    of the two renderers' tables (Mitsuba's separable masking G1 G1: the white base's albedo head-on at GGX α = 0.3
+    is 0.662 with it, 0.668 with spectrace's height-correlated G2; its coarser quadratures). Measured: spectrace's
+    image is 2.6 % (Beckmann) and 2.2 % (GGX) brighter, blocks within 1.7 σ and 3.2 σ beyond the allowance; with
+    coat_transmission "smooth" the test fails at 6.9 σ (Beckmann) and 98 σ (GGX). With Mitsuba's R_int estimate
+    substituted (a check outside the suite) the Beckmann case agrees within 3.0 σ without any allowance."""
+    bsdf = f"""<bsdf type="roughplastic">{REFLECTANCE}<float name="int_ior" value="1.5"/>
+        <float name="ext_ior" value="1"/><float name="alpha" value="{alpha}"/>
+        <string name="distribution" value="{distribution}"/></bsdf>"""
+    allowance = _mitsuba_internal_reflectance_allowance(alpha, distribution) + 0.01
+    text = _scene(_plastic_floor_and_wall(bsdf))
+    _compare(tmp_path, device, mitsuba_scalar_spectral, text, replicas=12, replica_spp=16, allowance=allowance)

@@ -59,6 +59,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_LIGHT_IMAGES": 0,
         "SCENE_HAS_BECKMANN": 0,
         "SCENE_HAS_NONLINEAR_PLASTIC": 0,
+        "SCENE_HAS_ROUGH_COAT": 0,
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
@@ -86,17 +87,22 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():
-    """Only a Beckmann lobe compiles Beckmann's code in, only a nonlinear plastic the albedo's remapping."""
-    for material, beckmann, nonlinear in (
-        (spectrace.conductor("Au", roughness=0.3), 0, 0),
-        (spectrace.conductor("Au", roughness=0.3, distribution="beckmann"), 1, 0),
-        (spectrace.dielectric(1.5, roughness=0.3, distribution="beckmann"), 1, 0),
-        (spectrace.plastic(0.5, roughness=0.2, distribution="beckmann", nonlinear=True), 1, 1),
-        (spectrace.plastic(0.5, nonlinear=True), 0, 1),
+    """Only a Beckmann lobe compiles Beckmann's code in, only a nonlinear plastic the albedo's remapping, only a
+    rough coat with its own transmission (not a smooth one: its transmission is the smooth interface's) the table
+    lookups."""
+    for material, expected in (
+        (spectrace.conductor("Au", roughness=0.3), (0, 0, 0)),
+        (spectrace.conductor("Au", roughness=0.3, distribution="beckmann"), (1, 0, 0)),
+        (spectrace.dielectric(1.5, roughness=0.3, distribution="beckmann"), (1, 0, 0)),
+        (spectrace.plastic(0.5, roughness=0.2, distribution="beckmann", nonlinear=True), (1, 1, 0)),
+        (spectrace.plastic(0.5, nonlinear=True), (0, 1, 0)),
+        (spectrace.plastic(0.5, roughness=0.2, coat_transmission="rough"), (0, 0, 1)),
+        (spectrace.plastic(0.5, coat_transmission="rough"), (0, 0, 0)),
     ):
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         defines = scene_feature_defines(build_scene_buffers(scene))
-        assert (defines["SCENE_HAS_BECKMANN"], defines["SCENE_HAS_NONLINEAR_PLASTIC"]) == (beckmann, nonlinear)
+        names = ("SCENE_HAS_BECKMANN", "SCENE_HAS_NONLINEAR_PLASTIC", "SCENE_HAS_ROUGH_COAT")
+        assert tuple(defines[name] for name in names) == expected, material
 
 
 def test_the_footprint_is_computed_only_for_the_lookups_that_read_it():
@@ -195,15 +201,17 @@ def _textured_scene(filters: tuple[str, ...]) -> spectrace.Scene:
 
 
 def _beckmann_scene() -> spectrace.Scene:
-    """Rough Beckmann gold, glass and nonlinear plastic beside GGX ones, in the environment map's light."""
+    """Rough Beckmann gold, glass and nonlinear plastic, a plastic with a rough coat's own transmission, beside GGX
+    ones, in the environment map's light."""
     materials = [
         spectrace.conductor("Au", roughness=0.3, distribution="beckmann"),
         spectrace.dielectric(1.5, roughness=0.2, distribution="beckmann"),
         spectrace.plastic((0.6, 0.2, 0.1), roughness=0.2, distribution="beckmann", nonlinear=True),
+        spectrace.plastic((0.1, 0.3, 0.6), roughness=0.3, coat_transmission="rough"),
         spectrace.conductor("Cu", roughness=0.3),
     ]
     shapes = [
-        spectrace.shape("sphere", material, transform=[{"scale": 0.4}, {"translate": [0.9 * i - 1.35, 0.4, 0]}])
+        spectrace.shape("sphere", material, transform=[{"scale": 0.35}, {"translate": [0.75 * i - 1.5, 0.4, 0]}])
         for i, material in enumerate(materials)
     ]
     return replace(_environment_map_scene(), shapes=shapes)

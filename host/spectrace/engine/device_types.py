@@ -69,13 +69,15 @@ MATERIAL_DTYPE = _struct(
         ("distribution", "<i4"),
         ("nonlinear", "<i4"),
         ("transmittance_offset", "<i4"),
+        ("coat_table_offset", "<i4"),
+        ("coat_internal_reflectance", "<f4"),
         # Surface detail (spectrace.materials.surface), last so that new parameters go before it.
         ("normal_map", "<i4"),
         ("bump_map", "<i4"),
         ("bump_scale", "<f4"),
         ("opacity", "<f4"),
         ("opacity_texture", "<i4"),
-        ("detail_pad", ("<i4", (3,))),
+        ("detail_pad", ("<i4", (1,))),
     ],
     112,
 )

@@ -35,6 +35,7 @@ def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
         ),
         "SCENE_HAS_BECKMANN": int(bool(np.any(materials["distribution"] == MICROFACET_BECKMANN))),
         "SCENE_HAS_NONLINEAR_PLASTIC": int(bool(np.any(materials["nonlinear"] != 0))),
+        "SCENE_HAS_ROUGH_COAT": int(bool(np.any(materials["coat_table_offset"] >= 0))),
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or bump_maps),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),

@@ -887,8 +887,8 @@ class MitsubaImporter:
         return value == "true"
 
     def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | dict | None:
-        """GGX α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None when
-        spectrace cannot represent it (recorded)."""
+        """Microfacet α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None
+        when spectrace cannot represent it (recorded)."""
         alpha: float | dict | None
         if "alpha_u" in properties or "alpha_v" in properties:
             u_element = properties.get("alpha_u", properties.get("alpha_v"))

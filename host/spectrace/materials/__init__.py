@@ -73,7 +73,8 @@ def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
     module = material_module(material)
     row = np.zeros((), MATERIAL_DTYPE)
     row["type"] = MATERIAL_CODES[module.NAME]
-    row["reflectance_offset"] = row["eta_offset"] = row["k_offset"] = row["transmittance_offset"] = MATERIAL_NO_SPECTRUM
+    for offset in ("reflectance_offset", "eta_offset", "k_offset", "transmittance_offset", "coat_table_offset"):
+        row[offset] = MATERIAL_NO_SPECTRUM
     row["ior"] = 1.0
     row["reflectance_texture"] = row["roughness_texture"] = NO_TEXTURE
     textured = _parameter_textures(material)

@@ -6,7 +6,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import IOR_CONSTANT, MICROFACET_DISTRIBUTIONS
-from spectrace.materials.opaque import Opaque
+from spectrace.errors import SpectraceError
+from spectrace.materials.coat import rough_coat
+from spectrace.materials.opaque import Opaque, smooth_everywhere
 from spectrace.materials.parameters import (
     DEFAULT_DISTRIBUTION,
     REQUIRED,
@@ -41,12 +43,24 @@ NONLINEAR = Parameter(
     doc="light reflected back down by the coat meets the base again, so the albedo ρ becomes "
     "ρ (1 − F_dr)/(1 − ρ F_dr) (Mitsuba 3's `nonlinear`: deeper colours)",
 )
+COAT_TRANSMISSIONS = ("smooth", "rough")
+COAT_TRANSMISSION = Parameter(
+    "coat_transmission",
+    "coat_transmission",
+    default="smooth",
+    default_doc='`"smooth"`',
+    type_doc='`"smooth"` or `"rough"`',
+    doc="how light crosses a rough coat to the base and back: by the smooth interface's 1 − F, or by the rough "
+    "interface's own transmittance, which loses what single scattering loses (Mitsuba 3's roughplastic); "
+    "`rough` needs a number `roughness`",
+)
 PARAMETERS = (
     reflectance(REQUIRED, "albedo of the diffuse base under the coat", textured=True),
     IOR,
     ROUGHNESS,
     distribution(),
     NONLINEAR,
+    COAT_TRANSMISSION,
 )
 
 
@@ -61,6 +75,7 @@ class PlasticMaterial(Opaque):
     roughness: float = ROUGHNESS.number_default  # or a one-channel texture
     distribution: str = DEFAULT_DISTRIBUTION
     nonlinear: bool = False
+    coat_transmission: str = "smooth"
 
     is_delta = False  # the base is diffuse whatever the coat
 
@@ -75,7 +90,23 @@ def from_spec(spec, resolver, key: str) -> PlasticMaterial:
         roughness=resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS),
         distribution=spec.distribution,
         nonlinear=spec.nonlinear,
+        coat_transmission=spec.coat_transmission,
     )
+
+
+def coat_problem(coat_transmission: str, roughness) -> str | None:
+    """Why a coat's transmission cannot be tabulated, or None: the rough coat's table is made for one α."""
+    if coat_transmission == "rough" and not isinstance(roughness, (int, float)):
+        return "coat_transmission 'rough' needs a number roughness (its transmittance is tabulated for one α)"
+    return None
+
+
+def check_spec(spec) -> None:
+    if problem := coat_problem(spec.coat_transmission, spec.roughness):
+        raise ValueError(problem)
+
+
+SPEC_CHECKS = (check_spec,)
 
 
 def make(
@@ -84,17 +115,28 @@ def make(
     roughness: float = ROUGHNESS.number_default,
     distribution: str = DEFAULT_DISTRIBUTION,
     nonlinear: bool = False,
+    coat_transmission: str = "smooth",
 ) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
     smooth or rough (`roughness` = α of the microfacet `distribution`, "ggx" or "beckmann"; a number or a grey
     texture). `nonlinear`: light the coat reflects back down meets the base again, which deepens colours (Mitsuba's
-    model of that name)."""
+    model of that name). `coat_transmission`: "smooth" (light crosses a rough coat by the smooth interface's
+    1 − F) or "rough" (by the rough interface's own transmittance, as Mitsuba's roughplastic; a number
+    roughness only)."""
+    if coat_transmission not in COAT_TRANSMISSIONS:
+        raise SpectraceError(
+            f"coat_transmission must be one of {', '.join(COAT_TRANSMISSIONS)}, got {coat_transmission!r}",
+            where="coat_transmission",
+        )
+    if problem := coat_problem(coat_transmission, roughness):
+        raise SpectraceError(problem, where="coat_transmission")
     return PlasticMaterial(
         spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
         ior=IOR.check(ior),
         roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
         distribution=check_distribution(distribution),
         nonlinear=bool(nonlinear),
+        coat_transmission=coat_transmission,
     )
 
 
@@ -105,6 +147,11 @@ def write_row(row: np.ndarray, material: PlasticMaterial, table: SpectrumTable) 
     row["alpha"] = material.roughness
     row["distribution"] = MICROFACET_DISTRIBUTIONS.index(material.distribution)
     row["nonlinear"] = int(material.nonlinear)
+    # A smooth coat's own transmittance is 1 − F: the table is only written for a rough one.
+    if material.coat_transmission == "rough" and not smooth_everywhere(material.roughness):
+        transmittance, internal = rough_coat(float(material.ior), float(material.roughness), material.distribution)
+        row["coat_table_offset"] = table.add_row(transmittance)
+        row["coat_internal_reflectance"] = internal
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
@@ -134,11 +181,14 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         table["roughness"] = roughness
         if (kind := importer.distribution(bsdf, properties)) != DEFAULT_DISTRIBUTION:
             table["distribution"] = kind
-        importer.notes.append(
-            f"line {bsdf.line}: {bsdf.label()}: spectrace's rough plastic passes light through its coat by the smooth "
-            "interface's Fresnel terms, Mitsuba's by the rough interface's (see docs/materials.md), so the "
-            "brightness of its diffuse part differs slightly"
-        )
+        if isinstance(roughness, float):
+            table["coat_transmission"] = "rough"  # Mitsuba's roughplastic: the rough coat's own transmittance
+        else:
+            importer.notes.append(
+                f"line {bsdf.line}: {bsdf.label()}: with a textured alpha, spectrace's rough plastic passes light "
+                "through its coat by the smooth interface's Fresnel terms, Mitsuba's by the rough interface's "
+                "(see docs/materials.md), so its diffuse part is brighter"
+            )
     if nonlinear:
         table["nonlinear"] = True
     return table

@@ -188,6 +188,7 @@ _ANNOTATIONS = {
     "bool": bool,
     "metal": Literal[METALS],
     "distribution": Literal[DISTRIBUTIONS],
+    "coat_transmission": Literal["smooth", "rough"],
     "ior": FiniteFloat | str | SellmeierSpec | CauchySpec,
     "uv": FiniteFloat | tuple[FiniteFloat, FiniteFloat],
     "wrap": Literal["repeat", "mirror", "clamp"],
