@@ -72,7 +72,9 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
         return !ended && ++s->segments <= last_segment;
     }
     if (hit.triangle < 0) {
-        if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0) {
+        /* hide_environment: the camera's own rays (the first segment) see black; reflections still show it. */
+        int hidden = params->hide_environment && s->segments == 1;
+        if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0 && !hidden) {
             __global const Light *env = &scene->lights[params->environment_light];
             float3 d = s->ray.direction;
             float weight = s->previous_delta

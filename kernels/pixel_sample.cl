@@ -5,6 +5,7 @@
 
 #include "camera.cl"
 #include "film.cl"
+#include "rng.cl"
 #include "scene.cl"
 
 /* Sample `sample_index` of a pixel: its random stream, its four wavelengths and its camera ray. */

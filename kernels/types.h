@@ -118,8 +118,9 @@ typedef struct {
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
  * type (listed with LIGHT_TYPES in spectrace.engine.device_types). */
 typedef struct {
-    float4 position;       /* point, spot */
-    float4 direction;      /* spot: unit axis; distant: unit direction the light travels */
+    float4 position;       /* point, spot; LIGHT_ENVIRONMENT_MAP: row 0 of the world-to-map rotation */
+    float4 direction;      /* spot: unit axis; distant: unit direction the light travels; LIGHT_ENVIRONMENT_MAP:
+                              row 1 of the world-to-map rotation */
     int type;              /* LIGHT_* */
     int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays */
     int spectrum_offset;
@@ -156,7 +157,7 @@ typedef struct {
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
-    int pad1;
+    int hide_environment;    /* 1: camera rays that leave the scene see black (Mitsuba's hide_emitters) */
 } RenderParams;
 
 typedef struct {

@@ -50,23 +50,6 @@ __kernel void bsdf_sample(__global const Material *material, __global const floa
     is_delta[i] = ok ? s.is_delta : 0;
 }
 
-/* The pdf of one wo on a grid of cell centres over the upper hemisphere, uniform in cos θ (n_cos cells) and φ
- * (n_phi cells), for integrating it over bins: item = i_cos * n_phi + i_phi. */
-__kernel void bsdf_pdf_grid(__global const Material *material, __global const float *spectra,
-                            __global const float *lambda, float4 wo, int n_cos, int n_phi, __global float *pdf)
-{
-    int item = get_global_id(0);
-    int i_cos = item / n_phi;
-    int i_phi = item - i_cos * n_phi;
-    float cos_theta = ((float)i_cos + 0.5f) / (float)n_cos;
-    float phi = TWO_PI * ((float)i_phi + 0.5f) / (float)n_phi;
-    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
-    float3 wi = (float3)(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
-    SampledWavelengths w = harness_wavelengths(lambda);
-    SurfaceContext sc = harness_context(spectra);
-    pdf[item] = material_pdf(material, &sc, &w, HARNESS_NORMAL, wo.xyz, wi);
-}
-
 __kernel void bsdf_has_non_delta_lobe(__global const Material *material, __global int *result)
 {
     result[0] = material_has_non_delta_lobe(material);

@@ -170,21 +170,17 @@ class Bsdf:
         )
 
     def pdf_grid(self, wo: np.ndarray, n_cos: int, n_phi: int) -> np.ndarray:
-        """pdf at cell centres, (n_cos, n_phi), uniform in cos θ ∈ [0, 1] and φ ∈ [0, 2π)."""
-        pdf = np.zeros(n_cos * n_phi, np.float32)
-        wo4 = np.zeros(4, np.float32)
-        wo4[:3] = wo
-        args = [
-            self.material,
-            self.spectra,
-            self.lam,
-            wo4,
-            np.int32(n_cos),
-            np.int32(n_phi),
-            self.runner.buffer(pdf, True),
-        ]
-        self.runner.run("bsdf_pdf_grid", n_cos * n_phi, args, {6: pdf})
-        return pdf.reshape(n_cos, n_phi).astype(np.float64)
+        """pdf at cell centres, (n_cos, n_phi), uniform in cos θ ∈ [0, 1] and φ ∈ [0, 2π). The directions are made
+        here, not in a kernel: Intel's CPU compiler has vectorised a kernel that made them and then called
+        material_pdf into one that wrote other work-items' values (correct with its vectoriser off)."""
+        cos_theta = (np.arange(n_cos) + 0.5) / n_cos
+        phi = 2.0 * np.pi * (np.arange(n_phi) + 0.5) / n_phi
+        sin_theta = np.sqrt(1.0 - cos_theta**2)[:, None]
+        wi = np.stack(
+            np.broadcast_arrays(sin_theta * np.cos(phi), sin_theta * np.sin(phi), cos_theta[:, None]), axis=-1
+        )
+        _, pdf = self.eval_pdf(np.asarray(wo, np.float64), wi.reshape(-1, 3))
+        return pdf.reshape(n_cos, n_phi)
 
     def has_non_delta_lobe(self) -> bool:
         result = np.zeros(1, np.int32)

@@ -176,7 +176,7 @@ RENDER_PARAMS_DTYPE = _struct(
         ("sample_begin", "<i4"),
         ("sample_count", "<i4"),
         ("medium_count", "<i4"),
-        ("pad1", "<i4"),
+        ("hide_environment", "<i4"),
     ],
     112,
 )

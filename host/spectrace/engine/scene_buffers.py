@@ -257,4 +257,5 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["seed"] = scene.seed
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
     params["medium_count"] = buffers.medium_count
+    params["hide_environment"] = int(scene.hide_environment)
     return params

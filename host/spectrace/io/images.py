@@ -78,7 +78,15 @@ def read_exr_checked(path: Path, where: str, what: str) -> dict:
 
 
 def read_environment_map(path: Path, where: str, what: str = "environment map") -> np.ndarray:
-    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map (or a picture's EXR)."""
+    """The (height, width, 3) linear sRGB pixels of an OpenEXR or Radiance HDR (.hdr, .rgbe) latitude-longitude map
+    (or a picture's EXR)."""
+    if path.suffix.lower() in (".hdr", ".rgbe"):
+        from spectrace.io.rgbe import read_rgbe
+
+        rgb = read_rgbe(path, where, what)
+        if not np.all(np.isfinite(rgb)):
+            raise SpectraceError(f"{what} '{path}' has NaN or infinite pixels", where=where)
+        return rgb
     channels = read_exr_checked(path, where, what)
     if "RGB" in channels:
         rgb = channels["RGB"]

@@ -164,8 +164,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         if eta is None or k is None:
             return None
         if "rgb" in eta or "rgb" in k:
-            importer.unsupported_plugin(bsdf, " with eta or k given as rgb")
-            return None
+            eta, k = _rgb_optical_constants(importer, bsdf, eta, k)
         table = {"type": "conductor", "eta": eta, "k": k}
     else:
         material = importer.text(properties["material"]) if "material" in properties else "none"
@@ -187,3 +186,40 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if tint is not None:
         table["specular_tint"] = tint
     return table
+
+
+# Wavelengths at which an uplifted η or k is written into the imported scene (smooth curves: 5 nm loses nothing).
+_UPLIFT_STEP_NM = 5.0
+
+
+def _rgb_optical_constants(importer, bsdf, eta: dict, k: dict) -> tuple[dict, dict]:
+    """η and k given as <rgb> (Mitsuba's RGB variants use them per channel) as spectra: with both an rgb or a
+    number, `conductor_from_rgb` (the normal-incidence colour an RGB renderer shows, exactly); one beside a measured
+    spectrum is uplifted alone (`uplift_unbounded`)."""
+    from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
+    from spectrace.spectral.uplift import conductor_from_rgb, uplift_unbounded
+
+    def triple(spectrum: dict) -> list[float] | None:
+        if "rgb" in spectrum:
+            return spectrum["rgb"]
+        return [spectrum["value"]] * 3 if list(spectrum) == ["value"] else None
+
+    where = importer.where(bsdf)
+    wavelengths = np.arange(GRID_MIN_NM, GRID_MAX_NM + 0.5, _UPLIFT_STEP_NM)
+    eta_rgb, k_rgb = triple(eta), triple(k)
+    spectra: tuple
+    if eta_rgb is not None and k_rgb is not None:
+        spectra = conductor_from_rgb(eta_rgb, k_rgb, where=where)
+    else:
+        spectra = tuple(
+            uplift_unbounded(spectrum["rgb"], where) if "rgb" in spectrum else None for spectrum in (eta, k)
+        )
+    importer.notes.append(
+        f"{importer.at(bsdf)}: {bsdf.label()}: eta and k given as rgb are uplifted to smooth spectra "
+        "(docs/mitsuba.md, 'Conductors given in RGB')"
+    )
+    tables = [
+        original if spectrum is None else {"values": [[float(w), float(spectrum.evaluate(w))] for w in wavelengths]}
+        for original, spectrum in zip((eta, k), spectra)
+    ]
+    return tables[0], tables[1]

@@ -185,7 +185,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
             table["coat_transmission"] = "rough"  # Mitsuba's roughplastic: the rough coat's own transmittance
         else:
             importer.notes.append(
-                f"line {bsdf.line}: {bsdf.label()}: with a textured alpha, spectrace's rough plastic passes light "
+                f"{importer.at(bsdf)}: {bsdf.label()}: with a textured alpha, spectrace's rough plastic passes light "
                 "through its coat by the smooth interface's Fresnel terms, Mitsuba's by the rough interface's "
                 "(see docs/materials.md), so its diffuse part is brighter"
             )

@@ -514,6 +514,7 @@ def load_scene(path: str | Path) -> Scene:
         max_depth=spec.integrator.max_depth,
         exposure=spec.film.exposure,
         rr_depth=spec.integrator.rr_depth,
+        hide_environment=spec.integrator.hide_environment,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
         sampler=spec.sampler.type,

@@ -84,6 +84,9 @@ class IntegratorSpec(Strict):
     rr_depth: int = Field(
         default=5, ge=1, le=limits.MAX_DEPTH, description="bounces after which Russian roulette may end a path"
     )
+    hide_environment: bool = Field(
+        default=False, description="camera rays that leave the scene see black; reflections still show it"
+    )
 
     @field_validator("max_depth")
     @classmethod
