@@ -90,29 +90,32 @@ typedef struct {
     int detail_pad[1];
 } Material;
 
-/* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the
- * texel buffer, `channels` per texel, rows top to bottom; its MIP levels follow level 0 there, level l being
- * max(1, width >> l) by max(1, height >> l) texels. */
+/* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its
+ * `storage` in the texel buffer from data_offset on, `channels` per texel, rows top to bottom; its MIP levels follow
+ * level 0 there, level l being max(1, width >> l) by max(1, height >> l) texels. */
 typedef struct {
     float4 uv_transform;  /* the lookup point st = uv · (x, y) + (z, w): uv_scale, then uv_offset (image widths) */
     int type;             /* TEXTURE_* */
-    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral),
+    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm; dimensionless when half), SCALAR (one value), BANDS (spectral),
                              VECTOR (three values as they are), RGB (linear r, g, b weighting the basis
                              spectra: an emission) */
-    int channels;         /* floats per texel: 3, 1, or the band count */
+    int channels;         /* values per texel: 3, 1, or the band count */
     int width;            /* level 0, texels */
     int height;
     int levels;           /* MIP levels (1: level 0 only) */
-    int data_offset;      /* first float of level 0 in the texel buffer */
+    int data_offset;      /* where level 0 starts in the texel buffer, in floats (4 bytes) */
     int wrap;             /* WRAP_* */
     int filter;           /* FILTER_* */
     float band_first_nm;  /* TEXEL_BANDS: centre wavelength of band 0, nm */
     float band_step_nm;   /* TEXEL_BANDS: spacing of the band centres, nm */
-    int side_spectrum[2]; /* TEXTURE_CHECKERBOARD: each side's spectrum offset, used when side_texture is NO_TEXTURE */
-    int side_texture[2];  /* TEXTURE_CHECKERBOARD: each side's texture (never a checkerboard), or NO_TEXTURE */
+    int side_spectrum[2]; /* TEXTURE_CHECKERBOARD, SCALE, MIX: each side's (operand's) spectrum offset, used when
+                             side_texture is NO_TEXTURE */
+    int side_texture[2];  /* each side's image texture (never a composite), or NO_TEXTURE */
     int basis_offset[3];  /* TEXEL_RGB: the spectra R, G, B a texel's (r, g, b) weights: r·R(λ) + g·G(λ) + b·B(λ) */
-    int pad0;
-    int pad1;
+    int storage;          /* STORAGE_*: how each value is stored (float, half, 8- or 16-bit unsigned normalised) */
+    float factor;         /* TEXTURE_SCALE: the factor; TEXTURE_MIX: the amount (when factor_texture is NO_TEXTURE) */
+    int factor_texture;   /* TEXTURE_SCALE, TEXTURE_MIX: a scalar image texture giving the factor, or NO_TEXTURE */
+    int pad[3];
 } Texture;
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its

@@ -70,6 +70,41 @@ def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float
     return module.make(sides[0], sides[1], uv_scale=uv_scale, uv_offset=uv_offset)
 
 
+def scale_texture(tex=1.0, scale=1.0):
+    """tex (a reflectance: anything `spectrum` takes, an RGB triple, or an image texture) times scale (a number >= 0
+    or a grey image texture), as pbrt-v4's `scale` texture; as a reflectance the product must stay within [0, 1]."""
+    from spectrace.textures import scale as module
+
+    return module.make(_operand(tex, "tex"), _factor(scale, "scale", None))
+
+
+def mix_texture(tex1=0.0, tex2=1.0, amount=0.5):
+    """(1 − amount) · tex1 + amount · tex2, as pbrt-v4's `mix` texture: tex1, tex2 reflectances (anything `spectrum`
+    takes, an RGB triple, or an image texture), amount a number in [0, 1] or a grey image texture."""
+    from spectrace.textures import mix as module
+
+    return module.make(_operand(tex1, "tex1"), _operand(tex2, "tex2"), _factor(amount, "amount", 1.0))
+
+
+def _operand(value, name: str):
+    from spectrace.textures import IMAGE_TEXTURES
+
+    return value if isinstance(value, IMAGE_TEXTURES) else spectrum_input.reflectance(value, name)
+
+
+def _factor(value, name: str, upper: float | None):
+    """A composite's number: a float within [0, upper], or a one-channel image texture."""
+    from spectrace.textures import IMAGE_TEXTURES, check_texture_values
+
+    if isinstance(value, IMAGE_TEXTURES):
+        check_texture_values(value, "float", name, upper)
+        return value
+    number = float(value)
+    if not (number >= 0.0 and (upper is None or number <= upper)):
+        raise SpectraceError(f"{name} must lie in [0, {upper if upper is not None else 'inf'}], got {value}", name)
+    return number
+
+
 # ---------------------------------------------------------------- geometry
 
 

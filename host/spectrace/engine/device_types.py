@@ -85,14 +85,24 @@ MATERIAL_DTYPE = _struct(
 # Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
 # TEXEL_SCALAR); SPECTRAL: an image of spectral bands (TEXEL_BANDS); CHECKERBOARD: two sides, each a spectrum or a
 # texture of another type.
-TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard")
-TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES))
+# SCALE: side 0 (a spectrum or an image texture) times the factor (factor_texture's value, else `factor`); MIX:
+# sides 0 and 1 blended by the amount (factor_texture's value, else `factor`): (1 − a) side 0 + a side 1.
+TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard", "scale", "mix")
+TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD, TEXTURE_SCALE, TEXTURE_MIX = range(len(TEXTURE_TYPES))
 # Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
 # S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
 # per band, at band centres band_first_nm + i·band_step_nm; VECTOR: three values read as they are (a normal map);
 # RGB: linear (r, g, b), the weights of three basis spectra (an emission: r·R(λ) + g·G(λ) + b·B(λ), the lights'
 # images).
 TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS, TEXEL_VECTOR, TEXEL_RGB = range(5)
+# Texture.storage: how each stored value is held (spectrace.textures.storage). FLOAT: float32; HALF: IEEE half
+# (sigmoid coefficients then in their dimensionless form); UNORM8, UNORM16: unsigned integers k standing for
+# k / 255 and k / 65535.
+STORAGE_FLOAT, STORAGE_HALF, STORAGE_UNORM8, STORAGE_UNORM16 = range(4)
+# The dimensionless variable of half-stored sigmoid coefficients, t = (λ − centre) / half span: the grid's middle
+# and half width, as the fits of spectrace.spectral.uplift use (t in [−1, 1]).
+SIGMOID_CENTRE_NM = 0.5 * (GRID_MIN_NM + GRID_MAX_NM)
+SIGMOID_HALF_SPAN_NM = 0.5 * (GRID_MAX_NM - GRID_MIN_NM)
 # Texture.wrap: where st outside [0, 1)² looks.
 WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
 # Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
@@ -119,10 +129,12 @@ TEXTURE_DTYPE = _struct(
         ("side_spectrum", ("<i4", (2,))),
         ("side_texture", ("<i4", (2,))),
         ("basis_offset", ("<i4", (3,))),
-        ("pad0", "<i4"),
-        ("pad1", "<i4"),
+        ("storage", "<i4"),
+        ("factor", "<f4"),
+        ("factor_texture", "<i4"),
+        ("pad", ("<i4", (3,))),
     ],
-    96,
+    112,
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
@@ -259,6 +271,13 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "TEXEL_BANDS": TEXEL_BANDS,
         "TEXEL_VECTOR": TEXEL_VECTOR,
         "TEXEL_RGB": TEXEL_RGB,
+        "STORAGE_FLOAT": STORAGE_FLOAT,
+        "STORAGE_HALF": STORAGE_HALF,
+        "STORAGE_UNORM8": STORAGE_UNORM8,
+        "STORAGE_UNORM16": STORAGE_UNORM16,
+        # The dimensionless variable of sigmoid coefficients, t = (λ − centre) / half span (spectrace.spectral.uplift).
+        "SIGMOID_CENTRE_NM": float(SIGMOID_CENTRE_NM),
+        "SIGMOID_HALF_SPAN_NM": float(SIGMOID_HALF_SPAN_NM),
         "WRAP_REPEAT": WRAP_REPEAT,
         "WRAP_MIRROR": WRAP_MIRROR,
         "WRAP_CLAMP": WRAP_CLAMP,

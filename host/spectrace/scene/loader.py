@@ -23,7 +23,14 @@ from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
-from spectrace.textures import IMAGE_TEXTURES, TEXTURES, BitmapTexture, check_texture_values, is_texture
+from spectrace.textures import (
+    IMAGE_TEXTURES,
+    TEXTURES,
+    BitmapTexture,
+    check_texture_values,
+    is_texture,
+    texture_module,
+)
 from spectrace.textures.shared import Placement
 
 
@@ -224,14 +231,16 @@ class _Resolver:
 
     def spectrum_or_texture(self, spec, key: str, kind: str, inner: bool = False):
         """A textured parameter's value (kind "spectrum": a reflectance, or "float": a scalar): a Spectrum, or a
-        texture whose values are checked for that use. inner: a checkerboard's side, which takes no checkerboard."""
+        texture whose values are checked for that use. inner: an operand of a composite (a checkerboard's side, a
+        scale's or mix's operand), which takes no composite."""
         if isinstance(spec, schema.SpectrumSpec):
             return self.spectrum(spec, key, emission=False)
         if isinstance(spec, schema.TextureRefSpec):
             texture = self.named_texture(spec.texture, f"{key}.texture")
             if inner and not is_texture_image(texture):
                 raise SpectraceError(
-                    f"texture '{spec.texture}' is a checkerboard; a checkerboard's sides are spectra or image textures",
+                    f"texture '{spec.texture}' is a {texture_module(texture).NAME}; a checkerboard's sides and a "
+                    "scale's or mix's operands are spectra or image textures",
                     where=self.where(f"{key}.texture"),
                 )
         else:

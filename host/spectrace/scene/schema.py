@@ -26,7 +26,7 @@ from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
-from spectrace.textures import TEXTURES
+from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
@@ -201,7 +201,7 @@ _ANNOTATIONS = {
 
 # Textures (docs/textures.md): inline, `{ texture = "bitmap", file = "wood.png" }`, the key `texture` naming the type;
 # or a [textures.NAME] table with `type`, referred to as `{ texture = "NAME" }`. A texture's own textured keys (a
-# checkerboard's colours) take spectra or image textures, not another checkerboard.
+# checkerboard's colours, a scale's or mix's operands) take spectra or image textures, not another composite.
 class TextureRefSpec(Strict):
     """{ texture = "NAME" }: a [textures.NAME] entry of this file."""
 
@@ -211,6 +211,11 @@ class TextureRefSpec(Strict):
 def _texture_model(module, key: str, textured_annotation) -> type[Strict]:
     fields: dict[str, Any] = {key: (Literal[module.NAME], ...)}
     for parameter in module.PARAMETERS:
+        if parameter.textured and parameter.type == "float":
+            # A composite's factor (scale's `scale`, mix's `amount`): a number, or an image texture (checked as read).
+            annotation = _number_or_texture(FiniteFloat, textured_annotation) if textured_annotation else FiniteFloat
+            fields[parameter.name] = (annotation, Field(default=parameter.default, description=parameter.doc))
+            continue
         annotation, field = _field(parameter)
         if parameter.textured:
             annotation = textured_annotation
@@ -288,7 +293,8 @@ def _after(check):
     return model_validator(mode="after")(validate)
 
 
-_IMAGE_TEXTURES = {name: m for name, m in TEXTURES.items() if name != "checkerboard"}
+# Composites (a checkerboard, scale, mix) take spectra and image textures, not other composites.
+_IMAGE_TEXTURES = {name: m for name, m in TEXTURES.items() if name not in COMPOSITE_TEXTURES}
 if TYPE_CHECKING:
     InnerSpectrumOrTexture: TypeAlias = Any
     SpectrumOrTexture: TypeAlias = Any
