@@ -74,7 +74,8 @@ typedef struct {
     float4 ior_coefficients_c;  /* IOR_SELLMEIER: C1, C2, C3 (µm²) in x, y, z */
     int type;                   /* MATERIAL_* */
     int reflectance_offset;     /* diffuse, plastic: base albedo; mirror, retroreflector: reflectance;
-                                   conductor, dielectric: optional specular tint (MATERIAL_NO_SPECTRUM: none) */
+                                   conductor, dielectric: optional specular tint; thindielectric: optional tint of
+                                   its reflection (MATERIAL_NO_SPECTRUM: none) */
     int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction */
     int k_offset;               /* conductor: imaginary part k(λ) (absorption) */
     float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe). With roughness_texture: the texture's
@@ -85,13 +86,21 @@ typedef struct {
                                    the conductor's and dielectric's specular tint), or NO_TEXTURE */
     int roughness_texture;      /* conductor, plastic, dielectric, retroreflector: a scalar texture of α per point
                                    that replaces alpha there, or NO_TEXTURE */
+    int distribution;           /* conductor, plastic, dielectric: MICROFACET_* of the rough lobe */
+    int nonlinear;              /* plastic: 1 = the base's internal scattering depends on its albedo (Mitsuba's
+                                   `nonlinear`), 0 = it does not */
+    int transmittance_offset;   /* thindielectric: optional tint of its transmission (MATERIAL_NO_SPECTRUM: none) */
+    int coat_table_offset;      /* plastic with a rough coat's own transmission: GRID_SAMPLES values of t(cos θ) at
+                                   cos θ = i / (GRID_SAMPLES − 1) in the spectrum table (MATERIAL_NO_SPECTRUM: the
+                                   smooth interface's 1 − F instead) */
+    float coat_internal_reflectance; /* with coat_table_offset: the coat's diffuse reflectance from inside, R_int */
     /* Surface detail, every type (kernels/surface_detail.cl, scene.cl; host: spectrace.materials.surface). */
     int normal_map;             /* a TEXEL_VECTOR texture of tangent-space normals, or NO_TEXTURE */
     int bump_map;               /* a scalar texture of heights, or NO_TEXTURE */
     float bump_scale;           /* scene units per bump map value */
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
-    int detail_pad[2];
+    int detail_pad[1];
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import spectrace
 from cli_runner import run_in_process
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
@@ -255,6 +256,10 @@ Material "dielectric" "spectrum eta" "glass-F11" "float roughness" 0.01 "bool re
 Shape "sphere"
 Material "coateddiffuse" "rgb reflectance" [0.2 0.3 0.4] "float eta" 1.4
 Shape "sphere"
+Material "thindielectric" "float eta" 1.33
+Shape "sphere"
+Material "coateddiffuse" "float roughness" 0.09
+Shape "sphere"
 """
     data, _ = pbrt_scene_data(_write(tmp_path, body))
     materials = list(data["materials"].values())
@@ -262,7 +267,12 @@ Shape "sphere"
     assert materials[1]["eta"] == {"spectrum": "metals/Au:eta"}
     assert materials[1]["k"]["values"][1:3] == [[400.0, 2.0], [700.0, 3.0]]
     assert materials[2] == {"type": "dielectric", "ior": "N-SF11", "roughness": 0.01}
-    assert materials[3] == {"type": "plastic", "reflectance": {"rgb": [0.2, 0.3, 0.4]}, "ior": 1.4}
+    # pbrt's random walk between coat and base meets the albedo at every return: the plastic's nonlinear series.
+    assert materials[3] == {"type": "plastic", "reflectance": {"rgb": [0.2, 0.3, 0.4]}, "ior": 1.4, "nonlinear": True}
+    assert materials[4] == {"type": "thindielectric", "ior": 1.33}
+    # A rough coat is crossed by its own microfacet transmission.
+    assert materials[5]["roughness"] == pytest.approx(0.3) and materials[5]["coat_transmission"] == "rough"
+    assert load_pbrt_scene(_write(tmp_path, body)).shapes[4].material == spectrace.thindielectric(1.33)
 
 
 def test_every_named_spectrum_pbrt_shares_with_spectrace_loads(tmp_path):
@@ -465,7 +475,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     ("body", "line", "message"),
     [
         ('Material "mix"\nShape "sphere"\n', 5, "material 'mix': spectrace has no material mixing"),
-        ('Material "thindielectric"\nShape "sphere"\n', 5, "spectrace has no thin dielectric"),
+        ('Material "thindielectric" "spectrum eta" "glass-BK7"\nShape "sphere"\n', 5, "eta must be a number"),
         ('Material "diffusetransmission"\nShape "sphere"\n', 5, "spectrace has no diffuse transmission"),
         ('Shape "curve"\n', 5, "shape 'curve'"),
         ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),

@@ -19,7 +19,15 @@ from spectrace.scene.model import EnvironmentMap
 
 # The type codes (materials: their order in spectrace.materials.MATERIALS), written out here so the test does not
 # read them from the code under test.
-MATERIAL_BITS = {"diffuse": 1, "conductor": 2, "mirror": 4, "plastic": 8, "dielectric": 16, "retroreflector": 32}
+MATERIAL_BITS = {
+    "diffuse": 1,
+    "conductor": 2,
+    "mirror": 4,
+    "plastic": 8,
+    "dielectric": 16,
+    "retroreflector": 32,
+    "thindielectric": 64,
+}
 LIGHT_BITS = {
     "area": 1,
     "point": 2,
@@ -58,6 +66,9 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
         "SCENE_HAS_MEDIA": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
+        "SCENE_HAS_BECKMANN": 0,
+        "SCENE_HAS_NONLINEAR_PLASTIC": 0,
+        "SCENE_HAS_ROUGH_COAT": 0,
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
@@ -86,6 +97,25 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         defines = scene_feature_defines(build_scene_buffers(scene))
         assert (defines["SCENE_HAS_SURFACE_NORMALS"], defines["SCENE_HAS_OPACITY"]) == (normals, opacity)
+
+
+def test_beckmann_lobes_and_nonlinear_plastics_are_features():
+    """Only a Beckmann lobe compiles Beckmann's code in, only a nonlinear plastic the albedo's remapping, only a
+    rough coat with its own transmission (not a smooth one: its transmission is the smooth interface's) the table
+    lookups."""
+    for material, expected in (
+        (spectrace.conductor("Au", roughness=0.3), (0, 0, 0)),
+        (spectrace.conductor("Au", roughness=0.3, distribution="beckmann"), (1, 0, 0)),
+        (spectrace.dielectric(1.5, roughness=0.3, distribution="beckmann"), (1, 0, 0)),
+        (spectrace.plastic(0.5, roughness=0.2, distribution="beckmann", nonlinear=True), (1, 1, 0)),
+        (spectrace.plastic(0.5, nonlinear=True), (0, 1, 0)),
+        (spectrace.plastic(0.5, roughness=0.2, coat_transmission="rough"), (0, 0, 1)),
+        (spectrace.plastic(0.5, coat_transmission="rough"), (0, 0, 0)),
+    ):
+        scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
+        defines = scene_feature_defines(build_scene_buffers(scene))
+        names = ("SCENE_HAS_BECKMANN", "SCENE_HAS_NONLINEAR_PLASTIC", "SCENE_HAS_ROUGH_COAT")
+        assert tuple(defines[name] for name in names) == expected, material
 
 
 def test_the_footprint_is_computed_only_for_the_lookups_that_read_it():
@@ -214,6 +244,23 @@ def _textured_scene(filters: tuple[str, ...]) -> spectrace.Scene:
     return replace(_environment_map_scene(), shapes=shapes)
 
 
+def _beckmann_scene() -> spectrace.Scene:
+    """Rough Beckmann gold, glass and nonlinear plastic, a plastic with a rough coat's own transmission, beside GGX
+    ones, in the environment map's light."""
+    materials = [
+        spectrace.conductor("Au", roughness=0.3, distribution="beckmann"),
+        spectrace.dielectric(1.5, roughness=0.2, distribution="beckmann"),
+        spectrace.plastic((0.6, 0.2, 0.1), roughness=0.2, distribution="beckmann", nonlinear=True),
+        spectrace.plastic((0.1, 0.3, 0.6), roughness=0.3, coat_transmission="rough"),
+        spectrace.conductor("Cu", roughness=0.3),
+    ]
+    shapes = [
+        spectrace.shape("sphere", material, transform=[{"scale": 0.35}, {"translate": [0.75 * i - 1.5, 0.4, 0]}])
+        for i, material in enumerate(materials)
+    ]
+    return replace(_environment_map_scene(), shapes=shapes)
+
+
 SCENES = {
     "cornell_box": lambda: _bundled("cornell_box"),
     "material_showcase": lambda: _bundled("material_showcase"),
@@ -228,6 +275,7 @@ SCENES = {
     # bilinear lookup reads it.
     "nearest_and_bilinear_textures": lambda: _textured_scene(("nearest", "bilinear")),
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
+    "beckmann_and_nonlinear_plastic": _beckmann_scene,
     "analytic_shapes": _analytic_shapes_scene,
 }
 

@@ -25,6 +25,10 @@ IOR_CONSTANT = 0  # Material.ior
 IOR_SELLMEIER = 1  # n² = 1 + Σ B_i λ² / (λ² − C_i), λ in µm: coefficients B1 B2 B3 C1 C2 C3 (C in µm²)
 IOR_CAUCHY = 2  # n = a + b / λ², λ in µm: coefficients a, b (b in µm²)
 
+# Material.distribution: the microfacet distribution of a rough material's lobe (kernels/microfacet.cl).
+MICROFACET_DISTRIBUTIONS = ("ggx", "beckmann")
+MICROFACET_GGX, MICROFACET_BECKMANN = range(len(MICROFACET_DISTRIBUTIONS))
+
 # An offset that names no spectrum (only offsets documented as optional in types.h may hold it).
 MATERIAL_NO_SPECTRUM = -1
 
@@ -62,15 +66,20 @@ MATERIAL_DTYPE = _struct(
         ("ior", "<f4"),
         ("reflectance_texture", "<i4"),
         ("roughness_texture", "<i4"),
+        ("distribution", "<i4"),
+        ("nonlinear", "<i4"),
+        ("transmittance_offset", "<i4"),
+        ("coat_table_offset", "<i4"),
+        ("coat_internal_reflectance", "<f4"),
         # Surface detail (spectrace.materials.surface), last so that new parameters go before it.
         ("normal_map", "<i4"),
         ("bump_map", "<i4"),
         ("bump_scale", "<f4"),
         ("opacity", "<f4"),
         ("opacity_texture", "<i4"),
-        ("detail_pad", ("<i4", (2,))),
+        ("detail_pad", ("<i4", (1,))),
     ],
-    96,
+    112,
 )
 
 # Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
@@ -284,6 +293,8 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "IOR_CONSTANT": IOR_CONSTANT,
         "IOR_SELLMEIER": IOR_SELLMEIER,
         "IOR_CAUCHY": IOR_CAUCHY,
+        "MICROFACET_GGX": MICROFACET_GGX,
+        "MICROFACET_BECKMANN": MICROFACET_BECKMANN,
         "METER_IRRADIANCE": METER_IRRADIANCE,
         "METER_RADIANCE": METER_RADIANCE,
         "METER_FLUX": METER_FLUX,

@@ -44,7 +44,10 @@ from spectrace.textures import is_texture, texture_module
 
 def regular_spectrum(spectrum: Spectrum) -> dict:
     """Mitsuba's piecewise-linear spectrum on spectrace's uniform 1 nm grid (its `regular` plugin: an O(1) lookup,
-    where `irregular` searches the wavelength list, so the peer is not slowed by the export)."""
+    where `irregular` searches the wavelength list, so the peer is not slowed by the export). A spectrum that is 0
+    everywhere is Mitsuba's `uniform` 0: its `regular` plugin refuses one without probability mass."""
+    if not np.any(spectrum.values):
+        return {"type": "uniform", "value": 0.0}
     return {
         "type": "regular",
         "wavelength_min": float(GRID_NM[0]),

@@ -48,7 +48,7 @@ from spectrace.interop.mitsuba_tree import shown as _shown
 from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
-from spectrace.materials.parameters import ROUGHNESS_RANGE
+from spectrace.materials.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
 from spectrace.scene import limits
 from spectrace.textures import TEXTURES
 
@@ -94,7 +94,7 @@ def supported_text() -> str:
 
 
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
-_PLANNED_BSDFS = ("thindielectric",)
+_PLANNED_BSDFS: tuple[str, ...] = ()
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
 _NAMED_IOR = {
     "vacuum": 1.0,
@@ -903,8 +903,8 @@ class MitsubaImporter:
         return value == "true"
 
     def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | dict | None:
-        """GGX α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None when
-        spectrace cannot represent it (recorded)."""
+        """Microfacet α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None
+        when spectrace cannot represent it (recorded)."""
         alpha: float | dict | None
         if "alpha_u" in properties or "alpha_v" in properties:
             u_element = properties.get("alpha_u", properties.get("alpha_v"))
@@ -929,15 +929,19 @@ class MitsubaImporter:
                 alpha = float(alpha["value"])
         else:
             alpha = 0.1
-        distribution = self.text(properties["distribution"]) if "distribution" in properties else "beckmann"
-        if distribution != "ggx":
-            self.notes.append(
-                f"{self.at(bsdf)}: {bsdf.label()} uses the {distribution} distribution; imported as "
-                f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)"
-            )
         if isinstance(alpha, float) and not ROUGHNESS_RANGE.contains(alpha):
             raise self.fail(bsdf, f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha:g}")
         return alpha
+
+    def distribution(self, bsdf: Element, properties: dict[str, Element]) -> str:
+        """The microfacet distribution of a rough Mitsuba BSDF (its default: beckmann)."""
+        if "distribution" not in properties:
+            return "beckmann"
+        element = self.resolve(properties["distribution"])
+        value = self.text(element)
+        if value not in DISTRIBUTIONS:
+            raise self.fail(element, f"unknown distribution '{_shown(value)}' (Mitsuba's: ggx, beckmann)", "value")
+        return value
 
     def ior(self, bsdf: Element, properties: dict[str, Element], key: str, default: float) -> float:
         """An index of refraction property (int_ior, ext_ior): a number or one of Mitsuba's names."""

@@ -49,14 +49,13 @@ from spectrace.interop.pbrt_parser import Entity, Location, PbrtScene, Shape, er
 from spectrace.io.output_files import check_output_file
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
-MATERIALS = ("diffuse", "conductor", "dielectric", "coateddiffuse", "interface")
+MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface")
 LIGHTS = ("point", "spot", "distant", "infinite")
 AREA_LIGHTS = ("diffuse",)
 TEXTURES = ("imagemap", "checkerboard", "constant")
 # Materials spectrace has no counterpart for, refused with this reason.
 _NO_EQUIVALENT = {
     "diffusetransmission": "spectrace has no diffuse transmission",
-    "thindielectric": "spectrace has no thin dielectric",
     "mix": "spectrace has no material mixing",
     "coatedconductor": "spectrace has no coated conductor",
     "measured": "spectrace has no measured BRDFs",
@@ -591,8 +590,14 @@ class PbrtImporter:
         eta: float | str = self.ior(material)
         if kind == "dielectric":
             return {"type": "dielectric", "ior": eta} | self._rough(material)
+        if kind == "thindielectric":  # pbrt-v4's ThinDielectricBxDF: R' = R + T²R/(1 − R²), straight through
+            if not isinstance(eta, (int, float)):
+                raise error(material.location, "a thindielectric's eta must be a number for spectrace")
+            return {"type": "thindielectric", "ior": eta}
         # coateddiffuse: pbrt-v4 simulates a dielectric coat over a Lambertian base (random walk between the
-        # layers); spectrace's plastic is the same two layers in closed form (docs/pbrt.md).
+        # layers); spectrace's plastic is the same two layers in closed form (docs/pbrt.md). The walk meets the
+        # base's albedo at every return to it, which is the plastic's nonlinear series, and crosses a rough coat
+        # by its own microfacet transmission, which is coat_transmission "rough".
         if not isinstance(eta, (int, float)):
             eta = 1.5
             self.warn(material.location, "coateddiffuse with a spectral eta imported with 1.5")
@@ -601,11 +606,15 @@ class PbrtImporter:
             self.warn(material.location, 'coateddiffuse "albedo" (an absorbing coat) not imported')
         for key in ("thickness", "g", "maxdepth", "nsamples"):
             material.find(key)
-        return {
+        table = {
             "type": "plastic",
             "reflectance": self.reflectance(material, "reflectance", 0.5),
             "ior": eta,
+            "nonlinear": True,
         } | self._rough(material)
+        if "roughness" in table:
+            table["coat_transmission"] = "rough"
+        return table
 
     def _rough(self, material: Entity) -> dict:
         alpha = self.roughness(material)

@@ -22,7 +22,7 @@ from pydantic import (
 
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
-from spectrace.materials.parameters import Parameter
+from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
@@ -190,6 +190,8 @@ _ANNOTATIONS = {
     "string": str,
     "bool": bool,
     "metal": Literal[METALS],
+    "distribution": Literal[DISTRIBUTIONS],
+    "coat_transmission": Literal["smooth", "rough"],
     "ior": FiniteFloat | str | SellmeierSpec | CauchySpec,
     "uv": FiniteFloat | tuple[FiniteFloat, FiniteFloat],
     "wrap": Literal["repeat", "mirror", "clamp"],
