@@ -119,39 +119,41 @@ inline int rough_dielectric_pair(float3 wo, float3 wi, float eta, RoughDielectri
 /* f(ωo, ωi) |cos θi|. Reflection: D G F / (4 |cos θo|) (Walter eq. 20 times cos θi); refraction (eq. 21 times
  * |cos θi|, its n_o² over the squared denominator divided through by n_o²):
  *     D G (1 − F) |ωi·h| (ωo·h) / (|cos θo| (ωo·h + e ωi·h)²). */
-inline float rough_dielectric_eval(float3 wo, float3 wi, float eta, float alpha)
+inline float rough_dielectric_eval(float3 wo, float3 wi, float eta, float alpha, int distribution)
 {
     RoughDielectricPair q;
     if (!rough_dielectric_pair(wo, wi, eta, &q)) return 0.0f;
-    float dg = ggx_d(q.h, alpha) * ggx_g2(q.wo, q.wi, alpha);
+    float dg = microfacet_d(q.h, alpha, distribution) * microfacet_g2(q.wo, q.wi, alpha, distribution);
     if (q.wi.z > 0.0f) return dg * q.fresnel / (4.0f * q.wo.z);
     float denominator = q.wo_h + q.e * q.wi_h;
     return dg * (1.0f - q.fresnel) * fabs(q.wi_h) * q.wo_h / (q.wo.z * denominator * denominator);
 }
 
-/* pdf of rough_dielectric_sample: the visible-normal density times the lobe choice (F or 1 − F) times the
- * Jacobian of h → ωi: 1 / (4 ωo·h) for reflection, e² |ωi·h| / (ωo·h + e ωi·h)² for refraction (Walter eq. 14, 17). */
-inline float rough_dielectric_pdf(float3 wo, float3 wi, float eta, float alpha)
+/* pdf of rough_dielectric_sample: the density of the sampled normal (GGX: the visible normals' D_wo(h), Heitz 2018)
+ * times the lobe choice (F or 1 − F) times the Jacobian of h → ωi: 1 / (4 ωo·h) for reflection,
+ * e² |ωi·h| / (ωo·h + e ωi·h)² for refraction (Walter eq. 14, 17). */
+inline float rough_dielectric_pdf(float3 wo, float3 wi, float eta, float alpha, int distribution)
 {
     RoughDielectricPair q;
     if (!rough_dielectric_pair(wo, wi, eta, &q)) return 0.0f;
-    float visible = ggx_g1(q.wo, alpha) * q.wo_h * ggx_d(q.h, alpha) / q.wo.z;  /* D_wo(h), Heitz 2018 */
+    float visible = microfacet_normal_pdf(q.wo, q.h, q.wo_h, alpha, distribution);
     if (q.wi.z > 0.0f) return visible * q.fresnel / (4.0f * q.wo_h);
     float denominator = q.wo_h + q.e * q.wi_h;
     return visible * (1.0f - q.fresnel) * q.e * q.e * fabs(q.wi_h) / (denominator * denominator);
 }
 
-/* A microfacet normal from the visible normals, then reflection off it with probability F(ωo·h), else refraction
- * through it. The weight f|cos θi|/pdf reduces to G2/G1(ωo), times 1/e² for refraction. Returns 0 when the
- * sampled direction leaves on the wrong side of the macro-surface (the sample then carries no light). */
-inline int rough_dielectric_sample(float3 wo, float eta, float alpha, float uc, float2 u, DielectricSample *s)
+/* A microfacet normal (GGX: from the visible normals), then reflection off it with probability F(ωo·h), else
+ * refraction through it. The weight f|cos θi|/pdf reduces to G2/G1(ωo) for GGX, times 1/e² for refraction. Returns 0 when the sampled normal faces away from ωo or the sampled direction leaves on the
+ * wrong side of the macro-surface (the sample then carries no light). */
+inline int rough_dielectric_sample(float3 wo, float eta, float alpha, int distribution, float uc, float2 u,
+                                   DielectricSample *s)
 {
     if (wo.z == 0.0f) return 0;
     float e = dielectric_eta_from(wo.z, eta);
     int flipped = wo.z < 0.0f;
     if (flipped) wo = mirror_z(wo);
 
-    float3 h = ggx_sample_visible_normal(wo, alpha, u);
+    float3 h = microfacet_sample_normal(wo, alpha, distribution, u);
     float wo_h = dot(wo, h);
     if (wo_h <= 0.0f) return 0;
     float cos_t;
@@ -170,7 +172,11 @@ inline int rough_dielectric_sample(float3 wo, float eta, float alpha, float uc, 
     weight *= radiance_scale;
 
     /* In the turned frame ωo.z > 0, so e is the eta the pdf expects. */
-    float pdf = rough_dielectric_pdf(wo, wi, e, alpha);
+    float pdf = rough_dielectric_pdf(wo, wi, e, alpha, distribution);
+    /* Beckmann's normals are not the visible ones, so D and G1 do not cancel: the weight is f|cos θi|/pdf itself
+     * (radiance factor included), evaluated on the normal that links ωo and ωi as eval and pdf see it. */
+    if (microfacet_is_beckmann(distribution))
+        weight = pdf > 0.0f ? rough_dielectric_eval(wo, wi, e, alpha, distribution) / pdf : 0.0f;
     s->wi = flipped ? mirror_z(wi) : wi;
     s->weight = weight;
     s->pdf = pdf;
@@ -185,6 +191,7 @@ typedef struct {
     float eta;    /* n_interior / n_exterior at the hero wavelength, which steers the path */
     float alpha;
     float4 tint;  /* optional specular tint on both lobes (1 without one) */
+    int distribution;  /* MICROFACET_* */
 } DielectricParams;
 
 /* Dispersive when the index depends on λ: then the four wavelengths of a path would leave the surface in different
@@ -204,26 +211,27 @@ inline DielectricParams dielectric_params(__global const Material *m, const Surf
     p.tint = m->reflectance_offset == MATERIAL_NO_SPECTRUM
                  ? (float4)(1.0f)
                  : surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
+    p.distribution = m->distribution;
     return p;
 }
 
 inline float4 dielectric_eval(const DielectricParams *p, float3 wo, float3 wi)
 {
     if (ggx_is_smooth(p->alpha)) return (float4)(0.0f);
-    return p->tint * rough_dielectric_eval(wo, wi, p->eta, p->alpha);
+    return p->tint * rough_dielectric_eval(wo, wi, p->eta, p->alpha, p->distribution);
 }
 
 inline float dielectric_pdf(const DielectricParams *p, float3 wo, float3 wi)
 {
     if (ggx_is_smooth(p->alpha)) return 0.0f;
-    return rough_dielectric_pdf(wo, wi, p->eta, p->alpha);
+    return rough_dielectric_pdf(wo, wi, p->eta, p->alpha, p->distribution);
 }
 
 inline int dielectric_sample(const DielectricParams *p, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     DielectricSample d;
     int ok = ggx_is_smooth(p->alpha) ? smooth_dielectric_sample(wo, p->eta, uc, &d)
-                                     : rough_dielectric_sample(wo, p->eta, p->alpha, uc, u, &d);
+                                     : rough_dielectric_sample(wo, p->eta, p->alpha, p->distribution, uc, u, &d);
     if (!ok) return 0;
     s->wi = d.wi;
     s->weight = p->tint * d.weight;

@@ -52,7 +52,7 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
     float3 from = offset_ray_origin(p, n_geometric, ls.wi);
     int to_infinity = isinf(ls.distance);
     float3 to = ls.point;
-    if (LIGHT_IS(light, LIGHT_TRIANGLE)) to = offset_ray_origin(ls.point, ls.normal, -ls.wi);
+    if (LIGHT_ON_SURFACE(light)) to = offset_ray_origin(ls.point, ls.normal, -ls.wi);
     /* Not scene_occluded: index-matched medium boundaries let light through, attenuated by the medium. */
     float4 transmittance = scene_transmittance(scene, w, from, to, ls.wi, to_infinity, query, rays_traced);
     if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
@@ -74,7 +74,7 @@ inline float4 estimate_direct_light_in_medium(const Scene *scene, const SampledW
     LightSample ls;
     if (!sample_one_light(scene, w, sampler, x, &light, &ls)) return (float4)(0.0f);
     float phase = henyey_greenstein(dot(travel, ls.wi), g);
-    float3 to = LIGHT_IS(light, LIGHT_TRIANGLE) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
+    float3 to = LIGHT_ON_SURFACE(light) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
     float4 transmittance = scene_transmittance(scene, w, x, to, ls.wi, isinf(ls.distance), query, rays_traced);
     if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
     float weight = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, phase);

@@ -4,7 +4,9 @@
  * column u = (φ + π) / 2π, row v = θ / π, row 0 at the top. Each texel's radiance is r·R(λ) + g·G(λ) + b·B(λ), with
  * R, G, B the emission spectra uplifted from the three primaries, so the map's linear sRGB is reproduced exactly.
  * The map is importance-sampled by a piecewise-constant density ∝ luminance × sin θ (marginal CDF over rows, then
- * a conditional CDF within the row), as in pbrt-v4's image infinite light. */
+ * a conditional CDF within the row), as in pbrt-v4's image infinite light. A map may be turned: the light's
+ * `position` and `direction` hold the first two rows of the rotation from world to map directions (the third is
+ * their cross product), the identity unless the scene turns it. */
 #ifndef SPECTRACE_ENVIRONMENT_CL
 #define SPECTRACE_ENVIRONMENT_CL
 
@@ -41,6 +43,19 @@ inline float3 map_uv_to_direction(float2 uv)
     return (float3)(s * sin(phi), cos(theta), -s * cos(phi));
 }
 
+/* World direction -> the map's own frame, and back (the rotation's rows: x, y, and z = x × y). */
+inline float3 world_to_map(__global const Light *light, float3 d)
+{
+    float3 x = light->position.xyz, y = light->direction.xyz;
+    return (float3)(dot(x, d), dot(y, d), dot(cross(x, y), d));
+}
+
+inline float3 map_to_world(__global const Light *light, float3 d)
+{
+    float3 x = light->position.xyz, y = light->direction.xyz;
+    return d.x * x + d.y * y + d.z * cross(x, y);
+}
+
 inline int map_texel(__global const Light *light, float2 uv)
 {
     int column = clamp((int)(uv.x * (float)light->map_width), 0, light->map_width - 1);
@@ -62,7 +77,7 @@ inline float4 environment_radiance(__global const Light *light, __global const f
                                    __global const float4 *texels, const SampledWavelengths *w, float3 d)
 {
     if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
-    return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, direction_to_map_uv(d))], w);
+    return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, direction_to_map_uv(world_to_map(light, d)))], w);
 }
 
 /* Solid-angle pdf of sampling direction d, times the light's pick probability. map_cdf holds the marginal CDF
@@ -70,7 +85,7 @@ inline float4 environment_radiance(__global const Light *light, __global const f
 inline float environment_pdf(__global const Light *light, __global const float *map_cdf, float3 d)
 {
     if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) return light->pmf * INV_FOUR_PI;
-    float2 uv = direction_to_map_uv(d);
+    float2 uv = direction_to_map_uv(world_to_map(light, d));
     int width = light->map_width, height = light->map_height;
     int row = clamp((int)(uv.y * (float)height), 0, height - 1);
     int column = clamp((int)(uv.x * (float)width), 0, width - 1);
@@ -104,7 +119,7 @@ inline float3 environment_sample(__global const Light *light, __global const flo
     *pdf = sin_theta > 0.0f
          ? light->pmf * row_mass * column_mass * (float)(width * height) / (2.0f * PI_F * PI_F * sin_theta)
          : 0.0f;
-    return map_uv_to_direction((float2)(uu, v));
+    return map_to_world(light, map_uv_to_direction((float2)(uu, v)));
 }
 
 #endif

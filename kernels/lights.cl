@@ -10,12 +10,13 @@
 #include "sampling.cl"
 #include "environment.cl"
 #include "texture.cl"
+#include "shapes.cl"
 
 typedef struct {
     float3 wi;         /* unit direction from the shaded point toward the light */
     float distance;    /* to the light point; INFINITY for distant and environment lights */
     float3 point;      /* the light point (finite lights), to aim the shadow ray at */
-    float3 normal;     /* LIGHT_TRIANGLE: its geometric normal, for the shadow ray's end offset */
+    float3 normal;     /* lights on a surface (LIGHT_ON_SURFACE): its geometric normal, for the shadow ray's end offset */
     float4 arriving;   /* radiance arriving along -wi (area, environment) or, for delta lights, the irradiance
                           it produces on a surface facing it: I/d² or E (W/(m² nm)) */
     float pdf;         /* solid-angle pdf including the pick probability; for delta lights the pick probability */
@@ -131,7 +132,80 @@ typedef struct {
     __global const float4 *texels;
     __global const float *map_cdf;
     TextureBuffers textures;  /* the emission textures' rows, the same texels as floats, the spectra */
+    __global const AnalyticShape *shapes;
 } LightBuffers;
+
+/* Lights on a surface (an emitting triangle, analytic sphere or other analytic shape): their shadow rays end just off
+ * the light's surface. */
+#define LIGHT_ON_SURFACE(light) \
+    (LIGHT_IS(light, LIGHT_TRIANGLE) || LIGHT_IS(light, LIGHT_SPHERE) || LIGHT_IS(light, LIGHT_SHAPE))
+
+/* Texture coordinates of the sphere point whose outward world normal is n. */
+inline float2 sphere_uv_of_normal(__global const AnalyticShape *shape, float3 n)
+{
+    float3 object_point = normalize(shape_vector_to_object(shape, n));
+    return (float2)(shape_azimuth_turns(object_point.x, object_point.y),
+                    atan2(sqrt(object_point.x * object_point.x + object_point.y * object_point.y), object_point.z) * (1.0f / SHAPE_PI));
+}
+
+/* Samples an emitting analytic shape seen from p: a sphere that p is outside by the cone it subtends, any other
+ * (and a sphere from inside) uniformly over its area. */
+inline int sample_shape_light(__global const Light *light, const LightBuffers *buffers, const SampledWavelengths *w,
+                              float3 p, float2 u, LightSample *s)
+{
+    __global const AnalyticShape *shape = &buffers->shapes[light->triangle];
+    float3 q, n;
+    float2 uv;
+    float pdf_solid_angle = 0.0f;
+    float one_minus_cos = LIGHT_IS(light, LIGHT_SPHERE)
+                        ? sphere_cone_one_minus_cos(light->position.xyz, light->position.w, p) : 0.0f;
+    if (one_minus_cos > 0.0f) {
+        q = sample_sphere_cone(light->position.xyz, light->position.w, p, u, &n, &pdf_solid_angle);
+        uv = sphere_uv_of_normal(shape, n);
+        if (shape->flip_normals) n = -n;
+    } else {
+        uv = shape_sample_uv(shape, u);
+        ShapeSurface g = shape_surface(shape, uv);
+        q = g.p;
+        n = g.n;
+        pdf_solid_angle = -1.0f;  /* from the area density below, once the distance is known */
+        s->pdf = shape_area_pdf(shape, g.area_stretch);
+    }
+    float3 to_light = q - p;
+    float d = length(to_light);
+    if (!(d > 0.0f)) return 0;
+    s->wi = to_light / d;
+    s->distance = d;
+    s->point = q;
+    s->normal = n;
+    s->arriving = area_light_emitted(light, &buffers->textures, w, n, -s->wi, uv);
+    if (pdf_solid_angle < 0.0f) {
+        float abs_cos = fabs(dot(n, s->wi));
+        pdf_solid_angle = abs_cos > 0.0f ? s->pdf * d * d / abs_cos : 0.0f;
+    }
+    s->pdf = light->pmf * pdf_solid_angle;
+    return s->pdf > 0.0f && isfinite(s->pdf);
+}
+
+/* Solid-angle density (pick probability included) with which sample_light reaches the point p (normal n, seen
+ * along -wo from `from`) of an emitting surface; shape_uv: p's texture coordinates when the light is an analytic
+ * shape. */
+inline float emitter_hit_pdf(__global const Light *light, __global const AnalyticShape *shapes, float3 from,
+                             float3 p, float3 n, float3 wo, float2 shape_uv)
+{
+    if (LIGHT_IS(light, LIGHT_SPHERE) || LIGHT_IS(light, LIGHT_SHAPE)) {
+        if (LIGHT_IS(light, LIGHT_SPHERE)) {
+            float one_minus_cos = sphere_cone_one_minus_cos(light->position.xyz, light->position.w, from);
+            if (one_minus_cos > 0.0f) return light->pmf / (SHAPE_TWO_PI * one_minus_cos);
+        }
+        __global const AnalyticShape *shape = &shapes[light->triangle];
+        float abs_cos = fabs(dot(n, wo));
+        if (!(abs_cos > 0.0f)) return 0.0f;
+        float d = distance(from, p);
+        return light->pmf * shape_area_pdf(shape, shape_surface(shape, shape_uv).area_stretch) * d * d / abs_cos;
+    }
+    return area_light_pdf(light, distance(from, p), fabs(dot(n, wo)));
+}
 
 /* Samples light `light` as seen from p. Returns 0 when the sample carries no light. */
 inline int sample_light(__global const Light *light, const LightBuffers *buffers, const SampledWavelengths *w,
@@ -156,6 +230,9 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
                                          triangle_uv(buffers->triangle_uvs, light->triangle, b12));
         s->pdf = area_light_pdf(light, d, fabs(dot(n_light, s->wi)));
         return s->pdf > 0.0f;
+    }
+    if (LIGHT_IS(light, LIGHT_SPHERE) || LIGHT_IS(light, LIGHT_SHAPE)) {
+        return sample_shape_light(light, buffers, w, p, u, s);
     }
     if (LIGHT_IS(light, LIGHT_POINT) || LIGHT_IS(light, LIGHT_SPOT)) {
         float3 to_light = light->position.xyz - p;

@@ -21,7 +21,7 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
         LightBuffers buffers = light_buffers(scene);
         if (sample_light(light, &buffers, w, p, u_light, &ls)) {
             float cos_i = dot(n, ls.wi);
-            float3 to = LIGHT_IS(light, LIGHT_TRIANGLE) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
+            float3 to = LIGHT_ON_SURFACE(light) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
             float4 transmittance = cos_i > 0.0f
                                  ? scene_transmittance(scene, w, p, to, ls.wi, isinf(ls.distance),
                                                        opacity_query(sampler, 0u, QUERY_SHADOW), rays_traced)

@@ -63,8 +63,40 @@ typedef struct {
     float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; 0 unless SCENE_NEEDS_FOOTPRINT) */
 } PathVertex;
 
+#if SCENE_HAS_SHAPES
+/* path_vertex at a hit of an analytic shape: its exact normal shades (no interpolation to correct), and its dp/du,
+ * dp/dv frame the surface detail and the footprint. */
+inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
+{
+    PathVertex v;
+    v.info = scene->triangle_info[hit.triangle];
+    ShapeSurface g = shape_surface(hit_shape(scene, hit.triangle), hit.b12);
+    v.p = g.p;
+    v.n = g.n;
+    v.ns = g.n;
+    v.wo = -ray.direction;
+    v.uv = hit.b12;
+    v.footprint = 0.0f;
+    if (SCENE_NEEDS_FOOTPRINT) {
+        v.footprint = footprint_from_tangents(scene->params, v.p, v.n, g.dpdu, g.dpdv, (float2)(1.0f, 0.0f),
+                                              (float2)(0.0f, 1.0f));
+    }
+    if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
+        __global const Material *m = &scene->materials[v.info.material];
+        if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
+            int parametrised = all(isfinite(g.dpdu)) && length(g.dpdu) > 0.0f && length(g.dpdv) > 0.0f;
+            v.ns = detailed_normal_at(scene, m, parametrised, g.dpdu, g.dpdv, v.uv, v.footprint, v.n, v.ns, v.wo);
+        }
+    }
+    return v;
+}
+#endif
+
 inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
 {
+#if SCENE_HAS_SHAPES
+    if (hit_is_shape(scene, hit.triangle)) return shape_vertex(scene, hit, ray);
+#endif
     PathVertex v;
     v.info = scene->triangle_info[hit.triangle];
     v.p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
@@ -88,8 +120,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
 inline float4 vertex_emission(const Scene *scene, const SampledWavelengths *w, const PathVertex *v, Hit hit)
 {
     TextureBuffers textures = {scene->textures, (__global const float *)scene->texels, scene->spectra};
-    return area_light_emitted(&scene->lights[v->info.light], &textures, w, v->n, v->wo,
-                              triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12));
+    return area_light_emitted(&scene->lights[v->info.light], &textures, w, v->n, v->wo, hit_uv(scene, hit));
 }
 
 /* At a material-less (index-matched) medium boundary the ray goes on unchanged into or out of the shape's

@@ -72,7 +72,9 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
         return !ended && ++s->segments <= last_segment;
     }
     if (hit.triangle < 0) {
-        if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0) {
+        /* hide_environment: the camera's own rays (the first segment) see black; reflections still show it. */
+        int hidden = params->hide_environment && s->segments == 1;
+        if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0 && !hidden) {
             __global const Light *env = &scene->lights[params->environment_light];
             float3 d = s->ray.direction;
             float weight = s->previous_delta
@@ -88,7 +90,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
         float4 emitted = vertex_emission(scene, w, &v, hit);
         float weight = 1.0f;
         if (!s->previous_delta) {
-            float pdf_light = area_light_pdf(light, distance(s->previous_point, v.p), fabs(dot(v.n, v.wo)));
+            float pdf_light = emitter_hit_pdf(light, scene->shapes, s->previous_point, v.p, v.n, v.wo, hit.b12);
             weight = power_heuristic(s->previous_pdf, pdf_light);
         }
         *radiance += s->throughput * emitted * weight;

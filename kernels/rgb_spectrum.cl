@@ -6,14 +6,29 @@
 #ifndef SPECTRACE_RGB_SPECTRUM_CL
 #define SPECTRACE_RGB_SPECTRUM_CL
 
-inline float4 sigmoid_polynomial(float3 c, float4 lambda_nm)
+/* S(x) at the four wavelengths' polynomial values x. */
+inline float4 sigmoid_of(float4 x)
 {
-    float4 x = (c.x * lambda_nm + c.y) * lambda_nm + c.z;
     /* x / sqrt(1 + x²) as one rsqrt (no division): as accurate (OpenCL allows rsqrt 2 ulp, sqrt 3 and a division
      * 2.5), but an ulp's error could lift a value past 1 or a saturated one off 0 and 1. Beyond |x| = 10⁴, S is
      * within 2.5e-9 of 0 or 1 (S(x) ≈ 1/(4x²) or 1 − 1/(4x²)): that end exactly. */
     float4 s = clamp(mad(0.5f * x, rsqrt(mad(x, x, 1.0f)), 0.5f), 0.0f, 1.0f);
     return select(s, step(0.0f, x), isgreater(fabs(x), (float4)(1.0e4f)));
+}
+
+inline float4 sigmoid_polynomial(float3 c, float4 lambda_nm)
+{
+    return sigmoid_of((c.x * lambda_nm + c.y) * lambda_nm + c.z);
+}
+
+/* The same spectrum from the dimensionless coefficients (a, b, c) of t = (λ − SIGMOID_CENTRE_NM) /
+ * SIGMOID_HALF_SPAN_NM, t in [−1, 1] over the grid (spectrace.spectral.uplift's own form): better conditioned than
+ * powers of λ in nm, so that half-float coefficients (textures' compact storage) stay within a colour difference
+ * far below what the eye tells apart (docs/textures.md, Memory). */
+inline float4 sigmoid_polynomial_dimensionless(float3 c, float4 lambda_nm)
+{
+    float4 t = (lambda_nm - SIGMOID_CENTRE_NM) * (1.0f / SIGMOID_HALF_SPAN_NM);
+    return sigmoid_of((c.x * t + c.y) * t + c.z);
 }
 
 #endif

@@ -25,6 +25,9 @@ typedef struct {
     __global const Medium *media;
     __global const Texture *textures;  /* material and emission textures, whose texels share `texels` (a dummy row
                                           if none) */
+    __global const AnalyticShape *shapes;  /* analytic spheres, disks and cylinders (a dummy row if none), in the
+                                              leaf order of shape_nodes */
+    __global const BVHNode *shape_nodes;   /* binary BVH over their boxes (a root no ray enters if none) */
 } Scene;
 
 /* The kinds of visibility query, told apart in a cut-out's choice (surface_met) so that a shadow ray and the path's
@@ -41,15 +44,15 @@ typedef struct {
         __global const TriangleInfo *triangle_info, __global const Material *materials,                           \
         __global const Light *lights, __global const float *light_cdf, __global const float *spectra,             \
         __global const float4 *texels, __global const float *map_cdf, __global const Medium *media,                \
-        __global const Texture *textures
+        __global const Texture *textures, __global const AnalyticShape *shapes, __global const BVHNode *shape_nodes
 #define SCENE_FROM_KERNEL_PARAMS                                                                                   \
     {params, nodes, triangle_vertices, triangle_uvs, triangle_normals, triangle_info, materials, lights,           \
-     light_cdf, spectra, texels, map_cdf, media, textures}
+     light_cdf, spectra, texels, map_cdf, media, textures, shapes, shape_nodes}
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
     LightBuffers b = {scene->triangle_vertices, scene->triangle_uvs, scene->spectra, scene->texels, scene->map_cdf,
-                      {scene->textures, (__global const float *)scene->texels, scene->spectra}};
+                      {scene->textures, (__global const float *)scene->texels, scene->spectra}, scene->shapes};
     return b;
 }
 
@@ -71,10 +74,12 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
  * with the tangent plane at p, give dp/dx and dp/dy; the triangle's positions and uvs map them to du/dx ... dv/dy;
  * the footprint is 2 max(|du/dx|, |dv/dx|, |du/dy|, |dv/dy|) (a filter spans a pixel on either side). After
  * reflections this is the camera's view of p, not the path's: an approximation that blurs no less than a primary
- * hit would. 0 (the finest level) where it cannot be formed: behind the camera, or a degenerate triangle. */
-inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3 n)
+ * hit would. 0 (the finest level) where it cannot be formed: behind the camera, or a degenerate triangle.
+ * footprint_from_tangents takes any surface on which moving by e1 and e2 moves uv by d1 and d2 (a triangle's edges,
+ * or an analytic shape's dp/du and dp/dv with d1 = (1, 0), d2 = (0, 1)). */
+inline float footprint_from_tangents(__global const RenderParams *camera, float3 p, float3 n, float3 e1, float3 e2,
+                                     float2 d1, float2 d2)
 {
-    __global const RenderParams *camera = scene->params;
     float3 origin = camera->camera_origin.xyz;
     float3 to_p = p - origin;
     float depth = dot(to_p, camera->camera_forward.xyz);
@@ -86,10 +91,6 @@ inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3
     float3 dpdx = origin + dx * (plane / dot(n, dx)) - p;
     float3 dpdy = origin + dy * (plane / dot(n, dy)) - p;
     /* p = v0 + a e1 + b e2 and uv = t0 + a d1 + b d2: an offset in the plane has (a, b) from the Gram system. */
-    __global const float4 *v = scene->triangle_vertices + 3 * triangle;
-    __global const float2 *t = scene->triangle_uvs + 3 * triangle;
-    float3 e1 = v[1].xyz - v[0].xyz, e2 = v[2].xyz - v[0].xyz;
-    float2 d1 = t[1] - t[0], d2 = t[2] - t[0];
     float g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
     float det = g11 * g22 - g12 * g12;
     if (!(det > 0.0f)) return 0.0f;
@@ -98,6 +99,123 @@ inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3
     float2 duv_dx = ax * d1 + bx * d2, duv_dy = ay * d1 + by * d2;
     float width = 2.0f * fmax(fmax(fabs(duv_dx.x), fabs(duv_dx.y)), fmax(fabs(duv_dy.x), fabs(duv_dy.y)));
     return isfinite(width) ? width : 0.0f;
+}
+
+inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3 n)
+{
+    __global const float4 *v = scene->triangle_vertices + 3 * triangle;
+    __global const float2 *t = scene->triangle_uvs + 3 * triangle;
+    float3 e1 = v[1].xyz - v[0].xyz, e2 = v[2].xyz - v[0].xyz;
+    float2 d1 = t[1] - t[0], d2 = t[2] - t[0];
+    return footprint_from_tangents(scene->params, p, n, e1, e2, d1, d2);
+}
+
+/* Analytic shapes (shapes.cl) have a BVH of their own beside the triangles': a hit of shape k is slot
+ * triangle_count + k of the TriangleInfo array, with the shape's texture coordinates in b12. A scene without them
+ * builds with SCENE_HAS_SHAPES 0 and traces exactly as before they existed. */
+inline int hit_is_shape(const Scene *scene, int slot)
+{
+    return SCENE_HAS_SHAPES && slot >= scene->params->triangle_count;
+}
+
+/* Whether the scene has nothing to hit. */
+inline int scene_is_empty(const Scene *scene)
+{
+    return scene->params->triangle_count == 0 && (!SCENE_HAS_SHAPES || scene->params->shape_count == 0);
+}
+
+#if SCENE_HAS_SHAPES
+inline __global const AnalyticShape *hit_shape(const Scene *scene, int slot)
+{
+    return &scene->shapes[slot - scene->params->triangle_count];
+}
+
+/* The closest analytic shape the ray meets before t_max (any of them when any_hit): bvh.cl's binary traversal
+ * (trace_bvh_binary) over the shapes' own BVH, whose leaves are runs of shapes. */
+inline Hit intersect_shapes(const Scene *scene, Ray ray, float t_max, int any_hit)
+{
+    Hit hit = no_hit(t_max);
+    /* The empty BVH's inverted root box still admits rays (the slab test orders each axis' bounds). */
+    if (scene->params->shape_count == 0) return hit;
+    __global const BVHNode *nodes = scene->shape_nodes;
+    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
+    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
+    if (ray_box_entry(&nodes[0], ray.origin, inv_direction, t_max) == INFINITY) return hit;
+    int stack[BVH_STACK_SIZE];
+    float stack_entry[BVH_STACK_SIZE];
+    int top = 0;
+    int index = 0;
+    while (true) {
+        __global const BVHNode *node = &nodes[index];
+        if (node->count > 0) {
+            for (int k = node->left_first; k < node->left_first + node->count; ++k) {
+                float2 uv;
+                float t = intersect_shape(&scene->shapes[k], ray.origin, ray.direction, hit.t, &uv);
+                if (t < hit.t) {
+                    hit.t = t;
+                    hit.triangle = scene->params->triangle_count + k;
+                    hit.b12 = uv;
+                    if (any_hit) return hit;
+                }
+            }
+        } else {
+            int left = node->left_first;
+            float t_left = ray_box_entry(&nodes[left], ray.origin, inv_direction, hit.t);
+            float t_right = ray_box_entry(&nodes[left + 1], ray.origin, inv_direction, hit.t);
+            if (t_left != INFINITY || t_right != INFINITY) {
+                if (fmax(t_left, t_right) != INFINITY) {
+                    stack[top] = t_left <= t_right ? left + 1 : left;
+                    stack_entry[top] = fmax(t_left, t_right);
+                    ++top;
+                }
+                index = t_left <= t_right ? left : left + 1;
+                continue;
+            }
+        }
+        while (true) {
+            if (top == 0) return hit;
+            --top;
+            if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
+        }
+    }
+}
+#endif
+
+/* The closest surface before t_max, triangle or analytic shape (any one when any_hit). */
+inline Hit trace_scene(const Scene *scene, Ray ray, float t_max, int any_hit)
+{
+#if SCENE_HAS_SHAPES
+    Hit shape_hit = intersect_shapes(scene, ray, t_max, any_hit);
+    if ((any_hit && shape_hit.triangle >= 0) || scene->params->triangle_count == 0) return shape_hit;
+    Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, ray, shape_hit.t, any_hit);
+    return hit.triangle >= 0 ? hit : shape_hit;
+#else
+    return trace_bvh(scene->nodes, scene->triangle_vertices, ray, t_max, any_hit);
+#endif
+}
+
+/* The geometric normal and point of a hit, for either kind of surface. */
+inline float3 hit_normal(const Scene *scene, Hit hit)
+{
+#if SCENE_HAS_SHAPES
+    if (hit_is_shape(scene, hit.triangle)) return shape_surface(hit_shape(scene, hit.triangle), hit.b12).n;
+#endif
+    return triangle_normal(scene->triangle_vertices, hit.triangle);
+}
+
+inline float3 hit_point(const Scene *scene, Hit hit)
+{
+#if SCENE_HAS_SHAPES
+    if (hit_is_shape(scene, hit.triangle)) return shape_surface(hit_shape(scene, hit.triangle), hit.b12).p;
+#endif
+    return triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+}
+
+/* Texture coordinates of a hit. */
+inline float2 hit_uv(const Scene *scene, Hit hit)
+{
+    if (hit_is_shape(scene, hit.triangle)) return hit.b12;
+    return triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
 }
 
 #if SCENE_HAS_OPACITY
@@ -116,7 +234,10 @@ inline float surface_opacity(const Scene *scene, int triangle, float2 b12)
     if (material == TRIANGLE_NO_MATERIAL) return 1.0f;
     __global const Material *m = &scene->materials[material];
     if (SCENE_HAS_TEXTURES && m->opacity_texture != NO_TEXTURE) {
-        SurfaceContext sc = surface_context(scene, triangle_uv(scene->triangle_uvs, triangle, b12), 0.0f);
+        Hit at;
+        at.triangle = triangle;
+        at.b12 = b12;
+        SurfaceContext sc = surface_context(scene, hit_uv(scene, at), 0.0f);
         return texture_numbers(&sc.buffers, m->opacity_texture, sc.uv, 0.0f).x;
     }
     return m->opacity;
@@ -135,8 +256,7 @@ inline int surface_met(const Scene *scene, uint query, int crossing, Hit hit)
 /* The ray `ray` (first traced as `query`) started again just past the surface of `hit`. */
 inline Ray ray_past(const Scene *scene, Ray ray, Hit hit)
 {
-    float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
-    ray.origin = offset_ray_origin(p, triangle_normal(scene->triangle_vertices, hit.triangle), ray.direction);
+    ray.origin = offset_ray_origin(hit_point(scene, hit), hit_normal(scene, hit), ray.direction);
     return ray;
 }
 #endif
@@ -147,14 +267,14 @@ inline Ray ray_past(const Scene *scene, Ray ray, Hit hit)
 inline Hit scene_intersect(const Scene *scene, Ray ray, uint query, uint *rays_traced)
 {
     *rays_traced += 1;
-    if (scene->params->triangle_count == 0) {
+    if (scene_is_empty(scene)) {
         Hit miss;
         miss.t = INFINITY;
         miss.triangle = -1;
         miss.b12 = (float2)(0.0f);
         return miss;
     }
-    Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, ray, INFINITY, 0);
+    Hit hit = trace_scene(scene, ray, INFINITY, 0);
 #if SCENE_HAS_OPACITY
     Ray past = ray;
     for (int crossing = 0;
@@ -163,7 +283,7 @@ inline Hit scene_intersect(const Scene *scene, Ray ray, uint query, uint *rays_t
         past = ray_past(scene, past, hit);
         float t_past = dot(past.origin - ray.origin, ray.direction);
         *rays_traced += 1;
-        hit = trace_bvh(scene->nodes, scene->triangle_vertices, past, INFINITY, 0);
+        hit = trace_scene(scene, past, INFINITY, 0);
         hit.t += t_past;
     }
 #endif
@@ -175,7 +295,7 @@ inline Hit scene_intersect(const Scene *scene, Ray ray, uint query, uint *rays_t
 inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 direction, int to_infinity,
                           uint query, uint *rays_traced)
 {
-    if (scene->params->triangle_count == 0) return 0;
+    if (scene_is_empty(scene)) return 0;
     *rays_traced += 1;
     Ray shadow;
     shadow.origin = from;
@@ -194,7 +314,7 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
     Ray past = shadow;
     float t_left = t_max;
     for (int crossing = 0; crossing <= MAX_OPACITY_CROSSINGS; ++crossing) {
-        Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, past, t_left, 0);
+        Hit hit = trace_scene(scene, past, t_left, 0);
         if (hit.triangle < 0) return 0;
         if (crossing == MAX_OPACITY_CROSSINGS || surface_met(scene, query, crossing, hit)) return 1;
         past = ray_past(scene, past, hit);
@@ -204,7 +324,7 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
     }
     return 1;
 #else
-    return trace_bvh(scene->nodes, scene->triangle_vertices, shadow, t_max, 1).triangle >= 0;
+    return trace_scene(scene, shadow, t_max, 1).triangle >= 0;
 #endif
 }
 
@@ -220,7 +340,7 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
         return scene_occluded(scene, from, to, direction, to_infinity, query, rays_traced) ? (float4)(0.0f)
                                                                                             : (float4)(1.0f);
     }
-    if (scene->params->triangle_count == 0) return (float4)(1.0f);
+    if (scene_is_empty(scene)) return (float4)(1.0f);
     Ray segment;
     segment.origin = from;
     float t_end = INFINITY;  /* along the whole segment, from `from` */
@@ -244,7 +364,7 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
 #endif
     for (int crossing = 0; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
         *rays_traced += 1;
-        Hit hit = trace_bvh(scene->nodes, scene->triangle_vertices, segment, fmax(t_end - t_origin, 0.0f), 0);
+        Hit hit = trace_scene(scene, segment, fmax(t_end - t_origin, 0.0f), 0);
         if (hit.triangle < 0) {
             if (medium_ahead < 0) return exp(-optical_depth);
             if (isinf(t_end)) return (float4)(0.0f);  /* a leak out of a closed medium: light cannot get through */
@@ -264,7 +384,7 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
 #else
         if (info.material != TRIANGLE_NO_MATERIAL) return (float4)(0.0f);
 #endif
-        float3 n = triangle_normal(scene->triangle_vertices, hit.triangle);
+        float3 n = hit_normal(scene, hit);
         if (dot(n, segment.direction) > 0.0f && info.interior >= 0) {
             optical_depth += medium_sigma_t(&scene->media[info.interior], scene->spectra, w) * STRETCH(hit.t);
         }
@@ -272,7 +392,7 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
         carried = 0.0f;
 #endif
         medium_ahead = medium_beyond(info.interior, n, segment.direction);
-        float3 p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
+        float3 p = hit_point(scene, hit);
         segment.origin = offset_ray_origin(p, n, segment.direction);
         t_origin = dot(segment.origin - from, segment.direction);
     }

@@ -23,6 +23,21 @@
 #define SCENE_HAS_LIGHT_IMAGES 1
 #endif
 
+/* Rough lobes with the Beckmann microfacet distribution (kernels/microfacet.cl); without them every rough lobe is
+ * GGX and the distribution is not read. */
+#ifndef SCENE_HAS_BECKMANN
+#define SCENE_HAS_BECKMANN 1
+#endif
+/* Plastics whose base's internal scattering depends on its albedo (`nonlinear`, kernels/bsdf_plastic.cl). */
+#ifndef SCENE_HAS_NONLINEAR_PLASTIC
+#define SCENE_HAS_NONLINEAR_PLASTIC 1
+#endif
+
+/* Plastics whose rough coat passes light by its own tabulated transmittance (`coat_transmission = "rough"`). */
+#ifndef SCENE_HAS_ROUGH_COAT
+#define SCENE_HAS_ROUGH_COAT 1
+#endif
+
 /* Material textures (kernels/texture.cl). */
 #ifndef SCENE_HAS_TEXTURES
 #define SCENE_HAS_TEXTURES 1
@@ -41,6 +56,11 @@
 /* Materials with an opacity below 1 (cut-outs): visibility queries may pass through surfaces (kernels/scene.cl). */
 #ifndef SCENE_HAS_OPACITY
 #define SCENE_HAS_OPACITY 1
+#endif
+
+/* Analytic spheres, disks and cylinders (kernels/shapes.cl), tested beside the triangles' BVH. */
+#ifndef SCENE_HAS_SHAPES
+#define SCENE_HAS_SHAPES 1
 #endif
 
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)

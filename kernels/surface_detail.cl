@@ -41,14 +41,12 @@ inline float2 bump_step(const TextureBuffers *b, int index, float footprint)
     return t->type != TEXTURE_CHECKERBOARD && all(isfinite(texel)) ? texel : (float2)(5.0e-4f);
 }
 
-/* The shading normal of material m at a hit of `triangle` (texture coordinates uv, footprint), turned from ns by
- * its normal map or bump map; ns itself when it has neither or the turn cannot be formed. */
-inline float3 detailed_normal(const Scene *scene, __global const Material *m, int triangle, float2 uv,
-                              float footprint, float3 n_geometric, float3 ns, float3 wo)
+/* The shading normal of material m at a point with tangents dpdu, dpdv (when `parametrised`), texture coordinates
+ * uv and footprint, turned from ns by its normal map or bump map; ns itself when it has neither or the turn cannot
+ * be formed. */
+inline float3 detailed_normal_at(const Scene *scene, __global const Material *m, int parametrised, float3 dpdu,
+                                 float3 dpdv, float2 uv, float footprint, float3 n_geometric, float3 ns, float3 wo)
 {
-    if (m->normal_map == NO_TEXTURE && m->bump_map == NO_TEXTURE) return ns;
-    float3 dpdu, dpdv;
-    int parametrised = triangle_dp_duv(scene, triangle, &dpdu, &dpdv);
     SurfaceContext sc = surface_context(scene, uv, footprint);
     float3 n;
     if (m->normal_map != NO_TEXTURE) {
@@ -80,6 +78,16 @@ inline float3 detailed_normal(const Scene *scene, __global const Material *m, in
     if (!(length_n > 0.0f) || !isfinite(length_n)) return ns;
     n /= length_n;
     return dot(n, wo) * dot(n_geometric, wo) > 0.0f ? n : n_geometric;
+}
+
+/* detailed_normal_at a hit of `triangle`, in its tangent frame. */
+inline float3 detailed_normal(const Scene *scene, __global const Material *m, int triangle, float2 uv,
+                              float footprint, float3 n_geometric, float3 ns, float3 wo)
+{
+    if (m->normal_map == NO_TEXTURE && m->bump_map == NO_TEXTURE) return ns;
+    float3 dpdu, dpdv;
+    int parametrised = triangle_dp_duv(scene, triangle, &dpdu, &dpdv);
+    return detailed_normal_at(scene, m, parametrised, dpdu, dpdv, uv, footprint, n_geometric, ns, wo);
 }
 
 #endif

@@ -7,7 +7,10 @@
  * bilinear interpolation between the four texels around the point, texel centres at half-integer positions, and
  * trilinear blending of the two pyramid levels whose texel size brackets the footprint. Filters blend SPECTRA, not
  * coefficients: each texel is evaluated at the path's wavelengths and the values blended, so a filtered
- * reflectance stays a convex combination of the texels' (in [0, 1] when they are). */
+ * reflectance stays a convex combination of the texels' (in [0, 1] when they are). Texels are stored compactly
+ * where that is exact or within a measured bound (Texture.storage; host/spectrace/textures/storage.py): 8- or 16-bit
+ * unsigned normalised integers for data read from such files, half floats (vload_half, core OpenCL 1.2) for sigmoid
+ * coefficients in the dimensionless form, emission RGB and spectral bands, float otherwise. */
 #ifndef SPECTRACE_TEXTURE_CL
 #define SPECTRACE_TEXTURE_CL
 
@@ -40,30 +43,65 @@ inline int texture_wrap(int i, int n, int wrap)
     return m < 0 ? m + n : m;
 }
 
-/* The value of texel (x, y) of a level that starts at float `level_offset` and is `width` texels wide, at the
+/* Value `i` of the texture's stored values (counted in values of its storage from its data_offset), as a float. */
+inline float texel_value(__global const Texture *t, const TextureBuffers *b, int i)
+{
+    __global const float *start = b->texels + t->data_offset;
+    if (t->storage == STORAGE_HALF) return vload_half(i, (__global const half *)start);
+    if (t->storage == STORAGE_UNORM8) return (float)((__global const uchar *)start)[i] * (1.0f / 255.0f);
+    if (t->storage == STORAGE_UNORM16) return (float)((__global const ushort *)start)[i] * (1.0f / 65535.0f);
+    return start[i];
+}
+
+/* Values i, i + 1, i + 2, as texel_value reads each. */
+inline float3 texel_value3(__global const Texture *t, const TextureBuffers *b, int i)
+{
+    __global const float *start = b->texels + t->data_offset;
+    if (t->storage == STORAGE_HALF) return vload_half3(0, (__global const half *)start + i);
+    if (t->storage == STORAGE_UNORM8) {
+        return convert_float3(vload3(0, (__global const uchar *)start + i)) * (1.0f / 255.0f);
+    }
+    if (t->storage == STORAGE_UNORM16) {
+        return convert_float3(vload3(0, (__global const ushort *)start + i)) * (1.0f / 65535.0f);
+    }
+    return vload3(0, start + i);
+}
+
+/* A sigmoid texel's spectrum: half-stored coefficients are the dimensionless ones, of t = (λ − centre) / half span,
+ * float-stored ones those of λ in nm (rgb_spectrum.cl). */
+inline float4 texel_sigmoid(__global const Texture *t, float3 c, float4 lambda_nm)
+{
+    if (t->storage == STORAGE_HALF) return sigmoid_polynomial_dimensionless(c, lambda_nm);
+    return sigmoid_polynomial(c, lambda_nm);
+}
+
+/* The value of texel (x, y) of a level that starts at value `level_offset` and is `width` texels wide, at the
  * path's wavelengths. BANDS are interpolated linearly between band centres, the end bands held beyond them. */
 inline float4 texel_spectrum(__global const Texture *t, const TextureBuffers *b, int level_offset, int width, int x,
                              int y, const SampledWavelengths *w)
 {
-    __global const float *texel = b->texels + level_offset + (y * width + x) * t->channels;
-    if (t->texel_format == TEXEL_SIGMOID) return sigmoid_polynomial(vload3(0, texel), w->lambda);
-    if (SCENE_HAS_SURFACE_NORMALS && t->texel_format == TEXEL_VECTOR) return (float4)(vload3(0, texel), 0.0f);
+    int texel = level_offset + (y * width + x) * t->channels;
+    if (t->texel_format == TEXEL_SIGMOID) return texel_sigmoid(t, texel_value3(t, b, texel), w->lambda);
+    if (SCENE_HAS_SURFACE_NORMALS && t->texel_format == TEXEL_VECTOR) return (float4)(texel_value3(t, b, texel), 0.0f);
     /* RGB weights are blended as they are, (r, g, b, 0): the caller weights the basis spectra with the result
      * (lights.cl), which the blend commutes with. */
-    if (t->texel_format == TEXEL_RGB) return (float4)(vload3(0, texel), 0.0f);
-    if (t->texel_format == TEXEL_SCALAR || t->channels == 1) return (float4)(texel[0]);
+    if (t->texel_format == TEXEL_RGB) return (float4)(texel_value3(t, b, texel), 0.0f);
+    if (t->texel_format == TEXEL_SCALAR || t->channels == 1) return (float4)(texel_value(t, b, texel));
     float4 position = clamp((w->lambda - t->band_first_nm) / t->band_step_nm, 0.0f, (float)(t->channels - 1));
-    int4 lower = min(convert_int4(position), (int4)(t->channels - 2));
-    float4 frac = position - convert_float4(lower);
-    float4 below = (float4)(texel[lower.x], texel[lower.y], texel[lower.z], texel[lower.w]);
-    float4 above = (float4)(texel[lower.x + 1], texel[lower.y + 1], texel[lower.z + 1], texel[lower.w + 1]);
+    int4 lower = texel + min(convert_int4(position), (int4)(t->channels - 2));
+    float4 frac = position - convert_float4(lower - texel);
+    float4 below = (float4)(texel_value(t, b, lower.x), texel_value(t, b, lower.y), texel_value(t, b, lower.z),
+                            texel_value(t, b, lower.w));
+    float4 above = (float4)(texel_value(t, b, lower.x + 1), texel_value(t, b, lower.y + 1),
+                            texel_value(t, b, lower.z + 1), texel_value(t, b, lower.w + 1));
     return mad(frac, above - below, below);
 }
 
-/* Float offset and size of MIP level `level` (level l is max(1, width >> l) by max(1, height >> l)). */
+/* Offset (in stored values, from the texture's data_offset) and size of MIP level `level` (level l is
+ * max(1, width >> l) by max(1, height >> l)). */
 inline int texture_level(__global const Texture *t, int level, int *width, int *height)
 {
-    int offset = t->data_offset, lw = t->width, lh = t->height;
+    int offset = 0, lw = t->width, lh = t->height;
     for (int l = 0; l < level; ++l) {
         offset += lw * lh * t->channels;
         lw = max(1, lw >> 1);
@@ -101,12 +139,13 @@ inline float4 texture_bilinear(__global const Texture *t, const TextureBuffers *
     if (t->texel_format == TEXEL_SIGMOID) {
         /* Most lookups of an image's flat regions find four equal texels: one spectrum then stands for the blend,
          * which is exactly what blending four equal values gives (mix(a, a, f) = a). */
-        __global const float *level_texels = b->texels + offset;
-        float3 c00 = vload3(ya * width + xa, level_texels), c10 = vload3(ya * width + xb, level_texels);
-        float3 c01 = vload3(yb * width + xa, level_texels), c11 = vload3(yb * width + xb, level_texels);
-        if (all(c00 == c10) && all(c00 == c01) && all(c00 == c11)) return sigmoid_polynomial(c00, w->lambda);
-        float4 top_sigmoid = mix(sigmoid_polynomial(c00, w->lambda), sigmoid_polynomial(c10, w->lambda), f.x);
-        float4 bottom_sigmoid = mix(sigmoid_polynomial(c01, w->lambda), sigmoid_polynomial(c11, w->lambda), f.x);
+        float3 c00 = texel_value3(t, b, offset + 3 * (ya * width + xa));
+        float3 c10 = texel_value3(t, b, offset + 3 * (ya * width + xb));
+        float3 c01 = texel_value3(t, b, offset + 3 * (yb * width + xa));
+        float3 c11 = texel_value3(t, b, offset + 3 * (yb * width + xb));
+        if (all(c00 == c10) && all(c00 == c01) && all(c00 == c11)) return texel_sigmoid(t, c00, w->lambda);
+        float4 top_sigmoid = mix(texel_sigmoid(t, c00, w->lambda), texel_sigmoid(t, c10, w->lambda), f.x);
+        float4 bottom_sigmoid = mix(texel_sigmoid(t, c01, w->lambda), texel_sigmoid(t, c11, w->lambda), f.x);
         return mix(top_sigmoid, bottom_sigmoid, f.y);
     }
     float4 top = mix(texel_spectrum(t, b, offset, width, xa, ya, w),
@@ -148,16 +187,32 @@ inline int checkerboard_side(float2 st)
     return (k - 2.0f * floor(0.5f * k)) != 0.0f;
 }
 
-/* Texture `index` at uv, at the path's four wavelengths. */
+/* Side `side` of a composite texture: its image texture, or its spectrum. */
+inline float4 texture_side(const TextureBuffers *b, __global const Texture *t, int side, float2 uv, float footprint,
+                           const SampledWavelengths *w)
+{
+    int inner = t->side_texture[side];
+    if (inner == NO_TEXTURE) return spectrum_at(b->spectra, t->side_spectrum[side], w);
+    return image_texture_spectrum(&b->textures[inner], b, uv, footprint, w);
+}
+
+/* Texture `index` at uv, at the path's four wavelengths. Composites (checkerboard, scale, mix) read their operands,
+ * which are never composites, so nothing recurses. */
 inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, float footprint,
                                const SampledWavelengths *w)
 {
     __global const Texture *t = &b->textures[index];
     if (t->type == TEXTURE_CHECKERBOARD) {
-        int side = checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw);
-        int inner = t->side_texture[side];
-        if (inner == NO_TEXTURE) return spectrum_at(b->spectra, t->side_spectrum[side], w);
-        t = &b->textures[inner];
+        return texture_side(b, t, checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, footprint, w);
+    }
+    if (t->type == TEXTURE_SCALE || t->type == TEXTURE_MIX) {
+        /* The factor is a number, the same at every wavelength: a scalar texture's first lane. */
+        float factor = t->factor_texture == NO_TEXTURE
+                     ? t->factor
+                     : image_texture_spectrum(&b->textures[t->factor_texture], b, uv, footprint, w).x;
+        float4 first = texture_side(b, t, 0, uv, footprint, w);
+        if (t->type == TEXTURE_SCALE) return factor * first;
+        return mix(first, texture_side(b, t, 1, uv, footprint, w), factor);
     }
     return image_texture_spectrum(t, b, uv, footprint, w);
 }

@@ -46,6 +46,19 @@ typedef struct {
                        when it shades with its geometric normal (flat) */
 } TriangleInfo;
 
+/* An analytic shape (kernels/shapes.cl): a sphere, disk or cylinder in its object space (Mitsuba 3's: the unit sphere
+ * at the origin; the unit disk in the plane z = 0 facing +z; the cylinder of radius 1 along z from 0 to 1, open),
+ * placed by an affine map. Its hits are slots triangle_count + index of the TriangleInfo array. */
+typedef struct {
+    float4 to_world[3];   /* rows of the object-to-world map: world coordinate i = dot(to_world[i], (p, 1)) */
+    float4 to_object[3];  /* rows of its inverse */
+    float4 sphere;        /* SHAPE_SPHERE: world centre (xyz) and radius (w), scene units (to_world is a similarity) */
+    int type;             /* SHAPE_* */
+    float abs_det;        /* |det| of to_world's linear part: world area = object area · abs_det · |M⁻ᵀ n_object| */
+    float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder) */
+    int flip_normals;     /* 1: the front (normal, emitting side) faces the other way: inward, the disk's −z */
+} AnalyticShape;
+
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already
  * multiplied by the scene's `scale`, in 1/scene unit. */
 typedef struct {
@@ -61,7 +74,8 @@ typedef struct {
     float4 ior_coefficients_c;  /* IOR_SELLMEIER: C1, C2, C3 (µm²) in x, y, z */
     int type;                   /* MATERIAL_* */
     int reflectance_offset;     /* diffuse, plastic: base albedo; mirror, retroreflector: reflectance;
-                                   conductor, dielectric: optional specular tint (MATERIAL_NO_SPECTRUM: none) */
+                                   conductor, dielectric: optional specular tint; thindielectric: optional tint of
+                                   its reflection (MATERIAL_NO_SPECTRUM: none) */
     int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction */
     int k_offset;               /* conductor: imaginary part k(λ) (absorption) */
     float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe). With roughness_texture: the texture's
@@ -72,52 +86,66 @@ typedef struct {
                                    the conductor's and dielectric's specular tint), or NO_TEXTURE */
     int roughness_texture;      /* conductor, plastic, dielectric, retroreflector: a scalar texture of α per point
                                    that replaces alpha there, or NO_TEXTURE */
+    int distribution;           /* conductor, plastic, dielectric: MICROFACET_* of the rough lobe */
+    int nonlinear;              /* plastic: 1 = the base's internal scattering depends on its albedo (Mitsuba's
+                                   `nonlinear`), 0 = it does not */
+    int transmittance_offset;   /* thindielectric: optional tint of its transmission (MATERIAL_NO_SPECTRUM: none) */
+    int coat_table_offset;      /* plastic with a rough coat's own transmission: GRID_SAMPLES values of t(cos θ) at
+                                   cos θ = i / (GRID_SAMPLES − 1) in the spectrum table (MATERIAL_NO_SPECTRUM: the
+                                   smooth interface's 1 − F instead) */
+    float coat_internal_reflectance; /* with coat_table_offset: the coat's diffuse reflectance from inside, R_int */
     /* Surface detail, every type (kernels/surface_detail.cl, scene.cl; host: spectrace.materials.surface). */
     int normal_map;             /* a TEXEL_VECTOR texture of tangent-space normals, or NO_TEXTURE */
     int bump_map;               /* a scalar texture of heights, or NO_TEXTURE */
     float bump_scale;           /* scene units per bump map value */
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
-    int detail_pad[2];
+    int detail_pad[1];
 } Material;
 
-/* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are floats in the
- * texel buffer, `channels` per texel, rows top to bottom; its MIP levels follow level 0 there, level l being
- * max(1, width >> l) by max(1, height >> l) texels. */
+/* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its
+ * `storage` in the texel buffer from data_offset on, `channels` per texel, rows top to bottom; its MIP levels follow
+ * level 0 there, level l being max(1, width >> l) by max(1, height >> l) texels. */
 typedef struct {
     float4 uv_transform;  /* the lookup point st = uv · (x, y) + (z, w): uv_scale, then uv_offset (image widths) */
     int type;             /* TEXTURE_* */
-    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm), SCALAR (one value), BANDS (spectral),
+    int texel_format;     /* TEXEL_*: SIGMOID (c0, c1, c2 with λ in nm; dimensionless when half), SCALAR (one value), BANDS (spectral),
                              VECTOR (three values as they are), RGB (linear r, g, b weighting the basis
                              spectra: an emission) */
-    int channels;         /* floats per texel: 3, 1, or the band count */
+    int channels;         /* values per texel: 3, 1, or the band count */
     int width;            /* level 0, texels */
     int height;
     int levels;           /* MIP levels (1: level 0 only) */
-    int data_offset;      /* first float of level 0 in the texel buffer */
+    int data_offset;      /* where level 0 starts in the texel buffer, in floats (4 bytes) */
     int wrap;             /* WRAP_* */
     int filter;           /* FILTER_* */
     float band_first_nm;  /* TEXEL_BANDS: centre wavelength of band 0, nm */
     float band_step_nm;   /* TEXEL_BANDS: spacing of the band centres, nm */
-    int side_spectrum[2]; /* TEXTURE_CHECKERBOARD: each side's spectrum offset, used when side_texture is NO_TEXTURE */
-    int side_texture[2];  /* TEXTURE_CHECKERBOARD: each side's texture (never a checkerboard), or NO_TEXTURE */
+    int side_spectrum[2]; /* TEXTURE_CHECKERBOARD, SCALE, MIX: each side's (operand's) spectrum offset, used when
+                             side_texture is NO_TEXTURE */
+    int side_texture[2];  /* each side's image texture (never a composite), or NO_TEXTURE */
     int basis_offset[3];  /* TEXEL_RGB: the spectra R, G, B a texel's (r, g, b) weights: r·R(λ) + g·G(λ) + b·B(λ) */
-    int pad0;
-    int pad1;
+    int storage;          /* STORAGE_*: how each value is stored (float, half, 8- or 16-bit unsigned normalised) */
+    float factor;         /* TEXTURE_SCALE: the factor; TEXTURE_MIX: the amount (when factor_texture is NO_TEXTURE) */
+    int factor_texture;   /* TEXTURE_SCALE, TEXTURE_MIX: a scalar image texture giving the factor, or NO_TEXTURE */
+    int pad[3];
 } Texture;
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
  * type (listed with LIGHT_TYPES in spectrace.engine.device_types). */
 typedef struct {
-    float4 position;       /* point, spot */
-    float4 direction;      /* spot: unit axis; distant: unit direction the light travels */
+    float4 position;       /* point, spot; LIGHT_SPHERE: centre (xyz) and radius (w); LIGHT_ENVIRONMENT_MAP: row 0 of
+                              the world-to-map rotation */
+    float4 direction;      /* spot: unit axis; distant: unit direction the light travels; LIGHT_ENVIRONMENT_MAP:
+                              row 1 of the world-to-map rotation */
     int type;              /* LIGHT_* */
-    int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays */
+    int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays; LIGHT_SPHERE, LIGHT_SHAPE: index of its
+                              AnalyticShape */
     int spectrum_offset;
     float scale;
     float pmf;             /* probability that next-event estimation picks this light */
-    float area;            /* LIGHT_TRIANGLE: m² */
-    int two_sided;         /* LIGHT_TRIANGLE */
+    float area;            /* LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_SHAPE: m² */
+    int two_sided;         /* LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_SHAPE */
     float cos_falloff_start;  /* LIGHT_SPOT: full intensity inside this cone */
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
@@ -147,7 +175,11 @@ typedef struct {
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
+    int hide_environment;    /* 1: camera rays that leave the scene see black (Mitsuba's hide_emitters) */
+    int shape_count;         /* analytic shapes (AnalyticShape rows) */
+    int pad0;
     int pad1;
+    int pad2;
 } RenderParams;
 
 typedef struct {

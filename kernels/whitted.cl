@@ -18,7 +18,8 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
         s->throughput *= beer_lambert(medium_sigma_t(&scene->media[s->medium], scene->spectra, w), hit.t);
     }
     if (hit.triangle < 0) {
-        if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0) {
+        int hidden = params->hide_environment && s->segments == 1;  /* the camera's own rays see black */
+        if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0 && !hidden) {
             __global const Light *env = &scene->lights[params->environment_light];
             *radiance += s->throughput * environment_radiance(env, scene->spectra, scene->texels, w,
                                                               s->ray.direction);

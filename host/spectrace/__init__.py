@@ -29,6 +29,8 @@ _LAZY = {
             "checkerboard",
             "constant_environment",
             "spectral_texture",
+            "scale_texture",
+            "mix_texture",
             "distant_light",
             "medium",
             "mesh_from_trimesh",

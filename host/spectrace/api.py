@@ -20,6 +20,7 @@ from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
+from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
 from spectrace.geometry.mesh import TriangleMesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
@@ -68,6 +69,41 @@ def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float
         for side, name in ((color0, "color0"), (color1, "color1"))
     ]
     return module.make(sides[0], sides[1], uv_scale=uv_scale, uv_offset=uv_offset)
+
+
+def scale_texture(tex=1.0, scale=1.0):
+    """tex (a reflectance: anything `spectrum` takes, an RGB triple, or an image texture) times scale (a number >= 0
+    or a grey image texture), as pbrt-v4's `scale` texture; as a reflectance the product must stay within [0, 1]."""
+    from spectrace.textures import scale as module
+
+    return module.make(_operand(tex, "tex"), _factor(scale, "scale", None))
+
+
+def mix_texture(tex1=0.0, tex2=1.0, amount=0.5):
+    """(1 − amount) · tex1 + amount · tex2, as pbrt-v4's `mix` texture: tex1, tex2 reflectances (anything `spectrum`
+    takes, an RGB triple, or an image texture), amount a number in [0, 1] or a grey image texture."""
+    from spectrace.textures import mix as module
+
+    return module.make(_operand(tex1, "tex1"), _operand(tex2, "tex2"), _factor(amount, "amount", 1.0))
+
+
+def _operand(value, name: str):
+    from spectrace.textures import IMAGE_TEXTURES
+
+    return value if isinstance(value, IMAGE_TEXTURES) else spectrum_input.reflectance(value, name)
+
+
+def _factor(value, name: str, upper: float | None):
+    """A composite's number: a float within [0, upper], or a one-channel image texture."""
+    from spectrace.textures import IMAGE_TEXTURES, check_texture_values
+
+    if isinstance(value, IMAGE_TEXTURES):
+        check_texture_values(value, "float", name, upper)
+        return value
+    number = float(value)
+    if not (number >= 0.0 and (upper is None or number <= upper)):
+        raise SpectraceError(f"{name} must lie in [0, {upper if upper is not None else 'inf'}], got {value}", name)
+    return number
 
 
 # ---------------------------------------------------------------- geometry
@@ -156,22 +192,32 @@ def _is_zero(source: SpectrumLike) -> bool:
 
 
 def shape(
-    geometry: TriangleMesh | Literal["rectangle", "cube", "sphere", "prism", "teapot"] | trimesh.Trimesh,
+    geometry: TriangleMesh
+    | Literal["rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot"]
+    | trimesh.Trimesh,
     material=None,
     emitter: AreaEmitter | None = None,
     transform: Iterable[Mapping[str, Any]] = (),
     name: str = "",
     interior: Medium | None = None,
     face_normals: bool | None = None,
+    tessellated: bool = False,
+    center: Sequence[float] | None = None,
+    radius: float | None = None,
+    flip_normals: bool = False,
 ) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
     "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the
-    Utah teapot standing on the origin, y up, body radius 1), moved by
+    Utah teapot standing on the origin, y up, body radius 1; "disk" of radius 1 at z = 0 facing +z, "cylinder" of
+    radius 1 along z from 0 to 1, open), moved by
     `transform` steps (see `transformed`). Built-ins face outward, as a dielectric needs. `interior` (see `medium`)
     fills a closed shape, whose faces must wind outward; without a material its boundary is index-matched (rays
     cross it unchanged). `face_normals` as the scene key: True shades with the face normals (facets), False
     smoothly (normals computed for a mesh without its own), None keeps the mesh's own normals (the sphere's are
-    radial, the teapot's its surface's; the other built-ins have none)."""
+    radial, the teapot's its surface's; the other built-ins have none). "sphere", "disk" and "cylinder" are exact
+    (analytic) surfaces, unless `tessellated` (or face_normals=True, which asks for facets) makes them triangles; an
+    analytic sphere's transform must scale uniformly. A sphere's `radius` and `center` place it before `transform`;
+    `flip_normals` turns their front (normal, emitting side) inward (the disk's to -z)."""
     if material is None and interior is None:
         raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
     if interior is not None and not isinstance(interior, Medium):
@@ -180,6 +226,36 @@ def shape(
         )
     if face_normals is not None and not isinstance(face_normals, bool):
         raise SpectraceError(f"face_normals must be True, False or None, got {face_normals!r}", where="face_normals")
+    if isinstance(geometry, str) and geometry in ANALYTIC_SHAPES:
+        if interior is not None and geometry != "sphere":
+            raise SpectraceError(f"a {geometry} encloses no volume: an interior needs a closed shape", where="interior")
+        steps = [dict(step) for step in transform]
+        if (center is not None or radius is not None) and geometry != "sphere":
+            raise SpectraceError(f"center and radius are a sphere's, not a {geometry}'s (use transform)")
+        if center is not None:
+            steps.insert(0, {"translate": list(_vector(center, "center"))})
+        if radius is not None:
+            if not (isinstance(radius, Real) and math.isfinite(radius) and radius > 0):
+                raise SpectraceError(f"radius must be a finite number > 0, got {radius!r}", where="radius")
+            steps.insert(0, {"scale": float(radius)})
+        matrix = transform_matrix(steps, where="transform") if steps else np.eye(4)
+        if not (tessellated or face_normals):
+            if geometry == "sphere" and (problem := similarity_problem(matrix)):
+                raise SpectraceError(f"{problem}; tessellated=True takes any", where="transform")
+            surface = AnalyticSurface(geometry, matrix, flip_normals=bool(flip_normals))
+            return Shape(
+                mesh=surface.tessellation(),
+                material=material,
+                emitter=emitter,
+                name=name or geometry,
+                interior=interior,
+                analytic=surface,
+            )
+        mesh = apply_transform(object_tessellation(geometry), matrix)
+        if flip_normals:
+            mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=mesh.normals)
+        mesh = shading_normals(mesh, face_normals, computed=False)
+        return Shape(mesh=mesh, material=material, emitter=emitter, name=name or geometry, interior=interior)
     if isinstance(geometry, str):
         if geometry not in primitives.BUILTIN_SHAPES:
             raise SpectraceError(f"unknown built-in shape '{geometry}' (use {', '.join(primitives.BUILTIN_SHAPES)})")

@@ -136,6 +136,45 @@ def inverse_square_and_cosine(device: Device) -> list[Check]:
     return checks
 
 
+def sphere_light(device: Device) -> list[Check]:
+    """An analytic Lambertian sphere light of flux Φ (radius 0.1 m) gives E = Φ cos θ / (4π r²) outside it while it
+    stands wholly above the meter's horizon, as a point light of the same flux does; sampled by the cone it subtends
+    (kernels/shapes.cl), so a small sphere far away is sampled as cheaply as near."""
+    from spectrace.geometry.analytic import AnalyticSurface
+
+    power, radius = 10.0, 0.1
+    to_world = transform_matrix([{"scale": radius}], where="validation")
+    surface = AnalyticSurface("sphere", to_world)
+    radiance = _equal_energy_flux(power) * (1.0 / (np.pi * surface.area()))  # Φ = π L A
+    lamp = Shape(
+        mesh=surface.tessellation(),
+        material=DiffuseMaterial(Spectrum.zeros()),
+        emitter=AreaEmitter(radiance),
+        analytic=surface,
+    )
+    checks = []
+    for r in (0.5, 1.0, 2.0):
+        for theta in (0.0, 60.0):
+            reading = measure(
+                _scene(shapes=[lamp]),
+                IrradianceMeter((0.0, 0.0, r), _tilted_normal(theta)),
+                streams=8,
+                samples_per_item=16,
+                device=device,
+            )
+            checks.append(
+                Check(
+                    "sphere light",
+                    f"E = Φ cos θ / (4π r²), sphere of radius {radius} m, r = {r} m, θ = {theta:g}°",
+                    power * np.cos(np.radians(theta)) / (4.0 * np.pi * r * r),
+                    reading.total,
+                    reading.total_standard_error,
+                    "W/m²",
+                )
+            )
+    return checks
+
+
 def spot_light_cone(device: Device) -> list[Check]:
     intensity = 2.0  # W/(sr nm)
     spot = SpotLight(
@@ -715,6 +754,7 @@ def prism_dispersion(device: Device) -> list[Check]:
 
 CASES: dict[str, Callable[[Device], list[Check]]] = {
     "inverse-square": inverse_square_and_cosine,
+    "sphere-light": sphere_light,
     "spot": spot_light_cone,
     "distant": distant_light_cosine,
     "environment": constant_environment,

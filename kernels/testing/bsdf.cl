@@ -54,3 +54,12 @@ __kernel void bsdf_has_non_delta_lobe(__global const Material *material, __globa
 {
     result[0] = material_has_non_delta_lobe(material);
 }
+
+/* D(v) and G1(v) of the microfacet distribution (MICROFACET_*) of roughness alpha at local directions v. */
+__kernel void microfacet_terms(__global const float4 *v, float alpha, int distribution, __global float *d,
+                               __global float *g1)
+{
+    int i = get_global_id(0);
+    d[i] = microfacet_d(v[i].xyz, alpha, distribution);
+    g1[i] = microfacet_g1(v[i].xyz, alpha, distribution);
+}

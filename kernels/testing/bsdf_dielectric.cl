@@ -36,21 +36,23 @@ __kernel void smooth_sample(__global const float4 *wo, __global const float *uc,
     pdf[i] = valid ? s.pdf : 0.0f;
 }
 
+/* distribution: MICROFACET_*. */
 __kernel void rough_eval_pdf(__global const float4 *wo, __global const float4 *wi, float eta, float alpha,
-                             __global float *f_cos, __global float *pdf)
+                             int distribution, __global float *f_cos, __global float *pdf)
 {
     int i = get_global_id(0);
-    f_cos[i] = rough_dielectric_eval(wo[i].xyz, wi[i].xyz, eta, alpha);
-    pdf[i] = rough_dielectric_pdf(wo[i].xyz, wi[i].xyz, eta, alpha);
+    f_cos[i] = rough_dielectric_eval(wo[i].xyz, wi[i].xyz, eta, alpha, distribution);
+    pdf[i] = rough_dielectric_pdf(wo[i].xyz, wi[i].xyz, eta, alpha, distribution);
 }
 
 /* u = (uc, u1, u2, unused). */
 __kernel void rough_sample(__global const float4 *wo, __global const float4 *u, float eta, float alpha,
-                           __global float4 *wi, __global float *weight, __global float *pdf, __global int *ok)
+                           int distribution, __global float4 *wi, __global float *weight, __global float *pdf,
+                           __global int *ok)
 {
     int i = get_global_id(0);
     DielectricSample s;
-    int valid = rough_dielectric_sample(wo[i].xyz, eta, alpha, u[i].x, u[i].yz, &s);
+    int valid = rough_dielectric_sample(wo[i].xyz, eta, alpha, distribution, u[i].x, u[i].yz, &s);
     ok[i] = valid ? 1 + s.is_delta : 0;
     wi[i] = valid ? (float4)(s.wi, 0.0f) : (float4)(0.0f);
     weight[i] = valid ? s.weight : 0.0f;

@@ -175,7 +175,7 @@ def test_device_buffers_hold_normals_only_for_smooth_triangles():
     buffers = build_scene_buffers(flat)
     assert np.all(buffers.triangle_info["normals"] == -1) and buffers.triangle_normals.shape == (3, 4)
 
-    ball = spectrace.shape("sphere", grey, transform=[{"translate": [3.0, 0.0, 0.0]}])
+    ball = spectrace.shape("sphere", grey, transform=[{"translate": [3.0, 0.0, 0.0]}], tessellated=True)
     scene = spectrace.Scene(camera=camera, width=4, height=4, shapes=[spectrace.shape("cube", grey), ball])
     buffers = build_scene_buffers(scene)
     info = buffers.triangle_info[: buffers.triangle_count]

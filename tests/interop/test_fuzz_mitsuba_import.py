@@ -134,6 +134,8 @@ TYPES = st.sampled_from(
         "rectangle",
         "cube",
         "sphere",
+        "disk",
+        "cylinder",
         "serialized",
         "diffuse",
         "twosided",
@@ -205,6 +207,9 @@ PROPERTY_NAMES = st.sampled_from(
         "eta",
         "normalmap",
         "opacity",
+        "radius",
+        "p0",
+        "flip_normals",
     ]
 )
 # Most files stay well-formed XML, so that most mutations reach the importer rather than the XML parser.

@@ -117,3 +117,27 @@ def test_peer_sampler_is_exported_and_checked(tmp_path, mitsuba_scalar_spectral)
     with pytest.raises(SpectraceError, match="unknown Mitsuba sampler 'sobol'") as error:
         scene_to_mitsuba_dict(scene, tmp_path, sampler="sobol")
     assert error.value.where == "--peer-sampler"
+
+
+@pytest.mark.peer
+def test_analytic_shapes_export_as_mitsubas_own(tmp_path, mitsuba_scalar_spectral):
+    """Analytic shapes become Mitsuba's sphere, disk and cylinder with the same map and facing: the same area and
+    bounds, and Mitsuba's normal where a ray meets them is spectrace's front (flip_normals too)."""
+    import spectrace
+
+    mi = mitsuba_scalar_spectral
+    grey = DiffuseMaterial(Spectrum.constant(0.5))
+    shapes = [
+        spectrace.shape("sphere", grey, center=[0.5, 0, 0], radius=0.4, flip_normals=True, name="ball"),
+        spectrace.shape("disk", grey, transform=[{"scale": [1, 0.5, 1]}, {"translate": [0, 0, -1]}], name="floor"),
+        spectrace.shape("cylinder", grey, transform=[{"scale": [0.3, 0.3, 2]}, {"translate": [-1, 0, -1]}]),
+    ]
+    scene = Scene(camera=Camera(origin=(0, -4, 0), target=(0, 0, 0)), width=8, height=8, shapes=shapes)
+    exported = mi.load_dict(scene_to_mitsuba_dict(scene, tmp_path, spp=1))
+    for shape, theirs in zip(shapes, exported.shapes()):
+        assert theirs.surface_area() == pytest.approx(shape.analytic.area(), rel=1e-5)
+        lo, hi = shape.analytic.bounds()
+        np.testing.assert_allclose(np.array(theirs.bbox().min), lo, atol=1e-4)
+        np.testing.assert_allclose(np.array(theirs.bbox().max), hi, atol=1e-4)
+    ball = exported.shapes()[0].ray_intersect(mi.Ray3f([0.5, -3.0, 0.0], [0.0, 1.0, 0.0]))
+    np.testing.assert_allclose(np.array(ball.n), [0.0, 1.0, 0.0], atol=1e-5)  # flipped: inward, toward +y there

@@ -73,18 +73,18 @@ def test_unsupported_plugins_are_all_named(tmp_path):
     path = _write(
         tmp_path,
         """
-        <bsdf type="thindielectric" id="metal"/>
-        <shape type="serialized"><string name="filename" value="x.serialized"/></shape>
+        <bsdf type="hair" id="metal"/>
+        <shape type="bsplinecurve"><string name="filename" value="x.txt"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
-        <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>""",
+        <emitter type="spot"><float name="cutoff_angle" value="30"/></emitter>""",
     )
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
     message = str(error.value)
     for named in (
-        "shape 'serialized' (line 6)",
-        "bsdf 'thindielectric' (not yet in spectrace) (line 5)",
-        "emitter 'envmap' (line 8)",
+        "shape 'bsplinecurve' (line 6)",
+        "bsdf 'hair' (line 5)",
+        "emitter 'spot' (line 8)",
     ):
         assert named in message
     assert "\n" not in message
@@ -114,21 +114,50 @@ def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
     assert materials["gold"] == {"type": "conductor", "metal": "Au", "roughness": 0.2}
     assert materials["mirror"] == {"type": "mirror", "reflectance": {"value": 0.8}}  # Mitsuba's material "none"
     assert materials["measured"]["eta"] == {"values": [[400.0, 1.2], [700.0, 0.2]]}
-    # Mitsuba's roughplastic defaults: alpha 0.1, Beckmann (imported as GGX, with a note); ior = bk7 / air.
+    # Mitsuba's roughplastic defaults: alpha 0.1, Beckmann; ior = bk7 / air.
     assert materials["red"] == {
         "type": "plastic",
         "reflectance": {"rgb": [0.5, 0.1, 0.1]},
         "ior": pytest.approx(1.5046 / 1.000277),
         "roughness": 0.1,
+        "distribution": "beckmann",
+        "coat_transmission": "rough",
     }
     assert materials["white"] == {"type": "plastic", "reflectance": {"value": 0.5}, "ior": 1.6}
-    assert any("beckmann" in note for note in notes)
+    assert not any("GGX" in note for note in notes)
     scene = load_mitsuba_scene(path)
     assert {type(shape.material).__name__ for shape in scene.shapes} == {
         "ConductorMaterial",
         "MirrorMaterial",
         "PlasticMaterial",
     }
+
+
+def test_distribution_and_nonlinear_are_mapped(tmp_path):
+    """Mitsuba's distribution (default beckmann) on every rough BSDF; plastic's nonlinear; an unknown distribution
+    is one error naming the element."""
+    body = """
+        <shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Cu"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughplastic"><string name="distribution" value="ggx"/>
+            <boolean name="nonlinear" value="true"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="plastic"><boolean name="nonlinear" value="false"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"><float name="alpha" value="0.3"/></bsdf></shape>"""
+    materials = list(mitsuba_scene_data(_write(tmp_path, body))[0]["materials"].values())
+    assert materials[0]["distribution"] == "beckmann" and materials[0]["roughness"] == 0.1
+    assert "distribution" not in materials[1] and materials[1]["nonlinear"] is True  # ggx: spectrace's default
+    assert "nonlinear" not in materials[2]
+    assert materials[3]["distribution"] == "beckmann"
+    scene = load_mitsuba_scene(_write(tmp_path, body))
+    kinds = [(shape.material.distribution, getattr(shape.material, "nonlinear", None)) for shape in scene.shapes]
+    assert kinds == [("beckmann", None), ("ggx", True), ("ggx", False), ("beckmann", None)]
+    bad = _write(
+        tmp_path,
+        '<shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/>'
+        '<string name="distribution" value="phong"/></bsdf></shape>',
+    )
+    with pytest.raises(SpectraceError, match="unknown distribution 'phong'") as error:
+        mitsuba_scene_data(bad)
+    assert "\n" not in str(error.value) and "line" in str(error.value)
 
 
 def test_unrepresentable_conductors_are_named(tmp_path):
@@ -239,7 +268,8 @@ def test_spectra_and_lights(tmp_path):
 
 def test_dielectrics(tmp_path):
     """Mitsuba's dielectric index is int_ior / ext_ior, named (its table, Hecht's values) or numeric; bk7 in air
-    by default; roughdielectric's alpha (default 0.1) becomes the GGX roughness."""
+    by default; roughdielectric's alpha (default 0.1) becomes the roughness of its distribution (default
+    beckmann)."""
     body = """
         <shape type="sphere"><bsdf type="dielectric"/></shape>
         <shape type="sphere"><bsdf type="dielectric"><string name="int_ior" value="water"/>
@@ -259,8 +289,7 @@ def test_dielectrics(tmp_path):
         "roughness": 0.25,
         "specular_tint": {"rgb": [0.9, 0.9, 0.9]},
     }
-    assert materials[3]["roughness"] == 0.1
-    assert any("beckmann distribution; imported as GGX" in note for note in notes)
+    assert materials[3]["roughness"] == 0.1 and materials[3]["distribution"] == "beckmann"  # Mitsuba's defaults
     scene = load_mitsuba_scene(_write(tmp_path, body))
     assert scene.shapes[1].material.ior.at(500.0) == pytest.approx(1.333)
 

@@ -922,8 +922,8 @@ def test_exported_textures_import_back_the_same(folder, mitsuba_scalar_spectral)
 
 @pytest.mark.peer
 def test_what_mitsuba_textures_cannot_match_is_refused(tmp_path, mitsuba_scalar_spectral):
-    """A spectral texture (Mitsuba's bitmap holds RGB) and trilinear filtering (Mitsuba's bitmap has no MIP
-    levels) are refused in one line, naming the texture."""
+    """A spectral texture (Mitsuba's bitmap holds RGB), trilinear filtering (Mitsuba's bitmap has no MIP levels) and
+    scale and mix textures (Mitsuba 3 has neither) are refused in one line, naming the texture."""
     import spectrace
     from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
     from spectrace.scene.model import Camera, Scene
@@ -933,6 +933,8 @@ def test_what_mitsuba_textures_cannot_match_is_refused(tmp_path, mitsuba_scalar_
     for texture, says in [
         (spectral, "a spectral texture ('array'): Mitsuba 3 has no spectral image texture"),
         (trilinear, "texture 'array': filter 'trilinear' (Mitsuba 3's bitmap has no MIP mapping)"),
+        (spectrace.scale_texture(0.5, 0.5), "a scale texture ('scale'): Mitsuba 3 has no scale texture"),
+        (spectrace.mix_texture(0.2, 0.4), "a mix texture ('mix'): Mitsuba 3 has no mix texture"),
     ]:
         scene = Scene(
             camera=Camera(origin=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0)),

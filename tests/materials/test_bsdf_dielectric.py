@@ -17,6 +17,8 @@ from spectrace.engine.device_types import (
     IOR_SELLMEIER,
     MATERIAL_DTYPE,
     MATERIAL_NO_SPECTRUM,
+    MICROFACET_BECKMANN,
+    MICROFACET_GGX,
 )
 from spectrace.materials import MATERIAL_CODES
 from spectrace.spectral.glasses import glass
@@ -115,7 +117,11 @@ def _fresnel_angles(cos_i, eta):
     return result
 
 
-def _rough_sample(kernel_runner, wo, eta, alpha, u):
+# The microfacet distributions, by the name the tests are parametrised with.
+DISTRIBUTIONS = {"ggx": MICROFACET_GGX, "beckmann": MICROFACET_BECKMANN}
+
+
+def _rough_sample(kernel_runner, wo, eta, alpha, u, distribution="ggx"):
     n = len(wo)
     wi, weight, pdf, ok = _run(
         kernel_runner,
@@ -123,12 +129,12 @@ def _rough_sample(kernel_runner, wo, eta, alpha, u):
         n,
         [wo, u],
         [(np.float32, (n, 4)), (np.float32, n), (np.float32, n), (np.int32, n)],
-        scalars=(np.float32(eta), np.float32(alpha)),
+        scalars=(np.float32(eta), np.float32(alpha), np.int32(DISTRIBUTIONS[distribution])),
     )
     return wi, weight.astype(np.float64), pdf.astype(np.float64), ok
 
 
-def _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha):
+def _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha, distribution="ggx"):
     n = len(wo)
     f_cos, pdf = _run(
         kernel_runner,
@@ -136,7 +142,7 @@ def _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha):
         n,
         [wo, wi],
         [(np.float32, n), (np.float32, n)],
-        scalars=(np.float32(eta), np.float32(alpha)),
+        scalars=(np.float32(eta), np.float32(alpha), np.int32(DISTRIBUTIONS[distribution])),
     )
     return f_cos.astype(np.float64), pdf.astype(np.float64)
 
@@ -285,8 +291,9 @@ def _flux_weights(wo, wi, weight, eta):
     return weight * (_index_of_side(wi[:, 2], eta) / _index_of_side(wo[:, 2], eta)) ** 2
 
 
+@pytest.mark.parametrize("distribution", DISTRIBUTIONS)
 @pytest.mark.parametrize("eta", ROUGH_ETAS)
-def test_rough_dielectric_conserves_energy(kernel_runner, eta):
+def test_rough_dielectric_conserves_energy(kernel_runner, eta, distribution):
     """∫ (f_r + f_t^flux) |cos θi| dωi ≤ 1 for light from every direction on either side, i.e. the sampled flux
     weights average at most 1 (within 4 standard errors)."""
     rng = np.random.default_rng(17)
@@ -297,10 +304,10 @@ def test_rough_dielectric_conserves_energy(kernel_runner, eta):
                 theta = np.radians(theta_deg) if side > 0 else np.pi - np.radians(theta_deg)
                 wo = np.repeat(_directions(np.array([theta]), 1.1), n, axis=0)
                 u = rng.random((n, 4)).astype(np.float32)
-                wi, weight, _, ok = _rough_sample(kernel_runner, wo, eta, alpha, u)
+                wi, weight, _, ok = _rough_sample(kernel_runner, wo, eta, alpha, u, distribution)
                 assert np.all(np.isfinite(weight)) and np.all(weight >= 0)
                 flux = _flux_weights(wo, wi, weight, eta)
-                where = f"eta={eta} alpha={alpha} theta={theta_deg} side={side}"
+                where = f"{distribution} eta={eta} alpha={alpha} theta={theta_deg} side={side}"
                 mean, _ = assert_furnace(flux, 1.0, slack=1e-6, what=where, at_most=True)
                 if alpha <= 0.05 and theta_deg <= 60:
                     # A nearly smooth interface loses almost nothing to masking...
@@ -314,48 +321,60 @@ def test_rough_dielectric_conserves_energy(kernel_runner, eta):
 
 
 @pytest.mark.parametrize("eta", ROUGH_ETAS)
-@pytest.mark.parametrize("alpha", [0.1, 0.5])
-def test_rough_dielectric_generalised_reciprocity(kernel_runner, eta, alpha):
-    """f(ωo, ωi) / n(ωo)² = f(ωi, ωo) / n(ωi)², for pairs on one side (plain reciprocity) and on both sides."""
+@pytest.mark.parametrize("alpha, distribution", [(0.1, "ggx"), (0.5, "ggx"), (0.4, "beckmann"), (0.8, "beckmann")])
+def test_rough_dielectric_generalised_reciprocity(kernel_runner, eta, alpha, distribution):
+    """f(ωo, ωi) / n(ωo)² = f(ωi, ωo) / n(ωi)², for pairs on one side (plain reciprocity) and on both sides (random
+    pairs: Beckmann's lobes, with no long tail, need a larger α than GGX's for many such pairs to carry light)."""
     rng = np.random.default_rng(23)
     n = 50_000
     wo = _uniform_sphere(rng, n)
     wi = _uniform_sphere(rng, n)
-    forward, _ = _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha)
-    backward, _ = _rough_eval_pdf(kernel_runner, wi, wo, eta, alpha)
+    forward, _ = _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha, distribution)
+    backward, _ = _rough_eval_pdf(kernel_runner, wi, wo, eta, alpha, distribution)
     f_forward = forward / np.abs(wi[:, 2])  # eval returns f |cos θi|
     f_backward = backward / np.abs(wo[:, 2])
     lhs = f_forward / _index_of_side(wo[:, 2], eta) ** 2
     rhs = f_backward / _index_of_side(wi[:, 2], eta) ** 2
     transmission = wo[:, 2] * wi[:, 2] < 0
-    assert np.count_nonzero(lhs[transmission] > 0) > n // 10, "most refracting pairs carry light"
+    assert np.count_nonzero(lhs[transmission] > 0) > n // 20, "thousands of refracting pairs carry light"
     assert_reciprocal(lhs, rhs, rtol=2e-3, what=f"eta={eta} alpha={alpha}")
 
 
+@pytest.mark.parametrize("distribution", DISTRIBUTIONS)
 @pytest.mark.parametrize("eta", ROUGH_ETAS)
-def test_rough_dielectric_weight_is_eval_over_pdf(kernel_runner, eta):
+def test_rough_dielectric_weight_is_eval_over_pdf(kernel_runner, eta, distribution):
     rng = np.random.default_rng(29)
     n = 40_000
     for alpha in (0.05, 0.4):
         wo = _uniform_sphere(rng, n)
         u = rng.random((n, 4)).astype(np.float32)
-        wi, weight, pdf_sampled, ok = _rough_sample(kernel_runner, wo, eta, alpha, u)
+        wi, weight, pdf_sampled, ok = _rough_sample(kernel_runner, wo, eta, alpha, u, distribution)
         valid = ok == 1
         assert np.mean(valid) > 0.8
-        f_cos, pdf = _rough_eval_pdf(kernel_runner, wo[valid], wi[valid], eta, alpha)
+        f_cos, pdf = _rough_eval_pdf(kernel_runner, wo[valid], wi[valid], eta, alpha, distribution)
         np.testing.assert_allclose(pdf_sampled[valid], pdf, rtol=2e-3)
         np.testing.assert_allclose(weight[valid], f_cos / pdf, rtol=2e-3)
         assert np.all(wi[~valid] == 0) and np.all(weight[~valid] == 0)
 
 
 # Chi-square goodness of fit of the rough sampler against its pdf, over the whole sphere. Each case: eta, alpha,
-# θo in degrees (above 90: ωo inside the glass).
-CHI2_CASES = [(1.5, 0.3, 40.0), (1.5, 0.6, 125.0), (1.78472, 0.15, 20.0), (1.78472, 0.5, 170.0), (1.5, 0.2, 75.0)]
+# θo in degrees (above 90: ωo inside the glass), distribution.
+CHI2_CASES = [
+    (1.5, 0.3, 40.0, "ggx"),
+    (1.5, 0.6, 125.0, "ggx"),
+    (1.78472, 0.15, 20.0, "ggx"),
+    (1.78472, 0.5, 170.0, "ggx"),
+    (1.5, 0.2, 75.0, "ggx"),
+    (1.5, 0.3, 40.0, "beckmann"),
+    (1.5, 0.6, 125.0, "beckmann"),
+    (1.78472, 0.15, 20.0, "beckmann"),
+    (1.5, 0.2, 75.0, "beckmann"),
+]
 CHI2_SAMPLES = 200_000
 CHI2_BINS_COS, CHI2_BINS_PHI, CHI2_SUBDIVISIONS = 24, 48, 12
 
 
-def _binned_pdf_mass(kernel_runner, wo_single, eta, alpha):
+def _binned_pdf_mass(kernel_runner, wo_single, eta, alpha, distribution):
     """∫ pdf dω over every (cos θ, φ) bin by the midpoint rule on sub-cells, each weighted by its exact solid angle
     (cos θ_a − cos θ_b) Δφ. The sub-cells split each bin evenly in θ, not in cos θ, so that lobes near the poles
     (where cos θ barely changes) are still resolved."""
@@ -371,27 +390,63 @@ def _binned_pdf_mass(kernel_runner, wo_single, eta, alpha):
     tt, pp = np.meshgrid(theta_mid, phi, indexing="ij")
     wi = _directions(tt.ravel(), pp.ravel())
     wo = np.repeat(wo_single[None, :], len(wi), axis=0)
-    _, pdf = _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha)
+    _, pdf = _rough_eval_pdf(kernel_runner, wo, wi, eta, alpha, distribution)
     fine = pdf.reshape(len(theta_mid), nphi) * cell_cos[:, None] * (2 * np.pi / nphi)
     return fine.reshape(CHI2_BINS_COS, s, CHI2_BINS_PHI, s).sum(axis=(1, 3))
 
 
-@pytest.mark.parametrize("eta, alpha, theta_deg", CHI2_CASES)
-def test_rough_dielectric_sampler_matches_pdf_chi_square(kernel_runner, eta, alpha, theta_deg):
+@pytest.mark.parametrize("eta, alpha, theta_deg, distribution", CHI2_CASES)
+def test_rough_dielectric_sampler_matches_pdf_chi_square(kernel_runner, eta, alpha, theta_deg, distribution):
     rng = np.random.default_rng(int(1000 * alpha + theta_deg))
     wo_single = _directions(np.array([np.radians(theta_deg)]), 0.4)[0]
     wo = np.repeat(wo_single[None, :], CHI2_SAMPLES, axis=0)
     u = rng.random((CHI2_SAMPLES, 4)).astype(np.float32)
-    wi, _, _, ok = _rough_sample(kernel_runner, wo, eta, alpha, u)
+    wi, _, _, ok = _rough_sample(kernel_runner, wo, eta, alpha, u, distribution)
     valid = ok == 1
     cos_bin = np.clip(((wi[valid, 2] + 1) / 2 * CHI2_BINS_COS).astype(int), 0, CHI2_BINS_COS - 1)
     phi = np.mod(np.arctan2(wi[valid, 1], wi[valid, 0]), 2 * np.pi)
     phi_bin = np.clip((phi / (2 * np.pi) * CHI2_BINS_PHI).astype(int), 0, CHI2_BINS_PHI - 1)
     observed = np.zeros((CHI2_BINS_COS, CHI2_BINS_PHI))
     np.add.at(observed, (cos_bin, phi_bin), 1)
-    mass = _binned_pdf_mass(kernel_runner, wo_single, eta, alpha)
+    mass = _binned_pdf_mass(kernel_runner, wo_single, eta, alpha, distribution)
     # The sampler may fail (a direction scattered under the macro-surface); the pdf's missing mass is that chance.
     assert mass.sum() <= 1.0 + 2e-3
     observed = np.append(observed.ravel(), np.count_nonzero(~valid))
     expected = np.append(mass.ravel(), max(1.0 - mass.sum(), 0.0)) * CHI2_SAMPLES
     assert_chi_square_fits(observed, expected, 0.01 / len(CHI2_CASES))
+
+
+# ---------------------------------------------------------------- the rough coat's tables (plastic)
+
+
+@pytest.mark.parametrize("eta, alpha, distribution", [(1.5, 0.1, "beckmann"), (1.5, 0.3, "ggx"), (1.78472, 0.6, "ggx")])
+def test_rough_coat_tables_are_what_the_rough_dielectric_transmits_and_reflects(
+    kernel_runner, eta, alpha, distribution
+):
+    """spectrace.materials.coat integrates this BSDF by quadrature on the host; Monte Carlo of the device's own
+    sampler must give the same numbers within 4 standard errors (plus 2e-3 for the table's interpolation in μ):
+    t(μ), the flux transmitted into the coat from outside at several angles, and R_int, the flux reflected back
+    inside when light arrives from inside with cosine-weighted directions (μ drawn with density 2μ)."""
+    from spectrace.materials.coat import rough_coat
+
+    table, internal = rough_coat(eta, alpha, distribution)
+    grid = np.linspace(0.0, 1.0, len(table))
+    rng = np.random.default_rng(41)
+    n = 100_000
+    for theta_deg in (0.0, 40.0, 70.0, 85.0):
+        wo = np.repeat(_directions(np.array([np.radians(theta_deg)]), 0.3), n, axis=0)
+        wi, weight, _, _ = _rough_sample(
+            kernel_runner, wo, eta, alpha, rng.random((n, 4)).astype(np.float32), distribution
+        )
+        transmitted = np.where(wi[:, 2] < 0, _flux_weights(wo, wi, weight, eta), 0.0)
+        mean, se = mean_and_standard_error(transmitted)
+        expected = np.interp(np.cos(np.radians(theta_deg)), grid, table)
+        assert_within_standard_errors(mean, expected, se, slack=2e-3, what=(theta_deg, "t"))
+    mu = np.sqrt(rng.random(n))
+    inside = _directions(np.pi - np.arccos(mu), 2.0 * np.pi * rng.random(n))
+    wi, weight, _, _ = _rough_sample(
+        kernel_runner, inside, eta, alpha, rng.random((n, 4)).astype(np.float32), distribution
+    )
+    reflected = np.where(wi[:, 2] < 0, _flux_weights(inside, wi, weight, eta), 0.0)
+    mean, se = mean_and_standard_error(reflected)
+    assert_within_standard_errors(mean, internal, se, slack=2e-3, what="R_int")

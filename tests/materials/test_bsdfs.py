@@ -35,9 +35,9 @@ LAMBDA_NM = np.array([420.0, 510.0, 600.0, 690.0], np.float32)  # whole nanometr
 SIGMAS = 4.0
 
 
-def _gold(roughness: float) -> ConductorMaterial:
+def _gold(roughness: float, distribution: str = "ggx") -> ConductorMaterial:
     eta, k = metal_ior("Au")
-    return ConductorMaterial(eta, k, roughness=roughness)
+    return ConductorMaterial(eta, k, roughness=roughness, distribution=distribution)
 
 
 def _constant(value: float) -> Spectrum:
@@ -50,6 +50,20 @@ NON_DELTA = [
     *[(f"conductor-Au-a{a}", _gold(a)) for a in (0.1, 0.3, 0.7)],
     *[(f"plastic-a{a}", PlasticMaterial(_constant(0.9), ior=1.5, roughness=a)) for a in (0.0, 0.1, 0.3, 0.7)],
     ("plastic-ior2.5-a0.2", PlasticMaterial(_constant(1.0), ior=2.5, roughness=0.2)),
+    *[(f"conductor-Au-beckmann-a{a}", _gold(a, "beckmann")) for a in (0.1, 0.3, 0.7)],
+    *[
+        (f"plastic-beckmann-a{a}", PlasticMaterial(_constant(0.9), ior=1.5, roughness=a, distribution="beckmann"))
+        for a in (0.1, 0.3, 0.7)
+    ],
+    ("plastic-nonlinear-a0.2", PlasticMaterial(_constant(0.9), ior=1.5, roughness=0.2, nonlinear=True)),
+    (
+        "plastic-rough-coat-beckmann-a0.3",
+        PlasticMaterial(_constant(0.9), roughness=0.3, distribution="beckmann", coat_transmission="rough"),
+    ),
+    (
+        "plastic-rough-coat-nonlinear-a0.5",
+        PlasticMaterial(_constant(0.6), roughness=0.5, nonlinear=True, coat_transmission="rough"),
+    ),
     *[(f"retroreflector-a{a}", RetroreflectorMaterial(_constant(1.0), roughness=a)) for a in (0.1, 0.3, 0.7)],
 ]
 DELTA_ONLY = [
@@ -61,6 +75,16 @@ EVERY = NON_DELTA + DELTA_ONLY
 ENERGY_CASES = EVERY + [
     ("plastic-white-smooth", PlasticMaterial(_constant(1.0), ior=1.5)),
     ("conductor-Ag-a1", ConductorMaterial(*metal_ior("Ag"), roughness=1.0)),
+    ("conductor-Ag-beckmann-a1", ConductorMaterial(*metal_ior("Ag"), roughness=1.0, distribution="beckmann")),
+    ("plastic-white-beckmann-a0.05", PlasticMaterial(_constant(1.0), roughness=0.05, distribution="beckmann")),
+    ("plastic-white-nonlinear", PlasticMaterial(_constant(1.0), ior=1.5, nonlinear=True)),
+    *[
+        (
+            f"plastic-white-rough-coat-{d}-a{a}",
+            PlasticMaterial(_constant(1.0), roughness=a, distribution=d, coat_transmission="rough"),
+        )
+        for d, a in (("beckmann", 0.05), ("beckmann", 0.3), ("ggx", 0.1), ("ggx", 1.0))
+    ],
 ]
 INCIDENT_DEGREES = (0.0, 30.0, 60.0, 80.0, 89.0)
 

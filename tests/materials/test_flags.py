@@ -13,6 +13,7 @@ from spectrace.scene.model import (
     MirrorMaterial,
     PlasticMaterial,
     RetroreflectorMaterial,
+    ThindielectricMaterial,
 )
 from spectrace.spectral.glasses import index_of_refraction
 from spectrace.spectral.metals import metal_ior
@@ -31,6 +32,7 @@ CASES = [
     *[(f"conductor-a{a}", ConductorMaterial(*metal_ior("Cu"), roughness=a)) for a in (0.0, 0.0009, 0.001, 0.3)],
     *[(f"plastic-a{a}", PlasticMaterial(GREY, roughness=a)) for a in (0.0, 0.3)],
     *[(f"retroreflector-a{a}", RetroreflectorMaterial(GREY, roughness=a)) for a in (0.0, 0.2)],
+    ("thindielectric", ThindielectricMaterial(1.5)),
     *[
         (f"dielectric-{ior}-a{a}", DielectricMaterial(index_of_refraction(ior), roughness=a))
         for ior in (1.5, "SF11")
@@ -59,8 +61,8 @@ def test_is_delta_is_the_kernels_verdict(kernel_runner, name, material):
     assert material.is_delta == (not result[0])
 
 
-def test_only_the_dielectric_transmits_and_disperses():
+def test_only_the_dielectrics_transmit_and_disperse():
     for name, material in CASES:
-        assert material.has_transmission == name.startswith("dielectric"), name
+        assert material.has_transmission == name.startswith(("dielectric", "thindielectric")), name
         # A constant index steers every wavelength alike; SF11's Sellmeier index does not.
         assert material.is_dispersive == ("SF11" in name), name

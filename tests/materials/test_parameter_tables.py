@@ -120,3 +120,17 @@ def test_plastic_ior_range_is_one_rule_in_the_api_and_the_loader(tmp_path):
                 spectrace.plastic(0.5, ior=ior)
             with pytest.raises(SpectraceError):
                 load_scene(path)
+
+
+def test_a_rough_coat_with_its_own_transmission_needs_a_number_roughness(tmp_path):
+    """Its transmittance is tabulated for one α: a roughness texture is refused, by the API and the loader alike."""
+    texture = spectrace.checkerboard(0.1, 0.3)
+    with pytest.raises(SpectraceError, match="coat_transmission"):
+        spectrace.plastic(0.5, roughness=texture, coat_transmission="rough")
+    spectrace.plastic(0.5, roughness=texture)  # the smooth coupling takes it
+    path = _material_scene(tmp_path, "plastic", "coat_transmission", "rough")
+    text = path.read_text(encoding="utf-8").replace("coat_transmission = 'rough'", 'coat_transmission = "rough"')
+    path.write_text(text.replace("[[shapes]]", 'roughness = { texture = "checkerboard" }\n[[shapes]]'))
+    with pytest.raises(SpectraceError, match="coat_transmission") as error:
+        load_scene(path)
+    assert "materials.m" in str(error.value.where)

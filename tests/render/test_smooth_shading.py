@@ -103,7 +103,7 @@ def test_smooth_icosphere_matches_the_analytic_lambertian_sphere(device):
 
 
 def _white_furnace(face_normals: bool | None) -> Scene:
-    sphere = spectrace.shape("sphere", spectrace.diffuse(1.0), face_normals=face_normals)
+    sphere = spectrace.shape("sphere", spectrace.diffuse(1.0), face_normals=face_normals, tessellated=True)
     camera = spectrace.Camera(origin=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0), fov_degrees=40.0)
     return Scene(
         camera=camera, width=16, height=16, shapes=[sphere], lights=[spectrace.constant_environment(1.0)],

@@ -19,8 +19,25 @@ from spectrace.scene.model import EnvironmentMap
 
 # The type codes (materials: their order in spectrace.materials.MATERIALS), written out here so the test does not
 # read them from the code under test.
-MATERIAL_BITS = {"diffuse": 1, "conductor": 2, "mirror": 4, "plastic": 8, "dielectric": 16, "retroreflector": 32}
-LIGHT_BITS = {"area": 1, "point": 2, "spot": 4, "distant": 8, "environment": 16, "environment_map": 32}
+MATERIAL_BITS = {
+    "diffuse": 1,
+    "conductor": 2,
+    "mirror": 4,
+    "plastic": 8,
+    "dielectric": 16,
+    "retroreflector": 32,
+    "thindielectric": 64,
+}
+LIGHT_BITS = {
+    "area": 1,
+    "point": 2,
+    "spot": 4,
+    "distant": 8,
+    "environment": 16,
+    "environment_map": 32,
+    "sphere": 64,
+    "shape": 128,
+}
 
 
 def _bundled(name: str) -> spectrace.Scene:
@@ -49,12 +66,19 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
         "SCENE_HAS_MEDIA": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
+        "SCENE_HAS_BECKMANN": 0,
+        "SCENE_HAS_NONLINEAR_PLASTIC": 0,
+        "SCENE_HAS_ROUGH_COAT": 0,
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
+        "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_OPACITY": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
+    analytic = scene_feature_defines(build_scene_buffers(_analytic_shapes_scene()))
+    assert analytic["SCENE_HAS_SHAPES"] == 1
+    assert analytic["SCENE_LIGHT_TYPES"] == LIGHT_BITS["sphere"] | LIGHT_BITS["shape"]
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
     assert lights["SCENE_HAS_TEXTURES"] == 0
@@ -73,6 +97,25 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         defines = scene_feature_defines(build_scene_buffers(scene))
         assert (defines["SCENE_HAS_SURFACE_NORMALS"], defines["SCENE_HAS_OPACITY"]) == (normals, opacity)
+
+
+def test_beckmann_lobes_and_nonlinear_plastics_are_features():
+    """Only a Beckmann lobe compiles Beckmann's code in, only a nonlinear plastic the albedo's remapping, only a
+    rough coat with its own transmission (not a smooth one: its transmission is the smooth interface's) the table
+    lookups."""
+    for material, expected in (
+        (spectrace.conductor("Au", roughness=0.3), (0, 0, 0)),
+        (spectrace.conductor("Au", roughness=0.3, distribution="beckmann"), (1, 0, 0)),
+        (spectrace.dielectric(1.5, roughness=0.3, distribution="beckmann"), (1, 0, 0)),
+        (spectrace.plastic(0.5, roughness=0.2, distribution="beckmann", nonlinear=True), (1, 1, 0)),
+        (spectrace.plastic(0.5, nonlinear=True), (0, 1, 0)),
+        (spectrace.plastic(0.5, roughness=0.2, coat_transmission="rough"), (0, 0, 1)),
+        (spectrace.plastic(0.5, coat_transmission="rough"), (0, 0, 0)),
+    ):
+        scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
+        defines = scene_feature_defines(build_scene_buffers(scene))
+        names = ("SCENE_HAS_BECKMANN", "SCENE_HAS_NONLINEAR_PLASTIC", "SCENE_HAS_ROUGH_COAT")
+        assert tuple(defines[name] for name in names) == expected, material
 
 
 def test_the_footprint_is_computed_only_for_the_lookups_that_read_it():
@@ -156,6 +199,37 @@ def _surface_detail_scene(cut_out: bool = True) -> spectrace.Scene:
     )
 
 
+def _analytic_shapes_scene() -> spectrace.Scene:
+    """An analytic sphere light and a disk light over a bump-mapped disk floor, a glass sphere and a textured
+    cylinder."""
+    rng = np.random.default_rng(8)
+    floor = spectrace.shape(
+        "disk", spectrace.plastic(0.5, bump_map=spectrace.bitmap(rng.uniform(0, 1, (4, 4)))), transform=[{"scale": 3}]
+    )
+    glass = spectrace.shape("sphere", spectrace.dielectric(1.5), transform=[{"scale": 0.4}, {"translate": [0, 0, 0.4]}])
+    can = spectrace.shape(
+        "cylinder",
+        spectrace.diffuse(spectrace.bitmap(rng.uniform(0, 1, (4, 4, 3)))),
+        transform=[{"scale": [0.3, 0.5, 0.8]}, {"translate": [0.8, 0.2, 0]}],
+    )
+    bulb = spectrace.shape(
+        "sphere", spectrace.diffuse(0.0), emitter=spectrace.area_emitter(20.0), transform=[{"translate": [0, 0, 8]}]
+    )
+    panel = spectrace.shape(
+        "disk",
+        spectrace.diffuse(0.0),
+        emitter=spectrace.area_emitter(3.0),
+        transform=[{"scale": [0.5, 0.3, 1]}, {"rotate": {"axis": [0, 1, 0], "angle": -120}}, {"translate": [2, 0, 1]}],
+    )
+    return spectrace.Scene(
+        camera=spectrace.Camera(origin=(0.0, -3.0, 2.0), target=(0.0, 0.0, 0.3)),
+        shapes=[floor, glass, can, bulb, panel],
+        width=16,
+        height=16,
+        spp=4,
+    )
+
+
 def _textured_scene(filters: tuple[str, ...]) -> spectrace.Scene:
     """Rectangles textured with random colours, one per filter, in the environment map's light."""
     rng = np.random.default_rng(6)
@@ -166,6 +240,23 @@ def _textured_scene(filters: tuple[str, ...]) -> spectrace.Scene:
             transform=[{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"translate": [1.0 * i - 0.5, 0.1 * i, 0]}],
         )
         for i, f in enumerate(filters)
+    ]
+    return replace(_environment_map_scene(), shapes=shapes)
+
+
+def _beckmann_scene() -> spectrace.Scene:
+    """Rough Beckmann gold, glass and nonlinear plastic, a plastic with a rough coat's own transmission, beside GGX
+    ones, in the environment map's light."""
+    materials = [
+        spectrace.conductor("Au", roughness=0.3, distribution="beckmann"),
+        spectrace.dielectric(1.5, roughness=0.2, distribution="beckmann"),
+        spectrace.plastic((0.6, 0.2, 0.1), roughness=0.2, distribution="beckmann", nonlinear=True),
+        spectrace.plastic((0.1, 0.3, 0.6), roughness=0.3, coat_transmission="rough"),
+        spectrace.conductor("Cu", roughness=0.3),
+    ]
+    shapes = [
+        spectrace.shape("sphere", material, transform=[{"scale": 0.35}, {"translate": [0.75 * i - 1.5, 0.4, 0]}])
+        for i, material in enumerate(materials)
     ]
     return replace(_environment_map_scene(), shapes=shapes)
 
@@ -184,6 +275,8 @@ SCENES = {
     # bilinear lookup reads it.
     "nearest_and_bilinear_textures": lambda: _textured_scene(("nearest", "bilinear")),
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
+    "beckmann_and_nonlinear_plastic": _beckmann_scene,
+    "analytic_shapes": _analytic_shapes_scene,
 }
 
 

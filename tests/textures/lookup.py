@@ -20,6 +20,7 @@ class TextureHarness:
         chunks = [np.zeros((1, 4), np.float32)]
         rows = TextureRows(table, chunks)
         self.indices = [rows.add(texture, kind) for texture, kind in uses]
+        self.rows = rows.array()
         if len(table) == 0:
             table.add(Spectrum.zeros())
         self.textures = runner.buffer(rows.array())
@@ -46,6 +47,25 @@ class TextureHarness:
 
 
 # ---------------------------------------------------------------- the reference
+
+
+def half_sigmoid_spectrum(coefficients_nm: np.ndarray, lambdas) -> np.ndarray:
+    """The spectrum at `lambdas` of sigmoid coefficients (..., 3) of λ in nm as half storage keeps them
+    (docs/textures.md, Memory): the same quadratic rewritten in t = (λ − 595) / 235 (the 360..830 nm grid's middle
+    and half width), its coefficients rounded to IEEE half; saturated black and white stay exactly 0 and 1."""
+    c = np.asarray(coefficients_nm, np.float64)
+    lam = np.asarray(lambdas, np.float64)
+    middle, half_width = 595.0, 235.0
+    # x(middle + half_width t) expanded in powers of t.
+    a = c[..., 0] * half_width**2
+    b = half_width * (2.0 * c[..., 0] * middle + c[..., 1])
+    k = c[..., 0] * middle**2 + c[..., 1] * middle + c[..., 2]
+    t = (lam - middle) / half_width
+    with np.errstate(over="ignore"):  # the saturated constants, replaced below
+        rounded = [np.asarray(v, np.float16).astype(np.float64)[..., None] for v in (a, b, k)]
+    x = (rounded[0] * t + rounded[1]) * t + rounded[2]
+    x = np.where(np.abs(k)[..., None] >= 1e4, np.sign(k)[..., None] * 1e6, x)
+    return 0.5 + x / (2.0 * np.sqrt(1.0 + x * x))
 
 
 def wrap_index(i: np.ndarray, n: int, mode: str) -> np.ndarray:

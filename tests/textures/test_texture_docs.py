@@ -11,7 +11,13 @@ from spectrace.materials.parameters import REQUIRED
 from spectrace.textures import TEXTURES
 
 DOC = (Path(__file__).resolve().parents[2] / "docs" / "textures.md").read_text(encoding="utf-8")
-API = {"bitmap": spectrace.bitmap, "spectral": spectrace.spectral_texture, "checkerboard": spectrace.checkerboard}
+API = {
+    "bitmap": spectrace.bitmap,
+    "spectral": spectrace.spectral_texture,
+    "checkerboard": spectrace.checkerboard,
+    "scale": spectrace.scale_texture,
+    "mix": spectrace.mix_texture,
+}
 
 
 def _documented_rows(name: str) -> list[tuple[str, str, str, str]]:

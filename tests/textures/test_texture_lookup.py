@@ -5,12 +5,21 @@ checkerboard's squares."""
 
 import numpy as np
 import pytest
-from tests.textures.lookup import HARNESS, TextureHarness, bilinear, nearest, pyramid, trilinear
+from tests.textures.lookup import (
+    HARNESS,
+    TextureHarness,
+    bilinear,
+    half_sigmoid_spectrum,
+    nearest,
+    pyramid,
+    trilinear,
+)
 
+from spectrace.engine.device_types import STORAGE_FLOAT, STORAGE_HALF
 from spectrace.spectral.rgb_texture import reflectance_coefficients
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.uplift import sigmoid_polynomial_spectrum, uplift_reflectance
-from spectrace.textures import bitmap, checkerboard, spectral
+from spectrace.textures import bitmap, checkerboard, mix, scale, spectral
 
 GRID_LAMBDAS = (400.0, 470.0, 555.0, 690.0)  # on the 1 nm grid, where the host's table is exact
 
@@ -91,17 +100,42 @@ def test_sigmoid_matches_the_host_spectrum(runner):
 
 def test_rgb_bilinear_blends_the_texels_spectra(runner):
     """A 2 × 2 RGB reflectance texture: between texel centres the value is the bilinear blend of the four texels'
-    SPECTRA (each S(poly) of its own coefficients, as textures fit them), not the spectrum of blended coefficients."""
+    SPECTRA (each S(poly) of its own coefficients, as textures fit them and store them in half), not the spectrum of
+    blended coefficients."""
     rgb = np.array([[[0.9, 0.1, 0.1], [0.1, 0.9, 0.1]], [[0.1, 0.1, 0.9], [0.9, 0.9, 0.2]]])
     texture = bitmap.make(rgb, wrap="clamp")
     rng = np.random.default_rng(7)
     uv = rng.uniform(0.0, 1.0, (500, 2))
-    got = TextureHarness(runner, [(texture, "spectrum")]).lookup(0, uv, lambdas=GRID_LAMBDAS)
-    grid_index = np.array(GRID_LAMBDAS).astype(int) - 360
-    spectra = np.array(
-        [[sigmoid_polynomial_spectrum(reflectance_coefficients(np.array(c)))[grid_index] for c in row] for row in rgb]
-    )
+    harness = TextureHarness(runner, [(texture, "spectrum")])
+    assert harness.rows["storage"][0] == STORAGE_HALF
+    got = harness.lookup(0, uv, lambdas=GRID_LAMBDAS)
+    spectra = half_sigmoid_spectrum(reflectance_coefficients(rgb), GRID_LAMBDAS)
     np.testing.assert_allclose(got, bilinear(spectra, uv, "clamp"), atol=5e-5)
+
+
+@pytest.mark.parametrize("storage", [STORAGE_HALF, STORAGE_FLOAT])
+def test_sigmoid_texels_in_either_storage(runner, storage):
+    """Texels of many colours (random, dark, saturated, black, white) read with nearest filtering: each is its
+    coefficients' spectrum as stored, within float rounding (half: the dimensionless coefficients rounded to half;
+    float: the coefficients in nm). A texture whose coefficients exceed half's range (those of a colour as dark as
+    (1e-9, 0, 0) do: they grow as the colour darkens) keeps float."""
+    rng = np.random.default_rng(17)
+    rgb = np.concatenate([rng.random((60, 3)), rng.random((20, 3)) * 0.01, [[0, 0, 0], [1, 1, 1], [0.5, 0.5, 0.5]]])
+    if storage == STORAGE_FLOAT:
+        rgb[0] = [1e-9, 0.0, 0.0]  # coefficients beyond 65504 in their dimensionless form
+    image = rgb.reshape(1, -1, 3)
+    harness = TextureHarness(runner, [(bitmap.make(image, filter="nearest"), "spectrum")])
+    assert harness.rows["storage"][0] == storage
+    uv = np.stack([(np.arange(len(rgb)) + 0.5) / len(rgb), np.full(len(rgb), 0.5)], axis=1)
+    got = harness.lookup(0, uv, lambdas=GRID_LAMBDAS)
+    coefficients = reflectance_coefficients(rgb)
+    if storage == STORAGE_HALF:
+        expected = half_sigmoid_spectrum(coefficients, GRID_LAMBDAS)
+    else:
+        grid_index = np.array(GRID_LAMBDAS).astype(int) - 360
+        expected = np.array([sigmoid_polynomial_spectrum(c.astype(np.float32))[grid_index] for c in coefficients])
+    np.testing.assert_allclose(got, expected, atol=5e-5)
+    np.testing.assert_array_equal(got[-3:-1], [[0.0] * 4, [1.0] * 4])
 
 
 def test_spectral_bands_are_interpolated_per_wavelength(runner):
@@ -113,8 +147,10 @@ def test_spectral_bands_are_interpolated_per_wavelength(runner):
     texture = spectral.make(values, wavelengths, filter="nearest")
     uv = rng.uniform(0.0, 1.0, (300, 2))
     lambdas = (380.0, 425.0, 612.5, 760.0)
-    got = TextureHarness(runner, [(texture, "spectrum")]).lookup(0, uv, lambdas=lambdas)
-    texels = nearest(values, uv, "repeat")
+    harness = TextureHarness(runner, [(texture, "spectrum")])
+    assert harness.rows["storage"][0] == STORAGE_HALF  # bands stored in half: each within 2^-11 relative
+    got = harness.lookup(0, uv, lambdas=lambdas)
+    texels = nearest(values.astype(np.float16).astype(np.float64), uv, "repeat")
     expected = np.array([[np.interp(lam, wavelengths, t) for lam in lambdas] for t in texels])
     np.testing.assert_allclose(got, expected, atol=2e-6)
 
@@ -130,8 +166,38 @@ def test_checkerboard_alternates_its_sides(runner):
     st = uv * 4.0
     clear = np.all(np.abs(st - np.round(st)) > 1e-4, axis=1)
     even = (np.floor(st[:, 0]) + np.floor(st[:, 1])) % 2 == 0
-    grey = sigmoid_polynomial_spectrum(reflectance_coefficients(np.full(3, 0.5)))[
-        np.array(GRID_LAMBDAS).astype(int) - 360
-    ]
+    grey = half_sigmoid_spectrum(reflectance_coefficients(np.full(3, 0.5)), GRID_LAMBDAS)
     np.testing.assert_allclose(got[clear & even], 0.25, atol=1e-6)
     np.testing.assert_allclose(got[clear & ~even], np.broadcast_to(grey, got[clear & ~even].shape), atol=5e-5)
+
+
+def test_scale_and_mix_compose_their_operands(runner):
+    """pbrt-v4's semantics: scale = tex · scale, mix = (1 − amount) · tex1 + amount · tex2, each operand looked up at
+    the point with its own placement and filter: an RGB bitmap scaled by a number and by a grey texture of another
+    size, a spectrum mixed with a bitmap by a grey amount texture, and two grey textures mixed as a scalar."""
+    rng = np.random.default_rng(12)
+    rgb = rng.uniform(0.05, 0.95, (3, 4, 3))
+    grey = rng.uniform(0.0, 1.0, (5, 2, 1))
+    other = rng.uniform(0.0, 1.0, (2, 3, 1))
+    image = bitmap.make(rgb, wrap="clamp")
+    factor = bitmap.make(grey, raw=True, wrap="mirror", uv_scale=2.0)
+    uses = [
+        (scale.make(image, 0.5), "spectrum"),
+        (scale.make(image, factor), "spectrum"),
+        (mix.make(Spectrum.constant(0.25), image, factor), "spectrum"),
+        (mix.make(bitmap.make(other, raw=True), factor, 0.3), "float"),
+    ]
+    harness = TextureHarness(runner, uses)
+    uv = rng.uniform(0.0, 1.0, (400, 2))
+    image_ref = bilinear(half_sigmoid_spectrum(reflectance_coefficients(rgb), GRID_LAMBDAS), uv, "clamp")
+    factor_ref = bilinear(grey, uv * 2.0, "mirror")[:, :1]
+    other_ref = bilinear(other, uv, "repeat")[:, :1]
+    expected = [
+        0.5 * image_ref,
+        factor_ref * image_ref,
+        (1.0 - factor_ref) * 0.25 + factor_ref * image_ref,
+        np.repeat(0.7 * other_ref + 0.3 * factor_ref, 4, axis=1),
+    ]
+    for which, reference in enumerate(expected):
+        got = harness.lookup(which, uv, lambdas=GRID_LAMBDAS)
+        np.testing.assert_allclose(got, reference, atol=6e-5, err_msg=f"use {which}")

@@ -171,8 +171,8 @@ def test_a_scalar_use_needs_one_channel():
 
 
 def test_textures_beyond_a_gibibyte_are_refused_before_conversion():
-    """The budget is checked from the image's size before any texel is converted: a 20000² texture (broadcast,
-    so the test allocates nothing) would need 4.5 GiB of coefficients."""
+    """The budget is checked from the image's size before any texel is converted: a 20000² RGB reflectance texture
+    (broadcast, so the test allocates nothing) would need 20000² × 3 half-float coefficients, 2.2 GiB."""
     import spectrace
     from spectrace.engine.scene_buffers import build_scene_buffers
     from spectrace.scene.model import Camera, Scene
@@ -185,7 +185,7 @@ def test_textures_beyond_a_gibibyte_are_refused_before_conversion():
         height=4,
         shapes=[spectrace.shape("rectangle", spectrace.diffuse(huge))],
     )
-    with pytest.raises(SpectraceError, match=r"textures need 4\.5 GiB of device memory.*at most 1\.0 GiB"):
+    with pytest.raises(SpectraceError, match=r"textures need 2\.2 GiB of device memory.*at most 1\.0 GiB"):
         build_scene_buffers(scene)
 
 
@@ -273,3 +273,51 @@ def test_bad_roughness_or_emission_texture_is_one_line(tmp_path, roughness, radi
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
     assert lines[0].startswith(f"error: {path}: {expected}"), lines[0]
     assert not (tmp_path / "x.png").exists()
+
+
+def test_scale_and_mix_in_a_scene_file(tmp_path):
+    """The docs' example: a named mix of a bitmap and an rgb by a raw grey amount, and an inline scale; a scaled
+    reflectance above 1, an RGB amount, a factor that varies with the wavelength and a checkerboard operand are
+    one-line errors naming the key."""
+    from spectrace.textures.mix import MixTexture
+    from spectrace.textures.scale import ScaleTexture
+
+    _png(tmp_path / "paint.png", np.full((2, 2, 3), 200, np.uint8))
+    _png(tmp_path / "mask.png", np.array([[0, 255], [128, 64]], np.uint8))
+    named = '[textures.worn]\ntype = "mix"\ntex1 = { texture = "bitmap", file = "paint.png" }\n'
+    named += 'tex2 = { rgb = [0.3, 0.25, 0.2] }\namount = { texture = "bitmap", file = "mask.png", raw = true }\n'
+    worn = load_scene(_scene(tmp_path, '{ texture = "worn" }', named)).shapes[0].material.reflectance
+    assert isinstance(worn, MixTexture)
+    np.testing.assert_allclose(worn.amount.values[..., 0], np.array([[0, 255], [128, 64]]) / 255.0, atol=1e-7)
+    scaled = (
+        load_scene(
+            _scene(tmp_path, '{ texture = "scale", tex = { texture = "bitmap", file = "paint.png" }, scale = 0.6 }')
+        )
+        .shapes[0]
+        .material.reflectance
+    )
+    assert isinstance(scaled, ScaleTexture) and scaled.scale == 0.6
+    constant = load_scene(_scene(tmp_path, '{ texture = "scale", tex = { value = 0.5 }, scale = { value = 0.8 } }'))
+    assert constant.shapes[0].material.reflectance.scale == 0.8  # a constant spectrum is its number
+    bad = [
+        ('{ texture = "scale", tex = { value = 0.6 }, scale = 2 }', "", "materials.m.reflectance: scale texture has"),
+        (
+            '{ texture = "mix", amount = { texture = "bitmap", file = "paint.png" } }',
+            "",
+            "materials.m.reflectance.amount: texture",
+        ),
+        (
+            '{ texture = "scale", tex = { value = 0.5 }, scale = { rgb = [0.2, 0.5, 0.9] } }',
+            "",
+            "materials.m.reflectance.scale: scale is a number or a grey texture",
+        ),
+        (
+            '{ texture = "mix", tex1 = { texture = "board" } }',
+            '[textures.board]\ntype = "checkerboard"\n',
+            "materials.m.reflectance.tex1.texture: texture 'board' is a checkerboard",
+        ),
+    ]
+    for reflectance, textures, expected in bad:
+        with pytest.raises(SpectraceError) as error:
+            load_scene(_scene(tmp_path, reflectance, textures))
+        assert str(error.value).startswith(f"{tmp_path / 'scene.toml'}: {expected}"), str(error.value)

@@ -104,6 +104,28 @@ def test_rgb_texture_regions_render_their_uplifted_spectra(device, material):
             assert_within_standard_errors(mean, 0.0, error, slack=2e-4, what=(r, c))
 
 
+@pytest.mark.parametrize("composite", ["scale", "mix"])
+def test_scale_and_mix_regions_render_their_composed_spectra(device, composite):
+    """A diffuse quad whose reflectance is the RGB texture scaled by a grey texture of factors (0.2, 0.9; 0.5, 1),
+    or mixed with a constant 0.3 by the amount 0.25: each region's XYZ is colour-science's of tex · factor, or of
+    0.75 ρ_texel + 0.25 · 0.3 (pbrt-v4's scale and mix)."""
+    texture = spectrace.bitmap(RGB_TEXELS, filter="nearest")
+    factors = np.array([[0.2, 0.9], [0.5, 1.0]])
+    if composite == "scale":
+        made = spectrace.scale_texture(texture, spectrace.bitmap(factors, raw=True, filter="nearest"))
+    else:
+        made = spectrace.mix_texture(texture, 0.3, 0.25)
+    image = Renderer(_quad_scene(spectrace.diffuse(made)), device).render()
+    half = SIDE // 2
+    for r in range(2):
+        for c in range(2):
+            texel = _sigmoid_spectrum(RGB_TEXELS[r, c])
+            spectrum = factors[r, c] * texel if composite == "scale" else 0.75 * texel + 0.25 * 0.3
+            region = image.xyz[r * half + 2 : (r + 1) * half - 2, c * half + 2 : (c + 1) * half - 2].reshape(-1, 3)
+            mean, error = mean_and_standard_error(region - _xyz_colour_science(spectrum))
+            assert_within_standard_errors(mean, 0.0, error, slack=2e-4, what=(r, c))
+
+
 @pytest.mark.parametrize("material", ["diffuse", "plastic"])
 def test_white_texture_furnace(device, material):
     """A white (1, 1, 1) texture, bilinear, on diffuse or smooth white plastic: every path returns the environment's

@@ -1,5 +1,5 @@
-"""Command line: `spectrace render | devices | bench | validate | display | spectra | import-mitsuba`, one module
-per command group in this package. Errors print as one line and exit non-zero."""
+"""Command line: `spectrace render | devices | bench | validate | display | spectra | import-mitsuba |
+import-pbrt`, one module per command group in this package. Errors print as one line and exit non-zero."""
 
 import importlib
 import sys
@@ -34,6 +34,11 @@ LAZY_COMMANDS = {
         "spectrace.cli.import_mitsuba",
         "import_mitsuba_command",
         "Convert a Mitsuba 3 XML scene to a spectrace TOML scene (docs/mitsuba.md).",
+    ),
+    "import-pbrt": (
+        "spectrace.cli.import_pbrt",
+        "import_pbrt_command",
+        "Convert a pbrt-v4 scene to a spectrace TOML scene (docs/pbrt.md).",
     ),
 }
 

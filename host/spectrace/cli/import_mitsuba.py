@@ -8,7 +8,7 @@ import typer
 from rich.console import Console
 
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import import_mitsuba, supported_text
+from spectrace.interop.mitsuba_xml import WARNING_PREFIX, import_mitsuba, supported_text
 
 
 def import_mitsuba_command(
@@ -21,6 +21,9 @@ def import_mitsuba_command(
         list[str] | None,
         typer.Option("--define", "-D", help="Set a $parameter, NAME=VALUE (repeatable), as Mitsuba's -D."),
     ] = None,
+    strict: Annotated[
+        bool, typer.Option("--strict", help="Refuse the scene when it has properties spectrace does not import.")
+    ] = False,
 ) -> None:
     if output.endswith(("/", os.sep)) or not Path(output).name:
         raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
@@ -30,10 +33,10 @@ def import_mitsuba_command(
         if not separator or not name:
             raise SpectraceError(f"expected NAME=VALUE, got '{item}'", where="--define")
         parameters[name] = value
-    notes = import_mitsuba(scene, Path(output), parameters)
+    notes = import_mitsuba(scene, Path(output), parameters, strict=strict)
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each note on one line
     for note in notes:
-        console.print(f"note: {note}", highlight=False, markup=False)
+        console.print(note if note.startswith(WARNING_PREFIX) else f"note: {note}", highlight=False, markup=False)
     console.print(f"wrote {output}", highlight=False, markup=False)
 
 
@@ -42,7 +45,9 @@ def import_mitsuba_command(
 # nothing elsewhere.
 import_mitsuba_command.__doc__ = (
     f"Convert a Mitsuba 3 XML scene to a spectrace TOML scene ({supported_text()}). Unsupported plugins are all "
-    "named in one error; choices spectrace makes differently (pixel filter, sampler) are printed as notes. The TOML "
+    "named in one error; choices spectrace makes differently (pixel filter, sampler) are printed as notes, and "
+    "every property "
+    "spectrace does not know as a warning (--strict: an error). The TOML "
     "is checked by loading it before it replaces OUT.toml (a failed import leaves an existing file as it was); "
     "render it with `spectrace render OUT.toml`."
 )

@@ -25,6 +25,10 @@ IOR_CONSTANT = 0  # Material.ior
 IOR_SELLMEIER = 1  # n² = 1 + Σ B_i λ² / (λ² − C_i), λ in µm: coefficients B1 B2 B3 C1 C2 C3 (C in µm²)
 IOR_CAUCHY = 2  # n = a + b / λ², λ in µm: coefficients a, b (b in µm²)
 
+# Material.distribution: the microfacet distribution of a rough material's lobe (kernels/microfacet.cl).
+MICROFACET_DISTRIBUTIONS = ("ggx", "beckmann")
+MICROFACET_GGX, MICROFACET_BECKMANN = range(len(MICROFACET_DISTRIBUTIONS))
+
 # An offset that names no spectrum (only offsets documented as optional in types.h may hold it).
 MATERIAL_NO_SPECTRUM = -1
 
@@ -62,28 +66,43 @@ MATERIAL_DTYPE = _struct(
         ("ior", "<f4"),
         ("reflectance_texture", "<i4"),
         ("roughness_texture", "<i4"),
+        ("distribution", "<i4"),
+        ("nonlinear", "<i4"),
+        ("transmittance_offset", "<i4"),
+        ("coat_table_offset", "<i4"),
+        ("coat_internal_reflectance", "<f4"),
         # Surface detail (spectrace.materials.surface), last so that new parameters go before it.
         ("normal_map", "<i4"),
         ("bump_map", "<i4"),
         ("bump_scale", "<f4"),
         ("opacity", "<f4"),
         ("opacity_texture", "<i4"),
-        ("detail_pad", ("<i4", (2,))),
+        ("detail_pad", ("<i4", (1,))),
     ],
-    96,
+    112,
 )
 
 # Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
 # TEXEL_SCALAR); SPECTRAL: an image of spectral bands (TEXEL_BANDS); CHECKERBOARD: two sides, each a spectrum or a
 # texture of another type.
-TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard")
-TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD = range(len(TEXTURE_TYPES))
+# SCALE: side 0 (a spectrum or an image texture) times the factor (factor_texture's value, else `factor`); MIX:
+# sides 0 and 1 blended by the amount (factor_texture's value, else `factor`): (1 − a) side 0 + a side 1.
+TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard", "scale", "mix")
+TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD, TEXTURE_SCALE, TEXTURE_MIX = range(len(TEXTURE_TYPES))
 # Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
 # S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
 # per band, at band centres band_first_nm + i·band_step_nm; VECTOR: three values read as they are (a normal map);
 # RGB: linear (r, g, b), the weights of three basis spectra (an emission: r·R(λ) + g·G(λ) + b·B(λ), the lights'
 # images).
 TEXEL_SIGMOID, TEXEL_SCALAR, TEXEL_BANDS, TEXEL_VECTOR, TEXEL_RGB = range(5)
+# Texture.storage: how each stored value is held (spectrace.textures.storage). FLOAT: float32; HALF: IEEE half
+# (sigmoid coefficients then in their dimensionless form); UNORM8, UNORM16: unsigned integers k standing for
+# k / 255 and k / 65535.
+STORAGE_FLOAT, STORAGE_HALF, STORAGE_UNORM8, STORAGE_UNORM16 = range(4)
+# The dimensionless variable of half-stored sigmoid coefficients, t = (λ − centre) / half span: the grid's middle
+# and half width, as the fits of spectrace.spectral.uplift use (t in [−1, 1]).
+SIGMOID_CENTRE_NM = 0.5 * (GRID_MIN_NM + GRID_MAX_NM)
+SIGMOID_HALF_SPAN_NM = 0.5 * (GRID_MAX_NM - GRID_MIN_NM)
 # Texture.wrap: where st outside [0, 1)² looks.
 WRAP_REPEAT, WRAP_MIRROR, WRAP_CLAMP = range(3)
 # Texture.filter: NEAREST: the texel containing st at the finest level; BILINEAR: the four nearest texels of one
@@ -110,21 +129,49 @@ TEXTURE_DTYPE = _struct(
         ("side_spectrum", ("<i4", (2,))),
         ("side_texture", ("<i4", (2,))),
         ("basis_offset", ("<i4", (3,))),
-        ("pad0", "<i4"),
-        ("pad1", "<i4"),
+        ("storage", "<i4"),
+        ("factor", "<f4"),
+        ("factor_texture", "<i4"),
+        ("pad", ("<i4", (3,))),
     ],
-    96,
+    112,
 )
 
 # Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
-LIGHT_TYPES = ("triangle", "point", "spot", "distant", "environment", "environment_map")
-LIGHT_TRIANGLE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_ENVIRONMENT, LIGHT_ENVIRONMENT_MAP = range(
-    len(LIGHT_TYPES)
-)
+LIGHT_TYPES = ("triangle", "point", "spot", "distant", "environment", "environment_map", "sphere", "shape")
+(
+    LIGHT_TRIANGLE,
+    LIGHT_POINT,
+    LIGHT_SPOT,
+    LIGHT_DISTANT,
+    LIGHT_ENVIRONMENT,
+    LIGHT_ENVIRONMENT_MAP,
+    LIGHT_SPHERE,
+    LIGHT_SHAPE,
+) = range(len(LIGHT_TYPES))
 # LIGHT_TRIANGLE: an emitting triangle of an area light, radiance W/(m² sr nm); LIGHT_POINT: isotropic, intensity
 # W/(sr nm); LIGHT_SPOT: intensity on the axis W/(sr nm), smooth falloff to the cutoff; LIGHT_DISTANT: irradiance
 # on a surface facing it, W/(m² nm); LIGHT_ENVIRONMENT: uniform at infinity, radiance W/(m² sr nm);
-# LIGHT_ENVIRONMENT_MAP: a latitude-longitude RGB image, scaled, W/(m² sr nm).
+# LIGHT_ENVIRONMENT_MAP: a latitude-longitude RGB image, scaled, W/(m² sr nm); LIGHT_SPHERE: an emitting analytic
+# sphere, sampled by the solid angle it subtends, and LIGHT_SHAPE: an emitting analytic disk or cylinder, sampled by
+# area, both radiance W/(m² sr nm).
+
+# AnalyticShape.type (kernels/shapes.cl): Mitsuba 3's sphere, disk and cylinder in their object space.
+SHAPE_TYPES = ("sphere", "disk", "cylinder")
+SHAPE_SPHERE, SHAPE_DISK, SHAPE_CYLINDER = range(len(SHAPE_TYPES))
+
+ANALYTIC_SHAPE_DTYPE = _struct(
+    [
+        ("to_world", ("<f4", (3, 4))),
+        ("to_object", ("<f4", (3, 4))),
+        ("sphere", ("<f4", (4,))),
+        ("type", "<i4"),
+        ("abs_det", "<f4"),
+        ("object_area", "<f4"),
+        ("flip_normals", "<i4"),
+    ],
+    128,
+)
 
 LIGHT_DTYPE = _struct(
     [
@@ -167,9 +214,13 @@ RENDER_PARAMS_DTYPE = _struct(
         ("sample_begin", "<i4"),
         ("sample_count", "<i4"),
         ("medium_count", "<i4"),
+        ("hide_environment", "<i4"),
+        ("shape_count", "<i4"),
+        ("pad0", "<i4"),
         ("pad1", "<i4"),
+        ("pad2", "<i4"),
     ],
-    112,
+    128,
 )
 
 # MeterParams.type (kernels/meters.cl). IRRADIANCE: W/(m² nm) on a one-sided surface at `point` facing
@@ -205,6 +256,8 @@ SCENE_KERNEL_BUFFERS = (
     "map_cdf",
     "media",
     "textures",
+    "shapes",
+    "shape_nodes",
 )
 
 # struct name in types.h -> dtype; the layout test walks this table.
@@ -216,6 +269,7 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "Medium": MEDIUM_DTYPE,
     "Texture": TEXTURE_DTYPE,
     "Light": LIGHT_DTYPE,
+    "AnalyticShape": ANALYTIC_SHAPE_DTYPE,
     "RenderParams": RENDER_PARAMS_DTYPE,
     "MeterParams": METER_PARAMS_DTYPE,
 }
@@ -239,6 +293,8 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "IOR_CONSTANT": IOR_CONSTANT,
         "IOR_SELLMEIER": IOR_SELLMEIER,
         "IOR_CAUCHY": IOR_CAUCHY,
+        "MICROFACET_GGX": MICROFACET_GGX,
+        "MICROFACET_BECKMANN": MICROFACET_BECKMANN,
         "METER_IRRADIANCE": METER_IRRADIANCE,
         "METER_RADIANCE": METER_RADIANCE,
         "METER_FLUX": METER_FLUX,
@@ -248,6 +304,13 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "TEXEL_BANDS": TEXEL_BANDS,
         "TEXEL_VECTOR": TEXEL_VECTOR,
         "TEXEL_RGB": TEXEL_RGB,
+        "STORAGE_FLOAT": STORAGE_FLOAT,
+        "STORAGE_HALF": STORAGE_HALF,
+        "STORAGE_UNORM8": STORAGE_UNORM8,
+        "STORAGE_UNORM16": STORAGE_UNORM16,
+        # The dimensionless variable of sigmoid coefficients, t = (λ − centre) / half span (spectrace.spectral.uplift).
+        "SIGMOID_CENTRE_NM": float(SIGMOID_CENTRE_NM),
+        "SIGMOID_HALF_SPAN_NM": float(SIGMOID_HALF_SPAN_NM),
         "WRAP_REPEAT": WRAP_REPEAT,
         "WRAP_MIRROR": WRAP_MIRROR,
         "WRAP_CLAMP": WRAP_CLAMP,
@@ -262,4 +325,5 @@ def device_contract_defines() -> dict[str, int | float | str]:
     }
     values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
     values |= {f"TEXTURE_{name.upper()}": code for code, name in enumerate(TEXTURE_TYPES)}
+    values |= {f"SHAPE_{name.upper()}": code for code, name in enumerate(SHAPE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

@@ -2,13 +2,14 @@
 
 import tracemalloc
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from time import perf_counter
 from typing import TypeVar
 
 import numpy as np
 
 from spectrace.engine.device_types import (
+    ANALYTIC_SHAPE_DTYPE,
     LIGHT_DTYPE,
     MATERIAL_DTYPE,
     MEDIUM_DTYPE,
@@ -17,6 +18,7 @@ from spectrace.engine.device_types import (
     TRIANGLE_NO_MATERIAL,
 )
 from spectrace.errors import SpectraceError
+from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
 from spectrace.lights import area as area_light
@@ -60,6 +62,12 @@ class SceneBuffers:
     medium_count: int
     textures: np.ndarray  # TEXTURE_DTYPE (one dummy entry when there are none)
     texture_count: int
+    # ANALYTIC_SHAPE_DTYPE (one dummy entry when there are none); shape k's TriangleInfo is entry triangle_count + k
+    shapes: np.ndarray = field(default_factory=lambda: np.zeros(1, ANALYTIC_SHAPE_DTYPE))
+    shape_count: int = 0
+    # BVH_NODE_DTYPE: the binary BVH over the analytic shapes' boxes (kernels/scene.cl intersect_shapes); a root
+    # every ray misses when there are none
+    shape_nodes: np.ndarray = field(default_factory=lambda: _empty_bvh().nodes)
     # What the acceleration structure cost: wall seconds of the binary build plus the traversal's node buffer
     # (bvh.build_seconds is the first alone), and the most memory the two allocated at once (None when tracemalloc
     # was already tracing something else, whose figures this would disturb).
@@ -99,6 +107,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     emitters: list[AreaEmitter] = []
     medium_index: dict[int, int] = {}
     medium_rows: list[tuple[int, int, float, int]] = []
+    analytic: list[tuple[AnalyticSurface, int, int, int]] = []  # surface, material, emitter, interior
     for shape in scene.shapes:
         interior = -1
         if shape.interior is not None:
@@ -126,6 +135,13 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             )
         if shape.emitter is not None and shape.emitter.image is not None and shape.mesh.uvs is None:
             raise SpectraceError(f"shape '{shape.name}' has no texture coordinates, but its emitter shows an image")
+        emitter_id = -1
+        if shape.emitter is not None:
+            emitter_id = len(emitters)
+            emitters.append(shape.emitter)
+        if shape.analytic is not None:
+            analytic.append((shape.analytic, material_index[key], emitter_id, interior))
+            continue
         v0, v1, v2 = shape.mesh.triangles()
         v0s.append(v0)
         v1s.append(v1)
@@ -134,10 +150,6 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         normal_parts.append(shape.mesh.triangle_normals())
         material_parts.append(np.full(len(v0), material_index[key], np.int32))
         interior_parts.append(np.full(len(v0), interior, np.int32))
-        emitter_id = -1
-        if shape.emitter is not None:
-            emitter_id = len(emitters)
-            emitters.append(shape.emitter)
         emitter_parts.append(np.full(len(v0), emitter_id, np.int32))
 
     if v0s and sum(len(v) for v in v0s):
@@ -158,6 +170,17 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         tri_material = tri_emitter = tri_interior = np.zeros(0, np.int32)
         bvh, bvh_seconds, bvh_peak = _empty_bvh(), 0.0, 0
         scene_radius = 1.0
+    shape_bvh = _empty_bvh()
+    if analytic:
+        # The analytic shapes get a BVH of their own over their exact boxes, from the same builder (a box as the
+        # triangle (lower, upper, lower) has that box as its bounds); they are stored in its leaf order.
+        boxes = np.array([surface.bounds() for surface, *_ in analytic])
+        shape_bvh = build_bvh(boxes[:, 0], boxes[:, 1], boxes[:, 0], max_leaf_size=2)
+        analytic = [analytic[i] for i in shape_bvh.prim_order]
+        corners = [np.array([bvh.nodes[0]["bmin"], bvh.nodes[0]["bmax"]])] if len(v0) else []
+        corners.append(np.array([shape_bvh.nodes[0]["bmin"], shape_bvh.nodes[0]["bmax"]]))
+        lo, hi = np.min([c[0] for c in corners], axis=0), np.max([c[1] for c in corners], axis=0)
+        scene_radius = 0.5 * float(np.linalg.norm(hi - lo))
     scene_radius = max(scene_radius, 1e-6)
 
     vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
@@ -186,6 +209,9 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     out = LightRows(table, scene_radius, texel_chunks, textures)
     areas = 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
     emitting = area_light.write_rows(emitters, tri_emitter, areas, out)
+    shape_light_rows = area_light.write_shape_rows(
+        [(emitters[e], k, surface) for k, (surface, _, e, _) in enumerate(analytic) if e >= 0], out
+    )
     for light in scene.lights:
         light_module(light).write_rows(light, out)
     rows, power = out.rows, out.power
@@ -205,13 +231,22 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         cdf[-1] = 1.0
     else:
         cdf = np.array([0.0, 1.0])
-    triangle_info = np.zeros(max(len(v0), 1), TRIANGLE_INFO_DTYPE)
+    triangle_info = np.zeros(max(len(v0) + len(analytic), 1), TRIANGLE_INFO_DTYPE)
     triangle_info["material"][: len(v0)] = tri_material
     triangle_info["light"][: len(v0)] = light_index
     triangle_info["interior"] = -1
     triangle_info["interior"][: len(v0)] = tri_interior
     triangle_info["normals"] = -1
     triangle_info["normals"][: len(v0)] = normal_slot
+    # The analytic shapes' entries follow the triangles' (kernels/scene.cl: a shape hit is slot triangle_count + k).
+    shape_lights = iter(shape_light_rows)
+    for k, (_, material, emitter, interior) in enumerate(analytic):
+        info = triangle_info[len(v0) + k]
+        info["material"], info["interior"] = material, interior
+        info["light"] = next(shape_lights) if emitter >= 0 else -1
+    shape_rows = np.zeros(max(len(analytic), 1), ANALYTIC_SHAPE_DTYPE)
+    for k, (surface, *_) in enumerate(analytic):
+        shape_rows[k] = surface.device_row()
 
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
@@ -242,6 +277,9 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         medium_count=len(medium_rows),
         textures=textures.array(),
         texture_count=len(textures.rows),
+        shapes=shape_rows,
+        shape_count=len(analytic),
+        shape_nodes=shape_bvh.nodes,
         bvh_seconds=bvh_seconds + nodes_seconds,
         bvh_peak_bytes=None if bvh_peak is None or nodes_peak is None else max(bvh_peak, nodes_peak),
     )
@@ -288,4 +326,6 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["seed"] = scene.seed
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
     params["medium_count"] = buffers.medium_count
+    params["hide_environment"] = int(scene.hide_environment)
+    params["shape_count"] = buffers.shape_count
     return params

@@ -4,7 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.engine.device_types import FILTER_TRILINEAR, NO_TEXTURE
+from spectrace.engine.device_types import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
 from spectrace.engine.scene_buffers import SceneBuffers
 
 
@@ -33,8 +33,12 @@ def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
         "SCENE_HAS_LIGHT_IMAGES": int(
             bool(np.any(buffers.lights["texture"] != NO_TEXTURE) or np.any(buffers.lights["map_width"] > 0))
         ),
+        "SCENE_HAS_BECKMANN": int(bool(np.any(materials["distribution"] == MICROFACET_BECKMANN))),
+        "SCENE_HAS_NONLINEAR_PLASTIC": int(bool(np.any(materials["nonlinear"] != 0))),
+        "SCENE_HAS_ROUGH_COAT": int(bool(np.any(materials["coat_table_offset"] >= 0))),
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or bump_maps),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
+        "SCENE_HAS_SHAPES": int(buffers.shape_count > 0),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
     }

@@ -180,13 +180,19 @@ def _progress_min_bytes() -> float:
         return PROGRESS_MIN_BYTES
 
 
-def load_mesh(path: Path, where: str) -> TriangleMesh:
-    """Read a mesh file (OBJ, PLY, STL, GLB, OFF, ...); a file holding several meshes is merged into one.
+def load_mesh(path: Path, where: str, shape_index: int = 0) -> TriangleMesh:
+    """Read a mesh file (OBJ, PLY, STL, GLB, OFF, ..., or Mitsuba's `.serialized`, whose mesh number `shape_index`
+    is read: spectrace.geometry.serialized); a file holding several meshes is merged into one.
 
     Vertex order and face winding are kept as stored, except that an OBJ vertex used with several texture
     coordinates or normals becomes one vertex per coordinate or normal. The file's vertex normals come along
     (none are made up when it has none). Every failure raises SpectraceError naming `where`.
     """
+    if Path(path).suffix.lower() == ".serialized":
+        from spectrace.geometry.serialized import read_serialized
+
+        vertices, faces, uvs, normals = read_serialized(path, shape_index, where)
+        return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs, normals=normals)
     path = regular_file(path, where, what="mesh file")
     size = path.stat().st_size
     announce = size >= _progress_min_bytes()

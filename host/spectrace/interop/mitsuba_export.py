@@ -44,7 +44,10 @@ from spectrace.textures import is_texture, texture_module
 
 def regular_spectrum(spectrum: Spectrum) -> dict:
     """Mitsuba's piecewise-linear spectrum on spectrace's uniform 1 nm grid (its `regular` plugin: an O(1) lookup,
-    where `irregular` searches the wavelength list, so the peer is not slowed by the export)."""
+    where `irregular` searches the wavelength list, so the peer is not slowed by the export). A spectrum that is 0
+    everywhere is Mitsuba's `uniform` 0: its `regular` plugin refuses one without probability mass."""
+    if not np.any(spectrum.values):
+        return {"type": "uniform", "value": 0.0}
     return {
         "type": "regular",
         "wavelength_min": float(GRID_NM[0]),
@@ -195,14 +198,22 @@ def scene_to_mitsuba_dict(
             name = f"material_{len(materials)}"
             entries[name] = to_mitsuba(shape.material, exporter)
             materials[material_key] = name
-        path = mesh_folder / f"shape_{index}.ply"
-        write_binary_ply(shape.mesh, path)
-        entry = {
-            "type": "ply",
-            "filename": str(path),
-            "face_normals": shape.mesh.normals is None,
-            "bsdf": {"type": "ref", "id": materials[material_key]},
-        }
+        if shape.analytic is not None:  # Mitsuba's own analytic shape, in the same object space
+            entry = {
+                "type": shape.analytic.kind,
+                "to_world": _transform(shape.analytic.to_world),
+                "flip_normals": shape.analytic.flip_normals,
+                "bsdf": {"type": "ref", "id": materials[material_key]},
+            }
+        else:
+            path = mesh_folder / f"shape_{index}.ply"
+            write_binary_ply(shape.mesh, path)
+            entry = {
+                "type": "ply",
+                "filename": str(path),
+                "face_normals": shape.mesh.normals is None,
+                "bsdf": {"type": "ref", "id": materials[material_key]},
+            }
         if shape.emitter is not None:
             entry["emitter"] = area.to_mitsuba(shape.emitter, exporter, f"shape '{shape.name}'")
         entries[f"shape_{index}"] = entry
@@ -216,6 +227,12 @@ def mitsuba_film_xyz(xyz: np.ndarray, mi) -> np.ndarray:
     from spectrace.spectral.colorimetry import CIE_Y_INTEGRAL
 
     return np.asarray(xyz, dtype=np.float64) / (float(mi.MI_CIE_Y_NORMALIZATION) * CIE_Y_INTEGRAL)
+
+
+def _transform(matrix: np.ndarray):
+    import mitsuba as mi  # the caller has chosen a variant
+
+    return mi.ScalarTransform4f(np.asarray(matrix, float).tolist())
 
 
 def _lookat(origin, target, up):

@@ -12,7 +12,8 @@ material's or light's parameter table marks the parameter `textured` (`checked_t
 becomes textured there imports textures without a change here. Mitsuba's rectangle and PLY texture coordinates run
 v up where spectrace's run down: textures on those shapes are imported with v flipped, as a material of their own.
 
-Imported here: shapes obj, ply, rectangle, cube, sphere (center, radius; face_normals on obj, ply and sphere);
+Imported here: shapes obj, ply, serialized (shape_index), rectangle, cube, and the analytic sphere (center, radius),
+disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sphere);
 twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
@@ -35,20 +36,19 @@ import math
 import os
 import re
 import tempfile
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import overload
-from xml.parsers import expat
 
 import numpy as np
 
-from spectrace.errors import SpectraceError, one_line
+from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
-from spectrace.io.input_files import regular_file
+from spectrace.interop.mitsuba_tree import Element, SceneTree, element_error, read_input_file, read_scene
+from spectrace.interop.mitsuba_tree import shown as _shown
 from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
-from spectrace.materials.parameters import ROUGHNESS_RANGE
+from spectrace.materials.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
 from spectrace.scene import limits
 from spectrace.textures import TEXTURES
 
@@ -67,14 +67,24 @@ TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
 SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 SUPPORTED = {
-    "shape": ("obj", "ply", "rectangle", "cube", "sphere"),
+    "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),
     "sensor": ("perspective",),
     "film": ("hdrfilm",),
-    "integrator": ("path", "direct", "volpath", "volpathmis"),
+    "integrator": ("path", "direct", "volpath", "volpathmis", "moment"),
 }
+
+
+def _importable(tag: str, kind: str) -> bool:
+    """Whether a nested object of this tag and type is one the importer reads (the rest, under a plugin it does not
+    import, is named with it)."""
+    if tag in ("sampler", "rfilter"):  # replaced by spectrace's own, with a note
+        return True
+    if tag in ("texture", "spectrum") and kind in _SPECTRUM_PLUGINS:
+        return True
+    return kind in SUPPORTED.get(tag, ())
 
 
 def supported_text() -> str:
@@ -84,7 +94,7 @@ def supported_text() -> str:
 
 
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
-_PLANNED_BSDFS = ("thindielectric",)
+_PLANNED_BSDFS: tuple[str, ...] = ()
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
 _NAMED_IOR = {
     "vacuum": 1.0,
@@ -128,6 +138,8 @@ _OBJECT_TAGS = (
     "spectrum",
 )
 # Elements that set a named property of the object holding them.
+# hdrfilm properties about the file Mitsuba writes, not the image: nothing to import.
+_FILM_STORAGE = ("pixel_format", "component_format", "file_format", "banner")
 _PROPERTY_TAGS = ("float", "integer", "string", "boolean", "rgb", "point", "vector", "transform")
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
 MITSUBA_DEFAULT_FILM = (768, 576)  # hdrfilm's default width and height
@@ -138,95 +150,7 @@ _SPECTRUM_PLUGINS = ("uniform", "irregular", "regular", "blackbody", "d65", "srg
 # Shapes whose Mitsuba texture coordinates run v up the image where spectrace's (for the same surface) run down:
 # Mitsuba's rectangle has v = 0 at y = -1, spectrace's at y = +1; Mitsuba reads a PLY's v as stored, spectrace
 # flips it (as both do an OBJ's vt). Textures on them are imported with v flipped.
-_V_UP_SHAPES = ("rectangle", "ply")
-
-
-@dataclass
-class Element:
-    tag: str
-    attributes: dict[str, str]
-    line: int
-    children: list[Element] = field(default_factory=list)
-    path: str = ""  # e.g. "shape[2]/transform/translate", for messages
-
-    def get(self, key: str, default: str | None = None) -> str | None:
-        return self.attributes.get(key, default)
-
-    def label(self) -> str:
-        kind = self.get("type")
-        return f"{self.tag} '{_shown(kind)}'" if kind else _shown(self.tag)
-
-
-def _shown(text: str, limit: int = 60) -> str:
-    """Text from the file as it may appear in a one-line message: shortened, line breaks and other unprintable
-    characters escaped."""
-    return one_line(text if len(text) <= limit else text[:limit] + "...")
-
-
-def read_input_file(path: Path, where: str) -> bytes:
-    """The bytes of the scene or of a file it refers to: every input file is read here, so that what may be read
-    is decided in one place."""
-    # A FIFO or a device would block or never end: only regular files are read.
-    regular_file(
-        path, None if where == str(path) else where, what="Mitsuba scene file" if where == str(path) else "file"
-    )
-    try:
-        return path.read_bytes()
-    except OSError as error:
-        raise SpectraceError(
-            f"cannot read '{_shown(str(path), 200)}' ({error.strerror or error})", where=where
-        ) from None
-
-
-def parse_xml(path: Path) -> Element:
-    """The XML tree with each element's line number and path (for messages)."""
-    data = read_input_file(path, str(path))
-    parser = expat.ParserCreate()
-    stack: list[Element] = []
-    root: list[Element] = []
-
-    def start(tag: str, attributes: dict[str, str]) -> None:
-        if len(stack) >= MAX_NESTING:
-            raise SpectraceError(
-                f"elements nested more than {MAX_NESTING} deep (line {parser.CurrentLineNumber}); "
-                "Mitsuba scenes need a handful of levels",
-                where=str(path),
-            )
-        element = Element(tag, dict(attributes), parser.CurrentLineNumber)
-        (stack[-1].children if stack else root).append(element)
-        stack.append(element)
-
-    parser.StartElementHandler = start
-    parser.EndElementHandler = lambda tag: stack.pop()
-    try:
-        parser.Parse(data, True)
-    except expat.ExpatError as error:
-        raise SpectraceError(
-            f"XML syntax error: {expat.ErrorString(error.code)} (line {error.lineno}, column {error.offset + 1})",
-            where=str(path),
-        ) from None
-    if not root or root[0].tag != "scene":
-        raise SpectraceError("not a Mitsuba scene: the root element must be <scene>", where=str(path))
-    _name_paths(root[0])
-    return root[0]
-
-
-def _name_paths(root: Element) -> None:
-    """Each element's path below the root: tags joined by '/', with the index among siblings of the same tag
-    (from 0, as spectrace's own key paths count) where there are several."""
-    root.path = "scene"
-    pending = [(root, "")]
-    while pending:
-        parent, prefix = pending.pop()
-        counts: dict[str, int] = {}
-        for child in parent.children:
-            counts[child.tag] = counts.get(child.tag, 0) + 1
-        seen: dict[str, int] = {}
-        for child in parent.children:
-            index = seen.get(child.tag, 0)
-            seen[child.tag] = index + 1
-            child.path = prefix + (f"{child.tag}[{index}]" if counts[child.tag] > 1 else child.tag)
-            pending.append((child, child.path + "/"))
+_V_UP_SHAPES = ("rectangle", "ply", "serialized")
 
 
 # ---------------------------------------------------------------- values
@@ -235,6 +159,40 @@ _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 _FLOAT32_MAX = float(np.finfo(np.float32).max)
 _INTEGER_LIMIT = 2**63  # TOML's integers are 64-bit
+
+
+class Properties(dict):
+    """An object's named children, which remember the keys the importer asked about (`in`, `[]`, `get`, or walking
+    the keys, which a plugin does to judge each one): every other one is reported as not imported."""
+
+    def __init__(self, owner: Element, items: dict[str, Element]):
+        super().__init__(items)
+        self.owner = owner
+        self.read: set[str] = set()
+
+    def __getitem__(self, key: str) -> Element:
+        self.read.add(key)
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self.read.add(key)
+        return super().get(key, default)
+
+    def __contains__(self, key: object) -> bool:
+        if isinstance(key, str):
+            self.read.add(key)
+        return super().__contains__(key)
+
+    def __iter__(self):
+        self.read.update(dict.keys(self))
+        return super().__iter__()
+
+    def understood(self, *keys: str) -> None:
+        """Keys the importer takes as read although it looks them up another way (or, as storage, not at all)."""
+        self.read.update(keys)
+
+    def unread(self) -> list[str]:
+        return [key for key in dict.keys(self) if key not in self.read]
 
 
 class MitsubaImporter:
@@ -252,8 +210,12 @@ class MitsubaImporter:
         self.toml_folder = toml_folder
         self.parameters = dict(parameters)
         self.ids: dict[str, Element] = {}
-        self.unsupported: list[str] = []
+        self.unsupported: dict[str, list] = {}  # "plugin detail" -> [count, first element]
         self.notes: list[str] = []
+        self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
+        self._properties: dict[int, Properties] = {}
+        self._hidden_emitters: Element | None = None  # the integrator asking for hide_emitters
+        self.search_folders: list[Path] = [xml_path.parent]  # <path> folders, then the scene's
         self.materials: dict[str, dict] = {}
         self._material_of_element: dict[tuple[int, bool], str] = {}
         self.textures: dict[str, dict] = {}
@@ -268,11 +230,10 @@ class MitsubaImporter:
 
     def fail(self, element: Element, message: str, attribute: str | None = None) -> SpectraceError:
         """The error for a problem at an element (or one of its attributes): where names the file and the path."""
-        place = f"{element.path}@{_shown(attribute)}" if attribute else element.path
-        return SpectraceError(f"{message} (line {element.line})", where=f"{self.xml_path}: {place}")
+        return element_error(element, message, attribute)
 
     def where(self, element: Element) -> str:
-        return f"{self.xml_path}: {element.path}"
+        return f"{element.file or self.xml_path}: {element.path}"
 
     @overload
     def attribute(self, element: Element, key: str, default: str) -> str: ...
@@ -281,22 +242,8 @@ class MitsubaImporter:
     def attribute(self, element: Element, key: str, default: None = None) -> str | None: ...
 
     def attribute(self, element: Element, key: str, default: str | None = None) -> str | None:
-        """An attribute with $parameters substituted."""
-        value = element.get(key, default)
-        if value is None or "$" not in value:
-            return value
-
-        def substitute(match: re.Match) -> str:
-            name = match.group(1)
-            if name not in self.parameters:
-                raise self.fail(
-                    element,
-                    f'undefined parameter ${name} (add <default name="{name}" value="..."/> or -D {name}=...)',
-                    key,
-                )
-            return self.parameters[name]
-
-        return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", substitute, value)
+        """An attribute ($parameters were substituted when the file was read: spectrace.interop.mitsuba_tree)."""
+        return element.get(key, default)
 
     def required(self, element: Element, key: str) -> str:
         value = self.attribute(element, key)
@@ -314,7 +261,49 @@ class MitsubaImporter:
         return properties[key]
 
     def unsupported_plugin(self, element: Element, detail: str = "") -> None:
-        self.unsupported.append(f"{element.label()}{detail} (line {element.line})")
+        """Record what spectrace cannot represent; the error names each once, with its count and first line."""
+        entry = self.unsupported.setdefault(f"{element.label()}{detail}", [0, element])
+        entry[0] += 1
+
+    def unsupported_object(self, element: Element, detail: str = "") -> None:
+        """A plugin spectrace does not import at all, and the plugins nested in it (or referenced from it) that it
+        would not import either, so that one error names all of them."""
+        self.unsupported_plugin(element, detail)
+        seen = {id(element)}
+        pending = list(element.children)
+        while pending:
+            child = pending.pop(0)
+            if child.tag == "ref":
+                identifier = child.get("id")
+                if identifier is None or identifier not in self.ids:
+                    continue
+                child = self.ids[identifier]
+            if id(child) in seen:
+                continue
+            seen.add(id(child))
+            kind = child.get("type")
+            if child.tag in _OBJECT_TAGS and kind is not None and not _importable(child.tag, kind):
+                self.unsupported_plugin(child)
+            pending += child.children
+
+    def at(self, element: Element) -> str:
+        """'line N' of an element, or 'line N of other.xml' for one from an <include>d file (notes, messages)."""
+        return f"line {element.line}" + (
+            f" of {_shown(element.file.name, 100)}" if element.file not in (None, self.xml_path) else ""
+        )
+
+    def unsupported_text(self) -> str:
+        parts = []
+        for text, (count, element) in self.unsupported.items():
+            place = self.at(element)
+            parts.append(f"{text} ({place})" if count == 1 else f"{text} ({count} times, first at {place})")
+        return ", ".join(parts)
+
+    def nested(self, properties: Properties, tag: str) -> list[Element]:
+        """The children (nested or referenced) of one kind, e.g. a shape's bsdf, read."""
+        keys = [key for key, child in properties.items() if self.resolve(child).tag == tag]
+        properties.understood(*keys)
+        return [self.resolve(properties[key]) for key in keys]
 
     def parse_number(self, text: str, element: Element, key: str) -> float:
         """A finite number that float32 (Mitsuba's and the renderer's precision) holds."""
@@ -397,8 +386,11 @@ class MitsubaImporter:
     def leave(self) -> None:
         self._resolving.pop()
 
-    def properties(self, element: Element) -> dict[str, Element]:
-        """Named children (property elements, references, nested objects); unnamed nested objects by tag."""
+    def properties(self, element: Element) -> Properties:
+        """Named children (property elements, references, nested objects); unnamed nested objects by tag. The same
+        object each time for one element, so that what was read of it adds up."""
+        if id(element) in self._properties:
+            return self._properties[id(element)]
         found: dict[str, Element] = {}
         for index, child in enumerate(element.children):
             name = child.get("name")
@@ -407,7 +399,8 @@ class MitsubaImporter:
             if name is None and child.tag in _OBJECT_TAGS:
                 name = child.tag if child.tag not in found else f"{child.tag}#{index}"
             found[name or f"#{index}"] = child
-        return found
+        properties = self._properties[id(element)] = Properties(element, found)
+        return properties
 
     # -------------------------------------------------- transforms
 
@@ -434,7 +427,15 @@ class MitsubaImporter:
                 axis = self.vector(step)
                 if not any(axis):
                     raise self.fail(step, "the rotation axis (x, y, z) must not be zero")
-                steps.append({"rotate": {"axis": axis, "angle": angle}})
+                if abs(float(np.linalg.norm(axis)) - 1.0) <= 1e-7:
+                    steps.append({"rotate": {"axis": axis, "angle": angle}})
+                else:
+                    # Mitsuba does not normalise the axis: its Rodrigues matrix with a longer axis also stretches.
+                    steps.append({"matrix": _unnormalised_rotation(axis, angle).tolist()})
+                    self.notes.append(
+                        f"{self.at(step)}: rotate axis {tuple(axis)} is not a unit vector; Mitsuba does not "
+                        "normalise it (the step also scales), and neither does the import"
+                    )
             elif step.tag == "matrix":
                 values = self.numbers(step, "value")
                 if len(values) == 9:
@@ -523,7 +524,7 @@ class MitsubaImporter:
             return {"texture": self._texture_of_element[cache]}
         module = TEXTURE_MODULES.get(self.kind(element))
         if module is None:
-            self.unsupported_plugin(element, f" as {key}")
+            self.unsupported_object(element, f" as {key}")
             return None
         table = module.from_mitsuba(self, element, self.properties(element))
         if table is None:
@@ -582,7 +583,7 @@ class MitsubaImporter:
     def input_file(self, element: Element, what: str = "file") -> str:
         """A file named by a property's value, relative to the XML: checked to exist, and written relative to the
         TOML."""
-        path = self.xml_path.parent / self.required(element, "value")
+        path = self.find_file(element, self.required(element, "value"))
         try:
             found = path.is_file()
         except (OSError, ValueError):  # e.g. a name too long for the file system
@@ -590,6 +591,20 @@ class MitsubaImporter:
         if not found:
             raise self.fail(element, f"{what} '{_shown(str(path), 200)}' does not exist or is not a file", "value")
         return _relative_path(path, self.toml_folder)
+
+    def find_file(self, element: Element, name: str) -> Path:
+        """A file named in the scene, looked up as Mitsuba's file resolver does: the <path> folders, then the scene's
+        folder (and, for an element of an <include>d file, that file's folder first). Where none holds it, the path
+        in the scene's folder, for the message."""
+        first = [element.file.parent] if element.file is not None and element.file != self.xml_path else []
+        for folder in (*first, *self.search_folders):
+            candidate = folder / name
+            try:
+                if candidate.exists():
+                    return candidate
+            except (OSError, ValueError):
+                break
+        return self.xml_path.parent / name
 
     def choice(self, element: Element, options: tuple[str, ...]) -> str:
         """A string property that must be one of `options`."""
@@ -713,7 +728,7 @@ class MitsubaImporter:
     def spd_file(self, element: Element) -> list[list[float]]:
         """An .spd file: lines 'wavelength value' (nm), '#' comments."""
         name = self.required(element, "filename")
-        path = self.xml_path.parent / name
+        path = self.find_file(element, name)
         where = f"{self.where(element)}@filename"
         data = read_input_file(path, where)
         try:
@@ -772,7 +787,7 @@ class MitsubaImporter:
         if textured and flip_v:
             name = _unique_name(f"{base}_flipped_v", self.materials)
             self.notes.append(
-                f"line {bsdf.line}: {bsdf.label()} on a rectangle or PLY shape: their texture coordinates run v up "
+                f"{self.at(bsdf)}: {bsdf.label()} on a rectangle or PLY shape: their texture coordinates run v up "
                 f"in Mitsuba and down in spectrace, so it is imported as material '{name}' with its textures' v "
                 "flipped"
             )
@@ -798,7 +813,7 @@ class MitsubaImporter:
         kind = self.kind(bsdf) if bsdf.tag == "bsdf" else None
         properties = self.properties(bsdf)
         if kind == "twosided":
-            nested = [self.resolve(child) for child in properties.values() if self.resolve(child).tag == "bsdf"]
+            nested = self.nested(properties, "bsdf")
             if len(nested) != 1:
                 self.unsupported_plugin(bsdf, " with two different sides")
                 return None
@@ -811,15 +826,16 @@ class MitsubaImporter:
             if table is None or not self.checked_textures(table, MATERIALS[table["type"]]):
                 return None
             return table
-        self.unsupported_plugin(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
+        self.unsupported_object(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
 
-    def surface_detail(self, bsdf: Element, kind: str, properties: dict[str, Element]) -> dict | None:
+    def surface_detail(self, bsdf: Element, kind: str, properties: Properties) -> dict | None:
         """The material of the one bsdf that a normalmap, bumpmap or mask adapter wraps, with the adapter's key
         added: normal_map (its `normalmap` texture), bump_map and bump_scale (its one texture, `scale`), opacity
         (`opacity`, Mitsuba's default 0.5). Mitsuba's bumpmap displaces by scale · h along the normal (its tangents
         are dp/du + scale · ∂h/∂u · n), which is spectrace's bump_scale."""
-        nested = [self.resolve(child) for child in properties.values() if self.resolve(child).tag == "bsdf"]
+        nested = self.nested(properties, "bsdf")
+        properties.understood(*properties.keys())  # each key is judged below
         if len(nested) != 1:
             raise self.fail(bsdf, f"{bsdf.label()} needs exactly one nested bsdf, got {len(nested)}")
         expected = {"normalmap": "normalmap", "bumpmap": "scale", "mask": "opacity"}[kind]
@@ -887,8 +903,8 @@ class MitsubaImporter:
         return value == "true"
 
     def roughness(self, bsdf: Element, properties: dict[str, Element]) -> float | dict | None:
-        """GGX α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None when
-        spectrace cannot represent it (recorded)."""
+        """Microfacet α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None
+        when spectrace cannot represent it (recorded)."""
         alpha: float | dict | None
         if "alpha_u" in properties or "alpha_v" in properties:
             u_element = properties.get("alpha_u", properties.get("alpha_v"))
@@ -913,15 +929,19 @@ class MitsubaImporter:
                 alpha = float(alpha["value"])
         else:
             alpha = 0.1
-        distribution = self.text(properties["distribution"]) if "distribution" in properties else "beckmann"
-        if distribution != "ggx":
-            self.notes.append(
-                f"line {bsdf.line}: {bsdf.label()} uses the {distribution} distribution; imported as "
-                f"GGX with the same alpha (spectrace has GGX only; highlights differ slightly)"
-            )
         if isinstance(alpha, float) and not ROUGHNESS_RANGE.contains(alpha):
             raise self.fail(bsdf, f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha:g}")
         return alpha
+
+    def distribution(self, bsdf: Element, properties: dict[str, Element]) -> str:
+        """The microfacet distribution of a rough Mitsuba BSDF (its default: beckmann)."""
+        if "distribution" not in properties:
+            return "beckmann"
+        element = self.resolve(properties["distribution"])
+        value = self.text(element)
+        if value not in DISTRIBUTIONS:
+            raise self.fail(element, f"unknown distribution '{_shown(value)}' (Mitsuba's: ggx, beckmann)", "value")
+        return value
 
     def ior(self, bsdf: Element, properties: dict[str, Element], key: str, default: float) -> float:
         """An index of refraction property (int_ior, ext_ior): a number or one of Mitsuba's names."""
@@ -945,15 +965,17 @@ class MitsubaImporter:
     def shape(self, element: Element, index: int) -> dict | None:
         kind = self.kind(element)
         if kind not in SUPPORTED["shape"]:
-            self.unsupported_plugin(element)
+            self.unsupported_object(element)
             return None
         properties = self.properties(element)
         name = element.get("id") or element.get("name") or f"{kind}{index}"
         table: dict = {"name": name}
         steps: list[dict] = []
-        if kind in ("obj", "ply"):
+        if kind in ("obj", "ply", "serialized"):
             filename = self.child(properties, "filename", element)
             table |= {"type": "mesh", "file": self.input_file(filename, "mesh file")}
+            if kind == "serialized" and "shape_index" in properties:
+                table["shape_index"] = self.integer(properties["shape_index"], low=0)
         else:
             table["type"] = kind
         if kind == "sphere":
@@ -962,25 +984,29 @@ class MitsubaImporter:
                 raise self.fail(properties["radius"], f"a sphere's radius must be > 0, got {radius:g}", "value")
             centre = self.vector(properties["center"]) if "center" in properties else [0.0, 0.0, 0.0]
             steps += [{"scale": radius}, {"translate": centre}]
+        if kind == "cylinder":
+            steps += self.cylinder_steps(properties)
         if "to_world" in properties:
             steps += self.transform_steps(properties["to_world"])
         flip = "flip_normals" in properties and self.text(properties["flip_normals"]) == "true"
-        if flip:
+        if flip and kind in ("sphere", "disk", "cylinder"):
+            table["flip_normals"] = True
+        elif flip:
             if kind != "rectangle":
                 self.unsupported_plugin(element, " with flip_normals")
-            steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring the flat square reverses its winding
+            steps.insert(0, {"scale": [1.0, 1.0, -1.0]})  # mirroring the flat square turns its face over
         if steps:
             table["transform"] = steps
-        if kind in ("obj", "ply", "sphere"):
+        if kind in ("obj", "ply", "serialized", "sphere"):
             face_normals = self.boolean(properties["face_normals"]) if "face_normals" in properties else False
             # Mitsuba 3 shades its meshes smoothly, computing vertex normals when the file has none, unless
             # face_normals is set; spectrace makes none up unless asked (face_normals = false) and shades the sphere
             # smoothly by default.
             if face_normals or kind != "sphere":
                 table["face_normals"] = face_normals
-        bsdf = properties.get("bsdf") or next((c for c in properties.values() if self.resolve(c).tag == "bsdf"), None)
+        bsdf = next(iter(self.nested(properties, "bsdf")), None)
         table["material"] = self.material(bsdf, name, flip_v=kind in _V_UP_SHAPES)
-        emitter = next((self.resolve(c) for c in properties.values() if self.resolve(c).tag == "emitter"), None)
+        emitter = next(iter(self.nested(properties, "emitter")), None)
         if emitter is not None:
             module = SHAPE_EMITTER_MODULES.get(self.kind(emitter))
             if module is None:
@@ -991,6 +1017,28 @@ class MitsubaImporter:
                 table["emitter"] = emitter_table
         return table if table["material"] is not None else None
 
+    def cylinder_steps(self, properties: dict[str, Element]) -> list[dict]:
+        """Mitsuba's cylinder from p0 to p1 of `radius`: the unit cylinder scaled by (r, r, |p1 − p0|), turned by the
+        frame Mitsuba builds around the axis (its coordinate_system, Duff et al. 2017, which sets where u = 0 is),
+        moved to p0."""
+        radius = self.number(properties["radius"]) if "radius" in properties else 1.0
+        if not radius > 0.0:
+            raise self.fail(properties["radius"], f"a cylinder's radius must be > 0, got {radius:g}", "value")
+        p0 = np.array(self.vector(properties["p0"]) if "p0" in properties else [0.0, 0.0, 0.0])
+        p1 = np.array(self.vector(properties["p1"]) if "p1" in properties else [0.0, 0.0, 1.0])
+        length = float(np.linalg.norm(p1 - p0))
+        if not length > 0.0:
+            raise self.fail(properties.get("p1") or properties["p0"], "a cylinder's p0 and p1 must differ", "x")
+        n = (p1 - p0) / length
+        sign = math.copysign(1.0, n[2])
+        a = -1.0 / (sign + n[2])
+        b = n[0] * n[1] * a
+        s = [1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]]
+        t = [b, sign + n[1] * n[1] * a, -n[1]]
+        frame = np.eye(4)
+        frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = s, t, n, p0
+        return [{"scale": [radius, radius, length]}, {"matrix": frame.tolist()}]
+
     def light(self, element: Element) -> dict | None:
         kind = self.kind(element)
         properties = self.properties(element)
@@ -998,18 +1046,21 @@ class MitsubaImporter:
         if kind in EMITTER_MODULES:
             table = EMITTER_MODULES[kind].from_mitsuba(self, element, properties, matrix)
             return table if table is None or self.checked_textures(table, LIGHTS[table["type"]]) else None
-        self.unsupported_plugin(element)
+        self.unsupported_object(element, " (not on a shape)" if kind in SHAPE_EMITTER_MODULES else "")
         return None
 
     def sensor(self, element: Element, data: dict) -> None:
         if self.kind(element) != "perspective":
-            self.unsupported_plugin(element)
+            self.unsupported_object(element)
             return
         properties = self.properties(element)
         for key, child in properties.items():
-            if key.startswith("principal_point_offset") and self.number(child) != 0.0:
-                self.unsupported_plugin(element, f" with {_shown(key)}")
-        film = properties.get("film")
+            if key.startswith("principal_point_offset"):
+                properties.understood(key)
+                if self.number(child) != 0.0:
+                    self.unsupported_plugin(element, f" with {_shown(key)}")
+        # Nested or referenced (a scene may declare its film or sampler at the top and refer to it by id).
+        film = next(iter(self.nested(properties, "film")), None)
         width, height = MITSUBA_DEFAULT_FILM
         self.origins["film"] = element
         if film is not None:
@@ -1017,15 +1068,17 @@ class MitsubaImporter:
             if self.kind(film) not in SUPPORTED["film"]:
                 self.unsupported_plugin(film)
             film_properties = self.properties(film)
+            film_properties.understood(*_FILM_STORAGE)
             width = self.integer(film_properties["width"], low=1) if "width" in film_properties else width
             height = self.integer(film_properties["height"], low=1) if "height" in film_properties else height
-            for key in film_properties:
+            for key in list(film_properties.keys()):
                 if key.startswith("crop_"):
+                    film_properties.understood(key)
                     self.unsupported_plugin(film, f" with {_shown(key)}")
-            rfilter = film_properties.get("rfilter")
+            rfilter = next(iter(self.nested(film_properties, "rfilter")), None)
             if rfilter is not None and rfilter.get("type") != "box":
                 self.notes.append(
-                    f"line {rfilter.line}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
+                    f"{self.at(rfilter)}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
                     "not imported: spectrace averages the samples inside each pixel (a box filter)"
                 )
         data["film"] = {"width": width, "height": height}
@@ -1045,7 +1098,9 @@ class MitsubaImporter:
             "fov_axis": "x",
         }
         self.origins["camera"] = element
-        sampler = properties.get("sampler")
+        sampler = next(iter(self.nested(properties, "sampler")), None)
+        # A pinhole has no focus: Mitsuba's perspective sensor takes focus_distance and does nothing with it.
+        properties.understood("focus_distance")
         if sampler is not None:
             sampler_properties = self.properties(sampler)
             data["sampler"] = {}
@@ -1056,7 +1111,7 @@ class MitsubaImporter:
                 data["sampler"]["seed"] = self.integer(sampler_properties["seed"], low=0)
             if self.kind(sampler) != "independent":
                 self.notes.append(
-                    f"line {sampler.line}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
+                    f"{self.at(sampler)}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
                     "spectrace uses its own sampler (same sample count)"
                 )
 
@@ -1096,7 +1151,7 @@ class MitsubaImporter:
     def integrator(self, element: Element, data: dict) -> None:
         kind = self.kind(element)
         if kind not in SUPPORTED["integrator"]:
-            self.unsupported_plugin(element)
+            self.unsupported_object(element)
             return
         properties = self.properties(element)
         settings = {"type": "path", "max_depth": -1}  # Mitsuba's path tracers default to unbounded depth
@@ -1104,24 +1159,47 @@ class MitsubaImporter:
             settings["max_depth"] = self.integer(properties["max_depth"])
         if "rr_depth" in properties:
             settings["rr_depth"] = self.integer(properties["rr_depth"])
+        if "hide_emitters" in properties and self.boolean(properties["hide_emitters"]):
+            # Mitsuba's camera rays then see no environment (spectrace's hide_environment) and pass through area
+            # lights, which spectrace's cannot: a scene with area lights is refused in run().
+            settings["hide_environment"] = True
+            self._hidden_emitters = element
         if kind == "direct":
             settings["max_depth"] = 2
             self.notes.append(
-                f"line {element.line}: integrator 'direct' imported as path tracing with max_depth 2 "
+                f"{self.at(element)}: integrator 'direct' imported as path tracing with max_depth 2 "
                 "(emitters seen directly and direct light)"
             )
+            # Mitsuba's direct integrator's sample counts per technique change the noise, not the mean.
+            properties.understood("emitter_samples", "bsdf_samples", "shading_samples")
         elif kind.startswith("volpath"):
-            self.notes.append(f"line {element.line}: integrator '{kind}' imported as 'path' (spectrace has no media)")
+            self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path' (spectrace has no media)")
+        elif kind == "moment":
+            # Mitsuba's moment integrator renders its nested integrator's image with the second moment as extra
+            # channels: the image is the nested one's.
+            nested = self.nested(properties, "integrator")
+            if len(nested) != 1:
+                raise self.fail(element, f"integrator 'moment' needs exactly one nested integrator, got {len(nested)}")
+            self.notes.append(
+                f"{self.at(element)}: integrator 'moment' imported as the integrator it holds (spectrace's image "
+                "has no moment channels)"
+            )
+            self.integrator(nested[0], data)
+            return
         data["integrator"] = settings
         self.origins["integrator"] = element
 
     # -------------------------------------------------- the scene
 
-    def run(self, root: Element) -> dict:
-        for child in root.children:
-            if child.tag == "default":
-                self.parameters.setdefault(self.required(child, "name"), self.required(child, "value"))
+    def run(self, tree: SceneTree) -> dict:
+        root = tree.root
+        self.search_folders = tree.search_folders
+        if tree.unused_parameters:
+            self.notes.append(
+                "parameters the scene does not use: " + ", ".join(_shown(name) for name in tree.unused_parameters)
+            )
         self._collect_ids(root)
+        referenced = self._referenced_ids(root)
         data: dict = {"integrator": {"type": "path", "max_depth": -1}}
         shapes: list[dict] = []
         lights: list[dict] = []
@@ -1129,7 +1207,7 @@ class MitsubaImporter:
         if not sensors:
             raise SpectraceError("the scene has no <sensor>; spectrace needs a camera", where=str(self.xml_path))
         if len(sensors) > 1:
-            self.notes.append(f"line {sensors[1].line}: only the first of {len(sensors)} sensors is imported")
+            self.notes.append(f"{self.at(sensors[1])}: only the first of {len(sensors)} sensors is imported")
         self.sensor(sensors[0], data)
         for index, child in enumerate(root.children):
             if child.tag == "shape":
@@ -1137,6 +1215,8 @@ class MitsubaImporter:
                     self.origins[f"shapes[{len(shapes)}]"] = child
                     shapes.append(table)
             elif child.tag == "emitter":
+                if child.get("type") == "area" and child.get("id") in referenced:
+                    continue  # an area light declared here and given to shapes by reference
                 if (table := self.light(child)) is not None:
                     self.origins[f"lights[{len(lights)}]"] = child
                     lights.append(table)
@@ -1144,16 +1224,34 @@ class MitsubaImporter:
                 self.integrator(child, data)
             elif child.tag in ("bsdf", "texture", "spectrum", "rgb", "default", "sensor", "alias"):
                 continue  # declarations: imported where they are used
-            elif child.tag in _OBJECT_TAGS or child.tag == "include":
-                self.unsupported_plugin(child)
+            elif child.tag in ("film", "sampler", "rfilter") and child.get("id") in referenced:
+                continue  # the same, for what a sensor refers to
+            elif child.tag in _OBJECT_TAGS:
+                self.unsupported_object(child)
         if self.unsupported:
             raise SpectraceError(
-                f"unsupported Mitsuba 3 plugins: {', '.join(self.unsupported)} (spectrace imports {supported_text()})",
+                f"unsupported Mitsuba 3 plugins: {self.unsupported_text()} (spectrace imports {supported_text()})",
                 where=str(self.xml_path),
             )
-        environments = [self.origins[f"lights[{i}]"] for i, light in enumerate(lights) if light["type"] == "constant"]
+        environments = [
+            self.origins[f"lights[{i}]"]
+            for i, light in enumerate(lights)
+            if getattr(LIGHTS[light["type"]], "IS_ENVIRONMENT", False)
+        ]
         if len(environments) > 1:
-            raise self.fail(environments[1], "a second constant emitter; spectrace takes one environment light")
+            raise self.fail(environments[1], "a second environment emitter; spectrace takes one environment light")
+        if self._hidden_emitters is not None and any("emitter" in shape for shape in shapes):
+            self.unsupported_plugin(
+                self._hidden_emitters,
+                " with hide_emitters in a scene with area lights (Mitsuba's camera rays pass through them; "
+                "spectrace hides only the environment)",
+            )
+        if self.unsupported:
+            raise SpectraceError(
+                f"unsupported Mitsuba 3 plugins: {self.unsupported_text()} (spectrace imports {supported_text()})",
+                where=str(self.xml_path),
+            )
+        self.report_unread_properties()
         if self.textures:
             data["textures"] = self.textures
         data["materials"] = self.materials
@@ -1165,14 +1263,49 @@ class MitsubaImporter:
             if key in data and data[key] != []
         }
 
+    def report_unread_properties(self) -> None:
+        """A warning for each property of an imported object that nothing read: spectrace does not know it."""
+        for properties in self._properties.values():
+            owner = properties.owner
+            for key in properties.unread():
+                child = dict.__getitem__(properties, key)
+                name = child.label() if key.startswith("#") or "#" in key else f"'{_shown(key)}'"
+                self.warnings.append(
+                    f"{_shown(str(child.file or self.xml_path), 200)}:{child.line}: {owner.label()}: property "
+                    f"{name} is not imported (spectrace does not know it)"
+                )
+
+    def _referenced_ids(self, root: Element) -> set[str]:
+        found: set[str] = set()
+        pending = [root]
+        while pending:
+            element = pending.pop()
+            if element.tag == "ref" and (identifier := element.get("id")) is not None:
+                found.add(identifier)
+            pending += element.children
+        return found
+
     def _collect_ids(self, root: Element) -> None:
+        aliases: list[Element] = []
         pending = [root]
         while pending:
             element = pending.pop()
             for child in element.children:
-                if (identifier := child.get("id")) is not None and child.tag != "ref":
-                    self.ids.setdefault(identifier, child)
+                identifier = child.get("id") if child.tag not in ("ref", "alias") else None
+                # Mitsuba refuses a scene whose objects share an id: a <ref> could not tell them apart.
+                if identifier is not None and (other := self.ids.setdefault(identifier, child)) is not child:
+                    first, second = sorted((other, child), key=lambda e: (e.file != self.xml_path, e.line))
+                    raise self.fail(second, f"duplicate id '{_shown(identifier)}' (also at {self.at(first)})", "id")
+                if child.tag == "alias":
+                    aliases.append(child)
                 pending.append(child)
+        for alias in sorted(aliases, key=lambda e: e.line):  # <alias id="a" as="b"/>: b names a's object too
+            source, target = self.required(alias, "id"), self.required(alias, "as")
+            if source not in self.ids:
+                raise self.fail(alias, f"alias of an undefined id '{_shown(source)}'", "id")
+            if target in self.ids:
+                raise self.fail(alias, f"alias '{_shown(target)}' names an id already taken", "as")
+            self.ids[target] = self.ids[source]
 
     def imported_error(self, error: SpectraceError, toml_path: Path) -> SpectraceError:
         """A loader's complaint about the imported TOML, told at the XML element the value came from."""
@@ -1190,6 +1323,17 @@ class MitsubaImporter:
                 f"the imported scene does not load: {error.message}{detail}", where=str(self.xml_path)
             )
         return self.fail(element, f"{error.message}{detail}")
+
+
+def _unnormalised_rotation(axis: list[float], degrees: float) -> np.ndarray:
+    """Mitsuba's rotate step as it builds it, axis a as given: cos θ I + sin θ [a]× + (1 − cos θ) a aᵀ (a rotation only
+    for a unit axis)."""
+    a = np.asarray(axis, np.float64)
+    cos, sin = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    cross = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    matrix = np.eye(4)
+    matrix[:3, :3] = cos * np.eye(3) + sin * cross + (1.0 - cos) * np.outer(a, a)
+    return matrix
 
 
 def _unique_name(base: str, taken: dict) -> str:
@@ -1220,18 +1364,40 @@ def check_output_path(toml_path: Path, xml_path: Path | None = None) -> None:
 # ---------------------------------------------------------------- public API
 
 
+WARNING_PREFIX = "warning: "
+
+
+def _imported(importer: MitsubaImporter, strict: bool) -> dict:
+    """The scene data; the properties nothing read are warnings among the notes, or with `strict` one error."""
+    data = importer.run(read_scene(importer.xml_path, importer.parameters))
+    if importer.warnings and strict:
+        raise SpectraceError(
+            f"{len(importer.warnings)} {'property' if len(importer.warnings) == 1 else 'properties'} not imported "
+            f"(--strict): {'; '.join(importer.warnings)}",
+            where=str(importer.xml_path),
+        )
+    importer.notes += [WARNING_PREFIX + warning for warning in importer.warnings]
+    return data
+
+
 def mitsuba_scene_data(
-    xml_path: str | Path, toml_folder: str | Path | None = None, parameters: dict[str, str] | None = None
+    xml_path: str | Path,
+    toml_folder: str | Path | None = None,
+    parameters: dict[str, str] | None = None,
+    strict: bool = False,
 ) -> tuple[dict, list[str]]:
     """(scene data in the TOML format's structure, notes) for a Mitsuba 3 XML scene. Mesh paths are written relative
     to `toml_folder` (default: the XML's folder). `parameters` set `$name` values, as `mitsuba -D name=value`.
-    Raises SpectraceError naming every unsupported plugin."""
+    Raises SpectraceError naming every unsupported plugin. Properties spectrace does not know are notes starting
+    with "warning: ", or with `strict` an error naming each."""
     xml_path = Path(xml_path)
     importer = MitsubaImporter(xml_path, Path(toml_folder) if toml_folder else xml_path.parent, parameters or {})
-    return importer.run(parse_xml(xml_path)), importer.notes
+    return _imported(importer, strict), importer.notes
 
 
-def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None) -> list[str]:
+def import_mitsuba(
+    xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None, strict: bool = False
+) -> list[str]:
     """Write the spectrace TOML scene for a Mitsuba 3 XML scene and check that it loads; returns the notes.
 
     The output is checked first (a folder, a read-only place) and replaced only by a complete TOML that loads: a
@@ -1243,11 +1409,11 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
     xml_path, toml_path = Path(xml_path), Path(toml_path)
     check_output_path(toml_path, xml_path)
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
-    data = importer.run(parse_xml(xml_path))
+    data = _imported(importer, strict)
     header = "\n".join(
         [
             f"Imported from the Mitsuba 3 scene {_shown(xml_path.name, 200)} by `spectrace import-mitsuba`.",
-            *(f"note: {note}" for note in importer.notes),
+            *(note if note.startswith(WARNING_PREFIX) else f"note: {note}" for note in importer.notes),
         ]
     )
     text = dumps(data, header=header)
@@ -1266,11 +1432,11 @@ def import_mitsuba(xml_path: str | Path, toml_path: str | Path, parameters: dict
     return importer.notes
 
 
-def load_mitsuba_scene(xml_path: str | Path, parameters: dict[str, str] | None = None):
+def load_mitsuba_scene(xml_path: str | Path, parameters: dict[str, str] | None = None, strict: bool = False):
     """A `Scene` from a Mitsuba 3 XML file (through a temporary TOML file)."""
     from spectrace.scene import load_scene
 
     with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
         toml_path = Path(folder) / (Path(xml_path).stem + ".toml")
-        import_mitsuba(xml_path, toml_path, parameters)
+        import_mitsuba(xml_path, toml_path, parameters, strict)
         return load_scene(toml_path).with_overrides(source=Path(xml_path))

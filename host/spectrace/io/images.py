@@ -10,6 +10,8 @@ from spectrace.errors import SpectraceError
 from spectrace.io.input_files import regular_file
 from spectrace.scene import limits
 
+RGBE_SUFFIXES = (".hdr", ".rgbe")  # Radiance HDR: spectrace.io.rgbe
+
 
 def read_picture(path: Path, where: str) -> np.ndarray:
     """(height, width, 3) values of a picture in [0, 1]: 8/16-bit PNG or JPEG code values divided by their maximum,
@@ -17,6 +19,8 @@ def read_picture(path: Path, where: str) -> np.ndarray:
     if path.suffix.lower() == ".exr":
         return read_environment_map(path, where, what="image").astype(np.float64)
     regular_file(path, where, what="image")
+    if (sixteen := _read_png16(path, where, "image")) is not None:
+        return np.repeat(sixteen, 3, axis=-1) if sixteen.shape[-1] == 1 else sixteen
 
     def decode(picture) -> tuple[np.ndarray, bool]:
         bits16 = picture.mode.startswith("I;16") or picture.mode == "I"
@@ -49,6 +53,27 @@ def _read_with_pillow(path: Path, where: str, what: str, decode):
         raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
 
 
+def _read_png16(path: Path, where: str, what: str) -> np.ndarray | None:
+    """A 16-bit RGB, RGBA or grey + alpha PNG's samples over 65535, (height, width, 1 or 3) without alpha, read at
+    their 16 bits (spectrace.io.png16: Pillow reads them at 8); None for any other file."""
+    from spectrace.io import png16
+
+    try:
+        with open(path, "rb") as file:
+            header = png16.sixteen_bit_colour_header(file.read(33))
+        if header is None:
+            return None
+        if problem := limits.image_size_problem(header[0], header[1]):
+            raise SpectraceError(f"{what} '{path}': {problem}", where=where)
+        samples = png16.read_png16(path)
+    except SpectraceError:
+        raise
+    except Exception as exc:  # a malformed file: zlib, Pillow and the reader's own errors
+        raise SpectraceError(f"cannot read {what} '{path}': {exc}", where=where) from None
+    colour = samples[..., :1] if samples.shape[-1] == 2 else samples[..., :3]
+    return colour.astype(np.float64) / 65535.0
+
+
 def _exr_size(path: Path) -> tuple[int, int]:
     """(width, height) of an OpenEXR file's data window, from its header alone."""
     import OpenEXR
@@ -78,7 +103,15 @@ def read_exr_checked(path: Path, where: str, what: str) -> dict:
 
 
 def read_environment_map(path: Path, where: str, what: str = "environment map") -> np.ndarray:
-    """The (height, width, 3) linear sRGB pixels of an OpenEXR latitude-longitude map (or a picture's EXR)."""
+    """The (height, width, 3) linear sRGB pixels of an OpenEXR or Radiance HDR (.hdr, .rgbe) latitude-longitude map
+    (or a picture's EXR)."""
+    if path.suffix.lower() in RGBE_SUFFIXES:
+        from spectrace.io.rgbe import read_rgbe
+
+        rgb = read_rgbe(path, where, what)
+        if not np.all(np.isfinite(rgb)):
+            raise SpectraceError(f"{what} '{path}' has NaN or infinite pixels", where=where)
+        return rgb
     channels = read_exr_checked(path, where, what)
     if "RGB" in channels:
         rgb = channels["RGB"]
@@ -96,9 +129,13 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
     """(values (height, width, channels), encoded) of an image texture: channels 1 (grey) or 3 (an alpha channel is
     dropped). PNG, JPEG, TIFF and the other formats Pillow reads give 8/16-bit code values divided by their maximum
     (encoded = True: the caller decodes the transfer curve); 32-bit float images (TIFF mode F) and OpenEXR
-    (R, G, B, or Y) give their values as stored (encoded = False). The size in the header is checked before anything
-    is decoded; non-finite values are refused."""
-    if path.suffix.lower() == ".exr":
+    (R, G, B, or Y) and Radiance RGBE (.hdr) give their values as stored (encoded = False). The size in the header is
+    checked before anything is decoded; non-finite values are refused."""
+    if path.suffix.lower() in RGBE_SUFFIXES:
+        from spectrace.io.rgbe import read_rgbe
+
+        values, encoded = read_rgbe(path, where, "texture").astype(np.float64), False
+    elif path.suffix.lower() == ".exr":
         channels = read_exr_checked(path, where, "texture")  # which checks it is a regular file
         if "RGB" in channels or "RGBA" in channels:
             values = np.asarray(channels.get("RGB", channels.get("RGBA")))[..., :3]
@@ -113,7 +150,10 @@ def read_texture_image(path: Path, where: str) -> tuple[np.ndarray, bool]:
         values = np.asarray(values, np.float64)
     else:
         regular_file(path, where, what="texture")
-        values, encoded = _read_with_pillow(path, where, "texture", pil_image_values)
+        if (sixteen := _read_png16(path, where, "texture")) is not None:
+            values, encoded = sixteen, True
+        else:
+            values, encoded = _read_with_pillow(path, where, "texture", pil_image_values)
     if not np.all(np.isfinite(values)):
         raise SpectraceError(f"texture '{path}' has NaN or infinite values", where=where)
     return values, encoded

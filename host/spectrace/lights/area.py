@@ -1,15 +1,19 @@
-"""Area lights: a shape's `emitter`, emitting from each of its triangles, optionally showing an image: an emission
+"""Area lights: a shape's `emitter`, emitting from each of its triangles (or from the whole of an analytic shape: a
+sphere sampled by the cone it subtends, a disk or cylinder by area), optionally showing an image: an emission
 texture, or a display's picture, which is one (kernels/lights.cl)."""
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_TRIANGLE, NO_TEXTURE
+from spectrace.engine.device_types import LIGHT_SHAPE, LIGHT_SPHERE, LIGHT_TRIANGLE, NO_TEXTURE
 from spectrace.lights.base import LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
+
+if TYPE_CHECKING:
+    from spectrace.geometry.analytic import AnalyticSurface
 
 NAME = "area"
 MITSUBA_PLUGINS = ("area",)  # on a shape only
@@ -126,6 +130,36 @@ def write_rows(
             np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0),
         )
     return emitting
+
+
+def write_shape_rows(emitters: list[tuple[AreaEmitter, int, "AnalyticSurface"]], out: LightRows) -> list[int]:
+    """One row per emitting analytic shape (its emitter, its index among the scene's analytic shapes, its surface):
+    LIGHT_SPHERE for a sphere (sampled by the cone it subtends), LIGHT_SHAPE for a disk or cylinder (sampled by
+    area); returns the row indices, in order."""
+    indices = []
+    for e, shape_index, surface in emitters:
+        if e.image is None:
+            spectrum_offset, texture, scale = out.table.add(e.radiance), NO_TEXTURE, 1.0
+        else:
+            basis = None if e.image.primaries is None else [out.table.add(p) for p in e.image.primaries]
+            texture = out.textures.add(e.image.texture, "emission", basis=basis)
+            spectrum_offset, scale = (basis[0] if basis else 0), e.image.scale
+        area = surface.area()
+        row = light_row(
+            LIGHT_SPHERE if surface.kind == "sphere" else LIGHT_SHAPE,
+            spectrum_offset,
+            triangle=shape_index,
+            area=area,
+            two_sided=e.two_sided,
+            scale=scale,
+            texture=texture,
+        )
+        if surface.kind == "sphere":  # Light.position: the centre, with the radius in w
+            centre, radius = surface.sphere_centre_radius()
+            row = ((*centre, radius), *row[1:])
+        indices.append(len(out.rows))
+        out.add(row, np.pi * area * e.radiance.mean() * (2.0 if e.two_sided else 1.0))
+    return indices
 
 
 def from_mitsuba(importer, emitter, properties) -> dict | None:

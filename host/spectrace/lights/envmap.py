@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import LIGHT_ENVIRONMENT_MAP
+from spectrace.errors import SpectraceError
 from spectrace.io.images import read_environment_map
 from spectrace.lights.base import Light, LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
@@ -13,12 +14,21 @@ from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 
 NAME = "envmap"
-MITSUBA_PLUGINS = ()
-MITSUBA_NONE = "not mapped yet: the importer refuses Mitsuba 3's envmap and the export this light"
+MITSUBA_PLUGINS = ("envmap",)
 IS_ENVIRONMENT = True
+DEFAULT_UP = (0.0, 1.0, 0.0)
+DEFAULT_FRONT = (0.0, 0.0, -1.0)
 PARAMETERS = (
     Parameter("file", "string", "", REQUIRED, doc="latitude-longitude OpenEXR image, linear sRGB"),
     Parameter("scale", "float", "", 1.0, Range(0.0), doc="multiplies every texel's radiance"),
+    Parameter("up", "vector", "", list(DEFAULT_UP), doc="the direction the image's top row (its zenith) shows"),
+    Parameter(
+        "front",
+        "vector",
+        "",
+        list(DEFAULT_FRONT),
+        doc="the direction the image's centre shows (made perpendicular to `up`)",
+    ),
 )
 
 
@@ -30,13 +40,41 @@ class EnvironmentMap(Light):
 
     rgb: np.ndarray
     scale: float = 1.0
+    up: tuple[float, float, float] = DEFAULT_UP
+    front: tuple[float, float, float] = DEFAULT_FRONT
+
+    def world_to_map_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """The first two rows (x, y) of the rotation from world directions to the map's frame (+y its zenith, −z
+        its centre); the kernel makes the third, x × y."""
+        y = np.asarray(self.up, float) / np.linalg.norm(self.up)
+        front = np.asarray(self.front, float)
+        z = -(front - (front @ y) * y)
+        z /= np.linalg.norm(z)
+        return np.cross(y, z), y
 
 
 MODEL = EnvironmentMap
 
 
+def orientation_problem(up, front) -> str | None:
+    """Why `up` and `front` do not orient a map (zero, or parallel), or None."""
+    up, front = np.asarray(up, float), np.asarray(front, float)
+    if not (np.linalg.norm(up) > 0 and np.linalg.norm(front) > 0):
+        return "up and front must not be zero"
+    if np.linalg.norm(np.cross(up / np.linalg.norm(up), front / np.linalg.norm(front))) < 1e-6:
+        return "up and front must not be parallel"
+    return None
+
+
 def from_spec(spec, resolver, key: str) -> EnvironmentMap:
-    return EnvironmentMap(read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file")), spec.scale)
+    if problem := orientation_problem(spec.up, spec.front):
+        raise SpectraceError(problem, where=resolver.where(f"{key}.front"))
+    return EnvironmentMap(
+        read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file")),
+        spec.scale,
+        tuple(float(v) for v in spec.up),  # type: ignore[arg-type]
+        tuple(float(v) for v in spec.front),  # type: ignore[arg-type]
+    )
 
 
 def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -67,10 +105,13 @@ def write_rows(light: EnvironmentMap, out: LightRows) -> None:
     map_texels, out.map_cdf, mean_luminance = environment_map_tables(light.rgb)
     basis = [out.table.add(uplift_illuminant(primary)) for primary in np.eye(3)]
     height, width = light.rgb.shape[:2]
+    row_x, row_y = light.world_to_map_rows()
     out.add(
         light_row(
             LIGHT_ENVIRONMENT_MAP,
             basis[0],
+            position=tuple(row_x),
+            direction=tuple(row_y),
             map_fields=(basis[1], basis[2], width, height),
             texel_offset=out.add_texels(map_texels[:, :3].reshape(height, width, 3)),
             scale=light.scale,
@@ -78,3 +119,29 @@ def write_rows(light: EnvironmentMap, out: LightRows) -> None:
         4.0 * np.pi**2 * out.scene_radius**2 * light.scale * mean_luminance,
         environment=True,
     )
+
+
+def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
+    """Mitsuba 3's `envmap`: filename (a latitude-longitude image), scale, to_world. Mitsuba's map shows its local +z
+    at the image's centre and +y at the top row (measured with Mitsuba's own emitter: +x at a quarter of the width,
+    +z at half, −x at three quarters); its to_world turns those into world directions, which become `front` and
+    `up` (a translation does nothing to light from infinitely far away)."""
+    table: dict = {"type": NAME, "file": importer.input_file(importer.child(properties, "filename", emitter), "image")}
+    if "scale" in properties:
+        scale = importer.number(properties["scale"])
+        if not scale >= 0.0:
+            raise importer.fail(properties["scale"], f"scale must be >= 0, got {scale:g}", "value")
+        table["scale"] = scale
+    linear = to_world[:3, :3]
+    columns = linear / np.linalg.norm(linear, axis=0)
+    if not (np.linalg.det(linear) > 0 and np.allclose(columns.T @ columns, np.eye(3), atol=1e-5)):
+        importer.unsupported_plugin(emitter, " with a to_world that mirrors or shears (spectrace turns maps only)")
+        return None
+    up, front = (columns @ [0.0, 1.0, 0.0]).tolist(), (columns @ [0.0, 0.0, 1.0]).tolist()
+    if not np.allclose(up, DEFAULT_UP, atol=0.0) or not np.allclose(front, DEFAULT_FRONT, atol=0.0):
+        table |= {"up": up, "front": front}
+    importer.notes.append(
+        f"{importer.at(emitter)}: envmap: spectrace looks the map up at the nearest texel (Mitsuba interpolates "
+        "bilinearly)"
+    )
+    return table

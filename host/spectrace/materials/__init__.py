@@ -21,13 +21,22 @@ import numpy as np
 
 from spectrace.dispatch import module_by_model
 from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE
-from spectrace.materials import conductor, dielectric, diffuse, mirror, plastic, retroreflector, surface
+from spectrace.materials import (
+    conductor,
+    dielectric,
+    diffuse,
+    mirror,
+    plastic,
+    retroreflector,
+    surface,
+    thindielectric,
+)
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
 # Scene-file `type` -> module. A module's position is its Material.type code (MATERIAL_<NAME> in the kernels), and
 # the order in which the schema lists the types and the kernels' dispatch tests them.
-MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector)}
+MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector, thindielectric)}
 MATERIAL_CODES = {name: code for code, name in enumerate(MATERIALS)}
 material_module = module_by_model(MATERIALS.values(), "material")
 # Every material takes the surface-detail keys (surface.py) besides its own: its API constructor too.
@@ -64,7 +73,8 @@ def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
     module = material_module(material)
     row = np.zeros((), MATERIAL_DTYPE)
     row["type"] = MATERIAL_CODES[module.NAME]
-    row["reflectance_offset"] = row["eta_offset"] = row["k_offset"] = MATERIAL_NO_SPECTRUM
+    for offset in ("reflectance_offset", "eta_offset", "k_offset", "transmittance_offset", "coat_table_offset"):
+        row[offset] = MATERIAL_NO_SPECTRUM
     row["ior"] = 1.0
     row["reflectance_texture"] = row["roughness_texture"] = NO_TEXTURE
     textured = _parameter_textures(material)

@@ -5,9 +5,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.engine.device_types import MICROFACET_DISTRIBUTIONS
 from spectrace.errors import SpectraceError
 from spectrace.materials.opaque import RoughOpaque
-from spectrace.materials.parameters import Parameter, Range, roughness, specular_tint
+from spectrace.materials.parameters import (
+    DEFAULT_DISTRIBUTION,
+    Parameter,
+    Range,
+    check_distribution,
+    distribution,
+    roughness,
+    specular_tint,
+)
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
@@ -18,7 +27,8 @@ NAME = "conductor"
 MITSUBA_PLUGINS = ("conductor", "roughconductor")
 # Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
 MITSUBA_METALS = ("Au", "Ag", "Cu", "Al")
-ROUGHNESS = roughness(0.0, "GGX α; 0 = polished")
+ROUGHNESS = roughness(0.0, "microfacet α; 0 = polished")
+DISTRIBUTION = distribution()
 PARAMETERS = (
     Parameter(
         "metal",
@@ -45,19 +55,21 @@ PARAMETERS = (
         doc="imaginary part k(λ) (extinction coefficient)",
     ),
     ROUGHNESS,
+    DISTRIBUTION,
     specular_tint("multiplies the Fresnel reflectance (an artistic control; physical metals leave it out)"),
 )
 
 
 @dataclass(frozen=True)
 class ConductorMaterial(RoughOpaque):
-    """Metal of complex index of refraction η(λ) + i k(λ) relative to the outside, smooth or GGX-rough; the Fresnel
-    reflectance is multiplied by `specular_tint` when given."""
+    """Metal of complex index of refraction η(λ) + i k(λ) relative to the outside, smooth or rough (GGX or
+    Beckmann microfacets); the Fresnel reflectance is multiplied by `specular_tint` when given."""
 
     eta: Spectrum
     k: Spectrum
     roughness: float = ROUGHNESS.number_default  # or a one-channel texture
     specular_tint: Spectrum | None = None  # or a texture
+    distribution: str = DEFAULT_DISTRIBUTION
 
 
 MODEL = ConductorMaterial
@@ -92,7 +104,7 @@ def from_spec(spec, resolver, key: str) -> ConductorMaterial:
         else None
     )
     roughness = resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS)
-    return ConductorMaterial(eta, k, roughness=roughness, specular_tint=tint)
+    return ConductorMaterial(eta, k, roughness=roughness, specular_tint=tint, distribution=spec.distribution)
 
 
 def make(
@@ -101,12 +113,13 @@ def make(
     eta: SpectrumLike | None = None,
     k: SpectrumLike | None = None,
     roughness: float = ROUGHNESS.number_default,
+    distribution: str = DISTRIBUTION.default,  # type: ignore[assignment]
     specular_tint: SpectrumLike | None = None,
 ) -> ConductorMaterial:
     """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
-    index of refraction η + ik relative to the outside, dimensionless); `roughness` is the GGX α (0 = smooth
-    mirror-like metal; a number or a grey texture); `specular_tint` (a reflectance or a texture) multiplies the
-    Fresnel term."""
+    index of refraction η + ik relative to the outside, dimensionless); `roughness` is the microfacet α (0 =
+    smooth mirror-like metal; a number or a grey texture) of the `distribution` ("ggx" or "beckmann");
+    `specular_tint` (a reflectance or a texture) multiplies the Fresnel term."""
     if problem := source_problem(metal, eta, k):
         raise SpectraceError(problem)
     if metal is not None:
@@ -117,7 +130,11 @@ def make(
         k_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(k), False, "k")
     tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
     return ConductorMaterial(
-        eta_spectrum, k_spectrum, roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS), specular_tint=tint
+        eta_spectrum,
+        k_spectrum,
+        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
+        specular_tint=tint,
+        distribution=check_distribution(distribution),
     )
 
 
@@ -127,6 +144,7 @@ def write_row(row: np.ndarray, material: ConductorMaterial, table: SpectrumTable
     if material.specular_tint is not None:
         row["reflectance_offset"] = table.add(material.specular_tint)
     row["alpha"] = material.roughness
+    row["distribution"] = MICROFACET_DISTRIBUTIONS.index(material.distribution)
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
@@ -146,8 +164,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         if eta is None or k is None:
             return None
         if "rgb" in eta or "rgb" in k:
-            importer.unsupported_plugin(bsdf, " with eta or k given as rgb")
-            return None
+            eta, k = _rgb_optical_constants(importer, bsdf, eta, k)
         table = {"type": "conductor", "eta": eta, "k": k}
     else:
         material = importer.text(properties["material"]) if "material" in properties else "none"
@@ -164,6 +181,45 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         table = {"type": "conductor", "metal": material}
     if roughness != 0.0:  # a number above 0, or a texture
         table["roughness"] = roughness
+        if (kind := importer.distribution(bsdf, properties)) != DEFAULT_DISTRIBUTION:
+            table["distribution"] = kind
     if tint is not None:
         table["specular_tint"] = tint
     return table
+
+
+# Wavelengths at which an uplifted η or k is written into the imported scene (smooth curves: 5 nm loses nothing).
+_UPLIFT_STEP_NM = 5.0
+
+
+def _rgb_optical_constants(importer, bsdf, eta: dict, k: dict) -> tuple[dict, dict]:
+    """η and k given as <rgb> (Mitsuba's RGB variants use them per channel) as spectra: with both an rgb or a
+    number, `conductor_from_rgb` (the normal-incidence colour an RGB renderer shows, exactly); one beside a measured
+    spectrum is uplifted alone (`uplift_unbounded`)."""
+    from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
+    from spectrace.spectral.uplift import conductor_from_rgb, uplift_unbounded
+
+    def triple(spectrum: dict) -> list[float] | None:
+        if "rgb" in spectrum:
+            return spectrum["rgb"]
+        return [spectrum["value"]] * 3 if list(spectrum) == ["value"] else None
+
+    where = importer.where(bsdf)
+    wavelengths = np.arange(GRID_MIN_NM, GRID_MAX_NM + 0.5, _UPLIFT_STEP_NM)
+    eta_rgb, k_rgb = triple(eta), triple(k)
+    spectra: tuple
+    if eta_rgb is not None and k_rgb is not None:
+        spectra = conductor_from_rgb(eta_rgb, k_rgb, where=where)
+    else:
+        spectra = tuple(
+            uplift_unbounded(spectrum["rgb"], where) if "rgb" in spectrum else None for spectrum in (eta, k)
+        )
+    importer.notes.append(
+        f"{importer.at(bsdf)}: {bsdf.label()}: eta and k given as rgb are uplifted to smooth spectra "
+        "(docs/mitsuba.md, 'Conductors given in RGB')"
+    )
+    tables = [
+        original if spectrum is None else {"values": [[float(w), float(spectrum.evaluate(w))] for w in wavelengths]}
+        for original, spectrum in zip((eta, k), spectra)
+    ]
+    return tables[0], tables[1]

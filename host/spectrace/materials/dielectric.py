@@ -1,14 +1,23 @@
 """`dielectric`: glass, water: Fresnel reflection and Snell refraction into an interior of index n(λ), smooth or
-GGX-rough, dispersive when n depends on λ (docs/materials.md, kernels/bsdf_dielectric.cl, kernels/ior.cl)."""
+GGX- or Beckmann-rough, dispersive when n depends on λ (docs/materials.md, kernels/bsdf_dielectric.cl,
+kernels/ior.cl)."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER
+from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MICROFACET_DISTRIBUTIONS
 from spectrace.materials.base import Material
 from spectrace.materials.opaque import smooth_everywhere
-from spectrace.materials.parameters import Parameter, Range, roughness, specular_tint
+from spectrace.materials.parameters import (
+    DEFAULT_DISTRIBUTION,
+    Parameter,
+    Range,
+    check_distribution,
+    distribution,
+    roughness,
+    specular_tint,
+)
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
@@ -17,7 +26,7 @@ from spectrace.spectral.table import SpectrumTable
 
 NAME = "dielectric"
 MITSUBA_PLUGINS = ("dielectric", "roughdielectric")
-ROUGHNESS = roughness(0.0, "GGX α; 0 = polished glass")
+ROUGHNESS = roughness(0.0, "microfacet α; 0 = polished glass")
 # A number, a glass name or Sellmeier/Cauchy coefficients: spectral.glasses.index_of_refraction checks the
 # range over the whole grid.
 IOR = Parameter(
@@ -33,6 +42,7 @@ IOR = Parameter(
 PARAMETERS = (
     IOR,
     ROUGHNESS,
+    distribution(),
     specular_tint("multiplies both reflection and transmission (an artistic control; clear glass leaves it out)"),
 )
 
@@ -46,6 +56,7 @@ class DielectricMaterial(Material):
     ior: IndexOfRefraction
     roughness: float = ROUGHNESS.number_default  # or a one-channel texture
     specular_tint: Spectrum | None = None  # or a texture
+    distribution: str = DEFAULT_DISTRIBUTION
 
     has_transmission = True
 
@@ -72,17 +83,20 @@ def from_spec(spec, resolver, key: str) -> DielectricMaterial:
         index_of_refraction(ior, where=resolver.where(f"{key}.ior")),
         roughness=resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS),
         specular_tint=tint,
+        distribution=spec.distribution,
     )
 
 
 def make(
     ior: float | str | dict = IOR.number_default,
     roughness: float = ROUGHNESS.number_default,
+    distribution: str = DEFAULT_DISTRIBUTION,
     specular_tint: SpectrumLike | None = None,
 ) -> DielectricMaterial:
     """Glass or water: Fresnel reflection and Snell refraction into an interior of index `ior` relative to the
     exterior (air) — a number, a glass name ("BK7", "SF11", "N-SF11"; `spectra/glasses/`), {"sellmeier": [B1, B2, B3,
-    C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or GGX-rough (`roughness` = α). The mesh's winding must
+    C1, C2, C3]} or {"cauchy": [a, b]} (λ in µm) — smooth or rough (`roughness` = α of the microfacet
+    `distribution`, "ggx" or "beckmann"). The mesh's winding must
     face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance or a texture) multiplies
     both lobes; `roughness` may be a grey texture."""
     tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
@@ -90,6 +104,7 @@ def make(
         index_of_refraction(ior, where="ior"),
         roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
         specular_tint=tint,
+        distribution=check_distribution(distribution),
     )
 
 
@@ -108,6 +123,7 @@ def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTabl
     if material.specular_tint is not None:
         row["reflectance_offset"] = table.add(material.specular_tint)
     row["alpha"] = material.roughness
+    row["distribution"] = MICROFACET_DISTRIBUTIONS.index(material.distribution)
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
@@ -136,6 +152,8 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     table: dict = {"type": "dielectric", "ior": round(ior, 6)}
     if roughness != 0.0:  # a number above 0, or a texture
         table["roughness"] = roughness
+        if (kind := importer.distribution(bsdf, properties)) != DEFAULT_DISTRIBUTION:
+            table["distribution"] = kind
     if tints:
         table["specular_tint"] = tints["specular_reflectance"]
     return table

@@ -161,6 +161,31 @@ def roughness(default: float, doc: str) -> Parameter:
     return Parameter("roughness", "float", default=default, range=ROUGHNESS_RANGE, doc=doc, textured=True)
 
 
+# The microfacet distributions of the rough materials (MICROFACET_DISTRIBUTIONS in spectrace.engine.device_types).
+DISTRIBUTIONS = ("ggx", "beckmann")
+DEFAULT_DISTRIBUTION = "ggx"
+
+
+def distribution() -> Parameter:
+    """The microfacet distribution of a rough material's lobe (Mitsuba 3's `distribution`; GGX by default here,
+    Beckmann by default in Mitsuba)."""
+    return Parameter(
+        "distribution",
+        "distribution",
+        default=DEFAULT_DISTRIBUTION,
+        default_doc=f'`"{DEFAULT_DISTRIBUTION}"`',
+        type_doc='`"ggx"` or `"beckmann"`',
+        doc="microfacet distribution of the rough lobe (docs/materials.md); `roughness` is its α",
+    )
+
+
+def check_distribution(value: str, where: str = "distribution") -> str:
+    """`value` if it names a distribution, else a SpectraceError naming the key."""
+    if value not in DISTRIBUTIONS:
+        raise SpectraceError(f"distribution must be one of {', '.join(DISTRIBUTIONS)}, got {value!r}", where=where)
+    return value
+
+
 def reflectance(
     default: object,
     doc: str,

@@ -1,13 +1,24 @@
-"""`plastic`: a diffuse base under a clear dielectric coat, smooth or GGX-rough (docs/materials.md,
-kernels/bsdf_plastic.cl)."""
+"""`plastic`: a diffuse base under a clear dielectric coat, smooth or rough (GGX or Beckmann), its internal
+scattering linear or not in the base's albedo (docs/materials.md, kernels/bsdf_plastic.cl)."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CONSTANT
-from spectrace.materials.opaque import Opaque
-from spectrace.materials.parameters import REQUIRED, Parameter, Range, reflectance, roughness
+from spectrace.engine.device_types import IOR_CONSTANT, MICROFACET_DISTRIBUTIONS
+from spectrace.errors import SpectraceError
+from spectrace.materials.coat import rough_coat
+from spectrace.materials.opaque import Opaque, smooth_everywhere
+from spectrace.materials.parameters import (
+    DEFAULT_DISTRIBUTION,
+    REQUIRED,
+    Parameter,
+    Range,
+    check_distribution,
+    distribution,
+    reflectance,
+    roughness,
+)
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
@@ -24,17 +35,47 @@ IOR = Parameter(
     range=Range(1.0, 4.0, low_open=True),
     doc="index of refraction of the clear coat relative to the outside",
 )
-ROUGHNESS = roughness(0.0, "GGX α of the coat")
-PARAMETERS = (reflectance(REQUIRED, "albedo of the diffuse base under the coat", textured=True), IOR, ROUGHNESS)
+ROUGHNESS = roughness(0.0, "microfacet α of the coat")
+NONLINEAR = Parameter(
+    "nonlinear",
+    "bool",
+    default=False,
+    doc="light reflected back down by the coat meets the base again, so the albedo ρ becomes "
+    "ρ (1 − F_dr)/(1 − ρ F_dr) (Mitsuba 3's `nonlinear`: deeper colours)",
+)
+COAT_TRANSMISSIONS = ("smooth", "rough")
+COAT_TRANSMISSION = Parameter(
+    "coat_transmission",
+    "coat_transmission",
+    default="smooth",
+    default_doc='`"smooth"`',
+    type_doc='`"smooth"` or `"rough"`',
+    doc="how light crosses a rough coat to the base and back: by the smooth interface's 1 − F, or by the rough "
+    "interface's own transmittance, which loses what single scattering loses (Mitsuba 3's roughplastic); "
+    "`rough` needs a number `roughness`",
+)
+PARAMETERS = (
+    reflectance(REQUIRED, "albedo of the diffuse base under the coat", textured=True),
+    IOR,
+    ROUGHNESS,
+    distribution(),
+    NONLINEAR,
+    COAT_TRANSMISSION,
+)
 
 
 @dataclass(frozen=True)
 class PlasticMaterial(Opaque):
-    """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside."""
+    """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside, smooth or
+    rough (α `roughness` of the microfacet `distribution`); `nonlinear`: the internal scattering depends on the
+    albedo."""
 
     reflectance: Spectrum  # or a texture (spectrace.textures)
     ior: float = IOR.number_default
     roughness: float = ROUGHNESS.number_default  # or a one-channel texture
+    distribution: str = DEFAULT_DISTRIBUTION
+    nonlinear: bool = False
+    coat_transmission: str = "smooth"
 
     is_delta = False  # the base is diffuse whatever the coat
 
@@ -47,18 +88,55 @@ def from_spec(spec, resolver, key: str) -> PlasticMaterial:
         resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"),
         ior=spec.ior,
         roughness=resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS),
+        distribution=spec.distribution,
+        nonlinear=spec.nonlinear,
+        coat_transmission=spec.coat_transmission,
     )
 
 
+def coat_problem(coat_transmission: str, roughness) -> str | None:
+    """Why a coat's transmission cannot be tabulated, or None: the rough coat's table is made for one α."""
+    if coat_transmission == "rough" and not isinstance(roughness, (int, float)):
+        return "coat_transmission 'rough' needs a number roughness (its transmittance is tabulated for one α)"
+    return None
+
+
+def check_spec(spec) -> None:
+    if problem := coat_problem(spec.coat_transmission, spec.roughness):
+        raise ValueError(problem)
+
+
+SPEC_CHECKS = (check_spec,)
+
+
 def make(
-    reflectance: SpectrumLike, ior: float = IOR.number_default, roughness: float = ROUGHNESS.number_default
+    reflectance: SpectrumLike,
+    ior: float = IOR.number_default,
+    roughness: float = ROUGHNESS.number_default,
+    distribution: str = DEFAULT_DISTRIBUTION,
+    nonlinear: bool = False,
+    coat_transmission: str = "smooth",
 ) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
-    smooth or GGX-rough (`roughness` = α, a number or a grey texture)."""
+    smooth or rough (`roughness` = α of the microfacet `distribution`, "ggx" or "beckmann"; a number or a grey
+    texture). `nonlinear`: light the coat reflects back down meets the base again, which deepens colours (Mitsuba's
+    model of that name). `coat_transmission`: "smooth" (light crosses a rough coat by the smooth interface's
+    1 − F) or "rough" (by the rough interface's own transmittance, as Mitsuba's roughplastic; a number
+    roughness only)."""
+    if coat_transmission not in COAT_TRANSMISSIONS:
+        raise SpectraceError(
+            f"coat_transmission must be one of {', '.join(COAT_TRANSMISSIONS)}, got {coat_transmission!r}",
+            where="coat_transmission",
+        )
+    if problem := coat_problem(coat_transmission, roughness):
+        raise SpectraceError(problem, where="coat_transmission")
     return PlasticMaterial(
         spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
         ior=IOR.check(ior),
         roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
+        distribution=check_distribution(distribution),
+        nonlinear=bool(nonlinear),
+        coat_transmission=coat_transmission,
     )
 
 
@@ -67,6 +145,13 @@ def write_row(row: np.ndarray, material: PlasticMaterial, table: SpectrumTable) 
     row["ior_model"] = IOR_CONSTANT
     row["ior"] = material.ior
     row["alpha"] = material.roughness
+    row["distribution"] = MICROFACET_DISTRIBUTIONS.index(material.distribution)
+    row["nonlinear"] = int(material.nonlinear)
+    # A smooth coat's own transmittance is 1 − F: the table is only written for a rough one.
+    if material.coat_transmission == "rough" and not smooth_everywhere(material.roughness):
+        transmittance, internal = rough_coat(float(material.ior), float(material.roughness), material.distribution)
+        row["coat_table_offset"] = table.add_row(transmittance)
+        row["coat_internal_reflectance"] = internal
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
@@ -82,9 +167,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         if specular is not None and specular != {"value": 1.0}:
             importer.unsupported_plugin(bsdf, " with specular_reflectance other than 1")
             return None
-    if "nonlinear" in properties and importer.text(properties["nonlinear"]) == "true":
-        importer.unsupported_plugin(bsdf, " with nonlinear = true")
-        return None
+    nonlinear = "nonlinear" in properties and importer.boolean(importer.resolve(properties["nonlinear"]))
     ior = importer.ior(bsdf, properties, "int_ior", 1.49) / importer.ior(bsdf, properties, "ext_ior", 1.000277)
     if IOR.range_problem(ior):
         raise importer.fail(
@@ -93,13 +176,19 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughplastic" else 0.0
     if roughness is None:
         return None
-    importer.notes.append(
-        f"line {bsdf.line}: {bsdf.label()}: spectrace's plastic couples coat and base "
-        "differently from Mitsuba's (an energy-conserving symmetric "
-        "coupling instead of internal scattering; see docs/materials.md), so the brightness of "
-        "its diffuse part differs"
-    )
     table = {"type": "plastic", "reflectance": reflectance, "ior": round(ior, 6)}
     if roughness != 0.0:  # a number above 0, or a texture
         table["roughness"] = roughness
+        if (kind := importer.distribution(bsdf, properties)) != DEFAULT_DISTRIBUTION:
+            table["distribution"] = kind
+        if isinstance(roughness, float):
+            table["coat_transmission"] = "rough"  # Mitsuba's roughplastic: the rough coat's own transmittance
+        else:
+            importer.notes.append(
+                f"{importer.at(bsdf)}: {bsdf.label()}: with a textured alpha, spectrace's rough plastic passes light "
+                "through its coat by the smooth interface's Fresnel terms, Mitsuba's by the rough interface's "
+                "(see docs/materials.md), so its diffuse part is brighter"
+            )
+    if nonlinear:
+        table["nonlinear"] = True
     return table

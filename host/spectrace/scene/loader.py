@@ -10,7 +10,8 @@ from pydantic import BaseModel, ValidationError
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
-from spectrace.geometry.mesh import load_mesh, shading_normals
+from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
+from spectrace.geometry.mesh import TriangleMesh, load_mesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
@@ -23,7 +24,14 @@ from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
-from spectrace.textures import IMAGE_TEXTURES, TEXTURES, BitmapTexture, check_texture_values, is_texture
+from spectrace.textures import (
+    IMAGE_TEXTURES,
+    TEXTURES,
+    BitmapTexture,
+    check_texture_values,
+    is_texture,
+    texture_module,
+)
 from spectrace.textures.shared import Placement
 
 
@@ -224,14 +232,16 @@ class _Resolver:
 
     def spectrum_or_texture(self, spec, key: str, kind: str, inner: bool = False):
         """A textured parameter's value (kind "spectrum": a reflectance, or "float": a scalar): a Spectrum, or a
-        texture whose values are checked for that use. inner: a checkerboard's side, which takes no checkerboard."""
+        texture whose values are checked for that use. inner: an operand of a composite (a checkerboard's side, a
+        scale's or mix's operand), which takes no composite."""
         if isinstance(spec, schema.SpectrumSpec):
             return self.spectrum(spec, key, emission=False)
         if isinstance(spec, schema.TextureRefSpec):
             texture = self.named_texture(spec.texture, f"{key}.texture")
             if inner and not is_texture_image(texture):
                 raise SpectraceError(
-                    f"texture '{spec.texture}' is a checkerboard; a checkerboard's sides are spectra or image textures",
+                    f"texture '{spec.texture}' is a {texture_module(texture).NAME}; a checkerboard's sides and a "
+                    "scale's or mix's operands are spectra or image textures",
                     where=self.where(f"{key}.texture"),
                 )
         else:
@@ -308,19 +318,39 @@ class _Resolver:
         shapes = []
         for i, s in enumerate(self.spec.shapes):
             key = f"shapes[{i}]"
+            # Analytic unless asked for triangles: facets (face_normals = true) exist only on a tessellation.
+            analytic = s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals)
             if s.type == "mesh":
                 assert s.file is not None  # the schema wants a file for a mesh
-                mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"))
+                mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"), shape_index=s.shape_index or 0)
+            elif s.type in ANALYTIC_SHAPES:
+                mesh = object_tessellation(s.type)
             else:
                 mesh = primitives.BUILTIN_SHAPES[s.type]()
-            if s.transform:
-                steps = [step.model_dump(exclude_none=True) for step in s.transform]
+            matrix = np.eye(4)
+            placement = ([{"scale": s.radius}] if s.radius is not None else []) + (
+                [{"translate": list(s.center)}] if s.center is not None else []
+            )
+            if s.transform or placement:
+                steps = placement + [step.model_dump(exclude_none=True) for step in s.transform]
                 with np.errstate(over="ignore", invalid="ignore"):  # overflows are reported just below
-                    mesh = apply_transform(mesh, transform_matrix(steps, where=self.where(f"{key}.transform")))
+                    matrix = transform_matrix(steps, where=self.where(f"{key}.transform"))
+                    mesh = apply_transform(mesh, matrix)
             if problem := limits.coordinates_problem(mesh.vertices):
                 culprit = "transform" if s.transform else "file" if s.type == "mesh" else "type"
                 raise SpectraceError(f"mesh has {problem}", where=self.where(f"{key}.{culprit}"))
-            mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
+            surface_of = None
+            if analytic:
+                if s.type == "sphere" and (problem := similarity_problem(matrix)):
+                    raise SpectraceError(
+                        f"{problem}; tessellated = true takes any", where=self.where(f"{key}.transform")
+                    )
+                surface_of = AnalyticSurface(s.type, matrix, flip_normals=bool(s.flip_normals))
+                mesh = surface_of.tessellation()
+            else:
+                if s.flip_normals:
+                    mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=mesh.normals)
+                mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
             if s.material is not None and s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
@@ -354,6 +384,7 @@ class _Resolver:
                     emitter=emitter,
                     name=s.name or f"{s.type}{i}",
                     interior=interior,
+                    analytic=surface_of,
                 )
             )
         return shapes
@@ -514,6 +545,7 @@ def load_scene(path: str | Path) -> Scene:
         max_depth=spec.integrator.max_depth,
         exposure=spec.film.exposure,
         rr_depth=spec.integrator.rr_depth,
+        hide_environment=spec.integrator.hide_environment,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
         sampler=spec.sampler.type,

@@ -10,6 +10,7 @@ from typing import Literal
 
 import numpy as np
 
+from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.lights.area import AreaEmitter, EmitterImage  # noqa: F401 (part of the model's names)
 from spectrace.lights.base import Light
@@ -89,6 +90,9 @@ class Shape:
     emitter: AreaEmitter | None = None
     name: str = ""
     interior: Medium | None = None  # fills the closed mesh, on the back side of its faces (outward winding)
+    # An analytic sphere, disk or cylinder that the kernels intersect exactly; `mesh` is then its tessellation, for
+    # what reads triangles (bounds, export), and is not rendered.
+    analytic: AnalyticSurface | None = None
 
 
 @dataclass(frozen=True)
@@ -101,6 +105,7 @@ class Scene:
     integrator: Literal["path", "direct"] = "path"
     max_depth: int = 8
     rr_depth: int = 5
+    hide_environment: bool = False  # camera rays that leave the scene see black (Mitsuba's hide_emitters)
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
     spp: int = 16
     seed: int = 0

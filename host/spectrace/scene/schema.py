@@ -22,11 +22,11 @@ from pydantic import (
 
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
-from spectrace.materials.parameters import Parameter
+from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
-from spectrace.textures import TEXTURES
+from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
@@ -83,6 +83,9 @@ class IntegratorSpec(Strict):
     )
     rr_depth: int = Field(
         default=5, ge=1, le=limits.MAX_DEPTH, description="bounces after which Russian roulette may end a path"
+    )
+    hide_environment: bool = Field(
+        default=False, description="camera rays that leave the scene see black; reflections still show it"
     )
 
     @field_validator("max_depth")
@@ -187,6 +190,8 @@ _ANNOTATIONS = {
     "string": str,
     "bool": bool,
     "metal": Literal[METALS],
+    "distribution": Literal[DISTRIBUTIONS],
+    "coat_transmission": Literal["smooth", "rough"],
     "ior": FiniteFloat | str | SellmeierSpec | CauchySpec,
     "uv": FiniteFloat | tuple[FiniteFloat, FiniteFloat],
     "wrap": Literal["repeat", "mirror", "clamp"],
@@ -196,7 +201,7 @@ _ANNOTATIONS = {
 
 # Textures (docs/textures.md): inline, `{ texture = "bitmap", file = "wood.png" }`, the key `texture` naming the type;
 # or a [textures.NAME] table with `type`, referred to as `{ texture = "NAME" }`. A texture's own textured keys (a
-# checkerboard's colours) take spectra or image textures, not another checkerboard.
+# checkerboard's colours, a scale's or mix's operands) take spectra or image textures, not another composite.
 class TextureRefSpec(Strict):
     """{ texture = "NAME" }: a [textures.NAME] entry of this file."""
 
@@ -206,6 +211,11 @@ class TextureRefSpec(Strict):
 def _texture_model(module, key: str, textured_annotation) -> type[Strict]:
     fields: dict[str, Any] = {key: (Literal[module.NAME], ...)}
     for parameter in module.PARAMETERS:
+        if parameter.textured and parameter.type == "float":
+            # A composite's factor (scale's `scale`, mix's `amount`): a number, or an image texture (checked as read).
+            annotation = _number_or_texture(FiniteFloat, textured_annotation) if textured_annotation else FiniteFloat
+            fields[parameter.name] = (annotation, Field(default=parameter.default, description=parameter.doc))
+            continue
         annotation, field = _field(parameter)
         if parameter.textured:
             annotation = textured_annotation
@@ -283,7 +293,8 @@ def _after(check):
     return model_validator(mode="after")(validate)
 
 
-_IMAGE_TEXTURES = {name: m for name, m in TEXTURES.items() if name != "checkerboard"}
+# Composites (a checkerboard, scale, mix) take spectra and image textures, not other composites.
+_IMAGE_TEXTURES = {name: m for name, m in TEXTURES.items() if name not in COMPOSITE_TEXTURES}
 if TYPE_CHECKING:
     InnerSpectrumOrTexture: TypeAlias = Any
     SpectrumOrTexture: TypeAlias = Any
@@ -388,8 +399,9 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere", "prism", "teapot"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot"]
     file: str | None = None
+    shape_index: Annotated[int, Field(ge=0, strict=True)] | None = None  # which mesh of a .serialized file
     material: str | None = None
     emitter: EmitterSpec | None = None
     interior: InteriorSpec | None = None
@@ -398,6 +410,14 @@ class ShapeSpec(Strict):
     # true: shade with the face normals (facets); false: smooth, with normals computed when a mesh file has none;
     # unset: a mesh file's own normals if it has any, the sphere's radial ones (docs/scene-format.md)
     face_normals: StrictBool | None = None
+    # sphere, disk, cylinder: true renders triangles (the icosphere, a polar grid, a ring of quads) instead of the
+    # exact surface (docs/scene-format.md)
+    tessellated: StrictBool | None = None
+    # sphere, disk, cylinder: their front (normal, emitting side) faces inward, or the disk's -z side
+    flip_normals: StrictBool | None = None
+    # sphere only: placed before `transform`, as Mitsuba 3's center and radius are before its to_world
+    center: Vector3 | None = None
+    radius: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
@@ -405,10 +425,20 @@ class ShapeSpec(Strict):
             raise ValueError("a mesh shape needs file")
         if self.type != "mesh" and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
+        if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):
+            raise ValueError("shape_index picks a mesh of a Mitsuba .serialized file; this shape has none")
         if self.material is None and self.interior is None:
             raise ValueError("a shape needs material (only a shape with an interior may omit it)")
-        if self.type == "rectangle" and self.interior is not None:
-            raise ValueError("a rectangle encloses no volume: an interior needs a closed shape")
+        if self.type in ("rectangle", "disk", "cylinder") and self.interior is not None:
+            raise ValueError(f"a {self.type} encloses no volume: an interior needs a closed shape")
+        if (self.center is not None or self.radius is not None) and self.type != "sphere":
+            raise ValueError(f"center and radius are a sphere's, not a {self.type}'s (use transform)")
+        if self.flip_normals is not None and self.type not in ("sphere", "disk", "cylinder"):
+            raise ValueError(
+                f"flip_normals is for sphere, disk and cylinder (a mirroring transform turns a {self.type})"
+            )
+        if self.tessellated is not None and self.type not in ("sphere", "disk", "cylinder"):
+            raise ValueError(f"tessellated is for the analytic shapes (sphere, disk, cylinder), not a {self.type}")
         return self
 
 

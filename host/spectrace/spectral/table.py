@@ -20,7 +20,14 @@ class SpectrumTable:
         """Store `spectrum` (once) and return the offset, in floats, of its first sample in `data`."""
         if not isinstance(spectrum, Spectrum):
             raise TypeError(f"SpectrumTable.add expects a Spectrum, got {type(spectrum).__name__}")
-        row = spectrum.values.astype(np.float32)
+        return self.add_row(spectrum.values)
+
+    def add_row(self, values: np.ndarray) -> int:
+        """Store GRID_SIZE values that are not a spectrum (a function the kernels tabulate on as many points, such
+        as a rough coat's transmittance in cos θ, spectrace.materials.coat) and return their offset."""
+        if np.shape(values) != (GRID_SIZE,):
+            raise ValueError(f"a table row has {GRID_SIZE} values, got shape {np.shape(values)}")
+        row = np.asarray(values).astype(np.float32)
         key = row.tobytes()
         offset = self._offsets_by_content.get(key)
         if offset is None:

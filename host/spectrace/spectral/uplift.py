@@ -236,3 +236,50 @@ def uplift_illuminant(rgb: Sequence[float] | np.ndarray, scale: float = 1.0, whe
         name=name,
         source="RGB illuminant uplift (Jakob & Hanika 2019, pbrt-v4 scheme)",
     )
+
+
+def uplift_unbounded(rgb: Sequence[float] | np.ndarray, where: str | None = None) -> Spectrum:
+    """A smooth spectrum for a non-negative RGB triple that is no reflectance (an optical constant, any size): the
+    reflectance uplift of rgb / max(rgb), times max(rgb). Its shape follows the triple's proportions; its values are
+    not the channels' at any wavelength (an index of refraction has no colour of its own)."""
+    values = _validated_rgb(rgb, "an RGB triple", where)
+    if np.any(values < 0.0):
+        raise SpectraceError(f"an RGB triple must not be negative here, got {tuple(values.tolist())}", where=where)
+    largest = float(values.max())
+    if largest == 0.0:
+        return Spectrum.constant(0.0, source="RGB uplift (Jakob & Hanika 2019)")
+    return uplift_reflectance(values / largest, where=where)[0] * largest
+
+
+def normal_incidence_reflectance(eta, k):
+    """Fresnel reflectance of a conductor of index η + ik at normal incidence, ((η−1)² + k²) / ((η+1)² + k²)."""
+    eta, k = np.asarray(eta, np.float64), np.asarray(k, np.float64)
+    return ((eta - 1.0) ** 2 + k**2) / ((eta + 1.0) ** 2 + k**2)
+
+
+def conductor_from_rgb(
+    eta_rgb: Sequence[float] | np.ndarray, k_rgb: Sequence[float] | np.ndarray, where: str | None = None
+) -> tuple[Spectrum, Spectrum]:
+    """Smooth spectra η(λ), k(λ) for a conductor given, as renderers working in RGB take it, by one η and one k per
+    sRGB channel, such that its colour at normal incidence is the one an RGB renderer shows.
+
+    An RGB renderer reflects R_c = ((η_c−1)² + k_c²) / ((η_c+1)² + k_c²) in channel c. Uplifting η and k each
+    (`uplift_unbounded`) and taking the Fresnel term of the result is off by up to 7 % in a channel (gold's red),
+    because the term is not linear in η and k. Instead: η(λ) is η's uplift; the reflectance R(λ) is the reflectance
+    uplift of (R_r, R_g, R_b), whose colour under D65 is exactly that triple; and k(λ) is what makes the Fresnel
+    term R at each wavelength, k² = (R (η+1)² − (η−1)²) / (1 − R). Where R is below the reflectance of a dielectric
+    of index η, ((η−1)/(η+1))² (no metal: rare), k = 0 and the reflectance is that one."""
+    eta_values = _validated_rgb(eta_rgb, "an RGB eta", where)
+    k_values = _validated_rgb(k_rgb, "an RGB k", where)
+    if not (np.all(eta_values > 0.0) and np.all(k_values >= 0.0)):
+        raise SpectraceError(
+            f"a conductor's eta must be > 0 and k >= 0, got eta {tuple(eta_values.tolist())}, "
+            f"k {tuple(k_values.tolist())}",
+            where=where,
+        )
+    eta = uplift_unbounded(eta_values, where).values.astype(np.float64)
+    target = np.clip(normal_incidence_reflectance(eta_values, k_values), 0.0, 1.0)
+    reflectance = np.minimum(uplift_reflectance(target, where)[0].values.astype(np.float64), 1.0 - 1e-7)
+    k = np.sqrt(np.maximum(reflectance * (eta + 1.0) ** 2 - (eta - 1.0) ** 2, 0.0) / (1.0 - reflectance))
+    source = "RGB conductor uplift (Jakob & Hanika 2019 reflectance, k solved from the Fresnel term)"
+    return Spectrum(eta, name="eta from rgb", source=source), Spectrum(k, name="k from rgb", source=source)

@@ -13,30 +13,48 @@ import numpy as np
 
 from spectrace.engine.device_types import (
     NO_TEXTURE,
+    TEXEL_BANDS,
+    TEXEL_RGB,
+    TEXEL_SCALAR,
+    TEXEL_SIGMOID,
+    TEXEL_VECTOR,
     TEXTURE_BITMAP,
     TEXTURE_CHECKERBOARD,
     TEXTURE_DTYPE,
+    TEXTURE_MIX,
+    TEXTURE_SCALE,
     TEXTURE_SPECTRAL,
 )
 from spectrace.errors import SpectraceError
 from spectrace.scene.limits import MAX_TEXTURE_BYTES, format_bytes
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
-from spectrace.textures import bitmap, checkerboard, spectral
+from spectrace.textures import bitmap, checkerboard, mix, scale, spectral, storage
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
+from spectrace.textures.mix import MixTexture
+from spectrace.textures.scale import ScaleTexture
 from spectrace.textures.shared import FILTERS, WRAPS, value_problem
 from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module.
-TEXTURES = {m.NAME: m for m in (bitmap, spectral, checkerboard)}
-Texture = BitmapTexture | SpectralTexture | CheckerboardTexture
+TEXTURES = {m.NAME: m for m in (bitmap, spectral, checkerboard, scale, mix)}
+# Those made of other textures: their operands are spectra and image textures only (the kernel does not recurse).
+COMPOSITE_TEXTURES = (checkerboard.NAME, scale.NAME, mix.NAME)
+Texture = BitmapTexture | SpectralTexture | CheckerboardTexture | ScaleTexture | MixTexture
 IMAGE_TEXTURES = (BitmapTexture, SpectralTexture)
 _DEVICE_TYPES = {BitmapTexture: TEXTURE_BITMAP, SpectralTexture: TEXTURE_SPECTRAL}
+_MODULES = {
+    BitmapTexture: bitmap,
+    SpectralTexture: spectral,
+    CheckerboardTexture: checkerboard,
+    ScaleTexture: scale,
+    MixTexture: mix,
+}
 
 
 def is_texture(value: object) -> bool:
-    return isinstance(value, (BitmapTexture, SpectralTexture, CheckerboardTexture))
+    return isinstance(value, tuple(_MODULES))
 
 
 def check_texture_values(texture, kind: str, where: str, upper: float | None = None) -> None:
@@ -44,7 +62,12 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
     (a checkerboard's sides: constant spectra or one-channel images) and its values lie in [0, upper]; an emission
     is an image texture (a bitmap or a spectral texture) of values >= 0."""
     if kind == "emission" and not isinstance(texture, IMAGE_TEXTURES):
-        raise SpectraceError("an emission texture is a bitmap or a spectral texture, not a checkerboard", where=where)
+        raise SpectraceError(
+            f"an emission texture is a bitmap or a spectral texture, not a {texture_module(texture).NAME}", where=where
+        )
+    if isinstance(texture, (ScaleTexture, MixTexture)):
+        _check_composite(texture, kind, where, upper)
+        return
     if isinstance(texture, CheckerboardTexture):
         if kind == "float":
             for side in (texture.color0, texture.color1):
@@ -69,6 +92,43 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
         raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
 
 
+def _check_composite(texture, kind: str, where: str, upper: float | None) -> None:
+    """A scale's or mix's operands fit the use (as a checkerboard's sides do), and a scaled reflectance or number
+    stays within its bound (a mix of values within a bound stays within it)."""
+    for operand in texture.operands:
+        if isinstance(operand, Spectrum):
+            if kind == "float" and np.ptp(operand.values) > 0.0:
+                raise SpectraceError(
+                    f"a scalar {texture.source} texture's operands are numbers or grey images, not spectra that vary "
+                    "with the wavelength",
+                    where=where,
+                )
+        elif is_texture(operand):
+            check_texture_values(operand, "float" if kind == "float" or operand is _factor(texture) else kind, where)
+    bound = 1.0 if kind == "spectrum" else upper
+    if bound is not None and (high := value_range(texture)[1]) > bound + 1e-6:
+        raise SpectraceError(f"{texture.source} texture has values above {bound:g} (max {high:.4g})", where=where)
+
+
+def _factor(texture):
+    """The operand of a composite that is a number rather than a spectrum: a scale's factor, a mix's amount."""
+    if isinstance(texture, ScaleTexture):
+        return texture.scale
+    return texture.amount if isinstance(texture, MixTexture) else None
+
+
+def value_range(value) -> tuple[float, float]:
+    """The smallest and largest value a texture or spectrum takes anywhere on a surface and at any wavelength (a
+    scale's: its operands' ranges multiplied, all being >= 0; a mix's: the hull of its two sides')."""
+    if isinstance(value, ScaleTexture):
+        (low, high), (f_low, f_high) = value_range(value.tex), value_range(value.scale)
+        return low * f_low, high * f_high
+    if isinstance(value, MixTexture):
+        ranges = [value_range(side) for side in (value.tex1, value.tex2)]
+        return min(r[0] for r in ranges), max(r[1] for r in ranges)
+    return scalar_range(value)
+
+
 def scalar_range(value) -> tuple[float, float]:
     """The smallest and largest value a scalar parameter (a number, or a one-channel texture checked by
     check_texture_values) takes anywhere on a surface: every filter blends texels with convex weights and every MIP
@@ -76,6 +136,8 @@ def scalar_range(value) -> tuple[float, float]:
     if isinstance(value, CheckerboardTexture):
         ranges = [scalar_range(side) for side in (value.color0, value.color1)]
         return min(r[0] for r in ranges), max(r[1] for r in ranges)
+    if isinstance(value, (ScaleTexture, MixTexture)):
+        return value_range(value)
     if isinstance(value, Spectrum):
         return float(value.values.min()), float(value.values.max())
     if isinstance(value, IMAGE_TEXTURES):
@@ -84,23 +146,41 @@ def scalar_range(value) -> tuple[float, float]:
 
 
 def texture_module(texture):
-    return {BitmapTexture: bitmap, SpectralTexture: spectral, CheckerboardTexture: checkerboard}[type(texture)]
+    return _MODULES[type(texture)]
+
+
+def texel_format_of(texture, kind: str) -> int:
+    """What an image texture's texels hold for a use of `kind` (as its module's device_texels makes them)."""
+    if isinstance(texture, SpectralTexture):
+        return TEXEL_BANDS
+    return {"float": TEXEL_SCALAR, "vector": TEXEL_VECTOR, "emission": TEXEL_RGB}.get(kind, TEXEL_SIGMOID)
 
 
 def device_bytes(texture, kind: str) -> int:
     """An estimate (exact for power-of-two sizes) of the texel bytes a texture takes on the device, from its size
-    alone: what the scene's texture budget is checked against before anything is converted."""
+    and values before anything is converted (its storage as `storage.predicted_storage` says: a sigmoid texture
+    predicted half may need float, twice this, once converted): what the scene's texture budget is checked
+    against before anything is converted."""
     if isinstance(texture, CheckerboardTexture):
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
+    if isinstance(texture, (ScaleTexture, MixTexture)):
+        factor = _factor(texture)
+        return sum(
+            device_bytes(operand, "float" if operand is factor else kind)
+            for operand in texture.operands
+            if is_texture(operand)
+        )
     height, width = texture.values.shape[:2]
     channels = 3 if isinstance(texture, BitmapTexture) and kind != "float" else texture.channels
     pyramid = 4.0 / 3.0 if texture.placement.filter == "trilinear" else 1.0
-    return int(width * height * channels * 4 * pyramid)
+    value_bytes = storage.BYTES[storage.predicted_storage(texel_format_of(texture, kind), texture.values)]
+    return int(width * height * channels * value_bytes * pyramid)
 
 
 class TextureRows:
     """The Texture rows of a scene and their texels, appended to the texel buffer the lights share (float4 chunks;
-    a texture's data starts on a float4 boundary and is addressed in floats)."""
+    a texture's data starts on a float4 boundary, its values stored as `storage` chooses). `bytes` counts the texel
+    bytes of the textures added."""
 
     def __init__(self, table: SpectrumTable, texel_chunks: list[np.ndarray]):
         self.table = table
@@ -108,6 +188,14 @@ class TextureRows:
         self.rows: list[np.ndarray] = []
         self.index: dict[tuple[int, str, tuple[int, ...]], int] = {}
         self.bytes = 0
+
+    def _check_budget(self, total: int, texture, where: str | None) -> None:
+        if total > MAX_TEXTURE_BYTES:
+            raise SpectraceError(
+                f"the scene's textures need {format_bytes(total)} of device memory (texture '{texture.source}' "
+                f"brings it there); at most {format_bytes(MAX_TEXTURE_BYTES)} are allowed: use smaller images",
+                where=where,
+            )
 
     def array(self) -> np.ndarray:
         return np.array(self.rows, TEXTURE_DTYPE) if self.rows else np.zeros(1, TEXTURE_DTYPE)
@@ -119,13 +207,7 @@ class TextureRows:
         key = (id(texture), kind, tuple(basis or ()))
         if key in self.index:
             return self.index[key]
-        self.bytes += device_bytes(texture, kind)
-        if self.bytes > MAX_TEXTURE_BYTES:
-            raise SpectraceError(
-                f"the scene's textures need {format_bytes(self.bytes)} of device memory (texture '{texture.source}' "
-                f"brings it there); at most {format_bytes(MAX_TEXTURE_BYTES)} are allowed: use smaller images",
-                where=where,
-            )
+        self._check_budget(self.bytes + device_bytes(texture, kind), texture, where)
         row = np.zeros((), TEXTURE_DTYPE)
         row["uv_transform"] = texture.placement.uv_transform
         row["side_spectrum"] = -1
@@ -139,6 +221,24 @@ class TextureRows:
                     row["side_texture"][i] = self.add(side, kind, where)
                 else:
                     raise SpectraceError("a checkerboard's sides are spectra or image textures", where=where)
+        elif isinstance(texture, (ScaleTexture, MixTexture)):
+            row["type"] = TEXTURE_SCALE if isinstance(texture, ScaleTexture) else TEXTURE_MIX
+            sides = (texture.tex,) if isinstance(texture, ScaleTexture) else (texture.tex1, texture.tex2)
+            for i, side in enumerate(sides):
+                if isinstance(side, Spectrum):
+                    row["side_spectrum"][i] = self.table.add(side)
+                elif isinstance(side, IMAGE_TEXTURES):
+                    row["side_texture"][i] = self.add(side, kind, where)
+                else:
+                    raise SpectraceError(f"a {texture.source} texture's operands are spectra or image textures", where)
+            factor = _factor(texture)
+            row["factor_texture"] = NO_TEXTURE
+            if isinstance(factor, IMAGE_TEXTURES):
+                row["factor_texture"] = self.add(factor, "float", where)
+            elif isinstance(factor, Spectrum):
+                row["factor"] = float(factor.values[0])  # a constant (checked)
+            else:
+                row["factor"] = float(factor)
         else:
             texel_format, channels, levels = texture_module(texture).device_texels(texture, kind)
             row["type"] = _DEVICE_TYPES[type(texture)]
@@ -154,10 +254,13 @@ class TextureRows:
                 row["band_step_nm"] = (
                     texture.wavelengths_nm[1] - texture.wavelengths_nm[0] if texture.channels > 1 else 1.0
                 )
+            row["storage"] = storage.storage(texel_format, levels, texture.values)
             row["data_offset"] = 4 * sum(len(c) for c in self.texel_chunks)
-            flat = np.concatenate([np.asarray(level, np.float32).ravel() for level in levels])
-            chunk = np.zeros(((len(flat) + 3) // 4, 4), np.float32)
-            chunk.ravel()[: len(flat)] = flat
+            stored = storage.encode(texel_format, int(row["storage"]), levels)
+            chunk = np.zeros(((len(stored) + 15) // 16, 4), np.float32)
+            chunk.view(np.uint8).ravel()[: len(stored)] = stored
+            self._check_budget(self.bytes + len(stored), texture, where)
+            self.bytes += len(stored)
             self.texel_chunks.append(chunk)
         self.rows.append(row)
         self.index[key] = len(self.rows) - 1

@@ -1,7 +1,7 @@
-"""`bitmap`: an RGB or grey image (PNG, JPEG, TIFF, ... as Pillow reads them, 8 or 16 bits; 32-bit float TIFF;
-OpenEXR R, G, B or Y). Integer-coded images are sRGB-encoded and decoded to linear values unless `raw = true`;
-float images hold linear values. As a reflectance each texel's linear sRGB colour becomes the sigmoid coefficients
-of its smooth spectrum (Jakob & Hanika 2019; spectrace.spectral.uplift), evaluated per wavelength on the device; as a
+"""`bitmap`: an RGB or grey image (PNG, JPEG, TIFF, ... as Pillow reads them, 8 or 16 bits; 32-bit float TIFF; OpenEXR
+R, G, B or Y; Radiance RGBE). Integer-coded images are sRGB-encoded and decoded to linear values unless `raw = true`;
+float images hold linear values. As a reflectance each texel's linear sRGB colour becomes the sigmoid coefficients of
+its smooth spectrum (Jakob & Hanika 2019; spectrace.spectral.uplift), evaluated per wavelength on the device; as a
 scalar (a future roughness) it must have one channel and is used as stored. docs/textures.md."""
 
 from dataclasses import dataclass
@@ -84,10 +84,10 @@ def make(
     uv_scale: float | tuple[float, float] = 1.0,
     uv_offset: tuple[float, float] = (0.0, 0.0),
 ) -> BitmapTexture:
-    """An image texture (docs/textures.md), `spectrace.bitmap`: a file path (PNG, JPEG, TIFF, OpenEXR; integer-coded
-    files are sRGB-decoded unless raw), a numpy array (H, W), (H, W, 1) or (H, W, 3) of linear values (srgb=True:
-    sRGB-encoded values in [0, 1]), or a PIL image (decoded from sRGB unless raw). st = uv · uv_scale + uv_offset;
-    wrap "repeat", "mirror" or "clamp"; filter "nearest", "bilinear" or "trilinear"."""
+    """An image texture (docs/textures.md), `spectrace.bitmap`: a file path (PNG, JPEG, TIFF, OpenEXR, Radiance .hdr;
+    integer-coded files are sRGB-decoded unless raw), a numpy array (H, W), (H, W, 1) or (H, W, 3) of linear values
+    (srgb=True: sRGB-encoded values in [0, 1]), or a PIL image (decoded from sRGB unless raw). st = uv · uv_scale +
+    uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest", "bilinear" or "trilinear"."""
     from spectrace.io.images import pil_image_values, read_texture_image
 
     where = "texture"

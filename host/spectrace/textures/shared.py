@@ -156,3 +156,26 @@ def value_problem(values: np.ndarray, upper: float | None, reflectance: bool = T
         why = ", which as a reflectance would create energy" if reflectance else ""
         return f"has values above {upper:g} (max {high:.4g}){why}"
     return None
+
+
+def composite_factor(value, resolver, key: str, upper: float | None):
+    """A scale's factor or a mix's amount from its validated scene value: a number in [0, upper], or a one-channel
+    image texture (checked by the resolver); a spectrum given instead (`{ value = ... }`) must be constant and is its
+    number."""
+    from spectrace.spectral.spectrum import Spectrum
+
+    name = key.rsplit(".", 1)[-1]
+    where = resolver.where(key)
+    if not isinstance(value, (int, float)):
+        value = resolver.spectrum_or_texture(value, key, "float", inner=True)
+        if not isinstance(value, Spectrum):
+            if upper is not None and (high := float(value.values.max())) > upper + 1e-6:
+                raise SpectraceError(f"texture '{value.source}' has values above {upper:g} (max {high:.4g})", where)
+            return value
+        if np.ptp(value.values) > 0.0:
+            raise SpectraceError(f"{name} is a number or a grey texture, not a spectrum that varies", where)
+        value = float(value.values[0])
+    if not (value >= 0.0 and (upper is None or value <= upper)):
+        bound = f"[0, {upper:g}]" if upper is not None else ">= 0"
+        raise SpectraceError(f"{name} must be {'in ' if upper is not None else ''}{bound}, got {value:g}", where)
+    return float(value)

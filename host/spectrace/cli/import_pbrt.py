@@ -1,0 +1,41 @@
+"""`spectrace import-pbrt SCENE.pbrt -o OUT.toml`: a pbrt-v4 scene as a spectrace scene file (docs/pbrt.md)."""
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from spectrace.errors import SpectraceError
+from spectrace.interop.pbrt_v4 import AREA_LIGHTS, LIGHTS, MATERIALS, SHAPES, TEXTURES, import_pbrt
+
+
+def import_pbrt_command(
+    scene: Annotated[Path, typer.Argument(help="pbrt-v4 scene (.pbrt).")],
+    # A string, not a Path: a Path would drop the trailing slash of "-o folder/", which names a folder.
+    output: Annotated[
+        str, typer.Option("--output", "-o", metavar="OUT.toml", help="spectrace scene file to write (TOML).")
+    ],
+    strict: Annotated[
+        bool, typer.Option("--strict", help="Fail if anything in the file is not imported (default: warn).")
+    ] = False,
+) -> None:
+    if output.endswith(("/", os.sep)) or not Path(output).name:
+        raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
+    warnings, notes = import_pbrt(scene, Path(output), strict=strict)
+    console = Console(stderr=True, soft_wrap=True, markup=False)  # each line on one line
+    for warning in warnings:
+        console.print(f"warning: {warning}", highlight=False, markup=False)
+    for note in notes:
+        console.print(f"note: {note}", highlight=False, markup=False)
+    console.print(f"wrote {output}", highlight=False, markup=False)
+
+
+import_pbrt_command.__doc__ = (
+    f"Convert a pbrt-v4 scene to a spectrace TOML scene (shapes {', '.join(SHAPES)}; materials "
+    f"{', '.join(MATERIALS)}; textures {', '.join(TEXTURES)}; lights {', '.join(LIGHTS)}, area "
+    f"{', '.join(AREA_LIGHTS)}). Meshes and environment maps go to a folder OUT_assets beside OUT.toml. "
+    "Parameters and directives not imported are listed as warnings (--strict: an error); entities spectrace "
+    "cannot represent are an error naming file:line. The TOML is checked by loading it before it replaces OUT.toml."
+)

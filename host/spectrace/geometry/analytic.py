@@ -1,0 +1,141 @@
+"""Analytic shapes: Mitsuba 3's sphere, disk and cylinder, intersected exactly by the kernels (kernels/shapes.cl).
+
+In object space (Mitsuba 3's plugins, checked against Mitsuba itself in tests/geometry/test_analytic_shapes.py):
+- sphere: radius 1 at the origin; u = φ/2π with φ = atan2(y, x) in [0, 2π), v = θ/π with θ the angle from +z;
+- disk: radius 1 in the plane z = 0, facing +z (one face); u = r, v = φ/2π;
+- cylinder: radius 1 around the z axis from z = 0 to z = 1, open (no caps), facing outward; u = φ/2π, v = z.
+`to_world` places the shape: any affine map for the disk and cylinder (intersected in object space, normals by the
+inverse transpose, so a non-uniform scale gives an exact elliptic disk or cylinder); a similarity for the sphere
+(translation, rotation, uniform scale), whose centre and radius the kernels use in world space.
+
+Each shape also keeps a tessellation (`mesh`) for what reads triangles: bounds, the Mitsuba export fallback, scene
+statistics.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.engine.device_types import ANALYTIC_SHAPE_DTYPE, SHAPE_TYPES
+from spectrace.geometry.mesh import TriangleMesh
+from spectrace.geometry.transforms import apply_transform
+
+ANALYTIC_SHAPES = SHAPE_TYPES  # ("sphere", "disk", "cylinder"): scene types that are analytic
+OBJECT_AREA = {"sphere": 4.0 * np.pi, "disk": np.pi, "cylinder": 2.0 * np.pi}
+# A sphere's map is a similarity when its linear part's columns are orthogonal and of equal length to this relative
+# tolerance (a float transform built from rotations and a uniform scale is far within it).
+_SIMILARITY_TOLERANCE = 1e-6
+# Azimuth steps for the cylinder's area under a non-uniform scale (the trapezoid rule on a smooth periodic integrand
+# converges geometrically: 1024 steps are exact to float precision for any reasonable ellipse).
+_AREA_STEPS = 1024
+
+
+def similarity_problem(matrix: np.ndarray) -> str | None:
+    """Why an analytic sphere cannot take this map (it would not stay a sphere), or None."""
+    linear = np.asarray(matrix, float)[:3, :3]
+    gram = linear.T @ linear
+    scale2 = np.trace(gram) / 3.0
+    if not scale2 > 0 or np.abs(gram - scale2 * np.eye(3)).max() > _SIMILARITY_TOLERANCE * scale2:
+        return "an analytic sphere's transform must scale uniformly (no shear or non-uniform scale)"
+    return None
+
+
+@dataclass(frozen=True, eq=False)
+class AnalyticSurface:
+    kind: str  # "sphere", "disk" or "cylinder"
+    to_world: np.ndarray  # (4, 4) object -> world
+    flip_normals: bool = False  # the front (normal, emitting side) inward, or the disk's -z side
+
+    @property
+    def linear(self) -> np.ndarray:
+        return np.asarray(self.to_world, float)[:3, :3]
+
+    def normal_stretch(self, object_normals: np.ndarray) -> np.ndarray:
+        """World area per object area at points with these unit object-space normals: |det M| |M⁻ᵀ n|."""
+        inverse_transpose = np.linalg.inv(self.linear).T
+        return abs(np.linalg.det(self.linear)) * np.linalg.norm(object_normals @ inverse_transpose.T, axis=-1)
+
+    def area(self) -> float:
+        """World-space area, scene units²."""
+        if self.kind == "disk":
+            return float(OBJECT_AREA["disk"] * self.normal_stretch(np.array([[0.0, 0.0, 1.0]]))[0])
+        if self.kind == "sphere":
+            return float(OBJECT_AREA["sphere"] * abs(np.linalg.det(self.linear)) ** (2.0 / 3.0))
+        phi = 2.0 * np.pi * (np.arange(_AREA_STEPS) + 0.5) / _AREA_STEPS
+        normals = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
+        return float(OBJECT_AREA["cylinder"] * self.normal_stretch(normals).mean())
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The exact axis-aligned box (lower, upper corner) of the placed shape, widened by a relative 1e-6 so that
+        float32 rounding never cuts it."""
+        matrix = np.asarray(self.to_world, float)
+        if self.kind == "sphere":
+            centre, radius = self.sphere_centre_radius()
+            lo, hi = centre - radius, centre + radius
+        else:
+            # A circle of radius 1 in the object's xy plane spans ±|row i of M's first two columns| along axis i.
+            half = np.hypot(matrix[:3, 0], matrix[:3, 1])
+            ends = [matrix[:3, 3]] + ([matrix[:3, 3] + matrix[:3, 2]] if self.kind == "cylinder" else [])
+            lo, hi = np.min(ends, axis=0) - half, np.max(ends, axis=0) + half
+        pad = 1e-6 * (np.abs(lo).max() + np.abs(hi).max() + (hi - lo).max())
+        return lo - pad, hi + pad
+
+    def sphere_centre_radius(self) -> tuple[np.ndarray, float]:
+        matrix = np.asarray(self.to_world, float)
+        return matrix[:3, 3].copy(), float(abs(np.linalg.det(self.linear)) ** (1.0 / 3.0))
+
+    def device_row(self) -> np.ndarray:
+        """The AnalyticShape row (kernels/types.h)."""
+        matrix = np.asarray(self.to_world, float)
+        row = np.zeros((), ANALYTIC_SHAPE_DTYPE)
+        row["to_world"] = matrix[:3]
+        row["to_object"] = np.linalg.inv(matrix)[:3]
+        row["type"] = SHAPE_TYPES.index(self.kind)
+        row["abs_det"] = abs(np.linalg.det(self.linear))
+        row["object_area"] = OBJECT_AREA[self.kind]
+        row["flip_normals"] = int(self.flip_normals)
+        if self.kind == "sphere":
+            centre, radius = self.sphere_centre_radius()
+            row["sphere"] = (*centre, radius)
+        return row
+
+    def tessellation(self) -> TriangleMesh:
+        """Triangles close to the surface, in world space, facing as the surface does, with its normals and texture
+        coordinates."""
+        mesh = apply_transform(object_tessellation(self.kind), self.to_world)
+        if self.flip_normals:
+            assert mesh.normals is not None
+            mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=-mesh.normals)
+        return mesh
+
+
+def object_tessellation(kind: str) -> TriangleMesh:
+    """The shape in object space as triangles: the built-in icosphere for the sphere, a polar grid for the disk, a
+    ring of quads for the cylinder (vertex normals and Mitsuba's texture coordinates at the vertices)."""
+    if kind == "sphere":
+        from spectrace.geometry.primitives import sphere
+
+        return sphere()
+    sectors, rings = 64, 8 if kind == "disk" else 1
+    u, v = np.meshgrid(np.linspace(0.0, 1.0, rings + 1), np.linspace(0.0, 1.0, sectors + 1), indexing="ij")
+    if kind == "disk":  # u = r, v = φ/2π
+        phi = 2.0 * np.pi * v
+        points = np.stack([u * np.cos(phi), u * np.sin(phi), np.zeros_like(u)], axis=-1)
+        normals = np.broadcast_to([0.0, 0.0, 1.0], points.shape)
+        uvs = np.stack([u, v], axis=-1)
+    else:  # u = φ/2π, v = z
+        phi = 2.0 * np.pi * v
+        points = np.stack([np.cos(phi), np.sin(phi), u], axis=-1)
+        normals = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(u)], axis=-1)
+        uvs = np.stack([v, u], axis=-1)
+    index = np.arange(points.shape[0] * points.shape[1]).reshape(points.shape[:2])
+    a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    vertices, normals, uvs = points.reshape(-1, 3), np.array(normals).reshape(-1, 3), uvs.reshape(-1, 2)
+    v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
+    face_normals = np.cross(v1 - v0, v2 - v0)
+    keep = np.linalg.norm(face_normals, axis=1) > 1e-12
+    faces, face_normals = faces[keep], face_normals[keep]
+    inward = np.einsum("ij,ij->i", face_normals, normals[faces[:, 0]] + normals[faces[:, 1]] + normals[faces[:, 2]])
+    faces[inward < 0] = faces[inward < 0][:, ::-1]
+    return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs, normals=normals)

@@ -1,0 +1,54 @@
+"""`mix`: two textures (or spectra) blended by an amount, a number in [0, 1] or a grey image texture:
+value = (1 − amount) · tex1 + amount · tex2, as pbrt-v4's `mix` texture (its `tex1`, `tex2` and `amount`, default
+0.5). Its operands are spectra or image textures (not checkerboards, nor other scale or mix textures); a blend of
+reflectances in [0, 1] stays in [0, 1]. Mitsuba 3 has no such texture (its `blendbsdf` blends whole BSDFs).
+docs/textures.md."""
+
+from dataclasses import dataclass
+
+from spectrace.materials.parameters import Parameter, Range
+from spectrace.textures.shared import Placement, composite_factor
+
+NAME = "mix"
+PARAMETERS = (
+    Parameter("tex1", "spectrum", default=0.0, range=Range(0.0, 1.0), doc="the value where amount is 0", textured=True),
+    Parameter("tex2", "spectrum", default=1.0, range=Range(0.0, 1.0), doc="the value where amount is 1", textured=True),
+    Parameter(
+        "amount",
+        "float",
+        default=0.5,
+        range=Range(0.0, 1.0),
+        doc="how much of tex2: a number, or a grey image texture whose value at the point is the amount",
+        textured=True,
+    ),
+)
+MITSUBA_PLUGINS: tuple[str, ...] = ()
+MITSUBA_NONE = "Mitsuba 3 has no mix texture"
+
+
+@dataclass(frozen=True, eq=False)
+class MixTexture:
+    """(1 − amount) · tex1 + amount · tex2: tex1, tex2 Spectra or image textures, amount a float in [0, 1] or a
+    one-channel image texture."""
+
+    tex1: object
+    tex2: object
+    amount: object = 0.5
+    source: str = "mix"
+    placement: Placement = Placement()  # unused: each operand places itself
+
+    @property
+    def operands(self) -> tuple:
+        return (self.tex1, self.tex2, self.amount)
+
+
+def from_spec(spec, resolver, key: str) -> MixTexture:
+    sides = [
+        resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
+        for name in ("tex1", "tex2")
+    ]
+    return MixTexture(sides[0], sides[1], composite_factor(spec.amount, resolver, f"{key}.amount", upper=1.0))
+
+
+def make(tex1=0.0, tex2=1.0, amount=0.5) -> MixTexture:
+    return MixTexture(tex1, tex2, amount)
