@@ -4,6 +4,7 @@
  * secondary lanes leaves the lane average unbiased) over `samples_per_item` samples with its own random stream;
  * the host combines the items of each wavelength into a mean and its standard error. The program is built without
  * SAMPLER_SOBOL, so sensors use the independent sampler (rng.cl). */
+#include "kernel_entry.h"
 #include "path_tracer.cl"
 
 /* E(p, n) = ∫ L cos θ dω over the hemisphere of n = π × the radiance an albedo-1, one-sided Lambertian surface at p
@@ -46,7 +47,7 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
     return M_PI_F * reflected;
 }
 
-__kernel void measure(SCENE_KERNEL_PARAMS, __global const MeterParams *meter, __global const float *wavelengths,
+KERNEL void measure(SCENE_KERNEL_PARAMS, __global const MeterParams *meter, __global const float *wavelengths,
                       int wavelength_count, __global float *item_means)
 {
     int item = get_global_id(0);

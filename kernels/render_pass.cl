@@ -3,11 +3,12 @@
  *
  * One work-item per pixel runs the pass's samples in sample-index order and adds each to the film one at a
  * time, so the float sums do not depend on how a render is split into passes. */
+#include "kernel_entry.h"
 #include "pixel_sample.cl"
 
 /* film: per pixel (ΣX, ΣY, ΣZ, number of dropped non-finite samples); ray_counts: rays traced per pixel, for
  * the benchmark's rays/s. */
-__kernel void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
+KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
                           __global uint *ray_counts, __global float *spectral_film)
 {
     int pixel = get_global_id(0);

@@ -8,6 +8,7 @@
  * additions in the same order as in the megakernel, whatever order the queue holds the slots in: the image is
  * deterministic and does not depend on how a render is split into passes. The includer includes
  * path_tracer.cl first. */
+#include "kernel_entry.h"
 #include "pixel_sample.cl"
 
 /* Everything a pixel's path carries between launches. */
@@ -21,7 +22,7 @@ typedef struct {
 } PathSlot;
 
 /* Bytes of one slot, for the host to size the slot buffer (the struct is private to the device code). */
-__kernel void wavefront_slot_size(__global uint *size)
+KERNEL void wavefront_slot_size(__global uint *size)
 {
     *size = (uint)sizeof(PathSlot);
 }
@@ -45,7 +46,7 @@ inline int start_slot_sample(__global const RenderParams *params, PathSlot *slot
 }
 
 /* queue, queue_length: the pixels with a live path, appended in no particular order. */
-__kernel void wavefront_start(__global const RenderParams *params, __global const float4 *cmf,
+KERNEL void wavefront_start(__global const RenderParams *params, __global const float4 *cmf,
                               __global float4 *film, __global float *spectral_film, __global PathSlot *slots,
                               __global int *queue, __global int *queue_length)
 {
@@ -61,7 +62,7 @@ __kernel void wavefront_start(__global const RenderParams *params, __global cons
 
 /* One segment of every path in `queue` (its first *queue_length entries); the paths still live after it go to
  * next_queue. */
-__kernel void wavefront_advance(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
+KERNEL void wavefront_advance(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
                                 __global uint *ray_counts, __global float *spectral_film, __global PathSlot *slots,
                                 __global const int *queue, __global const int *queue_length,
                                 __global int *next_queue, __global int *next_queue_length)

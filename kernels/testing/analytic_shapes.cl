@@ -1,10 +1,11 @@
 /* Test harness: kernels/shapes.cl's intersection and surface of one analytic shape per ray, and its light sampling
  * (the sphere's cone, any shape's area), so tests can compare with Mitsuba 3 and with closed forms. */
+#include "kernel_entry.h"
 #include "shapes.cl"
 
 /* hit: (t, u, v, unused) with t = INFINITY on a miss; p, n, dpdu, dpdv: the rebuilt surface (xyz; w: its area
  * stretch in p). */
-__kernel void shape_hits(__global const AnalyticShape *shapes, __global const float4 *origins,
+KERNEL void shape_hits(__global const AnalyticShape *shapes, __global const float4 *origins,
                          __global const float4 *directions, __global float4 *hit, __global float4 *p,
                          __global float4 *n, __global float4 *dpdu, __global float4 *dpdv, int ray_count)
 {
@@ -23,7 +24,7 @@ __kernel void shape_hits(__global const AnalyticShape *shapes, __global const fl
 
 /* Directions toward a sphere (centre, radius in sphere.xyz, w) from `from`, drawn in its cone from u: the direction
  * (xyz) and its solid-angle pdf (w); the sampled point (xyz) and 1 − cos θmax (w). */
-__kernel void sphere_cone_samples(float4 sphere, float4 from, __global const float2 *u, __global float4 *direction,
+KERNEL void sphere_cone_samples(float4 sphere, float4 from, __global const float2 *u, __global float4 *direction,
                                   __global float4 *point, int count)
 {
     int i = get_global_id(0);
@@ -37,7 +38,7 @@ __kernel void sphere_cone_samples(float4 sphere, float4 from, __global const flo
 
 /* Points drawn uniformly over the shape's object-space area from u: the point (xyz) and its density over world
  * area (w). */
-__kernel void shape_area_samples(__global const AnalyticShape *shape, __global const float2 *u,
+KERNEL void shape_area_samples(__global const AnalyticShape *shape, __global const float2 *u,
                                  __global float4 *point, int count)
 {
     int i = get_global_id(0);

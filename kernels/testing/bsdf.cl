@@ -1,6 +1,7 @@
 /* Test harness: one Material (with its spectrum table) evaluated, sampled and queried for its pdf on arrays of
  * directions and random numbers, at four fixed wavelengths. The surface normal is +z in world space, so world and
  * local directions differ only by a rotation about the normal. */
+#include "kernel_entry.h"
 #include "material.cl"
 
 inline SampledWavelengths harness_wavelengths(__global const float *lambda)
@@ -23,7 +24,7 @@ inline SurfaceContext harness_context(__global const float *spectra)
 }
 
 /* f(wo, wi)·|cos θi| and the pdf of wi given wo. */
-__kernel void bsdf_eval_pdf(__global const Material *material, __global const float *spectra,
+KERNEL void bsdf_eval_pdf(__global const Material *material, __global const float *spectra,
                             __global const float *lambda, __global const float4 *wo, __global const float4 *wi,
                             __global float4 *f_cos, __global float *pdf)
 {
@@ -35,7 +36,7 @@ __kernel void bsdf_eval_pdf(__global const Material *material, __global const fl
 }
 
 /* One sample per item from u = (uc, u.x, u.y); wi.w = 1 when a direction was produced. */
-__kernel void bsdf_sample(__global const Material *material, __global const float *spectra,
+KERNEL void bsdf_sample(__global const Material *material, __global const float *spectra,
                           __global const float *lambda, __global const float4 *wo, __global const float4 *u,
                           __global float4 *wi, __global float4 *weight, __global float *pdf, __global int *is_delta)
 {
@@ -50,13 +51,13 @@ __kernel void bsdf_sample(__global const Material *material, __global const floa
     is_delta[i] = ok ? s.is_delta : 0;
 }
 
-__kernel void bsdf_has_non_delta_lobe(__global const Material *material, __global int *result)
+KERNEL void bsdf_has_non_delta_lobe(__global const Material *material, __global int *result)
 {
     result[0] = material_has_non_delta_lobe(material);
 }
 
 /* D(v) and G1(v) of the microfacet distribution (MICROFACET_*) of roughness alpha at local directions v. */
-__kernel void microfacet_terms(__global const float4 *v, float alpha, int distribution, __global float *d,
+KERNEL void microfacet_terms(__global const float4 *v, float alpha, int distribution, __global float *d,
                                __global float *g1)
 {
     int i = get_global_id(0);

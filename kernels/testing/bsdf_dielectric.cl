@@ -1,11 +1,12 @@
 /* Test harness: the index-of-refraction models and the dielectric BSDF's eval, pdf and sample on arrays, so that
  * tests/materials/test_bsdf_dielectric.py can check them against numpy references and statistics. Directions are float4
  * with w unused, in the BSDF's local frame (+z = geometric normal, to the exterior). */
+#include "kernel_entry.h"
 #include "types.h"
 #include "ior.cl"
 #include "../bsdf_dielectric.cl"  /* not this file, which has the same name */
 
-__kernel void material_ior_at(__global const Material *materials, __global const int *material_index,
+KERNEL void material_ior_at(__global const Material *materials, __global const int *material_index,
                               __global const float *lambda_nm, __global float *ior, __global int *dispersive)
 {
     int i = get_global_id(0);
@@ -14,7 +15,7 @@ __kernel void material_ior_at(__global const Material *materials, __global const
     dispersive[i] = material_ior_is_dispersive(m);
 }
 
-__kernel void fresnel(__global const float *cos_i, __global const float *eta, __global float *reflectance,
+KERNEL void fresnel(__global const float *cos_i, __global const float *eta, __global float *reflectance,
                       __global float *cos_t)
 {
     int i = get_global_id(0);
@@ -24,7 +25,7 @@ __kernel void fresnel(__global const float *cos_i, __global const float *eta, __
 }
 
 /* For each ωo and uniform number: the sampled direction, weight, pdf, is_delta and whether a sample came out. */
-__kernel void smooth_sample(__global const float4 *wo, __global const float *uc, float eta, __global float4 *wi,
+KERNEL void smooth_sample(__global const float4 *wo, __global const float *uc, float eta, __global float4 *wi,
                             __global float *weight, __global float *pdf, __global int *ok)
 {
     int i = get_global_id(0);
@@ -37,7 +38,7 @@ __kernel void smooth_sample(__global const float4 *wo, __global const float *uc,
 }
 
 /* distribution: MICROFACET_*. */
-__kernel void rough_eval_pdf(__global const float4 *wo, __global const float4 *wi, float eta, float alpha,
+KERNEL void rough_eval_pdf(__global const float4 *wo, __global const float4 *wi, float eta, float alpha,
                              int distribution, __global float *f_cos, __global float *pdf)
 {
     int i = get_global_id(0);
@@ -46,7 +47,7 @@ __kernel void rough_eval_pdf(__global const float4 *wo, __global const float4 *w
 }
 
 /* u = (uc, u1, u2, unused). */
-__kernel void rough_sample(__global const float4 *wo, __global const float4 *u, float eta, float alpha,
+KERNEL void rough_sample(__global const float4 *wo, __global const float4 *u, float eta, float alpha,
                            int distribution, __global float4 *wi, __global float *weight, __global float *pdf,
                            __global int *ok)
 {

@@ -1,7 +1,8 @@
 /* Test harness: closest hit of each ray against the BVH, so tests can compare with a brute-force reference. */
+#include "kernel_entry.h"
 #include "bvh.cl"
 
-__kernel void closest_hit(__global const BVHNode *nodes, __global const float4 *triangle_vertices,
+KERNEL void closest_hit(__global const BVHNode *nodes, __global const float4 *triangle_vertices,
                           __global const float4 *origins, __global const float4 *directions,
                           __global float *hit_t, __global int *hit_triangle, int ray_count)
 {
@@ -16,7 +17,7 @@ __kernel void closest_hit(__global const BVHNode *nodes, __global const float4 *
 }
 
 /* Any-hit query up to t_max: 1 when something is closer, for shadow-ray tests. */
-__kernel void any_hit(__global const BVHNode *nodes, __global const float4 *triangle_vertices,
+KERNEL void any_hit(__global const BVHNode *nodes, __global const float4 *triangle_vertices,
                       __global const float4 *origins, __global const float4 *directions,
                       __global const float *t_max, __global int *occluded, int ray_count)
 {

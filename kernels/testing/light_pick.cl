@@ -1,7 +1,8 @@
 /* Test harness: pick_light_reusing (lights.cl) on given 2D numbers: the light picked and the rescaled numbers. */
+#include "kernel_entry.h"
 #include "lights.cl"
 
-__kernel void pick_reusing(__global const float *light_cdf, int light_count, __global const float2 *u,
+KERNEL void pick_reusing(__global const float *light_cdf, int light_count, __global const float2 *u,
                            __global int *picked, __global float2 *rescaled, int count)
 {
     int i = get_global_id(0);

@@ -1,10 +1,11 @@
 /* Test harness for kernels/medium.cl: free flights at four given wavelengths, and phase-function samples. */
+#include "kernel_entry.h"
 #include "rng.cl"
 #include "medium.cl"
 
 /* Each work-item draws one free flight toward a surface at t_surface and reports the weight it gives each lane,
  * split by the event: scattered before the surface, or reached it. */
-__kernel void free_flights(__global const float *spectra, __global const Medium *medium, float4 lambda,
+KERNEL void free_flights(__global const float *spectra, __global const Medium *medium, float4 lambda,
                            float t_surface, int hero_only, uint seed, __global float4 *scattered_weight,
                            __global float4 *surface_weight)
 {
@@ -19,7 +20,7 @@ __kernel void free_flights(__global const float *spectra, __global const Medium 
 }
 
 /* Directions scattered from light travelling along +z, and the phase function's value for each. */
-__kernel void phase_samples(float g, uint seed, __global float4 *direction, __global float *phase)
+KERNEL void phase_samples(float g, uint seed, __global float4 *direction, __global float *phase)
 {
     int item = get_global_id(0);
     Sampler sampler = sampler_start(seed, (uint)item, 0u);

@@ -2,9 +2,10 @@
  * Each work-item is one pixel; for each of its `sample_count` samples from index `sample_begin` it makes the draws
  * listed in `draw_dimensions` (1: sample_1d, 2: sample_2d) in order, as the integrators do, and writes each as a
  * float2 (a 1D draw's second component is 0). */
+#include "kernel_entry.h"
 #include "rng.cl"
 
-__kernel void draw_samples(uint seed, uint first_pixel, uint sample_begin, int sample_count,
+KERNEL void draw_samples(uint seed, uint first_pixel, uint sample_begin, int sample_count,
                            __global const int *draw_dimensions, int draw_count, __global float2 *draws)
 {
     int item = get_global_id(0);

@@ -1,5 +1,6 @@
 /* Test harness: texture lookups (texture.cl) at arrays of points, and the sigmoid spectrum (rgb_spectrum.cl) of
  * arrays of coefficients, at four fixed wavelengths. */
+#include "kernel_entry.h"
 #include "../texture.cl"  /* not this file, which has the same name */
 
 inline SampledWavelengths harness_wavelengths(__global const float *lambda)
@@ -8,7 +9,7 @@ inline SampledWavelengths harness_wavelengths(__global const float *lambda)
 }
 
 /* Texture `index` at uv = point.xy with footprint point.z (uv units). */
-__kernel void texture_lookup(__global const Texture *textures, __global const float4 *texels,
+KERNEL void texture_lookup(__global const Texture *textures, __global const float4 *texels,
                              __global const float *spectra, int index, __global const float *lambda,
                              __global const float4 *point, __global float4 *value)
 {
@@ -22,7 +23,7 @@ __kernel void texture_lookup(__global const Texture *textures, __global const fl
 }
 
 /* S(c0 λ² + c1 λ + c2) of coefficients.xyz at the four wavelengths. */
-__kernel void sigmoid_spectrum(__global const float4 *coefficients, __global const float *lambda,
+KERNEL void sigmoid_spectrum(__global const float4 *coefficients, __global const float *lambda,
                                __global float4 *value)
 {
     int i = get_global_id(0);
@@ -32,7 +33,7 @@ __kernel void sigmoid_spectrum(__global const float4 *coefficients, __global con
 #include "../scene.cl"
 
 /* scene.cl's camera_footprint at points p = point.xyz of triangle (int)point.w, with the camera of `params`. */
-__kernel void footprint_at(__global const RenderParams *params, __global const float4 *triangle_vertices,
+KERNEL void footprint_at(__global const RenderParams *params, __global const float4 *triangle_vertices,
                            __global const float2 *triangle_uvs, __global const float4 *point, __global float *out)
 {
     int i = get_global_id(0);

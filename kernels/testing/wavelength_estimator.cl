@@ -1,11 +1,12 @@
 /* Test harness: each work-item averages `samples_per_item` hero-wavelength estimates of the film XYZ of one
  * tabulated spectrum, exactly as the path tracer forms them; the host compares the mean with colour-science and
  * uses the spread between work-items for the standard error. */
+#include "kernel_entry.h"
 #include "rng.cl"
 #include "film.cl"
 #include "spectrum.cl"
 
-__kernel void estimate_spectrum_xyz(__global const float *spectra, int offset, __global const float4 *cmf,
+KERNEL void estimate_spectrum_xyz(__global const float *spectra, int offset, __global const float4 *cmf,
                                     uint seed, int samples_per_item, __global float4 *item_means)
 {
     int item = get_global_id(0);
@@ -20,7 +21,7 @@ __kernel void estimate_spectrum_xyz(__global const float *spectra, int offset, _
 
 /* The visible-wavelength sampler itself: λ for given uniform numbers, the pdf the estimator divides by (the
  * sampler's), and p(λ) evaluated at that λ. */
-__kernel void sample_wavelength_pdf(__global const float *u, __global float *lambda, __global float *sampled_pdf,
+KERNEL void sample_wavelength_pdf(__global const float *u, __global float *lambda, __global float *sampled_pdf,
                                     __global float *evaluated_pdf)
 {
     int i = get_global_id(0);
