@@ -569,3 +569,13 @@ def test_a_duplicate_id_is_refused_and_notes_name_included_files(tmp_path):
     path = _write(tmp_path, '<include filename="parts/integrator.xml"/><shape type="cube"/>', name="main.xml")
     _, notes = mitsuba_scene_data(path)
     assert any(note.startswith("line 3 of integrator.xml: integrator 'direct'") for note in notes), notes
+
+
+def test_near_clip_is_the_cameras(tmp_path):
+    """The sensor's near_clip reaches the camera (tests/render/test_near_clip.py shows what it does); a negative one
+    is refused with its line."""
+    sensor = SENSOR.replace('value="45"/>', 'value="45"/><float name="near_clip" value="2.5"/>')
+    data, notes = mitsuba_scene_data(_write(tmp_path, "", sensor=sensor))
+    assert data["camera"]["near_clip"] == 2.5 and not any("near_clip" in note for note in notes)
+    with pytest.raises(SpectraceError, match="near_clip must be 0 or more"):
+        mitsuba_scene_data(_write(tmp_path, "", name="bad.xml", sensor=sensor.replace("2.5", "-1")))

@@ -315,6 +315,7 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     origin, forward, right, up = scene.camera.basis(scene.width / scene.height)
     params = np.zeros(1, RENDER_PARAMS_DTYPE)
     params["camera_origin"][0, :3] = origin
+    params["camera_origin"][0, 3] = scene.camera.near_clip
     params["camera_forward"][0, :3] = forward
     params["camera_right"][0, :3] = right
     params["camera_up"][0, :3] = up

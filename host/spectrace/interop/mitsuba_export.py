@@ -173,6 +173,8 @@ def scene_to_mitsuba_dict(
             "fov": float(camera.fov_degrees),
             "fov_axis": camera.fov_axis,
             "to_world": _lookat(camera.origin, camera.target, camera.up),
+            # Mitsuba's own default (0.01) where ours is 0: it needs a positive plane.
+            **({"near_clip": float(camera.near_clip)} if camera.near_clip > 0.0 else {}),
             "sampler": {"type": sampler, "sample_count": int(spp or scene.spp)},
             "film": {
                 "type": "hdrfilm",

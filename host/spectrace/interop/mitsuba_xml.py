@@ -1097,6 +1097,10 @@ class MitsubaImporter:
             "fov": self.fov_x(properties, width / height, element),
             "fov_axis": "x",
         }
+        if "near_clip" in properties:
+            data["camera"]["near_clip"] = self.number(properties["near_clip"])
+            if not data["camera"]["near_clip"] >= 0.0:
+                raise self.fail(properties["near_clip"], "near_clip must be 0 or more", "value")
         self.origins["camera"] = element
         sampler = next(iter(self.nested(properties, "sampler")), None)
         # A pinhole has no focus: Mitsuba's perspective sensor takes focus_distance and does nothing with it.

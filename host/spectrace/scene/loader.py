@@ -533,6 +533,7 @@ def load_scene(path: str | Path) -> Scene:
         up=spec.camera.up,
         fov_degrees=spec.camera.fov,
         fov_axis=spec.camera.fov_axis,
+        near_clip=spec.camera.near_clip,
     )
     _check_camera(camera, path)
     return Scene(

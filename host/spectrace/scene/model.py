@@ -35,6 +35,7 @@ class Camera:
     up: tuple[float, float, float] = (0.0, 1.0, 0.0)
     fov_degrees: float = 45.0
     fov_axis: Literal["x", "y"] = "x"
+    near_clip: float = 0.0  # distance along the view axis before which nothing is seen (Mitsuba's near_clip)
 
     def basis(self, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """origin, forward, right·tan(fov_x/2), up·tan(fov_y/2) for an image of width/height = aspect_ratio.

@@ -43,6 +43,9 @@ class CameraSpec(Strict):
     up: Vector3 = (0.0, 1.0, 0.0)
     fov: FiniteFloat = Field(description="full field of view in degrees, along fov_axis")
     fov_axis: Literal["x", "y"] = "x"
+    near_clip: FiniteFloat = Field(
+        default=0.0, ge=0.0, description="distance along the view axis before which nothing is seen"
+    )
 
     @field_validator("fov")
     @classmethod
