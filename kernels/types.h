@@ -155,7 +155,7 @@ typedef struct {
     int texel_offset;         /* LIGHT_ENVIRONMENT_MAP: first texel of the image in the texel buffer */
     int texture;              /* LIGHT_TRIANGLE: its emission texture (an image on the surface, e.g. a screen's
                                  picture), which replaces spectrum_offset, or NO_TEXTURE */
-    int pad2;
+    int linear_falloff;       /* LIGHT_SPOT: 1: linear in θ between the two cones; 0: smoothstep in cos θ */
 } Light;
 
 /* Everything a render pass needs besides the buffers. */
