@@ -48,9 +48,12 @@ def test_homogeneous_medium_maps_to_an_index_matched_interior(tmp_path):
     assert defaults["shapes"][0]["interior"] == {"sigma_a": {"value": 0.25}, "sigma_s": {"value": 0.75}, "g": 0.0}
 
 
-def test_coloured_and_exterior_media_are_reported(tmp_path):
-    coloured = MEDIUM.replace('<float name="albedo" value="0.8"/>', '<rgb name="albedo" value="0.8, 0.5, 0.2"/>')
-    with pytest.raises(SpectraceError, match="coloured albedo"):
+COLOURED = MEDIUM.replace('<float name="albedo" value="0.8"/>', '<rgb name="albedo" value="0.95, 0.6, 0.3"/>')
+
+
+def test_coloured_extinction_and_exterior_media_are_reported(tmp_path):
+    coloured = MEDIUM.replace('<float name="sigma_t" value="2"/>', '<rgb name="sigma_t" value="2, 1, 0.5"/>')
+    with pytest.raises(SpectraceError, match="coloured sigma_t"):
         mitsuba_scene_data(_xml(tmp_path, 8, coloured))
     exterior = MEDIUM.replace('name="interior"', 'name="exterior"')
     with pytest.raises(SpectraceError, match="exterior medium"):
@@ -58,12 +61,13 @@ def test_coloured_and_exterior_media_are_reported(tmp_path):
 
 
 @pytest.mark.peer
-def test_medium_cube_renders_like_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral):
+@pytest.mark.parametrize("medium", [MEDIUM, COLOURED], ids=["grey", "rgb_albedo"])
+def test_medium_cube_renders_like_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral, medium):
     """Both renderers, spectral, REPLICAS independent images each; 8 x 8-pixel block means and the image mean agree
-    within 5 standard errors (tests/replica_agreement.py)."""
+    within 5 standard errors (tests/replica_agreement.py). rgb_albedo: the albedo uplifted as a reflectance."""
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 16, 8, 32, 8
-    path = _xml(tmp_path, size)
+    path = _xml(tmp_path, size, medium)
     scene = mi.load_file(str(path))
     by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
 

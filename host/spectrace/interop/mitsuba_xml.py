@@ -18,8 +18,8 @@ twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
 path (max_depth, rr_depth), direct (as path with max_depth 2) and volpath/volpathmis (as path, which renders
-media); a shape's interior homogeneous medium with constant sigma_t/albedo/scale and an hg or isotropic phase (a
-null bsdf: the index-matched boundary). Spectra: rgb (uplifted exactly as
+media); a shape's interior homogeneous medium with constant sigma_t and scale, a constant or rgb albedo and an hg
+or isotropic phase (a null bsdf: the index-matched boundary). Spectra: rgb (uplifted exactly as
 Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as a value, "λ:v" pairs,
 wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular, blackbody, d65 and srgb.
 `$name` parameters and <default> are substituted as Mitsuba does.
@@ -1032,8 +1032,8 @@ class MitsubaImporter:
     def interior_medium(self, properties: Properties) -> dict | None:
         """A shape's `interior` homogeneous medium as spectrace's interior: σs = scale·albedo·σt and
         σa = scale·(1 − albedo)·σt (Mitsuba 3's homogeneous: albedo default 0.75, sigma_t default 1), with its
-        Henyey–Greenstein phase (Mitsuba's hg: g default 0.8; isotropic: 0). Only constant coefficients are
-        mapped: coloured ones are reported."""
+        Henyey–Greenstein phase (Mitsuba's hg: g default 0.8; isotropic: 0). A constant sigma_t and a constant or
+        rgb albedo are mapped; other coloured coefficients are reported."""
         self.nested(properties, "medium")  # read here, whatever their names
         if "exterior" in properties:
             self.unsupported_plugin(self.resolve(properties["exterior"]), " as an exterior medium")
@@ -1045,17 +1045,16 @@ class MitsubaImporter:
             return None
         items = self.properties(medium)
         items.understood("sample_emitters")  # how Mitsuba samples, not what it renders
-        constants = {}
+        given: dict = {}
         for key, default in (("sigma_t", 1.0), ("albedo", 0.75)):
-            if key not in items:
-                constants[key] = default
-                continue
-            value = self.spectrum(items[key], key)
-            if value is None or set(value) != {"value"}:
+            value = self.spectrum(items[key], key) if key in items else {"value": default}
+            # An rgb albedo is a reflectance, uplifted as Mitsuba uplifts one; an rgb sigma_t is uplifted by
+            # Mitsuba's unbounded rule, which spectrace does not reproduce exactly.
+            if value is None or not (set(value) == {"value"} or (key == "albedo" and set(value) == {"rgb"})):
                 self.unsupported_plugin(medium, f" with a coloured {key}")
                 return None
-            constants[key] = float(value["value"])
-        albedo = constants["albedo"]
+            given[key] = value
+        albedo = given["albedo"].get("value", 0.0)
         if albedo > 1.0:
             raise self.fail(items["albedo"], f"a medium's albedo must not exceed 1, got {albedo:g}", "value")
         scale = self.number(items["scale"]) if "scale" in items else 1.0
@@ -1069,8 +1068,26 @@ class MitsubaImporter:
         elif phase is not None and self.kind(phase) != "isotropic":
             self.unsupported_object(phase)
             return None
-        sigma_t = constants["sigma_t"] * scale
+        sigma_t = float(given["sigma_t"]["value"]) * scale
+        if "rgb" in given["albedo"]:
+            return {**self._coloured_coefficients(given["albedo"]["rgb"], sigma_t, medium), "g": g}
         return {"sigma_a": {"value": sigma_t * (1.0 - albedo)}, "sigma_s": {"value": sigma_t * albedo}, "g": g}
+
+    def _coloured_coefficients(self, rgb: list[float], sigma_t: float, medium: Element) -> dict:
+        """σs = σt·a(λ), σa = σt·(1 − a(λ)) for an rgb albedo a uplifted as Mitsuba uplifts a reflectance (Jakob &
+        Hanika 2019), tabulated every 5 nm (a smooth curve)."""
+        from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
+        from spectrace.spectral.uplift import uplift_reflectance
+
+        if max(rgb) > 1.0:
+            raise self.fail(medium, f"a medium's albedo must not exceed 1, got rgb {rgb}", "albedo")
+        albedo = uplift_reflectance(rgb, where=self.where(medium))[0]
+        wavelengths = np.arange(GRID_MIN_NM, GRID_MAX_NM + 0.5, 5.0)
+        values = np.array([float(albedo.evaluate(w)) for w in wavelengths])
+        return {
+            "sigma_a": {"values": [[float(w), sigma_t * (1.0 - v)] for w, v in zip(wavelengths, values)]},
+            "sigma_s": {"values": [[float(w), sigma_t * v] for w, v in zip(wavelengths, values)]},
+        }
 
     def cylinder_steps(self, properties: dict[str, Element]) -> list[dict]:
         """Mitsuba's cylinder from p0 to p1 of `radius`: the unit cylinder scaled by (r, r, |p1 − p0|), turned by the
