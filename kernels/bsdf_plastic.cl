@@ -16,7 +16,8 @@
  * Mitsuba 3's plastic. `nonlinear` (Mitsuba's too) lets the base's albedo into that series: ρ/(1 − ρ F_dr) for
  * ρ/(1 − F_dr). A rough coat with its own transmission (Material.coat_table_offset, spectrace.materials.coat)
  * replaces (1 − F(cos θ)) by the rough interface's tabulated t(cos θ) and F_dr by its R_int, with s = 1: Mitsuba's
- * roughplastic.
+ * roughplastic. An optional specular_reflectance (Material.transmittance_offset) multiplies f_coat: Mitsuba 3's
+ * tint of the coat's reflection, which leaves the base term as it is.
  *
  * Sampling picks the coat with probability P = F(θo) / (F(θo) + (1 − F(θo)) ρ̄) (ρ̄: the mean base albedo over the
  * path's wavelengths), else the cosine-weighted base lobe; rough plastic reports the mixture pdf
@@ -35,6 +36,7 @@
 
 typedef struct {
     float4 reflectance;
+    float4 coat_tint;  /* multiplies the coat's reflection (Mitsuba 3's specular_reflectance); 1 when not given */
     float eta;
     float alpha;
     float base_scale;  /* c of the header comment */
@@ -54,6 +56,9 @@ inline PlasticParams plastic_params(__global const Material *m, const SurfaceCon
 {
     PlasticParams p;
     p.reflectance = surface_spectrum(sc, m->reflectance_texture, m->reflectance_offset, w);
+    p.coat_tint = m->transmittance_offset == MATERIAL_NO_SPECTRUM
+                      ? (float4)(1.0f)
+                      : spectrum_at(sc->buffers.spectra, m->transmittance_offset, w);
     p.eta = m->ior;
     p.alpha = surface_scalar(sc, m->roughness_texture, m->alpha, w);
     float s = ggx_is_smooth(p.alpha) ? 1.0f : PLASTIC_ROUGH_BASE_SCALE;
@@ -110,8 +115,8 @@ inline float4 plastic_coat_eval(const PlasticParams *p, float3 wo, float3 wi)
 {
     if (ggx_is_smooth(p->alpha) || wo.z <= 0.0f || wi.z <= 0.0f) return (float4)(0.0f);
     float3 h = reflection_half_vector(wo, wi);
-    return (float4)(fresnel_dielectric(dot(wo, h), p->eta)
-                    * microfacet_reflection_cos(wo, wi, p->alpha, p->distribution));
+    return p->coat_tint * (fresnel_dielectric(dot(wo, h), p->eta)
+                           * microfacet_reflection_cos(wo, wi, p->alpha, p->distribution));
 }
 
 inline float4 plastic_eval(const PlasticParams *p, float3 wo, float3 wi)
@@ -136,7 +141,7 @@ inline int plastic_sample(const PlasticParams *p, float3 wo, float uc, float2 u,
     float3 wi;
     if (uc < coat) {
         if (ggx_is_smooth(p->alpha)) {
-            return delta_sample(reflect_local(wo), (float4)(fresnel_dielectric(wo.z, p->eta) / coat), coat, s);
+            return delta_sample(reflect_local(wo), p->coat_tint * (fresnel_dielectric(wo.z, p->eta) / coat), coat, s);
         }
         wi = microfacet_reflect(wo, microfacet_sample_normal(wo, p->alpha, p->distribution, u));
         if (wi.z <= 0.0f) return 0;

@@ -107,11 +107,17 @@ inline float area_light_pdf(__global const Light *light, float distance, float a
     return light->pmf * distance * distance / (light->area * abs_cos_light);
 }
 
-/* Smooth spot falloff (smoothstep in cos θ between the cutoff and the falloff start). */
+/* Spot falloff between the cutoff and the falloff start: smoothstep in cos θ (pbrt-v4's profile), or, where
+ * linear_falloff is set, linear in the angle θ itself (Mitsuba 3's spot.cpp profile, so its scenes import exactly).
+ * Contract: cos_cutoff <= cos_falloff_start; returns a factor in [0, 1]. */
 inline float spot_falloff(__global const Light *light, float cos_theta)
 {
     if (cos_theta >= light->cos_falloff_start) return 1.0f;
     if (cos_theta <= light->cos_cutoff) return 0.0f;
+    if (light->linear_falloff) {
+        float cutoff = acos(light->cos_cutoff);
+        return (cutoff - acos(cos_theta)) / (cutoff - acos(light->cos_falloff_start));
+    }
     float t = (cos_theta - light->cos_cutoff) / (light->cos_falloff_start - light->cos_cutoff);
     return t * t * (3.0f - 2.0f * t);
 }

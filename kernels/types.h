@@ -89,7 +89,8 @@ typedef struct {
     int distribution;           /* conductor, plastic, dielectric: MICROFACET_* of the rough lobe */
     int nonlinear;              /* plastic: 1 = the base's internal scattering depends on its albedo (Mitsuba's
                                    `nonlinear`), 0 = it does not */
-    int transmittance_offset;   /* thindielectric: optional tint of its transmission (MATERIAL_NO_SPECTRUM: none) */
+    int transmittance_offset;   /* thindielectric: optional tint of its transmission; plastic: optional tint of its
+                                   coat's reflection (MATERIAL_NO_SPECTRUM: none) */
     int coat_table_offset;      /* plastic with a rough coat's own transmission: GRID_SAMPLES values of t(cos θ) at
                                    cos θ = i / (GRID_SAMPLES − 1) in the spectrum table (MATERIAL_NO_SPECTRUM: the
                                    smooth interface's 1 − F instead) */
@@ -155,7 +156,7 @@ typedef struct {
     int texel_offset;         /* LIGHT_ENVIRONMENT_MAP: first texel of the image in the texel buffer */
     int texture;              /* LIGHT_TRIANGLE: its emission texture (an image on the surface, e.g. a screen's
                                  picture), which replaces spectrum_offset, or NO_TEXTURE */
-    int pad2;
+    int linear_falloff;       /* LIGHT_SPOT: 1: linear in θ between the two cones; 0: smoothstep in cos θ */
 } Light;
 
 /* Everything a render pass needs besides the buffers. */

@@ -304,17 +304,19 @@ def spot_light(
     intensity: SpectrumLike | None = None,
     power_w: float | None = None,
     spectrum: SpectrumLike | None = None,
+    linear_falloff: bool = False,
 ) -> SpotLight:
     """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
-    degrees from the axis (default ¾ of the cutoff), smooth fall to 0 at `cutoff_angle` degrees; or `power_w` W
-    spread over the cone's effective solid angle."""
+    degrees from the axis (default ¾ of the cutoff), smooth fall (linear in the angle with `linear_falloff`) to 0 at
+    `cutoff_angle` degrees; or `power_w` W spread over the cone's effective solid angle."""
     origin = np.asarray(_vector(position, "position"))
     direction = unit_direction(
         np.asarray(_vector(target, "target")) - origin, None, "spot light target equals its position"
     )
     cutoff, start = lights.spot.cone(cutoff_angle, falloff_start, "cutoff_angle", "falloff_start")
-    solid_angle = lights.spot.effective_solid_angle(cutoff, start)
-    return SpotLight(tuple(origin), direction, _intensity(intensity, power_w, spectrum, solid_angle), cutoff, start)
+    solid_angle = lights.spot.effective_solid_angle(cutoff, start, linear_falloff)
+    emitted = _intensity(intensity, power_w, spectrum, solid_angle)
+    return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff))
 
 
 def distant_light(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:

@@ -8,7 +8,7 @@ measured ≤ bound + that tolerance.
 """
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -189,6 +189,20 @@ def spot_light_cone(device: Device) -> list[Check]:
                 f"E = I·falloff / r² at {angle:g}° off axis (cutoff 30°)",
                 intensity * falloff / 4.0,
                 spot,
+                IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
+                device,
+            )
+        )
+    # Mitsuba 3's profile: linear in the angle, so halfway between 10° and 30° is half the intensity.
+    linear = replace(spot, falloff_start_degrees=10.0, linear_falloff=True)
+    for angle, falloff in ((0.0, 1.0), (20.0, 0.5), (25.0, 0.25)):
+        direction = np.array([np.sin(np.radians(angle)), 0.0, np.cos(np.radians(angle))])
+        checks.append(
+            _light_irradiance(
+                "spot light, linear falloff",
+                f"E = I·falloff / r² at {angle:g}° off axis (linear from 10° to 30°)",
+                intensity * falloff / 4.0,
+                linear,
                 IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),
                 device,
             )

@@ -41,6 +41,15 @@ def test_spot_light_power_is_its_flux():
     assert solid_angle * _flux_per_steradian_of_axis(light.intensity) == pytest.approx(25.0, rel=1e-6)
 
 
+def test_linear_falloff_spot_light_power_is_its_flux():
+    light = spectrace.spot_light(**SPOT, power_w=25.0, spectrum="cie:D65", linear_falloff=True)
+    # Mitsuba 3's profile, linear in the angle θ between the two cones: integrate it over the sphere numerically.
+    theta = np.linspace(0.0, np.pi, 2_000_001)
+    falloff = np.clip((np.radians(40.0) - theta) / np.radians(40.0 - 15.0), 0.0, 1.0)
+    solid_angle = 2.0 * np.pi * np.trapezoid(falloff * np.sin(theta), theta)
+    assert solid_angle * _flux_per_steradian_of_axis(light.intensity) == pytest.approx(25.0, rel=1e-6)
+
+
 def test_scene_file_and_api_give_the_same_intensity(tmp_path):
     point = load_scene(
         _scene(tmp_path, 'type = "point"\nposition = [0, 2, 0]\npower = 60\nspectrum = { spectrum = "cie:A" }\n')

@@ -192,7 +192,7 @@ LIGHT_DTYPE = _struct(
         ("map_height", "<i4"),
         ("texel_offset", "<i4"),
         ("texture", "<i4"),
-        ("pad2", "<i4"),
+        ("linear_falloff", "<i4"),
     ],
     96,
 )

@@ -17,15 +17,16 @@ disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sph
 twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
-path (max_depth, rr_depth), direct (as path with max_depth 2) and volpath/volpathmis (as path: spectrace has no
-media). Spectra: rgb (uplifted exactly as
+path (max_depth, rr_depth), direct (as path with max_depth 2) and volpath/volpathmis (as path, which renders
+media); a shape's interior homogeneous medium with constant sigma_t and scale, a constant or rgb albedo and an hg
+or isotropic phase (a null bsdf: the index-matched boundary). Spectra: rgb (uplifted exactly as
 Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as a value, "λ:v" pairs,
 wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular, blackbody, d65 and srgb.
 `$name` parameters and <default> are substituted as Mitsuba does.
 
 Bad values are reported as one SpectraceError naming the file and the element path
 (`scene.xml: shape[2]/transform/translate@x`, docs/mitsuba.md "Bad input"). Anything else (another plugin type,
-a texture where spectrace takes none, media, include) is reported in one error naming each unsupported plugin and
+a texture where spectrace takes none, other media) is reported in one error naming each unsupported plugin and
 its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as notes.
 Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
 """
@@ -74,6 +75,8 @@ SUPPORTED = {
     "sensor": ("perspective",),
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis", "moment"),
+    "medium": ("homogeneous",),
+    "phase": ("hg", "isotropic"),
 }
 
 
@@ -1005,7 +1008,13 @@ class MitsubaImporter:
             if face_normals or kind != "sphere":
                 table["face_normals"] = face_normals
         bsdf = next(iter(self.nested(properties, "bsdf")), None)
-        table["material"] = self.material(bsdf, name, flip_v=kind in _V_UP_SHAPES)
+        interior = self.interior_medium(properties)
+        if interior is not None:
+            table["interior"] = interior
+        if interior is not None and bsdf is not None and self.kind(self.resolve(bsdf)) == "null":
+            table["material"] = None  # Mitsuba's null bsdf: the index-matched boundary of spectrace's media
+        else:
+            table["material"] = self.material(bsdf, name, flip_v=kind in _V_UP_SHAPES)
         emitter = next(iter(self.nested(properties, "emitter")), None)
         if emitter is not None:
             module = SHAPE_EMITTER_MODULES.get(self.kind(emitter))
@@ -1015,7 +1024,70 @@ class MitsubaImporter:
                 emitter_table := module.from_mitsuba(self, emitter, self.properties(emitter))
             ) is not None and self.checked_textures(emitter_table, module):
                 table["emitter"] = emitter_table
+        if table["material"] is None and "interior" in table:
+            del table["material"]
+            return table
         return table if table["material"] is not None else None
+
+    def interior_medium(self, properties: Properties) -> dict | None:
+        """A shape's `interior` homogeneous medium as spectrace's interior: σs = scale·albedo·σt and
+        σa = scale·(1 − albedo)·σt (Mitsuba 3's homogeneous: albedo default 0.75, sigma_t default 1), with its
+        Henyey–Greenstein phase (Mitsuba's hg: g default 0.8; isotropic: 0). A constant sigma_t and a constant or
+        rgb albedo are mapped; other coloured coefficients are reported."""
+        self.nested(properties, "medium")  # read here, whatever their names
+        if "exterior" in properties:
+            self.unsupported_plugin(self.resolve(properties["exterior"]), " as an exterior medium")
+        if "interior" not in properties:
+            return None
+        medium = self.resolve(properties["interior"])
+        if self.kind(medium) != "homogeneous":
+            self.unsupported_object(medium)
+            return None
+        items = self.properties(medium)
+        items.understood("sample_emitters")  # how Mitsuba samples, not what it renders
+        given: dict = {}
+        for key, default in (("sigma_t", 1.0), ("albedo", 0.75)):
+            value = self.spectrum(items[key], key) if key in items else {"value": default}
+            # An rgb albedo is a reflectance, uplifted as Mitsuba uplifts one; an rgb sigma_t is uplifted by
+            # Mitsuba's unbounded rule, which spectrace does not reproduce exactly.
+            if value is None or not (set(value) == {"value"} or (key == "albedo" and set(value) == {"rgb"})):
+                self.unsupported_plugin(medium, f" with a coloured {key}")
+                return None
+            given[key] = value
+        albedo = given["albedo"].get("value", 0.0)
+        if albedo > 1.0:
+            raise self.fail(items["albedo"], f"a medium's albedo must not exceed 1, got {albedo:g}", "value")
+        scale = self.number(items["scale"]) if "scale" in items else 1.0
+        if not scale > 0.0:
+            raise self.fail(items["scale"], f"a medium's scale must be > 0, got {scale:g}", "value")
+        g = 0.0
+        phase = next(iter(self.nested(items, "phase")), None)
+        if phase is not None and self.kind(phase) == "hg":
+            phase_items = self.properties(phase)
+            g = self.number(phase_items["g"]) if "g" in phase_items else 0.8
+        elif phase is not None and self.kind(phase) != "isotropic":
+            self.unsupported_object(phase)
+            return None
+        sigma_t = float(given["sigma_t"]["value"]) * scale
+        if "rgb" in given["albedo"]:
+            return {**self._coloured_coefficients(given["albedo"]["rgb"], sigma_t, medium), "g": g}
+        return {"sigma_a": {"value": sigma_t * (1.0 - albedo)}, "sigma_s": {"value": sigma_t * albedo}, "g": g}
+
+    def _coloured_coefficients(self, rgb: list[float], sigma_t: float, medium: Element) -> dict:
+        """σs = σt·a(λ), σa = σt·(1 − a(λ)) for an rgb albedo a uplifted as Mitsuba uplifts a reflectance (Jakob &
+        Hanika 2019), tabulated every 5 nm (a smooth curve)."""
+        from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
+        from spectrace.spectral.uplift import uplift_reflectance
+
+        if max(rgb) > 1.0:
+            raise self.fail(medium, f"a medium's albedo must not exceed 1, got rgb {rgb}", "albedo")
+        albedo = uplift_reflectance(rgb, where=self.where(medium))[0]
+        wavelengths = np.arange(GRID_MIN_NM, GRID_MAX_NM + 0.5, 5.0)
+        values = np.array([float(albedo.evaluate(w)) for w in wavelengths])
+        return {
+            "sigma_a": {"values": [[float(w), sigma_t * (1.0 - v)] for w, v in zip(wavelengths, values)]},
+            "sigma_s": {"values": [[float(w), sigma_t * v] for w, v in zip(wavelengths, values)]},
+        }
 
     def cylinder_steps(self, properties: dict[str, Element]) -> list[dict]:
         """Mitsuba's cylinder from p0 to p1 of `radius`: the unit cylinder scaled by (r, r, |p1 − p0|), turned by the
@@ -1177,7 +1249,7 @@ class MitsubaImporter:
             # Mitsuba's direct integrator's sample counts per technique change the noise, not the mean.
             properties.understood("emitter_samples", "bsdf_samples", "shading_samples")
         elif kind.startswith("volpath"):
-            self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path' (spectrace has no media)")
+            self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path', which renders media")
         elif kind == "moment":
             # Mitsuba's moment integrator renders its nested integrator's image with the second moment as extra
             # channels: the image is the nested one's.

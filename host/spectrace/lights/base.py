@@ -27,6 +27,7 @@ def light_row(
     map_fields=(0, 0, 0, 0),
     texel_offset: int = 0,
     texture: int = NO_TEXTURE,
+    linear_falloff: bool = False,
 ) -> tuple:
     """One Light row as a tuple in LIGHT_DTYPE's field order; pmf is filled in once every light's power is known."""
     return (
@@ -44,7 +45,7 @@ def light_row(
         *map_fields,
         texel_offset,
         texture,
-        0,
+        int(linear_falloff),
     )
 
 

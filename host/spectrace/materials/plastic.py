@@ -54,6 +54,12 @@ COAT_TRANSMISSION = Parameter(
     "interface's own transmittance, which loses what single scattering loses (Mitsuba 3's roughplastic); "
     "`rough` needs a number `roughness`",
 )
+SPECULAR_REFLECTANCE = reflectance(
+    None,
+    "multiplies the coat's reflection (Mitsuba 3's specular_reflectance; a clear coat leaves it out)",
+    name="specular_reflectance",
+    default_doc="none (1)",
+)
 PARAMETERS = (
     reflectance(REQUIRED, "albedo of the diffuse base under the coat", textured=True),
     IOR,
@@ -61,6 +67,7 @@ PARAMETERS = (
     distribution(),
     NONLINEAR,
     COAT_TRANSMISSION,
+    SPECULAR_REFLECTANCE,
 )
 
 
@@ -68,7 +75,7 @@ PARAMETERS = (
 class PlasticMaterial(Opaque):
     """Diffuse base of albedo `reflectance` under a clear coat of index `ior` relative to the outside, smooth or
     rough (α `roughness` of the microfacet `distribution`); `nonlinear`: the internal scattering depends on the
-    albedo."""
+    albedo; `specular_reflectance` tints the coat's reflection when given."""
 
     reflectance: Spectrum  # or a texture (spectrace.textures)
     ior: float = IOR.number_default
@@ -76,6 +83,7 @@ class PlasticMaterial(Opaque):
     distribution: str = DEFAULT_DISTRIBUTION
     nonlinear: bool = False
     coat_transmission: str = "smooth"
+    specular_reflectance: Spectrum | None = None
 
     is_delta = False  # the base is diffuse whatever the coat
 
@@ -91,6 +99,11 @@ def from_spec(spec, resolver, key: str) -> PlasticMaterial:
         distribution=spec.distribution,
         nonlinear=spec.nonlinear,
         coat_transmission=spec.coat_transmission,
+        specular_reflectance=(
+            resolver.spectrum(spec.specular_reflectance, f"{key}.specular_reflectance", emission=False)
+            if spec.specular_reflectance is not None
+            else None
+        ),
     )
 
 
@@ -116,13 +129,14 @@ def make(
     distribution: str = DEFAULT_DISTRIBUTION,
     nonlinear: bool = False,
     coat_transmission: str = "smooth",
+    specular_reflectance: SpectrumLike | None = None,
 ) -> PlasticMaterial:
     """A diffuse base of albedo `reflectance` under a clear coat of index `ior` (> 1, relative to the outside),
     smooth or rough (`roughness` = α of the microfacet `distribution`, "ggx" or "beckmann"; a number or a grey
     texture). `nonlinear`: light the coat reflects back down meets the base again, which deepens colours (Mitsuba's
     model of that name). `coat_transmission`: "smooth" (light crosses a rough coat by the smooth interface's
     1 − F) or "rough" (by the rough interface's own transmittance, as Mitsuba's roughplastic; a number
-    roughness only)."""
+    roughness only). `specular_reflectance` (a reflectance) tints the coat's reflection."""
     if coat_transmission not in COAT_TRANSMISSIONS:
         raise SpectraceError(
             f"coat_transmission must be one of {', '.join(COAT_TRANSMISSIONS)}, got {coat_transmission!r}",
@@ -137,6 +151,11 @@ def make(
         distribution=check_distribution(distribution),
         nonlinear=bool(nonlinear),
         coat_transmission=coat_transmission,
+        specular_reflectance=(
+            spectrum_input.reflectance(specular_reflectance, "specular_reflectance")
+            if specular_reflectance is not None
+            else None
+        ),
     )
 
 
@@ -147,6 +166,8 @@ def write_row(row: np.ndarray, material: PlasticMaterial, table: SpectrumTable) 
     row["alpha"] = material.roughness
     row["distribution"] = MICROFACET_DISTRIBUTIONS.index(material.distribution)
     row["nonlinear"] = int(material.nonlinear)
+    if material.specular_reflectance is not None:
+        row["transmittance_offset"] = table.add(material.specular_reflectance)
     # A smooth coat's own transmittance is 1 − F: the table is only written for a rough one.
     if material.coat_transmission == "rough" and not smooth_everywhere(material.roughness):
         transmittance, internal = rough_coat(float(material.ior), float(material.roughness), material.distribution)
@@ -162,10 +183,13 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     )
     if reflectance is None:
         return None
+    specular = None
     if "specular_reflectance" in properties:
+        if importer.resolve(properties["specular_reflectance"]).tag == "texture":
+            importer.unsupported_plugin(bsdf, " with a textured specular_reflectance")
+            return None
         specular = importer.spectrum(properties["specular_reflectance"], "specular_reflectance")
-        if specular is not None and specular != {"value": 1.0}:
-            importer.unsupported_plugin(bsdf, " with specular_reflectance other than 1")
+        if specular is None:
             return None
     nonlinear = "nonlinear" in properties and importer.boolean(importer.resolve(properties["nonlinear"]))
     ior = importer.ior(bsdf, properties, "int_ior", 1.49) / importer.ior(bsdf, properties, "ext_ior", 1.000277)
@@ -191,4 +215,6 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
             )
     if nonlinear:
         table["nonlinear"] = True
+    if specular is not None and specular != {"value": 1.0}:
+        table["specular_reflectance"] = specular
     return table
