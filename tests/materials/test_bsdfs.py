@@ -170,9 +170,9 @@ class Bsdf:
         )
 
     def pdf_grid(self, wo: np.ndarray, n_cos: int, n_phi: int) -> np.ndarray:
-        """pdf at cell centres, (n_cos, n_phi), uniform in cos θ ∈ [0, 1] and φ ∈ [0, 2π). The directions are made
-        here, not in a kernel: Intel's CPU compiler has vectorised a kernel that made them and then called
-        material_pdf into one that wrote other work-items' values (correct with its vectoriser off)."""
+        """pdf at cell centres, (n_cos, n_phi), uniform in cos θ ∈ [0, 1] and φ ∈ [0, 2π), through the same
+        bsdf_eval_pdf kernel as every other query (the kernel that made the directions itself was the one Intel's
+        vectoriser first miscompiled; kernels/kernel_entry.h now keeps that vectoriser off every kernel)."""
         cos_theta = (np.arange(n_cos) + 0.5) / n_cos
         phi = 2.0 * np.pi * (np.arange(n_phi) + 0.5) / n_phi
         sin_theta = np.sqrt(1.0 - cos_theta**2)[:, None]
