@@ -4,6 +4,7 @@
 #ifndef SPECTRACE_PATH_STATE_CL
 #define SPECTRACE_PATH_STATE_CL
 
+#include "aov.cl"
 #include "direct_lighting.cl"
 #include "surface_detail.cl"
 
@@ -21,6 +22,9 @@ typedef struct {
     int medium;              /* index of the medium `ray` travels in, -1 for none (kernels/medium.cl) */
     float radiance_scale;    /* product of the refractions' (n_o/n_i)² factors in `throughput` */
     int null_crossings;      /* medium boundaries crossed without a vertex, bounded by MAX_NULL_CROSSINGS */
+#if FILM_AOVS
+    AovRecord aov;           /* what the camera path records for the AOVs (aov.cl) */
+#endif
 } PathState;
 
 inline PathState camera_path(Ray ray)
@@ -36,6 +40,9 @@ inline PathState camera_path(Ray ray)
     s.medium = -1;  /* cameras and sensors stand outside every medium */
     s.radiance_scale = 1.0f;
     s.null_crossings = 0;
+#if FILM_AOVS
+    s.aov = aov_start();
+#endif
     return s;
 }
 

@@ -43,6 +43,9 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     float3 travel = s->ray.direction;
     *radiance += s->throughput * estimate_direct_light_in_medium(scene, w, sampler, x, travel, medium->g,
                                                                  path_query(sampler, s, QUERY_SHADOW), rays_traced);
+#if FILM_AOVS
+    aov_at_medium_scatter(&s->aov, flight.distance, x, s->throughput / s->radiance_scale);
+#endif
     s->ray.direction = sample_henyey_greenstein(travel, medium->g, sample_2d(sampler));
     s->ray.origin = x;
     s->previous_point = x;
@@ -85,6 +88,9 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     }
 
     PathVertex v = path_vertex(scene, hit, s->ray);
+#if FILM_AOVS
+    aov_at_surface(&s->aov, hit.t, v.p, v.ns, v.info.material != TRIANGLE_NO_MATERIAL);
+#endif
     if (v.info.light >= 0) {
         __global const Light *light = &scene->lights[v.info.light];
         float4 emitted = vertex_emission(scene, w, &v, hit);
@@ -100,7 +106,12 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     if (s->segments >= last_segment) return 0;
 
     BSDFSample bs;
-    if (!light_and_sample_vertex(scene, w, sampler, s, &v, 1, radiance, rays_traced, &bs)) return 0;
+    int sampled = light_and_sample_vertex(scene, w, sampler, s, &v, 1, radiance, rays_traced, &bs);
+#if FILM_AOVS
+    aov_at_bsdf_sample(&s->aov, material_has_non_delta_lobe(&scene->materials[v.info.material]), sampled,
+                       s->throughput / s->radiance_scale, bs.weight);
+#endif
+    if (!sampled) return 0;
     follow_bsdf_sample(s, &v, &bs);
     if (!survives_russian_roulette(s, params, sample_1d(sampler))) return 0;
     if (all(s->throughput == (float4)(0.0f))) return 0;
@@ -117,6 +128,18 @@ inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sam
     while (goes_on) goes_on = path_segment(scene, w, sampler, &s, &radiance, rays_traced);
     return radiance;
 }
+
+#if FILM_AOVS
+/* trace_path for a path state the caller keeps (its AOV record): the radiance the camera path `s` carries. */
+inline float4 trace_path_state(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                               uint *rays_traced)
+{
+    float4 radiance = (float4)(0.0f);
+    int goes_on = s->segments <= max_segments(scene->params);
+    while (goes_on) goes_on = path_segment(scene, w, sampler, s, &radiance, rays_traced);
+    return radiance;
+}
+#endif
 
 inline float4 trace_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray,
                          uint *rays_traced)

@@ -1,15 +1,17 @@
 /* The render-pass kernel shared by the integrators: the including file defines TRACE_RADIANCE(scene, w,
- * sampler, ray, rays_traced) first.
+ * sampler, ray, rays_traced) first, and TRACE_PATH_STATE(scene, w, sampler, PathState *, rays_traced), the same
+ * for a path state it keeps, which renders with AOVs (FILM_AOVS, kernels/aov.cl) use.
  *
  * One work-item per pixel runs the pass's samples in sample-index order and adds each to the film one at a
  * time, so the float sums do not depend on how a render is split into passes. */
 #include "kernel_entry.h"
+#include "aov.cl"
 #include "pixel_sample.cl"
 
 /* film: per pixel (ΣX, ΣY, ΣZ, number of dropped non-finite samples); ray_counts: rays traced per pixel, for
- * the benchmark's rays/s. */
+ * the benchmark's rays/s; aov_film: AOV_FLOAT4S_PER_PIXEL sums per pixel (aov.cl; untouched without FILM_AOVS). */
 KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
-                          __global uint *ray_counts, __global float *spectral_film)
+                          __global uint *ray_counts, __global float *spectral_film, __global float4 *aov_film)
 {
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
@@ -17,13 +19,26 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
 
     float4 accumulated = film[pixel];
     uint rays_traced = 0;
+#if FILM_AOVS
+    float4 aov_sums[AOV_FLOAT4S_PER_PIXEL];
+    for (int i = 0; i < AOV_FLOAT4S_PER_PIXEL; ++i) aov_sums[i] = aov_film[pixel * AOV_FLOAT4S_PER_PIXEL + i];
+#endif
     for (int s = params->sample_begin; s < params->sample_begin + params->sample_count; ++s) {
         Sampler sampler;
         SampledWavelengths w;
         Ray ray = start_pixel_sample(params, pixel, s, &sampler, &w);
+#if FILM_AOVS
+        PathState path = camera_path(ray);
+        float4 radiance = TRACE_PATH_STATE(&scene, &w, &sampler, &path, &rays_traced);
+        add_aov_sample(aov_sums, &path.aov, radiance, cmf, &w);
+#else
         float4 radiance = TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
+#endif
         add_pixel_sample(&accumulated, spectral_film, pixel, radiance, cmf, &w);
     }
     film[pixel] = accumulated;
+#if FILM_AOVS
+    for (int i = 0; i < AOV_FLOAT4S_PER_PIXEL; ++i) aov_film[pixel * AOV_FLOAT4S_PER_PIXEL + i] = aov_sums[i];
+#endif
     ray_counts[pixel] += rays_traced;
 }

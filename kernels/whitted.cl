@@ -27,6 +27,9 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
         return 0;
     }
     PathVertex v = path_vertex(scene, hit, s->ray);
+#if FILM_AOVS
+    aov_at_surface(&s->aov, hit.t, v.p, v.ns, v.info.material != TRIANGLE_NO_MATERIAL);
+#endif
     if (v.info.light >= 0) *radiance += s->throughput * vertex_emission(scene, w, &v, hit);
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
     if (s->segments >= last_segment) return 0;
@@ -34,12 +37,29 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
     /* Follow the specular lobes only: a sampled non-specular direction ends the path (its light was counted
      * by next-event estimation), which keeps the specular part unbiased. */
     BSDFSample bs;
-    if (!light_and_sample_vertex(scene, w, sampler, s, &v, 0, radiance, rays_traced, &bs) || !bs.is_delta) return 0;
+    int sampled = light_and_sample_vertex(scene, w, sampler, s, &v, 0, radiance, rays_traced, &bs);
+#if FILM_AOVS
+    aov_at_bsdf_sample(&s->aov, material_has_non_delta_lobe(&scene->materials[v.info.material]), sampled,
+                       s->throughput / s->radiance_scale, bs.weight);
+#endif
+    if (!sampled || !bs.is_delta) return 0;
     follow_bsdf_sample(s, &v, &bs);
     if (all(s->throughput == (float4)(0.0f))) return 0;
     ++s->segments;
     return 1;
 }
+
+#if FILM_AOVS
+/* trace_direct for a path state the caller keeps (its AOV record). */
+inline float4 trace_direct_state(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                                 uint *rays_traced)
+{
+    float4 radiance = (float4)(0.0f);
+    int goes_on = s->segments <= max_segments(scene->params);
+    while (goes_on) goes_on = direct_segment(scene, w, sampler, s, &radiance, rays_traced);
+    return radiance;
+}
+#endif
 
 inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray,
                            uint *rays_traced)

@@ -3,18 +3,21 @@ them, reading them back into an `Image`, and their saved state, the whole of a r
 stores (spectrace.engine.checkpoint writes and reads the file; what goes in it and back to the device is here).
 
 Per pixel the film holds four float32 sums (X, Y, Z and the count of non-finite samples left out), a uint32 count
-of rays traced, and, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`. Together with the
-number of samples per pixel added so far they are the entire state of a render: the samplers are counter-based and
-every pixel adds its samples in sample order, so restoring them continues the render bit for bit.
+of rays traced, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`, and, when any AOV is
+asked for, the twelve float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position and depth).
+Together with the number of samples per pixel added so far they are the entire state of a render: the samplers are
+counter-based and every pixel adds its samples in sample order, so restoring them continues the render bit for bit.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pyopencl as cl
 
+from spectrace.aovs import AOV_FLOATS_PER_PIXEL, aov_images
 from spectrace.device import Device
 from spectrace.engine.memory import SPECTRAL_BAND_BYTES
 from spectrace.engine.opencl_errors import translate_opencl_errors
@@ -24,7 +27,12 @@ from spectrace.scene import limits
 
 SPECTRAL_LIMITS_NM = (360.0, 830.0)  # the wavelengths the renders sample
 # Saved-state buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
-STATE_LAYOUT = {"film": (np.float32, 4), "ray_counts": (np.uint32, 1), "spectral_film": (np.float32, None)}
+STATE_LAYOUT = {
+    "film": (np.float32, 4),
+    "ray_counts": (np.uint32, 1),
+    "spectral_film": (np.float32, None),
+    "aov_film": (np.float32, 12),
+}
 
 
 @dataclass
@@ -87,8 +95,14 @@ class Film:
         height: int,
         spectral_bins: int = 0,
         spectral_range_nm: tuple[float, float] = SPECTRAL_LIMITS_NM,
+        aovs: Sequence[str] = (),
+        albedo_scale: np.ndarray | None = None,
     ):
+        """aovs: names from AOV_NAMES kept beside the image (their kernels built with aov_defines(aovs));
+        albedo_scale: albedo_channel_scale of the render's CMF table."""
         self.device = device
+        self.aovs = tuple(aovs)
+        self.albedo_scale = np.ones(3, np.float32) if albedo_scale is None else np.asarray(albedo_scale, np.float32)
         self.width = width
         self.height = height
         self.pixel_count = width * height
@@ -100,6 +114,9 @@ class Film:
         self.ray_count_buffer = cl.Buffer(ctx, rw, self.pixel_count * limits.RAY_COUNT_BYTES_PER_PIXEL)
         # Allocated even without bands (one float), since the kernels always take the argument.
         self.spectral_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * spectral_bins, 1) * SPECTRAL_BAND_BYTES)
+        # Likewise one float4 without AOVs.
+        aov_floats = self.pixel_count * AOV_FLOATS_PER_PIXEL if self.aovs else 4
+        self.aov_buffer = cl.Buffer(ctx, rw, aov_floats * 4)
         self.samples_done = 0
         self.render_seconds = 0.0
         self.reset()
@@ -110,6 +127,7 @@ class Film:
         cl.enqueue_fill_buffer(queue, self.xyz_buffer, np.zeros(1, np.float32), 0, self.xyz_buffer.size)
         cl.enqueue_fill_buffer(queue, self.ray_count_buffer, np.zeros(1, np.uint32), 0, self.ray_count_buffer.size)
         cl.enqueue_fill_buffer(queue, self.spectral_buffer, np.zeros(1, np.float32), 0, self.spectral_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.aov_buffer, np.zeros(1, np.float32), 0, self.aov_buffer.size)
         queue.finish()
         self.samples_done = 0
         self.render_seconds = 0.0
@@ -137,6 +155,14 @@ class Film:
         self.device.queue.finish()
         return bands.reshape(self.height, self.width, self.spectral_bins)
 
+    @translate_opencl_errors("reading the AOV film")
+    def read_aovs(self) -> np.ndarray:
+        """(pixels, 12) AOV sums (kernels/aov.cl's layout); divide by samples_done for the means."""
+        sums = np.empty((self.pixel_count, AOV_FLOATS_PER_PIXEL), np.float32)
+        cl.enqueue_copy(self.device.queue, sums, self.aov_buffer)
+        self.device.queue.finish()
+        return sums
+
     def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
         """The mean of the samples so far per pixel, labelled with how it was made."""
         film, rays = self.read()
@@ -148,7 +174,12 @@ class Film:
             spectral = SpectralBands(
                 np.linspace(lo, hi, self.spectral_bins + 1), self.read_spectral() / np.float32(count)
             )
+        aovs = {}
+        if self.aovs:
+            every = aov_images(self.read_aovs(), film, self.samples_done, self.albedo_scale, (self.height, self.width))
+            aovs = {name: every[name] for name in self.aovs}
         return Image(
+            aovs=aovs,
             spectral=spectral,
             xyz=xyz,
             spp=self.samples_done,
@@ -166,6 +197,8 @@ class Film:
         buffers = {"film": self.xyz_buffer, "ray_counts": self.ray_count_buffer}
         if self.spectral_bins > 0:
             buffers["spectral_film"] = self.spectral_buffer
+        if self.aovs:
+            buffers["aov_film"] = self.aov_buffer
         return buffers
 
     def save_state(self) -> RenderState:
@@ -175,6 +208,8 @@ class Film:
         buffers = {"film": film, "ray_counts": rays}
         if self.spectral_bins > 0:
             buffers["spectral_film"] = self.read_spectral().reshape(-1)
+        if self.aovs:
+            buffers["aov_film"] = self.read_aovs()
         return RenderState(self.samples_done, self.render_seconds, buffers)
 
     @translate_opencl_errors("restoring the film from a checkpoint")

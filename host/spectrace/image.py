@@ -41,6 +41,8 @@ class Image:
     rays_traced: int = 0
     exposure: float = 0.0  # stops: the RGB outputs are scaled by 2**exposure; xyz is not
     spectral: SpectralBands | None = None  # when rendered with spectral bins
+    # AOVs by name (spectrace.aovs): albedo (h, w, 3) XYZ, normal and position (h, w, 3), depth and variance (h, w)
+    aovs: dict[str, np.ndarray] = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
     colour_space: ColourSpace = ColourSpace.SRGB  # of the files `write` makes (see spectrace.colour_output)
     white_balance: WhiteBalance | None = None  # chromatic adaptation applied to every RGB output
@@ -48,6 +50,7 @@ class Image:
     def __repr__(self) -> str:
         # The dataclass's own repr would print every pixel (tens of kilobytes in a notebook).
         extras = [f"spectral_bins={len(self.spectral.edges_nm) - 1}"] if self.spectral is not None else []
+        extras += [f"aovs={','.join(self.aovs)}"] if self.aovs else []
         extras += [f"dropped_samples={self.dropped_samples}"] if self.dropped_samples else []
         extras += [f"exposure={self.exposure:g}"] if self.exposure else []
         return (
@@ -96,12 +99,14 @@ class Image:
 
     def write(self, path: str | Path, include_xyz: bool = True) -> None:
         """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
-        Fichet et al. 2021 layout when the image has them) or .png (sRGB, 8 bit)."""
+        Fichet et al. 2021 layout and the AOVs' channels (spectrace.aovs) when the image has them) or .png
+        (sRGB, 8 bit; the colour only)."""
         path = Path(path)
         suffix = path.suffix.lower()
         space = ColourSpace(self.colour_space)
         # Each writer imported only when used: OpenEXR's module takes longer to import than a small PNG to write.
         if suffix == ".exr":
+            from spectrace.aovs import aov_channels
             from spectrace.io.exr import write_exr
 
             attributes = {} if space is ColourSpace.SRGB else {"chromaticities": exr_chromaticities(space)}
@@ -112,6 +117,7 @@ class Image:
                 self.metadata(),
                 spectral=self.spectral,
                 attributes=attributes,
+                extra_channels=aov_channels(self.aovs, space),
             )
         elif suffix == ".png":
             from spectrace.io.png import write_png

@@ -6,6 +6,7 @@ from collections.abc import Callable
 import numpy as np
 import pyopencl as cl
 
+from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.device import Device, open_device
 from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.engine.launch import launch_shape, render_work_group
@@ -70,11 +71,13 @@ class Renderer:
         self.device = device if isinstance(device, Device) else open_device(device)
         self.buffers: SceneBuffers = build_scene_buffers(scene)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
-        check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
+        check_device_memory(
+            device_memory_need(self.buffers, scene.width * scene.height, spectral_bins, bool(scene.aovs)), self.device
+        )
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
         if specialise:
             defines |= scene_feature_defines(self.buffers)
-        defines |= spectral_defines(spectral_bins, spectral_range_nm)
+        defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
         self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
         self.kernel = self._create_kernels()
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
@@ -85,7 +88,15 @@ class Renderer:
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._scene = upload_scene(ctx, b)
         self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(b.cmf))
-        self.film = Film(self.device, scene.width, scene.height, spectral_bins, spectral_range_nm)
+        self.film = Film(
+            self.device,
+            scene.width,
+            scene.height,
+            spectral_bins,
+            spectral_range_nm,
+            aovs=scene.aovs,
+            albedo_scale=albedo_channel_scale(b.cmf),
+        )
         self._allocate(spectral_bins)
 
     def _check_scene(self, scene: Scene) -> None:
@@ -134,7 +145,13 @@ class Renderer:
         cl.enqueue_copy(queue, self._params, params)
         film = self.film
         self.kernel.set_args(
-            self._params, *self._scene, self._cmf, film.xyz_buffer, film.ray_count_buffer, film.spectral_buffer
+            self._params,
+            *self._scene,
+            self._cmf,
+            film.xyz_buffer,
+            film.ray_count_buffer,
+            film.spectral_buffer,
+            film.aov_buffer,
         )
         global_size, local_size = launch_shape(self.pixel_count, self.work_group)
         cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)

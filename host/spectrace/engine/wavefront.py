@@ -32,6 +32,11 @@ class WavefrontRenderer(Renderer):
                 f"the wavefront kernel runs the path integrator only, not {scene.integrator!r}",
                 where=str(scene.source) if scene.source else None,
             )
+        if scene.aovs:
+            raise SpectraceError(
+                "the wavefront kernel does not record AOVs; render them with the megakernel (--kernel megakernel)",
+                where=str(scene.source) if scene.source else None,
+            )
 
     def _allocate(self, spectral_bins: int) -> None:
         ctx = self.device.context

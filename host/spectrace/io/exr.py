@@ -29,10 +29,12 @@ def write_exr(
     metadata: dict[str, str],
     spectral=None,
     attributes: dict | None = None,
+    extra_channels: dict[str, np.ndarray] | None = None,
 ) -> None:
     """spectral: SpectralBands (band-averaged radiance) written as one S0 channel per band centre, with the
     layout's attributes (spectralLayoutVersion, emissiveUnits, polarisationHandedness). attributes: standard
-    header attributes, e.g. "chromaticities" when the RGB channels are not linear sRGB."""
+    header attributes, e.g. "chromaticities" when the RGB channels are not linear sRGB. extra_channels: more
+    (height, width) float32 channels by name (the AOVs)."""
     channels = {"RGB": np.ascontiguousarray(linear_srgb, dtype=np.float32)}
     header_extra = {}
     if spectral is not None:
@@ -48,6 +50,8 @@ def write_exr(
     if xyz is not None:
         for i, name in enumerate("XYZ"):
             channels[name] = np.ascontiguousarray(xyz[..., i], dtype=np.float32)
+    for name, plane in (extra_channels or {}).items():
+        channels[name] = np.ascontiguousarray(plane, dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     header.update({f"spectrace:{k}": str(v) for k, v in metadata.items()})
     header.update(header_extra)

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
+from spectrace.aovs import parse_aovs
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
@@ -545,6 +546,7 @@ def load_scene(path: str | Path) -> Scene:
         integrator=spec.integrator.type,
         max_depth=spec.integrator.max_depth,
         exposure=spec.film.exposure,
+        aovs=parse_aovs(spec.film.aovs),
         rr_depth=spec.integrator.rr_depth,
         hide_environment=spec.integrator.hide_environment,
         spp=spec.sampler.spp,

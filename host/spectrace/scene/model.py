@@ -111,6 +111,7 @@ class Scene:
     spp: int = 16
     seed: int = 0
     sampler: SamplerType = DEFAULT_SAMPLER
+    aovs: tuple[str, ...] = ()  # AOVs kept beside the image (spectrace.film.AOV_NAMES), in that order
     source: Path | None = None
     notes: dict = field(default_factory=dict)
 

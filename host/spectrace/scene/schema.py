@@ -64,6 +64,9 @@ class FilmSpec(Strict):
         le=limits.MAX_EXPOSURE_STOPS,
         description="stops: RGB output x 2**exposure",
     )
+    aovs: list[Literal["albedo", "normal", "depth", "position", "variance"]] = Field(
+        default_factory=list, description="AOVs written beside the image (EXR channels)"
+    )
 
     @field_validator("width", "height")
     @classmethod
