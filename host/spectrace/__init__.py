@@ -48,6 +48,7 @@ _LAZY = {
     ),
     **dict.fromkeys(["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.colour_output"),
     "SpectraceError": "spectrace.errors",
+    "denoise": "spectrace.denoising",
     "Image": "spectrace.image",
     **dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"),
     "load_scene": "spectrace.scene",
@@ -92,5 +93,6 @@ __getattr__, __dir__ = lazy_names(
         "Adaptation",
         "WhiteBalance",
         "parse_white_balance",
+        "denoise",
     ],
 )

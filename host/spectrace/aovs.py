@@ -29,7 +29,7 @@ def parse_aovs(names: str | Sequence[str] | None, where: str | None = None) -> t
     name raises SpectraceError at `where`."""
     if names is None:
         return ()
-    items = [n.strip() for n in names.split(",")] if isinstance(names, str) else list(names)
+    items = [n.strip() for n in names.split(",") if n.strip()] if isinstance(names, str) else list(names)
     for name in items:
         if not isinstance(name, str) or name not in AOV_NAMES:
             raise SpectraceError(f"unknown AOV {name!r} (choose from {', '.join(AOV_NAMES)})", where=where)

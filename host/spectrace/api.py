@@ -409,6 +409,7 @@ def render(
     colour_space: ColourSpace | str = ColourSpace.SRGB,
     white_balance: WhiteBalance | str | None = None,
     adaptation: Adaptation | str = Adaptation.BRADFORD,
+    aovs: str | Sequence[str] | None = None,
 ) -> Image:
     """Render `scene` to `spp` samples per pixel (default: the scene's) and return the `Image`.
 
@@ -417,13 +418,20 @@ def render(
     none, a callable is called as progress(samples_done, samples_total) after each pass; "auto" draws a bar
     only inside Jupyter. spectral_bins > 0 also keeps that many equal wavelength bands over 360..830 nm per
     pixel (`image.spectral`, band-averaged radiance in W/(m² sr nm)). colour_space, white_balance and
-    adaptation set how the image converts to RGB (see `spectrace.colour_output` and docs/colour.md).
+    adaptation set how the image converts to RGB (see `spectrace.colour_output` and docs/colour.md). aovs: AOVs
+    recorded by the same paths and kept in `image.aovs` ("albedo", "normal", "depth", "position", "variance", as
+    a sequence or a comma-separated string; None keeps the scene's `film.aovs`; see `spectrace.aovs`);
+    `spectrace.denoise(image)` needs albedo and normal.
     """
     if not isinstance(scene, Scene):
         raise SpectraceError(
             f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) reads a file)"
         )
     _check_camera(scene)
+    if aovs is not None:
+        from spectrace.aovs import parse_aovs
+
+        scene = scene.with_overrides(aovs=parse_aovs(aovs, where="aovs"))
     space = parse_colour_space(colour_space) if isinstance(colour_space, str) else ColourSpace(colour_space)
     balance = parse_white_balance(white_balance, adaptation) if isinstance(white_balance, str) else white_balance
     renderer = Renderer(scene, device, spectral_bins=spectral_bins) if spectral_bins else Renderer(scene, device)

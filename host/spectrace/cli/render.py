@@ -93,6 +93,22 @@ def render(
             "replaced (without it, such a render is refused: --resume continues it).",
         ),
     ] = False,
+    aov: Annotated[
+        str | None,
+        typer.Option(
+            "--aov",
+            help="EXR only: also store these AOVs, comma-separated: albedo, normal, depth, position, variance "
+            "(standard error of Y); replaces the scene's film.aovs. See docs/scene-format.md.",
+        ),
+    ] = None,
+    denoise: Annotated[
+        bool,
+        typer.Option(
+            "--denoise",
+            help="Denoise with Open Image Denoise (the spectrace[denoise] extra), guided by the albedo and normal "
+            "AOVs (recorded for it); --output gets the denoised image, <stem>.noisy<suffix> beside it the noisy one.",
+        ),
+    ] = False,
     kernel: Annotated[
         str,
         typer.Option(
@@ -103,6 +119,7 @@ def render(
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
     (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
+    from spectrace.aovs import parse_aovs
     from spectrace.cli import checks as cli_checks
     from spectrace.engine.checkpoint import read_checkpoint
     from spectrace.engine.stop_signals import StopOnSignals
@@ -111,6 +128,12 @@ def render(
     from spectrace.scene import load_scene
     from spectrace.scene.model import SAMPLER_TYPES
 
+    asked_aovs = parse_aovs(aov, where="--aov") if aov is not None else None
+    if denoise:
+        from spectrace.denoising import INSTALL_HINT, denoise_available
+
+        if not denoise_available():
+            raise SpectraceError(INSTALL_HINT, where="--denoise")
     if sampler is not None and sampler not in SAMPLER_TYPES:
         raise SpectraceError(f"unknown sampler '{sampler}' (use {' or '.join(SAMPLER_TYPES)})", where="--sampler")
     cli_checks.check_seed(seed)
@@ -121,10 +144,21 @@ def render(
     )
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
+    if asked_aovs and output.suffix.lower() != ".exr":
+        raise SpectraceError("--aov needs an .exr output", where=str(output))
+    aovs = loaded.aovs if asked_aovs is None else asked_aovs
+    if denoise:
+        aovs = tuple(dict.fromkeys((*aovs, "albedo", "normal")))
+    loaded = loaded.with_overrides(aovs=aovs)
     _check_render_options(loaded, output, width, height, spp)
     outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color, false_color_scale)
     state_file = checkpoint or resume
-    _check_output_files(scene, output, false_color, checkpoint, resume, overwrite)
+    noisy = None
+    if denoise:
+        from spectrace.denoising import noisy_path_for
+
+        noisy = noisy_path_for(output)
+    _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy)
     saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
     renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
     console.print(
@@ -144,10 +178,16 @@ def render(
         image = renderer.image()
         if image.spp == 0:
             raise SpectraceError("interrupted before the first pass finished; nothing written")
+        if noisy is not None:
+            from spectrace.denoising import denoise as denoise_image
+
+            _write_image(outputs.apply(image), noisy, xyz, state_file)
+            image = denoise_image(image)
         _write_image(outputs.apply(image), output, xyz, state_file)
         outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False, markup=False))
     pixels = image.width * image.height * image.spp
     note = " (interrupted: partial image)" if interrupted else ""
+    note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
     console.print(
         f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
         f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}",
@@ -173,7 +213,13 @@ def _check_render_options(scene, output: Path, width, height, spp) -> None:
 
 
 def _check_output_files(
-    scene: Path, output: Path, false_color: Path | None, checkpoint: Path | None, resume: Path | None, overwrite: bool
+    scene: Path,
+    output: Path,
+    false_color: Path | None,
+    checkpoint: Path | None,
+    resume: Path | None,
+    overwrite: bool,
+    noisy: Path | None = None,
 ) -> None:
     """Before any device work: every file the render will write can be written, no two name the same file, none
     is the scene, and a fresh render does not replace a checkpoint that holds another render's samples."""
@@ -183,9 +229,12 @@ def _check_output_files(
     if overwrite and resume is not None:
         raise SpectraceError("starts the render afresh, so it cannot go with --resume", where="--overwrite")
     cli_checks.check_distinct_files(
-        {"--output": output, "--false-color": false_color, state_option: state_file}, {"the scene file": scene}
+        {"--output": output, "--false-color": false_color, state_option: state_file, "--denoise": noisy},
+        {"the scene file": scene},
     )
     cli_checks.check_output_file(output, "--output")
+    if noisy is not None:
+        cli_checks.check_output_file(noisy, "--denoise")
     if false_color is not None:
         cli_checks.check_output_file(false_color, "--false-color")
     if state_file is not None:
