@@ -19,6 +19,7 @@ QUALITY_DEFAULT_SIZE = 128
 QUALITY_REFERENCE_SPP = 1024
 COLD_DEFAULT_SIZE = 256
 SAMPLERS_DEFAULT_SIZE = 32
+DENOISE_DEFAULT_SIZE = 128
 RENDER_DEFAULT_SIZES = [256, 512]
 
 SizesOption = Annotated[list[int] | None, typer.Option("--size", help="Square image size(s) in pixels, repeatable.")]
@@ -44,6 +45,7 @@ PeerSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(PE
 QualitySizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(QUALITY_DEFAULT_SIZE))]
 ColdSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(COLD_DEFAULT_SIZE))]
 SamplersSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(SAMPLERS_DEFAULT_SIZE))]
+DenoiseSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(DENOISE_DEFAULT_SIZE))]
 
 
 def _one(size: int | None) -> list[int] | None:
@@ -288,6 +290,33 @@ def samplers_bench(
     from spectrace.benchmarks.samplers import sampler_bench_command
 
     sampler_bench_command(scene, [_or(size, SAMPLERS_DEFAULT_SIZE)], device, as_json, console.rich())
+
+
+@bench_app.command("denoise")
+def denoise_bench(
+    size: DenoiseSizeOption = None,
+    spp: Annotated[int, typer.Option(help="Samples per pixel of the denoised renders.", min=1)] = 4,
+    reference_spp: Annotated[int, typer.Option(help="Samples per pixel of the reference.", min=2)] = 1024,
+    seeds: Annotated[int, typer.Option(help="Renders (seeds) averaged.", min=1)] = 4,
+    scene: SceneOption = None,
+    device: DeviceOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """Open Image Denoise measured: RMSE of the noisy and the denoised image at --spp against a long reference
+    render (the denoise extra; docs/performance.md)."""
+    _check(_one(size))
+    from spectrace.benchmarks.denoise import denoise_bench_command
+    from spectrace.denoising import INSTALL_HINT, denoise_available
+    from spectrace.scene import limits
+
+    for option, value in (("--spp", spp), ("--reference-spp", reference_spp)):
+        if problem := limits.spp_problem(value):
+            raise SpectraceError(problem, where=option)
+    if not denoise_available():
+        raise SpectraceError(INSTALL_HINT)
+    denoise_bench_command(
+        scene, _or(size, DENOISE_DEFAULT_SIZE), spp, reference_spp, seeds, device, as_json, console.rich()
+    )
 
 
 @bench_app.command("kernel-shapes")
