@@ -71,9 +71,7 @@ def test_depth_position_and_normal_of_a_plane(device):
 def test_albedo_of_a_diffuse_wall_is_its_reflectances_weighted_mean(device):
     spp = 64
     image = _render(device, _plane_scene(("albedo",), spp=spp))
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(360, 830, 1))
-    weights = cmfs.values  # (471, 3) x̄, ȳ, z̄ at 1 nm
-    expected = (REFLECTANCE[:, None] * weights).sum(axis=0) / weights.sum(axis=0)
+    expected = _weighted_means(REFLECTANCE)
     albedo = image.aovs["albedo"].reshape(-1, 3).astype(np.float64)
     # The albedo's only noise is the film's wavelength sampling; pixels are independent (independent sampler).
     mean = albedo.mean(axis=0)
@@ -81,6 +79,46 @@ def test_albedo_of_a_diffuse_wall_is_its_reflectances_weighted_mean(device):
     # 1e-4: the kernels interpolate the tables linearly between the 1 nm points, this sums at them.
     assert np.all(np.abs(mean - expected) <= 5 * standard_error + 1e-4), (mean, expected, standard_error)
     assert np.all(standard_error < 0.01 * expected)  # the check is sharp enough to mean something
+
+
+def _weighted_means(reflectance: np.ndarray) -> np.ndarray:
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(360, 830, 1))
+    weights = cmfs.values  # (471, 3) x̄, ȳ, z̄ at 1 nm
+    return (reflectance[:, None] * weights).sum(axis=0) / weights.sum(axis=0)
+
+
+@pytest.mark.parametrize("integrator", ["path", "direct"])
+def test_albedo_follows_the_specular_chain(device, integrator):
+    """A mirror of reflectance R at z = 0 faces the camera; behind the camera a diffuse wall of reflectance ρ at
+    z = 8 faces it. Depth and normal are the mirror's; the albedo is the wall's seen through the mirror: R·ρ."""
+    mirror_reflectance = 0.9 - 0.5 * (WAVELENGTHS - 360.0) / 470.0  # bluish
+    camera = spectrace.Camera(origin=(0.0, 0.0, DISTANCE), target=(0.0, 0.0, 0.0), fov_degrees=FOV_DEGREES)
+    mirror = spectrace.shape(
+        "rectangle", spectrace.mirror(spectrace.spectrum((WAVELENGTHS, mirror_reflectance))), transform=[{"scale": 10}]
+    )
+    wall = spectrace.shape(
+        "rectangle",
+        spectrace.diffuse(spectrace.spectrum((WAVELENGTHS, REFLECTANCE))),
+        transform=[{"scale": 20.0}, {"translate": [0.0, 0.0, 2 * DISTANCE]}],
+    )
+    scene = Scene(
+        camera=camera,
+        width=SIZE,
+        height=SIZE,
+        shapes=[mirror, wall],
+        lights=[spectrace.constant_environment(1.0)],
+        integrator=integrator,
+        sampler="independent",
+        aovs=("albedo", "normal", "depth"),
+    )
+    image = _render(device, scene, spp=64)
+    np.testing.assert_allclose(image.aovs["normal"], np.broadcast_to([0.0, 0.0, 1.0], (SIZE, SIZE, 3)), atol=1e-6)
+    assert np.all(image.aovs["depth"] < DISTANCE * 1.05)  # the mirror's (the wall's would be about 3x this)
+    albedo = image.aovs["albedo"].reshape(-1, 3).astype(np.float64)
+    mean, standard_error = albedo.mean(axis=0), albedo.std(axis=0, ddof=1) / np.sqrt(len(albedo))
+    expected = _weighted_means(mirror_reflectance * REFLECTANCE)
+    assert np.all(np.abs(mean - expected) <= 5 * standard_error + 1e-4), (mean, expected, standard_error)
+    assert not np.allclose(expected, _weighted_means(REFLECTANCE), rtol=0.05)  # the mirror's colour matters
 
 
 def test_the_standard_error_of_y_matches_the_spread_of_independent_renders(device):
@@ -132,6 +170,18 @@ def test_a_checkpoint_carries_the_aovs(device):
     plain = Renderer(_plane_scene(aovs=(), spp=4), device)
     with pytest.raises(SpectraceError, match="aov_film"):
         plain.film.restore_state(state)
+
+
+def test_film_aovs_in_a_scene_file(tmp_path):
+    from scene_text import CAMERA_FILM_GREY
+
+    path = tmp_path / "scene.toml"
+    text = CAMERA_FILM_GREY + '[[shapes]]\ntype = "rectangle"\nmaterial = "grey"\n'
+    path.write_text(text.replace("height = 6\n", 'height = 6\naovs = ["variance", "albedo"]\n'))
+    assert spectrace.load_scene(path).aovs == ("albedo", "variance")
+    path.write_text(text.replace("height = 6\n", 'height = 6\naovs = ["shadow"]\n'))
+    with pytest.raises(SpectraceError, match=r"film\.aovs"):
+        spectrace.load_scene(path)
 
 
 def test_aov_names_are_checked():
