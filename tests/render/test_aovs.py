@@ -26,8 +26,10 @@ WAVELENGTHS = np.arange(360.0, 831.0)
 REFLECTANCE = 0.15 + 0.7 * np.exp(-(((WAVELENGTHS - 610.0) / 60.0) ** 2))
 
 
-def _plane_scene(aovs=AOV_NAMES, spp: int = 16, seed: int = 0) -> Scene:
-    camera = spectrace.Camera(origin=(0.0, 0.0, DISTANCE), target=(0.0, 0.0, 0.0), fov_degrees=FOV_DEGREES)
+def _plane_scene(aovs=AOV_NAMES, spp: int = 16, seed: int = 0, near_clip: float = 0.0) -> Scene:
+    camera = spectrace.Camera(
+        origin=(0.0, 0.0, DISTANCE), target=(0.0, 0.0, 0.0), fov_degrees=FOV_DEGREES, near_clip=near_clip
+    )
     square = spectrace.shape(
         "rectangle", spectrace.diffuse(spectrace.spectrum((WAVELENGTHS, REFLECTANCE))), transform=[{"scale": 10.0}]
     )
@@ -48,19 +50,23 @@ def _render(device, scene: Scene, spp: int | None = None, pass_spp: int | None =
     return Renderer(scene, device).render(spp=spp, pass_spp=pass_spp)
 
 
-def test_depth_position_and_normal_of_a_plane(device):
-    image = _render(device, _plane_scene())
+@pytest.mark.parametrize("near_clip", [0.0, 1.0])
+def test_depth_position_and_normal_of_a_plane(device, near_clip):
+    """With a near clip the camera rays start on the clip plane and depth is measured from there, as Mitsuba 3's
+    depth AOV is (its perspective camera moves the ray origin onto that plane too)."""
+    image = _render(device, _plane_scene(near_clip=near_clip))
+    distance = DISTANCE - near_clip
     tan_half = np.tan(np.radians(FOV_DEGREES / 2))
     edges = (2.0 * np.arange(SIZE + 1) / SIZE - 1.0) * tan_half  # pixel edges on the image plane
     # Ray length over a pixel: smallest where |x|, |y| are smallest, largest at the farthest corner.
     nearest = np.where(edges[:-1] * edges[1:] <= 0, 0.0, np.minimum(abs(edges[:-1]), abs(edges[1:])))
     farthest = np.maximum(abs(edges[:-1]), abs(edges[1:]))
-    low = DISTANCE * np.sqrt(1 + nearest[:, None] ** 2 + nearest[None, :] ** 2)
-    high = DISTANCE * np.sqrt(1 + farthest[:, None] ** 2 + farthest[None, :] ** 2)
+    low = distance * np.sqrt(1 + nearest[:, None] ** 2 + nearest[None, :] ** 2)
+    high = distance * np.sqrt(1 + farthest[:, None] ** 2 + farthest[None, :] ** 2)
     depth = image.aovs["depth"].astype(np.float64)
     assert np.all(depth >= low * (1 - 1e-6)) and np.all(depth <= high * (1 + 1e-6))
     middle = SIZE // 2
-    assert depth[middle, middle] == pytest.approx(DISTANCE, rel=high[middle, middle] / DISTANCE - 1 + 1e-6)
+    assert depth[middle, middle] == pytest.approx(distance, rel=high[middle, middle] / distance - 1 + 1e-6)
     position = image.aovs["position"]
     np.testing.assert_allclose(position[..., 2], 0.0, atol=1e-6)
     # x, y lie within the pixel's footprint on the plane (image right is world -x, see Camera.basis).
