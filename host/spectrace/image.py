@@ -41,11 +41,11 @@ class Image:
     rays_traced: int = 0
     exposure: float = 0.0  # stops: the RGB outputs are scaled by 2**exposure; xyz is not
     spectral: SpectralBands | None = None  # when rendered with spectral bins
-    # AOVs by name (spectrace.aovs): albedo (h, w, 3) XYZ, normal and position (h, w, 3), depth and variance (h, w)
-    aovs: dict[str, np.ndarray] = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
     colour_space: ColourSpace = ColourSpace.SRGB  # of the files `write` makes (see spectrace.colour_output)
     white_balance: WhiteBalance | None = None  # chromatic adaptation applied to every RGB output
+    # AOVs by name (spectrace.aovs): albedo (h, w, 3) XYZ, normal and position (h, w, 3), depth and variance (h, w)
+    aovs: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         # The dataclass's own repr would print every pixel (tens of kilobytes in a notebook).
