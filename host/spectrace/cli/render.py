@@ -147,6 +147,13 @@ def render(
     if asked_aovs and output.suffix.lower() != ".exr":
         raise SpectraceError("--aov needs an .exr output", where=str(output))
     aovs = loaded.aovs if asked_aovs is None else asked_aovs
+    if aovs and output.suffix.lower() != ".exr":
+        console.print(
+            f"note: the scene's film.aovs ({', '.join(aovs)}) go to .exr files only; {output.name} gets the image",
+            highlight=False,
+            markup=False,
+        )
+        aovs = ()
     if denoise:
         aovs = tuple(dict.fromkeys((*aovs, "albedo", "normal")))
     loaded = loaded.with_overrides(aovs=aovs)
