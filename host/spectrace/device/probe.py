@@ -168,14 +168,37 @@ def _fingerprint(found: FoundDevice) -> str | None:
             found.device.version,
             found.device.driver_version,
         ]
-        if found.library and os.path.isabs(found.library):
-            status = os.stat(found.library)
-            parts += [found.library, str(status.st_size), str(status.st_mtime_ns)]
-        else:  # a soname: the loader's search decides which file, so the answer cannot be tied to one
+        library = found.library if found.library and os.path.isabs(found.library) else _loaded_file(found.library)
+        if library is None:
             return None
+        status = os.stat(library)
+        parts += [library, str(status.st_size), str(status.st_mtime_ns)]
     except Exception:  # noqa: BLE001 - any doubt means probing again, never a failure
         return None
     return hashlib.sha256("\n".join(map(str, parts)).encode()).hexdigest()
+
+
+def _loaded_file(soname: str | None) -> str | None:
+    """The file the dynamic loader took for a runtime named by its soname alone (Debian's PoCL .icd file says
+    `libpocl.so.2`), or None where that cannot be asked. The runtime is already loaded (its devices were listed),
+    so opening it again costs nothing, and asking the loader is the only way to follow its search exactly."""
+    if not soname or not sys.platform.startswith("linux"):
+        return None
+    import ctypes
+
+    class _LinkMap(ctypes.Structure):  # the head of glibc's struct link_map
+        _fields_ = [("l_addr", ctypes.c_void_p), ("l_name", ctypes.c_char_p)]
+
+    rtld_di_linkmap = 2
+    try:
+        handle = ctypes.CDLL(soname)
+        link_map = ctypes.POINTER(_LinkMap)()
+        if ctypes.CDLL(None).dlinfo(ctypes.c_void_p(handle._handle), rtld_di_linkmap, ctypes.byref(link_map)) != 0:
+            return None
+        name = link_map.contents.l_name
+    except (OSError, AttributeError, ValueError):
+        return None
+    return os.path.realpath(name.decode()) if name and name.startswith(b"/") else None
 
 
 def _pyopencl_stamp() -> list[str]:
