@@ -77,6 +77,40 @@ def state_problem(state: RenderState, width: int, height: int) -> str | None:
     return None
 
 
+def state_image(
+    state: RenderState,
+    width: int,
+    height: int,
+    spectral_range_nm: tuple[float, float],
+    seed: int,
+    device: str,
+    exposure: float = 0.0,
+    extra: dict | None = None,
+) -> Image:
+    """The image of a saved state: the mean of its samples per pixel, labelled with how it was made (a film's own
+    image, or one merged on the host from tiles rendered elsewhere, spectrace.engine.tiles)."""
+    film, rays = state.buffers["film"], state.buffers["ray_counts"]
+    count = max(state.samples_done, 1)
+    xyz = (film[:, :3] / np.float32(count)).reshape(height, width, 3)
+    spectral = None
+    if "spectral_film" in state.buffers:
+        bands = state.buffers["spectral_film"].reshape(height, width, -1)
+        lo, hi = spectral_range_nm
+        spectral = SpectralBands(np.linspace(lo, hi, bands.shape[2] + 1), bands / np.float32(count))
+    return Image(
+        spectral=spectral,
+        xyz=xyz,
+        spp=state.samples_done,
+        seed=seed,
+        device=device,
+        render_seconds=state.render_seconds,
+        dropped_samples=int(film[:, 3].astype(np.float64).sum()),  # float32 would round totals above 2^24
+        rays_traced=int(rays.astype(np.uint64).sum()),
+        exposure=exposure,
+        extra=extra or {},
+    )
+
+
 class Film:
     """The device film of one render and the count of samples per pixel it holds."""
 
@@ -139,26 +173,8 @@ class Film:
 
     def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
         """The mean of the samples so far per pixel, labelled with how it was made."""
-        film, rays = self.read()
-        count = max(self.samples_done, 1)
-        xyz = (film[:, :3] / np.float32(count)).reshape(self.height, self.width, 3)
-        spectral = None
-        if self.spectral_bins > 0:
-            lo, hi = self.spectral_range_nm
-            spectral = SpectralBands(
-                np.linspace(lo, hi, self.spectral_bins + 1), self.read_spectral() / np.float32(count)
-            )
-        return Image(
-            spectral=spectral,
-            xyz=xyz,
-            spp=self.samples_done,
-            seed=seed,
-            device=device,
-            render_seconds=self.render_seconds,
-            dropped_samples=int(film[:, 3].astype(np.float64).sum()),  # float32 would round totals above 2^24
-            rays_traced=int(rays.astype(np.uint64).sum()),
-            exposure=exposure,
-            extra=extra or {},
+        return state_image(
+            self.save_state(), self.width, self.height, self.spectral_range_nm, seed, device, exposure, extra
         )
 
     def _state_buffers(self) -> dict[str, cl.Buffer]:
