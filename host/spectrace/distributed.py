@@ -31,7 +31,7 @@ DEFAULT_CONNECT_TIMEOUT_S = 30.0
 _STOP_POLL_S = 0.2
 
 
-def _distributed(where: str) -> Any:
+def require_distributed(where: str) -> Any:
     try:
         import distributed
     except ImportError:
@@ -48,7 +48,7 @@ def connect(
     where = "--cluster" if cluster is not None else "--workers"
     if (cluster is None) == (workers is None):
         raise SpectraceError("give either a scheduler address or a number of local workers", where=where)
-    distributed = _distributed(where)
+    distributed = require_distributed(where)
     if workers is not None:
         if workers < 1:
             raise SpectraceError(f"needs at least 1 worker, got {workers}", where=where)
@@ -117,7 +117,7 @@ class DaskTiles:
         self.client = client
 
     def run(self, job: TileJob, indices: list[int], done: Callable[[TileResult], None], stop: Callable[[], bool]):
-        distributed = _distributed("--cluster")
+        distributed = require_distributed("--cluster")
         if not indices:
             return
         # One copy to the cluster; a worker that needs it fetches it (from the scheduler's chosen holder) once.

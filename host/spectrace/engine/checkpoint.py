@@ -218,7 +218,10 @@ def _tiles_problem(identity: RenderIdentity, tiles: TileMap | None) -> str | Non
         return f"tile_rows {tiles.rows} is outside 1..{identity.height}"
     count = -(-identity.height // tiles.rows)
     if tiles.done.dtype != bool or tiles.done.shape != (count,):
-        return f"tiles_done must be {count} booleans (tiles of {tiles.rows} rows), got {tiles.done.dtype} {tiles.done.shape}"
+        return (
+            f"tiles_done must be {count} booleans (tiles of {tiles.rows} rows), "
+            f"got {tiles.done.dtype} of shape {tiles.done.shape}"
+        )
     return None
 
 

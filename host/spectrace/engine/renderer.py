@@ -145,7 +145,7 @@ class Renderer:
         begin, end = self.pixel_range
         global_size, local_size = launch_shape(end - begin, self.work_group)
         offset = (begin,) if begin else None
-        cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size, global_work_offset=offset)
+        cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size, offset)
         queue.finish()
         film.add_pass(sample_count, time.perf_counter() - start)
 
