@@ -193,6 +193,21 @@ class Film:
             buffers["spectral_film"] = self.read_spectral().reshape(-1)
         return RenderState(self.samples_done, self.render_seconds, buffers)
 
+    @translate_opencl_errors("reading part of the film")
+    def read_state_pixels(self, begin: int, end: int) -> dict[str, np.ndarray]:
+        """Host copies of every accumulation buffer's values of pixels [begin, end), as (end - begin, values per
+        pixel) arrays by buffer name: a tile of a split render (spectrace.engine.tiles), read without the rest."""
+        queue = self.device.queue
+        pixels = {}
+        for name, buffer in self._state_buffers().items():
+            dtype = np.dtype(STATE_LAYOUT[name][0])
+            per_pixel = buffer.size // (self.pixel_count * dtype.itemsize)
+            values = np.empty((end - begin, per_pixel), dtype)
+            cl.enqueue_copy(queue, values, buffer, src_offset=begin * per_pixel * dtype.itemsize)
+            pixels[name] = values
+        queue.finish()
+        return pixels
+
     @translate_opencl_errors("restoring the film from a checkpoint")
     def restore_state(self, state: RenderState, where: str | None = None) -> None:
         """Upload a saved state of a film of this size (one state_problem passes, as every checkpoint read has):

@@ -116,7 +116,10 @@ def render(
     ] = None,
     tile_rows: Annotated[
         int | None,
-        typer.Option(help="With --cluster or --workers: film rows per tile (default: about 65536 pixels).", min=1),
+        typer.Option(
+            help="With --cluster or --workers: film rows per tile (default: at most 65536 pixels, at least 16 tiles).",
+            min=1,
+        ),
     ] = None,
     cluster_timeout: Annotated[
         float, typer.Option(help="Seconds to wait for the --cluster scheduler to answer.", min=0.1)

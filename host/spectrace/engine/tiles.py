@@ -33,9 +33,11 @@ if TYPE_CHECKING:
     from spectrace.engine.scene_buffers import SceneBuffers
     from spectrace.scene.model import Scene
 
-# Pixels per tile by default: at the measured 0.5-1 M samples/s of a CPU device, 64 spp of 65536 pixels is a few
-# seconds of work, well above a Dask task's few milliseconds of overhead (docs/distributed.md has the model).
+# Tiles by default: at most this many pixels, and at least MIN_TILES of them (when the film has the rows), so that
+# work spreads over several workers and a lost tile costs little; per-tile work stays far above a Dask task's
+# overhead (docs/distributed.md has the model and the measurements).
 DEFAULT_TILE_PIXELS = 65536
+MIN_TILES = 16
 MIXED_DEVICES_KEY = "devices_mixed"
 
 
@@ -58,9 +60,9 @@ class TilePlan:
 
 
 def plan_tiles(width: int, height: int, rows: int | None = None, where: str = "--tile-rows") -> TilePlan:
-    """Tiles of `rows` rows (default: about DEFAULT_TILE_PIXELS pixels each)."""
+    """Tiles of `rows` rows (default: at most DEFAULT_TILE_PIXELS pixels, at least MIN_TILES tiles)."""
     if rows is None:
-        rows = max(1, DEFAULT_TILE_PIXELS // width)
+        rows = max(1, min(DEFAULT_TILE_PIXELS // width, -(-height // MIN_TILES)))
     if not (isinstance(rows, int) and rows >= 1):
         raise SpectraceError(f"rows per tile must be a whole number >= 1, got {rows!r}", where=where)
     return TilePlan(width, height, min(rows, height))
@@ -91,10 +93,8 @@ def render_tile(renderer: Renderer, plan: TilePlan, index: int, spp: int) -> Til
         renderer.render(spp=spp)
     finally:
         renderer.pixel_range = (0, renderer.pixel_count)
-    state = renderer.film.save_state()
-    pixels = renderer.pixel_count
-    buffers = {name: _per_pixel(array, pixels)[begin:end].copy() for name, array in state.buffers.items()}
-    return TileResult(index, buffers, renderer.device.report.key, state.render_seconds)
+    film = renderer.film
+    return TileResult(index, film.read_state_pixels(begin, end), renderer.device.report.key, film.render_seconds)
 
 
 @dataclass
