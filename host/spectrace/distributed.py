@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import pickle
+import signal
 import threading
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
@@ -52,16 +53,15 @@ def connect(
     if workers is not None:
         if workers < 1:
             raise SpectraceError(f"needs at least 1 worker, got {workers}", where=where)
-        with (
-            distributed.LocalCluster(
+        with _workers_ignoring_ctrl_c():
+            local = distributed.LocalCluster(
                 n_workers=workers,
                 threads_per_worker=1,
                 processes=True,
                 dashboard_address=None,
                 silence_logs=logging.CRITICAL,
-            ) as local,
-            distributed.Client(local) as client,
-        ):
+            )
+        with local, distributed.Client(local) as client:
             yield client
         return
     try:
@@ -71,6 +71,21 @@ def connect(
         raise SpectraceError(f"cannot reach the Dask scheduler ({detail})", where=f"--cluster {cluster}") from None
     with client:
         yield client
+
+
+@contextlib.contextmanager
+def _workers_ignoring_ctrl_c() -> Iterator[None]:
+    """Ctrl-C in a terminal signals the whole process group, the LocalCluster's workers too: they would die with a
+    traceback each while the client is writing the finished tiles. Worker processes started while SIGINT is
+    ignored inherit that (Python and asyncio leave an ignored SIGINT alone); the client stops them itself."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 # ---------------------------------------------------------------- worker side
@@ -136,6 +151,8 @@ class DaskTiles:
                     try:
                         result = future.result()
                     except Exception as error:  # the task's own exception, re-raised here by Dask
+                        if stop():  # Ctrl-C reaches a LocalCluster's workers too: their loss is the stop's
+                            return
                         raise task_failure(error, f"tile {tiles.get(future.key, '?')}") from None
                     done(result)
         finally:

@@ -58,7 +58,8 @@ def render_tiled(
         saver = PeriodicTileCheckpoints(state_file, identity, checkpoint_interval, warn=lambda m: _say(f"warning: {m}"))
     with StopOnSignals() as stop:
         if cluster is None and workers is None:
-            _say(f"rendering {job.plan.count} tiles of {job.plan.rows} rows here")
+            left = job.plan.count - (int(film.done.sum()) if film is not None else 0)
+            _say(f"rendering {left} of {job.plan.count} tiles of {job.plan.rows} rows here")
             film = _run(job, LocalTiles(device), film, quiet, stop, saver)
         else:
             from spectrace.distributed import DaskTiles, connect, shipped_bytes
@@ -73,6 +74,8 @@ def render_tiled(
         interrupted = stop.requested
     if not film.done.any():
         raise SpectraceError("interrupted before the first tile finished; nothing written")
+    if not film.done.all() and state_file is None:
+        _save_unasked_checkpoint(film, identity, output)
     image = film.image(scene, job.spectral_range_nm)
     _write(outputs.apply(image), output, xyz, state_file)
     outputs.write_false_colour(image, log=_say)
@@ -85,6 +88,23 @@ def render_tiled(
         _say(f"warning: {image.dropped_samples} non-finite samples were dropped")
     if interrupted or partial:
         raise typer.Exit(130)
+
+
+def _save_unasked_checkpoint(film, identity, output: Path) -> None:
+    """An interrupted tiled render without --checkpoint keeps its finished tiles beside the image, so that
+    --resume can complete it (an existing file of that name is left alone)."""
+    from spectrace.engine.checkpoint import write_checkpoint
+
+    path = output.with_name(output.name + ".checkpoint.npz")
+    if path.exists():
+        _say(f"warning: {path} exists, so the finished tiles were not saved to it (use --checkpoint next time)")
+        return
+    try:
+        write_checkpoint(path, film.checkpoint(identity))
+    except OSError as error:
+        _say(f"warning: could not write {path} ({error.strerror or error})")
+        return
+    _say(f"wrote {path}: the finished tiles; --resume {path} completes the render")
 
 
 def _run(job, runner, film, quiet: bool, stop, saver):
