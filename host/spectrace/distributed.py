@@ -58,7 +58,7 @@ def connect(
                 n_workers=workers,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",  # any free port: the scheduler's HTTP server starts even without a dashboard
                 silence_logs=logging.CRITICAL,
             )
         with local, distributed.Client(local) as client:
@@ -92,6 +92,10 @@ def _workers_ignoring_ctrl_c() -> Iterator[None]:
 
 _WORKER_LOCK = threading.Lock()  # one tile at a time per worker process: the renderer and its device are shared
 _WORKER_RENDERERS: dict[tuple[str, str | None], Renderer] = {}
+
+
+def _the_job(job: TileJob) -> TileJob:
+    return job
 
 
 def render_tile_task(job: TileJob, index: int) -> TileResult:
@@ -135,8 +139,10 @@ class DaskTiles:
         distributed = require_distributed("--cluster")
         if not indices:
             return
-        # One copy to the cluster; a worker that needs it fetches it (from the scheduler's chosen holder) once.
-        shipped = self.client.scatter(job, hash=False)
+        # The job goes to the cluster once, as a task that returns it: a worker fetches it once from whichever worker
+        # holds it, and when every holder is lost the scheduler recomputes it from the task (scattered data would be
+        # lost for good, and with it every tile still to render).
+        shipped = self.client.submit(_the_job, job, pure=False)
         pending = {self.client.submit(render_tile_task, shipped, index, pure=False) for index in indices}
         tiles = {future.key: index for future, index in zip(pending, indices)}
         try:

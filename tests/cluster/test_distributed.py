@@ -67,15 +67,17 @@ def test_a_media_scene_on_two_workers_is_bit_identical_to_one_render(client, dev
 def test_a_worker_killed_mid_render_loses_only_time(client, device):
     scene = _cornell(width=32, height=32, spp=8)
     whole = render(scene, device=device, progress=False)
-    pids = list(client.run(os.getpid).values())
+    pids = client.run(os.getpid)  # worker address -> process id
     killed = []
 
-    def kill_one(done: int, total: int) -> None:
+    def kill_the_job_holder(done: int, total: int) -> None:
+        # The worst worker to lose: the one holding the job every remaining tile needs (and finished tiles).
         if done >= 1 and not killed:
+            holders = [w for key, where in client.who_has().items() if "the_job" in str(key) for w in where]
             killed.append(done)
-            os.kill(pids[0], signal.SIGKILL)
+            os.kill(pids[holders[0] if holders else next(iter(pids))], signal.SIGKILL)
 
-    tiled = render(scene, device=device.report.key, progress=kill_one, client=client, tile_rows=2)
+    tiled = render(scene, device=device.report.key, progress=kill_the_job_holder, client=client, tile_rows=2)
     assert killed and killed[0] < 16  # the kill landed while tiles were still to do
     _assert_same_bits(tiled, whole)
     client.wait_for_workers(2, timeout=120)  # the nanny restarts it for the tests after this one
