@@ -24,7 +24,7 @@ import numpy as np
 
 from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, TileMap, identity_mismatch, write_checkpoint
 from spectrace.errors import SpectraceError
-from spectrace.film import RenderState, state_image
+from spectrace.film import STATE_LAYOUT, RenderState, state_image
 from spectrace.image import Image
 
 if TYPE_CHECKING:
@@ -81,6 +81,15 @@ class TileResult:
 
 def _per_pixel(array: np.ndarray, pixels: int) -> np.ndarray:
     return array.reshape(pixels, -1)
+
+
+def _state_shape(name: str, pixels: int, per_pixel: int) -> tuple[int, ...]:
+    """A saved-state buffer's shape as the film saves it (spectrace.film.STATE_LAYOUT): flat where the layout
+    leaves the count per pixel open (the bands), (pixels,) for one value, (pixels, k) for several."""
+    layout = STATE_LAYOUT.get(name, (None, per_pixel))[1]
+    if layout is None:
+        return (pixels * per_pixel,)
+    return (pixels, per_pixel) if per_pixel > 1 else (pixels,)
 
 
 def render_tile(renderer: Renderer, plan: TilePlan, index: int, spp: int) -> TileResult:
@@ -186,11 +195,7 @@ class TiledFilm:
         begin, end = self.plan.pixels(result.index)
         for name, values in result.buffers.items():
             if name not in self.buffers:
-                # Shaped as the film's own saved state: (pixels, k), (pixels,) for one value, flat for the bands.
-                shape: tuple[int, ...] = (pixels, values.shape[1]) if values.shape[1] > 1 else (pixels,)
-                if name == "spectral_film":
-                    shape = (pixels * values.shape[1],)
-                self.buffers[name] = np.zeros(shape, values.dtype)
+                self.buffers[name] = np.zeros(_state_shape(name, pixels, values.shape[1]), values.dtype)
             _per_pixel(self.buffers[name], pixels)[begin:end] = values
         self.done[result.index] = True
         self.devices.add(result.device)
