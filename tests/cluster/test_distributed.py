@@ -222,3 +222,35 @@ def test_without_dask_the_cluster_option_says_what_to_install(tmp_path, monkeypa
         err.strip()
         == 'error: --cluster: needs Dask distributed, which is not installed: pip install "spectrace[distributed]"'
     )
+
+
+@pytest.mark.slow
+def test_ctrl_c_writes_the_finished_tiles_and_a_checkpoint_that_resume_completes(device, tmp_path, monkeypatch, capsys):
+    import subprocess
+    import time
+
+    partial, saved = tmp_path / "partial.exr", tmp_path / "tiles.npz"
+    args = [*render_cornell_box(partial, 256, 64, 64), "--workers", "2", "--tile-rows", "4", "-q"]
+    env = {**os.environ, "SPECTRACE_DEVICE": device.report.key}
+    command = [sys.executable, "-m", "spectrace", *args, "--checkpoint", str(saved), "--checkpoint-interval", "0"]
+    process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)
+    deadline = time.monotonic() + 240
+    while not saved.exists() and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group, workers included
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 130, err
+    assert "Traceback" not in err and "interrupted: partial image" in err
+    assert partial.exists()
+    checkpoint = read_checkpoint(saved)
+    assert checkpoint.tiles is not None and 0 < checkpoint.tiles.done.sum() < 16
+
+    monkeypatch.setenv("SPECTRACE_DEVICE", device.report.key)
+    done = tmp_path / "done.exr"
+    status, err = run_in_process(
+        monkeypatch, capsys, [*render_cornell_box(done, 256, 64, 64), "--resume", str(saved), "-q"]
+    )
+    assert status == 0, err
+    whole = render(_cornell(width=64, height=64, spp=256), device=device, progress=False)
+    resumed = read_exr(done)[0]
+    assert np.array_equal(np.stack([resumed[c] for c in "XYZ"], axis=-1), whole.xyz)
