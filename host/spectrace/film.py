@@ -193,6 +193,24 @@ class Film:
             buffers["spectral_film"] = self.read_spectral().reshape(-1)
         return RenderState(self.samples_done, self.render_seconds, buffers)
 
+    def _pixel_bytes(self, name: str, buffer: cl.Buffer) -> tuple[np.dtype, int]:
+        """A saved-state buffer's element type and its values per pixel."""
+        dtype = np.dtype(STATE_LAYOUT[name][0])
+        return dtype, buffer.size // (self.pixel_count * dtype.itemsize)
+
+    @translate_opencl_errors("clearing part of the film")
+    def reset_pixels(self, begin: int, end: int) -> None:
+        """Start the render again for pixels [begin, end) only (a tile of a split render, spectrace.engine.tiles):
+        clearing a whole large film for each small tile would cost more than the tile."""
+        queue = self.device.queue
+        for name, buffer in self._state_buffers().items():
+            dtype, per_pixel = self._pixel_bytes(name, buffer)
+            row = per_pixel * dtype.itemsize
+            cl.enqueue_fill_buffer(queue, buffer, np.zeros(1, dtype), begin * row, (end - begin) * row)
+        queue.finish()
+        self.samples_done = 0
+        self.render_seconds = 0.0
+
     @translate_opencl_errors("reading part of the film")
     def read_state_pixels(self, begin: int, end: int) -> dict[str, np.ndarray]:
         """Host copies of every accumulation buffer's values of pixels [begin, end), as (end - begin, values per
@@ -200,8 +218,7 @@ class Film:
         queue = self.device.queue
         pixels = {}
         for name, buffer in self._state_buffers().items():
-            dtype = np.dtype(STATE_LAYOUT[name][0])
-            per_pixel = buffer.size // (self.pixel_count * dtype.itemsize)
+            dtype, per_pixel = self._pixel_bytes(name, buffer)
             values = np.empty((end - begin, per_pixel), dtype)
             cl.enqueue_copy(queue, values, buffer, src_offset=begin * per_pixel * dtype.itemsize)
             pixels[name] = values

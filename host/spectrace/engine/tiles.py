@@ -96,7 +96,8 @@ def render_tile(renderer: Renderer, plan: TilePlan, index: int, spp: int) -> Til
     """Render tile `index` to `spp` samples per pixel on `renderer` (a renderer of the whole film: the tile's pixels
     keep their place in it, and with it their sample sequences)."""
     begin, end = plan.pixels(index)
-    renderer.reset()
+    # Only the tile's pixels: those a padded launch wrote past its end are cleared by their own tile, before it.
+    renderer.film.reset_pixels(begin, end)
     renderer.pixel_range = (begin, end)
     try:
         renderer.render(spp=spp)
