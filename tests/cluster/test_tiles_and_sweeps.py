@@ -103,3 +103,14 @@ def test_a_sweep_file_with_an_unknown_grid_key_is_one_line(tmp_path, monkeypatch
     assert status == 2 and err.count("\n") == 1
     assert f"{spec}: grid.colour: unknown key" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_worker_with_other_kernels_refuses_the_job(device):
+    from dataclasses import replace
+
+    from spectrace.distributed import render_tile_task
+
+    job, _ = make_job(_cornell(), None, device.report.key, 0, 5)
+    assert job.kernels_digest  # the client's, always sent
+    with pytest.raises(SpectraceError, match="other spectrace kernels than the client"):
+        render_tile_task(replace(job, kernels_digest="0" * 64, key="other kernels"), 0)

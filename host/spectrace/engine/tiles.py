@@ -121,6 +121,7 @@ class TileJob:
     spectral_bins: int = 0
     spectral_range_nm: tuple[float, float] = (360.0, 830.0)
     key: str = ""  # the render's identity digest: workers cache one renderer per key
+    kernels_digest: str = ""  # the client's kernel sources: a worker with others would render other bits
 
     @classmethod
     def make(
@@ -133,12 +134,24 @@ class TileJob:
         spectral_bins: int,
         spectral_range_nm: tuple[float, float],
         key: str,
+        kernels_digest: str = "",
     ) -> TileJob:
         shipped = replace(scene, shapes=[], notes={})
-        return cls(shipped, buffers, plan, spp, device, spectral_bins, spectral_range_nm, key)
+        return cls(shipped, buffers, plan, spp, device, spectral_bins, spectral_range_nm, key, kernels_digest)
 
     def renderer(self, device: Device | str | None = None) -> Renderer:
+        """A renderer of the whole film on this machine, after checking that its kernels are the client's."""
+        from spectrace import resources
+        from spectrace.device.program_cache import kernels_digest
         from spectrace.engine.renderer import Renderer
+
+        if self.kernels_digest and kernels_digest(resources.kernels_dir()) != self.kernels_digest:
+            import socket
+
+            raise SpectraceError(
+                f"the worker on {socket.gethostname()} has other spectrace kernels than the client (another "
+                f"version?): its tiles would not merge bit for bit; install the client's version there"
+            )
 
         return Renderer(
             self.scene,
@@ -323,5 +336,15 @@ def make_job(
     buffers = build_scene_buffers(scene)
     identity = scene_identity(scene, buffers, spectral_bins, spectral_range_nm)
     plan = plan_tiles(scene.width, scene.height, tile_rows)
-    job = TileJob.make(scene, buffers, plan, total, device, spectral_bins, spectral_range_nm, identity.scene_digest)
+    job = TileJob.make(
+        scene,
+        buffers,
+        plan,
+        total,
+        device,
+        spectral_bins,
+        spectral_range_nm,
+        identity.scene_digest,
+        identity.kernels_digest,
+    )
     return job, identity
