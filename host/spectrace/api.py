@@ -410,6 +410,8 @@ def render(
     white_balance: WhiteBalance | str | None = None,
     adaptation: Adaptation | str = Adaptation.BRADFORD,
     aovs: str | Sequence[str] | None = None,
+    client: Any = None,
+    tile_rows: int | None = None,
 ) -> Image:
     """Render `scene` to `spp` samples per pixel (default: the scene's) and return the `Image`.
 
@@ -422,6 +424,9 @@ def render(
     recorded by the same paths and kept in `image.aovs` ("albedo", "normal", "depth", "position", "variance", as
     a sequence or a comma-separated string; None keeps the scene's `film.aovs`; see `spectrace.aovs`);
     `spectrace.denoise(image)` needs albedo and normal.
+    client: a Dask distributed Client: the render runs split into tiles of `tile_rows` rows on its workers, each
+    opening `device` there (docs/distributed.md); the image is bit-identical to one rendered here on the same
+    device type, and one progress bar counts tiles.
     """
     if not isinstance(scene, Scene):
         raise SpectraceError(
@@ -434,11 +439,40 @@ def render(
         scene = scene.with_overrides(aovs=parse_aovs(aovs, where="aovs"))
     space = parse_colour_space(colour_space) if isinstance(colour_space, str) else ColourSpace(colour_space)
     balance = parse_white_balance(white_balance, adaptation) if isinstance(white_balance, str) else white_balance
-    renderer = Renderer(scene, device, spectral_bins=spectral_bins) if spectral_bins else Renderer(scene, device)
-    image = render_passes(renderer, spp, pass_spp=pass_spp, progress=progress)
+    if client is not None:
+        image = _render_on_client(scene, client, spp, device, progress, spectral_bins, tile_rows)
+    else:
+        renderer = Renderer(scene, device, spectral_bins=spectral_bins) if spectral_bins else Renderer(scene, device)
+        image = render_passes(renderer, spp, pass_spp=pass_spp, progress=progress)
     image.colour_space = space
     image.white_balance = balance
     return image
+
+
+def _render_on_client(
+    scene: Scene,
+    client: Any,
+    spp: int | None,
+    device: Device | str | None,
+    progress: ProgressOption,
+    spectral_bins: int,
+    tile_rows: int | None,
+) -> Image:
+    from spectrace.aovs import albedo_channel_scale
+    from spectrace.device import Device
+    from spectrace.distributed import DaskTiles
+    from spectrace.engine.tiles import make_job, render_tiles
+    from spectrace.progress import in_notebook, progress_bar
+
+    selection = device.report.key if isinstance(device, Device) else device
+    job, _ = make_job(scene, spp, selection, spectral_bins, tile_rows)
+    show_bar = progress is True or (progress == "auto" and in_notebook())
+    reporter = (
+        progress_bar(job.plan.count, 0, unit="tiles") if show_bar else _no_bar(progress if callable(progress) else None)
+    )
+    with reporter as draw:
+        film = render_tiles(job, DaskTiles(client), progress=draw)
+    return film.image(scene, job.spectral_range_nm, albedo_scale=albedo_channel_scale(job.buffers.cmf))
 
 
 def measure_radiance(

@@ -85,6 +85,49 @@ def state_problem(state: RenderState, width: int, height: int) -> str | None:
     return None
 
 
+def state_image(
+    state: RenderState,
+    width: int,
+    height: int,
+    spectral_range_nm: tuple[float, float],
+    seed: int,
+    device: str,
+    exposure: float = 0.0,
+    extra: dict | None = None,
+    aovs: tuple[str, ...] | list[str] = (),
+    albedo_scale: np.ndarray | None = None,
+) -> Image:
+    """The image of a saved state: the mean of its samples per pixel, labelled with how it was made (a film's own
+    image, or one merged on the host from tiles rendered elsewhere, spectrace.engine.tiles). `aovs` names the AOVs
+    to make from its AOV sums, whose albedo channels `albedo_scale` (the film's CMF weights) turns into means."""
+    film, rays = state.buffers["film"], state.buffers["ray_counts"]
+    count = max(state.samples_done, 1)
+    xyz = (film[:, :3] / np.float32(count)).reshape(height, width, 3)
+    spectral = None
+    if "spectral_film" in state.buffers:
+        bands = state.buffers["spectral_film"].reshape(height, width, -1)
+        lo, hi = spectral_range_nm
+        spectral = SpectralBands(np.linspace(lo, hi, bands.shape[2] + 1), bands / np.float32(count))
+    images = {}
+    if aovs:
+        scale = np.ones(3, np.float32) if albedo_scale is None else albedo_scale
+        every = aov_images(state.buffers["aov_film"], film, state.samples_done, scale, (height, width))
+        images = {name: every[name] for name in aovs}
+    return Image(
+        aovs=images,
+        spectral=spectral,
+        xyz=xyz,
+        spp=state.samples_done,
+        seed=seed,
+        device=device,
+        render_seconds=state.render_seconds,
+        dropped_samples=int(film[:, 3].astype(np.float64).sum()),  # float32 would round totals above 2^24
+        rays_traced=int(rays.astype(np.uint64).sum()),
+        exposure=exposure,
+        extra=extra or {},
+    )
+
+
 class Film:
     """The device film of one render and the count of samples per pixel it holds."""
 
@@ -165,31 +208,17 @@ class Film:
 
     def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
         """The mean of the samples so far per pixel, labelled with how it was made."""
-        film, rays = self.read()
-        count = max(self.samples_done, 1)
-        xyz = (film[:, :3] / np.float32(count)).reshape(self.height, self.width, 3)
-        spectral = None
-        if self.spectral_bins > 0:
-            lo, hi = self.spectral_range_nm
-            spectral = SpectralBands(
-                np.linspace(lo, hi, self.spectral_bins + 1), self.read_spectral() / np.float32(count)
-            )
-        aovs = {}
-        if self.aovs:
-            every = aov_images(self.read_aovs(), film, self.samples_done, self.albedo_scale, (self.height, self.width))
-            aovs = {name: every[name] for name in self.aovs}
-        return Image(
-            aovs=aovs,
-            spectral=spectral,
-            xyz=xyz,
-            spp=self.samples_done,
-            seed=seed,
-            device=device,
-            render_seconds=self.render_seconds,
-            dropped_samples=int(film[:, 3].astype(np.float64).sum()),  # float32 would round totals above 2^24
-            rays_traced=int(rays.astype(np.uint64).sum()),
-            exposure=exposure,
-            extra=extra or {},
+        return state_image(
+            self.save_state(),
+            self.width,
+            self.height,
+            self.spectral_range_nm,
+            seed,
+            device,
+            exposure,
+            extra,
+            aovs=self.aovs,
+            albedo_scale=self.albedo_scale,
         )
 
     def _state_buffers(self) -> dict[str, cl.Buffer]:
@@ -211,6 +240,38 @@ class Film:
         if self.aovs:
             buffers["aov_film"] = self.read_aovs()
         return RenderState(self.samples_done, self.render_seconds, buffers)
+
+    def _pixel_bytes(self, name: str, buffer: cl.Buffer) -> tuple[np.dtype, int]:
+        """A saved-state buffer's element type and its values per pixel."""
+        dtype = np.dtype(STATE_LAYOUT[name][0])
+        return dtype, buffer.size // (self.pixel_count * dtype.itemsize)
+
+    @translate_opencl_errors("clearing part of the film")
+    def reset_pixels(self, begin: int, end: int) -> None:
+        """Start the render again for pixels [begin, end) only (a tile of a split render, spectrace.engine.tiles):
+        clearing a whole large film for each small tile would cost more than the tile."""
+        queue = self.device.queue
+        for name, buffer in self._state_buffers().items():
+            dtype, per_pixel = self._pixel_bytes(name, buffer)
+            row = per_pixel * dtype.itemsize
+            cl.enqueue_fill_buffer(queue, buffer, np.zeros(1, dtype), begin * row, (end - begin) * row)
+        queue.finish()
+        self.samples_done = 0
+        self.render_seconds = 0.0
+
+    @translate_opencl_errors("reading part of the film")
+    def read_state_pixels(self, begin: int, end: int) -> dict[str, np.ndarray]:
+        """Host copies of every accumulation buffer's values of pixels [begin, end), as (end - begin, values per
+        pixel) arrays by buffer name: a tile of a split render (spectrace.engine.tiles), read without the rest."""
+        queue = self.device.queue
+        pixels = {}
+        for name, buffer in self._state_buffers().items():
+            dtype, per_pixel = self._pixel_bytes(name, buffer)
+            values = np.empty((end - begin, per_pixel), dtype)
+            cl.enqueue_copy(queue, values, buffer, src_offset=begin * per_pixel * dtype.itemsize)
+            pixels[name] = values
+        queue.finish()
+        return pixels
 
     @translate_opencl_errors("restoring the film from a checkpoint")
     def restore_state(self, state: RenderState, where: str | None = None) -> None:

@@ -33,14 +33,14 @@ def has_ipywidgets() -> bool:
 
 
 @contextmanager
-def text_bar(total_spp: int, done_spp: int, stream=None) -> Iterator[ProgressCallback]:
+def text_bar(total_spp: int, done_spp: int, stream=None, unit: str = "spp") -> Iterator[ProgressCallback]:
     """A one-line text bar redrawn with a carriage return."""
     stream = stream or sys.stderr
     width = 30
 
     def draw(done: int, total: int) -> None:
         filled = width * min(done, total) // max(total, 1)
-        stream.write(f"\rrendering |{'#' * filled}{'.' * (width - filled)}| {done}/{total} spp")
+        stream.write(f"\rrendering |{'#' * filled}{'.' * (width - filled)}| {done}/{total} {unit}")
         stream.flush()
 
     draw(done_spp, total_spp)
@@ -52,18 +52,21 @@ def text_bar(total_spp: int, done_spp: int, stream=None) -> Iterator[ProgressCal
 
 
 @contextmanager
-def progress_bar(total_spp: int, done_spp: int, console: Console | None = None) -> Iterator[ProgressCallback]:
+def progress_bar(
+    total_spp: int, done_spp: int, console: Console | None = None, unit: str = "spp"
+) -> Iterator[ProgressCallback]:
     """A progress callback, progress(samples_done, samples_total), drawing the bar for where the render runs.
     `console`: the rich console to draw on outside Jupyter (default: a new one on stderr), so that messages the
-    caller prints on it during the render stay above the bar."""
+    caller prints on it during the render stay above the bar. `unit`: what is counted (a tiled render counts
+    tiles, one bar over all its workers)."""
     if in_notebook():
         if not (has_ipywidgets() and _installed("tqdm")):
-            with text_bar(total_spp, done_spp) as draw:
+            with text_bar(total_spp, done_spp, unit=unit) as draw:
                 yield draw
             return
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=total_spp, initial=done_spp, unit="spp", desc="rendering")
+        bar = tqdm(total=total_spp, initial=done_spp, unit=unit, desc="rendering")
         try:
             yield lambda done, total: bar.update(done - bar.n)
         finally:
@@ -75,7 +78,7 @@ def progress_bar(total_spp: int, done_spp: int, console: Console | None = None) 
     with Progress(
         TextColumn("rendering"),
         BarColumn(),
-        TextColumn("{task.completed}/{task.total} spp"),
+        TextColumn("{task.completed}/{task.total} " + unit),
         TimeElapsedColumn(),
         TimeRemainingColumn(),
         console=console or Console(stderr=True, soft_wrap=True, markup=False),

@@ -1,4 +1,4 @@
-"""Command line: `spectrace render | devices | bench | validate | display | spectra | import-mitsuba |
+"""Command line: `spectrace render | devices | bench | validate | display | spectra | sweep | import-mitsuba |
 import-pbrt`, one module per command group in this package. Errors print as one line and exit non-zero."""
 
 import importlib
@@ -34,6 +34,11 @@ LAZY_COMMANDS = {
         "spectrace.cli.import_mitsuba",
         "import_mitsuba_command",
         "Convert a Mitsuba 3 XML scene to a spectrace TOML scene (docs/mitsuba.md).",
+    ),
+    "sweep": (
+        "spectrace.cli.sweep",
+        "sweep_command",
+        "Run a grid of display computations or renders (here or on a Dask cluster) into one results table.",
     ),
     "import-pbrt": (
         "spectrace.cli.import_pbrt",

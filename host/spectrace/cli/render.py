@@ -116,6 +116,30 @@ def render(
             "per path segment; path integrator only). Both give the same image."
         ),
     ] = "megakernel",
+    cluster: Annotated[
+        str | None,
+        typer.Option(
+            help="Render on the Dask scheduler at this address (tcp://host:8786), split into tiles; the image is "
+            "bit-identical to one rendered here on the same device type (docs/distributed.md).",
+        ),
+    ] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(
+            help="Render split into tiles on a Dask LocalCluster of N worker processes on this machine.",
+            min=1,
+        ),
+    ] = None,
+    tile_rows: Annotated[
+        int | None,
+        typer.Option(
+            help="With --cluster or --workers: film rows per tile (default: at most 65536 pixels, at least 16 tiles).",
+            min=1,
+        ),
+    ] = None,
+    cluster_timeout: Annotated[
+        float, typer.Option(help="Seconds to wait for the --cluster scheduler to answer.", min=0.1)
+    ] = 30.0,
 ) -> None:
     """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
     (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
@@ -167,6 +191,29 @@ def render(
         noisy = noisy_path_for(output)
     _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy)
     saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
+    if cluster is not None or workers is not None or (saved is not None and saved.tiles is not None):
+        from spectrace.cli.render_tiles import render_tiled
+
+        render_tiled(
+            loaded,
+            output,
+            outputs,
+            xyz=xyz,
+            device=device,
+            kernel=kernel,
+            spectral_bins=spectral_bins,
+            quiet=quiet,
+            state_file=state_file,
+            checkpoint_interval=checkpoint_interval,
+            saved=saved,
+            resume=resume,
+            cluster=cluster,
+            workers=workers,
+            tile_rows=tile_rows,
+            cluster_timeout=cluster_timeout,
+            noisy=noisy,
+        )
+        return
     renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
     console.print(
         f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False, markup=False

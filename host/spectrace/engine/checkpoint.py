@@ -13,6 +13,10 @@ rather than continued into a render. Reading also checks each buffer's type and 
 that the sums are finite. Files of format 1 (no checksum) are still read, with those explicit checks only.
 What the state is (its buffers, their layout, saving it from and restoring it to the device) is the film's
 (spectrace.film); this module adds the render's identity and the file.
+
+A render split into tiles (spectrace.engine.tiles) saves format 3: the same entries plus `tile_rows` (film rows
+per tile) and `tiles_done` (one bool per tile): the tiles marked done hold all `samples_done` samples per pixel,
+the others none. Older readers refuse the format rather than continue such a file as a uniform render.
 """
 
 from __future__ import annotations
@@ -38,8 +42,11 @@ from spectrace.scene import limits
 
 if TYPE_CHECKING:
     from spectrace.engine.renderer import Renderer
+    from spectrace.engine.scene_buffers import SceneBuffers
+    from spectrace.scene.model import Scene
 
 CHECKPOINT_FORMAT = "spectrace-checkpoint-2"
+TILED_CHECKPOINT_FORMAT = "spectrace-checkpoint-3"
 _FORMAT_WITHOUT_CHECKSUM = "spectrace-checkpoint-1"
 # The scene digest starts from this fixed string, not from the format's name: a new file format must not make
 # every checkpoint already saved look like one of another scene.
@@ -60,11 +67,20 @@ class RenderIdentity:
     kernels_digest: str  # the kernel sources: other code would continue with other numbers
 
 
+@dataclass(frozen=True)
+class TileMap:
+    """Which tiles of a tiled render are finished: tiles of `rows` film rows each, top to bottom."""
+
+    rows: int
+    done: np.ndarray  # bool, one per tile
+
+
 @dataclass
 class Checkpoint:
     identity: RenderIdentity
     state: RenderState
     device: str  # the device key the samples so far ran on
+    tiles: TileMap | None = None  # a tiled render's finished tiles; None: every pixel holds samples_done samples
 
 
 def _update_with_array(digest, name: str, array: np.ndarray) -> None:
@@ -75,24 +91,35 @@ def _update_with_array(digest, name: str, array: np.ndarray) -> None:
 
 def scene_digest(renderer: Renderer) -> str:
     """SHA-256 of everything the render's kernels read except the sample range, and of the program settings."""
+    return buffers_digest(renderer.scene, renderer.buffers, renderer.spectral_bins, renderer.spectral_range_nm)
+
+
+def buffers_digest(
+    scene: Scene, buffers: SceneBuffers, spectral_bins: int, spectral_range_nm: tuple[float, float]
+) -> str:
+    """scene_digest of a render not yet on a device (a tiled render's client holds no renderer)."""
     digest = hashlib.sha256(_SCENE_DIGEST_SALT.encode())
-    settings = (
-        renderer.scene.integrator,
-        renderer.spectral_bins,
-        tuple(renderer.spectral_range_nm),
-        renderer.scene.sampler,
-    )
+    settings = (scene.integrator, spectral_bins, tuple(spectral_range_nm), scene.sampler)
     digest.update(repr(settings).encode())
-    _update_with_array(digest, "params", render_params(renderer.scene, renderer.buffers, 0, 0))
-    for name, array in scene_arrays(renderer.buffers).items():
+    _update_with_array(digest, "params", render_params(scene, buffers, 0, 0))
+    for name, array in scene_arrays(buffers).items():
         _update_with_array(digest, name, array)
     return digest.hexdigest()
 
 
 def render_identity(renderer: Renderer) -> RenderIdentity:
-    scene = renderer.scene
+    return scene_identity(renderer.scene, renderer.buffers, renderer.spectral_bins, renderer.spectral_range_nm)
+
+
+def scene_identity(
+    scene: Scene, buffers: SceneBuffers, spectral_bins: int, spectral_range_nm: tuple[float, float]
+) -> RenderIdentity:
     return RenderIdentity(
-        scene.width, scene.height, scene.seed, scene_digest(renderer), kernels_digest(resources.kernels_dir())
+        scene.width,
+        scene.height,
+        scene.seed,
+        buffers_digest(scene, buffers, spectral_bins, spectral_range_nm),
+        kernels_digest(resources.kernels_dir()),
     )
 
 
@@ -108,7 +135,7 @@ def save_checkpoint(path: str | Path, renderer: Renderer, identity: RenderIdenti
 def write_checkpoint(path: str | Path, checkpoint: Checkpoint) -> None:
     identity, state = checkpoint.identity, checkpoint.state
     payload: dict[str, Any] = {
-        "format": np.array(CHECKPOINT_FORMAT),
+        "format": np.array(CHECKPOINT_FORMAT if checkpoint.tiles is None else TILED_CHECKPOINT_FORMAT),
         "width": np.int64(identity.width),
         "height": np.int64(identity.height),
         "seed": np.int64(identity.seed),
@@ -119,6 +146,9 @@ def write_checkpoint(path: str | Path, checkpoint: Checkpoint) -> None:
         "device": np.array(checkpoint.device),
         **{_STATE_PREFIX + name: np.ascontiguousarray(array) for name, array in state.buffers.items()},
     }
+    if checkpoint.tiles is not None:
+        payload["tile_rows"] = np.int64(checkpoint.tiles.rows)
+        payload["tiles_done"] = np.asarray(checkpoint.tiles.done, bool)
     payload[_CHECKSUM] = np.array(_checksum(payload))
 
     def write(temp: Path) -> None:
@@ -149,13 +179,13 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
         raise SpectraceError(f"not a readable spectrace checkpoint ({detail})", where=str(path)) from None
     try:
         file_format = str(fields["format"])
-        if file_format not in (CHECKPOINT_FORMAT, _FORMAT_WITHOUT_CHECKSUM):
+        if file_format not in (CHECKPOINT_FORMAT, TILED_CHECKPOINT_FORMAT, _FORMAT_WITHOUT_CHECKSUM):
             raise SpectraceError(
                 f"checkpoint format '{file_format}' is not '{CHECKPOINT_FORMAT}' (written by "
                 f"another version of spectrace?)",
                 where=str(path),
             )
-        if file_format == CHECKPOINT_FORMAT and str(fields[_CHECKSUM]) != _checksum(fields):
+        if file_format != _FORMAT_WITHOUT_CHECKSUM and str(fields[_CHECKSUM]) != _checksum(fields):
             raise SpectraceError(
                 "the checkpoint's checksum does not match its contents: the file is damaged", where=str(path)
             )
@@ -171,11 +201,28 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
         }
         state = RenderState(int(fields["samples_done"]), float(fields["render_seconds"]), buffers)
         device = str(fields["device"])
+        tiles = None
+        if file_format == TILED_CHECKPOINT_FORMAT:
+            tiles = TileMap(int(fields["tile_rows"]), np.asarray(fields["tiles_done"]))
     except (KeyError, TypeError, ValueError) as error:
         raise SpectraceError(f"not a spectrace checkpoint (missing or malformed {error})", where=str(path)) from None
-    if problem := _state_problem(identity, state):
+    if problem := (_state_problem(identity, state) or _tiles_problem(identity, tiles)):
         raise SpectraceError(f"damaged checkpoint: {problem}", where=str(path))
-    return Checkpoint(identity, state, device)
+    return Checkpoint(identity, state, device, tiles)
+
+
+def _tiles_problem(identity: RenderIdentity, tiles: TileMap | None) -> str | None:
+    if tiles is None:
+        return None
+    if not 1 <= tiles.rows <= identity.height:
+        return f"tile_rows {tiles.rows} is outside 1..{identity.height}"
+    count = -(-identity.height // tiles.rows)
+    if tiles.done.dtype != bool or tiles.done.shape != (count,):
+        return (
+            f"tiles_done must be {count} booleans (tiles of {tiles.rows} rows), "
+            f"got {tiles.done.dtype} of shape {tiles.done.shape}"
+        )
+    return None
 
 
 def _state_problem(identity: RenderIdentity, state: RenderState) -> str | None:
@@ -212,6 +259,12 @@ def restore_checkpoint(renderer: Renderer, checkpoint: Checkpoint, where: str) -
     """Load `checkpoint` into `renderer`, after checking that it belongs to this very render (`where` names the
     checkpoint in errors). Returns the render's identity, which hashes every scene array: for the checkpoints the
     render goes on to write (PeriodicCheckpoints' `identity`)."""
+    if checkpoint.tiles is not None:
+        raise SpectraceError(
+            "the checkpoint holds a render split into tiles: it continues tile by tile (spectrace render --resume "
+            "does so; the megakernel only)",
+            where=where,
+        )
     identity = render_identity(renderer)
     if problem := identity_mismatch(checkpoint.identity, identity):
         raise SpectraceError(problem, where=where)

@@ -55,10 +55,12 @@ class Renderer:
         spectral_bins: int = 0,
         spectral_range_nm: tuple[float, float] = (360.0, 830.0),
         specialise: bool = True,
+        buffers: SceneBuffers | None = None,
     ):
         """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (the band-
         averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output. specialise=False builds the kernels
-        that handle every scene instead of ones carrying only this scene's features (for comparisons)."""
+        that handle every scene instead of ones carrying only this scene's features (for comparisons). `buffers`:
+        the scene's buffers when already built (build_scene_buffers(scene)), as a cluster's workers receive them."""
         self.scene = scene
         self._check_scene(scene)
         problem = (
@@ -69,7 +71,7 @@ class Renderer:
         if problem:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         self.device = device if isinstance(device, Device) else open_device(device)
-        self.buffers: SceneBuffers = build_scene_buffers(scene)
+        self.buffers: SceneBuffers = buffers if buffers is not None else build_scene_buffers(scene)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
         check_device_memory(
             device_memory_need(self.buffers, scene.width * scene.height, spectral_bins, bool(scene.aovs)), self.device
@@ -97,6 +99,10 @@ class Renderer:
             aovs=scene.aovs,
             albedo_scale=albedo_channel_scale(b.cmf),
         )
+        # The pixels [begin, end) the passes render: all of them, or one tile of a split render (spectrace.engine.
+        # tiles). The launch's global offset moves the work-item ids, so each pixel runs the same code on the
+        # same ids either way and adds the same bits.
+        self.pixel_range = (0, self.film.pixel_count)
         self._allocate(spectral_bins)
 
     def _check_scene(self, scene: Scene) -> None:
@@ -153,8 +159,10 @@ class Renderer:
             film.spectral_buffer,
             film.aov_buffer,
         )
-        global_size, local_size = launch_shape(self.pixel_count, self.work_group)
-        cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
+        begin, end = self.pixel_range
+        global_size, local_size = launch_shape(end - begin, self.work_group)
+        offset = (begin,) if begin else None
+        cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size, offset)
         queue.finish()
         film.add_pass(sample_count, time.perf_counter() - start)
 

@@ -18,13 +18,14 @@ def material_model_names() -> dict[str, str]:
     return {module.MODEL.__name__: module.__name__ for module in MATERIALS.values()}
 
 
-def load_scene(path: str | Path):
+def load_scene(path: str | Path, overrides: dict | None = None):
     """Read, validate and resolve a TOML scene file; a bare name (`cornell_box`, `cornell_box.toml`) that is no file
-    here names a bundled scene. Raises SpectraceError naming the file and key path."""
+    here names a bundled scene. Raises SpectraceError naming the file and key path. `overrides`: values replacing
+    the file's at dotted key paths ("film.width": 64), as if the file said so."""
     from spectrace.resources import resolve_scene_path
     from spectrace.scene.loader import load_scene as load_scene_file
 
-    return load_scene_file(resolve_scene_path(path))
+    return load_scene_file(resolve_scene_path(path), overrides)
 
 
 __getattr__, __dir__ = lazy_names(

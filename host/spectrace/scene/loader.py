@@ -130,7 +130,28 @@ def _too_deep(data: object) -> tuple | None:
     return None
 
 
-def read_scene_spec(path: Path) -> schema.SceneSpec:
+def set_key_path(data: dict, dotted: str, value: object, where: str) -> None:
+    """Replace the value at a dotted key path of parsed TOML ("materials.red.reflectance", "shapes.0.material";
+    a number indexes an array of tables). The path must exist up to its last key, which may be new."""
+    parts = dotted.split(".")
+    node: object = data
+    for depth, part in enumerate(parts):
+        last = depth == len(parts) - 1
+        if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            if last:
+                node[int(part)] = value
+            else:
+                node = node[int(part)]
+        elif isinstance(node, dict) and (last or part in node):
+            if last:
+                node[part] = value
+            else:
+                node = node[part]
+        else:
+            raise SpectraceError(f"the scene has no {'.'.join(parts[: depth + 1])}", where=where)
+
+
+def read_scene_spec(path: Path, overrides: dict[str, object] | None = None) -> schema.SceneSpec:
     regular_file(path, what="scene file")
     try:
         # utf-8-sig: editors on Windows may start the file with a byte order mark, which TOML does not allow.
@@ -155,6 +176,8 @@ def read_scene_spec(path: Path) -> schema.SceneSpec:
             f"values nested more than {MAX_NESTING} levels deep (a scene needs only a few)",
             where=f"{path}: {key_path(location[:3])}",
         )
+    for dotted, value in (overrides or {}).items():
+        set_key_path(data, dotted, value, where=f"{path}: {dotted}")
     try:
         return schema.SceneSpec.model_validate(data)
     except ValidationError as exc:
@@ -509,10 +532,12 @@ def is_texture_image(texture) -> bool:
 TEXTURE_TYPE_NAMES = tuple(TEXTURES)
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read, validate and resolve a TOML scene file; raises SpectraceError naming the file and key path."""
+def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> Scene:
+    """Read, validate and resolve a TOML scene file; raises SpectraceError naming the file and key path.
+    `overrides`: values replacing the file's at dotted key paths ("film.width", "materials.red.reflectance"),
+    before validation, as if the file said so (a sweep's grid, spectrace.sweep)."""
     path = Path(path)
-    spec = read_scene_spec(path)
+    spec = read_scene_spec(path, overrides)
     resolver = _Resolver(path, spec)
     for name in spec.textures:
         if name in TEXTURE_TYPE_NAMES:
