@@ -217,7 +217,6 @@ class MitsubaImporter:
         self.notes: list[str] = []
         self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
         self._properties: dict[int, Properties] = {}
-        self._hidden_emitters: Element | None = None  # the integrator asking for hide_emitters
         self.search_folders: list[Path] = [xml_path.parent]  # <path> folders, then the scene's
         self.materials: dict[str, dict] = {}
         self._material_of_element: dict[tuple[int, bool], str] = {}
@@ -1236,10 +1235,9 @@ class MitsubaImporter:
         if "rr_depth" in properties:
             settings["rr_depth"] = self.integer(properties["rr_depth"])
         if "hide_emitters" in properties and self.boolean(properties["hide_emitters"]):
-            # Mitsuba's camera rays then see no environment (spectrace's hide_environment) and pass through area
-            # lights, which spectrace's cannot: a scene with area lights is refused in run().
-            settings["hide_environment"] = True
-            self._hidden_emitters = element
+            # Mitsuba's camera rays then see no environment and pass through area lights (measured: behind a
+            # hidden area light they see the lit wall it hides, with its path and direct integrators alike).
+            settings["hide_emitters"] = True
         if kind == "direct":
             settings["max_depth"] = 2
             self.notes.append(
@@ -1316,12 +1314,6 @@ class MitsubaImporter:
         ]
         if len(environments) > 1:
             raise self.fail(environments[1], "a second environment emitter; spectrace takes one environment light")
-        if self._hidden_emitters is not None and any("emitter" in shape for shape in shapes):
-            self.unsupported_plugin(
-                self._hidden_emitters,
-                " with hide_emitters in a scene with area lights (Mitsuba's camera rays pass through them; "
-                "spectrace hides only the environment)",
-            )
         if self.unsupported:
             raise SpectraceError(
                 f"unsupported Mitsuba 3 plugins: {self.unsupported_text()} (spectrace imports {supported_text()})",
