@@ -49,14 +49,13 @@ from spectrace.interop.pbrt_parser import Entity, Location, PbrtScene, Shape, er
 from spectrace.io.output_files import check_output_file
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
-MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface")
+MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface", "mix")
 LIGHTS = ("point", "spot", "distant", "infinite")
 AREA_LIGHTS = ("diffuse",)
 TEXTURES = ("imagemap", "checkerboard", "constant")
 # Materials spectrace has no counterpart for, refused with this reason.
 _NO_EQUIVALENT = {
     "diffusetransmission": "spectrace has no diffuse transmission",
-    "mix": "spectrace has no material mixing",
     "coatedconductor": "spectrace has no coated conductor",
     "measured": "spectrace has no measured BRDFs",
     "hair": "spectrace has no hair model",
@@ -569,6 +568,8 @@ class PbrtImporter:
                 self.warn(parameter.location, f'"{parameter.label()}" not imported')
         if kind == "interface":
             return None
+        if kind == "mix":
+            return self.mix_table(material)
         if kind == "diffuse":
             return {"type": "diffuse", "reflectance": self.reflectance(material, "reflectance", 0.5)}
         if kind == "conductor":
@@ -615,6 +616,55 @@ class PbrtImporter:
         if "roughness" in table:
             table["coat_transmission"] = "rough"
         return table
+
+    def mix_table(self, material: Entity) -> dict | None:
+        """pbrt-v4's `mix`: at each intersection one of `materials` is chosen by a hash of the point and direction,
+        the second with probability `amount` (its MixMaterial::ChooseMaterial). What a pixel averages is then the
+        amount-weighted blend of the two BSDFs, which for two diffuse materials is one diffuse material of the
+        blended reflectance, (1 - amount) R1 + amount R2: spectrace's `mix` texture. An amount of 0 or 1, or the
+        same material twice, is that material; other pairs have no single spectrace material and are refused."""
+        names = material.find("materials", "string")
+        if names is None or len(names.values) != 2:
+            raise error(material.location, f'{material.label()} needs "string materials" naming two materials')
+        tables = []
+        for name in names.values:
+            if str(name) not in self.scene.named_materials:
+                raise error(names.location, f"mix names '{shown(str(name))}', which no MakeNamedMaterial defined")
+            tables.append(self.material_table(self.scene.named_materials[str(name)]))
+        amount_texture = material.find("amount", "texture")
+        number = self.one(material, "amount", 0.5)
+        amount: float | dict = number
+        if amount_texture is not None:
+            key = ("float", str(amount_texture.values[0]))
+            if key not in self.scene.textures:
+                raise error(
+                    amount_texture.location,
+                    f"\"{amount_texture.label()}\" names '{shown(key[1])}', which no Texture defined",
+                )
+            amount = self.texture_table(self.scene.textures[key].entity)
+            if amount.get("texture") != "bitmap":
+                raise error(amount_texture.location, "a mix's amount texture must be an imagemap for spectrace")
+        elif number <= 0.0 or number >= 1.0:
+            return tables[number >= 1.0]
+        if tables[0] == tables[1]:
+            return tables[0]
+        if any(table is None or table["type"] != "diffuse" for table in tables):
+            kinds = " and ".join("interface" if table is None else str(table["type"]) for table in tables)
+            raise error(
+                material.location,
+                f"material 'mix' of {kinds}: spectrace mixes two diffuse materials only (the blend of two other "
+                "BSDFs is no spectrace material)",
+            )
+        assert tables[0] is not None and tables[1] is not None
+        return {
+            "type": "diffuse",
+            "reflectance": {
+                "texture": "mix",
+                "tex1": tables[0]["reflectance"],
+                "tex2": tables[1]["reflectance"],
+                "amount": amount,
+            },
+        }
 
     def _rough(self, material: Entity) -> dict:
         alpha = self.roughness(material)
