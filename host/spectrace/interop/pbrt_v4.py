@@ -510,7 +510,12 @@ class PbrtImporter:
     def reflectance(self, entity: Entity, name: str, default: float) -> dict:
         return self.spectrum(entity, name, "albedo") or self.texture_reference(entity, name) or {"value": default}
 
-    def roughness(self, material: Entity) -> float:
+    def roughness(self, material: Entity) -> float | dict:
+        """The GGX α: a number, or for a `"texture roughness"` a one-channel texture of α per point."""
+        if (texture := material.find("roughness", "texture")) is not None and not any(
+            material.find(key, "texture", "float") for key in ("uroughness", "vroughness")
+        ):
+            return self.roughness_texture(material, texture)
         values = [self.one(material, key, -1.0) for key in ("roughness", "uroughness", "vroughness")]
         for key in ("roughness", "uroughness", "vroughness"):
             if (parameter := material.find(key, "texture")) is not None:
@@ -525,6 +530,35 @@ class PbrtImporter:
         # pbrt-v4 remaps a roughness to the Trowbridge-Reitz (GGX) alpha as sqrt(roughness) unless told not to.
         alpha = math.sqrt(roughness) if self.boolean(material, "remaproughness", True) else roughness
         return min(alpha, 1.0)
+
+    def roughness_texture(self, material: Entity, parameter) -> float | dict:
+        """A float texture as the roughness: a `constant` one is its number; an `imagemap` becomes a one-channel
+        float TIFF of α beside the TOML: pbrt's float lookup averages an image's channels, and its remapping
+        (`remaproughness`, default true: α = √roughness) is applied to each texel, as pbrt applies it to the value
+        it looks up (exact for nearest lookups; a filtered lookup differs by √ of a blend against a blend of √)."""
+        from spectrace.io.images import read_texture_image
+        from spectrace.textures.bitmap import decoded
+
+        key = ("float", str(parameter.values[0]))
+        if key not in self.scene.textures:
+            raise error(
+                parameter.location, f"\"{parameter.label()}\" names '{shown(key[1])}', which no Texture defined"
+            )
+        texture = self.scene.textures[key].entity
+        table = self.texture_table(texture)
+        remap = self.boolean(material, "remaproughness", True)
+        if "texture" not in table:
+            value = max(float(table.get("value", 0.0)) * float(table.get("scale", 1.0)), 0.0)
+            return min(math.sqrt(value) if remap else value, 1.0)
+        if table["texture"] != "bitmap":
+            raise error(parameter.location, f'"{parameter.label()}": spectrace takes an imagemap or a constant here')
+        source = (self.toml_folder / table["file"]).resolve()
+        values, encoded = read_texture_image(source, str(texture.location))
+        roughness = np.clip(decoded(values, encoded, bool(table.get("raw", False))).mean(axis=-1), 0.0, None)
+        alpha = np.minimum(np.sqrt(roughness) if remap else roughness, 1.0)
+        file = _name(f"{source.stem}_alpha", {Path(n).stem for n in self.files}) + ".tif"
+        self.files[file] = alpha.astype(np.float32)
+        return table | {"file": f"{self.mesh_folder}/{file}", "raw": True}
 
     def material(self, reference: Entity | str | None, location: Location) -> str | None:
         """The TOML material name for a shape's material (None for pbrt's `interface`)."""
@@ -668,7 +702,7 @@ class PbrtImporter:
 
     def _rough(self, material: Entity) -> dict:
         alpha = self.roughness(material)
-        return {"roughness": alpha} if alpha > 0 else {}
+        return {"roughness": alpha} if isinstance(alpha, dict) or alpha > 0 else {}
 
     def ior(self, material: Entity) -> float | str:
         parameter = material.find("eta", "float", "spectrum", "rgb")
@@ -1276,7 +1310,12 @@ def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = Fal
             for name, mesh in importer.meshes.items():
                 write_ply(folder / name, mesh)
             for name, image in importer.files.items():
-                write_exr(folder / name, image, None, {})
+                if name.endswith(".tif"):  # one channel of numbers (a roughness): a float TIFF keeps it one
+                    from PIL import Image
+
+                    Image.fromarray(image, mode="F").save(folder / name)
+                else:
+                    write_exr(folder / name, image, None, {})
         except OSError as failure:
             raise SpectraceError(
                 f"cannot write the meshes ({failure.strerror or failure})", where=str(folder)
