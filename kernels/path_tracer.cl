@@ -75,8 +75,8 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
         return !ended && ++s->segments <= last_segment;
     }
     if (hit.triangle < 0) {
-        /* hide_environment: the camera's own rays (the first segment) see black; reflections still show it. */
-        int hidden = params->hide_environment && s->segments == 1;
+        /* A hidden environment: the camera's own rays (the first segment) see black; reflections still show it. */
+        int hidden = (params->hide_emitters & HIDE_ENVIRONMENT) && s->segments == 1;
         if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0 && !hidden) {
             __global const Light *env = &scene->lights[params->environment_light];
             float3 d = s->ray.direction;
@@ -88,6 +88,16 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     }
 
     PathVertex v = path_vertex(scene, hit, s->ray);
+#if SCENE_HIDES_AREA_EMITTERS
+    /* Hidden area lights: the camera's own rays pass through them (as through a boundary without material), so
+     * they show what lies behind; they still light every other vertex. */
+    if (v.info.light >= 0 && s->segments == 1 && (params->hide_emitters & HIDE_AREA_EMITTERS)) {
+#if FILM_AOVS
+        aov_at_surface(&s->aov, hit.t, v.p, v.ns, 0); /* seen through: its distance counts toward the depth */
+#endif
+        return cross_null_boundary(s, &v);
+    }
+#endif
 #if FILM_AOVS
     aov_at_surface(&s->aov, hit.t, v.p, v.ns, v.info.material != TRIANGLE_NO_MATERIAL);
 #endif

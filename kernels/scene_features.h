@@ -58,6 +58,11 @@
 #define SCENE_HAS_OPACITY 1
 #endif
 
+/* hide_emitters with area lights: the camera's own rays pass through them (kernels/path_tracer.cl). */
+#ifndef SCENE_HIDES_AREA_EMITTERS
+#define SCENE_HIDES_AREA_EMITTERS 1
+#endif
+
 /* Analytic spheres, disks and cylinders (kernels/shapes.cl), tested beside the triangles' BVH. */
 #ifndef SCENE_HAS_SHAPES
 #define SCENE_HAS_SHAPES 1

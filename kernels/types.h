@@ -176,7 +176,7 @@ typedef struct {
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
-    int hide_environment;    /* 1: camera rays that leave the scene see black (Mitsuba's hide_emitters) */
+    int hide_emitters;       /* HIDE_ENVIRONMENT | HIDE_AREA_EMITTERS bits: what the camera's own rays do not see */
     int shape_count;         /* analytic shapes (AnalyticShape rows) */
     int pad0;
     int pad1;

@@ -18,7 +18,7 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
         s->throughput *= beer_lambert(medium_sigma_t(&scene->media[s->medium], scene->spectra, w), hit.t);
     }
     if (hit.triangle < 0) {
-        int hidden = params->hide_environment && s->segments == 1;  /* the camera's own rays see black */
+        int hidden = (params->hide_emitters & HIDE_ENVIRONMENT) && s->segments == 1;  /* the camera's rays see black */
         if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0 && !hidden) {
             __global const Light *env = &scene->lights[params->environment_light];
             *radiance += s->throughput * environment_radiance(env, scene->spectra, scene->texels, w,
@@ -27,6 +27,15 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
         return 0;
     }
     PathVertex v = path_vertex(scene, hit, s->ray);
+#if SCENE_HIDES_AREA_EMITTERS
+    /* Hidden area lights: the camera's own rays pass through them, as in path_segment. */
+    if (v.info.light >= 0 && s->segments == 1 && (params->hide_emitters & HIDE_AREA_EMITTERS)) {
+#if FILM_AOVS
+        aov_at_surface(&s->aov, hit.t, v.p, v.ns, 0); /* seen through: its distance counts toward the depth */
+#endif
+        return cross_null_boundary(s, &v);
+    }
+#endif
 #if FILM_AOVS
     aov_at_surface(&s->aov, hit.t, v.p, v.ns, v.info.material != TRIANGLE_NO_MATERIAL);
 #endif

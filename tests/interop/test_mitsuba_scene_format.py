@@ -260,7 +260,7 @@ def test_hide_emitters_hides_the_environment_from_camera_rays_only(tmp_path, dev
     images = {}
     for hide in ("false", "true"):
         scene = load_mitsuba_scene(path, parameters={"hide": hide}).with_overrides(spp=8)
-        assert scene.hide_environment == (hide == "true")
+        assert scene.hide_emitters == (hide == "true")
         renderer = Renderer(scene, device)
         renderer.render(spp=8, pass_spp=8)
         images[hide] = renderer.image().xyz.astype(np.float64)
@@ -275,16 +275,6 @@ def test_hide_emitters_hides_the_environment_from_camera_rays_only(tmp_path, dev
     # a Monte Carlo estimate over wavelengths: its mean within 4 standard errors.
     luminance = shown[background][:, 1]
     assert abs(luminance.mean() - 0.5) < 4 * luminance.std(ddof=1) / math.sqrt(luminance.size)
-
-
-def test_hide_emitters_with_area_lights_is_refused(tmp_path):
-    path = _write(
-        tmp_path,
-        HIDDEN.replace("$hide", "true")
-        + '<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>',
-    )
-    with pytest.raises(SpectraceError, match=r"integrator 'path' with hide_emitters in a scene with area lights"):
-        mitsuba_scene_data(path)
 
 
 # ---------------------------------------------------------------- what is not imported

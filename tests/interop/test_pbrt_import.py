@@ -474,7 +474,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
 @pytest.mark.parametrize(
     ("body", "line", "message"),
     [
-        ('Material "mix"\nShape "sphere"\n', 5, "material 'mix': spectrace has no material mixing"),
+        ('Material "mix"\nShape "sphere"\n', 5, 'Material "mix" needs "string materials" naming two materials'),
         ('Material "thindielectric" "spectrum eta" "glass-BK7"\nShape "sphere"\n', 5, "eta must be a number"),
         ('Material "diffusetransmission"\nShape "sphere"\n', 5, "spectrace has no diffuse transmission"),
         ('Shape "curve"\n', 5, "shape 'curve'"),

@@ -74,6 +74,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_OPACITY": 0,
+        "SCENE_HIDES_AREA_EMITTERS": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
     analytic = scene_feature_defines(build_scene_buffers(_analytic_shapes_scene()))
@@ -277,6 +278,8 @@ SCENES = {
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
     "beckmann_and_nonlinear_plastic": _beckmann_scene,
     "analytic_shapes": _analytic_shapes_scene,
+    # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.
+    "hidden_area_light": lambda: replace(_bundled("cornell_box"), hide_emitters=True),
 }
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from spectrace.benchmarks.image_agreement import SIGMA_LIMIT, compare_regions, regions_for
 from spectrace.device import discover_devices, open_device
 from spectrace.engine.renderer import Renderer
-from spectrace.resources import scenes_dir
+from spectrace.resources import resolve_scene_path, scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import Scene
 
@@ -32,9 +32,12 @@ if TYPE_CHECKING:
     from spectrace.image import Image
 
 
-def bench_scene(scene_path: Path | None, size: int, spp: int, max_depth: int) -> Scene:
-    scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml")
-    return scene.with_overrides(width=size, height=size, spp=spp, max_depth=max_depth)
+def bench_scene(scene_path: Path | None, size: int, spp: int, max_depth: int, keep_aspect: bool = False) -> Scene:
+    """The scene (a file, or a bundled scene's name such as `veach_mis`) at `size` pixels wide: square, or with its
+    own aspect ratio."""
+    scene = load_scene(resolve_scene_path(scene_path) if scene_path is not None else scenes_dir() / "cornell_box.toml")
+    height = max(1, round(size * scene.height / scene.width)) if keep_aspect else size
+    return scene.with_overrides(width=size, height=height, spp=spp, max_depth=max_depth)
 
 
 def device_keys(device: str | None, all_devices: bool) -> list[str | None]:

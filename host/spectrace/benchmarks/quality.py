@@ -10,6 +10,11 @@ through "RMSE at budget". The error is the RMSE of
 film XYZ over all pixels and channels against the reference, and relative to the reference's mean Y. The
 reference's own noise RMS (from its two independent halves) is reported: RMSE² includes its square. "RMSE at
 budget" takes that out and scales to exactly the budget (variance ∝ 1/time), since a renderer may overrun it.
+Where lights are in view, each error is also given over the pixels that see none ("off lights"): a light seen
+directly puts most of the RMSE into the few pixels its edge crosses. Each renderer also renders `equal_spp` samples
+per pixel, for the error at equal spp (the estimators' variance,
+whatever their speed), with the reference's noise taken out the same way ("RMSE net"). The image keeps the scene's
+aspect ratio, `size` pixels wide.
 """
 
 import tempfile
@@ -28,10 +33,20 @@ from spectrace.scene import limits
 
 REFERENCE_SEED_OFFSET = 1_000_003
 PROBE_SPP = 4
+EQUAL_SPP = 64
 
 
-def _rmse(image: np.ndarray, reference: np.ndarray) -> float:
-    return float(np.sqrt(np.mean((image.astype(np.float64) - reference) ** 2)))
+def _rmse(image: np.ndarray, reference: np.ndarray, pixels: np.ndarray | None = None) -> float:
+    difference = image.astype(np.float64) - reference
+    return float(np.sqrt(np.mean((difference if pixels is None else difference[pixels]) ** 2)))
+
+
+def _pixels_off_lights(scene, device) -> np.ndarray | None:
+    """The pixels where no camera ray meets a light (a render of emitters only, max_depth 1, is black there), or
+    None when the scene has no light in view. A light seen directly puts most of a small image's RMSE into the
+    few pixels it covers in part, which measures antialiasing of its edge, not the light transport around it."""
+    seen = Renderer(scene.with_overrides(max_depth=1), device).render(spp=64).xyz[..., 1] > 0.0
+    return ~seen if seen.any() else None
 
 
 def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: float) -> int:
@@ -47,8 +62,9 @@ def run_quality_bench(
     device_key: str | None,
     log: Callable[[str], None] = lambda text: None,
     peer_sampler: str = "independent",
+    equal_spp: int = EQUAL_SPP,
 ) -> dict:
-    scene = bench_scene(scene_path, size, 1, max_depth)
+    scene = bench_scene(scene_path, size, 1, max_depth, keep_aspect=True)
     device = open_device(device_key)
     log(f"reference: spectrace, {reference_spp} spp")
     reference_renderer = Renderer(
@@ -58,10 +74,18 @@ def run_quality_bench(
     reference = reference_renderer.render(spp=reference_spp).xyz.astype(np.float64)
     # The reference is the mean of two independent halves a and b: its own noise is RMS(a - b) / 2.
     other_half = (reference * reference_spp - half * (reference_spp // 2)) / (reference_spp - reference_spp // 2)
+    off_lights = _pixels_off_lights(scene, device)
+
+    def errors(image: np.ndarray) -> dict:
+        found = {"rmse": _rmse(image, reference)}
+        if off_lights is not None:
+            found["rmse_off_lights"] = _rmse(image, reference, off_lights)
+        return found
+
     result: dict[str, Any] = {
         "scene": str(scene.source),
         "width": size,
-        "height": size,
+        "height": scene.height,
         "max_depth": max_depth,
         "samplers": {"spectrace": scene.sampler, "mitsuba": peer_sampler},
         "budget_seconds": seconds,
@@ -69,9 +93,11 @@ def run_quality_bench(
         "reference": {
             "spp": reference_spp,
             "noise_rms": _rmse(half, other_half) / 2.0,
+            "noise_rms_off_lights": None if off_lights is None else _rmse(half, other_half, off_lights) / 2.0,
             "mean_y": float(reference[..., 1].mean()),
         },
         "renderers": [],
+        "equal_spp": {"spp": equal_spp, "renderers": []},
         "cross_check": None,
         "notes": [],
     }
@@ -93,10 +119,22 @@ def run_quality_bench(
             "runtime": device.report.key,
             "spp": image.spp,
             "seconds": elapsed,
-            "rmse": _rmse(image.xyz, reference),
+            **errors(image.xyz),
         }
     )
     log(f"spectrace: {image.spp} spp in {elapsed:.2f} s")
+    renderer.reset()
+    start = time.perf_counter()
+    image = renderer.render(spp=equal_spp)
+    result["equal_spp"]["renderers"].append(
+        {
+            "renderer": "spectrace",
+            "runtime": device.report.key,
+            "spp": image.spp,
+            "seconds": time.perf_counter() - start,
+            **errors(image.xyz),
+        }
+    )
 
     try:
         from spectrace.benchmarks.mitsuba_runtime import render_with_mitsuba, usable_variants
@@ -123,10 +161,20 @@ def run_quality_bench(
                         "runtime": variant,
                         "spp": timed.spp,
                         "seconds": timed.seconds,
-                        "rmse": _rmse(timed.xyz, reference),
+                        **errors(timed.xyz),
                     }
                 )
                 log(f"mitsuba {variant}: {timed.spp} spp in {timed.seconds:.2f} s")
+                same = render_with_mitsuba(scene_dict, variant, spp=equal_spp, warm_up=False)
+                result["equal_spp"]["renderers"].append(
+                    {
+                        "renderer": "mitsuba",
+                        "runtime": variant,
+                        "spp": same.spp,
+                        "seconds": same.seconds,
+                        **errors(same.xyz),
+                    }
+                )
                 if index == 0:  # cross-check the reference against the fastest peer, at a quarter of its spp
                     check = render_with_mitsuba(
                         scene_dict, variant, spp=max(1, reference_spp // 4), seed=7, warm_up=False
@@ -144,7 +192,26 @@ def run_quality_bench(
         # Monte Carlo variance falls as 1/time: the error each would have had in exactly the budget, with the
         # reference's own noise taken out (RMSE² = error² + reference noise², the two being independent).
         row["rmse_at_budget"] = float(np.sqrt(max(row["rmse"] ** 2 - noise**2, 0.0) * row["seconds"] / seconds))
+    for row in result["equal_spp"]["renderers"]:
+        row["relative_rmse"] = row["rmse"] / max(result["reference"]["mean_y"], 1e-30)
+        row["rmse_net"] = float(np.sqrt(max(row["rmse"] ** 2 - noise**2, 0.0)))
+    if off_lights is not None:
+        result["reference"]["pixels_off_lights"] = float(off_lights.mean())
+        noise_off = result["reference"]["noise_rms_off_lights"]
+        for row in result["equal_spp"]["renderers"]:
+            row["rmse_off_lights_net"] = float(np.sqrt(max(row["rmse_off_lights"] ** 2 - noise_off**2, 0.0)))
+        for row in result["renderers"]:
+            row["rmse_off_lights_at_budget"] = float(
+                np.sqrt(max(row["rmse_off_lights"] ** 2 - noise_off**2, 0.0) * row["seconds"] / seconds)
+            )
     return result
+
+
+def _off_lights_note(reference: dict) -> str:
+    if "pixels_off_lights" not in reference:
+        return ""
+    share = 100 * reference["pixels_off_lights"]
+    return f", {reference['noise_rms_off_lights']:.3g} on the {share:.1f} % of pixels off lights"
 
 
 def quality_tables(result: dict) -> list:
@@ -154,10 +221,12 @@ def quality_tables(result: dict) -> list:
     table = Table(
         title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
         f"max_depth {result['max_depth']}; reference {ref['spp']} spp (its noise RMS "
-        f"{ref['noise_rms']:.3g}); samplers: spectrace {result['samplers']['spectrace']}, "
+        f"{ref['noise_rms']:.3g}{_off_lights_note(ref)}); samplers: spectrace {result['samplers']['spectrace']}, "
         f"Mitsuba {result['samplers']['mitsuba']}"
     )
-    for column in ("renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE at budget"):
+    off = "pixels_off_lights" in ref
+    columns = ["renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE at budget"]
+    for column in columns + (["off lights, at budget"] if off else []):
         table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
     for r in result["renderers"]:
         table.add_row(
@@ -168,8 +237,27 @@ def quality_tables(result: dict) -> list:
             f"{r['rmse']:.4g}",
             f"{100 * r['relative_rmse']:.2f} %",
             f"{r['rmse_at_budget']:.4g}",
+            *([f"{r['rmse_off_lights_at_budget']:.4g}"] if off else []),
         )
     tables = [table]
+    same = result["equal_spp"]
+    if same["renderers"]:
+        equal = Table(title=f"equal spp: {same['spp']} each (Mitsuba's stratified samplers may round it up)")
+        columns = ["renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE net"]
+        for column in columns + (["off lights, net"] if off else []):
+            equal.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
+        for r in same["renderers"]:
+            equal.add_row(
+                r["renderer"],
+                r["runtime"],
+                str(r["spp"]),
+                f"{r['seconds']:.2f}",
+                f"{r['rmse']:.4g}",
+                f"{100 * r['relative_rmse']:.2f} %",
+                f"{r['rmse_net']:.4g}",
+                *([f"{r['rmse_off_lights_net']:.4g}"] if off else []),
+            )
+        tables.append(equal)
     check = result["cross_check"]
     if check:
         cross = Table(title=f"reference cross-check against Mitsuba {check['mitsuba']} at {check['spp']} spp")

@@ -174,9 +174,11 @@ def quality_bench(
     scene: SceneOption = None,
     device: DeviceOption = None,
     peer_sampler: PeerSamplerOption = "independent",
+    spp: Annotated[int, typer.Option(help="Samples per pixel of the equal-spp comparison.", min=1)] = 64,
     as_json: JsonOption = False,
 ) -> None:
-    """Error at equal wall time against a long reference render: spectrace, and Mitsuba 3 where installed."""
+    """Error at equal wall time and at equal spp against a long reference render: spectrace, and Mitsuba 3 where
+    installed. --scene veach_mis is Veach's MIS scene (bundled)."""
     _check(_one(size), max_depth, seconds)
     from spectrace.benchmarks.quality import quality_tables, run_quality_bench
 
@@ -189,6 +191,7 @@ def quality_bench(
         device,
         log=_log,
         peer_sampler=peer_sampler,
+        equal_spp=spp,
     )
     _emit("quality", result, lambda: quality_tables(result), as_json)
 

@@ -48,6 +48,9 @@ def _struct(fields: Sequence[tuple[str, DTypeLike]], itemsize: int) -> np.dtype:
 
 
 TRIANGLE_NO_MATERIAL = -1  # TriangleInfo.material of an index-matched medium boundary
+# RenderParams.hide_emitters bits: camera rays that leave the scene see black; camera rays pass through area lights
+# (what Mitsuba 3's hide_emitters does, measured with its path and direct integrators).
+HIDE_ENVIRONMENT, HIDE_AREA_EMITTERS = 1, 2
 
 TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4"), ("interior", "<i4"), ("normals", "<i4")], 16)
 
@@ -214,7 +217,7 @@ RENDER_PARAMS_DTYPE = _struct(
         ("sample_begin", "<i4"),
         ("sample_count", "<i4"),
         ("medium_count", "<i4"),
-        ("hide_environment", "<i4"),
+        ("hide_emitters", "<i4"),
         ("shape_count", "<i4"),
         ("pad0", "<i4"),
         ("pad1", "<i4"),
@@ -290,6 +293,8 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "GRID_SAMPLES": int(GRID_SIZE),
         "MATERIAL_NO_SPECTRUM": MATERIAL_NO_SPECTRUM,
         "TRIANGLE_NO_MATERIAL": TRIANGLE_NO_MATERIAL,
+        "HIDE_ENVIRONMENT": HIDE_ENVIRONMENT,
+        "HIDE_AREA_EMITTERS": HIDE_AREA_EMITTERS,
         "IOR_CONSTANT": IOR_CONSTANT,
         "IOR_SELLMEIER": IOR_SELLMEIER,
         "IOR_CAUCHY": IOR_CAUCHY,

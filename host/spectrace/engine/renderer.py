@@ -78,7 +78,8 @@ class Renderer:
         )
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
         if specialise:
-            defines |= scene_feature_defines(self.buffers)
+            hides = scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes)
+            defines |= scene_feature_defines(self.buffers, hides)
         defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
         self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
         self.kernel = self._create_kernels()

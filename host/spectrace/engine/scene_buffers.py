@@ -10,6 +10,8 @@ import numpy as np
 
 from spectrace.engine.device_types import (
     ANALYTIC_SHAPE_DTYPE,
+    HIDE_AREA_EMITTERS,
+    HIDE_ENVIRONMENT,
     LIGHT_DTYPE,
     MATERIAL_DTYPE,
     MEDIUM_DTYPE,
@@ -327,6 +329,8 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["seed"] = scene.seed
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
     params["medium_count"] = buffers.medium_count
-    params["hide_environment"] = int(scene.hide_environment)
+    params["hide_emitters"] = (HIDE_ENVIRONMENT if scene.hide_environment or scene.hide_emitters else 0) | (
+        HIDE_AREA_EMITTERS if scene.hide_emitters else 0
+    )
     params["shape_count"] = buffers.shape_count
     return params

@@ -20,7 +20,8 @@ def _materials_have_textures(materials: np.ndarray) -> bool:
     return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields)
 
 
-def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
+def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = False) -> dict[str, int]:
+    """`hides_area_emitters`: the scene has area lights and hide_emitters (camera rays pass through them)."""
     materials = buffers.materials
     textures = buffers.textures[: buffers.texture_count]
     bump_maps = bool(np.any(materials["bump_map"] >= 0))
@@ -40,5 +41,6 @@ def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or bump_maps),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_SHAPES": int(buffers.shape_count > 0),
+        "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
     }

@@ -217,7 +217,6 @@ class MitsubaImporter:
         self.notes: list[str] = []
         self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
         self._properties: dict[int, Properties] = {}
-        self._hidden_emitters: Element | None = None  # the integrator asking for hide_emitters
         self.search_folders: list[Path] = [xml_path.parent]  # <path> folders, then the scene's
         self.materials: dict[str, dict] = {}
         self._material_of_element: dict[tuple[int, bool], str] = {}
@@ -765,14 +764,16 @@ class MitsubaImporter:
 
     # -------------------------------------------------- materials
 
-    def material(self, element: Element | None, owner: str, flip_v: bool = False) -> str | None:
+    def material(self, element: Element | None, owner: str, flip_v: bool = False, emits: bool = False) -> str | None:
         """The name of the spectrace material for a (possibly referenced) bsdf, defining it on first use. flip_v:
         for a shape whose v runs up (_V_UP_SHAPES); a textured bsdf then becomes a material of its own, with its
-        textures' v flipped."""
+        textures' v flipped. Without a bsdf, Mitsuba's default: diffuse 0.5, and black on a shape that emits
+        (measured: Mitsuba 3's emitter without a bsdf reflects nothing)."""
         if element is None:
-            if "default" not in self.materials:
-                self.materials["default"] = {"type": "diffuse", "reflectance": {"value": 0.5}}  # Mitsuba's default
-            return "default"
+            name, reflectance = ("default_emitter", 0.0) if emits else ("default", 0.5)
+            if name not in self.materials:
+                self.materials[name] = {"type": "diffuse", "reflectance": {"value": reflectance}}
+            return name
         bsdf = self.resolve(element)
         if (id(bsdf), flip_v) in self._material_of_element:
             return self._material_of_element[(id(bsdf), flip_v)]
@@ -1008,14 +1009,14 @@ class MitsubaImporter:
             if face_normals or kind != "sphere":
                 table["face_normals"] = face_normals
         bsdf = next(iter(self.nested(properties, "bsdf")), None)
+        emitter = next(iter(self.nested(properties, "emitter")), None)
         interior = self.interior_medium(properties)
         if interior is not None:
             table["interior"] = interior
         if interior is not None and bsdf is not None and self.kind(self.resolve(bsdf)) == "null":
             table["material"] = None  # Mitsuba's null bsdf: the index-matched boundary of spectrace's media
         else:
-            table["material"] = self.material(bsdf, name, flip_v=kind in _V_UP_SHAPES)
-        emitter = next(iter(self.nested(properties, "emitter")), None)
+            table["material"] = self.material(bsdf, name, flip_v=kind in _V_UP_SHAPES, emits=emitter is not None)
         if emitter is not None:
             module = SHAPE_EMITTER_MODULES.get(self.kind(emitter))
             if module is None:
@@ -1032,8 +1033,8 @@ class MitsubaImporter:
     def interior_medium(self, properties: Properties) -> dict | None:
         """A shape's `interior` homogeneous medium as spectrace's interior: σs = scale·albedo·σt and
         σa = scale·(1 − albedo)·σt (Mitsuba 3's homogeneous: albedo default 0.75, sigma_t default 1), with its
-        Henyey–Greenstein phase (Mitsuba's hg: g default 0.8; isotropic: 0). A constant sigma_t and a constant or
-        rgb albedo are mapped; other coloured coefficients are reported."""
+        Henyey–Greenstein phase (Mitsuba's hg: g default 0.8; isotropic: 0). A constant or rgb sigma_t and a
+        constant or rgb albedo are mapped; other coloured coefficients are reported."""
         self.nested(properties, "medium")  # read here, whatever their names
         if "exterior" in properties:
             self.unsupported_plugin(self.resolve(properties["exterior"]), " as an exterior medium")
@@ -1047,12 +1048,19 @@ class MitsubaImporter:
         items.understood("sample_emitters")  # how Mitsuba samples, not what it renders
         given: dict = {}
         for key, default in (("sigma_t", 1.0), ("albedo", 0.75)):
-            value = self.spectrum(items[key], key) if key in items else {"value": default}
-            # An rgb albedo is a reflectance, uplifted as Mitsuba uplifts one; an rgb sigma_t is uplifted by
-            # Mitsuba's unbounded rule, which spectrace does not reproduce exactly.
-            if value is None or not (set(value) == {"value"} or (key == "albedo" and set(value) == {"rgb"})):
+            value: dict | None = self.spectrum(items[key], key) if key in items else {"value": default}
+            # An rgb albedo or sigma_t is uplifted as Mitsuba's spectral variants uplift a reflectance (they refuse
+            # an rgb sigma_t outside [0, 1], and so does spectrace); `scale` then multiplies sigma_t.
+            if value is None or set(value) not in ({"value"}, {"rgb"}):
                 self.unsupported_plugin(medium, f" with a coloured {key}")
                 return None
+            if "rgb" in value and not all(0.0 <= c <= 1.0 for c in value["rgb"]):
+                raise self.fail(
+                    items[key],
+                    f"a medium's rgb {key} must lie in [0, 1] (as Mitsuba's spectral variants "
+                    f"require), got {value['rgb']}",
+                    "value",
+                )
             given[key] = value
         albedo = given["albedo"].get("value", 0.0)
         if albedo > 1.0:
@@ -1068,25 +1076,32 @@ class MitsubaImporter:
         elif phase is not None and self.kind(phase) != "isotropic":
             self.unsupported_object(phase)
             return None
+        if "rgb" in given["albedo"] or "rgb" in given["sigma_t"]:
+            return {**self._coloured_coefficients(given["sigma_t"], given["albedo"], scale, medium), "g": g}
         sigma_t = float(given["sigma_t"]["value"]) * scale
-        if "rgb" in given["albedo"]:
-            return {**self._coloured_coefficients(given["albedo"]["rgb"], sigma_t, medium), "g": g}
         return {"sigma_a": {"value": sigma_t * (1.0 - albedo)}, "sigma_s": {"value": sigma_t * albedo}, "g": g}
 
-    def _coloured_coefficients(self, rgb: list[float], sigma_t: float, medium: Element) -> dict:
-        """σs = σt·a(λ), σa = σt·(1 − a(λ)) for an rgb albedo a uplifted as Mitsuba uplifts a reflectance (Jakob &
-        Hanika 2019), tabulated every 5 nm (a smooth curve)."""
+    def _coloured_coefficients(self, sigma_t: dict, albedo: dict, scale: float, medium: Element) -> dict:
+        """σs = σt(λ)·a(λ), σa = σt(λ)·(1 − a(λ)) with σt = scale · sigma_t, each of sigma_t and the albedo a number
+        or an rgb in [0, 1] uplifted as Mitsuba uplifts a reflectance (Jakob & Hanika 2019; measured: Mitsuba 3's
+        homogeneous medium gives the same σt(λ) and σs(λ) within 0.1 %), tabulated every 5 nm (smooth curves)."""
         from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
         from spectrace.spectral.uplift import uplift_reflectance
 
-        if max(rgb) > 1.0:
-            raise self.fail(medium, f"a medium's albedo must not exceed 1, got rgb {rgb}", "albedo")
-        albedo = uplift_reflectance(rgb, where=self.where(medium))[0]
         wavelengths = np.arange(GRID_MIN_NM, GRID_MAX_NM + 0.5, 5.0)
-        values = np.array([float(albedo.evaluate(w)) for w in wavelengths])
+
+        def tabulated(value: dict) -> np.ndarray:
+            if "value" in value:
+                return np.full(len(wavelengths), float(value["value"]))
+            spectrum = uplift_reflectance(value["rgb"], where=self.where(medium))[0]
+            return np.array([float(spectrum.evaluate(w)) for w in wavelengths])
+
+        extinction, albedo_values = scale * tabulated(sigma_t), tabulated(albedo)
         return {
-            "sigma_a": {"values": [[float(w), sigma_t * (1.0 - v)] for w, v in zip(wavelengths, values)]},
-            "sigma_s": {"values": [[float(w), sigma_t * v] for w, v in zip(wavelengths, values)]},
+            "sigma_a": {
+                "values": [[float(w), t * (1.0 - a)] for w, t, a in zip(wavelengths, extinction, albedo_values)]
+            },
+            "sigma_s": {"values": [[float(w), t * a] for w, t, a in zip(wavelengths, extinction, albedo_values)]},
         }
 
     def cylinder_steps(self, properties: dict[str, Element]) -> list[dict]:
@@ -1236,10 +1251,9 @@ class MitsubaImporter:
         if "rr_depth" in properties:
             settings["rr_depth"] = self.integer(properties["rr_depth"])
         if "hide_emitters" in properties and self.boolean(properties["hide_emitters"]):
-            # Mitsuba's camera rays then see no environment (spectrace's hide_environment) and pass through area
-            # lights, which spectrace's cannot: a scene with area lights is refused in run().
-            settings["hide_environment"] = True
-            self._hidden_emitters = element
+            # Mitsuba's camera rays then see no environment and pass through area lights (measured: behind a
+            # hidden area light they see the lit wall it hides, with its path and direct integrators alike).
+            settings["hide_emitters"] = True
         if kind == "direct":
             settings["max_depth"] = 2
             self.notes.append(
@@ -1316,12 +1330,6 @@ class MitsubaImporter:
         ]
         if len(environments) > 1:
             raise self.fail(environments[1], "a second environment emitter; spectrace takes one environment light")
-        if self._hidden_emitters is not None and any("emitter" in shape for shape in shapes):
-            self.unsupported_plugin(
-                self._hidden_emitters,
-                " with hide_emitters in a scene with area lights (Mitsuba's camera rays pass through them; "
-                "spectrace hides only the environment)",
-            )
         if self.unsupported:
             raise SpectraceError(
                 f"unsupported Mitsuba 3 plugins: {self.unsupported_text()} (spectrace imports {supported_text()})",

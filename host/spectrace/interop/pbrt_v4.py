@@ -49,14 +49,13 @@ from spectrace.interop.pbrt_parser import Entity, Location, PbrtScene, Shape, er
 from spectrace.io.output_files import check_output_file
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
-MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface")
+MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface", "mix")
 LIGHTS = ("point", "spot", "distant", "infinite")
 AREA_LIGHTS = ("diffuse",)
 TEXTURES = ("imagemap", "checkerboard", "constant")
 # Materials spectrace has no counterpart for, refused with this reason.
 _NO_EQUIVALENT = {
     "diffusetransmission": "spectrace has no diffuse transmission",
-    "mix": "spectrace has no material mixing",
     "coatedconductor": "spectrace has no coated conductor",
     "measured": "spectrace has no measured BRDFs",
     "hair": "spectrace has no hair model",
@@ -511,7 +510,12 @@ class PbrtImporter:
     def reflectance(self, entity: Entity, name: str, default: float) -> dict:
         return self.spectrum(entity, name, "albedo") or self.texture_reference(entity, name) or {"value": default}
 
-    def roughness(self, material: Entity) -> float:
+    def roughness(self, material: Entity) -> float | dict:
+        """The GGX α: a number, or for a `"texture roughness"` a one-channel texture of α per point."""
+        if (texture := material.find("roughness", "texture")) is not None and not any(
+            material.find(key, "texture", "float") for key in ("uroughness", "vroughness")
+        ):
+            return self.roughness_texture(material, texture)
         values = [self.one(material, key, -1.0) for key in ("roughness", "uroughness", "vroughness")]
         for key in ("roughness", "uroughness", "vroughness"):
             if (parameter := material.find(key, "texture")) is not None:
@@ -526,6 +530,35 @@ class PbrtImporter:
         # pbrt-v4 remaps a roughness to the Trowbridge-Reitz (GGX) alpha as sqrt(roughness) unless told not to.
         alpha = math.sqrt(roughness) if self.boolean(material, "remaproughness", True) else roughness
         return min(alpha, 1.0)
+
+    def roughness_texture(self, material: Entity, parameter) -> float | dict:
+        """A float texture as the roughness: a `constant` one is its number; an `imagemap` becomes a one-channel
+        float TIFF of α beside the TOML: pbrt's float lookup averages an image's channels, and its remapping
+        (`remaproughness`, default true: α = √roughness) is applied to each texel, as pbrt applies it to the value
+        it looks up (exact for nearest lookups; a filtered lookup differs by √ of a blend against a blend of √)."""
+        from spectrace.io.images import read_texture_image
+        from spectrace.textures.bitmap import decoded
+
+        key = ("float", str(parameter.values[0]))
+        if key not in self.scene.textures:
+            raise error(
+                parameter.location, f"\"{parameter.label()}\" names '{shown(key[1])}', which no Texture defined"
+            )
+        texture = self.scene.textures[key].entity
+        table = self.texture_table(texture)
+        remap = self.boolean(material, "remaproughness", True)
+        if "texture" not in table:
+            value = max(float(table.get("value", 0.0)) * float(table.get("scale", 1.0)), 0.0)
+            return min(math.sqrt(value) if remap else value, 1.0)
+        if table["texture"] != "bitmap":
+            raise error(parameter.location, f'"{parameter.label()}": spectrace takes an imagemap or a constant here')
+        source = (self.toml_folder / table["file"]).resolve()
+        values, encoded = read_texture_image(source, str(texture.location))
+        roughness = np.clip(decoded(values, encoded, bool(table.get("raw", False))).mean(axis=-1), 0.0, None)
+        alpha = np.minimum(np.sqrt(roughness) if remap else roughness, 1.0)
+        file = _name(f"{source.stem}_alpha", {Path(n).stem for n in self.files}) + ".tif"
+        self.files[file] = alpha.astype(np.float32)
+        return table | {"file": f"{self.mesh_folder}/{file}", "raw": True}
 
     def material(self, reference: Entity | str | None, location: Location) -> str | None:
         """The TOML material name for a shape's material (None for pbrt's `interface`)."""
@@ -569,6 +602,8 @@ class PbrtImporter:
                 self.warn(parameter.location, f'"{parameter.label()}" not imported')
         if kind == "interface":
             return None
+        if kind == "mix":
+            return self.mix_table(material)
         if kind == "diffuse":
             return {"type": "diffuse", "reflectance": self.reflectance(material, "reflectance", 0.5)}
         if kind == "conductor":
@@ -616,9 +651,58 @@ class PbrtImporter:
             table["coat_transmission"] = "rough"
         return table
 
+    def mix_table(self, material: Entity) -> dict | None:
+        """pbrt-v4's `mix`: at each intersection one of `materials` is chosen by a hash of the point and direction,
+        the second with probability `amount` (its MixMaterial::ChooseMaterial). What a pixel averages is then the
+        amount-weighted blend of the two BSDFs, which for two diffuse materials is one diffuse material of the
+        blended reflectance, (1 - amount) R1 + amount R2: spectrace's `mix` texture. An amount of 0 or 1, or the
+        same material twice, is that material; other pairs have no single spectrace material and are refused."""
+        names = material.find("materials", "string")
+        if names is None or len(names.values) != 2:
+            raise error(material.location, f'{material.label()} needs "string materials" naming two materials')
+        tables = []
+        for name in names.values:
+            if str(name) not in self.scene.named_materials:
+                raise error(names.location, f"mix names '{shown(str(name))}', which no MakeNamedMaterial defined")
+            tables.append(self.material_table(self.scene.named_materials[str(name)]))
+        amount_texture = material.find("amount", "texture")
+        number = self.one(material, "amount", 0.5)
+        amount: float | dict = number
+        if amount_texture is not None:
+            key = ("float", str(amount_texture.values[0]))
+            if key not in self.scene.textures:
+                raise error(
+                    amount_texture.location,
+                    f"\"{amount_texture.label()}\" names '{shown(key[1])}', which no Texture defined",
+                )
+            amount = self.texture_table(self.scene.textures[key].entity)
+            if amount.get("texture") != "bitmap":
+                raise error(amount_texture.location, "a mix's amount texture must be an imagemap for spectrace")
+        elif number <= 0.0 or number >= 1.0:
+            return tables[number >= 1.0]
+        if tables[0] == tables[1]:
+            return tables[0]
+        if any(table is None or table["type"] != "diffuse" for table in tables):
+            kinds = " and ".join("interface" if table is None else str(table["type"]) for table in tables)
+            raise error(
+                material.location,
+                f"material 'mix' of {kinds}: spectrace mixes two diffuse materials only (the blend of two other "
+                "BSDFs is no spectrace material)",
+            )
+        assert tables[0] is not None and tables[1] is not None
+        return {
+            "type": "diffuse",
+            "reflectance": {
+                "texture": "mix",
+                "tex1": tables[0]["reflectance"],
+                "tex2": tables[1]["reflectance"],
+                "amount": amount,
+            },
+        }
+
     def _rough(self, material: Entity) -> dict:
         alpha = self.roughness(material)
-        return {"roughness": alpha} if alpha > 0 else {}
+        return {"roughness": alpha} if isinstance(alpha, dict) or alpha > 0 else {}
 
     def ior(self, material: Entity) -> float | str:
         parameter = material.find("eta", "float", "spectrum", "rgb")
@@ -1226,7 +1310,12 @@ def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = Fal
             for name, mesh in importer.meshes.items():
                 write_ply(folder / name, mesh)
             for name, image in importer.files.items():
-                write_exr(folder / name, image, None, {})
+                if name.endswith(".tif"):  # one channel of numbers (a roughness): a float TIFF keeps it one
+                    from PIL import Image
+
+                    Image.fromarray(image, mode="F").save(folder / name)
+                else:
+                    write_exr(folder / name, image, None, {})
         except OSError as failure:
             raise SpectraceError(
                 f"cannot write the meshes ({failure.strerror or failure})", where=str(folder)

@@ -223,3 +223,21 @@ def _rgb_optical_constants(importer, bsdf, eta: dict, k: dict) -> tuple[dict, di
         for original, spectrum in zip((eta, k), spectra)
     ]
     return tables[0], tables[1]
+
+
+def to_mitsuba(material: ConductorMaterial, exporter) -> dict:
+    """Mitsuba's `conductor` or `roughconductor` with the same η, k (as spectra on spectrace's grid), α and
+    distribution, sampling visible normals as Mitsuba does by default; `twosided` because spectrace's conductor
+    reflects on both faces and Mitsuba's is black from behind."""
+    from spectrace.textures import is_texture
+
+    entry: dict = {"eta": exporter.spectrum(material.eta), "k": exporter.spectrum(material.k)}
+    if material.specular_tint is not None:
+        entry["specular_reflectance"] = exporter.spectrum(material.specular_tint)
+    if is_texture(material.roughness):
+        raise exporter.refuse("a conductor with textured roughness is not exported yet")
+    if material.is_delta:
+        entry["type"] = "conductor"
+    else:
+        entry.update(type="roughconductor", alpha=float(material.roughness), distribution=material.distribution)
+    return {"type": "twosided", "bsdf": entry}

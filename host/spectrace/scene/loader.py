@@ -574,6 +574,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         aovs=parse_aovs(spec.film.aovs),
         rr_depth=spec.integrator.rr_depth,
         hide_environment=spec.integrator.hide_environment,
+        hide_emitters=spec.integrator.hide_emitters,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
         sampler=spec.sampler.type,

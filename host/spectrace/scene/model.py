@@ -106,7 +106,8 @@ class Scene:
     integrator: Literal["path", "direct"] = "path"
     max_depth: int = 8
     rr_depth: int = 5
-    hide_environment: bool = False  # camera rays that leave the scene see black (Mitsuba's hide_emitters)
+    hide_environment: bool = False  # camera rays that leave the scene see black
+    hide_emitters: bool = False  # Mitsuba 3's hide_emitters: the environment hidden, area lights seen through
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
     spp: int = 16
     seed: int = 0

@@ -93,6 +93,10 @@ class IntegratorSpec(Strict):
     hide_environment: bool = Field(
         default=False, description="camera rays that leave the scene see black; reflections still show it"
     )
+    hide_emitters: bool = Field(
+        default=False,
+        description="Mitsuba 3's hide_emitters: hide_environment, and camera rays pass through area lights",
+    )
 
     @field_validator("max_depth")
     @classmethod
