@@ -20,8 +20,10 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
     for (int s = params->sample_begin; s < params->sample_begin + params->sample_count; ++s) {
         Sampler sampler;
         SampledWavelengths w;
-        Ray ray = start_pixel_sample(params, pixel, s, &sampler, &w);
-        float4 radiance = TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
+        float weight;
+        Ray ray = start_pixel_sample(params, pixel, s, &sampler, &w, &weight);
+        /* × 1 for box and tent filters, which changes no bits. */
+        float4 radiance = weight * TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
         add_pixel_sample(&accumulated, spectral_film, pixel, radiance, cmf, &w);
     }
     film[pixel] = accumulated;

@@ -20,6 +20,14 @@ def _materials_have_textures(materials: np.ndarray) -> bool:
     return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields)
 
 
+def camera_feature_defines(params: np.ndarray) -> dict[str, int]:
+    """The camera type and pixel filter of a scene's RenderParams (kernels/scene_features.h)."""
+    return {
+        "SCENE_CAMERA_TYPES": 1 << int(params["camera_type"][0]),
+        "SCENE_PIXEL_FILTERS": 1 << int(params["pixel_filter"][0]),
+    }
+
+
 def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
     materials = buffers.materials
     textures = buffers.textures[: buffers.texture_count]
