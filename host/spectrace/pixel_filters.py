@@ -23,7 +23,11 @@ RADIUS_LIMIT = 16.0  # pixels: a wider filter blurs more than any use asks and w
 _RADIUS = Range(0.0, RADIUS_LIMIT, low_open=True)
 FILTERS: dict[str, tuple[Parameter, ...]] = {
     "box": (),
-    "tent": (Parameter("radius", "float", "pixels", 1.0, _RADIUS, doc="where f = 1 − |x|/radius reaches 0"),),
+    "tent": (
+        Parameter(
+            "radius", "float", "pixels", None, _RADIUS, default_doc="1", doc="where f = 1 − |x|/radius reaches 0"
+        ),
+    ),
     "gaussian": (
         Parameter("stddev", "float", "pixels", 0.5, Range(0.0, 4.0, low_open=True), doc="σ of exp(−x²/2σ²)"),
         Parameter(
@@ -37,7 +41,7 @@ FILTERS: dict[str, tuple[Parameter, ...]] = {
         ),
     ),
     "mitchell": (
-        Parameter("radius", "float", "pixels", 2.0, _RADIUS, doc="the cubic's support"),
+        Parameter("radius", "float", "pixels", None, _RADIUS, default_doc="2", doc="the cubic's support"),
         Parameter("b", "float", "", 1.0 / 3.0, Range(0.0, 1.0), default_doc="1/3", doc="Mitchell–Netravali B"),
         Parameter("c", "float", "", 1.0 / 3.0, Range(0.0, 1.0), default_doc="1/3", doc="Mitchell–Netravali C"),
     ),
