@@ -1227,12 +1227,13 @@ class MitsubaImporter:
                 raise self.fail(rfilter, f"stddev must lie in (0, 4] pixels, got {stddev:g}", "type")
             return {"type": "gaussian", "stddev": stddev}
         if kind == "mitchell":
-            table = {"type": "mitchell", "radius": 2.0}
+            table: dict[str, object] = {"type": "mitchell", "radius": 2.0}
             for key in ("B", "C"):
                 if key in properties:
-                    table[key.lower()] = self.number(properties[key])
-                    if not 0.0 <= table[key.lower()] <= 1.0:
-                        raise self.fail(rfilter, f"{key} must lie in [0, 1], got {table[key.lower()]:g}", "type")
+                    value = self.number(properties[key])
+                    if not 0.0 <= value <= 1.0:
+                        raise self.fail(rfilter, f"{key} must lie in [0, 1], got {value:g}", "type")
+                    table[key.lower()] = value
             return table
         self.notes.append(
             f"{self.at(rfilter)}: reconstruction filter '{_shown(kind)}' not imported: spectrace has box, tent, "

@@ -443,8 +443,7 @@ _FILTER_SPECS = {
     name: create_model(
         f"{name.capitalize()}FilterSpec",
         __base__=Strict,
-        type=(Literal[name], ...),
-        **{parameter.name: _field(parameter) for parameter in parameters},
+        **{"type": (Literal[name], ...)} | {parameter.name: _field(parameter) for parameter in parameters},
     )
     for name, parameters in FILTERS.items()
 }
