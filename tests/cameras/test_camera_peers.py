@@ -75,8 +75,8 @@ def _agree(path, device, mi, replicas=8, replica_spp=8, block=8) -> np.ndarray:
 
 
 def _glowing(x: float, y: float, z: float, radius: float) -> str:
-    return f"""<shape type="sphere"><point name="center" x="{x}" y="{y}" z="{z}"/><float name="radius" value="{radius}"/>
-  <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+    return f"""<shape type="sphere"><point name="center" x="{x}" y="{y}" z="{z}"/>
+  <float name="radius" value="{radius}"/><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
   <emitter type="area"><rgb name="radiance" value="1, 0.8, 0.6"/></emitter></shape>"""
 
 
