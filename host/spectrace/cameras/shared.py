@@ -25,6 +25,7 @@ FOV = Parameter(
     Range(0.0, 180.0, low_open=True, high_open=True),
     doc="full field of view along fov_axis",
     api_name="fov_degrees",
+    schema_range=False,  # checked by the schema's validator, whose message names the range in degrees
 )
 FOV_AXIS = Parameter("fov_axis", "axis", "", "x", doc='"x" or "y": the image axis fov spans', type_doc='"x" or "y"')
 

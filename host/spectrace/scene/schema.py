@@ -426,7 +426,19 @@ def _camera_spec(module) -> type[Strict]:
         SPEC_CHECKS=getattr(module, "SPEC_CHECKS", ()),
         __doc__=module.__doc__,
     )
-    return _spec_model(table, f"{module.NAME.capitalize()}CameraSpec", type_default=module.NAME)
+    model = _spec_model(table, f"{module.NAME.capitalize()}CameraSpec", type_default=module.NAME)
+    checked = [p for p in table.PARAMETERS if p.type == "float" and p.range is not None and not p.schema_range]
+    if not checked:
+        return model
+
+    def in_range(cls, value, info):
+        parameter = next(p for p in checked if p.name == info.field_name)
+        if value is not None and (problem := parameter.range_problem(value)):
+            raise ValueError(problem)
+        return value
+
+    validator: Any = field_validator(*(p.name for p in checked))(classmethod(in_range))
+    return create_model(model.__name__, __base__=model, __validators__={"_in_range": validator})
 
 
 def _type_or(default: str):
