@@ -9,6 +9,7 @@ import pytest
 
 import spectrace
 from spectrace.engine.renderer import Renderer
+from spectrace.engine.wavefront import WavefrontRenderer
 from spectrace.scene.model import Scene
 
 WIDTH, HEIGHT = 24, 48
@@ -67,13 +68,15 @@ def _standard_error_with_floor(standard_error: np.ndarray, expected: np.ndarray,
     return np.sqrt(standard_error**2 + np.abs(expected) / (HEIGHT * spp)) + 1e-7
 
 
+@pytest.mark.parametrize("shape", [Renderer, WavefrontRenderer], ids=["megakernel", "wavefront"])
 @pytest.mark.parametrize("name", list(FILTERS))
-def test_an_edge_renders_as_the_step_convolved_with_the_filter(device, name):
+def test_an_edge_renders_as_the_step_convolved_with_the_filter(device, name, shape):
     """Every row sees the same edge, so the rows are independent replicas of the profile: each column's mean over the
-    48 rows is within 5 standard errors (their spread) of the analytic convolution. Mitchell's negative lobes show
-    as values below 0 and above 1 beside the edge."""
+    48 rows is within 5 standard errors (their spread) of the analytic convolution, with both kernel shapes (the
+    wavefront carries each sample's filter weight in its path slot). Mitchell's negative lobes show as values below
+    0 and above 1 beside the edge."""
     scene = _edge_scene(spectrace.PixelFilter(name), spp=64)
-    renderer = Renderer(scene, device)
+    renderer = shape(scene, device)
     renderer.render(spp=64)
     y = renderer.image().xyz[..., 1].astype(np.float64)
     mean = y.mean(axis=0)
