@@ -1196,7 +1196,7 @@ class MitsubaImporter:
         self.origins["camera"] = element
         sampler = next(iter(self.nested(properties, "sampler")), None)
         # A pinhole has no focus: Mitsuba's perspective sensor takes focus_distance and does nothing with it.
-        properties.understood("focus_distance", "far_clip")
+        properties.understood("focus_distance")
         if sampler is not None:
             sampler_properties = self.properties(sampler)
             data["sampler"] = {}
