@@ -1,24 +1,121 @@
-/* Pinhole perspective camera. The image plane spans [-1, 1] in both directions at unit distance along
- * camera_forward; camera_right and camera_up carry tan(fov/2) of their axis, so no trigonometry runs here.
- * camera_origin.w is the near clip distance (Mitsuba 3's near_clip): rays start on the plane that far along
- * camera_forward, so nothing nearer is seen (0: they start at the eye). */
+/* Cameras: a position on the film (in pixels, x to the right, y down, (0, 0) the top-left corner) becomes a ray.
+ *
+ * - CAMERA_PERSPECTIVE, a pinhole: the image plane spans [-1, 1] in both directions at unit distance along
+ *   camera_forward; camera_right and camera_up carry tan(fov/2) of their axis, so no trigonometry runs here.
+ * - CAMERA_THIN_LENS (Pharr, Jakob & Humphreys, 4th ed., 5.2.3): the pinhole's ray through the film position meets
+ *   the plane of focus (lens.y along camera_forward) at a point every lens ray then aims at; the ray starts on a
+ *   disk of radius lens.x (uniform in area) around camera_origin, in the plane spanned by camera_right and
+ *   camera_up. Points on the plane of focus image sharply; the others blur into the circle of confusion.
+ * - CAMERA_ORTHOGRAPHIC: parallel rays along camera_forward from the plane through camera_origin; camera_right and
+ *   camera_up carry half the view's width and height in scene units.
+ * - CAMERA_EQUIRECTANGULAR: latitude-longitude over the whole sphere, in the convention of the environment maps
+ *   (kernels/environment.cl) with camera_up as the map's +y, camera_forward as its -z and camera_right as its +x:
+ *   the image's centre looks along camera_forward, a column is a longitude (2π over the width), a row a latitude
+ *   (π over the height, row 0 at the zenith). An environment rendered so, and put back as an envmap light with the
+ *   same frame, is the environment again.
+ * camera_origin.w is the near clip distance (Mitsuba 3's near_clip): rays start where they cross the plane that far
+ * along camera_forward (equirectangular: that far along the ray), so nothing nearer is seen (0: at the lens). */
 #ifndef SPECTRACE_CAMERA_CL
 #define SPECTRACE_CAMERA_CL
 
 #include "types.h"
 #include "ray.cl"
+#include "rng.cl"
+#include "sampling.cl"
 
-/* pixel_x, pixel_y: integer pixel, row 0 at the top; jitter in [0,1)². */
-inline Ray camera_ray(__global const RenderParams *p, int pixel_x, int pixel_y, float2 jitter)
+#define CAMERA_PI 3.14159265358979f
+
+/* The pinhole's ray through the film position; its direction before normalising has unit part along
+ * camera_forward. */
+inline float3 pinhole_direction(__global const RenderParams *p, float2 film)
 {
-    float ndc_x = 2.0f * ((float)pixel_x + jitter.x) / (float)p->width - 1.0f;
-    float ndc_y = 1.0f - 2.0f * ((float)pixel_y + jitter.y) / (float)p->height;
-    float3 direction = p->camera_forward.xyz + ndc_x * p->camera_right.xyz + ndc_y * p->camera_up.xyz;
+    float ndc_x = 2.0f * film.x / (float)p->width - 1.0f;
+    float ndc_y = 1.0f - 2.0f * film.y / (float)p->height;
+    return p->camera_forward.xyz + ndc_x * p->camera_right.xyz + ndc_y * p->camera_up.xyz;
+}
+
+/* film: the position in pixels. A thin lens draws its lens position from `sampler` (one 2D draw, after the film
+ * position's); the other cameras draw nothing. */
+inline Ray camera_ray(__global const RenderParams *p, float2 film, Sampler *sampler)
+{
     Ray ray;
+    if (CAMERA_IS(p, CAMERA_ORTHOGRAPHIC)) {
+        float ndc_x = 2.0f * film.x / (float)p->width - 1.0f;
+        float ndc_y = 1.0f - 2.0f * film.y / (float)p->height;
+        ray.direction = p->camera_forward.xyz;
+        ray.origin = p->camera_origin.xyz + ndc_x * p->camera_right.xyz + ndc_y * p->camera_up.xyz
+                     + p->camera_origin.w * ray.direction;
+        return ray;
+    }
+    if (CAMERA_IS(p, CAMERA_EQUIRECTANGULAR)) {
+        float theta = CAMERA_PI * film.y / (float)p->height;
+        float2 cs = cos_sin_turns(film.x / (float)p->width - 0.5f);  /* φ = 2π u − π: (cos φ, sin φ) */
+        float sin_theta = sin(theta);
+        ray.direction = normalize(sin_theta * cs.y * p->camera_right.xyz + cos(theta) * p->camera_up.xyz
+                                  + sin_theta * cs.x * p->camera_forward.xyz);
+        ray.origin = p->camera_origin.xyz + p->camera_origin.w * ray.direction;
+        return ray;
+    }
+    float3 direction = pinhole_direction(p, film);
+    if (CAMERA_IS(p, CAMERA_THIN_LENS)) {
+        float2 u = sample_2d(sampler);
+        float2 disk = p->lens.x * sqrt(u.x) * cos_sin_turns(u.y);
+        float3 lens = disk.x * normalize(p->camera_right.xyz) + disk.y * normalize(p->camera_up.xyz);
+        /* The pinhole ray reaches the plane of focus at lens.y · direction (its forward part is 1). */
+        float3 towards = p->lens.y * direction - lens;
+        float forward = dot(towards, p->camera_forward.xyz);
+        ray.origin = p->camera_origin.xyz + lens + (p->camera_origin.w / forward) * towards;
+        ray.direction = normalize(towards);
+        return ray;
+    }
     /* direction's part along camera_forward is 1, so this lands on the near plane. */
     ray.origin = p->camera_origin.xyz + p->camera_origin.w * direction;
     ray.direction = normalize(direction);
     return ray;
+}
+
+/* The rays through the film positions one pixel to the right of and one below the one that sees the point p, as
+ * origins o_x, o_y and directions d_x, d_y (not normalised), for ray differentials (kernels/scene.cl's footprint);
+ * 0 where p is not in view (behind a perspective or orthographic camera, on an equirectangular camera's axis). A
+ * thin lens is taken as its pinhole (as pbrt-v4's Camera::Approximate_dp_dxy takes every camera's central ray). */
+inline int camera_neighbour_rays(__global const RenderParams *p, float3 point, float3 *o_x, float3 *d_x,
+                                 float3 *o_y, float3 *d_y)
+{
+    float3 origin = p->camera_origin.xyz;
+    float3 to_p = point - origin;
+    float3 forward = p->camera_forward.xyz;
+    if (CAMERA_IS(p, CAMERA_EQUIRECTANGULAR)) {
+        float distance = length(to_p);
+        if (!(distance > 0.0f)) return 0;
+        float3 d = to_p / distance;
+        float lx = dot(d, p->camera_right.xyz), ly = dot(d, p->camera_up.xyz), lz = dot(d, forward);
+        float sin_theta = sqrt(lx * lx + lz * lz);
+        if (!(sin_theta > 0.0f)) return 0;
+        /* ∂d/∂φ = (lz right − lx forward); ∂d/∂θ, a unit vector: (ly lx / sin θ, −sin θ, ly lz / sin θ) in the
+         * camera's (right, up, forward). */
+        float3 d_phi = lz * p->camera_right.xyz - lx * forward;
+        float3 d_theta = (ly / sin_theta) * (lx * p->camera_right.xyz + lz * forward) - sin_theta * p->camera_up.xyz;
+        *o_x = origin;
+        *o_y = origin;
+        *d_x = d + d_phi * (2.0f * CAMERA_PI / (float)p->width);
+        *d_y = d + d_theta * (CAMERA_PI / (float)p->height);
+        return 1;
+    }
+    float depth = dot(to_p, forward);
+    if (!(depth > 0.0f)) return 0;
+    if (CAMERA_IS(p, CAMERA_ORTHOGRAPHIC)) {
+        *o_x = point + p->camera_right.xyz * (2.0f / (float)p->width);
+        *o_y = point + p->camera_up.xyz * (2.0f / (float)p->height);
+        *d_x = forward;
+        *d_y = forward;
+        return 1;
+    }
+    float3 d = to_p / depth;  /* the camera ray's direction with unit forward part, as camera_ray forms it */
+    *o_x = origin;
+    *o_y = origin;
+    *d_x = d + p->camera_right.xyz * (2.0f / (float)p->width);
+    *d_y = d + p->camera_up.xyz * (2.0f / (float)p->height);
+    return 1;
 }
 
 #endif

@@ -26,13 +26,15 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
     for (int s = params->sample_begin; s < params->sample_begin + params->sample_count; ++s) {
         Sampler sampler;
         SampledWavelengths w;
-        Ray ray = start_pixel_sample(params, pixel, s, &sampler, &w);
+        float weight;
+        Ray ray = start_pixel_sample(params, pixel, s, &sampler, &w, &weight);
+        /* weight: the pixel filter's sample weight, × 1 for box and tent filters, which changes no bits. */
 #if FILM_AOVS
         PathState path = camera_path(ray);
-        float4 radiance = TRACE_PATH_STATE(&scene, &w, &sampler, &path, &rays_traced);
+        float4 radiance = weight * TRACE_PATH_STATE(&scene, &w, &sampler, &path, &rays_traced);
         add_aov_sample(aov_sums, &path.aov, radiance, cmf, &w);
 #else
-        float4 radiance = TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
+        float4 radiance = weight * TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
 #endif
         add_pixel_sample(&accumulated, spectral_film, pixel, radiance, cmf, &w);
     }

@@ -4,6 +4,7 @@
 
 #include "types.h"
 #include "bvh.cl"
+#include "camera.cl"
 #include "lights.cl"
 #include "medium.cl"
 #include "texture.cl"
@@ -70,7 +71,7 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
 
 /* The texture footprint at point p of a triangle (normal n): how far uv moves between neighbouring pixels, estimated
  * from the camera as pbrt-v4 does for every intersection (Pharr, Jakob & Humphreys, 4th ed., 10.1.3,
- * Camera::Approximate_dp_dxy): the rays through p and through the points one pixel to the right and down, met
+ * Camera::Approximate_dp_dxy): the camera's rays one pixel to the right and down of p's (camera_neighbour_rays), met
  * with the tangent plane at p, give dp/dx and dp/dy; the triangle's positions and uvs map them to du/dx ... dv/dy;
  * the footprint is 2 max(|du/dx|, |dv/dx|, |du/dy|, |dv/dy|) (a filter spans a pixel on either side). After
  * reflections this is the camera's view of p, not the path's: an approximation that blurs no less than a primary
@@ -80,16 +81,10 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
 inline float footprint_from_tangents(__global const RenderParams *camera, float3 p, float3 n, float3 e1, float3 e2,
                                      float2 d1, float2 d2)
 {
-    float3 origin = camera->camera_origin.xyz;
-    float3 to_p = p - origin;
-    float depth = dot(to_p, camera->camera_forward.xyz);
-    if (!(depth > 0.0f)) return 0.0f;
-    float3 d = to_p / depth;  /* the camera ray's direction with unit forward part, as camera.cl forms it */
-    float3 dx = d + camera->camera_right.xyz * (2.0f / (float)camera->width);
-    float3 dy = d + camera->camera_up.xyz * (2.0f / (float)camera->height);
-    float plane = dot(n, to_p);
-    float3 dpdx = origin + dx * (plane / dot(n, dx)) - p;
-    float3 dpdy = origin + dy * (plane / dot(n, dy)) - p;
+    float3 ox, dx, oy, dy;
+    if (!camera_neighbour_rays(camera, p, &ox, &dx, &oy, &dy)) return 0.0f;
+    float3 dpdx = ox + dx * (dot(n, p - ox) / dot(n, dx)) - p;
+    float3 dpdy = oy + dy * (dot(n, p - oy) / dot(n, dy)) - p;
     /* p = v0 + a e1 + b e2 and uv = t0 + a d1 + b d2: an offset in the plane has (a, b) from the Gram system. */
     float g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
     float det = g11 * g22 - g12 * g12;

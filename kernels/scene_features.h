@@ -68,12 +68,25 @@
 #define SCENE_HAS_SHAPES 1
 #endif
 
+/* Bit t set: the camera is of type CAMERA_t / the pixel filter is PIXEL_FILTER_t (one bit each in a scene's build;
+ * every bit without the defines). */
+#ifndef SCENE_CAMERA_TYPES
+#define SCENE_CAMERA_TYPES ((1 << CAMERA_TYPE_COUNT) - 1)
+#endif
+#ifndef SCENE_PIXEL_FILTERS
+#define SCENE_PIXEL_FILTERS ((1 << PIXEL_FILTER_COUNT) - 1)
+#endif
+
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 #define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
 #define SCENE_HAS_ENVIRONMENT (SCENE_USES_LIGHT(LIGHT_ENVIRONMENT) || SCENE_USES_LIGHT(LIGHT_ENVIRONMENT_MAP))
 
 /* Type tests that fold to constants when the scene has none of that type, or nothing else. */
 #define MATERIAL_IS(m, t) (SCENE_USES_MATERIAL(t) && (SCENE_MATERIAL_TYPES == (1 << (t)) || (m)->type == (t)))
+#define CAMERA_IS(params, t) \
+    (((SCENE_CAMERA_TYPES >> (t)) & 1) && (SCENE_CAMERA_TYPES == (1 << (t)) || (params)->camera_type == (t)))
+#define PIXEL_FILTER_IS(params, t) \
+    (((SCENE_PIXEL_FILTERS >> (t)) & 1) && (SCENE_PIXEL_FILTERS == (1 << (t)) || (params)->pixel_filter == (t)))
 #define LIGHT_IS(light, t) (SCENE_USES_LIGHT(t) && (SCENE_LIGHT_TYPES == (1 << (t)) || (light)->type == (t)))
 
 #endif

@@ -163,8 +163,9 @@ typedef struct {
 typedef struct {
     float4 camera_origin;
     float4 camera_forward;   /* unit vector */
-    float4 camera_right;     /* unit vector scaled by tan(fov_x / 2) */
-    float4 camera_up;        /* unit vector scaled by tan(fov_y / 2) */
+    float4 camera_right;     /* perspective, thin lens: unit vector scaled by tan(fov_x / 2); orthographic: scaled
+                                by half the view's width (scene units); equirectangular: unit vector */
+    float4 camera_up;        /* likewise with fov_y / the view's height */
     int width;
     int height;
     int max_depth;           /* path segments from the camera (Mitsuba 3): 1 = emitters only; -1 = unbounded */
@@ -178,9 +179,14 @@ typedef struct {
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
     int hide_emitters;       /* HIDE_ENVIRONMENT | HIDE_AREA_EMITTERS bits: what the camera's own rays do not see */
     int shape_count;         /* analytic shapes (AnalyticShape rows) */
+    int camera_type;         /* CAMERA_* (kernels/camera.cl) */
+    int pixel_filter;        /* PIXEL_FILTER_* (kernels/pixel_filter.cl) */
     int pad0;
-    int pad1;
-    int pad2;
+    float4 lens;             /* CAMERA_THIN_LENS: aperture radius, focus distance along camera_forward (scene
+                                units), 0, 0 */
+    float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:
+                                gaussian: -1/(2σ²), exp(-radius²/(2σ²)) (σ in pixels); mitchell: B, C */
+    float filter_cdf[PIXEL_FILTER_BINS];  /* gaussian, mitchell: CDF of |f| over [0, radius] at each bin's end */
 } RenderParams;
 
 typedef struct {

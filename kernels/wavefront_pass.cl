@@ -16,6 +16,7 @@ typedef struct {
     PathState path;
     SampledWavelengths w;
     float4 radiance;      /* gathered so far by the current sample */
+    float weight;         /* the pixel filter's weight of the current sample (pixel_sample.cl) */
     Sampler sampler;
     int sample;           /* the sample index being traced */
     uint rays_traced;     /* by this pixel in this pass, added to ray_counts when its samples are done */
@@ -33,13 +34,13 @@ inline int start_slot_sample(__global const RenderParams *params, PathSlot *slot
                              __global float4 *film, __global float *spectral_film, __global const float4 *cmf)
 {
     for (; sample_index < params->sample_begin + params->sample_count; ++sample_index) {
-        Ray ray = start_pixel_sample(params, pixel, sample_index, &slot->sampler, &slot->w);
+        Ray ray = start_pixel_sample(params, pixel, sample_index, &slot->sampler, &slot->w, &slot->weight);
         slot->path = camera_path(ray);
         slot->radiance = (float4)(0.0f);
         slot->sample = sample_index;
         if (slot->path.segments <= max_segments(params)) return 1;
         float4 accumulated = film[pixel];
-        add_pixel_sample(&accumulated, spectral_film, pixel, slot->radiance, cmf, &slot->w);
+        add_pixel_sample(&accumulated, spectral_film, pixel, slot->weight * slot->radiance, cmf, &slot->w);
         film[pixel] = accumulated;
     }
     return 0;
@@ -75,7 +76,7 @@ KERNEL void wavefront_advance(SCENE_KERNEL_PARAMS, __global const float4 *cmf, _
     int live = path_segment(&scene, &slot.w, &slot.sampler, &slot.path, &slot.radiance, &slot.rays_traced);
     if (!live) {
         float4 accumulated = film[pixel];
-        add_pixel_sample(&accumulated, spectral_film, pixel, slot.radiance, cmf, &slot.w);
+        add_pixel_sample(&accumulated, spectral_film, pixel, slot.weight * slot.radiance, cmf, &slot.w);
         film[pixel] = accumulated;
         live = start_slot_sample(params, &slot, pixel, slot.sample + 1, film, spectral_film, cmf);
     }

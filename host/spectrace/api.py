@@ -25,6 +25,7 @@ from spectrace.geometry.mesh import TriangleMesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
 from spectrace.lights.base import unit_direction
+from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import (
     AreaEmitter,
     ConstantEnvironment,
@@ -348,8 +349,21 @@ def _check_camera(scene: Scene) -> None:
         raise SpectraceError("camera target equals origin", where="camera.target")
     if np.linalg.norm(np.cross(forward, camera.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
         raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where="camera.up")
-    if not 0.0 < camera.fov_degrees < 180.0:
+    from spectrace.cameras import CAMERAS
+
+    if camera.type not in CAMERAS:
+        raise SpectraceError(f"unknown camera type {camera.type!r}; one of {', '.join(CAMERAS)}", where="camera.type")
+    if camera.type in ("perspective", "thinlens") and not 0.0 < camera.fov_degrees < 180.0:
         raise SpectraceError(f"fov must lie in (0, 180) degrees, got {camera.fov_degrees}", where="camera.fov")
+    numbers = {
+        "thinlens": ("aperture_radius", "focus_distance"),
+        "orthographic": ("view_width",),
+    }.get(camera.type, ())
+    tables = {parameter.name: parameter for parameter in CAMERAS[camera.type].PARAMETERS}
+    for name in numbers:
+        tables[name].check(getattr(camera, name), where=f"camera.{name}")
+    if not isinstance(scene.pixel_filter, PixelFilter):
+        raise SpectraceError("expected a spectrace.PixelFilter", where="pixel_filter")
 
 
 @contextmanager

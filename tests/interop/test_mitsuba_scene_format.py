@@ -247,7 +247,8 @@ HIDDEN = """<integrator type="path"><boolean name="hide_emitters" value="$hide"/
     <shape type="cube"><transform name="to_world"><scale value="0.3"/><translate z="3"/></transform></shape>"""
 HIDDEN_SENSOR = """<sensor type="perspective"><float name="fov" value="30"/>
     <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1"/></transform>
-    <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/></film></sensor>"""
+    <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/>
+    <rfilter type="box"/></film></sensor>"""
 
 
 def test_hide_emitters_hides_the_environment_from_camera_rays_only(tmp_path, device):

@@ -457,11 +457,11 @@ def test_written_meshes_keep_normals_and_uv(tmp_path):
 
 
 def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
-    body = 'PixelFilter "gaussian"\nShape "sphere" "float radius" 1 "float frobs" 3\n' + PLANE
+    body = 'PixelFilter "sinc"\nShape "sphere" "float radius" 1 "float frobs" 3\n' + PLANE
     path = _write(tmp_path, body)
     warnings, _ = import_pbrt(path, tmp_path / "a.toml")
     assert f'{path}:6: Shape "sphere": parameter "float frobs" not imported' in warnings
-    assert any(w.startswith(f"{path}:5: PixelFilter not imported") for w in warnings)
+    assert any(w.startswith(f"{path}:5: pixel filter 'sinc' not imported") for w in warnings)
     # The same message at many lines is one warning.
     body = "".join(f'Shape "sphere" "float frobs" {i}\n' for i in range(50))
     warnings, _ = import_pbrt(_write(tmp_path, body), tmp_path / "c.toml")
@@ -508,11 +508,13 @@ def test_command_prints_warnings_and_strict_fails_in_one_line(tmp_path, monkeypa
     assert code != 0 and len(stderr.strip().splitlines()) == 1 and "sigma" in stderr
 
 
-def test_orthographic_camera_is_one_line(tmp_path, monkeypatch, capsys):
-    path = _write(tmp_path, PLANE, HEADER.replace('"perspective"', '"orthographic"'))
+def test_realistic_camera_is_one_line(tmp_path, monkeypatch, capsys):
+    path = _write(tmp_path, PLANE, HEADER.replace('"perspective"', '"realistic"'))
     code, stderr = run_in_process(monkeypatch, capsys, ["import-pbrt", str(path), "-o", str(tmp_path / "x.toml")])
     assert code != 0
-    assert stderr.strip() == f"error: {path}:2: camera 'orthographic': spectrace has only a perspective camera"
+    assert stderr.strip() == (
+        f"error: {path}:2: camera 'realistic': spectrace imports pbrt's perspective and orthographic cameras"
+    )
 
 
 # ---------------------------------------------------------------- renders
@@ -588,6 +590,7 @@ PBRT_SCENE = """Scale -1 1 1
 LookAt 0 1 4  0 1 0  0 1 0
 Camera "perspective" "float fov" 45
 Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+PixelFilter "box"
 Integrator "volpath" "integer maxdepth" 3
 WorldBegin
 Material "diffuse" "rgb reflectance" [0.7 0.7 0.7]

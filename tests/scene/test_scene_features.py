@@ -262,7 +262,25 @@ def _beckmann_scene() -> spectrace.Scene:
     return replace(_environment_map_scene(), shapes=shapes)
 
 
+def _with_camera(scene: spectrace.Scene, camera_type: str, filter_type: str) -> spectrace.Scene:
+    """The scene through another camera type and pixel filter, framing about what its perspective camera framed."""
+    camera = scene.camera
+    distance = float(np.linalg.norm(np.subtract(camera.target, camera.origin)))
+    changes = {
+        "thinlens": {"aperture_radius": 0.05 * distance, "focus_distance": distance},
+        "orthographic": {"view_width": 2.0 * distance * np.tan(np.radians(camera.fov_degrees) / 2.0)},
+        "equirectangular": {},
+    }[camera_type]
+    camera = replace(camera, type=camera_type, **changes)
+    return replace(scene, camera=camera, pixel_filter=spectrace.PixelFilter(filter_type))
+
+
 SCENES = {
+    "thin_lens_and_gaussian": lambda: _with_camera(_bundled("cornell_box"), "thinlens", "gaussian"),
+    "orthographic_trilinear_and_mitchell": lambda: _with_camera(
+        _textured_scene(("trilinear",)), "orthographic", "mitchell"
+    ),
+    "equirectangular_and_tent": lambda: _with_camera(_environment_map_scene(), "equirectangular", "tent"),
     "cornell_box": lambda: _bundled("cornell_box"),
     "material_showcase": lambda: _bundled("material_showcase"),
     "subsurface": lambda: _bundled("subsurface").with_overrides(max_depth=16),

@@ -200,6 +200,18 @@ LIGHT_DTYPE = _struct(
     96,
 )
 
+# RenderParams.camera_type: how a film position becomes a ray (kernels/camera.cl; spectrace.cameras, whose
+# registry CAMERAS lists the types in this order).
+CAMERA_TYPES = ("perspective", "thinlens", "orthographic", "equirectangular")
+CAMERA_PERSPECTIVE, CAMERA_THIN_LENS, CAMERA_ORTHOGRAPHIC, CAMERA_EQUIRECTANGULAR = range(len(CAMERA_TYPES))
+
+# RenderParams.pixel_filter: the pixel's reconstruction filter, importance-sampled (kernels/pixel_filter.cl;
+# spectrace.pixel_filters). Gaussian and Mitchell–Netravali are sampled from a table of PIXEL_FILTER_BINS
+# piecewise-constant bins of |f| over [0, radius] (RenderParams.filter_cdf).
+PIXEL_FILTERS = ("box", "tent", "gaussian", "mitchell")
+PIXEL_FILTER_BOX, PIXEL_FILTER_TENT, PIXEL_FILTER_GAUSSIAN, PIXEL_FILTER_MITCHELL = range(len(PIXEL_FILTERS))
+PIXEL_FILTER_BINS = 32
+
 RENDER_PARAMS_DTYPE = _struct(
     [
         ("camera_origin", ("<f4", (4,))),
@@ -219,11 +231,14 @@ RENDER_PARAMS_DTYPE = _struct(
         ("medium_count", "<i4"),
         ("hide_emitters", "<i4"),
         ("shape_count", "<i4"),
+        ("camera_type", "<i4"),
+        ("pixel_filter", "<i4"),
         ("pad0", "<i4"),
-        ("pad1", "<i4"),
-        ("pad2", "<i4"),
+        ("lens", ("<f4", (4,))),
+        ("filter_shape", ("<f4", (4,))),
+        ("filter_cdf", ("<f4", (PIXEL_FILTER_BINS,))),
     ],
-    128,
+    160 + 4 * PIXEL_FILTER_BINS,
 )
 
 # MeterParams.type (kernels/meters.cl). IRRADIANCE: W/(m² nm) on a one-sided surface at `point` facing
@@ -323,6 +338,17 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "FILTER_BILINEAR": FILTER_BILINEAR,
         "FILTER_TRILINEAR": FILTER_TRILINEAR,
         "LIGHT_TYPE_COUNT": len(LIGHT_TYPES),
+        "CAMERA_PERSPECTIVE": CAMERA_PERSPECTIVE,
+        "CAMERA_THIN_LENS": CAMERA_THIN_LENS,
+        "CAMERA_ORTHOGRAPHIC": CAMERA_ORTHOGRAPHIC,
+        "CAMERA_EQUIRECTANGULAR": CAMERA_EQUIRECTANGULAR,
+        "CAMERA_TYPE_COUNT": len(CAMERA_TYPES),
+        "PIXEL_FILTER_BOX": PIXEL_FILTER_BOX,
+        "PIXEL_FILTER_TENT": PIXEL_FILTER_TENT,
+        "PIXEL_FILTER_GAUSSIAN": PIXEL_FILTER_GAUSSIAN,
+        "PIXEL_FILTER_MITCHELL": PIXEL_FILTER_MITCHELL,
+        "PIXEL_FILTER_COUNT": len(PIXEL_FILTERS),
+        "PIXEL_FILTER_BINS": PIXEL_FILTER_BINS,
         # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
         "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
         "BVH_STACK_SIZE": MAX_DEPTH,

@@ -13,7 +13,7 @@ from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
-from spectrace.engine.scene_features import scene_feature_defines
+from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
 from spectrace.errors import SpectraceError
 from spectrace.film import Film, spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines
@@ -80,6 +80,7 @@ class Renderer:
         if specialise:
             hides = scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes)
             defines |= scene_feature_defines(self.buffers, hides)
+            defines |= camera_feature_defines(render_params(scene, self.buffers, 0, 0))
         defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
         self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
         self.kernel = self._create_kernels()

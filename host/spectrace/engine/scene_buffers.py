@@ -15,6 +15,7 @@ from spectrace.engine.device_types import (
     LIGHT_DTYPE,
     MATERIAL_DTYPE,
     MEDIUM_DTYPE,
+    PIXEL_FILTERS,
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
     TRIANGLE_NO_MATERIAL,
@@ -333,4 +334,13 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
         HIDE_AREA_EMITTERS if scene.hide_emitters else 0
     )
     params["shape_count"] = buffers.shape_count
+    from spectrace.cameras import CAMERAS
+
+    camera = CAMERAS[scene.camera.type]
+    params["camera_type"] = camera.CODE
+    params["lens"][0, :2] = camera.lens(scene.camera)
+    pixel_filter = scene.pixel_filter
+    params["pixel_filter"] = PIXEL_FILTERS.index(pixel_filter.type)
+    params["filter_shape"][0] = pixel_filter.device_shape()
+    params["filter_cdf"][0] = pixel_filter.device_cdf()
     return params

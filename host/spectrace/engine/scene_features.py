@@ -20,6 +20,14 @@ def _materials_have_textures(materials: np.ndarray) -> bool:
     return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields)
 
 
+def camera_feature_defines(params: np.ndarray) -> dict[str, int]:
+    """The camera type and pixel filter of a scene's RenderParams (kernels/scene_features.h)."""
+    return {
+        "SCENE_CAMERA_TYPES": 1 << int(params["camera_type"][0]),
+        "SCENE_PIXEL_FILTERS": 1 << int(params["pixel_filter"][0]),
+    }
+
+
 def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = False) -> dict[str, int]:
     """`hides_area_emitters`: the scene has area lights and hide_emitters (camera rays pass through them)."""
     materials = buffers.materials

@@ -14,7 +14,8 @@ The export is meant to make Mitsuba do exactly the work spectrace does, so that 
   entry; spectrace's diffuse reflects on both faces, so it becomes `twosided` around `diffuse`; Mitsuba's `area`
   emitter is one-sided toward the face normal, as spectrace's default;
 - camera: the same origin/target/up (Mitsuba's `lookat` puts image-right along forward x up, as spectrace does),
-  fov and fov_axis; a box pixel filter, because spectrace averages samples uniformly inside each pixel;
+  fov and fov_axis (a thin lens's aperture and focus; an orthographic view's width as to_world's scale); the
+  scene's pixel filter (Mitsuba's filters have fixed radii: another radius is refused);
 - film: `hdrfilm` with pixel_format "xyz". Both renderers estimate ∫ L (x̄, ȳ, z̄) dλ with the CIE 1931 2°
   functions on 360-830 nm and the same wavelength pdf, but divide by different constants: spectrace by ∫ ȳ dλ of
   its table (trapezoid rule, 106.857), Mitsuba 3 by its fixed MI_CIE_Y_NORMALIZATION (1/106.750), so Mitsuba's
@@ -173,10 +174,7 @@ def scene_to_mitsuba_dict(
             "hide_emitters": bool(scene.hide_emitters or scene.hide_environment),
         },
         "sensor": {
-            "type": "perspective",
-            "fov": float(camera.fov_degrees),
-            "fov_axis": camera.fov_axis,
-            "to_world": _lookat(camera.origin, camera.target, camera.up),
+            **_sensor(scene),
             # Mitsuba's own default (0.01) where ours is 0: it needs a positive plane.
             **({"near_clip": float(camera.near_clip)} if camera.near_clip > 0.0 else {}),
             "sampler": {"type": sampler, "sample_count": int(spp or scene.spp)},
@@ -185,7 +183,7 @@ def scene_to_mitsuba_dict(
                 "width": int(scene.width),
                 "height": int(scene.height),
                 "pixel_format": "xyz",
-                "rfilter": {"type": "box"},
+                "rfilter": _rfilter(scene),
             },
         },
     }
@@ -239,6 +237,37 @@ def _transform(matrix: np.ndarray):
     import mitsuba as mi  # the caller has chosen a variant
 
     return mi.ScalarTransform4f(np.asarray(matrix, float).tolist())
+
+
+def _sensor(scene: Scene) -> dict:
+    """The camera as a Mitsuba 3 sensor: perspective, thinlens, or orthographic (whose view Mitsuba scales by
+    to_world from [-1, 1] across)."""
+    camera = scene.camera
+    to_world = _lookat(camera.origin, camera.target, camera.up)
+    if camera.type == "orthographic":
+        import mitsuba as mi
+
+        half = float(camera.view_width) / 2.0
+        return {"type": "orthographic", "to_world": to_world @ mi.ScalarTransform4f().scale([half, half, 1.0])}
+    if camera.type not in ("perspective", "thinlens"):
+        raise _refuse(f"camera '{camera.type}' (Mitsuba 3 has no such sensor)", scene)
+    sensor = {"type": camera.type, "fov": float(camera.fov_degrees), "fov_axis": camera.fov_axis, "to_world": to_world}
+    if camera.type == "thinlens":
+        sensor |= {"aperture_radius": float(camera.aperture_radius), "focus_distance": float(camera.focus_distance)}
+    return sensor
+
+
+def _rfilter(scene: Scene) -> dict:
+    """The pixel filter as Mitsuba's rfilter, whose radii are fixed (tent 1, Gaussian 4σ, Mitchell 2)."""
+    f = scene.pixel_filter
+    fixed = {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * f.stddev, "mitchell": 2.0}[f.type]
+    if abs(f.support - fixed) > 1e-9 * fixed:
+        raise _refuse(f"a {f.type} filter of radius {f.support:g} (Mitsuba's is {fixed:g})", scene)
+    if f.type == "gaussian":
+        return {"type": "gaussian", "stddev": float(f.stddev)}
+    if f.type == "mitchell":
+        return {"type": "mitchell", "B": float(f.b), "C": float(f.c)}
+    return {"type": f.type}
 
 
 def _lookat(origin, target, up):

@@ -42,6 +42,7 @@ from typing import overload
 
 import numpy as np
 
+from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
 from spectrace.interop.mitsuba_tree import Element, SceneTree, element_error, read_input_file, read_scene
@@ -67,12 +68,15 @@ TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
 # one BSDF too, and become keys of its material (spectrace.materials.surface): normal_map, bump_map, opacity.
 SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
+# Mitsuba sensor plugin → spectrace camera type, from the cameras' modules (spectrace.cameras).
+CAMERA_PLUGINS = {plugin: name for name, module in CAMERAS.items() for plugin in module.MITSUBA_PLUGINS}
+_SENSOR_PLUGINS = tuple(CAMERA_PLUGINS)
 SUPPORTED = {
     "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),
-    "sensor": ("perspective",),
+    "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm",),
     "integrator": ("path", "direct", "volpath", "volpathmis", "moment"),
     "medium": ("homogeneous",),
@@ -1137,7 +1141,8 @@ class MitsubaImporter:
         return None
 
     def sensor(self, element: Element, data: dict) -> None:
-        if self.kind(element) != "perspective":
+        kind = self.kind(element)
+        if kind not in _SENSOR_PLUGINS:
             self.unsupported_object(element)
             return
         properties = self.properties(element)
@@ -1163,12 +1168,9 @@ class MitsubaImporter:
                     film_properties.understood(key)
                     self.unsupported_plugin(film, f" with {_shown(key)}")
             rfilter = next(iter(self.nested(film_properties, "rfilter")), None)
-            if rfilter is not None and rfilter.get("type") != "box":
-                self.notes.append(
-                    f"{self.at(rfilter)}: reconstruction filter '{_shown(rfilter.get('type') or '')}' "
-                    "not imported: spectrace averages the samples inside each pixel (a box filter)"
-                )
-        data["film"] = {"width": width, "height": height}
+        else:
+            rfilter = None
+        data["film"] = {"width": width, "height": height, "filter": self.pixel_filter(rfilter)}
         matrix = self.to_world(properties)
         linear = matrix[:3, :3]
         if not np.linalg.det(linear) > 0:
@@ -1178,12 +1180,30 @@ class MitsubaImporter:
         forward = linear @ [0.0, 0.0, 1.0]
         up = linear @ [0.0, 1.0, 0.0]
         data["camera"] = {
+            "type": CAMERA_PLUGINS[kind],
             "origin": origin.tolist(),
             "target": (origin + forward / np.linalg.norm(forward)).tolist(),
             "up": (up / np.linalg.norm(up)).tolist(),
-            "fov": self.fov_x(properties, width / height, element),
-            "fov_axis": "x",
         }
+        if kind == "orthographic":
+            # Mitsuba's view spans [-1, 1] along camera x and [-1/aspect, 1/aspect] along y, then to_world scales it.
+            half_x, half_y = np.linalg.norm(linear @ [1.0, 0.0, 0.0]), np.linalg.norm(up)
+            if not math.isclose(half_x, half_y, rel_tol=1e-6):
+                self.unsupported_plugin(element, " whose to_world scales x and y differently")
+                return
+            data["camera"]["view_width"] = 2.0 * float(half_x)
+        else:
+            data["camera"]["fov"] = self.fov_x(properties, width / height, element)
+            data["camera"]["fov_axis"] = "x"
+        if kind == "thinlens":
+            if "aperture_radius" not in properties:
+                raise self.fail(element, "thinlens needs aperture_radius (Mitsuba 3 requires it too)", "type")
+            aperture = self.number(properties["aperture_radius"])
+            # Mitsuba's default focus is 10 000 scene units away: as good as infinity for a scene of metres.
+            focus = self.number(properties["focus_distance"]) if "focus_distance" in properties else 1e4
+            if not aperture >= 0.0 or not focus > 0.0:
+                raise self.fail(element, "thinlens needs aperture_radius >= 0 and focus_distance > 0", "type")
+            data["camera"] |= {"aperture_radius": aperture, "focus_distance": focus}
         if "near_clip" in properties:
             data["camera"]["near_clip"] = self.number(properties["near_clip"])
             if not data["camera"]["near_clip"] >= 0.0:
@@ -1205,6 +1225,36 @@ class MitsubaImporter:
                     f"{self.at(sampler)}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
                     "spectrace uses its own sampler (same sample count)"
                 )
+
+    def pixel_filter(self, rfilter: Element | None) -> dict:
+        """The film's filter: Mitsuba 3's own default, its Gaussian of σ = 0.5, when the file names none."""
+        if rfilter is None:
+            return {"type": "gaussian", "stddev": 0.5}
+        kind = rfilter.get("type") or ""
+        properties = self.properties(rfilter)
+        if kind == "box":
+            return {"type": "box"}
+        if kind == "tent":
+            return {"type": "tent"}  # radius 1 in Mitsuba, fixed
+        if kind == "gaussian":
+            stddev = self.number(properties["stddev"]) if "stddev" in properties else 0.5
+            if not 0.0 < stddev <= 4.0:
+                raise self.fail(rfilter, f"stddev must lie in (0, 4] pixels, got {stddev:g}", "type")
+            return {"type": "gaussian", "stddev": stddev}
+        if kind == "mitchell":
+            table: dict[str, object] = {"type": "mitchell", "radius": 2.0}
+            for key in ("B", "C"):
+                if key in properties:
+                    value = self.number(properties[key])
+                    if not 0.0 <= value <= 1.0:
+                        raise self.fail(rfilter, f"{key} must lie in [0, 1], got {value:g}", "type")
+                    table[key.lower()] = value
+            return table
+        self.notes.append(
+            f"{self.at(rfilter)}: reconstruction filter '{_shown(kind)}' not imported: spectrace has box, tent, "
+            "gaussian and mitchell; a box filter used"
+        )
+        return {"type": "box"}
 
     def fov_x(self, properties: dict[str, Element], aspect: float, element: Element) -> float:
         """Horizontal field of view in degrees, as Mitsuba derives it from fov + fov_axis or focal_length."""

@@ -484,6 +484,7 @@ class PbrtScene:
     camera: Entity | None = None
     camera_from_world: np.ndarray = field(default_factory=lambda: np.eye(4))
     film: Entity | None = None
+    pixel_filter: Entity | None = None
     sampler: Entity | None = None
     integrator: Entity | None = None
     shapes: list[Shape] = field(default_factory=list)
@@ -527,7 +528,6 @@ def _saved(state: _State, directive: str, location: Location) -> _State:
 
 _IGNORED = {
     # Directives that change nothing spectrace imports, reported once each with what they would have changed.
-    "PixelFilter": "spectrace averages a pixel's samples (a box filter)",
     "Accelerator": "spectrace builds its own BVH",
     "TransformTimes": "motion blur is not imported",
     "ActiveTransform": "motion blur is not imported",
@@ -600,6 +600,8 @@ def read_scene(path: str | Path) -> PbrtScene:
             named_systems["camera"] = np.linalg.inv(state.ctm)
         elif name in ("Film", "Sampler", "Integrator"):
             setattr(scene, name.lower(), entity(directive, arguments[0]))
+        elif name == "PixelFilter":
+            scene.pixel_filter = entity(directive, arguments[0])
         elif name == "WorldBegin":
             scene.has_world = True
             state.ctm = np.eye(4)

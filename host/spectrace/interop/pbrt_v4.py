@@ -26,7 +26,7 @@ Conventions it bridges (each checked by tests/interop/test_pbrt_import.py):
 
 Anything the file states that is not imported is reported: a parameter no mapping read, or a directive spectrace
 has no counterpart for, as a warning naming file:line (an error with strict=True); an entity of a type spectrace
-cannot represent (an orthographic camera, a `mix` material, a goniometric light, a `curve` shape) as an error
+cannot represent (a realistic camera, a `mix` material, a goniometric light, a `curve` shape) as an error
 naming file:line.
 """
 
@@ -297,8 +297,11 @@ class PbrtImporter:
     def camera(self, data: dict) -> None:
         scene = self.scene
         camera = scene.camera or Entity("Camera", "perspective", [], Location(self.source, 1))
-        if camera.kind != "perspective":
-            raise error(camera.location, f"camera '{shown(camera.kind)}': spectrace has only a perspective camera")
+        if camera.kind not in ("perspective", "orthographic"):
+            raise error(
+                camera.location,
+                f"camera '{shown(camera.kind)}': spectrace imports pbrt's perspective and orthographic cameras",
+            )
         width, height = PBRT_DEFAULT_FILM
         film = scene.film
         if film is not None:
@@ -324,25 +327,55 @@ class PbrtImporter:
         forward = self.direction(world_from_camera, [0.0, 0.0, 1.0])
         up = self.direction(world_from_camera, [0.0, 1.0, 0.0])
         aspect = self.one(camera, "frameaspectratio", width / height)
-        if (window := camera.find("screenwindow")) is not None:
-            self.warn(window.location, '"screenwindow" not imported (the image spans pbrt\'s default window)')
-        fov = self.one(camera, "fov", PBRT_DEFAULT_FOV)
-        if not 0.0 < fov < 180.0:
-            raise error(camera.location, f"fov must lie in (0, 180) degrees, got {fov:g}")
-        if self.one(camera, "lensradius", 0.0) > 0.0:
-            self.warn(
-                camera.location, '"lensradius" not imported: spectrace\'s camera is a pinhole (no depth of field)'
-            )
-        camera.find("focaldistance")
-        data["camera"] = {
-            "origin": origin,
-            "target": (np.asarray(origin) + np.asarray(forward)).tolist(),
-            "up": up,
-            "fov": fov,
-            # pbrt's fov spans the shorter side of the frame.
-            "fov_axis": "y" if aspect > 1.0 else "x",
-        }
-        data["film"] = {"width": width, "height": height}
+        # pbrt's default screen window spans [-1, 1] along the frame's shorter side.
+        default_window = [-aspect, aspect, -1.0, 1.0] if aspect > 1.0 else [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect]
+        window = camera.find("screenwindow")
+        lens_radius = self.one(camera, "lensradius", 0.0)
+        focus = self.one(camera, "focaldistance", 1e6)  # pbrt-v4's default
+        if camera.kind == "orthographic":
+            x0, x1, y0, y1 = self.floats(camera, "screenwindow", default_window) or default_window
+            if not (x1 > x0 and y1 > y0):
+                raise error(camera.location, "screenwindow must have x0 < x1 and y0 < y1")
+            if not math.isclose((x1 - x0) / (y1 - y0), width / height, rel_tol=1e-4):
+                self.warn(
+                    camera.location,
+                    "the screen window's aspect ratio differs from the film's: the window's width is kept",
+                )
+            # An off-centre window moves the view's centre in the camera's plane (pbrt's camera x is image right).
+            centre = self.point(world_from_camera, [(x0 + x1) / 2.0, (y0 + y1) / 2.0, 0.0])
+            data["camera"] = {
+                "type": "orthographic",
+                "origin": centre,
+                "target": (np.asarray(centre) + np.asarray(forward)).tolist(),
+                "up": up,
+                "view_width": x1 - x0,
+            }
+            if lens_radius > 0.0:
+                self.warn(camera.location, '"lensradius" not imported: spectrace\'s orthographic camera is sharp')
+        else:
+            if window is not None:
+                self.warn(window.location, '"screenwindow" not imported (the image spans pbrt\'s default window)')
+            fov = self.one(camera, "fov", PBRT_DEFAULT_FOV)
+            if not 0.0 < fov < 180.0:
+                raise error(camera.location, f"fov must lie in (0, 180) degrees, got {fov:g}")
+            data["camera"] = {
+                "origin": origin,
+                "target": (np.asarray(origin) + np.asarray(forward)).tolist(),
+                "up": up,
+                "fov": fov,
+                # pbrt's fov spans the shorter side of the frame.
+                "fov_axis": "y" if aspect > 1.0 else "x",
+            }
+            if lens_radius > 0.0:
+                if not focus > 0.0:
+                    raise error(camera.location, f"focaldistance must be > 0, got {focus:g}")
+                data["camera"] = {
+                    "type": "thinlens",
+                    **data["camera"],
+                    "aperture_radius": lens_radius,
+                    "focus_distance": focus,
+                }
+        data["film"] = {"width": width, "height": height, "filter": self.pixel_filter()}
         # pbrt-v4's sensor scales the image by ISO/100 times the shutter's open time; spectrace's film exposure
         # (stops) scales its RGB the same way.
         iso = self.one(film, "iso", 100.0) if film is not None else 100.0
@@ -351,6 +384,40 @@ class PbrtImporter:
             raise error(camera.location, "iso and the shutter times give no exposure")
         if ratio != 1.0:
             data["film"]["exposure"] = math.log2(ratio)
+
+    def pixel_filter(self) -> dict:
+        """pbrt-v4's PixelFilter; its default, as pbrt-v4's, is the Gaussian of σ = 0.5 and radius 1.5."""
+        entity = self.scene.pixel_filter
+        kind = entity.kind if entity is not None else "gaussian"
+        defaults = {"box": 0.5, "gaussian": 1.5, "mitchell": 2.0, "triangle": 2.0}
+        if kind not in defaults:
+            assert entity is not None
+            self.warn(entity.location, f"pixel filter '{shown(kind)}' not imported: a Gaussian filter used")
+            kind = "gaussian"
+        radius = defaults[kind]
+        if entity is not None and kind == entity.kind:
+            radius = self.one(entity, "xradius", radius)
+            if self.one(entity, "yradius", radius) != radius:
+                self.warn(entity.location, "yradius differs from xradius: spectrace's filters take one radius (x's)")
+        if kind == "box":
+            if radius != 0.5:
+                assert entity is not None
+                self.warn(entity.location, "a box filter's radius other than 0.5 is not imported")
+            return {"type": "box"}
+        if not 0.0 < radius <= 16.0:
+            assert entity is not None
+            raise error(entity.location, f"the filter's radius must lie in (0, 16] pixels, got {radius:g}")
+        if kind == "triangle":
+            return {"type": "tent", "radius": radius}
+        if kind == "gaussian":
+            sigma = self.one(entity, "sigma", 0.5) if entity is not None else 0.5
+            if not 0.0 < sigma <= 4.0:
+                assert entity is not None
+                raise error(entity.location, f"sigma must lie in (0, 4] pixels, got {sigma:g}")
+            return {"type": "gaussian", "stddev": sigma, "radius": radius}
+        b = self.one(entity, "B", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
+        c = self.one(entity, "C", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
+        return {"type": "mitchell", "radius": radius, "b": b, "c": c}
 
     def sampler(self, data: dict) -> None:
         sampler = self.scene.sampler
@@ -1097,7 +1164,13 @@ class PbrtImporter:
             raise error(extra.location, "a second infinite light; spectrace takes one environment light")
         if not shapes and not lights:
             raise SpectraceError("the scene has no shapes or lights spectrace imports", where=str(self.source))
-        for entity in (self.scene.camera, self.scene.film, self.scene.sampler, self.scene.integrator):
+        for entity in (
+            self.scene.camera,
+            self.scene.film,
+            self.scene.pixel_filter,
+            self.scene.sampler,
+            self.scene.integrator,
+        ):
             if entity is not None:
                 self.read.add(id(entity))
         for entity in self.scene.entities:

@@ -8,7 +8,9 @@ from pathlib import Path
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
+from spectrace import pixel_filters
 from spectrace.aovs import parse_aovs
+from spectrace.cameras import thinlens
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
@@ -553,14 +555,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         resolver.named_spectrum(name, f"spectra.{name}")
     for name in spec.textures:
         resolver.named_texture(name, f"textures.{name}")
-    camera = Camera(
-        origin=spec.camera.origin,
-        target=spec.camera.target,
-        up=spec.camera.up,
-        fov_degrees=spec.camera.fov,
-        fov_axis=spec.camera.fov_axis,
-        near_clip=spec.camera.near_clip,
-    )
+    camera = camera_from_spec(spec.camera)
     _check_camera(camera, path)
     return Scene(
         camera=camera,
@@ -572,6 +567,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         max_depth=spec.integrator.max_depth,
         exposure=spec.film.exposure,
         aovs=parse_aovs(spec.film.aovs),
+        pixel_filter=pixel_filters.from_spec(spec.film.filter),
         rr_depth=spec.integrator.rr_depth,
         hide_environment=spec.integrator.hide_environment,
         hide_emitters=spec.integrator.hide_emitters,
@@ -580,6 +576,22 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         sampler=spec.sampler.type,
         source=path,
     )
+
+
+def camera_from_spec(spec) -> Camera:
+    """The model camera of a `[camera]` table (any type: spectrace.cameras)."""
+    keys = spec.model_dump()
+    fields: dict = {"origin": spec.origin, "target": spec.target, "up": spec.up, "near_clip": spec.near_clip}
+    fields["type"] = spec.type
+    if "fov" in keys:
+        fields["fov_degrees"], fields["fov_axis"] = spec.fov, spec.fov_axis
+    if spec.type == "thinlens":
+        fields["aperture_radius"] = thinlens.aperture_radius(spec.aperture_radius, spec.f_number, spec.focal_length)
+        distance = float(np.linalg.norm(np.subtract(spec.target, spec.origin)))
+        fields["focus_distance"] = spec.focus_distance if spec.focus_distance is not None else distance
+    if spec.type == "orthographic":
+        fields["view_width"] = spec.view_width
+    return Camera(**fields)
 
 
 def _check_camera(camera: Camera, path: Path) -> None:

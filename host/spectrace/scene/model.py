@@ -20,6 +20,7 @@ from spectrace.lights.envmap import EnvironmentMap  # noqa: F401
 from spectrace.lights.point import PointLight  # noqa: F401
 from spectrace.lights.spot import SpotLight  # noqa: F401
 from spectrace.materials.base import Material
+from spectrace.pixel_filters import BOX_FILTER, PixelFilter
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
@@ -28,33 +29,34 @@ SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
 DEFAULT_SAMPLER: SamplerType = "sobol"
 
 
+CameraType = Literal["perspective", "thinlens", "orthographic", "equirectangular"]
+
+
 @dataclass(frozen=True)
 class Camera:
+    """A camera of any type (spectrace.cameras: each type's module says which fields it reads)."""
+
     origin: tuple[float, float, float]
     target: tuple[float, float, float]
     up: tuple[float, float, float] = (0.0, 1.0, 0.0)
-    fov_degrees: float = 45.0
+    fov_degrees: float = 45.0  # perspective, thinlens
     fov_axis: Literal["x", "y"] = "x"
     near_clip: float = 0.0  # distance along the view axis before which nothing is seen (Mitsuba's near_clip)
+    type: CameraType = "perspective"
+    aperture_radius: float = 0.0  # thinlens: scene units
+    focus_distance: float = 1.0  # thinlens: scene units along the view axis
+    view_width: float = 2.0  # orthographic: scene units across the image
 
     def basis(self, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """origin, forward, right·tan(fov_x/2), up·tan(fov_y/2) for an image of width/height = aspect_ratio.
+        """origin, forward, and the right and up vectors the kernels read for an image of width/height =
+        aspect_ratio (a perspective camera's: right·tan(fov_x/2), up·tan(fov_y/2)).
 
         right = forward × up, so with +y up and +z forward the image's right is world -x (as in the Cornell box
         data, whose red wall at x ≈ 550 mm appears on the left).
         """
-        origin = np.asarray(self.origin, float)
-        forward = np.asarray(self.target, float) - origin
-        forward /= np.linalg.norm(forward)
-        right = np.cross(forward, np.asarray(self.up, float))
-        right /= np.linalg.norm(right)
-        up = np.cross(right, forward)
-        tan_half = np.tan(np.radians(self.fov_degrees) / 2.0)
-        if self.fov_axis == "x":
-            tan_x, tan_y = tan_half, tan_half / aspect_ratio
-        else:
-            tan_x, tan_y = tan_half * aspect_ratio, tan_half
-        return origin, forward, right * tan_x, up * tan_y
+        from spectrace.cameras import CAMERAS
+
+        return CAMERAS[self.type].basis(self, aspect_ratio)
 
 
 # Materials and lights live in their own modules (spectrace.materials, spectrace.lights), each with its parameter
@@ -108,6 +110,7 @@ class Scene:
     rr_depth: int = 5
     hide_environment: bool = False  # camera rays that leave the scene see black
     hide_emitters: bool = False  # Mitsuba 3's hide_emitters: the environment hidden, area lights seen through
+    pixel_filter: PixelFilter = BOX_FILTER  # the pixel's reconstruction filter (spectrace.pixel_filters)
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
     spp: int = 16
     seed: int = 0

@@ -6,6 +6,7 @@ and files on disk are resolved by scene.loader, which reports errors with the sa
 
 import functools
 import operator
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Protocol, TypeAlias
 
 from pydantic import (
@@ -20,9 +21,12 @@ from pydantic import (
     model_validator,
 )
 
+from spectrace.cameras import CAMERAS
+from spectrace.cameras import shared as camera_shared
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
 from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
+from spectrace.pixel_filters import FILTERS
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
@@ -34,52 +38,6 @@ Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class CameraSpec(Strict):
-    type: Literal["perspective"] = "perspective"
-    origin: Vector3
-    target: Vector3
-    up: Vector3 = (0.0, 1.0, 0.0)
-    fov: FiniteFloat = Field(description="full field of view in degrees, along fov_axis")
-    fov_axis: Literal["x", "y"] = "x"
-    near_clip: FiniteFloat = Field(
-        default=0.0, ge=0.0, description="distance along the view axis before which nothing is seen"
-    )
-
-    @field_validator("fov")
-    @classmethod
-    def _fov_in_range(cls, value: float) -> float:
-        if not 0.0 < value < 180.0:
-            raise ValueError(f"fov must lie in (0, 180) degrees, got {value}")
-        return value
-
-
-class FilmSpec(Strict):
-    width: int = Field(gt=0)
-    height: int = Field(gt=0)
-    exposure: FiniteFloat = Field(
-        default=0.0,
-        ge=-limits.MAX_EXPOSURE_STOPS,
-        le=limits.MAX_EXPOSURE_STOPS,
-        description="stops: RGB output x 2**exposure",
-    )
-    aovs: list[Literal["albedo", "normal", "depth", "position", "variance"]] = Field(
-        default_factory=list, description="AOVs written beside the image (EXR channels)"
-    )
-
-    @field_validator("width", "height")
-    @classmethod
-    def _side_within_limit(cls, value: int, info) -> int:
-        if problem := limits.film_side_problem(info.field_name, value):
-            raise ValueError(problem)
-        return value
-
-    @model_validator(mode="after")
-    def _pixels_within_limit(self) -> "FilmSpec":
-        if problem := limits.film_size_problem(self.width, self.height):
-            raise ValueError(problem)
-        return self
 
 
 class IntegratorSpec(Strict):
@@ -206,6 +164,7 @@ _ANNOTATIONS = {
     "uv": FiniteFloat | tuple[FiniteFloat, FiniteFloat],
     "wrap": Literal["repeat", "mirror", "clamp"],
     "filter": Literal["nearest", "bilinear", "trilinear"],
+    "axis": Literal["x", "y"],
 }
 
 
@@ -461,6 +420,90 @@ if TYPE_CHECKING:
     LightSpec: TypeAlias = TableSpec
 else:
     LightSpec = Annotated[functools.reduce(operator.or_, LIGHT_SPECS.values()), Field(discriminator="type")]
+
+
+def _camera_spec(module) -> type[Strict]:
+    """A camera type's keys: the shared ones (spectrace.cameras.shared), then its module's."""
+    table = SimpleNamespace(
+        NAME=module.NAME,
+        PARAMETERS=camera_shared.PARAMETERS + module.PARAMETERS,
+        SPEC_CHECKS=getattr(module, "SPEC_CHECKS", ()),
+        __doc__=module.__doc__,
+    )
+    model = _spec_model(table, f"{module.NAME.capitalize()}CameraSpec", type_default=module.NAME)
+    checked = [p for p in table.PARAMETERS if p.type == "float" and p.range is not None and not p.schema_range]
+    if not checked:
+        return model
+
+    def in_range(cls, value, info):
+        parameter = next(p for p in checked if p.name == info.field_name)
+        if value is not None and (problem := parameter.range_problem(value)):
+            raise ValueError(problem)
+        return value
+
+    validator: Any = field_validator(*(p.name for p in checked))(classmethod(in_range))
+    return create_model(model.__name__, __base__=model, __validators__={"_in_range": validator})
+
+
+def _type_or(default: str):
+    """The discriminator of a table whose `type` may be left out (then `default`)."""
+
+    def tag(value) -> str:
+        return value.get("type", default) if isinstance(value, dict) else getattr(value, "type", default)
+
+    return Discriminator(tag)
+
+
+CAMERA_SPECS = {name: _camera_spec(module) for name, module in CAMERAS.items()}
+_FILTER_SPECS = {
+    name: create_model(
+        f"{name.capitalize()}FilterSpec",
+        __base__=Strict,
+        **{"type": (Literal[name], ...)} | {parameter.name: _field(parameter) for parameter in parameters},
+    )
+    for name, parameters in FILTERS.items()
+}
+if TYPE_CHECKING:
+    CameraSpec: TypeAlias = TableSpec
+    PixelFilterSpec: TypeAlias = Any
+else:
+    CameraSpec = Annotated[
+        functools.reduce(operator.or_, (Annotated[m, Tag(n)] for n, m in CAMERA_SPECS.items())),
+        _type_or("perspective"),
+    ]
+    PixelFilterSpec = (
+        Literal[tuple(FILTERS)]
+        | Annotated[functools.reduce(operator.or_, _FILTER_SPECS.values()), Field(discriminator="type")]
+        | None
+    )
+
+
+class FilmSpec(Strict):
+    width: int = Field(gt=0)
+    height: int = Field(gt=0)
+    exposure: FiniteFloat = Field(
+        default=0.0,
+        ge=-limits.MAX_EXPOSURE_STOPS,
+        le=limits.MAX_EXPOSURE_STOPS,
+        description="stops: RGB output x 2**exposure",
+    )
+    filter: PixelFilterSpec = Field(default=None, description="the pixel's reconstruction filter (default box)")
+    aovs: list[Literal["albedo", "normal", "depth", "position", "variance"]] = Field(
+        default_factory=list, description="AOVs written beside the image (EXR channels)"
+    )
+
+    @field_validator("width", "height")
+    @classmethod
+    def _side_within_limit(cls, value: int, info) -> int:
+        if problem := limits.film_side_problem(info.field_name, value):
+            raise ValueError(problem)
+        return value
+
+    @model_validator(mode="after")
+    def _pixels_within_limit(self) -> "FilmSpec":
+        if problem := limits.film_size_problem(self.width, self.height):
+            raise ValueError(problem)
+        return self
 
 
 class SceneSpec(Strict):

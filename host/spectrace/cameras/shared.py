@@ -1,0 +1,51 @@
+"""The keys every camera takes, and the frame they set (origin, forward, and image right = forward × up)."""
+
+import numpy as np
+
+from spectrace.materials.parameters import REQUIRED, Parameter, Range
+
+ORIGIN = Parameter("origin", "vector", "scene units", REQUIRED, doc="where the camera is (the lens's centre)")
+TARGET = Parameter("target", "vector", "scene units", REQUIRED, doc="a point the camera looks at")
+UP = Parameter("up", "vector", "", (0.0, 1.0, 0.0), doc="the image's up direction (need not be orthogonal)")
+NEAR_CLIP = Parameter(
+    "near_clip",
+    "float",
+    "scene units",
+    0.0,
+    Range(0.0),
+    doc="distance along the view axis before which nothing is seen",
+)
+PARAMETERS = (ORIGIN, TARGET, UP, NEAR_CLIP)
+
+FOV = Parameter(
+    "fov",
+    "float",
+    "degrees",
+    REQUIRED,
+    Range(0.0, 180.0, low_open=True, high_open=True),
+    doc="full field of view along fov_axis",
+    api_name="fov_degrees",
+    schema_range=False,  # checked by the schema's validator, whose message names the range in degrees
+)
+FOV_AXIS = Parameter("fov_axis", "axis", "", "x", doc='"x" or "y": the image axis fov spans', type_doc='"x" or "y"')
+
+
+def frame(camera) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """origin, unit forward, unit right = forward × up, unit up (orthogonalised)."""
+    origin = np.asarray(camera.origin, float)
+    forward = np.asarray(camera.target, float) - origin
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, np.asarray(camera.up, float))
+    right /= np.linalg.norm(right)
+    return origin, forward, right, np.cross(right, forward)
+
+
+def perspective_basis(camera, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """origin, forward, right·tan(fov_x/2), up·tan(fov_y/2) for an image of width/height = aspect_ratio."""
+    origin, forward, right, up = frame(camera)
+    tan_half = np.tan(np.radians(camera.fov_degrees) / 2.0)
+    if camera.fov_axis == "x":
+        tan_x, tan_y = tan_half, tan_half / aspect_ratio
+    else:
+        tan_x, tan_y = tan_half * aspect_ratio, tan_half
+    return origin, forward, right * tan_x, up * tan_y
