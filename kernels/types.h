@@ -59,6 +59,19 @@ typedef struct {
     int flip_normals;     /* 1: the front (normal, emitting side) faces the other way: inward, the disk's −z */
 } AnalyticShape;
 
+/* A placed copy of an instanced object (kernels/scene.cl, "Instances"): the object's triangles are stored once, at
+ * slots [first_slot, first_slot + triangle count) after the scene's own triangles and analytic shapes, under their
+ * own 4-wide BVH; an instance adds only this row and a leaf of the top-level BVH over the instances' world boxes. */
+typedef struct {
+    float4 to_world[3];   /* rows of the object-to-world affine map: world coordinate i = dot(to_world[i], (p, 1)) */
+    float4 to_object[3];  /* rows of its inverse (rays enter object space through it; normals leave by its
+                             transpose, M⁻ᵀ) */
+    int nodes;            /* float4 offset of the object's BVH in instance_nodes */
+    int object;           /* which object (the host's numbering; the kernels do not read it) */
+    int pad0;
+    int pad1;
+} Instance;
+
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already
  * multiplied by the scene's `scale`, in 1/scene unit. */
 typedef struct {
@@ -178,7 +191,7 @@ typedef struct {
     int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
     int hide_environment;    /* 1: camera rays that leave the scene see black (Mitsuba's hide_emitters) */
     int shape_count;         /* analytic shapes (AnalyticShape rows) */
-    int pad0;
+    int instance_count;      /* placed objects (Instance rows) */
     int pad1;
     int pad2;
 } RenderParams;

@@ -40,5 +40,6 @@ def scene_feature_defines(buffers: SceneBuffers) -> dict[str, int]:
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or bump_maps),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_SHAPES": int(buffers.shape_count > 0),
+        "SCENE_HAS_INSTANCES": int(buffers.instance_count > 0),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
     }
