@@ -73,6 +73,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
+        "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
@@ -261,6 +262,29 @@ def _beckmann_scene() -> spectrace.Scene:
     return replace(_environment_map_scene(), shapes=shapes)
 
 
+def _instanced_scene() -> spectrace.Scene:
+    """A textured, bump-mapped, smooth-shaded object placed three times (one mirrored) under an area light."""
+    rng = np.random.default_rng(9)
+    ball = spectrace.shape(
+        "sphere", spectrace.plastic(0.5, bump_map=spectrace.bitmap(rng.uniform(0, 1, (4, 4)))), tessellated=True
+    )
+    box = spectrace.shape(
+        "cube",
+        spectrace.diffuse(spectrace.bitmap(rng.uniform(0, 1, (4, 4, 3)))),
+        transform=[{"scale": 0.3}, {"translate": [1.0, 0, 0]}],
+    )
+    obj = spectrace.instanced_object([ball, box])
+    placements = [
+        [{"scale": 0.5}, {"translate": [-1, 0, 0.5]}],
+        [{"scale": [0.6, 0.3, 0.5]}, {"rotate": {"axis": [0, 0, 1], "angle": 60}}, {"translate": [0.8, 0.3, 0.5]}],
+        [{"matrix": [[-0.4, 0, 0, 0], [0, 0.4, 0, 0], [0, 0, 0.4, 0], [0, 0, 0, 1]]}, {"translate": [0, -0.8, 0.4]}],
+    ]
+    base = _surface_detail_scene(cut_out=False)
+    return replace(
+        base, shapes=[base.shapes[0], base.shapes[2]], instances=[spectrace.instance(obj, p) for p in placements]
+    )
+
+
 SCENES = {
     "cornell_box": lambda: _bundled("cornell_box"),
     "material_showcase": lambda: _bundled("material_showcase"),
@@ -277,6 +301,7 @@ SCENES = {
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
     "beckmann_and_nonlinear_plastic": _beckmann_scene,
     "analytic_shapes": _analytic_shapes_scene,
+    "instances": _instanced_scene,
 }
 
 
