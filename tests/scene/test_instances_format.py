@@ -56,8 +56,8 @@ transform = [{ rotate = { axis = [0, 1, 0], angle = 90 } }, { translate = [2, 0,
             "undefined object 'pots' (did you mean 'post'?)",
         ),
         (
-            '[objects.lamp]\nshapes = [{ type = "rectangle", material = "grey", emitter = { radiance = { value = 1 } } }]'
-            "\n",
+            '[objects.lamp]\nshapes = [{ type = "rectangle", material = "grey",'
+            " emitter = { radiance = { value = 1 } } }]\n",
             '[[instances]]\nobject = "lamp"\n',
             "objects.lamp.shapes[0].emitter",
             "emitters cannot be instanced",
