@@ -326,7 +326,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         shapes=shape_rows,
         shape_count=len(analytic),
         shape_nodes=shape_bvh.nodes,
-        bvh_seconds=bvh_seconds + nodes_seconds,
+        bvh_seconds=bvh_seconds + nodes_seconds + objects.seconds,
         bvh_peak_bytes=None if bvh_peak is None or nodes_peak is None else max(bvh_peak, nodes_peak),
         instances=instance_rows,
         instance_count=len(scene.instances),
@@ -360,6 +360,7 @@ class _ObjectTriangles:
         self.object_of = [object_number[id(instance.object)] for instance in instances]
         self.bvhs: list[BVH] = []
         self.first: list[int] = []
+        self.seconds = 0.0  # building the objects' BVHs and the top level, for the acceleration structure's cost
         parts: dict[str, list[np.ndarray]] = {k: [] for k in ("vertices", "uvs", "normals", "info")}
         slot, smooth_slot = first_slot, 0
         boxes = []
@@ -402,7 +403,9 @@ class _ObjectTriangles:
                 raise SpectraceError(f"object '{obj.name}' has no triangles")
             v0, v1, v2, uv = (np.concatenate(x) for x in (v0s, v1s, v2s, uvs))
             corner = _corner_normals(normals, [len(v) for v in v0s])
+            started = perf_counter()
             bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
+            self.seconds += perf_counter() - started
             order = bvh.prim_order
             v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
             rows = np.concatenate(info)[order]
@@ -445,6 +448,7 @@ class _ObjectTriangles:
         nodes, then each object's node buffer with its leaves' slots moved to where its triangles are stored."""
         if not self.instances:
             return np.zeros(1, INSTANCE_DTYPE), _empty_bvh().nodes.view(np.float32).copy()
+        started = perf_counter()
         boxes = self.instance_boxes
         assert boxes is not None
         top = build_bvh(boxes[:, 0], boxes[:, 1], boxes[:, 0], max_leaf_size=2)
@@ -462,6 +466,7 @@ class _ObjectTriangles:
             float4s += len(buffer) // 4
         if float4s > np.iinfo(np.int32).max:
             raise SpectraceError("the instanced objects' BVHs are too large for 32-bit offsets")
+        self.seconds += perf_counter() - started
         rows = np.zeros(len(self.instances), INSTANCE_DTYPE)
         for row, i in enumerate(top.prim_order):
             matrix = np.asarray(self.instances[i].to_world, np.float64)
