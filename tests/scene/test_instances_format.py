@@ -83,3 +83,23 @@ def test_mistakes_name_the_key(tmp_path, objects, instances, where, message):
     text = str(error.value)
     assert where in text and message in text, text
     assert "\n" not in text
+
+
+def test_python_instances_are_checked_like_shapes():
+    import spectrace
+    from spectrace.scene import limits
+    from spectrace.scene.model import Instance
+
+    obj = spectrace.instanced_object([spectrace.shape("cube", spectrace.diffuse(0.5))], name="box")
+    camera = spectrace.Camera(origin=(0, 0, -5), target=(0, 0, 0))
+    for matrix, says in (
+        (np.full((4, 4), np.nan), "not a finite 4 x 4 matrix"),
+        (np.diag([1.0, 0.0, 1.0, 1.0]), "singular"),
+        (np.diag([1e38, 1e38, 1e38, 1.0]), "instance 0 ('far') places shape 'cube'"),
+    ):
+        scene = spectrace.Scene(camera=camera, width=4, height=4, shapes=[], instances=[Instance(obj, matrix, "far")])
+        assert says in (limits.scene_geometry_problem(scene) or ""), matrix
+    with pytest.raises(SpectraceError, match="emitters cannot be instanced"):
+        spectrace.instanced_object([spectrace.shape("cube", spectrace.diffuse(0.5), emitter=spectrace.area_emitter(1))])
+    with pytest.raises(SpectraceError, match="tessellated=True"):
+        spectrace.instanced_object([spectrace.shape("sphere", spectrace.diffuse(0.5))])
