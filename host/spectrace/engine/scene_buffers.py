@@ -433,15 +433,16 @@ class _ObjectTriangles:
         self.normals = np.concatenate(parts["normals"]) if parts["normals"] else np.zeros((0, 3, 4), np.float32)
         self.info = np.concatenate(parts["info"]) if self.objects else np.zeros(0, TRIANGLE_INFO_DTYPE)
         self.instance_boxes: np.ndarray | None = None
+        self.matrices = np.zeros((0, 4, 4))
         if instances:
-            world = []
-            for instance, k in zip(instances, self.object_of):
-                lo, hi = boxes[k]
-                corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-                matrix = np.asarray(instance.to_world, np.float64)
-                placed = corners @ matrix[:3, :3].T + matrix[:3, 3]
-                world.append((placed.min(axis=0), placed.max(axis=0)))
-            self.instance_boxes = np.array(world)
+            # Each instance's world box: the hull of its object's box corners under its map.
+            matrices = np.array([np.asarray(instance.to_world, np.float64) for instance in instances])
+            lo, hi = (np.array([boxes[k][side] for k in self.object_of]) for side in (0, 1))
+            choose = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)  # (8, 3)
+            corners = np.where(choose[None], hi[:, None, :], lo[:, None, :])  # (N, 8, 3)
+            placed = np.einsum("nij,nkj->nki", matrices[:, :3, :3], corners) + matrices[:, None, :3, 3]
+            self.instance_boxes = np.stack([placed.min(axis=1), placed.max(axis=1)], axis=1)
+            self.matrices = matrices
 
     def device_buffers(self, triangle_vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(Instance rows in the top-level BVH's leaf order, the instance node buffer): the top-level binary BVH's
@@ -467,13 +468,14 @@ class _ObjectTriangles:
         if float4s > np.iinfo(np.int32).max:
             raise SpectraceError("the instanced objects' BVHs are too large for 32-bit offsets")
         self.seconds += perf_counter() - started
+        order = top.prim_order
+        matrices = self.matrices[order]
         rows = np.zeros(len(self.instances), INSTANCE_DTYPE)
-        for row, i in enumerate(top.prim_order):
-            matrix = np.asarray(self.instances[i].to_world, np.float64)
-            rows[row]["to_world"] = matrix[:3]
-            rows[row]["to_object"] = np.linalg.inv(matrix)[:3]
-            rows[row]["nodes"] = offsets[self.object_of[i]]
-            rows[row]["object"] = self.object_of[i]
+        rows["to_world"] = matrices[:, :3]
+        rows["to_object"] = np.linalg.inv(matrices)[:, :3]
+        objects = np.asarray(self.object_of)[order]
+        rows["nodes"] = np.asarray(offsets)[objects]
+        rows["object"] = objects
         return rows, np.concatenate(chunks)
 
 

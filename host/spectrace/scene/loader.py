@@ -420,6 +420,7 @@ class _Resolver:
                     )
             objects[name] = InstancedObject(shapes=self.shapes(materials, o.shapes, key), name=name)
         instances = []
+        boxes: dict[str, np.ndarray] = {}
         for i, spec in enumerate(self.spec.instances):
             key = f"instances[{i}]"
             if spec.object not in objects:
@@ -434,7 +435,13 @@ class _Resolver:
                 with np.errstate(over="ignore", invalid="ignore"):
                     matrix = transform_matrix(steps, where=self.where(f"{key}.transform"))
             obj = objects[spec.object]
-            corners = np.concatenate([sh.mesh.vertices for sh in obj.shapes])
+            if spec.object not in boxes:  # the object's box corners: an affine map keeps the rest within them
+                points = np.concatenate([sh.mesh.vertices for sh in obj.shapes])
+                lo, hi = points.min(axis=0), points.max(axis=0)
+                boxes[spec.object] = np.array(
+                    [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+                )
+            corners = boxes[spec.object]
             with np.errstate(over="ignore", invalid="ignore"):
                 placed = corners @ matrix[:3, :3].T + matrix[:3, 3]
             if problem := limits.coordinates_problem(placed):
