@@ -15,6 +15,7 @@ from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.engine.renderer import Renderer, upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.engine.scene_features import scene_feature_defines
+from spectrace.geometry import bvh4
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.scene.model import Shape
@@ -101,9 +102,9 @@ def _rays(count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return origins, directions
 
 
-def _trace(kernel_runner, scene, origins, directions, t_max):
+def _trace(kernel_runner, scene, origins, directions, t_max, width=None):
     buffers = build_scene_buffers(scene)
-    runner = kernel_runner("testing/scene_hits.cl", {**traversal_defines(), **scene_feature_defines(buffers)})
+    runner = kernel_runner("testing/scene_hits.cl", {**traversal_defines(width), **scene_feature_defines(buffers)})
     n = len(origins)
     params = runner.buffer(render_params(scene, buffers, 0, 1))
     scene_args = upload_scene(runner.device.context, buffers)
@@ -151,7 +152,11 @@ def _brute_force(scene: spectrace.Scene, origins: np.ndarray, directions: np.nda
     return best_t, best_n
 
 
-def test_instanced_hits_match_brute_force_and_the_expanded_copies(kernel_runner):
+@pytest.mark.parametrize("width", [4, 2])
+def test_instanced_hits_match_brute_force_and_the_expanded_copies(kernel_runner, monkeypatch, width):
+    """Through both traversals (the 4-wide default and the binary one kept for comparison), whose node buffers the
+    objects' leaves point into differently."""
+    monkeypatch.setattr(bvh4, "TRAVERSAL_WIDTH", width)
     instanced, expanded = _scenes()
     origins, directions = _rays(3000, seed=4)
     t_true, n_true = _brute_force(expanded, origins, directions)
@@ -160,8 +165,10 @@ def test_instanced_hits_match_brute_force_and_the_expanded_copies(kernel_runner)
     t_max = np.where(np.isfinite(t_true), t_true, 10.0)
     results = {}
     for name, scene in (("instanced", instanced), ("expanded", expanded)):
-        short = _trace(kernel_runner, scene, origins, directions, t_max * 0.999)[1][4]
-        buffers, (hit, point, normal, shading, past) = _trace(kernel_runner, scene, origins, directions, t_max * 1.001)
+        short = _trace(kernel_runner, scene, origins, directions, t_max * 0.999, width)[1][4]
+        buffers, (hit, point, normal, shading, past) = _trace(
+            kernel_runner, scene, origins, directions, t_max * 1.001, width
+        )
         results[name] = (hit, point, normal, shading)
         t = hit[:, 0].astype(np.float64)
         # Rays through an edge or a vertex may slip between float32 triangles in either: a handful at most.
