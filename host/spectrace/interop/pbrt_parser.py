@@ -2,8 +2,8 @@
 
 The result is a `PbrtScene`: the camera, film, sampler and integrator entities, and every shape, light, material
 and texture with its world transform and the file:line it came from; the objects of ObjectBegin/ObjectEnd with their
-shapes (under the transform at their definition) and each ObjectInstance's use of one, which `expanded_shapes` turns
-into copies where an importer needs them.
+shapes (under the transform at their definition) and each ObjectInstance's use of one (its CTM, which places the
+object's shapes as pbrt-v4 does: the instance's CTM times each shape's).
 What the entities mean is left to spectrace.interop.pbrt_v4, which maps them onto a spectrace scene.
 
 The file format is pbrt-v4's ("pbrt-v4 File Format", pbrt.org/fileformat-v4): a directive is a keyword, its
@@ -680,6 +680,8 @@ def read_scene(path: str | Path) -> PbrtScene:
             defining = None
             state = stack.pop()
         elif name == "ObjectInstance":
+            if defining is not None:
+                raise error(location, "ObjectInstance inside ObjectBegin: pbrt-v4 does not nest instances either")
             if arguments[0] not in instances:
                 raise error(location, f"ObjectInstance names '{shown(arguments[0])}', which no ObjectBegin defined")
             scene.objects.setdefault(arguments[0], instances[arguments[0]])
@@ -691,18 +693,3 @@ def read_scene(path: str | Path) -> PbrtScene:
         opened = stack[-1].opened or Location(Path(path), 1)
         raise error(opened, f"{stack[-1].kind} is never closed by {closing[stack[-1].kind]}")
     return scene
-
-
-def expanded_shapes(shapes: list[Shape], world_from_instance: np.ndarray) -> list[Shape]:
-    """An object's shapes as copies in world space under one instance's transform (as pbrt-v4 places them: the
-    instance's CTM times each shape's CTM at its definition; media are not carried into instances)."""
-    return [
-        Shape(
-            shape.entity,
-            world_from_instance @ shape.world_from_object,
-            shape.reverse_orientation,
-            shape.material,
-            shape.area_light,
-        )
-        for shape in shapes
-    ]

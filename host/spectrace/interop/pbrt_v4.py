@@ -38,7 +38,7 @@ import os
 import re
 import shutil
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +51,6 @@ from spectrace.interop.pbrt_parser import (
     PbrtScene,
     Shape,
     error,
-    expanded_shapes,
     read_scene,
     shown,
 )
@@ -831,16 +830,19 @@ class PbrtImporter:
             table["emitter"] = self.area_light(shape.area_light, mesh, self.world @ shape.world_from_object, entity)
         return table
 
-    def instanced_object(self, name: str, location: Location, objects: dict[str, dict]) -> str | None:
+    def instanced_object(self, name: str, objects: dict[str, dict]) -> str:
         """The spectrace object (its name in `objects`, added there) for pbrt object `name`, its shapes in the
-        object's own space and stored once however often it is placed; None when its instances must be copies
-        instead: spectrace instances no emitters (the area lights' rows are the emitting triangles themselves)."""
+        object's own space and stored once however often it is placed. As in pbrt-v4, whose instances carry no area
+        lights, an area light on an object's shape is left out, with pbrt's warning."""
         shapes = self.scene.objects[name]
-        if any(shape.area_light is not None for shape in shapes):
-            self.notes.append(
-                f"{location}: object '{shown(name)}' has area lights: its instances are imported as copies"
-            )
-            return None
+        for shape in shapes:
+            if shape.area_light is not None:
+                self.warn(
+                    shape.entity.location,
+                    f"area light on a shape of object '{shown(name)}' not imported (pbrt-v4: \"Area lights not "
+                    'supported with object instancing"; its instances do not emit)',
+                )
+        shapes = [replace(shape, area_light=None) for shape in shapes]
         object_name = _name(name, objects)
         tables: list[dict] = []
         world, self.world = self.world, np.eye(4)  # the object's own space; each instance carries the mirror
@@ -1041,22 +1043,14 @@ class PbrtImporter:
                 shapes.append(table)
         objects: dict[str, dict] = {}
         instances: list[dict] = []
-        placed: dict[str, str | None] = {}  # pbrt object -> its spectrace object, None where instances are copies
-        copies = len(self.scene.shapes)
+        placed: dict[str, str] = {}  # pbrt object -> its spectrace object
         for use in self.scene.object_uses:
             if use.name not in placed:
-                placed[use.name] = self.instanced_object(use.name, use.location, objects)
-            if (object_name := placed[use.name]) is not None:
-                if objects[object_name]["shapes"]:
-                    self.origins[f"instances[{len(instances)}]"] = use.location
-                    transform = [{"matrix": (self.world @ use.world_from_instance).tolist()}]
-                    instances.append({"object": object_name, "transform": transform})
-                continue
-            for shape in expanded_shapes(self.scene.objects[use.name], use.world_from_instance):
-                if (table := self.shape(shape, copies)) is not None:
-                    self.origins[f"shapes[{len(shapes)}]"] = shape.entity.location
-                    shapes.append(table)
-                copies += 1
+                placed[use.name] = self.instanced_object(use.name, objects)
+            if objects[placed[use.name]]["shapes"]:
+                self.origins[f"instances[{len(instances)}]"] = use.location
+                transform = [{"matrix": (self.world @ use.world_from_instance).tolist()}]
+                instances.append({"object": placed[use.name], "transform": transform})
         objects = {name: table for name, table in objects.items() if table["shapes"]}
         for light in self.scene.lights:
             self.origins[f"lights[{len(lights)}]"] = light.entity.location
