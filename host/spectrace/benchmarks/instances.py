@@ -42,7 +42,7 @@ def instanced_scene(count: int, triangles: int, size: int, spp: int, max_depth: 
     side = int(np.ceil(np.sqrt(count)))
     instances = []
     for i in range(count):
-        steps = [
+        steps: list[dict] = [
             {"rotate": {"axis": [0, 1, 0], "angle": float(rng.uniform(0, 360))}},
             {
                 "translate": [
