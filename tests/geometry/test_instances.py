@@ -33,12 +33,14 @@ PLACEMENTS = [
 
 
 def _object_shapes() -> list[Shape]:
-    """A smooth tessellated sphere, a textured cube and a plastic rectangle, in object space."""
+    """A smooth, bump-mapped tessellated sphere, a textured cube and a gold rectangle, in object space."""
     rng = np.random.default_rng(11)
     return [
         spectrace.shape(
             "sphere",
-            spectrace.plastic((0.7, 0.3, 0.2), roughness=0.2),
+            spectrace.plastic(
+                (0.7, 0.3, 0.2), roughness=0.2, bump_map=spectrace.bitmap(rng.uniform(0, 1, (8, 8))), bump_scale=0.02
+            ),
             tessellated=True,
             transform=[{"scale": 0.4}, {"translate": [0, 0.4, 0]}],
             name="ball",
