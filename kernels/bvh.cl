@@ -3,6 +3,7 @@
 #define SPECTRACE_BVH_CL
 
 #include "types.h"
+#include "scene_features.h"
 #include "triangle.cl"
 #include "triangle4.cl"
 
@@ -13,6 +14,9 @@ typedef struct {
     float t;         /* distance along the ray; t_max when nothing was hit */
     int triangle;    /* slot in the triangle arrays, or -1 */
     float2 b12;      /* barycentric coordinates of v1 and v2 */
+#if SCENE_HAS_INSTANCES
+    int instance;    /* the Instance whose object the triangle belongs to, or -1 for the scene's own surfaces */
+#endif
 } Hit;
 
 /* Distance at which the ray enters the box, or INFINITY when it misses it before t_max. The exit distance is widened by 2γ₃
@@ -56,6 +60,9 @@ inline Hit no_hit(float t_max)
     hit.t = t_max;
     hit.triangle = -1;
     hit.b12 = (float2)(0.0f);
+#if SCENE_HAS_INSTANCES
+    hit.instance = -1;
+#endif
     return hit;
 }
 

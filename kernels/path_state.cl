@@ -99,10 +99,51 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
 }
 #endif
 
+#if SCENE_HAS_INSTANCES
+/* path_vertex at a hit of an instanced object's triangle: the object-space triangle read as for the scene's own,
+ * its point and tangents taken to world space by the instance's map, its normals by the inverse transpose. */
+inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
+{
+    __global const Instance *instance = &scene->instances[hit.instance];
+    PathVertex v;
+    v.info = scene->triangle_info[hit.triangle];
+    v.p = affine_point(instance->to_world, triangle_point(scene->triangle_vertices, hit.triangle, hit.b12));
+    v.n = instance_normal(instance, triangle_normal(scene->triangle_vertices, hit.triangle));
+    v.wo = -ray.direction;
+    v.ns = v.info.normals < 0 ? v.n : instance_shading_normal(scene, instance, v.info.normals, hit.b12, v.n, v.wo);
+    v.uv = (float2)(0.0f);
+    v.footprint = 0.0f;
+    if (SCENE_HAS_TEXTURES) {
+        v.uv = triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
+        if (SCENE_NEEDS_FOOTPRINT) {
+            __global const float4 *c = scene->triangle_vertices + 3 * hit.triangle;
+            __global const float2 *t = scene->triangle_uvs + 3 * hit.triangle;
+            float3 e1 = affine_vector(instance->to_world, c[1].xyz - c[0].xyz);
+            float3 e2 = affine_vector(instance->to_world, c[2].xyz - c[0].xyz);
+            v.footprint = footprint_from_tangents(scene->params, v.p, v.n, e1, e2, t[1] - t[0], t[2] - t[0]);
+        }
+    }
+    if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
+        __global const Material *m = &scene->materials[v.info.material];
+        if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
+            float3 dpdu = (float3)(0.0f), dpdv = (float3)(0.0f);
+            int parametrised = triangle_dp_duv(scene, hit.triangle, &dpdu, &dpdv);
+            dpdu = affine_vector(instance->to_world, dpdu);
+            dpdv = affine_vector(instance->to_world, dpdv);
+            v.ns = detailed_normal_at(scene, m, parametrised, dpdu, dpdv, v.uv, v.footprint, v.n, v.ns, v.wo);
+        }
+    }
+    return v;
+}
+#endif
+
 inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
 {
 #if SCENE_HAS_SHAPES
     if (hit_is_shape(scene, hit.triangle)) return shape_vertex(scene, hit, ray);
+#endif
+#if SCENE_HAS_INSTANCES
+    if (hit.instance >= 0) return instance_vertex(scene, hit, ray);
 #endif
     PathVertex v;
     v.info = scene->triangle_info[hit.triangle];

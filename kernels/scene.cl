@@ -29,6 +29,10 @@ typedef struct {
     __global const AnalyticShape *shapes;  /* analytic spheres, disks and cylinders (a dummy row if none), in the
                                               leaf order of shape_nodes */
     __global const BVHNode *shape_nodes;   /* binary BVH over their boxes (a root no ray enters if none) */
+    __global const Instance *instances;    /* placed copies of instanced objects (a dummy row if none), in the leaf
+                                              order of the top-level BVH */
+    __global const float4 *instance_nodes; /* the top-level binary BVH over the instances' world boxes (BVHNode,
+                                              two float4 each), then each object's own BVH (Instance.nodes) */
 } Scene;
 
 /* The kinds of visibility query, told apart in a cut-out's choice (surface_met) so that a shadow ray and the path's
@@ -45,10 +49,11 @@ typedef struct {
         __global const TriangleInfo *triangle_info, __global const Material *materials,                           \
         __global const Light *lights, __global const float *light_cdf, __global const float *spectra,             \
         __global const float4 *texels, __global const float *map_cdf, __global const Medium *media,                \
-        __global const Texture *textures, __global const AnalyticShape *shapes, __global const BVHNode *shape_nodes
+        __global const Texture *textures, __global const AnalyticShape *shapes, __global const BVHNode *shape_nodes, \
+        __global const Instance *instances, __global const float4 *instance_nodes
 #define SCENE_FROM_KERNEL_PARAMS                                                                                   \
     {params, nodes, triangle_vertices, triangle_uvs, triangle_normals, triangle_info, materials, lights,           \
-     light_cdf, spectra, texels, map_cdf, media, textures, shapes, shape_nodes}
+     light_cdf, spectra, texels, map_cdf, media, textures, shapes, shape_nodes, instances, instance_nodes}
 
 inline LightBuffers light_buffers(const Scene *scene)
 {
@@ -110,13 +115,20 @@ inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3
  * builds with SCENE_HAS_SHAPES 0 and traces exactly as before they existed. */
 inline int hit_is_shape(const Scene *scene, int slot)
 {
+#if SCENE_HAS_INSTANCES
+    /* Instanced objects' triangles follow the shapes' slots. */
+    return SCENE_HAS_SHAPES && slot >= scene->params->triangle_count
+           && slot < scene->params->triangle_count + scene->params->shape_count;
+#else
     return SCENE_HAS_SHAPES && slot >= scene->params->triangle_count;
+#endif
 }
 
 /* Whether the scene has nothing to hit. */
 inline int scene_is_empty(const Scene *scene)
 {
-    return scene->params->triangle_count == 0 && (!SCENE_HAS_SHAPES || scene->params->shape_count == 0);
+    return scene->params->triangle_count == 0 && (!SCENE_HAS_SHAPES || scene->params->shape_count == 0)
+           && (!SCENE_HAS_INSTANCES || scene->params->instance_count == 0);
 }
 
 #if SCENE_HAS_SHAPES
@@ -176,8 +188,91 @@ inline Hit intersect_shapes(const Scene *scene, Ray ray, float t_max, int any_hi
 }
 #endif
 
-/* The closest surface before t_max, triangle or analytic shape (any one when any_hit). */
-inline Hit trace_scene(const Scene *scene, Ray ray, float t_max, int any_hit)
+/* Instances (two-level BVH, as in Wald et al. 2003 and pbrt-v4's and Mitsuba 3's instancing): an object's triangles
+ * are stored once, at TriangleInfo slots after the analytic shapes' (their vertices, uvs and normals at the same
+ * slots of the triangle arrays, which hold unused entries for the shapes), under a 4-wide BVH of their own built in
+ * object space. A binary top-level BVH over the instances' world boxes leads to Instance rows; a ray reaching one is
+ * taken into object space (direction not renormalised, so t stays the world distance) and traced through the
+ * object's BVH. The hit keeps the object's slot, so materials, media and cut-outs need nothing new, and the
+ * Instance, whose map takes points and tangents to world space and normals by its inverse transpose. A scene
+ * without instances builds with SCENE_HAS_INSTANCES 0 and traces exactly as before they existed. */
+#if SCENE_HAS_INSTANCES
+inline float3 affine_point(__global const float4 *rows, float3 p)
+{
+    return (float3)(dot(rows[0].xyz, p) + rows[0].w, dot(rows[1].xyz, p) + rows[1].w, dot(rows[2].xyz, p) + rows[2].w);
+}
+
+inline float3 affine_vector(__global const float4 *rows, float3 v)
+{
+    return (float3)(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
+}
+
+/* M⁻ᵀ n of an object-space normal n (not normalised): the columns of to_object's linear part weighted by n. */
+inline float3 instance_normal_direction(__global const Instance *instance, float3 n)
+{
+    return n.x * instance->to_object[0].xyz + n.y * instance->to_object[1].xyz + n.z * instance->to_object[2].xyz;
+}
+
+inline float3 instance_normal(__global const Instance *instance, float3 n)
+{
+    return normalize(instance_normal_direction(instance, n));
+}
+
+/* The closest instanced triangle the ray meets before t_max (any of them when any_hit): the binary traversal of
+ * intersect_shapes over the top-level BVH, whose leaves are runs of instances, each traced in its object's BVH. */
+inline Hit intersect_instances(const Scene *scene, Ray ray, float t_max, int any_hit)
+{
+    Hit hit = no_hit(t_max);
+    if (scene->params->instance_count == 0) return hit;
+    __global const BVHNode *nodes = (__global const BVHNode *)scene->instance_nodes;
+    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
+    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
+    if (ray_box_entry(&nodes[0], ray.origin, inv_direction, t_max) == INFINITY) return hit;
+    int stack[BVH_STACK_SIZE];
+    float stack_entry[BVH_STACK_SIZE];
+    int top = 0;
+    int index = 0;
+    while (true) {
+        __global const BVHNode *node = &nodes[index];
+        if (node->count > 0) {
+            for (int k = node->left_first; k < node->left_first + node->count; ++k) {
+                __global const Instance *instance = &scene->instances[k];
+                Ray in_object;
+                in_object.origin = affine_point(instance->to_object, ray.origin);
+                in_object.direction = affine_vector(instance->to_object, ray.direction);
+                Hit h = trace_bvh((__global const BVHNode *)(scene->instance_nodes + instance->nodes),
+                                  scene->triangle_vertices, in_object, hit.t, any_hit);
+                if (h.triangle >= 0) {
+                    hit = h;
+                    hit.instance = k;
+                    if (any_hit) return hit;
+                }
+            }
+        } else {
+            int left = node->left_first;
+            float t_left = ray_box_entry(&nodes[left], ray.origin, inv_direction, hit.t);
+            float t_right = ray_box_entry(&nodes[left + 1], ray.origin, inv_direction, hit.t);
+            if (t_left != INFINITY || t_right != INFINITY) {
+                if (fmax(t_left, t_right) != INFINITY) {
+                    stack[top] = t_left <= t_right ? left + 1 : left;
+                    stack_entry[top] = fmax(t_left, t_right);
+                    ++top;
+                }
+                index = t_left <= t_right ? left : left + 1;
+                continue;
+            }
+        }
+        while (true) {
+            if (top == 0) return hit;
+            --top;
+            if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
+        }
+    }
+}
+#endif
+
+/* The closest surface before t_max among the scene's own triangles and analytic shapes (any one when any_hit). */
+inline Hit trace_scene_own(const Scene *scene, Ray ray, float t_max, int any_hit)
 {
 #if SCENE_HAS_SHAPES
     Hit shape_hit = intersect_shapes(scene, ray, t_max, any_hit);
@@ -189,11 +284,29 @@ inline Hit trace_scene(const Scene *scene, Ray ray, float t_max, int any_hit)
 #endif
 }
 
+/* The closest surface before t_max, triangle, analytic shape or instanced triangle (any one when any_hit). */
+inline Hit trace_scene(const Scene *scene, Ray ray, float t_max, int any_hit)
+{
+#if SCENE_HAS_INSTANCES
+    Hit hit = trace_scene_own(scene, ray, t_max, any_hit);
+    if (any_hit && hit.triangle >= 0) return hit;
+    Hit instance_hit = intersect_instances(scene, ray, hit.t, any_hit);
+    return instance_hit.triangle >= 0 ? instance_hit : hit;
+#else
+    return trace_scene_own(scene, ray, t_max, any_hit);
+#endif
+}
+
 /* The geometric normal and point of a hit, for either kind of surface. */
 inline float3 hit_normal(const Scene *scene, Hit hit)
 {
 #if SCENE_HAS_SHAPES
     if (hit_is_shape(scene, hit.triangle)) return shape_surface(hit_shape(scene, hit.triangle), hit.b12).n;
+#endif
+#if SCENE_HAS_INSTANCES
+    if (hit.instance >= 0) {
+        return instance_normal(&scene->instances[hit.instance], triangle_normal(scene->triangle_vertices, hit.triangle));
+    }
 #endif
     return triangle_normal(scene->triangle_vertices, hit.triangle);
 }
@@ -202,6 +315,12 @@ inline float3 hit_point(const Scene *scene, Hit hit)
 {
 #if SCENE_HAS_SHAPES
     if (hit_is_shape(scene, hit.triangle)) return shape_surface(hit_shape(scene, hit.triangle), hit.b12).p;
+#endif
+#if SCENE_HAS_INSTANCES
+    if (hit.instance >= 0) {
+        return affine_point(scene->instances[hit.instance].to_world,
+                            triangle_point(scene->triangle_vertices, hit.triangle, hit.b12));
+    }
 #endif
     return triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
 }
@@ -232,6 +351,9 @@ inline float surface_opacity(const Scene *scene, int triangle, float2 b12)
         Hit at;
         at.triangle = triangle;
         at.b12 = b12;
+#if SCENE_HAS_INSTANCES
+        at.instance = -1;  /* hit_uv reads only the slot */
+#endif
         SurfaceContext sc = surface_context(scene, hit_uv(scene, at), 0.0f);
         return texture_numbers(&sc.buffers, m->opacity_texture, sc.uv, 0.0f).x;
     }
@@ -267,6 +389,9 @@ inline Hit scene_intersect(const Scene *scene, Ray ray, uint query, uint *rays_t
         miss.t = INFINITY;
         miss.triangle = -1;
         miss.b12 = (float2)(0.0f);
+#if SCENE_HAS_INSTANCES
+        miss.instance = -1;
+#endif
         return miss;
     }
     Hit hit = trace_scene(scene, ray, INFINITY, 0);

@@ -77,6 +77,11 @@
 #define SCENE_PIXEL_FILTERS ((1 << PIXEL_FILTER_COUNT) - 1)
 #endif
 
+/* Instanced objects (kernels/scene.cl, "Instances"): a top-level BVH over the instances beside the triangles'. */
+#ifndef SCENE_HAS_INSTANCES
+#define SCENE_HAS_INSTANCES 1
+#endif
+
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 #define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
 #define SCENE_HAS_ENVIRONMENT (SCENE_USES_LIGHT(LIGHT_ENVIRONMENT) || SCENE_USES_LIGHT(LIGHT_ENVIRONMENT_MAP))

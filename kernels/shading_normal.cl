@@ -38,6 +38,23 @@ inline float3 shading_normal(const Scene *scene, int normals, float2 b12, float3
     return dot(n, wo) * dot(n_geometric, wo) > 0.0f ? n : n_geometric;
 }
 
+#if SCENE_HAS_INSTANCES
+/* shading_normal at a hit of an instanced object's triangle: the corners' object-space normals interpolated, then
+ * taken to world space by the instance's inverse transpose (as the host turns the normals of a transformed mesh). */
+inline float3 instance_shading_normal(const Scene *scene, __global const Instance *instance, int normals, float2 b12,
+                                      float3 n_geometric, float3 wo)
+{
+    __global const float4 *corner = scene->triangle_normals + 3 * normals;
+    float3 n = (1.0f - b12.x - b12.y) * corner[0].xyz + b12.x * corner[1].xyz + b12.y * corner[2].xyz;
+    n = instance_normal_direction(instance, n);
+    float length_n = length(n);
+    if (!(length_n > 0.0f)) return n_geometric;
+    n /= length_n;
+    if (dot(n, n_geometric) < 0.0f) n = -n;
+    return dot(n, wo) * dot(n_geometric, wo) > 0.0f ? n : n_geometric;
+}
+#endif
+
 /* Rule 2 above: 0 when wi is on different sides of the shading and the geometric normal. A vertex that shades with
  * its geometric normal passes without a test. */
 inline int shading_side_agrees(float3 n_geometric, float3 n_shading, float3 wi)

@@ -59,6 +59,19 @@ typedef struct {
     int flip_normals;     /* 1: the front (normal, emitting side) faces the other way: inward, the disk's −z */
 } AnalyticShape;
 
+/* A placed copy of an instanced object (kernels/scene.cl, "Instances"): the object's triangles are stored once, at
+ * slots [first_slot, first_slot + triangle count) after the scene's own triangles and analytic shapes, under their
+ * own 4-wide BVH; an instance adds only this row and a leaf of the top-level BVH over the instances' world boxes. */
+typedef struct {
+    float4 to_world[3];   /* rows of the object-to-world affine map: world coordinate i = dot(to_world[i], (p, 1)) */
+    float4 to_object[3];  /* rows of its inverse (rays enter object space through it; normals leave by its
+                             transpose, M⁻ᵀ) */
+    int nodes;            /* float4 offset of the object's BVH in instance_nodes */
+    int object;           /* which object (the host's numbering; the kernels do not read it) */
+    int pad0;
+    int pad1;
+} Instance;
+
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already
  * multiplied by the scene's `scale`, in 1/scene unit. */
 typedef struct {
@@ -181,7 +194,7 @@ typedef struct {
     int shape_count;         /* analytic shapes (AnalyticShape rows) */
     int camera_type;         /* CAMERA_* (kernels/camera.cl) */
     int pixel_filter;        /* PIXEL_FILTER_* (kernels/pixel_filter.cl) */
-    int pad0;
+    int instance_count;      /* placed objects (Instance rows) */
     float4 lens;             /* CAMERA_THIN_LENS: aperture radius, focus distance along camera_forward (scene
                                 units), 0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:

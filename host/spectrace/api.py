@@ -30,6 +30,8 @@ from spectrace.scene.model import (
     AreaEmitter,
     ConstantEnvironment,
     DistantLight,
+    Instance,
+    InstancedObject,
     Medium,
     PointLight,
     Scene,
@@ -268,6 +270,31 @@ def shape(
         mesh = mesh_from_trimesh(geometry)
     mesh = shading_normals(transformed(mesh, transform), face_normals, computed=not isinstance(geometry, str))
     return Shape(mesh=mesh, material=material, emitter=emitter, name=name, interior=interior)
+
+
+def instanced_object(shapes: Sequence[Shape], name: str = "") -> InstancedObject:
+    """A group of shapes (meshes, built with `shape` in the object's own space) declared once and placed by
+    `instance` any number of times, stored once on the device (Mitsuba 3's shapegroup, pbrt-v4's ObjectBegin).
+    Analytic surfaces and emitters cannot be instanced: tessellate them, or place them as shapes of their own."""
+    shapes = list(shapes)
+    if not shapes or not all(isinstance(s, Shape) for s in shapes):
+        raise SpectraceError("an instanced object needs one or more shapes (see shape())", where=name or "object")
+    for s in shapes:
+        if s.analytic is not None:
+            raise SpectraceError(f"shape '{s.name}': analytic surfaces cannot be instanced (tessellated=True)")
+        if s.emitter is not None:
+            raise SpectraceError(f"shape '{s.name}': emitters cannot be instanced (place the emitting shape itself)")
+    return InstancedObject(shapes=shapes, name=name)
+
+
+def instance(obj: InstancedObject, transform: Iterable[Mapping[str, Any]] = (), name: str = "") -> Instance:
+    """`obj` placed in the scene by `transform` steps (as for `shape`; a 4 x 4 `matrix` step takes any affine map,
+    mirrors included); put the result in `Scene(instances=[...])`."""
+    if not isinstance(obj, InstancedObject):
+        raise SpectraceError(f"instance() places an InstancedObject, got {type(obj).__name__}")
+    steps = [dict(step) for step in transform]
+    matrix = transform_matrix(steps, where="transform") if steps else np.eye(4)
+    return Instance(object=obj, to_world=matrix, name=name or obj.name)
 
 
 def _intensity(

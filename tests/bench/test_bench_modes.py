@@ -188,3 +188,14 @@ def test_build_mode_times_mitsuba_loading_the_same_mesh(build_mode):
     peer = build_mode["best"]["mitsuba"]
     assert peer["triangles"] == build_mode["triangles"]  # it read the same triangles from the PLY written for it
     assert peer["seconds"] > 0 and build_mode["ratio_wall"] > 0
+
+
+@pytest.mark.slow
+def test_instances_mode_stores_the_object_once():
+    out = _bench("instances", "--count", "4", "--triangles", "200", "--size", "8", "--spp", "1")["instances"]
+    instanced, copies = out["instanced"], out["expanded"]
+    # 2 n² triangles with n = round(√100) = 10: 200 stored once, placed four times; the copies store all four.
+    assert instanced["stored_triangles"] == 200 and copies["stored_triangles"] == instanced["placed_triangles"] == 800
+    assert instanced["scene_device_bytes"] < copies["scene_device_bytes"]
+    assert instanced["samples_per_second"] > 0 and copies["samples_per_second"] > 0
+    assert instanced["mean_y"] == pytest.approx(copies["mean_y"], rel=0.05)

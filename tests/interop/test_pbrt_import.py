@@ -13,7 +13,14 @@ import spectrace
 from cli_runner import run_in_process
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
-from spectrace.interop.pbrt_parser import Location, column_major, look_at, read_scene, rotate, tokenize
+from spectrace.interop.pbrt_parser import (
+    Location,
+    column_major,
+    look_at,
+    read_scene,
+    rotate,
+    tokenize,
+)
 from spectrace.interop.pbrt_v4 import import_pbrt, load_pbrt_scene, pbrt_scene_data
 from spectrace.spectral import spectrum_to_xyz
 
@@ -87,6 +94,7 @@ def test_parameter_lists_with_and_without_brackets(tmp_path):
         ('Include "missing.pbrt"\n', 5, "not a file"),
         ("AttributeBegin\n", 5, "AttributeBegin is never closed"),
         ('ObjectInstance "nothing"\n', 5, "which no ObjectBegin defined"),
+        ('ObjectBegin "a"\nObjectEnd\nObjectBegin "b"\nObjectInstance "a"\n', 8, "pbrt-v4 does not nest instances"),
     ],
 )
 def test_bad_input_names_file_and_line(tmp_path, body, line, message):
@@ -164,9 +172,53 @@ Rotate 90 0 0 1
 ObjectInstance "thing"
 """
     scene = read_scene(_write(tmp_path, body))
-    centres = [shape.world_from_object @ [0, 0, 0, 1] for shape in scene.shapes]
+    assert len(scene.shapes) == 1 and [use.name for use in scene.object_uses] == ["thing", "thing"]
+    (inside,) = scene.objects["thing"]
+    placed = [use.world_from_instance @ inside.world_from_object for use in scene.object_uses]
+    centres = [m @ [0, 0, 0, 1] for m in [scene.shapes[0].world_from_object, *placed]]
     np.testing.assert_allclose(centres, [[0, 0, 0, 1], [5, 1, 0, 1], [4, 0, 0, 1]], atol=1e-12)
-    assert scene.shapes[1].entity is scene.shapes[2].entity
+
+
+def _placed_triangles(scene) -> np.ndarray:
+    """Every triangle of a loaded scene in world space, instances placed as copies, sorted for comparison."""
+    from spectrace.geometry.transforms import apply_transform
+
+    meshes = [shape.mesh for shape in scene.shapes]
+    meshes += [apply_transform(s.mesh, i.to_world) for i in scene.instances for s in i.object.shapes]
+    triangles = np.concatenate([np.stack(m.triangles(), axis=1) for m in meshes])  # (M, 3 corners, 3)
+    triangles = np.sort(np.round(triangles, 9).reshape(len(triangles), -1).view("f8,f8,f8,f8,f8,f8,f8,f8,f8"), axis=0)
+    return triangles.view(np.float64).reshape(-1, 9)
+
+
+def test_objects_are_imported_once_and_placed_by_instances(tmp_path):
+    """An object of a mesh and a partial sphere placed three times (once mirrored) imports as one spectrace object with
+    three instances, its mesh written once, and places the same triangles as the same shapes written out in
+    world space; an area light in an object is left out, as pbrt-v4 leaves it out."""
+    mesh = 'Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0  1 1 0] "integer indices" [0 1 2 2 1 3]\n'
+    sphere = 'Shape "sphere" "float radius" 0.5 "float phimax" 300\n'
+    placements = ["Translate 1 0 0", "Rotate 30 0 1 0\nScale 2 1 1", "Scale -1 1 1\nTranslate 0 2 0"]
+    defined = 'ObjectBegin "thing"\nTranslate 0 0 1\n' + mesh + sphere + "ObjectEnd\n"
+    uses = "".join(f'AttributeBegin\n{p}\nObjectInstance "thing"\nAttributeEnd\n' for p in placements)
+    written_out = "".join(f"AttributeBegin\n{p}\nTranslate 0 0 1\n{mesh}{sphere}AttributeEnd\n" for p in placements)
+    toml = tmp_path / "out" / "scene.toml"
+    import_pbrt(_write(tmp_path, PLANE + defined + uses), toml)
+    from spectrace.scene import load_scene
+
+    instanced = load_scene(toml)
+    assert len(instanced.instances) == 3 and len({id(i.object) for i in instanced.instances}) == 1
+    # The plane, the object's mesh and its (partial, so tessellated) sphere.
+    assert len(instanced.shapes) == 1 and len(list((tmp_path / "out").rglob("*.ply"))) == 3
+    toml2 = tmp_path / "out2" / "scene.toml"
+    import_pbrt(_write(tmp_path, PLANE + written_out, name="copies.pbrt"), toml2)
+    copies = load_scene(toml2)
+    assert not copies.instances
+    np.testing.assert_allclose(_placed_triangles(instanced), _placed_triangles(copies), atol=1e-6)
+
+    # pbrt-v4 instances no area lights (it warns and places the shapes unlit): so does the import.
+    light = 'ObjectBegin "lamp"\nAreaLightSource "diffuse"\n' + mesh + "ObjectEnd\n"
+    data, importer = pbrt_scene_data(_write(tmp_path, light + uses.replace("thing", "lamp"), name="lamp.pbrt"))
+    assert len(data["instances"]) == 3 and not any("emitter" in s for s in data["objects"]["lamp"]["shapes"])
+    assert any("Area lights not supported with object instancing" in w for w in importer.warnings)
 
 
 # ---------------------------------------------------------------- conventions

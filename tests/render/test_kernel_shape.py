@@ -3,6 +3,8 @@ must estimate the same image (checked per region with independent seeds, within 
 megakernel's determinism and pass-split invariance. The subsurface scene takes paths through medium boundaries
 and scattering points, whose state the wavefront carries between launches."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -25,9 +27,32 @@ def _scene(name: str, **overrides):
     return load_scene(scenes_dir() / f"{name}.toml").with_overrides(width=SIZE, height=SIZE, **overrides)
 
 
+def _instanced_cornell_box():
+    """The Cornell box with an object (a cube under a smooth ball) placed three times, once mirrored."""
+    import spectrace
+
+    ball = spectrace.shape("sphere", spectrace.plastic(0.4), tessellated=True, transform=[{"translate": [0, 2, 0]}])
+    obj = spectrace.instanced_object([spectrace.shape("cube", spectrace.diffuse(0.6)), ball])
+    placements = [
+        [{"scale": 0.04}, {"translate": [0.45, 0.04, 0.1]}],
+        [
+            {"scale": [0.05, 0.03, 0.04]},
+            {"rotate": {"axis": [0, 1, 0], "angle": 30}},
+            {"translate": [0.32, 0.03, 0.02]},
+        ],
+        [
+            {"matrix": [[-0.035, 0, 0, 0], [0, 0.035, 0, 0], [0, 0, 0.035, 0], [0, 0, 0, 1]]},
+            {"translate": [0.09, 0.035, 0.45]},
+        ],
+    ]
+    scene = _scene("cornell_box", spp=16, max_depth=8)
+    return replace(scene, instances=[spectrace.instance(obj, p) for p in placements])
+
+
 SCENES = {
     "cornell_box": lambda: _scene("cornell_box", spp=16, max_depth=8),
     "subsurface": lambda: _scene("subsurface", spp=16, max_depth=16),
+    "instances": _instanced_cornell_box,
 }
 
 

@@ -73,6 +73,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
+        "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
     }
@@ -275,6 +276,29 @@ def _with_camera(scene: spectrace.Scene, camera_type: str, filter_type: str) -> 
     return replace(scene, camera=camera, pixel_filter=spectrace.PixelFilter(filter_type))
 
 
+def _instanced_scene() -> spectrace.Scene:
+    """A textured, bump-mapped, smooth-shaded object placed three times (one mirrored) under an area light."""
+    rng = np.random.default_rng(9)
+    ball = spectrace.shape(
+        "sphere", spectrace.plastic(0.5, bump_map=spectrace.bitmap(rng.uniform(0, 1, (4, 4)))), tessellated=True
+    )
+    box = spectrace.shape(
+        "cube",
+        spectrace.diffuse(spectrace.bitmap(rng.uniform(0, 1, (4, 4, 3)))),
+        transform=[{"scale": 0.3}, {"translate": [1.0, 0, 0]}],
+    )
+    obj = spectrace.instanced_object([ball, box])
+    placements = [
+        [{"scale": 0.5}, {"translate": [-1, 0, 0.5]}],
+        [{"scale": [0.6, 0.3, 0.5]}, {"rotate": {"axis": [0, 0, 1], "angle": 60}}, {"translate": [0.8, 0.3, 0.5]}],
+        [{"matrix": [[-0.4, 0, 0, 0], [0, 0.4, 0, 0], [0, 0, 0.4, 0], [0, 0, 0, 1]]}, {"translate": [0, -0.8, 0.4]}],
+    ]
+    base = _surface_detail_scene(cut_out=False)
+    return replace(
+        base, shapes=[base.shapes[0], base.shapes[2]], instances=[spectrace.instance(obj, p) for p in placements]
+    )
+
+
 SCENES = {
     "thin_lens_and_gaussian": lambda: _with_camera(_bundled("cornell_box"), "thinlens", "gaussian"),
     "orthographic_trilinear_and_mitchell": lambda: _with_camera(
@@ -298,6 +322,7 @@ SCENES = {
     "analytic_shapes": _analytic_shapes_scene,
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.
     "hidden_area_light": lambda: replace(_bundled("cornell_box"), hide_emitters=True),
+    "instances": _instanced_scene,
 }
 
 

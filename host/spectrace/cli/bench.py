@@ -257,6 +257,25 @@ def scaling_bench(
     _emit("scaling", result, lambda: scaling_tables(result), as_json)
 
 
+@bench_app.command("instances")
+def instances_bench(
+    count: Annotated[int, typer.Option(help="Instances of the object.", min=1)] = 100,
+    triangles: Annotated[int, typer.Option(help="Triangles of the instanced object.", min=2)] = 100_000,
+    size: Annotated[int, typer.Option(help="Square image size in pixels.")] = 128,
+    spp: SppOption = 16,
+    max_depth: MaxDepthOption = 8,
+    expanded: Annotated[bool, typer.Option(help="Also render the instances expanded into copies.")] = True,
+    device: DeviceOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """Instancing against expanded copies: scene device memory, set-up and samples/s."""
+    _check([size], max_depth)
+    from spectrace.benchmarks.instances import instances_tables, run_instances_bench
+
+    result = run_instances_bench(count, triangles, size, spp, max_depth, device, expanded, log=_log)
+    _emit("instances", result, lambda: instances_tables(result), as_json)
+
+
 @bench_app.command("cold")
 def cold_bench(
     size: ColdSizeOption = None,

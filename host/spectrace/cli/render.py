@@ -220,8 +220,13 @@ def render(
     )
     buffers = renderer.buffers
     peak = f", peak {buffers.bvh_peak_bytes / 2**20:.0f} MiB" if buffers.bvh_peak_bytes is not None else ""
+    instanced = (
+        f" + {buffers.instance_count} instances of {buffers.instanced_triangle_count} object triangles stored once"
+        if buffers.instance_count
+        else ""
+    )
     console.print(
-        f"scene: {buffers.triangle_count} triangles, BVH built in {buffers.bvh_seconds:.2f} s{peak}",
+        f"scene: {buffers.triangle_count} triangles{instanced}, BVH built in {buffers.bvh_seconds:.2f} s{peak}",
         highlight=False,
         markup=False,
     )

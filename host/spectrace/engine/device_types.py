@@ -176,6 +176,18 @@ ANALYTIC_SHAPE_DTYPE = _struct(
     128,
 )
 
+INSTANCE_DTYPE = _struct(
+    [
+        ("to_world", ("<f4", (3, 4))),
+        ("to_object", ("<f4", (3, 4))),
+        ("nodes", "<i4"),
+        ("object", "<i4"),
+        ("pad0", "<i4"),
+        ("pad1", "<i4"),
+    ],
+    112,
+)
+
 LIGHT_DTYPE = _struct(
     [
         ("position", ("<f4", (4,))),
@@ -233,7 +245,7 @@ RENDER_PARAMS_DTYPE = _struct(
         ("shape_count", "<i4"),
         ("camera_type", "<i4"),
         ("pixel_filter", "<i4"),
-        ("pad0", "<i4"),
+        ("instance_count", "<i4"),
         ("lens", ("<f4", (4,))),
         ("filter_shape", ("<f4", (4,))),
         ("filter_cdf", ("<f4", (PIXEL_FILTER_BINS,))),
@@ -276,6 +288,8 @@ SCENE_KERNEL_BUFFERS = (
     "textures",
     "shapes",
     "shape_nodes",
+    "instances",
+    "instance_nodes",
 )
 
 # struct name in types.h -> dtype; the layout test walks this table.
@@ -288,6 +302,7 @@ DEVICE_STRUCTS: dict[str, np.dtype] = {
     "Texture": TEXTURE_DTYPE,
     "Light": LIGHT_DTYPE,
     "AnalyticShape": ANALYTIC_SHAPE_DTYPE,
+    "Instance": INSTANCE_DTYPE,
     "RenderParams": RENDER_PARAMS_DTYPE,
     "MeterParams": METER_PARAMS_DTYPE,
 }

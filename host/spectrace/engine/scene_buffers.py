@@ -12,6 +12,7 @@ from spectrace.engine.device_types import (
     ANALYTIC_SHAPE_DTYPE,
     HIDE_AREA_EMITTERS,
     HIDE_ENVIRONMENT,
+    INSTANCE_DTYPE,
     LIGHT_DTYPE,
     MATERIAL_DTYPE,
     MEDIUM_DTYPE,
@@ -30,7 +31,7 @@ from spectrace.lights.area import AreaEmitter
 from spectrace.lights.base import LightRows
 from spectrace.materials import material_row, material_textures, write_detail
 from spectrace.materials.surface import cut_out_problem
-from spectrace.scene.model import Scene
+from spectrace.scene.model import Instance, InstancedObject, Scene
 from spectrace.spectral.colorimetry import cmf_table_normalised
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
@@ -76,6 +77,14 @@ class SceneBuffers:
     # was already tracing something else, whose figures this would disturb).
     bvh_seconds: float = 0.0
     bvh_peak_bytes: int | None = None
+    # INSTANCE_DTYPE rows in the top-level BVH's leaf order (one dummy row when there are none); the instanced
+    # objects' triangles are stored once each, at the slots after the analytic shapes' (kernels/scene.cl)
+    instances: np.ndarray = field(default_factory=lambda: np.zeros(1, INSTANCE_DTYPE))
+    instance_count: int = 0
+    # float32: the top-level binary BVH (BVH_NODE_DTYPE) over the instances' world boxes, then each object's own
+    # node buffer (Instance.nodes is its float4 offset); a root every ray misses when there are none
+    instance_nodes: np.ndarray = field(default_factory=lambda: _empty_bvh().nodes.view(np.float32).copy())
+    instanced_triangle_count: int = 0  # triangles stored for the instanced objects (each object's once)
 
 
 def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
@@ -184,6 +193,29 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         corners.append(np.array([shape_bvh.nodes[0]["bmin"], shape_bvh.nodes[0]["bmax"]]))
         lo, hi = np.min([c[0] for c in corners], axis=0), np.max([c[1] for c in corners], axis=0)
         scene_radius = 0.5 * float(np.linalg.norm(hi - lo))
+    objects = _ObjectTriangles(
+        scene.instances,
+        len(v0) + len(analytic),
+        material_index,
+        material_rows,
+        medium_index,
+        medium_rows,
+        table,
+        textures,
+    )
+    if objects.instance_boxes is not None:
+        boxes = objects.instance_boxes
+        corners = [boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)]
+        if len(v0) or analytic:
+            old = scene_radius
+            lo = np.minimum(corners[0], bvh.nodes[0]["bmin"] if len(v0) else corners[0])
+            hi = np.maximum(corners[1], bvh.nodes[0]["bmax"] if len(v0) else corners[1])
+            if analytic:
+                lo = np.minimum(lo, shape_bvh.nodes[0]["bmin"])
+                hi = np.maximum(hi, shape_bvh.nodes[0]["bmax"])
+            scene_radius = max(old, 0.5 * float(np.linalg.norm(hi - lo)))
+        else:
+            scene_radius = 0.5 * float(np.linalg.norm(corners[1] - corners[0]))
     scene_radius = max(scene_radius, 1e-6)
 
     vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
@@ -247,6 +279,19 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         info = triangle_info[len(v0) + k]
         info["material"], info["interior"] = material, interior
         info["light"] = next(shape_lights) if emitter >= 0 else -1
+    if objects.count:
+        # The objects' slots follow the shapes': the triangle arrays keep unused entries for the shapes.
+        own = len(v0) + len(analytic)
+        world_smooth = int(smooth.sum())
+        vertices = np.concatenate([vertices[: len(v0)], np.zeros((len(analytic), 3, 4), np.float32), objects.vertices])
+        triangle_uvs = np.concatenate(
+            [triangle_uvs[: len(v0)], np.zeros((len(analytic), 3, 2), np.float32), objects.uvs]
+        )
+        object_info = objects.info.copy()
+        object_info["normals"][object_info["normals"] >= 0] += world_smooth
+        triangle_info = np.concatenate([triangle_info[:own], object_info])
+        if len(objects.normals):
+            triangle_normals = np.concatenate([triangle_normals[:world_smooth], objects.normals])
     shape_rows = np.zeros(max(len(analytic), 1), ANALYTIC_SHAPE_DTYPE)
     for k, (surface, *_) in enumerate(analytic):
         shape_rows[k] = surface.device_row()
@@ -259,6 +304,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     if len(table) == 0:
         table.add(Spectrum.zeros())
     nodes, nodes_seconds, nodes_peak = _measured(lambda: device_nodes(bvh, vertices.reshape(-1, 4)))
+    instance_rows, instance_nodes = objects.device_buffers(vertices.reshape(-1, 4))
     return SceneBuffers(
         bvh=bvh,
         nodes=nodes,
@@ -283,9 +329,157 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         shapes=shape_rows,
         shape_count=len(analytic),
         shape_nodes=shape_bvh.nodes,
-        bvh_seconds=bvh_seconds + nodes_seconds,
+        bvh_seconds=bvh_seconds + nodes_seconds + objects.seconds,
         bvh_peak_bytes=None if bvh_peak is None or nodes_peak is None else max(bvh_peak, nodes_peak),
+        instances=instance_rows,
+        instance_count=len(scene.instances),
+        instance_nodes=instance_nodes,
+        instanced_triangle_count=objects.count,
     )
+
+
+class _ObjectTriangles:
+    """The instanced objects' triangles, each object's once, at slots from `first_slot` on, each under a BVH of its
+    own; and the instances' world boxes. Materials and media join the scene's tables (shared with its own shapes)."""
+
+    def __init__(
+        self,
+        instances: list[Instance],
+        first_slot: int,
+        material_index: dict[int, int],
+        material_rows: list[np.ndarray],
+        medium_index: dict[int, int],
+        medium_rows: list[tuple[int, int, float, int]],
+        table: SpectrumTable,
+        textures: TextureRows,
+    ) -> None:
+        self.instances = instances
+        self.objects: list[InstancedObject] = []
+        object_number: dict[int, int] = {}
+        for instance in instances:
+            if id(instance.object) not in object_number:
+                object_number[id(instance.object)] = len(self.objects)
+                self.objects.append(instance.object)
+        self.object_of = [object_number[id(instance.object)] for instance in instances]
+        self.bvhs: list[BVH] = []
+        self.first: list[int] = []
+        self.seconds = 0.0  # building the objects' BVHs and the top level, for the acceleration structure's cost
+        parts: dict[str, list[np.ndarray]] = {k: [] for k in ("vertices", "uvs", "normals", "info")}
+        slot, smooth_slot = first_slot, 0
+        boxes = []
+        for obj in self.objects:
+            v0s, v1s, v2s, uvs, normals, info = [], [], [], [], [], []
+            for shape in obj.shapes:
+                where = f"object '{obj.name}', shape '{shape.name}'"
+                if shape.analytic is not None:
+                    raise SpectraceError(f"{where}: analytic shapes cannot be instanced (use a mesh)")
+                if shape.emitter is not None:
+                    raise SpectraceError(f"{where}: emitters cannot be instanced (place the emitting shape itself)")
+                interior = -1
+                if shape.interior is not None:
+                    interior = medium_index.setdefault(id(shape.interior), len(medium_rows))
+                    if interior == len(medium_rows):
+                        m = shape.interior
+                        medium_rows.append((table.add(m.sigma_a), table.add(m.sigma_s), float(m.g), 0))
+                key = id(shape.material)
+                if shape.material is None:
+                    if shape.interior is None:
+                        raise SpectraceError(f"{where} has neither a material nor an interior")
+                    material_index[key] = TRIANGLE_NO_MATERIAL
+                elif key not in material_index:
+                    material_index[key] = len(material_rows)
+                    material_rows.append(material_row(shape.material, table, textures))
+                if (problem := cut_out_problem(shape.material, False, shape.interior is not None)) is not None:
+                    raise SpectraceError(f"{where}: {problem}")
+                if shape.material is not None and shape.mesh.uvs is None and material_textures(shape.material):
+                    raise SpectraceError(f"{where} has no texture coordinates, but its material has a texture")
+                a, b, c = shape.mesh.triangles()
+                v0s.append(a)
+                v1s.append(b)
+                v2s.append(c)
+                uvs.append(shape.mesh.triangle_uvs())
+                normals.append(shape.mesh.triangle_normals())
+                rows = np.zeros(len(a), TRIANGLE_INFO_DTYPE)
+                rows["material"], rows["light"], rows["interior"] = material_index[key], -1, interior
+                info.append(rows)
+            if not v0s or not sum(len(v) for v in v0s):
+                raise SpectraceError(f"object '{obj.name}' has no triangles")
+            v0, v1, v2, uv = (np.concatenate(x) for x in (v0s, v1s, v2s, uvs))
+            corner = _corner_normals(normals, [len(v) for v in v0s])
+            started = perf_counter()
+            bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
+            self.seconds += perf_counter() - started
+            order = bvh.prim_order
+            v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
+            rows = np.concatenate(info)[order]
+            block = np.zeros((len(v0), 3, 4), np.float32)
+            block[:, 0, :3], block[:, 1, :3], block[:, 2, :3] = v0, v1, v2
+            block[:, :, 3] = _unit_normals(v0, v1, v2)
+            smooth = np.zeros(len(v0), bool)
+            if corner is not None:
+                corner = corner[order]
+                smooth = ~np.isnan(corner).any(axis=(1, 2)) & (np.linalg.norm(corner, axis=-1) > 0).all(axis=1)
+                parts["normals"].append(np.pad(corner[smooth], ((0, 0), (0, 0), (0, 1))).astype(np.float32))
+            rows["normals"] = -1
+            rows["normals"][smooth] = smooth_slot + np.arange(int(smooth.sum()), dtype=np.int32)
+            smooth_slot += int(smooth.sum())
+            parts["vertices"].append(block)
+            parts["uvs"].append(uv.astype(np.float32))
+            parts["info"].append(rows)
+            self.bvhs.append(bvh)
+            self.first.append(slot)
+            slot += len(v0)
+            boxes.append((bvh.nodes[0]["bmin"].astype(np.float64), bvh.nodes[0]["bmax"].astype(np.float64)))
+        self.count = slot - first_slot
+        self.vertices = np.concatenate(parts["vertices"]) if self.objects else np.zeros((0, 3, 4), np.float32)
+        self.uvs = np.concatenate(parts["uvs"]) if self.objects else np.zeros((0, 3, 2), np.float32)
+        self.normals = np.concatenate(parts["normals"]) if parts["normals"] else np.zeros((0, 3, 4), np.float32)
+        self.info = np.concatenate(parts["info"]) if self.objects else np.zeros(0, TRIANGLE_INFO_DTYPE)
+        self.instance_boxes: np.ndarray | None = None
+        self.matrices = np.zeros((0, 4, 4))
+        if instances:
+            # Each instance's world box: the hull of its object's box corners under its map.
+            matrices = np.array([np.asarray(instance.to_world, np.float64) for instance in instances])
+            lo, hi = (np.array([boxes[k][side] for k in self.object_of]) for side in (0, 1))
+            choose = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)  # (8, 3)
+            corners = np.where(choose[None], hi[:, None, :], lo[:, None, :])  # (N, 8, 3)
+            placed = np.einsum("nij,nkj->nki", matrices[:, :3, :3], corners) + matrices[:, None, :3, 3]
+            self.instance_boxes = np.stack([placed.min(axis=1), placed.max(axis=1)], axis=1)
+            self.matrices = matrices
+
+    def device_buffers(self, triangle_vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(Instance rows in the top-level BVH's leaf order, the instance node buffer): the top-level binary BVH's
+        nodes, then each object's node buffer with its leaves' slots moved to where its triangles are stored."""
+        if not self.instances:
+            return np.zeros(1, INSTANCE_DTYPE), _empty_bvh().nodes.view(np.float32).copy()
+        started = perf_counter()
+        boxes = self.instance_boxes
+        assert boxes is not None
+        top = build_bvh(boxes[:, 0], boxes[:, 1], boxes[:, 0], max_leaf_size=2)
+        chunks = [top.nodes.view(np.float32).reshape(-1)]
+        offsets = []
+        float4s = len(chunks[0]) // 4
+        for bvh, first in zip(self.bvhs, self.first):
+            placed = bvh.nodes.copy()
+            leaves = placed["count"] > 0
+            placed["left_first"][leaves] += first
+            shifted = BVH(placed, bvh.prim_order, bvh.depth, bvh.sah_cost, bvh.build_seconds)
+            buffer = np.ascontiguousarray(device_nodes(shifted, triangle_vertices)).view(np.float32).reshape(-1)
+            offsets.append(float4s)
+            chunks.append(buffer)
+            float4s += len(buffer) // 4
+        if float4s > np.iinfo(np.int32).max:
+            raise SpectraceError("the instanced objects' BVHs are too large for 32-bit offsets")
+        self.seconds += perf_counter() - started
+        order = top.prim_order
+        matrices = self.matrices[order]
+        rows = np.zeros(len(self.instances), INSTANCE_DTYPE)
+        rows["to_world"] = matrices[:, :3]
+        rows["to_object"] = np.linalg.inv(matrices)[:, :3]
+        objects = np.asarray(self.object_of)[order]
+        rows["nodes"] = np.asarray(offsets)[objects]
+        rows["object"] = objects
+        return rows, np.concatenate(chunks)
 
 
 T = TypeVar("T")
@@ -343,4 +537,5 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["pixel_filter"] = PIXEL_FILTERS.index(pixel_filter.type)
     params["filter_shape"][0] = pixel_filter.device_shape()
     params["filter_cdf"][0] = pixel_filter.device_cdf()
+    params["instance_count"] = buffers.instance_count
     return params

@@ -189,7 +189,8 @@ def scene_to_mitsuba_dict(
     }
     exporter = MitsubaExport(scene, mesh_folder)
     materials: dict[int, str] = {}
-    for index, shape in enumerate(scene.shapes):
+
+    def shape_entry(shape, file_stem: str) -> dict:
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
             raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
@@ -210,7 +211,7 @@ def scene_to_mitsuba_dict(
                 "bsdf": {"type": "ref", "id": materials[material_key]},
             }
         else:
-            path = mesh_folder / f"shape_{index}.ply"
+            path = mesh_folder / f"{file_stem}.ply"
             write_binary_ply(shape.mesh, path)
             entry = {
                 "type": "ply",
@@ -220,7 +221,23 @@ def scene_to_mitsuba_dict(
             }
         if shape.emitter is not None:
             entry["emitter"] = area.to_mitsuba(shape.emitter, exporter, f"shape '{shape.name}'")
-        entries[f"shape_{index}"] = entry
+        return entry
+
+    for index, shape in enumerate(scene.shapes):
+        entries[f"shape_{index}"] = shape_entry(shape, f"shape_{index}")
+    # Objects as Mitsuba's shapegroups (each stored once there too), instances as its instances.
+    groups: dict[int, str] = {}
+    for index, instance in enumerate(scene.instances):
+        if id(instance.object) not in groups:
+            group = groups[id(instance.object)] = f"object_{len(groups)}"
+            entries[group] = {"type": "shapegroup"} | {
+                f"shape_{k}": shape_entry(shape, f"{group}_shape_{k}") for k, shape in enumerate(instance.object.shapes)
+            }
+        entries[f"instance_{index}"] = {
+            "type": "instance",
+            "shapegroup": {"type": "ref", "id": groups[id(instance.object)]},
+            "to_world": _transform(np.asarray(instance.to_world, np.float64)),
+        }
     for index, light in enumerate(scene.lights):
         entries[f"light_{index}"] = _light_entry(light, exporter)
     return entries

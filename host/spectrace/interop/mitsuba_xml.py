@@ -72,7 +72,7 @@ BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 CAMERA_PLUGINS = {plugin: name for name, module in CAMERAS.items() for plugin in module.MITSUBA_PLUGINS}
 _SENSOR_PLUGINS = tuple(CAMERA_PLUGINS)
 SUPPORTED = {
-    "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder"),
+    "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),
@@ -221,6 +221,7 @@ class MitsubaImporter:
         self.notes: list[str] = []
         self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
         self._properties: dict[int, Properties] = {}
+        self._object_names: dict[int, str] = {}  # shapegroup element -> its spectrace object's name
         self.search_folders: list[Path] = [xml_path.parent]  # <path> folders, then the scene's
         self.materials: dict[str, dict] = {}
         self._material_of_element: dict[tuple[int, bool], str] = {}
@@ -1034,6 +1035,49 @@ class MitsubaImporter:
             return table
         return table if table["material"] is not None else None
 
+    def instance(self, element: Element, objects: dict[str, dict]) -> dict | None:
+        """A Mitsuba `instance`: its shapegroup (imported once, as a spectrace object) placed by its to_world."""
+        properties = self.properties(element)
+        groups = self.nested(properties, "shape")
+        if len(groups) != 1 or self.kind(groups[0]) != "shapegroup":
+            raise self.fail(element, 'an instance places exactly one shapegroup (<ref id="..."/>)')
+        (group,) = groups
+        if id(group) not in self._object_names:
+            self._object_names[id(group)] = self.shapegroup(group, objects)
+        name = self._object_names[id(group)]
+        if not objects[name]["shapes"]:
+            return None
+        table: dict = {"object": name}
+        if "to_world" in properties:
+            steps = self.transform_steps(self.resolve(properties["to_world"]))
+            self.to_world(properties)  # the same steps, checked as for shapes: non-zero scales, a finite product
+            if steps:
+                table["transform"] = steps
+        return table
+
+    def shapegroup(self, group: Element, objects: dict[str, dict]) -> str:
+        """A Mitsuba `shapegroup` as a spectrace object (its shapes in their own space, stored once); its name in
+        `objects`. Mitsuba 3 refuses emitters and nested instancing in a shapegroup; so does the import. Spheres,
+        disks and cylinders, exact surfaces in Mitsuba's instances, are instanced as their tessellations."""
+        name = _unique_name(group.get("id") or "shapegroup", objects)
+        tables: list[dict] = []
+        for index, child in enumerate(self.nested(self.properties(group), "shape")):
+            kind = self.kind(child)
+            if kind in ("shapegroup", "instance"):
+                raise self.fail(child, f"a {kind} inside a shapegroup: nested instancing is not supported")
+            emitters = [c for c in self.properties(child).values() if self.resolve(c).tag == "emitter"]
+            if emitters:
+                raise self.fail(emitters[0], "emitters cannot be instanced: a shapegroup's shapes do not emit")
+            if (table := self.shape(child, index)) is None:
+                continue
+            if table["type"] in ("sphere", "disk", "cylinder"):
+                table["tessellated"] = True
+                self.notes.append(f"{self.at(child)}: the instanced {kind} is a tessellation (Mitsuba's is exact)")
+            self.origins[f"objects.{name}.shapes[{len(tables)}]"] = child
+            tables.append(table)
+        objects[name] = {"shapes": tables}
+        return name
+
     def interior_medium(self, properties: Properties) -> dict | None:
         """A shape's `interior` homogeneous medium as spectrace's interior: σs = scale·albedo·σt and
         σa = scale·(1 − albedo)·σt (Mitsuba 3's homogeneous: albedo default 0.75, sigma_t default 1), with its
@@ -1349,8 +1393,16 @@ class MitsubaImporter:
         if len(sensors) > 1:
             self.notes.append(f"{self.at(sensors[1])}: only the first of {len(sensors)} sensors is imported")
         self.sensor(sensors[0], data)
+        objects: dict[str, dict] = {}
+        instances: list[dict] = []
         for index, child in enumerate(root.children):
-            if child.tag == "shape":
+            if child.tag == "shape" and child.get("type") == "shapegroup":
+                continue  # a declaration: imported where an instance places it
+            if child.tag == "shape" and child.get("type") == "instance":
+                if (table := self.instance(child, objects)) is not None:
+                    self.origins[f"instances[{len(instances)}]"] = child
+                    instances.append(table)
+            elif child.tag == "shape":
                 if (table := self.shape(child, index)) is not None:
                     self.origins[f"shapes[{len(shapes)}]"] = child
                     shapes.append(table)
@@ -1391,11 +1443,12 @@ class MitsubaImporter:
         data["materials"] = self.materials
         data["shapes"] = shapes
         data["lights"] = lights
-        return {
-            key: data[key]
-            for key in ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
-            if key in data and data[key] != []
-        }
+        data["objects"] = {name: table for name, table in objects.items() if table["shapes"]}
+        data["instances"] = instances
+        order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
+        # materials stays even when empty (the scene format asks for the table); objects only when some are placed.
+        kept = {key: data[key] for key in order if key in data and data[key] != []}
+        return kept | {key: data[key] for key in ("objects", "instances") if data[key]}
 
     def report_unread_properties(self) -> None:
         """A warning for each property of an imported object that nothing read: spectrace does not know it."""

@@ -1,7 +1,9 @@
 """pbrt-v4 scene files: the tokenizer, the directives and the graphics state, as pbrt-v4 reads them.
 
 The result is a `PbrtScene`: the camera, film, sampler and integrator entities, and every shape, light, material
-and texture with its world transform and the file:line it came from, object instances already expanded into copies.
+and texture with its world transform and the file:line it came from; the objects of ObjectBegin/ObjectEnd with their
+shapes (under the transform at their definition) and each ObjectInstance's use of one (its CTM, which places the
+object's shapes as pbrt-v4 does: the instance's CTM times each shape's).
 What the entities mean is left to spectrace.interop.pbrt_v4, which maps them onto a spectrace scene.
 
 The file format is pbrt-v4's ("pbrt-v4 File Format", pbrt.org/fileformat-v4): a directive is a keyword, its
@@ -468,6 +470,15 @@ class Shape:
 
 
 @dataclass
+class ObjectUse:
+    """An ObjectInstance: the object's name and the CTM at the directive (world from the object's space)."""
+
+    name: str
+    world_from_instance: np.ndarray
+    location: Location
+
+
+@dataclass
 class Light:
     entity: Entity
     world_from_light: np.ndarray
@@ -487,7 +498,9 @@ class PbrtScene:
     pixel_filter: Entity | None = None
     sampler: Entity | None = None
     integrator: Entity | None = None
-    shapes: list[Shape] = field(default_factory=list)
+    shapes: list[Shape] = field(default_factory=list)  # outside objects
+    objects: dict[str, list[Shape]] = field(default_factory=dict)  # ObjectBegin's name -> its shapes
+    object_uses: list[ObjectUse] = field(default_factory=list)  # every ObjectInstance, in file order
     lights: list[Light] = field(default_factory=list)
     named_materials: dict[str, Entity] = field(default_factory=dict)
     textures: dict[tuple[str, str], Texture] = field(default_factory=dict)  # (value type, name)
@@ -537,7 +550,7 @@ _IGNORED = {
 
 
 def read_scene(path: str | Path) -> PbrtScene:
-    """The scene a pbrt-v4 file describes, instances expanded, every entity with its file:line."""
+    """The scene a pbrt-v4 file describes, objects and their instances, every entity with its file:line."""
     scene = PbrtScene()
     state = _State(np.eye(4))
     stack: list[_State] = []
@@ -669,18 +682,12 @@ def read_scene(path: str | Path) -> PbrtScene:
             defining = None
             state = stack.pop()
         elif name == "ObjectInstance":
+            if defining is not None:
+                raise error(location, "ObjectInstance inside ObjectBegin: pbrt-v4 does not nest instances either")
             if arguments[0] not in instances:
                 raise error(location, f"ObjectInstance names '{shown(arguments[0])}', which no ObjectBegin defined")
-            for shape in instances[arguments[0]]:
-                scene.shapes.append(
-                    Shape(
-                        shape.entity,
-                        state.ctm @ shape.world_from_object,
-                        shape.reverse_orientation,
-                        shape.material,
-                        shape.area_light,
-                    )
-                )
+            scene.objects.setdefault(arguments[0], instances[arguments[0]])
+            scene.object_uses.append(ObjectUse(arguments[0], state.ctm.copy(), location))
         elif name in _IGNORED:
             scene.unsupported.append(f"{location}: {name} not imported ({_IGNORED[name]})")
     if stack:

@@ -38,14 +38,22 @@ import os
 import re
 import shutil
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import similarity_problem
-from spectrace.interop.pbrt_parser import Entity, Location, PbrtScene, Shape, error, read_scene, shown
+from spectrace.interop.pbrt_parser import (
+    Entity,
+    Location,
+    PbrtScene,
+    Shape,
+    error,
+    read_scene,
+    shown,
+)
 from spectrace.io.output_files import check_output_file
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
@@ -973,6 +981,34 @@ class PbrtImporter:
             table["emitter"] = self.area_light(shape.area_light, mesh, self.world @ shape.world_from_object, entity)
         return table
 
+    def instanced_object(self, name: str, objects: dict[str, dict]) -> str:
+        """The spectrace object (its name in `objects`, added there) for pbrt object `name`, its shapes in the
+        object's own space and stored once however often it is placed. As in pbrt-v4, whose instances carry no area
+        lights, an area light on an object's shape is left out, with pbrt's warning."""
+        shapes = self.scene.objects[name]
+        for shape in shapes:
+            if shape.area_light is not None:
+                self.warn(
+                    shape.entity.location,
+                    f"area light on a shape of object '{shown(name)}' not imported (pbrt-v4: \"Area lights not "
+                    'supported with object instancing"; its instances do not emit)',
+                )
+        shapes = [replace(shape, area_light=None) for shape in shapes]
+        object_name = _name(name, objects)
+        tables: list[dict] = []
+        world, self.world = self.world, np.eye(4)  # the object's own space; each instance carries the mirror
+        try:
+            for index, shape in enumerate(shapes):
+                if (table := self.shape(shape, index)) is not None:
+                    if table["type"] == "sphere":
+                        table["tessellated"] = True  # an instance may stretch it; spectrace instances triangles
+                    self.origins[f"objects.{object_name}.shapes[{len(tables)}]"] = shape.entity.location
+                    tables.append(table)
+        finally:
+            self.world = world
+        objects[object_name] = {"shapes": tables}
+        return object_name
+
     def interior(self, shape: Shape) -> dict | None:
         """The spectrace `interior` for the named medium inside a shape (MediumInterface's first name)."""
         if shape.outside_medium:
@@ -1156,13 +1192,24 @@ class PbrtImporter:
             if (table := self.shape(shape, index)) is not None:
                 self.origins[f"shapes[{len(shapes)}]"] = shape.entity.location
                 shapes.append(table)
+        objects: dict[str, dict] = {}
+        instances: list[dict] = []
+        placed: dict[str, str] = {}  # pbrt object -> its spectrace object
+        for use in self.scene.object_uses:
+            if use.name not in placed:
+                placed[use.name] = self.instanced_object(use.name, objects)
+            if objects[placed[use.name]]["shapes"]:
+                self.origins[f"instances[{len(instances)}]"] = use.location
+                transform = [{"matrix": (self.world @ use.world_from_instance).tolist()}]
+                instances.append({"object": placed[use.name], "transform": transform})
+        objects = {name: table for name, table in objects.items() if table["shapes"]}
         for light in self.scene.lights:
             self.origins[f"lights[{len(lights)}]"] = light.entity.location
             lights.append(self.light(light))
         if sum(light["type"] in ("constant", "envmap") for light in lights) > 1:
             extra = [light.entity for light in self.scene.lights if light.entity.kind == "infinite"][1]
             raise error(extra.location, "a second infinite light; spectrace takes one environment light")
-        if not shapes and not lights:
+        if not shapes and not lights and not instances:
             raise SpectraceError("the scene has no shapes or lights spectrace imports", where=str(self.source))
         for entity in (
             self.scene.camera,
@@ -1184,7 +1231,20 @@ class PbrtImporter:
         data["materials"] = self.materials
         data["shapes"] = shapes
         data["lights"] = lights
-        order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
+        data["objects"] = objects
+        data["instances"] = instances
+        order = (
+            "camera",
+            "film",
+            "integrator",
+            "sampler",
+            "textures",
+            "materials",
+            "shapes",
+            "lights",
+            "objects",
+            "instances",
+        )
         # materials stays even when empty: the scene format asks for the table.
         return {key: data[key] for key in order if key in data and (key == "materials" or data[key] not in ([], {}))}
 

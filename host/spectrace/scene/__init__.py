@@ -8,7 +8,7 @@ from pathlib import Path
 
 from spectrace.lazy_names import lazy_names
 
-MODEL_NAMES = ["Scene", "Camera", "Shape", "AreaEmitter", "Medium"]
+MODEL_NAMES = ["Scene", "Camera", "Shape", "AreaEmitter", "Medium", "InstancedObject", "Instance"]
 
 
 def material_model_names() -> dict[str, str]:

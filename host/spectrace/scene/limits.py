@@ -210,6 +210,20 @@ def scene_geometry_problem(scene) -> str | None:
     for index, shape in enumerate(scene.shapes):
         if problem := coordinates_problem(shape.mesh.vertices):
             return f"shape {index} ('{shape.name}') has {problem}"
+    for index, instance in enumerate(getattr(scene, "instances", ())):
+        matrix = np.asarray(instance.to_world, dtype=np.float64)
+        if matrix.shape != (4, 4) or not np.all(np.isfinite(matrix)):
+            return f"instance {index} ('{instance.name}') has a to_world that is not a finite 4 x 4 matrix"
+        if abs(np.linalg.det(matrix[:3, :3])) == 0.0:
+            return f"instance {index} ('{instance.name}') has a singular to_world"
+        for shape in instance.object.shapes:
+            # The corners of the shape's box: an affine map keeps every point within their images' hull.
+            lo, hi = shape.mesh.vertices.min(axis=0), shape.mesh.vertices.max(axis=0)
+            corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+            with np.errstate(over="ignore", invalid="ignore"):
+                placed = corners @ matrix[:3, :3].T + matrix[:3, 3]
+            if problem := coordinates_problem(placed):
+                return f"instance {index} ('{instance.name}') places shape '{shape.name}' with {problem}"
     camera = scene.camera
     if problem := coordinates_problem(np.array([camera.origin, camera.target, camera.up], dtype=np.float64)):
         return f"the camera has {problem}"

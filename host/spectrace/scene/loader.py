@@ -22,7 +22,18 @@ from spectrace.lights import LIGHTS
 from spectrace.lights.area import emitter as area_emitter
 from spectrace.materials import MATERIALS, material_textures, surface
 from spectrace.scene import limits, schema
-from spectrace.scene.model import AreaEmitter, Camera, EmitterImage, Light, Material, Medium, Scene, Shape
+from spectrace.scene.model import (
+    AreaEmitter,
+    Camera,
+    EmitterImage,
+    Instance,
+    InstancedObject,
+    Light,
+    Material,
+    Medium,
+    Scene,
+    Shape,
+)
 from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
@@ -340,10 +351,12 @@ class _Resolver:
             )
         return optical_constant(self.spectrum(spec, key, emission=True), positive, self.where(key))
 
-    def shapes(self, materials: dict[str, Material]) -> list[Shape]:
+    def shapes(
+        self, materials: dict[str, Material], specs: list[schema.ShapeSpec] | None = None, prefix: str = "shapes"
+    ) -> list[Shape]:
         shapes = []
-        for i, s in enumerate(self.spec.shapes):
-            key = f"shapes[{i}]"
+        for i, s in enumerate(self.spec.shapes if specs is None else specs):
+            key = f"{prefix}[{i}]"
             # Analytic unless asked for triangles: facets (face_normals = true) exist only on a tessellation.
             analytic = s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals)
             if s.type == "mesh":
@@ -414,6 +427,53 @@ class _Resolver:
                 )
             )
         return shapes
+
+    def instances(self, materials: dict[str, Material]) -> list[Instance]:
+        """The objects, each resolved once in its own space, and the instances that place them."""
+        objects: dict[str, InstancedObject] = {}
+        for name, o in self.spec.objects.items():
+            key = f"objects.{name}.shapes"
+            for i, s in enumerate(o.shapes):
+                if s.emitter is not None:
+                    raise SpectraceError(
+                        "emitters cannot be instanced: place the emitting shape in `shapes`",
+                        where=self.where(f"{key}[{i}].emitter"),
+                    )
+                if s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals):
+                    raise SpectraceError(
+                        f"an analytic {s.type} cannot be instanced: set tessellated = true",
+                        where=self.where(f"{key}[{i}].type"),
+                    )
+            objects[name] = InstancedObject(shapes=self.shapes(materials, o.shapes, key), name=name)
+        instances = []
+        boxes: dict[str, np.ndarray] = {}
+        for i, spec in enumerate(self.spec.instances):
+            key = f"instances[{i}]"
+            if spec.object not in objects:
+                close = difflib.get_close_matches(spec.object, list(objects), n=1)
+                hint = (
+                    f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(objects)) or 'none'}"
+                )
+                raise SpectraceError(f"undefined object '{spec.object}'{hint}", where=self.where(f"{key}.object"))
+            matrix = np.eye(4)
+            if spec.transform:
+                steps = [step.model_dump(exclude_none=True) for step in spec.transform]
+                with np.errstate(over="ignore", invalid="ignore"):
+                    matrix = transform_matrix(steps, where=self.where(f"{key}.transform"))
+            obj = objects[spec.object]
+            if spec.object not in boxes:  # the object's box corners: an affine map keeps the rest within them
+                points = np.concatenate([sh.mesh.vertices for sh in obj.shapes])
+                lo, hi = points.min(axis=0), points.max(axis=0)
+                boxes[spec.object] = np.array(
+                    [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+                )
+            corners = boxes[spec.object]
+            with np.errstate(over="ignore", invalid="ignore"):
+                placed = corners @ matrix[:3, :3].T + matrix[:3, 3]
+            if problem := limits.coordinates_problem(placed):
+                raise SpectraceError(f"the placed object has {problem}", where=self.where(f"{key}.transform"))
+            instances.append(Instance(object=obj, to_world=matrix, name=spec.name or f"{spec.object}{i}"))
+        return instances
 
     def interior(self, spec: schema.InteriorSpec, key: str) -> Medium:
         """σa, σs in 1/scene unit: a preset's 1/mm table or the given spectra (no upper bound), times scale."""
@@ -550,6 +610,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
             )
     materials = resolver.materials()
     shapes = resolver.shapes(materials)
+    instances = resolver.instances(materials)
     lights = resolver.lights()
     for name in spec.spectra:
         resolver.named_spectrum(name, f"spectra.{name}")
@@ -575,6 +636,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         seed=spec.sampler.seed,
         sampler=spec.sampler.type,
         source=path,
+        instances=instances,
     )
 
 

@@ -98,6 +98,26 @@ class Shape:
     analytic: AnalyticSurface | None = None
 
 
+@dataclass(frozen=True, eq=False)
+class InstancedObject:
+    """A group of shapes declared once, in its own object space, and placed any number of times by Instances (Mitsuba
+    3's shapegroup, pbrt-v4's ObjectBegin/ObjectEnd): its triangles are stored once on the device under a BVH of their
+    own (kernels/scene.cl, "Instances"). Meshes only: analytic shapes and emitters are refused in objects."""
+
+    shapes: list[Shape]  # object space
+    name: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class Instance:
+    """One placement of an InstancedObject (Mitsuba 3's instance, pbrt-v4's ObjectInstance): its object space taken
+    to world space by `to_world`, an invertible 4 x 4 affine matrix (a mirroring one is allowed)."""
+
+    object: InstancedObject
+    to_world: np.ndarray  # (4, 4)
+    name: str = ""
+
+
 @dataclass(frozen=True)
 class Scene:
     camera: Camera
@@ -118,6 +138,7 @@ class Scene:
     aovs: tuple[str, ...] = ()  # AOVs kept beside the image (spectrace.film.AOV_NAMES), in that order
     source: Path | None = None
     notes: dict = field(default_factory=dict)
+    instances: list[Instance] = field(default_factory=list)  # placed copies of objects stored once
 
     def with_overrides(self, **changes) -> "Scene":
         """A copy with some settings replaced (spp, width, height, seed, max_depth, ...); None keeps a value."""

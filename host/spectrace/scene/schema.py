@@ -506,6 +506,21 @@ class FilmSpec(Strict):
         return self
 
 
+class ObjectSpec(Strict):
+    """A group of shapes declared once in its own space and placed by `instances` (Mitsuba 3's shapegroup, pbrt-v4's
+    ObjectBegin/ObjectEnd); not rendered by itself."""
+
+    shapes: list[ShapeSpec] = Field(min_length=1)
+
+
+class InstanceSpec(Strict):
+    """One placement of an object (Mitsuba 3's instance, pbrt-v4's ObjectInstance)."""
+
+    object: str
+    transform: list[TransformStep] = []
+    name: str | None = None
+
+
 class SceneSpec(Strict):
     camera: CameraSpec
     film: FilmSpec
@@ -516,10 +531,12 @@ class SceneSpec(Strict):
     materials: dict[str, MaterialSpec]
     shapes: list[ShapeSpec] = []
     lights: list[LightSpec] = []
+    objects: dict[str, ObjectSpec] = {}
+    instances: list[InstanceSpec] = []
 
     @model_validator(mode="after")
     def _something_emits(self) -> "SceneSpec":
-        if not self.shapes and not self.lights:
+        if not self.shapes and not self.lights and not self.instances:
             raise ValueError("the scene has neither shapes nor lights")
         if sum(1 for light in self.lights if LIGHTS[light.type].IS_ENVIRONMENT) > 1:
             raise ValueError("at most one environment light (constant or envmap)")
