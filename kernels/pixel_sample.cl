@@ -8,12 +8,13 @@
 #include "rng.cl"
 #include "scene.cl"
 
-/* Sample `sample_index` of a pixel: its random stream, its four wavelengths and its camera ray. */
-inline Ray start_pixel_sample(__global const RenderParams *params, int pixel, int sample_index, Sampler *sampler,
-                              SampledWavelengths *w)
+/* Sample `sample_index` of a pixel: its random stream, its four wavelengths (drawn as the film table `cmf` says,
+ * film.cl) and its camera ray. */
+inline Ray start_pixel_sample(__global const RenderParams *params, __global const float4 *cmf, int pixel,
+                              int sample_index, Sampler *sampler, SampledWavelengths *w)
 {
     *sampler = sampler_start((uint)params->seed, (uint)pixel, (uint)sample_index);
-    *w = sample_wavelengths(sample_1d(sampler));
+    *w = sample_film_wavelengths(sample_1d(sampler), cmf);
     return camera_ray(params, pixel % params->width, pixel / params->width, sample_2d(sampler));
 }
 

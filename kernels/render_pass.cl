@@ -7,9 +7,9 @@
 #include "pixel_sample.cl"
 
 /* film: per pixel (ΣX, ΣY, ΣZ, number of dropped non-finite samples); ray_counts: rays traced per pixel, for
- * the benchmark's rays/s. */
+ * the benchmark's rays/s; spectral_film, response_film: film.cl's optional per-pixel sums. */
 KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
-                          __global uint *ray_counts, __global float *spectral_film)
+                          __global uint *ray_counts, __global float *spectral_film, __global float *response_film)
 {
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
@@ -20,9 +20,9 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
     for (int s = params->sample_begin; s < params->sample_begin + params->sample_count; ++s) {
         Sampler sampler;
         SampledWavelengths w;
-        Ray ray = start_pixel_sample(params, pixel, s, &sampler, &w);
+        Ray ray = start_pixel_sample(params, cmf, pixel, s, &sampler, &w);
         float4 radiance = TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
-        add_pixel_sample(&accumulated, spectral_film, pixel, radiance, cmf, &w);
+        add_pixel_sample(&accumulated, spectral_film, response_film, pixel, radiance, cmf, &w);
     }
     film[pixel] = accumulated;
     ray_counts[pixel] += rays_traced;

@@ -3,7 +3,8 @@ them, reading them back into an `Image`, and their saved state, the whole of a r
 stores (spectrace.engine.checkpoint writes and reads the file; what goes in it and back to the device is here).
 
 Per pixel the film holds four float32 sums (X, Y, Z and the count of non-finite samples left out), a uint32 count
-of rays traced, and, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`. Together with the
+of rays traced, when asked for `spectral_bins` float32 band sums over `spectral_range_nm`, and one float32 sum per
+channel of the film's response (spectrace.spectral.film_response: more observers, a measured sensor). Together with the
 number of samples per pixel added so far they are the entire state of a render: the samplers are counter-based and
 every pixel adds its samples in sample order, so restoring them continues the render bit for bit.
 """
@@ -21,10 +22,16 @@ from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.errors import SpectraceError
 from spectrace.image import Image, SpectralBands
 from spectrace.scene import limits
+from spectrace.spectral.film_response import FilmResponse
 
 SPECTRAL_LIMITS_NM = (360.0, 830.0)  # the wavelengths the renders sample
 # Saved-state buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
-STATE_LAYOUT = {"film": (np.float32, 4), "ray_counts": (np.uint32, 1), "spectral_film": (np.float32, None)}
+STATE_LAYOUT = {
+    "film": (np.float32, 4),
+    "ray_counts": (np.uint32, 1),
+    "spectral_film": (np.float32, None),
+    "response_film": (np.float32, None),
+}
 
 
 @dataclass
@@ -47,7 +54,8 @@ def spectral_defines(bins: int, range_nm: tuple[float, float]) -> dict[str, int 
 
 
 def state_problem(state: RenderState, width: int, height: int) -> str | None:
-    """Why `state` cannot be the saved state of a width x height film, or None (any number of spectral bands)."""
+    """Why `state` cannot be the saved state of a width x height film, or None (any number of spectral bands and
+    response channels)."""
     if not 0 <= state.samples_done <= limits.MAX_SPP:
         return f"sample count {state.samples_done} is outside 0..{limits.MAX_SPP}"
     if not (np.isfinite(state.render_seconds) and state.render_seconds >= 0):
@@ -87,8 +95,11 @@ class Film:
         height: int,
         spectral_bins: int = 0,
         spectral_range_nm: tuple[float, float] = SPECTRAL_LIMITS_NM,
+        response: FilmResponse | None = None,
     ):
         self.device = device
+        self.response = response or FilmResponse()
+        self.response_channels = len(self.response.channel_names)
         self.width = width
         self.height = height
         self.pixel_count = width * height
@@ -100,6 +111,7 @@ class Film:
         self.ray_count_buffer = cl.Buffer(ctx, rw, self.pixel_count * limits.RAY_COUNT_BYTES_PER_PIXEL)
         # Allocated even without bands (one float), since the kernels always take the argument.
         self.spectral_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * spectral_bins, 1) * SPECTRAL_BAND_BYTES)
+        self.response_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * self.response_channels, 1) * 4)
         self.samples_done = 0
         self.render_seconds = 0.0
         self.reset()
@@ -110,6 +122,7 @@ class Film:
         cl.enqueue_fill_buffer(queue, self.xyz_buffer, np.zeros(1, np.float32), 0, self.xyz_buffer.size)
         cl.enqueue_fill_buffer(queue, self.ray_count_buffer, np.zeros(1, np.uint32), 0, self.ray_count_buffer.size)
         cl.enqueue_fill_buffer(queue, self.spectral_buffer, np.zeros(1, np.float32), 0, self.spectral_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.response_buffer, np.zeros(1, np.float32), 0, self.response_buffer.size)
         queue.finish()
         self.samples_done = 0
         self.render_seconds = 0.0
@@ -137,6 +150,14 @@ class Film:
         self.device.queue.finish()
         return bands.reshape(self.height, self.width, self.spectral_bins)
 
+    @translate_opencl_errors("reading the response film")
+    def read_responses(self) -> np.ndarray:
+        """(height, width, channels) response sums; divide by samples_done for the means."""
+        sums = np.empty(self.pixel_count * self.response_channels, np.float32)
+        cl.enqueue_copy(self.device.queue, sums, self.response_buffer)
+        self.device.queue.finish()
+        return sums.reshape(self.height, self.width, self.response_channels)
+
     def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
         """The mean of the samples so far per pixel, labelled with how it was made."""
         film, rays = self.read()
@@ -148,7 +169,12 @@ class Film:
             spectral = SpectralBands(
                 np.linspace(lo, hi, self.spectral_bins + 1), self.read_spectral() / np.float32(count)
             )
+        channels: dict[str, np.ndarray] = {}
+        if not self.response.is_default:
+            responses = self.read_responses() / np.float32(count)
+            xyz, channels = self.response.outputs(xyz, responses)
         return Image(
+            channels=channels,
             spectral=spectral,
             xyz=xyz,
             spp=self.samples_done,
@@ -166,6 +192,8 @@ class Film:
         buffers = {"film": self.xyz_buffer, "ray_counts": self.ray_count_buffer}
         if self.spectral_bins > 0:
             buffers["spectral_film"] = self.spectral_buffer
+        if self.response_channels > 0:
+            buffers["response_film"] = self.response_buffer
         return buffers
 
     def save_state(self) -> RenderState:
@@ -175,6 +203,8 @@ class Film:
         buffers = {"film": film, "ray_counts": rays}
         if self.spectral_bins > 0:
             buffers["spectral_film"] = self.read_spectral().reshape(-1)
+        if self.response_channels > 0:
+            buffers["response_film"] = self.read_responses().reshape(-1)
         return RenderState(self.samples_done, self.render_seconds, buffers)
 
     @translate_opencl_errors("restoring the film from a checkpoint")

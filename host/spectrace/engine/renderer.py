@@ -75,6 +75,8 @@ class Renderer:
         if specialise:
             defines |= scene_feature_defines(self.buffers)
         defines |= spectral_defines(spectral_bins, spectral_range_nm)
+        response = scene.film_response
+        defines |= response.defines()
         self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
         self.kernel = self._create_kernels()
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
@@ -84,8 +86,10 @@ class Renderer:
         b = self.buffers
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._scene = upload_scene(ctx, b)
-        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(b.cmf))
-        self.film = Film(self.device, scene.width, scene.height, spectral_bins, spectral_range_nm)
+        # The default CIE 1931 film's table is the scene buffers' CMFs; other films bring their own (film.cl).
+        film_table = b.cmf if response.is_default else response.device_table()
+        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(film_table))
+        self.film = Film(self.device, scene.width, scene.height, spectral_bins, spectral_range_nm, response=response)
         self._allocate(spectral_bins)
 
     def _check_scene(self, scene: Scene) -> None:
@@ -134,7 +138,13 @@ class Renderer:
         cl.enqueue_copy(queue, self._params, params)
         film = self.film
         self.kernel.set_args(
-            self._params, *self._scene, self._cmf, film.xyz_buffer, film.ray_count_buffer, film.spectral_buffer
+            self._params,
+            *self._scene,
+            self._cmf,
+            film.xyz_buffer,
+            film.ray_count_buffer,
+            film.spectral_buffer,
+            film.response_buffer,
         )
         global_size, local_size = launch_shape(self.pixel_count, self.work_group)
         cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)

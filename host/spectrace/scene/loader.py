@@ -21,6 +21,8 @@ from spectrace.materials import MATERIALS, material_textures, surface
 from spectrace.scene import limits, schema
 from spectrace.scene.model import AreaEmitter, Camera, EmitterImage, Light, Material, Medium, Scene, Shape
 from spectrace.spectral.blackbody import blackbody
+from spectrace.spectral.film_response import FilmResponse, load_sensor
+from spectrace.spectral.illuminants import cie_illuminant
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
@@ -536,6 +538,7 @@ def load_scene(path: str | Path) -> Scene:
         near_clip=spec.camera.near_clip,
     )
     _check_camera(camera, path)
+    film_response = _film_response(spec.film, resolver)
     return Scene(
         camera=camera,
         width=spec.film.width,
@@ -545,12 +548,36 @@ def load_scene(path: str | Path) -> Scene:
         integrator=spec.integrator.type,
         max_depth=spec.integrator.max_depth,
         exposure=spec.film.exposure,
+        film_response=film_response,
         rr_depth=spec.integrator.rr_depth,
         hide_environment=spec.integrator.hide_environment,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
         sampler=spec.sampler.type,
         source=path,
+    )
+
+
+def _film_response(film: schema.FilmSpec, resolver: _Resolver) -> FilmResponse:
+    """The film's observers and sensor (spectrace.spectral.film_response); errors name the film's keys."""
+    sensor = None
+    if film.sensor is not None:
+        try:
+            sensor = load_sensor(resolver.folder / film.sensor)
+        except SpectraceError as exc:
+            raise SpectraceError(str(exc), where=resolver.where("film.sensor")) from None
+    if film.sensor_white is not None:
+        if sensor is None or len(sensor.channel_names) != 3:
+            raise SpectraceError(
+                "sensor_white (white balance and colour correction) needs a 3-channel film.sensor",
+                where=resolver.where("film.sensor_white"),
+            )
+        try:
+            cie_illuminant(film.sensor_white)
+        except SpectraceError as exc:
+            raise SpectraceError(exc.message, where=resolver.where("film.sensor_white")) from None
+    return FilmResponse(
+        observer=film.observer, observers=tuple(film.observers), sensor=sensor, sensor_white=film.sensor_white
     )
 
 

@@ -20,6 +20,7 @@ from spectrace.lights.envmap import EnvironmentMap  # noqa: F401
 from spectrace.lights.point import PointLight  # noqa: F401
 from spectrace.lights.spot import SpotLight  # noqa: F401
 from spectrace.materials.base import Material
+from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
@@ -108,6 +109,7 @@ class Scene:
     rr_depth: int = 5
     hide_environment: bool = False  # camera rays that leave the scene see black (Mitsuba's hide_emitters)
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
+    film_response: FilmResponse = field(default_factory=FilmResponse)  # observers and sensor of the film
     spp: int = 16
     seed: int = 0
     sampler: SamplerType = DEFAULT_SAMPLER

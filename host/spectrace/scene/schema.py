@@ -25,6 +25,7 @@ from spectrace.materials import MATERIALS, surface
 from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
+from spectrace.spectral.film_response import observer_problem
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 
@@ -64,6 +65,29 @@ class FilmSpec(Strict):
         le=limits.MAX_EXPOSURE_STOPS,
         description="stops: RGB output x 2**exposure",
     )
+    observer: str = Field(default="CIE 1931 2°", description="CIE observer of the film's X, Y, Z and RGB outputs")
+    observers: list[str] = Field(default_factory=list, description="more observers, X, Y, Z each as EXR channels")
+    sensor: str | None = Field(default=None, description="CSV of measured channel sensitivities, as EXR channels")
+    sensor_white: str | None = Field(
+        default=None, description="CIE illuminant: white balance and colour correction of a 3-channel sensor"
+    )
+
+    @field_validator("observer")
+    @classmethod
+    def _known_observer(cls, value: str) -> str:
+        if problem := observer_problem(value):
+            raise ValueError(problem)
+        return value
+
+    @field_validator("observers")
+    @classmethod
+    def _known_observers(cls, value: list[str]) -> list[str]:
+        for label in value:
+            if problem := observer_problem(label):
+                raise ValueError(problem)
+        if len(set(value)) != len(value):
+            raise ValueError("an observer is listed twice")
+        return value
 
     @field_validator("width", "height")
     @classmethod
