@@ -52,6 +52,7 @@ _LAZY = {
     **dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"),
     "load_scene": "spectrace.scene",
     "Spectrum": "spectrace.spectral.spectrum",
+    **dict.fromkeys(["FilmResponse", "load_sensor", "delta_e_2000_map"], "spectrace.spectral.film_response"),
 }
 
 
@@ -92,5 +93,8 @@ __getattr__, __dir__ = lazy_names(
         "Adaptation",
         "WhiteBalance",
         "parse_white_balance",
+        "FilmResponse",
+        "load_sensor",
+        "delta_e_2000_map",
     ],
 )

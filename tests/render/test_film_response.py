@@ -23,12 +23,16 @@ PREFIXES = {"CIE 1931 2°": "cie1931_2", "CIE 1964 10°": "cie1964_10", "CIE 201
 RADIANCE = 'spectrum = "cie:FL2", scale = 0.01'
 
 
-def _scene(tmp_path, film_keys: str, radiance: str = RADIANCE):
+def _write_scene(tmp_path, film_keys: str, radiance: str = RADIANCE):
     text = emitting_screen(radiance=radiance, width=16, height=16)
     text = text.replace("height = 16\n", f"height = 16\n{film_keys}\n", 1)
     path = tmp_path / "screen.toml"
     path.write_text(text, encoding="utf-8")
-    return load_scene(path)
+    return path
+
+
+def _scene(tmp_path, film_keys: str, radiance: str = RADIANCE):
+    return load_scene(_write_scene(tmp_path, film_keys, radiance))
 
 
 def _expected_xyz(radiance: np.ndarray, observer: str) -> np.ndarray:
@@ -135,3 +139,69 @@ def test_channels_are_written_to_the_exr(device, tmp_path):
     read, _ = read_exr(tmp_path / "out.exr")
     assert {"sensor.mono", "cie2012_10.X", "cie2012_10.Y", "cie2012_10.Z", "X", "Y", "Z", "RGB"} <= set(read)
     np.testing.assert_array_equal(read["sensor.mono"], image.channels["sensor.mono"])
+
+
+@pytest.mark.parametrize("kernel", ["megakernel", "wavefront"])
+def test_response_film_is_split_invariant_and_resumes_exactly(device, tmp_path, kernel):
+    from dataclasses import replace
+
+    from spectrace.engine.checkpoint import resume_render, save_checkpoint
+    from spectrace.engine.wavefront import make_renderer
+    from spectrace.resources import scenes_dir
+    from spectrace.spectral.film_response import load_sensor
+
+    _write_sensor(tmp_path / "mono.csv", {"mono": _gaussian(650, 60)})
+    scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=12, height=10, spp=5, seed=3)
+    response = replace(
+        scene.film_response,
+        observer="CIE 1964 10°",
+        observers=("CIE 1931 2°", "CIE 2012 2°"),
+        sensor=load_sensor(tmp_path / "mono.csv"),
+    )
+    scene = scene.with_overrides(film_response=response)
+    one = make_renderer(scene, device, kernel)
+    one.run_pass(5)
+    split = make_renderer(scene, device, kernel)
+    split.run_pass(2)
+    save_checkpoint(tmp_path / "state.npz", split)
+    resumed = make_renderer(scene, device, kernel)
+    resume_render(resumed, tmp_path / "state.npz")
+    resumed.run_pass(1)
+    resumed.run_pass(2)
+    reference = one.film.read_responses()
+    assert reference.shape == (10, 12, 7) and reference[..., -1].mean() > 0
+    assert np.array_equal(resumed.film.read_responses().view(np.uint32), reference.view(np.uint32))
+    assert np.array_equal(resumed.read_film()[0].view(np.uint32), one.read_film()[0].view(np.uint32))
+
+
+def test_render_command_writes_the_delta_e_map(device, tmp_path, monkeypatch, capsys):
+    from cli_runner import run_in_process
+
+    _write_scene(tmp_path, 'observers = ["CIE 1931 2°", "CIE 2012 2°"]')
+    out = tmp_path / "map.exr"
+    code, _ = run_in_process(
+        monkeypatch, capsys, ["render", str(tmp_path / "screen.toml"), "-o", str(out), "--delta-e-map", "--spp", "2"]
+    )
+    assert code in (0, None)
+    channels, _ = read_exr(out)
+    assert np.all(np.isfinite(channels["deltaE00"])) and channels["deltaE00"].mean() > 0.1
+
+
+@pytest.mark.parametrize(
+    ("film_keys", "option", "says"),
+    [
+        ('observers = ["CIE 1931 2°"]', "--delta-e-map", "--delta-e-map: compares the first two of film.observers"),
+        ('observer = "CIE 1931"', "", "film.observer"),
+        ('sensor = "missing.csv"', "", "film.sensor"),
+        ('sensor_white = "D65"', "", "film.sensor_white"),
+    ],
+)
+def test_bad_film_settings_are_one_line(tmp_path, monkeypatch, capsys, film_keys, option, says):
+    from cli_runner import run_in_process
+
+    _write_scene(tmp_path, film_keys)
+    argv = ["render", str(tmp_path / "screen.toml"), "-o", str(tmp_path / "out.exr"), *([option] if option else [])]
+    code, err = run_in_process(monkeypatch, capsys, argv)
+    assert code != 0
+    assert len(err.strip().splitlines()) == 1 and says in err and "Traceback" not in err, err
+    assert not (tmp_path / "out.exr").exists()

@@ -86,6 +86,10 @@ def scene_digest(renderer: Renderer) -> str:
     _update_with_array(digest, "params", render_params(renderer.scene, renderer.buffers, 0, 0))
     for name, array in scene_arrays(renderer.buffers).items():
         _update_with_array(digest, name, array)
+    response = renderer.scene.film_response
+    if not response.is_default:  # (the default film's table is the scene's CMF array, hashed above)
+        digest.update(repr(response.channel_names).encode())
+        _update_with_array(digest, "film_table", renderer.film_table)
     return digest.hexdigest()
 
 

@@ -87,8 +87,8 @@ class Renderer:
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._scene = upload_scene(ctx, b)
         # The default CIE 1931 film's table is the scene buffers' CMFs; other films bring their own (film.cl).
-        film_table = b.cmf if response.is_default else response.device_table()
-        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(film_table))
+        self.film_table = b.cmf if response.is_default else response.device_table()
+        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(self.film_table))
         self.film = Film(self.device, scene.width, scene.height, spectral_bins, spectral_range_nm, response=response)
         self._allocate(spectral_bins)
 
