@@ -205,3 +205,54 @@ def test_bad_film_settings_are_one_line(tmp_path, monkeypatch, capsys, film_keys
     assert code != 0
     assert len(err.strip().splitlines()) == 1 and says in err and "Traceback" not in err, err
     assert not (tmp_path / "out.exr").exists()
+
+
+# ---------------------------------------------------------------- the film's wavelength range
+
+
+def test_blackbody_through_a_near_infrared_sensor_gives_the_planck_integral(device, tmp_path):
+    from spectrace.spectral.blackbody import WIEN_DISPLACEMENT, planck_radiance
+
+    wavelengths = np.arange(760, 1101)
+    sensitivity = np.exp(-0.5 * ((wavelengths - 950) / 40.0) ** 2)  # nothing below 760 nm: a NIR-only sensor
+    lines = ["wavelength_nm,NIR", *(f"{w},{v:.9g}" for w, v in zip(wavelengths, sensitivity))]
+    (tmp_path / "nir.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    temperature = 1500.0
+    scene = _scene(tmp_path, 'sensor = "nir.csv"\nwavelengths = [300, 1100]', radiance=f"blackbody = {temperature}")
+    image = Renderer(scene, device).render()
+    # Planck's law (normalised to its peak, as the scene format's blackbody is) times the sensor, integrated on a
+    # 0.01 nm grid: independent of the renderer's 1 nm table.
+    fine = np.linspace(760.0, 1100.0, 34001)
+    peak = planck_radiance(np.array([WIEN_DISPLACEMENT / temperature * 1e9]), temperature)[0]
+    integrand = planck_radiance(fine, temperature) / peak * np.interp(fine, wavelengths, sensitivity)
+    expected = np.trapezoid(integrand, fine)
+    _assert_within_4_sigma(image.channels["sensor.NIR"][..., None], np.array([expected]))
+
+
+def test_a_spectrum_short_of_the_films_range_is_one_line_naming_it(tmp_path, monkeypatch, capsys):
+    from cli_runner import run_in_process
+
+    (tmp_path / "lamp.csv").write_text("wavelength_nm,value\n380,1\n780,2\n", encoding="utf-8")
+    _write_scene(tmp_path, "wavelengths = [300, 1000]", radiance='file = "lamp.csv"')
+    code, err = run_in_process(monkeypatch, capsys, ["render", str(tmp_path / "screen.toml"), "-o", "x.exr"])
+    assert code != 0 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert "lamp" in err and "380-780 nm" in err and "300-380 nm and 780-1000 nm" in err, err
+
+
+def test_rgb_outside_the_visible_is_refused_unless_extended(device, tmp_path, monkeypatch, capsys):
+    from cli_runner import run_in_process
+
+    text = (
+        emitting_screen(reflectance="rgb = [0.2, 0.5, 0.3]", radiance="blackbody = 3000", width=4, height=4)
+        .replace("height = 4\n", "height = 4\nwavelengths = [360, 1000]\n", 1)
+        .replace("max_depth = 1", "max_depth = 2")
+    )
+    path = tmp_path / "rgb.toml"
+    path.write_text(text, encoding="utf-8")
+    out = tmp_path / "out.exr"
+    code, err = run_in_process(monkeypatch, capsys, ["render", str(path), "-o", str(out)])
+    assert code != 0 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert "RGB uplift" in err and "extend_rgb" in err and not out.exists(), err
+    path.write_text(text.replace("wavelengths = [360, 1000]", "wavelengths = [360, 1000]\nextend_rgb = true"))
+    image = Renderer(load_scene(path), device).render(spp=2)
+    assert np.all(np.isfinite(image.xyz)) and image.xyz[..., 1].mean() > 0

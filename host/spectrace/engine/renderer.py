@@ -68,7 +68,13 @@ class Renderer:
         if problem:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         self.device = device if isinstance(device, Device) else open_device(device)
-        self.buffers: SceneBuffers = build_scene_buffers(scene)
+        try:
+            self.buffers: SceneBuffers = build_scene_buffers(scene)
+        except SpectraceError as exc:  # a spectrum short of the film's range: name the scene when nothing else is
+            if exc.where or scene.source is None:
+                raise
+            raise SpectraceError(exc.message, where=str(scene.source)) from None
+        self._check_film_range(scene)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
         check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
@@ -91,6 +97,21 @@ class Renderer:
         self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(self.film_table))
         self.film = Film(self.device, scene.width, scene.height, spectral_bins, spectral_range_nm, response=response)
         self._allocate(spectral_bins)
+
+    def _check_film_range(self, scene: Scene) -> None:
+        """A film range of its own reaches every tabulated spectrum (the table refuses those that fall short), but
+        not the textures and pictures, whose RGB texels are uplifted in the kernels on the visible grid."""
+        response = scene.film_response
+        if not response.has_own_grid:
+            return
+        features = scene_feature_defines(self.buffers)
+        if features["SCENE_HAS_TEXTURES"] or features["SCENE_HAS_LIGHT_IMAGES"]:
+            lo, hi = response.wavelengths
+            raise SpectraceError(
+                f"film.wavelengths {lo:g}-{hi:g} nm: textures and emitter pictures are defined for the visible "
+                "(360-830 nm) only; a film range of its own takes spectra, not textures",
+                where=str(scene.source) if scene.source else None,
+            )
 
     def _check_scene(self, scene: Scene) -> None:
         """Refuses a scene this kernel shape cannot render, before any other check."""

@@ -576,9 +576,17 @@ def _film_response(film: schema.FilmSpec, resolver: _Resolver) -> FilmResponse:
             cie_illuminant(film.sensor_white)
         except SpectraceError as exc:
             raise SpectraceError(exc.message, where=resolver.where("film.sensor_white")) from None
-    return FilmResponse(
-        observer=film.observer, observers=tuple(film.observers), sensor=sensor, sensor_white=film.sensor_white
-    )
+    try:
+        return FilmResponse(
+            observer=film.observer,
+            observers=tuple(film.observers),
+            sensor=sensor,
+            sensor_white=film.sensor_white,
+            wavelengths=(float(film.wavelengths[0]), float(film.wavelengths[1])),
+            extend_rgb=film.extend_rgb,
+        )
+    except SpectraceError as exc:
+        raise SpectraceError(str(exc), where=resolver.where("film")) from None
 
 
 def _check_camera(camera: Camera, path: Path) -> None:

@@ -25,7 +25,7 @@ from spectrace.materials import MATERIALS, surface
 from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
-from spectrace.spectral.film_response import observer_problem
+from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 
@@ -71,6 +71,20 @@ class FilmSpec(Strict):
     sensor_white: str | None = Field(
         default=None, description="CIE illuminant: white balance and colour correction of a 3-channel sensor"
     )
+
+    wavelengths: tuple[FiniteFloat, FiniteFloat] = Field(
+        default=(360.0, 830.0), description="nm: the film's wavelength range (1 nm grid); spectra must cover it"
+    )
+    extend_rgb: StrictBool = Field(
+        default=False, description="RGB uplifts continue (their sigmoid) beyond the visible when wavelengths go there"
+    )
+
+    @field_validator("wavelengths")
+    @classmethod
+    def _wavelength_range(cls, value: tuple[float, float]) -> tuple[float, float]:
+        if problem := wavelength_range_problem(value):
+            raise ValueError(problem)
+        return value
 
     @field_validator("observer")
     @classmethod

@@ -34,7 +34,14 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.spectral.colorimetry import CIE_1931_CMFS, cmf_table_normalised, spectrum_to_xyz
-from spectrace.spectral.grid import GRID_NM, GRID_SIZE, GRID_STEP_NM, TRAPEZOID_WEIGHTS_NM, integrate_on_grid
+from spectrace.spectral.grid import (
+    GRID_MAX_NM,
+    GRID_MIN_NM,
+    GRID_NM,
+    GRID_STEP_NM,
+    TRAPEZOID_WEIGHTS_NM,
+    integrate_on_grid,
+)
 
 DEFAULT_OBSERVER = "CIE 1931 2°"
 # label (the scene format's name) -> (channel prefix, colour-science's MSDS_CMFS key)
@@ -47,6 +54,21 @@ OBSERVERS: dict[str, tuple[str, str]] = {
 UNIFORM_FRACTION = 0.1  # of the tabulated wavelength pdf
 DELTA_E_CHANNEL = "deltaE00"
 SENSOR_PREFIX = "sensor."
+
+
+WAVELENGTH_LIMITS_NM = (200.0, 2500.0)  # what film.wavelengths may ask for (silicon to short-wave infrared)
+
+
+def wavelength_range_problem(wavelengths: tuple[float, float]) -> str | None:
+    lo, hi = (float(value) for value in wavelengths)
+    if not (WAVELENGTH_LIMITS_NM[0] <= lo < hi <= WAVELENGTH_LIMITS_NM[1]):
+        return (
+            f"film wavelengths must be [lo, hi] with {WAVELENGTH_LIMITS_NM[0]:g} <= lo < hi <= "
+            f"{WAVELENGTH_LIMITS_NM[1]:g} nm, got [{lo:g}, {hi:g}]"
+        )
+    if lo != round(lo) or hi != round(hi):
+        return f"film wavelengths must be whole nanometres (the grid is 1 nm), got [{lo:g}, {hi:g}]"
+    return None
 
 
 def observer_problem(label: str) -> str | None:
@@ -70,19 +92,37 @@ def observer_cmfs(label: str) -> np.ndarray:
     return table
 
 
-def observer_xyz_curves(label: str) -> np.ndarray:
-    """(grid, 3): the observer's CMFs divided by its ∫ȳ, so that a constant radiance 1 has Y = 1."""
-    cmfs = observer_cmfs(label)
-    return cmfs / float(integrate_on_grid(cmfs[:, 1]))
+def observer_xyz_curves(label: str, wavelengths_nm: np.ndarray = GRID_NM) -> np.ndarray:
+    """(wavelengths, 3): the observer's CMFs divided by its ∫ȳ, so that a constant radiance 1 has Y = 1; zero
+    beyond the common grid (no observer's table goes further)."""
+    cmfs = observer_cmfs(label) / float(integrate_on_grid(observer_cmfs(label)[:, 1]))
+    if wavelengths_nm is GRID_NM:
+        return cmfs
+    return np.stack([np.interp(wavelengths_nm, GRID_NM, cmfs[:, i], left=0.0, right=0.0) for i in range(3)], axis=1)
 
 
 @dataclass(frozen=True, eq=False)
 class Sensor:
-    """Measured channel sensitivities on the grid, (channels, grid), zero beyond the file's wavelengths."""
+    """Measured channel sensitivities: the file's samples, (wavelengths,) and (wavelengths, channels)."""
 
     source: str
     channel_names: tuple[str, ...]
-    curves: np.ndarray
+    wavelengths_nm: np.ndarray
+    sensitivities: np.ndarray
+
+    def curves_on(self, wavelengths_nm: np.ndarray) -> np.ndarray:
+        """(channels, len(wavelengths_nm)): linear between the samples, zero beyond them."""
+        return np.stack(
+            [
+                np.interp(wavelengths_nm, self.wavelengths_nm, self.sensitivities[:, i], left=0.0, right=0.0)
+                for i in range(self.sensitivities.shape[1])
+            ]
+        )
+
+    @property
+    def curves(self) -> np.ndarray:
+        """(channels, grid) on the common grid."""
+        return self.curves_on(GRID_NM)
 
 
 def load_sensor(path: str | Path) -> Sensor:
@@ -111,14 +151,11 @@ def load_sensor(path: str | Path) -> Sensor:
     if len(wavelengths) < 2:
         raise SpectraceError("a sensor file needs at least two wavelengths", where=str(path))
     data = np.asarray(rows, np.float64)
-    curves = np.stack([np.interp(GRID_NM, wavelengths, data[:, i], left=0.0, right=0.0) for i in range(data.shape[1])])
-    for name, curve in zip(table.columns, curves):
-        if not integrate_on_grid(curve) > 0:
-            raise SpectraceError(
-                f"channel '{name}' has no sensitivity within {GRID_NM[0]:g}-{GRID_NM[-1]:g} nm", where=str(path)
-            )
-    curves.setflags(write=False)
-    return Sensor(source=str(path), channel_names=tuple(table.columns), curves=curves)
+    sensor = Sensor(str(path), tuple(table.columns), np.asarray(wavelengths, np.float64), data)
+    for name, row in zip(table.columns, data.T):
+        if not row.max() > 0:
+            raise SpectraceError(f"channel '{name}' has no sensitivity", where=str(path))
+    return sensor
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,6 +167,8 @@ class FilmResponse:
     sensor: Sensor | None = None
     sensor_white: str | None = None  # CIE illuminant for the white balance and colour-correction matrix
     delta_e_pair: tuple[str, str] | None = field(default=None)  # observers whose CIEDE2000 map the image gets
+    wavelengths: tuple[float, float] = (GRID_MIN_NM, GRID_MAX_NM)  # the film's range, nm (a 1 nm grid over it)
+    extend_rgb: bool = False  # RGB uplifts continue beyond the visible when the range goes there
 
     def __post_init__(self) -> None:
         for label in (self.observer, *self.observers):
@@ -139,6 +178,17 @@ class FilmResponse:
             raise SpectraceError("film observers are listed more than once")
         if self.sensor_white is not None and (self.sensor is None or len(self.sensor.channel_names) != 3):
             raise SpectraceError("sensor_white (white balance and colour correction) needs a 3-channel sensor")
+        if problem := wavelength_range_problem(self.wavelengths):
+            raise SpectraceError(problem)
+        if self.sensor is not None:
+            for name, curve in zip(self.sensor.channel_names, self.sensor.curves_on(self.grid_nm)):
+                if not curve.max() > 0:
+                    lo, hi = self.wavelengths
+                    raise SpectraceError(
+                        f"sensor channel '{name}' has no sensitivity within the film's wavelengths {lo:g}-{hi:g} nm "
+                        "(film.wavelengths sets them)",
+                        where=self.sensor.source,
+                    )
         if self.delta_e_pair is not None:
             missing = [label for label in self.delta_e_pair if label not in self.observers]
             if missing or self.delta_e_pair[0] == self.delta_e_pair[1]:
@@ -149,7 +199,22 @@ class FilmResponse:
 
     @property
     def is_default(self) -> bool:
-        return self.observer == DEFAULT_OBSERVER and not self.observers and self.sensor is None
+        return (
+            self.observer == DEFAULT_OBSERVER and not self.observers and self.sensor is None and not self.has_own_grid
+        )
+
+    @property
+    def has_own_grid(self) -> bool:
+        """The film's range is not the common grid's: spectra go to the device on the film's own 1 nm grid."""
+        return tuple(self.wavelengths) != (GRID_MIN_NM, GRID_MAX_NM)
+
+    @property
+    def grid_nm(self) -> np.ndarray:
+        """The film's wavelength grid: 1 nm over `wavelengths` (the common grid by default)."""
+        if not self.has_own_grid:
+            return GRID_NM
+        lo, hi = self.wavelengths
+        return np.arange(lo, hi + 0.5 * GRID_STEP_NM, GRID_STEP_NM)
 
     @property
     def channel_names(self) -> tuple[str, ...]:
@@ -160,25 +225,26 @@ class FilmResponse:
         return tuple(names)
 
     def curves(self) -> np.ndarray:
-        """(channels, grid) response curves of the response film."""
-        parts = [observer_xyz_curves(label).T for label in self.observers]
+        """(channels, film grid) response curves of the response film."""
+        grid = self.grid_nm
+        parts = [observer_xyz_curves(label, grid).T for label in self.observers]
         if self.sensor is not None:
-            parts.append(self.sensor.curves)
-        return np.concatenate(parts) if parts else np.zeros((0, GRID_SIZE))
+            parts.append(self.sensor.curves_on(grid))
+        return np.concatenate(parts) if parts else np.zeros((0, grid.size))
 
     def xyz_curves(self) -> np.ndarray:
-        """(grid, 3) float32: the XYZ film's table (the default film's exact one for CIE 1931)."""
-        if self.observer == DEFAULT_OBSERVER:
+        """(film grid, 3) float32: the XYZ film's table (the default film's exact one for CIE 1931)."""
+        if self.observer == DEFAULT_OBSERVER and not self.has_own_grid:
             return cmf_table_normalised()
-        return observer_xyz_curves(self.observer).astype(np.float32)
+        return observer_xyz_curves(self.observer, self.grid_nm).astype(np.float32)
 
     def sampling_pdf(self) -> np.ndarray:
         """(grid − 1,) pdf (1/nm) of the wavelengths on the grid's intervals: see the module's docstring."""
         curves = np.concatenate([self.xyz_curves().T.astype(np.float64), self.curves()])
-        shapes = curves / integrate_on_grid(curves)[:, None]
+        shapes = curves / np.maximum(curves.sum(axis=1), 1e-300)[:, None]
         mean = shapes.mean(axis=0)
         on_intervals = 0.5 * (mean[1:] + mean[:-1])
-        span = GRID_STEP_NM * (GRID_SIZE - 1)
+        span = GRID_STEP_NM * (self.grid_nm.size - 1)
         pdf = (1.0 - UNIFORM_FRACTION) * on_intervals / (on_intervals.sum() * GRID_STEP_NM) + UNIFORM_FRACTION / span
         return pdf
 
@@ -193,11 +259,12 @@ class FilmResponse:
 
     def device_table(self) -> np.ndarray:
         """(rows, 4) float32: the film table kernels/film.cl reads (XYZ CMFs, response curves, sampling table)."""
-        xyz = np.zeros((GRID_SIZE, 4), np.float32)
+        size = self.grid_nm.size
+        xyz = np.zeros((size, 4), np.float32)
         xyz[:, :3] = self.xyz_curves()
         curves = self.curves()
         groups = (len(curves) + 3) // 4
-        responses = np.zeros((groups, GRID_SIZE, 4), np.float32)
+        responses = np.zeros((groups, size, 4), np.float32)
         for channel, curve in enumerate(curves):
             responses[channel // 4, :, channel % 4] = curve
         cdf, pdf = self.sampling_table()
@@ -205,11 +272,16 @@ class FilmResponse:
         sampling = np.concatenate([sampling, np.zeros((-sampling.size) % 4, np.float32)]).reshape(-1, 4)
         return np.ascontiguousarray(np.concatenate([xyz, responses.reshape(-1, 4), sampling]))
 
-    def defines(self) -> dict[str, int]:
-        """Kernel defines for this film (none for the default film)."""
+    def defines(self) -> dict[str, int | float]:
+        """Kernel defines for this film (none for the default film); a film range of its own sets the grid of
+        every tabulated spectrum (kernels/spectrum.cl) to the film's."""
         if self.is_default:
             return {}
-        return {"FILM_RESPONSES": len(self.channel_names), "WAVELENGTH_TABLE": 1}
+        defines: dict[str, int | float] = {"FILM_RESPONSES": len(self.channel_names), "WAVELENGTH_TABLE": 1}
+        if self.has_own_grid:
+            grid = self.grid_nm
+            defines |= {"GRID_MIN_NM": float(grid[0]), "GRID_MAX_NM": float(grid[-1]), "GRID_SAMPLES": int(grid.size)}
+        return defines
 
     def outputs(self, xyz: np.ndarray, responses: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """The image's XYZ and named extra channels from the film's means: xyz (H, W, 3), responses (H, W, N)."""
