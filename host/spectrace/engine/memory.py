@@ -52,12 +52,15 @@ def scene_arrays(buffers: SceneBuffers) -> dict[str, np.ndarray]:
     return arrays
 
 
-def device_memory_need(buffers: SceneBuffers, pixel_count: int, spectral_bins: int = 0) -> DeviceMemoryNeed:
+def device_memory_need(
+    buffers: SceneBuffers, pixel_count: int, spectral_bins: int = 0, response_channels: int = 0
+) -> DeviceMemoryNeed:
     need = {
         "film": pixel_count * FILM_BYTES_PER_PIXEL,
         "ray counts": pixel_count * RAY_COUNT_BYTES_PER_PIXEL,
-        # allocated even without bands (one float), since the kernel always takes the argument
+        # allocated even without bands or channels (one float), since the kernel always takes the argument
         "spectral bands": max(pixel_count * spectral_bins, 1) * SPECTRAL_BAND_BYTES,
+        "response channels": max(pixel_count * response_channels, 1) * SPECTRAL_BAND_BYTES,
         "scene render parameters": RENDER_PARAMS_DTYPE.itemsize,
     }
     need.update({f"scene {name}": array.nbytes for name, array in scene_arrays(buffers).items()})

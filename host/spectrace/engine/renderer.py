@@ -76,7 +76,10 @@ class Renderer:
             raise SpectraceError(exc.message, where=str(scene.source)) from None
         self._check_film_range(scene)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
-        check_device_memory(device_memory_need(self.buffers, scene.width * scene.height, spectral_bins), self.device)
+        response_channels = len(scene.film_response.channel_names)
+        check_device_memory(
+            device_memory_need(self.buffers, scene.width * scene.height, spectral_bins, response_channels), self.device
+        )
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
         if specialise:
             defines |= scene_feature_defines(self.buffers)
@@ -205,6 +208,19 @@ class Renderer:
         """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
         return self.film.read_spectral()
 
+    def _film_metadata(self) -> dict[str, str]:
+        """What the film responded to, for the image's metadata (nothing for the default film)."""
+        response = self.scene.film_response
+        if response.is_default:
+            return {}
+        lo, hi = response.wavelengths
+        metadata = {"observer": response.observer, "wavelengths_nm": f"{lo:g}-{hi:g}"}
+        if response.sensor is not None:
+            metadata["sensor"] = response.sensor.source
+        if response.sensor_white is not None:
+            metadata["sensor_white"] = response.sensor_white
+        return metadata
+
     def image(self) -> Image:
         scene = self.scene
         return self.film.image(
@@ -217,6 +233,7 @@ class Renderer:
                 "height": scene.height,
                 "sampler": scene.sampler,
                 "triangles": self.buffers.triangle_count,
+                **self._film_metadata(),
                 "bvh_seconds": f"{self.buffers.bvh_seconds:.3f}",
                 **(
                     {"bvh_peak_mib": f"{self.buffers.bvh_peak_bytes / 2**20:.1f}"}

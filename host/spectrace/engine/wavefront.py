@@ -39,7 +39,7 @@ class WavefrontRenderer(Renderer):
         size_buffer = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4)
         cl.Kernel(self.program, "wavefront_slot_size")(self.device.queue, (1,), None, size_buffer)
         cl.enqueue_copy(self.device.queue, slot_size, size_buffer)
-        need = device_memory_need(self.buffers, self.pixel_count, spectral_bins)
+        need = device_memory_need(self.buffers, self.pixel_count, spectral_bins, self.film.response_channels)
         need.buffers["path slots"] = self.pixel_count * int(slot_size[0])
         need.buffers["path queues"] = 2 * self.pixel_count * QUEUE_ENTRY_BYTES
         check_device_memory(need, self.device)
