@@ -116,7 +116,7 @@ def test_delta_e_map_is_colour_sciences_ciede2000(device, tmp_path):
 
     scene = _scene(tmp_path, 'observers = ["CIE 1931 2°", "CIE 1964 10°"]')
     scene = scene.with_overrides(
-        film_response=replace(scene.film_response, delta_e_pair=("CIE 1931 2°", "CIE 1964 10°"))
+        film_response=replace(scene.film_response, delta_e_pair=("CIE 1931 2°", "CIE 1964 10°"), delta_e_white_y=2.0)
     )
     image = Renderer(scene, device).render(spp=4)
     d65 = colour.SDS_ILLUMINANTS["D65"]
@@ -124,7 +124,7 @@ def test_delta_e_map_is_colour_sciences_ciede2000(device, tmp_path):
     for observer in ("CIE 1931 2°", "CIE 1964 10°"):
         white = colour.XYZ_to_xy(colour.sd_to_XYZ(d65, cmfs=colour.MSDS_CMFS[COLOUR_NAMES[observer]]))
         xyz = np.stack([image.channels[f"{PREFIXES[observer]}.{a}"] for a in "XYZ"], -1).astype(np.float64)
-        labs.append(colour.XYZ_to_Lab(xyz, white))
+        labs.append(colour.XYZ_to_Lab(xyz / 2.0, white))  # the white at film Y = 2
     expected = colour.delta_E(labs[0], labs[1], method="CIE 2000")
     assert expected.mean() > 0.5, "the lamp should look different to the two observers"
     np.testing.assert_allclose(image.channels["deltaE00"], expected, rtol=1e-3, atol=1e-3)

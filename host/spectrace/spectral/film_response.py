@@ -167,6 +167,7 @@ class FilmResponse:
     sensor: Sensor | None = None
     sensor_white: str | None = None  # CIE illuminant for the white balance and colour-correction matrix
     delta_e_pair: tuple[str, str] | None = field(default=None)  # observers whose CIEDE2000 map the image gets
+    delta_e_white_y: float = 1.0  # film Y of the ΔE map's reference white (CIELAB's Y_n)
     wavelengths: tuple[float, float] = (GRID_MIN_NM, GRID_MAX_NM)  # the film's range, nm (a 1 nm grid over it)
     extend_rgb: bool = False  # RGB uplifts continue beyond the visible when the range goes there
 
@@ -178,6 +179,8 @@ class FilmResponse:
             raise SpectraceError("film observers are listed more than once")
         if self.sensor_white is not None and (self.sensor is None or len(self.sensor.channel_names) != 3):
             raise SpectraceError("sensor_white (white balance and colour correction) needs a 3-channel sensor")
+        if not (np.isfinite(self.delta_e_white_y) and self.delta_e_white_y > 0):
+            raise SpectraceError(f"the ΔE map's white Y must be a positive number, got {self.delta_e_white_y}")
         if problem := wavelength_range_problem(self.wavelengths):
             raise SpectraceError(problem)
         if self.sensor is not None:
@@ -293,7 +296,8 @@ class FilmResponse:
             xyz = ((raw * gains) @ matrix.T).astype(np.float32)
         if self.delta_e_pair is not None:
             first, second = (observer_xyz_image(channels, label) for label in self.delta_e_pair)
-            channels[DELTA_E_CHANNEL] = delta_e_2000_map(first, second, *self.delta_e_pair).astype(np.float32)
+            delta_e = delta_e_2000_map(first, second, *self.delta_e_pair, white_y=self.delta_e_white_y)
+            channels[DELTA_E_CHANNEL] = delta_e.astype(np.float32)
         return xyz, channels
 
 
@@ -314,13 +318,16 @@ def reference_white_xy(label: str) -> tuple[float, float]:
     return float(x), float(y)
 
 
-def delta_e_2000_map(first: np.ndarray, second: np.ndarray, first_label: str, second_label: str) -> np.ndarray:
+def delta_e_2000_map(
+    first: np.ndarray, second: np.ndarray, first_label: str, second_label: str, white_y: float = 1.0
+) -> np.ndarray:
     """Per-pixel CIEDE2000 between two observers' XYZ images (colour-science's `delta_E`). Each image goes to CIELAB
-    with its own observer's D65 as the reference white at Y = 1 (film units: a constant radiance 1 is L* = 100)."""
+    with its own observer's D65 chromaticity as the reference white, at film Y = `white_y` (by default 1: a constant
+    radiance 1 is L* = 100)."""
     import colour
 
-    lab_first = colour.XYZ_to_Lab(first.astype(np.float64), reference_white_xy(first_label))
-    lab_second = colour.XYZ_to_Lab(second.astype(np.float64), reference_white_xy(second_label))
+    lab_first = colour.XYZ_to_Lab(first.astype(np.float64) / white_y, reference_white_xy(first_label))
+    lab_second = colour.XYZ_to_Lab(second.astype(np.float64) / white_y, reference_white_xy(second_label))
     return np.asarray(colour.delta_E(lab_first, lab_second, method="CIE 2000"))
 
 
