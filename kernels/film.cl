@@ -8,13 +8,13 @@
  *
  * Film responses (optional): FILM_RESPONSES more curves r_c(λ) (other observers' x̄ȳz̄, a camera's measured channel
  * sensitivities), each estimated the same way, ∫ L r_c dλ, into FILM_RESPONSES floats per pixel of `response_film`.
- * With WAVELENGTH_TABLE the wavelengths follow a tabulated pdf the host shaped after the film's curves (pbrt-v4
- * samples its RGB film's visible range the same way in spirit; the table is a piecewise-constant pdf inverted by
- * binary search on its CDF, Pharr et al., PBR 4th ed., Sec. A.1 "Sampling 1D functions"). The film table `cmf`
- * then holds, in float4 rows: GRID_SAMPLES rows of the XYZ film's CMFs, FILM_RESPONSE_GROUPS × GRID_SAMPLES rows of
- * the response curves four at a time, then the sampling table: GRID_SAMPLES floats of CDF at the grid's nodes and
- * GRID_SAMPLES - 1 floats of pdf (1/nm) on the intervals between them. Renders of the default CIE 1931 film define
- * neither and carry none of this code. */
+ * With WAVELENGTH_TABLE the wavelengths follow a tabulated pdf the host shaped after the film's curves (as Mitsuba
+ * 3's specfilm samples by its response curves): a piecewise-constant pdf on the grid's intervals, inverted by binary
+ * search on its CDF (pbrt-v4's PiecewiseConstant1D does the same). The film table `cmf` then holds, in float4
+ * rows: GRID_SAMPLES rows of the XYZ film's CMFs, FILM_RESPONSE_GROUPS × GRID_SAMPLES rows of the response curves
+ * four at a time, then the sampling table: GRID_SAMPLES floats of CDF at the grid's nodes and GRID_SAMPLES - 1
+ * floats of pdf (1/nm) on the intervals between them (host: spectrace.spectral.film_response). Renders of the
+ * default CIE 1931 film define neither and carry none of this code. */
 #ifndef SPECTRACE_FILM_CL
 #define SPECTRACE_FILM_CL
 
