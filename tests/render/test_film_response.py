@@ -256,3 +256,19 @@ def test_rgb_outside_the_visible_is_refused_unless_extended(device, tmp_path, mo
     path.write_text(text.replace("wavelengths = [360, 1000]", "wavelengths = [360, 1000]\nextend_rgb = true"))
     image = Renderer(load_scene(path), device).render(spp=2)
     assert np.all(np.isfinite(image.xyz)) and image.xyz[..., 1].mean() > 0
+
+
+def test_a_checkpoint_of_another_film_is_refused(device, tmp_path):
+    from dataclasses import replace
+
+    from spectrace.engine.checkpoint import resume_render, save_checkpoint
+    from spectrace.errors import SpectraceError
+
+    scene = _scene(tmp_path, 'observers = ["CIE 1964 10°"]')
+    renderer = Renderer(scene, device)
+    renderer.run_pass(1)
+    save_checkpoint(tmp_path / "state.npz", renderer)
+    other = scene.with_overrides(film_response=replace(scene.film_response, observers=("CIE 2012 10°",)))
+    with pytest.raises(SpectraceError):
+        resume_render(Renderer(other, device), tmp_path / "state.npz")
+    resume_render(Renderer(scene, device), tmp_path / "state.npz")  # the same film resumes
