@@ -10,13 +10,14 @@
 #include "rng.cl"
 #include "scene.cl"
 
-/* Sample `sample_index` of a pixel: its random stream, its four wavelengths and its camera ray; `weight` is what
- * its radiance is multiplied by before it reaches the film (the pixel filter's, 1 for box and tent). */
-inline Ray start_pixel_sample(__global const RenderParams *params, int pixel, int sample_index, Sampler *sampler,
-                              SampledWavelengths *w, float *weight)
+/* Sample `sample_index` of a pixel: its random stream, its four wavelengths (drawn as the film table `cmf` says,
+ * film.cl) and its camera ray; `weight` is what its radiance is multiplied by before it reaches the film (the pixel
+ * filter's, 1 for box and tent). */
+inline Ray start_pixel_sample(__global const RenderParams *params, __global const float4 *cmf, int pixel,
+                              int sample_index, Sampler *sampler, SampledWavelengths *w, float *weight)
 {
     *sampler = sampler_start((uint)params->seed, (uint)pixel, (uint)sample_index);
-    *w = sample_wavelengths(sample_1d(sampler));
+    *w = sample_film_wavelengths(sample_1d(sampler), cmf);
     float2 film = pixel_filter_sample(params, pixel % params->width, pixel / params->width, sample_2d(sampler),
                                       weight);
     return camera_ray(params, film, sampler);

@@ -9,9 +9,11 @@
 #include "pixel_sample.cl"
 
 /* film: per pixel (ΣX, ΣY, ΣZ, number of dropped non-finite samples); ray_counts: rays traced per pixel, for
- * the benchmark's rays/s; aov_film: AOV_FLOAT4S_PER_PIXEL sums per pixel (aov.cl; untouched without FILM_AOVS). */
+ * the benchmark's rays/s; spectral_film, response_film: film.cl's optional per-pixel sums; aov_film:
+ * AOV_FLOAT4S_PER_PIXEL sums per pixel (aov.cl; untouched without FILM_AOVS). */
 KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
-                          __global uint *ray_counts, __global float *spectral_film, __global float4 *aov_film)
+                          __global uint *ray_counts, __global float *spectral_film, __global float *response_film,
+                          __global float4 *aov_film)
 {
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
@@ -27,7 +29,7 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
         Sampler sampler;
         SampledWavelengths w;
         float weight;
-        Ray ray = start_pixel_sample(params, pixel, s, &sampler, &w, &weight);
+        Ray ray = start_pixel_sample(params, cmf, pixel, s, &sampler, &w, &weight);
         /* weight: the pixel filter's sample weight, × 1 for box and tent filters, which changes no bits. */
 #if FILM_AOVS
         PathState path = camera_path(ray);
@@ -36,7 +38,7 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
 #else
         float4 radiance = weight * TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
 #endif
-        add_pixel_sample(&accumulated, spectral_film, pixel, radiance, cmf, &w);
+        add_pixel_sample(&accumulated, spectral_film, response_film, pixel, radiance, cmf, &w);
     }
     film[pixel] = accumulated;
 #if FILM_AOVS

@@ -31,16 +31,18 @@ KERNEL void wavefront_slot_size(__global uint *size)
 /* Starts the pixel's samples from `sample_index` on, adding to the film those that end before tracing anything
  * (none unless max_depth < 1); returns 0 when the pass's samples of the pixel are all done. */
 inline int start_slot_sample(__global const RenderParams *params, PathSlot *slot, int pixel, int sample_index,
-                             __global float4 *film, __global float *spectral_film, __global const float4 *cmf)
+                             __global float4 *film, __global float *spectral_film, __global float *response_film,
+                             __global const float4 *cmf)
 {
     for (; sample_index < params->sample_begin + params->sample_count; ++sample_index) {
-        Ray ray = start_pixel_sample(params, pixel, sample_index, &slot->sampler, &slot->w, &slot->weight);
+        Ray ray = start_pixel_sample(params, cmf, pixel, sample_index, &slot->sampler, &slot->w, &slot->weight);
         slot->path = camera_path(ray);
         slot->radiance = (float4)(0.0f);
         slot->sample = sample_index;
         if (slot->path.segments <= max_segments(params)) return 1;
         float4 accumulated = film[pixel];
-        add_pixel_sample(&accumulated, spectral_film, pixel, slot->weight * slot->radiance, cmf, &slot->w);
+        add_pixel_sample(&accumulated, spectral_film, response_film, pixel, slot->weight * slot->radiance, cmf,
+                         &slot->w);
         film[pixel] = accumulated;
     }
     return 0;
@@ -48,14 +50,14 @@ inline int start_slot_sample(__global const RenderParams *params, PathSlot *slot
 
 /* queue, queue_length: the pixels with a live path, appended in no particular order. */
 KERNEL void wavefront_start(__global const RenderParams *params, __global const float4 *cmf,
-                              __global float4 *film, __global float *spectral_film, __global PathSlot *slots,
-                              __global int *queue, __global int *queue_length)
+                              __global float4 *film, __global float *spectral_film, __global float *response_film,
+                              __global PathSlot *slots, __global int *queue, __global int *queue_length)
 {
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
     PathSlot slot;
     slot.rays_traced = 0;
-    if (start_slot_sample(params, &slot, pixel, params->sample_begin, film, spectral_film, cmf)) {
+    if (start_slot_sample(params, &slot, pixel, params->sample_begin, film, spectral_film, response_film, cmf)) {
         slots[pixel] = slot;
         queue[atomic_inc(queue_length)] = pixel;
     }
@@ -64,7 +66,8 @@ KERNEL void wavefront_start(__global const RenderParams *params, __global const 
 /* One segment of every path in `queue` (its first *queue_length entries); the paths still live after it go to
  * next_queue. */
 KERNEL void wavefront_advance(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __global float4 *film,
-                                __global uint *ray_counts, __global float *spectral_film, __global PathSlot *slots,
+                                __global uint *ray_counts, __global float *spectral_film,
+                                __global float *response_film, __global PathSlot *slots,
                                 __global const int *queue, __global const int *queue_length,
                                 __global int *next_queue, __global int *next_queue_length)
 {
@@ -76,9 +79,9 @@ KERNEL void wavefront_advance(SCENE_KERNEL_PARAMS, __global const float4 *cmf, _
     int live = path_segment(&scene, &slot.w, &slot.sampler, &slot.path, &slot.radiance, &slot.rays_traced);
     if (!live) {
         float4 accumulated = film[pixel];
-        add_pixel_sample(&accumulated, spectral_film, pixel, slot.weight * slot.radiance, cmf, &slot.w);
+        add_pixel_sample(&accumulated, spectral_film, response_film, pixel, slot.weight * slot.radiance, cmf, &slot.w);
         film[pixel] = accumulated;
-        live = start_slot_sample(params, &slot, pixel, slot.sample + 1, film, spectral_film, cmf);
+        live = start_slot_sample(params, &slot, pixel, slot.sample + 1, film, spectral_film, response_film, cmf);
     }
     if (live) {
         slots[pixel] = slot;

@@ -47,17 +47,31 @@ inline float4 sample_visible_wavelengths(float4 u, float4 *pdf)
     return clamp(lambda, GRID_MIN_NM, GRID_MAX_NM);
 }
 
-inline SampledWavelengths sample_wavelengths(float u)
+/* The four sample-space positions of a hero wavelength's u ∈ [0, 1): u and its rotations by ¼, ½, ¾. */
+inline float4 hero_rotations(float u)
 {
     float4 us = (float4)(u, u + 0.25f, u + 0.5f, u + 0.75f);
-    us = us - floor(us);
+    return us - floor(us);
+}
+
+/* Wavelengths `lambda` (nm, within the grid) drawn with density `pdf` (1/nm), with their grid positions. */
+inline SampledWavelengths wavelengths_on_grid(float4 lambda, float4 pdf)
+{
     SampledWavelengths w;
-    w.lambda = sample_visible_wavelengths(us, &w.pdf);
+    w.lambda = lambda;
+    w.pdf = pdf;
     float4 position = w.lambda - GRID_MIN_NM;
     float4 lower = clamp(floor(position), 0.0f, (float)(GRID_SAMPLES - 2));
     w.grid_index = convert_int4(lower);
     w.grid_frac = position - lower;
     return w;
+}
+
+inline SampledWavelengths sample_wavelengths(float u)
+{
+    float4 pdf;
+    float4 lambda = sample_visible_wavelengths(hero_rotations(u), &pdf);
+    return wavelengths_on_grid(lambda, pdf);
 }
 
 /* Whether the four wavelengths differ: sensors put one wavelength in all four lanes, which then go on together

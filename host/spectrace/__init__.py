@@ -56,6 +56,7 @@ _LAZY = {
     **dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"),
     "load_scene": "spectrace.scene",
     "Spectrum": "spectrace.spectral.spectrum",
+    **dict.fromkeys(["FilmResponse", "load_sensor", "delta_e_2000_map"], "spectrace.spectral.film_response"),
 }
 
 
@@ -100,5 +101,8 @@ __getattr__, __dir__ = lazy_names(
         "WhiteBalance",
         "parse_white_balance",
         "denoise",
+        "FilmResponse",
+        "load_sensor",
+        "delta_e_2000_map",
     ],
 )

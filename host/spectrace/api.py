@@ -499,9 +499,9 @@ def _render_on_client(
     spectral_bins: int,
     tile_rows: int | None,
 ) -> Image:
-    from spectrace.aovs import albedo_channel_scale
     from spectrace.device import Device
     from spectrace.distributed import DaskTiles
+    from spectrace.engine.renderer import film_albedo_scale, film_table
     from spectrace.engine.tiles import make_job, render_tiles
     from spectrace.progress import in_notebook, progress_bar
 
@@ -513,7 +513,9 @@ def _render_on_client(
     )
     with reporter as draw:
         film = render_tiles(job, DaskTiles(client), progress=draw)
-    return film.image(scene, job.spectral_range_nm, albedo_scale=albedo_channel_scale(job.buffers.cmf))
+    return film.image(
+        scene, job.spectral_range_nm, albedo_scale=film_albedo_scale(scene, film_table(scene, job.buffers))
+    )
 
 
 def measure_radiance(

@@ -3,8 +3,9 @@ them, reading them back into an `Image`, and their saved state, the whole of a r
 stores (spectrace.engine.checkpoint writes and reads the file; what goes in it and back to the device is here).
 
 Per pixel the film holds four float32 sums (X, Y, Z and the count of non-finite samples left out), a uint32 count
-of rays traced, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`, and, when any AOV is
-asked for, the twelve float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position and depth).
+of rays traced, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`, one float32 sum per
+channel of the film's response (spectrace.spectral.film_response: more observers, a measured sensor) and, when any AOV
+is asked for, the twelve float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position and depth).
 Together with the number of samples per pixel added so far they are the entire state of a render: the samplers are
 counter-based and every pixel adds its samples in sample order, so restoring them continues the render bit for bit.
 """
@@ -24,6 +25,7 @@ from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.errors import SpectraceError
 from spectrace.image import Image, SpectralBands
 from spectrace.scene import limits
+from spectrace.spectral.film_response import FilmResponse
 
 SPECTRAL_LIMITS_NM = (360.0, 830.0)  # the wavelengths the renders sample
 # Saved-state buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
@@ -32,6 +34,7 @@ STATE_LAYOUT = {
     "ray_counts": (np.uint32, 1),
     "spectral_film": (np.float32, None),
     "aov_film": (np.float32, 12),
+    "response_film": (np.float32, None),
 }
 
 
@@ -55,7 +58,8 @@ def spectral_defines(bins: int, range_nm: tuple[float, float]) -> dict[str, int 
 
 
 def state_problem(state: RenderState, width: int, height: int) -> str | None:
-    """Why `state` cannot be the saved state of a width x height film, or None (any number of spectral bands)."""
+    """Why `state` cannot be the saved state of a width x height film, or None (any number of spectral bands and
+    response channels)."""
     if not 0 <= state.samples_done <= limits.MAX_SPP:
         return f"sample count {state.samples_done} is outside 0..{limits.MAX_SPP}"
     if not (np.isfinite(state.render_seconds) and state.render_seconds >= 0):
@@ -96,10 +100,12 @@ def state_image(
     extra: dict | None = None,
     aovs: tuple[str, ...] | list[str] = (),
     albedo_scale: np.ndarray | None = None,
+    response: FilmResponse | None = None,
 ) -> Image:
     """The image of a saved state: the mean of its samples per pixel, labelled with how it was made (a film's own
     image, or one merged on the host from tiles rendered elsewhere, spectrace.engine.tiles). `aovs` names the AOVs
-    to make from its AOV sums, whose albedo channels `albedo_scale` (the film's CMF weights) turns into means."""
+    to make from its AOV sums, whose albedo channels `albedo_scale` (the film's CMF weights) turns into means;
+    `response` the film's observers or sensor, whose channels it makes from the response sums."""
     film, rays = state.buffers["film"], state.buffers["ray_counts"]
     count = max(state.samples_done, 1)
     xyz = (film[:, :3] / np.float32(count)).reshape(height, width, 3)
@@ -108,6 +114,10 @@ def state_image(
         bands = state.buffers["spectral_film"].reshape(height, width, -1)
         lo, hi = spectral_range_nm
         spectral = SpectralBands(np.linspace(lo, hi, bands.shape[2] + 1), bands / np.float32(count))
+    channels: dict[str, np.ndarray] = {}
+    if response is not None and not response.is_default:
+        responses = state.buffers["response_film"].reshape(height, width, -1) / np.float32(count)
+        xyz, channels = response.outputs(xyz, responses)
     images = {}
     if aovs:
         scale = np.ones(3, np.float32) if albedo_scale is None else albedo_scale
@@ -115,6 +125,7 @@ def state_image(
         images = {name: every[name] for name in aovs}
     return Image(
         aovs=images,
+        channels=channels,
         spectral=spectral,
         xyz=xyz,
         spp=state.samples_done,
@@ -140,12 +151,15 @@ class Film:
         spectral_range_nm: tuple[float, float] = SPECTRAL_LIMITS_NM,
         aovs: Sequence[str] = (),
         albedo_scale: np.ndarray | None = None,
+        response: FilmResponse | None = None,
     ):
         """aovs: names from AOV_NAMES kept beside the image (their kernels built with aov_defines(aovs));
         albedo_scale: albedo_channel_scale of the render's CMF table."""
         self.device = device
         self.aovs = tuple(aovs)
         self.albedo_scale = np.ones(3, np.float32) if albedo_scale is None else np.asarray(albedo_scale, np.float32)
+        self.response = response or FilmResponse()
+        self.response_channels = len(self.response.channel_names)
         self.width = width
         self.height = height
         self.pixel_count = width * height
@@ -160,6 +174,7 @@ class Film:
         # Likewise one float4 without AOVs.
         aov_floats = self.pixel_count * AOV_FLOATS_PER_PIXEL if self.aovs else 4
         self.aov_buffer = cl.Buffer(ctx, rw, aov_floats * 4)
+        self.response_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * self.response_channels, 1) * 4)
         self.samples_done = 0
         self.render_seconds = 0.0
         self.reset()
@@ -171,6 +186,7 @@ class Film:
         cl.enqueue_fill_buffer(queue, self.ray_count_buffer, np.zeros(1, np.uint32), 0, self.ray_count_buffer.size)
         cl.enqueue_fill_buffer(queue, self.spectral_buffer, np.zeros(1, np.float32), 0, self.spectral_buffer.size)
         cl.enqueue_fill_buffer(queue, self.aov_buffer, np.zeros(1, np.float32), 0, self.aov_buffer.size)
+        cl.enqueue_fill_buffer(queue, self.response_buffer, np.zeros(1, np.float32), 0, self.response_buffer.size)
         queue.finish()
         self.samples_done = 0
         self.render_seconds = 0.0
@@ -206,6 +222,14 @@ class Film:
         self.device.queue.finish()
         return sums
 
+    @translate_opencl_errors("reading the response film")
+    def read_responses(self) -> np.ndarray:
+        """(height, width, channels) response sums; divide by samples_done for the means."""
+        sums = np.empty(self.pixel_count * self.response_channels, np.float32)
+        cl.enqueue_copy(self.device.queue, sums, self.response_buffer)
+        self.device.queue.finish()
+        return sums.reshape(self.height, self.width, self.response_channels)
+
     def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
         """The mean of the samples so far per pixel, labelled with how it was made."""
         return state_image(
@@ -219,6 +243,7 @@ class Film:
             extra,
             aovs=self.aovs,
             albedo_scale=self.albedo_scale,
+            response=self.response,
         )
 
     def _state_buffers(self) -> dict[str, cl.Buffer]:
@@ -228,6 +253,8 @@ class Film:
             buffers["spectral_film"] = self.spectral_buffer
         if self.aovs:
             buffers["aov_film"] = self.aov_buffer
+        if self.response_channels > 0:
+            buffers["response_film"] = self.response_buffer
         return buffers
 
     def save_state(self) -> RenderState:
@@ -239,6 +266,8 @@ class Film:
             buffers["spectral_film"] = self.read_spectral().reshape(-1)
         if self.aovs:
             buffers["aov_film"] = self.read_aovs()
+        if self.response_channels > 0:
+            buffers["response_film"] = self.read_responses().reshape(-1)
         return RenderState(self.samples_done, self.render_seconds, buffers)
 
     def _pixel_bytes(self, name: str, buffer: cl.Buffer) -> tuple[np.dtype, int]:

@@ -41,6 +41,9 @@ class Image:
     rays_traced: int = 0
     exposure: float = 0.0  # stops: the RGB outputs are scaled by 2**exposure; xyz is not
     spectral: SpectralBands | None = None  # when rendered with spectral bins
+    # Further named (height, width) float32 channels (more observers' X, Y, Z, a sensor's channels, a ΔE map),
+    # written to EXR under these names.
+    channels: dict[str, np.ndarray] = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
     colour_space: ColourSpace = ColourSpace.SRGB  # of the files `write` makes (see spectrace.colour_output)
     white_balance: WhiteBalance | None = None  # chromatic adaptation applied to every RGB output
@@ -99,8 +102,8 @@ class Image:
 
     def write(self, path: str | Path, include_xyz: bool = True) -> None:
         """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
-        Fichet et al. 2021 layout and the AOVs' channels (spectrace.aovs) when the image has them) or .png
-        (sRGB, 8 bit; the colour only)."""
+        Fichet et al. 2021 layout when the image has them, the AOVs' channels (spectrace.aovs) and `channels` by
+        name) or .png (sRGB, 8 bit; the colour only)."""
         path = Path(path)
         suffix = path.suffix.lower()
         space = ColourSpace(self.colour_space)
@@ -117,7 +120,7 @@ class Image:
                 self.metadata(),
                 spectral=self.spectral,
                 attributes=attributes,
-                extra_channels=aov_channels(self.aovs, space),
+                channels={**aov_channels(self.aovs, space), **self.channels},
             )
         elif suffix == ".png":
             from spectrace.io.png import write_png

@@ -30,3 +30,13 @@ KERNEL void sample_wavelength_pdf(__global const float *u, __global float *lambd
     sampled_pdf[i] = w.pdf.x;
     evaluated_pdf[i] = visible_wavelength_pdf(w.lambda.x);
 }
+
+/* The film's wavelength sampler (film.cl: tabulated when built with WAVELENGTH_TABLE): the hero λ and its pdf. */
+KERNEL void sample_film_wavelength_pdf(__global const float4 *film_table, __global const float *u,
+                                         __global float *lambda, __global float *sampled_pdf)
+{
+    int i = get_global_id(0);
+    SampledWavelengths w = sample_film_wavelengths(u[i], film_table);
+    lambda[i] = w.lambda.x;
+    sampled_pdf[i] = w.pdf.x;
+}

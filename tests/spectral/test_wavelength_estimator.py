@@ -120,3 +120,32 @@ def test_sampled_pdf_is_the_visible_pdf_at_the_sampled_wavelength(kernel_runner)
     np.testing.assert_allclose(sampled_pdf, expected, rtol=1e-5)
     np.testing.assert_allclose(evaluated_pdf, expected, rtol=1e-5)
     assert lam[0] == pytest.approx(360, abs=1e-3) and lam[-1] == pytest.approx(830, abs=1e-3)
+
+
+@pytest.mark.parametrize("observers", [("CIE 1964 10°",), ("CIE 2012 2°", "CIE 2012 10°")])
+def test_tabulated_sampler_inverts_the_films_cdf(kernel_runner, observers):
+    """The film's tabulated sampler: λ(u) lands where the piecewise-constant pdf's CDF (built here in double
+    precision from the host's pdf) equals u, and the pdf it reports is that pdf on λ's interval."""
+    from spectrace.spectral.film_response import FilmResponse
+
+    response = FilmResponse(observer=observers[0], observers=observers[1:])
+    runner = kernel_runner("testing/wavelength_estimator.cl", response.defines())
+    n = 100_000
+    u = ((np.arange(n) + 0.5) / n).astype(np.float32)
+    lam, pdf = np.empty(n, np.float32), np.empty(n, np.float32)
+    table = response.device_table()
+    args = [runner.buffer(table), runner.buffer(u), runner.buffer(lam, True), runner.buffer(pdf, True)]
+    runner.run("sample_film_wavelength_pdf", n, args, {2: lam, 3: pdf})
+    density = response.sampling_pdf()  # per 1 nm interval of the grid, before rounding to float32
+    cdf = np.concatenate([[0.0], np.cumsum(density)]) / density.sum()
+    assert np.all(np.diff(lam) >= 0) and lam.min() >= GRID_NM[0] and lam.max() <= GRID_NM[-1]
+    np.testing.assert_allclose(np.interp(lam.astype(np.float64), GRID_NM, cdf), u, atol=2e-6)
+    # The kernel's pdf is the slope of its float32 CDF: ~6e-8 absolute per node near 1, on interval masses of at
+    # least 0.1/470 (the uniform part), hence rtol 5e-4. A λ on a node may report either neighbouring interval.
+    normalised = density / density.sum()
+    interval = np.floor(lam - GRID_NM[0]).astype(int)
+    below = normalised[np.clip(interval - 1, 0, len(density) - 1)]
+    at = normalised[np.clip(interval, 0, len(density) - 1)]
+    on_node = lam == np.floor(lam)
+    matches = np.isclose(pdf, at, rtol=5e-4, atol=0) | (on_node & np.isclose(pdf, below, rtol=5e-4, atol=0))
+    assert matches.all(), (lam[~matches][:5], pdf[~matches][:5], at[~matches][:5])

@@ -34,6 +34,21 @@ def render(
             max=471,
         ),
     ] = 0,
+    delta_e_map: Annotated[
+        bool,
+        typer.Option(
+            "--delta-e-map",
+            help="EXR only: also store a deltaE00 channel, the per-pixel CIEDE2000 between the first two observers of "
+            "the scene's film.observers (each in CIELAB against its own D65 white at Y = 1; see docs/colour.md).",
+        ),
+    ] = False,
+    delta_e_white_y: Annotated[
+        float,
+        typer.Option(
+            help="Film Y of the --delta-e-map's reference white (CIELAB's Y_n): e.g. the Y of a white patch in the "
+            "scene.",
+        ),
+    ] = 1.0,
     colour_space: Annotated[
         str,
         typer.Option(
@@ -181,6 +196,8 @@ def render(
     if denoise:
         aovs = tuple(dict.fromkeys((*aovs, "albedo", "normal")))
     loaded = loaded.with_overrides(aovs=aovs)
+    if delta_e_map:
+        loaded = loaded.with_overrides(film_response=_with_delta_e_map(loaded.film_response, output, delta_e_white_y))
     _check_render_options(loaded, output, width, height, spp)
     outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color, false_color_scale)
     state_file = checkpoint or resume
@@ -257,6 +274,21 @@ def render(
         console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
     if interrupted:
         raise typer.Exit(130)
+
+
+def _with_delta_e_map(response, output: Path, white_y: float):
+    from dataclasses import replace
+
+    import numpy as np
+
+    if not (np.isfinite(white_y) and white_y > 0):
+        raise SpectraceError(f"must be a positive number, got {white_y}", where="--delta-e-white-y")
+
+    if output.suffix.lower() != ".exr":
+        raise SpectraceError("--delta-e-map needs an .exr output", where=str(output))
+    if len(response.observers) < 2:
+        raise SpectraceError("compares the first two of film.observers; the scene lists fewer", where="--delta-e-map")
+    return replace(response, delta_e_pair=(response.observers[0], response.observers[1]), delta_e_white_y=white_y)
 
 
 def _check_render_options(scene, output: Path, width, height, spp) -> None:

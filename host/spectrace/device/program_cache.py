@@ -149,10 +149,15 @@ def generated_headers() -> dict[str, str]:
     return {materials.KERNEL_HEADER_NAME: materials.kernel_header()}
 
 
+# Contract values a render may set for itself: the wavelength grid of the spectrum table, which a film with a range
+# of its own (film.wavelengths, spectrace.spectral.film_response) moves; the host builds that table on the same grid.
+RENDER_SETTABLE_CONTRACT = frozenset({"GRID_MIN_NM", "GRID_MAX_NM", "GRID_SAMPLES"})
+
+
 def _with_contract(defines: Mapping[str, DefineValue] | None) -> dict[str, DefineValue]:
     """`defines` plus the host/device contract, which every build gets: the kernels keep no copy of those numbers."""
     contract = kernel_contract()
-    clash = sorted(set(contract) & set(defines or {}))
+    clash = sorted((set(contract) - RENDER_SETTABLE_CONTRACT) & set(defines or {}))
     if clash:
         raise SpectraceError(f"kernel define {clash[0]} is fixed by the host/device contract")
     return contract | dict(defines or {})

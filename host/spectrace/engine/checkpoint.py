@@ -104,6 +104,10 @@ def buffers_digest(
     _update_with_array(digest, "params", render_params(scene, buffers, 0, 0))
     for name, array in scene_arrays(buffers).items():
         _update_with_array(digest, name, array)
+    response = scene.film_response
+    if not response.is_default:  # (the default film's table is the scene's CMF array, hashed above)
+        digest.update(repr(response.channel_names).encode())
+        _update_with_array(digest, "film_table", response.device_table())
     return digest.hexdigest()
 
 

@@ -53,13 +53,18 @@ def scene_arrays(buffers: SceneBuffers) -> dict[str, np.ndarray]:
 
 
 def device_memory_need(
-    buffers: SceneBuffers, pixel_count: int, spectral_bins: int = 0, aovs: bool = False
+    buffers: SceneBuffers,
+    pixel_count: int,
+    spectral_bins: int = 0,
+    response_channels: int = 0,
+    aovs: bool = False,
 ) -> DeviceMemoryNeed:
     need = {
         "film": pixel_count * FILM_BYTES_PER_PIXEL,
         "ray counts": pixel_count * RAY_COUNT_BYTES_PER_PIXEL,
-        # allocated even without bands (one float), since the kernel always takes the argument
+        # allocated even without bands or channels (one float), since the kernel always takes the argument
         "spectral bands": max(pixel_count * spectral_bins, 1) * SPECTRAL_BAND_BYTES,
+        "response channels": max(pixel_count * response_channels, 1) * SPECTRAL_BAND_BYTES,
         "scene render parameters": RENDER_PARAMS_DTYPE.itemsize,
         # twelve floats per pixel with AOVs (kernels/aov.cl), else one float4 for the argument
         "AOV sums": pixel_count * 48 if aovs else 16,

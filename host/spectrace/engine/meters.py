@@ -18,6 +18,7 @@ from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
+from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.grid import GRID_NM
 
 LUMINOUS_EFFICACY_LM_PER_W = 683.0
@@ -116,6 +117,8 @@ def measure(
     model, `scene.max_depth` segments from the meter). The standard errors come from the spread of the streams."""
     device = device if isinstance(device, Device) else open_device(device)
     wavelengths = np.asarray(wavelengths_nm, np.float32)
+    if scene.film_response.has_own_grid:  # meters read spectra on the common grid, whatever the film's range
+        scene = scene.with_overrides(film_response=FilmResponse())
     buffers = build_scene_buffers(scene)
     program = device.build_program("meters.cl", defines=traversal_defines() or None)
     ctx, queue = device.context, device.queue

@@ -46,6 +46,18 @@ def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
     ]
 
 
+def film_table(scene: Scene, buffers: SceneBuffers) -> np.ndarray:
+    """The film table the render kernels read as `cmf` (kernels/film.cl): the scene buffers' CIE 1931 CMFs for the
+    default film; other films bring their own, whose first rows are the film observer's XYZ curves on its grid."""
+    response = scene.film_response
+    return buffers.cmf if response.is_default else response.device_table()
+
+
+def film_albedo_scale(scene: Scene, table: np.ndarray) -> np.ndarray:
+    """The albedo AOV's channel scale (spectrace.aovs) for the film observer's XYZ rows of a film table."""
+    return albedo_channel_scale(table[: scene.film_response.grid_nm.size])
+
+
 class Renderer:
     @translate_opencl_errors("setting up the render")
     def __init__(
@@ -71,10 +83,20 @@ class Renderer:
         if problem:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         self.device = device if isinstance(device, Device) else open_device(device)
-        self.buffers: SceneBuffers = buffers if buffers is not None else build_scene_buffers(scene)
+        try:
+            self.buffers: SceneBuffers = buffers if buffers is not None else build_scene_buffers(scene)
+        except SpectraceError as exc:  # a spectrum short of the film's range: name the scene when nothing else is
+            if exc.where or scene.source is None:
+                raise
+            raise SpectraceError(exc.message, where=str(scene.source)) from None
+        self._check_film_range(scene)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
+        response_channels = len(scene.film_response.channel_names)
         check_device_memory(
-            device_memory_need(self.buffers, scene.width * scene.height, spectral_bins, bool(scene.aovs)), self.device
+            device_memory_need(
+                self.buffers, scene.width * scene.height, spectral_bins, response_channels, aovs=bool(scene.aovs)
+            ),
+            self.device,
         )
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
         if specialise:
@@ -82,6 +104,8 @@ class Renderer:
             defines |= scene_feature_defines(self.buffers, hides)
             defines |= camera_feature_defines(render_params(scene, self.buffers, 0, 0))
         defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
+        response = scene.film_response
+        defines |= response.defines()
         self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
         self.kernel = self._create_kernels()
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
@@ -91,7 +115,10 @@ class Renderer:
         b = self.buffers
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._scene = upload_scene(ctx, b)
-        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(b.cmf))
+        # The default CIE 1931 film's table is the scene buffers' CMFs; other films bring their own (film.cl), whose
+        # first rows are the film observer's XYZ curves on the film's grid.
+        self.film_table = film_table(scene, b)
+        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(self.film_table))
         self.film = Film(
             self.device,
             scene.width,
@@ -99,13 +126,29 @@ class Renderer:
             spectral_bins,
             spectral_range_nm,
             aovs=scene.aovs,
-            albedo_scale=albedo_channel_scale(b.cmf),
+            albedo_scale=film_albedo_scale(scene, self.film_table),
+            response=response,
         )
         # The pixels [begin, end) the passes render: all of them, or one tile of a split render (spectrace.engine.
         # tiles). The launch's global offset moves the work-item ids, so each pixel runs the same code on the
         # same ids either way and adds the same bits.
         self.pixel_range = (0, self.film.pixel_count)
         self._allocate(spectral_bins)
+
+    def _check_film_range(self, scene: Scene) -> None:
+        """A film range of its own reaches every tabulated spectrum (the table refuses those that fall short), but
+        not the textures and pictures, whose RGB texels are uplifted in the kernels on the visible grid."""
+        response = scene.film_response
+        if not response.has_own_grid:
+            return
+        features = scene_feature_defines(self.buffers)
+        if features["SCENE_HAS_TEXTURES"] or features["SCENE_HAS_LIGHT_IMAGES"]:
+            lo, hi = response.wavelengths
+            raise SpectraceError(
+                f"film.wavelengths {lo:g}-{hi:g} nm: textures and emitter pictures are defined for the visible "
+                "(360-830 nm) only; a film range of its own takes spectra, not textures",
+                where=str(scene.source) if scene.source else None,
+            )
 
     def _check_scene(self, scene: Scene) -> None:
         """Refuses a scene this kernel shape cannot render, before any other check."""
@@ -159,6 +202,7 @@ class Renderer:
             film.xyz_buffer,
             film.ray_count_buffer,
             film.spectral_buffer,
+            film.response_buffer,
             film.aov_buffer,
         )
         begin, end = self.pixel_range
@@ -201,6 +245,19 @@ class Renderer:
         """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
         return self.film.read_spectral()
 
+    def _film_metadata(self) -> dict[str, str]:
+        """What the film responded to, for the image's metadata (nothing for the default film)."""
+        response = self.scene.film_response
+        if response.is_default:
+            return {}
+        lo, hi = response.wavelengths
+        metadata = {"observer": response.observer, "wavelengths_nm": f"{lo:g}-{hi:g}"}
+        if response.sensor is not None:
+            metadata["sensor"] = response.sensor.source
+        if response.sensor_white is not None:
+            metadata["sensor_white"] = response.sensor_white
+        return metadata
+
     def image(self) -> Image:
         scene = self.scene
         return self.film.image(
@@ -213,6 +270,7 @@ class Renderer:
                 "height": scene.height,
                 "sampler": scene.sampler,
                 "triangles": self.buffers.triangle_count,
+                **self._film_metadata(),
                 "bvh_seconds": f"{self.buffers.bvh_seconds:.3f}",
                 **(
                     {"bvh_peak_mib": f"{self.buffers.bvh_peak_bytes / 2**20:.1f}"}

@@ -103,7 +103,11 @@ def _corner_normals(parts: list[np.ndarray | None], counts: list[int]) -> np.nda
 
 
 def build_scene_buffers(scene: Scene) -> SceneBuffers:
-    table = SpectrumTable()
+    response = scene.film_response
+    # A film range of its own puts every spectrum on the film's grid (refusing those that do not reach it).
+    table = (
+        SpectrumTable(response.grid_nm, extend_rgb=response.extend_rgb) if response.has_own_grid else SpectrumTable()
+    )
     texel_chunks = [np.zeros((1, 4), np.float32)]
     textures = TextureRows(table, texel_chunks)
     material_index: dict[int, int] = {}

@@ -271,6 +271,7 @@ class TiledFilm:
             labels,
             aovs=scene.aovs,
             albedo_scale=albedo_scale,
+            response=scene.film_response,
         )
 
 

@@ -44,7 +44,7 @@ class WavefrontRenderer(Renderer):
         size_buffer = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4)
         cl.Kernel(self.program, "wavefront_slot_size")(self.device.queue, (1,), None, size_buffer)
         cl.enqueue_copy(self.device.queue, slot_size, size_buffer)
-        need = device_memory_need(self.buffers, self.pixel_count, spectral_bins)
+        need = device_memory_need(self.buffers, self.pixel_count, spectral_bins, self.film.response_channels)
         need.buffers["path slots"] = self.pixel_count * int(slot_size[0])
         need.buffers["path queues"] = 2 * self.pixel_count * QUEUE_ENTRY_BYTES
         check_device_memory(need, self.device)
@@ -77,6 +77,7 @@ class WavefrontRenderer(Renderer):
             self._cmf,
             film.xyz_buffer,
             film.spectral_buffer,
+            film.response_buffer,
             self._slots,
             self._queues[0],
             self._queue_lengths[0],
@@ -95,6 +96,7 @@ class WavefrontRenderer(Renderer):
                 film.xyz_buffer,
                 film.ray_count_buffer,
                 film.spectral_buffer,
+                film.response_buffer,
                 self._slots,
                 self._queues[current],
                 self._queue_lengths[current],

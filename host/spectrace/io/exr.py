@@ -29,12 +29,13 @@ def write_exr(
     metadata: dict[str, str],
     spectral=None,
     attributes: dict | None = None,
-    extra_channels: dict[str, np.ndarray] | None = None,
+    channels: dict[str, np.ndarray] | None = None,
 ) -> None:
     """spectral: SpectralBands (band-averaged radiance) written as one S0 channel per band centre, with the
     layout's attributes (spectralLayoutVersion, emissiveUnits, polarisationHandedness). attributes: standard
-    header attributes, e.g. "chromaticities" when the RGB channels are not linear sRGB. extra_channels: more
-    (height, width) float32 channels by name (the AOVs)."""
+    header attributes, e.g. "chromaticities" when the RGB channels are not linear sRGB. channels: more (H, W)
+    channels by name (names must not be R, G, B, X, Y, Z or spectral channels)."""
+    extra_channels = channels or {}
     channels = {"RGB": np.ascontiguousarray(linear_srgb, dtype=np.float32)}
     header_extra = {}
     if spectral is not None:
@@ -50,8 +51,10 @@ def write_exr(
     if xyz is not None:
         for i, name in enumerate("XYZ"):
             channels[name] = np.ascontiguousarray(xyz[..., i], dtype=np.float32)
-    for name, plane in (extra_channels or {}).items():
-        channels[name] = np.ascontiguousarray(plane, dtype=np.float32)
+    for name, values in extra_channels.items():
+        if name in channels or name in {"R", "G", "B", "X", "Y", "Z"} or parse_spectral_channel(name) is not None:
+            raise ValueError(f"EXR channel name {name!r} is reserved")
+        channels[name] = np.ascontiguousarray(values, dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     header.update({f"spectrace:{k}": str(v) for k, v in metadata.items()})
     header.update(header_extra)

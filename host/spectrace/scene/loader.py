@@ -35,6 +35,8 @@ from spectrace.scene.model import (
     Shape,
 )
 from spectrace.spectral.blackbody import blackbody
+from spectrace.spectral.film_response import FilmResponse, load_sensor
+from spectrace.spectral.illuminants import cie_illuminant
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
@@ -618,6 +620,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         resolver.named_texture(name, f"textures.{name}")
     camera = camera_from_spec(spec.camera)
     _check_camera(camera, path)
+    film_response = _film_response(spec.film, resolver)
     return Scene(
         camera=camera,
         width=spec.film.width,
@@ -629,6 +632,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         exposure=spec.film.exposure,
         aovs=parse_aovs(spec.film.aovs),
         pixel_filter=pixel_filters.from_spec(spec.film.filter),
+        film_response=film_response,
         rr_depth=spec.integrator.rr_depth,
         hide_environment=spec.integrator.hide_environment,
         hide_emitters=spec.integrator.hide_emitters,
@@ -654,6 +658,37 @@ def camera_from_spec(spec) -> Camera:
     if spec.type == "orthographic":
         fields["view_width"] = spec.view_width
     return Camera(**fields)
+
+
+def _film_response(film: schema.FilmSpec, resolver: _Resolver) -> FilmResponse:
+    """The film's observers and sensor (spectrace.spectral.film_response); errors name the film's keys."""
+    sensor = None
+    if film.sensor is not None:
+        try:
+            sensor = load_sensor(resolver.folder / film.sensor)
+        except SpectraceError as exc:
+            raise SpectraceError(str(exc), where=resolver.where("film.sensor")) from None
+    if film.sensor_white is not None:
+        if sensor is None or len(sensor.channel_names) != 3:
+            raise SpectraceError(
+                "sensor_white (white balance and colour correction) needs a 3-channel film.sensor",
+                where=resolver.where("film.sensor_white"),
+            )
+        try:
+            cie_illuminant(film.sensor_white)
+        except SpectraceError as exc:
+            raise SpectraceError(exc.message, where=resolver.where("film.sensor_white")) from None
+    try:
+        return FilmResponse(
+            observer=film.observer,
+            observers=tuple(film.observers),
+            sensor=sensor,
+            sensor_white=film.sensor_white,
+            wavelengths=(float(film.wavelengths[0]), float(film.wavelengths[1])),
+            extend_rgb=film.extend_rgb,
+        )
+    except SpectraceError as exc:
+        raise SpectraceError(str(exc), where=resolver.where("film")) from None
 
 
 def _check_camera(camera: Camera, path: Path) -> None:

@@ -21,6 +21,7 @@ from spectrace.lights.point import PointLight  # noqa: F401
 from spectrace.lights.spot import SpotLight  # noqa: F401
 from spectrace.materials.base import Material
 from spectrace.pixel_filters import BOX_FILTER, PixelFilter
+from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
@@ -132,6 +133,7 @@ class Scene:
     hide_emitters: bool = False  # Mitsuba 3's hide_emitters: the environment hidden, area lights seen through
     pixel_filter: PixelFilter = BOX_FILTER  # the pixel's reconstruction filter (spectrace.pixel_filters)
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
+    film_response: FilmResponse = field(default_factory=FilmResponse)  # observers and sensor of the film
     spp: int = 16
     seed: int = 0
     sampler: SamplerType = DEFAULT_SAMPLER

@@ -29,6 +29,7 @@ from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.pixel_filters import FILTERS
 from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
+from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 
@@ -491,6 +492,43 @@ class FilmSpec(Strict):
     aovs: list[Literal["albedo", "normal", "depth", "position", "variance"]] = Field(
         default_factory=list, description="AOVs written beside the image (EXR channels)"
     )
+    observer: str = Field(default="CIE 1931 2°", description="CIE observer of the film's X, Y, Z and RGB outputs")
+    observers: list[str] = Field(default_factory=list, description="more observers, X, Y, Z each as EXR channels")
+    sensor: str | None = Field(default=None, description="CSV of measured channel sensitivities, as EXR channels")
+    sensor_white: str | None = Field(
+        default=None, description="CIE illuminant: white balance and colour correction of a 3-channel sensor"
+    )
+
+    wavelengths: tuple[FiniteFloat, FiniteFloat] = Field(
+        default=(360.0, 830.0), description="nm: the film's wavelength range (1 nm grid); spectra must cover it"
+    )
+    extend_rgb: StrictBool = Field(
+        default=False, description="RGB uplifts continue (their sigmoid) beyond the visible when wavelengths go there"
+    )
+
+    @field_validator("wavelengths")
+    @classmethod
+    def _wavelength_range(cls, value: tuple[float, float]) -> tuple[float, float]:
+        if problem := wavelength_range_problem(value):
+            raise ValueError(problem)
+        return value
+
+    @field_validator("observer")
+    @classmethod
+    def _known_observer(cls, value: str) -> str:
+        if problem := observer_problem(value):
+            raise ValueError(problem)
+        return value
+
+    @field_validator("observers")
+    @classmethod
+    def _known_observers(cls, value: list[str]) -> list[str]:
+        for label in value:
+            if problem := observer_problem(label):
+                raise ValueError(problem)
+        if len(set(value)) != len(value):
+            raise ValueError("an observer is listed twice")
+        return value
 
     @field_validator("width", "height")
     @classmethod

@@ -3,7 +3,7 @@
 import numpy as np
 
 from spectrace.spectral.grid import GRID_NM
-from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum import Extension, Spectrum
 
 # CODATA 2018 exact values (SI).
 PLANCK_CONSTANT = 6.62607015e-34  # J s
@@ -25,4 +25,7 @@ def blackbody(temperature_k: float) -> Spectrum:
     360–830 nm) is 1, as pbrt-v4 does: absolute values (~10⁷ W/(m² sr nm) at 5500 K) are rarely what a scene
     wants; give the scale separately."""
     peak = planck_radiance(np.array([WIEN_DISPLACEMENT / temperature_k * 1e9]), temperature_k)[0]
-    return Spectrum(planck_radiance(GRID_NM, temperature_k) / peak, name=f"blackbody {temperature_k:g} K")
+    extension = Extension(0.0, np.inf, lambda nm: planck_radiance(nm, temperature_k) / peak)
+    return Spectrum(
+        planck_radiance(GRID_NM, temperature_k) / peak, name=f"blackbody {temperature_k:g} K", extension=extension
+    )

@@ -14,7 +14,7 @@ import numpy as np
 from spectrace.errors import SpectraceError
 from spectrace.spectral.colorimetry import normalised_to_unit_y
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_NM, GRID_STEP_NM, resample_to_grid
-from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum import Extension, Spectrum, sampled_extension
 
 CIE_ILLUMINANT_PREFIX = "cie:"
 
@@ -55,7 +55,33 @@ def cie_illuminant(name: str, where: str | None = None) -> Spectrum:
         _cie_illuminant_values(canonical_name),
         name=f"{CIE_ILLUMINANT_PREFIX}{canonical_name}",
         source="colour-science SDS_ILLUMINANTS",
+        extension=_cie_illuminant_extension(canonical_name),
     )
+
+
+# CIE 15:2004 eq. (3.1): illuminant A's relative spectral power, with c2 = 1.435e7 nm K and T = 2848 K.
+_ILLUMINANT_A_C2_NM_K = 1.435e7
+_ILLUMINANT_A_K = 2848.0
+
+
+def _illuminant_a(wavelengths_nm: np.ndarray) -> np.ndarray:
+    lam = np.asarray(wavelengths_nm, np.float64)
+    return (
+        100.0
+        * (560.0 / lam) ** 5
+        * np.expm1(_ILLUMINANT_A_C2_NM_K / (_ILLUMINANT_A_K * 560.0))
+        / np.expm1(_ILLUMINANT_A_C2_NM_K / (_ILLUMINANT_A_K * lam))
+    )
+
+
+def _cie_illuminant_extension(canonical_name: str) -> Extension:
+    """Illuminant A is a formula, defined at every wavelength; the others are their tables' range."""
+    if canonical_name == "A":
+        return Extension(0.0, np.inf, _illuminant_a)
+    import colour
+
+    sd = colour.SDS_ILLUMINANTS[canonical_name]
+    return sampled_extension(np.asarray(sd.wavelengths), np.asarray(sd.values))
 
 
 @cache

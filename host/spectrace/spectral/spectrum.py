@@ -1,14 +1,53 @@
-"""`Spectrum`: a spectral quantity sampled on the common wavelength grid (see `grid.py`)."""
+"""`Spectrum`: a spectral quantity sampled on the common wavelength grid (see `grid.py`), and how it continues
+beyond that grid (`Extension`) for a film whose wavelengths reach further (`film.wavelengths`)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from numbers import Real
 from typing import overload
 
 import numpy as np
 
 from spectrace.errors import SpectraceError
-from spectrace.spectral.grid import GRID_NM, GRID_SIZE
+from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_NM, GRID_SIZE
+
+
+@dataclass(frozen=True)
+class Extension:
+    """What a spectrum is beyond the common grid: its values on [lo_nm, hi_nm] (the range its data or formula
+    defines), from `evaluate` (nm -> values). `rgb_uplift`: the spectrum is an RGB uplift, whose continuation
+    outside the visible is a convention, used only when the scene asks for it (`film.extend_rgb`)."""
+
+    lo_nm: float
+    hi_nm: float
+    evaluate: Callable[[np.ndarray], np.ndarray]
+    rgb_uplift: bool = False
+
+    def scaled(self, factor: float) -> Extension:
+        evaluate = self.evaluate
+        return Extension(self.lo_nm, self.hi_nm, lambda nm: factor * evaluate(nm), self.rgb_uplift)
+
+    def times(self, other: Extension) -> Extension:
+        first, second = self.evaluate, other.evaluate
+        return Extension(
+            max(self.lo_nm, other.lo_nm),
+            min(self.hi_nm, other.hi_nm),
+            lambda nm: first(nm) * second(nm),
+            self.rgb_uplift or other.rgb_uplift,
+        )
+
+
+def sampled_extension(wavelengths_nm: np.ndarray, values: np.ndarray) -> Extension:
+    """The extension of measured samples: linear interpolation, over the samples' own range only."""
+    wavelengths = np.array(wavelengths_nm, np.float64)
+    data = np.array(values, np.float64)
+    return Extension(float(wavelengths[0]), float(wavelengths[-1]), lambda nm: np.interp(nm, wavelengths, data))
+
+
+def _range_text(lo: float, hi: float) -> str:
+    return f"{lo:g}-{hi:g} nm"
 
 
 class Spectrum:
@@ -19,9 +58,9 @@ class Spectrum:
     whatever was loaded: reflectance (dimensionless), relative radiance, an index of refraction, ...
     """
 
-    __slots__ = ("_values", "name", "source")
+    __slots__ = ("_values", "extension", "name", "source")
 
-    def __init__(self, values: np.ndarray, name: str = "", source: str = ""):
+    def __init__(self, values: np.ndarray, name: str = "", source: str = "", extension: Extension | None = None):
         array = np.array(values, dtype=np.float64)  # always a private copy
         if array.shape != (GRID_SIZE,):
             raise ValueError(f"a Spectrum needs {GRID_SIZE} samples on the grid, got shape {array.shape}")
@@ -31,10 +70,13 @@ class Spectrum:
         self._values = array
         self.name = name
         self.source = source
+        self.extension = extension  # None: defined on the common grid only
 
     @classmethod
-    def constant(cls, value: float, name: str = "", source: str = "") -> Spectrum:
-        return cls(np.full(GRID_SIZE, float(value)), name=name or f"constant {value:g}", source=source)
+    def constant(cls, value: float, name: str = "", source: str = "", rgb_uplift: bool = False) -> Spectrum:
+        level = float(value)
+        extension = Extension(-np.inf, np.inf, lambda nm: np.full(np.shape(nm), level), rgb_uplift)
+        return cls(np.full(GRID_SIZE, level), name=name or f"constant {value:g}", source=source, extension=extension)
 
     @classmethod
     def zeros(cls, name: str = "zero", source: str = "") -> Spectrum:
@@ -70,11 +112,24 @@ class Spectrum:
         return float(self._values.mean())
 
     def scaled(self, factor: float, name: str | None = None) -> Spectrum:
-        return Spectrum(self._values * float(factor), name=self.name if name is None else name, source=self.source)
+        extension = self.extension.scaled(float(factor)) if self.extension is not None else None
+        return Spectrum(
+            self._values * float(factor),
+            name=self.name if name is None else name,
+            source=self.source,
+            extension=extension,
+        )
 
     def __mul__(self, other: float | Real | Spectrum) -> Spectrum:
         if isinstance(other, Spectrum):
-            return Spectrum(self._values * other._values, name=f"{self.name}*{other.name}", source=self.source)
+            extension = (
+                self.extension.times(other.extension)
+                if self.extension is not None and other.extension is not None
+                else None
+            )
+            return Spectrum(
+                self._values * other._values, name=f"{self.name}*{other.name}", source=self.source, extension=extension
+            )
         if isinstance(other, Real) and not isinstance(other, bool):
             return self.scaled(float(other))
         return NotImplemented
@@ -85,6 +140,42 @@ class Spectrum:
         if isinstance(divisor, Real) and not isinstance(divisor, bool):
             return self.scaled(1.0 / float(divisor))
         return NotImplemented
+
+    def on_wavelengths(self, wavelengths_nm: np.ndarray, extend_rgb: bool = False) -> np.ndarray:
+        """Values at `wavelengths_nm` (ascending, nm): the grid samples (lerped) within the common grid, the extension
+        beyond it. One-line errors when the spectrum does not reach that far, or is an RGB uplift and `extend_rgb`
+        is not set: a film that sees further than a spectrum is defined must not see a silent zero or a guess."""
+        wavelengths = np.asarray(wavelengths_nm, np.float64)
+        inside = (wavelengths >= GRID_MIN_NM) & (wavelengths <= GRID_MAX_NM)
+        result = np.empty(wavelengths.shape)
+        result[inside] = np.interp(wavelengths[inside], GRID_NM, self._values)
+        outside = wavelengths[~inside]
+        if outside.size == 0:
+            return result
+        wanted = _range_text(wavelengths[0], wavelengths[-1])
+        label = f"spectrum '{self.name or 'unnamed'}'"
+        extension = self.extension
+        if extension is not None and extension.rgb_uplift and not extend_rgb:
+            raise SpectraceError(
+                f"{label} is an RGB uplift, defined for the visible ({_range_text(GRID_MIN_NM, GRID_MAX_NM)}) only; "
+                f"the film's wavelengths {wanted} need measured data, or film.extend_rgb = true to continue it"
+            )
+        data_lo, data_hi = (extension.lo_nm, extension.hi_nm) if extension is not None else (GRID_MIN_NM, GRID_MAX_NM)
+        if outside.min() < min(data_lo, GRID_MIN_NM) or outside.max() > max(data_hi, GRID_MAX_NM):
+            missing = [_range_text(a, b) for a, b in ((wavelengths[0], data_lo), (data_hi, wavelengths[-1])) if b > a]
+            defined = _range_text(extension.lo_nm, extension.hi_nm) if extension else "the common grid"
+            raise SpectraceError(
+                f"{label} is defined over {defined}; the film's wavelengths {wanted} also need {' and '.join(missing)}",
+                where=self.source or None,
+            )
+        assert extension is not None
+        values = np.asarray(extension.evaluate(outside), np.float64)
+        if not np.all(np.isfinite(values)):
+            raise SpectraceError(
+                f"{label} has NaN or infinite values beyond the common grid", where=self.source or None
+            )
+        result[~inside] = values
+        return result
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Spectrum):

@@ -27,7 +27,7 @@ from spectrace.io.input_files import regular_file
 from spectrace.resources import spectra_dir
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, resample_to_grid
 from spectrace.spectral.illuminants import CIE_ILLUMINANT_PREFIX, cie_illuminant, cie_illuminant_names
-from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum import Spectrum, sampled_extension
 
 if TYPE_CHECKING:
     import colour
@@ -53,7 +53,12 @@ def _spectrum_from_samples(
             " entirely (micrometres instead of nanometres?)",
             where=where,
         )
-    return Spectrum(resample_to_grid(np.array(wavelengths_nm), np.array(values)), name=name, source=source)
+    return Spectrum(
+        resample_to_grid(np.array(wavelengths_nm), np.array(values)),
+        name=name,
+        source=source,
+        extension=sampled_extension(np.array(wavelengths_nm), np.array(values)),
+    )
 
 
 # What a CSV or a spectrum string may hold as a number: ASCII digits, an optional sign, point and exponent.

@@ -33,7 +33,7 @@ from spectrace.errors import SpectraceError
 from spectrace.spectral.colorimetry import CIE_1931_CMFS, XYZ_TO_LINEAR_SRGB
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_NM, GRID_SIZE, TRAPEZOID_WEIGHTS_NM
 from spectrace.spectral.illuminants import cie_illuminant, d65_normalised
-from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum import Extension, Spectrum
 
 # |x| this large makes S(x) exactly 0 or 1 in float32 (1 + x^2 rounds to x^2) and 1 - 2.5e-13 in float64,
 # while x^2 stays far from float32 overflow; used instead of +-inf, for which S is inf/inf = NaN.
@@ -175,13 +175,22 @@ def _uplift_rounded(rgb: tuple[float, float, float]) -> tuple[Spectrum, np.ndarr
     source = "RGB uplift (Jakob & Hanika 2019)"
     if all(channel == 0.0 for channel in rgb):
         coefficients = np.array([0.0, 0.0, -SATURATED_SIGMOID_ARGUMENT])
-        return Spectrum.constant(0.0, name=name, source=source), _read_only(coefficients)
+        return Spectrum.constant(0.0, name=name, source=source, rgb_uplift=True), _read_only(coefficients)
     if all(channel == 1.0 for channel in rgb):
         coefficients = np.array([0.0, 0.0, SATURATED_SIGMOID_ARGUMENT])
-        return Spectrum.constant(1.0, name=name, source=source), _read_only(coefficients)
+        return Spectrum.constant(1.0, name=name, source=source, rgb_uplift=True), _read_only(coefficients)
     coefficients = _dimensionless_to_nm(_fit_dimensionless(np.array(rgb)))
-    spectrum = Spectrum(sigmoid_polynomial_spectrum(coefficients), name=name, source=source)
+    spectrum = Spectrum(
+        sigmoid_polynomial_spectrum(coefficients), name=name, source=source, extension=_sigmoid_extension(coefficients)
+    )
     return spectrum, _read_only(coefficients)
+
+
+def _sigmoid_extension(coefficients_nm: np.ndarray) -> Extension:
+    """The sigmoid polynomial beyond the grid: a smooth continuation with no physical meaning outside the visible,
+    hence marked as an RGB uplift (used only when a scene asks for it)."""
+    c0, c1, c2 = (float(c) for c in coefficients_nm)
+    return Extension(-np.inf, np.inf, lambda nm: sigmoid((c0 * nm + c1) * nm + c2), rgb_uplift=True)
 
 
 def uplift_reflectance(rgb: Sequence[float] | np.ndarray, where: str | None = None) -> tuple[Spectrum, np.ndarray]:
@@ -229,12 +238,15 @@ def uplift_illuminant(rgb: Sequence[float] | np.ndarray, scale: float = 1.0, whe
     coefficients, multiplier = illuminant_coefficients(rgb, where=where)
     name = "rgb({:.4g}, {:.4g}, {:.4g}) emission".format(*(float(channel) for channel in rgb))
     if multiplier == 0.0:
-        return Spectrum.constant(0.0, name=name, source="RGB uplift (Jakob & Hanika 2019)")
+        return Spectrum.constant(0.0, name=name, source="RGB uplift (Jakob & Hanika 2019)", rgb_uplift=True)
     shape = sigmoid_polynomial_spectrum(coefficients)
+    d65 = d65_normalised()
+    assert d65.extension is not None
     return Spectrum(
-        float(scale) * multiplier * shape * d65_normalised().values,
+        float(scale) * multiplier * shape * d65.values,
         name=name,
         source="RGB illuminant uplift (Jakob & Hanika 2019, pbrt-v4 scheme)",
+        extension=_sigmoid_extension(coefficients).times(d65.extension).scaled(float(scale) * multiplier),
     )
 
 
@@ -247,7 +259,7 @@ def uplift_unbounded(rgb: Sequence[float] | np.ndarray, where: str | None = None
         raise SpectraceError(f"an RGB triple must not be negative here, got {tuple(values.tolist())}", where=where)
     largest = float(values.max())
     if largest == 0.0:
-        return Spectrum.constant(0.0, source="RGB uplift (Jakob & Hanika 2019)")
+        return Spectrum.constant(0.0, source="RGB uplift (Jakob & Hanika 2019)", rgb_uplift=True)
     return uplift_reflectance(values / largest, where=where)[0] * largest
 
 
