@@ -116,7 +116,8 @@ def state_image(
         spectral = SpectralBands(np.linspace(lo, hi, bands.shape[2] + 1), bands / np.float32(count))
     channels: dict[str, np.ndarray] = {}
     if response is not None and not response.is_default:
-        responses = state.buffers["response_film"].reshape(height, width, -1) / np.float32(count)
+        sums = state.buffers.get("response_film", np.zeros(0, np.float32))  # absent: a film without channels
+        responses = sums.reshape(height, width, -1) / np.float32(count)
         xyz, channels = response.outputs(xyz, responses)
     images = {}
     if aovs:
