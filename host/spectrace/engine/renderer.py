@@ -46,6 +46,14 @@ def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
 
 
 class Renderer:
+    def __new__(cls, scene: Scene, *args, **kwargs):
+        """Renderer(scene) of a light-tracing scene is the light tracer's renderer, whoever asks for it."""
+        if cls is Renderer and scene.integrator == "light":
+            from spectrace.engine.light_tracer import LightTracerRenderer
+
+            return super().__new__(LightTracerRenderer)
+        return super().__new__(cls)
+
     @translate_opencl_errors("setting up the render")
     def __init__(
         self,

@@ -103,7 +103,7 @@ class Scene:
     height: int
     shapes: list[Shape]
     lights: list[Light] = field(default_factory=list)
-    integrator: Literal["path", "direct"] = "path"
+    integrator: Literal["path", "direct", "light"] = "path"
     max_depth: int = 8
     rr_depth: int = 5
     hide_environment: bool = False  # camera rays that leave the scene see black (Mitsuba's hide_emitters)

@@ -80,7 +80,7 @@ class FilmSpec(Strict):
 
 
 class IntegratorSpec(Strict):
-    type: Literal["path", "direct"] = "path"
+    type: Literal["path", "direct", "light"] = "path"
     max_depth: int = Field(
         default=8, ge=-1, le=limits.MAX_DEPTH, description="path segments from the camera; -1 = unbounded"
     )
