@@ -120,14 +120,15 @@ class LightTracerRenderer(Renderer):
         parts = []
         while len(items):
             pixel, xyz, counts = self._launch(sample_index, items, begin)
+            used = pixel >= 0
+            following = items[counts > begin + capacity]
+            if begin == 0 and not len(following):
+                return pixel[used], xyz[used]  # the usual case: every path's records fitted in one launch
             record = np.tile(np.arange(begin, begin + capacity), len(items))
             owner = np.repeat(items, capacity)
-            used = pixel >= 0
             parts.append((owner[used], record[used], pixel[used], xyz[used]))
-            items = items[counts > begin + capacity]
+            items = following
             begin += capacity
-        if len(parts) == 1:
-            return parts[0][2], parts[0][3]
         owner, record, pixel, xyz = (np.concatenate(column) for column in zip(*parts, strict=True))
         order = np.lexsort((record, owner))
         return pixel[order], xyz[order]
