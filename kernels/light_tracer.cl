@@ -3,12 +3,16 @@
  * Kirk 1990). It reaches what a camera path cannot: caustics of point, spot and distant lights seen on diffuse
  * surfaces through smooth glass and mirrors (paths L S+ D E).
  *
- * Transport along a light path is adjoint (Veach 1997, ch. 5): the BSDFs are the camera paths' (material.cl), with
- * two corrections. Refraction's radiance compression (n_o/n_i)² belongs to radiance, not to the power a light path
- * carries, so each sample's weight is divided by its radiance_scale and the BTDF evaluated toward the camera has
- * it taken out (adjoint_bsdf_factor). Shading normals make the adjoint BSDF differ from the BSDF by
- * |ωo·ns||ωi·ng| / (|ωo·ng||ωi·ns|) with ωo toward where the light came from (Veach 1997, eq. 5.19; pbrt's
- * CorrectShadingNormal); the cosine at the camera side of a connection is then the geometric one.
+ * Light flows along a light path the way the path is traced, so each vertex needs the BSDF for light arriving from
+ * the previous vertex (ωlight) and leaving toward the next: material_eval(wo = next, wi = ωlight), radiance's own
+ * convention, which is how the connection to the camera evaluates it. A sampled direction comes from
+ * material_sample(wo = ωlight), the BSDF with its arguments swapped (its adjoint, Veach 1997, ch. 5), which differs
+ * in two ways: refraction's radiance compression (n_o/n_i)² is the one for light flowing the other way, so the
+ * sample's weight is divided by its radiance_scale (the BSDFs are otherwise symmetric), and with shading normals the
+ * weight needs |ωo·ns||ωi·ng| / (|ωo·ng||ωi·ns|), ωo = ωlight (Veach 1997, eq. 5.19; pbrt's CorrectShadingNormal).
+ * At a connection the cosine of the camera's side is the geometric one, and f·|ωlight·ns| is divided by
+ * |ωlight·ng| (the same shading-normal rule: the BSDF with shading normals is f·|ωi·ns|/|ωi·ng| per geometric
+ * cosine, whichever way a path is traced).
  *
  * max_depth counts path segments from the camera as the path integrator does: light vertex i (1 = the first surface
  * the light reaches, 0 = a point on an area light) seen by the camera closes a path of i + 1 segments.
@@ -45,20 +49,6 @@ inline void record_splat(SplatRecords *r, int pixel, float4 value, __global cons
     if (!(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z))) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
     r->xyz[slot] = xyz;
     r->pixel[slot] = pixel;
-}
-
-/* The factor that turns material_eval's f(ωo, ωi)|cos θi| (radiance transport) into the adjoint BSDF's: for a
- * refraction from ωi's side into ωo's by a dielectric, the radiance compression 1/e² it carries (e = index on ωi's
- * side over ωo's; bsdf_dielectric.cl) is taken out. Other BSDFs are symmetric. n: the shading normal. */
-inline float adjoint_bsdf_factor(__global const Material *m, const SampledWavelengths *w, float3 n, float3 wo,
-                                 float3 wi)
-{
-    if (!MATERIAL_IS(m, MATERIAL_DIELECTRIC)) return 1.0f;
-    float cos_o = dot(n, wo), cos_i = dot(n, wi);
-    if (cos_o * cos_i >= 0.0f) return 1.0f;
-    float eta = material_ior(m, w->lambda.x);
-    float e = cos_o >= 0.0f ? eta : 1.0f / eta;
-    return e * e;
 }
 
 /* Veach's shading-normal factor for adjoint transport: |ωo·ns||ωi·ng| / (|ωo·ng||ωi·ns|), ωo toward where the light
@@ -148,13 +138,10 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
             CameraConnection c = connect_to_camera(params, v.p);
             if (c.pixel >= 0 && shading_side_agrees(v.n, v.ns, c.to_camera)) {
                 float4 f_cos = material_eval(material, &sc, &w, v.ns, c.to_camera, v.wo);
-                /* f_cos holds |ωlight·ns|. The adjoint BSDF times the connection's cosine at this end,
-                 * f*·|ωcamera·ns| with Veach's factor, is f·|ωlight·ns|·|ωcamera·ng| / |ωlight·ng|. */
+                /* f_cos holds |ωlight·ns|: times |ωcamera·ng| / |ωlight·ng| (see the top of this file). */
                 float cos_light = fabs(dot(v.wo, v.n));
-                float adjoint = cos_light > 0.0f ? adjoint_bsdf_factor(material, &w, v.ns, c.to_camera, v.wo)
-                                                       * fabs(dot(c.to_camera, v.n)) / cos_light
-                                                 : 0.0f;
-                float4 value = s.throughput * f_cos * (adjoint * c.importance);
+                float cosines = cos_light > 0.0f ? fabs(dot(c.to_camera, v.n)) / cos_light : 0.0f;
+                float4 value = s.throughput * f_cos * (cosines * c.importance);
                 if (any(value != (float4)(0.0f))
                     && camera_sees(scene, &c, v.p, v.n, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
                     record_splat(records, c.pixel, value, cmf, &w);

@@ -10,6 +10,12 @@
   k-th term light that bounced 2k times inside the slab, d − t + t/n the paraxial apparent distance of the source.
 - Cornell box and a textured scene (checkerboard walls, an image on the lamp): the light tracer's and the path
   tracer's images agree within noise (block means, 5 standard errors from independent replicas).
+- A scene of the other light types (distant, constant environment seen directly, an emitting analytic sphere) with
+  rough glass, a cube shaded smooth and a rough-coated plastic: light tracer and path tracer agree. Sharper tests of
+  what differs when a BSDF is traced from the light: rough glass seen from below under a spot light (the connection
+  evaluates the BTDF for light arriving from inside the glass, so refraction's radiance scaling must be the one for
+  that direction), and a ceiling lit only by a cube whose corner-averaged shading normals are far from its faces'
+  (the sampled directions need Veach's shading-normal factor).
 - The same seed gives the same bits however the render is split into passes, including paths re-launched for
   their later splat records.
 """
@@ -318,3 +324,169 @@ def test_spectral_output_refused(device, tmp_path):
     scene = spectrace.load_scene(_floor_scene(tmp_path, "light"))
     with pytest.raises(SpectraceError, match="spectral"):
         Renderer(scene, device, spectral_bins=4)
+
+
+def _mixed_scene(tmp_path: Path, integrator: str, target: str) -> Path:
+    origin = "[{}, 0.9, {}]".format(*np.add(eval(target)[::2], [0.0, 1.8]))  # 1.8 in front of the target
+    return _write(
+        tmp_path,
+        _camera(origin, target, 30, 16)
+        + f"""
+[integrator]
+type = "{integrator}"
+max_depth = 5
+
+[materials.floor]
+type = "plastic"
+reflectance = {{ rgb = [0.5, 0.4, 0.3] }}
+roughness = 0.3
+
+[materials.frosted]
+type = "dielectric"
+ior = 1.5
+roughness = 0.5
+
+[materials.matte]
+type = "diffuse"
+reflectance = {{ rgb = [0.3, 0.6, 0.4] }}
+
+[[shapes]]
+type = "rectangle"
+material = "floor"
+transform = [{{ rotate = {{ axis = [1, 0, 0], angle = -90 }} }}, {{ scale = 1.2 }}]
+
+[[shapes]]
+type = "sphere"
+material = "frosted"
+transform = [{{ scale = 0.45 }}, {{ translate = [-0.5, 0.45, 0] }}]
+
+[[shapes]]
+type = "cube"
+face_normals = false
+material = "matte"
+transform = [{{ scale = 0.3 }}, {{ rotate = {{ axis = [0, 1, 0], angle = 30 }} }}, {{ translate = [0.6, 0.3, -0.3] }}]
+
+[[shapes]]
+type = "sphere"
+material = "matte"
+emitter = {{ radiance = {{ value = 3 }} }}
+transform = [{{ scale = 0.15 }}, {{ translate = [0.2, 1.3, 0.6] }}]
+
+[[lights]]
+type = "distant"
+direction = [0.4, -1, -0.3]
+irradiance = {{ value = 0.8 }}
+
+[[lights]]
+type = "constant"
+radiance = {{ value = 0.1 }}
+""",
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("target", ["[-0.5, 0.45, 0]", "[0.6, 0.3, -0.3]"], ids=["rough-glass", "smooth-shaded-cube"])
+def test_other_lights_and_adjoint_bsdfs_agree_with_the_path_tracer(device, tmp_path, target):
+    """The camera fills its view with the rough glass sphere, or with the smooth-shaded cube. (Rough glass lit by
+    large lights makes heavy-tailed light-traced pixels: test_rough_glass_seen_from_below is the sharper test of
+    its BTDF.)"""
+    path = spectrace_replicas(Renderer(spectrace.load_scene(_mixed_scene(tmp_path, "path", target)), device), 8, 16)
+    light = spectrace_replicas(Renderer(spectrace.load_scene(_mixed_scene(tmp_path, "light", target)), device), 8, 16)
+    assert path.mean() > 0.05
+    assert_replicas_agree(light, path, block=4)
+
+
+def _rough_slab_scene(tmp_path: Path, integrator: str) -> Path:
+    """A spot light over a rough glass slab, seen from below: every pixel is light the slab lets through toward the
+    camera, which the light tracer finds by evaluating the rough BTDF at the slab's lower face for light arriving
+    from inside the glass (where refraction's radiance scaling decides the value)."""
+    return _write(
+        tmp_path,
+        _camera("[0, 0, 0]", "[0, 0, 1]", 50, 16)
+        + f"""
+[integrator]
+type = "{integrator}"
+max_depth = 3
+
+[materials.frosted]
+type = "dielectric"
+ior = 1.5
+roughness = 0.2
+
+[[shapes]]
+type = "cube"
+material = "frosted"
+transform = [{{ scale = [1.5, 1.5, 0.05] }}, {{ translate = [0, 0, 0.5] }}]
+
+[[lights]]
+type = "spot"
+position = [0.1, 0, 1]
+target = [0, 0, 0]
+cutoff_angle = 60
+intensity = {{ value = 1 }}
+""",
+    )
+
+
+def test_rough_glass_seen_from_below(device, tmp_path):
+    path = spectrace_replicas(Renderer(spectrace.load_scene(_rough_slab_scene(tmp_path, "path")), device), 8, 16)
+    light = spectrace_replicas(Renderer(spectrace.load_scene(_rough_slab_scene(tmp_path, "light")), device), 8, 16)
+    assert path.mean() > 0.01
+    assert_replicas_agree(light, path, block=4)
+
+
+def _shading_normals_scene(tmp_path: Path, integrator: str) -> Path:
+    """A spot light whose narrow cone lands on the top of a cube shaded smooth (its vertex normals the average of
+    three faces', far from each face's own), under a ceiling lit only by what the cube reflects, which the camera
+    looks at: the light tracer's sampled directions at the cube carry Veach's shading-normal factor. The ceiling is
+    small, so no part of it sees the cube at so grazing an angle that the path tracer would hardly ever find it."""
+    # Eight shared corners: the normals computed from the faces point along the diagonals.
+    corners = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    quads = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+    (tmp_path / "cube.obj").write_text(
+        "".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+        + "".join(f"f {a} {b} {c}\nf {a} {c} {d}\n" for a, b, c, d in quads)
+    )
+    return _write(
+        tmp_path,
+        _camera("[1.2, 0, 0.1]", "[0.2, 0, 1]", 70, 16, up="[0, 0, 1]")
+        + f"""
+[integrator]
+type = "{integrator}"
+max_depth = 3
+
+[materials.white]
+type = "diffuse"
+reflectance = {{ value = 0.8 }}
+
+[[shapes]]
+type = "mesh"
+file = "cube.obj"
+face_normals = false
+material = "white"
+transform = [{{ scale = 0.3 }}]
+
+[[shapes]]
+type = "rectangle"
+material = "white"
+transform = [{{ rotate = {{ axis = [1, 0, 0], angle = 180 }} }}, {{ translate = [0, 0, 1.0] }}]
+
+[[lights]]
+type = "spot"
+position = [0.05, 0.1, 0.95]
+target = [0.05, 0.1, 0]
+cutoff_angle = 15
+intensity = {{ value = 5 }}
+""",
+    )
+
+
+def test_shading_normals_seen_by_their_light(device, tmp_path):
+    path = spectrace_replicas(Renderer(spectrace.load_scene(_shading_normals_scene(tmp_path, "path")), device), 8, 128)
+    light = spectrace_replicas(
+        Renderer(spectrace.load_scene(_shading_normals_scene(tmp_path, "light")), device), 8, 128
+    )
+    assert path.mean() > 0.005
+    # The image's lowest rows see the ceiling's and the cube's edges almost edge-on: nearly black, and lit only by
+    # rare paths, whose spread a few replicas do not estimate.
+    assert_replicas_agree(light[:, :12, 2:14], path[:, :12, 2:14], block=4)
