@@ -69,13 +69,14 @@ inline int camera_sees(const Scene *scene, const CameraConnection *c, float3 x, 
 }
 
 /* The environment seen straight from the camera (a path of one segment): a light path cannot end in a pinhole, so
- * the work-item traces the camera ray of its own pixel for it. */
+ * the work-item traces the camera ray of its own pixel for it. The jitter is drawn in every build, so a kernel
+ * specialised to a scene without an environment draws the same numbers as one built for every scene. */
 inline void environment_seen_directly(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, int item,
                                       SplatRecords *records, __global const float4 *cmf, uint *rays_traced)
 {
+    float2 jitter = sample_2d(sampler);
 #if SCENE_HAS_ENVIRONMENT
     __global const RenderParams *params = scene->params;
-    float2 jitter = sample_2d(sampler);
     if (params->environment_light < 0 || params->hide_environment) return;
     Ray ray = camera_ray(params, item % params->width, item / params->width, jitter);
     PathState s = camera_path(ray);

@@ -11,14 +11,13 @@ the path tracer (Mitsuba 3's ptracer counts alike) and the film is divided by th
 """
 
 import time
+from typing import Any
 
 import numpy as np
 import pyopencl as cl
 
 from spectrace.engine.launch import launch_shape
 from spectrace.engine.memory import check_device_memory, device_memory_need
-from spectrace.engine.opencl_errors import translate_opencl_errors
-from spectrace.engine.renderer import Renderer
 from spectrace.engine.scene_buffers import render_params
 from spectrace.errors import SpectraceError
 from spectrace.scene.model import Scene
@@ -55,25 +54,23 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
     return None
 
 
-class LightTracerRenderer(Renderer):
-    def _program_file(self, scene: Scene) -> str:
-        return "integrator_light.cl"
+class LightPasses:
+    """The passes of a `light` scene's Renderer (spectrace.engine.renderer), which built the program and the film and
+    hands its run_pass here."""
 
-    def _create_kernels(self) -> cl.Kernel:
-        return cl.Kernel(self.program, "light_pass")
-
-    def _allocate(self, spectral_bins: int) -> None:
-        scene = self.scene
-        problem = light_tracing_problem(scene, self.buffers.medium_count, spectral_bins)
+    def __init__(self, renderer: Any, spectral_bins: int):
+        self.renderer = renderer
+        scene = renderer.scene
+        problem = light_tracing_problem(scene, renderer.buffers.medium_count, spectral_bins)
         if problem:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         depth_slots = scene.max_depth + 1 if scene.max_depth > 0 else MAX_RECORD_SLOTS
         self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
-        pixels = self.pixel_count
-        need = device_memory_need(self.buffers, pixels, spectral_bins)
+        pixels = renderer.pixel_count
+        need = device_memory_need(renderer.buffers, pixels, spectral_bins)
         need.buffers["splat records"] = pixels * self.capacity * RECORD_BYTES
-        check_device_memory(need, self.device)
-        ctx = self.device.context
+        check_device_memory(need, renderer.device)
+        ctx = renderer.device.context
         rw = cl.mem_flags.READ_WRITE
         self._splat_xyz = cl.Buffer(ctx, rw, pixels * self.capacity * 16)
         self._splat_pixel = cl.Buffer(ctx, rw, pixels * self.capacity * 4)
@@ -84,13 +81,14 @@ class LightTracerRenderer(Renderer):
     def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Runs the light paths of `items` for one pixel sample, keeping their records begin .. begin + capacity − 1:
         (pixel, xyz) of the slots in order, and each path's record count."""
-        queue = self.device.queue
+        r = self.renderer
+        queue = r.device.queue
         count, capacity = len(items), self.capacity
         cl.enqueue_copy(queue, self._items, np.ascontiguousarray(items, np.int32))
-        self.kernel.set_args(
-            self._params,
-            *self._scene,
-            self._cmf,
+        r.kernel.set_args(
+            r._params,
+            *r._scene,
+            r._cmf,
             self._sphere,
             np.int32(sample_index),
             self._items,
@@ -100,9 +98,9 @@ class LightTracerRenderer(Renderer):
             self._splat_xyz,
             self._splat_pixel,
             self._splat_counts,
-            self.film.ray_count_buffer,
+            r.film.ray_count_buffer,
         )
-        cl.enqueue_nd_range_kernel(queue, self.kernel, *launch_shape(count, self.work_group))
+        cl.enqueue_nd_range_kernel(queue, r.kernel, *launch_shape(count, r.work_group))
         pixel = np.empty(count * capacity, np.int32)
         xyz = np.empty((count * capacity, 4), np.float32)
         counts = np.empty(count, np.int32)
@@ -115,7 +113,7 @@ class LightTracerRenderer(Renderer):
     def _sample_splats(self, sample_index: int) -> tuple[np.ndarray, np.ndarray]:
         """Every splat of one pixel sample's light paths, in the order (work-item, record)."""
         capacity = self.capacity
-        items = np.arange(self.pixel_count, dtype=np.int32)
+        items = np.arange(self.renderer.pixel_count, dtype=np.int32)
         begin = 0
         parts = []
         while len(items):
@@ -133,15 +131,17 @@ class LightTracerRenderer(Renderer):
         order = np.lexsort((record, owner))
         return pixel[order], xyz[order]
 
-    @translate_opencl_errors("running a render pass")
     def run_pass(self, sample_count: int) -> None:
-        queue = self.device.queue
-        film = self.film
+        """Adds `sample_count` pixel samples' light paths to the renderer's film (its run_pass, translated errors)."""
+        r = self.renderer
+        queue = r.device.queue
+        film = r.film
+        done = film.samples_done
         start = time.perf_counter()
-        cl.enqueue_copy(queue, self._params, render_params(self.scene, self.buffers, self.samples_done, sample_count))
-        sums = np.empty((self.pixel_count, 4), np.float32)
+        cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
+        sums = np.empty((r.pixel_count, 4), np.float32)
         cl.enqueue_copy(queue, sums, film.xyz_buffer)
-        for sample_index in range(self.samples_done, self.samples_done + sample_count):
+        for sample_index in range(done, done + sample_count):
             pixel, xyz = self._sample_splats(sample_index)
             # ufunc.at adds unbuffered, one record after another in this order: the same float sums every time.
             np.add.at(sums, pixel, xyz)
