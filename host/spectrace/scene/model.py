@@ -23,6 +23,8 @@ from spectrace.materials.base import Material
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
+IntegratorType = Literal["path", "direct", "light"]
+INTEGRATOR_TYPES: tuple[str, ...] = ("path", "direct", "light")  # docs/integrators.md
 SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
 # Lower error than the independent sampler at equal spp on every scene measured (docs/sampling.md).
 DEFAULT_SAMPLER: SamplerType = "sobol"
@@ -103,7 +105,7 @@ class Scene:
     height: int
     shapes: list[Shape]
     lights: list[Light] = field(default_factory=list)
-    integrator: Literal["path", "direct", "light"] = "path"
+    integrator: IntegratorType = "path"
     max_depth: int = 8
     rr_depth: int = 5
     hide_environment: bool = False  # camera rays that leave the scene see black (Mitsuba's hide_emitters)

@@ -24,7 +24,7 @@ from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
 from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.scene import limits
-from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
+from spectrace.scene.model import DEFAULT_SAMPLER, IntegratorType, SamplerType
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 
@@ -80,7 +80,7 @@ class FilmSpec(Strict):
 
 
 class IntegratorSpec(Strict):
-    type: Literal["path", "direct", "light"] = "path"
+    type: IntegratorType = "path"
     max_depth: int = Field(
         default=8, ge=-1, le=limits.MAX_DEPTH, description="path segments from the camera; -1 = unbounded"
     )
