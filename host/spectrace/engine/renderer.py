@@ -47,6 +47,8 @@ def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
 
 
 class Renderer:
+    _light_passes: LightPasses | None = None  # set by _allocate for a `light` scene
+
     @translate_opencl_errors("setting up the render")
     def __init__(
         self,
