@@ -72,12 +72,13 @@ inline int camera_sees(const Scene *scene, const CameraConnection *c, float3 x, 
  * the work-item traces the camera ray of its own pixel for it. The jitter is drawn in every build, so a kernel
  * specialised to a scene without an environment draws the same numbers as one built for every scene. */
 inline void environment_seen_directly(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, int item,
-                                      SplatRecords *records, __global const float4 *cmf, uint *rays_traced)
+                                      int hide_environment, SplatRecords *records, __global const float4 *cmf,
+                                      uint *rays_traced)
 {
     float2 jitter = sample_2d(sampler);
 #if SCENE_HAS_ENVIRONMENT
     __global const RenderParams *params = scene->params;
-    if (params->environment_light < 0 || params->hide_environment) return;
+    if (params->environment_light < 0 || hide_environment) return;
     Ray ray = camera_ray(params, item % params->width, item / params->width, jitter);
     PathState s = camera_path(ray);
     Hit hit = scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced);
@@ -87,15 +88,17 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
 #endif
 }
 
-/* One light path of pixel sample `sample_index` of work-item `item`: its splats go to `records`. */
+/* One light path of pixel sample `sample_index` of work-item `item`: its splats go to `records`. hide_environment:
+ * the camera's own rays see black where they leave the scene (the scene's hide_environment). */
 inline void trace_light_path(const Scene *scene, int item, int sample_index, float4 scene_sphere,
-                             __global const float4 *cmf, SplatRecords *records, uint *rays_traced)
+                             int hide_environment, __global const float4 *cmf, SplatRecords *records,
+                             uint *rays_traced)
 {
     __global const RenderParams *params = scene->params;
     Sampler sampler = sampler_start((uint)params->seed, (uint)item, (uint)sample_index);
     SampledWavelengths w = sample_wavelengths(sample_1d(&sampler));
     int last_segment = max_segments(params);
-    environment_seen_directly(scene, &w, &sampler, item, records, cmf, rays_traced);
+    environment_seen_directly(scene, &w, &sampler, item, hide_environment, records, cmf, rays_traced);
 
     float2 u_pick = sample_2d(&sampler);
     float2 u_direction = sample_2d(&sampler);

@@ -489,3 +489,43 @@ def test_shading_normals_seen_by_their_light(device, tmp_path):
     # The image's lowest rows see the ceiling's and the cube's edges almost edge-on: nearly black, and lit only by
     # rare paths, whose spread a few replicas do not estimate.
     assert_replicas_agree(light[:, :12, 2:14], path[:, :12, 2:14], block=4)
+
+
+@pytest.mark.parametrize("hidden", [False, True])
+def test_environment_seen_directly(device, tmp_path, hidden):
+    """Nothing but a constant environment of radiance 0.3: every pixel sees exactly it (the camera ray each
+    work-item traces for its own pixel), or black with hide_environment."""
+    scene = spectrace.load_scene(
+        _write(
+            tmp_path,
+            _camera("[0, 0, 0]", "[0, 0, 1]", 60, 8)
+            + f"""
+[integrator]
+type = "light"
+hide_environment = {str(hidden).lower()}
+
+[materials.grey]
+type = "diffuse"
+reflectance = {{ value = 0.5 }}
+
+[[lights]]
+type = "constant"
+radiance = {{ value = 0.3 }}
+""",
+        )
+    )
+    y = Renderer(scene.with_overrides(spp=64), device).render().xyz[..., 1]
+    if hidden:
+        assert np.all(y == 0.0)
+    else:
+        mean, standard_error = mean_and_standard_error(y.ravel())
+        assert standard_error < 0.01 * 0.3
+        assert_within_standard_errors(mean, 0.3, standard_error)
+
+
+def test_a_tile_of_the_film_is_refused(device, tmp_path):
+    """Splats land in any pixel, so a renderer asked for a pixel range (a tile of a split render) refuses."""
+    renderer = Renderer(spectrace.load_scene(_floor_scene(tmp_path, "light")), device)
+    renderer.pixel_range = (0, 10)
+    with pytest.raises(SpectraceError, match="tiles"):
+        renderer.render(spp=1)

@@ -51,6 +51,12 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
         return "integrator 'light' does not render participating media yet; use 'path'"
     if spectral_bins:
         return "integrator 'light' does not write spectral bands yet; render without spectral output or use 'path'"
+    if getattr(scene, "aovs", ()):
+        return "integrator 'light' does not record AOVs yet; leave film.aovs out or use 'path'"
+    if getattr(scene, "hide_emitters", False) and any(shape.emitter is not None for shape in scene.shapes):
+        return (
+            "integrator 'light' cannot hide area lights from the camera (hide_emitters); use hide_environment or 'path'"
+        )
     return None
 
 
@@ -77,6 +83,8 @@ class LightPasses:
         self._splat_counts = cl.Buffer(ctx, rw, pixels * 4)
         self._items = cl.Buffer(ctx, rw, pixels * 4)
         self._sphere = scene_sphere(scene)
+        # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.
+        self._hide_environment = np.int32(scene.hide_environment or getattr(scene, "hide_emitters", False))
 
     def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Runs the light paths of `items` for one pixel sample, keeping their records begin .. begin + capacity − 1:
@@ -90,6 +98,7 @@ class LightPasses:
             *r._scene,
             r._cmf,
             self._sphere,
+            self._hide_environment,
             np.int32(sample_index),
             self._items,
             np.int32(count),
@@ -134,6 +143,8 @@ class LightPasses:
     def run_pass(self, sample_count: int) -> None:
         """Adds `sample_count` pixel samples' light paths to the renderer's film (its run_pass, translated errors)."""
         r = self.renderer
+        if tuple(getattr(r, "pixel_range", (0, r.pixel_count))) != (0, r.pixel_count):
+            raise SpectraceError("integrator 'light' renders whole films, not tiles: its splats land in any pixel")
         queue = r.device.queue
         film = r.film
         done = film.samples_done
