@@ -335,3 +335,16 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
     general = Renderer(scene, device, specialise=False).render().xyz
     assert np.all(np.isfinite(specialised)) and specialised[..., 1].mean() > 0
     assert np.array_equal(specialised.view(np.uint32), general.view(np.uint32))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "name", ["cornell_box", "prism", "environment_map", "distant_and_spot", "trilinear_texture", "analytic_shapes"]
+)
+def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):
+    """The same for the light tracer (which refuses media, so no subsurface scene)."""
+    scene = SCENES[name]().with_overrides(width=16, height=16, spp=4, integrator="light")
+    specialised = Renderer(scene, device).render().xyz
+    general = Renderer(scene, device, specialise=False).render().xyz
+    assert np.all(np.isfinite(specialised)) and specialised[..., 1].mean() > 0
+    assert np.array_equal(specialised.view(np.uint32), general.view(np.uint32))

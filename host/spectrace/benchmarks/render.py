@@ -1,6 +1,8 @@
-"""`spectrace bench` (no mode): throughput of the path tracer on a scene (the Cornell box by default).
+"""`spectrace bench` (no mode): throughput of an integrator (the scene's, or --integrator) on a scene (the Cornell
+box by default).
 
-Figures are samples/s (pixel samples, each a full path) and rays/s (closest-hit and shadow rays traced), timed
+Figures are samples/s (pixel samples, each a full path: a camera path, or for the light tracer one light path per
+pixel) and rays/s (closest-hit and shadow rays traced), timed
 around the kernel passes only, after one warm-up pass. The program build time says whether it came from the
 binary cache; "to 1st pass" is scene setup + build + the first 1-spp pass, which on PoCL includes its lazy
 kernel compilation (run with empty SPECTRACE_CACHE_DIR and POCL_CACHE_DIR folders for a cold start).
@@ -27,8 +29,9 @@ def run_render_bench(
     device: str | None,
     all_devices: bool,
     log: Callable[[str], None] = lambda text: None,
+    integrator: str | None = None,
 ) -> list[dict]:
-    scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml")
+    scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml").with_overrides(integrator=integrator)
     keys = [r.key for r in discover_devices() if r.ok] if all_devices else [device]
     results = []
     for key in keys:
@@ -49,6 +52,7 @@ def run_render_bench(
                 "device_name": dev.report.device_name,
                 "width": size,
                 "height": size,
+                "integrator": sized.integrator,
                 "spp": image.spp,
                 "max_depth": max_depth,
                 "seconds": image.render_seconds,
@@ -61,7 +65,7 @@ def run_render_bench(
                 "start_to_first_pass_seconds": setup_seconds + first_pass_seconds,
             }
             log(
-                f"{row['device']} {size}x{size}: {row['samples_per_second'] / 1e6:.3f} M samples/s, "
+                f"{row['device']} {size}x{size} {sized.integrator}: {row['samples_per_second'] / 1e6:.3f} M samples/s, "
                 f"{row['rays_per_second'] / 1e6:.3f} M rays/s"
             )
             results.append(row)
@@ -69,14 +73,16 @@ def run_render_bench(
 
 
 def render_bench_table(results: list[dict]) -> Table:
-    table = Table(title="spectrace bench: path tracer throughput")
-    for column in ("device", "size", "spp", "depth", "M samples/s", "M rays/s", "time s", "build s", "to 1st pass s"):
+    table = Table(title="spectrace bench: throughput")
+    columns = ("device", "size", "integrator", "spp", "depth", "M samples/s", "M rays/s", "time s", "build s")
+    for column in (*columns, "to 1st pass s"):
         table.add_column(column, justify="right" if column != "device" else "left")
     for r in results:
         build = f"{r['kernel_build_seconds']:.2f}" + (" (cached)" if r["kernel_build_cached"] else "")
         table.add_row(
             r["device"],
             f"{r['width']}x{r['height']}",
+            r["integrator"],
             str(r["spp"]),
             str(r["max_depth"]),
             f"{r['samples_per_second'] / 1e6:.3f}",

@@ -25,6 +25,10 @@ RENDER_DEFAULT_SIZES = [256, 512]
 SizesOption = Annotated[list[int] | None, typer.Option("--size", help="Square image size(s) in pixels, repeatable.")]
 SppOption = Annotated[int, typer.Option(help="Samples per pixel per measurement.", min=1)]
 MaxDepthOption = Annotated[int, typer.Option(help="Path segments from the camera.")]
+IntegratorOption = Annotated[
+    str | None,
+    typer.Option(help="Integrator to time: path, direct or light (default: the scene's; docs/integrators.md)."),
+]
 SceneOption = Annotated[Path | None, typer.Option(help="Scene file (default: the Cornell box).")]
 AllOption = Annotated[bool, typer.Option("--all", help="Every working device in turn.")]
 TrianglesOption = Annotated[int, typer.Option(help="Triangles of the largest mesh.", min=20)]
@@ -99,6 +103,7 @@ def render_bench(
     spp: SppOption = 16,
     max_depth: MaxDepthOption = 8,
     scene: SceneOption = None,
+    integrator: IntegratorOption = None,
     device: DeviceOption = None,
     all_devices: AllOption = False,
     as_json: JsonOption = False,
@@ -119,6 +124,12 @@ def render_bench(
         return
     _check(size, max_depth)
     from spectrace.benchmarks.render import render_bench_table, run_render_bench
+    from spectrace.scene.model import INTEGRATOR_TYPES
+
+    if integrator is not None and integrator not in INTEGRATOR_TYPES:
+        raise SpectraceError(
+            f"unknown integrator {integrator!r}; choose {', '.join(INTEGRATOR_TYPES)}", where="--integrator"
+        )
 
     results = run_render_bench(
         scene,
@@ -128,6 +139,7 @@ def render_bench(
         device=device,
         all_devices=all_devices,
         log=_log,
+        integrator=integrator,
     )
     _emit("render", results, lambda: [render_bench_table(results)], as_json, width=150)
 

@@ -10,6 +10,7 @@ from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.device import Device, open_device
 from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.engine.launch import launch_shape, render_work_group
+from spectrace.engine.light_tracer import LightPasses
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
@@ -27,7 +28,7 @@ ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 # launch overhead does not matter.
 TARGET_PASS_SECONDS = 0.5
 
-INTEGRATOR_PROGRAMS = {"path": "integrator_path.cl", "direct": "integrator_direct.cl"}
+INTEGRATOR_PROGRAMS = {"path": "integrator_path.cl", "direct": "integrator_direct.cl", "light": "integrator_light.cl"}
 
 
 def sampler_defines(sampler: str) -> dict[str, int]:
@@ -59,6 +60,8 @@ def film_albedo_scale(scene: Scene, table: np.ndarray) -> np.ndarray:
 
 
 class Renderer:
+    _light_passes: LightPasses | None = None  # set by _allocate for a `light` scene
+
     @translate_opencl_errors("setting up the render")
     def __init__(
         self,
@@ -154,13 +157,15 @@ class Renderer:
         """Refuses a scene this kernel shape cannot render, before any other check."""
 
     def _allocate(self, spectral_bins: int) -> None:
-        """The device buffers this kernel shape needs beyond the film and the scene."""
+        """The device buffers this kernel shape needs beyond the film and the scene: the light tracer's launches and
+        splat records (spectrace.engine.light_tracer) for a `light` scene."""
+        self._light_passes = LightPasses(self, spectral_bins) if self.scene.integrator == "light" else None
 
     def _program_file(self, scene: Scene) -> str:
         return INTEGRATOR_PROGRAMS[scene.integrator]
 
     def _create_kernels(self) -> cl.Kernel:
-        return cl.Kernel(self.program, "render_pass")
+        return cl.Kernel(self.program, "light_pass" if self.scene.integrator == "light" else "render_pass")
 
     # The film's size and bands, which the film holds (one copy, no drift).
     @property
@@ -190,6 +195,9 @@ class Renderer:
     @translate_opencl_errors("running a render pass")
     def run_pass(self, sample_count: int) -> None:
         """Add `sample_count` samples per pixel, continuing the sample sequence where the last pass stopped."""
+        if self._light_passes is not None:
+            self._light_passes.run_pass(sample_count)
+            return
         queue = self.device.queue
         params = render_params(self.scene, self.buffers, self.samples_done, sample_count)
         start = time.perf_counter()

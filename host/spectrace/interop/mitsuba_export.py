@@ -21,8 +21,8 @@ The export is meant to make Mitsuba do exactly the work spectrace does, so that 
   its table (trapezoid rule, 106.857), Mitsuba 3 by its fixed MI_CIE_Y_NORMALIZATION (1/106.750), so Mitsuba's
   XYZ is 0.1 % higher for every spectrum (measured: 1.00098 ± 0.00003 for a constant radiance 1).
   `mitsuba_film_xyz` rescales Mitsuba's image to spectrace's convention before any comparison;
-- integrator: `path` with the same max_depth, rr_depth and hide_emitters (spectrace's hide_environment where the
-  scene has no area lights). Both count max_depth in path segments and start
+- integrator: `path` (or `ptracer` for the light tracer) with the same max_depth, rr_depth and hide_emitters
+  (spectrace's hide_environment where the scene has no area lights). Both count max_depth in path segments and start
   Russian roulette once `rr_depth` bounces have happened, with survival probability min(max throughput, 0.95).
 
 What has no faithful counterpart (a material or light whose module has no `to_mitsuba`: spot lights, whose falloff
@@ -145,6 +145,8 @@ def _light_entry(light, exporter: MitsubaExport) -> dict:
 
 # Mitsuba 3's samplers; "independent" is its default, the stratified ones are its counterparts of spectrace's Sobol.
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
+# spectrace integrator -> Mitsuba 3 plugin with the same max_depth and rr_depth meaning.
+_MITSUBA_INTEGRATORS = {"path": "path", "light": "ptracer"}
 
 
 def scene_to_mitsuba_dict(
@@ -157,8 +159,11 @@ def scene_to_mitsuba_dict(
         raise SpectraceError(
             f"unknown Mitsuba sampler '{sampler}'; samplers: {', '.join(MITSUBA_SAMPLERS)}", where="--peer-sampler"
         )
-    if scene.integrator != "path":
-        raise _refuse(f"integrator '{scene.integrator}' (only 'path' maps onto Mitsuba's path tracer)", scene)
+    if scene.integrator not in _MITSUBA_INTEGRATORS:
+        raise _refuse(
+            f"integrator '{scene.integrator}' (only 'path' and 'light' map onto Mitsuba's path and particle tracers)",
+            scene,
+        )
     has_area_lights = any(shape.emitter is not None for shape in scene.shapes)
     if scene.hide_environment and not scene.hide_emitters and has_area_lights:
         raise _refuse("hide_environment with area lights (Mitsuba's hide_emitters hides both)", scene)
@@ -168,7 +173,7 @@ def scene_to_mitsuba_dict(
     entries: dict = {
         "type": "scene",
         "integrator": {
-            "type": "path",
+            "type": _MITSUBA_INTEGRATORS[scene.integrator],
             "max_depth": int(scene.max_depth),
             "rr_depth": int(scene.rr_depth),
             "hide_emitters": bool(scene.hide_emitters or scene.hide_environment),

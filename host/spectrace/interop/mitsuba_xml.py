@@ -17,11 +17,12 @@ disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sph
 twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
-path (max_depth, rr_depth), direct (as path with max_depth 2) and volpath/volpathmis (as path, which renders
-media); a shape's interior homogeneous medium with constant sigma_t and scale, a constant or rgb albedo and an hg
-or isotropic phase (a null bsdf: the index-matched boundary). Spectra: rgb (uplifted exactly as
-Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as a value, "λ:v" pairs,
-wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular, blackbody, d65 and srgb.
+path (max_depth, rr_depth), direct (as path with max_depth 2), volpath/volpathmis (as path, which renders
+media) and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium with constant sigma_t
+and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the index-matched boundary).
+Spectra: rgb (uplifted exactly as Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as
+a value, "λ:v" pairs, wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular,
+blackbody, d65 and srgb.
 `$name` parameters and <default> are substituted as Mitsuba does.
 
 Bad values are reported as one SpectraceError naming the file and the element path
@@ -78,7 +79,7 @@ SUPPORTED = {
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm",),
-    "integrator": ("path", "direct", "volpath", "volpathmis", "moment"),
+    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "ptracer"),
     "medium": ("homogeneous",),
     "phase": ("hg", "isotropic"),
 }
@@ -1356,6 +1357,11 @@ class MitsubaImporter:
             )
             # Mitsuba's direct integrator's sample counts per technique change the noise, not the mean.
             properties.understood("emitter_samples", "bsdf_samples", "shading_samples")
+        elif kind == "ptracer":
+            # Mitsuba's particle tracer is spectrace's light tracer, with the same max_depth and rr_depth meaning;
+            # how many light paths one of its passes runs changes the scheduling, not the image.
+            settings["type"] = "light"
+            properties.understood("samples_per_pass")
         elif kind.startswith("volpath"):
             self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path', which renders media")
         elif kind == "moment":

@@ -25,6 +25,8 @@ from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
+IntegratorType = Literal["path", "direct", "light"]
+INTEGRATOR_TYPES: tuple[str, ...] = ("path", "direct", "light")  # docs/integrators.md
 SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
 # Lower error than the independent sampler at equal spp on every scene measured (docs/sampling.md).
 DEFAULT_SAMPLER: SamplerType = "sobol"
@@ -126,7 +128,7 @@ class Scene:
     height: int
     shapes: list[Shape]
     lights: list[Light] = field(default_factory=list)
-    integrator: Literal["path", "direct"] = "path"
+    integrator: IntegratorType = "path"
     max_depth: int = 8
     rr_depth: int = 5
     hide_environment: bool = False  # camera rays that leave the scene see black

@@ -28,7 +28,7 @@ from spectrace.materials import MATERIALS, surface
 from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.pixel_filters import FILTERS
 from spectrace.scene import limits
-from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
+from spectrace.scene.model import DEFAULT_SAMPLER, IntegratorType, SamplerType
 from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
@@ -42,7 +42,7 @@ class Strict(BaseModel):
 
 
 class IntegratorSpec(Strict):
-    type: Literal["path", "direct"] = "path"
+    type: IntegratorType = "path"
     max_depth: int = Field(
         default=8, ge=-1, le=limits.MAX_DEPTH, description="path segments from the camera; -1 = unbounded"
     )

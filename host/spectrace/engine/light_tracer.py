@@ -1,0 +1,168 @@
+"""The light tracer on the host: launches of light paths and the deterministic addition of their splats to the film.
+
+A light path's connections to the camera land in arbitrary pixels, so the kernel (kernels/integrator_light.cl) does
+not add them to the film: each work-item writes its splats as records (pixel, XYZ) into slots of its own, and the
+host adds every record to the film in the order (sample index, work-item, record). Float sums then come out the same
+whatever the split into passes, as the path tracer's do, with no atomics (OpenCL 1.2 has no float atomics, and the
+64-bit integer ones an order-free fixed-point film would need are an extension).
+
+Each pixel sample runs as many light paths as the film has pixels, so samples per pixel mean the same work as for
+the path tracer (Mitsuba 3's ptracer counts alike) and the film is divided by the samples done as always.
+"""
+
+import time
+from typing import Any
+
+import numpy as np
+import pyopencl as cl
+
+from spectrace.engine.launch import launch_shape
+from spectrace.engine.memory import check_device_memory, device_memory_need
+from spectrace.engine.scene_buffers import render_params
+from spectrace.errors import SpectraceError
+from spectrace.scene.model import Scene
+
+# Splat record slots per light path and launch: a path longer than this is launched again for its later records
+# (rare: Russian roulette ends most paths sooner), so memory stays bounded for unbounded max_depth.
+MAX_RECORD_SLOTS = 16
+RECORD_BYTES = 16 + 4  # float4 XYZ + int pixel
+
+
+def scene_sphere(scene: Scene) -> np.ndarray:
+    """A sphere (centre, radius) holding every shape, slightly enlarged: distant and environment light paths start
+    on a disk outside it."""
+    points = [shape.mesh.vertices for shape in scene.shapes if len(shape.mesh.vertices)]
+    if not points:
+        return np.array([0.0, 0.0, 0.0, 1.0], np.float32)
+    everything = np.concatenate(points)
+    lo, hi = everything.min(axis=0), everything.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    radius = 0.5 * float(np.linalg.norm(hi - lo))
+    radius = radius * 1.01 + 1e-3 * max(1.0, float(np.abs(centre).max()))
+    return np.array([*centre, radius], np.float32)
+
+
+def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
+    """Why the light tracer cannot render this scene as asked, or None."""
+    camera_type = scene.camera.type
+    if camera_type != "perspective":
+        return f"integrator 'light' supports the perspective (pinhole) camera only, not {camera_type!r}"
+    if medium_count:
+        return "integrator 'light' does not render participating media yet; use 'path'"
+    if spectral_bins:
+        return "integrator 'light' does not write spectral bands yet; render without spectral output or use 'path'"
+    if scene.pixel_filter.type != "box":
+        return (
+            f"integrator 'light' splats into whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
+            "use film.filter = \"box\" or 'path'"
+        )
+    if not scene.film_response.is_default:
+        return "integrator 'light' renders the default CIE 1931 film only (no observers, sensor or wavelengths yet)"
+    if scene.aovs:
+        return "integrator 'light' does not record AOVs yet; leave film.aovs out or use 'path'"
+    if scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes):
+        return (
+            "integrator 'light' cannot hide area lights from the camera (hide_emitters); use hide_environment or 'path'"
+        )
+    return None
+
+
+class LightPasses:
+    """The passes of a `light` scene's Renderer (spectrace.engine.renderer), which built the program and the film and
+    hands its run_pass here."""
+
+    def __init__(self, renderer: Any, spectral_bins: int):
+        self.renderer = renderer
+        scene = renderer.scene
+        problem = light_tracing_problem(scene, renderer.buffers.medium_count, spectral_bins)
+        if problem:
+            raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
+        depth_slots = scene.max_depth + 1 if scene.max_depth > 0 else MAX_RECORD_SLOTS
+        self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
+        pixels = renderer.pixel_count
+        need = device_memory_need(renderer.buffers, pixels, spectral_bins)
+        need.buffers["splat records"] = pixels * self.capacity * RECORD_BYTES
+        check_device_memory(need, renderer.device)
+        ctx = renderer.device.context
+        rw = cl.mem_flags.READ_WRITE
+        self._splat_xyz = cl.Buffer(ctx, rw, pixels * self.capacity * 16)
+        self._splat_pixel = cl.Buffer(ctx, rw, pixels * self.capacity * 4)
+        self._splat_counts = cl.Buffer(ctx, rw, pixels * 4)
+        self._items = cl.Buffer(ctx, rw, pixels * 4)
+        self._sphere = scene_sphere(scene)
+        # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.
+        self._hide_environment = np.int32(scene.hide_environment or getattr(scene, "hide_emitters", False))
+
+    def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Runs the light paths of `items` for one pixel sample, keeping their records begin .. begin + capacity − 1:
+        (pixel, xyz) of the slots in order, and each path's record count."""
+        r = self.renderer
+        queue = r.device.queue
+        count, capacity = len(items), self.capacity
+        cl.enqueue_copy(queue, self._items, np.ascontiguousarray(items, np.int32))
+        r.kernel.set_args(
+            r._params,
+            *r._scene,
+            r._cmf,
+            self._sphere,
+            self._hide_environment,
+            np.int32(sample_index),
+            self._items,
+            np.int32(count),
+            np.int32(begin),
+            np.int32(capacity),
+            self._splat_xyz,
+            self._splat_pixel,
+            self._splat_counts,
+            r.film.ray_count_buffer,
+        )
+        cl.enqueue_nd_range_kernel(queue, r.kernel, *launch_shape(count, r.work_group))
+        pixel = np.empty(count * capacity, np.int32)
+        xyz = np.empty((count * capacity, 4), np.float32)
+        counts = np.empty(count, np.int32)
+        cl.enqueue_copy(queue, pixel, self._splat_pixel)
+        cl.enqueue_copy(queue, xyz, self._splat_xyz)
+        cl.enqueue_copy(queue, counts, self._splat_counts)
+        queue.finish()
+        return pixel, xyz, counts
+
+    def _sample_splats(self, sample_index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every splat of one pixel sample's light paths, in the order (work-item, record)."""
+        capacity = self.capacity
+        items = np.arange(self.renderer.pixel_count, dtype=np.int32)
+        begin = 0
+        parts = []
+        while len(items):
+            pixel, xyz, counts = self._launch(sample_index, items, begin)
+            used = pixel >= 0
+            following = items[counts > begin + capacity]
+            if begin == 0 and not len(following):
+                return pixel[used], xyz[used]  # the usual case: every path's records fitted in one launch
+            record = np.tile(np.arange(begin, begin + capacity), len(items))
+            owner = np.repeat(items, capacity)
+            parts.append((owner[used], record[used], pixel[used], xyz[used]))
+            items = following
+            begin += capacity
+        owner, record, pixel, xyz = (np.concatenate(column) for column in zip(*parts, strict=True))
+        order = np.lexsort((record, owner))
+        return pixel[order], xyz[order]
+
+    def run_pass(self, sample_count: int) -> None:
+        """Adds `sample_count` pixel samples' light paths to the renderer's film (its run_pass, translated errors)."""
+        r = self.renderer
+        if tuple(getattr(r, "pixel_range", (0, r.pixel_count))) != (0, r.pixel_count):
+            raise SpectraceError("integrator 'light' renders whole films, not tiles: its splats land in any pixel")
+        queue = r.device.queue
+        film = r.film
+        done = film.samples_done
+        start = time.perf_counter()
+        cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
+        sums = np.empty((r.pixel_count, 4), np.float32)
+        cl.enqueue_copy(queue, sums, film.xyz_buffer)
+        for sample_index in range(done, done + sample_count):
+            pixel, xyz = self._sample_splats(sample_index)
+            # ufunc.at adds unbuffered, one record after another in this order: the same float sums every time.
+            np.add.at(sums, pixel, xyz)
+        cl.enqueue_copy(queue, film.xyz_buffer, sums)
+        queue.finish()
+        film.add_pass(sample_count, time.perf_counter() - start)

@@ -1,0 +1,181 @@
+/* The light tracer (particle tracing): paths start on the lights and every vertex the camera could see is
+ * connected to it, adding to the pixel the connection lands in (Veach 1997, sec. 10.2 "light tracing"; Arvo &
+ * Kirk 1990). It reaches what a camera path cannot: caustics of point, spot and distant lights seen on diffuse
+ * surfaces through smooth glass and mirrors (paths L S+ D E).
+ *
+ * Light flows along a light path the way the path is traced, so each vertex needs the BSDF for light arriving from
+ * the previous vertex (ωlight) and leaving toward the next: material_eval(wo = next, wi = ωlight), radiance's own
+ * convention, which is how the connection to the camera evaluates it. A sampled direction comes from
+ * material_sample(wo = ωlight), the BSDF with its arguments swapped (its adjoint, Veach 1997, ch. 5), which differs
+ * in two ways: refraction's radiance compression (n_o/n_i)² is the one for light flowing the other way, so the
+ * sample's weight is divided by its radiance_scale (the BSDFs are otherwise symmetric), and with shading normals the
+ * weight needs |ωo·ns||ωi·ng| / (|ωo·ng||ωi·ns|), ωo = ωlight (Veach 1997, eq. 5.19; pbrt's CorrectShadingNormal).
+ * At a connection the cosine of the camera's side is the geometric one, and f·|ωlight·ns| is divided by
+ * |ωlight·ng| (the same shading-normal rule: the BSDF with shading normals is f·|ωi·ns|/|ωi·ng| per geometric
+ * cosine, whichever way a path is traced).
+ *
+ * max_depth counts path segments from the camera as the path integrator does: light vertex i (1 = the first surface
+ * the light reaches, 0 = a point on an area light) seen by the camera closes a path of i + 1 segments.
+ *
+ * The splats a path makes land in arbitrary pixels. To keep the film deterministic they are not added here: each
+ * is written as a record (pixel, XYZ) in its work-item's slots, in the order the path makes them, and the host adds
+ * the records to the film in the order (sample index, work-item, record), the same however the render is split
+ * into passes (spectrace.engine.light_tracer). */
+#ifndef SPECTRACE_LIGHT_TRACER_CL
+#define SPECTRACE_LIGHT_TRACER_CL
+
+#include "camera.cl"
+#include "camera_importance.cl"
+#include "film.cl"
+#include "light_emission.cl"
+#include "path_state.cl"
+
+/* Where a work-item's splat records go: slots [0, capacity) of its own, for the records numbered begin .. begin +
+ * capacity − 1 of its path (the host launches the path again for later ones); count is every record it makes. */
+typedef struct {
+    __global float4 *xyz;  /* XYZ estimate, w = 1 for a dropped (non-finite) one */
+    __global int *pixel;   /* -1 for an unused slot */
+    int begin;
+    int capacity;
+    int count;
+} SplatRecords;
+
+inline void record_splat(SplatRecords *r, int pixel, float4 value, __global const float4 *cmf,
+                         const SampledWavelengths *w)
+{
+    int slot = r->count++ - r->begin;
+    if (slot < 0 || slot >= r->capacity) return;
+    float4 xyz = spectrum_to_xyz_estimate(value, cmf, w);
+    if (!(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z))) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
+    r->xyz[slot] = xyz;
+    r->pixel[slot] = pixel;
+}
+
+/* Veach's shading-normal factor for adjoint transport: |ωo·ns||ωi·ng| / (|ωo·ng||ωi·ns|), ωo toward where the light
+ * came from, ωi where it goes; 1 where the vertex shades with its geometric normal. */
+inline float shading_normal_adjoint(float3 ng, float3 ns, float3 wo, float3 wi)
+{
+    if (all(ns == ng)) return 1.0f;
+    float denominator = fabs(dot(wo, ng)) * fabs(dot(wi, ns));
+    return denominator > 0.0f ? fabs(dot(wo, ns)) * fabs(dot(wi, ng)) / denominator : 0.0f;
+}
+
+/* The camera sees x (offset off its surface along ng toward the camera) unless something lies between. */
+inline int camera_sees(const Scene *scene, const CameraConnection *c, float3 x, float3 ng, uint query,
+                       uint *rays_traced)
+{
+    float3 from = offset_ray_origin(x, ng, c->to_camera);
+    return !scene_occluded(scene, from, c->lens, c->to_camera, 0, query, rays_traced);
+}
+
+/* The environment seen straight from the camera (a path of one segment): a light path cannot end in a pinhole, so
+ * the work-item traces the camera ray of its own pixel for it. The jitter is drawn in every build, so a kernel
+ * specialised to a scene without an environment draws the same numbers as one built for every scene. */
+inline void environment_seen_directly(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, int item,
+                                      int hide_environment, SplatRecords *records, __global const float4 *cmf,
+                                      uint *rays_traced)
+{
+    float2 jitter = sample_2d(sampler);
+#if SCENE_HAS_ENVIRONMENT
+    __global const RenderParams *params = scene->params;
+    if (params->environment_light < 0 || hide_environment) return;
+    float2 film = (float2)((float)(item % params->width) + jitter.x, (float)(item / params->width) + jitter.y);
+    Ray ray = camera_ray(params, film, sampler); /* the pinhole draws nothing more from the sampler */
+    PathState s = camera_path(ray);
+    Hit hit = scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced);
+    if (hit.triangle >= 0) return;
+    __global const Light *env = &scene->lights[params->environment_light];
+    record_splat(records, item, environment_radiance(env, scene->spectra, scene->texels, w, ray.direction), cmf, w);
+#endif
+}
+
+/* One light path of pixel sample `sample_index` of work-item `item`: its splats go to `records`. hide_environment:
+ * the camera's own rays see black where they leave the scene (the scene's hide_environment). */
+inline void trace_light_path(const Scene *scene, int item, int sample_index, float4 scene_sphere,
+                             int hide_environment, __global const float4 *cmf, SplatRecords *records,
+                             uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    Sampler sampler = sampler_start((uint)params->seed, (uint)item, (uint)sample_index);
+    SampledWavelengths w = sample_wavelengths(sample_1d(&sampler));
+    int last_segment = max_segments(params);
+    environment_seen_directly(scene, &w, &sampler, item, hide_environment, records, cmf, rays_traced);
+
+    float2 u_pick = sample_2d(&sampler);
+    float2 u_direction = sample_2d(&sampler);
+    if (params->light_count == 0) return;
+    __global const Light *light = &scene->lights[pick_light_reusing(scene->light_cdf, params->light_count, &u_pick)];
+    LightBuffers buffers = light_buffers(scene);
+    EmissionSample e;
+    if (!sample_emission(light, &buffers, &w, scene_sphere, u_pick, u_direction, &e)) return;
+
+    /* The path's state as a camera path keeps it (path_state.cl), for the same queries and medium bookkeeping. */
+    PathState s = camera_path(e.ray);
+    s.throughput = e.weight;
+    float4 scatter = (float4)(1.0f);  /* product of the adjoint BSDF weights alone, for Russian roulette */
+
+    if (e.first_vertex) {
+        CameraConnection c = connect_to_camera(params, e.point);
+        if (c.pixel >= 0) {
+            float cos_light = fabs(dot(e.normal, c.to_camera));
+            TextureBuffers textures = buffers.textures;
+            float4 emitted = area_light_emitted(light, &textures, &w, e.normal, c.to_camera, e.uv);
+            if (any(emitted != (float4)(0.0f))
+                && camera_sees(scene, &c, e.point, e.normal, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
+                record_splat(records, c.pixel, emitted * (cos_light * c.importance / e.pdf_area), cmf, &w);
+            }
+        }
+    }
+
+    /* s.segments: the index of the vertex s.ray is about to reach. */
+    while (s.segments + 1 <= last_segment) {
+        Hit hit = scene_intersect(scene, s.ray, path_query(&sampler, &s, QUERY_PATH), rays_traced);
+        if (hit.triangle < 0) return;
+        PathVertex v = path_vertex(scene, hit, s.ray);
+        if (v.info.material == TRIANGLE_NO_MATERIAL) {
+            if (!cross_null_boundary(&s, &v)) return;
+            continue;
+        }
+        __global const Material *material = &scene->materials[v.info.material];
+        if (material_disperses(material, &w)) terminate_secondary(&s.throughput, &s.secondary_terminated);
+        SurfaceContext sc = surface_context(scene, v.uv, v.footprint);
+        if (material_has_non_delta_lobe(material)) {
+            CameraConnection c = connect_to_camera(params, v.p);
+            if (c.pixel >= 0 && shading_side_agrees(v.n, v.ns, c.to_camera)) {
+                float4 f_cos = material_eval(material, &sc, &w, v.ns, c.to_camera, v.wo);
+                /* f_cos holds |ωlight·ns|: times |ωcamera·ng| / |ωlight·ng| (see the top of this file). */
+                float cos_light = fabs(dot(v.wo, v.n));
+                float cosines = cos_light > 0.0f ? fabs(dot(c.to_camera, v.n)) / cos_light : 0.0f;
+                float4 value = s.throughput * f_cos * (cosines * c.importance);
+                if (any(value != (float4)(0.0f))
+                    && camera_sees(scene, &c, v.p, v.n, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
+                    record_splat(records, c.pixel, value, cmf, &w);
+                }
+            }
+        }
+        if (s.segments + 2 > last_segment) return;
+        float uc = sample_1d(&sampler);
+        float2 u = sample_2d(&sampler);
+        BSDFSample bs;
+        if (!material_sample(material, &sc, &w, v.ns, v.wo, uc, u, &bs) || !shading_side_agrees(v.n, v.ns, bs.wi))
+            return;
+        float4 weight = bs.weight * (shading_normal_adjoint(v.n, v.ns, v.wo, bs.wi) / bs.radiance_scale);
+        s.throughput *= weight;
+        scatter *= weight;
+        s.previous_point = v.p;
+        s.medium = medium_beyond(v.info.interior, v.n, bs.wi);
+        s.ray.origin = offset_ray_origin(v.p, v.n, bs.wi);
+        s.ray.direction = bs.wi;
+        /* Russian roulette as the path tracer's (rr_depth, survival min(max weight, 0.95)), on the BSDF weights. */
+        if (s.segments >= params->rr_depth) {
+            float q = fmin(fmax(fmax(scatter.x, scatter.y), fmax(scatter.z, scatter.w)), 0.95f);
+            if (!(sample_1d(&sampler) < q)) return;
+            s.throughput /= q;
+            scatter /= q;
+        }
+        if (all(s.throughput == (float4)(0.0f))) return;
+        ++s.segments;
+    }
+}
+
+#endif
