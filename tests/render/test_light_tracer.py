@@ -529,3 +529,20 @@ def test_a_tile_of_the_film_is_refused(device, tmp_path):
     renderer.pixel_range = (0, 10)
     with pytest.raises(SpectraceError, match="tiles"):
         renderer.render(spp=1)
+
+
+@pytest.mark.parametrize(
+    ("changes", "words"),
+    [
+        ({"pixel_filter": spectrace.PixelFilter("gaussian")}, "gaussian filter"),
+        ({"film_response": spectrace.FilmResponse(observer="CIE 1964 10°")}, "default CIE 1931 film"),
+        ({"aovs": ("depth",)}, "AOVs"),
+    ],
+)
+def test_what_splats_cannot_give_is_refused_in_one_line(device, tmp_path, changes, words):
+    """A splat lands in one whole pixel, with the film's CIE 1931 weights, at the end of a light path: a filter's
+    spread, another film's curves and the camera path's first surface are not there to be had."""
+    scene = spectrace.load_scene(_floor_scene(tmp_path, "light")).with_overrides(**changes)
+    with pytest.raises(SpectraceError, match=words) as error:
+        Renderer(scene, device)
+    assert "\n" not in str(error.value)
