@@ -43,11 +43,18 @@ typedef struct {
     RayShear shear;
 } TraversalRay;
 
+/* 1 / direction for the slab tests, with components below 1e-30 in size taken as ±1e-30 (same sign), so a ray
+ * parallel to a slab gets a huge finite reciprocal rather than inf times 0 = NaN at the box's faces. */
+inline float3 slab_inverse_direction(float3 direction)
+{
+    float3 tiny = copysign((float3)(1.0e-30f), direction);
+    return 1.0f / select(direction, tiny, fabs(direction) < (float3)(1.0e-30f));
+}
+
 inline TraversalRay traversal_ray(Ray ray)
 {
     TraversalRay r;
-    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
-    r.inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
+    r.inv_direction = slab_inverse_direction(ray.direction);
     r.origin4 = (float4)(ray.origin, 0.0f);
     r.shear = ray_shear(ray.direction);
     r.origin_k = shuffle(r.origin4, r.shear.permutation).xyz;
@@ -162,6 +169,64 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
     }
 }
 
+/* A walk over a binary BVH whose leaves the caller tests (triangles, analytic shapes, instances): at an inner
+ * node the children the ray enters are visited near to far, the farther one kept on a stack with the distance at
+ * which the ray enters its box. Every binary traversal in the kernels takes its steps from here. */
+typedef struct {
+    int stack[BVH_STACK_SIZE];
+    float entry[BVH_STACK_SIZE];  /* where the ray enters each pushed node's box */
+    int top;
+    int index;                    /* the node the walk stands at */
+} BinaryWalk;
+
+/* At the root; 0 when the ray misses the whole BVH before t_max. */
+inline int binary_walk_start(BinaryWalk *walk, __global const BVHNode *nodes, float3 origin, float3 inv_direction,
+                             float t_max)
+{
+    walk->top = 0;
+    walk->index = 0;
+    return ray_box_entry(&nodes[0], origin, inv_direction, t_max) != INFINITY;
+}
+
+/* Pop, skipping nodes that a closer hit found since has made irrelevant (t: the closest hit so far). Entering
+ * before t is the whole test: the box's exit was checked against a t_max no smaller than t when it was pushed.
+ * 0 when the stack is empty: the walk is over. */
+inline int binary_walk_pop(BinaryWalk *walk, float t)
+{
+    while (walk->top > 0) {
+        --walk->top;
+        if (walk->entry[walk->top] <= t) {
+            walk->index = walk->stack[walk->top];
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* From the node the walk stands at, down to the next leaf the ray may meet before t: 1 with walk->index at that
+ * leaf, 0 when the walk is over. After testing the leaf, the caller pops (binary_walk_pop) and descends again. */
+inline int binary_walk_to_leaf(BinaryWalk *walk, __global const BVHNode *nodes, float3 origin, float3 inv_direction,
+                               float t)
+{
+    while (true) {
+        __global const BVHNode *node = &nodes[walk->index];
+        if (node->count > 0) return 1;
+        int left = node->left_first;
+        float t_left = ray_box_entry(&nodes[left], origin, inv_direction, t);
+        float t_right = ray_box_entry(&nodes[left + 1], origin, inv_direction, t);
+        if (t_left != INFINITY || t_right != INFINITY) {
+            if (fmax(t_left, t_right) != INFINITY) {
+                walk->stack[walk->top] = t_left <= t_right ? left + 1 : left;
+                walk->entry[walk->top] = fmax(t_left, t_right);
+                ++walk->top;
+            }
+            walk->index = t_left <= t_right ? left : left + 1;
+            continue;
+        }
+        if (!binary_walk_pop(walk, t)) return 0;
+    }
+}
+
 /* any_hit: stop at the first hit closer than t_max (shadow rays).
  * Both children's boxes are tested from the parent and the nearer is entered first; the farther one is pushed
  * with its entry distance, so a pop drops it without reading its box again once a closer hit is known.
@@ -172,40 +237,14 @@ inline Hit trace_bvh_binary(__global const BVHNode *nodes, __global const float4
 {
     Hit hit = no_hit(t_max);
     TraversalRay r = traversal_ray(ray);
-    float3 inv_direction = r.inv_direction;
-    int stack[BVH_STACK_SIZE];
-    float stack_entry[BVH_STACK_SIZE];  /* where the ray enters each pushed node's box */
-    int top = 0;
-    int index = 0;
-    if (ray_box_entry(&nodes[0], ray.origin, inv_direction, t_max) == INFINITY) return hit;
-    while (true) {
-        __global const BVHNode *node = &nodes[index];
-        if (node->count > 0) {
-            if (intersect_leaf(triangle_vertices, &r, node->left_first, node->count, any_hit, &hit)) return hit;
-        } else {
-            int left = node->left_first;
-            float t_left = ray_box_entry(&nodes[left], ray.origin, inv_direction, hit.t);
-            float t_right = ray_box_entry(&nodes[left + 1], ray.origin, inv_direction, hit.t);
-            if (t_left != INFINITY || t_right != INFINITY) {
-                int near_child = t_left <= t_right ? left : left + 1;
-                int far_child = t_left <= t_right ? left + 1 : left;
-                if (fmax(t_left, t_right) != INFINITY) {
-                    stack[top] = far_child;
-                    stack_entry[top] = fmax(t_left, t_right);
-                    ++top;
-                }
-                index = near_child;
-                continue;
-            }
-        }
-        /* Pop, skipping nodes that a closer hit found since has made irrelevant. Entering before hit.t is the
-         * whole test: the box's exit was checked against a t_max no smaller than hit.t when it was pushed. */
-        while (true) {
-            if (top == 0) return hit;
-            --top;
-            if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
-        }
+    BinaryWalk walk;
+    if (!binary_walk_start(&walk, nodes, ray.origin, r.inv_direction, t_max)) return hit;
+    while (binary_walk_to_leaf(&walk, nodes, ray.origin, r.inv_direction, hit.t)) {
+        __global const BVHNode *node = &nodes[walk.index];
+        if (intersect_leaf(triangle_vertices, &r, node->left_first, node->count, any_hit, &hit)) return hit;
+        if (!binary_walk_pop(&walk, hit.t)) break;
     }
+    return hit;
 }
 
 /* The traversal the build selected: BVH_WIDTH == 4 when the host uploaded 4-wide nodes (geometry/bvh4.py) in the

@@ -182,6 +182,28 @@ inline int cross_null_boundary(PathState *s, const PathVertex *v)
     return 1;
 }
 
+/* What a path records of the surface it has just reached, before anything else is done there: the AOVs' first
+ * surface, and hidden area lights (hide_emitters), which the camera's own rays cross as a boundary without material,
+ * showing what lies behind (they still light every other vertex). Returns 1 when the path crossed such a light;
+ * the segment's caller then returns *live. */
+inline int record_surface_reached(PathState *s, const PathVertex *v, float t, __global const RenderParams *params,
+                                  int *live)
+{
+#if SCENE_HIDES_AREA_EMITTERS
+    if (v->info.light >= 0 && s->segments == 1 && (params->hide_emitters & HIDE_AREA_EMITTERS)) {
+#if FILM_AOVS
+        aov_at_surface(&s->aov, t, v->p, v->ns, 0); /* seen through: its distance counts toward the depth */
+#endif
+        *live = cross_null_boundary(s, v);
+        return 1;
+    }
+#endif
+#if FILM_AOVS
+    aov_at_surface(&s->aov, t, v->p, v->ns, v->info.material != TRIANGLE_NO_MATERIAL);
+#endif
+    return 0;
+}
+
 /* What a path does at a surface before choosing where to go: a dispersive surface keeps only the hero wavelength
  * for everything that follows, direct light included (its BSDF is evaluated at the hero's index of refraction);
  * then next-event estimation, MIS-weighted when use_mis, unless every lobe is a delta lobe. */

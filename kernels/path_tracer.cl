@@ -88,19 +88,8 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     }
 
     PathVertex v = path_vertex(scene, hit, s->ray);
-#if SCENE_HIDES_AREA_EMITTERS
-    /* Hidden area lights: the camera's own rays pass through them (as through a boundary without material), so
-     * they show what lies behind; they still light every other vertex. */
-    if (v.info.light >= 0 && s->segments == 1 && (params->hide_emitters & HIDE_AREA_EMITTERS)) {
-#if FILM_AOVS
-        aov_at_surface(&s->aov, hit.t, v.p, v.ns, 0); /* seen through: its distance counts toward the depth */
-#endif
-        return cross_null_boundary(s, &v);
-    }
-#endif
-#if FILM_AOVS
-    aov_at_surface(&s->aov, hit.t, v.p, v.ns, v.info.material != TRIANGLE_NO_MATERIAL);
-#endif
+    int live;
+    if (record_surface_reached(s, &v, hit.t, params, &live)) return live;
     if (v.info.light >= 0) {
         __global const Light *light = &scene->lights[v.info.light];
         float4 emitted = vertex_emission(scene, w, &v, hit);

@@ -115,20 +115,27 @@ inline float camera_footprint(const Scene *scene, int triangle, float3 p, float3
  * builds with SCENE_HAS_SHAPES 0 and traces exactly as before they existed. */
 inline int hit_is_shape(const Scene *scene, int slot)
 {
-#if SCENE_HAS_INSTANCES
+#if !SCENE_HAS_SHAPES
+    return 0;
+#elif SCENE_HAS_INSTANCES
     /* Instanced objects' triangles follow the shapes' slots. */
-    return SCENE_HAS_SHAPES && slot >= scene->params->triangle_count
-           && slot < scene->params->triangle_count + scene->params->shape_count;
+    return slot >= scene->params->triangle_count && slot < scene->params->triangle_count + scene->params->shape_count;
 #else
-    return SCENE_HAS_SHAPES && slot >= scene->params->triangle_count;
+    return slot >= scene->params->triangle_count;
 #endif
 }
 
 /* Whether the scene has nothing to hit. */
 inline int scene_is_empty(const Scene *scene)
 {
-    return scene->params->triangle_count == 0 && (!SCENE_HAS_SHAPES || scene->params->shape_count == 0)
-           && (!SCENE_HAS_INSTANCES || scene->params->instance_count == 0);
+    int empty = scene->params->triangle_count == 0;
+#if SCENE_HAS_SHAPES
+    empty = empty && scene->params->shape_count == 0;
+#endif
+#if SCENE_HAS_INSTANCES
+    empty = empty && scene->params->instance_count == 0;
+#endif
+    return empty;
 }
 
 #if SCENE_HAS_SHAPES
@@ -145,46 +152,24 @@ inline Hit intersect_shapes(const Scene *scene, Ray ray, float t_max, int any_hi
     /* The empty BVH's inverted root box still admits rays (the slab test orders each axis' bounds). */
     if (scene->params->shape_count == 0) return hit;
     __global const BVHNode *nodes = scene->shape_nodes;
-    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
-    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
-    if (ray_box_entry(&nodes[0], ray.origin, inv_direction, t_max) == INFINITY) return hit;
-    int stack[BVH_STACK_SIZE];
-    float stack_entry[BVH_STACK_SIZE];
-    int top = 0;
-    int index = 0;
-    while (true) {
-        __global const BVHNode *node = &nodes[index];
-        if (node->count > 0) {
-            for (int k = node->left_first; k < node->left_first + node->count; ++k) {
-                float2 uv;
-                float t = intersect_shape(&scene->shapes[k], ray.origin, ray.direction, hit.t, &uv);
-                if (t < hit.t) {
-                    hit.t = t;
-                    hit.triangle = scene->params->triangle_count + k;
-                    hit.b12 = uv;
-                    if (any_hit) return hit;
-                }
-            }
-        } else {
-            int left = node->left_first;
-            float t_left = ray_box_entry(&nodes[left], ray.origin, inv_direction, hit.t);
-            float t_right = ray_box_entry(&nodes[left + 1], ray.origin, inv_direction, hit.t);
-            if (t_left != INFINITY || t_right != INFINITY) {
-                if (fmax(t_left, t_right) != INFINITY) {
-                    stack[top] = t_left <= t_right ? left + 1 : left;
-                    stack_entry[top] = fmax(t_left, t_right);
-                    ++top;
-                }
-                index = t_left <= t_right ? left : left + 1;
-                continue;
+    float3 inv_direction = slab_inverse_direction(ray.direction);
+    BinaryWalk walk;
+    if (!binary_walk_start(&walk, nodes, ray.origin, inv_direction, t_max)) return hit;
+    while (binary_walk_to_leaf(&walk, nodes, ray.origin, inv_direction, hit.t)) {
+        __global const BVHNode *node = &nodes[walk.index];
+        for (int k = node->left_first; k < node->left_first + node->count; ++k) {
+            float2 uv;
+            float t = intersect_shape(&scene->shapes[k], ray.origin, ray.direction, hit.t, &uv);
+            if (t < hit.t) {
+                hit.t = t;
+                hit.triangle = scene->params->triangle_count + k;
+                hit.b12 = uv;
+                if (any_hit) return hit;
             }
         }
-        while (true) {
-            if (top == 0) return hit;
-            --top;
-            if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
-        }
+        if (!binary_walk_pop(&walk, hit.t)) break;
     }
+    return hit;
 }
 #endif
 
@@ -225,49 +210,27 @@ inline Hit intersect_instances(const Scene *scene, Ray ray, float t_max, int any
     Hit hit = no_hit(t_max);
     if (scene->params->instance_count == 0) return hit;
     __global const BVHNode *nodes = (__global const BVHNode *)scene->instance_nodes;
-    float3 tiny = copysign((float3)(1.0e-30f), ray.direction);
-    float3 inv_direction = 1.0f / select(ray.direction, tiny, fabs(ray.direction) < (float3)(1.0e-30f));
-    if (ray_box_entry(&nodes[0], ray.origin, inv_direction, t_max) == INFINITY) return hit;
-    int stack[BVH_STACK_SIZE];
-    float stack_entry[BVH_STACK_SIZE];
-    int top = 0;
-    int index = 0;
-    while (true) {
-        __global const BVHNode *node = &nodes[index];
-        if (node->count > 0) {
-            for (int k = node->left_first; k < node->left_first + node->count; ++k) {
-                __global const Instance *instance = &scene->instances[k];
-                Ray in_object;
-                in_object.origin = affine_point(instance->to_object, ray.origin);
-                in_object.direction = affine_vector(instance->to_object, ray.direction);
-                Hit h = trace_bvh((__global const BVHNode *)(scene->instance_nodes + instance->nodes),
-                                  scene->triangle_vertices, in_object, hit.t, any_hit);
-                if (h.triangle >= 0) {
-                    hit = h;
-                    hit.instance = k;
-                    if (any_hit) return hit;
-                }
-            }
-        } else {
-            int left = node->left_first;
-            float t_left = ray_box_entry(&nodes[left], ray.origin, inv_direction, hit.t);
-            float t_right = ray_box_entry(&nodes[left + 1], ray.origin, inv_direction, hit.t);
-            if (t_left != INFINITY || t_right != INFINITY) {
-                if (fmax(t_left, t_right) != INFINITY) {
-                    stack[top] = t_left <= t_right ? left + 1 : left;
-                    stack_entry[top] = fmax(t_left, t_right);
-                    ++top;
-                }
-                index = t_left <= t_right ? left : left + 1;
-                continue;
+    float3 inv_direction = slab_inverse_direction(ray.direction);
+    BinaryWalk walk;
+    if (!binary_walk_start(&walk, nodes, ray.origin, inv_direction, t_max)) return hit;
+    while (binary_walk_to_leaf(&walk, nodes, ray.origin, inv_direction, hit.t)) {
+        __global const BVHNode *node = &nodes[walk.index];
+        for (int k = node->left_first; k < node->left_first + node->count; ++k) {
+            __global const Instance *instance = &scene->instances[k];
+            Ray in_object;
+            in_object.origin = affine_point(instance->to_object, ray.origin);
+            in_object.direction = affine_vector(instance->to_object, ray.direction);
+            Hit h = trace_bvh((__global const BVHNode *)(scene->instance_nodes + instance->nodes),
+                              scene->triangle_vertices, in_object, hit.t, any_hit);
+            if (h.triangle >= 0) {
+                hit = h;
+                hit.instance = k;
+                if (any_hit) return hit;
             }
         }
-        while (true) {
-            if (top == 0) return hit;
-            --top;
-            if (stack_entry[top] <= hit.t) { index = stack[top]; break; }
-        }
+        if (!binary_walk_pop(&walk, hit.t)) break;
     }
+    return hit;
 }
 #endif
 

@@ -27,18 +27,8 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
         return 0;
     }
     PathVertex v = path_vertex(scene, hit, s->ray);
-#if SCENE_HIDES_AREA_EMITTERS
-    /* Hidden area lights: the camera's own rays pass through them, as in path_segment. */
-    if (v.info.light >= 0 && s->segments == 1 && (params->hide_emitters & HIDE_AREA_EMITTERS)) {
-#if FILM_AOVS
-        aov_at_surface(&s->aov, hit.t, v.p, v.ns, 0); /* seen through: its distance counts toward the depth */
-#endif
-        return cross_null_boundary(s, &v);
-    }
-#endif
-#if FILM_AOVS
-    aov_at_surface(&s->aov, hit.t, v.p, v.ns, v.info.material != TRIANGLE_NO_MATERIAL);
-#endif
+    int live;
+    if (record_surface_reached(s, &v, hit.t, params, &live)) return live;
     if (v.info.light >= 0) *radiance += s->throughput * vertex_emission(scene, w, &v, hit);
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
     if (s->segments >= last_segment) return 0;
