@@ -199,3 +199,16 @@ def test_instances_mode_stores_the_object_once():
     assert instanced["scene_device_bytes"] < copies["scene_device_bytes"]
     assert instanced["samples_per_second"] > 0 and copies["samples_per_second"] > 0
     assert instanced["mean_y"] == pytest.approx(copies["mean_y"], rel=0.05)
+
+
+@pytest.mark.slow
+@pytest.mark.peer
+def test_peer_mode_renders_the_living_room_scene():
+    """The benchmark's larger scene (295,000 triangles) exports to Mitsuba 3 whole, and the two images agree."""
+    pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
+    out = _bench("peer", "--scene", "living_room", "--size", "16", "--spp", "16", "--max-depth", "4")
+    peer = out["peer"]
+    assert peer["scene"].endswith("living_room.toml") and peer["width"] == 16
+    assert peer["mitsuba"], peer["notes"]
+    for pair in peer["agreement"]:
+        assert pair["agrees"], pair

@@ -412,3 +412,36 @@ def test_threads_build_the_same_tree(monkeypatch, threads):
     assert shared.depth == single.depth
     np.testing.assert_array_equal(shared.nodes, single.nodes)
     np.testing.assert_array_equal(shared.prim_order, single.prim_order)
+
+
+def test_leaf_blocks_price_a_leaf_by_its_blocks():
+    """Eight unit triangles in a row along x, each 1 deep in z: the row's box is 8 x 1 x 1 (area 34), each half's
+    4 x 1 x 1 (area 18). Priced by triangles the halves cost 1 + (18·4 + 18·4)/34 = 5.2 < 8, a split; priced by
+    four-triangle blocks they cost 1 + (18·1 + 18·1)/34 = 2.06 > 2, the row's two blocks, so it stays one leaf."""
+    row = np.array([[[i, 0.0, 0.0], [i + 1.0, 0.0, 1.0], [i, 1.0, 0.0]] for i in range(8)])
+    by_triangles = build_bvh(*_corners(row), max_leaf_size=4)
+    by_blocks = build_bvh(*_corners(row), max_leaf_size=4, leaf_block=4)
+    assert_valid_bvh(by_triangles, row)
+    assert_valid_bvh(by_blocks, row)
+    assert list(by_triangles.nodes["count"]) == [0, 4, 4]
+    assert list(by_blocks.nodes["count"]) == [8]
+
+
+def test_leaf_blocks_keep_a_valid_tree_that_fills_its_blocks():
+    """On a real mesh, block pricing still gives a valid tree, and its leaves fill their blocks better."""
+    triangles = _bumpy_sphere_and_torus(np.random.default_rng(7))
+    by_triangles = build_bvh(*_corners(triangles), max_leaf_size=8)
+    by_blocks = build_bvh(*_corners(triangles), max_leaf_size=8, leaf_block=4)
+    assert_valid_bvh(by_blocks, triangles)
+
+    def blocks(bvh):
+        counts = bvh.nodes["count"][bvh.nodes["count"] > 0]
+        return int((-(-counts // 4)).sum())
+
+    assert blocks(by_blocks) < blocks(by_triangles)
+
+
+def test_leaf_block_must_be_positive():
+    row = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
+    with pytest.raises(ValueError, match="leaf_block"):
+        build_bvh(*_corners(row), leaf_block=0)

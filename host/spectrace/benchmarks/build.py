@@ -25,7 +25,7 @@ import numpy as np
 
 from spectrace.benchmarks.rays import displaced_sphere, subdivisions_for
 from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
+from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
 from spectrace.geometry.mesh import TriangleMesh, load_mesh
 
 MITSUBA_VARIANT = "scalar_rgb"
@@ -93,14 +93,17 @@ def spectrace_build(mesh: TriangleMesh) -> dict:
         return ordered.reshape(-1, 4)
 
     cpu = time.process_time()
-    bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
+    bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK)
     cpu = time.process_time() - cpu
     vertices = leaf_order_vertices(bvh)
     wall, nodes_cpu = time.perf_counter(), time.process_time()
     nodes = device_nodes(bvh, vertices)
     wall, nodes_cpu = time.perf_counter() - wall, time.process_time() - nodes_cpu
     peaks = []
-    for work in (lambda: build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE), lambda: device_nodes(bvh, vertices)):
+    for work in (
+        lambda: build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK),
+        lambda: device_nodes(bvh, vertices),
+    ):
         tracemalloc.start()
         try:
             work()

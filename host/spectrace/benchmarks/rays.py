@@ -24,7 +24,7 @@ import pyopencl as cl
 from spectrace.device import open_device
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh4 import LEAF_SIZE, collapse_to_bvh4, device_nodes, traversal_defines
+from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, collapse_to_bvh4, device_nodes, traversal_defines
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, icosphere
 from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
@@ -83,11 +83,11 @@ def build_with_memory(mesh: TriangleMesh):
     """(BVH, CPU seconds of an untraced build, peak traced bytes of a second, traced build)."""
     v0, v1, v2 = mesh.triangles()
     cpu = time.process_time()
-    bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
+    bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK)
     cpu = time.process_time() - cpu
     tracemalloc.start()
     try:
-        build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
+        build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK)
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()

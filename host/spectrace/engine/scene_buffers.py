@@ -24,7 +24,7 @@ from spectrace.engine.device_types import (
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
-from spectrace.geometry.bvh4 import LEAF_SIZE, device_nodes
+from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
 from spectrace.lights import area as area_light
 from spectrace.lights import light_module
 from spectrace.lights.area import AreaEmitter
@@ -173,7 +173,9 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         corner_normals = _corner_normals(normal_parts, [len(v) for v in v0s])
         tri_material, tri_emitter = np.concatenate(material_parts), np.concatenate(emitter_parts)
         tri_interior = np.concatenate(interior_parts)
-        bvh, bvh_seconds, bvh_peak = _measured(lambda: build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE))
+        bvh, bvh_seconds, bvh_peak = _measured(
+            lambda: build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK)
+        )
         order = bvh.prim_order
         v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
         corner_normals = corner_normals[order] if corner_normals is not None else None
@@ -411,7 +413,7 @@ class _ObjectTriangles:
             v0, v1, v2, uv = (np.concatenate(x) for x in (v0s, v1s, v2s, uvs))
             corner = _corner_normals(normals, [len(v) for v in v0s])
             started = perf_counter()
-            bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE)
+            bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK)
             self.seconds += perf_counter() - started
             order = bvh.prim_order
             v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]

@@ -8,7 +8,10 @@ Method: binned SAH over centroid bounds (Wald 2007, "On fast construction of SAH
 hierarchies"; pbrt-v4, Sec. 7.3.2), 12 bins per axis by default as in pbrt-v4 (against 16: 10-17 % less build
 time on 1.3-2 M triangles for SAH costs 0.06-0.1 % higher). Cost model: traversing a node costs 1, intersecting a
 triangle costs 1, so a split of node N into L and R costs 1 + (A(L) |L| + A(R) |R|) / A(N) against |N| for a
-leaf. A node becomes a leaf when it holds <= max_leaf_size triangles or no split beats the leaf, except that nodes
+leaf. With leaf_block = b > 1 (the 4-wide traversal tests leaves b triangles at a time) a side's |S| becomes its
+blocks ceil(|S| / b), each costing BLOCK_COST, as Embree's builders price leaves of b-wide primitives (Wald et al.
+2008 pack leaves the same way): a leaf of 5 triangles then costs as much as one of 8. A node becomes a leaf when
+it holds <= max_leaf_size triangles or no split beats the leaf, except that nodes
 above FORCED_SPLIT_LEAF_SIZE are always split. Where binning cannot separate the centroids (all coincide), or where
 the depth left before MAX_DEPTH runs short, the node is split at the middle of its triangles in Morton order.
 
@@ -49,6 +52,8 @@ BVH_NODE_DTYPE = np.dtype(
 MAX_DEPTH = 64
 # Above this many triangles a node is split even where the SAH prefers a leaf, so leaf loops stay short.
 FORCED_SPLIT_LEAF_SIZE = 16
+# Cost of testing one leaf block (leaf_block triangles at once) against traversing a node, when leaf_block > 1.
+BLOCK_COST = 1.0
 # Nodes of more triangles fill their bins from an evenly spaced sample of this many of them (module docstring).
 SAMPLED_BINNING_TRIANGLES = 512
 # Bits per axis of the Morton codes that order the triangles before the build (3 x 21 = 63 bits).
@@ -107,15 +112,21 @@ def build_bvh(
     max_leaf_size: int = 4,
     bins: int = 12,
     threads: int = 1,
+    leaf_block: int = 1,
 ) -> BVH:
     """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units, on `threads`
     threads; the tree is the same for any number of threads. One by default: on a shared 2-core machine two
-    threads measured no faster (docs/performance.md, "BVH build"), and each costs a copy of the level it starts at."""
+    threads measured no faster (docs/performance.md, "BVH build"), and each costs a copy of the level it starts at.
+
+    leaf_block: the traversal tests a leaf's triangles this many at a time, so the SAH prices a leaf by its blocks,
+    ceil(count / leaf_block), each costing BLOCK_COST (see the module's cost model); 1 is the classic triangle count."""
     start = perf_counter()
     if max_leaf_size < 1:
         raise ValueError(f"max_leaf_size must be >= 1, got {max_leaf_size}")
     if bins < 2:
         raise ValueError(f"bins must be >= 2, got {bins}")
+    if leaf_block < 1:
+        raise ValueError(f"leaf_block must be >= 1, got {leaf_block}")
     boxes = _triangle_boxes_float32(v0, v1, v2)
     triangle_count = boxes.shape[1]
     forced_split_above = max(FORCED_SPLIT_LEAF_SIZE, max_leaf_size)
@@ -150,7 +161,9 @@ def build_bvh(
             depth = top_depth + len(levels)
             if depth > MAX_DEPTH:  # the depth guard in _choose_splits makes this unreachable
                 raise RuntimeError(f"BVH build exceeded depth {MAX_DEPTH}")
-            nodes, current = _build_level(current, depth, prim_order, max_leaf_size, forced_split_above, bins)
+            nodes, current = _build_level(
+                current, depth, prim_order, max_leaf_size, forced_split_above, bins, leaf_block
+            )
             levels.append(nodes)
         return levels, current
 
@@ -313,6 +326,7 @@ def _build_level(
     max_leaf_size: int,
     forced_split_above: int,
     bins: int,
+    leaf_block: int,
 ) -> tuple[np.ndarray, "_Level | None"]:
     """Make the nodes of one tree level; write leaf triangles into prim_order; return the next level."""
     counts = level.counts
@@ -326,7 +340,7 @@ def _build_level(
     rows["bmin"] = low
     rows["bmax"] = high
 
-    splits = _choose_splits(level, starts, low, high, depth, max_leaf_size, forced_split_above, bins)
+    splits = _choose_splits(level, starts, low, high, depth, max_leaf_size, forced_split_above, bins, leaf_block)
 
     _emit_leaves(level, starts, node_of_triangle, ~splits.is_split, prim_order)
     rows["count"] = np.where(splits.is_split, 0, counts)
@@ -356,6 +370,7 @@ def _choose_splits(
     max_leaf_size: int,
     forced_split_above: int,
     bins: int,
+    leaf_block: int,
 ) -> _LevelSplits:
     """Decide per node: leaf, SAH split, or a split at the middle (when binning cannot separate or depth runs out)."""
     counts = level.counts
@@ -368,11 +383,13 @@ def _choose_splits(
     bin_origin = np.zeros((counts.size, 3))
     bin_scale = np.zeros((counts.size, 3))
     if may_split.any():
-        _binned_sah(level, starts, may_split, bin_origin, bin_scale, bins, plan)
+        _binned_sah(level, starts, may_split, bin_origin, bin_scale, bins, plan, leaf_block)
 
     node_area = _box_areas(low.astype(np.float64), high.astype(np.float64))
-    # 1 + cost / A(node) < count, written without dividing so flat nodes (area 0) never prefer splitting.
-    sah_prefers_split = plan.cost < (counts - 1) * node_area
+    # 1 + BLOCK_COST * cost / A(node) < BLOCK_COST * blocks, written without dividing so flat nodes (area 0) never
+    # prefer splitting; with leaf_block 1 and BLOCK_COST 1 this is 1 + cost / A(node) < count.
+    block_cost = BLOCK_COST if leaf_block > 1 else 1.0
+    sah_prefers_split = plan.cost < (_blocks(counts, leaf_block) - 1.0 / block_cost) * node_area
     is_split = may_split & (sah_prefers_split | (counts > forced_split_above))
     # Halving finishes within MAX_DEPTH from any node that keeps depth + levels_to_leaf <= MAX_DEPTH,
     # which holds at the root; an SAH split can leave a child nearly as large as its parent, so it is
@@ -399,6 +416,7 @@ def _binned_sah(
     bin_scale: np.ndarray,
     bins: int,
     plan: _SplitPlan,
+    leaf_block: int,
 ) -> None:
     """Fill plan, bin_origin and bin_scale for the nodes in may_split, from an evenly spaced sample of at most
     SAMPLED_BINNING_TRIANGLES of each one's triangles, in chunks of nodes so the per-bin arrays stay small."""
@@ -431,7 +449,13 @@ def _binned_sah(
         last = int(ends[chunk.stop - 1])
         nodes = candidates[chunk]
         cost, axis, last_left_bin = _best_binned_split(
-            centroids[:, first:last], boxes[:, first:last], sample_counts[chunk], origin[chunk], scale[chunk], bins
+            centroids[:, first:last],
+            boxes[:, first:last],
+            sample_counts[chunk],
+            origin[chunk],
+            scale[chunk],
+            bins,
+            leaf_block,
         )
         plan.cost[nodes] = cost
         plan.axis[nodes] = axis
@@ -445,6 +469,7 @@ def _best_binned_split(
     bin_origin: np.ndarray,
     bin_scale: np.ndarray,
     bins: int,
+    leaf_block: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Bin every node's triangles on each axis and sweep the bin boundaries for the cheapest SAH split."""
     node_count = counts.size
@@ -467,7 +492,7 @@ def _best_binned_split(
             np.minimum.at(bin_boxes[row], node_bin, boxes[row])
             np.maximum.at(bin_boxes[row + 3], node_bin, boxes[row + 3])
         bin_boxes = np.ascontiguousarray(bin_boxes.reshape(6, node_count, bins).transpose(0, 2, 1))
-        cost = _split_costs(bin_boxes, np.ascontiguousarray(bin_counts))
+        cost = _split_costs(bin_boxes, np.ascontiguousarray(bin_counts), leaf_block)
         axis_best_bin = np.argmin(cost, axis=0)
         axis_best_cost = cost[axis_best_bin, all_nodes]
         better = axis_best_cost < best_cost
@@ -477,8 +502,9 @@ def _best_binned_split(
     return best_cost, best_axis, best_bin
 
 
-def _split_costs(bin_boxes: np.ndarray, bin_counts: np.ndarray) -> np.ndarray:
-    """(bins-1, N) cost A(L)|L| + A(R)|R| of splitting after each bin; inf where a side would be empty.
+def _split_costs(bin_boxes: np.ndarray, bin_counts: np.ndarray, leaf_block: int = 1) -> np.ndarray:
+    """(bins-1, N) cost A(L) B(L) + A(R) B(R) of splitting after each bin, B the blocks of leaf_block triangles
+    (the triangle count when leaf_block is 1); inf where a side would be empty.
 
     bin_boxes is (6, bins, N) (min xyz, max xyz; an empty bin is the +inf/-inf box), bin_counts (bins, N)."""
     bins = bin_counts.shape[0]
@@ -494,8 +520,15 @@ def _split_costs(bin_boxes: np.ndarray, bin_counts: np.ndarray) -> np.ndarray:
     left_count = np.cumsum(bin_counts, axis=0)[:-1]
     right_count = bin_counts.sum(axis=0) - left_count
     with np.errstate(invalid="ignore"):
-        cost = _row_box_areas(left) * left_count + _row_box_areas(right) * right_count
+        cost = _row_box_areas(left) * _blocks(left_count, leaf_block) + _row_box_areas(right) * _blocks(
+            right_count, leaf_block
+        )
     return np.where((left_count > 0) & (right_count > 0), cost, np.inf)
+
+
+def _blocks(counts: np.ndarray, leaf_block: int) -> np.ndarray:
+    """Blocks of leaf_block triangles that `counts` triangles fill (the counts themselves for leaf_block 1)."""
+    return counts if leaf_block == 1 else -(-counts // leaf_block)
 
 
 def _union(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:

@@ -16,7 +16,7 @@ with that leaf as its only child. The leaf triangle slots are the binary tree's,
 import numpy as np
 
 from spectrace.geometry.bvh import BVH, MAX_DEPTH
-from spectrace.geometry.triangle_blocks import node_buffer, pack_leaf_blocks
+from spectrace.geometry.triangle_blocks import LANES, node_buffer, pack_leaf_blocks
 
 BVH4_NODE_DTYPE = np.dtype(
     {
@@ -101,6 +101,10 @@ TRAVERSAL_WIDTH = 4
 # leaves of 4, measured in alternating runs on both CPU runtimes: the Cornell box 3-7 % more samples/s, closest-hit
 # rays on 20,480 triangles 7-12 % more, on 1.3 M triangles within the runs' noise (docs/performance.md).
 LEAF_SIZE = 8
+# The SAH build prices a leaf by those blocks (build_bvh's leaf_block), so it prefers leaves that fill them: against
+# pricing by triangles, measured in alternating runs on both CPU runtimes, the Cornell box and the living room
+# rendered faster with the same image (docs/performance.md, "Block-aware SAH").
+LEAF_BLOCK = LANES if TRAVERSAL_WIDTH == 4 else 1
 # Entries of the 4-wide kernel's stack (kernels/bvh.cl BVH4_STACK_SIZE): a visit pushes at most three, and the
 # collapse never makes a path longer than the binary tree's (<= MAX_DEPTH), so the stack cannot overflow.
 BVH4_STACK_SIZE = 3 * MAX_DEPTH + 1
