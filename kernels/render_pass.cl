@@ -33,8 +33,9 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
         /* weight: the pixel filter's sample weight, × 1 for box and tent filters, which changes no bits. */
 #if FILM_AOVS
         PathState path = camera_path(ray);
+        path.aov.cmf = cmf;
         float4 radiance = weight * TRACE_PATH_STATE(&scene, &w, &sampler, &path, &rays_traced);
-        add_aov_sample(aov_sums, &path.aov, radiance, cmf, &w);
+        add_aov_sample(aov_sums, &path.aov, radiance, weight, cmf, &w);
 #else
         float4 radiance = weight * TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
 #endif

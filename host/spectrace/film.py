@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from spectrace.aovs import AOV_FLOATS_PER_PIXEL, aov_images
+from spectrace.aovs import AOV_FLOATS_PER_PIXEL, aov_images, with_companions
 from spectrace.device import Device
 from spectrace.engine.memory import SPECTRAL_BAND_BYTES
 from spectrace.engine.opencl_errors import translate_opencl_errors
@@ -123,7 +123,7 @@ def state_image(
     if aovs:
         scale = np.ones(3, np.float32) if albedo_scale is None else albedo_scale
         every = aov_images(state.buffers["aov_film"], film, state.samples_done, scale, (height, width))
-        images = {name: every[name] for name in aovs}
+        images = {name: every[name] for name in with_companions(aovs)}
     return Image(
         aovs=images,
         channels=channels,

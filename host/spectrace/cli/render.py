@@ -194,7 +194,9 @@ def render(
         )
         aovs = ()
     if denoise:
-        aovs = tuple(dict.fromkeys((*aovs, "albedo", "normal")))
+        from spectrace.denoising import RENDER_AOVS
+
+        aovs = tuple(dict.fromkeys((*aovs, *RENDER_AOVS)))
     loaded = loaded.with_overrides(aovs=aovs)
     if delta_e_map:
         loaded = loaded.with_overrides(film_response=_with_delta_e_map(loaded.film_response, output, delta_e_white_y))
