@@ -49,7 +49,6 @@ typedef struct {
     float4 position;       /* xyz: first surface point (scene units); w: depth t (scene units) */
     float4 emission_sampled;   /* xyz: film XYZ estimate of the emission the camera ray meets (radiance units) */
     float4 emission_expected;  /* xyz: its expected value over the wavelengths (radiance units) */
-    __global const float4 *cmf;  /* the film's CMF rows (film.cl), set by the render pass */
     float travelled;       /* scene units of camera ray crossed through material-less boundaries so far */
     int surface_recorded;  /* normal, position and depth are final */
     int albedo_recorded;   /* albedo is final */
@@ -63,7 +62,6 @@ inline AovRecord aov_start(void)
     a.position = (float4)(0.0f);
     a.emission_sampled = (float4)(0.0f);
     a.emission_expected = (float4)(0.0f);
-    a.cmf = 0;
     a.travelled = 0.0f;
     a.surface_recorded = 0;
     a.albedo_recorded = 0;
@@ -133,21 +131,20 @@ inline float4 aov_grid_xyz(__global const float4 *cmf, int i, float4 weight, flo
     return (float4)(xyz.x, xyz.y, xyz.z, 0.0f);
 }
 
-/* Whether the camera ray's emission can be given its expected value: the record has the film's table, the
- * path's throughput is one number for every wavelength, and the wavelengths differ (not a sensor's). */
-inline int aov_emission_expectable(const AovRecord *a, float4 throughput, const SampledWavelengths *w)
+/* Whether the camera ray's emission can be given its expected value: the path's throughput is one number for
+ * every wavelength, and the wavelengths differ (not a sensor's). */
+inline int aov_emission_expectable(float4 throughput, const SampledWavelengths *w)
 {
-    return a->cmf != 0 && all(throughput == (float4)(throughput.x)) && wavelengths_differ(w);
+    return all(throughput == (float4)(throughput.x)) && wavelengths_differ(w);
 }
 
 /* The camera ray met emission `emitted` at wavelengths w with path throughput `throughput` and MIS weight
- * `weight` (what the path adds to its radiance); expected_xyz is the film XYZ of throughput × weight × the
- * emitted spectrum, when aov_emission_expectable said it can be had (otherwise ignored). */
-inline void aov_at_camera_emission(AovRecord *a, float4 throughput, float4 emitted, float weight, float4 expected_xyz,
-                                   int expectable, const SampledWavelengths *w)
+ * `weight` (what the path adds to its radiance); expected_xyz is the film XYZ of the emitted spectrum (the film's
+ * table `cmf`), when aov_emission_expectable said it can be had (otherwise ignored). */
+inline void aov_at_camera_emission(AovRecord *a, __global const float4 *cmf, float4 throughput, float4 emitted,
+                                   float weight, float4 expected_xyz, int expectable, const SampledWavelengths *w)
 {
-    if (a->cmf == 0) return;
-    float4 sampled = spectrum_to_xyz_estimate(throughput * emitted * weight, a->cmf, w);
+    float4 sampled = spectrum_to_xyz_estimate(throughput * emitted * weight, cmf, w);
     a->emission_sampled += sampled;
     a->emission_expected += expectable ? throughput.x * weight * expected_xyz : sampled;
 }

@@ -83,11 +83,11 @@ inline float4 expected_camera_emission(const Scene *scene, __global const float4
 inline void record_camera_emission(const Scene *scene, const SampledWavelengths *w, PathState *s, float4 emitted,
                                    float weight, const PathVertex *v, Hit hit)
 {
-    if (s->segments != 1) return;
-    int expectable = aov_emission_expectable(&s->aov, s->throughput, w);
-    float4 expected = expectable ? expected_camera_emission(scene, s->aov.cmf, v, hit, s->ray.direction)
+    if (s->segments != 1 || scene->film_cmf == 0) return;
+    int expectable = aov_emission_expectable(s->throughput, w);
+    float4 expected = expectable ? expected_camera_emission(scene, scene->film_cmf, v, hit, s->ray.direction)
                                  : (float4)(0.0f);
-    aov_at_camera_emission(&s->aov, s->throughput, emitted, weight, expected, expectable, w);
+    aov_at_camera_emission(&s->aov, scene->film_cmf, s->throughput, emitted, weight, expected, expectable, w);
 }
 #endif
 

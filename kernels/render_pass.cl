@@ -18,6 +18,9 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
     Scene scene = SCENE_FROM_KERNEL_PARAMS;
+#if FILM_AOVS
+    scene.film_cmf = cmf;
+#endif
 
     float4 accumulated = film[pixel];
     uint rays_traced = 0;
@@ -33,7 +36,6 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
         /* weight: the pixel filter's sample weight, × 1 for box and tent filters, which changes no bits. */
 #if FILM_AOVS
         PathState path = camera_path(ray);
-        path.aov.cmf = cmf;
         float4 radiance = weight * TRACE_PATH_STATE(&scene, &w, &sampler, &path, &rays_traced);
         add_aov_sample(aov_sums, &path.aov, radiance, weight, cmf, &w);
 #else

@@ -5,7 +5,8 @@ stores (spectrace.engine.checkpoint writes and reads the file; what goes in it a
 Per pixel the film holds four float32 sums (X, Y, Z and the count of non-finite samples left out), a uint32 count
 of rays traced, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`, one float32 sum per
 channel of the film's response (spectrace.spectral.film_response: more observers, a measured sensor) and, when any AOV
-is asked for, the twelve float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position and depth).
+is asked for, the AOV_FLOATS_PER_PIXEL float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position
+and depth, the emission sampled and expected).
 Together with the number of samples per pixel added so far they are the entire state of a render: the samplers are
 counter-based and every pixel adds its samples in sample order, so restoring them continues the render bit for bit.
 """
@@ -33,7 +34,7 @@ STATE_LAYOUT = {
     "film": (np.float32, 4),
     "ray_counts": (np.uint32, 1),
     "spectral_film": (np.float32, None),
-    "aov_film": (np.float32, 12),
+    "aov_film": (np.float32, AOV_FLOATS_PER_PIXEL),
     "response_film": (np.float32, None),
 }
 
