@@ -18,6 +18,9 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
     int pixel = get_global_id(0);
     if (pixel >= params->width * params->height) return;
     Scene scene = SCENE_FROM_KERNEL_PARAMS;
+#if FILM_AOVS
+    scene.film_cmf = cmf;
+#endif
 
     float4 accumulated = film[pixel];
     uint rays_traced = 0;
@@ -34,7 +37,7 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
 #if FILM_AOVS
         PathState path = camera_path(ray);
         float4 radiance = weight * TRACE_PATH_STATE(&scene, &w, &sampler, &path, &rays_traced);
-        add_aov_sample(aov_sums, &path.aov, radiance, cmf, &w);
+        add_aov_sample(aov_sums, &path.aov, radiance, weight, cmf, &w);
 #else
         float4 radiance = weight * TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
 #endif

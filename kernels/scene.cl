@@ -33,6 +33,10 @@ typedef struct {
                                               order of the top-level BVH */
     __global const float4 *instance_nodes; /* the top-level binary BVH over the instances' world boxes (BVHNode,
                                               two float4 each), then each object's own BVH (Instance.nodes) */
+#if FILM_AOVS
+    __global const float4 *film_cmf;       /* the film's table (film.cl) for the emission AOV (aov.cl), set by the
+                                              render passes; 0 (the initializer leaves it so) in other kernels */
+#endif
 } Scene;
 
 /* The kinds of visibility query, told apart in a cut-out's choice (surface_met) so that a shadow ray and the path's

@@ -5,6 +5,11 @@ them without the device layer.
 albedo is kept as XYZ, each channel the reflectance's x̄-, ȳ- or z̄-weighted mean (a perfect white reflector has
 (1, 1, 1)); files and the denoiser get it in the output colour space, adapted from the equal-energy white to the
 space's white, so that white stays (1, 1, 1). variance is the standard error of the pixel's mean Y.
+
+emission is the film XYZ of the emission the camera rays meet directly (area lights, the environment), as its
+expected value over the wavelengths: free of the colour noise four sampled wavelengths give it. Asking for it also
+keeps `emission_sampled`, the same emission as the image's own estimate holds it, which the denoiser exchanges for
+the expected value (spectrace.denoising).
 """
 
 from collections.abc import Sequence
@@ -13,14 +18,18 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 
-AOV_NAMES = ("albedo", "normal", "depth", "position", "variance")
-AOV_FLOATS_PER_PIXEL = 12  # kernels/aov.cl: AOV_FLOAT4S_PER_PIXEL float4s
+AOV_NAMES = ("albedo", "normal", "depth", "position", "variance", "emission")
+# Images an AOV brings along besides its own (kept with it, written beside it).
+AOV_COMPANIONS = {"emission": ("emission_sampled",)}
+AOV_FLOATS_PER_PIXEL = 20  # kernels/aov.cl: AOV_FLOAT4S_PER_PIXEL float4s
 # EXR channels of each AOV but the albedo, whose channel names follow the colour space (aov_channels).
 AOV_CHANNELS = {
     "normal": ("normal.X", "normal.Y", "normal.Z"),
     "depth": ("depth.Z",),
     "position": ("position.X", "position.Y", "position.Z"),
     "variance": ("Y.stderr",),
+    "emission": ("emission.X", "emission.Y", "emission.Z"),
+    "emission_sampled": ("emission_sampled.X", "emission_sampled.Y", "emission_sampled.Z"),
 }
 
 
@@ -51,11 +60,12 @@ def albedo_channel_scale(cmf: np.ndarray) -> np.ndarray:
 
 
 def aov_images(sums: np.ndarray, film: np.ndarray, samples: int, albedo_scale: np.ndarray, shape: tuple[int, int]):
-    """The AOV images (by name, AOV_NAMES) of `sums` ((pixels, 12) AOV sums), `film` ((pixels, 4) film sums)
-    after `samples` samples per pixel. variance: the standard error of the pixel's mean Y (inf below 2 samples)."""
+    """The AOV images (by name, AOV_NAMES and their companions) of `sums` ((pixels, AOV_FLOATS_PER_PIXEL) sums),
+    `film` ((pixels, 4) film sums) after `samples` samples per pixel. variance: the standard error of the pixel's
+    mean Y (inf below 2 samples)."""
     n = max(samples, 1)
     height, width = shape
-    per = sums.astype(np.float64).reshape(-1, 3, 4) / n
+    per = sums.astype(np.float64).reshape(-1, AOV_FLOATS_PER_PIXEL // 4, 4) / n
 
     def image(values: np.ndarray) -> np.ndarray:
         return values.reshape(height, width, *values.shape[1:]).astype(np.float32)
@@ -72,7 +82,14 @@ def aov_images(sums: np.ndarray, film: np.ndarray, samples: int, albedo_scale: n
         "depth": image(per[:, 2, 3]),
         "position": image(per[:, 2, :3]),
         "variance": image(stderr),
+        "emission": image(per[:, 4, :3]),
+        "emission_sampled": image(per[:, 3, :3]),
     }
+
+
+def with_companions(aovs: Sequence[str]) -> tuple[str, ...]:
+    """The images an image keeps for the AOVs asked: each, then its companions."""
+    return tuple(name for aov in aovs for name in (aov, *AOV_COMPANIONS.get(aov, ())))
 
 
 def albedo_in(albedo_xyz: np.ndarray, space) -> np.ndarray:

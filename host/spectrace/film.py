@@ -5,7 +5,8 @@ stores (spectrace.engine.checkpoint writes and reads the file; what goes in it a
 Per pixel the film holds four float32 sums (X, Y, Z and the count of non-finite samples left out), a uint32 count
 of rays traced, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`, one float32 sum per
 channel of the film's response (spectrace.spectral.film_response: more observers, a measured sensor) and, when any AOV
-is asked for, the twelve float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position and depth).
+is asked for, the AOV_FLOATS_PER_PIXEL float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position
+and depth, the emission sampled and expected).
 Together with the number of samples per pixel added so far they are the entire state of a render: the samplers are
 counter-based and every pixel adds its samples in sample order, so restoring them continues the render bit for bit.
 """
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from spectrace.aovs import AOV_FLOATS_PER_PIXEL, aov_images
+from spectrace.aovs import AOV_FLOATS_PER_PIXEL, aov_images, with_companions
 from spectrace.device import Device
 from spectrace.engine.memory import SPECTRAL_BAND_BYTES
 from spectrace.engine.opencl_errors import translate_opencl_errors
@@ -33,7 +34,7 @@ STATE_LAYOUT = {
     "film": (np.float32, 4),
     "ray_counts": (np.uint32, 1),
     "spectral_film": (np.float32, None),
-    "aov_film": (np.float32, 12),
+    "aov_film": (np.float32, AOV_FLOATS_PER_PIXEL),
     "response_film": (np.float32, None),
 }
 
@@ -123,7 +124,7 @@ def state_image(
     if aovs:
         scale = np.ones(3, np.float32) if albedo_scale is None else albedo_scale
         every = aov_images(state.buffers["aov_film"], film, state.samples_done, scale, (height, width))
-        images = {name: every[name] for name in aovs}
+        images = {name: every[name] for name in with_companions(aovs)}
     return Image(
         aovs=images,
         channels=channels,

@@ -199,8 +199,78 @@ def test_aov_names_are_checked():
         spectrace.render(_plane_scene(aovs=()), aovs=["depth", "z"], progress=False)
 
 
-def test_the_wavefront_refuses_aovs_in_one_line(device):
+@pytest.mark.parametrize("scene_kind", ["plane", "cornell"])
+def test_the_wavefront_records_the_megakernels_aovs(device, scene_kind):
+    """The two kernel shapes run the same per-segment function and add each pixel's samples in the same order, so
+    their AOVs (and images) agree: bit for bit where the compiler contracts the two kernels alike, else to float
+    rounding. The Cornell box brings a directly seen light (the emission AOV) and bounces."""
     from spectrace.engine.wavefront import make_renderer
+    from spectrace.resources import scenes_dir
 
-    with pytest.raises(SpectraceError, match="wavefront kernel does not record AOVs"):
-        make_renderer(_plane_scene(), device, "wavefront")
+    if scene_kind == "plane":
+        scene = _plane_scene(spp=6)
+    else:
+        scene = spectrace.load_scene(scenes_dir() / "cornell_box.toml").with_overrides(
+            width=12, height=12, aovs=AOV_NAMES, spp=3
+        )
+    mega = make_renderer(scene, device, "megakernel").render(pass_spp=4)
+    wave = make_renderer(scene, device, "wavefront").render(pass_spp=4)
+    assert set(wave.aovs) == set(mega.aovs)
+    identical_colour = np.array_equal(wave.xyz, mega.xyz)
+    for name, values in mega.aovs.items():
+        if identical_colour:
+            assert np.array_equal(wave.aovs[name], values, equal_nan=True), name
+        np.testing.assert_allclose(wave.aovs[name], values, rtol=1e-5, atol=1e-6, err_msg=name)
+    np.testing.assert_allclose(wave.xyz, mega.xyz, rtol=1e-5, atol=1e-6)
+    if scene_kind == "cornell":
+        assert mega.aovs["emission"].any()  # the light is in view
+
+
+# A greenish-yellow emission spectrum, tabulated at 1 nm like REFLECTANCE.
+EMISSION = 0.5 + 2.0 * np.exp(-(((WAVELENGTHS - 560.0) / 40.0) ** 2))
+
+
+def _film_xyz(radiance: np.ndarray) -> np.ndarray:
+    """Film XYZ of a radiance on the 1 nm grid: ∫ L x̄ȳz̄ dλ / ∫ȳ (trapezoid rule), from colour-science's tables."""
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(360, 830, 1))
+    weights = np.ones(len(WAVELENGTHS))
+    weights[[0, -1]] = 0.5
+    table = cmfs.values * weights[:, None]
+    return (radiance[:, None] * table).sum(axis=0) / table[:, 1].sum()
+
+
+@pytest.mark.parametrize("where", ["environment", "area light"])
+def test_the_emission_aov_is_the_expected_value_of_the_emission_seen(device, where):
+    """A camera sees only emission (a constant environment, or an emitting square filling the view in front of a
+    black one): the emission AOV is its spectrum's film XYZ in every pixel (colour-science's tables), without the
+    colour noise of sampled wavelengths, and emission_sampled is the image itself (all of it is that emission)."""
+    spectrum = spectrace.spectrum((WAVELENGTHS, EMISSION))
+    scene = _plane_scene(aovs=("emission",), spp=8)
+    if where == "environment":
+        scene = scene.with_overrides(shapes=[], lights=[spectrace.constant_environment(spectrum)])
+    else:
+        emitter = spectrace.shape(
+            "rectangle", spectrace.diffuse(0.0), emitter=spectrace.area_emitter(spectrum), transform=[{"scale": 10}]
+        )
+        scene = scene.with_overrides(shapes=[emitter], lights=[])
+    image = _render(device, scene)
+    assert set(image.aovs) == {"emission", "emission_sampled"}
+    expected = _film_xyz(EMISSION)
+    # 2e-4: the kernels integrate the linear interpolation of the tables, this sums at the 1 nm points.
+    np.testing.assert_allclose(
+        image.aovs["emission"].reshape(-1, 3), np.broadcast_to(expected, (SIZE * SIZE, 3)), rtol=2e-4
+    )
+    np.testing.assert_allclose(image.aovs["emission_sampled"], image.xyz, rtol=1e-5, atol=1e-6)
+    # The sampled emission does carry colour noise, and its mean over pixels is the expected value.
+    sampled = image.aovs["emission_sampled"].reshape(-1, 3).astype(np.float64)
+    standard_error = sampled.std(axis=0, ddof=1) / np.sqrt(len(sampled))
+    assert np.all(standard_error > 1e-3 * expected)
+    assert np.all(np.abs(sampled.mean(axis=0) - expected) <= 5 * standard_error)
+
+
+def test_the_emission_aov_holds_only_what_the_camera_rays_meet(device):
+    """The lit diffuse plane sends no emission of its own: emission and emission_sampled are 0 there, though the
+    image is not."""
+    image = _render(device, _plane_scene(aovs=("emission",), spp=2))
+    assert image.xyz[..., 1].min() > 0
+    assert not image.aovs["emission"].any() and not image.aovs["emission_sampled"].any()

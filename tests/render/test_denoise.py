@@ -70,3 +70,25 @@ def test_cli_refuses_bad_aov_options_in_one_line(monkeypatch, capsys, tmp_path, 
     assert status != 0
     assert err.strip().count("\n") == 0 and message in err
     assert not out.exists()
+
+
+def test_directly_seen_emission_is_exchanged_for_its_expected_value(device):
+    """A view of nothing but a constant environment: once its sampled emission is taken out nothing is left to
+    denoise, so the denoised image is the emission's expected film XYZ (the spectrum's, by colour-science's tables)
+    in every pixel; denoised whole, the colour noise of sampled wavelengths stays in it."""
+    pytest.importorskip("pyoidn", reason="the denoise extra (pyoidn) is not installed")
+    import colour
+
+    wavelengths = np.arange(360.0, 831.0)
+    radiance = 0.5 + 2.0 * np.exp(-(((wavelengths - 560.0) / 40.0) ** 2))
+    scene = _cornell(aovs=("albedo", "normal", "emission")).with_overrides(
+        shapes=[], lights=[spectrace.constant_environment(spectrace.spectrum((wavelengths, radiance)))]
+    )
+    image = spectrace.render(scene, spp=2, device=device, progress=False)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(360, 830, 1))
+    table = cmfs.values * np.r_[0.5, np.ones(len(wavelengths) - 2), 0.5][:, None]
+    expected = (radiance[:, None] * table).sum(axis=0) / table[:, 1].sum()
+    denoised = spectrace.denoise(image).xyz.reshape(-1, 3)
+    np.testing.assert_allclose(denoised, np.broadcast_to(expected, denoised.shape), rtol=2e-4, atol=1e-5)
+    whole = spectrace.denoise(image, exchange_emission=False).xyz.reshape(-1, 3)
+    assert np.abs(whole - expected).max() > 1e-2 * expected.max()

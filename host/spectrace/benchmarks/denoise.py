@@ -7,6 +7,8 @@ figure hides where the error is:
   sampling four wavelengths at Y ≈ 10, dominate it;
 - film XYZ away from the emitters (pixels of the reference below EMITTER_Y, less a ring of RING_PIXELS around them);
 - display sRGB (clipped to [0, 1] and encoded, what a viewer sees; 0..1 per channel).
+Each noisy render is denoised twice: whole (the image as it is) and with the directly seen emission exchanged for
+its expected value (the emission AOV, spectrace.denoising), which is what `spectrace render --denoise` does.
 The reference is rendered as two halves of different seeds, whose difference estimates its own RMSE (reported).
 """
 
@@ -45,9 +47,15 @@ def _away_from_emitters(reference: np.ndarray) -> np.ndarray:
 
 
 def run_denoise_bench(
-    scene_path: Path | None, size: int, spp: int, reference_spp: int, seeds: int, device: str | None, log=print
+    scene_path: Path | None,
+    size: int,
+    spp: int,
+    reference_spp: int,
+    seeds: int,
+    device: str | None,
+    log=print,
 ) -> dict:
-    from spectrace.denoising import denoise
+    from spectrace.denoising import RENDER_AOVS, denoise
 
     dev = open_device(device)
     scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml").with_overrides(width=size, height=size)
@@ -64,11 +72,12 @@ def run_denoise_bench(
     errors: dict[str, list[float]] = {}
     denoise_seconds = 0.0
     for seed in range(seeds):
-        noisy = Renderer(scene.with_overrides(seed=seed, aovs=("albedo", "normal")), dev).render(spp=spp)
+        noisy = Renderer(scene.with_overrides(seed=seed, aovs=RENDER_AOVS), dev).render(spp=spp)
         started = time.perf_counter()
         denoised = denoise(noisy)
         denoise_seconds += time.perf_counter() - started
-        for label, image in (("noisy", noisy), ("denoised", denoised)):
+        whole = denoise(noisy, exchange_emission=False)
+        for label, image in (("noisy", noisy), ("whole", whole), ("denoised", denoised)):
             difference = image.xyz.astype(np.float64) - reference
             for metric, value in (
                 ("xyz", np.mean(difference**2)),
@@ -81,13 +90,18 @@ def run_denoise_bench(
         {
             "metric": metric,
             "noisy": rmse[f"noisy_{metric}"],
+            "denoised_whole": rmse[f"whole_{metric}"],
             "denoised": rmse[f"denoised_{metric}"],
+            "ratio_whole": rmse[f"noisy_{metric}"] / rmse[f"whole_{metric}"],
             "ratio": rmse[f"noisy_{metric}"] / rmse[f"denoised_{metric}"],
         }
         for metric in ("xyz", "xyz_away", "display")
     ]
     for row in rows:
-        log(f"{row['metric']}: RMSE noisy {row['noisy']:.4g}, denoised {row['denoised']:.4g}, {row['ratio']:.2f}x")
+        log(
+            f"{row['metric']}: RMSE noisy {row['noisy']:.4g}, denoised whole {row['denoised_whole']:.4g} "
+            f"({row['ratio_whole']:.2f}x), emission exchanged {row['denoised']:.4g} ({row['ratio']:.2f}x)"
+        )
     return {
         "device": dev.report.key,
         "scene": str(scene.source) if scene.source else None,
@@ -116,10 +130,18 @@ def denoise_bench_table(result: dict) -> Table:
         f"({result['width']}x{result['height']}, {result['spp']} spp, {result['seeds']} seeds, reference's own "
         f"XYZ RMSE ~{result['reference_rmse']:.2g}; denoising {result['denoise_seconds_per_image']:.2f} s/image)"
     )
-    for column in ("RMSE of", "noisy", "denoised", "noisy/denoised"):
+    columns = ("RMSE of", "noisy", "denoised whole", "noisy/whole", "denoised, emission exchanged", "noisy/exchanged")
+    for column in columns:
         table.add_column(column, justify="right")
     for r in result["rows"]:
-        table.add_row(METRIC_LABELS[r["metric"]], f"{r['noisy']:.4g}", f"{r['denoised']:.4g}", f"{r['ratio']:.2f}")
+        table.add_row(
+            METRIC_LABELS[r["metric"]],
+            f"{r['noisy']:.4g}",
+            f"{r['denoised_whole']:.4g}",
+            f"{r['ratio_whole']:.2f}",
+            f"{r['denoised']:.4g}",
+            f"{r['ratio']:.2f}",
+        )
     return table
 
 

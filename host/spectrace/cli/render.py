@@ -113,7 +113,8 @@ def render(
         typer.Option(
             "--aov",
             help="EXR only: also store these AOVs, comma-separated: albedo, normal, depth, position, variance "
-            "(standard error of Y); replaces the scene's film.aovs. See docs/scene-format.md.",
+            "(standard error of Y), emission (directly seen, as its expected value); replaces the scene's film.aovs. "
+            "See docs/scene-format.md.",
         ),
     ] = None,
     denoise: Annotated[
@@ -121,7 +122,8 @@ def render(
         typer.Option(
             "--denoise",
             help="Denoise with Open Image Denoise (the spectrace[denoise] extra), guided by the albedo and normal "
-            "AOVs (recorded for it); --output gets the denoised image, <stem>.noisy<suffix> beside it the noisy one.",
+            "AOVs, the directly seen emission exchanged for its expected value (the emission AOV; all recorded for "
+            "it); --output gets the denoised image, <stem>.noisy<suffix> beside it the noisy one.",
         ),
     ] = False,
     kernel: Annotated[
@@ -194,7 +196,9 @@ def render(
         )
         aovs = ()
     if denoise:
-        aovs = tuple(dict.fromkeys((*aovs, "albedo", "normal")))
+        from spectrace.denoising import RENDER_AOVS
+
+        aovs = tuple(dict.fromkeys((*aovs, *RENDER_AOVS)))
     loaded = loaded.with_overrides(aovs=aovs)
     if delta_e_map:
         loaded = loaded.with_overrides(film_response=_with_delta_e_map(loaded.film_response, output, delta_e_white_y))

@@ -8,7 +8,7 @@ import pyopencl as cl
 
 from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.device import Device, open_device
-from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
+from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.light_tracer import LightPasses
 from spectrace.engine.memory import check_device_memory, device_memory_need
@@ -21,6 +21,7 @@ from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.image import Image
 from spectrace.scene import limits
 from spectrace.scene.model import SAMPLER_TYPES, Scene
+from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
 ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 
@@ -139,19 +140,36 @@ class Renderer:
         self._allocate(spectral_bins)
 
     def _check_film_range(self, scene: Scene) -> None:
-        """A film range of its own reaches every tabulated spectrum (the table refuses those that fall short), but
-        not the textures and pictures, whose RGB texels are uplifted in the kernels on the visible grid."""
+        """A film range of its own reaches every tabulated spectrum (the table refuses those that fall short). The
+        textures' RGB texels are sigmoids of λ and the pictures' weight basis spectra from the table, so they hold on
+        any range inside the visible; beyond it they follow the rule of RGB spectra (continued only with
+        film.extend_rgb), and a spectral texture must have bands as far as the film goes."""
         response = scene.film_response
         if not response.has_own_grid:
             return
+        lo, hi = response.wavelengths
+        if lo >= GRID_MIN_NM and hi <= GRID_MAX_NM:
+            return
+        where = str(scene.source) if scene.source else None
+        textures = self.buffers.textures[: self.buffers.texture_count]
         features = scene_feature_defines(self.buffers)
-        if features["SCENE_HAS_TEXTURES"] or features["SCENE_HAS_LIGHT_IMAGES"]:
-            lo, hi = response.wavelengths
+        rgb = bool(np.any(np.isin(textures["texel_format"], (TEXEL_SIGMOID, TEXEL_RGB))))
+        if (rgb or features["SCENE_HAS_LIGHT_IMAGES"]) and not response.extend_rgb:
             raise SpectraceError(
-                f"film.wavelengths {lo:g}-{hi:g} nm: textures and emitter pictures are defined for the visible "
-                "(360-830 nm) only; a film range of its own takes spectra, not textures",
-                where=str(scene.source) if scene.source else None,
+                f"film.wavelengths {lo:g}-{hi:g} nm: textures and emitter pictures hold RGB colours, defined for the "
+                f"visible ({GRID_MIN_NM:g}-{GRID_MAX_NM:g} nm) only; film.extend_rgb = true continues them (as it "
+                "does RGB spectra)",
+                where=where,
             )
+        for texture in textures[textures["texel_format"] == TEXEL_BANDS]:
+            first = float(texture["band_first_nm"])
+            last = first + float(texture["band_step_nm"]) * (int(texture["channels"]) - 1)
+            if (lo < GRID_MIN_NM and first > lo) or (hi > GRID_MAX_NM and last < hi):
+                raise SpectraceError(
+                    f"film.wavelengths {lo:g}-{hi:g} nm: a spectral texture's bands span {first:g}-{last:g} nm; beyond "
+                    f"the visible the film's range needs measured bands",
+                    where=where,
+                )
 
     def _check_scene(self, scene: Scene) -> None:
         """Refuses a scene this kernel shape cannot render, before any other check."""

@@ -3,8 +3,9 @@
 Each pass starts one path per pixel (`wavefront_start`), then launches `wavefront_advance` over the queue of live
 paths until it is empty; a launch moves every live path one segment on, and a path that ends is added to the film
 and replaced by its pixel's next sample (kernels/wavefront_pass.cl). The image is the megakernel's: the same
-per-segment function, the same per-pixel order of additions to the film. Which kernel shape is faster was measured
-(docs/devices.md, "Kernel shape (measured)"); the megakernel is the default, this one is `--kernel wavefront`.
+per-segment function, the same per-pixel order of additions to the film (and to the AOV sums). Which kernel shape
+is faster was measured (docs/devices.md, "Kernel shape (measured)"); the megakernel is the default, this one is
+`--kernel wavefront`.
 """
 
 import time
@@ -32,11 +33,6 @@ class WavefrontRenderer(Renderer):
                 f"the wavefront kernel runs the path integrator only, not {scene.integrator!r}",
                 where=str(scene.source) if scene.source else None,
             )
-        if scene.aovs:
-            raise SpectraceError(
-                "the wavefront kernel does not record AOVs; render them with the megakernel (--kernel megakernel)",
-                where=str(scene.source) if scene.source else None,
-            )
 
     def _allocate(self, spectral_bins: int) -> None:
         ctx = self.device.context
@@ -44,7 +40,9 @@ class WavefrontRenderer(Renderer):
         size_buffer = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4)
         cl.Kernel(self.program, "wavefront_slot_size")(self.device.queue, (1,), None, size_buffer)
         cl.enqueue_copy(self.device.queue, slot_size, size_buffer)
-        need = device_memory_need(self.buffers, self.pixel_count, spectral_bins, self.film.response_channels)
+        need = device_memory_need(
+            self.buffers, self.pixel_count, spectral_bins, self.film.response_channels, aovs=bool(self.scene.aovs)
+        )
         need.buffers["path slots"] = self.pixel_count * int(slot_size[0])
         need.buffers["path queues"] = 2 * self.pixel_count * QUEUE_ENTRY_BYTES
         check_device_memory(need, self.device)
@@ -78,6 +76,7 @@ class WavefrontRenderer(Renderer):
             film.xyz_buffer,
             film.spectral_buffer,
             film.response_buffer,
+            film.aov_buffer,
             self._slots,
             self._queues[0],
             self._queue_lengths[0],
@@ -97,6 +96,7 @@ class WavefrontRenderer(Renderer):
                 film.ray_count_buffer,
                 film.spectral_buffer,
                 film.response_buffer,
+                film.aov_buffer,
                 self._slots,
                 self._queues[current],
                 self._queue_lengths[current],

@@ -16,9 +16,10 @@ Imported here: shapes obj, ply, serialized (shape_index), rectangle, cube, and t
 disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sphere);
 twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
-with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
-path (max_depth, rr_depth), direct (as path with max_depth 2), volpath/volpathmis (as path, which renders
-media) and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium with constant sigma_t
+with lookat/translate/rotate/scale/matrix); hdrfilm width/height; specfilm (its responses as the film's sensor,
+a CSV beside the TOML); the sampler's sample_count and seed; integrators path (max_depth, rr_depth), direct (as
+path with max_depth 2), volpath/volpathmis (as path, which renders media)
+and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium with constant sigma_t
 and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the index-matched boundary).
 Spectra: rgb (uplifted exactly as Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as
 a value, "λ:v" pairs, wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular,
@@ -53,6 +54,7 @@ from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
 from spectrace.scene import limits
+from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 from spectrace.textures import TEXTURES
 
 
@@ -78,7 +80,7 @@ SUPPORTED = {
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
-    "film": ("hdrfilm",),
+    "film": ("hdrfilm", "specfilm"),
     "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "ptracer"),
     "medium": ("homogeneous",),
     "phase": ("hg", "isotropic"),
@@ -217,6 +219,9 @@ class MitsubaImporter:
         self.xml_path = xml_path
         self.toml_folder = toml_folder
         self.parameters = dict(parameters)
+        # Files the scene needs beside its TOML (a specfilm's response curves as a sensor CSV): name -> text.
+        self.side_files: dict[str, str] = {}
+        self.side_stem = xml_path.stem  # their names start with it (import_mitsuba: the TOML's stem)
         self.ids: dict[str, Element] = {}
         self.unsupported: dict[str, list] = {}  # "plugin detail" -> [count, first element]
         self.notes: list[str] = []
@@ -1213,9 +1218,11 @@ class MitsubaImporter:
                     film_properties.understood(key)
                     self.unsupported_plugin(film, f" with {_shown(key)}")
             rfilter = next(iter(self.nested(film_properties, "rfilter")), None)
+            sensor = self.specfilm_sensor(film, film_properties) if self.kind(film) == "specfilm" else {}
         else:
             rfilter = None
-        data["film"] = {"width": width, "height": height, "filter": self.pixel_filter(rfilter)}
+            sensor = {}
+        data["film"] = {"width": width, "height": height, "filter": self.pixel_filter(rfilter), **(sensor or {})}
         matrix = self.to_world(properties)
         linear = matrix[:3, :3]
         if not np.linalg.det(linear) > 0:
@@ -1270,6 +1277,55 @@ class MitsubaImporter:
                     f"{self.at(sampler)}: sampler '{_shown(sampler.get('type') or '')}' not imported: "
                     "spectrace uses its own sampler (same sample count)"
                 )
+
+    def specfilm_sensor(self, film: Element, properties: Properties) -> dict | None:
+        """A specfilm's response curves (its named spectra) as the film's sensor: a CSV beside the TOML
+        (`side_files`) with one channel per curve, in the file's order (as Mitsuba's film holds them; its EXR
+        sorts them by name, as spectrace's does), on a 1 nm grid over their
+        wavelengths, each zero outside its own (as Mitsuba evaluates a tabulated spectrum). Both films record
+        ∫ L(λ) s(λ) dλ per channel. Curves beyond 360-830 nm widen the film's range there, with the RGB uplifts
+        continued (film.extend_rgb), as Mitsuba evaluates its RGB spectra at any wavelength."""
+        curves: dict[str, np.ndarray] = {}
+        for key in list(dict.keys(properties)):
+            child = self.resolve(dict.__getitem__(properties, key))
+            if child.tag not in ("spectrum", "texture") or (
+                child.tag == "texture" and self.kind(child) not in _SPECTRUM_PLUGINS
+            ):
+                continue
+            properties.understood(key)
+            table = self.spectrum_element(child)
+            if table is None:
+                return None
+            if "values" in table:
+                curves[key] = np.asarray(table["values"], np.float64).reshape(-1, 2)
+            elif "value" in table:  # Mitsuba's uniform spectrum spans the visible
+                curves[key] = np.array([[GRID_MIN_NM, table["value"]], [GRID_MAX_NM, table["value"]]])
+            else:
+                self.unsupported_plugin(film, f" with the response '{_shown(key)}' (a {_shown(self.kind(child))})")
+                return None
+            if not re.fullmatch(r"[A-Za-z0-9_.\-]+", key):
+                raise self.fail(child, f"response name '{_shown(key)}' must be letters, digits, '_', '.' or '-'")
+        if not curves:
+            raise self.fail(film, "a specfilm needs at least one response spectrum (Mitsuba requires one)")
+        lo = math.floor(min(curve[0, 0] for curve in curves.values()))
+        hi = math.ceil(max(curve[-1, 0] for curve in curves.values()))
+        if lo < 200 or hi > 2500:
+            raise self.fail(film, f"its responses span {lo}-{hi} nm; spectrace's film reaches 200-2500 nm")
+        grid = np.arange(lo, hi + 1, dtype=np.float64)
+        columns = [np.interp(grid, c[:, 0], c[:, 1], left=0.0, right=0.0) for c in curves.values()]
+        lines = ["# The response curves of a Mitsuba 3 specfilm, on a 1 nm grid", f"wavelength_nm,{','.join(curves)}"]
+        lines += [f"{w:g}," + ",".join(f"{column[i]:.9g}" for column in columns) for i, w in enumerate(grid)]
+        name = f"{self.side_stem}.sensor.csv"
+        self.side_files[name] = "\n".join(lines) + "\n"
+        sensor: dict = {"sensor": name}
+        if lo < GRID_MIN_NM or hi > GRID_MAX_NM:
+            sensor |= {"wavelengths": [min(lo, int(GRID_MIN_NM)), max(hi, int(GRID_MAX_NM))], "extend_rgb": True}
+            self.notes.append(
+                f"the specfilm's responses reach {lo}-{hi} nm: the film's range is widened to take them, with RGB "
+                "colours continued beyond the visible as Mitsuba does"
+            )
+        self.notes.append(f"the specfilm's responses are the film's sensor, written to {name} beside the scene")
+        return sensor
 
     def pixel_filter(self, rfilter: Element | None) -> dict:
         """The film's filter: Mitsuba 3's own default, its Gaussian of σ = 0.5, when the file names none."""
@@ -1602,6 +1658,7 @@ def import_mitsuba(
     xml_path, toml_path = Path(xml_path), Path(toml_path)
     check_output_path(toml_path, xml_path)
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
+    importer.side_stem = toml_path.stem
     data = _imported(importer, strict)
     header = "\n".join(
         [
@@ -1618,11 +1675,27 @@ def import_mitsuba(
         except SpectraceError as error:
             raise importer.imported_error(error, temp) from None
 
+    written: list[Path] = []
     try:
+        for name, side_text in importer.side_files.items():
+            side_path = toml_path.parent / name
+            if not side_path.exists():
+                written.append(side_path)
+            write_atomically(side_path, lambda temp, text=side_text: temp.write_text(text, encoding="utf-8"))
         write_atomically(toml_path, write_and_check)
     except OSError as error:
+        _remove(written)
         raise SpectraceError(f"cannot write the TOML ({error.strerror or error})", where=str(toml_path)) from None
+    except SpectraceError:
+        _remove(written)
+        raise
     return importer.notes
+
+
+def _remove(paths: list[Path]) -> None:
+    """Files this import made before it failed (a file that was there before stays, replaced)."""
+    for path in paths:
+        path.unlink(missing_ok=True)
 
 
 def load_mitsuba_scene(xml_path: str | Path, parameters: dict[str, str] | None = None, strict: bool = False):
