@@ -1681,7 +1681,11 @@ def import_mitsuba(
             side_path = toml_path.parent / name
             if not side_path.exists():
                 written.append(side_path)
-            write_atomically(side_path, lambda temp, text=side_text: temp.write_text(text, encoding="utf-8"))
+
+            def write_side(temp: Path, text: str = side_text) -> None:
+                temp.write_text(text, encoding="utf-8")
+
+            write_atomically(side_path, write_side)
         write_atomically(toml_path, write_and_check)
     except OSError as error:
         _remove(written)
