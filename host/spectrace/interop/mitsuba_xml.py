@@ -1362,6 +1362,11 @@ class MitsubaImporter:
             # how many light paths one of its passes runs changes the scheduling, not the image.
             settings["type"] = "light"
             properties.understood("samples_per_pass")
+        elif kind == "bdpt":
+            # Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none): spectrace's bdpt, max_depth and rr_depth
+            # meaning the same; its per-strategy options change the noise, not the mean.
+            settings["type"] = "bdpt"
+            properties.understood("lightImage", "sampleDirect", "samples_per_pass")
         elif kind.startswith("volpath"):
             self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path', which renders media")
         elif kind == "moment":
