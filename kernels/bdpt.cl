@@ -33,8 +33,8 @@
 #define BDPT_MAX_SEGMENTS 16
 #define BDPT_MAX_VERTICES (BDPT_MAX_SEGMENTS + 1)
 
-/* BDPT_ONLY_S / BDPT_ONLY_T (both defined): keep only that strategy, weighted as in the full estimate, so the sum
- * over all (s, t) of such renders is the full render (the MIS weights sum to one); tests only. */
+/* Test builds only: BDPT_ONLY_S / BDPT_ONLY_T (both defined) keep that one strategy; BDPT_UNWEIGHTED drops the MIS
+ * weights, so that one strategy alone estimates the light of paths of s + t − 1 segments by itself. */
 
 #define BDPT_CAMERA 0
 #define BDPT_LIGHT 1
@@ -125,13 +125,14 @@ inline float light_origin_pdf(const Scene *scene, const BdptVertex *v)
 #endif
 }
 
-/* A light's point as the origin of a light subpath, from the light pick and position draws (the position part of
- * sample_emission): 0 when the light gives nothing. beta = 1 / (pmf · p_A). */
-inline int sample_light_origin(const Scene *scene, float2 u_pick, float2 u_position, BdptVertex *v)
+/* A light's point as the origin of a light subpath, from one 2D draw that picks the light and then the point
+ * (pick_light_reusing; the position part of sample_emission): 0 when the light gives nothing.
+ * beta = 1 / (pmf · p_A). */
+inline int sample_light_origin(const Scene *scene, float2 u_position, BdptVertex *v)
 {
     __global const RenderParams *params = scene->params;
     if (params->light_count == 0) return 0;
-    int index = pick_light_reusing(scene->light_cdf, params->light_count, &u_pick);
+    int index = pick_light_reusing(scene->light_cdf, params->light_count, &u_position);
     __global const Light *light = &scene->lights[index];
     if (!(light->pmf > 0.0f)) return 0;
     v->kind = BDPT_LIGHT;
@@ -291,6 +292,9 @@ inline float bdpt_remap(float f) { return f != 0.0f ? f : 1.0f; }
 inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, const BdptVertex *light,
                              const BdptVertex *camera, const BdptVertex *sampled, int s, int t)
 {
+#ifdef BDPT_UNWEIGHTED
+    return 1.0f;
+#endif
     if (s + t == 2) return 1.0f;
     const BdptVertex *qs = s == 1 ? sampled : (s > 0 ? &light[s - 1] : 0);
     const BdptVertex *qs_minus = s > 1 ? &light[s - 2] : 0;
@@ -373,6 +377,12 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
     float filter_weight;
     Ray ray = start_pixel_sample(params, cmf, item, sample_index, &sampler, &w, &filter_weight);
 
+    /* The light subpath's start and the light point of next-event estimation take the sampler's first dimensions
+     * after the camera ray's, where a low-discrepancy sampler stratifies them best. */
+    float2 u_position = sample_2d(&sampler);
+    float2 u_direction = sample_2d(&sampler);
+    float2 u_nee_position = sample_2d(&sampler);
+
     BdptVertex camera[BDPT_MAX_VERTICES];
     BdptVertex light[BDPT_MAX_VERTICES - 1];
     camera[0].kind = BDPT_CAMERA;
@@ -392,11 +402,8 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
     int nc = bdpt_walk(scene, &w, &sampler, ray, camera[0].beta, camera_direction_pdf(params, ray.direction), 0,
                        camera, last_segment + 1, 0u, rays_traced);
 
-    float2 u_pick = sample_2d(&sampler);
-    float2 u_position = sample_2d(&sampler);
-    float2 u_direction = sample_2d(&sampler);
     int nl = 0;
-    if (sample_light_origin(scene, u_pick, u_position, &light[0])) {
+    if (sample_light_origin(scene, u_position, &light[0])) {
         nl = 1;
         __global const Light *l = &scene->lights[light[0].light];
         float3 d;
@@ -428,8 +435,6 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
         }
     }
 
-    float2 u_nee_pick = sample_2d(&sampler);
-    float2 u_nee_position = sample_2d(&sampler);
     float4 radiance = (float4)(0.0f);
 
     for (int t = 1; t <= nc; ++t) {
@@ -470,7 +475,7 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
             BdptVertex sampled;
             const BdptVertex *qs;
             if (s == 1) {
-                if (!sample_light_origin(scene, u_nee_pick, u_nee_position, &sampled)) continue;
+                if (!sample_light_origin(scene, u_nee_position, &sampled)) continue;
                 qs = &sampled;
             } else {
                 qs = &light[s - 1];

@@ -63,7 +63,8 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
         return f"integrator '{name}' does not record AOVs yet; leave film.aovs out or use 'path'"
     if scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes):
         return (
-             f"integrator '{name}' cannot hide area lights from the camera (hide_emitters); use hide_environment or 'path'"
+            f"integrator '{name}' cannot hide area lights from the camera (hide_emitters); "
+            "use hide_environment or 'path'"
         )
     return None
 

@@ -8,8 +8,8 @@ import pyopencl as cl
 
 from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.device import Device, open_device
-from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.engine.bdpt import bdpt_problem
+from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.light_tracer import LightPasses
 from spectrace.engine.memory import check_device_memory, device_memory_need
