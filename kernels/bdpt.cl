@@ -59,13 +59,22 @@ typedef struct {
     int hero;           /* a dispersive vertex at or before it on its subpath */
 } BdptVertex;
 
-/* Area density at `to` of a solid-angle density pdf_dir from `from`: × |cos| at `to` / d² (no cosine when `to` is
- * a point without a surface). */
+/* The density with which a solid-angle density pdf_dir at `from` reaches `to`, for the MIS ratios: the area density
+ * at `to` (× |cos| at `to` / d², no cosine where `to` is a point without a surface), except where `to` is a vertex a
+ * delta lobe left: then the density per projected solid angle at `from` (÷ |cos| at `from`). A chain of delta
+ * vertices carries projected solid angle unchanged (the generalized geometry term between its ends is symmetric),
+ * so two strategies' densities of a path through glass compare correctly in this measure, where areas at the
+ * chain's inner vertices would not (they would favour the camera path that hits a small lamp through glass over
+ * the light path that lights the screen, by the ratio of the two end segments' geometry terms). */
 inline float bdpt_to_area(float pdf_dir, const BdptVertex *from, const BdptVertex *to)
 {
     float3 d = to->p - from->p;
     float d2 = dot(d, d);
     if (!(d2 > 0.0f)) return 0.0f;
+    if (to->delta) {
+        float cos_from = all(from->n == (float3)(0.0f)) ? 1.0f : fabs(dot(from->n, d)) * rsqrt(d2);
+        return cos_from > 0.0f ? pdf_dir / cos_from : 0.0f;
+    }
     float cos_to = all(to->n == (float3)(0.0f)) ? 1.0f : fabs(dot(to->n, d)) * rsqrt(d2);
     return pdf_dir * cos_to / d2;
 }
@@ -241,6 +250,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         float pdf_reverse = 0.0f;
         if (bs.is_delta) {
             v->delta = 1;
+            v->pdf_fwd = bdpt_to_area(pdf_dir, prev, v); /* now per projected solid angle at prev */
             pdf_dir = 0.0f;
         } else {
             pdf_dir = bs.pdf;
