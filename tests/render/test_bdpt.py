@@ -147,9 +147,10 @@ def test_textured_scene_agrees_with_the_path_tracer(device, tmp_path):
     assert_replicas_agree(bdpt, path, block=4)
 
 
-def _dispersive_scene(tmp_path: Path, integrator: str) -> Path:
-    """A flint-glass sphere and a rough flint block on a floor, under a large lamp: the paths through glass keep their
-    hero wavelength alone, on either subpath."""
+def _dispersive_scene(tmp_path: Path, integrator: str, lamp: str = "rectangle") -> Path:
+    """A flint-glass sphere on a floor under a lamp (a rectangle, or an emitting analytic sphere, whose light points
+    and densities come from its own parametrisation): the paths through glass keep their hero wavelength alone, on
+    either subpath."""
     return _write(
         tmp_path,
         f"""
@@ -189,7 +190,7 @@ material = "flint"
 transform = [{{ scale = 0.5 }}, {{ translate = [0, 0.5, 0] }}]
 
 [[shapes]]
-type = "rectangle"
+type = "{lamp}"
 material = "black"
 emitter = {{ radiance = {{ rgb = [1, 0.9, 0.8], scale = 6 }} }}
 transform = [{{ scale = 0.6 }}, {{ rotate = {{ axis = [1, 0, 0], angle = 90 }} }}, {{ translate = [0.3, 2, 0.2] }}]
@@ -198,9 +199,11 @@ transform = [{{ scale = 0.6 }}, {{ rotate = {{ axis = [1, 0, 0], angle = 90 }} }
 
 
 @pytest.mark.slow
-def test_dispersive_glass_agrees_with_the_path_tracer(device, tmp_path):
-    path = spectrace_replicas(Renderer(spectrace.load_scene(_dispersive_scene(tmp_path, "path")), device), 8, 32)
-    bdpt = spectrace_replicas(Renderer(spectrace.load_scene(_dispersive_scene(tmp_path, "bdpt")), device), 8, 32)
+@pytest.mark.parametrize("lamp", ["rectangle", "sphere"])
+def test_dispersive_glass_agrees_with_the_path_tracer(device, tmp_path, lamp):
+    path_scene = spectrace.load_scene(_dispersive_scene(tmp_path, "path", lamp))
+    path = spectrace_replicas(Renderer(path_scene, device), 8, 32)
+    bdpt = spectrace_replicas(Renderer(spectrace.load_scene(_dispersive_scene(tmp_path, "bdpt", lamp)), device), 8, 32)
     assert path.mean() > 0.01
     assert_replicas_agree(bdpt, path, block=4)
 
