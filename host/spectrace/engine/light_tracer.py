@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pyopencl as cl
 
+from spectrace.engine.bdpt import bdpt_problem
 from spectrace.engine.launch import launch_shape
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.scene_buffers import render_params
@@ -66,6 +67,8 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
             f"integrator '{name}' cannot hide area lights from the camera (hide_emitters); "
             "use hide_environment or 'path'"
         )
+    if name == "bdpt":
+        return bdpt_problem(scene)
     return None
 
 

@@ -8,7 +8,6 @@ import pyopencl as cl
 
 from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.device import Device, open_device
-from spectrace.engine.bdpt import bdpt_problem
 from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.light_tracer import LightPasses
@@ -169,9 +168,6 @@ class Renderer:
         """The device buffers this kernel shape needs beyond the film and the scene: the light tracer's launches and
         splat records (spectrace.engine.light_tracer) for a `light` scene."""
         splats = self.scene.integrator in SPLATTING_KERNELS
-        problem = bdpt_problem(self.scene) if self.scene.integrator == "bdpt" else None
-        if problem:
-            raise SpectraceError(problem, where=str(self.scene.source) if self.scene.source else None)
         self._light_passes = LightPasses(self, spectral_bins) if splats else None
 
     def _program_file(self, scene: Scene) -> str:

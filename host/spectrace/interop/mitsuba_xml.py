@@ -18,9 +18,8 @@ twosided around one BSDF (spectrace's
 materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
 with lookat/translate/rotate/scale/matrix); hdrfilm width/height; the sampler's sample_count and seed; integrators
 path (max_depth, rr_depth), direct (as path with max_depth 2), volpath/volpathmis (as path, which renders
-media), ptracer (as the light tracer, `light`) and bdpt (Mitsuba 0.6's, as `bdpt`); a shape's interior homogeneous
-medium with constant sigma_t and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the
-index-matched boundary).
+media) and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium with constant sigma_t
+and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the index-matched boundary).
 Spectra: rgb (uplifted exactly as Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as
 a value, "λ:v" pairs, wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular,
 blackbody, d65 and srgb.
@@ -31,6 +30,7 @@ Bad values are reported as one SpectraceError naming the file and the element pa
 a texture where spectrace takes none, other media) is reported in one error naming each unsupported plugin and
 its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as notes.
 Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
+Mitsuba 0.6's bdpt integrator (Mitsuba 3 has none) imports as spectrace's bidirectional path tracer, `bdpt`.
 """
 
 from __future__ import annotations
