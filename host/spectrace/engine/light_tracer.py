@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pyopencl as cl
 
+from spectrace.engine.bdpt import bdpt_problem
 from spectrace.engine.launch import launch_shape
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.scene_buffers import render_params
@@ -44,26 +45,30 @@ def scene_sphere(scene: Scene) -> np.ndarray:
 
 def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the light tracer cannot render this scene as asked, or None."""
+    name = scene.integrator  # 'light', or 'bdpt', which shares these limits
     camera_type = scene.camera.type
     if camera_type != "perspective":
-        return f"integrator 'light' supports the perspective (pinhole) camera only, not {camera_type!r}"
+        return f"integrator '{name}' supports the perspective (pinhole) camera only, not {camera_type!r}"
     if medium_count:
-        return "integrator 'light' does not render participating media yet; use 'path'"
+        return f"integrator '{name}' does not render participating media yet; use 'path'"
     if spectral_bins:
-        return "integrator 'light' does not write spectral bands yet; render without spectral output or use 'path'"
+        return f"integrator '{name}' does not write spectral bands yet; render without spectral output or use 'path'"
     if scene.pixel_filter.type != "box":
         return (
-            f"integrator 'light' splats into whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
+            f"integrator '{name}' splats into whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
             "use film.filter = \"box\" or 'path'"
         )
     if not scene.film_response.is_default:
-        return "integrator 'light' renders the default CIE 1931 film only (no observers, sensor or wavelengths yet)"
+        return f"integrator '{name}' renders the default CIE 1931 film only (no observers, sensor or wavelengths yet)"
     if scene.aovs:
-        return "integrator 'light' does not record AOVs yet; leave film.aovs out or use 'path'"
+        return f"integrator '{name}' does not record AOVs yet; leave film.aovs out or use 'path'"
     if scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes):
         return (
-            "integrator 'light' cannot hide area lights from the camera (hide_emitters); use hide_environment or 'path'"
+            f"integrator '{name}' cannot hide area lights from the camera (hide_emitters); "
+            "use hide_environment or 'path'"
         )
+    if name == "bdpt":
+        return bdpt_problem(scene)
     return None
 
 

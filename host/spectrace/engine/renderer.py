@@ -29,7 +29,15 @@ ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 # launch overhead does not matter.
 TARGET_PASS_SECONDS = 0.5
 
-INTEGRATOR_PROGRAMS = {"path": "integrator_path.cl", "direct": "integrator_direct.cl", "light": "integrator_light.cl"}
+INTEGRATOR_PROGRAMS = {
+    "path": "integrator_path.cl",
+    "direct": "integrator_direct.cl",
+    "light": "integrator_light.cl",
+    "bdpt": "integrator_bdpt.cl",
+}
+# Integrators whose connections land in any pixel: their passes are spectrace.engine.light_tracer's (splat records
+# reduced on the host in a fixed order), their kernels take its arguments.
+SPLATTING_KERNELS = {"light": "light_pass", "bdpt": "bdpt_pass"}
 
 
 def sampler_defines(sampler: str) -> dict[str, int]:
@@ -177,13 +185,14 @@ class Renderer:
     def _allocate(self, spectral_bins: int) -> None:
         """The device buffers this kernel shape needs beyond the film and the scene: the light tracer's launches and
         splat records (spectrace.engine.light_tracer) for a `light` scene."""
-        self._light_passes = LightPasses(self, spectral_bins) if self.scene.integrator == "light" else None
+        splats = self.scene.integrator in SPLATTING_KERNELS
+        self._light_passes = LightPasses(self, spectral_bins) if splats else None
 
     def _program_file(self, scene: Scene) -> str:
         return INTEGRATOR_PROGRAMS[scene.integrator]
 
     def _create_kernels(self) -> cl.Kernel:
-        return cl.Kernel(self.program, "light_pass" if self.scene.integrator == "light" else "render_pass")
+        return cl.Kernel(self.program, SPLATTING_KERNELS.get(self.scene.integrator, "render_pass"))
 
     # The film's size and bands, which the film holds (one copy, no drift).
     @property

@@ -31,6 +31,7 @@ Bad values are reported as one SpectraceError naming the file and the element pa
 a texture where spectrace takes none, other media) is reported in one error naming each unsupported plugin and
 its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as notes.
 Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
+Mitsuba 0.6's bdpt integrator (Mitsuba 3 has none) imports as spectrace's bidirectional path tracer, `bdpt`.
 """
 
 from __future__ import annotations
@@ -81,7 +82,7 @@ SUPPORTED = {
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm", "specfilm"),
-    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "ptracer"),
+    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "ptracer", "bdpt"),
     "medium": ("homogeneous",),
     "phase": ("hg", "isotropic"),
 }
@@ -1418,6 +1419,11 @@ class MitsubaImporter:
             # how many light paths one of its passes runs changes the scheduling, not the image.
             settings["type"] = "light"
             properties.understood("samples_per_pass")
+        elif kind == "bdpt":
+            # Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none): spectrace's bdpt, max_depth and rr_depth
+            # meaning the same; its per-strategy options change the noise, not the mean.
+            settings["type"] = "bdpt"
+            properties.understood("lightImage", "sampleDirect", "samples_per_pass")
         elif kind.startswith("volpath"):
             self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path', which renders media")
         elif kind == "moment":

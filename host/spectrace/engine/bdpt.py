@@ -1,0 +1,25 @@
+"""Bidirectional path tracing on the host: what the `bdpt` integrator (kernels/bdpt.cl) refuses beyond the light
+tracer's limits. Its passes are the light tracer's (spectrace.engine.light_tracer): every pixel sample writes splat
+records (its light-to-camera connections, then its own pixel's estimate) that the host adds to the film in a fixed
+order."""
+
+from spectrace.lights import light_module
+from spectrace.scene.model import Scene
+
+# Subpaths live in fixed arrays in the kernel (kernels/bdpt.cl's BDPT_MAX_SEGMENTS).
+BDPT_MAX_SEGMENTS = 16
+_AT_INFINITY = ("distant", "constant", "envmap")
+
+
+def bdpt_problem(scene: Scene) -> str | None:
+    """Why the bidirectional path tracer cannot render this scene, or None (the light tracer's checks come first)."""
+    if scene.max_depth < 0 or scene.max_depth > BDPT_MAX_SEGMENTS:
+        return (
+            f"integrator 'bdpt' keeps paths of at most {BDPT_MAX_SEGMENTS} segments: "
+            f"set integrator.max_depth between 1 and {BDPT_MAX_SEGMENTS}, not {scene.max_depth}"
+        )
+    for light in scene.lights:
+        name = light_module(light).NAME
+        if name in _AT_INFINITY:
+            return f"integrator 'bdpt' does not take {name!r} lights yet (lights at infinity); use 'light' or 'path'"
+    return None

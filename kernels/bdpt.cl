@@ -1,0 +1,524 @@
+/* Bidirectional path tracing (Veach 1997, ch. 10; Veach & Guibas 1995): a light subpath and a camera subpath per
+ * pixel sample, every pair of their prefixes (s light vertices, t camera vertices) joined into a full path, each
+ * weighted by multiple importance sampling over all the strategies that could have made the same path. The MIS
+ * weight uses the power heuristic evaluated, as in pbrt-v4's BDPT (Pharr, Jakob & Humphreys, "Physically Based
+ * Rendering", 4th ed., sec. 13.4), from running ratios of the area densities with which each vertex is reached
+ * forward (along the subpath that made it) and in reverse (from the other side); vertices reached by a delta lobe
+ * or a delta light take part only through the strategies that can make them.
+ *
+ * Strategies (max_depth counts segments from the camera, as for the path tracer: s + t − 1 <= max_depth):
+ * - s = 0: a camera vertex on an emitter (with t = 2 and s = 1 absent, an emitter seen directly weighs 1);
+ * - s = 1: a point sampled on a light, by the same densities light paths start with (light_emission.cl), joined to a
+ *   camera vertex: next-event estimation;
+ * - t = 1: a light vertex joined to the pinhole, as the light tracer does (light_tracer.cl): its value lands in any
+ *   pixel and is written as a splat record, reduced on the host in a fixed order;
+ * - s, t >= 2: a light vertex joined to a camera vertex through a shadow ray.
+ * The sum of a work-item's own-pixel strategies is written as one more record for its own pixel.
+ *
+ * Light subpath vertices use the adjoint BSDF (light_tracer.cl's conventions: the sample weight divided by the
+ * radiance scale, Veach's shading-normal factor). A vertex's beta is its subpath's throughput as it arrives there:
+ * importance (camera side, 1 at the eye) or flux (light side, 1/p at the light's point), all four wavelengths kept;
+ * `hero` says a dispersive vertex lies on the subpath at or before it. A joined path with a hero vertex on either
+ * side keeps its hero wavelength alone (×4, terminate_secondary), once, whatever the side; the MIS densities are
+ * the hero wavelength's on both sides (the BSDFs draw dispersive directions for the hero).
+ *
+ * Not handled (the host refuses them in one line): participating media, environment and distant lights (vertices
+ * at infinity), other cameras than the pinhole. Subpaths hold at most BDPT_MAX_VERTICES vertices. */
+#ifndef SPECTRACE_BDPT_CL
+#define SPECTRACE_BDPT_CL
+
+#include "light_tracer.cl"
+
+/* max_depth 16 at most: a camera subpath of 17 vertices (the eye and 16 surfaces), a light one of 16. */
+#define BDPT_MAX_SEGMENTS 16
+#define BDPT_MAX_VERTICES (BDPT_MAX_SEGMENTS + 1)
+
+/* Test builds only: BDPT_ONLY_S / BDPT_ONLY_T (both defined) keep that one strategy; BDPT_UNWEIGHTED drops the MIS
+ * weights, so that one strategy alone estimates the light of paths of s + t − 1 segments by itself. */
+
+#define BDPT_CAMERA 0
+#define BDPT_LIGHT 1
+#define BDPT_SURFACE 2
+
+typedef struct {
+    float3 p;           /* scene units */
+    float3 n;           /* geometric normal; 0 for a point without a surface (eye, point and spot lights) */
+    float3 ns;          /* shading normal (surfaces) */
+    float3 wo;          /* unit, back toward the previous vertex of its subpath (surfaces) */
+    float4 beta;        /* subpath throughput arriving here, per wavelength (see the top of the file) */
+    float4 le;          /* camera vertices on emitters: radiance emitted toward wo, W/(m² sr nm) */
+    float2 uv;          /* texture coordinates, or an analytic shape's own (u, v) */
+    float footprint;    /* texture footprint in uv units */
+    float pdf_fwd;      /* area density (1/m²) of reaching it along its own subpath; the light's point: pmf · p_A */
+    float pdf_rev;      /* area density of reaching it from the other side's next vertex */
+    int kind;           /* BDPT_CAMERA, BDPT_LIGHT, BDPT_SURFACE */
+    int delta;          /* its subpath left it by a delta lobe */
+    int delta_light;    /* a light's point with a delta position (point, spot) */
+    int material;       /* surfaces: material index */
+    int light;          /* index of the light it lies on, or -1 */
+    int hero;           /* a dispersive vertex at or before it on its subpath */
+} BdptVertex;
+
+/* The density with which a solid-angle density pdf_dir at `from` reaches `to`, for the MIS ratios: the area density
+ * at `to` (× |cos| at `to` / d², no cosine where `to` is a point without a surface), except where `to` is a vertex a
+ * delta lobe left: then the density per projected solid angle at `from` (÷ |cos| at `from`). A chain of delta
+ * vertices carries projected solid angle unchanged (the generalized geometry term between its ends is symmetric),
+ * so two strategies' densities of a path through glass compare correctly in this measure, where areas at the
+ * chain's inner vertices would not (they would favour the camera path that hits a small lamp through glass over
+ * the light path that lights the screen, by the ratio of the two end segments' geometry terms). */
+inline float bdpt_to_area(float pdf_dir, const BdptVertex *from, const BdptVertex *to)
+{
+    float3 d = to->p - from->p;
+    float d2 = dot(d, d);
+    if (!(d2 > 0.0f)) return 0.0f;
+    if (to->delta) {
+        float cos_from = all(from->n == (float3)(0.0f)) ? 1.0f : fabs(dot(from->n, d)) * rsqrt(d2);
+        return cos_from > 0.0f ? pdf_dir / cos_from : 0.0f;
+    }
+    float cos_to = all(to->n == (float3)(0.0f)) ? 1.0f : fabs(dot(to->n, d)) * rsqrt(d2);
+    return pdf_dir * cos_to / d2;
+}
+
+/* The pinhole's solid-angle density of a camera ray along unit d: 1/(A cos³θ) over the film (camera_importance.cl),
+ * 0 outside it. */
+inline float camera_direction_pdf(__global const RenderParams *params, float3 d)
+{
+    float cos_theta = dot(d, params->camera_forward.xyz);
+    if (!(cos_theta > 0.0f)) return 0.0f;
+    float3 right = params->camera_right.xyz, up = params->camera_up.xyz;
+    float tan_x2 = dot(right, right), tan_y2 = dot(up, up);
+    if (fabs(dot(d, right)) > tan_x2 * cos_theta || fabs(dot(d, up)) > tan_y2 * cos_theta) return 0.0f;
+    float area = 4.0f * sqrt(tan_x2 * tan_y2);
+    return 1.0f / (area * cos_theta * cos_theta * cos_theta);
+}
+
+/* Solid-angle density with which light `light`'s emission sampling (light_emission.cl) leaves its point (normal n,
+ * 0 for point and spot lights) along unit d. */
+inline float light_direction_pdf(__global const Light *light, float3 n, float3 d)
+{
+    if (LIGHT_ON_SURFACE(light)) {
+        float c = dot(n, d);
+        if (light->two_sided) return fabs(c) * (0.5f / PI_F);
+        return c > 0.0f ? c / PI_F : 0.0f;
+    }
+    if (LIGHT_IS(light, LIGHT_SPOT)) {
+        if (dot(d, light->direction.xyz) < light->cos_cutoff) return 0.0f;
+        return 1.0f / (TWO_PI * (1.0f - light->cos_cutoff));
+    }
+    return 1.0f / (4.0f * PI_F);
+}
+
+/* Radiance (intensity for point and spot lights) that light vertex v emits along unit d. */
+inline float4 light_vertex_emitted(const Scene *scene, const SampledWavelengths *w, const BdptVertex *v, float3 d)
+{
+    __global const Light *light = &scene->lights[v->light];
+    if (LIGHT_ON_SURFACE(light)) {
+        TextureBuffers textures = light_buffers(scene).textures;
+        return area_light_emitted(light, &textures, w, v->n, d, v->uv);
+    }
+    float4 intensity = light_spectrum(light, scene->spectra, w);
+    if (LIGHT_IS(light, LIGHT_SPOT)) intensity *= spot_falloff(light, dot(d, light->direction.xyz));
+    return intensity;
+}
+
+/* Area density (pick included) with which a light subpath starts at surface vertex v of an emitter. */
+inline float light_origin_pdf(const Scene *scene, const BdptVertex *v)
+{
+    __global const Light *light = &scene->lights[v->light];
+    if (LIGHT_IS(light, LIGHT_TRIANGLE)) return light->pmf / light->area;
+#if SCENE_HAS_SHAPES
+    __global const AnalyticShape *shape = &scene->shapes[light->triangle];
+    return light->pmf * shape_area_pdf(shape, shape_surface(shape, v->uv).area_stretch);
+#else
+    return 0.0f;
+#endif
+}
+
+/* A light's point as the origin of a light subpath, from one 2D draw that picks the light and then the point
+ * (pick_light_reusing; the position part of sample_emission): 0 when the light gives nothing.
+ * beta = 1 / (pmf · p_A). */
+inline int sample_light_origin(const Scene *scene, float2 u_position, BdptVertex *v)
+{
+    __global const RenderParams *params = scene->params;
+    if (params->light_count == 0) return 0;
+    int index = pick_light_reusing(scene->light_cdf, params->light_count, &u_position);
+    __global const Light *light = &scene->lights[index];
+    if (!(light->pmf > 0.0f)) return 0;
+    v->kind = BDPT_LIGHT;
+    v->light = index;
+    v->material = -1;
+    v->delta = 0;
+    v->hero = 0;
+    v->uv = (float2)(0.0f);
+    v->footprint = 0.0f;
+    v->pdf_rev = 0.0f;
+    v->le = (float4)(0.0f);
+    v->wo = (float3)(0.0f);
+    if (LIGHT_ON_SURFACE(light)) {
+        float pdf_area;
+        if (LIGHT_IS(light, LIGHT_TRIANGLE)) {
+            float2 b12 = sample_triangle_uniform(u_position);
+            v->p = triangle_point(scene->triangle_vertices, light->triangle, b12);
+            v->n = triangle_normal(scene->triangle_vertices, light->triangle);
+            v->uv = triangle_uv(scene->triangle_uvs, light->triangle, b12);
+            pdf_area = 1.0f / light->area;
+        } else {
+#if SCENE_HAS_SHAPES
+            __global const AnalyticShape *shape = &scene->shapes[light->triangle];
+            v->uv = shape_sample_uv(shape, u_position);
+            ShapeSurface g = shape_surface(shape, v->uv);
+            v->p = g.p;
+            v->n = g.n;
+            pdf_area = shape_area_pdf(shape, g.area_stretch);
+#else
+            return 0;
+#endif
+        }
+        if (!(pdf_area > 0.0f) || !isfinite(pdf_area)) return 0;
+        v->ns = v->n;
+        v->delta_light = 0;
+        v->pdf_fwd = light->pmf * pdf_area;
+    } else if (LIGHT_IS(light, LIGHT_POINT) || LIGHT_IS(light, LIGHT_SPOT)) {
+        v->p = light->position.xyz;
+        v->n = (float3)(0.0f);
+        v->ns = v->n;
+        v->delta_light = 1;
+        v->pdf_fwd = light->pmf;
+    } else {
+        return 0; /* distant and environment lights: refused by the host */
+    }
+    v->beta = (float4)(1.0f / v->pdf_fwd);
+    return 1;
+}
+
+/* Follows a subpath from its first vertex path[0] along ray (leaving with solid-angle density pdf_dir and
+ * throughput beta) until it has max_vertices vertices, leaves the scene, or Russian roulette or a BSDF ends it.
+ * adjoint: a light subpath (the adjoint BSDF). Returns the vertex count. */
+inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray, float4 beta,
+                     float pdf_dir, int adjoint, BdptVertex *path, int max_vertices, uint query_base,
+                     uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    PathState s = camera_path(ray);
+    s.throughput = beta;
+    float4 scatter = (float4)(1.0f);
+    int count = 1;
+    int hero = 0;
+    while (count < max_vertices) {
+        Hit hit = scene_intersect(scene, s.ray, path_query(sampler, &s, QUERY_PATH) ^ query_base, rays_traced);
+        if (hit.triangle < 0) break;
+        PathVertex pv = path_vertex(scene, hit, s.ray);
+        if (pv.info.material == TRIANGLE_NO_MATERIAL && pv.info.light < 0) {
+            if (!cross_null_boundary(&s, &pv)) break;
+            continue;
+        }
+        BdptVertex *v = &path[count];
+        BdptVertex *prev = &path[count - 1];
+        v->kind = BDPT_SURFACE;
+        v->p = pv.p;
+        v->n = pv.n;
+        v->ns = pv.ns;
+        v->wo = pv.wo;
+        v->uv = pv.uv;
+        v->footprint = pv.footprint;
+        v->beta = s.throughput;
+        v->material = pv.info.material;
+        v->light = pv.info.light;
+        v->le = (float4)(0.0f);
+        if (!adjoint && pv.info.light >= 0) v->le = vertex_emission(scene, w, &pv, hit);
+        v->delta = 0;
+        v->delta_light = 0;
+        v->pdf_fwd = bdpt_to_area(pdf_dir, prev, v);
+        v->pdf_rev = 0.0f;
+        ++count;
+        if (pv.info.material == TRIANGLE_NO_MATERIAL) {
+            v->hero = hero;
+            break; /* an emitter without a material ends the subpath */
+        }
+        __global const Material *material = &scene->materials[pv.info.material];
+        if (material_disperses(material, w)) hero = 1;
+        v->hero = hero;
+        if (count >= max_vertices) break;
+        SurfaceContext sc = surface_context(scene, pv.uv, pv.footprint);
+        float uc = sample_1d(sampler);
+        float2 u = sample_2d(sampler);
+        BSDFSample bs;
+        if (!material_sample(material, &sc, w, pv.ns, pv.wo, uc, u, &bs) || !shading_side_agrees(pv.n, pv.ns, bs.wi))
+            break;
+        float4 weight = bs.weight;
+        if (adjoint) weight *= shading_normal_adjoint(pv.n, pv.ns, pv.wo, bs.wi) / bs.radiance_scale;
+        float pdf_reverse = 0.0f;
+        if (bs.is_delta) {
+            v->delta = 1;
+            v->pdf_fwd = bdpt_to_area(pdf_dir, prev, v); /* now per projected solid angle at prev */
+            pdf_dir = 0.0f;
+        } else {
+            pdf_dir = bs.pdf;
+            pdf_reverse = material_pdf(material, &sc, w, pv.ns, bs.wi, pv.wo);
+        }
+        prev->pdf_rev = bdpt_to_area(pdf_reverse, v, prev);
+        s.throughput *= weight;
+        scatter *= weight / (adjoint ? 1.0f : bs.radiance_scale);
+        s.previous_point = pv.p;
+        s.ray.origin = offset_ray_origin(pv.p, pv.n, bs.wi);
+        s.ray.direction = bs.wi;
+        /* Russian roulette as the path tracer's (rr_depth, survival min(max weight, 0.95)), on the BSDF weights
+         * without refraction's radiance compression. */
+        if (count - 1 >= params->rr_depth) {
+            float q = fmin(fmax(fmax(scatter.x, scatter.y), fmax(scatter.z, scatter.w)), 0.95f);
+            if (!(sample_1d(sampler) < q)) break;
+            s.throughput /= q;
+            scatter /= q;
+        }
+        if (all(s.throughput == (float4)(0.0f))) break;
+        ++s.segments;
+    }
+    return count;
+}
+
+/* The BSDF density of surface vertex v sampling toward `next` having arrived from `prev` (solid angle), as an
+ * area density at next. */
+inline float bdpt_surface_pdf(const Scene *scene, const SampledWavelengths *w, const BdptVertex *v,
+                              const BdptVertex *prev, const BdptVertex *next)
+{
+    __global const Material *material = &scene->materials[v->material];
+    SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+    float3 wo = normalize(prev->p - v->p), wi = normalize(next->p - v->p);
+    return bdpt_to_area(material_pdf(material, &sc, w, v->ns, wo, wi), v, next);
+}
+
+/* The area density at next of the light's emission leaving its point v toward next. */
+inline float bdpt_light_pdf(const Scene *scene, const BdptVertex *v, const BdptVertex *next)
+{
+    float3 d = normalize(next->p - v->p);
+    return bdpt_to_area(light_direction_pdf(&scene->lights[v->light], v->n, d), v, next);
+}
+
+inline float bdpt_remap(float f) { return f != 0.0f ? f : 1.0f; }
+
+/* The MIS weight (power heuristic) of strategy (s, t) for the path its vertices make: light[0 .. s-1] (light[0]
+ * replaced by *sampled when s = 1) and camera[0 .. t-1]. The densities the strategy changes at the four vertices
+ * beside the connection are computed here; the subpaths' stored ones serve for the rest. */
+inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, const BdptVertex *light,
+                             const BdptVertex *camera, const BdptVertex *sampled, int s, int t)
+{
+#ifdef BDPT_UNWEIGHTED
+    return 1.0f;
+#endif
+    if (s + t == 2) return 1.0f;
+    const BdptVertex *qs = s == 1 ? sampled : (s > 0 ? &light[s - 1] : 0);
+    const BdptVertex *qs_minus = s > 1 ? &light[s - 2] : 0;
+    const BdptVertex *pt = &camera[t - 1];
+    const BdptVertex *pt_minus = t > 1 ? &camera[t - 2] : 0;
+    __global const RenderParams *params = scene->params;
+
+    /* Reverse densities the connection gives. */
+    float pt_rev = 0.0f, pt_minus_rev = 0.0f, qs_rev = 0.0f, qs_minus_rev = 0.0f;
+    if (t > 1) {
+        if (s == 0) pt_rev = light_origin_pdf(scene, pt);
+        else if (s == 1) pt_rev = bdpt_light_pdf(scene, qs, pt);
+        else pt_rev = bdpt_surface_pdf(scene, w, qs, qs_minus, pt);
+        if (s == 0) pt_minus_rev = bdpt_light_pdf(scene, pt, pt_minus);
+        else pt_minus_rev = bdpt_surface_pdf(scene, w, pt, qs, pt_minus);
+    }
+    if (s > 0) {
+        if (t == 1) qs_rev = bdpt_to_area(camera_direction_pdf(params, normalize(qs->p - pt->p)), pt, qs);
+        else qs_rev = bdpt_surface_pdf(scene, w, pt, pt_minus, qs);
+        if (s > 1) qs_minus_rev = bdpt_surface_pdf(scene, w, qs, pt, qs_minus);
+    }
+
+    float sum = 0.0f, r = 1.0f;
+    for (int i = t - 1; i > 0; --i) {
+        float rev = i == t - 1 ? pt_rev : (i == t - 2 ? pt_minus_rev : camera[i].pdf_rev);
+        r *= bdpt_remap(rev) / bdpt_remap(camera[i].pdf_fwd);
+        int delta_here = i == t - 1 ? 0 : camera[i].delta;
+        if (!delta_here && !camera[i - 1].delta) sum += r * r;
+    }
+    r = 1.0f;
+    for (int i = s - 1; i >= 0; --i) {
+        const BdptVertex *v = (i == 0 && s == 1) ? sampled : &light[i];
+        float rev = i == s - 1 ? qs_rev : (i == s - 2 ? qs_minus_rev : v->pdf_rev);
+        r *= bdpt_remap(rev) / bdpt_remap(v->pdf_fwd);
+        int delta_here = i == s - 1 ? 0 : v->delta;
+        int delta_before = i > 0 ? (i - 1 == s - 1 ? 0 : light[i - 1].delta) : v->delta_light;
+        if (!delta_here && !delta_before) sum += r * r;
+    }
+    return 1.0f / (1.0f + sum);
+}
+
+/* Keeps the hero wavelength alone (×4) when either side's vertex says the path dispersed. */
+inline float4 bdpt_hero(float4 value, int hero)
+{
+    int hero_only = 0;
+    if (hero) terminate_secondary(&value, &hero_only);
+    return value;
+}
+
+inline int bdpt_keeps(int s, int t)
+{
+#if defined(BDPT_ONLY_S) && defined(BDPT_ONLY_T)
+    return s == BDPT_ONLY_S && t == BDPT_ONLY_T;
+#else
+    return 1;
+#endif
+}
+
+/* Nothing blocks the segment between two vertices (each offset off its surface toward the other). */
+inline int bdpt_visible(const Scene *scene, const BdptVertex *a, const BdptVertex *b, uint query, uint *rays_traced)
+{
+    float3 d = b->p - a->p;
+    float dist = length(d);
+    if (!(dist > 0.0f)) return 0;
+    d /= dist;
+    float3 from = all(a->n == (float3)(0.0f)) ? a->p : offset_ray_origin(a->p, a->n, d);
+    float3 to = all(b->n == (float3)(0.0f)) ? b->p : offset_ray_origin(b->p, b->n, -d);
+    return !scene_occluded(scene, from, to, d, 0, query, rays_traced);
+}
+
+/* One pixel sample of pixel `item`, written to records: the light-to-camera strategies (t = 1) as it makes them,
+ * then the sum of the others, which all land in its own pixel (when not zero). */
+inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global const float4 *cmf,
+                         SplatRecords *records, uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    int last_segment = min(max_segments(params), BDPT_MAX_SEGMENTS);
+    Sampler sampler;
+    SampledWavelengths w;
+    float filter_weight;
+    Ray ray = start_pixel_sample(params, cmf, item, sample_index, &sampler, &w, &filter_weight);
+
+    /* The light subpath's start and the light point of next-event estimation take the sampler's first dimensions
+     * after the camera ray's, where a low-discrepancy sampler stratifies them best. */
+    float2 u_position = sample_2d(&sampler);
+    float2 u_direction = sample_2d(&sampler);
+    float2 u_nee_position = sample_2d(&sampler);
+
+    BdptVertex camera[BDPT_MAX_VERTICES];
+    BdptVertex light[BDPT_MAX_VERTICES - 1];
+    camera[0].kind = BDPT_CAMERA;
+    camera[0].p = params->camera_origin.xyz;
+    camera[0].n = (float3)(0.0f);
+    camera[0].ns = camera[0].n;
+    camera[0].wo = camera[0].n;
+    camera[0].beta = (float4)(filter_weight);
+    camera[0].le = (float4)(0.0f);
+    camera[0].pdf_fwd = 1.0f;
+    camera[0].pdf_rev = 0.0f;
+    camera[0].delta = 0;
+    camera[0].delta_light = 0;
+    camera[0].material = -1;
+    camera[0].light = -1;
+    camera[0].hero = 0;
+    int nc = bdpt_walk(scene, &w, &sampler, ray, camera[0].beta, camera_direction_pdf(params, ray.direction), 0,
+                       camera, last_segment + 1, 0u, rays_traced);
+
+    int nl = 0;
+    if (sample_light_origin(scene, u_position, &light[0])) {
+        nl = 1;
+        __global const Light *l = &scene->lights[light[0].light];
+        float3 d;
+        if (LIGHT_ON_SURFACE(l)) {
+            float side = 1.0f;
+            if (l->two_sided) {
+                if (u_direction.x < 0.5f) {
+                    side = -1.0f;
+                    u_direction.x *= 2.0f;
+                } else {
+                    u_direction.x = fmin(2.0f * u_direction.x - 1.0f, 0x1.fffffep-1f);
+                }
+            }
+            d = sample_cosine_about(side * light[0].n, u_direction);
+        } else if (LIGHT_IS(l, LIGHT_SPOT)) {
+            d = sample_uniform_cone_about(l->direction.xyz, l->cos_cutoff, u_direction);
+        } else {
+            d = sample_uniform_sphere(u_direction);
+        }
+        float pdf_dir = light_direction_pdf(l, light[0].n, d);
+        float cos_light = LIGHT_ON_SURFACE(l) ? fabs(dot(light[0].n, d)) : 1.0f;
+        float4 flux = light_vertex_emitted(scene, &w, &light[0], d) * (cos_light / pdf_dir) * light[0].beta;
+        if (pdf_dir > 0.0f && any(flux != (float4)(0.0f))) {
+            Ray lray;
+            lray.origin = LIGHT_ON_SURFACE(l) ? offset_ray_origin(light[0].p, light[0].n, d) : light[0].p;
+            lray.direction = d;
+            nl = bdpt_walk(scene, &w, &sampler, lray, flux, pdf_dir, 1, light, last_segment, 0x9e3779b9u,
+                           rays_traced);
+        }
+    }
+
+    float4 radiance = (float4)(0.0f);
+
+    for (int t = 1; t <= nc; ++t) {
+        for (int s = 0; s <= nl || (s == 1 && t > 1); ++s) {
+            if (s + t - 1 > last_segment) break;
+            if ((s == 1 && t == 1) || (s == 0 && t == 1)) continue;
+            if (!bdpt_keeps(s, t)) continue;
+            uint query = opacity_query(&sampler, ((uint)s << 8) ^ (uint)t, QUERY_SHADOW);
+            BdptVertex *pt = &camera[t - 1];
+            if (s == 0) {
+                if (pt->light < 0 || all(pt->le == (float4)(0.0f))) continue;
+                float4 value = pt->beta * pt->le;
+                radiance += bdpt_hero(value, pt->hero) * bdpt_mis_weight(scene, &w, light, camera, 0, 0, t);
+                continue;
+            }
+            if (t == 1) {
+                BdptVertex *qs = &light[s - 1];
+                if (qs->kind != BDPT_SURFACE || qs->material < 0) continue;
+                __global const Material *material = &scene->materials[qs->material];
+                if (!material_has_non_delta_lobe(material)) continue;
+                CameraConnection c = connect_to_camera(params, qs->p);
+                if (c.pixel < 0 || !shading_side_agrees(qs->n, qs->ns, c.to_camera)) continue;
+                SurfaceContext sc = surface_context(scene, qs->uv, qs->footprint);
+                float4 f_cos = material_eval(material, &sc, &w, qs->ns, c.to_camera, qs->wo);
+                float cos_light = fabs(dot(qs->wo, qs->n));
+                float cosines = cos_light > 0.0f ? fabs(dot(c.to_camera, qs->n)) / cos_light : 0.0f;
+                float4 value = qs->beta * f_cos * (cosines * c.importance);
+                if (all(value == (float4)(0.0f))) continue;
+                if (!camera_sees(scene, &c, qs->p, qs->n, query, rays_traced)) continue;
+                float weight = bdpt_mis_weight(scene, &w, light, camera, 0, s, 1);
+                record_splat(records, c.pixel, bdpt_hero(value, qs->hero) * weight, cmf, &w);
+                continue;
+            }
+            /* t >= 2: a camera vertex with a non-delta lobe. */
+            if (pt->kind != BDPT_SURFACE || pt->material < 0) continue;
+            __global const Material *pm = &scene->materials[pt->material];
+            if (!material_has_non_delta_lobe(pm)) continue;
+            BdptVertex sampled;
+            const BdptVertex *qs;
+            if (s == 1) {
+                if (!sample_light_origin(scene, u_nee_position, &sampled)) continue;
+                qs = &sampled;
+            } else {
+                qs = &light[s - 1];
+                if (qs->kind != BDPT_SURFACE || qs->material < 0) continue;
+                if (!material_has_non_delta_lobe(&scene->materials[qs->material])) continue;
+            }
+            float3 d = qs->p - pt->p;
+            float d2 = dot(d, d);
+            if (!(d2 > 0.0f)) continue;
+            float3 to_q = d * rsqrt(d2);
+            if (!shading_side_agrees(pt->n, pt->ns, to_q)) continue;
+            SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
+            float4 f_p = material_eval(pm, &psc, &w, pt->ns, pt->wo, to_q);
+            float4 f_q;
+            float cos_q = all(qs->n == (float3)(0.0f)) ? 1.0f : fabs(dot(qs->n, to_q));
+            if (s == 1) {
+                f_q = light_vertex_emitted(scene, &w, qs, -to_q);
+            } else {
+                if (!shading_side_agrees(qs->n, qs->ns, -to_q)) continue;
+                __global const Material *qm = &scene->materials[qs->material];
+                SurfaceContext qsc = surface_context(scene, qs->uv, qs->footprint);
+                float cos_in = fabs(dot(qs->wo, qs->n));
+                if (!(cos_in > 0.0f)) continue;
+                f_q = material_eval(qm, &qsc, &w, qs->ns, -to_q, qs->wo) / cos_in;
+            }
+            float4 value = qs->beta * f_q * pt->beta * f_p * (cos_q / d2);
+            if (all(value == (float4)(0.0f))) continue;
+            if (!bdpt_visible(scene, pt, qs, query, rays_traced)) continue;
+            float weight = bdpt_mis_weight(scene, &w, light, camera, s == 1 ? &sampled : 0, s, t);
+            radiance += bdpt_hero(value, pt->hero || qs->hero) * weight;
+        }
+    }
+    if (any(radiance != (float4)(0.0f))) record_splat(records, item, radiance, cmf, &w);
+}
+
+#endif

@@ -1,0 +1,240 @@
+"""Bidirectional path tracing (integrator 'bdpt') against closed-form radiometry and the path tracer.
+
+- A closed enclosure of emitting, diffusely reflecting walls holds the radiance Le (1 − ρ^d) / (1 − ρ) truncated to
+  d path segments; paths of exactly k segments carry Le ρ^(k−1), and every strategy (s, t) with s + t − 1 = k, kept
+  alone and unweighted, must estimate that by itself (the camera walk, the light walk, next-event estimation, the
+  connections and the light-to-camera splats each), while the MIS-weighted sum over them must too (the weights
+  sum to one for every path).
+- A spot light through a smooth glass slab onto a screen (a caustic the path tracer renders black): only the
+  light-to-camera strategy reaches it, and its MIS weight must be one (delta vertices remapped): the screen's
+  irradiance I T² Σ R^{2k}/(d − t + (2k + 1)t/n)² (tests/render/test_light_tracer.py).
+- The Cornell box, a textured scene and a dispersive glass sphere: BDPT's and the path tracer's images agree within
+  noise (block means, 5 standard errors from independent replicas).
+- The same seed gives the same bits however the render is split into passes.
+"""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+from tests.render.test_light_tracer import (
+    ALBEDO,
+    DISTANCE,
+    EMITTED,
+    FLOOR_ALBEDO,
+    INTENSITY,
+    IOR,
+    THICKNESS,
+    _floor_scene,
+    _furnace_box,
+    _slab_scene,
+    _textured_scene,
+    _write,
+)
+
+import spectrace
+from replica_agreement import assert_replicas_agree, spectrace_replicas
+from spectrace.engine import light_tracer
+from spectrace.engine.renderer import Renderer
+from spectrace.errors import SpectraceError
+from spectrace.resources import resolve_scene_path
+from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
+
+
+def _enclosure(max_depth: int):
+    return dataclasses.replace(_furnace_box(max_depth), integrator="bdpt")
+
+
+def _image_mean(renderer, replicas: int = 8, replica_spp: int = 16):
+    """Mean and standard error of the whole image's Y over independent replicas (splats land in any pixel)."""
+    return mean_and_standard_error(spectrace_replicas(renderer, replicas, replica_spp)[..., 1].mean(axis=(1, 2)))
+
+
+@pytest.mark.parametrize("max_depth", [1, 3, 8])
+def test_enclosure_radiance(device, max_depth):
+    expected = EMITTED * (1 - ALBEDO**max_depth) / (1 - ALBEDO)
+    mean, standard_error = _image_mean(Renderer(_enclosure(max_depth), device))
+    assert standard_error < 0.02 * expected
+    assert_within_standard_errors(mean, expected, standard_error)
+
+
+@pytest.fixture
+def strategy_device(device, monkeypatch):
+    """The device, building its programs with the test defines that keep one strategy (kernels/bdpt.cl)."""
+    build = device.build_program
+    chosen: dict[str, int] = {}
+
+    def build_with(entry, defines=None, **kwargs):
+        return build(entry, defines={**(defines or {}), **chosen}, **kwargs)
+
+    monkeypatch.setattr(device, "build_program", build_with)
+    return device, chosen
+
+
+SEGMENTS = 3
+
+
+@pytest.mark.parametrize("s", range(SEGMENTS + 1))
+def test_each_strategy_alone_estimates_its_path_length(strategy_device, s):
+    """Paths of exactly 3 segments in the enclosure carry Le ρ²: strategy (s, 4 − s) alone, unweighted, estimates
+    it; weighted, the strategies' images add up to it."""
+    device, chosen = strategy_device
+    t = SEGMENTS + 1 - s
+    chosen |= {"BDPT_ONLY_S": s, "BDPT_ONLY_T": t, "BDPT_UNWEIGHTED": 1}
+    expected = EMITTED * ALBEDO ** (SEGMENTS - 1)
+    mean, standard_error = _image_mean(Renderer(_enclosure(SEGMENTS), device), 8, 32)
+    assert standard_error < 0.03 * expected
+    assert_within_standard_errors(mean, expected, standard_error)
+
+
+def test_weighted_strategies_of_one_length_add_up(strategy_device):
+    device, chosen = strategy_device
+    scene = _enclosure(SEGMENTS).with_overrides(spp=8)
+    images = []
+    for s in range(SEGMENTS + 1):
+        chosen |= {"BDPT_ONLY_S": s, "BDPT_ONLY_T": SEGMENTS + 1 - s}
+        images.append(Renderer(scene, device).render().xyz[..., 1].astype(np.float64))
+    means = np.array([image.mean() for image in images])
+    assert np.all(means > 0.0)  # each strategy takes a share of these paths
+    # The replicas of the sum: independent seeds give the noise.
+    sums = []
+    for seed in range(8):
+        total = 0.0
+        for s in range(SEGMENTS + 1):
+            chosen |= {"BDPT_ONLY_S": s, "BDPT_ONLY_T": SEGMENTS + 1 - s}
+            total += Renderer(scene.with_overrides(seed=seed + 100), device).render().xyz[..., 1].mean()
+        sums.append(total)
+    mean, standard_error = mean_and_standard_error(np.array(sums))
+    assert_within_standard_errors(mean, EMITTED * ALBEDO ** (SEGMENTS - 1), standard_error)
+
+
+def test_point_light_through_a_glass_slab(device, tmp_path):
+    """Only the light-to-camera strategy reaches the caustic, with MIS weight one."""
+    reflectance = ((IOR - 1) / (IOR + 1)) ** 2
+    transmittance = 1 - reflectance
+    k = np.arange(6)
+    irradiance = INTENSITY * np.sum(
+        transmittance**2 * reflectance ** (2 * k) / (DISTANCE - THICKNESS + (2 * k + 1) * THICKNESS / IOR) ** 2
+    )
+    expected = FLOOR_ALBEDO / np.pi * irradiance
+    text = _slab_scene(tmp_path, "bdpt").read_text().replace("max_depth = -1", "max_depth = 16")
+    scene = spectrace.load_scene(_write(tmp_path, text))
+    images = spectrace_replicas(Renderer(scene, device), 8, 128)[:, 6:10, 6:10, 1]
+    mean, standard_error = mean_and_standard_error(images.mean(axis=(1, 2)))
+    assert standard_error < 0.01 * expected
+    assert_within_standard_errors(mean, expected, standard_error)
+
+
+CORNELL_SIZE = 32
+
+
+@pytest.mark.slow
+def test_cornell_box_agrees_with_the_path_tracer(device):
+    scene = spectrace.load_scene(resolve_scene_path("cornell_box")).with_overrides(
+        width=CORNELL_SIZE, height=CORNELL_SIZE, seed=11
+    )
+    path = spectrace_replicas(Renderer(scene, device), 8, 8)
+    bdpt = spectrace_replicas(Renderer(scene.with_overrides(integrator="bdpt"), device), 8, 8)
+    assert_replicas_agree(bdpt, path, block=8)
+
+
+@pytest.mark.slow
+def test_textured_scene_agrees_with_the_path_tracer(device, tmp_path):
+    path = spectrace_replicas(Renderer(spectrace.load_scene(_textured_scene(tmp_path, "path")), device), 8, 8)
+    bdpt = spectrace_replicas(Renderer(spectrace.load_scene(_textured_scene(tmp_path, "bdpt")), device), 8, 8)
+    assert path.mean() > 0.01
+    assert_replicas_agree(bdpt, path, block=4)
+
+
+def _dispersive_scene(tmp_path: Path, integrator: str, lamp: str = "rectangle") -> Path:
+    """A flint-glass sphere on a floor under a lamp (a rectangle, or an emitting analytic sphere, whose light points
+    and densities come from its own parametrisation): the paths through glass keep their hero wavelength alone, on
+    either subpath."""
+    return _write(
+        tmp_path,
+        f"""
+[camera]
+origin = [0, 1.2, 2.2]
+target = [0, 0.3, 0]
+fov = 50
+
+[film]
+width = 16
+height = 16
+
+[integrator]
+type = "{integrator}"
+max_depth = 6
+
+[materials.flint]
+type = "dielectric"
+ior = "SF11"
+
+[materials.floor]
+type = "diffuse"
+reflectance = {{ rgb = [0.7, 0.6, 0.5] }}
+
+[materials.black]
+type = "diffuse"
+reflectance = {{ value = 0 }}
+
+[[shapes]]
+type = "rectangle"
+material = "floor"
+transform = [{{ scale = 3 }}, {{ rotate = {{ axis = [1, 0, 0], angle = -90 }} }}]
+
+[[shapes]]
+type = "sphere"
+material = "flint"
+transform = [{{ scale = 0.5 }}, {{ translate = [0, 0.5, 0] }}]
+
+[[shapes]]
+type = "{lamp}"
+material = "black"
+emitter = {{ radiance = {{ rgb = [1, 0.9, 0.8], scale = 6 }} }}
+transform = [{{ scale = 0.6 }}, {{ rotate = {{ axis = [1, 0, 0], angle = 90 }} }}, {{ translate = [0.3, 2, 0.2] }}]
+""",
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("lamp", ["rectangle", "sphere"])
+def test_dispersive_glass_agrees_with_the_path_tracer(device, tmp_path, lamp):
+    path_scene = spectrace.load_scene(_dispersive_scene(tmp_path, "path", lamp))
+    path = spectrace_replicas(Renderer(path_scene, device), 8, 32)
+    bdpt = spectrace_replicas(Renderer(spectrace.load_scene(_dispersive_scene(tmp_path, "bdpt", lamp)), device), 8, 32)
+    assert path.mean() > 0.01
+    assert_replicas_agree(bdpt, path, block=4)
+
+
+def test_pass_split_gives_the_same_bits(device, tmp_path, monkeypatch):
+    scene = spectrace.load_scene(_textured_scene(tmp_path, "bdpt")).with_overrides(max_depth=10, spp=6)
+    one_pass = Renderer(scene, device).render(pass_spp=6).xyz
+    split = Renderer(scene, device).render(pass_spp=1).xyz
+    np.testing.assert_array_equal(one_pass, split)
+    # Two record slots per launch: many pixel samples are launched again for their later records.
+    monkeypatch.setattr(light_tracer, "MAX_RECORD_SLOTS", 2)
+    relaunched = Renderer(scene, device).render(pass_spp=4).xyz
+    np.testing.assert_array_equal(one_pass, relaunched)
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        ('\n[[lights]]\ntype = "distant"\ndirection = [0, 0, -1]\nirradiance = { value = 1 }\n', "'distant' lights"),
+        ("\n[[shapes]]\ntype = \"cube\"\ninterior = { sigma_a = { value = 0.1 }, sigma_s = { value = 0.1 } }\n"
+         "transform = [{ scale = 0.2 }, { translate = [0, 0, 0.5] }]\n", "participating media"),
+    ],
+)  # fmt: skip
+def test_refusals_in_one_line(device, tmp_path, extra, match):
+    scene = spectrace.load_scene(_write(tmp_path, _floor_scene(tmp_path, "bdpt").read_text() + extra))
+    with pytest.raises(SpectraceError, match=match) as error:
+        Renderer(scene, device)
+    assert "\n" not in str(error.value)
+
+
+def test_unbounded_depth_refused(device, tmp_path):
+    scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt")).with_overrides(max_depth=-1)
+    with pytest.raises(SpectraceError, match="max_depth"):
+        Renderer(scene, device)
