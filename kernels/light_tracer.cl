@@ -60,6 +60,13 @@ inline float shading_normal_adjoint(float3 ng, float3 ns, float3 wo, float3 wi)
     return denominator > 0.0f ? fabs(dot(wo, ns)) * fabs(dot(wi, ng)) / denominator : 0.0f;
 }
 
+/* The lens point's sample for a connection: drawn only by the thin lens, so the other cameras' paths draw the same
+ * numbers as before it existed. */
+inline float2 lens_sample(__global const RenderParams *params, Sampler *sampler)
+{
+    return CAMERA_IS(params, CAMERA_THIN_LENS) ? sample_2d(sampler) : (float2)(0.0f);
+}
+
 /* The camera sees x (offset off its surface along ng toward the camera) unless something lies between. */
 inline int camera_sees(const Scene *scene, const CameraConnection *c, float3 x, float3 ng, uint query,
                        uint *rays_traced)
@@ -80,7 +87,7 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
     __global const RenderParams *params = scene->params;
     if (params->environment_light < 0 || hide_environment) return;
     float2 film = (float2)((float)(item % params->width) + jitter.x, (float)(item / params->width) + jitter.y);
-    Ray ray = camera_ray(params, film, sampler); /* the pinhole draws nothing more from the sampler */
+    Ray ray = camera_ray(params, film, sampler); /* only the thin lens draws more: its lens point */
     PathState s = camera_path(ray);
     Hit hit = scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced);
     if (hit.triangle >= 0) return;
@@ -115,7 +122,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
     float4 scatter = (float4)(1.0f);  /* product of the adjoint BSDF weights alone, for Russian roulette */
 
     if (e.first_vertex) {
-        CameraConnection c = connect_to_camera(params, e.point);
+        CameraConnection c = connect_to_camera_sampled(params, e.point, lens_sample(params, &sampler));
         if (c.pixel >= 0) {
             float cos_light = fabs(dot(e.normal, c.to_camera));
             TextureBuffers textures = buffers.textures;
@@ -140,7 +147,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
         if (material_disperses(material, &w)) terminate_secondary(&s.throughput, &s.secondary_terminated);
         SurfaceContext sc = surface_context(scene, v.uv, v.footprint);
         if (material_has_non_delta_lobe(material)) {
-            CameraConnection c = connect_to_camera(params, v.p);
+            CameraConnection c = connect_to_camera_sampled(params, v.p, lens_sample(params, &sampler));
             if (c.pixel >= 0 && shading_side_agrees(v.n, v.ns, c.to_camera)) {
                 float4 f_cos = material_eval(material, &sc, &w, v.ns, c.to_camera, v.wo);
                 /* f_cos holds |ωlight·ns|: times |ωcamera·ng| / |ωlight·ng| (see the top of this file). */

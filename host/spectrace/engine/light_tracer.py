@@ -25,6 +25,8 @@ from spectrace.scene.model import Scene
 # Splat record slots per light path and launch: a path longer than this is launched again for its later records
 # (rare: Russian roulette ends most paths sooner), so memory stays bounded for unbounded max_depth.
 MAX_RECORD_SLOTS = 16
+# The cameras a point can connect to (kernels/camera_importance.cl).
+LIGHT_TRACED_CAMERAS = ("perspective", "thinlens", "orthographic")
 RECORD_BYTES = 16 + 4  # float4 XYZ + int pixel
 
 
@@ -45,8 +47,11 @@ def scene_sphere(scene: Scene) -> np.ndarray:
 def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the light tracer cannot render this scene as asked, or None."""
     camera_type = scene.camera.type
-    if camera_type != "perspective":
-        return f"integrator 'light' supports the perspective (pinhole) camera only, not {camera_type!r}"
+    if camera_type not in LIGHT_TRACED_CAMERAS:
+        # An equirectangular camera has no film plane for a point's connection to land on (its importance is over
+        # the sphere of directions); kernels/camera_importance.cl has the others.
+        known = ", ".join(LIGHT_TRACED_CAMERAS)
+        return f"integrator 'light' supports the {known} cameras, not {camera_type!r}"
     if medium_count:
         return "integrator 'light' does not render participating media yet; use 'path'"
     if spectral_bins:
