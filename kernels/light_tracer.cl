@@ -38,6 +38,8 @@ typedef struct {
     int begin;
     int capacity;
     int count;
+    __global float4 *band_value; /* with SPECTRAL_BINS: each lane's band-averaged radiance estimate, W/(m² sr nm) */
+    __global int4 *band;         /* with SPECTRAL_BINS: each lane's band, -1 outside the bands or when dropped */
 } SplatRecords;
 
 inline void record_splat(SplatRecords *r, int pixel, float4 value, __global const float4 *cmf,
@@ -46,9 +48,19 @@ inline void record_splat(SplatRecords *r, int pixel, float4 value, __global cons
     int slot = r->count++ - r->begin;
     if (slot < 0 || slot >= r->capacity) return;
     float4 xyz = spectrum_to_xyz_estimate(value, cmf, w);
-    if (!(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z))) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
+    int dropped = !(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z));
+    if (dropped) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
     r->xyz[slot] = xyz;
     r->pixel[slot] = pixel;
+#if SPECTRAL_BINS > 0
+    /* As add_to_spectral_film (film.cl) adds a camera path's sample, lane by lane; the host adds them in order. */
+    const float band = (SPECTRAL_MAX_NM - SPECTRAL_MIN_NM) / (float)SPECTRAL_BINS;
+    float4 lanes = 0.25f * value / (w->pdf * band);
+    int4 bins = convert_int4(floor((w->lambda - (float4)(SPECTRAL_MIN_NM)) / band));
+    bins = select((int4)(-1), bins, bins >= (int4)(0) && bins < (int4)(SPECTRAL_BINS));
+    r->band_value[slot] = lanes;
+    r->band[slot] = dropped ? (int4)(-1) : bins;
+#endif
 }
 
 /* Veach's shading-normal factor for adjoint transport: |ωo·ns||ωi·ng| / (|ωo·ng||ωi·ns|), ωo toward where the light

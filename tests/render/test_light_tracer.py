@@ -319,10 +319,53 @@ transform = [{ scale = 0.2 }, { translate = [0, 0, 0.5] }]
     assert "\n" not in str(error.value)
 
 
-def test_spectral_output_refused(device, tmp_path):
-    scene = spectrace.load_scene(_floor_scene(tmp_path, "light"))
-    with pytest.raises(SpectraceError, match="spectral"):
-        Renderer(scene, device, spectral_bins=4)
+BANDS_NM, TEMPERATURE = (400.0, 700.0, 3), 4000.0
+
+
+def _planck_band_means(temperature: float, lo: float, hi: float, bins: int) -> np.ndarray:
+    """Planck's law normalised to 1 at its peak (Wien's λ = b / T), averaged over each band."""
+    h, c, k = 6.62607015e-34, 2.99792458e8, 1.380649e-23
+
+    def planck(nm):
+        m = np.asarray(nm) * 1e-9
+        return 1.0 / (m**5 * np.expm1(h * c / (m * k * temperature)))
+
+    peak = planck(2.897771955e-3 / temperature * 1e9)
+    edges = np.linspace(lo, hi, bins + 1)
+    fine = [np.linspace(a, b, 2001) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    return np.array([np.trapezoid(planck(x), x) / (x[-1] - x[0]) for x in fine]) / peak
+
+
+def test_spectral_bands_of_a_lit_floor(device, tmp_path):
+    """--spectral-bins from light paths: each band holds the floor's band-averaged radiance ρ/π · I_band h / r³,
+    I_band the light's (a 4000 K Planck spectrum) mean over the band, and the pass split keeps the bits."""
+    lo, hi, bins = BANDS_NM
+    text = (
+        _floor_scene(tmp_path, "light")
+        .read_text()
+        .replace(
+            f"intensity = {{ value = {INTENSITY} }}",
+            f"intensity = {{ blackbody = {TEMPERATURE:g}, scale = {INTENSITY} }}",
+        )
+    )
+    scene = spectrace.load_scene(_write(tmp_path, text))
+    renderer = Renderer(scene, device, spectral_bins=bins, spectral_range_nm=(lo, hi))
+    replicas, replica_spp, sums = 8, 16, []
+    for replica in range(1, replicas + 1):
+        renderer.render(spp=replica * replica_spp, pass_spp=replica_spp)
+        sums.append(renderer.read_spectral_film().astype(np.float64))
+    bands = np.diff(np.stack([np.zeros_like(sums[0]), *sums]), axis=0) / replica_spp
+    blocks = bands.reshape(replicas, 4, 8, 4, 8, bins).mean(axis=(2, 4))
+    geometry = _floor_radiance_per_pixel(scene).reshape(4, 8, 4, 8).mean(axis=(1, 3)) / INTENSITY
+    expected = geometry[..., None] * INTENSITY * _planck_band_means(TEMPERATURE, lo, hi, bins)
+    mean, standard_error = mean_and_standard_error(blocks)
+    assert np.all(standard_error < 0.06 * expected)
+    assert_within_standard_errors(mean, expected, standard_error)
+    split = Renderer(scene, device, spectral_bins=bins, spectral_range_nm=(lo, hi))
+    split.render(spp=4, pass_spp=1)
+    whole = Renderer(scene, device, spectral_bins=bins, spectral_range_nm=(lo, hi))
+    whole.render(spp=4, pass_spp=4)
+    np.testing.assert_array_equal(split.read_spectral_film(), whole.read_spectral_film())
 
 
 def _mixed_scene(tmp_path: Path, integrator: str, target: str) -> Path:

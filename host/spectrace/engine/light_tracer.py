@@ -28,6 +28,7 @@ MAX_RECORD_SLOTS = 16
 # The cameras a point can connect to (kernels/camera_importance.cl).
 LIGHT_TRACED_CAMERAS = ("perspective", "thinlens", "orthographic")
 RECORD_BYTES = 16 + 4  # float4 XYZ + int pixel
+BAND_RECORD_BYTES = 16 + 16  # with spectral bands: float4 lane values + int4 lane bands
 
 
 def scene_sphere(scene: Scene) -> np.ndarray:
@@ -54,8 +55,6 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
         return f"integrator 'light' supports the {known} cameras, not {camera_type!r}"
     if medium_count:
         return "integrator 'light' does not render participating media yet; use 'path'"
-    if spectral_bins:
-        return "integrator 'light' does not write spectral bands yet; render without spectral output or use 'path'"
     if scene.pixel_filter.type != "box":
         return (
             f"integrator 'light' splats into whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
@@ -86,21 +85,27 @@ class LightPasses:
         self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
         pixels = renderer.pixel_count
         need = device_memory_need(renderer.buffers, pixels, spectral_bins)
-        need.buffers["splat records"] = pixels * self.capacity * RECORD_BYTES
+        record_bytes = RECORD_BYTES + (BAND_RECORD_BYTES if spectral_bins else 0)
+        need.buffers["splat records"] = pixels * self.capacity * record_bytes
         check_device_memory(need, renderer.device)
+        self.spectral_bins = spectral_bins
         ctx = renderer.device.context
         rw = cl.mem_flags.READ_WRITE
         self._splat_xyz = cl.Buffer(ctx, rw, pixels * self.capacity * 16)
         self._splat_pixel = cl.Buffer(ctx, rw, pixels * self.capacity * 4)
         self._splat_counts = cl.Buffer(ctx, rw, pixels * 4)
+        band_slots = pixels * self.capacity if spectral_bins else 1
+        self._splat_band_value = cl.Buffer(ctx, rw, band_slots * 16)
+        self._splat_band = cl.Buffer(ctx, rw, band_slots * 16)
         self._items = cl.Buffer(ctx, rw, pixels * 4)
         self._sphere = scene_sphere(scene)
         # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.
         self._hide_environment = np.int32(scene.hide_environment or getattr(scene, "hide_emitters", False))
 
-    def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, ...]:
         """Runs the light paths of `items` for one pixel sample, keeping their records begin .. begin + capacity − 1:
-        (pixel, xyz) of the slots in order, and each path's record count."""
+        (pixel, xyz, band values, bands) of the slots in order (the bands (0, 4)-shaped without spectral bins), and
+        each path's record count."""
         r = self.renderer
         queue = r.device.queue
         count, capacity = len(items), self.capacity
@@ -119,6 +124,8 @@ class LightPasses:
             self._splat_xyz,
             self._splat_pixel,
             self._splat_counts,
+            self._splat_band_value,
+            self._splat_band,
             r.film.ray_count_buffer,
         )
         cl.enqueue_nd_range_kernel(queue, r.kernel, *launch_shape(count, r.work_group))
@@ -128,29 +135,41 @@ class LightPasses:
         cl.enqueue_copy(queue, pixel, self._splat_pixel)
         cl.enqueue_copy(queue, xyz, self._splat_xyz)
         cl.enqueue_copy(queue, counts, self._splat_counts)
+        band_rows = count * capacity if self.spectral_bins else 0
+        band_value = np.empty((band_rows, 4), np.float32)
+        band = np.empty((band_rows, 4), np.int32)
+        if band_rows:
+            cl.enqueue_copy(queue, band_value, self._splat_band_value)
+            cl.enqueue_copy(queue, band, self._splat_band)
         queue.finish()
-        return pixel, xyz, counts
+        return pixel, xyz, band_value, band, counts
 
-    def _sample_splats(self, sample_index: int) -> tuple[np.ndarray, np.ndarray]:
-        """Every splat of one pixel sample's light paths, in the order (work-item, record)."""
+    def _sample_splats(self, sample_index: int) -> tuple[np.ndarray, ...]:
+        """Every splat of one pixel sample's light paths, in the order (work-item, record): pixel, xyz, and with
+        spectral bins each record's lane values and bands."""
         capacity = self.capacity
         items = np.arange(self.renderer.pixel_count, dtype=np.int32)
         begin = 0
         parts = []
         while len(items):
-            pixel, xyz, counts = self._launch(sample_index, items, begin)
+            pixel, xyz, band_value, band, counts = self._launch(sample_index, items, begin)
             used = pixel >= 0
+            used_bands = used if self.spectral_bins else np.zeros(0, bool)
             following = items[counts > begin + capacity]
             if begin == 0 and not len(following):
-                return pixel[used], xyz[used]  # the usual case: every path's records fitted in one launch
+                # the usual case: every path's records fitted in one launch
+                return pixel[used], xyz[used], band_value[used_bands], band[used_bands]
             record = np.tile(np.arange(begin, begin + capacity), len(items))
             owner = np.repeat(items, capacity)
-            parts.append((owner[used], record[used], pixel[used], xyz[used]))
+            order_keys = (owner[used], record[used], pixel[used], xyz[used])
+            parts.append((*order_keys, band_value[used_bands], band[used_bands]))
             items = following
             begin += capacity
-        owner, record, pixel, xyz = (np.concatenate(column) for column in zip(*parts, strict=True))
+        owner, record, pixel, xyz, band_value, band = (np.concatenate(column) for column in zip(*parts, strict=True))
         order = np.lexsort((record, owner))
-        return pixel[order], xyz[order]
+        if not self.spectral_bins:
+            return pixel[order], xyz[order], band_value, band
+        return pixel[order], xyz[order], band_value[order], band[order]
 
     def run_pass(self, sample_count: int) -> None:
         """Adds `sample_count` pixel samples' light paths to the renderer's film (its run_pass, translated errors)."""
@@ -164,10 +183,20 @@ class LightPasses:
         cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
         sums = np.empty((r.pixel_count, 4), np.float32)
         cl.enqueue_copy(queue, sums, film.xyz_buffer)
+        bins = self.spectral_bins
+        bands = np.empty(r.pixel_count * bins, np.float32)
+        if bins:
+            cl.enqueue_copy(queue, bands, film.spectral_buffer)
         for sample_index in range(done, done + sample_count):
-            pixel, xyz = self._sample_splats(sample_index)
+            pixel, xyz, band_value, band = self._sample_splats(sample_index)
             # ufunc.at adds unbuffered, one record after another in this order: the same float sums every time.
             np.add.at(sums, pixel, xyz)
+            if bins:
+                # Record by record, lane by lane within one, as add_to_spectral_film adds a camera path's lanes.
+                inside = band >= 0
+                np.add.at(bands, (pixel[:, None] * bins + band)[inside], band_value[inside])
         cl.enqueue_copy(queue, film.xyz_buffer, sums)
+        if bins:
+            cl.enqueue_copy(queue, film.spectral_buffer, bands)
         queue.finish()
         film.add_pass(sample_count, time.perf_counter() - start)
