@@ -17,7 +17,10 @@
  *   A = 4 |camera_right| |camera_up| (scene units²) through the camera's plane, so a point is seen along exactly one
  *   ray, from its projection on that plane; the direction is a delta, and the estimate is 1 / A (per unit area of
  *   the point's surface projected on the plane, the surface's cosine toward the camera being the caller's).
- * Other cameras (equirectangular) are refused by the host for light tracing. */
+ * Other cameras (equirectangular) are refused by the host for light tracing.
+ *
+ * With a pixel filter wider than the box, a point up to (radius − ½) pixels beyond the film's edge still adds to the
+ * edge pixels (as a camera path's filter-sampled position may fall there): such points are seen too. */
 #ifndef SPECTRACE_CAMERA_IMPORTANCE_CL
 #define SPECTRACE_CAMERA_IMPORTANCE_CL
 
@@ -25,13 +28,28 @@
 #include "sampling.cl"
 
 typedef struct {
-    int pixel;        /* row-major pixel index (row 0 at the top), or -1 when the point is not seen */
+    int pixel;        /* row-major pixel index (row 0 at the top), or -1 when the point is not seen; for a
+                         point in the filter's margin outside the film, the nearest pixel */
+    float2 film;      /* where it lands on the film, pixels (x right, y down from the top-left corner) */
     float3 lens;      /* the point the camera sees it from: the eye, or the near plane's point on the way to it */
     float3 to_camera; /* unit direction from the point toward the eye */
     float distance;   /* from the point to the eye, scene units */
     float importance; /* We · cos θ / distance²: the film-normalised importance times the geometry term's camera
                          side, 1/(A cos³θ distance²) in 1/(sr · scene unit²) per unit image-plane area */
 } CameraConnection;
+
+/* Fills c's film position and pixel for the film position (fx, fy); 0 when it lies outside the film and the
+ * filter's margin. */
+inline int land_on_film(__global const RenderParams *params, float fx, float fy, CameraConnection *c)
+{
+    float margin = PIXEL_FILTER_IS(params, PIXEL_FILTER_BOX) ? 0.0f : params->filter_shape.x - 0.5f;
+    float w = (float)params->width, h = (float)params->height;
+    if (!(fx >= -margin && fx < w + margin && fy >= -margin && fy < h + margin)) return 0;
+    c->film = (float2)(fx, fy);
+    int px = max(min((int)fx, params->width - 1), 0), py = max(min((int)fy, params->height - 1), 0);
+    c->pixel = py * params->width + px;
+    return 1;
+}
 
 /* Where x lands on the film of the camera in params, and with what importance (pixel -1: outside the view, behind
  * the camera or nearer than the near clip plane). u_lens: a uniform 2D sample for the thin lens's lens point (unused
@@ -54,8 +72,7 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
         float ndc_x = dot(d, right) / tan_x2, ndc_y = dot(d, up) / tan_y2;
         float fx = 0.5f * (ndc_x + 1.0f) * (float)params->width;
         float fy = 0.5f * (1.0f - ndc_y) * (float)params->height;
-        if (!(fx >= 0.0f && fx < (float)params->width && fy >= 0.0f && fy < (float)params->height)) return c;
-        c.pixel = min((int)fy, params->height - 1) * params->width + min((int)fx, params->width - 1);
+        if (!land_on_film(params, fx, fy, &c)) return c;
         c.to_camera = -forward;
         c.distance = depth - near;
         c.lens = x - c.distance * forward;
@@ -78,11 +95,9 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
     float ndc_y = dot(seen, up) / (tan_y2 * seen_depth);
     float fx = 0.5f * (ndc_x + 1.0f) * (float)params->width;
     float fy = 0.5f * (1.0f - ndc_y) * (float)params->height;
-    if (!(fx >= 0.0f && fx < (float)params->width && fy >= 0.0f && fy < (float)params->height)) return c;
-    int px = min((int)fx, params->width - 1), py = min((int)fy, params->height - 1);
+    if (!land_on_film(params, fx, fy, &c)) return c;
     float dist = length(d);
     float cos_theta = depth / dist;
-    c.pixel = py * params->width + px;
     c.to_camera = -d / dist;
     c.distance = dist;
     c.lens = lens_point + (near / depth) * d;

@@ -40,13 +40,16 @@ typedef struct {
     int count;
     __global float4 *band_value; /* with SPECTRAL_BINS: each lane's band-averaged radiance estimate, W/(m² sr nm) */
     __global int4 *band;         /* with SPECTRAL_BINS: each lane's band, -1 outside the bands or when dropped */
+    __global float2 *film;       /* with a filter other than the box: the film position, pixels */
 } SplatRecords;
 
-inline void record_splat(SplatRecords *r, int pixel, float4 value, __global const float4 *cmf,
-                         const SampledWavelengths *w)
+inline void record_splat(SplatRecords *r, int pixel, float2 film, float4 value, __global const float4 *cmf,
+                         const SampledWavelengths *w, __global const RenderParams *params)
 {
     int slot = r->count++ - r->begin;
     if (slot < 0 || slot >= r->capacity) return;
+    /* The host spreads the splat over the pixels whose filter covers it (spectrace.engine.light_tracer). */
+    if (!PIXEL_FILTER_IS(params, PIXEL_FILTER_BOX)) r->film[slot] = film;
     float4 xyz = spectrum_to_xyz_estimate(value, cmf, w);
     int dropped = !(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z));
     if (dropped) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
@@ -104,7 +107,8 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
     Hit hit = scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced);
     if (hit.triangle >= 0) return;
     __global const Light *env = &scene->lights[params->environment_light];
-    record_splat(records, item, environment_radiance(env, scene->spectra, scene->texels, w, ray.direction), cmf, w);
+    record_splat(records, item, film, environment_radiance(env, scene->spectra, scene->texels, w, ray.direction), cmf, w,
+                 params);
 #endif
 }
 
@@ -141,7 +145,8 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
             float4 emitted = area_light_emitted(light, &textures, &w, e.normal, c.to_camera, e.uv);
             if (any(emitted != (float4)(0.0f))
                 && camera_sees(scene, &c, e.point, e.normal, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
-                record_splat(records, c.pixel, emitted * (cos_light * c.importance / e.pdf_area), cmf, &w);
+                record_splat(records, c.pixel, c.film, emitted * (cos_light * c.importance / e.pdf_area), cmf, &w,
+                             params);
             }
         }
     }
@@ -168,7 +173,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
                 float4 value = s.throughput * f_cos * (cosines * c.importance);
                 if (any(value != (float4)(0.0f))
                     && camera_sees(scene, &c, v.p, v.n, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
-                    record_splat(records, c.pixel, value, cmf, &w);
+                    record_splat(records, c.pixel, c.film, value, cmf, &w, params);
                 }
             }
         }

@@ -572,3 +572,21 @@ def test_a_tile_of_the_film_is_refused(device, tmp_path):
     renderer.pixel_range = (0, 10)
     with pytest.raises(SpectraceError, match="tiles"):
         renderer.render(spp=1)
+
+
+@pytest.mark.parametrize("pixel_filter", ['{ type = "gaussian", stddev = 0.5 }', '{ type = "mitchell" }'])
+def test_pixel_filters_agree_with_the_path_tracer(device, tmp_path, pixel_filter):
+    """A splat spread over the pixels whose filter covers it (with its weight f(dx) f(dy) / (∫f)², negative lobes
+    included, and from points up to radius − ½ pixels beyond the film's edge) against the path tracer's filter
+    importance sampling, on the checkerboard room (sharp texture edges, so the filter changes the image)."""
+    texts = [
+        _textured_scene(tmp_path, integrator).read_text().replace("[film]\n", f"[film]\nfilter = {pixel_filter}\n")
+        for integrator in ("path", "light")
+    ]
+    path_scene = spectrace.load_scene(_write(tmp_path, texts[0]))
+    light_scene = spectrace.load_scene(_write(tmp_path, texts[1]))
+    path = spectrace_replicas(Renderer(path_scene, device), 8, 8)
+    light = spectrace_replicas(Renderer(light_scene, device), 8, 8)
+    assert_replicas_agree(light, path, block=2)
+    one_pass = Renderer(light_scene, device).render(spp=4, pass_spp=4).xyz
+    np.testing.assert_array_equal(one_pass, Renderer(light_scene, device).render(spp=4, pass_spp=1).xyz)
