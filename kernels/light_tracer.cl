@@ -107,8 +107,8 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
     Hit hit = scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced);
     if (hit.triangle >= 0) return;
     __global const Light *env = &scene->lights[params->environment_light];
-    record_splat(records, item, film, environment_radiance(env, scene->spectra, scene->texels, w, ray.direction), cmf, w,
-                 params);
+    float4 radiance = environment_radiance(env, scene->spectra, scene->texels, w, ray.direction);
+    record_splat(records, item, film, radiance, cmf, w, params);
 #endif
 }
 
