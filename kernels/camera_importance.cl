@@ -1,5 +1,5 @@
-/* The pinhole camera seen from the scene: where a point lands on the film and the camera's importance We there,
- * for integrators that reach the camera from the lights (light tracing, kernels/light_tracer.cl).
+/* The camera seen from the scene: where a point lands on the film and the camera's importance We there, for
+ * integrators that reach the camera from the lights (light tracing, kernels/light_tracer.cl).
  *
  * camera.cl's rays pass through the image plane at unit distance along camera_forward, which spans
  * [-1, 1]·camera_right × [-1, 1]·camera_up, so its area is A = 4 |camera_right| |camera_up|. A pixel's value is the
@@ -8,14 +8,29 @@
  * ω and camera_forward (Veach 1997, sec. 4.A, 8.1.2; pbrt-v4's PerspectiveCamera::We); a pixel's own importance is
  * pixel_count times it, and with pixel_count light paths per pixel sample that factor cancels (light_tracer.cl).
  *
- * Only the pinhole perspective camera is handled; the host refuses other cameras for light tracing. */
+ * - The pinhole (perspective): the point is seen from the eye; the connection's estimate is We · cos θ / d².
+ * - The thin lens (pbrt-v4's PerspectiveCamera::SampleWi with a lens): a lens point drawn uniformly on the aperture
+ *   disk of area A_lens (camera_ray's draw), We = 1 / (A · A_lens · cos⁴θ) for the ray from it, whose film
+ *   position is where the eye sees that ray's point on the plane of focus; divided by the lens point's density
+ *   1 / A_lens the estimate is again 1 / (A cos³θ d²), θ and d now from the lens point.
+ * - The orthographic camera: its rays all run along camera_forward, from the view rectangle of area
+ *   A = 4 |camera_right| |camera_up| (scene units²) through the camera's plane, so a point is seen along exactly one
+ *   ray, from its projection on that plane; the direction is a delta, and the estimate is 1 / A (per unit area of
+ *   the point's surface projected on the plane, the surface's cosine toward the camera being the caller's).
+ * Other cameras (equirectangular) are refused by the host for light tracing.
+ *
+ * With a pixel filter wider than the box, a point up to (radius − ½) pixels beyond the film's edge still adds to the
+ * edge pixels (as a camera path's filter-sampled position may fall there): such points are seen too. */
 #ifndef SPECTRACE_CAMERA_IMPORTANCE_CL
 #define SPECTRACE_CAMERA_IMPORTANCE_CL
 
 #include "types.h"
+#include "sampling.cl"
 
 typedef struct {
-    int pixel;        /* row-major pixel index (row 0 at the top), or -1 when the point is not seen */
+    int pixel;        /* row-major pixel index (row 0 at the top), or -1 when the point is not seen; for a
+                         point in the filter's margin outside the film, the nearest pixel */
+    float2 film;      /* where it lands on the film, pixels (x right, y down from the top-left corner) */
     float3 lens;      /* the point the camera sees it from: the eye, or the near plane's point on the way to it */
     float3 to_camera; /* unit direction from the point toward the eye */
     float distance;   /* from the point to the eye, scene units */
@@ -23,9 +38,23 @@ typedef struct {
                          side, 1/(A cos³θ distance²) in 1/(sr · scene unit²) per unit image-plane area */
 } CameraConnection;
 
-/* Where x lands on the film of the pinhole camera in params, and with what importance (pixel -1: outside the
- * frustum, behind the eye or nearer than the near clip plane). */
-inline CameraConnection connect_to_camera(__global const RenderParams *params, float3 x)
+/* Fills c's film position and pixel for the film position (fx, fy); 0 when it lies outside the film and the
+ * filter's margin. */
+inline int land_on_film(__global const RenderParams *params, float fx, float fy, CameraConnection *c)
+{
+    float margin = PIXEL_FILTER_IS(params, PIXEL_FILTER_BOX) ? 0.0f : params->filter_shape.x - 0.5f;
+    float w = (float)params->width, h = (float)params->height;
+    if (!(fx >= -margin && fx < w + margin && fy >= -margin && fy < h + margin)) return 0;
+    c->film = (float2)(fx, fy);
+    int px = max(min((int)fx, params->width - 1), 0), py = max(min((int)fy, params->height - 1), 0);
+    c->pixel = py * params->width + px;
+    return 1;
+}
+
+/* Where x lands on the film of the camera in params, and with what importance (pixel -1: outside the view, behind
+ * the camera or nearer than the near clip plane). u_lens: a uniform 2D sample for the thin lens's lens point (unused
+ * by the other cameras); (0, 0) is the lens's centre. */
+inline CameraConnection connect_to_camera_sampled(__global const RenderParams *params, float3 x, float2 u_lens)
 {
     CameraConnection c;
     c.pixel = -1;
@@ -33,26 +62,53 @@ inline CameraConnection connect_to_camera(__global const RenderParams *params, f
     float3 forward = params->camera_forward.xyz;
     float3 right = params->camera_right.xyz;
     float3 up = params->camera_up.xyz;
-    float3 d = x - eye;
-    float depth = dot(d, forward);
     float near = params->camera_origin.w;
-    if (!(depth > 0.0f) || depth <= near) return c;
     float tan_x2 = dot(right, right), tan_y2 = dot(up, up);
-    float ndc_x = dot(d, right) / (tan_x2 * depth);
-    float ndc_y = dot(d, up) / (tan_y2 * depth);
+    float area = 4.0f * sqrt(tan_x2 * tan_y2);
+    if (CAMERA_IS(params, CAMERA_ORTHOGRAPHIC)) {
+        float3 d = x - eye;
+        float depth = dot(d, forward);
+        if (!(depth > near)) return c;
+        float ndc_x = dot(d, right) / tan_x2, ndc_y = dot(d, up) / tan_y2;
+        float fx = 0.5f * (ndc_x + 1.0f) * (float)params->width;
+        float fy = 0.5f * (1.0f - ndc_y) * (float)params->height;
+        if (!land_on_film(params, fx, fy, &c)) return c;
+        c.to_camera = -forward;
+        c.distance = depth - near;
+        c.lens = x - c.distance * forward;
+        c.importance = 1.0f / area;
+        return c;
+    }
+    float3 lens_point = eye;
+    if (CAMERA_IS(params, CAMERA_THIN_LENS)) {
+        float2 disk = params->lens.x * sqrt(u_lens.x) * cos_sin_turns(u_lens.y);
+        lens_point = eye + disk.x * normalize(right) + disk.y * normalize(up);
+    }
+    float3 d = x - lens_point;
+    float depth = dot(d, forward);
+    if (!(depth > 0.0f) || depth <= near) return c;
+    /* The eye sees the film position of the ray lens_point → x where that ray meets the plane of focus (for the
+     * pinhole, lens_point is the eye and that is x's own direction). */
+    float3 seen = CAMERA_IS(params, CAMERA_THIN_LENS) ? lens_point + (params->lens.y / depth) * d - eye : d;
+    float seen_depth = dot(seen, forward);
+    float ndc_x = dot(seen, right) / (tan_x2 * seen_depth);
+    float ndc_y = dot(seen, up) / (tan_y2 * seen_depth);
     float fx = 0.5f * (ndc_x + 1.0f) * (float)params->width;
     float fy = 0.5f * (1.0f - ndc_y) * (float)params->height;
-    if (!(fx >= 0.0f && fx < (float)params->width && fy >= 0.0f && fy < (float)params->height)) return c;
-    int px = min((int)fx, params->width - 1), py = min((int)fy, params->height - 1);
+    if (!land_on_film(params, fx, fy, &c)) return c;
     float dist = length(d);
     float cos_theta = depth / dist;
-    float area = 4.0f * sqrt(tan_x2 * tan_y2);
-    c.pixel = py * params->width + px;
     c.to_camera = -d / dist;
     c.distance = dist;
-    c.lens = eye + (near / depth) * d;
+    c.lens = lens_point + (near / depth) * d;
     c.importance = 1.0f / (area * cos_theta * cos_theta * cos_theta * dist * dist);
     return c;
+}
+
+/* The connection through the lens's centre: exact for the pinhole and orthographic cameras. */
+inline CameraConnection connect_to_camera(__global const RenderParams *params, float3 x)
+{
+    return connect_to_camera_sampled(params, x, (float2)(0.0f));
 }
 
 #endif

@@ -38,17 +38,32 @@ typedef struct {
     int begin;
     int capacity;
     int count;
+    __global float4 *band_value; /* with SPECTRAL_BINS: each lane's band-averaged radiance estimate, W/(m² sr nm) */
+    __global int4 *band;         /* with SPECTRAL_BINS: each lane's band, -1 outside the bands or when dropped */
+    __global float2 *film;       /* with a filter other than the box: the film position, pixels */
 } SplatRecords;
 
-inline void record_splat(SplatRecords *r, int pixel, float4 value, __global const float4 *cmf,
-                         const SampledWavelengths *w)
+inline void record_splat(SplatRecords *r, int pixel, float2 film, float4 value, __global const float4 *cmf,
+                         const SampledWavelengths *w, __global const RenderParams *params)
 {
     int slot = r->count++ - r->begin;
     if (slot < 0 || slot >= r->capacity) return;
+    /* The host spreads the splat over the pixels whose filter covers it (spectrace.engine.light_tracer). */
+    if (!PIXEL_FILTER_IS(params, PIXEL_FILTER_BOX)) r->film[slot] = film;
     float4 xyz = spectrum_to_xyz_estimate(value, cmf, w);
-    if (!(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z))) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
+    int dropped = !(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z));
+    if (dropped) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
     r->xyz[slot] = xyz;
     r->pixel[slot] = pixel;
+#if SPECTRAL_BINS > 0
+    /* As add_to_spectral_film (film.cl) adds a camera path's sample, lane by lane; the host adds them in order. */
+    const float band = (SPECTRAL_MAX_NM - SPECTRAL_MIN_NM) / (float)SPECTRAL_BINS;
+    float4 lanes = 0.25f * value / (w->pdf * band);
+    int4 bins = convert_int4(floor((w->lambda - (float4)(SPECTRAL_MIN_NM)) / band));
+    bins = select((int4)(-1), bins, bins >= (int4)(0) && bins < (int4)(SPECTRAL_BINS));
+    r->band_value[slot] = lanes;
+    r->band[slot] = dropped ? (int4)(-1) : bins;
+#endif
 }
 
 /* Veach's shading-normal factor for adjoint transport: |ωo·ns||ωi·ng| / (|ωo·ng||ωi·ns|), ωo toward where the light
@@ -58,6 +73,13 @@ inline float shading_normal_adjoint(float3 ng, float3 ns, float3 wo, float3 wi)
     if (all(ns == ng)) return 1.0f;
     float denominator = fabs(dot(wo, ng)) * fabs(dot(wi, ns));
     return denominator > 0.0f ? fabs(dot(wo, ns)) * fabs(dot(wi, ng)) / denominator : 0.0f;
+}
+
+/* The lens point's sample for a connection: drawn only by the thin lens, so the other cameras' paths draw the same
+ * numbers as before it existed. */
+inline float2 lens_sample(__global const RenderParams *params, Sampler *sampler)
+{
+    return CAMERA_IS(params, CAMERA_THIN_LENS) ? sample_2d(sampler) : (float2)(0.0f);
 }
 
 /* The camera sees x (offset off its surface along ng toward the camera) unless something lies between. */
@@ -80,12 +102,13 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
     __global const RenderParams *params = scene->params;
     if (params->environment_light < 0 || hide_environment) return;
     float2 film = (float2)((float)(item % params->width) + jitter.x, (float)(item / params->width) + jitter.y);
-    Ray ray = camera_ray(params, film, sampler); /* the pinhole draws nothing more from the sampler */
+    Ray ray = camera_ray(params, film, sampler); /* only the thin lens draws more: its lens point */
     PathState s = camera_path(ray);
     Hit hit = scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced);
     if (hit.triangle >= 0) return;
     __global const Light *env = &scene->lights[params->environment_light];
-    record_splat(records, item, environment_radiance(env, scene->spectra, scene->texels, w, ray.direction), cmf, w);
+    float4 radiance = environment_radiance(env, scene->spectra, scene->texels, w, ray.direction);
+    record_splat(records, item, film, radiance, cmf, w, params);
 #endif
 }
 
@@ -115,14 +138,15 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
     float4 scatter = (float4)(1.0f);  /* product of the adjoint BSDF weights alone, for Russian roulette */
 
     if (e.first_vertex) {
-        CameraConnection c = connect_to_camera(params, e.point);
+        CameraConnection c = connect_to_camera_sampled(params, e.point, lens_sample(params, &sampler));
         if (c.pixel >= 0) {
             float cos_light = fabs(dot(e.normal, c.to_camera));
             TextureBuffers textures = buffers.textures;
             float4 emitted = area_light_emitted(light, &textures, &w, e.normal, c.to_camera, e.uv);
             if (any(emitted != (float4)(0.0f))
                 && camera_sees(scene, &c, e.point, e.normal, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
-                record_splat(records, c.pixel, emitted * (cos_light * c.importance / e.pdf_area), cmf, &w);
+                record_splat(records, c.pixel, c.film, emitted * (cos_light * c.importance / e.pdf_area), cmf, &w,
+                             params);
             }
         }
     }
@@ -140,7 +164,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
         if (material_disperses(material, &w)) terminate_secondary(&s.throughput, &s.secondary_terminated);
         SurfaceContext sc = surface_context(scene, v.uv, v.footprint);
         if (material_has_non_delta_lobe(material)) {
-            CameraConnection c = connect_to_camera(params, v.p);
+            CameraConnection c = connect_to_camera_sampled(params, v.p, lens_sample(params, &sampler));
             if (c.pixel >= 0 && shading_side_agrees(v.n, v.ns, c.to_camera)) {
                 float4 f_cos = material_eval(material, &sc, &w, v.ns, c.to_camera, v.wo);
                 /* f_cos holds |ωlight·ns|: times |ωcamera·ng| / |ωlight·ng| (see the top of this file). */
@@ -149,7 +173,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
                 float4 value = s.throughput * f_cos * (cosines * c.importance);
                 if (any(value != (float4)(0.0f))
                     && camera_sees(scene, &c, v.p, v.n, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
-                    record_splat(records, c.pixel, value, cmf, &w);
+                    record_splat(records, c.pixel, c.film, value, cmf, &w, params);
                 }
             }
         }

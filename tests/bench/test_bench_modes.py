@@ -156,6 +156,26 @@ def test_options_outside_their_mode_are_one_line_errors(argv, says):
     assert result.stderr.startswith(says) and result.stderr.count("\n") == 1, result.stderr
 
 
+def test_quality_mode_compares_the_integrators_asked_for():
+    """One row per --integrator at equal time and at equal spp, against a reference of the integrator asked for."""
+    quality = _bench(
+        "quality", "--size", "8", "--seconds", "0.05", "--spp", "4", "--no-mitsuba",
+        "--integrator", "path", "--integrator", "light", "--reference-integrator", "light",
+    )["quality"]  # fmt: skip
+    assert quality["reference"]["integrator"] == "light"
+    for rows in (quality["renderers"], quality["equal_spp"]["renderers"]):
+        assert [(row["renderer"], row["integrator"]) for row in rows] == [("spectrace", "path"), ("spectrace", "light")]
+        assert all(row["rmse"] > 0 and row["spp"] >= 1 for row in rows)
+    assert [row["spp"] for row in quality["equal_spp"]["renderers"]] == [4, 4]
+
+
+@pytest.mark.parametrize("option", ["--integrator", "--reference-integrator"])
+def test_quality_mode_refuses_an_unknown_integrator_in_one_line(option):
+    result = run_spectrace("bench", "quality", option, "photon")
+    assert result.returncode != 0
+    assert "unknown integrator 'photon'" in result.stderr and result.stderr.count("\n") == 1, result.stderr
+
+
 def test_the_quality_references_seed_stays_a_valid_seed_other_than_the_scenes():
     """The reference renders with the scene's seed offset: wrapped into 0..MAX_SEED for any scene seed, even the
     largest (the kernels take a 32-bit signed seed), and never equal to it."""

@@ -238,3 +238,24 @@ def test_unbounded_depth_refused(device, tmp_path):
     scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt")).with_overrides(max_depth=-1)
     with pytest.raises(SpectraceError, match="max_depth"):
         Renderer(scene, device)
+
+
+@pytest.mark.parametrize(
+    ("changes", "spectral_bins", "match"),
+    [
+        ({"pixel_filter": spectrace.PixelFilter("gaussian")}, 0, "gaussian filter"),
+        ({}, 4, "spectral bands"),
+        ({"camera_type": "thinlens"}, 0, "pinhole"),
+    ],
+)
+def test_what_the_light_tracer_has_but_bdpt_has_not_is_refused(device, tmp_path, changes, spectral_bins, match):
+    """The light tracer's filter spreads, spectral bands and lens cameras are not in BDPT's kernels."""
+    scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt"))
+    camera_type = changes.pop("camera_type", None)
+    if camera_type:
+        changes["camera"] = dataclasses.replace(
+            scene.camera, type=camera_type, aperture_radius=0.01, focus_distance=1.0
+        )
+    with pytest.raises(SpectraceError, match=match) as error:
+        Renderer(scene.with_overrides(**changes), device, spectral_bins=spectral_bins)
+    assert "\n" not in str(error.value)

@@ -319,10 +319,53 @@ transform = [{ scale = 0.2 }, { translate = [0, 0, 0.5] }]
     assert "\n" not in str(error.value)
 
 
-def test_spectral_output_refused(device, tmp_path):
-    scene = spectrace.load_scene(_floor_scene(tmp_path, "light"))
-    with pytest.raises(SpectraceError, match="spectral"):
-        Renderer(scene, device, spectral_bins=4)
+BANDS_NM, TEMPERATURE = (400.0, 700.0, 3), 4000.0
+
+
+def _planck_band_means(temperature: float, lo: float, hi: float, bins: int) -> np.ndarray:
+    """Planck's law normalised to 1 at its peak (Wien's λ = b / T), averaged over each band."""
+    h, c, k = 6.62607015e-34, 2.99792458e8, 1.380649e-23
+
+    def planck(nm):
+        m = np.asarray(nm) * 1e-9
+        return 1.0 / (m**5 * np.expm1(h * c / (m * k * temperature)))
+
+    peak = planck(2.897771955e-3 / temperature * 1e9)
+    edges = np.linspace(lo, hi, bins + 1)
+    fine = [np.linspace(a, b, 2001) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    return np.array([np.trapezoid(planck(x), x) / (x[-1] - x[0]) for x in fine]) / peak
+
+
+def test_spectral_bands_of_a_lit_floor(device, tmp_path):
+    """--spectral-bins from light paths: each band holds the floor's band-averaged radiance ρ/π · I_band h / r³,
+    I_band the light's (a 4000 K Planck spectrum) mean over the band, and the pass split keeps the bits."""
+    lo, hi, bins = BANDS_NM
+    text = (
+        _floor_scene(tmp_path, "light")
+        .read_text()
+        .replace(
+            f"intensity = {{ value = {INTENSITY} }}",
+            f"intensity = {{ blackbody = {TEMPERATURE:g}, scale = {INTENSITY} }}",
+        )
+    )
+    scene = spectrace.load_scene(_write(tmp_path, text))
+    renderer = Renderer(scene, device, spectral_bins=bins, spectral_range_nm=(lo, hi))
+    replicas, replica_spp, sums = 8, 16, []
+    for replica in range(1, replicas + 1):
+        renderer.render(spp=replica * replica_spp, pass_spp=replica_spp)
+        sums.append(renderer.read_spectral_film().astype(np.float64))
+    bands = np.diff(np.stack([np.zeros_like(sums[0]), *sums]), axis=0) / replica_spp
+    blocks = bands.reshape(replicas, 4, 8, 4, 8, bins).mean(axis=(2, 4))
+    geometry = _floor_radiance_per_pixel(scene).reshape(4, 8, 4, 8).mean(axis=(1, 3)) / INTENSITY
+    expected = geometry[..., None] * INTENSITY * _planck_band_means(TEMPERATURE, lo, hi, bins)
+    mean, standard_error = mean_and_standard_error(blocks)
+    assert np.all(standard_error < 0.06 * expected)
+    assert_within_standard_errors(mean, expected, standard_error)
+    split = Renderer(scene, device, spectral_bins=bins, spectral_range_nm=(lo, hi))
+    split.render(spp=4, pass_spp=1)
+    whole = Renderer(scene, device, spectral_bins=bins, spectral_range_nm=(lo, hi))
+    whole.render(spp=4, pass_spp=4)
+    np.testing.assert_array_equal(split.read_spectral_film(), whole.read_spectral_film())
 
 
 def _mixed_scene(tmp_path: Path, integrator: str, target: str) -> Path:
@@ -534,15 +577,32 @@ def test_a_tile_of_the_film_is_refused(device, tmp_path):
 @pytest.mark.parametrize(
     ("changes", "words"),
     [
-        ({"pixel_filter": spectrace.PixelFilter("gaussian")}, "gaussian filter"),
         ({"film_response": spectrace.FilmResponse(observer="CIE 1964 10°")}, "default CIE 1931 film"),
         ({"aovs": ("depth",)}, "AOVs"),
     ],
 )
 def test_what_splats_cannot_give_is_refused_in_one_line(device, tmp_path, changes, words):
-    """A splat lands in one whole pixel, with the film's CIE 1931 weights, at the end of a light path: a filter's
-    spread, another film's curves and the camera path's first surface are not there to be had."""
+    """A splat is added with the film's CIE 1931 weights at the end of a light path: another film's curves and the
+    camera path's first surface are not there to be had."""
     scene = spectrace.load_scene(_floor_scene(tmp_path, "light")).with_overrides(**changes)
     with pytest.raises(SpectraceError, match=words) as error:
         Renderer(scene, device)
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("pixel_filter", ['{ type = "gaussian", stddev = 0.5 }', '{ type = "mitchell" }'])
+def test_pixel_filters_agree_with_the_path_tracer(device, tmp_path, pixel_filter):
+    """A splat spread over the pixels whose filter covers it (with its weight f(dx) f(dy) / (∫f)², negative lobes
+    included, and from points up to radius − ½ pixels beyond the film's edge) against the path tracer's filter
+    importance sampling, on the checkerboard room (sharp texture edges, so the filter changes the image)."""
+    texts = [
+        _textured_scene(tmp_path, integrator).read_text().replace("[film]\n", f"[film]\nfilter = {pixel_filter}\n")
+        for integrator in ("path", "light")
+    ]
+    path_scene = spectrace.load_scene(_write(tmp_path, texts[0]))
+    light_scene = spectrace.load_scene(_write(tmp_path, texts[1]))
+    path = spectrace_replicas(Renderer(path_scene, device), 8, 8)
+    light = spectrace_replicas(Renderer(light_scene, device), 8, 8)
+    assert_replicas_agree(light, path, block=2)
+    one_pass = Renderer(light_scene, device).render(spp=4, pass_spp=4).xyz
+    np.testing.assert_array_equal(one_pass, Renderer(light_scene, device).render(spp=4, pass_spp=1).xyz)

@@ -53,6 +53,29 @@ def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: fl
     return max(1, int(round(budget_seconds * probe_spp / max(seconds_for_probe, 1e-9))))
 
 
+def _time_spectrace(scene, device, seconds: float, equal_spp: int, result: dict, errors, log) -> None:
+    """One integrator's rows: the spp that fit the budget (from a warm probe), and equal_spp."""
+    renderer = Renderer(scene, device)
+    renderer.run_pass(1)
+    renderer.reset()
+    probe = renderer.render(spp=PROBE_SPP)
+    spp = min(_spp_for_budget(probe.render_seconds, PROBE_SPP, seconds), limits.MAX_SPP)
+    if scene.sampler == "sobol":
+        spp = 1 << (spp.bit_length() - 1)
+    renderer.reset()
+    start = time.perf_counter()
+    image = renderer.render(spp=spp)
+    elapsed = time.perf_counter() - start
+    row = {"renderer": "spectrace", "integrator": scene.integrator, "runtime": device.report.key}
+    result["renderers"].append({**row, "spp": image.spp, "seconds": elapsed, **errors(image.xyz)})
+    log(f"spectrace {scene.integrator}: {image.spp} spp in {elapsed:.2f} s")
+    renderer.reset()
+    start = time.perf_counter()
+    image = renderer.render(spp=equal_spp)
+    elapsed = time.perf_counter() - start
+    result["equal_spp"]["renderers"].append({**row, "spp": image.spp, "seconds": elapsed, **errors(image.xyz)})
+
+
 def run_quality_bench(
     scene_path: Path | None,
     size: int,
@@ -63,12 +86,21 @@ def run_quality_bench(
     log: Callable[[str], None] = lambda text: None,
     peer_sampler: str = "independent",
     equal_spp: int = EQUAL_SPP,
+    integrators: list[str] | None = None,
+    reference_integrator: str | None = None,
+    peer: bool = True,
 ) -> dict:
+    """integrators: spectrace's integrators to compare (default: the scene's own), each a row; reference_integrator:
+    the one rendering the reference (default: the scene's; any unbiased one converges to the same image)."""
     scene = bench_scene(scene_path, size, 1, max_depth, keep_aspect=True)
     device = open_device(device_key)
-    log(f"reference: spectrace, {reference_spp} spp")
+    reference_integrator = reference_integrator or scene.integrator
+    log(f"reference: spectrace {reference_integrator}, {reference_spp} spp")
     reference_renderer = Renderer(
-        scene.with_overrides(seed=limits.offset_seed(scene.seed, REFERENCE_SEED_OFFSET)), device
+        scene.with_overrides(
+            seed=limits.offset_seed(scene.seed, REFERENCE_SEED_OFFSET), integrator=reference_integrator
+        ),
+        device,
     )
     half = reference_renderer.render(spp=max(1, reference_spp // 2)).xyz.astype(np.float64)
     reference = reference_renderer.render(spp=reference_spp).xyz.astype(np.float64)
@@ -88,10 +120,12 @@ def run_quality_bench(
         "height": scene.height,
         "max_depth": max_depth,
         "samplers": {"spectrace": scene.sampler, "mitsuba": peer_sampler},
+        "integrators": list(integrators or [scene.integrator]),
         "budget_seconds": seconds,
         "runtime": device.report.key,
         "reference": {
             "spp": reference_spp,
+            "integrator": reference_integrator,
             "noise_rms": _rmse(half, other_half) / 2.0,
             "noise_rms_off_lights": None if off_lights is None else _rmse(half, other_half, off_lights) / 2.0,
             "mean_y": float(reference[..., 1].mean()),
@@ -102,48 +136,20 @@ def run_quality_bench(
         "notes": [],
     }
 
-    renderer = Renderer(scene, device)
-    renderer.run_pass(1)
-    renderer.reset()
-    probe = renderer.render(spp=PROBE_SPP)
-    spp = min(_spp_for_budget(probe.render_seconds, PROBE_SPP, seconds), limits.MAX_SPP)
-    if scene.sampler == "sobol":
-        spp = 1 << (spp.bit_length() - 1)
-    renderer.reset()
-    start = time.perf_counter()
-    image = renderer.render(spp=spp)
-    elapsed = time.perf_counter() - start
-    result["renderers"].append(
-        {
-            "renderer": "spectrace",
-            "runtime": device.report.key,
-            "spp": image.spp,
-            "seconds": elapsed,
-            **errors(image.xyz),
-        }
-    )
-    log(f"spectrace: {image.spp} spp in {elapsed:.2f} s")
-    renderer.reset()
-    start = time.perf_counter()
-    image = renderer.render(spp=equal_spp)
-    result["equal_spp"]["renderers"].append(
-        {
-            "renderer": "spectrace",
-            "runtime": device.report.key,
-            "spp": image.spp,
-            "seconds": time.perf_counter() - start,
-            **errors(image.xyz),
-        }
-    )
+    for integrator in result["integrators"]:
+        _time_spectrace(scene.with_overrides(integrator=integrator), device, seconds, equal_spp, result, errors, log)
 
-    try:
-        from spectrace.benchmarks.mitsuba_runtime import render_with_mitsuba, usable_variants
-        from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    usable = None
+    if not peer:
+        result["notes"].append("Mitsuba left out (--no-mitsuba)")
+    else:
+        try:
+            from spectrace.benchmarks.mitsuba_runtime import render_with_mitsuba, usable_variants
+            from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
 
-        usable = usable_variants()
-    except ImportError:
-        result["notes"].append("mitsuba is not installed (pip install 'spectrace[bench]'): spectrace only")
-        usable = None
+            usable = usable_variants()
+        except ImportError:
+            result["notes"].append("mitsuba is not installed (pip install 'spectrace[bench]'): spectrace only")
     if usable is not None:
         result["notes"] += usable.notes + [f"Mitsuba's sampler: {peer_sampler}; spectrace's: {scene.sampler}"]
         with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
@@ -214,13 +220,17 @@ def _off_lights_note(reference: dict) -> str:
     return f", {reference['noise_rms_off_lights']:.3g} on the {share:.1f} % of pixels off lights"
 
 
+def _renderer_name(row: dict) -> str:
+    return f"{row['renderer']} {row['integrator']}" if "integrator" in row else row["renderer"]
+
+
 def quality_tables(result: dict) -> list:
     from rich.table import Table
 
     ref = result["reference"]
     table = Table(
         title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
-        f"max_depth {result['max_depth']}; reference {ref['spp']} spp (its noise RMS "
+        f"max_depth {result['max_depth']}; reference {ref['spp']} spp of {ref['integrator']} (its noise RMS "
         f"{ref['noise_rms']:.3g}{_off_lights_note(ref)}); samplers: spectrace {result['samplers']['spectrace']}, "
         f"Mitsuba {result['samplers']['mitsuba']}"
     )
@@ -230,7 +240,7 @@ def quality_tables(result: dict) -> list:
         table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
     for r in result["renderers"]:
         table.add_row(
-            r["renderer"],
+            _renderer_name(r),
             r["runtime"],
             str(r["spp"]),
             f"{r['seconds']:.2f}",
@@ -248,7 +258,7 @@ def quality_tables(result: dict) -> list:
             equal.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
         for r in same["renderers"]:
             equal.add_row(
-                r["renderer"],
+                _renderer_name(r),
                 r["runtime"],
                 str(r["spp"]),
                 f"{r['seconds']:.2f}",

@@ -27,7 +27,7 @@ SppOption = Annotated[int, typer.Option(help="Samples per pixel per measurement.
 MaxDepthOption = Annotated[int, typer.Option(help="Path segments from the camera.")]
 IntegratorOption = Annotated[
     str | None,
-    typer.Option(help="Integrator to time: path, direct or light (default: the scene's; docs/integrators.md)."),
+    typer.Option(help="Integrator to time, one of spectrace.scene.model.INTEGRATOR_TYPES (default: the scene's)."),
 ]
 SceneOption = Annotated[Path | None, typer.Option(help="Scene file (default: the Cornell box).")]
 AllOption = Annotated[bool, typer.Option("--all", help="Every working device in turn.")]
@@ -50,6 +50,16 @@ QualitySizeOption = Annotated[int | None, typer.Option("--size", help=_size_help
 ColdSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(COLD_DEFAULT_SIZE))]
 SamplersSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(SAMPLERS_DEFAULT_SIZE))]
 DenoiseSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help(DENOISE_DEFAULT_SIZE))]
+
+
+def _check_integrators(names: list[str], option: str) -> None:
+    """Names from the integrator table (spectrace.scene.model.INTEGRATOR_TYPES), so a new integrator is benched as
+    soon as it is registered there."""
+    from spectrace.scene.model import INTEGRATOR_TYPES
+
+    for name in names:
+        if name not in INTEGRATOR_TYPES:
+            raise SpectraceError(f"unknown integrator {name!r}; choose {', '.join(INTEGRATOR_TYPES)}", where=option)
 
 
 def _one(size: int | None) -> list[int] | None:
@@ -124,12 +134,8 @@ def render_bench(
         return
     _check(size, max_depth)
     from spectrace.benchmarks.render import render_bench_table, run_render_bench
-    from spectrace.scene.model import INTEGRATOR_TYPES
 
-    if integrator is not None and integrator not in INTEGRATOR_TYPES:
-        raise SpectraceError(
-            f"unknown integrator {integrator!r}; choose {', '.join(INTEGRATOR_TYPES)}", where="--integrator"
-        )
+    _check_integrators([integrator] if integrator is not None else [], "--integrator")
 
     results = run_render_bench(
         scene,
@@ -187,11 +193,24 @@ def quality_bench(
     device: DeviceOption = None,
     peer_sampler: PeerSamplerOption = "independent",
     spp: Annotated[int, typer.Option(help="Samples per pixel of the equal-spp comparison.", min=1)] = 64,
+    integrator: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--integrator",
+            help="spectrace integrator to compare, repeatable: each gets the budget (default: the scene's).",
+        ),
+    ] = None,
+    reference_integrator: Annotated[
+        str | None, typer.Option(help="Integrator of the reference render (default: the scene's).")
+    ] = None,
+    mitsuba: Annotated[bool, typer.Option(help="Compare with Mitsuba 3 where installed.")] = True,
     as_json: JsonOption = False,
 ) -> None:
-    """Error at equal wall time and at equal spp against a long reference render: spectrace, and Mitsuba 3 where
-    installed. --scene veach_mis is Veach's MIS scene (bundled)."""
+    """Error at equal wall time and at equal spp against a long reference render: spectrace (one row per
+    --integrator), and Mitsuba 3 where installed. --scene veach_mis is Veach's MIS scene (bundled)."""
     _check(_one(size), max_depth, seconds)
+    _check_integrators(integrator or [], "--integrator")
+    _check_integrators([reference_integrator] if reference_integrator else [], "--reference-integrator")
     from spectrace.benchmarks.quality import quality_tables, run_quality_bench
 
     result = run_quality_bench(
@@ -204,6 +223,9 @@ def quality_bench(
         log=_log,
         peer_sampler=peer_sampler,
         equal_spp=spp,
+        integrators=integrator,
+        reference_integrator=reference_integrator,
+        peer=mitsuba,
     )
     _emit("quality", result, lambda: quality_tables(result), as_json)
 

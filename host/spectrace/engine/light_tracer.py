@@ -26,7 +26,10 @@ from spectrace.scene.model import Scene
 # Splat record slots per light path and launch: a path longer than this is launched again for its later records
 # (rare: Russian roulette ends most paths sooner), so memory stays bounded for unbounded max_depth.
 MAX_RECORD_SLOTS = 16
+# The cameras a point can connect to (kernels/camera_importance.cl).
+LIGHT_TRACED_CAMERAS = ("perspective", "thinlens", "orthographic")
 RECORD_BYTES = 16 + 4  # float4 XYZ + int pixel
+BAND_RECORD_BYTES = 16 + 16  # with spectral bands: float4 lane values + int4 lane bands
 
 
 def scene_sphere(scene: Scene) -> np.ndarray:
@@ -43,20 +46,57 @@ def scene_sphere(scene: Scene) -> np.ndarray:
     return np.array([*centre, radius], np.float32)
 
 
+def _has_environment(scene: Scene) -> bool:
+    from spectrace.lights import LIGHTS
+
+    models = tuple(module.MODEL for module in LIGHTS.values() if getattr(module, "IS_ENVIRONMENT", False))
+    return any(isinstance(light, models) for light in scene.lights)
+
+
+def filter_spread(pixel_filter, film: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pixels (row-major) each splat at film position (x, y) adds to, and the weights f(dx) f(dy) / (∫f)², shaped
+    (splats, k²): a pixel's value is ∫ f(x − x_pixel) L(x) dx / (∫f)², which a camera path's filter-sampled
+    position estimates and a splat's weight in that pixel does too. 0 weight for pixels off the film."""
+    radius = pixel_filter.support
+    k = int(np.floor(2.0 * radius)) + 2
+    first = np.floor(film - radius).astype(np.int64)  # (splats, 2): the lowest pixel column and row it may reach
+    offsets = np.arange(k)
+    columns = first[:, 0:1] + offsets  # (splats, k)
+    rows = first[:, 1:2] + offsets
+    wx = pixel_filter.evaluate(film[:, 0:1] - (columns + 0.5)) * ((columns >= 0) & (columns < width))
+    wy = pixel_filter.evaluate(film[:, 1:2] - (rows + 0.5)) * ((rows >= 0) & (rows < height))
+    weight = (wy[:, :, None] * wx[:, None, :]) / pixel_filter.integral() ** 2
+    pixel = np.clip(rows, 0, height - 1)[:, :, None] * width + np.clip(columns, 0, width - 1)[:, None, :]
+    return pixel.reshape(len(film), k * k), weight.reshape(len(film), k * k)
+
+
 def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the light tracer cannot render this scene as asked, or None."""
     name = scene.integrator  # 'light', or 'bdpt', which shares these limits
     camera_type = scene.camera.type
-    if camera_type != "perspective":
-        return f"integrator '{name}' supports the perspective (pinhole) camera only, not {camera_type!r}"
+    if name == "bdpt":
+        # BDPT joins its subpaths at the pinhole and adds whole-pixel records: the light tracer's lens cameras,
+        # spectral bands and filter spreads are not in its kernels.
+        if camera_type != "perspective":
+            return f"integrator 'bdpt' supports the perspective (pinhole) camera only, not {camera_type!r}"
+        if spectral_bins:
+            return "integrator 'bdpt' does not write spectral bands yet; render without spectral output or use 'path'"
+        if scene.pixel_filter.type != "box":
+            return (
+                f"integrator 'bdpt' adds whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
+                "use film.filter = \"box\" or 'path'"
+            )
+    if camera_type not in LIGHT_TRACED_CAMERAS:
+        # An equirectangular camera has no film plane for a point's connection to land on (its importance is over
+        # the sphere of directions); kernels/camera_importance.cl has the others.
+        known = ", ".join(LIGHT_TRACED_CAMERAS)
+        return f"integrator '{name}' supports the {known} cameras, not {camera_type!r}"
     if medium_count:
         return f"integrator '{name}' does not render participating media yet; use 'path'"
-    if spectral_bins:
-        return f"integrator '{name}' does not write spectral bands yet; render without spectral output or use 'path'"
-    if scene.pixel_filter.type != "box":
+    if scene.pixel_filter.type != "box" and _has_environment(scene):
         return (
-            f"integrator '{name}' splats into whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
-            "use film.filter = \"box\" or 'path'"
+            f"integrator '{name}' cannot apply a {scene.pixel_filter.type} filter to an environment seen directly "
+            "(its own camera rays sample the box); use film.filter = \"box\" or 'path'"
         )
     if not scene.film_response.is_default:
         return f"integrator '{name}' renders the default CIE 1931 film only (no observers, sensor or wavelengths yet)"
@@ -86,21 +126,29 @@ class LightPasses:
         self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
         pixels = renderer.pixel_count
         need = device_memory_need(renderer.buffers, pixels, spectral_bins)
-        need.buffers["splat records"] = pixels * self.capacity * RECORD_BYTES
+        self.pixel_filter = scene.pixel_filter if scene.pixel_filter.type != "box" else None
+        record_bytes = RECORD_BYTES + (BAND_RECORD_BYTES if spectral_bins else 0) + (8 if self.pixel_filter else 0)
+        need.buffers["splat records"] = pixels * self.capacity * record_bytes
         check_device_memory(need, renderer.device)
+        self.spectral_bins = spectral_bins
         ctx = renderer.device.context
         rw = cl.mem_flags.READ_WRITE
         self._splat_xyz = cl.Buffer(ctx, rw, pixels * self.capacity * 16)
         self._splat_pixel = cl.Buffer(ctx, rw, pixels * self.capacity * 4)
         self._splat_counts = cl.Buffer(ctx, rw, pixels * 4)
+        band_slots = pixels * self.capacity if spectral_bins else 1
+        self._splat_band_value = cl.Buffer(ctx, rw, band_slots * 16)
+        self._splat_band = cl.Buffer(ctx, rw, band_slots * 16)
+        self._splat_film = cl.Buffer(ctx, rw, (pixels * self.capacity if self.pixel_filter else 1) * 8)
         self._items = cl.Buffer(ctx, rw, pixels * 4)
         self._sphere = scene_sphere(scene)
         # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.
         self._hide_environment = np.int32(scene.hide_environment or getattr(scene, "hide_emitters", False))
 
-    def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, ...]:
         """Runs the light paths of `items` for one pixel sample, keeping their records begin .. begin + capacity − 1:
-        (pixel, xyz) of the slots in order, and each path's record count."""
+        (pixel, xyz, band values, bands, film positions) of the slots in order (0 rows for what the render does
+        not record: bands without spectral bins, positions with the box filter), and each path's record count."""
         r = self.renderer
         queue = r.device.queue
         count, capacity = len(items), self.capacity
@@ -119,6 +167,9 @@ class LightPasses:
             self._splat_xyz,
             self._splat_pixel,
             self._splat_counts,
+            self._splat_band_value,
+            self._splat_band,
+            self._splat_film,
             r.film.ray_count_buffer,
         )
         cl.enqueue_nd_range_kernel(queue, r.kernel, *launch_shape(count, r.work_group))
@@ -128,29 +179,40 @@ class LightPasses:
         cl.enqueue_copy(queue, pixel, self._splat_pixel)
         cl.enqueue_copy(queue, xyz, self._splat_xyz)
         cl.enqueue_copy(queue, counts, self._splat_counts)
+        band_rows = count * capacity if self.spectral_bins else 0
+        band_value = np.empty((band_rows, 4), np.float32)
+        band = np.empty((band_rows, 4), np.int32)
+        if band_rows:
+            cl.enqueue_copy(queue, band_value, self._splat_band_value)
+            cl.enqueue_copy(queue, band, self._splat_band)
+        film = np.empty((count * capacity if self.pixel_filter else 0, 2), np.float32)
+        if len(film):
+            cl.enqueue_copy(queue, film, self._splat_film)
         queue.finish()
-        return pixel, xyz, counts
+        return pixel, xyz, band_value, band, film, counts
 
-    def _sample_splats(self, sample_index: int) -> tuple[np.ndarray, np.ndarray]:
-        """Every splat of one pixel sample's light paths, in the order (work-item, record)."""
+    def _sample_splats(self, sample_index: int) -> list[np.ndarray]:
+        """Every splat of one pixel sample's light paths, in the order (work-item, record): pixel, xyz, and (0 rows
+        when not recorded) each record's lane values, bands and film position."""
         capacity = self.capacity
         items = np.arange(self.renderer.pixel_count, dtype=np.int32)
         begin = 0
         parts = []
         while len(items):
-            pixel, xyz, counts = self._launch(sample_index, items, begin)
-            used = pixel >= 0
+            *columns, counts = self._launch(sample_index, items, begin)
+            used = columns[0] >= 0
+            kept = [column[used] if len(column) else column for column in columns]
             following = items[counts > begin + capacity]
             if begin == 0 and not len(following):
-                return pixel[used], xyz[used]  # the usual case: every path's records fitted in one launch
+                return kept  # the usual case: every path's records fitted in one launch
             record = np.tile(np.arange(begin, begin + capacity), len(items))
             owner = np.repeat(items, capacity)
-            parts.append((owner[used], record[used], pixel[used], xyz[used]))
+            parts.append([owner[used], record[used], *kept])
             items = following
             begin += capacity
-        owner, record, pixel, xyz = (np.concatenate(column) for column in zip(*parts, strict=True))
+        owner, record, *columns = (np.concatenate(column) for column in zip(*parts, strict=True))
         order = np.lexsort((record, owner))
-        return pixel[order], xyz[order]
+        return [column[order] if len(column) else column for column in columns]
 
     def run_pass(self, sample_count: int) -> None:
         """Adds `sample_count` pixel samples' light paths to the renderer's film (its run_pass, translated errors)."""
@@ -164,10 +226,35 @@ class LightPasses:
         cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
         sums = np.empty((r.pixel_count, 4), np.float32)
         cl.enqueue_copy(queue, sums, film.xyz_buffer)
+        bins = self.spectral_bins
+        bands = np.empty(r.pixel_count * bins, np.float32)
+        if bins:
+            cl.enqueue_copy(queue, bands, film.spectral_buffer)
         for sample_index in range(done, done + sample_count):
-            pixel, xyz = self._sample_splats(sample_index)
-            # ufunc.at adds unbuffered, one record after another in this order: the same float sums every time.
-            np.add.at(sums, pixel, xyz)
+            pixel, xyz, band_value, band, position = self._sample_splats(sample_index)
+            if self.pixel_filter is not None:
+                # Each splat spread over the pixels its filter covers; the dropped-sample count stays in its own.
+                np.add.at(sums[:, 3], pixel, xyz[:, 3])
+                pixel, weight = filter_spread(
+                    self.pixel_filter, position.astype(np.float64), r.scene.width, r.scene.height
+                )
+                xyz = (xyz[:, None, :3] * weight[..., None]).astype(np.float32)
+                band_value = band_value[:, None, :] * weight[..., None] if bins else band_value
+                band = np.repeat(band[:, None, :], weight.shape[1], axis=1) if bins else band
+                nonzero = weight != 0.0
+                pixel, xyz = pixel[nonzero], xyz[nonzero]
+                if bins:
+                    band_value, band = band_value[nonzero].astype(np.float32), band[nonzero]
+                np.add.at(sums[:, :3], pixel, xyz)
+            else:
+                # ufunc.at adds unbuffered, one record after another in this order: the same float sums every time.
+                np.add.at(sums, pixel, xyz)
+            if bins:
+                # Record by record, lane by lane within one, as add_to_spectral_film adds a camera path's lanes.
+                inside = band >= 0
+                np.add.at(bands, (pixel[:, None] * bins + band)[inside], band_value[inside])
         cl.enqueue_copy(queue, film.xyz_buffer, sums)
+        if bins:
+            cl.enqueue_copy(queue, film.spectral_buffer, bands)
         queue.finish()
         film.add_pass(sample_count, time.perf_counter() - start)
