@@ -475,7 +475,7 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
                 if (all(value == (float4)(0.0f))) continue;
                 if (!camera_sees(scene, &c, qs->p, qs->n, query, rays_traced)) continue;
                 float weight = bdpt_mis_weight(scene, &w, light, camera, 0, s, 1);
-                record_splat(records, c.pixel, bdpt_hero(value, qs->hero) * weight, cmf, &w);
+                record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, &w, params);
                 continue;
             }
             /* t >= 2: a camera vertex with a non-delta lobe. */
@@ -518,7 +518,8 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
             radiance += bdpt_hero(value, pt->hero || qs->hero) * weight;
         }
     }
-    if (any(radiance != (float4)(0.0f))) record_splat(records, item, radiance, cmf, &w);
+    /* The pixel's own sum: whole-pixel (box filter) records, so its film position is not read. */
+    if (any(radiance != (float4)(0.0f))) record_splat(records, item, (float2)(0.0f), radiance, cmf, &w, params);
 }
 
 #endif
