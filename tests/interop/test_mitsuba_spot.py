@@ -111,3 +111,22 @@ def test_spot_with_a_slide_renders_like_mitsuba(tmp_path, device, mitsuba_scalar
     assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
     # The quadrants differ in colour: a lost or constant slide would not pass the block test either.
     assert by_mitsuba[..., 0].mean() > 0.02 and by_mitsuba[..., 1].mean() > 0.02
+
+
+@pytest.mark.peer
+@pytest.mark.slow
+def test_spot_with_a_slide_light_traces_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
+    """The light tracer starts its paths through the slide: Mitsuba's ptracer against spectrace's, as above."""
+    mi = mitsuba_scalar_spectral
+    _slide(tmp_path)
+    replicas, replica_spp, size, block = 8, 4, 32, 8
+    path = _xml(tmp_path, size, SLIDE_SPOT)
+    path.write_text(path.read_text().replace('<integrator type="path">', '<integrator type="ptracer">'))
+    scene = mi.load_file(str(path))
+    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
+
+    from spectrace.engine.renderer import Renderer
+
+    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
+    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    assert by_mitsuba[..., 0].mean() > 0.02 and by_mitsuba[..., 1].mean() > 0.02
