@@ -108,6 +108,9 @@ inline int sample_emission(__global const Light *light, const LightBuffers *buff
             d = sample_uniform_cone_about(axis, light->cos_cutoff, u_direction);
             float solid_angle = TWO_PI * (1.0f - light->cos_cutoff);
             intensity *= spot_falloff(light, dot(d, axis)) * solid_angle;
+            if (SCENE_HAS_LIGHT_IMAGES && light->texture != NO_TEXTURE) {
+                intensity *= spot_slide(light, &buffers->textures, w, d);
+            }
         } else {
             d = sample_uniform_sphere(u_direction);
             intensity *= 4.0f * PI_F;

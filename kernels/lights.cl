@@ -122,6 +122,25 @@ inline float spot_falloff(__global const Light *light, float cos_theta)
     return t * t * (3.0f - 2.0f * t);
 }
 
+/* A spot's slide, Mitsuba 3's spot `texture` (spot.cpp): a reflectance image the intensity passes through,
+ * projected over the cone at uv = (0.5, 0.5) + ½ (x, y) / (z tan θ_cutoff) in the light's frame: z its axis, x at
+ * the angle direction.w from the tangent of the axis' orthonormal basis toward its bitangent (the host's
+ * lights/spot.py measures it so), y = z × x, down the image. Looked up at its finest level.
+ * Contract: light->texture is a reflectance texture, d unit and leaving the light; 0 behind the light. */
+inline float4 spot_slide(__global const Light *light, const TextureBuffers *textures, const SampledWavelengths *w,
+                         float3 d)
+{
+    float3 z = light->direction.xyz, tangent, bitangent;
+    orthonormal_basis(z, &tangent, &bitangent);
+    float3 x = cos(light->direction.w) * tangent + sin(light->direction.w) * bitangent;
+    float3 y = cross(z, x);
+    float cos_theta = dot(d, z);
+    if (!(cos_theta > 0.0f)) return (float4)(0.0f);
+    float tan_cutoff = sqrt(fmax(0.0f, 1.0f - light->cos_cutoff * light->cos_cutoff)) / light->cos_cutoff;
+    float2 uv = 0.5f + 0.5f * (float2)(dot(d, x), dot(d, y)) / (cos_theta * tan_cutoff);
+    return texture_spectrum(textures, light->texture, uv, 0.0f, w);
+}
+
 inline float3 sample_uniform_sphere(float2 u)
 {
     float z = 1.0f - 2.0f * u.x;
@@ -251,6 +270,9 @@ inline int sample_light(__global const Light *light, const LightBuffers *buffers
         float falloff = 1.0f;
         if (LIGHT_IS(light, LIGHT_SPOT)) falloff = spot_falloff(light, dot(-s->wi, light->direction.xyz));
         s->arriving = light_spectrum(light, spectra, w) * (falloff / d2);
+        if (SCENE_HAS_LIGHT_IMAGES && LIGHT_IS(light, LIGHT_SPOT) && light->texture != NO_TEXTURE) {
+            s->arriving *= spot_slide(light, &buffers->textures, w, -s->wi);
+        }
         s->pdf = light->pmf;
         s->is_delta = 1;
         return falloff > 0.0f;

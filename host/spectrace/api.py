@@ -333,10 +333,13 @@ def spot_light(
     power_w: float | None = None,
     spectrum: SpectrumLike | None = None,
     linear_falloff: bool = False,
+    slide=None,
+    slide_up: Sequence[float] = (0.0, 1.0, 0.0),
 ) -> SpotLight:
     """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
     degrees from the axis (default ¾ of the cutoff), smooth fall (linear in the angle with `linear_falloff`) to 0 at
-    `cutoff_angle` degrees; or `power_w` W spread over the cone's effective solid angle."""
+    `cutoff_angle` degrees; or `power_w` W spread over the cone's effective solid angle. `slide`: a reflectance
+    texture the light passes through, projected over the cone's cutoff square, its top toward `slide_up`."""
     origin = np.asarray(_vector(position, "position"))
     direction = unit_direction(
         np.asarray(_vector(target, "target")) - origin, None, "spot light target equals its position"
@@ -344,7 +347,10 @@ def spot_light(
     cutoff, start = lights.spot.cone(cutoff_angle, falloff_start, "cutoff_angle", "falloff_start")
     solid_angle = lights.spot.effective_solid_angle(cutoff, start, linear_falloff)
     emitted = _intensity(intensity, power_w, spectrum, solid_angle)
-    return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff))
+    if slide is None:
+        return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff))
+    x = lights.spot.slide_x(direction, _vector(slide_up, "slide_up"), "slide_up")
+    return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff), slide, x)
 
 
 def distant_light(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:

@@ -48,6 +48,18 @@ def test_homogeneous_medium_maps_to_an_index_matched_interior(tmp_path):
     assert defaults["shapes"][0]["interior"] == {"sigma_a": {"value": 0.25}, "sigma_s": {"value": 0.75}, "g": 0.0}
 
 
+def test_medium_declared_at_the_top_and_referenced_is_the_same_interior(tmp_path):
+    """Mitsuba's test and documentation scenes declare the medium once, `<medium id>` at the top, and give it to
+    shapes by `<ref name="interior">`: the same import as the medium written inside the shape."""
+    inline, _ = mitsuba_scene_data(_xml(tmp_path, 8))
+    declared = MEDIUM.replace('name="interior"', 'id="m1"')
+    path = _xml(tmp_path, 8, '<ref id="m1" name="interior"/>')
+    path.write_text(path.read_text().replace("<shape", declared + "\n<shape", 1))
+    data, notes = mitsuba_scene_data(path)
+    assert data["shapes"][0]["interior"] == inline["shapes"][0]["interior"]
+    assert not [note for note in notes if "medium" in note], notes
+
+
 COLOURED = MEDIUM.replace('<float name="albedo" value="0.8"/>', '<rgb name="albedo" value="0.95, 0.6, 0.3"/>')
 
 

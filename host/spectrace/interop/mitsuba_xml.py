@@ -1484,8 +1484,8 @@ class MitsubaImporter:
                 self.integrator(child, data)
             elif child.tag in ("bsdf", "texture", "spectrum", "rgb", "default", "sensor", "alias"):
                 continue  # declarations: imported where they are used
-            elif child.tag in ("film", "sampler", "rfilter") and child.get("id") in referenced:
-                continue  # the same, for what a sensor refers to
+            elif child.tag in ("film", "sampler", "rfilter", "medium", "phase") and child.get("id") in referenced:
+                continue  # the same, for what a sensor or a shape (its interior) refers to
             elif child.tag in _OBJECT_TAGS:
                 self.unsupported_object(child)
         if self.unsupported:

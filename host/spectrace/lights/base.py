@@ -21,6 +21,7 @@ def light_row(
     two_sided: bool = False,
     position=(0.0, 0.0, 0.0),
     direction=(0.0, 0.0, 1.0),
+    direction_w: float = 0.0,
     scale: float = 1.0,
     cos_falloff_start: float = 1.0,
     cos_cutoff: float = 1.0,
@@ -32,7 +33,7 @@ def light_row(
     """One Light row as a tuple in LIGHT_DTYPE's field order; pmf is filled in once every light's power is known."""
     return (
         (*position, 1.0),
-        (*direction, 0.0),
+        (*direction, direction_w),
         light_type,
         triangle,
         spectrum_offset,

@@ -1,10 +1,12 @@
-"""`spot`: a point light emitting into a cone, with a smooth falloff toward its edge (kernels/lights.cl)."""
+"""`spot`: a point light emitting into a cone, with a smooth falloff toward its edge, optionally through a slide: a
+texture projected over the cone (Mitsuba 3's spot `texture`; kernels/lights.cl)."""
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_SPOT
+from spectrace.engine.device_types import LIGHT_SPOT, NO_TEXTURE
 from spectrace.errors import SpectraceError
 from spectrace.lights import point
 from spectrace.lights.base import Light, LightRows, check_position, light_row, unit_direction
@@ -38,12 +40,33 @@ LINEAR_FALLOFF = Parameter(
     doc="fall linearly in the angle θ from falloff_start to cutoff_angle (Mitsuba 3's profile) instead of "
     "smoothstep in cos θ (pbrt-v4's)",
 )
+SLIDE = Parameter(
+    "slide",
+    "spectrum",
+    "",
+    None,
+    default_doc="none",
+    doc="a reflectance texture the intensity passes through, projected over the cone: texture coordinates "
+    "(0.5, 0.5) + ½ (x, y) / (z tan cutoff_angle) in the light's frame (x along axis × slide_up, y down the image), "
+    "so the image spans the cone's cutoff square (Mitsuba 3's spot `texture`)",
+    textured=True,
+)
+SLIDE_UP = Parameter(
+    "slide_up",
+    "vector",
+    "",
+    (0.0, 1.0, 0.0),
+    default_doc="[0, 1, 0]",
+    doc="with a slide: the direction the top of the image faces, not along the axis",
+)
 PARAMETERS = (
     *point.PARAMETERS,
     Parameter("target", "vector", "scene units", REQUIRED, doc="the point the axis goes through"),
     CUTOFF_ANGLE,
     FALLOFF_START,
     LINEAR_FALLOFF,
+    SLIDE,
+    SLIDE_UP,
 )
 
 
@@ -70,6 +93,8 @@ class SpotLight(Light):
     cutoff_degrees: float = CUTOFF_ANGLE.number_default
     falloff_start_degrees: float = 25.0
     linear_falloff: bool = False
+    slide: Any = None  # a reflectance texture (spectrace.textures) projected over the cone, or None
+    slide_x: tuple[float, float, float] = (1.0, 0.0, 0.0)  # unit, across the axis: the image's u direction
 
     def effective_solid_angle(self) -> float:
         """∫ falloff dω over the sphere, sr: flux = intensity × this."""
@@ -102,20 +127,56 @@ def from_spec(spec, resolver, key: str) -> SpotLight:
     )
     linear = bool(spec.linear_falloff)
     intensity = point.spec_intensity(spec, resolver, key, effective_solid_angle(cutoff, start, linear))
-    return SpotLight(spec.position, direction, intensity, cutoff, start, linear)
+    if spec.slide is None:
+        return SpotLight(spec.position, direction, intensity, cutoff, start, linear)
+    slide = resolver.spectrum_or_texture(spec.slide, f"{key}.slide", "spectrum")
+    if isinstance(slide, Spectrum):
+        raise SpectraceError(
+            "a slide is a texture (a constant one is a factor of the intensity)", where=resolver.where(f"{key}.slide")
+        )
+    x = slide_x(direction, spec.slide_up, resolver.where(f"{key}.slide_up"))
+    return SpotLight(spec.position, direction, intensity, cutoff, start, linear, slide, x)
+
+
+def slide_x(direction, slide_up, where: str | None = None) -> tuple[float, float, float]:
+    """The image's u direction across the axis: Mitsuba's local frame looks down +z with y down the image, so
+    x = y × z with y the part of −slide_up across the axis."""
+    down = -np.asarray(slide_up, float)
+    down = down - np.dot(down, direction) * np.asarray(direction)
+    if not np.linalg.norm(down) > 1e-6:
+        raise SpectraceError("slide_up must not lie along the axis", where=where)
+    x = np.cross(down / np.linalg.norm(down), direction)
+    return (float(x[0]), float(x[1]), float(x[2]))
+
+
+def slide_angle(direction, x) -> float:
+    """The angle of x from the tangent of the axis' orthonormal basis (Duff et al. 2017, as kernels/sampling.cl
+    builds it) toward its bitangent: the kernel rebuilds x from the axis and this one number."""
+    n = np.asarray(direction, float)
+    sign = 1.0 if n[2] >= 0.0 else -1.0
+    a = -1.0 / (sign + n[2])
+    b = n[0] * n[1] * a
+    tangent = np.array([1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]])
+    bitangent = np.array([b, sign + n[1] * n[1] * a, -n[1]])
+    return float(np.arctan2(np.dot(x, bitangent), np.dot(x, tangent)))
 
 
 def write_rows(light: SpotLight, out: LightRows) -> None:
+    # The slide's angle rides in the axis' spare w (kernels/lights.cl), 0 and unread without one: the same rows.
+    slide = light.slide is not None
     out.add(
         light_row(
             LIGHT_SPOT,
             out.table.add(light.intensity),
             position=light.position,
             direction=light.direction,
+            direction_w=slide_angle(light.direction, light.slide_x) if slide else 0.0,
             cos_falloff_start=np.cos(np.radians(light.falloff_start_degrees)),
             cos_cutoff=np.cos(np.radians(light.cutoff_degrees)),
             linear_falloff=light.linear_falloff,
+            texture=out.textures.add(light.slide, "spectrum") if slide else NO_TEXTURE,
         ),
+        # A slide only dims (a reflectance): the unfiltered power bounds the light's for its pick probability.
         light.effective_solid_angle() * light.intensity.mean(),
     )
 
@@ -130,7 +191,7 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
         return None
     matrix = np.asarray(to_world, dtype=float)
     position = matrix[:3, 3]
-    return {
+    table = {
         "type": "spot",
         "position": position.tolist(),
         "target": (position + matrix[:3, 2]).tolist(),
@@ -139,3 +200,12 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
         "linear_falloff": True,
         "intensity": intensity,
     }
+    if "texture" in properties:
+        # Mitsuba multiplies the intensity by the texture looked up in its local frame, whose y runs down the image:
+        # the image's top faces the frame's -y.
+        slide = importer.spectrum(properties["texture"], "texture")
+        if slide is None:
+            return None
+        table["slide"] = slide
+        table["slide_up"] = (-matrix[:3, 1]).tolist()
+    return table
