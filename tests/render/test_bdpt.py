@@ -259,3 +259,14 @@ def test_what_the_light_tracer_has_but_bdpt_has_not_is_refused(device, tmp_path,
     with pytest.raises(SpectraceError, match=match) as error:
         Renderer(scene.with_overrides(**changes), device, spectral_bins=spectral_bins)
     assert "\n" not in str(error.value)
+
+
+def test_a_spot_lights_slide_is_refused(device, tmp_path):
+    """kernels/bdpt.cl weighs a spot by its falloff alone, so a slide (Mitsuba's spot texture) must not pass unseen."""
+    scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt"))
+    spot = spectrace.spot_light(
+        (0.0, 0.0, 2.0), (0.0, 0.0, 0.0), 30.0, intensity=1.0, slide=spectrace.bitmap(np.full((2, 2, 3), 0.5))
+    )
+    with pytest.raises(SpectraceError, match="slide") as error:
+        Renderer(scene.with_overrides(lights=[*scene.lights, spot]), device)
+    assert "\n" not in str(error.value)

@@ -22,4 +22,7 @@ def bdpt_problem(scene: Scene) -> str | None:
         name = light_module(light).NAME
         if name in _AT_INFINITY:
             return f"integrator 'bdpt' does not take {name!r} lights yet (lights at infinity); use 'light' or 'path'"
+        if name == "spot" and getattr(light, "slide", None) is not None:
+            # kernels/bdpt.cl weighs a spot by its falloff alone: its slide would be left out without a word.
+            return "integrator 'bdpt' does not take a spot light's slide yet; use 'light' or 'path'"
     return None
