@@ -10,21 +10,14 @@
 #include "kernel_entry.h"
 #include "light_tracer.cl"
 
-KERNEL void light_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, float4 scene_sphere, int hide_environment,
-                       int sample_index,
-                       __global const int *items, int item_count, int record_begin, int capacity,
-                       __global float4 *splat_xyz, __global int *splat_pixel, __global int *splat_counts,
-                       __global float4 *splat_band_value, __global int4 *splat_band, __global float2 *splat_film,
-                       __global uint *ray_counts)
+KERNEL void light_pass(SCENE_KERNEL_PARAMS, SPLAT_PASS_PARAMS)
 {
     int slot = get_global_id(0);
     if (slot >= item_count) return;
     Scene scene = SCENE_FROM_KERNEL_PARAMS;
     int item = items[slot];
-    for (int k = 0; k < capacity; ++k) splat_pixel[slot * capacity + k] = -1;
-    SplatRecords records = {splat_xyz + slot * capacity, splat_pixel + slot * capacity, record_begin, capacity, 0,
-                            splat_band_value + slot * capacity, splat_band + slot * capacity,
-                            splat_film + slot * capacity};
+    SplatRecords records = slot_splat_records(slot, record_begin, capacity, splat_xyz, splat_pixel, splat_band_value,
+                                              splat_band, splat_film);
     uint rays_traced = 0;
     trace_light_path(&scene, item, sample_index, scene_sphere, hide_environment, cmf, &records, &rays_traced);
     splat_counts[slot] = records.count;

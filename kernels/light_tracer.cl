@@ -43,6 +43,27 @@ typedef struct {
     __global float2 *film;       /* with a filter other than the box: the film position, pixels */
 } SplatRecords;
 
+/* The arguments every splatting pass kernel takes after SCENE_KERNEL_PARAMS (integrator_light.cl, integrator_bdpt.cl),
+ * in the order spectrace.engine.light_tracer sets them: one list, so the two kernels cannot drift apart. */
+#define SPLAT_PASS_PARAMS                                                                                            \
+    __global const float4 *cmf, float4 scene_sphere, int hide_environment, int sample_index,                        \
+        __global const int *items, int item_count, int record_begin, int capacity, __global float4 *splat_xyz,      \
+        __global int *splat_pixel, __global int *splat_counts, __global float4 *splat_band_value,                   \
+        __global int4 *splat_band, __global float2 *splat_film, __global uint *ray_counts
+
+/* Work-item `slot`'s records in a pass's splat buffers (its `capacity` slots), emptied (pixel -1) before the path
+ * writes any. */
+inline SplatRecords slot_splat_records(int slot, int record_begin, int capacity, __global float4 *splat_xyz,
+                                       __global int *splat_pixel, __global float4 *splat_band_value,
+                                       __global int4 *splat_band, __global float2 *splat_film)
+{
+    for (int k = 0; k < capacity; ++k) splat_pixel[slot * capacity + k] = -1;
+    SplatRecords records = {splat_xyz + slot * capacity, splat_pixel + slot * capacity, record_begin, capacity, 0,
+                            splat_band_value + slot * capacity, splat_band + slot * capacity,
+                            splat_film + slot * capacity};
+    return records;
+}
+
 inline void record_splat(SplatRecords *r, int pixel, float2 film, float4 value, __global const float4 *cmf,
                          const SampledWavelengths *w, __global const RenderParams *params)
 {

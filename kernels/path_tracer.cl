@@ -160,18 +160,8 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     return 1;
 }
 
-/* Radiance carried back along the path from state `s` onward, including emission met by s.ray. */
-inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState s,
-                            uint *rays_traced)
-{
-    float4 radiance = (float4)(0.0f);
-    int goes_on = s.segments <= max_segments(scene->params);
-    while (goes_on) goes_on = path_segment(scene, w, sampler, &s, &radiance, rays_traced);
-    return radiance;
-}
-
-#if FILM_AOVS
-/* trace_path for a path state the caller keeps (its AOV record): the radiance the camera path `s` carries. */
+/* Radiance carried back along the path from state `*s` onward, including emission met by s->ray; the state is the
+ * caller's, so what the path records on the way (its AOVs) stays with it. */
 inline float4 trace_path_state(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
                                uint *rays_traced)
 {
@@ -180,7 +170,13 @@ inline float4 trace_path_state(const Scene *scene, const SampledWavelengths *w, 
     while (goes_on) goes_on = path_segment(scene, w, sampler, s, &radiance, rays_traced);
     return radiance;
 }
-#endif
+
+/* trace_path_state of a copy of `s`. */
+inline float4 continue_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState s,
+                            uint *rays_traced)
+{
+    return trace_path_state(scene, w, sampler, &s, rays_traced);
+}
 
 inline float4 trace_path(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray,
                          uint *rays_traced)

@@ -48,8 +48,8 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
     return 1;
 }
 
-#if FILM_AOVS
-/* trace_direct for a path state the caller keeps (its AOV record). */
+/* The local model's radiance from state `*s` onward; the state is the caller's, so what the path records on the way
+ * (its AOVs) stays with it. */
 inline float4 trace_direct_state(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
                                  uint *rays_traced)
 {
@@ -58,16 +58,12 @@ inline float4 trace_direct_state(const Scene *scene, const SampledWavelengths *w
     while (goes_on) goes_on = direct_segment(scene, w, sampler, s, &radiance, rays_traced);
     return radiance;
 }
-#endif
 
 inline float4 trace_direct(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray,
                            uint *rays_traced)
 {
     PathState s = camera_path(ray);
-    float4 radiance = (float4)(0.0f);
-    int goes_on = s.segments <= max_segments(scene->params);
-    while (goes_on) goes_on = direct_segment(scene, w, sampler, &s, &radiance, rays_traced);
-    return radiance;
+    return trace_direct_state(scene, w, sampler, &s, rays_traced);
 }
 
 #endif
