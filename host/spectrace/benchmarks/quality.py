@@ -224,6 +224,27 @@ def _renderer_name(row: dict) -> str:
     return f"{row['renderer']} {row['integrator']}" if "integrator" in row else row["renderer"]
 
 
+def _error_table(table, renderers: list[dict], label: str, key: str, off_lights: bool):
+    """`table` with a row per renderer: its error as measured, and as `key` corrects it (`label`: "at budget" for equal
+    time, "net" of the reference's noise for equal spp), with the error off the lights where the scene shows them."""
+    columns = ["renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", f"RMSE {label}"]
+    for column in columns + ([f"off lights, {label}"] if off_lights else []):
+        table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
+    off_key = key.replace("rmse_", "rmse_off_lights_")
+    for r in renderers:
+        table.add_row(
+            _renderer_name(r),
+            r["runtime"],
+            str(r["spp"]),
+            f"{r['seconds']:.2f}",
+            f"{r['rmse']:.4g}",
+            f"{100 * r['relative_rmse']:.2f} %",
+            f"{r[key]:.4g}",
+            *([f"{r[off_key]:.4g}"] if off_lights else []),
+        )
+    return table
+
+
 def quality_tables(result: dict) -> list:
     from rich.table import Table
 
@@ -235,39 +256,11 @@ def quality_tables(result: dict) -> list:
         f"Mitsuba {result['samplers']['mitsuba']}"
     )
     off = "pixels_off_lights" in ref
-    columns = ["renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE at budget"]
-    for column in columns + (["off lights, at budget"] if off else []):
-        table.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
-    for r in result["renderers"]:
-        table.add_row(
-            _renderer_name(r),
-            r["runtime"],
-            str(r["spp"]),
-            f"{r['seconds']:.2f}",
-            f"{r['rmse']:.4g}",
-            f"{100 * r['relative_rmse']:.2f} %",
-            f"{r['rmse_at_budget']:.4g}",
-            *([f"{r['rmse_off_lights_at_budget']:.4g}"] if off else []),
-        )
-    tables = [table]
+    tables = [_error_table(table, result["renderers"], "at budget", "rmse_at_budget", off)]
     same = result["equal_spp"]
     if same["renderers"]:
         equal = Table(title=f"equal spp: {same['spp']} each (Mitsuba's stratified samplers may round it up)")
-        columns = ["renderer", "runtime", "spp", "time s", "RMSE (XYZ)", "RMSE / mean Y", "RMSE net"]
-        for column in columns + (["off lights, net"] if off else []):
-            equal.add_column(column, justify="left" if column in ("renderer", "runtime") else "right")
-        for r in same["renderers"]:
-            equal.add_row(
-                _renderer_name(r),
-                r["runtime"],
-                str(r["spp"]),
-                f"{r['seconds']:.2f}",
-                f"{r['rmse']:.4g}",
-                f"{100 * r['relative_rmse']:.2f} %",
-                f"{r['rmse_net']:.4g}",
-                *([f"{r['rmse_off_lights_net']:.4g}"] if off else []),
-            )
-        tables.append(equal)
+        tables.append(_error_table(equal, same["renderers"], "net", "rmse_net", off))
     check = result["cross_check"]
     if check:
         cross = Table(title=f"reference cross-check against Mitsuba {check['mitsuba']} at {check['spp']} spp")
