@@ -6,9 +6,10 @@
 #include "scene_features.h"
 #include "triangle.cl"
 #include "triangle4.cl"
+#include "triangle8.cl"
 
-/* BVH_STACK_SIZE, BVH4_STACK_SIZE: the traversal stacks' entries, from the depth the host's builder guarantees
- * (spectrace.geometry.bvh MAX_DEPTH; bvh4.py), passed as build defines (spectrace.engine.device_types). */
+/* BVH_STACK_SIZE, BVH4_STACK_SIZE, BVH8_STACK_SIZE: the traversal stacks' entries, from the depth the host's builder
+ * guarantees (spectrace.geometry.bvh MAX_DEPTH; bvh4.py), passed as build defines (spectrace.engine.device_types). */
 
 typedef struct {
     float t;         /* distance along the ray; t_max when nothing was hit */
@@ -169,6 +170,82 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
     }
 }
 
+/* 8-wide traversal (types.h BVH8Node), for CPUs whose vectors hold eight floats: one visit slab-tests the eight
+ * children's boxes as float8; the hit ones go onto the stack by insertion, farthest deepest, and the nearest is popped
+ * and entered at once. A leaf is a run of blocks of eight triangles (triangle8.cl) after the nodes in the same buffer.
+ * Stack references as in trace_bvh4: a node index (>= 0), or ~(float4 offset of a leaf's first block).
+ * BVH8_STACK_SIZE entries of 8 bytes (776 bytes with MAX_DEPTH 64): the collapse bounds the entries a path pushes
+ * (bvh4.py collapse, extra_pushes). */
+inline Hit trace_bvh8(__global const BVH8Node *nodes, __global const float4 *triangle_vertices, Ray ray,
+                      float t_max, int any_hit)
+{
+    Hit hit = no_hit(t_max);
+    TraversalRay r = traversal_ray(ray);
+    float3 inv_direction = r.inv_direction;
+    float8 ox = (float8)(ray.origin.x), oy = (float8)(ray.origin.y), oz = (float8)(ray.origin.z);
+    float8 ix = (float8)(inv_direction.x), iy = (float8)(inv_direction.y), iz = (float8)(inv_direction.z);
+    int stack[BVH8_STACK_SIZE];
+    float stack_entry[BVH8_STACK_SIZE];
+    int top = 0;
+    int reference = 0;
+    while (true) {
+        if (reference < 0) {
+            __global const float8 *block = (__global const float8 *)((__global const float4 *)nodes + ~reference);
+            while (true) {
+                int4 meta = as_int4(block[LEAF_BLOCK8_FLOAT8S - 1].lo);
+                if (intersect_triangles8(block, r.origin_k, &r.shear, meta, &hit.t, &hit.triangle, &hit.b12)
+                    && any_hit) {
+                    return hit;
+                }
+                if (!meta.z) break;
+                block += LEAF_BLOCK8_FLOAT8S;
+            }
+        } else {
+            __global const BVH8Node *node = &nodes[reference];
+            float8 lx = (node->child_min[0] - ox) * ix, hx = (node->child_max[0] - ox) * ix;
+            float8 ly = (node->child_min[1] - oy) * iy, hy = (node->child_max[1] - oy) * iy;
+            float8 lz = (node->child_min[2] - oz) * iz, hz = (node->child_max[2] - oz) * iz;
+            float8 enter = fmax(fmax(fmin(lx, hx), fmin(ly, hy)), fmax(fmin(lz, hz), (float8)(0.0f)));
+            /* Exit widened by 2γ₃ as in ray_box_entry (Ize 2013). */
+            float8 leave = fmin(fmin(fmax(lx, hx), fmax(ly, hy)), fmax(lz, hz)) * 1.0000004f;
+            leave = fmin(leave, (float8)(hit.t));
+            int8 counts = node->count;
+            int8 entered = (enter <= leave) & (counts >= (int8)(0));
+            if (any(entered)) {
+                int8 child = node->child;
+                int refs[8];
+                float entries[8];
+                vstore8(select(child, ~child, counts > (int8)(0)), 0, refs);
+                vstore8(select((float8)(INFINITY), enter, entered), 0, entries);
+                int base = top;
+                for (int k = 0; k < 8; ++k) {
+                    float t = entries[k];
+                    if (t == INFINITY) continue;
+                    /* Insertion keeping [base, top) farthest first; equal entries keep the lower slot nearer the
+                     * top, so it is visited first. */
+                    int j = top;
+                    while (j > base && stack_entry[j - 1] <= t) {
+                        stack[j] = stack[j - 1];
+                        stack_entry[j] = stack_entry[j - 1];
+                        --j;
+                    }
+                    stack[j] = refs[k];
+                    stack_entry[j] = t;
+                    ++top;
+                }
+                --top;
+                reference = stack[top];
+                continue;
+            }
+        }
+        while (true) {
+            if (top == 0) return hit;
+            --top;
+            if (stack_entry[top] <= hit.t) { reference = stack[top]; break; }
+        }
+    }
+}
+
 /* A walk over a binary BVH whose leaves the caller tests (triangles, analytic shapes, instances): at an inner
  * node the children the ray enters are visited near to far, the farther one kept on a stack with the distance at
  * which the ray enters its box. Every binary traversal in the kernels takes its steps from here. */
@@ -247,12 +324,14 @@ inline Hit trace_bvh_binary(__global const BVHNode *nodes, __global const float4
     return hit;
 }
 
-/* The traversal the build selected: BVH_WIDTH == 4 when the host uploaded 4-wide nodes (geometry/bvh4.py) in the
- * node buffer, whose kernel arguments keep the binary node type. */
+/* The traversal the build selected: BVH_WIDTH == 8 or 4 when the host uploaded 8- or 4-wide nodes
+ * (geometry/bvh4.py) in the node buffer, whose kernel arguments keep the binary node type. */
 inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
                      int any_hit)
 {
-#if defined(BVH_WIDTH) && BVH_WIDTH == 4
+#if defined(BVH_WIDTH) && BVH_WIDTH == 8
+    return trace_bvh8((__global const BVH8Node *)nodes, triangle_vertices, ray, t_max, any_hit);
+#elif defined(BVH_WIDTH) && BVH_WIDTH == 4
     return trace_bvh4((__global const BVH4Node *)nodes, triangle_vertices, ray, t_max, any_hit);
 #else
     return trace_bvh_binary(nodes, triangle_vertices, ray, t_max, any_hit);

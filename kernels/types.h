@@ -35,6 +35,14 @@ typedef struct {
     int4 count;
 } BVH4Node;
 
+/* 8-wide BVH node (256 bytes), the same layout with eight children per node (geometry/bvh4.py, width 8). */
+typedef struct {
+    float8 child_min[3];
+    float8 child_max[3];
+    int8 child;
+    int8 count;
+} BVH8Node;
+
 /* Per-triangle shading data, in BVH leaf order. */
 typedef struct {
     int material;   /* index into the material array; TRIANGLE_NO_MATERIAL on an index-matched medium boundary, which

@@ -7,8 +7,8 @@ from raytracing_reference import brute_force_closest_hit
 from spectrace.geometry.bvh import build_bvh
 from spectrace.geometry.bvh4 import device_nodes, traversal_defines
 
-# Both traversals: the binary tree, and its 4-wide collapse (geometry/bvh4.py).
-WIDTHS = [2, 4]
+# Every traversal: the binary tree, and its 4- and 8-wide collapses (geometry/bvh4.py).
+WIDTHS = [2, 4, 8]
 
 
 def _soup(rng, count):

@@ -154,7 +154,7 @@ def _brute_force(scene: spectrace.Scene, origins: np.ndarray, directions: np.nda
     return best_t, best_n
 
 
-@pytest.mark.parametrize("width", [4, 2])
+@pytest.mark.parametrize("width", [8, 4, 2])
 def test_instanced_hits_match_brute_force_and_the_expanded_copies(kernel_runner, monkeypatch, width):
     """Through both traversals (the 4-wide default and the binary one kept for comparison), whose node buffers the
     objects' leaves point into differently."""

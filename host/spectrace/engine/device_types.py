@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import DTypeLike
 
 from spectrace.geometry.bvh import BVH_NODE_DTYPE, MAX_DEPTH
-from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE, BVH4_STACK_SIZE
+from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE, BVH4_STACK_SIZE, BVH8_NODE_DTYPE, BVH8_STACK_SIZE
 from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
@@ -296,6 +296,7 @@ SCENE_KERNEL_BUFFERS = (
 DEVICE_STRUCTS: dict[str, np.dtype] = {
     "BVHNode": BVH_NODE_DTYPE,
     "BVH4Node": BVH4_NODE_DTYPE,
+    "BVH8Node": BVH8_NODE_DTYPE,
     "TriangleInfo": TRIANGLE_INFO_DTYPE,
     "Material": MATERIAL_DTYPE,
     "Medium": MEDIUM_DTYPE,
@@ -368,6 +369,7 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
         "BVH_STACK_SIZE": MAX_DEPTH,
         "BVH4_STACK_SIZE": BVH4_STACK_SIZE,
+        "BVH8_STACK_SIZE": BVH8_STACK_SIZE,
     }
     values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
     values |= {f"TEXTURE_{name.upper()}": code for code, name in enumerate(TEXTURE_TYPES)}
