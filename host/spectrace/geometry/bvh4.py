@@ -1,11 +1,11 @@
 """Collapse of the binary SAH tree (spectrace.geometry.bvh) into a 4- or 8-wide tree for float4 / float8 box tests.
 
 Each wide node holds its children's boxes in SoA form, so one visit slab-tests four (eight) boxes with float4
-(float8) arithmetic (Wald et al. 2008, "Getting rid of packets: efficient SIMD single-ray traversal using multi-branching
-BVHs"; Dammertz et al. 2008, "Shallow bounding volume hierarchies for fast SIMD ray tracing"). A node is formed
-from a binary interior node by repeatedly opening its largest-area interior child (replacing it with its two
-children) until it has four (eight) children or only leaves remain, the greedy rule of the papers above. The collapse
-works one level of wide nodes at a time, with the same numpy calls for every node of the level.
+(float8) arithmetic (Wald et al. 2008, "Getting rid of packets: efficient SIMD single-ray traversal using
+multi-branching BVHs"; Dammertz et al. 2008, "Shallow bounding volume hierarchies for fast SIMD ray tracing"). A
+node is formed from a binary interior node by repeatedly opening its largest-area interior child (replacing it with
+its two children) until it has four (eight) children or only leaves remain, the greedy rule of the papers above.
+The collapse works one level of wide nodes at a time, with the same numpy calls for every node of the level.
 
 Layout (mirrors `BVH4Node` and `BVH8Node` in kernels/types.h): child_min[axis][k], child_max[axis][k] the box of
 child k; child[k] a wide node index when count[k] == 0, the first triangle slot of a leaf when count[k] > 0; an unused
@@ -30,6 +30,7 @@ def _node_dtype(width: int) -> np.dtype:
             "itemsize": 2 * boxes + 8 * width,
         }
     )
+
 
 BVH4_NODE_DTYPE = _node_dtype(4)  # 128 bytes
 BVH8_NODE_DTYPE = _node_dtype(8)  # 256 bytes

@@ -2,14 +2,16 @@
 arithmetic.
 
 A leaf's triangles are tested one after the other in the binary traversal; in the 4-wide (8-wide) one they are
-tested four (eight) at a time, each lane one triangle (Wald et al. 2008 pack leaves the same way, for the same reason), which measured
-cheaper than the scalar loop on both CPU runtimes here (docs/performance.md, "Current figures").
+tested four (eight) at a time, each lane one triangle (Wald et al. 2008 pack leaves the same way, for the same
+reason), which measured cheaper than the scalar loop on both CPU runtimes here (docs/performance.md, "Current
+figures").
 
 Block layout for L lanes (4 or 8; 10 vectors of L floats, read by kernels/triangle4.cl and triangle8.cl): vector
 `3 * vertex + axis` holds that coordinate of the triangle's vertex 0, 1 or 2 in lanes 0..L-1, one triangle per lane;
 the last vector starts with four ints (first triangle slot, triangles in this block, 1 when another block of the
-same leaf follows, 0), zeros after them. A leaf of n triangles takes ceil(n / L) consecutive blocks; unused lanes hold zeros and are masked by the count. The leaf's
-triangles are the binary tree's slots, so prim_order and every per-triangle array are unchanged.
+same leaf follows, 0), zeros after them. A leaf of n triangles takes ceil(n / L) consecutive blocks; unused lanes
+hold zeros and are masked by the count. The leaf's triangles are the binary tree's slots, so prim_order and every
+per-triangle array are unchanged.
 """
 
 import numpy as np
