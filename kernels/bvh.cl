@@ -174,8 +174,8 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
  * children's boxes as float8; the hit ones go onto the stack by insertion, farthest deepest, and the nearest is popped
  * and entered at once. A leaf is a run of blocks of eight triangles (triangle8.cl) after the nodes in the same buffer.
  * Stack references as in trace_bvh4: a node index (>= 0), or ~(float4 offset of a leaf's first block).
- * BVH8_STACK_SIZE entries of 8 bytes (776 bytes with MAX_DEPTH 64): the collapse bounds the entries a path pushes
- * (bvh4.py collapse, extra_pushes). */
+ * BVH8_STACK_SIZE entries of 8 bytes (96: 768 bytes of private memory): the collapse bounds the entries a path
+ * pushes to fit (bvh4.py collapse, stack_size). */
 inline Hit trace_bvh8(__global const BVH8Node *nodes, __global const float4 *triangle_vertices, Ray ray,
                       float t_max, int any_hit)
 {

@@ -60,9 +60,9 @@ def test_scaling_rays_and_quality_modes(modes):
     rays = out["rays"]
     assert rays["triangles"] == 320 and rays["rays"] == 3000
     assert rays["bvh"]["sah_cost"] > 0 and rays["bvh"]["nodes"] >= 1
-    # The tree the kernel walks: 4-wide nodes, and leaves of up to 8 triangles in blocks of four, so at least
+    # The tree the kernel walks: wide nodes, and leaves of up to 8 triangles in blocks of four or eight, so at least
     # ceil(320 / 8) leaves' worth of blocks and at most one block per triangle.
-    assert 1 <= rays["bvh"]["nodes_4wide"] < rays["bvh"]["nodes"] and rays["bvh"]["depth_4wide"] <= rays["bvh"]["depth"]
+    assert 1 <= rays["bvh"]["nodes_wide"] < rays["bvh"]["nodes"] and rays["bvh"]["depth_wide"] <= rays["bvh"]["depth"]
     assert 320 // 8 <= rays["bvh"]["leaf_blocks"] <= 320
     assert len(rays["spectrace"]) == 1 and rays["spectrace"][0]["rays_per_second"] > 0
 

@@ -1,10 +1,12 @@
-"""The 4-wide collapse of the binary BVH: same leaves, boxes that bound their subtrees, a tree (not a DAG)."""
+"""The 4- and 8-wide collapses of the binary BVH: same leaves, boxes that bound their subtrees, a tree (not a DAG),
+and a traversal stack that the 8-wide kernel's cannot overflow."""
 
 import numpy as np
 import pytest
 
 from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh4 import collapse_to_bvh4
+from spectrace.geometry.bvh import MAX_DEPTH
+from spectrace.geometry.bvh4 import BVH8_STACK_SIZE, collapse, collapse_to_bvh4
 
 
 def _soup(seed, count):
@@ -13,11 +15,12 @@ def _soup(seed, count):
     return centres + rng.normal(0, 0.05, (count, 3, 3))
 
 
+@pytest.mark.parametrize("width", [4, 8])
 @pytest.mark.parametrize("count", [1, 2, 5, 37, 2000])
-def test_collapse_keeps_every_leaf_and_bounds_every_subtree(count):
+def test_collapse_keeps_every_leaf_and_bounds_every_subtree(count, width):
     triangles = _soup(count, count)
     bvh = build_bvh(triangles[:, 0], triangles[:, 1], triangles[:, 2])
-    nodes, depth = collapse_to_bvh4(bvh)
+    nodes, depth = collapse(bvh, width)
     assert 1 <= depth <= max(bvh.depth, 1)
 
     child, counts = nodes["child"], nodes["count"]
@@ -57,3 +60,34 @@ def test_interior_nodes_fill_their_four_slots_while_they_can():
     nodes, depth = collapse_to_bvh4(bvh)
     assert np.all(nodes["count"] >= 0)
     assert depth == 3 and len(nodes) == 1 + 4 + 16
+
+
+def _largest_stack(nodes):
+    """Most entries a traversal can hold: at a node, the (children - 1) its ancestors and itself pushed, plus one
+    for the kernel's push of every hit child before it pops the nearest."""
+    used = (nodes["count"] >= 0).sum(axis=1)
+    pending = np.zeros(len(nodes), np.int64)
+    pending[0] = used[0] - 1
+    for node in range(len(nodes)):  # parents come before their children in the level order
+        inner = nodes["count"][node] == 0
+        pending[nodes["child"][node][inner]] = pending[node] + used[nodes["child"][node][inner]] - 1
+    return int(pending.max()) + 1
+
+
+def test_eight_wide_stack_bound_holds_on_a_deep_tree():
+    """A chain of ever smaller boxes makes the binary tree deep; the 8-wide collapse must keep the stack within
+    BVH8_STACK_SIZE there, and with a small stack give nodes fewer children rather than overflow it."""
+    sizes = 0.5 ** np.arange(120)
+    triangles = np.stack([np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]) * s + s for s in sizes])
+    triangles = np.concatenate([triangles, _soup(3, 3000)])
+    bvh = build_bvh(triangles[:, 0], triangles[:, 1], triangles[:, 2], max_leaf_size=1)
+    assert bvh.depth > 30, "the case must be deep"
+    nodes, depth = collapse(bvh, 8)
+    assert depth <= MAX_DEPTH and _largest_stack(nodes) <= BVH8_STACK_SIZE
+    unbounded, _ = collapse(bvh, 8, stack_size=8 * MAX_DEPTH)
+    small = bvh.depth + 4
+    tight, _ = collapse(bvh, 8, stack_size=small)
+    assert _largest_stack(tight) <= small < _largest_stack(unbounded)
+    # Where the stack allows it, nodes keep their full width: the same tree as with no bound.
+    wide, _ = collapse(bvh, 8, stack_size=_largest_stack(unbounded) + bvh.depth)
+    np.testing.assert_array_equal(wide["child"], unbounded["child"])

@@ -1,7 +1,7 @@
 """`spectrace bench build`: the BVH build of a large mesh, against Mitsuba 3 loading the same mesh.
 
 spectrace's side is what a render pays, and reports, for its acceleration structure: the binary SAH build
-(spectrace.geometry.bvh) and the 4-wide node buffer with its leaf blocks (spectrace.geometry.bvh4), timed in wall
+(spectrace.geometry.bvh) and the wide node buffer with its leaf blocks (spectrace.geometry.bvh4), timed in wall
 and CPU seconds, with the most memory either allocated at once (tracemalloc, which numpy reports its arrays to).
 Mitsuba's side is its whole `load_dict` of the same triangles, written as binary PLY files (or the PLY files given):
 reading the files, merging the shapes and building its own BVH (Embree in the scalar variants); or, given the
@@ -82,7 +82,7 @@ def read_meshes(paths: list[Path]) -> tuple[TriangleMesh, list[Path]]:
 
 
 def spectrace_build(mesh: TriangleMesh) -> dict:
-    """The binary build and the 4-wide node buffer, as a render makes them (and reports them: the vertices put in
+    """The binary build and the wide node buffer, as a render makes them (and reports them: the vertices put in
     leaf order between the two are scene assembly, not counted); traced once more for the memory."""
     v0, v1, v2 = mesh.triangles()
 
@@ -195,7 +195,7 @@ def build_tables(result: dict) -> list:
         table.add_column(column, justify="left" if not column else "right")
     ours = result["best"]["spectrace"]
     table.add_row(
-        "spectrace build + 4-wide nodes",
+        "spectrace build + wide nodes",
         f"{ours['seconds']:.2f}",
         f"{ours['cpu_seconds']:.2f}",
         f"{ours['peak_traced_bytes'] / 2**20:.0f} (traced)",

@@ -24,10 +24,10 @@ import pyopencl as cl
 from spectrace.device import open_device
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, collapse_to_bvh4, device_nodes, traversal_defines
+from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, TRAVERSAL_WIDTH, collapse, device_nodes, traversal_defines
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, icosphere
-from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
+from spectrace.geometry.triangle_blocks import BLOCK_VECTORS
 
 DISTANCE_CHECK_RAYS = 20000
 
@@ -103,12 +103,14 @@ def _leaf_order_vertices(mesh: TriangleMesh, bvh) -> np.ndarray:
 
 
 def traversal_tree_stats(bvh, node_buffer: np.ndarray) -> dict:
-    """The tree the kernel traverses: the 4-wide collapse and its leaf blocks, and the node buffer's size."""
-    nodes4, depth4 = collapse_to_bvh4(bvh)
-    blocks = (node_buffer.nbytes - nodes4.nbytes) // (16 * LEAF_BLOCK_FLOAT4S)
+    """The tree the kernel traverses: the wide collapse (TRAVERSAL_WIDTH) and its leaf blocks, and the node buffer's
+    size."""
+    nodes, depth = collapse(bvh, TRAVERSAL_WIDTH)
+    blocks = (node_buffer.nbytes - nodes.nbytes) // (4 * BLOCK_VECTORS * TRAVERSAL_WIDTH)
     return {
-        "nodes_4wide": int(len(nodes4)),
-        "depth_4wide": int(depth4),
+        "width": TRAVERSAL_WIDTH,
+        "nodes_wide": int(len(nodes)),
+        "depth_wide": int(depth),
         "leaf_blocks": int(blocks),
         "node_buffer_bytes": int(node_buffer.nbytes),
     }
@@ -270,8 +272,8 @@ def rays_tables(result: dict) -> list:
         "nodes",
         "depth",
         "SAH cost",
-        "4-wide nodes",
-        "4-wide depth",
+        "wide nodes",
+        "wide depth",
         "leaf blocks",
         "node buffer MiB",
     ):
@@ -284,8 +286,8 @@ def rays_tables(result: dict) -> list:
         str(bvh["nodes"]),
         str(bvh["depth"]),
         f"{bvh['sah_cost']:.1f}",
-        str(bvh["nodes_4wide"]),
-        str(bvh["depth_4wide"]),
+        str(bvh["nodes_wide"]),
+        str(bvh["depth_wide"]),
         str(bvh["leaf_blocks"]),
         f"{bvh['node_buffer_bytes'] / 2**20:.0f}",
     )

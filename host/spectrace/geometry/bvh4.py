@@ -37,11 +37,10 @@ BVH8_NODE_DTYPE = _node_dtype(8)  # 256 bytes
 
 NODE_DTYPES = {4: BVH4_NODE_DTYPE, 8: BVH8_NODE_DTYPE}
 
-# Extra stack entries an 8-wide path may take beyond one per level (see collapse): with one entry per level of a
-# tree at most MAX_DEPTH deep, the 8-wide kernel's stack (kernels/bvh.cl BVH8_STACK_SIZE) never overflows.
-BVH8_EXTRA_PUSHES = 32
-# The kernel pushes a node's hit children before it pops the nearest: one entry more than the bound of collapse.
-BVH8_STACK_SIZE = MAX_DEPTH + BVH8_EXTRA_PUSHES + 1
+# Entries of the 8-wide kernel's stack (kernels/bvh.cl BVH8_STACK_SIZE, 8 bytes each): the collapse gives a node
+# fewer children where more could overflow it (collapse, stack_size). 96 leaves every node of the living room
+# (295k triangles, stack need 65) its full width; any tree the builder makes (depth <= MAX_DEPTH) fits.
+BVH8_STACK_SIZE = 96
 
 
 def collapse_to_bvh4(bvh: BVH) -> tuple[np.ndarray, int]:
@@ -49,45 +48,52 @@ def collapse_to_bvh4(bvh: BVH) -> tuple[np.ndarray, int]:
     return collapse(bvh, 4)
 
 
-def collapse(bvh: BVH, width: int, extra_pushes: int | None = None) -> tuple[np.ndarray, int]:
+def collapse(bvh: BVH, width: int, stack_size: int | None = None) -> tuple[np.ndarray, int]:
     """(nodes, depth): the `width`-wide tree (4 or 8) over the same leaves as `bvh`, and its longest root-to-leaf
     path in edges.
 
-    extra_pushes bounds the traversal stack: a visit pushes at most (children - 1) entries, and every entry on the
-    stack was pushed by an ancestor of the node being visited, so the stack never holds more than the sum of
-    (children - 1) over a root-to-node path. A node is given fewer children where that sum less the path's length
-    would pass extra_pushes (default: none for width 4, whose bound 3 per level is the kernel's stack; for width 8
-    BVH8_EXTRA_PUSHES), so the stack holds at most depth + extra_pushes <= MAX_DEPTH + extra_pushes entries."""
+    stack_size bounds the traversal stack. Every entry on the stack was pushed by an ancestor of the node being
+    visited, and a visit pushes at most its node's (children - 1) (the kernel pushes all of them, then pops one), so
+    the stack never holds more than 1 + the sum of (children - 1) over a root-to-node path. A node gets fewer
+    children where that sum, plus one entry for each level its binary subtree could still add below it with two
+    children a node, would pass stack_size; two children always fit while the binary tree's height stays below
+    stack_size. Default: no bound for width 4 (its kernel's stack holds three entries a level), BVH8_STACK_SIZE for
+    width 8."""
     if width not in NODE_DTYPES:
         raise ValueError(f"BVH width must be 4 or 8, got {width}")
-    if extra_pushes is None:
-        extra_pushes = BVH8_EXTRA_PUSHES if width == 8 else (width - 2) * MAX_DEPTH
+    if stack_size is None:
+        stack_size = BVH8_STACK_SIZE if width == 8 else (width - 1) * MAX_DEPTH + 1
     binary = bvh.nodes
     is_leaf = binary["count"] > 0
+    height = _binary_heights(binary, is_leaf)
+    if height[0] >= stack_size:
+        raise ValueError(f"a binary BVH {height[0]} deep does not fit a {width}-wide stack of {stack_size}")
     box_min = binary["bmin"].astype(np.float64)
     box_max = binary["bmax"].astype(np.float64)
     extent = np.maximum(box_max - box_min, 0.0)
     # Half the surface area: only its ranking matters, to pick which child to open.
     area = extent[:, 0] * extent[:, 1] + extent[:, 1] * extent[:, 2] + extent[:, 2] * extent[:, 0]
 
+    def open_level(parents: np.ndarray, pushed_above: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The children of the wide nodes made from `parents`, and the pushes on the path to each, its own included."""
+        most = stack_size - pushed_above - height[parents] + 1
+        children = _open_children(parents, binary, is_leaf, area, width, most)
+        return children, pushed_above + (children >= 0).sum(axis=1) - 1
+
     if is_leaf[0]:
         level = np.full((1, width), -1, dtype=np.int64)
         level[0, 0] = 0
-        extra = np.zeros(1, np.int64)
+        pushed = np.zeros(1, np.int64)
     else:
-        level = _open_children(np.array([0]), binary, is_leaf, area, width, np.array([extra_pushes]))
-        extra = (level >= 0).sum(axis=1) - 2
+        level, pushed = open_level(np.array([0]), np.zeros(1, np.int64))
     levels = []
     while level.shape[0] > 0:
         levels.append(level)
         inner = (level >= 0) & ~is_leaf[np.maximum(level, 0)]
-        parents = level[inner]
-        if not parents.size:
+        if not inner.any():
             break
-        # Extra pushes already spent on the path to each new node: its parent's, row-major like `parents`.
-        spent = np.broadcast_to(extra[:, None], level.shape)[inner]
-        level = _open_children(parents, binary, is_leaf, area, width, extra_pushes - spent)
-        extra = spent + (level >= 0).sum(axis=1) - 2
+        # Row-major, like the wide nodes of the next level: each inherits its parent's pushes.
+        level, pushed = open_level(level[inner], np.broadcast_to(pushed[:, None], level.shape)[inner])
 
     dtype = NODE_DTYPES[width]
     node_count = sum(rows.shape[0] for rows in levels)
@@ -111,11 +117,29 @@ def collapse(bvh: BVH, width: int, extra_pushes: int | None = None) -> tuple[np.
     return nodes, len(levels)
 
 
+def _binary_heights(binary: np.ndarray, is_leaf: np.ndarray) -> np.ndarray:
+    """Edges from each binary node down to its deepest leaf: the levels found from the root down, then the heights
+    from the deepest level up, one numpy step per level."""
+    levels = [np.array([0])]
+    while True:
+        inner = levels[-1][~is_leaf[levels[-1]]]
+        if not inner.size:
+            break
+        left = binary["left_first"][inner].astype(np.int64)
+        levels.append(np.concatenate([left, left + 1]))
+    height = np.zeros(len(binary), np.int64)
+    for nodes in levels[-2::-1]:
+        inner = nodes[~is_leaf[nodes]]
+        left = binary["left_first"][inner].astype(np.int64)
+        height[inner] = 1 + np.maximum(height[left], height[left + 1])
+    return height
+
+
 def _open_children(
-    parents: np.ndarray, binary: np.ndarray, is_leaf: np.ndarray, area: np.ndarray, width: int, spare: np.ndarray
+    parents: np.ndarray, binary: np.ndarray, is_leaf: np.ndarray, area: np.ndarray, width: int, most: np.ndarray
 ) -> np.ndarray:
-    """(P, width) binary node ids (-1 unused) of the children of the wide nodes made from binary interior `parents`.
-    spare: (P,) how many children beyond two each node may have (the stack bound of collapse)."""
+    """(P, width) binary node ids (-1 unused) of the children of the wide nodes made from binary interior `parents`,
+    at most `most` (P,) children each (and at least two)."""
     left = binary["left_first"][parents].astype(np.int64)
     children = np.full((parents.size, width), -1, dtype=np.int64)
     children[:, 0] = left
@@ -126,7 +150,7 @@ def _open_children(
         openable = (children >= 0) & ~is_leaf[safe]
         score = np.where(openable, area[safe], -1.0)
         pick = np.argmax(score, axis=1)
-        can = openable[rows, pick] & (used - 2 < spare)
+        can = openable[rows, pick] & (used < most)
         opened = children[rows[can], pick[can]]
         first_child = binary["left_first"][opened].astype(np.int64)
         children[rows[can], pick[can]] = first_child
