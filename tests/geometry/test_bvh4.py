@@ -4,8 +4,7 @@ and a traversal stack that the 8-wide kernel's cannot overflow."""
 import numpy as np
 import pytest
 
-from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh import MAX_DEPTH
+from spectrace.geometry.bvh import MAX_DEPTH, build_bvh
 from spectrace.geometry.bvh4 import BVH8_STACK_SIZE, collapse, collapse_to_bvh4
 
 
