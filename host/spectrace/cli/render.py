@@ -122,8 +122,9 @@ def render(
         typer.Option(
             "--denoise",
             help="Denoise with Open Image Denoise (the spectrace[denoise] extra), guided by the albedo and normal "
-            "AOVs, the directly seen emission exchanged for its expected value (the emission AOV; all recorded for "
-            "it); --output gets the denoised image, <stem>.noisy<suffix> beside it the noisy one.",
+            "AOVs (recorded for it); the emitters seen directly are rendered apart by camera rays alone at "
+            "max(32, 2 spp) and replace the image's own (docs/integrators.md). --output gets the denoised image, "
+            "<stem>.noisy<suffix> beside it the noisy one.",
         ),
     ] = False,
     kernel: Annotated[
@@ -259,10 +260,12 @@ def render(
         if image.spp == 0:
             raise SpectraceError("interrupted before the first pass finished; nothing written")
         if noisy is not None:
-            from spectrace.denoising import denoise as denoise_image
-
             _write_image(outputs.apply(image), noisy, xyz, state_file)
-            image = denoise_image(image)
+            from spectrace.denoising import denoise_with_emission_pass
+
+            image = denoise_with_emission_pass(
+                loaded, image, renderer.device, log=lambda text: console.print(text, highlight=False, markup=False)
+            )
         _write_image(outputs.apply(image), output, xyz, state_file)
         outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False, markup=False))
     pixels = image.width * image.height * image.spp
