@@ -82,6 +82,15 @@ def render(
         ),
     ] = None,
     false_color_scale: Annotated[str, typer.Option(help="Scale of the false-colour map: log or linear.")] = "log",
+    pixel_filter: Annotated[
+        str | None,
+        typer.Option(
+            "--filter",
+            help="Pixel filter, replacing the scene's film.filter: TYPE or TYPE:KEY=VALUE,... with TYPE box, tent, "
+            "gaussian or mitchell and the keys of docs/scene-format.md's filter table, e.g. "
+            "gaussian:stddev=0.5,radius=2.",
+        ),
+    ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
     checkpoint: Annotated[
         Path | None,
@@ -181,8 +190,20 @@ def render(
     cli_checks.check_seed(seed)
     cli_checks.check_max_depth(max_depth)
     cli_checks.check_exposure(exposure)
+    chosen_filter = None
+    if pixel_filter is not None:
+        from spectrace.pixel_filters import parse_filter_option
+
+        chosen_filter = parse_filter_option(pixel_filter)
     loaded = load_scene(scene).with_overrides(
-        spp=spp, width=width, height=height, seed=seed, max_depth=max_depth, exposure=exposure, sampler=sampler
+        spp=spp,
+        width=width,
+        height=height,
+        seed=seed,
+        max_depth=max_depth,
+        exposure=exposure,
+        sampler=sampler,
+        pixel_filter=chosen_filter,
     )
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
