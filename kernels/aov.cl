@@ -22,8 +22,9 @@
  *            value over the wavelengths, the film XYZ of the emitted spectrum (the trapezoid rule on the grid,
  *            as the film's tables are integrated). The expected value carries none of the colour noise of four
  *            sampled wavelengths, which the directly seen emitters of a short render are full of; the denoiser
- *            takes the sampled part out of the image and adds the expected part back (spectrace.denoising), a
- *            conditional expectation (Rao-Blackwellisation) of that part of the estimator. A sample whose camera
+ *            takes the sampled part out of the image and adds back the expected part of a longer pass of camera
+ *            rays alone (max_depth 1; spectrace.denoising), or the image's own, a conditional expectation
+ *            (Rao-Blackwellisation) of that part of the estimator. A sample whose camera
  *            throughput differs between its wavelengths (a medium on the way) or whose wavelengths are one
  *            (sensors) records the sampled value for both.
  * The film keeps per pixel three float4 sums over the samples in sample order (split-invariant like the film):

@@ -17,7 +17,11 @@
  *   A = 4 |camera_right| |camera_up| (scene units²) through the camera's plane, so a point is seen along exactly one
  *   ray, from its projection on that plane; the direction is a delta, and the estimate is 1 / A (per unit area of
  *   the point's surface projected on the plane, the surface's cosine toward the camera being the caller's).
- * Other cameras (equirectangular) are refused by the host for light tracing.
+ * - The equirectangular camera (camera.cl): film position (u, v) in [0, 1]² looks along θ = π v from camera_up and
+ *   φ = 2π u − π around it from camera_forward, a uniform density on the film, so over directions
+ *   p(ω) = 1 / (2π² sin θ) (dω = sin θ dθ dφ = 2π² sin θ du dv): that is We, with no film plane to add a cosine,
+ *   and the estimate is 1 / (2π² sin θ d²). Points on the axis (sin θ = 0) are not seen. The host takes it with the
+ *   box filter only: a wider filter would have to wrap around the seam and the poles, as a camera path's does.
  *
  * With a pixel filter wider than the box, a point up to (radius − ½) pixels beyond the film's edge still adds to the
  * edge pixels (as a camera path's filter-sampled position may fall there): such points are seen too. */
@@ -25,6 +29,7 @@
 #define SPECTRACE_CAMERA_IMPORTANCE_CL
 
 #include "types.h"
+#include "camera.cl"
 #include "sampling.cl"
 
 typedef struct {
@@ -77,6 +82,24 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
         c.distance = depth - near;
         c.lens = x - c.distance * forward;
         c.importance = 1.0f / area;
+        return c;
+    }
+    if (CAMERA_IS(params, CAMERA_EQUIRECTANGULAR)) {
+        float3 d = x - eye;
+        float dist = length(d);
+        if (!(dist > near)) return c;
+        float3 dir = d / dist;
+        float cos_theta = clamp(dot(dir, normalize(up)), -1.0f, 1.0f);
+        float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+        if (!(sin_theta > 0.0f)) return c;
+        float phi = atan2(dot(dir, normalize(right)), dot(dir, normalize(forward)));
+        float fx = (0.5f + phi / (2.0f * CAMERA_PI)) * (float)params->width;
+        float fy = acos(cos_theta) / CAMERA_PI * (float)params->height;
+        if (!land_on_film(params, fx, fy, &c)) return c;
+        c.to_camera = -dir;
+        c.distance = dist;
+        c.lens = eye + near * dir;
+        c.importance = 1.0f / (2.0f * CAMERA_PI * CAMERA_PI * sin_theta * dist * dist);
         return c;
     }
     float3 lens_point = eye;

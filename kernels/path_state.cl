@@ -171,6 +171,41 @@ inline float4 vertex_emission(const Scene *scene, const SampledWavelengths *w, c
     return area_light_emitted(&scene->lights[v->info.light], &textures, w, v->n, v->wo, hit_uv(scene, hit));
 }
 
+#if FILM_AOVS
+/* The film XYZ of the emission the camera ray meets, integrated over the grid (aov.cl's emission AOV): the area
+ * light at v, or the environment in direction d when v is 0. Only for camera rays, so its cost (GRID_SAMPLES
+ * evaluations) is paid once per sample that sees an emitter. Both integrators record it. */
+inline float4 expected_camera_emission(const Scene *scene, __global const float4 *cmf, const PathVertex *v, Hit hit,
+                                       float3 d)
+{
+    float4 xyz = (float4)(0.0f);
+    for (int i = 0; i < GRID_SAMPLES; i += 4) {
+        float4 lambda;
+        float4 weight = aov_grid_weights(i, &lambda);
+        SampledWavelengths g = wavelengths_on_grid(lambda, (float4)(1.0f));
+        float4 emitted;
+        if (v) {
+            emitted = vertex_emission(scene, &g, v, hit);
+        } else {
+            __global const Light *env = &scene->lights[scene->params->environment_light];
+            emitted = environment_radiance(env, scene->spectra, scene->texels, &g, d);
+        }
+        xyz += aov_grid_xyz(cmf, i, weight, emitted);
+    }
+    return xyz;
+}
+
+inline void record_camera_emission(const Scene *scene, const SampledWavelengths *w, PathState *s, float4 emitted,
+                                   float weight, const PathVertex *v, Hit hit)
+{
+    if (s->segments != 1 || scene->film_cmf == 0) return;
+    int expectable = aov_emission_expectable(s->throughput, w);
+    float4 expected = expectable ? expected_camera_emission(scene, scene->film_cmf, v, hit, s->ray.direction)
+                                 : (float4)(0.0f);
+    aov_at_camera_emission(&s->aov, scene->film_cmf, s->throughput, emitted, weight, expected, expectable, w);
+}
+#endif
+
 /* At a material-less (index-matched) medium boundary the ray goes on unchanged into or out of the shape's
  * interior: no vertex, and the segment it is goes on too. Returns 0 when the path has crossed too many (a ray
  * caught on a boundary by rounding). */

@@ -21,15 +21,24 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
         int hidden = (params->hide_emitters & HIDE_ENVIRONMENT) && s->segments == 1;  /* the camera's rays see black */
         if (SCENE_HAS_ENVIRONMENT && params->environment_light >= 0 && !hidden) {
             __global const Light *env = &scene->lights[params->environment_light];
-            *radiance += s->throughput * environment_radiance(env, scene->spectra, scene->texels, w,
-                                                              s->ray.direction);
+            float4 emitted = environment_radiance(env, scene->spectra, scene->texels, w, s->ray.direction);
+            *radiance += s->throughput * emitted;
+#if FILM_AOVS
+            record_camera_emission(scene, w, s, emitted, 1.0f, 0, hit);
+#endif
         }
         return 0;
     }
     PathVertex v = path_vertex(scene, hit, s->ray);
     int live;
     if (record_surface_reached(s, &v, hit.t, params, &live)) return live;
-    if (v.info.light >= 0) *radiance += s->throughput * vertex_emission(scene, w, &v, hit);
+    if (v.info.light >= 0) {
+        float4 emitted = vertex_emission(scene, w, &v, hit);
+        *radiance += s->throughput * emitted;
+#if FILM_AOVS
+        record_camera_emission(scene, w, s, emitted, 1.0f, &v, hit);
+#endif
+    }
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
     if (s->segments >= last_segment) return 0;
 

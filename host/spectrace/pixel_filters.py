@@ -134,6 +134,32 @@ def mitchell_1d(x: np.ndarray, b: float, c: float) -> np.ndarray:
     return np.where(x < 1.0, inner, np.where(x < 2.0, outer, 0.0))
 
 
+def parse_filter_option(text: str, where: str = "--filter") -> PixelFilter:
+    """A pixel filter from the command line's form, `TYPE` or `TYPE:KEY=VALUE,KEY=VALUE` (`gaussian:stddev=0.5,
+    radius=2`), the keys those of FILTERS; anything else raises a SpectraceError at `where`."""
+    name, _, rest = text.strip().partition(":")
+    name = name.strip()
+    if name not in FILTERS:
+        raise SpectraceError(f"unknown pixel filter {name!r}; one of {', '.join(FILTERS)}", where=where)
+    keys = [parameter.name for parameter in FILTERS[name]]
+    values: dict[str, float] = {}
+    for item in (part.strip() for part in rest.split(",")) if rest.strip() else ():
+        key, equals, value = (piece.strip() for piece in item.partition("="))
+        if key not in keys:
+            allowed = f"its keys are {', '.join(keys)}" if keys else "it has no keys"
+            raise SpectraceError(f"{name} filter has no key {key!r} ({allowed})", where=where)
+        if not equals or key in values:
+            raise SpectraceError(f"give each key once as {key}=NUMBER, got {item!r}", where=where)
+        try:
+            values[key] = float(value)
+        except ValueError:
+            raise SpectraceError(f"{key} must be a number, got {value!r}", where=where) from None
+    try:
+        return PixelFilter(name, **values)  # type: ignore[arg-type]
+    except SpectraceError as error:
+        raise SpectraceError(error.message, where=where) from None
+
+
 def from_spec(spec) -> PixelFilter:
     """A `film.filter` value from the schema: a type name, or a table with `type` and that type's keys."""
     if spec is None:

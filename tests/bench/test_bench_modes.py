@@ -232,3 +232,15 @@ def test_peer_mode_renders_the_living_room_scene():
     assert peer["mitsuba"], peer["notes"]
     for pair in peer["agreement"]:
         assert pair["agrees"], pair
+
+
+def test_denoise_mode_reports_what_it_rendered():
+    """Tiny sizes, figures not judged: the emission pass has max(32, 2 spp) samples, the equal-time render at least
+    the asked spp, and each ratio is the noisy RMSE over that column's."""
+    pytest.importorskip("pyoidn", reason="the denoise extra (pyoidn) is not installed")
+    result = _bench("denoise", "--size", "16", "--spp", "2", "--reference-spp", "8", "--seeds", "1")["denoise"]
+    assert result["spp"] == 2 and result["emission_pass_spp"] == 32 and result["equal_time_spp"] >= 2
+    assert [row["metric"] for row in result["rows"]] == ["xyz", "xyz_away", "display"]
+    for row in result["rows"]:
+        for label in ("equal_time", "whole", "exchanged", "denoised"):
+            assert row[f"ratio_{label}"] == pytest.approx(row["noisy"] / row[label])

@@ -74,3 +74,61 @@ def test_orthographic_pbrt_scene_renders_a_square_at_its_size(tmp_path, device):
     renderer.render(spp=4)
     lit = renderer.image().xyz[..., 1] > 0.5
     assert lit.sum() == 100 and lit[5:15, 15:25].all()
+
+
+def _pbrt_equirect_direction(u: float, v: float) -> np.ndarray:
+    """pbrt-v4's spherical camera, mapping "equirect" (cameras.cpp, SphericalCamera::GenerateRay): film position
+    (u, v) in [0, 1]² looks along θ = π v, φ = 2π u, camera-space direction (sin θ cos φ, cos θ, sin θ sin φ)
+    (SphericalDirection, then y and z swapped)."""
+    theta, phi = np.pi * v, 2.0 * np.pi * u
+    return np.array([np.sin(theta) * np.cos(phi), np.cos(theta), np.sin(theta) * np.sin(phi)])
+
+
+@pytest.mark.parametrize(
+    ("header", "camera_to_world"),
+    [
+        ("LookAt 0 0 0  0 0 1  0 1 0", np.eye(3)),  # pbrt's LookAt: camera +x = up × forward = world +x
+        ("Scale -1 1 1\nLookAt 0 0 0  0 0 1  0 1 0", np.diag([-1.0, 1.0, 1.0])),  # the exporters' mirrored camera
+    ],
+    ids=["lookat", "mirrored"],
+)
+def test_spherical_equirect_camera_sees_each_direction_where_pbrt_does(tmp_path, device, header, camera_to_world):
+    """A small emitting sphere placed along the direction pbrt's equirect mapping gives film position (u, v) is
+    rendered by the imported equirectangular camera at that position: the centroid of its light lies within half a
+    pixel of (u, v). The positions are off the image's centre line and its middle row, so a mirrored or flipped
+    image would put them elsewhere."""
+    width, height = 64, 32
+    for u, v in ((0.25, 0.5), (0.5, 1.0 / 3.0), (0.625, 0.65), (0.85, 0.3)):
+        position = 10.0 * camera_to_world @ _pbrt_equirect_direction(u, v)
+        path = tmp_path / "spherical.pbrt"
+        path.write_text(
+            f"""{header}
+Camera "spherical" "string mapping" "equirect"
+Film "rgb" "integer xresolution" {width} "integer yresolution" {height}
+PixelFilter "box"
+WorldBegin
+AttributeBegin
+Translate {position[0]} {position[1]} {position[2]}
+AreaLightSource "diffuse" "rgb L" [1 1 1]
+Shape "sphere" "float radius" 0.8
+AttributeEnd
+"""
+        )
+        scene = load_pbrt_scene(path)
+        assert scene.camera.type == "equirectangular"
+        image = Renderer(scene.with_overrides(spp=16, max_depth=1), device).render(spp=16)
+        y = image.xyz[..., 1].astype(np.float64)
+        assert y.sum() > 0
+        rows, columns = np.mgrid[0:height, 0:width] + 0.5
+        column, row = (columns * y).sum() / y.sum(), (rows * y).sum() / y.sum()
+        assert abs(column - u * width) <= 0.5 and abs(row - v * height) <= 0.5, (u, v, column, row)
+
+
+@pytest.mark.parametrize("camera", ['Camera "spherical"', 'Camera "spherical" "string mapping" "equalarea"'])
+def test_spherical_equal_area_camera_is_refused_in_one_line(tmp_path, camera):
+    from spectrace.errors import SpectraceError
+
+    with pytest.raises(SpectraceError) as caught:
+        load_pbrt_scene(_write(tmp_path, camera))
+    message = str(caught.value)
+    assert "\n" not in message and "scene.pbrt:3" in message and "equalarea" in message and "equirect" in message

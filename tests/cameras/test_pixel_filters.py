@@ -122,8 +122,7 @@ def test_a_filter_of_another_radius_and_width_is_its_own_convolution(device):
             del FILTERS["custom"]
 
 
-def test_the_scene_file_takes_a_filter_by_name_or_table(tmp_path):
-    base = """[camera]
+SCENE_TEXT = """[camera]
 origin = [0, 0, 5]
 target = [0, 0, 0]
 fov = 40
@@ -139,6 +138,10 @@ type = "sphere"
 material = "grey"
 emitter = {{ radiance = {{ value = 1 }} }}
 """
+
+
+def test_the_scene_file_takes_a_filter_by_name_or_table(tmp_path):
+    base = SCENE_TEXT
     cases = {
         "": spectrace.PixelFilter("box"),
         'filter = "tent"': spectrace.PixelFilter("tent"),
@@ -152,3 +155,49 @@ emitter = {{ radiance = {{ value = 1 }} }}
     path.write_text(base.format(filter='filter = { type = "gaussian", sigma = 0.3 }'))
     with pytest.raises(spectrace.SpectraceError, match="film.filter"):
         spectrace.load_scene(path)
+
+
+def test_the_filter_option_renders_as_the_scene_files_filter(monkeypatch, capsys, tmp_path):
+    """`spectrace render --filter gaussian:stddev=0.5,radius=1.5` gives the bits of the same scene whose film.filter
+    names that filter (the key whose renders the tests above check against the convolution), not the box's."""
+    from cli_runner import run_in_process
+    from spectrace.io.exr import read_exr
+
+    scenes = {}
+    for name, text in (("plain", ""), ("file", 'filter = { type = "gaussian", stddev = 0.5, radius = 1.5 }')):
+        scenes[name] = tmp_path / f"{name}.toml"
+        scenes[name].write_text(SCENE_TEXT.format(filter=text))
+    images = {}
+    for name, scene, option in (
+        ("option", scenes["plain"], ["--filter", "gaussian:stddev=0.5,radius=1.5"]),
+        ("file", scenes["file"], []),
+        ("box", scenes["plain"], []),
+    ):
+        out = tmp_path / f"{name}.exr"
+        argv = ["render", str(scene), "-o", str(out), "--spp", "4", "-q", *option]
+        status, err = run_in_process(monkeypatch, capsys, argv)
+        assert status in (0, None), err
+        images[name] = read_exr(out)[0]["RGB"]
+    np.testing.assert_array_equal(images["option"], images["file"])
+    assert not np.array_equal(images["option"], images["box"])
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("gauss", "unknown pixel filter 'gauss'"),
+        ("gaussian:sigma=1", "gaussian filter has no key 'sigma' (its keys are stddev, radius)"),
+        ("gaussian:stddev=x", "stddev must be a number, got 'x'"),
+        ("gaussian:stddev", "give each key once as stddev=NUMBER"),
+        ("tent:radius=20", "radius must lie in (0, 16] pixels"),
+        ("box:radius=1", "box filter has no key 'radius'"),
+    ],
+)
+def test_a_bad_filter_option_is_one_line_and_writes_nothing(monkeypatch, capsys, tmp_path, spec, message):
+    from cli_runner import render_cornell_box, run_in_process
+
+    out = tmp_path / "c.exr"
+    status, err = run_in_process(monkeypatch, capsys, [*render_cornell_box(out, 1, 8, 8), "--filter", spec])
+    assert status != 0
+    assert err.strip().count("\n") == 0 and "--filter" in err and message in err, err
+    assert not out.exists()

@@ -565,7 +565,8 @@ def test_realistic_camera_is_one_line(tmp_path, monkeypatch, capsys):
     code, stderr = run_in_process(monkeypatch, capsys, ["import-pbrt", str(path), "-o", str(tmp_path / "x.toml")])
     assert code != 0
     assert stderr.strip() == (
-        f"error: {path}:2: camera 'realistic': spectrace imports pbrt's perspective and orthographic cameras"
+        f"error: {path}:2: camera 'realistic': spectrace imports pbrt's perspective, orthographic and spherical "
+        '(mapping "equirect") cameras'
     )
 
 

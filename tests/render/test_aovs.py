@@ -239,13 +239,15 @@ def _film_xyz(radiance: np.ndarray) -> np.ndarray:
     return (radiance[:, None] * table).sum(axis=0) / table[:, 1].sum()
 
 
+@pytest.mark.parametrize("integrator", ["path", "direct"])
 @pytest.mark.parametrize("where", ["environment", "area light"])
-def test_the_emission_aov_is_the_expected_value_of_the_emission_seen(device, where):
+def test_the_emission_aov_is_the_expected_value_of_the_emission_seen(device, where, integrator):
     """A camera sees only emission (a constant environment, or an emitting square filling the view in front of a
     black one): the emission AOV is its spectrum's film XYZ in every pixel (colour-science's tables), without the
-    colour noise of sampled wavelengths, and emission_sampled is the image itself (all of it is that emission)."""
+    colour noise of sampled wavelengths, and emission_sampled is the image itself (all of it is that emission).
+    Both integrators that follow camera paths record it."""
     spectrum = spectrace.spectrum((WAVELENGTHS, EMISSION))
-    scene = _plane_scene(aovs=("emission",), spp=8)
+    scene = _plane_scene(aovs=("emission",), spp=8).with_overrides(integrator=integrator)
     if where == "environment":
         scene = scene.with_overrides(shapes=[], lights=[spectrace.constant_environment(spectrum)])
     else:

@@ -9,6 +9,8 @@ radiance averaged over what the pixel sees, computed here with numpy from the ca
   pinhole's ray through the film position reaches (pbrt-v4's and Mitsuba 3's thin lens); focused nearer than the
   floor, so each pixel averages the radiance over a blurred footprint and the strongly peaked centre spreads out
   (blocks differ from the pinhole's by up to 49 %).
+- equirectangular: the whole sphere of directions, each pixel's mean over its (u, v) square, the floor made smaller
+  so that all of it lies inside the cone.
 Block means of independent replicas within 5 standard errors.
 """
 
@@ -130,8 +132,60 @@ def test_floor_seen_through_other_cameras(device, tmp_path, camera):
     assert_within_standard_errors(mean, expected, standard_error)
 
 
-def test_equirectangular_camera_refused_in_one_line(device, tmp_path):
-    scene = spectrace.load_scene(_scene(tmp_path, 'type = "equirectangular"'))
-    with pytest.raises(SpectraceError, match="equirectangular") as error:
+def _expected_equirectangular(scene, supersample: int = 24) -> np.ndarray:
+    """Each pixel's mean over film positions uniform in it of the radiance along θ = π v, φ = 2π u − π (camera.cl's
+    equirectangular camera: θ from up, φ around it from forward toward right), 0 where the ray misses the floor
+    ([-FLOOR, FLOOR]², all of it inside the spot's cone), in blocks of BLOCK/2 pixels."""
+    origin, forward, right, up = scene.camera.basis(2.0)
+    width, height = 2 * SIZE, SIZE
+    offsets = (np.arange(supersample) + 0.5) / supersample
+    u = ((np.arange(width)[:, None] + offsets[None, :]).ravel()) / width
+    v = ((np.arange(height)[:, None] + offsets[None, :]).ravel()) / height
+    uu, vv = np.meshgrid(u, v, indexing="xy")
+    theta, phi = np.pi * vv, 2 * np.pi * uu - np.pi
+    directions = (
+        (np.sin(theta) * np.sin(phi))[..., None] * right
+        + np.cos(theta)[..., None] * up
+        + (np.sin(theta) * np.cos(phi))[..., None] * forward
+    )
+    downward = directions[..., 2] < -1e-9
+    t = np.where(downward, -origin[2] / np.where(downward, directions[..., 2], -1.0), 0.0)
+    hit = origin + t[..., None] * directions
+    on_floor = downward & (np.abs(hit[..., 0]) <= FLOOR) & (np.abs(hit[..., 1]) <= FLOOR)
+    origins = np.broadcast_to(origin, directions.shape)
+    radiance = np.where(on_floor, _radiance(origins, np.where(on_floor[..., None], directions, forward)), 0.0)
+    block = BLOCK // 2
+    return radiance.reshape(height // block, block * supersample, width // block, block * supersample).mean(axis=(1, 3))
+
+
+FLOOR = 2.0  # the equirectangular test's floor half-width: its corners (r < 2.9) lie inside the 80° cone (r < 3.4)
+
+
+def test_floor_seen_through_the_equirectangular_camera(device, tmp_path):
+    """The whole sphere of directions on a 2:1 film: the floor below, nothing elsewhere; the light tracer's
+    connections (importance 1/(2π² sin θ d²)) against the radiance averaged over each pixel's directions."""
+    text = _scene(tmp_path, 'type = "equirectangular"').read_text()
+    text = text.replace(f"width = {SIZE}", f"width = {2 * SIZE}").replace("scale = 6", f"scale = {FLOOR}")
+    path = tmp_path / "equirectangular.toml"
+    path.write_text(text, encoding="utf-8")
+    scene = spectrace.load_scene(path)
+    assert scene.camera.type == "equirectangular" and scene.width == 2 * SIZE
+    expected = _expected_equirectangular(scene)
+    images = spectrace_replicas(Renderer(scene, device), 8, 16)[..., 1]
+    block = BLOCK // 2
+    blocks = images.reshape(len(images), SIZE // block, block, 2 * SIZE // block, block).mean(axis=(2, 4))
+    mean, standard_error = mean_and_standard_error(blocks)
+    lit = expected > 0.05 * expected.max()
+    assert lit.sum() >= 8 and (~lit).sum() >= 8
+    assert np.all(standard_error[lit] < 0.05 * expected[lit])
+    assert_within_standard_errors(mean, expected, standard_error)
+
+
+def test_equirectangular_camera_with_a_wider_filter_refused_in_one_line(device, tmp_path):
+    text = _scene(tmp_path, 'type = "equirectangular"').read_text()
+    path = tmp_path / "filtered.toml"
+    path.write_text(text.replace(f"height = {SIZE}", f'height = {SIZE}\nfilter = "gaussian"'), encoding="utf-8")
+    scene = spectrace.load_scene(path)
+    with pytest.raises(SpectraceError, match="equirectangular camera with the box filter only") as error:
         Renderer(scene, device)
     assert "\n" not in str(error.value)

@@ -7,8 +7,11 @@ figure hides where the error is:
   sampling four wavelengths at Y ≈ 10, dominate it;
 - film XYZ away from the emitters (pixels of the reference below EMITTER_Y, less a ring of RING_PIXELS around them);
 - display sRGB (clipped to [0, 1] and encoded, what a viewer sees; 0..1 per channel).
-Each noisy render is denoised twice: whole (the image as it is) and with the directly seen emission exchanged for
-its expected value (the emission AOV, spectrace.denoising), which is what `spectrace render --denoise` does.
+Each noisy render is denoised three ways: as `spectrace render --denoise` does (its directly seen emission taken
+out, the rest denoised, the directly seen emission pass of spectrace.denoising added back), with the image's own
+emission exchanged for its expected value over the wavelengths (the emission AOV) instead, and whole (the image as
+it is). Beside them, the noisy render given the time of render + emission pass + denoising (its spp scaled by that
+time over the render's), so that the comparison is at equal cost.
 The reference is rendered as two halves of different seeds, whose difference estimates its own RMSE (reported).
 """
 
@@ -46,6 +49,9 @@ def _away_from_emitters(reference: np.ndarray) -> np.ndarray:
     return ~near
 
 
+LABELS = ("noisy", "equal_time", "whole", "exchanged", "denoised")
+
+
 def run_denoise_bench(
     scene_path: Path | None,
     size: int,
@@ -55,7 +61,7 @@ def run_denoise_bench(
     device: str | None,
     log=print,
 ) -> dict:
-    from spectrace.denoising import RENDER_AOVS, denoise
+    from spectrace.denoising import RENDER_AOVS, denoise, directly_seen_emission
 
     dev = open_device(device)
     scene = load_scene(scene_path or scenes_dir() / "cornell_box.toml").with_overrides(width=size, height=size)
@@ -70,37 +76,53 @@ def run_denoise_bench(
     away = _away_from_emitters(reference)
     reference_display = _display(reference)
     errors: dict[str, list[float]] = {}
-    denoise_seconds = 0.0
+    seconds = {"render": 0.0, "emission_pass": 0.0, "denoise": 0.0}
+    emission_spp = 0
+    results: list[tuple[str, np.ndarray]] = []
     for seed in range(seeds):
-        noisy = Renderer(scene.with_overrides(seed=seed, aovs=RENDER_AOVS), dev).render(spp=spp)
+        seeded = scene.with_overrides(seed=seed)
+        noisy = Renderer(seeded.with_overrides(aovs=RENDER_AOVS), dev).render(spp=spp)
+        seconds["render"] += noisy.render_seconds
+        emission = directly_seen_emission(seeded, spp, dev)
+        seconds["emission_pass"] += emission.render_seconds
+        emission_spp = emission.spp
         started = time.perf_counter()
-        denoised = denoise(noisy)
-        denoise_seconds += time.perf_counter() - started
-        whole = denoise(noisy, exchange_emission=False)
-        for label, image in (("noisy", noisy), ("whole", whole), ("denoised", denoised)):
-            difference = image.xyz.astype(np.float64) - reference
-            for metric, value in (
-                ("xyz", np.mean(difference**2)),
-                ("xyz_away", np.mean(difference[away] ** 2)),
-                ("display", np.mean((_display(image.xyz) - reference_display) ** 2)),
-            ):
-                errors.setdefault(f"{label}_{metric}", []).append(float(value))
+        denoised = denoise(noisy, emission=emission)
+        seconds["denoise"] += time.perf_counter() - started
+        results += [
+            ("noisy", noisy.xyz),
+            ("whole", denoise(noisy, exchange_emission=False).xyz),
+            ("exchanged", denoise(noisy).xyz),
+            ("denoised", denoised.xyz),
+        ]
+    # The noisy image given the time of render + emission pass + denoising: spp scaled by that time over the
+    # render's (render time grows in proportion to spp at a fixed size).
+    total = sum(seconds.values())
+    equal_time_spp = max(spp, round(spp * total / max(seconds["render"], 1e-9)))
+    for seed in range(seeds):
+        longer = Renderer(scene.with_overrides(seed=seed, aovs=()), dev).render(spp=equal_time_spp)
+        results.append(("equal_time", longer.xyz))
+    for label, xyz in results:
+        difference = xyz.astype(np.float64) - reference
+        for metric, value in (
+            ("xyz", np.mean(difference**2)),
+            ("xyz_away", np.mean(difference[away] ** 2)),
+            ("display", np.mean((_display(xyz) - reference_display) ** 2)),
+        ):
+            errors.setdefault(f"{label}_{metric}", []).append(float(value))
     rmse = {key: float(np.sqrt(np.mean(values))) for key, values in errors.items()}
     rows = [
         {
             "metric": metric,
-            "noisy": rmse[f"noisy_{metric}"],
-            "denoised_whole": rmse[f"whole_{metric}"],
-            "denoised": rmse[f"denoised_{metric}"],
-            "ratio_whole": rmse[f"noisy_{metric}"] / rmse[f"whole_{metric}"],
-            "ratio": rmse[f"noisy_{metric}"] / rmse[f"denoised_{metric}"],
+            **{label: rmse[f"{label}_{metric}"] for label in LABELS},
+            **{f"ratio_{label}": rmse[f"noisy_{metric}"] / rmse[f"{label}_{metric}"] for label in LABELS[1:]},
         }
         for metric in ("xyz", "xyz_away", "display")
     ]
     for row in rows:
         log(
-            f"{row['metric']}: RMSE noisy {row['noisy']:.4g}, denoised whole {row['denoised_whole']:.4g} "
-            f"({row['ratio_whole']:.2f}x), emission exchanged {row['denoised']:.4g} ({row['ratio']:.2f}x)"
+            f"{row['metric']}: RMSE noisy {row['noisy']:.4g}; "
+            + ", ".join(f"{label} {row[label]:.4g} ({row[f'ratio_{label}']:.2f}x)" for label in LABELS[1:])
         )
     return {
         "device": dev.report.key,
@@ -112,7 +134,11 @@ def run_denoise_bench(
         "reference_spp": 2 * max(reference_spp // 2, 1),
         "reference_rmse": reference_rmse,
         "pixels_away_from_emitters": int(away.sum()),
-        "denoise_seconds_per_image": denoise_seconds / seeds,
+        "emission_pass_spp": emission_spp,
+        "render_seconds_per_image": seconds["render"] / seeds,
+        "emission_pass_seconds_per_image": seconds["emission_pass"] / seeds,
+        "denoise_seconds_per_image": seconds["denoise"] / seeds,
+        "equal_time_spp": equal_time_spp,
         "rows": rows,
     }
 
@@ -128,19 +154,28 @@ def denoise_bench_table(result: dict) -> Table:
     table = Table(
         title=f"spectrace bench denoise: RMSE against a {result['reference_spp']}-spp reference "
         f"({result['width']}x{result['height']}, {result['spp']} spp, {result['seeds']} seeds, reference's own "
-        f"XYZ RMSE ~{result['reference_rmse']:.2g}; denoising {result['denoise_seconds_per_image']:.2f} s/image)"
+        f"XYZ RMSE ~{result['reference_rmse']:.2g}); per image: render {result['render_seconds_per_image']:.2f} s, "
+        f"emission pass ({result['emission_pass_spp']} spp) {result['emission_pass_seconds_per_image']:.2f} s, "
+        f"denoising {result['denoise_seconds_per_image']:.2f} s",
+        caption="each cell: RMSE (noisy's RMSE over it). --denoise is OIDN of the image less its directly seen "
+        "emission, plus the emission pass; 'AOV exchange' adds back the image's own emission's expected value "
+        "instead; 'whole' denoises the image as it is",
     )
-    columns = ("RMSE of", "noisy", "denoised whole", "noisy/whole", "denoised, emission exchanged", "noisy/exchanged")
+    columns = (
+        "RMSE of",
+        "noisy",
+        f"noisy, equal time ({result['equal_time_spp']} spp)",
+        "denoised whole",
+        "denoised, AOV exchange",
+        "--denoise (emission pass)",
+    )
     for column in columns:
         table.add_column(column, justify="right")
     for r in result["rows"]:
         table.add_row(
             METRIC_LABELS[r["metric"]],
             f"{r['noisy']:.4g}",
-            f"{r['denoised_whole']:.4g}",
-            f"{r['ratio_whole']:.2f}",
-            f"{r['denoised']:.4g}",
-            f"{r['ratio']:.2f}",
+            *(f"{r[label]:.4g} ({r[f'ratio_{label}']:.2f}x)" for label in LABELS[1:]),
         )
     return table
 

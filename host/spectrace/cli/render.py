@@ -82,6 +82,15 @@ def render(
         ),
     ] = None,
     false_color_scale: Annotated[str, typer.Option(help="Scale of the false-colour map: log or linear.")] = "log",
+    pixel_filter: Annotated[
+        str | None,
+        typer.Option(
+            "--filter",
+            help="Pixel filter, replacing the scene's film.filter: TYPE or TYPE:KEY=VALUE,... with TYPE box, tent, "
+            "gaussian or mitchell and the keys of docs/scene-format.md's filter table, e.g. "
+            "gaussian:stddev=0.5,radius=2.",
+        ),
+    ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
     checkpoint: Annotated[
         Path | None,
@@ -122,8 +131,9 @@ def render(
         typer.Option(
             "--denoise",
             help="Denoise with Open Image Denoise (the spectrace[denoise] extra), guided by the albedo and normal "
-            "AOVs, the directly seen emission exchanged for its expected value (the emission AOV; all recorded for "
-            "it); --output gets the denoised image, <stem>.noisy<suffix> beside it the noisy one.",
+            "AOVs (recorded for it); the emitters seen directly are rendered apart by camera rays alone at "
+            "max(32, 2 spp) and replace the image's own (docs/integrators.md). --output gets the denoised image, "
+            "<stem>.noisy<suffix> beside it the noisy one.",
         ),
     ] = False,
     kernel: Annotated[
@@ -180,8 +190,20 @@ def render(
     cli_checks.check_seed(seed)
     cli_checks.check_max_depth(max_depth)
     cli_checks.check_exposure(exposure)
+    chosen_filter = None
+    if pixel_filter is not None:
+        from spectrace.pixel_filters import parse_filter_option
+
+        chosen_filter = parse_filter_option(pixel_filter)
     loaded = load_scene(scene).with_overrides(
-        spp=spp, width=width, height=height, seed=seed, max_depth=max_depth, exposure=exposure, sampler=sampler
+        spp=spp,
+        width=width,
+        height=height,
+        seed=seed,
+        max_depth=max_depth,
+        exposure=exposure,
+        sampler=sampler,
+        pixel_filter=chosen_filter,
     )
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
@@ -259,10 +281,12 @@ def render(
         if image.spp == 0:
             raise SpectraceError("interrupted before the first pass finished; nothing written")
         if noisy is not None:
-            from spectrace.denoising import denoise as denoise_image
-
             _write_image(outputs.apply(image), noisy, xyz, state_file)
-            image = denoise_image(image)
+            from spectrace.denoising import denoise_with_emission_pass
+
+            image = denoise_with_emission_pass(
+                loaded, image, renderer.device, log=lambda text: console.print(text, highlight=False, markup=False)
+            )
         _write_image(outputs.apply(image), output, xyz, state_file)
         outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False, markup=False))
     pixels = image.width * image.height * image.spp

@@ -27,7 +27,7 @@ from spectrace.scene.model import Scene
 # (rare: Russian roulette ends most paths sooner), so memory stays bounded for unbounded max_depth.
 MAX_RECORD_SLOTS = 16
 # The cameras a point can connect to (kernels/camera_importance.cl).
-LIGHT_TRACED_CAMERAS = ("perspective", "thinlens", "orthographic")
+LIGHT_TRACED_CAMERAS = ("perspective", "thinlens", "orthographic", "equirectangular")
 RECORD_BYTES = 16 + 4  # float4 XYZ + int pixel
 BAND_RECORD_BYTES = 16 + 16  # with spectral bands: float4 lane values + int4 lane bands
 
@@ -87,10 +87,14 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
                 "use film.filter = \"box\" or 'path'"
             )
     if camera_type not in LIGHT_TRACED_CAMERAS:
-        # An equirectangular camera has no film plane for a point's connection to land on (its importance is over
-        # the sphere of directions); kernels/camera_importance.cl has the others.
         known = ", ".join(LIGHT_TRACED_CAMERAS)
         return f"integrator '{name}' supports the {known} cameras, not {camera_type!r}"
+    if camera_type == "equirectangular" and scene.pixel_filter.type != "box":
+        # A wider filter's spread would have to wrap around the image's seam and poles (filter_spread does not).
+        return (
+            f"integrator '{name}' takes the equirectangular camera with the box filter only, not a "
+            f"{scene.pixel_filter.type} filter; use film.filter = \"box\" or 'path'"
+        )
     if medium_count:
         return f"integrator '{name}' does not render participating media yet; use 'path'"
     if scene.pixel_filter.type != "box" and _has_environment(scene):

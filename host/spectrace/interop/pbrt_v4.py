@@ -305,10 +305,17 @@ class PbrtImporter:
     def camera(self, data: dict) -> None:
         scene = self.scene
         camera = scene.camera or Entity("Camera", "perspective", [], Location(self.source, 1))
-        if camera.kind not in ("perspective", "orthographic"):
+        if camera.kind not in ("perspective", "orthographic", "spherical"):
             raise error(
                 camera.location,
-                f"camera '{shown(camera.kind)}': spectrace imports pbrt's perspective and orthographic cameras",
+                f"camera '{shown(camera.kind)}': spectrace imports pbrt's perspective, orthographic and spherical "
+                '(mapping "equirect") cameras',
+            )
+        if camera.kind == "spherical" and (mapping := self.string(camera, "mapping") or "equalarea") != "equirect":
+            raise error(
+                camera.location,
+                f"spherical camera mapping '{shown(mapping)}' (pbrt-v4's default is equalarea): spectrace imports "
+                'only "equirect", as its equirectangular camera',
             )
         width, height = PBRT_DEFAULT_FILM
         film = scene.film
@@ -322,7 +329,12 @@ class PbrtImporter:
         world_from_camera = np.linalg.inv(scene.camera_from_world)
         linear = world_from_camera[:3, :3]
         # pbrt's image right is the camera's +x = up × forward for a proper rotation; spectrace's is forward × up.
-        self.world = _MIRROR if np.linalg.det(linear) > 0 else np.eye(4)
+        # pbrt's spherical camera turns the other way: its longitude runs from +x toward +z, i.e. from right to
+        # left as seen from inside, where spectrace's equirectangular runs left to right (see spherical_camera).
+        mirrors = np.linalg.det(linear) > 0
+        if camera.kind == "spherical":
+            mirrors = not mirrors
+        self.world = _MIRROR if mirrors else np.eye(4)
         gram = linear.T @ linear
         if not np.allclose(gram, np.eye(3) * gram[0, 0], rtol=1e-4, atol=1e-6 * gram[0, 0]):
             self.warn(
@@ -340,7 +352,9 @@ class PbrtImporter:
         window = camera.find("screenwindow")
         lens_radius = self.one(camera, "lensradius", 0.0)
         focus = self.one(camera, "focaldistance", 1e6)  # pbrt-v4's default
-        if camera.kind == "orthographic":
+        if camera.kind == "spherical":
+            data["camera"] = self.spherical_camera(camera, world_from_camera, origin, up)
+        elif camera.kind == "orthographic":
             x0, x1, y0, y1 = self.floats(camera, "screenwindow", default_window) or default_window
             if not (x1 > x0 and y1 > y0):
                 raise error(camera.location, "screenwindow must have x0 < x1 and y0 < y1")
@@ -392,6 +406,26 @@ class PbrtImporter:
             raise error(camera.location, "iso and the shutter times give no exposure")
         if ratio != 1.0:
             data["film"]["exposure"] = math.log2(ratio)
+
+    def spherical_camera(self, camera: Entity, world_from_camera: np.ndarray, origin, up) -> dict:
+        """pbrt-v4's spherical camera with mapping "equirect" as spectrace's equirectangular camera. pbrt-v4
+        (cameras.cpp, SphericalCamera::GenerateRay) sends film position (u, v) in [0, 1]² along θ = π v, φ = 2π u,
+        camera direction (sin θ cos φ, cos θ, sin θ sin φ): row 0 toward the camera's +y, the image's centre
+        (φ = π) along its −x, φ growing from +x toward +z. spectrace's (kernels/camera.cl) sends (u, v) along
+        θ = π v, φ' = 2π u − π, sin θ sin φ' right + cos θ up + sin θ cos φ' forward. The two agree with up = the
+        camera's +y, forward = its −x and right = forward × up = its −z, which holds when the world is mirrored
+        exactly when the perspective camera's is not (camera())."""
+        if self.one(camera, "lensradius", 0.0) > 0.0:
+            self.warn(camera.location, '"lensradius" not imported: the spherical camera is a pinhole')
+        if camera.find("screenwindow") is not None:
+            self.warn(camera.location, '"screenwindow" not imported: the spherical camera covers the whole sphere')
+        forward = (-np.asarray(self.direction(world_from_camera, [1.0, 0.0, 0.0]))).tolist()
+        return {
+            "type": "equirectangular",
+            "origin": origin,
+            "target": (np.asarray(origin) + np.asarray(forward)).tolist(),
+            "up": up,
+        }
 
     def pixel_filter(self) -> dict:
         """pbrt-v4's PixelFilter; its default, as pbrt-v4's, is the Gaussian of σ = 0.5 and radius 1.5."""
