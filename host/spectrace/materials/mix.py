@@ -114,10 +114,11 @@ def from_spec(spec, resolver, key: str) -> MixMaterial:
     return check(materials, amount, lambda name: resolver.where(f"{key}.{name}"))
 
 
-def make(first: Material, second: Material, amount=0.5) -> MixMaterial:
-    """One of two materials per shading point, `second` with probability `amount` (a number in [0, 1] or a grey
-    texture): the blend (1 − amount) · first + amount · second, as pbrt-v4's `mix` and Mitsuba's `blendbsdf`."""
-    return check((first, second), amount, lambda name: name)
+def make(materials, amount=0.5) -> MixMaterial:
+    """One of two materials (first, second) per shading point, the second with probability `amount` (a number in
+    [0, 1] or a grey texture): the blend (1 − amount) · first + amount · second, as pbrt-v4's `mix` and Mitsuba's
+    `blendbsdf`."""
+    return check(materials, amount, lambda name: name)
 
 
 def write_row(row: np.ndarray, material: MixMaterial, table: SpectrumTable) -> None:
@@ -139,7 +140,8 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     or a texture."""
     nested = importer.nested(properties, "bsdf")
     if len(nested) != 2:
-        raise importer.fail(bsdf, f"{bsdf.label()} needs exactly two nested bsdfs, got {len(nested)}")
+        importer.unsupported_plugin(bsdf, f" with {len(nested)} nested bsdfs (a blend takes two)")
+        return None
     names = []
     for index, child in enumerate(nested):
         name = importer.material(child, f"{importer.attribute(bsdf, 'id') or 'blend'}_{index}")
