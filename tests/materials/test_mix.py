@@ -166,6 +166,11 @@ def test_a_mix_of_a_material_with_itself_is_that_material_and_an_amount_of_one_t
             "m",
             "a mixed material cannot have an opacity",
         ),
+        (
+            _mix("m", "red", "gold", "0.5") + 'bump_map = { texture = "checkerboard" }\n',
+            "m",
+            "a mix takes no normal or bump map of its own",
+        ),
     ],
 )
 def test_bad_mixes_are_refused_in_one_line_naming_the_key(tmp_path, extra, material, message):

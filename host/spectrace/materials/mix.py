@@ -135,6 +135,14 @@ def surface_detail_problem(material: MixMaterial) -> str | None:
     return None
 
 
+def check_spec(spec) -> None:
+    if spec.normal_map is not None or spec.bump_map is not None:
+        raise ValueError("a mix takes no normal or bump map of its own; give them to its materials")
+
+
+SPEC_CHECKS = (check_spec,)
+
+
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """blendbsdf: its two nested bsdfs in order (weight 0 is the first alone, 1 the second), its `weight` a number
     or a texture."""
