@@ -85,7 +85,8 @@ def test_a_mix_of_a_conductor_and_a_diffuse_material_renders_their_blend(tmp_pat
     XYZ against the weighted means of each alone, within 5 standard errors; the weights swapped are far off."""
     amount = 0.3
     gold = 'MakeNamedMaterial "gold" "string type" "conductor" "float roughness" 0.3\n'
-    mixed = _render(tmp_path, gold + f'Material "mix" "string materials" ["gold" "red"] "float amount" {amount}', device)
+    mix = f'Material "mix" "string materials" ["gold" "red"] "float amount" {amount}'
+    mixed = _render(tmp_path, gold + mix, device)
     metal = _render(tmp_path, gold + 'NamedMaterial "gold"', device)
     red = _render(tmp_path, 'NamedMaterial "red"', device)
     expected = (1.0 - amount) * metal.mean(axis=0) + amount * red.mean(axis=0)

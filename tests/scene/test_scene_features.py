@@ -106,7 +106,8 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", mixed)])
     defines = scene_feature_defines(build_scene_buffers(scene))
     assert defines["SCENE_HAS_MIX"] == 1
-    assert defines["SCENE_MATERIAL_TYPES"] == MATERIAL_BITS["mix"] | MATERIAL_BITS["diffuse"] | MATERIAL_BITS["conductor"]
+    mixed_types = MATERIAL_BITS["mix"] | MATERIAL_BITS["diffuse"] | MATERIAL_BITS["conductor"]
+    assert defines["SCENE_MATERIAL_TYPES"] == mixed_types
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():

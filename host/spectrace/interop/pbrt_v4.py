@@ -759,18 +759,18 @@ class PbrtImporter:
             return tables[0]
         if any(table is None for table in tables):
             raise error(material.location, "material 'mix' with an interface: spectrace mixes two materials")
-        assert tables[0] is not None and tables[1] is not None
+        pair = [table for table in tables if table is not None]
         if (
-            all(table["type"] == "diffuse" for table in tables)
+            all(table["type"] == "diffuse" for table in pair)
             and (not isinstance(amount, dict) or amount.get("texture") == "bitmap")
-            and not any(t["reflectance"].get("texture") in ("checkerboard", "scale", "mix") for t in tables)
+            and not any(table["reflectance"].get("texture") in ("checkerboard", "scale", "mix") for table in pair)
         ):
             return {
                 "type": "diffuse",
                 "reflectance": {
                     "texture": "mix",
-                    "tex1": tables[0]["reflectance"],
-                    "tex2": tables[1]["reflectance"],
+                    "tex1": pair[0]["reflectance"],
+                    "tex2": pair[1]["reflectance"],
                     "amount": amount,
                 },
             }

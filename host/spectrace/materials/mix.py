@@ -92,9 +92,8 @@ def check(materials, amount, where) -> MixMaterial:
         raise SpectraceError("a mix takes two materials", where=where("materials"))
     for m in materials:
         if m.detail is not None and m.detail.is_cut_out:
-            raise SpectraceError(
-                "a mixed material cannot have an opacity (cut-outs): give the opacity to the mix", where=where("materials")
-            )
+            message = "a mixed material cannot have an opacity (cut-outs): give the opacity to the mix"
+            raise SpectraceError(message, where=where("materials"))
     if is_texture(amount):
         check_texture_values(amount, "float", where("amount"), upper=1.0)
     else:
@@ -123,14 +122,14 @@ def make(materials, amount=0.5) -> MixMaterial:
 
 def write_row(row: np.ndarray, material: MixMaterial, table: SpectrumTable) -> None:
     # The materials' row indices (ROW_FIELDS) are written by spectrace.materials once their rows are placed.
-    row["alpha"] = float(material.amount)
+    row["alpha"] = float(material.amount)  # type: ignore[arg-type]  # a number here (material_row)
 
 
 def surface_detail_problem(material: MixMaterial) -> str | None:
     """Why the mix's own surface detail cannot be honoured, or None: the normal is turned by the material chosen
     at the point, so a mix takes no normal or bump map of its own."""
     detail = material.detail
-    if detail is not None and (detail.normal_map is not None or detail.bump_map is not None):
+    if detail is not None and (getattr(detail, "normal_map", None) is not None or getattr(detail, "bump_map", None)):
         return "a mix takes no normal or bump map of its own; give them to its materials"
     return None
 
@@ -175,7 +174,8 @@ def to_mitsuba(material: MixMaterial, exporter) -> dict:
     """Mitsuba's blendbsdf of the two materials' own exports, with the amount as its weight."""
     from spectrace.textures import is_texture
 
-    weight = exporter.spectrum(material.amount) if is_texture(material.amount) else float(material.amount)
+    amount = material.amount
+    weight = exporter.spectrum(amount) if is_texture(amount) else float(amount)  # type: ignore[arg-type]
     return {
         "type": "blendbsdf",
         "weight": weight,
