@@ -189,3 +189,18 @@ def test_mixes_nest_at_most_eight_deep(tmp_path):
     load_scene(_scene_path(tmp_path, "m8", chain(8)))
     with pytest.raises(SpectraceError, match="mixes nest at most 8 deep, this one 9"):
         load_scene(_scene_path(tmp_path, "m9", chain(9)))
+
+
+def test_a_mix_renders_with_the_same_bits_however_built_or_split(tmp_path, device):
+    """The choice is a hash of the intersection, not a sampler draw: the scene's own kernels, the kernels built for
+    every scene, the wavefront and a render split into passes give the same bits."""
+    from spectrace.engine.wavefront import make_renderer
+
+    scene = load_scene(_scene_path(tmp_path, "m", _mix("m", "red", "gold", "0.4"), spp=8))
+    reference = Renderer(scene, device).render().xyz
+    assert reference.mean() > 0
+    np.testing.assert_array_equal(Renderer(scene, device, specialise=False).render().xyz, reference)
+    np.testing.assert_array_equal(make_renderer(scene, device, "wavefront").render().xyz, reference)
+    split = Renderer(scene, device)
+    split.render(spp=8, pass_spp=3)
+    np.testing.assert_array_equal(split.image().xyz, reference)
