@@ -16,8 +16,10 @@ from spectrace.scene.model import MixMaterial
 from spectrace.spectral import xyz_to_linear_srgb
 
 DIFFUSE = '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.15, 0.1"/></bsdf>'
-GOLD = '<bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/>' \
+GOLD = (
+    '<bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/>'
     '<float name="alpha" value="0.3"/></bsdf>'
+)
 WEIGHT = '<float name="weight" value="0.3"/>'
 
 
@@ -52,8 +54,10 @@ def test_blendbsdf_imports_as_a_mix_of_its_two_bsdfs_in_order(tmp_path):
     # Mitsuba's default weight is 0.5; a texture weight is a texture amount.
     data, _ = mitsuba_scene_data(_xml(tmp_path, ""))
     assert [m for m in data["materials"].values() if m["type"] == "mix"][0]["amount"] == 0.5
-    checker = '<texture type="checkerboard" name="weight"><float name="color0" value="0"/>' \
+    checker = (
+        '<texture type="checkerboard" name="weight"><float name="color0" value="0"/>'
         '<float name="color1" value="1"/></texture>'
+    )
     data, _ = mitsuba_scene_data(_xml(tmp_path, checker))
     (mixed,) = [m for m in data["materials"].values() if m["type"] == "mix"]
     assert data["textures"][mixed["amount"]["texture"]]["type"] == "checkerboard"

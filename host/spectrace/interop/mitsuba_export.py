@@ -93,8 +93,8 @@ def _refuse(what: str, scene: Scene) -> SpectraceError:
 
 class MitsubaExport:
     """What the modules' `to_mitsuba(model, exporter)` use: `spectrum` (a Mitsuba spectrum entry, or a texture's
-    where a parameter holds one), `material` (another material's entry), `refuse` (the error for what has no faithful counterpart), and for the texture
-    modules `write_linear_image` and `uv_transform`."""
+    where a parameter holds one), `material` (another material's entry, for a mix), `refuse` (the error for what
+    has no faithful counterpart), and for the texture modules `write_linear_image` and `uv_transform`."""
 
     def __init__(self, scene: Scene, folder: Path):
         self.scene = scene
