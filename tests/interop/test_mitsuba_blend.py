@@ -92,3 +92,23 @@ def test_a_mix_exports_as_blendbsdf_and_renders_like_spectrace(tmp_path, device,
     )
     by_spectrace = spectrace_replicas(Renderer(scene, device), replicas, replica_spp)
     assert_replicas_agree(by_spectrace, by_mitsuba, block)
+
+
+def test_a_blend_on_a_rectangle_flips_its_materials_textures_as_its_own(tmp_path):
+    """Mitsuba's rectangle has v up, spectrace's down: the textures of a blend's materials on a rectangle are
+    imported with v flipped, as a plain bsdf's are, and the blend becomes a material of its own too."""
+    checker = '<texture type="checkerboard" name="reflectance"/>'
+    path = tmp_path / "rect.xml"
+    path.write_text(
+        f"""<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>
+<integer name="height" value="8"/></film></sensor>
+<shape type="rectangle"><bsdf type="blendbsdf">{WEIGHT}<bsdf type="diffuse">{checker}</bsdf>{GOLD}</bsdf></shape>
+</scene>
+"""
+    )
+    data, _ = mitsuba_scene_data(path)
+    (mixed,) = [m for m in data["materials"].values() if m["type"] == "mix"]
+    diffuse = data["materials"][mixed["materials"][0]]
+    texture = data["textures"][diffuse["reflectance"]["texture"]]
+    assert texture["uv_scale"][1] < 0  # v flipped

@@ -151,7 +151,8 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         return None
     names = []
     for index, child in enumerate(nested):
-        name = importer.material(child, f"{importer.attribute(bsdf, 'id') or 'blend'}_{index}")
+        # On a shape whose v runs up, the materials' textures are flipped as the blend's own are.
+        name = importer.material(child, f"{importer.attribute(bsdf, 'id') or 'blend'}_{index}", importer.flip_v)
         if name is None:
             return None
         names.append(name)
