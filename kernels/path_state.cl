@@ -7,6 +7,7 @@
 #include "aov.cl"
 #include "direct_lighting.cl"
 #include "surface_detail.cl"
+#include "material_mix.cl"
 
 /* Longest path when max_depth is unbounded (-1): Russian roulette ends paths long before this. */
 #define UNBOUNDED_DEPTH 1024
@@ -60,7 +61,8 @@ inline int max_segments(__global const RenderParams *params)
 
 /* Where a path's ray met a surface. */
 typedef struct {
-    TriangleInfo info;
+    TriangleInfo info;  /* the triangle's, but `material`: the BSDF that shades this point, a mix resolved into
+                           one of its materials (material_mix.cl) */
     float3 p;
     float3 n;   /* geometric normal (the winding's front): sides, ray offsets, media, emission */
     float3 ns;  /* shading normal, the BSDF's frame: n itself on a flat triangle (shading_normal.cl), turned by a
@@ -88,6 +90,7 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
         v.footprint = footprint_from_tangents(scene->params, v.p, v.n, g.dpdu, g.dpdv, (float2)(1.0f, 0.0f),
                                               (float2)(0.0f, 1.0f));
     }
+    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         __global const Material *m = &scene->materials[v.info.material];
         if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
@@ -123,6 +126,7 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
             v.footprint = footprint_from_tangents(scene->params, v.p, v.n, e1, e2, t[1] - t[0], t[2] - t[0]);
         }
     }
+    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         __global const Material *m = &scene->materials[v.info.material];
         if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
@@ -157,6 +161,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
         v.uv = triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
         if (SCENE_NEEDS_FOOTPRINT) v.footprint = camera_footprint(scene, hit.triangle, v.p, v.n);
     }
+    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         v.ns = detailed_normal(scene, &scene->materials[v.info.material], hit.triangle, v.uv, v.footprint, v.n,
                                v.ns, v.wo);

@@ -38,6 +38,11 @@
 #define SCENE_HAS_ROUGH_COAT 1
 #endif
 
+/* Mix materials (kernels/material_mix.cl): each vertex resolves its material into one of a mix's. */
+#ifndef SCENE_HAS_MIX
+#define SCENE_HAS_MIX 1
+#endif
+
 /* Material textures (kernels/texture.cl). */
 #ifndef SCENE_HAS_TEXTURES
 #define SCENE_HAS_TEXTURES 1

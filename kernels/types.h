@@ -97,16 +97,18 @@ typedef struct {
     int reflectance_offset;     /* diffuse, plastic: base albedo; mirror, retroreflector: reflectance;
                                    conductor, dielectric: optional specular tint; thindielectric: optional tint of
                                    its reflection (MATERIAL_NO_SPECTRUM: none) */
-    int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction */
-    int k_offset;               /* conductor: imaginary part k(λ) (absorption) */
+    int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction; mix: its first
+                                   material's row index (material_mix.cl) */
+    int k_offset;               /* conductor: imaginary part k(λ) (absorption); mix: its second material's row */
     float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe). With roughness_texture: the texture's
-                                   largest α, which decides the flags (smooth only if smooth everywhere) */
+                                   largest α, which decides the flags (smooth only if smooth everywhere); mix: the
+                                   probability of its second material, `amount` */
     int ior_model;              /* IOR_*: dielectric interior, plastic coating */
     float ior;                  /* IOR_CONSTANT: interior index relative to the exterior */
     int reflectance_texture;    /* index into the texture array that replaces reflectance_offset (the reflectance, or
                                    the conductor's and dielectric's specular tint), or NO_TEXTURE */
     int roughness_texture;      /* conductor, plastic, dielectric, retroreflector: a scalar texture of α per point
-                                   that replaces alpha there, or NO_TEXTURE */
+                                   that replaces alpha there, or NO_TEXTURE; mix: a scalar texture of its amount */
     int distribution;           /* conductor, plastic, dielectric: MICROFACET_* of the rough lobe */
     int nonlinear;              /* plastic: 1 = the base's internal scattering depends on its albedo (Mitsuba's
                                    `nonlinear`), 0 = it does not */

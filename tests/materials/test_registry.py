@@ -9,7 +9,7 @@ import spectrace
 from package_imports import MODULES
 from spectrace import api, resources
 from spectrace.device.program_cache import generated_headers, kernel_contract
-from spectrace.materials import KERNEL_HEADER_NAME, MATERIAL_CODES, MATERIALS, kernel_file
+from spectrace.materials import BSDFS, KERNEL_HEADER_NAME, MATERIAL_CODES, MATERIALS, kernel_file
 from spectrace.materials.base import Material
 
 KERNELS = resources.kernels_dir()
@@ -22,16 +22,21 @@ def _generated_list() -> list[tuple[str, str, str]]:
 
 
 def test_the_generated_kernel_list_is_the_registry_in_code_order():
-    expected = [(f"MATERIAL_{name.upper()}", name, f"{name.capitalize()}Params") for name in MATERIALS]
+    """The BSDFs come first, in code order; the composites (a mix), which have no BSDF, after them and outside the
+    list, with codes of their own."""
+    expected = [(f"MATERIAL_{name.upper()}", name, f"{name.capitalize()}Params") for name in BSDFS]
     assert _generated_list() == expected
     contract = kernel_contract()
-    assert [contract[code] for code, _, _ in _generated_list()] == list(range(len(MATERIALS)))
+    assert [contract[code] for code, _, _ in _generated_list()] == list(range(len(BSDFS)))
     assert contract["MATERIAL_TYPE_COUNT"] == len(MATERIALS) == len(set(MATERIAL_CODES.values()))
+    composites = [name for name in MATERIALS if name not in BSDFS]
+    assert composites == ["mix"]
+    assert [contract[f"MATERIAL_{name.upper()}"] for name in composites] == list(range(len(BSDFS), len(MATERIALS)))
 
 
 def test_every_registered_bsdf_has_its_kernel_file_with_the_functions_the_dispatch_calls():
     header = generated_headers()[KERNEL_HEADER_NAME]
-    for name in MATERIALS:
+    for name in BSDFS:
         path = KERNELS / kernel_file(name)
         assert path.is_file(), path
         assert f'#include "{kernel_file(name)}"' in header
@@ -44,7 +49,14 @@ def test_every_registered_bsdf_has_its_kernel_file_with_the_functions_the_dispat
 def test_every_bsdf_kernel_file_is_registered():
     shared = {"bsdf_sample.cl"}  # what every BSDF uses, not a BSDF
     files = {path.name for path in KERNELS.glob("bsdf_*.cl")} - shared
-    assert files == {kernel_file(name) for name in MATERIALS}
+    assert files == {kernel_file(name) for name in BSDFS}
+
+
+def test_a_composite_has_its_own_kernel_file_outside_the_bsdf_list():
+    header = generated_headers()[KERNEL_HEADER_NAME]
+    for name in set(MATERIALS) - set(BSDFS):
+        assert (KERNELS / kernel_file(name)).is_file() and not kernel_file(name).startswith("bsdf_")
+        assert kernel_file(name) not in header
 
 
 def test_no_kernel_file_lists_the_bsdfs():

@@ -27,6 +27,7 @@ MATERIAL_BITS = {
     "dielectric": 16,
     "retroreflector": 32,
     "thindielectric": 64,
+    "mix": 128,
 }
 LIGHT_BITS = {
     "area": 1,
@@ -69,6 +70,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_BECKMANN": 0,
         "SCENE_HAS_NONLINEAR_PLASTIC": 0,
         "SCENE_HAS_ROUGH_COAT": 0,
+        "SCENE_HAS_MIX": 0,
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
@@ -99,6 +101,13 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         defines = scene_feature_defines(build_scene_buffers(scene))
         assert (defines["SCENE_HAS_SURFACE_NORMALS"], defines["SCENE_HAS_OPACITY"]) == (normals, opacity)
+    # A mix: its own type bit and those of its materials (rows of their own), and SCENE_HAS_MIX.
+    mixed = spectrace.mix((spectrace.diffuse(0.5), spectrace.conductor(metal="Au")), 0.3)
+    scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", mixed)])
+    defines = scene_feature_defines(build_scene_buffers(scene))
+    assert defines["SCENE_HAS_MIX"] == 1
+    mixed_types = MATERIAL_BITS["mix"] | MATERIAL_BITS["diffuse"] | MATERIAL_BITS["conductor"]
+    assert defines["SCENE_MATERIAL_TYPES"] == mixed_types
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():

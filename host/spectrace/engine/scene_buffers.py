@@ -29,7 +29,7 @@ from spectrace.lights import area as area_light
 from spectrace.lights import light_module
 from spectrace.lights.area import AreaEmitter
 from spectrace.lights.base import LightRows
-from spectrace.materials import material_row, material_textures, write_detail
+from spectrace.materials import append_material_rows, material_textures, write_detail
 from spectrace.materials.surface import cut_out_problem
 from spectrace.scene.model import Instance, InstancedObject, Scene
 from spectrace.spectral.colorimetry import cmf_table_normalised
@@ -137,9 +137,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
             if shape.interior is None:
                 raise SpectraceError(f"shape '{shape.name}' has neither a material nor an interior")
             material_index[key] = TRIANGLE_NO_MATERIAL
-        elif key not in material_index:
-            material_index[key] = len(material_rows)
-            material_rows.append(material_row(shape.material, table, textures))
+        else:
+            append_material_rows(shape.material, material_rows, table, textures, material_index)
         if (
             problem := cut_out_problem(shape.material, shape.emitter is not None, shape.interior is not None)
         ) is not None:
@@ -392,9 +391,8 @@ class _ObjectTriangles:
                     if shape.interior is None:
                         raise SpectraceError(f"{where} has neither a material nor an interior")
                     material_index[key] = TRIANGLE_NO_MATERIAL
-                elif key not in material_index:
-                    material_index[key] = len(material_rows)
-                    material_rows.append(material_row(shape.material, table, textures))
+                else:
+                    append_material_rows(shape.material, material_rows, table, textures, material_index)
                 if (problem := cut_out_problem(shape.material, False, shape.interior is not None)) is not None:
                     raise SpectraceError(f"{where}: {problem}")
                 if shape.material is not None and shape.mesh.uvs is None and material_textures(shape.material):

@@ -6,6 +6,7 @@ import numpy as np
 
 from spectrace.engine.device_types import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
 from spectrace.engine.scene_buffers import SceneBuffers
+from spectrace.materials import MATERIAL_CODES
 
 
 def _type_bits(types: np.ndarray) -> int:
@@ -45,6 +46,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_BECKMANN": int(bool(np.any(materials["distribution"] == MICROFACET_BECKMANN))),
         "SCENE_HAS_NONLINEAR_PLASTIC": int(bool(np.any(materials["nonlinear"] != 0))),
         "SCENE_HAS_ROUGH_COAT": int(bool(np.any(materials["coat_table_offset"] >= 0))),
+        "SCENE_HAS_MIX": int(bool(np.any(materials["type"] == MATERIAL_CODES["mix"]))),
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or bump_maps),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),

@@ -93,8 +93,8 @@ def _refuse(what: str, scene: Scene) -> SpectraceError:
 
 class MitsubaExport:
     """What the modules' `to_mitsuba(model, exporter)` use: `spectrum` (a Mitsuba spectrum entry, or a texture's
-    where a parameter holds one), `refuse` (the error for what has no faithful counterpart), and for the texture
-    modules `write_linear_image` and `uv_transform`."""
+    where a parameter holds one), `material` (another material's entry, for a mix), `refuse` (the error for what
+    has no faithful counterpart), and for the texture modules `write_linear_image` and `uv_transform`."""
 
     def __init__(self, scene: Scene, folder: Path):
         self.scene = scene
@@ -108,6 +108,15 @@ class MitsubaExport:
         if not hasattr(module, "to_mitsuba"):
             raise self.refuse(f"a {module.NAME} texture ('{value.source}'): {module.MITSUBA_NONE}")
         return module.to_mitsuba(value, self)
+
+    def material(self, material) -> dict:
+        """A material's Mitsuba entry (a composite's `to_mitsuba` exports its materials through it)."""
+        to_mitsuba = _MATERIAL_EXPORTS.get(type(material))
+        if to_mitsuba is None:
+            raise self.refuse(f"material {type(material).__name__} is not exported yet")
+        if material.detail is not None:
+            raise self.refuse("surface detail (normal or bump map, opacity) is not exported yet")
+        return to_mitsuba(material, self)
 
     def refuse(self, what: str) -> SpectraceError:
         return _refuse(what, self.scene)

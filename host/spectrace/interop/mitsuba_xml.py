@@ -240,6 +240,11 @@ class MitsubaImporter:
         self._resolving: list[int] = []  # elements being converted, to stop reference cycles
         self.origins: dict[str, Element] = {}  # TOML key path -> the element it was imported from
 
+    @property
+    def flip_v(self) -> bool:
+        """Whether the material being converted is for a shape whose v runs up (its textures' v flipped)."""
+        return self._flip_v
+
     # -------------------------------------------------- helpers
 
     def fail(self, element: Element, message: str, attribute: str | None = None) -> SpectraceError:

@@ -26,7 +26,7 @@ Conventions it bridges (each checked by tests/interop/test_pbrt_import.py):
 
 Anything the file states that is not imported is reported: a parameter no mapping read, or a directive spectrace
 has no counterpart for, as a warning naming file:line (an error with strict=True); an entity of a type spectrace
-cannot represent (a realistic camera, a `mix` material, a goniometric light, a `curve` shape) as an error
+cannot represent (a realistic camera, a `measured` material, a goniometric light, a `curve` shape) as an error
 naming file:line.
 """
 
@@ -762,10 +762,10 @@ class PbrtImporter:
 
     def mix_table(self, material: Entity) -> dict | None:
         """pbrt-v4's `mix`: at each intersection one of `materials` is chosen by a hash of the point and direction,
-        the second with probability `amount` (its MixMaterial::ChooseMaterial). What a pixel averages is then the
-        amount-weighted blend of the two BSDFs, which for two diffuse materials is one diffuse material of the
-        blended reflectance, (1 - amount) R1 + amount R2: spectrace's `mix` texture. An amount of 0 or 1, or the
-        same material twice, is that material; other pairs have no single spectrace material and are refused."""
+        the second with probability `amount` (its MixMaterial::ChooseMaterial): spectrace's `mix` material, which
+        chooses the same way. Two diffuse materials with a number or image amount become instead one diffuse
+        material of the blended reflectance, (1 - amount) R1 + amount R2 (spectrace's `mix` texture): the same
+        average without the choice's noise. An amount of 0 or 1, or the same material twice, is that material."""
         names = material.find("materials", "string")
         if names is None or len(names.values) != 2:
             raise error(material.location, f'{material.label()} needs "string materials" naming two materials')
@@ -785,29 +785,31 @@ class PbrtImporter:
                     f"\"{amount_texture.label()}\" names '{shown(key[1])}', which no Texture defined",
                 )
             amount = self.texture_table(self.scene.textures[key].entity)
-            if amount.get("texture") != "bitmap":
-                raise error(amount_texture.location, "a mix's amount texture must be an imagemap for spectrace")
+            if amount.get("texture") not in ("bitmap", "checkerboard"):
+                raise error(amount_texture.location, "a mix's amount texture must be an imagemap or a checkerboard")
         elif number <= 0.0 or number >= 1.0:
             return tables[number >= 1.0]
         if tables[0] == tables[1]:
             return tables[0]
-        if any(table is None or table["type"] != "diffuse" for table in tables):
-            kinds = " and ".join("interface" if table is None else str(table["type"]) for table in tables)
-            raise error(
-                material.location,
-                f"material 'mix' of {kinds}: spectrace mixes two diffuse materials only (the blend of two other "
-                "BSDFs is no spectrace material)",
-            )
-        assert tables[0] is not None and tables[1] is not None
-        return {
-            "type": "diffuse",
-            "reflectance": {
-                "texture": "mix",
-                "tex1": tables[0]["reflectance"],
-                "tex2": tables[1]["reflectance"],
-                "amount": amount,
-            },
-        }
+        if any(table is None for table in tables):
+            raise error(material.location, "material 'mix' with an interface: spectrace mixes two materials")
+        pair = [table for table in tables if table is not None]
+        if (
+            all(table["type"] == "diffuse" for table in pair)
+            and (not isinstance(amount, dict) or amount.get("texture") == "bitmap")
+            and not any(table["reflectance"].get("texture") in ("checkerboard", "scale", "mix") for table in pair)
+        ):
+            return {
+                "type": "diffuse",
+                "reflectance": {
+                    "texture": "mix",
+                    "tex1": pair[0]["reflectance"],
+                    "tex2": pair[1]["reflectance"],
+                    "amount": amount,
+                },
+            }
+        materials = [self.material(str(name), names.location) for name in names.values]
+        return {"type": "mix", "materials": materials, "amount": amount}
 
     def _rough(self, material: Entity) -> dict:
         alpha = self.roughness(material)

@@ -21,11 +21,13 @@ import numpy as np
 
 from spectrace.dispatch import module_by_model
 from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE
+from spectrace.errors import SpectraceError
 from spectrace.materials import (
     conductor,
     dielectric,
     diffuse,
     mirror,
+    mix,
     plastic,
     retroreflector,
     surface,
@@ -36,7 +38,11 @@ from spectrace.spectral.table import SpectrumTable
 
 # Scene-file `type` -> module. A module's position is its Material.type code (MATERIAL_<NAME> in the kernels), and
 # the order in which the schema lists the types and the kernels' dispatch tests them.
-MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector, thindielectric)}
+# The mix comes last: a composite of other materials (COMPOSITE), it has no BSDF and is no entry of the kernels'
+# MATERIAL_LIST; kernels/material_mix.cl resolves it into one of its materials at each vertex.
+MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector, thindielectric, mix)}
+# The BSDFs: the materials with a bsdf_<name>.cl and an entry in MATERIAL_LIST.
+BSDFS = {name: m for name, m in MATERIALS.items() if not getattr(m, "COMPOSITE", False)}
 MATERIAL_CODES = {name: code for code, name in enumerate(MATERIALS)}
 material_module = module_by_model(MATERIALS.values(), "material")
 # Every material takes the surface-detail keys (surface.py) besides its own: its API constructor too.
@@ -56,9 +62,30 @@ def _parameter_textures(material) -> dict:
 
 
 def material_textures(material) -> dict:
-    """The textured parameters of `material` that hold a texture, and its surface detail's textures, by name."""
+    """The textured parameters of `material` that hold a texture, and its surface detail's textures, by name (a
+    mix's materials' too, under `materials[i].<name>`)."""
     detail = material.detail
-    return _parameter_textures(material) | (detail.textures() if detail is not None else {})
+    found = _parameter_textures(material) | (detail.textures() if detail is not None else {})
+    if isinstance(material, mix.MixMaterial):
+        for i, part in enumerate(material.materials):
+            found |= {f"materials[{i}].{name}": texture for name, texture in material_textures(part).items()}
+    return found
+
+
+def append_material_rows(material, rows: list[np.ndarray], table: SpectrumTable, textures, index: dict) -> int:
+    """The row index of `material` in `rows`, appending its row (material_row) on first use, keyed by id() in
+    `index`; a mix's materials are appended after it, recursively, and their indices written into its row."""
+    key = id(material)
+    if key in index:
+        return index[key]
+    at = index[key] = len(rows)
+    if isinstance(material, mix.MixMaterial) and (problem := mix.surface_detail_problem(material)) is not None:
+        raise SpectraceError(problem)
+    rows.append(material_row(material, table, textures))
+    if isinstance(material, mix.MixMaterial):
+        for field, part in zip(mix.ROW_FIELDS, material.materials):
+            rows[at][field] = append_material_rows(part, rows, table, textures, index)
+    return at
 
 
 def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
@@ -111,8 +138,9 @@ def write_detail(row: np.ndarray, detail, textures) -> None:
 
 
 def kernel_file(name: str) -> str:
-    """The kernel file of BSDF `name`, in the kernels folder."""
-    return f"bsdf_{name}.cl"
+    """The kernel file of material `name`, in the kernels folder: bsdf_<name>.cl for a BSDF, the composite's own
+    KERNEL_FILE otherwise."""
+    return getattr(MATERIALS[name], "KERNEL_FILE", f"bsdf_{name}.cl")
 
 
 def kernel_defines() -> dict[str, int]:
@@ -130,8 +158,8 @@ def kernel_header() -> str:
     """material_list.h: every BSDF's kernel file included, and MATERIAL_LIST, the X-macro list kernels/material.cl
     expands into its dispatch: X(code, name, Params) per BSDF, in code order, with Params = <Name>Params, the
     struct <name>_params returns."""
-    includes = "".join(f'#include "{kernel_file(name)}"\n' for name in MATERIALS)
-    entries = " \\\n".join(f"    X(MATERIAL_{name.upper()}, {name}, {name.capitalize()}Params)" for name in MATERIALS)
+    includes = "".join(f'#include "{kernel_file(name)}"\n' for name in BSDFS)
+    entries = " \\\n".join(f"    X(MATERIAL_{name.upper()}, {name}, {name.capitalize()}Params)" for name in BSDFS)
     return (
         "/* Generated from spectrace.materials.MATERIALS: do not edit. */\n"
         "#ifndef SPECTRACE_MATERIAL_LIST_H\n#define SPECTRACE_MATERIAL_LIST_H\n\n"

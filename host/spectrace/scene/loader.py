@@ -208,6 +208,8 @@ class _Resolver:
         self.spec = spec
         self.named_spectra: dict[str, Spectrum] = {}
         self.named_textures: dict[str, object] = {}
+        self.named_materials: dict[str, Material] = {}
+        self.resolving_materials: list[str] = []  # the names being resolved: a mix naming one of them is a cycle
 
     def where(self, key: str) -> str:
         return f"{self.path}: {key}"
@@ -312,7 +314,27 @@ class _Resolver:
         return texture
 
     def materials(self) -> dict[str, Material]:
-        return {name: self.material(m, f"materials.{name}") for name, m in self.spec.materials.items()}
+        return {name: self.material_named(name, "materials") for name in self.spec.materials}
+
+    def material_named(self, name: str, key: str) -> Material:
+        """The material [materials.NAME], resolved once; a mix names others (`key`: where the name was given),
+        which must be defined and must not name the mix itself, directly or through other mixes."""
+        resolved, resolving = self.named_materials, self.resolving_materials
+        if name in resolved:
+            return resolved[name]
+        if name not in self.spec.materials:
+            close = difflib.get_close_matches(name, list(self.spec.materials), n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(self.spec.materials))}"
+            raise SpectraceError(f"undefined material '{name}'{hint}", where=self.where(key))
+        if name in resolving:
+            cycle = " -> ".join([*resolving[resolving.index(name) :], name])
+            raise SpectraceError(f"materials mix themselves: {cycle}", where=self.where(key))
+        resolving.append(name)
+        try:
+            resolved[name] = self.material(self.spec.materials[name], f"materials.{name}")
+        finally:
+            resolving.pop()
+        return resolved[name]
 
     def material(self, spec, key: str) -> Material:
         return surface.with_detail(MATERIALS[spec.type].from_spec(spec, self, key), self.surface_detail(spec, key))

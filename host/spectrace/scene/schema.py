@@ -166,6 +166,7 @@ _ANNOTATIONS = {
     "wrap": Literal["repeat", "mirror", "clamp"],
     "filter": Literal["nearest", "bilinear", "trilinear"],
     "axis": Literal["x", "y"],
+    "materials": tuple[str, str],  # a mix's two materials, by their names in [materials]
 }
 
 
