@@ -58,6 +58,11 @@
 #define SCENE_HAS_OPACITY 1
 #endif
 
+/* Materials that reflect on one face only (Material.one_sided, kernels/material.cl). */
+#ifndef SCENE_HAS_ONE_SIDED
+#define SCENE_HAS_ONE_SIDED 1
+#endif
+
 /* hide_emitters with area lights: the camera's own rays pass through them (kernels/path_tracer.cl). */
 #ifndef SCENE_HIDES_AREA_EMITTERS
 #define SCENE_HIDES_AREA_EMITTERS 1

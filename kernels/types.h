@@ -114,7 +114,9 @@ typedef struct {
     float bump_scale;           /* scene units per bump map value */
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
-    int detail_pad[1];
+    int one_sided;              /* 1: a reflecting BSDF is black seen from the back of its surface (wo on the far side
+                                   of the winding's normal), as Mitsuba 3's outside `twosided`; 0: it reflects on
+                                   both faces. BSDFs that transmit ignore it */
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its

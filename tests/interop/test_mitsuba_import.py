@@ -111,8 +111,13 @@ def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
     )
     data, notes = mitsuba_scene_data(path)
     materials = data["materials"]
-    assert materials["gold"] == {"type": "conductor", "metal": "Au", "roughness": 0.2}
-    assert materials["mirror"] == {"type": "mirror", "reflectance": {"value": 0.8}}  # Mitsuba's material "none"
+    # Outside `twosided`, Mitsuba's reflecting BSDFs are black from the back.
+    assert materials["gold"] == {"type": "conductor", "metal": "Au", "roughness": 0.2, "two_sided": False}
+    assert materials["mirror"] == {  # Mitsuba's material "none"
+        "type": "mirror",
+        "reflectance": {"value": 0.8},
+        "two_sided": False,
+    }
     assert materials["measured"]["eta"] == {"values": [[400.0, 1.2], [700.0, 0.2]]}
     # Mitsuba's roughplastic defaults: alpha 0.1, Beckmann; ior = bk7 / air.
     assert materials["red"] == {
@@ -123,7 +128,7 @@ def test_conductor_and_plastic_bsdfs_are_mapped(tmp_path):
         "distribution": "beckmann",
         "coat_transmission": "rough",
     }
-    assert materials["white"] == {"type": "plastic", "reflectance": {"value": 0.5}, "ior": 1.6}
+    assert materials["white"] == {"type": "plastic", "reflectance": {"value": 0.5}, "ior": 1.6, "two_sided": False}
     assert not any("GGX" in note for note in notes)
     scene = load_mitsuba_scene(path)
     assert {type(shape.material).__name__ for shape in scene.shapes} == {

@@ -53,7 +53,7 @@ def test_parameters_are_substituted_in_every_attribute(tmp_path):
     )
     data, _ = mitsuba_scene_data(path)
     assert data["integrator"] == {"type": "path", "max_depth": 3}
-    assert data["materials"]["white"] == {"type": "diffuse", "reflectance": {"value": 0.3}}
+    assert data["materials"]["white"] == {"type": "diffuse", "reflectance": {"value": 0.3}, "two_sided": False}
     assert data["shapes"][0]["file"] == "meshes/triangle.obj"
     # -D wins over <default>, as Mitsuba's -D does; \$ is a literal dollar.
     data, _ = mitsuba_scene_data(path, parameters={"depth": "5"})

@@ -75,6 +75,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
+        "SCENE_HAS_ONE_SIDED": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
@@ -99,6 +100,11 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         defines = scene_feature_defines(build_scene_buffers(scene))
         assert (defines["SCENE_HAS_SURFACE_NORMALS"], defines["SCENE_HAS_OPACITY"]) == (normals, opacity)
+    for two_sided in (True, False):
+        scene = replace(
+            _environment_map_scene(), shapes=[spectrace.shape("rectangle", spectrace.diffuse(0.5, two_sided=two_sided))]
+        )
+        assert scene_feature_defines(build_scene_buffers(scene))["SCENE_HAS_ONE_SIDED"] == int(not two_sided)
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():

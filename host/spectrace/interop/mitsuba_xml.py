@@ -13,14 +13,14 @@ becomes textured there imports textures without a change here. Mitsuba's rectang
 v up where spectrace's run down: textures on those shapes are imported with v flipped, as a material of their own.
 
 Imported here: shapes obj, ply, serialized (shape_index), rectangle, cube, and the analytic sphere (center, radius),
-disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sphere);
-twosided around one BSDF (spectrace's
-materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
-with lookat/translate/rotate/scale/matrix); hdrfilm width/height; specfilm (its responses as the film's sensor,
-a CSV beside the TOML); the sampler's sample_count and seed; integrators path (max_depth, rr_depth), direct (as
-path with max_depth 2), volpath/volpathmis (as path, which renders media)
-and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium with constant sigma_t
-and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the index-matched boundary).
+disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sphere); twosided around one BSDF (a
+reflecting BSDF outside it is one-sided, black from the back, as in Mitsuba: its material takes two_sided = false);
+the perspective sensor (fov with any fov_axis, or focal_length; to_world with lookat/translate/rotate/scale/matrix);
+hdrfilm width/height; specfilm (its responses as the film's sensor, a CSV beside the TOML); the sampler's
+sample_count and seed; integrators path (max_depth, rr_depth), direct (as path with max_depth 2), volpath/volpathmis
+(as path, which renders media) and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium
+with constant sigma_t and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the
+index-matched boundary).
 Spectra: rgb (uplifted exactly as Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as
 a value, "λ:v" pairs, wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular,
 blackbody, d65 and srgb.
@@ -68,8 +68,9 @@ BSDF_MODULES = _modules_by_plugin(MATERIALS.values())
 EMITTER_MODULES = _modules_by_plugin(LIGHTS.values())  # emitters of their own, <emitter> children of <scene>
 SHAPE_EMITTER_MODULES = _modules_by_plugin((area,))  # emitters on a shape
 TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
-# `twosided` wraps one BSDF: spectrace's materials already reflect on both faces. The surface-detail adapters wrap
-# one BSDF too, and become keys of its material (spectrace.materials.surface): normal_map, bump_map, opacity.
+# `twosided` wraps one BSDF: without it, a reflecting material imports with two_sided = false. The surface-detail
+# adapters wrap one BSDF too, and become keys of its material (spectrace.materials.surface): normal_map, bump_map,
+# opacity.
 SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 # Mitsuba sensor plugin → spectrace camera type, from the cameras' modules (spectrace.cameras).
@@ -779,12 +780,14 @@ class MitsubaImporter:
     def material(self, element: Element | None, owner: str, flip_v: bool = False, emits: bool = False) -> str | None:
         """The name of the spectrace material for a (possibly referenced) bsdf, defining it on first use. flip_v:
         for a shape whose v runs up (_V_UP_SHAPES); a textured bsdf then becomes a material of its own, with its
-        textures' v flipped. Without a bsdf, Mitsuba's default: diffuse 0.5, and black on a shape that emits
-        (measured: Mitsuba 3's emitter without a bsdf reflects nothing)."""
+        textures' v flipped. Without a bsdf, Mitsuba's default: diffuse 0.5, one-sided as its plain diffuse is,
+        and black on a shape that emits (measured: Mitsuba 3's emitter without a bsdf reflects nothing)."""
         if element is None:
             name, reflectance = ("default_emitter", 0.0) if emits else ("default", 0.5)
             if name not in self.materials:
                 self.materials[name] = {"type": "diffuse", "reflectance": {"value": reflectance}}
+                if not emits:
+                    self.materials[name]["two_sided"] = False
             return name
         bsdf = self.resolve(element)
         if (id(bsdf), flip_v) in self._material_of_element:
@@ -818,14 +821,17 @@ class MitsubaImporter:
                 self.origins[f"materials.{name}.{key}"] = self._texture_elements[value["texture"]]
         return name
 
-    def material_table(self, bsdf: Element) -> dict | None:
+    def material_table(self, bsdf: Element, two_sided: bool = False) -> dict | None:
+        """two_sided: the bsdf is inside a `twosided` wrapper. Outside one, Mitsuba's reflecting BSDFs are black
+        from the back of the surface, so their materials take two_sided = false; those that transmit have two
+        sides by nature."""
         self.enter(bsdf)
         try:
-            return self._material_table(bsdf)
+            return self._material_table(bsdf, two_sided)
         finally:
             self.leave()
 
-    def _material_table(self, bsdf: Element) -> dict | None:
+    def _material_table(self, bsdf: Element, two_sided: bool) -> dict | None:
         kind = self.kind(bsdf) if bsdf.tag == "bsdf" else None
         properties = self.properties(bsdf)
         if kind == "twosided":
@@ -833,19 +839,21 @@ class MitsubaImporter:
             if len(nested) != 1:
                 self.unsupported_plugin(bsdf, " with two different sides")
                 return None
-            return self.material_table(nested[0])
+            return self.material_table(nested[0], two_sided=True)
         if kind in SURFACE_DETAIL_WRAPPERS:
-            return self.surface_detail(bsdf, kind, properties)
+            return self.surface_detail(bsdf, kind, properties, two_sided)
         if kind in BSDF_MODULES:
             table = BSDF_MODULES[kind].from_mitsuba(self, bsdf, properties)
             # A module may import a plugin as another material (conductor "none" as mirror): that one's table counts.
             if table is None or not self.checked_textures(table, MATERIALS[table["type"]]):
                 return None
+            if not two_sided and not MATERIALS[table["type"]].MODEL.has_transmission:
+                table["two_sided"] = False
             return table
         self.unsupported_object(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
 
-    def surface_detail(self, bsdf: Element, kind: str, properties: Properties) -> dict | None:
+    def surface_detail(self, bsdf: Element, kind: str, properties: Properties, two_sided: bool) -> dict | None:
         """The material of the one bsdf that a normalmap, bumpmap or mask adapter wraps, with the adapter's key
         added: normal_map (its `normalmap` texture), bump_map and bump_scale (its one texture, `scale`), opacity
         (`opacity`, Mitsuba's default 0.5). Mitsuba's bumpmap displaces by scale · h along the normal (its tangents
@@ -882,7 +890,7 @@ class MitsubaImporter:
             detail["opacity"] = self.opacity(properties["opacity"]) if "opacity" in properties else 0.5
         if any(value is None for value in detail.values()):
             return None
-        table = self.material_table(nested[0])
+        table = self.material_table(nested[0], two_sided)
         if table is None:
             return None
         one_of = ("opacity",) if "opacity" in detail else ("normal_map", "bump_map")

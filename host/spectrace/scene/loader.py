@@ -334,6 +334,7 @@ class _Resolver:
             values["bump_map"],
             spec.bump_scale,
             values["opacity"],
+            spec.two_sided,
             where=lambda name: self.where(f"{key}.{name}"),
         )
 
