@@ -78,6 +78,10 @@
 #ifndef SCENE_CAMERA_TYPES
 #define SCENE_CAMERA_TYPES ((1 << CAMERA_TYPE_COUNT) - 1)
 #endif
+/* A camera with a far clip plane (RenderParams.camera_forward.w > 0, kernels/camera.cl). */
+#ifndef SCENE_HAS_FAR_CLIP
+#define SCENE_HAS_FAR_CLIP 1
+#endif
 #ifndef SCENE_PIXEL_FILTERS
 #define SCENE_PIXEL_FILTERS ((1 << PIXEL_FILTER_COUNT) - 1)
 #endif

@@ -176,8 +176,8 @@ typedef struct {
 
 /* Everything a render pass needs besides the buffers. */
 typedef struct {
-    float4 camera_origin;
-    float4 camera_forward;   /* unit vector */
+    float4 camera_origin;    /* xyz: the eye; w: the near clip distance (kernels/camera.cl), scene units */
+    float4 camera_forward;   /* xyz: unit vector; w: the far clip distance (scene units; 0: none) */
     float4 camera_right;     /* perspective, thin lens: unit vector scaled by tan(fov_x / 2); orthographic: scaled
                                 by half the view's width (scene units); equirectangular: unit vector */
     float4 camera_up;        /* likewise with fov_y / the view's height */

@@ -25,6 +25,7 @@ def camera_feature_defines(params: np.ndarray) -> dict[str, int]:
     return {
         "SCENE_CAMERA_TYPES": 1 << int(params["camera_type"][0]),
         "SCENE_PIXEL_FILTERS": 1 << int(params["pixel_filter"][0]),
+        "SCENE_HAS_FAR_CLIP": int(params["camera_forward"][0, 3] > 0.0),
     }
 
 

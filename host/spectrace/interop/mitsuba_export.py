@@ -183,6 +183,8 @@ def scene_to_mitsuba_dict(
             **_sensor(scene),
             # Mitsuba's own default (0.01) where ours is 0: it needs a positive plane.
             **({"near_clip": float(camera.near_clip)} if camera.near_clip > 0.0 else {}),
+            # Mitsuba's default far clip is 10 000 scene units; spectrace's none.
+            **({"far_clip": float(camera.far_clip)} if camera.far_clip is not None else {}),
             "sampler": {"type": sampler, "sample_count": int(spp or scene.spp)},
             "film": {
                 "type": "hdrfilm",

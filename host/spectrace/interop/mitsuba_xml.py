@@ -1269,6 +1269,12 @@ class MitsubaImporter:
             data["camera"]["near_clip"] = self.number(properties["near_clip"])
             if not data["camera"]["near_clip"] >= 0.0:
                 raise self.fail(properties["near_clip"], "near_clip must be 0 or more", "value")
+        if "far_clip" in properties:
+            # Mitsuba's default is 10 000 scene units; spectrace's none, the same for scenes of any usual size.
+            far = self.number(properties["far_clip"])
+            if not far > data["camera"].get("near_clip", 0.0):
+                raise self.fail(properties["far_clip"], "far_clip must be more than near_clip", "value")
+            data["camera"]["far_clip"] = far
         self.origins["camera"] = element
         sampler = next(iter(self.nested(properties, "sampler")), None)
         # A pinhole has no focus: Mitsuba's perspective sensor takes focus_distance and does nothing with it.
