@@ -170,14 +170,30 @@ def test_unrepresentable_conductors_are_named(tmp_path):
         tmp_path,
         """
         <bsdf type="conductor" id="chrome"><string name="material" value="Cr"/></bsdf>
-        <bsdf type="roughconductor" id="brushed"><string name="material" value="Al"/>
-            <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>
-        <shape type="cube"><ref id="chrome"/></shape>
-        <shape type="cube"><ref id="brushed"/></shape>""",
+        <shape type="cube"><ref id="chrome"/></shape>""",
     )
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
-    assert "with material 'Cr'" in str(error.value) and "anisotropic roughness" in str(error.value)
+    assert "with material 'Cr'" in str(error.value)
+
+
+def test_anisotropic_roughness_is_approximated_with_a_warning(tmp_path):
+    """spectrace's lobes are isotropic: alpha_u, alpha_v become their geometric mean, which keeps the distribution's
+    peak 1 / (π αu αv), and a warning names the BSDF and both values; --strict refuses it."""
+    path = _write(
+        tmp_path,
+        """
+        <bsdf type="roughconductor" id="brushed"><string name="material" value="Al"/>
+            <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.4"/></bsdf>
+        <shape type="cube"><ref id="brushed"/></shape>""",
+    )
+    data, notes = mitsuba_scene_data(path)
+    assert data["materials"]["brushed"]["roughness"] == pytest.approx(0.2)
+    warnings = [note for note in notes if note.startswith("warning: ")]
+    assert len(warnings) == 1
+    assert "bsdf 'roughconductor': anisotropic roughness alpha_u = 0.1, alpha_v = 0.4" in warnings[0]
+    with pytest.raises(SpectraceError, match="anisotropic"):
+        mitsuba_scene_data(path, strict=True)
 
 
 @pytest.mark.parametrize(

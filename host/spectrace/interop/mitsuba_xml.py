@@ -83,7 +83,7 @@ SUPPORTED = {
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm", "specfilm"),
-    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "ptracer", "bdpt"),
+    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "aov", "ptracer", "bdpt"),
     "medium": ("homogeneous",),
     "phase": ("hg", "isotropic"),
 }
@@ -105,6 +105,8 @@ def supported_text() -> str:
     return "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
 
 
+# Mitsuba's aov integrator's AOV types -> spectrace's film AOVs of the same definition (kernels/aov.cl).
+_MITSUBA_AOVS = {"albedo": "albedo", "depth": "depth", "position": "position", "sh_normal": "normal"}
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 _PLANNED_BSDFS: tuple[str, ...] = ()
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
@@ -228,6 +230,7 @@ class MitsubaImporter:
         self.unsupported: dict[str, list] = {}  # "plugin detail" -> [count, first element]
         self.notes: list[str] = []
         self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
+        self.film_aovs: list[str] = []  # from an aov integrator
         self._properties: dict[int, Properties] = {}
         self._object_names: dict[int, str] = {}  # shapegroup element -> its spectrace object's name
         self.search_folders: list[Path] = [xml_path.parent]  # <path> folders, then the scene's
@@ -939,10 +942,16 @@ class MitsubaImporter:
                 return None
             alpha_u = self.number(self.resolve(u_element))
             alpha_v = self.number(self.resolve(v_element))
-            if alpha_u != alpha_v:
-                self.unsupported_plugin(bsdf, " with anisotropic roughness")
-                return None
             alpha = alpha_u
+            if alpha_u != alpha_v:
+                # spectrace's microfacet lobes are isotropic: the geometric mean keeps the distribution's peak
+                # D(0) = 1 / (π αu αv), so the highlight's height, and loses its stretch.
+                alpha = math.sqrt(alpha_u * alpha_v)
+                self.warnings.append(
+                    f"{_shown(str(bsdf.file or self.xml_path), 200)}:{bsdf.line}: {bsdf.label()}: anisotropic "
+                    f"roughness alpha_u = {alpha_u:g}, alpha_v = {alpha_v:g} approximated by the isotropic "
+                    f"alpha = sqrt(alpha_u alpha_v) = {alpha:.4g} (spectrace's microfacet lobes are isotropic)"
+                )
         elif "alpha" in properties:
             element = self.resolve(properties["alpha"])
             # A texture's α is checked against the range when the scene loads, as any roughness texture is.
@@ -1452,8 +1461,40 @@ class MitsubaImporter:
             )
             self.integrator(nested[0], data)
             return
+        elif kind == "aov":
+            self.aov_integrator(element, properties, data)
+            return
         data["integrator"] = settings
         self.origins["integrator"] = element
+
+    def aov_integrator(self, element: Element, properties: Properties, data: dict) -> None:
+        """Mitsuba's `aov` integrator: its nested integrator's image, and the AOVs its `aovs` list names
+        ("name:type, ..."). The types spectrace's film keeps (the same definitions: spectrace.aovs) become the film's
+        aovs; each other type is a warning naming it, and so is an aov integrator without a nested one (Mitsuba's
+        image then holds the AOVs alone; spectrace renders the path tracer's image beside them)."""
+        nested = self.nested(properties, "integrator")
+        if len(nested) > 1:
+            raise self.fail(element, f"integrator 'aov' with {len(nested)} nested integrators (spectrace renders one)")
+        where = f"{_shown(str(element.file or self.xml_path), 200)}:{element.line}: integrator 'aov'"
+        kept: list[str] = []
+        text = self.text(properties["aovs"]) if "aovs" in properties else ""
+        for entry in filter(None, (part.strip() for part in text.split(","))):
+            kind = entry.split(":", 1)[-1].strip()
+            if kind in _MITSUBA_AOVS and _MITSUBA_AOVS[kind] not in kept:
+                kept.append(_MITSUBA_AOVS[kind])
+            elif kind not in _MITSUBA_AOVS:
+                self.warnings.append(
+                    f"{where}: AOV '{_shown(entry)}' is not imported (spectrace's film keeps the types "
+                    f"{', '.join(sorted(_MITSUBA_AOVS))})"
+                )
+        if kept:
+            self.film_aovs = kept
+        if nested:
+            self.integrator(nested[0], data)
+        else:
+            self.warnings.append(f"{where}: it holds no integrator; its image is spectrace's path tracer's")
+            data["integrator"] = {"type": "path", "max_depth": -1}
+            self.origins["integrator"] = element
 
     # -------------------------------------------------- the scene
 
@@ -1527,6 +1568,8 @@ class MitsubaImporter:
         data["lights"] = lights
         data["objects"] = {name: table for name, table in objects.items() if table["shapes"]}
         data["instances"] = instances
+        if self.film_aovs and "film" in data:
+            data["film"]["aovs"] = self.film_aovs
         order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
         # materials stays even when empty (the scene format asks for the table); objects only when some are placed.
         kept = {key: data[key] for key in order if key in data and data[key] != []}
