@@ -555,6 +555,34 @@ class MitsubaImporter:
         self.origins[f"textures.{name}"] = element
         return {"texture": name}
 
+    def scalar_texture(self, element: Element, key: str) -> dict | None:
+        """A texture where Mitsuba reads one number per point (a bump map's height, an opacity, an α): an RGB bitmap
+        there gives its luminance in Mitsuba, so it is imported as a texture of its own with luminance = true (a
+        grey one as it is)."""
+        known = set(self.textures)
+        reference = self.texture(element, key)
+        if reference is None or list(reference) != ["texture"]:
+            return reference
+        name = reference["texture"]
+        table = self.textures[name]
+        if table["type"] != "bitmap" or table.get("luminance"):
+            return reference
+        from spectrace.io.images import read_texture_image
+
+        values, _ = read_texture_image(self.toml_folder / table["file"], f"{self.xml_path}: {key}")
+        if values.shape[-1] == 1:
+            return reference
+        if name not in known:  # made for this use: it becomes the luminance, and a colour use makes its own
+            table["luminance"] = True
+            self._texture_of_element = {k: v for k, v in self._texture_of_element.items() if v != name}
+            return reference
+        grey = f"{name}_luminance"
+        if grey not in self.textures:
+            self.textures[grey] = table | {"luminance": True}
+            self._texture_elements[grey] = self._texture_elements[name]
+            self.origins[f"textures.{grey}"] = self._texture_elements[name]
+        return {"texture": grey}
+
     def texture_type(self, name: str) -> str:
         return self.textures[name]["type"]
 
@@ -886,7 +914,7 @@ class MitsubaImporter:
             if self.kind(texture) in _SPECTRUM_PLUGINS:  # a constant height: no gradient, nothing to import
                 self.unsupported_plugin(texture, " as a bump map (spectrace's bump maps are bitmaps or checkerboards)")
                 return None
-            detail["bump_map"] = self.texture(texture, "bump_map")
+            detail["bump_map"] = self.scalar_texture(texture, "bump_map")
             if "scale" in properties:
                 detail["bump_scale"] = self.number(properties["scale"])
         else:
@@ -911,7 +939,7 @@ class MitsubaImporter:
         """A mask's opacity: a number in [0, 1] or a texture."""
         resolved = self.resolve(element)
         if resolved.tag == "texture":
-            return self.texture(resolved, "opacity")
+            return self.scalar_texture(resolved, "opacity")
         if resolved.tag != "float":
             self.unsupported_plugin(resolved, " as opacity (spectrace's opacity is a number or a texture)")
             return None
@@ -955,7 +983,7 @@ class MitsubaImporter:
         elif "alpha" in properties:
             element = self.resolve(properties["alpha"])
             # A texture's α is checked against the range when the scene loads, as any roughness texture is.
-            alpha = self.texture(element, "roughness") if element.tag == "texture" else self.number(element)
+            alpha = self.scalar_texture(element, "roughness") if element.tag == "texture" else self.number(element)
             if alpha is None:
                 return None
             if isinstance(alpha, dict) and list(alpha) == ["value"]:  # a spectrum plugin standing for a number
