@@ -224,7 +224,7 @@ class MitsubaImporter:
         self.toml_folder = toml_folder
         self.parameters = dict(parameters)
         # Files the scene needs beside its TOML (a specfilm's response curves as a sensor CSV): name -> text.
-        self.side_files: dict[str, str] = {}
+        self.side_files: dict[str, str | bytes] = {}
         self.side_stem = xml_path.stem  # their names start with it (import_mitsuba: the TOML's stem)
         self.ids: dict[str, Element] = {}
         self.unsupported: dict[str, list] = {}  # "plugin detail" -> [count, first element]
@@ -903,10 +903,17 @@ class MitsubaImporter:
         detail: dict = {}
         if kind == "normalmap":
             texture = self.resolve(self.child(properties, "normalmap", bsdf))
-            if texture.tag != "texture" or self.kind(texture) != "bitmap":
-                self.unsupported_plugin(texture, " as normalmap (spectrace's normal maps are bitmaps)")
+            if texture.tag == "texture" and self.kind(texture) == "rawconstant":
+                constant = self.constant_normal_map(texture)
+                if constant is None:
+                    return None
+                if constant:  # the unturned normal (0, 0, 1) needs no map
+                    detail["normal_map"] = constant
+            elif texture.tag != "texture" or self.kind(texture) != "bitmap":
+                self.unsupported_plugin(texture, " as normalmap (spectrace's normal maps are bitmaps or rawconstant)")
                 return None
-            detail["normal_map"] = self.texture(texture, "normal_map")
+            else:
+                detail["normal_map"] = self.texture(texture, "normal_map")
         elif kind == "bumpmap":
             if len(textures) != 1:
                 raise self.fail(bsdf, f"{bsdf.label()} needs exactly one nested texture, got {len(textures)}")
@@ -934,6 +941,40 @@ class MitsubaImporter:
             )
             return None
         return table | detail
+
+    def constant_normal_map(self, texture: Element) -> dict | None:
+        """A `rawconstant` texture as a normal map: one tangent-space normal 2 c − 1 everywhere. The unturned normal
+        (c = (0.5, 0.5, 1)) is an empty dict (no map); any other is a 1 x 1 float OpenEXR of c written beside the
+        TOML, read raw. None when it is no normal (recorded)."""
+        properties = self.properties(texture)
+        value = self.resolve(self.child(properties, "value", texture))
+        if value.tag not in ("vector", "rgb", "float"):
+            self.unsupported_plugin(texture, " as normalmap (its value is a vector, an rgb or a float)")
+            return None
+        numbers = self.vector(value) if value.tag == "vector" else self.numbers(value)
+        if len(numbers) not in (1, 3):
+            raise self.fail(value, f"a rawconstant normal map needs 1 or 3 numbers, got {len(numbers)}", "value")
+        c = np.resize(np.asarray(numbers, np.float64), 3)
+        if not np.linalg.norm(2.0 * c - 1.0) > 0.0:
+            raise self.fail(value, "a rawconstant normal map of value 0.5, 0.5, 0.5 holds no direction", "value")
+        if np.allclose(c, (0.5, 0.5, 1.0), rtol=0.0, atol=1e-6):
+            return {}
+        from spectrace.io.exr import write_exr
+
+        with tempfile.TemporaryDirectory(prefix="spectrace-normal-") as folder:
+            path = Path(folder) / "normal.exr"
+            write_exr(path, np.tile(c, (1, 1, 1)), None, {})
+            data = path.read_bytes()
+        name = f"{self.side_stem}.normal_map_{sum(key.endswith('.exr') for key in self.side_files) + 1}.exr"
+        self.side_files[name] = data
+        texture_name = _unique_name(self.attribute(texture, "id") or "normal_map_constant", self.textures)
+        self.textures[texture_name] = {"type": "bitmap", "file": name, "raw": True}
+        self._texture_elements[texture_name] = texture
+        self.origins[f"textures.{texture_name}"] = texture
+        self.notes.append(
+            f"{self.at(texture)}: the rawconstant normal map is a 1 x 1 image written to {name} beside the scene"
+        )
+        return {"texture": texture_name}
 
     def opacity(self, element: Element) -> float | dict | None:
         """A mask's opacity: a number in [0, 1] or a texture."""
@@ -1773,8 +1814,11 @@ def import_mitsuba(
             if not side_path.exists():
                 written.append(side_path)
 
-            def write_side(temp: Path, text: str = side_text) -> None:
-                temp.write_text(text, encoding="utf-8")
+            def write_side(temp: Path, text: str | bytes = side_text) -> None:
+                if isinstance(text, bytes):
+                    temp.write_bytes(text)
+                else:
+                    temp.write_text(text, encoding="utf-8")
 
             write_atomically(side_path, write_side)
         write_atomically(toml_path, write_and_check)
