@@ -535,7 +535,7 @@ DETAIL_UNSUPPORTED = [
     (
         "checkerboard-normalmap",
         f'<bsdf type="normalmap"><texture type="checkerboard" name="normalmap"/>{DIFFUSE}</bsdf>',
-        "texture 'checkerboard' as normalmap (spectrace's normal maps are bitmaps)",
+        "texture 'checkerboard' as normalmap (spectrace's normal maps are bitmaps or rawconstant)",
     ),
     (
         "colour-opacity",
