@@ -206,6 +206,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
     int hero = 0;
     while (count < max_vertices) {
         Hit hit = scene_intersect(scene, s.ray, path_query(sampler, &s, QUERY_PATH) ^ query_base, rays_traced);
+        if (!adjoint) hit = far_clipped(params, &s, hit);
         if (hit.triangle < 0) break;
         PathVertex pv = path_vertex(scene, hit, s.ray);
         if (pv.info.material == TRIANGLE_NO_MATERIAL && pv.info.light < 0) {

@@ -14,7 +14,11 @@
  *   (π over the height, row 0 at the zenith). An environment rendered so, and put back as an envmap light with the
  *   same frame, is the environment again.
  * camera_origin.w is the near clip distance (Mitsuba 3's near_clip): rays start where they cross the plane that far
- * along camera_forward (equirectangular: that far along the ray), so nothing nearer is seen (0: at the lens). */
+ * along camera_forward (equirectangular: that far along the ray), so nothing nearer is seen (0: at the lens).
+ * camera_forward.w is the far clip distance (Mitsuba 3's far_clip; 0: none), measured the same way: the camera's own
+ * rays see nothing beyond that plane (a miss, which shows the environment), and light arriving from beyond it does
+ * not reach the film (camera_importance.cl). Mitsuba 3's perspective, thin lens and orthographic sensors set the
+ * ray's maxt to the distance to that plane along the view axis, as here. */
 #ifndef SPECTRACE_CAMERA_CL
 #define SPECTRACE_CAMERA_CL
 
@@ -72,6 +76,22 @@ inline Ray camera_ray(__global const RenderParams *p, float2 film, Sampler *samp
     ray.origin = p->camera_origin.xyz + p->camera_origin.w * direction;
     ray.direction = normalize(direction);
     return ray;
+}
+
+/* How far along `ray`, a ray camera_ray made, from its start, the camera sees: to the far clip plane (INFINITY
+ * without one). */
+inline float camera_ray_reach(__global const RenderParams *p, Ray ray)
+{
+#if SCENE_HAS_FAR_CLIP
+    float far = p->camera_forward.w;
+    if (!(far > 0.0f)) return INFINITY;
+    float near = p->camera_origin.w;
+    if (CAMERA_IS(p, CAMERA_EQUIRECTANGULAR)) return far - near;
+    /* Every other camera's rays start on the near plane. */
+    return (far - near) / dot(ray.direction, p->camera_forward.xyz);
+#else
+    return INFINITY;
+#endif
 }
 
 /* The rays through the film positions one pixel to the right of and one below the one that sees the point p, as

@@ -57,7 +57,7 @@ inline int land_on_film(__global const RenderParams *params, float fx, float fy,
 }
 
 /* Where x lands on the film of the camera in params, and with what importance (pixel -1: outside the view, behind
- * the camera or nearer than the near clip plane). u_lens: a uniform 2D sample for the thin lens's lens point (unused
+ * the camera, nearer than the near clip plane or beyond the far one). u_lens: a uniform 2D sample for the thin lens's lens point (unused
  * by the other cameras); (0, 0) is the lens's centre. */
 inline CameraConnection connect_to_camera_sampled(__global const RenderParams *params, float3 x, float2 u_lens)
 {
@@ -68,12 +68,17 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
     float3 right = params->camera_right.xyz;
     float3 up = params->camera_up.xyz;
     float near = params->camera_origin.w;
+#if SCENE_HAS_FAR_CLIP
+    float far = params->camera_forward.w > 0.0f ? params->camera_forward.w : INFINITY;
+#else
+    float far = INFINITY;
+#endif
     float tan_x2 = dot(right, right), tan_y2 = dot(up, up);
     float area = 4.0f * sqrt(tan_x2 * tan_y2);
     if (CAMERA_IS(params, CAMERA_ORTHOGRAPHIC)) {
         float3 d = x - eye;
         float depth = dot(d, forward);
-        if (!(depth > near)) return c;
+        if (!(depth > near) || depth > far) return c;
         float ndc_x = dot(d, right) / tan_x2, ndc_y = dot(d, up) / tan_y2;
         float fx = 0.5f * (ndc_x + 1.0f) * (float)params->width;
         float fy = 0.5f * (1.0f - ndc_y) * (float)params->height;
@@ -109,7 +114,7 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
     }
     float3 d = x - lens_point;
     float depth = dot(d, forward);
-    if (!(depth > 0.0f) || depth <= near) return c;
+    if (!(depth > 0.0f) || depth <= near || depth > far) return c;
     /* The eye sees the film position of the ray lens_point → x where that ray meets the plane of focus (for the
      * pinhole, lens_point is the eye and that is x's own direction). */
     float3 seen = CAMERA_IS(params, CAMERA_THIN_LENS) ? lens_point + (params->lens.y / depth) * d - eye : d;

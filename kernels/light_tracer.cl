@@ -125,7 +125,7 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
     float2 film = (float2)((float)(item % params->width) + jitter.x, (float)(item / params->width) + jitter.y);
     Ray ray = camera_ray(params, film, sampler); /* only the thin lens draws more: its lens point */
     PathState s = camera_path(ray);
-    Hit hit = scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced);
+    Hit hit = far_clipped(params, &s, scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced));
     if (hit.triangle >= 0) return;
     __global const Light *env = &scene->lights[params->environment_light];
     float4 radiance = environment_radiance(env, scene->spectra, scene->texels, w, ray.direction);

@@ -52,9 +52,9 @@ inline float3 facing(float3 n, float3 wo)
     return dot(n, wo) >= 0.0f ? n : -n;
 }
 
-/* The local frame of material m at a surface of (shading) normal n seen from wo. Every reflector reflects on both
- * faces, so its frame's normal is turned toward wo (local wo.z ≥ 0). A transmitting one keeps n on the winding's
- * front: which side is the interior (so the sign of the refraction) comes from the winding, so closed meshes need
+/* The local frame of material m at a surface of (shading) normal n seen from wo. A reflector's frame's normal is
+ * turned toward wo (local wo.z ≥ 0): it reflects on both faces, unless one-sided (material_back_is_black). A
+ * transmitting one keeps n on the winding's front: which side is the interior (so the sign of the refraction) comes from the winding, so closed meshes need
  * outward normals. */
 inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 wo)
 {
@@ -99,9 +99,23 @@ inline int material_disperses(__global const Material *m, const SampledWavelengt
     return (material_flags(m) & BSDF_DISPERSIVE) && wavelengths_differ(w);
 }
 
+/* 1 when m reflects on one face only and wo sees the other, where it is black (Mitsuba 3's BSDFs outside `twosided`
+ * test cos θ > 0 in the shading frame alike). n is turned to the winding's front (shading_normal.cl), so its side
+ * is the front. A reflecting BSDF passes light only between directions on wo's side, so testing wo alone blacks
+ * the back whichever of the pair is wo: radiance (wo toward the viewer) and importance (wo toward the light) alike. */
+inline int material_back_is_black(__global const Material *m, float3 n, float3 wo)
+{
+#if SCENE_HAS_ONE_SIDED
+    return m->one_sided && !(material_flags(m) & BSDF_TRANSMISSION) && !(dot(n, wo) > 0.0f);
+#else
+    return 0;
+#endif
+}
+
 inline float4 material_eval(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                             float3 n, float3 wo, float3 wi)
 {
+    if (material_back_is_black(m, n, wo)) return (float4)(0.0f);
     ShadingFrame frame = material_frame(m, n, wo);
     return material_eval_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
 }
@@ -109,6 +123,7 @@ inline float4 material_eval(__global const Material *m, const SurfaceContext *sc
 inline float material_pdf(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                           float3 n, float3 wo, float3 wi)
 {
+    if (material_back_is_black(m, n, wo)) return 0.0f;
     ShadingFrame frame = material_frame(m, n, wo);
     return material_pdf_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
 }
@@ -116,6 +131,7 @@ inline float material_pdf(__global const Material *m, const SurfaceContext *sc, 
 inline int material_sample(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                            float3 n, float3 wo, float uc, float2 u, BSDFSample *s)
 {
+    if (material_back_is_black(m, n, wo)) return 0;
     ShadingFrame frame = material_frame(m, n, wo);
     if (!material_sample_local(m, sc, w, to_local(&frame, wo), uc, u, s)) return 0;
     s->wi = to_world(&frame, s->wi);

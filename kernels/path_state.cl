@@ -28,6 +28,16 @@ typedef struct {
 #endif
 } PathState;
 
+/* hit, or a miss where it lies beyond the camera's far clip on the camera's own ray (s's first segment, before any
+ * medium boundary is crossed: Mitsuba 3 limits only the sensor's ray). Call it on camera paths only. */
+inline Hit far_clipped(__global const RenderParams *params, const PathState *s, Hit hit)
+{
+#if SCENE_HAS_FAR_CLIP
+    if (s->segments == 1 && s->null_crossings == 0 && hit.t > camera_ray_reach(params, s->ray)) return no_hit(INFINITY);
+#endif
+    return hit;
+}
+
 inline PathState camera_path(Ray ray)
 {
     PathState s;

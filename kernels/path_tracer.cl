@@ -70,7 +70,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     int last_segment = max_segments(params);
     int ended = 0;
 
-    Hit hit = scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced);
+    Hit hit = far_clipped(params, s, scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced));
     if (scatter_in_medium(scene, w, sampler, s, hit.t, last_segment, radiance, &ended, rays_traced)) {
         return !ended && ++s->segments <= last_segment;
     }

@@ -63,6 +63,11 @@
 #define SCENE_HAS_OPACITY 1
 #endif
 
+/* Materials that reflect on one face only (Material.one_sided, kernels/material.cl). */
+#ifndef SCENE_HAS_ONE_SIDED
+#define SCENE_HAS_ONE_SIDED 1
+#endif
+
 /* hide_emitters with area lights: the camera's own rays pass through them (kernels/path_tracer.cl). */
 #ifndef SCENE_HIDES_AREA_EMITTERS
 #define SCENE_HIDES_AREA_EMITTERS 1
@@ -77,6 +82,10 @@
  * every bit without the defines). */
 #ifndef SCENE_CAMERA_TYPES
 #define SCENE_CAMERA_TYPES ((1 << CAMERA_TYPE_COUNT) - 1)
+#endif
+/* A camera with a far clip plane (RenderParams.camera_forward.w > 0, kernels/camera.cl). */
+#ifndef SCENE_HAS_FAR_CLIP
+#define SCENE_HAS_FAR_CLIP 1
 #endif
 #ifndef SCENE_PIXEL_FILTERS
 #define SCENE_PIXEL_FILTERS ((1 << PIXEL_FILTER_COUNT) - 1)

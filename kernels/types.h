@@ -124,7 +124,9 @@ typedef struct {
     float bump_scale;           /* scene units per bump map value */
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
-    int detail_pad[1];
+    int one_sided;              /* 1: a reflecting BSDF is black seen from the back of its surface (wo on the far side
+                                   of the winding's normal), as Mitsuba 3's outside `twosided`; 0: it reflects on
+                                   both faces. BSDFs that transmit ignore it */
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its
@@ -184,8 +186,8 @@ typedef struct {
 
 /* Everything a render pass needs besides the buffers. */
 typedef struct {
-    float4 camera_origin;
-    float4 camera_forward;   /* unit vector */
+    float4 camera_origin;    /* xyz: the eye; w: the near clip distance (kernels/camera.cl), scene units */
+    float4 camera_forward;   /* xyz: unit vector; w: the far clip distance (scene units; 0: none) */
     float4 camera_right;     /* perspective, thin lens: unit vector scaled by tan(fov_x / 2); orthographic: scaled
                                 by half the view's width (scene units); equirectangular: unit vector */
     float4 camera_up;        /* likewise with fov_y / the view's height */

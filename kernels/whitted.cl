@@ -12,7 +12,7 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
 {
     __global const RenderParams *params = scene->params;
     int last_segment = max_segments(params);
-    Hit hit = scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced);
+    Hit hit = far_clipped(params, s, scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced));
     /* The local model carries only the light a medium does not scatter: its transmittance to the surface. */
     if (s->medium >= 0) {
         s->throughput *= beer_lambert(medium_sigma_t(&scene->media[s->medium], scene->spectra, w), hit.t);

@@ -383,7 +383,10 @@ def _check_camera(scene: Scene) -> None:
     if np.linalg.norm(np.cross(forward, camera.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
         raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where="camera.up")
     from spectrace.cameras import CAMERAS
+    from spectrace.cameras.shared import clip_problem
 
+    if problem := clip_problem(camera):
+        raise SpectraceError(problem, where="camera.far_clip")
     if camera.type not in CAMERAS:
         raise SpectraceError(f"unknown camera type {camera.type!r}; one of {', '.join(CAMERAS)}", where="camera.type")
     if camera.type in ("perspective", "thinlens") and not 0.0 < camera.fov_degrees < 180.0:

@@ -32,7 +32,12 @@ def test_an_emitter_without_a_bsdf_is_black_and_other_shapes_diffuse(tmp_path):
     emitting, plain = data["shapes"]
     assert "emitter" in emitting and "emitter" not in plain
     assert data["materials"][emitting["material"]] == {"type": "diffuse", "reflectance": {"value": 0.0}}
-    assert data["materials"][plain["material"]] == {"type": "diffuse", "reflectance": {"value": 0.5}}
+    # Mitsuba's default is its plain diffuse, black from the back.
+    assert data["materials"][plain["material"]] == {
+        "type": "diffuse",
+        "reflectance": {"value": 0.5},
+        "two_sided": False,
+    }
 
 
 @pytest.mark.peer

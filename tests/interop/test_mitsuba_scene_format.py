@@ -53,7 +53,7 @@ def test_parameters_are_substituted_in_every_attribute(tmp_path):
     )
     data, _ = mitsuba_scene_data(path)
     assert data["integrator"] == {"type": "path", "max_depth": 3}
-    assert data["materials"]["white"] == {"type": "diffuse", "reflectance": {"value": 0.3}}
+    assert data["materials"]["white"] == {"type": "diffuse", "reflectance": {"value": 0.3}, "two_sided": False}
     assert data["shapes"][0]["file"] == "meshes/triangle.obj"
     # -D wins over <default>, as Mitsuba's -D does; \$ is a literal dollar.
     data, _ = mitsuba_scene_data(path, parameters={"depth": "5"})
@@ -240,6 +240,31 @@ def test_moment_holds_the_integrator_it_renders(tmp_path):
     data, notes = mitsuba_scene_data(path)
     assert data["integrator"] == {"type": "path", "max_depth": 2}
     assert any("'moment' imported as the integrator it holds" in note for note in notes)
+
+
+def test_aov_holds_the_integrator_it_renders_and_keeps_the_aovs_spectrace_has(tmp_path):
+    """Mitsuba's aov integrator: its nested integrator's image; depth, position, sh_normal and albedo are the film's
+    AOVs of the same definitions (kernels/aov.cl); any other type, and an aov integrator without a nested one, is
+    a warning naming it, which --strict makes an error."""
+    path = _write(
+        tmp_path,
+        '<integrator type="aov"><string name="aovs" value="dd.y:depth, nn:sh_normal, tex:uv, pos:position"/>'
+        '<integrator type="path"><integer name="max_depth" value="5"/></integrator></integrator><shape type="cube"/>',
+    )
+    data, notes = mitsuba_scene_data(path)
+    assert data["integrator"] == {"type": "path", "max_depth": 5}
+    assert data["film"]["aovs"] == ["depth", "normal", "position"]
+    assert [note for note in notes if note.startswith("warning: ")] == [
+        f"warning: {path}:4: integrator 'aov': AOV 'tex:uv' is not imported (spectrace's film keeps the types "
+        "albedo, depth, position, sh_normal)"
+    ]
+    assert load_mitsuba_scene(path).aovs == ("normal", "depth", "position")
+    with pytest.raises(SpectraceError, match="'tex:uv'"):
+        mitsuba_scene_data(path, strict=True)
+    alone = _write(tmp_path, '<integrator type="aov"><string name="aovs" value="a:albedo"/></integrator>')
+    data, notes = mitsuba_scene_data(alone)
+    assert data["integrator"]["type"] == "path" and data["film"]["aovs"] == ["albedo"]
+    assert any("holds no integrator" in note for note in notes if note.startswith("warning: "))
 
 
 HIDDEN = """<integrator type="path"><boolean name="hide_emitters" value="$hide"/></integrator>

@@ -77,6 +77,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
+        "SCENE_HAS_ONE_SIDED": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
@@ -108,6 +109,11 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     assert defines["SCENE_HAS_MIX"] == 1
     mixed_types = MATERIAL_BITS["mix"] | MATERIAL_BITS["diffuse"] | MATERIAL_BITS["conductor"]
     assert defines["SCENE_MATERIAL_TYPES"] == mixed_types
+    for two_sided in (True, False):
+        scene = replace(
+            _environment_map_scene(), shapes=[spectrace.shape("rectangle", spectrace.diffuse(0.5, two_sided=two_sided))]
+        )
+        assert scene_feature_defines(build_scene_buffers(scene))["SCENE_HAS_ONE_SIDED"] == int(not two_sided)
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():

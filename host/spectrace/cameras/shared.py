@@ -15,7 +15,15 @@ NEAR_CLIP = Parameter(
     Range(0.0),
     doc="distance along the view axis before which nothing is seen",
 )
-PARAMETERS = (ORIGIN, TARGET, UP, NEAR_CLIP)
+FAR_CLIP = Parameter(
+    "far_clip",
+    "float",
+    "scene units",
+    None,
+    Range(0.0, low_open=True),
+    doc="distance along the view axis beyond which nothing is seen (none: no limit); more than near_clip",
+)
+PARAMETERS = (ORIGIN, TARGET, UP, NEAR_CLIP, FAR_CLIP)
 
 FOV = Parameter(
     "fov",
@@ -28,6 +36,13 @@ FOV = Parameter(
     schema_range=False,  # checked by the schema's validator, whose message names the range in degrees
 )
 FOV_AXIS = Parameter("fov_axis", "axis", "", "x", doc='"x" or "y": the image axis fov spans', type_doc='"x" or "y"')
+
+
+def clip_problem(camera) -> str | None:
+    """Why the camera's far clip cannot be, or None: it must lie beyond the near one."""
+    if camera.far_clip is not None and not camera.far_clip > camera.near_clip:
+        return f"far_clip ({camera.far_clip:g}) must be more than near_clip ({camera.near_clip:g})"
+    return None
 
 
 def frame(camera) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -80,7 +80,7 @@ MATERIAL_DTYPE = _struct(
         ("bump_scale", "<f4"),
         ("opacity", "<f4"),
         ("opacity_texture", "<i4"),
-        ("detail_pad", ("<i4", (1,))),
+        ("one_sided", "<i4"),
     ],
     112,
 )

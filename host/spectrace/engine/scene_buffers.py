@@ -518,6 +518,7 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["camera_origin"][0, :3] = origin
     params["camera_origin"][0, 3] = scene.camera.near_clip
     params["camera_forward"][0, :3] = forward
+    params["camera_forward"][0, 3] = scene.camera.far_clip or 0.0  # 0: none (kernels/camera.cl)
     params["camera_right"][0, :3] = right
     params["camera_up"][0, :3] = up
     params["width"], params["height"] = scene.width, scene.height

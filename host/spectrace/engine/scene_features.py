@@ -26,6 +26,7 @@ def camera_feature_defines(params: np.ndarray) -> dict[str, int]:
     return {
         "SCENE_CAMERA_TYPES": 1 << int(params["camera_type"][0]),
         "SCENE_PIXEL_FILTERS": 1 << int(params["pixel_filter"][0]),
+        "SCENE_HAS_FAR_CLIP": int(params["camera_forward"][0, 3] > 0.0),
     }
 
 
@@ -54,4 +55,5 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),
         "SCENE_HAS_INSTANCES": int(buffers.instance_count > 0),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
+        "SCENE_HAS_ONE_SIDED": int(bool(np.any(materials["one_sided"] != 0))),
     }

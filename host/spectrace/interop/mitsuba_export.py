@@ -11,7 +11,8 @@ The export is meant to make Mitsuba do exactly the work spectrace does, so that 
 - spectra: every spectrum as Mitsuba's `regular` spectrum on spectrace's own 1 nm grid (360-830 nm), so both
   interpolate the same samples linearly;
 - materials and lights: each module's `to_mitsuba` (spectrace.materials.<name>, spectrace.lights.<name>) gives its
-  entry; spectrace's diffuse reflects on both faces, so it becomes `twosided` around `diffuse`; Mitsuba's `area`
+  entry; spectrace's diffuse reflects on both faces, so it becomes `twosided` around `diffuse` (a material with
+  two_sided = false, the BSDF alone); Mitsuba's `area`
   emitter is one-sided toward the face normal, as spectrace's default;
 - camera: the same origin/target/up (Mitsuba's `lookat` puts image-right along forward x up, as spectrace does),
   fov and fov_axis (a thin lens's aperture and focus; an orthographic view's width as to_world's scale); the
@@ -191,6 +192,8 @@ def scene_to_mitsuba_dict(
             **_sensor(scene),
             # Mitsuba's own default (0.01) where ours is 0: it needs a positive plane.
             **({"near_clip": float(camera.near_clip)} if camera.near_clip > 0.0 else {}),
+            # Mitsuba's default far clip is 10 000 scene units; spectrace's none.
+            **({"far_clip": float(camera.far_clip)} if camera.far_clip is not None else {}),
             "sampler": {"type": sampler, "sample_count": int(spp or scene.spp)},
             "film": {
                 "type": "hdrfilm",
@@ -208,14 +211,18 @@ def scene_to_mitsuba_dict(
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
             raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
-        if shape.material is not None and shape.material.detail is not None:
+        detail = shape.material.detail if shape.material is not None else None
+        if detail is not None and (detail.normal_map, detail.bump_map, detail.opacity) != (None, None, 1.0):
             raise exporter.refuse(
                 f"shape '{shape.name}': surface detail (normal or bump map, opacity) is not exported yet"
             )
         material_key = id(shape.material)
         if material_key not in materials:
             name = f"material_{len(materials)}"
-            entries[name] = to_mitsuba(shape.material, exporter)
+            entry = to_mitsuba(shape.material, exporter)
+            if detail is not None and not detail.two_sided and entry["type"] == "twosided":
+                entry = entry["bsdf"]  # Mitsuba's BSDF alone is one-sided, black from the back
+            entries[name] = entry
             materials[material_key] = name
         if shape.analytic is not None:  # Mitsuba's own analytic shape, in the same object space
             entry = {

@@ -13,14 +13,14 @@ becomes textured there imports textures without a change here. Mitsuba's rectang
 v up where spectrace's run down: textures on those shapes are imported with v flipped, as a material of their own.
 
 Imported here: shapes obj, ply, serialized (shape_index), rectangle, cube, and the analytic sphere (center, radius),
-disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sphere);
-twosided around one BSDF (spectrace's
-materials already reflect on both faces); the perspective sensor (fov with any fov_axis, or focal_length; to_world
-with lookat/translate/rotate/scale/matrix); hdrfilm width/height; specfilm (its responses as the film's sensor,
-a CSV beside the TOML); the sampler's sample_count and seed; integrators path (max_depth, rr_depth), direct (as
-path with max_depth 2), volpath/volpathmis (as path, which renders media)
-and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium with constant sigma_t
-and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the index-matched boundary).
+disk and cylinder (p0, p1, radius) (face_normals on obj, ply, serialized and sphere); twosided around one BSDF (a
+reflecting BSDF outside it is one-sided, black from the back, as in Mitsuba: its material takes two_sided = false);
+the perspective sensor (fov with any fov_axis, or focal_length; to_world with lookat/translate/rotate/scale/matrix);
+hdrfilm width/height; specfilm (its responses as the film's sensor, a CSV beside the TOML); the sampler's
+sample_count and seed; integrators path (max_depth, rr_depth), direct (as path with max_depth 2), volpath/volpathmis
+(as path, which renders media) and ptracer (as the light tracer, `light`); a shape's interior homogeneous medium
+with constant sigma_t and scale, a constant or rgb albedo and an hg or isotropic phase (a null bsdf: the
+index-matched boundary).
 Spectra: rgb (uplifted exactly as Mitsuba does: Jakob & Hanika 2019, emission D65-based), float, spectrum given as
 a value, "λ:v" pairs, wavelengths/values or an .spd file, and the spectrum plugins uniform, regular, irregular,
 blackbody, d65 and srgb.
@@ -68,8 +68,9 @@ BSDF_MODULES = _modules_by_plugin(MATERIALS.values())
 EMITTER_MODULES = _modules_by_plugin(LIGHTS.values())  # emitters of their own, <emitter> children of <scene>
 SHAPE_EMITTER_MODULES = _modules_by_plugin((area,))  # emitters on a shape
 TEXTURE_MODULES = _modules_by_plugin(TEXTURES.values())
-# `twosided` wraps one BSDF: spectrace's materials already reflect on both faces. The surface-detail adapters wrap
-# one BSDF too, and become keys of its material (spectrace.materials.surface): normal_map, bump_map, opacity.
+# `twosided` wraps one BSDF: without it, a reflecting material imports with two_sided = false. The surface-detail
+# adapters wrap one BSDF too, and become keys of its material (spectrace.materials.surface): normal_map, bump_map,
+# opacity.
 SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 # Mitsuba sensor plugin → spectrace camera type, from the cameras' modules (spectrace.cameras).
@@ -82,7 +83,7 @@ SUPPORTED = {
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm", "specfilm"),
-    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "ptracer", "bdpt"),
+    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "aov", "ptracer", "bdpt"),
     "medium": ("homogeneous",),
     "phase": ("hg", "isotropic"),
 }
@@ -104,6 +105,8 @@ def supported_text() -> str:
     return "; ".join(f"{tag} {', '.join(kinds)}" for tag, kinds in SUPPORTED.items())
 
 
+# Mitsuba's aov integrator's AOV types -> spectrace's film AOVs of the same definition (kernels/aov.cl).
+_MITSUBA_AOVS = {"albedo": "albedo", "depth": "depth", "position": "position", "sh_normal": "normal"}
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 _PLANNED_BSDFS: tuple[str, ...] = ()
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
@@ -221,12 +224,13 @@ class MitsubaImporter:
         self.toml_folder = toml_folder
         self.parameters = dict(parameters)
         # Files the scene needs beside its TOML (a specfilm's response curves as a sensor CSV): name -> text.
-        self.side_files: dict[str, str] = {}
+        self.side_files: dict[str, str | bytes] = {}
         self.side_stem = xml_path.stem  # their names start with it (import_mitsuba: the TOML's stem)
         self.ids: dict[str, Element] = {}
         self.unsupported: dict[str, list] = {}  # "plugin detail" -> [count, first element]
         self.notes: list[str] = []
         self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
+        self.film_aovs: list[str] = []  # from an aov integrator
         self._properties: dict[int, Properties] = {}
         self._object_names: dict[int, str] = {}  # shapegroup element -> its spectrace object's name
         self.search_folders: list[Path] = [xml_path.parent]  # <path> folders, then the scene's
@@ -556,6 +560,34 @@ class MitsubaImporter:
         self.origins[f"textures.{name}"] = element
         return {"texture": name}
 
+    def scalar_texture(self, element: Element, key: str) -> dict | None:
+        """A texture where Mitsuba reads one number per point (a bump map's height, an opacity, an α): an RGB bitmap
+        there gives its luminance in Mitsuba, so it is imported as a texture of its own with luminance = true (a
+        grey one as it is)."""
+        known = set(self.textures)
+        reference = self.texture(element, key)
+        if reference is None or list(reference) != ["texture"]:
+            return reference
+        name = reference["texture"]
+        table = self.textures[name]
+        if table["type"] != "bitmap" or table.get("luminance"):
+            return reference
+        from spectrace.io.images import read_texture_image
+
+        values, _ = read_texture_image(self.toml_folder / table["file"], f"{self.xml_path}: {key}")
+        if values.shape[-1] == 1:
+            return reference
+        if name not in known:  # made for this use: it becomes the luminance, and a colour use makes its own
+            table["luminance"] = True
+            self._texture_of_element = {k: v for k, v in self._texture_of_element.items() if v != name}
+            return reference
+        grey = f"{name}_luminance"
+        if grey not in self.textures:
+            self.textures[grey] = table | {"luminance": True}
+            self._texture_elements[grey] = self._texture_elements[name]
+            self.origins[f"textures.{grey}"] = self._texture_elements[name]
+        return {"texture": grey}
+
     def texture_type(self, name: str) -> str:
         return self.textures[name]["type"]
 
@@ -784,12 +816,14 @@ class MitsubaImporter:
     def material(self, element: Element | None, owner: str, flip_v: bool = False, emits: bool = False) -> str | None:
         """The name of the spectrace material for a (possibly referenced) bsdf, defining it on first use. flip_v:
         for a shape whose v runs up (_V_UP_SHAPES); a textured bsdf then becomes a material of its own, with its
-        textures' v flipped. Without a bsdf, Mitsuba's default: diffuse 0.5, and black on a shape that emits
-        (measured: Mitsuba 3's emitter without a bsdf reflects nothing)."""
+        textures' v flipped. Without a bsdf, Mitsuba's default: diffuse 0.5, one-sided as its plain diffuse is,
+        and black on a shape that emits (measured: Mitsuba 3's emitter without a bsdf reflects nothing)."""
         if element is None:
             name, reflectance = ("default_emitter", 0.0) if emits else ("default", 0.5)
             if name not in self.materials:
                 self.materials[name] = {"type": "diffuse", "reflectance": {"value": reflectance}}
+                if not emits:
+                    self.materials[name]["two_sided"] = False
             return name
         bsdf = self.resolve(element)
         if (id(bsdf), flip_v) in self._material_of_element:
@@ -823,14 +857,17 @@ class MitsubaImporter:
                 self.origins[f"materials.{name}.{key}"] = self._texture_elements[value["texture"]]
         return name
 
-    def material_table(self, bsdf: Element) -> dict | None:
+    def material_table(self, bsdf: Element, two_sided: bool = False) -> dict | None:
+        """two_sided: the bsdf is inside a `twosided` wrapper. Outside one, Mitsuba's reflecting BSDFs are black
+        from the back of the surface, so their materials take two_sided = false; those that transmit have two
+        sides by nature."""
         self.enter(bsdf)
         try:
-            return self._material_table(bsdf)
+            return self._material_table(bsdf, two_sided)
         finally:
             self.leave()
 
-    def _material_table(self, bsdf: Element) -> dict | None:
+    def _material_table(self, bsdf: Element, two_sided: bool) -> dict | None:
         kind = self.kind(bsdf) if bsdf.tag == "bsdf" else None
         properties = self.properties(bsdf)
         if kind == "twosided":
@@ -838,19 +875,21 @@ class MitsubaImporter:
             if len(nested) != 1:
                 self.unsupported_plugin(bsdf, " with two different sides")
                 return None
-            return self.material_table(nested[0])
+            return self.material_table(nested[0], two_sided=True)
         if kind in SURFACE_DETAIL_WRAPPERS:
-            return self.surface_detail(bsdf, kind, properties)
+            return self.surface_detail(bsdf, kind, properties, two_sided)
         if kind in BSDF_MODULES:
             table = BSDF_MODULES[kind].from_mitsuba(self, bsdf, properties)
             # A module may import a plugin as another material (conductor "none" as mirror): that one's table counts.
             if table is None or not self.checked_textures(table, MATERIALS[table["type"]]):
                 return None
+            if not two_sided and not MATERIALS[table["type"]].MODEL.has_transmission:
+                table["two_sided"] = False
             return table
         self.unsupported_object(bsdf, " (not yet in spectrace)" if kind in _PLANNED_BSDFS else "")
         return None
 
-    def surface_detail(self, bsdf: Element, kind: str, properties: Properties) -> dict | None:
+    def surface_detail(self, bsdf: Element, kind: str, properties: Properties, two_sided: bool) -> dict | None:
         """The material of the one bsdf that a normalmap, bumpmap or mask adapter wraps, with the adapter's key
         added: normal_map (its `normalmap` texture), bump_map and bump_scale (its one texture, `scale`), opacity
         (`opacity`, Mitsuba's default 0.5). Mitsuba's bumpmap displaces by scale · h along the normal (its tangents
@@ -869,10 +908,17 @@ class MitsubaImporter:
         detail: dict = {}
         if kind == "normalmap":
             texture = self.resolve(self.child(properties, "normalmap", bsdf))
-            if texture.tag != "texture" or self.kind(texture) != "bitmap":
-                self.unsupported_plugin(texture, " as normalmap (spectrace's normal maps are bitmaps)")
+            if texture.tag == "texture" and self.kind(texture) == "rawconstant":
+                constant = self.constant_normal_map(texture)
+                if constant is None:
+                    return None
+                if constant:  # the unturned normal (0, 0, 1) needs no map
+                    detail["normal_map"] = constant
+            elif texture.tag != "texture" or self.kind(texture) != "bitmap":
+                self.unsupported_plugin(texture, " as normalmap (spectrace's normal maps are bitmaps or rawconstant)")
                 return None
-            detail["normal_map"] = self.texture(texture, "normal_map")
+            else:
+                detail["normal_map"] = self.texture(texture, "normal_map")
         elif kind == "bumpmap":
             if len(textures) != 1:
                 raise self.fail(bsdf, f"{bsdf.label()} needs exactly one nested texture, got {len(textures)}")
@@ -880,14 +926,14 @@ class MitsubaImporter:
             if self.kind(texture) in _SPECTRUM_PLUGINS:  # a constant height: no gradient, nothing to import
                 self.unsupported_plugin(texture, " as a bump map (spectrace's bump maps are bitmaps or checkerboards)")
                 return None
-            detail["bump_map"] = self.texture(texture, "bump_map")
+            detail["bump_map"] = self.scalar_texture(texture, "bump_map")
             if "scale" in properties:
                 detail["bump_scale"] = self.number(properties["scale"])
         else:
             detail["opacity"] = self.opacity(properties["opacity"]) if "opacity" in properties else 0.5
         if any(value is None for value in detail.values()):
             return None
-        table = self.material_table(nested[0])
+        table = self.material_table(nested[0], two_sided)
         if table is None:
             return None
         one_of = ("opacity",) if "opacity" in detail else ("normal_map", "bump_map")
@@ -901,11 +947,45 @@ class MitsubaImporter:
             return None
         return table | detail
 
+    def constant_normal_map(self, texture: Element) -> dict | None:
+        """A `rawconstant` texture as a normal map: one tangent-space normal 2 c − 1 everywhere. The unturned normal
+        (c = (0.5, 0.5, 1)) is an empty dict (no map); any other is a 1 x 1 float OpenEXR of c written beside the
+        TOML, read raw. None when it is no normal (recorded)."""
+        properties = self.properties(texture)
+        value = self.resolve(self.child(properties, "value", texture))
+        if value.tag not in ("vector", "rgb", "float"):
+            self.unsupported_plugin(texture, " as normalmap (its value is a vector, an rgb or a float)")
+            return None
+        numbers = self.vector(value) if value.tag == "vector" else self.numbers(value)
+        if len(numbers) not in (1, 3):
+            raise self.fail(value, f"a rawconstant normal map needs 1 or 3 numbers, got {len(numbers)}", "value")
+        c = np.resize(np.asarray(numbers, np.float64), 3)
+        if not np.linalg.norm(2.0 * c - 1.0) > 0.0:
+            raise self.fail(value, "a rawconstant normal map of value 0.5, 0.5, 0.5 holds no direction", "value")
+        if np.allclose(c, (0.5, 0.5, 1.0), rtol=0.0, atol=1e-6):
+            return {}
+        from spectrace.io.exr import write_exr
+
+        with tempfile.TemporaryDirectory(prefix="spectrace-normal-") as folder:
+            path = Path(folder) / "normal.exr"
+            write_exr(path, np.tile(c, (1, 1, 1)), None, {})
+            data = path.read_bytes()
+        name = f"{self.side_stem}.normal_map_{sum(key.endswith('.exr') for key in self.side_files) + 1}.exr"
+        self.side_files[name] = data
+        texture_name = _unique_name(self.attribute(texture, "id") or "normal_map_constant", self.textures)
+        self.textures[texture_name] = {"type": "bitmap", "file": name, "raw": True}
+        self._texture_elements[texture_name] = texture
+        self.origins[f"textures.{texture_name}"] = texture
+        self.notes.append(
+            f"{self.at(texture)}: the rawconstant normal map is a 1 x 1 image written to {name} beside the scene"
+        )
+        return {"texture": texture_name}
+
     def opacity(self, element: Element) -> float | dict | None:
         """A mask's opacity: a number in [0, 1] or a texture."""
         resolved = self.resolve(element)
         if resolved.tag == "texture":
-            return self.texture(resolved, "opacity")
+            return self.scalar_texture(resolved, "opacity")
         if resolved.tag != "float":
             self.unsupported_plugin(resolved, " as opacity (spectrace's opacity is a number or a texture)")
             return None
@@ -936,14 +1016,20 @@ class MitsubaImporter:
                 return None
             alpha_u = self.number(self.resolve(u_element))
             alpha_v = self.number(self.resolve(v_element))
-            if alpha_u != alpha_v:
-                self.unsupported_plugin(bsdf, " with anisotropic roughness")
-                return None
             alpha = alpha_u
+            if alpha_u != alpha_v:
+                # spectrace's microfacet lobes are isotropic: the geometric mean keeps the distribution's peak
+                # D(0) = 1 / (π αu αv), so the highlight's height, and loses its stretch.
+                alpha = math.sqrt(alpha_u * alpha_v)
+                self.warnings.append(
+                    f"{_shown(str(bsdf.file or self.xml_path), 200)}:{bsdf.line}: {bsdf.label()}: anisotropic "
+                    f"roughness alpha_u = {alpha_u:g}, alpha_v = {alpha_v:g} approximated by the isotropic "
+                    f"alpha = sqrt(alpha_u alpha_v) = {alpha:.4g} (spectrace's microfacet lobes are isotropic)"
+                )
         elif "alpha" in properties:
             element = self.resolve(properties["alpha"])
             # A texture's α is checked against the range when the scene loads, as any roughness texture is.
-            alpha = self.texture(element, "roughness") if element.tag == "texture" else self.number(element)
+            alpha = self.scalar_texture(element, "roughness") if element.tag == "texture" else self.number(element)
             if alpha is None:
                 return None
             if isinstance(alpha, dict) and list(alpha) == ["value"]:  # a spectrum plugin standing for a number
@@ -1266,6 +1352,12 @@ class MitsubaImporter:
             data["camera"]["near_clip"] = self.number(properties["near_clip"])
             if not data["camera"]["near_clip"] >= 0.0:
                 raise self.fail(properties["near_clip"], "near_clip must be 0 or more", "value")
+        if "far_clip" in properties:
+            # Mitsuba's default is 10 000 scene units; spectrace's none, the same for scenes of any usual size.
+            far = self.number(properties["far_clip"])
+            if not far > data["camera"].get("near_clip", 0.0):
+                raise self.fail(properties["far_clip"], "far_clip must be more than near_clip", "value")
+            data["camera"]["far_clip"] = far
         self.origins["camera"] = element
         sampler = next(iter(self.nested(properties, "sampler")), None)
         # A pinhole has no focus: Mitsuba's perspective sensor takes focus_distance and does nothing with it.
@@ -1443,8 +1535,40 @@ class MitsubaImporter:
             )
             self.integrator(nested[0], data)
             return
+        elif kind == "aov":
+            self.aov_integrator(element, properties, data)
+            return
         data["integrator"] = settings
         self.origins["integrator"] = element
+
+    def aov_integrator(self, element: Element, properties: Properties, data: dict) -> None:
+        """Mitsuba's `aov` integrator: its nested integrator's image, and the AOVs its `aovs` list names
+        ("name:type, ..."). The types spectrace's film keeps (the same definitions: spectrace.aovs) become the film's
+        aovs; each other type is a warning naming it, and so is an aov integrator without a nested one (Mitsuba's
+        image then holds the AOVs alone; spectrace renders the path tracer's image beside them)."""
+        nested = self.nested(properties, "integrator")
+        if len(nested) > 1:
+            raise self.fail(element, f"integrator 'aov' with {len(nested)} nested integrators (spectrace renders one)")
+        where = f"{_shown(str(element.file or self.xml_path), 200)}:{element.line}: integrator 'aov'"
+        kept: list[str] = []
+        text = self.text(properties["aovs"]) if "aovs" in properties else ""
+        for entry in filter(None, (part.strip() for part in text.split(","))):
+            kind = entry.split(":", 1)[-1].strip()
+            if kind in _MITSUBA_AOVS and _MITSUBA_AOVS[kind] not in kept:
+                kept.append(_MITSUBA_AOVS[kind])
+            elif kind not in _MITSUBA_AOVS:
+                self.warnings.append(
+                    f"{where}: AOV '{_shown(entry)}' is not imported (spectrace's film keeps the types "
+                    f"{', '.join(sorted(_MITSUBA_AOVS))})"
+                )
+        if kept:
+            self.film_aovs = kept
+        if nested:
+            self.integrator(nested[0], data)
+        else:
+            self.warnings.append(f"{where}: it holds no integrator; its image is spectrace's path tracer's")
+            data["integrator"] = {"type": "path", "max_depth": -1}
+            self.origins["integrator"] = element
 
     # -------------------------------------------------- the scene
 
@@ -1518,6 +1642,8 @@ class MitsubaImporter:
         data["lights"] = lights
         data["objects"] = {name: table for name, table in objects.items() if table["shapes"]}
         data["instances"] = instances
+        if self.film_aovs and "film" in data:
+            data["film"]["aovs"] = self.film_aovs
         order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
         # materials stays even when empty (the scene format asks for the table); objects only when some are placed.
         kept = {key: data[key] for key in order if key in data and data[key] != []}
@@ -1693,8 +1819,11 @@ def import_mitsuba(
             if not side_path.exists():
                 written.append(side_path)
 
-            def write_side(temp: Path, text: str = side_text) -> None:
-                temp.write_text(text, encoding="utf-8")
+            def write_side(temp: Path, text: str | bytes = side_text) -> None:
+                if isinstance(text, bytes):
+                    temp.write_bytes(text)
+                else:
+                    temp.write_text(text, encoding="utf-8")
 
             write_atomically(side_path, write_side)
         write_atomically(toml_path, write_and_check)

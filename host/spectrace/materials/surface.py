@@ -4,6 +4,10 @@ where it is below 1. They live on the material (its `detail`) and at the end of 
 (kernels/types.h); the kernels read them in kernels/surface_detail.cl (the normals) and kernels/scene.cl (the
 opacity of every visibility query).
 
+`two_sided = false` makes a reflecting material black seen from the back of its surface (the side away from its
+winding's normal), as Mitsuba 3's BSDFs are outside a `twosided` wrapper; materials that transmit have two sides by
+nature and ignore it.
+
 A normal map holds tangent-space directions n = 2 c − 1 per texel, +z out of the surface, x along the direction
 in which u grows, y = z × x (the OpenGL convention, green up in an image seen upright from the front; Mitsuba 3's
 `normalmap` builds the same frame). A bump map holds heights: `bump_scale` scene units per texture value.
@@ -53,6 +57,13 @@ PARAMETERS = (
         type_doc="float or texture in [0, 1]",
         textured=True,
     ),
+    Parameter(
+        "two_sided",
+        "bool",
+        default=True,
+        doc="false: a reflecting material reflects only on the front of its surface (toward the winding's normal) "
+        "and is black from the back, as Mitsuba 3's BSDFs outside `twosided`; ignored by materials that transmit",
+    ),
 )
 NAMES = tuple(p.name for p in PARAMETERS)
 _BY_NAME = {p.name: p for p in PARAMETERS}
@@ -66,6 +77,7 @@ class SurfaceDetail:
     bump_map: object = None  # a scalar texture (BitmapTexture of 1 channel, or CheckerboardTexture)
     bump_scale: float = 1.0
     opacity: object = 1.0  # a float, or a scalar texture
+    two_sided: bool = True
 
     @property
     def is_cut_out(self) -> bool:
@@ -114,7 +126,9 @@ def check_texture(texture, name: str, where: str) -> None:
         )
 
 
-def detail(normal_map=None, bump_map=None, bump_scale=1.0, opacity=1.0, where=None) -> SurfaceDetail | None:
+def detail(
+    normal_map=None, bump_map=None, bump_scale=1.0, opacity=1.0, two_sided=True, where=None
+) -> SurfaceDetail | None:
     """The SurfaceDetail of checked values, or None when every one is at its default. `where(name)` is the key
     path of a key in errors (the Python API's keyword names when None)."""
     from spectrace.textures import is_texture
@@ -134,9 +148,11 @@ def detail(normal_map=None, bump_map=None, bump_scale=1.0, opacity=1.0, where=No
         check_texture(opacity, "opacity", at("opacity"))
     else:
         opacity = _BY_NAME["opacity"].check(opacity, at("opacity"))
-    if normal_map is None and bump_map is None and not is_texture(opacity) and opacity == 1.0:
+    if not isinstance(two_sided, bool):
+        raise SpectraceError(f"two_sided must be true or false, got {two_sided!r}", where=at("two_sided"))
+    if normal_map is None and bump_map is None and not is_texture(opacity) and opacity == 1.0 and two_sided:
         return None
-    return SurfaceDetail(normal_map, bump_map, scale, opacity)
+    return SurfaceDetail(normal_map, bump_map, scale, opacity, two_sided)
 
 
 def cut_out_problem(material, emits: bool, has_interior: bool) -> str | None:
@@ -162,8 +178,8 @@ def accepting_detail(make: Callable) -> Callable:
     material>): written once here rather than in every module."""
 
     @functools.wraps(make)
-    def detailed(*args, normal_map=None, bump_map=None, bump_scale=1.0, opacity=1.0, **kwargs):
-        return with_detail(make(*args, **kwargs), detail(normal_map, bump_map, bump_scale, opacity))
+    def detailed(*args, normal_map=None, bump_map=None, bump_scale=1.0, opacity=1.0, two_sided=True, **kwargs):
+        return with_detail(make(*args, **kwargs), detail(normal_map, bump_map, bump_scale, opacity, two_sided))
 
     signature = inspect.signature(make)
     extra = [
@@ -172,7 +188,8 @@ def accepting_detail(make: Callable) -> Callable:
     ]
     detailed.__signature__ = signature.replace(parameters=[*signature.parameters.values(), *extra])  # type: ignore[attr-defined]
     detailed.__doc__ = (make.__doc__ or "") + (
-        "\n\nEvery material also takes normal_map or bump_map (with bump_scale, scene units) and opacity (a number "
-        'or texture in [0, 1]): docs/textures.md, "Surface detail".'
+        "\n\nEvery material also takes normal_map or bump_map (with bump_scale, scene units), opacity (a number "
+        "or texture in [0, 1]) and two_sided (False: black from the back, for reflecting materials): "
+        'docs/textures.md, "Surface detail".'
     )
     return detailed

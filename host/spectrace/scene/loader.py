@@ -11,6 +11,7 @@ from pydantic import BaseModel, ValidationError
 from spectrace import pixel_filters
 from spectrace.aovs import parse_aovs
 from spectrace.cameras import thinlens
+from spectrace.cameras.shared import clip_problem
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
@@ -356,6 +357,7 @@ class _Resolver:
             values["bump_map"],
             spec.bump_scale,
             values["opacity"],
+            spec.two_sided,
             where=lambda name: self.where(f"{key}.{name}"),
         )
 
@@ -670,6 +672,7 @@ def camera_from_spec(spec) -> Camera:
     """The model camera of a `[camera]` table (any type: spectrace.cameras)."""
     keys = spec.model_dump()
     fields: dict = {"origin": spec.origin, "target": spec.target, "up": spec.up, "near_clip": spec.near_clip}
+    fields["far_clip"] = spec.far_clip
     fields["type"] = spec.type
     if "fov" in keys:
         fields["fov_degrees"], fields["fov_axis"] = spec.fov, spec.fov_axis
@@ -723,3 +726,5 @@ def _check_camera(camera: Camera, path: Path) -> None:
     # Written as not (>) so that an up vector too small to survive the cross product counts as parallel.
     if not np.linalg.norm(np.cross(forward, camera.up)) > 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
         raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where=f"{path}: camera.up")
+    if problem := clip_problem(camera):
+        raise SpectraceError(problem, where=f"{path}: camera.far_clip")

@@ -45,6 +45,7 @@ class Camera:
     fov_degrees: float = 45.0  # perspective, thinlens
     fov_axis: Literal["x", "y"] = "x"
     near_clip: float = 0.0  # distance along the view axis before which nothing is seen (Mitsuba's near_clip)
+    far_clip: float | None = None  # distance along the view axis beyond which nothing is seen (Mitsuba's far_clip)
     type: CameraType = "perspective"
     aperture_radius: float = 0.0  # thinlens: scene units
     focus_distance: float = 1.0  # thinlens: scene units along the view axis

@@ -311,10 +311,11 @@ class TableSpec(Protocol):
 
 def _surface_detail_fields() -> dict[str, Any]:
     """The keys every material takes besides its own (spectrace.materials.surface): textures (normal_map,
-    bump_map), a number (bump_scale) and a number or texture (opacity), whose range the loader checks."""
+    bump_map), a number (bump_scale), a number or texture (opacity), whose range the loader checks, and a boolean
+    (two_sided)."""
     fields: dict[str, Any] = {}
     for parameter in surface.PARAMETERS:
-        annotation, field = _field(parameter) if parameter.type == "float" else (None, None)
+        annotation, field = _field(parameter) if parameter.type in ("float", "bool") else (None, None)
         if parameter.type == "texture":
             annotation, field = SpectrumOrTexture | None, Field(default=None, description=parameter.doc)
         elif parameter.textured:

@@ -31,7 +31,17 @@ RAW = Parameter(
     default=False,
     doc="use the code values as they are (data such as a roughness map) instead of decoding the sRGB curve",
 )
-PARAMETERS = (FILE, RAW, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
+LUMINANCE = Parameter(
+    "luminance",
+    "bool",
+    default=False,
+    doc="read an RGB image as one channel, the luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of its linear values "
+    "(as Mitsuba 3 reads an RGB bitmap where it needs one number, e.g. a bump map); a grey image stays as it is",
+)
+PARAMETERS = (FILE, RAW, LUMINANCE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
+# The Y row of the linear sRGB -> XYZ matrix (IEC 61966-2-1; Rec. ITU-R BT.709 primaries, D65 white), the weights
+# Mitsuba 3's luminance() uses.
+_LUMINANCE_WEIGHTS = np.array([0.212671, 0.715160, 0.072169])
 MITSUBA_PLUGINS = ("bitmap",)
 # Mitsuba 3's bitmap filters and wraps, by the names both use; Mitsuba has no MIP mapping (no trilinear).
 MITSUBA_FILTERS = ("bilinear", "nearest")
@@ -66,8 +76,9 @@ def from_spec(spec, resolver, key: str) -> BitmapTexture:
 
     path = resolver.folder / spec.file
     values, encoded = read_texture_image(path, resolver.where(f"{key}.file"))
+    linear = decoded(values, encoded, spec.raw)
     return BitmapTexture(
-        _read_only(decoded(values, encoded, spec.raw)),
+        _read_only(_luminance(linear) if spec.luminance else linear),
         placement(spec, resolver.where(key)),
         source=str(path),
         srgb_decoded=encoded and not spec.raw,
@@ -79,6 +90,7 @@ def make(
     *,
     srgb: bool | None = None,
     raw: bool = False,
+    luminance: bool = False,
     wrap: str = "repeat",
     filter: str = "bilinear",
     uv_scale: float | tuple[float, float] = 1.0,
@@ -87,7 +99,8 @@ def make(
     """An image texture (docs/textures.md), `spectrace.bitmap`: a file path (PNG, JPEG, TIFF, OpenEXR, Radiance .hdr;
     integer-coded files are sRGB-decoded unless raw), a numpy array (H, W), (H, W, 1) or (H, W, 3) of linear values
     (srgb=True: sRGB-encoded values in [0, 1]), or a PIL image (decoded from sRGB unless raw). st = uv · uv_scale +
-    uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest", "bilinear" or "trilinear"."""
+    uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest", "bilinear" or "trilinear"; luminance=True: an RGB
+    image as one channel, its luminance."""
     from spectrace.io.images import pil_image_values, read_texture_image
 
     where = "texture"
@@ -110,12 +123,18 @@ def make(
         raise SpectraceError(
             f"a texture is a file path, a numpy array or a PIL image, got {type(source).__name__}", where
         )
+    linear = decoded(values, encoded, raw)
     return BitmapTexture(
-        _read_only(decoded(values, encoded, raw)),
+        _read_only(_luminance(linear) if luminance else linear),
         checked_placement(uv_scale, uv_offset, wrap, filter),
         source=name,
         srgb_decoded=encoded and not raw,
     )
+
+
+def _luminance(values: np.ndarray) -> np.ndarray:
+    """One channel, the luminance of an RGB image's linear values; a grey image as it is."""
+    return values if values.shape[-1] == 1 else (values @ _LUMINANCE_WEIGHTS)[..., None]
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
