@@ -14,8 +14,8 @@ from spectrace.engine.light_tracer import LightPasses
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
-from spectrace.engine.sppm import SppmPasses
 from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
+from spectrace.engine.sppm import SppmPasses
 from spectrace.errors import SpectraceError
 from spectrace.film import Film, spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines

@@ -227,4 +227,3 @@ class SppmPasses:
             cl.enqueue_nd_range_kernel(queue, self._gather_kernel, *launch_shape(r.pixel_count, r.work_group))
             queue.finish()
         film.add_pass(sample_count, time.perf_counter() - start)
-
