@@ -1,7 +1,7 @@
 /* Render-pass programs of the `sppm` integrator (stochastic progressive photon mapping, kernels/sppm.cl).
  *
  * An iteration (one pixel sample) is two launches with the host between them (spectrace.engine.sppm):
- * sppm_photon_pass traces photon paths (work-item k: photon k of the iteration) and writes each one's records to its
+ * sppm_photon_pass traces photon paths (work-item k: photons k, k + pixels, ... of the iteration) and writes each one's records to its
  * own `capacity` slots and their number to photon_counts; the host sorts the records into a hash grid; then
  * sppm_gather_pass (work-item k: pixel k) traces the pixel's camera path to its visible point, gathers the photons
  * around it, updates the pixel's statistics and writes its film sums. */
@@ -13,18 +13,22 @@ KERNEL void sppm_photon_pass(SCENE_KERNEL_PARAMS, float4 scene_sphere, int sampl
                              __global float4 *photon_direction, __global float4 *photon_normal,
                              __global float4 *photon_flux, __global int *photon_counts, __global uint *ray_counts)
 {
-    int item = get_global_id(0);
-    if (item >= photon_count) return;
+    int pixels = params->width * params->height;
+    int first = get_global_id(0);
+    if (first >= pixels) return;
     Scene scene = SCENE_FROM_KERNEL_PARAMS;
     SampledWavelengths w = sppm_wavelengths(params, wavelength_stream, sample_index);
-    int slots = item * capacity;
-    PhotonRecords records = {photon_position + slots, photon_direction + slots, photon_normal + slots,
-                             photon_flux + slots, capacity, 0};
     uint rays_traced = 0;
-    /* Photon k's sampler is keyed past the film's pixels and the wavelengths' stream. */
-    trace_photon(&scene, wavelength_stream + 1 + item, sample_index, &w, scene_sphere, &records, &rays_traced);
-    photon_counts[item] = records.count;
-    ray_counts[item % (params->width * params->height)] += rays_traced;
+    /* Work-item k traces photons k, k + pixels, ...: its rays are counted in pixel k's slot alone. */
+    for (int item = first; item < photon_count; item += pixels) {
+        int slots = item * capacity;
+        PhotonRecords records = {photon_position + slots, photon_direction + slots, photon_normal + slots,
+                                 photon_flux + slots, capacity, 0};
+        /* Photon k's sampler is keyed past the film's pixels and the wavelengths' stream. */
+        trace_photon(&scene, wavelength_stream + 1 + item, sample_index, &w, scene_sphere, &records, &rays_traced);
+        photon_counts[item] = records.count;
+    }
+    ray_counts[first] += rays_traced;
 }
 
 KERNEL void sppm_gather_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, int sample_index,

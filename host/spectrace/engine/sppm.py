@@ -27,6 +27,8 @@ from spectrace.scene.model import Scene
 # The initial gather radius, in pixel footprints at the visible point's distance along the camera path: wide enough
 # to find photons from the first iterations, narrow enough that the blur it starts with is a pixel or two.
 INITIAL_RADIUS_PIXELS = 1.5
+# Photon paths per iteration, per pixel of the film.
+PHOTONS_PER_PIXEL = 1
 # Photon records per photon path: bounces beyond this many diffuse vertices are left out (Russian roulette has ended
 # nearly every path by then).
 MAX_PHOTON_RECORDS = 16
@@ -101,7 +103,7 @@ class SppmPasses:
         if problem:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         pixels = renderer.pixel_count
-        self.photon_count = pixels
+        self.photon_count = pixels * PHOTONS_PER_PIXEL
         depth_slots = scene.max_depth - 2 if scene.max_depth > 0 else MAX_PHOTON_RECORDS
         self.capacity = max(1, min(depth_slots, MAX_PHOTON_RECORDS))
         need = device_memory_need(renderer.buffers, pixels, spectral_bins)
@@ -152,7 +154,7 @@ class SppmPasses:
             self._counts,
             r.film.ray_count_buffer,
         )
-        cl.enqueue_nd_range_kernel(queue, self._photon_kernel, *launch_shape(count, r.work_group))
+        cl.enqueue_nd_range_kernel(queue, self._photon_kernel, *launch_shape(r.pixel_count, r.work_group))
         counts = np.empty(count, np.int32)
         cl.enqueue_copy(queue, counts, self._counts)
         columns = [np.empty((count * capacity, 4), np.float32) for _ in range(4)]
