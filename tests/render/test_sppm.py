@@ -184,3 +184,12 @@ def test_a_tile_is_refused(device, tmp_path):
     renderer.pixel_range = (0, 8)
     with pytest.raises(SpectraceError, match="whole films"):
         renderer.run_pass(1)
+
+
+def test_checkpoints_refused(device, tmp_path):
+    from spectrace.engine.checkpoint import PeriodicCheckpoints
+
+    renderer = Renderer(spectrace.load_scene(_slab_scene(tmp_path, "sppm")), device)
+    with pytest.raises(SpectraceError, match="checkpoints"):
+        PeriodicCheckpoints(tmp_path / "state.npz", renderer, 1.0)
+    assert not (tmp_path / "state.npz").exists()
