@@ -26,9 +26,9 @@ from spectrace.scene.model import Scene
 
 # The initial gather radius, in pixel footprints at the visible point's distance along the camera path: wide enough
 # to find photons from the first iterations, narrow enough that the blur it starts with is a pixel or two.
-INITIAL_RADIUS_PIXELS = 1.5
+INITIAL_RADIUS_PIXELS = 3.0
 # Photon paths per iteration, per pixel of the film.
-PHOTONS_PER_PIXEL = 1
+PHOTONS_PER_PIXEL = 2
 # Photon records per photon path: bounces beyond this many diffuse vertices are left out (Russian roulette has ended
 # nearly every path by then).
 MAX_PHOTON_RECORDS = 16
