@@ -49,11 +49,14 @@ def cell_hash(cells: np.ndarray, table_size: int) -> np.ndarray:
 def _mixes_delta_and_non_delta(material: Any) -> bool:
     """A material whose lobes mix a delta lobe with non-delta ones (a smooth coat over a diffuse base, a roughness
     texture that may reach 0): a visible point there would drop the delta part of its reflection."""
+    from spectrace.materials.opaque import smooth_everywhere
     from spectrace.materials.plastic import PlasticMaterial
 
     roughness = getattr(material, "roughness", None)
     textured = roughness is not None and not isinstance(roughness, (int, float))
-    return textured or (isinstance(material, PlasticMaterial) and roughness == 0.0)
+    # kernels/microfacet.cl's ggx_lobe_flags: a textured width may be delta at some points and not at others; a
+    # plastic's coat adds its lobe to the diffuse base's.
+    return textured or (isinstance(material, PlasticMaterial) and smooth_everywhere(roughness))
 
 
 def sppm_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
