@@ -9,8 +9,9 @@
  *    (light_emission.cl), and at every vertex with a non-delta lobe reached after at least one bounce (light vertex
  *    i >= 2: the light's first surface is lit by next-event estimation instead) write a photon record: position,
  *    the direction the light came from, the geometric normal and the flux carried (W/nm per lane);
- * 2. the host sorts the records into a spatial hash grid of cells as wide as the largest gather radius, in a fixed
- *    order (spectrace.engine.sppm);
+ *    and the hash bucket of its cell in a grid of cells as wide as the largest gather radius;
+ * 2. the host sorts the record slots by bucket, stably, so each bucket lists its photons in a fixed order
+ *    (spectrace.engine.sppm);
  * 3. a gather pass (sppm_gather_pass), one work-item per pixel: the pixel's camera path follows delta lobes to its
  *    first vertex with a non-delta lobe, the visible point, adding the emission it meets and next-event estimation
  *    at the visible point (unweighted: no BSDF sample leaves it) to the pixel's direct sum; then every photon
@@ -44,14 +45,33 @@ inline SampledWavelengths sppm_wavelengths(__global const RenderParams *params, 
     return sample_wavelengths(sample_1d(&sampler));
 }
 
+/* The grid cell of point p: cells of width cell_size from origin. */
+inline int4 sppm_cell(float3 p, float3 origin, float cell_size)
+{
+    float3 c = floor((p - origin) / cell_size);
+    return (int4)(convert_int3(c), 0);
+}
+
+/* The hash bucket of a cell (the primes of Teschner et al. 2003). The photon pass and the gather both use this one
+ * function, so a photon is looked for in the bucket it was filed in. */
+inline uint sppm_hash(int4 cell, uint table_size)
+{
+    uint h = ((uint)cell.x * 73856093u) ^ ((uint)cell.y * 19349663u) ^ ((uint)cell.z * 83492791u);
+    return h % table_size;
+}
+
 /* Where a photon path's records go: slots [0, capacity) of its own. */
 typedef struct {
     __global float4 *position;   /* xyz: the point, m; w: 1 when the path keeps only its hero lane */
     __global float4 *direction;  /* xyz: toward where the light came from; w: the light vertex index i */
     __global float4 *normal;     /* xyz: the geometric normal */
     __global float4 *flux;       /* W/nm per lane, divided by nothing (the host's photon count normalises) */
+    __global uint *bucket;       /* the hash bucket of the record's grid cell; table_size for an unused slot */
     int capacity;
     int count;
+    float3 origin;               /* the grid's: m */
+    float cell_size;             /* m */
+    uint table_size;
 } PhotonRecords;
 
 /* One photon path of iteration `sample_index`, number `item`; its sampler is keyed by `stream` (the film's pixel
@@ -93,6 +113,7 @@ inline void trace_photon(const Scene *scene, int stream, int sample_index, const
             records->direction[k] = (float4)(v.wo, (float)s.segments);
             records->normal[k] = (float4)(v.n, 0.0f);
             records->flux[k] = s.throughput;
+            records->bucket[k] = sppm_hash(sppm_cell(v.p, records->origin, records->cell_size), records->table_size);
         }
         if (s.segments + 2 > last_segment) return;
         SurfaceContext sc = surface_context(scene, v.uv, v.footprint);
@@ -120,27 +141,14 @@ inline void trace_photon(const Scene *scene, int stream, int sample_index, const
     }
 }
 
-/* The grid cell of point p: cells of width cell_size from origin. */
-inline int4 sppm_cell(float3 p, float3 origin, float cell_size)
-{
-    float3 c = floor((p - origin) / cell_size);
-    return (int4)(convert_int3(c), 0);
-}
-
-/* The hash bucket of a cell, as spectrace.engine.sppm.cell_hash computes it (the primes of Teschner et al. 2003). */
-inline uint sppm_hash(int4 cell, uint table_size)
-{
-    uint h = ((uint)cell.x * 73856093u) ^ ((uint)cell.y * 19349663u) ^ ((uint)cell.z * 83492791u);
-    return h % table_size;
-}
-
-/* The photon grid of an iteration, as the host built it: photons sorted by bucket, bucket b's are
- * [cell_start[b], cell_start[b + 1]). */
+/* The photon grid of an iteration, as the host built it: bucket b's photons are the record slots
+ * order[cell_start[b] .. cell_start[b + 1]). */
 typedef struct {
     __global const float4 *position;
     __global const float4 *direction;
     __global const float4 *normal;
     __global const float4 *flux;
+    __global const int *order;       /* the records' slots, sorted by bucket (within one, in the order traced) */
     __global const int *cell_start;
     uint table_size;
     float3 origin;     /* m */
@@ -168,7 +176,8 @@ inline float4 gather_photons(const PhotonGrid *grid, const Scene *scene, const S
                 for (int k = 0; k < buckets; ++k) repeated |= seen[k] == b;
                 if (repeated) continue;
                 seen[buckets++] = b;
-                for (int j = grid->cell_start[b]; j < grid->cell_start[b + 1]; ++j) {
+                for (int i = grid->cell_start[b]; i < grid->cell_start[b + 1]; ++i) {
+                    int j = grid->order[i];
                     float4 pos = grid->position[j];
                     float3 d = pos.xyz - v->p;
                     if (dot(d, d) > r * r) continue;

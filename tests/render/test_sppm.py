@@ -151,16 +151,6 @@ def test_pass_split_gives_the_same_bits(device, tmp_path):
     np.testing.assert_array_equal(one_pass, renderer.render(pass_spp=2).xyz)
 
 
-def test_cell_hash_matches_the_kernels():
-    """Negative cells wrap as the kernel's uint casts do."""
-    cells = np.array([[0, 0, 0], [-1, 2, -3], [7, -8, 9]], np.int32)
-    expected = [
-        ((x % 2**32) * 73856093 % 2**32 ^ (y % 2**32) * 19349663 % 2**32 ^ (z % 2**32) * 83492791 % 2**32) % 1024
-        for x, y, z in cells.tolist()
-    ]
-    assert sppm.cell_hash(cells, 1024).tolist() == expected
-
-
 @pytest.mark.parametrize(
     ("extra", "match"),
     [

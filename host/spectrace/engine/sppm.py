@@ -1,11 +1,12 @@
 """Stochastic progressive photon mapping on the host (kernels/sppm.cl): what the `sppm` integrator refuses, its
 per-pixel statistics, and the photon grid built between each iteration's photon and gather launches.
 
-An iteration (one sample per pixel) traces as many photon paths as the film has pixels; the host keeps their
-records in the order (photon, record) and sorts them stably by the hash bucket of their grid cell, so every bucket
-lists its photons in that order and each pixel's gather adds them in the same order whatever the split into passes.
-The cells are as wide as the largest gather radius (with a margin for rounding), so a pixel finds every photon
-within its radius in the 27 cells around its own.
+An iteration (one sample per pixel) traces PHOTONS_PER_PIXEL photon paths per pixel; each record carries the hash
+bucket of its grid cell (kernels/sppm.cl's sppm_hash, which the gather uses too), and the host sorts the record
+slots stably by bucket, so every bucket lists its photons in the order (photon, record) and each pixel's gather adds
+them in the same order whatever the split into passes. Only the buckets travel to the host and the slot order back;
+the records stay on the device. The cells are as wide as the largest gather radius (with a margin), so a pixel finds
+every photon within its radius in the 27 cells around its own.
 """
 
 from __future__ import annotations
@@ -32,18 +33,11 @@ PHOTONS_PER_PIXEL = 2
 # Photon records per photon path: bounces beyond this many diffuse vertices are left out (Russian roulette has ended
 # nearly every path by then).
 MAX_PHOTON_RECORDS = 16
-# Cells wider than the largest radius by this share, so that rounding of cell indices cannot hide a photon.
+# Cells wider than the largest radius by this share, so that float rounding at a cell's edge cannot hide a photon.
 CELL_MARGIN = 1.02
 SPPM_CAMERAS = ("perspective", "thinlens")
-PHOTON_RECORD_BYTES = 4 * 16  # position, direction, normal, flux: a float4 each
+PHOTON_RECORD_BYTES = 4 * 16 + 4 + 4  # position, direction, normal, flux (a float4 each), bucket, slot order
 PIXEL_STATE_BYTES = 16 + 16 + 4 + 4  # direct and τ (float4 each), radius, photon count
-
-
-def cell_hash(cells: np.ndarray, table_size: int) -> np.ndarray:
-    """The hash bucket of each grid cell (int32 rows x, y, z), as kernels/sppm.cl's sppm_hash computes it."""
-    c = cells.astype(np.int32).view(np.uint32)
-    h = (c[:, 0] * np.uint32(73856093)) ^ (c[:, 1] * np.uint32(19349663)) ^ (c[:, 2] * np.uint32(83492791))
-    return h % np.uint32(table_size)
 
 
 def _mixes_delta_and_non_delta(material: Any) -> bool:
@@ -111,12 +105,16 @@ class SppmPasses:
         self.capacity = max(1, min(depth_slots, MAX_PHOTON_RECORDS))
         need = device_memory_need(renderer.buffers, pixels, spectral_bins)
         record_bytes = self.photon_count * self.capacity * PHOTON_RECORD_BYTES
-        need.buffers["photon records (and their sorted copy)"] = 2 * record_bytes
+        need.buffers["photon records"] = record_bytes
         need.buffers["pixel statistics"] = pixels * PIXEL_STATE_BYTES
         check_device_memory(need, renderer.device)
         ctx = renderer.device.context
         rw = cl.mem_flags.READ_WRITE
-        self._records = [cl.Buffer(ctx, rw, record_bytes // 4) for _ in range(4)]
+        slots = self.photon_count * self.capacity
+        self._records = [cl.Buffer(ctx, rw, slots * 16) for _ in range(4)]
+        self._buckets = cl.Buffer(ctx, rw, slots * 4)
+        # Hash buckets: about two per photon path (most paths leave fewer records than that).
+        self._table_size = 1 << max(10, int(math.ceil(math.log2(2 * self.photon_count))))
         self._counts = cl.Buffer(ctx, rw, self.photon_count * 4)
         self._direct = cl.Buffer(ctx, rw, pixels * 16)
         self._tau = cl.Buffer(ctx, rw, pixels * 16)
@@ -140,50 +138,45 @@ class SppmPasses:
             cl.enqueue_fill_buffer(queue, buffer, np.zeros(1, np.float32), 0, buffer.size)
         queue.finish()
 
-    def _trace_photons(self, sample_index: int) -> list[np.ndarray]:
-        """One iteration's photon records, in the order (photon, record): position, direction, normal, flux."""
+    def _trace_photons(self, sample_index: int, cell_size: float) -> np.ndarray:
+        """Runs one iteration's photon paths; returns each record slot's bucket (table size: unused), in the order
+        (photon, record)."""
         r = self.renderer
         queue = r.device.queue
-        count, capacity = self.photon_count, self.capacity
         self._photon_kernel.set_args(
             r._params,
             *r._scene,
             self._sphere,
             np.int32(sample_index),
-            np.int32(count),
+            np.int32(self.photon_count),
             np.int32(r.pixel_count),
-            np.int32(capacity),
+            np.int32(self.capacity),
             *self._records,
+            self._buckets,
             self._counts,
+            self._origin,
+            np.float32(cell_size),
+            np.uint32(self._table_size),
             r.film.ray_count_buffer,
         )
         cl.enqueue_nd_range_kernel(queue, self._photon_kernel, *launch_shape(r.pixel_count, r.work_group))
-        counts = np.empty(count, np.int32)
-        cl.enqueue_copy(queue, counts, self._counts)
-        columns = [np.empty((count * capacity, 4), np.float32) for _ in range(4)]
-        for column, buffer in zip(columns, self._records, strict=True):
-            cl.enqueue_copy(queue, column, buffer)
+        buckets = np.empty(self.photon_count * self.capacity, np.uint32)
+        cl.enqueue_copy(queue, buckets, self._buckets)
         queue.finish()
-        used = (np.arange(capacity)[None, :] < counts[:, None]).reshape(-1)
-        return [column[used] for column in columns]
+        return buckets
 
-    def _grid(self, records: list[np.ndarray], cell_size: float) -> tuple[list[cl.Buffer], cl.Buffer, int]:
-        """The photons sorted by bucket (stable: within one, in the order traced) and each bucket's start."""
+    def _grid(self, buckets: np.ndarray) -> tuple[cl.Buffer, cl.Buffer]:
+        """The used slots sorted by bucket (stable: within one, in the order traced) and each bucket's start."""
         ctx = self.renderer.device.context
-        position = records[0]
-        table_size = 1 << max(10, int(math.ceil(math.log2(max(1, 2 * len(position))))))
-        cells = np.floor((position[:, :3] - self._origin[:3]) / np.float32(cell_size)).astype(np.int32)
-        buckets = cell_hash(cells, table_size)
-        order = np.argsort(buckets, kind="stable")
-        starts = np.zeros(table_size + 1, np.int32)
-        np.cumsum(np.bincount(buckets, minlength=table_size), out=starts[1:])
+        used = np.flatnonzero(buckets < self._table_size).astype(np.int32)
+        filed = buckets[used]
+        order = used[np.argsort(filed, kind="stable")]
+        starts = np.zeros(self._table_size + 1, np.int32)
+        np.cumsum(np.bincount(filed, minlength=self._table_size), out=starts[1:])
         ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-        # One-element placeholders where an iteration found no photon (an empty buffer cannot be made).
-        sorted_columns = [
-            cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(c[order]) if len(c) else np.zeros((1, 4), np.float32))
-            for c in records
-        ]
-        return sorted_columns, cl.Buffer(ctx, ro, hostbuf=starts), table_size
+        # A one-element placeholder where an iteration found no photon (an empty buffer cannot be made).
+        order_buffer = cl.Buffer(ctx, ro, hostbuf=order if len(order) else np.zeros(1, np.int32))
+        return order_buffer, cl.Buffer(ctx, ro, hostbuf=starts)
 
     def _cell_size(self) -> float:
         """The grid's cell width: the largest radius of a pixel (the first iteration's bound before any is set)."""
@@ -206,9 +199,8 @@ class SppmPasses:
         start = time.perf_counter()
         cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
         for sample_index in range(done, done + sample_count):
-            records = self._trace_photons(sample_index)
             cell_size = self._cell_size()
-            columns, starts, table_size = self._grid(records, cell_size)
+            order, starts = self._grid(self._trace_photons(sample_index, cell_size))
             self._gather_kernel.set_args(
                 r._params,
                 *r._scene,
@@ -217,9 +209,10 @@ class SppmPasses:
                 np.int32(r.pixel_count),
                 self._radius_per_metre,
                 np.float32(self.photon_count),
-                *columns,
+                *self._records,
+                order,
                 starts,
-                np.uint32(table_size),
+                np.uint32(self._table_size),
                 self._origin,
                 np.float32(cell_size),
                 self._direct,
