@@ -261,7 +261,7 @@ inline void sppm_gather(const Scene *scene, const PhotonGrid *grid, __global con
             /* The visible point: no BSDF sample leaves it, so next-event estimation is not MIS-weighted. */
             direct += s.throughput * estimate_direct_light(scene, w, &sampler, v.p, v.n, v.ns, v.wo, material, &sc,
                                                            0, path_query(&sampler, &s, QUERY_SHADOW), rays_traced);
-            /* The first radius: a few pixel footprints, within the cell (less the host's rounding margin). */
+            /* The first radius: a few pixel footprints, within the cell (less its margin). */
             if (r == 0.0f) r = fmin(radius_per_metre * travelled, 0.98f * grid->cell_size);
             float4 phi = gather_photons(grid, scene, w, &v, material, &sc, s.segments, s.secondary_terminated, r,
                                         &found);
