@@ -126,8 +126,8 @@ class SppmPasses:
         self._sphere = sphere
         self._origin = np.array([*(sphere[:3] - sphere[3]), 0.0], np.float32)
         self._radius_per_metre = np.float32(initial_radius_per_metre(scene))
-        # The largest initial radius: the camera's farthest view of the scene's sphere, in pixel footprints
-        # (camera paths through mirrors may go farther; their radius is cut to this).
+        # The first iteration's cells: the largest first radius, at the camera's farthest view of the scene's sphere
+        # (camera paths through mirrors may go farther; their radius is cut to the cell).
         reach = float(np.linalg.norm(np.asarray(scene.camera.origin) - sphere[:3])) + float(sphere[3])
         self._first_cell = float(self._radius_per_metre) * reach * CELL_MARGIN
         self.reset()
@@ -179,14 +179,14 @@ class SppmPasses:
         return order_buffer, cl.Buffer(ctx, ro, hostbuf=starts)
 
     def _cell_size(self) -> float:
-        """The grid's cell width: the largest radius of a pixel (the first iteration's bound before any is set)."""
+        """The grid's cell width: the largest radius of a pixel, or the first iterations' bound while none is set. A
+        pixel that finds its first visible point later starts within the cell (kernels/sppm.cl), so pixels that see
+        nothing (the sky) do not hold the cells at their first width."""
         r = self.renderer
         radius = np.empty(r.pixel_count, np.float32)
         cl.enqueue_copy(r.device.queue, radius, self._radius)
         largest = float(radius.max()) if radius.size else 0.0
-        if largest == 0.0 or not (radius > 0.0).all():
-            largest = max(largest, self._first_cell)
-        return max(largest * CELL_MARGIN, 1e-6)
+        return max((largest if largest > 0.0 else self._first_cell) * CELL_MARGIN, 1e-6)
 
     def run_pass(self, sample_count: int) -> None:
         """Runs `sample_count` iterations (the renderer's run_pass, translated errors)."""
