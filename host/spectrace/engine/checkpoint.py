@@ -112,6 +112,12 @@ def buffers_digest(
 
 
 def render_identity(renderer: Renderer) -> RenderIdentity:
+    if renderer.scene.integrator == "sppm":
+        # Its per-pixel photon statistics (radius, photon count, flux) are not in the film's saved state.
+        raise SpectraceError(
+            "integrator 'sppm' cannot save or resume checkpoints (its photon statistics are not in the film's state); "
+            "render without --checkpoint/--resume"
+        )
     return scene_identity(renderer.scene, renderer.buffers, renderer.spectral_bins, renderer.spectral_range_nm)
 
 
@@ -298,6 +304,8 @@ class PeriodicCheckpoints:
         clock=time.monotonic,
         identity: RenderIdentity | None = None,
     ):
+        if renderer.scene.integrator == "sppm":
+            render_identity(renderer)  # refuses before the first pass, not after it
         self.path = Path(path)
         self.renderer = renderer
         self.interval_seconds = interval_seconds

@@ -15,6 +15,7 @@ from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
 from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
+from spectrace.engine.sppm import SppmPasses
 from spectrace.errors import SpectraceError
 from spectrace.film import Film, spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines
@@ -34,10 +35,14 @@ INTEGRATOR_PROGRAMS = {
     "direct": "integrator_direct.cl",
     "light": "integrator_light.cl",
     "bdpt": "integrator_bdpt.cl",
+    "sppm": "integrator_sppm.cl",
 }
 # Integrators whose connections land in any pixel: their passes are spectrace.engine.light_tracer's (splat records
 # reduced on the host in a fixed order), their kernels take its arguments.
 SPLATTING_KERNELS = {"light": "light_pass", "bdpt": "bdpt_pass"}
+# Every integrator's pass kernel other than render_pass: the splatting ones, and stochastic progressive photon
+# mapping's gather (its passes are spectrace.engine.sppm's, which also runs the program's photon kernel).
+PASS_KERNELS = {**SPLATTING_KERNELS, "sppm": "sppm_gather_pass"}
 
 
 def sampler_defines(sampler: str) -> dict[str, int]:
@@ -69,7 +74,8 @@ def film_albedo_scale(scene: Scene, table: np.ndarray) -> np.ndarray:
 
 
 class Renderer:
-    _light_passes: LightPasses | None = None  # set by _allocate for a `light` scene
+    _light_passes: LightPasses | None = None  # set by _allocate for a `light` or `bdpt` scene
+    _sppm_passes: SppmPasses | None = None  # set by _allocate for an `sppm` scene
 
     @translate_opencl_errors("setting up the render")
     def __init__(
@@ -187,12 +193,13 @@ class Renderer:
         splat records (spectrace.engine.light_tracer) for a `light` scene."""
         splats = self.scene.integrator in SPLATTING_KERNELS
         self._light_passes = LightPasses(self, spectral_bins) if splats else None
+        self._sppm_passes = SppmPasses(self, spectral_bins) if self.scene.integrator == "sppm" else None
 
     def _program_file(self, scene: Scene) -> str:
         return INTEGRATOR_PROGRAMS[scene.integrator]
 
     def _create_kernels(self) -> cl.Kernel:
-        return cl.Kernel(self.program, SPLATTING_KERNELS.get(self.scene.integrator, "render_pass"))
+        return cl.Kernel(self.program, PASS_KERNELS.get(self.scene.integrator, "render_pass"))
 
     # The film's size and bands, which the film holds (one copy, no drift).
     @property
@@ -218,12 +225,17 @@ class Renderer:
     def reset(self) -> None:
         """Clear the film to start the render again."""
         self.film.reset()
+        if self._sppm_passes is not None:
+            self._sppm_passes.reset()
 
     @translate_opencl_errors("running a render pass")
     def run_pass(self, sample_count: int) -> None:
         """Add `sample_count` samples per pixel, continuing the sample sequence where the last pass stopped."""
         if self._light_passes is not None:
             self._light_passes.run_pass(sample_count)
+            return
+        if self._sppm_passes is not None:
+            self._sppm_passes.run_pass(sample_count)
             return
         queue = self.device.queue
         params = render_params(self.scene, self.buffers, self.samples_done, sample_count)

@@ -31,7 +31,8 @@ Bad values are reported as one SpectraceError naming the file and the element pa
 a texture where spectrace takes none, other media) is reported in one error naming each unsupported plugin and
 its line; choices spectrace makes differently (the reconstruction filter, the sampler) are returned as notes.
 Parameters are documented in Mitsuba 3's plugin reference (mitsuba.readthedocs.io, "Plugin reference").
-Mitsuba 0.6's bdpt integrator (Mitsuba 3 has none) imports as spectrace's bidirectional path tracer, `bdpt`.
+Mitsuba 0.6's bdpt integrator (Mitsuba 3 has none) imports as spectrace's bidirectional path tracer, `bdpt`; its
+sppm and photonmapper integrators as spectrace's stochastic progressive photon mapping, `sppm`.
 """
 
 from __future__ import annotations
@@ -83,7 +84,7 @@ SUPPORTED = {
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm", "specfilm"),
-    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "aov", "ptracer", "bdpt"),
+    "integrator": ("path", "direct", "volpath", "volpathmis", "moment", "aov", "ptracer", "bdpt", "sppm", "photonmapper"),
     "medium": ("homogeneous",),
     "phase": ("hg", "isotropic"),
 }
@@ -1521,6 +1522,21 @@ class MitsubaImporter:
             # meaning the same; its per-strategy options change the noise, not the mean.
             settings["type"] = "bdpt"
             properties.understood("lightImage", "sampleDirect", "samples_per_pass")
+        elif kind in ("sppm", "photonmapper"):
+            # Mitsuba 0.6's photon mappers: spectrace's sppm, which converges to the same image; the photon counts,
+            # radii and lookup sizes are its own (spectrace.engine.sppm), so they are noted, not followed.
+            settings["type"] = "sppm"
+            own = (
+                "photonCount", "initialRadius", "alpha", "granularity", "maxPasses", "directSamples",
+                "glossySamples", "globalPhotons", "causticPhotons", "volumePhotons", "globalLookupRadius",
+                "causticLookupRadius", "lookupSize",
+            )  # fmt: skip
+            if any(name in properties for name in own):
+                self.notes.append(
+                    f"{self.at(element)}: integrator '{kind}' imported as 'sppm'; its photon counts and radii are "
+                    "spectrace's own choice"
+                )
+            properties.understood(*own)
         elif kind.startswith("volpath"):
             self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path', which renders media")
         elif kind == "moment":

@@ -25,8 +25,8 @@ from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
-IntegratorType = Literal["path", "direct", "light", "bdpt"]
-INTEGRATOR_TYPES: tuple[str, ...] = ("path", "direct", "light", "bdpt")  # docs/integrators.md
+IntegratorType = Literal["path", "direct", "light", "bdpt", "sppm"]
+INTEGRATOR_TYPES: tuple[str, ...] = ("path", "direct", "light", "bdpt", "sppm")  # docs/integrators.md
 SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
 # Lower error than the independent sampler at equal spp on every scene measured (docs/sampling.md).
 DEFAULT_SAMPLER: SamplerType = "sobol"

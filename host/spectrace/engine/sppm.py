@@ -1,0 +1,227 @@
+"""Stochastic progressive photon mapping on the host (kernels/sppm.cl): what the `sppm` integrator refuses, its
+per-pixel statistics, and the photon grid built between each iteration's photon and gather launches.
+
+An iteration (one sample per pixel) traces PHOTONS_PER_PIXEL photon paths per pixel; each record carries the hash
+bucket of its grid cell (kernels/sppm.cl's sppm_hash, which the gather uses too), and the host sorts the record
+slots stably by bucket, so every bucket lists its photons in the order (photon, record) and each pixel's gather adds
+them in the same order whatever the split into passes. Only the buckets travel to the host and the slot order back;
+the records stay on the device. The cells are as wide as the largest gather radius (with a margin), so a pixel finds
+every photon within its radius in the 27 cells around its own.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+import pyopencl as cl
+
+from spectrace.engine.launch import launch_shape
+from spectrace.engine.light_tracer import scene_sphere
+from spectrace.engine.memory import check_device_memory, device_memory_need
+from spectrace.engine.scene_buffers import render_params
+from spectrace.errors import SpectraceError
+from spectrace.scene.model import Scene
+
+# The initial gather radius, in pixel footprints at the visible point's distance along the camera path: wide enough
+# to find photons from the first iterations, narrow enough that the blur it starts with is a pixel or two.
+INITIAL_RADIUS_PIXELS = 3.0
+# Photon paths per iteration, per pixel of the film.
+PHOTONS_PER_PIXEL = 2
+# Photon records per photon path: bounces beyond this many diffuse vertices are left out (Russian roulette has ended
+# nearly every path by then).
+MAX_PHOTON_RECORDS = 16
+# Cells wider than the largest radius by this share, so that float rounding at a cell's edge cannot hide a photon.
+CELL_MARGIN = 1.02
+SPPM_CAMERAS = ("perspective", "thinlens")
+PHOTON_RECORD_BYTES = 4 * 16 + 4 + 4  # position, direction, normal, flux (a float4 each), bucket, slot order
+PIXEL_STATE_BYTES = 16 + 16 + 4 + 4  # direct and τ (float4 each), radius, photon count
+
+
+def _mixes_delta_and_non_delta(material: Any) -> bool:
+    """A material whose lobes mix a delta lobe with non-delta ones (a smooth coat over a diffuse base, a roughness
+    texture that may reach 0): a visible point there would drop the delta part of its reflection."""
+    from spectrace.materials.opaque import smooth_everywhere
+    from spectrace.materials.plastic import PlasticMaterial
+
+    roughness = getattr(material, "roughness", None)
+    textured = roughness is not None and not isinstance(roughness, (int, float))
+    # kernels/microfacet.cl's ggx_lobe_flags: a textured width may be delta at some points and not at others; a
+    # plastic's coat adds its lobe to the diffuse base's.
+    return textured or (isinstance(material, PlasticMaterial) and smooth_everywhere(roughness))
+
+
+def sppm_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
+    """Why the `sppm` integrator cannot render this scene as asked, or None."""
+    camera_type = scene.camera.type
+    if camera_type not in SPPM_CAMERAS:
+        known = " and ".join(SPPM_CAMERAS)
+        return f"integrator 'sppm' supports the {known} cameras, not {camera_type!r}"
+    if medium_count:
+        return "integrator 'sppm' does not render participating media; use 'path'"
+    if spectral_bins:
+        return "integrator 'sppm' does not write spectral bands; render without spectral output or use 'path'"
+    if scene.pixel_filter.type != "box":
+        return (
+            f"integrator 'sppm' estimates whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
+            "use film.filter = \"box\" or 'path'"
+        )
+    if not scene.film_response.is_default:
+        return "integrator 'sppm' renders the default CIE 1931 film only (no observers, sensor or wavelengths)"
+    if scene.aovs:
+        return "integrator 'sppm' does not record AOVs; leave film.aovs out or use 'path'"
+    for shape in scene.shapes:
+        if shape.material is not None and _mixes_delta_and_non_delta(shape.material):
+            return (
+                f"integrator 'sppm' cannot render a {type(shape.material).__name__} with a smooth coat or textured "
+                "roughness (its smooth and rough lobes "
+                "would need a visible point on both); use 'path' or 'bdpt'"
+            )
+    return None
+
+
+def initial_radius_per_metre(scene: Scene) -> float:
+    """The initial gather radius per metre of camera path: INITIAL_RADIUS_PIXELS pixel footprints."""
+    _, _, _, up = scene.camera.basis(scene.width / scene.height)
+    pixel_angle = 2.0 * float(np.linalg.norm(up)) / scene.height  # tan(fov_y/2)·2 per pixel row
+    return INITIAL_RADIUS_PIXELS * pixel_angle
+
+
+class SppmPasses:
+    """The passes of an `sppm` scene's Renderer (spectrace.engine.renderer), which built the program (both kernels)
+    and the film and hands its run_pass here."""
+
+    def __init__(self, renderer: Any, spectral_bins: int):
+        self.renderer = renderer
+        scene = renderer.scene
+        problem = sppm_problem(scene, renderer.buffers.medium_count, spectral_bins)
+        if problem:
+            raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
+        pixels = renderer.pixel_count
+        self.photon_count = pixels * PHOTONS_PER_PIXEL
+        depth_slots = scene.max_depth - 2 if scene.max_depth > 0 else MAX_PHOTON_RECORDS
+        self.capacity = max(1, min(depth_slots, MAX_PHOTON_RECORDS))
+        need = device_memory_need(renderer.buffers, pixels, spectral_bins)
+        record_bytes = self.photon_count * self.capacity * PHOTON_RECORD_BYTES
+        need.buffers["photon records"] = record_bytes
+        need.buffers["pixel statistics"] = pixels * PIXEL_STATE_BYTES
+        check_device_memory(need, renderer.device)
+        ctx = renderer.device.context
+        rw = cl.mem_flags.READ_WRITE
+        slots = self.photon_count * self.capacity
+        self._records = [cl.Buffer(ctx, rw, slots * 16) for _ in range(4)]
+        self._buckets = cl.Buffer(ctx, rw, slots * 4)
+        # Hash buckets: about two per photon path (most paths leave fewer records than that).
+        self._table_size = 1 << max(10, int(math.ceil(math.log2(2 * self.photon_count))))
+        self._counts = cl.Buffer(ctx, rw, self.photon_count * 4)
+        self._direct = cl.Buffer(ctx, rw, pixels * 16)
+        self._tau = cl.Buffer(ctx, rw, pixels * 16)
+        self._radius = cl.Buffer(ctx, rw, pixels * 4)
+        self._photons = cl.Buffer(ctx, rw, pixels * 4)
+        self._photon_kernel = cl.Kernel(renderer.program, "sppm_photon_pass")
+        self._gather_kernel = renderer.kernel
+        sphere = scene_sphere(scene)
+        self._sphere = sphere
+        self._origin = np.array([*(sphere[:3] - sphere[3]), 0.0], np.float32)
+        self._radius_per_metre = np.float32(initial_radius_per_metre(scene))
+        # The first iteration's cells: the largest first radius, at the camera's farthest view of the scene's sphere
+        # (camera paths through mirrors may go farther; their radius is cut to the cell).
+        reach = float(np.linalg.norm(np.asarray(scene.camera.origin) - sphere[:3])) + float(sphere[3])
+        self._first_cell = float(self._radius_per_metre) * reach * CELL_MARGIN
+        self.reset()
+
+    def reset(self) -> None:
+        queue = self.renderer.device.queue
+        for buffer in (self._direct, self._tau, self._radius, self._photons):
+            cl.enqueue_fill_buffer(queue, buffer, np.zeros(1, np.float32), 0, buffer.size)
+        queue.finish()
+
+    def _trace_photons(self, sample_index: int, cell_size: float) -> np.ndarray:
+        """Runs one iteration's photon paths; returns each record slot's bucket (table size: unused), in the order
+        (photon, record)."""
+        r = self.renderer
+        queue = r.device.queue
+        self._photon_kernel.set_args(
+            r._params,
+            *r._scene,
+            self._sphere,
+            np.int32(sample_index),
+            np.int32(self.photon_count),
+            np.int32(r.pixel_count),
+            np.int32(self.capacity),
+            *self._records,
+            self._buckets,
+            self._counts,
+            self._origin,
+            np.float32(cell_size),
+            np.uint32(self._table_size),
+            r.film.ray_count_buffer,
+        )
+        cl.enqueue_nd_range_kernel(queue, self._photon_kernel, *launch_shape(r.pixel_count, r.work_group))
+        buckets = np.empty(self.photon_count * self.capacity, np.uint32)
+        cl.enqueue_copy(queue, buckets, self._buckets)
+        queue.finish()
+        return buckets
+
+    def _grid(self, buckets: np.ndarray) -> tuple[cl.Buffer, cl.Buffer]:
+        """The used slots sorted by bucket (stable: within one, in the order traced) and each bucket's start."""
+        ctx = self.renderer.device.context
+        used = np.flatnonzero(buckets < self._table_size).astype(np.int32)
+        filed = buckets[used]
+        order = used[np.argsort(filed, kind="stable")]
+        starts = np.zeros(self._table_size + 1, np.int32)
+        np.cumsum(np.bincount(filed, minlength=self._table_size), out=starts[1:])
+        ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+        # A one-element placeholder where an iteration found no photon (an empty buffer cannot be made).
+        order_buffer = cl.Buffer(ctx, ro, hostbuf=order if len(order) else np.zeros(1, np.int32))
+        return order_buffer, cl.Buffer(ctx, ro, hostbuf=starts)
+
+    def _cell_size(self) -> float:
+        """The grid's cell width: the largest radius of a pixel, or the first iterations' bound while none is set. A
+        pixel that finds its first visible point later starts within the cell (kernels/sppm.cl), so pixels that see
+        nothing (the sky) do not hold the cells at their first width."""
+        r = self.renderer
+        radius = np.empty(r.pixel_count, np.float32)
+        cl.enqueue_copy(r.device.queue, radius, self._radius)
+        largest = float(radius.max()) if radius.size else 0.0
+        return max((largest if largest > 0.0 else self._first_cell) * CELL_MARGIN, 1e-6)
+
+    def run_pass(self, sample_count: int) -> None:
+        """Runs `sample_count` iterations (the renderer's run_pass, translated errors)."""
+        r = self.renderer
+        if tuple(getattr(r, "pixel_range", (0, r.pixel_count))) != (0, r.pixel_count):
+            raise SpectraceError("integrator 'sppm' renders whole films, not tiles: its photons land in any pixel")
+        queue = r.device.queue
+        film = r.film
+        done = film.samples_done
+        start = time.perf_counter()
+        cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
+        for sample_index in range(done, done + sample_count):
+            cell_size = self._cell_size()
+            order, starts = self._grid(self._trace_photons(sample_index, cell_size))
+            self._gather_kernel.set_args(
+                r._params,
+                *r._scene,
+                r._cmf,
+                np.int32(sample_index),
+                np.int32(r.pixel_count),
+                self._radius_per_metre,
+                np.float32(self.photon_count),
+                *self._records,
+                order,
+                starts,
+                np.uint32(self._table_size),
+                self._origin,
+                np.float32(cell_size),
+                self._direct,
+                self._tau,
+                self._radius,
+                self._photons,
+                film.xyz_buffer,
+                film.ray_count_buffer,
+            )
+            cl.enqueue_nd_range_kernel(queue, self._gather_kernel, *launch_shape(r.pixel_count, r.work_group))
+            queue.finish()
+        film.add_pass(sample_count, time.perf_counter() - start)
