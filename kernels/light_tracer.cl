@@ -208,7 +208,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
         s.throughput *= weight;
         scatter *= weight;
         s.previous_point = v.p;
-        s.medium = medium_beyond(v.info.interior, v.n, bs.wi);
+        s.medium = medium_beyond(v.info.interior, v.n, bs.wi, s.medium);
         s.ray.origin = offset_ray_origin(v.p, v.n, bs.wi);
         s.ray.direction = bs.wi;
         /* Russian roulette as the path tracer's (rr_depth, survival min(max weight, 0.95)), on the BSDF weights. */

@@ -177,7 +177,7 @@ inline float4 vertex_emission(const Scene *scene, const SampledWavelengths *w, c
 inline int cross_null_boundary(PathState *s, const PathVertex *v)
 {
     if (++s->null_crossings > MAX_NULL_CROSSINGS) return 0;
-    s->medium = medium_beyond(v->info.interior, v->n, s->ray.direction);
+    s->medium = medium_beyond(v->info.interior, v->n, s->ray.direction, s->medium);
     s->ray.origin = offset_ray_origin(v->p, v->n, s->ray.direction);
     return 1;
 }
@@ -215,7 +215,8 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     if (material_has_non_delta_lobe(material)) {
         SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
         *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
-                                                           use_mis, path_query(sampler, s, QUERY_SHADOW), rays_traced);
+                                                           v->info.interior, s->medium, use_mis,
+                                                           path_query(sampler, s, QUERY_SHADOW), rays_traced);
     }
 }
 
@@ -243,7 +244,7 @@ inline void follow_bsdf_sample(PathState *s, const PathVertex *v, const BSDFSamp
     s->radiance_scale *= bs->radiance_scale;
     s->previous_pdf = bs->pdf;
     s->previous_delta = bs->is_delta;
-    s->medium = medium_beyond(v->info.interior, v->n, bs->wi);
+    s->medium = medium_beyond(v->info.interior, v->n, bs->wi, s->medium);
     s->previous_point = v->p;
     s->ray.origin = offset_ray_origin(v->p, v->n, bs->wi);
     s->ray.direction = bs->wi;
