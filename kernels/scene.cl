@@ -490,4 +490,24 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
 #undef STRETCH
 }
 
+/* The medium around a point (-1: none), for paths that start away from the camera (light paths): a probe ray from
+ * the point goes on past every surface without an interior until it meets a medium boundary, which it leaves (the
+ * point is inside that medium) or enters (outside every medium). One level, as media do not nest (medium.cl). */
+inline int scene_medium_at(const Scene *scene, float3 point)
+{
+    if (!SCENE_HAS_MEDIA || scene->params->medium_count == 0 || scene_is_empty(scene)) return -1;
+    Ray probe;
+    probe.origin = point;
+    probe.direction = normalize((float3)(0.267f, 0.535f, 0.802f));  /* any direction: boundaries are closed */
+    for (int crossing = 0; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
+        Hit hit = trace_scene(scene, probe, INFINITY, 0);
+        if (hit.triangle < 0) return -1;
+        int interior = scene->triangle_info[hit.triangle].interior;
+        float3 n = hit_normal(scene, hit);
+        if (interior >= 0) return dot(n, probe.direction) > 0.0f ? interior : -1;
+        probe.origin = offset_ray_origin(hit_point(scene, hit), n, probe.direction);
+    }
+    return -1;
+}
+
 #endif
