@@ -96,9 +96,9 @@ FOG = """<scene version="3.0.0">
   <rfilter type="box"/></film></sensor>
 <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
   <transform name="to_world"><scale value="0.3"/><translate value="0.5, 0, -0.7"/></transform></shape>
-<shape type="cube"><transform name="to_world"><scale value="1.2"/></transform>
+<shape type="cube"><transform name="to_world"><scale value="1.2"/></transform><bsdf type="null"/>
   <medium type="homogeneous" name="interior">
-    <float name="sigma_t" value="1.5"/><float name="albedo" value="0.9"/>
+    <float name="sigma_t" value="2.5"/><float name="albedo" value="0.6"/>
     <phase type="hg"><float name="g" value="0.4"/></phase></medium></shape>
 <shape type="rectangle"><transform name="to_world"><scale value="3"/><translate value="0, 0, -1.2"/></transform>
   <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></shape>
@@ -128,6 +128,7 @@ def test_light_and_path_tracer_agree_on_a_lamp_in_fog(tmp_path, device):
         difference = a.mean(axis=0) - b.mean(axis=0)
         standard_error = np.sqrt(a.var(axis=0, ddof=1) / replicas + b.var(axis=0, ddof=1) / replicas)
         assert np.all(np.abs(difference) <= 5 * standard_error), np.max(np.abs(difference) / standard_error)
+    assert np.all(ours["path"].mean(axis=(0, 1, 2)) > 0.01)  # the lamp lights the scene through the fog
 
 
 def test_a_light_traced_medium_keeps_its_bits_however_split(tmp_path, device):
