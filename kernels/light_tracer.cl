@@ -103,14 +103,6 @@ inline float2 lens_sample(__global const RenderParams *params, Sampler *sampler)
     return CAMERA_IS(params, CAMERA_THIN_LENS) ? sample_2d(sampler) : (float2)(0.0f);
 }
 
-/* The camera sees x (offset off its surface along ng toward the camera) unless something lies between. */
-inline int camera_sees(const Scene *scene, const CameraConnection *c, float3 x, float3 ng, uint query,
-                       uint *rays_traced)
-{
-    float3 from = offset_ray_origin(x, ng, c->to_camera);
-    return !scene_occluded(scene, from, c->lens, c->to_camera, 0, query, rays_traced);
-}
-
 /* The fraction of light that leaves `from` (offset off its surface toward the camera, or a point in a medium) in
  * `medium` and reaches the camera's lens point: 0 when something blocks it, the media's transmittance between
  * (scene_transmittance; in scenes without media the plain occlusion test). */

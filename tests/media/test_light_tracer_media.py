@@ -1,11 +1,12 @@
-"""The light tracer in homogeneous media (docs/media.md): light paths start in their light's medium, scatter in
-media as the path tracer's camera paths do (free flights, Henyey–Greenstein), and every connection to the camera
-carries the media's transmittance. Checked against a closed form (a point light inside an absorber), the path
-tracer on a scattering scene (region means), and itself split into passes."""
+"""The light tracer and BDPT in homogeneous media (docs/media.md): light paths start in their light's medium, scatter
+in media as the path tracer's camera paths do (free flights, Henyey–Greenstein), and every connection carries the
+media's transmittance. Checked against a closed form (a point light inside an absorber), the path tracer on a
+scattering scene (region means), and themselves split into passes."""
 
 import math
 
 import numpy as np
+import pytest
 
 from replica_agreement import spectrace_replicas
 from spectrace.engine.renderer import Renderer
@@ -27,7 +28,7 @@ width = 8
 height = 8
 
 [integrator]
-type = "light"
+type = "{integrator}"
 max_depth = 2
 
 [sampler]
@@ -72,13 +73,14 @@ def _replica_means(scene, device, replicas=8, replica_spp=16):
     return xyz[..., 1].mean(axis=(1, 2))  # Y of each replica's image mean
 
 
-def test_a_point_light_inside_an_absorber_lights_the_floor_through_it(tmp_path, device):
+@pytest.mark.parametrize("integrator", ["light", "bdpt"])
+def test_a_point_light_inside_an_absorber_lights_the_floor_through_it(tmp_path, device, integrator):
     """Image means with σa and without (σa = 0): their ratio is the closed form's, within 5 standard errors. A light
     path starting outside the medium would miss exp(−σa r) on its way to the floor."""
     means = {}
     for sigma_a in (SIGMA_A, 0.0):
         path = tmp_path / f"absorber_{sigma_a}.toml"
-        path.write_text(POINT_IN_ABSORBER.format(sigma_a=sigma_a))
+        path.write_text(POINT_IN_ABSORBER.format(sigma_a=sigma_a, integrator=integrator))
         means[sigma_a] = _replica_means(load_scene(path), device)
     a, b = means[SIGMA_A], means[0.0]
     ratio = a.mean() / b.mean()
@@ -108,33 +110,36 @@ FOG = """<scene version="3.0.0">
 """
 
 
-def test_light_and_path_tracer_agree_on_a_lamp_in_fog(tmp_path, device):
+@pytest.mark.parametrize("integrator", ["light", "bdpt"])
+def test_light_paths_and_the_path_tracer_agree_on_a_lamp_in_fog(tmp_path, device, integrator):
     """A lamp and a diffuse ball inside a box of scattering fog (index-matched) over a floor outside: 4 x 4 blocks
-    of 4 x 4 pixels and the image mean of both integrators within 5 standard errors of the replicas."""
+    of 4 x 4 pixels and the image mean of the light tracer or BDPT and of the path tracer within 5 standard errors
+    of the replicas."""
     path = tmp_path / "fog.xml"
     path.write_text(FOG)
     scene = load_mitsuba_scene(path)
     replicas, replica_spp, block = 8, 32, 4
     ours = {
         kind: spectrace_replicas(Renderer(scene.with_overrides(integrator=kind), device), replicas, replica_spp)
-        for kind in ("light", "path")
+        for kind in (integrator, "path")
     }
     n = 16 // block
     for reduce in (
         lambda images: images.reshape(replicas, n, block, n, block, 3).mean(axis=(2, 4)),
         lambda images: images.mean(axis=(1, 2)),
     ):
-        a, b = reduce(ours["light"]), reduce(ours["path"])
+        a, b = reduce(ours[integrator]), reduce(ours["path"])
         difference = a.mean(axis=0) - b.mean(axis=0)
         standard_error = np.sqrt(a.var(axis=0, ddof=1) / replicas + b.var(axis=0, ddof=1) / replicas)
         assert np.all(np.abs(difference) <= 5 * standard_error), np.max(np.abs(difference) / standard_error)
     assert np.all(ours["path"].mean(axis=(0, 1, 2)) > 0.01)  # the lamp lights the scene through the fog
 
 
-def test_a_light_traced_medium_keeps_its_bits_however_split(tmp_path, device):
+@pytest.mark.parametrize("integrator", ["light", "bdpt"])
+def test_a_light_traced_medium_keeps_its_bits_however_split(tmp_path, device, integrator):
     path = tmp_path / "fog.xml"
     path.write_text(FOG)
-    scene = load_mitsuba_scene(path).with_overrides(integrator="light")
+    scene = load_mitsuba_scene(path).with_overrides(integrator=integrator)
     whole = Renderer(scene, device)
     whole.render(spp=8)
     split = Renderer(scene, device)

@@ -91,8 +91,6 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
         # the sphere of directions); kernels/camera_importance.cl has the others.
         known = ", ".join(LIGHT_TRACED_CAMERAS)
         return f"integrator '{name}' supports the {known} cameras, not {camera_type!r}"
-    if medium_count and name == "bdpt":
-        return "integrator 'bdpt' does not render participating media yet; use 'path' or 'light'"
     if scene.pixel_filter.type != "box" and _has_environment(scene):
         return (
             f"integrator '{name}' cannot apply a {scene.pixel_filter.type} filter to an environment seen directly "
