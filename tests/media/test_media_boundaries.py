@@ -153,3 +153,46 @@ intensity = {{ value = {intensity} }}
 def test_count_thin_passes_is_for_the_path_tracer_only(tmp_path):
     with pytest.raises(SpectraceError, match="count_thin_passes = false is only for integrator 'path'"):
         _load(tmp_path, HEAD.format(depth=4, integrator='type = "light"\ncount_thin_passes = false') + ENVIRONMENT)
+
+
+def test_count_thin_passes_refusal_names_the_key(tmp_path):
+    with pytest.raises(SpectraceError) as error:
+        _load(tmp_path, HEAD.format(depth=4, integrator='type = "bdpt"\ncount_thin_passes = false') + ENVIRONMENT)
+    assert "integrator" in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_scene_built_in_python_is_refused_too(tmp_path, device):
+    from spectrace.engine.renderer import Renderer
+
+    scene = _load(tmp_path, HEAD.format(depth=4, integrator="") + SHEET_MATERIAL + _sheet(0.0) + ENVIRONMENT)
+    with pytest.raises(SpectraceError, match="count_thin_passes = false is only for integrator 'path'"):
+        Renderer(scene.with_overrides(integrator="light", count_thin_passes=False), device)
+
+
+def _mitsuba_xml(tmp_path, kind: str):
+    path = tmp_path / f"{kind}.xml"
+    path.write_text(
+        f'<scene version="3.0.0"><integrator type="{kind}"/><sensor type="perspective">'
+        '<film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>'
+        '</sensor><emitter type="constant"/></scene>'
+    )
+    return path
+
+
+def test_mitsuba_volpath_imports_uncounted_thin_passes(tmp_path):
+    """Mitsuba's volpath counts no pass through a thin sheet (a null lobe there), its path tracer does."""
+    from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+
+    for kind, counted in (("volpath", False), ("path", True)):
+        data, _ = mitsuba_scene_data(_mitsuba_xml(tmp_path, kind))
+        assert data["integrator"].get("count_thin_passes", True) is counted
+
+
+@pytest.mark.peer
+def test_uncounted_thin_passes_export_as_volpath(tmp_path, mitsuba_scalar_spectral):
+    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+
+    for kind in ("volpath", "path"):
+        exported = scene_to_mitsuba_dict(load_mitsuba_scene(_mitsuba_xml(tmp_path, kind)), tmp_path / "meshes")
+        assert exported["integrator"]["type"] == kind
