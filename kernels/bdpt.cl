@@ -22,8 +22,10 @@
  * side keeps its hero wavelength alone (×4, terminate_secondary), once, whatever the side; the MIS densities are
  * the hero wavelength's on both sides (the BSDFs draw dispersive directions for the hero).
  *
- * Not handled (the host refuses them in one line): participating media, environment and distant lights (vertices
- * at infinity), other cameras than the pinhole. Subpaths hold at most BDPT_MAX_VERTICES vertices. */
+ * Homogeneous media: bdpt_medium.cl (scattering points as vertices, transmittance on connections).
+ *
+ * Not handled (the host refuses them in one line): environment and distant lights (vertices at infinity), other
+ * cameras than the pinhole. Subpaths hold at most BDPT_MAX_VERTICES vertices. */
 #ifndef SPECTRACE_BDPT_CL
 #define SPECTRACE_BDPT_CL
 
@@ -57,6 +59,8 @@ typedef struct {
     int material;       /* surfaces: material index */
     int light;          /* index of the light it lies on, or -1 */
     int hero;           /* a dispersive vertex at or before it on its subpath */
+    int medium;         /* the medium around it: a surface's subpath arrived in it (bdpt_medium.cl) */
+    int interior;       /* surfaces: the shape's interior medium, or -1 */
 } BdptVertex;
 
 /* The density with which a solid-angle density pdf_dir at `from` reaches `to`, for the MIS ratios: the area density
@@ -78,6 +82,8 @@ inline float bdpt_to_area(float pdf_dir, const BdptVertex *from, const BdptVerte
     float cos_to = all(to->n == (float3)(0.0f)) ? 1.0f : fabs(dot(to->n, d)) * rsqrt(d2);
     return pdf_dir * cos_to / d2;
 }
+
+#include "bdpt_medium.cl"
 
 /* The pinhole's solid-angle density of a camera ray along unit d: 1/(A cos³θ) over the film (camera_importance.cl),
  * 0 outside it. */
@@ -188,6 +194,8 @@ inline int sample_light_origin(const Scene *scene, float2 u_position, BdptVertex
         return 0; /* distant and environment lights: refused by the host */
     }
     v->beta = (float4)(1.0f / v->pdf_fwd);
+    v->interior = -1;
+    v->medium = bdpt_light_medium(scene, v);
     return 1;
 }
 
@@ -201,12 +209,17 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
     __global const RenderParams *params = scene->params;
     PathState s = camera_path(ray);
     s.throughput = beta;
+    s.medium = path[0].medium;
     float4 scatter = (float4)(1.0f);
     int count = 1;
     int hero = 0;
     while (count < max_vertices) {
         Hit hit = scene_intersect(scene, s.ray, path_query(sampler, &s, QUERY_PATH) ^ query_base, rays_traced);
         if (!adjoint) hit = far_clipped(params, &s, hit);
+        int in_medium = bdpt_medium_step(scene, w, sampler, &s, hit.t, path, &count, max_vertices, &pdf_dir,
+                                         &scatter, hero);
+        if (in_medium < 0) break;
+        if (in_medium > 0) continue;
         if (hit.triangle < 0) break;
         PathVertex pv = path_vertex(scene, hit, s.ray);
         if (pv.info.material == TRIANGLE_NO_MATERIAL && pv.info.light < 0) {
@@ -225,6 +238,8 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         v->beta = s.throughput;
         v->material = pv.info.material;
         v->light = pv.info.light;
+        v->medium = s.medium;
+        v->interior = pv.info.interior;
         v->le = (float4)(0.0f);
         if (!adjoint && pv.info.light >= 0) v->le = vertex_emission(scene, w, &pv, hit);
         v->delta = 0;
@@ -261,6 +276,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         s.throughput *= weight;
         scatter *= weight / (adjoint ? 1.0f : bs.radiance_scale);
         s.previous_point = pv.p;
+        s.medium = medium_beyond(pv.info.interior, pv.n, bs.wi, s.medium);
         s.ray.origin = offset_ray_origin(pv.p, pv.n, bs.wi);
         s.ray.direction = bs.wi;
         /* Russian roulette as the path tracer's (rr_depth, survival min(max weight, 0.95)), on the BSDF weights
@@ -282,6 +298,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
 inline float bdpt_surface_pdf(const Scene *scene, const SampledWavelengths *w, const BdptVertex *v,
                               const BdptVertex *prev, const BdptVertex *next)
 {
+    if (v->kind == BDPT_MEDIUM) return bdpt_phase_pdf(scene, v, prev, next);
     __global const Material *material = &scene->materials[v->material];
     SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
     float3 wo = normalize(prev->p - v->p), wi = normalize(next->p - v->p);
@@ -364,18 +381,6 @@ inline int bdpt_keeps(int s, int t)
 #endif
 }
 
-/* Nothing blocks the segment between two vertices (each offset off its surface toward the other). */
-inline int bdpt_visible(const Scene *scene, const BdptVertex *a, const BdptVertex *b, uint query, uint *rays_traced)
-{
-    float3 d = b->p - a->p;
-    float dist = length(d);
-    if (!(dist > 0.0f)) return 0;
-    d /= dist;
-    float3 from = all(a->n == (float3)(0.0f)) ? a->p : offset_ray_origin(a->p, a->n, d);
-    float3 to = all(b->n == (float3)(0.0f)) ? b->p : offset_ray_origin(b->p, b->n, -d);
-    return !scene_occluded(scene, from, to, d, 0, query, rays_traced);
-}
-
 /* One pixel sample of pixel `item`, written to records: the light-to-camera strategies (t = 1) as it makes them,
  * then the sum of the others, which all land in its own pixel (when not zero). */
 inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global const float4 *cmf,
@@ -410,6 +415,8 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
     camera[0].material = -1;
     camera[0].light = -1;
     camera[0].hero = 0;
+    camera[0].medium = -1; /* cameras stand outside every medium */
+    camera[0].interior = -1;
     int nc = bdpt_walk(scene, &w, &sampler, ray, camera[0].beta, camera_direction_pdf(params, ray.direction), 0,
                        camera, last_segment + 1, 0u, rays_traced);
 
@@ -463,6 +470,17 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
             }
             if (t == 1) {
                 BdptVertex *qs = &light[s - 1];
+                if (qs->kind == BDPT_MEDIUM) {
+                    CameraConnection c = connect_to_camera(params, qs->p);
+                    if (c.pixel < 0) continue;
+                    float4 value = qs->beta * (bdpt_phase(scene, qs, -qs->wo, c.to_camera) * c.importance);
+                    if (all(value == (float4)(0.0f))) continue;
+                    value *= camera_transmittance(scene, &w, qs->medium, &c, qs->p, query, rays_traced);
+                    if (all(value == (float4)(0.0f))) continue;
+                    float weight = bdpt_mis_weight(scene, &w, light, camera, 0, s, 1);
+                    record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, &w, params);
+                    continue;
+                }
                 if (qs->kind != BDPT_SURFACE || qs->material < 0) continue;
                 __global const Material *material = &scene->materials[qs->material];
                 if (!material_has_non_delta_lobe(material)) continue;
@@ -474,15 +492,18 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
                 float cosines = cos_light > 0.0f ? fabs(dot(c.to_camera, qs->n)) / cos_light : 0.0f;
                 float4 value = qs->beta * f_cos * (cosines * c.importance);
                 if (all(value == (float4)(0.0f))) continue;
-                if (!camera_sees(scene, &c, qs->p, qs->n, query, rays_traced)) continue;
+                value *= camera_transmittance(scene, &w, medium_beyond(qs->interior, qs->n, c.to_camera, qs->medium),
+                                              &c, offset_ray_origin(qs->p, qs->n, c.to_camera), query, rays_traced);
+                if (all(value == (float4)(0.0f))) continue;
                 float weight = bdpt_mis_weight(scene, &w, light, camera, 0, s, 1);
                 record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, &w, params);
                 continue;
             }
-            /* t >= 2: a camera vertex with a non-delta lobe. */
-            if (pt->kind != BDPT_SURFACE || pt->material < 0) continue;
-            __global const Material *pm = &scene->materials[pt->material];
-            if (!material_has_non_delta_lobe(pm)) continue;
+            /* t >= 2: a camera vertex with a non-delta lobe, or a scattering point. */
+            int pt_medium = pt->kind == BDPT_MEDIUM;
+            if (!pt_medium && (pt->kind != BDPT_SURFACE || pt->material < 0)) continue;
+            __global const Material *pm = &scene->materials[pt_medium ? 0 : pt->material];
+            if (!pt_medium && !material_has_non_delta_lobe(pm)) continue;
             BdptVertex sampled;
             const BdptVertex *qs;
             if (s == 1) {
@@ -490,20 +511,29 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
                 qs = &sampled;
             } else {
                 qs = &light[s - 1];
-                if (qs->kind != BDPT_SURFACE || qs->material < 0) continue;
-                if (!material_has_non_delta_lobe(&scene->materials[qs->material])) continue;
+                if (qs->kind != BDPT_MEDIUM) {
+                    if (qs->kind != BDPT_SURFACE || qs->material < 0) continue;
+                    if (!material_has_non_delta_lobe(&scene->materials[qs->material])) continue;
+                }
             }
             float3 d = qs->p - pt->p;
             float d2 = dot(d, d);
             if (!(d2 > 0.0f)) continue;
             float3 to_q = d * rsqrt(d2);
-            if (!shading_side_agrees(pt->n, pt->ns, to_q)) continue;
-            SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
-            float4 f_p = material_eval(pm, &psc, &w, pt->ns, pt->wo, to_q);
+            float4 f_p;
+            if (pt_medium) {
+                f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
+            } else {
+                if (!shading_side_agrees(pt->n, pt->ns, to_q)) continue;
+                SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
+                f_p = material_eval(pm, &psc, &w, pt->ns, pt->wo, to_q);
+            }
             float4 f_q;
             float cos_q = all(qs->n == (float3)(0.0f)) ? 1.0f : fabs(dot(qs->n, to_q));
             if (s == 1) {
                 f_q = light_vertex_emitted(scene, &w, qs, -to_q);
+            } else if (qs->kind == BDPT_MEDIUM) {
+                f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
             } else {
                 if (!shading_side_agrees(qs->n, qs->ns, -to_q)) continue;
                 __global const Material *qm = &scene->materials[qs->material];
@@ -514,7 +544,8 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, __global 
             }
             float4 value = qs->beta * f_q * pt->beta * f_p * (cos_q / d2);
             if (all(value == (float4)(0.0f))) continue;
-            if (!bdpt_visible(scene, pt, qs, query, rays_traced)) continue;
+            value *= bdpt_transmittance(scene, &w, pt, qs, query, rays_traced);
+            if (all(value == (float4)(0.0f))) continue;
             float weight = bdpt_mis_weight(scene, &w, light, camera, s == 1 ? &sampled : 0, s, t);
             radiance += bdpt_hero(value, pt->hero || qs->hero) * weight;
         }

@@ -35,12 +35,13 @@ inline int sample_one_light(const Scene *scene, const SampledWavelengths *w, Sam
 
 /* Radiance reflected toward wo by light from one sampled light: f·cos·L / pdf, weighted against BSDF sampling by
  * the power heuristic when use_mis (delta lights always weigh 1: BSDF sampling cannot find them). The BSDF's frame
- * follows the shading normal, the shadow ray leaves by the geometric one (shading_normal.cl). `query` names the
- * shadow ray (opacity_query). */
+ * follows the shading normal, the shadow ray leaves by the geometric one (shading_normal.cl). The shadow ray starts
+ * in the medium on its side of the surface: medium_beyond of the surface's `interior` for a path that arrived in
+ * `medium`. `query` names the shadow ray (opacity_query). */
 inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
                                     float3 n_geometric, float3 n_shading, float3 wo,
-                                    __global const Material *material, const SurfaceContext *sc, int use_mis,
-                                    uint query, uint *rays_traced)
+                                    __global const Material *material, const SurfaceContext *sc, int interior,
+                                    int medium, int use_mis, uint query, uint *rays_traced)
 {
     __global const Light *light;
     LightSample ls;
@@ -54,7 +55,9 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
     float3 to = ls.point;
     if (LIGHT_ON_SURFACE(light)) to = offset_ray_origin(ls.point, ls.normal, -ls.wi);
     /* Not scene_occluded: index-matched medium boundaries let light through, attenuated by the medium. */
-    float4 transmittance = scene_transmittance(scene, w, from, to, ls.wi, to_infinity, query, rays_traced);
+    int medium_out = medium_beyond(interior, n_geometric, ls.wi, medium);
+    float4 transmittance = scene_transmittance(scene, w, medium_out, from, to, ls.wi, to_infinity, query,
+                                               rays_traced);
     if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
 
     float weight = 1.0f;
@@ -64,18 +67,20 @@ inline float4 estimate_direct_light(const Scene *scene, const SampledWavelengths
     return f_cos * ls.arriving * transmittance * (weight / ls.pdf);
 }
 
-/* The same at a scattering point x inside a medium, for light that travelled along `travel` before scattering:
+/* The same at a scattering point x inside `medium`, for light that travelled along `travel` before scattering:
  * the phase function takes the place of f·cos, and the shadow ray's transmittance includes the stretch inside
  * the medium. MIS weighs it against phase-function sampling. */
 inline float4 estimate_direct_light_in_medium(const Scene *scene, const SampledWavelengths *w, Sampler *sampler,
-                                              float3 x, float3 travel, float g, uint query, uint *rays_traced)
+                                              float3 x, float3 travel, int medium, float g, uint query,
+                                              uint *rays_traced)
 {
     __global const Light *light;
     LightSample ls;
     if (!sample_one_light(scene, w, sampler, x, &light, &ls)) return (float4)(0.0f);
     float phase = henyey_greenstein(dot(travel, ls.wi), g);
     float3 to = LIGHT_ON_SURFACE(light) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
-    float4 transmittance = scene_transmittance(scene, w, x, to, ls.wi, isinf(ls.distance), query, rays_traced);
+    float4 transmittance = scene_transmittance(scene, w, medium, x, to, ls.wi, isinf(ls.distance), query,
+                                               rays_traced);
     if (all(transmittance == (float4)(0.0f))) return (float4)(0.0f);
     float weight = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, phase);
     return ls.arriving * transmittance * (phase * weight / ls.pdf);

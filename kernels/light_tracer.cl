@@ -103,12 +103,13 @@ inline float2 lens_sample(__global const RenderParams *params, Sampler *sampler)
     return CAMERA_IS(params, CAMERA_THIN_LENS) ? sample_2d(sampler) : (float2)(0.0f);
 }
 
-/* The camera sees x (offset off its surface along ng toward the camera) unless something lies between. */
-inline int camera_sees(const Scene *scene, const CameraConnection *c, float3 x, float3 ng, uint query,
-                       uint *rays_traced)
+/* The fraction of light that leaves `from` (offset off its surface toward the camera, or a point in a medium) in
+ * `medium` and reaches the camera's lens point: 0 when something blocks it, the media's transmittance between
+ * (scene_transmittance; in scenes without media the plain occlusion test). */
+inline float4 camera_transmittance(const Scene *scene, const SampledWavelengths *w, int medium,
+                                   const CameraConnection *c, float3 from, uint query, uint *rays_traced)
 {
-    float3 from = offset_ray_origin(x, ng, c->to_camera);
-    return !scene_occluded(scene, from, c->lens, c->to_camera, 0, query, rays_traced);
+    return scene_transmittance(scene, w, medium, from, c->lens, c->to_camera, 0, query, rays_traced);
 }
 
 /* The environment seen straight from the camera (a path of one segment): a light path cannot end in a pinhole, so
@@ -125,12 +126,75 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
     float2 film = (float2)((float)(item % params->width) + jitter.x, (float)(item / params->width) + jitter.y);
     Ray ray = camera_ray(params, film, sampler); /* only the thin lens draws more: its lens point */
     PathState s = camera_path(ray);
-    Hit hit = far_clipped(params, &s, scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced));
-    if (hit.triangle >= 0) return;
+    float4 transmittance = (float4)(1.0f);
+    if (SCENE_HAS_MEDIA && params->medium_count > 0) {
+        /* Through index-matched media the light that is not scattered away arrives; the scattered light is the
+         * light paths' to bring. */
+        transmittance = scene_transmittance(scene, w, -1, ray.origin, ray.origin, ray.direction, 1,
+                                            path_query(sampler, &s, QUERY_PATH), rays_traced);
+        if (all(transmittance == (float4)(0.0f))) return;
+    } else {
+        Hit hit = far_clipped(params, &s, scene_intersect(scene, ray, path_query(sampler, &s, QUERY_PATH), rays_traced));
+        if (hit.triangle >= 0) return;
+    }
     __global const Light *env = &scene->lights[params->environment_light];
     float4 radiance = environment_radiance(env, scene->spectra, scene->texels, w, ray.direction);
-    record_splat(records, item, film, radiance, cmf, w, params);
+    record_splat(records, item, film, radiance * transmittance, cmf, w, params);
 #endif
+}
+
+/* Russian roulette as the path tracer's (rr_depth, survival min(max weight, 0.95)), on the scattering weights
+ * alone (`scatter`: the adjoint BSDF and the media's weights): 0 ends the path, as does a zero throughput. */
+inline int light_path_survives(PathState *s, float4 *scatter, __global const RenderParams *params, Sampler *sampler)
+{
+    if (s->segments >= params->rr_depth) {
+        float4 t = *scatter;
+        float q = fmin(fmax(fmax(t.x, t.y), fmax(t.z, t.w)), 0.95f);
+        if (!(sample_1d(sampler) < q)) return 0;
+        s->throughput /= q;
+        *scatter /= q;
+    }
+    return any(s->throughput != (float4)(0.0f));
+}
+
+/* Inside a medium, the light path's flight toward the surface at hit_t may end at a scattering point x (a vertex,
+ * numbered s->segments like a surface's): x is connected to the camera (the phase function toward it, the media's
+ * transmittance on the way) and the path goes on in a direction drawn from the phase function, *scattered = 1.
+ * Free flights as the path tracer's (medium_sample_flight). Returns 0 when the path ends. */
+inline int scatter_light_in_medium(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                                   float hit_t, int last_segment, __global const float4 *cmf, SplatRecords *records,
+                                   float4 *scatter, int *scattered, uint *rays_traced)
+{
+    *scattered = 0;
+    if (!SCENE_HAS_MEDIA || s->medium < 0) return 1;
+    __global const RenderParams *params = scene->params;
+    __global const Medium *medium = &scene->media[s->medium];
+    float u_lane = sample_1d(sampler);
+    float u_distance = sample_1d(sampler);
+    FreeFlight flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane,
+                                             u_distance);
+    s->throughput *= flight.weight;
+    *scatter *= flight.weight;
+    if (!flight.scattered) return any(s->throughput != (float4)(0.0f));
+    *scattered = 1;
+    float3 x = s->ray.origin + flight.distance * s->ray.direction;
+    float3 travel = s->ray.direction;
+    CameraConnection c = connect_to_camera_sampled(params, x, lens_sample(params, sampler));
+    if (c.pixel >= 0) {
+        float4 value = s->throughput * (henyey_greenstein(dot(travel, c.to_camera), medium->g) * c.importance);
+        if (any(value != (float4)(0.0f))) {
+            value *= camera_transmittance(scene, w, s->medium, &c, x, path_query(sampler, s, QUERY_SHADOW),
+                                          rays_traced);
+            if (any(value != (float4)(0.0f))) record_splat(records, c.pixel, c.film, value, cmf, w, params);
+        }
+    }
+    if (s->segments + 2 > last_segment) return 0;
+    s->ray.direction = sample_henyey_greenstein(travel, medium->g, sample_2d(sampler));
+    s->ray.origin = x;
+    s->previous_point = x;
+    if (!light_path_survives(s, scatter, params, sampler)) return 0;
+    ++s->segments;
+    return 1;
 }
 
 /* One light path of pixel sample `sample_index` of work-item `item`: its splats go to `records`. hide_environment:
@@ -156,6 +220,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
     /* The path's state as a camera path keeps it (path_state.cl), for the same queries and medium bookkeeping. */
     PathState s = camera_path(e.ray);
     s.throughput = e.weight;
+    s.medium = scene_medium_at(scene, e.ray.origin); /* the light's medium, on the side its light leaves */
     float4 scatter = (float4)(1.0f);  /* product of the adjoint BSDF weights alone, for Russian roulette */
 
     if (e.first_vertex) {
@@ -164,10 +229,15 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
             float cos_light = fabs(dot(e.normal, c.to_camera));
             TextureBuffers textures = buffers.textures;
             float4 emitted = area_light_emitted(light, &textures, &w, e.normal, c.to_camera, e.uv);
-            if (any(emitted != (float4)(0.0f))
-                && camera_sees(scene, &c, e.point, e.normal, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
-                record_splat(records, c.pixel, c.film, emitted * (cos_light * c.importance / e.pdf_area), cmf, &w,
-                             params);
+            if (any(emitted != (float4)(0.0f))) {
+                /* A one-sided lamp is seen from the side its light leaves: the path's medium. */
+                float4 transmittance = camera_transmittance(scene, &w, s.medium, &c,
+                                                            offset_ray_origin(e.point, e.normal, c.to_camera),
+                                                            path_query(&sampler, &s, QUERY_SHADOW), rays_traced);
+                if (any(transmittance != (float4)(0.0f))) {
+                    record_splat(records, c.pixel, c.film,
+                                 emitted * transmittance * (cos_light * c.importance / e.pdf_area), cmf, &w, params);
+                }
             }
         }
     }
@@ -175,6 +245,12 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
     /* s.segments: the index of the vertex s.ray is about to reach. */
     while (s.segments + 1 <= last_segment) {
         Hit hit = scene_intersect(scene, s.ray, path_query(&sampler, &s, QUERY_PATH), rays_traced);
+        int scattered = 0;
+        if (!scatter_light_in_medium(scene, &w, &sampler, &s, hit.t, last_segment, cmf, records, &scatter,
+                                     &scattered, rays_traced)) {
+            return;
+        }
+        if (scattered) continue;
         if (hit.triangle < 0) return;
         PathVertex v = path_vertex(scene, hit, s.ray);
         if (v.info.material == TRIANGLE_NO_MATERIAL) {
@@ -192,9 +268,11 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
                 float cos_light = fabs(dot(v.wo, v.n));
                 float cosines = cos_light > 0.0f ? fabs(dot(c.to_camera, v.n)) / cos_light : 0.0f;
                 float4 value = s.throughput * f_cos * (cosines * c.importance);
-                if (any(value != (float4)(0.0f))
-                    && camera_sees(scene, &c, v.p, v.n, path_query(&sampler, &s, QUERY_SHADOW), rays_traced)) {
-                    record_splat(records, c.pixel, c.film, value, cmf, &w, params);
+                if (any(value != (float4)(0.0f))) {
+                    int medium = medium_beyond(v.info.interior, v.n, c.to_camera, s.medium);
+                    value *= camera_transmittance(scene, &w, medium, &c, offset_ray_origin(v.p, v.n, c.to_camera),
+                                                  path_query(&sampler, &s, QUERY_SHADOW), rays_traced);
+                    if (any(value != (float4)(0.0f))) record_splat(records, c.pixel, c.film, value, cmf, &w, params);
                 }
             }
         }
@@ -208,17 +286,10 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
         s.throughput *= weight;
         scatter *= weight;
         s.previous_point = v.p;
-        s.medium = medium_beyond(v.info.interior, v.n, bs.wi);
+        s.medium = medium_beyond(v.info.interior, v.n, bs.wi, s.medium);
         s.ray.origin = offset_ray_origin(v.p, v.n, bs.wi);
         s.ray.direction = bs.wi;
-        /* Russian roulette as the path tracer's (rr_depth, survival min(max weight, 0.95)), on the BSDF weights. */
-        if (s.segments >= params->rr_depth) {
-            float q = fmin(fmax(fmax(scatter.x, scatter.y), fmax(scatter.z, scatter.w)), 0.95f);
-            if (!(sample_1d(&sampler) < q)) return;
-            s.throughput /= q;
-            scatter /= q;
-        }
-        if (all(s.throughput == (float4)(0.0f))) return;
+        if (!light_path_survives(&s, &scatter, params, &sampler)) return;
         ++s.segments;
     }
 }

@@ -18,10 +18,14 @@
  * rounding, far above what any scene needs. */
 #define MAX_NULL_CROSSINGS 256
 
-/* The medium a ray leaving a surface along `direction` travels in: the shape's interior when it heads against the
- * outward geometric normal, none otherwise. One level only: media do not nest (docs/media.md). */
-inline int medium_beyond(int interior, float3 outward_normal, float3 direction)
+/* The medium a ray leaving a surface along `direction` travels in, for a ray that met it travelling in `current`:
+ * at a medium boundary (a shape with an interior medium) the interior when it heads against the outward geometric
+ * normal, none otherwise; any other surface (no interior) is no boundary, and the ray stays in `current`, as in
+ * Mitsuba 3, where a shape without interior or exterior media keeps the ray's medium. One level only: media do not
+ * nest (docs/media.md). */
+inline int medium_beyond(int interior, float3 outward_normal, float3 direction, int current)
 {
+    if (interior < 0) return current;
     return dot(outward_normal, direction) < 0.0f ? interior : -1;
 }
 

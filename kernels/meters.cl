@@ -24,7 +24,7 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
             float cos_i = dot(n, ls.wi);
             float3 to = LIGHT_ON_SURFACE(light) ? offset_ray_origin(ls.point, ls.normal, -ls.wi) : ls.point;
             float4 transmittance = cos_i > 0.0f
-                                 ? scene_transmittance(scene, w, p, to, ls.wi, isinf(ls.distance),
+                                 ? scene_transmittance(scene, w, -1, p, to, ls.wi, isinf(ls.distance),
                                                        opacity_query(sampler, 0u, QUERY_SHADOW), rays_traced)
                                  : (float4)(0.0f);
             if (any(transmittance != (float4)(0.0f))) {

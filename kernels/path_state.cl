@@ -227,7 +227,7 @@ inline void record_camera_emission(const Scene *scene, const SampledWavelengths 
 inline int cross_null_boundary(PathState *s, const PathVertex *v)
 {
     if (++s->null_crossings > MAX_NULL_CROSSINGS) return 0;
-    s->medium = medium_beyond(v->info.interior, v->n, s->ray.direction);
+    s->medium = medium_beyond(v->info.interior, v->n, s->ray.direction, s->medium);
     s->ray.origin = offset_ray_origin(v->p, v->n, s->ray.direction);
     return 1;
 }
@@ -265,7 +265,8 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     if (material_has_non_delta_lobe(material)) {
         SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
         *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
-                                                           use_mis, path_query(sampler, s, QUERY_SHADOW), rays_traced);
+                                                           v->info.interior, s->medium, use_mis,
+                                                           path_query(sampler, s, QUERY_SHADOW), rays_traced);
     }
 }
 
@@ -293,7 +294,7 @@ inline void follow_bsdf_sample(PathState *s, const PathVertex *v, const BSDFSamp
     s->radiance_scale *= bs->radiance_scale;
     s->previous_pdf = bs->pdf;
     s->previous_delta = bs->is_delta;
-    s->medium = medium_beyond(v->info.interior, v->n, bs->wi);
+    s->medium = medium_beyond(v->info.interior, v->n, bs->wi, s->medium);
     s->previous_point = v->p;
     s->ray.origin = offset_ray_origin(v->p, v->n, bs->wi);
     s->ray.direction = bs->wi;

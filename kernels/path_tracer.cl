@@ -41,7 +41,7 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     }
     float3 x = s->ray.origin + flight.distance * s->ray.direction;
     float3 travel = s->ray.direction;
-    *radiance += s->throughput * estimate_direct_light_in_medium(scene, w, sampler, x, travel, medium->g,
+    *radiance += s->throughput * estimate_direct_light_in_medium(scene, w, sampler, x, travel, s->medium, medium->g,
                                                                  path_query(sampler, s, QUERY_SHADOW), rays_traced);
 #if FILM_AOVS
     aov_at_medium_scatter(&s->aov, flight.distance, x, s->throughput / s->radiance_scale);
@@ -109,7 +109,9 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     }
     /* Beyond a material-less boundary the same segment goes on. */
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
-    if (s->segments >= last_segment) return 0;
+    int uncounted_passes = !params->count_thin_passes
+                        && MATERIAL_IS(&scene->materials[v.info.material], MATERIAL_THINDIELECTRIC);
+    if (s->segments >= last_segment && !uncounted_passes) return 0;
 
     BSDFSample bs;
     int sampled = light_and_sample_vertex(scene, w, sampler, s, &v, 1, radiance, rays_traced, &bs);
@@ -118,10 +120,15 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
                        s->throughput / s->radiance_scale, bs.weight);
 #endif
     if (!sampled) return 0;
+    /* Straight through a thin sheet, when such passes do not count toward max_depth (count_thin_passes off, as
+     * Mitsuba 3's volpath, whose thindielectric transmission is a null lobe): the path goes on with the same
+     * segment number, even from its last segment. */
+    int uncounted = uncounted_passes && dot(bs.wi, v.n) * dot(v.wo, v.n) < 0.0f;
+    if (s->segments >= last_segment && !uncounted) return 0;
     follow_bsdf_sample(s, &v, &bs);
     if (!survives_russian_roulette(s, params, sample_1d(sampler))) return 0;
     if (all(s->throughput == (float4)(0.0f))) return 0;
-    ++s->segments;  /* below last_segment here, so the next one is allowed */
+    if (!uncounted) ++s->segments;  /* below last_segment here, so the next one is allowed */
     return 1;
 }
 

@@ -415,19 +415,18 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
 #endif
 }
 
-/* The fraction of light per wavelength that crosses the same segment as scene_occluded: 0 when a surface blocks
- * it, else exp(−Σ σt·length) over the media whose material-less (index-matched) boundaries it passes, so shadow
- * rays see what a path would (Beer–Lambert). Each stretch's medium follows from the boundary that ends it:
- * leaving a shape along its outward normal means the stretch was inside the shape. `query` as for
- * scene_intersect. */
-inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *w, float3 from, float3 to,
+/* The fraction of light per wavelength that crosses the same segment as scene_occluded, for a segment that starts
+ * in `medium` (-1: none; the path's medium on the side the segment leaves): 0 when a surface blocks it, else
+ * exp(−Σ σt·length) over the media it travels through, passing material-less (index-matched) boundaries, so
+ * shadow rays see what a path would (Beer–Lambert). Each boundary changes the medium as it changes a path's
+ * (medium_beyond). `query` as for scene_intersect. */
+inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *w, int medium, float3 from, float3 to,
                                   float3 direction, int to_infinity, uint query, uint *rays_traced)
 {
     if (!SCENE_HAS_MEDIA || scene->params->medium_count == 0) {
         return scene_occluded(scene, from, to, direction, to_infinity, query, rays_traced) ? (float4)(0.0f)
                                                                                             : (float4)(1.0f);
     }
-    if (scene_is_empty(scene)) return (float4)(1.0f);
     Ray segment;
     segment.origin = from;
     float t_end = INFINITY;  /* along the whole segment, from `from` */
@@ -441,7 +440,7 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
         t_end = length_d * 0.9999f;  /* stop just short of the light's own surface */
     }
     float4 optical_depth = (float4)(0.0f);
-    int medium_ahead = -1;
+    int medium_ahead = medium;
     float t_origin = 0.0f;
 #if SCENE_HAS_OPACITY
     float carried = 0.0f;  /* the stretch since the last medium boundary before segment.origin (cut-outs passed) */
@@ -450,8 +449,12 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
 #define STRETCH(t) (t)
 #endif
     for (int crossing = 0; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
-        *rays_traced += 1;
-        Hit hit = trace_scene(scene, segment, fmax(t_end - t_origin, 0.0f), 0);
+        Hit hit;
+        hit.triangle = -1;
+        if (!scene_is_empty(scene)) {
+            *rays_traced += 1;
+            hit = trace_scene(scene, segment, fmax(t_end - t_origin, 0.0f), 0);
+        }
         if (hit.triangle < 0) {
             if (medium_ahead < 0) return exp(-optical_depth);
             if (isinf(t_end)) return (float4)(0.0f);  /* a leak out of a closed medium: light cannot get through */
@@ -472,19 +475,39 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
         if (info.material != TRIANGLE_NO_MATERIAL) return (float4)(0.0f);
 #endif
         float3 n = hit_normal(scene, hit);
-        if (dot(n, segment.direction) > 0.0f && info.interior >= 0) {
-            optical_depth += medium_sigma_t(&scene->media[info.interior], scene->spectra, w) * STRETCH(hit.t);
+        if (medium_ahead >= 0) {
+            optical_depth += medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w) * STRETCH(hit.t);
         }
 #if SCENE_HAS_OPACITY
         carried = 0.0f;
 #endif
-        medium_ahead = medium_beyond(info.interior, n, segment.direction);
+        medium_ahead = medium_beyond(info.interior, n, segment.direction, medium_ahead);
         float3 p = hit_point(scene, hit);
         segment.origin = offset_ray_origin(p, n, segment.direction);
         t_origin = dot(segment.origin - from, segment.direction);
     }
     return (float4)(0.0f);
 #undef STRETCH
+}
+
+/* The medium around a point (-1: none), for paths that start away from the camera (light paths): a probe ray from
+ * the point goes on past every surface without an interior until it meets a medium boundary, which it leaves (the
+ * point is inside that medium) or enters (outside every medium). One level, as media do not nest (medium.cl). */
+inline int scene_medium_at(const Scene *scene, float3 point)
+{
+    if (!SCENE_HAS_MEDIA || scene->params->medium_count == 0 || scene_is_empty(scene)) return -1;
+    Ray probe;
+    probe.origin = point;
+    probe.direction = normalize((float3)(0.267f, 0.535f, 0.802f));  /* any direction: boundaries are closed */
+    for (int crossing = 0; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
+        Hit hit = trace_scene(scene, probe, INFINITY, 0);
+        if (hit.triangle < 0) return -1;
+        int interior = scene->triangle_info[hit.triangle].interior;
+        float3 n = hit_normal(scene, hit);
+        if (interior >= 0) return dot(n, probe.direction) > 0.0f ? interior : -1;
+        probe.origin = offset_ray_origin(hit_point(scene, hit), n, probe.direction);
+    }
+    return -1;
 }
 
 #endif

@@ -127,7 +127,7 @@ inline void trace_photon(const Scene *scene, int stream, int sample_index, const
         s.throughput *= weight;
         scatter *= weight;
         s.previous_point = v.p;
-        s.medium = medium_beyond(v.info.interior, v.n, bs.wi);
+        s.medium = medium_beyond(v.info.interior, v.n, bs.wi, s.medium);
         s.ray.origin = offset_ray_origin(v.p, v.n, bs.wi);
         s.ray.direction = bs.wi;
         if (s.segments >= params->rr_depth) {
@@ -260,7 +260,7 @@ inline void sppm_gather(const Scene *scene, const PhotonGrid *grid, __global con
         if (material_has_non_delta_lobe(material)) {
             /* The visible point: no BSDF sample leaves it, so next-event estimation is not MIS-weighted. */
             direct += s.throughput * estimate_direct_light(scene, w, &sampler, v.p, v.n, v.ns, v.wo, material, &sc,
-                                                           0, path_query(&sampler, &s, QUERY_SHADOW), rays_traced);
+                                                           v.info.interior, s.medium, 0, path_query(&sampler, &s, QUERY_SHADOW), rays_traced);
             /* The first radius: a few pixel footprints, within the cell (less its margin). */
             if (r == 0.0f) r = fmin(radius_per_metre * travelled, 0.98f * grid->cell_size);
             float4 phi = gather_photons(grid, scene, w, &v, material, &sc, s.segments, s.secondary_terminated, r,

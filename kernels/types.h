@@ -207,6 +207,9 @@ typedef struct {
     int camera_type;         /* CAMERA_* (kernels/camera.cl) */
     int pixel_filter;        /* PIXEL_FILTER_* (kernels/pixel_filter.cl) */
     int instance_count;      /* placed objects (Instance rows) */
+    int count_thin_passes;   /* path: 1: a pass straight through a thin sheet (thindielectric) is a segment toward
+                                max_depth; 0: it is not (Mitsuba 3's volpath) */
+    int pad_params[3];
     float4 lens;             /* CAMERA_THIN_LENS: aperture radius, focus distance along camera_forward (scene
                                 units), 0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:

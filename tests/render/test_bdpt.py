@@ -223,8 +223,6 @@ def test_pass_split_gives_the_same_bits(device, tmp_path, monkeypatch):
     ("extra", "match"),
     [
         ('\n[[lights]]\ntype = "distant"\ndirection = [0, 0, -1]\nirradiance = { value = 1 }\n', "'distant' lights"),
-        ("\n[[shapes]]\ntype = \"cube\"\ninterior = { sigma_a = { value = 0.1 }, sigma_s = { value = 0.1 } }\n"
-         "transform = [{ scale = 0.2 }, { translate = [0, 0, 0.5] }]\n", "participating media"),
     ],
 )  # fmt: skip
 def test_refusals_in_one_line(device, tmp_path, extra, match):

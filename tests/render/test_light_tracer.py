@@ -305,20 +305,6 @@ def test_pass_split_gives_the_same_bits(device, tmp_path, monkeypatch):
     np.testing.assert_array_equal(one_pass, relaunched)
 
 
-def test_media_refused_in_one_line(device, tmp_path):
-    text = (_floor_scene(tmp_path, "light")).read_text()
-    text += """
-[[shapes]]
-type = "cube"
-interior = { sigma_a = { value = 0.1 }, sigma_s = { value = 0.1 } }
-transform = [{ scale = 0.2 }, { translate = [0, 0, 0.5] }]
-"""
-    scene = spectrace.load_scene(_write(tmp_path, text))
-    with pytest.raises(SpectraceError, match="participating media") as error:
-        Renderer(scene, device)
-    assert "\n" not in str(error.value)
-
-
 BANDS_NM, TEMPERATURE = (400.0, 700.0, 3), 4000.0
 
 

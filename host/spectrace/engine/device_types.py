@@ -246,11 +246,13 @@ RENDER_PARAMS_DTYPE = _struct(
         ("camera_type", "<i4"),
         ("pixel_filter", "<i4"),
         ("instance_count", "<i4"),
+        ("count_thin_passes", "<i4"),
+        ("pad_params", ("<i4", (3,))),
         ("lens", ("<f4", (4,))),
         ("filter_shape", ("<f4", (4,))),
         ("filter_cdf", ("<f4", (PIXEL_FILTER_BINS,))),
     ],
-    160 + 4 * PIXEL_FILTER_BINS,
+    176 + 4 * PIXEL_FILTER_BINS,
 )
 
 # MeterParams.type (kernels/meters.cl). IRRADIANCE: W/(m² nm) on a one-sided surface at `point` facing

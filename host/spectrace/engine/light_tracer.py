@@ -95,8 +95,6 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
             f"integrator '{name}' takes the equirectangular camera with the box filter only, not a "
             f"{scene.pixel_filter.type} filter; use film.filter = \"box\" or 'path'"
         )
-    if medium_count:
-        return f"integrator '{name}' does not render participating media yet; use 'path'"
     if scene.pixel_filter.type != "box" and _has_environment(scene):
         return (
             f"integrator '{name}' cannot apply a {scene.pixel_filter.type} filter to an environment seen directly "

@@ -543,4 +543,5 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["filter_shape"][0] = pixel_filter.device_shape()
     params["filter_cdf"][0] = pixel_filter.device_cdf()
     params["instance_count"] = buffers.instance_count
+    params["count_thin_passes"] = int(getattr(scene, "count_thin_passes", True))
     return params

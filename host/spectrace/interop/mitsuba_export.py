@@ -183,7 +183,8 @@ def scene_to_mitsuba_dict(
     entries: dict = {
         "type": "scene",
         "integrator": {
-            "type": _MITSUBA_INTEGRATORS[scene.integrator],
+            # Mitsuba's volpath is the path tracer that counts no pass straight through a thin sheet.
+            "type": "volpath" if not scene.count_thin_passes else _MITSUBA_INTEGRATORS[scene.integrator],
             "max_depth": int(scene.max_depth),
             "rr_depth": int(scene.rr_depth),
             "hide_emitters": bool(scene.hide_emitters or scene.hide_environment),

@@ -1550,6 +1550,9 @@ class MitsubaImporter:
             properties.understood(*own)
         elif kind.startswith("volpath"):
             self.notes.append(f"{self.at(element)}: integrator '{kind}' imported as 'path', which renders media")
+            # volpath counts no null interaction toward max_depth, and Mitsuba's thindielectric transmits by a
+            # null lobe: a pass straight through a thin sheet is no segment there (path counts it).
+            settings["count_thin_passes"] = False
         elif kind == "moment":
             # Mitsuba's moment integrator renders its nested integrator's image with the second moment as extra
             # channels: the image is the nested one's.

@@ -167,7 +167,15 @@ def scene_settings_problem(scene) -> str | None:
             else None
         )
         or exposure_problem(scene.exposure)
+        or count_thin_passes_problem(scene.integrator, scene.count_thin_passes)
     )
+
+
+def count_thin_passes_problem(integrator: str, count_thin_passes: bool) -> str | None:
+    """Why count_thin_passes = false cannot be used with this integrator (only the path tracer has it), or None."""
+    if count_thin_passes or integrator == "path":
+        return None
+    return f"count_thin_passes = false is only for integrator 'path', not '{integrator}'"
 
 
 def coordinates_problem(points: np.ndarray) -> str | None:

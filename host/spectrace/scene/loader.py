@@ -660,6 +660,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         rr_depth=spec.integrator.rr_depth,
         hide_environment=spec.integrator.hide_environment,
         hide_emitters=spec.integrator.hide_emitters,
+        count_thin_passes=spec.integrator.count_thin_passes,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
         sampler=spec.sampler.type,

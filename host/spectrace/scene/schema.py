@@ -57,12 +57,24 @@ class IntegratorSpec(Strict):
         description="Mitsuba 3's hide_emitters: hide_environment, and camera rays pass through area lights",
     )
 
+    count_thin_passes: bool = Field(
+        default=True,
+        description="path only: a pass straight through a thindielectric counts toward max_depth (false: Mitsuba "
+        "3's volpath, where it does not)",
+    )
+
     @field_validator("max_depth")
     @classmethod
     def _depth_not_zero(cls, value: int) -> int:
         if value == 0:
             raise ValueError("max_depth must be -1 (unbounded) or >= 1")
         return value
+
+    @model_validator(mode="after")
+    def _thin_passes_for_path_only(self) -> "IntegratorSpec":
+        if problem := limits.count_thin_passes_problem(self.type, self.count_thin_passes):
+            raise ValueError(problem)
+        return self
 
 
 class SamplerSpec(Strict):
