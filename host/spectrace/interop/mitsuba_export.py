@@ -115,9 +115,13 @@ class MitsubaExport:
         to_mitsuba = _MATERIAL_EXPORTS.get(type(material))
         if to_mitsuba is None:
             raise self.refuse(f"material {type(material).__name__} is not exported yet")
-        if material.detail is not None:
+        detail = material.detail
+        if detail is not None and (detail.normal_map, detail.bump_map, detail.opacity) != (None, None, 1.0):
             raise self.refuse("surface detail (normal or bump map, opacity) is not exported yet")
-        return to_mitsuba(material, self)
+        entry = to_mitsuba(material, self)
+        if detail is not None and not detail.two_sided and entry["type"] == "twosided":
+            entry = entry["bsdf"]  # Mitsuba's BSDF alone is one-sided, black from the back
+        return entry
 
     def refuse(self, what: str) -> SpectraceError:
         return _refuse(what, self.scene)
@@ -220,10 +224,7 @@ def scene_to_mitsuba_dict(
         material_key = id(shape.material)
         if material_key not in materials:
             name = f"material_{len(materials)}"
-            entry = to_mitsuba(shape.material, exporter)
-            if detail is not None and not detail.two_sided and entry["type"] == "twosided":
-                entry = entry["bsdf"]  # Mitsuba's BSDF alone is one-sided, black from the back
-            entries[name] = entry
+            entries[name] = exporter.material(shape.material)
             materials[material_key] = name
         if shape.analytic is not None:  # Mitsuba's own analytic shape, in the same object space
             entry = {
