@@ -10,6 +10,10 @@
   irradiance I T² Σ R^{2k}/(d − t + (2k + 1)t/n)² (tests/render/test_light_tracer.py).
 - The Cornell box, a textured scene and a dispersive glass sphere: BDPT's and the path tracer's images agree within
   noise (block means, 5 standard errors from independent replicas).
+- Lights at infinity and lens cameras: a scene of a distant light, a constant environment and an emitting sphere over
+  rough glass, a smooth-shaded cube and plastic (tests/render/test_light_tracer.py's), seen through the pinhole,
+  the thin lens and the orthographic camera, and a spot light's slide: BDPT's and the path tracer's images agree
+  within noise. (tests/render/test_light_traced_cameras.py holds BDPT's lens cameras to the floor's closed form.)
 - The same seed gives the same bits however the render is split into passes.
 """
 
@@ -26,8 +30,10 @@ from tests.render.test_light_tracer import (
     INTENSITY,
     IOR,
     THICKNESS,
+    _camera,
     _floor_scene,
     _furnace_box,
+    _mixed_scene,
     _slab_scene,
     _textured_scene,
     _write,
@@ -222,7 +228,6 @@ def test_pass_split_gives_the_same_bits(device, tmp_path, monkeypatch):
 @pytest.mark.parametrize(
     ("extra", "match"),
     [
-        ('\n[[lights]]\ntype = "distant"\ndirection = [0, 0, -1]\nirradiance = { value = 1 }\n', "'distant' lights"),
         ("\n[[shapes]]\ntype = \"cube\"\ninterior = { sigma_a = { value = 0.1 }, sigma_s = { value = 0.1 } }\n"
          "transform = [{ scale = 0.2 }, { translate = [0, 0, 0.5] }]\n", "participating media"),
     ],
@@ -245,28 +250,90 @@ def test_unbounded_depth_refused(device, tmp_path):
     [
         ({"pixel_filter": spectrace.PixelFilter("gaussian")}, 0, "gaussian filter"),
         ({}, 4, "spectral bands"),
-        ({"camera_type": "thinlens"}, 0, "pinhole"),
     ],
 )
 def test_what_the_light_tracer_has_but_bdpt_has_not_is_refused(device, tmp_path, changes, spectral_bins, match):
-    """The light tracer's filter spreads, spectral bands and lens cameras are not in BDPT's kernels."""
+    """The light tracer's filter spreads and spectral bands are not in BDPT's kernels."""
     scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt"))
-    camera_type = changes.pop("camera_type", None)
-    if camera_type:
-        changes["camera"] = dataclasses.replace(
-            scene.camera, type=camera_type, aperture_radius=0.01, focus_distance=1.0
-        )
     with pytest.raises(SpectraceError, match=match) as error:
         Renderer(scene.with_overrides(**changes), device, spectral_bins=spectral_bins)
     assert "\n" not in str(error.value)
 
 
-def test_a_spot_lights_slide_is_refused(device, tmp_path):
-    """kernels/bdpt.cl weighs a spot by its falloff alone, so a slide (Mitsuba's spot texture) must not pass unseen."""
-    scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt"))
-    spot = spectrace.spot_light(
-        (0.0, 0.0, 2.0), (0.0, 0.0, 0.0), 30.0, intensity=1.0, slide=spectrace.bitmap(np.full((2, 2, 3), 0.5))
+def _slide_scene(tmp_path: Path, integrator: str):
+    """The floor under a spot light whose slide (a 2 × 2 image of different colours) projects onto it."""
+    scene = spectrace.load_scene(_floor_scene(tmp_path, integrator)).with_overrides(seed=3)
+    pixels = np.array([[[0.9, 0.2, 0.1], [0.1, 0.8, 0.2]], [[0.2, 0.3, 0.9], [0.7, 0.7, 0.7]]])
+    spot = spectrace.spot_light((0.3, -0.2, 1.0), (0.3, -0.2, 0.0), 40.0, intensity=2.0, slide=spectrace.bitmap(pixels))
+    return scene.with_overrides(lights=[spot])
+
+
+def test_a_spot_lights_slide_agrees_with_the_path_tracer(device, tmp_path):
+    path = spectrace_replicas(Renderer(_slide_scene(tmp_path, "path"), device), 8, 8)
+    bdpt = spectrace_replicas(Renderer(_slide_scene(tmp_path, "bdpt"), device), 8, 8)
+    assert path.mean() > 0.01
+    assert_replicas_agree(bdpt, path, block=8)
+
+
+CAMERAS = {  # each replaces the pinhole's field of view
+    "pinhole": "fov = 30\n",
+    "thinlens": 'fov = 30\ntype = "thinlens"\naperture_radius = 0.08\nfocus_distance = 1.6\n',
+    "orthographic": 'type = "orthographic"\nview_width = 1.4\n',
+}
+
+
+def _lights_at_infinity(tmp_path: Path, integrator: str, target: str, camera: str):
+    """test_light_tracer.py's scene of a distant light, a constant environment (seen past the objects) and an
+    emitting sphere, seen through `camera`."""
+    text = _mixed_scene(tmp_path, integrator, target).read_text()
+    return spectrace.load_scene(_write(tmp_path, text.replace("fov = 30\n", CAMERAS[camera])))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("target", "camera"),
+    [("[-0.5, 0.45, 0]", "pinhole"), ("[0.6, 0.3, -0.3]", "thinlens"), ("[0, 0.3, 0]", "orthographic")],
+    ids=["rough-glass", "cube-thin-lens", "orthographic"],
+)
+def test_lights_at_infinity_and_lens_cameras_agree_with_the_path_tracer(device, tmp_path, target, camera):
+    path = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "path", target, camera), device), 8, 16)
+    bdpt = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "bdpt", target, camera), device), 8, 16)
+    assert path.mean() > 0.05
+    assert_replicas_agree(bdpt, path, block=4)
+
+
+@pytest.mark.parametrize("hidden", [False, True])
+def test_environment_seen_directly(device, tmp_path, hidden):
+    """Nothing but a constant environment of radiance 0.3: every pixel sees exactly it (the camera path's own
+    vertex at infinity, weight 1), or nothing when hidden."""
+    text = (
+        _camera("[0, 0, 0]", "[0, 0, -1]", 60, 8)
+        + f"""
+[integrator]
+type = "bdpt"
+max_depth = 3
+hide_environment = {"true" if hidden else "false"}
+
+[materials.grey]
+type = "diffuse"
+reflectance = {{ value = 0.5 }}
+
+[[lights]]
+type = "constant"
+radiance = {{ value = 0.3 }}
+"""
     )
-    with pytest.raises(SpectraceError, match="slide") as error:
-        Renderer(scene.with_overrides(lights=[*scene.lights, spot]), device)
-    assert "\n" not in str(error.value)
+    y = Renderer(spectrace.load_scene(_write(tmp_path, text)), device).render(spp=64).xyz[..., 1]
+    if hidden:
+        assert np.all(y == 0.0)
+    else:
+        mean, standard_error = mean_and_standard_error(y.ravel())
+        assert standard_error < 0.01 * 0.3
+        assert_within_standard_errors(mean, 0.3, standard_error)
+
+
+def test_lights_at_infinity_and_a_thin_lens_split_into_passes_give_the_same_bits(device, tmp_path):
+    scene = _lights_at_infinity(tmp_path, "bdpt", "[0.6, 0.3, -0.3]", "thinlens").with_overrides(spp=4)
+    one_pass = Renderer(scene, device).render(pass_spp=4).xyz
+    split = Renderer(scene, device).render(pass_spp=1).xyz
+    np.testing.assert_array_equal(one_pass, split)

@@ -71,10 +71,10 @@ def filter_spread(pixel_filter, film: np.ndarray, width: int, height: int) -> tu
 
 
 def add_in_order(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
-    """target[index[k]] += values[k] for k = 0, 1, ... in that order (np.add.at's float sums), target's rows being
-    contiguous (others take np.add.at as they are): the rows are flattened to single elements first, since np.add.at's fast path is for 1-D arrays
-    (measured 2.8 times faster on BDPT's records than np.add.at on the rows; each element still adds its values one
-    after another, so the bits are the same)."""
+    """target[index[k]] += values[k] for k = 0, 1, ... in that order (np.add.at's float sums). A C-contiguous 2-D
+    target is added to as its flattened elements, since np.add.at's fast path is for 1-D arrays (measured 2.8 times
+    faster on BDPT's records than on the rows); each element still adds its values one after another, so the bits
+    are the same. Other targets take np.add.at as they are."""
     if target.ndim == 1 or not target.flags.c_contiguous or len(index) == 0:
         np.add.at(target, index, values)
         return
@@ -88,10 +88,8 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
     name = scene.integrator  # 'light', or 'bdpt', which shares these limits
     camera_type = scene.camera.type
     if name == "bdpt":
-        # BDPT joins its subpaths at the pinhole and adds whole-pixel records: the light tracer's lens cameras,
-        # spectral bands and filter spreads are not in its kernels.
-        if camera_type != "perspective":
-            return f"integrator 'bdpt' supports the perspective (pinhole) camera only, not {camera_type!r}"
+        # BDPT adds its own pixel's strategies as whole-pixel records: the light tracer's spectral bands and filter
+        # spreads are not in its kernels.
         if spectral_bins:
             return "integrator 'bdpt' does not write spectral bands yet; render without spectral output or use 'path'"
         if scene.pixel_filter.type != "box":
