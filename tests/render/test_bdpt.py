@@ -12,7 +12,8 @@
   noise (block means, 5 standard errors from independent replicas).
 - Lights at infinity and lens cameras: a scene of a distant light, a constant environment and an emitting sphere over
   rough glass, a smooth-shaded cube and plastic (tests/render/test_light_tracer.py's), seen through the pinhole,
-  the thin lens and the orthographic camera, and a spot light's slide: BDPT's and the path tracer's images agree
+  the thin lens and the orthographic camera, with an environment map for the constant environment, and a spot
+  light's slide: BDPT's and the path tracer's images agree
   within noise. (tests/render/test_light_traced_cameras.py holds BDPT's lens cameras to the floor's closed form.)
 - The same seed gives the same bits however the render is split into passes.
 """
@@ -44,6 +45,7 @@ from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine import light_tracer
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.io.exr import write_exr
 from spectrace.resources import resolve_scene_path
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
@@ -282,22 +284,35 @@ CAMERAS = {  # each replaces the pinhole's field of view
 }
 
 
-def _lights_at_infinity(tmp_path: Path, integrator: str, target: str, camera: str):
+def _lights_at_infinity(tmp_path: Path, integrator: str, target: str, camera: str, sky: bool = False):
     """test_light_tracer.py's scene of a distant light, a constant environment (seen past the objects) and an
-    emitting sphere, seen through `camera`."""
-    text = _mixed_scene(tmp_path, integrator, target).read_text()
-    return spectrace.load_scene(_write(tmp_path, text.replace("fov = 30\n", CAMERAS[camera])))
+    emitting sphere, seen through `camera`; sky: an environment map with a small bright sun instead of the constant
+    environment (its importance sampling's density in the MIS weights)."""
+    text = _mixed_scene(tmp_path, integrator, target).read_text().replace("fov = 30\n", CAMERAS[camera])
+    if sky:
+        rgb = np.random.default_rng(4).uniform(0.0, 0.2, (8, 16, 3)).astype(np.float32)
+        rgb[2, 5] = (30.0, 25.0, 10.0)
+        write_exr(tmp_path / "sky.exr", rgb, None, {})
+        constant = 'type = "constant"\nradiance = { value = 0.1 }'
+        assert constant in text
+        text = text.replace(constant, 'type = "envmap"\nfile = "sky.exr"\nscale = 0.5')
+    return spectrace.load_scene(_write(tmp_path, text))
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("target", "camera"),
-    [("[-0.5, 0.45, 0]", "pinhole"), ("[0.6, 0.3, -0.3]", "thinlens"), ("[0, 0.3, 0]", "orthographic")],
-    ids=["rough-glass", "cube-thin-lens", "orthographic"],
+    ("target", "camera", "sky"),
+    [
+        ("[-0.5, 0.45, 0]", "pinhole", False),
+        ("[0.6, 0.3, -0.3]", "thinlens", False),
+        ("[0, 0.3, 0]", "orthographic", False),
+        ("[0, 0.3, 0]", "pinhole", True),
+    ],
+    ids=["rough-glass", "cube-thin-lens", "orthographic", "environment-map"],
 )
-def test_lights_at_infinity_and_lens_cameras_agree_with_the_path_tracer(device, tmp_path, target, camera):
-    path = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "path", target, camera), device), 8, 16)
-    bdpt = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "bdpt", target, camera), device), 8, 16)
+def test_lights_at_infinity_and_lens_cameras_agree_with_the_path_tracer(device, tmp_path, target, camera, sky):
+    path = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "path", target, camera, sky), device), 8, 16)
+    bdpt = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "bdpt", target, camera, sky), device), 8, 16)
     assert path.mean() > 0.05
     assert_replicas_agree(bdpt, path, block=4)
 
