@@ -4,13 +4,15 @@
  * weight uses the power heuristic evaluated, as in pbrt-v4's BDPT (Pharr, Jakob & Humphreys, "Physically Based
  * Rendering", 4th ed., sec. 13.4), from running ratios of the area densities with which each vertex is reached
  * forward (along the subpath that made it) and in reverse (from the other side); vertices reached by a delta lobe
- * or a delta light take part only through the strategies that can make them.
+ * or a delta light take part only through the strategies that can make them. Each walk keeps at every vertex the
+ * sum of those ratios' squares up to it (mis_sum), so that a connection's weight costs O(1): the densities it
+ * changes at the four vertices beside it, and the two sums beyond.
  *
  * Strategies (max_depth counts segments from the camera, as for the path tracer: s + t − 1 <= max_depth):
  * - s = 0: a camera vertex on an emitter (with t = 2 and s = 1 absent, an emitter seen directly weighs 1);
  * - s = 1: a point sampled on a light, by the same densities light paths start with (light_emission.cl), joined to a
  *   camera vertex: next-event estimation;
- * - t = 1: a light vertex joined to the pinhole, as the light tracer does (light_tracer.cl): its value lands in any
+ * - t = 1: a light vertex joined to the camera, as the light tracer does (light_tracer.cl): its value lands in any
  *   pixel and is written as a splat record, reduced on the host in a fixed order;
  * - s, t >= 2: a light vertex joined to a camera vertex through a shadow ray.
  * The sum of a work-item's own-pixel strategies is written as one more record for its own pixel.
