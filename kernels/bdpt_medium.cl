@@ -10,7 +10,10 @@
  * strategy's weight is computed by the same function of the same path, so the weights still sum to one and the
  * estimate stays unbiased; only their balance ignores how likely each strategy was to stop at a medium vertex.
  * A light subpath starts in its light's medium (scene_medium_at); connections start in the medium on their side of
- * the vertex they leave (scene_transmittance). Included by bdpt.cl after BdptVertex and bdpt_to_area. */
+ * the vertex they leave (scene_transmittance); a light at infinity's subpath starts outside the scene, in none. A
+ * camera subpath that leaves the scene does so through a flight that did not scatter, whose weight its throughput
+ * carries to the environment's vertex. Included by bdpt.cl after BdptVertex, bdpt_to_area, bdpt_direction and
+ * bdpt_extend_mis_sum. */
 #ifndef SPECTRACE_BDPT_MEDIUM_CL
 #define SPECTRACE_BDPT_MEDIUM_CL
 
@@ -41,15 +44,20 @@ inline float bdpt_phase(const Scene *scene, const BdptVertex *v, float3 in, floa
  * density at next (bdpt_surface_pdf's counterpart). */
 inline float bdpt_phase_pdf(const Scene *scene, const BdptVertex *v, const BdptVertex *prev, const BdptVertex *next)
 {
-    float3 in = normalize(v->p - prev->p), out = normalize(next->p - v->p);
+    float3 in = bdpt_direction(prev, v), out = bdpt_direction(v, next);
     return bdpt_to_area(bdpt_phase(scene, v, in, out), v, next);
 }
 
-/* The fraction of light that crosses from vertex a to vertex b (each offset off its surface toward the other): 0
- * when a surface blocks it, the media's transmittance between; in scenes without media the occlusion test. */
+/* The fraction of light that crosses from vertex a to vertex b (each offset off its surface toward the other; b may
+ * be a light at infinity, reached along its direction): 0 when a surface blocks it, the media's transmittance
+ * between; in scenes without media the occlusion test. */
 inline float4 bdpt_transmittance(const Scene *scene, const SampledWavelengths *w, const BdptVertex *a,
                                  const BdptVertex *b, uint query, uint *rays_traced)
 {
+    if (b->at_infinity) {
+        float3 from = all(a->n == (float3)(0.0f)) ? a->p : offset_ray_origin(a->p, a->n, b->wo);
+        return scene_transmittance(scene, w, bdpt_side_medium(a, b->wo), from, from, b->wo, 1, query, rays_traced);
+    }
     float3 d = b->p - a->p;
     float dist = length(d);
     if (!(dist > 0.0f)) return (float4)(0.0f);
@@ -62,10 +70,11 @@ inline float4 bdpt_transmittance(const Scene *scene, const SampledWavelengths *w
 /* One free flight of a subpath in its medium toward the surface at hit_t. Returns 0 when it reaches the surface
  * (the throughput carries the flight's weight) or the subpath is outside media; 1 when it scattered: the point is
  * vertex path[*count] (*count then counts it) and the subpath goes on from it along a phase-sampled direction
- * (*pdf_dir its density); -1 when the subpath ends (no vertex left, Russian roulette, nothing carried). */
+ * (*pdf_dir its density); -1 when the subpath ends (no vertex left, Russian roulette, nothing carried). The vertex
+ * before it gets its reverse density and running MIS sum as bdpt_walk's surfaces do; adjoint: a light subpath. */
 inline int bdpt_medium_step(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
                             float hit_t, BdptVertex *path, int *count, int max_vertices, float *pdf_dir,
-                            float4 *scatter, int hero)
+                            float4 *scatter, int hero, int adjoint)
 {
     if (!SCENE_HAS_MEDIA || s->medium < 0) return 0;
     __global const Medium *medium = &scene->media[s->medium];
@@ -96,17 +105,21 @@ inline int bdpt_medium_step(const Scene *scene, const SampledWavelengths *w, Sam
     v->delta = 0;
     v->delta_light = 0;
     v->hero = hero;
+    v->beam_pdf = 0.0f; /* before bdpt_to_area reads the vertex */
+    v->at_infinity = 0;
     v->pdf_fwd = bdpt_to_area(*pdf_dir, prev, v);
     v->pdf_rev = 0.0f;
+    v->mis_sum = 0.0f;
     ++*count;
     if (*count >= max_vertices) return -1;
     float3 next = sample_henyey_greenstein(travel, medium->g, sample_2d(sampler));
     *pdf_dir = henyey_greenstein(dot(travel, next), medium->g);
     prev->pdf_rev = bdpt_to_area(*pdf_dir, v, prev); /* the phase function is symmetric */
+    bdpt_extend_mis_sum(path, *count - 2, adjoint);
     s->previous_point = v->p;
     s->ray.origin = v->p;
     s->ray.direction = next;
-    if (*count - 1 >= scene->params->rr_depth) {
+    if (*count - 1 >= scene->params->rr_depth / 4) { /* as bdpt_walk's surfaces */
         float4 t = *scatter;
         float q = fmin(fmax(fmax(t.x, t.y), fmax(t.z, t.w)), 0.95f);
         if (!(sample_1d(sampler) < q)) return -1;

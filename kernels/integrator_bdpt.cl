@@ -5,8 +5,7 @@
  * as for the `light` integrator (integrator_light.cl), everything it finds is written as splat records in its own
  * `capacity` slots: those connections in the order it makes them, then its own pixel's estimate. The host adds them
  * to the film in the order (sample index, work-item, record) (spectrace.engine.light_tracer). The arguments are the
- * light tracer's, so the same host code drives both; scene_sphere and hide_environment are unused (the host refuses
- * distant and environment lights for this integrator). */
+ * light tracer's, so the same host code drives both. */
 #include "kernel_entry.h"
 #include "pixel_sample.cl"
 #include "bdpt.cl"
@@ -20,7 +19,7 @@ KERNEL void bdpt_pass(SCENE_KERNEL_PARAMS, SPLAT_PASS_PARAMS)
     SplatRecords records = slot_splat_records(slot, record_begin, capacity, splat_xyz, splat_pixel, splat_band_value,
                                               splat_band, splat_film);
     uint rays_traced = 0;
-    trace_bdpt(&scene, item, sample_index, cmf, &records, &rays_traced);
+    trace_bdpt(&scene, item, sample_index, scene_sphere, hide_environment, cmf, &records, &rays_traced);
     splat_counts[slot] = records.count;
     if (record_begin == 0) ray_counts[item] += rays_traced;
 }

@@ -145,3 +145,37 @@ def test_a_light_traced_medium_keeps_its_bits_however_split(tmp_path, device, in
     split = Renderer(scene, device)
     split.render(spp=8, pass_spp=3)
     assert np.array_equal(whole.image().xyz, split.image().xyz)
+
+
+# The fog box lit from outside by a sky (constant environment) and a sun (distant light): lights at infinity, whose
+# BDPT subpaths start outside the scene and whose joins carry the transmittance to infinity through the fog.
+FOG_UNDER_SKY = FOG.replace(
+    "</scene>",
+    '<emitter type="constant"><rgb name="radiance" value="0.3, 0.3, 0.3"/></emitter>\n'
+    '<emitter type="directional"><vector name="direction" value="0.3, 0.4, -1"/>'
+    '<rgb name="irradiance" value="2, 2, 2"/></emitter>\n</scene>',
+)
+
+
+def test_bdpt_and_the_path_tracer_agree_on_fog_under_a_sky_and_a_sun(tmp_path, device):
+    """The fog scene with a constant environment and a distant light added: BDPT's and the path tracer's 4 x 4 blocks
+    of 4 x 4 pixels and image means within 5 standard errors of the replicas. A join to a light at infinity that
+    skipped the fog's transmittance, or an environment vertex inside the fog without the flight's weight, would be
+    too bright."""
+    path = tmp_path / "fog_sky.xml"
+    path.write_text(FOG_UNDER_SKY)
+    scene = load_mitsuba_scene(path)
+    replicas, replica_spp, block = 8, 16, 4
+    ours = {
+        kind: spectrace_replicas(Renderer(scene.with_overrides(integrator=kind), device), replicas, replica_spp)
+        for kind in ("bdpt", "path")
+    }
+    n = 16 // block
+    for reduce in (
+        lambda images: images.reshape(replicas, n, block, n, block, 3).mean(axis=(2, 4)),
+        lambda images: images.mean(axis=(1, 2)),
+    ):
+        a, b = reduce(ours["bdpt"]), reduce(ours["path"])
+        difference = a.mean(axis=0) - b.mean(axis=0)
+        standard_error = np.sqrt(a.var(axis=0, ddof=1) / replicas + b.var(axis=0, ddof=1) / replicas)
+        assert np.all(np.abs(difference) <= 5 * standard_error), np.max(np.abs(difference) / standard_error)

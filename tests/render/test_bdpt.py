@@ -10,10 +10,16 @@
   irradiance I T² Σ R^{2k}/(d − t + (2k + 1)t/n)² (tests/render/test_light_tracer.py).
 - The Cornell box, a textured scene and a dispersive glass sphere: BDPT's and the path tracer's images agree within
   noise (block means, 5 standard errors from independent replicas).
+- Lights at infinity and lens cameras: a scene of a distant light, a constant environment and an emitting sphere over
+  rough glass, a smooth-shaded cube and plastic (tests/render/test_light_tracer.py's), seen through the pinhole,
+  the thin lens and the orthographic camera, with an environment map for the constant environment, and a spot
+  light's slide: BDPT's and the path tracer's images agree
+  within noise. (tests/render/test_light_traced_cameras.py holds BDPT's lens cameras to the floor's closed form.)
 - The same seed gives the same bits however the render is split into passes.
 """
 
 import dataclasses
+import re
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +32,10 @@ from tests.render.test_light_tracer import (
     INTENSITY,
     IOR,
     THICKNESS,
+    _camera,
     _floor_scene,
     _furnace_box,
+    _mixed_scene,
     _slab_scene,
     _textured_scene,
     _write,
@@ -38,6 +46,7 @@ from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine import light_tracer
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.io.exr import write_exr
 from spectrace.resources import resolve_scene_path
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
@@ -219,15 +228,13 @@ def test_pass_split_gives_the_same_bits(device, tmp_path, monkeypatch):
     np.testing.assert_array_equal(one_pass, relaunched)
 
 
-@pytest.mark.parametrize(
-    ("extra", "match"),
-    [
-        ('\n[[lights]]\ntype = "distant"\ndirection = [0, 0, -1]\nirradiance = { value = 1 }\n', "'distant' lights"),
-    ],
-)  # fmt: skip
-def test_refusals_in_one_line(device, tmp_path, extra, match):
-    scene = spectrace.load_scene(_write(tmp_path, _floor_scene(tmp_path, "bdpt").read_text() + extra))
-    with pytest.raises(SpectraceError, match=match) as error:
+def test_refusals_in_one_line(device, tmp_path):
+    # The equirectangular camera's importance is over the sphere of directions: kernels/bdpt.cl's camera vertex and
+    # MIS densities are the film-plane cameras' (media, lights at infinity and lens cameras are all taken now).
+    text = _floor_scene(tmp_path, "bdpt").read_text().replace("[camera]\n", '[camera]\ntype = "equirectangular"\n')
+    text = re.sub(r"\nfov = [^\n]*", "", text)  # an equirectangular camera has no field of view
+    scene = spectrace.load_scene(_write(tmp_path, text))
+    with pytest.raises(SpectraceError, match="'equirectangular'") as error:
         Renderer(scene, device)
     assert "\n" not in str(error.value)
 
@@ -243,28 +250,103 @@ def test_unbounded_depth_refused(device, tmp_path):
     [
         ({"pixel_filter": spectrace.PixelFilter("gaussian")}, 0, "gaussian filter"),
         ({}, 4, "spectral bands"),
-        ({"camera_type": "thinlens"}, 0, "pinhole"),
     ],
 )
 def test_what_the_light_tracer_has_but_bdpt_has_not_is_refused(device, tmp_path, changes, spectral_bins, match):
-    """The light tracer's filter spreads, spectral bands and lens cameras are not in BDPT's kernels."""
+    """The light tracer's filter spreads and spectral bands are not in BDPT's kernels."""
     scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt"))
-    camera_type = changes.pop("camera_type", None)
-    if camera_type:
-        changes["camera"] = dataclasses.replace(
-            scene.camera, type=camera_type, aperture_radius=0.01, focus_distance=1.0
-        )
     with pytest.raises(SpectraceError, match=match) as error:
         Renderer(scene.with_overrides(**changes), device, spectral_bins=spectral_bins)
     assert "\n" not in str(error.value)
 
 
-def test_a_spot_lights_slide_is_refused(device, tmp_path):
-    """kernels/bdpt.cl weighs a spot by its falloff alone, so a slide (Mitsuba's spot texture) must not pass unseen."""
-    scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt"))
-    spot = spectrace.spot_light(
-        (0.0, 0.0, 2.0), (0.0, 0.0, 0.0), 30.0, intensity=1.0, slide=spectrace.bitmap(np.full((2, 2, 3), 0.5))
+def _slide_scene(tmp_path: Path, integrator: str):
+    """The floor under a spot light whose slide (a 2 × 2 image of different colours) projects onto it."""
+    scene = spectrace.load_scene(_floor_scene(tmp_path, integrator)).with_overrides(seed=3)
+    pixels = np.array([[[0.9, 0.2, 0.1], [0.1, 0.8, 0.2]], [[0.2, 0.3, 0.9], [0.7, 0.7, 0.7]]])
+    spot = spectrace.spot_light((0.3, -0.2, 1.0), (0.3, -0.2, 0.0), 40.0, intensity=2.0, slide=spectrace.bitmap(pixels))
+    return scene.with_overrides(lights=[spot])
+
+
+def test_a_spot_lights_slide_agrees_with_the_path_tracer(device, tmp_path):
+    path = spectrace_replicas(Renderer(_slide_scene(tmp_path, "path"), device), 8, 8)
+    bdpt = spectrace_replicas(Renderer(_slide_scene(tmp_path, "bdpt"), device), 8, 8)
+    assert path.mean() > 0.01
+    assert_replicas_agree(bdpt, path, block=8)
+
+
+CAMERAS = {  # each replaces the pinhole's field of view
+    "pinhole": "fov = 30\n",
+    "thinlens": 'fov = 30\ntype = "thinlens"\naperture_radius = 0.08\nfocus_distance = 1.6\n',
+    "orthographic": 'type = "orthographic"\nview_width = 1.4\n',
+}
+
+
+def _lights_at_infinity(tmp_path: Path, integrator: str, target: str, camera: str, sky: bool = False):
+    """test_light_tracer.py's scene of a distant light, a constant environment (seen past the objects) and an
+    emitting sphere, seen through `camera`; sky: an environment map with a small bright sun instead of the constant
+    environment (its importance sampling's density in the MIS weights)."""
+    text = _mixed_scene(tmp_path, integrator, target).read_text().replace("fov = 30\n", CAMERAS[camera])
+    if sky:
+        rgb = np.random.default_rng(4).uniform(0.0, 0.2, (8, 16, 3)).astype(np.float32)
+        rgb[2, 5] = (30.0, 25.0, 10.0)
+        write_exr(tmp_path / "sky.exr", rgb, None, {})
+        constant = 'type = "constant"\nradiance = { value = 0.1 }'
+        assert constant in text
+        text = text.replace(constant, 'type = "envmap"\nfile = "sky.exr"\nscale = 0.5')
+    return spectrace.load_scene(_write(tmp_path, text))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("target", "camera", "sky"),
+    [
+        ("[-0.5, 0.45, 0]", "pinhole", False),
+        ("[0.6, 0.3, -0.3]", "thinlens", False),
+        ("[0, 0.3, 0]", "orthographic", False),
+        ("[0, 0.3, 0]", "pinhole", True),
+    ],
+    ids=["rough-glass", "cube-thin-lens", "orthographic", "environment-map"],
+)
+def test_lights_at_infinity_and_lens_cameras_agree_with_the_path_tracer(device, tmp_path, target, camera, sky):
+    path = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "path", target, camera, sky), device), 8, 16)
+    bdpt = spectrace_replicas(Renderer(_lights_at_infinity(tmp_path, "bdpt", target, camera, sky), device), 8, 16)
+    assert path.mean() > 0.05
+    assert_replicas_agree(bdpt, path, block=4)
+
+
+@pytest.mark.parametrize("hidden", [False, True])
+def test_environment_seen_directly(device, tmp_path, hidden):
+    """Nothing but a constant environment of radiance 0.3: every pixel sees exactly it (the camera path's own
+    vertex at infinity, weight 1), or nothing when hidden."""
+    text = (
+        _camera("[0, 0, 0]", "[0, 0, -1]", 60, 8)
+        + f"""
+[integrator]
+type = "bdpt"
+max_depth = 3
+hide_environment = {"true" if hidden else "false"}
+
+[materials.grey]
+type = "diffuse"
+reflectance = {{ value = 0.5 }}
+
+[[lights]]
+type = "constant"
+radiance = {{ value = 0.3 }}
+"""
     )
-    with pytest.raises(SpectraceError, match="slide") as error:
-        Renderer(scene.with_overrides(lights=[*scene.lights, spot]), device)
-    assert "\n" not in str(error.value)
+    y = Renderer(spectrace.load_scene(_write(tmp_path, text)), device).render(spp=64).xyz[..., 1]
+    if hidden:
+        assert np.all(y == 0.0)
+    else:
+        mean, standard_error = mean_and_standard_error(y.ravel())
+        assert standard_error < 0.01 * 0.3
+        assert_within_standard_errors(mean, 0.3, standard_error)
+
+
+def test_lights_at_infinity_and_a_thin_lens_split_into_passes_give_the_same_bits(device, tmp_path):
+    scene = _lights_at_infinity(tmp_path, "bdpt", "[0.6, 0.3, -0.3]", "thinlens").with_overrides(spp=4)
+    one_pass = Renderer(scene, device).render(pass_spp=4).xyz
+    split = Renderer(scene, device).render(pass_spp=1).xyz
+    np.testing.assert_array_equal(one_pass, split)

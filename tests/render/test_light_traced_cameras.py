@@ -1,4 +1,4 @@
-"""The light tracer's connections to the thin-lens and orthographic cameras, against the floor's radiance.
+"""The light tracer's and BDPT's connections to the thin-lens and orthographic cameras, against the floor's radiance.
 
 A spot light of intensity I at height h over a diffuse floor of albedo ρ, pointing down with a cone of 80° (wider
 than the view; its intensity constant within), gives the floor the radiance ρ/π · I h / r³ (r the distance to the
@@ -115,8 +115,11 @@ def _expected_thin_lens(scene, supersample: int = 4, lens_rings: int = 12, lens_
     return _blocks(total / (lens_rings * lens_spokes), supersample)
 
 
+@pytest.mark.parametrize("integrator", ["light", "bdpt"])
 @pytest.mark.parametrize("camera", ["orthographic", "thinlens"])
-def test_floor_seen_through_other_cameras(device, tmp_path, camera):
+def test_floor_seen_through_other_cameras(device, tmp_path, camera, integrator):
+    """The light tracer's connections alone; BDPT's weighed against next-event estimation from the camera's
+    vertices (MIS over both)."""
     if camera == "orthographic":
         scene = spectrace.load_scene(_scene(tmp_path, f'type = "orthographic"\nview_width = {VIEW_WIDTH}'))
         expected = _expected_orthographic(scene)
@@ -124,6 +127,7 @@ def test_floor_seen_through_other_cameras(device, tmp_path, camera):
         keys = f'type = "thinlens"\nfov = 50\naperture_radius = {APERTURE}\nfocus_distance = {FOCUS}'
         scene = spectrace.load_scene(_scene(tmp_path, keys))
         expected = _expected_thin_lens(scene)
+    scene = scene.with_overrides(integrator=integrator)
     images = spectrace_replicas(Renderer(scene, device), 8, 16)[..., 1]
     n = SIZE // BLOCK
     blocks = images.reshape(len(images), n, BLOCK, n, BLOCK).mean(axis=(2, 4))

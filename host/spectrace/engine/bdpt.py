@@ -3,12 +3,10 @@ tracer's limits. Its passes are the light tracer's (spectrace.engine.light_trace
 records (its light-to-camera connections, then its own pixel's estimate) that the host adds to the film in a fixed
 order."""
 
-from spectrace.lights import light_module
 from spectrace.scene.model import Scene
 
 # Subpaths live in fixed arrays in the kernel (kernels/bdpt.cl's BDPT_MAX_SEGMENTS).
 BDPT_MAX_SEGMENTS = 16
-_AT_INFINITY = ("distant", "constant", "envmap")
 
 
 def bdpt_problem(scene: Scene) -> str | None:
@@ -18,11 +16,8 @@ def bdpt_problem(scene: Scene) -> str | None:
             f"integrator 'bdpt' keeps paths of at most {BDPT_MAX_SEGMENTS} segments: "
             f"set integrator.max_depth between 1 and {BDPT_MAX_SEGMENTS}, not {scene.max_depth}"
         )
-    for light in scene.lights:
-        name = light_module(light).NAME
-        if name in _AT_INFINITY:
-            return f"integrator 'bdpt' does not take {name!r} lights yet (lights at infinity); use 'light' or 'path'"
-        if name == "spot" and getattr(light, "slide", None) is not None:
-            # kernels/bdpt.cl weighs a spot by its falloff alone: its slide would be left out without a word.
-            return "integrator 'bdpt' does not take a spot light's slide yet; use 'light' or 'path'"
+    if scene.camera.type == "equirectangular":
+        # Its importance is over the sphere of directions: kernels/bdpt.cl's eye vertex and MIS densities are the
+        # film-plane cameras'.
+        return "integrator 'bdpt' supports the perspective, thinlens and orthographic cameras, not 'equirectangular'"
     return None

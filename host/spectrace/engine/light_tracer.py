@@ -70,15 +70,26 @@ def filter_spread(pixel_filter, film: np.ndarray, width: int, height: int) -> tu
     return pixel.reshape(len(film), k * k), weight.reshape(len(film), k * k)
 
 
+def add_in_order(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """target[index[k]] += values[k] for k = 0, 1, ... in that order (np.add.at's float sums). A C-contiguous 2-D
+    target is added to as its flattened elements, since np.add.at's fast path is for 1-D arrays (measured 2.8 times
+    faster on BDPT's records than on the rows); each element still adds its values one after another, so the bits
+    are the same. Other targets take np.add.at as they are."""
+    if target.ndim == 1 or not target.flags.c_contiguous or len(index) == 0:
+        np.add.at(target, index, values)
+        return
+    width = target.shape[1]
+    flat = (index.astype(np.intp)[:, None] * width + np.arange(width)).ravel()
+    np.add.at(target.reshape(-1), flat, values.reshape(-1))
+
+
 def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the light tracer cannot render this scene as asked, or None."""
     name = scene.integrator  # 'light', or 'bdpt', which shares these limits
     camera_type = scene.camera.type
     if name == "bdpt":
-        # BDPT joins its subpaths at the pinhole and adds whole-pixel records: the light tracer's lens cameras,
-        # spectral bands and filter spreads are not in its kernels.
-        if camera_type != "perspective":
-            return f"integrator 'bdpt' supports the perspective (pinhole) camera only, not {camera_type!r}"
+        # BDPT adds its own pixel's strategies as whole-pixel records: the light tracer's spectral bands and filter
+        # spreads are not in its kernels.
         if spectral_bins:
             return "integrator 'bdpt' does not write spectral bands yet; render without spectral output or use 'path'"
         if scene.pixel_filter.type != "box":
@@ -247,10 +258,10 @@ class LightPasses:
                 pixel, xyz = pixel[nonzero], xyz[nonzero]
                 if bins:
                     band_value, band = band_value[nonzero].astype(np.float32), band[nonzero]
-                np.add.at(sums[:, :3], pixel, xyz)
+                np.add.at(sums[:, :3], pixel, xyz)  # strided rows: kept as they were
             else:
-                # ufunc.at adds unbuffered, one record after another in this order: the same float sums every time.
-                np.add.at(sums, pixel, xyz)
+                # One record after another in this order: the same float sums every time.
+                add_in_order(sums, pixel, xyz)
             if bins:
                 # Record by record, lane by lane within one, as add_to_spectral_film adds a camera path's lanes.
                 inside = band >= 0
