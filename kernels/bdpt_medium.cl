@@ -78,11 +78,7 @@ inline int bdpt_medium_step(const Scene *scene, const SampledWavelengths *w, Sam
 {
     if (!SCENE_HAS_MEDIA || s->medium < 0) return 0;
     __global const Medium *medium = &scene->media[s->medium];
-    float u_lane = sample_1d(sampler);
-    float u_distance = sample_1d(sampler);
-    FreeFlight flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane,
-                                             u_distance);
-    s->throughput *= flight.weight;
+    FreeFlight flight = path_free_flight(scene, w, sampler, s, medium, hit_t);
     *scatter *= flight.weight;
     if (all(s->throughput == (float4)(0.0f))) return -1;
     if (!flight.scattered) return 0;

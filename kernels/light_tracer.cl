@@ -157,6 +157,28 @@ inline int light_path_survives(PathState *s, float4 *scatter, __global const Ren
     return any(s->throughput != (float4)(0.0f));
 }
 
+/* Continues light path s from its surface vertex v along a direction drawn from v's material, weighted by the
+ * adjoint BSDF (this file's header), then Russian roulette (light_path_survives): the light tracer's walk and
+ * SPPM's photons go on alike. Returns 0 when the path ends. */
+inline int continue_light_path(const PathVertex *v, __global const Material *material, const SurfaceContext *sc,
+                               const SampledWavelengths *w, __global const RenderParams *params, Sampler *sampler,
+                               PathState *s, float4 *scatter)
+{
+    float uc = sample_1d(sampler);
+    float2 u = sample_2d(sampler);
+    BSDFSample bs;
+    if (!material_sample(material, sc, w, v->ns, v->wo, uc, u, &bs) || !shading_side_agrees(v->n, v->ns, bs.wi))
+        return 0;
+    float4 weight = bs.weight * (shading_normal_adjoint(v->n, v->ns, v->wo, bs.wi) / bs.radiance_scale);
+    s->throughput *= weight;
+    *scatter *= weight;
+    s->previous_point = v->p;
+    s->medium = medium_beyond(v->info.interior, v->n, bs.wi, s->medium);
+    s->ray.origin = offset_ray_origin(v->p, v->n, bs.wi);
+    s->ray.direction = bs.wi;
+    return light_path_survives(s, scatter, params, sampler);
+}
+
 /* Inside a medium, the light path's flight toward the surface at hit_t may end at a scattering point x (a vertex,
  * numbered s->segments like a surface's): x is connected to the camera (the phase function toward it, the media's
  * transmittance on the way) and the path goes on in a direction drawn from the phase function, *scattered = 1.
@@ -169,11 +191,7 @@ inline int scatter_light_in_medium(const Scene *scene, const SampledWavelengths 
     if (!SCENE_HAS_MEDIA || s->medium < 0) return 1;
     __global const RenderParams *params = scene->params;
     __global const Medium *medium = &scene->media[s->medium];
-    float u_lane = sample_1d(sampler);
-    float u_distance = sample_1d(sampler);
-    FreeFlight flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane,
-                                             u_distance);
-    s->throughput *= flight.weight;
+    FreeFlight flight = path_free_flight(scene, w, sampler, s, medium, hit_t);
     *scatter *= flight.weight;
     if (!flight.scattered) return any(s->throughput != (float4)(0.0f));
     *scattered = 1;
@@ -277,19 +295,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
             }
         }
         if (s.segments + 2 > last_segment) return;
-        float uc = sample_1d(&sampler);
-        float2 u = sample_2d(&sampler);
-        BSDFSample bs;
-        if (!material_sample(material, &sc, &w, v.ns, v.wo, uc, u, &bs) || !shading_side_agrees(v.n, v.ns, bs.wi))
-            return;
-        float4 weight = bs.weight * (shading_normal_adjoint(v.n, v.ns, v.wo, bs.wi) / bs.radiance_scale);
-        s.throughput *= weight;
-        scatter *= weight;
-        s.previous_point = v.p;
-        s.medium = medium_beyond(v.info.interior, v.n, bs.wi, s.medium);
-        s.ray.origin = offset_ray_origin(v.p, v.n, bs.wi);
-        s.ray.direction = bs.wi;
-        if (!light_path_survives(&s, &scatter, params, &sampler)) return;
+        if (!continue_light_path(&v, material, &sc, &w, params, &sampler, &s, &scatter)) return;
         ++s.segments;
     }
 }

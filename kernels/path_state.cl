@@ -57,6 +57,20 @@ inline PathState camera_path(Ray ray)
     return s;
 }
 
+/* One free flight of s through its medium toward the surface at hit_t, the same for camera paths, light paths
+ * and BDPT subpaths, so that the three draw their numbers alike: medium_sample_flight's lane then distance, the
+ * flight's weight taken into s->throughput. The caller has checked that s is in a medium. */
+inline FreeFlight path_free_flight(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                                   __global const Medium *medium, float hit_t)
+{
+    float u_lane = sample_1d(sampler);
+    float u_distance = sample_1d(sampler);
+    FreeFlight flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane,
+                                             u_distance);
+    s->throughput *= flight.weight;
+    return flight;
+}
+
 /* A query of the path's from its current vertex (opacity_query): the segment and the boundaries crossed within it
  * tell its queries apart even where no draw lies between them (a material-less boundary crossed outside media). */
 inline uint path_query(const Sampler *sampler, const PathState *s, uint kind)

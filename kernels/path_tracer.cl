@@ -29,11 +29,7 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     *ended = 0;
     if (!SCENE_HAS_MEDIA || s->medium < 0) return 0;
     __global const Medium *medium = &scene->media[s->medium];
-    float u_lane = sample_1d(sampler);
-    float u_distance = sample_1d(sampler);
-    FreeFlight flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane,
-                                             u_distance);
-    s->throughput *= flight.weight;
+    FreeFlight flight = path_free_flight(scene, w, sampler, s, medium, hit_t);
     if (!flight.scattered) return 0;
     if (s->segments >= last_segment) {
         *ended = 1;

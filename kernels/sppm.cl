@@ -117,26 +117,7 @@ inline void trace_photon(const Scene *scene, int stream, int sample_index, const
         }
         if (s.segments + 2 > last_segment) return;
         SurfaceContext sc = surface_context(scene, v.uv, v.footprint);
-        float uc = sample_1d(&sampler);
-        float2 u = sample_2d(&sampler);
-        BSDFSample bs;
-        if (!material_sample(material, &sc, w, v.ns, v.wo, uc, u, &bs) || !shading_side_agrees(v.n, v.ns, bs.wi))
-            return;
-        /* The adjoint BSDF's weight, as the light tracer's (light_tracer.cl's header). */
-        float4 weight = bs.weight * (shading_normal_adjoint(v.n, v.ns, v.wo, bs.wi) / bs.radiance_scale);
-        s.throughput *= weight;
-        scatter *= weight;
-        s.previous_point = v.p;
-        s.medium = medium_beyond(v.info.interior, v.n, bs.wi, s.medium);
-        s.ray.origin = offset_ray_origin(v.p, v.n, bs.wi);
-        s.ray.direction = bs.wi;
-        if (s.segments >= params->rr_depth) {
-            float q = fmin(fmax(fmax(scatter.x, scatter.y), fmax(scatter.z, scatter.w)), 0.95f);
-            if (!(sample_1d(&sampler) < q)) return;
-            s.throughput /= q;
-            scatter /= q;
-        }
-        if (all(s.throughput == (float4)(0.0f))) return;
+        if (!continue_light_path(&v, material, &sc, w, params, &sampler, &s, &scatter)) return;
         ++s.segments;
     }
 }
