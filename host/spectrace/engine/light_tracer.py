@@ -125,6 +125,14 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
     return None
 
 
+def refuse_tiles(renderer: Any, what: str) -> None:
+    """One line when a renderer of the splatting integrators (light, bdpt, sppm) was given a tile: `what` (splats,
+    photons) lands in any pixel, so only a whole film is right."""
+    if tuple(getattr(renderer, "pixel_range", (0, renderer.pixel_count))) != (0, renderer.pixel_count):
+        name = renderer.scene.integrator
+        raise SpectraceError(f"integrator '{name}' renders whole films, not tiles: its {what} land in any pixel")
+
+
 class LightPasses:
     """The passes of a `light` scene's Renderer (spectrace.engine.renderer), which built the program and the film and
     hands its run_pass here."""
@@ -230,8 +238,7 @@ class LightPasses:
     def run_pass(self, sample_count: int) -> None:
         """Adds `sample_count` pixel samples' light paths to the renderer's film (its run_pass, translated errors)."""
         r = self.renderer
-        if tuple(getattr(r, "pixel_range", (0, r.pixel_count))) != (0, r.pixel_count):
-            raise SpectraceError("integrator 'light' renders whole films, not tiles: its splats land in any pixel")
+        refuse_tiles(r, "splats")
         queue = r.device.queue
         film = r.film
         done = film.samples_done

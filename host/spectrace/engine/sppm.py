@@ -19,7 +19,7 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.engine.launch import launch_shape
-from spectrace.engine.light_tracer import scene_sphere
+from spectrace.engine.light_tracer import refuse_tiles, scene_sphere
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.scene_buffers import render_params
 from spectrace.errors import SpectraceError
@@ -191,8 +191,7 @@ class SppmPasses:
     def run_pass(self, sample_count: int) -> None:
         """Runs `sample_count` iterations (the renderer's run_pass, translated errors)."""
         r = self.renderer
-        if tuple(getattr(r, "pixel_range", (0, r.pixel_count))) != (0, r.pixel_count):
-            raise SpectraceError("integrator 'sppm' renders whole films, not tiles: its photons land in any pixel")
+        refuse_tiles(r, "photons")
         queue = r.device.queue
         film = r.film
         done = film.samples_done
