@@ -57,13 +57,21 @@ from spectrace.interop.pbrt_parser import (
 from spectrace.io.output_files import check_output_file
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
-MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface", "mix")
+MATERIALS = (
+    "diffuse",
+    "conductor",
+    "dielectric",
+    "thindielectric",
+    "coateddiffuse",
+    "diffusetransmission",
+    "interface",
+    "mix",
+)
 LIGHTS = ("point", "spot", "distant", "infinite")
 AREA_LIGHTS = ("diffuse",)
 TEXTURES = ("imagemap", "checkerboard", "constant")
 # Materials spectrace has no counterpart for, refused with this reason.
 _NO_EQUIVALENT = {
-    "diffusetransmission": "spectrace has no diffuse transmission",
     "coatedconductor": "spectrace has no coated conductor",
     "measured": "spectrace has no measured BRDFs",
     "hair": "spectrace has no hair model",
@@ -731,6 +739,8 @@ class PbrtImporter:
             if "glass" in eta_table or "glass" in k:
                 raise error(material.location, "a glass's index given as a conductor's eta or k")
             return table | self._rough(material)
+        if kind == "diffusetransmission":
+            return self.diffuse_transmission(material)
         eta: float | str = self.ior(material)
         if kind == "dielectric":
             return {"type": "dielectric", "ior": eta} | self._rough(material)
@@ -758,6 +768,28 @@ class PbrtImporter:
         } | self._rough(material)
         if "roughness" in table:
             table["coat_transmission"] = "rough"
+        return table
+
+    def diffuse_transmission(self, material: Entity) -> dict:
+        """pbrt-v4's DiffuseTransmissionMaterial: Lambertian reflection and transmission, `reflectance` and
+        `transmittance` (defaults 0.25 each) both multiplied by `scale` (default 1), as spectrace's
+        `diffusetransmission`."""
+        factor = self.one(material, "scale", 1.0)
+        table: dict = {"type": "diffusetransmission"}
+        for key in ("reflectance", "transmittance"):
+            value = self.reflectance(material, key, 0.25)
+            if factor != 1.0:
+                if "value" in value:
+                    value = {"value": value["value"] * factor}
+                elif "rgb" in value:
+                    value = {"rgb": [c * factor for c in value["rgb"]]}
+                else:
+                    raise error(
+                        material.location,
+                        f'diffusetransmission "scale" {factor:g} on a {key} that is not a number or rgb: spectrace '
+                        "scales only those",
+                    )
+            table[key] = value
         return table
 
     def mix_table(self, material: Entity) -> dict | None:
