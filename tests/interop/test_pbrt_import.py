@@ -528,7 +528,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     [
         ('Material "mix"\nShape "sphere"\n', 5, 'Material "mix" needs "string materials" naming two materials'),
         ('Material "thindielectric" "spectrum eta" "glass-BK7"\nShape "sphere"\n', 5, "eta must be a number"),
-        ('Material "diffusetransmission"\nShape "sphere"\n', 5, "spectrace has no diffuse transmission"),
+        ('Material "coatedconductor"\nShape "sphere"\n', 5, "spectrace has no coated conductor"),
         ('Shape "curve"\n', 5, "shape 'curve'"),
         ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),
         ('LightSource "goniometric"\n', 5, "light 'goniometric'"),
