@@ -55,6 +55,7 @@ from spectrace.interop.pbrt_parser import (
     shown,
 )
 from spectrace.io.output_files import check_output_file
+from spectrace.spectral.metals import METALS as SPECTRACE_METALS
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
 MATERIALS = (
@@ -79,8 +80,17 @@ _NO_EQUIVALENT = {
 }
 # Unbiased integrators that converge to the path tracer's image.
 _SAME_IMAGE_INTEGRATORS = ("bdpt", "mlt", "sppm", "lightpath", "randomwalk")
-_METALS = ("Ag", "Al", "Au", "Cu")  # pbrt's metal-X-eta / metal-X-k that spectra/metals holds
-_GLASSES = {"glass-BK7": "N-BK7", "glass-F11": "N-SF11"}  # spectra/glasses/sellmeier.csv notes which pbrt table each is
+_METALS = ("Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2")  # pbrt's metal-X-eta / metal-X-k: spectra/metals/X.csv
+# pbrt-v4's named glasses; spectra/glasses/sellmeier.csv notes how close each of pbrt's tables is to the formula.
+_GLASSES = {
+    "glass-BK7": "N-BK7",
+    "glass-BAF10": "N-BAF10",
+    "glass-FK51A": "N-FK51A",
+    "glass-LASF9": "N-LASF9",
+    "glass-F5": "N-SF5",
+    "glass-F10": "N-SF10",
+    "glass-F11": "N-SF11",
+}
 _ILLUMINANTS = {"stdillum-A": "A", "stdillum-D50": "D50", "stdillum-D65": "D65"} | {
     f"stdillum-F{i}": f"FL{i}" for i in range(1, 13)
 }
@@ -732,8 +742,9 @@ class PbrtImporter:
             k = self.spectrum(material, "k", "unbounded") or {"spectrum": "metals/Cu:k"}
             table: dict[str, object] = {"type": "conductor"}
             metals = {s.get("spectrum", "").split(":")[0] for s in (eta_table, k)}
-            if len(metals) == 1 and metals != {""} and next(iter(metals)).startswith("metals/"):
-                table["metal"] = next(iter(metals)).removeprefix("metals/")
+            metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
+            if metal in SPECTRACE_METALS:
+                table["metal"] = metal
             else:
                 table |= {"eta": eta_table, "k": k}
             if "glass" in eta_table or "glass" in k:
