@@ -595,9 +595,19 @@ class PbrtImporter:
         """pbrt's `scale` texture: `tex` times a number. A scaled spectrum stays a spectrum; a scaled image becomes a
         linear OpenEXR copy of it, multiplied, beside the TOML (pbrt scales the uplifted spectrum, spectrace uplifts
         the scaled colour: the same colour under D65, docs/pbrt.md)."""
-        if (factor_texture := texture.find("scale", "texture")) is not None:
-            raise error(factor_texture.location, f'{texture.label()}: a texture as "scale" (spectrace takes a number)')
+        value_type = next(t.value_type for t in self.scene.textures.values() if t.entity is texture)
         factor = self.one(texture, "scale", 1.0)
+        if (factor_texture := texture.find("scale", "texture")) is not None:
+            # A constant float texture as the factor is its number (pbrt-v4's scenes write scales so).
+            key = ("float", str(factor_texture.values[0]))
+            constant = self.scene.textures.get(key)
+            if constant is None or constant.entity.kind != "constant":
+                raise error(
+                    factor_texture.location,
+                    f'{texture.label()}: a texture as "scale" other than a constant one (spectrace takes a number)',
+                )
+            self.read.add(id(constant.entity))
+            factor = self.one(constant.entity, "value", 1.0)
         if factor < 0:
             raise error(texture.location, f"{texture.label()}: a negative scale")
         inner = self.spectrum(texture, "tex", "albedo")
@@ -606,7 +616,7 @@ class PbrtImporter:
             if reference is None:
                 inner = {"value": 1.0}
             else:
-                key = ("spectrum", str(reference.values[0]))
+                key = (value_type, str(reference.values[0]))
                 if key not in self.scene.textures:
                     raise error(
                         reference.location, f"\"texture tex\" names '{shown(key[1])}', which no Texture defined"
@@ -680,8 +690,13 @@ class PbrtImporter:
         if table["texture"] != "bitmap":
             raise error(parameter.location, f'"{parameter.label()}": spectrace takes an imagemap or a constant here')
         source = (self.toml_folder / table["file"]).resolve()
-        values, encoded = read_texture_image(source, str(texture.location))
-        roughness = np.clip(decoded(values, encoded, bool(table.get("raw", False))).mean(axis=-1), 0.0, None)
+        written = str(table["file"]).removeprefix(f"{self.mesh_folder}/")
+        if written in self.files:  # a scaled image this import made (a `scale` texture): not on disk yet
+            linear = np.asarray(self.files[written], np.float64)
+        else:
+            values, encoded = read_texture_image(source, str(texture.location))
+            linear = decoded(values, encoded, bool(table.get("raw", False)))
+        roughness = np.clip(linear.mean(axis=-1), 0.0, None)
         alpha = np.minimum(np.sqrt(roughness) if remap else roughness, 1.0)
         file = _name(f"{source.stem}_alpha", {Path(n).stem for n in self.files}) + ".tif"
         self.files[file] = alpha.astype(np.float32)
