@@ -313,11 +313,14 @@ Shape "sphere"
 Material "coateddiffuse" "float roughness" 0.09
 Shape "sphere"
 """
-    data, _ = pbrt_scene_data(_write(tmp_path, body))
+    data, importer = pbrt_scene_data(_write(tmp_path, body))
     materials = list(data["materials"].values())
     assert materials[0] == {"type": "conductor", "metal": "Ag", "roughness": pytest.approx(0.2)}  # sqrt(0.04)
     assert materials[1]["eta"] == {"spectrum": "metals/Au:eta"}
-    assert materials[1]["k"]["values"][1:3] == [[400.0, 2.0], [700.0, 3.0]]
+    # An index given over 400-700 nm holds its end values beyond (pbrt's zero there would be no index: a metal of
+    # η = k = 0 reflects everything), with a note.
+    assert materials[1]["k"]["values"] == [[400.0, 2.0], [700.0, 3.0]]
+    assert any("400-700 nm" in note for note in importer.notes)
     assert materials[2] == {"type": "dielectric", "ior": "N-SF11", "roughness": 0.01}
     # pbrt's random walk between coat and base meets the albedo at every return: the plastic's nonlinear series.
     assert materials[3] == {"type": "plastic", "reflectance": {"rgb": [0.2, 0.3, 0.4]}, "ior": 1.4, "nonlinear": True}

@@ -270,15 +270,24 @@ class PbrtImporter:
             return {"blackbody": float(values[0])}
         if isinstance(values[0], str):
             return self.named_spectrum(values[0], parameter.location, role, parameter.label())
-        return {"values": self.pairs([float(v) for v in values], parameter.location, parameter.label())}
+        return {"values": self.pairs([float(v) for v in values], parameter.location, parameter.label(), role)}
 
-    def pairs(self, numbers: list[float], location: Location, label: str) -> list[list[float]]:
+    def pairs(self, numbers: list[float], location: Location, label: str, role: str = "") -> list[list[float]]:
+        """Wavelength/value pairs as pbrt reads them: zero outside their range (spectrace holds the end values, so
+        zeros are added at the ends), except for an index of refraction (role "unbounded"), where pbrt's zero (a
+        metal of η = k = 0, a perfect mirror) is no index: the end values are held instead, with a note."""
         if len(numbers) % 2 or len(numbers) < 4:
             raise error(location, f'"{label}" needs wavelength/value pairs, at least two')
         pairs = [[numbers[i], numbers[i + 1]] for i in range(0, len(numbers), 2)]
         if any(b[0] <= a[0] for a, b in zip(pairs, pairs[1:], strict=False)):
             raise error(location, f'"{label}": wavelengths must increase')
-        # pbrt's piecewise-linear spectrum is zero outside its samples; spectrace holds the end values.
+        if role == "unbounded":
+            if pairs[0][0] > 360.0 or pairs[-1][0] < 830.0:
+                self.notes.append(
+                    f'{location}: "{label}" covers {pairs[0][0]:g}-{pairs[-1][0]:g} nm: its end values are held to '
+                    "360-830 nm (pbrt has 0 there)"
+                )
+            return pairs
         if pairs[0][0] > 360.0:
             pairs.insert(0, [pairs[0][0] - 1e-3, 0.0])
         if pairs[-1][0] < 830.0:
@@ -301,8 +310,11 @@ class PbrtImporter:
                 raise error(
                     location, f"\"{label}\": '{shown(name, 200)}' is not a file of wavelength/value pairs"
                 ) from None
-            return {"values": self.pairs(numbers, location, label)}
-        known = "metal-{Ag,Al,Au,Cu}-{eta,k}, glass-BK7, glass-F11, stdillum-{A,D50,D65,F1..F12}"
+            return {"values": self.pairs(numbers, location, label, role)}
+        known = (
+            "metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k}, glass-{BK7,BAF10,FK51A,LASF9,F5,F10,F11}, "
+            "stdillum-{A,D50,D65,F1..F12}"
+        )
         raise error(
             location, f"\"{label}\": named spectrum '{shown(name)}' has no spectrace data (spectrace maps {known})"
         )
