@@ -227,10 +227,14 @@ def scene_to_mitsuba_dict(
             entries[name] = exporter.material(shape.material)
             materials[material_key] = name
         if shape.analytic is not None:  # Mitsuba's own analytic shape, in the same object space
+            # Mitsuba turns a sphere's normals inward under a mirroring to_world (measured: an emitting sphere
+            # scaled by (-1, 1, 1) renders black from outside); spectrace's sphere faces out whatever the matrix.
+            # Its disk and cylinder keep their fronts under a mirror, as spectrace's do.
+            mirrored = shape.analytic.kind == "sphere" and np.linalg.det(shape.analytic.linear) < 0
             entry = {
                 "type": shape.analytic.kind,
                 "to_world": _transform(shape.analytic.to_world),
-                "flip_normals": shape.analytic.flip_normals,
+                "flip_normals": bool(shape.analytic.flip_normals) != bool(mirrored),
                 "bsdf": {"type": "ref", "id": materials[material_key]},
             }
         else:
