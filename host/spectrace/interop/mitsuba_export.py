@@ -216,6 +216,8 @@ def scene_to_mitsuba_dict(
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
             raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
+        if getattr(shape, "interior", None) is not None:
+            raise exporter.refuse(f"shape '{shape.name}': an interior medium is not exported yet")
         detail = shape.material.detail if shape.material is not None else None
         if detail is not None and (detail.normal_map, detail.bump_map, detail.opacity) != (None, None, 1.0):
             raise exporter.refuse(
