@@ -236,5 +236,8 @@ def test_a_shape_with_an_interior_medium_is_refused(tmp_path, mitsuba_scalar_spe
         'MakeNamedMedium "ruby" "string type" "homogeneous" "rgb sigma_a" [0.01 0.2 0.5] "rgb sigma_s" [0 0 0]\n'
         'Material "dielectric" "float eta" 1.7\nMediumInterface "ruby" ""\nShape "sphere"\n'
     )
+    from spectrace.pixel_filters import BOX_FILTER
+
+    scene = load_pbrt_scene(path).with_overrides(pixel_filter=BOX_FILTER)
     with pytest.raises(SpectraceError, match="interior medium"):
-        scene_to_mitsuba_dict(load_pbrt_scene(path), tmp_path)
+        scene_to_mitsuba_dict(scene, tmp_path)
