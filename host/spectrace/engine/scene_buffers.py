@@ -414,7 +414,8 @@ class _ObjectTriangles:
                 if shape.analytic is not None:
                     shape_rows.append(shape.analytic.device_row())
                     row = np.zeros((), TRIANGLE_INFO_DTYPE)
-                    row["material"], row["light"], row["interior"], row["normals"] = material_index[key], -1, interior, -1
+                    row["material"], row["interior"] = material_index[key], interior
+                    row["light"] = row["normals"] = -1
                     shape_info.append(row)
                     analytic_boxes.append(shape.analytic.bounds())
                     continue
