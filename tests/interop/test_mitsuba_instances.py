@@ -1,5 +1,6 @@
 """Mitsuba 3's shapegroup and instance imported as a spectrace object stored once and its instances: the instances
-see the same surfaces as Mitsuba's (ray hits), and the scene renders like Mitsuba's own rendering of the file."""
+see the same surfaces as Mitsuba's (ray hits; texture coordinates too on spheres, disks and cylinders, which stay
+exact under stretching instances), and the scene renders like Mitsuba's own rendering of the file."""
 
 import re
 from pathlib import Path
@@ -32,6 +33,45 @@ GROUP = """
 <shape type="instance"><ref id="crate"/>
   <transform name="to_world"><scale x="1.4" y="0.8" z="1.6"/><rotate z="1" angle="-50"/><translate x="-0.9" y="0.2"/>
   </transform>
+</shape>
+<shape type="rectangle" id="floor">
+  <transform name="to_world"><scale value="3"/></transform>
+  <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+</shape>
+<shape type="rectangle" id="light">
+  <transform name="to_world"><scale value="0.6"/><rotate x="1" angle="180"/><translate x="0.4" y="-0.5" z="2.2"/>
+  </transform>
+  <emitter type="area"><rgb name="radiance" value="12, 11, 10"/></emitter>
+</shape>
+<emitter type="constant"><rgb name="radiance" value="0.15, 0.17, 0.2"/></emitter>
+"""
+
+
+# Mitsuba 3's exact shapes in a shapegroup, placed under non-uniform scales, a shear and a mirror: the instance
+# stretches the sphere into an ellipsoid, the disk and cylinder into elliptic ones.
+ANALYTIC_GROUP = """
+<shape type="shapegroup" id="parts">
+  <shape type="sphere"><point name="center" x="0" y="0" z="0.35"/><float name="radius" value="0.3"/>
+    <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.7, 0.3, 0.2"/>
+      <float name="alpha" value="0.25"/></bsdf>
+  </shape>
+  <shape type="disk">
+    <transform name="to_world"><scale x="0.3" y="0.2"/><rotate x="1" angle="60"/><translate x="0.45" z="0.3"/>
+    </transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.6, 0.3"/></bsdf>
+  </shape>
+  <shape type="cylinder"><point name="p0" x="-0.5" y="0" z="0"/><point name="p1" x="-0.5" y="0" z="0.6"/>
+    <float name="radius" value="0.12"/>
+    <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.4, 0.8"/></bsdf></bsdf>
+  </shape>
+</shape>
+<shape type="instance"><ref id="parts"/></shape>
+<shape type="instance"><ref id="parts"/>
+  <transform name="to_world"><scale x="1.4" y="0.7" z="1.5"/><rotate z="1" angle="35"/><translate x="1.0" y="0.4"/>
+  </transform>
+</shape>
+<shape type="instance"><ref id="parts"/>
+  <transform name="to_world"><matrix value="-1 0.3 0 -0.9  0 1.2 0 0.1  0 0 0.8 0  0 0 0 1"/></transform>
 </shape>
 <shape type="rectangle" id="floor">
   <transform name="to_world"><scale value="3"/></transform>
@@ -149,14 +189,16 @@ def test_instanced_scene_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_s
 
 
 @pytest.mark.peer
-def test_exported_instances_are_mitsubas_shapegroups_again(tmp_path, mitsuba_scalar_spectral):
+@pytest.mark.parametrize("group", ["meshes", "analytic"])
+def test_exported_instances_are_mitsubas_shapegroups_again(tmp_path, mitsuba_scalar_spectral, group):
     """The imported scene exported back (spectrace.interop.mitsuba_export: objects as shapegroups, instances as
     instances) meets every ray where Mitsuba's own load of the file does."""
     from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
 
     mi = mitsuba_scalar_spectral
-    # The export covers the materials the peer benchmark uses: the gold card becomes diffuse.
-    body = re.sub(r'<bsdf type="roughconductor">.*?</bsdf>', '<bsdf type="diffuse"/>', GROUP, flags=re.S)
+    # The export covers the materials the peer benchmark uses: the gold card and the plastic ball become diffuse.
+    source = GROUP if group == "meshes" else ANALYTIC_GROUP
+    body = re.sub(r'<bsdf type="rough(conductor|plastic)">.*?</bsdf>', '<bsdf type="diffuse"/>', source, flags=re.S)
     path = _xml(tmp_path, 8, body)
     exported = scene_to_mitsuba_dict(load_mitsuba_scene(path), tmp_path / "meshes")
     assert sum(entry.get("type") == "instance" for entry in exported.values() if isinstance(entry, dict)) == 3
@@ -173,45 +215,6 @@ def test_exported_instances_are_mitsubas_shapegroups_again(tmp_path, mitsuba_sca
             hits += 1
             assert float(b.t) == pytest.approx(float(a.t), rel=1e-5)
     assert hits > 200
-
-
-# Mitsuba 3's exact shapes in a shapegroup, placed under non-uniform scales, a shear and a mirror: the instance
-# stretches the sphere into an ellipsoid, the disk and cylinder into elliptic ones.
-ANALYTIC_GROUP = """
-<shape type="shapegroup" id="parts">
-  <shape type="sphere"><point name="center" x="0" y="0" z="0.35"/><float name="radius" value="0.3"/>
-    <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.7, 0.3, 0.2"/>
-      <float name="alpha" value="0.25"/></bsdf>
-  </shape>
-  <shape type="disk">
-    <transform name="to_world"><scale x="0.3" y="0.2"/><rotate x="1" angle="60"/><translate x="0.45" z="0.3"/>
-    </transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.6, 0.3"/></bsdf>
-  </shape>
-  <shape type="cylinder"><point name="p0" x="-0.5" y="0" z="0"/><point name="p1" x="-0.5" y="0" z="0.6"/>
-    <float name="radius" value="0.12"/>
-    <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.4, 0.8"/></bsdf></bsdf>
-  </shape>
-</shape>
-<shape type="instance"><ref id="parts"/></shape>
-<shape type="instance"><ref id="parts"/>
-  <transform name="to_world"><scale x="1.4" y="0.7" z="1.5"/><rotate z="1" angle="35"/><translate x="1.0" y="0.4"/>
-  </transform>
-</shape>
-<shape type="instance"><ref id="parts"/>
-  <transform name="to_world"><matrix value="-1 0.3 0 -0.9  0 1.2 0 0.1  0 0 0.8 0  0 0 0 1"/></transform>
-</shape>
-<shape type="rectangle" id="floor">
-  <transform name="to_world"><scale value="3"/></transform>
-  <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
-</shape>
-<shape type="rectangle" id="light">
-  <transform name="to_world"><scale value="0.6"/><rotate x="1" angle="180"/><translate x="0.4" y="-0.5" z="2.2"/>
-  </transform>
-  <emitter type="area"><rgb name="radiance" value="12, 11, 10"/></emitter>
-</shape>
-<emitter type="constant"><rgb name="radiance" value="0.15, 0.17, 0.2"/></emitter>
-"""
 
 
 def test_shapegroup_keeps_spheres_disks_and_cylinders_exact(tmp_path):
