@@ -1674,10 +1674,23 @@ class MitsubaImporter:
         data["instances"] = instances
         if self.film_aovs and "film" in data:
             data["film"]["aovs"] = self.film_aovs
+        self.whole_pixel_filter(data)
         order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
         # materials stays even when empty (the scene format asks for the table); objects only when some are placed.
         kept = {key: data[key] for key in order if key in data and data[key] != []}
         return kept | {key: data[key] for key in ("objects", "instances") if data[key]}
+
+    def whole_pixel_filter(self, data: dict) -> None:
+        """spectrace's bdpt and sppm estimate whole pixels (spectrace.engine.light_tracer, .sppm): a film filter
+        other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
+        film, integrator = data.get("film"), data.get("integrator", {})
+        if film is None or integrator.get("type") not in ("bdpt", "sppm") or film["filter"]["type"] == "box":
+            return
+        self.notes.append(
+            f"{self.at(self.origins['film'])}: integrator '{integrator['type']}' estimates whole pixels: the film's "
+            f"{film['filter']['type']} filter is imported as the box filter"
+        )
+        film["filter"] = {"type": "box"}
 
     def report_unread_properties(self) -> None:
         """A warning for each property of an imported object that nothing read: spectrace does not know it."""
