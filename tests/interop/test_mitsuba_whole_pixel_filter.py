@@ -1,6 +1,7 @@
 """Mitsuba 0.6's bdpt and photon mappers (imported as spectrace's bdpt and sppm, which estimate whole pixels) with
 Mitsuba's default Gaussian film filter: the import takes the box filter with a note, so the scene renders, and its
-bdpt image agrees with Mitsuba 3's path tracer (which has no bdpt) rendering the same scene with the box filter."""
+bdpt image agrees with Mitsuba 3's path tracer (which has no bdpt) rendering the same scene with the box filter.
+Mitsuba's unbounded max_depth (its default, -1), which spectrace's bdpt cannot keep, becomes its longest, 16."""
 
 import numpy as np
 import pytest
@@ -15,7 +16,8 @@ def _xml(folder, size: int, rfilter: str = ""):
     path.write_text(
         f"""<scene version="3.0.0">
 <default name="integrator" value="bdpt"/>
-<integrator type="$integrator"><integer name="max_depth" value="3"/></integrator>
+<default name="depth" value="-1"/>
+<integrator type="$integrator"><integer name="max_depth" value="$depth"/></integrator>
 <sensor type="perspective"><float name="fov" value="60"/>
   <transform name="to_world"><lookat origin="0, -1.5, 1.5" target="0, 0, 0" up="0, 0, 1"/></transform>
   <film type="hdrfilm"><integer name="width" value="{size}"/><integer name="height" value="{size}"/>{rfilter}
@@ -42,6 +44,15 @@ def test_gaussian_filter_becomes_the_box_with_a_note(tmp_path, integrator):
     assert not any("whole pixels" in note for note in path_notes)
 
 
+@pytest.mark.parametrize("depth, expected", [("-1", 16), ("40", 16), ("16", 16), ("3", 3)])
+def test_bdpt_depth_beyond_its_subpaths_becomes_the_longest_it_keeps(tmp_path, depth, expected):
+    data, notes = mitsuba_scene_data(_xml(tmp_path, 8), parameters={"depth": depth})
+    assert data["integrator"]["max_depth"] == expected
+    assert any(f"max_depth {depth} imported with max_depth 16" in note for note in notes) == (depth in ("-1", "40"))
+    path_data = mitsuba_scene_data(_xml(tmp_path, 8), parameters={"depth": depth, "integrator": "path"})[0]
+    assert path_data["integrator"]["max_depth"] == int(depth)  # the path tracer keeps any depth
+
+
 @pytest.mark.peer
 def test_bdpt_import_renders_like_mitsubas_path_tracer(tmp_path, device, mitsuba_scalar_spectral):
     """REPLICAS independent images each; 8 x 8-pixel block means and the image mean agree within 5 standard errors
@@ -53,8 +64,8 @@ def test_bdpt_import_renders_like_mitsubas_path_tracer(tmp_path, device, mitsuba
 
     from spectrace.engine.renderer import Renderer
 
-    renderer = Renderer(load_mitsuba_scene(_xml(tmp_path, size)), device)
-    assert renderer.scene.integrator == "bdpt"
+    renderer = Renderer(load_mitsuba_scene(_xml(tmp_path, size)), device)  # max_depth -1 as Mitsuba's default
+    assert (renderer.scene.integrator, renderer.scene.max_depth) == ("bdpt", 16)
     xyz_replicas = spectrace_replicas(renderer, replicas, replica_spp)
     assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
     assert by_mitsuba.mean() > 0.02  # the comparison saw a lit image

@@ -47,6 +47,7 @@ from typing import overload
 import numpy as np
 
 from spectrace.cameras import CAMERAS
+from spectrace.engine.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
 from spectrace.interop.mitsuba_tree import Element, SceneTree, element_error, read_input_file, read_scene
@@ -1532,6 +1533,16 @@ class MitsubaImporter:
             # Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none): spectrace's bdpt, max_depth and rr_depth
             # meaning the same; its per-strategy options change the noise, not the mean.
             settings["type"] = "bdpt"
+            depth = settings["max_depth"]
+            if not (isinstance(depth, int) and 0 <= depth <= BDPT_MAX_SEGMENTS):
+                # Unbounded (Mitsuba's default, -1) or deeper than the kernel's subpath arrays: the longest paths
+                # spectrace's bdpt keeps, so the import renders; the paths left out carry what Russian roulette
+                # lets through beyond that many bounces.
+                self.notes.append(
+                    f"{self.at(element)}: integrator 'bdpt' with max_depth {depth} imported with "
+                    f"max_depth {BDPT_MAX_SEGMENTS}, the longest paths spectrace's bdpt keeps"
+                )
+                settings["max_depth"] = BDPT_MAX_SEGMENTS
             properties.understood("lightImage", "sampleDirect", "samples_per_pass")
         elif kind in ("sppm", "photonmapper"):
             # Mitsuba 0.6's photon mappers: spectrace's sppm, which converges to the same image; the photon counts,
