@@ -50,7 +50,14 @@ from spectrace.cameras import CAMERAS
 from spectrace.engine.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
-from spectrace.interop.mitsuba_tree import Element, SceneTree, element_error, read_input_file, read_scene
+from spectrace.interop.mitsuba_tree import (
+    Element,
+    SceneTree,
+    camel_to_snake,
+    element_error,
+    read_input_file,
+    read_scene,
+)
 from spectrace.interop.mitsuba_tree import shown as _shown
 from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
@@ -1543,12 +1550,12 @@ class MitsubaImporter:
                     f"max_depth {BDPT_MAX_SEGMENTS}, the longest paths spectrace's bdpt keeps"
                 )
                 settings["max_depth"] = BDPT_MAX_SEGMENTS
-            properties.understood("lightImage", "sampleDirect", "samples_per_pass")
+            properties.understood(*_with_snake_case("lightImage", "sampleDirect", "samples_per_pass"))
         elif kind in ("sppm", "photonmapper"):
             # Mitsuba 0.6's photon mappers: spectrace's sppm, which converges to the same image; the photon counts,
             # radii and lookup sizes are its own (spectrace.engine.sppm), so they are noted, not followed.
             settings["type"] = "sppm"
-            own = (
+            own = _with_snake_case(  # a 0.x file's names arrive upgraded to snake_case
                 "photonCount", "initialRadius", "alpha", "granularity", "maxPasses", "directSamples",
                 "glossySamples", "globalPhotons", "causticPhotons", "volumePhotons", "globalLookupRadius",
                 "causticLookupRadius", "lookupSize",
@@ -1774,6 +1781,11 @@ def _unnormalised_rotation(axis: list[float], degrees: float) -> np.ndarray:
     matrix = np.eye(4)
     matrix[:3, :3] = cos * np.eye(3) + sin * cross + (1.0 - cos) * np.outer(a, a)
     return matrix
+
+
+def _with_snake_case(*names: str) -> tuple[str, ...]:
+    """Mitsuba 0.6 property names as a 3.x file spells them and as a 0.x file's upgrade turns them (snake_case)."""
+    return tuple(dict.fromkeys([*names, *(camel_to_snake(name) for name in names)]))
 
 
 def _unique_name(base: str, taken: dict) -> str:
