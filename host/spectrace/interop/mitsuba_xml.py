@@ -1633,7 +1633,14 @@ class MitsubaImporter:
         lights: list[dict] = []
         sensors = [c for c in root.children if c.tag == "sensor"]
         if not sensors:
-            raise SpectraceError("the scene has no <sensor>; spectrace needs a camera", where=str(self.xml_path))
+            # Mitsuba 3 makes no default camera (its scene dropped the one it made before 3.0.0): it loads such a
+            # file, usually a fragment for <include>, and refuses to render it ("No sensor specified").
+            raise SpectraceError(
+                "the scene has no <sensor>, and a camera is needed: Mitsuba 3 loads such a file but renders nothing "
+                "from it either (it makes no default camera); add a <sensor>, or import the scene that includes "
+                "this file",
+                where=str(self.xml_path),
+            )
         if len(sensors) > 1:
             self.notes.append(f"{self.at(sensors[1])}: only the first of {len(sensors)} sensors is imported")
         self.sensor(sensors[0], data)
