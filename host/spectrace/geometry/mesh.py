@@ -205,6 +205,8 @@ def load_mesh(path: Path, where: str, shape_index: int = 0) -> TriangleMesh:
     # trimesh, whose vectorised reader beats a Python loop over millions of lines.
     if data is not None and size <= _PLAIN_OBJ_MAX_BYTES and (simple := _plain_triangle_obj(path, data)) is not None:
         mesh = _validated_mesh(simple[0], simple[1], path, where, normals=simple[2])
+    elif path.suffix.lower() == ".ply" and (ply := _direct_ply(path, where)) is not None:
+        mesh = ply
     else:
         mesh = _mesh_through_trimesh(path, where, data)
     if announce:
@@ -213,6 +215,20 @@ def load_mesh(path: Path, where: str, shape_index: int = 0) -> TriangleMesh:
             file=sys.stderr,
             flush=True,
         )
+    return mesh
+
+
+def _direct_ply(path: Path, where: str) -> TriangleMesh | None:
+    """A binary PLY triangle mesh read directly (spectrace.geometry.ply), as the trimesh path would read it; None
+    for a PLY file of another kind."""
+    from spectrace.geometry.ply import read_binary_ply
+
+    read = read_binary_ply(_read_bytes(path, where))
+    if read is None:
+        return None
+    mesh = _validated_mesh(read.vertices, read.faces, path, where, read.normals)
+    if read.uvs is not None and np.all(np.isfinite(read.uvs)):
+        mesh.uvs = np.column_stack([read.uvs[:, 0], 1.0 - read.uvs[:, 1]])  # v up in the file, down in spectrace
     return mesh
 
 
