@@ -63,12 +63,17 @@ class TriangleMesh:
             return None
         corners = self.normals[self.faces]
         length = np.linalg.norm(corners, axis=-1, keepdims=True)
-        corners = np.divide(corners, length, out=np.zeros_like(corners), where=length > 0)
-        v0, v1, v2 = self.triangles()
-        face = np.cross(v1 - v0, v2 - v0)
-        face_length = np.linalg.norm(face, axis=-1, keepdims=True)
-        face = np.divide(face, face_length, out=np.zeros_like(face), where=face_length > 0)
-        return np.where(length > 0, corners, face[:, None, :])
+        np.divide(corners, length, out=corners, where=length > 0)
+        # Face normals only for the few triangles with a zero corner: a million-triangle mesh would otherwise
+        # gather all its corners and take their cross products again for nothing.
+        missing = np.flatnonzero(~(length > 0).all(axis=(1, 2)))
+        if len(missing):
+            v0, v1, v2 = (self.vertices[self.faces[missing, k]] for k in range(3))
+            face = np.cross(v1 - v0, v2 - v0)
+            face_length = np.linalg.norm(face, axis=-1, keepdims=True)
+            face = np.divide(face, face_length, out=np.zeros_like(face), where=face_length > 0)
+            corners[missing] = np.where(length[missing] > 0, corners[missing], face[:, None, :])
+        return corners
 
     def with_normals(self, normals: np.ndarray | None) -> "TriangleMesh":
         """The same mesh with other vertex normals (None: flat shading)."""
