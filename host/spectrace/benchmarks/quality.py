@@ -6,10 +6,10 @@ renderer gets the same wall-clock budget, in the same way: a warm 4-spp probe re
 then it renders the spp that fit the budget (the time actually taken is reported). With the Sobol sampler
 spectrace renders powers of two, as its users would: Owen-scrambled Sobol points are balanced at powers of two, and a
 few samples past one can raise the error (docs/sampling.md). It renders the two that bracket the budget, the largest
-that fits and the next, and "RMSE at budget" interpolates their errors (net of the reference's noise) to the budget
-on log error against log time: Sobol's error falls faster than 1/√spp where the image has edges, so scaling one
-render's error by its time (below) would favour whichever integrator happens to reach the higher power of two. The
-error is the RMSE of
+that fits and the next, and "RMSE at budget" interpolates their errors (net of the reference's noise) on log error
+against log spp to the spp the budget buys at the two renders' throughput: Sobol's error falls faster than 1/√spp
+where the image has edges, so scaling one render's error by its time (below) would favour whichever integrator
+happens to reach the higher power of two. The error is the RMSE of
 film XYZ over all pixels and channels against the reference, and relative to the reference's mean Y. The
 reference's own noise RMS (from its two independent halves) is reported: RMSE² includes its square. "RMSE at
 budget" takes that out and scales to exactly the budget (variance ∝ 1/time), since a renderer may overrun it.
@@ -222,14 +222,17 @@ def _at_budget(row: dict, key: str, noise: float, seconds: float) -> float:
     """The error row[key] would have had in exactly `seconds`, with the reference's own noise taken out (RMSE² =
     error² + reference noise², the two being independent). One render: Monte Carlo variance falls as 1/time. Two
     (the row and row["above"], Sobol's powers of two either side of the budget): interpolated between them on log
-    error against log time, at the rate the sampler showed there."""
+    error against log spp, at the spp the budget buys at their throughput."""
     error2 = max(row[key] ** 2 - noise**2, 1e-30)
     above = row.get("above")
-    if above is None or not above["seconds"] > row["seconds"]:
+    if above is None:
         return float(np.sqrt(error2 * row["seconds"] / seconds))
     above2 = max(above[key] ** 2 - noise**2, 1e-30)
-    slope = np.log(above2 / error2) / np.log(above["seconds"] / row["seconds"])
-    return float(np.sqrt(error2 * (seconds / row["seconds"]) ** slope))
+    # The spp the budget buys at the throughput of both renders together (one render's time is noisier), and the
+    # error there on the line through the two in log error against log spp.
+    spp_at_budget = seconds * (row["spp"] + above["spp"]) / (row["seconds"] + above["seconds"])
+    slope = np.log(above2 / error2) / np.log(above["spp"] / row["spp"])
+    return float(np.sqrt(error2 * (spp_at_budget / row["spp"]) ** slope))
 
 
 def _off_lights_note(reference: dict) -> str:
