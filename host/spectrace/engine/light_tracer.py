@@ -147,7 +147,7 @@ class LightPasses:
         self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
         if scene.integrator == "bdpt":
             # Its t = 1 joins (light vertices 2 .. max_depth), then each of its pixels' own sums.
-            self.capacity = scene.max_depth - 1 + BDPT_PIXELS_PER_LIGHT_PATH
+            self.capacity = min(scene.max_depth - 1 + BDPT_PIXELS_PER_LIGHT_PATH, MAX_RECORD_SLOTS)
         pixels = renderer.pixel_count
         need = device_memory_need(renderer.buffers, pixels, spectral_bins)
         self.pixel_filter = scene.pixel_filter if scene.pixel_filter.type != "box" else None
