@@ -97,13 +97,13 @@ typedef struct {
 } PathVertex;
 
 #if SCENE_HAS_SHAPES
-/* path_vertex at a hit of an analytic shape: its exact normal shades (no interpolation to correct), and its dp/du,
- * dp/dv frame the surface detail and the footprint. */
+/* path_vertex at a hit of an analytic shape, placed by itself or by an instance (hit_shape_surface): its exact
+ * normal shades (no interpolation to correct), and its dp/du, dp/dv frame the surface detail and the footprint. */
 inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
 {
     PathVertex v;
     v.info = scene->triangle_info[hit.triangle];
-    ShapeSurface g = shape_surface(hit_shape(scene, hit.triangle), hit.b12);
+    ShapeSurface g = hit_shape_surface(scene, hit);
     v.p = g.p;
     v.n = g.n;
     v.ns = g.n;

@@ -122,8 +122,9 @@ inline int hit_is_shape(const Scene *scene, int slot)
 #if !SCENE_HAS_SHAPES
     return 0;
 #elif SCENE_HAS_INSTANCES
-    /* Instanced objects' triangles follow the shapes' slots. */
-    return slot >= scene->params->triangle_count && slot < scene->params->triangle_count + scene->params->shape_count;
+    /* Instanced objects' analytic shapes follow the scene's own, and their triangles follow all the shapes' slots. */
+    return slot >= scene->params->triangle_count &&
+           slot < scene->params->triangle_count + scene->params->shape_count + scene->params->instanced_shape_count;
 #else
     return slot >= scene->params->triangle_count;
 #endif
@@ -182,9 +183,13 @@ inline Hit intersect_shapes(const Scene *scene, Ray ray, float t_max, int any_hi
  * slots of the triangle arrays, which hold unused entries for the shapes), under a 4-wide BVH of their own built in
  * object space. A binary top-level BVH over the instances' world boxes leads to Instance rows; a ray reaching one is
  * taken into object space (direction not renormalised, so t stays the world distance) and traced through the
- * object's BVH. The hit keeps the object's slot, so materials, media and cut-outs need nothing new, and the
- * Instance, whose map takes points and tangents to world space and normals by its inverse transpose. A scene
- * without instances builds with SCENE_HAS_INSTANCES 0 and traces exactly as before they existed. */
+ * object's BVH. The object's analytic shapes (a short list, AnalyticShape rows in object space after the scene's
+ * own, slots triangle_count + row) are met by the same object-space ray, its direction made unit for
+ * intersect_shape and its distances scaled back to world units: the ray is transformed, never the shape, so any
+ * affine placement (non-uniform scale, shear, mirror) gives the exact quadric (pbrt-v4 and Mitsuba 3 do the same).
+ * The hit keeps the object's slot, so materials, media and cut-outs need nothing new, and the Instance, whose map
+ * takes points and tangents to world space and normals by its inverse transpose. A scene without instances builds
+ * with SCENE_HAS_INSTANCES 0 and traces exactly as before they existed. */
 #if SCENE_HAS_INSTANCES
 inline float3 affine_point(__global const float4 *rows, float3 p)
 {
@@ -207,8 +212,35 @@ inline float3 instance_normal(__global const Instance *instance, float3 n)
     return normalize(instance_normal_direction(instance, n));
 }
 
-/* The closest instanced triangle the ray meets before t_max (any of them when any_hit): the binary traversal of
- * intersect_shapes over the top-level BVH, whose leaves are runs of instances, each traced in its object's BVH. */
+#if SCENE_HAS_SHAPES
+/* The closest of an instance's analytic shapes that the object-space ray `in_object` (direction M⁻¹ d for a unit
+ * world direction d) meets before world distance hit.t, replacing `hit` (t in world units) when one is closer; any
+ * of them when any_hit. Requires instance->shape_count > 0. */
+inline Hit intersect_instance_shapes(const Scene *scene, __global const Instance *instance, Ray in_object, Hit hit,
+                                     int any_hit)
+{
+    float object_per_world = length(in_object.direction);  /* object-space length of one world unit along the ray */
+    if (!(object_per_world > 0.0f)) return hit;
+    float3 direction = in_object.direction / object_per_world;
+    float t_object = hit.t * object_per_world;
+    for (int k = instance->first_shape; k < instance->first_shape + instance->shape_count; ++k) {
+        float2 uv;
+        float t = intersect_shape(&scene->shapes[k], in_object.origin, direction, t_object, &uv);
+        if (t < t_object) {
+            t_object = t;
+            hit.t = t / object_per_world;
+            hit.triangle = scene->params->triangle_count + k;
+            hit.b12 = uv;
+            if (any_hit) return hit;
+        }
+    }
+    return hit;
+}
+#endif
+
+/* The closest instanced triangle or analytic shape the ray meets before t_max (any of them when any_hit): the binary
+ * traversal of intersect_shapes over the top-level BVH, whose leaves are runs of instances, each traced in its
+ * object's BVH and then its object's shapes. */
 inline Hit intersect_instances(const Scene *scene, Ray ray, float t_max, int any_hit)
 {
     Hit hit = no_hit(t_max);
@@ -224,8 +256,19 @@ inline Hit intersect_instances(const Scene *scene, Ray ray, float t_max, int any
             Ray in_object;
             in_object.origin = affine_point(instance->to_object, ray.origin);
             in_object.direction = affine_vector(instance->to_object, ray.direction);
+#if SCENE_HAS_SHAPES
+            Hit h = no_hit(hit.t);
+            if (instance->nodes >= 0) {
+                h = trace_bvh((__global const BVHNode *)(scene->instance_nodes + instance->nodes),
+                              scene->triangle_vertices, in_object, hit.t, any_hit);
+            }
+            if (instance->shape_count > 0 && !(any_hit && h.triangle >= 0)) {
+                h = intersect_instance_shapes(scene, instance, in_object, h, any_hit);
+            }
+#else
             Hit h = trace_bvh((__global const BVHNode *)(scene->instance_nodes + instance->nodes),
                               scene->triangle_vertices, in_object, hit.t, any_hit);
+#endif
             if (h.triangle >= 0) {
                 hit = h;
                 hit.instance = k;
@@ -264,11 +307,35 @@ inline Hit trace_scene(const Scene *scene, Ray ray, float t_max, int any_hit)
 #endif
 }
 
+#if SCENE_HAS_SHAPES
+/* The world-space surface at a hit of an analytic shape (hit_is_shape): an instanced object's shape is rebuilt in
+ * object space and taken to world space by its instance's map (points and tangents by M, the normal by M⁻ᵀ, which
+ * keeps its side). */
+inline ShapeSurface hit_shape_surface(const Scene *scene, Hit hit)
+{
+    ShapeSurface g = shape_surface(hit_shape(scene, hit.triangle), hit.b12);
+#if SCENE_HAS_INSTANCES
+    if (hit.instance >= 0) {
+        __global const Instance *instance = &scene->instances[hit.instance];
+        __global const float4 *m = instance->to_world;
+        g.p = affine_point(m, g.p);
+        g.dpdu = affine_vector(m, g.dpdu);
+        g.dpdv = affine_vector(m, g.dpdv);
+        float3 n = instance_normal_direction(instance, g.n);
+        float length_n = length(n);
+        g.n = n / length_n;
+        g.area_stretch *= fabs(dot(m[0].xyz, cross(m[1].xyz, m[2].xyz))) * length_n;
+    }
+#endif
+    return g;
+}
+#endif
+
 /* The geometric normal and point of a hit, for either kind of surface. */
 inline float3 hit_normal(const Scene *scene, Hit hit)
 {
 #if SCENE_HAS_SHAPES
-    if (hit_is_shape(scene, hit.triangle)) return shape_surface(hit_shape(scene, hit.triangle), hit.b12).n;
+    if (hit_is_shape(scene, hit.triangle)) return hit_shape_surface(scene, hit).n;
 #endif
 #if SCENE_HAS_INSTANCES
     if (hit.instance >= 0) {
@@ -281,7 +348,7 @@ inline float3 hit_normal(const Scene *scene, Hit hit)
 inline float3 hit_point(const Scene *scene, Hit hit)
 {
 #if SCENE_HAS_SHAPES
-    if (hit_is_shape(scene, hit.triangle)) return shape_surface(hit_shape(scene, hit.triangle), hit.b12).p;
+    if (hit_is_shape(scene, hit.triangle)) return hit_shape_surface(scene, hit).p;
 #endif
 #if SCENE_HAS_INSTANCES
     if (hit.instance >= 0) {

@@ -68,16 +68,18 @@ typedef struct {
 } AnalyticShape;
 
 /* A placed copy of an instanced object (kernels/scene.cl, "Instances"): the object's triangles are stored once, at
- * slots [first_slot, first_slot + triangle count) after the scene's own triangles and analytic shapes, under their
- * own 4-wide BVH; an instance adds only this row and a leaf of the top-level BVH over the instances' world boxes. */
+ * slots after the scene's own triangles and all analytic shapes, under their own 4-wide BVH, and its analytic shapes
+ * once, as AnalyticShape rows in object space after the scene's own; an instance adds only this row and a leaf of
+ * the top-level BVH over the instances' world boxes. */
 typedef struct {
     float4 to_world[3];   /* rows of the object-to-world affine map: world coordinate i = dot(to_world[i], (p, 1)) */
     float4 to_object[3];  /* rows of its inverse (rays enter object space through it; normals leave by its
                              transpose, M⁻ᵀ) */
-    int nodes;            /* float4 offset of the object's BVH in instance_nodes */
+    int nodes;            /* float4 offset of the object's BVH in instance_nodes; -1 when it has no triangles */
     int object;           /* which object (the host's numbering; the kernels do not read it) */
-    int pad0;
-    int pad1;
+    int first_shape;      /* the object's analytic shapes: AnalyticShape rows [first_shape, first_shape +
+                             shape_count), in the object's space (their hits: slot triangle_count + row) */
+    int shape_count;
 } Instance;
 
 /* A homogeneous participating medium (kernels/medium.cl); the coefficients are tabulated spectra, already
@@ -209,7 +211,8 @@ typedef struct {
     int instance_count;      /* placed objects (Instance rows) */
     int count_thin_passes;   /* path: 1: a pass straight through a thin sheet (thindielectric) is a segment toward
                                 max_depth; 0: it is not (Mitsuba 3's volpath) */
-    int pad_params[3];
+    int instanced_shape_count;  /* analytic shapes of instanced objects (AnalyticShape rows after shape_count) */
+    int pad_params[2];
     float4 lens;             /* CAMERA_THIN_LENS: aperture radius, focus distance along camera_forward (scene
                                 units), 0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:

@@ -275,13 +275,12 @@ def shape(
 def instanced_object(shapes: Sequence[Shape], name: str = "") -> InstancedObject:
     """A group of shapes (meshes, built with `shape` in the object's own space) declared once and placed by
     `instance` any number of times, stored once on the device (Mitsuba 3's shapegroup, pbrt-v4's ObjectBegin).
-    Analytic surfaces and emitters cannot be instanced: tessellate them, or place them as shapes of their own."""
+    Analytic spheres, disks and cylinders stay exact under any instance transform; emitters cannot be instanced:
+    place the emitting shape as a shape of its own."""
     shapes = list(shapes)
     if not shapes or not all(isinstance(s, Shape) for s in shapes):
         raise SpectraceError("an instanced object needs one or more shapes (see shape())", where=name or "object")
     for s in shapes:
-        if s.analytic is not None:
-            raise SpectraceError(f"shape '{s.name}': analytic surfaces cannot be instanced (tessellated=True)")
         if s.emitter is not None:
             raise SpectraceError(f"shape '{s.name}': emitters cannot be instanced (place the emitting shape itself)")
     return InstancedObject(shapes=shapes, name=name)

@@ -221,6 +221,55 @@ def test_objects_are_imported_once_and_placed_by_instances(tmp_path):
     assert any("Area lights not supported with object instancing" in w for w in importer.warnings)
 
 
+def test_object_spheres_stay_analytic_under_any_instance_transform(tmp_path, kernel_runner):
+    """A whole sphere in an object is spectrace's analytic sphere in the object's space; instances that stretch it
+    into ellipsoids place it by their maps, and rays meet the ellipsoids at the float64 closed form's distances."""
+    from tests.geometry.test_analytic_shapes import _reference_hits
+    from tests.geometry.test_instances import _trace
+
+    from spectrace.geometry.analytic import AnalyticSurface
+
+    defined = 'ObjectBegin "ball"\nTranslate 0 0 1\nShape "sphere" "float radius" 0.5\nObjectEnd\n'
+    placements = ["Translate 1 0 0\nScale 2 1 0.5", "Rotate 30 0 1 0\nScale 1 1.5 1", "Translate -1.5 0.5 0"]
+    uses = "".join(f'AttributeBegin\n{p}\nObjectInstance "ball"\nAttributeEnd\n' for p in placements)
+    marker = 'AttributeBegin\nTranslate 4 0 0\nShape "sphere" "float radius" 0.1\nAttributeEnd\n'
+    scene = load_pbrt_scene(_write(tmp_path, marker + defined + uses))
+    (ball,) = {id(i.object): i.object for i in scene.instances}.values()
+    assert [s.analytic.kind for s in ball.shapes] == ["sphere"]
+    # pbrt's left-handed world is mirrored through x = 0 or not (the marker at pbrt's x = 4 says which).
+    mirror = np.diag([np.sign(scene.shapes[0].analytic.to_world[0, 3]), 1.0, 1.0, 1.0])
+
+    def t(x, y, z):
+        m = np.eye(4)
+        m[:3, 3] = x, y, z
+        return m
+
+    def s(x, y, z):
+        return np.diag([x, y, z, 1.0])
+
+    c, r = np.cos(np.radians(30)), np.sin(np.radians(30))
+    rotate_y = np.array([[c, 0, r, 0], [0, 1, 0, 0], [-r, 0, c, 0], [0, 0, 0, 1]])
+    expected = [t(1, 0, 0) @ s(2, 1, 0.5), rotate_y @ s(1, 1.5, 1), t(-1.5, 0.5, 0)]
+    in_object = t(0, 0, 1) @ s(0.5, 0.5, 0.5)
+    for instance, placement in zip(scene.instances, expected):
+        np.testing.assert_allclose(
+            instance.to_world @ ball.shapes[0].analytic.to_world, mirror @ placement @ in_object, atol=1e-12
+        )
+    rng = np.random.default_rng(2)
+    origins = rng.normal(size=(1500, 3)) * 3 + [0, 0, 4]
+    directions = rng.uniform([-2.5, -1, 0], [2.5, 1.5, 1.5], (1500, 3)) - origins
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    t_ref = np.min(
+        [_reference_hits(AnalyticSurface("sphere", mirror @ p @ in_object), origins, directions)[0] for p in expected],
+        axis=0,
+    )
+    only_balls = spectrace.Scene(camera=scene.camera, width=4, height=4, shapes=[], instances=scene.instances)
+    hit = _trace(kernel_runner, only_balls, origins, directions, np.full(len(origins), 1e9))[1][0]
+    assert np.isfinite(t_ref).mean() > 0.2 and np.mean(np.isfinite(hit[:, 0]) != np.isfinite(t_ref)) < 0.003
+    both = np.isfinite(t_ref) & np.isfinite(hit[:, 0])
+    np.testing.assert_allclose(hit[both, 0], t_ref[both], rtol=5e-5)
+
+
 # ---------------------------------------------------------------- conventions
 
 

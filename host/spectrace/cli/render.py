@@ -263,8 +263,10 @@ def render(
     )
     buffers = renderer.buffers
     peak = f", peak {buffers.bvh_peak_bytes / 2**20:.0f} MiB" if buffers.bvh_peak_bytes is not None else ""
+    object_shapes = f" and {buffers.instanced_shape_count} analytic shapes" if buffers.instanced_shape_count else ""
     instanced = (
-        f" + {buffers.instance_count} instances of {buffers.instanced_triangle_count} object triangles stored once"
+        f" + {buffers.instance_count} instances of {buffers.instanced_triangle_count} object triangles"
+        f"{object_shapes} stored once"
         if buffers.instance_count
         else ""
     )

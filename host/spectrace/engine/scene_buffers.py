@@ -85,6 +85,9 @@ class SceneBuffers:
     # node buffer (Instance.nodes is its float4 offset); a root every ray misses when there are none
     instance_nodes: np.ndarray = field(default_factory=lambda: _empty_bvh().nodes.view(np.float32).copy())
     instanced_triangle_count: int = 0  # triangles stored for the instanced objects (each object's once)
+    # analytic shapes of the instanced objects (each object's once), in object space: rows shape_count on of
+    # `shapes`, TriangleInfo slots triangle_count + row
+    instanced_shape_count: int = 0
 
 
 def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
@@ -201,6 +204,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     objects = _ObjectTriangles(
         scene.instances,
         len(v0) + len(analytic),
+        len(analytic),
         material_index,
         material_rows,
         medium_index,
@@ -284,22 +288,24 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         info = triangle_info[len(v0) + k]
         info["material"], info["interior"] = material, interior
         info["light"] = next(shape_lights) if emitter >= 0 else -1
-    if objects.count:
-        # The objects' slots follow the shapes': the triangle arrays keep unused entries for the shapes.
+    if objects.count or objects.shape_count:
+        # The objects' shapes' slots follow the scene's own shapes', their triangles' slots follow all the shapes':
+        # the triangle arrays keep unused entries for the shapes.
         own = len(v0) + len(analytic)
+        shapes = len(analytic) + objects.shape_count
         world_smooth = int(smooth.sum())
-        vertices = np.concatenate([vertices[: len(v0)], np.zeros((len(analytic), 3, 4), np.float32), objects.vertices])
-        triangle_uvs = np.concatenate(
-            [triangle_uvs[: len(v0)], np.zeros((len(analytic), 3, 2), np.float32), objects.uvs]
-        )
+        vertices = np.concatenate([vertices[: len(v0)], np.zeros((shapes, 3, 4), np.float32), objects.vertices])
+        triangle_uvs = np.concatenate([triangle_uvs[: len(v0)], np.zeros((shapes, 3, 2), np.float32), objects.uvs])
         object_info = objects.info.copy()
         object_info["normals"][object_info["normals"] >= 0] += world_smooth
-        triangle_info = np.concatenate([triangle_info[:own], object_info])
+        triangle_info = np.concatenate([triangle_info[:own], objects.shape_info, object_info])
         if len(objects.normals):
             triangle_normals = np.concatenate([triangle_normals[:world_smooth], objects.normals])
-    shape_rows = np.zeros(max(len(analytic), 1), ANALYTIC_SHAPE_DTYPE)
+    shape_rows = np.zeros(max(len(analytic) + objects.shape_count, 1), ANALYTIC_SHAPE_DTYPE)
     for k, (surface, *_) in enumerate(analytic):
         shape_rows[k] = surface.device_row()
+    if objects.shape_rows is not None:
+        shape_rows[len(analytic) : len(analytic) + objects.shape_count] = objects.shape_rows
 
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
@@ -340,17 +346,21 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         instance_count=len(scene.instances),
         instance_nodes=instance_nodes,
         instanced_triangle_count=objects.count,
+        instanced_shape_count=objects.shape_count,
     )
 
 
 class _ObjectTriangles:
-    """The instanced objects' triangles, each object's once, at slots from `first_slot` on, each under a BVH of its
-    own; and the instances' world boxes. Materials and media join the scene's tables (shared with its own shapes)."""
+    """The instanced objects' analytic shapes, each object's once, as AnalyticShape rows from `first_shape` on
+    (TriangleInfo slots from `first_slot` on); then their triangles, each object's once, at the slots after those,
+    each under a BVH of its own; and the instances' world boxes. Materials and media join the scene's tables
+    (shared with its own shapes)."""
 
     def __init__(
         self,
         instances: list[Instance],
         first_slot: int,
+        first_shape: int,
         material_index: dict[int, int],
         material_rows: list[np.ndarray],
         medium_index: dict[int, int],
@@ -366,18 +376,22 @@ class _ObjectTriangles:
                 object_number[id(instance.object)] = len(self.objects)
                 self.objects.append(instance.object)
         self.object_of = [object_number[id(instance.object)] for instance in instances]
-        self.bvhs: list[BVH] = []
+        self.bvhs: list[BVH | None] = []  # None: the object has analytic shapes only
         self.first: list[int] = []
+        self.shapes_of: list[tuple[int, int]] = []  # (first AnalyticShape row, count) of each object
         self.seconds = 0.0  # building the objects' BVHs and the top level, for the acceleration structure's cost
         parts: dict[str, list[np.ndarray]] = {k: [] for k in ("vertices", "uvs", "normals", "info")}
-        slot, smooth_slot = first_slot, 0
+        shape_rows: list[np.ndarray] = []
+        shape_info: list[np.ndarray] = []
+        self.shape_count = sum(shape.analytic is not None for obj in self.objects for shape in obj.shapes)
+        slot, smooth_slot = first_slot + self.shape_count, 0
         boxes = []
         for obj in self.objects:
             v0s, v1s, v2s, uvs, normals, info = [], [], [], [], [], []
+            analytic_boxes = []
+            self.shapes_of.append((first_shape + len(shape_rows), 0))
             for shape in obj.shapes:
                 where = f"object '{obj.name}', shape '{shape.name}'"
-                if shape.analytic is not None:
-                    raise SpectraceError(f"{where}: analytic shapes cannot be instanced (use a mesh)")
                 if shape.emitter is not None:
                     raise SpectraceError(f"{where}: emitters cannot be instanced (place the emitting shape itself)")
                 interior = -1
@@ -397,6 +411,14 @@ class _ObjectTriangles:
                     raise SpectraceError(f"{where}: {problem}")
                 if shape.material is not None and shape.mesh.uvs is None and material_textures(shape.material):
                     raise SpectraceError(f"{where} has no texture coordinates, but its material has a texture")
+                if shape.analytic is not None:
+                    shape_rows.append(shape.analytic.device_row())
+                    row = np.zeros((), TRIANGLE_INFO_DTYPE)
+                    row["material"], row["interior"] = material_index[key], interior
+                    row["light"] = row["normals"] = -1
+                    shape_info.append(row)
+                    analytic_boxes.append(shape.analytic.bounds())
+                    continue
                 a, b, c = shape.mesh.triangles()
                 v0s.append(a)
                 v1s.append(b)
@@ -406,8 +428,15 @@ class _ObjectTriangles:
                 rows = np.zeros(len(a), TRIANGLE_INFO_DTYPE)
                 rows["material"], rows["light"], rows["interior"] = material_index[key], -1, interior
                 info.append(rows)
+            self.shapes_of[-1] = (self.shapes_of[-1][0], len(analytic_boxes))
+            box = [np.array(b, np.float64) for b in analytic_boxes]
             if not v0s or not sum(len(v) for v in v0s):
-                raise SpectraceError(f"object '{obj.name}' has no triangles")
+                if not analytic_boxes:
+                    raise SpectraceError(f"object '{obj.name}' has no triangles")
+                self.bvhs.append(None)
+                self.first.append(slot)
+                boxes.append((np.min([b[0] for b in box], axis=0), np.max([b[1] for b in box], axis=0)))
+                continue
             v0, v1, v2, uv = (np.concatenate(x) for x in (v0s, v1s, v2s, uvs))
             corner = _corner_normals(normals, [len(v) for v in v0s])
             started = perf_counter()
@@ -433,12 +462,19 @@ class _ObjectTriangles:
             self.bvhs.append(bvh)
             self.first.append(slot)
             slot += len(v0)
-            boxes.append((bvh.nodes[0]["bmin"].astype(np.float64), bvh.nodes[0]["bmax"].astype(np.float64)))
-        self.count = slot - first_slot
-        self.vertices = np.concatenate(parts["vertices"]) if self.objects else np.zeros((0, 3, 4), np.float32)
-        self.uvs = np.concatenate(parts["uvs"]) if self.objects else np.zeros((0, 3, 2), np.float32)
+            lo, hi = bvh.nodes[0]["bmin"].astype(np.float64), bvh.nodes[0]["bmax"].astype(np.float64)
+            for b in box:
+                lo, hi = np.minimum(lo, b[0]), np.maximum(hi, b[1])
+            boxes.append((lo, hi))
+        self.count = slot - first_slot - self.shape_count
+        self.shape_rows = np.concatenate([r.reshape(1) for r in shape_rows]) if shape_rows else None
+        self.shape_info = (
+            np.concatenate([r.reshape(1) for r in shape_info]) if shape_info else np.zeros(0, TRIANGLE_INFO_DTYPE)
+        )
+        self.vertices = np.concatenate(parts["vertices"]) if parts["vertices"] else np.zeros((0, 3, 4), np.float32)
+        self.uvs = np.concatenate(parts["uvs"]) if parts["uvs"] else np.zeros((0, 3, 2), np.float32)
         self.normals = np.concatenate(parts["normals"]) if parts["normals"] else np.zeros((0, 3, 4), np.float32)
-        self.info = np.concatenate(parts["info"]) if self.objects else np.zeros(0, TRIANGLE_INFO_DTYPE)
+        self.info = np.concatenate(parts["info"]) if parts["info"] else np.zeros(0, TRIANGLE_INFO_DTYPE)
         self.instance_boxes: np.ndarray | None = None
         self.matrices = np.zeros((0, 4, 4))
         if instances:
@@ -464,6 +500,9 @@ class _ObjectTriangles:
         offsets = []
         float4s = len(chunks[0]) // 4
         for bvh, first in zip(self.bvhs, self.first):
+            if bvh is None:
+                offsets.append(-1)  # no triangles: the kernels meet its shapes only
+                continue
             placed = bvh.nodes.copy()
             leaves = placed["count"] > 0
             placed["left_first"][leaves] += first
@@ -483,6 +522,8 @@ class _ObjectTriangles:
         objects = np.asarray(self.object_of)[order]
         rows["nodes"] = np.asarray(offsets)[objects]
         rows["object"] = objects
+        rows["first_shape"] = np.array([first for first, _ in self.shapes_of])[objects]
+        rows["shape_count"] = np.array([count for _, count in self.shapes_of])[objects]
         return rows, np.concatenate(chunks)
 
 
@@ -543,5 +584,6 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["filter_shape"][0] = pixel_filter.device_shape()
     params["filter_cdf"][0] = pixel_filter.device_cdf()
     params["instance_count"] = buffers.instance_count
+    params["instanced_shape_count"] = buffers.instanced_shape_count
     params["count_thin_passes"] = int(getattr(scene, "count_thin_passes", True))
     return params

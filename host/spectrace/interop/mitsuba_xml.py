@@ -1167,8 +1167,8 @@ class MitsubaImporter:
 
     def shapegroup(self, group: Element, objects: dict[str, dict]) -> str:
         """A Mitsuba `shapegroup` as a spectrace object (its shapes in their own space, stored once); its name in
-        `objects`. Mitsuba 3 refuses emitters and nested instancing in a shapegroup; so does the import. Spheres,
-        disks and cylinders, exact surfaces in Mitsuba's instances, are instanced as their tessellations."""
+        `objects`. Mitsuba 3 refuses emitters ("Instancing of emitters is not supported") and nested instancing in a
+        shapegroup; so does the import. Spheres, disks and cylinders stay exact, as in Mitsuba's instances."""
         name = _unique_name(group.get("id") or "shapegroup", objects)
         tables: list[dict] = []
         for index, child in enumerate(self.nested(self.properties(group), "shape")):
@@ -1177,12 +1177,11 @@ class MitsubaImporter:
                 raise self.fail(child, f"a {kind} inside a shapegroup: nested instancing is not supported")
             emitters = [c for c in self.properties(child).values() if self.resolve(c).tag == "emitter"]
             if emitters:
-                raise self.fail(emitters[0], "emitters cannot be instanced: a shapegroup's shapes do not emit")
+                raise self.fail(
+                    emitters[0], "emitters cannot be instanced: a shapegroup's shapes do not emit (nor in Mitsuba 3)"
+                )
             if (table := self.shape(child, index)) is None:
                 continue
-            if table["type"] in ("sphere", "disk", "cylinder"):
-                table["tessellated"] = True
-                self.notes.append(f"{self.at(child)}: the instanced {kind} is a tessellation (Mitsuba's is exact)")
             self.origins[f"objects.{name}.shapes[{len(tables)}]"] = child
             tables.append(table)
         objects[name] = {"shapes": tables}

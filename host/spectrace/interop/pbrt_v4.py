@@ -1036,8 +1036,6 @@ class PbrtImporter:
         try:
             for index, shape in enumerate(shapes):
                 if (table := self.shape(shape, index)) is not None:
-                    if table["type"] == "sphere":
-                        table["tessellated"] = True  # an instance may stretch it; spectrace instances triangles
                     self.origins[f"objects.{object_name}.shapes[{len(tables)}]"] = shape.entity.location
                     tables.append(table)
         finally:

@@ -465,11 +465,6 @@ class _Resolver:
                         "emitters cannot be instanced: place the emitting shape in `shapes`",
                         where=self.where(f"{key}[{i}].emitter"),
                     )
-                if s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals):
-                    raise SpectraceError(
-                        f"an analytic {s.type} cannot be instanced: set tessellated = true",
-                        where=self.where(f"{key}[{i}].type"),
-                    )
             objects[name] = InstancedObject(shapes=self.shapes(materials, o.shapes, key), name=name)
         instances = []
         boxes: dict[str, np.ndarray] = {}

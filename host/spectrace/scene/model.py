@@ -106,7 +106,8 @@ class Shape:
 class InstancedObject:
     """A group of shapes declared once, in its own object space, and placed any number of times by Instances (Mitsuba
     3's shapegroup, pbrt-v4's ObjectBegin/ObjectEnd): its triangles are stored once on the device under a BVH of their
-    own (kernels/scene.cl, "Instances"). Meshes only: analytic shapes and emitters are refused in objects."""
+    own (kernels/scene.cl, "Instances"), its analytic shapes once, intersected exactly through each instance's map.
+    Emitters are refused in objects."""
 
     shapes: list[Shape]  # object space
     name: str = ""
