@@ -172,8 +172,10 @@ ANALYTIC_SHAPE_DTYPE = _struct(
         ("abs_det", "<f4"),
         ("object_area", "<f4"),
         ("flip_normals", "<i4"),
+        ("pbrt_uv", "<i4"),
+        ("pad", ("<i4", (3,))),
     ],
-    128,
+    144,
 )
 
 INSTANCE_DTYPE = _struct(
