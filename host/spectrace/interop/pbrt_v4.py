@@ -19,8 +19,8 @@ Conventions it bridges (each checked by tests/interop/test_pbrt_import.py):
   to spectrace's data: metal-{Ag,Al,Au,Cu}-{eta,k} to spectra/metals, glass-BK7 to N-BK7 and glass-F11 to N-SF11
   (SCHOTT Sellmeier), stdillum-* to the CIE illuminants. Wavelength/value lists are zero outside their range, as in
   pbrt.
-- Files: meshes pbrt gives inline (trianglemesh, bilinearmesh) and the shapes spectrace has no built-in for (disk,
-  cylinder, partial or textured spheres) are written as binary PLY files into a folder beside the TOML; PLY files a
+- Files: meshes pbrt gives inline (trianglemesh, bilinearmesh) and the shapes spectrace has no exact surface for
+  (partial spheres, disks and cylinders) are written as binary PLY files into a folder beside the TOML; PLY files a
   scene names are rewritten there too (pbrt's ReverseOrientation and normal-facing rules applied, gzipped files
   read); environment maps (resampled, spectrace.interop.pbrt_envmap) and scaled image textures go there as OpenEXR.
 
