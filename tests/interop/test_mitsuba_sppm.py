@@ -2,6 +2,8 @@
 progressive photon mapping (integrator 'sppm'), which converges to the same image; their photon counts and radii are
 spectrace's own choice, which the import notes."""
 
+from pathlib import Path
+
 import pytest
 
 from spectrace.interop.mitsuba_xml import mitsuba_scene_data
@@ -41,3 +43,20 @@ def test_their_photon_settings_are_noted(tmp_path):
     data, notes = mitsuba_scene_data(_xml(tmp_path, xml))
     assert data["integrator"]["type"] == "sppm"
     assert any("photon counts and radii" in note for note in notes), notes
+
+
+def test_their_settings_in_a_0x_file_are_noted_not_warned(tmp_path):
+    """A version 0.5 file's camelCase names arrive upgraded (directSamples -> direct_samples): still Mitsuba 0.6's
+    photon-mapper settings, noted as spectrace's own choice, not reported as unknown properties."""
+    new = _xml(
+        tmp_path,
+        '<integrator type="photonmapper"><integer name="directSamples" value="16"/>'
+        '<integer name="glossySamples" value="16"/><integer name="globalPhotons" value="9"/></integrator>',
+    )
+    path = tmp_path / "old.xml"
+    path.write_text(Path(new).read_text().replace('version="3.0.0"', 'version="0.5.0"'))
+    assert 'version="0.5.0"' in path.read_text()
+    data, notes = mitsuba_scene_data(path)
+    assert data["integrator"]["type"] == "sppm"
+    assert any("photon counts and radii" in note for note in notes), notes
+    assert not [note for note in notes if note.startswith("warning")], notes

@@ -310,7 +310,7 @@ def test_bad_material_input_is_a_spectrace_error():
     with pytest.raises(SpectraceError, match=r"give metal \(.*\) or both eta and k"):
         spectrace.conductor(eta=1.5)
     with pytest.raises(SpectraceError, match="eta"):
-        spectrace.conductor(eta=0.0, k=1.0)
+        spectrace.conductor(eta=-0.5, k=1.0)
     with pytest.raises(SpectraceError, match="ior"):
         spectrace.plastic(0.5, ior=1.0)
     with pytest.raises(SpectraceError, match="reflectance"):

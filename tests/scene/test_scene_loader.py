@@ -186,7 +186,7 @@ def test_reflective_materials_resolve(tmp_path):
         ('type = "conductor"', "materials.grey", "give metal"),
         ('type = "conductor"\nmetal = "Au"\neta = { value = 1 }', "materials.grey", "not both"),
         ('type = "conductor"\neta = { rgb = [1, 1, 1] }\nk = { value = 1 }', "materials.grey.eta", "not a colour"),
-        ('type = "conductor"\neta = { value = 0 }\nk = { value = 1 }', "materials.grey.eta", "> 0"),
+        ('type = "conductor"\neta = { value = -0.5 }\nk = { value = 1 }', "materials.grey.eta", "negative"),
         ('type = "conductor"\neta = { value = 1 }\nk = { value = -1 }', "materials.grey.k", "negative"),
         ('type = "conductor"\nmetal = "Au"\nroughness = 2', "materials.grey.roughness", "less than or equal to 1"),
         (

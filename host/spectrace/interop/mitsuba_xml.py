@@ -47,9 +47,17 @@ from typing import overload
 import numpy as np
 
 from spectrace.cameras import CAMERAS
+from spectrace.engine.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
-from spectrace.interop.mitsuba_tree import Element, SceneTree, element_error, read_input_file, read_scene
+from spectrace.interop.mitsuba_tree import (
+    Element,
+    SceneTree,
+    camel_to_snake,
+    element_error,
+    read_input_file,
+    read_scene,
+)
 from spectrace.interop.mitsuba_tree import shown as _shown
 from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
@@ -1531,12 +1539,22 @@ class MitsubaImporter:
             # Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none): spectrace's bdpt, max_depth and rr_depth
             # meaning the same; its per-strategy options change the noise, not the mean.
             settings["type"] = "bdpt"
-            properties.understood("lightImage", "sampleDirect", "samples_per_pass")
+            depth = settings["max_depth"]
+            if not (isinstance(depth, int) and 0 <= depth <= BDPT_MAX_SEGMENTS):
+                # Unbounded (Mitsuba's default, -1) or deeper than the kernel's subpath arrays: the longest paths
+                # spectrace's bdpt keeps, so the import renders; the paths left out carry what Russian roulette
+                # lets through beyond that many bounces.
+                self.notes.append(
+                    f"{self.at(element)}: integrator 'bdpt' with max_depth {depth} imported with "
+                    f"max_depth {BDPT_MAX_SEGMENTS}, the longest paths spectrace's bdpt keeps"
+                )
+                settings["max_depth"] = BDPT_MAX_SEGMENTS
+            properties.understood(*_with_snake_case("lightImage", "sampleDirect", "samples_per_pass"))
         elif kind in ("sppm", "photonmapper"):
             # Mitsuba 0.6's photon mappers: spectrace's sppm, which converges to the same image; the photon counts,
             # radii and lookup sizes are its own (spectrace.engine.sppm), so they are noted, not followed.
             settings["type"] = "sppm"
-            own = (
+            own = _with_snake_case(  # a 0.x file's names arrive upgraded to snake_case
                 "photonCount", "initialRadius", "alpha", "granularity", "maxPasses", "directSamples",
                 "glossySamples", "globalPhotons", "causticPhotons", "volumePhotons", "globalLookupRadius",
                 "causticLookupRadius", "lookupSize",
@@ -1615,7 +1633,14 @@ class MitsubaImporter:
         lights: list[dict] = []
         sensors = [c for c in root.children if c.tag == "sensor"]
         if not sensors:
-            raise SpectraceError("the scene has no <sensor>; spectrace needs a camera", where=str(self.xml_path))
+            # Mitsuba 3 makes no default camera (its scene dropped the one it made before 3.0.0): it loads such a
+            # file, usually a fragment for <include>, and refuses to render it ("No sensor specified").
+            raise SpectraceError(
+                "the scene has no <sensor>, and a camera is needed: Mitsuba 3 loads such a file but renders nothing "
+                "from it either (it makes no default camera); add a <sensor>, or import the scene that includes "
+                "this file",
+                where=str(self.xml_path),
+            )
         if len(sensors) > 1:
             self.notes.append(f"{self.at(sensors[1])}: only the first of {len(sensors)} sensors is imported")
         self.sensor(sensors[0], data)
@@ -1673,10 +1698,23 @@ class MitsubaImporter:
         data["instances"] = instances
         if self.film_aovs and "film" in data:
             data["film"]["aovs"] = self.film_aovs
+        self.whole_pixel_filter(data)
         order = ("camera", "film", "integrator", "sampler", "textures", "materials", "shapes", "lights")
         # materials stays even when empty (the scene format asks for the table); objects only when some are placed.
         kept = {key: data[key] for key in order if key in data and data[key] != []}
         return kept | {key: data[key] for key in ("objects", "instances") if data[key]}
+
+    def whole_pixel_filter(self, data: dict) -> None:
+        """spectrace's bdpt and sppm estimate whole pixels (spectrace.engine.light_tracer, .sppm): a film filter
+        other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
+        film, integrator = data.get("film"), data.get("integrator", {})
+        if film is None or integrator.get("type") not in ("bdpt", "sppm") or film["filter"]["type"] == "box":
+            return
+        self.notes.append(
+            f"{self.at(self.origins['film'])}: integrator '{integrator['type']}' estimates whole pixels: the film's "
+            f"{film['filter']['type']} filter is imported as the box filter"
+        )
+        film["filter"] = {"type": "box"}
 
     def report_unread_properties(self) -> None:
         """A warning for each property of an imported object that nothing read: spectrace does not know it."""
@@ -1749,6 +1787,11 @@ def _unnormalised_rotation(axis: list[float], degrees: float) -> np.ndarray:
     matrix = np.eye(4)
     matrix[:3, :3] = cos * np.eye(3) + sin * cross + (1.0 - cos) * np.outer(a, a)
     return matrix
+
+
+def _with_snake_case(*names: str) -> tuple[str, ...]:
+    """Mitsuba 0.6 property names as a 3.x file spells them and as a 0.x file's upgrade turns them (snake_case)."""
+    return tuple(dict.fromkeys([*names, *(camel_to_snake(name) for name in names)]))
 
 
 def _unique_name(base: str, taken: dict) -> str:

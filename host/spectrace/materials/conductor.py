@@ -43,8 +43,9 @@ PARAMETERS = (
         "spectrum",
         "dimensionless",
         default=None,
-        range=Range(0.0, low_open=True),
-        doc="real part η(λ) of the metal's index of refraction relative to the outside",
+        range=Range(0.0),
+        doc="real part η(λ) of the metal's index of refraction relative to the outside (η = 0, k = 1 reflects "
+        'everything at every angle: Mitsuba\'s material "none")',
     ),
     Parameter(
         "k",
@@ -96,7 +97,7 @@ def from_spec(spec, resolver, key: str) -> ConductorMaterial:
     if spec.metal is not None:
         eta, k = metal_ior(spec.metal, where=resolver.where(f"{key}.metal"))
     else:
-        eta = resolver.optical_constant(spec.eta, f"{key}.eta", positive=True)
+        eta = resolver.optical_constant(spec.eta, f"{key}.eta", positive=False)
         k = resolver.optical_constant(spec.k, f"{key}.k", positive=False)
     tint = (
         resolver.spectrum_or_texture(spec.specular_tint, f"{key}.specular_tint", "spectrum")
@@ -126,7 +127,7 @@ def make(
         eta_spectrum, k_spectrum = metal_ior(metal, where="metal")
     else:
         assert eta is not None and k is not None  # source_problem has refused every other combination
-        eta_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(eta), True, "eta")
+        eta_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(eta), False, "eta")
         k_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(k), False, "k")
     tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
     return ConductorMaterial(
@@ -168,17 +169,17 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         table = {"type": "conductor", "eta": eta, "k": k}
     else:
         material = importer.text(properties["material"]) if "material" in properties else "none"
-        if material == "none":  # Mitsuba's default: a perfect mirror scaled by specular_reflectance
-            if roughness != 0.0:  # a number above 0, or a texture
-                importer.unsupported_plugin(bsdf, " with material 'none' and roughness")
-                return None
-            return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
-        if material not in MITSUBA_METALS:
+        if material == "none":  # Mitsuba's default: η = 0, k = 1, whose Fresnel term is 1 at every angle
+            if roughness == 0.0:  # a perfect mirror scaled by specular_reflectance
+                return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
+            table = {"type": "conductor", "eta": {"value": 0.0}, "k": {"value": 1.0}}
+        elif material not in MITSUBA_METALS:
             importer.unsupported_plugin(
                 bsdf, f" with material '{material}' (spectrace has {', '.join(MITSUBA_METALS)})"
             )
             return None
-        table = {"type": "conductor", "metal": material}
+        else:
+            table = {"type": "conductor", "metal": material}
     if roughness != 0.0:  # a number above 0, or a texture
         table["roughness"] = roughness
         if (kind := importer.distribution(bsdf, properties)) != DEFAULT_DISTRIBUTION:
