@@ -173,7 +173,9 @@ ANALYTIC_SHAPE_DTYPE = _struct(
         ("object_area", "<f4"),
         ("flip_normals", "<i4"),
         ("pbrt_uv", "<i4"),
-        ("pad", ("<i4", (3,))),
+        ("pad0", "<i4"),
+        ("pad1", "<i4"),
+        ("pad2", "<i4"),
     ],
     144,
 )
