@@ -277,3 +277,34 @@ LightSource "distant" "point3 from" [0 0 1] "point3 to" [0 0 0]
     chosen = inside & away_from_edges
     assert chosen.sum() > 40
     assert np.all(red[chosen & expect_red]) and np.all(blue[chosen & ~expect_red])
+
+
+def test_disk_with_pbrt_uv_exports_to_mitsuba_as_triangles_carrying_them(tmp_path, mitsuba_scalar_spectral):
+    """Mitsuba's disk has u = r, v = φ/2π: a disk with pbrt's (u, v) is exported as its tessellation, whose
+    vertices carry pbrt's u = φ/2π, v = 1 − r/radius (φ in pbrt's object space, here its world)."""
+    from dataclasses import replace
+
+    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+
+    header = HEADER.replace("WorldBegin", 'PixelFilter "box"\nWorldBegin')
+    scene = load_pbrt_scene(_write(tmp_path, MARKER + CHECKER + 'Shape "disk" "float radius" 1.5\n', header))
+    grey = spectrace.diffuse(0.5)
+    shapes = [replace(shape, material=grey) for shape in scene.shapes]
+    assert shapes[1].analytic.pbrt_uv
+    entries = scene_to_mitsuba_dict(replace(scene, shapes=shapes), tmp_path, spp=1)
+    disk = entries["shape_1"]
+    assert disk["type"] == "ply"
+    # The PLY's vertex rows as written (x, y, z, nx, ny, nz, u, v: float32), read without a loader's conventions.
+    data = Path(disk["filename"]).read_bytes()
+    header, body = data.split(b"end_header\n", 1)
+    count = int(header.split(b"element vertex ")[1].split()[0])
+    assert header.count(b"property float") == 8
+    rows = np.frombuffer(body[: count * 32], "<f4").reshape(count, 8).astype(np.float64)
+    mirror = np.sign(shapes[0].analytic.to_world[0, 3])  # pbrt's world is spectrace's mirrored through x = 0, or not
+    x, y = mirror * rows[:, 0], rows[:, 1]
+    radius = np.hypot(x, y)
+    away = radius > 1e-6  # φ is undefined at the centre
+    u = np.mod(np.arctan2(y, x), 2 * np.pi)[away] / (2 * np.pi)
+    du = np.abs(rows[away, 6] - u)
+    np.testing.assert_array_less(np.minimum(du, 1 - du), 1e-5)
+    np.testing.assert_allclose(rows[:, 7], 1 - radius / 1.5, atol=1e-5)
