@@ -184,6 +184,12 @@ inline Hit trace_bvh8(__global const BVH8Node *nodes, __global const float4 *tri
     float3 inv_direction = r.inv_direction;
     float8 ox = (float8)(ray.origin.x), oy = (float8)(ray.origin.y), oz = (float8)(ray.origin.z);
     float8 ix = (float8)(inv_direction.x), iy = (float8)(inv_direction.y), iz = (float8)(inv_direction.z);
+    /* The slab each axis enters by: a box's lower plane when the direction is positive, else its upper one
+     * (child_min[0..2] then child_max[0..2] in the node), as fmin and fmax of the two would pick, with the same
+     * values, since a valid box's planes keep their order through the subtraction and the product. */
+    int near_x = inv_direction.x >= 0.0f ? 0 : 3, near_y = inv_direction.y >= 0.0f ? 1 : 4;
+    int near_z = inv_direction.z >= 0.0f ? 2 : 5;
+    int far_x = near_x ^ 3, far_y = near_y == 1 ? 4 : 1, far_z = near_z == 2 ? 5 : 2;
     int stack[BVH8_STACK_SIZE];
     float stack_entry[BVH8_STACK_SIZE];
     int top = 0;
@@ -202,12 +208,13 @@ inline Hit trace_bvh8(__global const BVH8Node *nodes, __global const float4 *tri
             }
         } else {
             __global const BVH8Node *node = &nodes[reference];
-            float8 lx = (node->child_min[0] - ox) * ix, hx = (node->child_max[0] - ox) * ix;
-            float8 ly = (node->child_min[1] - oy) * iy, hy = (node->child_max[1] - oy) * iy;
-            float8 lz = (node->child_min[2] - oz) * iz, hz = (node->child_max[2] - oz) * iz;
-            float8 enter = fmax(fmax(fmin(lx, hx), fmin(ly, hy)), fmax(fmin(lz, hz), (float8)(0.0f)));
+            __global const float8 *planes = node->child_min;
+            float8 nx = (planes[near_x] - ox) * ix, fx = (planes[far_x] - ox) * ix;
+            float8 ny = (planes[near_y] - oy) * iy, fy = (planes[far_y] - oy) * iy;
+            float8 nz = (planes[near_z] - oz) * iz, fz = (planes[far_z] - oz) * iz;
+            float8 enter = fmax(fmax(nx, ny), fmax(nz, (float8)(0.0f)));
             /* Exit widened by 2γ₃ as in ray_box_entry (Ize 2013). */
-            float8 leave = fmin(fmin(fmax(lx, hx), fmax(ly, hy)), fmax(lz, hz)) * 1.0000004f;
+            float8 leave = fmin(fmin(fx, fy), fz) * 1.0000004f;
             leave = fmin(leave, (float8)(hit.t));
             int8 counts = node->count;
             int8 entered = (enter <= leave) & (counts >= (int8)(0));

@@ -362,11 +362,14 @@ Shape "sphere"
 Material "coateddiffuse" "float roughness" 0.09
 Shape "sphere"
 """
-    data, _ = pbrt_scene_data(_write(tmp_path, body))
+    data, importer = pbrt_scene_data(_write(tmp_path, body))
     materials = list(data["materials"].values())
     assert materials[0] == {"type": "conductor", "metal": "Ag", "roughness": pytest.approx(0.2)}  # sqrt(0.04)
     assert materials[1]["eta"] == {"spectrum": "metals/Au:eta"}
-    assert materials[1]["k"]["values"][1:3] == [[400.0, 2.0], [700.0, 3.0]]
+    # An index given over 400-700 nm holds its end values beyond (pbrt's zero there would be no index: a metal of
+    # η = k = 0 reflects everything), with a note.
+    assert materials[1]["k"]["values"] == [[400.0, 2.0], [700.0, 3.0]]
+    assert any("400-700 nm" in note for note in importer.notes)
     assert materials[2] == {"type": "dielectric", "ior": "N-SF11", "roughness": 0.01}
     # pbrt's random walk between coat and base meets the albedo at every return: the plastic's nonlinear series.
     assert materials[3] == {"type": "plastic", "reflectance": {"rgb": [0.2, 0.3, 0.4]}, "ior": 1.4, "nonlinear": True}
@@ -386,6 +389,40 @@ def test_every_named_spectrum_pbrt_shares_with_spectrace_loads(tmp_path):
     scene = load_pbrt_scene(_write(tmp_path, body))
     assert [spectrum_to_xyz(light.intensity)[1] for light in scene.lights] == pytest.approx([2.0] * len(illuminants))
     assert len({id(shape.material) for shape in scene.shapes}) == 4
+
+
+# SCHOTT's catalogue n_d (587.5618 nm) of the glass each of pbrt-v4's glass names tabulates (SCHOTT Zemax catalogue
+# 2017-01-20b, as quoted by refractiveindex.info; pbrt's tables agree with these glasses' formulas within 2e-4).
+PBRT_GLASS_ND = {
+    "glass-BK7": ("N-BK7", 1.5168),
+    "glass-BAF10": ("N-BAF10", 1.67003),
+    "glass-FK51A": ("N-FK51A", 1.48656),
+    "glass-LASF9": ("N-LASF9", 1.85025),
+    "glass-F5": ("N-SF5", 1.67271),
+    "glass-F10": ("N-SF10", 1.72828),
+    "glass-F11": ("N-SF11", 1.78472),
+}
+
+
+def test_all_seven_pbrt_glasses_and_pbrt_s_other_metals_import(tmp_path):
+    """Every named glass and metal of pbrt-v4's table (spectrum.cpp's named spectra) resolves: a glass to the SCHOTT
+    glass whose catalogue n_d its index reproduces, CuZn / MgO / TiO2 to their tabulated η and k."""
+    body = "".join(f'Material "dielectric" "spectrum eta" "{name}"\nShape "sphere"\n' for name in PBRT_GLASS_ND)
+    metals = ("CuZn", "MgO", "TiO2")
+    for metal in metals:
+        body += f'Material "conductor" "spectrum eta" "metal-{metal}-eta" "spectrum k" "metal-{metal}-k"\n'
+        body += 'Shape "sphere"\n'
+    data, _ = pbrt_scene_data(_write(tmp_path, body))
+    tables = list(data["materials"].values())
+    assert [table["ior"] for table in tables[:7]] == [glass for glass, _ in PBRT_GLASS_ND.values()]
+    assert [table["eta"] for table in tables[7:]] == [{"spectrum": f"metals/{m}:eta"} for m in metals]
+    scene = load_pbrt_scene(_write(tmp_path, body))
+    for shape, (_, n_d) in zip(scene.shapes[:7], PBRT_GLASS_ND.values()):
+        assert shape.material.ior.at(587.5618) == pytest.approx(n_d, abs=2e-5)
+    # Brass at 550 nm, a row of pbrt's table (η 0.527, k 2.765): a metal; MgO and TiO2 are dielectrics (k about 0).
+    brass, mgo, tio2 = (shape.material for shape in scene.shapes[7:])
+    assert brass.eta.evaluate(550.0) == pytest.approx(0.527) and brass.k.evaluate(550.0) == pytest.approx(2.765)
+    assert mgo.k.max() <= 1e-6 and 1.7 < mgo.eta.evaluate(550.0) < 1.8 and tio2.k.evaluate(550.0) < 1e-3
 
 
 def test_reverse_orientation_and_bilinear_patches_keep_pbrt_fronts(tmp_path):
@@ -582,7 +619,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     [
         ('Material "mix"\nShape "sphere"\n', 5, 'Material "mix" needs "string materials" naming two materials'),
         ('Material "thindielectric" "spectrum eta" "glass-BK7"\nShape "sphere"\n', 5, "eta must be a number"),
-        ('Material "diffusetransmission"\nShape "sphere"\n', 5, "spectrace has no diffuse transmission"),
+        ('Material "coatedconductor"\nShape "sphere"\n', 5, "spectrace has no coated conductor"),
         ('Shape "curve"\n', 5, "shape 'curve'"),
         ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),
         ('LightSource "goniometric"\n', 5, "light 'goniometric'"),

@@ -62,3 +62,27 @@ def test_a_uniform_roughness_image_renders_as_the_number(tmp_path, device):
     )
     assert_replicas_agree(textured, number, 4)
     assert number[..., 1].mean() > 0.0
+
+
+@pytest.mark.parametrize("factor", ['"float scale" 0.1', '"texture scale" "tenth"'])
+def test_a_scaled_imagemap_roughness_is_alpha_of_the_scaled_texels(tmp_path, factor):
+    """pbrt-v4's scenes scale a float imagemap by a `scale` texture (a number, or a constant texture) before
+    using it as a roughness (its crown scene does): α = √(0.1 · texel) per texel."""
+    grey = np.array([[10, 200], [64, 255]], np.uint8)
+    Image.fromarray(grey).save(tmp_path / "rough.png")
+    path = _scene(tmp_path, '"texture roughness" "scaled"')
+    path.write_text(
+        path.read_text().replace(
+            'Material "conductor"',
+            'Texture "tenth" "float" "constant" "float value" 0.1\n'
+            f'Texture "scaled" "float" "scale" "texture tex" "bumps" {factor}\nMaterial "conductor"',
+        )
+    )
+    warnings, _ = import_pbrt(path, tmp_path / "out.toml")
+    assert not warnings
+    import tomllib
+
+    data = tomllib.loads((tmp_path / "out.toml").read_text())
+    texture = next(iter(data["materials"].values()))["roughness"]
+    alpha = np.asarray(Image.open(tmp_path / texture["file"]), np.float64)
+    np.testing.assert_allclose(alpha, np.sqrt(0.1 * grey / 255.0), rtol=1e-6)

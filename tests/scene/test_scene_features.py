@@ -27,7 +27,8 @@ MATERIAL_BITS = {
     "dielectric": 16,
     "retroreflector": 32,
     "thindielectric": 64,
-    "mix": 128,
+    "diffusetransmission": 128,
+    "mix": 256,
 }
 LIGHT_BITS = {
     "area": 1,

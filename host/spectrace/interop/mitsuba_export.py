@@ -216,6 +216,8 @@ def scene_to_mitsuba_dict(
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
         if to_mitsuba is None:
             raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
+        if getattr(shape, "interior", None) is not None:
+            raise exporter.refuse(f"shape '{shape.name}': an interior medium is not exported yet")
         detail = shape.material.detail if shape.material is not None else None
         if detail is not None and (detail.normal_map, detail.bump_map, detail.opacity) != (None, None, 1.0):
             raise exporter.refuse(
@@ -229,10 +231,14 @@ def scene_to_mitsuba_dict(
         # Mitsuba's own analytic shape, in the same object space; one with pbrt's texture coordinates (a disk or
         # sphere imported from pbrt-v4) as its tessellation, which carries them.
         if shape.analytic is not None and not (shape.analytic.pbrt_uv and shape.analytic.kind != "cylinder"):
+            # Mitsuba turns a sphere's normals inward under a mirroring to_world (measured: an emitting sphere
+            # scaled by (-1, 1, 1) renders black from outside); spectrace's sphere faces out whatever the matrix.
+            # Its disk and cylinder keep their fronts under a mirror, as spectrace's do.
+            mirrored = shape.analytic.kind == "sphere" and np.linalg.det(shape.analytic.linear) < 0
             entry = {
                 "type": shape.analytic.kind,
                 "to_world": _transform(shape.analytic.to_world),
-                "flip_normals": shape.analytic.flip_normals,
+                "flip_normals": bool(shape.analytic.flip_normals) != bool(mirrored),
                 "bsdf": {"type": "ref", "id": materials[material_key]},
             }
         else:

@@ -55,15 +55,24 @@ from spectrace.interop.pbrt_parser import (
     shown,
 )
 from spectrace.io.output_files import check_output_file
+from spectrace.spectral.metals import METALS as SPECTRACE_METALS
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
-MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface", "mix")
+MATERIALS = (
+    "diffuse",
+    "conductor",
+    "dielectric",
+    "thindielectric",
+    "coateddiffuse",
+    "diffusetransmission",
+    "interface",
+    "mix",
+)
 LIGHTS = ("point", "spot", "distant", "infinite")
 AREA_LIGHTS = ("diffuse",)
 TEXTURES = ("imagemap", "checkerboard", "constant")
 # Materials spectrace has no counterpart for, refused with this reason.
 _NO_EQUIVALENT = {
-    "diffusetransmission": "spectrace has no diffuse transmission",
     "coatedconductor": "spectrace has no coated conductor",
     "measured": "spectrace has no measured BRDFs",
     "hair": "spectrace has no hair model",
@@ -71,8 +80,17 @@ _NO_EQUIVALENT = {
 }
 # Unbiased integrators that converge to the path tracer's image.
 _SAME_IMAGE_INTEGRATORS = ("bdpt", "mlt", "sppm", "lightpath", "randomwalk")
-_METALS = ("Ag", "Al", "Au", "Cu")  # pbrt's metal-X-eta / metal-X-k that spectra/metals holds
-_GLASSES = {"glass-BK7": "N-BK7", "glass-F11": "N-SF11"}  # spectra/glasses/sellmeier.csv notes which pbrt table each is
+_METALS = ("Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2")  # pbrt's metal-X-eta / metal-X-k: spectra/metals/X.csv
+# pbrt-v4's named glasses; spectra/glasses/sellmeier.csv notes how close each of pbrt's tables is to the formula.
+_GLASSES = {
+    "glass-BK7": "N-BK7",
+    "glass-BAF10": "N-BAF10",
+    "glass-FK51A": "N-FK51A",
+    "glass-LASF9": "N-LASF9",
+    "glass-F5": "N-SF5",
+    "glass-F10": "N-SF10",
+    "glass-F11": "N-SF11",
+}
 _ILLUMINANTS = {"stdillum-A": "A", "stdillum-D50": "D50", "stdillum-D65": "D65"} | {
     f"stdillum-F{i}": f"FL{i}" for i in range(1, 13)
 }
@@ -252,15 +270,24 @@ class PbrtImporter:
             return {"blackbody": float(values[0])}
         if isinstance(values[0], str):
             return self.named_spectrum(values[0], parameter.location, role, parameter.label())
-        return {"values": self.pairs([float(v) for v in values], parameter.location, parameter.label())}
+        return {"values": self.pairs([float(v) for v in values], parameter.location, parameter.label(), role)}
 
-    def pairs(self, numbers: list[float], location: Location, label: str) -> list[list[float]]:
+    def pairs(self, numbers: list[float], location: Location, label: str, role: str = "") -> list[list[float]]:
+        """Wavelength/value pairs as pbrt reads them: zero outside their range (spectrace holds the end values, so
+        zeros are added at the ends), except for an index of refraction (role "unbounded"), where pbrt's zero (a
+        metal of η = k = 0, a perfect mirror) is no index: the end values are held instead, with a note."""
         if len(numbers) % 2 or len(numbers) < 4:
             raise error(location, f'"{label}" needs wavelength/value pairs, at least two')
         pairs = [[numbers[i], numbers[i + 1]] for i in range(0, len(numbers), 2)]
         if any(b[0] <= a[0] for a, b in zip(pairs, pairs[1:], strict=False)):
             raise error(location, f'"{label}": wavelengths must increase')
-        # pbrt's piecewise-linear spectrum is zero outside its samples; spectrace holds the end values.
+        if role == "unbounded":
+            if pairs[0][0] > 360.0 or pairs[-1][0] < 830.0:
+                self.notes.append(
+                    f'{location}: "{label}" covers {pairs[0][0]:g}-{pairs[-1][0]:g} nm: its end values are held to '
+                    "360-830 nm (pbrt has 0 there)"
+                )
+            return pairs
         if pairs[0][0] > 360.0:
             pairs.insert(0, [pairs[0][0] - 1e-3, 0.0])
         if pairs[-1][0] < 830.0:
@@ -283,8 +310,11 @@ class PbrtImporter:
                 raise error(
                     location, f"\"{label}\": '{shown(name, 200)}' is not a file of wavelength/value pairs"
                 ) from None
-            return {"values": self.pairs(numbers, location, label)}
-        known = "metal-{Ag,Al,Au,Cu}-{eta,k}, glass-BK7, glass-F11, stdillum-{A,D50,D65,F1..F12}"
+            return {"values": self.pairs(numbers, location, label, role)}
+        known = (
+            "metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k}, glass-{BK7,BAF10,FK51A,LASF9,F5,F10,F11}, "
+            "stdillum-{A,D50,D65,F1..F12}"
+        )
         raise error(
             location, f"\"{label}\": named spectrum '{shown(name)}' has no spectrace data (spectrace maps {known})"
         )
@@ -577,9 +607,19 @@ class PbrtImporter:
         """pbrt's `scale` texture: `tex` times a number. A scaled spectrum stays a spectrum; a scaled image becomes a
         linear OpenEXR copy of it, multiplied, beside the TOML (pbrt scales the uplifted spectrum, spectrace uplifts
         the scaled colour: the same colour under D65, docs/pbrt.md)."""
-        if (factor_texture := texture.find("scale", "texture")) is not None:
-            raise error(factor_texture.location, f'{texture.label()}: a texture as "scale" (spectrace takes a number)')
+        value_type = next(t.value_type for t in self.scene.textures.values() if t.entity is texture)
         factor = self.one(texture, "scale", 1.0)
+        if (factor_texture := texture.find("scale", "texture")) is not None:
+            # A constant float texture as the factor is its number (pbrt-v4's scenes write scales so).
+            key = ("float", str(factor_texture.values[0]))
+            constant = self.scene.textures.get(key)
+            if constant is None or constant.entity.kind != "constant":
+                raise error(
+                    factor_texture.location,
+                    f'{texture.label()}: a texture as "scale" other than a constant one (spectrace takes a number)',
+                )
+            self.read.add(id(constant.entity))
+            factor = self.one(constant.entity, "value", 1.0)
         if factor < 0:
             raise error(texture.location, f"{texture.label()}: a negative scale")
         inner = self.spectrum(texture, "tex", "albedo")
@@ -588,7 +628,7 @@ class PbrtImporter:
             if reference is None:
                 inner = {"value": 1.0}
             else:
-                key = ("spectrum", str(reference.values[0]))
+                key = (value_type, str(reference.values[0]))
                 if key not in self.scene.textures:
                     raise error(
                         reference.location, f"\"texture tex\" names '{shown(key[1])}', which no Texture defined"
@@ -662,8 +702,13 @@ class PbrtImporter:
         if table["texture"] != "bitmap":
             raise error(parameter.location, f'"{parameter.label()}": spectrace takes an imagemap or a constant here')
         source = (self.toml_folder / table["file"]).resolve()
-        values, encoded = read_texture_image(source, str(texture.location))
-        roughness = np.clip(decoded(values, encoded, bool(table.get("raw", False))).mean(axis=-1), 0.0, None)
+        written = str(table["file"]).removeprefix(f"{self.mesh_folder}/")
+        if written in self.files:  # a scaled image this import made (a `scale` texture): not on disk yet
+            linear = np.asarray(self.files[written], np.float64)
+        else:
+            values, encoded = read_texture_image(source, str(texture.location))
+            linear = decoded(values, encoded, bool(table.get("raw", False)))
+        roughness = np.clip(linear.mean(axis=-1), 0.0, None)
         alpha = np.minimum(np.sqrt(roughness) if remap else roughness, 1.0)
         file = _name(f"{source.stem}_alpha", {Path(n).stem for n in self.files}) + ".tif"
         self.files[file] = alpha.astype(np.float32)
@@ -724,13 +769,16 @@ class PbrtImporter:
             k = self.spectrum(material, "k", "unbounded") or {"spectrum": "metals/Cu:k"}
             table: dict[str, object] = {"type": "conductor"}
             metals = {s.get("spectrum", "").split(":")[0] for s in (eta_table, k)}
-            if len(metals) == 1 and metals != {""} and next(iter(metals)).startswith("metals/"):
-                table["metal"] = next(iter(metals)).removeprefix("metals/")
+            metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
+            if metal in SPECTRACE_METALS:
+                table["metal"] = metal
             else:
                 table |= {"eta": eta_table, "k": k}
             if "glass" in eta_table or "glass" in k:
                 raise error(material.location, "a glass's index given as a conductor's eta or k")
             return table | self._rough(material)
+        if kind == "diffusetransmission":
+            return self.diffuse_transmission(material)
         eta: float | str = self.ior(material)
         if kind == "dielectric":
             return {"type": "dielectric", "ior": eta} | self._rough(material)
@@ -758,6 +806,28 @@ class PbrtImporter:
         } | self._rough(material)
         if "roughness" in table:
             table["coat_transmission"] = "rough"
+        return table
+
+    def diffuse_transmission(self, material: Entity) -> dict:
+        """pbrt-v4's DiffuseTransmissionMaterial: Lambertian reflection and transmission, `reflectance` and
+        `transmittance` (defaults 0.25 each) both multiplied by `scale` (default 1), as spectrace's
+        `diffusetransmission`."""
+        factor = self.one(material, "scale", 1.0)
+        table: dict = {"type": "diffusetransmission"}
+        for key in ("reflectance", "transmittance"):
+            value = self.reflectance(material, key, 0.25)
+            if factor != 1.0:
+                if "value" in value:
+                    value = {"value": value["value"] * factor}
+                elif "rgb" in value:
+                    value = {"rgb": [c * factor for c in value["rgb"]]}
+                else:
+                    raise error(
+                        material.location,
+                        f'diffusetransmission "scale" {factor:g} on a {key} that is not a number or rgb: spectrace '
+                        "scales only those",
+                    )
+            table[key] = value
         return table
 
     def mix_table(self, material: Entity) -> dict | None:

@@ -26,6 +26,7 @@ from spectrace.materials import (
     conductor,
     dielectric,
     diffuse,
+    diffusetransmission,
     mirror,
     mix,
     plastic,
@@ -40,7 +41,20 @@ from spectrace.spectral.table import SpectrumTable
 # the order in which the schema lists the types and the kernels' dispatch tests them.
 # The mix comes last: a composite of other materials (COMPOSITE), it has no BSDF and is no entry of the kernels'
 # MATERIAL_LIST; kernels/material_mix.cl resolves it into one of its materials at each vertex.
-MATERIALS = {m.NAME: m for m in (diffuse, conductor, mirror, plastic, dielectric, retroreflector, thindielectric, mix)}
+MATERIALS = {
+    m.NAME: m
+    for m in (
+        diffuse,
+        conductor,
+        mirror,
+        plastic,
+        dielectric,
+        retroreflector,
+        thindielectric,
+        diffusetransmission,
+        mix,
+    )
+}
 # The BSDFs: the materials with a bsdf_<name>.cl and an entry in MATERIAL_LIST.
 BSDFS = {name: m for name, m in MATERIALS.items() if not getattr(m, "COMPOSITE", False)}
 MATERIAL_CODES = {name: code for code, name in enumerate(MATERIALS)}

@@ -157,3 +157,26 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if tints:
         table["specular_tint"] = tints["specular_reflectance"]
     return table
+
+
+def to_mitsuba(material: DielectricMaterial, exporter) -> dict:
+    """Mitsuba's `dielectric` or `roughdielectric` of the same relative index (int_ior over an ext_ior of 1), α and
+    distribution; a tint on both lobes. Mitsuba's dielectrics take one index for every wavelength, so a dispersive
+    glass is refused, as is a textured roughness."""
+    from spectrace.textures import is_texture
+
+    if material.ior.dispersive:
+        raise exporter.refuse(f"a dispersive dielectric ({material.ior.name or 'its index'} varies with wavelength)")
+    if is_texture(material.roughness):
+        raise exporter.refuse("a dielectric with textured roughness is not exported yet")
+    entry: dict = {"int_ior": float(material.ior.at(550.0)), "ext_ior": 1.0}
+    if material.specular_tint is not None:
+        tint = exporter.spectrum(material.specular_tint)
+        entry |= {"specular_reflectance": tint, "specular_transmittance": tint}
+    if material.is_delta:
+        return {"type": "dielectric"} | entry
+    return {
+        "type": "roughdielectric",
+        "alpha": float(material.roughness),
+        "distribution": material.distribution,
+    } | entry

@@ -218,3 +218,33 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if specular is not None and specular != {"value": 1.0}:
         table["specular_reflectance"] = specular
     return table
+
+
+def to_mitsuba(material: PlasticMaterial, exporter) -> dict:
+    """Mitsuba's `plastic` (a smooth coat) or `roughplastic` (a rough coat crossed by its own transmittance:
+    coat_transmission "rough") with the same albedo, coat index, `nonlinear`, α and distribution; `twosided`, as
+    spectrace's plastic reflects on both faces. A rough coat crossed by the smooth interface's Fresnel terms has no
+    Mitsuba counterpart and is refused, as is a textured roughness."""
+    from spectrace.materials.opaque import smooth_everywhere
+    from spectrace.textures import is_texture
+
+    if is_texture(material.roughness):
+        raise exporter.refuse("a plastic with textured roughness is not exported yet")
+    entry: dict = {
+        "diffuse_reflectance": exporter.spectrum(material.reflectance),
+        "int_ior": float(material.ior),
+        "ext_ior": 1.0,
+        "nonlinear": bool(material.nonlinear),
+    }
+    if material.specular_reflectance is not None:
+        entry["specular_reflectance"] = exporter.spectrum(material.specular_reflectance)
+    if smooth_everywhere(material.roughness):
+        entry["type"] = "plastic"
+    elif material.coat_transmission == "rough":
+        entry |= {"type": "roughplastic", "alpha": float(material.roughness), "distribution": material.distribution}
+    else:
+        raise exporter.refuse(
+            'a rough plastic with coat_transmission "smooth" (Mitsuba\'s roughplastic crosses its coat by the rough '
+            "interface's transmittance)"
+        )
+    return {"type": "twosided", "bsdf": entry}

@@ -1,0 +1,59 @@
+"""`diffusetransmission`: Lambertian reflection R(λ)/π on the side light arrives from and Lambertian transmission
+T(λ)/π to the other side (paper, a lampshade, a leaf); pbrt-v4's `diffusetransmission` material
+(docs/materials.md, kernels/bsdf_diffusetransmission.cl)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spectrace.materials.base import Material
+from spectrace.materials.parameters import REQUIRED, reflectance
+from spectrace.spectral import spectrum_input
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
+from spectrace.spectral.table import SpectrumTable
+
+NAME = "diffusetransmission"
+MITSUBA_PLUGINS = ()
+MITSUBA_NONE = "Mitsuba 3 has no diffuse transmission BSDF (its 0.6 `difftrans` plugin was not carried over)"
+PARAMETERS = (
+    reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π on the side the light arrives from", textured=True),
+    reflectance(REQUIRED, "Lambertian transmission f = T(λ)/π to the other side (R + T ≤ 1)", name="transmittance"),
+)
+
+
+@dataclass(frozen=True)
+class DiffusetransmissionMaterial(Material):
+    """Lambertian reflection `reflectance`/π and Lambertian transmission `transmittance`/π, the same from both
+    faces."""
+
+    reflectance: Spectrum  # or a texture
+    transmittance: Spectrum
+
+    is_delta = False
+    has_transmission = True
+    is_dispersive = False
+
+
+MODEL = DiffusetransmissionMaterial
+
+
+def from_spec(spec, resolver, key: str) -> DiffusetransmissionMaterial:
+    return DiffusetransmissionMaterial(
+        resolver.spectrum_or_texture(spec.reflectance, f"{key}.reflectance", "spectrum"),
+        resolver.spectrum(spec.transmittance, f"{key}.transmittance", emission=False),
+    )
+
+
+def make(reflectance: SpectrumLike, transmittance: SpectrumLike) -> DiffusetransmissionMaterial:
+    """Lambertian reflection R/π and transmission T/π (both in [0, 1], R + T ≤ 1 for energy conservation; a linear
+    sRGB triple is uplifted); `reflectance` may be a texture."""
+    return DiffusetransmissionMaterial(
+        spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
+        spectrum_input.reflectance(transmittance, "transmittance"),
+    )
+
+
+def write_row(row: np.ndarray, material: DiffusetransmissionMaterial, table: SpectrumTable) -> None:
+    row["reflectance_offset"] = table.add(material.reflectance)
+    row["transmittance_offset"] = table.add(material.transmittance)
