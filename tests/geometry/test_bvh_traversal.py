@@ -49,7 +49,8 @@ def _trace(kernel_runner, kernel, width, bvh, vertices, origins, directions, rea
     `read` then `written`, and the `written` arrays are filled in."""
     width, quantised = (8, True) if width == "8q" else (width, False)
     runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width, quantised))
-    inputs = [device_nodes(bvh, vertices, width, quantised), vertices, _as_float4(origins), _as_float4(directions), *read]
+    nodes = device_nodes(bvh, vertices, width, quantised)
+    inputs = [nodes, vertices, _as_float4(origins), _as_float4(directions), *read]
     args = [runner.buffer(a) for a in inputs] + [runner.buffer(a, True) for a in written]
     runner.run(kernel, len(origins), [*args, np.int32(len(origins))], dict(enumerate(written, len(inputs))))
 
