@@ -15,7 +15,9 @@
  * - t = 1: a light vertex joined to the camera, as the light tracer does (light_tracer.cl): its value lands in any
  *   pixel and is written as a splat record, reduced on the host in a fixed order;
  * - s, t >= 2: a light vertex joined to a camera vertex through a shadow ray.
- * The sum of a work-item's own-pixel strategies is written as one more record for its own pixel.
+ * The sum of each pixel's own strategies is written as one more record for that pixel. A work-item renders a pixel
+ * sample of two neighbouring pixels whose camera subpaths share one light subpath (trace_bdpt): the light walk and
+ * the t = 1 joins are made once for two pixel samples, which the t = 1 strategy's value and MIS weight count.
  *
  * Light subpath vertices use the adjoint BSDF (light_tracer.cl's conventions: the sample weight divided by the
  * radiance scale, Veach's shading-normal factor). A vertex's beta is its subpath's throughput as it arrives there:
@@ -44,6 +46,11 @@
 /* max_depth 16 at most: a camera subpath of 17 vertices (the eye and 16 surfaces), a light one of 16. */
 #define BDPT_MAX_SEGMENTS 16
 #define BDPT_MAX_VERTICES (BDPT_MAX_SEGMENTS + 1)
+/* Neighbouring pixels (in row-major order) whose camera subpaths share one light subpath (trace_bdpt); the host's
+ * spectrace.engine.bdpt.BDPT_PIXELS_PER_LIGHT_PATH. */
+#ifndef BDPT_PIXELS_PER_LIGHT_PATH
+#define BDPT_PIXELS_PER_LIGHT_PATH 2
+#endif
 
 /* Test builds only: BDPT_ONLY_S / BDPT_ONLY_T (both defined) keep that one strategy; BDPT_UNWEIGHTED drops the MIS
  * weights, so that one strategy alone estimates the light of paths of s + t − 1 segments by itself. */
@@ -192,8 +199,10 @@ inline float bdpt_remap(float f) { return f != 0.0f ? f : 1.0f; }
 
 /* Sets path[k].mis_sum once its pdf_rev is known (the walk has sampled vertex k + 1): S_k = ρ_k² (S_{k−1} + c_k),
  * ρ_k = pdf_rev / pdf_fwd (remapped), c_k = 1 where neither vertex k nor the one before it (a light's point: a delta
- * light) is delta, S_{−1} = 0 on a light subpath; a camera subpath's vertex 0 (the eye) takes no part, S_0 = 0. */
-inline void bdpt_extend_mis_sum(BdptVertex *path, int k, int adjoint)
+ * light) is delta, S_{−1} = 0 on a light subpath; a camera subpath's vertex 0 (the eye) takes no part, S_0 = 0.
+ * A camera subpath's c_1 is the light-to-camera strategy's (t = 1), counted light_share² times: it has light_share
+ * samples per pixel sample (bdpt_light_share; the power heuristic weighs n_i p_i). */
+inline void bdpt_extend_mis_sum(BdptVertex *path, int k, int adjoint, float light_share)
 {
     BdptVertex *v = &path[k];
     if (k == 0 && !adjoint) {
@@ -203,7 +212,17 @@ inline void bdpt_extend_mis_sum(BdptVertex *path, int k, int adjoint)
     int before_delta = k == 0 ? v->delta_light : path[k - 1].delta;
     float before_sum = k == 0 ? 0.0f : path[k - 1].mis_sum;
     float rho = bdpt_remap(v->pdf_rev) / bdpt_remap(v->pdf_fwd);
-    v->mis_sum = rho * rho * (before_sum + ((v->delta || before_delta) ? 0.0f : 1.0f));
+    float c = (v->delta || before_delta) ? 0.0f : (k == 1 && !adjoint ? light_share * light_share : 1.0f);
+    v->mis_sum = rho * rho * (before_sum + c);
+}
+
+/* Light subpaths per pixel sample, n_light / n_pixels: trace_bdpt traces one for each BDPT_PIXELS_PER_LIGHT_PATH
+ * pixels. */
+inline float bdpt_light_share(__global const RenderParams *params)
+{
+    int pixels = params->width * params->height;
+    int group = BDPT_PIXELS_PER_LIGHT_PATH;
+    return (float)((pixels + group - 1) / group) / (float)pixels;
 }
 
 #include "bdpt_medium.cl"
@@ -327,7 +346,7 @@ inline int bdpt_environment_vertex(const Scene *scene, const SampledWavelengths 
  * vertex at infinity, when the scene has one (beam_pdf: its disk's density, 1/(πR²)). Returns the vertex count. */
 inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray, float4 beta,
                      float pdf_dir, int adjoint, BdptVertex *path, int max_vertices, uint query_base,
-                     float beam_pdf, uint *rays_traced)
+                     float beam_pdf, float light_share, uint *rays_traced)
 {
     __global const RenderParams *params = scene->params;
     PathState s = camera_path(ray);
@@ -340,7 +359,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         Hit hit = scene_intersect(scene, s.ray, path_query(sampler, &s, QUERY_PATH) ^ query_base, rays_traced);
         if (!adjoint) hit = far_clipped(params, &s, hit);
         int in_medium = bdpt_medium_step(scene, w, sampler, &s, hit.t, path, &count, max_vertices, &pdf_dir,
-                                         &scatter, hero, adjoint);
+                                         &scatter, hero, adjoint, light_share);
         if (in_medium < 0) break;
         if (in_medium > 0) continue;
         if (hit.triangle < 0) {
@@ -403,7 +422,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
             pdf_reverse = material_pdf(material, &sc, w, pv.ns, bs.wi, pv.wo);
         }
         prev->pdf_rev = bdpt_to_area(pdf_reverse, v, prev);
-        bdpt_extend_mis_sum(path, count - 2, adjoint);
+        bdpt_extend_mis_sum(path, count - 2, adjoint, light_share);
         s.throughput *= weight;
         scatter *= weight / (adjoint ? 1.0f : bs.radiance_scale);
         s.previous_point = pv.p;
@@ -454,7 +473,8 @@ inline float bdpt_light_pdf(const Scene *scene, const BdptVertex *v, const BdptV
  * beside the connection are computed here; the subpaths' stored ones serve for the rest. camera_rev (t = 1): the
  * area density at light[s-1] of the camera's ray through it, from the lens point the connection drew. */
 inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, const BdptVertex *light,
-                             const BdptVertex *camera, const BdptVertex *sampled, int s, int t, float camera_rev)
+                             const BdptVertex *camera, const BdptVertex *sampled, int s, int t, float camera_rev,
+                             float light_share)
 {
 #ifdef BDPT_UNWEIGHTED
     return 1.0f;
@@ -483,12 +503,13 @@ inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, co
     /* The ratios at the two vertices either side of the connection and their neighbours, then the rest of each
      * subpath's sum as its walk kept it (mis_sum): O(1) per strategy. */
     float sum = 0.0f;
+    float t1 = light_share * light_share; /* the light-to-camera strategy's n² (bdpt_extend_mis_sum) */
     if (t > 1) {
         float r = bdpt_remap(pt_rev) / bdpt_remap(pt->pdf_fwd);
-        if (!camera[t - 2].delta) sum += r * r;
+        if (!camera[t - 2].delta) sum += r * r * (t == 2 ? t1 : 1.0f);
         if (t > 2) {
             r *= bdpt_remap(pt_minus_rev) / bdpt_remap(pt_minus->pdf_fwd);
-            if (!pt_minus->delta && !camera[t - 3].delta) sum += r * r;
+            if (!pt_minus->delta && !camera[t - 3].delta) sum += r * r * (t == 3 ? t1 : 1.0f);
             if (t > 3) sum += r * r * camera[t - 3].mis_sum;
         }
     }
@@ -501,6 +522,7 @@ inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, co
             if (s > 2) sum += r * r * light[s - 3].mis_sum;
         }
     }
+    if (t == 1) sum /= t1; /* relative to its own n² */
     return 1.0f / (1.0f + sum);
 }
 
@@ -593,20 +615,132 @@ inline int bdpt_light_ray(const Scene *scene, const SampledWavelengths *w, float
     return *pdf_dir > 0.0f && any(*flux != (float4)(0.0f));
 }
 
-/* One pixel sample of pixel `item`, written to records: the light-to-camera strategies (t = 1) as it makes them,
- * then the sum of the others, which all land in its own pixel (when not zero). scene_sphere: the scene's bounding
- * sphere (centre xyz, radius w), across which lights at infinity start; hide_environment: the environment seen
- * straight from the camera is black. */
-inline void trace_bdpt(const Scene *scene, int item, int sample_index, float4 scene_sphere, int hide_environment,
+/* Strategy (s, 1), s >= 2: light vertex light[s − 1] joined to the camera (a lens point drawn from the sampler),
+ * written as a splat record for the pixel it lands in. */
+inline void bdpt_splat(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, const BdptVertex *light,
+                       const BdptVertex *camera, int s, float light_share, __global const float4 *cmf,
+                       SplatRecords *records, uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    uint query = opacity_query(sampler, ((uint)s << 8) ^ 1u, QUERY_SHADOW);
+    const BdptVertex *qs = &light[s - 1];
+    if (qs->kind == BDPT_MEDIUM) {
+        CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, sampler));
+        if (c.pixel < 0) return;
+        float4 value = qs->beta * (bdpt_phase(scene, qs, -qs->wo, c.to_camera) * c.importance);
+        if (all(value == (float4)(0.0f))) return;
+        value *= camera_transmittance(scene, w, qs->medium, &c, qs->p, query, rays_traced);
+        if (all(value == (float4)(0.0f))) return;
+        /* No surface at qs: the camera's area density there has no cosine. */
+        float weight = bdpt_mis_weight(scene, w, light, camera, 0, s, 1, c.importance, light_share) / light_share;
+        record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, w, params);
+        return;
+    }
+    if (qs->kind != BDPT_SURFACE || qs->material < 0) return;
+    __global const Material *material = &scene->materials[qs->material];
+    if (!material_has_non_delta_lobe(material)) return;
+    CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, sampler));
+    if (c.pixel < 0 || !shading_side_agrees(qs->n, qs->ns, c.to_camera)) return;
+    SurfaceContext sc = surface_context(scene, qs->uv, qs->footprint);
+    float4 f_cos = material_eval(material, &sc, w, qs->ns, c.to_camera, qs->wo);
+    float cos_light = fabs(dot(qs->wo, qs->n));
+    float cos_camera = fabs(dot(c.to_camera, qs->n));
+    float cosines = cos_light > 0.0f ? cos_camera / cos_light : 0.0f;
+    float4 value = qs->beta * f_cos * (cosines * c.importance);
+    if (all(value == (float4)(0.0f))) return;
+    value *= camera_transmittance(scene, w, medium_beyond(qs->interior, qs->n, c.to_camera, qs->medium),
+                                  &c, offset_ray_origin(qs->p, qs->n, c.to_camera), query, rays_traced);
+    if (all(value == (float4)(0.0f))) return;
+    /* The camera's density of its ray through qs, as an area density there: c.importance holds the
+     * direction's 1/(A cos³θ) over d² (1/A for the orthographic camera's parallel rays). */
+    float weight = bdpt_mis_weight(scene, w, light, camera, 0, s, 1, c.importance * cos_camera, light_share) /
+                   light_share;
+    record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, w, params);
+}
+
+/* The camera vertex pt = camera[t − 1], t >= 2, can be joined to a light vertex: a surface with a non-delta lobe, or
+ * a scattering point. */
+inline int bdpt_joinable(const Scene *scene, const BdptVertex *pt)
+{
+    if (pt->kind == BDPT_MEDIUM) return 1;
+    return pt->kind == BDPT_SURFACE && pt->material >= 0 && material_has_non_delta_lobe(&scene->materials[pt->material]);
+}
+
+/* Strategy (s, t), s >= 1, t >= 2, its camera vertex joinable (bdpt_joinable): the value of the path joining
+ * qs (next-event estimation's light point when s = 1, light[s − 1] otherwise) to camera[t − 1] through a shadow
+ * ray (opacity `query`), weighted by MIS; 0 where the join gives nothing. */
+inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, const BdptVertex *light,
+                           const BdptVertex *camera, const BdptVertex *qs, int s, int t, uint query, float light_share,
+                           uint *rays_traced)
+{
+    const BdptVertex *pt = &camera[t - 1];
+    int pt_medium = pt->kind == BDPT_MEDIUM;
+    __global const Material *pm = &scene->materials[pt_medium ? 0 : pt->material];
+    if (s > 1 && qs->kind != BDPT_MEDIUM) {
+        if (qs->kind != BDPT_SURFACE || qs->material < 0) return (float4)(0.0f);
+        if (!material_has_non_delta_lobe(&scene->materials[qs->material])) return (float4)(0.0f);
+    }
+    /* G's distance and the light's cosine: none toward a light at infinity (a solid angle measure). */
+    float3 to_q;
+    float g = 1.0f;
+    if (qs->at_infinity) {
+        to_q = qs->wo;
+    } else {
+        float3 d = qs->p - pt->p;
+        float d2 = dot(d, d);
+        if (!(d2 > 0.0f)) return (float4)(0.0f);
+        to_q = d * rsqrt(d2);
+        g = (all(qs->n == (float3)(0.0f)) ? 1.0f : fabs(dot(qs->n, to_q))) / d2;
+    }
+    float4 f_p;
+    if (pt_medium) {
+        f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
+    } else {
+        if (!shading_side_agrees(pt->n, pt->ns, to_q)) return (float4)(0.0f);
+        SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
+        f_p = material_eval(pm, &psc, w, pt->ns, pt->wo, to_q);
+    }
+    float4 f_q;
+    if (s == 1) {
+        f_q = light_vertex_emitted(scene, w, qs, -to_q);
+    } else if (qs->kind == BDPT_MEDIUM) {
+        f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
+    } else {
+        if (!shading_side_agrees(qs->n, qs->ns, -to_q)) return (float4)(0.0f);
+        __global const Material *qm = &scene->materials[qs->material];
+        SurfaceContext qsc = surface_context(scene, qs->uv, qs->footprint);
+        float cos_in = fabs(dot(qs->wo, qs->n));
+        if (!(cos_in > 0.0f)) return (float4)(0.0f);
+        f_q = material_eval(qm, &qsc, w, qs->ns, -to_q, qs->wo) / cos_in;
+    }
+    float4 value = qs->beta * f_q * pt->beta * f_p * g;
+    if (all(value == (float4)(0.0f))) return (float4)(0.0f);
+    value *= bdpt_transmittance(scene, w, pt, qs, query, rays_traced);
+    if (all(value == (float4)(0.0f))) return (float4)(0.0f);
+    float weight = bdpt_mis_weight(scene, w, light, camera, s == 1 ? qs : 0, s, t, 0.0f, light_share);
+    return bdpt_hero(value, pt->hero || qs->hero) * weight;
+}
+
+/* One pixel sample of the pixels of `group` (BDPT_PIXELS_PER_LIGHT_PATH consecutive ones from group × that, those
+ * the film has), written to records: the light-to-camera strategies (t = 1) as it makes them, then each pixel's sum
+ * of the others (when not zero). The camera subpaths share one light subpath (and its wavelengths): every strategy with s >= 2
+ * and t >= 2 joins each camera subpath to a whole light subpath, as with one light subpath per pixel sample, while
+ * the light subpath's walk and its joins to the camera (t = 1) are made once for two pixel samples. The t = 1
+ * strategy then has bdpt_light_share(params) samples per pixel sample, which its splats' value and the MIS weights
+ * count. scene_sphere: the scene's bounding sphere (centre xyz, radius w), across which lights at infinity start;
+ * hide_environment: the environment seen straight from the camera is black. */
+inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 scene_sphere, int hide_environment,
                        __global const float4 *cmf, SplatRecords *records, uint *rays_traced)
 {
     __global const RenderParams *params = scene->params;
     int last_segment = min(max_segments(params), BDPT_MAX_SEGMENTS);
     float beam_pdf = 1.0f / (PI_F * scene_sphere.w * scene_sphere.w);
+    float light_share = bdpt_light_share(params);
+    int pixel = BDPT_PIXELS_PER_LIGHT_PATH * group;
     Sampler sampler;
     SampledWavelengths w;
     float filter_weight;
-    Ray ray = start_pixel_sample(params, cmf, item, sample_index, &sampler, &w, &filter_weight);
+    Ray ray = start_pixel_sample(params, cmf, pixel, sample_index, &sampler, &w, &filter_weight);
 
     /* The light subpath's start and the light point of next-event estimation take the sampler's first dimensions
      * after the camera ray's, where a low-discrepancy sampler stratifies them best. */
@@ -619,7 +753,7 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, float4 sc
     bdpt_camera_vertex(params, ray, filter_weight, &camera[0]);
     float camera_pdf = camera[0].beam_pdf > 0.0f ? 0.0f : camera_direction_pdf(params, ray.direction);
     int nc = bdpt_walk(scene, &w, &sampler, ray, camera[0].beta, camera_pdf, 0, camera, last_segment + 1, 0u,
-                       beam_pdf, rays_traced);
+                       beam_pdf, light_share, rays_traced);
 
     int nl = 0;
     if (sample_light_origin(scene, u_position, beam_pdf, &light[0])) {
@@ -629,124 +763,59 @@ inline void trace_bdpt(const Scene *scene, int item, int sample_index, float4 sc
         float4 flux;
         if (bdpt_light_ray(scene, &w, scene_sphere, u_direction, &light[0], &lray, &pdf_dir, &flux)) {
             nl = bdpt_walk(scene, &w, &sampler, lray, flux, pdf_dir, 1, light, last_segment, 0x9e3779b9u, beam_pdf,
-                           rays_traced);
+                           light_share, rays_traced);
         }
     }
 
-    /* Next-event estimation's light point, one for every camera vertex (the same draw for each). */
-    BdptVertex sampled;
-    int have_sampled = sample_light_origin(scene, u_nee_position, beam_pdf, &sampled);
+    /* t = 1 first, its records in the order of s (lens points from the first pixel's sampler). */
+    for (int s = 2; s <= nl && s <= last_segment; ++s) {
+        if (bdpt_keeps(s, 1)) {
+            bdpt_splat(scene, &w, &sampler, light, camera, s, light_share, cmf, records, rays_traced);
+        }
+    }
 
-    float4 radiance = (float4)(0.0f);
-
-    for (int t = 1; t <= nc; ++t) {
-        for (int s = 0; s <= nl || (s == 1 && t > 1); ++s) {
-            if (s + t - 1 > last_segment) break;
-            if ((s == 1 && t == 1) || (s == 0 && t == 1)) continue;
-            if (!bdpt_keeps(s, t)) continue;
-            uint query = opacity_query(&sampler, ((uint)s << 8) ^ (uint)t, QUERY_SHADOW);
+    int pixels = params->width * params->height;
+    for (int k = 0; k < BDPT_PIXELS_PER_LIGHT_PATH && pixel < pixels; ++k, ++pixel) {
+        if (k > 0) {
+            /* The next pixel's camera subpath, with the first one's wavelengths (the light subpath's); its own
+             * draws at the dimensions the first pixel's took, the light subpath's start left unused. */
+            SampledWavelengths own;
+            ray = start_pixel_sample(params, cmf, pixel, sample_index, &sampler, &own, &filter_weight);
+            (void)sample_2d(&sampler);
+            (void)sample_2d(&sampler);
+            u_nee_position = sample_2d(&sampler);
+            bdpt_camera_vertex(params, ray, filter_weight, &camera[0]);
+            camera_pdf = camera[0].beam_pdf > 0.0f ? 0.0f : camera_direction_pdf(params, ray.direction);
+            nc = bdpt_walk(scene, &w, &sampler, ray, camera[0].beta, camera_pdf, 0, camera, last_segment + 1, 0u,
+                           beam_pdf, light_share, rays_traced);
+        }
+        /* Next-event estimation's light point, one for every camera vertex (the same draw for each). */
+        BdptVertex sampled;
+        int have_sampled = sample_light_origin(scene, u_nee_position, beam_pdf, &sampled);
+        float4 radiance = (float4)(0.0f);
+        for (int t = 2; t <= nc; ++t) {
             BdptVertex *pt = &camera[t - 1];
-            if (s == 0) {
-                if (pt->light < 0 || all(pt->le == (float4)(0.0f))) continue;
-                if (pt->at_infinity && t == 2 && hide_environment) continue;
+            if (bdpt_keeps(0, t) && pt->light >= 0 && any(pt->le != (float4)(0.0f)) &&
+                !(pt->at_infinity && t == 2 && hide_environment)) {
                 float4 value = pt->beta * pt->le;
-                radiance += bdpt_hero(value, pt->hero) * bdpt_mis_weight(scene, &w, light, camera, 0, 0, t, 0.0f);
-                continue;
+                float weight = bdpt_mis_weight(scene, &w, light, camera, 0, 0, t, 0.0f, light_share);
+                radiance += bdpt_hero(value, pt->hero) * weight;
             }
-            if (t == 1) {
-                BdptVertex *qs = &light[s - 1];
-                if (qs->kind == BDPT_MEDIUM) {
-                    CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, &sampler));
-                    if (c.pixel < 0) continue;
-                    float4 value = qs->beta * (bdpt_phase(scene, qs, -qs->wo, c.to_camera) * c.importance);
-                    if (all(value == (float4)(0.0f))) continue;
-                    value *= camera_transmittance(scene, &w, qs->medium, &c, qs->p, query, rays_traced);
-                    if (all(value == (float4)(0.0f))) continue;
-                    /* No surface at qs: the camera's area density there has no cosine. */
-                    float weight = bdpt_mis_weight(scene, &w, light, camera, 0, s, 1, c.importance);
-                    record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, &w, params);
-                    continue;
-                }
-                if (qs->kind != BDPT_SURFACE || qs->material < 0) continue;
-                __global const Material *material = &scene->materials[qs->material];
-                if (!material_has_non_delta_lobe(material)) continue;
-                CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, &sampler));
-                if (c.pixel < 0 || !shading_side_agrees(qs->n, qs->ns, c.to_camera)) continue;
-                SurfaceContext sc = surface_context(scene, qs->uv, qs->footprint);
-                float4 f_cos = material_eval(material, &sc, &w, qs->ns, c.to_camera, qs->wo);
-                float cos_light = fabs(dot(qs->wo, qs->n));
-                float cos_camera = fabs(dot(c.to_camera, qs->n));
-                float cosines = cos_light > 0.0f ? cos_camera / cos_light : 0.0f;
-                float4 value = qs->beta * f_cos * (cosines * c.importance);
-                if (all(value == (float4)(0.0f))) continue;
-                value *= camera_transmittance(scene, &w, medium_beyond(qs->interior, qs->n, c.to_camera, qs->medium),
-                                              &c, offset_ray_origin(qs->p, qs->n, c.to_camera), query, rays_traced);
-                if (all(value == (float4)(0.0f))) continue;
-                /* The camera's density of its ray through qs, as an area density there: c.importance holds the
-                 * direction's 1/(A cos³θ) over d² (1/A for the orthographic camera's parallel rays). */
-                float weight = bdpt_mis_weight(scene, &w, light, camera, 0, s, 1, c.importance * cos_camera);
-                record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, &w, params);
-                continue;
+            if (t > last_segment || !bdpt_joinable(scene, pt)) continue;
+            if (have_sampled && bdpt_keeps(1, t)) {
+                uint query = opacity_query(&sampler, (1u << 8) ^ (uint)t, QUERY_SHADOW);
+                radiance += bdpt_connect(scene, &w, light, camera, &sampled, 1, t, query, light_share, rays_traced);
             }
-            /* t >= 2: a camera vertex with a non-delta lobe, or a scattering point. */
-            int pt_medium = pt->kind == BDPT_MEDIUM;
-            if (!pt_medium && (pt->kind != BDPT_SURFACE || pt->material < 0)) continue;
-            __global const Material *pm = &scene->materials[pt_medium ? 0 : pt->material];
-            if (!pt_medium && !material_has_non_delta_lobe(pm)) continue;
-            const BdptVertex *qs;
-            if (s == 1) {
-                if (!have_sampled) continue;
-                qs = &sampled;
-            } else {
-                qs = &light[s - 1];
-                if (qs->kind != BDPT_MEDIUM) {
-                    if (qs->kind != BDPT_SURFACE || qs->material < 0) continue;
-                    if (!material_has_non_delta_lobe(&scene->materials[qs->material])) continue;
-                }
+            for (int s = 2; s <= nl && s + t - 1 <= last_segment; ++s) {
+                if (!bdpt_keeps(s, t)) continue;
+                uint query = opacity_query(&sampler, ((uint)s << 8) ^ (uint)t, QUERY_SHADOW);
+                radiance += bdpt_connect(scene, &w, light, camera, &light[s - 1], s, t, query, light_share,
+                                         rays_traced);
             }
-            /* G's distance and the light's cosine: none toward a light at infinity (a solid angle measure). */
-            float3 to_q;
-            float g = 1.0f;
-            if (qs->at_infinity) {
-                to_q = qs->wo;
-            } else {
-                float3 d = qs->p - pt->p;
-                float d2 = dot(d, d);
-                if (!(d2 > 0.0f)) continue;
-                to_q = d * rsqrt(d2);
-                g = (all(qs->n == (float3)(0.0f)) ? 1.0f : fabs(dot(qs->n, to_q))) / d2;
-            }
-            float4 f_p;
-            if (pt_medium) {
-                f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
-            } else {
-                if (!shading_side_agrees(pt->n, pt->ns, to_q)) continue;
-                SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
-                f_p = material_eval(pm, &psc, &w, pt->ns, pt->wo, to_q);
-            }
-            float4 f_q;
-            if (s == 1) {
-                f_q = light_vertex_emitted(scene, &w, qs, -to_q);
-            } else if (qs->kind == BDPT_MEDIUM) {
-                f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
-            } else {
-                if (!shading_side_agrees(qs->n, qs->ns, -to_q)) continue;
-                __global const Material *qm = &scene->materials[qs->material];
-                SurfaceContext qsc = surface_context(scene, qs->uv, qs->footprint);
-                float cos_in = fabs(dot(qs->wo, qs->n));
-                if (!(cos_in > 0.0f)) continue;
-                f_q = material_eval(qm, &qsc, &w, qs->ns, -to_q, qs->wo) / cos_in;
-            }
-            float4 value = qs->beta * f_q * pt->beta * f_p * g;
-            if (all(value == (float4)(0.0f))) continue;
-            value *= bdpt_transmittance(scene, &w, pt, qs, query, rays_traced);
-            if (all(value == (float4)(0.0f))) continue;
-            float weight = bdpt_mis_weight(scene, &w, light, camera, s == 1 ? &sampled : 0, s, t, 0.0f);
-            radiance += bdpt_hero(value, pt->hero || qs->hero) * weight;
         }
+        /* The pixel's own sum: whole-pixel (box filter) records, so its film position is not read. */
+        if (any(radiance != (float4)(0.0f))) record_splat(records, pixel, (float2)(0.0f), radiance, cmf, &w, params);
     }
-    /* The pixel's own sum: whole-pixel (box filter) records, so its film position is not read. */
-    if (any(radiance != (float4)(0.0f))) record_splat(records, item, (float2)(0.0f), radiance, cmf, &w, params);
 }
 
 #endif

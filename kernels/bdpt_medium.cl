@@ -74,7 +74,7 @@ inline float4 bdpt_transmittance(const Scene *scene, const SampledWavelengths *w
  * before it gets its reverse density and running MIS sum as bdpt_walk's surfaces do; adjoint: a light subpath. */
 inline int bdpt_medium_step(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
                             float hit_t, BdptVertex *path, int *count, int max_vertices, float *pdf_dir,
-                            float4 *scatter, int hero, int adjoint)
+                            float4 *scatter, int hero, int adjoint, float light_share)
 {
     if (!SCENE_HAS_MEDIA || s->medium < 0) return 0;
     __global const Medium *medium = &scene->media[s->medium];
@@ -111,7 +111,7 @@ inline int bdpt_medium_step(const Scene *scene, const SampledWavelengths *w, Sam
     float3 next = sample_henyey_greenstein(travel, medium->g, sample_2d(sampler));
     *pdf_dir = henyey_greenstein(dot(travel, next), medium->g);
     prev->pdf_rev = bdpt_to_area(*pdf_dir, v, prev); /* the phase function is symmetric */
-    bdpt_extend_mis_sum(path, *count - 2, adjoint);
+    bdpt_extend_mis_sum(path, *count - 2, adjoint, light_share);
     s->previous_point = v->p;
     s->ray.origin = v->p;
     s->ray.direction = next;

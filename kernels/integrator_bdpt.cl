@@ -1,9 +1,10 @@
 /* Render-pass program of the `bdpt` integrator (bidirectional path tracing, kernels/bdpt.cl).
  *
- * One launch runs one pixel sample: work-item k is a pixel sample of pixel k (or of the pixel listed in `items` when
- * the host launches some again for their later records). Its light-to-camera connections land in any pixel, so,
- * as for the `light` integrator (integrator_light.cl), everything it finds is written as splat records in its own
- * `capacity` slots: those connections in the order it makes them, then its own pixel's estimate. The host adds them
+ * One launch runs one pixel sample: work-item k is a pixel sample of the BDPT_PIXELS_PER_LIGHT_PATH pixels from
+ * k × that, which share a light subpath (or of the group listed in `items` when the host launches some again for their later records). Its
+ * light-to-camera connections land in any pixel, so, as for the `light` integrator (integrator_light.cl), everything
+ * it finds is written as splat records in its own `capacity` slots: those connections in the order it makes them,
+ * then its two pixels' estimates. The host adds them
  * to the film in the order (sample index, work-item, record) (spectrace.engine.light_tracer). The arguments are the
  * light tracer's, so the same host code drives both. */
 #include "kernel_entry.h"
@@ -21,5 +22,6 @@ KERNEL void bdpt_pass(SCENE_KERNEL_PARAMS, SPLAT_PASS_PARAMS)
     uint rays_traced = 0;
     trace_bdpt(&scene, item, sample_index, scene_sphere, hide_environment, cmf, &records, &rays_traced);
     splat_counts[slot] = records.count;
-    if (record_begin == 0) ray_counts[item] += rays_traced;
+    /* The group's rays, counted in its first pixel. */
+    if (record_begin == 0) ray_counts[BDPT_PIXELS_PER_LIGHT_PATH * item] += rays_traced;
 }

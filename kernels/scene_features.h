@@ -48,8 +48,9 @@
 #define SCENE_HAS_TEXTURES 1
 #endif
 
-/* Lookups that read the texture footprint (trilinear filtering, bump maps' finite differences): only then does a
- * hit pay for camera_footprint (kernels/scene.cl); elsewhere the footprint stays 0, which no other lookup reads. */
+/* Lookups that read the texture footprint (trilinear filtering, a checkerboard bump map's differences): only then
+ * does a hit pay for camera_footprint (kernels/scene.cl); elsewhere the footprint stays 0, which no other lookup
+ * reads. */
 #ifndef SCENE_NEEDS_FOOTPRINT
 #define SCENE_NEEDS_FOOTPRINT SCENE_HAS_TEXTURES
 #endif

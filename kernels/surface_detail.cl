@@ -31,14 +31,22 @@ inline float3 in_plane(float3 n, float3 d)
     return d - n * dot(n, d);
 }
 
-/* The uv steps of a bump map's finite differences: half the footprint (about a pixel's width, as pbrt-v4's BumpMap
- * takes), else one texel of the map (a checkerboard has none: a small fixed step). */
-inline float2 bump_step(const TextureBuffers *b, int index, float footprint)
+/* ∂h/∂u and ∂h/∂v of bump map `index` at uv: a bitmap's is the exact gradient of its lookup (image_texture_gradient:
+ * the bilinear interpolant's, 0 for nearest), as Mitsuba 3's bumpmap takes it. A checkerboard's heights are flat
+ * but for their edges, whose relief a derivative would miss: forward differences over half the footprint (about a
+ * pixel's width, pbrt-v4's BumpMap step) or, where the footprint is 0, pbrt-v4's fixed 5e-4, show them. */
+inline float2 bump_gradient(const TextureBuffers *b, int index, float2 uv, float footprint)
 {
-    if (footprint > 0.0f) return (float2)(0.5f * footprint);
     __global const Texture *t = &b->textures[index];
-    float2 texel = 1.0f / ((float2)(t->width, t->height) * fabs(t->uv_transform.xy));
-    return t->type != TEXTURE_CHECKERBOARD && all(isfinite(texel)) ? texel : (float2)(5.0e-4f);
+    if (t->type != TEXTURE_CHECKERBOARD) {
+        SampledWavelengths w = fixed_wavelengths((float4)(560.0f));
+        return image_texture_gradient(t, b, uv, footprint, &w);
+    }
+    float step = footprint > 0.0f ? 0.5f * footprint : 5.0e-4f;
+    float h = texture_numbers(b, index, uv, footprint).x;
+    float h_u = texture_numbers(b, index, uv + (float2)(step, 0.0f), footprint).x;
+    float h_v = texture_numbers(b, index, uv + (float2)(0.0f, step), footprint).x;
+    return (float2)(h_u - h, h_v - h) / step;
 }
 
 /* The shading normal of material m at a point with tangents dpdu, dpdv (when `parametrised`), texture coordinates
@@ -61,15 +69,12 @@ inline float3 detailed_normal_at(const Scene *scene, __global const Material *m,
         }
         n = to_world(&frame, mapped);
     } else {
-        /* Blinn 1978: the surface displaced by h·bump_scale along ns has tangents dp/du + (dh/du)·bump_scale·ns and
-         * dp/dv + (dh/dv)·bump_scale·ns; forward differences of h give the derivatives. */
+        /* Blinn 1978: the surface displaced by h·bump_scale along ns has tangents dp/du + (∂h/∂u)·bump_scale·ns
+         * and dp/dv + (∂h/∂v)·bump_scale·ns (their parts along ns replaced, as Mitsuba 3's bumpmap does). */
         if (!parametrised) return ns;
-        float2 step = bump_step(&sc.buffers, m->bump_map, footprint);
-        float h = texture_numbers(&sc.buffers, m->bump_map, uv, footprint).x;
-        float h_u = texture_numbers(&sc.buffers, m->bump_map, uv + (float2)(step.x, 0.0f), footprint).x;
-        float h_v = texture_numbers(&sc.buffers, m->bump_map, uv + (float2)(0.0f, step.y), footprint).x;
-        float3 tu = in_plane(ns, dpdu) + ns * (m->bump_scale * (h_u - h) / step.x);
-        float3 tv = in_plane(ns, dpdv) + ns * (m->bump_scale * (h_v - h) / step.y);
+        float2 slope = m->bump_scale * bump_gradient(&sc.buffers, m->bump_map, uv, footprint);
+        float3 tu = in_plane(ns, dpdu) + ns * slope.x;
+        float3 tv = in_plane(ns, dpdv) + ns * slope.y;
         n = cross(tu, tv);
         /* The cross product's sign follows the uv layout's handedness; the surface's front is ns's side. */
         if (dot(n, ns) < 0.0f) n = -n;

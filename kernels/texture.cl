@@ -180,6 +180,50 @@ inline float4 image_texture_spectrum(__global const Texture *t, const TextureBuf
     return value;
 }
 
+/* The gradient ∂h/∂st of texture_bilinear's interpolant at one level (h: the first lane of a scalar texture): the
+ * exact derivative of the blend, constant across u inside each cell between four texel centres and linear in v,
+ * in texels, times the level's size (Mitsuba 3's bitmap eval_1_grad takes the same derivative). Wrapped neighbours
+ * as the lookup wraps them, so a clamped edge is flat beyond the outer texel centres. */
+inline float2 texture_bilinear_gradient(__global const Texture *t, const TextureBuffers *b, int level, float2 st,
+                                        const SampledWavelengths *w)
+{
+    int width, height;
+    int offset = texture_level(t, level, &width, &height);
+    float2 p = clamp(st * (float2)(width, height) - 0.5f, -TEXTURE_MAX_COORDINATE, TEXTURE_MAX_COORDINATE);
+    float2 corner = floor(p);
+    float2 f = p - corner;
+    int x0 = (int)corner.x, y0 = (int)corner.y;
+    int xa = texture_wrap(x0, width, t->wrap), xb = texture_wrap(x0 + 1, width, t->wrap);
+    int ya = texture_wrap(y0, height, t->wrap), yb = texture_wrap(y0 + 1, height, t->wrap);
+    float h00 = texel_spectrum(t, b, offset, width, xa, ya, w).x;
+    float h10 = texel_spectrum(t, b, offset, width, xb, ya, w).x;
+    float h01 = texel_spectrum(t, b, offset, width, xa, yb, w).x;
+    float h11 = texel_spectrum(t, b, offset, width, xb, yb, w).x;
+    float2 per_texel = (float2)(mix(h10 - h00, h11 - h01, f.y), mix(h01 - h00, h11 - h10, f.x));
+    return per_texel * (float2)(width, height);
+}
+
+/* ∂h/∂uv of an image texture's lookup at uv (image_texture_spectrum's first lane): 0 for a nearest lookup, whose
+ * steps have no derivative (as Mitsuba 3's eval_1_grad gives), the bilinear interpolant's gradient otherwise, and
+ * for a trilinear lookup the same blend of its two levels' gradients (the blend is linear). */
+inline float2 image_texture_gradient(__global const Texture *t, const TextureBuffers *b, float2 uv, float footprint,
+                                     const SampledWavelengths *w)
+{
+    if (t->filter == FILTER_NEAREST) return (float2)(0.0f);
+    float2 st = uv * t->uv_transform.xy + t->uv_transform.zw;
+    float2 gradient;
+    if (t->filter == FILTER_BILINEAR || t->levels == 1) {
+        gradient = texture_bilinear_gradient(t, b, 0, st, w);
+    } else {
+        float level = texture_mip_level(t, footprint * fmax(fabs(t->uv_transform.x), fabs(t->uv_transform.y)));
+        int lower = (int)floor(level);
+        float frac = level - (float)lower;
+        gradient = texture_bilinear_gradient(t, b, lower, st, w);
+        if (frac > 0.0f) gradient = mix(gradient, texture_bilinear_gradient(t, b, lower + 1, st, w), frac);
+    }
+    return gradient * t->uv_transform.xy;  /* the chain rule through st = uv · scale + offset */
+}
+
 /* Which side of a checkerboard st is on: 0 where floor(s) + floor(t) is even. */
 inline int checkerboard_side(float2 st)
 {

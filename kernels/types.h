@@ -77,6 +77,8 @@ typedef struct {
     float abs_det;        /* |det| of to_world's linear part: world area = object area · abs_det · |M⁻ᵀ n_object| */
     float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder) */
     int flip_normals;     /* 1: the front (normal, emitting side) faces the other way: inward, the disk's −z */
+    int pbrt_uv;          /* 1: texture coordinates as pbrt-v4 gives them (shapes.cl, shape_uv_from_mitsuba) */
+    int pad0, pad1, pad2;
 } AnalyticShape;
 
 /* A placed copy of an instanced object (kernels/scene.cl, "Instances"): the object's triangles are stored once, at

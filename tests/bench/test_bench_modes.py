@@ -71,6 +71,7 @@ def test_scaling_rays_and_quality_modes(modes):
     ours = quality["renderers"][0]
     assert ours["renderer"] == "spectrace" and ours["spp"] >= 1 and ours["rmse"] > 0
     assert ours["spp"] & (ours["spp"] - 1) == 0  # the default Sobol sampler renders a power of two
+    assert ours["above"]["spp"] == 2 * ours["spp"]  # and the next, bracketing the budget
 
 
 @pytest.mark.slow

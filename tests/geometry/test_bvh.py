@@ -401,13 +401,25 @@ def test_sampled_binning_keeps_the_tree_valid_and_good(monkeypatch):
     assert bvh.sah_cost < 0.8 * _naive_median_split_sah(clustered)
 
 
-@pytest.mark.parametrize("threads", [2, 3, 8])
-def test_threads_build_the_same_tree(monkeypatch, threads):
+@pytest.mark.parametrize(("threads", "nodes_per_thread"), [(2, 1), (3, 1), (8, 1), (2, 8)])
+def test_threads_build_the_same_tree(monkeypatch, threads, nodes_per_thread):
     """Subtrees built on several threads, then joined level by level, give the single-thread tree bit for bit."""
     monkeypatch.setattr(bvh_module, "PARALLEL_BUILD_TRIANGLES", 100)
+    monkeypatch.setattr(bvh_module, "PARALLEL_NODES_PER_THREAD", nodes_per_thread)
     triangles = _bumpy_sphere_and_torus(np.random.default_rng(5))
     single = build_bvh(*_corners(triangles), threads=1)
+    split_level = bvh_module._split_level
+    parts: list[int] = []
+
+    def recording_split(level, count):
+        groups = split_level(level, count)
+        parts.append(len(groups))
+        return groups
+
+    monkeypatch.setattr(bvh_module, "_split_level", recording_split)
     shared = build_bvh(*_corners(triangles), threads=threads)
+    # One split into 2..threads groups (nodes too uneven to cut evenly may merge two threads' shares).
+    assert len(parts) == 1 and 2 <= parts[0] <= threads, "the build never went onto threads: nothing compared"
     assert_valid_bvh(shared, triangles)
     assert shared.depth == single.depth
     np.testing.assert_array_equal(shared.nodes, single.nodes)

@@ -129,7 +129,7 @@ def test_point_light_through_a_glass_slab(device, tmp_path):
     expected = FLOOR_ALBEDO / np.pi * irradiance
     text = _slab_scene(tmp_path, "bdpt").read_text().replace("max_depth = -1", "max_depth = 16")
     scene = spectrace.load_scene(_write(tmp_path, text))
-    images = spectrace_replicas(Renderer(scene, device), 8, 128)[:, 6:10, 6:10, 1]
+    images = spectrace_replicas(Renderer(scene, device), 8, 256)[:, 6:10, 6:10, 1]
     mean, standard_error = mean_and_standard_error(images.mean(axis=(1, 2)))
     assert standard_error < 0.01 * expected
     assert_within_standard_errors(mean, expected, standard_error)

@@ -137,8 +137,9 @@ def test_beckmann_lobes_and_nonlinear_plastics_are_features():
 
 
 def test_the_footprint_is_computed_only_for_the_lookups_that_read_it():
-    """Trilinear filtering chooses its level by the footprint and a bump map steps by it; nearest and bilinear
-    lookups, and a trilinear one on a 1 x 1 image (no pyramid), never read it."""
+    """Trilinear filtering chooses its level by the footprint and a checkerboard bump map steps by it; nearest and
+    bilinear lookups, a trilinear one on a 1 x 1 image (no pyramid), and a bitmap bump map's exact gradient (of a
+    nearest or bilinear lookup) never read it."""
     image = np.full((4, 4), 0.5)
     for reflectance, bump_map, needs in (
         (spectrace.bitmap(image, filter="nearest"), None, 0),
@@ -146,7 +147,10 @@ def test_the_footprint_is_computed_only_for_the_lookups_that_read_it():
         (spectrace.bitmap(np.full((1, 1), 0.5), filter="trilinear"), None, 0),
         (spectrace.bitmap(image, filter="trilinear"), None, 1),
         (spectrace.checkerboard(0.2, spectrace.bitmap(image, filter="trilinear")), None, 1),
-        (0.5, spectrace.bitmap(image), 1),
+        (0.5, spectrace.bitmap(image), 0),
+        (0.5, spectrace.bitmap(image, filter="nearest"), 0),
+        (0.5, spectrace.bitmap(image, filter="trilinear"), 1),
+        (0.5, spectrace.checkerboard(0.2, 0.7), 1),
     ):
         material = spectrace.diffuse(reflectance, bump_map=bump_map)
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])

@@ -105,6 +105,30 @@ def test_constant_slope_bump_map_shades_like_the_tilted_plane():
     assert bumped == pytest.approx(tilted, rel=1e-5)
 
 
+@pytest.mark.parametrize("filter_name", ["bilinear", "trilinear", "nearest"])
+def test_a_linear_height_field_turns_every_normal_to_its_closed_form(device, filter_name):
+    """Heights h = a·u + b·v at the texel centres of an 8 × 8 raw map (clamped): the bilinear interpolant is that
+    plane exactly between the outer texel centres, so its gradient is (a, b) at every point there, and on the
+    rectangle (dp/du = 2 x̂, dp/dv = −2 ŷ: v runs down the image, whose top is +y) the bumped surface's tangents are
+    (2, 0, s·a) and (0, −2, s·b): the normal is (−s·a/2, s·b/2, 1) normalised. The camera sees uv in about
+    [0.15, 0.85], inside that region, so every pixel's normal AOV is the closed form. A nearest lookup is a step
+    function with no derivative: the normal stays +z (Mitsuba 3's bitmap gives a zero gradient there too)."""
+    size, texels, a, b, scale = 8, 8, 2.0 * np.tan(np.radians(25.0)), -2.0 * np.tan(np.radians(10.0)), 1.0
+    centres = (np.arange(texels) + 0.5) / texels
+    heights = 1.0 + a * centres[None, :] + b * centres[:, None]  # row j holds v = centres[j]; no negative heights
+    bumps = spectrace.bitmap(heights, wrap="clamp", filter=filter_name)
+    plane = spectrace.shape("rectangle", spectrace.diffuse(ALBEDO, bump_map=bumps, bump_scale=scale))
+    camera = spectrace.Camera(origin=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0), fov_degrees=20.0)
+    scene = Scene(
+        camera=camera, width=size, height=size, shapes=[plane], lights=[spectrace.constant_environment(1.0)],
+        max_depth=1, spp=4, seed=1, aovs=("normal",),
+    )  # fmt: skip
+    normals = Renderer(scene, device).render().aovs["normal"].astype(np.float64)
+    expected = np.array([-scale * a / 2.0, scale * b / 2.0, 1.0]) if filter_name != "nearest" else np.eye(3)[2]
+    expected /= np.linalg.norm(expected)
+    np.testing.assert_allclose(normals, np.broadcast_to(expected, normals.shape), atol=2e-5)
+
+
 def test_normal_map_in_a_furnace_loses_only_the_wedge_below_the_surface():
     """A white Lambertian plane in a uniform environment of radiance 1 with every normal tilted by θ: directions
     above the tilted normal but below the plane are dropped (shading_normal.cl, rule 2), the cosine-weighted

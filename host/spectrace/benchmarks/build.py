@@ -7,8 +7,9 @@ Mitsuba's side is its whole `load_dict` of the same triangles, written as binary
 reading the files, merging the shapes and building its own BVH (Embree in the scalar variants); or, given the
 Mitsuba scene file those PLY files come from, its `load_file` of the whole scene (materials, emitters, textures).
 It runs in a child process, so its peak resident size is its own (reported above the child's resident size just
-before the load, where /proc tells it). The two alternate, round by round, so a shared machine's load falls on
-both; each side's best round is compared.
+before the load, where /proc tells it); with a scene file, the meshes alone are loaded too (`load_dict`). spectrace
+builds with its default threads and, where that is more than one, on one thread too. All alternate, round by
+round, so a shared machine's load falls on each; each one's best round is compared, and the medians are given.
 """
 
 import json
@@ -24,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from spectrace.benchmarks.rays import displaced_sphere, subdivisions_for
-from spectrace.geometry.bvh import build_bvh
+from spectrace.geometry.bvh import build_bvh, default_build_threads
 from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
 from spectrace.geometry.mesh import TriangleMesh, load_mesh
 
@@ -81,9 +82,10 @@ def read_meshes(paths: list[Path]) -> tuple[TriangleMesh, list[Path]]:
     return TriangleMesh(vertices=np.concatenate(vertices), faces=np.concatenate(faces)), files
 
 
-def spectrace_build(mesh: TriangleMesh) -> dict:
-    """The binary build and the wide node buffer, as a render makes them (and reports them: the vertices put in
-    leaf order between the two are scene assembly, not counted); traced once more for the memory."""
+def spectrace_build(mesh: TriangleMesh, threads: int | None = None) -> dict:
+    """The binary build (on `threads` threads, None: the default) and the wide node buffer, as a render makes
+    them (and reports them: the vertices put in leaf order between the two are scene assembly, not counted);
+    traced once more for the memory."""
     v0, v1, v2 = mesh.triangles()
 
     def leaf_order_vertices(bvh) -> np.ndarray:
@@ -93,7 +95,7 @@ def spectrace_build(mesh: TriangleMesh) -> dict:
         return ordered.reshape(-1, 4)
 
     cpu = time.process_time()
-    bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK)
+    bvh = build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK, threads=threads)
     cpu = time.process_time() - cpu
     vertices = leaf_order_vertices(bvh)
     wall, nodes_cpu = time.perf_counter(), time.process_time()
@@ -101,7 +103,7 @@ def spectrace_build(mesh: TriangleMesh) -> dict:
     wall, nodes_cpu = time.perf_counter() - wall, time.process_time() - nodes_cpu
     peaks = []
     for work in (
-        lambda: build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK),
+        lambda: build_bvh(v0, v1, v2, max_leaf_size=LEAF_SIZE, leaf_block=LEAF_BLOCK, threads=threads),
         lambda: device_nodes(bvh, vertices),
     ):
         tracemalloc.start()
@@ -119,6 +121,7 @@ def spectrace_build(mesh: TriangleMesh) -> dict:
         "depth": int(bvh.depth),
         "sah_cost": bvh.sah_cost,
         "node_buffer_bytes": int(nodes.nbytes),
+        "threads": default_build_threads() if threads is None else threads,
     }
 
 
@@ -158,13 +161,26 @@ def run_build_bench(
             "source": source,
             "mitsuba_loads": str(mitsuba_scene) if mitsuba_scene is not None else "the mesh files (load_dict)",
             "spectrace": [],
+            "spectrace_one_thread": [],
             "mitsuba": [],
+            "mitsuba_load_dict": [],
             "notes": [],
         }
+        threads = default_build_threads()
         for round_index in range(rounds):
             row = spectrace_build(mesh)
-            log(f"round {round_index + 1}: spectrace {row['seconds']:.2f} s ({row['cpu_seconds']:.2f} CPU s)")
+            log(
+                f"round {round_index + 1}: spectrace, {threads} threads, {row['seconds']:.2f} s"
+                f" ({row['cpu_seconds']:.2f} CPU s)"
+            )
             result["spectrace"].append(row)
+            if threads > 1:
+                row = spectrace_build(mesh, threads=1)
+                log(
+                    f"round {round_index + 1}: spectrace, 1 thread, {row['seconds']:.2f} s"
+                    f" ({row['cpu_seconds']:.2f} CPU s)"
+                )
+                result["spectrace_one_thread"].append(row)
             try:
                 import mitsuba  # noqa: F401  (only whether it is there; the child imports it)
             except ImportError:
@@ -177,11 +193,28 @@ def run_build_bench(
                 continue
             log(f"round {round_index + 1}: Mitsuba {peer['seconds']:.2f} s ({peer['cpu_seconds']:.2f} CPU s)")
             result["mitsuba"].append(peer)
-    best = min(result["spectrace"], key=lambda r: r["seconds"])
-    result["best"] = {"spectrace": best}
+            if mitsuba_scene is not None:
+                try:
+                    peer = mitsuba_load(files)
+                except RuntimeError as error:
+                    result["notes"].append(f"Mitsuba's load_dict of the meshes failed: {error}")
+                    continue
+                log(
+                    f"round {round_index + 1}: Mitsuba load_dict {peer['seconds']:.2f} s"
+                    f" ({peer['cpu_seconds']:.2f} CPU s)"
+                )
+                result["mitsuba_load_dict"].append(peer)
+    result["best"] = {}
+    result["median"] = {}
+    for key in ("spectrace", "spectrace_one_thread", "mitsuba", "mitsuba_load_dict"):
+        if result[key]:
+            result["best"][key] = min(result[key], key=lambda r: r["seconds"])
+            result["median"][key] = {
+                figure: float(np.median([r[figure] for r in result[key]])) for figure in ("seconds", "cpu_seconds")
+            }
+    best = result["best"]["spectrace"]
     if result["mitsuba"]:
-        peer_best = min(result["mitsuba"], key=lambda r: r["seconds"])
-        result["best"]["mitsuba"] = peer_best
+        peer_best = result["best"]["mitsuba"]
         result["ratio_wall"] = best["seconds"] / peer_best["seconds"]
         result["ratio_cpu"] = best["cpu_seconds"] / max(peer_best["cpu_seconds"], 1e-9)
     return result
@@ -193,31 +226,32 @@ def build_tables(result: dict) -> list:
     table = Table(title=f"BVH build vs Mitsuba 3 load ({MITSUBA_VARIANT}): {result['triangles']} triangles")
     for column in ("", "wall s", "CPU s", "peak MiB", "SAH cost", "nodes", "node buffer MiB"):
         table.add_column(column, justify="left" if not column else "right")
-    ours = result["best"]["spectrace"]
-    table.add_row(
-        "spectrace build + wide nodes",
-        f"{ours['seconds']:.2f}",
-        f"{ours['cpu_seconds']:.2f}",
-        f"{ours['peak_traced_bytes'] / 2**20:.0f} (traced)",
-        f"{ours['sah_cost']:.1f}",
-        str(ours["nodes"]),
-        f"{ours['node_buffer_bytes'] / 2**20:.0f}",
-    )
-    peer = result["best"].get("mitsuba")
-    if peer:
-        table.add_row(
-            f"Mitsuba {peer['version']} "
-            + (
-                "load_file (whole scene)"
-                if result["mitsuba_loads"].endswith(".xml")
-                else "load_dict (files, merge, BVH)"
-            ),
-            f"{peer['seconds']:.2f}",
-            f"{peer['cpu_seconds']:.2f}",
-            f"{peer['peak_rss_growth_bytes'] / 2**20:.0f} (RSS growth)",
-            "",
-            "",
-            "",
-        )
+    for key in ("spectrace", "spectrace_one_thread"):
+        ours = result["best"].get(key)
+        if ours:
+            table.add_row(
+                f"spectrace build + wide nodes, {ours['threads']} thread" + ("s" if ours["threads"] > 1 else ""),
+                f"{ours['seconds']:.2f}",
+                f"{ours['cpu_seconds']:.2f}",
+                f"{ours['peak_traced_bytes'] / 2**20:.0f} (traced)",
+                f"{ours['sah_cost']:.1f}",
+                str(ours["nodes"]),
+                f"{ours['node_buffer_bytes'] / 2**20:.0f}",
+            )
+    for key in ("mitsuba", "mitsuba_load_dict"):
+        peer = result["best"].get(key)
+        if peer:
+            whole = key == "mitsuba" and result["mitsuba_loads"].endswith(".xml")
+            table.add_row(
+                f"Mitsuba {peer['version']} "
+                + ("load_file (whole scene)" if whole else "load_dict (files, merge, BVH)"),
+                f"{peer['seconds']:.2f}",
+                f"{peer['cpu_seconds']:.2f}",
+                f"{peer['peak_rss_growth_bytes'] / 2**20:.0f} (RSS growth)",
+                "",
+                "",
+                "",
+            )
+    if result["best"].get("mitsuba"):
         table.add_row("ratio spectrace / Mitsuba", f"{result['ratio_wall']:.2f}x", f"{result['ratio_cpu']:.2f}x")
     return [table]

@@ -4,9 +4,12 @@ A converged reference is a long spectrace render (its own seed, so its noise is 
 judged), cross-checked region by region against a long Mitsuba render of the exported scene. Then each
 renderer gets the same wall-clock budget, in the same way: a warm 4-spp probe render measures its throughput,
 then it renders the spp that fit the budget (the time actually taken is reported). With the Sobol sampler
-spectrace takes the largest power of two that fits, as its users would: Owen-scrambled Sobol points are balanced at
-powers of two, and a few samples past one can raise the error (docs/sampling.md); the time saved counts against it
-through "RMSE at budget". The error is the RMSE of
+spectrace renders powers of two, as its users would: Owen-scrambled Sobol points are balanced at powers of two, and a
+few samples past one can raise the error (docs/sampling.md). It renders the two that bracket the budget, the largest
+that fits and the next, and "RMSE at budget" interpolates their errors (net of the reference's noise) on log error
+against log spp to the spp the budget buys at the two renders' throughput: Sobol's error falls faster than 1/√spp
+where the image has edges, so scaling one render's error by its time (below) would favour whichever integrator
+happens to reach the higher power of two. The error is the RMSE of
 film XYZ over all pixels and channels against the reference, and relative to the reference's mean Y. The
 reference's own noise RMS (from its two independent halves) is reported: RMSE² includes its square. "RMSE at
 budget" takes that out and scales to exactly the budget (variance ∝ 1/time), since a renderer may overrun it.
@@ -54,21 +57,27 @@ def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: fl
 
 
 def _time_spectrace(scene, device, seconds: float, equal_spp: int, result: dict, errors, log) -> None:
-    """One integrator's rows: the spp that fit the budget (from a warm probe), and equal_spp."""
+    """One integrator's rows: the spp that fit the budget (from a warm probe), and equal_spp. With the Sobol sampler,
+    the powers of two either side of the budget: the row is the lower one's, with the upper one's as "above"."""
     renderer = Renderer(scene, device)
     renderer.run_pass(1)
     renderer.reset()
     probe = renderer.render(spp=PROBE_SPP)
     spp = min(_spp_for_budget(probe.render_seconds, PROBE_SPP, seconds), limits.MAX_SPP)
+    counts = [spp]
     if scene.sampler == "sobol":
         spp = 1 << (spp.bit_length() - 1)
-    renderer.reset()
-    start = time.perf_counter()
-    image = renderer.render(spp=spp)
-    elapsed = time.perf_counter() - start
+        counts = [spp] + ([2 * spp] if 2 * spp <= limits.MAX_SPP else [])
     row = {"renderer": "spectrace", "integrator": scene.integrator, "runtime": device.report.key}
-    result["renderers"].append({**row, "spp": image.spp, "seconds": elapsed, **errors(image.xyz)})
-    log(f"spectrace {scene.integrator}: {image.spp} spp in {elapsed:.2f} s")
+    timed = []
+    for count in counts:
+        renderer.reset()
+        start = time.perf_counter()
+        image = renderer.render(spp=count)
+        elapsed = time.perf_counter() - start
+        timed.append({"spp": image.spp, "seconds": elapsed, **errors(image.xyz)})
+        log(f"spectrace {scene.integrator}: {image.spp} spp in {elapsed:.2f} s")
+    result["renderers"].append({**row, **timed[0], **({"above": timed[1]} if len(timed) > 1 else {})})
     renderer.reset()
     start = time.perf_counter()
     image = renderer.render(spp=equal_spp)
@@ -195,9 +204,7 @@ def run_quality_bench(
     noise = result["reference"]["noise_rms"]
     for row in result["renderers"]:
         row["relative_rmse"] = row["rmse"] / max(result["reference"]["mean_y"], 1e-30)
-        # Monte Carlo variance falls as 1/time: the error each would have had in exactly the budget, with the
-        # reference's own noise taken out (RMSE² = error² + reference noise², the two being independent).
-        row["rmse_at_budget"] = float(np.sqrt(max(row["rmse"] ** 2 - noise**2, 0.0) * row["seconds"] / seconds))
+        row["rmse_at_budget"] = _at_budget(row, "rmse", noise, seconds)
     for row in result["equal_spp"]["renderers"]:
         row["relative_rmse"] = row["rmse"] / max(result["reference"]["mean_y"], 1e-30)
         row["rmse_net"] = float(np.sqrt(max(row["rmse"] ** 2 - noise**2, 0.0)))
@@ -207,10 +214,25 @@ def run_quality_bench(
         for row in result["equal_spp"]["renderers"]:
             row["rmse_off_lights_net"] = float(np.sqrt(max(row["rmse_off_lights"] ** 2 - noise_off**2, 0.0)))
         for row in result["renderers"]:
-            row["rmse_off_lights_at_budget"] = float(
-                np.sqrt(max(row["rmse_off_lights"] ** 2 - noise_off**2, 0.0) * row["seconds"] / seconds)
-            )
+            row["rmse_off_lights_at_budget"] = _at_budget(row, "rmse_off_lights", noise_off, seconds)
     return result
+
+
+def _at_budget(row: dict, key: str, noise: float, seconds: float) -> float:
+    """The error row[key] would have had in exactly `seconds`, with the reference's own noise taken out (RMSE² =
+    error² + reference noise², the two being independent). One render: Monte Carlo variance falls as 1/time. Two
+    (the row and row["above"], Sobol's powers of two either side of the budget): interpolated between them on log
+    error against log spp, at the spp the budget buys at their throughput."""
+    error2 = max(row[key] ** 2 - noise**2, 1e-30)
+    above = row.get("above")
+    if above is None:
+        return float(np.sqrt(error2 * row["seconds"] / seconds))
+    above2 = max(above[key] ** 2 - noise**2, 1e-30)
+    # The spp the budget buys at the throughput of both renders together (one render's time is noisier), and the
+    # error there on the line through the two in log error against log spp.
+    spp_at_budget = seconds * (row["spp"] + above["spp"]) / (row["seconds"] + above["seconds"])
+    slope = np.log(above2 / error2) / np.log(above["spp"] / row["spp"])
+    return float(np.sqrt(error2 * (spp_at_budget / row["spp"]) ** slope))
 
 
 def _off_lights_note(reference: dict) -> str:
@@ -235,8 +257,8 @@ def _error_table(table, renderers: list[dict], label: str, key: str, off_lights:
         table.add_row(
             _renderer_name(r),
             r["runtime"],
-            str(r["spp"]),
-            f"{r['seconds']:.2f}",
+            str(r["spp"]) + (f", {r['above']['spp']}" if "above" in r else ""),
+            f"{r['seconds']:.2f}" + (f", {r['above']['seconds']:.2f}" if "above" in r else ""),
             f"{r['rmse']:.4g}",
             f"{100 * r['relative_rmse']:.2f} %",
             f"{r[key]:.4g}",

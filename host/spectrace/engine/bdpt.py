@@ -7,6 +7,9 @@ from spectrace.scene.model import Scene
 
 # Subpaths live in fixed arrays in the kernel (kernels/bdpt.cl's BDPT_MAX_SEGMENTS).
 BDPT_MAX_SEGMENTS = 16
+# Consecutive pixels whose camera subpaths share one light subpath: a work-item each (kernels/bdpt.cl's
+# BDPT_PIXELS_PER_LIGHT_PATH).
+BDPT_PIXELS_PER_LIGHT_PATH = 2
 
 
 def bdpt_problem(scene: Scene) -> str | None:

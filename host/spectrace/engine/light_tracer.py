@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pyopencl as cl
 
-from spectrace.engine.bdpt import bdpt_problem
+from spectrace.engine.bdpt import BDPT_PIXELS_PER_LIGHT_PATH, bdpt_problem
 from spectrace.engine.launch import launch_shape
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.scene_buffers import render_params
@@ -145,6 +145,9 @@ class LightPasses:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         depth_slots = scene.max_depth + 1 if scene.max_depth > 0 else MAX_RECORD_SLOTS
         self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
+        if scene.integrator == "bdpt":
+            # Its t = 1 joins (light vertices 2 .. max_depth), then each of its pixels' own sums.
+            self.capacity = min(scene.max_depth - 1 + BDPT_PIXELS_PER_LIGHT_PATH, MAX_RECORD_SLOTS)
         pixels = renderer.pixel_count
         need = device_memory_need(renderer.buffers, pixels, spectral_bins)
         self.pixel_filter = scene.pixel_filter if scene.pixel_filter.type != "box" else None
@@ -162,6 +165,9 @@ class LightPasses:
         self._splat_band = cl.Buffer(ctx, rw, band_slots * 16)
         self._splat_film = cl.Buffer(ctx, rw, (pixels * self.capacity if self.pixel_filter else 1) * 8)
         self._items = cl.Buffer(ctx, rw, pixels * 4)
+        # A BDPT work-item renders a group of pixels with one light subpath (kernels/bdpt.cl's trace_bdpt).
+        group = BDPT_PIXELS_PER_LIGHT_PATH if scene.integrator == "bdpt" else 1
+        self.work_items = -(-pixels // group)
         self._sphere = scene_sphere(scene)
         # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.
         self._hide_environment = np.int32(scene.hide_environment or getattr(scene, "hide_emitters", False))
@@ -216,7 +222,7 @@ class LightPasses:
         """Every splat of one pixel sample's light paths, in the order (work-item, record): pixel, xyz, and (0 rows
         when not recorded) each record's lane values, bands and film position."""
         capacity = self.capacity
-        items = np.arange(self.renderer.pixel_count, dtype=np.int32)
+        items = np.arange(self.work_items, dtype=np.int32)
         begin = 0
         parts = []
         while len(items):

@@ -4,7 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.engine.device_types import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
+from spectrace.engine.device_types import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, TEXTURE_CHECKERBOARD
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.materials import MATERIAL_CODES
 
@@ -35,8 +35,11 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
     materials = buffers.materials
     textures = buffers.textures[: buffers.texture_count]
     bump_maps = bool(np.any(materials["bump_map"] >= 0))
-    # Only a trilinear lookup with a pyramid to choose from and a bump map's step read the footprint (texture.cl).
+    # Only a trilinear lookup with a pyramid to choose from (texture.cl) and a checkerboard bump map's finite
+    # differences (surface_detail.cl; a bitmap's gradient is exact) read the footprint.
     trilinear = bool(np.any((textures["filter"] == FILTER_TRILINEAR) & (textures["levels"] > 1)))
+    bump_textures = materials["bump_map"][materials["bump_map"] >= 0]
+    checkerboard_bumps = bool(np.any(textures["type"][bump_textures] == TEXTURE_CHECKERBOARD))
     return {
         "SCENE_MATERIAL_TYPES": _type_bits(buffers.materials["type"]),
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
@@ -49,7 +52,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_ROUGH_COAT": int(bool(np.any(materials["coat_table_offset"] >= 0))),
         "SCENE_HAS_MIX": int(bool(np.any(materials["type"] == MATERIAL_CODES["mix"]))),
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
-        "SCENE_NEEDS_FOOTPRINT": int(trilinear or bump_maps),
+        "SCENE_NEEDS_FOOTPRINT": int(trilinear or checkerboard_bumps),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_SHAPES": int(buffers.shape_count + buffers.instanced_shape_count > 0),
         "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),

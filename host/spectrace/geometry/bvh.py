@@ -23,9 +23,10 @@ What makes it fast on millions of triangles (docs/performance.md, "BVH build"):
   many of them (spread over the node's surface by the Morton order), then sends every triangle to the side of the
   chosen plane. On 2 M triangles this halves the binning work of the upper levels for an SAH cost within a few
   percent.
-- With threads > 1, once a level holds a node per thread the subtrees below are built on threads (numpy's array
-  loops mostly run without the GIL); each thread writes its own leaves' slots, and the levels are joined in order,
-  so the tree is the one a single thread builds. Off by default: no gain was measurable here (see build_bvh).
+- Once a level holds a few nodes per thread the subtrees below are built on threads (numpy's array loops mostly run
+  without the GIL), one per core the process may use (at most MAX_BUILD_THREADS) unless told otherwise; each
+  thread writes its own leaves' slots, and the levels are joined in order, so the tree is the one a single thread
+  builds, bit for bit, whatever the number of threads.
 
 Layout (mirrors `BVHNode` in kernels/types.h): an interior node has count == 0 and its children at
 left_first and left_first + 1; a leaf has count > 0 triangles in slots prim_order[left_first : left_first +
@@ -33,6 +34,7 @@ count]. Node 0 is the root. Bounds are float32 rounded outward, so they contain 
 also those triangles' vertices rounded to the nearest float32.
 """
 
+import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from time import perf_counter
@@ -60,6 +62,12 @@ SAMPLED_BINNING_TRIANGLES = 512
 MORTON_BITS = 21
 # Levels of at least this many triangles are shared out between threads, by subtree (module docstring).
 PARALLEL_BUILD_TRIANGLES = 65536
+# The subtrees go to threads once a level has this many nodes per thread: cut between more nodes, the threads' shares
+# of triangles come out more even (2.04 M-triangle Lego scene, 2 threads: the larger share 62 % of the triangles cut
+# at 2 nodes, 51 % at 16), for a few more levels built on one thread.
+PARALLEL_NODES_PER_THREAD = 8
+# Most threads a build uses by default: past a few, the levels above the split, built on one thread, dominate.
+MAX_BUILD_THREADS = 8
 # Nodes x bins evaluated per binning pass; bounds the temporary per-bin arrays to a few MB.
 _SAH_CHUNK_BIN_ENTRIES = 1 << 18
 
@@ -111,12 +119,12 @@ def build_bvh(
     v2: np.ndarray,
     max_leaf_size: int = 4,
     bins: int = 12,
-    threads: int = 1,
+    threads: int | None = None,
     leaf_block: int = 1,
 ) -> BVH:
     """Build a binned-SAH BVH over triangles (v0[i], v1[i], v2[i]), each (M, 3) in scene units, on `threads`
-    threads; the tree is the same for any number of threads. One by default: on a shared 2-core machine two
-    threads measured no faster (docs/performance.md, "BVH build"), and each costs a copy of the level it starts at.
+    threads (None: default_build_threads()); the tree is the same for any number of threads. Threads pay off only
+    where cores are free (docs/performance.md, "BVH build"), and the split costs a copy of the level it starts at.
 
     leaf_block: the traversal tests a leaf's triangles this many at a time, so the SAH prices a leaf by its blocks,
     ceil(count / leaf_block), each costing BLOCK_COST (see the module's cost model); 1 is the classic triangle count."""
@@ -143,7 +151,7 @@ def build_bvh(
         tree_index=np.zeros(1, dtype=np.int64),
     )
     del boxes, morton  # the level holds them now, in Morton order; each level frees its parent's arrays
-    threads = max(1, threads)
+    threads = default_build_threads() if threads is None else max(1, threads)
 
     def build_levels(top: _Level, top_depth: int, until_parallel: bool) -> tuple[list[np.ndarray], _Level | None]:
         """Levels from `top` down, children numbered from 0 within each level (offset later): to the leaves, or
@@ -154,7 +162,7 @@ def build_bvh(
         while current is not None:
             if (
                 until_parallel
-                and current.counts.size >= threads
+                and current.counts.size >= threads * PARALLEL_NODES_PER_THREAD
                 and current.triangle_ids.size >= PARALLEL_BUILD_TRIANGLES
             ):
                 break
@@ -189,6 +197,15 @@ def build_bvh(
         sah_cost=sah_cost(all_nodes),
         build_seconds=perf_counter() - start,
     )
+
+
+def default_build_threads() -> int:
+    """The cores this process may run on (its CPU affinity), at most MAX_BUILD_THREADS."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # no affinity call on this platform (macOS, Windows)
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, MAX_BUILD_THREADS))
 
 
 def _split_level(level: _Level, parts: int) -> list[_Level]:
