@@ -727,3 +727,6 @@ def test_float_text_reads_back_at_the_precision_of_the_value():
         assert len(text) <= len(repr(float(value)))
     assert float_text(0.1) == "0.1" and float_text(float(np.float32(0.1))) == "0.1"
     assert float_text(1e300) == "1e+300" and float_text(-0.0) == "-0.0"
+    # numpy's float64 is a float, but its repr is not TOML: an rgb medium coefficient uplifted by numpy was written so
+    value = np.float64(0.06643712080068864)
+    assert float(float_text(value)) == value and "np" not in float_text(value)
