@@ -692,25 +692,27 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
         to_q = d * rsqrt(d2);
         g = (all(qs->n == (float3)(0.0f)) ? 1.0f : fabs(dot(qs->n, to_q))) / d2;
     }
+    /* The geometric rejections of both ends first, then the BSDFs: a join that gives nothing costs no evaluation. */
+    int qs_surface = s > 1 && qs->kind != BDPT_MEDIUM;
+    float cos_in = qs_surface ? fabs(dot(qs->wo, qs->n)) : 1.0f;
+    if (qs_surface && (!(cos_in > 0.0f) || !shading_side_agrees(qs->n, qs->ns, -to_q))) return (float4)(0.0f);
+    if (!pt_medium && !shading_side_agrees(pt->n, pt->ns, to_q)) return (float4)(0.0f);
     float4 f_p;
     if (pt_medium) {
         f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
     } else {
-        if (!shading_side_agrees(pt->n, pt->ns, to_q)) return (float4)(0.0f);
         SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
         f_p = material_eval(pm, &psc, w, pt->ns, pt->wo, to_q);
     }
+    if (all(f_p == (float4)(0.0f))) return (float4)(0.0f);
     float4 f_q;
     if (s == 1) {
         f_q = light_vertex_emitted(scene, w, qs, -to_q);
-    } else if (qs->kind == BDPT_MEDIUM) {
+    } else if (!qs_surface) {
         f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
     } else {
-        if (!shading_side_agrees(qs->n, qs->ns, -to_q)) return (float4)(0.0f);
         __global const Material *qm = &scene->materials[qs->material];
         SurfaceContext qsc = surface_context(scene, qs->uv, qs->footprint);
-        float cos_in = fabs(dot(qs->wo, qs->n));
-        if (!(cos_in > 0.0f)) return (float4)(0.0f);
         f_q = material_eval(qm, &qsc, w, qs->ns, -to_q, qs->wo) / cos_in;
     }
     float4 value = qs->beta * f_q * pt->beta * f_p * g;
