@@ -15,7 +15,7 @@
  * - t = 1: a light vertex joined to the camera, as the light tracer does (light_tracer.cl): its value lands in any
  *   pixel and is written as a splat record, reduced on the host in a fixed order;
  * - s, t >= 2: a light vertex joined to a camera vertex through a shadow ray.
- * The sum of each pixel's own strategies is written as one more record for that pixel. A work-item renders a pixel
+ * The sum of each pixel's own strategies goes to the pixel's row of own_xyz. A work-item renders a pixel
  * sample of two neighbouring pixels whose camera subpaths share one light subpath (trace_bdpt): the light walk and
  * the t = 1 joins are made once for two pixel samples, which the t = 1 strategy's value and MIS weight count.
  *
@@ -692,25 +692,27 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
         to_q = d * rsqrt(d2);
         g = (all(qs->n == (float3)(0.0f)) ? 1.0f : fabs(dot(qs->n, to_q))) / d2;
     }
+    /* The geometric rejections of both ends first, then the BSDFs: a join that gives nothing costs no evaluation. */
+    int qs_surface = s > 1 && qs->kind != BDPT_MEDIUM;
+    float cos_in = qs_surface ? fabs(dot(qs->wo, qs->n)) : 1.0f;
+    if (qs_surface && (!(cos_in > 0.0f) || !shading_side_agrees(qs->n, qs->ns, -to_q))) return (float4)(0.0f);
+    if (!pt_medium && !shading_side_agrees(pt->n, pt->ns, to_q)) return (float4)(0.0f);
     float4 f_p;
     if (pt_medium) {
         f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
     } else {
-        if (!shading_side_agrees(pt->n, pt->ns, to_q)) return (float4)(0.0f);
         SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
         f_p = material_eval(pm, &psc, w, pt->ns, pt->wo, to_q);
     }
+    if (all(f_p == (float4)(0.0f))) return (float4)(0.0f);
     float4 f_q;
     if (s == 1) {
         f_q = light_vertex_emitted(scene, w, qs, -to_q);
-    } else if (qs->kind == BDPT_MEDIUM) {
+    } else if (!qs_surface) {
         f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
     } else {
-        if (!shading_side_agrees(qs->n, qs->ns, -to_q)) return (float4)(0.0f);
         __global const Material *qm = &scene->materials[qs->material];
         SurfaceContext qsc = surface_context(scene, qs->uv, qs->footprint);
-        float cos_in = fabs(dot(qs->wo, qs->n));
-        if (!(cos_in > 0.0f)) return (float4)(0.0f);
         f_q = material_eval(qm, &qsc, w, qs->ns, -to_q, qs->wo) / cos_in;
     }
     float4 value = qs->beta * f_q * pt->beta * f_p * g;
@@ -722,15 +724,16 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
 }
 
 /* One pixel sample of the pixels of `group` (BDPT_PIXELS_PER_LIGHT_PATH consecutive ones from group × that, those
- * the film has), written to records: the light-to-camera strategies (t = 1) as it makes them, then each pixel's sum
- * of the others (when not zero). The camera subpaths share one light subpath (and its wavelengths): every strategy with s >= 2
+ * the film has): the light-to-camera strategies (t = 1) written to records as it makes them, each pixel's sum of the
+ * others (XYZ, w = 1 where dropped) to its row of own_xyz. The camera subpaths share one light subpath (and its wavelengths): every strategy with s >= 2
  * and t >= 2 joins each camera subpath to a whole light subpath, as with one light subpath per pixel sample, while
  * the light subpath's walk and its joins to the camera (t = 1) are made once for two pixel samples. The t = 1
  * strategy then has bdpt_light_share(params) samples per pixel sample, which its splats' value and the MIS weights
  * count. scene_sphere: the scene's bounding sphere (centre xyz, radius w), across which lights at infinity start;
  * hide_environment: the environment seen straight from the camera is black. */
 inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 scene_sphere, int hide_environment,
-                       __global const float4 *cmf, SplatRecords *records, uint *rays_traced)
+                       __global const float4 *cmf, SplatRecords *records, __global float4 *own_xyz,
+                       uint *rays_traced)
 {
     __global const RenderParams *params = scene->params;
     int last_segment = min(max_segments(params), BDPT_MAX_SEGMENTS);
@@ -813,8 +816,9 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
                                          rays_traced);
             }
         }
-        /* The pixel's own sum: whole-pixel (box filter) records, so its film position is not read. */
-        if (any(radiance != (float4)(0.0f))) record_splat(records, pixel, (float2)(0.0f), radiance, cmf, &w, params);
+        /* The pixel's own sum, in its row of own_xyz (written by the first launch of the sample alone: a relaunch
+         * for later records makes the same sum). */
+        if (records->begin == 0) own_xyz[pixel] = splat_xyz_estimate(radiance, cmf, &w);
     }
 }
 

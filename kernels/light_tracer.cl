@@ -49,7 +49,7 @@ typedef struct {
     __global const float4 *cmf, float4 scene_sphere, int hide_environment, int sample_index,                        \
         __global const int *items, int item_count, int record_begin, int capacity, __global float4 *splat_xyz,      \
         __global int *splat_pixel, __global int *splat_counts, __global float4 *splat_band_value,                   \
-        __global int4 *splat_band, __global float2 *splat_film, __global uint *ray_counts
+        __global int4 *splat_band, __global float2 *splat_film, __global float4 *own_xyz, __global uint *ray_counts
 
 /* Work-item `slot`'s records in a pass's splat buffers (its `capacity` slots), emptied (pixel -1) before the path
  * writes any. */
@@ -64,6 +64,14 @@ inline SplatRecords slot_splat_records(int slot, int record_begin, int capacity,
     return records;
 }
 
+/* A splat's XYZ estimate, w = 1 (and XYZ 0) where it is not finite: the film counts it as a dropped sample. */
+inline float4 splat_xyz_estimate(float4 value, __global const float4 *cmf, const SampledWavelengths *w)
+{
+    float4 xyz = spectrum_to_xyz_estimate(value, cmf, w);
+    int dropped = !(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z));
+    return dropped ? (float4)(0.0f, 0.0f, 0.0f, 1.0f) : xyz;
+}
+
 inline void record_splat(SplatRecords *r, int pixel, float2 film, float4 value, __global const float4 *cmf,
                          const SampledWavelengths *w, __global const RenderParams *params)
 {
@@ -71,9 +79,8 @@ inline void record_splat(SplatRecords *r, int pixel, float2 film, float4 value, 
     if (slot < 0 || slot >= r->capacity) return;
     /* The host spreads the splat over the pixels whose filter covers it (spectrace.engine.light_tracer). */
     if (!PIXEL_FILTER_IS(params, PIXEL_FILTER_BOX)) r->film[slot] = film;
-    float4 xyz = spectrum_to_xyz_estimate(value, cmf, w);
-    int dropped = !(isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z));
-    if (dropped) xyz = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
+    float4 xyz = splat_xyz_estimate(value, cmf, w);
+    int dropped = xyz.w != 0.0f;
     r->xyz[slot] = xyz;
     r->pixel[slot] = pixel;
 #if SPECTRAL_BINS > 0

@@ -1,7 +1,7 @@
 """Bidirectional path tracing on the host: what the `bdpt` integrator (kernels/bdpt.cl) refuses beyond the light
-tracer's limits. Its passes are the light tracer's (spectrace.engine.light_tracer): every pixel sample writes splat
-records (its light-to-camera connections, then its own pixel's estimate) that the host adds to the film in a fixed
-order."""
+tracer's limits. Its passes are the light tracer's (spectrace.engine.light_tracer): every pixel sample writes its
+own pixel's estimate to that pixel's row and its light-to-camera connections as splat records, which the host adds
+to the film in a fixed order (every pixel's own estimate, then the records)."""
 
 from spectrace.scene.model import Scene
 

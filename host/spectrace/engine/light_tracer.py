@@ -4,7 +4,9 @@ A light path's connections to the camera land in arbitrary pixels, so the kernel
 not add them to the film: each work-item writes its splats as records (pixel, XYZ) into slots of its own, and the
 host adds every record to the film in the order (sample index, work-item, record). Float sums then come out the same
 whatever the split into passes, as the path tracer's do, with no atomics (OpenCL 1.2 has no float atomics, and the
-64-bit integer ones an order-free fixed-point film would need are an extension).
+64-bit integer ones an order-free fixed-point film would need are an extension). BDPT's work-items also write each
+of their pixels' own estimates (all its strategies but the light-to-camera one) to a row per pixel, which the host
+adds to the film before the sample's records: fewer records to add one by one.
 
 Each pixel sample runs as many light paths as the film has pixels, so samples per pixel mean the same work as for
 the path tracer (Mitsuba 3's ptracer counts alike) and the film is divided by the samples done as always.
@@ -145,14 +147,15 @@ class LightPasses:
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         depth_slots = scene.max_depth + 1 if scene.max_depth > 0 else MAX_RECORD_SLOTS
         self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
-        if scene.integrator == "bdpt":
-            # Its t = 1 joins (light vertices 2 .. max_depth), then each of its pixels' own sums.
-            self.capacity = min(scene.max_depth - 1 + BDPT_PIXELS_PER_LIGHT_PATH, MAX_RECORD_SLOTS)
+        self.bdpt = scene.integrator == "bdpt"
+        if self.bdpt:
+            # Its t = 1 joins (light vertices 2 .. max_depth); its pixels' own sums go to a row each (own_xyz).
+            self.capacity = min(max(scene.max_depth - 1, 1), MAX_RECORD_SLOTS)
         pixels = renderer.pixel_count
         need = device_memory_need(renderer.buffers, pixels, spectral_bins)
         self.pixel_filter = scene.pixel_filter if scene.pixel_filter.type != "box" else None
         record_bytes = RECORD_BYTES + (BAND_RECORD_BYTES if spectral_bins else 0) + (8 if self.pixel_filter else 0)
-        need.buffers["splat records"] = pixels * self.capacity * record_bytes
+        need.buffers["splat records"] = pixels * self.capacity * record_bytes + (pixels * 16 if self.bdpt else 0)
         check_device_memory(need, renderer.device)
         self.spectral_bins = spectral_bins
         ctx = renderer.device.context
@@ -165,6 +168,7 @@ class LightPasses:
         self._splat_band = cl.Buffer(ctx, rw, band_slots * 16)
         self._splat_film = cl.Buffer(ctx, rw, (pixels * self.capacity if self.pixel_filter else 1) * 8)
         self._items = cl.Buffer(ctx, rw, pixels * 4)
+        self._own_xyz = cl.Buffer(ctx, rw, (pixels if self.bdpt else 1) * 16)
         # A BDPT work-item renders a group of pixels with one light subpath (kernels/bdpt.cl's trace_bdpt).
         group = BDPT_PIXELS_PER_LIGHT_PATH if scene.integrator == "bdpt" else 1
         self.work_items = -(-pixels // group)
@@ -197,6 +201,7 @@ class LightPasses:
             self._splat_band_value,
             self._splat_band,
             self._splat_film,
+            self._own_xyz,
             r.film.ray_count_buffer,
         )
         cl.enqueue_nd_range_kernel(queue, r.kernel, *launch_shape(count, r.work_group))
@@ -256,8 +261,13 @@ class LightPasses:
         bands = np.empty(r.pixel_count * bins, np.float32)
         if bins:
             cl.enqueue_copy(queue, bands, film.spectral_buffer)
+        own = np.empty((r.pixel_count, 4), np.float32) if self.bdpt else None
         for sample_index in range(done, done + sample_count):
             pixel, xyz, band_value, band, position = self._sample_splats(sample_index)
+            if own is not None:
+                # BDPT's pixels' own estimates (every strategy but t = 1), one per pixel, before the sample's splats.
+                cl.enqueue_copy(queue, own, self._own_xyz)
+                sums += own
             if self.pixel_filter is not None:
                 # Each splat spread over the pixels its filter covers; the dropped-sample count stays in its own.
                 np.add.at(sums[:, 3], pixel, xyz[:, 3])
