@@ -253,6 +253,90 @@ inline Hit trace_bvh8(__global const BVH8Node *nodes, __global const float4 *tri
     }
 }
 
+/* trace_bvh8 over quantised nodes (types.h BVH8QNode): each visit first turns the eight children's 8-bit planes
+ * into float8 planes, origin + q * scale (the product exact, one rounding in the sum, as the host's quantise_nodes
+ * computes it), then runs trace_bvh8's slab test, order and stack. The planes contain the float boxes, so the
+ * traversal visits every child trace_bvh8 visits and finds the same closest hit, save which of equally near
+ * triangles wins when the visiting order differs. */
+inline Hit trace_bvh8q(__global const BVH8QNode *nodes, __global const float4 *triangle_vertices, Ray ray,
+                       float t_max, int any_hit)
+{
+    Hit hit = no_hit(t_max);
+    TraversalRay r = traversal_ray(ray);
+    float3 inv_direction = r.inv_direction;
+    float8 ix = (float8)(inv_direction.x), iy = (float8)(inv_direction.y), iz = (float8)(inv_direction.z);
+    /* As in trace_bvh8: the entering plane of each axis is the lower one (q[axis]) for a positive direction, else
+     * the upper one (q[3 + axis]). */
+    int near_x = inv_direction.x >= 0.0f ? 0 : 3, near_y = inv_direction.y >= 0.0f ? 1 : 4;
+    int near_z = inv_direction.z >= 0.0f ? 2 : 5;
+    int far_x = near_x ^ 3, far_y = near_y == 1 ? 4 : 1, far_z = near_z == 2 ? 5 : 2;
+    int stack[BVH8_STACK_SIZE];
+    float stack_entry[BVH8_STACK_SIZE];
+    int top = 0;
+    int reference = 0;
+    while (true) {
+        if (reference < 0) {
+            __global const float8 *block = (__global const float8 *)((__global const float4 *)nodes + ~reference);
+            while (true) {
+                int4 meta = as_int4(block[LEAF_BLOCK8_FLOAT8S - 1].lo);
+                if (intersect_triangles8(block, r.origin_k, &r.shear, meta, &hit.t, &hit.triangle, &hit.b12)
+                    && any_hit) {
+                    return hit;
+                }
+                if (!meta.z) break;
+                block += LEAF_BLOCK8_FLOAT8S;
+            }
+        } else {
+            __global const BVH8QNode *node = &nodes[reference];
+            __global const uchar8 *q = node->q;
+            float8 px = (float8)(node->origin[0]), py = (float8)(node->origin[1]), pz = (float8)(node->origin[2]);
+            float8 sx = (float8)(node->scale[0]), sy = (float8)(node->scale[1]), sz = (float8)(node->scale[2]);
+            float8 nx = (px + convert_float8(q[near_x]) * sx - (float8)(ray.origin.x)) * ix;
+            float8 fx = (px + convert_float8(q[far_x]) * sx - (float8)(ray.origin.x)) * ix;
+            float8 ny = (py + convert_float8(q[near_y]) * sy - (float8)(ray.origin.y)) * iy;
+            float8 fy = (py + convert_float8(q[far_y]) * sy - (float8)(ray.origin.y)) * iy;
+            float8 nz = (pz + convert_float8(q[near_z]) * sz - (float8)(ray.origin.z)) * iz;
+            float8 fz = (pz + convert_float8(q[far_z]) * sz - (float8)(ray.origin.z)) * iz;
+            float8 enter = fmax(fmax(nx, ny), fmax(nz, (float8)(0.0f)));
+            /* Exit widened by 2γ₃ as in ray_box_entry (Ize 2013). */
+            float8 leave = fmin(fmin(fx, fy), fz) * 1.0000004f;
+            leave = fmin(leave, (float8)(hit.t));
+            int8 kind = convert_int8(node->kind);
+            int8 entered = (enter <= leave) & (kind >= (int8)(0));
+            if (any(entered)) {
+                int8 child = node->child;
+                int refs[8];
+                float entries[8];
+                vstore8(select(child, ~child, kind > (int8)(0)), 0, refs);
+                vstore8(select((float8)(INFINITY), enter, entered), 0, entries);
+                int base = top;
+                for (int k = 0; k < 8; ++k) {
+                    float t = entries[k];
+                    if (t == INFINITY) continue;
+                    /* Insertion as in trace_bvh8. */
+                    int j = top;
+                    while (j > base && stack_entry[j - 1] <= t) {
+                        stack[j] = stack[j - 1];
+                        stack_entry[j] = stack_entry[j - 1];
+                        --j;
+                    }
+                    stack[j] = refs[k];
+                    stack_entry[j] = t;
+                    ++top;
+                }
+                --top;
+                reference = stack[top];
+                continue;
+            }
+        }
+        while (true) {
+            if (top == 0) return hit;
+            --top;
+            if (stack_entry[top] <= hit.t) { reference = stack[top]; break; }
+        }
+    }
+}
+
 /* A walk over a binary BVH whose leaves the caller tests (triangles, analytic shapes, instances): at an inner
  * node the children the ray enters are visited near to far, the farther one kept on a stack with the distance at
  * which the ray enters its box. Every binary traversal in the kernels takes its steps from here. */
@@ -332,11 +416,13 @@ inline Hit trace_bvh_binary(__global const BVHNode *nodes, __global const float4
 }
 
 /* The traversal the build selected: BVH_WIDTH == 8 or 4 when the host uploaded 8- or 4-wide nodes
- * (geometry/bvh4.py) in the node buffer, whose kernel arguments keep the binary node type. */
+ * (geometry/bvh4.py) in the node buffer, quantised 8-wide ones when BVH8_QUANTISED is defined too, whose kernel arguments keep the binary node type. */
 inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
                      int any_hit)
 {
-#if defined(BVH_WIDTH) && BVH_WIDTH == 8
+#if defined(BVH_WIDTH) && BVH_WIDTH == 8 && defined(BVH8_QUANTISED)
+    return trace_bvh8q((__global const BVH8QNode *)nodes, triangle_vertices, ray, t_max, any_hit);
+#elif defined(BVH_WIDTH) && BVH_WIDTH == 8
     return trace_bvh8((__global const BVH8Node *)nodes, triangle_vertices, ray, t_max, any_hit);
 #elif defined(BVH_WIDTH) && BVH_WIDTH == 4
     return trace_bvh4((__global const BVH4Node *)nodes, triangle_vertices, ray, t_max, any_hit);

@@ -169,8 +169,8 @@ typedef struct {
 inline float2 sphere_uv_of_normal(__global const AnalyticShape *shape, float3 n)
 {
     float3 object_point = normalize(shape_vector_to_object(shape, n));
-    return (float2)(shape_azimuth_turns(object_point.x, object_point.y),
-                    atan2(sqrt(object_point.x * object_point.x + object_point.y * object_point.y), object_point.z) * (1.0f / SHAPE_PI));
+    return shape_uv_from_mitsuba(shape, (float2)(shape_azimuth_turns(object_point.x, object_point.y),
+                    atan2(sqrt(object_point.x * object_point.x + object_point.y * object_point.y), object_point.z) * (1.0f / SHAPE_PI)));
 }
 
 /* Samples an emitting analytic shape seen from p: a sphere that p is outside by the cone it subtends, any other

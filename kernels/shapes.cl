@@ -7,7 +7,8 @@
  * discriminant from the squared distance of the ray to the centre, r² − |f − (f·d) d|², rather than the difference
  * b² − c of two large numbers, and the smaller root as c / q; the hit point is then projected back onto the sphere
  * (pbrt-v4's refinement). The disk and cylinder are intersected in object space, so any affine placement works.
- * A hit stores the shape's texture coordinates in Hit.b12, from which its surface is rebuilt. */
+ * A hit stores the shape's texture coordinates in Hit.b12, from which its surface is rebuilt; a shape imported from
+ * pbrt-v4 may keep pbrt's texture coordinates instead of Mitsuba's (pbrt_uv). */
 #ifndef SPECTRACE_SHAPES_CL
 #define SPECTRACE_SHAPES_CL
 
@@ -54,6 +55,25 @@ inline float shape_azimuth_turns(float x, float y)
     return u < 0.0f ? u + 1.0f : u;
 }
 
+/* A shape's texture coordinates from Mitsuba 3's, and back. With pbrt_uv they are pbrt-v4's (its Disk and Sphere
+ * InteractionFromIntersection): the whole disk u = φ/2π, v = 1 − r (Mitsuba's u = r, v = φ/2π); the whole sphere
+ * v = 1 − θ/π (Mitsuba's θ/π). The cylinders agree. Hits, surfaces and samples all use the shape's own. */
+inline float2 shape_uv_from_mitsuba(__global const AnalyticShape *s, float2 uv)
+{
+    if (!s->pbrt_uv) return uv;
+    if (s->type == SHAPE_DISK) return (float2)(uv.y, 1.0f - uv.x);
+    if (s->type == SHAPE_SPHERE) return (float2)(uv.x, 1.0f - uv.y);
+    return uv;
+}
+
+inline float2 shape_uv_to_mitsuba(__global const AnalyticShape *s, float2 uv)
+{
+    if (!s->pbrt_uv) return uv;
+    if (s->type == SHAPE_DISK) return (float2)(1.0f - uv.y, uv.x);
+    if (s->type == SHAPE_SPHERE) return (float2)(uv.x, 1.0f - uv.y);
+    return uv;
+}
+
 /* The roots of a t² + 2 b t + c = 0 given sqrt(b² − a c) (>= 0), near first; 0 when there are none. */
 inline int stable_roots(float a, float b, float c, float sqrt_discriminant, float *t0, float *t1)
 {
@@ -84,8 +104,8 @@ inline float intersect_shape(__global const AnalyticShape *s, float3 origin, flo
         if (!(t > 0.0f && t < t_max)) return t_max;
         /* Projected back onto the sphere: the object-space point at unit distance from the centre. */
         float3 object_point = normalize(shape_point_to_object(s, origin + t * direction));
-        *uv = (float2)(shape_azimuth_turns(object_point.x, object_point.y),
-                       atan2(sqrt(object_point.x * object_point.x + object_point.y * object_point.y), object_point.z) * (1.0f / SHAPE_PI));
+        *uv = shape_uv_from_mitsuba(s, (float2)(shape_azimuth_turns(object_point.x, object_point.y),
+                       atan2(sqrt(object_point.x * object_point.x + object_point.y * object_point.y), object_point.z) * (1.0f / SHAPE_PI)));
         return t;
     }
     float3 o = shape_point_to_object(s, origin);
@@ -97,7 +117,7 @@ inline float intersect_shape(__global const AnalyticShape *s, float3 origin, flo
         float x = o.x + t * d.x, y = o.y + t * d.y;
         float r2 = x * x + y * y;
         if (r2 > 1.0f) return t_max;
-        *uv = (float2)(sqrt(r2), shape_azimuth_turns(x, y));
+        *uv = shape_uv_from_mitsuba(s, (float2)(sqrt(r2), shape_azimuth_turns(x, y)));
         return t;
     }
     /* SHAPE_CYLINDER: x² + y² = 1, 0 <= z <= 1. b² − a c = a − (o × d)_z² for the unit circle (Lagrange's identity),
@@ -133,10 +153,11 @@ typedef struct {
     float area_stretch;  /* world area per object-space area here: abs_det · |M⁻ᵀ n_object| */
 } ShapeSurface;
 
-/* The surface at texture coordinates uv: sphere u = φ/2π, v = θ/π (θ from +z); disk u = r, v = φ/2π; cylinder
- * u = φ/2π, v = z. */
-inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 uv)
+/* The surface at the shape's texture coordinates (shape_uv_from_mitsuba), in Mitsuba's: sphere u = φ/2π, v = θ/π
+ * (θ from +z); disk u = r, v = φ/2π; cylinder u = φ/2π, v = z. */
+inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_uv)
 {
+    float2 uv = shape_uv_to_mitsuba(s, shape_uv);
     float3 object_point, n_local, dpdu, dpdv;
     if (s->type == SHAPE_SPHERE) {
         float2 azimuth = cos_sin_turns(uv.x);
@@ -164,6 +185,13 @@ inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 uv)
     float length_n = length(n);
     g.n = (s->flip_normals ? -1.0f : 1.0f) * n / length_n;
     g.area_stretch = s->abs_det * length_n;
+    if (s->pbrt_uv && s->type == SHAPE_DISK) {  /* pbrt's (u, v) = (Mitsuba's v, 1 − Mitsuba's u) */
+        float3 dpdr = dpdu;
+        dpdu = dpdv;
+        dpdv = -dpdr;
+    } else if (s->pbrt_uv && s->type == SHAPE_SPHERE) {
+        dpdv = -dpdv;
+    }
     g.dpdu = shape_vector_to_world(s, dpdu);
     g.dpdv = shape_vector_to_world(s, dpdv);
     return g;
@@ -172,9 +200,15 @@ inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 uv)
 /* Texture coordinates of a point drawn uniformly over the shape's object-space area from u in [0, 1)². */
 inline float2 shape_sample_uv(__global const AnalyticShape *s, float2 u)
 {
-    if (s->type == SHAPE_SPHERE) return (float2)(u.y, acos(clamp(1.0f - 2.0f * u.x, -1.0f, 1.0f)) * (1.0f / SHAPE_PI));
-    if (s->type == SHAPE_DISK) return (float2)(sqrt(u.x), u.y);
-    return (float2)(u.y, u.x);
+    float2 uv;
+    if (s->type == SHAPE_SPHERE) {
+        uv = (float2)(u.y, acos(clamp(1.0f - 2.0f * u.x, -1.0f, 1.0f)) * (1.0f / SHAPE_PI));
+    } else if (s->type == SHAPE_DISK) {
+        uv = (float2)(sqrt(u.x), u.y);
+    } else {
+        uv = (float2)(u.y, u.x);
+    }
+    return shape_uv_from_mitsuba(s, uv);
 }
 
 /* Density over world area of shape_sample_uv's points, at a point where the map stretches area by area_stretch. */

@@ -43,6 +43,18 @@ typedef struct {
     int8 count;
 } BVH8Node;
 
+/* Quantised 8-wide BVH node (128 bytes; geometry/bvh4.py BVH8Q_NODE_DTYPE, after Ylitie et al. 2017): child k's
+ * box has, along each axis, the planes origin[axis] + q[plane][k] * scale[axis] (world units; scale a power of two),
+ * rounded outwards on the host so they contain the child's float box. */
+typedef struct {
+    int8 child;       /* a node index, or the float4 offset of a leaf's first block */
+    uchar8 q[6];      /* lower planes x, y, z, then upper planes x, y, z, in steps of scale */
+    char8 kind;       /* -1 unused slot, 0 a node, 1 a leaf */
+    float origin[3];  /* the node's lower corner (world units) */
+    float scale[3];   /* one step of q along each axis (world units) */
+    int pad[4];
+} BVH8QNode;
+
 /* Per-triangle shading data, in BVH leaf order. */
 typedef struct {
     int material;   /* index into the material array; TRIANGLE_NO_MATERIAL on an index-matched medium boundary, which
@@ -65,6 +77,8 @@ typedef struct {
     float abs_det;        /* |det| of to_world's linear part: world area = object area · abs_det · |M⁻ᵀ n_object| */
     float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder) */
     int flip_normals;     /* 1: the front (normal, emitting side) faces the other way: inward, the disk's −z */
+    int pbrt_uv;          /* 1: texture coordinates as pbrt-v4 gives them (shapes.cl, shape_uv_from_mitsuba) */
+    int pad0, pad1, pad2;
 } AnalyticShape;
 
 /* A placed copy of an instanced object (kernels/scene.cl, "Instances"): the object's triangles are stored once, at

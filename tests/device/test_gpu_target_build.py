@@ -86,3 +86,12 @@ def test_render_kernels_compile_to_ptx(tmp_path, sampler, bands):
 def test_meter_kernels_compile_to_ptx(tmp_path):
     options = _options(tmp_path, traversal_defines())
     _compile(["-target", "nvptx64-nvidia-cuda", "-O2", "-S", "-o", str(tmp_path / "out.ptx")], "meters.cl", options)
+
+
+@needs_clang
+@pytest.mark.parametrize("width, quantised", [(4, False), (8, True)])
+def test_other_traversals_compile_to_ptx(tmp_path, width, quantised):
+    """The traversals the renders do not use by default (bvh4.py TRAVERSAL_WIDTH, QUANTISED_NODES) build too."""
+    options = _options(tmp_path, traversal_defines(width, quantised))
+    for entry in ["testing/closest_hit.cl", "integrator_path.cl"]:
+        _compile(["-target", "nvptx64-nvidia-cuda", "-O2", "-S", "-o", str(tmp_path / "out.ptx")], entry, options)

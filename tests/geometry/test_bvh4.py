@@ -90,3 +90,38 @@ def test_eight_wide_stack_bound_holds_on_a_deep_tree():
     # Where the stack allows it, nodes keep their full width: the same tree as with no bound.
     wide, _ = collapse(bvh, 8, stack_size=_largest_stack(unbounded) + bvh.depth)
     np.testing.assert_array_equal(wide["child"], unbounded["child"])
+
+
+@pytest.mark.parametrize("offset", [0.0, 1000.0])
+def test_quantised_boxes_contain_the_float_boxes_and_stay_within_a_step(offset):
+    """Each dequantised child box (origin + q·scale in float32, as the kernel computes it) contains its float box,
+    and lies no more than one step (plus the origin's rounding) outside it; a step is at most 2/255 of the node's
+    extent. A far offset makes the float32 sums round, and a flat scene gives zero extents."""
+    from spectrace.geometry.bvh4 import quantise_nodes
+
+    triangles = _soup(7, 800) + offset
+    flat = _soup(8, 200)
+    flat[..., 2] = 0.5
+    for soup in (triangles, flat):
+        bvh = build_bvh(soup[:, 0], soup[:, 1], soup[:, 2])
+        nodes, _ = collapse(bvh, 8)
+        quantised = quantise_nodes(nodes)
+        used = nodes["count"] >= 0
+        np.testing.assert_array_equal(quantised["kind"], np.where(used, np.where(nodes["count"] > 0, 1, 0), -1))
+        np.testing.assert_array_equal(quantised["child"], nodes["child"])
+        origin = quantised["origin"][:, :, None].astype(np.float32)
+        scale = quantised["scale"][:, :, None].astype(np.float32)
+        assert np.all(np.log2(scale) == np.round(np.log2(scale))), "scales are powers of two"
+        low = origin + quantised["q"][:, :3, :].astype(np.float32) * scale
+        high = origin + quantised["q"][:, 3:, :].astype(np.float32) * scale
+        box_min, box_max = nodes["child_min"], nodes["child_max"]
+        inside = ~used[:, None, :] | ((low <= box_min) & (high >= box_max))
+        assert inside.all()
+        real_min = np.where(used[:, None, :], box_min, np.inf).min(axis=2)
+        real_max = np.where(used[:, None, :], box_max, -np.inf).max(axis=2)
+        ulp = np.spacing(np.maximum(np.abs(real_min), np.abs(real_max)).astype(np.float32))
+        extent = (real_max - real_min).astype(np.float64)
+        assert np.all(scale[:, :, 0] <= np.maximum(2 * extent / 255, 2.0**-126) + 2 * ulp)
+        slack = (scale + 2 * ulp[:, :, None])[:, :, :] * np.ones_like(low)
+        assert np.all(~used[:, None, :] | (box_min - low <= slack))
+        assert np.all(~used[:, None, :] | (high - box_max <= slack))

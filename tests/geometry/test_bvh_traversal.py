@@ -7,8 +7,9 @@ from raytracing_reference import brute_force_closest_hit
 from spectrace.geometry.bvh import build_bvh
 from spectrace.geometry.bvh4 import device_nodes, traversal_defines
 
-# Every traversal: the binary tree, and its 4- and 8-wide collapses (geometry/bvh4.py).
-WIDTHS = [2, 4, 8]
+# Every traversal: the binary tree, its 4- and 8-wide collapses, and the 8-wide one with quantised child boxes
+# ("8q") (geometry/bvh4.py).
+WIDTHS = [2, 4, 8, "8q"]
 
 
 def _soup(rng, count):
@@ -46,8 +47,10 @@ def _device_scene(triangles, max_leaf_size=4):
 def _trace(kernel_runner, kernel, width, bvh, vertices, origins, directions, read=(), written=()):
     """Run `kernel` of the traversal test program over the rays; its arguments after the scene and the rays are
     `read` then `written`, and the `written` arrays are filled in."""
-    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width))
-    inputs = [device_nodes(bvh, vertices, width), vertices, _as_float4(origins), _as_float4(directions), *read]
+    width, quantised = (8, True) if width == "8q" else (width, False)
+    runner = kernel_runner("testing/closest_hit.cl", traversal_defines(width, quantised))
+    nodes = device_nodes(bvh, vertices, width, quantised)
+    inputs = [nodes, vertices, _as_float4(origins), _as_float4(directions), *read]
     args = [runner.buffer(a) for a in inputs] + [runner.buffer(a, True) for a in written]
     runner.run(kernel, len(origins), [*args, np.int32(len(origins))], dict(enumerate(written, len(inputs))))
 

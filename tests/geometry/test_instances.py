@@ -154,10 +154,12 @@ def _brute_force(scene: spectrace.Scene, origins: np.ndarray, directions: np.nda
     return best_t, best_n
 
 
-@pytest.mark.parametrize("width", [8, 4, 2])
+@pytest.mark.parametrize("width", [8, "8q", 4, 2])
 def test_instanced_hits_match_brute_force_and_the_expanded_copies(kernel_runner, monkeypatch, width):
-    """Through both traversals (the 4-wide default and the binary one kept for comparison), whose node buffers the
-    objects' leaves point into differently."""
+    """Through every traversal (the 8-wide default, its quantised nodes ("8q"), the 4-wide and binary ones kept for
+    comparison), whose node buffers the objects' leaves point into differently."""
+    monkeypatch.setattr(bvh4, "QUANTISED_NODES", width == "8q")
+    width = 8 if width == "8q" else width
     monkeypatch.setattr(bvh4, "TRAVERSAL_WIDTH", width)
     instanced, expanded = _scenes()
     origins, directions = _rays(3000, seed=4)

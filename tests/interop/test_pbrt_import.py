@@ -446,17 +446,22 @@ Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0] "normal N" [0 0 1  0 0 1  
 
 
 def test_partial_and_reversed_spheres_are_tessellated_as_pbrt_defines_them(tmp_path):
-    """A hemisphere (zmax 0) of radius 2 has area 2π r² and faces out; ReverseOrientation turns a sphere's front in;
-    a whole, plain sphere stays spectrace's built-in one."""
+    """A hemisphere (zmax 0) of radius 2 has area 2π r² and faces out; ReverseOrientation turns a sphere's front in
+    (the analytic sphere's flip_normals, or a tessellation's winding); a whole, plain sphere stays spectrace's
+    built-in one."""
     body = 'Shape "sphere" "float radius" 2 "float zmax" 0\nShape "sphere"\nReverseOrientation\nShape "sphere"\n'
+    body += 'Scale 1 2 1\nShape "sphere"\n'
     data, importer = pbrt_scene_data(_write(tmp_path, body))
-    hemisphere, plain, reversed_sphere = data["shapes"]
-    assert plain["type"] == "sphere" and hemisphere["type"] == reversed_sphere["type"] == "mesh"
-    for table, area, outward in ((hemisphere, 2 * math.pi * 4, True), (reversed_sphere, 4 * math.pi, False)):
+    hemisphere, plain, reversed_sphere, reversed_ellipsoid = data["shapes"]
+    assert plain["type"] == reversed_sphere["type"] == "sphere" and "flip_normals" not in plain
+    assert reversed_sphere["flip_normals"] is True
+    assert hemisphere["type"] == reversed_ellipsoid["type"] == "mesh"
+    for table, area, outward in ((hemisphere, 2 * math.pi * 4, True), (reversed_ellipsoid, None, False)):
         mesh = importer.meshes[Path(table["file"]).name]
         a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
         normals = np.cross(b - a, c - a)
-        assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(area, rel=2e-3)
+        if area is not None:
+            assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(area, rel=2e-3)
         facing = np.einsum("ij,ij->i", normals, a + b + c)
         assert np.all(facing > 0) if outward else np.all(facing < 0)
     hemisphere_mesh = importer.meshes[Path(hemisphere["file"]).name]

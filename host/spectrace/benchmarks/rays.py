@@ -24,7 +24,16 @@ import pyopencl as cl
 from spectrace.device import open_device
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.geometry.bvh import build_bvh
-from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, TRAVERSAL_WIDTH, collapse, device_nodes, traversal_defines
+from spectrace.geometry.bvh4 import (
+    BVH8Q_NODE_DTYPE,
+    LEAF_BLOCK,
+    LEAF_SIZE,
+    QUANTISED_NODES,
+    TRAVERSAL_WIDTH,
+    collapse,
+    device_nodes,
+    traversal_defines,
+)
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, icosphere
 from spectrace.geometry.triangle_blocks import BLOCK_VECTORS
@@ -106,7 +115,9 @@ def traversal_tree_stats(bvh, node_buffer: np.ndarray) -> dict:
     """The tree the kernel traverses: the wide collapse (TRAVERSAL_WIDTH) and its leaf blocks, and the node buffer's
     size."""
     nodes, depth = collapse(bvh, TRAVERSAL_WIDTH)
-    blocks = (node_buffer.nbytes - nodes.nbytes) // (4 * BLOCK_VECTORS * TRAVERSAL_WIDTH)
+    quantised = TRAVERSAL_WIDTH == 8 and QUANTISED_NODES
+    node_bytes = len(nodes) * (BVH8Q_NODE_DTYPE.itemsize if quantised else nodes.dtype.itemsize)
+    blocks = (node_buffer.nbytes - node_bytes) // (4 * BLOCK_VECTORS * TRAVERSAL_WIDTH)
     return {
         "width": TRAVERSAL_WIDTH,
         "nodes_wide": int(len(nodes)),

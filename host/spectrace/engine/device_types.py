@@ -174,8 +174,12 @@ ANALYTIC_SHAPE_DTYPE = _struct(
         ("abs_det", "<f4"),
         ("object_area", "<f4"),
         ("flip_normals", "<i4"),
+        ("pbrt_uv", "<i4"),
+        ("pad0", "<i4"),
+        ("pad1", "<i4"),
+        ("pad2", "<i4"),
     ],
-    128,
+    144,
 )
 
 INSTANCE_DTYPE = _struct(

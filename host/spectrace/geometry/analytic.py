@@ -45,6 +45,9 @@ class AnalyticSurface:
     kind: str  # "sphere", "disk" or "cylinder"
     to_world: np.ndarray  # (4, 4) object -> world
     flip_normals: bool = False  # the front (normal, emitting side) inward, or the disk's -z side
+    # Texture coordinates as pbrt-v4 gives them (kernels/shapes.cl, shape_uv_from_mitsuba): the disk's u = φ/2π,
+    # v = 1 - r, the sphere's v = 1 - θ/π; Mitsuba's otherwise (the cylinders agree).
+    pbrt_uv: bool = False
 
     @property
     def linear(self) -> np.ndarray:
@@ -94,6 +97,7 @@ class AnalyticSurface:
         row["abs_det"] = abs(np.linalg.det(self.linear))
         row["object_area"] = OBJECT_AREA[self.kind]
         row["flip_normals"] = int(self.flip_normals)
+        row["pbrt_uv"] = int(self.pbrt_uv)
         if self.kind == "sphere":
             centre, radius = self.sphere_centre_radius()
             row["sphere"] = (*centre, radius)
@@ -103,10 +107,24 @@ class AnalyticSurface:
         """Triangles close to the surface, in world space, facing as the surface does, with its normals and texture
         coordinates."""
         mesh = apply_transform(object_tessellation(self.kind), self.to_world)
+        if self.pbrt_uv:
+            mesh = TriangleMesh(
+                mesh.vertices, mesh.faces, uvs=pbrt_uv_from_mitsuba(self.kind, mesh.uvs), normals=mesh.normals
+            )
         if self.flip_normals:
             assert mesh.normals is not None
             mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=-mesh.normals)
         return mesh
+
+
+def pbrt_uv_from_mitsuba(kind: str, uvs):
+    """pbrt-v4's texture coordinates of the whole disk and sphere from Mitsuba 3's (kernels/shapes.cl)."""
+    uvs = np.asarray(uvs, float)
+    if kind == "disk":  # (φ/2π, 1 - r) from (r, φ/2π)
+        return np.stack([uvs[..., 1], 1.0 - uvs[..., 0]], axis=-1)
+    if kind == "sphere":  # v = 1 - θ/π
+        return np.stack([uvs[..., 0], 1.0 - uvs[..., 1]], axis=-1)
+    return uvs
 
 
 def object_tessellation(kind: str) -> TriangleMesh:

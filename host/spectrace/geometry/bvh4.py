@@ -37,6 +37,20 @@ BVH8_NODE_DTYPE = _node_dtype(8)  # 256 bytes
 
 NODE_DTYPES = {4: BVH4_NODE_DTYPE, 8: BVH8_NODE_DTYPE}
 
+# The 8-wide node with its children's boxes quantised to 8 bits per plane relative to the node's own box (Ylitie et
+# al. 2017, "Efficient incoherent ray traversal on GPUs through compressed wide BVHs"): half the float node's bytes.
+# q[0..2] the lower planes (x, y, z), q[3..5] the upper ones, of child k in lane k: the plane is origin[axis] +
+# q * scale[axis] in float32, scale a power of two, so the kernel's dequantisation rounds once, exactly as here.
+# kind[k]: -1 unused slot, 0 a wide node, 1 a leaf. Mirrors BVH8QNode in kernels/types.h.
+BVH8Q_NODE_DTYPE = np.dtype(
+    {
+        "names": ["child", "q", "kind", "origin", "scale"],
+        "formats": [("<i4", (8,)), ("u1", (6, 8)), ("i1", (8,)), ("<f4", (3,)), ("<f4", (3,))],
+        "offsets": [0, 32, 80, 88, 100],
+        "itemsize": 128,
+    }
+)
+
 # Entries of the 8-wide kernel's stack (kernels/bvh.cl BVH8_STACK_SIZE, 8 bytes each): the collapse gives a node
 # fewer children where more could overflow it (collapse, stack_size). 96 leaves every node of the living room
 # (295k triangles, stack need 65) its full width; any tree the builder makes (depth <= MAX_DEPTH) fits.
@@ -178,20 +192,88 @@ LEAF_BLOCK = LANES if TRAVERSAL_WIDTH in (4, 8) else 1
 BVH4_STACK_SIZE = 3 * MAX_DEPTH + 1
 
 
-def device_nodes(bvh: BVH, triangle_vertices: np.ndarray, width: int | None = None) -> np.ndarray:
+# Whether the 8-wide traversal reads quantised nodes (BVH8Q_NODE_DTYPE) rather than float ones. Off: measured in
+# alternating runs on both CPU runtimes it did not win on both (docs/performance.md, "Quantised 8-wide nodes").
+QUANTISED_NODES = False
+
+
+def quantise_nodes(nodes: np.ndarray) -> np.ndarray:
+    """The 8-wide float nodes (BVH8_NODE_DTYPE, leaf children already pointing at their blocks) as quantised nodes:
+    each child box rounded outwards, lower planes down and upper planes up, so the box the kernel dequantises
+    contains the float box and the traversal visits every child the float one visits."""
+    used = nodes["count"] >= 0  # (N, 8)
+    box_min = nodes["child_min"].astype(np.float32)  # (N, 3, 8)
+    box_max = nodes["child_max"].astype(np.float32)
+    lo = np.where(used[:, None, :], box_min, np.inf).min(axis=2)  # (N, 3): the node's own box
+    hi = np.where(used[:, None, :], box_max, -np.inf).max(axis=2)
+    origin = lo.astype(np.float32)
+    # The smallest power of two whose 255 steps reach past the node's upper plane in float32 (checked below), and
+    # no smaller than 2^-126, so the scale is never a denormal a device might flush to zero.
+    extent = np.maximum(hi.astype(np.float64) - origin, 0.0)
+    exponent = np.maximum(np.ceil(np.log2(np.maximum(extent, 1e-300) / 255.0)), -126.0)
+    for _ in range(4):
+        reach = origin + np.float32(255.0) * np.exp2(exponent).astype(np.float32)
+        short = reach < hi
+        if not short.any():
+            break
+        exponent = exponent + short
+    scale = np.exp2(exponent).astype(np.float32)  # (N, 3)
+
+    def plane(q: np.ndarray) -> np.ndarray:
+        """What the kernel computes for quantised planes q (N, 3, 8): one float32 product (exact) and sum."""
+        return origin[:, :, None] + q.astype(np.float32) * scale[:, :, None]
+
+    with np.errstate(invalid="ignore", over="ignore"):
+        offset_min = (box_min.astype(np.float64) - origin[:, :, None]) / scale[:, :, None]
+        offset_max = (box_max.astype(np.float64) - origin[:, :, None]) / scale[:, :, None]
+    q_lo = np.clip(np.floor(np.where(used[:, None, :], offset_min, 0.0)), 0, 255)
+    q_hi = np.clip(np.ceil(np.where(used[:, None, :], offset_max, 0.0)), 0, 255)
+    for _ in range(4):  # the float64 quotients can round to the wrong side of a plane: step outwards until not
+        low_over = used[:, None, :] & (plane(q_lo) > box_min)
+        high_under = used[:, None, :] & (plane(q_hi) < box_max)
+        q_lo = np.where(low_over, np.maximum(q_lo - 1, 0), q_lo)
+        q_hi = np.where(high_under, np.minimum(q_hi + 1, 255), q_hi)
+    contains = ~used[:, None, :] | ((plane(q_lo) <= box_min) & (plane(q_hi) >= box_max))
+    if not contains.all():
+        raise ValueError("a quantised BVH box does not contain its child's box")
+    out = np.zeros(len(nodes), dtype=BVH8Q_NODE_DTYPE)
+    out["child"] = nodes["child"]
+    out["q"][:, :3, :] = q_lo.astype(np.uint8)
+    out["q"][:, 3:, :] = q_hi.astype(np.uint8)
+    out["kind"] = np.where(used, np.where(nodes["count"] > 0, 1, 0), -1)
+    out["origin"] = origin
+    out["scale"] = scale
+    return out
+
+
+def device_nodes(
+    bvh: BVH, triangle_vertices: np.ndarray, width: int | None = None, quantised: bool | None = None
+) -> np.ndarray:
     """The node buffer the traversal of `width` (default TRAVERSAL_WIDTH) reads: the binary nodes, or the wide
-    nodes followed by their leaves' triangle blocks of `width` lanes (geometry/triangle_blocks.py).
-    triangle_vertices: (3·M, 4) float32 in leaf slot order, as uploaded for shading."""
+    nodes followed by their leaves' triangle blocks of `width` lanes (geometry/triangle_blocks.py); 8-wide nodes
+    quantised when `quantised` (default QUANTISED_NODES). triangle_vertices: (3·M, 4) float32 in leaf slot order,
+    as uploaded for shading."""
     width = TRAVERSAL_WIDTH if width is None else width
     if width == 2:
         return bvh.nodes
     if width not in NODE_DTYPES:
         raise ValueError(f"BVH traversal width must be 2, 4 or 8, got {width}")
     nodes, _ = collapse(bvh, width)
-    return node_buffer(*pack_leaf_blocks(nodes, triangle_vertices, lanes=width))
+    nodes, blocks = pack_leaf_blocks(nodes, triangle_vertices, lanes=width)
+    if width == 8 and (QUANTISED_NODES if quantised is None else quantised):
+        # The blocks follow the smaller nodes: every leaf offset moves down by the bytes saved (in float4s).
+        shift = len(nodes) * (BVH8_NODE_DTYPE.itemsize - BVH8Q_NODE_DTYPE.itemsize) // 16
+        nodes["child"] = np.where(nodes["count"] > 0, nodes["child"] - shift, nodes["child"])
+        return node_buffer(quantise_nodes(nodes), blocks)
+    return node_buffer(nodes, blocks)
 
 
-def traversal_defines(width: int | None = None) -> dict[str, int]:
-    """Kernel build defines selecting the traversal of `width` (none for the binary one)."""
+def traversal_defines(width: int | None = None, quantised: bool | None = None) -> dict[str, int]:
+    """Kernel build defines selecting the traversal of `width` (none for the binary one), with quantised 8-wide
+    nodes when `quantised` (default QUANTISED_NODES)."""
     width = TRAVERSAL_WIDTH if width is None else width
-    return {"BVH_WIDTH": width} if width in NODE_DTYPES else {}
+    if width not in NODE_DTYPES:
+        return {}
+    if width == 8 and (QUANTISED_NODES if quantised is None else quantised):
+        return {"BVH_WIDTH": 8, "BVH8_QUANTISED": 1}
+    return {"BVH_WIDTH": width}

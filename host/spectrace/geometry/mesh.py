@@ -63,12 +63,17 @@ class TriangleMesh:
             return None
         corners = self.normals[self.faces]
         length = np.linalg.norm(corners, axis=-1, keepdims=True)
-        corners = np.divide(corners, length, out=np.zeros_like(corners), where=length > 0)
-        v0, v1, v2 = self.triangles()
-        face = np.cross(v1 - v0, v2 - v0)
-        face_length = np.linalg.norm(face, axis=-1, keepdims=True)
-        face = np.divide(face, face_length, out=np.zeros_like(face), where=face_length > 0)
-        return np.where(length > 0, corners, face[:, None, :])
+        np.divide(corners, length, out=corners, where=length > 0)
+        # Face normals only for the few triangles with a zero corner: a million-triangle mesh would otherwise
+        # gather all its corners and take their cross products again for nothing.
+        missing = np.flatnonzero(~(length > 0).all(axis=(1, 2)))
+        if len(missing):
+            v0, v1, v2 = (self.vertices[self.faces[missing, k]] for k in range(3))
+            face = np.cross(v1 - v0, v2 - v0)
+            face_length = np.linalg.norm(face, axis=-1, keepdims=True)
+            face = np.divide(face, face_length, out=np.zeros_like(face), where=face_length > 0)
+            corners[missing] = np.where(length[missing] > 0, corners[missing], face[:, None, :])
+        return corners
 
     def with_normals(self, normals: np.ndarray | None) -> "TriangleMesh":
         """The same mesh with other vertex normals (None: flat shading)."""
@@ -205,6 +210,8 @@ def load_mesh(path: Path, where: str, shape_index: int = 0) -> TriangleMesh:
     # trimesh, whose vectorised reader beats a Python loop over millions of lines.
     if data is not None and size <= _PLAIN_OBJ_MAX_BYTES and (simple := _plain_triangle_obj(path, data)) is not None:
         mesh = _validated_mesh(simple[0], simple[1], path, where, normals=simple[2])
+    elif path.suffix.lower() == ".ply" and (ply := _direct_ply(path, where)) is not None:
+        mesh = ply
     else:
         mesh = _mesh_through_trimesh(path, where, data)
     if announce:
@@ -213,6 +220,20 @@ def load_mesh(path: Path, where: str, shape_index: int = 0) -> TriangleMesh:
             file=sys.stderr,
             flush=True,
         )
+    return mesh
+
+
+def _direct_ply(path: Path, where: str) -> TriangleMesh | None:
+    """A binary PLY triangle mesh read directly (spectrace.geometry.ply), as the trimesh path would read it; None
+    for a PLY file of another kind."""
+    from spectrace.geometry.ply import read_binary_ply
+
+    read = read_binary_ply(_read_bytes(path, where))
+    if read is None:
+        return None
+    mesh = _validated_mesh(read.vertices, read.faces, path, where, read.normals)
+    if read.uvs is not None and np.all(np.isfinite(read.uvs)):
+        mesh.uvs = np.column_stack([read.uvs[:, 0], 1.0 - read.uvs[:, 1]])  # v up in the file, down in spectrace
     return mesh
 
 

@@ -228,7 +228,9 @@ def scene_to_mitsuba_dict(
             name = f"material_{len(materials)}"
             entries[name] = exporter.material(shape.material)
             materials[material_key] = name
-        if shape.analytic is not None:  # Mitsuba's own analytic shape, in the same object space
+        # Mitsuba's own analytic shape, in the same object space; one with pbrt's texture coordinates (a disk or
+        # sphere imported from pbrt-v4) as its tessellation, which carries them.
+        if shape.analytic is not None and not (shape.analytic.pbrt_uv and shape.analytic.kind != "cylinder"):
             # Mitsuba turns a sphere's normals inward under a mirroring to_world (measured: an emitting sphere
             # scaled by (-1, 1, 1) renders black from outside); spectrace's sphere faces out whatever the matrix.
             # Its disk and cylinder keep their fronts under a mirror, as spectrace's do.

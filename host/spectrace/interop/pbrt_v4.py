@@ -19,8 +19,8 @@ Conventions it bridges (each checked by tests/interop/test_pbrt_import.py):
   to spectrace's data: metal-{Ag,Al,Au,Cu}-{eta,k} to spectra/metals, glass-BK7 to N-BK7 and glass-F11 to N-SF11
   (SCHOTT Sellmeier), stdillum-* to the CIE illuminants. Wavelength/value lists are zero outside their range, as in
   pbrt.
-- Files: meshes pbrt gives inline (trianglemesh, bilinearmesh) and the shapes spectrace has no built-in for (disk,
-  cylinder, partial or textured spheres) are written as binary PLY files into a folder beside the TOML; PLY files a
+- Files: meshes pbrt gives inline (trianglemesh, bilinearmesh) and the shapes spectrace has no exact surface for
+  (partial spheres, disks and cylinders) are written as binary PLY files into a folder beside the TOML; PLY files a
   scene names are rewritten there too (pbrt's ReverseOrientation and normal-facing rules applied, gzipped files
   read); environment maps (resampled, spectrace.interop.pbrt_envmap) and scaled image textures go there as OpenEXR.
 
@@ -905,20 +905,8 @@ class PbrtImporter:
         The one place that decides how each pbrt shape becomes spectrace geometry (analytic shapes change it)."""
         entity = shape.entity
         matrix = self.world @ shape.world_from_object
-        if entity.kind == "sphere":
-            radius = self.one(entity, "radius", 1.0)
-            if not radius > 0:
-                raise error(entity.location, f"a sphere's radius must be > 0, got {radius:g}")
-            zmin, zmax = self.one(entity, "zmin", -radius), self.one(entity, "zmax", radius)
-            phimax = self.one(entity, "phimax", 360.0)
-            whole = zmin <= -radius and zmax >= radius and phimax >= 360.0
-            # The built-in sphere (smooth, exact normals) for a whole, untextured, outward sphere; otherwise a
-            # tessellation with pbrt's parametrisation (partial spheres, texture coordinates, reversed fronts).
-            if whole and not needs_uv and not shape.reverse_orientation:
-                steps = [{"scale": radius}, {"matrix": matrix.tolist()}]
-                # The analytic sphere, unless the placement is no similarity (an ellipsoid needs triangles).
-                tessellated = similarity_problem(matrix) is not None
-                return {"type": "sphere", "transform": steps} | ({"tessellated": True} if tessellated else {}), None
+        if (analytic := self.analytic_geometry(shape, matrix, needs_uv)) is not None:
+            return analytic, None
         key = id(entity), shape.reverse_orientation, needs_uv
         if key not in self._mesh_of:
             mesh = self.mesh(shape)
@@ -933,6 +921,62 @@ class PbrtImporter:
         file, mesh = self._mesh_of[key]
         table = {"type": "mesh", "file": f"{self.mesh_folder}/{file}", "transform": [{"matrix": matrix.tolist()}]}
         return table, mesh
+
+    def analytic_geometry(self, shape: Shape, matrix: np.ndarray, needs_uv: bool) -> dict | None:
+        """The spectrace analytic sphere, disk or cylinder for a whole pbrt one (exact surface, smooth normals,
+        pbrt's texture coordinates and front side), or None when it needs triangles: partial shapes (phimax < 360,
+        a disk's innerradius > 0, a sphere's zmin/zmax cuts), degenerate ones, and a sphere under a map that is no
+        similarity (an ellipsoid: the built-in tessellation when nothing depends on its orientation or uv)."""
+        entity = shape.entity
+        kind = entity.kind
+        if kind not in ("sphere", "disk", "cylinder"):
+            return None
+        radius = self.one(entity, "radius", 1.0)
+        if kind == "sphere" and not radius > 0:
+            raise error(entity.location, f"a sphere's radius must be > 0, got {radius:g}")
+        if not radius > 0 or self.one(entity, "phimax", 360.0) < 360.0:
+            return None
+        # pbrt's front: the object-space normal (outward; the disk's +z), flipped when ReverseOrientation is set
+        # or the shape's own placement swaps handedness (Disk/Cylinder/Sphere InteractionFromIntersection), then
+        # carried to the world by the inverse transpose, which is what spectrace's flip_normals does. The mirror
+        # into spectrace's world (self.world) is not pbrt's and does not count.
+        flip = shape.reverse_orientation != bool(np.linalg.det(shape.world_from_object[:3, :3]) < 0)
+        if kind == "sphere":
+            zmin, zmax = self.one(entity, "zmin", -radius), self.one(entity, "zmax", radius)
+            if zmin > -radius or zmax < radius:
+                return None
+            steps: list[dict] = [{"scale": radius}, {"matrix": matrix.tolist()}]
+            if similarity_problem(matrix) is not None:
+                if needs_uv or flip:
+                    return None
+                return {"type": "sphere", "transform": steps, "tessellated": True}
+        elif kind == "disk":
+            if self.one(entity, "innerradius", 0.0) > 0.0:
+                return None
+            # Spectrace's unit disk (z = 0, facing +z) scaled to the radius and lifted to z = height.
+            height = self.one(entity, "height", 0.0)
+            steps = [{"scale": [radius, radius, 1.0]}, {"translate": [0.0, 0.0, height]}, {"matrix": matrix.tolist()}]
+        else:
+            # Spectrace's cylinder (radius 1, z from 0 to 1) stretched over [zmin, zmax]; pbrt orders them itself.
+            z0, z1 = sorted((self.one(entity, "zmin", -1.0), self.one(entity, "zmax", 1.0)))
+            if not z1 > z0:
+                return None
+            steps = [{"scale": [radius, radius, z1 - z0]}, {"translate": [0.0, 0.0, z0]}, {"matrix": matrix.tolist()}]
+        table: dict = {"type": kind, "transform": steps}
+        if flip:
+            table["flip_normals"] = True
+        if needs_uv and kind != "cylinder":  # the cylinders' (u, v) already agree
+            table["uv_convention"] = "pbrt"
+        return table
+
+    def analytic_area(self, entity: Entity) -> float:
+        """pbrt-v4's Area() of a whole sphere, disk or cylinder: object-space, whatever the transform scales."""
+        radius = self.one(entity, "radius", 1.0)
+        if entity.kind == "sphere":
+            return 4.0 * math.pi * radius**2
+        if entity.kind == "disk":
+            return math.pi * radius**2
+        return 2.0 * math.pi * radius * abs(self.one(entity, "zmax", 1.0) - self.one(entity, "zmin", -1.0))
 
     def mesh(self, shape: Shape) -> MeshData:
         entity = shape.entity
@@ -1183,12 +1227,8 @@ class PbrtImporter:
         if power > 0:
             if mesh is not None:
                 area = mesh.world_area(matrix)
-            else:  # the sphere: radius r scaled by the transform's (uniform) scale
-                area = (
-                    4.0
-                    * math.pi
-                    * (self.one(shape, "radius", 1.0) * abs(np.linalg.det(matrix[:3, :3])) ** (1 / 3)) ** 2
-                )
+            else:  # an analytic shape: pbrt's Shape::Area(), in the shape's object space (unscaled)
+                area = self.analytic_area(shape)
             scale *= power / ((2.0 if two_sided else 1.0) * area * math.pi)
         table: dict[str, object] = {"radiance": self.emission(light, "L", scale)}
         if two_sided:

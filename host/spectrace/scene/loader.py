@@ -14,7 +14,13 @@ from spectrace.cameras import thinlens
 from spectrace.cameras.shared import clip_problem
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
-from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
+from spectrace.geometry.analytic import (
+    ANALYTIC_SHAPES,
+    AnalyticSurface,
+    object_tessellation,
+    pbrt_uv_from_mitsuba,
+    similarity_problem,
+)
 from spectrace.geometry.mesh import TriangleMesh, load_mesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
@@ -391,6 +397,8 @@ class _Resolver:
                 mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"), shape_index=s.shape_index or 0)
             elif s.type in ANALYTIC_SHAPES:
                 mesh = object_tessellation(s.type)
+                if s.uv_convention == "pbrt":
+                    mesh = TriangleMesh(mesh.vertices, mesh.faces, pbrt_uv_from_mitsuba(s.type, mesh.uvs), mesh.normals)
             else:
                 mesh = primitives.BUILTIN_SHAPES[s.type]()
             matrix = np.eye(4)
@@ -411,7 +419,9 @@ class _Resolver:
                     raise SpectraceError(
                         f"{problem}; tessellated = true takes any", where=self.where(f"{key}.transform")
                     )
-                surface_of = AnalyticSurface(s.type, matrix, flip_normals=bool(s.flip_normals))
+                surface_of = AnalyticSurface(
+                    s.type, matrix, flip_normals=bool(s.flip_normals), pbrt_uv=s.uv_convention == "pbrt"
+                )
                 mesh = surface_of.tessellation()
             else:
                 if s.flip_normals:
