@@ -25,6 +25,7 @@ from spectrace.engine.wavefront import make_renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.materials import MATERIALS, surface
+from spectrace.scene.loader import load_scene
 from spectrace.scene.model import Scene
 from stats_toolkit import assert_within_standard_errors
 
@@ -372,6 +373,7 @@ def _bad_inputs(tmp_path) -> list[tuple[str, str, str]]:
             "materials.m.bump_map: a material takes a normal map or a bump map, not both",
         ),
         ("normal_map = { value = 0.5 }", "", "materials.m.normal_map: normal_map takes a texture"),
+        ('shadowing_function = "maybe"', "", "materials.m.shadowing_function"),
         (
             "opacity = 0.5",
             "emitter = { radiance = { value = 1 } }",
@@ -389,6 +391,16 @@ def test_bad_surface_detail_is_one_line(tmp_path, monkeypatch, capsys):
         assert code != 0 and len(lines) == 1 and "Traceback" not in err, (detail, err)
         assert lines[0].startswith(f"error: {scene}: {expected}"), (detail, lines[0])
         assert not (tmp_path / "x.png").exists()
+
+
+def test_a_scene_file_turns_the_shadowing_term_on(tmp_path):
+    PILImage.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "normals.png")
+    scene = tmp_path / "scene.toml"
+    for value in (True, False):
+        normal_map = 'normal_map = { texture = "bitmap", file = "normals.png", raw = true }'
+        detail = f"{normal_map}\nshadowing_function = {str(value).lower()}"
+        scene.write_text(SCENE.format(detail=detail, emitter=""))
+        assert load_scene(scene).shapes[0].material.detail.shadowing_function is value
 
 
 def test_a_one_channel_normal_map_is_one_line_from_a_real_process(tmp_path):
