@@ -82,6 +82,96 @@ def test_the_shipped_cmf_table_equals_colour_sciences():
     assert np.array_equal(CIE_1931_CMFS, expected)
 
 
+def test_the_shipped_d65_table_equals_colour_sciences():
+    import colour  # a dependency: missing, the test fails rather than skips
+
+    from spectrace.spectral.illuminants import shipped_illuminant_table
+
+    wavelengths, values = shipped_illuminant_table("D65")
+    reference = colour.SDS_ILLUMINANTS["D65"]
+    assert np.array_equal(wavelengths, np.asarray(reference.wavelengths, np.float64))
+    assert np.array_equal(values, np.asarray(reference.values, np.float64))
+
+
+def test_illuminant_a_on_the_grid_is_colour_sciences_bits():
+    import colour  # a dependency: missing, the test fails rather than skips
+
+    from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_STEP_NM
+    from spectrace.spectral.illuminants import cie_illuminant
+
+    shape = colour.SpectralShape(GRID_MIN_NM, GRID_MAX_NM, GRID_STEP_NM)
+    expected = np.asarray(colour.sd_CIE_standard_illuminant_A(shape).values, np.float64)
+    assert np.array_equal(cie_illuminant("A").values, expected)
+
+
+_RGB_XML = """<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>
+    </sensor>
+    <bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.7, 0.2, 0.1"/></bsdf>
+    <shape type="rectangle"><ref id="red"/></shape>
+    <emitter type="constant"><rgb name="radiance" value="1, 1, 1"/></emitter>
+</scene>
+"""
+
+_LAMP_TOML = """[camera]
+origin = [0, 0, 4]
+target = [0, 0, 0]
+fov = 40
+
+[film]
+width = 4
+height = 4
+
+[materials.green]
+type = "diffuse"
+reflectance = { rgb = [0.2, 0.5, 0.3] }
+
+[[shapes]]
+type = "rectangle"
+material = "green"
+
+[[shapes]]
+type = "rectangle"
+material = "green"
+transform = [{ translate = [0, 3, 0] }]
+emitter = { radiance = { spectrum = "cie:A", scale = 0.1 } }
+"""
+
+_COLOUR_SCIENCE_AND_WHAT_IT_BRINGS = ("colour", "scipy", "matplotlib")
+
+
+@pytest.mark.subprocess
+def test_importing_and_loading_scenes_with_rgb_colours_does_not_import_colour_science(tmp_path):
+    """RGB colours are uplifted against D65 and the bundled scenes' lamps are CIE A: both come without colour-science
+    (and the SciPy and matplotlib it brings). import-mitsuba loads the TOML it writes, so that is a load too."""
+    (tmp_path / "rgb.xml").write_text(_RGB_XML)
+    command = [sys.executable, "-X", "importtime", "-m", "spectrace", "import-mitsuba", "rgb.xml", "-o", "rgb.toml"]
+    imported = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert imported.returncode == 0, imported.stderr[-2000:]
+    modules = _imported_modules(imported.stderr)
+    assert "spectrace.spectral.uplift" in modules  # the RGB colours were uplifted: the log is read right
+    assert not {m for m in modules if m.split(".")[0] in _COLOUR_SCIENCE_AND_WHAT_IT_BRINGS}
+
+    (tmp_path / "lamp.toml").write_text(_LAMP_TOML)
+    loaded = _loaded_after_running(
+        "from spectrace.scene.loader import load_scene; load_scene(sys.argv[1])",
+        (*_COLOUR_SCIENCE_AND_WHAT_IT_BRINGS, "spectrace.spectral.uplift"),
+        str(tmp_path / "lamp.toml"),
+    )
+    assert loaded == ["spectrace.spectral.uplift"]
+
+
+def _loaded_after_running(statement: str, modules: tuple[str, ...], *args: str) -> list[str]:
+    """Which of `modules` a fresh interpreter has loaded after running `statement` (with sys imported, argv = args)."""
+    code = f"import sys; {statement}; print(' '.join(m for m in {modules!r} if m in sys.modules))"
+    result = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-2000:]
+    return result.stdout.split()
+
+
 @pytest.mark.parametrize("name", sorted(p.name for p in (scenes_dir() / "cornell_box").glob("*.obj")))
 def test_plain_obj_files_read_as_trimesh_reads_them(name):
     import trimesh  # a dependency: missing, the test fails rather than skips

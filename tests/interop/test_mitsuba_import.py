@@ -314,13 +314,32 @@ def test_dielectrics(tmp_path):
     scene = load_mitsuba_scene(_write(tmp_path, body))
     assert scene.shapes[1].material.ior.at(500.0) == pytest.approx(1.333)
 
-    bad = _write(
+    # Mitsuba's relative η = int_ior / ext_ior below 1 (an air bubble in water) is the ior as it is; equal indices
+    # give 1 (straight through), except on a roughdielectric, which Mitsuba 3 refuses too; 0.1 is out of range.
+    bubble = _write(
         tmp_path,
         """<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="air"/>
-        <string name="ext_ior" value="water"/></bsdf></shape>""",
+        <string name="ext_ior" value="water"/></bsdf></shape>
+        <shape type="cube"><bsdf type="dielectric"><float name="int_ior" value="1.33"/>
+        <float name="ext_ior" value="1.33"/></bsdf></shape>
+        <shape type="cube"><bsdf type="thindielectric"><float name="int_ior" value="1"/>
+        <float name="ext_ior" value="1.33"/></bsdf></shape>""",
     )
-    with pytest.raises(SpectraceError, match="int_ior not above ext_ior"):
-        mitsuba_scene_data(bad)
+    iors = [material["ior"] for material in mitsuba_scene_data(bubble)[0]["materials"].values()]
+    assert iors == [pytest.approx(1.000277 / 1.333), 1.0, pytest.approx(1 / 1.33)]
+    for bsdf, message in (
+        (
+            '<bsdf type="roughdielectric"><float name="int_ior" value="1.2"/><float name="ext_ior" value="1.2"/>',
+            "roughdielectric with int_ior equal to ext_ior",
+        ),
+        (
+            '<bsdf type="dielectric"><float name="int_ior" value="0.1"/><float name="ext_ior" value="1"/>',
+            "needs a ratio in",
+        ),
+    ):
+        with pytest.raises(SpectraceError, match=message) as error:
+            mitsuba_scene_data(_write(tmp_path, f'<shape type="cube">{bsdf}</bsdf></shape>'))
+        assert "\n" not in str(error.value)
     # Anisotropic roughness is approximated (the geometric mean) with a warning, on dielectrics as on conductors.
     brushed = _write(
         tmp_path,
@@ -708,3 +727,6 @@ def test_float_text_reads_back_at_the_precision_of_the_value():
         assert len(text) <= len(repr(float(value)))
     assert float_text(0.1) == "0.1" and float_text(float(np.float32(0.1))) == "0.1"
     assert float_text(1e300) == "1e+300" and float_text(-0.0) == "-0.0"
+    # numpy's float64 is a float, but its repr is not TOML: an rgb medium coefficient uplifted by numpy was written so
+    value = np.float64(0.06643712080068864)
+    assert float(float_text(value)) == value and "np" not in float_text(value)

@@ -195,7 +195,7 @@ def test_unknown_glass_is_a_one_line_error():
 
 def test_fresnel_matches_angle_form(kernel_runner):
     cos_i = np.linspace(0.0005, 1.0, 400)
-    etas = [1.5, 1 / 1.5, 1.78472, 1 / 1.78472, 1.0001]
+    etas = [1.5, 1 / 1.5, 1.78472, 1 / 1.78472, 1.0001, 1.0]
     c = np.tile(cos_i, len(etas)).astype(np.float32)
     e = np.repeat(etas, len(cos_i)).astype(np.float32)
     reflectance, cos_t = _run(kernel_runner, "fresnel", len(c), [c, e], [(np.float32, len(c))] * 2)

@@ -70,7 +70,8 @@ def test_ior_forms_load_into_material_rows(tmp_path, lines, model, n_at_d):
     "lines, message",
     [
         ('ior = "BK8"', "materials.glass.ior: unknown glass 'BK8'"),
-        ("ior = 0.9", "materials.glass.ior: the index of refraction must lie in"),
+        ("ior = 0.2", "materials.glass.ior: the index of refraction must lie in"),
+        ("ior = 1.0\nroughness = 0.2", "materials.glass.ior: a rough dielectric's index must differ from 1"),
         ("ior = { cauchy = [1.5] }", "materials.glass.ior"),
         ("ior = { sellmeier = [1, 1, 1, 0.2, 0.1, 0.3] }", "materials.glass.ior: the index of refraction must lie in"),
         ("roughness = 2", "materials.glass.roughness"),
@@ -90,6 +91,11 @@ def test_api_helper():
     assert spectrace.dielectric({"cauchy": [1.5, 0.004]}).ior.model == "cauchy"
     with pytest.raises(SpectraceError, match="roughness"):
         spectrace.dielectric(1.5, roughness=-1)
+    # Below 1 (the rarer medium inside) and index-matched smooth interfaces are valid; a rough matched one is not.
+    assert spectrace.dielectric(1 / 1.33).ior.at(500.0) == pytest.approx(1 / 1.33)
+    assert spectrace.dielectric(1.0).is_delta
+    with pytest.raises(SpectraceError, match="differ from 1"):
+        spectrace.dielectric(1.0, roughness=0.1)
 
 
 FURNACE_SIDE, FURNACE_SPP = 12, 96

@@ -45,7 +45,8 @@ def float_text(value: float) -> str:
             text = repr(float(str(single)))
             if np.float32(float(text)) == single:
                 return text
-    return repr(value)
+    # float(): numpy's float64 is a float whose repr is "np.float64(...)", which TOML cannot read.
+    return repr(float(value))
 
 
 def _table_body(table: dict) -> list[str]:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MICROFACET_DISTRIBUTIONS
+from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
 from spectrace.materials.opaque import smooth_everywhere
 from spectrace.materials.parameters import (
@@ -19,7 +20,7 @@ from spectrace.materials.parameters import (
     specular_tint,
 )
 from spectrace.spectral import spectrum_input
-from spectrace.spectral.glasses import IOR_RANGE, IndexOfRefraction, index_of_refraction
+from spectrace.spectral.glasses import IOR_RANGE, ROUGH_IOR_GAP, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
@@ -36,8 +37,9 @@ IOR = Parameter(
     default=1.5,
     range=Range(*IOR_RANGE),
     type_doc=f"see below, dimensionless, in {Range(*IOR_RANGE)} over 360–830 nm",
-    doc="index of refraction of the interior relative to the exterior, which is air (n = 1); a dispersive "
-    "`ior` splits white light",
+    doc="index of refraction of the interior relative to the exterior, which is air (n = 1); below 1 the "
+    "interior is the rarer medium (an air bubble in water), at 1 a smooth surface passes light straight through "
+    f"(a rough one needs an index at least {ROUGH_IOR_GAP:g} away from 1); a dispersive `ior` splits white light",
 )
 PARAMETERS = (
     IOR,
@@ -79,12 +81,13 @@ def from_spec(spec, resolver, key: str) -> DielectricMaterial:
         if spec.specular_tint is not None
         else None
     )
-    return DielectricMaterial(
+    material = DielectricMaterial(
         index_of_refraction(ior, where=resolver.where(f"{key}.ior")),
         roughness=resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS),
         specular_tint=tint,
         distribution=spec.distribution,
     )
+    return check_rough_index(material, resolver.where(f"{key}.ior"))
 
 
 def make(
@@ -100,12 +103,28 @@ def make(
     face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance or a texture) multiplies
     both lobes; `roughness` may be a grey texture."""
     tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
-    return DielectricMaterial(
+    material = DielectricMaterial(
         index_of_refraction(ior, where="ior"),
         roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
         specular_tint=tint,
         distribution=check_distribution(distribution),
     )
+    return check_rough_index(material, "ior")
+
+
+def check_rough_index(material: DielectricMaterial, where: str) -> DielectricMaterial:
+    """`material`, or a SpectraceError when it is rough and its index comes within ROUGH_IOR_GAP of 1 somewhere in
+    360–830 nm (a smooth one passes light straight through there, a rough one has no refraction half vector)."""
+    if material.is_delta:
+        return material
+    n = material.ior.at(np.arange(360.0, 831.0, 1.0))
+    if np.any(np.abs(n - 1.0) < ROUGH_IOR_GAP):
+        raise SpectraceError(
+            f"a rough dielectric's index must differ from 1 by at least {ROUGH_IOR_GAP:g} "
+            "(an index-matched rough surface has no refraction; make it smooth: roughness = 0)",
+            where=where,
+        )
+    return material
 
 
 def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
@@ -128,17 +147,20 @@ def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTabl
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's dielectrics have one constant index per side (default bk7 inside, air outside): spectrace's ior
-    is their ratio. One tint on both lobes stands for equal specular_reflectance and specular_transmittance."""
+    is their ratio, below 1 when the inside is the rarer medium, 1 (straight through) when they match, as in
+    Mitsuba. One tint on both lobes stands for equal specular_reflectance and specular_transmittance."""
     named = importer.NAMED_IOR
     ior = importer.ior(bsdf, properties, "int_ior", named["bk7"]) / importer.ior(
         bsdf, properties, "ext_ior", named["air"]
     )
-    if ior < IOR_RANGE[0]:
-        importer.unsupported_plugin(bsdf, " with int_ior not above ext_ior (flip the shape's normals instead)")
-        return None
+    if not IOR_RANGE[0] <= ior <= IOR_RANGE[1]:
+        raise importer.fail(bsdf, f"int_ior / ext_ior = {ior:.4g}: spectrace's dielectric needs a ratio in {IOR.range}")
     roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughdielectric" else 0.0
     if roughness is None:
         return None
+    if roughness != 0.0 and abs(ior - 1.0) < ROUGH_IOR_GAP:
+        # Mitsuba 3 refuses a roughdielectric of equal indices too.
+        raise importer.fail(bsdf, "a roughdielectric with int_ior equal to ext_ior has no refraction")
     tints = {
         key: importer.spectrum(properties[key], key)
         for key in ("specular_reflectance", "specular_transmittance")

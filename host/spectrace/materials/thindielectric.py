@@ -16,14 +16,16 @@ from spectrace.spectral.table import SpectrumTable
 
 NAME = "thindielectric"
 MITSUBA_PLUGINS = ("thindielectric",)
-# Above 4 nothing physical; at 1 the sheet is not there.
+# Above 4 nothing physical; at 1 the sheet is not there (R = 0, light passes straight through); below 1 the sheet
+# is the rarer medium and reflects totally past the critical angle, as Fresnel's equations give.
 IOR = Parameter(
     "ior",
     "float",
     "dimensionless",
     default=1.5,
-    range=Range(1.0, 4.0, low_open=True),
-    doc="index of refraction of the sheet relative to the outside (the same on both sides)",
+    range=Range(0.25, 4.0),
+    doc="index of refraction of the sheet relative to the outside (the same on both sides); below 1 the sheet is "
+    "the rarer medium",
 )
 SPECULAR_REFLECTANCE = reflectance(
     None,
@@ -79,7 +81,7 @@ def make(
     specular_reflectance: SpectrumLike | None = None,
     specular_transmittance: SpectrumLike | None = None,
 ) -> ThindielectricMaterial:
-    """A thin dielectric sheet (a window pane) of index `ior` (> 1, relative to the outside): specular reflection
+    """A thin dielectric sheet (a window pane) of index `ior` (relative to the outside): specular reflection
     R' = 2R/(1 + R), the rest straight through. `specular_reflectance` (a reflectance or a texture) and
     `specular_transmittance` (a reflectance) tint the two lobes."""
     reflection = (

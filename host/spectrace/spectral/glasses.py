@@ -109,9 +109,14 @@ def glass(name: str, where: str | None = None) -> Glass:
     return table[key]
 
 
-# The index a dielectric may have at any visible wavelength. Above 1 so that the interior is the denser medium (an
-# air bubble in glass is a sphere with inward normals); below 1 + 1e-4 the refraction degenerates numerically.
-IOR_RANGE = (1.0001, 4.0)
+# The index a dielectric may have at any visible wavelength, interior over exterior. Below 1 the interior is the
+# rarer medium (an air bubble in water): light from outside may then be totally reflected, which the Fresnel term
+# and Snell's law already give for either side of the surface. At 1 a smooth interface passes light straight
+# through; a rough one degenerates near 1 (ROUGH_IOR_GAP).
+IOR_RANGE = (0.25, 4.0)
+# A rough interface needs |n − 1| at least this large: its refraction half vector n_o ωo + n_i ωi vanishes as the
+# indices meet.
+ROUGH_IOR_GAP = 1e-4
 _CHECK_WAVELENGTHS_NM = np.arange(360.0, 831.0, 1.0)
 _COEFFICIENT_COUNTS = {"sellmeier": 6, "cauchy": 2}
 
