@@ -63,6 +63,7 @@ typedef struct {
     float3 p;           /* scene units; at infinity: a point on its ray (the disk point of a light's) */
     float3 n;           /* geometric normal; 0 for a point without a surface (eye, point and spot lights) */
     float3 ns;          /* shading normal (surfaces) */
+    float3 ns_base;     /* surfaces: the shading normal before a normal or bump map turned it (PathVertex) */
     float3 wo;          /* unit, back toward the previous vertex of its subpath (surfaces); at infinity: toward the
                            light, from the scene */
     float4 beta;        /* subpath throughput arriving here, per wavelength (see the top of the file) */
@@ -274,12 +275,14 @@ inline int sample_light_origin(const Scene *scene, float2 u_position, float beam
         }
         if (!(pdf_area > 0.0f) || !isfinite(pdf_area)) return 0;
         v->ns = v->n;
+        v->ns_base = v->n;
         v->delta_light = 0;
         v->pdf_fwd = light->pmf * pdf_area;
     } else if (LIGHT_IS(light, LIGHT_POINT) || LIGHT_IS(light, LIGHT_SPOT)) {
         v->p = light->position.xyz;
         v->n = (float3)(0.0f);
         v->ns = v->n;
+        v->ns_base = v->n;
         v->delta_light = 1;
         v->pdf_fwd = light->pmf;
     } else {
@@ -287,6 +290,7 @@ inline int sample_light_origin(const Scene *scene, float2 u_position, float beam
         v->beam_pdf = beam_pdf;
         v->n = (float3)(0.0f);
         v->ns = v->n;
+        v->ns_base = v->n;
         v->p = (float3)(0.0f); /* set where a subpath starts from it */
         v->delta_light = LIGHT_IS(light, LIGHT_DISTANT);
         if (v->delta_light) {
@@ -319,6 +323,7 @@ inline int bdpt_environment_vertex(const Scene *scene, const SampledWavelengths 
     v->p = s->ray.origin + s->ray.direction;
     v->n = (float3)(0.0f);
     v->ns = v->n;
+    v->ns_base = v->n;
     v->wo = s->ray.direction;
     v->beta = s->throughput;
     v->le = environment_radiance(&scene->lights[v->light], scene->spectra, scene->texels, w, v->wo);
@@ -378,6 +383,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         v->p = pv.p;
         v->n = pv.n;
         v->ns = pv.ns;
+        v->ns_base = pv.ns_base;
         v->wo = pv.wo;
         v->uv = pv.uv;
         v->footprint = pv.footprint;
@@ -404,7 +410,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         if (material_disperses(material, w)) hero = 1;
         v->hero = hero;
         if (count >= max_vertices) break;
-        SurfaceContext sc = surface_context(scene, pv.uv, pv.footprint);
+        SurfaceContext sc = shading_context(scene, pv.uv, pv.footprint, pv.ns_base, adjoint);
         float uc = sample_1d(sampler);
         float2 u = sample_2d(sampler);
         BSDFSample bs;
@@ -554,6 +560,7 @@ inline void bdpt_camera_vertex(__global const RenderParams *params, Ray ray, flo
     if (CAMERA_IS(params, CAMERA_PERSPECTIVE)) v->p = params->camera_origin.xyz;
     v->n = (float3)(0.0f);
     v->ns = v->n;
+    v->ns_base = v->n;
     v->wo = v->n;
     v->beta = (float4)(filter_weight);
     v->le = (float4)(0.0f);
@@ -641,7 +648,7 @@ inline void bdpt_splat(const Scene *scene, const SampledWavelengths *w, Sampler 
     if (!material_has_non_delta_lobe(material)) return;
     CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, sampler));
     if (c.pixel < 0 || !shading_side_agrees(qs->n, qs->ns, c.to_camera)) return;
-    SurfaceContext sc = surface_context(scene, qs->uv, qs->footprint);
+    SurfaceContext sc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, 0);
     float4 f_cos = material_eval(material, &sc, w, qs->ns, c.to_camera, qs->wo);
     float cos_light = fabs(dot(qs->wo, qs->n));
     float cos_camera = fabs(dot(c.to_camera, qs->n));
@@ -701,7 +708,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
     if (pt_medium) {
         f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
     } else {
-        SurfaceContext psc = surface_context(scene, pt->uv, pt->footprint);
+        SurfaceContext psc = shading_context(scene, pt->uv, pt->footprint, pt->ns_base, 0);
         f_p = material_eval(pm, &psc, w, pt->ns, pt->wo, to_q);
     }
     if (all(f_p == (float4)(0.0f))) return (float4)(0.0f);
@@ -712,7 +719,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
         f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
     } else {
         __global const Material *qm = &scene->materials[qs->material];
-        SurfaceContext qsc = surface_context(scene, qs->uv, qs->footprint);
+        SurfaceContext qsc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, 0);
         f_q = material_eval(qm, &qsc, w, qs->ns, -to_q, qs->wo) / cos_in;
     }
     float4 value = qs->beta * f_q * pt->beta * f_p * g;

@@ -112,12 +112,39 @@ inline int material_back_is_black(__global const Material *m, float3 n, float3 w
 #endif
 }
 
+/* tan² of the angle between unit vectors whose cosine is c (either side: the square of c). */
+inline float tan2_from_cos(float c)
+{
+    float c2 = c * c;
+    return fmax(1.0f - c2, 0.0f) / c2;
+}
+
+/* The factor a normal- or bump-mapped material m with Material.shadowing scales its BSDF's value by, for light
+ * arriving along wl (the light's side, whichever way the transport runs) at a point whose shading normal n was
+ * turned from sc->base_normal: Conty Estevez, Pearce & Kulla 2019 ("A Microfacet-Based Shadowing Function to Solve
+ * the Bump Terminator Problem", Ray Tracing Gems ch. 12), G = 2 / (1 + √(1 + α² tan² θl)), α² = min(1, tan²θn / 8),
+ * θn the turn and θl wl's angle from the base normal, as Mitsuba 3's normalmap and bumpmap apply it. 1 without
+ * the term. Its value is a function of squares of cosines, so the side either normal faces does not matter. */
+inline float material_shadowing(__global const Material *m, const SurfaceContext *sc, float3 n, float3 wl)
+{
+#if SCENE_HAS_SURFACE_NORMALS
+    if (!m->shadowing || !(dot(sc->base_normal, sc->base_normal) > 0.0f)) return 1.0f;
+    float alpha2 = fmin(0.125f * tan2_from_cos(dot(n, sc->base_normal)), 1.0f);
+    float g = 2.0f / (1.0f + sqrt(1.0f + alpha2 * tan2_from_cos(dot(wl, sc->base_normal))));
+    return isfinite(g) ? g : 0.0f;
+#else
+    return 1.0f;
+#endif
+}
+
+/* wi is the light's side: radiance's own arguments, which every caller passes (an importance walk swaps them). */
 inline float4 material_eval(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
                             float3 n, float3 wo, float3 wi)
 {
     if (material_back_is_black(m, n, wo)) return (float4)(0.0f);
     ShadingFrame frame = material_frame(m, n, wo);
-    return material_eval_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
+    return material_eval_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi)) *
+           material_shadowing(m, sc, n, wi);
 }
 
 inline float material_pdf(__global const Material *m, const SurfaceContext *sc, const SampledWavelengths *w,
@@ -135,6 +162,8 @@ inline int material_sample(__global const Material *m, const SurfaceContext *sc,
     ShadingFrame frame = material_frame(m, n, wo);
     if (!material_sample_local(m, sc, w, to_local(&frame, wo), uc, u, s)) return 0;
     s->wi = to_world(&frame, s->wi);
+    /* The pdf stays the nested BSDF's, as in Mitsuba: the term is part of the value, so of the weight. */
+    s->weight *= material_shadowing(m, sc, n, sc->adjoint ? wo : s->wi);
     return 1;
 }
 

@@ -91,6 +91,7 @@ typedef struct {
     float3 n;   /* geometric normal (the winding's front): sides, ray offsets, media, emission */
     float3 ns;  /* shading normal, the BSDF's frame: n itself on a flat triangle (shading_normal.cl), turned by a
                    normal or bump map (surface_detail.cl) */
+    float3 ns_base;  /* the shading normal before a normal or bump map turned it: their shadowing term's reference */
     float3 wo;  /* back along the ray */
     float2 uv;  /* texture coordinates (only in scenes with material textures) */
     float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; 0 unless SCENE_NEEDS_FOOTPRINT) */
@@ -107,6 +108,7 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
     v.p = g.p;
     v.n = g.n;
     v.ns = g.n;
+    v.ns_base = v.ns;
     v.wo = -ray.direction;
     v.uv = hit.b12;
     v.footprint = 0.0f;
@@ -138,6 +140,7 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
     v.n = instance_normal(instance, triangle_normal(scene->triangle_vertices, hit.triangle));
     v.wo = -ray.direction;
     v.ns = v.info.normals < 0 ? v.n : instance_shading_normal(scene, instance, v.info.normals, hit.b12, v.n, v.wo);
+    v.ns_base = v.ns;
     v.uv = (float2)(0.0f);
     v.footprint = 0.0f;
     if (SCENE_HAS_TEXTURES) {
@@ -186,6 +189,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
         if (SCENE_NEEDS_FOOTPRINT) v.footprint = camera_footprint(scene, hit.triangle, v.p, v.n);
     }
     if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
+    v.ns_base = v.ns;
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         v.ns = detailed_normal(scene, &scene->materials[v.info.material], hit.triangle, v.uv, v.footprint, v.n,
                                v.ns, v.wo);
@@ -277,7 +281,7 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
 {
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
-        SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+        SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, 0);
         *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
                                                            v->info.interior, s->medium, use_mis,
                                                            path_query(sampler, s, QUERY_SHADOW), rays_traced);
@@ -295,7 +299,7 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
-    SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, 0);
     return material_sample(material, &sc, w, v->ns, v->wo, uc, u, bs)
         && shading_side_agrees(v->n, v->ns, bs->wi);
 }

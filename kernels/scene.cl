@@ -75,6 +75,19 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
     sc.buffers.spectra = scene->spectra;
     sc.uv = uv;
     sc.footprint = footprint;
+    sc.base_normal = (float3)(0.0f);
+    sc.adjoint = 0;
+    return sc;
+}
+
+/* surface_context at a surface point whose shading normal before its surface detail was base_normal, for the
+ * transport `adjoint` (SurfaceContext): what material_eval and material_sample take, for the shadowing term. */
+inline SurfaceContext shading_context(const Scene *scene, float2 uv, float footprint, float3 base_normal,
+                                      int adjoint)
+{
+    SurfaceContext sc = surface_context(scene, uv, footprint);
+    sc.base_normal = base_normal;
+    sc.adjoint = adjoint;
     return sc;
 }
 

@@ -143,6 +143,10 @@ typedef struct {
     int one_sided;              /* 1: a reflecting BSDF is black seen from the back of its surface (wo on the far side
                                    of the winding's normal), as Mitsuba 3's outside `twosided`; 0: it reflects on
                                    both faces. BSDFs that transmit ignore it */
+    int shadowing;              /* 1: with a normal or bump map, the BSDF's value is scaled by the shadowing term of
+                                   Conty Estevez et al. 2019 (material.cl, material_shadowing), as Mitsuba 3's
+                                   `use_shadowing_function`; 0: it is not */
+    int pad[3];                 /* to the float4 alignment */
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its

@@ -20,6 +20,8 @@ inline SurfaceContext harness_context(__global const float *spectra)
     sc.buffers.spectra = spectra;
     sc.uv = (float2)(0.0f);
     sc.footprint = 0.0f;
+    sc.base_normal = (float3)(0.0f);
+    sc.adjoint = 0;
     return sc;
 }
 

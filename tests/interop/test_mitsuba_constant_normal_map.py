@@ -15,8 +15,8 @@ SIZE = 32
 
 
 def _xml(folder, value: str, shadowing_off: str = ""):
-    """shadowing_off: Mitsuba's switch that turns its normalmap's shadowing term off (which spectrace does not apply:
-    tests/interop/test_mitsuba_normal_map_convention.py), given to Mitsuba's copy only."""
+    """shadowing_off: Mitsuba's switch that turns its normalmap's shadowing term off (on by default, imported as
+    `shadowing_function`: tests/interop/test_mitsuba_normal_map_convention.py)."""
     x, y, z = (v.strip() for v in value.split(","))
     path = folder / f"normal_{x}_{y}_{z}{'_off' if shadowing_off else ''}.xml"
     path.write_text(
@@ -54,14 +54,12 @@ def test_a_constant_normal_map_is_a_one_texel_image(tmp_path):
 @pytest.mark.slow
 def test_a_constant_normal_map_renders_as_in_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
     """8 independent images from each renderer: 8 x 8-pixel block means and the image mean within 5 standard
-    errors, Mitsuba's normalmap without its shadowing term (spectrace applies none); the panel without its normal
-    map disagrees with Mitsuba's image."""
+    errors, the same XML (Mitsuba's default shadowing term on) on both sides; the panel without its normal map
+    disagrees with Mitsuba's image."""
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, block = 8, 4, 8
     tilted = _xml(tmp_path, "0.8, 0.4, 0.9")
-    theirs = mi.load_file(
-        str(_xml(tmp_path, "0.8, 0.4, 0.9", '<boolean name="use_shadowing_function" value="false"/>'))
-    )
+    theirs = mi.load_file(str(tilted))
     by_mitsuba = np.stack([np.array(mi.render(theirs, spp=replica_spp, seed=seed)) for seed in range(replicas)])
 
     def ours(path) -> np.ndarray:

@@ -407,6 +407,7 @@ def test_normalmap_becomes_the_materials_normal_map(folder, bsdf):
         "type": "diffuse",
         "reflectance": {"rgb": [0.5, 0.5, 0.5]},
         "normal_map": {"texture": "normal_map_texture"},
+        "shadowing_function": True,  # Mitsuba's default use_shadowing_function
     } | ({"two_sided": False} if "twosided" not in bsdf else {})  # Mitsuba's diffuse alone is one-sided
     assert data["textures"]["normal_map_texture"] == {"type": "bitmap", "file": "normal.png", "raw": True}
     normal_map = load_mitsuba_scene(folder / "scene.xml").shapes[0].material.detail.normal_map
@@ -441,8 +442,19 @@ def test_bumpmap_becomes_bump_map_and_scale(folder, order):
     material = data["materials"][data["shapes"][0]["material"]]
     assert material["bump_map"] == {"texture": "bump_map_texture"} and material["bump_scale"] == 0.05
     detail = load_mitsuba_scene(folder / "scene.xml").shapes[0].material.detail
-    assert detail.bump_scale == 0.05 and detail.bump_map.channels == 1
+    assert detail.bump_scale == 0.05 and detail.bump_map.channels == 1 and detail.shadowing_function
     np.testing.assert_allclose(detail.bump_map.values[..., 0], [[0, 64 / 255], [128 / 255, 1]], atol=1e-6)
+
+
+@pytest.mark.parametrize("kind", ["normalmap", "bumpmap"])
+@pytest.mark.parametrize("value", [True, False])
+def test_use_shadowing_function_becomes_shadowing_function(folder, kind, value):
+    _detail_images(folder)
+    switch = f'<boolean name="use_shadowing_function" value="{str(value).lower()}"/>'
+    inner = NORMAL_MAP if kind == "normalmap" else HEIGHTS
+    data, _ = mitsuba_scene_data(_write(folder, QUAD.format(f'<bsdf type="{kind}">{inner}{switch}{DIFFUSE}</bsdf>')))
+    assert data["materials"][data["shapes"][0]["material"]]["shadowing_function"] is value
+    assert load_mitsuba_scene(folder / "scene.xml").shapes[0].material.detail.shadowing_function is value
 
 
 def test_bumpmap_scale_defaults_to_1(folder):

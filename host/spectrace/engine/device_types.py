@@ -81,8 +81,10 @@ MATERIAL_DTYPE = _struct(
         ("opacity", "<f4"),
         ("opacity_texture", "<i4"),
         ("one_sided", "<i4"),
+        ("shadowing", "<i4"),
+        ("pad", ("<i4", (3,))),
     ],
-    112,
+    128,
 )
 
 # Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or

@@ -913,14 +913,18 @@ class MitsubaImporter:
         """The material of the one bsdf that a normalmap, bumpmap or mask adapter wraps, with the adapter's key
         added: normal_map (its `normalmap` texture), bump_map and bump_scale (its one texture, `scale`), opacity
         (`opacity`, Mitsuba's default 0.5). Mitsuba's bumpmap displaces by scale · h along the normal (its tangents
-        are dp/du + scale · ∂h/∂u · n), which is spectrace's bump_scale."""
+        are dp/du + scale · ∂h/∂u · n), which is spectrace's bump_scale. A normal or bump map's
+        `use_shadowing_function` (Mitsuba's default true) is spectrace's shadowing_function."""
         nested = self.nested(properties, "bsdf")
         properties.understood(*properties.keys())  # each key is judged below
         if len(nested) != 1:
             raise self.fail(bsdf, f"{bsdf.label()} needs exactly one nested bsdf, got {len(nested)}")
         expected = {"normalmap": "normalmap", "bumpmap": "scale", "mask": "opacity"}[kind]
         textures = [key for key, child in properties.items() if self.resolve(child).tag == "texture"]
+        shadowing = kind != "mask"
         for key, child in properties.items():
+            if shadowing and key == "use_shadowing_function":
+                continue
             # A bumpmap's texture may have any name.
             if key != expected and self.resolve(child).tag != "bsdf" and not (kind == "bumpmap" and key in textures):
                 self.unsupported_plugin(bsdf, f" with {_shown(key)}")
@@ -953,6 +957,9 @@ class MitsubaImporter:
             detail["opacity"] = self.opacity(properties["opacity"]) if "opacity" in properties else 0.5
         if any(value is None for value in detail.values()):
             return None
+        if shadowing and detail:
+            switch = properties.get("use_shadowing_function")
+            detail["shadowing_function"] = True if switch is None else self.boolean(switch)
         table = self.material_table(nested[0], two_sided)
         if table is None:
             return None

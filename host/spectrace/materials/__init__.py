@@ -137,10 +137,11 @@ def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
 def write_detail(row: np.ndarray, detail, textures) -> None:
     """The surface-detail fields at the end of a Material row (kernels/types.h); their defaults change nothing."""
     row["normal_map"] = row["bump_map"] = row["opacity_texture"] = NO_TEXTURE
-    row["bump_scale"], row["opacity"], row["one_sided"] = 0.0, 1.0, 0
+    row["bump_scale"], row["opacity"], row["one_sided"], row["shadowing"] = 0.0, 1.0, 0, 0
     if detail is None:
         return
     row["one_sided"] = int(not detail.two_sided)
+    row["shadowing"] = int(detail.shadowing_function and (detail.normal_map is not None or detail.bump_map is not None))
     if detail.normal_map is not None:
         row["normal_map"] = textures.add(detail.normal_map, "vector")
     if detail.bump_map is not None:

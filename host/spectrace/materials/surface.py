@@ -64,6 +64,14 @@ PARAMETERS = (
         doc="false: a reflecting material reflects only on the front of its surface (toward the winding's normal) "
         "and is black from the back, as Mitsuba 3's BSDFs outside `twosided`; ignored by materials that transmit",
     ),
+    Parameter(
+        "shadowing_function",
+        "bool",
+        default=False,
+        doc="true: with a normal or bump map, the BSDF's value is scaled by the shadowing term of Conty Estevez, "
+        "Pearce & Kulla 2019 of the light's direction (Mitsuba 3's `use_shadowing_function`, which Mitsuba turns "
+        "on by default): it darkens steep maps under grazing light",
+    ),
 )
 NAMES = tuple(p.name for p in PARAMETERS)
 _BY_NAME = {p.name: p for p in PARAMETERS}
@@ -78,6 +86,7 @@ class SurfaceDetail:
     bump_scale: float = 1.0
     opacity: object = 1.0  # a float, or a scalar texture
     two_sided: bool = True
+    shadowing_function: bool = False
 
     @property
     def is_cut_out(self) -> bool:
@@ -127,7 +136,13 @@ def check_texture(texture, name: str, where: str) -> None:
 
 
 def detail(
-    normal_map=None, bump_map=None, bump_scale=1.0, opacity=1.0, two_sided=True, where=None
+    normal_map=None,
+    bump_map=None,
+    bump_scale=1.0,
+    opacity=1.0,
+    two_sided=True,
+    where=None,
+    shadowing_function=False,
 ) -> SurfaceDetail | None:
     """The SurfaceDetail of checked values, or None when every one is at its default. `where(name)` is the key
     path of a key in errors (the Python API's keyword names when None)."""
@@ -150,9 +165,13 @@ def detail(
         opacity = _BY_NAME["opacity"].check(opacity, at("opacity"))
     if not isinstance(two_sided, bool):
         raise SpectraceError(f"two_sided must be true or false, got {two_sided!r}", where=at("two_sided"))
+    if not isinstance(shadowing_function, bool):
+        raise SpectraceError(
+            f"shadowing_function must be true or false, got {shadowing_function!r}", where=at("shadowing_function")
+        )
     if normal_map is None and bump_map is None and not is_texture(opacity) and opacity == 1.0 and two_sided:
         return None
-    return SurfaceDetail(normal_map, bump_map, scale, opacity, two_sided)
+    return SurfaceDetail(normal_map, bump_map, scale, opacity, two_sided, shadowing_function)
 
 
 def cut_out_problem(material, emits: bool, has_interior: bool) -> str | None:
@@ -178,8 +197,20 @@ def accepting_detail(make: Callable) -> Callable:
     material>): written once here rather than in every module."""
 
     @functools.wraps(make)
-    def detailed(*args, normal_map=None, bump_map=None, bump_scale=1.0, opacity=1.0, two_sided=True, **kwargs):
-        return with_detail(make(*args, **kwargs), detail(normal_map, bump_map, bump_scale, opacity, two_sided))
+    def detailed(
+        *args,
+        normal_map=None,
+        bump_map=None,
+        bump_scale=1.0,
+        opacity=1.0,
+        two_sided=True,
+        shadowing_function=False,
+        **kwargs,
+    ):
+        return with_detail(
+            make(*args, **kwargs),
+            detail(normal_map, bump_map, bump_scale, opacity, two_sided, shadowing_function=shadowing_function),
+        )
 
     signature = inspect.signature(make)
     extra = [
@@ -189,7 +220,8 @@ def accepting_detail(make: Callable) -> Callable:
     detailed.__signature__ = signature.replace(parameters=[*signature.parameters.values(), *extra])  # type: ignore[attr-defined]
     detailed.__doc__ = (make.__doc__ or "") + (
         "\n\nEvery material also takes normal_map or bump_map (with bump_scale, scene units), opacity (a number "
-        "or texture in [0, 1]) and two_sided (False: black from the back, for reflecting materials): "
+        "or texture in [0, 1]), two_sided (False: black from the back, for reflecting materials) and "
+        "shadowing_function (True: Mitsuba 3's shadowing term on normal- and bump-mapped surfaces): "
         'docs/textures.md, "Surface detail".'
     )
     return detailed

@@ -365,6 +365,7 @@ class _Resolver:
             values["opacity"],
             spec.two_sided,
             where=lambda name: self.where(f"{key}.{name}"),
+            shadowing_function=spec.shadowing_function,
         )
 
     def texture(self, spec, key: str):

@@ -324,7 +324,7 @@ class TableSpec(Protocol):
 def _surface_detail_fields() -> dict[str, Any]:
     """The keys every material takes besides its own (spectrace.materials.surface): textures (normal_map,
     bump_map), a number (bump_scale), a number or texture (opacity), whose range the loader checks, and a boolean
-    (two_sided)."""
+    (two_sided, shadowing_function)."""
     fields: dict[str, Any] = {}
     for parameter in surface.PARAMETERS:
         annotation, field = _field(parameter) if parameter.type in ("float", "bool") else (None, None)
