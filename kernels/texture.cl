@@ -124,35 +124,52 @@ inline float4 texture_nearest(__global const Texture *t, const TextureBuffers *b
     return texel_spectrum(t, b, offset, width, x, y, w);
 }
 
+/* The cell of four texel centres around st at one level (texel centres at (i + ½) / width), its corners wrapped as
+ * the texture wraps, and st's place in it: what a bilinear lookup and its gradient both read. */
+typedef struct {
+    int offset;         /* the level's first texel */
+    int width, height;  /* the level's size, texels */
+    int xa, xb, ya, yb; /* the cell's columns and rows, wrapped */
+    float2 f;           /* st's fraction across the cell, [0, 1) */
+} BilinearCell;
+
+inline BilinearCell texture_bilinear_cell(__global const Texture *t, int level, float2 st)
+{
+    BilinearCell c;
+    c.offset = texture_level(t, level, &c.width, &c.height);
+    float2 p = clamp(st * (float2)(c.width, c.height) - 0.5f, -TEXTURE_MAX_COORDINATE, TEXTURE_MAX_COORDINATE);
+    float2 corner = floor(p);
+    c.f = p - corner;
+    int x0 = (int)corner.x, y0 = (int)corner.y;
+    c.xa = texture_wrap(x0, c.width, t->wrap);
+    c.xb = texture_wrap(x0 + 1, c.width, t->wrap);
+    c.ya = texture_wrap(y0, c.height, t->wrap);
+    c.yb = texture_wrap(y0 + 1, c.height, t->wrap);
+    return c;
+}
+
 /* The four texels around st at one level, blended by their distance (texel centres at (i + ½) / width). */
 inline float4 texture_bilinear(__global const Texture *t, const TextureBuffers *b, int level, float2 st,
                                const SampledWavelengths *w)
 {
-    int width, height;
-    int offset = texture_level(t, level, &width, &height);
-    float2 p = clamp(st * (float2)(width, height) - 0.5f, -TEXTURE_MAX_COORDINATE, TEXTURE_MAX_COORDINATE);
-    float2 corner = floor(p);
-    float2 f = p - corner;
-    int x0 = (int)corner.x, y0 = (int)corner.y;
-    int xa = texture_wrap(x0, width, t->wrap), xb = texture_wrap(x0 + 1, width, t->wrap);
-    int ya = texture_wrap(y0, height, t->wrap), yb = texture_wrap(y0 + 1, height, t->wrap);
+    BilinearCell c = texture_bilinear_cell(t, level, st);
     if (t->texel_format == TEXEL_SIGMOID) {
         /* Most lookups of an image's flat regions find four equal texels: one spectrum then stands for the blend,
          * which is exactly what blending four equal values gives (mix(a, a, f) = a). */
-        float3 c00 = texel_value3(t, b, offset + 3 * (ya * width + xa));
-        float3 c10 = texel_value3(t, b, offset + 3 * (ya * width + xb));
-        float3 c01 = texel_value3(t, b, offset + 3 * (yb * width + xa));
-        float3 c11 = texel_value3(t, b, offset + 3 * (yb * width + xb));
+        float3 c00 = texel_value3(t, b, c.offset + 3 * (c.ya * c.width + c.xa));
+        float3 c10 = texel_value3(t, b, c.offset + 3 * (c.ya * c.width + c.xb));
+        float3 c01 = texel_value3(t, b, c.offset + 3 * (c.yb * c.width + c.xa));
+        float3 c11 = texel_value3(t, b, c.offset + 3 * (c.yb * c.width + c.xb));
         if (all(c00 == c10) && all(c00 == c01) && all(c00 == c11)) return texel_sigmoid(t, c00, w->lambda);
-        float4 top_sigmoid = mix(texel_sigmoid(t, c00, w->lambda), texel_sigmoid(t, c10, w->lambda), f.x);
-        float4 bottom_sigmoid = mix(texel_sigmoid(t, c01, w->lambda), texel_sigmoid(t, c11, w->lambda), f.x);
-        return mix(top_sigmoid, bottom_sigmoid, f.y);
+        float4 top_sigmoid = mix(texel_sigmoid(t, c00, w->lambda), texel_sigmoid(t, c10, w->lambda), c.f.x);
+        float4 bottom_sigmoid = mix(texel_sigmoid(t, c01, w->lambda), texel_sigmoid(t, c11, w->lambda), c.f.x);
+        return mix(top_sigmoid, bottom_sigmoid, c.f.y);
     }
-    float4 top = mix(texel_spectrum(t, b, offset, width, xa, ya, w),
-                     texel_spectrum(t, b, offset, width, xb, ya, w), f.x);
-    float4 bottom = mix(texel_spectrum(t, b, offset, width, xa, yb, w),
-                        texel_spectrum(t, b, offset, width, xb, yb, w), f.x);
-    return mix(top, bottom, f.y);
+    float4 top = mix(texel_spectrum(t, b, c.offset, c.width, c.xa, c.ya, w),
+                     texel_spectrum(t, b, c.offset, c.width, c.xb, c.ya, w), c.f.x);
+    float4 bottom = mix(texel_spectrum(t, b, c.offset, c.width, c.xa, c.yb, w),
+                        texel_spectrum(t, b, c.offset, c.width, c.xb, c.yb, w), c.f.x);
+    return mix(top, bottom, c.f.y);
 }
 
 /* The continuous MIP level whose texels are `footprint` wide in st units: texels of level l are 2^l / max(width,
@@ -187,20 +204,13 @@ inline float4 image_texture_spectrum(__global const Texture *t, const TextureBuf
 inline float2 texture_bilinear_gradient(__global const Texture *t, const TextureBuffers *b, int level, float2 st,
                                         const SampledWavelengths *w)
 {
-    int width, height;
-    int offset = texture_level(t, level, &width, &height);
-    float2 p = clamp(st * (float2)(width, height) - 0.5f, -TEXTURE_MAX_COORDINATE, TEXTURE_MAX_COORDINATE);
-    float2 corner = floor(p);
-    float2 f = p - corner;
-    int x0 = (int)corner.x, y0 = (int)corner.y;
-    int xa = texture_wrap(x0, width, t->wrap), xb = texture_wrap(x0 + 1, width, t->wrap);
-    int ya = texture_wrap(y0, height, t->wrap), yb = texture_wrap(y0 + 1, height, t->wrap);
-    float h00 = texel_spectrum(t, b, offset, width, xa, ya, w).x;
-    float h10 = texel_spectrum(t, b, offset, width, xb, ya, w).x;
-    float h01 = texel_spectrum(t, b, offset, width, xa, yb, w).x;
-    float h11 = texel_spectrum(t, b, offset, width, xb, yb, w).x;
-    float2 per_texel = (float2)(mix(h10 - h00, h11 - h01, f.y), mix(h01 - h00, h11 - h10, f.x));
-    return per_texel * (float2)(width, height);
+    BilinearCell c = texture_bilinear_cell(t, level, st);
+    float h00 = texel_spectrum(t, b, c.offset, c.width, c.xa, c.ya, w).x;
+    float h10 = texel_spectrum(t, b, c.offset, c.width, c.xb, c.ya, w).x;
+    float h01 = texel_spectrum(t, b, c.offset, c.width, c.xa, c.yb, w).x;
+    float h11 = texel_spectrum(t, b, c.offset, c.width, c.xb, c.yb, w).x;
+    float2 per_texel = (float2)(mix(h10 - h00, h11 - h01, c.f.y), mix(h01 - h00, h11 - h10, c.f.x));
+    return per_texel * (float2)(c.width, c.height);
 }
 
 /* ∂h/∂uv of an image texture's lookup at uv (image_texture_spectrum's first lane): 0 for a nearest lookup, whose
