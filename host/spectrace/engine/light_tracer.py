@@ -170,7 +170,7 @@ class LightPasses:
         self._items = cl.Buffer(ctx, rw, pixels * 4)
         self._own_xyz = cl.Buffer(ctx, rw, (pixels if self.bdpt else 1) * 16)
         # A BDPT work-item renders a group of pixels with one light subpath (kernels/bdpt.cl's trace_bdpt).
-        group = BDPT_PIXELS_PER_LIGHT_PATH if scene.integrator == "bdpt" else 1
+        group = BDPT_PIXELS_PER_LIGHT_PATH if self.bdpt else 1
         self.work_items = -(-pixels // group)
         self._sphere = scene_sphere(scene)
         # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.
