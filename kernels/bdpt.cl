@@ -16,8 +16,9 @@
  *   pixel and is written as a splat record, reduced on the host in a fixed order;
  * - s, t >= 2: a light vertex joined to a camera vertex through a shadow ray.
  * The sum of each pixel's own strategies goes to the pixel's row of own_xyz. A work-item renders a pixel
- * sample of two neighbouring pixels whose camera subpaths share one light subpath (trace_bdpt): the light walk and
- * the t = 1 joins are made once for two pixel samples, which the t = 1 strategy's value and MIS weight count.
+ * sample of BDPT_PIXELS_PER_LIGHT_PATH neighbouring pixels whose camera subpaths share one light subpath
+ * (trace_bdpt): the light walk and the t = 1 joins are made once for those pixel samples, which the t = 1 strategy's
+ * value and MIS weight count.
  *
  * Light subpath vertices use the adjoint BSDF (light_tracer.cl's conventions: the sample weight divided by the
  * radiance scale, Veach's shading-normal factor). A vertex's beta is its subpath's throughput as it arrives there:
@@ -46,8 +47,8 @@
 /* max_depth 16 at most: a camera subpath of 17 vertices (the eye and 16 surfaces), a light one of 16. */
 #define BDPT_MAX_SEGMENTS 16
 #define BDPT_MAX_VERTICES (BDPT_MAX_SEGMENTS + 1)
-/* Neighbouring pixels (in row-major order) whose camera subpaths share one light subpath (trace_bdpt); the host's
- * spectrace.engine.bdpt.BDPT_PIXELS_PER_LIGHT_PATH. */
+/* Neighbouring pixels (in row-major order) whose camera subpaths share one light subpath (trace_bdpt), 1..16: the
+ * host defines it from the scene (spectrace.engine.bdpt.pixels_per_light_path). */
 #ifndef BDPT_PIXELS_PER_LIGHT_PATH
 #define BDPT_PIXELS_PER_LIGHT_PATH 2
 #endif
@@ -734,7 +735,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
  * the film has): the light-to-camera strategies (t = 1) written to records as it makes them, each pixel's sum of the
  * others (XYZ, w = 1 where dropped) to its row of own_xyz. The camera subpaths share one light subpath (and its wavelengths): every strategy with s >= 2
  * and t >= 2 joins each camera subpath to a whole light subpath, as with one light subpath per pixel sample, while
- * the light subpath's walk and its joins to the camera (t = 1) are made once for two pixel samples. The t = 1
+ * the light subpath's walk and its joins to the camera (t = 1) are made once for the group's pixel samples. The t = 1
  * strategy then has bdpt_light_share(params) samples per pixel sample, which its splats' value and the MIS weights
  * count. scene_sphere: the scene's bounding sphere (centre xyz, radius w), across which lights at infinity start;
  * hide_environment: the environment seen straight from the camera is black. */

@@ -3,7 +3,7 @@
  * One launch runs one pixel sample: work-item k is a pixel sample of the BDPT_PIXELS_PER_LIGHT_PATH pixels from
  * k × that, which share a light subpath (or of the group listed in `items` when the host launches some again for their later records). Its
  * light-to-camera connections land in any pixel, so, as for the `light` integrator (integrator_light.cl), they are
- * written as splat records in its own `capacity` slots, in the order it makes them; its two pixels' own estimates go
+ * written as splat records in its own `capacity` slots, in the order it makes them; its pixels' own estimates go
  * to their rows of own_xyz. The host adds, for each sample, every pixel's own estimate and then the records in the
  * order (work-item, record) to the film (spectrace.engine.light_tracer). The arguments are the light tracer's, so
  * the same host code drives both. */

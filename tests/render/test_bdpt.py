@@ -43,7 +43,7 @@ from tests.render.test_light_tracer import (
 
 import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.engine import light_tracer
+from spectrace.engine import bdpt, light_tracer
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import write_exr
@@ -66,6 +66,43 @@ def test_enclosure_radiance(device, max_depth):
     mean, standard_error = _image_mean(Renderer(_enclosure(max_depth), device))
     assert standard_error < 0.02 * expected
     assert_within_standard_errors(mean, expected, standard_error)
+
+
+@pytest.mark.parametrize("pixels", [1, 3])
+def test_any_number_of_pixels_per_light_subpath(device, pixels):
+    """The enclosure's radiance whatever number of pixels share a light subpath: 3 does not divide the 32 × 32 film,
+    so the last work-item has a pixel of its own; the t = 1 strategy's share and MIS weights follow the number."""
+    expected = EMITTED * (1 - ALBEDO**3) / (1 - ALBEDO)
+    scene = _enclosure(3).with_overrides(pixels_per_light_path=pixels)
+    mean, standard_error = _image_mean(Renderer(scene, device))
+    assert standard_error < 0.02 * expected
+    assert_within_standard_errors(mean, expected, standard_error)
+
+
+def test_pixels_per_light_subpath_from_the_scene(tmp_path):
+    """Four where every surface is diffuse (the enclosure), two where a smooth surface can make a caustic that the
+    light-to-camera strategy mostly finds (the glass slab), what the scene says where it says it."""
+    diffuse = _enclosure(3)
+    glass = spectrace.load_scene(_slab_scene(tmp_path, "bdpt"))
+    assert bdpt.pixels_per_light_path(diffuse) == 4
+    assert bdpt.pixels_per_light_path(glass) == 2
+    assert bdpt.pixels_per_light_path(glass.with_overrides(pixels_per_light_path=4)) == 4
+
+
+@pytest.mark.parametrize(
+    ("integrator", "pixels", "match"),
+    [
+        ("bdpt", 0, "pixels_per_light_path must lie in 1..16"),
+        ("bdpt", 17, "pixels_per_light_path must lie in 1..16"),
+        ("path", 2, "pixels_per_light_path is only for integrator 'bdpt'"),
+    ],
+)
+def test_pixels_per_light_subpath_refused_in_one_line(tmp_path, integrator, pixels, match):
+    text = _floor_scene(tmp_path, integrator).read_text()
+    text = text.replace("[integrator]\n", f"[integrator]\npixels_per_light_path = {pixels}\n")
+    with pytest.raises(SpectraceError, match=match) as error:
+        spectrace.load_scene(_write(tmp_path, text))
+    assert "integrator" in str(error.value) and "\n" not in str(error.value)
 
 
 @pytest.fixture
@@ -217,8 +254,11 @@ def test_dispersive_glass_agrees_with_the_path_tracer(device, tmp_path, lamp):
     assert_replicas_agree(bdpt, path, block=4)
 
 
-def test_pass_split_gives_the_same_bits(device, tmp_path, monkeypatch):
-    scene = spectrace.load_scene(_textured_scene(tmp_path, "bdpt")).with_overrides(max_depth=10, spp=6)
+@pytest.mark.parametrize("pixels", [None, 3])
+def test_pass_split_gives_the_same_bits(device, tmp_path, monkeypatch, pixels):
+    scene = spectrace.load_scene(_textured_scene(tmp_path, "bdpt")).with_overrides(
+        max_depth=10, spp=6, pixels_per_light_path=pixels
+    )
     one_pass = Renderer(scene, device).render(pass_spp=6).xyz
     split = Renderer(scene, device).render(pass_spp=1).xyz
     np.testing.assert_array_equal(one_pass, split)

@@ -1,15 +1,21 @@
 """Bidirectional path tracing on the host: what the `bdpt` integrator (kernels/bdpt.cl) refuses beyond the light
-tracer's limits. Its passes are the light tracer's (spectrace.engine.light_tracer): every pixel sample writes its
-own pixel's estimate to that pixel's row and its light-to-camera connections as splat records, which the host adds
-to the film in a fixed order (every pixel's own estimate, then the records)."""
+tracer's limits, and how many pixels share a light subpath. Its passes are the light tracer's
+(spectrace.engine.light_tracer): every pixel sample writes its own pixel's estimate to that pixel's row and its
+light-to-camera connections as splat records, which the host adds to the film in a fixed order (every pixel's own
+estimate, then the records)."""
 
+from spectrace.materials.diffuse import DiffuseMaterial
 from spectrace.scene.model import Scene
 
 # Subpaths live in fixed arrays in the kernel (kernels/bdpt.cl's BDPT_MAX_SEGMENTS).
 BDPT_MAX_SEGMENTS = 16
-# Consecutive pixels whose camera subpaths share one light subpath: a work-item each (kernels/bdpt.cl's
-# BDPT_PIXELS_PER_LIGHT_PATH).
-BDPT_PIXELS_PER_LIGHT_PATH = 2
+# Consecutive pixels whose camera subpaths share one light subpath, a work-item each group (kernels/bdpt.cl's
+# BDPT_PIXELS_PER_LIGHT_PATH), unless the scene sets integrator.pixels_per_light_path: where some path of light
+# can reach the camera through a smooth or glossy surface or a medium (a caustic that mostly the light-to-camera
+# strategy finds), and where every surface is diffuse and no medium fills a shape (the light-to-camera strategy
+# then adds little that the others do not). Measured in docs/integrators.md ("Sharing light subpaths").
+PIXELS_PER_LIGHT_PATH = 2
+PIXELS_PER_LIGHT_PATH_DIFFUSE = 4
 
 
 def bdpt_problem(scene: Scene) -> str | None:
@@ -24,3 +30,17 @@ def bdpt_problem(scene: Scene) -> str | None:
         # film-plane cameras'.
         return "integrator 'bdpt' supports the perspective, thinlens and orthographic cameras, not 'equirectangular'"
     return None
+
+
+def only_diffuse(scene: Scene) -> bool:
+    """Every surface of the scene (its instanced objects' too) is diffuse, and no medium fills a shape."""
+    shapes = list(scene.shapes) + [shape for instance in scene.instances for shape in instance.object.shapes]
+    return all(isinstance(shape.material, DiffuseMaterial) and shape.interior is None for shape in shapes)
+
+
+def pixels_per_light_path(scene: Scene) -> int:
+    """Neighbouring pixels whose camera subpaths share one light subpath: the scene's integrator.pixels_per_light_path,
+    else PIXELS_PER_LIGHT_PATH_DIFFUSE where only_diffuse, else PIXELS_PER_LIGHT_PATH."""
+    if scene.pixels_per_light_path is not None:
+        return int(scene.pixels_per_light_path)
+    return PIXELS_PER_LIGHT_PATH_DIFFUSE if only_diffuse(scene) else PIXELS_PER_LIGHT_PATH

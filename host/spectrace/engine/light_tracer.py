@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pyopencl as cl
 
-from spectrace.engine.bdpt import BDPT_PIXELS_PER_LIGHT_PATH, bdpt_problem
+from spectrace.engine.bdpt import bdpt_problem, pixels_per_light_path
 from spectrace.engine.launch import launch_shape
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.scene_buffers import render_params
@@ -170,7 +170,7 @@ class LightPasses:
         self._items = cl.Buffer(ctx, rw, pixels * 4)
         self._own_xyz = cl.Buffer(ctx, rw, (pixels if self.bdpt else 1) * 16)
         # A BDPT work-item renders a group of pixels with one light subpath (kernels/bdpt.cl's trace_bdpt).
-        group = BDPT_PIXELS_PER_LIGHT_PATH if self.bdpt else 1
+        group = pixels_per_light_path(scene) if self.bdpt else 1
         self.work_items = -(-pixels // group)
         self._sphere = scene_sphere(scene)
         # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.

@@ -8,6 +8,7 @@ import pyopencl as cl
 
 from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.device import Device, open_device
+from spectrace.engine.bdpt import pixels_per_light_path
 from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.light_tracer import LightPasses
@@ -124,6 +125,8 @@ class Renderer:
         defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
         response = scene.film_response
         defines |= response.defines()
+        if scene.integrator == "bdpt":
+            defines["BDPT_PIXELS_PER_LIGHT_PATH"] = pixels_per_light_path(scene)
         self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
         self.kernel = self._create_kernels()
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.

@@ -667,6 +667,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         hide_environment=spec.integrator.hide_environment,
         hide_emitters=spec.integrator.hide_emitters,
         count_thin_passes=spec.integrator.count_thin_passes,
+        pixels_per_light_path=spec.integrator.pixels_per_light_path,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
         sampler=spec.sampler.type,

@@ -136,6 +136,7 @@ class Scene:
     hide_environment: bool = False  # camera rays that leave the scene see black
     hide_emitters: bool = False  # Mitsuba 3's hide_emitters: the environment hidden, area lights seen through
     count_thin_passes: bool = True  # path: a pass straight through a thindielectric counts toward max_depth
+    pixels_per_light_path: int | None = None  # bdpt: pixels sharing one light subpath; None: chosen from the scene
     pixel_filter: PixelFilter = BOX_FILTER  # the pixel's reconstruction filter (spectrace.pixel_filters)
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
     film_response: FilmResponse = field(default_factory=FilmResponse)  # observers and sensor of the film

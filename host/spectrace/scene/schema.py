@@ -62,6 +62,12 @@ class IntegratorSpec(Strict):
         description="path only: a pass straight through a thindielectric counts toward max_depth (false: Mitsuba "
         "3's volpath, where it does not)",
     )
+    pixels_per_light_path: int | None = Field(
+        default=None,
+        description="bdpt only: neighbouring pixels whose camera subpaths share one light subpath, 1.."
+        f"{limits.MAX_PIXELS_PER_LIGHT_PATH}; absent: 4 where every surface is diffuse and no medium fills a shape, "
+        "2 otherwise (docs/integrators.md)",
+    )
 
     @field_validator("max_depth")
     @classmethod
@@ -73,6 +79,8 @@ class IntegratorSpec(Strict):
     @model_validator(mode="after")
     def _thin_passes_for_path_only(self) -> "IntegratorSpec":
         if problem := limits.count_thin_passes_problem(self.type, self.count_thin_passes):
+            raise ValueError(problem)
+        if problem := limits.pixels_per_light_path_problem(self.type, self.pixels_per_light_path):
             raise ValueError(problem)
         return self
 
