@@ -454,34 +454,35 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
     return count;
 }
 
-/* The BSDF density of surface vertex v sampling toward `next` having arrived from `prev` (solid angle), as an
- * area density at next. */
-inline float bdpt_surface_pdf(const Scene *scene, const SampledWavelengths *w, const BdptVertex *v,
-                              const BdptVertex *prev, const BdptVertex *next)
+/* The density with which surface or medium vertex v, arrived at from unit direction wo (toward the vertex before
+ * it), samples unit wi toward vertex `next` (the BSDF's, or the phase function's), as an area density at next. The
+ * caller passes the directions it knows (a vertex's own wo, the connection's), which a join would otherwise
+ * normalise again for each of its four densities. */
+inline float bdpt_vertex_pdf(const Scene *scene, const SampledWavelengths *w, const BdptVertex *v, float3 wo,
+                             float3 wi, const BdptVertex *next)
 {
-    if (v->kind == BDPT_MEDIUM) return bdpt_phase_pdf(scene, v, prev, next);
+    if (v->kind == BDPT_MEDIUM) return bdpt_to_area(bdpt_phase(scene, v, -wo, wi), v, next);
     __global const Material *material = &scene->materials[v->material];
     SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
-    float3 wo = bdpt_direction(v, prev), wi = bdpt_direction(v, next);
     return bdpt_to_area(material_pdf(material, &sc, w, v->ns, wo, wi), v, next);
 }
 
-/* The area density at next of the light's emission leaving its point v toward next (from a light at infinity: its
- * disk's density across the beam). */
-inline float bdpt_light_pdf(const Scene *scene, const BdptVertex *v, const BdptVertex *next)
+/* The area density at next of the light's emission leaving its point v along unit d toward next (from a light at
+ * infinity: its disk's density across the beam, d unused). */
+inline float bdpt_light_pdf(const Scene *scene, const BdptVertex *v, float3 d, const BdptVertex *next)
 {
     if (v->at_infinity) return bdpt_to_area(0.0f, v, next);
-    float3 d = normalize(next->p - v->p);
     return bdpt_to_area(light_direction_pdf(&scene->lights[v->light], v->n, d), v, next);
 }
 
 /* The MIS weight (power heuristic) of strategy (s, t) for the path its vertices make: light[0 .. s-1] (light[0]
  * replaced by *sampled when s = 1) and camera[0 .. t-1]. The densities the strategy changes at the four vertices
- * beside the connection are computed here; the subpaths' stored ones serve for the rest. camera_rev (t = 1): the
+ * beside the connection are computed here; the subpaths' stored ones serve for the rest. to_q: the unit direction
+ * from camera[t − 1] (the camera, t = 1) toward the light side's vertex joined to it (s >= 1). camera_rev (t = 1): the
  * area density at light[s-1] of the camera's ray through it, from the lens point the connection drew. */
 inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, const BdptVertex *light,
-                             const BdptVertex *camera, const BdptVertex *sampled, int s, int t, float camera_rev,
-                             float light_share)
+                             const BdptVertex *camera, const BdptVertex *sampled, int s, int t, float3 to_q,
+                             float camera_rev, float light_share)
 {
 #ifdef BDPT_UNWEIGHTED
     return 1.0f;
@@ -495,16 +496,17 @@ inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, co
     /* Reverse densities the connection gives. */
     float pt_rev = 0.0f, pt_minus_rev = 0.0f, qs_rev = 0.0f, qs_minus_rev = 0.0f;
     if (t > 1) {
+        /* pt and qs (s >= 2) are surface or medium vertices: their wo points back along their own subpaths. */
         if (s == 0) pt_rev = light_origin_pdf(scene, pt);
-        else if (s == 1) pt_rev = bdpt_light_pdf(scene, qs, pt);
-        else pt_rev = bdpt_surface_pdf(scene, w, qs, qs_minus, pt);
-        if (s == 0) pt_minus_rev = bdpt_light_pdf(scene, pt, pt_minus);
-        else pt_minus_rev = bdpt_surface_pdf(scene, w, pt, qs, pt_minus);
+        else if (s == 1) pt_rev = bdpt_light_pdf(scene, qs, -to_q, pt);
+        else pt_rev = bdpt_vertex_pdf(scene, w, qs, qs->wo, -to_q, pt);
+        if (s == 0) pt_minus_rev = bdpt_light_pdf(scene, pt, pt->wo, pt_minus);
+        else pt_minus_rev = bdpt_vertex_pdf(scene, w, pt, to_q, pt->wo, pt_minus);
     }
     if (s > 0) {
         if (t == 1) qs_rev = camera_rev;
-        else qs_rev = bdpt_surface_pdf(scene, w, pt, pt_minus, qs);
-        if (s > 1) qs_minus_rev = bdpt_surface_pdf(scene, w, qs, pt, qs_minus);
+        else qs_rev = bdpt_vertex_pdf(scene, w, pt, pt->wo, to_q, qs);
+        if (s > 1) qs_minus_rev = bdpt_vertex_pdf(scene, w, qs, -to_q, qs->wo, qs_minus);
     }
 
     /* The ratios at the two vertices either side of the connection and their neighbours, then the rest of each
@@ -640,7 +642,8 @@ inline void bdpt_splat(const Scene *scene, const SampledWavelengths *w, Sampler 
         value *= camera_transmittance(scene, w, qs->medium, &c, qs->p, query, rays_traced);
         if (all(value == (float4)(0.0f))) return;
         /* No surface at qs: the camera's area density there has no cosine. */
-        float weight = bdpt_mis_weight(scene, w, light, camera, 0, s, 1, c.importance, light_share) / light_share;
+        float weight =
+            bdpt_mis_weight(scene, w, light, camera, 0, s, 1, -c.to_camera, c.importance, light_share) / light_share;
         record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, w, params);
         return;
     }
@@ -661,7 +664,8 @@ inline void bdpt_splat(const Scene *scene, const SampledWavelengths *w, Sampler 
     if (all(value == (float4)(0.0f))) return;
     /* The camera's density of its ray through qs, as an area density there: c.importance holds the
      * direction's 1/(A cos³θ) over d² (1/A for the orthographic camera's parallel rays). */
-    float weight = bdpt_mis_weight(scene, w, light, camera, 0, s, 1, c.importance * cos_camera, light_share) /
+    float weight = bdpt_mis_weight(scene, w, light, camera, 0, s, 1, -c.to_camera, c.importance * cos_camera,
+                                   light_share) /
                    light_share;
     record_splat(records, c.pixel, c.film, bdpt_hero(value, qs->hero) * weight, cmf, w, params);
 }
@@ -727,7 +731,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
     if (all(value == (float4)(0.0f))) return (float4)(0.0f);
     value *= bdpt_transmittance(scene, w, pt, qs, query, rays_traced);
     if (all(value == (float4)(0.0f))) return (float4)(0.0f);
-    float weight = bdpt_mis_weight(scene, w, light, camera, s == 1 ? qs : 0, s, t, 0.0f, light_share);
+    float weight = bdpt_mis_weight(scene, w, light, camera, s == 1 ? qs : 0, s, t, to_q, 0.0f, light_share);
     return bdpt_hero(value, pt->hero || qs->hero) * weight;
 }
 
@@ -809,7 +813,7 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
             if (bdpt_keeps(0, t) && pt->light >= 0 && any(pt->le != (float4)(0.0f)) &&
                 !(pt->at_infinity && t == 2 && hide_environment)) {
                 float4 value = pt->beta * pt->le;
-                float weight = bdpt_mis_weight(scene, &w, light, camera, 0, 0, t, 0.0f, light_share);
+                float weight = bdpt_mis_weight(scene, &w, light, camera, 0, 0, t, (float3)(0.0f), 0.0f, light_share);
                 radiance += bdpt_hero(value, pt->hero) * weight;
             }
             if (t > last_segment || !bdpt_joinable(scene, pt)) continue;

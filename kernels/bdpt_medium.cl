@@ -40,14 +40,6 @@ inline float bdpt_phase(const Scene *scene, const BdptVertex *v, float3 in, floa
     return henyey_greenstein(dot(in, out), scene->media[v->medium].g);
 }
 
-/* The phase function's density at medium vertex v of sampling toward next, having arrived from prev, as an area
- * density at next (bdpt_surface_pdf's counterpart). */
-inline float bdpt_phase_pdf(const Scene *scene, const BdptVertex *v, const BdptVertex *prev, const BdptVertex *next)
-{
-    float3 in = bdpt_direction(prev, v), out = bdpt_direction(v, next);
-    return bdpt_to_area(bdpt_phase(scene, v, in, out), v, next);
-}
-
 /* The fraction of light that crosses from vertex a to vertex b (each offset off its surface toward the other; b may
  * be a light at infinity, reached along its direction): 0 when a surface blocks it, the media's transmittance
  * between; in scenes without media the occlusion test. */
