@@ -114,6 +114,18 @@ def test_other_scene_content_or_kernels_are_refused(device, tmp_path, monkeypatc
         resume_render(Renderer(scene, device), path)
 
 
+def test_bdpt_with_other_pixels_per_light_subpath_is_refused(device, tmp_path):
+    """Another grouping of pixels draws other samples: resuming with it would not give the uninterrupted render."""
+    path = tmp_path / "state.npz"
+    scene = _cornell().with_overrides(integrator="bdpt")
+    first = Renderer(scene, device)
+    first.run_pass(1)
+    save_checkpoint(path, first)
+    with pytest.raises(SpectraceError, match="another scene or other settings"):
+        resume_render(Renderer(scene.with_overrides(pixels_per_light_path=2), device), path)
+    resume_render(Renderer(scene.with_overrides(pixels_per_light_path=4), device), path)  # the Cornell box's own
+
+
 def _rewrite(source, target, replaced=None, dropped=()):
     """A copy of the checkpoint archive `source` with some entries replaced or dropped, and the rest untouched."""
     replaced = replaced or {}

@@ -32,6 +32,7 @@ import numpy as np
 
 from spectrace import resources
 from spectrace.device.program_cache import kernels_digest
+from spectrace.engine.bdpt import pixels_per_light_path
 from spectrace.engine.memory import scene_arrays
 from spectrace.engine.scene_buffers import render_params
 from spectrace.errors import SpectraceError
@@ -99,7 +100,9 @@ def buffers_digest(
 ) -> str:
     """scene_digest of a render not yet on a device (a tiled render's client holds no renderer)."""
     digest = hashlib.sha256(_SCENE_DIGEST_SALT.encode())
-    settings = (scene.integrator, spectral_bins, tuple(spectral_range_nm), scene.sampler)
+    settings: tuple = (scene.integrator, spectral_bins, tuple(spectral_range_nm), scene.sampler)
+    if scene.integrator == "bdpt":  # its light subpaths are shared by other groups of pixels (kernels/bdpt.cl)
+        settings += (pixels_per_light_path(scene),)
     digest.update(repr(settings).encode())
     _update_with_array(digest, "params", render_params(scene, buffers, 0, 0))
     for name, array in scene_arrays(buffers).items():
