@@ -105,6 +105,14 @@ def test_pixels_per_light_subpath_refused_in_one_line(tmp_path, integrator, pixe
     assert "integrator" in str(error.value) and "\n" not in str(error.value)
 
 
+def test_pixels_per_light_subpath_out_of_range_refused_in_python(device, tmp_path):
+    scene = spectrace.load_scene(_floor_scene(tmp_path, "bdpt"))
+    with pytest.raises(SpectraceError, match="pixels_per_light_path must lie in 1..16"):
+        Renderer(scene.with_overrides(pixels_per_light_path=0), device)
+    # A BDPT scene switched to another integrator keeps the setting, unused.
+    Renderer(scene.with_overrides(pixels_per_light_path=3, integrator="path"), device)
+
+
 @pytest.fixture
 def strategy_device(device, monkeypatch):
     """The device, building its programs with the test defines that keep one strategy (kernels/bdpt.cl)."""

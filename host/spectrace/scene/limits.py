@@ -168,7 +168,8 @@ def scene_settings_problem(scene) -> str | None:
         )
         or exposure_problem(scene.exposure)
         or count_thin_passes_problem(scene.integrator, scene.count_thin_passes)
-        or pixels_per_light_path_problem(scene.integrator, getattr(scene, "pixels_per_light_path", None))
+        # Only its range: a scene switched to another integrator (with_overrides, --integrator) keeps it unused.
+        or pixels_per_light_path_problem("bdpt", getattr(scene, "pixels_per_light_path", None))
     )
 
 
@@ -184,7 +185,8 @@ MAX_PIXELS_PER_LIGHT_PATH = 16
 
 
 def pixels_per_light_path_problem(integrator: str, pixels: int | None) -> str | None:
-    """Why integrator.pixels_per_light_path cannot be used (BDPT's alone, 1..MAX_PIXELS_PER_LIGHT_PATH), or None."""
+    """Why integrator.pixels_per_light_path cannot be used with this integrator (BDPT's alone, in
+    1..MAX_PIXELS_PER_LIGHT_PATH), or None."""
     if pixels is None:
         return None
     if integrator != "bdpt":
