@@ -457,3 +457,89 @@ def test_leaf_block_must_be_positive():
     row = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
     with pytest.raises(ValueError, match="leaf_block"):
         build_bvh(*_corners(row), leaf_block=0)
+
+
+def _furnished_room(rng):
+    """A room's six walls (12 large triangles, 10 x 3 x 8) around small furniture: five bumpy balls of 1,280
+    triangles each, two resting on the floor."""
+    room = trimesh.creation.box(extents=[10.0, 3.0, 8.0])
+    parts = [room.vertices[room.faces]]
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.3)
+    for centre in ([-3.0, -1.2, -2.0], [2.5, -1.2, 1.0], [0.0, 0.5, 0.0], [-4.0, 1.0, 3.0], [3.5, 0.0, -3.0]):
+        bumps = 1.0 + 0.05 * rng.standard_normal((len(ball.vertices), 1))
+        parts.append((ball.vertices * bumps + centre)[ball.faces])
+    return np.concatenate(parts)
+
+
+def test_sampled_binning_bins_every_large_triangle():
+    """A sampled node's sample gains each of its triangles whose box has at least LARGE_TRIANGLE_SHARE of the node's
+    surface area, counted once, while the sampled small ones share the rest of the node's count; a node too small to
+    be sampled is left alone."""
+    rng = np.random.default_rng(21)
+    triangles = _furnished_room(rng)  # 12 walls, then 6,400 small triangles
+    node_size = bvh_module.SAMPLED_BINNING_TRIANGLES + 1000
+    order = rng.permutation(len(triangles))
+    big_node = np.sort(np.concatenate([np.arange(12), order[order >= 12][: node_size - 12]]))
+    small_node = order[order >= 12][node_size - 12 : node_size + 88]
+    members = np.concatenate([big_node, small_node])
+    boxes = np.concatenate([triangles[members].min(axis=1), triangles[members].max(axis=1)], axis=1).T
+    counts = np.array([len(big_node), len(small_node)])
+    level = bvh_module._Level(
+        triangle_ids=members.astype(np.int32),
+        boxes=boxes.astype(np.float32),
+        counts=counts,
+        slot_offsets=np.array([0, len(big_node)]),
+        tree_index=np.array([0, 1]),
+    )
+    starts = np.array([0, len(big_node)])
+    lo = np.stack([boxes[:3, : len(big_node)].min(axis=1), boxes[:3, len(big_node) :].min(axis=1)])
+    hi = np.stack([boxes[3:, : len(big_node)].max(axis=1), boxes[3:, len(big_node) :].max(axis=1)])
+    extent = hi - lo
+    node_half_area = extent[:, 0] * extent[:, 1] + extent[:, 1] * extent[:, 2] + extent[:, 2] * extent[:, 0]
+    sample = bvh_module.SAMPLED_BINNING_TRIANGLES
+    stride = np.arange(sample) * len(big_node) // sample
+    positions = np.concatenate([stride, starts[1] + np.arange(len(small_node))])
+    joined, joined_counts, weights = bvh_module._with_large_triangles(
+        level, starts, np.array([0, 1]), node_half_area, positions, np.array([sample, len(small_node)])
+    )
+
+    size = boxes[3:] - boxes[:3]
+    half_area = size[0] * size[1] + size[1] * size[2] + size[2] * size[0]
+    large = np.flatnonzero(half_area[: len(big_node)] >= bvh_module.LARGE_TRIANGLE_SHARE * node_half_area[0])
+    assert set(members[large]) == set(range(12)), "the room's walls, and only they, are large"
+    assert set(stride) <= set(joined) and set(large) <= set(joined)
+    assert joined_counts[0] == len(set(stride) | set(large)) and joined_counts[1] == len(small_node)
+    assert weights is not None
+    first = weights[: joined_counts[0]]
+    np.testing.assert_array_equal(first[np.isin(joined[: joined_counts[0]], large)], 1.0)
+    assert first.sum() == pytest.approx(len(big_node), rel=1e-12)
+    np.testing.assert_array_equal(weights[joined_counts[0] :], 1.0)
+
+
+def test_sampled_binning_in_a_room_finds_the_brute_force_hits(monkeypatch):
+    """Built with sampled nodes that bin their large triangles, the tree is valid and the traversal finds the
+    brute-force closest hits of rays inside the room."""
+    triangles = _furnished_room(np.random.default_rng(11))
+    monkeypatch.setattr(bvh_module, "SAMPLED_BINNING_TRIANGLES", 64)
+    sampled = build_bvh(*_corners(triangles), max_leaf_size=8, leaf_block=4)
+    assert_valid_bvh(sampled, triangles)
+    rng = np.random.default_rng(12)
+    origins = rng.uniform([-4.9, -1.4, -3.9], [4.9, 1.4, 3.9], (300, 3))
+    directions = rng.normal(size=(300, 3))
+    t, prim = _traverse_closest_hits(sampled, triangles, origins, directions)
+    ref_t, ref_prim = brute_force_closest_hit(origins, directions, *_corners(triangles))
+    assert np.all(ref_prim >= 0), "every ray inside the closed room hits something"
+    np.testing.assert_array_equal(prim, ref_prim)
+    np.testing.assert_allclose(t, ref_t, rtol=1e-12)
+
+
+def test_threads_build_the_same_tree_with_large_triangles(monkeypatch):
+    """The sampled nodes' large triangles are found per node, so threads still give the single-thread tree."""
+    monkeypatch.setattr(bvh_module, "SAMPLED_BINNING_TRIANGLES", 64)
+    monkeypatch.setattr(bvh_module, "PARALLEL_BUILD_TRIANGLES", 100)
+    monkeypatch.setattr(bvh_module, "PARALLEL_NODES_PER_THREAD", 1)
+    triangles = _furnished_room(np.random.default_rng(13))
+    single = build_bvh(*_corners(triangles), max_leaf_size=8, leaf_block=4, threads=1)
+    shared = build_bvh(*_corners(triangles), max_leaf_size=8, leaf_block=4, threads=3)
+    np.testing.assert_array_equal(shared.nodes, single.nodes)
+    np.testing.assert_array_equal(shared.prim_order, single.prim_order)
