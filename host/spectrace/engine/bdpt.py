@@ -4,7 +4,6 @@ tracer's limits, and how many pixels share a light subpath. Its passes are the l
 light-to-camera connections as splat records, which the host adds to the film in a fixed order (every pixel's own
 estimate, then the records)."""
 
-from spectrace.materials.diffuse import DiffuseMaterial
 from spectrace.scene.model import Scene
 
 # Subpaths live in fixed arrays in the kernel (kernels/bdpt.cl's BDPT_MAX_SEGMENTS).
@@ -35,7 +34,7 @@ def bdpt_problem(scene: Scene) -> str | None:
 def only_diffuse(scene: Scene) -> bool:
     """Every surface of the scene (its instanced objects' too) is diffuse, and no medium fills a shape."""
     shapes = list(scene.shapes) + [shape for instance in scene.instances for shape in instance.object.shapes]
-    return all(isinstance(shape.material, DiffuseMaterial) and shape.interior is None for shape in shapes)
+    return all(shape.material is not None and shape.material.is_diffuse and shape.interior is None for shape in shapes)
 
 
 def pixels_per_light_path(scene: Scene) -> int:

@@ -14,6 +14,7 @@ class DiffuseMaterial(ReflectanceOnly):
     """Lambertian, f = R(λ)/π, reflecting on both faces."""
 
     is_delta = False
+    is_diffuse = True
 
 
 MODEL = DiffuseMaterial

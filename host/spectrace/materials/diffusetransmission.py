@@ -31,6 +31,7 @@ class DiffusetransmissionMaterial(Material):
     transmittance: Spectrum
 
     is_delta = False
+    is_diffuse = True
     has_transmission = True
     is_dispersive = False
 

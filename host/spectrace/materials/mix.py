@@ -70,6 +70,10 @@ class MixMaterial(Material):
     def is_dispersive(self) -> bool:
         return any(m.is_dispersive for m in self.materials)
 
+    @property
+    def is_diffuse(self) -> bool:
+        return all(m.is_diffuse for m in self.materials)
+
 
 MODEL = MixMaterial
 
