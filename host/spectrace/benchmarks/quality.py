@@ -3,7 +3,8 @@
 A converged reference is a long spectrace render (its own seed, so its noise is independent of the images
 judged), cross-checked region by region against a long Mitsuba render of the exported scene. Then each
 renderer gets the same wall-clock budget, in the same way: a warm 4-spp probe render measures its throughput,
-then it renders the spp that fit the budget (the time actually taken is reported). With the Sobol sampler
+then it renders the spp that fit the budget (the time actually taken is reported), warm too (a JIT variant of
+Mitsuba compiles anew for each sample count, once, as spectrace builds its kernels once). With the Sobol sampler
 spectrace renders powers of two, as its users would: Owen-scrambled Sobol points are balanced at powers of two, and a
 few samples past one can raise the error (docs/sampling.md). It renders the two that bracket the budget, the largest
 that fits and the next, and "RMSE at budget" interpolates their errors (net of the reference's noise) on log error
@@ -169,7 +170,9 @@ def run_quality_bench(
                 scene_dict = scene_to_mitsuba_dict(scene, Path(folder), sampler=peer_sampler)
                 peer_probe = render_with_mitsuba(scene_dict, variant, spp=PROBE_SPP)
                 spp = _spp_for_budget(peer_probe.seconds, PROBE_SPP, seconds)
-                timed = render_with_mitsuba(scene_dict, variant, spp=spp, warm_up=False)
+                # Warm, as spectrace's timed renders are: a JIT variant compiles its kernels again for a new sample
+                # count, which the first render at that count would otherwise pay inside the budget.
+                timed = render_with_mitsuba(scene_dict, variant, spp=spp)
                 result["renderers"].append(
                     {
                         "renderer": "mitsuba",
@@ -180,7 +183,7 @@ def run_quality_bench(
                     }
                 )
                 log(f"mitsuba {variant}: {timed.spp} spp in {timed.seconds:.2f} s")
-                same = render_with_mitsuba(scene_dict, variant, spp=equal_spp, warm_up=False)
+                same = render_with_mitsuba(scene_dict, variant, spp=equal_spp)
                 result["equal_spp"]["renderers"].append(
                     {
                         "renderer": "mitsuba",
