@@ -65,7 +65,7 @@ class IntegratorSpec(Strict):
     pixels_per_light_path: int | None = Field(
         default=None,
         description="bdpt only: neighbouring pixels whose camera subpaths share one light subpath, 1.."
-        f"{limits.MAX_PIXELS_PER_LIGHT_PATH}; absent: 4 where every surface is diffuse and no medium fills a shape, "
+        f"{limits.MAX_PIXELS_PER_LIGHT_PATH}; absent: 4 where every surface is Lambertian and no medium fills a shape, "
         "2 otherwise (docs/integrators.md)",
     )
 
