@@ -163,12 +163,9 @@ def detail(
         check_texture(opacity, "opacity", at("opacity"))
     else:
         opacity = _BY_NAME["opacity"].check(opacity, at("opacity"))
-    if not isinstance(two_sided, bool):
-        raise SpectraceError(f"two_sided must be true or false, got {two_sided!r}", where=at("two_sided"))
-    if not isinstance(shadowing_function, bool):
-        raise SpectraceError(
-            f"shadowing_function must be true or false, got {shadowing_function!r}", where=at("shadowing_function")
-        )
+    for name, flag in (("two_sided", two_sided), ("shadowing_function", shadowing_function)):
+        if not isinstance(flag, bool):
+            raise SpectraceError(f"{name} must be true or false, got {flag!r}", where=at(name))
     if normal_map is None and bump_map is None and not is_texture(opacity) and opacity == 1.0 and two_sided:
         return None
     return SurfaceDetail(normal_map, bump_map, scale, opacity, two_sided, shadowing_function)
