@@ -26,3 +26,19 @@ def assert_replicas_agree(ours: np.ndarray, theirs: np.ndarray, block: int, sigm
         difference = a.mean(axis=0) - b.mean(axis=0)
         standard_error = np.sqrt(a.var(axis=0, ddof=1) / len(a) + b.var(axis=0, ddof=1) / len(b))
         assert np.all(np.abs(difference) <= sigmas * standard_error), np.max(np.abs(difference) / standard_error)
+
+
+def assert_renders_like_mitsuba(mi, path, device, replicas: int, replica_spp: int, block: int, ours=None) -> np.ndarray:
+    """Mitsuba 3 (`mi`, a spectral variant) renders the XML at `path` and spectrace renders its import of the same
+    file (of `ours` where given: the same scene with another integrator, say) as `replicas` independent images of
+    `replica_spp` samples each; their linear sRGB must agree (assert_replicas_agree). Returns Mitsuba's images, for
+    the caller's check that the comparison saw what it was meant to."""
+    from spectrace.engine.renderer import Renderer
+    from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+    from spectrace.spectral import xyz_to_linear_srgb
+
+    scene = mi.load_file(str(path))
+    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
+    renderer = Renderer(load_mitsuba_scene(path if ours is None else ours), device)
+    assert_replicas_agree(xyz_to_linear_srgb(spectrace_replicas(renderer, replicas, replica_spp)), by_mitsuba, block)
+    return by_mitsuba

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
+from replica_agreement import assert_renders_like_mitsuba, spectrace_replicas
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.pixel_filters import PixelFilter
 from spectrace.spectral import xyz_to_linear_srgb
@@ -64,12 +64,7 @@ def test_mitsuba_sensors_map_to_cameras(tmp_path):
 
 def _agree(path, device, mi, replicas=8, replica_spp=8, block=8) -> np.ndarray:
     """Mitsuba's replicas, after checking that ours agree with them."""
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.02  # the comparison saw a lit image
     return by_mitsuba
 

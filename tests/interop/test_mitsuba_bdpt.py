@@ -5,12 +5,10 @@ a point light."""
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
+from replica_agreement import assert_renders_like_mitsuba
+from spectrace.interop.mitsuba_xml import mitsuba_scene_data
 
 
 def _xml(folder: Path, size: int, integrator: str) -> Path:
@@ -53,12 +51,6 @@ def test_bdpt_renders_like_mitsuba_path(tmp_path, device, mitsuba_scalar_spectra
     """8 independent images each; 8 x 8-pixel block means and the image mean agree within 5 standard errors."""
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 8, 8, 32, 8
-    scene = mi.load_file(str(_xml(tmp_path, size, "path")))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    ours = load_mitsuba_scene(_xml(tmp_path, size, "bdpt"))
-    xyz_replicas = spectrace_replicas(Renderer(ours, device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    path, ours = _xml(tmp_path, size, "path"), _xml(tmp_path, size, "bdpt")
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block, ours=ours)
     assert by_mitsuba.mean() > 0.02  # the comparison saw a lit image

@@ -8,12 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
+from replica_agreement import assert_renders_like_mitsuba, assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
 from spectrace.interop.mitsuba_export import mitsuba_film_xyz, scene_to_mitsuba_dict
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.scene.model import MixMaterial
-from spectrace.spectral import xyz_to_linear_srgb
 
 DIFFUSE = '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.15, 0.1"/></bsdf>'
 GOLD = (
@@ -71,10 +70,7 @@ def test_blendbsdf_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectra
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, block = 16, 8, 8
     path = _xml(tmp_path)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-    ours = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(ours), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image
 
 

@@ -8,10 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
+from replica_agreement import assert_renders_like_mitsuba
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
 
 GROUP = """
 <shape type="shapegroup" id="crate">
@@ -179,13 +178,7 @@ def test_instanced_scene_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_s
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 16, 8, 32, 8
     path = _xml(tmp_path, size)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
 
 
 @pytest.mark.peer
@@ -282,10 +275,4 @@ def test_instanced_analytic_shapes_render_like_mitsuba(tmp_path, device, mitsuba
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 16, 8, 32, 8
     path = _xml(tmp_path, size, ANALYTIC_GROUP)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)

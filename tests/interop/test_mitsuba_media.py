@@ -7,10 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
+from replica_agreement import assert_renders_like_mitsuba
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
+from spectrace.interop.mitsuba_xml import mitsuba_scene_data
 
 MEDIUM = """<medium type="homogeneous" name="interior">
     <float name="sigma_t" value="2"/><float name="albedo" value="0.8"/><float name="scale" value="1.5"/>
@@ -105,13 +104,7 @@ def test_medium_cube_renders_like_mitsuba_volpath(tmp_path, device, mitsuba_scal
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 16, 8, 32, 8
     path = _xml(tmp_path, size, medium)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     # The medium is seen: the cube's centre is darker than the open environment around it.
     centre = by_mitsuba[:, 12:20, 12:20].mean()
     assert centre < 0.8 * by_mitsuba[:, :4, :4].mean()
@@ -160,10 +153,4 @@ def test_fog_behind_a_thin_sheet_renders_like_mitsuba_volpath(tmp_path, device, 
     replicas, replica_spp, block = 16, 128, 4
     path = tmp_path / "fog.xml"
     path.write_text(FOG_SPHERE.format(inside=inside))
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)

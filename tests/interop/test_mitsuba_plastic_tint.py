@@ -4,12 +4,10 @@ uniform environment under a small area light, renders like Mitsuba 3 renders the
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
+from replica_agreement import assert_renders_like_mitsuba
+from spectrace.interop.mitsuba_xml import mitsuba_scene_data
 
 TINT = '<rgb name="specular_reflectance" value="0.9, 0.5, 0.1"/>'
 
@@ -53,10 +51,4 @@ def test_tinted_plastic_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_sp
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, block = 16, 8, 8
     path = _xml(tmp_path)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)

@@ -4,12 +4,10 @@ light seen by the camera and a point light."""
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
+from replica_agreement import assert_renders_like_mitsuba
+from spectrace.interop.mitsuba_xml import mitsuba_scene_data
 
 
 def _xml(folder: Path, size: int) -> Path:
@@ -53,11 +51,5 @@ def test_ptracer_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral)
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 8, 4, 32, 8
     path = _xml(tmp_path, size)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.02  # the comparison saw a lit image

@@ -4,12 +4,10 @@ matched (int_ior = ext_ior) imported as they are: spectrace's ior is Mitsuba's r
 internal reflection then happens on the outside). A bubble of η = 1/1.33 must render as a water sphere of η = 1.33
 whose normals are flipped (the same interface seen from the other side), and both as Mitsuba 3 renders them."""
 
-import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
+from replica_agreement import assert_renders_like_mitsuba
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
 
 # (bsdf type, int_ior, ext_ior, the sphere's flip_normals, the ior spectrace must import)
 CASES = {
@@ -60,11 +58,5 @@ def test_relative_index_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_sp
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 8, 4, 32, 8
     path = _xml(tmp_path, case, size)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image

@@ -2,12 +2,10 @@
 angle) imported as a rough conductor of η 0 and k 1: the Fresnel term is exactly 1 (|(c − i)/(c + i)|² = 1 for the
 s wave, likewise p), and the sphere renders as Mitsuba 3 renders the same XML."""
 
-import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
+from replica_agreement import assert_renders_like_mitsuba
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
 
 
 def _xml(folder, size: int):
@@ -46,11 +44,5 @@ def test_rough_material_none_renders_like_mitsuba(tmp_path, device, mitsuba_scal
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 8, 4, 32, 8
     path = _xml(tmp_path, size)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image

@@ -7,10 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
+from replica_agreement import assert_renders_like_mitsuba
 from spectrace.engine.device_types import ANALYTIC_SHAPE_DTYPE
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene
-from spectrace.spectral import xyz_to_linear_srgb
 
 SHAPES = """
 <shape type="disk" id="floor">
@@ -126,13 +125,7 @@ def test_analytic_shapes_scene_renders_like_mitsuba(tmp_path, device, mitsuba_sc
     replicas, replica_spp, size, block = 16, 8, 32, 8
     _images(tmp_path)
     path = _xml(tmp_path, size, TEXTURED if textured else SHAPES)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.05  # the comparison saw a lit image
 
 

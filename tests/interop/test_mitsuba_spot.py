@@ -7,9 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.spectral import xyz_to_linear_srgb
+from replica_agreement import assert_renders_like_mitsuba
+from spectrace.interop.mitsuba_xml import mitsuba_scene_data
 
 # The spot 1 unit above a floor, tilted 20° so both edges of the transition (10° to 35°) land on the floor.
 SPOT = """<emitter type="spot">
@@ -57,13 +56,7 @@ def test_spot_over_a_floor_renders_like_mitsuba(tmp_path, device, mitsuba_scalar
     mi = mitsuba_scalar_spectral
     replicas, replica_spp, size, block = 8, 4, 32, 8
     path = _xml(tmp_path, size)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.02  # the comparison saw a lit image
 
 
@@ -102,13 +95,7 @@ def test_spot_with_a_slide_renders_like_mitsuba(tmp_path, device, mitsuba_scalar
     _slide(tmp_path)
     replicas, replica_spp, size, block = 8, 4, 32, 8
     path = _xml(tmp_path, size, SLIDE_SPOT)
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     # The quadrants differ in colour: a lost or constant slide would not pass the block test either.
     assert by_mitsuba[..., 0].mean() > 0.02 and by_mitsuba[..., 1].mean() > 0.02
 
@@ -122,11 +109,5 @@ def test_spot_with_a_slide_light_traces_like_mitsuba(tmp_path, device, mitsuba_s
     replicas, replica_spp, size, block = 8, 4, 32, 8
     path = _xml(tmp_path, size, SLIDE_SPOT)
     path.write_text(path.read_text().replace('<integrator type="path">', '<integrator type="ptracer">'))
-    scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
-
-    from spectrace.engine.renderer import Renderer
-
-    xyz_replicas = spectrace_replicas(Renderer(load_mitsuba_scene(path), device), replicas, replica_spp)
-    assert_replicas_agree(xyz_to_linear_srgb(xyz_replicas), by_mitsuba, block)
+    by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba[..., 0].mean() > 0.02 and by_mitsuba[..., 1].mean() > 0.02
