@@ -1,4 +1,4 @@
-"""`spectrace render`: a scene file to an image, with checkpoints and a clean stop on Ctrl-C or SIGTERM."""
+"""`spectrace render`: a scene file to an image, with checkpoints and a clean stop on Ctrl-C, SIGTERM or SIGHUP."""
 
 from pathlib import Path
 from typing import Annotated
@@ -168,8 +168,9 @@ def render(
         float, typer.Option(help="Seconds to wait for the --cluster scheduler to answer.", min=0.1)
     ] = 30.0,
 ) -> None:
-    """Render SCENE to an image. Ctrl-C or SIGTERM stops after the current pass and writes the samples done so far
-    (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without writing."""
+    """Render SCENE to an image. Ctrl-C, SIGTERM or SIGHUP (a closed terminal) stops after the current pass and
+    writes the samples done so far (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without
+    writing."""
     from spectrace.aovs import parse_aovs
     from spectrace.cli import checks as cli_checks
     from spectrace.engine.checkpoint import read_checkpoint
