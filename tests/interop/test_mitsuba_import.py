@@ -629,7 +629,7 @@ def test_outputs_that_cannot_be_written_are_refused_before_the_import(tmp_path, 
     (tmp_path / "folder").mkdir()
     (tmp_path / "file.txt").write_text("")
     for output, place, says in [
-        (tmp_path / "folder", tmp_path / "folder", "the TOML file names a folder; name a file in it"),
+        (tmp_path / "folder", tmp_path / "folder", "--output names a folder; name a file in it"),
         (f"{tmp_path / 'new'}/", f"{tmp_path / 'new'}/", "names a folder"),
         (tmp_path / "file.txt" / "out.toml", tmp_path / "file.txt" / "out.toml", "is not a folder"),
         (xml, xml, "is the Mitsuba scene being imported"),
@@ -658,7 +658,7 @@ def test_a_read_only_folder_is_refused_before_the_import(tmp_path, monkeypatch, 
             monkeypatch, capsys, ["import-mitsuba", str(xml), "-o", str(folder / "out.toml")]
         )
         _assert_one_error_line(
-            status, stderr, str(folder / "out.toml"), f"cannot create files in the folder {folder} for the TOML file"
+            status, stderr, str(folder / "out.toml"), f"cannot create files in the folder {folder} for --output"
         )
     finally:
         locked.chmod(0o755)

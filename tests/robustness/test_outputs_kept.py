@@ -69,3 +69,84 @@ def test_an_ignored_hangup_stays_ignored():
         assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGHUP, previous)
+
+
+PBRT_PLANE = """LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 30
+Film "rgb" "integer xresolution" 8 "integer yresolution" 6
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Shape "trianglemesh" "point3 P" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] "integer indices" [0 1 2 0 2 3]
+"""
+MITSUBA_CUBE = """<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="45"/>
+<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film></sensor>
+<shape type="cube"/>
+</scene>
+"""
+
+
+def _every_output_option(tmp_path: Path) -> dict[str, tuple[list[str], str, str]]:
+    """name -> (argv before the output's path, the option, the output's suffix): every file a command writes by a
+    name the user gives."""
+    (tmp_path / "scene.pbrt").write_text(PBRT_PLANE)
+    (tmp_path / "scene.xml").write_text(MITSUBA_CUBE)
+    from spectrace.resources import scenes_dir
+
+    render = ["render", str(scenes_dir() / "cornell_box.toml"), "--spp", "1", "--width", "8", "--height", "6"]
+    good = str(tmp_path / "good.exr")
+    return {
+        "render -o": ([*render, "-o"], "--output", ".exr"),
+        "render --checkpoint": ([*render, "-o", good, "--checkpoint"], "--checkpoint", ".npz"),
+        "render --false-color": ([*render, "-o", good, "--false-color"], "--false-color", ".png"),
+        "spectra plot -o": (["spectra", "plot", "cie:D65", "-o"], "--output", ".png"),
+        "display compare --plot": (
+            ["display", "compare", "--rgb", "0.5", "0.5", "0.5", "-d", "CRT-Dell", "--plot"],
+            "--plot",
+            ".png",
+        ),
+        "import-pbrt -o": (["import-pbrt", str(tmp_path / "scene.pbrt"), "-o"], "--output", ".toml"),
+        "import-mitsuba -o": (["import-mitsuba", str(tmp_path / "scene.xml"), "-o"], "--output", ".toml"),
+    }
+
+
+def test_outputs_through_a_symlink_loop_or_too_long_are_one_line(tmp_path, monkeypatch, capsys):
+    """A folder that is a loop of symbolic links, a name over 255 bytes, a path over 4096: for every output option of
+    every command, one line naming the option and the path, status 2, and nothing written."""
+    from cli_runner import run_in_process
+
+    (tmp_path / "loop").symlink_to("loop")
+    commands = _every_output_option(tmp_path)
+    before = sorted(path.name for path in tmp_path.iterdir())
+    for name, (argv, option, suffix) in commands.items():
+        for target, says in [
+            (tmp_path / "loop" / f"out{suffix}", "a path that leads through a loop of symbolic links"),
+            (tmp_path / ("n" * 300 + suffix), "a path too long for the file system"),
+            (tmp_path.joinpath(*["d" * 200] * 25, f"out{suffix}"), "a path too long for the file system"),
+        ]:
+            status, stderr = run_in_process(monkeypatch, capsys, [*argv, str(target)])
+            assert status == 2 and stderr.count("\n") == 1, (name, stderr)
+            assert stderr.startswith(f"error: {target}: {option} names {says}"), (name, stderr)
+    assert sorted(path.name for path in tmp_path.iterdir()) == before
+
+
+@pytest.mark.subprocess
+def test_an_output_in_a_symlink_loop_is_one_line_from_a_real_process(tmp_path):
+    from cli_runner import run_spectrace
+
+    (tmp_path / "loop").symlink_to("loop")
+    target = tmp_path / "loop" / "out.png"
+    result = run_spectrace(*render_cornell_box(target, 1, 8, 6))
+    assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
+    assert result.stderr == f"error: {target}: --output names a path that leads through a loop of symbolic links\n"
+
+
+def test_a_long_name_the_file_system_takes_is_written(tmp_path, monkeypatch, capsys):
+    """A 250-character name is a valid file name, so it must be written: the hidden temporary files beside it are
+    cut short, not 250 characters plus their own."""
+    from cli_runner import run_in_process
+
+    argv, _, _ = _every_output_option(tmp_path)["spectra plot -o"]
+    target = tmp_path / ("n" * 246 + ".png")
+    status, stderr = run_in_process(monkeypatch, capsys, [*argv, str(target)])
+    assert status == 0 and target.stat().st_size > 0, stderr

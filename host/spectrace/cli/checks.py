@@ -37,8 +37,11 @@ def check_finite(value: float | None, option: str) -> None:
 
 def same_file(first: Path, second: Path) -> bool:
     """Different spellings of one file: relative and absolute, '..', symbolic links, hard links."""
-    if first.resolve() == second.resolve():
-        return True
+    try:
+        if first.resolve() == second.resolve():
+            return True
+    except (OSError, RuntimeError):  # a loop of symbolic links (RuntimeError before Python 3.13), too long a name
+        return os.path.abspath(first) == os.path.abspath(second)
     try:
         return os.path.samefile(first, second)
     except OSError:  # one of them does not exist yet

@@ -33,7 +33,7 @@ def import_mitsuba_command(
         if not separator or not name:
             raise SpectraceError(f"expected NAME=VALUE, got '{item}'", where="--define")
         parameters[name] = value
-    notes = import_mitsuba(scene, Path(output), parameters, strict=strict)
+    notes = import_mitsuba(scene, Path(output), parameters, strict=strict, option="--output")
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each note on one line
     for note in notes:
         console.print(note if note.startswith(WARNING_PREFIX) else f"note: {note}", highlight=False, markup=False)

@@ -23,7 +23,7 @@ def import_pbrt_command(
 ) -> None:
     if output.endswith(("/", os.sep)) or not Path(output).name:
         raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
-    warnings, notes = import_pbrt(scene, Path(output), strict=strict)
+    warnings, notes = import_pbrt(scene, Path(output), strict=strict, option="--output")
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each line on one line
     for warning in warnings:
         console.print(f"warning: {warning}", highlight=False, markup=False)

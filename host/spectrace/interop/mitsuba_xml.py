@@ -1816,14 +1816,14 @@ def _relative_path(path: Path, folder: Path) -> str:
         return path.resolve().as_posix()
 
 
-def check_output_path(toml_path: Path, xml_path: Path | None = None) -> None:
+def check_output_path(toml_path: Path, xml_path: Path | None = None, option: str = "the TOML file") -> None:
     """Refuse, before any work, an output that could not be written or would destroy the input: what every output
     is refused for (spectrace.io.output_files), and the XML itself. Missing folders are created when the TOML is
     written."""
     where = str(toml_path)
+    check_output_file(toml_path, option, create_folders=True)
     if xml_path is not None and toml_path.exists() and xml_path.exists() and toml_path.samefile(xml_path):
         raise SpectraceError("is the Mitsuba scene being imported; writing it would destroy the input", where=where)
-    check_output_file(toml_path, "the TOML file", create_folders=True)
 
 
 # ---------------------------------------------------------------- public API
@@ -1861,9 +1861,14 @@ def mitsuba_scene_data(
 
 
 def import_mitsuba(
-    xml_path: str | Path, toml_path: str | Path, parameters: dict[str, str] | None = None, strict: bool = False
+    xml_path: str | Path,
+    toml_path: str | Path,
+    parameters: dict[str, str] | None = None,
+    strict: bool = False,
+    option: str = "the TOML file",
 ) -> list[str]:
     """Write the spectrace TOML scene for a Mitsuba 3 XML scene and check that it loads; returns the notes.
+    option: what errors about the output call it (the command line's --output).
 
     The output is checked first (a folder, a read-only place) and replaced only by a complete TOML that loads: a
     failed import leaves any existing file as it was."""
@@ -1872,7 +1877,7 @@ def import_mitsuba(
     from spectrace.scene import load_scene
 
     xml_path, toml_path = Path(xml_path), Path(toml_path)
-    check_output_path(toml_path, xml_path)
+    check_output_path(toml_path, xml_path, option)
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
     importer.side_stem = toml_path.stem
     data = _imported(importer, strict)

@@ -1548,9 +1548,12 @@ def pbrt_scene_data(pbrt_path: str | Path, toml_path: str | Path | None = None) 
     return importer.run(), importer
 
 
-def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = False) -> tuple[list[str], list[str]]:
+def import_pbrt(
+    pbrt_path: str | Path, toml_path: str | Path, strict: bool = False, option: str = "the TOML file"
+) -> tuple[list[str], list[str]]:
     """Write the spectrace TOML scene (and its folder of meshes) for a pbrt-v4 scene and check that it loads;
     returns (warnings, notes). strict: every warning (something in the file not imported) is an error instead.
+    option: what errors about the output call it (the command line's --output).
 
     The output is checked first and replaced only by a complete TOML that loads: a failed import leaves any
     existing file as it was."""
@@ -1559,11 +1562,11 @@ def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = Fal
     from spectrace.scene import load_scene
 
     pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
+    check_output_file(toml_path, option, create_folders=True)
     if toml_path.exists() and pbrt_path.exists() and toml_path.samefile(pbrt_path):
         raise SpectraceError(
             "is the pbrt scene being imported; writing it would destroy the input", where=str(toml_path)
         )
-    check_output_file(toml_path, "the TOML file", create_folders=True)
     data, importer = pbrt_scene_data(pbrt_path, toml_path)
     if strict and importer.warnings:
         raise SpectraceError(

@@ -17,15 +17,25 @@ def _mode_for(path: Path) -> int:
         return 0o666 & ~umask
 
 
-def write_atomically(path: Path, write: Callable[[Path], object]) -> None:
-    """Call write(temp_path) on a temporary file in path's folder, fsync it, then rename it over path.
+# Characters of the output's stem and suffix kept in a temporary name: any name the file system takes for the
+# output then gives a temporary name it takes too (names are limited to 255 bytes, 4 per character at most).
+_TEMP_STEM_CHARS = 32
+_TEMP_SUFFIX_CHARS = 16
 
-    The temporary name keeps path's suffix, since some writers choose the format from it.
-    """
+
+def temporary_name_parts(path: Path, kind: str = "tmp") -> tuple[str, str]:
+    """(prefix, suffix) of the hidden temporary files made beside `path` (`.name.XXXXXXXX.tmp.exr`): its suffix
+    kept, since some writers choose the format from it, and both cut short for a long name."""
+    return f".{path.stem[:_TEMP_STEM_CHARS]}.", f".{kind}{path.suffix[:_TEMP_SUFFIX_CHARS]}"
+
+
+def write_atomically(path: Path, write: Callable[[Path], object]) -> None:
+    """Call write(temp_path) on a temporary file in path's folder, fsync it, then rename it over path."""
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     folder.mkdir(parents=True, exist_ok=True)
-    fd, temp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=folder)
+    prefix, suffix = temporary_name_parts(path)
+    fd, temp_name = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=folder)
     os.close(fd)
     temp = Path(temp_name)
     try:
