@@ -150,3 +150,96 @@ def test_a_long_name_the_file_system_takes_is_written(tmp_path, monkeypatch, cap
     target = tmp_path / ("n" * 246 + ".png")
     status, stderr = run_in_process(monkeypatch, capsys, [*argv, str(target)])
     assert status == 0 and target.stat().st_size > 0, stderr
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    """Every file under `folder` (hidden ones too) by relative name, with its bytes."""
+    return {path.relative_to(folder).as_posix(): path.read_bytes() for path in folder.rglob("*") if path.is_file()}
+
+
+MITSUBA_SPECFILM = """<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="30"/>
+    <film type="specfilm"><integer name="width" value="WIDTH"/><integer name="height" value="4"/>
+      <spectrum name="band" value="500:0, 550:RESPONSE, 600:0"/></film></sensor>
+  <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+</scene>
+"""
+
+
+def _importer_cases(tmp_path: Path) -> dict[str, tuple[Path, Path, Path, str]]:
+    """importer -> (a scene, another that imports with other files, one whose TOML does not load, where the files
+    go beside out.toml)."""
+    pbrt = {
+        "good": PBRT_PLANE,
+        "other": PBRT_PLANE.replace("9 9 0  -9 9 0", "8 8 0  -9 9 0") + PBRT_PLANE.splitlines()[-1] + "\n",
+        "bad": PBRT_PLANE.replace('xresolution" 8', 'xresolution" 100000').replace("9 9 0  -9 9 0", "7 7 0  -9 9 0"),
+    }
+    mitsuba = {
+        "good": MITSUBA_SPECFILM.replace("WIDTH", "4").replace("RESPONSE", "1"),
+        "other": MITSUBA_SPECFILM.replace("WIDTH", "4").replace("RESPONSE", "0.5"),
+        "bad": MITSUBA_SPECFILM.replace("WIDTH", "100000").replace("RESPONSE", "0.25"),
+    }
+    cases = {}
+    for command, suffix, texts, files in [
+        ("import-pbrt", ".pbrt", pbrt, "out_assets"),
+        ("import-mitsuba", ".xml", mitsuba, "out.sensor.csv"),
+    ]:
+        sources = tmp_path / "sources" / command
+        sources.mkdir(parents=True)
+        for name, text in texts.items():
+            (sources / f"{name}{suffix}").write_text(text)
+        cases[command] = (sources / f"good{suffix}", sources / f"other{suffix}", sources / f"bad{suffix}", files)
+    return cases
+
+
+@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba"])
+def test_a_failed_import_leaves_the_earlier_import_whole(command, tmp_path, monkeypatch, capsys):
+    """An import whose TOML does not load, over an earlier import: one line, status 2, and the earlier TOML and
+    the files it refers to (pbrt's meshes folder, Mitsuba's sensor table) byte for byte as they were, with no
+    temporary file left. A good import then replaces the TOML and those files together."""
+    from cli_runner import run_in_process
+
+    good, other, bad, files = _importer_cases(tmp_path)[command]
+    out_folder = tmp_path / "out"
+    out_folder.mkdir()
+    out = out_folder / "out.toml"
+    status, stderr = run_in_process(monkeypatch, capsys, [command, str(good), "-o", str(out)])
+    assert status == 0 and (out_folder / files).exists(), stderr
+    earlier = _tree(out_folder)
+
+    status, stderr = run_in_process(monkeypatch, capsys, [command, str(bad), "-o", str(out)])
+    assert status == 2 and stderr.count("\n") == 1 and "100000" in stderr, stderr
+    assert _tree(out_folder) == earlier
+    assert sorted(path.name for path in out_folder.iterdir()) == sorted(["out.toml", files])
+
+    fresh = tmp_path / "fresh" / "out.toml"
+    for target in (out, fresh):
+        status, stderr = run_in_process(monkeypatch, capsys, [command, str(other), "-o", str(target)])
+        assert status == 0, stderr
+    replaced = _tree(out_folder)
+    assert replaced == _tree(fresh.parent)  # nothing of the earlier import's files is left
+    assert {n: b for n, b in replaced.items() if n != "out.toml"} != {
+        n: b for n, b in earlier.items() if n != "out.toml"
+    }
+
+
+@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba"])
+def test_an_import_failing_at_its_last_rename_puts_the_earlier_files_back(command, tmp_path, monkeypatch, capsys):
+    """The files are swapped in before the TOML is renamed over the earlier one; if that rename fails (a full
+    disk cannot, but a file system can), the earlier files come back."""
+    from cli_runner import run_in_process
+
+    good, other, _, files = _importer_cases(tmp_path)[command]
+    out = tmp_path / "out" / "out.toml"
+    status, stderr = run_in_process(monkeypatch, capsys, [command, str(good), "-o", str(out)])
+    assert status == 0, stderr
+    earlier = _tree(out.parent)
+
+    def failing_replace(source, target):
+        raise OSError(5, "Input/output error", str(target))
+
+    monkeypatch.setattr(os, "replace", failing_replace)
+    status, stderr = run_in_process(monkeypatch, capsys, [command, str(other), "-o", str(out)])
+    assert status == 2 and stderr == f"error: {out}: cannot write the TOML or its files (Input/output error)\n"
+    assert _tree(out.parent) == earlier
+    assert sorted(path.name for path in out.parent.iterdir()) == sorted(["out.toml", files])

@@ -48,6 +48,7 @@ import_mitsuba_command.__doc__ = (
     "named in one error; choices spectrace makes differently (pixel filter, sampler) are printed as notes, and "
     "every property "
     "spectrace does not know as a warning (--strict: an error). The TOML "
-    "is checked by loading it before it replaces OUT.toml (a failed import leaves an existing file as it was); "
+    "is checked by loading it before it and the files beside it replace the earlier ones (a failed import leaves "
+    "an earlier import as it was); "
     "render it with `spectrace render OUT.toml`."
 )

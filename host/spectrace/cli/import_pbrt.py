@@ -37,5 +37,6 @@ import_pbrt_command.__doc__ = (
     f"{', '.join(MATERIALS)}; textures {', '.join(TEXTURES)}; lights {', '.join(LIGHTS)}, area "
     f"{', '.join(AREA_LIGHTS)}). Meshes and environment maps go to a folder OUT_assets beside OUT.toml. "
     "Parameters and directives not imported are listed as warnings (--strict: an error); entities spectrace "
-    "cannot represent are an error naming file:line. The TOML is checked by loading it before it replaces OUT.toml."
+    "cannot represent are an error naming file:line. The TOML is checked by loading it before it and OUT_assets "
+    "replace the earlier ones: a failed import leaves an earlier import as it was."
 )

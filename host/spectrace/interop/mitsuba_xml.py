@@ -41,6 +41,7 @@ import math
 import os
 import re
 import tempfile
+from functools import partial
 from pathlib import Path
 from typing import overload
 
@@ -1870,10 +1871,10 @@ def import_mitsuba(
     """Write the spectrace TOML scene for a Mitsuba 3 XML scene and check that it loads; returns the notes.
     option: what errors about the output call it (the command line's --output).
 
-    The output is checked first (a folder, a read-only place) and replaced only by a complete TOML that loads: a
-    failed import leaves any existing file as it was."""
-    from spectrace.interop.toml_writer import dumps
-    from spectrace.io.atomic import write_atomically
+    The output is checked first (a folder, a read-only place); the TOML and the files beside it that it refers to
+    (`side_files`) are replaced together, and only by a complete import whose TOML loads: a failed import leaves an
+    earlier one as it was."""
+    from spectrace.interop.toml_writer import write_scene
     from spectrace.scene import load_scene
 
     xml_path, toml_path = Path(xml_path), Path(toml_path)
@@ -1887,43 +1888,28 @@ def import_mitsuba(
             *(note if note.startswith(WARNING_PREFIX) else f"note: {note}" for note in importer.notes),
         ]
     )
-    text = dumps(data, header=header)
 
-    def write_and_check(temp: Path) -> None:
-        temp.write_text(text, encoding="utf-8")
+    def check(temp: Path) -> None:
         try:
             load_scene(temp)  # from the output's folder, where its relative mesh paths lead
         except SpectraceError as error:
             raise importer.imported_error(error, temp) from None
 
-    written: list[Path] = []
+    files = {name: partial(_write_side, content=content) for name, content in importer.side_files.items()}
     try:
-        for name, side_text in importer.side_files.items():
-            side_path = toml_path.parent / name
-            if not side_path.exists():
-                written.append(side_path)
-
-            def write_side(temp: Path, text: str | bytes = side_text) -> None:
-                if isinstance(text, bytes):
-                    temp.write_bytes(text)
-                else:
-                    temp.write_text(text, encoding="utf-8")
-
-            write_atomically(side_path, write_side)
-        write_atomically(toml_path, write_and_check)
+        write_scene(toml_path, data, header, files, check)
     except OSError as error:
-        _remove(written)
-        raise SpectraceError(f"cannot write the TOML ({error.strerror or error})", where=str(toml_path)) from None
-    except SpectraceError:
-        _remove(written)
-        raise
+        raise SpectraceError(
+            f"cannot write the TOML or its files ({error.strerror or error})", where=str(toml_path)
+        ) from None
     return importer.notes
 
 
-def _remove(paths: list[Path]) -> None:
-    """Files this import made before it failed (a file that was there before stays, replaced)."""
-    for path in paths:
-        path.unlink(missing_ok=True)
+def _write_side(path: Path, content: str | bytes) -> None:
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content, encoding="utf-8")
 
 
 def load_mitsuba_scene(xml_path: str | Path, parameters: dict[str, str] | None = None, strict: bool = False):

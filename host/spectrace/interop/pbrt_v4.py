@@ -38,7 +38,9 @@ import os
 import re
 import shutil
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -1548,6 +1550,19 @@ def pbrt_scene_data(pbrt_path: str | Path, toml_path: str | Path | None = None) 
     return importer.run(), importer
 
 
+def _write_image_file(path: Path, image: np.ndarray) -> None:
+    """An image the import made: a one-channel float TIFF for a `.tif` (a roughness: one number per texel), else
+    an OpenEXR."""
+    if path.suffix == ".tif":
+        from PIL import Image
+
+        Image.fromarray(image, mode="F").save(path)
+    else:
+        from spectrace.io.exr import write_exr
+
+        write_exr(path, image, None, {})
+
+
 def import_pbrt(
     pbrt_path: str | Path, toml_path: str | Path, strict: bool = False, option: str = "the TOML file"
 ) -> tuple[list[str], list[str]]:
@@ -1555,10 +1570,9 @@ def import_pbrt(
     returns (warnings, notes). strict: every warning (something in the file not imported) is an error instead.
     option: what errors about the output call it (the command line's --output).
 
-    The output is checked first and replaced only by a complete TOML that loads: a failed import leaves any
-    existing file as it was."""
-    from spectrace.interop.toml_writer import dumps
-    from spectrace.io.atomic import write_atomically
+    The output is checked first; the TOML and its folder of meshes are replaced together, and only by a complete
+    import whose TOML loads: a failed import leaves an earlier one, TOML and folder, as it was."""
+    from spectrace.interop.toml_writer import write_scene
     from spectrace.scene import load_scene
 
     pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
@@ -1580,38 +1594,24 @@ def import_pbrt(
             *(f"note: {text}" for text in importer.notes),
         ]
     )
-    text = dumps(data, header=header)
-    folder = toml_path.parent / importer.mesh_folder
-    if importer.meshes or importer.files:
-        from spectrace.io.exr import write_exr
+    files: dict[str, Callable[[Path], object]] = {}
+    for name, mesh in importer.meshes.items():
+        files[f"{importer.mesh_folder}/{name}"] = partial(write_ply, mesh=mesh)
+    for name, image in importer.files.items():
+        files[f"{importer.mesh_folder}/{name}"] = partial(_write_image_file, image=image)
 
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            for name, mesh in importer.meshes.items():
-                write_ply(folder / name, mesh)
-            for name, image in importer.files.items():
-                if name.endswith(".tif"):  # one channel of numbers (a roughness): a float TIFF keeps it one
-                    from PIL import Image
-
-                    Image.fromarray(image, mode="F").save(folder / name)
-                else:
-                    write_exr(folder / name, image, None, {})
-        except OSError as failure:
-            raise SpectraceError(
-                f"cannot write the meshes ({failure.strerror or failure})", where=str(folder)
-            ) from None
-
-    def write_and_check(temp: Path) -> None:
-        temp.write_text(text, encoding="utf-8")
+    def check(temp: Path) -> None:
         try:
             load_scene(temp)
         except SpectraceError as failure:
             raise importer.imported_error(failure, temp) from None
 
     try:
-        write_atomically(toml_path, write_and_check)
+        write_scene(toml_path, data, header, files, check)
     except OSError as failure:
-        raise SpectraceError(f"cannot write the TOML ({failure.strerror or failure})", where=str(toml_path)) from None
+        raise SpectraceError(
+            f"cannot write the TOML or its files ({failure.strerror or failure})", where=str(toml_path)
+        ) from None
     return importer.warnings, importer.notes
 
 

@@ -4,6 +4,8 @@ strings, numbers and booleans, which is all a spectrace scene uses (the standard
 import json
 import math
 import re
+from collections.abc import Callable, Mapping
+from pathlib import Path
 
 import numpy as np
 
@@ -82,3 +84,34 @@ def _is_section(value) -> bool:
     return (isinstance(value, dict) and value != {}) or (
         isinstance(value, list) and bool(value) and all(isinstance(item, dict) for item in value)
     )
+
+
+def _with_strings_replaced(value, replacements: Mapping[str, str]):
+    if isinstance(value, str):
+        return replacements.get(value, value)
+    if isinstance(value, dict):
+        return {key: _with_strings_replaced(item, replacements) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_with_strings_replaced(item, replacements) for item in value]
+    return value
+
+
+def write_scene(
+    toml_path: Path,
+    data: dict,
+    header: str,
+    files: Mapping[str, Callable[[Path], object]],
+    check: Callable[[Path], object],
+) -> None:
+    """Write an imported scene all or nothing (spectrace.io.atomic.write_with_files): the TOML of `data` and the
+    files it refers to, `files` (name relative to the TOML's folder, as `data` spells it -> writer). check(temp)
+    loads the TOML first, written where it will be with those names leading to the files not yet in place, and
+    raises to leave the earlier import, TOML and files, as it was."""
+    from spectrace.io.atomic import write_with_files
+
+    def write_and_check(temp: Path, staged: Mapping[str, str]) -> None:
+        temp.write_text(dumps(_with_strings_replaced(data, staged), header=header), encoding="utf-8")
+        check(temp)
+        temp.write_text(dumps(data, header=header), encoding="utf-8")
+
+    write_with_files(toml_path, files, write_and_check)
