@@ -243,3 +243,65 @@ def test_an_import_failing_at_its_last_rename_puts_the_earlier_files_back(comman
     assert status == 2 and stderr == f"error: {out}: cannot write the TOML or its files (Input/output error)\n"
     assert _tree(out.parent) == earlier
     assert sorted(path.name for path in out.parent.iterdir()) == sorted(["out.toml", files])
+
+
+def _locks(folder: Path) -> list[str]:
+    return sorted(path.name for path in folder.rglob("*.lock"))
+
+
+@pytest.mark.subprocess
+@pytest.mark.slow
+def test_a_second_render_on_an_output_in_use_is_refused_naming_the_holder(device, tmp_path):
+    """While a render writes out.exr and state.npz, a second render naming either (-o, however spelled;
+    --resume of the checkpoint) stops at once: one line naming the option, the file and the first render's pid,
+    status 2; the first render goes on, and once it has stopped the lock files are gone and the output is free."""
+    from cli_runner import run_spectrace
+
+    out, state = tmp_path / "out.exr", tmp_path / "state.npz"
+    (tmp_path / "link").symlink_to(tmp_path, target_is_directory=True)
+    first = _start_render(out, state)
+    try:
+        _wait_for_first_pass(first, state)
+        for option, named, argv in [
+            ("--output", out, render_cornell_box(out, 1, 8, 6)),
+            ("--output", tmp_path / "link" / "out.exr", render_cornell_box(tmp_path / "link" / "out.exr", 1, 8, 6)),
+            ("--resume", state, [*render_cornell_box(tmp_path / "other.exr", 1, 8, 6), "--resume", str(state)]),
+        ]:
+            second = run_spectrace(*argv, timeout=120)
+            assert second.returncode == 2 and "Traceback" not in second.stderr, second.stderr
+            assert second.stderr.count("\n") == 1, second.stderr
+            line = second.stderr
+            assert line.startswith(f"error: {named}: {option} is being written by another command"), line
+            assert f"pid {first.pid} on " in line, line
+            assert first.poll() is None
+        assert not (tmp_path / "other.exr").exists()
+        first.send_signal(signal.SIGTERM)
+        _, stderr = first.communicate(timeout=120)
+    finally:
+        first.kill()
+    assert first.returncode == 130, stderr
+    assert _locks(tmp_path) == []
+    again = run_spectrace(*render_cornell_box(out, 1, 8, 6), timeout=120)
+    assert again.returncode == 0, again.stderr
+    assert _locks(tmp_path) == []
+
+
+def test_a_lock_left_by_a_dead_render_does_not_stop_the_next(tmp_path, monkeypatch, capsys):
+    """A render killed outright (kill -9) leaves its lock file, but the kernel has dropped its lock: the next
+    render on that output takes it and goes on; an error after the locks are taken releases them too."""
+    from cli_runner import run_in_process
+    from spectrace.io.output_lock import lock_path_for
+
+    out = tmp_path / "out.png"
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    lock_path_for(out).write_text(f"spectrace render, pid {dead.stdout.strip()} on this host, since long ago\n")
+    status, stderr = run_in_process(monkeypatch, capsys, render_cornell_box(out, 1, 8, 6) + ["-q"])
+    assert status == 0 and out.is_file(), stderr
+    assert _locks(tmp_path) == []
+
+    state = tmp_path / "state.npz"
+    state.write_bytes(b"not a checkpoint")
+    status, stderr = run_in_process(
+        monkeypatch, capsys, render_cornell_box(out, 1, 8, 6) + ["--resume", str(state), "-q"]
+    )
+    assert status == 2 and _locks(tmp_path) == [], stderr

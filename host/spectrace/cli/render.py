@@ -1,12 +1,15 @@
 """`spectrace render`: a scene file to an image, with checkpoints and a clean stop on Ctrl-C, SIGTERM or SIGHUP."""
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from spectrace.cli.common import DeviceOption, console
 from spectrace.errors import SpectraceError
+
+if TYPE_CHECKING:
+    from spectrace.io.output_lock import OutputLocks
 
 
 def render(
@@ -233,78 +236,77 @@ def render(
         from spectrace.denoising import noisy_path_for
 
         noisy = noisy_path_for(output)
-    _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy)
-    saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
-    if cluster is not None or workers is not None or (saved is not None and saved.tiles is not None):
-        from spectrace.cli.render_tiles import render_tiled
+    with _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy):
+        saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
+        if cluster is not None or workers is not None or (saved is not None and saved.tiles is not None):
+            from spectrace.cli.render_tiles import render_tiled
 
-        render_tiled(
-            loaded,
-            output,
-            outputs,
-            xyz=xyz,
-            device=device,
-            kernel=kernel,
-            spectral_bins=spectral_bins,
-            quiet=quiet,
-            state_file=state_file,
-            checkpoint_interval=checkpoint_interval,
-            saved=saved,
-            resume=resume,
-            cluster=cluster,
-            workers=workers,
-            tile_rows=tile_rows,
-            cluster_timeout=cluster_timeout,
-            noisy=noisy,
-        )
-        return
-    renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
-    console.print(
-        f"device: {renderer.device.report.key} ({renderer.device.report.device_name})", highlight=False, markup=False
-    )
-    buffers = renderer.buffers
-    peak = f", peak {buffers.bvh_peak_bytes / 2**20:.0f} MiB" if buffers.bvh_peak_bytes is not None else ""
-    object_shapes = f" and {buffers.instanced_shape_count} analytic shapes" if buffers.instanced_shape_count else ""
-    instanced = (
-        f" + {buffers.instance_count} instances of {buffers.instanced_triangle_count} object triangles"
-        f"{object_shapes} stored once"
-        if buffers.instance_count
-        else ""
-    )
-    console.print(
-        f"scene: {buffers.triangle_count} triangles{instanced}, BVH built in {buffers.bvh_seconds:.2f} s{peak}",
-        highlight=False,
-        markup=False,
-    )
-    identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
-    with StopOnSignals() as stop:
-        _render_passes(renderer, stop, state_file, checkpoint_interval, quiet, identity)
-        interrupted = stop.requested
-        image = renderer.image()
-        if image.spp == 0:
-            raise SpectraceError("interrupted before the first pass finished; nothing written")
-        if noisy is not None:
-            _write_image(outputs.apply(image), noisy, xyz, state_file)
-            from spectrace.denoising import denoise_with_emission_pass
-
-            image = denoise_with_emission_pass(
-                loaded, image, renderer.device, log=lambda text: console.print(text, highlight=False, markup=False)
+            render_tiled(
+                loaded,
+                output,
+                outputs,
+                xyz=xyz,
+                device=device,
+                kernel=kernel,
+                spectral_bins=spectral_bins,
+                quiet=quiet,
+                state_file=state_file,
+                checkpoint_interval=checkpoint_interval,
+                saved=saved,
+                resume=resume,
+                cluster=cluster,
+                workers=workers,
+                tile_rows=tile_rows,
+                cluster_timeout=cluster_timeout,
+                noisy=noisy,
             )
-        _write_image(outputs.apply(image), output, xyz, state_file)
-        outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False, markup=False))
-    pixels = image.width * image.height * image.spp
-    note = " (interrupted: partial image)" if interrupted else ""
-    note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
-    console.print(
-        f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
-        f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}",
-        highlight=False,
-        markup=False,
-    )
-    if image.dropped_samples:
-        console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
-    if interrupted:
-        raise typer.Exit(130)
+            return
+        renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
+        report = renderer.device.report
+        console.print(f"device: {report.key} ({report.device_name})", highlight=False, markup=False)
+        buffers = renderer.buffers
+        peak = f", peak {buffers.bvh_peak_bytes / 2**20:.0f} MiB" if buffers.bvh_peak_bytes is not None else ""
+        object_shapes = f" and {buffers.instanced_shape_count} analytic shapes" if buffers.instanced_shape_count else ""
+        instanced = (
+            f" + {buffers.instance_count} instances of {buffers.instanced_triangle_count} object triangles"
+            f"{object_shapes} stored once"
+            if buffers.instance_count
+            else ""
+        )
+        console.print(
+            f"scene: {buffers.triangle_count} triangles{instanced}, BVH built in {buffers.bvh_seconds:.2f} s{peak}",
+            highlight=False,
+            markup=False,
+        )
+        identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
+        with StopOnSignals() as stop:
+            _render_passes(renderer, stop, state_file, checkpoint_interval, quiet, identity)
+            interrupted = stop.requested
+            image = renderer.image()
+            if image.spp == 0:
+                raise SpectraceError("interrupted before the first pass finished; nothing written")
+            if noisy is not None:
+                _write_image(outputs.apply(image), noisy, xyz, state_file)
+                from spectrace.denoising import denoise_with_emission_pass
+
+                image = denoise_with_emission_pass(
+                    loaded, image, renderer.device, log=lambda text: console.print(text, highlight=False, markup=False)
+                )
+            _write_image(outputs.apply(image), output, xyz, state_file)
+            outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False, markup=False))
+        pixels = image.width * image.height * image.spp
+        note = " (interrupted: partial image)" if interrupted else ""
+        note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
+        console.print(
+            f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
+            f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}",
+            highlight=False,
+            markup=False,
+        )
+        if image.dropped_samples:
+            console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
+        if interrupted:
+            raise typer.Exit(130)
 
 
 def _with_delta_e_map(response, output: Path, white_y: float):
@@ -342,10 +344,12 @@ def _check_output_files(
     resume: Path | None,
     overwrite: bool,
     noisy: Path | None = None,
-) -> None:
+) -> "OutputLocks":
     """Before any device work: every file the render will write can be written, no two name the same file, none
-    is the scene, and a fresh render does not replace a checkpoint that holds another render's samples."""
+    is the scene, no other command is writing one (their locks, held until the returned OutputLocks exits), and a
+    fresh render does not replace a checkpoint that holds another render's samples."""
     from spectrace.cli import checks as cli_checks
+    from spectrace.io.output_lock import OutputLocks
 
     state_option, state_file = ("--checkpoint", checkpoint) if checkpoint is not None else ("--resume", resume)
     if overwrite and resume is not None:
@@ -361,13 +365,19 @@ def _check_output_files(
         cli_checks.check_output_file(false_color, "--false-color")
     if state_file is not None:
         cli_checks.check_output_file(state_file, state_option)
+    locks = OutputLocks(
+        {"--output": output, "--denoise": noisy, "--false-color": false_color, state_option: state_file},
+        command="spectrace render",
+    )
     continued = resume is not None and checkpoint is not None and cli_checks.same_file(checkpoint, resume)
     if checkpoint is not None and checkpoint.exists() and not continued and not overwrite:
+        locks.release()
         raise SpectraceError(
             f"--checkpoint names a file that already exists; use --resume {checkpoint} to continue "
             f"the render it holds, or --overwrite to start again and replace it",
             where=str(checkpoint),
         )
+    return locks
 
 
 def _resume(renderer, restored, path: Path):
