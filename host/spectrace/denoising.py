@@ -21,7 +21,9 @@ the wavelengths of the image's own camera rays (the `emission` AOV) is added bac
 removes the colour noise but not the coverage noise; without the AOVs the image goes in whole.
 """
 
+import os
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -60,6 +62,42 @@ def denoise_available() -> bool:
 def noisy_path_for(path):
     """Where `spectrace render --denoise` keeps the noisy image beside the denoised `path`: `<stem>.noisy<suffix>`."""
     return path.with_name(f"{path.stem}.noisy{path.suffix}")
+
+
+# The noisy image's metadata (`spectrace:noisy_image_of`): the name of the denoised image it was written beside.
+NOISY_MARK = "noisy_image_of"
+
+
+def noisy_image(image: Image, output: Path) -> Image:
+    """The noisy image as `spectrace render --denoise -o output` writes it: marked as that output's noisy twin."""
+    return replace(image, extra={**image.extra, NOISY_MARK: Path(output).name})
+
+
+def _noisy_mark(path: Path) -> str | None:
+    """The mark of a noisy twin in the image file `path`, if it has one."""
+    try:
+        if path.suffix.lower() == ".exr":
+            from spectrace.io.exr import read_exr_header
+
+            value = read_exr_header(path).get(f"spectrace:{NOISY_MARK}")
+            return value.decode("utf-8", "replace") if isinstance(value, bytes) else value
+        from spectrace.io.png import read_png_texts
+
+        return read_png_texts(path).get(f"spectrace:{NOISY_MARK}")
+    except (OSError, RuntimeError, ValueError):  # unreadable, or not an image at all: not ours
+        return None
+
+
+def check_noisy_path(noisy: Path, output: Path) -> None:
+    """Refuse to replace, at the noisy image's place beside `output`, a file that is not the noisy twin an
+    earlier `--denoise -o output` wrote: the user named `output` only, and that file may be anything (another
+    render's image, a photo). The twin itself is replaced, as `output` is."""
+    if os.path.lexists(noisy) and _noisy_mark(noisy) != Path(output).name:
+        raise SpectraceError(
+            f"--denoise keeps the noisy image in {noisy.name}, which exists and is not the noisy image of an "
+            f"earlier --denoise render of {Path(output).name}; move it away or choose another --output",
+            where=str(noisy),
+        )
 
 
 def emission_pass_spp(spp: int) -> int:

@@ -305,3 +305,42 @@ def test_a_lock_left_by_a_dead_render_does_not_stop_the_next(tmp_path, monkeypat
         monkeypatch, capsys, render_cornell_box(out, 1, 8, 6) + ["--resume", str(state), "-q"]
     )
     assert status == 2 and _locks(tmp_path) == [], stderr
+
+
+@pytest.mark.parametrize("suffix", [".exr", ".png"])
+def test_denoise_replaces_its_own_noisy_image_and_no_other_file(suffix, tmp_path, monkeypatch, capsys):
+    """`--denoise -o out.X` keeps the noisy image in out.noisy.X, a file the user did not name: a file there that
+    is not the noisy image of an earlier --denoise render of out.X (a photo, another output's noisy image) is
+    refused before any work, one line naming --denoise and the file, and left as it was; the render's own noisy
+    image is replaced like -o. (The denoiser is a stand-in: only which files are written is tested here.)"""
+    import dataclasses
+
+    from cli_runner import run_in_process
+    from spectrace import denoising
+
+    monkeypatch.setattr(denoising, "denoise_available", lambda: True)
+    monkeypatch.setattr(
+        denoising,
+        "denoise_with_emission_pass",
+        lambda scene, image, device=None, log=print: dataclasses.replace(image, extra={**image.extra, "denoised": "x"}),
+    )
+
+    def render(out: Path) -> tuple[int, str]:
+        return run_in_process(monkeypatch, capsys, render_cornell_box(out, 1, 8, 6) + ["--denoise", "-q"])
+
+    out, noisy = tmp_path / f"out{suffix}", tmp_path / f"out.noisy{suffix}"
+    noisy.write_bytes(b"a photo the user keeps here")
+    status, stderr = render(out)
+    assert status == 2 and stderr.count("\n") == 1, stderr
+    assert stderr.startswith(f"error: {noisy}: --denoise keeps the noisy image in {noisy.name}, which exists"), stderr
+    assert noisy.read_bytes() == b"a photo the user keeps here" and not out.exists()
+
+    noisy.unlink()
+    for _ in range(2):  # the second render replaces the first one's noisy image
+        status, stderr = render(out)
+        assert status == 0 and out.is_file() and noisy.is_file(), stderr
+    other, others_noisy = tmp_path / f"other{suffix}", tmp_path / f"other.noisy{suffix}"
+    others_noisy.write_bytes(noisy.read_bytes())  # out's noisy image, not other's
+    status, stderr = render(other)
+    assert status == 2 and stderr.startswith(f"error: {others_noisy}: --denoise keeps"), stderr
+    assert others_noisy.read_bytes() == noisy.read_bytes() and not other.exists()

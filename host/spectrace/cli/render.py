@@ -136,7 +136,8 @@ def render(
             help="Denoise with Open Image Denoise (the spectrace[denoise] extra), guided by the albedo and normal "
             "AOVs (recorded for it); the emitters seen directly are rendered apart by camera rays alone at "
             "max(32, 2 spp) and replace the image's own (docs/integrators.md). --output gets the denoised image, "
-            "<stem>.noisy<suffix> beside it the noisy one.",
+            "<stem>.noisy<suffix> beside it the noisy one (replacing only an earlier --denoise render's noisy image "
+            "of the same output; any other file there is refused).",
         ),
     ] = False,
     kernel: Annotated[
@@ -286,8 +287,9 @@ def render(
             if image.spp == 0:
                 raise SpectraceError("interrupted before the first pass finished; nothing written")
             if noisy is not None:
-                _write_image(outputs.apply(image), noisy, xyz, state_file)
-                from spectrace.denoising import denoise_with_emission_pass
+                from spectrace.denoising import denoise_with_emission_pass, noisy_image
+
+                _write_image(noisy_image(outputs.apply(image), output), noisy, xyz, state_file)
 
                 image = denoise_with_emission_pass(
                     loaded, image, renderer.device, log=lambda text: console.print(text, highlight=False, markup=False)
@@ -360,7 +362,10 @@ def _check_output_files(
     )
     cli_checks.check_output_file(output, "--output")
     if noisy is not None:
+        from spectrace.denoising import check_noisy_path
+
         cli_checks.check_output_file(noisy, "--denoise")
+        check_noisy_path(noisy, output)
     if false_color is not None:
         cli_checks.check_output_file(false_color, "--false-color")
     if state_file is not None:

@@ -82,9 +82,9 @@ def render_tiled(
         scene, job.spectral_range_nm, albedo_scale=film_albedo_scale(scene, film_table(scene, job.buffers))
     )
     if noisy is not None:  # --denoise: the noisy image kept beside the denoised one, as for a render here
-        from spectrace.denoising import denoise_with_emission_pass
+        from spectrace.denoising import denoise_with_emission_pass, noisy_image
 
-        _write(outputs.apply(image), noisy, xyz, state_file)
+        _write(noisy_image(outputs.apply(image), output), noisy, xyz, state_file)
         image = denoise_with_emission_pass(scene, image, device, log=_say)
     _write(outputs.apply(image), output, xyz, state_file)
     outputs.write_false_colour(image, log=_say)

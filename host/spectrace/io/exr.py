@@ -87,6 +87,12 @@ def read_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
         return channels, dict(exr.header())
 
 
+def read_exr_header(path: Path) -> dict:
+    """The header's attributes alone (no pixels read)."""
+    with OpenEXR.File(str(path), header_only=True) as exr:
+        return dict(exr.header())
+
+
 def read_spectral_exr(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """(wavelengths_nm (bins,), radiance (height, width, bins)) from the S0 channels of a spectral EXR."""
     channels, _ = read_exr(path)

@@ -56,3 +56,28 @@ def write_png(
 def _write_file(path: Path, data: bytes) -> None:
     with open(path, "wb") as file:
         file.write(data)
+
+
+def read_png_texts(path: Path, limit: int = 1 << 20) -> dict[str, str]:
+    """The text chunks (tEXt, and uncompressed iTXt) before the pixels of a PNG, by keyword, from its first
+    `limit` bytes (spectrace writes them there); {} for a file that is no PNG."""
+    with open(path, "rb") as file:
+        data = file.read(limit)
+    if not data.startswith(_SIGNATURE):
+        return {}
+    texts: dict[str, str] = {}
+    position = len(_SIGNATURE)
+    while position + 8 <= len(data):
+        (length,) = struct.unpack(">I", data[position : position + 4])
+        kind, payload = data[position + 4 : position + 8], data[position + 8 : position + 8 + length]
+        position += 12 + length
+        if kind in (b"IDAT", b"IEND"):
+            break
+        keyword, _, rest = payload.partition(b"\x00")
+        if kind == b"tEXt":
+            texts[keyword.decode("latin-1")] = rest.decode("latin-1")
+        elif kind == b"iTXt" and rest[:1] == b"\x00":  # compression flag 0; then method, language, translation
+            _, _, rest = rest[2:].partition(b"\x00")
+            _, _, text = rest.partition(b"\x00")
+            texts[keyword.decode("latin-1")] = text.decode("utf-8", "replace")
+    return texts
