@@ -56,6 +56,7 @@ def test_a_closed_terminal_keeps_the_samples_and_the_checkpoint(device, tmp_path
     _, header = read_exr(out)
     done = int(header["spectrace:spp"])
     assert 0 < done < 1000000 and read_checkpoint(state).state.samples_done == done
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["partial.exr", "state.npz"]  # its locks are gone
 
 
 def test_an_ignored_hangup_stays_ignored():
