@@ -184,6 +184,7 @@ _SCALARS = st.one_of(
             "materials.black.reflectance",
             "shapes.0.material",
             "",
+            "d" * 300,
             0,
             1,
             -1,
