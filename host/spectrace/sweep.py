@@ -48,7 +48,7 @@ def grid_items(grid: Mapping[str, Sequence[Any]], where: str | None = None) -> l
     for name, values in grid.items():
         if isinstance(values, str | bytes) or not isinstance(values, Sequence) or len(values) == 0:
             raise SpectraceError(
-                f"a grid entry must be a non-empty list of values, got {_brief(values)}", where=f"{prefix}{name}"
+                f"a grid entry must be a non-empty list of values, got {value_text(values)}", where=f"{prefix}{name}"
             )
         count *= len(values)
     if count > MAX_ITEMS:
@@ -61,8 +61,12 @@ def grid_items(grid: Mapping[str, Sequence[Any]], where: str | None = None) -> l
     return [dict(zip(names, combination)) for combination in itertools.product(*(grid[name] for name in names))]
 
 
-def _brief(value: Any) -> str:
-    text = repr(value)
+def value_text(value: Any) -> str:
+    """A value as a spec (TOML) or JSON would show it (`true`, not Python's `True`), shortened for a message."""
+    try:
+        text = json.dumps(value, ensure_ascii=False, default=str)
+    except ValueError:  # a structure that holds itself
+        text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 
@@ -339,20 +343,20 @@ def display_argument(name: str, value: Any) -> Any:
 
     if name == "display":
         if not isinstance(value, str):
-            raise SpectraceError(f"a display is a name or a display CSV file, got {_brief(value)}", where=name)
+            raise SpectraceError(f"a display is a name or a display CSV file, got {value_text(value)}", where=name)
         return load_display(value, where=name)
     if name == "rgb":
         if isinstance(value, str | bytes) or not isinstance(value, Sequence) or not all(map(_is_number, value)):
-            raise SpectraceError(f"an RGB triple is a list of 3 numbers, got {_brief(value)}", where=name)
+            raise SpectraceError(f"an RGB triple is a list of 3 numbers, got {value_text(value)}", where=name)
         return checked_rgb(np.asarray(value, dtype=np.float64), where=name)
     if name == "observer":
         names = [member.value for member in Observer]
         if not isinstance(value, str) or value not in names:
-            raise SpectraceError(f"unknown observer {_brief(value)} (use {', '.join(names)})", where=name)
+            raise SpectraceError(f"unknown observer {value_text(value)} (use {', '.join(names)})", where=name)
         return Observer(value)
     if name == "white_luminance":
         if not _is_number(value):
-            raise SpectraceError(f"a white luminance is a number of cd/m², got {_brief(value)}", where=name)
+            raise SpectraceError(f"a white luminance is a number of cd/m², got {value_text(value)}", where=name)
         try:
             return ViewingConditions(float(value))
         except SpectraceError as error:

@@ -41,6 +41,7 @@ def read_spec(path: Path) -> tuple[str, dict[str, Any], dict[str, list]]:
     """(kind, the [sweep] table, the [grid] table) of a sweep file, checked: a spec of the wrong shape is one
     SpectraceError naming the file and the key path."""
     from spectrace.io.input_files import regular_file
+    from spectrace.sweep import value_text
 
     regular_file(path, what="sweep file")
     try:
@@ -64,7 +65,9 @@ def read_spec(path: Path) -> tuple[str, dict[str, Any], dict[str, list]]:
     settings, grid = data.get("sweep", {}), data.get("grid", {})
     kind = settings.get("kind")
     if not isinstance(kind, str) or kind not in KINDS:
-        raise SpectraceError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}"[:200], where=f"{path}: sweep.kind")
+        raise SpectraceError(
+            f"kind must be one of {', '.join(KINDS)}, got {value_text(kind)}", where=f"{path}: sweep.kind"
+        )
     for name in settings:
         if name not in SWEEP_KEYS[kind]:
             allowed = ", ".join(SWEEP_KEYS[kind])
@@ -78,7 +81,9 @@ def read_spec(path: Path) -> tuple[str, dict[str, Any], dict[str, list]]:
             hint = ' (quote a dotted key path: "film.width" = [...])' if kind == "render" else ""
             raise SpectraceError(f"a grid entry must be a list of values, got a table{hint}", where=where)
         if not isinstance(values, list) or not values:
-            raise SpectraceError(f"a grid entry must be a non-empty list of values, got {values!r}"[:200], where=where)
+            raise SpectraceError(
+                f"a grid entry must be a non-empty list of values, got {value_text(values)}", where=where
+            )
     if kind == "display":
         _check_display_grid(path, grid)
     _check_no_repeats(path, grid)
@@ -87,7 +92,7 @@ def read_spec(path: Path) -> tuple[str, dict[str, Any], dict[str, list]]:
             raise SpectraceError("a render sweep names its scene file", where=f"{path}: sweep.scene")
         if not isinstance(settings["scene"], str) or not settings["scene"]:
             raise SpectraceError(
-                f"the scene is a file name, got {settings['scene']!r}"[:200], where=f"{path}: sweep.scene"
+                f"the scene is a file name, got {value_text(settings['scene'])}", where=f"{path}: sweep.scene"
             )
     return kind, settings, grid
 
