@@ -40,6 +40,10 @@ def resolve_scene_path(scene: "str | Path") -> Path:
     from spectrace.errors import SpectraceError
 
     path = Path(scene)
+    try:
+        path.exists()
+    except (OSError, ValueError):  # a name the system will not look up (too long): the loader's to report
+        return path
     if path.is_file() or path.parent != Path(".") or str(path) in ("", "."):
         return path
     if path.exists() and not path.is_dir():

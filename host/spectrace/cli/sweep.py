@@ -14,6 +14,7 @@ key paths ("film.width", "materials.red.reflectance"), each set before the scene
 
 from __future__ import annotations
 
+import json
 import tomllib
 from pathlib import Path
 from typing import Annotated, Any
@@ -24,16 +25,23 @@ from spectrace.cli.common import DeviceOption, console
 from spectrace.errors import SpectraceError
 
 KINDS = ("display", "render")
-DISPLAY_KEYS = ("display", "rgb", "observer", "white_luminance")
+SWEEP_KEYS = {"display": ("kind",), "render": ("kind", "scene")}
 
 
 def _say(text: str) -> None:
     console.print(text, highlight=False, markup=False)
 
 
+def _key_path(table: str, name: str) -> str:
+    """A key of the table as a key path; a key that is no bare name (a scene's dotted key path) quoted."""
+    return f"{table}.{name}" if name.isidentifier() else f"{table}.{json.dumps(name, ensure_ascii=False)}"
+
+
 def read_spec(path: Path) -> tuple[str, dict[str, Any], dict[str, list]]:
-    """(kind, the [sweep] table, the [grid] table) of a sweep file, checked."""
+    """(kind, the [sweep] table, the [grid] table) of a sweep file, checked: a spec of the wrong shape is one
+    SpectraceError naming the file and the key path."""
     from spectrace.io.input_files import regular_file
+    from spectrace.sweep import value_text
 
     regular_file(path, what="sweep file")
     try:
@@ -42,43 +50,139 @@ def read_spec(path: Path) -> tuple[str, dict[str, Any], dict[str, list]]:
         raise SpectraceError(f"cannot read the sweep file ({error})", where=str(path)) from None
     except tomllib.TOMLDecodeError as error:
         raise SpectraceError(f"TOML syntax error: {error}", where=str(path)) from None
+    except RecursionError:  # tomllib parses arrays and inline tables recursively
+        raise SpectraceError("arrays or inline tables nested too deep to parse", where=str(path)) from None
     unknown = set(data) - {"sweep", "grid"}
     if unknown:
         raise SpectraceError(f"unknown table(s) {', '.join(sorted(unknown))} (use [sweep] and [grid])", where=str(path))
+    for table in ("sweep", "grid"):
+        if not isinstance(data.get(table, {}), dict):
+            value = data[table]
+            got = type(value).__name__
+            if isinstance(value, list):
+                got = f"an array of tables ([[{table}]])" if all(isinstance(v, dict) for v in value) else "an array"
+            raise SpectraceError(f"expected a table ([{table}]), got {got}", where=f"{path}: {table}")
     settings, grid = data.get("sweep", {}), data.get("grid", {})
     kind = settings.get("kind")
-    if kind not in KINDS:
-        raise SpectraceError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}", where=f"{path}: sweep.kind")
+    if not isinstance(kind, str) or kind not in KINDS:
+        raise SpectraceError(
+            f"kind must be one of {', '.join(KINDS)}, got {value_text(kind)}", where=f"{path}: sweep.kind"
+        )
+    for name in settings:
+        if name not in SWEEP_KEYS[kind]:
+            allowed = ", ".join(SWEEP_KEYS[kind])
+            where = f"{path}: {_key_path('sweep', name)}"
+            raise SpectraceError(f"unknown key in a {kind} sweep (use {allowed})", where=where)
     if not grid:
         raise SpectraceError("the [grid] table is missing or empty", where=f"{path}: grid")
+    for name, values in grid.items():
+        where = f"{path}: {_key_path('grid', name)}"
+        if isinstance(values, dict):
+            hint = ' (quote a dotted key path: "film.width" = [...])' if kind == "render" else ""
+            raise SpectraceError(f"a grid entry must be a list of values, got a table{hint}", where=where)
+        if not isinstance(values, list) or not values:
+            raise SpectraceError(
+                f"a grid entry must be a non-empty list of values, got {value_text(values)}", where=where
+            )
     if kind == "display":
-        for name in grid:
-            if name not in DISPLAY_KEYS:
-                raise SpectraceError(f"unknown key (use {', '.join(DISPLAY_KEYS)})", where=f"{path}: grid.{name}")
-        for name in ("display", "rgb"):
-            if name not in grid:
-                raise SpectraceError("a display sweep needs this key", where=f"{path}: grid.{name}")
-    elif "scene" not in settings:
-        raise SpectraceError("a render sweep names its scene file", where=f"{path}: sweep.scene")
+        _check_display_grid(path, grid)
+    _check_no_repeats(path, grid)
+    if kind == "render":
+        if "scene" not in settings:
+            raise SpectraceError("a render sweep names its scene file", where=f"{path}: sweep.scene")
+        if not isinstance(settings["scene"], str) or not settings["scene"]:
+            raise SpectraceError(
+                f"the scene is a file name, got {value_text(settings['scene'])}", where=f"{path}: sweep.scene"
+            )
     return kind, settings, grid
+
+
+def _check_no_repeats(path: Path, grid: dict[str, list]) -> None:
+    """A value twice in one grid entry would make two items of the same key, one row twice in the table."""
+    for name, values in grid.items():
+        seen: dict[str, int] = {}
+        for index, value in enumerate(values):
+            text = json.dumps(value, sort_keys=True, default=str)
+            if text in seen:
+                raise SpectraceError(
+                    f"repeats the value at [{seen[text]}]", where=f"{path}: {_key_path('grid', name)}[{index}]"
+                )
+            seen[text] = index
+
+
+def _check_display_grid(path: Path, grid: dict[str, list]) -> None:
+    from spectrace.sweep import DISPLAY_ARGUMENTS, display_argument
+
+    for name in grid:
+        if name not in DISPLAY_ARGUMENTS:
+            raise SpectraceError(
+                f"unknown key (use {', '.join(DISPLAY_ARGUMENTS)})", where=f"{path}: {_key_path('grid', name)}"
+            )
+    for name in ("display", "rgb"):
+        if name not in grid:
+            raise SpectraceError("a display sweep needs this key", where=f"{path}: grid.{name}")
+    for name, values in grid.items():
+        for index, value in enumerate(values):
+            try:
+                display_argument(name, value)
+            except SpectraceError as error:
+                # The argument's own complaint, or a display file's (which names that file and line).
+                message = error.message if error.where == name else str(error)
+                raise SpectraceError(message, where=f"{path}: {_key_path('grid', name)}[{index}]") from None
+
+
+def _override_at_fault(error: SpectraceError, scene_file: Path, params: dict[str, Any]) -> str | None:
+    """The grid key whose value the scene's error is about (the error names that key path of the scene), or None
+    when the error lies elsewhere in the scene."""
+    from spectrace.scene.loader import key_path
+
+    if not error.where or not error.where.startswith(f"{scene_file}: "):
+        return None
+    location = error.where[len(f"{scene_file}: ") :]
+    for name in params:
+        forms = {name, key_path(tuple(int(part) if part.isdigit() else part for part in name.split(".")))}
+        if any(location == form or location.startswith((f"{form}.", f"{form}[")) for form in forms):
+            return name
+    return None
 
 
 def sweep_items(path: Path, device: str | None) -> list:
     """The sweep's items; a render sweep's scenes are read here (any error names the file and key now, and the
-    workers receive resolved scenes, no files)."""
+    workers receive resolved scenes, no files). Each item's key covers what determines it: its parameters, the
+    files it reads (by content) and the program."""
     from spectrace import sweep as sweeping
 
     kind, settings, grid = read_spec(path)
-    combinations = sweeping.grid_items({name: grid[name] for name in grid})
+    combinations = sweeping.grid_items({name: grid[name] for name in grid}, where=str(path))
+    digests = sweeping.FileDigests()
     if kind == "display":
-        return [sweeping.SweepItem(params, sweeping.display_colour_item, params) for params in combinations]
+        return [
+            sweeping.SweepItem(
+                params, sweeping.display_colour_item, params, sweeping.display_inputs(params["display"], digests)
+            )
+            for params in combinations
+        ]
+    from spectrace.io.input_files import regular_file
     from spectrace.scene import load_scene
 
-    scene_file = (path.parent / str(settings["scene"])).resolve()
+    scene_file = regular_file(path.parent / settings["scene"], where=f"{path}: sweep.scene", what="scene file")
+    scene_file = scene_file.resolve()
     items = []
     for params in combinations:
-        scene = load_scene(scene_file, overrides=params)
-        items.append(sweeping.SweepItem(params, sweeping.render_item, {"scene": scene, "device": device}))
+        try:
+            scene = load_scene(scene_file, overrides=params)
+            inputs = sweeping.scene_inputs(scene_file, params, digests)
+        except SpectraceError as error:
+            name = _override_at_fault(error, scene_file, params)
+            if name is None:  # the scene's own fault, named with its key path
+                raise SpectraceError(str(error), where=f"{path}: sweep.scene") from None
+            index = grid[name].index(params[name])
+            raise SpectraceError(
+                f"{error.message} (in {scene_file.name})",
+                where=f"{path}: {_key_path('grid', name)}[{index}]",
+            ) from None
+        inputs["device"] = device
+        items.append(sweeping.SweepItem(params, sweeping.render_item, {"scene": scene, "device": device}, inputs))
     return items
 
 

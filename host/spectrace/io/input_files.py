@@ -32,6 +32,8 @@ def regular_file(path: str | Path, where: str | None = None, what: str = "file")
         raise SpectraceError(f"{subject} does not exist", where=where) from None
     except OSError as error:
         raise SpectraceError(f"cannot read {subject} ({error.strerror or error})", where=where) from None
+    except ValueError:  # no system call takes a name with a NUL character in it
+        raise SpectraceError(f"{subject} has a NUL character in its name", where=where) from None
     if stat.S_ISDIR(mode):
         raise SpectraceError(f"{subject} is a folder, not a file", where=where)
     for test, kind in _SPECIAL_KINDS:
@@ -40,3 +42,12 @@ def regular_file(path: str | Path, where: str | None = None, what: str = "file")
     if not stat.S_ISREG(mode):
         raise SpectraceError(f"{subject} is not a regular file", where=where)
     return path
+
+
+def is_regular_file(path: str | Path) -> bool:
+    """Whether `path` names a regular file, as a yes or no even for a name the system refuses to look up (too
+    long, a NUL byte, a loop of links), where Path.is_file raises."""
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except (OSError, ValueError):
+        return False

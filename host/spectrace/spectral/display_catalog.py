@@ -21,7 +21,7 @@ from pathlib import Path
 import colour
 
 from spectrace.errors import SpectraceError
-from spectrace.io.input_files import regular_file
+from spectrace.io.input_files import is_regular_file, regular_file
 from spectrace.resources import spectra_dir
 from spectrace.spectral import load_spectrum_csv, spectrum_from_colour
 from spectrace.spectral.display import CHANNELS, Display
@@ -63,7 +63,7 @@ def display_names() -> list[str]:
 
 
 def _looks_like_path(spec: str) -> bool:
-    return spec.lower().endswith(".csv") or "/" in spec or "\\" in spec or Path(spec).is_file()
+    return spec.lower().endswith(".csv") or "/" in spec or "\\" in spec or is_regular_file(spec)
 
 
 def load_display(spec: str, where: str | None = None) -> Display:
