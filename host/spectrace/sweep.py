@@ -2,14 +2,14 @@
 observers, a scene's light temperature or material colour over a range), here or on a Dask cluster
 (spectrace.distributed), into one results table plus the images.
 
-Each finished item is saved at once as its own small JSON file (and its images) in the output folder, named by its
-key: a digest of everything that determines its result, namely the function, its parameters, the inputs it reads
-(`SweepItem.inputs`: a scene's file and every file it names, by content) and the program (the package version and
-the kernel sources). A rerun skips the items whose key it finds saved, so an interrupted sweep resumes where it
-stopped, while an item whose scene, asset or program changed is computed again; a file saved without the key it
-should hold (damaged, or from an older spectrace) is not trusted either. The table, `results.json` and
-`results.csv` (one row per item: its parameters, then its results), is written from those files, in grid order, at
-the end of every run.
+Each finished item is saved at once as its own small JSON file (and its images) in the output folder, named by its key:
+a digest of everything that determines its result, namely the function, its parameters, the inputs it reads
+(`SweepItem.inputs`: a scene's file and every file it names, by content) and the program (the package version, the
+kernel sources, the host code and the shipped spectra). A rerun skips the items whose key it finds saved, so an
+interrupted sweep resumes where it stopped, while an item whose scene, asset or program changed is computed again; a
+file saved without the key it should hold (damaged, or from an older spectrace) is not trusted either. The table,
+`results.json` and `results.csv` (one row per item: its parameters, then its results), is written from those files, in
+grid order, at the end of every run.
 """
 
 from __future__ import annotations
@@ -72,13 +72,21 @@ def value_text(value: Any) -> str:
 
 @cache
 def program_version() -> dict[str, str]:
-    """What identifies this program's results: the package version and the kernel sources' digest (the one the
-    program cache and checkpoints use)."""
-    import spectrace
-    from spectrace.device.program_cache import kernels_digest
-    from spectrace.resources import kernels_dir
+    """What identifies this program's results: the package version, the kernel sources' digest (the one the
+    program cache and checkpoints use), and digests of the host code and the shipped spectra, since the version
+    number does not change with every edit of either."""
+    from pathlib import Path
 
-    return {"version": spectrace.__version__, "kernels": kernels_digest(kernels_dir())}
+    import spectrace
+    from spectrace.device.program_cache import files_digest, kernels_digest
+    from spectrace.resources import kernels_dir, spectra_dir
+
+    return {
+        "version": spectrace.__version__,
+        "kernels": kernels_digest(kernels_dir()),
+        "host": files_digest(Path(spectrace.__file__).resolve().parent, (".py",)),
+        "spectra": files_digest(spectra_dir(), (".csv",)),
+    }
 
 
 def _canonical(value: Any) -> str:

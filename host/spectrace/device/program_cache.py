@@ -90,11 +90,16 @@ def _load_binary(context, device, binary: bytes, options: str) -> cl.Program | N
 
 def kernels_digest(kernels_dir: Path) -> str:
     """Hash of every ``*.cl`` and ``*.h`` file under `kernels_dir` (names and contents)."""
+    return files_digest(kernels_dir, (".cl", ".h"))
+
+
+def files_digest(folder: Path, suffixes: tuple[str, ...]) -> str:
+    """Hash of every file under `folder` whose name ends in one of `suffixes` (relative names and contents)."""
     digest = hashlib.sha256()
-    files = sorted(p for p in kernels_dir.rglob("*") if p.suffix in (".cl", ".h") and p.is_file())
+    files = sorted(p for p in folder.rglob("*") if p.suffix in suffixes and p.is_file())
     for path in files:
         content = path.read_bytes()
-        digest.update(path.relative_to(kernels_dir).as_posix().encode() + b"\0")
+        digest.update(path.relative_to(folder).as_posix().encode() + b"\0")
         digest.update(len(content).to_bytes(8, "little") + content)
     return digest.hexdigest()
 
