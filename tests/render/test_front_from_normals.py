@@ -1,8 +1,11 @@
 """Where a mesh has vertex normals, they say which side of it is the front, whatever its winding: a closed mesh with
 outward normals but inward winding (as some exporters write them) must render as the same mesh wound outward, for
-one-sided materials and one-sided area lights, in the path tracer and in the adjoint integrators (light tracing,
-BDPT), and its stored geometric normals (which decide a dielectric's and a medium's inside) must point outward.
-Mitsuba 3 decides the side by the shading frame alike (tests/interop/test_mitsuba_one_sided.py compares)."""
+one-sided materials and one-sided area lights, on its own or as a mirrored instance, in the path tracer and in the
+adjoint integrators (light tracing, BDPT), and its stored geometric normals (which decide a dielectric's and a
+medium's inside) must point outward. Mitsuba 3 decides the side by the shading frame alike
+(tests/interop/test_mitsuba_one_sided.py compares)."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -123,8 +126,20 @@ def _lamp_scene(wound_inward: bool, integrator: str) -> Scene:
     )  # fmt: skip
 
 
+def _instanced_scene(wound_inward: bool, integrator: str) -> Scene:
+    """_sphere_scene with the sphere an instanced object, placed by a mirroring map (which turns the winding)."""
+    scene = _sphere_scene(wound_inward, integrator)
+    obj = spectrace.instanced_object([scene.shapes[0]])
+    mirrored = spectrace.instance(obj, [{"scale": [-1, 1, 1]}, {"rotate": {"axis": [0, 0, 1], "angle": 30}}])
+    return replace(scene, shapes=scene.shapes[1:], instances=[mirrored])
+
+
 @pytest.mark.parametrize("integrator", ["path", "light", "bdpt"])
-@pytest.mark.parametrize("make", [_sphere_scene, _lamp_scene], ids=["one-sided material", "one-sided lamp"])
+@pytest.mark.parametrize(
+    "make",
+    [_sphere_scene, _lamp_scene, _instanced_scene],
+    ids=["one-sided material", "one-sided lamp", "mirrored instance"],
+)
 def test_a_mesh_wound_against_its_normals_renders_as_wound_along_them(device, integrator, make):
     """REPLICAS independent images of each: 4 x 4-pixel block means and the image mean within 5 standard errors
     (tests/replica_agreement.py). The reference is the outward-wound sphere, whose sides were never in question."""
