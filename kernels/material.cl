@@ -100,8 +100,8 @@ inline int material_disperses(__global const Material *m, const SampledWavelengt
 }
 
 /* 1 when m reflects on one face only and wo sees the other, where it is black (Mitsuba 3's BSDFs outside `twosided`
- * test cos θ > 0 in the shading frame alike). n is turned to the winding's front (shading_normal.cl), so its side
- * is the front. A reflecting BSDF passes light only between directions on wo's side, so testing wo alone blacks
+ * test cos θ > 0 in the shading frame alike). n is turned to the winding's front (shading_normal.cl), which the
+ * host has made the side the vertex normals point to, so its side is the front. A reflecting BSDF passes light only between directions on wo's side, so testing wo alone blacks
  * the back whichever of the pair is wo: radiance (wo toward the viewer) and importance (wo toward the light) alike. */
 inline int material_back_is_black(__global const Material *m, float3 n, float3 wo)
 {

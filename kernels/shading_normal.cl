@@ -3,9 +3,11 @@
  *
  * The geometric normal keeps every decision about sides: which side of the surface a direction is on, where a
  * ray leaves from (offset_ray_origin), which medium it enters (medium_beyond), which side an area light emits
- * to. Only the BSDF's frame (material_frame, material.cl) turns with the shading normal, cosines included: spectrace
- * traces radiance only (camera paths and sensors), so the correction that importance transport needs for shading
- * normals (Veach 1997, thesis §5.3; pbrt-v4 applies it in its TransportMode::Importance) does not arise.
+ * to, whether a one-sided material is seen from its back. The host winds each triangle with vertex normals toward
+ * them (TriangleMesh.corners), so its geometric normal faces the side its normals do, the front as Mitsuba 3's
+ * shading frame decides it. Only the BSDF's frame (material_frame, material.cl) turns with the shading normal,
+ * cosines included; light subpaths (light_tracer.cl, bdpt.cl) add the correction that importance transport needs
+ * for shading normals (Veach 1997, thesis §5.3).
  *
  * Where the two normals disagree, a direction would count as reflected for one and transmitted for the other, and
  * light leaks through the surface. Two rules keep them consistent, the same in next-event estimation and in BSDF
@@ -25,8 +27,8 @@
 
 /* The shading normal at barycentrics b12 of a triangle whose corner normals start at entry 3·normals, seen from wo:
  * the interpolated normal turned to the winding's front (which says inside from outside, as for the geometric
- * one), or the geometric normal n_geometric by rule 1 above, or when the interpolation vanishes (opposite corner
- * normals). */
+ * one; the host winds the triangle so, and this turns only where corner normals cross the triangle's plane), or
+ * the geometric normal n_geometric by rule 1 above, or when the interpolation vanishes (opposite corner normals). */
 inline float3 shading_normal(const Scene *scene, int normals, float2 b12, float3 n_geometric, float3 wo)
 {
     __global const float4 *corner = scene->triangle_normals + 3 * normals;

@@ -61,7 +61,8 @@ typedef struct {
                        rays cross unchanged (docs/media.md) */
     int light;      /* index into the light array, or -1 when the triangle does not emit */
     int interior;   /* index into the medium array: the medium filling the closed shape this triangle bounds, on
-                       the side opposite its geometric normal (the winding's back side); -1 when none */
+                       the side opposite its geometric normal (the winding's back side, which the host makes the
+                       side opposite its vertex normals where it has them); -1 when none */
     int normals;    /* its corners' shading normals are entries 3·normals .. 3·normals + 2 of triangle_normals; -1
                        when it shades with its geometric normal (flat) */
 } TriangleInfo;
@@ -141,8 +142,9 @@ typedef struct {
     float opacity;              /* the probability that a ray meets the surface, where opacity_texture is NO_TEXTURE */
     int opacity_texture;        /* a scalar texture of it, or NO_TEXTURE */
     int one_sided;              /* 1: a reflecting BSDF is black seen from the back of its surface (wo on the far side
-                                   of the winding's normal), as Mitsuba 3's outside `twosided`; 0: it reflects on
-                                   both faces. BSDFs that transmit ignore it */
+                                   of the winding's normal, which the host turns toward the vertex normals), as
+                                   Mitsuba 3's outside `twosided`; 0: it reflects on both faces. BSDFs that transmit
+                                   ignore it */
     int shadowing;              /* 1: with a normal or bump map, the BSDF's value is scaled by the shadowing term of
                                    Conty Estevez et al. 2019 (material.cl, material_shadowing), as Mitsuba 3's
                                    `use_shadowing_function`; 0: it is not */

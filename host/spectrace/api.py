@@ -256,7 +256,7 @@ def shape(
             )
         mesh = apply_transform(object_tessellation(geometry), matrix)
         if flip_normals:
-            mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=mesh.normals)
+            mesh = mesh.flipped()
         mesh = shading_normals(mesh, face_normals, computed=False)
         return Shape(mesh=mesh, material=material, emitter=emitter, name=name or geometry, interior=interior)
     if isinstance(geometry, str):

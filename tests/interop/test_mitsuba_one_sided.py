@@ -1,7 +1,8 @@
 """One-sided reflection: Mitsuba 3's reflecting BSDFs are black from the back of the surface unless wrapped in
 `twosided`, and the importer gives their materials `two_sided = false`. Checked two ways: the back of a one-sided
 material is exactly black in every integrator while its front keeps the two-sided material's bits (a closed form:
-the flag changes nothing on the front), and a scene of back faces renders as Mitsuba 3 renders the same XML."""
+the flag changes nothing on the front), and a scene of back faces renders as Mitsuba 3 renders the same XML. Which
+side is the front: the vertex normals' where a mesh has them (Mitsuba's shading frame), whatever the winding."""
 
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ import pytest
 import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
+from spectrace.geometry import primitives
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.scene.model import Scene
 from spectrace.spectral import xyz_to_linear_srgb
@@ -144,3 +146,69 @@ def _all_two_sided(scene: Scene) -> Scene:
     from dataclasses import replace
 
     return replace(scene, shapes=[replace(s, material=replace(s.material, detail=None)) for s in scene.shapes])
+
+
+def _write_inward_wound_sphere(path) -> None:
+    """An ASCII PLY icosphere with outward vertex normals and every face wound inward, as exporters that do not keep
+    the winding write them."""
+    mesh = primitives.sphere(subdivisions=3)
+    header = (
+        f"ply\nformat ascii 1.0\nelement vertex {len(mesh.vertices)}\n"
+        + "".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz"))
+        + f"element face {len(mesh.faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    rows = [" ".join(f"{x:.9g}" for x in (*p, *n)) for p, n in zip(mesh.vertices, mesh.normals, strict=True)]
+    rows += [f"3 {c} {b} {a}" for a, b, c in mesh.faces]
+    path.write_text(header + "\n".join(rows) + "\n")
+
+
+# A one-sided diffuse sphere and a one-sided spherical lamp, both that PLY file, over a floor, lit by the lamp and
+# a point light: Mitsuba sees the sphere lit and the lamp bright, from their normals' side.
+WOUND_INWARD = f"""<scene version="3.0.0">
+  <integrator type="$integrator"><integer name="max_depth" value="4"/></integrator>
+  <sensor type="perspective"><float name="fov" value="45"/>
+    <transform name="to_world"><lookat origin="0, -4, 1.2" target="0, 0, -0.2" up="0, 0, 1"/></transform>
+    <film type="hdrfilm"><integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
+      <rfilter type="box"/></film></sensor>
+  <shape type="rectangle"><transform name="to_world"><scale value="4"/><translate z="-1"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></shape>
+  <shape type="ply"><string name="filename" value="sphere.ply"/>
+    <transform name="to_world"><scale value="0.8"/><translate x="-0.5" z="-0.2"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.5, 0.3"/></bsdf></shape>
+  <shape type="ply"><string name="filename" value="sphere.ply"/>
+    <transform name="to_world"><scale value="0.3"/><translate x="0.9" y="-0.6" z="0.6"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="4, 3.5, 3"/></emitter></shape>
+  <emitter type="point"><point name="position" x="-1.5" y="-2.5" z="2.5"/><rgb name="intensity" value="8, 8, 8"/>
+  </emitter>
+</scene>"""
+
+
+@pytest.mark.peer
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator", ["path", "ptracer", "bdpt"])
+def test_a_mesh_wound_against_its_normals_renders_as_in_mitsuba(tmp_path, device, mitsuba_scalar_spectral, integrator):
+    """REPLICAS independent images from each renderer agree (tests/replica_agreement.py); Mitsuba's is lit where
+    the sphere is (it decides the side by the shading frame), so a renderer deciding by the winding, which sees both
+    spheres from the back, disagrees. Every spectrace integrator is compared with Mitsuba's path tracer: Mitsuba's
+    light tracer (`ptracer`) drops the connection to the camera wherever the winding's normal and the shading
+    normal disagree (its test against light leaks), so it shows this sphere black, unlike its own path tracer and
+    unlike the same sphere wound outward."""
+    mi = mitsuba_scalar_spectral
+    replicas, replica_spp, block = 8, 8, 8
+    _write_inward_wound_sphere(tmp_path / "sphere.ply")
+
+    def xml(name: str):
+        path = tmp_path / f"{name}.xml"
+        path.write_text(WOUND_INWARD.replace("$integrator", name))
+        return path
+
+    by_mitsuba = np.stack(
+        [np.array(mi.render(mi.load_file(str(xml("path"))), spp=replica_spp, seed=seed)) for seed in range(replicas)]
+    )
+    ours = xyz_to_linear_srgb(
+        spectrace_replicas(Renderer(load_mitsuba_scene(xml(integrator)), device), replicas, replica_spp)
+    )
+    assert_replicas_agree(ours, by_mitsuba, block)
+    # The sphere (left of the middle) is lit in Mitsuba's image, not the black back of a one-sided surface.
+    assert by_mitsuba[:, SIZE // 2 - 4 : SIZE // 2 + 2, SIZE // 4 : SIZE // 2].mean() > 0.05

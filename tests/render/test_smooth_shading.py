@@ -24,11 +24,15 @@ SIZE = 20
 FAMILY_FALSE_ALARM = 1e-3  # chance that some pixel of a correct render fails, split over the pixels (Bonferroni)
 
 
-def _sphere_scene(face_normals: bool | None, seed: int = 7) -> Scene:
+def _sphere_scene(face_normals: bool | None, seed: int = 7, one_sided_wound_inward: bool = False) -> Scene:
     # 1280 triangles: fine enough for interpolated normals to stay within 0.2° of the sphere's, coarse enough for
     # the facets to show through the noise.
     icosphere = primitives.sphere(subdivisions=3)
-    sphere = spectrace.shape(icosphere, spectrace.diffuse(ALBEDO), face_normals=face_normals)
+    material = spectrace.diffuse(ALBEDO)
+    if one_sided_wound_inward:
+        icosphere = TriangleMesh(icosphere.vertices, icosphere.faces[:, ::-1], icosphere.uvs, icosphere.normals)
+        material = spectrace.diffuse(ALBEDO, two_sided=False)
+    sphere = spectrace.shape(icosphere, material, face_normals=face_normals)
     light = spectrace.distant_light(tuple(-TOWARD_LIGHT), IRRADIANCE)
     # max_depth 2: emitters and direct light only, so the analytic value is the whole radiance.
     return Scene(
@@ -100,6 +104,21 @@ def test_smooth_icosphere_matches_the_analytic_lambertian_sphere(device):
             )  # fmt: skip
     # In standard errors, the smooth sphere's deviations are noise (mean square near 1); the facets' are not.
     assert np.mean(scaled_deviations[None] ** 2) < 2.0 < 4.0 < np.mean(scaled_deviations[True] ** 2)
+
+
+def test_a_one_sided_sphere_wound_inward_with_outward_normals_matches_the_analytic_sphere(device):
+    """Its vertex normals, not its winding, say which side is its front (Mitsuba 3's shading-frame rule): one-sided,
+    it shows its lit outside as the two-sided sphere does, pixel by pixel."""
+    expected, least_cos, greatest_n_dot_l = _analytic_sphere()
+    compared = _compared_pixels(least_cos, greatest_n_dot_l)
+    sigmas = stats.norm.isf(FAMILY_FALSE_ALARM / (2 * compared.sum()))
+    samples = _per_sample_y(_sphere_scene(None, one_sided_wound_inward=True), device, 64)
+    mean, standard_error = mean_and_standard_error(samples)
+    assert mean[compared].max() > 0.1  # lit, not the black back of the surface
+    assert_within_standard_errors(
+        mean[compared], expected[compared], standard_error[compared], sigmas=sigmas, slack=1e-4,
+        what="one-sided inward-wound sphere vs analytic",
+    )  # fmt: skip
 
 
 def _white_furnace(face_normals: bool | None) -> Scene:

@@ -160,12 +160,12 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         if shape.analytic is not None:
             analytic.append((shape.analytic, material_index[key], emitter_id, interior))
             continue
-        v0, v1, v2 = shape.mesh.triangles()
+        v0, v1, v2, corner_uvs, corner_normals = shape.mesh.corners()
         v0s.append(v0)
         v1s.append(v1)
         v2s.append(v2)
-        uvs.append(shape.mesh.triangle_uvs())
-        normal_parts.append(shape.mesh.triangle_normals())
+        uvs.append(corner_uvs)
+        normal_parts.append(corner_normals)
         material_parts.append(np.full(len(v0), material_index[key], np.int32))
         interior_parts.append(np.full(len(v0), interior, np.int32))
         emitter_parts.append(np.full(len(v0), emitter_id, np.int32))
@@ -419,12 +419,12 @@ class _ObjectTriangles:
                     shape_info.append(row)
                     analytic_boxes.append(shape.analytic.bounds())
                     continue
-                a, b, c = shape.mesh.triangles()
+                a, b, c, corner_uvs, corner_normals = shape.mesh.corners()
                 v0s.append(a)
                 v1s.append(b)
                 v2s.append(c)
-                uvs.append(shape.mesh.triangle_uvs())
-                normals.append(shape.mesh.triangle_normals())
+                uvs.append(corner_uvs)
+                normals.append(corner_normals)
                 rows = np.zeros(len(a), TRIANGLE_INFO_DTYPE)
                 rows["material"], rows["light"], rows["interior"] = material_index[key], -1, interior
                 info.append(rows)

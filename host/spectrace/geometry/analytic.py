@@ -112,8 +112,7 @@ class AnalyticSurface:
                 mesh.vertices, mesh.faces, uvs=pbrt_uv_from_mitsuba(self.kind, mesh.uvs), normals=mesh.normals
             )
         if self.flip_normals:
-            assert mesh.normals is not None
-            mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=-mesh.normals)
+            mesh = mesh.flipped()
         return mesh
 
 

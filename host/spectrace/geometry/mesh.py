@@ -16,7 +16,8 @@ from spectrace.io.input_files import regular_file
 
 @dataclass
 class TriangleMesh:
-    """Triangles in scene units; face winding (counter-clockwise seen from the front) defines the front side.
+    """Triangles in scene units. The front side is the one the vertex normals point to where the mesh has them,
+    else the one its winding shows counter-clockwise (corners() makes the two agree for the renderer).
 
     The geometric normal of face i is (v1 - v0) x (v2 - v0), normalised, with vk = vertices[faces[i, k]].
     """
@@ -75,6 +76,28 @@ class TriangleMesh:
             corners[missing] = np.where(length[missing] > 0, corners[missing], face[:, None, :])
         return corners
 
+    def corners(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+        """Each triangle's corners as the renderer takes them: positions v0, v1, v2 (each (M, 3)), texture
+        coordinates (M, 3, 2) and unit shading normals (M, 3, 3; None without vertex normals), with corners 1 and 2
+        swapped on the triangles wound against their normals (winding_against_normals), so that every decision
+        the renderer takes by the winding (one-sided materials and lights, a dielectric's or a medium's inside)
+        follows the normals, as the shading does."""
+        v0, v1, v2 = self.triangles()
+        uvs, normals = self.triangle_uvs(), self.triangle_normals()
+        if normals is not None:
+            back = winding_against_normals(v0, v1, v2, normals)
+            if back.any():
+                v1, v2 = np.where(back[:, None], v2, v1), np.where(back[:, None], v1, v2)
+                uvs[back] = uvs[back][:, [0, 2, 1]]
+                normals[back] = normals[back][:, [0, 2, 1]]
+        return v0, v1, v2, uvs, normals
+
+    def flipped(self) -> "TriangleMesh":
+        """The same surface with its front on the other side: the winding reversed and the vertex normals turned
+        (a shape's `flip_normals`, Mitsuba 3's alike: both its normals change sign)."""
+        normals = None if self.normals is None else -self.normals
+        return TriangleMesh(self.vertices, self.faces[:, ::-1].copy(), uvs=self.uvs, normals=normals)
+
     def with_normals(self, normals: np.ndarray | None) -> "TriangleMesh":
         """The same mesh with other vertex normals (None: flat shading)."""
         return TriangleMesh(vertices=self.vertices, faces=self.faces, uvs=self.uvs, normals=normals)
@@ -105,6 +128,17 @@ class TriangleMesh:
     def area(self) -> float:
         """Total surface area, in scene units squared."""
         return float(self.triangle_areas().sum())
+
+
+def winding_against_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, corner_normals: np.ndarray) -> np.ndarray:
+    """(M,) True for the triangles (corners v0, v1, v2, each (M, 3)) whose winding's normal (v1 − v0) × (v2 − v0)
+    points away from the side their corners' normals (M, 3, 3) point to, as their sum says (the interpolated normal
+    at the centroid). Where a mesh has vertex normals, they say which side is the front: Mitsuba 3's one-sided
+    BSDFs and area lights test cos θ in the shading frame, and pbrt-v4 turns the geometric normal toward the
+    shading normal. Mitsuba decides at each hit, this once per triangle: the two differ only on a triangle whose
+    interpolated normal crosses its plane, which no smooth surface's tessellation has."""
+    face = np.cross(v1 - v0, v2 - v0)
+    return np.einsum("ij,ij->i", face, corner_normals.sum(axis=1)) < 0.0
 
 
 def shading_normals(mesh: TriangleMesh, face_normals: bool | None, computed: bool = True) -> TriangleMesh:

@@ -47,6 +47,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import similarity_problem
+from spectrace.geometry.mesh import winding_against_normals
 from spectrace.interop.pbrt_parser import (
     Entity,
     Location,
@@ -1050,10 +1051,11 @@ class PbrtImporter:
             raise error(entity.location, f"shape '{shown(kind)}': spectrace imports {', '.join(SHAPES)}")
         if mesh.normals is not None:
             # pbrt turns a triangle's geometric normal toward its shading normals: the normals, not the winding,
-            # say which side is the front.
+            # say which side is the front (spectrace's renderer reads it so too); the file written keeps a winding
+            # that agrees, for any other reader.
             a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
-            facing = np.einsum("ij,ij->i", np.cross(b - a, c - a), mesh.normals[mesh.faces].sum(axis=1))
-            mesh.faces = np.where((facing < 0)[:, None], mesh.faces[:, ::-1], mesh.faces)
+            back = winding_against_normals(a, b, c, mesh.normals[mesh.faces])
+            mesh.faces = np.where(back[:, None], mesh.faces[:, ::-1], mesh.faces)
         return mesh
 
     def subdivided_mesh(self, entity: Entity) -> MeshData:

@@ -425,7 +425,7 @@ class _Resolver:
                 mesh = surface_of.tessellation()
             else:
                 if s.flip_normals:
-                    mesh = TriangleMesh(mesh.vertices, mesh.faces[:, ::-1].copy(), uvs=mesh.uvs, normals=mesh.normals)
+                    mesh = mesh.flipped()
                 mesh = shading_normals(mesh, s.face_normals, computed=s.type == "mesh")
             if s.material is not None and s.material not in materials:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
