@@ -94,7 +94,7 @@ def _parse_mesh(stream: BoundedInflater, version: int, fail) -> MeshArrays:
     columns_per_vertex = 3 + 3 * bool(flags & HAS_NORMALS) + 2 * bool(flags & HAS_TEXCOORDS)
     columns_per_vertex += 3 * bool(flags & HAS_COLORS)
     body = vertex_count * columns_per_vertex * real.itemsize + triangle_count * 12
-    stream.declare(stream.produced + body, "its header declares (vertex and triangle counts, flags)")
+    stream.declare(stream.produced + body, "its header's counts and flags declare")
 
     def array(columns: int) -> np.ndarray:
         size = vertex_count * columns * real.itemsize
