@@ -13,7 +13,9 @@ matrix (CTM), `Transform`/`ConcatTransform` give the matrix column by column (tr
 normalises its axis, `LookAt` sets the camera frame with image right = up × forward (pbrt's left-handed camera), and
 the CTM at `Camera` is camera-from-world. `WorldBegin` resets the CTM; `AttributeBegin`/`AttributeEnd` save and restore
 the whole graphics state. `Include` and `Import` read another file in place (relative to the including file's
-folder); `Import`'s only difference in pbrt-v4, parallel parsing, changes nothing here.
+folder; a `.gz` file inflated, as pbrt-v4 reads it); `Import`'s only difference in pbrt-v4, parallel parsing,
+changes nothing here. A file including itself, and files whose includes multiply (each including the next several
+times), are refused (spectrace.io.input_files.Inclusions).
 
 Bad input (an unterminated string, a number that is none, a directive missing its arguments, an unmatched
 `AttributeEnd`) raises one SpectraceError naming file:line.
