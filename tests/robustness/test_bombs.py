@@ -99,6 +99,20 @@ def test_the_bounded_reader_gives_the_stream_and_refuses_one_byte_more(kind, com
             compressed.inflate(packed[:cut], kind, len(data), fail)
 
 
+def test_gzip_members_and_zero_padding_read_as_pythons_gzip_reads_them():
+    def fail(message):
+        return SpectraceError(message, where="x")
+
+    for data in (
+        gzip.compress(b"abc") + gzip.compress(b"") + gzip.compress(b"def"),
+        gzip.compress(b"abc") + bytes(200_000) + gzip.compress(b"def") + bytes(3),
+        gzip.compress(b"abc") + bytes(70_000),
+    ):
+        assert compressed.inflate(data, "gzip", 100, fail) == gzip.decompress(data)
+    with pytest.raises(SpectraceError, match="its compressed data is damaged"):
+        compressed.inflate(gzip.compress(b"abc") + b"junk", "gzip", 100, fail)
+
+
 def test_the_overall_limit_comes_from_the_environment(monkeypatch):
     monkeypatch.setenv(compressed.MAX_INFLATED_ENVIRONMENT, "1.5")
     assert compressed.max_inflated_bytes() == 3 << 19

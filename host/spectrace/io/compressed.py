@@ -112,11 +112,17 @@ class BoundedInflater:
         while not self._ended:
             inflater = self._inflater
             if inflater.eof:
-                rest = inflater.unused_data or self._pending or self._compressed()
-                if self._kind != "gzip" or not rest:
+                if self._kind != "gzip":
                     self._ended = True
                     break
-                self._inflater, self._pending = _decompressor(self._kind), rest  # the next gzip member
+                # Another member may follow; zero bytes padding a gzip file are skipped, as gunzip does.
+                rest = (inflater.unused_data or self._pending).lstrip(b"\0")
+                while not rest and (chunk := self._compressed()):
+                    rest = chunk.lstrip(b"\0")
+                if not rest:
+                    self._ended = True
+                    break
+                self._inflater, self._pending = _decompressor(self._kind), rest
                 continue
             # bzip2 and xz keep back input they have not inflated yet, and say when they need more.
             data = self._input() if getattr(inflater, "needs_input", True) else b""
