@@ -288,6 +288,22 @@ def test_include_fan_outs_are_one_line_on_the_command_line(tmp_path):
         assert not (tmp_path / "out.toml").exists()
 
 
+def test_running_out_of_memory_in_an_import_does_not_blame_the_film(tmp_path, monkeypatch, capsys):
+    from cli_runner import run_in_process
+
+    def exhausted(*_):
+        raise MemoryError
+
+    (tmp_path / "mesh.ply.gz").write_bytes(gzip.compress(PLY_HEADER + TRIANGLE))
+    (tmp_path / "scene.pbrt").write_text(PBRT_HEADER + 'Shape "plymesh" "string filename" "mesh.ply.gz"\n')
+    monkeypatch.setattr(compressed.BoundedInflater, "read", exhausted)
+    argv = ["import-pbrt", str(tmp_path / "scene.pbrt"), "-o", str(tmp_path / "out.toml")]
+    status, stderr = run_in_process(monkeypatch, capsys, argv)
+    assert status == 2 and stderr == (
+        "error: out of host memory (the scene's meshes, images and included files are more than this machine holds)\n"
+    )
+
+
 # ---------------------------------------------------------------- includes, in process
 
 
