@@ -222,6 +222,56 @@ def test_a_16_bit_png_inflating_past_its_header_is_refused_in_little_memory(tmp_
     assert peak < 8 * len(png), f"{peak / 1e6:.1f} MB allocated"
 
 
+def _checkpoint(path) -> None:
+    from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, write_checkpoint
+    from spectrace.film import RenderState
+
+    film = np.random.default_rng(2).random((16, 4), dtype=np.float32)
+    state = RenderState(3, 1.5, {"film": film, "ray_counts": np.full(16, 7, np.uint32)})
+    write_checkpoint(path, Checkpoint(RenderIdentity(4, 4, 1, "s", "k"), state, "d"))
+
+
+def _repacked(source, target, bombs: dict[str, tuple[tuple[int, ...], str]]) -> None:
+    """The checkpoint `source` with every member deflated, and the members named in `bombs` replaced by (or
+    added as) arrays of zeros of the given shape and type, streamed: never held whole."""
+    import zipfile
+
+    from numpy.lib import format as npy
+
+    with zipfile.ZipFile(source) as archive, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as copy:
+        for item in archive.namelist():
+            if item.removesuffix(".npy") not in bombs:
+                copy.writestr(item, archive.read(item))
+        for name, (shape, dtype) in bombs.items():
+            with copy.open(f"{name}.npy", "w", force_zip64=True) as stream:
+                npy.write_array_header_2_0(stream, {"descr": dtype, "fortran_order": False, "shape": shape})
+                for _ in range(int(np.prod(shape)) * np.dtype(dtype).itemsize // len(ZEROS)):
+                    stream.write(ZEROS)
+
+
+def test_a_checkpoint_member_inflating_past_its_role_is_refused_unread(tmp_path):
+    from spectrace.engine.checkpoint import read_checkpoint
+
+    _checkpoint(tmp_path / "state.npz")
+    _repacked(tmp_path / "state.npz", tmp_path / "deflated.npz", {})
+    original, deflated = read_checkpoint(tmp_path / "state.npz"), read_checkpoint(tmp_path / "deflated.npz")
+    for name, array in original.state.buffers.items():
+        np.testing.assert_array_equal(deflated.state.buffers[name], array)
+    # 64 MiB bombs, a thousand times their bounds (smaller than the others, to spare CI the deflating).
+    cases = {
+        "state_film": (((1 << 22, 4), "<f4"), "would inflate to 64.0 MiB, more than 64.2 KiB (what a 4x4 film's"),
+        "seed": (((1 << 23,), "<i8"), "member 'seed.npy' would inflate to 64.0 MiB, more than 1 MiB"),
+        "state_bogus": (((1 << 24,), "<f4"), "more than 1.0 MiB (what a member other than a known film buffer"),
+    }
+    for member, (bomb, expected) in cases.items():
+        path = tmp_path / f"{member}.npz"
+        _repacked(tmp_path / "state.npz", path, {member: bomb})
+        assert os.path.getsize(path) < 0.2e6
+        message, peak = _peak_of_read(lambda path=path: read_checkpoint(path))
+        assert message.startswith(f"{path}: damaged checkpoint: ") and expected in message, message
+        assert peak < 8 << 20, f"{peak / 1e6:.1f} MB allocated"
+
+
 # ---------------------------------------------------------------- the command line: exit status and peak memory
 
 # The command line run as a user runs it, reporting its own peak resident memory (kB on Linux) on the last line.
