@@ -558,6 +558,64 @@ def test_a_floor_lit_by_a_turned_envmap_renders_like_mitsuba(tmp_path, device, m
     assert_replicas_agree(xyz_to_linear_srgb(ours), theirs, 4)
 
 
+MISSPELT = """
+    <emiter type="point"><rgb name="intensity" value="1"/></emiter>
+    <shape type="cube"><shpe type="sphere"/>
+        <transform name="to_world"><translat x="1"/><scale value="2"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"><colour/></rgb></bsdf></shape>
+    <bsdf type="diffuse" id="unused"><flaot name="x" value="1"/></bsdf>
+    <include filename="part.xml"/>"""
+# The same scene as Mitsuba would read it if it skipped the unknown tags (a <default> keeps the shape's index,
+# which its imported name is made from).
+SPELT = """
+    <default name="placeholder" value="0"/>
+    <shape type="cube">
+        <transform name="to_world"><scale value="2"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+    <bsdf type="diffuse" id="unused"/>
+    <include filename="part.xml"/>"""
+
+
+def test_unknown_tags_are_reported_at_every_level_and_strict_refuses_them(tmp_path):
+    (tmp_path / "part.xml").write_text('<scene version="3.0.0">\n<emitter type="constant"><spectrm/></emitter></scene>')
+    path = _write(tmp_path, MISSPELT)
+    data, notes = mitsuba_scene_data(path)
+    part = tmp_path / "part.xml"
+    assert [note for note in notes if note.startswith("warning: ")] == [
+        f"warning: {path}:5: emiter: unknown tag <emiter> is not imported (Mitsuba 3 has no such element)",
+        f"warning: {path}:6: shape/shpe: unknown tag <shpe> is not imported (Mitsuba 3 has no such element)",
+        f"warning: {path}:7: shape/transform/translat: unknown tag <translat> is not imported (Mitsuba 3 has no "
+        "such element)",
+        f"warning: {path}:8: shape/bsdf/rgb/colour: unknown tag <colour> is not imported (Mitsuba 3 has no such "
+        "element)",
+        f"warning: {path}:9: bsdf/flaot: unknown tag <flaot> is not imported (Mitsuba 3 has no such element)",
+        f"warning: {part}:2: emitter/spectrm: unknown tag <spectrm> is not imported (Mitsuba 3 has no such element)",
+    ]
+    spelt, _ = mitsuba_scene_data(_write(tmp_path, SPELT, name="spelt.xml"))
+    assert data == spelt
+    with pytest.raises(SpectraceError) as caught:
+        mitsuba_scene_data(path, strict=True)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: 6 unknown tags not imported (--strict): {path}:5: emiter: unknown tag")
+    assert "\n" not in message
+    both = _write(tmp_path, '<shape type="cube"><float name="glow" value="2"/><shpe/></shape>', name="both.xml")
+    with pytest.raises(SpectraceError, match=r"1 property and 1 unknown tag not imported \(--strict\)"):
+        mitsuba_scene_data(both, strict=True)
+
+
+@pytest.mark.subprocess
+def test_strict_refuses_a_misspelt_tag_on_the_command_line(tmp_path):
+    from cli_runner import run_spectrace
+
+    path = _write(tmp_path, '<emiter type="point"><rgb name="intensity" value="1"/></emiter><shape type="cube"/>')
+    result = run_spectrace("import-mitsuba", str(path), "-o", str(tmp_path / "out.toml"), "--strict", timeout=120)
+    assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+    assert f"{path}: 1 unknown tag not imported (--strict): {path}:4: emiter: unknown tag <emiter>" in result.stderr
+    assert "Traceback" not in result.stderr and not (tmp_path / "out.toml").exists()
+    result = run_spectrace("import-mitsuba", str(path), "-o", str(tmp_path / "out.toml"), timeout=120)
+    assert result.returncode == 0 and f"warning: {path}:4: emiter: unknown tag <emiter>" in result.stderr
+
+
 def test_the_command_takes_defines_prints_warnings_and_refuses_with_strict(tmp_path, monkeypatch, capsys):
     from cli_runner import run_in_process
 

@@ -113,6 +113,15 @@ def _usage_error_line(exc: Exception) -> str:
     return f"error: {message}"
 
 
+def _memory_advice(arguments: list[str]) -> str:
+    """What would need less host memory: the film, for the commands that render; the input, for the importers
+    (a film size would not help an import that ran out reading its meshes)."""
+    command = next((argument for argument in arguments if not argument.startswith("-")), "")
+    if command.startswith("import-"):
+        return "the scene's meshes, images and included files are more than this machine holds"
+    return "a smaller film, --width/--height, needs less"
+
+
 def main() -> None:
     try:
         usage_error = _usage_error_type()
@@ -135,7 +144,7 @@ def main() -> None:
         console.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)
     except MemoryError:
-        console.print("error: out of host memory (a smaller film, --width/--height, needs less)", highlight=False)
+        console.print(f"error: out of host memory ({_memory_advice(sys.argv[1:])})", highlight=False, markup=False)
         sys.exit(2)
     except Exception as exc:
         opencl = sys.modules.get("pyopencl")

@@ -186,7 +186,11 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
         raise SpectraceError("not a spectrace checkpoint (not an .npz archive, or truncated)", where=str(path))
     try:
         with np.load(path, allow_pickle=False) as data:
+            if problem := _inflation_problem(data):
+                raise SpectraceError(f"damaged checkpoint: {problem}", where=str(path))
             fields = {name: data[name] for name in data.files}
+    except SpectraceError:
+        raise
     except Exception as error:  # numpy and zipfile raise many types for damaged files
         detail = " ".join(str(error).split()) or type(error).__name__
         raise SpectraceError(f"not a readable spectrace checkpoint ({detail})", where=str(path)) from None
@@ -222,6 +226,51 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
     if problem := (_state_problem(identity, state) or _tiles_problem(identity, tiles)):
         raise SpectraceError(f"damaged checkpoint: {problem}", where=str(path))
     return Checkpoint(identity, state, device, tiles)
+
+
+# The most a compressed member that is not a film buffer may inflate to: the others are numbers, names and the
+# tile map (one flag per tile, at most one a film row).
+_SMALL_MEMBER_BYTES = 1 << 20
+# An .npy member's header before its data (numpy.lib.format pads it to a multiple of 64 bytes; 64 KiB is its
+# version 2 limit).
+_NPY_HEADER_BYTES = 1 << 16
+
+
+def _inflation_problem(data: Any) -> str | None:
+    """Why a member of the checkpoint's archive would inflate to more than its role allows, or None. spectrace
+    writes the members stored (not compressed), which cannot inflate; a compressed one (an archive repacked, or
+    made to harm) is bounded before numpy reads it: a film buffer by what its layout takes for the film size the
+    checkpoint states, a buffer of bands (any number of them) by the overall limit on compressed inputs, every
+    other member by 1 MiB. zipfile stops each member at the size its entry declares, so the declared size is the
+    bound to check."""
+    from spectrace.film import STATE_LAYOUT
+    from spectrace.io.compressed import max_inflated_bytes
+
+    packed = [info for info in data.zip.infolist() if info.compress_type != zipfile.ZIP_STORED]
+    state = [info for info in packed if info.filename.startswith(_STATE_PREFIX)]
+    for info in packed:
+        if info not in state and info.file_size > _SMALL_MEMBER_BYTES:
+            return f"member '{info.filename}' would inflate to {limits.format_bytes(info.file_size)}, more than 1 MiB"
+    if not state:
+        return None
+    width, height = int(data["width"]), int(data["height"])
+    if problem := limits.film_size_problem(width, height):
+        return problem
+    for info in state:
+        dtype, per_pixel = STATE_LAYOUT.get(info.filename[len(_STATE_PREFIX) :].removesuffix(".npy"), (None, 0))
+        if dtype is None:  # an unknown buffer, refused by name once read: a small member until then
+            most, role = _SMALL_MEMBER_BYTES, "what a member other than a known film buffer may hold"
+        elif per_pixel is None:
+            most, role = max_inflated_bytes(), "the limit on a compressed input"
+        else:
+            most = width * height * per_pixel * np.dtype(dtype).itemsize + _NPY_HEADER_BYTES
+            role = f"what a {width}x{height} film's buffer takes"
+        if info.file_size > most:
+            return (
+                f"member '{info.filename}' would inflate to {limits.format_bytes(info.file_size)}, more than "
+                f"{limits.format_bytes(most)} ({role})"
+            )
+    return None
 
 
 def _tiles_problem(identity: RenderIdentity, tiles: TileMap | None) -> str | None:

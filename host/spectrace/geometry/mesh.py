@@ -3,6 +3,7 @@
 import io
 import os
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.io.compressed import COMPRESSED_SUFFIXES, file_inflater
 from spectrace.io.input_files import regular_file
 
 
@@ -209,6 +211,8 @@ def _scan_obj(data: bytes, path: Path, where: str) -> bool:
 
 
 _PLAIN_OBJ_MAX_BYTES = 4_000_000
+# Archives trimesh would open and inflate whole, member by member: refused (spectrace.io.compressed).
+_ARCHIVE_SUFFIXES = (".zip", ".tar", ".tgz", ".tar.gz", ".tar.bz2", ".tar.xz")
 
 
 def _progress_min_bytes() -> float:
@@ -227,6 +231,14 @@ def load_mesh(path: Path, where: str, shape_index: int = 0) -> TriangleMesh:
     coordinates or normals becomes one vertex per coordinate or normal. The file's vertex normals come along
     (none are made up when it has none). Every failure raises SpectraceError naming `where`.
     """
+    if Path(path).name.lower().endswith(_ARCHIVE_SUFFIXES):
+        raise SpectraceError(
+            f"mesh file '{path}' is an archive, which is not read (its members could inflate to any size): "
+            "extract the mesh; single compressed files (.gz, .bz2, .xz) are read",
+            where=where,
+        )
+    if Path(path).suffix.lower() in COMPRESSED_SUFFIXES:
+        return _load_compressed(Path(path), where, shape_index)
     if Path(path).suffix.lower() == ".serialized":
         from spectrace.geometry.serialized import read_serialized
 
@@ -255,6 +267,32 @@ def load_mesh(path: Path, where: str, shape_index: int = 0) -> TriangleMesh:
             flush=True,
         )
     return mesh
+
+
+def _load_compressed(path: Path, where: str, shape_index: int) -> TriangleMesh:
+    """A gzip, bzip2 or xz compressed mesh file (`bunny.ply.gz`), inflated to a temporary file within the limit its
+    header declares where it is a binary PLY, else the overall limit (spectrace.io.compressed), then read as the
+    file it holds. Messages name the compressed file."""
+    from spectrace.geometry.ply import HEADER_MAX_BYTES, declared_size
+
+    path = regular_file(path, where, what="mesh file")
+    with tempfile.TemporaryDirectory(prefix="spectrace-mesh-") as folder:
+        plain = Path(folder) / path.stem
+        try:
+            with open(path, "rb") as source, open(plain, "wb") as target:
+                inflater = file_inflater(path, source, where, "mesh file")
+                if Path(path.stem).suffix.lower() == ".ply":
+                    head = inflater.read(HEADER_MAX_BYTES)
+                    if (size := declared_size(head)) is not None:
+                        inflater.declare(size, "its PLY header declares")
+                    target.write(head)
+                inflater.copy_to(target)
+        except OSError as error:
+            raise SpectraceError(f"cannot read mesh file '{path}' ({error.strerror or error})", where=where) from None
+        try:
+            return load_mesh(plain, where, shape_index)
+        except SpectraceError as error:
+            raise SpectraceError(error.message.replace(str(plain), str(path)), where=error.where) from None
 
 
 def _direct_ply(path: Path, where: str) -> TriangleMesh | None:

@@ -44,6 +44,42 @@ class PlyTriangles:
     uvs: np.ndarray | None  # (N, 2) float64 as stored (v up the image, as mesh files store it)
 
 
+# A PLY header is searched for this far into a file (real headers are a few hundred bytes).
+HEADER_MAX_BYTES = 1 << 16
+
+
+def declared_size(head: bytes) -> int | None:
+    """The most bytes a binary PLY file whose first bytes are `head` may hold, from its header: the header, then
+    each element's count times its record, a list property counted at the most entries its count type can state
+    (255 for uchar). None for an ASCII file (numbers as text have no fixed size) or a header not found or not
+    understood: the caller's overall limit applies then."""
+    end = head.find(b"end_header", 0, HEADER_MAX_BYTES)
+    newline = head.find(b"\n", end)
+    if not head.startswith(b"ply") or end < 0 or newline < 0:
+        return None
+    try:
+        lines = [line.split() for line in head[:end].decode("ascii").splitlines()[1:]]
+    except UnicodeError:
+        return None
+    if not any(fields[:2] in (["format", "binary_little_endian"], ["format", "binary_big_endian"]) for fields in lines):
+        return None
+    total, count = newline + 1, 0
+    for fields in lines:
+        if len(fields) == 3 and fields[0] == "element" and fields[2].isdigit():
+            count = int(fields[2])
+        elif len(fields) == 3 and fields[0] == "property" and fields[1] in _TYPES:
+            total += count * np.dtype(_TYPES[fields[1]]).itemsize
+        elif len(fields) == 5 and fields[:2] == ["property", "list"] and {fields[2], fields[3]} <= set(_TYPES):
+            counter, item = np.dtype(_TYPES[fields[2]]), np.dtype(_TYPES[fields[3]])
+            if counter.kind not in _INTEGER_KINDS:
+                return None
+            most = np.iinfo(counter).max
+            total += count * (counter.itemsize + int(most) * item.itemsize)
+        elif fields and fields[0] not in ("format", "comment", "obj_info"):
+            return None
+    return total
+
+
 def read_binary_ply(data: bytes) -> PlyTriangles | None:
     """The triangles of a binary PLY file's bytes, or None when the file is not of the simple kind this reads."""
     end = data.find(b"end_header", 0, 1 << 16)

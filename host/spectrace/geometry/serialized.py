@@ -15,12 +15,12 @@ every spectrace mesh's (spectrace.geometry.mesh).
 """
 
 import struct
-import zlib
 from pathlib import Path
 
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.io.compressed import BoundedInflater, max_inflated_bytes
 from spectrace.io.input_files import regular_file
 
 # (vertices (N, 3), faces (M, 3), texture coordinates (N, 2) v down or None, vertex normals (N, 3) or None)
@@ -30,6 +30,8 @@ FORMAT_ID = 0x041C
 VERSIONS = (3, 4)
 HAS_NORMALS, HAS_TEXCOORDS, HAS_COLORS = 0x0001, 0x0002, 0x0008
 DOUBLE_PRECISION = 0x2000
+# A mesh name longer than this is taken as a missing terminator (Mitsuba writes shape names: tens of bytes).
+_MAX_NAME_BYTES = 1 << 16
 
 
 def read_serialized(path: Path, shape_index: int, where: str) -> MeshArrays:
@@ -60,37 +62,39 @@ def read_serialized(path: Path, shape_index: int, where: str) -> MeshArrays:
     (offset,) = struct.unpack_from(offset_type, data, len(data) - 4 - offset_size * (count - shape_index))
     if offset + 4 > len(data) or struct.unpack_from("<HH", data, offset) != (FORMAT_ID, version):
         raise fail(f"mesh {shape_index} does not start where the file's table says (byte {offset})")
-    try:
-        # One mesh's stream ends where zlib says; the decompressor ignores what follows it.
-        stream = zlib.decompressobj().decompress(data[offset + 4 :])
-    except zlib.error as error:
-        raise fail(f"mesh {shape_index}'s compressed data is damaged ({error})") from None
+    # One mesh's zlib stream ends where zlib says; what follows it (the next mesh) is not read. It is inflated in
+    # steps, each bounded by what the mesh's own header has declared so far (spectrace.io.compressed).
+    stream = BoundedInflater(data[offset + 4 :], "zlib", max_inflated_bytes(), fail)
     return _parse_mesh(stream, version, fail)
 
 
-def _parse_mesh(stream: bytes, version: int, fail) -> MeshArrays:
-    position = 0
-
+def _parse_mesh(stream: BoundedInflater, version: int, fail) -> MeshArrays:
     def take(size: int) -> bytes:
-        nonlocal position
-        if position + size > len(stream):
+        chunk = stream.read(size)
+        if len(chunk) < size:
             raise fail("its data ends early")
-        chunk = stream[position : position + size]
-        position += size
         return chunk
 
     (flags,) = struct.unpack("<I", take(4))
     if version == 4:
-        end = stream.find(b"\0", position)
-        if end < 0:
-            raise fail("its mesh name is not terminated")
-        position = end + 1
+        text = b""
+        while not text.endswith(b"\0"):  # NUL-terminated
+            byte = stream.read(1)
+            if not byte:
+                raise fail("its mesh name is not terminated")
+            text += byte
+            if len(text) > _MAX_NAME_BYTES:
+                raise fail(f"its mesh name is not terminated within {_MAX_NAME_BYTES} bytes")
     vertex_count, triangle_count = struct.unpack("<QQ", take(16))
     if vertex_count == 0 or triangle_count == 0:
         raise fail("contains no triangles")
     if vertex_count >= 2**32:
         raise fail(f"{vertex_count} vertices: more than 32-bit indices address")
     real = np.dtype("<f8") if flags & DOUBLE_PRECISION else np.dtype("<f4")
+    columns_per_vertex = 3 + 3 * bool(flags & HAS_NORMALS) + 2 * bool(flags & HAS_TEXCOORDS)
+    columns_per_vertex += 3 * bool(flags & HAS_COLORS)
+    body = vertex_count * columns_per_vertex * real.itemsize + triangle_count * 12
+    stream.declare(stream.produced + body, "its header's counts and flags declare")
 
     def array(columns: int) -> np.ndarray:
         size = vertex_count * columns * real.itemsize
@@ -102,6 +106,7 @@ def _parse_mesh(stream: bytes, version: int, fail) -> MeshArrays:
     if flags & HAS_COLORS:
         array(3)
     faces = np.frombuffer(take(triangle_count * 12), "<u4").reshape(triangle_count, 3).astype(np.int64)
+    stream.ended()  # refuses a stream holding more than its header declared: damage, or a decompression bomb
     if faces.max() >= vertex_count:
         raise fail("has faces that index missing vertices")
     for name, rows in (("vertices", vertices), ("vertex normals", normals), ("texture coordinates", uvs)):

@@ -28,7 +28,7 @@ from pathlib import Path
 from xml.parsers import expat
 
 from spectrace.errors import SpectraceError, one_line
-from spectrace.io.input_files import regular_file
+from spectrace.io.input_files import Inclusions, regular_file
 from spectrace.scene import limits
 
 MAX_NESTING = limits.MAX_NESTING
@@ -173,7 +173,7 @@ def parse_version(root: Element) -> tuple[int, int, int] | None:
 
 class _Reader:
     """One scene's reading: the parameters (from -D, then <default>s as they come), the <path> folders, the files
-    being included (to refuse a loop)."""
+    being included (to refuse a loop, and to bound what all of them may hold)."""
 
     def __init__(self, scene_path: Path, parameters: dict[str, str]):
         self.scene_path = scene_path
@@ -181,7 +181,7 @@ class _Reader:
         self.from_command_line = set(parameters)
         self.used: set[str] = set()
         self.folders: list[Path] = []
-        self.including: list[Path] = []
+        self.inclusions = Inclusions(MAX_INCLUDE_DEPTH, "<include>")
 
     # -------------------------------------------------- $parameters
 
@@ -219,18 +219,17 @@ class _Reader:
 
     def read(self, path: Path, where: str | None, depth: int) -> tuple[Element, tuple[int, int, int] | None]:
         """A file's root element, substituted, its includes spliced in, upgraded where its version is old."""
-        resolved = path.resolve()
-        if resolved in self.including:
-            raise SpectraceError(f"includes itself (through {' -> '.join(p.name for p in self.including)})", where)
-        root = parse_file(path, where)
-        self.substitute(root)
-        version = parse_version(root)
-        old = version is not None and version < UPGRADED_BELOW
-        self.including.append(resolved)
+        # Refuses a loop, and scenes whose files (counted each time they are included) would take too long or
+        # too much memory to read.
+        self.inclusions.enter(path, where or str(path))
         try:
+            root = parse_file(path, where)
+            self.substitute(root)
+            version = parse_version(root)
+            old = version is not None and version < UPGRADED_BELOW
             self.walk(root, old, depth, 0)
         finally:
-            self.including.pop()
+            self.inclusions.leave()
         return root, version
 
     def walk(self, element: Element, old: bool, depth: int, level: int) -> None:

@@ -176,6 +176,13 @@ _OBJECT_TAGS = (
 # hdrfilm properties about the file Mitsuba writes, not the image: nothing to import.
 _FILM_STORAGE = ("pixel_format", "component_format", "file_format", "banner")
 _PROPERTY_TAGS = ("float", "integer", "string", "boolean", "rgb", "point", "vector", "transform")
+# Every tag Mitsuba 3's parser knows (src/core/parser.cpp): the objects, the properties, a transform's steps, and
+# the parser's own (<include> and <path> are gone once the file is read: spectrace.interop.mitsuba_tree). Any other
+# tag is a misspelling or another program's; Mitsuba refuses it, the import reports it (--strict: an error).
+_TRANSFORM_STEPS = ("translate", "rotate", "scale", "matrix", "lookat")
+_KNOWN_TAGS = frozenset(
+    (*_OBJECT_TAGS, *_PROPERTY_TAGS, *_TRANSFORM_STEPS, "ref", "alias", "default", "include", "path")
+)
 _FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
 MITSUBA_DEFAULT_FILM = (768, 576)  # hdrfilm's default width and height
 MITSUBA_DEFAULT_FOCAL_LENGTH_MM = 50.0  # the perspective sensor's, when neither fov nor focal_length is given
@@ -250,7 +257,8 @@ class MitsubaImporter:
         self.ids: dict[str, Element] = {}
         self.unsupported: dict[str, list] = {}  # "plugin detail" -> [count, first element]
         self.notes: list[str] = []
-        self.warnings: list[str] = []  # properties not imported: `--strict` makes them an error
+        self.warnings: list[str] = []  # properties and unknown tags not imported: `--strict` makes them an error
+        self.unknown_tags = 0  # of the warnings
         self.film_aovs: list[str] = []  # from an aov integrator
         self._properties: dict[int, Properties] = {}
         self._object_names: dict[int, str] = {}  # shapegroup element -> its spectrace object's name
@@ -489,8 +497,9 @@ class MitsubaImporter:
                 steps.append({"matrix": [values[i : i + 4] for i in range(0, 16, 4)]})
             elif step.tag == "lookat":
                 steps.append({"matrix": self.look_at(step).tolist()})
-            else:
+            elif step.tag in _KNOWN_TAGS:
                 self.unsupported_plugin(step, " transform step")
+            # an unknown tag (a misspelt step) is reported by report_unknown_tags
         return steps
 
     def look_at(self, element: Element) -> np.ndarray:
@@ -1627,9 +1636,26 @@ class MitsubaImporter:
 
     # -------------------------------------------------- the scene
 
+    def report_unknown_tags(self, root: Element) -> None:
+        """A warning (--strict: an error) for every element, at any depth, whose tag Mitsuba does not know: it and
+        what it holds are not imported. Misspellings (<emiter>, <shpe>) would otherwise vanish unseen where nothing
+        looks for them (the scene's top level, a declaration never used, a property's or a transform's children)."""
+        pending = list(reversed(root.children))  # depth first, in document order
+        while pending:
+            element = pending.pop()
+            if element.tag in _KNOWN_TAGS:
+                pending += reversed(element.children)
+                continue
+            self.unknown_tags += 1
+            self.warnings.append(
+                f"{_shown(str(element.file or self.xml_path), 200)}:{element.line}: {element.path}: unknown tag "
+                f"<{_shown(element.tag)}> is not imported (Mitsuba 3 has no such element)"
+            )
+
     def run(self, tree: SceneTree) -> dict:
         root = tree.root
         self.search_folders = tree.search_folders
+        self.report_unknown_tags(root)
         if tree.unused_parameters:
             self.notes.append(
                 "parameters the scene does not use: " + ", ".join(_shown(name) for name in tree.unused_parameters)
@@ -1730,6 +1756,8 @@ class MitsubaImporter:
             owner = properties.owner
             for key in properties.unread():
                 child = dict.__getitem__(properties, key)
+                if child.tag not in _KNOWN_TAGS:
+                    continue  # reported as an unknown tag
                 name = child.label() if key.startswith("#") or "#" in key else f"'{_shown(key)}'"
                 self.warnings.append(
                     f"{_shown(str(child.file or self.xml_path), 200)}:{child.line}: {owner.label()}: property "
@@ -1837,9 +1865,11 @@ def _imported(importer: MitsubaImporter, strict: bool) -> dict:
     """The scene data; the properties nothing read are warnings among the notes, or with `strict` one error."""
     data = importer.run(read_scene(importer.xml_path, importer.parameters))
     if importer.warnings and strict:
+        properties, tags = len(importer.warnings) - importer.unknown_tags, importer.unknown_tags
+        counts = [f"{properties} {'property' if properties == 1 else 'properties'}"] if properties else []
+        counts += [f"{tags} unknown {'tag' if tags == 1 else 'tags'}"] if tags else []
         raise SpectraceError(
-            f"{len(importer.warnings)} {'property' if len(importer.warnings) == 1 else 'properties'} not imported "
-            f"(--strict): {'; '.join(importer.warnings)}",
+            f"{' and '.join(counts)} not imported (--strict): {'; '.join(importer.warnings)}",
             where=str(importer.xml_path),
         )
     importer.notes += [WARNING_PREFIX + warning for warning in importer.warnings]

@@ -13,7 +13,9 @@ matrix (CTM), `Transform`/`ConcatTransform` give the matrix column by column (tr
 normalises its axis, `LookAt` sets the camera frame with image right = up × forward (pbrt's left-handed camera), and
 the CTM at `Camera` is camera-from-world. `WorldBegin` resets the CTM; `AttributeBegin`/`AttributeEnd` save and restore
 the whole graphics state. `Include` and `Import` read another file in place (relative to the including file's
-folder); `Import`'s only difference in pbrt-v4, parallel parsing, changes nothing here.
+folder; a `.gz` file inflated, as pbrt-v4 reads it); `Import`'s only difference in pbrt-v4, parallel parsing,
+changes nothing here. A file including itself, and files whose includes multiply (each including the next several
+times), are refused (spectrace.io.input_files.Inclusions).
 
 Bad input (an unterminated string, a number that is none, a directive missing its arguments, an unmatched
 `AttributeEnd`) raises one SpectraceError naming file:line.
@@ -29,7 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.errors import SpectraceError, one_line
-from spectrace.io.input_files import regular_file
+from spectrace.io.compressed import file_inflater
+from spectrace.io.input_files import Inclusions, regular_file
 from spectrace.scene import limits
 
 MAX_INCLUDE_DEPTH = limits.MAX_NESTING
@@ -303,20 +306,38 @@ def _array_values(token: Token, kind: str, declaration: Token) -> list:
     return values
 
 
-def _directives(path: Path, depth: int = 0):
-    """The directives of one file, Include and Import followed in place."""
-    if depth > MAX_INCLUDE_DEPTH:
-        raise SpectraceError(
-            f"Include nested more than {MAX_INCLUDE_DEPTH} deep (a file including itself?)", where=str(path)
-        )
+def _read_text(path: Path, where: str, inclusions: Inclusions) -> str:
+    """A scene file's text, counted against the scene's inclusions (checked before it is read); a `.gz` file is
+    inflated (as pbrt-v4 reads it) within what the inclusions have left."""
     regular_file(path, None, what="pbrt scene file")
     try:
-        text = path.read_bytes().decode("utf-8")
+        if path.suffix.lower() != ".gz":
+            inclusions.enter(path, where)
+            data = path.read_bytes()
+        else:
+            inclusions.enter(path, where, size=0)
+            with open(path, "rb") as source:
+                inflater = file_inflater(path, source, where, "pbrt scene file")
+                inflater.declare(inclusions.remaining_bytes(), "left of what a scene's included files may hold")
+                data = inflater.read_all()
+            inclusions.charge(path, len(data), where)
     except OSError as failure:
         raise SpectraceError(f"cannot read the file ({failure.strerror or failure})", where=str(path)) from None
+    try:
+        return data.decode("utf-8")
     except UnicodeDecodeError as failure:
-        line = path.read_bytes()[: failure.start].count(b"\n") + 1
+        line = data[: failure.start].count(b"\n") + 1
         raise error(Location(path, line), "is not UTF-8 text (a binary file?)") from None
+
+
+def _directives(path: Path, inclusions: Inclusions, where: str | None = None):
+    """The directives of one file, Include and Import followed in place."""
+    text = _read_text(path, where or str(path), inclusions)
+    yield from _file_directives(text, path, inclusions)
+    inclusions.leave()
+
+
+def _file_directives(text: str, path: Path, inclusions: Inclusions):
     stream = _TokenStream(tokenize(text, path), path)
     while (token := stream.peek()) is not None:
         stream.next("a directive")
@@ -372,14 +393,14 @@ def _directives(path: Path, depth: int = 0):
                 raise error(
                     token.location, f"{token.text} names '{shown(str(arguments[0]), 200)}', which is not a file"
                 )
-            yield from _directives(included, depth + 1)
+            yield from _directives(included, inclusions, str(token.location))
             continue
         yield Directive(token.text, arguments, parameters, token.location)
 
 
 def parse_directives(path: str | Path) -> list[Directive]:
     """Every directive of a pbrt-v4 scene, its Include and Import files followed in place."""
-    return list(_directives(Path(path)))
+    return list(_directives(Path(path), Inclusions(MAX_INCLUDE_DEPTH, "Include/Import")))
 
 
 # ---------------------------------------------------------------- transforms (pbrt-v4's, on column vectors)

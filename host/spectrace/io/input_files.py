@@ -51,3 +51,65 @@ def is_regular_file(path: str | Path) -> bool:
         return stat.S_ISREG(os.stat(path).st_mode)
     except (OSError, ValueError):
         return False
+
+
+# What one scene's includes may read, all files together, counting a file each time it is included (pbrt's
+# Include and Import, Mitsuba's <include>). A file that includes the next several times multiplies at every level
+# (ten files each including the next ten times: 10^10 readings), which no depth limit stops in time. Real scenes
+# include tens to thousands of files, and their text (inline meshes included) stays far below the byte limit,
+# which keeps the parsed text within a workstation's memory (the parsers hold several times the text).
+MAX_INCLUDED_FILES = 10_000
+MAX_INCLUDED_BYTES = 1 << 30
+
+
+class Inclusions:
+    """One scene's reading of itself and its included files: `enter(path, where)` before a file is read refuses,
+    with one line naming the file, a file that includes itself (directly or further down), nesting deeper than
+    `max_depth` files, and a scene whose files, counted each time they are read, pass MAX_INCLUDED_FILES or
+    MAX_INCLUDED_BYTES; `leave()` when its reading is over. `remaining_bytes()` bounds what a compressed file may
+    inflate to."""
+
+    def __init__(self, max_depth: int, directive: str):
+        self.max_depth = max_depth
+        self.directive = directive  # "Include", "<include>": how messages name the mechanism
+        self.stack: list[Path] = []
+        self.files = 0
+        self.bytes = 0
+
+    def enter(self, path: Path, where: str, size: int | None = None) -> None:
+        """Count `path` (of `size` bytes, else its size on disk) as read once more, after the checks."""
+        resolved = path.resolve()
+        if resolved in self.stack:
+            chain = " -> ".join(p.name for p in [*self.stack[self.stack.index(resolved) :], resolved])
+            raise SpectraceError(f"'{path}' includes itself ({chain})", where=where)
+        if len(self.stack) > self.max_depth:
+            raise SpectraceError(f"'{path}': {self.directive} nested more than {self.max_depth} files deep", where)
+        self.files += 1
+        if self.files > MAX_INCLUDED_FILES:
+            raise SpectraceError(
+                f"'{path}': the scene reads more than {MAX_INCLUDED_FILES} files through {self.directive} "
+                "(a file counts each time it is included): files that include others several times multiply",
+                where=where,
+            )
+        if size is None:
+            try:
+                size = path.stat().st_size
+            except OSError:
+                size = 0  # the reader says why it cannot read the file
+        self.charge(path, size, where)
+        self.stack.append(resolved)
+
+    def charge(self, path: Path, size: int, where: str) -> None:
+        self.bytes += size
+        if self.bytes > MAX_INCLUDED_BYTES:
+            raise SpectraceError(
+                f"'{path}': the scene's files come to more than {MAX_INCLUDED_BYTES >> 20} MiB of text through "
+                f"{self.directive} (a file counts each time it is included)",
+                where=where,
+            )
+
+    def leave(self) -> None:
+        self.stack.pop()
+
+    def remaining_bytes(self) -> int:
+        return max(0, MAX_INCLUDED_BYTES - self.bytes)

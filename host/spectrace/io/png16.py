@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.io.compressed import inflate
+
 _SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _CHANNELS = {2: 3, 4: 2, 6: 4}  # colour type -> samples a pixel: RGB, grey + alpha, RGBA
 # Adam7: each pass's first column and row, and its steps.
@@ -75,10 +77,10 @@ def decode_png16(data: bytes) -> np.ndarray:
         raise PngError("not a 16-bit RGB, RGBA or grey + alpha PNG")
     width, height, colour_type, interlace = header
     channels = _CHANNELS[colour_type]
-    try:
-        inflated = zlib.decompress(b"".join(payload for kind, payload in _chunks(data) if kind == b"IDAT"))
-    except zlib.error as exc:
-        raise PngError(f"its image data cannot be inflated ({exc})") from None
+    # The header fixes the inflated size (each scanline's filter byte and samples), so no more is inflated.
+    size = sum(h * (1 + 2 * channels * w) for w, h in _passes(width, height, interlace))
+    idat = b"".join(payload for kind, payload in _chunks(data) if kind == b"IDAT")
+    inflated = inflate(idat, "zlib", size, PngError, "its header declares")
     raw = np.frombuffer(inflated, np.uint8)
     halves: list[list[np.ndarray]] = [[], []]
     position = 0
