@@ -63,6 +63,7 @@ from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
+from spectrace.pixel_filters import PixelFilter
 from spectrace.scene import limits
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 from spectrace.textures import TEXTURES
@@ -1463,8 +1464,10 @@ class MitsubaImporter:
             return {"type": "tent"}  # radius 1 in Mitsuba, fixed
         if kind == "gaussian":
             stddev = self.number(properties["stddev"]) if "stddev" in properties else 0.5
-            if not 0.0 < stddev <= 4.0:
-                raise self.fail(rfilter, f"stddev must lie in (0, 4] pixels, got {stddev:g}", "type")
+            try:  # the filters' own range (spectrace.pixel_filters)
+                PixelFilter("gaussian", stddev=stddev)
+            except SpectraceError as exc:
+                raise self.fail(rfilter, exc.message, "type") from None
             return {"type": "gaussian", "stddev": stddev}
         if kind == "mitchell":
             table: dict[str, object] = {"type": "mitchell", "radius": 2.0}
