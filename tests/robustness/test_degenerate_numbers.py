@@ -2,7 +2,7 @@
 file and key path (or option, or file:line), before any device work: transforms that are singular or overflow once
 composed (scene files and pbrt files), light powers over no area or solid angle, pixel filters narrower than 32-bit
 film positions resolve, film ranges where the observer is zero, white points outside the spectral locus or with
-subnormal coordinates, environment maps and emitters beyond 32-bit range. Where the
+subnormal coordinates, environment maps beyond 32-bit range, spectral bands finer than the film's grid. Where the
 rule is a number, it is checked against an independent reference (singular values, colour-science's locus, quadrature
 of the filter)."""
 
@@ -134,6 +134,13 @@ SCENE_CASES = [
         (),
         "lights[0].scale",
         "the map's texels times scale reach 1e+300",
+    ),
+    (
+        "spectral-bins-finer-than-the-film-grid",
+        _with_film("wavelengths = [400, 700]"),
+        ("--spectral-bins", "302"),
+        "--spectral-bins",
+        "302 bands over the film's 400-700 nm would be narrower than the 1 nm grid",
     ),
     ("white-subnormal-y", SCENE, ("--white-balance", "0.3,1e-310"), "--white-balance", "is not a colour"),
     ("white-subnormal-x", SCENE, ("--white-balance", "1e-320,0.33"), "--white-balance", "is not a colour"),
@@ -382,6 +389,75 @@ def test_an_environment_map_built_in_python_is_checked_too():
     with pytest.raises(SpectraceError, match="times scale"):
         EnvironmentMap(np.ones((2, 4, 3), np.float32), scale=math.inf)
     EnvironmentMap(np.full((2, 4, 3), 1e10, np.float32), scale=1e10)  # exactly at the bound
+
+
+def test_spectral_bands_span_the_films_wavelengths(device, tmp_path):
+    """A screen of constant radiance 1 over a film of 300-1100 nm: the bands cover that range (not 360-830 nm) and
+    each holds the band-averaged radiance 1, within 4 standard errors of its pixels' mean."""
+    from spectrace.engine.renderer import Renderer
+    from spectrace.scene import load_scene
+
+    scene_file = tmp_path / "screen.toml"
+    scene_file.write_text(emitting_screen().replace("[film]\n", "[film]\nwavelengths = [300, 1100]\n", 1))
+    scene = load_scene(scene_file)
+    image = Renderer(scene, device, spectral_bins=8).render()
+    np.testing.assert_allclose(image.spectral.edges_nm, np.linspace(300.0, 1100.0, 9))
+    bands = image.spectral.radiance.reshape(-1, 8).astype(np.float64)
+    error = bands.std(axis=0, ddof=1) / math.sqrt(bands.shape[0])
+    assert np.all(error > 0)
+    np.testing.assert_array_less(np.abs(bands.mean(axis=0) - 1.0), 4.0 * error)
+
+
+def test_the_fail_fraction_of_dropped_samples():
+    from spectrace.film import DROPPED_FAIL_FRACTION, dropped_samples_problem
+
+    assert dropped_samples_problem(0, 0) is None
+    assert dropped_samples_problem(49, 100) is None and DROPPED_FAIL_FRACTION == 0.5
+    assert "50 (50 %) of the render's 100 samples" in (dropped_samples_problem(50, 100) or "")
+    assert "every one of the render's 100 samples" in (dropped_samples_problem(100, 100) or "")
+
+
+# A scene built in Python (no file's checks) whose emitter, 3e38 W/(m² sr nm), overflows every sample; the command
+# line renders it as if a file had given it.
+_EVERY_SAMPLE_OVERFLOWS = """
+import sys
+import numpy as np
+import spectrace.scene
+from spectrace import cli
+from spectrace.geometry import primitives
+from spectrace.geometry.transforms import apply_transform
+from spectrace.materials.diffuse import DiffuseMaterial
+from spectrace.scene.model import AreaEmitter, Camera, Scene, Shape
+from spectrace.spectral.spectrum import Spectrum
+
+wall = apply_transform(primitives.rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]))
+shape = Shape(wall, DiffuseMaterial(Spectrum.constant(0.5)), emitter=AreaEmitter(Spectrum.constant(3e38)), name="sun")
+scene = Scene(Camera(origin=(0, 0, 5), target=(0, 0, 0), fov_degrees=30), width=4, height=3, shapes=[shape], spp=2)
+spectrace.scene.load_scene = lambda path: scene
+sys.argv = ["spectrace", "render", "built-in-python.toml", "-o", sys.argv[1], "-q"]
+cli.main()
+"""
+
+
+@pytest.mark.subprocess
+def test_a_real_process_fails_when_every_sample_is_dropped(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    out = tmp_path / "out.png"
+    result = subprocess.run(
+        [sys.executable, "-c", _EVERY_SAMPLE_OVERFLOWS, str(out)],
+        capture_output=True,
+        text=True,
+        env=os.environ.copy(),
+        timeout=300,
+    )
+    assert result.returncode == 2, result.stderr
+    errors = [line for line in result.stderr.splitlines() if line.startswith("error: ")]
+    assert "Traceback" not in result.stderr and len(errors) == 1, result.stderr
+    assert "every one of the render's 24 samples" in errors[0] and "shape 'sun'" in errors[0], errors[0]
+    assert not out.exists()
 
 
 def test_an_emitter_scale_that_overflows_is_refused_at_the_scale(tmp_path):
