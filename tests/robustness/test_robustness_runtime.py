@@ -191,12 +191,13 @@ def test_a_render_of_dropped_samples_fails_naming_the_emitter(device, tmp_path, 
 
 def test_a_few_dropped_samples_are_counted_and_reported(device, tmp_path, monkeypatch, capsys):
     """Below spectrace.film.DROPPED_FAIL_FRACTION the image is written, the count in its metadata and a warning:
-    here the overflowing emitter fills the left 2 of 6 columns, a third of the samples."""
+    here the overflowing emitter covers the left eighth of the view (x from -3 to -1 where the view spans ±1.34),
+    in front of a plain one."""
     from spectrace.film import DROPPED_FAIL_FRACTION
 
     scene = _overflowing_light_scene()
     edge = np.diag([1.0, 10.0, 1.0, 1.0])
-    edge[0, 3] = -2.0  # x from -3 to -1: the left third of a 30 degree view of width 2 * 5 tan 15° (about 2.7)
+    edge[0, 3] = -2.0  # x from -3 to -1 of a 30 degree view 2 * 5 tan 15° (about 2.7) wide
     bright = replace(scene.shapes[0], mesh=apply_transform(primitives.rectangle(), edge))
     grey = Shape(
         apply_transform(primitives.rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]) @ _translation(0, 0, -1)),
