@@ -225,6 +225,12 @@ PBRT_CASES = [
         "is singular",
     ),
     (
+        "distant-light-under-a-singular-transform",
+        PBRT_HEADER + 'AttributeBegin\nScale 0 0 0\nLightSource "distant" "rgb L" [1 1 1]\nAttributeEnd\n' + PLANE,
+        7,
+        "the light's transform is singular",
+    ),
+    (
         "gaussian-window-too-narrow",
         PBRT_HEADER.replace("WorldBegin", 'PixelFilter "gaussian" "float sigma" 4 "float xradius" 0.01\nWorldBegin')
         + PLANE,
@@ -254,6 +260,15 @@ def test_a_real_process_refuses_a_power_over_no_area_in_one_line(tmp_path):
     result = run_spectrace("import-pbrt", str(source), "-o", str(tmp_path / "scene.toml"), timeout=300)
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert result.stderr.count("\n") == 1 and result.stderr.startswith(f"error: {source}:5: "), result.stderr
+
+
+def test_an_importers_non_finite_number_is_found_by_its_key_path():
+    from spectrace.interop.toml_writer import non_finite_key
+
+    data = {"camera": {"origin": [0.0, 1.0, 5.0]}, "lights": [{"scale": 1.0}, {"direction": [0.0, math.nan, 0.0]}]}
+    assert non_finite_key(data) == "lights[1].direction[1]"
+    assert non_finite_key({"shapes": [{"transform": [{"scale": -math.inf}]}]}) == "shapes[0].transform[0].scale"
+    assert non_finite_key({"film": {"width": 8, "exposure": 1e308}}) is None
 
 
 # ---------------------------------------------------------------- the rules against independent references

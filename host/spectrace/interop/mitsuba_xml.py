@@ -1870,7 +1870,7 @@ def import_mitsuba(
 
     The output is checked first (a folder, a read-only place) and replaced only by a complete TOML that loads: a
     failed import leaves any existing file as it was."""
-    from spectrace.interop.toml_writer import dumps
+    from spectrace.interop.toml_writer import dumps, non_finite_key
     from spectrace.io.atomic import write_atomically
     from spectrace.scene import load_scene
 
@@ -1885,6 +1885,11 @@ def import_mitsuba(
             *(note if note.startswith(WARNING_PREFIX) else f"note: {note}" for note in importer.notes),
         ]
     )
+    if (key := non_finite_key(data)) is not None:
+        failure = SpectraceError(
+            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
+        )
+        raise importer.imported_error(failure, toml_path)
     text = dumps(data, header=header)
 
     def write_and_check(temp: Path) -> None:

@@ -1245,6 +1245,9 @@ class PbrtImporter:
         entity, matrix = light.entity, light.world_from_light
         self.read.add(id(entity))
         kind = entity.kind
+        # Every light but a point takes a direction through its transform: a singular one maps it to zero (or NaN).
+        if kind != "point" and (problem := linear_map_problem(matrix[:3, :3])):
+            raise error(entity.location, f"the light's transform {problem}")
         scale = self.one(entity, "scale", 1.0)
         if kind == "point":
             power = self.one(entity, "power", -1.0)
@@ -1331,8 +1334,6 @@ class PbrtImporter:
         # RGB texels are illuminants of the colour space's D65, normalised as an RGB light's L: spectrace's envmap
         # texels are D65-based with RGB (1, 1, 1) at Y = 1, so pbrt's scale carries over.
         linear = (self.world @ matrix)[:3, :3]
-        if problem := linear_map_problem(linear):
-            raise error(entity.location, f"the light's transform {problem}")
         image = to_latitude_longitude(square, linear / np.cbrt(abs(np.linalg.det(linear))), min(height, 2048))
         file = _name(path.stem, {Path(n).stem for n in self.files}) + ".exr"
         self.files[file] = image
@@ -1571,7 +1572,7 @@ def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = Fal
 
     The output is checked first and replaced only by a complete TOML that loads: a failed import leaves any
     existing file as it was."""
-    from spectrace.interop.toml_writer import dumps
+    from spectrace.interop.toml_writer import dumps, non_finite_key
     from spectrace.io.atomic import write_atomically
     from spectrace.scene import load_scene
 
@@ -1594,6 +1595,11 @@ def import_pbrt(pbrt_path: str | Path, toml_path: str | Path, strict: bool = Fal
             *(f"note: {text}" for text in importer.notes),
         ]
     )
+    if (key := non_finite_key(data)) is not None:
+        failure = SpectraceError(
+            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
+        )
+        raise importer.imported_error(failure, toml_path)
     text = dumps(data, header=header)
     folder = toml_path.parent / importer.mesh_folder
     if importer.meshes or importer.files:
