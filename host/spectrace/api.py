@@ -467,9 +467,10 @@ def render(
     device: a Device, a selection string ("pocl", "gpu", a key from `spectrace devices`) or None (automatic).
     progress: True draws a progress bar (a notebook widget under Jupyter when tqdm is installed), False or None
     none, a callable is called as progress(samples_done, samples_total) after each pass; "auto" draws a bar
-    only inside Jupyter. spectral_bins > 0 also keeps that many equal wavelength bands over 360..830 nm per
-    pixel (`image.spectral`, band-averaged radiance in W/(m² sr nm)). colour_space, white_balance and
-    adaptation set how the image converts to RGB (see `spectrace.colour_output` and docs/colour.md). aovs: AOVs
+    only inside Jupyter. spectral_bins > 0 also keeps that many equal wavelength bands over the film's wavelengths
+    (film.wavelengths, 360..830 nm by default) per pixel (`image.spectral`, band-averaged radiance in
+    W/(m² sr nm)). colour_space, white_balance and adaptation set how the image converts to RGB (see
+    `spectrace.colour_output` and docs/colour.md). aovs: AOVs
     recorded by the same paths and kept in `image.aovs` ("albedo", "normal", "depth", "position", "variance", as
     a sequence or a comma-separated string; None keeps the scene's `film.aovs`; see `spectrace.aovs`);
     `spectrace.denoise(image)` needs albedo and normal.

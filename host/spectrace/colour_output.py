@@ -91,6 +91,10 @@ class WhiteBalance:
     scene_white_xyz: np.ndarray  # Y = 1
     method: Adaptation = Adaptation.BRADFORD
 
+    def __post_init__(self) -> None:
+        if problem := white_problem(self.scene_white_xyz, Adaptation(self.method)):
+            raise SpectraceError(f"white '{self.label}' {problem}", where="white_balance")
+
     def matrix(self, space: ColourSpace) -> np.ndarray:
         """3x3 matrix acting on XYZ."""
         return adaptation_matrix(self.scene_white_xyz, output_white_xyz(space), self.method)
@@ -113,6 +117,60 @@ def adaptation_matrix(
     )
 
 
+@cache
+def _spectral_locus_xy() -> np.ndarray:
+    """(n, 2) CIE 1931 chromaticities of the monochromatic lights on the grid, in wavelength order: with the
+    purple line from the last back to the first, the boundary of every colour a spectrum can have."""
+    from spectrace.spectral.colorimetry import CIE_1931_CMFS
+
+    sums = CIE_1931_CMFS.sum(axis=1)
+    keep = sums > 1e-4 * sums.max()  # the tables' far ends, where the chromaticities are rounding
+    return CIE_1931_CMFS[keep, :2] / sums[keep, None]
+
+
+def _inside_polygon(point: np.ndarray, polygon: np.ndarray) -> bool:
+    """Whether `point` lies inside the closed `polygon` (even-odd rule: crossings of a ray toward +x)."""
+    x, y = point
+    start, end = polygon, np.roll(polygon, -1, axis=0)
+    straddles = (start[:, 1] > y) != (end[:, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        crossing_x = start[:, 0] + (y - start[:, 1]) * (end[:, 0] - start[:, 0]) / (end[:, 1] - start[:, 1])
+    return bool(np.count_nonzero(straddles & (crossing_x > x)) % 2)
+
+
+def white_problem(xyz: np.ndarray, method: Adaptation = Adaptation.BRADFORD) -> str | None:
+    """Why XYZ cannot be a white to adapt from, or None. Adaptation divides by the white's Y and by its cone responses
+    (diag(LMS_target / LMS_source)): a Y that is zero or subnormal, a chromaticity outside the spectral locus (no
+    light has it), or a cone response of `method` that is not positive (Bradford's sharpened cones go negative near
+    the locus) would turn every pixel into huge, negative or NaN values."""
+    import colour
+
+    method = Adaptation(method)
+    white = np.asarray(xyz, np.float64)
+    if white.shape != (3,) or not np.all(np.isfinite(white)):
+        return f"must be three finite numbers X, Y, Z, got {white}"
+    if not white[1] >= np.finfo(np.float64).tiny:
+        return f"has no luminance (Y = {white[1]:g}): it cannot be scaled to Y = 1"
+    with np.errstate(over="ignore"):
+        normalised = white / white[1]
+    total = float(normalised.sum())
+    if not np.all(np.isfinite(normalised)) or not total > 0:
+        return f"has X, Y, Z ({white[0]:g}, {white[1]:g}, {white[2]:g}) of no chromaticity"
+    chromaticity = normalised[:2] / total
+    if not _inside_polygon(chromaticity, _spectral_locus_xy()):
+        return (
+            f"has chromaticity x, y = {chromaticity[0]:.4g}, {chromaticity[1]:.4g}, outside the spectral locus: "
+            "no light has that colour"
+        )
+    cones = colour.CHROMATIC_ADAPTATION_TRANSFORMS[_ADAPTATION_DATASETS[method]] @ normalised
+    if not np.all(cones > 1e-6 * np.abs(cones).max()):
+        return (
+            f"is too saturated for {method.value} adaptation (its cone responses {', '.join(f'{c:.3g}' for c in cones)}"
+            " must be positive): pick a less saturated white or another --adaptation"
+        )
+    return None
+
+
 def _chromaticity_white(text: str) -> np.ndarray | None:
     parts = text.replace(" ", "").split(",")
     if len(parts) != 2:
@@ -121,7 +179,9 @@ def _chromaticity_white(text: str) -> np.ndarray | None:
         x, y = (float(part) for part in parts)
     except ValueError:
         return None
-    if not (0.0 < x < 1.0 and 0.0 < y < 1.0 and x + y < 1.0):
+    # Normal floats only: x / y of a subnormal y overflows, a subnormal x is a typo for 0.
+    tiny = np.finfo(np.float64).tiny
+    if not (tiny <= x < 1.0 and tiny <= y < 1.0 and x + y < 1.0):
         raise SpectraceError(
             f"chromaticity x, y = {x:g}, {y:g} is not a colour (need x, y > 0, x + y < 1)", where="--white-balance"
         )
@@ -176,8 +236,8 @@ def parse_white_balance(text: str, method: Adaptation | str = Adaptation.BRADFOR
         white = _blackbody_white(text)
     if white is None:
         white = _spectrum_white(text)
-    if not (np.all(np.isfinite(white)) and white[1] > 0):
-        raise SpectraceError(f"white '{text}' has no luminance", where="--white-balance")
+    if problem := white_problem(white, method):
+        raise SpectraceError(f"white '{text}' {problem}", where="--white-balance")
     return WhiteBalance(label=text, scene_white_xyz=white / white[1], method=method)
 
 

@@ -26,7 +26,7 @@ from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.errors import SpectraceError
 from spectrace.image import Image, SpectralBands
 from spectrace.scene import limits
-from spectrace.spectral.film_response import FilmResponse
+from spectrace.spectral.film_response import WAVELENGTH_LIMITS_NM, FilmResponse
 
 SPECTRAL_LIMITS_NM = (360.0, 830.0)  # the wavelengths the renders sample
 # Saved-state buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
@@ -48,14 +48,102 @@ class RenderState:
     buffers: dict[str, np.ndarray]
 
 
+def spectral_range(scene) -> tuple[float, float]:
+    """The wavelengths a scene's spectral bands span by default: its film's (film.wavelengths), the range its samples
+    are drawn from, so no band lies where no sample falls and none of the film's range goes without a band."""
+    response = getattr(scene, "film_response", None)
+    lo, hi = response.wavelengths if response is not None else SPECTRAL_LIMITS_NM
+    return float(lo), float(hi)
+
+
+def spectral_bins_problem(bins: int, range_nm: tuple[float, float]) -> str | None:
+    """Why `bins` equal bands cannot span `range_nm`, or None: at most one band per nanometre of the 1 nm grid the
+    spectra are tabulated on (its nodes: hi - lo + 1), as 471 bands over the default 360-830 nm."""
+    lo, hi = range_nm
+    most = int(hi - lo) + 1
+    if bins > most:
+        return (
+            f"{bins} bands over the film's {lo:g}-{hi:g} nm would be narrower than the 1 nm grid the spectra are "
+            f"tabulated on: give at most {most} (film.wavelengths sets the range)"
+        )
+    return None
+
+
 def spectral_defines(bins: int, range_nm: tuple[float, float]) -> dict[str, int | float]:
     """Kernel defines that make kernels/film.cl accumulate `bins` equal bands over `range_nm` (none for 0 bins)."""
     if bins <= 0:
         return {}
     lo, hi = range_nm
-    if not (SPECTRAL_LIMITS_NM[0] <= lo < hi <= SPECTRAL_LIMITS_NM[1]):
-        raise SpectraceError(f"spectral range must lie within 360-830 nm, got {lo}-{hi}")
+    if not (WAVELENGTH_LIMITS_NM[0] <= lo < hi <= WAVELENGTH_LIMITS_NM[1]):
+        raise SpectraceError(
+            f"spectral range must lie within {WAVELENGTH_LIMITS_NM[0]:g}-{WAVELENGTH_LIMITS_NM[1]:g} nm, got {lo}-{hi}"
+        )
+    if problem := spectral_bins_problem(bins, range_nm):
+        raise SpectraceError(problem, where="--spectral-bins")
     return {"SPECTRAL_BINS": int(bins), "SPECTRAL_MIN_NM": float(lo), "SPECTRAL_MAX_NM": float(hi)}
+
+
+# A render fails, rather than give its image, when at least this fraction of its samples were NaN or infinite and
+# dropped: the image then holds less than half of the light it should, wherever the rest would have gone, so it is no
+# picture of the scene (an image of every sample dropped is black). A few dropped samples (a rare overflow on a long
+# path) only warn. The cause is an input whose numbers overflow 32-bit floats or divide by zero.
+DROPPED_FAIL_FRACTION = 0.5
+# An emitter's radiance, times the CMFs over the wavelength pdf (up to about 1e3 together) and a path's throughput,
+# overflows 32-bit floats (3.4e38) from about here on: the likeliest input when samples are dropped.
+_OVERFLOWING_EMISSION = 1e30
+
+
+def dropped_samples_problem(dropped: int, samples: int, scene=None) -> str | None:
+    """Why a render of `samples` samples, `dropped` of them non-finite, has no image to give (see
+    DROPPED_FAIL_FRACTION), naming the scene's likeliest input at fault; or None."""
+    if samples <= 0 or dropped < DROPPED_FAIL_FRACTION * samples:
+        return None
+    share = "every one" if dropped >= samples else f"{dropped} ({100.0 * dropped / samples:.0f} %)"
+    cause = likely_non_finite_input(scene) if scene is not None else None
+    cause = cause or "look for numbers in the scene that overflow 32-bit floats (above about 1e38) or divide by zero"
+    source = f" of {scene.source}" if scene is not None and getattr(scene, "source", None) else ""
+    return (
+        f"{share} of the render's {samples} samples{source} came out NaN or infinite and was dropped, so the image "
+        f"would be black or too dark; {cause}"
+    )
+
+
+def likely_non_finite_input(scene) -> str | None:
+    """The input of `scene` that most likely makes its samples non-finite, as a phrase, or None: a pixel filter or a
+    film response whose device numbers are not finite, else an emitter bright enough to overflow 32-bit floats."""
+    pixel_filter = getattr(scene, "pixel_filter", None)
+    if pixel_filter is not None:
+        with np.errstate(all="ignore"):
+            try:
+                numbers = np.concatenate([pixel_filter.device_shape(), pixel_filter.device_cdf()])
+            except (ArithmeticError, ValueError):
+                numbers = np.array([np.nan])
+        if not np.all(np.isfinite(numbers)):
+            return f"the pixel filter (film.filter, {pixel_filter.type}) has no finite weights"
+    response = getattr(scene, "film_response", None)
+    if response is not None and not response.is_default:
+        with np.errstate(all="ignore"):
+            table = response.device_table()
+        if not np.all(np.isfinite(table)):
+            return "the film's observers or sensor have no finite wavelength pdf over film.wavelengths"
+    brightest, name = 0.0, ""
+    for shape in getattr(scene, "shapes", ()):
+        if shape.emitter is not None and np.size(shape.emitter.radiance.values):
+            peak = float(np.max(np.abs(shape.emitter.radiance.values)))
+            if not peak <= brightest:
+                brightest, name = peak, f"the emitter of shape '{shape.name}'"
+    for index, light in enumerate(getattr(scene, "lights", ())):
+        scale = float(getattr(light, "scale", 1.0))
+        for value in vars(light).values() if hasattr(light, "__dict__") else ():
+            array = getattr(value, "values", value)
+            if isinstance(array, np.ndarray) and array.size and array.dtype.kind == "f":
+                with np.errstate(over="ignore"):
+                    peak = float(np.max(np.abs(array))) * (scale if value is getattr(light, "rgb", None) else 1.0)
+                if not peak <= brightest:
+                    brightest, name = peak, f"light {index} ({type(light).__name__})"
+    if not brightest <= _OVERFLOWING_EMISSION:
+        return f"{name} reaches {brightest:.3g} W/(m² sr nm), which overflows 32-bit floats on the way to the film"
+    return None
 
 
 def state_problem(state: RenderState, width: int, height: int) -> str | None:

@@ -18,9 +18,17 @@ from spectrace.errors import SpectraceError
 from spectrace.materials.parameters import Parameter, Range
 
 FilterType = Literal["box", "tent", "gaussian", "mitchell"]
-_POSITIVE = Range(0.0, low_open=True)
 RADIUS_LIMIT = 16.0  # pixels: a wider filter blurs more than any use asks and wastes samples far from the pixel
-_RADIUS = Range(0.0, RADIUS_LIMIT, low_open=True)
+# pixels: about the spacing of 32-bit film positions at the largest film side (2^14 px, a 24-bit significand:
+# 2^-10 ≈ 0.001 px). A narrower radius or σ cannot move a sample off the pixel's centre there, and the numbers that
+# normalise the filter (1/∫f, -1/2σ²) leave 32-bit range long before σ reaches 0 (σ = 1e-30 px gave NaN weights,
+# every sample dropped; σ = 1e-300 px divided by zero).
+WIDTH_LIMIT = 0.001
+_RADIUS = Range(WIDTH_LIMIT, RADIUS_LIMIT)
+# A Gaussian's radius below σ/16 leaves f a peak of 1 - exp(-1/512) ≈ 2^-9 above its cut-off: less than that and its
+# 32-bit evaluation, exp(−x²/2σ²) − exp(−r²/2σ²), is all rounding (radius 1e-4 px under σ = 4 px weighted every
+# sample 0, a black image).
+GAUSSIAN_RADIUS_PER_STDDEV = 1.0 / 16.0
 FILTERS: dict[str, tuple[Parameter, ...]] = {
     "box": (),
     "tent": (
@@ -29,7 +37,7 @@ FILTERS: dict[str, tuple[Parameter, ...]] = {
         ),
     ),
     "gaussian": (
-        Parameter("stddev", "float", "pixels", 0.5, Range(0.0, 4.0, low_open=True), doc="σ of exp(−x²/2σ²)"),
+        Parameter("stddev", "float", "pixels", 0.5, Range(WIDTH_LIMIT, 4.0), doc="σ of exp(−x²/2σ²)"),
         Parameter(
             "radius",
             "float",
@@ -37,7 +45,8 @@ FILTERS: dict[str, tuple[Parameter, ...]] = {
             None,
             _RADIUS,
             default_doc="4 stddev",
-            doc="cut-off; f = exp(−x²/2σ²) − exp(−radius²/2σ²) inside it (Mitsuba 3's and pbrt-v4's form)",
+            doc="cut-off, at least stddev/16; f = exp(−x²/2σ²) − exp(−radius²/2σ²) inside it (Mitsuba 3's and "
+            "pbrt-v4's form)",
         ),
     ),
     "mitchell": (
@@ -66,6 +75,12 @@ class PixelFilter:
             value = getattr(self, parameter.name)
             if value is not None:
                 parameter.check(value, where=f"filter.{parameter.name}")
+        if self.type == "gaussian" and not self.support >= GAUSSIAN_RADIUS_PER_STDDEV * self.stddev:
+            raise SpectraceError(
+                f"a Gaussian's radius must be at least stddev/16 ({self.stddev / 16:g} px), got {self.support:g}: "
+                "a narrower window leaves nothing of the curve above its cut-off in 32-bit floats",
+                where="filter.radius",
+            )
 
     @property
     def support(self) -> float:

@@ -189,7 +189,10 @@ def test_the_filter_option_renders_as_the_scene_files_filter(monkeypatch, capsys
         ("gaussian:sigma=1", "gaussian filter has no key 'sigma' (its keys are stddev, radius)"),
         ("gaussian:stddev=x", "stddev must be a number, got 'x'"),
         ("gaussian:stddev", "give each key once as stddev=NUMBER"),
-        ("tent:radius=20", "radius must lie in (0, 16] pixels"),
+        ("tent:radius=20", "radius must lie in [0.001, 16] pixels"),
+        ("mitchell:radius=1e-30", "radius must lie in [0.001, 16] pixels"),
+        ("gaussian:stddev=1e-300,radius=1", "stddev must lie in [0.001, 4] pixels"),
+        ("gaussian:stddev=4,radius=0.2", "radius must be at least stddev/16 (0.25 px), got 0.2"),
         ("box:radius=1", "box filter has no key 'radius'"),
     ],
 )

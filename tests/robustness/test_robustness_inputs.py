@@ -342,7 +342,7 @@ CASES = [
         'material = "grey"',
         'material = "grey"\ntransform = [{ scale = 1e300 }, { scale = 1e300 }]',
         "shapes[0].transform",
-        "NaN or infinite coordinates",
+        "NaN or infinite entries (the product of its steps overflows)",
     ),
     # sizes and ranges
     replace("zero-width", "width = 8", "width = 0", "film.width", "greater than 0"),

@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -169,23 +170,63 @@ def _overflowing_light_scene() -> Scene:
     )
 
 
-def test_non_finite_samples_are_dropped_counted_and_reported(device, tmp_path, monkeypatch, capsys):
+def test_a_render_of_dropped_samples_fails_naming_the_emitter(device, tmp_path, monkeypatch, capsys):
+    """Every sample overflows: the render refuses to give a black image, in the API and on the command line (one
+    line naming the emitter, exit 2, nothing written)."""
     scene = _overflowing_light_scene()
+    with pytest.raises(SpectraceError) as failure:
+        Renderer(scene, device).render()
+    message = str(failure.value)
+    assert "every one of the render's 90 samples" in message and "shape 'too bright'" in message
+
+    monkeypatch.setattr("spectrace.scene.load_scene", lambda path: scene)
+    monkeypatch.setattr(sys, "argv", ["spectrace", "render", "ignored.toml", "-o", str(tmp_path / "cli.png"), "-q"])
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    assert exit_info.value.code == 2
+    errors = [line for line in capsys.readouterr().err.splitlines() if line.startswith("error: ")]
+    assert len(errors) == 1 and "NaN or infinite" in errors[0] and "too bright" in errors[0]
+    assert not (tmp_path / "cli.png").exists()
+
+
+def test_a_few_dropped_samples_are_counted_and_reported(device, tmp_path, monkeypatch, capsys):
+    """Below spectrace.film.DROPPED_FAIL_FRACTION the image is written, the count in its metadata and a warning:
+    here the overflowing emitter covers the left eighth of the view (x from -3 to -1 where the view spans ±1.34),
+    in front of a plain one."""
+    from spectrace.film import DROPPED_FAIL_FRACTION
+
+    scene = _overflowing_light_scene()
+    edge = np.diag([1.0, 10.0, 1.0, 1.0])
+    edge[0, 3] = -2.0  # x from -3 to -1 of a 30 degree view 2 * 5 tan 15° (about 2.7) wide
+    bright = replace(scene.shapes[0], mesh=apply_transform(primitives.rectangle(), edge))
+    grey = Shape(
+        apply_transform(primitives.rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]) @ _translation(0, 0, -1)),
+        DiffuseMaterial(Spectrum.constant(0.5)),
+        emitter=AreaEmitter(Spectrum.constant(1.0)),
+        name="plain",
+    )
+    scene = replace(scene, shapes=[bright, grey])
     image = Renderer(scene, device).render()
-    assert image.dropped_samples == 6 * 5 * 3  # every sample overflowed...
-    assert np.all(image.xyz == 0.0)  # ...and none reached the film
+    assert 0 < image.dropped_samples < DROPPED_FAIL_FRACTION * 6 * 5 * 3
     image.write(tmp_path / "dropped.png")
     from PIL import Image as PILImage
 
     with PILImage.open(tmp_path / "dropped.png") as written:
-        assert written.text["spectrace:dropped_samples"] == "90"
+        assert written.text["spectrace:dropped_samples"] == str(image.dropped_samples)
 
     monkeypatch.setattr("spectrace.scene.load_scene", lambda path: scene)
     monkeypatch.setattr(sys, "argv", ["spectrace", "render", "ignored.toml", "-o", str(tmp_path / "cli.png"), "-q"])
     with pytest.raises(SystemExit) as exit_info:
         cli.main()
     assert exit_info.value.code == 0
-    assert "warning: 90 non-finite samples were dropped" in " ".join(capsys.readouterr().err.split())
+    expected = f"warning: {image.dropped_samples} non-finite samples were dropped"
+    assert expected in " ".join(capsys.readouterr().err.split())
+
+
+def _translation(x: float, y: float, z: float) -> np.ndarray:
+    matrix = np.eye(4)
+    matrix[:3, 3] = (x, y, z)
+    return matrix
 
 
 def test_a_stop_request_ends_the_render_between_passes_with_the_true_count(cornell, device):

@@ -31,10 +31,11 @@ def render(
     spectral_bins: Annotated[
         int,
         typer.Option(
-            help="EXR only: also store N equal wavelength bands over 360-830 nm (spectral EXR, Fichet et al. 2021 "
-            "layout; band-averaged radiance in W/(m² sr nm)).",
+            help="EXR only: also store N equal wavelength bands over the film's wavelengths (film.wavelengths, "
+            "360-830 nm by default; at most one band per nm) (spectral EXR, Fichet et al. 2021 layout; band-averaged "
+            "radiance in W/(m² sr nm)).",
             min=0,
-            max=471,
+            max=2301,
         ),
     ] = 0,
     delta_e_map: Annotated[
@@ -212,6 +213,11 @@ def render(
     )
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
+    if spectral_bins:
+        from spectrace.film import spectral_bins_problem, spectral_range
+
+        if problem := spectral_bins_problem(spectral_bins, spectral_range(loaded)):
+            raise SpectraceError(problem, where="--spectral-bins")
     if asked_aovs and output.suffix.lower() != ".exr":
         raise SpectraceError("--aov needs an .exr output", where=str(output))
     aovs = loaded.aovs if asked_aovs is None else asked_aovs

@@ -18,7 +18,7 @@ from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, re
 from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
 from spectrace.engine.sppm import SppmPasses
 from spectrace.errors import SpectraceError
-from spectrace.film import Film, spectral_defines
+from spectrace.film import Film, dropped_samples_problem, spectral_defines, spectral_range
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.image import Image
 from spectrace.scene import limits
@@ -84,16 +84,19 @@ class Renderer:
         scene: Scene,
         device: Device | str | None = None,
         spectral_bins: int = 0,
-        spectral_range_nm: tuple[float, float] = (360.0, 830.0),
+        spectral_range_nm: tuple[float, float] | None = None,
         specialise: bool = True,
         buffers: SceneBuffers | None = None,
     ):
-        """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (the band-
-        averaged radiance per pixel, W/(m² sr nm)), for spectral EXR output. specialise=False builds the kernels
+        """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (None: the
+        film's wavelengths, which the samples span; the band-averaged radiance per pixel, W/(m² sr nm)), for
+        spectral EXR output. specialise=False builds the kernels
         that handle every scene instead of ones carrying only this scene's features (for comparisons). `buffers`:
         the scene's buffers when already built (build_scene_buffers(scene)), as a cluster's workers receive them."""
         self.scene = scene
         self._check_scene(scene)
+        if spectral_range_nm is None:
+            spectral_range_nm = spectral_range(scene)
         problem = (
             limits.render_settings_problem(scene.width, scene.height, scene.spp)
             or limits.scene_settings_problem(scene)
@@ -309,6 +312,16 @@ class Renderer:
         return metadata
 
     def image(self) -> Image:
+        """The image of the samples so far; a SpectraceError when most of them were dropped as non-finite
+        (spectrace.film.DROPPED_FAIL_FRACTION), naming the likeliest input."""
+        scene = self.scene
+        image = self._film_image()
+        begin, end = self.pixel_range
+        if problem := dropped_samples_problem(image.dropped_samples, image.spp * (end - begin), scene):
+            raise SpectraceError(problem)
+        return image
+
+    def _film_image(self) -> Image:
         scene = self.scene
         return self.film.image(
             seed=scene.seed,

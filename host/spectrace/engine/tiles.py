@@ -24,7 +24,7 @@ import numpy as np
 
 from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, TileMap, identity_mismatch, write_checkpoint
 from spectrace.errors import SpectraceError
-from spectrace.film import STATE_LAYOUT, RenderState, state_image
+from spectrace.film import STATE_LAYOUT, RenderState, dropped_samples_problem, spectral_range, state_image
 from spectrace.image import Image
 
 if TYPE_CHECKING:
@@ -260,7 +260,7 @@ class TiledFilm:
         if len(self.devices) > 1:
             # Bit-identity holds per device type only: the merged image says it mixes them.
             labels[MIXED_DEVICES_KEY] = "yes"
-        return state_image(
+        image = state_image(
             self.state(),
             self.plan.width,
             self.plan.height,
@@ -273,6 +273,11 @@ class TiledFilm:
             albedo_scale=albedo_scale,
             response=scene.film_response,
         )
+        # The samples of the finished tiles only: an interrupted render's other pixels hold none.
+        samples = image.spp * image.width * image.height * int(self.done.sum()) // max(self.plan.count, 1)
+        if problem := dropped_samples_problem(image.dropped_samples, samples, scene):
+            raise SpectraceError(problem)
+        return image
 
 
 class PeriodicTileCheckpoints:
@@ -328,7 +333,7 @@ def make_job(
     device: str | None = None,
     spectral_bins: int = 0,
     tile_rows: int | None = None,
-    spectral_range_nm: tuple[float, float] = (360.0, 830.0),
+    spectral_range_nm: tuple[float, float] | None = None,
 ) -> tuple[TileJob, RenderIdentity]:
     """The job of a tiled render of `scene` and the render's identity (for checkpoints), checked and built here on
     the client: the scene buffers (BVH included) are built once, not once per worker."""
@@ -345,6 +350,8 @@ def make_job(
     if problem:
         raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
     buffers = build_scene_buffers(scene)
+    if spectral_range_nm is None:
+        spectral_range_nm = spectral_range(scene)
     identity = scene_identity(scene, buffers, spectral_bins, spectral_range_nm)
     plan = plan_tiles(scene.width, scene.height, tile_rows)
     job = TileJob.make(

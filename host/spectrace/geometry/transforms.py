@@ -13,9 +13,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
-
-# |det| of the linear part below this fraction of (largest entry)^3 counts as singular: the shape would collapse.
-_SINGULAR_RELATIVE_DET = 1e-12
+from spectrace.scene.limits import linear_map_problem
 
 
 def transform_matrix(ops: list[dict], where: str) -> np.ndarray:
@@ -37,6 +35,9 @@ def transform_matrix(ops: list[dict], where: str) -> np.ndarray:
                 f"unknown transform step '{kind}'; expected one of {', '.join(_STEP_BUILDERS)}", where=step_where
             )
         matrix = _STEP_BUILDERS[kind](value, f"{step_where}.{kind}") @ matrix
+    # Each step is checked alone; their product can still overflow or collapse (two scales of 1e-200 make 0).
+    if problem := linear_map_problem(matrix[:3, :3]):
+        raise SpectraceError(f"the transform {problem}", where=where)
     return matrix
 
 
@@ -101,9 +102,8 @@ def _matrix(value: object, where: str) -> np.ndarray:
         raise SpectraceError(
             "the last matrix row must be [0, 0, 0, 1]: only affine transforms are supported", where=f"{where}[3]"
         )
-    linear = matrix[:3, :3]
-    if abs(np.linalg.det(linear)) <= _SINGULAR_RELATIVE_DET * np.abs(linear).max() ** 3:
-        raise SpectraceError("matrix is singular: it would flatten the shape", where=where)
+    if problem := linear_map_problem(matrix[:3, :3]):
+        raise SpectraceError(f"matrix {problem}", where=where)
     return matrix
 
 

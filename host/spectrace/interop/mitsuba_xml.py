@@ -64,6 +64,7 @@ from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.materials.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
+from spectrace.pixel_filters import PixelFilter
 from spectrace.scene import limits
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 from spectrace.textures import TEXTURES
@@ -1473,8 +1474,10 @@ class MitsubaImporter:
             return {"type": "tent"}  # radius 1 in Mitsuba, fixed
         if kind == "gaussian":
             stddev = self.number(properties["stddev"]) if "stddev" in properties else 0.5
-            if not 0.0 < stddev <= 4.0:
-                raise self.fail(rfilter, f"stddev must lie in (0, 4] pixels, got {stddev:g}", "type")
+            try:  # the filters' own range (spectrace.pixel_filters)
+                PixelFilter("gaussian", stddev=stddev)
+            except SpectraceError as exc:
+                raise self.fail(rfilter, exc.message, "type") from None
             return {"type": "gaussian", "stddev": stddev}
         if kind == "mitchell":
             table: dict[str, object] = {"type": "mitchell", "radius": 2.0}
@@ -1904,7 +1907,7 @@ def import_mitsuba(
     The output is checked first (a folder, a read-only place); the TOML and the files beside it that it refers to
     (`side_files`) are replaced together, and only by a complete import whose TOML loads: a failed import leaves an
     earlier one as it was."""
-    from spectrace.interop.toml_writer import write_scene
+    from spectrace.interop.toml_writer import non_finite_key, write_scene
     from spectrace.scene import load_scene
 
     xml_path, toml_path = Path(xml_path), Path(toml_path)
@@ -1918,6 +1921,11 @@ def import_mitsuba(
             *(note if note.startswith(WARNING_PREFIX) else f"note: {note}" for note in importer.notes),
         ]
     )
+    if (key := non_finite_key(data)) is not None:
+        failure = SpectraceError(
+            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
+        )
+        raise importer.imported_error(failure, toml_path)
 
     def check(temp: Path) -> None:
         try:

@@ -454,6 +454,19 @@ def column_major(values: list[float]) -> np.ndarray:
     return np.array(values, dtype=np.float64).reshape(4, 4).T
 
 
+# Each transform directive's CTM from the CTM before it, its arguments and its file:line.
+_TRANSFORMS = {
+    "Translate": lambda ctm, arguments, location: ctm @ translate(*arguments),
+    "Scale": lambda ctm, arguments, location: ctm @ scale(*arguments),
+    "Rotate": lambda ctm, arguments, location: (
+        ctm @ rotate(arguments[0], arguments[1], arguments[2], arguments[3], location)
+    ),
+    "LookAt": lambda ctm, arguments, location: ctm @ look_at(arguments, location),
+    "Transform": lambda ctm, arguments, location: column_major(arguments[0]),
+    "ConcatTransform": lambda ctm, arguments, location: ctm @ column_major(arguments[0]),
+}
+
+
 # ---------------------------------------------------------------- the graphics state and the scene
 
 
@@ -592,18 +605,11 @@ def read_scene(path: str | Path) -> PbrtScene:
 
     for directive in parse_directives(path):
         name, arguments, location = directive.name, directive.arguments, directive.location
-        if name == "Translate":
-            state.ctm = state.ctm @ translate(*arguments)
-        elif name == "Scale":
-            state.ctm = state.ctm @ scale(*arguments)
-        elif name == "Rotate":
-            state.ctm = state.ctm @ rotate(arguments[0], arguments[1], arguments[2], arguments[3], location)
-        elif name == "LookAt":
-            state.ctm = state.ctm @ look_at(arguments, location)
-        elif name == "Transform":
-            state.ctm = column_major(arguments[0])
-        elif name == "ConcatTransform":
-            state.ctm = state.ctm @ column_major(arguments[0])
+        if name in _TRANSFORMS:
+            with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported just below
+                state.ctm = _TRANSFORMS[name](state.ctm, arguments, location)
+            if not np.isfinite(state.ctm).all():
+                raise error(location, f"{name} makes the current transform overflow (entries beyond ±1.8e308)")
         elif name == "Identity":
             state.ctm = np.eye(4)
         elif name == "CoordinateSystem":
@@ -628,6 +634,9 @@ def read_scene(path: str | Path) -> PbrtScene:
             else:
                 state = saved
         elif name == "Camera":
+            # The camera's placement is the inverse of this camera-from-world: a singular one places no camera.
+            if problem := limits.linear_map_problem(state.ctm[:3, :3]):
+                raise error(location, f"the current transform (camera-from-world) {problem}")
             scene.camera = entity(directive, arguments[0])
             scene.camera_from_world = state.ctm.copy()
             scene.camera_medium = state.outside

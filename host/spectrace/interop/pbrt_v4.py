@@ -56,6 +56,8 @@ from spectrace.interop.pbrt_parser import (
     shown,
 )
 from spectrace.io.output_files import check_output_file
+from spectrace.pixel_filters import PixelFilter
+from spectrace.scene.limits import linear_map_problem
 from spectrace.spectral.metals import METALS as SPECTRACE_METALS
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
@@ -477,20 +479,21 @@ class PbrtImporter:
                 assert entity is not None
                 self.warn(entity.location, "a box filter's radius other than 0.5 is not imported")
             return {"type": "box"}
-        if not 0.0 < radius <= 16.0:
-            assert entity is not None
-            raise error(entity.location, f"the filter's radius must lie in (0, 16] pixels, got {radius:g}")
         if kind == "triangle":
-            return {"type": "tent", "radius": radius}
-        if kind == "gaussian":
+            table: dict = {"type": "tent", "radius": radius}
+        elif kind == "gaussian":
             sigma = self.one(entity, "sigma", 0.5) if entity is not None else 0.5
-            if not 0.0 < sigma <= 4.0:
-                assert entity is not None
-                raise error(entity.location, f"sigma must lie in (0, 4] pixels, got {sigma:g}")
-            return {"type": "gaussian", "stddev": sigma, "radius": radius}
-        b = self.one(entity, "B", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
-        c = self.one(entity, "C", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
-        return {"type": "mitchell", "radius": radius, "b": b, "c": c}
+            table = {"type": "gaussian", "stddev": sigma, "radius": radius}
+        else:
+            b = self.one(entity, "B", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
+            c = self.one(entity, "C", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
+            table = {"type": "mitchell", "radius": radius, "b": b, "c": c}
+        try:  # the filters' own ranges and rules (spectrace.pixel_filters), at the file's line
+            PixelFilter(**table)
+        except SpectraceError as exc:
+            assert entity is not None  # pbrt's default filter is valid
+            raise error(entity.location, f"{exc.message} ({exc.where}, imported from PixelFilter)") from None
+        return table
 
     def sampler(self, data: dict) -> None:
         sampler = self.scene.sampler
@@ -1221,6 +1224,9 @@ class PbrtImporter:
                 area = mesh.world_area(matrix)
             else:  # an analytic shape: pbrt's Shape::Area(), in the shape's object space (unscaled)
                 area = self.analytic_area(shape)
+            # Radiance = power / (sides · area · π): a shape without area would need infinite radiance.
+            if not (area > 0.0 and math.isfinite(area)):
+                raise error(light.location, f'"power" needs a shape with a positive finite area, got area {area:g}')
             scale *= power / ((2.0 if two_sided else 1.0) * area * math.pi)
         table: dict[str, object] = {"radiance": self.emission(light, "L", scale)}
         if two_sided:
@@ -1231,6 +1237,9 @@ class PbrtImporter:
         entity, matrix = light.entity, light.world_from_light
         self.read.add(id(entity))
         kind = entity.kind
+        # Every light but a point takes a direction through its transform: a singular one maps it to zero (or NaN).
+        if kind != "point" and (problem := linear_map_problem(matrix[:3, :3])):
+            raise error(entity.location, f"the light's transform {problem}")
         scale = self.one(entity, "scale", 1.0)
         if kind == "point":
             power = self.one(entity, "power", -1.0)
@@ -1249,7 +1258,10 @@ class PbrtImporter:
             power = self.one(entity, "power", -1.0)
             if power > 0:
                 cos_end, cos_start = math.cos(math.radians(cone)), math.cos(math.radians(cone - delta))
-                scale *= power / (2.0 * math.pi * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0))
+                solid_angle = 2.0 * math.pi * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0)
+                if not solid_angle > 0.0:  # intensity = power / solid angle: a closed cone would need infinite
+                    raise error(entity.location, f'"power" needs a cone of positive solid angle (coneangle {cone:g})')
+                scale *= power / solid_angle
             return {
                 "type": "spot",
                 "position": self.point(matrix, start),
@@ -1304,7 +1316,13 @@ class PbrtImporter:
             self.warn(entity.location, '"portal" not imported')
         illuminance = self.one(entity, "illuminance", -1.0)
         if illuminance > 0:
-            scale *= illuminance / upper_illuminance(square)
+            reference = upper_illuminance(square)
+            if not (reference > 0.0 and math.isfinite(reference)):
+                raise error(
+                    entity.location,
+                    f'"illuminance" rescales the map\'s upper hemisphere, whose illuminance is {reference:g}',
+                )
+            scale *= illuminance / reference
         # RGB texels are illuminants of the colour space's D65, normalised as an RGB light's L: spectrace's envmap
         # texels are D65-based with RGB (1, 1, 1) at Y = 1, so pbrt's scale carries over.
         linear = (self.world @ matrix)[:3, :3]
@@ -1562,7 +1580,7 @@ def import_pbrt(
 
     The output is checked first; the TOML and its folder of meshes are replaced together, and only by a complete
     import whose TOML loads: a failed import leaves an earlier one, TOML and folder, as it was."""
-    from spectrace.interop.toml_writer import write_scene
+    from spectrace.interop.toml_writer import non_finite_key, write_scene
     from spectrace.scene import load_scene
 
     pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
@@ -1584,6 +1602,11 @@ def import_pbrt(
             *(f"note: {text}" for text in importer.notes),
         ]
     )
+    if (key := non_finite_key(data)) is not None:
+        failure = SpectraceError(
+            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
+        )
+        raise importer.imported_error(failure, toml_path)
     files: dict[str, Callable[[Path], object]] = {}
     for name, mesh in importer.meshes.items():
         files[f"{importer.mesh_folder}/{name}"] = partial(write_ply, mesh=mesh)

@@ -36,6 +36,21 @@ def _value(value) -> str:
     raise TypeError(f"cannot write {type(value).__name__} to TOML")
 
 
+def non_finite_key(data: object, path: str = "") -> str | None:
+    """The key path (`lights[0].direction[1]`) of the first NaN or infinite number in scene data, or None: what an
+    importer's arithmetic made of degenerate input, to be reported at its source instead of failing to write."""
+    stack: list[tuple[object, str]] = [(data, path)]
+    while stack:
+        value, where = stack.pop()
+        if isinstance(value, float) and not math.isfinite(value):
+            return where
+        if isinstance(value, dict):
+            stack.extend((item, f"{where}.{key}" if where else str(key)) for key, item in reversed(value.items()))
+        elif isinstance(value, (list, tuple)):
+            stack.extend((item, f"{where}[{index}]") for index, item in reversed(list(enumerate(value))))
+    return None
+
+
 def float_text(value: float) -> str:
     """The shortest text that reads back as `value` at the precision it carries. A value that is exactly a float32
     (as every number written by a single-precision program is: Mitsuba's 3.9 is 3.9000000953674316) is written as

@@ -78,6 +78,21 @@ class AreaEmitter:
 MODEL = AreaEmitter
 
 
+def peak_radiance(e: AreaEmitter) -> float:
+    """The largest radiance the emitter sends anywhere, W/(m² sr nm), scale applied: its spectrum's peak, or for an
+    image the brightest texel times its brightest primary (an upper bound)."""
+    with np.errstate(over="ignore"):
+        if e.image is None:
+            return float(np.max(np.abs(e.radiance.values))) if np.size(e.radiance.values) else 0.0
+        texels = float(np.max(np.abs(np.asarray(e.image.texture.values, np.float64))))
+        primary = (
+            max((float(np.max(np.abs(p.values))) for p in e.image.primaries), default=1.0)
+            if (e.image.primaries)
+            else 1.0
+        )
+        return texels * primary * abs(float(e.image.scale))
+
+
 def emission_image(texture, scale: float = 1.0) -> EmitterImage:
     """An emission texture (a bitmap of linear sRGB, or a spectral texture) as the image of an area light."""
     from spectrace.spectral.uplift import uplift_illuminant

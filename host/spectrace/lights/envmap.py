@@ -10,6 +10,7 @@ from spectrace.errors import SpectraceError
 from spectrace.io.images import read_environment_map
 from spectrace.lights.base import Light, LightRows, light_row
 from spectrace.materials.parameters import REQUIRED, Parameter, Range
+from spectrace.scene import limits
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 
@@ -43,6 +44,10 @@ class EnvironmentMap(Light):
     up: tuple[float, float, float] = DEFAULT_UP
     front: tuple[float, float, float] = DEFAULT_FRONT
 
+    def __post_init__(self) -> None:
+        if problem := magnitude_problem(self.rgb, self.scale):
+            raise SpectraceError(problem, where="scale")
+
     def world_to_map_rows(self) -> tuple[np.ndarray, np.ndarray]:
         """The first two rows (x, y) of the rotation from world directions to the map's frame (+y its zenith, −z
         its centre); the kernel makes the third, x × y."""
@@ -66,11 +71,38 @@ def orientation_problem(up, front) -> str | None:
     return None
 
 
+def magnitude_problem(rgb: np.ndarray, scale: float) -> str | None:
+    """Why a map's texels (times `scale`) would overflow on the device, or None. Refused, not rescaled: as for any
+    spectrum (limits.MAX_SPECTRUM_VALUE), a texel's radiance reaches the film times the CMFs over the wavelength pdf
+    and summed over the samples in 32-bit floats, so a map far beyond 1e20 turns every sample that sees it into
+    infinity, dropped (a black sky); rescaling it quietly would change the light the scene asked for. The texels are
+    limited alone too, since the kernel weighs the basis spectra by them before it applies `scale`."""
+    largest = float(np.max(rgb)) if np.size(rgb) else 0.0
+    limit = limits.MAX_SPECTRUM_VALUE
+    if largest > limit:
+        return (
+            f"the map's texels reach {largest:.3g}, beyond {limit:.0e}, where the film's 32-bit sums overflow "
+            "(scale the image's values down)"
+        )
+    with np.errstate(over="ignore"):
+        scaled = largest * float(scale)
+    if not scaled <= limit:
+        return (
+            f"the map's texels times scale reach {scaled:.3g}, beyond {limit:.0e}, where the film's 32-bit sums "
+            "overflow (scale the scene's radiometric units down)"
+        )
+    return None
+
+
 def from_spec(spec, resolver, key: str) -> EnvironmentMap:
     if problem := orientation_problem(spec.up, spec.front):
         raise SpectraceError(problem, where=resolver.where(f"{key}.front"))
+    rgb = read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file"))
+    if problem := magnitude_problem(rgb, spec.scale):
+        name = "file" if float(np.max(rgb, initial=0.0)) > limits.MAX_SPECTRUM_VALUE else "scale"
+        raise SpectraceError(problem, where=resolver.where(f"{key}.{name}"))
     return EnvironmentMap(
-        read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file")),
+        rgb,
         spec.scale,
         tuple(float(v) for v in spec.up),  # type: ignore[arg-type]
         tuple(float(v) for v in spec.front),  # type: ignore[arg-type]

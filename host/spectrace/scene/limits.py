@@ -57,6 +57,11 @@ MAX_COORDINATE = 1e12
 # and summed over up to MAX_SPP samples in 32-bit floats; 1e20 leaves that room. The Sun's spectral radiance is
 # about 3e4 W/(m² sr nm).
 MAX_SPECTRUM_VALUE = 1e20
+# A transform whose smallest singular value is at most this fraction of its largest counts as singular: it
+# flattens what it places onto a plane or a line (a scale of 1e-200 twice underflows to exactly 0), and its inverse,
+# which turns normals and the kernels' rays into object space, does not exist or overflows. The fraction lies far
+# below the 2^-24 relative resolution of 32-bit coordinates, so only maps singular up to rounding are refused.
+SINGULAR_RELATIVE = 1e-12
 
 
 def format_bytes(count: float) -> str:
@@ -216,6 +221,22 @@ def coordinates_problem(points: np.ndarray) -> str | None:
     return None
 
 
+def linear_map_problem(linear: np.ndarray) -> str | None:
+    """Why the (3, 3) linear part of a transform cannot place a shape or a camera (non-finite entries, or singular by
+    SINGULAR_RELATIVE), or None. Singular values, not the determinant: the determinant of a finite map can overflow
+    or underflow where the map itself is well conditioned (a uniform scale of 1e120 or 1e-120)."""
+    matrix = np.asarray(linear, dtype=np.float64)
+    if not np.isfinite(matrix).all():
+        return "has NaN or infinite entries (the product of its steps overflows)"
+    singular = np.linalg.svd(matrix, compute_uv=False)
+    if not singular[0] > 0.0 or singular[-1] <= SINGULAR_RELATIVE * singular[0]:
+        return (
+            f"is singular (largest and smallest singular values {singular[0]:.3g} and {singular[-1]:.3g}): it would "
+            "flatten what it places"
+        )
+    return None
+
+
 def spectrum_magnitude_problem(values: np.ndarray) -> str | None:
     """Why a spectrum with these values would overflow on the device, or None."""
     largest = float(np.max(np.abs(values))) if np.size(values) else 0.0
@@ -242,8 +263,8 @@ def scene_geometry_problem(scene) -> str | None:
         matrix = np.asarray(instance.to_world, dtype=np.float64)
         if matrix.shape != (4, 4) or not np.all(np.isfinite(matrix)):
             return f"instance {index} ('{instance.name}') has a to_world that is not a finite 4 x 4 matrix"
-        if abs(np.linalg.det(matrix[:3, :3])) == 0.0:
-            return f"instance {index} ('{instance.name}') has a singular to_world"
+        if problem := linear_map_problem(matrix[:3, :3]):
+            return f"instance {index} ('{instance.name}') has a to_world that {problem}"
         for shape in instance.object.shapes:
             # The corners of the shape's box: an affine map keeps every point within their images' hull.
             lo, hi = shape.mesh.vertices.min(axis=0), shape.mesh.vertices.max(axis=0)

@@ -27,6 +27,7 @@ from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
 from spectrace.lights.area import emitter as area_emitter
+from spectrace.lights.area import peak_radiance
 from spectrace.materials import MATERIALS, material_textures, surface
 from spectrace.scene import limits, schema
 from spectrace.scene.model import (
@@ -580,7 +581,14 @@ class _Resolver:
         return display.with_transfer(parse_encoding(spec.encoding, where=self.where(f"{key}.encoding")))
 
     def emitter(self, spec, key: str) -> AreaEmitter:
-        """A shape's emitter: a radiance spectrum, a display's picture, or an emission texture, times scale."""
+        """A shape's emitter: a radiance spectrum, a display's picture, or an emission texture, times scale; the
+        radiance is checked once more with the scale applied, which alone may carry it past 32-bit range."""
+        emitter = self._emitter(spec, key)
+        if problem := limits.spectrum_magnitude_problem(np.array([peak_radiance(emitter)])):
+            raise SpectraceError(problem, where=self.where(f"{key}.scale" if spec.scale != 1.0 else f"{key}.radiance"))
+        return emitter
+
+    def _emitter(self, spec, key: str) -> AreaEmitter:
         radiance = spec.radiance
         if isinstance(radiance, schema.SpectrumSpec) and radiance.image is not None:
             drive, primaries = self.emitter_image(radiance, f"{key}.radiance")
@@ -651,6 +659,10 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
     camera = camera_from_spec(spec.camera)
     _check_camera(camera, path)
     film_response = _film_response(spec.film, resolver)
+    try:  # the rules between a filter's keys; the schema checked each key alone
+        pixel_filter = pixel_filters.from_spec(spec.film.filter)
+    except SpectraceError as exc:
+        raise SpectraceError(exc.message, where=resolver.where(f"film.{exc.where}")) from None
     return Scene(
         camera=camera,
         width=spec.film.width,
@@ -661,7 +673,7 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
         max_depth=spec.integrator.max_depth,
         exposure=spec.film.exposure,
         aovs=parse_aovs(spec.film.aovs),
-        pixel_filter=pixel_filters.from_spec(spec.film.filter),
+        pixel_filter=pixel_filter,
         film_response=film_response,
         rr_depth=spec.integrator.rr_depth,
         hide_environment=spec.integrator.hide_environment,
@@ -721,6 +733,8 @@ def _film_response(film: schema.FilmSpec, resolver: _Resolver) -> FilmResponse:
             extend_rgb=film.extend_rgb,
         )
     except SpectraceError as exc:
+        if exc.where == "film.wavelengths":
+            raise SpectraceError(exc.message, where=resolver.where(exc.where)) from None
         raise SpectraceError(str(exc), where=resolver.where("film")) from None
 
 

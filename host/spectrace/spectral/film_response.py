@@ -77,6 +77,19 @@ def observer_problem(label: str) -> str | None:
     return f"unknown observer '{label}' (use {', '.join(repr(name) for name in OBSERVERS)})"
 
 
+def observer_range_problem(label: str, wavelengths: tuple[float, float]) -> str | None:
+    """Why observer `label` sees nothing over the film's `wavelengths` (all of x̄, ȳ, z̄ zero there), or None."""
+    lo, hi = (float(value) for value in wavelengths)
+    inside = np.abs(GRID_NM - 0.5 * (lo + hi)) <= 0.5 * (hi - lo)
+    if np.any(observer_cmfs(label)[inside] > 0.0):
+        return None
+    seen = GRID_NM[np.any(observer_cmfs(label) > 0.0, axis=1)]
+    return (
+        f"observer '{label}' is zero over the film's wavelengths {lo:g}-{hi:g} nm (it responds over "
+        f"{seen[0]:g}-{seen[-1]:g} nm): its X, Y, Z would all be 0; widen or move film.wavelengths"
+    )
+
+
 @cache
 def observer_cmfs(label: str) -> np.ndarray:
     """(grid, 3) x̄, ȳ, z̄ of the observer `label` on the grid, zero where its table has no data."""
@@ -183,6 +196,12 @@ class FilmResponse:
             raise SpectraceError(f"the ΔE map's white Y must be a positive number, got {self.delta_e_white_y}")
         if problem := wavelength_range_problem(self.wavelengths):
             raise SpectraceError(problem)
+        # An observer zero over the whole range records nothing, and a film of nothing else has no wavelength to
+        # sample (its pdf is 0/0: every sample NaN). The film's own observer may be zero there when a sensor's
+        # channels are what the film is for (an infrared camera); its X, Y, Z are then black by request.
+        for label in (*([] if self.sensor is not None else [self.observer]), *self.observers):
+            if problem := observer_range_problem(label, self.wavelengths):
+                raise SpectraceError(problem, where="film.wavelengths")
         if self.sensor is not None:
             for name, curve in zip(self.sensor.channel_names, self.sensor.curves_on(self.grid_nm)):
                 if not curve.max() > 0:
