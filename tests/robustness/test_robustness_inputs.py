@@ -389,7 +389,9 @@ CASES = [
     ),
     replace("override-absurd-spp", "", "", "--spp", "exceeds the limit of 1048576", argv=("--spp", "2000000")),
     replace("override-zero-spp", "", "", "--spp", "greater than or equal to 1", argv=("--spp", "0")),
-    replace("override-non-integer-width", "", "", "--width", "valid integer", argv=("--width", "wide")),
+    replace(
+        "override-non-integer-width", "", "", "--width", "must be a whole number, got 'wide'", argv=("--width", "wide")
+    ),
     replace(
         "unknown-output-format", "", "", "out.tiff", "unknown image format '.tiff'", argv=("-o", "{folder}/out.tiff")
     ),
@@ -448,11 +450,11 @@ CASES = [
         "",
         "",
         "--exposure",
-        "exposure must be a finite number of stops, got nan",
+        "must be a finite number, got nan",
         argv=("--exposure", "nan"),
     ),
     replace(
-        "override-inf-exposure", "", "", "--exposure", "finite number of stops, got inf", argv=("--exposure", "inf")
+        "override-inf-exposure", "", "", "--exposure", "must be a finite number, got inf", argv=("--exposure", "inf")
     ),
     replace(
         "override-huge-exposure",
