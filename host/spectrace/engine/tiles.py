@@ -63,7 +63,7 @@ def plan_tiles(width: int, height: int, rows: int | None = None, where: str = "-
     """Tiles of `rows` rows (default: at most DEFAULT_TILE_PIXELS pixels, at least MIN_TILES tiles)."""
     if rows is None:
         rows = max(1, min(DEFAULT_TILE_PIXELS // width, -(-height // MIN_TILES)))
-    if not (isinstance(rows, int) and rows >= 1):
+    if isinstance(rows, bool) or not (isinstance(rows, int) and rows >= 1):
         raise SpectraceError(f"rows per tile must be a whole number >= 1, got {rows!r}", where=where)
     return TilePlan(width, height, min(rows, height))
 
