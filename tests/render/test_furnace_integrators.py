@@ -128,6 +128,10 @@ def _furnace(name: str, case_name: str, integrator: str, device) -> tuple[float,
     return float(mean), float(standard_error)
 
 
+def _id(name: str, case: Case) -> str:
+    return f"{name}-{case.name.replace(' ', '_')}"
+
+
 def _params():
     for name, case in ALL_CASES:
         for integrator in INTEGRATORS:
@@ -136,7 +140,7 @@ def _params():
             if integrator == "sppm" and case.sppm_refused:
                 continue
             marks = () if integrator in case.fast else (pytest.mark.slow,)
-            yield pytest.param(name, case.name, integrator, marks=marks, id=f"{name}-{case.name}-{integrator}")
+            yield pytest.param(name, case.name, integrator, marks=marks, id=f"{_id(name, case)}-{integrator}")
 
 
 def test_every_material_has_a_furnace_case():
@@ -160,7 +164,7 @@ def test_furnace(device, name, case_name, integrator):
         assert_within_standard_errors(mean, reference, np.hypot(standard_error, reference_error), what=what)
 
 
-@pytest.mark.parametrize("name, case", ALL_CASES, ids=[f"{n}-{c.name}" for n, c in ALL_CASES])
+@pytest.mark.parametrize("name, case", ALL_CASES, ids=[_id(n, c) for n, c in ALL_CASES])
 def test_sppm_refuses_exactly_the_mixed_lobes(name, case):
     problem = sppm_problem(_scene(case, "sppm"), 0, 0)
     assert (problem is not None) == case.sppm_refused, (name, case.name, problem)
