@@ -250,7 +250,8 @@ def render(
         saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
         if tile_rows is not None and cluster is None and workers is None and (saved is None or saved.tiles is None):
             raise SpectraceError(
-                "splits a render over --workers or --cluster (or resumes a tiled checkpoint); a render here is one piece",
+                "splits a render over --workers or --cluster (or resumes a tiled checkpoint); a render here is one "
+                "piece",
                 where="--tile-rows",
             )
         if cluster is not None or workers is not None or (saved is not None and saved.tiles is not None):
