@@ -5,11 +5,14 @@
  *   irradiance) arriving;
  * - light_hits: what a BSDF-sampled ray meets, as path_tracer.cl's path_segment weighs it for multiple importance
  *   sampling: at an emitter, emitter_hit_pdf from the ray's origin and vertex_emission; on a miss, the
- *   environment's environment_pdf and environment_radiance. Kept to the same calls, so a change there shows here.
+ *   environment's environment_pdf and environment_radiance. Kept to the same calls, so a change there shows here;
+ * - light_emissions: the first ray of a light path, as light_tracer.cl draws it (light_emission.cl
+ *   sample_emission after the same pick), with the flux it carries.
  * Directions are unit and world-space; points need no ray offset (tests place them in free space). Built without
  * scene-feature defines, so one program serves every light type (kernels/scene_features.h). */
 #include "kernel_entry.h"
 #include "path_state.cl"
+#include "light_emission.cl"
 
 inline SampledWavelengths harness_wavelengths(__global const float *lambda)
 {
@@ -74,4 +77,20 @@ KERNEL void light_hits(SCENE_KERNEL_PARAMS, __global const float *lambda, __glob
     pdf[i] = emitter_hit_pdf(&scene.lights[v.info.light], scene.shapes, ray.origin, v.p, v.n, v.wo, hit.b12);
     emitted[i] = vertex_emission(&scene, &w, &v, hit);
     light[i] = v.info.light;
+}
+
+/* weight: the flux (W/nm) the ray carries, 0 when nothing leaves; u: (pick and position, direction) numbers.
+ * scene_sphere: the bounding sphere distant and environment lights shine across, centre (xyz) and radius (w). */
+KERNEL void light_emissions(SCENE_KERNEL_PARAMS, __global const float *lambda, float4 scene_sphere,
+                            __global const float4 *u, __global float4 *weight, int count)
+{
+    int i = get_global_id(0);
+    if (i >= count) return;
+    Scene scene = SCENE_FROM_KERNEL_PARAMS;
+    SampledWavelengths w = harness_wavelengths(lambda);
+    LightBuffers buffers = light_buffers(&scene);
+    float2 u_pick = u[i].xy;
+    __global const Light *light = &scene.lights[pick_light_reusing(light_cdf, params->light_count, &u_pick)];
+    EmissionSample e;
+    weight[i] = sample_emission(light, &buffers, &w, scene_sphere, u_pick, u[i].zw, &e) ? e.weight : (float4)(0.0f);
 }

@@ -5,7 +5,8 @@ closed form, as tests/materials/test_bsdfs.py checks the BSDFs:
 - the directions next-event estimation draws follow that pdf (chi-square over a binning of directions);
 - what arrives is each type's closed form: I/d² for a point light, I·falloff(θ)/d² for a spot across its whole
   transition (the documented smoothstep in cos θ, or linear in θ, written here from its definition), E for a distant
-  light, the radiance of the texel a direction falls in for an environment map, L on an area light's emitting side.
+  light, the radiance of the texel a direction falls in for an environment map, L on an area light's emitting side;
+- the first rays of light paths (light tracing, BDPT) carry on average the light's flux, from its definition.
 
 Cases are listed by the light registry's names (spectrace.lights.LIGHTS, plus `area` on meshes and on every analytic
 shape, with and without an emission texture); a registered light without cases fails. Random numbers come from fixed
@@ -22,12 +23,21 @@ from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.geometry.analytic import ANALYTIC_SHAPES
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.lights import LIGHTS
-from spectrace.scene.model import Camera, DiffuseMaterial, EnvironmentMap, Scene
+from spectrace.scene.model import (
+    Camera,
+    ConstantEnvironment,
+    DiffuseMaterial,
+    DistantLight,
+    EnvironmentMap,
+    PointLight,
+    Scene,
+    SpotLight,
+)
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.uplift import uplift_illuminant
 from spectrace.textures import bitmap, spectral
-from stats_toolkit import assert_chi_square_fits
+from stats_toolkit import assert_chi_square_fits, assert_within_standard_errors, mean_and_standard_error
 
 HARNESS = "testing/lights.cl"
 LAMBDA_NM = np.array([420.0, 510.0, 600.0, 690.0], np.float32)  # whole nanometres: grid points of the table
@@ -284,6 +294,7 @@ def _area_cases() -> list[Case]:
 TEXELS = np.array([[[4.0, 1.0, 0.2], [0.3, 0.8, 3.0]]])
 BANDS_NM = np.array([400.0, 550.0, 700.0])
 BAND_TEXELS = np.array([[[1.0, 3.0, 0.5], [2.5, 0.2, 1.5]]])
+BAND_VALUES = np.array([np.interp(LAMBDA_NM, BANDS_NM, texel) for texel in BAND_TEXELS[0]])  # (2, 4)
 
 
 def _textured_cases() -> list[Case]:
@@ -294,7 +305,7 @@ def _textured_cases() -> list[Case]:
     image = bitmap.make(TEXELS, filter="nearest")
     rgb_values = TEXELS[0] @ _basis()  # (2, 4)
     bands = spectral.make(BAND_TEXELS, BANDS_NM, filter="nearest")
-    band_values = np.array([np.interp(LAMBDA_NM, BANDS_NM, texel) for texel in BAND_TEXELS[0]])
+    band_values = BAND_VALUES
     for name, texture, values in (("bitmap", image, rgb_values), ("spectral", bands, band_values)):
         shape = spectrace.shape("rectangle", GREY, spectrace.area_emitter(texture, scale=0.5), transform=steps)
 
@@ -392,6 +403,23 @@ class Lights:
         first = len(self.scene_args) + 3
         self.runner.run("light_hits", n, args, {first: pdf, first + 1: emitted, first + 2: light, first + 3: t})
         return {"pdf": pdf.astype(np.float64), "emitted": emitted.astype(np.float64), "light": light, "t": t}
+
+    def emit(self, n: int, seed: int, radius: float) -> np.ndarray:
+        """The flux (W/nm) each of n first rays of light paths carries; distant and environment lights shine
+        across a sphere of `radius` about the origin."""
+        u = np.random.default_rng(seed).random((n, 4), dtype=np.float32)
+        weight = np.zeros((n, 4), np.float32)
+        sphere = np.array([0.0, 0.0, 0.0, radius], np.float32)
+        args = [
+            *self.scene_args,
+            self.lam,
+            sphere,
+            self.runner.buffer(u),
+            self.runner.buffer(weight, True),
+            np.int32(n),
+        ]
+        self.runner.run("light_emissions", n, args, {len(self.scene_args) + 3: weight})
+        return weight.astype(np.float64)
 
 
 @pytest.fixture(scope="module")
@@ -568,3 +596,60 @@ def test_spot_profile_across_its_whole_transition(lights, linear):
     solid_angle = 2.0 * np.pi * np.trapezoid(kernel_profile[:, 0] * np.sin(fine), fine)
     flux = solid_angle * np.trapezoid(powered.intensity.values, GRID_NM)
     assert flux == pytest.approx(25.0, rel=1e-3)
+
+
+# ---------------------------------------------------------------- the flux leaving
+
+
+# Emitting areas of the area cases, from their shapes' definitions (docs/scene-format.md): the rectangle [-1, 1]²,
+# the sphere of radius 0.6, the unit disk, the unit cylinder stretched to length 3.
+EMITTING_AREA = {
+    "rectangle": 4.0,
+    "textured": 4.0,
+    "sphere": 4.0 * np.pi * 0.6**2,
+    "disk": np.pi,
+    "cylinder": 2.0 * np.pi * 3.0,
+}
+
+
+def _flux(case: Case, radius: float) -> np.ndarray:
+    """The flux (W/nm) the case's light emits, at LAMBDA_NM, from its definition: 4πI for a point light,
+    I·2π[(1 − cos θs) + (cos θs − cos θc)/2] for a spot (docs/scene-format.md), E·πR² across the disk a sphere of
+    radius R shows a distant light, πR² ∫L dω for an environment, π·A·L per emitting side of an area light."""
+    if case.scene.lights:
+        light = case.scene.lights[0]
+        if isinstance(light, PointLight):
+            return 4.0 * np.pi * _at(light.intensity)
+        if isinstance(light, SpotLight):
+            cos_s, cos_c = np.cos(np.radians([light.falloff_start_degrees, light.cutoff_degrees]))
+            return _at(light.intensity) * 2.0 * np.pi * ((1.0 - cos_s) + 0.5 * (cos_s - cos_c))
+        if isinstance(light, DistantLight):
+            return _at(light.irradiance) * np.pi * radius**2
+        if isinstance(light, ConstantEnvironment):
+            return _at(light.radiance) * 4.0 * np.pi * np.pi * radius**2
+        if isinstance(light, EnvironmentMap):
+            height, width = light.rgb.shape[:2]
+            edges = np.cos(np.pi * np.arange(height + 1) / height)
+            texel_solid_angle = (edges[:-1] - edges[1:]) * 2.0 * np.pi / width
+            radiance = light.scale * light.rgb.astype(np.float64) @ _basis()  # (height, width, 4)
+            return np.pi * radius**2 * np.einsum("hwk,h->k", radiance, texel_solid_angle)
+        raise AssertionError(f"{case.id}: no closed form for the flux of a {type(light).__name__}")
+    emitter = case.scene.shapes[0].emitter
+    area = EMITTING_AREA[case.id.split("-")[1]]
+    sides = 2.0 if emitter.two_sided else 1.0
+    if emitter.image is None:
+        return np.pi * area * sides * _at(emitter.radiance)
+    # The two texels each cover half the rectangle.
+    values = TEXELS[0] @ _basis() if emitter.image.primaries is not None else BAND_VALUES
+    return np.pi * area * sides * emitter.image.scale * values.mean(axis=0)
+
+
+@pytest.mark.parametrize("case", EVERY, ids=_ids(EVERY))
+def test_light_paths_start_with_the_lights_flux(lights, case):
+    """The mean flux the first rays of light paths carry (light_emission.cl, after the pick) is the light's flux,
+    within 4 standard errors (a point light's rays all carry the same: float rounding only)."""
+    radius = 3.0
+    weight = lights(case.scene).emit(20000, seed=70, radius=radius)
+    mean, standard_error = mean_and_standard_error(weight)
+    expected = _flux(case, radius)
+    assert_within_standard_errors(mean, expected, standard_error, SIGMAS, slack=2e-5 * expected, what=case.id)
