@@ -14,6 +14,7 @@ from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.scene.model import AreaEmitter, Camera, MirrorMaterial, PlasticMaterial, Scene, Shape
 from spectrace.spectral.spectrum import Spectrum
+from stats_toolkit import assert_within_standard_errors
 
 EMITTED = 0.5
 
@@ -60,5 +61,4 @@ def test_white_smooth_plastic_enclosure(device, integrator, max_depth):
     spp = 256 if integrator == "direct" else 64
     mean, standard_error = _measured_y(_box(material, integrator, max_depth, spp=spp), device)
     expected = EMITTED * max_depth
-    assert standard_error < 0.02 * expected
-    assert abs(mean - expected) < 4 * standard_error, (mean, expected, standard_error)
+    assert_within_standard_errors(mean, expected, standard_error, power=0.05)
