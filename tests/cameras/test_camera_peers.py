@@ -76,6 +76,7 @@ def _glowing(x: float, y: float, z: float, radius: float) -> str:
 
 
 @pytest.mark.peer
+@pytest.mark.slow
 def test_thinlens_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
     """Glowing spheres on black, 4 (in focus), 2 and 7 units from a lens of radius 0.5 focused at 4: circles of
     confusion of about 5.5 and 2.4 pixels, compared in 4 x 4-pixel blocks, fine enough that a pinhole render of the

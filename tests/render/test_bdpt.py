@@ -127,6 +127,7 @@ def strategy_device(device, monkeypatch):
 SEGMENTS = 3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("s", range(SEGMENTS + 1))
 def test_each_strategy_alone_estimates_its_path_length(strategy_device, s):
     """Paths of exactly 3 segments in the enclosure carry Le ρ²: strategy (s, 4 − s) alone, unweighted, estimates

@@ -512,6 +512,7 @@ intensity = {{ value = 5 }}
     )
 
 
+@pytest.mark.slow
 def test_shading_normals_seen_by_their_light(device, tmp_path):
     """The ceiling's light, to 5 %: the path tracer, which must find the cube's small lit spot from the ceiling by
     sampling its BSDF, is the noisier and takes the more samples."""
@@ -579,6 +580,7 @@ def test_what_splats_cannot_give_is_refused_in_one_line(device, tmp_path, change
     assert "\n" not in str(error.value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pixel_filter", ['{ type = "gaussian", stddev = 0.5 }', '{ type = "mitchell" }'])
 def test_pixel_filters_agree_with_the_path_tracer(device, tmp_path, pixel_filter):
     """A splat spread over the pixels whose filter covers it (with its weight f(dx) f(dy) / (∫f)², negative lobes
