@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import spectrace
-from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
+from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 from spectrace.engine.renderer import Renderer, upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.engine.scene_features import scene_feature_defines
