@@ -4,6 +4,11 @@ A binary is reused only when everything that could change it is unchanged: every
 in the kernels folder and every header generated from the host's registries (`generated_headers`), the entry file,
 the build options (defines included) and the device's identity (platform name and version, device name, driver
 version). pyopencl's own cache is bypassed so that only this one decides.
+
+The key names the kernels by their content, not by where they lie: the ``-I`` folders the compiler is given are left
+out of it, so a fresh clone, a wheel's copy or a second worktree with the same sources reuses the binaries already
+built (the binaries carry no path: builds are without debug information). A cached file carries the digest of its
+binary, so a damaged entry is rebuilt without ever reaching the runtime's loader.
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from spectrace.device.discovery import cache_root
 from spectrace.device.report import DeviceReport
 from spectrace.errors import SpectraceError
 
-_CACHE_FORMAT = b"spectrace-program-cache-v1"
+_CACHE_FORMAT = b"spectrace-program-cache-v2"
 _BASE_OPTIONS = ("-cl-std=CL1.2",)  # no -cl-fast-relaxed-math: the kernels rely on IEEE inf/nan
 _LOG_LINES = 40
 _DEFINE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -121,6 +126,15 @@ def _include_option(folder: Path) -> list[str]:
     return ["-I", f'"{text}"' if any(c.isspace() for c in text) else text]
 
 
+def _define_options(defines: Mapping[str, DefineValue] | None) -> list[str]:
+    options: list[str] = []
+    for name, value in sorted((defines or {}).items()):
+        if not _DEFINE_NAME.fullmatch(name):
+            raise SpectraceError(f"kernel define name '{name}' is not a C identifier")
+        options += ["-D", f"{name}={_define_value(name, value)}"]
+    return options
+
+
 def build_options(
     kernels_dir: Path,
     defines: Mapping[str, DefineValue] | None,
@@ -130,11 +144,13 @@ def build_options(
     options = [*_BASE_OPTIONS, *_include_option(kernels_dir)]
     if generated_dir is not None:
         options += _include_option(generated_dir)
-    for name, value in sorted((defines or {}).items()):
-        if not _DEFINE_NAME.fullmatch(name):
-            raise SpectraceError(f"kernel define name '{name}' is not a C identifier")
-        options += ["-D", f"{name}={_define_value(name, value)}"]
-    return " ".join(options + list(extra or []))
+    return " ".join(options + _define_options(defines) + list(extra or []))
+
+
+def keyed_options(defines: Mapping[str, DefineValue] | None, extra: list[str] | None) -> str:
+    """`build_options` less the include folders: what the cache key names, so that it depends on the sources'
+    content (named by their digest) and not on where they lie."""
+    return " ".join([*_BASE_OPTIONS, *_define_options(defines), *(extra or [])])
 
 
 def kernel_contract() -> dict[str, DefineValue]:
@@ -207,6 +223,21 @@ def program_cache_dir() -> Path:
     return cache_root() / "kernels"
 
 
+def _cache_entry(binary: bytes) -> bytes:
+    """A cache file's content: the format tag, the binary's SHA-256, then the binary."""
+    return _CACHE_FORMAT + b"\n" + hashlib.sha256(binary).digest() + binary
+
+
+def _cached_binary(entry: bytes) -> bytes | None:
+    """The binary of a cache file, or None when the file is not whole (truncated, overwritten, another format): a
+    damaged binary is never handed to the runtime, whose loader need not survive one."""
+    head = _CACHE_FORMAT + b"\n"
+    if not entry.startswith(head):
+        return None
+    digest, binary = entry[len(head) : len(head) + 32], entry[len(head) + 32 :]
+    return binary if binary and hashlib.sha256(binary).digest() == digest else None
+
+
 def _write_atomically(path: Path, data: bytes) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -261,24 +292,28 @@ class Device:
         headers = generated_headers()
         headers_digest = _headers_digest(headers)
         generated_dir = _write_generated_headers(headers, headers_digest)
-        option_text = build_options(kernels_dir, _with_contract(defines), options, generated_dir)
+        all_defines = _with_contract(defines)
+        option_text = build_options(kernels_dir, all_defines, options, generated_dir)
         sources_digest = hashlib.sha256(f"{kernels_digest(kernels_dir)} {headers_digest}".encode()).hexdigest()
-        key = program_cache_key(sources_digest, entry, option_text, device_identity(self.report))
+        key_options = keyed_options(all_defines, options)
+        key = program_cache_key(sources_digest, entry, key_options, device_identity(self.report))
         cache_file = program_cache_dir() / f"{key}.bin"
 
         program = None
         if cache_file.is_file() and not from_source:
             try:
-                program = _load_binary(self.context, self.cl_device, cache_file.read_bytes(), option_text)
+                binary = _cached_binary(cache_file.read_bytes())
             except OSError:
-                program = None
+                binary = None
+            if binary is not None:
+                program = _load_binary(self.context, self.cl_device, binary, option_text)
         cached = program is not None
         if program is None:
             program = self._build_from_source(entry, sources_digest, option_text)
             self.last_build_log = compiler_log(program, self.cl_device)
             binary = _program_binary(program)
             if binary is not None:
-                _write_atomically(cache_file, binary)
+                _write_atomically(cache_file, _cache_entry(binary))
         self.last_build_seconds = time.perf_counter() - started
         self.last_build_cached = cached
         return program
