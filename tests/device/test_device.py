@@ -13,6 +13,8 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -443,6 +445,38 @@ def test_a_corrupt_cached_binary_is_rebuilt(device, kernels_folder, damage):
     again = device.build_program("tests/affine.cl", {"OFFSET": 1})
     assert device.last_build_cached is True
     np.testing.assert_array_equal(_run_affine(device, again), np.arange(16, dtype=np.float32) * 3.0 + 1.0)
+
+
+def test_two_builders_of_one_program_build_it_once(device, kernels_folder, monkeypatch):
+    """A second builder of the same program (another test worker, a parallel sweep) waits for the first one's
+    binary instead of building it too: each opened device here is a separate context, as in two processes."""
+    builds = []
+    original = Device._build_from_source
+
+    def slow_build(self, *args):
+        builds.append(self)
+        time.sleep(1.0)  # holds the build open, so that the other builder surely finds no binary when it starts
+        return original(self, *args)
+
+    monkeypatch.setattr(Device, "_build_from_source", slow_build)
+    builders = [device, Device(device.report, device.cl_device)]
+    start = threading.Barrier(len(builders))
+    programs = {}
+
+    def build(builder):
+        start.wait()
+        programs[id(builder)] = builder.build_program("tests/affine.cl", {"OFFSET": 4})
+
+    threads = [threading.Thread(target=build, args=(builder,)) for builder in builders]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert len(builds) == 1 and len(_cached_binaries()) == 1
+    assert sorted(builder.last_build_cached for builder in builders) == [False, True]
+    for builder in builders:
+        expected = np.arange(16, dtype=np.float32) * 3.0 + 4.0
+        np.testing.assert_array_equal(_run_affine(builder, programs[id(builder)]), expected)
 
 
 @pytest.mark.parametrize("where", ["elsewhere", "a folder with spaces"])

@@ -13,6 +13,7 @@ binary, so a damaged entry is rebuilt without ever reaching the runtime's loader
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import os
@@ -20,7 +21,7 @@ import re
 import tempfile
 import time
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import cast
 
@@ -30,6 +31,11 @@ from spectrace import resources
 from spectrace.device.discovery import cache_root
 from spectrace.device.report import DeviceReport
 from spectrace.errors import SpectraceError
+
+try:
+    import fcntl
+except ImportError:  # Windows: no flock; processes building one program at once then both build it
+    fcntl = None  # type: ignore[assignment]
 
 _CACHE_FORMAT = b"spectrace-program-cache-v2"
 _BASE_OPTIONS = ("-cl-std=CL1.2",)  # no -cl-fast-relaxed-math: the kernels rely on IEEE inf/nan
@@ -238,6 +244,28 @@ def _cached_binary(entry: bytes) -> bytes | None:
     return binary if binary and hashlib.sha256(binary).digest() == digest else None
 
 
+@contextlib.contextmanager
+def _building(cache_file: Path) -> Iterator[None]:
+    """Held while one process builds the program of `cache_file`: another that wants the same program (a second
+    test worker, a parallel sweep) waits and then loads the binary instead of building it too. Where the lock file
+    cannot be made or locked, builds go on unlocked: the cache is only ever a saving."""
+    fd = None
+    if fcntl is not None:
+        try:
+            cache_file.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(cache_file.with_suffix(".lock"), os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o644)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except OSError:
+            if fd is not None:
+                os.close(fd)
+            fd = None
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)  # closing drops the lock; the empty file stays for the next build of this key
+
+
 def _write_atomically(path: Path, data: bytes) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -299,23 +327,32 @@ class Device:
         key = program_cache_key(sources_digest, entry, key_options, device_identity(self.report))
         cache_file = program_cache_dir() / f"{key}.bin"
 
-        program = None
-        if cache_file.is_file() and not from_source:
-            try:
-                binary = _cached_binary(cache_file.read_bytes())
-            except OSError:
-                binary = None
-            if binary is not None:
-                program = _load_binary(self.context, self.cl_device, binary, option_text)
-        cached = program is not None
+        program = None if from_source else self._load_cached(cache_file, option_text)
         if program is None:
-            program = self._build_from_source(entry, sources_digest, option_text)
-            self.last_build_log = compiler_log(program, self.cl_device)
-            binary = _program_binary(program)
-            if binary is not None:
-                _write_atomically(cache_file, _cache_entry(binary))
+            with contextlib.nullcontext() if from_source else _building(cache_file):
+                # Another process may have built it while this one waited for the lock.
+                program = None if from_source else self._load_cached(cache_file, option_text)
+                if program is None:
+                    program = self._build_and_store(entry, sources_digest, option_text, cache_file)
         self.last_build_seconds = time.perf_counter() - started
-        self.last_build_cached = cached
+        return program
+
+    def _load_cached(self, cache_file: Path, option_text: str) -> cl.Program | None:
+        try:
+            binary = _cached_binary(cache_file.read_bytes()) if cache_file.is_file() else None
+        except OSError:
+            binary = None
+        program = None if binary is None else _load_binary(self.context, self.cl_device, binary, option_text)
+        self.last_build_cached = program is not None
+        return program
+
+    def _build_and_store(self, entry: str, sources_digest: str, option_text: str, cache_file: Path) -> cl.Program:
+        self.last_build_cached = False
+        program = self._build_from_source(entry, sources_digest, option_text)
+        self.last_build_log = compiler_log(program, self.cl_device)
+        binary = _program_binary(program)
+        if binary is not None:
+            _write_atomically(cache_file, _cache_entry(binary))
         return program
 
     def _build_from_source(self, entry: str, sources_digest: str, option_text: str) -> cl.Program:
