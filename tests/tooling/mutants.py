@@ -209,11 +209,11 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/spectral/test_wavelength_estimator.py",),
     ),
     Mutant(
-        "cmf_lookup_reversed",
+        "cmf_lookup_off_by_one",
         "kernels/film.cl",
-        "return mad((float4)(frac), cmf[index + 1] - a, a);",
-        "return mad((float4)(1.0f - frac), cmf[index + 1] - a, a);",
-        "CMF table interpolated with the fraction reversed between its 1 nm nodes",
+        "float4 a = cmf[index];\n    return mad((float4)(frac), cmf[index + 1] - a, a);",
+        "float4 a = cmf[index + 1];\n    return mad((float4)(frac), cmf[min(index + 2, GRID_SAMPLES - 1)] - a, a);",
+        "CMF table read one 1 nm node late (off by one in the index: every wavelength weighted as λ + 1 nm)",
         ("tests/spectral/test_wavelength_estimator.py",),
     ),
     Mutant(
