@@ -154,6 +154,38 @@ MUTANTS: tuple[Mutant, ...] = (
             "tests/render/test_light_traced_cameras.py",
         ),
     ),
+    Mutant(
+        "shadow_ray_not_offset",
+        "kernels/direct_lighting.cl",
+        "float3 from = offset_ray_origin(p, n_geometric, ls.wi);",
+        "float3 from = p;",
+        "next-event shadow ray leaves from the surface point itself, not offset along the normal",
+        ("tests/render/test_path_integrator.py", "tests/render/test_validation.py::test_law_holds[inverse-square]"),
+    ),
+    Mutant(
+        "bdpt_mis_sum_x1.05",
+        "kernels/bdpt.cl",
+        "return 1.0f / (1.0f + sum);",
+        "return 1.0f / (1.0f + 1.05f * sum);",
+        "BDPT's MIS weight with the other strategies' sum 5 % high (the weights of a path add up to less than one)",
+        ("tests/render/test_bdpt.py",),
+    ),
+    Mutant(
+        "sppm_radius_update",
+        "kernels/sppm.cl",
+        "float shrink = (r_new / r) * (r_new / r);",
+        "float shrink = r_new / r;",
+        "SPPM's flux rescaled by the radius ratio where the area ratio (its square) belongs",
+        ("tests/render/test_sppm.py",),
+    ),
+    Mutant(
+        "camera_fov_x1.05",
+        "host/spectrace/cameras/shared.py",
+        "tan_half = np.tan(np.radians(camera.fov_degrees) / 2.0)",
+        "tan_half = np.tan(np.radians(1.05 * camera.fov_degrees) / 2.0)",
+        "perspective cameras' field of view 5 % wide",
+        ("tests/cameras",),
+    ),
     # BSDFs, Fresnel, microfacets.
     Mutant(
         "lambert_one_over_pi",
