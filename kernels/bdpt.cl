@@ -71,7 +71,10 @@ typedef struct {
     float4 le;          /* camera vertices on emitters: radiance emitted toward wo, W/(m² sr nm) */
     float2 uv;          /* texture coordinates, or an analytic shape's own (u, v) */
     float footprint;    /* texture footprint in uv units */
-    float pdf_fwd;      /* area density (1/m²) of reaching it along its own subpath; the light's point: pmf · p_A */
+    float pdf_fwd;      /* area density (1/m²) of reaching it along its own subpath; the light's point: pmf · p_A;
+                           where `delta`, per projected solid angle at the vertex before (bdpt_to_area) */
+    float pdf_fwd_area; /* where `delta`: pdf_fwd as an area density, for the strategies that end the subpath here
+                           (bdpt_connection_end) */
     float pdf_rev;      /* area density of reaching it from the other side's next vertex */
     float mis_sum;      /* Σ r_i² over the strategies that would make this subpath's vertices 0 (light) or 1 (camera)
                            up to this one from the other side, r_i the product of pdf_rev / pdf_fwd from vertex i to
@@ -79,7 +82,9 @@ typedef struct {
     float beam_pdf;     /* rays leaving it are parallel (lights at infinity, the orthographic camera): their density
                            per unit area across the beam, 1/m²; 0 otherwise */
     int kind;           /* BDPT_CAMERA, BDPT_LIGHT, BDPT_SURFACE, BDPT_MEDIUM (bdpt_medium.cl) */
-    int delta;          /* its subpath left it by a delta lobe */
+    int delta;          /* its subpath left it by a delta lobe (of a BSDF that may have others: plastic's smooth coat
+                           over its diffuse base); a strategy that joins it to the other side leaves it by the join
+                           instead (bdpt_connection_end) */
     int delta_light;    /* a light's point with a delta position (point, spot) */
     int material;       /* surfaces: material index */
     int light;          /* index of the light it lies on, or -1 */
@@ -422,6 +427,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         float pdf_reverse = 0.0f;
         if (bs.is_delta) {
             v->delta = 1;
+            v->pdf_fwd_area = v->pdf_fwd;
             v->pdf_fwd = bdpt_to_area(pdf_dir, prev, v); /* now per projected solid angle at prev */
             pdf_dir = 0.0f;
         } else {
@@ -475,6 +481,22 @@ inline float bdpt_light_pdf(const Scene *scene, const BdptVertex *v, float3 d, c
     return bdpt_to_area(light_direction_pdf(&scene->lights[v->light], v->n, d), v, next);
 }
 
+/* Vertex v as the last vertex of its subpath in a strategy that joins it to the other side (or, on a camera subpath,
+ * ends it on an emitter): the join, not the lobe the walk sampled there, leaves it, so it is no delta vertex of that
+ * path, and its densities are area densities, as the reverse ones the join gives it are. A BSDF with a delta lobe
+ * beside others (smooth plastic) has delta set at some vertices only; read as delta, such a vertex's ratio would
+ * compare a projected-solid-angle density with an area one, and the weights of a path would sum to more than one.
+ * pbrt-v4's BDPT MIS weight clears both ends' delta flags alike. */
+inline BdptVertex bdpt_connection_end(const BdptVertex *v)
+{
+    BdptVertex end = *v;
+    if (end.delta) {
+        end.delta = 0;
+        end.pdf_fwd = end.pdf_fwd_area;
+    }
+    return end;
+}
+
 /* The MIS weight (power heuristic) of strategy (s, t) for the path its vertices make: light[0 .. s-1] (light[0]
  * replaced by *sampled when s = 1) and camera[0 .. t-1]. The densities the strategy changes at the four vertices
  * beside the connection are computed here; the subpaths' stored ones serve for the rest. to_q: the unit direction
@@ -488,9 +510,11 @@ inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, co
     return 1.0f;
 #endif
     if (s + t == 2) return 1.0f;
-    const BdptVertex *qs = s == 1 ? sampled : (s > 0 ? &light[s - 1] : 0);
+    BdptVertex qs_end, pt_end = bdpt_connection_end(&camera[t - 1]);
+    if (s > 0) qs_end = bdpt_connection_end(s == 1 ? sampled : &light[s - 1]);
+    const BdptVertex *qs = s > 0 ? &qs_end : 0;
     const BdptVertex *qs_minus = s > 1 ? &light[s - 2] : 0;
-    const BdptVertex *pt = &camera[t - 1];
+    const BdptVertex *pt = &pt_end;
     const BdptVertex *pt_minus = t > 1 ? &camera[t - 2] : 0;
 
     /* Reverse densities the connection gives. */

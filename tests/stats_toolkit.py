@@ -1,7 +1,10 @@
 """The statistics every Monte Carlo test shares, so that each kind of check is made one way.
 
 - A mean against its expected value within k standard errors (`assert_within_standard_errors`), or against a bound
-  (`assert_at_most_within_standard_errors`); `mean_and_standard_error` gives both figures from replicates.
+  (`assert_at_most_within_standard_errors`); `mean_and_standard_error` gives both figures from replicates. A check
+  that passes says only that the error is below k standard errors (plus any slack): relative to the expected value,
+  that is the smallest error it would still catch, its power (`relative_power`). Every message states it, and a
+  check given `power` fails as a design error where it is weaker than that.
 - The furnace (`assert_furnace`): the weights of an importance sampler (f cos / pdf, 0 for a failed sample) average
   to the albedo they estimate. A white furnace, where the albedo is exactly known, catches energy lost or gained.
 - Reciprocity (`assert_reciprocal`): a BSDF evaluated both ways round gives the same value.
@@ -21,6 +24,12 @@ from scipy import stats
 
 SIGMAS = 4.0
 MIN_EXPECTED = 5.0
+POWER = 0.05
+
+
+class DesignError(Exception):
+    """A check too weak to see the error it is meant to: the test's fault, not the code's. Not an AssertionError,
+    so that a test expecting a comparison to fail (pytest.raises(AssertionError)) is not satisfied by it."""
 
 
 def mean_and_standard_error(values, axis=0) -> tuple[np.ndarray, np.ndarray]:
@@ -30,16 +39,41 @@ def mean_and_standard_error(values, axis=0) -> tuple[np.ndarray, np.ndarray]:
     return values.mean(axis=axis), values.std(axis=axis, ddof=1) / np.sqrt(n)
 
 
+def relative_power(expected, standard_error, sigmas: float = SIGMAS, slack: float = 0.0) -> np.ndarray:
+    """The smallest relative error a check within `sigmas` standard errors (plus `slack`) would catch: its
+    tolerance over |expected| (infinite where expected is 0)."""
+    expected, standard_error = np.asarray(expected, dtype=np.float64), np.asarray(standard_error, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(expected != 0, (sigmas * standard_error + slack) / np.abs(expected), np.inf)
+
+
+def assert_power(expected, standard_error, power: float = POWER, sigmas: float = SIGMAS, slack=0.0, what: object = ""):
+    """The check of a mean against `expected` within `sigmas` standard errors (plus `slack`) would catch a relative
+    error of `power` in every element: else the test is too weak to tell a right estimator from a wrong one."""
+    achieved = relative_power(expected, standard_error, sigmas, slack)
+    if not np.all(achieved <= power):
+        raise DesignError(
+            f"test design: {what}: too weak, power {np.max(achieved):.1%} above {power:.0%} (the smallest relative "
+            f"error {sigmas:g} standard errors would catch; more samples, or a larger region)"
+        )
+
+
 def assert_within_standard_errors(
-    mean, expected, standard_error, sigmas: float = SIGMAS, slack: float = 0.0, what: object = ""
+    mean, expected, standard_error, sigmas: float = SIGMAS, slack=0.0, what: object = "", power: float | None = None
 ) -> None:
     """|mean − expected| ≤ sigmas × standard error + slack, element-wise. `slack` absorbs a known deterministic error
-    (float32 rounding, a quadrature's), never the noise."""
-    mean, expected, standard_error = (np.asarray(x, dtype=np.float64) for x in (mean, expected, standard_error))
+    (float32 rounding, a quadrature's), never the noise. With `power`, the check must also be able to catch that
+    relative error (assert_power)."""
+    mean, expected, standard_error, slack = (
+        np.asarray(x, dtype=np.float64) for x in (mean, expected, standard_error, slack)
+    )
+    if power is not None:
+        assert_power(expected, standard_error, power, sigmas, slack, what)
     deviation = np.abs(mean - expected)
     assert np.all(deviation <= sigmas * standard_error + slack), (
         f"{what}: mean {mean} expected {expected} standard error {standard_error} "
-        f"(deviation {np.max(deviation / np.maximum(standard_error, 1e-300)):.3g} standard errors)"
+        f"(deviation {np.max(deviation / np.maximum(standard_error, 1e-300)):.3g} standard errors; power "
+        f"{np.max(relative_power(expected, standard_error, sigmas, slack)):.1%})"
     )
 
 

@@ -1,17 +1,22 @@
 """The shared statistics (tests/stats_toolkit.py) can fail: the chi-square test rejects a sampler whose density is
 wrong on half its domain and accepts the right one, its p values are uniform when the sampler is right (so the pooling
-rule and the degrees of freedom are honest), and the standard-error checks reject a biased mean. Fixed seeds."""
+rule and the degrees of freedom are honest), the standard-error checks reject a biased mean, and a check too weak
+to see a 5 % error, or a replica comparison too noisy to, fails as a design error while one strong enough catches
+that error. Fixed seeds."""
 
 import numpy as np
 import pytest
 
+from replica_agreement import assert_replicas_agree
 from stats_toolkit import (
+    DesignError,
     assert_chi_square_fits,
     assert_furnace,
     assert_reciprocal,
     assert_within_standard_errors,
     chi_square_p_value,
     pooled_bins,
+    relative_power,
 )
 
 EDGES = np.linspace(0.0, 1.0, 21)
@@ -135,3 +140,34 @@ def test_reciprocity_needs_light_and_agreement():
         assert_reciprocal(values, values * (1 + 1e-3), rtol=1e-4)
     with pytest.raises(AssertionError, match="no pair"):
         assert_reciprocal(np.zeros(5), np.zeros(5), rtol=1e-4)
+
+
+def test_power_is_the_relative_error_the_tolerance_lets_through():
+    np.testing.assert_allclose(relative_power([2.0, 4.0], [0.01, 0.01], sigmas=4, slack=0.02), [0.03, 0.015])
+    assert relative_power(0.0, 0.01)[()] == np.inf  # nothing to be relative to
+    with pytest.raises(DesignError, match="power 8.0%"):
+        assert_within_standard_errors(1.0, 1.0, 0.02, power=0.05)  # 4 standard errors of 2 %: blind below 8 %
+    assert_within_standard_errors(1.0, 1.0, 0.01, power=0.05)
+
+
+def _replicas(rng, mean: np.ndarray, noise: float, replicas: int = 8) -> np.ndarray:
+    """(replicas, height, width, 3) images of `mean` with independent Gaussian noise of relative size `noise`."""
+    return mean * (1.0 + noise * rng.standard_normal((replicas, *mean.shape)))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_replica_comparison_states_its_power_and_catches_five_percent(seed):
+    """A comparison whose power is under 5 % passes two renders of the same image and fails one 5 % too bright
+    (everywhere, or only in the region it is about); one too noisy to tell fails as a design error."""
+    rng = np.random.default_rng(seed)
+    mean = np.ones((8, 8, 3)) * np.linspace(0.5, 1.5, 8)[:, None, None]
+    region = np.zeros((8, 8), dtype=bool)
+    region[2:6, 2:6] = True
+    brighter = mean * np.where(region, 1.05, 1.0)[..., None]
+    # Per pixel 10 %, over 16 pixels of 3 channels and 8 replicas each: power about 5 x 0.1 / sqrt(48 x 4) = 3.6 %.
+    power = assert_replicas_agree(_replicas(rng, mean, 0.1), _replicas(rng, mean, 0.1), block=4, region=region)
+    assert 0.02 < power < 0.05
+    with pytest.raises(AssertionError, match=r"region mean .* differs by .* power [0-9.]+%"):
+        assert_replicas_agree(_replicas(rng, brighter, 0.1), _replicas(rng, mean, 0.1), block=4, region=region)
+    with pytest.raises(DesignError, match="too weak"):
+        assert_replicas_agree(_replicas(rng, mean, 0.3), _replicas(rng, mean, 0.3), block=4, region=region)

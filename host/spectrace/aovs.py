@@ -38,6 +38,10 @@ def parse_aovs(names: str | Sequence[str] | None, where: str | None = None) -> t
     name raises SpectraceError at `where`."""
     if names is None:
         return ()
+    if not isinstance(names, str | Sequence):
+        raise SpectraceError(
+            f"expected AOV names as a comma-separated string or a sequence, got {names!r}", where=where
+        )
     items = [n.strip() for n in names.split(",") if n.strip()] if isinstance(names, str) else list(names)
     for name in items:
         if not isinstance(name, str) or name not in AOV_NAMES:

@@ -21,7 +21,7 @@ from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
-from spectrace.geometry.mesh import TriangleMesh, shading_normals
+from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.image import Image
 from spectrace.lights.base import unit_direction
@@ -119,12 +119,21 @@ def mesh_from_trimesh(mesh: trimesh.Trimesh | trimesh.Scene) -> TriangleMesh:
     single: Any = mesh.to_mesh() if hasattr(mesh, "to_mesh") else mesh  # a trimesh.Scene merged, or anything else
     if not (hasattr(single, "vertices") and hasattr(single, "faces")):
         raise SpectraceError(f"expected a trimesh.Trimesh or trimesh.Scene, got {type(single).__name__}")
-    vertices, faces = np.asarray(single.vertices, np.float64), np.asarray(single.faces, np.int64)
+    try:
+        vertices, faces = np.asarray(single.vertices, np.float64), np.asarray(single.faces)
+    except (TypeError, ValueError) as exc:
+        raise SpectraceError(f"the mesh's vertices or faces are not arrays of numbers ({exc})", where="mesh") from None
+    if vertices.ndim != 2 or vertices.shape[1:] != (3,):
+        raise SpectraceError(f"the mesh's vertices must be (N, 3), got shape {vertices.shape}", where="mesh")
     if faces.ndim != 2 or faces.shape[1:] != (3,) or len(faces) == 0:
-        raise SpectraceError("the mesh has no triangles")
+        raise SpectraceError("the mesh has no triangles", where="mesh")
+    if faces.dtype.kind not in "iu":
+        raise SpectraceError(f"the mesh's faces must be vertex indices (integers), got {faces.dtype}", where="mesh")
     if not np.all(np.isfinite(vertices)):
-        raise SpectraceError("the mesh has NaN or infinite vertex coordinates")
-    return TriangleMesh(vertices=vertices, faces=faces)
+        raise SpectraceError("the mesh has NaN or infinite vertex coordinates", where="mesh")
+    if problem := faces_problem(faces, len(vertices)):
+        raise SpectraceError(f"the mesh's {problem}", where="mesh")
+    return TriangleMesh(vertices=vertices, faces=faces.astype(np.int64))
 
 
 def transformed(mesh: TriangleMesh, steps: Iterable[Mapping[str, Any]]) -> TriangleMesh:
@@ -401,6 +410,27 @@ def _check_camera(scene: Scene) -> None:
         raise SpectraceError("expected a spectrace.PixelFilter", where="pixel_filter")
 
 
+def _check_render_arguments(spp: Any, pass_spp: Any, spectral_bins: Any, tile_rows: Any) -> None:
+    """render()'s numbers, refused before a device opens: a pass_spp of -1 or 0.5 would never finish the
+    render, a spp of NaN or "16" would end it at once with a black image."""
+    from spectrace.scene import limits
+
+    problems = (
+        spp is not None and limits.spp_problem(spp),
+        limits.pass_spp_problem(pass_spp),
+        limits.whole_number_problem("spectral_bins", spectral_bins)
+        or (f"spectral_bins must be at least 0, got {spectral_bins}" if spectral_bins < 0 else None),
+        tile_rows is not None
+        and (
+            limits.whole_number_problem("tile_rows", tile_rows)
+            or (f"tile_rows must be at least 1, got {tile_rows}" if tile_rows < 1 else None)
+        ),
+    )
+    for problem in problems:
+        if problem:
+            raise SpectraceError(problem)
+
+
 @contextmanager
 def _no_bar(callback: Callable[[int, int], None] | None):
     yield callback
@@ -482,6 +512,7 @@ def render(
         raise SpectraceError(
             f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) reads a file)"
         )
+    _check_render_arguments(spp, pass_spp, spectral_bins, tile_rows)
     _check_camera(scene)
     if aovs is not None:
         from spectrace.aovs import parse_aovs
@@ -542,7 +573,15 @@ def measure_radiance(
     `wavelengths_nm` (default every 5 nm over 360-830 nm), with standard errors from `streams` independent
     estimates; the reading's Y is the luminance in cd/m² (a radiance meter, `spectrace.engine.meters`)."""
     from spectrace.engine.meters import DEFAULT_WAVELENGTHS_NM, RadianceMeter, measure
+    from spectrace.scene import limits
 
+    for name, count in (("streams", streams), ("samples_per_item", samples_per_item)):
+        if problem := limits.whole_number_problem(name, count) or (
+            f"{name} must be at least 1, got {count}" if count < 1 else None
+        ):
+            raise SpectraceError(problem)
+    if problem := limits.seed_problem(seed):
+        raise SpectraceError(problem)
     meter = RadianceMeter(_vector(origin, "origin"), _vector(direction, "direction"))
     wavelengths = DEFAULT_WAVELENGTHS_NM if wavelengths_nm is None else wavelengths_nm
     return measure(

@@ -25,6 +25,7 @@ from functools import cache
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.number_text import number_problem
 from spectrace.spectral.colorimetry import XYZ_TO_LINEAR_SRGB, spectrum_to_xyz, srgb_encode
 
 
@@ -175,10 +176,9 @@ def _chromaticity_white(text: str) -> np.ndarray | None:
     parts = text.replace(" ", "").split(",")
     if len(parts) != 2:
         return None
-    try:
-        x, y = (float(part) for part in parts)
-    except ValueError:
+    if any(number_problem(part) for part in parts):
         return None
+    x, y = (float(part) for part in parts)
     # Normal floats only: x / y of a subnormal y overflows, a subnormal x is a typo for 0.
     tiny = np.finfo(np.float64).tiny
     if not (tiny <= x < 1.0 and tiny <= y < 1.0 and x + y < 1.0):
@@ -191,10 +191,9 @@ def _chromaticity_white(text: str) -> np.ndarray | None:
 def _blackbody_white(text: str) -> np.ndarray | None:
     if not text.lower().endswith("k"):
         return None
-    try:
-        temperature_k = float(text[:-1])
-    except ValueError:
+    if number_problem(text[:-1]):
         return None
+    temperature_k = float(text[:-1])
     if not 500.0 <= temperature_k <= 100000.0:
         raise SpectraceError(
             f"black-body temperature must lie in 500..100000 K, got {temperature_k:g} K", where="--white-balance"

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import pickle
 import signal
 import threading
+import warnings
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
 
@@ -28,6 +30,9 @@ if TYPE_CHECKING:
 
 INSTALL_HINT = 'needs Dask distributed, which is not installed: pip install "spectrace[distributed]"'
 DEFAULT_CONNECT_TIMEOUT_S = 30.0
+# Waiting for a scheduler: from a moment to a day (a batch queue may take hours to start one; "forever" is a hang).
+MIN_CONNECT_TIMEOUT_S = 0.1
+MAX_CONNECT_TIMEOUT_S = 86400.0
 # How often the client, waiting for tiles, looks whether Ctrl-C asked it to stop.
 _STOP_POLL_S = 0.2
 
@@ -40,19 +45,51 @@ def require_distributed(where: str) -> Any:
     return distributed
 
 
+def local_worker_limit() -> int:
+    """The most worker processes a LocalCluster may start: this machine's cores (those this process may run on).
+    Each worker renders on its own OpenCL device, which already uses every core (or a GPU), so more processes
+    only compete for them, while each holds the scene and a whole-size film in memory."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # no affinity call on this platform (macOS, Windows)
+        return max(1, os.cpu_count() or 1)
+
+
+def check_cluster_options(cluster: str | None, workers: int | None, timeout_s: float) -> None:
+    """One line for options that could never connect: both or neither of a scheduler and local workers, a number
+    of local workers outside 1 .. local_worker_limit(), a timeout that is not a number of seconds in
+    [MIN_CONNECT_TIMEOUT_S, MAX_CONNECT_TIMEOUT_S]."""
+    if (cluster is None) == (workers is None):
+        raise SpectraceError(
+            "give either a scheduler address or a number of local workers",
+            where="--cluster" if cluster is not None else "--workers",
+        )
+    if workers is not None:
+        limit = local_worker_limit()
+        if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= limit:
+            raise SpectraceError(
+                f"a LocalCluster takes 1 to {limit} worker processes (this machine's cores: each worker's device "
+                f"already uses all of them), got {workers!r}",
+                where="--workers",
+            )
+    seconds_ok = isinstance(timeout_s, (int, float)) and not isinstance(timeout_s, bool)
+    if not (seconds_ok and MIN_CONNECT_TIMEOUT_S <= timeout_s <= MAX_CONNECT_TIMEOUT_S):
+        raise SpectraceError(
+            f"must be a number of seconds from {MIN_CONNECT_TIMEOUT_S:g} to {MAX_CONNECT_TIMEOUT_S:g} (a day), "
+            f"got {timeout_s!r}",
+            where="--cluster-timeout",
+        )
+
+
 @contextlib.contextmanager
 def connect(
     cluster: str | None = None, workers: int | None = None, timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S
 ) -> Iterator[Client]:
     """A Dask client of the scheduler at `cluster` (tcp://host:8786), or of a LocalCluster of `workers` worker
     processes (one thread each: a worker's OpenCL device already uses all its cores) started and stopped here."""
-    where = "--cluster" if cluster is not None else "--workers"
-    if (cluster is None) == (workers is None):
-        raise SpectraceError("give either a scheduler address or a number of local workers", where=where)
-    distributed = require_distributed(where)
+    check_cluster_options(cluster, workers, timeout_s)
+    distributed = require_distributed("--cluster" if cluster is not None else "--workers")
     if workers is not None:
-        if workers < 1:
-            raise SpectraceError(f"needs at least 1 worker, got {workers}", where=where)
         with _workers_ignoring_ctrl_c():
             local = distributed.LocalCluster(
                 n_workers=workers,
@@ -142,9 +179,14 @@ class DaskTiles:
         # The job goes to the cluster once, as a task that returns it: a worker fetches it once from whichever worker
         # holds it, and when every holder is lost the scheduler recomputes it from the task (scattered data would be
         # lost for good, and with it every tile still to render).
-        shipped = self.client.submit(_the_job, job, pure=False)
-        pending = {self.client.submit(render_tile_task, shipped, index, pure=False) for index in indices}
-        tiles = {future.key: index for future, index in zip(pending, indices)}
+        with warnings.catch_warnings():
+            # Dask warns of a large graph (a big scene's buffers in the task): sending them with the task is the
+            # point, see above.
+            warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
+            shipped = self.client.submit(_the_job, job, pure=False)
+        futures = [self.client.submit(render_tile_task, shipped, index, pure=False) for index in indices]
+        tiles = {future.key: index for future, index in zip(futures, indices)}
+        pending = set(futures)
         try:
             while pending:
                 if stop():

@@ -16,6 +16,7 @@ import numpy as np
 from spectrace.engine.device_types import PIXEL_FILTER_BINS, PIXEL_FILTERS
 from spectrace.errors import SpectraceError
 from spectrace.materials.parameters import Parameter, Range
+from spectrace.number_text import number_problem
 
 FilterType = Literal["box", "tent", "gaussian", "mitchell"]
 RADIUS_LIMIT = 16.0  # pixels: a wider filter blurs more than any use asks and wastes samples far from the pixel
@@ -165,10 +166,9 @@ def parse_filter_option(text: str, where: str = "--filter") -> PixelFilter:
             raise SpectraceError(f"{name} filter has no key {key!r} ({allowed})", where=where)
         if not equals or key in values:
             raise SpectraceError(f"give each key once as {key}=NUMBER, got {item!r}", where=where)
-        try:
-            values[key] = float(value)
-        except ValueError:
-            raise SpectraceError(f"{key} must be a number, got {value!r}", where=where) from None
+        if problem := number_problem(value):
+            raise SpectraceError(f"{key} {problem}", where=where)
+        values[key] = float(value)
     try:
         return PixelFilter(name, **values)  # type: ignore[arg-type]
     except SpectraceError as error:

@@ -181,12 +181,17 @@ def spot_light_cone(device: Device) -> list[Check]:
         (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), Spectrum.constant(intensity), cutoff_degrees=30.0, falloff_start_degrees=20.0
     )
     checks = []
-    for angle, falloff in ((0.0, 1.0), (15.0, 1.0), (35.0, 0.0)):
+    # Within the transition, pbrt-v4's smoothstep 3t² − 2t³ of t = (cos θ − cos 30°) / (cos 20° − cos 30°).
+    t = (np.cos(np.radians([22.0, 25.0, 28.0])) - np.cos(np.radians(30.0))) / (
+        np.cos(np.radians(20.0)) - np.cos(np.radians(30.0))
+    )
+    smoothstep = t * t * (3.0 - 2.0 * t)
+    for angle, falloff in ((0.0, 1.0), (15.0, 1.0), *zip((22.0, 25.0, 28.0), smoothstep), (35.0, 0.0)):
         direction = np.array([np.sin(np.radians(angle)), 0.0, np.cos(np.radians(angle))])
         checks.append(
             _light_irradiance(
                 "spot light",
-                f"E = I·falloff / r² at {angle:g}° off axis (cutoff 30°)",
+                f"E = I·falloff / r² at {angle:g}° off axis (smoothstep in cos θ from 20° to 30°)",
                 intensity * falloff / 4.0,
                 spot,
                 IrradianceMeter(tuple(2.0 * direction), tuple(-direction)),

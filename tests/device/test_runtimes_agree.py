@@ -13,7 +13,7 @@ from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 
 SIZE, BLOCK = 24, 8
-REPLICAS, REPLICA_SPP = 8, 4
+REPLICAS, REPLICA_SPP = 8, 32
 
 
 def _other_runtimes(device) -> list[str]:

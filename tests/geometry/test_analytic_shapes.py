@@ -131,10 +131,13 @@ def test_hits_agree_with_mitsuba(kernel_runner, mitsuba_scalar_spectral, kind):
     shape = mi.load_dict({"type": kind, "to_world": mi.ScalarTransform4f(surface.to_world.tolist())})
     origins, directions = _rays(surface, 300, seed=3)
     hit, p, n, dpdu, dpdv = _device_hits(kernel_runner, surface, origins, directions)
-    compared = 0
+    compared = disagreed = 0
     for i in range(len(origins)):
         si = shape.ray_intersect(mi.Ray3f(origins[i].tolist(), directions[i].tolist()))
-        if not si.is_valid() or not np.isfinite(hit[i, 0]):
+        if si.is_valid() != bool(np.isfinite(hit[i, 0])):
+            disagreed += 1  # either one hits alone: only a ray grazing a rim may, within float rounding
+            continue
+        if not si.is_valid():
             continue
         compared += 1
         assert hit[i, 0] == pytest.approx(si.t, rel=1e-4, abs=1e-5)
@@ -145,7 +148,7 @@ def test_hits_agree_with_mitsuba(kernel_runner, mitsuba_scalar_spectral, kind):
         scale = max(1.0, np.abs(np.array(si.dp_du)).max(), np.abs(np.array(si.dp_dv)).max())
         np.testing.assert_allclose(dpdu[i, :3], np.array(si.dp_du), atol=2e-4 * scale)
         np.testing.assert_allclose(dpdv[i, :3], np.array(si.dp_dv), atol=2e-4 * scale)
-    assert compared > 100
+    assert compared > 100 and disagreed <= 1, (compared, disagreed)  # one ray in 300 may graze a rim
     # The area of the placed shape, as Mitsuba reports it (under a uniform scale across z, which Mitsuba needs).
     assert surface.area() == pytest.approx(shape.surface_area(), rel=1e-5)
 

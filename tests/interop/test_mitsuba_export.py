@@ -241,3 +241,26 @@ def test_a_shape_with_an_interior_medium_is_refused(tmp_path, mitsuba_scalar_spe
     scene = load_pbrt_scene(path).with_overrides(pixel_filter=BOX_FILTER)
     with pytest.raises(SpectraceError, match="interior medium"):
         scene_to_mitsuba_dict(scene, tmp_path)
+
+
+def test_each_exported_bitmap_gets_its_own_image_file(tmp_path, monkeypatch, mitsuba_scalar_spectral):
+    """The export writes each bitmap's linear values once and names that file in the bitmap's entry. Those values
+    are often a temporary (a grey image repeated into RGB, float64 texels made float32), freed once written, whose
+    id() the next one may get: every bitmap must still name a file of its own values. The second round makes every
+    id() the same, as a freed array's is for the next one, since the interpreter reuses ids only at times."""
+    from spectrace.interop import mitsuba_export
+    from spectrace.io.exr import read_exr
+    from spectrace.textures import bitmap
+
+    greys = [0.125 * k for k in range(1, 8)]
+    for round_ in ("ids as they come", "every id the same"):
+        if round_ == "every id the same":
+            monkeypatch.setattr(mitsuba_export, "id", lambda _: 1, raising=False)
+        folder = tmp_path / round_.replace(" ", "-")
+        folder.mkdir()
+        exporter = mitsuba_export.MitsubaExport(None, folder)  # type: ignore[arg-type]
+        for grey in greys:
+            entry = bitmap.to_mitsuba(bitmap.make(np.full((2, 3, 1), grey), filter="nearest"), exporter)
+            channels, _ = read_exr(entry["filename"])
+            assert np.all(channels["RGB"] == np.float32(grey)), (round_, grey, entry["filename"])
+        assert len(list(folder.glob("*.exr"))) == len(greys), round_

@@ -150,7 +150,7 @@ def test_fog_behind_a_thin_sheet_renders_like_mitsuba_volpath(tmp_path, device, 
     through the sheet do not count toward max_depth: 16 replicas each, 4 x 4-pixel blocks and the image mean within
     5 standard errors (before: 0.85, 0.88 and 2.5 times Mitsuba's mean, 9 to 12 standard errors off)."""
     mi = mitsuba_scalar_spectral
-    replicas, replica_spp, block = 16, 128, 4
+    replicas, replica_spp, block = 16, 320, 4
     path = tmp_path / "fog.xml"
     path.write_text(FOG_SPHERE.format(inside=inside))
     assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)

@@ -49,7 +49,7 @@ def test_ptracer_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral)
     """Both light tracers, spectral, 8 independent images each; 8 x 8-pixel block means and the image mean agree
     within 5 standard errors (tests/replica_agreement.py)."""
     mi = mitsuba_scalar_spectral
-    replicas, replica_spp, size, block = 8, 4, 32, 8
+    replicas, replica_spp, size, block = 8, 24, 32, 8
     path = _xml(tmp_path, size)
     by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block)
     assert by_mitsuba.mean() > 0.02  # the comparison saw a lit image

@@ -102,16 +102,19 @@ def test_imported_shapes_meet_rays_where_mitsuba_does(tmp_path, kernel_runner, m
         args += [runner.buffer(o, writable=True) for o in outputs] + [np.int32(n)]
         runner.run("shape_hits", n, args, {3 + k: o for k, o in enumerate(outputs)})
         hit, p, normal = outputs[0], outputs[1], outputs[2]
-        compared = 0
+        compared = disagreed = 0
         for i in range(n):
             si = theirs[name].ray_intersect(mi.Ray3f(origins[i].tolist(), directions[i].tolist()))
-            if not si.is_valid() or not np.isfinite(hit[i, 0]):
+            if si.is_valid() != bool(np.isfinite(hit[i, 0])):
+                disagreed += 1  # either one hits alone: only a ray grazing a rim may, within float rounding
+                continue
+            if not si.is_valid():
                 continue
             compared += 1
             np.testing.assert_allclose(p[i, :3], np.array(si.p), atol=1e-4, err_msg=name)
             np.testing.assert_allclose(normal[i, :3], np.array(si.n), atol=1e-4, err_msg=name)
             np.testing.assert_allclose((hit[i, 1:3] - np.array(si.uv) + 0.5) % 1.0 - 0.5, 0.0, atol=3e-5, err_msg=name)
-        assert compared > 40, name
+        assert compared > 40 and disagreed <= 1, (name, compared, disagreed)  # one ray in 200 may graze a rim
 
 
 @pytest.mark.peer
@@ -156,6 +159,7 @@ def test_flip_normals_turns_the_analytic_shapes_as_in_mitsuba(tmp_path, kernel_r
         compared = 0
         for i in range(n):
             si = theirs[kind].ray_intersect(mi.Ray3f(origins[i].tolist(), directions[i].tolist()))
+            assert si.is_valid() == bool(np.isfinite(outputs[0][i, 0])), (kind, i)  # both hit, or both miss
             if si.is_valid():
                 compared += 1
                 np.testing.assert_allclose(outputs[2][i, :3], np.array(si.n), atol=1e-5, err_msg=kind)

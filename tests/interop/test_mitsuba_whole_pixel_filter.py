@@ -58,7 +58,7 @@ def test_bdpt_import_renders_like_mitsubas_path_tracer(tmp_path, device, mitsuba
     """REPLICAS independent images each; 8 x 8-pixel block means and the image mean agree within 5 standard errors
     (tests/replica_agreement.py)."""
     mi = mitsuba_scalar_spectral
-    replicas, replica_spp, size, block = 8, 4, 32, 8
+    replicas, replica_spp, size, block = 8, 12, 32, 8
     scene = mi.load_file(str(_xml(tmp_path, size, '<rfilter type="box"/>')), integrator="path")
     by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
 

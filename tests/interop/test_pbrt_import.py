@@ -764,8 +764,8 @@ def test_scene_renders_as_the_same_scene_imported_from_mitsuba_xml(tmp_path, dev
     from_xml = load_mitsuba_scene(tmp_path / "scene.xml").with_overrides(seed=1)
     from_pbrt = load_pbrt_scene(tmp_path / "scene.pbrt").with_overrides(seed=2)
     assert from_pbrt.max_depth == from_xml.max_depth == 4
-    ours = spectrace_replicas(Renderer(from_pbrt, device), replicas=8, replica_spp=8)
-    theirs = spectrace_replicas(Renderer(from_xml, device), replicas=8, replica_spp=8)
+    ours = spectrace_replicas(Renderer(from_pbrt, device), replicas=8, replica_spp=24)
+    theirs = spectrace_replicas(Renderer(from_xml, device), replicas=8, replica_spp=24)
     assert ours[..., 1].mean() > 0.05  # the scene is lit
     assert_replicas_agree(ours, theirs, block=4)
 
@@ -779,7 +779,7 @@ def test_scene_renders_as_mitsuba_renders_the_same_scene(tmp_path, device, mitsu
     mi = mitsuba_scalar_spectral
     (tmp_path / "scene.xml").write_text(MITSUBA_XML)
     (tmp_path / "scene.pbrt").write_text(PBRT_SCENE)
-    replicas, replica_spp = 16, 8
+    replicas, replica_spp = 16, 40
     mitsuba_scene = mi.load_file(str(tmp_path / "scene.xml"))
     by_mitsuba = np.stack([np.array(mi.render(mitsuba_scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
     ours = spectrace_replicas(Renderer(load_pbrt_scene(tmp_path / "scene.pbrt"), device), replicas, replica_spp)

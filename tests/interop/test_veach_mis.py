@@ -48,5 +48,7 @@ def test_exported_veach_mis_renders_like_spectrace(tmp_path, device, mitsuba_sca
         [mitsuba_film_xyz(mi.render(mitsuba_scene, spp=replica_spp, seed=seed), mi) for seed in range(replicas)]
     )
     by_spectrace = spectrace_replicas(Renderer(scene, device), replicas, replica_spp)
-    assert_replicas_agree(by_spectrace, by_mitsuba, block)
+    # Power 29 % on the image's mean (its small, bright lamps seen in the glossy plates): 5 % would take 33 times
+    # the samples; the blocks, at 10 %, are the sharper check here.
+    assert_replicas_agree(by_spectrace, by_mitsuba, block, power=0.35)
     assert by_mitsuba[..., 1].mean() > 0.05

@@ -284,6 +284,7 @@ def test_smooth_dielectric_picks_reflection_with_fresnel_frequency(kernel_runner
 ROUGH_ETAS = [1.5, 1.78472]
 ROUGH_ALPHAS = [0.05, 0.3, 0.8]
 ROUGH_THETAS_DEG = [0.0, 30.0, 60.0, 80.0]
+FRESNEL_SAMPLES = 400_000
 
 
 def _flux_weights(wo, wi, weight, eta):
@@ -314,10 +315,19 @@ def test_rough_dielectric_conserves_energy(kernel_runner, eta, distribution):
                     assert mean > 0.97, (where, mean)
                 if alpha <= 0.05 and theta_deg <= 60 and side > 0:
                     # ...and reflects about Fresnel's F (from outside: inside, the critical angle is too near).
-                    reflected = np.where(wi[:, 2] * wo[:, 2] > 0, flux, 0.0)
+                    # F is near 0.04, so resolving it to 5 % takes its own, larger sample; the slack is the
+                    # rough interface's own departure from F (microfacet normals 0.05 rad off the mean, masking:
+                    # below 1 % of F).
+                    wo_f = np.repeat(wo[:1], FRESNEL_SAMPLES, axis=0)
+                    u_f = rng.random((FRESNEL_SAMPLES, 4)).astype(np.float32)
+                    wi_f, weight_f, _, _ = _rough_sample(kernel_runner, wo_f, eta, alpha, u_f, distribution)
+                    flux_f = _flux_weights(wo_f, wi_f, weight_f, eta)
+                    reflected = np.where(wi_f[:, 2] * wo_f[:, 2] > 0, flux_f, 0.0)
                     fresnel = _fresnel_angles(np.array([np.cos(np.radians(theta_deg))]), eta)[0]
                     reflected_mean, reflected_se = mean_and_standard_error(reflected)
-                    assert_within_standard_errors(reflected_mean, fresnel, reflected_se, slack=0.01, what=where)
+                    assert_within_standard_errors(
+                        reflected_mean, fresnel, reflected_se, slack=0.01 * fresnel, what=where, power=0.05
+                    )
 
 
 @pytest.mark.parametrize("eta", ROUGH_ETAS)

@@ -224,7 +224,7 @@ def test_direct_integrator_equals_path_at_depth_two(device):
     )
     camera = spectrace.Camera(origin=(0.0, -3.0, 2.0), target=(0.0, 0.0, 0.0))
     scene = Scene(camera=camera, width=32, height=32, shapes=[floor, bulb, panel], max_depth=2)
-    path = spectrace_replicas(Renderer(scene, device), 8, 8)
-    direct = spectrace_replicas(Renderer(scene.with_overrides(integrator="direct", seed=1), device), 8, 8)
+    path = spectrace_replicas(Renderer(scene, device), 8, 24)
+    direct = spectrace_replicas(Renderer(scene.with_overrides(integrator="direct", seed=1), device), 8, 24)
     assert_replicas_agree(direct, path, 8)
     assert path[..., 1].mean() > 0.05

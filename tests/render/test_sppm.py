@@ -51,13 +51,12 @@ def test_spot_light_through_a_glass_slab(device, tmp_path):
     scene = spectrace.load_scene(_write(tmp_path, text))
     images = _independent_renders(scene, device, 6, 64)[:, 6:10, 6:10, 1]
     mean, standard_error = mean_and_standard_error(images.mean(axis=(1, 2)))
-    assert standard_error < 0.02 * expected
     # The blur's bias: near the axis E(ρ) = E0 (1 − 3ρ²/(2D²) + ...) with D the apparent distance (≥ 0.96), so a
     # disk of radius r averages it to E0 (1 − 3r²/(4D²)); r starts at INITIAL_RADIUS_PIXELS pixel footprints
     # (1.37 cm each at the screen) and only shrinks. The inverse-square terms beyond are smaller.
     r = sppm.INITIAL_RADIUS_PIXELS * 2 * np.tan(np.radians(20)) * 0.3 / 16
     bound = 0.75 * (r / 0.96) ** 2 * expected
-    assert_within_standard_errors(mean, expected, standard_error, slack=bound)
+    assert_within_standard_errors(mean, expected, standard_error, slack=bound, power=0.05)
 
 
 def _line_centroid_expected(scene, line_nm: float, sigma_nm: float) -> float:

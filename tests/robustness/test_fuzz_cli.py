@@ -24,7 +24,7 @@ import pytest
 from hypothesis import HealthCheck, given
 from hypothesis import strategies as st
 
-from fuzz_settings import fuzz_settings
+from fuzz_settings import LONG_RUN_EXAMPLES, fuzz_settings
 from scene_text import glowing_rectangle
 from spectrace import cli
 
@@ -146,7 +146,8 @@ def _options(table: dict, flags: list[str], max_size: int):
 
 # ---------------------------------------------------------------- running one example
 
-COUNTS: dict[str, dict[int, int]] = {}
+COUNTS: dict[str, dict[int, int]] = {}  # command -> exit status -> runs
+EXAMPLES = {"render": 300, "bench": 150, "display": 100, "spectra plot": 40}  # each command's fuzz test's examples
 
 
 def _example_folder(workspace: Path) -> Path:
@@ -223,7 +224,7 @@ def workspace(tmp_path_factory):
 # ---------------------------------------------------------------- the commands
 
 
-@_settings(300)
+@_settings(EXAMPLES["render"])
 @given(options=_options(RENDER_OPTIONS, RENDER_FLAGS, max_size=4))
 def test_render_options(workspace, options):
     folder = _example_folder(workspace)
@@ -289,7 +290,7 @@ def _bench_argv(mode: str):
     return _options(table, [*flags, "--json"], max_size=4).map(lambda options: [*([(mode,)] if mode else []), *options])
 
 
-@_settings(150)
+@_settings(EXAMPLES["bench"])
 @given(argv=st.sampled_from(list(BENCH_MODES)).flatmap(_bench_argv))
 def test_bench_options(stubbed_bench, argv):
     argv = ["bench", *_absolute(Path("."), argv)]
@@ -308,7 +309,7 @@ def test_bench_options(stubbed_bench, argv):
             assert math.isfinite(float(seconds)), argv
 
 
-@_settings(100)
+@_settings(EXAMPLES["display"])
 @given(
     command=st.sampled_from(["compare", "match", "metamerism"]),
     rgb=RGB,
@@ -332,7 +333,7 @@ def test_display_options(workspace, command, rgb, source, target, options, plot)
 
 
 @pytest.mark.filterwarnings("ignore:Glyph .* missing from font")  # odd characters in titles draw as boxes
-@_settings(40)
+@_settings(EXAMPLES["spectra plot"])
 @given(
     names=st.lists(st.one_of(st.sampled_from(["cie:D65", "cie:A", "cornell_box/light"]), TEXT), min_size=1, max_size=3),
     output=FILE_NAMES,
@@ -348,6 +349,13 @@ def test_spectra_plot_options(workspace, names, output, title, normalise):
 
 
 def test_fuzz_counts():
-    """How many cases ran, by command and exit status (shown with -s)."""
-    for command in ("render", "bench", "display", "spectra plot"):
+    """Each fuzz test that ran in this session ran every one of its examples, and its command both accepted some
+    values (exit 0) and refused others (exit 2), so neither path went untried. The counts are printed with -s."""
+    ran = [command for command in EXAMPLES if command in COUNTS]
+    if not ran:
+        pytest.skip("counts what the fuzz tests above ran, and none ran in this session")
+    for command in ran:
         _report(command)
+        counts = COUNTS[command]
+        assert sum(counts.values()) == (LONG_RUN_EXAMPLES or EXAMPLES[command]), (command, counts)
+        assert set(counts) == {0, 2}, (command, counts)

@@ -98,7 +98,8 @@ CASES = [
         "unknown key 'valeu' (did you mean 'value'?)",
     ),
     replace("wrong-type-int", "width = 8", 'width = "eight"', "film.width", "valid integer"),
-    replace("wrong-type-fraction", "width = 8", "width = 8.5", "film.width", "fractional part"),
+    replace("wrong-type-fraction", "width = 8", "width = 8.5", "film.width", "valid integer, got 8.5"),
+    replace("wrong-type-bool-int", "width = 8", "width = true", "film.width", "valid integer, got true"),
     replace("wrong-type-vector", "origin = [0, 0, 5]", 'origin = "here"', "camera.origin", "valid tuple"),
     replace("wrong-type-table", "[film]\nwidth = 8\nheight = 6", "film = 3", "film", "expected a table"),
     replace("short-vector", "origin = [0, 0, 5]", "origin = [0, 5]", "camera.origin[2]", "required key is missing"),
@@ -388,7 +389,9 @@ CASES = [
     ),
     replace("override-absurd-spp", "", "", "--spp", "exceeds the limit of 1048576", argv=("--spp", "2000000")),
     replace("override-zero-spp", "", "", "--spp", "greater than or equal to 1", argv=("--spp", "0")),
-    replace("override-non-integer-width", "", "", "--width", "valid integer", argv=("--width", "wide")),
+    replace(
+        "override-non-integer-width", "", "", "--width", "must be a whole number, got 'wide'", argv=("--width", "wide")
+    ),
     replace(
         "unknown-output-format", "", "", "out.tiff", "unknown image format '.tiff'", argv=("-o", "{folder}/out.tiff")
     ),
@@ -447,11 +450,11 @@ CASES = [
         "",
         "",
         "--exposure",
-        "exposure must be a finite number of stops, got nan",
+        "must be a finite number, got nan",
         argv=("--exposure", "nan"),
     ),
     replace(
-        "override-inf-exposure", "", "", "--exposure", "finite number of stops, got inf", argv=("--exposure", "inf")
+        "override-inf-exposure", "", "", "--exposure", "must be a finite number, got inf", argv=("--exposure", "inf")
     ),
     replace(
         "override-huge-exposure",

@@ -121,6 +121,29 @@ def test_emission_and_bands_storage_follows_the_stated_rule():
     assert rows.array()["storage"][index] == STORAGE_FLOAT
 
 
+def test_a_texture_freed_after_its_row_was_added_does_not_lend_that_row_to_a_new_one(monkeypatch):
+    """A texture's row is found again by the texture's identity. Textures made and dropped one after another, as a
+    scene built in pieces may, reuse each other's memory and so, at times, their id(): each must still get a row of
+    its own, with its own size. The interpreter reuses ids only at times, so the second half makes it certain: every
+    texture's id() the same, as a freed texture's is for the next one."""
+    import spectrace.textures
+    from spectrace.textures import spectral
+
+    bands = np.arange(400.0, 701.0, 100.0)
+
+    def rows_of_dropped_textures() -> TextureRows:
+        rows = TextureRows(SpectrumTable(), [np.zeros((1, 4), np.float32)])
+        for width in range(1, 41):
+            texture = spectral.make(np.full((2, width, 4), 0.5), bands)
+            assert rows.add(texture, "spectrum") == width - 1
+            del texture
+        return rows
+
+    assert list(rows_of_dropped_textures().array()["width"]) == list(range(1, 41))
+    monkeypatch.setattr(spectrace.textures, "id", lambda _: 1, raising=False)
+    assert list(rows_of_dropped_textures().array()["width"]) == list(range(1, 41))
+
+
 def _lab(coefficients: np.ndarray, dimensionless_form: bool) -> np.ndarray:
     """CIELAB under D65 (colour-science's CMFs and illuminant, 1 nm) of sigmoid spectra S(poly)."""
     shape = colour.SpectralShape(360, 830, 1)

@@ -11,9 +11,11 @@ from spectrace.cli import bench, devices, render, validate
 from spectrace.cli.common import (
     GROUP_SETTINGS,
     PlainHelpFlagCommand,
+    click_exceptions,
     console,
     help_flag_defaulting_to_false,
     help_width,
+    strict_number_options,
 )
 from spectrace.errors import SpectraceError
 
@@ -72,7 +74,7 @@ class _LazyGroup(TyperGroup):
         name, command, rest = super().resolve_command(ctx, args)
         if name in LAZY_COMMANDS:
             command = self.commands[name] = _load_command(name)
-        return name, command, rest
+        return name, strict_number_options(command), rest
 
 
 app = typer.Typer(
@@ -90,13 +92,8 @@ app.command("validate")(validate.validate)
 
 
 def _usage_error_type() -> type[Exception]:
-    """Click's UsageError (bad option values, unknown options, missing arguments); recent typer versions carry
-    their own copy of click."""
-    try:
-        exceptions = importlib.import_module("typer._click.exceptions")
-    except ImportError:
-        exceptions = importlib.import_module("click.exceptions")
-    return exceptions.UsageError
+    """Click's UsageError (bad option values, unknown options, missing arguments)."""
+    return click_exceptions().UsageError
 
 
 def _usage_error_line(exc: Exception) -> str:

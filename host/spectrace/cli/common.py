@@ -1,8 +1,10 @@
 """What the commands share: the message console (stderr), the settings of every command group and the options
 several of them take."""
 
+import importlib
 import os
 import sys
+import typing
 from typing import Annotated, Any
 
 import typer
@@ -75,3 +77,48 @@ DeviceOption = Annotated[
     typer.Option("--device", "-d", help="Device key or substring (see `spectrace devices`); env SPECTRACE_DEVICE."),
 ]
 JsonOption = Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")]
+
+
+def click_exceptions() -> Any:
+    """Click's exceptions module: recent typer versions carry their own copy of click."""
+    try:
+        return importlib.import_module("typer._click.exceptions")
+    except ImportError:
+        return importlib.import_module("click.exceptions")
+
+
+def _number_kind(param: Any) -> type | None:
+    """int or float when `param` takes whole numbers or numbers (alone, or as the items of a list or tuple)."""
+    descriptor = getattr(param, "type_descriptor", None)
+    if descriptor is not None:  # typer's own conversion, from the annotation
+        annotation = descriptor.annotation
+        items = typing.get_args(annotation) if typing.get_origin(annotation) in (list, tuple) else (annotation,)
+        kinds = {item for item in items if item in (int, float)}
+        return kinds.pop() if len(kinds) == 1 else None
+    name = type(getattr(param, "type", None)).__name__  # typer releases that convert with click's types
+    return int if name in ("IntParamType", "IntRange") else float if name in ("FloatParamType", "FloatRange") else None
+
+
+def strict_number_options(command: Any) -> Any:
+    """`command` (and its sub-commands) with every whole-number and number option reading its text as
+    spectrace.number_text does: typer and click convert with int() and float() or pydantic's lax parsing, which take
+    '0_2' as 2, '16.0' as an integer and 'nan' or 'inf' as numbers. The option's own range check follows."""
+    from spectrace.number_text import integer_problem, number_problem
+
+    for param in getattr(command, "params", ()):
+        kind = _number_kind(param)
+        if kind is None or getattr(param, "_strict_numbers", False):
+            continue
+        problem_of = integer_problem if kind is int else number_problem
+
+        def process_value(ctx: Any, value: Any, param: Any = param, problem_of=problem_of, convert=param.process_value):
+            for text in value if isinstance(value, (list, tuple)) else (value,):
+                if isinstance(text, str) and (problem := problem_of(text)):
+                    raise click_exceptions().BadParameter(problem, ctx=ctx, param=param)
+            return convert(ctx, value)
+
+        param.process_value = process_value
+        param._strict_numbers = True
+    for sub_command in getattr(command, "commands", {}).values():
+        strict_number_options(sub_command)
+    return command

@@ -158,19 +158,22 @@ def render(
     workers: Annotated[
         int | None,
         typer.Option(
-            help="Render split into tiles on a Dask LocalCluster of N worker processes on this machine.",
+            help="Render split into tiles on a Dask LocalCluster of N worker processes on this machine (at most its "
+            "cores; more than the tiles are not started).",
             min=1,
         ),
     ] = None,
     tile_rows: Annotated[
         int | None,
         typer.Option(
-            help="With --cluster or --workers: film rows per tile (default: at most 65536 pixels, at least 16 tiles).",
+            help="With --cluster or --workers (only): film rows per tile (default: at most 65536 pixels, at least 16 "
+            "tiles; the light, bdpt and sppm integrators render the whole film as one tile).",
             min=1,
         ),
     ] = None,
     cluster_timeout: Annotated[
-        float, typer.Option(help="Seconds to wait for the --cluster scheduler to answer.", min=0.1)
+        float,
+        typer.Option(help="Seconds to wait for the --cluster scheduler to answer (0.1 to 86400, a day).", min=0.1),
     ] = 30.0,
 ) -> None:
     """Render SCENE to an image. Ctrl-C, SIGTERM or SIGHUP (a closed terminal) stops after the current pass and
@@ -245,6 +248,12 @@ def render(
         noisy = noisy_path_for(output)
     with _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy):
         saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
+        if tile_rows is not None and cluster is None and workers is None and (saved is None or saved.tiles is None):
+            raise SpectraceError(
+                "splits a render over --workers or --cluster (or resumes a tiled checkpoint); a render here is one "
+                "piece",
+                where="--tile-rows",
+            )
         if cluster is not None or workers is not None or (saved is not None and saved.tiles is not None):
             from spectrace.cli.render_tiles import render_tiled
 

@@ -44,9 +44,10 @@ def render_tiled(
     if kernel != "megakernel":
         raise SpectraceError("a render split into tiles runs the megakernel only", where="--kernel")
     if cluster is not None or workers is not None:
-        from spectrace.distributed import require_distributed
+        from spectrace.distributed import check_cluster_options, require_distributed
 
         require_distributed("--cluster" if cluster is not None else "--workers")  # before any work: say what to install
+        check_cluster_options(cluster, workers, cluster_timeout)
     rows = saved.tiles.rows if saved is not None and saved.tiles is not None else tile_rows
     if saved is not None and saved.tiles is not None and tile_rows is not None and tile_rows != rows:
         raise SpectraceError(f"the checkpoint's tiles have {rows} rows", where="--tile-rows")
@@ -58,9 +59,13 @@ def render_tiled(
     saver = None
     if state_file is not None:
         saver = PeriodicTileCheckpoints(state_file, identity, checkpoint_interval, warn=lambda m: _say(f"warning: {m}"))
+    left = job.plan.count - (int(film.done.sum()) if film is not None else 0)
+    if workers is not None and workers > max(left, 1):
+        # A worker renders whole tiles: the others would only start, load the scene and wait.
+        _say(f"note: {left} tiles to render, so {max(left, 1)} of the {workers} workers asked for are started")
+        workers = max(left, 1)
     with StopOnSignals() as stop:
         if cluster is None and workers is None:
-            left = job.plan.count - (int(film.done.sum()) if film is not None else 0)
             _say(f"rendering {left} of {job.plan.count} tiles of {job.plan.rows} rows here")
             film = _run(job, LocalTiles(device), film, quiet, stop, saver)
         else:

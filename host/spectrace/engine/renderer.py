@@ -276,7 +276,7 @@ class Renderer:
         TARGET_PASS_SECONDS unless pass_spp fixes it; the image does not depend on the pass sizes.
         `should_stop` is asked between passes; when it says True the image of the samples done so far is returned."""
         total = spp if spp is not None else self.scene.spp
-        if problem := limits.spp_problem(total):
+        if problem := limits.spp_problem(total) or limits.pass_spp_problem(pass_spp):
             raise SpectraceError(problem)
         chunk = pass_spp or 1
         while self.samples_done < total and not (should_stop is not None and should_stop()):

@@ -42,10 +42,16 @@ PIXEL_STATE_BYTES = 16 + 16 + 4 + 4  # direct and τ (float4 each), radius, phot
 
 def _mixes_delta_and_non_delta(material: Any) -> bool:
     """A material whose lobes mix a delta lobe with non-delta ones (a smooth coat over a diffuse base, a roughness
-    texture that may reach 0): a visible point there would drop the delta part of its reflection."""
+    texture that may reach 0, a mix of such a material or of a delta and a non-delta one): a visible point there
+    would drop the delta part of its reflection, and a photon path would leave no photon where a mix picked its
+    delta part for the photon's direction, while the visible point's direction picks the other."""
+    from spectrace.materials.mix import MixMaterial
     from spectrace.materials.opaque import smooth_everywhere
     from spectrace.materials.plastic import PlasticMaterial
 
+    if isinstance(material, MixMaterial):
+        parts = material.materials
+        return any(_mixes_delta_and_non_delta(m) for m in parts) or len({m.is_delta for m in parts}) > 1
     roughness = getattr(material, "roughness", None)
     textured = roughness is not None and not isinstance(roughness, (int, float))
     # kernels/microfacet.cl's ggx_lobe_flags: a textured width may be delta at some points and not at others; a
@@ -75,9 +81,9 @@ def sppm_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | N
     for shape in scene.shapes:
         if shape.material is not None and _mixes_delta_and_non_delta(shape.material):
             return (
-                f"integrator 'sppm' cannot render a {type(shape.material).__name__} with a smooth coat or textured "
-                "roughness (its smooth and rough lobes "
-                "would need a visible point on both); use 'path' or 'bdpt'"
+                f"integrator 'sppm' cannot render a {type(shape.material).__name__} whose smooth and rough lobes "
+                "share a surface (a smooth coat, textured roughness, a mix of smooth and rough materials): they "
+                "would need a visible point on both; use 'path' or 'bdpt'"
             )
     return None
 

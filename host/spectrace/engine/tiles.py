@@ -63,7 +63,7 @@ def plan_tiles(width: int, height: int, rows: int | None = None, where: str = "-
     """Tiles of `rows` rows (default: at most DEFAULT_TILE_PIXELS pixels, at least MIN_TILES tiles)."""
     if rows is None:
         rows = max(1, min(DEFAULT_TILE_PIXELS // width, -(-height // MIN_TILES)))
-    if not (isinstance(rows, int) and rows >= 1):
+    if isinstance(rows, bool) or not (isinstance(rows, int) and rows >= 1):
         raise SpectraceError(f"rows per tile must be a whole number >= 1, got {rows!r}", where=where)
     return TilePlan(width, height, min(rows, height))
 
@@ -109,9 +109,11 @@ def render_tile(renderer: Renderer, plan: TilePlan, index: int, spp: int) -> Til
 
 @dataclass
 class TileJob:
-    """Everything a worker needs to render tiles of one film, with no file system shared with the client: the scene's
-    settings and camera (its shapes left out: their triangles, materials, spectra and textures are in `buffers`,
-    already built, BVH included), the device to open and the film's spectral bands."""
+    """Everything a worker needs to render tiles of one film, with no file system shared with the client: the scene,
+    its buffers already built (BVH included), the device to open and the film's spectral bands. The scene goes whole,
+    shapes included, although their triangles are in `buffers` too: a renderer also decides from them (which shapes
+    emit, whether every material is diffuse, the bounds that distant and environment light paths start outside),
+    and a worker deciding otherwise than the client would render other bits."""
 
     scene: Scene
     buffers: SceneBuffers
@@ -136,7 +138,7 @@ class TileJob:
         key: str,
         kernels_digest: str = "",
     ) -> TileJob:
-        shipped = replace(scene, shapes=[], notes={})
+        shipped = replace(scene, notes={})
         return cls(shipped, buffers, plan, spp, device, spectral_bins, spectral_range_nm, key, kernels_digest)
 
     def renderer(self, device: Device | str | None = None) -> Renderer:
@@ -327,6 +329,23 @@ def render_tiles(
     return film
 
 
+def whole_film_rows(scene: Scene, tile_rows: int | None, where: str = "--tile-rows") -> int | None:
+    """The rows per tile for `scene`: `tile_rows` as given, except for the integrators whose splats or photons land
+    in any pixel (light, bdpt, sppm), which render the whole film as one tile on one worker (a smaller tile asked
+    for is refused)."""
+    from spectrace.engine.renderer import PASS_KERNELS
+
+    if scene.integrator not in PASS_KERNELS:
+        return tile_rows
+    if tile_rows is not None and tile_rows < scene.height:
+        raise SpectraceError(
+            f"integrator '{scene.integrator}' renders the whole film as one tile (its contributions land in any "
+            f"pixel): leave the rows per tile out, or give at least the film's {scene.height}",
+            where=where,
+        )
+    return scene.height
+
+
 def make_job(
     scene: Scene,
     spp: int | None = None,
@@ -349,6 +368,7 @@ def make_job(
     )
     if problem:
         raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
+    tile_rows = whole_film_rows(scene, tile_rows)
     buffers = build_scene_buffers(scene)
     if spectral_range_nm is None:
         spectral_range_nm = spectral_range(scene)

@@ -16,6 +16,21 @@ from spectrace.io.compressed import COMPRESSED_SUFFIXES, file_inflater
 from spectrace.io.input_files import regular_file
 
 
+def faces_problem(faces: np.ndarray, vertex_count: int) -> str | None:
+    """Why (M, 3) `faces` do not all index one of `vertex_count` vertices, or None. numpy would read a negative
+    index from the end of the vertices, a wrong triangle drawn without a word, and fail on one past it only when
+    the triangles are gathered."""
+    if faces.size == 0:
+        return None
+    low, high = int(faces.min()), int(faces.max())
+    if low >= 0 and high < vertex_count:
+        return None
+    return (
+        f"faces index vertex {low if low < 0 else high}, outside the {vertex_count} vertices "
+        f"(indices 0..{vertex_count - 1})"
+    )
+
+
 @dataclass
 class TriangleMesh:
     """Triangles in scene units. The front side is the one the vertex normals point to where the mesh has them,
@@ -48,6 +63,8 @@ class TriangleMesh:
             raise ValueError(f"vertices must be (N, 3), got {self.vertices.shape}")
         if self.faces.ndim != 2 or self.faces.shape[1] != 3:
             raise ValueError(f"faces must be (M, 3), got {self.faces.shape}")
+        if problem := faces_problem(self.faces, len(self.vertices)):
+            raise ValueError(problem)
 
     def triangles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Corner positions (v0, v1, v2), each (M, 3) float64."""

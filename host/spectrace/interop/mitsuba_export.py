@@ -100,7 +100,9 @@ class MitsubaExport:
     def __init__(self, scene: Scene, folder: Path):
         self.scene = scene
         self.folder = folder
-        self._images: dict[int, Path] = {}
+        # Each array written with its file, found again by identity and kept alive: an id() alone would be handed
+        # on once a caller's temporary (a grey image repeated into RGB) was freed, and the next image given its file.
+        self._images: list[tuple[np.ndarray, Path]] = []
 
     def spectrum(self, value) -> dict:
         if not is_texture(value):
@@ -130,11 +132,13 @@ class MitsubaExport:
         """A float OpenEXR (R, G, B) of linear values in the export's folder, once per array."""
         from spectrace.io.exr import write_exr
 
-        if id(values) not in self._images:
-            path = self.folder / f"texture_{len(self._images)}.exr"
-            write_exr(path, np.asarray(values, np.float32), None, {})
-            self._images[id(values)] = path
-        return self._images[id(values)]
+        for written, path in self._images:
+            if written is values:
+                return path
+        path = self.folder / f"texture_{len(self._images)}.exr"
+        write_exr(path, np.asarray(values, np.float32), None, {})
+        self._images.append((values, path))
+        return path
 
     @staticmethod
     def uv_transform(scale, offset):

@@ -4,6 +4,7 @@ The names below load on first use, so that the leaf modules of this package (`li
 lower layers (image readers, light modules) without pulling in the loader, which imports those layers back.
 """
 
+import os
 from pathlib import Path
 
 from spectrace.lazy_names import lazy_names
@@ -22,9 +23,14 @@ def load_scene(path: str | Path, overrides: dict | None = None):
     """Read, validate and resolve a TOML scene file; a bare name (`cornell_box`, `cornell_box.toml`) that is no file
     here names a bundled scene. Raises SpectraceError naming the file and key path. `overrides`: values replacing
     the file's at dotted key paths ("film.width": 64), as if the file said so."""
+    from spectrace.errors import SpectraceError
     from spectrace.resources import resolve_scene_path
     from spectrace.scene.loader import load_scene as load_scene_file
 
+    if not isinstance(path, str | os.PathLike):
+        raise SpectraceError(f"load_scene() reads a file: give its path (a str or a Path), got {path!r}"[:200])
+    if overrides is not None and not (isinstance(overrides, dict) and all(isinstance(k, str) for k in overrides)):
+        raise SpectraceError(f"overrides must map dotted key paths (str) to values, got {overrides!r}"[:200])
     return load_scene_file(resolve_scene_path(path), overrides)
 
 

@@ -4,6 +4,8 @@ The schema checks scene files against them, the command line checks its override
 Scene built through the Python API; every message says what the request would cost.
 """
 
+from numbers import Real
+
 import numpy as np
 
 # Deepest nesting accepted in an input file (TOML tables and arrays, Mitsuba XML elements and references). Real
@@ -74,8 +76,26 @@ def format_bytes(count: float) -> str:
     raise AssertionError("unreachable")
 
 
+def whole_number_problem(name: str, value: object) -> str | None:
+    """Why `value`, given for `name`, is not a whole number, or None. A scene file's schema refuses other types
+    itself; a Python caller may pass anything: True (an int to Python), 16.0, NaN, "16", each of which int()
+    or a comparison would take or fail on later."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer):
+        return f"{name} must be a whole number, got {value!r}"
+    return None
+
+
+def flag_problem(name: str, value: object) -> str | None:
+    """Why `value`, given for `name`, is not True or False, or None (1 or "no" would be read by their truth)."""
+    if not isinstance(value, bool | np.bool_):
+        return f"{name} must be True or False, got {value!r}"
+    return None
+
+
 def film_side_problem(name: str, pixels: int) -> str | None:
     """Why a film side of `pixels` cannot be rendered, or None."""
+    if problem := whole_number_problem(f"film {name}", pixels):
+        return problem
     if pixels < 1:
         return f"film {name} must be at least 1 pixel, got {pixels}"
     if pixels > MAX_FILM_SIDE_PX:
@@ -85,6 +105,8 @@ def film_side_problem(name: str, pixels: int) -> str | None:
 
 def film_size_problem(width: int, height: int) -> str | None:
     """Why a width x height film cannot be rendered, with the memory it would need, or None."""
+    if problem := whole_number_problem("film width", width) or whole_number_problem("film height", height):
+        return problem
     problem = film_side_problem("width", width) or film_side_problem("height", height)
     if problem is None and width * height <= MAX_FILM_PIXELS:
         return None
@@ -114,6 +136,8 @@ def image_size_problem(width: int, height: int) -> str | None:
 
 def spp_problem(spp: int) -> str | None:
     """Why `spp` samples per pixel cannot be rendered, or None."""
+    if problem := whole_number_problem("spp", spp):
+        return problem
     if spp < 1:
         return f"spp must be at least 1, got {spp}"
     if spp > MAX_SPP:
@@ -132,6 +156,8 @@ def offset_seed(seed: int, offset: int) -> int:
 
 def seed_problem(seed: int) -> str | None:
     """Why `seed` cannot seed the kernels' samplers, or None."""
+    if problem := whole_number_problem("seed", seed):
+        return problem
     if not 0 <= seed <= MAX_SEED:
         return f"seed must lie in 0..{MAX_SEED} (the kernels take it as a 32-bit signed integer), got {seed}"
     return None
@@ -139,6 +165,8 @@ def seed_problem(seed: int) -> str | None:
 
 def max_depth_problem(depth: int, name: str = "max_depth") -> str | None:
     """Why a path depth cannot be rendered, or None; -1 means unbounded (Russian roulette ends the paths)."""
+    if problem := whole_number_problem(name, depth):
+        return problem
     if depth == -1 or 1 <= depth <= MAX_DEPTH:
         return None
     if depth > MAX_DEPTH:
@@ -151,6 +179,8 @@ def max_depth_problem(depth: int, name: str = "max_depth") -> str | None:
 
 def exposure_problem(stops: float) -> str | None:
     """Why an exposure in stops cannot be applied to the outputs, or None."""
+    if isinstance(stops, bool | np.bool_) or not isinstance(stops, Real):
+        return f"exposure must be a number of stops, got {stops!r}"
     if not np.isfinite(stops):
         return f"exposure must be a finite number of stops, got {stops}"
     if abs(stops) > MAX_EXPOSURE_STOPS:
@@ -161,11 +191,28 @@ def exposure_problem(stops: float) -> str | None:
     return None
 
 
+def pass_spp_problem(pass_spp: int | None) -> str | None:
+    """Why `pass_spp` samples per pixel cannot be one pass (None: passes sized by their time), or None."""
+    if pass_spp is None:
+        return None
+    if problem := whole_number_problem("pass_spp", pass_spp):
+        return problem
+    return f"pass_spp must be at least 1, got {pass_spp}" if pass_spp < 1 else None
+
+
+def choice_problem(name: str, value: object, choices: tuple[str, ...]) -> str | None:
+    """Why `value`, given for `name`, is not one of `choices`, or None."""
+    if isinstance(value, str) and value in choices:
+        return None
+    return f"{name} must be one of {', '.join(choices)}, got {value!r}"
+
+
 def scene_settings_problem(scene) -> str | None:
     """Why a Scene's seed, depths or exposure cannot be used (for scenes built in Python), or None."""
     return (
         seed_problem(scene.seed)
         or max_depth_problem(scene.max_depth)
+        or whole_number_problem("rr_depth", scene.rr_depth)
         or (
             f"rr_depth must lie in 1..{MAX_DEPTH}, got {scene.rr_depth}"
             if not 1 <= scene.rr_depth <= MAX_DEPTH

@@ -113,6 +113,10 @@ def _location_in_data(data: object, location: tuple, missing: bool) -> tuple:
     return tuple(kept)
 
 
+# A value of the wrong type where a number, a boolean or a string belongs (`width = true`, `spp = "4"`).
+_SCALAR_TYPE_ERRORS = ("int_type", "float_type", "bool_type", "string_type")
+
+
 def _validation_error(path: Path, error: ValidationError, data: object = None) -> SpectraceError:
     # A misspelt key also shows up as a missing required one; the misspelling is the actionable report. Among
     # the rest, the deepest location is the most specific (a union reports every member's complaint).
@@ -134,6 +138,9 @@ def _validation_error(path: Path, error: ValidationError, data: object = None) -
         location = (*location, str(context.get("discriminator", "type")).strip("'"))
     elif first["type"] in ("model_type", "dict_type"):  # pydantic would name a schema class
         message = f"expected a table, got {type(first['input']).__name__} {first['input']!r}"[:200]
+    elif first["type"] in _SCALAR_TYPE_ERRORS:  # the schema is strict: say what the file gave instead
+        given = first["input"]
+        message += ", got " + (str(given).lower() if isinstance(given, bool) else repr(given))[:100]
     extra = f" ({len(error.errors()) - 1} more problem(s))" if len(error.errors()) > 1 else ""
     return SpectraceError(message + extra, where=f"{path}: {key_path(location)}" if location else str(path))
 

@@ -5,11 +5,14 @@ these, never the file format.
 """
 
 from dataclasses import dataclass, field
+from numbers import Real
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
+from spectrace.aovs import parse_aovs
+from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.lights.area import AreaEmitter, EmitterImage  # noqa: F401 (part of the model's names)
@@ -21,6 +24,7 @@ from spectrace.lights.point import PointLight  # noqa: F401
 from spectrace.lights.spot import SpotLight  # noqa: F401
 from spectrace.materials.base import Material
 from spectrace.pixel_filters import BOX_FILTER, PixelFilter
+from spectrace.scene import limits
 from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
@@ -148,8 +152,52 @@ class Scene:
     notes: dict = field(default_factory=dict)
     instances: list[Instance] = field(default_factory=list)  # placed copies of objects stored once
 
+    def __post_init__(self) -> None:
+        # A dataclass checks no types, and a Python caller may pass anything: refused here, naming the field, is
+        # what would fail far from the call (a fractional width, an unknown integrator) or be read by its truth
+        # (hide_emitters=1). The ranges are checked where the scene is rendered (spectrace.scene.limits).
+        if problem := settings_type_problem(self):
+            raise SpectraceError(problem)
+        object.__setattr__(self, "aovs", parse_aovs(self.aovs, where="aovs"))
+
     def with_overrides(self, **changes) -> "Scene":
         """A copy with some settings replaced (spp, width, height, seed, max_depth, ...); None keeps a value."""
         from dataclasses import replace
 
         return replace(self, **{k: v for k, v in changes.items() if v is not None})
+
+
+def settings_type_problem(scene: Scene) -> str | None:
+    """Why a Scene's settings are not of their types (whole numbers, a known integrator and sampler, flags, a
+    number of stops), or None."""
+    return (
+        limits.choice_problem("integrator", scene.integrator, INTEGRATOR_TYPES)
+        or limits.choice_problem("sampler", scene.sampler, SAMPLER_TYPES)
+        or next(
+            (
+                problem
+                for name in ("width", "height", "spp", "seed", "max_depth", "rr_depth")
+                if (problem := limits.whole_number_problem(name, getattr(scene, name)))
+            ),
+            None,
+        )
+        or next(
+            (
+                problem
+                for name in ("hide_environment", "hide_emitters", "count_thin_passes")
+                if (problem := limits.flag_problem(name, getattr(scene, name)))
+            ),
+            None,
+        )
+        # The type alone: a NaN or huge exposure is the renderer's to refuse, as for a file's.
+        or (
+            limits.exposure_problem(scene.exposure)
+            if isinstance(scene.exposure, bool) or not isinstance(scene.exposure, Real)
+            else None
+        )
+        or (
+            None
+            if isinstance(scene.aovs, str | list | tuple)
+            else f"aovs must be a sequence of AOV names, got {scene.aovs!r}"
+        )
+    )

@@ -20,6 +20,7 @@ from pydantic import (
     field_validator,
     model_validator,
 )
+from pydantic import Strict as StrictMode
 
 from spectrace.cameras import CAMERAS
 from spectrace.cameras import shared as camera_shared
@@ -34,11 +35,16 @@ from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
-Vector3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
+# A TOML array read as a fixed-length tuple: strict validation takes only Python tuples, and the parsed file holds
+# lists, so the tuple alone is lax; its items stay strict.
+Vector3 = Annotated[tuple[FiniteFloat, FiniteFloat, FiniteFloat], StrictMode(False)]
+FloatPair = Annotated[tuple[FiniteFloat, FiniteFloat], StrictMode(False)]
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # strict: a value of the wrong type is refused, not converted: `width = true` or `max_depth = true` is not 1,
+    # `spp = "4"` not 4, `spp = 4.0` not 4, `two_sided = 1` not true. An integer is a float (a float key takes 2).
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class IntegratorSpec(Strict):
@@ -117,7 +123,7 @@ class SpectrumSpec(Strict):
     encoding: Literal["linear", "srgb", "gamma2.2"] = "linear"
     white_luminance: FiniteFloat | None = Field(default=None, gt=0.0, description="cd/m² of the display's white")
     spectrum: str | None = None
-    values: str | list[tuple[FiniteFloat, FiniteFloat]] | None = None
+    values: str | list[FloatPair] | None = None
     file: str | None = None
     column: str | None = None
     scale: FiniteFloat = 1.0
@@ -147,7 +153,7 @@ class SpectrumSpec(Strict):
 class NamedSpectrumSpec(Strict):
     """A [spectra.NAME] entry: a spectrum defined once and referred to by name."""
 
-    values: str | list[tuple[FiniteFloat, FiniteFloat]] | None = None
+    values: str | list[FloatPair] | None = None
     file: str | None = None
     column: str | None = None
     library: str | None = None
@@ -161,13 +167,13 @@ class NamedSpectrumSpec(Strict):
 
 
 class SellmeierSpec(Strict):
-    sellmeier: tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat] = Field(
-        description="B1, B2, B3, C1, C2, C3 of n² = 1 + Σ B λ²/(λ² − C), λ in µm, C in µm²"
-    )
+    sellmeier: Annotated[
+        tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat], StrictMode(False)
+    ] = Field(description="B1, B2, B3, C1, C2, C3 of n² = 1 + Σ B λ²/(λ² − C), λ in µm, C in µm²")
 
 
 class CauchySpec(Strict):
-    cauchy: tuple[FiniteFloat, FiniteFloat] = Field(description="a, b of n = a + b/λ², λ in µm, b in µm²")
+    cauchy: FloatPair = Field(description="a, b of n = a + b/λ², λ in µm, b in µm²")
 
 
 # Materials and lights: one spec per module of spectrace.materials / spectrace.lights, told apart by `type`, its
@@ -182,11 +188,11 @@ _ANNOTATIONS = {
     "distribution": Literal[DISTRIBUTIONS],
     "coat_transmission": Literal["smooth", "rough"],
     "ior": FiniteFloat | str | SellmeierSpec | CauchySpec,
-    "uv": FiniteFloat | tuple[FiniteFloat, FiniteFloat],
+    "uv": FiniteFloat | FloatPair,
     "wrap": Literal["repeat", "mirror", "clamp"],
     "filter": Literal["nearest", "bilinear", "trilinear"],
     "axis": Literal["x", "y"],
-    "materials": tuple[str, str],  # a mix's two materials, by their names in [materials]
+    "materials": Annotated[tuple[str, str], StrictMode(False)],  # a mix's two materials, by their names in [materials]
 }
 
 
@@ -525,7 +531,7 @@ class FilmSpec(Strict):
         default=None, description="CIE illuminant: white balance and colour correction of a 3-channel sensor"
     )
 
-    wavelengths: tuple[FiniteFloat, FiniteFloat] = Field(
+    wavelengths: FloatPair = Field(
         default=(360.0, 830.0), description="nm: the film's wavelength range (1 nm grid); spectra must cover it"
     )
     extend_rgb: StrictBool = Field(

@@ -1,5 +1,7 @@
 """Planck's law for the spectral radiance of a black body."""
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from spectrace.spectral.grid import GRID_NM
@@ -25,7 +27,19 @@ def blackbody(temperature_k: float) -> Spectrum:
     360–830 nm) is 1, as pbrt-v4 does: absolute values (~10⁷ W/(m² sr nm) at 5500 K) are rarely what a scene
     wants; give the scale separately."""
     peak = planck_radiance(np.array([WIEN_DISPLACEMENT / temperature_k * 1e9]), temperature_k)[0]
-    extension = Extension(0.0, np.inf, lambda nm: planck_radiance(nm, temperature_k) / peak)
+    extension = Extension(0.0, np.inf, NormalisedPlanckCurve(temperature_k, peak))
     return Spectrum(
         planck_radiance(GRID_NM, temperature_k) / peak, name=f"blackbody {temperature_k:g} K", extension=extension
     )
+
+
+@dataclass(frozen=True)
+class NormalisedPlanckCurve:
+    """nm -> Planck's radiance at `temperature_k` divided by `peak` (a plain dataclass, not a closure, so that
+    scenes pickle)."""
+
+    temperature_k: float
+    peak: float
+
+    def __call__(self, nm: np.ndarray) -> np.ndarray:
+        return planck_radiance(nm, self.temperature_k) / self.peak

@@ -18,32 +18,83 @@ from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_NM, GRID_SIZE
 class Extension:
     """What a spectrum is beyond the common grid: its values on [lo_nm, hi_nm] (the range its data or formula
     defines), from `evaluate` (nm -> values). `rgb_uplift`: the spectrum is an RGB uplift, whose continuation
-    outside the visible is a convention, used only when the scene asks for it (`film.extend_rgb`)."""
+    outside the visible is a convention, used only when the scene asks for it (`film.extend_rgb`).
+
+    `evaluate` must pickle with plain `pickle` (a module-level function or a small dataclass such as those below,
+    never a lambda or a closure): scenes travel to other processes, a cluster's workers among them."""
 
     lo_nm: float
     hi_nm: float
     evaluate: Callable[[np.ndarray], np.ndarray]
     rgb_uplift: bool = False
 
+    def __post_init__(self) -> None:
+        # A lambda or closure pickles only through cloudpickle: plain pickle (the command line's measure of what a
+        # cluster's workers receive, process pools) would fail on the whole scene, far from here.
+        name = getattr(self.evaluate, "__qualname__", "")
+        if "<lambda>" in name or "<locals>" in name:
+            raise TypeError(f"an Extension's evaluate must pickle: a module-level function or dataclass, not {name}")
+
     def scaled(self, factor: float) -> Extension:
-        evaluate = self.evaluate
-        return Extension(self.lo_nm, self.hi_nm, lambda nm: factor * evaluate(nm), self.rgb_uplift)
+        return Extension(self.lo_nm, self.hi_nm, ScaledCurve(factor, self.evaluate), self.rgb_uplift)
 
     def times(self, other: Extension) -> Extension:
-        first, second = self.evaluate, other.evaluate
         return Extension(
             max(self.lo_nm, other.lo_nm),
             min(self.hi_nm, other.hi_nm),
-            lambda nm: first(nm) * second(nm),
+            ProductCurve(self.evaluate, other.evaluate),
             self.rgb_uplift or other.rgb_uplift,
         )
+
+
+@dataclass(frozen=True)
+class ConstantCurve:
+    """nm -> `level` everywhere."""
+
+    level: float
+
+    def __call__(self, nm: np.ndarray) -> np.ndarray:
+        return np.full(np.shape(nm), self.level)
+
+
+@dataclass(frozen=True)
+class ScaledCurve:
+    """nm -> factor * curve(nm)."""
+
+    factor: float
+    curve: Callable[[np.ndarray], np.ndarray]
+
+    def __call__(self, nm: np.ndarray) -> np.ndarray:
+        return self.factor * self.curve(nm)
+
+
+@dataclass(frozen=True)
+class ProductCurve:
+    """nm -> first(nm) * second(nm)."""
+
+    first: Callable[[np.ndarray], np.ndarray]
+    second: Callable[[np.ndarray], np.ndarray]
+
+    def __call__(self, nm: np.ndarray) -> np.ndarray:
+        return self.first(nm) * self.second(nm)
+
+
+@dataclass(frozen=True, eq=False)  # arrays have no single truth value: curves compare by identity
+class SampledCurve:
+    """nm -> linear interpolation of the samples (wavelengths ascending, nm), held constant beyond them."""
+
+    wavelengths_nm: np.ndarray
+    values: np.ndarray
+
+    def __call__(self, nm: np.ndarray) -> np.ndarray:
+        return np.interp(nm, self.wavelengths_nm, self.values)
 
 
 def sampled_extension(wavelengths_nm: np.ndarray, values: np.ndarray) -> Extension:
     """The extension of measured samples: linear interpolation, over the samples' own range only."""
     wavelengths = np.array(wavelengths_nm, np.float64)
     data = np.array(values, np.float64)
-    return Extension(float(wavelengths[0]), float(wavelengths[-1]), lambda nm: np.interp(nm, wavelengths, data))
+    return Extension(float(wavelengths[0]), float(wavelengths[-1]), SampledCurve(wavelengths, data))
 
 
 def _range_text(lo: float, hi: float) -> str:
@@ -75,7 +126,7 @@ class Spectrum:
     @classmethod
     def constant(cls, value: float, name: str = "", source: str = "", rgb_uplift: bool = False) -> Spectrum:
         level = float(value)
-        extension = Extension(-np.inf, np.inf, lambda nm: np.full(np.shape(nm), level), rgb_uplift)
+        extension = Extension(-np.inf, np.inf, ConstantCurve(level), rgb_uplift)
         return cls(np.full(GRID_SIZE, level), name=name or f"constant {value:g}", source=source, extension=extension)
 
     @classmethod

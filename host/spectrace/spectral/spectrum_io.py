@@ -12,7 +12,6 @@ then rows of numbers with the wavelength in nm, strictly ascending.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -24,6 +23,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.io.input_files import regular_file
+from spectrace.number_text import DECIMAL, NOT_FINITE
 from spectrace.resources import spectra_dir
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, resample_to_grid
 from spectrace.spectral.illuminants import CIE_ILLUMINANT_PREFIX, cie_illuminant, cie_illuminant_names
@@ -61,11 +61,10 @@ def _spectrum_from_samples(
     )
 
 
-# What a CSV or a spectrum string may hold as a number: ASCII digits, an optional sign, point and exponent.
-# Python's float() accepts more that nobody writing a spectrum means: '0_5' is 5.0 (a digit separator), and
-# other scripts' digits ('５') are digits to it. nan and inf are recognised only to say that they are not finite.
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
-_NOT_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+# What a CSV or a spectrum string may hold as a number (spectrace.number_text); nan and inf are recognised only to
+# say that they are not finite.
+_NUMBER = DECIMAL
+_NOT_FINITE = NOT_FINITE
 
 
 def _parse_number(text: str, what: str, where: str) -> float:

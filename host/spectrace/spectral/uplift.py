@@ -24,6 +24,7 @@ lambda + c2), the coefficients reproduce the float64 spectrum to ~2e-5.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import cache, lru_cache
 from numbers import Real
 
@@ -190,7 +191,20 @@ def _sigmoid_extension(coefficients_nm: np.ndarray) -> Extension:
     """The sigmoid polynomial beyond the grid: a smooth continuation with no physical meaning outside the visible,
     hence marked as an RGB uplift (used only when a scene asks for it)."""
     c0, c1, c2 = (float(c) for c in coefficients_nm)
-    return Extension(-np.inf, np.inf, lambda nm: sigmoid((c0 * nm + c1) * nm + c2), rgb_uplift=True)
+    return Extension(-np.inf, np.inf, SigmoidPolynomialCurve(c0, c1, c2), rgb_uplift=True)
+
+
+@dataclass(frozen=True)
+class SigmoidPolynomialCurve:
+    """nm -> S((c0 nm + c1) nm + c2), the curve of an uplifted reflectance (a plain dataclass, not a closure, so
+    that scenes pickle)."""
+
+    c0: float
+    c1: float
+    c2: float
+
+    def __call__(self, nm: np.ndarray) -> np.ndarray:
+        return sigmoid((self.c0 * nm + self.c1) * nm + self.c2)
 
 
 def uplift_reflectance(rgb: Sequence[float] | np.ndarray, where: str | None = None) -> tuple[Spectrum, np.ndarray]:

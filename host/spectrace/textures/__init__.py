@@ -186,7 +186,9 @@ class TextureRows:
         self.table = table
         self.texel_chunks = texel_chunks
         self.rows: list[np.ndarray] = []
-        self.index: dict[tuple[int, str, tuple[int, ...]], int] = {}
+        # Keyed by the texture itself (textures compare and hash by identity), which the key keeps alive: an id()
+        # would be handed on to a new texture once the first was freed, and the new one given the old one's row.
+        self.index: dict[tuple[object, str, tuple[int, ...]], int] = {}
         self.bytes = 0
 
     def _check_budget(self, total: int, texture, where: str | None) -> None:
@@ -204,7 +206,7 @@ class TextureRows:
         """The index of `texture`'s row for a use of `kind` ("spectrum": a reflectance, "float": a scalar, or
         "emission": a light's radiance, an RGB bitmap's texels weighting the spectra at the table offsets `basis`),
         added when new."""
-        key = (id(texture), kind, tuple(basis or ()))
+        key = (texture, kind, tuple(basis or ()))
         if key in self.index:
             return self.index[key]
         self._check_budget(self.bytes + device_bytes(texture, kind), texture, where)

@@ -1,0 +1,170 @@
+"""The white furnace for every material of the registry (spectrace.materials.MATERIALS), smooth and rough where it
+has a roughness, under every integrator (path, light, bdpt, sppm).
+
+Two spheres side by side in a uniform environment of radiance 1 (light passes between them, and through them where
+they transmit), seen whole with the environment around them, `max_depth` 16 (paths of three segments and more, where
+the subpaths of BDPT go on past the vertices they are joined at), Russian roulette off (its rare heavy weights hide
+from a standard error). A material that absorbs nothing returns the environment exactly: the image's mean Y is 1.
+The closed form holds up to the paths longer than `max_depth` (inside and between the spheres), which the path
+tracer puts below 1e-4 (6e-5 for the thin dielectric, whose passes count as segments); SLACK allows that much. A
+material that absorbs (a metal, a tinted base, a rough lobe's single scattering) has no closed form here: each
+integrator's mean agrees with the path tracer's, within 4 combined standard errors, and none exceeds 1.
+
+Standard errors come from independent replicas (consecutive sample ranges of one render), as the splatting
+integrators' pixels are not independent. BDPT runs with one pixel per light subpath, where the light-to-camera
+strategy's share of each path, and with it an error in the weights that share it, is largest.
+
+Where an integrator cannot see a material by design, the case is left out with its reason: the light tracer renders
+a delta lobe seen from the camera black (docs/integrators.md), and SPPM refuses a material whose delta and non-delta
+lobes share a surface (a smooth coat over a diffuse base, a mix of a delta and a non-delta material), which
+test_sppm_refuses_exactly_the_mixed_lobes checks against the table."""
+
+import dataclasses
+import functools
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+import spectrace
+from replica_agreement import spectrace_replicas
+from spectrace.engine.renderer import Renderer
+from spectrace.engine.sppm import sppm_problem
+from spectrace.materials import MATERIALS
+from spectrace.scene.model import Scene
+from stats_toolkit import (
+    assert_at_most_within_standard_errors,
+    assert_within_standard_errors,
+    mean_and_standard_error,
+)
+
+SLACK = 2e-4
+SIDE = 16
+REPLICAS = 16
+SPP = {"path": 16, "bdpt": 16, "light": 64, "sppm": 16}
+INTEGRATORS = tuple(SPP)
+
+
+@dataclasses.dataclass(frozen=True)
+class Case:
+    name: str
+    material: Callable[[], object]
+    lossless: bool  # absorbs nothing: the closed form 1; otherwise the path tracer's mean is the reference
+    delta_lobe: bool  # has a delta lobe, which the light tracer cannot see from the camera
+    sppm_refused: bool = False  # delta and non-delta lobes on one surface
+    fast: tuple[str, ...] = ()  # the integrators of the quick subset; the others are marked slow
+
+
+S = spectrace
+# One list per registry entry: test_every_material_has_a_furnace_case keeps it complete.
+CASES = {
+    "diffuse": [Case("white", lambda: S.diffuse(1.0), True, False, fast=("bdpt",))],
+    "conductor": [
+        Case("gold", lambda: S.conductor("Au"), False, True),
+        Case("rough gold", lambda: S.conductor("Au", roughness=0.3), False, False),
+    ],
+    "mirror": [Case("white", lambda: S.mirror(1.0), True, True)],
+    "plastic": [
+        Case("white", lambda: S.plastic(1.0), True, True, sppm_refused=True, fast=("bdpt", "path")),
+        Case("white ior 3", lambda: S.plastic(1.0, ior=3.0), True, True, sppm_refused=True, fast=("bdpt",)),
+        Case("grey", lambda: S.plastic(0.3), False, True, sppm_refused=True, fast=("bdpt",)),
+        Case("rough white", lambda: S.plastic(1.0, roughness=0.3), False, False),
+        Case("rough coat", lambda: S.plastic(1.0, roughness=0.3, coat_transmission="rough"), False, False),
+    ],
+    "dielectric": [
+        Case("smooth", lambda: S.dielectric(1.5), True, True),
+        Case("rough", lambda: S.dielectric(1.5, roughness=0.3), False, False),
+    ],
+    "retroreflector": [
+        Case("smooth", lambda: S.retroreflector(1.0, roughness=0.0), True, True),
+        Case("rough", lambda: S.retroreflector(1.0, roughness=0.3), False, False),
+    ],
+    "thindielectric": [Case("smooth", lambda: S.thindielectric(1.5), True, True)],
+    "diffusetransmission": [Case("white", lambda: S.diffusetransmission(0.3, 0.7), True, False)],
+    "mix": [
+        Case(
+            "diffuse and smooth plastic",
+            lambda: S.mix([S.diffuse(1.0), S.plastic(1.0, ior=3.0)], amount=0.75),
+            True,
+            True,
+            sppm_refused=True,
+            fast=("bdpt",),
+        ),
+        Case("diffuse and mirror", lambda: S.mix([S.diffuse(1.0), S.mirror(1.0)]), True, True, sppm_refused=True),
+        Case(
+            "rough metal and diffuse",
+            lambda: S.mix([S.conductor("Cu", roughness=0.2), S.diffuse(0.8)]),
+            False,
+            False,
+        ),
+    ],
+}
+ALL_CASES = [(name, case) for name, cases in CASES.items() for case in cases]
+
+
+def _scene(case: Case, integrator: str) -> Scene:
+    material = case.material()
+    shapes = [S.shape("sphere", material, transform=[{"translate": [x, 0.0, 0.0]}]) for x in (-1.25, 1.25)]
+    return Scene(
+        camera=S.Camera(origin=(0.0, 1.0, -4.5), target=(0.0, 0.0, 0.0), fov_degrees=40.0),
+        width=SIDE,
+        height=SIDE,
+        shapes=shapes,
+        lights=[S.constant_environment(1.0)],
+        max_depth=16,
+        rr_depth=64,
+        integrator=integrator,
+        pixels_per_light_path=1 if integrator == "bdpt" else None,
+        seed=7,
+    )
+
+
+@functools.cache
+def _furnace(name: str, case_name: str, integrator: str, device) -> tuple[float, float]:
+    """The image's mean Y and its standard error over REPLICAS independent replicas."""
+    case = next(c for c in CASES[name] if c.name == case_name)
+    images = spectrace_replicas(Renderer(_scene(case, integrator), device), REPLICAS, SPP[integrator])
+    mean, standard_error = mean_and_standard_error(images[..., 1].mean(axis=(1, 2)))
+    return float(mean), float(standard_error)
+
+
+def _id(name: str, case: Case) -> str:
+    return f"{name}-{case.name.replace(' ', '_')}"
+
+
+def _params():
+    for name, case in ALL_CASES:
+        for integrator in INTEGRATORS:
+            if integrator == "light" and case.delta_lobe:
+                continue  # seen in a delta lobe, black to the light tracer by design
+            if integrator == "sppm" and case.sppm_refused:
+                continue
+            marks = () if integrator in case.fast else (pytest.mark.slow,)
+            yield pytest.param(name, case.name, integrator, marks=marks, id=f"{_id(name, case)}-{integrator}")
+
+
+def test_every_material_has_a_furnace_case():
+    assert set(CASES) == set(MATERIALS)
+    roughness = {name for name, module in MATERIALS.items() if any(p.name == "roughness" for p in module.PARAMETERS)}
+    for name in roughness:  # a smooth case (a delta lobe) and a rough one
+        assert {c.delta_lobe for c in CASES[name]} == {True, False}, name
+
+
+@pytest.mark.parametrize("name, case_name, integrator", list(_params()))
+def test_furnace(device, name, case_name, integrator):
+    case = next(c for c in CASES[name] if c.name == case_name)
+    mean, standard_error = _furnace(name, case_name, integrator, device)
+    what = f"{name} ({case_name}) under {integrator}"
+    if case.lossless:
+        assert_within_standard_errors(mean, 1.0, standard_error, slack=SLACK, what=what)
+        return
+    assert_at_most_within_standard_errors(mean, 1.0, standard_error, slack=SLACK, what=what)
+    if integrator != "path":
+        reference, reference_error = _furnace(name, case_name, "path", device)
+        assert_within_standard_errors(mean, reference, np.hypot(standard_error, reference_error), what=what)
+
+
+@pytest.mark.parametrize("name, case", ALL_CASES, ids=[_id(n, c) for n, c in ALL_CASES])
+def test_sppm_refuses_exactly_the_mixed_lobes(name, case):
+    problem = sppm_problem(_scene(case, "sppm"), 0, 0)
+    assert (problem is not None) == case.sppm_refused, (name, case.name, problem)
