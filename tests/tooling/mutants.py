@@ -56,9 +56,9 @@ MUTANTS: tuple[Mutant, ...] = (
         "return t;",
         "spot light's smoothstep falloff replaced by one linear in cos θ",
         (
+            "tests/lights/test_light_harness.py::test_spot_profile_across_its_whole_transition",
             "tests/render/test_validation.py::test_law_holds[spot]",
             "tests/render/test_sppm.py::test_spot_light_through_a_glass_slab",
-            "tests/lights",
         ),
     ),
     Mutant(
@@ -67,7 +67,11 @@ MUTANTS: tuple[Mutant, ...] = (
         "return light->pmf * density_uv / (2.0f * PI_F * PI_F * sin_theta);",
         "return 1.05f * light->pmf * density_uv / (2.0f * PI_F * PI_F * sin_theta);",
         "environment map's solid-angle pdf 5 % high",
-        ("tests/lights/test_environment_map.py", "tests/render/test_bdpt.py::test_environment_seen_directly"),
+        (
+            "tests/lights/test_light_harness.py::test_pdf_at_a_hit_is_the_pdf_the_sampler_returned",
+            "tests/lights/test_environment_map.py",
+            "tests/render/test_bdpt.py::test_environment_seen_directly",
+        ),
     ),
     Mutant(
         "emitter_hit_pdf_x1.1",
@@ -76,10 +80,10 @@ MUTANTS: tuple[Mutant, ...] = (
         "return 1.1f * area_light_pdf(light, distance(from, p), fabs(dot(n, wo)));",
         "pdf of reaching an emitting triangle by light sampling, as the MIS weight of a BSDF hit sees it, 10 % high",
         (
+            "tests/lights/test_light_harness.py::test_pdf_at_a_hit_is_the_pdf_the_sampler_returned",
             "tests/render/test_path_integrator.py",
             "tests/render/test_cornell_box.py",
             "tests/interop/test_veach_mis.py",
-            "tests/lights",
         ),
     ),
     Mutant(
@@ -89,10 +93,10 @@ MUTANTS: tuple[Mutant, ...] = (
         "return 1.05f * light->pmf * distance * distance / (light->area * abs_cos_light);",
         "emitting triangle's solid-angle pdf 5 % high (next-event estimation and MIS both)",
         (
+            "tests/lights/test_light_harness.py::test_sampler_follows_the_hit_pdf_chi_square_and_the_pdf_integrates_to_one",
             "tests/render/test_path_integrator.py",
             "tests/render/test_cornell_box.py",
             "tests/interop/test_veach_mis.py",
-            "tests/lights",
         ),
     ),
     Mutant(
