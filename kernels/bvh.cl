@@ -9,7 +9,8 @@
 #include "triangle8.cl"
 
 /* BVH_STACK_SIZE, BVH4_STACK_SIZE, BVH8_STACK_SIZE: the traversal stacks' entries, from the depth the host's builder
- * guarantees (spectrace.geometry.bvh MAX_DEPTH; bvh4.py), passed as build defines (spectrace.engine.device_types). */
+ * guarantees (MAX_DEPTH; the collapse in geometry/bvh4.py), set in spectrace.core.contract and passed as build
+ * defines. */
 
 typedef struct {
     float t;         /* distance along the ray; t_max when nothing was hit */

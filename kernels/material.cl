@@ -4,8 +4,9 @@
  * up in the spectrum table or, for textured parameters, the textures at the surface point: texture.cl's
  * SurfaceContext),
  * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. The list of BSDFs is not kept here: the host writes
- * material_list.h from its registry (spectrace.materials.MATERIALS) for every build, with each bsdf_<name>.cl
- * included and MATERIAL_LIST, and defines each MATERIAL_<NAME> code. Adding a BSDF: that file and its host module
+ * material_list.h from its registry (spectrace.materials.MATERIALS) for every build it hands them to
+ * (spectrace.materials.generated_sources), with each bsdf_<name>.cl included and MATERIAL_LIST, and defines each
+ * MATERIAL_<NAME> code. Adding a BSDF: that file and its host module
  * (docs/materials.md, "Adding a BSDF"); nothing here changes. docs/materials.md describes each model. */
 #ifndef SPECTRACE_MATERIAL_CL
 #define SPECTRACE_MATERIAL_CL
@@ -15,6 +16,9 @@
 #include "spectrum.cl"
 #include "texture.cl"
 #include "bsdf_sample.cl"
+#ifndef MATERIAL_TYPE_COUNT
+#error "built without the materials' generated sources (spectrace.materials.generated_sources)"
+#endif
 #include "material_list.h"
 
 /* MATERIAL_LIST(X) (material_list.h) holds X(code, name, Params) for every BSDF: its Material.type code, the prefix

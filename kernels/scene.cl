@@ -45,7 +45,7 @@ typedef struct {
 #define QUERY_SHADOW 0x297a2d39U  /* shadow rays of next-event estimation: scene_occluded, scene_transmittance */
 
 /* The parameters every scene kernel starts with: the render's parameters, then the scene's buffers in the order
- * spectrace.engine.device_types.SCENE_KERNEL_BUFFERS names them (the host sets them from that list). A kernel
+ * spectrace.core.contract.SCENE_KERNEL_BUFFERS names them (the host sets them from that list). A kernel
  * declared with them makes its Scene with `Scene scene = SCENE_FROM_KERNEL_PARAMS;`. */
 #define SCENE_KERNEL_PARAMS                                                                                        \
     __global const RenderParams *params, __global const BVHNode *nodes, __global const float4 *triangle_vertices, \

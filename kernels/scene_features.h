@@ -7,7 +7,7 @@
 #define SPECTRACE_SCENE_FEATURES_H
 
 /* Bit t set: some material of type MATERIAL_t / some light of type LIGHT_t is in the scene (the codes:
- * spectrace.engine.device_types). */
+ * spectrace.core.contract). */
 #ifndef SCENE_MATERIAL_TYPES
 #define SCENE_MATERIAL_TYPES ((1 << MATERIAL_TYPE_COUNT) - 1)
 #endif

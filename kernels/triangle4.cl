@@ -10,7 +10,8 @@
 
 #include "triangle.cl"
 
-/* A block is LEAF_BLOCK_FLOAT4S float4 (a build define: spectrace.geometry.triangle_blocks owns the layout). */
+/* A block is LEAF_BLOCK_FLOAT4S float4 (a build define from spectrace.core.contract; spectrace.geometry.triangle_blocks
+ * packs the blocks). */
 
 /* Tests one block against hits closer than *t_hit; on a hit updates *t_hit, *triangle and *b12 and returns 1.
  * origin_k: the ray origin's coordinates in the shear's order (kx, ky, kz). */

@@ -1,6 +1,6 @@
 /* Structs shared by the host and the device.
  *
- * Each struct is mirrored by a numpy structured dtype in host/spectrace/engine/device_types.py with explicit
+ * Each struct is mirrored by a numpy structured dtype in host/spectrace/core/contract.py with explicit
  * offsets; tests/device/test_struct_layout.py compiles a kernel that reports sizeof/offsetof and compares.
  * Only float4 and 4-byte scalars are used, float4 first, so every compiler lays them out identically
  * (float3 is avoided: it occupies 16 bytes in buffers). */
@@ -11,9 +11,9 @@
 
 /* The numbers both sides must agree on (the wavelength grid GRID_MIN_NM, GRID_MAX_NM, GRID_SAMPLES; the MATERIAL_*,
  * IOR_*, LIGHT_* and METER_* codes; MATERIAL_NO_SPECTRUM, TRIANGLE_NO_MATERIAL; buffer layouts) have one home,
- * host/spectrace/engine/device_types.py, and reach every kernel build as defines. */
+ * host/spectrace/core/contract.py, and reach every kernel build as defines. */
 #ifndef GRID_SAMPLES
-#error "built without the host/device contract defines (spectrace.engine.device_types.device_contract_defines)"
+#error "built without the host/device contract defines (spectrace.core.contract.device_contract_defines)"
 #endif
 
 /* Bounding volume hierarchy node (32 bytes). Interior: count == 0, children at left_first and left_first + 1.
@@ -180,7 +180,7 @@ typedef struct {
 } Texture;
 
 /* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
- * type (listed with LIGHT_TYPES in spectrace.engine.device_types). */
+ * type (listed with LIGHT_TYPES in spectrace.core.contract). */
 typedef struct {
     float4 position;       /* point, spot; LIGHT_SPHERE: centre (xyz) and radius (w); LIGHT_ENVIRONMENT_MAP: row 0 of
                               the world-to-map rotation */

@@ -6,6 +6,7 @@ import pyopencl as cl
 import pytest
 
 from spectrace.device import open_device
+from spectrace.materials import generated_sources
 
 
 def pytest_report_header(config):
@@ -30,7 +31,7 @@ class KernelRunner:
 
     def __init__(self, device, entry: str, defines: dict | None = None):
         self.device = device
-        self.program = device.build_program(entry, defines=defines or None)
+        self.program = device.build_program(entry, defines=defines or None, generated=generated_sources())
         self.kernels = {}
 
     def buffer(self, array: np.ndarray, writable: bool = False) -> cl.Buffer:

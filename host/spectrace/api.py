@@ -413,7 +413,7 @@ def _check_camera(scene: Scene) -> None:
 def _check_render_arguments(spp: Any, pass_spp: Any, spectral_bins: Any, tile_rows: Any) -> None:
     """render()'s numbers, refused before a device opens: a pass_spp of -1 or 0.5 would never finish the
     render, a spp of NaN or "16" would end it at once with a black image."""
-    from spectrace.scene import limits
+    from spectrace.core import limits
 
     problems = (
         spp is not None and limits.spp_problem(spp),
@@ -572,8 +572,8 @@ def measure_radiance(
     """The spectral radiance arriving at `origin` seen looking along `direction`, W/(m² sr nm), at each of
     `wavelengths_nm` (default every 5 nm over 360-830 nm), with standard errors from `streams` independent
     estimates; the reading's Y is the luminance in cd/m² (a radiance meter, `spectrace.engine.meters`)."""
+    from spectrace.core import limits
     from spectrace.engine.meters import DEFAULT_WAVELENGTHS_NM, RadianceMeter, measure
-    from spectrace.scene import limits
 
     for name, count in (("streams", streams), ("samples_per_item", samples_per_item)):
         if problem := limits.whole_number_problem(name, count) or (

@@ -29,9 +29,9 @@ import numpy as np
 
 from spectrace.aovs import albedo_in
 from spectrace.colour_output import ColourSpace, xyz_to_rgb_matrix
+from spectrace.core.limits import MAX_SEED
 from spectrace.errors import SpectraceError
 from spectrace.image import Image
-from spectrace.scene.limits import MAX_SEED
 from spectrace.scene.model import Scene
 
 DENOISE_AOVS = ("albedo", "normal")

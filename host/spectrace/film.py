@@ -20,12 +20,12 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.aovs import AOV_FLOATS_PER_PIXEL, aov_images, with_companions
+from spectrace.core import limits
 from spectrace.device import Device
 from spectrace.engine.memory import SPECTRAL_BAND_BYTES
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.errors import SpectraceError
 from spectrace.image import Image, SpectralBands
-from spectrace.scene import limits
 from spectrace.spectral.film_response import WAVELENGTH_LIMITS_NM, FilmResponse
 
 SPECTRAL_LIMITS_NM = (360.0, 830.0)  # the wavelengths the renders sample

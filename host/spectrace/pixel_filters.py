@@ -13,9 +13,9 @@ from typing import Literal
 
 import numpy as np
 
-from spectrace.engine.device_types import PIXEL_FILTER_BINS, PIXEL_FILTERS
+from spectrace.core.contract import PIXEL_FILTER_BINS, PIXEL_FILTERS
+from spectrace.core.parameters import Parameter, Range
 from spectrace.errors import SpectraceError
-from spectrace.materials.parameters import Parameter, Range
 from spectrace.number_text import number_problem
 
 FilterType = Literal["box", "tent", "gaussian", "mitchell"]

@@ -181,7 +181,7 @@ def test_the_quality_references_seed_stays_a_valid_seed_other_than_the_scenes():
     """The reference renders with the scene's seed offset: wrapped into 0..MAX_SEED for any scene seed, even the
     largest (the kernels take a 32-bit signed seed), and never equal to it."""
     from spectrace.benchmarks.quality import REFERENCE_SEED_OFFSET
-    from spectrace.scene.limits import MAX_SEED, offset_seed, seed_problem
+    from spectrace.core.limits import MAX_SEED, offset_seed, seed_problem
 
     for seed in (0, 12345, MAX_SEED - REFERENCE_SEED_OFFSET, MAX_SEED - REFERENCE_SEED_OFFSET + 1, MAX_SEED):
         reference = offset_seed(seed, REFERENCE_SEED_OFFSET)

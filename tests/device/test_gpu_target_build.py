@@ -12,10 +12,11 @@ from pathlib import Path
 import pytest
 
 from spectrace import resources
-from spectrace.device.program_cache import _with_contract, build_options, generated_headers
+from spectrace.device.program_cache import _with_contract, build_options
 from spectrace.engine.renderer import INTEGRATOR_PROGRAMS, sampler_defines
 from spectrace.film import spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines
+from spectrace.materials import generated_sources
 from spectrace.scene.model import SAMPLER_TYPES
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
@@ -39,9 +40,10 @@ needs_clang = pytest.mark.skipif(CLANG is None, reason="no clang with the NVPTX 
 
 
 def _options(tmp_path: Path, defines: dict) -> list[str]:
-    for name, text in generated_headers().items():
+    generated = generated_sources()
+    for name, text in generated.headers.items():
         (tmp_path / name).write_text(text)
-    return build_options(resources.kernels_dir(), _with_contract(defines), None, tmp_path).split()
+    return build_options(resources.kernels_dir(), _with_contract(defines, generated), None, tmp_path).split()
 
 
 def _compile(target: list[str], entry: str, options: list[str]) -> None:

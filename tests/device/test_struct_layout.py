@@ -5,7 +5,8 @@ scene kernels take the scene buffers in the order the host sets them."""
 import numpy as np
 import pytest
 
-from spectrace.engine.device_types import DEVICE_STRUCTS
+from spectrace.core.contract import DEVICE_STRUCTS
+from spectrace.materials import generated_sources
 
 
 def _layout_kernel_source() -> str:
@@ -24,7 +25,7 @@ def test_device_struct_layout_matches_numpy(device, tmp_path):
 
     source = tmp_path / "report_layout.cl"
     source.write_text(_layout_kernel_source())
-    program = device.build_program(str(source))
+    program = device.build_program(str(source), generated=generated_sources())
     expected = []
     for dtype in DEVICE_STRUCTS.values():
         expected.append(dtype.itemsize)
@@ -52,11 +53,11 @@ def test_kernels_see_every_contract_value_the_host_defines(device, tmp_path):
     from spectrace.device.program_cache import kernel_contract
     from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
-    contract = kernel_contract()
+    contract = kernel_contract(generated_sources())
     names = sorted(contract)
     source = tmp_path / "report_contract.cl"
     source.write_text(_contract_report_source(names))
-    program = device.build_program(str(source))
+    program = device.build_program(str(source), generated=generated_sources())
     out = np.zeros(len(names), np.float32)
     buffer = cl.Buffer(device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
     program.report_contract(device.queue, (1,), None, buffer)
@@ -76,7 +77,7 @@ def test_no_kernel_file_keeps_its_own_copy_of_a_contract_value():
     from spectrace import resources
     from spectrace.device.program_cache import kernel_contract
 
-    names = set(kernel_contract())
+    names = set(kernel_contract(generated_sources()))
     copies = []
     for path in sorted(resources.kernels_dir().rglob("*")):
         if path.suffix in (".cl", ".h"):
@@ -95,6 +96,17 @@ def test_a_build_without_the_contract_stops_with_a_clear_error(device):
         compile_source(device.context, device.cl_device, '#include "types.h"\n', options)
 
 
+def test_a_material_dispatch_built_without_the_registrys_sources_stops_with_a_clear_error(device):
+    """The device layer adds only the contract; the material codes and list come from the registry, and a build
+    not handed them names what it lacks rather than failing somewhere inside the dispatch."""
+    from spectrace import resources
+    from spectrace.device.program_cache import KernelBuildError, _with_contract, build_options, compile_source
+
+    options = build_options(resources.kernels_dir(), _with_contract(None), None)
+    with pytest.raises(KernelBuildError, match="generated sources"):
+        compile_source(device.context, device.cl_device, '#include "material.cl"\n', options)
+
+
 @pytest.mark.parametrize(
     ("entry", "kernel"),
     [
@@ -109,9 +121,11 @@ def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device, entry, 
     as the compiler reports them, must be those buffers in that order."""
     import pyopencl as cl
 
-    from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
+    from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 
-    program = device.build_program(entry, options=["-cl-kernel-arg-info"], from_source=True)
+    program = device.build_program(
+        entry, options=["-cl-kernel-arg-info"], from_source=True, generated=generated_sources()
+    )
     k = cl.Kernel(program, kernel)
     names = [k.get_arg_info(i, cl.kernel_arg_info.NAME) for i in range(1 + len(SCENE_KERNEL_BUFFERS))]
     assert names == ["params", *SCENE_KERNEL_BUFFERS]

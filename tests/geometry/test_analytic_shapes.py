@@ -6,7 +6,7 @@ the sphere), and uniform area sampling (its density integrates to the area, also
 import numpy as np
 import pytest
 
-from spectrace.engine.device_types import ANALYTIC_SHAPE_DTYPE
+from spectrace.core.contract import ANALYTIC_SHAPE_DTYPE
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.transforms import transform_matrix
 from stats_toolkit import assert_chi_square_fits

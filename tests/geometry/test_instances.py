@@ -12,7 +12,7 @@ import pytest
 
 import spectrace
 from replica_agreement import assert_replicas_agree
-from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS
+from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 from spectrace.engine.renderer import Renderer, upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.engine.scene_features import scene_feature_defines

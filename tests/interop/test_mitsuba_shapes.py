@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
-from spectrace.engine.device_types import ANALYTIC_SHAPE_DTYPE
+from spectrace.core.contract import ANALYTIC_SHAPE_DTYPE
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene
 
 SHAPES = """

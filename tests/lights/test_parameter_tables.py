@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 import spectrace
+from spectrace.core.parameters import REQUIRED
 from spectrace.lights import LIGHTS, area
-from spectrace.materials.parameters import REQUIRED
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE_FORMAT = (ROOT / "docs" / "scene-format.md").read_text(encoding="utf-8")

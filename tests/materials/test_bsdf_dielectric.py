@@ -11,7 +11,7 @@ index of the medium ω lies in, and a refracted radiance sample carries (n(ωo)/
 import numpy as np
 import pytest
 
-from spectrace.engine.device_types import (
+from spectrace.core.contract import (
     IOR_CAUCHY,
     IOR_CONSTANT,
     IOR_SELLMEIER,

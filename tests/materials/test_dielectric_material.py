@@ -8,7 +8,7 @@ import pytest
 
 import spectrace
 from scene_text import camera_film
-from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER
+from spectrace.core.contract import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES, material_row

@@ -12,7 +12,7 @@ import pytest
 from scipy.special import erf
 
 from materials.test_bsdfs import Bsdf
-from spectrace.engine.device_types import MICROFACET_BECKMANN, MICROFACET_GGX
+from spectrace.core.contract import MICROFACET_BECKMANN, MICROFACET_GGX
 from spectrace.materials import material_row
 from spectrace.scene.model import ConductorMaterial
 from spectrace.spectral.spectrum import Spectrum

@@ -10,9 +10,9 @@ import pytest
 
 import spectrace
 from scene_text import camera_film
+from spectrace.core.parameters import REQUIRED
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIALS
-from spectrace.materials.parameters import REQUIRED
 from spectrace.scene.loader import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -8,15 +8,15 @@ import re
 import spectrace
 from package_imports import MODULES
 from spectrace import api, resources
-from spectrace.device.program_cache import generated_headers, kernel_contract
-from spectrace.materials import BSDFS, KERNEL_HEADER_NAME, MATERIAL_CODES, MATERIALS, kernel_file
+from spectrace.device.program_cache import kernel_contract
+from spectrace.materials import BSDFS, KERNEL_HEADER_NAME, MATERIAL_CODES, MATERIALS, generated_sources, kernel_file
 from spectrace.materials.base import Material
 
 KERNELS = resources.kernels_dir()
 
 
 def _generated_list() -> list[tuple[str, str, str]]:
-    header = generated_headers()[KERNEL_HEADER_NAME]
+    header = generated_sources().headers[KERNEL_HEADER_NAME]
     body = header.split("#define MATERIAL_LIST(X)", 1)[1]
     return re.findall(r"X\((\w+), (\w+), (\w+)\)", body)
 
@@ -26,7 +26,7 @@ def test_the_generated_kernel_list_is_the_registry_in_code_order():
     list, with codes of their own."""
     expected = [(f"MATERIAL_{name.upper()}", name, f"{name.capitalize()}Params") for name in BSDFS]
     assert _generated_list() == expected
-    contract = kernel_contract()
+    contract = kernel_contract(generated_sources())
     assert [contract[code] for code, _, _ in _generated_list()] == list(range(len(BSDFS)))
     assert contract["MATERIAL_TYPE_COUNT"] == len(MATERIALS) == len(set(MATERIAL_CODES.values()))
     composites = [name for name in MATERIALS if name not in BSDFS]
@@ -35,7 +35,7 @@ def test_the_generated_kernel_list_is_the_registry_in_code_order():
 
 
 def test_every_registered_bsdf_has_its_kernel_file_with_the_functions_the_dispatch_calls():
-    header = generated_headers()[KERNEL_HEADER_NAME]
+    header = generated_sources().headers[KERNEL_HEADER_NAME]
     for name in BSDFS:
         path = KERNELS / kernel_file(name)
         assert path.is_file(), path
@@ -53,7 +53,7 @@ def test_every_bsdf_kernel_file_is_registered():
 
 
 def test_a_composite_has_its_own_kernel_file_outside_the_bsdf_list():
-    header = generated_headers()[KERNEL_HEADER_NAME]
+    header = generated_sources().headers[KERNEL_HEADER_NAME]
     for name in set(MATERIALS) - set(BSDFS):
         assert (KERNELS / kernel_file(name)).is_file() and not kernel_file(name).startswith("bsdf_")
         assert kernel_file(name) not in header

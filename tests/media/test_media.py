@@ -12,7 +12,7 @@ import pytest
 
 import spectrace
 from scene_text import CAMERA_FILM_GREY
-from spectrace.engine.device_types import MEDIUM_DTYPE
+from spectrace.core.contract import MEDIUM_DTYPE
 from spectrace.engine.meters import IrradianceMeter, RadianceMeter, measure
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives

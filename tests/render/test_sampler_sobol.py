@@ -15,6 +15,7 @@ from spectrace.engine.checkpoint import render_identity
 from spectrace.engine.renderer import Renderer, sampler_defines
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
+from spectrace.materials import generated_sources
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import DEFAULT_SAMPLER
@@ -27,7 +28,9 @@ COORDINATES = [(d, c) for d, dims in enumerate(DRAWS) for c in range(dims)]
 class DrawRunner(KernelRunner):
     def __init__(self, device, sampler: str):
         self.device = device
-        self.program = device.build_program("testing/sampler_draws.cl", defines=sampler_defines(sampler) or None)
+        self.program = device.build_program(
+            "testing/sampler_draws.cl", defines=sampler_defines(sampler) or None, generated=generated_sources()
+        )
         self.kernels = {}
 
     def draws(

@@ -17,6 +17,7 @@ import pytest
 
 from cli_runner import run_in_process
 from spectrace import cli
+from spectrace.core.limits import format_bytes
 from spectrace.engine import memory
 from spectrace.engine import renderer as renderer_module
 from spectrace.engine.checkpoint import read_checkpoint
@@ -29,7 +30,6 @@ from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
-from spectrace.scene.limits import format_bytes
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
 from spectrace.spectral.spectrum import Spectrum
 

@@ -104,7 +104,7 @@ def test_mistakes_name_the_key(tmp_path, objects, instances, where, message):
 
 def test_python_instances_are_checked_like_shapes():
     import spectrace
-    from spectrace.scene import limits
+    from spectrace.core import limits
     from spectrace.scene.model import Instance
 
     obj = spectrace.instanced_object([spectrace.shape("cube", spectrace.diffuse(0.5))], name="box")

@@ -9,7 +9,7 @@ from PIL import Image as PILImage
 from tests.textures.lookup import HARNESS, TextureHarness, bilinear, pyramid, trilinear
 
 import spectrace
-from spectrace.engine.device_types import STORAGE_FLOAT, STORAGE_HALF, STORAGE_UNORM8, STORAGE_UNORM16
+from spectrace.core.contract import STORAGE_FLOAT, STORAGE_HALF, STORAGE_UNORM8, STORAGE_UNORM16
 from spectrace.errors import SpectraceError
 from spectrace.spectral import srgb_decode
 from spectrace.spectral.rgb_texture import reflectance_coefficients

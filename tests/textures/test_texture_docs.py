@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 import spectrace
-from spectrace.materials.parameters import REQUIRED
+from spectrace.core.parameters import REQUIRED
 from spectrace.textures import TEXTURES
 
 DOC = (Path(__file__).resolve().parents[2] / "docs" / "textures.md").read_text(encoding="utf-8")

@@ -15,7 +15,7 @@ from tests.textures.lookup import (
     trilinear,
 )
 
-from spectrace.engine.device_types import STORAGE_FLOAT, STORAGE_HALF
+from spectrace.core.contract import STORAGE_FLOAT, STORAGE_HALF
 from spectrace.spectral.rgb_texture import reflectance_coefficients
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.uplift import sigmoid_polynomial_spectrum, uplift_reflectance

@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 import spectrace
+from spectrace.core.parameters import SMOOTH_ALPHA
 from spectrace.engine.meters import FluxMeter, measure
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.scene_buffers import build_scene_buffers
 from spectrace.errors import SpectraceError
-from spectrace.materials.parameters import SMOOTH_ALPHA
 from spectrace.scene.model import Camera, Scene
 from spectrace.spectral.rgb_texture import texture_reflectance_coefficients
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error

@@ -31,9 +31,9 @@ import numpy as np
 
 from spectrace.benchmarks.image_agreement import compare_regions, regions_for
 from spectrace.benchmarks.peer_mitsuba import bench_scene
+from spectrace.core import limits
 from spectrace.device import open_device
 from spectrace.engine.renderer import Renderer
-from spectrace.scene import limits
 
 REFERENCE_SEED_OFFSET = 1_000_003
 PROBE_SPP = 4

@@ -37,6 +37,7 @@ from spectrace.geometry.bvh4 import (
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, icosphere
 from spectrace.geometry.triangle_blocks import BLOCK_VECTORS
+from spectrace.materials import generated_sources
 
 DISTANCE_CHECK_RAYS = 20000
 
@@ -132,7 +133,9 @@ def trace_with_spectrace(
 ) -> dict:
     """vertices, node_buffer: the kernel's triangle and node buffers (_leaf_order_vertices, device_nodes)."""
     device = open_device(device_key)
-    program = device.build_program("testing/closest_hit.cl", defines=traversal_defines() or None)
+    program = device.build_program(
+        "testing/closest_hit.cl", defines=traversal_defines() or None, generated=generated_sources()
+    )
     kernel = cl.Kernel(program, "closest_hit")
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR

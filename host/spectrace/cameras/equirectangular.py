@@ -7,7 +7,7 @@ that an `envmap` light without rotation reproduces."""
 import numpy as np
 
 from spectrace.cameras.shared import frame
-from spectrace.engine.device_types import CAMERA_EQUIRECTANGULAR
+from spectrace.core.contract import CAMERA_EQUIRECTANGULAR
 
 NAME = "equirectangular"
 CODE = CAMERA_EQUIRECTANGULAR

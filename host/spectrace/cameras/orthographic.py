@@ -5,8 +5,8 @@ view_width / aspect ratio up, so an object's image size is its world size whatev
 import numpy as np
 
 from spectrace.cameras.shared import frame
-from spectrace.engine.device_types import CAMERA_ORTHOGRAPHIC
-from spectrace.materials.parameters import REQUIRED, Parameter, Range
+from spectrace.core.contract import CAMERA_ORTHOGRAPHIC
+from spectrace.core.parameters import REQUIRED, Parameter, Range
 
 NAME = "orthographic"
 CODE = CAMERA_ORTHOGRAPHIC

@@ -3,7 +3,7 @@
 import numpy as np
 
 from spectrace.cameras.shared import FOV, FOV_AXIS, perspective_basis
-from spectrace.engine.device_types import CAMERA_PERSPECTIVE
+from spectrace.core.contract import CAMERA_PERSPECTIVE
 
 NAME = "perspective"
 CODE = CAMERA_PERSPECTIVE

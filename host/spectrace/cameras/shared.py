@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from spectrace.materials.parameters import REQUIRED, Parameter, Range
+from spectrace.core.parameters import REQUIRED, Parameter, Range
 
 ORIGIN = Parameter("origin", "vector", "scene units", REQUIRED, doc="where the camera is (the lens's centre)")
 TARGET = Parameter("target", "vector", "scene units", REQUIRED, doc="a point the camera looks at")

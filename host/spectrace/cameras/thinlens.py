@@ -10,8 +10,8 @@ The aperture is `aperture_radius`, or `f_number` with the lens's `focal_length` 
 import numpy as np
 
 from spectrace.cameras.shared import FOV, FOV_AXIS, perspective_basis
-from spectrace.engine.device_types import CAMERA_THIN_LENS
-from spectrace.materials.parameters import Parameter, Range
+from spectrace.core.contract import CAMERA_THIN_LENS
+from spectrace.core.parameters import Parameter, Range
 
 NAME = "thinlens"
 CODE = CAMERA_THIN_LENS

@@ -77,7 +77,7 @@ def _log(text: str) -> None:
 def _check(sizes: list[int] | None = None, max_depth: int | None = None, seconds: float | None = None) -> None:
     """The limits the render command applies, for the options a bench shares with it."""
     from spectrace.cli import checks
-    from spectrace.scene import limits
+    from spectrace.core import limits
 
     checks.check_max_depth(max_depth)
     checks.check_finite(seconds, "--seconds")
@@ -362,8 +362,8 @@ def denoise_bench(
     render (the denoise extra; docs/performance.md)."""
     _check(_one(size))
     from spectrace.benchmarks.denoise import denoise_bench_command
+    from spectrace.core import limits
     from spectrace.denoising import INSTALL_HINT, denoise_available
-    from spectrace.scene import limits
 
     for option, value in (("--spp", spp), ("--reference-spp", reference_spp)):
         if problem := limits.spp_problem(value):

@@ -9,9 +9,9 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
+from spectrace.core import limits
 from spectrace.errors import SpectraceError
 from spectrace.io.output_files import check_output_file  # noqa: F401 (the commands' check of their outputs)
-from spectrace.scene import limits
 
 
 def check_seed(seed: int | None, option: str = "--seed") -> None:

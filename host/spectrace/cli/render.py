@@ -343,7 +343,7 @@ def _with_delta_e_map(response, output: Path, white_y: float):
 
 def _check_render_options(scene, output: Path, width, height, spp) -> None:
     """Refuse what would fail only after the render (unknown format) or could never run."""
-    from spectrace.scene import limits
+    from spectrace.core import limits
 
     if output.suffix.lower() not in (".exr", ".png"):
         raise SpectraceError(f"unknown image format '{output.suffix}' (use .exr or .png)", where=str(output))

@@ -1,7 +1,8 @@
 """An opened OpenCL device and its kernel builds, with an on-disk cache of program binaries.
 
 A binary is reused only when everything that could change it is unchanged: every ``*.cl``/``*.h`` file
-in the kernels folder and every header generated from the host's registries (`generated_headers`), the entry file,
+in the kernels folder and every header generated from the host's registries (handed to a build as
+`GeneratedSources`: this layer does not read the registries), the entry file,
 the build options (defines included) and the device's identity (platform name and version, device name, driver
 version). pyopencl's own cache is bypassed so that only this one decides.
 """
@@ -17,7 +18,7 @@ import time
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 import pyopencl as cl
 
@@ -25,6 +26,9 @@ from spectrace import resources
 from spectrace.device.discovery import cache_root
 from spectrace.device.report import DeviceReport
 from spectrace.errors import SpectraceError
+
+if TYPE_CHECKING:
+    from spectrace.core.contract import GeneratedSources
 
 _CACHE_FORMAT = b"spectrace-program-cache-v1"
 _BASE_OPTIONS = ("-cl-std=CL1.2",)  # no -cl-fast-relaxed-math: the kernels rely on IEEE inf/nan
@@ -137,21 +141,13 @@ def build_options(
     return " ".join(options + list(extra or []))
 
 
-def kernel_contract() -> dict[str, DefineValue]:
+def kernel_contract(generated: GeneratedSources | None = None) -> dict[str, DefineValue]:
     """Every value of the host/device contract, which every build gets as defines: the struct codes, wavelength
-    grid and buffer layouts (spectrace.engine.device_types) and the materials' type codes (their registry)."""
-    # Not at import: these load numpy tables and the material modules.
-    from spectrace.engine.device_types import device_contract_defines
-    from spectrace.materials import kernel_defines
+    grid and buffer layouts (spectrace.core.contract) and the registries' type codes the build is handed."""
+    # Not at import: the contract loads numpy tables.
+    from spectrace.core.contract import device_contract_defines
 
-    return device_contract_defines() | kernel_defines()
-
-
-def generated_headers() -> dict[str, str]:
-    """The headers the kernels include that the host writes from its registries: file name -> text."""
-    from spectrace import materials
-
-    return {materials.KERNEL_HEADER_NAME: materials.kernel_header()}
+    return device_contract_defines() | dict(generated.defines if generated is not None else {})
 
 
 # Contract values a render may set for itself: the wavelength grid of the spectrum table, which a film with a range
@@ -159,9 +155,11 @@ def generated_headers() -> dict[str, str]:
 RENDER_SETTABLE_CONTRACT = frozenset({"GRID_MIN_NM", "GRID_MAX_NM", "GRID_SAMPLES"})
 
 
-def _with_contract(defines: Mapping[str, DefineValue] | None) -> dict[str, DefineValue]:
+def _with_contract(
+    defines: Mapping[str, DefineValue] | None, generated: GeneratedSources | None = None
+) -> dict[str, DefineValue]:
     """`defines` plus the host/device contract, which every build gets: the kernels keep no copy of those numbers."""
-    contract = kernel_contract()
+    contract = kernel_contract(generated)
     clash = sorted((set(contract) - RENDER_SETTABLE_CONTRACT) & set(defines or {}))
     if clash:
         raise SpectraceError(f"kernel define {clash[0]} is fixed by the host/device contract")
@@ -248,9 +246,11 @@ class Device:
         defines: Mapping[str, DefineValue] | None = None,
         options: list[str] | None = None,
         from_source: bool = False,
+        generated: GeneratedSources | None = None,
     ) -> cl.Program:
         """Build ``kernels/<entry>`` with ``-I kernels``, ``-I`` the folder of the generated headers and
-        ``-D name=value`` for each define and each value of the host/device contract (`kernel_contract`), reusing a
+        ``-D name=value`` for each define and each value of the host/device contract (`kernel_contract`, with the
+        registries' codes and headers in `generated`, which kernels that dispatch over a registry need), reusing a
         cached binary when sources, generated headers, options and device are unchanged, unless `from_source` (a
         program loaded from a binary may lack what only the compiler knows: Intel's CPU runtime then reports no
         kernel argument names although built with -cl-kernel-arg-info)."""
@@ -258,10 +258,10 @@ class Device:
         kernels_dir = resources.kernels_dir()
         if not (kernels_dir / entry).is_file():
             raise SpectraceError(f"kernel file '{entry}' not found in the kernels folder", where=entry)
-        headers = generated_headers()
+        headers = dict(generated.headers) if generated is not None else {}
         headers_digest = _headers_digest(headers)
-        generated_dir = _write_generated_headers(headers, headers_digest)
-        option_text = build_options(kernels_dir, _with_contract(defines), options, generated_dir)
+        generated_dir = _write_generated_headers(headers, headers_digest) if headers else None
+        option_text = build_options(kernels_dir, _with_contract(defines, generated), options, generated_dir)
         sources_digest = hashlib.sha256(f"{kernels_digest(kernels_dir)} {headers_digest}".encode()).hexdigest()
         key = program_cache_key(sources_digest, entry, option_text, device_identity(self.report))
         cache_file = program_cache_dir() / f"{key}.bin"

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from spectrace import resources
+from spectrace.core import limits
 from spectrace.device.program_cache import kernels_digest
 from spectrace.engine.bdpt import pixels_per_light_path
 from spectrace.engine.memory import scene_arrays
@@ -39,7 +40,6 @@ from spectrace.errors import SpectraceError
 from spectrace.film import RenderState, state_problem
 from spectrace.io.atomic import write_atomically
 from spectrace.io.input_files import regular_file
-from spectrace.scene import limits
 
 if TYPE_CHECKING:
     from spectrace.engine.renderer import Renderer

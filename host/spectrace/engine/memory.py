@@ -10,11 +10,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.core.contract import RENDER_PARAMS_DTYPE
+from spectrace.core.limits import FILM_BYTES_PER_PIXEL, RAY_COUNT_BYTES_PER_PIXEL, format_bytes
 from spectrace.device import Device
-from spectrace.engine.device_types import RENDER_PARAMS_DTYPE
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
-from spectrace.scene.limits import FILM_BYTES_PER_PIXEL, RAY_COUNT_BYTES_PER_PIXEL, format_bytes
 
 SPECTRAL_BAND_BYTES = 4  # one float32 sum per band and pixel
 

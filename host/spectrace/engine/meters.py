@@ -10,12 +10,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyopencl as cl
 
+from spectrace.core.contract import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
 from spectrace.device import Device, open_device
-from spectrace.engine.device_types import METER_FLUX, METER_IRRADIANCE, METER_PARAMS_DTYPE, METER_RADIANCE
 from spectrace.engine.launch import meter_work_group
 from spectrace.engine.renderer import upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.geometry.bvh4 import traversal_defines
+from spectrace.materials import generated_sources
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
 from spectrace.spectral.film_response import FilmResponse
@@ -120,7 +121,7 @@ def measure(
     if scene.film_response.has_own_grid:  # meters read spectra on the common grid, whatever the film's range
         scene = scene.with_overrides(film_response=FilmResponse())
     buffers = build_scene_buffers(scene)
-    program = device.build_program("meters.cl", defines=traversal_defines() or None)
+    program = device.build_program("meters.cl", defines=traversal_defines() or None, generated=generated_sources())
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     params, meter_params, wavelength_buffer = (

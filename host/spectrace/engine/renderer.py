@@ -6,10 +6,12 @@ from collections.abc import Callable
 import numpy as np
 import pyopencl as cl
 
+from spectrace import materials
 from spectrace.aovs import albedo_channel_scale, aov_defines
+from spectrace.core import limits
+from spectrace.core.contract import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
 from spectrace.device import Device, open_device
 from spectrace.engine.bdpt import pixels_per_light_path
-from spectrace.engine.device_types import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.light_tracer import LightPasses
 from spectrace.engine.memory import check_device_memory, device_memory_need
@@ -21,7 +23,6 @@ from spectrace.errors import SpectraceError
 from spectrace.film import Film, dropped_samples_problem, spectral_defines, spectral_range
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.image import Image
-from spectrace.scene import limits
 from spectrace.scene.model import SAMPLER_TYPES, Scene
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
@@ -130,7 +131,9 @@ class Renderer:
         defines |= response.defines()
         if scene.integrator == "bdpt":
             defines["BDPT_PIXELS_PER_LIGHT_PATH"] = pixels_per_light_path(scene)
-        self.program = self.device.build_program(self._program_file(scene), defines=defines or None)
+        self.program = self.device.build_program(
+            self._program_file(scene), defines=defines or None, generated=materials.generated_sources()
+        )
         self.kernel = self._create_kernels()
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
         self.work_group = render_work_group(self.device)

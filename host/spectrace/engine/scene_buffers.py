@@ -8,7 +8,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from spectrace.engine.device_types import (
+from spectrace.core.contract import (
     ANALYTIC_SHAPE_DTYPE,
     HIDE_AREA_EMITTERS,
     HIDE_ENVIRONMENT,

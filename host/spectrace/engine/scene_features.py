@@ -4,7 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.engine.device_types import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, TEXTURE_CHECKERBOARD
+from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, TEXTURE_CHECKERBOARD
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.materials import MATERIAL_CODES
 

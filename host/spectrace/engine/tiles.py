@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from spectrace.core import limits
 from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, TileMap, identity_mismatch, write_checkpoint
 from spectrace.errors import SpectraceError
 from spectrace.film import STATE_LAYOUT, RenderState, dropped_samples_problem, spectral_range, state_image
@@ -358,7 +359,6 @@ def make_job(
     the client: the scene buffers (BVH included) are built once, not once per worker."""
     from spectrace.engine.checkpoint import scene_identity
     from spectrace.engine.scene_buffers import build_scene_buffers
-    from spectrace.scene import limits
 
     total = spp if spp is not None else scene.spp
     problem = (

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import ANALYTIC_SHAPE_DTYPE, SHAPE_TYPES
+from spectrace.core.contract import ANALYTIC_SHAPE_DTYPE, SHAPE_TYPES
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform
 

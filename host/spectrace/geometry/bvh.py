@@ -46,17 +46,8 @@ from time import perf_counter
 
 import numpy as np
 
-BVH_NODE_DTYPE = np.dtype(
-    {
-        "names": ["bmin", "left_first", "bmax", "count"],
-        "formats": [("<f4", (3,)), "<i4", ("<f4", (3,)), "<i4"],
-        "offsets": [0, 12, 16, 28],
-        "itemsize": 32,
-    }
-)
+from spectrace.core.contract import BVH_NODE_DTYPE, MAX_DEPTH
 
-# Deepest root-to-leaf path, in edges, that the kernel's fixed traversal stack can hold.
-MAX_DEPTH = 64
 # Above this many triangles a node is split even where the SAH prefers a leaf, so leaf loops stay short.
 FORCED_SPLIT_LEAF_SIZE = 16
 # Cost of testing one leaf block (leaf_block triangles at once) against traversing a node, when leaf_block > 1.

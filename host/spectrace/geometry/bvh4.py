@@ -15,25 +15,9 @@ with that leaf as its only child. The leaf triangle slots are the binary tree's,
 
 import numpy as np
 
-from spectrace.geometry.bvh import BVH, MAX_DEPTH
+from spectrace.core.contract import BVH4_NODE_DTYPE, BVH8_NODE_DTYPE, BVH8_STACK_SIZE, MAX_DEPTH
+from spectrace.geometry.bvh import BVH
 from spectrace.geometry.triangle_blocks import LANES, node_buffer, pack_leaf_blocks
-
-
-def _node_dtype(width: int) -> np.dtype:
-    """SoA node of `width` children: 24·width bytes of boxes, then the child and count vectors."""
-    boxes = 12 * width
-    return np.dtype(
-        {
-            "names": ["child_min", "child_max", "child", "count"],
-            "formats": [("<f4", (3, width)), ("<f4", (3, width)), ("<i4", (width,)), ("<i4", (width,))],
-            "offsets": [0, boxes, 2 * boxes, 2 * boxes + 4 * width],
-            "itemsize": 2 * boxes + 8 * width,
-        }
-    )
-
-
-BVH4_NODE_DTYPE = _node_dtype(4)  # 128 bytes
-BVH8_NODE_DTYPE = _node_dtype(8)  # 256 bytes
 
 NODE_DTYPES = {4: BVH4_NODE_DTYPE, 8: BVH8_NODE_DTYPE}
 
@@ -50,11 +34,6 @@ BVH8Q_NODE_DTYPE = np.dtype(
         "itemsize": 128,
     }
 )
-
-# Entries of the 8-wide kernel's stack (kernels/bvh.cl BVH8_STACK_SIZE, 8 bytes each): the collapse gives a node
-# fewer children where more could overflow it (collapse, stack_size). 96 leaves every node of the living room
-# (295k triangles, stack need 65) its full width; any tree the builder makes (depth <= MAX_DEPTH) fits.
-BVH8_STACK_SIZE = 96
 
 
 def collapse_to_bvh4(bvh: BVH) -> tuple[np.ndarray, int]:
@@ -187,9 +166,6 @@ LEAF_SIZE = 8
 # rendered faster with the same image (docs/performance.md, "Block-aware SAH"). The 8-wide traversal keeps the same
 # binary tree, so both wide traversals visit the same leaves and give the same hits.
 LEAF_BLOCK = LANES if TRAVERSAL_WIDTH in (4, 8) else 1
-# Entries of the 4-wide kernel's stack (kernels/bvh.cl BVH4_STACK_SIZE): a visit pushes at most three, and the
-# collapse never makes a path longer than the binary tree's (<= MAX_DEPTH), so the stack cannot overflow.
-BVH4_STACK_SIZE = 3 * MAX_DEPTH + 1
 
 
 # Whether the 8-wide traversal reads quantised nodes (BVH8Q_NODE_DTYPE) rather than float ones. Off: measured in

@@ -11,9 +11,9 @@ from typing import TypeGuard
 
 import numpy as np
 
+from spectrace.core.limits import linear_map_problem
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
-from spectrace.scene.limits import linear_map_problem
 
 
 def transform_matrix(ops: list[dict], where: str) -> np.ndarray:

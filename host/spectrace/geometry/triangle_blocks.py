@@ -16,7 +16,6 @@ per-triangle array are unchanged.
 
 import numpy as np
 
-LEAF_BLOCK_FLOAT4S = 10  # a 4-lane block in float4s (kernels: LEAF_BLOCK_FLOAT4S)
 LANES = 4
 BLOCK_VECTORS = 10  # a block of L lanes is this many vectors of L floats
 

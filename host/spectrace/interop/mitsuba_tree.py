@@ -27,9 +27,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
 
+from spectrace.core import limits
 from spectrace.errors import SpectraceError, one_line
 from spectrace.io.input_files import Inclusions, regular_file
-from spectrace.scene import limits
 
 MAX_NESTING = limits.MAX_NESTING
 MAX_INCLUDE_DEPTH = 15  # Mitsuba 3's ParserConfig.max_include_depth

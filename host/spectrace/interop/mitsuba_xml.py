@@ -48,6 +48,8 @@ from typing import overload
 import numpy as np
 
 from spectrace.cameras import CAMERAS
+from spectrace.core import limits
+from spectrace.core.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
 from spectrace.engine.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
@@ -63,9 +65,7 @@ from spectrace.interop.mitsuba_tree import shown as _shown
 from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
-from spectrace.materials.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
 from spectrace.pixel_filters import PixelFilter
-from spectrace.scene import limits
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 from spectrace.textures import TEXTURES
 

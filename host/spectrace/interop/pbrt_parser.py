@@ -30,10 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.core import limits
 from spectrace.errors import SpectraceError, one_line
 from spectrace.io.compressed import file_inflater
 from spectrace.io.input_files import Inclusions, regular_file
-from spectrace.scene import limits
 
 MAX_INCLUDE_DEPTH = limits.MAX_NESTING
 

@@ -43,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.core.limits import linear_map_problem
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import similarity_problem
 from spectrace.geometry.mesh import winding_against_normals
@@ -57,7 +58,6 @@ from spectrace.interop.pbrt_parser import (
 )
 from spectrace.io.output_files import check_output_file
 from spectrace.pixel_filters import PixelFilter
-from spectrace.scene.limits import linear_map_problem
 from spectrace.spectral.metals import METALS as SPECTRACE_METALS
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")

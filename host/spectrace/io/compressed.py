@@ -21,8 +21,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO
 
+from spectrace.core.limits import format_bytes
 from spectrace.errors import SpectraceError
-from spectrace.scene.limits import format_bytes
 
 # The overall limit: the largest inflated input accepted whatever its header says. 2 GiB of binary PLY is about
 # 90 million triangles (12 bytes a float32 vertex, 13 a triangle), which spectrace holds on the host at about

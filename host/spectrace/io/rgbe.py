@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.core import limits
 from spectrace.errors import SpectraceError
 from spectrace.io.input_files import regular_file
-from spectrace.scene import limits
 
 _MAX_HEADER_LINES = 1000
 

@@ -1,7 +1,7 @@
 """Lights' host side: one module per light, listed in LIGHTS (the `[[lights]]` types) plus `area` (a shape's
 emitter).
 
-Each module opens with its parameter table (PARAMETERS, spectrace.materials.parameters) and holds its resolved
+Each module opens with its parameter table (PARAMETERS, spectrace.core.parameters) and holds its resolved
 dataclass (MODEL), `from_spec` (a validated scene-file table to the dataclass), SPEC_CHECKS for rules spanning
 several keys, IS_ENVIRONMENT (a scene has at most one environment), `write_rows`, which adds its Light rows
 (kernels/types.h) with an estimate of the power each emits to a LightRows (base.py), and its Mitsuba 3 mapping as a

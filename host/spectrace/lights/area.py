@@ -7,9 +7,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_SHAPE, LIGHT_SPHERE, LIGHT_TRIANGLE, NO_TEXTURE
+from spectrace.core.contract import LIGHT_SHAPE, LIGHT_SPHERE, LIGHT_TRIANGLE, NO_TEXTURE
+from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.lights.base import LightRows, light_row
-from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
 
 if TYPE_CHECKING:

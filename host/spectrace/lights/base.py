@@ -3,7 +3,8 @@ positions and directions."""
 
 import numpy as np
 
-from spectrace.engine.device_types import NO_TEXTURE
+from spectrace.core import limits
+from spectrace.core.contract import NO_TEXTURE
 from spectrace.errors import SpectraceError
 from spectrace.spectral.table import SpectrumTable
 
@@ -97,8 +98,6 @@ def unit_direction(
 
 
 def check_position(position, where: str) -> None:
-    """A position's coordinates within the renderer's limits (scene/limits.py)."""
-    from spectrace.scene import limits  # the scene package imports the light modules
-
+    """A position's coordinates within the renderer's limits (core/limits.py)."""
     if problem := limits.coordinates_problem(position):
         raise SpectraceError(f"position has {problem}", where=where)

@@ -4,9 +4,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_DISTANT
+from spectrace.core.contract import LIGHT_DISTANT
+from spectrace.core.parameters import REQUIRED, Parameter
 from spectrace.lights.base import Light, LightRows, light_row, unit_direction
-from spectrace.materials.parameters import REQUIRED, Parameter
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "distant"

@@ -5,12 +5,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_ENVIRONMENT_MAP
+from spectrace.core import limits
+from spectrace.core.contract import LIGHT_ENVIRONMENT_MAP
+from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.io.images import read_environment_map
 from spectrace.lights.base import Light, LightRows, light_row
-from spectrace.materials.parameters import REQUIRED, Parameter, Range
-from spectrace.scene import limits
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 

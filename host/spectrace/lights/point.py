@@ -7,10 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_POINT
+from spectrace.core import limits
+from spectrace.core.contract import LIGHT_POINT
+from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.lights.base import Light, LightRows, check_position, light_row
-from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
 
@@ -72,8 +73,6 @@ def intensity_from_power(
 ) -> Spectrum:
     """I(λ), W/(sr nm): `power` W spread over `solid_angle_sr` with the spectral shape `shape` (equal energy when
     None) normalised to ∫Φ(λ)dλ = power."""
-    from spectrace.scene import limits  # the scene package imports the light modules
-
     if shape is None:
         shape = Spectrum.constant(1.0, name="equal energy")
     total = float(integrate_on_grid(shape.values))

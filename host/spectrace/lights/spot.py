@@ -6,11 +6,11 @@ from typing import Any
 
 import numpy as np
 
-from spectrace.engine.device_types import LIGHT_SPOT, NO_TEXTURE
+from spectrace.core.contract import LIGHT_SPOT, NO_TEXTURE
+from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.lights import point
 from spectrace.lights.base import Light, LightRows, check_position, light_row, unit_direction
-from spectrace.materials.parameters import REQUIRED, Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
 
 NAME = "spot"

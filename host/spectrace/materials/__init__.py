@@ -19,8 +19,8 @@ import dataclasses
 
 import numpy as np
 
+from spectrace.core.contract import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE, GeneratedSources
 from spectrace.dispatch import module_by_model
-from spectrace.engine.device_types import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE
 from spectrace.errors import SpectraceError
 from spectrace.materials import (
     conductor,
@@ -166,7 +166,8 @@ def kernel_defines() -> dict[str, int]:
     }
 
 
-# The header kernels/material.cl includes as "material_list.h"; spectrace.device writes it for each build.
+# The header kernels/material.cl includes as "material_list.h"; spectrace.device writes it for each build that is
+# handed it (`generated_sources`).
 KERNEL_HEADER_NAME = "material_list.h"
 
 
@@ -181,3 +182,8 @@ def kernel_header() -> str:
         "#ifndef SPECTRACE_MATERIAL_LIST_H\n#define SPECTRACE_MATERIAL_LIST_H\n\n"
         f"{includes}\n#define MATERIAL_LIST(X) \\\n{entries}\n\n#endif\n"
     )
+
+
+def generated_sources() -> GeneratedSources:
+    """The material codes and material_list.h, which a build of kernels that dispatch over materials is handed."""
+    return GeneratedSources(kernel_defines(), {KERNEL_HEADER_NAME: kernel_header()})

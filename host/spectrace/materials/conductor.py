@@ -5,10 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import MICROFACET_DISTRIBUTIONS
-from spectrace.errors import SpectraceError
-from spectrace.materials.opaque import RoughOpaque
-from spectrace.materials.parameters import (
+from spectrace.core.contract import MICROFACET_DISTRIBUTIONS
+from spectrace.core.parameters import (
     DEFAULT_DISTRIBUTION,
     Parameter,
     Range,
@@ -17,6 +15,8 @@ from spectrace.materials.parameters import (
     roughness,
     specular_tint,
 )
+from spectrace.errors import SpectraceError
+from spectrace.materials.opaque import RoughOpaque
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum

@@ -6,11 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MICROFACET_DISTRIBUTIONS
-from spectrace.errors import SpectraceError
-from spectrace.materials.base import Material
-from spectrace.materials.opaque import smooth_everywhere
-from spectrace.materials.parameters import (
+from spectrace.core.contract import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, MICROFACET_DISTRIBUTIONS
+from spectrace.core.parameters import (
     DEFAULT_DISTRIBUTION,
     Parameter,
     Range,
@@ -19,6 +16,9 @@ from spectrace.materials.parameters import (
     roughness,
     specular_tint,
 )
+from spectrace.errors import SpectraceError
+from spectrace.materials.base import Material
+from spectrace.materials.opaque import smooth_everywhere
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.glasses import IOR_RANGE, ROUGH_IOR_GAP, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum

@@ -1,7 +1,7 @@
 """`diffuse`: Lambertian reflection, f = R(λ)/π, on both faces (docs/materials.md, kernels/bsdf_diffuse.cl)."""
 
+from spectrace.core.parameters import REQUIRED, reflectance
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
-from spectrace.materials.parameters import REQUIRED, reflectance
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum_input import SpectrumLike
 

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.core.parameters import REQUIRED, reflectance
 from spectrace.materials.base import Material
-from spectrace.materials.parameters import REQUIRED, reflectance
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike

@@ -1,7 +1,7 @@
 """`mirror`: perfect specular reflection of reflectance R(λ) (docs/materials.md, kernels/bsdf_mirror.cl)."""
 
+from spectrace.core.parameters import reflectance
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
-from spectrace.materials.parameters import reflectance
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum_input import SpectrumLike
 

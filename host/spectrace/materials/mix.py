@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.core.parameters import Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
-from spectrace.materials.parameters import Parameter, Range
 from spectrace.spectral.table import SpectrumTable
 
 NAME = "mix"

@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from spectrace.core.parameters import SMOOTH_ALPHA
 from spectrace.materials.base import Material
-from spectrace.materials.parameters import SMOOTH_ALPHA
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 

@@ -5,11 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CONSTANT, MICROFACET_DISTRIBUTIONS
-from spectrace.errors import SpectraceError
-from spectrace.materials.coat import rough_coat
-from spectrace.materials.opaque import Opaque, smooth_everywhere
-from spectrace.materials.parameters import (
+from spectrace.core.contract import IOR_CONSTANT, MICROFACET_DISTRIBUTIONS
+from spectrace.core.parameters import (
     DEFAULT_DISTRIBUTION,
     REQUIRED,
     Parameter,
@@ -19,6 +16,9 @@ from spectrace.materials.parameters import (
     reflectance,
     roughness,
 )
+from spectrace.errors import SpectraceError
+from spectrace.materials.coat import rough_coat
+from spectrace.materials.opaque import Opaque, smooth_everywhere
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike

@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spectrace.core.parameters import reflectance, roughness
 from spectrace.materials.opaque import RoughOpaque
-from spectrace.materials.parameters import reflectance, roughness
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike

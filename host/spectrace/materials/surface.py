@@ -19,8 +19,8 @@ import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from spectrace.core.parameters import Parameter, Range
 from spectrace.errors import SpectraceError
-from spectrace.materials.parameters import Parameter, Range
 
 OPACITY_RANGE = Range(0.0, 1.0)
 PARAMETERS = (

@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.engine.device_types import IOR_CONSTANT
+from spectrace.core.contract import IOR_CONSTANT
+from spectrace.core.parameters import Parameter, Range, reflectance
 from spectrace.materials.base import Material
-from spectrace.materials.parameters import Parameter, Range, reflectance
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike

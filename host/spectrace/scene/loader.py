@@ -12,6 +12,7 @@ from spectrace import pixel_filters
 from spectrace.aovs import parse_aovs
 from spectrace.cameras import thinlens
 from spectrace.cameras.shared import clip_problem
+from spectrace.core import limits
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import (
@@ -29,7 +30,7 @@ from spectrace.lights import LIGHTS
 from spectrace.lights.area import emitter as area_emitter
 from spectrace.lights.area import peak_radiance
 from spectrace.materials import MATERIALS, material_textures, surface
-from spectrace.scene import limits, schema
+from spectrace.scene import schema
 from spectrace.scene.model import (
     AreaEmitter,
     Camera,

@@ -12,6 +12,7 @@ from typing import Literal
 import numpy as np
 
 from spectrace.aovs import parse_aovs
+from spectrace.core import limits
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.mesh import TriangleMesh
@@ -24,7 +25,6 @@ from spectrace.lights.point import PointLight  # noqa: F401
 from spectrace.lights.spot import SpotLight  # noqa: F401
 from spectrace.materials.base import Material
 from spectrace.pixel_filters import BOX_FILTER, PixelFilter
-from spectrace.scene import limits
 from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
@@ -155,7 +155,7 @@ class Scene:
     def __post_init__(self) -> None:
         # A dataclass checks no types, and a Python caller may pass anything: refused here, naming the field, is
         # what would fail far from the call (a fractional width, an unknown integrator) or be read by its truth
-        # (hide_emitters=1). The ranges are checked where the scene is rendered (spectrace.scene.limits).
+        # (hide_emitters=1). The ranges are checked where the scene is rendered (spectrace.core.limits).
         if problem := settings_type_problem(self):
             raise SpectraceError(problem)
         object.__setattr__(self, "aovs", parse_aovs(self.aovs, where="aovs"))

@@ -24,11 +24,11 @@ from pydantic import Strict as StrictMode
 
 from spectrace.cameras import CAMERAS
 from spectrace.cameras import shared as camera_shared
+from spectrace.core import limits
+from spectrace.core.parameters import DISTRIBUTIONS, Parameter
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
-from spectrace.materials.parameters import DISTRIBUTIONS, Parameter
 from spectrace.pixel_filters import FILTERS
-from spectrace.scene import limits
 from spectrace.scene.model import DEFAULT_SAMPLER, IntegratorType, SamplerType
 from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS

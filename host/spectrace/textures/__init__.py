@@ -1,5 +1,5 @@
 """Textures: one module per type, listed in TEXTURES (docs/textures.md). Each opens with its parameter table
-(PARAMETERS, spectrace.materials.parameters), from which the scene schema builds the texture's keys, and holds its
+(PARAMETERS, spectrace.core.parameters), from which the scene schema builds the texture's keys, and holds its
 resolved dataclass, `from_spec` (a validated scene table to the dataclass), `make` (the Python API) and, for image
 textures, `device_texels` (its texels for one use: sigmoid coefficients of a reflectance, scalars, spectral bands,
 with the MIP pyramid when filtered trilinearly). The kernel side is kernels/texture.cl.
@@ -11,7 +11,7 @@ scene into one Texture array and the shared texel buffer, each texture once howe
 
 import numpy as np
 
-from spectrace.engine.device_types import (
+from spectrace.core.contract import (
     NO_TEXTURE,
     TEXEL_BANDS,
     TEXEL_RGB,
@@ -25,8 +25,8 @@ from spectrace.engine.device_types import (
     TEXTURE_SCALE,
     TEXTURE_SPECTRAL,
 )
+from spectrace.core.limits import MAX_TEXTURE_BYTES, format_bytes
 from spectrace.errors import SpectraceError
-from spectrace.scene.limits import MAX_TEXTURE_BYTES, format_bytes
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 from spectrace.textures import bitmap, checkerboard, mix, scale, spectral, storage

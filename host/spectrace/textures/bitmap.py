@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.engine.device_types import TEXEL_RGB, TEXEL_SCALAR, TEXEL_SIGMOID, TEXEL_VECTOR
+from spectrace.core.contract import TEXEL_RGB, TEXEL_SCALAR, TEXEL_SIGMOID, TEXEL_VECTOR
+from spectrace.core.parameters import Parameter
 from spectrace.errors import SpectraceError
-from spectrace.materials.parameters import Parameter
 from spectrace.textures.shared import (
     FILE,
     FILTER,

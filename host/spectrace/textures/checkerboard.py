@@ -4,7 +4,7 @@ square, as Mitsuba 3's checkerboard). Evaluated exactly at the point, without fi
 
 from dataclasses import dataclass
 
-from spectrace.materials.parameters import Parameter, Range
+from spectrace.core.parameters import Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.textures.shared import UV_OFFSET, Placement, uv_pair, uv_scale
 

@@ -6,7 +6,7 @@ docs/textures.md."""
 
 from dataclasses import dataclass
 
-from spectrace.materials.parameters import Parameter, Range
+from spectrace.core.parameters import Parameter, Range
 from spectrace.textures.shared import Placement, composite_factor
 
 NAME = "mix"

@@ -7,7 +7,7 @@ from numbers import Real
 
 import numpy as np
 
-from spectrace.engine.device_types import (
+from spectrace.core.contract import (
     FILTER_BILINEAR,
     FILTER_NEAREST,
     FILTER_TRILINEAR,
@@ -15,8 +15,8 @@ from spectrace.engine.device_types import (
     WRAP_MIRROR,
     WRAP_REPEAT,
 )
+from spectrace.core.parameters import REQUIRED, Parameter
 from spectrace.errors import SpectraceError
-from spectrace.materials.parameters import REQUIRED, Parameter
 
 WRAPS = {"repeat": WRAP_REPEAT, "mirror": WRAP_MIRROR, "clamp": WRAP_CLAMP}
 FILTERS = {"nearest": FILTER_NEAREST, "bilinear": FILTER_BILINEAR, "trilinear": FILTER_TRILINEAR}

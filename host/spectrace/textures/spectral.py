@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.engine.device_types import TEXEL_BANDS
+from spectrace.core.contract import TEXEL_BANDS
 from spectrace.errors import SpectraceError
 from spectrace.textures.shared import (
     FILE,

@@ -18,7 +18,7 @@ The choice depends only on the values, so a texture is stored alike in every sce
 
 import numpy as np
 
-from spectrace.engine.device_types import (
+from spectrace.core.contract import (
     SIGMOID_CENTRE_NM,
     SIGMOID_HALF_SPAN_NM,
     STORAGE_FLOAT,

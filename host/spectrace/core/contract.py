@@ -1,20 +1,19 @@
 """The host/device contract: numpy mirrors of the structs in kernels/types.h (explicit offsets), and the one home
 of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts)
-but the materials' type codes, which come from their registry (spectrace.materials.MATERIALS).
+but the materials' type codes, which come from their registry (spectrace.materials.MATERIALS) and reach a build as
+`GeneratedSources`.
 
 The kernels hold no copy of those numbers: every kernel build gets them as defines (`device_contract_defines`,
 added by spectrace.device's program builds). tests/device/test_struct_layout.py compiles a kernel that reports each
 struct's sizeof and offsetof, and every contract value as the kernels see it, and compares them with this module.
 """
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import DTypeLike
 
-from spectrace.geometry.bvh import BVH_NODE_DTYPE, MAX_DEPTH
-from spectrace.geometry.bvh4 import BVH4_NODE_DTYPE, BVH4_STACK_SIZE, BVH8_NODE_DTYPE, BVH8_STACK_SIZE
-from spectrace.geometry.triangle_blocks import LEAF_BLOCK_FLOAT4S
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM, GRID_SIZE
 
 # Material.type: which BSDF. The codes (MATERIAL_<NAME>, MATERIAL_TYPE_COUNT) are each BSDF's position in
@@ -33,6 +32,16 @@ MICROFACET_GGX, MICROFACET_BECKMANN = range(len(MICROFACET_DISTRIBUTIONS))
 MATERIAL_NO_SPECTRUM = -1
 
 
+@dataclass(frozen=True)
+class GeneratedSources:
+    """What the plugin registries add to a kernel build beyond the kernels folder and `device_contract_defines`:
+    their type codes as defines and their dispatch lists as headers (file name -> text). Whoever builds a program
+    that dispatches over a registry hands it to spectrace.device, which does not read the registries itself."""
+
+    defines: Mapping[str, int] = field(default_factory=dict)
+    headers: Mapping[str, str] = field(default_factory=dict)
+
+
 def _struct(fields: Sequence[tuple[str, DTypeLike]], itemsize: int) -> np.dtype:
     names, formats, offsets = [], [], []
     offset = 0
@@ -45,6 +54,45 @@ def _struct(fields: Sequence[tuple[str, DTypeLike]], itemsize: int) -> np.dtype:
     if offset != itemsize:
         raise AssertionError(f"struct fields add up to {offset} bytes, expected {itemsize}")
     return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": itemsize})
+
+
+# The BVH nodes the kernels traverse (kernels/bvh.cl), which spectrace.geometry builds.
+BVH_NODE_DTYPE = np.dtype(
+    {
+        "names": ["bmin", "left_first", "bmax", "count"],
+        "formats": [("<f4", (3,)), "<i4", ("<f4", (3,)), "<i4"],
+        "offsets": [0, 12, 16, 28],
+        "itemsize": 32,
+    }
+)
+
+
+def _wide_node_dtype(width: int) -> np.dtype:
+    """SoA node of `width` children: 24·width bytes of boxes, then the child and count vectors."""
+    boxes = 12 * width
+    return np.dtype(
+        {
+            "names": ["child_min", "child_max", "child", "count"],
+            "formats": [("<f4", (3, width)), ("<f4", (3, width)), ("<i4", (width,)), ("<i4", (width,))],
+            "offsets": [0, boxes, 2 * boxes, 2 * boxes + 4 * width],
+            "itemsize": 2 * boxes + 8 * width,
+        }
+    )
+
+
+BVH4_NODE_DTYPE = _wide_node_dtype(4)  # 128 bytes
+BVH8_NODE_DTYPE = _wide_node_dtype(8)  # 256 bytes
+
+# Deepest root-to-leaf path, in edges, that the kernel's fixed traversal stack can hold.
+MAX_DEPTH = 64
+# Entries of the 4-wide kernel's stack (kernels/bvh.cl BVH4_STACK_SIZE): a visit pushes at most three, and the
+# collapse never makes a path longer than the binary tree's (<= MAX_DEPTH), so the stack cannot overflow.
+BVH4_STACK_SIZE = 3 * MAX_DEPTH + 1
+# Entries of the 8-wide kernel's stack (kernels/bvh.cl BVH8_STACK_SIZE, 8 bytes each): the collapse gives a node
+# fewer children where more could overflow it (collapse, stack_size). 96 leaves every node of the living room
+# (295k triangles, stack need 65) its full width; any tree the builder makes (depth <= MAX_DEPTH) fits.
+BVH8_STACK_SIZE = 96
+LEAF_BLOCK_FLOAT4S = 10  # a 4-lane leaf block of triangles in float4s (spectrace.geometry.triangle_blocks)
 
 
 TRIANGLE_NO_MATERIAL = -1  # TriangleInfo.material of an index-matched medium boundary

@@ -161,7 +161,7 @@ def roughness(default: float, doc: str) -> Parameter:
     return Parameter("roughness", "float", default=default, range=ROUGHNESS_RANGE, doc=doc, textured=True)
 
 
-# The microfacet distributions of the rough materials (MICROFACET_DISTRIBUTIONS in spectrace.engine.device_types).
+# The microfacet distributions of the rough materials (MICROFACET_DISTRIBUTIONS in spectrace.core.contract).
 DISTRIBUTIONS = ("ggx", "beckmann")
 DEFAULT_DISTRIBUTION = "ggx"
 
