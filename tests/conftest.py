@@ -1,12 +1,20 @@
 """Shared fixtures. Every test that runs kernels uses one device for the whole session, chosen as the CLI
 chooses (SPECTRACE_DEVICE, else the automatic pick); the report header names it."""
 
+import os
+
 import numpy as np
 import pyopencl as cl
 import pytest
 
 from spectrace.device import open_device
 from spectrace.materials import generated_sources
+
+# Renders use the kernels built for every scene unless a test asks for a scene's own (the specialisation tests,
+# which check that both give the same bits): one program per integrator and option set instead of one per scene's
+# feature set. Set here, so that child processes (the CLI tests) inherit it; SPECTRACE_GENERAL_KERNELS=0 runs the
+# suite on the specialised kernels instead.
+os.environ.setdefault("SPECTRACE_GENERAL_KERNELS", "1")
 
 
 def pytest_report_header(config):

@@ -13,6 +13,8 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -420,13 +422,85 @@ def test_changing_a_define_or_a_header_changes_the_cache_key(device, kernels_fol
     np.testing.assert_array_equal(_run_affine(device, rescaled), np.arange(16, dtype=np.float32) * 5.0 + 2.0)
 
 
-def test_a_corrupt_cached_binary_is_rebuilt(device, kernels_folder):
+@pytest.mark.parametrize(
+    "damage",
+    [
+        lambda entry: b"not a program binary",
+        lambda entry: entry[: len(entry) // 2],  # a truncated copy
+        lambda entry: entry[:-1] + bytes([entry[-1] ^ 1]),  # one bit of the binary flipped
+        lambda entry: b"",
+    ],
+    ids=["garbage", "truncated", "flipped-bit", "empty"],
+)
+def test_a_corrupt_cached_binary_is_rebuilt(device, kernels_folder, damage):
     device.build_program("tests/affine.cl", {"OFFSET": 1})
     [binary] = _cached_binaries()
-    binary.write_bytes(b"not a program binary")
+    whole = binary.read_bytes()
+    binary.write_bytes(damage(whole))
     program = device.build_program("tests/affine.cl", {"OFFSET": 1})
     assert device.last_build_cached is False
     np.testing.assert_array_equal(_run_affine(device, program), np.arange(16, dtype=np.float32) * 3.0 + 1.0)
+    # The rebuilt entry replaced the damaged one (a build need not give the same bytes twice: compare its use).
+    assert binary.read_bytes() != damage(whole)
+    again = device.build_program("tests/affine.cl", {"OFFSET": 1})
+    assert device.last_build_cached is True
+    np.testing.assert_array_equal(_run_affine(device, again), np.arange(16, dtype=np.float32) * 3.0 + 1.0)
+
+
+def test_two_builders_of_one_program_build_it_once(device, kernels_folder, monkeypatch):
+    """A second builder of the same program (another test worker, a parallel sweep) waits for the first one's
+    binary instead of building it too: each opened device here is a separate context, as in two processes."""
+    builds = []
+    original = Device._build_from_source
+
+    def slow_build(self, *args):
+        builds.append(self)
+        time.sleep(1.0)  # holds the build open, so that the other builder surely finds no binary when it starts
+        return original(self, *args)
+
+    monkeypatch.setattr(Device, "_build_from_source", slow_build)
+    builders = [device, Device(device.report, device.cl_device)]
+    start = threading.Barrier(len(builders))
+    programs = {}
+
+    def build(builder):
+        start.wait()
+        programs[id(builder)] = builder.build_program("tests/affine.cl", {"OFFSET": 4})
+
+    threads = [threading.Thread(target=build, args=(builder,)) for builder in builders]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert len(builds) == 1 and len(_cached_binaries()) == 1
+    assert sorted(builder.last_build_cached for builder in builders) == [False, True]
+    for builder in builders:
+        expected = np.arange(16, dtype=np.float32) * 3.0 + 4.0
+        np.testing.assert_array_equal(_run_affine(builder, programs[id(builder)]), expected)
+
+
+@pytest.mark.parametrize("where", ["elsewhere", "a folder with spaces"])
+def test_the_same_kernels_in_another_folder_reuse_the_cached_binary(
+    device, kernels_folder, tmp_path, monkeypatch, where
+):
+    """The cache is keyed by the kernels' content, not their path: a fresh clone or a second checkout of the same
+    sources builds nothing, while the compiler still gets the folder it must include from."""
+    device.build_program("tests/affine.cl", {"OFFSET": 0.25})
+    assert device.last_build_cached is False
+    [binary] = _cached_binaries()
+    copy = tmp_path / where / "kernels"
+    shutil.copytree(kernels_folder, copy)
+    shutil.rmtree(kernels_folder)  # nothing may still be read from the first folder
+    monkeypatch.setattr(spectrace.resources, "kernels_dir", lambda: copy)
+    program = device.build_program("tests/affine.cl", {"OFFSET": 0.25})
+    assert device.last_build_cached is True and _cached_binaries() == [binary]
+    np.testing.assert_array_equal(_run_affine(device, program), np.arange(16, dtype=np.float32) * 3.0 + 0.25)
+    # The copy builds from source in its own folder (an include the first folder lacked is found there).
+    (copy / "scale.h").write_text('#include "factor.h"\n')
+    (copy / "factor.h").write_text("#define SCALE_FACTOR 7.0f\n")
+    rebuilt = device.build_program("tests/affine.cl", {"OFFSET": 0.25})
+    assert device.last_build_cached is False and len(_cached_binaries()) == 2
+    np.testing.assert_array_equal(_run_affine(device, rebuilt), np.arange(16, dtype=np.float32) * 7.0 + 0.25)
 
 
 def test_a_failing_build_raises_with_the_compiler_log(device, kernels_folder):

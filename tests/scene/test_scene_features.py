@@ -351,7 +351,7 @@ SCENES = {
 @pytest.mark.parametrize("integrator", ["path", "direct"])
 def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name, integrator):
     scene = SCENES[name]().with_overrides(width=16, height=16, spp=4, integrator=integrator)
-    specialised = Renderer(scene, device).render().xyz
+    specialised = Renderer(scene, device, specialise=True).render().xyz
     general = Renderer(scene, device, specialise=False).render().xyz
     assert np.all(np.isfinite(specialised)) and specialised[..., 1].mean() > 0
     assert np.array_equal(specialised.view(np.uint32), general.view(np.uint32))
@@ -364,7 +364,29 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
 def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):
     """The same for the light tracer (which refuses media, so no subsurface scene)."""
     scene = SCENES[name]().with_overrides(width=16, height=16, spp=4, integrator="light")
-    specialised = Renderer(scene, device).render().xyz
+    specialised = Renderer(scene, device, specialise=True).render().xyz
     general = Renderer(scene, device, specialise=False).render().xyz
     assert np.all(np.isfinite(specialised)) and specialised[..., 1].mean() > 0
     assert np.array_equal(specialised.view(np.uint32), general.view(np.uint32))
+
+
+@pytest.mark.parametrize(("value", "specialised"), [("1", False), ("0", True), ("", True)])
+def test_the_environment_picks_general_or_scene_kernels_and_an_argument_wins(device, monkeypatch, value, specialised):
+    scene = _bundled("cornell_box").with_overrides(width=4, height=4, spp=1)
+    monkeypatch.setenv("SPECTRACE_GENERAL_KERNELS", value)
+    assert Renderer(scene, device).specialised is specialised
+    assert Renderer(scene, device, specialise=not specialised).specialised is (not specialised)
+
+
+@pytest.mark.subprocess
+def test_a_bad_general_kernels_setting_is_one_line_naming_the_variable(tmp_path, monkeypatch):
+    from cli_runner import render_cornell_box, run_spectrace
+
+    out = tmp_path / "box.png"
+    out.write_bytes(b"kept")
+    monkeypatch.setenv("SPECTRACE_GENERAL_KERNELS", "yes")
+    result = run_spectrace(*render_cornell_box(out, spp=1, width=4, height=4))
+    assert result.returncode != 0
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "SPECTRACE_GENERAL_KERNELS" in lines[0] and "Traceback" not in result.stderr
+    assert out.read_bytes() == b"kept"

@@ -5,10 +5,16 @@ in the kernels folder and every header generated from the host's registries (han
 `GeneratedSources`: this layer does not read the registries), the entry file,
 the build options (defines included) and the device's identity (platform name and version, device name, driver
 version). pyopencl's own cache is bypassed so that only this one decides.
+
+The key names the kernels by their content, not by where they lie: the ``-I`` folders the compiler is given are left
+out of it, so a fresh clone, a wheel's copy or a second worktree with the same sources reuses the binaries already
+built (the binaries carry no path: builds are without debug information). A cached file carries the digest of its
+binary, so a damaged entry is rebuilt without ever reaching the runtime's loader.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import os
@@ -16,7 +22,7 @@ import re
 import tempfile
 import time
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
@@ -30,7 +36,12 @@ from spectrace.errors import SpectraceError
 if TYPE_CHECKING:
     from spectrace.core.contract import GeneratedSources
 
-_CACHE_FORMAT = b"spectrace-program-cache-v1"
+try:
+    import fcntl
+except ImportError:  # Windows: no flock; processes building one program at once then both build it
+    fcntl = None  # type: ignore[assignment]
+
+_CACHE_FORMAT = b"spectrace-program-cache-v2"
 _BASE_OPTIONS = ("-cl-std=CL1.2",)  # no -cl-fast-relaxed-math: the kernels rely on IEEE inf/nan
 _LOG_LINES = 40
 _DEFINE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -125,6 +136,15 @@ def _include_option(folder: Path) -> list[str]:
     return ["-I", f'"{text}"' if any(c.isspace() for c in text) else text]
 
 
+def _define_options(defines: Mapping[str, DefineValue] | None) -> list[str]:
+    options: list[str] = []
+    for name, value in sorted((defines or {}).items()):
+        if not _DEFINE_NAME.fullmatch(name):
+            raise SpectraceError(f"kernel define name '{name}' is not a C identifier")
+        options += ["-D", f"{name}={_define_value(name, value)}"]
+    return options
+
+
 def build_options(
     kernels_dir: Path,
     defines: Mapping[str, DefineValue] | None,
@@ -134,11 +154,13 @@ def build_options(
     options = [*_BASE_OPTIONS, *_include_option(kernels_dir)]
     if generated_dir is not None:
         options += _include_option(generated_dir)
-    for name, value in sorted((defines or {}).items()):
-        if not _DEFINE_NAME.fullmatch(name):
-            raise SpectraceError(f"kernel define name '{name}' is not a C identifier")
-        options += ["-D", f"{name}={_define_value(name, value)}"]
-    return " ".join(options + list(extra or []))
+    return " ".join(options + _define_options(defines) + list(extra or []))
+
+
+def keyed_options(defines: Mapping[str, DefineValue] | None, extra: list[str] | None) -> str:
+    """`build_options` less the include folders: what the cache key names, so that it depends on the sources'
+    content (named by their digest) and not on where they lie."""
+    return " ".join([*_BASE_OPTIONS, *_define_options(defines), *(extra or [])])
 
 
 def kernel_contract(generated: GeneratedSources | None = None) -> dict[str, DefineValue]:
@@ -205,6 +227,43 @@ def program_cache_dir() -> Path:
     return cache_root() / "kernels"
 
 
+def _cache_entry(binary: bytes) -> bytes:
+    """A cache file's content: the format tag, the binary's SHA-256, then the binary."""
+    return _CACHE_FORMAT + b"\n" + hashlib.sha256(binary).digest() + binary
+
+
+def _cached_binary(entry: bytes) -> bytes | None:
+    """The binary of a cache file, or None when the file is not whole (truncated, overwritten, another format): a
+    damaged binary is never handed to the runtime, whose loader need not survive one."""
+    head = _CACHE_FORMAT + b"\n"
+    if not entry.startswith(head):
+        return None
+    digest, binary = entry[len(head) : len(head) + 32], entry[len(head) + 32 :]
+    return binary if binary and hashlib.sha256(binary).digest() == digest else None
+
+
+@contextlib.contextmanager
+def _building(cache_file: Path) -> Iterator[None]:
+    """Held while one process builds the program of `cache_file`: another that wants the same program (a second
+    test worker, a parallel sweep) waits and then loads the binary instead of building it too. Where the lock file
+    cannot be made or locked, builds go on unlocked: the cache is only ever a saving."""
+    fd = None
+    if fcntl is not None:
+        try:
+            cache_file.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(cache_file.with_suffix(".lock"), os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o644)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except OSError:
+            if fd is not None:
+                os.close(fd)
+            fd = None
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)  # closing drops the lock; the empty file stays for the next build of this key
+
+
 def _write_atomically(path: Path, data: bytes) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -261,26 +320,39 @@ class Device:
         headers = dict(generated.headers) if generated is not None else {}
         headers_digest = _headers_digest(headers)
         generated_dir = _write_generated_headers(headers, headers_digest) if headers else None
-        option_text = build_options(kernels_dir, _with_contract(defines, generated), options, generated_dir)
+        all_defines = _with_contract(defines, generated)
+        option_text = build_options(kernels_dir, all_defines, options, generated_dir)
         sources_digest = hashlib.sha256(f"{kernels_digest(kernels_dir)} {headers_digest}".encode()).hexdigest()
-        key = program_cache_key(sources_digest, entry, option_text, device_identity(self.report))
+        key_options = keyed_options(all_defines, options)
+        key = program_cache_key(sources_digest, entry, key_options, device_identity(self.report))
         cache_file = program_cache_dir() / f"{key}.bin"
 
-        program = None
-        if cache_file.is_file() and not from_source:
-            try:
-                program = _load_binary(self.context, self.cl_device, cache_file.read_bytes(), option_text)
-            except OSError:
-                program = None
-        cached = program is not None
+        program = None if from_source else self._load_cached(cache_file, option_text)
         if program is None:
-            program = self._build_from_source(entry, sources_digest, option_text)
-            self.last_build_log = compiler_log(program, self.cl_device)
-            binary = _program_binary(program)
-            if binary is not None:
-                _write_atomically(cache_file, binary)
+            with contextlib.nullcontext() if from_source else _building(cache_file):
+                # Another process may have built it while this one waited for the lock.
+                program = None if from_source else self._load_cached(cache_file, option_text)
+                if program is None:
+                    program = self._build_and_store(entry, sources_digest, option_text, cache_file)
         self.last_build_seconds = time.perf_counter() - started
-        self.last_build_cached = cached
+        return program
+
+    def _load_cached(self, cache_file: Path, option_text: str) -> cl.Program | None:
+        try:
+            binary = _cached_binary(cache_file.read_bytes()) if cache_file.is_file() else None
+        except OSError:
+            binary = None
+        program = None if binary is None else _load_binary(self.context, self.cl_device, binary, option_text)
+        self.last_build_cached = program is not None
+        return program
+
+    def _build_and_store(self, entry: str, sources_digest: str, option_text: str, cache_file: Path) -> cl.Program:
+        self.last_build_cached = False
+        program = self._build_from_source(entry, sources_digest, option_text)
+        self.last_build_log = compiler_log(program, self.cl_device)
+        binary = _program_binary(program)
+        if binary is not None:
+            _write_atomically(cache_file, _cache_entry(binary))
         return program
 
     def _build_from_source(self, entry: str, sources_digest: str, option_text: str) -> cl.Program:

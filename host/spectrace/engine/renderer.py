@@ -1,5 +1,6 @@
 """Progressive rendering on an OpenCL device: upload the scene once, then run passes of samples into the film."""
 
+import os
 import time
 from collections.abc import Callable
 
@@ -54,6 +55,19 @@ def sampler_defines(sampler: str) -> dict[str, int]:
     return {"SAMPLER_SOBOL": 1} if sampler == "sobol" else {}
 
 
+GENERAL_KERNELS_VARIABLE = "SPECTRACE_GENERAL_KERNELS"
+
+
+def specialise_by_default() -> bool:
+    """Whether a renderer builds its scene's own kernels when not told: yes, unless $SPECTRACE_GENERAL_KERNELS is 1.
+    The images are the same bits either way; the general kernels save a build per distinct scene (the test suite
+    renders hundreds) at the cost of a longer one, shared by them all."""
+    value = os.environ.get(GENERAL_KERNELS_VARIABLE, "").strip()
+    if value not in ("", "0", "1"):
+        raise SpectraceError(f"{GENERAL_KERNELS_VARIABLE}={value!r}: use 1 (general kernels) or 0 (the scene's own)")
+    return value != "1"
+
+
 def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
     """Read-only device copies of the scene's buffers in the order every scene kernel takes them after the
     RenderParams buffer (SCENE_KERNEL_BUFFERS; kernels/scene.cl's SCENE_KERNEL_PARAMS)."""
@@ -86,14 +100,18 @@ class Renderer:
         device: Device | str | None = None,
         spectral_bins: int = 0,
         spectral_range_nm: tuple[float, float] | None = None,
-        specialise: bool = True,
+        specialise: bool | None = None,
         buffers: SceneBuffers | None = None,
     ):
         """spectral_bins > 0 also accumulates that many equal wavelength bands over spectral_range_nm (None: the
         film's wavelengths, which the samples span; the band-averaged radiance per pixel, W/(m² sr nm)), for
-        spectral EXR output. specialise=False builds the kernels
-        that handle every scene instead of ones carrying only this scene's features (for comparisons). `buffers`:
-        the scene's buffers when already built (build_scene_buffers(scene)), as a cluster's workers receive them."""
+        spectral EXR output. specialise=False builds the kernels that handle every scene instead of ones carrying
+        only this scene's features (the same bits; one program for all scenes rather than one per feature set);
+        None: as $SPECTRACE_GENERAL_KERNELS says (`specialise_by_default`). `buffers`: the scene's buffers when
+        already built (build_scene_buffers(scene)), as a cluster's workers receive them."""
+        if specialise is None:
+            specialise = specialise_by_default()
+        self.specialised = specialise
         self.scene = scene
         self._check_scene(scene)
         if spectral_range_nm is None:
