@@ -61,8 +61,9 @@ PARAMETERS = (
         "two_sided",
         "bool",
         default=True,
-        doc="false: a reflecting material reflects only on the front of its surface (toward the winding's normal) "
-        "and is black from the back, as Mitsuba 3's BSDFs outside `twosided`; ignored by materials that transmit",
+        doc="false: a reflecting material reflects only on the front of its surface (the side its vertex normals "
+        "point to, or its winding's normal on a flat mesh) and is black from the back, as Mitsuba 3's BSDFs outside "
+        "`twosided`; ignored by materials that transmit",
     ),
     Parameter(
         "shadowing_function",
