@@ -198,7 +198,12 @@ MUTANTS: tuple[Mutant, ...] = (
         "tan_half = np.tan(np.radians(camera.fov_degrees) / 2.0)",
         "tan_half = np.tan(np.radians(1.05 * camera.fov_degrees) / 2.0)",
         "perspective cameras' field of view 5 % wide",
-        ("tests/cameras",),
+        (
+            "tests/cameras/test_field_of_view.py",
+            "tests/cameras/test_camera_optics.py",
+            "tests/cameras/test_camera_peers.py",
+            "tests/cameras/test_pbrt_cameras.py",
+        ),
     ),
     # BSDFs, Fresnel, microfacets.
     Mutant(
