@@ -210,9 +210,18 @@ def test_bad_film_settings_are_one_line(tmp_path, monkeypatch, capsys, film_keys
 # ---------------------------------------------------------------- the film's wavelength range
 
 
-def test_blackbody_through_a_near_infrared_sensor_gives_the_planck_integral(device, tmp_path):
-    from spectrace.spectral.blackbody import WIEN_DISPLACEMENT, planck_radiance
+def _planck_relative_to_peak(wavelength_nm: np.ndarray, temperature: float) -> np.ndarray:
+    """Planck's law from colour-science with the second radiation constant c2 = hc/k of CODATA 2018 (1.438776877
+    × 10⁻² m K; colour's default is ITS-90's rounded 1.4388 × 10⁻²), divided by its maximum, found here by searching
+    a 0.01 nm grid about λ_max = c2 / (4.965 T) rather than from the renderer's Wien constant. c1 cancels."""
+    planck_law = colour.colorimetry.planck_law
+    c2 = 1.438776877e-2
+    around_peak = c2 / (4.965 * temperature) * 1e9 + np.linspace(-50.0, 50.0, 10001)
+    peak = planck_law(around_peak * 1e-9, temperature, c2=c2).max()
+    return planck_law(np.asarray(wavelength_nm, float) * 1e-9, temperature, c2=c2) / peak
 
+
+def test_blackbody_through_a_near_infrared_sensor_gives_the_planck_integral(device, tmp_path):
     wavelengths = np.arange(760, 1101)
     sensitivity = np.exp(-0.5 * ((wavelengths - 950) / 40.0) ** 2)  # nothing below 760 nm: a NIR-only sensor
     lines = ["wavelength_nm,NIR", *(f"{w},{v:.9g}" for w, v in zip(wavelengths, sensitivity))]
@@ -221,10 +230,9 @@ def test_blackbody_through_a_near_infrared_sensor_gives_the_planck_integral(devi
     scene = _scene(tmp_path, 'sensor = "nir.csv"\nwavelengths = [300, 1100]', radiance=f"blackbody = {temperature}")
     image = Renderer(scene, device).render()
     # Planck's law (normalised to its peak, as the scene format's blackbody is) times the sensor, integrated on a
-    # 0.01 nm grid: independent of the renderer's 1 nm table.
+    # 0.01 nm grid: independent of the renderer's Planck function and of its 1 nm table.
     fine = np.linspace(760.0, 1100.0, 34001)
-    peak = planck_radiance(np.array([WIEN_DISPLACEMENT / temperature * 1e9]), temperature)[0]
-    integrand = planck_radiance(fine, temperature) / peak * np.interp(fine, wavelengths, sensitivity)
+    integrand = _planck_relative_to_peak(fine, temperature) * np.interp(fine, wavelengths, sensitivity)
     expected = np.trapezoid(integrand, fine)
     _assert_within_4_sigma(image.channels["sensor.NIR"][..., None], np.array([expected]))
 
