@@ -1578,10 +1578,10 @@ def import_pbrt(
     returns (warnings, notes). strict: every warning (something in the file not imported) is an error instead.
     option: what errors about the output call it (the command line's --output).
 
-    The output is checked first; the TOML and its folder of meshes are replaced together, and only by a complete
-    import whose TOML loads: a failed import leaves an earlier one, TOML and folder, as it was."""
-    from spectrace.interop.toml_writer import non_finite_key, write_scene
-    from spectrace.scene import load_scene
+    The output is checked and locked first (spectrace.io.output_lock: a second import writing it is refused); the
+    TOML and its folder of meshes are replaced together, and only by a complete import whose TOML loads: a failed
+    import leaves an earlier one, TOML and folder, as it was."""
+    from spectrace.interop.toml_writer import lock_import
 
     pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
     check_output_file(toml_path, option, create_folders=True)
@@ -1589,6 +1589,14 @@ def import_pbrt(
         raise SpectraceError(
             "is the pbrt scene being imported; writing it would destroy the input", where=str(toml_path)
         )
+    with lock_import(toml_path, option, "spectrace import-pbrt"):
+        return _import_pbrt(pbrt_path, toml_path, strict, option)
+
+
+def _import_pbrt(pbrt_path: Path, toml_path: Path, strict: bool, option: str) -> tuple[list[str], list[str]]:
+    from spectrace.interop.toml_writer import non_finite_key, write_scene
+    from spectrace.scene import load_scene
+
     data, importer = pbrt_scene_data(pbrt_path, toml_path)
     if strict and importer.warnings:
         raise SpectraceError(
@@ -1620,7 +1628,7 @@ def import_pbrt(
             raise importer.imported_error(failure, temp) from None
 
     try:
-        write_scene(toml_path, data, header, files, check)
+        write_scene(toml_path, data, header, files, check, option, "spectrace import-pbrt")
     except OSError as failure:
         raise SpectraceError(
             f"cannot write the TOML or its files ({failure.strerror or failure})", where=str(toml_path)
