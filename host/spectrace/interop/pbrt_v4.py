@@ -871,7 +871,7 @@ class PbrtImporter:
         if (
             all(table["type"] == "diffuse" for table in pair)
             and (not isinstance(amount, dict) or amount.get("texture") == "bitmap")
-            and not any(table["reflectance"].get("texture") in ("checkerboard", "scale", "mix") for table in pair)
+            and not any(self._texture_kind(table["reflectance"]) in ("checkerboard", "scale", "mix") for table in pair)
         ):
             return {
                 "type": "diffuse",
@@ -884,6 +884,11 @@ class PbrtImporter:
             }
         materials = [self.material(str(name), names.location) for name in names.values]
         return {"type": "mix", "materials": materials, "amount": amount}
+
+    def _texture_kind(self, value: dict) -> str | None:
+        """The kind of texture a TOML value holds (a named one's from the textures table), None for a spectrum."""
+        name = value.get("texture")
+        return self.textures[name]["type"] if name in self.textures else name
 
     def _rough(self, material: Entity) -> dict:
         alpha = self.roughness(material)
@@ -1110,8 +1115,7 @@ class PbrtImporter:
             return None
         if material is None and shape.area_light is not None:
             material = self.material(None, entity.location)
-        textured = any(isinstance(v, dict) and "texture" in v for v in self.materials.get(material or "", {}).values())
-        geometry, mesh = self.shape_geometry(shape, needs_uv=textured)
+        geometry, mesh = self.shape_geometry(shape, needs_uv=self.reads_uv(material))
         table: dict = {"name": f"{entity.kind}{index}", **geometry}
         if material is not None:  # an interface around a medium: an index-matched boundary in spectrace
             table["material"] = material
@@ -1202,6 +1206,15 @@ class PbrtImporter:
         if emission is not None and emission not in ({"value": 0.0}, {"rgb": [0.0, 0.0, 0.0]}):
             self.warn(medium.location, "a medium's emission (Le) not imported")
         return table
+
+    def reads_uv(self, material: str | None) -> bool:
+        """Whether rendering the TOML material `material` reads texture coordinates: a parameter of it holds a
+        texture, or one of a mix's materials reads them, at any depth (as the scene loader decides, through
+        spectrace.materials.material_textures). A mesh without uv then gets pbrt's default ones."""
+        table = self.materials.get(material or "", {})
+        if any(isinstance(value, dict) and "texture" in value for value in table.values()):
+            return True
+        return table.get("type") == "mix" and any(self.reads_uv(part) for part in table.get("materials", []))
 
     def _with_opacity(self, material: str, opacity: float) -> str:
         name = _name(f"{material}_alpha", self.materials)
