@@ -242,14 +242,32 @@ def run_items(
     client: Any = None,
     progress: Callable[[int, int], None] | None = None,
     stop: Callable[[], bool] | None = None,
+    option: str = "the output folder",
 ) -> tuple[list[dict[str, Any]], int]:
     """Compute the items not already in `out_dir` (here, or as Dask tasks on `client`), save each as it finishes,
-    and write the table of every item finished so far. Returns (the rows, how many were computed now)."""
+    and write the table of every item finished so far. Returns (the rows, how many were computed now).
+
+    The folder is locked meanwhile (spectrace.io.output_lock): a second sweep into it would rewrite the table
+    without the first one's rows, so it is refused at once, naming this one. option: what that refusal calls
+    the folder (the command line's --output)."""
+    from spectrace.io.output_lock import OutputLocks
+
     out = Path(out_dir)
     try:
         (out / ITEMS_FOLDER).mkdir(parents=True, exist_ok=True)
     except OSError as error:
         raise SpectraceError(f"cannot create the output folder ({error.strerror or error})", where=str(out)) from None
+    with OutputLocks({option: out}, command="spectrace sweep"):
+        return _run_items(items, out, client, progress, stop)
+
+
+def _run_items(
+    items: list[SweepItem],
+    out: Path,
+    client: Any,
+    progress: Callable[[int, int], None] | None,
+    stop: Callable[[], bool] | None,
+) -> tuple[list[dict[str, Any]], int]:
     rows: list[dict[str, Any] | None] = [_load_row(out, item) for item in items]
     todo = [index for index, row in enumerate(rows) if row is None]
     should_stop = stop or (lambda: False)

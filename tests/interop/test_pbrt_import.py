@@ -661,6 +661,54 @@ def test_realistic_camera_is_one_line(tmp_path, monkeypatch, capsys):
     )
 
 
+SQUARE_PLY_WITHOUT_UV = """ply
+format ascii 1.0
+element vertex 4
+property float x
+property float y
+property float z
+element face 2
+property list uchar int vertex_indices
+end_header
+-9 -9 0
+9 -9 0
+9 9 0
+-9 9 0
+3 0 1 2
+3 0 2 3
+"""
+TEXTURED_MIX = """Texture "white" "spectrum" "checkerboard" "rgb tex1" [1 1 1] "rgb tex2" [1 1 1]
+MakeNamedMaterial "textured" "string type" "diffuse" "texture reflectance" "white"
+MakeNamedMaterial "black" "string type" "diffuse" "rgb reflectance" [0 0 0]
+MakeNamedMaterial "inner" "string type" "mix" "string materials" ["textured" "black"] "float amount" AMOUNT
+MakeNamedMaterial "outer" "string type" "mix" "string materials" ["black" "inner"] "float amount" 0.5
+"""
+
+
+@pytest.mark.parametrize("material", ["inner", "outer"])
+def test_a_plymesh_without_uv_under_a_mix_with_a_textured_part_gets_pbrt_default_uv(material, tmp_path):
+    """Rendering a mix reads the texture coordinates wherever one of its materials (at any depth) is textured, so a
+    mesh without uv under it gets pbrt's default ones, (0, 0), (1, 0), (1, 1) at each triangle's corners, as
+    under a textured material of its own (pbrt-v4's Triangle does the same), instead of a TOML that fails to load."""
+    from spectrace.scene import load_scene
+
+    (tmp_path / "square.ply").write_text(SQUARE_PLY_WITHOUT_UV)
+    body = TEXTURED_MIX.replace("AMOUNT", "0.5") + f'NamedMaterial "{material}"\n'
+    body += 'Shape "plymesh" "string filename" "square.ply"\n'
+    toml = tmp_path / "out" / "scene.toml"
+    import_pbrt(_write(tmp_path, body), toml)
+    (shape,) = load_scene(toml).shapes
+    # Per triangle, each corner (x mirrored by the import, v stored as 1 - v) with the uv pbrt gives it.
+    mesh = shape.mesh
+    triangles = {
+        frozenset((tuple(np.round(mesh.vertices[i], 6)), tuple(mesh.uvs[i])) for i in face) for face in mesh.faces
+    }
+    assert triangles == {
+        frozenset({((9, -9, 0), (0, 1)), ((-9, -9, 0), (1, 1)), ((-9, 9, 0), (1, 0))}),
+        frozenset({((9, -9, 0), (0, 1)), ((-9, 9, 0), (1, 1)), ((9, 9, 0), (1, 0))}),
+    }
+
+
 # ---------------------------------------------------------------- renders
 
 
@@ -938,3 +986,29 @@ def test_meshes_without_uv_get_pbrt_default_coordinates(tmp_path):
     assert uv_of == {(0, 0, 0): (0, 1), (-2, 0, 0): (1, 1), (-2, 2, 0): (1, 0)}
     uv_of = {tuple(np.round(v, 6)): tuple(uv) for v, uv in zip(patch.mesh.vertices, patch.mesh.uvs, strict=True)}
     assert uv_of == {(0, 0, 1): (0, 1), (-2, 0, 1): (1, 1), (0, 2, 1): (0, 0), (-2, 2, 1): (1, 0)}
+
+
+def test_a_textured_mix_on_a_mesh_without_uv_renders_the_mixed_albedo(tmp_path, device):
+    """Furnace: under a uniform sky, a diffuse plane of albedo a seen from its front is a times the sky (the plane
+    shadows nothing it sees). pbrt-v4's mix takes its second material with probability `amount`, so the plymesh
+    without uv under mix(black, mix(white checkerboard, black, 3/4), 1/2) has albedo 1/2 · 1/4 = 1/8; the white
+    plane (albedo 1) gives the sky itself. Their ratio is held to 1/8 within 4 standard errors of the mix's pixel
+    mean (the white plane's estimate has next to no variance: every sample is the sky)."""
+    from spectrace.scene import load_scene
+
+    (tmp_path / "square.ply").write_text(SQUARE_PLY_WITHOUT_UV)
+    sky = 'LightSource "infinite" "rgb L" [1 1 1]\n'
+    means = {}
+    for name, material in [
+        ("mix", 'NamedMaterial "outer"\n'),
+        ("white", 'Material "diffuse" "rgb reflectance" [1 1 1]\n'),
+    ]:
+        body = (
+            sky + TEXTURED_MIX.replace("AMOUNT", "0.75") + material + 'Shape "plymesh" "string filename" "square.ply"\n'
+        )
+        toml = tmp_path / name / "scene.toml"
+        import_pbrt(_write(tmp_path, body, name=f"{name}.pbrt"), toml)
+        y = _render_y(load_scene(toml).with_overrides(seed=7), device, spp=64)
+        means[name] = (y.mean(), y.std(ddof=1) / math.sqrt(y.size))
+    (mixed, error), (white, _) = means["mix"], means["white"]
+    assert white > 0 and abs(mixed / white - 1 / 8) < 4 * error / white, (means, mixed / white)

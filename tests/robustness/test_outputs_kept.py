@@ -1,6 +1,6 @@
 """Nothing already on disk is lost: a closed terminal (SIGHUP) keeps a render's samples as SIGTERM does, outputs
 that cannot even be looked at (a symbolic-link loop, a name too long) are one line, a failed import leaves the
-earlier import whole, and two renders on one output cannot both write it."""
+earlier import whole, and two renders, imports or sweeps on one output cannot both write it."""
 
 import os
 import signal
@@ -348,3 +348,59 @@ def test_denoise_replaces_its_own_noisy_image_and_no_other_file(suffix, tmp_path
     status, stderr = render(other)
     assert status == 2 and stderr.startswith(f"error: {others_noisy}: --denoise keeps"), stderr
     assert others_noisy.read_bytes() == noisy.read_bytes() and not other.exists()
+
+
+@pytest.mark.subprocess
+@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba"])
+def test_an_import_onto_an_output_in_use_is_refused_naming_the_holder(command, tmp_path, monkeypatch, capsys):
+    """While another command writes the import's TOML, or the entry beside it that the import swaps in (pbrt's
+    `out_assets`, Mitsuba's `out.sensor.csv`, which `-o out` and `-o out.toml` share), a real import process
+    stops: one line naming the file, the option and the holder's pid, status 2, the earlier import untouched.
+    Once the holder lets go the import goes on and leaves no lock file."""
+    from cli_runner import run_in_process, run_spectrace
+    from spectrace.io.output_lock import OutputLocks
+
+    good, other, _, files = _importer_cases(tmp_path)[command]
+    out = tmp_path / "out" / "out.toml"
+    status, stderr = run_in_process(monkeypatch, capsys, [command, str(good), "-o", str(out)])
+    assert status == 0, stderr
+    earlier = _tree(out.parent)
+    for held, says in [(out, "--output"), (out.parent / files, f"{files} beside --output")]:
+        with OutputLocks({"held": held}, command="another import"):
+            result = run_spectrace(command, str(other), "-o", str(out), timeout=120)
+        assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+        assert result.stderr.startswith(
+            f"error: {held}: {says} is being written by another command (another import, pid {os.getpid()} on "
+        ), result.stderr
+        assert _tree(out.parent) == earlier
+    status, stderr = run_in_process(monkeypatch, capsys, [command, str(other), "-o", str(out)])
+    assert status == 0 and _tree(out.parent) != earlier, stderr
+    assert _locks(tmp_path) == []
+
+
+@pytest.mark.subprocess
+def test_a_sweep_into_a_folder_in_use_is_refused_naming_the_holder(tmp_path, monkeypatch, capsys):
+    """A second sweep into a results folder another sweep is writing would rewrite its table without the first
+    one's rows: a real sweep process stops at once, one line naming the folder and the holder's pid, status 2,
+    the folder as it was; once the holder lets go the sweep runs and leaves no lock file."""
+    from cli_runner import run_in_process, run_spectrace
+    from spectrace.io.output_lock import OutputLocks
+
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('[sweep]\nkind = "display"\n[grid]\ndisplay = ["CRT-Dell"]\nrgb = [[0.5, 0.5, 0.5]]\n')
+    out = tmp_path / "results"
+    status, stderr = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out), "-q"])
+    assert status == 0, stderr
+    earlier = _tree(out)
+    spec.write_text('[sweep]\nkind = "display"\n[grid]\ndisplay = ["CRT-Dell"]\nrgb = [[0.5, 0.5, 0.5], [1, 0, 0]]\n')
+    with OutputLocks({"held": out}, command="spectrace sweep"):
+        result = run_spectrace("sweep", str(spec), "-o", str(tmp_path / "." / "results"), "-q", timeout=120)
+    assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+    assert result.stderr.startswith(
+        f"error: {tmp_path / '.' / 'results'}: --output is being written by another command (spectrace sweep, "
+        f"pid {os.getpid()} on "
+    ), result.stderr
+    assert _tree(out) == earlier
+    status, stderr = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out), "-q"])
+    assert status == 0 and "2/2 items (1 computed now" in stderr + capsys.readouterr().out, stderr
+    assert _locks(tmp_path) == []

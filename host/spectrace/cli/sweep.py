@@ -218,12 +218,12 @@ def sweep_command(
         bar = nullcontext(None) if quiet else progress_bar(len(items), 0, console.rich(), unit="items")
         with bar as draw:
             if cluster is None and workers is None:
-                rows, computed = sweeping.run_items(items, output, None, draw, stop)
+                rows, computed = sweeping.run_items(items, output, None, draw, stop, "--output")
             else:
                 from spectrace.distributed import connect
 
                 with connect(cluster, workers, cluster_timeout) as client:
-                    rows, computed = sweeping.run_items(items, output, client, draw, stop)
+                    rows, computed = sweeping.run_items(items, output, client, draw, stop, "--output")
     _say(
         f"wrote {output / 'results.csv'} and results.json: {len(rows)}/{len(items)} items "
         f"({computed} computed now, {len(rows) - computed} already done)"

@@ -1904,14 +1904,23 @@ def import_mitsuba(
     """Write the spectrace TOML scene for a Mitsuba 3 XML scene and check that it loads; returns the notes.
     option: what errors about the output call it (the command line's --output).
 
-    The output is checked first (a folder, a read-only place); the TOML and the files beside it that it refers to
-    (`side_files`) are replaced together, and only by a complete import whose TOML loads: a failed import leaves an
-    earlier one as it was."""
-    from spectrace.interop.toml_writer import non_finite_key, write_scene
-    from spectrace.scene import load_scene
+    The output is checked first (a folder, a read-only place) and locked (spectrace.io.output_lock: a second import
+    writing it is refused); the TOML and the files beside it that it refers to (`side_files`) are replaced
+    together, and only by a complete import whose TOML loads: a failed import leaves an earlier one as it was."""
+    from spectrace.interop.toml_writer import lock_import
 
     xml_path, toml_path = Path(xml_path), Path(toml_path)
     check_output_path(toml_path, xml_path, option)
+    with lock_import(toml_path, option, "spectrace import-mitsuba"):
+        return _import_mitsuba(xml_path, toml_path, parameters, strict, option)
+
+
+def _import_mitsuba(
+    xml_path: Path, toml_path: Path, parameters: dict[str, str] | None, strict: bool, option: str
+) -> list[str]:
+    from spectrace.interop.toml_writer import non_finite_key, write_scene
+    from spectrace.scene import load_scene
+
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
     importer.side_stem = toml_path.stem
     data = _imported(importer, strict)
@@ -1935,7 +1944,7 @@ def import_mitsuba(
 
     files = {name: partial(_write_side, content=content) for name, content in importer.side_files.items()}
     try:
-        write_scene(toml_path, data, header, files, check)
+        write_scene(toml_path, data, header, files, check, option, "spectrace import-mitsuba")
     except OSError as error:
         raise SpectraceError(
             f"cannot write the TOML or its files ({error.strerror or error})", where=str(toml_path)

@@ -871,7 +871,7 @@ class PbrtImporter:
         if (
             all(table["type"] == "diffuse" for table in pair)
             and (not isinstance(amount, dict) or amount.get("texture") == "bitmap")
-            and not any(table["reflectance"].get("texture") in ("checkerboard", "scale", "mix") for table in pair)
+            and not any(self._texture_kind(table["reflectance"]) in ("checkerboard", "scale", "mix") for table in pair)
         ):
             return {
                 "type": "diffuse",
@@ -884,6 +884,11 @@ class PbrtImporter:
             }
         materials = [self.material(str(name), names.location) for name in names.values]
         return {"type": "mix", "materials": materials, "amount": amount}
+
+    def _texture_kind(self, value: dict) -> str | None:
+        """The kind of texture a TOML value holds (a named one's from the textures table), None for a spectrum."""
+        name = value.get("texture")
+        return self.textures[name]["type"] if name in self.textures else name
 
     def _rough(self, material: Entity) -> dict:
         alpha = self.roughness(material)
@@ -1110,8 +1115,7 @@ class PbrtImporter:
             return None
         if material is None and shape.area_light is not None:
             material = self.material(None, entity.location)
-        textured = any(isinstance(v, dict) and "texture" in v for v in self.materials.get(material or "", {}).values())
-        geometry, mesh = self.shape_geometry(shape, needs_uv=textured)
+        geometry, mesh = self.shape_geometry(shape, needs_uv=self.reads_uv(material))
         table: dict = {"name": f"{entity.kind}{index}", **geometry}
         if material is not None:  # an interface around a medium: an index-matched boundary in spectrace
             table["material"] = material
@@ -1202,6 +1206,15 @@ class PbrtImporter:
         if emission is not None and emission not in ({"value": 0.0}, {"rgb": [0.0, 0.0, 0.0]}):
             self.warn(medium.location, "a medium's emission (Le) not imported")
         return table
+
+    def reads_uv(self, material: str | None) -> bool:
+        """Whether rendering the TOML material `material` reads texture coordinates: a parameter of it holds a
+        texture, or one of a mix's materials reads them, at any depth (as the scene loader decides, through
+        spectrace.materials.material_textures). A mesh without uv then gets pbrt's default ones."""
+        table = self.materials.get(material or "", {})
+        if any(isinstance(value, dict) and "texture" in value for value in table.values()):
+            return True
+        return table.get("type") == "mix" and any(self.reads_uv(part) for part in table.get("materials", []))
 
     def _with_opacity(self, material: str, opacity: float) -> str:
         name = _name(f"{material}_alpha", self.materials)
@@ -1578,10 +1591,10 @@ def import_pbrt(
     returns (warnings, notes). strict: every warning (something in the file not imported) is an error instead.
     option: what errors about the output call it (the command line's --output).
 
-    The output is checked first; the TOML and its folder of meshes are replaced together, and only by a complete
-    import whose TOML loads: a failed import leaves an earlier one, TOML and folder, as it was."""
-    from spectrace.interop.toml_writer import non_finite_key, write_scene
-    from spectrace.scene import load_scene
+    The output is checked and locked first (spectrace.io.output_lock: a second import writing it is refused); the
+    TOML and its folder of meshes are replaced together, and only by a complete import whose TOML loads: a failed
+    import leaves an earlier one, TOML and folder, as it was."""
+    from spectrace.interop.toml_writer import lock_import
 
     pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
     check_output_file(toml_path, option, create_folders=True)
@@ -1589,6 +1602,14 @@ def import_pbrt(
         raise SpectraceError(
             "is the pbrt scene being imported; writing it would destroy the input", where=str(toml_path)
         )
+    with lock_import(toml_path, option, "spectrace import-pbrt"):
+        return _import_pbrt(pbrt_path, toml_path, strict, option)
+
+
+def _import_pbrt(pbrt_path: Path, toml_path: Path, strict: bool, option: str) -> tuple[list[str], list[str]]:
+    from spectrace.interop.toml_writer import non_finite_key, write_scene
+    from spectrace.scene import load_scene
+
     data, importer = pbrt_scene_data(pbrt_path, toml_path)
     if strict and importer.warnings:
         raise SpectraceError(
@@ -1620,7 +1641,7 @@ def import_pbrt(
             raise importer.imported_error(failure, temp) from None
 
     try:
-        write_scene(toml_path, data, header, files, check)
+        write_scene(toml_path, data, header, files, check, option, "spectrace import-pbrt")
     except OSError as failure:
         raise SpectraceError(
             f"cannot write the TOML or its files ({failure.strerror or failure})", where=str(toml_path)

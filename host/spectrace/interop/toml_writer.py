@@ -5,7 +5,7 @@ import json
 import math
 import re
 from collections.abc import Callable, Mapping
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 import numpy as np
 
@@ -117,16 +117,43 @@ def write_scene(
     header: str,
     files: Mapping[str, Callable[[Path], object]],
     check: Callable[[Path], object],
+    option: str = "the TOML file",
+    command: str = "spectrace import",
 ) -> None:
     """Write an imported scene all or nothing (spectrace.io.atomic.write_with_files): the TOML of `data` and the
     files it refers to, `files` (name relative to the TOML's folder, as `data` spells it -> writer). check(temp)
     loads the TOML first, written where it will be with those names leading to the files not yet in place, and
-    raises to leave the earlier import, TOML and files, as it was."""
+    raises to leave the earlier import, TOML and files, as it was.
+
+    The TOML's own lock is the caller's (lock_import, taken before the import's work); the entries beside it
+    that are swapped in (a folder of meshes, a side file) are locked here, since only now are their names known,
+    so that a second import sharing them (`-o out` and `-o out.toml` share `out_assets`) is refused, naming its
+    holder, instead of both swapping them."""
     from spectrace.io.atomic import write_with_files
+    from spectrace.io.output_lock import OutputLocks
 
     def write_and_check(temp: Path, staged: Mapping[str, str]) -> None:
         temp.write_text(dumps(_with_strings_replaced(data, staged), header=header), encoding="utf-8")
         check(temp)
         temp.write_text(dumps(data, header=header), encoding="utf-8")
 
-    write_with_files(toml_path, files, write_and_check)
+    folder = toml_path.parent
+    entries = dict.fromkeys(PurePosixPath(name).parts[0] for name in files)
+    with OutputLocks({f"{top} beside {option}": folder / top for top in entries}, command=command):
+        write_with_files(toml_path, files, write_and_check)
+
+
+def lock_import(toml_path: Path, option: str, command: str):
+    """The lock of an import's TOML (spectrace.io.output_lock.OutputLocks), to hold from before the import's work
+    until it ends: a second command writing the same file is refused at once, naming this one. The TOML's folder
+    is made first (an import makes missing folders anyway), since the lock file lies there."""
+    from spectrace.errors import SpectraceError
+    from spectrace.io.output_lock import OutputLocks
+
+    try:
+        toml_path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise SpectraceError(
+            f"cannot create the folder of {option} ({error.strerror or error})", where=str(toml_path)
+        ) from None
+    return OutputLocks({option: toml_path}, command=command)
