@@ -37,18 +37,19 @@ def test_the_four_lights_emit_the_same_power():
 @pytest.mark.slow
 def test_exported_veach_mis_renders_like_spectrace(tmp_path, device, mitsuba_scalar_spectral):
     """Direct light (max_depth 2) on rough and smooth aluminium plates from analytic sphere lights: REPLICAS
-    independent images from each renderer, 8 x 8-pixel block means and the whole image within 5 standard errors.
-    The export's roughconductor carries spectrace's η, k and α. Measured: largest block 2.2 standard errors; every
-    plate's α exported 1.5× wider: 9.8 (1.2×: 4.1, passes)."""
+    independent images from each renderer, 8 x 8-pixel block means, the whole image and the plates (the rows below
+    the lamps) within 5 standard errors. The export's roughconductor carries spectrace's η, k and α. The plates'
+    mean is the quantity held to 5 %: the lamps seen directly are bright, few-pixel disks whose coverage noise says
+    nothing about the plates' MIS estimates."""
     mi = mitsuba_scalar_spectral
-    replicas, replica_spp, size, block = 16, 16, 32, 8
+    replicas, replica_spp, size, block = 16, 256, 32, 8
     scene = load_scene(scenes_dir() / "veach_mis.toml").with_overrides(width=size, height=size, max_depth=2)
     mitsuba_scene = mi.load_dict(scene_to_mitsuba_dict(scene, tmp_path, spp=replica_spp))
     by_mitsuba = np.stack(
         [mitsuba_film_xyz(mi.render(mitsuba_scene, spp=replica_spp, seed=seed), mi) for seed in range(replicas)]
     )
     by_spectrace = spectrace_replicas(Renderer(scene, device), replicas, replica_spp)
-    # Power 29 % on the image's mean (its small, bright lamps seen in the glossy plates): 5 % would take 33 times
-    # the samples; the blocks, at 10 %, are the sharper check here.
-    assert_replicas_agree(by_spectrace, by_mitsuba, block, power=0.35)
+    plates = np.zeros((size, size), dtype=bool)
+    plates[size * 3 // 8 :] = True
+    assert_replicas_agree(by_spectrace, by_mitsuba, block, region=plates)
     assert by_mitsuba[..., 1].mean() > 0.05

@@ -413,17 +413,16 @@ radiance = {{ value = 0.1 }}
     )
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("target", ["[-0.5, 0.45, 0]", "[0.6, 0.3, -0.3]"], ids=["rough-glass", "smooth-shaded-cube"])
-def test_other_lights_and_adjoint_bsdfs_agree_with_the_path_tracer(device, tmp_path, target):
-    """The camera fills its view with the rough glass sphere, or with the smooth-shaded cube. (Rough glass lit by
-    large lights makes heavy-tailed light-traced pixels: test_rough_glass_seen_from_below is the sharper test of
-    its BTDF.)"""
-    path = spectrace_replicas(Renderer(spectrace.load_scene(_mixed_scene(tmp_path, "path", target)), device), 8, 16)
-    light = spectrace_replicas(Renderer(spectrace.load_scene(_mixed_scene(tmp_path, "light", target)), device), 8, 16)
+def test_other_lights_and_adjoint_bsdfs_agree_with_the_path_tracer(device, tmp_path):
+    """The camera fills its view with the smooth-shaded cube on the plastic floor, under the distant, constant and
+    spherical area lights; the image's mean is held to 5 %. The rough glass sphere stays out of view: lit by large
+    lights it makes heavy-tailed light-traced pixels that would take some 200 times these samples to resolve 5 %,
+    and test_rough_glass_seen_from_below is the test of its BTDF."""
+    target = "[0.6, 0.3, -0.3]"
+    path = spectrace_replicas(Renderer(spectrace.load_scene(_mixed_scene(tmp_path, "path", target)), device), 8, 128)
+    light = spectrace_replicas(Renderer(spectrace.load_scene(_mixed_scene(tmp_path, "light", target)), device), 8, 128)
     assert path.mean() > 0.05
-    # Power 72 % (rough glass) and 14 % (the cube) at these samples: 5 % would take 200 and 8 times as many.
-    assert_replicas_agree(light, path, block=4, power=0.8 if target == "[-0.5, 0.45, 0]" else 0.2)
+    assert_replicas_agree(light, path, block=4)
 
 
 def _rough_slab_scene(tmp_path: Path, integrator: str) -> Path:
