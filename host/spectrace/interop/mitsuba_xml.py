@@ -65,6 +65,7 @@ from spectrace.interop.mitsuba_tree import shown as _shown
 from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
+from spectrace.number_text import DECIMAL, INTEGER
 from spectrace.pixel_filters import PixelFilter
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 from spectrace.textures import TEXTURES
@@ -198,8 +199,6 @@ _V_UP_SHAPES = ("rectangle", "ply", "serialized")
 
 # ---------------------------------------------------------------- values
 
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
-_INTEGER = re.compile(r"[+-]?[0-9]+")
 _FLOAT32_MAX = float(np.finfo(np.float32).max)
 _INTEGER_LIMIT = 2**63  # TOML's integers are 64-bit
 
@@ -361,7 +360,7 @@ class MitsubaImporter:
     def parse_number(self, text: str, element: Element, key: str) -> float:
         """A finite number that float32 (Mitsuba's and the renderer's precision) holds."""
         text = text.strip()
-        if not _NUMBER.fullmatch(text):
+        if not DECIMAL.fullmatch(text):
             raise self.fail(element, f"expected a finite number, got '{_shown(text)}'", key)
         value = float(text)
         if not abs(value) <= _FLOAT32_MAX:
@@ -392,7 +391,7 @@ class MitsubaImporter:
         """An integer property (<integer>, or an integral <float>) within TOML's 64-bit range."""
         element = self.resolve(element)
         text = self.required(element, "value").strip()
-        if _INTEGER.fullmatch(text):
+        if INTEGER.fullmatch(text):
             value = int(text)
         else:
             number = self.number(element)
@@ -825,7 +824,7 @@ class MitsubaImporter:
             if not text:
                 continue
             parts = text.split()
-            if len(parts) != 2 or not all(_NUMBER.fullmatch(part) for part in parts):
+            if len(parts) != 2 or not all(DECIMAL.fullmatch(part) for part in parts):
                 raise self.fail(
                     element,
                     f"line {number} of '{_shown(name)}': expected 'wavelength value', got '{_shown(text)}'",

@@ -61,18 +61,14 @@ def _spectrum_from_samples(
     )
 
 
-# What a CSV or a spectrum string may hold as a number (spectrace.number_text); nan and inf are recognised only to
-# say that they are not finite.
-_NUMBER = DECIMAL
-_NOT_FINITE = NOT_FINITE
-
-
 def _parse_number(text: str, what: str, where: str) -> float:
+    """A number of a CSV or a spectrum string, as spectrace.number_text reads numbers; nan and inf are recognised
+    only to say that they are not finite."""
     text = text.strip()
-    if _NOT_FINITE.fullmatch(text):
+    if NOT_FINITE.fullmatch(text):
         raise SpectraceError(f"{what} is {text}; spectra must be finite", where=where)
-    if not _NUMBER.fullmatch(text):
-        hint = ": '_' is not a digit separator here" if "_" in text and _NUMBER.fullmatch(text.replace("_", "")) else ""
+    if not DECIMAL.fullmatch(text):
+        hint = ": '_' is not a digit separator here" if "_" in text and DECIMAL.fullmatch(text.replace("_", "")) else ""
         raise SpectraceError(f"'{text}' is not a number ({what}){hint}", where=where)
     number = float(text)
     if not math.isfinite(number):  # e.g. 1e999
