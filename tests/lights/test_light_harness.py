@@ -41,7 +41,6 @@ from stats_toolkit import assert_chi_square_fits, assert_within_standard_errors,
 
 HARNESS = "testing/lights.cl"
 LAMBDA_NM = np.array([420.0, 510.0, 600.0, 690.0], np.float32)  # whole nanometres: grid points of the table
-SIGMAS = 4.0
 CAMERA = Camera(origin=(0.0, 0.0, 10.0), target=(0.0, 0.0, 0.0))
 GREY = DiffuseMaterial(Spectrum.constant(0.5))
 
@@ -652,4 +651,4 @@ def test_light_paths_start_with_the_lights_flux(lights, case):
     weight = lights(case.scene).emit(20000, seed=70, radius=radius)
     mean, standard_error = mean_and_standard_error(weight)
     expected = _flux(case, radius)
-    assert_within_standard_errors(mean, expected, standard_error, SIGMAS, slack=2e-5 * expected, what=case.id)
+    assert_within_standard_errors(mean, expected, standard_error, slack=2e-5 * expected, what=case.id)
