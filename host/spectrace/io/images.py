@@ -76,10 +76,9 @@ def _read_png16(path: Path, where: str, what: str) -> np.ndarray | None:
 
 def _exr_size(path: Path) -> tuple[int, int]:
     """(width, height) of an OpenEXR file's data window, from its header alone."""
-    import OpenEXR
+    from spectrace.io.exr import read_exr_header
 
-    with OpenEXR.File(str(path), header_only=True) as exr:
-        (x_min, y_min), (x_max, y_max) = (np.asarray(corner).tolist() for corner in exr.header()["dataWindow"])
+    (x_min, y_min), (x_max, y_max) = (np.asarray(corner).tolist() for corner in read_exr_header(path)["dataWindow"])
     return int(x_max) - int(x_min) + 1, int(y_max) - int(y_min) + 1
 
 

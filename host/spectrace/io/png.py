@@ -6,13 +6,14 @@ start-up more than the encoding does. Pillow still reads images (io/images.py)."
 
 import struct
 import zlib
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
 from spectrace.io.atomic import write_atomically
 
-_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _COMPRESSION_LEVEL = 6  # zlib's default: within a few per cent of the smallest size at a fraction of level 9's time
 
 
@@ -37,7 +38,7 @@ def encode_png(pixels: np.ndarray, texts: dict[str, str], chunks: dict[bytes, by
     header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)  # 8 bits per channel, truecolour
     rows = np.zeros((height, 1 + 3 * width), np.uint8)  # each row opens with its filter type byte (0)
     rows[:, 1:] = np.ascontiguousarray(pixels, np.uint8).reshape(height, 3 * width)
-    parts = [_SIGNATURE, _chunk(b"IHDR", header)]
+    parts = [SIGNATURE, _chunk(b"IHDR", header)]
     parts += [_chunk(chunk_type, payload) for chunk_type, payload in (chunks or {}).items()]
     parts += [_text_chunk(key, value) for key, value in texts.items()]
     parts += [_chunk(b"IDAT", zlib.compress(rows.tobytes(), _COMPRESSION_LEVEL)), _chunk(b"IEND", b"")]
@@ -58,19 +59,27 @@ def _write_file(path: Path, data: bytes) -> None:
         file.write(data)
 
 
+def chunks(data: bytes) -> Iterator[tuple[bytes, bytes]]:
+    """(type, payload) of each whole or cut chunk of the PNG bytes `data` (its signature first), to IEND."""
+    position = len(SIGNATURE)
+    while position + 8 <= len(data):
+        (length,) = struct.unpack(">I", data[position : position + 4])
+        kind = data[position + 4 : position + 8]
+        yield kind, data[position + 8 : position + 8 + length]
+        position += 12 + length
+        if kind == b"IEND":
+            return
+
+
 def read_png_texts(path: Path, limit: int = 1 << 20) -> dict[str, str]:
     """The text chunks (tEXt, and uncompressed iTXt) before the pixels of a PNG, by keyword, from its first
     `limit` bytes (spectrace writes them there); {} for a file that is no PNG."""
     with open(path, "rb") as file:
         data = file.read(limit)
-    if not data.startswith(_SIGNATURE):
+    if not data.startswith(SIGNATURE):
         return {}
     texts: dict[str, str] = {}
-    position = len(_SIGNATURE)
-    while position + 8 <= len(data):
-        (length,) = struct.unpack(">I", data[position : position + 4])
-        kind, payload = data[position + 4 : position + 8], data[position + 8 : position + 8 + length]
-        position += 12 + length
+    for kind, payload in chunks(data):
         if kind in (b"IDAT", b"IEND"):
             break
         keyword, _, rest = payload.partition(b"\x00")

@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.io.compressed import inflate
+from spectrace.io.png import SIGNATURE as _SIGNATURE
+from spectrace.io.png import chunks as _chunks
 
-_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _CHANNELS = {2: 3, 4: 2, 6: 4}  # colour type -> samples a pixel: RGB, grey + alpha, RGBA
 # Adam7: each pass's first column and row, and its steps.
 _ADAM7 = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), (1, 0, 2, 2), (0, 1, 1, 2))
@@ -26,17 +27,6 @@ _ADAM7 = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), 
 
 class PngError(ValueError):
     """A malformed PNG; the message says how."""
-
-
-def _chunks(data: bytes):
-    position = len(_SIGNATURE)
-    while position + 8 <= len(data):
-        (length,) = struct.unpack(">I", data[position : position + 4])
-        kind = data[position + 4 : position + 8]
-        yield kind, data[position + 8 : position + 8 + length]
-        position += 12 + length
-        if kind == b"IEND":
-            return
 
 
 def sixteen_bit_colour_header(head: bytes) -> tuple[int, int, int, int] | None:
