@@ -81,7 +81,7 @@ def _luminance_factor(table: dict) -> float:
 
 class Context:
     """One import: the parsed scene, where the TOML goes, what it holds so far and what was not imported. Every
-    mapping (the modules of spectrace.interop.pbrt, and through `Import` each material's `from_pbrt`) reads pbrt's
+    mapping (the modules of spectrace.interop.pbrt, and through `Import` each plugin's `from_pbrt`) reads pbrt's
     parameters through it, so that what none read is reported."""
 
     def __init__(self, scene: PbrtScene, source: Path, toml_folder: Path, mesh_folder: str):

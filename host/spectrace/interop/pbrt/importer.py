@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.errors import SpectraceError
-from spectrace.interop.pbrt import materials, textures
+from spectrace.interop.pbrt import lights, materials, textures
 from spectrace.interop.pbrt.cameras import camera, integrator, sampler
 from spectrace.interop.pbrt.context import Context, grouped
 from spectrace.interop.pbrt.graphics_state import Entity, read_scene
@@ -39,8 +39,8 @@ from spectrace.io.output_files import check_output_file
 
 
 class Import(Context):
-    """The context each material module's `from_pbrt(context, material)` is handed: the Context's readers, and what
-    several material mappings share (the material modules reach the importer only through it)."""
+    """The context each material and light module's `from_pbrt` is handed: the Context's readers, and what several
+    mappings share (the plugin modules reach the importer only through it)."""
 
     def reflectance(self, entity: Entity, name: str, default: float) -> dict:
         """A reflectance: a spectrum (an RGB in [0, 1]), a spectrum texture, or the number `default`."""
@@ -65,6 +65,10 @@ class Import(Context):
     def texture_table(self, texture: Entity) -> dict:
         """The TOML table of a pbrt texture."""
         return textures.texture_table(self, texture)
+
+    def environment_map(self, light: Entity, matrix: np.ndarray, scale: float) -> dict:
+        """The `envmap` table of an image infinite light, its map resampled and written beside the TOML."""
+        return lights.environment_map(self, light, matrix, scale)
 
 
 def scene_data(context: Context) -> dict:
