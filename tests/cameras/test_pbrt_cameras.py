@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.pbrt_v4 import load_pbrt_scene, pbrt_scene_data
+from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 from spectrace.pixel_filters import PixelFilter
 
 PLANE = 'Shape "trianglemesh" "point3 P" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] "integer indices" [0 1 2 0 2 3]\n'

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from fuzz_settings import LONG_RUN_EXAMPLES, fuzz_settings
 from spectrace.errors import SpectraceError
-from spectrace.interop.pbrt_v4 import import_pbrt
+from spectrace.interop.pbrt import import_pbrt
 
 EXAMPLES = 300
 FUZZ_SETTINGS = fuzz_settings(

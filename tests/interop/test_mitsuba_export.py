@@ -168,7 +168,7 @@ def test_an_emitting_sphere_under_a_mirror_exports_facing_out(tmp_path, device, 
     has a negative determinant): the exported sphere must face out as spectrace's does. Mitsuba turns a mirrored
     sphere's normals inward, which left the light black (measured: mean 0 against spectrace's 5.8). Means of the
     film Y within 5 standard errors."""
-    from spectrace.interop.pbrt_v4 import load_pbrt_scene
+    from spectrace.interop.pbrt import load_pbrt_scene
     from spectrace.pixel_filters import BOX_FILTER
 
     mi = mitsuba_scalar_spectral
@@ -203,7 +203,7 @@ def test_exported_dielectrics_and_plastics_render_like_spectrace(tmp_path, devic
     """A sphere of glass (smooth, rough) or of plastic (pbrt's coateddiffuse: a smooth coat, a rough one crossed
     by its own transmittance) on a diffuse floor under a sky, imported from pbrt text and exported: 8 replicas of
     16 spp from each renderer, 8 x 8-pixel block means and the image mean within 5 standard errors."""
-    from spectrace.interop.pbrt_v4 import load_pbrt_scene
+    from spectrace.interop.pbrt import load_pbrt_scene
     from spectrace.pixel_filters import BOX_FILTER
 
     mi = mitsuba_scalar_spectral
@@ -228,7 +228,7 @@ def test_exported_dielectrics_and_plastics_render_like_spectrace(tmp_path, devic
 @pytest.mark.peer
 def test_a_shape_with_an_interior_medium_is_refused(tmp_path, mitsuba_scalar_spectral):
     """The export wrote such a glass without its medium (a 9 % brighter image of a pbrt scene with coloured gems)."""
-    from spectrace.interop.pbrt_v4 import load_pbrt_scene
+    from spectrace.interop.pbrt import load_pbrt_scene
 
     path = tmp_path / "gem.pbrt"
     path.write_text(

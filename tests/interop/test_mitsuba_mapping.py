@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from plugin_mappings import assert_declares_mapping
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.lights import LIGHTS, area
@@ -33,16 +34,7 @@ def _plugins(modules) -> list[tuple[str, object]]:
 
 @pytest.mark.parametrize("module", MODULES, ids=[m.NAME for m in MODULES])
 def test_every_module_declares_its_mitsuba_plugins_or_why_it_has_none(module):
-    plugins = module.MITSUBA_PLUGINS
-    assert isinstance(plugins, tuple) and all(isinstance(p, str) and p for p in plugins), plugins
-    if plugins:
-        assert callable(getattr(module, "from_mitsuba", None)), f"{module.NAME} declares plugins but no from_mitsuba"
-        assert not hasattr(module, "MITSUBA_NONE")
-    else:
-        assert isinstance(getattr(module, "MITSUBA_NONE", None), str) and module.MITSUBA_NONE.strip(), (
-            f"{module.NAME}: MITSUBA_PLUGINS is empty and MITSUBA_NONE does not say why"
-        )
-        assert not hasattr(module, "from_mitsuba")
+    assert_declares_mapping(module, "MITSUBA_PLUGINS", "from_mitsuba", "MITSUBA_NONE")
 
 
 @pytest.mark.parametrize("modules", [list(MATERIALS.values()), [*LIGHTS.values(), area]], ids=["bsdf", "emitter"])

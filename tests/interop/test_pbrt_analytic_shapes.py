@@ -12,7 +12,7 @@ import pytest
 from tests.geometry.test_instances import _trace
 
 import spectrace
-from spectrace.interop.pbrt_v4 import load_pbrt_scene, pbrt_scene_data
+from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 
 HEADER = """LookAt 0 0 5  0 0 0  0 1 0
 Camera "perspective" "float fov" 30

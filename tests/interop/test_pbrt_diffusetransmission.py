@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.pbrt_v4 import load_pbrt_scene, pbrt_scene_data
+from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 
 HEADER = """LookAt 0 0 5  0 0 0  0 1 0
 Camera "perspective" "float fov" 20

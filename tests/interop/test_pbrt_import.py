@@ -13,15 +13,9 @@ import spectrace
 from cli_runner import run_in_process
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
-from spectrace.interop.pbrt_parser import (
-    Location,
-    column_major,
-    look_at,
-    read_scene,
-    rotate,
-    tokenize,
-)
-from spectrace.interop.pbrt_v4 import import_pbrt, load_pbrt_scene, pbrt_scene_data
+from spectrace.interop.pbrt import import_pbrt, load_pbrt_scene, pbrt_scene_data
+from spectrace.interop.pbrt.graphics_state import column_major, look_at, read_scene, rotate
+from spectrace.interop.pbrt.parser import Location, tokenize
 from spectrace.spectral import spectrum_to_xyz
 
 HEADER = """LookAt 0 0 5  0 0 0  0 1 0
@@ -841,7 +835,7 @@ def test_scene_renders_as_mitsuba_renders_the_same_scene(tmp_path, device, mitsu
 def test_equal_area_square_covers_the_sphere_uniformly():
     """Clarberg's map is equal-area: a uniform grid on the square gives z uniform on [-1, 1] (mean 0, mean z² 1/3);
     its centre is +z, the corners -z, the edge midpoints the ±x and ±y axes; sphere_to_square inverts it."""
-    from spectrace.interop.pbrt_envmap import sphere_to_square, square_to_sphere
+    from spectrace.interop.pbrt.envmap import sphere_to_square, square_to_sphere
 
     side = 200
     grid = (np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2) + 0.5) / side
@@ -855,7 +849,7 @@ def test_equal_area_square_covers_the_sphere_uniformly():
 
 def _square_map(path: Path, side: int, upper: float, lower: float) -> None:
     """A square equal-area map: `upper` where the texel's direction has z > 0, `lower` elsewhere (grey)."""
-    from spectrace.interop.pbrt_envmap import square_to_sphere
+    from spectrace.interop.pbrt.envmap import square_to_sphere
     from spectrace.io.exr import write_exr
 
     grid = (np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2) + 0.5) / side

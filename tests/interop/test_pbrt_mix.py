@@ -10,7 +10,7 @@ import pytest
 
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
-from spectrace.interop.pbrt_v4 import load_pbrt_scene, pbrt_scene_data
+from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 
 # A plane filling the view under a constant sky; pbrt's maxdepth 1 is direct light only.
 HEADER = """LookAt 0 0 5  0 0 0  0 1 0

@@ -10,7 +10,7 @@ from PIL import Image
 
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.pbrt_v4 import import_pbrt, load_pbrt_scene
+from spectrace.interop.pbrt import import_pbrt, load_pbrt_scene
 
 HEADER = """LookAt 0 3 3  0 0 0  0 1 0
 Camera "perspective" "float fov" 40

@@ -361,7 +361,7 @@ def test_running_out_of_memory_in_an_import_does_not_blame_the_film(tmp_path, mo
 
 
 def test_a_pbrt_include_cycle_is_refused_naming_the_chain(tmp_path):
-    from spectrace.interop.pbrt_parser import parse_directives
+    from spectrace.interop.pbrt.parser import parse_directives
 
     (tmp_path / "a.pbrt").write_text('AttributeBegin\nInclude "b.pbrt"\nAttributeEnd\n')
     (tmp_path / "b.pbrt").write_text('Import "a.pbrt"\n')
@@ -377,7 +377,7 @@ def test_a_pbrt_include_cycle_is_refused_naming_the_chain(tmp_path):
 def test_the_included_text_is_bounded_in_bytes(tmp_path, monkeypatch):
     """Each reading counts: one 600-byte file read three times passes a 1500-byte budget on its third reading."""
     from spectrace.interop.mitsuba_tree import read_scene as read_mitsuba
-    from spectrace.interop.pbrt_parser import parse_directives
+    from spectrace.interop.pbrt.parser import parse_directives
 
     monkeypatch.setattr(inclusions_module, "MAX_INCLUDED_BYTES", 1500)
     (tmp_path / "part.pbrt").write_text("AttributeBegin AttributeEnd\n" * 22)
@@ -391,7 +391,7 @@ def test_the_included_text_is_bounded_in_bytes(tmp_path, monkeypatch):
 
 
 def test_a_gzipped_pbrt_file_reads_as_its_plain_twin(tmp_path, monkeypatch):
-    from spectrace.interop.pbrt_parser import parse_directives
+    from spectrace.interop.pbrt.parser import parse_directives
 
     text = 'Shape "sphere" "float radius" 2\nAttributeBegin\nTranslate 1 2 3\nAttributeEnd\n'
     (tmp_path / "part.pbrt").write_text(text)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from spectrace.interop.mitsuba_xml import load_mitsuba_scene
-from spectrace.interop.pbrt_v4 import load_pbrt_scene
+from spectrace.interop.pbrt import load_pbrt_scene
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.spectral.spectrum import Extension

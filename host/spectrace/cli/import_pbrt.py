@@ -8,7 +8,11 @@ import typer
 from rich.console import Console
 
 from spectrace.errors import SpectraceError
-from spectrace.interop.pbrt_v4 import AREA_LIGHTS, LIGHTS, MATERIALS, SHAPES, TEXTURES, import_pbrt
+from spectrace.interop.pbrt import import_pbrt
+from spectrace.interop.pbrt.lights import AREA_LIGHTS, LIGHTS
+from spectrace.interop.pbrt.materials import IMPORTED_MATERIALS
+from spectrace.interop.pbrt.shapes import SHAPES
+from spectrace.interop.pbrt.textures import TEXTURES
 
 
 def import_pbrt_command(
@@ -34,7 +38,7 @@ def import_pbrt_command(
 
 import_pbrt_command.__doc__ = (
     f"Convert a pbrt-v4 scene to a spectrace TOML scene (shapes {', '.join(SHAPES)}; materials "
-    f"{', '.join(MATERIALS)}; textures {', '.join(TEXTURES)}; lights {', '.join(LIGHTS)}, area "
+    f"{', '.join(IMPORTED_MATERIALS)}; textures {', '.join(TEXTURES)}; lights {', '.join(LIGHTS)}, area "
     f"{', '.join(AREA_LIGHTS)}). Meshes and environment maps go to a folder OUT_assets beside OUT.toml. "
     "Parameters and directives not imported are listed as warnings (--strict: an error); entities spectrace "
     "cannot represent are an error naming file:line. The TOML is checked by loading it before it and OUT_assets "

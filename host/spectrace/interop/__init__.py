@@ -2,7 +2,7 @@
 docs/pbrt.md)."""
 
 from spectrace.interop.mitsuba_xml import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
-from spectrace.interop.pbrt_v4 import import_pbrt, load_pbrt_scene, pbrt_scene_data
+from spectrace.interop.pbrt import import_pbrt, load_pbrt_scene, pbrt_scene_data
 
 __all__ = [
     "import_mitsuba",

@@ -2,6 +2,7 @@
 sphere sampled by the cone it subtends, a disk or cylinder by area), optionally showing an image: an emission
 texture, or a display's picture, which is one (kernels/lights.cl)."""
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -17,6 +18,7 @@ if TYPE_CHECKING:
 
 NAME = "area"
 MITSUBA_PLUGINS = ("area",)  # on a shape only
+PBRT_LIGHTS = ("diffuse",)  # AreaLightSource, on a shape
 PARAMETERS = (
     Parameter(
         "radiance",
@@ -182,6 +184,27 @@ def from_mitsuba(importer, emitter, properties) -> dict | None:
     radiance = importer.child(properties, "radiance", emitter)
     spectrum = importer.spectrum(radiance, "radiance")
     return None if spectrum is None else {"radiance": spectrum}
+
+
+def from_pbrt(context, light, area) -> dict:
+    """pbrt-v4's diffuse area light; `area()` is the shape's area, which `power` is spread over (each side's)."""
+    if light.find("filename") is not None:
+        raise context.error(light.location, "an area light showing an image file is not imported")
+    two_sided = context.boolean(light, "twosided", False)
+    scale = context.one(light, "scale", 1.0)
+    power = context.one(light, "power", -1.0)
+    if power > 0:
+        shape_area = area()
+        # Radiance = power / (sides · area · π): a shape without area would need infinite radiance.
+        if not (shape_area > 0.0 and math.isfinite(shape_area)):
+            raise context.error(
+                light.location, f'"power" needs a shape with a positive finite area, got area {shape_area:g}'
+            )
+        scale *= power / ((2.0 if two_sided else 1.0) * shape_area * math.pi)
+    table: dict[str, object] = {"radiance": context.emission(light, "L", scale)}
+    if two_sided:
+        table["two_sided"] = True
+    return table
 
 
 def to_mitsuba(emitter: AreaEmitter, exporter, owner: str) -> dict:

@@ -1,5 +1,6 @@
 """`constant`: a uniform environment, the same radiance from every direction (kernels/environment.cl)."""
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +12,8 @@ from spectrace.spectral.spectrum import Spectrum
 
 NAME = "constant"
 MITSUBA_PLUGINS = ("constant",)
+# pbrt-v4's `infinite` is two lights here: this one without an image, envmap with one.
+PBRT_LIGHTS = ("infinite",)
 IS_ENVIRONMENT = True
 PARAMETERS = (Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="from every direction"),)
 
@@ -40,6 +43,20 @@ def write_rows(light: ConstantEnvironment, out: LightRows) -> None:
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     radiance = importer.emission(properties, "radiance")
     return None if radiance is None else {"type": "constant", "radiance": radiance}
+
+
+def from_pbrt(context, light, matrix) -> dict | None:
+    """pbrt-v4's `infinite` light without an image (None with one: envmap's); `illuminance` is that of the upper
+    hemisphere, π times the radiance."""
+    if light.find("filename", "string") is not None:
+        return None
+    scale = context.one(light, "scale", 1.0)
+    if light.find("portal") is not None:
+        context.warn(light.location, '"portal" not imported')
+    illuminance = context.one(light, "illuminance", -1.0)
+    if illuminance > 0:
+        scale *= illuminance / math.pi
+    return {"type": "constant", "radiance": context.emission(light, "L", scale)}
 
 
 def to_mitsuba(light: ConstantEnvironment, exporter) -> dict:

@@ -11,6 +11,7 @@ from spectrace.spectral.spectrum import Spectrum
 
 NAME = "distant"
 MITSUBA_PLUGINS = ("directional",)
+PBRT_LIGHTS = ("distant",)
 IS_ENVIRONMENT = False
 PARAMETERS = (
     Parameter("direction", "vector", "", REQUIRED, doc="the direction the light travels"),
@@ -52,6 +53,21 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
         raise importer.fail(properties.get("direction", emitter), "the direction must not be zero")
     irradiance = importer.emission(properties, "irradiance")
     return None if irradiance is None else {"type": "distant", "direction": direction, "irradiance": irradiance}
+
+
+def from_pbrt(context, light, matrix) -> dict | None:
+    """pbrt-v4's distant light, shining from `from` toward `to`; `illuminance` is its irradiance's luminance."""
+    scale = context.one(light, "scale", 1.0)
+    start = context.vector(light, "from", [0.0, 0.0, 0.0])
+    end = context.vector(light, "to", [0.0, 0.0, 1.0])
+    illuminance = context.one(light, "illuminance", -1.0)
+    if illuminance > 0:
+        scale *= illuminance
+    return {
+        "type": "distant",
+        "direction": context.direction(matrix, np.subtract(end, start)),
+        "irradiance": context.emission(light, "L", scale),
+    }
 
 
 def to_mitsuba(light: DistantLight, exporter) -> dict:

@@ -16,6 +16,8 @@ from spectrace.spectral.uplift import uplift_illuminant
 
 NAME = "envmap"
 MITSUBA_PLUGINS = ("envmap",)
+# pbrt-v4's `infinite` is two lights here: this one with an image (`filename`), constant without.
+PBRT_LIGHTS = ("infinite",)
 IS_ENVIRONMENT = True
 DEFAULT_UP = (0.0, 1.0, 0.0)
 DEFAULT_FRONT = (0.0, 0.0, -1.0)
@@ -177,3 +179,11 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
         "bilinearly)"
     )
     return table
+
+
+def from_pbrt(context, light, matrix) -> dict | None:
+    """pbrt-v4's `infinite` light with an image (None without one: constant's), its equal-area square resampled
+    into a latitude-longitude map in spectrace's world (context.environment_map)."""
+    if light.find("filename", "string") is None:
+        return None
+    return context.environment_map(light, matrix, context.one(light, "scale", 1.0))

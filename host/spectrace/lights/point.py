@@ -3,6 +3,7 @@
 Also the one place a power (total flux, W) becomes an intensity (W/(sr nm)), for spot lights too.
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +18,7 @@ from spectrace.spectral.spectrum import Spectrum
 
 NAME = "point"
 MITSUBA_PLUGINS = ("point",)
+PBRT_LIGHTS = ("point",)
 IS_ENVIRONMENT = False
 FULL_SPHERE_SR = 4.0 * np.pi
 POSITION = Parameter("position", "vector", "scene units", REQUIRED, doc="where the light is")
@@ -111,6 +113,19 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     position = importer.vector(properties["position"]) if "position" in properties else to_world[:3, 3].tolist()
     intensity = importer.emission(properties, "intensity")
     return None if intensity is None else {"type": "point", "position": position, "intensity": intensity}
+
+
+def from_pbrt(context, light, matrix) -> dict | None:
+    """pbrt-v4's point light at `from` (its transform applied); `power` is spread over the whole sphere."""
+    scale = context.one(light, "scale", 1.0)
+    power = context.one(light, "power", -1.0)
+    if power > 0:
+        scale *= power / (4.0 * math.pi)
+    return {
+        "type": "point",
+        "position": context.point(matrix, context.vector(light, "from", [0.0, 0.0, 0.0])),
+        "intensity": context.emission(light, "I", scale),
+    }
 
 
 def to_mitsuba(light: PointLight, exporter) -> dict:

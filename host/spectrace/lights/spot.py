@@ -1,6 +1,7 @@
 """`spot`: a point light emitting into a cone, with a smooth falloff toward its edge, optionally through a slide: a
 texture projected over the cone (Mitsuba 3's spot `texture`; kernels/lights.cl)."""
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,6 +16,7 @@ from spectrace.spectral.spectrum import Spectrum
 
 NAME = "spot"
 MITSUBA_PLUGINS = ("spot",)
+PBRT_LIGHTS = ("spot",)
 IS_ENVIRONMENT = False
 CUTOFF_ANGLE = Parameter(
     "cutoff_angle",
@@ -209,3 +211,28 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
         table["slide"] = slide
         table["slide_up"] = (-matrix[:3, 1]).tolist()
     return table
+
+
+def from_pbrt(context, light, matrix) -> dict | None:
+    """pbrt-v4's spot light from `from` toward `to`, full intensity within coneangle − conedeltaangle; `power` is
+    spread over the cone as pbrt-v4's SpotLight spreads it (the falloff band counted at half)."""
+    scale = context.one(light, "scale", 1.0)
+    start = context.vector(light, "from", [0.0, 0.0, 0.0])
+    end = context.vector(light, "to", [0.0, 0.0, 1.0])
+    cone = context.one(light, "coneangle", 30.0)
+    delta = context.one(light, "conedeltaangle", 5.0)
+    power = context.one(light, "power", -1.0)
+    if power > 0:
+        cos_end, cos_start = math.cos(math.radians(cone)), math.cos(math.radians(cone - delta))
+        solid_angle = 2.0 * math.pi * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0)
+        if not solid_angle > 0.0:  # intensity = power / solid angle: a closed cone would need infinite
+            raise context.error(light.location, f'"power" needs a cone of positive solid angle (coneangle {cone:g})')
+        scale *= power / solid_angle
+    return {
+        "type": "spot",
+        "position": context.point(matrix, start),
+        "target": context.point(matrix, end),
+        "cutoff_angle": cone,
+        "falloff_start": max(cone - delta, 0.0),
+        "intensity": context.emission(light, "I", scale),
+    }

@@ -25,6 +25,7 @@ from spectrace.spectral.table import SpectrumTable
 
 NAME = "conductor"
 MITSUBA_PLUGINS = ("conductor", "roughconductor")
+PBRT_MATERIALS = ("conductor",)
 # Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
 MITSUBA_METALS = ("Au", "Ag", "Cu", "Al")
 ROUGHNESS = roughness(0.0, "microfacet α; 0 = polished")
@@ -187,6 +188,26 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if tint is not None:
         table["specular_tint"] = tint
     return table
+
+
+def from_pbrt(context, material) -> dict | None:
+    """pbrt-v4's conductor by eta and k (default: copper); a named metal spectrace has is written as `metal`."""
+    if (reflectance := material.find("reflectance")) is not None:
+        raise context.error(
+            reflectance.location, 'a conductor given by "reflectance": spectrace\'s conductor takes eta and k'
+        )
+    eta = context.spectrum(material, "eta", "unbounded") or {"spectrum": "metals/Cu:eta"}
+    k = context.spectrum(material, "k", "unbounded") or {"spectrum": "metals/Cu:k"}
+    table: dict[str, object] = {"type": "conductor"}
+    metals = {s.get("spectrum", "").split(":")[0] for s in (eta, k)}
+    metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
+    if metal in METALS:
+        table["metal"] = metal
+    else:
+        table |= {"eta": eta, "k": k}
+    if "glass" in eta or "glass" in k:
+        raise context.error(material.location, "a glass's index given as a conductor's eta or k")
+    return table | context.rough(material)
 
 
 # Wavelengths at which an uplifted η or k is written into the imported scene (smooth curves: 5 nm loses nothing).

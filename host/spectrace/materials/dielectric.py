@@ -27,6 +27,7 @@ from spectrace.spectral.table import SpectrumTable
 
 NAME = "dielectric"
 MITSUBA_PLUGINS = ("dielectric", "roughdielectric")
+PBRT_MATERIALS = ("dielectric",)
 ROUGHNESS = roughness(0.0, "microfacet α; 0 = polished glass")
 # A number, a glass name or Sellmeier/Cauchy coefficients: spectral.glasses.index_of_refraction checks the
 # range over the whole grid.
@@ -179,6 +180,10 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if tints:
         table["specular_tint"] = tints["specular_reflectance"]
     return table
+
+
+def from_pbrt(context, material) -> dict | None:
+    return {"type": "dielectric", "ior": context.ior(material)} | context.rough(material)
 
 
 def to_mitsuba(material: DielectricMaterial, exporter) -> dict:

@@ -7,6 +7,7 @@ from spectrace.spectral.spectrum_input import SpectrumLike
 
 NAME = "diffuse"
 MITSUBA_PLUGINS = ("diffuse",)
+PBRT_MATERIALS = ("diffuse",)
 PARAMETERS = (reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π", textured=True),)
 
 
@@ -33,6 +34,10 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     reflectance = properties.get("reflectance")
     spectrum = importer.spectrum(reflectance, "reflectance") if reflectance is not None else {"value": 0.5}
     return None if spectrum is None else {"type": "diffuse", "reflectance": spectrum}
+
+
+def from_pbrt(context, material) -> dict | None:
+    return {"type": "diffuse", "reflectance": context.reflectance(material, "reflectance", 0.5)}
 
 
 def to_mitsuba(material: DiffuseMaterial, exporter) -> dict:

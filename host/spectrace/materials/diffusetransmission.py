@@ -16,6 +16,7 @@ from spectrace.spectral.table import SpectrumTable
 NAME = "diffusetransmission"
 MITSUBA_PLUGINS = ()
 MITSUBA_NONE = "Mitsuba 3 has no diffuse transmission BSDF (its 0.6 `difftrans` plugin was not carried over)"
+PBRT_MATERIALS = ("diffusetransmission",)
 PARAMETERS = (
     reflectance(REQUIRED, "Lambertian reflection f = R(λ)/π on the side the light arrives from", textured=True),
     reflectance(REQUIRED, "Lambertian transmission f = T(λ)/π to the other side (R + T ≤ 1)", name="transmittance"),
@@ -53,6 +54,28 @@ def make(reflectance: SpectrumLike, transmittance: SpectrumLike) -> Diffusetrans
         spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
         spectrum_input.reflectance(transmittance, "transmittance"),
     )
+
+
+def from_pbrt(context, material) -> dict | None:
+    """pbrt-v4's DiffuseTransmissionMaterial: Lambertian reflection and transmission, `reflectance` and
+    `transmittance` (defaults 0.25 each) both multiplied by `scale` (default 1)."""
+    factor = context.one(material, "scale", 1.0)
+    table: dict = {"type": "diffusetransmission"}
+    for key in ("reflectance", "transmittance"):
+        value = context.reflectance(material, key, 0.25)
+        if factor != 1.0:
+            if "value" in value:
+                value = {"value": value["value"] * factor}
+            elif "rgb" in value:
+                value = {"rgb": [c * factor for c in value["rgb"]]}
+            else:
+                raise context.error(
+                    material.location,
+                    f'diffusetransmission "scale" {factor:g} on a {key} that is not a number or rgb: spectrace '
+                    "scales only those",
+                )
+        table[key] = value
+    return table
 
 
 def write_row(row: np.ndarray, material: DiffusetransmissionMaterial, table: SpectrumTable) -> None:

@@ -8,6 +8,8 @@ from spectrace.spectral.spectrum_input import SpectrumLike
 NAME = "mirror"
 MITSUBA_PLUGINS = ()
 MITSUBA_NONE = 'Mitsuba 3\'s mirror is a conductor of material "none", which conductor.py imports as a mirror'
+PBRT_MATERIALS = ()
+PBRT_NONE = "pbrt-v4 has no mirror material (pbrt-v3's `mirror` was removed)"
 PARAMETERS = (reflectance(1.0, "perfect specular reflection scaled by R(λ)", textured=True),)
 
 

@@ -25,6 +25,7 @@ NAME = "mix"
 COMPOSITE = True
 KERNEL_FILE = "material_mix.cl"
 MITSUBA_PLUGINS = ("blendbsdf",)
+PBRT_MATERIALS = ("mix",)
 # Mixes within mixes, counting this one (MIX_MAX_DEPTH in kernels/material_mix.cl).
 MAX_DEPTH = 8
 # The Material row fields holding the two materials' row indices.
@@ -173,6 +174,61 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     else:
         table["amount"] = 0.5
     return table
+
+
+def from_pbrt(context, material) -> dict | None:
+    """pbrt-v4's `mix`: at each intersection one of `materials` is chosen by a hash of the point and direction, the
+    second with probability `amount` (its MixMaterial::ChooseMaterial), as this material chooses. Two diffuse
+    materials with a number or image amount become instead one diffuse material of the blended reflectance,
+    (1 - amount) R1 + amount R2 (the `mix` texture): the same average without the choice's noise. An amount of 0 or
+    1, or the same material twice, is that material."""
+    names = material.find("materials", "string")
+    if names is None or len(names.values) != 2:
+        raise context.error(material.location, f'{material.label()} needs "string materials" naming two materials')
+    tables = []
+    for name in names.values:
+        if str(name) not in context.scene.named_materials:
+            raise context.error(
+                names.location, f"mix names '{context.shown(str(name))}', which no MakeNamedMaterial defined"
+            )
+        tables.append(context.material_table(context.scene.named_materials[str(name)]))
+    amount_texture = material.find("amount", "texture")
+    number = context.one(material, "amount", 0.5)
+    amount: float | dict = number
+    if amount_texture is not None:
+        key = ("float", str(amount_texture.values[0]))
+        if key not in context.scene.textures:
+            raise context.error(
+                amount_texture.location,
+                f"\"{amount_texture.label()}\" names '{context.shown(key[1])}', which no Texture defined",
+            )
+        texture: dict = context.texture_table(context.scene.textures[key].entity)
+        if texture.get("texture") not in ("bitmap", "checkerboard"):
+            raise context.error(amount_texture.location, "a mix's amount texture must be an imagemap or a checkerboard")
+        amount = texture
+    elif number <= 0.0 or number >= 1.0:
+        return tables[number >= 1.0]
+    if tables[0] == tables[1]:
+        return tables[0]
+    if any(table is None for table in tables):
+        raise context.error(material.location, "material 'mix' with an interface: spectrace mixes two materials")
+    pair = [table for table in tables if table is not None]
+    if (
+        all(table["type"] == "diffuse" for table in pair)
+        and (not isinstance(amount, dict) or amount.get("texture") == "bitmap")
+        and not any(context.texture_kind(table["reflectance"]) in ("checkerboard", "scale", "mix") for table in pair)
+    ):
+        return {
+            "type": "diffuse",
+            "reflectance": {
+                "texture": "mix",
+                "tex1": pair[0]["reflectance"],
+                "tex2": pair[1]["reflectance"],
+                "amount": amount,
+            },
+        }
+    materials = [context.material(str(name), names.location) for name in names.values]
+    return {"type": "mix", "materials": materials, "amount": amount}
 
 
 def to_mitsuba(material: MixMaterial, exporter) -> dict:

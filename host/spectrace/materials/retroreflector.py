@@ -15,6 +15,8 @@ from spectrace.spectral.table import SpectrumTable
 NAME = "retroreflector"
 MITSUBA_PLUGINS = ()
 MITSUBA_NONE = "Mitsuba 3 has no retroreflecting BSDF"
+PBRT_MATERIALS = ()
+PBRT_NONE = "pbrt-v4 has no retroreflecting material"
 ROUGHNESS = roughness(0.1, "GGX α: the width of the lobe around the direction light came from")
 PARAMETERS = (reflectance(1.0, "how much comes back", textured=True), ROUGHNESS)
 

@@ -16,6 +16,7 @@ from spectrace.spectral.table import SpectrumTable
 
 NAME = "thindielectric"
 MITSUBA_PLUGINS = ("thindielectric",)
+PBRT_MATERIALS = ("thindielectric",)
 # Above 4 nothing physical; at 1 the sheet is not there (R = 0, light passes straight through); below 1 the sheet
 # is the rarer medium and reflects totally past the critical angle, as Fresnel's equations give.
 IOR = Parameter(
@@ -129,6 +130,14 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
                 return None
             table[key] = tint
     return table
+
+
+def from_pbrt(context, material) -> dict | None:
+    """pbrt-v4's ThinDielectricBxDF: R' = R + T²R/(1 − R²), straight through, as here."""
+    eta = context.ior(material)
+    if not isinstance(eta, (int, float)):
+        raise context.error(material.location, "a thindielectric's eta must be a number for spectrace")
+    return {"type": "thindielectric", "ior": eta}
 
 
 def to_mitsuba(material: ThindielectricMaterial, exporter) -> dict:

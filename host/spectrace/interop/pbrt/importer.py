@@ -1,0 +1,257 @@
+"""pbrt-v4 scenes -> spectrace scene TOML, for the subset spectrace represents (docs/pbrt.md).
+
+spectrace.interop.pbrt.parser and .graphics_state read the file (tokens, directives, graphics state, instances
+expanded); a module per kind maps what they read onto spectrace's scene format: cameras (camera, film, pixel
+filter, sampler, integrator), shapes (and meshes), materials (dispatching to each material module's `from_pbrt`),
+textures, media and lights, all reading pbrt's parameters through one `Context`. This module runs them and writes
+the result, with the same writer (spectrace.interop.toml_writer), the same checks on the output and the same
+one-line errors as the Mitsuba importer. Each convention the mappings bridge is checked by
+tests/interop/test_pbrt_import.py.
+
+Files: meshes, environment maps (resampled, spectrace.interop.pbrt.envmap) and scaled image textures go into a
+folder beside the TOML, as PLY and OpenEXR.
+
+Anything the file states that is not imported is reported: a parameter no mapping read, or a directive spectrace
+has no counterpart for, as a warning naming file:line (an error with strict=True); an entity of a type spectrace
+cannot represent (a realistic camera, a `measured` material, a goniometric light, a `curve` shape) as an error
+naming file:line.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from spectrace.errors import SpectraceError
+from spectrace.interop.pbrt import lights, materials, textures
+from spectrace.interop.pbrt.cameras import camera, integrator, sampler
+from spectrace.interop.pbrt.context import Context, grouped
+from spectrace.interop.pbrt.graphics_state import Entity, read_scene
+from spectrace.interop.pbrt.lights import light_table
+from spectrace.interop.pbrt.meshes import write_ply
+from spectrace.interop.pbrt.parser import Location, error, shown
+from spectrace.interop.pbrt.shapes import instanced_object, shape_table
+from spectrace.io.output_files import check_output_file
+
+
+class Import(Context):
+    """The context each material and light module's `from_pbrt` is handed: the Context's readers, and what several
+    mappings share (the plugin modules reach the importer only through it)."""
+
+    def reflectance(self, entity: Entity, name: str, default: float) -> dict:
+        """A reflectance: a spectrum (an RGB in [0, 1]), a spectrum texture, or the number `default`."""
+        return materials.reflectance(self, entity, name, default)
+
+    def rough(self, material: Entity) -> dict:
+        """{"roughness": α} for a rough surface (pbrt's roughness remapped to the GGX α), {} for a smooth one."""
+        return materials.rough(self, material)
+
+    def ior(self, material: Entity) -> float | str:
+        """`eta`: a number, or a named glass spectrace has (its name)."""
+        return materials.ior(self, material)
+
+    def material(self, reference: Entity | str | None, location: Location) -> str | None:
+        """The TOML material name of a pbrt material (None for `interface`), each mapped once."""
+        return materials.material_name(self, reference, location)
+
+    def material_table(self, material: Entity) -> dict | None:
+        """The TOML table of a pbrt material (None for `interface`)."""
+        return materials.material_table(self, material)
+
+    def texture_table(self, texture: Entity) -> dict:
+        """The TOML table of a pbrt texture."""
+        return textures.texture_table(self, texture)
+
+    def environment_map(self, light: Entity, matrix: np.ndarray, scale: float) -> dict:
+        """The `envmap` table of an image infinite light, its map resampled and written beside the TOML."""
+        return lights.environment_map(self, light, matrix, scale)
+
+
+def scene_data(context: Context) -> dict:
+    """The scene data in the TOML format's structure; the context keeps the warnings, notes and files."""
+    if not context.scene.has_world:
+        raise SpectraceError("the file has no WorldBegin: is it a pbrt-v4 scene?", where=str(context.source))
+    data: dict = {}
+    camera(context, data)
+    integrator(context, data)
+    sampler(context, data)
+    shapes: list[dict] = []
+    lights: list[dict] = []
+    for index, shape in enumerate(context.scene.shapes):
+        if (table := shape_table(context, shape, index)) is not None:
+            context.origins[f"shapes[{len(shapes)}]"] = shape.entity.location
+            shapes.append(table)
+    objects: dict[str, dict] = {}
+    instances: list[dict] = []
+    placed: dict[str, str] = {}  # pbrt object -> its spectrace object
+    for use in context.scene.object_uses:
+        if use.name not in placed:
+            placed[use.name] = instanced_object(context, use.name, objects)
+        if objects[placed[use.name]]["shapes"]:
+            context.origins[f"instances[{len(instances)}]"] = use.location
+            transform = [{"matrix": (context.world @ use.world_from_instance).tolist()}]
+            instances.append({"object": placed[use.name], "transform": transform})
+    objects = {name: table for name, table in objects.items() if table["shapes"]}
+    for light in context.scene.lights:
+        context.origins[f"lights[{len(lights)}]"] = light.entity.location
+        lights.append(light_table(context, light))
+    if sum(light["type"] in ("constant", "envmap") for light in lights) > 1:
+        extra = [light.entity for light in context.scene.lights if light.entity.kind == "infinite"][1]
+        raise error(extra.location, "a second infinite light; spectrace takes one environment light")
+    if not shapes and not lights and not instances:
+        raise SpectraceError("the scene has no shapes or lights spectrace imports", where=str(context.source))
+    for entity in (
+        context.scene.camera,
+        context.scene.film,
+        context.scene.pixel_filter,
+        context.scene.sampler,
+        context.scene.integrator,
+    ):
+        if entity is not None:
+            context.read.add(id(entity))
+    for entity in context.scene.entities:
+        if id(entity) in context.read:
+            for parameter in entity.parameters:
+                if not parameter.used:
+                    context.warn(parameter.location, f'{entity.label()}: parameter "{parameter.label()}" not imported')
+    context.warnings, context.notes = grouped(context.warnings), grouped(context.notes)
+    if context.textures:
+        data["textures"] = context.textures
+    data["materials"] = context.materials
+    data["shapes"] = shapes
+    data["lights"] = lights
+    data["objects"] = objects
+    data["instances"] = instances
+    order = (
+        "camera",
+        "film",
+        "integrator",
+        "sampler",
+        "textures",
+        "materials",
+        "shapes",
+        "lights",
+        "objects",
+        "instances",
+    )
+    # materials stays even when empty: the scene format asks for the table.
+    return {key: data[key] for key in order if key in data and (key == "materials" or data[key] not in ([], {}))}
+
+
+def imported_error(context: Context, failure: SpectraceError, toml_path: Path) -> SpectraceError:
+    """The loader's complaint about the written TOML, told at the pbrt line the value came from."""
+    where = failure.where or ""
+    key = where.split(": ", 1)[1] if where.startswith(f"{toml_path}: ") else ""
+    matches = [p for p in context.origins if key == p or key.startswith((p + ".", p + "["))]
+    detail = f" (imported as {key})" if key else ""
+    if not matches:
+        return SpectraceError(f"the imported scene does not load: {failure.message}{detail}", where=str(context.source))
+    return error(context.origins[max(matches, key=len)], f"{failure.message}{detail}")
+
+
+# ---------------------------------------------------------------- public API
+
+
+def mesh_folder_name(toml_path: Path) -> str:
+    """The folder beside the TOML that holds the meshes and environment maps an import writes."""
+    return f"{toml_path.stem}_assets"
+
+
+def pbrt_scene_data(pbrt_path: str | Path, toml_path: str | Path | None = None) -> tuple[dict, Import]:
+    """(scene data in the TOML format's structure, the importer with its warnings, notes and meshes to write)."""
+    pbrt_path = Path(pbrt_path)
+    toml_path = Path(toml_path) if toml_path is not None else pbrt_path.with_suffix(".toml")
+    importer = Import(read_scene(pbrt_path), pbrt_path, toml_path.parent, mesh_folder_name(toml_path))
+    return scene_data(importer), importer
+
+
+def _write_image_file(path: Path, image: np.ndarray) -> None:
+    """An image the import made: a one-channel float TIFF for a `.tif` (a roughness: one number per texel), else
+    an OpenEXR."""
+    if path.suffix == ".tif":
+        from PIL import Image
+
+        Image.fromarray(image, mode="F").save(path)
+    else:
+        from spectrace.io.exr import write_exr
+
+        write_exr(path, image, None, {})
+
+
+def import_pbrt(
+    pbrt_path: str | Path, toml_path: str | Path, strict: bool = False, option: str = "the TOML file"
+) -> tuple[list[str], list[str]]:
+    """Write the spectrace TOML scene (and its folder of meshes) for a pbrt-v4 scene and check that it loads;
+    returns (warnings, notes). strict: every warning (something in the file not imported) is an error instead.
+    option: what errors about the output call it (the command line's --output).
+
+    The output is checked and locked first (spectrace.io.output_lock: a second import writing it is refused); the
+    TOML and its folder of meshes are replaced together, and only by a complete import whose TOML loads: a failed
+    import leaves an earlier one, TOML and folder, as it was."""
+    from spectrace.interop.toml_writer import lock_import
+
+    pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
+    check_output_file(toml_path, option, create_folders=True)
+    if toml_path.exists() and pbrt_path.exists() and toml_path.samefile(pbrt_path):
+        raise SpectraceError(
+            "is the pbrt scene being imported; writing it would destroy the input", where=str(toml_path)
+        )
+    with lock_import(toml_path, option, "spectrace import-pbrt"):
+        return _import_pbrt(pbrt_path, toml_path, strict, option)
+
+
+def _import_pbrt(pbrt_path: Path, toml_path: Path, strict: bool, option: str) -> tuple[list[str], list[str]]:
+    from spectrace.interop.toml_writer import non_finite_key, write_scene
+    from spectrace.scene import load_scene
+
+    data, importer = pbrt_scene_data(pbrt_path, toml_path)
+    if strict and importer.warnings:
+        raise SpectraceError(
+            f"{len(importer.warnings)} things not imported (--strict): " + "; ".join(importer.warnings),
+            where=str(pbrt_path),
+        )
+    header = "\n".join(
+        [
+            f"Imported from the pbrt-v4 scene {shown(pbrt_path.name, 200)} by `spectrace import-pbrt`.",
+            *(f"warning: {text}" for text in importer.warnings),
+            *(f"note: {text}" for text in importer.notes),
+        ]
+    )
+    if (key := non_finite_key(data)) is not None:
+        failure = SpectraceError(
+            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
+        )
+        raise imported_error(importer, failure, toml_path)
+    files: dict[str, Callable[[Path], object]] = {}
+    for name, mesh in importer.meshes.items():
+        files[f"{importer.mesh_folder}/{name}"] = partial(write_ply, mesh=mesh)
+    for name, image in importer.files.items():
+        files[f"{importer.mesh_folder}/{name}"] = partial(_write_image_file, image=image)
+
+    def check(temp: Path) -> None:
+        try:
+            load_scene(temp)
+        except SpectraceError as failure:
+            raise imported_error(importer, failure, temp) from None
+
+    try:
+        write_scene(toml_path, data, header, files, check, option, "spectrace import-pbrt")
+    except OSError as failure:
+        raise SpectraceError(
+            f"cannot write the TOML or its files ({failure.strerror or failure})", where=str(toml_path)
+        ) from None
+    return importer.warnings, importer.notes
+
+
+def load_pbrt_scene(pbrt_path: str | Path, strict: bool = False):
+    """A `Scene` from a pbrt-v4 file (through a temporary TOML file and mesh folder)."""
+    from spectrace.scene import load_scene
+
+    with tempfile.TemporaryDirectory(prefix="spectrace-pbrt-") as folder:
+        toml_path = Path(folder) / (Path(pbrt_path).stem + ".toml")
+        import_pbrt(pbrt_path, toml_path, strict=strict)
+        return load_scene(toml_path).with_overrides(source=Path(pbrt_path))

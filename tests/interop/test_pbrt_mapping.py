@@ -1,0 +1,113 @@
+"""Every material and light module maps pbrt-v4 or says why it does not: its PBRT_MATERIALS or PBRT_LIGHTS (with
+`from_pbrt`) or PBRT_NONE, so a new module cannot silently lack a mapping. Each declared pbrt material and light
+imports with pbrt-v4's defaults into a scene that loads as that module's, and the importer's list of what it takes
+(its refusals, the command's help) is the modules' declarations."""
+
+import re
+
+import numpy as np
+import pytest
+
+from plugin_mappings import assert_declares_mapping
+from spectrace.errors import SpectraceError
+from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
+from spectrace.io.exr import write_exr
+from spectrace.lights import LIGHTS, area, envmap
+from spectrace.materials import MATERIALS
+
+MODULES = list(MATERIALS.values())
+LIGHT_MODULES = [*LIGHTS.values(), area]
+CAMERA = """LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 30
+Film "rgb" "integer xresolution" 8 "integer yresolution" 6
+WorldBegin
+"""
+HEADER = CAMERA + 'LightSource "infinite" "rgb L" [1 1 1]\n'
+QUAD = 'Shape "trianglemesh" "point3 P" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] "integer indices" [0 1 2  0 2 3]\n'
+# pbrt's mix names two materials; of two different kinds, so that it stays a mix (two diffuse ones blend).
+_MIX_PARTS = (
+    'MakeNamedMaterial "first" "string type" "diffuse"\n'
+    'MakeNamedMaterial "second" "string type" "conductor"\n'
+    'Material "mix" "string materials" ["first" "second"]\n'
+)
+
+
+def _declared(modules, names: str = "PBRT_MATERIALS") -> list[tuple[str, object]]:
+    return [(kind, module) for module in modules for kind in getattr(module, names)]
+
+
+_LIGHTS = _declared(LIGHT_MODULES, "PBRT_LIGHTS")
+
+
+@pytest.mark.parametrize("module", MODULES, ids=[m.NAME for m in MODULES])
+def test_every_material_declares_its_pbrt_materials_or_why_it_has_none(module):
+    assert_declares_mapping(module, "PBRT_MATERIALS", "from_pbrt", "PBRT_NONE")
+
+
+def test_no_pbrt_material_is_claimed_twice():
+    kinds = [kind for kind, _ in _declared(MODULES)]
+    assert len(kinds) == len(set(kinds)), kinds
+
+
+@pytest.mark.parametrize("kind, module", _declared(MODULES), ids=[k for k, _ in _declared(MODULES)])
+def test_each_declared_pbrt_material_imports_with_pbrts_defaults_as_its_module(tmp_path, kind, module):
+    path = tmp_path / "scene.pbrt"
+    material = _MIX_PARTS if kind == "mix" else f'Material "{kind}"\n'
+    path.write_text(HEADER + material + QUAD)
+    (shape,) = load_pbrt_scene(path).shapes
+    assert isinstance(shape.material, module.MODEL)
+
+
+def test_the_refusal_lists_the_declared_materials(tmp_path):
+    """An unknown material is refused naming what the import takes: the modules' declarations and `interface`, a
+    boundary without a surface."""
+    path = tmp_path / "scene.pbrt"
+    path.write_text(HEADER + 'Material "no-such-material"\n' + QUAD)
+    with pytest.raises(SpectraceError) as caught:
+        pbrt_scene_data(path)
+    listed = re.search(r"\(spectrace imports (.*)\)$", caught.value.message).group(1).split(", ")
+    assert set(listed) == {kind for kind, _ in _declared(MODULES)} | {"interface"}
+
+
+def test_the_commands_help_lists_every_declared_material():
+    from typer.testing import CliRunner
+
+    from spectrace.cli import app
+
+    result = CliRunner().invoke(app, ["import-pbrt", "--help"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    declared = {kind for kind, _ in [*_declared(MODULES), *_LIGHTS]}
+    assert declared <= set(re.findall(r"[\w-]+", result.output))
+
+
+@pytest.mark.parametrize("module", LIGHT_MODULES, ids=[m.NAME for m in LIGHT_MODULES])
+def test_every_light_declares_its_pbrt_lights_or_why_it_has_none(module):
+    assert_declares_mapping(module, "PBRT_LIGHTS", "from_pbrt", "PBRT_NONE")
+
+
+@pytest.mark.parametrize("kind, module", _LIGHTS, ids=[f"{k}-{m.NAME}" for k, m in _LIGHTS])
+def test_each_declared_pbrt_light_imports_with_pbrts_defaults_as_its_module(tmp_path, kind, module):
+    """pbrt's `infinite` is two of spectrace's lights: constant without an image, envmap with one (an equal-area
+    square map, as pbrt-v4 takes); an area light is on a shape."""
+    path = tmp_path / "scene.pbrt"
+    if module is area:
+        path.write_text(CAMERA + f'AreaLightSource "{kind}"\n' + QUAD)
+        (shape,) = load_pbrt_scene(path).shapes
+        assert isinstance(shape.emitter, area.MODEL)
+        return
+    light = f'LightSource "{kind}"'
+    if module is envmap:
+        write_exr(tmp_path / "sky.exr", np.ones((8, 8, 3), np.float32), None, {})
+        light += ' "string filename" "sky.exr"'
+    path.write_text(CAMERA + light + "\n" + QUAD)
+    (imported,) = load_pbrt_scene(path).lights
+    assert isinstance(imported, module.MODEL)
+
+
+def test_the_light_refusal_lists_the_declared_lights(tmp_path):
+    path = tmp_path / "scene.pbrt"
+    path.write_text(CAMERA + 'LightSource "goniometric"\n' + QUAD)
+    with pytest.raises(SpectraceError) as caught:
+        pbrt_scene_data(path)
+    listed = re.search(r"spectrace imports (.*) and diffuse area lights$", caught.value.message).group(1).split(", ")
+    assert sorted(listed) == sorted({kind for kind, module in _LIGHTS if module is not area})
