@@ -23,6 +23,8 @@ def emission(ctx: ImportContext, properties: dict, key: str) -> dict | None:
 
 
 def light(ctx: ImportContext, element: Element) -> dict | None:
+    """An <emitter> child of the scene as a [[lights]] table, by its light module; None where it is not imported
+    (recorded)."""
     kind = ctx.kind(element)
     properties = ctx.properties(element)
     matrix = to_world(ctx, properties)

@@ -16,6 +16,7 @@ MITSUBA_AOVS = {"albedo": "albedo", "depth": "depth", "position": "position", "s
 
 
 def integrator(ctx: ImportContext, element: Element, data: dict) -> None:
+    """The <integrator> as the [integrator] table of `data` (the module's docstring says what each becomes)."""
     kind = ctx.kind(element)
     if kind not in SUPPORTED["integrator"]:
         ctx.unsupported_object(element)

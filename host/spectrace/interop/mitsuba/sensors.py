@@ -21,13 +21,13 @@ from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
 # hdrfilm properties about the file Mitsuba writes, not the image: nothing to import.
 FILM_STORAGE = ("pixel_format", "component_format", "file_format", "banner")
-
 FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # Mitsuba's focal_length is in 35 mm film equivalent (36 x 24 mm)
 MITSUBA_DEFAULT_FILM = (768, 576)  # hdrfilm's default width and height
 MITSUBA_DEFAULT_FOCAL_LENGTH_MM = 50.0  # the perspective sensor's, when neither fov nor focal_length is given
 
 
 def sensor(ctx: ImportContext, element: Element, data: dict) -> None:
+    """The sensor as the [camera] table of `data`, its film as [film] and its sampler as [sampler]."""
     kind = ctx.kind(element)
     if kind not in CAMERA_PLUGINS:
         ctx.unsupported_object(element)

@@ -24,6 +24,8 @@ V_UP_SHAPES = ("rectangle", "ply", "serialized")
 
 
 def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
+    """A <shape> as a [[shapes]] table with its material, emitter and interior; None where it is not imported
+    (recorded)."""
     kind = ctx.kind(element)
     if kind not in SUPPORTED["shape"]:
         ctx.unsupported_object(element)
