@@ -90,7 +90,7 @@ def assert_renders_like_mitsuba(
     `replica_spp` samples each; their linear sRGB must agree (assert_replicas_agree). Returns Mitsuba's images, for
     the caller's check that the comparison saw what it was meant to."""
     from spectrace.engine.renderer import Renderer
-    from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+    from spectrace.interop.mitsuba import load_mitsuba_scene
     from spectrace.spectral import xyz_to_linear_srgb
 
     scene = mi.load_file(str(path))

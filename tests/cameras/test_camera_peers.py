@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba, spectrace_replicas
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.pixel_filters import PixelFilter
 from spectrace.spectral import xyz_to_linear_srgb
 

@@ -145,7 +145,7 @@ _XML = """<scene version="3.0.0">
 
 
 def test_mitsuba_import_places_the_mesh_as_mitsuba_does(tmp_path, mitsuba_scalar_spectral):
-    from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+    from spectrace.interop.mitsuba import load_mitsuba_scene
 
     mi = mitsuba_scalar_spectral
     write_serialized(tmp_path / "parts.serialized", _meshes())

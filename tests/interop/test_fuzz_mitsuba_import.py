@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from fuzz_settings import fuzz_settings
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import import_mitsuba
+from spectrace.interop.mitsuba import import_mitsuba
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "mitsuba"
 BASES = [(DATA / name).read_text() for name in ("cornell_box.xml", "features.xml", "textures.xml")]

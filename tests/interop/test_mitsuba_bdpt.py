@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
-from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+from spectrace.interop.mitsuba import mitsuba_scene_data
 
 
 def _xml(folder: Path, size: int, integrator: str) -> Path:

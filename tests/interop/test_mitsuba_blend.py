@@ -10,8 +10,8 @@ import pytest
 
 from replica_agreement import assert_renders_like_mitsuba, assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.mitsuba_export import mitsuba_film_xyz, scene_to_mitsuba_dict
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba.export import mitsuba_film_xyz, scene_to_mitsuba_dict
 from spectrace.scene.model import MixMaterial
 
 DIFFUSE = '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.15, 0.1"/></bsdf>'

@@ -6,7 +6,7 @@ import pytest
 
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.spectral import xyz_to_linear_srgb
 
 SIZE = 16

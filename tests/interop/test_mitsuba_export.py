@@ -12,7 +12,7 @@ from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry.primitives import rectangle, sphere
 from spectrace.geometry.transforms import apply_transform
-from spectrace.interop.mitsuba_export import mitsuba_film_xyz, scene_to_mitsuba_dict, write_binary_ply
+from spectrace.interop.mitsuba.export import mitsuba_film_xyz, scene_to_mitsuba_dict, write_binary_ply
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, SpotLight
@@ -248,7 +248,7 @@ def test_each_exported_bitmap_gets_its_own_image_file(tmp_path, monkeypatch, mit
     are often a temporary (a grey image repeated into RGB, float64 texels made float32), freed once written, whose
     id() the next one may get: every bitmap must still name a file of its own values. The second round makes every
     id() the same, as a freed array's is for the next one, since the interpreter reuses ids only at times."""
-    from spectrace.interop import mitsuba_export
+    from spectrace.interop.mitsuba import export as mitsuba_export
     from spectrace.io.exr import read_exr
     from spectrace.textures import bitmap
 

@@ -9,7 +9,7 @@ import pytest
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.spectral import xyz_to_linear_srgb
 
 SIZE = 32
@@ -47,7 +47,7 @@ def test_far_clip_is_the_cameras(tmp_path):
 
 @pytest.mark.peer
 def test_far_clip_is_exported(tmp_path, mitsuba_scalar_spectral):
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
     entry = scene_to_mitsuba_dict(load_mitsuba_scene(_xml(tmp_path, "4.2")), tmp_path)
     assert entry["sensor"]["far_clip"] == 4.2

@@ -13,7 +13,7 @@ from cli_runner import run_in_process as _run_in_process
 from cli_runner import run_spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.spectral import spectrum_to_xyz, xyz_to_linear_srgb
 from spectrace.spectral.blackbody import planck_radiance
 
@@ -666,7 +666,7 @@ def test_a_read_only_folder_is_refused_before_the_import(tmp_path, monkeypatch, 
 
 def test_a_failed_check_leaves_the_existing_output(tmp_path):
     """The import succeeds but the loader refuses the result (a film too large): the old file stays."""
-    from spectrace.interop.mitsuba_xml import import_mitsuba
+    from spectrace.interop.mitsuba import import_mitsuba
 
     sensor = """<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="100000"/></film>
         </sensor>"""
@@ -687,7 +687,7 @@ def test_numbers_are_written_as_in_the_xml_and_read_back_exactly(tmp_path):
     as 3.9 too, and reads back as the same float32. Values that are not float32 read back as the same double."""
     import tomllib
 
-    from spectrace.interop.mitsuba_xml import import_mitsuba
+    from spectrace.interop.mitsuba import import_mitsuba
 
     sensor = """<sensor type="perspective"><float name="fov" value="40"/>
         <transform name="to_world"><lookat origin="0, 0, 3.9" target="0, 0, 0" up="0, 1, 0"/></transform>

@@ -10,7 +10,7 @@ import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 
 GROUP = """
 <shape type="shapegroup" id="crate">
@@ -184,9 +184,9 @@ def test_instanced_scene_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_s
 @pytest.mark.peer
 @pytest.mark.parametrize("group", ["meshes", "analytic"])
 def test_exported_instances_are_mitsubas_shapegroups_again(tmp_path, mitsuba_scalar_spectral, group):
-    """The imported scene exported back (spectrace.interop.mitsuba_export: objects as shapegroups, instances as
+    """The imported scene exported back (spectrace.interop.mitsuba.export: objects as shapegroups, instances as
     instances) meets every ray where Mitsuba's own load of the file does."""
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
     mi = mitsuba_scalar_spectral
     # The export covers the materials the peer benchmark uses: the gold card and the plastic ball become diffuse.

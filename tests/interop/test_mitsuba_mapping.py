@@ -11,7 +11,7 @@ import pytest
 
 from plugin_mappings import assert_declares_mapping
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.spectral import spectrum_to_xyz
@@ -112,7 +112,7 @@ def test_the_commands_help_lists_every_plugin_the_importer_takes():
     from typer.testing import CliRunner
 
     from spectrace.cli import app
-    from spectrace.interop.mitsuba_xml import SUPPORTED
+    from spectrace.interop.mitsuba.plugins import SUPPORTED
 
     result = CliRunner().invoke(app, ["import-mitsuba", "--help"], env={"COLUMNS": "200"})
     assert result.exit_code == 0, result.output
@@ -120,3 +120,23 @@ def test_the_commands_help_lists_every_plugin_the_importer_takes():
     plugins = {plugin for plugin, _ in _plugins([*MATERIALS.values(), *LIGHTS.values(), area])}
     assert plugins <= {kind for kinds in SUPPORTED.values() for kind in kinds}
     assert {kind for kinds in SUPPORTED.values() for kind in kinds} <= words
+
+
+def test_the_importer_offers_every_helper_a_plugin_mapping_calls(tmp_path):
+    """A material's, light's or texture's `from_mitsuba` calls helpers on the importer it is given (`importer.spectrum`,
+    `importer.roughness`, ...), which live in the kinds' modules of spectrace.interop.mitsuba: each name a mapping
+    uses must be on the importer, or that plugin would fail only when a scene uses it."""
+    import ast
+    import inspect
+
+    from spectrace.interop.mitsuba.importer import MitsubaImporter
+    from spectrace.textures import TEXTURES
+
+    used: dict[str, str] = {}
+    for module in {*MODULES, *TEXTURES.values()}:
+        for node in ast.walk(ast.parse(inspect.getsource(module))):
+            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "importer":
+                used.setdefault(node.attr, module.__name__)
+    importer = MitsubaImporter(tmp_path / "scene.xml", tmp_path, {})
+    assert {"spectrum", "roughness", "fail", "unsupported_plugin"} <= used.keys()  # the walk sees the mappings' calls
+    assert {name: module for name, module in used.items() if not hasattr(importer, name)} == {}

@@ -9,7 +9,7 @@ import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+from spectrace.interop.mitsuba import mitsuba_scene_data
 
 MEDIUM = """<medium type="homogeneous" name="interior">
     <float name="sigma_t" value="2"/><float name="albedo" value="0.8"/><float name="scale" value="1.5"/>

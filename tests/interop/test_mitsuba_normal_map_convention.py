@@ -14,8 +14,8 @@ import pytest
 from PIL import Image
 
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.mitsuba_export import mitsuba_film_xyz
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+from spectrace.interop.mitsuba import load_mitsuba_scene
+from spectrace.interop.mitsuba.export import mitsuba_film_xyz
 
 SCENE = """<scene version="3.0.0">
  <integrator type="path"><integer name="max_depth" value="2"/></integrator>

@@ -11,7 +11,7 @@ import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
 from spectrace.geometry import primitives
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.scene.model import Scene
 from spectrace.spectral import xyz_to_linear_srgb
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
-from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+from spectrace.interop.mitsuba import mitsuba_scene_data
 
 TINT = '<rgb name="specular_reflectance" value="0.9, 0.5, 0.1"/>'
 

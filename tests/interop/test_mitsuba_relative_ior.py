@@ -7,7 +7,7 @@ whose normals are flipped (the same interface seen from the other side), and bot
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 
 # (bsdf type, int_ior, ext_ior, the sphere's flip_normals, the ior spectrace must import)
 CASES = {

@@ -9,7 +9,7 @@ from PIL import Image
 
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.spectral import xyz_to_linear_srgb
 from spectrace.textures.bitmap import make as bitmap
 

@@ -5,7 +5,7 @@ s wave, likewise p), and the sphere renders as Mitsuba 3 renders the same XML.""
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 
 
 def _xml(folder, size: int):

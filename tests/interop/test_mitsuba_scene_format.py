@@ -11,8 +11,8 @@ import pytest
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
-from spectrace.interop.mitsuba_tree import camel_to_snake
-from spectrace.interop.mitsuba_xml import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba.tree import camel_to_snake
 from spectrace.spectral import reflectance_to_xyz, xyz_to_linear_srgb
 from spectrace.spectral.illuminants import cie_illuminant
 from spectrace.spectral.spectrum import Spectrum

@@ -9,7 +9,7 @@ import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
 from spectrace.core.contract import ANALYTIC_SHAPE_DTYPE
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+from spectrace.interop.mitsuba import load_mitsuba_scene
 
 SHAPES = """
 <shape type="disk" id="floor">
@@ -179,7 +179,7 @@ def test_flip_normals_turns_the_analytic_shapes_as_in_mitsuba(tmp_path, kernel_r
 )
 def test_bad_cylinders_are_one_line_naming_the_element(tmp_path, body, path, says):
     from spectrace.errors import SpectraceError
-    from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+    from spectrace.interop.mitsuba import mitsuba_scene_data
 
     xml = tmp_path / "bad.xml"
     xml.write_text(f'<scene version="3.0.0"><sensor type="perspective"/>{body}</scene>')

@@ -8,7 +8,7 @@ import pytest
 
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import import_mitsuba, load_mitsuba_scene
+from spectrace.interop.mitsuba import import_mitsuba, load_mitsuba_scene
 from spectrace.scene import load_scene
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 

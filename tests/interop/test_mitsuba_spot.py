@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
-from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+from spectrace.interop.mitsuba import mitsuba_scene_data
 
 # The spot 1 unit above a floor, tilted 20° so both edges of the transition (10° to 35°) land on the floor.
 SPOT = """<emitter type="spot">

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+from spectrace.interop.mitsuba import mitsuba_scene_data
 
 
 def _xml(tmp_path, integrator: str) -> str:

@@ -19,8 +19,8 @@ from replica_agreement import spectrace_replicas
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
-from spectrace.interop.mitsuba_export import mitsuba_film_xyz
-from spectrace.interop.mitsuba_xml import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba.export import mitsuba_film_xyz
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
 
@@ -900,7 +900,7 @@ def test_exported_textures_import_back_the_same(folder, mitsuba_scalar_spectral)
     """COMPARISON imported, exported (scene_to_mitsuba_dict: meshes as PLY files with spectrace's uv, bitmaps as
     float OpenEXR files), written to XML by Mitsuba's own serialiser and imported again: each shape's vertices look
     its texture up at the same st, with the same texels, wrap and filter, and the checkerboard's sides the same."""
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
     mi = mitsuba_scalar_spectral
     _uv_sphere_obj(folder / "ball.obj")
@@ -937,7 +937,7 @@ def test_what_mitsuba_textures_cannot_match_is_refused(tmp_path, mitsuba_scalar_
     """A spectral texture (Mitsuba's bitmap holds RGB), trilinear filtering (Mitsuba's bitmap has no MIP levels) and
     scale and mix textures (Mitsuba 3 has neither) are refused in one line, naming the texture."""
     import spectrace
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
     from spectrace.scene.model import Camera, Scene
 
     spectral = spectrace.spectral_texture(np.full((2, 2, 3), 0.5), [450.0, 550.0, 650.0])

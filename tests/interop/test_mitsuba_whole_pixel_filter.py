@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.spectral import xyz_to_linear_srgb
 
 

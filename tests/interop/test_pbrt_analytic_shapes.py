@@ -284,7 +284,7 @@ def test_disk_with_pbrt_uv_exports_to_mitsuba_as_triangles_carrying_them(tmp_pat
     vertices carry pbrt's u = φ/2π, v = 1 − r/radius (φ in pbrt's object space, here its world)."""
     from dataclasses import replace
 
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
     header = HEADER.replace("WorldBegin", 'PixelFilter "box"\nWorldBegin')
     scene = load_pbrt_scene(_write(tmp_path, MARKER + CHECKER + 'Shape "disk" "float radius" 1.5\n', header))

@@ -799,7 +799,7 @@ AttributeEnd
 
 def test_scene_renders_as_the_same_scene_imported_from_mitsuba_xml(tmp_path, device):
     from spectrace.engine.renderer import Renderer
-    from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+    from spectrace.interop.mitsuba import load_mitsuba_scene
 
     (tmp_path / "scene.xml").write_text(MITSUBA_XML)
     (tmp_path / "scene.pbrt").write_text(PBRT_SCENE)

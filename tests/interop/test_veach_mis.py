@@ -6,8 +6,8 @@ import pytest
 
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.mitsuba_export import mitsuba_film_xyz, scene_to_mitsuba_dict
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+from spectrace.interop.mitsuba import load_mitsuba_scene
+from spectrace.interop.mitsuba.export import mitsuba_film_xyz, scene_to_mitsuba_dict
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 

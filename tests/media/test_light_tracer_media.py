@@ -10,7 +10,7 @@ import pytest
 
 from replica_agreement import spectrace_replicas
 from spectrace.engine.renderer import Renderer
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+from spectrace.interop.mitsuba import load_mitsuba_scene
 from spectrace.scene import load_scene
 
 SIGMA_A = 0.8

@@ -181,7 +181,7 @@ def _mitsuba_xml(tmp_path, kind: str):
 
 def test_mitsuba_volpath_imports_uncounted_thin_passes(tmp_path):
     """Mitsuba's volpath counts no pass through a thin sheet (a null lobe there), its path tracer does."""
-    from spectrace.interop.mitsuba_xml import mitsuba_scene_data
+    from spectrace.interop.mitsuba import mitsuba_scene_data
 
     for kind, counted in (("volpath", False), ("path", True)):
         data, _ = mitsuba_scene_data(_mitsuba_xml(tmp_path, kind))
@@ -190,8 +190,8 @@ def test_mitsuba_volpath_imports_uncounted_thin_passes(tmp_path):
 
 @pytest.mark.peer
 def test_uncounted_thin_passes_export_as_volpath(tmp_path, mitsuba_scalar_spectral):
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
-    from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+    from spectrace.interop.mitsuba import load_mitsuba_scene
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
     for kind in ("volpath", "path"):
         exported = scene_to_mitsuba_dict(load_mitsuba_scene(_mitsuba_xml(tmp_path, kind)), tmp_path / "meshes")

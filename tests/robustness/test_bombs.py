@@ -376,7 +376,7 @@ def test_a_pbrt_include_cycle_is_refused_naming_the_chain(tmp_path):
 
 def test_the_included_text_is_bounded_in_bytes(tmp_path, monkeypatch):
     """Each reading counts: one 600-byte file read three times passes a 1500-byte budget on its third reading."""
-    from spectrace.interop.mitsuba_tree import read_scene as read_mitsuba
+    from spectrace.interop.mitsuba.tree import read_scene as read_mitsuba
     from spectrace.interop.pbrt.parser import parse_directives
 
     monkeypatch.setattr(inclusions_module, "MAX_INCLUDED_BYTES", 1500)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spectrace.interop.mitsuba_xml import load_mitsuba_scene
+from spectrace.interop.mitsuba import load_mitsuba_scene
 from spectrace.interop.pbrt import load_pbrt_scene
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene

@@ -151,7 +151,7 @@ def run_build_bench(
         else:
             mesh = displaced_sphere(subdivisions_for(triangles))
             files = [Path(folder) / "mesh.ply"]
-            from spectrace.interop.mitsuba_export import write_binary_ply
+            from spectrace.interop.mitsuba.export import write_binary_ply
 
             write_binary_ply(TriangleMesh(mesh.vertices, mesh.faces), files[0])  # positions only, as Mitsuba times it
             source = "displaced icosphere"

@@ -289,7 +289,7 @@ class MitsubaContestant:
         import drjit as dr
         import mitsuba as mi
 
-        from spectrace.interop.mitsuba_export import mitsuba_film_xyz
+        from spectrace.interop.mitsuba.export import mitsuba_film_xyz
 
         if self.xyz is None:
             raise RuntimeError("result() needs a timed render first (render_once)")

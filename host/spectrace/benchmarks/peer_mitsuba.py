@@ -1,6 +1,6 @@
 """`spectrace bench peer`: the same scene rendered by spectrace and by Mitsuba 3, timed side by side.
 
-Both render the scene exported by spectrace.interop.mitsuba_export (same triangles, camera, measured spectra,
+Both render the scene exported by spectrace.interop.mitsuba.export (same triangles, camera, measured spectra,
 resolution, spp, max_depth and Russian roulette start). Figures are wall-clock times of warm renders, film
 read-back included, the best of `repeats` identical renders (default 2) in rounds that alternate spectrace and
 Mitsuba, as the CPU may be shared. spectrace's renders follow its kernel build and one 1-spp warm-up pass;
@@ -106,7 +106,7 @@ def run_peer_bench(
     peer_sampler: str = "independent",
 ) -> dict:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant, usable_variants
-    from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
     scene = bench_scene(scene_path, size, spp, max_depth)
     usable = usable_variants(variants)  # before any render: it may set DRJIT_LIBLLVM_PATH

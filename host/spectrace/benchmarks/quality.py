@@ -155,7 +155,7 @@ def run_quality_bench(
     else:
         try:
             from spectrace.benchmarks.mitsuba_runtime import render_with_mitsuba, usable_variants
-            from spectrace.interop.mitsuba_export import scene_to_mitsuba_dict
+            from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
             usable = usable_variants()
         except ImportError:

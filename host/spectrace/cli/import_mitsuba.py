@@ -8,7 +8,7 @@ import typer
 from rich.console import Console
 
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba_xml import WARNING_PREFIX, import_mitsuba, supported_text
+from spectrace.interop.mitsuba import WARNING_PREFIX, import_mitsuba, supported_text
 
 
 def import_mitsuba_command(

@@ -1,7 +1,7 @@
 """Scene interchange with other renderers: Mitsuba 3 XML import (see docs/mitsuba.md) and pbrt-v4 import (see
 docs/pbrt.md)."""
 
-from spectrace.interop.mitsuba_xml import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
+from spectrace.interop.mitsuba import import_mitsuba, load_mitsuba_scene, mitsuba_scene_data
 from spectrace.interop.pbrt import import_pbrt, load_pbrt_scene, pbrt_scene_data
 
 __all__ = [
