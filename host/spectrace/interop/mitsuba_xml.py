@@ -50,9 +50,9 @@ import numpy as np
 from spectrace.cameras import CAMERAS
 from spectrace.core import limits
 from spectrace.core.parameters import DISTRIBUTIONS, ROUGHNESS_RANGE
-from spectrace.engine.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.transforms import transform_matrix
+from spectrace.integrators.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.interop.mitsuba_tree import (
     Element,
     SceneTree,
@@ -1571,7 +1571,7 @@ class MitsubaImporter:
             properties.understood(*_with_snake_case("lightImage", "sampleDirect", "samples_per_pass"))
         elif kind in ("sppm", "photonmapper"):
             # Mitsuba 0.6's photon mappers: spectrace's sppm, which converges to the same image; the photon counts,
-            # radii and lookup sizes are its own (spectrace.engine.sppm), so they are noted, not followed.
+            # radii and lookup sizes are its own (spectrace.integrators.sppm), so they are noted, not followed.
             settings["type"] = "sppm"
             own = _with_snake_case(  # a 0.x file's names arrive upgraded to snake_case
                 "photonCount", "initialRadius", "alpha", "granularity", "maxPasses", "directSamples",
@@ -1741,7 +1741,7 @@ class MitsubaImporter:
         return kept | {key: data[key] for key in ("objects", "instances") if data[key]}
 
     def whole_pixel_filter(self, data: dict) -> None:
-        """spectrace's bdpt and sppm estimate whole pixels (spectrace.engine.light_tracer, .sppm): a film filter
+        """spectrace's bdpt and sppm estimate whole pixels (spectrace.integrators.light, .sppm): a film filter
         other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
         film, integrator = data.get("film"), data.get("integrator", {})
         if film is None or integrator.get("type") not in ("bdpt", "sppm") or film["filter"]["type"] == "box":

@@ -26,10 +26,12 @@ from spectrace.cameras import CAMERAS
 from spectrace.cameras import shared as camera_shared
 from spectrace.core import limits
 from spectrace.core.parameters import DISTRIBUTIONS, Parameter
+from spectrace.integrators import INTEGRATORS, settings_problem
+from spectrace.integrators.bdpt import MAX_PIXELS_PER_LIGHT_PATH
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
 from spectrace.pixel_filters import FILTERS
-from spectrace.scene.model import DEFAULT_SAMPLER, IntegratorType, SamplerType
+from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
@@ -47,8 +49,14 @@ class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
+if TYPE_CHECKING:
+    IntegratorName: TypeAlias = str
+else:  # the registry's names, as a Literal: pydantic lists them when another is given
+    IntegratorName = Literal[tuple(INTEGRATORS)]
+
+
 class IntegratorSpec(Strict):
-    type: IntegratorType = "path"
+    type: IntegratorName = "path"
     max_depth: int = Field(
         default=8, ge=-1, le=limits.MAX_DEPTH, description="path segments from the camera; -1 = unbounded"
     )
@@ -71,7 +79,7 @@ class IntegratorSpec(Strict):
     pixels_per_light_path: int | None = Field(
         default=None,
         description="bdpt only: neighbouring pixels whose camera subpaths share one light subpath, 1.."
-        f"{limits.MAX_PIXELS_PER_LIGHT_PATH}; absent: 4 where every surface is Lambertian and no medium fills a shape, "
+        f"{MAX_PIXELS_PER_LIGHT_PATH}; absent: 4 where every surface is Lambertian and no medium fills a shape, "
         "2 otherwise (docs/integrators.md)",
     )
 
@@ -83,10 +91,8 @@ class IntegratorSpec(Strict):
         return value
 
     @model_validator(mode="after")
-    def _thin_passes_for_path_only(self) -> "IntegratorSpec":
-        if problem := limits.count_thin_passes_problem(self.type, self.count_thin_passes):
-            raise ValueError(problem)
-        if problem := limits.pixels_per_light_path_problem(self.type, self.pixels_per_light_path):
+    def _keys_of_this_integrator(self) -> "IntegratorSpec":
+        if problem := settings_problem(self.type, self):
             raise ValueError(problem)
         return self
 
