@@ -16,7 +16,9 @@ PIXELS_PER_LIGHT_PATH = Parameter(
     "int",
     default=None,
     range=Range(1, MAX_PIXELS_PER_LIGHT_PATH),
-    doc="neighbouring pixels whose camera subpaths share one light subpath; absent: chosen from the scene",
+    doc=f"neighbouring pixels whose camera subpaths share one light subpath, 1..{MAX_PIXELS_PER_LIGHT_PATH}; absent: "
+    "4 where every surface is Lambertian and no medium fills a shape, 2 otherwise (docs/integrators.md)",
+    schema_range=False,  # spectrace.integrators.value_problem says "1..16", whatever integrator the scene names
 )
 PARAMETERS = (*SHARED_PARAMETERS, PIXELS_PER_LIGHT_PATH)
 PROGRAMS = {"megakernel": "integrator_bdpt.cl"}
