@@ -1,6 +1,7 @@
 """The white furnace for every integrator of the registry (spectrace.integrators.INTEGRATORS) and for every material
 of the registry (spectrace.materials.MATERIALS), smooth and rough where it has a roughness; and each integrator
-refuses exactly the features it declares (REFUSES), in one line that names it.
+refuses exactly the features it declares (REFUSES), in one line that names it, and tiles and checkpoints as it
+declares (SPLATS, CHECKPOINT_PROBLEM).
 
 One white Lambertian sphere in a uniform environment of radiance 1 is the closed form every integrator renders: a
 convex surface sees only the environment, so the light arriving directly is all there is and the image's mean Y is
@@ -34,7 +35,9 @@ import pytest
 
 import spectrace
 from replica_agreement import spectrace_replicas
+from spectrace.engine.checkpoint import read_checkpoint, save_checkpoint
 from spectrace.engine.renderer import Renderer
+from spectrace.engine.tiles import whole_film_rows
 from spectrace.errors import SpectraceError
 from spectrace.integrators import INTEGRATORS
 from spectrace.integrators.base import FEATURES
@@ -231,6 +234,33 @@ def test_the_renderer_refuses_what_its_integrator_does_before_building_a_program
     with pytest.raises(SpectraceError) as refused:
         Renderer(scene, device, spectral_bins=bands)
     assert str(refused.value).endswith(expected)
+
+
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+def test_each_integrator_refuses_tiles_and_checkpoints_as_it_declares(device, integrator, tmp_path):
+    """SPLATS (its contributions land in any pixel): a tile of the film is refused, by the renderer and by a tiled
+    render's plan; CHECKPOINT_PROBLEM: a checkpoint is refused with that line."""
+    plugin = INTEGRATORS[integrator]
+    scene = _lit_sphere(integrator)
+    tile = Renderer(scene, device)
+    tile.pixel_range = (0, tile.pixel_count // 2)
+    if plugin.SPLATS is None:
+        tile.run_pass(1)
+        assert whole_film_rows(scene, 4) == 4
+    else:
+        with pytest.raises(SpectraceError, match=f"its {plugin.SPLATS} land in any pixel"):
+            tile.run_pass(1)
+        with pytest.raises(SpectraceError, match="renders the whole film as one tile"):
+            whole_film_rows(scene, 4)
+    whole = Renderer(scene, device)
+    whole.run_pass(1)
+    if plugin.CHECKPOINT_PROBLEM is None:
+        save_checkpoint(tmp_path / "state.npz", whole)
+        assert read_checkpoint(tmp_path / "state.npz").state.samples_done == 1
+    else:
+        with pytest.raises(SpectraceError) as refused:
+            save_checkpoint(tmp_path / "state.npz", whole)
+        assert str(refused.value) == plugin.CHECKPOINT_PROBLEM and not (tmp_path / "state.npz").exists()
 
 
 def test_every_material_has_a_furnace_case():
