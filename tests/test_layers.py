@@ -74,6 +74,20 @@ def test_plugins_never_import_the_engine_the_scene_or_the_device_layer():
     assert _violations(PLUGINS, above) == []
 
 
+def test_integrators_are_handed_their_renderer_and_import_no_layer_above_the_plugins():
+    """An integrator reads the scene's fields and runs its passes through what the renderer hands it
+    (spectrace.integrators.base.RenderHost); the scene layer imports the integrator registry for its names."""
+    above = (
+        "spectrace.engine",
+        "spectrace.scene",
+        "spectrace.device",
+        "spectrace.film",
+        "spectrace.api",
+        "spectrace.cli",
+    )
+    assert _violations(("spectrace.integrators",), above) == []
+
+
 def test_the_device_layer_reads_no_registry_and_no_scene():
     """Kernel builds are handed the registries' generated headers and codes (GeneratedSources); the device layer
     knows OpenCL runtimes and the contract, nothing of what is rendered."""

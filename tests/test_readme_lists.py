@@ -7,10 +7,10 @@ from pathlib import Path
 import pytest
 
 from spectrace.cameras import CAMERAS
+from spectrace.integrators import INTEGRATORS
 from spectrace.lights import LIGHTS
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PIXEL_FILTERS
-from spectrace.scene.model import INTEGRATOR_TYPES
 from spectrace.textures import TEXTURES
 
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -18,7 +18,7 @@ README = Path(__file__).resolve().parents[1] / "README.md"
 REGISTRIES = {
     "materials": list(MATERIALS),
     "lights": list(LIGHTS),
-    "integrators": list(INTEGRATOR_TYPES),
+    "integrators": list(INTEGRATORS),
     "cameras": list(CAMERAS),
     "pixel filters": list(PIXEL_FILTERS),
     "textures": list(TEXTURES),

@@ -13,15 +13,16 @@ import pytest
 
 from spectrace import resources
 from spectrace.device.program_cache import _with_contract, build_options
-from spectrace.engine.renderer import INTEGRATOR_PROGRAMS, sampler_defines
+from spectrace.engine.renderer import sampler_defines
 from spectrace.film import spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines
+from spectrace.integrators import INTEGRATORS
 from spectrace.materials import generated_sources
 from spectrace.scene.model import SAMPLER_TYPES
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
-RENDER_ENTRIES = [*INTEGRATOR_PROGRAMS.values(), "integrator_path_wavefront.cl"]
+RENDER_ENTRIES = [program for plugin in INTEGRATORS.values() for program in plugin.PROGRAMS.values()]
 
 
 def _clang() -> str | None:

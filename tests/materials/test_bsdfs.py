@@ -264,8 +264,8 @@ def test_delta_only_materials_have_zero_eval_and_pdf(bsdf, name, material):
 
 @pytest.mark.parametrize("name, material", EVERY, ids=[c[0] for c in EVERY])
 def test_is_diffuse_where_the_kernel_reflects_lambertian(bsdf, name, material):
-    """is_diffuse (BDPT shares light subpaths more where it holds: spectrace.engine.bdpt) exactly where the kernel's
-    f = f·|cos θi| / |cos θi| is the same non-zero value for every pair of directions, with no delta lobe."""
+    """is_diffuse (BDPT shares light subpaths more where it holds: spectrace.integrators.bdpt) exactly where the
+    kernel's f = f·|cos θi| / |cos θi| is the same non-zero value for every pair of directions, with no delta lobe."""
     rng = np.random.default_rng(7)
     wi = _uniform_hemisphere(rng, 400)
     f_cos, _ = bsdf(material).eval_pdf(_uniform_hemisphere(rng, 400), wi)

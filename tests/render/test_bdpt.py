@@ -43,9 +43,10 @@ from tests.render.test_light_tracer import (
 
 import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.engine import bdpt, light_tracer
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.integrators import bdpt
+from spectrace.integrators import light as light_tracer
 from spectrace.io.exr import write_exr
 from spectrace.resources import resolve_scene_path
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error

@@ -1,5 +1,11 @@
-"""The white furnace for every material of the registry (spectrace.materials.MATERIALS), smooth and rough where it
-has a roughness, under every integrator (path, light, bdpt, sppm).
+"""The white furnace for every integrator of the registry (spectrace.integrators.INTEGRATORS) and for every material
+of the registry (spectrace.materials.MATERIALS), smooth and rough where it has a roughness; and each integrator
+refuses exactly the features it declares (REFUSES), in one line that names it, and tiles and checkpoints as it
+declares (SPLATS, CHECKPOINT_PROBLEM).
+
+One white Lambertian sphere in a uniform environment of radiance 1 is the closed form every integrator renders: a
+convex surface sees only the environment, so the light arriving directly is all there is and the image's mean Y is
+1, for the local model (`direct`) too.
 
 Two spheres side by side in a uniform environment of radiance 1 (light passes between them, and through them where
 they transmit), seen whole with the environment around them, `max_depth` 16 (paths of three segments and more, where
@@ -14,6 +20,7 @@ Standard errors come from independent replicas (consecutive sample ranges of one
 integrators' pixels are not independent. BDPT runs with one pixel per light subpath, where the light-to-camera
 strategy's share of each path, and with it an error in the weights that share it, is largest.
 
+The integrators that carry light over every bounce (all but LOCAL) render the two spheres of every material case.
 Where an integrator cannot see a material by design, the case is left out with its reason: the light tracer renders
 a delta lobe seen from the camera black (docs/integrators.md), and SPPM refuses a material whose delta and non-delta
 lobes share a surface (a smooth coat over a diffuse base, a mix of a delta and a non-delta material), which
@@ -28,10 +35,16 @@ import pytest
 
 import spectrace
 from replica_agreement import spectrace_replicas
+from spectrace.engine.checkpoint import read_checkpoint, save_checkpoint
 from spectrace.engine.renderer import Renderer
-from spectrace.engine.sppm import sppm_problem
+from spectrace.engine.tiles import whole_film_rows
+from spectrace.errors import SpectraceError
+from spectrace.integrators import INTEGRATORS
+from spectrace.integrators.base import FEATURES
 from spectrace.materials import MATERIALS
+from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import Scene
+from spectrace.spectral.film_response import FilmResponse
 from stats_toolkit import (
     assert_at_most_within_standard_errors,
     assert_within_standard_errors,
@@ -41,8 +54,12 @@ from stats_toolkit import (
 SLACK = 2e-4
 SIDE = 16
 REPLICAS = 16
-SPP = {"path": 16, "bdpt": 16, "light": 64, "sppm": 16}
-INTEGRATORS = tuple(SPP)
+# Samples per pixel of a replica, for every registered integrator (test_every_integrator_has_its_furnace keeps it
+# complete): the light tracer's pixels are noisier at equal spp.
+SPP = {"path": 16, "direct": 16, "bdpt": 16, "light": 64, "sppm": 16}
+# The integrators that leave out light after its first bounce off a rough surface (the local model): the two spheres
+# light each other, so only the single sphere's closed form holds for them.
+LOCAL = {"direct"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,9 +119,9 @@ CASES = {
 ALL_CASES = [(name, case) for name, cases in CASES.items() for case in cases]
 
 
-def _scene(case: Case, integrator: str) -> Scene:
+def _scene(case: Case, integrator: str, positions=(-1.25, 1.25)) -> Scene:
     material = case.material()
-    shapes = [S.shape("sphere", material, transform=[{"translate": [x, 0.0, 0.0]}]) for x in (-1.25, 1.25)]
+    shapes = [S.shape("sphere", material, transform=[{"translate": [x, 0.0, 0.0]}]) for x in positions]
     return Scene(
         camera=S.Camera(origin=(0.0, 1.0, -4.5), target=(0.0, 0.0, 0.0), fov_degrees=40.0),
         width=SIDE,
@@ -135,12 +152,115 @@ def _id(name: str, case: Case) -> str:
 def _params():
     for name, case in ALL_CASES:
         for integrator in INTEGRATORS:
+            if integrator in LOCAL:
+                continue
             if integrator == "light" and case.delta_lobe:
                 continue  # seen in a delta lobe, black to the light tracer by design
             if integrator == "sppm" and case.sppm_refused:
                 continue
             marks = () if integrator in case.fast else (pytest.mark.slow,)
             yield pytest.param(name, case.name, integrator, marks=marks, id=f"{_id(name, case)}-{integrator}")
+
+
+def test_every_integrator_has_its_furnace():
+    assert set(SPP) == set(INTEGRATORS)
+    assert set(INTEGRATORS) > LOCAL
+
+
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+def test_every_integrator_renders_the_white_sphere(device, integrator):
+    white = CASES["diffuse"][0]
+    assert white.lossless and not white.delta_lobe
+    scene = _scene(white, integrator, positions=(0.0,))
+    images = spectrace_replicas(Renderer(scene, device), REPLICAS, SPP[integrator])
+    mean, standard_error = mean_and_standard_error(images[..., 1].mean(axis=(1, 2)))
+    assert_within_standard_errors(mean, 1.0, standard_error, slack=SLACK, what=f"a white sphere under {integrator}")
+
+
+def _lit_sphere(integrator: str) -> Scene:
+    """A white sphere lit by a point light and a small area light, seen by a pinhole with the box filter: a scene
+    every integrator renders."""
+    lamp = S.shape("rectangle", S.diffuse(0.5), emitter=S.area_emitter(1.0), transform=[{"translate": [0, 3, 0]}])
+    return Scene(
+        camera=S.Camera(origin=(0.0, 1.0, -4.5), target=(0.0, 0.0, 0.0), fov_degrees=40.0),
+        width=8,
+        height=8,
+        shapes=[S.shape("sphere", S.diffuse(0.8)), lamp],
+        lights=[S.point_light((2.0, 2.0, -2.0), intensity=1.0)],
+        integrator=integrator,
+    )
+
+
+# Each feature of spectrace.integrators.base.FEATURES as a change of _lit_sphere's scene, media and spectral bands.
+FEATURE_CHANGES = {
+    "spectral bands": ({}, 0, 4),
+    "AOVs": ({"aovs": ("albedo",)}, 0, 0),
+    "pixel filters": ({"pixel_filter": PixelFilter("gaussian", stddev=0.5)}, 0, 0),
+    "film responses": ({"film_response": FilmResponse(wavelengths=(400.0, 700.0))}, 0, 0),
+    "media": ({}, 1, 0),
+    "hidden area lights": ({"hide_emitters": True}, 0, 0),
+}
+
+
+def test_every_feature_an_integrator_may_refuse_has_its_scene():
+    assert tuple(FEATURE_CHANGES) == FEATURES
+    for plugin in INTEGRATORS.values():
+        assert set(plugin.REFUSES) <= set(FEATURES), plugin.NAME
+
+
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+@pytest.mark.parametrize("feature", FEATURES)
+def test_each_integrator_refuses_exactly_what_it_declares(integrator, feature):
+    plugin = INTEGRATORS[integrator]
+    assert plugin.problem(_lit_sphere(integrator), 0, 0) is None
+    changes, media, bands = FEATURE_CHANGES[feature]
+    problem = plugin.problem(_lit_sphere(integrator).with_overrides(**changes), media, bands)
+    assert (problem is not None) == (feature in plugin.REFUSES), (integrator, feature, problem)
+    if problem is not None:
+        assert f"integrator '{integrator}'" in problem and "\n" not in problem
+
+
+@pytest.mark.parametrize("integrator", [name for name, plugin in INTEGRATORS.items() if plugin.REFUSES])
+def test_the_renderer_refuses_what_its_integrator_does_before_building_a_program(device, integrator, monkeypatch):
+    changes, media, bands = FEATURE_CHANGES[INTEGRATORS[integrator].REFUSES[0]]
+    scene = _lit_sphere(integrator).with_overrides(**changes)
+    expected = INTEGRATORS[integrator].problem(scene, media, bands)
+    assert expected is not None and media == 0  # (a medium would need a closed shape to fill)
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("a program was built for a scene its integrator refuses")
+
+    monkeypatch.setattr(type(device), "build_program", no_build)
+    with pytest.raises(SpectraceError) as refused:
+        Renderer(scene, device, spectral_bins=bands)
+    assert str(refused.value).endswith(expected)
+
+
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+def test_each_integrator_refuses_tiles_and_checkpoints_as_it_declares(device, integrator, tmp_path):
+    """SPLATS (its contributions land in any pixel): a tile of the film is refused, by the renderer and by a tiled
+    render's plan; CHECKPOINT_PROBLEM: a checkpoint is refused with that line."""
+    plugin = INTEGRATORS[integrator]
+    scene = _lit_sphere(integrator)
+    tile = Renderer(scene, device)
+    tile.pixel_range = (0, tile.pixel_count // 2)
+    if plugin.SPLATS is None:
+        tile.run_pass(1)
+        assert whole_film_rows(scene, 4) == 4
+    else:
+        with pytest.raises(SpectraceError, match=f"its {plugin.SPLATS} land in any pixel"):
+            tile.run_pass(1)
+        with pytest.raises(SpectraceError, match="renders the whole film as one tile"):
+            whole_film_rows(scene, 4)
+    whole = Renderer(scene, device)
+    whole.run_pass(1)
+    if plugin.CHECKPOINT_PROBLEM is None:
+        save_checkpoint(tmp_path / "state.npz", whole)
+        assert read_checkpoint(tmp_path / "state.npz").state.samples_done == 1
+    else:
+        with pytest.raises(SpectraceError) as refused:
+            save_checkpoint(tmp_path / "state.npz", whole)
+        assert str(refused.value) == plugin.CHECKPOINT_PROBLEM and not (tmp_path / "state.npz").exists()
 
 
 def test_every_material_has_a_furnace_case():
@@ -166,5 +286,5 @@ def test_furnace(device, name, case_name, integrator):
 
 @pytest.mark.parametrize("name, case", ALL_CASES, ids=[_id(n, c) for n, c in ALL_CASES])
 def test_sppm_refuses_exactly_the_mixed_lobes(name, case):
-    problem = sppm_problem(_scene(case, "sppm"), 0, 0)
+    problem = INTEGRATORS["sppm"].problem(_scene(case, "sppm"), 0, 0)
     assert (problem is not None) == case.sppm_refused, (name, case.name, problem)

@@ -27,11 +27,11 @@ import pytest
 
 import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
-from spectrace.engine import light_tracer
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
+from spectrace.integrators import light as light_tracer
 from spectrace.io.png import write_png
 from spectrace.resources import resolve_scene_path
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape

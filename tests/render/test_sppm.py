@@ -21,9 +21,9 @@ from tests.render.test_light_traced_dispersion import _scene as _prism_scene
 from tests.render.test_light_tracer import DISTANCE, FLOOR_ALBEDO, INTENSITY, IOR, THICKNESS, _slab_scene, _write
 
 import spectrace
-from spectrace.engine import sppm
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.integrators import sppm
 from spectrace.resources import resolve_scene_path
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
 from spectrace.spectral.grid import GRID_NM

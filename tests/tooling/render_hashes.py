@@ -21,9 +21,6 @@ from pathlib import Path
 import numpy as np
 
 REPOSITORY = Path(__file__).resolve().parents[2]
-# Integrators besides the scene's own tried on every scene; one that refuses a scene is skipped for it (a refusal
-# is part of the record, so a change in what is refused shows too).
-INTEGRATORS = ("path", "direct", "light", "bdpt", "sppm")
 RUNTIMES = ("intel-cpu", "pocl-system")
 
 
@@ -42,10 +39,13 @@ def _digest(image) -> str:
 def _hashes(runtime: str, general: bool) -> dict[str, str]:
     os.environ["SPECTRACE_GENERAL_KERNELS"] = "1" if general else "0"
     import spectrace
+    from spectrace.integrators import INTEGRATORS
 
     found: dict[str, str] = {}
     for name, path in _cases():
         scene = spectrace.load_scene(path)
+        # Every registered integrator besides the scene's own; a refusal is part of the record, so a change in what
+        # is refused shows too.
         for integrator in dict.fromkeys((scene.integrator, *INTEGRATORS)):
             small = scene.with_overrides(width=24, height=16, spp=2, integrator=integrator)
             key = f"{runtime}/{'general' if general else 'specialised'}/{name}/{integrator}"

@@ -27,7 +27,7 @@ SppOption = Annotated[int, typer.Option(help="Samples per pixel per measurement.
 MaxDepthOption = Annotated[int, typer.Option(help="Path segments from the camera.")]
 IntegratorOption = Annotated[
     str | None,
-    typer.Option(help="Integrator to time, one of spectrace.scene.model.INTEGRATOR_TYPES (default: the scene's)."),
+    typer.Option(help="Integrator to time, one of spectrace.integrators.INTEGRATORS (default: the scene's)."),
 ]
 SceneOption = Annotated[Path | None, typer.Option(help="Scene file (default: the Cornell box).")]
 AllOption = Annotated[bool, typer.Option("--all", help="Every working device in turn.")]
@@ -53,13 +53,13 @@ DenoiseSizeOption = Annotated[int | None, typer.Option("--size", help=_size_help
 
 
 def _check_integrators(names: list[str], option: str) -> None:
-    """Names from the integrator table (spectrace.scene.model.INTEGRATOR_TYPES), so a new integrator is benched as
+    """Names from the integrator registry (spectrace.integrators.INTEGRATORS), so a new integrator is benched as
     soon as it is registered there."""
-    from spectrace.scene.model import INTEGRATOR_TYPES
+    from spectrace.integrators import INTEGRATORS
 
     for name in names:
-        if name not in INTEGRATOR_TYPES:
-            raise SpectraceError(f"unknown integrator {name!r}; choose {', '.join(INTEGRATOR_TYPES)}", where=option)
+        if name not in INTEGRATORS:
+            raise SpectraceError(f"unknown integrator {name!r}; choose {', '.join(INTEGRATORS)}", where=option)
 
 
 def _one(size: int | None) -> list[int] | None:

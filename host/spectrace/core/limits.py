@@ -219,35 +219,7 @@ def scene_settings_problem(scene) -> str | None:
             else None
         )
         or exposure_problem(scene.exposure)
-        or count_thin_passes_problem(scene.integrator, scene.count_thin_passes)
-        # Only its range: a scene switched to another integrator (with_overrides, --integrator) keeps it unused.
-        or pixels_per_light_path_problem("bdpt", getattr(scene, "pixels_per_light_path", None))
     )
-
-
-def count_thin_passes_problem(integrator: str, count_thin_passes: bool) -> str | None:
-    """Why count_thin_passes = false cannot be used with this integrator (only the path tracer has it), or None."""
-    if count_thin_passes or integrator == "path":
-        return None
-    return f"count_thin_passes = false is only for integrator 'path', not '{integrator}'"
-
-
-# The most neighbouring pixels BDPT lets share one light subpath (integrator.pixels_per_light_path).
-MAX_PIXELS_PER_LIGHT_PATH = 16
-
-
-def pixels_per_light_path_problem(integrator: str, pixels: int | None) -> str | None:
-    """Why integrator.pixels_per_light_path cannot be used with this integrator (BDPT's alone, in
-    1..MAX_PIXELS_PER_LIGHT_PATH), or None."""
-    if pixels is None:
-        return None
-    if integrator != "bdpt":
-        return f"pixels_per_light_path is only for integrator 'bdpt', not '{integrator}'"
-    if isinstance(pixels, bool) or not isinstance(pixels, int | np.integer):
-        return f"pixels_per_light_path must be a whole number, got {pixels!r}"
-    if not 1 <= pixels <= MAX_PIXELS_PER_LIGHT_PATH:
-        return f"pixels_per_light_path must lie in 1..{MAX_PIXELS_PER_LIGHT_PATH}, got {pixels}"
-    return None
 
 
 def coordinates_problem(points: np.ndarray) -> str | None:

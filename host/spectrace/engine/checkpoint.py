@@ -33,11 +33,11 @@ import numpy as np
 from spectrace import resources
 from spectrace.core import limits
 from spectrace.device.program_cache import kernels_digest
-from spectrace.engine.bdpt import pixels_per_light_path
 from spectrace.engine.memory import scene_arrays
 from spectrace.engine.scene_buffers import render_params
 from spectrace.errors import SpectraceError
 from spectrace.film import RenderState, state_problem
+from spectrace.integrators import INTEGRATORS
 from spectrace.io.atomic import write_atomically
 from spectrace.io.input_files import regular_file
 
@@ -101,8 +101,8 @@ def buffers_digest(
     """scene_digest of a render not yet on a device (a tiled render's client holds no renderer)."""
     digest = hashlib.sha256(_SCENE_DIGEST_SALT.encode())
     settings: tuple = (scene.integrator, spectral_bins, tuple(spectral_range_nm), scene.sampler)
-    if scene.integrator == "bdpt":  # its light subpaths are shared by other groups of pixels (kernels/bdpt.cl)
-        settings += (pixels_per_light_path(scene),)
+    # The integrator's own build settings decide its numbers too (BDPT's light subpaths shared by groups of pixels).
+    settings += tuple(INTEGRATORS[scene.integrator].defines(scene).values())
     digest.update(repr(settings).encode())
     _update_with_array(digest, "params", render_params(scene, buffers, 0, 0))
     for name, array in scene_arrays(buffers).items():
@@ -115,12 +115,8 @@ def buffers_digest(
 
 
 def render_identity(renderer: Renderer) -> RenderIdentity:
-    if renderer.scene.integrator == "sppm":
-        # Its per-pixel photon statistics (radius, photon count, flux) are not in the film's saved state.
-        raise SpectraceError(
-            "integrator 'sppm' cannot save or resume checkpoints (its photon statistics are not in the film's state); "
-            "render without --checkpoint/--resume"
-        )
+    if problem := renderer.integrator.CHECKPOINT_PROBLEM:
+        raise SpectraceError(problem)
     return scene_identity(renderer.scene, renderer.buffers, renderer.spectral_bins, renderer.spectral_range_nm)
 
 
@@ -356,7 +352,7 @@ class PeriodicCheckpoints:
         clock=time.monotonic,
         identity: RenderIdentity | None = None,
     ):
-        if renderer.scene.integrator == "sppm":
+        if renderer.integrator.CHECKPOINT_PROBLEM:
             render_identity(renderer)  # refuses before the first pass, not after it
         self.path = Path(path)
         self.renderer = renderer

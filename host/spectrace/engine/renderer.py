@@ -2,7 +2,9 @@
 
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 import pyopencl as cl
@@ -12,18 +14,16 @@ from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.core import limits
 from spectrace.core.contract import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
 from spectrace.device import Device, open_device
-from spectrace.engine.bdpt import pixels_per_light_path
 from spectrace.engine.launch import launch_shape, render_work_group
-from spectrace.engine.light_tracer import LightPasses
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
 from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
-from spectrace.engine.sppm import SppmPasses
 from spectrace.errors import SpectraceError
 from spectrace.film import Film, dropped_samples_problem, spectral_defines, spectral_range
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.image import Image
+from spectrace.integrators import INTEGRATORS, scene_settings_problem
 from spectrace.scene.model import SAMPLER_TYPES, Scene
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
@@ -32,20 +32,6 @@ ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 # Aim for passes of about this long: short enough for a live progress bar and prompt Ctrl-C, long enough that
 # launch overhead does not matter.
 TARGET_PASS_SECONDS = 0.5
-
-INTEGRATOR_PROGRAMS = {
-    "path": "integrator_path.cl",
-    "direct": "integrator_direct.cl",
-    "light": "integrator_light.cl",
-    "bdpt": "integrator_bdpt.cl",
-    "sppm": "integrator_sppm.cl",
-}
-# Integrators whose connections land in any pixel: their passes are spectrace.engine.light_tracer's (splat records
-# reduced on the host in a fixed order), their kernels take its arguments.
-SPLATTING_KERNELS = {"light": "light_pass", "bdpt": "bdpt_pass"}
-# Every integrator's pass kernel other than render_pass: the splatting ones, and stochastic progressive photon
-# mapping's gather (its passes are spectrace.engine.sppm's, which also runs the program's photon kernel).
-PASS_KERNELS = {**SPLATTING_KERNELS, "sppm": "sppm_gather_pass"}
 
 
 def sampler_defines(sampler: str) -> dict[str, int]:
@@ -90,8 +76,11 @@ def film_albedo_scale(scene: Scene, table: np.ndarray) -> np.ndarray:
 
 
 class Renderer:
-    _light_passes: LightPasses | None = None  # set by _allocate for a `light` or `bdpt` scene
-    _sppm_passes: SppmPasses | None = None  # set by _allocate for an `sppm` scene
+    """A render of one scene on one device: the film, the scene's device buffers and the launches, which it hands its
+    integrator's passes as their spectrace.integrators.base.RenderHost (the integrator owns its program, its passes
+    and their device state)."""
+
+    KERNEL_SHAPE = "megakernel"  # which of the integrator's programs it runs (spectrace.engine.wavefront)
 
     @translate_opencl_errors("setting up the render")
     def __init__(
@@ -113,12 +102,19 @@ class Renderer:
             specialise = specialise_by_default()
         self.specialised = specialise
         self.scene = scene
-        self._check_scene(scene)
+        self.integrator = INTEGRATORS.named(scene.integrator)
+        if self.KERNEL_SHAPE not in self.integrator.PROGRAMS:
+            having = " and ".join(name for name, plugin in INTEGRATORS.items() if self.KERNEL_SHAPE in plugin.PROGRAMS)
+            raise SpectraceError(
+                f"the {self.KERNEL_SHAPE} kernel runs the {having} integrator only, not {scene.integrator!r}",
+                where=str(scene.source) if scene.source else None,
+            )
         if spectral_range_nm is None:
             spectral_range_nm = spectral_range(scene)
         problem = (
             limits.render_settings_problem(scene.width, scene.height, scene.spp)
             or limits.scene_settings_problem(scene)
+            or scene_settings_problem(scene)
             or limits.scene_geometry_problem(scene)
         )
         if problem:
@@ -131,6 +127,8 @@ class Renderer:
                 raise
             raise SpectraceError(exc.message, where=str(scene.source)) from None
         self._check_film_range(scene)
+        if problem := self.integrator.problem(scene, self.buffers.medium_count, spectral_bins):
+            raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
         response_channels = len(scene.film_response.channel_names)
         check_device_memory(
@@ -147,14 +145,14 @@ class Renderer:
         defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
         response = scene.film_response
         defines |= response.defines()
-        if scene.integrator == "bdpt":
-            defines["BDPT_PIXELS_PER_LIGHT_PATH"] = pixels_per_light_path(scene)
+        defines |= self.integrator.defines(scene)
         self.program = self.device.build_program(
-            self._program_file(scene), defines=defines or None, generated=materials.generated_sources()
+            self.integrator.PROGRAMS[self.KERNEL_SHAPE],
+            defines=defines or None,
+            generated=materials.generated_sources(),
         )
-        self.kernel = self._create_kernels()
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
-        self.work_group = render_work_group(self.device)
+        self.work_group = self._work_group()
         ctx = self.device.context
         ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
         b = self.buffers
@@ -178,7 +176,7 @@ class Renderer:
         # tiles). The launch's global offset moves the work-item ids, so each pixel runs the same code on the
         # same ids either way and adds the same bits.
         self.pixel_range = (0, self.film.pixel_count)
-        self._allocate(spectral_bins)
+        self.passes = self.integrator.passes(self, self.KERNEL_SHAPE, spectral_bins)
 
     def _check_film_range(self, scene: Scene) -> None:
         """A film range of its own reaches every tabulated spectrum (the table refuses those that fall short). The
@@ -212,21 +210,78 @@ class Renderer:
                     where=where,
                 )
 
-    def _check_scene(self, scene: Scene) -> None:
-        """Refuses a scene this kernel shape cannot render, before any other check."""
+    def _work_group(self) -> int | None:
+        return render_work_group(self.device)
 
-    def _allocate(self, spectral_bins: int) -> None:
-        """The device buffers this kernel shape needs beyond the film and the scene: the light tracer's launches and
-        splat records (spectrace.engine.light_tracer) for a `light` scene."""
-        splats = self.scene.integrator in SPLATTING_KERNELS
-        self._light_passes = LightPasses(self, spectral_bins) if splats else None
-        self._sppm_passes = SppmPasses(self, spectral_bins) if self.scene.integrator == "sppm" else None
+    # What the integrator's passes are handed (spectrace.integrators.base.RenderHost).
+    def kernel(self, name: str) -> cl.Kernel:
+        return cl.Kernel(self.program, name)
 
-    def _program_file(self, scene: Scene) -> str:
-        return INTEGRATOR_PROGRAMS[scene.integrator]
+    def buffer(self, nbytes: int = 0, data: np.ndarray | None = None) -> cl.Buffer:
+        if data is not None:
+            return cl.Buffer(self.device.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=data)
+        return cl.Buffer(self.device.context, cl.mem_flags.READ_WRITE, nbytes)
 
-    def _create_kernels(self) -> cl.Kernel:
-        return cl.Kernel(self.program, PASS_KERNELS.get(self.scene.integrator, "render_pass"))
+    def check_memory(self, extra: dict[str, int]) -> None:
+        scene = self.scene
+        need = device_memory_need(
+            self.buffers, self.pixel_count, self.spectral_bins, self.film.response_channels, aovs=bool(scene.aovs)
+        )
+        need.buffers.update(extra)
+        check_device_memory(need, self.device)
+
+    @property
+    def params_buffer(self) -> cl.Buffer:
+        return self._params
+
+    @property
+    def cmf_buffer(self) -> cl.Buffer:
+        return self._cmf
+
+    def scene_arguments(self) -> tuple:
+        return (self._params, *self._scene)
+
+    def film_arguments(self) -> tuple:
+        film = self.film
+        return (
+            self._cmf,
+            film.xyz_buffer,
+            film.ray_count_buffer,
+            film.spectral_buffer,
+            film.response_buffer,
+            film.aov_buffer,
+        )
+
+    @contextmanager
+    def render_pass(self, sample_count: int) -> Iterator[int]:
+        if (splats := self.integrator.SPLATS) is not None and tuple(self.pixel_range) != (0, self.pixel_count):
+            raise SpectraceError(
+                f"integrator '{self.scene.integrator}' renders whole films, not tiles: its {splats} land in any pixel"
+            )
+        done = self.samples_done
+        params = render_params(self.scene, self.buffers, done, sample_count)
+        start = time.perf_counter()
+        cl.enqueue_copy(self.device.queue, self._params, params)
+        yield done
+        self.film.add_pass(sample_count, time.perf_counter() - start)
+
+    def launch(self, kernel: cl.Kernel, count: int, *arguments: Any, offset: int = 0) -> None:
+        if arguments:
+            kernel.set_args(*arguments)
+        global_size, local_size = launch_shape(count, self.work_group)
+        cl.enqueue_nd_range_kernel(self.device.queue, kernel, global_size, local_size, (offset,) if offset else None)
+
+    def upload(self, buffer: cl.Buffer, array: np.ndarray) -> None:
+        cl.enqueue_copy(self.device.queue, buffer, array)
+
+    def download(self, array: np.ndarray, buffer: cl.Buffer) -> None:
+        cl.enqueue_copy(self.device.queue, array, buffer)
+
+    def clear(self, buffer: cl.Buffer) -> None:
+        cl.enqueue_fill_buffer(self.device.queue, buffer, np.zeros(1, np.float32), 0, buffer.size)
+
+    def finish(self) -> None:
+        self.device.queue.finish()
 
     # The film's size and bands, which the film holds (one copy, no drift).
     @property
@@ -252,39 +307,12 @@ class Renderer:
     def reset(self) -> None:
         """Clear the film to start the render again."""
         self.film.reset()
-        if self._sppm_passes is not None:
-            self._sppm_passes.reset()
+        self.passes.reset()
 
     @translate_opencl_errors("running a render pass")
     def run_pass(self, sample_count: int) -> None:
         """Add `sample_count` samples per pixel, continuing the sample sequence where the last pass stopped."""
-        if self._light_passes is not None:
-            self._light_passes.run_pass(sample_count)
-            return
-        if self._sppm_passes is not None:
-            self._sppm_passes.run_pass(sample_count)
-            return
-        queue = self.device.queue
-        params = render_params(self.scene, self.buffers, self.samples_done, sample_count)
-        start = time.perf_counter()
-        cl.enqueue_copy(queue, self._params, params)
-        film = self.film
-        self.kernel.set_args(
-            self._params,
-            *self._scene,
-            self._cmf,
-            film.xyz_buffer,
-            film.ray_count_buffer,
-            film.spectral_buffer,
-            film.response_buffer,
-            film.aov_buffer,
-        )
-        begin, end = self.pixel_range
-        global_size, local_size = launch_shape(end - begin, self.work_group)
-        offset = (begin,) if begin else None
-        cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size, offset)
-        queue.finish()
-        film.add_pass(sample_count, time.perf_counter() - start)
+        self.passes.run_pass(sample_count)
 
     def render(
         self,

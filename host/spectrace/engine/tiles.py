@@ -27,6 +27,7 @@ from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, TileMap, ide
 from spectrace.errors import SpectraceError
 from spectrace.film import STATE_LAYOUT, RenderState, dropped_samples_problem, spectral_range, state_image
 from spectrace.image import Image
+from spectrace.integrators import INTEGRATORS, scene_settings_problem
 
 if TYPE_CHECKING:
     from spectrace.device import Device
@@ -332,11 +333,9 @@ def render_tiles(
 
 def whole_film_rows(scene: Scene, tile_rows: int | None, where: str = "--tile-rows") -> int | None:
     """The rows per tile for `scene`: `tile_rows` as given, except for the integrators whose splats or photons land
-    in any pixel (light, bdpt, sppm), which render the whole film as one tile on one worker (a smaller tile asked
-    for is refused)."""
-    from spectrace.engine.renderer import PASS_KERNELS
-
-    if scene.integrator not in PASS_KERNELS:
+    in any pixel (their SPLATS: light, bdpt, sppm), which render the whole film as one tile on one worker (a smaller
+    tile asked for is refused)."""
+    if INTEGRATORS[scene.integrator].SPLATS is None:
         return tile_rows
     if tile_rows is not None and tile_rows < scene.height:
         raise SpectraceError(
@@ -364,6 +363,7 @@ def make_job(
     problem = (
         limits.render_settings_problem(scene.width, scene.height, total)
         or limits.scene_settings_problem(scene)
+        or scene_settings_problem(scene)
         or limits.scene_geometry_problem(scene)
     )
     if problem:

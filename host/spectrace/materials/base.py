@@ -27,5 +27,5 @@ class Material:
     @property
     def is_diffuse(self) -> bool:
         # False unless a material says so: a glossy or delta lobe that goes unstated would only cost BDPT speed
-        # (spectrace.engine.bdpt.pixels_per_light_path), while a wrong True would cost its caustics.
+        # (spectrace.integrators.bdpt.pixels_per_light_path), while a wrong True would cost its caustics.
         return False

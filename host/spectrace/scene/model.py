@@ -16,6 +16,7 @@ from spectrace.core import limits
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.mesh import TriangleMesh
+from spectrace.integrators import INTEGRATORS
 from spectrace.lights.area import AreaEmitter, EmitterImage  # noqa: F401 (part of the model's names)
 from spectrace.lights.base import Light
 from spectrace.lights.constant import ConstantEnvironment  # noqa: F401 (the lights' models, part of the model's names)
@@ -29,8 +30,6 @@ from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
-IntegratorType = Literal["path", "direct", "light", "bdpt", "sppm"]
-INTEGRATOR_TYPES: tuple[str, ...] = ("path", "direct", "light", "bdpt", "sppm")  # docs/integrators.md
 SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
 # Lower error than the independent sampler at equal spp on every scene measured (docs/sampling.md).
 DEFAULT_SAMPLER: SamplerType = "sobol"
@@ -134,7 +133,7 @@ class Scene:
     height: int
     shapes: list[Shape]
     lights: list[Light] = field(default_factory=list)
-    integrator: IntegratorType = "path"
+    integrator: str = "path"  # a name of spectrace.integrators.INTEGRATORS
     max_depth: int = 8
     rr_depth: int = 5
     hide_environment: bool = False  # camera rays that leave the scene see black
@@ -171,7 +170,7 @@ def settings_type_problem(scene: Scene) -> str | None:
     """Why a Scene's settings are not of their types (whole numbers, a known integrator and sampler, flags, a
     number of stops), or None."""
     return (
-        limits.choice_problem("integrator", scene.integrator, INTEGRATOR_TYPES)
+        limits.choice_problem("integrator", scene.integrator, tuple(INTEGRATORS))
         or limits.choice_problem("sampler", scene.sampler, SAMPLER_TYPES)
         or next(
             (

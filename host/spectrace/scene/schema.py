@@ -4,6 +4,7 @@ Only the shape of the input is checked here; references between sections (a shap
 and files on disk are resolved by scene.loader, which reports errors with the same key paths.
 """
 
+import dataclasses
 import functools
 import operator
 from types import SimpleNamespace
@@ -26,10 +27,11 @@ from spectrace.cameras import CAMERAS
 from spectrace.cameras import shared as camera_shared
 from spectrace.core import limits
 from spectrace.core.parameters import DISTRIBUTIONS, Parameter
+from spectrace.integrators import INTEGRATORS, settings_problem
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
 from spectrace.pixel_filters import FILTERS
-from spectrace.scene.model import DEFAULT_SAMPLER, IntegratorType, SamplerType
+from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
@@ -45,50 +47,6 @@ class Strict(BaseModel):
     # strict: a value of the wrong type is refused, not converted: `width = true` or `max_depth = true` is not 1,
     # `spp = "4"` not 4, `spp = 4.0` not 4, `two_sided = 1` not true. An integer is a float (a float key takes 2).
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
-
-
-class IntegratorSpec(Strict):
-    type: IntegratorType = "path"
-    max_depth: int = Field(
-        default=8, ge=-1, le=limits.MAX_DEPTH, description="path segments from the camera; -1 = unbounded"
-    )
-    rr_depth: int = Field(
-        default=5, ge=1, le=limits.MAX_DEPTH, description="bounces after which Russian roulette may end a path"
-    )
-    hide_environment: bool = Field(
-        default=False, description="camera rays that leave the scene see black; reflections still show it"
-    )
-    hide_emitters: bool = Field(
-        default=False,
-        description="Mitsuba 3's hide_emitters: hide_environment, and camera rays pass through area lights",
-    )
-
-    count_thin_passes: bool = Field(
-        default=True,
-        description="path only: a pass straight through a thindielectric counts toward max_depth (false: Mitsuba "
-        "3's volpath, where it does not)",
-    )
-    pixels_per_light_path: int | None = Field(
-        default=None,
-        description="bdpt only: neighbouring pixels whose camera subpaths share one light subpath, 1.."
-        f"{limits.MAX_PIXELS_PER_LIGHT_PATH}; absent: 4 where every surface is Lambertian and no medium fills a shape, "
-        "2 otherwise (docs/integrators.md)",
-    )
-
-    @field_validator("max_depth")
-    @classmethod
-    def _depth_not_zero(cls, value: int) -> int:
-        if value == 0:
-            raise ValueError("max_depth must be -1 (unbounded) or >= 1")
-        return value
-
-    @model_validator(mode="after")
-    def _thin_passes_for_path_only(self) -> "IntegratorSpec":
-        if problem := limits.count_thin_passes_problem(self.type, self.count_thin_passes):
-            raise ValueError(problem)
-        if problem := limits.pixels_per_light_path_problem(self.type, self.pixels_per_light_path):
-            raise ValueError(problem)
-        return self
 
 
 class SamplerSpec(Strict):
@@ -184,6 +142,7 @@ _ANNOTATIONS = {
     "vector": Vector3,
     "string": str,
     "bool": bool,
+    "int": int,
     "metal": Literal[METALS],
     "distribution": Literal[DISTRIBUTIONS],
     "coat_transmission": Literal["smooth", "rough"],
@@ -270,7 +229,7 @@ def _field(parameter: Parameter) -> tuple:
         default = parameter.default
     constraints = (
         parameter.range.constraints()
-        if parameter.type == "float" and parameter.range is not None and parameter.schema_range
+        if parameter.type in ("float", "int") and parameter.range is not None and parameter.schema_range
         else {}
     )
     description = f"{parameter.unit}: {parameter.doc}" if parameter.unit else parameter.doc
@@ -324,6 +283,52 @@ def _spec_model(module, name: str, type_default=..., extra: dict | None = None) 
         __validators__={check.__name__: _after(check) for check in getattr(module, "SPEC_CHECKS", ())},
         **fields,
     )
+
+
+if TYPE_CHECKING:
+    IntegratorName: TypeAlias = str
+else:  # the registry's names, as a Literal: pydantic lists them when another is given
+    IntegratorName = Literal[tuple(INTEGRATORS)]
+
+
+class _IntegratorKeys(Strict):
+    """The checks of the [integrator] table beyond each key's own: max_depth 0 means nothing, and a key of some
+    integrators is refused for the others (spectrace.integrators.settings_problem)."""
+
+    type: IntegratorName = "path"
+
+    @field_validator("max_depth", check_fields=False)
+    @classmethod
+    def _depth_not_zero(cls, value: int) -> int:
+        if value == 0:
+            raise ValueError("max_depth must be -1 (unbounded) or >= 1")
+        return value
+
+    @model_validator(mode="after")
+    def _keys_of_this_integrator(self) -> "_IntegratorKeys":
+        if problem := settings_problem(self.type, self):
+            raise ValueError(problem)
+        return self
+
+
+def _integrator_fields() -> dict[str, Any]:
+    """Every integrator's keys (their PARAMETERS, in the registry's order); a key that only some take says which."""
+    fields: dict[str, Any] = {}
+    for plugin in INTEGRATORS.values():
+        for parameter in plugin.PARAMETERS:
+            if parameter.name in fields:
+                continue
+            owners = [name for name, p in INTEGRATORS.items() if parameter in p.PARAMETERS]
+            if len(owners) < len(INTEGRATORS):
+                parameter = dataclasses.replace(parameter, doc=f"{' and '.join(owners)} only: {parameter.doc}")
+            fields[parameter.name] = _field(parameter)
+    return fields
+
+
+if TYPE_CHECKING:
+    IntegratorSpec: TypeAlias = Any
+else:
+    IntegratorSpec = create_model("IntegratorSpec", __base__=_IntegratorKeys, **_integrator_fields())
 
 
 class TableSpec(Protocol):

@@ -6,7 +6,7 @@ stochastic progressive photon mapping, `sppm`."""
 
 from __future__ import annotations
 
-from spectrace.engine.bdpt import BDPT_MAX_SEGMENTS
+from spectrace.integrators.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.interop.mitsuba.context import ImportContext, Properties
 from spectrace.interop.mitsuba.plugins import SUPPORTED
 from spectrace.interop.mitsuba.tree import Element, camel_to_snake, shown
@@ -61,7 +61,7 @@ def integrator(ctx: ImportContext, element: Element, data: dict) -> None:
         properties.understood(*_with_snake_case("lightImage", "sampleDirect", "samples_per_pass"))
     elif kind in ("sppm", "photonmapper"):
         # Mitsuba 0.6's photon mappers: spectrace's sppm, which converges to the same image; the photon counts,
-        # radii and lookup sizes are its own (spectrace.engine.sppm), so they are noted, not followed.
+        # radii and lookup sizes are its own (spectrace.integrators.sppm), so they are noted, not followed.
         settings["type"] = "sppm"
         own = _with_snake_case(  # a 0.x file's names arrive upgraded to snake_case
             "photonCount", "initialRadius", "alpha", "granularity", "maxPasses", "directSamples",

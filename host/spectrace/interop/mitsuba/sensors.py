@@ -240,7 +240,7 @@ def fov_x(ctx: ImportContext, properties: dict[str, Element], aspect: float, ele
 
 
 def whole_pixel_filter(ctx: ImportContext, data: dict) -> None:
-    """spectrace's bdpt and sppm estimate whole pixels (spectrace.engine.light_tracer, .sppm): a film filter
+    """spectrace's bdpt and sppm estimate whole pixels (spectrace.integrators.light, .sppm): a film filter
     other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
     film, integrator = data.get("film"), data.get("integrator", {})
     if film is None or integrator.get("type") not in ("bdpt", "sppm") or film["filter"]["type"] == "box":

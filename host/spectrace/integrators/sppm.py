@@ -1,5 +1,5 @@
-"""Stochastic progressive photon mapping on the host (kernels/sppm.cl): what the `sppm` integrator refuses, its
-per-pixel statistics, and the photon grid built between each iteration's photon and gather launches.
+"""The `sppm` integrator, stochastic progressive photon mapping (kernels/integrator_sppm.cl, kernels/sppm.cl): what it
+refuses, its per-pixel statistics, and the photon grid built between each iteration's photon and gather launches.
 
 An iteration (one sample per pixel) traces PHOTONS_PER_PIXEL photon paths per pixel; each record carries the hash
 bucket of its grid cell (kernels/sppm.cl's sppm_hash, which the gather uses too), and the host sorts the record
@@ -12,18 +12,25 @@ every photon within its radius in the 27 cells around its own.
 from __future__ import annotations
 
 import math
-import time
 from typing import Any
 
 import numpy as np
-import pyopencl as cl
 
-from spectrace.engine.launch import launch_shape
-from spectrace.engine.light_tracer import refuse_tiles, scene_sphere
-from spectrace.engine.memory import check_device_memory, device_memory_need
-from spectrace.engine.scene_buffers import render_params
-from spectrace.errors import SpectraceError
-from spectrace.scene.model import Scene
+from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines
+from spectrace.integrators.light import scene_sphere
+
+NAME = "sppm"
+PARAMETERS = SHARED_PARAMETERS
+PROGRAMS = {"megakernel": "integrator_sppm.cl"}
+SPLATS = "photons"  # a photon adds to every pixel whose radius holds it: whole films only
+# Its per-pixel photon statistics (radius, photon count, flux) are not in the film's saved state.
+# Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
+REFUSES: tuple[str, ...] = ("spectral bands", "AOVs", "pixel filters", "film responses", "media")
+CHECKPOINT_PROBLEM = (
+    "integrator 'sppm' cannot save or resume checkpoints (its photon statistics are not in the film's state); "
+    "render without --checkpoint/--resume"
+)
+defines = no_defines
 
 # The initial gather radius, in pixel footprints at the visible point's distance along the camera path: wide enough
 # to find photons from the first iterations, narrow enough that the blur it starts with is a pixel or two.
@@ -59,7 +66,7 @@ def _mixes_delta_and_non_delta(material: Any) -> bool:
     return textured or (isinstance(material, PlasticMaterial) and smooth_everywhere(roughness))
 
 
-def sppm_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
+def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the `sppm` integrator cannot render this scene as asked, or None."""
     camera_type = scene.camera.type
     if camera_type not in SPPM_CAMERAS:
@@ -88,6 +95,10 @@ def sppm_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | N
     return None
 
 
+def passes(host: RenderHost, shape: str, spectral_bins: int) -> SppmPasses:
+    return SppmPasses(host)
+
+
 def initial_radius_per_metre(scene: Scene) -> float:
     """The initial gather radius per metre of camera path: INITIAL_RADIUS_PIXELS pixel footprints."""
     _, _, _, up = scene.camera.basis(scene.width / scene.height)
@@ -96,38 +107,34 @@ def initial_radius_per_metre(scene: Scene) -> float:
 
 
 class SppmPasses:
-    """The passes of an `sppm` scene's Renderer (spectrace.engine.renderer), which built the program (both kernels)
-    and the film and hands its run_pass here."""
+    """The iterations of an `sppm` render: its program's photon and gather kernels, the photon records, the grid and
+    the per-pixel statistics."""
 
-    def __init__(self, renderer: Any, spectral_bins: int):
-        self.renderer = renderer
-        scene = renderer.scene
-        problem = sppm_problem(scene, renderer.buffers.medium_count, spectral_bins)
-        if problem:
-            raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
-        pixels = renderer.pixel_count
+    def __init__(self, host: RenderHost):
+        self.host = host
+        scene = host.scene
+        pixels = host.pixel_count
         self.photon_count = pixels * PHOTONS_PER_PIXEL
         depth_slots = scene.max_depth - 2 if scene.max_depth > 0 else MAX_PHOTON_RECORDS
         self.capacity = max(1, min(depth_slots, MAX_PHOTON_RECORDS))
-        need = device_memory_need(renderer.buffers, pixels, spectral_bins)
-        record_bytes = self.photon_count * self.capacity * PHOTON_RECORD_BYTES
-        need.buffers["photon records"] = record_bytes
-        need.buffers["pixel statistics"] = pixels * PIXEL_STATE_BYTES
-        check_device_memory(need, renderer.device)
-        ctx = renderer.device.context
-        rw = cl.mem_flags.READ_WRITE
+        host.check_memory(
+            {
+                "photon records": self.photon_count * self.capacity * PHOTON_RECORD_BYTES,
+                "pixel statistics": pixels * PIXEL_STATE_BYTES,
+            }
+        )
         slots = self.photon_count * self.capacity
-        self._records = [cl.Buffer(ctx, rw, slots * 16) for _ in range(4)]
-        self._buckets = cl.Buffer(ctx, rw, slots * 4)
+        self._records = [host.buffer(slots * 16) for _ in range(4)]
+        self._buckets = host.buffer(slots * 4)
         # Hash buckets: about two per photon path (most paths leave fewer records than that).
         self._table_size = 1 << max(10, int(math.ceil(math.log2(2 * self.photon_count))))
-        self._counts = cl.Buffer(ctx, rw, self.photon_count * 4)
-        self._direct = cl.Buffer(ctx, rw, pixels * 16)
-        self._tau = cl.Buffer(ctx, rw, pixels * 16)
-        self._radius = cl.Buffer(ctx, rw, pixels * 4)
-        self._photons = cl.Buffer(ctx, rw, pixels * 4)
-        self._photon_kernel = cl.Kernel(renderer.program, "sppm_photon_pass")
-        self._gather_kernel = renderer.kernel
+        self._counts = host.buffer(self.photon_count * 4)
+        self._direct = host.buffer(pixels * 16)
+        self._tau = host.buffer(pixels * 16)
+        self._radius = host.buffer(pixels * 4)
+        self._photons = host.buffer(pixels * 4)
+        self._gather_kernel = host.kernel("sppm_gather_pass")
+        self._photon_kernel = host.kernel("sppm_photon_pass")
         sphere = scene_sphere(scene)
         self._sphere = sphere
         self._origin = np.array([*(sphere[:3] - sphere[3]), 0.0], np.float32)
@@ -139,23 +146,22 @@ class SppmPasses:
         self.reset()
 
     def reset(self) -> None:
-        queue = self.renderer.device.queue
         for buffer in (self._direct, self._tau, self._radius, self._photons):
-            cl.enqueue_fill_buffer(queue, buffer, np.zeros(1, np.float32), 0, buffer.size)
-        queue.finish()
+            self.host.clear(buffer)
+        self.host.finish()
 
     def _trace_photons(self, sample_index: int, cell_size: float) -> np.ndarray:
         """Runs one iteration's photon paths; returns each record slot's bucket (table size: unused), in the order
         (photon, record)."""
-        r = self.renderer
-        queue = r.device.queue
-        self._photon_kernel.set_args(
-            r._params,
-            *r._scene,
+        host = self.host
+        host.launch(
+            self._photon_kernel,
+            host.pixel_count,
+            *host.scene_arguments(),
             self._sphere,
             np.int32(sample_index),
             np.int32(self.photon_count),
-            np.int32(r.pixel_count),
+            np.int32(host.pixel_count),
             np.int32(self.capacity),
             *self._records,
             self._buckets,
@@ -163,70 +169,61 @@ class SppmPasses:
             self._origin,
             np.float32(cell_size),
             np.uint32(self._table_size),
-            r.film.ray_count_buffer,
+            host.film.ray_count_buffer,
         )
-        cl.enqueue_nd_range_kernel(queue, self._photon_kernel, *launch_shape(r.pixel_count, r.work_group))
         buckets = np.empty(self.photon_count * self.capacity, np.uint32)
-        cl.enqueue_copy(queue, buckets, self._buckets)
-        queue.finish()
+        host.download(buckets, self._buckets)
+        host.finish()
         return buckets
 
-    def _grid(self, buckets: np.ndarray) -> tuple[cl.Buffer, cl.Buffer]:
+    def _grid(self, buckets: np.ndarray) -> tuple[Any, Any]:
         """The used slots sorted by bucket (stable: within one, in the order traced) and each bucket's start."""
-        ctx = self.renderer.device.context
         used = np.flatnonzero(buckets < self._table_size).astype(np.int32)
         filed = buckets[used]
         order = used[np.argsort(filed, kind="stable")]
         starts = np.zeros(self._table_size + 1, np.int32)
         np.cumsum(np.bincount(filed, minlength=self._table_size), out=starts[1:])
-        ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
         # A one-element placeholder where an iteration found no photon (an empty buffer cannot be made).
-        order_buffer = cl.Buffer(ctx, ro, hostbuf=order if len(order) else np.zeros(1, np.int32))
-        return order_buffer, cl.Buffer(ctx, ro, hostbuf=starts)
+        order_buffer = self.host.buffer(data=order if len(order) else np.zeros(1, np.int32))
+        return order_buffer, self.host.buffer(data=starts)
 
     def _cell_size(self) -> float:
         """The grid's cell width: the largest radius of a pixel, or the first iterations' bound while none is set. A
         pixel that finds its first visible point later starts within the cell (kernels/sppm.cl), so pixels that see
         nothing (the sky) do not hold the cells at their first width."""
-        r = self.renderer
-        radius = np.empty(r.pixel_count, np.float32)
-        cl.enqueue_copy(r.device.queue, radius, self._radius)
+        radius = np.empty(self.host.pixel_count, np.float32)
+        self.host.download(radius, self._radius)
         largest = float(radius.max()) if radius.size else 0.0
         return max((largest if largest > 0.0 else self._first_cell) * CELL_MARGIN, 1e-6)
 
     def run_pass(self, sample_count: int) -> None:
-        """Runs `sample_count` iterations (the renderer's run_pass, translated errors)."""
-        r = self.renderer
-        refuse_tiles(r, "photons")
-        queue = r.device.queue
-        film = r.film
-        done = film.samples_done
-        start = time.perf_counter()
-        cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
-        for sample_index in range(done, done + sample_count):
-            cell_size = self._cell_size()
-            order, starts = self._grid(self._trace_photons(sample_index, cell_size))
-            self._gather_kernel.set_args(
-                r._params,
-                *r._scene,
-                r._cmf,
-                np.int32(sample_index),
-                np.int32(r.pixel_count),
-                self._radius_per_metre,
-                np.float32(self.photon_count),
-                *self._records,
-                order,
-                starts,
-                np.uint32(self._table_size),
-                self._origin,
-                np.float32(cell_size),
-                self._direct,
-                self._tau,
-                self._radius,
-                self._photons,
-                film.xyz_buffer,
-                film.ray_count_buffer,
-            )
-            cl.enqueue_nd_range_kernel(queue, self._gather_kernel, *launch_shape(r.pixel_count, r.work_group))
-            queue.finish()
-        film.add_pass(sample_count, time.perf_counter() - start)
+        """Runs `sample_count` iterations."""
+        host = self.host
+        film = host.film
+        with host.render_pass(sample_count) as done:
+            for sample_index in range(done, done + sample_count):
+                cell_size = self._cell_size()
+                order, starts = self._grid(self._trace_photons(sample_index, cell_size))
+                host.launch(
+                    self._gather_kernel,
+                    host.pixel_count,
+                    *host.scene_arguments(),
+                    host.cmf_buffer,
+                    np.int32(sample_index),
+                    np.int32(host.pixel_count),
+                    self._radius_per_metre,
+                    np.float32(self.photon_count),
+                    *self._records,
+                    order,
+                    starts,
+                    np.uint32(self._table_size),
+                    self._origin,
+                    np.float32(cell_size),
+                    self._direct,
+                    self._tau,
+                    self._radius,
+                    self._photons,
+                    film.xyz_buffer,
+                    film.ray_count_buffer,
+                )
+                host.finish()

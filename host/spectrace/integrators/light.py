@@ -1,4 +1,5 @@
-"""The light tracer on the host: launches of light paths and the deterministic addition of their splats to the film.
+"""The `light` integrator, light tracing (kernels/integrator_light.cl): what it refuses, its launches of light paths
+and the deterministic addition of their splats to the film, which BDPT's passes share (spectrace.integrators.bdpt).
 
 A light path's connections to the camera land in arbitrary pixels, so the kernel (kernels/integrator_light.cl) does
 not add them to the film: each work-item writes its splats as records (pixel, XYZ) into slots of its own, and the
@@ -12,18 +13,20 @@ Each pixel sample runs as many light paths as the film has pixels, so samples pe
 the path tracer (Mitsuba 3's ptracer counts alike) and the film is divided by the samples done as always.
 """
 
-import time
-from typing import Any
+from __future__ import annotations
 
 import numpy as np
-import pyopencl as cl
 
-from spectrace.engine.bdpt import bdpt_problem, pixels_per_light_path
-from spectrace.engine.launch import launch_shape
-from spectrace.engine.memory import check_device_memory, device_memory_need
-from spectrace.engine.scene_buffers import render_params
-from spectrace.errors import SpectraceError
-from spectrace.scene.model import Scene
+from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines
+
+NAME = "light"
+PARAMETERS = SHARED_PARAMETERS
+PROGRAMS = {"megakernel": "integrator_light.cl"}
+SPLATS = "splats"  # its camera connections land in any pixel: whole films only
+# Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
+REFUSES: tuple[str, ...] = ("AOVs", "film responses", "hidden area lights")
+CHECKPOINT_PROBLEM = None
+defines = no_defines
 
 # Splat record slots per light path and launch: a path longer than this is launched again for its later records
 # (rare: Russian roulette ends most paths sooner), so memory stays bounded for unbounded max_depth.
@@ -85,20 +88,20 @@ def add_in_order(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> N
     np.add.at(target.reshape(-1), flat, values.reshape(-1))
 
 
-def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
+def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the light tracer cannot render this scene as asked, or None."""
-    name = scene.integrator  # 'light', or 'bdpt', which shares these limits
+    return splatting_problem(scene, NAME)
+
+
+def passes(host: RenderHost, shape: str, spectral_bins: int) -> LightPasses:
+    depth_slots = host.scene.max_depth + 1 if host.scene.max_depth > 0 else MAX_RECORD_SLOTS
+    return LightPasses(host, spectral_bins, "light_pass", min(depth_slots, MAX_RECORD_SLOTS))
+
+
+def splatting_problem(scene: Scene, name: str) -> str | None:
+    """Why integrator `name` (the light tracer, or BDPT, whose light-to-camera joins are its splats) cannot render
+    this scene, or None."""
     camera_type = scene.camera.type
-    if name == "bdpt":
-        # BDPT adds its own pixel's strategies as whole-pixel records: the light tracer's spectral bands and filter
-        # spreads are not in its kernels.
-        if spectral_bins:
-            return "integrator 'bdpt' does not write spectral bands yet; render without spectral output or use 'path'"
-        if scene.pixel_filter.type != "box":
-            return (
-                f"integrator 'bdpt' adds whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
-                "use film.filter = \"box\" or 'path'"
-            )
     if camera_type not in LIGHT_TRACED_CAMERAS:
         known = ", ".join(LIGHT_TRACED_CAMERAS)
         return f"integrator '{name}' supports the {known} cameras, not {camera_type!r}"
@@ -122,72 +125,62 @@ def light_tracing_problem(scene: Scene, medium_count: int, spectral_bins: int) -
             f"integrator '{name}' cannot hide area lights from the camera (hide_emitters); "
             "use hide_environment or 'path'"
         )
-    if name == "bdpt":
-        return bdpt_problem(scene)
     return None
 
 
-def refuse_tiles(renderer: Any, what: str) -> None:
-    """One line when a renderer of the splatting integrators (light, bdpt, sppm) was given a tile: `what` (splats,
-    photons) lands in any pixel, so only a whole film is right."""
-    if tuple(getattr(renderer, "pixel_range", (0, renderer.pixel_count))) != (0, renderer.pixel_count):
-        name = renderer.scene.integrator
-        raise SpectraceError(f"integrator '{name}' renders whole films, not tiles: its {what} land in any pixel")
-
-
 class LightPasses:
-    """The passes of a `light` scene's Renderer (spectrace.engine.renderer), which built the program and the film and
-    hands its run_pass here."""
+    """Passes of light paths whose camera connections are splat records (kernel `kernel`, `capacity` record slots
+    per path and launch). BDPT's (`own_rows`) also write each pixel's own estimate to a row per pixel, and run one
+    light subpath per group of `pixels_per_path` pixels (kernels/bdpt.cl's trace_bdpt)."""
 
-    def __init__(self, renderer: Any, spectral_bins: int):
-        self.renderer = renderer
-        scene = renderer.scene
-        problem = light_tracing_problem(scene, renderer.buffers.medium_count, spectral_bins)
-        if problem:
-            raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
-        depth_slots = scene.max_depth + 1 if scene.max_depth > 0 else MAX_RECORD_SLOTS
-        self.capacity = min(depth_slots, MAX_RECORD_SLOTS)
-        self.bdpt = scene.integrator == "bdpt"
-        if self.bdpt:
-            # Its t = 1 joins (light vertices 2 .. max_depth); its pixels' own sums go to a row each (own_xyz).
-            self.capacity = min(max(scene.max_depth - 1, 1), MAX_RECORD_SLOTS)
-        pixels = renderer.pixel_count
-        need = device_memory_need(renderer.buffers, pixels, spectral_bins)
+    def __init__(
+        self,
+        host: RenderHost,
+        spectral_bins: int,
+        kernel: str,
+        capacity: int,
+        own_rows: bool = False,
+        pixels_per_path: int = 1,
+    ):
+        self.host = host
+        scene = host.scene
+        self.capacity = capacity
+        self.own_rows = own_rows
+        pixels = host.pixel_count
         self.pixel_filter = scene.pixel_filter if scene.pixel_filter.type != "box" else None
         record_bytes = RECORD_BYTES + (BAND_RECORD_BYTES if spectral_bins else 0) + (8 if self.pixel_filter else 0)
-        need.buffers["splat records"] = pixels * self.capacity * record_bytes + (pixels * 16 if self.bdpt else 0)
-        check_device_memory(need, renderer.device)
+        host.check_memory({"splat records": pixels * capacity * record_bytes + (pixels * 16 if own_rows else 0)})
         self.spectral_bins = spectral_bins
-        ctx = renderer.device.context
-        rw = cl.mem_flags.READ_WRITE
-        self._splat_xyz = cl.Buffer(ctx, rw, pixels * self.capacity * 16)
-        self._splat_pixel = cl.Buffer(ctx, rw, pixels * self.capacity * 4)
-        self._splat_counts = cl.Buffer(ctx, rw, pixels * 4)
-        band_slots = pixels * self.capacity if spectral_bins else 1
-        self._splat_band_value = cl.Buffer(ctx, rw, band_slots * 16)
-        self._splat_band = cl.Buffer(ctx, rw, band_slots * 16)
-        self._splat_film = cl.Buffer(ctx, rw, (pixels * self.capacity if self.pixel_filter else 1) * 8)
-        self._items = cl.Buffer(ctx, rw, pixels * 4)
-        self._own_xyz = cl.Buffer(ctx, rw, (pixels if self.bdpt else 1) * 16)
-        # A BDPT work-item renders a group of pixels with one light subpath (kernels/bdpt.cl's trace_bdpt).
-        group = pixels_per_light_path(scene) if self.bdpt else 1
-        self.work_items = -(-pixels // group)
+        self._kernel = host.kernel(kernel)
+        self._splat_xyz = host.buffer(pixels * capacity * 16)
+        self._splat_pixel = host.buffer(pixels * capacity * 4)
+        self._splat_counts = host.buffer(pixels * 4)
+        band_slots = pixels * capacity if spectral_bins else 1
+        self._splat_band_value = host.buffer(band_slots * 16)
+        self._splat_band = host.buffer(band_slots * 16)
+        self._splat_film = host.buffer((pixels * capacity if self.pixel_filter else 1) * 8)
+        self._items = host.buffer(pixels * 4)
+        self._own_xyz = host.buffer((pixels if own_rows else 1) * 16)
+        self.work_items = -(-pixels // pixels_per_path)
         self._sphere = scene_sphere(scene)
         # hide_emitters without area lights hides the environment alone (Mitsuba's), as hide_environment does.
         self._hide_environment = np.int32(scene.hide_environment or getattr(scene, "hide_emitters", False))
+
+    def reset(self) -> None:
+        pass
 
     def _launch(self, sample_index: int, items: np.ndarray, begin: int) -> tuple[np.ndarray, ...]:
         """Runs the light paths of `items` for one pixel sample, keeping their records begin .. begin + capacity − 1:
         (pixel, xyz, band values, bands, film positions) of the slots in order (0 rows for what the render does
         not record: bands without spectral bins, positions with the box filter), and each path's record count."""
-        r = self.renderer
-        queue = r.device.queue
+        host = self.host
         count, capacity = len(items), self.capacity
-        cl.enqueue_copy(queue, self._items, np.ascontiguousarray(items, np.int32))
-        r.kernel.set_args(
-            r._params,
-            *r._scene,
-            r._cmf,
+        host.upload(self._items, np.ascontiguousarray(items, np.int32))
+        host.launch(
+            self._kernel,
+            count,
+            *host.scene_arguments(),
+            host.cmf_buffer,
             self._sphere,
             self._hide_environment,
             np.int32(sample_index),
@@ -202,25 +195,24 @@ class LightPasses:
             self._splat_band,
             self._splat_film,
             self._own_xyz,
-            r.film.ray_count_buffer,
+            host.film.ray_count_buffer,
         )
-        cl.enqueue_nd_range_kernel(queue, r.kernel, *launch_shape(count, r.work_group))
         pixel = np.empty(count * capacity, np.int32)
         xyz = np.empty((count * capacity, 4), np.float32)
         counts = np.empty(count, np.int32)
-        cl.enqueue_copy(queue, pixel, self._splat_pixel)
-        cl.enqueue_copy(queue, xyz, self._splat_xyz)
-        cl.enqueue_copy(queue, counts, self._splat_counts)
+        host.download(pixel, self._splat_pixel)
+        host.download(xyz, self._splat_xyz)
+        host.download(counts, self._splat_counts)
         band_rows = count * capacity if self.spectral_bins else 0
         band_value = np.empty((band_rows, 4), np.float32)
         band = np.empty((band_rows, 4), np.int32)
         if band_rows:
-            cl.enqueue_copy(queue, band_value, self._splat_band_value)
-            cl.enqueue_copy(queue, band, self._splat_band)
+            host.download(band_value, self._splat_band_value)
+            host.download(band, self._splat_band)
         film = np.empty((count * capacity if self.pixel_filter else 0, 2), np.float32)
         if len(film):
-            cl.enqueue_copy(queue, film, self._splat_film)
-        queue.finish()
+            host.download(film, self._splat_film)
+        host.finish()
         return pixel, xyz, band_value, band, film, counts
 
     def _sample_splats(self, sample_index: int) -> list[np.ndarray]:
@@ -247,50 +239,47 @@ class LightPasses:
         return [column[order] if len(column) else column for column in columns]
 
     def run_pass(self, sample_count: int) -> None:
-        """Adds `sample_count` pixel samples' light paths to the renderer's film (its run_pass, translated errors)."""
-        r = self.renderer
-        refuse_tiles(r, "splats")
-        queue = r.device.queue
-        film = r.film
-        done = film.samples_done
-        start = time.perf_counter()
-        cl.enqueue_copy(queue, r._params, render_params(r.scene, r.buffers, done, sample_count))
-        sums = np.empty((r.pixel_count, 4), np.float32)
-        cl.enqueue_copy(queue, sums, film.xyz_buffer)
-        bins = self.spectral_bins
-        bands = np.empty(r.pixel_count * bins, np.float32)
-        if bins:
-            cl.enqueue_copy(queue, bands, film.spectral_buffer)
-        own = np.empty((r.pixel_count, 4), np.float32) if self.bdpt else None
-        for sample_index in range(done, done + sample_count):
-            pixel, xyz, band_value, band, position = self._sample_splats(sample_index)
-            if own is not None:
-                # BDPT's pixels' own estimates (every strategy but t = 1), one per pixel, before the sample's splats.
-                cl.enqueue_copy(queue, own, self._own_xyz)
-                sums += own
-            if self.pixel_filter is not None:
-                # Each splat spread over the pixels its filter covers; the dropped-sample count stays in its own.
-                np.add.at(sums[:, 3], pixel, xyz[:, 3])
-                pixel, weight = filter_spread(
-                    self.pixel_filter, position.astype(np.float64), r.scene.width, r.scene.height
-                )
-                xyz = (xyz[:, None, :3] * weight[..., None]).astype(np.float32)
-                band_value = band_value[:, None, :] * weight[..., None] if bins else band_value
-                band = np.repeat(band[:, None, :], weight.shape[1], axis=1) if bins else band
-                nonzero = weight != 0.0
-                pixel, xyz = pixel[nonzero], xyz[nonzero]
-                if bins:
-                    band_value, band = band_value[nonzero].astype(np.float32), band[nonzero]
-                np.add.at(sums[:, :3], pixel, xyz)  # strided rows: kept as they were
-            else:
-                # One record after another in this order: the same float sums every time.
-                add_in_order(sums, pixel, xyz)
+        """Adds `sample_count` pixel samples' light paths to the renderer's film."""
+        host = self.host
+        film = host.film
+        pixels = host.pixel_count
+        with host.render_pass(sample_count) as done:
+            sums = np.empty((pixels, 4), np.float32)
+            host.download(sums, film.xyz_buffer)
+            bins = self.spectral_bins
+            bands = np.empty(pixels * bins, np.float32)
             if bins:
-                # Record by record, lane by lane within one, as add_to_spectral_film adds a camera path's lanes.
-                inside = band >= 0
-                np.add.at(bands, (pixel[:, None] * bins + band)[inside], band_value[inside])
-        cl.enqueue_copy(queue, film.xyz_buffer, sums)
-        if bins:
-            cl.enqueue_copy(queue, film.spectral_buffer, bands)
-        queue.finish()
-        film.add_pass(sample_count, time.perf_counter() - start)
+                host.download(bands, film.spectral_buffer)
+            own = np.empty((pixels, 4), np.float32) if self.own_rows else None
+            for sample_index in range(done, done + sample_count):
+                pixel, xyz, band_value, band, position = self._sample_splats(sample_index)
+                if own is not None:
+                    # BDPT's pixels' own estimates (every strategy but t = 1), one per pixel, before the sample's
+                    # splats.
+                    host.download(own, self._own_xyz)
+                    sums += own
+                if self.pixel_filter is not None:
+                    # Each splat spread over the pixels its filter covers; the dropped-sample count stays in its own.
+                    np.add.at(sums[:, 3], pixel, xyz[:, 3])
+                    pixel, weight = filter_spread(
+                        self.pixel_filter, position.astype(np.float64), host.scene.width, host.scene.height
+                    )
+                    xyz = (xyz[:, None, :3] * weight[..., None]).astype(np.float32)
+                    band_value = band_value[:, None, :] * weight[..., None] if bins else band_value
+                    band = np.repeat(band[:, None, :], weight.shape[1], axis=1) if bins else band
+                    nonzero = weight != 0.0
+                    pixel, xyz = pixel[nonzero], xyz[nonzero]
+                    if bins:
+                        band_value, band = band_value[nonzero].astype(np.float32), band[nonzero]
+                    np.add.at(sums[:, :3], pixel, xyz)  # strided rows: kept as they were
+                else:
+                    # One record after another in this order: the same float sums every time.
+                    add_in_order(sums, pixel, xyz)
+                if bins:
+                    # Record by record, lane by lane within one, as add_to_spectral_film adds a camera path's lanes.
+                    inside = band >= 0
+                    np.add.at(bands, (pixel[:, None] * bins + band)[inside], band_value[inside])
+            host.upload(film.xyz_buffer, sums)
+            if bins:
+                host.upload(film.spectral_buffer, bands)
+            host.finish()
