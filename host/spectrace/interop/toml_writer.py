@@ -9,6 +9,8 @@ from pathlib import Path, PurePosixPath
 
 import numpy as np
 
+from spectrace.errors import SpectraceError
+
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 _FLOAT32_MAX = float(np.finfo(np.float32).max)
 
@@ -143,11 +145,44 @@ def write_scene(
         write_with_files(toml_path, files, write_and_check)
 
 
+def write_imported_scene(
+    toml_path: Path,
+    data: dict,
+    header: str,
+    files: Mapping[str, Callable[[Path], object]],
+    told_at: Callable[[SpectraceError, Path], SpectraceError],
+    option: str,
+    command: str,
+) -> None:
+    """An importer's last step, the same for every format: refuse a number that overflowed on the way, write the
+    TOML and its files all or nothing (write_scene), loading the TOML first; told_at(error, path) turns the loader's
+    complaint about the TOML at `path` into one at the place in the imported file the value came from."""
+    from spectrace.scene import load_scene
+
+    if (key := non_finite_key(data)) is not None:
+        failure = SpectraceError(
+            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
+        )
+        raise told_at(failure, toml_path)
+
+    def check(temp: Path) -> None:
+        try:
+            load_scene(temp)  # from the output's folder, where its relative file paths lead
+        except SpectraceError as error:
+            raise told_at(error, temp) from None
+
+    try:
+        write_scene(toml_path, data, header, files, check, option, command)
+    except OSError as error:
+        raise SpectraceError(
+            f"cannot write the TOML or its files ({error.strerror or error})", where=str(toml_path)
+        ) from None
+
+
 def lock_import(toml_path: Path, option: str, command: str):
     """The lock of an import's TOML (spectrace.io.output_lock.OutputLocks), to hold from before the import's work
     until it ends: a second command writing the same file is refused at once, naming this one. The TOML's folder
     is made first (an import makes missing folders anyway), since the lock file lies there."""
-    from spectrace.errors import SpectraceError
     from spectrace.io.output_lock import OutputLocks
 
     try:

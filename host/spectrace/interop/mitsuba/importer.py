@@ -258,8 +258,7 @@ def import_mitsuba(
 def _import_mitsuba(
     xml_path: Path, toml_path: Path, parameters: dict[str, str] | None, strict: bool, option: str
 ) -> list[str]:
-    from spectrace.interop.toml_writer import non_finite_key, write_scene
-    from spectrace.scene import load_scene
+    from spectrace.interop.toml_writer import write_imported_scene
 
     importer = MitsubaImporter(xml_path, toml_path.parent, parameters or {})
     importer.side_stem = toml_path.stem
@@ -270,25 +269,8 @@ def _import_mitsuba(
             *(note if note.startswith(WARNING_PREFIX) else f"note: {note}" for note in importer.notes),
         ]
     )
-    if (key := non_finite_key(data)) is not None:
-        failure = SpectraceError(
-            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
-        )
-        raise importer.imported_error(failure, toml_path)
-
-    def check(temp: Path) -> None:
-        try:
-            load_scene(temp)  # from the output's folder, where its relative mesh paths lead
-        except SpectraceError as error:
-            raise importer.imported_error(error, temp) from None
-
     files = {name: partial(_write_side, content=content) for name, content in importer.side_files.items()}
-    try:
-        write_scene(toml_path, data, header, files, check, option, "spectrace import-mitsuba")
-    except OSError as error:
-        raise SpectraceError(
-            f"cannot write the TOML or its files ({error.strerror or error})", where=str(toml_path)
-        ) from None
+    write_imported_scene(toml_path, data, header, files, importer.imported_error, option, "spectrace import-mitsuba")
     return importer.notes
 
 

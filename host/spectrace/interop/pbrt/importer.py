@@ -205,8 +205,7 @@ def import_pbrt(
 
 
 def _import_pbrt(pbrt_path: Path, toml_path: Path, strict: bool, option: str) -> tuple[list[str], list[str]]:
-    from spectrace.interop.toml_writer import non_finite_key, write_scene
-    from spectrace.scene import load_scene
+    from spectrace.interop.toml_writer import write_imported_scene
 
     data, importer = pbrt_scene_data(pbrt_path, toml_path)
     if strict and importer.warnings:
@@ -221,29 +220,15 @@ def _import_pbrt(pbrt_path: Path, toml_path: Path, strict: bool, option: str) ->
             *(f"note: {text}" for text in importer.notes),
         ]
     )
-    if (key := non_finite_key(data)) is not None:
-        failure = SpectraceError(
-            "is NaN or infinite: a number of the file overflows or divides by zero", f"{toml_path}: {key}"
-        )
-        raise imported_error(importer, failure, toml_path)
     files: dict[str, Callable[[Path], object]] = {}
     for name, mesh in importer.meshes.items():
         files[f"{importer.mesh_folder}/{name}"] = partial(write_ply, mesh=mesh)
     for name, image in importer.files.items():
         files[f"{importer.mesh_folder}/{name}"] = partial(_write_image_file, image=image)
 
-    def check(temp: Path) -> None:
-        try:
-            load_scene(temp)
-        except SpectraceError as failure:
-            raise imported_error(importer, failure, temp) from None
-
-    try:
-        write_scene(toml_path, data, header, files, check, option, "spectrace import-pbrt")
-    except OSError as failure:
-        raise SpectraceError(
-            f"cannot write the TOML or its files ({failure.strerror or failure})", where=str(toml_path)
-        ) from None
+    write_imported_scene(
+        toml_path, data, header, files, partial(imported_error, importer), option, "spectrace import-pbrt"
+    )
     return importer.warnings, importer.notes
 
 
