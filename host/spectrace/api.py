@@ -16,14 +16,14 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 import numpy as np
 
 from spectrace import lights, materials, textures
-from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
+from spectrace.film.image import Image
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.image import Image
 from spectrace.lights.base import unit_direction
 from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import (
@@ -500,9 +500,9 @@ def render(
     only inside Jupyter. spectral_bins > 0 also keeps that many equal wavelength bands over the film's wavelengths
     (film.wavelengths, 360..830 nm by default) per pixel (`image.spectral`, band-averaged radiance in
     W/(m² sr nm)). colour_space, white_balance and adaptation set how the image converts to RGB (see
-    `spectrace.colour_output` and docs/colour.md). aovs: AOVs
+    `spectrace.film.colour_output` and docs/colour.md). aovs: AOVs
     recorded by the same paths and kept in `image.aovs` ("albedo", "normal", "depth", "position", "variance", as
-    a sequence or a comma-separated string; None keeps the scene's `film.aovs`; see `spectrace.aovs`);
+    a sequence or a comma-separated string; None keeps the scene's `film.aovs`; see `spectrace.film.aovs`);
     `spectrace.denoise(image)` needs albedo and normal.
     client: a Dask distributed Client: the render runs split into tiles of `tile_rows` rows on its workers, each
     opening `device` there (docs/distributed.md); the image is bit-identical to one rendered here on the same
@@ -515,7 +515,7 @@ def render(
     _check_render_arguments(spp, pass_spp, spectral_bins, tile_rows)
     _check_camera(scene)
     if aovs is not None:
-        from spectrace.aovs import parse_aovs
+        from spectrace.film.aovs import parse_aovs
 
         scene = scene.with_overrides(aovs=parse_aovs(aovs, where="aovs"))
     space = parse_colour_space(colour_space) if isinstance(colour_space, str) else ColourSpace(colour_space)
@@ -541,7 +541,6 @@ def _render_on_client(
 ) -> Image:
     from spectrace.device import Device
     from spectrace.distributed import DaskTiles
-    from spectrace.engine.renderer import film_albedo_scale, film_table
     from spectrace.engine.tiles import make_job, render_tiles
     from spectrace.progress import in_notebook, progress_bar
 
@@ -553,9 +552,7 @@ def _render_on_client(
     )
     with reporter as draw:
         film = render_tiles(job, DaskTiles(client), progress=draw)
-    return film.image(
-        scene, job.spectral_range_nm, albedo_scale=film_albedo_scale(scene, film_table(scene, job.buffers))
-    )
+    return film.image(scene, job.film())
 
 
 def measure_radiance(

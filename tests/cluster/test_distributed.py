@@ -96,7 +96,7 @@ def test_an_interrupted_tiled_render_resumes_bit_identical(client, device, tmp_p
         checkpoints=PeriodicTileCheckpoints(saved, identity, 0.0),
     )
     assert int(film.done.sum()) == 2
-    partial = film.image(scene, job.spectral_range_nm)
+    partial = film.image(scene, job.film())
     assert partial.extra["tiles"] == "2/5"
     assert not partial.xyz[8:].any()  # the tiles not rendered are black
 
@@ -104,7 +104,7 @@ def test_an_interrupted_tiled_render_resumes_bit_identical(client, device, tmp_p
     resumed_film = TiledFilm.from_checkpoint(checkpoint, identity, job.spp, str(saved))
     from spectrace.distributed import DaskTiles
 
-    resumed = render_tiles(job, DaskTiles(client), resumed_film).image(scene, job.spectral_range_nm)
+    resumed = render_tiles(job, DaskTiles(client), resumed_film).image(scene, job.film())
     _assert_same_bits(resumed, render(scene, device=device, progress=False))
 
 
@@ -145,7 +145,7 @@ def test_tiles_from_different_devices_are_marked_in_the_metadata(tmp_path):
     film = TiledFilm(job.plan, job.spp)
     for index, key in enumerate((first, second)):
         render_tiles(job, _OneTile(LocalTiles(open_device(key)), index), film)
-    image = film.image(scene, job.spectral_range_nm)
+    image = film.image(scene, job.film())
     assert image.extra["devices_mixed"] == "yes"
     assert first in image.device and second in image.device
 

@@ -119,16 +119,13 @@ def test_a_worker_with_other_kernels_refuses_the_job(device):
 def test_a_tiled_render_keeps_the_aovs_of_a_render_in_one_piece(device):
     """AOV sums are per-pixel sums like the film's, so tiles merge them into the same bits, and the merged image
     makes the same AOV images (the albedo's channel scale included)."""
-    from spectrace.aovs import albedo_channel_scale
 
     scene = _cornell(aovs=("albedo", "depth", "variance"))
     whole = Renderer(scene, device)
     whole.render()
     expected = whole.image()
     job, _ = make_job(scene, None, device.report.key, 0, 3)
-    merged = render_tiles(job, LocalTiles(device)).image(
-        scene, job.spectral_range_nm, albedo_scale=albedo_channel_scale(job.buffers.cmf)
-    )
+    merged = render_tiles(job, LocalTiles(device)).image(scene, job.film())
     assert np.array_equal(merged.xyz, expected.xyz)
     assert sorted(merged.aovs) == sorted(expected.aovs) == ["albedo", "depth", "variance"]
     for name, values in expected.aovs.items():

@@ -179,12 +179,12 @@ def render(
     """Render SCENE to an image. Ctrl-C, SIGTERM or SIGHUP (a closed terminal) stops after the current pass and
     writes the samples done so far (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without
     writing."""
-    from spectrace.aovs import parse_aovs
     from spectrace.cli import checks as cli_checks
     from spectrace.engine.checkpoint import read_checkpoint
     from spectrace.engine.stop_signals import StopOnSignals
     from spectrace.engine.wavefront import make_renderer
-    from spectrace.output_options import RenderOutputOptions
+    from spectrace.film.aovs import parse_aovs
+    from spectrace.film.output_options import RenderOutputOptions
     from spectrace.scene import load_scene
     from spectrace.scene.model import SAMPLER_TYPES
 
@@ -217,7 +217,7 @@ def render(
     if spectral_bins and output.suffix.lower() != ".exr":
         raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
     if spectral_bins:
-        from spectrace.film import spectral_bins_problem, spectral_range
+        from spectrace.film.state import spectral_bins_problem, spectral_range
 
         if problem := spectral_bins_problem(spectral_bins, spectral_range(loaded)):
             raise SpectraceError(problem, where="--spectral-bins")

@@ -35,7 +35,6 @@ def render_tiled(
     cluster_timeout: float,
     noisy: Path | None = None,
 ) -> None:
-    from spectrace.engine.renderer import film_albedo_scale, film_table
     from spectrace.engine.stop_signals import StopOnSignals
     from spectrace.engine.tiles import LocalTiles, PeriodicTileCheckpoints, TiledFilm, make_job
 
@@ -83,9 +82,7 @@ def render_tiled(
         raise SpectraceError("interrupted before the first tile finished; nothing written")
     if not film.done.all() and state_file is None:
         _save_unasked_checkpoint(film, identity, output)
-    image = film.image(
-        scene, job.spectral_range_nm, albedo_scale=film_albedo_scale(scene, film_table(scene, job.buffers))
-    )
+    image = film.image(scene, job.film())
     if noisy is not None:  # --denoise: the noisy image kept beside the denoised one, as for a render here
         from spectrace.denoising import denoise_with_emission_pass, noisy_image
 

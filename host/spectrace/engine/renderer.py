@@ -8,7 +8,6 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace import materials
-from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.core import limits
 from spectrace.core.contract import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
 from spectrace.device import Device, open_device
@@ -21,9 +20,10 @@ from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, re
 from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
 from spectrace.engine.sppm import SppmPasses
 from spectrace.errors import SpectraceError
-from spectrace.film import Film, dropped_samples_problem, spectral_defines, spectral_range
+from spectrace.film.image import Image
+from spectrace.film.setup import FilmSetup
+from spectrace.film.state import dropped_samples_problem
 from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.image import Image
 from spectrace.scene.model import SAMPLER_TYPES, Scene
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
@@ -77,18 +77,6 @@ def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
     ]
 
 
-def film_table(scene: Scene, buffers: SceneBuffers) -> np.ndarray:
-    """The film table the render kernels read as `cmf` (kernels/film.cl): the scene buffers' CIE 1931 CMFs for the
-    default film; other films bring their own, whose first rows are the film observer's XYZ curves on its grid."""
-    response = scene.film_response
-    return buffers.cmf if response.is_default else response.device_table()
-
-
-def film_albedo_scale(scene: Scene, table: np.ndarray) -> np.ndarray:
-    """The albedo AOV's channel scale (spectrace.aovs) for the film observer's XYZ rows of a film table."""
-    return albedo_channel_scale(table[: scene.film_response.grid_nm.size])
-
-
 class Renderer:
     _light_passes: LightPasses | None = None  # set by _allocate for a `light` or `bdpt` scene
     _sppm_passes: SppmPasses | None = None  # set by _allocate for an `sppm` scene
@@ -114,8 +102,6 @@ class Renderer:
         self.specialised = specialise
         self.scene = scene
         self._check_scene(scene)
-        if spectral_range_nm is None:
-            spectral_range_nm = spectral_range(scene)
         problem = (
             limits.render_settings_problem(scene.width, scene.height, scene.spp)
             or limits.scene_settings_problem(scene)
@@ -131,11 +117,11 @@ class Renderer:
                 raise
             raise SpectraceError(exc.message, where=str(scene.source)) from None
         self._check_film_range(scene)
+        film = FilmSetup.of(scene, self.buffers.cmf, spectral_bins, spectral_range_nm)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
-        response_channels = len(scene.film_response.channel_names)
         check_device_memory(
             device_memory_need(
-                self.buffers, scene.width * scene.height, spectral_bins, response_channels, aovs=bool(scene.aovs)
+                self.buffers, scene.width * scene.height, spectral_bins, film.response_channels, aovs=bool(film.aovs)
             ),
             self.device,
         )
@@ -144,9 +130,7 @@ class Renderer:
             hides = scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes)
             defines |= scene_feature_defines(self.buffers, hides)
             defines |= camera_feature_defines(render_params(scene, self.buffers, 0, 0))
-        defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
-        response = scene.film_response
-        defines |= response.defines()
+        defines |= film.defines()
         if scene.integrator == "bdpt":
             defines["BDPT_PIXELS_PER_LIGHT_PATH"] = pixels_per_light_path(scene)
         self.program = self.device.build_program(
@@ -156,24 +140,10 @@ class Renderer:
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
         self.work_group = render_work_group(self.device)
         ctx = self.device.context
-        ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-        b = self.buffers
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
-        self._scene = upload_scene(ctx, b)
-        # The default CIE 1931 film's table is the scene buffers' CMFs; other films bring their own (film.cl), whose
-        # first rows are the film observer's XYZ curves on the film's grid.
-        self.film_table = film_table(scene, b)
-        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(self.film_table))
-        self.film = Film(
-            self.device,
-            scene.width,
-            scene.height,
-            spectral_bins,
-            spectral_range_nm,
-            aovs=scene.aovs,
-            albedo_scale=film_albedo_scale(scene, self.film_table),
-            response=response,
-        )
+        self._scene = upload_scene(ctx, self.buffers)
+        self.film = film.create(self.device)
+        self._cmf = self.film.table_buffer  # the light tracer's and SPPM's kernels take the table apart
         # The pixels [begin, end) the passes render: all of them, or one tile of a split render (spectrace.engine.
         # tiles). The launch's global offset moves the work-item ids, so each pixel runs the same code on the
         # same ids either way and adds the same bits.
@@ -272,12 +242,7 @@ class Renderer:
         self.kernel.set_args(
             self._params,
             *self._scene,
-            self._cmf,
-            film.xyz_buffer,
-            film.ray_count_buffer,
-            film.spectral_buffer,
-            film.response_buffer,
-            film.aov_buffer,
+            *film.kernel_arguments(),
         )
         begin, end = self.pixel_range
         global_size, local_size = launch_shape(end - begin, self.work_group)
@@ -319,22 +284,9 @@ class Renderer:
         """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
         return self.film.read_spectral()
 
-    def _film_metadata(self) -> dict[str, str]:
-        """What the film responded to, for the image's metadata (nothing for the default film)."""
-        response = self.scene.film_response
-        if response.is_default:
-            return {}
-        lo, hi = response.wavelengths
-        metadata = {"observer": response.observer, "wavelengths_nm": f"{lo:g}-{hi:g}"}
-        if response.sensor is not None:
-            metadata["sensor"] = response.sensor.source
-        if response.sensor_white is not None:
-            metadata["sensor_white"] = response.sensor_white
-        return metadata
-
     def image(self) -> Image:
         """The image of the samples so far; a SpectraceError when most of them were dropped as non-finite
-        (spectrace.film.DROPPED_FAIL_FRACTION), naming the likeliest input."""
+        (spectrace.film.state.DROPPED_FAIL_FRACTION), naming the likeliest input."""
         scene = self.scene
         image = self._film_image()
         begin, end = self.pixel_range
@@ -354,7 +306,7 @@ class Renderer:
                 "height": scene.height,
                 "sampler": scene.sampler,
                 "triangles": self.buffers.triangle_count,
-                **self._film_metadata(),
+                **self.film.setup.metadata(),
                 "bvh_seconds": f"{self.buffers.bvh_seconds:.3f}",
                 **(
                     {"bvh_peak_mib": f"{self.buffers.bvh_peak_bytes / 2**20:.1f}"}

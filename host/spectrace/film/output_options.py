@@ -9,9 +9,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from spectrace.colour_output import ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.errors import SpectraceError
-from spectrace.image import Image
+from spectrace.film.colour_output import ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
+from spectrace.film.image import Image
 
 FalseColourScale = Literal["log", "linear"]
 FALSE_COLOUR_SCALES: tuple[FalseColourScale, ...] = ("log", "linear")
