@@ -187,7 +187,7 @@ class LightPasses:
         r.kernel.set_args(
             r._params,
             *r._scene,
-            r._cmf,
+            r.film.table_buffer,
             self._sphere,
             self._hide_environment,
             np.int32(sample_index),

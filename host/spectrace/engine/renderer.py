@@ -103,7 +103,7 @@ class Renderer:
         self.scene = scene
         self._check_scene(scene)
         problem = (
-            limits.render_settings_problem(scene.width, scene.height, scene.spp)
+            limits.film_size_problem(scene.width, scene.height)  # the spp: checked by render(), which is given it
             or limits.scene_settings_problem(scene)
             or limits.scene_geometry_problem(scene)
         )
@@ -143,7 +143,6 @@ class Renderer:
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
         self._scene = upload_scene(ctx, self.buffers)
         self.film = film.create(self.device)
-        self._cmf = self.film.table_buffer  # the light tracer's and SPPM's kernels take the table apart
         # The pixels [begin, end) the passes render: all of them, or one tile of a split render (spectrace.engine.
         # tiles). The launch's global offset moves the work-item ids, so each pixel runs the same code on the
         # same ids either way and adds the same bits.

@@ -209,7 +209,7 @@ class SppmPasses:
             self._gather_kernel.set_args(
                 r._params,
                 *r._scene,
-                r._cmf,
+                r.film.table_buffer,
                 np.int32(sample_index),
                 np.int32(r.pixel_count),
                 self._radius_per_metre,

@@ -22,11 +22,10 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from spectrace.core import limits
 from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, TileMap, identity_mismatch, write_checkpoint
 from spectrace.errors import SpectraceError
 from spectrace.film.image import Image
-from spectrace.film.state import STATE_LAYOUT, RenderState, dropped_samples_problem, spectral_range
+from spectrace.film.state import STATE_LAYOUT, RenderState, dropped_samples_problem
 
 if TYPE_CHECKING:
     from spectrace.device import Device
@@ -333,44 +332,3 @@ def whole_film_rows(scene: Scene, tile_rows: int | None, where: str = "--tile-ro
             where=where,
         )
     return scene.height
-
-
-def make_job(
-    scene: Scene,
-    spp: int | None = None,
-    device: str | None = None,
-    spectral_bins: int = 0,
-    tile_rows: int | None = None,
-    spectral_range_nm: tuple[float, float] | None = None,
-) -> tuple[TileJob, RenderIdentity]:
-    """The job of a tiled render of `scene` and the render's identity (for checkpoints), checked and built here on
-    the client: the scene buffers (BVH included) are built once, not once per worker."""
-    from spectrace.engine.checkpoint import scene_identity
-    from spectrace.engine.scene_buffers import build_scene_buffers
-
-    total = spp if spp is not None else scene.spp
-    problem = (
-        limits.render_settings_problem(scene.width, scene.height, total)
-        or limits.scene_settings_problem(scene)
-        or limits.scene_geometry_problem(scene)
-    )
-    if problem:
-        raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
-    tile_rows = whole_film_rows(scene, tile_rows)
-    buffers = build_scene_buffers(scene)
-    if spectral_range_nm is None:
-        spectral_range_nm = spectral_range(scene)
-    identity = scene_identity(scene, buffers, spectral_bins, spectral_range_nm)
-    plan = plan_tiles(scene.width, scene.height, tile_rows)
-    job = TileJob.make(
-        scene,
-        buffers,
-        plan,
-        total,
-        device,
-        spectral_bins,
-        spectral_range_nm,
-        identity.scene_digest,
-        identity.kernels_digest,
-    )
-    return job, identity

@@ -1,7 +1,7 @@
 """The film: what a render integrates against and what it gives back.
 
-- `response`: what the film responds to (its observer's CMFs, more observers, a measured sensor's curves) and the
-  wavelength range and sampling table the kernels read;
+- `response`: what the film responds to (colour matching functions, a measured sensor's curves), the wavelength
+  range and the sampling table the kernels read;
 - `aovs`: the images kept beside the colour (albedo, normal, depth...), their names and channels;
 - `state`: the film's saved state (what checkpoints and tiles hold), its checks and its image;
 - `setup`: the one object the engine asks for the film's defines, device buffers (`Film`) and kernel arguments,

@@ -1,8 +1,8 @@
 """The film of one render as the engine sees it: `FilmSetup`, the one object it asks for the film's kernel
 defines, its device buffers (`Film`) and their kernel arguments, and which turns the film's sums back into an
-`Image`. The engine never looks inside: what the film integrates against (an observer's CMFs, more observers, a
-sensor, spectral bands, AOVs) is the film's own business, so a new kind of film output changes this package and
-kernels/film.cl, not the renderer."""
+`Image`. The engine never looks inside: what the film integrates against (colour matching functions, several of
+them, a sensor, spectral bands, AOVs) is the film's own business, so a new kind of film output changes this
+package and kernels/film.cl, not the renderer."""
 
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ class FilmSetup:
         spectral_range_nm: tuple[float, float] | None = None,
     ) -> FilmSetup:
         """The film of `scene`. `scene_cmf`: the scene buffers' CIE 1931 table, which is the default film's own
-        (other films bring theirs, whose first rows are the film observer's XYZ curves on the film's grid).
+        (other films bring theirs, whose first rows are the film's own XYZ curves on its grid).
         `spectral_range_nm` None: the film's wavelengths, which the samples span."""
         response = scene.film_response
         table = scene_cmf if response.is_default else response.device_table()
@@ -70,7 +70,7 @@ class FilmSetup:
 
     @property
     def albedo_scale(self) -> np.ndarray:
-        """The albedo AOV's channel scale (spectrace.film.aovs) for the film observer's XYZ rows of the table."""
+        """The albedo AOV's channel scale (spectrace.film.aovs) for the film's XYZ rows of the table."""
         return albedo_channel_scale(self.table[: self.response.grid_nm.size])
 
     def defines(self) -> dict[str, int | float]:
@@ -83,16 +83,7 @@ class FilmSetup:
 
     def metadata(self) -> dict[str, str]:
         """What the film responded to, for the image's metadata (nothing for the default film)."""
-        response = self.response
-        if response.is_default:
-            return {}
-        lo, hi = response.wavelengths
-        metadata = {"observer": response.observer, "wavelengths_nm": f"{lo:g}-{hi:g}"}
-        if response.sensor is not None:
-            metadata["sensor"] = response.sensor.source
-        if response.sensor_white is not None:
-            metadata["sensor_white"] = response.sensor_white
-        return metadata
+        return self.response.metadata()
 
     def create(self, device: Device) -> Film:
         """The device film: its buffers allocated and cleared on `device` (a spectrace.device.Device)."""
@@ -178,39 +169,33 @@ class Film:
         self.render_seconds += seconds
         self.samples_done += sample_count
 
+    def _read(self, buffer: cl.Buffer, shape: tuple[int, ...], dtype: type = np.float32) -> np.ndarray:
+        values: np.ndarray = np.empty(shape, dtype)
+        cl.enqueue_copy(self.device.queue, values, buffer)
+        self.device.queue.finish()
+        return values
+
     @translate_opencl_errors("reading the film")
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """(pixels, 4) float32 sums of X, Y, Z and dropped samples, and (pixels,) uint32 rays traced."""
-        film = np.empty((self.pixel_count, 4), np.float32)
-        rays = np.empty(self.pixel_count, np.uint32)
-        cl.enqueue_copy(self.device.queue, film, self.xyz_buffer)
-        cl.enqueue_copy(self.device.queue, rays, self.ray_count_buffer)
-        self.device.queue.finish()
-        return film, rays
+        return self._read(self.xyz_buffer, (self.pixel_count, 4)), self._read(
+            self.ray_count_buffer, (self.pixel_count,), np.uint32
+        )
 
     @translate_opencl_errors("reading the spectral film")
     def read_spectral(self) -> np.ndarray:
         """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
-        bands = np.empty(self.pixel_count * self.spectral_bins, np.float32)
-        cl.enqueue_copy(self.device.queue, bands, self.spectral_buffer)
-        self.device.queue.finish()
-        return bands.reshape(self.height, self.width, self.spectral_bins)
+        return self._read(self.spectral_buffer, (self.height, self.width, self.spectral_bins))
 
     @translate_opencl_errors("reading the AOV film")
     def read_aovs(self) -> np.ndarray:
-        """(pixels, 12) AOV sums (kernels/aov.cl's layout); divide by samples_done for the means."""
-        sums = np.empty((self.pixel_count, AOV_FLOATS_PER_PIXEL), np.float32)
-        cl.enqueue_copy(self.device.queue, sums, self.aov_buffer)
-        self.device.queue.finish()
-        return sums
+        """(pixels, AOV_FLOATS_PER_PIXEL) AOV sums (kernels/aov.cl's layout); divide by samples_done for the means."""
+        return self._read(self.aov_buffer, (self.pixel_count, AOV_FLOATS_PER_PIXEL))
 
     @translate_opencl_errors("reading the response film")
     def read_responses(self) -> np.ndarray:
         """(height, width, channels) response sums; divide by samples_done for the means."""
-        sums = np.empty(self.pixel_count * self.response_channels, np.float32)
-        cl.enqueue_copy(self.device.queue, sums, self.response_buffer)
-        self.device.queue.finish()
-        return sums.reshape(self.height, self.width, self.response_channels)
+        return self._read(self.response_buffer, (self.height, self.width, self.response_channels))
 
     def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
         """The mean of the samples so far per pixel, labelled with how it was made."""
