@@ -9,7 +9,7 @@ import pyopencl as cl
 
 from spectrace import materials
 from spectrace.core import limits
-from spectrace.core.contract import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
+from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 from spectrace.device import Device, open_device
 from spectrace.engine.bdpt import pixels_per_light_path
 from spectrace.engine.launch import launch_shape, render_work_group
@@ -25,7 +25,6 @@ from spectrace.film.setup import FilmSetup
 from spectrace.film.state import dropped_samples_problem
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.scene.model import SAMPLER_TYPES, Scene
-from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
 ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 
@@ -116,8 +115,10 @@ class Renderer:
             if exc.where or scene.source is None:
                 raise
             raise SpectraceError(exc.message, where=str(scene.source)) from None
-        self._check_film_range(scene)
         film = FilmSetup.of(scene, self.buffers.cmf, spectral_bins, spectral_range_nm)
+        if film.beyond_the_visible:
+            light_images = bool(scene_feature_defines(self.buffers)["SCENE_HAS_LIGHT_IMAGES"])
+            film.check_scene_spectra(self.buffers.textures[: self.buffers.texture_count], light_images, scene.source)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
         check_device_memory(
             device_memory_need(
@@ -148,38 +149,6 @@ class Renderer:
         # same ids either way and adds the same bits.
         self.pixel_range = (0, self.film.pixel_count)
         self._allocate(spectral_bins)
-
-    def _check_film_range(self, scene: Scene) -> None:
-        """A film range of its own reaches every tabulated spectrum (the table refuses those that fall short). The
-        textures' RGB texels are sigmoids of λ and the pictures' weight basis spectra from the table, so they hold on
-        any range inside the visible; beyond it they follow the rule of RGB spectra (continued only with
-        film.extend_rgb), and a spectral texture must have bands as far as the film goes."""
-        response = scene.film_response
-        if not response.has_own_grid:
-            return
-        lo, hi = response.wavelengths
-        if lo >= GRID_MIN_NM and hi <= GRID_MAX_NM:
-            return
-        where = str(scene.source) if scene.source else None
-        textures = self.buffers.textures[: self.buffers.texture_count]
-        features = scene_feature_defines(self.buffers)
-        rgb = bool(np.any(np.isin(textures["texel_format"], (TEXEL_SIGMOID, TEXEL_RGB))))
-        if (rgb or features["SCENE_HAS_LIGHT_IMAGES"]) and not response.extend_rgb:
-            raise SpectraceError(
-                f"film.wavelengths {lo:g}-{hi:g} nm: textures and emitter pictures hold RGB colours, defined for the "
-                f"visible ({GRID_MIN_NM:g}-{GRID_MAX_NM:g} nm) only; film.extend_rgb = true continues them (as it "
-                "does RGB spectra)",
-                where=where,
-            )
-        for texture in textures[textures["texel_format"] == TEXEL_BANDS]:
-            first = float(texture["band_first_nm"])
-            last = first + float(texture["band_step_nm"]) * (int(texture["channels"]) - 1)
-            if (lo < GRID_MIN_NM and first > lo) or (hi > GRID_MAX_NM and last < hi):
-                raise SpectraceError(
-                    f"film.wavelengths {lo:g}-{hi:g} nm: a spectral texture's bands span {first:g}-{last:g} nm; beyond "
-                    f"the visible the film's range needs measured bands",
-                    where=where,
-                )
 
     def _check_scene(self, scene: Scene) -> None:
         """Refuses a scene this kernel shape cannot render, before any other check."""

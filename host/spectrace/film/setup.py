@@ -12,6 +12,7 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.core import limits
+from spectrace.core.contract import TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
 from spectrace.device import Device
 from spectrace.engine.memory import SPECTRAL_BAND_BYTES
 from spectrace.engine.opencl_errors import translate_opencl_errors
@@ -26,6 +27,7 @@ from spectrace.film.state import (
     spectral_range,
     state_image,
 )
+from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,40 @@ class FilmSetup:
     def albedo_scale(self) -> np.ndarray:
         """The albedo AOV's channel scale (spectrace.film.aovs) for the film's XYZ rows of the table."""
         return albedo_channel_scale(self.table[: self.response.grid_nm.size])
+
+    @property
+    def beyond_the_visible(self) -> bool:
+        """The film's wavelengths reach past the common grid (GRID_MIN_NM-GRID_MAX_NM, the visible)."""
+        lo, hi = self.response.wavelengths
+        return self.response.has_own_grid and (lo < GRID_MIN_NM or hi > GRID_MAX_NM)
+
+    def check_scene_spectra(self, textures: np.ndarray, light_images: bool, source: object = None) -> None:
+        """Refuse a scene whose spectra stop short of a film range beyond the visible (the spectrum table refuses
+        tabulated spectra that do). The textures' RGB texels (`textures`: the scene buffers' texture rows) are
+        sigmoids of λ and the emitter pictures' (`light_images`) weight basis spectra from the table, so they hold
+        on any range inside the visible; beyond it they follow the rule of RGB spectra (continued only with
+        film.extend_rgb), and a spectral texture must have bands as far as the film goes."""
+        if not self.beyond_the_visible:
+            return
+        lo, hi = self.response.wavelengths
+        where = str(source) if source else None
+        rgb = bool(np.any(np.isin(textures["texel_format"], (TEXEL_SIGMOID, TEXEL_RGB))))
+        if (rgb or light_images) and not self.response.extend_rgb:
+            raise SpectraceError(
+                f"film.wavelengths {lo:g}-{hi:g} nm: textures and emitter pictures hold RGB colours, defined for the "
+                f"visible ({GRID_MIN_NM:g}-{GRID_MAX_NM:g} nm) only; film.extend_rgb = true continues them (as it "
+                "does RGB spectra)",
+                where=where,
+            )
+        for texture in textures[textures["texel_format"] == TEXEL_BANDS]:
+            first = float(texture["band_first_nm"])
+            last = first + float(texture["band_step_nm"]) * (int(texture["channels"]) - 1)
+            if (lo < GRID_MIN_NM and first > lo) or (hi > GRID_MAX_NM and last < hi):
+                raise SpectraceError(
+                    f"film.wavelengths {lo:g}-{hi:g} nm: a spectral texture's bands span {first:g}-{last:g} nm; beyond "
+                    f"the visible the film's range needs measured bands",
+                    where=where,
+                )
 
     def defines(self) -> dict[str, int | float]:
         """Kernel defines of this film: its spectral bands, AOVs and response (none for the default film)."""
