@@ -48,15 +48,17 @@ _LAZY = {
         ],
         "spectrace.api",
     ),
-    **dict.fromkeys(["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.colour_output"),
+    **dict.fromkeys(
+        ["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.film.colour_output"
+    ),
     "SpectraceError": "spectrace.errors",
     **dict.fromkeys(["denoise", "directly_seen_emission"], "spectrace.denoising"),
-    "Image": "spectrace.image",
+    "Image": "spectrace.film.image",
     "PixelFilter": "spectrace.pixel_filters",
     **dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"),
     "load_scene": "spectrace.scene",
     "Spectrum": "spectrace.spectral.spectrum",
-    **dict.fromkeys(["FilmResponse", "load_sensor", "delta_e_2000_map"], "spectrace.spectral.film_response"),
+    **dict.fromkeys(["FilmResponse", "load_sensor", "delta_e_2000_map"], "spectrace.film.response"),
 }
 
 

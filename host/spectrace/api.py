@@ -16,14 +16,14 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 import numpy as np
 
 from spectrace import lights, materials, textures
-from spectrace.colour_output import Adaptation, ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
+from spectrace.film.image import Image
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.image import Image
 from spectrace.lights.base import unit_direction
 from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import (
@@ -48,6 +48,7 @@ if TYPE_CHECKING:
 
     from spectrace.device import Device
     from spectrace.engine.checkpoint import PeriodicCheckpoints
+    from spectrace.engine.job import RenderJob
     from spectrace.engine.meters import MeterReading
 
 ProgressOption = bool | Literal["auto"] | Callable[[int, int], None] | None
@@ -410,27 +411,6 @@ def _check_camera(scene: Scene) -> None:
         raise SpectraceError("expected a spectrace.PixelFilter", where="pixel_filter")
 
 
-def _check_render_arguments(spp: Any, pass_spp: Any, spectral_bins: Any, tile_rows: Any) -> None:
-    """render()'s numbers, refused before a device opens: a pass_spp of -1 or 0.5 would never finish the
-    render, a spp of NaN or "16" would end it at once with a black image."""
-    from spectrace.core import limits
-
-    problems = (
-        spp is not None and limits.spp_problem(spp),
-        limits.pass_spp_problem(pass_spp),
-        limits.whole_number_problem("spectral_bins", spectral_bins)
-        or (f"spectral_bins must be at least 0, got {spectral_bins}" if spectral_bins < 0 else None),
-        tile_rows is not None
-        and (
-            limits.whole_number_problem("tile_rows", tile_rows)
-            or (f"tile_rows must be at least 1, got {tile_rows}" if tile_rows < 1 else None)
-        ),
-    )
-    for problem in problems:
-        if problem:
-            raise SpectraceError(problem)
-
-
 @contextmanager
 def _no_bar(callback: Callable[[int, int], None] | None):
     yield callback
@@ -500,9 +480,9 @@ def render(
     only inside Jupyter. spectral_bins > 0 also keeps that many equal wavelength bands over the film's wavelengths
     (film.wavelengths, 360..830 nm by default) per pixel (`image.spectral`, band-averaged radiance in
     W/(m² sr nm)). colour_space, white_balance and adaptation set how the image converts to RGB (see
-    `spectrace.colour_output` and docs/colour.md). aovs: AOVs
+    `spectrace.film.colour_output` and docs/colour.md). aovs: AOVs
     recorded by the same paths and kept in `image.aovs` ("albedo", "normal", "depth", "position", "variance", as
-    a sequence or a comma-separated string; None keeps the scene's `film.aovs`; see `spectrace.aovs`);
+    a sequence or a comma-separated string; None keeps the scene's `film.aovs`; see `spectrace.film.aovs`);
     `spectrace.denoise(image)` needs albedo and normal.
     client: a Dask distributed Client: the render runs split into tiles of `tile_rows` rows on its workers, each
     opening `device` there (docs/distributed.md); the image is bit-identical to one rendered here on the same
@@ -512,50 +492,43 @@ def render(
         raise SpectraceError(
             f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) reads a file)"
         )
-    _check_render_arguments(spp, pass_spp, spectral_bins, tile_rows)
+    from spectrace.engine.job import RenderJob
+
     _check_camera(scene)
-    if aovs is not None:
-        from spectrace.aovs import parse_aovs
-
-        scene = scene.with_overrides(aovs=parse_aovs(aovs, where="aovs"))
-    space = parse_colour_space(colour_space) if isinstance(colour_space, str) else ColourSpace(colour_space)
-    balance = parse_white_balance(white_balance, adaptation) if isinstance(white_balance, str) else white_balance
+    job = RenderJob.make(
+        scene,
+        spp=spp,
+        pass_spp=pass_spp,
+        spectral_bins=spectral_bins,
+        tile_rows=tile_rows,
+        aovs=aovs,
+        device=device,
+        colour_space=colour_space,
+        white_balance=white_balance,
+        adaptation=adaptation,
+    )
     if client is not None:
-        image = _render_on_client(scene, client, spp, device, progress, spectral_bins, tile_rows)
+        image = _render_on_client(job, client, progress)
     else:
-        renderer = Renderer(scene, device, spectral_bins=spectral_bins) if spectral_bins else Renderer(scene, device)
-        image = render_passes(renderer, spp, pass_spp=pass_spp, progress=progress)
-    image.colour_space = space
-    image.white_balance = balance
-    return image
+        image = render_passes(job.renderer(), pass_spp=job.pass_spp, progress=progress)
+    return job.finish(image)
 
 
-def _render_on_client(
-    scene: Scene,
-    client: Any,
-    spp: int | None,
-    device: Device | str | None,
-    progress: ProgressOption,
-    spectral_bins: int,
-    tile_rows: int | None,
-) -> Image:
-    from spectrace.device import Device
+def _render_on_client(job: RenderJob, client: Any, progress: ProgressOption) -> Image:
     from spectrace.distributed import DaskTiles
-    from spectrace.engine.renderer import film_albedo_scale, film_table
-    from spectrace.engine.tiles import make_job, render_tiles
+    from spectrace.engine.tiles import render_tiles
     from spectrace.progress import in_notebook, progress_bar
 
-    selection = device.report.key if isinstance(device, Device) else device
-    job, _ = make_job(scene, spp, selection, spectral_bins, tile_rows)
+    tiles, _ = job.tiles()
     show_bar = progress is True or (progress == "auto" and in_notebook())
     reporter = (
-        progress_bar(job.plan.count, 0, unit="tiles") if show_bar else _no_bar(progress if callable(progress) else None)
+        progress_bar(tiles.plan.count, 0, unit="tiles")
+        if show_bar
+        else _no_bar(progress if callable(progress) else None)
     )
     with reporter as draw:
-        film = render_tiles(job, DaskTiles(client), progress=draw)
-    return film.image(
-        scene, job.spectral_range_nm, albedo_scale=film_albedo_scale(scene, film_table(scene, job.buffers))
-    )
+        film = render_tiles(tiles, DaskTiles(client), progress=draw)
+    return film.image(job.scene, tiles.film())
 
 
 def measure_radiance(

@@ -4,7 +4,7 @@ guided by the render's albedo and normal AOVs. An optional extra (`spectrace[den
 OIDN works on linear RGB: the film's XYZ goes to linear sRGB (negative, out-of-gamut values clipped to 0, which
 OIDN's HDR mode requires), is denoised, and comes back to XYZ, so the denoised image keeps every output option
 (colour space, white balance, exposure) of the noisy one. The albedo goes in as linear sRGB with white at
-(1, 1, 1) (spectrace.aovs.albedo_in), clipped to [0, 1]; the normals as they are (world space), clipped to [-1, 1].
+(1, 1, 1) (spectrace.film.aovs.albedo_in), clipped to [0, 1]; the normals as they are (world space), clipped to [-1, 1].
 Both guides are noisy (the same paths made them), so OIDN prefilters them (cleanAux off).
 
 Emitters seen directly: a short render knows the light a camera ray meets on an emitter poorly where an emitter's
@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.aovs import albedo_in
-from spectrace.colour_output import ColourSpace, xyz_to_rgb_matrix
 from spectrace.core.limits import MAX_SEED
 from spectrace.errors import SpectraceError
-from spectrace.image import Image
+from spectrace.film.aovs import albedo_in
+from spectrace.film.colour_output import ColourSpace, xyz_to_rgb_matrix
+from spectrace.film.image import Image
 from spectrace.scene.model import Scene
 
 DENOISE_AOVS = ("albedo", "normal")

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from spectrace.errors import SpectraceError
-from spectrace.image import Image
+from spectrace.film.image import Image
 from spectrace.io.atomic import write_atomically
 from spectrace.io.input_files import is_regular_file
 

@@ -12,7 +12,8 @@ import pytest
 from cli_runner import render_cornell_box, run_in_process
 from spectrace import render
 from spectrace.engine.checkpoint import read_checkpoint
-from spectrace.engine.tiles import LocalTiles, PeriodicTileCheckpoints, TiledFilm, make_job, render_tiles
+from spectrace.engine.job import RenderJob
+from spectrace.engine.tiles import LocalTiles, PeriodicTileCheckpoints, TiledFilm, render_tiles
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
 from spectrace.resources import scenes_dir
@@ -85,7 +86,7 @@ def test_a_worker_killed_mid_render_loses_only_time(client, device):
 
 def test_an_interrupted_tiled_render_resumes_bit_identical(client, device, tmp_path):
     scene = _cornell()
-    job, identity = make_job(scene, None, device.report.key, 0, 4)
+    job, identity = RenderJob.make(scene, device=device.report.key, tile_rows=4).tiles()
     saved = tmp_path / "render.ckpt"
     arrived = []
     film = render_tiles(
@@ -96,7 +97,7 @@ def test_an_interrupted_tiled_render_resumes_bit_identical(client, device, tmp_p
         checkpoints=PeriodicTileCheckpoints(saved, identity, 0.0),
     )
     assert int(film.done.sum()) == 2
-    partial = film.image(scene, job.spectral_range_nm)
+    partial = film.image(scene, job.film())
     assert partial.extra["tiles"] == "2/5"
     assert not partial.xyz[8:].any()  # the tiles not rendered are black
 
@@ -104,13 +105,13 @@ def test_an_interrupted_tiled_render_resumes_bit_identical(client, device, tmp_p
     resumed_film = TiledFilm.from_checkpoint(checkpoint, identity, job.spp, str(saved))
     from spectrace.distributed import DaskTiles
 
-    resumed = render_tiles(job, DaskTiles(client), resumed_film).image(scene, job.spectral_range_nm)
+    resumed = render_tiles(job, DaskTiles(client), resumed_film).image(scene, job.film())
     _assert_same_bits(resumed, render(scene, device=device, progress=False))
 
 
 def test_the_command_line_resumes_a_tiled_checkpoint_here(device, tmp_path, monkeypatch, capsys):
     scene = _cornell()
-    job, identity = make_job(scene, None, device.report.key, 0, 4)
+    job, identity = RenderJob.make(scene, device=device.report.key, tile_rows=4).tiles()
     saved = tmp_path / "render.ckpt"
     render_tiles(job, LocalTiles(device), stop=lambda: False, checkpoints=PeriodicTileCheckpoints(saved, identity, 0))
     # Keep only the first tile done: the resume renders the other four.
@@ -141,11 +142,11 @@ def test_tiles_from_different_devices_are_marked_in_the_metadata(tmp_path):
         pytest.skip(f"needs OpenCL devices of two runtimes, found {keys}")
     first, second = list(runtimes.values())[:2]
     scene = _cornell()
-    job, _ = make_job(scene, None, None, 0, 10)
+    job, _ = RenderJob.make(scene, device=None, tile_rows=10).tiles()
     film = TiledFilm(job.plan, job.spp)
     for index, key in enumerate((first, second)):
         render_tiles(job, _OneTile(LocalTiles(open_device(key)), index), film)
-    image = film.image(scene, job.spectral_range_nm)
+    image = film.image(scene, job.film())
     assert image.extra["devices_mixed"] == "yes"
     assert first in image.device and second in image.device
 

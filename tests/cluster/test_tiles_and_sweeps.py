@@ -9,8 +9,9 @@ import pytest
 
 from cli_runner import render_cornell_box, run_in_process
 from spectrace.engine.checkpoint import TileMap, read_checkpoint, save_checkpoint, write_checkpoint
+from spectrace.engine.job import RenderJob
 from spectrace.engine.renderer import Renderer
-from spectrace.engine.tiles import LocalTiles, PeriodicTileCheckpoints, make_job, render_tiles
+from spectrace.engine.tiles import LocalTiles, PeriodicTileCheckpoints, render_tiles
 from spectrace.errors import SpectraceError
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
@@ -23,7 +24,7 @@ def _cornell(**changes):
 
 
 def test_a_tile_map_that_does_not_fit_the_film_is_refused(device, tmp_path):
-    job, identity = make_job(_cornell(), None, device.report.key, 0, 3)
+    job, identity = RenderJob.make(_cornell(), device=device.report.key, tile_rows=3).tiles()
     path = tmp_path / "tiles.npz"
     render_tiles(job, LocalTiles(device), checkpoints=PeriodicTileCheckpoints(path, identity, 0))
     checkpoint = read_checkpoint(path)
@@ -51,7 +52,7 @@ def test_a_plain_checkpoint_is_not_resumed_tile_by_tile(device, tmp_path, monkey
 def test_a_tiled_checkpoint_is_not_loaded_into_a_plain_renderer(device, tmp_path):
     from spectrace.engine.checkpoint import restore_checkpoint
 
-    job, identity = make_job(_cornell(), None, device.report.key, 0, 5)
+    job, identity = RenderJob.make(_cornell(), device=device.report.key, tile_rows=5).tiles()
     path = tmp_path / "tiles.npz"
     render_tiles(job, LocalTiles(device), checkpoints=PeriodicTileCheckpoints(path, identity, 0))
     with pytest.raises(SpectraceError, match="split into tiles"):
@@ -110,7 +111,7 @@ def test_a_worker_with_other_kernels_refuses_the_job(device):
 
     from spectrace.distributed import render_tile_task
 
-    job, _ = make_job(_cornell(), None, device.report.key, 0, 5)
+    job, _ = RenderJob.make(_cornell(), device=device.report.key, tile_rows=5).tiles()
     assert job.kernels_digest  # the client's, always sent
     with pytest.raises(SpectraceError, match="other spectrace kernels than the client"):
         render_tile_task(replace(job, kernels_digest="0" * 64, key="other kernels"), 0)
@@ -119,16 +120,13 @@ def test_a_worker_with_other_kernels_refuses_the_job(device):
 def test_a_tiled_render_keeps_the_aovs_of_a_render_in_one_piece(device):
     """AOV sums are per-pixel sums like the film's, so tiles merge them into the same bits, and the merged image
     makes the same AOV images (the albedo's channel scale included)."""
-    from spectrace.aovs import albedo_channel_scale
 
     scene = _cornell(aovs=("albedo", "depth", "variance"))
     whole = Renderer(scene, device)
     whole.render()
     expected = whole.image()
-    job, _ = make_job(scene, None, device.report.key, 0, 3)
-    merged = render_tiles(job, LocalTiles(device)).image(
-        scene, job.spectral_range_nm, albedo_scale=albedo_channel_scale(job.buffers.cmf)
-    )
+    job, _ = RenderJob.make(scene, device=device.report.key, tile_rows=3).tiles()
+    merged = render_tiles(job, LocalTiles(device)).image(scene, job.film())
     assert np.array_equal(merged.xyz, expected.xyz)
     assert sorted(merged.aovs) == sorted(expected.aovs) == ["albedo", "depth", "variance"]
     for name, values in expected.aovs.items():

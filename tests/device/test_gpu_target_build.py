@@ -14,7 +14,7 @@ import pytest
 from spectrace import resources
 from spectrace.device.program_cache import _with_contract, build_options
 from spectrace.engine.renderer import sampler_defines
-from spectrace.film import spectral_defines
+from spectrace.film.state import spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.integrators import INTEGRATORS
 from spectrace.materials import generated_sources

@@ -1,4 +1,4 @@
-"""AOVs (kernels/aov.cl, spectrace.aovs) against what they measure.
+"""AOVs (kernels/aov.cl, spectrace.film.aovs) against what they measure.
 
 A camera looks straight down the -z axis at a large diffuse square in the plane z = 0, lit by a uniform
 environment. Every camera ray meets the square, so: each pixel's depth is the mean over its samples of the ray
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import spectrace
-from spectrace.aovs import AOV_NAMES, parse_aovs
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.film.aovs import AOV_NAMES, parse_aovs
 from spectrace.scene.model import Scene
 
 DISTANCE = 4.0

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from cli_runner import render_cornell_box, run_spectrace
-from spectrace.colour_output import (
+from spectrace.errors import SpectraceError
+from spectrace.film.colour_output import (
     Adaptation,
     ColourSpace,
     adaptation_matrix,
@@ -15,8 +16,7 @@ from spectrace.colour_output import (
     xyz_to_output,
     xyz_to_rgb_matrix,
 )
-from spectrace.errors import SpectraceError
-from spectrace.image import Image
+from spectrace.film.image import Image
 from spectrace.io.exr import read_exr
 from spectrace.spectral.colorimetry import XYZ_TO_LINEAR_SRGB
 

@@ -147,8 +147,8 @@ def test_response_film_is_split_invariant_and_resumes_exactly(device, tmp_path, 
 
     from spectrace.engine.checkpoint import resume_render, save_checkpoint
     from spectrace.engine.wavefront import make_renderer
+    from spectrace.film.response import load_sensor
     from spectrace.resources import scenes_dir
-    from spectrace.spectral.film_response import load_sensor
 
     _write_sensor(tmp_path / "mono.csv", {"mono": _gaussian(650, 60)})
     scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=12, height=10, spp=5, seed=3)

@@ -44,7 +44,7 @@ from spectrace.integrators.base import FEATURES
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import Scene
-from spectrace.spectral.film_response import FilmResponse
+from spectrace.film.response import FilmResponse
 from stats_toolkit import (
     assert_at_most_within_standard_errors,
     assert_within_standard_errors,

@@ -224,7 +224,7 @@ def test_a_16_bit_png_inflating_past_its_header_is_refused_in_little_memory(tmp_
 
 def _checkpoint(path) -> None:
     from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, write_checkpoint
-    from spectrace.film import RenderState
+    from spectrace.film.state import RenderState
 
     film = np.random.default_rng(2).random((16, 4), dtype=np.float32)
     state = RenderState(3, 1.5, {"film": film, "ray_counts": np.full(16, 7, np.uint32)})

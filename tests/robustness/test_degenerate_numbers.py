@@ -338,7 +338,7 @@ def test_accepted_white_chromaticities_are_those_inside_colour_sciences_spectral
     colour = pytest.importorskip("colour")
     from matplotlib.path import Path
 
-    from spectrace.colour_output import Adaptation, white_problem
+    from spectrace.film.colour_output import Adaptation, white_problem
 
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].values
     sums = cmfs.sum(axis=1)
@@ -360,7 +360,7 @@ def test_accepted_white_chromaticities_are_those_inside_colour_sciences_spectral
 @pytest.mark.parametrize("method", ["bradford", "von-kries"])
 def test_every_accepted_white_adapts_to_a_neutral(method):
     """Whatever white is accepted, the adaptation is finite and takes that white to R = G = B (the output white)."""
-    from spectrace.colour_output import ColourSpace, parse_white_balance, white_problem, xyz_to_output
+    from spectrace.film.colour_output import ColourSpace, parse_white_balance, white_problem, xyz_to_output
 
     rng = np.random.default_rng(11)
     accepted = 0
@@ -379,7 +379,7 @@ def test_every_accepted_white_adapts_to_a_neutral(method):
 def test_the_observer_rule_follows_each_observers_table():
     """CIE 2012's tables start at 390 nm, CIE 1931's reach 360-830 nm (colour-science's data, CVRL's)."""
     colour = pytest.importorskip("colour")
-    from spectrace.spectral.film_response import observer_range_problem
+    from spectrace.film.response import observer_range_problem
 
     start_2012 = float(colour.MSDS_CMFS["CIE 2015 2 Degree Standard Observer"].wavelengths[0])
     assert start_2012 == 390.0
@@ -388,7 +388,7 @@ def test_the_observer_rule_follows_each_observers_table():
     assert observer_range_problem("CIE 1931 2°", (831.0, 900.0)) is not None
     assert observer_range_problem("CIE 1931 2°", (830.0, 900.0)) is None
     # A sensor film may leave its XYZ observer unseen: its channels are what it records.
-    from spectrace.spectral.film_response import FilmResponse, Sensor
+    from spectrace.film.response import FilmResponse, Sensor
 
     sensor = Sensor("ir.csv", ("ir",), np.array([850.0, 1000.0]), np.array([[1.0], [1.0]]))
     FilmResponse(sensor=sensor, wavelengths=(900.0, 1000.0))
@@ -424,7 +424,7 @@ def test_spectral_bands_span_the_films_wavelengths(device, tmp_path):
 
 
 def test_the_fail_fraction_of_dropped_samples():
-    from spectrace.film import DROPPED_FAIL_FRACTION, dropped_samples_problem
+    from spectrace.film.state import DROPPED_FAIL_FRACTION, dropped_samples_problem
 
     assert dropped_samples_problem(0, 0) is None
     assert dropped_samples_problem(49, 100) is None and DROPPED_FAIL_FRACTION == 0.5

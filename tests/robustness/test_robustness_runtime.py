@@ -190,10 +190,10 @@ def test_a_render_of_dropped_samples_fails_naming_the_emitter(device, tmp_path, 
 
 
 def test_a_few_dropped_samples_are_counted_and_reported(device, tmp_path, monkeypatch, capsys):
-    """Below spectrace.film.DROPPED_FAIL_FRACTION the image is written, the count in its metadata and a warning:
+    """Below spectrace.film.state.DROPPED_FAIL_FRACTION the image is written, the count in its metadata and a warning:
     here the overflowing emitter covers the left eighth of the view (x from -3 to -1 where the view spans ±1.34),
     in front of a plain one."""
-    from spectrace.film import DROPPED_FAIL_FRACTION
+    from spectrace.film.state import DROPPED_FAIL_FRACTION
 
     scene = _overflowing_light_scene()
     edge = np.diag([1.0, 10.0, 1.0, 1.0])

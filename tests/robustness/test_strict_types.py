@@ -81,8 +81,8 @@ def test_render_options_refuse_what_python_would_convert(argv, says, tmp_path, m
 
 @pytest.mark.parametrize("text", ["3_200K", "0_3,0.3"])
 def test_a_white_balance_with_a_digit_separator_is_no_temperature_or_chromaticity(text):
-    from spectrace.colour_output import parse_white_balance
     from spectrace.errors import SpectraceError
+    from spectrace.film.colour_output import parse_white_balance
 
     with pytest.raises(SpectraceError, match="unknown white"):
         parse_white_balance(text)

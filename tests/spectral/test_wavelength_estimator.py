@@ -126,7 +126,7 @@ def test_sampled_pdf_is_the_visible_pdf_at_the_sampled_wavelength(kernel_runner)
 def test_tabulated_sampler_inverts_the_films_cdf(kernel_runner, observers):
     """The film's tabulated sampler: λ(u) lands where the piecewise-constant pdf's CDF (built here in double
     precision from the host's pdf) equals u, and the pdf it reports is that pdf on λ's interval."""
-    from spectrace.spectral.film_response import FilmResponse
+    from spectrace.film.response import FilmResponse
 
     response = FilmResponse(observer=observers[0], observers=observers[1:])
     runner = kernel_runner("testing/wavelength_estimator.cl", response.defines())

@@ -11,7 +11,7 @@ import pytest
 import spectrace
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
-from spectrace.spectral.film_response import FilmResponse
+from spectrace.film.response import FilmResponse
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 from textures.test_textured_render import GRID, RGB_TEXELS, SIDE, _quad_scene, _sigmoid_spectrum
 

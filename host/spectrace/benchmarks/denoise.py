@@ -23,9 +23,9 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from spectrace.colour_output import ColourSpace, xyz_to_output
 from spectrace.device import open_device
 from spectrace.engine.renderer import Renderer
+from spectrace.film.colour_output import ColourSpace, xyz_to_output
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.spectral.colorimetry import srgb_encode

@@ -29,7 +29,7 @@ from spectrace.scene.model import Scene
 
 if TYPE_CHECKING:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant
-    from spectrace.image import Image
+    from spectrace.film.image import Image
 
 
 def bench_scene(scene_path: Path | None, size: int, spp: int, max_depth: int, keep_aspect: bool = False) -> Scene:

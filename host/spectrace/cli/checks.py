@@ -14,18 +14,8 @@ from spectrace.errors import SpectraceError
 from spectrace.io.output_files import check_output_file  # noqa: F401 (the commands' check of their outputs)
 
 
-def check_seed(seed: int | None, option: str = "--seed") -> None:
-    if seed is not None and (problem := limits.seed_problem(seed)):
-        raise SpectraceError(problem, where=option)
-
-
 def check_max_depth(depth: int | None, option: str = "--max-depth") -> None:
     if depth is not None and (problem := limits.max_depth_problem(depth)):
-        raise SpectraceError(problem, where=option)
-
-
-def check_exposure(stops: float | None, option: str = "--exposure") -> None:
-    if stops is not None and (problem := limits.exposure_problem(stops)):
         raise SpectraceError(problem, where=option)
 
 

@@ -179,67 +179,31 @@ def render(
     """Render SCENE to an image. Ctrl-C, SIGTERM or SIGHUP (a closed terminal) stops after the current pass and
     writes the samples done so far (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without
     writing."""
-    from spectrace.aovs import parse_aovs
-    from spectrace.cli import checks as cli_checks
-    from spectrace.engine.checkpoint import read_checkpoint
-    from spectrace.engine.stop_signals import StopOnSignals
-    from spectrace.engine.wavefront import make_renderer
-    from spectrace.output_options import RenderOutputOptions
-    from spectrace.scene import load_scene
-    from spectrace.scene.model import SAMPLER_TYPES
-
-    asked_aovs = parse_aovs(aov, where="--aov") if aov is not None else None
-    if denoise:
-        from spectrace.denoising import INSTALL_HINT, denoise_available
-
-        if not denoise_available():
-            raise SpectraceError(INSTALL_HINT, where="--denoise")
-    if sampler is not None and sampler not in SAMPLER_TYPES:
-        raise SpectraceError(f"unknown sampler '{sampler}' (use {' or '.join(SAMPLER_TYPES)})", where="--sampler")
-    cli_checks.check_seed(seed)
-    cli_checks.check_max_depth(max_depth)
-    cli_checks.check_exposure(exposure)
-    chosen_filter = None
-    if pixel_filter is not None:
-        from spectrace.pixel_filters import parse_filter_option
-
-        chosen_filter = parse_filter_option(pixel_filter)
-    loaded = load_scene(scene).with_overrides(
+    job = _job_from_options(
+        scene,
+        output,
         spp=spp,
         width=width,
         height=height,
         seed=seed,
         max_depth=max_depth,
-        exposure=exposure,
         sampler=sampler,
-        pixel_filter=chosen_filter,
+        exposure=exposure,
+        device=device,
+        spectral_bins=spectral_bins,
+        delta_e_map=delta_e_map,
+        delta_e_white_y=delta_e_white_y,
+        colour_space=colour_space,
+        white_balance=white_balance,
+        adaptation=adaptation,
+        false_color=false_color,
+        false_color_scale=false_color_scale,
+        pixel_filter=pixel_filter,
+        aov=aov,
+        denoise=denoise,
+        kernel=kernel,
+        tile_rows=tile_rows,
     )
-    if spectral_bins and output.suffix.lower() != ".exr":
-        raise SpectraceError("--spectral-bins needs an .exr output", where=str(output))
-    if spectral_bins:
-        from spectrace.film import spectral_bins_problem, spectral_range
-
-        if problem := spectral_bins_problem(spectral_bins, spectral_range(loaded)):
-            raise SpectraceError(problem, where="--spectral-bins")
-    if asked_aovs and output.suffix.lower() != ".exr":
-        raise SpectraceError("--aov needs an .exr output", where=str(output))
-    aovs = loaded.aovs if asked_aovs is None else asked_aovs
-    if aovs and output.suffix.lower() != ".exr":
-        console.print(
-            f"note: the scene's film.aovs ({', '.join(aovs)}) go to .exr files only; {output.name} gets the image",
-            highlight=False,
-            markup=False,
-        )
-        aovs = ()
-    if denoise:
-        from spectrace.denoising import RENDER_AOVS
-
-        aovs = tuple(dict.fromkeys((*aovs, *RENDER_AOVS)))
-    loaded = loaded.with_overrides(aovs=aovs)
-    if delta_e_map:
-        loaded = loaded.with_overrides(film_response=_with_delta_e_map(loaded.film_response, output, delta_e_white_y))
-    _check_render_options(loaded, output, width, height, spp)
-    outputs = RenderOutputOptions.parse(output, colour_space, white_balance, adaptation, false_color, false_color_scale)
     state_file = checkpoint or resume
     noisy = None
     if denoise:
@@ -247,24 +211,23 @@ def render(
 
         noisy = noisy_path_for(output)
     with _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy):
+        from spectrace.engine.checkpoint import read_checkpoint
+
         saved = read_checkpoint(resume) if resume is not None else None  # a bad file fails before the device work
-        if tile_rows is not None and cluster is None and workers is None and (saved is None or saved.tiles is None):
+        resumes_tiles = saved is not None and saved.tiles is not None
+        if tile_rows is not None and cluster is None and workers is None and not resumes_tiles:
             raise SpectraceError(
                 "splits a render over --workers or --cluster (or resumes a tiled checkpoint); a render here is one "
                 "piece",
                 where="--tile-rows",
             )
-        if cluster is not None or workers is not None or (saved is not None and saved.tiles is not None):
+        if cluster is not None or workers is not None or resumes_tiles:
             from spectrace.cli.render_tiles import render_tiled
 
             render_tiled(
-                loaded,
+                job,
                 output,
-                outputs,
                 xyz=xyz,
-                device=device,
-                kernel=kernel,
-                spectral_bins=spectral_bins,
                 quiet=quiet,
                 state_file=state_file,
                 checkpoint_interval=checkpoint_interval,
@@ -272,58 +235,110 @@ def render(
                 resume=resume,
                 cluster=cluster,
                 workers=workers,
-                tile_rows=tile_rows,
                 cluster_timeout=cluster_timeout,
                 noisy=noisy,
             )
             return
-        renderer = make_renderer(loaded, device, kernel, spectral_bins=spectral_bins)
-        report = renderer.device.report
-        console.print(f"device: {report.key} ({report.device_name})", highlight=False, markup=False)
-        buffers = renderer.buffers
-        peak = f", peak {buffers.bvh_peak_bytes / 2**20:.0f} MiB" if buffers.bvh_peak_bytes is not None else ""
-        object_shapes = f" and {buffers.instanced_shape_count} analytic shapes" if buffers.instanced_shape_count else ""
-        instanced = (
-            f" + {buffers.instance_count} instances of {buffers.instanced_triangle_count} object triangles"
-            f"{object_shapes} stored once"
-            if buffers.instance_count
-            else ""
-        )
-        console.print(
-            f"scene: {buffers.triangle_count} triangles{instanced}, BVH built in {buffers.bvh_seconds:.2f} s{peak}",
-            highlight=False,
-            markup=False,
-        )
-        identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
-        with StopOnSignals() as stop:
-            _render_passes(renderer, stop, state_file, checkpoint_interval, quiet, identity)
-            interrupted = stop.requested
-            image = renderer.image()
-            if image.spp == 0:
-                raise SpectraceError("interrupted before the first pass finished; nothing written")
-            if noisy is not None:
-                from spectrace.denoising import denoise_with_emission_pass, noisy_image
+        _render_here(job, output, xyz, quiet, state_file, checkpoint_interval, saved, resume, noisy)
 
-                _write_image(noisy_image(outputs.apply(image), output), noisy, xyz, state_file)
 
-                image = denoise_with_emission_pass(
-                    loaded, image, renderer.device, log=lambda text: console.print(text, highlight=False, markup=False)
-                )
-            _write_image(outputs.apply(image), output, xyz, state_file)
-            outputs.write_false_colour(image, log=lambda text: console.print(text, highlight=False, markup=False))
-        pixels = image.width * image.height * image.spp
-        note = " (interrupted: partial image)" if interrupted else ""
-        note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
-        console.print(
-            f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
-            f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}",
-            highlight=False,
-            markup=False,
+def _say(text: str) -> None:
+    console.print(text, highlight=False, markup=False)
+
+
+def _job_from_options(
+    scene: Path,
+    output: Path,
+    *,
+    delta_e_map: bool,
+    delta_e_white_y: float,
+    colour_space: str,
+    white_balance: str | None,
+    false_color: Path | None,
+    false_color_scale: str,
+    pixel_filter: str | None,
+    aov: str | None,
+    **settings,
+):
+    """The render's RenderJob from the command's options (every check made there, under the options' names), with
+    the ΔE map the command adds to the scene's film."""
+    from spectrace.engine.job import COMMAND_LINE, RenderJob
+    from spectrace.scene import load_scene
+
+    chosen_filter = None
+    if pixel_filter is not None:
+        from spectrace.pixel_filters import parse_filter_option
+
+        chosen_filter = parse_filter_option(pixel_filter)
+    job = RenderJob.make(
+        lambda: load_scene(scene),
+        COMMAND_LINE,
+        output=output,
+        pixel_filter=chosen_filter,
+        aovs=aov,
+        colour_space=colour_space,
+        white_balance=white_balance or None,
+        false_colour=false_color,
+        false_colour_scale=false_color_scale,
+        **settings,
+    )
+    for note in job.notes:
+        _say(note)
+    if delta_e_map:
+        response = _with_delta_e_map(job.scene.film_response, output, delta_e_white_y)
+        job = job.with_scene(job.scene.with_overrides(film_response=response))
+    return job
+
+
+def _render_here(job, output: Path, xyz: bool, quiet: bool, state_file, interval: float, saved, resume, noisy):
+    """The render in one piece on one device of this machine, then its files."""
+    from spectrace.cli.render_output import write_render
+    from spectrace.engine.stop_signals import StopOnSignals
+
+    renderer = job.renderer()
+    report = renderer.device.report
+    _say(f"device: {report.key} ({report.device_name})")
+    _say(_scene_line(renderer.buffers))
+    identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
+    with StopOnSignals() as stop:
+        _render_passes(renderer, stop, state_file, interval, quiet, identity)
+        interrupted = stop.requested
+        image = renderer.image()
+        if image.spp == 0:
+            raise SpectraceError("interrupted before the first pass finished; nothing written")
+        image = write_render(
+            job,
+            image,
+            output,
+            include_xyz=xyz,
+            state_file=state_file,
+            noisy=noisy,
+            device=renderer.device,
+            log=_say,
         )
-        if image.dropped_samples:
-            console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
-        if interrupted:
-            raise typer.Exit(130)
+    pixels = image.width * image.height * image.spp
+    note = " (interrupted: partial image)" if interrupted else ""
+    note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
+    _say(
+        f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
+        f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}"
+    )
+    if image.dropped_samples:
+        console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
+    if interrupted:
+        raise typer.Exit(130)
+
+
+def _scene_line(buffers) -> str:
+    peak = f", peak {buffers.bvh_peak_bytes / 2**20:.0f} MiB" if buffers.bvh_peak_bytes is not None else ""
+    object_shapes = f" and {buffers.instanced_shape_count} analytic shapes" if buffers.instanced_shape_count else ""
+    instanced = (
+        f" + {buffers.instance_count} instances of {buffers.instanced_triangle_count} object triangles"
+        f"{object_shapes} stored once"
+        if buffers.instance_count
+        else ""
+    )
+    return f"scene: {buffers.triangle_count} triangles{instanced}, BVH built in {buffers.bvh_seconds:.2f} s{peak}"
 
 
 def _with_delta_e_map(response, output: Path, white_y: float):
@@ -339,18 +354,6 @@ def _with_delta_e_map(response, output: Path, white_y: float):
     if len(response.observers) < 2:
         raise SpectraceError("compares the first two of film.observers; the scene lists fewer", where="--delta-e-map")
     return replace(response, delta_e_pair=(response.observers[0], response.observers[1]), delta_e_white_y=white_y)
-
-
-def _check_render_options(scene, output: Path, width, height, spp) -> None:
-    """Refuse what would fail only after the render (unknown format) or could never run."""
-    from spectrace.core import limits
-
-    if output.suffix.lower() not in (".exr", ".png"):
-        raise SpectraceError(f"unknown image format '{output.suffix}' (use .exr or .png)", where=str(output))
-    if (width or height) and (problem := limits.film_size_problem(scene.width, scene.height)):
-        raise SpectraceError(problem, where="--width/--height")
-    if spp and (problem := limits.spp_problem(spp)):
-        raise SpectraceError(problem, where="--spp")
 
 
 def _check_output_files(
@@ -440,11 +443,3 @@ def _render_passes(renderer, stop, state_file: Path | None, interval: float, qui
             f"{error.message}; {state_file} holds the last {saver.saved_samples} spp (continue with --resume)",
             where=error.where,
         ) from None
-
-
-def _write_image(image, output: Path, include_xyz: bool, state_file: Path | None) -> None:
-    try:
-        image.write(output, include_xyz=include_xyz)
-    except OSError as error:
-        kept = f"; the render's state is in {state_file} (continue with --resume)" if state_file else ""
-        raise SpectraceError(f"cannot write the image ({error.strerror or error}){kept}", where=str(output)) from None

@@ -16,14 +16,10 @@ def _say(text: str) -> None:
 
 
 def render_tiled(
-    scene,
+    job,
     output: Path,
-    outputs,
     *,
     xyz: bool,
-    device: str | None,
-    kernel: str,
-    spectral_bins: int,
     quiet: bool,
     state_file: Path | None,
     checkpoint_interval: float,
@@ -31,68 +27,62 @@ def render_tiled(
     resume: Path | None,
     cluster: str | None,
     workers: int | None,
-    tile_rows: int | None,
     cluster_timeout: float,
     noisy: Path | None = None,
 ) -> None:
-    from spectrace.engine.renderer import film_albedo_scale, film_table
+    """Render `job` (a spectrace.engine.job.RenderJob) split into tiles, then write its files."""
+    from spectrace.cli.render_output import write_render
     from spectrace.engine.stop_signals import StopOnSignals
-    from spectrace.engine.tiles import LocalTiles, PeriodicTileCheckpoints, TiledFilm, make_job
+    from spectrace.engine.tiles import LocalTiles, PeriodicTileCheckpoints, TiledFilm
 
     if cluster is not None and workers is not None:
         raise SpectraceError("give --cluster or --workers, not both", where="--workers")
-    if kernel != "megakernel":
+    if job.kernel != "megakernel":
         raise SpectraceError("a render split into tiles runs the megakernel only", where="--kernel")
     if cluster is not None or workers is not None:
         from spectrace.distributed import check_cluster_options, require_distributed
 
         require_distributed("--cluster" if cluster is not None else "--workers")  # before any work: say what to install
         check_cluster_options(cluster, workers, cluster_timeout)
-    rows = saved.tiles.rows if saved is not None and saved.tiles is not None else tile_rows
-    if saved is not None and saved.tiles is not None and tile_rows is not None and tile_rows != rows:
+    rows = saved.tiles.rows if saved is not None and saved.tiles is not None else job.tile_rows
+    if saved is not None and saved.tiles is not None and job.tile_rows is not None and job.tile_rows != rows:
         raise SpectraceError(f"the checkpoint's tiles have {rows} rows", where="--tile-rows")
-    job, identity = make_job(scene, None, device, spectral_bins, rows)
+    tiles, identity = job.tiles(rows)
     film = None
     if saved is not None and resume is not None:
-        film = TiledFilm.from_checkpoint(saved, identity, job.spp, str(resume))
+        film = TiledFilm.from_checkpoint(saved, identity, tiles.spp, str(resume))
         _say(f"resumed {resume}: {int(film.done.sum())}/{film.plan.count} tiles done")
     saver = None
     if state_file is not None:
         saver = PeriodicTileCheckpoints(state_file, identity, checkpoint_interval, warn=lambda m: _say(f"warning: {m}"))
-    left = job.plan.count - (int(film.done.sum()) if film is not None else 0)
+    left = tiles.plan.count - (int(film.done.sum()) if film is not None else 0)
     if workers is not None and workers > max(left, 1):
         # A worker renders whole tiles: the others would only start, load the scene and wait.
         _say(f"note: {left} tiles to render, so {max(left, 1)} of the {workers} workers asked for are started")
         workers = max(left, 1)
     with StopOnSignals() as stop:
         if cluster is None and workers is None:
-            _say(f"rendering {left} of {job.plan.count} tiles of {job.plan.rows} rows here")
-            film = _run(job, LocalTiles(device), film, quiet, stop, saver)
+            _say(f"rendering {left} of {tiles.plan.count} tiles of {tiles.plan.rows} rows here")
+            film = _run(tiles, LocalTiles(job.device), film, quiet, stop, saver)
         else:
             from spectrace.distributed import DaskTiles, connect, shipped_bytes
 
             with connect(cluster, workers, cluster_timeout) as client:
                 count = len(client.scheduler_info().get("workers", {}))
                 _say(
-                    f"cluster: {count} workers; {job.plan.count} tiles of {job.plan.rows} rows; "
-                    f"{shipped_bytes(job) / 2**20:.2f} MiB of scene to each worker"
+                    f"cluster: {count} workers; {tiles.plan.count} tiles of {tiles.plan.rows} rows; "
+                    f"{shipped_bytes(tiles) / 2**20:.2f} MiB of scene to each worker"
                 )
-                film = _run(job, DaskTiles(client), film, quiet, stop, saver)
+                film = _run(tiles, DaskTiles(client), film, quiet, stop, saver)
         interrupted = stop.requested
     if not film.done.any():
         raise SpectraceError("interrupted before the first tile finished; nothing written")
     if not film.done.all() and state_file is None:
         _save_unasked_checkpoint(film, identity, output)
-    image = film.image(
-        scene, job.spectral_range_nm, albedo_scale=film_albedo_scale(scene, film_table(scene, job.buffers))
+    image = film.image(job.scene, tiles.film())
+    image = write_render(
+        job, image, output, include_xyz=xyz, state_file=state_file, noisy=noisy, device=job.device, log=_say
     )
-    if noisy is not None:  # --denoise: the noisy image kept beside the denoised one, as for a render here
-        from spectrace.denoising import denoise_with_emission_pass, noisy_image
-
-        _write(noisy_image(outputs.apply(image), output), noisy, xyz, state_file)
-        image = denoise_with_emission_pass(scene, image, device, log=_say)
-    _write(outputs.apply(image), output, xyz, state_file)
-    outputs.write_false_colour(image, log=_say)
     partial = not film.done.all()
     note = f" (interrupted: partial image, {int(film.done.sum())}/{film.plan.count} tiles)" if partial else ""
     _say(f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s of tiles{note}")
@@ -132,11 +122,3 @@ def _run(job, runner, film, quiet: bool, stop, saver):
     bar = nullcontext(None) if quiet else progress_bar(count, done, console.rich(), unit="tiles")
     with bar as draw:
         return render_tiles(job, runner, film, progress=draw, stop=stop, checkpoints=saver)
-
-
-def _write(image, output: Path, include_xyz: bool, state_file: Path | None) -> None:
-    try:
-        image.write(output, include_xyz=include_xyz)
-    except OSError as error:
-        kept = f"; the render's state is in {state_file} (continue with --resume)" if state_file else ""
-        raise SpectraceError(f"cannot write the image ({error.strerror or error}){kept}", where=str(output)) from None

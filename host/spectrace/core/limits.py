@@ -267,11 +267,6 @@ def spectrum_magnitude_problem(values: np.ndarray) -> str | None:
     return None
 
 
-def render_settings_problem(width: int, height: int, spp: int) -> str | None:
-    """Why a render of this size cannot run (film size with its memory, or spp), or None."""
-    return film_size_problem(width, height) or spp_problem(spp)
-
-
 def scene_geometry_problem(scene) -> str | None:
     """Why a resolved Scene (from a file or built in Python) cannot be traced: a shape, the camera or a point
     light with NaN, infinite or overflowing coordinates; or None."""

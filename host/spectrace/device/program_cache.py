@@ -173,7 +173,7 @@ def kernel_contract(generated: GeneratedSources | None = None) -> dict[str, Defi
 
 
 # Contract values a render may set for itself: the wavelength grid of the spectrum table, which a film with a range
-# of its own (film.wavelengths, spectrace.spectral.film_response) moves; the host builds that table on the same grid.
+# of its own (film.wavelengths, spectrace.film.response) moves; the host builds that table on the same grid.
 RENDER_SETTABLE_CONTRACT = frozenset({"GRID_MIN_NM", "GRID_MAX_NM", "GRID_SAMPLES"})
 
 

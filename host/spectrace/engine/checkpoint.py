@@ -12,7 +12,7 @@ a SHA-256 of every other entry (name, type, shape and bytes): a file damaged on 
 rather than continued into a render. Reading also checks each buffer's type and shape against the film size and
 that the sums are finite. Files of format 1 (no checksum) are still read, with those explicit checks only.
 What the state is (its buffers, their layout, saving it from and restoring it to the device) is the film's
-(spectrace.film); this module adds the render's identity and the file.
+(spectrace.film.state); this module adds the render's identity and the file.
 
 A render split into tiles (spectrace.engine.tiles) saves format 3: the same entries plus `tile_rows` (film rows
 per tile) and `tiles_done` (one bool per tile): the tiles marked done hold all `samples_done` samples per pixel,
@@ -36,7 +36,7 @@ from spectrace.device.program_cache import kernels_digest
 from spectrace.engine.memory import scene_arrays
 from spectrace.engine.scene_buffers import render_params
 from spectrace.errors import SpectraceError
-from spectrace.film import RenderState, state_problem
+from spectrace.film.state import RenderState, state_problem
 from spectrace.integrators import INTEGRATORS
 from spectrace.io.atomic import write_atomically
 from spectrace.io.input_files import regular_file
@@ -239,7 +239,7 @@ def _inflation_problem(data: Any) -> str | None:
     checkpoint states, a buffer of bands (any number of them) by the overall limit on compressed inputs, every
     other member by 1 MiB. zipfile stops each member at the size its entry declares, so the declared size is the
     bound to check."""
-    from spectrace.film import STATE_LAYOUT
+    from spectrace.film.state import STATE_LAYOUT
     from spectrace.io.compressed import max_inflated_bytes
 
     packed = [info for info in data.zip.infolist() if info.compress_type != zipfile.ZIP_STORED]

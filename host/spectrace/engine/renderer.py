@@ -10,9 +10,8 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace import materials
-from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.core import limits
-from spectrace.core.contract import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
+from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 from spectrace.device import Device, open_device
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.memory import check_device_memory, device_memory_need
@@ -20,12 +19,12 @@ from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
 from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
 from spectrace.errors import SpectraceError
-from spectrace.film import Film, dropped_samples_problem, spectral_defines, spectral_range
+from spectrace.film.image import Image
+from spectrace.film.setup import FilmSetup
+from spectrace.film.state import dropped_samples_problem
 from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.image import Image
 from spectrace.integrators import INTEGRATORS, scene_settings_problem
 from spectrace.scene.model import SAMPLER_TYPES, Scene
-from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
 ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
 
@@ -63,18 +62,6 @@ def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
     ]
 
 
-def film_table(scene: Scene, buffers: SceneBuffers) -> np.ndarray:
-    """The film table the render kernels read as `cmf` (kernels/film.cl): the scene buffers' CIE 1931 CMFs for the
-    default film; other films bring their own, whose first rows are the film observer's XYZ curves on its grid."""
-    response = scene.film_response
-    return buffers.cmf if response.is_default else response.device_table()
-
-
-def film_albedo_scale(scene: Scene, table: np.ndarray) -> np.ndarray:
-    """The albedo AOV's channel scale (spectrace.aovs) for the film observer's XYZ rows of a film table."""
-    return albedo_channel_scale(table[: scene.film_response.grid_nm.size])
-
-
 class Renderer:
     """A render of one scene on one device: the film, the scene's device buffers and the launches, which it hands its
     integrator's passes as their spectrace.integrators.base.RenderHost (the integrator owns its program, its passes
@@ -109,10 +96,8 @@ class Renderer:
                 f"the {self.KERNEL_SHAPE} kernel runs the {having} integrator only, not {scene.integrator!r}",
                 where=str(scene.source) if scene.source else None,
             )
-        if spectral_range_nm is None:
-            spectral_range_nm = spectral_range(scene)
         problem = (
-            limits.render_settings_problem(scene.width, scene.height, scene.spp)
+            limits.film_size_problem(scene.width, scene.height)  # the spp: checked by render(), which is given it
             or limits.scene_settings_problem(scene)
             or scene_settings_problem(scene)
             or limits.scene_geometry_problem(scene)
@@ -126,14 +111,16 @@ class Renderer:
             if exc.where or scene.source is None:
                 raise
             raise SpectraceError(exc.message, where=str(scene.source)) from None
-        self._check_film_range(scene)
+        film = FilmSetup.of(scene, self.buffers.cmf, spectral_bins, spectral_range_nm)
+        if film.beyond_the_visible:
+            light_images = bool(scene_feature_defines(self.buffers)["SCENE_HAS_LIGHT_IMAGES"])
+            film.check_scene_spectra(self.buffers.textures[: self.buffers.texture_count], light_images, scene.source)
         if problem := self.integrator.problem(scene, self.buffers.medium_count, spectral_bins):
             raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
         # Refuse before allocating anything: a failed allocation deep in the driver says far less.
-        response_channels = len(scene.film_response.channel_names)
         check_device_memory(
             device_memory_need(
-                self.buffers, scene.width * scene.height, spectral_bins, response_channels, aovs=bool(scene.aovs)
+                self.buffers, scene.width * scene.height, spectral_bins, film.response_channels, aovs=bool(film.aovs)
             ),
             self.device,
         )
@@ -142,9 +129,7 @@ class Renderer:
             hides = scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes)
             defines |= scene_feature_defines(self.buffers, hides)
             defines |= camera_feature_defines(render_params(scene, self.buffers, 0, 0))
-        defines |= spectral_defines(spectral_bins, spectral_range_nm) | aov_defines(scene.aovs)
-        response = scene.film_response
-        defines |= response.defines()
+        defines |= film.defines()
         defines |= self.integrator.defines(scene)
         self.program = self.device.build_program(
             self.integrator.PROGRAMS[self.KERNEL_SHAPE],
@@ -154,61 +139,14 @@ class Renderer:
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
         self.work_group = self._work_group()
         ctx = self.device.context
-        ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-        b = self.buffers
         self._params = cl.Buffer(ctx, cl.mem_flags.READ_ONLY, render_params(scene, self.buffers, 0, 0).nbytes)
-        self._scene = upload_scene(ctx, b)
-        # The default CIE 1931 film's table is the scene buffers' CMFs; other films bring their own (film.cl), whose
-        # first rows are the film observer's XYZ curves on the film's grid.
-        self.film_table = film_table(scene, b)
-        self._cmf = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(self.film_table))
-        self.film = Film(
-            self.device,
-            scene.width,
-            scene.height,
-            spectral_bins,
-            spectral_range_nm,
-            aovs=scene.aovs,
-            albedo_scale=film_albedo_scale(scene, self.film_table),
-            response=response,
-        )
+        self._scene = upload_scene(ctx, self.buffers)
+        self.film = film.create(self.device)
         # The pixels [begin, end) the passes render: all of them, or one tile of a split render (spectrace.engine.
         # tiles). The launch's global offset moves the work-item ids, so each pixel runs the same code on the
         # same ids either way and adds the same bits.
         self.pixel_range = (0, self.film.pixel_count)
         self.passes = self.integrator.passes(self, self.KERNEL_SHAPE, spectral_bins)
-
-    def _check_film_range(self, scene: Scene) -> None:
-        """A film range of its own reaches every tabulated spectrum (the table refuses those that fall short). The
-        textures' RGB texels are sigmoids of λ and the pictures' weight basis spectra from the table, so they hold on
-        any range inside the visible; beyond it they follow the rule of RGB spectra (continued only with
-        film.extend_rgb), and a spectral texture must have bands as far as the film goes."""
-        response = scene.film_response
-        if not response.has_own_grid:
-            return
-        lo, hi = response.wavelengths
-        if lo >= GRID_MIN_NM and hi <= GRID_MAX_NM:
-            return
-        where = str(scene.source) if scene.source else None
-        textures = self.buffers.textures[: self.buffers.texture_count]
-        features = scene_feature_defines(self.buffers)
-        rgb = bool(np.any(np.isin(textures["texel_format"], (TEXEL_SIGMOID, TEXEL_RGB))))
-        if (rgb or features["SCENE_HAS_LIGHT_IMAGES"]) and not response.extend_rgb:
-            raise SpectraceError(
-                f"film.wavelengths {lo:g}-{hi:g} nm: textures and emitter pictures hold RGB colours, defined for the "
-                f"visible ({GRID_MIN_NM:g}-{GRID_MAX_NM:g} nm) only; film.extend_rgb = true continues them (as it "
-                "does RGB spectra)",
-                where=where,
-            )
-        for texture in textures[textures["texel_format"] == TEXEL_BANDS]:
-            first = float(texture["band_first_nm"])
-            last = first + float(texture["band_step_nm"]) * (int(texture["channels"]) - 1)
-            if (lo < GRID_MIN_NM and first > lo) or (hi > GRID_MAX_NM and last < hi):
-                raise SpectraceError(
-                    f"film.wavelengths {lo:g}-{hi:g} nm: a spectral texture's bands span {first:g}-{last:g} nm; beyond "
-                    f"the visible the film's range needs measured bands",
-                    where=where,
-                )
 
     def _work_group(self) -> int | None:
         return render_work_group(self.device)
@@ -236,21 +174,13 @@ class Renderer:
 
     @property
     def cmf_buffer(self) -> cl.Buffer:
-        return self._cmf
+        return self.film.table_buffer
 
     def scene_arguments(self) -> tuple:
         return (self._params, *self._scene)
 
     def film_arguments(self) -> tuple:
-        film = self.film
-        return (
-            self._cmf,
-            film.xyz_buffer,
-            film.ray_count_buffer,
-            film.spectral_buffer,
-            film.response_buffer,
-            film.aov_buffer,
-        )
+        return self.film.kernel_arguments()
 
     @contextmanager
     def render_pass(self, sample_count: int) -> Iterator[int]:
@@ -347,22 +277,9 @@ class Renderer:
         """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
         return self.film.read_spectral()
 
-    def _film_metadata(self) -> dict[str, str]:
-        """What the film responded to, for the image's metadata (nothing for the default film)."""
-        response = self.scene.film_response
-        if response.is_default:
-            return {}
-        lo, hi = response.wavelengths
-        metadata = {"observer": response.observer, "wavelengths_nm": f"{lo:g}-{hi:g}"}
-        if response.sensor is not None:
-            metadata["sensor"] = response.sensor.source
-        if response.sensor_white is not None:
-            metadata["sensor_white"] = response.sensor_white
-        return metadata
-
     def image(self) -> Image:
         """The image of the samples so far; a SpectraceError when most of them were dropped as non-finite
-        (spectrace.film.DROPPED_FAIL_FRACTION), naming the likeliest input."""
+        (spectrace.film.state.DROPPED_FAIL_FRACTION), naming the likeliest input."""
         scene = self.scene
         image = self._film_image()
         begin, end = self.pixel_range
@@ -382,7 +299,7 @@ class Renderer:
                 "height": scene.height,
                 "sampler": scene.sampler,
                 "triangles": self.buffers.triangle_count,
-                **self._film_metadata(),
+                **self.film.setup.metadata(),
                 "bvh_seconds": f"{self.buffers.bvh_seconds:.3f}",
                 **(
                     {"bvh_peak_mib": f"{self.buffers.bvh_peak_bytes / 2**20:.1f}"}

@@ -5,7 +5,7 @@ Every tile holds all the samples of its pixels, added in sample order by the sam
 launch's global offset gives each pixel its own work-item id, spectrace.engine.renderer), so the merged film is
 bit-identical to a one-piece render with the same seed on the same device type, however the tiles are spread over
 workers, and when a lost tile is rendered again. The merge is generic over the film's saved-state buffers
-(spectrace.film.RenderState): each is pixel-major, so a tile is one slice along the pixel axis of every buffer,
+(spectrace.film.state.RenderState): each is pixel-major, so a tile is one slice along the pixel axis of every buffer,
 whatever channels the film accumulates.
 
 A tiled render's progress is which tiles are done (a TileMap): its checkpoints (format 3, spectrace.engine.
@@ -22,17 +22,17 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from spectrace.core import limits
 from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, TileMap, identity_mismatch, write_checkpoint
 from spectrace.errors import SpectraceError
-from spectrace.film import STATE_LAYOUT, RenderState, dropped_samples_problem, spectral_range, state_image
-from spectrace.image import Image
-from spectrace.integrators import INTEGRATORS, scene_settings_problem
+from spectrace.film.image import Image
+from spectrace.film.state import STATE_LAYOUT, RenderState, dropped_samples_problem
+from spectrace.integrators import INTEGRATORS
 
 if TYPE_CHECKING:
     from spectrace.device import Device
     from spectrace.engine.renderer import Renderer
     from spectrace.engine.scene_buffers import SceneBuffers
+    from spectrace.film.setup import FilmSetup
     from spectrace.scene.model import Scene
 
 # Tiles by default: at most this many pixels, and at least MIN_TILES of them (when the film has the rows), so that
@@ -86,7 +86,7 @@ def _per_pixel(array: np.ndarray, pixels: int) -> np.ndarray:
 
 
 def _state_shape(name: str, pixels: int, per_pixel: int) -> tuple[int, ...]:
-    """A saved-state buffer's shape as the film saves it (spectrace.film.STATE_LAYOUT): flat where the layout
+    """A saved-state buffer's shape as the film saves it (spectrace.film.state.STATE_LAYOUT): flat where the layout
     leaves the count per pixel open (the bands), (pixels,) for one value, (pixels, k) for several."""
     layout = STATE_LAYOUT.get(name, (None, per_pixel))[1]
     if layout is None:
@@ -142,6 +142,12 @@ class TileJob:
     ) -> TileJob:
         shipped = replace(scene, notes={})
         return cls(shipped, buffers, plan, spp, device, spectral_bins, spectral_range_nm, key, kernels_digest)
+
+    def film(self) -> FilmSetup:
+        """The film the tiles are rendered into, as each worker's renderer sets it up."""
+        from spectrace.film.setup import FilmSetup
+
+        return FilmSetup.of(self.scene, self.buffers.cmf, self.spectral_bins, self.spectral_range_nm)
 
     def renderer(self, device: Device | str | None = None) -> Renderer:
         """A renderer of the whole film on this machine, after checking that its kernels are the client's."""
@@ -251,32 +257,13 @@ class TiledFilm:
         devices = set(checkpoint.device.split("; ")) if done.any() and checkpoint.device else set()
         return cls(plan, spp, dict(checkpoint.state.buffers), done.copy(), devices, checkpoint.state.render_seconds)
 
-    def image(
-        self,
-        scene: Scene,
-        spectral_range_nm: tuple[float, float],
-        extra: dict | None = None,
-        albedo_scale: np.ndarray | None = None,
-    ) -> Image:
-        """The merged image; `albedo_scale` (spectrace.aovs.albedo_channel_scale of the job's CMF table) turns the
-        albedo AOV's sums into means where the scene asks for AOVs."""
+    def image(self, scene: Scene, film: FilmSetup, extra: dict | None = None) -> Image:
+        """The merged image of `scene`'s tiles on `film` (TileJob.film)."""
         labels = {"tiles": f"{int(self.done.sum())}/{self.plan.count}", "tile_rows": self.plan.rows, **(extra or {})}
         if len(self.devices) > 1:
             # Bit-identity holds per device type only: the merged image says it mixes them.
             labels[MIXED_DEVICES_KEY] = "yes"
-        image = state_image(
-            self.state(),
-            self.plan.width,
-            self.plan.height,
-            spectral_range_nm,
-            scene.seed,
-            self.device,
-            scene.exposure,
-            labels,
-            aovs=scene.aovs,
-            albedo_scale=albedo_scale,
-            response=scene.film_response,
-        )
+        image = film.image(self.state(), scene.seed, self.device, scene.exposure, labels)
         # The samples of the finished tiles only: an interrupted render's other pixels hold none.
         samples = image.spp * image.width * image.height * int(self.done.sum()) // max(self.plan.count, 1)
         if problem := dropped_samples_problem(image.dropped_samples, samples, scene):
@@ -344,45 +331,3 @@ def whole_film_rows(scene: Scene, tile_rows: int | None, where: str = "--tile-ro
             where=where,
         )
     return scene.height
-
-
-def make_job(
-    scene: Scene,
-    spp: int | None = None,
-    device: str | None = None,
-    spectral_bins: int = 0,
-    tile_rows: int | None = None,
-    spectral_range_nm: tuple[float, float] | None = None,
-) -> tuple[TileJob, RenderIdentity]:
-    """The job of a tiled render of `scene` and the render's identity (for checkpoints), checked and built here on
-    the client: the scene buffers (BVH included) are built once, not once per worker."""
-    from spectrace.engine.checkpoint import scene_identity
-    from spectrace.engine.scene_buffers import build_scene_buffers
-
-    total = spp if spp is not None else scene.spp
-    problem = (
-        limits.render_settings_problem(scene.width, scene.height, total)
-        or limits.scene_settings_problem(scene)
-        or scene_settings_problem(scene)
-        or limits.scene_geometry_problem(scene)
-    )
-    if problem:
-        raise SpectraceError(problem, where=str(scene.source) if scene.source else None)
-    tile_rows = whole_film_rows(scene, tile_rows)
-    buffers = build_scene_buffers(scene)
-    if spectral_range_nm is None:
-        spectral_range_nm = spectral_range(scene)
-    identity = scene_identity(scene, buffers, spectral_bins, spectral_range_nm)
-    plan = plan_tiles(scene.width, scene.height, tile_rows)
-    job = TileJob.make(
-        scene,
-        buffers,
-        plan,
-        total,
-        device,
-        spectral_bins,
-        spectral_range_nm,
-        identity.scene_digest,
-        identity.kernels_digest,
-    )
-    return job, identity

@@ -9,11 +9,12 @@ import numpy as np
 from pydantic import BaseModel, ValidationError
 
 from spectrace import pixel_filters
-from spectrace.aovs import parse_aovs
 from spectrace.cameras import thinlens
 from spectrace.cameras.shared import clip_problem
 from spectrace.core import limits
 from spectrace.errors import SpectraceError
+from spectrace.film.aovs import parse_aovs
+from spectrace.film.response import FilmResponse, load_sensor
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import (
     ANALYTIC_SHAPES,
@@ -44,7 +45,6 @@ from spectrace.scene.model import (
     Shape,
 )
 from spectrace.spectral.blackbody import blackbody
-from spectrace.spectral.film_response import FilmResponse, load_sensor
 from spectrace.spectral.illuminants import cie_illuminant
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
@@ -714,7 +714,7 @@ def camera_from_spec(spec) -> Camera:
 
 
 def _film_response(film: schema.FilmSpec, resolver: _Resolver) -> FilmResponse:
-    """The film's observers and sensor (spectrace.spectral.film_response); errors name the film's keys."""
+    """The film's observers and sensor (spectrace.film.response); errors name the film's keys."""
     sensor = None
     if film.sensor is not None:
         try:

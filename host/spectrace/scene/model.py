@@ -11,9 +11,10 @@ from typing import Literal
 
 import numpy as np
 
-from spectrace.aovs import parse_aovs
 from spectrace.core import limits
 from spectrace.errors import SpectraceError
+from spectrace.film.aovs import parse_aovs
+from spectrace.film.response import FilmResponse
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.integrators import INTEGRATORS
@@ -26,7 +27,6 @@ from spectrace.lights.point import PointLight  # noqa: F401
 from spectrace.lights.spot import SpotLight  # noqa: F401
 from spectrace.materials.base import Material
 from spectrace.pixel_filters import BOX_FILTER, PixelFilter
-from spectrace.spectral.film_response import FilmResponse
 from spectrace.spectral.spectrum import Spectrum
 
 SamplerType = Literal["independent", "sobol"]
@@ -146,7 +146,7 @@ class Scene:
     spp: int = 16
     seed: int = 0
     sampler: SamplerType = DEFAULT_SAMPLER
-    aovs: tuple[str, ...] = ()  # AOVs kept beside the image (spectrace.film.AOV_NAMES), in that order
+    aovs: tuple[str, ...] = ()  # AOVs kept beside the image (spectrace.film.aovs.AOV_NAMES), in that order
     source: Path | None = None
     notes: dict = field(default_factory=dict)
     instances: list[Instance] = field(default_factory=list)  # placed copies of objects stored once

@@ -27,12 +27,12 @@ from spectrace.cameras import CAMERAS
 from spectrace.cameras import shared as camera_shared
 from spectrace.core import limits
 from spectrace.core.parameters import DISTRIBUTIONS, Parameter
+from spectrace.film.response import observer_problem, wavelength_range_problem
 from spectrace.integrators import INTEGRATORS, settings_problem
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
 from spectrace.pixel_filters import FILTERS
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
-from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
 

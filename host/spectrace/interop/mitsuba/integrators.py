@@ -100,7 +100,7 @@ def integrator(ctx: ImportContext, element: Element, data: dict) -> None:
 
 def aov_integrator(ctx: ImportContext, element: Element, properties: Properties, data: dict) -> None:
     """Mitsuba's `aov` integrator: its nested integrator's image, and the AOVs its `aovs` list names
-    ("name:type, ..."). The types spectrace's film keeps (the same definitions: spectrace.aovs) become the film's
+    ("name:type, ..."). The types spectrace's film keeps (the same definitions: spectrace.film.aovs) become the film's
     aovs; each other type is a warning naming it, and so is an aov integrator without a nested one (Mitsuba's
     image then holds the AOVs alone; spectrace renders the path tracer's image beside them)."""
     nested = ctx.nested(properties, "integrator")

@@ -1,10 +1,10 @@
-"""The film on the host: the device buffers the render kernels add pixel samples to (kernels/film.cl), clearing
-them, reading them back into an `Image`, and their saved state, the whole of a render's progress that a checkpoint
-stores (spectrace.engine.checkpoint writes and reads the file; what goes in it and back to the device is here).
+"""The film's state on the host: the sums the render kernels add pixel samples to (kernels/film.cl; their device
+buffers are spectrace.film.setup's `Film`), the whole of a render's progress that a checkpoint stores
+(spectrace.engine.checkpoint writes and reads the file; what goes in it is here), and their image.
 
 Per pixel the film holds four float32 sums (X, Y, Z and the count of non-finite samples left out), a uint32 count
 of rays traced, when asked for, `spectral_bins` float32 band sums over `spectral_range_nm`, one float32 sum per
-channel of the film's response (spectrace.spectral.film_response: more observers, a measured sensor) and, when any AOV
+channel of the film's response (spectrace.film.response: more observers, a measured sensor) and, when any AOV
 is asked for, the AOV_FLOATS_PER_PIXEL float32 AOV sums of kernels/aov.cl (albedo XYZ and ΣY², normal, position
 and depth, the emission sampled and expected).
 Together with the number of samples per pixel added so far they are the entire state of a render: the samplers are
@@ -13,20 +13,15 @@ counter-based and every pixel adds its samples in sample order, so restoring the
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pyopencl as cl
 
-from spectrace.aovs import AOV_FLOATS_PER_PIXEL, aov_images, with_companions
 from spectrace.core import limits
-from spectrace.device import Device
-from spectrace.engine.memory import SPECTRAL_BAND_BYTES
-from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.errors import SpectraceError
-from spectrace.image import Image, SpectralBands
-from spectrace.spectral.film_response import WAVELENGTH_LIMITS_NM, FilmResponse
+from spectrace.film.aovs import AOV_FLOATS_PER_PIXEL, aov_images, with_companions
+from spectrace.film.image import Image, SpectralBands
+from spectrace.film.response import WAVELENGTH_LIMITS_NM, FilmResponse
 
 SPECTRAL_LIMITS_NM = (360.0, 830.0)  # the wavelengths the renders sample
 # Saved-state buffers: element type, and elements per pixel (None: a positive whole number of them, the bands).
@@ -227,191 +222,3 @@ def state_image(
         exposure=exposure,
         extra=extra or {},
     )
-
-
-class Film:
-    """The device film of one render and the count of samples per pixel it holds."""
-
-    def __init__(
-        self,
-        device: Device,
-        width: int,
-        height: int,
-        spectral_bins: int = 0,
-        spectral_range_nm: tuple[float, float] = SPECTRAL_LIMITS_NM,
-        aovs: Sequence[str] = (),
-        albedo_scale: np.ndarray | None = None,
-        response: FilmResponse | None = None,
-    ):
-        """aovs: names from AOV_NAMES kept beside the image (their kernels built with aov_defines(aovs));
-        albedo_scale: albedo_channel_scale of the render's CMF table."""
-        self.device = device
-        self.aovs = tuple(aovs)
-        self.albedo_scale = np.ones(3, np.float32) if albedo_scale is None else np.asarray(albedo_scale, np.float32)
-        self.response = response or FilmResponse()
-        self.response_channels = len(self.response.channel_names)
-        self.width = width
-        self.height = height
-        self.pixel_count = width * height
-        self.spectral_bins = spectral_bins
-        self.spectral_range_nm = spectral_range_nm
-        ctx = device.context
-        rw = cl.mem_flags.READ_WRITE
-        self.xyz_buffer = cl.Buffer(ctx, rw, self.pixel_count * limits.FILM_BYTES_PER_PIXEL)
-        self.ray_count_buffer = cl.Buffer(ctx, rw, self.pixel_count * limits.RAY_COUNT_BYTES_PER_PIXEL)
-        # Allocated even without bands (one float), since the kernels always take the argument.
-        self.spectral_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * spectral_bins, 1) * SPECTRAL_BAND_BYTES)
-        # Likewise one float4 without AOVs.
-        aov_floats = self.pixel_count * AOV_FLOATS_PER_PIXEL if self.aovs else 4
-        self.aov_buffer = cl.Buffer(ctx, rw, aov_floats * 4)
-        self.response_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * self.response_channels, 1) * 4)
-        self.samples_done = 0
-        self.render_seconds = 0.0
-        self.reset()
-
-    @translate_opencl_errors("clearing the film")
-    def reset(self) -> None:
-        queue = self.device.queue
-        cl.enqueue_fill_buffer(queue, self.xyz_buffer, np.zeros(1, np.float32), 0, self.xyz_buffer.size)
-        cl.enqueue_fill_buffer(queue, self.ray_count_buffer, np.zeros(1, np.uint32), 0, self.ray_count_buffer.size)
-        cl.enqueue_fill_buffer(queue, self.spectral_buffer, np.zeros(1, np.float32), 0, self.spectral_buffer.size)
-        cl.enqueue_fill_buffer(queue, self.aov_buffer, np.zeros(1, np.float32), 0, self.aov_buffer.size)
-        cl.enqueue_fill_buffer(queue, self.response_buffer, np.zeros(1, np.float32), 0, self.response_buffer.size)
-        queue.finish()
-        self.samples_done = 0
-        self.render_seconds = 0.0
-
-    def add_pass(self, sample_count: int, seconds: float) -> None:
-        """Record a finished pass that added `sample_count` samples to every pixel in `seconds`."""
-        self.render_seconds += seconds
-        self.samples_done += sample_count
-
-    @translate_opencl_errors("reading the film")
-    def read(self) -> tuple[np.ndarray, np.ndarray]:
-        """(pixels, 4) float32 sums of X, Y, Z and dropped samples, and (pixels,) uint32 rays traced."""
-        film = np.empty((self.pixel_count, 4), np.float32)
-        rays = np.empty(self.pixel_count, np.uint32)
-        cl.enqueue_copy(self.device.queue, film, self.xyz_buffer)
-        cl.enqueue_copy(self.device.queue, rays, self.ray_count_buffer)
-        self.device.queue.finish()
-        return film, rays
-
-    @translate_opencl_errors("reading the spectral film")
-    def read_spectral(self) -> np.ndarray:
-        """(height, width, bins) band sums; divide by samples_done for the band-averaged radiance."""
-        bands = np.empty(self.pixel_count * self.spectral_bins, np.float32)
-        cl.enqueue_copy(self.device.queue, bands, self.spectral_buffer)
-        self.device.queue.finish()
-        return bands.reshape(self.height, self.width, self.spectral_bins)
-
-    @translate_opencl_errors("reading the AOV film")
-    def read_aovs(self) -> np.ndarray:
-        """(pixels, 12) AOV sums (kernels/aov.cl's layout); divide by samples_done for the means."""
-        sums = np.empty((self.pixel_count, AOV_FLOATS_PER_PIXEL), np.float32)
-        cl.enqueue_copy(self.device.queue, sums, self.aov_buffer)
-        self.device.queue.finish()
-        return sums
-
-    @translate_opencl_errors("reading the response film")
-    def read_responses(self) -> np.ndarray:
-        """(height, width, channels) response sums; divide by samples_done for the means."""
-        sums = np.empty(self.pixel_count * self.response_channels, np.float32)
-        cl.enqueue_copy(self.device.queue, sums, self.response_buffer)
-        self.device.queue.finish()
-        return sums.reshape(self.height, self.width, self.response_channels)
-
-    def image(self, seed: int, device: str, exposure: float = 0.0, extra: dict | None = None) -> Image:
-        """The mean of the samples so far per pixel, labelled with how it was made."""
-        return state_image(
-            self.save_state(),
-            self.width,
-            self.height,
-            self.spectral_range_nm,
-            seed,
-            device,
-            exposure,
-            extra,
-            aovs=self.aovs,
-            albedo_scale=self.albedo_scale,
-            response=self.response,
-        )
-
-    def _state_buffers(self) -> dict[str, cl.Buffer]:
-        """The device buffers that accumulate samples: with samples_done, the whole state of the render."""
-        buffers = {"film": self.xyz_buffer, "ray_counts": self.ray_count_buffer}
-        if self.spectral_bins > 0:
-            buffers["spectral_film"] = self.spectral_buffer
-        if self.aovs:
-            buffers["aov_film"] = self.aov_buffer
-        if self.response_channels > 0:
-            buffers["response_film"] = self.response_buffer
-        return buffers
-
-    def save_state(self) -> RenderState:
-        """Host copies of the accumulation buffers and the sample count: restore_state() on the film of a render of
-        the same scene and seed continues this render exactly."""
-        film, rays = self.read()
-        buffers = {"film": film, "ray_counts": rays}
-        if self.spectral_bins > 0:
-            buffers["spectral_film"] = self.read_spectral().reshape(-1)
-        if self.aovs:
-            buffers["aov_film"] = self.read_aovs()
-        if self.response_channels > 0:
-            buffers["response_film"] = self.read_responses().reshape(-1)
-        return RenderState(self.samples_done, self.render_seconds, buffers)
-
-    def _pixel_bytes(self, name: str, buffer: cl.Buffer) -> tuple[np.dtype, int]:
-        """A saved-state buffer's element type and its values per pixel."""
-        dtype = np.dtype(STATE_LAYOUT[name][0])
-        return dtype, buffer.size // (self.pixel_count * dtype.itemsize)
-
-    @translate_opencl_errors("clearing part of the film")
-    def reset_pixels(self, begin: int, end: int) -> None:
-        """Start the render again for pixels [begin, end) only (a tile of a split render, spectrace.engine.tiles):
-        clearing a whole large film for each small tile would cost more than the tile."""
-        queue = self.device.queue
-        for name, buffer in self._state_buffers().items():
-            dtype, per_pixel = self._pixel_bytes(name, buffer)
-            row = per_pixel * dtype.itemsize
-            cl.enqueue_fill_buffer(queue, buffer, np.zeros(1, dtype), begin * row, (end - begin) * row)
-        queue.finish()
-        self.samples_done = 0
-        self.render_seconds = 0.0
-
-    @translate_opencl_errors("reading part of the film")
-    def read_state_pixels(self, begin: int, end: int) -> dict[str, np.ndarray]:
-        """Host copies of every accumulation buffer's values of pixels [begin, end), as (end - begin, values per
-        pixel) arrays by buffer name: a tile of a split render (spectrace.engine.tiles), read without the rest."""
-        queue = self.device.queue
-        pixels = {}
-        for name, buffer in self._state_buffers().items():
-            dtype, per_pixel = self._pixel_bytes(name, buffer)
-            values = np.empty((end - begin, per_pixel), dtype)
-            cl.enqueue_copy(queue, values, buffer, src_offset=begin * per_pixel * dtype.itemsize)
-            pixels[name] = values
-        queue.finish()
-        return pixels
-
-    @translate_opencl_errors("restoring the film from a checkpoint")
-    def restore_state(self, state: RenderState, where: str | None = None) -> None:
-        """Upload a saved state of a film of this size (one state_problem passes, as every checkpoint read has):
-        what is left to check is that it holds exactly this film's buffers, the spectral bands at this film's
-        band count."""
-        targets = self._state_buffers()
-        if set(state.buffers) != set(targets):
-            raise SpectraceError(
-                f"the saved state holds {', '.join(sorted(state.buffers)) or 'nothing'} but this "
-                f"render accumulates {', '.join(sorted(targets))}",
-                where=where,
-            )
-        for name, array in state.buffers.items():
-            if array.nbytes != targets[name].size:
-                raise SpectraceError(
-                    f"saved {name} holds {array.nbytes} bytes, this render needs {targets[name].size}", where=where
-                )
-        queue = self.device.queue
-        for name, array in state.buffers.items():
-            cl.enqueue_copy(queue, targets[name], np.ascontiguousarray(array))
-        queue.finish()
-        self.samples_done = int(state.samples_done)
-        self.render_seconds = float(state.render_seconds)

@@ -5,7 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.colour_output import (
+from spectrace.errors import SpectraceError
+from spectrace.film.colour_output import (
     ColourSpace,
     WhiteBalance,
     encode_for_display,
@@ -13,7 +14,6 @@ from spectrace.colour_output import (
     png_cicp,
     xyz_to_output,
 )
-from spectrace.errors import SpectraceError
 from spectrace.spectral.colorimetry import srgb_encode
 
 
@@ -45,9 +45,9 @@ class Image:
     # written to EXR under these names.
     channels: dict[str, np.ndarray] = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
-    colour_space: ColourSpace = ColourSpace.SRGB  # of the files `write` makes (see spectrace.colour_output)
+    colour_space: ColourSpace = ColourSpace.SRGB  # of the files `write` makes (see spectrace.film.colour_output)
     white_balance: WhiteBalance | None = None  # chromatic adaptation applied to every RGB output
-    # AOVs by name (spectrace.aovs): albedo (h, w, 3) XYZ, normal and position (h, w, 3), depth and variance (h, w)
+    # AOVs by name (spectrace.film.aovs): albedo (h, w, 3) XYZ, normal and position (h, w, 3), depth and variance (h, w)
     aovs: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __repr__(self) -> str:
@@ -102,14 +102,14 @@ class Image:
 
     def write(self, path: str | Path, include_xyz: bool = True) -> None:
         """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
-        Fichet et al. 2021 layout when the image has them, the AOVs' channels (spectrace.aovs) and `channels` by
+        Fichet et al. 2021 layout when the image has them, the AOVs' channels (spectrace.film.aovs) and `channels` by
         name) or .png (sRGB, 8 bit; the colour only)."""
         path = Path(path)
         suffix = path.suffix.lower()
         space = ColourSpace(self.colour_space)
         # Each writer imported only when used: OpenEXR's module takes longer to import than a small PNG to write.
         if suffix == ".exr":
-            from spectrace.aovs import aov_channels
+            from spectrace.film.aovs import aov_channels
             from spectrace.io.exr import write_exr
 
             attributes = {} if space is ColourSpace.SRGB else {"chromaticities": exr_chromaticities(space)}

@@ -9,9 +9,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from spectrace.colour_output import ColourSpace, WhiteBalance, parse_colour_space, parse_white_balance
 from spectrace.errors import SpectraceError
-from spectrace.image import Image
+from spectrace.film.colour_output import (
+    Adaptation,
+    ColourSpace,
+    WhiteBalance,
+    parse_colour_space,
+    parse_white_balance,
+)
+from spectrace.film.image import Image
 
 FalseColourScale = Literal["log", "linear"]
 FALSE_COLOUR_SCALES: tuple[FalseColourScale, ...] = ("log", "linear")
@@ -27,21 +33,31 @@ class RenderOutputOptions:
     @classmethod
     def parse(
         cls,
-        output: Path,
-        colour_space: str = "srgb",
-        white_balance: str | None = None,
-        adaptation: str = "bradford",
+        output: Path | None,
+        colour_space: ColourSpace | str = "srgb",
+        white_balance: WhiteBalance | str | None = None,
+        adaptation: Adaptation | str = "bradford",
         false_colour: Path | None = None,
         false_colour_scale: str = "log",
+        names: tuple[str | None, str | None, str | None] = ("--colour-space", "--white-balance", "--adaptation"),
     ) -> RenderOutputOptions:
-        space = parse_colour_space(colour_space)
-        if space is ColourSpace.XYZ and output.suffix.lower() == ".png":
-            raise SpectraceError(
-                "XYZ output needs an .exr file (PNG holds display-encoded RGB)", where="--colour-space"
-            )
-        balance = parse_white_balance(white_balance, adaptation) if white_balance else None
-        if not white_balance and adaptation.strip().lower() != "bradford":
-            parse_white_balance("D65", adaptation)  # reports an unknown --adaptation even without --white-balance
+        """The options as given on the command line or to spectrace.render (there already parsed or as text);
+        `output`: the image file, None for an image kept in memory; `names`: what errors call the colour space,
+        the white and the adaptation."""
+        space_name, white_name, method_name = names
+        space = (
+            parse_colour_space(colour_space, space_name) if isinstance(colour_space, str) else ColourSpace(colour_space)
+        )
+        if space is ColourSpace.XYZ and output is not None and output.suffix.lower() == ".png":
+            raise SpectraceError("XYZ output needs an .exr file (PNG holds display-encoded RGB)", where=space_name)
+        balance = (
+            parse_white_balance(white_balance, adaptation, where=white_name, method_where=method_name)
+            if isinstance(white_balance, str)
+            else white_balance
+        )
+        if not white_balance and str(adaptation).strip().lower() != "bradford":
+            # reports an unknown adaptation even without a white
+            parse_white_balance("D65", adaptation, where=white_name, method_where=method_name)
         if false_colour_scale not in FALSE_COLOUR_SCALES:
             raise SpectraceError(
                 f"unknown scale '{false_colour_scale}' (use {' or '.join(FALSE_COLOUR_SCALES)})",

@@ -172,7 +172,7 @@ def white_problem(xyz: np.ndarray, method: Adaptation = Adaptation.BRADFORD) -> 
     return None
 
 
-def _chromaticity_white(text: str) -> np.ndarray | None:
+def _chromaticity_white(text: str, where: str | None) -> np.ndarray | None:
     parts = text.replace(" ", "").split(",")
     if len(parts) != 2:
         return None
@@ -183,27 +183,25 @@ def _chromaticity_white(text: str) -> np.ndarray | None:
     tiny = np.finfo(np.float64).tiny
     if not (tiny <= x < 1.0 and tiny <= y < 1.0 and x + y < 1.0):
         raise SpectraceError(
-            f"chromaticity x, y = {x:g}, {y:g} is not a colour (need x, y > 0, x + y < 1)", where="--white-balance"
+            f"chromaticity x, y = {x:g}, {y:g} is not a colour (need x, y > 0, x + y < 1)", where=where
         )
     return np.array([x / y, 1.0, (1.0 - x - y) / y])
 
 
-def _blackbody_white(text: str) -> np.ndarray | None:
+def _blackbody_white(text: str, where: str | None) -> np.ndarray | None:
     if not text.lower().endswith("k"):
         return None
     if number_problem(text[:-1]):
         return None
     temperature_k = float(text[:-1])
     if not 500.0 <= temperature_k <= 100000.0:
-        raise SpectraceError(
-            f"black-body temperature must lie in 500..100000 K, got {temperature_k:g} K", where="--white-balance"
-        )
+        raise SpectraceError(f"black-body temperature must lie in 500..100000 K, got {temperature_k:g} K", where=where)
     from spectrace.spectral.blackbody import blackbody
 
     return spectrum_to_xyz(blackbody(temperature_k))
 
 
-def _spectrum_white(text: str) -> np.ndarray:
+def _spectrum_white(text: str, where: str | None) -> np.ndarray:
     from spectrace.spectral.illuminants import cie_illuminant_names
     from spectrace.spectral.spectrum_io import library_spectrum
 
@@ -214,38 +212,45 @@ def _spectrum_white(text: str) -> np.ndarray:
         raise SpectraceError(
             f"unknown white '{text}': give a CIE illuminant ({', '.join(cie_illuminant_names()[:6])}, ...), a "
             "temperature such as 3200K, a chromaticity 'x,y', or a library spectrum (`spectrace spectra list`)",
-            where="--white-balance",
+            where=where,
         ) from None
     return spectrum_to_xyz(spectrum)
 
 
-def parse_white_balance(text: str, method: Adaptation | str = Adaptation.BRADFORD) -> WhiteBalance:
+def parse_white_balance(
+    text: str,
+    method: Adaptation | str = Adaptation.BRADFORD,
+    *,
+    where: str | None = "--white-balance",
+    method_where: str | None = "--adaptation",
+) -> WhiteBalance:
     """The white named by `text`: a CIE illuminant ("A", "D50", "FL2", "cie:A"), a black body ("3200K"), a
     CIE 1931 chromaticity ("0.4476,0.4074") or a library spectrum ("cornell_box/light"). Spectra are integrated
-    with the renderer's CMFs, so an illuminant's own white maps to exactly neutral."""
+    with the renderer's CMFs, so an illuminant's own white maps to exactly neutral. An error names `where` (the
+    white) or `method_where` (the method), the command line's options unless told."""
     text = text.strip()
     try:
         method = Adaptation(method)
     except ValueError:
         raise SpectraceError(
-            f"unknown adaptation '{method}' (use {', '.join(a.value for a in Adaptation)})", where="--adaptation"
+            f"unknown adaptation '{method}' (use {', '.join(a.value for a in Adaptation)})", where=method_where
         ) from None
-    white = _chromaticity_white(text)
+    white = _chromaticity_white(text, where)
     if white is None:
-        white = _blackbody_white(text)
+        white = _blackbody_white(text, where)
     if white is None:
-        white = _spectrum_white(text)
+        white = _spectrum_white(text, where)
     if problem := white_problem(white, method):
-        raise SpectraceError(f"white '{text}' {problem}", where="--white-balance")
+        raise SpectraceError(f"white '{text}' {problem}", where=where)
     return WhiteBalance(label=text, scene_white_xyz=white / white[1], method=method)
 
 
-def parse_colour_space(text: str) -> ColourSpace:
+def parse_colour_space(text: str, where: str | None = "--colour-space") -> ColourSpace:
     try:
         return ColourSpace(text.strip().lower())
     except ValueError:
         raise SpectraceError(
-            f"unknown colour space '{text}' (use {', '.join(s.value for s in ColourSpace)})", where="--colour-space"
+            f"unknown colour space '{text}' (use {', '.join(s.value for s in ColourSpace)})", where=where
         ) from None
 
 

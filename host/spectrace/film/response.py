@@ -305,6 +305,18 @@ class FilmResponse:
             defines |= {"GRID_MIN_NM": float(grid[0]), "GRID_MAX_NM": float(grid[-1]), "GRID_SAMPLES": int(grid.size)}
         return defines
 
+    def metadata(self) -> dict[str, str]:
+        """What the film responds to, for an image's metadata (nothing for the default film)."""
+        if self.is_default:
+            return {}
+        lo, hi = self.wavelengths
+        metadata = {"observer": self.observer, "wavelengths_nm": f"{lo:g}-{hi:g}"}
+        if self.sensor is not None:
+            metadata["sensor"] = self.sensor.source
+        if self.sensor_white is not None:
+            metadata["sensor_white"] = self.sensor_white
+        return metadata
+
     def outputs(self, xyz: np.ndarray, responses: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """The image's XYZ and named extra channels from the film's means: xyz (H, W, 3), responses (H, W, N)."""
         channels = {name: responses[..., i] for i, name in enumerate(self.channel_names)}

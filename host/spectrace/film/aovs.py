@@ -99,7 +99,7 @@ def with_companions(aovs: Sequence[str]) -> tuple[str, ...]:
 def albedo_in(albedo_xyz: np.ndarray, space) -> np.ndarray:
     """The albedo in linear `space` (a ColourSpace): Bradford-adapted from the equal-energy white (XYZ (1, 1, 1),
     the albedo of a perfect white reflector) to the space's white, so white is (1, 1, 1); XYZ unchanged."""
-    from spectrace.colour_output import ColourSpace, WhiteBalance, xyz_to_output
+    from spectrace.film.colour_output import ColourSpace, WhiteBalance, xyz_to_output
 
     space = ColourSpace(space)
     if space is ColourSpace.XYZ:
@@ -109,7 +109,7 @@ def albedo_in(albedo_xyz: np.ndarray, space) -> np.ndarray:
 
 def aov_channels(aovs: dict[str, np.ndarray], space) -> dict[str, np.ndarray]:
     """EXR channels (name: (height, width) float32) of an image's AOVs, albedo in the output colour space."""
-    from spectrace.colour_output import ColourSpace
+    from spectrace.film.colour_output import ColourSpace
 
     channels = {}
     for name, values in aovs.items():
