@@ -5,8 +5,7 @@
 #include "types.h"
 #include "scene_features.h"
 #include "triangle.cl"
-#include "triangle4.cl"
-#include "triangle8.cl"
+#include "triangle_blocks.cl"
 
 /* BVH_STACK_SIZE, BVH4_STACK_SIZE, BVH8_STACK_SIZE: the traversal stacks' entries, from the depth the host's builder
  * guarantees (MAX_DEPTH; the collapse in geometry/bvh4.py), set in spectrace.core.contract and passed as build
@@ -108,7 +107,7 @@ inline int intersect_leaf(__global const float4 *triangle_vertices, const Traver
 
 /* 4-wide traversal (types.h BVH4Node): one visit slab-tests the four children's boxes as float4, sorts the hit ones
  * near to far with a 5-comparator network, enters the nearest and pushes the rest with their entry distances. A
- * leaf is a run of blocks of four triangles (triangle4.cl) after the nodes in the same buffer. Stack references: a
+ * leaf is a run of blocks of four triangles (triangle_blocks.cl) after the nodes in the same buffer. Stack references: a
  * 4-wide node index (>= 0), or ~(float4 offset of a leaf's first block in the node buffer). */
 inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *triangle_vertices, Ray ray,
                       float t_max, int any_hit)
@@ -244,10 +243,10 @@ inline int8 bvh8_child(__global const float4 *nodes, int reference)
 
 /* 8-wide traversal (types.h BVH8Node, or BVH8QNode with BVH8_QUANTISED: bvh8_slabs above), for CPUs whose vectors
  * hold eight floats: one visit slab-tests the eight children's boxes as float8; the hit ones go onto the stack by
- * insertion, farthest deepest, and the nearest is popped and entered at once. A leaf is a run of blocks of eight triangles (triangle8.cl) after the nodes in the same buffer. Stack
- * references as in trace_bvh4: a node index (>= 0), or ~(float4 offset of a leaf's first block).
- * BVH8_STACK_SIZE entries of 8 bytes (96: 768 bytes of private memory): the collapse bounds the entries a path
- * pushes to fit (bvh4.py collapse, stack_size). */
+ * insertion, farthest deepest, and the nearest is popped and entered at once. A leaf is a run of blocks of eight
+ * triangles (triangle_blocks.cl) after the nodes in the same buffer. Stack references as in trace_bvh4: a node index
+ * (>= 0), or ~(float4 offset of a leaf's first block). BVH8_STACK_SIZE entries of 8 bytes (96: 768 bytes of private
+ * memory): the collapse bounds the entries a path pushes to fit (bvh4.py collapse, stack_size). */
 inline Hit trace_bvh8(__global const float4 *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
                       int any_hit)
 {
