@@ -19,14 +19,49 @@
 #define TRIANGLE_LANE_INDEX4 ((int4)(0, 1, 2, 3))
 #define TRIANGLE_LANE_INDEX8 ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
 
-/* triangle_lanes4 and triangle_lanes8, one definition written out for each width L by the preprocessor (OpenCL C
- * has no generic vector width): the mask of the block's lanes whose triangle the ray hits closer than t_hit, with
- * each lane's distance *t and unnormalised barycentrics *v, *w over *det (b12 = (v, w) / det). origin_k: the ray
- * origin's coordinates in the shear's order (kx, ky, kz); count: the triangles in the block. */
-#define TRIANGLE_LANES(L)                                                                                           \
-    inline int##L triangle_lanes##L(__global const float##L *block, float3 origin_k, const RayShear *s, int count,   \
-                                    float t_hit, float##L *t_out, float##L *v_out, float##L *w_out,                 \
-                                    float##L *det_out)                                                              \
+/* The pick of the hit: the nearest lane of t_lanes (INFINITY where a lane missed), the first of equal ones as the
+ * one-by-one loop's strict "closer than" keeps it, written to *t_hit, *triangle (first: the block's first triangle
+ * slot) and *b12 = (v, w) / det of that lane. Per width: scalar compares for four lanes, halving reductions and a
+ * read back through private memory for eight. */
+inline void nearest_lane4(float4 t_lanes, float4 v, float4 w, float4 det, int first, float *t_hit, int *triangle,
+                          float2 *b12)
+{
+    float t_min = fmin(fmin(t_lanes.s0, t_lanes.s1), fmin(t_lanes.s2, t_lanes.s3));
+    int lane = t_lanes.s0 == t_min ? 0 : t_lanes.s1 == t_min ? 1 : t_lanes.s2 == t_min ? 2 : 3;
+    float v_hit = lane == 0 ? v.s0 : lane == 1 ? v.s1 : lane == 2 ? v.s2 : v.s3;
+    float w_hit = lane == 0 ? w.s0 : lane == 1 ? w.s1 : lane == 2 ? w.s2 : w.s3;
+    float det_hit = lane == 0 ? det.s0 : lane == 1 ? det.s1 : lane == 2 ? det.s2 : det.s3;
+    *t_hit = t_min;
+    *triangle = first + lane;
+    *b12 = (float2)(v_hit, w_hit) / det_hit;
+}
+
+inline void nearest_lane8(float8 t_lanes, float8 v, float8 w, float8 det, int first, float *t_hit, int *triangle,
+                          float2 *b12)
+{
+    float4 t_half = fmin(t_lanes.lo, t_lanes.hi);
+    float2 t_quarter = fmin(t_half.lo, t_half.hi);
+    float t_min = fmin(t_quarter.x, t_quarter.y);
+    int8 candidates = select((int8)(8), TRIANGLE_LANE_INDEX8, t_lanes == (float8)(t_min));
+    int4 lane_half = min(candidates.lo, candidates.hi);
+    int2 lane_quarter = min(lane_half.lo, lane_half.hi);
+    int lane = min(lane_quarter.x, lane_quarter.y);
+    float values[3][8];
+    vstore8(v, 0, values[0]);
+    vstore8(w, 0, values[1]);
+    vstore8(det, 0, values[2]);
+    *t_hit = t_min;
+    *triangle = first + lane;
+    *b12 = (float2)(values[0][lane], values[1][lane]) / values[2][lane];
+}
+
+/* intersect_triangles4 and intersect_triangles8, one definition written out for each width L by the preprocessor
+ * (OpenCL C 1.2 has no generic vector width): tests one block of L lanes against hits closer than *t_hit; on a hit
+ * updates *t_hit, *triangle and *b12 and returns 1. origin_k: the ray origin's coordinates in the shear's order
+ * (kx, ky, kz); meta: the block's last vector as ints. */
+#define INTERSECT_TRIANGLES(L)                                                                                      \
+    inline int intersect_triangles##L(__global const float##L *block, float3 origin_k, const RayShear *s, int4 meta, \
+                                      float *t_hit, int *triangle, float2 *b12)                                     \
     {                                                                                                               \
         uint kx = s->permutation.x, ky = s->permutation.y, kz = s->permutation.z;                                   \
         float##L ox = (float##L)(origin_k.x), oy = (float##L)(origin_k.y), oz = (float##L)(origin_k.z);             \
@@ -44,62 +79,14 @@
         int##L outside = ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));           \
         float##L det = u + v + w;                                                                                   \
         float##L t = (u * (sz * a_z) + v * (sz * b_z) + w * (sz * c_z)) / det;                                      \
-        *t_out = t;                                                                                                 \
-        *v_out = v;                                                                                                 \
-        *w_out = w;                                                                                                 \
-        *det_out = det;                                                                                             \
-        return ~outside & (det != zero) & (t > zero) & (t < (float##L)(t_hit))                                      \
-               & (TRIANGLE_LANE_INDEX##L < (int##L)(count));                                                        \
+        int##L hit = ~outside & (det != zero) & (t > zero) & (t < (float##L)(*t_hit))                               \
+                     & (TRIANGLE_LANE_INDEX##L < (int##L)(meta.y));                                                 \
+        if (!any(hit)) return 0;                                                                                    \
+        nearest_lane##L(select((float##L)(INFINITY), t, hit), v, w, det, meta.x, t_hit, triangle, b12);             \
+        return 1;                                                                                                   \
     }
 
-TRIANGLE_LANES(4)
-TRIANGLE_LANES(8)
-
-/* Tests a 4-lane block against hits closer than *t_hit; on a hit updates *t_hit, *triangle and *b12 and returns 1.
- * The nearest lane is picked with scalar compares, the first of equal ones. */
-inline int intersect_triangles4(__global const float4 *block, float3 origin_k, const RayShear *s, int4 meta,
-                                float *t_hit, int *triangle, float2 *b12)
-{
-    float4 t, v, w, det;
-    int4 hit = triangle_lanes4(block, origin_k, s, meta.y, *t_hit, &t, &v, &w, &det);
-    if (!any(hit)) return 0;
-    float4 t_lanes = select((float4)(INFINITY), t, hit);
-    float t_min = fmin(fmin(t_lanes.s0, t_lanes.s1), fmin(t_lanes.s2, t_lanes.s3));
-    int lane = t_lanes.s0 == t_min ? 0 : t_lanes.s1 == t_min ? 1 : t_lanes.s2 == t_min ? 2 : 3;
-    float v_hit = lane == 0 ? v.s0 : lane == 1 ? v.s1 : lane == 2 ? v.s2 : v.s3;
-    float w_hit = lane == 0 ? w.s0 : lane == 1 ? w.s1 : lane == 2 ? w.s2 : w.s3;
-    float det_hit = lane == 0 ? det.s0 : lane == 1 ? det.s1 : lane == 2 ? det.s2 : det.s3;
-    *t_hit = t_min;
-    *triangle = meta.x + lane;
-    *b12 = (float2)(v_hit, w_hit) / det_hit;
-    return 1;
-}
-
-/* The same for an 8-lane block: the nearest lane by halving reductions, its values read back through private
- * memory. */
-inline int intersect_triangles8(__global const float8 *block, float3 origin_k, const RayShear *s, int4 meta,
-                                float *t_hit, int *triangle, float2 *b12)
-{
-    float8 t, v, w, det;
-    int8 hit = triangle_lanes8(block, origin_k, s, meta.y, *t_hit, &t, &v, &w, &det);
-    if (!any(hit)) return 0;
-    float8 t_lanes = select((float8)(INFINITY), t, hit);
-    float4 t_half = fmin(t_lanes.lo, t_lanes.hi);
-    float2 t_quarter = fmin(t_half.lo, t_half.hi);
-    float t_min = fmin(t_quarter.x, t_quarter.y);
-    /* The first lane at the nearest distance, as the one-by-one loop's strict "closer than" keeps it. */
-    int8 candidates = select((int8)(8), TRIANGLE_LANE_INDEX8, t_lanes == (float8)(t_min));
-    int4 lane_half = min(candidates.lo, candidates.hi);
-    int2 lane_quarter = min(lane_half.lo, lane_half.hi);
-    int lane = min(lane_quarter.x, lane_quarter.y);
-    float values[3][8];
-    vstore8(v, 0, values[0]);
-    vstore8(w, 0, values[1]);
-    vstore8(det, 0, values[2]);
-    *t_hit = t_min;
-    *triangle = meta.x + lane;
-    *b12 = (float2)(values[0][lane], values[1][lane]) / values[2][lane];
-    return 1;
-}
+INTERSECT_TRIANGLES(4)
+INTERSECT_TRIANGLES(8)
 
 #endif
