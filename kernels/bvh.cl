@@ -5,8 +5,7 @@
 #include "types.h"
 #include "scene_features.h"
 #include "triangle.cl"
-#include "triangle4.cl"
-#include "triangle8.cl"
+#include "triangle_blocks.cl"
 
 /* BVH_STACK_SIZE, BVH4_STACK_SIZE, BVH8_STACK_SIZE: the traversal stacks' entries, from the depth the host's builder
  * guarantees (MAX_DEPTH; the collapse in geometry/bvh4.py), set in spectrace.core.contract and passed as build
@@ -108,7 +107,7 @@ inline int intersect_leaf(__global const float4 *triangle_vertices, const Traver
 
 /* 4-wide traversal (types.h BVH4Node): one visit slab-tests the four children's boxes as float4, sorts the hit ones
  * near to far with a 5-comparator network, enters the nearest and pushes the rest with their entry distances. A
- * leaf is a run of blocks of four triangles (triangle4.cl) after the nodes in the same buffer. Stack references: a
+ * leaf is a run of blocks of four triangles (triangle_blocks.cl) after the nodes in the same buffer. Stack references: a
  * 4-wide node index (>= 0), or ~(float4 offset of a leaf's first block in the node buffer). */
 inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *triangle_vertices, Ray ray,
                       float t_max, int any_hit)
@@ -171,113 +170,102 @@ inline Hit trace_bvh4(__global const BVH4Node *nodes, __global const float4 *tri
     }
 }
 
-/* 8-wide traversal (types.h BVH8Node), for CPUs whose vectors hold eight floats: one visit slab-tests the eight
- * children's boxes as float8; the hit ones go onto the stack by insertion, farthest deepest, and the nearest is popped
- * and entered at once. A leaf is a run of blocks of eight triangles (triangle8.cl) after the nodes in the same buffer.
- * Stack references as in trace_bvh4: a node index (>= 0), or ~(float4 offset of a leaf's first block).
- * BVH8_STACK_SIZE entries of 8 bytes (96: 768 bytes of private memory): the collapse bounds the entries a path
- * pushes to fit (bvh4.py collapse, stack_size). */
-inline Hit trace_bvh8(__global const BVH8Node *nodes, __global const float4 *triangle_vertices, Ray ray,
-                      float t_max, int any_hit)
+/* What the 8-wide traversal keeps of a ray for its slab tests: the origin and 1 / direction in every lane, and of
+ * each axis the plane a box is entered by (0..2 the lower planes x, y, z, 3..5 the upper ones): the lower one when
+ * the direction is positive, else the upper one, as fmin and fmax of the two would pick, with the same values, since
+ * a valid box's planes keep their order through the subtraction and the product. */
+typedef struct {
+    float8 ox, oy, oz;
+    float8 ix, iy, iz;
+    int near_x, near_y, near_z, far_x, far_y, far_z;
+} BVH8Ray;
+
+/* A node's eight children against the ray: the distances to each axis's entry (n) and exit (f) planes. */
+typedef struct {
+    float8 nx, fx, ny, fy, nz, fz;
+} BVH8Slabs;
+
+/* The node decode, the one place the two 8-wide node formats differ. The build define BVH8_QUANTISED picks it rather
+ * than an argument: PoCL optimises the traversal before its kernel compiler inlines it, and would keep both
+ * decodes in the loop. */
+#if defined(BVH8_QUANTISED)
+/* types.h BVH8QNode: a child's planes are origin + q * scale, the product exact (scale is a power of two), one
+ * rounding in the sum, as the host's quantise_nodes computes it. The quantised planes contain the float boxes, so
+ * the traversal visits every child the float nodes would have it visit and finds the same closest hit, save which
+ * of equally near triangles wins when the visiting order differs. */
+inline BVH8Slabs bvh8_slabs(__global const float4 *nodes, int reference, const BVH8Ray *r)
 {
-    Hit hit = no_hit(t_max);
-    TraversalRay r = traversal_ray(ray);
-    float3 inv_direction = r.inv_direction;
-    float8 ox = (float8)(ray.origin.x), oy = (float8)(ray.origin.y), oz = (float8)(ray.origin.z);
-    float8 ix = (float8)(inv_direction.x), iy = (float8)(inv_direction.y), iz = (float8)(inv_direction.z);
-    /* The slab each axis enters by: a box's lower plane when the direction is positive, else its upper one
-     * (child_min[0..2] then child_max[0..2] in the node), as fmin and fmax of the two would pick, with the same
-     * values, since a valid box's planes keep their order through the subtraction and the product. */
-    int near_x = inv_direction.x >= 0.0f ? 0 : 3, near_y = inv_direction.y >= 0.0f ? 1 : 4;
-    int near_z = inv_direction.z >= 0.0f ? 2 : 5;
-    int far_x = near_x ^ 3, far_y = near_y == 1 ? 4 : 1, far_z = near_z == 2 ? 5 : 2;
-    int stack[BVH8_STACK_SIZE];
-    float stack_entry[BVH8_STACK_SIZE];
-    int top = 0;
-    int reference = 0;
-    while (true) {
-        if (reference < 0) {
-            __global const float8 *block = (__global const float8 *)((__global const float4 *)nodes + ~reference);
-            while (true) {
-                int4 meta = as_int4(block[LEAF_BLOCK8_FLOAT8S - 1].lo);
-                if (intersect_triangles8(block, r.origin_k, &r.shear, meta, &hit.t, &hit.triangle, &hit.b12)
-                    && any_hit) {
-                    return hit;
-                }
-                if (!meta.z) break;
-                block += LEAF_BLOCK8_FLOAT8S;
-            }
-        } else {
-            __global const BVH8Node *node = &nodes[reference];
-            __global const float8 *planes = node->child_min;
-            float8 nx = (planes[near_x] - ox) * ix, fx = (planes[far_x] - ox) * ix;
-            float8 ny = (planes[near_y] - oy) * iy, fy = (planes[far_y] - oy) * iy;
-            float8 nz = (planes[near_z] - oz) * iz, fz = (planes[far_z] - oz) * iz;
-            float8 enter = fmax(fmax(nx, ny), fmax(nz, (float8)(0.0f)));
-            /* Exit widened by 2γ₃ as in ray_box_entry (Ize 2013). */
-            float8 leave = fmin(fmin(fx, fy), fz) * 1.0000004f;
-            leave = fmin(leave, (float8)(hit.t));
-            int8 counts = node->count;
-            int8 entered = (enter <= leave) & (counts >= (int8)(0));
-            if (any(entered)) {
-                int8 child = node->child;
-                int refs[8];
-                float entries[8];
-                vstore8(select(child, ~child, counts > (int8)(0)), 0, refs);
-                vstore8(select((float8)(INFINITY), enter, entered), 0, entries);
-                int base = top;
-                for (int k = 0; k < 8; ++k) {
-                    float t = entries[k];
-                    if (t == INFINITY) continue;
-                    /* Insertion keeping [base, top) farthest first; equal entries keep the lower slot nearer the
-                     * top, so it is visited first. */
-                    int j = top;
-                    while (j > base && stack_entry[j - 1] <= t) {
-                        stack[j] = stack[j - 1];
-                        stack_entry[j] = stack_entry[j - 1];
-                        --j;
-                    }
-                    stack[j] = refs[k];
-                    stack_entry[j] = t;
-                    ++top;
-                }
-                --top;
-                reference = stack[top];
-                continue;
-            }
-        }
-        while (true) {
-            if (top == 0) return hit;
-            --top;
-            if (stack_entry[top] <= hit.t) { reference = stack[top]; break; }
-        }
-    }
+    __global const BVH8QNode *node = (__global const BVH8QNode *)nodes + reference;
+    __global const uchar8 *q = node->q;
+    float8 px = (float8)(node->origin[0]), py = (float8)(node->origin[1]), pz = (float8)(node->origin[2]);
+    float8 sx = (float8)(node->scale[0]), sy = (float8)(node->scale[1]), sz = (float8)(node->scale[2]);
+    BVH8Slabs d;
+    d.nx = (px + convert_float8(q[r->near_x]) * sx - r->ox) * r->ix;
+    d.fx = (px + convert_float8(q[r->far_x]) * sx - r->ox) * r->ix;
+    d.ny = (py + convert_float8(q[r->near_y]) * sy - r->oy) * r->iy;
+    d.fy = (py + convert_float8(q[r->far_y]) * sy - r->oy) * r->iy;
+    d.nz = (pz + convert_float8(q[r->near_z]) * sz - r->oz) * r->iz;
+    d.fz = (pz + convert_float8(q[r->far_z]) * sz - r->oz) * r->iz;
+    return d;
 }
 
-/* trace_bvh8 over quantised nodes (types.h BVH8QNode): each visit first turns the eight children's 8-bit planes
- * into float8 planes, origin + q * scale (the product exact, one rounding in the sum, as the host's quantise_nodes
- * computes it), then runs trace_bvh8's slab test, order and stack. The planes contain the float boxes, so the
- * traversal visits every child trace_bvh8 visits and finds the same closest hit, save which of equally near
- * triangles wins when the visiting order differs. */
-inline Hit trace_bvh8q(__global const BVH8QNode *nodes, __global const float4 *triangle_vertices, Ray ray,
-                       float t_max, int any_hit)
+inline int8 bvh8_kind(__global const float4 *nodes, int reference)
+{
+    return convert_int8(((__global const BVH8QNode *)nodes)[reference].kind);
+}
+
+inline int8 bvh8_child(__global const float4 *nodes, int reference)
+{
+    return ((__global const BVH8QNode *)nodes)[reference].child;
+}
+#else
+/* types.h BVH8Node: the planes as stored, child_min[0..2] then child_max[0..2]. */
+inline BVH8Slabs bvh8_slabs(__global const float4 *nodes, int reference, const BVH8Ray *r)
+{
+    __global const float8 *planes = ((__global const BVH8Node *)nodes)[reference].child_min;
+    BVH8Slabs d;
+    d.nx = (planes[r->near_x] - r->ox) * r->ix, d.fx = (planes[r->far_x] - r->ox) * r->ix;
+    d.ny = (planes[r->near_y] - r->oy) * r->iy, d.fy = (planes[r->far_y] - r->oy) * r->iy;
+    d.nz = (planes[r->near_z] - r->oz) * r->iz, d.fz = (planes[r->far_z] - r->oz) * r->iz;
+    return d;
+}
+
+inline int8 bvh8_kind(__global const float4 *nodes, int reference)
+{
+    return ((__global const BVH8Node *)nodes)[reference].count;
+}
+
+inline int8 bvh8_child(__global const float4 *nodes, int reference)
+{
+    return ((__global const BVH8Node *)nodes)[reference].child;
+}
+#endif
+
+/* 8-wide traversal (types.h BVH8Node, or BVH8QNode with BVH8_QUANTISED: bvh8_slabs above), for CPUs whose vectors
+ * hold eight floats: one visit slab-tests the eight children's boxes as float8; the hit ones go onto the stack by
+ * insertion, farthest deepest, and the nearest is popped and entered at once. A leaf is a run of blocks of eight
+ * triangles (triangle_blocks.cl) after the nodes in the same buffer. Stack references as in trace_bvh4: a node index
+ * (>= 0), or ~(float4 offset of a leaf's first block). BVH8_STACK_SIZE entries of 8 bytes (96: 768 bytes of private
+ * memory): the collapse bounds the entries a path pushes to fit (bvh4.py collapse, stack_size). */
+inline Hit trace_bvh8(__global const float4 *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
+                      int any_hit)
 {
     Hit hit = no_hit(t_max);
     TraversalRay r = traversal_ray(ray);
     float3 inv_direction = r.inv_direction;
-    float8 ix = (float8)(inv_direction.x), iy = (float8)(inv_direction.y), iz = (float8)(inv_direction.z);
-    /* As in trace_bvh8: the entering plane of each axis is the lower one (q[axis]) for a positive direction, else
-     * the upper one (q[3 + axis]). */
-    int near_x = inv_direction.x >= 0.0f ? 0 : 3, near_y = inv_direction.y >= 0.0f ? 1 : 4;
-    int near_z = inv_direction.z >= 0.0f ? 2 : 5;
-    int far_x = near_x ^ 3, far_y = near_y == 1 ? 4 : 1, far_z = near_z == 2 ? 5 : 2;
+    BVH8Ray r8;
+    r8.ox = (float8)(ray.origin.x), r8.oy = (float8)(ray.origin.y), r8.oz = (float8)(ray.origin.z);
+    r8.ix = (float8)(inv_direction.x), r8.iy = (float8)(inv_direction.y), r8.iz = (float8)(inv_direction.z);
+    r8.near_x = inv_direction.x >= 0.0f ? 0 : 3, r8.near_y = inv_direction.y >= 0.0f ? 1 : 4;
+    r8.near_z = inv_direction.z >= 0.0f ? 2 : 5;
+    r8.far_x = r8.near_x ^ 3, r8.far_y = r8.near_y == 1 ? 4 : 1, r8.far_z = r8.near_z == 2 ? 5 : 2;
     int stack[BVH8_STACK_SIZE];
     float stack_entry[BVH8_STACK_SIZE];
     int top = 0;
     int reference = 0;
     while (true) {
         if (reference < 0) {
-            __global const float8 *block = (__global const float8 *)((__global const float4 *)nodes + ~reference);
+            __global const float8 *block = (__global const float8 *)(nodes + ~reference);
             while (true) {
                 int4 meta = as_int4(block[LEAF_BLOCK8_FLOAT8S - 1].lo);
                 if (intersect_triangles8(block, r.origin_k, &r.shear, meta, &hit.t, &hit.triangle, &hit.b12)
@@ -288,24 +276,15 @@ inline Hit trace_bvh8q(__global const BVH8QNode *nodes, __global const float4 *t
                 block += LEAF_BLOCK8_FLOAT8S;
             }
         } else {
-            __global const BVH8QNode *node = &nodes[reference];
-            __global const uchar8 *q = node->q;
-            float8 px = (float8)(node->origin[0]), py = (float8)(node->origin[1]), pz = (float8)(node->origin[2]);
-            float8 sx = (float8)(node->scale[0]), sy = (float8)(node->scale[1]), sz = (float8)(node->scale[2]);
-            float8 nx = (px + convert_float8(q[near_x]) * sx - (float8)(ray.origin.x)) * ix;
-            float8 fx = (px + convert_float8(q[far_x]) * sx - (float8)(ray.origin.x)) * ix;
-            float8 ny = (py + convert_float8(q[near_y]) * sy - (float8)(ray.origin.y)) * iy;
-            float8 fy = (py + convert_float8(q[far_y]) * sy - (float8)(ray.origin.y)) * iy;
-            float8 nz = (pz + convert_float8(q[near_z]) * sz - (float8)(ray.origin.z)) * iz;
-            float8 fz = (pz + convert_float8(q[far_z]) * sz - (float8)(ray.origin.z)) * iz;
-            float8 enter = fmax(fmax(nx, ny), fmax(nz, (float8)(0.0f)));
+            BVH8Slabs d = bvh8_slabs(nodes, reference, &r8);
+            float8 enter = fmax(fmax(d.nx, d.ny), fmax(d.nz, (float8)(0.0f)));
             /* Exit widened by 2γ₃ as in ray_box_entry (Ize 2013). */
-            float8 leave = fmin(fmin(fx, fy), fz) * 1.0000004f;
+            float8 leave = fmin(fmin(d.fx, d.fy), d.fz) * 1.0000004f;
             leave = fmin(leave, (float8)(hit.t));
-            int8 kind = convert_int8(node->kind);
+            int8 kind = bvh8_kind(nodes, reference);
             int8 entered = (enter <= leave) & (kind >= (int8)(0));
             if (any(entered)) {
-                int8 child = node->child;
+                int8 child = bvh8_child(nodes, reference);
                 int refs[8];
                 float entries[8];
                 vstore8(select(child, ~child, kind > (int8)(0)), 0, refs);
@@ -314,7 +293,8 @@ inline Hit trace_bvh8q(__global const BVH8QNode *nodes, __global const float4 *t
                 for (int k = 0; k < 8; ++k) {
                     float t = entries[k];
                     if (t == INFINITY) continue;
-                    /* Insertion as in trace_bvh8. */
+                    /* Insertion keeping [base, top) farthest first; equal entries keep the lower slot nearer the
+                     * top, so it is visited first. */
                     int j = top;
                     while (j > base && stack_entry[j - 1] <= t) {
                         stack[j] = stack[j - 1];
@@ -421,10 +401,8 @@ inline Hit trace_bvh_binary(__global const BVHNode *nodes, __global const float4
 inline Hit trace_bvh(__global const BVHNode *nodes, __global const float4 *triangle_vertices, Ray ray, float t_max,
                      int any_hit)
 {
-#if defined(BVH_WIDTH) && BVH_WIDTH == 8 && defined(BVH8_QUANTISED)
-    return trace_bvh8q((__global const BVH8QNode *)nodes, triangle_vertices, ray, t_max, any_hit);
-#elif defined(BVH_WIDTH) && BVH_WIDTH == 8
-    return trace_bvh8((__global const BVH8Node *)nodes, triangle_vertices, ray, t_max, any_hit);
+#if defined(BVH_WIDTH) && BVH_WIDTH == 8
+    return trace_bvh8((__global const float4 *)nodes, triangle_vertices, ray, t_max, any_hit);
 #elif defined(BVH_WIDTH) && BVH_WIDTH == 4
     return trace_bvh4((__global const BVH4Node *)nodes, triangle_vertices, ray, t_max, any_hit);
 #else

@@ -164,9 +164,28 @@ inline int light_path_survives(PathState *s, float4 *scatter, __global const Ren
     return any(s->throughput != (float4)(0.0f));
 }
 
-/* Continues light path s from its surface vertex v along a direction drawn from v's material, weighted by the
- * adjoint BSDF (this file's header), then Russian roulette (light_path_survives): the light tracer's walk and
- * SPPM's photons go on alike. Returns 0 when the path ends. */
+/* What a light path's ray met (light_path_meets). */
+#define LIGHT_PATH_ENDS 0     /* nothing, or a boundary it may not cross again: the path ends */
+#define LIGHT_PATH_CROSSES 1  /* an index-matched medium boundary, crossed: the path's segment goes on */
+#define LIGHT_PATH_SURFACE 2  /* a surface with a material, the path's next vertex */
+
+/* The first step the light tracer's walk and SPPM's photons take where the ray s->ray ends at `hit`: *v is the
+ * surface it meets; one without material (an index-matched medium boundary) is crossed, and at a dispersive
+ * material the path keeps only its hero wavelength from there on (terminate_secondary). */
+inline int light_path_meets(const Scene *scene, const SampledWavelengths *w, PathState *s, Hit hit, PathVertex *v)
+{
+    if (hit.triangle < 0) return LIGHT_PATH_ENDS;
+    *v = path_vertex(scene, hit, s->ray);
+    if (v->info.material == TRIANGLE_NO_MATERIAL)
+        return cross_null_boundary(s, v) ? LIGHT_PATH_CROSSES : LIGHT_PATH_ENDS;
+    if (material_disperses(&scene->materials[v->info.material], w))
+        terminate_secondary(&s->throughput, &s->secondary_terminated);
+    return LIGHT_PATH_SURFACE;
+}
+
+/* The last step the light tracer's walk and SPPM's photons take at a surface vertex v: the path goes on along a
+ * direction drawn from v's material, weighted by the adjoint BSDF (this file's header), then Russian roulette
+ * (light_path_survives), and s->segments counts the new segment. Returns 0 when the path ends. */
 inline int continue_light_path(const PathVertex *v, __global const Material *material, const SurfaceContext *sc,
                                const SampledWavelengths *w, __global const RenderParams *params, Sampler *sampler,
                                PathState *s, float4 *scatter)
@@ -183,7 +202,9 @@ inline int continue_light_path(const PathVertex *v, __global const Material *mat
     s->medium = medium_beyond(v->info.interior, v->n, bs.wi, s->medium);
     s->ray.origin = offset_ray_origin(v->p, v->n, bs.wi);
     s->ray.direction = bs.wi;
-    return light_path_survives(s, scatter, params, sampler);
+    if (!light_path_survives(s, scatter, params, sampler)) return 0;
+    ++s->segments;
+    return 1;
 }
 
 /* Inside a medium, the light path's flight toward the surface at hit_t may end at a scattering point x (a vertex,
@@ -276,14 +297,11 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
             return;
         }
         if (scattered) continue;
-        if (hit.triangle < 0) return;
-        PathVertex v = path_vertex(scene, hit, s.ray);
-        if (v.info.material == TRIANGLE_NO_MATERIAL) {
-            if (!cross_null_boundary(&s, &v)) return;
-            continue;
-        }
+        PathVertex v;
+        int met = light_path_meets(scene, &w, &s, hit, &v);
+        if (met == LIGHT_PATH_ENDS) return;
+        if (met == LIGHT_PATH_CROSSES) continue;
         __global const Material *material = &scene->materials[v.info.material];
-        if (material_disperses(material, &w)) terminate_secondary(&s.throughput, &s.secondary_terminated);
         SurfaceContext sc = shading_context(scene, v.uv, v.footprint, v.ns_base, 1);
         if (material_has_non_delta_lobe(material)) {
             CameraConnection c = connect_to_camera_sampled(params, v.p, lens_sample(params, &sampler));
@@ -303,7 +321,6 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
         }
         if (s.segments + 2 > last_segment) return;
         if (!continue_light_path(&v, material, &sc, &w, params, &sampler, &s, &scatter)) return;
-        ++s.segments;
     }
 }
 

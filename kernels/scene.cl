@@ -431,16 +431,7 @@ inline Ray ray_past(const Scene *scene, Ray ray, Hit hit)
 inline Hit scene_intersect(const Scene *scene, Ray ray, uint query, uint *rays_traced)
 {
     *rays_traced += 1;
-    if (scene_is_empty(scene)) {
-        Hit miss;
-        miss.t = INFINITY;
-        miss.triangle = -1;
-        miss.b12 = (float2)(0.0f);
-#if SCENE_HAS_INSTANCES
-        miss.instance = -1;
-#endif
-        return miss;
-    }
+    if (scene_is_empty(scene)) return no_hit(INFINITY);
     Hit hit = trace_scene(scene, ray, INFINITY, 0);
 #if SCENE_HAS_OPACITY
     Ray past = ray;

@@ -98,14 +98,11 @@ inline void trace_photon(const Scene *scene, int stream, int sample_index, const
      * point one camera segment away at the least, so it needs s.segments + 1 <= last_segment. */
     while (s.segments + 1 <= last_segment) {
         Hit hit = scene_intersect(scene, s.ray, path_query(&sampler, &s, QUERY_PATH), rays_traced);
-        if (hit.triangle < 0) return;
-        PathVertex v = path_vertex(scene, hit, s.ray);
-        if (v.info.material == TRIANGLE_NO_MATERIAL) {
-            if (!cross_null_boundary(&s, &v)) return;
-            continue;
-        }
+        PathVertex v;
+        int met = light_path_meets(scene, w, &s, hit, &v);
+        if (met == LIGHT_PATH_ENDS) return;
+        if (met == LIGHT_PATH_CROSSES) continue;
         __global const Material *material = &scene->materials[v.info.material];
-        if (material_disperses(material, w)) terminate_secondary(&s.throughput, &s.secondary_terminated);
         if (s.segments >= 2 && material_has_non_delta_lobe(material)) {
             if (records->count >= records->capacity) return;
             int k = records->count++;
@@ -118,7 +115,6 @@ inline void trace_photon(const Scene *scene, int stream, int sample_index, const
         if (s.segments + 2 > last_segment) return;
         SurfaceContext sc = shading_context(scene, v.uv, v.footprint, v.ns_base, 1);
         if (!continue_light_path(&v, material, &sc, w, params, &sampler, &s, &scatter)) return;
-        ++s.segments;
     }
 }
 

@@ -6,7 +6,7 @@ tested four (eight) at a time, each lane one triangle (Wald et al. 2008 pack lea
 reason), which measured cheaper than the scalar loop on both CPU runtimes here (docs/performance.md, "Current
 figures").
 
-Block layout for L lanes (4 or 8; 10 vectors of L floats, read by kernels/triangle4.cl and triangle8.cl): vector
+Block layout for L lanes (4 or 8; 10 vectors of L floats, read by kernels/triangle_blocks.cl): vector
 `3 * vertex + axis` holds that coordinate of the triangle's vertex 0, 1 or 2 in lanes 0..L-1, one triangle per lane;
 the last vector starts with four ints (first triangle slot, triangles in this block, 1 when another block of the
 same leaf follows, 0), zeros after them. A leaf of n triangles takes ceil(n / L) consecutive blocks; unused lanes
