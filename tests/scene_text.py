@@ -3,14 +3,16 @@ material, to which a test appends its shapes and settings. Values are given as T
 exact literals (integers or floats) it always wrote."""
 
 
-def camera_film(origin="[0, 0, 5]", target="[0, 0, 0]", fov="40", width="8", height="6") -> str:
-    """The [camera] and [film] tables."""
+def camera_film(origin="[0, 0, 5]", target="[0, 0, 0]", fov="40", width="8", height="6", camera="") -> str:
+    """The [camera] and [film] tables; `camera` is more of the camera's keys (`up`, `type`, ...), one a line.
+    `fov` None leaves the key out (for a camera type that takes none, given in `camera`)."""
+    fov_line = "" if fov is None else f"fov = {fov}\n"
+    more = f"{camera.strip()}\n" if camera.strip() else ""
     return f"""
 [camera]
 origin = {origin}
 target = {target}
-fov = {fov}
-
+{fov_line}{more}
 [film]
 width = {width}
 height = {height}

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import spectrace
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.wavefront import WavefrontRenderer
 from spectrace.scene.model import Scene
@@ -122,14 +123,9 @@ def test_a_filter_of_another_radius_and_width_is_its_own_convolution(device):
             del FILTERS["custom"]
 
 
-SCENE_TEXT = """[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-[film]
-width = 8
-height = 6
-{filter}
+SCENE_TEXT = (
+    camera_film(origin="[0, 0, 5]", target="[0, 0, 0]", fov="40", width="8", height="6")
+    + """{filter}
 [materials.grey]
 type = "diffuse"
 reflectance = {{ value = 0.5 }}
@@ -138,6 +134,7 @@ type = "sphere"
 material = "grey"
 emitter = {{ radiance = {{ value = 1 }} }}
 """
+)
 
 
 def test_the_scene_file_takes_a_filter_by_name_or_table(tmp_path):

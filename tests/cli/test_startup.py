@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+from scene_text import camera_film
 from spectrace.resources import scenes_dir
 
 
@@ -116,15 +117,9 @@ _RGB_XML = """<scene version="3.0.0">
 </scene>
 """
 
-_LAMP_TOML = """[camera]
-origin = [0, 0, 4]
-target = [0, 0, 0]
-fov = 40
-
-[film]
-width = 4
-height = 4
-
+_LAMP_TOML = (
+    camera_film(origin="[0, 0, 4]", target="[0, 0, 0]", fov="40", width="4", height="4")
+    + """
 [materials.green]
 type = "diffuse"
 reflectance = { rgb = [0.2, 0.5, 0.3] }
@@ -139,6 +134,7 @@ material = "green"
 transform = [{ translate = [0, 3, 0] }]
 emitter = { radiance = { spectrum = "cie:A", scale = 0.1 } }
 """
+)
 
 _COLOUR_SCIENCE_AND_WHAT_IT_BRINGS = ("colour", "scipy", "matplotlib")
 

@@ -2,6 +2,8 @@
 field on the device), every build sees the contract values the host defines and no kernel file keeps a copy, and the
 scene kernels take the scene buffers in the order the host sets them."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -107,25 +109,45 @@ def test_a_material_dispatch_built_without_the_registrys_sources_stops_with_a_cl
         compile_source(device.context, device.cl_device, '#include "material.cl"\n', options)
 
 
-@pytest.mark.parametrize(
-    ("entry", "kernel"),
-    [
-        ("integrator_path.cl", "render_pass"),
-        ("integrator_direct.cl", "render_pass"),
-        ("integrator_path_wavefront.cl", "wavefront_advance"),
-        ("meters.cl", "measure"),
-    ],
-)
-def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device, entry, kernel):
-    """The host sets a scene kernel's first arguments from SCENE_KERNEL_BUFFERS; the kernel's own parameter names,
-    as the compiler reports them, must be those buffers in that order."""
+def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device):
+    """The host sets a scene kernel's first arguments from SCENE_KERNEL_BUFFERS; SCENE_KERNEL_PARAMS (kernels/scene.cl)
+    declares them, and its parameter names, as the compiler reports them for a kernel declared with it, must be those
+    buffers in that order. A small harness kernel shows them: a source build of a render pass costs seven times as
+    long, and every pass kernel opens with the same macro (the next test)."""
     import pyopencl as cl
 
     from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 
     program = device.build_program(
-        entry, options=["-cl-kernel-arg-info"], from_source=True, generated=generated_sources()
+        "testing/scene_hits.cl", options=["-cl-kernel-arg-info"], from_source=True, generated=generated_sources()
     )
-    k = cl.Kernel(program, kernel)
+    k = cl.Kernel(program, "scene_hits")
     names = [k.get_arg_info(i, cl.kernel_arg_info.NAME) for i in range(1 + len(SCENE_KERNEL_BUFFERS))]
     assert names == ["params", *SCENE_KERNEL_BUFFERS]
+
+
+def _kernel_declarations() -> dict[str, str]:
+    """`<file>: <kernel>` -> the parameter list of every KERNEL of the renderer (the kernels folder; the tests'
+    harness kernels in kernels/testing/ take what they test as they like)."""
+    from spectrace import resources
+
+    found = {}
+    for path in sorted(resources.kernels_dir().glob("*.cl")):
+        text = path.read_text(encoding="utf-8")
+        for match in re.finditer(r"^KERNEL void (\w+)\((.*?)\)\s*\{", text, flags=re.S | re.M):
+            found[f"{path.name}: {match[1]}"] = " ".join(match[2].split())
+    return found
+
+
+def test_every_kernel_that_reads_the_scene_opens_with_the_scene_parameters():
+    """A kernel that takes the scene's buffers takes them through SCENE_KERNEL_PARAMS, first, so the host's order
+    (checked above on one kernel) is every kernel's."""
+    declarations = _kernel_declarations()
+    assert {"render_pass.cl: render_pass", "meters.cl: measure", "integrator_bdpt.cl: bdpt_pass"} <= set(declarations)
+    scene_buffer_types = ("BVHNode", "TriangleInfo", "Material ", "Light ", "AnalyticShape", "Instance ")
+    wrong = [
+        name
+        for name, parameters in declarations.items()
+        if not parameters.startswith("SCENE_KERNEL_PARAMS") and any(t in parameters for t in scene_buffer_types)
+    ]
+    assert wrong == [], f"kernels that take scene buffers without SCENE_KERNEL_PARAMS first: {wrong}"

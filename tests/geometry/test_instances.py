@@ -15,7 +15,6 @@ from replica_agreement import assert_replicas_agree
 from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 from spectrace.engine.renderer import Renderer, upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
-from spectrace.engine.scene_features import scene_feature_defines
 from spectrace.geometry import bvh4
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.geometry.transforms import apply_transform, transform_matrix
@@ -106,7 +105,9 @@ def _rays(count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _trace(kernel_runner, scene, origins, directions, t_max, width=None):
     buffers = build_scene_buffers(scene)
-    runner = kernel_runner("testing/scene_hits.cl", {**traversal_defines(width), **scene_feature_defines(buffers)})
+    # The kernels built for every scene (one program per traversal width, whatever the scene), as the renders in the
+    # suite use; that a scene's own kernels give the same bits is tests/scene/test_scene_features.py's.
+    runner = kernel_runner("testing/scene_hits.cl", traversal_defines(width))
     n = len(origins)
     params = runner.buffer(render_params(scene, buffers, 0, 1))
     scene_args = upload_scene(runner.device.context, buffers)

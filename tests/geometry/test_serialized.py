@@ -8,6 +8,7 @@ import zlib
 import numpy as np
 import pytest
 
+from scene_text import camera_film
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import load_mesh
 
@@ -105,15 +106,9 @@ def test_scene_file_takes_shape_index(tmp_path):
     from spectrace.scene.loader import load_scene
 
     write_serialized(tmp_path / "parts.serialized", _meshes())
-    text = """
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 40
-[film]
-width = 8
-height = 8
-[materials.white]
+    text = (
+        camera_film(origin="[0, 0, 5]", target="[0, 0, 0]", fov="40", width="8", height="8")
+        + """[materials.white]
 type = "diffuse"
 reflectance = { value = 0.5 }
 [[shapes]]
@@ -122,6 +117,7 @@ file = "parts.serialized"
 shape_index = 2
 material = "white"
 """
+    )
     (tmp_path / "scene.toml").write_text(text)
     scene = load_scene(tmp_path / "scene.toml")
     assert len(scene.shapes[0].mesh.faces) == 2

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.geometry.test_instances import _trace
 
 from replica_agreement import assert_renders_like_mitsuba
 from spectrace.errors import SpectraceError
@@ -131,11 +132,6 @@ def test_what_mitsuba_refuses_is_one_line_naming_the_element(tmp_path, body, say
 @pytest.mark.peer
 def test_instances_meet_rays_where_mitsuba_does(tmp_path, kernel_runner, mitsuba_scalar_spectral):
     """Rays through the instances: the hit distance and normal match Mitsuba's ray_intersect."""
-    from spectrace.engine.renderer import upload_scene
-    from spectrace.engine.scene_buffers import build_scene_buffers, render_params
-    from spectrace.engine.scene_features import scene_feature_defines
-    from spectrace.geometry.bvh4 import traversal_defines
-
     mi = mitsuba_scalar_spectral
     path = _xml(tmp_path, 8)
     ours = load_mitsuba_scene(path)
@@ -146,15 +142,7 @@ def test_instances_meet_rays_where_mitsuba_does(tmp_path, kernel_runner, mitsuba
     origins[:, 2] = np.abs(origins[:, 2]) + 0.5  # above the floor
     directions = rng.uniform([-1.4, -0.6, 0.0], [1.4, 0.8, 0.6], (n, 3)) - origins
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    buffers = build_scene_buffers(ours)
-    runner = kernel_runner("testing/scene_hits.cl", {**traversal_defines(), **scene_feature_defines(buffers)})
-    out = [np.zeros((n, 4), np.float32) for _ in range(4)] + [np.zeros(n, np.int32)]
-    four = [np.hstack([a, np.zeros((n, 1))]).astype(np.float32) for a in (origins, directions)]
-    args = [runner.buffer(render_params(ours, buffers, 0, 1)), *upload_scene(runner.device.context, buffers)]
-    args += [runner.buffer(a) for a in four] + [runner.buffer(np.full(n, 1e9, np.float32))]
-    first = len(args)
-    args += [runner.buffer(o, True) for o in out] + [np.int32(n)]
-    runner.run("scene_hits", n, args, {first + k: o for k, o in enumerate(out)})
+    _, out = _trace(kernel_runner, ours, origins, directions, np.full(n, 1e9))
     hit, normal = out[0], out[2]
     compared = disagreed = 0
     for i in range(n):
@@ -223,11 +211,6 @@ def test_shapegroup_keeps_spheres_disks_and_cylinders_exact(tmp_path):
 def test_instanced_analytic_shapes_meet_rays_where_mitsuba_does(tmp_path, kernel_runner, mitsuba_scalar_spectral):
     """Hit distance, normal and texture coordinates of Mitsuba's ray_intersect on the stretched, sheared and mirrored
     instances of its sphere, disk and cylinder."""
-    from spectrace.engine.renderer import upload_scene
-    from spectrace.engine.scene_buffers import build_scene_buffers, render_params
-    from spectrace.engine.scene_features import scene_feature_defines
-    from spectrace.geometry.bvh4 import traversal_defines
-
     mi = mitsuba_scalar_spectral
     path = _xml(tmp_path, 8, ANALYTIC_GROUP)
     ours = load_mitsuba_scene(path)
@@ -238,16 +221,8 @@ def test_instanced_analytic_shapes_meet_rays_where_mitsuba_does(tmp_path, kernel
     origins[:, 2] = np.abs(origins[:, 2]) + 0.6
     directions = rng.uniform([-1.6, -0.6, 0.0], [1.8, 1.0, 0.8], (n, 3)) - origins
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    buffers = build_scene_buffers(ours)
+    buffers, out = _trace(kernel_runner, ours, origins, directions, np.full(n, 1e9))
     assert buffers.instanced_shape_count == 3
-    runner = kernel_runner("testing/scene_hits.cl", {**traversal_defines(), **scene_feature_defines(buffers)})
-    out = [np.zeros((n, 4), np.float32) for _ in range(4)] + [np.zeros(n, np.int32)]
-    four = [np.hstack([a, np.zeros((n, 1))]).astype(np.float32) for a in (origins, directions)]
-    args = [runner.buffer(render_params(ours, buffers, 0, 1)), *upload_scene(runner.device.context, buffers)]
-    args += [runner.buffer(a) for a in four] + [runner.buffer(np.full(n, 1e9, np.float32))]
-    first = len(args)
-    args += [runner.buffer(o, True) for o in out] + [np.int32(n)]
-    runner.run("scene_hits", n, args, {first + k: o for k, o in enumerate(out)})
     hit, normal = out[0], out[2]
     compared = disagreed = on_shapes = 0
     for i in range(n):

@@ -9,21 +9,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.scene.loader import load_scene
 
 # A square filling the view, lit by a point light off to one side: a diffuse red and a rough gold, whose highlight
 # makes the regions differ. One bounce (max_depth 2): light, surface, camera.
-SCENE = """
-[camera]
-origin = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-fov = 30
-[film]
-width = 24
-height = 24
-[integrator]
+SCENE = (
+    camera_film(
+        origin="[0.0, 0.0, 3.0]",
+        target="[0.0, 0.0, 0.0]",
+        fov="30",
+        width="24",
+        height="24",
+    )
+    + """[integrator]
 type = "{integrator}"
 max_depth = 2
 [sampler]
@@ -48,6 +49,7 @@ type = "point"
 position = [0.6, 0.4, 1.2]
 power = 40.0
 """
+)
 REGIONS = 3  # 3 x 3 blocks of 8 x 8 pixels
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from replica_agreement import spectrace_replicas
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.interop.mitsuba import load_mitsuba_scene
 from spectrace.scene import load_scene
@@ -17,16 +18,9 @@ SIGMA_A = 0.8
 
 # A white floor at z = -0.5 and a point light 0.6 to the side, 1 above it, both inside an absorbing index-matched box
 # spanning z in [-1, 1]; a camera 5.5 above the floor looking straight down (fov 20°).
-POINT_IN_ABSORBER = """
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, -0.5]
-fov = 20
-
-[film]
-width = 8
-height = 8
-
+POINT_IN_ABSORBER = (
+    camera_film(origin="[0, 0, 5]", target="[0, 0, -0.5]", fov="20", width="8", height="8")
+    + """
 [integrator]
 type = "{integrator}"
 max_depth = 2
@@ -53,6 +47,7 @@ type = "point"
 position = [0.6, 0, 0.5]
 intensity = {{ value = 2.0 }}
 """
+)
 
 
 def _floor_mean(sigma_a: float) -> float:

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from scene_text import camera_film
 from spectrace.engine.meters import RadianceMeter, measure
 from spectrace.errors import SpectraceError
 from spectrace.scene import load_scene
@@ -17,20 +18,14 @@ from spectrace.scene import load_scene
 WAVELENGTHS = np.array([450.0, 600.0])
 SIGMA_A = 0.8  # 1/scene unit, grey
 
-HEAD = """
-[camera]
-origin = [0, 0, 5]
-target = [0, 0, 0]
-fov = 20
-
-[film]
-width = 4
-height = 4
-
+HEAD = (
+    camera_film(origin="[0, 0, 5]", target="[0, 0, 0]", fov="20", width="4", height="4")
+    + """
 [integrator]
 max_depth = {depth}
 {integrator}
 """
+)
 
 # An absorbing box, index-matched (no material): 4 wide, spanning z in [-1, 1].
 BOX = f"""

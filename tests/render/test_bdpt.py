@@ -43,6 +43,7 @@ from tests.render.test_light_tracer import (
 
 import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.integrators import bdpt
@@ -206,16 +207,8 @@ def _dispersive_scene(tmp_path: Path, integrator: str, lamp: str = "rectangle") 
     either subpath."""
     return _write(
         tmp_path,
-        f"""
-[camera]
-origin = [0, 1.2, 2.2]
-target = [0, 0.3, 0]
-fov = 50
-
-[film]
-width = 16
-height = 16
-
+        camera_film(origin="[0, 1.2, 2.2]", target="[0, 0.3, 0]", fov="50", width="16", height="16")
+        + f"""
 [integrator]
 type = "{integrator}"
 max_depth = 6

@@ -39,12 +39,12 @@ from spectrace.engine.checkpoint import read_checkpoint, save_checkpoint
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.tiles import whole_film_rows
 from spectrace.errors import SpectraceError
+from spectrace.film.response import FilmResponse
 from spectrace.integrators import INTEGRATORS
 from spectrace.integrators.base import FEATURES
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import Scene
-from spectrace.film.response import FilmResponse
 from stats_toolkit import (
     assert_at_most_within_standard_errors,
     assert_within_standard_errors,

@@ -21,6 +21,7 @@ import pytest
 
 import spectrace
 from replica_agreement import spectrace_replicas
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from stats_toolkit import assert_power, assert_within_standard_errors, mean_and_standard_error
@@ -32,17 +33,15 @@ APERTURE, FOCUS, VIEW_WIDTH = 0.5, 1.0, 3.0
 def _scene(tmp_path: Path, camera: str) -> Path:
     path = tmp_path / "floor.toml"
     path.write_text(
-        f"""
-[camera]
-origin = [0.2, -0.1, {CAMERA_HEIGHT}]
-target = [0.2, -0.1, 0]
-up = [0, 1, 0]
-{camera}
-
-[film]
-width = {SIZE}
-height = {SIZE}
-
+        camera_film(
+            origin=f"[0.2, -0.1, {CAMERA_HEIGHT}]",
+            target="[0.2, -0.1, 0]",
+            fov=None,
+            width=SIZE,
+            height=SIZE,
+            camera=f"up = [0, 1, 0]\n{camera}",
+        )
+        + f"""
 [integrator]
 type = "light"
 max_depth = 2

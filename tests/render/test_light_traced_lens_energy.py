@@ -22,6 +22,7 @@ import numpy as np
 
 import spectrace
 from replica_agreement import spectrace_replicas
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
@@ -33,17 +34,15 @@ def _scene(tmp_path: Path) -> Path:
     fov = np.degrees(2 * np.arctan(HALF_TAN))
     path = tmp_path / "ball_lens.toml"
     path.write_text(
-        f"""
-[camera]
-origin = [0, 0, {CAMERA_HEIGHT}]
-target = [0, 0, 0]
-up = [0, 1, 0]
-fov = {fov}
-
-[film]
-width = 32
-height = 32
-
+        camera_film(
+            origin=f"[0, 0, {CAMERA_HEIGHT}]",
+            target="[0, 0, 0]",
+            fov=fov,
+            width="32",
+            height="32",
+            camera="up = [0, 1, 0]",
+        )
+        + f"""
 [integrator]
 type = "light"
 max_depth = 4

@@ -27,6 +27,7 @@ import pytest
 
 import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
@@ -75,17 +76,7 @@ def _write(tmp_path: Path, text: str) -> Path:
 
 
 def _camera(origin, target, fov, size, up="[0, 1, 0]") -> str:
-    return f"""
-[camera]
-origin = {origin}
-target = {target}
-up = {up}
-fov = {fov}
-
-[film]
-width = {size}
-height = {size}
-"""
+    return camera_film(origin=origin, target=target, fov=fov, width=size, height=size, camera=f"up = {up}")
 
 
 INTENSITY, HEIGHT, FLOOR_ALBEDO = 2.0, 1.0, 0.5

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from pydantic import BaseModel, ValidationError
 
 from fuzz_settings import fuzz_settings
+from scene_text import camera_film
 from spectrace.errors import SpectraceError
 from spectrace.scene import schema
 from spectrace.scene.loader import read_scene_spec
@@ -145,16 +146,9 @@ def test_every_scalar_key_takes_a_value_of_its_type(model, key, taken):
 
 # ---------------------------------------------------------------- through the loader: file, key path, one line
 
-SCENE = """\
-[camera]
-origin = [0, 1, -4]
-target = [0, 1, 0]
-fov = 40
-
-[film]
-width = 8
-height = 8
-
+SCENE = (
+    camera_film(origin="[0, 1, -4]", target="[0, 1, 0]", fov="40", width="8", height="8")
+    + """
 [integrator]
 type = "bdpt"
 
@@ -169,6 +163,7 @@ reflectance = { value = 0.5 }
 type = "rectangle"
 material = "white"
 """
+)
 
 SECTIONS = {
     "film": schema.FilmSpec,

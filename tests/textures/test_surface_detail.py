@@ -10,7 +10,6 @@ the tolerances.
 
 import dataclasses
 import inspect
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -436,25 +435,6 @@ def test_the_api_refuses_the_same():
 
 
 # ---------------------------------------------------------------- docs
-
-
-def _documented_detail_rows(doc: str, start: str) -> list[tuple[str, ...]]:
-    section = doc.split(start, 1)[1]
-    table = section.split("| key | type, unit | default | meaning |", 1)[1].split("\n\n", 1)[0]
-    return [
-        tuple(cell.strip() for cell in row.strip("|").split(" | "))
-        for row in table.splitlines()
-        if row.startswith("| `")
-    ]
-
-
-@pytest.mark.parametrize(
-    "doc, start", [("textures.md", "## Surface detail"), ("scene-format.md", "Every material also takes these keys")]
-)
-def test_docs_tables_are_the_surface_detail_table(doc, start):
-    text = (Path(__file__).resolve().parents[2] / "docs" / doc).read_text(encoding="utf-8")
-    expected = [(f"`{p.name}`", p.doc_type(), p.doc_default(), p.doc) for p in surface.PARAMETERS]
-    assert _documented_detail_rows(text, start) == expected
 
 
 @pytest.mark.parametrize("name", list(MATERIALS))

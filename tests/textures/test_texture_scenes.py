@@ -8,22 +8,18 @@ import pytest
 from PIL import Image as PILImage
 
 from cli_runner import run_in_process, run_spectrace
+from scene_text import camera_film
 from spectrace.errors import SpectraceError
 from spectrace.scene import load_scene
 from spectrace.scene.loader import check_texture_values
 from spectrace.textures import bitmap, checkerboard
 
-HEADER = """
-[camera]
-origin = [0, 0, 3]
-target = [0, 0, 0]
-fov = 30
-[film]
-width = 8
-height = 8
-[sampler]
+HEADER = (
+    camera_film(origin="[0, 0, 3]", target="[0, 0, 0]", fov="30", width="8", height="8")
+    + """[sampler]
 spp = 2
 """
+)
 
 SCENE = (
     HEADER

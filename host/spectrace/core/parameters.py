@@ -149,6 +149,11 @@ class Parameter:
             return str(self.default).lower()
         if isinstance(self.default, float):
             return f"{self.default:g}"
+        # As a scene file writes them: TOML strings are double-quoted, and a vector is an array.
+        if isinstance(self.default, str):
+            return f'`"{self.default}"`'
+        if isinstance(self.default, (list, tuple)):
+            return f"`[{', '.join(f'{value:g}' for value in self.default)}]`"
         return f"`{self.default!r}`"
 
 
