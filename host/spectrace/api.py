@@ -7,6 +7,7 @@ like the same scene written as TOML. docs/python-api.md shows it in use.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import contextmanager
@@ -397,15 +398,12 @@ def _check_camera(scene: Scene) -> None:
         raise SpectraceError(problem, where="camera.far_clip")
     if camera.type not in CAMERAS:
         raise SpectraceError(f"unknown camera type {camera.type!r}; one of {', '.join(CAMERAS)}", where="camera.type")
-    if camera.type in ("perspective", "thinlens") and not 0.0 < camera.fov_degrees < 180.0:
-        raise SpectraceError(f"fov must lie in (0, 180) degrees, got {camera.fov_degrees}", where="camera.fov")
-    numbers = {
-        "thinlens": ("aperture_radius", "focus_distance"),
-        "orthographic": ("view_width",),
-    }.get(camera.type, ())
-    tables = {parameter.name: parameter for parameter in CAMERAS[camera.type].PARAMETERS}
-    for name in numbers:
-        tables[name].check(getattr(camera, name), where=f"camera.{name}")
+    # The camera's numbers that are fields of the model (a thin lens's f_number is resolved into its aperture).
+    fields = {field.name for field in dataclasses.fields(camera)}
+    for parameter in CAMERAS[camera.type].PARAMETERS:
+        name = parameter.api_name or parameter.name
+        if parameter.type == "float" and name in fields and (value := getattr(camera, name)) is not None:
+            parameter.check(value, where=f"camera.{parameter.name}")
     if not isinstance(scene.pixel_filter, PixelFilter):
         raise SpectraceError("expected a spectrace.PixelFilter", where="pixel_filter")
 

@@ -28,7 +28,7 @@ from spectrace.core import limits
 from spectrace.core.parameters import DISTRIBUTIONS, Parameter
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
-from spectrace.pixel_filters import FILTERS
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.scene.model import DEFAULT_SAMPLER, IntegratorType, SamplerType
 from spectrace.spectral.film_response import observer_problem, wavelength_range_problem
 from spectrace.spectral.metals import METALS
@@ -492,9 +492,9 @@ _FILTER_SPECS = {
     name: create_model(
         f"{name.capitalize()}FilterSpec",
         __base__=Strict,
-        **{"type": (Literal[name], ...)} | {parameter.name: _field(parameter) for parameter in parameters},
+        **{"type": (Literal[name], ...)} | {parameter.name: _field(parameter) for parameter in module.PARAMETERS},
     )
-    for name, parameters in FILTERS.items()
+    for name, module in PIXEL_FILTERS.items()
 }
 if TYPE_CHECKING:
     CameraSpec: TypeAlias = TableSpec
@@ -505,7 +505,7 @@ else:
         _type_or("perspective"),
     ]
     PixelFilterSpec = (
-        Literal[tuple(FILTERS)]
+        Literal[tuple(PIXEL_FILTERS)]
         | Annotated[functools.reduce(operator.or_, _FILTER_SPECS.values()), Field(discriminator="type")]
         | None
     )

@@ -9,6 +9,7 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.textures.shared import UV_OFFSET, Placement, uv_pair, uv_scale
 
 NAME = "checkerboard"
+COMPOSITE = True
 PARAMETERS = (
     Parameter(
         "color0",
@@ -36,6 +37,9 @@ class CheckerboardTexture:
     color1: object
     placement: Placement = Placement(uv_scale=(2.0, 2.0))
     source: str = "checkerboard"
+
+
+MODEL = CheckerboardTexture
 
 
 def from_spec(spec, resolver, key: str) -> CheckerboardTexture:

@@ -10,6 +10,7 @@ from spectrace.core.parameters import Parameter, Range
 from spectrace.textures.shared import Placement, composite_factor
 
 NAME = "mix"
+COMPOSITE = True
 PARAMETERS = (
     Parameter("tex1", "spectrum", default=0.0, range=Range(0.0, 1.0), doc="the value where amount is 0", textured=True),
     Parameter("tex2", "spectrum", default=1.0, range=Range(0.0, 1.0), doc="the value where amount is 1", textured=True),
@@ -40,6 +41,9 @@ class MixTexture:
     @property
     def operands(self) -> tuple:
         return (self.tex1, self.tex2, self.amount)
+
+
+MODEL = MixTexture
 
 
 def from_spec(spec, resolver, key: str) -> MixTexture:

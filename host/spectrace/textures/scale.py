@@ -10,6 +10,7 @@ from spectrace.core.parameters import Parameter, Range
 from spectrace.textures.shared import Placement, composite_factor
 
 NAME = "scale"
+COMPOSITE = True
 PARAMETERS = (
     Parameter("tex", "spectrum", default=1.0, range=Range(0.0, 1.0), doc="what is scaled", textured=True),
     Parameter(
@@ -37,6 +38,9 @@ class ScaleTexture:
     @property
     def operands(self) -> tuple:
         return (self.tex, self.scale)
+
+
+MODEL = ScaleTexture
 
 
 def from_spec(spec, resolver, key: str) -> ScaleTexture:
