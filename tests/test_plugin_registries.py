@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+import spectrace
 from spectrace import resources
 from spectrace.cameras import CAMERAS
 from spectrace.cameras.base import CameraPlugin
@@ -113,6 +114,13 @@ def test_every_plugin_has_its_device_case(kind, name):
 @pytest.mark.parametrize(("kind", "name"), PLUGINS)
 def test_every_plugin_is_described_in_its_docs_page(kind, name):
     assert _documented(KINDS[kind].docs, name), f"docs/{KINDS[kind].docs} has no heading, row or item for {name}"
+
+
+@pytest.mark.parametrize("name", list(TEXTURES))
+def test_every_texture_is_constructed_in_the_api_by_its_make(name):
+    module = TEXTURES[name]
+    assert getattr(spectrace, module.API_NAME) is module.make
+    assert module.API_NAME in spectrace.__all__
 
 
 def test_the_docs_check_sees_a_missing_plugin():

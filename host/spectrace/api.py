@@ -57,57 +57,9 @@ ProgressOption = bool | Literal["auto"] | Callable[[int, int], None] | None
 # ---------------------------------------------------------------- spectra
 
 
-# Texture constructors (docs/textures.md): each texture module's `make`, as the materials' are theirs.
-bitmap = textures.bitmap.make
-spectral_texture = textures.spectral.make
-
-
-def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)):
-    """Squares of color0 and color1 (reflectances: anything `spectrum` takes, an RGB triple, or an image texture)
-    over the texture coordinates: color0 where floor(s) + floor(t) is even, st = uv · uv_scale + uv_offset."""
-    from spectrace.textures import IMAGE_TEXTURES
-    from spectrace.textures import checkerboard as module
-
-    sides = [
-        side if isinstance(side, IMAGE_TEXTURES) else spectrum_input.reflectance(side, name)
-        for side, name in ((color0, "color0"), (color1, "color1"))
-    ]
-    return module.make(sides[0], sides[1], uv_scale=uv_scale, uv_offset=uv_offset)
-
-
-def scale_texture(tex=1.0, scale=1.0):
-    """tex (a reflectance: anything `spectrum` takes, an RGB triple, or an image texture) times scale (a number >= 0
-    or a grey image texture), as pbrt-v4's `scale` texture; as a reflectance the product must stay within [0, 1]."""
-    from spectrace.textures import scale as module
-
-    return module.make(_operand(tex, "tex"), _factor(scale, "scale", None))
-
-
-def mix_texture(tex1=0.0, tex2=1.0, amount=0.5):
-    """(1 − amount) · tex1 + amount · tex2, as pbrt-v4's `mix` texture: tex1, tex2 reflectances (anything `spectrum`
-    takes, an RGB triple, or an image texture), amount a number in [0, 1] or a grey image texture."""
-    from spectrace.textures import mix as module
-
-    return module.make(_operand(tex1, "tex1"), _operand(tex2, "tex2"), _factor(amount, "amount", 1.0))
-
-
-def _operand(value, name: str):
-    from spectrace.textures import IMAGE_TEXTURES
-
-    return value if isinstance(value, IMAGE_TEXTURES) else spectrum_input.reflectance(value, name)
-
-
-def _factor(value, name: str, upper: float | None):
-    """A composite's number: a float within [0, upper], or a one-channel image texture."""
-    from spectrace.textures import IMAGE_TEXTURES, check_texture_values
-
-    if isinstance(value, IMAGE_TEXTURES):
-        check_texture_values(value, "float", name, upper)
-        return value
-    number = float(value)
-    if not (number >= 0.0 and (upper is None or number <= upper)):
-        raise SpectraceError(f"{name} must lie in [0, {upper if upper is not None else 'inf'}], got {value}", name)
-    return number
+# Texture constructors (docs/textures.md): each texture module's `make`, `spectrace.<API_NAME>`, as the materials'
+# are theirs.
+globals().update({module.API_NAME: module.make for module in textures.TEXTURES.values()})
 
 
 # ---------------------------------------------------------------- geometry

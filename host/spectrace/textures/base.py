@@ -22,10 +22,16 @@ class TexturePlugin(TabledPlugin, Protocol):
     @property
     def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802
 
+    @property
+    def API_NAME(self) -> str:  # noqa: N802
+        """The name of `make` in the Python API, `spectrace.<API_NAME>`."""
+        ...
+
     def from_spec(self, spec: Any, resolver: Any, key: str) -> Any:
         """The dataclass of a validated scene-file table at `key`, its operands resolved by `resolver`."""
         ...
 
     def make(self, *args: Any, **kwargs: Any) -> Any:
-        """The Python API's constructor."""
+        """The Python API's constructor, which takes any value the API takes (a spectrum in any form, an RGB
+        triple) and checks it."""
         ...

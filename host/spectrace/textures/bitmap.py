@@ -25,6 +25,7 @@ from spectrace.textures.shared import (
 )
 
 NAME = "bitmap"
+API_NAME = NAME
 COMPOSITE = False
 RAW = Parameter(
     "raw",

@@ -158,6 +158,28 @@ def value_problem(values: np.ndarray, upper: float | None, reflectance: bool = T
     return None
 
 
+def api_operand(value, name: str):
+    """An operand given to the Python API's constructor of a composite: an image texture as it is, anything else a
+    reflectance (anything `spectrace.spectrum` takes, an RGB triple)."""
+    from spectrace.spectral import spectrum_input
+    from spectrace.textures import IMAGE_TEXTURES
+
+    return value if isinstance(value, IMAGE_TEXTURES) else spectrum_input.reflectance(value, name)
+
+
+def api_factor(value, name: str, upper: float | None):
+    """A composite's number given to the Python API: a float within [0, upper], or a one-channel image texture."""
+    from spectrace.textures import IMAGE_TEXTURES, check_texture_values
+
+    if isinstance(value, IMAGE_TEXTURES):
+        check_texture_values(value, "float", name, upper)
+        return value
+    number = float(value)
+    if not (number >= 0.0 and (upper is None or number <= upper)):
+        raise SpectraceError(f"{name} must lie in [0, {upper if upper is not None else 'inf'}], got {value}", name)
+    return number
+
+
 def composite_factor(value, resolver, key: str, upper: float | None):
     """A scale's factor or a mix's amount from its validated scene value: a number in [0, upper], or a one-channel
     image texture (checked by the resolver); a spectrum given instead (`{ value = ... }`) must be constant and is its

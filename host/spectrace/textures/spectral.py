@@ -24,6 +24,7 @@ from spectrace.textures.shared import (
 )
 
 NAME = "spectral"
+API_NAME = "spectral_texture"  # beside spectrace.spectrum, a bare "spectral" would not say what it makes
 COMPOSITE = False
 PARAMETERS = (FILE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
 # More bands than the 1 nm grid has samples would add nothing the renderer can resolve.
