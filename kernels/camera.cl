@@ -2,7 +2,7 @@
  *
  * - CAMERA_PERSPECTIVE, a pinhole: the image plane spans [-1, 1] in both directions at unit distance along
  *   camera_forward; camera_right and camera_up carry tan(fov/2) of their axis, so no trigonometry runs here.
- * - CAMERA_THIN_LENS (Pharr, Jakob & Humphreys, 4th ed., 5.2.3): the pinhole's ray through the film position meets
+ * - CAMERA_THINLENS (Pharr, Jakob & Humphreys, 4th ed., 5.2.3): the pinhole's ray through the film position meets
  *   the plane of focus (lens.y along camera_forward) at a point every lens ray then aims at; the ray starts on a
  *   disk of radius lens.x (uniform in area) around camera_origin, in the plane spanned by camera_right and
  *   camera_up. Points on the plane of focus image sharply; the others blur into the circle of confusion.
@@ -26,6 +26,9 @@
 #include "ray.cl"
 #include "rng.cl"
 #include "sampling.cl"
+#ifndef CAMERA_TYPE_COUNT
+#error "built without the cameras' generated sources (spectrace.plugins.generated_sources)"
+#endif
 
 #define CAMERA_PI 3.14159265358979f
 
@@ -61,7 +64,7 @@ inline Ray camera_ray(__global const RenderParams *p, float2 film, Sampler *samp
         return ray;
     }
     float3 direction = pinhole_direction(p, film);
-    if (CAMERA_IS(p, CAMERA_THIN_LENS)) {
+    if (CAMERA_IS(p, CAMERA_THINLENS)) {
         float2 u = sample_2d(sampler);
         float2 disk = p->lens.x * sqrt(u.x) * cos_sin_turns(u.y);
         float3 lens = disk.x * normalize(p->camera_right.xyz) + disk.y * normalize(p->camera_up.xyz);

@@ -108,7 +108,7 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
         return c;
     }
     float3 lens_point = eye;
-    if (CAMERA_IS(params, CAMERA_THIN_LENS)) {
+    if (CAMERA_IS(params, CAMERA_THINLENS)) {
         float2 disk = params->lens.x * sqrt(u_lens.x) * cos_sin_turns(u_lens.y);
         lens_point = eye + disk.x * normalize(right) + disk.y * normalize(up);
     }
@@ -117,7 +117,7 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
     if (!(depth > 0.0f) || depth <= near || depth > far) return c;
     /* The eye sees the film position of the ray lens_point → x where that ray meets the plane of focus (for the
      * pinhole, lens_point is the eye and that is x's own direction). */
-    float3 seen = CAMERA_IS(params, CAMERA_THIN_LENS) ? lens_point + (params->lens.y / depth) * d - eye : d;
+    float3 seen = CAMERA_IS(params, CAMERA_THINLENS) ? lens_point + (params->lens.y / depth) * d - eye : d;
     float seen_depth = dot(seen, forward);
     float ndc_x = dot(seen, right) / (tan_x2 * seen_depth);
     float ndc_y = dot(seen, up) / (tan_y2 * seen_depth);

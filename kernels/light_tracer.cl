@@ -107,7 +107,7 @@ inline float shading_normal_adjoint(float3 ng, float3 ns, float3 wo, float3 wi)
  * numbers as before it existed. */
 inline float2 lens_sample(__global const RenderParams *params, Sampler *sampler)
 {
-    return CAMERA_IS(params, CAMERA_THIN_LENS) ? sample_2d(sampler) : (float2)(0.0f);
+    return CAMERA_IS(params, CAMERA_THINLENS) ? sample_2d(sampler) : (float2)(0.0f);
 }
 
 /* The fraction of light that leaves `from` (offset off its surface toward the camera, or a point in a medium) in

@@ -5,7 +5,7 @@
  * SurfaceContext),
  * <name>_eval (f·|cos θi|), <name>_pdf and <name>_sample. The list of BSDFs is not kept here: the host writes
  * material_list.h from its registry (spectrace.materials.MATERIALS) for every build it hands them to
- * (spectrace.materials.generated_sources), with each bsdf_<name>.cl included and MATERIAL_LIST, and defines each
+ * (spectrace.plugins.generated_sources), with each bsdf_<name>.cl included and MATERIAL_LIST, and defines each
  * MATERIAL_<NAME> code. Adding a BSDF: that file and its host module
  * (docs/materials.md, "Adding a BSDF"); nothing here changes. docs/materials.md describes each model. */
 #ifndef SPECTRACE_MATERIAL_CL
@@ -17,7 +17,7 @@
 #include "texture.cl"
 #include "bsdf_sample.cl"
 #ifndef MATERIAL_TYPE_COUNT
-#error "built without the materials' generated sources (spectrace.materials.generated_sources)"
+#error "built without the materials' generated sources (spectrace.plugins.generated_sources)"
 #endif
 #include "material_list.h"
 

@@ -16,6 +16,9 @@
 #define SPECTRACE_PIXEL_FILTER_CL
 
 #include "types.h"
+#ifndef PIXEL_FILTER_TYPE_COUNT
+#error "built without the pixel filters' generated sources (spectrace.plugins.generated_sources)"
+#endif
 
 /* Mitchell–Netravali's cubic k(x) for x = |offset| in [0, 2] filter units. */
 inline float mitchell_1d(float x, float b, float c)

@@ -89,7 +89,7 @@
 #define SCENE_HAS_FAR_CLIP 1
 #endif
 #ifndef SCENE_PIXEL_FILTERS
-#define SCENE_PIXEL_FILTERS ((1 << PIXEL_FILTER_COUNT) - 1)
+#define SCENE_PIXEL_FILTERS ((1 << PIXEL_FILTER_TYPE_COUNT) - 1)
 #endif
 
 /* Instanced objects (kernels/scene.cl, "Instances"): a top-level BVH over the instances beside the triangles'. */

@@ -17,6 +17,9 @@
 #include "types.h"
 #include "rgb_spectrum.cl"
 #include "spectrum.cl"
+#ifndef TEXTURE_TYPE_COUNT
+#error "built without the textures' generated sources (spectrace.plugins.generated_sources)"
+#endif
 
 /* What a texture lookup reads: the texture rows, the texel buffer as floats, and the spectrum table (for a
  * checkerboard side that is a spectrum). */

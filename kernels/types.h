@@ -233,7 +233,7 @@ typedef struct {
                                 max_depth; 0: it is not (Mitsuba 3's volpath) */
     int instanced_shape_count;  /* analytic shapes of instanced objects (AnalyticShape rows after shape_count) */
     int pad_params[2];
-    float4 lens;             /* CAMERA_THIN_LENS: aperture radius, focus distance along camera_forward (scene
+    float4 lens;             /* CAMERA_THINLENS: aperture radius, focus distance along camera_forward (scene
                                 units), 0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:
                                 gaussian: -1/(2σ²), exp(-radius²/(2σ²)) (σ in pixels); mitchell: B, C */

@@ -20,17 +20,13 @@ from spectrace.scene import MODEL_NAMES, material_model_names
 ensure_usable_cache_folder()
 
 # The names below load on first use (PEP 562), so that `spectrace --help` and `import spectrace.cli` do not pay for
-# colour-science, SciPy and the OpenCL host code. Where each name lives (the materials' names: _registry_names):
+# colour-science, SciPy and the OpenCL host code. Where each name lives (the materials' and textures' names:
+# _registry_names):
 _LAZY = {
     **dict.fromkeys(
         [
             "area_emitter",
-            "bitmap",
-            "checkerboard",
             "constant_environment",
-            "spectral_texture",
-            "scale_texture",
-            "mix_texture",
             "distant_light",
             "medium",
             "mesh_from_trimesh",
@@ -41,7 +37,6 @@ _LAZY = {
             "shape",
             "instanced_object",
             "instance",
-            "spectral_texture",
             "spectrum",
             "spot_light",
             "transformed",
@@ -63,11 +58,14 @@ _LAZY = {
 
 
 def _registry_names() -> dict[str, str]:
-    """Names that come from the materials' registry: each material's constructor (`spectrace.diffuse`, ...: its
-    module's `make`, which spectrace.api exposes) and its dataclass."""
+    """Names that come from the registries: each material's constructor (`spectrace.diffuse`, ...: its module's
+    `make`, which spectrace.api exposes) and its dataclass, and each texture's constructor (`spectrace.bitmap`, ...:
+    its module's API_NAME)."""
     from spectrace.materials import MATERIALS
+    from spectrace.textures import TEXTURES
 
-    return dict.fromkeys(MATERIALS, "spectrace.api") | material_model_names()
+    textures = dict.fromkeys((module.API_NAME for module in TEXTURES.values()), "spectrace.api")
+    return dict.fromkeys(MATERIALS, "spectrace.api") | material_model_names() | textures
 
 
 __version__ = "0.1.0"

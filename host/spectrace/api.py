@@ -7,6 +7,7 @@ like the same scene written as TOML. docs/python-api.md shows it in use.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import contextmanager
@@ -57,57 +58,9 @@ ProgressOption = bool | Literal["auto"] | Callable[[int, int], None] | None
 # ---------------------------------------------------------------- spectra
 
 
-# Texture constructors (docs/textures.md): each texture module's `make`, as the materials' are theirs.
-bitmap = textures.bitmap.make
-spectral_texture = textures.spectral.make
-
-
-def checkerboard(color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)):
-    """Squares of color0 and color1 (reflectances: anything `spectrum` takes, an RGB triple, or an image texture)
-    over the texture coordinates: color0 where floor(s) + floor(t) is even, st = uv · uv_scale + uv_offset."""
-    from spectrace.textures import IMAGE_TEXTURES
-    from spectrace.textures import checkerboard as module
-
-    sides = [
-        side if isinstance(side, IMAGE_TEXTURES) else spectrum_input.reflectance(side, name)
-        for side, name in ((color0, "color0"), (color1, "color1"))
-    ]
-    return module.make(sides[0], sides[1], uv_scale=uv_scale, uv_offset=uv_offset)
-
-
-def scale_texture(tex=1.0, scale=1.0):
-    """tex (a reflectance: anything `spectrum` takes, an RGB triple, or an image texture) times scale (a number >= 0
-    or a grey image texture), as pbrt-v4's `scale` texture; as a reflectance the product must stay within [0, 1]."""
-    from spectrace.textures import scale as module
-
-    return module.make(_operand(tex, "tex"), _factor(scale, "scale", None))
-
-
-def mix_texture(tex1=0.0, tex2=1.0, amount=0.5):
-    """(1 − amount) · tex1 + amount · tex2, as pbrt-v4's `mix` texture: tex1, tex2 reflectances (anything `spectrum`
-    takes, an RGB triple, or an image texture), amount a number in [0, 1] or a grey image texture."""
-    from spectrace.textures import mix as module
-
-    return module.make(_operand(tex1, "tex1"), _operand(tex2, "tex2"), _factor(amount, "amount", 1.0))
-
-
-def _operand(value, name: str):
-    from spectrace.textures import IMAGE_TEXTURES
-
-    return value if isinstance(value, IMAGE_TEXTURES) else spectrum_input.reflectance(value, name)
-
-
-def _factor(value, name: str, upper: float | None):
-    """A composite's number: a float within [0, upper], or a one-channel image texture."""
-    from spectrace.textures import IMAGE_TEXTURES, check_texture_values
-
-    if isinstance(value, IMAGE_TEXTURES):
-        check_texture_values(value, "float", name, upper)
-        return value
-    number = float(value)
-    if not (number >= 0.0 and (upper is None or number <= upper)):
-        raise SpectraceError(f"{name} must lie in [0, {upper if upper is not None else 'inf'}], got {value}", name)
-    return number
+# Texture constructors (docs/textures.md): each texture module's `make`, `spectrace.<API_NAME>`, as the materials'
+# are theirs.
+globals().update({module.API_NAME: module.make for module in textures.TEXTURES.values()})
 
 
 # ---------------------------------------------------------------- geometry
@@ -398,15 +351,12 @@ def _check_camera(scene: Scene) -> None:
         raise SpectraceError(problem, where="camera.far_clip")
     if camera.type not in CAMERAS:
         raise SpectraceError(f"unknown camera type {camera.type!r}; one of {', '.join(CAMERAS)}", where="camera.type")
-    if camera.type in ("perspective", "thinlens") and not 0.0 < camera.fov_degrees < 180.0:
-        raise SpectraceError(f"fov must lie in (0, 180) degrees, got {camera.fov_degrees}", where="camera.fov")
-    numbers = {
-        "thinlens": ("aperture_radius", "focus_distance"),
-        "orthographic": ("view_width",),
-    }.get(camera.type, ())
-    tables = {parameter.name: parameter for parameter in CAMERAS[camera.type].PARAMETERS}
-    for name in numbers:
-        tables[name].check(getattr(camera, name), where=f"camera.{name}")
+    # The camera's numbers that are fields of the model (a thin lens's f_number is resolved into its aperture).
+    fields = {field.name for field in dataclasses.fields(camera)}
+    for parameter in CAMERAS[camera.type].PARAMETERS:
+        name = parameter.api_name or parameter.name
+        if parameter.type == "float" and name in fields and (value := getattr(camera, name)) is not None:
+            parameter.check(value, where=f"camera.{parameter.name}")
     if not isinstance(scene.pixel_filter, PixelFilter):
         raise SpectraceError("expected a spectrace.PixelFilter", where="pixel_filter")
 

@@ -17,7 +17,7 @@ from spectrace.engine.renderer import sampler_defines
 from spectrace.film.state import spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.integrators import INTEGRATORS
-from spectrace.materials import generated_sources
+from spectrace.plugins import generated_sources
 from spectrace.scene.model import SAMPLER_TYPES
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from spectrace.core.contract import DEVICE_STRUCTS
-from spectrace.materials import generated_sources
+from spectrace.plugins import generated_sources
 
 
 def _layout_kernel_source() -> str:
@@ -98,15 +98,16 @@ def test_a_build_without_the_contract_stops_with_a_clear_error(device):
         compile_source(device.context, device.cl_device, '#include "types.h"\n', options)
 
 
-def test_a_material_dispatch_built_without_the_registrys_sources_stops_with_a_clear_error(device):
-    """The device layer adds only the contract; the material codes and list come from the registry, and a build
-    not handed them names what it lacks rather than failing somewhere inside the dispatch."""
+@pytest.mark.parametrize("entry", ["material.cl", "texture.cl", "camera.cl", "pixel_filter.cl"])
+def test_a_dispatch_built_without_the_registries_sources_stops_with_a_clear_error(device, entry):
+    """The device layer adds only the contract; the plugins' codes (and the materials' list) come from their
+    registries, and a build not handed them names what it lacks rather than failing somewhere inside a dispatch."""
     from spectrace import resources
     from spectrace.device.program_cache import KernelBuildError, _with_contract, build_options, compile_source
 
     options = build_options(resources.kernels_dir(), _with_contract(None), None)
     with pytest.raises(KernelBuildError, match="generated sources"):
-        compile_source(device.context, device.cl_device, '#include "material.cl"\n', options)
+        compile_source(device.context, device.cl_device, f'#include "{entry}"\n', options)
 
 
 def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device):

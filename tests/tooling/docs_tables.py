@@ -18,7 +18,6 @@ import re
 import sys
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 REPOSITORY = Path(__file__).resolve().parents[2]
@@ -33,7 +32,7 @@ def _kinds() -> dict[str, Mapping[str, Any]]:
     from spectrace.integrators import INTEGRATORS
     from spectrace.lights import LIGHTS
     from spectrace.materials import MATERIALS
-    from spectrace.pixel_filters import FILTERS
+    from spectrace.pixel_filters import PIXEL_FILTERS
     from spectrace.textures import TEXTURES
 
     return {
@@ -41,7 +40,7 @@ def _kinds() -> dict[str, Mapping[str, Any]]:
         "lights": LIGHTS,
         "textures": TEXTURES,
         "cameras": CAMERAS,
-        "pixel filters": {name: SimpleNamespace(NAME=name, PARAMETERS=table) for name, table in FILTERS.items()},
+        "pixel filters": PIXEL_FILTERS,
         "integrators": INTEGRATORS,
     }
 

@@ -1,11 +1,16 @@
 """The cameras (kernels/camera.cl): one module per type, each with its parameter table (the keys it takes beside
 the shared ones in `shared.py`), the Mitsuba 3 plugins it imports and how it fills the RenderParams' camera fields.
-`CAMERAS` lists them in the order of their device codes (spectrace.core.contract.CAMERA_TYPES)."""
-
-from types import ModuleType
+`CAMERAS` lists them; a camera's position there is its device code (RenderParams.camera_type, CAMERA_<NAME> in the
+kernels: `generated_sources`)."""
 
 from spectrace.cameras import equirectangular, orthographic, perspective, thinlens
-from spectrace.core.contract import CAMERA_TYPES
+from spectrace.cameras.base import CameraPlugin
+from spectrace.core.contract import GeneratedSources
+from spectrace.core.registry import Registry
 
-CAMERAS: dict[str, ModuleType] = {m.NAME: m for m in (perspective, thinlens, orthographic, equirectangular)}
-assert tuple(CAMERAS) == CAMERA_TYPES
+CAMERAS = Registry[CameraPlugin]("camera", (perspective, thinlens, orthographic, equirectangular))
+
+
+def generated_sources() -> GeneratedSources:
+    """CAMERA_<NAME> and CAMERA_TYPE_COUNT, which every kernel that makes camera rays is built with."""
+    return GeneratedSources(CAMERAS.kernel_defines("CAMERA"))

@@ -7,10 +7,8 @@ that an `envmap` light without rotation reproduces."""
 import numpy as np
 
 from spectrace.cameras.shared import frame
-from spectrace.core.contract import CAMERA_EQUIRECTANGULAR
 
 NAME = "equirectangular"
-CODE = CAMERA_EQUIRECTANGULAR
 MITSUBA_PLUGINS: tuple[str, ...] = ()  # Mitsuba 3 has no such sensor
 PARAMETERS = ()
 

@@ -5,11 +5,9 @@ view_width / aspect ratio up, so an object's image size is its world size whatev
 import numpy as np
 
 from spectrace.cameras.shared import frame
-from spectrace.core.contract import CAMERA_ORTHOGRAPHIC
 from spectrace.core.parameters import REQUIRED, Parameter, Range
 
 NAME = "orthographic"
-CODE = CAMERA_ORTHOGRAPHIC
 MITSUBA_PLUGINS = ("orthographic",)
 VIEW_WIDTH = Parameter(
     "view_width",

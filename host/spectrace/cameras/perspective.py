@@ -3,10 +3,8 @@
 import numpy as np
 
 from spectrace.cameras.shared import FOV, FOV_AXIS, perspective_basis
-from spectrace.core.contract import CAMERA_PERSPECTIVE
 
 NAME = "perspective"
-CODE = CAMERA_PERSPECTIVE
 MITSUBA_PLUGINS = ("perspective",)
 PARAMETERS = (FOV, FOV_AXIS)
 

@@ -1,4 +1,4 @@
-"""`thinlens`: a perspective camera with a thin lens, for depth of field (kernels/camera.cl, CAMERA_THIN_LENS;
+"""`thinlens`: a perspective camera with a thin lens, for depth of field (kernels/camera.cl, CAMERA_THINLENS;
 Pharr, Jakob & Humphreys, 4th ed., 5.2.3; Mitsuba 3's `thinlens`).
 
 Points at `focus_distance` (measured along the view axis) image sharply; a point at distance z images to a disk,
@@ -10,11 +10,9 @@ The aperture is `aperture_radius`, or `f_number` with the lens's `focal_length` 
 import numpy as np
 
 from spectrace.cameras.shared import FOV, FOV_AXIS, perspective_basis
-from spectrace.core.contract import CAMERA_THIN_LENS
 from spectrace.core.parameters import Parameter, Range
 
 NAME = "thinlens"
-CODE = CAMERA_THIN_LENS
 MITSUBA_PLUGINS = ("thinlens",)
 APERTURE_RADIUS = Parameter(
     "aperture_radius", "float", "scene units", None, Range(0.0), doc="the lens's radius; or give f_number"

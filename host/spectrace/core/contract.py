@@ -1,7 +1,7 @@
 """The host/device contract: numpy mirrors of the structs in kernels/types.h (explicit offsets), and the one home
 of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts)
-but the materials' type codes, which come from their registry (spectrace.materials.MATERIALS) and reach a build as
-`GeneratedSources`.
+but the plugins' type codes (materials, textures, cameras, pixel filters), which are their positions in their
+registries (spectrace.core.registry) and reach a build as `GeneratedSources`.
 
 The kernels hold no copy of those numbers: every kernel build gets them as defines (`device_contract_defines`,
 added by spectrace.device's program builds). tests/device/test_struct_layout.py compiles a kernel that reports each
@@ -135,13 +135,7 @@ MATERIAL_DTYPE = _struct(
     128,
 )
 
-# Texture.type (kernels/texture.cl; host/spectrace/textures). BITMAP: an image of texels (TEXEL_SIGMOID or
-# TEXEL_SCALAR); SPECTRAL: an image of spectral bands (TEXEL_BANDS); CHECKERBOARD: two sides, each a spectrum or a
-# texture of another type.
-# SCALE: side 0 (a spectrum or an image texture) times the factor (factor_texture's value, else `factor`); MIX:
-# sides 0 and 1 blended by the amount (factor_texture's value, else `factor`): (1 − a) side 0 + a side 1.
-TEXTURE_TYPES = ("bitmap", "spectral", "checkerboard", "scale", "mix")
-TEXTURE_BITMAP, TEXTURE_SPECTRAL, TEXTURE_CHECKERBOARD, TEXTURE_SCALE, TEXTURE_MIX = range(len(TEXTURE_TYPES))
+# Texture.type: TEXTURE_<NAME>, each texture's position in spectrace.textures.TEXTURES (kernels/texture.cl).
 # Texture.texel_format: what one texel holds. SIGMOID: the 3 coefficients (c0, c1, c2) of a reflectance
 # S(c0 λ² + c1 λ + c2), λ in nm; SCALAR: one value (a data texture, returned at every wavelength); BANDS: one value
 # per band, at band centres band_first_nm + i·band_step_nm; VECTOR: three values read as they are (a normal map);
@@ -266,16 +260,11 @@ LIGHT_DTYPE = _struct(
     96,
 )
 
-# RenderParams.camera_type: how a film position becomes a ray (kernels/camera.cl; spectrace.cameras, whose
-# registry CAMERAS lists the types in this order).
-CAMERA_TYPES = ("perspective", "thinlens", "orthographic", "equirectangular")
-CAMERA_PERSPECTIVE, CAMERA_THIN_LENS, CAMERA_ORTHOGRAPHIC, CAMERA_EQUIRECTANGULAR = range(len(CAMERA_TYPES))
-
-# RenderParams.pixel_filter: the pixel's reconstruction filter, importance-sampled (kernels/pixel_filter.cl;
-# spectrace.pixel_filters). Gaussian and Mitchell–Netravali are sampled from a table of PIXEL_FILTER_BINS
-# piecewise-constant bins of |f| over [0, radius] (RenderParams.filter_cdf).
-PIXEL_FILTERS = ("box", "tent", "gaussian", "mitchell")
-PIXEL_FILTER_BOX, PIXEL_FILTER_TENT, PIXEL_FILTER_GAUSSIAN, PIXEL_FILTER_MITCHELL = range(len(PIXEL_FILTERS))
+# RenderParams.camera_type: how a film position becomes a ray, CAMERA_<NAME>, each camera's position in
+# spectrace.cameras.CAMERAS (kernels/camera.cl).
+# RenderParams.pixel_filter: the pixel's reconstruction filter, importance-sampled, PIXEL_FILTER_<NAME>, each
+# filter's position in spectrace.pixel_filters.PIXEL_FILTERS (kernels/pixel_filter.cl). Those the kernel draws from
+# a table (TABULATED) use PIXEL_FILTER_BINS piecewise-constant bins of |f| over [0, radius] (RenderParams.filter_cdf).
 PIXEL_FILTER_BINS = 32
 
 RENDER_PARAMS_DTYPE = _struct(
@@ -411,16 +400,6 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "FILTER_BILINEAR": FILTER_BILINEAR,
         "FILTER_TRILINEAR": FILTER_TRILINEAR,
         "LIGHT_TYPE_COUNT": len(LIGHT_TYPES),
-        "CAMERA_PERSPECTIVE": CAMERA_PERSPECTIVE,
-        "CAMERA_THIN_LENS": CAMERA_THIN_LENS,
-        "CAMERA_ORTHOGRAPHIC": CAMERA_ORTHOGRAPHIC,
-        "CAMERA_EQUIRECTANGULAR": CAMERA_EQUIRECTANGULAR,
-        "CAMERA_TYPE_COUNT": len(CAMERA_TYPES),
-        "PIXEL_FILTER_BOX": PIXEL_FILTER_BOX,
-        "PIXEL_FILTER_TENT": PIXEL_FILTER_TENT,
-        "PIXEL_FILTER_GAUSSIAN": PIXEL_FILTER_GAUSSIAN,
-        "PIXEL_FILTER_MITCHELL": PIXEL_FILTER_MITCHELL,
-        "PIXEL_FILTER_COUNT": len(PIXEL_FILTERS),
         "PIXEL_FILTER_BINS": PIXEL_FILTER_BINS,
         # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
         "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
@@ -429,6 +408,5 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "BVH8_STACK_SIZE": BVH8_STACK_SIZE,
     }
     values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
-    values |= {f"TEXTURE_{name.upper()}": code for code, name in enumerate(TEXTURE_TYPES)}
     values |= {f"SHAPE_{name.upper()}": code for code, name in enumerate(SHAPE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

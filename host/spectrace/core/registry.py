@@ -11,6 +11,7 @@ are generated, never written twice.
 from collections.abc import Iterable, Iterator, Mapping
 from typing import Generic, Protocol, TypeVar
 
+from spectrace.core.parameters import Parameter
 from spectrace.errors import SpectraceError
 
 
@@ -19,6 +20,14 @@ class Plugin(Protocol):
 
     @property
     def NAME(self) -> str: ...  # noqa: N802 (a module constant)
+
+
+class TabledPlugin(Plugin, Protocol):
+    """A plugin that opens with its parameter table, from which the scene schema, the API and the docs read its
+    keys (spectrace.core.parameters)."""
+
+    @property
+    def PARAMETERS(self) -> tuple[Parameter, ...]: ...  # noqa: N802 (a module constant)
 
 
 P = TypeVar("P", bound=Plugin, covariant=True)

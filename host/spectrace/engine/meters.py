@@ -17,7 +17,7 @@ from spectrace.engine.renderer import upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.film.response import FilmResponse
 from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.materials import generated_sources
+from spectrace.plugins import generated_sources
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
 from spectrace.spectral.grid import GRID_NM

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pyopencl as cl
 
-from spectrace import materials
+from spectrace import plugins
 from spectrace.core import limits
 from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 from spectrace.device import Device, open_device
@@ -134,7 +134,7 @@ class Renderer:
         self.program = self.device.build_program(
             self.integrator.PROGRAMS[self.KERNEL_SHAPE],
             defines=defines or None,
-            generated=materials.generated_sources(),
+            generated=plugins.generated_sources(),
         )
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
         self.work_group = self._work_group()

@@ -16,7 +16,6 @@ from spectrace.core.contract import (
     LIGHT_DTYPE,
     MATERIAL_DTYPE,
     MEDIUM_DTYPE,
-    PIXEL_FILTERS,
     RENDER_PARAMS_DTYPE,
     TRIANGLE_INFO_DTYPE,
     TRIANGLE_NO_MATERIAL,
@@ -577,10 +576,10 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     from spectrace.cameras import CAMERAS
 
     camera = CAMERAS[scene.camera.type]
-    params["camera_type"] = camera.CODE
+    params["camera_type"] = CAMERAS.codes[scene.camera.type]
     params["lens"][0, :2] = camera.lens(scene.camera)
     pixel_filter = scene.pixel_filter
-    params["pixel_filter"] = PIXEL_FILTERS.index(pixel_filter.type)
+    params["pixel_filter"] = pixel_filter.code
     params["filter_shape"][0] = pixel_filter.device_shape()
     params["filter_cdf"][0] = pixel_filter.device_cdf()
     params["instance_count"] = buffers.instance_count

@@ -4,9 +4,10 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, TEXTURE_CHECKERBOARD
+from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.materials import MATERIAL_CODES
+from spectrace.textures import TEXTURES
 
 
 def _type_bits(types: np.ndarray) -> int:
@@ -39,7 +40,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
     # differences (surface_detail.cl; a bitmap's gradient is exact) read the footprint.
     trilinear = bool(np.any((textures["filter"] == FILTER_TRILINEAR) & (textures["levels"] > 1)))
     bump_textures = materials["bump_map"][materials["bump_map"] >= 0]
-    checkerboard_bumps = bool(np.any(textures["type"][bump_textures] == TEXTURE_CHECKERBOARD))
+    checkerboard_bumps = bool(np.any(textures["type"][bump_textures] == TEXTURES.codes["checkerboard"]))
     return {
         "SCENE_MATERIAL_TYPES": _type_bits(buffers.materials["type"]),
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),

@@ -20,7 +20,7 @@ import dataclasses
 import numpy as np
 
 from spectrace.core.contract import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE, GeneratedSources
-from spectrace.dispatch import module_by_model
+from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
 from spectrace.materials import (
     conductor,
@@ -34,6 +34,7 @@ from spectrace.materials import (
     surface,
     thindielectric,
 )
+from spectrace.materials.base import MaterialPlugin
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
@@ -41,9 +42,9 @@ from spectrace.spectral.table import SpectrumTable
 # the order in which the schema lists the types and the kernels' dispatch tests them.
 # The mix comes last: a composite of other materials (COMPOSITE), it has no BSDF and is no entry of the kernels'
 # MATERIAL_LIST; kernels/material_mix.cl resolves it into one of its materials at each vertex.
-MATERIALS = {
-    m.NAME: m
-    for m in (
+MATERIALS = Registry[MaterialPlugin](
+    "material",
+    (
         diffuse,
         conductor,
         mirror,
@@ -53,15 +54,15 @@ MATERIALS = {
         thindielectric,
         diffusetransmission,
         mix,
-    )
-}
+    ),
+)
 # The BSDFs: the materials with a bsdf_<name>.cl and an entry in MATERIAL_LIST.
 BSDFS = {name: m for name, m in MATERIALS.items() if not getattr(m, "COMPOSITE", False)}
-MATERIAL_CODES = {name: code for code, name in enumerate(MATERIALS)}
-material_module = module_by_model(MATERIALS.values(), "material")
+MATERIAL_CODES = MATERIALS.codes
+material_module = MATERIALS.for_model
 # Every material takes the surface-detail keys (surface.py) besides its own: its API constructor too.
 for _module in MATERIALS.values():
-    _module.make = surface.accepting_detail(_module.make)  # type: ignore[attr-defined]
+    _module.make = surface.accepting_detail(_module.make)  # type: ignore[method-assign]
 
 
 def _parameter_textures(material) -> dict:
@@ -161,9 +162,7 @@ def kernel_file(name: str) -> str:
 
 def kernel_defines() -> dict[str, int]:
     """MATERIAL_<NAME>: each BSDF's Material.type code, and MATERIAL_TYPE_COUNT, for every kernel build."""
-    return {f"MATERIAL_{name.upper()}": code for name, code in MATERIAL_CODES.items()} | {
-        "MATERIAL_TYPE_COUNT": len(MATERIALS)
-    }
+    return MATERIALS.kernel_defines("MATERIAL")
 
 
 # The header kernels/material.cl includes as "material_list.h"; spectrace.device writes it for each build that is

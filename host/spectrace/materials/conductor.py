@@ -22,6 +22,7 @@ from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import number_or_texture, reflectance_or_texture
 
 NAME = "conductor"
 MITSUBA_PLUGINS = ("conductor", "roughconductor")
@@ -130,11 +131,11 @@ def make(
         assert eta is not None and k is not None  # source_problem has refused every other combination
         eta_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(eta), False, "eta")
         k_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(k), False, "k")
-    tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
+    tint = reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
     return ConductorMaterial(
         eta_spectrum,
         k_spectrum,
-        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
+        roughness=number_or_texture(roughness, ROUGHNESS),
         specular_tint=tint,
         distribution=check_distribution(distribution),
     )

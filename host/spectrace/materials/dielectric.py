@@ -19,11 +19,11 @@ from spectrace.core.parameters import (
 from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
 from spectrace.materials.opaque import smooth_everywhere
-from spectrace.spectral import spectrum_input
 from spectrace.spectral.glasses import IOR_RANGE, ROUGH_IOR_GAP, IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import number_or_texture, reflectance_or_texture
 
 NAME = "dielectric"
 MITSUBA_PLUGINS = ("dielectric", "roughdielectric")
@@ -103,10 +103,10 @@ def make(
     `distribution`, "ggx" or "beckmann"). The mesh's winding must
     face the exterior. A dispersive ior splits white light; `specular_tint` (a reflectance or a texture) multiplies
     both lobes; `roughness` may be a grey texture."""
-    tint = spectrum_input.reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
+    tint = reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
     material = DielectricMaterial(
         index_of_refraction(ior, where="ior"),
-        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
+        roughness=number_or_texture(roughness, ROUGHNESS),
         specular_tint=tint,
         distribution=check_distribution(distribution),
     )

@@ -2,8 +2,8 @@
 
 from spectrace.core.parameters import REQUIRED, reflectance
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
-from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum_input import SpectrumLike
+from spectrace.textures import reflectance_or_texture
 
 NAME = "diffuse"
 MITSUBA_PLUGINS = ("diffuse",)
@@ -27,7 +27,7 @@ from_spec, write_row = reflectance_only(DiffuseMaterial)
 def make(reflectance: SpectrumLike) -> DiffuseMaterial:
     """Lambertian material, f = R(λ)/π, reflecting on both faces; `reflectance` in [0, 1] (a linear sRGB triple is
     uplifted)."""
-    return DiffuseMaterial(spectrum_input.reflectance_or_texture(reflectance, "reflectance"))
+    return DiffuseMaterial(reflectance_or_texture(reflectance, "reflectance"))
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:

@@ -12,6 +12,7 @@ from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import reflectance_or_texture
 
 NAME = "diffusetransmission"
 MITSUBA_PLUGINS = ()
@@ -51,7 +52,7 @@ def make(reflectance: SpectrumLike, transmittance: SpectrumLike) -> Diffusetrans
     """Lambertian reflection R/π and transmission T/π (both in [0, 1], R + T ≤ 1 for energy conservation; a linear
     sRGB triple is uplifted); `reflectance` may be a texture."""
     return DiffusetransmissionMaterial(
-        spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
+        reflectance_or_texture(reflectance, "reflectance"),
         spectrum_input.reflectance(transmittance, "transmittance"),
     )
 

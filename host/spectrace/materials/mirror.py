@@ -2,8 +2,8 @@
 
 from spectrace.core.parameters import reflectance
 from spectrace.materials.opaque import ReflectanceOnly, reflectance_only
-from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum_input import SpectrumLike
+from spectrace.textures import reflectance_or_texture
 
 NAME = "mirror"
 MITSUBA_PLUGINS = ()
@@ -28,4 +28,4 @@ from_spec, write_row = reflectance_only(MirrorMaterial)
 def make(reflectance: SpectrumLike = PARAMETERS[0].number_default) -> MirrorMaterial:
     """Perfect specular reflection of reflectance R(λ) in [0, 1] (default 1; a spectrum or a texture), on both
     faces."""
-    return MirrorMaterial(spectrum_input.reflectance_or_texture(reflectance, "reflectance"))
+    return MirrorMaterial(reflectance_or_texture(reflectance, "reflectance"))

@@ -23,6 +23,7 @@ from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import number_or_texture, reflectance_or_texture
 
 NAME = "plastic"
 MITSUBA_PLUGINS = ("plastic", "roughplastic")
@@ -146,9 +147,9 @@ def make(
     if problem := coat_problem(coat_transmission, roughness):
         raise SpectraceError(problem, where="coat_transmission")
     return PlasticMaterial(
-        spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
+        reflectance_or_texture(reflectance, "reflectance"),
         ior=IOR.check(ior),
-        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
+        roughness=number_or_texture(roughness, ROUGHNESS),
         distribution=check_distribution(distribution),
         nonlinear=bool(nonlinear),
         coat_transmission=coat_transmission,

@@ -7,10 +7,10 @@ import numpy as np
 
 from spectrace.core.parameters import reflectance, roughness
 from spectrace.materials.opaque import RoughOpaque
-from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import number_or_texture, reflectance_or_texture
 
 NAME = "retroreflector"
 MITSUBA_PLUGINS = ()
@@ -45,8 +45,8 @@ def make(
     """Sends light back toward where it came from (road signs): a GGX lobe of width `roughness` (α) about the
     incident direction, scaled by `reflectance` (each a number or spectrum, or a texture)."""
     return RetroreflectorMaterial(
-        spectrum_input.reflectance_or_texture(reflectance, "reflectance"),
-        roughness=spectrum_input.number_or_texture(roughness, ROUGHNESS),
+        reflectance_or_texture(reflectance, "reflectance"),
+        roughness=number_or_texture(roughness, ROUGHNESS),
     )
 
 

@@ -13,6 +13,7 @@ from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import reflectance_or_texture
 
 NAME = "thindielectric"
 MITSUBA_PLUGINS = ("thindielectric",)
@@ -86,7 +87,7 @@ def make(
     R' = 2R/(1 + R), the rest straight through. `specular_reflectance` (a reflectance or a texture) and
     `specular_transmittance` (a reflectance) tint the two lobes."""
     reflection = (
-        spectrum_input.reflectance_or_texture(specular_reflectance, "specular_reflectance")
+        reflectance_or_texture(specular_reflectance, "specular_reflectance")
         if specular_reflectance is not None
         else None
     )

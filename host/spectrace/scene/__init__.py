@@ -16,7 +16,7 @@ def material_model_names() -> dict[str, str]:
     """Each material's dataclass (its module's MODEL) by name -> the module it lives in; imports the registry."""
     from spectrace.materials import MATERIALS
 
-    return {module.MODEL.__name__: module.__name__ for module in MATERIALS.values()}
+    return {module.MODEL.__name__: module.MODEL.__module__ for module in MATERIALS.values()}
 
 
 def load_scene(path: str | Path, overrides: dict | None = None):

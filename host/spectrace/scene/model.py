@@ -35,9 +35,6 @@ SAMPLER_TYPES: tuple[str, ...] = ("independent", "sobol")
 DEFAULT_SAMPLER: SamplerType = "sobol"
 
 
-CameraType = Literal["perspective", "thinlens", "orthographic", "equirectangular"]
-
-
 @dataclass(frozen=True)
 class Camera:
     """A camera of any type (spectrace.cameras: each type's module says which fields it reads)."""
@@ -49,7 +46,7 @@ class Camera:
     fov_axis: Literal["x", "y"] = "x"
     near_clip: float = 0.0  # distance along the view axis before which nothing is seen (Mitsuba's near_clip)
     far_clip: float | None = None  # distance along the view axis beyond which nothing is seen (Mitsuba's far_clip)
-    type: CameraType = "perspective"
+    type: str = "perspective"  # a name of spectrace.cameras.CAMERAS
     aperture_radius: float = 0.0  # thinlens: scene units
     focus_distance: float = 1.0  # thinlens: scene units along the view axis
     view_width: float = 2.0  # orthographic: scene units across the image

@@ -31,7 +31,7 @@ from spectrace.film.response import observer_problem, wavelength_range_problem
 from spectrace.integrators import INTEGRATORS, settings_problem
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
-from spectrace.pixel_filters import FILTERS
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.scene.model import DEFAULT_SAMPLER, SamplerType
 from spectrace.spectral.metals import METALS
 from spectrace.textures import COMPOSITE_TEXTURES, TEXTURES
@@ -497,9 +497,9 @@ _FILTER_SPECS = {
     name: create_model(
         f"{name.capitalize()}FilterSpec",
         __base__=Strict,
-        **{"type": (Literal[name], ...)} | {parameter.name: _field(parameter) for parameter in parameters},
+        **{"type": (Literal[name], ...)} | {parameter.name: _field(parameter) for parameter in module.PARAMETERS},
     )
-    for name, parameters in FILTERS.items()
+    for name, module in PIXEL_FILTERS.items()
 }
 if TYPE_CHECKING:
     CameraSpec: TypeAlias = TableSpec
@@ -510,7 +510,7 @@ else:
         _type_or("perspective"),
     ]
     PixelFilterSpec = (
-        Literal[tuple(FILTERS)]
+        Literal[tuple(PIXEL_FILTERS)]
         | Annotated[functools.reduce(operator.or_, _FILTER_SPECS.values()), Field(discriminator="type")]
         | None
     )

@@ -132,27 +132,5 @@ def reflectance(source: SpectrumLike, where: str) -> Spectrum:
     return role_spectrum(source, False, where)
 
 
-def reflectance_or_texture(source, where: str):
-    """A textured reflectance parameter's value: a texture (spectrace.textures; its values checked to lie in [0, 1])
-    as it is, anything else as `reflectance`."""
-    from spectrace.textures import check_texture_values, is_texture
-
-    if is_texture(source):
-        check_texture_values(source, "spectrum", where)
-        return source
-    return reflectance(source, where)
-
-
-def number_or_texture(source, parameter, where: str | None = None):
-    """A textured number's value (a `roughness`): a one-channel texture (spectrace.textures) whose values lie in
-    the parameter's range as it is, anything else checked as a number in that range."""
-    from spectrace.textures import check_texture_values, is_texture
-
-    if is_texture(source):
-        check_texture_values(source, "float", where or parameter.name, upper=parameter.range.high)
-        return source
-    return parameter.check(source, where)
-
-
 def emission(source: SpectrumLike, where: str) -> Spectrum:
     return role_spectrum(source, True, where)

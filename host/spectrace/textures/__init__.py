@@ -1,8 +1,9 @@
-"""Textures: one module per type, listed in TEXTURES (docs/textures.md). Each opens with its parameter table
-(PARAMETERS, spectrace.core.parameters), from which the scene schema builds the texture's keys, and holds its
-resolved dataclass, `from_spec` (a validated scene table to the dataclass), `make` (the Python API) and, for image
-textures, `device_texels` (its texels for one use: sigmoid coefficients of a reflectance, scalars, spectral bands,
-with the MIP pyramid when filtered trilinearly). The kernel side is kernels/texture.cl.
+"""Textures: one module per type, listed in TEXTURES (docs/textures.md), whose shape `base.TexturePlugin` states.
+Each opens with its parameter table (PARAMETERS, spectrace.core.parameters), from which the scene schema builds the
+texture's keys, and holds its resolved dataclass (MODEL), `from_spec` (a validated scene table to the dataclass),
+`make` (the Python API) and, for image textures, `device_texels` (its texels for one use: sigmoid coefficients of a
+reflectance, scalars, spectral bands, with the MIP pyramid when filtered trilinearly). A texture's position in
+TEXTURES is its Texture.type code (TEXTURE_<NAME> in kernels/texture.cl: `generated_sources`).
 
 A material parameter whose table entry says `textured` takes a texture wherever it takes a spectrum; its Material
 row then holds the texture's index in `<name>_texture` (kernels/types.h). TextureRows writes every texture of a
@@ -18,43 +19,38 @@ from spectrace.core.contract import (
     TEXEL_SCALAR,
     TEXEL_SIGMOID,
     TEXEL_VECTOR,
-    TEXTURE_BITMAP,
-    TEXTURE_CHECKERBOARD,
     TEXTURE_DTYPE,
-    TEXTURE_MIX,
-    TEXTURE_SCALE,
-    TEXTURE_SPECTRAL,
+    GeneratedSources,
 )
 from spectrace.core.limits import MAX_TEXTURE_BYTES, format_bytes
+from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 from spectrace.textures import bitmap, checkerboard, mix, scale, spectral, storage
+from spectrace.textures.base import TexturePlugin
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
 from spectrace.textures.mix import MixTexture
 from spectrace.textures.scale import ScaleTexture
-from spectrace.textures.shared import FILTERS, WRAPS, value_problem
+from spectrace.textures.shared import FILTERS, WRAPS, ImageTextures, value_problem
 from spectrace.textures.spectral import SpectralTexture
 
-# Scene-file type -> module.
-TEXTURES = {m.NAME: m for m in (bitmap, spectral, checkerboard, scale, mix)}
+# Scene-file type -> module; the position is the Texture.type code.
+TEXTURES = Registry[TexturePlugin]("texture", (bitmap, spectral, checkerboard, scale, mix))
 # Those made of other textures: their operands are spectra and image textures only (the kernel does not recurse).
-COMPOSITE_TEXTURES = (checkerboard.NAME, scale.NAME, mix.NAME)
-Texture = BitmapTexture | SpectralTexture | CheckerboardTexture | ScaleTexture | MixTexture
-IMAGE_TEXTURES = (BitmapTexture, SpectralTexture)
-_DEVICE_TYPES = {BitmapTexture: TEXTURE_BITMAP, SpectralTexture: TEXTURE_SPECTRAL}
-_MODULES = {
-    BitmapTexture: bitmap,
-    SpectralTexture: spectral,
-    CheckerboardTexture: checkerboard,
-    ScaleTexture: scale,
-    MixTexture: mix,
-}
+COMPOSITE_TEXTURES = tuple(name for name, module in TEXTURES.items() if module.COMPOSITE)
+IMAGE_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if not module.COMPOSITE)
+_MODELS = tuple(module.MODEL for module in TEXTURES.values())
+
+
+def generated_sources() -> GeneratedSources:
+    """TEXTURE_<NAME> and TEXTURE_TYPE_COUNT, which every kernel that reads textures is built with."""
+    return GeneratedSources(TEXTURES.kernel_defines("TEXTURE"))
 
 
 def is_texture(value: object) -> bool:
-    return isinstance(value, tuple(_MODULES))
+    return isinstance(value, _MODELS)
 
 
 def check_texture_values(texture, kind: str, where: str, upper: float | None = None) -> None:
@@ -90,6 +86,29 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
         )
     if problem := value_problem(texture.values, 1.0 if kind == "spectrum" else upper, reflectance=kind == "spectrum"):
         raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
+
+
+ImageTextures.models, ImageTextures.check = IMAGE_TEXTURES, check_texture_values
+
+
+def reflectance_or_texture(source, where: str):
+    """A textured reflectance parameter's value: a texture (its values checked to lie in [0, 1])
+    as it is, anything else as `reflectance`."""
+    if is_texture(source):
+        check_texture_values(source, "spectrum", where)
+        return source
+    from spectrace.spectral import spectrum_input
+
+    return spectrum_input.reflectance(source, where)
+
+
+def number_or_texture(source, parameter, where: str | None = None):
+    """A textured number's value (a `roughness`): a one-channel texture whose values lie in
+    the parameter's range as it is, anything else checked as a number in that range."""
+    if is_texture(source):
+        check_texture_values(source, "float", where or parameter.name, upper=parameter.range.high)
+        return source
+    return parameter.check(source, where)
 
 
 def _check_composite(texture, kind: str, where: str, upper: float | None) -> None:
@@ -146,7 +165,7 @@ def scalar_range(value) -> tuple[float, float]:
 
 
 def texture_module(texture):
-    return _MODULES[type(texture)]
+    return TEXTURES.for_model(texture)
 
 
 def texel_format_of(texture, kind: str) -> int:
@@ -214,8 +233,8 @@ class TextureRows:
         row["uv_transform"] = texture.placement.uv_transform
         row["side_spectrum"] = -1
         row["side_texture"] = NO_TEXTURE
+        row["type"] = TEXTURES.codes[texture_module(texture).NAME]
         if isinstance(texture, CheckerboardTexture):
-            row["type"] = TEXTURE_CHECKERBOARD
             for i, side in enumerate((texture.color0, texture.color1)):
                 if isinstance(side, Spectrum):
                     row["side_spectrum"][i] = self.table.add(side)
@@ -224,7 +243,6 @@ class TextureRows:
                 else:
                     raise SpectraceError("a checkerboard's sides are spectra or image textures", where=where)
         elif isinstance(texture, (ScaleTexture, MixTexture)):
-            row["type"] = TEXTURE_SCALE if isinstance(texture, ScaleTexture) else TEXTURE_MIX
             sides = (texture.tex,) if isinstance(texture, ScaleTexture) else (texture.tex1, texture.tex2)
             for i, side in enumerate(sides):
                 if isinstance(side, Spectrum):
@@ -243,7 +261,6 @@ class TextureRows:
                 row["factor"] = float(factor)
         else:
             texel_format, channels, levels = texture_module(texture).device_texels(texture, kind)
-            row["type"] = _DEVICE_TYPES[type(texture)]
             if basis is not None:
                 row["basis_offset"] = basis
             row["texel_format"], row["channels"] = texel_format, channels

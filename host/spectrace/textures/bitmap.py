@@ -25,6 +25,8 @@ from spectrace.textures.shared import (
 )
 
 NAME = "bitmap"
+API_NAME = NAME
+COMPOSITE = False
 RAW = Parameter(
     "raw",
     "bool",
@@ -62,6 +64,9 @@ class BitmapTexture:
     @property
     def channels(self) -> int:
         return int(self.values.shape[-1])
+
+
+MODEL = BitmapTexture
 
 
 def decoded(values: np.ndarray, encoded: bool, raw: bool) -> np.ndarray:

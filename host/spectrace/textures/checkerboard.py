@@ -6,9 +6,11 @@ from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
-from spectrace.textures.shared import UV_OFFSET, Placement, uv_pair, uv_scale
+from spectrace.textures.shared import UV_OFFSET, Placement, api_operand, uv_pair, uv_scale
 
 NAME = "checkerboard"
+API_NAME = NAME
+COMPOSITE = True
 PARAMETERS = (
     Parameter(
         "color0",
@@ -38,6 +40,9 @@ class CheckerboardTexture:
     source: str = "checkerboard"
 
 
+MODEL = CheckerboardTexture
+
+
 def from_spec(spec, resolver, key: str) -> CheckerboardTexture:
     sides = [
         resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
@@ -54,11 +59,14 @@ def from_spec(spec, resolver, key: str) -> CheckerboardTexture:
     )
 
 
-def make(color0, color1, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)) -> CheckerboardTexture:
-    """color0 and color1: spectra (a Spectrum, a number or an RGB triple: reflectances) or image textures."""
+def make(
+    color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)
+) -> CheckerboardTexture:
+    """Squares of color0 and color1 (reflectances: anything `spectrum` takes, an RGB triple, or an image texture)
+    over the texture coordinates: color0 where floor(s) + floor(t) is even, st = uv · uv_scale + uv_offset."""
     return CheckerboardTexture(
-        color0,
-        color1,
+        api_operand(color0, "color0"),
+        api_operand(color1, "color1"),
         Placement(uv_scale=uv_pair(uv_scale, "uv_scale", None), uv_offset=uv_pair(uv_offset, "uv_offset", None)),
     )
 

@@ -7,9 +7,11 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
-from spectrace.textures.shared import Placement, composite_factor
+from spectrace.textures.shared import Placement, api_factor, api_operand, composite_factor
 
 NAME = "mix"
+API_NAME = "mix_texture"  # spectrace.mix is the material
+COMPOSITE = True
 PARAMETERS = (
     Parameter("tex1", "spectrum", default=0.0, range=Range(0.0, 1.0), doc="the value where amount is 0", textured=True),
     Parameter("tex2", "spectrum", default=1.0, range=Range(0.0, 1.0), doc="the value where amount is 1", textured=True),
@@ -42,6 +44,9 @@ class MixTexture:
         return (self.tex1, self.tex2, self.amount)
 
 
+MODEL = MixTexture
+
+
 def from_spec(spec, resolver, key: str) -> MixTexture:
     sides = [
         resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
@@ -51,4 +56,6 @@ def from_spec(spec, resolver, key: str) -> MixTexture:
 
 
 def make(tex1=0.0, tex2=1.0, amount=0.5) -> MixTexture:
-    return MixTexture(tex1, tex2, amount)
+    """(1 − amount) · tex1 + amount · tex2, as pbrt-v4's `mix` texture: tex1, tex2 reflectances (anything `spectrum`
+    takes, an RGB triple, or an image texture), amount a number in [0, 1] or a grey image texture."""
+    return MixTexture(api_operand(tex1, "tex1"), api_operand(tex2, "tex2"), api_factor(amount, "amount", 1.0))

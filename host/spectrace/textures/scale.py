@@ -7,9 +7,11 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
-from spectrace.textures.shared import Placement, composite_factor
+from spectrace.textures.shared import Placement, api_factor, api_operand, composite_factor
 
 NAME = "scale"
+API_NAME = "scale_texture"  # as mix_texture, whose plain name is the material's
+COMPOSITE = True
 PARAMETERS = (
     Parameter("tex", "spectrum", default=1.0, range=Range(0.0, 1.0), doc="what is scaled", textured=True),
     Parameter(
@@ -39,10 +41,15 @@ class ScaleTexture:
         return (self.tex, self.scale)
 
 
+MODEL = ScaleTexture
+
+
 def from_spec(spec, resolver, key: str) -> ScaleTexture:
     tex = resolver.spectrum_or_texture(spec.tex, f"{key}.tex", "spectrum", inner=True)
     return ScaleTexture(tex, composite_factor(spec.scale, resolver, f"{key}.scale", upper=None))
 
 
-def make(tex, scale=1.0) -> ScaleTexture:
-    return ScaleTexture(tex, scale)
+def make(tex=1.0, scale=1.0) -> ScaleTexture:
+    """tex (a reflectance: anything `spectrum` takes, an RGB triple, or an image texture) times scale (a number >= 0
+    or a grey image texture), as pbrt-v4's `scale` texture; as a reflectance the product must stay within [0, 1]."""
+    return ScaleTexture(api_operand(tex, "tex"), api_factor(scale, "scale", None))

@@ -1,7 +1,7 @@
 """What the image textures share: where a lookup lands on the image (uv_scale, uv_offset, wrap), how it is
 filtered, and the MIP pyramid (Williams 1983, "Pyramidal Parametrics") that trilinear filtering reads."""
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from numbers import Real
 
@@ -156,6 +156,35 @@ def value_problem(values: np.ndarray, upper: float | None, reflectance: bool = T
         why = ", which as a reflectance would create energy" if reflectance else ""
         return f"has values above {upper:g} (max {high:.4g}){why}"
     return None
+
+
+class ImageTextures:
+    """What a composite's API constructor checks its operands against: the image textures' models and their value
+    check, both read from the registry, which lists the composites themselves. The package hands them over once its
+    registry is built (spectrace.textures), before any constructor can run, so this module needs no import of it."""
+
+    models: tuple[type, ...] = ()
+    check: Callable[..., None] | None = None
+
+
+def api_operand(value, name: str):
+    """An operand given to the Python API's constructor of a composite: an image texture as it is, anything else a
+    reflectance (anything `spectrace.spectrum` takes, an RGB triple)."""
+    from spectrace.spectral import spectrum_input
+
+    return value if isinstance(value, ImageTextures.models) else spectrum_input.reflectance(value, name)
+
+
+def api_factor(value, name: str, upper: float | None):
+    """A composite's number given to the Python API: a float within [0, upper], or a one-channel image texture."""
+    if isinstance(value, ImageTextures.models):
+        assert ImageTextures.check is not None
+        ImageTextures.check(value, "float", name, upper)
+        return value
+    number = float(value)
+    if not (number >= 0.0 and (upper is None or number <= upper)):
+        raise SpectraceError(f"{name} must lie in [0, {upper if upper is not None else 'inf'}], got {value}", name)
+    return number
 
 
 def composite_factor(value, resolver, key: str, upper: float | None):

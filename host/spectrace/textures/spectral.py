@@ -24,6 +24,8 @@ from spectrace.textures.shared import (
 )
 
 NAME = "spectral"
+API_NAME = "spectral_texture"  # beside spectrace.spectrum, a bare "spectral" would not say what it makes
+COMPOSITE = False
 PARAMETERS = (FILE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
 # More bands than the 1 nm grid has samples would add nothing the renderer can resolve.
 MAX_BANDS = 471
@@ -45,6 +47,9 @@ class SpectralTexture:
     @property
     def channels(self) -> int:
         return int(self.values.shape[-1])
+
+
+MODEL = SpectralTexture
 
 
 def _equally_spaced(wavelengths: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,7 +23,10 @@ from spectrace.interop.pbrt.textures import texture_reference, texture_table
 from spectrace.materials import MATERIALS
 
 # pbrt material type -> the spectrace material module whose from_pbrt maps it.
-_MAPPINGS = {kind: module for module in MATERIALS.values() for kind in getattr(module, "PBRT_MATERIALS", ())}
+# A module that declares PBRT_MATERIALS has from_pbrt (tests/interop/test_pbrt_mapping.py).
+_MAPPINGS: dict[str, Any] = {
+    kind: module for module in MATERIALS.values() for kind in getattr(module, "PBRT_MATERIALS", ())
+}
 # What the import takes: the modules' types and `interface`, a boundary without a surface.
 IMPORTED_MATERIALS = (*_MAPPINGS, "interface")
 # Materials spectrace has no counterpart for, refused with this reason.
