@@ -8,7 +8,7 @@ import pyopencl as cl
 import pytest
 
 from spectrace.device import open_device
-from spectrace.materials import generated_sources
+from spectrace.registries import generated_sources
 
 # Renders use the kernels built for every scene unless a test asks for a scene's own (the specialisation tests,
 # which check that both give the same bits): one program per integrator and option set instead of one per scene's

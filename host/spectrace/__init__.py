@@ -27,14 +27,11 @@ _LAZY = {
             "area_emitter",
             "bitmap",
             "checkerboard",
-            "constant_environment",
             "spectral_texture",
             "scale_texture",
             "mix_texture",
-            "distant_light",
             "medium",
             "mesh_from_trimesh",
-            "point_light",
             "render",
             "rgb_emission",
             "rgb_reflectance",
@@ -43,7 +40,6 @@ _LAZY = {
             "instance",
             "spectral_texture",
             "spectrum",
-            "spot_light",
             "transformed",
         ],
         "spectrace.api",
@@ -61,11 +57,14 @@ _LAZY = {
 
 
 def _registry_names() -> dict[str, str]:
-    """Names that come from the materials' registry: each material's constructor (`spectrace.diffuse`, ...: its
-    module's `make`, which spectrace.api exposes) and its dataclass."""
+    """Names that come from the registries: each material's constructor (`spectrace.diffuse`, ...: its module's
+    `make`, which spectrace.api exposes) and its dataclass, and each light's constructor (`spectrace.point_light`,
+    ...: its module's `make`, under its API_NAME)."""
+    from spectrace.lights import LIGHTS
     from spectrace.materials import MATERIALS
 
-    return dict.fromkeys(MATERIALS, "spectrace.api") | material_model_names()
+    lights = {m.API_NAME: "spectrace.api" for m in LIGHTS.values() if m.API_NAME is not None}
+    return dict.fromkeys(MATERIALS, "spectrace.api") | lights | material_model_names()
 
 
 __version__ = "0.1.0"
@@ -92,10 +91,6 @@ __getattr__, __dir__ = lazy_names(
         "instance",
         "medium",
         "area_emitter",
-        "point_light",
-        "spot_light",
-        "distant_light",
-        "constant_environment",
         "ColourSpace",
         "Adaptation",
         "WhiteBalance",

@@ -16,7 +16,7 @@ from spectrace.device.program_cache import _with_contract, build_options
 from spectrace.engine.renderer import INTEGRATOR_PROGRAMS, sampler_defines
 from spectrace.film import spectral_defines
 from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.materials import generated_sources
+from spectrace.registries import generated_sources
 from spectrace.scene.model import SAMPLER_TYPES
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from spectrace.core.contract import DEVICE_STRUCTS
-from spectrace.materials import generated_sources
+from spectrace.registries import generated_sources
 
 
 def _layout_kernel_source() -> str:

@@ -15,7 +15,7 @@ from spectrace.engine.checkpoint import render_identity
 from spectrace.engine.renderer import Renderer, sampler_defines
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import read_exr
-from spectrace.materials import generated_sources
+from spectrace.registries import generated_sources
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import DEFAULT_SAMPLER

@@ -37,7 +37,7 @@ from spectrace.geometry.bvh4 import (
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.primitives import MAX_SPHERE_SUBDIVISIONS, icosphere
 from spectrace.geometry.triangle_blocks import BLOCK_VECTORS
-from spectrace.materials import generated_sources
+from spectrace.registries import generated_sources
 
 DISTANCE_CHECK_RAYS = 20000
 

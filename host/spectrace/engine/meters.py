@@ -16,7 +16,7 @@ from spectrace.engine.launch import meter_work_group
 from spectrace.engine.renderer import upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.geometry.bvh4 import traversal_defines
-from spectrace.materials import generated_sources
+from spectrace.registries import generated_sources
 from spectrace.scene.model import Scene
 from spectrace.spectral.colorimetry import CIE_1931_CMFS
 from spectrace.spectral.film_response import FilmResponse

@@ -7,7 +7,7 @@ from collections.abc import Callable
 import numpy as np
 import pyopencl as cl
 
-from spectrace import materials
+from spectrace import registries
 from spectrace.aovs import albedo_channel_scale, aov_defines
 from spectrace.core import limits
 from spectrace.core.contract import SCENE_KERNEL_BUFFERS, TEXEL_BANDS, TEXEL_RGB, TEXEL_SIGMOID
@@ -150,7 +150,7 @@ class Renderer:
         if scene.integrator == "bdpt":
             defines["BDPT_PIXELS_PER_LIGHT_PATH"] = pixels_per_light_path(scene)
         self.program = self.device.build_program(
-            self._program_file(scene), defines=defines or None, generated=materials.generated_sources()
+            self._program_file(scene), defines=defines or None, generated=registries.generated_sources()
         )
         self.kernel = self._create_kernels()
         # Work-items per group of the pass launches (None: the runtime's choice); `spectrace bench` varies it.
