@@ -148,16 +148,11 @@ inline float3 bdpt_direction(const BdptVertex *a, const BdptVertex *b)
  * 0 for point and spot lights) along unit d. */
 inline float light_direction_pdf(__global const Light *light, float3 n, float3 d)
 {
-    if (LIGHT_ON_SURFACE(light)) {
-        float c = dot(n, d);
-        if (light->two_sided) return fabs(c) * (0.5f / PI_F);
-        return c > 0.0f ? c / PI_F : 0.0f;
-    }
-    if (LIGHT_IS(light, LIGHT_SPOT)) {
-        if (dot(d, light->direction.xyz) < light->cos_cutoff) return 0.0f;
-        return 1.0f / (TWO_PI * (1.0f - light->cos_cutoff));
-    }
-    return 1.0f / (4.0f * PI_F);
+    if (LIGHT_ON_SURFACE(light)) return area_light_pdf_direction(light, n, d);
+#define X(name, NAME) if (LIGHT_IS(light, LIGHT_##NAME)) return light_##name##_pdf_direction(light, d);
+    LIGHT_LIST_POSITION(X)
+#undef X
+    return 0.0f;
 }
 
 /* Radiance (intensity for point and spot lights) that light vertex v emits along unit d. */
@@ -167,19 +162,17 @@ inline float4 light_vertex_emitted(const Scene *scene, const SampledWavelengths 
     TextureBuffers textures = light_buffers(scene).textures;
     if (LIGHT_ON_SURFACE(light)) return area_light_emitted(light, &textures, w, v->n, d, v->uv);
     if (v->at_infinity) {
-#if SCENE_HAS_ENVIRONMENT
-        if (!LIGHT_IS(light, LIGHT_DISTANT)) {
-            return environment_radiance(light, scene->spectra, scene->texels, w, v->wo);
-        }
-#endif
-        return light_spectrum(light, scene->spectra, w); /* irradiance, W/(m² nm) */
+        /* a distant light's: its irradiance, W/(m² nm) */
+#define X(name, NAME) \
+        if (LIGHT_IS(light, LIGHT_##NAME)) return light_##name##_radiance(light, scene->spectra, scene->texels, w, v->wo);
+        LIGHT_LIST_INFINITE(X)
+#undef X
+        return (float4)(0.0f);
     }
-    float4 intensity = light_spectrum(light, scene->spectra, w);
-    if (LIGHT_IS(light, LIGHT_SPOT)) {
-        intensity *= spot_falloff(light, dot(d, light->direction.xyz));
-        if (SCENE_HAS_LIGHT_IMAGES && light->texture != NO_TEXTURE) intensity *= spot_slide(light, &textures, w, d);
-    }
-    return intensity;
+#define X(name, NAME) if (LIGHT_IS(light, LIGHT_##NAME)) return light_##name##_intensity(light, &textures, w, d);
+    LIGHT_LIST_POSITION(X)
+#undef X
+    return (float4)(0.0f);
 }
 
 /* Area density (pick included) with which a light subpath starts at surface vertex v of an emitter; for a vertex
@@ -188,18 +181,16 @@ inline float light_origin_pdf(const Scene *scene, const BdptVertex *v)
 {
     __global const Light *light = &scene->lights[v->light];
     if (v->at_infinity) {
-#if SCENE_HAS_ENVIRONMENT
-        if (!LIGHT_IS(light, LIGHT_DISTANT)) return environment_pdf(light, scene->map_cdf, v->wo);
-#endif
-        return light->pmf; /* a delta direction */
+        /* a delta direction's: its pick probability */
+#define X(name, NAME) if (LIGHT_IS(light, LIGHT_##NAME)) return light_##name##_pdf_wi(light, scene->map_cdf, v->wo);
+        LIGHT_LIST_INFINITE(X)
+#undef X
+        return 0.0f;
     }
-    if (LIGHT_IS(light, LIGHT_TRIANGLE)) return light->pmf / light->area;
-#if SCENE_HAS_SHAPES
-    __global const AnalyticShape *shape = &scene->shapes[light->triangle];
-    return light->pmf * shape_area_pdf(shape, shape_surface(shape, v->uv).area_stretch);
-#else
+#define X(name, NAME) if (LIGHT_IS(light, LIGHT_##NAME)) return light_##name##_pdf_point(light, scene->shapes, v->uv);
+    LIGHT_LIST_AREA(X)
+#undef X
     return 0.0f;
-#endif
 }
 
 inline float bdpt_remap(float f) { return f != 0.0f ? f : 1.0f; }
@@ -260,31 +251,18 @@ inline int sample_light_origin(const Scene *scene, float2 u_position, float beam
     v->le = (float4)(0.0f);
     v->wo = (float3)(0.0f);
     if (LIGHT_ON_SURFACE(light)) {
-        float pdf_area;
-        if (LIGHT_IS(light, LIGHT_TRIANGLE)) {
-            float2 b12 = sample_triangle_uniform(u_position);
-            v->p = triangle_point(scene->triangle_vertices, light->triangle, b12);
-            v->n = triangle_normal(scene->triangle_vertices, light->triangle);
-            v->uv = triangle_uv(scene->triangle_uvs, light->triangle, b12);
-            pdf_area = 1.0f / light->area;
-        } else {
-#if SCENE_HAS_SHAPES
-            __global const AnalyticShape *shape = &scene->shapes[light->triangle];
-            v->uv = shape_sample_uv(shape, u_position);
-            ShapeSurface g = shape_surface(shape, v->uv);
-            v->p = g.p;
-            v->n = g.n;
-            pdf_area = shape_area_pdf(shape, g.area_stretch);
-#else
-            return 0;
-#endif
-        }
+        LightBuffers buffers = light_buffers(scene);
+        float pdf_area = 0.0f;
+#define X(name, NAME) \
+        if (LIGHT_IS(light, LIGHT_##NAME)) pdf_area = light_##name##_sample_point(light, &buffers, u_position, &v->p, &v->n, &v->uv);
+        LIGHT_LIST_AREA(X)
+#undef X
         if (!(pdf_area > 0.0f) || !isfinite(pdf_area)) return 0;
         v->ns = v->n;
         v->ns_base = v->n;
         v->delta_light = 0;
         v->pdf_fwd = light->pmf * pdf_area;
-    } else if (LIGHT_IS(light, LIGHT_POINT) || LIGHT_IS(light, LIGHT_SPOT)) {
+    } else if (LIGHT_KIND_POSITION(light)) {
         v->p = light->position.xyz;
         v->n = (float3)(0.0f);
         v->ns = v->n;
@@ -298,16 +276,16 @@ inline int sample_light_origin(const Scene *scene, float2 u_position, float beam
         v->ns = v->n;
         v->ns_base = v->n;
         v->p = (float3)(0.0f); /* set where a subpath starts from it */
-        v->delta_light = LIGHT_IS(light, LIGHT_DISTANT);
-        if (v->delta_light) {
-            v->wo = -light->direction.xyz;
-            v->pdf_fwd = light->pmf;
-        } else {
-#if SCENE_HAS_ENVIRONMENT
-            v->wo = environment_sample(light, scene->map_cdf, u_position, &v->pdf_fwd);
-#endif
-            if (!(v->pdf_fwd > 0.0f)) return 0;
+        /* a delta direction: its own, at its pick probability */
+        v->delta_light = 0;
+#define X(name, NAME)                                                                      \
+        if (LIGHT_IS(light, LIGHT_##NAME)) {                                               \
+            v->wo = light_##name##_sample_wi(light, scene->map_cdf, u_position, &v->pdf_fwd); \
+            v->delta_light = LIGHT_##NAME##_DELTA;                                         \
         }
+        LIGHT_LIST_INFINITE(X)
+#undef X
+        if (!(v->pdf_fwd > 0.0f)) return 0;
     }
     v->beta = (float4)(1.0f / v->pdf_fwd);
     v->interior = -1;
@@ -626,20 +604,13 @@ inline int bdpt_light_ray(const Scene *scene, const SampledWavelengths *w, float
     }
     float3 d;
     if (LIGHT_ON_SURFACE(l)) {
-        float side = 1.0f;
-        if (l->two_sided) {
-            if (u_direction.x < 0.5f) {
-                side = -1.0f;
-                u_direction.x *= 2.0f;
-            } else {
-                u_direction.x = fmin(2.0f * u_direction.x - 1.0f, 0x1.fffffep-1f);
-            }
-        }
-        d = sample_cosine_about(side * origin->n, u_direction);
-    } else if (LIGHT_IS(l, LIGHT_SPOT)) {
-        d = sample_uniform_cone_about(l->direction.xyz, l->cos_cutoff, u_direction);
+        float side;
+        d = area_light_sample_direction(l, origin->n, u_direction, &side);
     } else {
-        d = sample_uniform_sphere(u_direction);
+        d = (float3)(0.0f);
+#define X(name, NAME) if (LIGHT_IS(l, LIGHT_##NAME)) d = light_##name##_sample_direction(l, u_direction);
+        LIGHT_LIST_POSITION(X)
+#undef X
     }
     *pdf_dir = light_direction_pdf(l, origin->n, d);
     float cos_light = LIGHT_ON_SURFACE(l) ? fabs(dot(origin->n, d)) : 1.0f;

@@ -31,26 +31,6 @@ typedef struct {
     float pdf_area;     /* pmf · p_A(point), 1/m² */
 } EmissionSample;
 
-/* A direction uniform within the cone of half-angle acos(cos_max) about axis. */
-inline float3 sample_uniform_cone_about(float3 axis, float cos_max, float2 u)
-{
-    float cos_theta = 1.0f - u.x * (1.0f - cos_max);
-    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
-    float2 circle = sin_theta * cos_sin_turns(u.y);
-    float3 t, b;
-    orthonormal_basis(axis, &t, &b);
-    return circle.x * t + circle.y * b + cos_theta * axis;
-}
-
-/* A point of the disk of radius r about centre, perpendicular to the unit direction d. */
-inline float3 sample_disk_across(float3 centre, float3 d, float r, float2 u)
-{
-    float3 t, b;
-    orthonormal_basis(d, &t, &b);
-    float2 circle = sqrt(u.x) * r * cos_sin_turns(u.y);
-    return centre + circle.x * t + circle.y * b;
-}
-
 /* Emission from light `light` (picked with light->pmf), from two 2D draws u_position and u_direction.
  * scene_sphere: the scene's bounding sphere, centre (xyz) and radius (w). Returns 0 when nothing leaves. */
 inline int sample_emission(__global const Light *light, const LightBuffers *buffers, const SampledWavelengths *w,
@@ -61,33 +41,15 @@ inline int sample_emission(__global const Light *light, const LightBuffers *buff
     if (!(light->pmf > 0.0f)) return 0;
     if (LIGHT_ON_SURFACE(light)) {
         float3 p, n;
-        float pdf_area;
-        if (LIGHT_IS(light, LIGHT_TRIANGLE)) {
-            float2 b12 = sample_triangle_uniform(u_position);
-            p = triangle_point(buffers->triangle_vertices, light->triangle, b12);
-            n = triangle_normal(buffers->triangle_vertices, light->triangle);
-            e->uv = triangle_uv(buffers->triangle_uvs, light->triangle, b12);
-            pdf_area = 1.0f / light->area;
-        } else {
-            __global const AnalyticShape *shape = &buffers->shapes[light->triangle];
-            e->uv = shape_sample_uv(shape, u_position);
-            ShapeSurface g = shape_surface(shape, e->uv);
-            p = g.p;
-            n = g.n;
-            pdf_area = shape_area_pdf(shape, g.area_stretch);
-        }
+        float pdf_area = 0.0f;
+#define X(name, NAME) \
+        if (LIGHT_IS(light, LIGHT_##NAME)) pdf_area = light_##name##_sample_point(light, buffers, u_position, &p, &n, &e->uv);
+        LIGHT_LIST_AREA(X)
+#undef X
         if (!(pdf_area > 0.0f) || !isfinite(pdf_area)) return 0;
-        float side = 1.0f, sides = 1.0f;
-        if (light->two_sided) {
-            sides = 2.0f;
-            if (u_direction.x < 0.5f) {
-                side = -1.0f;
-                u_direction.x *= 2.0f;
-            } else {
-                u_direction.x = fmin(2.0f * u_direction.x - 1.0f, 0x1.fffffep-1f);
-            }
-        }
-        float3 d = sample_cosine_about(side * n, u_direction);
+        float side;
+        float3 d = area_light_sample_direction(light, n, u_direction, &side);
+        float sides = light->two_sided ? 2.0f : 1.0f;
         float cos_theta = dot(side * n, d);
         if (!(cos_theta > 0.0f)) return 0;
         float4 radiance = area_light_emitted(light, &buffers->textures, w, n, d, e->uv);
@@ -100,42 +62,32 @@ inline int sample_emission(__global const Light *light, const LightBuffers *buff
         e->pdf_area = light->pmf * pdf_area;
         return any(e->weight != (float4)(0.0f));
     }
-    if (LIGHT_IS(light, LIGHT_POINT) || LIGHT_IS(light, LIGHT_SPOT)) {
-        float3 d;
-        float4 intensity = light_spectrum(light, buffers->spectra, w);
-        if (LIGHT_IS(light, LIGHT_SPOT)) {
-            float3 axis = light->direction.xyz;
-            d = sample_uniform_cone_about(axis, light->cos_cutoff, u_direction);
-            float solid_angle = TWO_PI * (1.0f - light->cos_cutoff);
-            intensity *= spot_falloff(light, dot(d, axis)) * solid_angle;
-            if (SCENE_HAS_LIGHT_IMAGES && light->texture != NO_TEXTURE) {
-                intensity *= spot_slide(light, &buffers->textures, w, d);
-            }
-        } else {
-            d = sample_uniform_sphere(u_direction);
-            intensity *= 4.0f * PI_F;
-        }
+    if (LIGHT_KIND_POSITION(light)) {
+        float3 d = (float3)(0.0f);
+        float4 intensity = (float4)(0.0f);
+#define X(name, NAME) \
+        if (LIGHT_IS(light, LIGHT_##NAME)) intensity = light_##name##_sample_le(light, buffers, w, u_direction, &d);
+        LIGHT_LIST_POSITION(X)
+#undef X
         e->weight = intensity / light->pmf;
         e->ray.origin = light->position.xyz;
         e->ray.direction = d;
         return any(e->weight != (float4)(0.0f));
     }
-    float3 travel;
-    float4 per_area;  /* irradiance on a plane across the beam, divided by the direction's pdf */
-    if (LIGHT_IS(light, LIGHT_DISTANT)) {
-        travel = light->direction.xyz;
-        per_area = light_spectrum(light, buffers->spectra, w) / light->pmf;
-    } else {
-#if !SCENE_HAS_ENVIRONMENT
-        return 0;
-#else
-        float pdf;
-        float3 toward = environment_sample(light, buffers->map_cdf, u_direction, &pdf);
-        if (!(pdf > 0.0f)) return 0;
-        travel = -toward;
-        per_area = environment_radiance(light, buffers->spectra, buffers->texels, w, toward) / pdf;
-#endif
+    /* At infinity: the direction toward the light (a distant light's own, at its pick probability) and the
+     * irradiance across the beam over that direction's density. */
+    float3 travel = (float3)(0.0f);
+    float4 per_area = (float4)(0.0f);
+#define X(name, NAME)                                                                                   \
+    if (LIGHT_IS(light, LIGHT_##NAME)) {                                                                \
+        float pdf;                                                                                      \
+        float3 toward = light_##name##_sample_wi(light, buffers->map_cdf, u_direction, &pdf);          \
+        if (!(pdf > 0.0f)) return 0;                                                                    \
+        travel = -toward;                                                                               \
+        per_area = light_##name##_radiance(light, buffers->spectra, buffers->texels, w, toward) / pdf; \
     }
+    LIGHT_LIST_INFINITE(X)
+#undef X
     float r = scene_sphere.w;
     e->ray.origin = sample_disk_across(scene_sphere.xyz - r * travel, travel, r, u_position);
     e->ray.direction = travel;

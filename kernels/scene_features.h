@@ -99,7 +99,8 @@
 
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 #define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
-#define SCENE_HAS_ENVIRONMENT (SCENE_USES_LIGHT(LIGHT_ENVIRONMENT) || SCENE_USES_LIGHT(LIGHT_ENVIRONMENT_MAP))
+/* LIGHT_ENVIRONMENT_TYPES: the bits of the device light types of environments (spectrace.lights). */
+#define SCENE_HAS_ENVIRONMENT ((SCENE_LIGHT_TYPES & LIGHT_ENVIRONMENT_TYPES) != 0)
 
 /* Type tests that fold to constants when the scene has none of that type, or nothing else. */
 #define MATERIAL_IS(m, t) (SCENE_USES_MATERIAL(t) && (SCENE_MATERIAL_TYPES == (1 << (t)) || (m)->type == (t)))

@@ -179,8 +179,9 @@ typedef struct {
     int pad[3];
 } Texture;
 
-/* One light for next-event estimation; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its
- * type (listed with LIGHT_TYPES in spectrace.core.contract). */
+/* One light; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its type (`type`: a device
+ * light type's code, LIGHT_<NAME>, generated from spectrace.lights.DEVICE_LIGHTS; its kernel file,
+ * light_<name>.cl, states the unit and which fields it reads). */
 typedef struct {
     float4 position;       /* point, spot; LIGHT_SPHERE: centre (xyz) and radius (w); LIGHT_ENVIRONMENT_MAP: row 0 of
                               the world-to-map rotation */

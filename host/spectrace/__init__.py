@@ -26,11 +26,8 @@ _LAZY = {
     **dict.fromkeys(
         [
             "area_emitter",
-            "constant_environment",
-            "distant_light",
             "medium",
             "mesh_from_trimesh",
-            "point_light",
             "render",
             "rgb_emission",
             "rgb_reflectance",
@@ -38,7 +35,6 @@ _LAZY = {
             "instanced_object",
             "instance",
             "spectrum",
-            "spot_light",
             "transformed",
         ],
         "spectrace.api",
@@ -59,13 +55,16 @@ _LAZY = {
 
 def _registry_names() -> dict[str, str]:
     """Names that come from the registries: each material's constructor (`spectrace.diffuse`, ...: its module's
-    `make`, which spectrace.api exposes) and its dataclass, and each texture's constructor (`spectrace.bitmap`, ...:
-    its module's API_NAME)."""
+    `make`, which spectrace.api exposes) and its dataclass, each light's constructor (`spectrace.point_light`, ...:
+    its module's `make`, under its API_NAME) and each texture's constructor (`spectrace.bitmap`, ...: its module's
+    API_NAME)."""
+    from spectrace.lights import LIGHTS
     from spectrace.materials import MATERIALS
     from spectrace.textures import TEXTURES
 
     textures = dict.fromkeys((module.API_NAME for module in TEXTURES.values()), "spectrace.api")
-    return dict.fromkeys(MATERIALS, "spectrace.api") | material_model_names() | textures
+    lights = {m.API_NAME: "spectrace.api" for m in LIGHTS.values() if m.API_NAME is not None}
+    return dict.fromkeys(MATERIALS, "spectrace.api") | lights | material_model_names() | textures
 
 
 __version__ = "0.1.0"
@@ -92,10 +91,6 @@ __getattr__, __dir__ = lazy_names(
         "instance",
         "medium",
         "area_emitter",
-        "point_light",
-        "spot_light",
-        "distant_light",
-        "constant_environment",
         "ColourSpace",
         "Adaptation",
         "WhiteBalance",

@@ -25,19 +25,15 @@ from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
-from spectrace.lights.base import unit_direction
+from spectrace.lights.base import vector3
 from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import (
     AreaEmitter,
-    ConstantEnvironment,
-    DistantLight,
     Instance,
     InstancedObject,
     Medium,
-    PointLight,
     Scene,
     Shape,
-    SpotLight,
 )
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
@@ -199,7 +195,7 @@ def shape(
         if (center is not None or radius is not None) and geometry != "sphere":
             raise SpectraceError(f"center and radius are a sphere's, not a {geometry}'s (use transform)")
         if center is not None:
-            steps.insert(0, {"translate": list(_vector(center, "center"))})
+            steps.insert(0, {"translate": list(vector3(center, "center"))})
         if radius is not None:
             if not (isinstance(radius, Real) and math.isfinite(radius) and radius > 0):
                 raise SpectraceError(f"radius must be a finite number > 0, got {radius!r}", where="radius")
@@ -259,79 +255,9 @@ def instance(obj: InstancedObject, transform: Iterable[Mapping[str, Any]] = (), 
     return Instance(object=obj, to_world=matrix, name=name or obj.name)
 
 
-def _intensity(
-    intensity: SpectrumLike | None, power_w: float | None, shape_spectrum: SpectrumLike | None, solid_angle_sr: float
-) -> Spectrum:
-    """I(λ), W/(sr nm): given, or `power_w` (W over 360..830 nm) spread over `solid_angle_sr` with the spectral
-    shape `shape_spectrum` (equal energy by default), as a scene file's `power` + `spectrum`."""
-    if problem := lights.point.source_problem(intensity, power_w, shape_spectrum, power_name="power_w"):
-        raise SpectraceError(problem)
-    if intensity is not None:
-        return spectrum_input.emission(intensity, "intensity")
-    assert power_w is not None  # source_problem has refused giving neither
-    shape_values = spectrum_input.emission(shape_spectrum, "spectrum") if shape_spectrum is not None else None
-    return lights.point.intensity_from_power(power_w, shape_values, solid_angle_sr)
-
-
-def point_light(
-    position: Sequence[float],
-    intensity: SpectrumLike | None = None,
-    power_w: float | None = None,
-    spectrum: SpectrumLike | None = None,
-) -> PointLight:
-    """Isotropic point light: `intensity` I(λ) in W/(sr nm), or `power_w` (total flux over 360..830 nm, W) with
-    the spectral shape `spectrum` (equal energy by default): I = Φ(λ)/4π."""
-    return PointLight(
-        _vector(position, "position"), _intensity(intensity, power_w, spectrum, lights.point.FULL_SPHERE_SR)
-    )
-
-
-def spot_light(
-    position: Sequence[float],
-    target: Sequence[float],
-    cutoff_angle: float = lights.spot.CUTOFF_ANGLE.number_default,
-    falloff_start: float | None = None,
-    intensity: SpectrumLike | None = None,
-    power_w: float | None = None,
-    spectrum: SpectrumLike | None = None,
-    linear_falloff: bool = False,
-    slide=None,
-    slide_up: Sequence[float] = (0.0, 1.0, 0.0),
-) -> SpotLight:
-    """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
-    degrees from the axis (default ¾ of the cutoff), smooth fall (linear in the angle with `linear_falloff`) to 0 at
-    `cutoff_angle` degrees; or `power_w` W spread over the cone's effective solid angle. `slide`: a reflectance
-    texture the light passes through, projected over the cone's cutoff square, its top toward `slide_up`."""
-    origin = np.asarray(_vector(position, "position"))
-    direction = unit_direction(
-        np.asarray(_vector(target, "target")) - origin, None, "spot light target equals its position"
-    )
-    cutoff, start = lights.spot.cone(cutoff_angle, falloff_start, "cutoff_angle", "falloff_start")
-    solid_angle = lights.spot.effective_solid_angle(cutoff, start, linear_falloff)
-    emitted = _intensity(intensity, power_w, spectrum, solid_angle)
-    if slide is None:
-        return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff))
-    x = lights.spot.slide_x(direction, _vector(slide_up, "slide_up"), "slide_up")
-    return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff), slide, x)
-
-
-def distant_light(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:
-    """Parallel light travelling along `direction`, irradiance E(λ) in W/(m² nm) on a surface facing it."""
-    return DistantLight(
-        unit_direction(_vector(direction, "direction"), "direction"), spectrum_input.emission(irradiance, "irradiance")
-    )
-
-
-def constant_environment(radiance: SpectrumLike) -> ConstantEnvironment:
-    """The same radiance L(λ), W/(m² sr nm), from every direction."""
-    return ConstantEnvironment(spectrum_input.emission(radiance, "radiance"))
-
-
-def _vector(value: Sequence[float] | np.ndarray, what: str) -> tuple[float, float, float]:
-    array = np.asarray(value, np.float64)
-    if array.shape != (3,) or not np.all(np.isfinite(array)):
-        raise SpectraceError(f"expected 3 finite numbers, got {value!r}", where=what)
-    return float(array[0]), float(array[1]), float(array[2])
+# One constructor per light, `spectrace.<API_NAME>(...)`: its module's `make`, which takes the parameters of its
+# table (docs/python-api.md).
+globals().update({m.API_NAME: m.make for m in lights.LIGHTS.values() if m.API_NAME is not None})
 
 
 # ---------------------------------------------------------------- rendering
@@ -505,7 +431,7 @@ def measure_radiance(
             raise SpectraceError(problem)
     if problem := limits.seed_problem(seed):
         raise SpectraceError(problem)
-    meter = RadianceMeter(_vector(origin, "origin"), _vector(direction, "direction"))
+    meter = RadianceMeter(vector3(origin, "origin"), vector3(direction, "direction"))
     wavelengths = DEFAULT_WAVELENGTHS_NM if wavelengths_nm is None else wavelengths_nm
     return measure(
         scene,

@@ -47,3 +47,17 @@ def test_a_model_finds_its_plugin_and_another_type_is_unsupported():
     assert registry.for_model(_Blue()) is BLUE
     with pytest.raises(SpectraceError, match="unsupported colour int"):
         registry.for_model(3)
+
+
+def test_the_package_registries_are_registries():
+    """Every kind of plugin is listed through the one helper (so the device codes and the docs come from one
+    shape); a kind still listed in a plain dict fails here."""
+    from spectrace.cameras import CAMERAS
+    from spectrace.integrators import INTEGRATORS
+    from spectrace.lights import DEVICE_LIGHTS, LIGHTS
+    from spectrace.materials import MATERIALS
+    from spectrace.pixel_filters import PIXEL_FILTERS
+    from spectrace.textures import TEXTURES
+
+    registries = (MATERIALS, LIGHTS, DEVICE_LIGHTS, TEXTURES, CAMERAS, PIXEL_FILTERS, INTEGRATORS)
+    assert all(isinstance(registry, Registry) for registry in registries)

@@ -9,12 +9,9 @@ import spectrace
 from spectrace.core.parameters import REQUIRED
 from spectrace.lights import LIGHTS, area
 
-API_HELPERS = {
-    "point": spectrace.point_light,
-    "spot": spectrace.spot_light,
-    "distant": spectrace.distant_light,
-    "constant": spectrace.constant_environment,
-    "area": spectrace.area_emitter,
+# Each light's Python constructor, `spectrace.<API_NAME>` (a shape's emitter: area_emitter).
+API_HELPERS = {name: getattr(spectrace, m.API_NAME) for name, m in LIGHTS.items() if m.API_NAME is not None} | {
+    "area": spectrace.area_emitter
 }
 
 

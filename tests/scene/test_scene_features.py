@@ -17,7 +17,8 @@ from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import EnvironmentMap
 
-# The type codes (materials: their order in spectrace.materials.MATERIALS), written out here so the test does not
+# The type codes (materials: their order in spectrace.materials.MATERIALS; lights: in
+# spectrace.lights.DEVICE_LIGHTS, the shapes' emitters first), written out here so the test does not
 # read them from the code under test.
 MATERIAL_BITS = {
     "diffuse": 1,
@@ -32,13 +33,13 @@ MATERIAL_BITS = {
 }
 LIGHT_BITS = {
     "area": 1,
-    "point": 2,
-    "spot": 4,
-    "distant": 8,
-    "environment": 16,
-    "environment_map": 32,
-    "sphere": 64,
-    "shape": 128,
+    "sphere": 2,
+    "shape": 4,
+    "point": 8,
+    "spot": 16,
+    "distant": 32,
+    "environment": 64,
+    "environment_map": 128,
 }
 
 

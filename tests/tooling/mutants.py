@@ -51,7 +51,7 @@ MUTANTS: tuple[Mutant, ...] = (
     # Whole-render light transport.
     Mutant(
         "spot_falloff_linear",
-        "kernels/lights.cl",
+        "kernels/light_spot.cl",
         "return t * t * (3.0f - 2.0f * t);",
         "return t;",
         "spot light's smoothstep falloff replaced by one linear in cos θ",
@@ -63,7 +63,7 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "environment_pdf_x1.05",
-        "kernels/environment.cl",
+        "kernels/light_environment_map.cl",
         "return light->pmf * density_uv / (2.0f * PI_F * PI_F * sin_theta);",
         "return 1.05f * light->pmf * density_uv / (2.0f * PI_F * PI_F * sin_theta);",
         "environment map's solid-angle pdf 5 % high",
@@ -75,7 +75,7 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "emitter_hit_pdf_x1.1",
-        "kernels/lights.cl",
+        "kernels/light_triangle.cl",
         "return area_light_pdf(light, distance(from, p), fabs(dot(n, wo)));",
         "return 1.1f * area_light_pdf(light, distance(from, p), fabs(dot(n, wo)));",
         "pdf of reaching an emitting triangle by light sampling, as the MIS weight of a BSDF hit sees it, 10 % high",
@@ -88,7 +88,7 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "area_light_pdf_x1.05",
-        "kernels/lights.cl",
+        "kernels/light_area.cl",
         "return light->pmf * distance * distance / (light->area * abs_cos_light);",
         "return 1.05f * light->pmf * distance * distance / (light->area * abs_cos_light);",
         "emitting triangle's solid-angle pdf 5 % high (next-event estimation and MIS both)",
@@ -147,10 +147,10 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "point_light_inverse_square",
-        "kernels/lights.cl",
-        "s->arriving = light_spectrum(light, spectra, w) * (falloff / d2);",
-        "s->arriving = light_spectrum(light, spectra, w) * (falloff / pow(d2, 1.02f));",
-        "point and spot lights fall off as 1/r^2.04 instead of 1/r²",
+        "kernels/light_point.cl",
+        "s->arriving = light_spectrum(light, buffers->spectra, w) * (1.0f / d2);",
+        "s->arriving = light_spectrum(light, buffers->spectra, w) * (1.0f / pow(d2, 1.02f));",
+        "point lights fall off as 1/r^2.04 instead of 1/r²",
         (
             "tests/render/test_validation.py::test_law_holds[inverse-square]",
             "tests/render/test_light_tracer.py::test_point_light_over_a_diffuse_floor",

@@ -1,7 +1,8 @@
 """The host/device contract: numpy mirrors of the structs in kernels/types.h (explicit offsets), and the one home
 of every number both sides must agree on (the type codes of those structs, the wavelength grid, buffer layouts)
-but the plugins' type codes (materials, textures, cameras, pixel filters), which are their positions in their
-registries (spectrace.core.registry) and reach a build as `GeneratedSources`.
+but the plugins' type codes (materials, lights, textures, cameras, pixel filters), which are their positions in
+their registries (spectrace.core.registry; the lights' device types in spectrace.lights.DEVICE_LIGHTS) and reach a
+build as `GeneratedSources`.
 
 The kernels hold no copy of those numbers: every kernel build gets them as defines (`device_contract_defines`,
 added by spectrace.device's program builds). tests/device/test_struct_layout.py compiles a kernel that reports each
@@ -40,6 +41,14 @@ class GeneratedSources:
 
     defines: Mapping[str, int] = field(default_factory=dict)
     headers: Mapping[str, str] = field(default_factory=dict)
+
+    def __or__(self, other: "GeneratedSources") -> "GeneratedSources":
+        """Both registries' codes and headers, for a build that dispatches over both; a name given twice is a
+        clash of two registries."""
+        for mine, theirs in ((self.defines, other.defines), (self.headers, other.headers)):
+            if clash := sorted(set(mine) & set(theirs)):
+                raise ValueError(f"two registries generate {clash[0]}")
+        return GeneratedSources({**self.defines, **other.defines}, {**self.headers, **other.headers})
 
 
 def _struct(fields: Sequence[tuple[str, DTypeLike]], itemsize: int) -> np.dtype:
@@ -183,25 +192,6 @@ TEXTURE_DTYPE = _struct(
     ],
     112,
 )
-
-# Light.type, and the unit of each type's emission (kernels/lights.cl, environment.cl).
-LIGHT_TYPES = ("triangle", "point", "spot", "distant", "environment", "environment_map", "sphere", "shape")
-(
-    LIGHT_TRIANGLE,
-    LIGHT_POINT,
-    LIGHT_SPOT,
-    LIGHT_DISTANT,
-    LIGHT_ENVIRONMENT,
-    LIGHT_ENVIRONMENT_MAP,
-    LIGHT_SPHERE,
-    LIGHT_SHAPE,
-) = range(len(LIGHT_TYPES))
-# LIGHT_TRIANGLE: an emitting triangle of an area light, radiance W/(m² sr nm); LIGHT_POINT: isotropic, intensity
-# W/(sr nm); LIGHT_SPOT: intensity on the axis W/(sr nm), smooth falloff to the cutoff; LIGHT_DISTANT: irradiance
-# on a surface facing it, W/(m² nm); LIGHT_ENVIRONMENT: uniform at infinity, radiance W/(m² sr nm);
-# LIGHT_ENVIRONMENT_MAP: a latitude-longitude RGB image, scaled, W/(m² sr nm); LIGHT_SPHERE: an emitting analytic
-# sphere, sampled by the solid angle it subtends, and LIGHT_SHAPE: an emitting analytic disk or cylinder, sampled by
-# area, both radiance W/(m² sr nm).
 
 # AnalyticShape.type (kernels/shapes.cl): Mitsuba 3's sphere, disk and cylinder in their object space.
 SHAPE_TYPES = ("sphere", "disk", "cylinder")
@@ -399,7 +389,6 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "FILTER_NEAREST": FILTER_NEAREST,
         "FILTER_BILINEAR": FILTER_BILINEAR,
         "FILTER_TRILINEAR": FILTER_TRILINEAR,
-        "LIGHT_TYPE_COUNT": len(LIGHT_TYPES),
         "PIXEL_FILTER_BINS": PIXEL_FILTER_BINS,
         # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
         "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
@@ -407,6 +396,5 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "BVH4_STACK_SIZE": BVH4_STACK_SIZE,
         "BVH8_STACK_SIZE": BVH8_STACK_SIZE,
     }
-    values |= {f"LIGHT_{name.upper()}": code for code, name in enumerate(LIGHT_TYPES)}
     values |= {f"SHAPE_{name.upper()}": code for code, name in enumerate(SHAPE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

@@ -24,8 +24,8 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
+from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
-from spectrace.lights import light_module
 from spectrace.lights.area import AreaEmitter
 from spectrace.lights.base import LightRows
 from spectrace.materials import append_material_rows, material_textures, write_detail
@@ -58,7 +58,8 @@ class SceneBuffers:
     triangle_normals: np.ndarray
     texels: np.ndarray  # (n, 4) float32: images of environment maps and textured emitters, after one dummy texel;
     # material textures' texels, addressed in floats (kernels/texture.cl)
-    map_cdf: np.ndarray  # marginal CDF over rows (H + 1), then each row's CDF (W + 1): see kernels/environment.cl
+    # marginal CDF over rows (H + 1), then each row's CDF (W + 1): see kernels/light_environment_map.cl
+    map_cdf: np.ndarray
     spectra: np.ndarray  # float32 table
     cmf: np.ndarray  # (471, 4) float32: x̄, ȳ, z̄ / ∫ȳ
     media: np.ndarray  # MEDIUM_DTYPE (one dummy entry when there are none)
@@ -229,7 +230,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
     vertices[: len(v0), 0, :3], vertices[: len(v0), 1, :3], vertices[: len(v0), 2, :3] = v0, v1, v2
     # The spare w of each triangle's three vertices holds its unit geometric normal (x, y, z), so shading reads it
-    # with the vertices instead of computing cross and normalize at every hit and light sample (kernels/lights.cl).
+    # with the vertices instead of computing cross and normalize at every hit and light sample
+    # (kernels/light_triangle.cl).
     vertices[: len(v0), :, 3] = _unit_normals(v0, v1, v2)
 
     triangle_uvs = np.zeros((max(len(v0), 1), 3, 2), np.float32)
@@ -249,7 +251,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
 
     # Each light writes its own rows (spectrace.lights); images shown by emitters and environment maps share one
     # texel buffer, each light knowing its offset.
-    out = LightRows(table, scene_radius, texel_chunks, textures)
+    out = LightRows(table, scene_radius, DEVICE_LIGHTS.codes, texel_chunks, textures)
     areas = 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
     emitting = area_light.write_rows(emitters, tri_emitter, areas, out)
     shape_light_rows = area_light.write_shape_rows(

@@ -1,6 +1,12 @@
 """Area lights: a shape's `emitter`, emitting from each of its triangles (or from the whole of an analytic shape: a
 sphere sampled by the cone it subtends, a disk or cylinder by area), optionally showing an image: an emission
-texture, or a display's picture, which is one (kernels/lights.cl)."""
+texture, or a display's picture, which is one (kernels/light_area.cl and the kernel file of each shape's device
+type).
+
+Not a LightPlugin (spectrace.lights.base): an area light is no `[[lights]]` table but a shape's `emitter`, so it has
+no from_spec of its own (the loader reads it with the shape, `emitter` below), its rows come with the scene's
+triangles and analytic shapes (write_rows, write_shape_rows) and its Mitsuba mapping has no to_world (it is the
+shape's). It is a LightSource: it declares the device light types its rows have."""
 
 import math
 from dataclasses import dataclass
@@ -8,9 +14,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from spectrace.core.contract import LIGHT_SHAPE, LIGHT_SPHERE, LIGHT_TRIANGLE, NO_TEXTURE
+from spectrace.core.contract import NO_TEXTURE
 from spectrace.core.parameters import REQUIRED, Parameter, Range
-from spectrace.lights.base import LightRows, light_row
+from spectrace.lights.base import DeviceLight, LightRows, light_row
 from spectrace.spectral.spectrum import Spectrum
 
 if TYPE_CHECKING:
@@ -19,6 +25,13 @@ if TYPE_CHECKING:
 NAME = "area"
 MITSUBA_PLUGINS = ("area",)  # on a shape only
 PBRT_LIGHTS = ("diffuse",)  # AreaLightSource, on a shape
+
+# Radiance W/(m² sr nm) from each emitting triangle; from an analytic sphere (sampled by the solid angle it
+# subtends); from another analytic shape, a disk or cylinder (sampled by area).
+TRIANGLE = DeviceLight("triangle", "area")
+SPHERE = DeviceLight("sphere", "area")
+SHAPE = DeviceLight("shape", "area")
+DEVICE_TYPES = (TRIANGLE, SPHERE, SHAPE)
 PARAMETERS = (
     Parameter(
         "radiance",
@@ -136,7 +149,7 @@ def write_rows(
         spectrum_offset, texture, scale = emitter_rows[triangle_emitter[t]]
         out.add(
             light_row(
-                LIGHT_TRIANGLE,
+                out.code(TRIANGLE),
                 spectrum_offset,
                 triangle=int(t),
                 area=areas[t],
@@ -151,7 +164,7 @@ def write_rows(
 
 def write_shape_rows(emitters: list[tuple[AreaEmitter, int, "AnalyticSurface"]], out: LightRows) -> list[int]:
     """One row per emitting analytic shape (its emitter, its index among the scene's analytic shapes, its surface):
-    LIGHT_SPHERE for a sphere (sampled by the cone it subtends), LIGHT_SHAPE for a disk or cylinder (sampled by
+    SPHERE for a sphere (sampled by the cone it subtends), SHAPE for a disk or cylinder (sampled by
     area); returns the row indices, in order."""
     indices = []
     for e, shape_index, surface in emitters:
@@ -163,7 +176,7 @@ def write_shape_rows(emitters: list[tuple[AreaEmitter, int, "AnalyticSurface"]],
             spectrum_offset, scale = (basis[0] if basis else 0), e.image.scale
         area = surface.area()
         row = light_row(
-            LIGHT_SPHERE if surface.kind == "sphere" else LIGHT_SHAPE,
+            out.code(SPHERE if surface.kind == "sphere" else SHAPE),
             spectrum_offset,
             triangle=shape_index,
             area=area,

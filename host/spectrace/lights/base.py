@@ -1,16 +1,100 @@
-"""What every light module shares: the scene model's `Light`, its Light rows (kernels/types.h) and the checks of
-positions and directions."""
+"""What every light module shares: the scene model's `Light`, what a light module holds (`LightPlugin`, which mypy
+checks each module of spectrace.lights.LIGHTS against), the device light types (`DeviceLight`), its Light rows
+(kernels/types.h) and the checks of positions and directions."""
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
 from spectrace.core import limits
 from spectrace.core.contract import NO_TEXTURE
+from spectrace.core.parameters import Parameter
+from spectrace.core.registry import Plugin
 from spectrace.errors import SpectraceError
 from spectrace.spectral.table import SpectrumTable
 
 
 class Light:
     """A `[[lights]]` light of the scene model: what every light module's MODEL is (a shape's AreaEmitter is not)."""
+
+
+# The kinds of device light (pbrt-v4's LightType, with its two delta kinds told apart by where they are): which
+# functions a light's kernel file defines and which parts of the kernels' shared code (kernels/lights.cl,
+# light_emission.cl, bdpt.cl) it goes through.
+#  - "area": emits from a surface; its file samples a point on it and states the densities of that point;
+#  - "position": at one point (a delta position); its file samples and states directions leaving it;
+#  - "infinite": at infinity, a direction toward it sampled (a delta direction, or a distribution over directions).
+DEVICE_LIGHT_KINDS = ("area", "position", "infinite")
+
+
+@dataclass(frozen=True)
+class DeviceLight:
+    """One type of Light row, a light as the kernels see it: its code (Light.type, LIGHT_<NAME>) is its position
+    among every light module's DEVICE_TYPES (spectrace.lights.DEVICE_LIGHTS), its kernel file
+    kernels/light_<name>.cl, which defines the functions of its `kind` (kernels/lights.cl says which)."""
+
+    name: str
+    kind: str
+
+    def __post_init__(self) -> None:
+        if self.kind not in DEVICE_LIGHT_KINDS:
+            raise ValueError(f"device light {self.name!r}: kind {self.kind!r} is not one of {DEVICE_LIGHT_KINDS}")
+
+    @property
+    def NAME(self) -> str:  # noqa: N802 (a plugin's name, as a module's NAME)
+        return self.name
+
+    @property
+    def kernel_file(self) -> str:
+        return f"light_{self.name}.cl"
+
+
+class LightSource(Plugin, Protocol):
+    """What every module that writes Light rows states: the device light types of its rows. A `[[lights]]` light
+    (LightPlugin) and a shape's emitter (spectrace.lights.area) both are one."""
+
+    @property
+    def DEVICE_TYPES(self) -> tuple[DeviceLight, ...]: ...  # noqa: N802 (a module constant)
+
+
+class LightPlugin(LightSource, Protocol):
+    """What a `[[lights]]` light module holds: its parameter table, its resolved dataclass (MODEL), `from_spec` (a
+    validated scene-file table to the dataclass), `write_rows` (its Light rows and power, through LightRows), whether
+    it is an environment (a scene has at most one), its Python API constructor `make` (`spectrace.<API_NAME>`, or
+    None where it has none) and its Mitsuba 3 and pbrt-v4 mappings (MITSUBA_PLUGINS, `from_mitsuba`; PBRT_LIGHTS,
+    `from_pbrt`). Optional: SPEC_CHECKS (rules spanning several keys) and `to_mitsuba` (the export, where Mitsuba can
+    do the same)."""
+
+    @property
+    def PARAMETERS(self) -> tuple[Parameter, ...]: ...  # noqa: N802
+
+    @property
+    def MODEL(self) -> type[Light]: ...  # noqa: N802
+
+    @property
+    def IS_ENVIRONMENT(self) -> bool: ...  # noqa: N802
+
+    @property
+    def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802
+
+    @property
+    def API_NAME(self) -> str | None: ...  # noqa: N802
+
+    @property
+    def make(self) -> Callable[..., Light] | None: ...
+
+    def from_spec(self, spec: Any, resolver: Any, key: str) -> Light: ...
+
+    def write_rows(self, light: Any, out: "LightRows") -> None: ...
+
+    def from_mitsuba(self, importer: Any, emitter: Any, properties: Any, to_world: Any) -> dict | None: ...
+
+    @property
+    def PBRT_LIGHTS(self) -> tuple[str, ...]: ...  # noqa: N802
+
+    def from_pbrt(self, context: Any, light: Any, matrix: Any) -> dict | None: ...
 
 
 def light_row(
@@ -56,20 +140,30 @@ class LightRows:
     it), and the buffers they share: the spectrum table and one texel buffer for every image a light shows."""
 
     def __init__(
-        self, table: SpectrumTable, scene_radius: float, texel_chunks: list[np.ndarray] | None = None, textures=None
+        self,
+        table: SpectrumTable,
+        scene_radius: float,
+        codes: Mapping[str, int],
+        texel_chunks: list[np.ndarray] | None = None,
+        textures=None,
     ):
         from spectrace.textures import TextureRows
 
+        self.codes = codes  # each device light type's Light.type code (spectrace.lights.DEVICE_LIGHTS.codes)
         self.table = table
         self.scene_radius = scene_radius
         self.rows: list[tuple] = []
         self.power: list[float] = []
         self.environment_light = -1  # index of the environment's row, or -1
-        self.map_cdf = np.zeros(2, np.float32)  # the environment map's sampling CDFs (kernels/environment.cl)
+        self.map_cdf = np.zeros(2, np.float32)  # the environment map's sampling CDFs (kernels/light_environment_map.cl)
         # The texel buffer, which material textures share (spectrace.textures.TextureRows): a dummy texel first.
         self.texel_chunks = texel_chunks if texel_chunks is not None else [np.zeros((1, 4), np.float32)]
         # The texture rows of the images area lights show (the scene's, which the materials' textures share).
         self.textures = textures if textures is not None else TextureRows(table, self.texel_chunks)
+
+    def code(self, device: DeviceLight) -> int:
+        """The Light.type code of a row of `device`'s type."""
+        return self.codes[device.name]
 
     def add(self, row: tuple, power: float, environment: bool = False) -> None:
         if environment:
@@ -84,6 +178,14 @@ class LightRows:
         chunk[:, :3] = np.maximum(rgb.reshape(-1, 3), 0.0)
         self.texel_chunks.append(chunk)
         return offset
+
+
+def vector3(value, what: str) -> tuple[float, float, float]:
+    """Three finite numbers given to the Python API, as a tuple; anything else is an error naming `what`."""
+    array = np.asarray(value, np.float64)
+    if array.shape != (3,) or not np.all(np.isfinite(array)):
+        raise SpectraceError(f"expected 3 finite numbers, got {value!r}", where=what)
+    return float(array[0]), float(array[1]), float(array[2])
 
 
 def unit_direction(

@@ -1,20 +1,25 @@
-"""`constant`: a uniform environment, the same radiance from every direction (kernels/environment.cl)."""
+"""`constant`: a uniform environment, the same radiance from every direction (kernels/light_environment.cl)."""
 
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.core.contract import LIGHT_ENVIRONMENT
 from spectrace.core.parameters import REQUIRED, Parameter
-from spectrace.lights.base import Light, LightRows, light_row
+from spectrace.lights.base import DeviceLight, Light, LightRows, light_row
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 
 NAME = "constant"
+API_NAME = "constant_environment"
 MITSUBA_PLUGINS = ("constant",)
 # pbrt-v4's `infinite` is two lights here: this one without an image, envmap with one.
 PBRT_LIGHTS = ("infinite",)
 IS_ENVIRONMENT = True
+# Radiance L(λ), W/(m² sr nm), the same from every direction at infinity.
+ENVIRONMENT = DeviceLight("environment", "infinite")
+DEVICE_TYPES = (ENVIRONMENT,)
 PARAMETERS = (Parameter("radiance", "spectrum", "W/(m² sr nm)", REQUIRED, doc="from every direction"),)
 
 
@@ -34,10 +39,15 @@ def from_spec(spec, resolver, key: str) -> ConstantEnvironment:
 
 def write_rows(light: ConstantEnvironment, out: LightRows) -> None:
     out.add(
-        light_row(LIGHT_ENVIRONMENT, out.table.add(light.radiance)),
+        light_row(out.code(ENVIRONMENT), out.table.add(light.radiance)),
         4.0 * np.pi**2 * out.scene_radius**2 * light.radiance.mean(),
         environment=True,
     )
+
+
+def make(radiance: SpectrumLike) -> ConstantEnvironment:
+    """The same radiance L(λ), W/(m² sr nm), from every direction."""
+    return ConstantEnvironment(spectrum_input.emission(radiance, "radiance"))
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:

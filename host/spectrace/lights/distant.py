@@ -1,18 +1,24 @@
-"""`distant`: parallel light from infinity, e.g. the sun (kernels/lights.cl)."""
+"""`distant`: parallel light from infinity, e.g. the sun (kernels/light_distant.cl)."""
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.core.contract import LIGHT_DISTANT
 from spectrace.core.parameters import REQUIRED, Parameter
-from spectrace.lights.base import Light, LightRows, light_row, unit_direction
+from spectrace.lights.base import DeviceLight, Light, LightRows, light_row, unit_direction, vector3
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 
 NAME = "distant"
+API_NAME = "distant_light"
 MITSUBA_PLUGINS = ("directional",)
 PBRT_LIGHTS = ("distant",)
 IS_ENVIRONMENT = False
+# Irradiance E(λ) on a surface facing it, W/(m² nm), from one direction (a delta direction).
+DISTANT = DeviceLight("distant", "infinite")
+DEVICE_TYPES = (DISTANT,)
 PARAMETERS = (
     Parameter("direction", "vector", "", REQUIRED, doc="the direction the light travels"),
     Parameter("irradiance", "spectrum", "W/(m² nm)", REQUIRED, doc="on a surface facing the light"),
@@ -38,8 +44,15 @@ def from_spec(spec, resolver, key: str) -> DistantLight:
 def write_rows(light: DistantLight, out: LightRows) -> None:
     # The flux through the disc the scene's bounding sphere shows the light.
     out.add(
-        light_row(LIGHT_DISTANT, out.table.add(light.irradiance), direction=light.direction),
+        light_row(out.code(DISTANT), out.table.add(light.irradiance), direction=light.direction),
         np.pi * out.scene_radius**2 * light.irradiance.mean(),
+    )
+
+
+def make(direction: Sequence[float], irradiance: SpectrumLike) -> DistantLight:
+    """Parallel light travelling along `direction`, irradiance E(λ) in W/(m² nm) on a surface facing it."""
+    return DistantLight(
+        unit_direction(vector3(direction, "direction"), "direction"), spectrum_input.emission(irradiance, "irradiance")
     )
 
 

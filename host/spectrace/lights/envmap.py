@@ -1,16 +1,15 @@
 """`envmap`: an environment from a latitude-longitude image, importance-sampled by luminance
-(kernels/environment.cl)."""
+(kernels/light_environment_map.cl)."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
 from spectrace.core import limits
-from spectrace.core.contract import LIGHT_ENVIRONMENT_MAP
 from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.io.images import read_environment_map
-from spectrace.lights.base import Light, LightRows, light_row
+from spectrace.lights.base import DeviceLight, Light, LightRows, light_row
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 
@@ -19,6 +18,12 @@ MITSUBA_PLUGINS = ("envmap",)
 # pbrt-v4's `infinite` is two lights here: this one with an image (`filename`), constant without.
 PBRT_LIGHTS = ("infinite",)
 IS_ENVIRONMENT = True
+# A latitude-longitude RGB image at infinity, scaled: radiance W/(m² sr nm).
+ENVIRONMENT_MAP = DeviceLight("environment_map", "infinite")
+DEVICE_TYPES = (ENVIRONMENT_MAP,)
+# No Python API constructor yet: a map comes from the file a scene names.
+API_NAME = None
+make = None
 DEFAULT_UP = (0.0, 1.0, 0.0)
 DEFAULT_FRONT = (0.0, 0.0, -1.0)
 PARAMETERS = (
@@ -39,7 +44,7 @@ PARAMETERS = (
 class EnvironmentMap(Light):
     """Light from a latitude-longitude image at infinity: `rgb` (height, width, 3) linear sRGB, times `scale`;
     each texel's radiance is the D65-based emission uplift of its colour (RGB (1,1,1) = D65 at Y = 1), in
-    W/(m² sr nm). +y is up; the image centre looks along −z (see kernels/environment.cl)."""
+    W/(m² sr nm). +y is up; the image centre looks along −z (see kernels/light_environment_map.cl)."""
 
     rgb: np.ndarray
     scale: float = 1.0
@@ -142,7 +147,7 @@ def write_rows(light: EnvironmentMap, out: LightRows) -> None:
     row_x, row_y = light.world_to_map_rows()
     out.add(
         light_row(
-            LIGHT_ENVIRONMENT_MAP,
+            out.code(ENVIRONMENT_MAP),
             basis[0],
             position=tuple(row_x),
             direction=tuple(row_y),

@@ -1,25 +1,31 @@
-"""`point`: an isotropic point light, given by its intensity or by its power (kernels/lights.cl).
+"""`point`: an isotropic point light, given by its intensity or by its power (kernels/light_point.cl).
 
 Also the one place a power (total flux, W) becomes an intensity (W/(sr nm)), for spot lights too.
 """
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from spectrace.core import limits
-from spectrace.core.contract import LIGHT_POINT
 from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
-from spectrace.lights.base import Light, LightRows, check_position, light_row
+from spectrace.lights.base import DeviceLight, Light, LightRows, check_position, light_row, vector3
+from spectrace.spectral import spectrum_input
 from spectrace.spectral.grid import integrate_on_grid
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 
 NAME = "point"
+API_NAME = "point_light"
 MITSUBA_PLUGINS = ("point",)
 PBRT_LIGHTS = ("point",)
 IS_ENVIRONMENT = False
+# Intensity I(λ), W/(sr nm).
+POINT = DeviceLight("point", "position")
+DEVICE_TYPES = (POINT,)
 FULL_SPHERE_SR = 4.0 * np.pi
 POSITION = Parameter("position", "vector", "scene units", REQUIRED, doc="where the light is")
 INTENSITY = Parameter("intensity", "spectrum", "W/(sr nm)", None, doc="I(λ); give either intensity or power")
@@ -104,9 +110,35 @@ def from_spec(spec, resolver, key: str) -> PointLight:
 
 def write_rows(light: PointLight, out: LightRows) -> None:
     out.add(
-        light_row(LIGHT_POINT, out.table.add(light.intensity), position=light.position),
+        light_row(out.code(POINT), out.table.add(light.intensity), position=light.position),
         4.0 * np.pi * light.intensity.mean(),
     )
+
+
+def make(
+    position: Sequence[float],
+    intensity: SpectrumLike | None = None,
+    power_w: float | None = None,
+    spectrum: SpectrumLike | None = None,
+) -> PointLight:
+    """Isotropic point light: `intensity` I(λ) in W/(sr nm), or `power_w` (total flux over 360..830 nm, W) with
+    the spectral shape `spectrum` (equal energy by default): I = Φ(λ)/4π."""
+    return PointLight(vector3(position, "position"), make_intensity(intensity, power_w, spectrum, FULL_SPHERE_SR))
+
+
+def make_intensity(
+    intensity: SpectrumLike | None, power_w: float | None, shape_spectrum: SpectrumLike | None, solid_angle_sr: float
+) -> Spectrum:
+    """I(λ), W/(sr nm), of a Python API point or spot light: given, or `power_w` (W over 360..830 nm) spread over
+    `solid_angle_sr` with the spectral shape `shape_spectrum` (equal energy by default), as a scene file's `power` +
+    `spectrum`."""
+    if problem := source_problem(intensity, power_w, shape_spectrum, power_name="power_w"):
+        raise SpectraceError(problem)
+    if intensity is not None:
+        return spectrum_input.emission(intensity, "intensity")
+    assert power_w is not None  # source_problem has refused giving neither
+    shape_values = spectrum_input.emission(shape_spectrum, "spectrum") if shape_spectrum is not None else None
+    return intensity_from_power(power_w, shape_values, solid_angle_sr)
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:

@@ -1,23 +1,29 @@
 """`spot`: a point light emitting into a cone, with a smooth falloff toward its edge, optionally through a slide: a
-texture projected over the cone (Mitsuba 3's spot `texture`; kernels/lights.cl)."""
+texture projected over the cone (Mitsuba 3's spot `texture`; kernels/light_spot.cl)."""
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from spectrace.core.contract import LIGHT_SPOT, NO_TEXTURE
+from spectrace.core.contract import NO_TEXTURE
 from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.lights import point
-from spectrace.lights.base import Light, LightRows, check_position, light_row, unit_direction
+from spectrace.lights.base import DeviceLight, Light, LightRows, check_position, light_row, unit_direction, vector3
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
 
 NAME = "spot"
+API_NAME = "spot_light"
 MITSUBA_PLUGINS = ("spot",)
 PBRT_LIGHTS = ("spot",)
 IS_ENVIRONMENT = False
+# Intensity on the axis I(λ), W/(sr nm), falling to 0 at the cutoff.
+SPOT = DeviceLight("spot", "position")
+DEVICE_TYPES = (SPOT,)
 CUTOFF_ANGLE = Parameter(
     "cutoff_angle",
     "float",
@@ -168,7 +174,7 @@ def write_rows(light: SpotLight, out: LightRows) -> None:
     slide = light.slide is not None
     out.add(
         light_row(
-            LIGHT_SPOT,
+            out.code(SPOT),
             out.table.add(light.intensity),
             position=light.position,
             direction=light.direction,
@@ -181,6 +187,35 @@ def write_rows(light: SpotLight, out: LightRows) -> None:
         # A slide only dims (a reflectance): the unfiltered power bounds the light's for its pick probability.
         light.effective_solid_angle() * light.intensity.mean(),
     )
+
+
+def make(
+    position: Sequence[float],
+    target: Sequence[float],
+    cutoff_angle: float = CUTOFF_ANGLE.number_default,
+    falloff_start: float | None = None,
+    intensity: SpectrumLike | None = None,
+    power_w: float | None = None,
+    spectrum: SpectrumLike | None = None,
+    linear_falloff: bool = False,
+    slide=None,
+    slide_up: Sequence[float] = (0.0, 1.0, 0.0),
+) -> SpotLight:
+    """Spot light at `position` aimed at `target`: full intensity (W/(sr nm), on the axis) up to `falloff_start`
+    degrees from the axis (default ¾ of the cutoff), smooth fall (linear in the angle with `linear_falloff`) to 0 at
+    `cutoff_angle` degrees; or `power_w` W spread over the cone's effective solid angle. `slide`: a reflectance
+    texture the light passes through, projected over the cone's cutoff square, its top toward `slide_up`."""
+    origin = np.asarray(vector3(position, "position"))
+    direction = unit_direction(
+        np.asarray(vector3(target, "target")) - origin, None, "spot light target equals its position"
+    )
+    cutoff, start = cone(cutoff_angle, falloff_start, "cutoff_angle", "falloff_start")
+    solid_angle = effective_solid_angle(cutoff, start, linear_falloff)
+    emitted = point.make_intensity(intensity, power_w, spectrum, solid_angle)
+    if slide is None:
+        return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff))
+    x = slide_x(direction, vector3(slide_up, "slide_up"), "slide_up")
+    return SpotLight(tuple(origin), direction, emitted, cutoff, start, bool(linear_falloff), slide, x)
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:

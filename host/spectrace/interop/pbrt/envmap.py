@@ -2,7 +2,7 @@
 
 pbrt-v4 stores an environment as a square image in Clarberg's equal-area octahedral mapping ("Fast Equal-Area
 Mapping of the (Hemi)Sphere using SIMD", JGT 2008; pbrt-v4 section 3.8.3), +z of the light's frame at the square's
-centre; spectrace's `envmap` is a latitude-longitude image with +y up (kernels/environment.cl). The importer
+centre; spectrace's `envmap` is a latitude-longitude image with +y up (kernels/light_environment_map.cl). The importer
 resamples the square into a latitude-longitude image in spectrace's world, with the light's transform (and the
 importer's handedness mirror) applied, so the environment needs no transform of its own.
 """
@@ -47,7 +47,7 @@ def square_to_sphere(points: np.ndarray) -> np.ndarray:
 
 def latitude_longitude_directions(height: int, width: int) -> np.ndarray:
     """(height, width, 3) directions of spectrace's envmap texel centres: θ = acos(y) down the rows, φ = atan2(x, −z)
-    across the columns from −π (kernels/environment.cl)."""
+    across the columns from −π (kernels/light_environment_map.cl)."""
     theta = (np.arange(height) + 0.5) / height * math.pi
     phi = (np.arange(width) + 0.5) / width * 2.0 * math.pi - math.pi
     sin_theta = np.sin(theta)[:, None]

@@ -1,32 +1,20 @@
-/* Environment lights: light from infinitely far away, a constant radiance or a latitude-longitude RGB map.
+/* An environment map (pbrt-v4's ImageInfiniteLight; Mitsuba 3's envmap): light from infinitely far away given by a
+ * latitude-longitude RGB image, radiance W/(m² sr nm) times the light's scale.
  *
  * Map convention (+y up): a direction d has θ = acos(d.y) (0 at the zenith) and φ = atan2(d.x, −d.z); texel
  * column u = (φ + π) / 2π, row v = θ / π, row 0 at the top. Each texel's radiance is r·R(λ) + g·G(λ) + b·B(λ), with
- * R, G, B the emission spectra uplifted from the three primaries, so the map's linear sRGB is reproduced exactly.
- * The map is importance-sampled by a piecewise-constant density ∝ luminance × sin θ (marginal CDF over rows, then
- * a conditional CDF within the row), as in pbrt-v4's image infinite light. A map may be turned: the light's
- * `position` and `direction` hold the first two rows of the rotation from world to map directions (the third is
- * their cross product), the identity unless the scene turns it. */
-#ifndef SPECTRACE_ENVIRONMENT_CL
-#define SPECTRACE_ENVIRONMENT_CL
+ * R, G, B the emission spectra uplifted from the three primaries (Light.spectrum_offset, basis_green_offset,
+ * basis_blue_offset), so the map's linear sRGB is reproduced exactly. The map is importance-sampled by a
+ * piecewise-constant density ∝ luminance × sin θ (marginal CDF over rows, then a conditional CDF within the row), as
+ * in pbrt-v4's image infinite light. A map may be turned: the light's `position` and `direction` hold the first two
+ * rows of the rotation from world to map directions (the third is their cross product), the identity unless the
+ * scene turns it. Contract: Light.map_width, map_height >= 1; texels from Light.texel_offset; map_cdf as below. */
+#ifndef SPECTRACE_LIGHT_ENVIRONMENT_MAP_CL
+#define SPECTRACE_LIGHT_ENVIRONMENT_MAP_CL
 
-#include "types.h"
-#include "spectrum.cl"
-#include "sampling.cl"
+#include "light_sample.cl"
 
-#define INV_FOUR_PI 0.07957747154594767f
-#define PI_F 3.14159265358979f
-
-/* Smallest i in [0, count) with u < cdf[i + 1]. */
-inline int cdf_search(__global const float *cdf, int count, float u)
-{
-    int lo = 0, hi = count - 1;
-    while (lo < hi) {
-        int mid = (lo + hi) / 2;
-        if (u < cdf[mid + 1]) hi = mid; else lo = mid + 1;
-    }
-    return lo;
-}
+#define LIGHT_ENVIRONMENT_MAP_DELTA 0
 
 inline float2 direction_to_map_uv(float3 d)
 {
@@ -73,18 +61,16 @@ inline float4 texel_radiance(__global const Light *light, __global const float *
 }
 
 /* Radiance arriving from direction d (pointing away from the scene). */
-inline float4 environment_radiance(__global const Light *light, __global const float *spectra,
-                                   __global const float4 *texels, const SampledWavelengths *w, float3 d)
+inline float4 light_environment_map_radiance(__global const Light *light, __global const float *spectra,
+                                             __global const float4 *texels, const SampledWavelengths *w, float3 d)
 {
-    if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) return light->scale * spectrum_at(spectra, light->spectrum_offset, w);
     return texel_radiance(light, spectra, texels[light->texel_offset + map_texel(light, direction_to_map_uv(world_to_map(light, d)))], w);
 }
 
 /* Solid-angle pdf of sampling direction d, times the light's pick probability. map_cdf holds the marginal CDF
  * over rows (height + 1 floats), then each row's conditional CDF (width + 1 floats). */
-inline float environment_pdf(__global const Light *light, __global const float *map_cdf, float3 d)
+inline float light_environment_map_pdf_wi(__global const Light *light, __global const float *map_cdf, float3 d)
 {
-    if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) return light->pmf * INV_FOUR_PI;
     float2 uv = direction_to_map_uv(world_to_map(light, d));
     int width = light->map_width, height = light->map_height;
     int row = clamp((int)(uv.y * (float)height), 0, height - 1);
@@ -98,15 +84,9 @@ inline float environment_pdf(__global const Light *light, __global const float *
 }
 
 /* Samples a direction toward the environment; returns it with its pdf (pick probability included). */
-inline float3 environment_sample(__global const Light *light, __global const float *map_cdf, float2 u, float *pdf)
+inline float3 light_environment_map_sample_wi(__global const Light *light, __global const float *map_cdf, float2 u,
+                                              float *pdf)
 {
-    if (LIGHT_IS(light, LIGHT_ENVIRONMENT)) {
-        float z = 1.0f - 2.0f * u.x;
-        float r = sqrt(fmax(0.0f, 1.0f - z * z));
-        float2 circle = r * cos_sin_turns(u.y);
-        *pdf = light->pmf * INV_FOUR_PI;
-        return (float3)(circle.x, circle.y, z);
-    }
     int width = light->map_width, height = light->map_height;
     int row = cdf_search(map_cdf, height, u.x);
     float row_mass = map_cdf[row + 1] - map_cdf[row];
@@ -120,6 +100,14 @@ inline float3 environment_sample(__global const Light *light, __global const flo
          ? light->pmf * row_mass * column_mass * (float)(width * height) / (2.0f * PI_F * PI_F * sin_theta)
          : 0.0f;
     return map_to_world(light, map_uv_to_direction((float2)(uu, v)));
+}
+
+inline int light_environment_map_sample_li(__global const Light *light, const LightBuffers *buffers,
+                                           const SampledWavelengths *w, float3 p, float2 u, LightSample *s)
+{
+    s->wi = light_environment_map_sample_wi(light, buffers->map_cdf, u, &s->pdf);
+    s->arriving = light_environment_map_radiance(light, buffers->spectra, buffers->texels, w, s->wi);
+    return at_infinity_sampled(p, s);
 }
 
 #endif
