@@ -79,7 +79,7 @@ SPECULAR = Parameter(
     "specular",
     "float",
     default=None,
-    range=UNIT,
+    range=Range(0.0, 1.0, low_open=True),
     default_doc="none",
     doc="the index written as a reflectance level instead of `eta` (Mitsuba 3's and Blender's): "
     "eta = 2/(1 − √(0.08 specular)) − 1, so 0.5 gives 1.5; give `eta` or `specular`, not both",
@@ -94,6 +94,8 @@ CLEARCOAT_GLOSS = _weight(
 # The scalar weights in the order of the kernel's parameter block (PRINCIPLED_* in kernels/bsdf_principled.cl).
 SCALARS = (ROUGHNESS, ANISOTROPIC, METALLIC, SPEC_TRANS, SPEC_TINT, SHEEN, SHEEN_TINT, CLEARCOAT, CLEARCOAT_GLOSS)
 PARAMETERS = (BASE_COLOR, *SCALARS[:4], ETA, SPECULAR, *SCALARS[4:])
+# α never falls below 0.001 (Mitsuba's clamp): no smooth (delta) case, whatever the roughness.
+ALWAYS_ROUGH = True
 # The material places its own textures: its scalars' texture indices go into its parameter block, not row fields.
 WRITES_OWN_TEXTURES = True
 
@@ -168,7 +170,7 @@ def make(
     anisotropic: float = 0.0,
     metallic: float = 0.0,
     spec_trans: float = 0.0,
-    eta: float | str | dict | None = None,
+    eta: float | str | dict = ETA.number_default,
     specular: float | None = None,
     spec_tint: float = 0.0,
     sheen: float = 0.0,
@@ -194,9 +196,10 @@ def make(
     }
     if specular is not None:
         specular = SPECULAR.check(specular)
+    given_eta = None if specular is not None and eta == ETA.number_default else eta
     return PrincipledMaterial(
         spectrum_input.reflectance_or_texture(base_color, "base_color"),
-        _check_eta(_index(eta, specular, "eta"), "eta"),
+        _check_eta(_index(given_eta, specular, "eta"), "eta"),
         **{p.name: spectrum_input.number_or_texture(values[p.name], p) for p in SCALARS},
     )
 
