@@ -10,10 +10,14 @@ import numpy as np
 import pytest
 
 from materials.test_bsdfs import Bsdf
+from scene_text import camera_film
+from spectrace.errors import SpectraceError
 from spectrace.materials.dielectric import DielectricMaterial
 from spectrace.materials.principled import PrincipledMaterial, eta_from_specular, make
+from spectrace.scene.loader import load_scene
 from spectrace.spectral.glasses import index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures import is_texture
 from stats_toolkit import assert_chi_square_fits, assert_furnace, assert_reciprocal
 
 HARNESS = "testing/bsdf.cl"
@@ -189,3 +193,54 @@ def test_specular_is_the_index_as_a_reflectance_level():
         eta = eta_from_specular(specular)
         np.testing.assert_allclose(((eta - 1) / (eta + 1)) ** 2, 0.08 * specular, rtol=1e-12)
     assert make(specular=0.5).eta.at(550.0) == pytest.approx(1.5)
+
+
+def _scene_file(tmp_path, lines: str):
+    path = tmp_path / "scene.toml"
+    path.write_text(
+        camera_film(width="4", height="4")
+        + f'\n[materials.m]\ntype = "principled"\n{lines}\n[[shapes]]\ntype = "sphere"\nmaterial = "m"\n',
+        encoding="utf-8",
+    )
+    return path
+
+
+def test_scene_file_takes_eta_or_specular_and_textured_weights(tmp_path):
+    """eta by a glass name disperses; specular is the index another way; a weight takes a texture; eta and specular
+    together are one error naming the key."""
+    glass = load_scene(_scene_file(tmp_path, 'eta = "SF11"\nspec_trans = 1.0')).shapes[0].material
+    assert glass.is_dispersive and glass.has_transmission
+    assert load_scene(_scene_file(tmp_path, "specular = 0.5")).shapes[0].material.eta.at(550.0) == pytest.approx(1.5)
+    textured = load_scene(_scene_file(tmp_path, 'metallic = { texture = "checkerboard" }')).shapes[0].material
+    assert is_texture(textured.metallic)
+    path = _scene_file(tmp_path, "eta = 1.4\nspecular = 0.5")
+    with pytest.raises(SpectraceError) as error:
+        load_scene(path)
+    assert error.value.where == f"{path}: materials.m.eta" and "not both" in str(error.value)
+
+
+def test_mitsuba_principled_imports_its_weights_and_their_textures(tmp_path):
+    """Mitsuba's names map one to one; a bitmap weight becomes a grey texture; an out-of-range weight is an error
+    naming the file."""
+    from PIL import Image
+
+    from spectrace.interop.mitsuba import load_mitsuba_scene
+
+    Image.fromarray(np.array([[0, 255]], np.uint8)).save(tmp_path / "metal.png")
+    body = """<bsdf type="principled"><rgb name="base_color" value="0.8, 0.2, 0.1"/>
+        <texture type="bitmap" name="metallic"><string name="filename" value="metal.png"/></texture>
+        <float name="roughness" value="0.3"/><float name="spec_trans" value="0.25"/><float name="eta" value="1.33"/>
+        <float name="clearcoat" value="0.5"/><float name="sheen" value="{sheen}"/></bsdf>"""
+    scene = """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
+        <integer name="height" value="4"/></film></sensor><shape type="sphere">{body}</shape>
+        <emitter type="constant"/></scene>"""
+    xml = tmp_path / "scene.xml"
+    xml.write_text(scene.format(body=body.format(sheen=0.75)))
+    material = load_mitsuba_scene(xml).shapes[0].material
+    assert isinstance(material, PrincipledMaterial) and is_texture(material.metallic)
+    assert (material.roughness, material.spec_trans, material.clearcoat, material.sheen) == (0.3, 0.25, 0.5, 0.75)
+    assert material.eta.at(550.0) == pytest.approx(1.33)
+    xml.write_text(scene.format(body=body.format(sheen=1.5)))
+    with pytest.raises(SpectraceError) as error:
+        load_mitsuba_scene(xml)
+    assert "sheen" in str(error.value) and "scene.xml" in str(error.value)
