@@ -111,9 +111,9 @@ typedef struct {
     float4 ior_coefficients_b;  /* IOR_SELLMEIER: B1, B2, B3 (x, y, z); IOR_CAUCHY: a, b (µm²) in x, y */
     float4 ior_coefficients_c;  /* IOR_SELLMEIER: C1, C2, C3 (µm²) in x, y, z */
     int type;                   /* MATERIAL_* */
-    int reflectance_offset;     /* diffuse, plastic: base albedo; mirror, retroreflector: reflectance;
-                                   conductor, dielectric: optional specular tint; thindielectric: optional tint of
-                                   its reflection (MATERIAL_NO_SPECTRUM: none) */
+    int reflectance_offset;     /* diffuse, plastic: base albedo; principled: base colour; mirror, retroreflector:
+                                   reflectance; conductor, dielectric: optional specular tint; thindielectric:
+                                   optional tint of its reflection (MATERIAL_NO_SPECTRUM: none) */
     int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction; mix: its first
                                    material's row index (material_mix.cl) */
     int k_offset;               /* conductor: imaginary part k(λ) (absorption); mix: its second material's row */
@@ -128,12 +128,14 @@ typedef struct {
                                    that replaces alpha there, or NO_TEXTURE; mix: a scalar texture of its amount */
     int distribution;           /* conductor, plastic, dielectric: MICROFACET_* of the rough lobe */
     int nonlinear;              /* plastic: 1 = the base's internal scattering depends on its albedo (Mitsuba's
-                                   `nonlinear`), 0 = it does not */
+                                   `nonlinear`), 0 = it does not; principled: 1 = it transmits (spec_trans above 0
+                                   somewhere), its flags' BSDF_TRANSMISSION */
     int transmittance_offset;   /* thindielectric: optional tint of its transmission; plastic: optional tint of its
                                    coat's reflection (MATERIAL_NO_SPECTRUM: none) */
     int coat_table_offset;      /* plastic with a rough coat's own transmission: GRID_SAMPLES values of t(cos θ) at
                                    cos θ = i / (GRID_SAMPLES − 1) in the spectrum table (MATERIAL_NO_SPECTRUM: the
-                                   smooth interface's 1 − F instead) */
+                                   smooth interface's 1 − F instead); principled: its parameter block (each
+                                   weight and its texture, bsdf_principled.cl) */
     float coat_internal_reflectance; /* with coat_table_offset: the coat's diffuse reflectance from inside, R_int */
     /* Surface detail, every type (kernels/surface_detail.cl, scene.cl; host: spectrace.materials.surface). */
     int normal_map;             /* a TEXEL_VECTOR texture of tangent-space normals, or NO_TEXTURE */

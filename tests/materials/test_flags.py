@@ -12,6 +12,7 @@ from spectrace.scene.model import (
     DiffuseMaterial,
     MirrorMaterial,
     PlasticMaterial,
+    PrincipledMaterial,
     RetroreflectorMaterial,
     ThindielectricMaterial,
 )
@@ -48,6 +49,13 @@ CASES = [
             ("dielectric-1.5", lambda t: DielectricMaterial(index_of_refraction(1.5), roughness=t)),
         )
     ],
+    # The principled material never has a delta lobe (α ≥ 0.001); it transmits where spec_trans is above 0
+    # somewhere (a texture's largest value) and metallic below 1.
+    ("principled-opaque", PrincipledMaterial(GREY, index_of_refraction("SF11"), roughness=0.0)),
+    ("principled-metal", PrincipledMaterial(GREY, index_of_refraction(1.5), metallic=1.0, spec_trans=1.0)),
+    ("principled-glass-1.5", PrincipledMaterial(GREY, index_of_refraction(1.5), roughness=0.0, spec_trans=1.0)),
+    ("principled-glass-SF11", PrincipledMaterial(GREY, index_of_refraction("SF11"), spec_trans=0.5)),
+    ("principled-glass-texture", PrincipledMaterial(GREY, index_of_refraction(1.5), spec_trans=MIXED_MAP)),
 ]
 
 
@@ -61,8 +69,8 @@ def test_is_delta_is_the_kernels_verdict(kernel_runner, name, material):
     assert material.is_delta == (not result[0])
 
 
-def test_only_the_dielectrics_transmit_and_disperse():
+def test_only_the_dielectrics_and_principled_glass_transmit_and_disperse():
     for name, material in CASES:
-        assert material.has_transmission == name.startswith(("dielectric", "thindielectric")), name
+        assert material.has_transmission == name.startswith(("dielectric", "thindielectric", "principled-glass")), name
         # A constant index steers every wavelength alike; SF11's Sellmeier index does not.
         assert material.is_dispersive == ("SF11" in name), name

@@ -98,6 +98,11 @@ CASES = {
     ],
     "thindielectric": [Case("smooth", lambda: S.thindielectric(1.5), True, True)],
     "diffusetransmission": [Case("white", lambda: S.diffusetransmission(0.3, 0.7), True, False)],
+    "principled": [
+        Case("white metal", lambda: S.principled(1.0, roughness=0.5, metallic=1.0), False, False, fast=("bdpt",)),
+        Case("glass", lambda: S.principled(1.0, roughness=0.5, spec_trans=1.0), False, False, fast=("bdpt",)),
+        Case("grey base with clearcoat", lambda: S.principled(0.5, roughness=0.5, clearcoat=1.0), False, False),
+    ],
     "mix": [
         Case(
             "diffuse and smooth plastic",
@@ -266,7 +271,8 @@ def test_each_integrator_refuses_tiles_and_checkpoints_as_it_declares(device, in
 def test_every_material_has_a_furnace_case():
     assert set(CASES) == set(MATERIALS)
     roughness = {name for name, module in MATERIALS.items() if any(p.name == "roughness" for p in module.PARAMETERS)}
-    for name in roughness:  # a smooth case (a delta lobe) and a rough one
+    for name in roughness - {n for n, m in MATERIALS.items() if getattr(m, "ALWAYS_ROUGH", False)}:
+        # a smooth case (a delta lobe) and a rough one
         assert {c.delta_lobe for c in CASES[name]} == {True, False}, name
 
 

@@ -30,6 +30,7 @@ from spectrace.materials import (
     mirror,
     mix,
     plastic,
+    principled,
     retroreflector,
     surface,
     thindielectric,
@@ -53,6 +54,7 @@ MATERIALS = Registry[MaterialPlugin](
         retroreflector,
         thindielectric,
         diffusetransmission,
+        principled,
         mix,
     ),
 )
@@ -119,6 +121,11 @@ def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
         row[offset] = MATERIAL_NO_SPECTRUM
     row["ior"] = 1.0
     row["reflectance_texture"] = row["roughness_texture"] = NO_TEXTURE
+    if getattr(module, "WRITES_OWN_TEXTURES", False):
+        # Parameters that have no row fields of their own: the module is handed the textures and places them.
+        module.write_row(row, material, table, textures)
+        write_detail(row, material.detail, textures)
+        return row
     textured = _parameter_textures(material)
     parameters = {p.name: p for p in module.PARAMETERS}
     if textured:

@@ -42,6 +42,18 @@ class SpectrumTable:
             values = np.interp(np.linspace(0.0, 1.0, self.row_size), np.linspace(0.0, 1.0, GRID_SIZE), values)
         return self._add(values)
 
+    def add_block(self, values: np.ndarray) -> int:
+        """Store floats that are no function of the wavelength or of anything else (a material's parameter block,
+        read by index) and return their offset: consecutive, padded to whole rows, shared with no other entry."""
+        values = np.asarray(values, np.float32).ravel()
+        rows = max(1, -(-values.size // self.row_size))
+        padded = np.zeros(rows * self.row_size, np.float32)
+        padded[: values.size] = values
+        offset = len(self._rows) * self.row_size
+        self._rows.extend(padded.reshape(rows, self.row_size))
+        self._data = None
+        return offset
+
     def _add(self, values: np.ndarray) -> int:
         row = np.asarray(values).astype(np.float32)
         key = row.tobytes()
