@@ -16,6 +16,7 @@ MATERIALS, its kernel file, tests (docs/materials.md, "Adding a BSDF").
 """
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 
@@ -123,7 +124,8 @@ def material_row(material, table: SpectrumTable, textures=None) -> np.ndarray:
     row["reflectance_texture"] = row["roughness_texture"] = NO_TEXTURE
     if getattr(module, "WRITES_OWN_TEXTURES", False):
         # Parameters that have no row fields of their own: the module is handed the textures and places them.
-        module.write_row(row, material, table, textures)
+        own: Any = module  # its write_row takes the textures too, beyond what MaterialPlugin states
+        own.write_row(row, material, table, textures)
         write_detail(row, material.detail, textures)
         return row
     textured = _parameter_textures(material)

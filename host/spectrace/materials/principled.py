@@ -18,11 +18,11 @@ from spectrace.core.contract import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, NO_
 from spectrace.core.parameters import Parameter, Range, reflectance
 from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
-from spectrace.spectral import spectrum_input
 from spectrace.spectral.glasses import IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import number_or_texture, reflectance_or_texture
 
 NAME = "principled"
 MITSUBA_PLUGINS = ("principled",)
@@ -198,9 +198,9 @@ def make(
         specular = SPECULAR.check(specular)
     given_eta = None if specular is not None and eta == ETA.number_default else eta
     return PrincipledMaterial(
-        spectrum_input.reflectance_or_texture(base_color, "base_color"),
+        reflectance_or_texture(base_color, "base_color"),
         _check_eta(_index(given_eta, specular, "eta"), "eta"),
-        **{p.name: spectrum_input.number_or_texture(values[p.name], p) for p in SCALARS},
+        **{p.name: number_or_texture(values[p.name], p) for p in SCALARS},
     )
 
 
@@ -256,8 +256,6 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's `principled`: the same parameters under the same names, each weight a number or a texture; its
     sampling rates (which change no expected value) are read and left out."""
-    from spectrace.interop.mitsuba.textures import scalar_texture
-
     base = importer.spectrum(properties["base_color"], "base_color") if "base_color" in properties else {"value": 0.5}
     if base is None:
         return None
@@ -266,7 +264,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         if parameter.name not in properties:
             continue
         element = importer.resolve(properties[parameter.name])
-        value = scalar_texture(importer, element, parameter.name) if element.tag == "texture" else None
+        value = importer.scalar_texture(element, parameter.name) if element.tag == "texture" else None
         if element.tag != "texture":
             value = importer.number(element)
             if not UNIT.contains(value):

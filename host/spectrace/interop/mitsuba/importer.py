@@ -27,11 +27,13 @@ WARNING_PREFIX = "warning: "
 class MitsubaImporter(ImportContext):
     """What a plugin module's `from_mitsuba` receives: the import's context (context.py) with the helpers of the
     kinds that a mapping calls as methods: `spectrum` and `emission` for a colour or spectrum property, the rough
-    BSDFs' shared `roughness`, `distribution` and `ior`, a blend's nested `material`, a texture's `uv_placement`."""
+    BSDFs' shared `roughness`, `distribution` and `ior`, a one-number texture's `scalar_texture`, a blend's nested
+    `material`, a texture's `uv_placement`."""
 
     NAMED_IOR = materials.NAMED_IOR  # Mitsuba 3's named indices of refraction, for int_ior / ext_ior
     spectrum = textures.spectrum
     texture = textures.texture
+    scalar_texture = textures.scalar_texture
     texture_type = textures.texture_type
     uv_placement = textures.uv_placement
     emission = emitters.emission
