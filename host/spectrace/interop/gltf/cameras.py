@@ -28,7 +28,7 @@ def choose_camera(ctx: GltfImport, nodes: list[PlacedNode], choice: str | None) 
     for placed in with_camera:
         index = placed.node["camera"]
         camera = cameras[index] if isinstance(index, int) and 0 <= index < len(cameras) else {}
-        names = {str(index), camera.get("name") if isinstance(camera, dict) else None, placed.node.get("name")}
+        names = [str(index), camera.get("name") if isinstance(camera, dict) else None, placed.node.get("name")]
         if choice in names:
             return placed
     available = []
@@ -63,9 +63,9 @@ def camera(ctx: GltfImport, placed: PlacedNode) -> tuple[dict, dict]:
     table: dict = {"origin": origin, "target": target, "up": up}
     if kind == "perspective":
         where = f"{pointer}/perspective"
-        params = entry.get("perspective")
-        if not isinstance(params, dict):
+        if "perspective" not in entry:
             raise doc.fail(where, "is required for a perspective camera")
+        params = doc.obj(entry, "perspective", pointer)
         yfov = doc.number(params, "yfov", where)
         if not 0.0 < yfov < math.pi:
             raise doc.fail(f"{where}/yfov", f"must lie in (0, π) radians, got {yfov:g}")
@@ -77,9 +77,9 @@ def camera(ctx: GltfImport, placed: PlacedNode) -> tuple[dict, dict]:
         far = params.get("zfar")
     elif kind == "orthographic":
         where = f"{pointer}/orthographic"
-        params = entry.get("orthographic")
-        if not isinstance(params, dict):
+        if "orthographic" not in entry:
             raise doc.fail(where, "is required for an orthographic camera")
+        params = doc.obj(entry, "orthographic", pointer)
         xmag, ymag = doc.number(params, "xmag", where), doc.number(params, "ymag", where)
         if xmag == 0.0 or ymag == 0.0:
             raise doc.fail(where, "xmag and ymag must not be zero")

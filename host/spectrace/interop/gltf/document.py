@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import base64
 import json
+import math
 import struct
 from pathlib import Path
 from urllib.parse import unquote
@@ -27,6 +28,24 @@ COMPONENT_COUNTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MA
 # Extensions whose data spectrace cannot decode: a file that needs them is refused naming the extension.
 COMPRESSION_EXTENSIONS = ("KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression")
 MAX_FILE_BYTES = 2**31  # a buffer or image beyond this is refused before it is read
+FLOAT32_MAX = float(np.finfo(np.float32).max)  # the renderer's numbers are single precision
+
+
+def _finite(value: object) -> bool:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(float(value)) and abs(float(value)) <= FLOAT32_MAX
+    except OverflowError:  # an integer beyond a double's range
+        return False
+
+
+def _shown(value: object) -> str:
+    try:
+        text = json.dumps(value)
+    except (ValueError, TypeError):
+        text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 class GltfDocument:
@@ -63,29 +82,53 @@ class GltfDocument:
             raise self.fail(f"/{name}/{index}", "must be an object")
         return entry
 
-    def number(self, table: dict, key: str, pointer: str, default: float | None = None) -> float:
-        value = table.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-            raise self.fail(f"{pointer}/{key}", f"expected a finite number, got {json.dumps(value)}")
-        return float(value)
+    def obj(self, table: object, key: str, pointer: str) -> dict:
+        """table[key], which must be a JSON object ({} where absent)."""
+        value = self._table(table, pointer).get(key, {})
+        if not isinstance(value, dict):
+            raise self.fail(f"{pointer}/{key}", f"must be an object, got {_shown(value)}")
+        return value
 
-    def numbers(self, table: dict, key: str, pointer: str, count: int, default: list[float]) -> list[float]:
-        value = table.get(key, default)
-        if (
-            not isinstance(value, list)
-            or len(value) != count
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) for v in value)
-        ):
-            raise self.fail(f"{pointer}/{key}", f"expected {count} finite numbers, got {json.dumps(value)[:80]}")
+    def extension(self, table: object, name: str, pointer: str) -> dict | None:
+        """The object of extension `name` in table's `extensions`, or None where it has none."""
+        extensions = self.obj(table, "extensions", pointer)
+        if name not in extensions:
+            return None
+        return self.obj(extensions, name, f"{pointer}/extensions")
+
+    def _table(self, table: object, pointer: str) -> dict:
+        if not isinstance(table, dict):
+            raise self.fail(pointer, f"must be an object, got {_shown(table)}")
+        return table
+
+    def number(self, table: object, key: str, pointer: str, default: float | None = None) -> float:
+        value = self._table(table, pointer).get(key, default)
+        if not _finite(value):
+            raise self.fail(f"{pointer}/{key}", f"expected a finite number, got {_shown(value)}")
+        return float(value)  # type: ignore[arg-type]
+
+    def numbers(self, table: object, key: str, pointer: str, count: int, default: list[float]) -> list[float]:
+        value = self._table(table, pointer).get(key, default)
+        if not isinstance(value, list) or len(value) != count or not all(_finite(v) for v in value):
+            raise self.fail(f"{pointer}/{key}", f"expected {count} finite numbers, got {_shown(value)}")
         return [float(v) for v in value]
 
-    def index(self, table: dict, key: str, pointer: str) -> int | None:
-        value = table.get(key)
-        if value is None:
+    def index(self, table: object, key: str, pointer: str) -> int | None:
+        value = self._table(table, pointer).get(key)
+        if value is None and key not in self._table(table, pointer):
             return None
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise self.fail(f"{pointer}/{key}", f"expected an index (an integer >= 0), got {json.dumps(value)}")
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**53:
+            raise self.fail(f"{pointer}/{key}", f"expected an index (an integer >= 0), got {_shown(value)}")
         return value
+
+    def choice(self, table: object, key: str, pointer: str, options: dict, default: object) -> object:
+        """options[table[key]] for a value among the options' keys (enums: component types, wraps, modes)."""
+        value = self._table(table, pointer).get(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, str)) or value not in options:
+            raise self.fail(
+                f"{pointer}/{key}", f"unknown value {_shown(value)} (expected one of {', '.join(map(str, options))})"
+            )
+        return options[value]
 
     # -------------------------------------------------- files
 
@@ -173,7 +216,7 @@ class GltfDocument:
             data = self.binary_chunk
         else:
             for name in COMPRESSION_EXTENSIONS:
-                if name in (entry.get("extensions") or {}):
+                if self.extension(entry, name, where) is not None:
                     raise self.fail(where, f"a fallback buffer of {name}, which spectrace does not decode")
             raise self.fail(where, "has no uri and is not the binary chunk of a .glb")
         length = self.index(entry, "byteLength", where)
@@ -189,7 +232,7 @@ class GltfDocument:
         view = self.item("bufferViews", index, pointer)
         where = f"/bufferViews/{index}"
         for name in COMPRESSION_EXTENSIONS:
-            if name in (view.get("extensions") or {}):
+            if self.extension(view, name, where) is not None:
                 raise self.fail(
                     f"{where}/extensions/{name}", f"compressed with {name}, which spectrace does not decode"
                 )
@@ -214,16 +257,13 @@ class GltfDocument:
         entry = self.item("accessors", index, pointer)
         where = f"/accessors/{index}"
         component = entry.get("componentType")
-        if component not in COMPONENT_TYPES:
-            raise self.fail(f"{where}/componentType", f"unknown component type {json.dumps(component)}")
-        kind = entry.get("type")
-        if kind not in COMPONENT_COUNTS:
-            raise self.fail(f"{where}/type", f"unknown accessor type {json.dumps(kind)}")
+        dtype = np.dtype(str(self.choice(entry, "componentType", where, COMPONENT_TYPES, None)))
+        components = int(str(self.choice(entry, "type", where, COMPONENT_COUNTS, None)))
         count = self.index(entry, "count", where)
         if count is None:
             raise self.fail(f"{where}/count", "is required")
-        components = COMPONENT_COUNTS[kind]
-        dtype = np.dtype(COMPONENT_TYPES[component])
+        if count * components > MAX_FILE_BYTES:
+            raise self.fail(f"{where}/count", f"{count} elements are more than a glTF buffer holds")
         if "bufferView" in entry:
             values = self._strided(entry, where, dtype, components, count)
         else:
@@ -231,6 +271,8 @@ class GltfDocument:
         if "sparse" in entry:
             values = self._sparse(entry["sparse"], f"{where}/sparse", values, dtype, components)
         normalized = entry.get("normalized", False)
+        if not isinstance(normalized, bool):
+            raise self.fail(f"{where}/normalized", "must be true or false")
         if normalized and component in NORMALIZED_DIVISORS:
             return np.maximum(values.astype(np.float64) / NORMALIZED_DIVISORS[component], -1.0)
         if dtype.kind == "f":
@@ -242,7 +284,8 @@ class GltfDocument:
 
     def _strided(self, entry: dict, where: str, dtype: np.dtype, components: int, count: int) -> np.ndarray:
         view_index = self.index(entry, "bufferView", where)
-        assert view_index is not None
+        if view_index is None:
+            raise self.fail(f"{where}/bufferView", "must be an index")
         data, stride = self.buffer_view(view_index, f"{where}/bufferView")
         offset = self.index(entry, "byteOffset", where) or 0
         element = dtype.itemsize * components
@@ -256,16 +299,12 @@ class GltfDocument:
         ).copy()
 
     def _sparse(self, sparse: object, where: str, values: np.ndarray, dtype: np.dtype, components: int):
-        if not isinstance(sparse, dict):
-            raise self.fail(where, "must be an object")
         count = self.index(sparse, "count", where) or 0
-        indices_entry, values_entry = sparse.get("indices"), sparse.get("values")
-        if not isinstance(indices_entry, dict) or not isinstance(values_entry, dict):
-            raise self.fail(where, "needs the objects 'indices' and 'values'")
-        index_type = indices_entry.get("componentType")
-        if index_type not in (5121, 5123, 5125):
-            raise self.fail(f"{where}/indices/componentType", "must be an unsigned integer type")
-        index_dtype = np.dtype(COMPONENT_TYPES[index_type])
+        if count > len(values):
+            raise self.fail(f"{where}/count", f"{count} replacements for an accessor of {len(values)} elements")
+        indices_entry, values_entry = self.obj(sparse, "indices", where), self.obj(sparse, "values", where)
+        unsigned = {k: v for k, v in COMPONENT_TYPES.items() if k in (5121, 5123, 5125)}
+        index_dtype = np.dtype(str(self.choice(indices_entry, "componentType", f"{where}/indices", unsigned, None)))
         indices = self._packed(indices_entry, f"{where}/indices", index_dtype, 1, count)[:, 0].astype(np.int64)
         replacements = self._packed(values_entry, f"{where}/values", dtype, components, count)
         if len(indices) and (indices.max() >= len(values)):

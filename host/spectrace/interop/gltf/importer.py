@@ -99,7 +99,7 @@ def scene_data(ctx: GltfImport, camera_choice: str | None = None) -> dict:
     doc = ctx.doc
     _check_extensions(doc, ctx)
     for i, name in enumerate(doc.array("extensionsUsed")):
-        if name not in SUPPORTED_EXTENSIONS and not name.startswith("KHR_materials_"):
+        if name not in SUPPORTED_EXTENSIONS and not str(name).startswith("KHR_materials_"):
             ctx.warn(f"/extensionsUsed/{i}", f"extension {name} is not imported")
     if doc.array("animations"):
         ctx.warn("/animations", "animations are not imported (the nodes keep their rest transforms)")
@@ -115,7 +115,7 @@ def scene_data(ctx: GltfImport, camera_choice: str | None = None) -> dict:
                 ctx.note(f"{placed.pointer}: a node scaled to nothing (a hidden mesh) is left out")
             else:
                 placed_meshes.append(placed)
-        if "KHR_lights_punctual" in (node.get("extensions") or {}):
+        if doc.extension(node, "KHR_lights_punctual", placed.pointer) is not None:
             imported = light(ctx, placed)
             if imported is not None:
                 ctx.origins[f"lights[{len(lights)}]"] = placed.pointer

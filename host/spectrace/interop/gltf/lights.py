@@ -18,10 +18,12 @@ from spectrace.interop.gltf.nodes import PlacedNode
 
 def light(ctx: GltfImport, placed: PlacedNode) -> dict | None:
     doc = ctx.doc
-    reference = ((placed.node.get("extensions") or {}).get("KHR_lights_punctual") or {}).get("light")
+    reference = (doc.extension(placed.node, "KHR_lights_punctual", placed.pointer) or {}).get("light")
     pointer = f"{placed.pointer}/extensions/KHR_lights_punctual/light"
-    definitions = (doc.json.get("extensions") or {}).get("KHR_lights_punctual") or {}
-    lights = definitions.get("lights", []) if isinstance(definitions, dict) else []
+    definitions = doc.extension(doc.json, "KHR_lights_punctual", "") or {}
+    lights = definitions.get("lights", [])
+    if not isinstance(lights, list):
+        raise doc.fail("/extensions/KHR_lights_punctual/lights", "must be an array")
     if isinstance(reference, bool) or not isinstance(reference, int) or not 0 <= reference < len(lights):
         raise doc.fail(pointer, f"refers to light {reference}, which /extensions/KHR_lights_punctual/lights lacks")
     where = f"/extensions/KHR_lights_punctual/lights/{reference}"
@@ -51,9 +53,7 @@ def light(ctx: GltfImport, placed: PlacedNode) -> dict | None:
     if kind == "directional":
         return {"type": "distant", "direction": [float(v) for v in axis], "irradiance": spectrum}
     if kind == "spot":
-        cone = entry.get("spot", {})
-        if not isinstance(cone, dict):
-            raise doc.fail(f"{where}/spot", "must be an object")
+        cone = doc.obj(entry, "spot", where)
         inner = doc.number(cone, "innerConeAngle", f"{where}/spot", 0.0)
         outer = doc.number(cone, "outerConeAngle", f"{where}/spot", math.pi / 4.0)
         if not 0.0 <= inner < outer <= math.pi / 2.0:

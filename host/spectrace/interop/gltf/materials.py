@@ -47,11 +47,9 @@ def material_name(ctx: GltfImport, index: int | None) -> str:
 
 def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | None]:
     doc = ctx.doc
-    pbr = entry.get("pbrMetallicRoughness", {})
-    if not isinstance(pbr, dict):
-        raise doc.fail(f"{pointer}/pbrMetallicRoughness", "must be an object")
+    pbr = doc.obj(entry, "pbrMetallicRoughness", pointer)
     p_pointer = f"{pointer}/pbrMetallicRoughness"
-    extensions = entry.get("extensions") or {}
+    extensions = doc.obj(entry, "extensions", pointer)
     base_factor = doc.numbers(pbr, "baseColorFactor", p_pointer, 4, [1.0, 1.0, 1.0, 1.0])
     for i, value in enumerate(base_factor):
         if not 0.0 <= value <= 1.0:
@@ -77,7 +75,7 @@ def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | No
         roughness_map = texture(ctx, packed, where, "roughness", roughness) if packed is not None else None
         table["metallic"] = metallic_map or metallic
         table["roughness"] = roughness_map or roughness
-        _extensions(ctx, table, extensions, pointer)
+        _extensions(ctx, table, entry, pointer)
     if "normalTexture" in entry:
         where = f"{pointer}/normalTexture"
         info = entry["normalTexture"]
@@ -114,9 +112,9 @@ def _unit(doc, table: dict, key: str, pointer: str, default: float = 1.0) -> flo
     return value
 
 
-def _extensions(ctx: GltfImport, table: dict, extensions: dict, pointer: str) -> None:
+def _extensions(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
     doc = ctx.doc
-    if isinstance(ior := extensions.get("KHR_materials_ior"), dict):
+    if (ior := doc.extension(entry, "KHR_materials_ior", pointer)) is not None:
         where = f"{pointer}/extensions/KHR_materials_ior"
         value = doc.number(ior, "ior", where, 1.5)
         if value == 0.0:  # the extension's "0: a fully specular surface"; principled's eta lies in (1, 4]
@@ -128,14 +126,14 @@ def _extensions(ctx: GltfImport, table: dict, extensions: dict, pointer: str) ->
             raise doc.fail(f"{where}/ior", f"must be 0 or lie in [1, 4], got {value:g}")
         else:
             table["eta"] = value
-    if isinstance(transmission := extensions.get("KHR_materials_transmission"), dict):
+    if (transmission := doc.extension(entry, "KHR_materials_transmission", pointer)) is not None:
         where = f"{pointer}/extensions/KHR_materials_transmission"
         factor = _unit(doc, transmission, "transmissionFactor", where, 0.0)
         info = transmission.get("transmissionTexture")
         mapped = texture(ctx, info, f"{where}/transmissionTexture", "red", factor) if info is not None else None
         if mapped is not None or factor > 0.0:
             table["spec_trans"] = mapped or factor
-    if isinstance(coat := extensions.get("KHR_materials_clearcoat"), dict):
+    if (coat := doc.extension(entry, "KHR_materials_clearcoat", pointer)) is not None:
         where = f"{pointer}/extensions/KHR_materials_clearcoat"
         factor = _unit(doc, coat, "clearcoatFactor", where, 0.0)
         info = coat.get("clearcoatTexture")
@@ -150,7 +148,7 @@ def _extensions(ctx: GltfImport, table: dict, extensions: dict, pointer: str) ->
             table["clearcoat_gloss"] = gloss or 1.0 - rough
         if "clearcoatNormalTexture" in coat:
             ctx.warn(f"{where}/clearcoatNormalTexture", "a clearcoat's own normal map is not imported")
-    if isinstance(sheen := extensions.get("KHR_materials_sheen"), dict):
+    if (sheen := doc.extension(entry, "KHR_materials_sheen", pointer)) is not None:
         # glTF's sheen is a coloured Charlie lobe with its own roughness, principled's Burley's amount and tint:
         # the amount is the colour's largest component, tinted toward the base colour where the colour is not grey.
         where = f"{pointer}/extensions/KHR_materials_sheen"
@@ -198,7 +196,7 @@ def _emitter(ctx: GltfImport, entry: dict, pointer: str, double_sided: bool) -> 
     factor = doc.numbers(entry, "emissiveFactor", pointer, 3, [0.0, 0.0, 0.0])
     if any(value < 0.0 for value in factor):
         raise doc.fail(f"{pointer}/emissiveFactor", "must not be negative")
-    strength_table = (entry.get("extensions") or {}).get("KHR_materials_emissive_strength") or {}
+    strength_table = doc.extension(entry, "KHR_materials_emissive_strength", pointer) or {}
     where = f"{pointer}/extensions/KHR_materials_emissive_strength"
     strength = doc.number(strength_table, "emissiveStrength", where, 1.0) if strength_table else 1.0
     if strength < 0.0:

@@ -39,11 +39,11 @@ def primitive_mesh(doc: GltfDocument, primitive: dict, pointer: str) -> MeshData
         return None
     if mode not in (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN):
         raise doc.fail(f"{pointer}/mode", f"unknown primitive mode {mode}")
-    attributes = primitive.get("attributes")
-    if not isinstance(attributes, dict) or "POSITION" not in attributes:
+    attributes = doc.obj(primitive, "attributes", pointer)
+    if "POSITION" not in attributes:
         raise doc.fail(f"{pointer}/attributes", "needs a POSITION accessor")
     for name in ("KHR_draco_mesh_compression",):
-        if name in (primitive.get("extensions") or {}):
+        if doc.extension(primitive, name, pointer) is not None:
             raise doc.fail(f"{pointer}/extensions/{name}", f"compressed with {name}, which spectrace does not decode")
 
     def read(name: str, width: int) -> np.ndarray:
@@ -79,4 +79,4 @@ def primitive_mesh(doc: GltfDocument, primitive: dict, pointer: str) -> MeshData
 
 
 def unread_attributes(primitive: dict) -> list[str]:
-    return [name for name in (primitive.get("attributes") or {}) if name not in READ_ATTRIBUTES]
+    return [name for name in primitive["attributes"] if name not in READ_ATTRIBUTES]

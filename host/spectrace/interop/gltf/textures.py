@@ -81,11 +81,13 @@ def texture(
     where = f"/textures/{index}"
     source = doc.index(entry, "source", where)
     if source is None:
-        names = ", ".join(entry.get("extensions") or {}) or "none"
+        names = ", ".join(doc.obj(entry, "extensions", where)) or "none"
         ctx.warn(where, f"a texture without a PNG or JPEG source (its extensions: {names}) is not imported")
         return None
-    transform = (info.get("extensions") or {}).get("KHR_texture_transform") or {}
-    tex_coord = transform.get("texCoord", info.get("texCoord", 0))
+    transform = doc.extension(info, "KHR_texture_transform", pointer) or {}
+    tex_coord = doc.index(info, "texCoord", pointer) or 0
+    if "texCoord" in transform:
+        tex_coord = doc.index(transform, "texCoord", f"{pointer}/extensions/KHR_texture_transform") or 0
     if tex_coord != 0:
         ctx.warn(f"{pointer}/texCoord", "textures on a second set of texture coordinates are not imported")
         return None
@@ -112,12 +114,10 @@ def texture(
     sampler_index = doc.index(entry, "sampler", where)
     if sampler_index is not None:
         sampler = doc.item("samplers", sampler_index, f"{where}/sampler")
-        wraps = {WRAPS.get(sampler.get(k, 10497)) for k in ("wrapS", "wrapT")}
-        if None in wraps:
-            raise doc.fail(f"/samplers/{sampler_index}", "unknown wrapS or wrapT")
-        if len(wraps) > 1:
-            ctx.warn(f"/samplers/{sampler_index}", "different wraps along u and v are imported as wrapS's")
-        wrap = WRAPS[sampler.get("wrapS", 10497)]
+        s_pointer = f"/samplers/{sampler_index}"
+        wrap, wrap_t = (doc.choice(sampler, key, s_pointer, WRAPS, 10497) for key in ("wrapS", "wrapT"))
+        if wrap != wrap_t:
+            ctx.warn(s_pointer, "different wraps along u and v are imported as wrapS's")
         if wrap != "repeat":
             table["wrap"] = wrap
         if sampler.get("magFilter") == NEAREST:
