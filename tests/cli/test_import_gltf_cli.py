@@ -88,3 +88,13 @@ def test_render_of_the_glb_equals_the_render_of_its_import(tmp_path):
     assert a.keys() == b.keys() and math.isfinite(float(a["Y"].sum())) and a["Y"].max() > 0
     for name in a:
         np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+def test_an_output_that_is_the_input_or_a_folder_is_refused(tmp_path):
+    model = _model(tmp_path)
+    before = model.read_bytes()
+    line = _one_line_error(run_spectrace("import-gltf", str(model), "-o", str(model)))
+    assert "would destroy the input" in line
+    line = _one_line_error(run_spectrace("import-gltf", str(model), "-o", f"{tmp_path}/"))
+    assert "names a folder" in line
+    assert model.read_bytes() == before

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from tests.interop.gltf_builder import Gltf
 
@@ -108,3 +109,33 @@ def test_a_grey_plane_under_a_sun_renders_rho_e_over_pi(tmp_path, device):
     values = image.xyz[..., 1].ravel()
     standard_error = values.std(ddof=1) / math.sqrt(len(values))
     assert abs(values.mean() - expected) <= 4.0 * standard_error + RELATIVE * expected
+
+
+def test_an_emissive_texture_shows_upright_with_each_texel_at_its_luminance(tmp_path, device):
+    """glTF's texel (0, 0) is the image's top-left corner: a 2 × 2 emissive texture on a quad seen from its front,
+    +y up, shows red, green / blue, white in the image's quadrants, each at strength × Y(texel) nits (film Y is
+    that over 683 lm/W · ∫ȳ dλ)."""
+    import spectrace
+    from spectrace.spectral.colorimetry import CIE_Y_INTEGRAL
+
+    strength = 2.0e5
+    texels = np.array([[[255, 0, 0], [0, 255, 0]], [[0, 0, 255], [255, 255, 255]]])
+    gltf = Gltf()
+    texture = gltf.image_texture(texels, sampler={"magFilter": 9728})
+    material = gltf.material(
+        emissiveTexture={"index": texture},
+        emissiveFactor=[1, 1, 1],
+        extensions={"KHR_materials_emissive_strength": {"emissiveStrength": strength}},
+    )
+    gltf.node(mesh=gltf.quad(material=material))
+    ortho = gltf.camera(type="orthographic", orthographic={"xmag": 1.0, "ymag": 1.0, "znear": 0.0, "zfar": 10.0})
+    gltf.node(camera=ortho, translation=[0, 0, 3])
+    scene = load_gltf_scene(gltf.write(tmp_path / "sign.glb"), material_model="diffuse")
+    image = spectrace.render(scene.with_overrides(width=8, height=8, spp=8, max_depth=1), device=device)
+    luminance = np.array([[0.2126, 0.7152], [0.0722, 1.0]]) * strength / (683.0 * CIE_Y_INTEGRAL)
+    for row in range(2):
+        for column in range(2):
+            values = image.xyz[4 * row : 4 * row + 4, 4 * column : 4 * column + 4, 1].ravel()
+            standard_error = values.std(ddof=1) / math.sqrt(len(values))
+            expected = luminance[row, column]
+            assert abs(values.mean() - expected) <= 4.0 * standard_error + RELATIVE * expected, (row, column)
