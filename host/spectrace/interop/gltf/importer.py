@@ -81,7 +81,7 @@ def _mesh_files(ctx: GltfImport, index: int) -> list[tuple[str, str, int | None]
         if len(mesh.faces) == 0:
             continue
         material = doc.index(primitive, "material", where)
-        name = material_name(ctx, material)
+        name = material_name(ctx, material, where)
         file = ctx.file_name(f"{base}_{p}" if len(primitives) > 1 else base, ".ply")
         ctx.files[file] = partial(write_ply, mesh=mesh)
         ctx.meshes[file] = mesh
@@ -136,8 +136,12 @@ def scene_data(ctx: GltfImport, camera_choice: str | None = None) -> dict:
         index = placed.node["mesh"]
         transform = _matrix(placed.world)
         for file, _, _ in files[index]:
+            # the corners of the mesh's box, moved: bounds enough to frame, at 8 points a placement
             vertices = ctx.meshes[file].vertices
-            world_points.append(vertices @ placed.world[:3, :3].T + placed.world[:3, 3])
+            if len(vertices):
+                low, high = vertices.min(axis=0), vertices.max(axis=0)
+                corners = np.array([[(low, high)[(i >> axis) & 1][axis] for axis in range(3)] for i in range(8)])
+                world_points.append(corners @ placed.world[:3, :3].T + placed.world[:3, 3])
         emitting = any(ctx.emitters[material] is not None for _, _, material in files[index])
         if uses[index] > 1 and not emitting:
             if index not in object_of_mesh:

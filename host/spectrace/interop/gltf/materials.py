@@ -30,8 +30,9 @@ IMPORTED_EXTENSIONS = (
 DEFAULT_MATERIAL: dict = {}
 
 
-def material_name(ctx: GltfImport, index: int | None) -> str:
-    """The TOML name of materials[index] (None: glTF's default material), converted on first use."""
+def material_name(ctx: GltfImport, index: int | None, user: str) -> str:
+    """The TOML name of materials[index] (None: glTF's default material), converted on first use; `user` is the
+    pointer of the primitive that uses it, where a problem with the default material is told."""
     if index not in ctx.material_names:
         doc = ctx.doc
         pointer = f"/materials/{index}" if index is not None else "/materials"
@@ -41,6 +42,7 @@ def material_name(ctx: GltfImport, index: int | None) -> str:
         table, emitter = convert(ctx, entry, pointer)
         ctx.materials[name] = table
         ctx.material_names[index] = name
+        ctx.origins[f"materials.{name}"] = pointer if index is not None else user
         ctx.emitters[index] = emitter
     return ctx.material_names[index]
 
