@@ -401,3 +401,16 @@ def test_a_truncated_glb_and_a_bad_data_uri_are_refused(tmp_path):
     with pytest.raises(SpectraceError, match="base64") as raised:
         gltf_scene_data(tmp_path / "bad.gltf")
     assert raised.value.where.endswith("bad.gltf: /buffers/0/uri")
+
+
+def test_zeros_no_byte_backs_are_refused_before_they_are_made(tmp_path):
+    """An accessor without a bufferView is zeros: a few bytes of JSON asking for 2²⁶ of them is refused, not
+    allocated (1.5 GiB as the doubles they would become)."""
+    gltf = Gltf()
+    gltf.node(mesh=gltf.quad())
+    accessor = gltf.json["accessors"][0]
+    del accessor["bufferView"]
+    accessor["count"] = 2**26
+    with pytest.raises(SpectraceError, match="without a bufferView") as raised:
+        _data(tmp_path, gltf)
+    assert raised.value.where.endswith("model.glb: /accessors/0/count")

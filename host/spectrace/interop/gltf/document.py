@@ -28,6 +28,7 @@ COMPONENT_COUNTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MA
 # Extensions whose data spectrace cannot decode: a file that needs them is refused naming the extension.
 COMPRESSION_EXTENSIONS = ("KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression")
 MAX_FILE_BYTES = 2**31  # a buffer or image beyond this is refused before it is read
+MAX_ZERO_ELEMENTS = 2**24  # an accessor without a bufferView: its elements are zeros (or a sparse accessor's base)
 FLOAT32_MAX = float(np.finfo(np.float32).max)  # the renderer's numbers are single precision
 
 
@@ -266,6 +267,12 @@ class GltfDocument:
             raise self.fail(f"{where}/count", f"{count} elements are more than a glTF buffer holds")
         if "bufferView" in entry:
             values = self._strided(entry, where, dtype, components, count)
+        elif count > MAX_ZERO_ELEMENTS:
+            # zeros that no byte of the file backs: a few bytes of JSON could ask for gigabytes
+            raise self.fail(
+                f"{where}/count",
+                f"{count} elements without a bufferView (zeros) are more than spectrace reads ({MAX_ZERO_ELEMENTS})",
+            )
         else:
             values = np.zeros((count, components), dtype=dtype)
         if "sparse" in entry:

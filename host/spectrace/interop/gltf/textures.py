@@ -54,7 +54,7 @@ def decoded_image(ctx: GltfImport, index: int, pointer: str) -> np.ndarray:
                 rgba[..., 3] = 255
             else:
                 rgba = np.asarray(image.convert("RGBA"), dtype=np.float64)
-    except (UnidentifiedImageError, OSError, ValueError) as error:
+    except (UnidentifiedImageError, OSError, ValueError, Image.DecompressionBombError) as error:
         raise ctx.doc.fail(f"/images/{index}", f"cannot decode {name} ({error})") from None
     ctx.decoded[index] = rgba
     return rgba
