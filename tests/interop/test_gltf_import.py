@@ -414,3 +414,52 @@ def test_zeros_no_byte_backs_are_refused_before_they_are_made(tmp_path):
     with pytest.raises(SpectraceError, match="without a bufferView") as raised:
         _data(tmp_path, gltf)
     assert raised.value.where.endswith("model.glb: /accessors/0/count")
+
+
+def test_extension_textures_read_their_channels(tmp_path):
+    """KHR_materials_transmission's and _clearcoat's factors in R, the clearcoat's roughness in G, written as the
+    principled clearcoat_gloss = 1 − roughness · factor."""
+    rng = np.random.default_rng(5)
+    pixels = rng.integers(0, 256, (3, 4, 3))
+    gltf = Gltf()
+    texture = gltf.image_texture(pixels)
+    material = gltf.material(
+        extensions={
+            "KHR_materials_transmission": {"transmissionFactor": 0.5, "transmissionTexture": {"index": texture}},
+            "KHR_materials_clearcoat": {
+                "clearcoatFactor": 1.0,
+                "clearcoatTexture": {"index": texture},
+                "clearcoatRoughnessFactor": 0.5,
+                "clearcoatRoughnessTexture": {"index": texture},
+            },
+        }
+    )
+    gltf.node(mesh=gltf.quad(material=material))
+    data, ctx = _data(tmp_path, gltf)
+    table = data["materials"]["material0"]
+    written = {key: _written_png(tmp_path, ctx, table[key]["file"]) for key in ("spec_trans", "clearcoat")}
+    np.testing.assert_array_equal(written["spec_trans"], np.round(pixels[..., 0] * 0.5))
+    np.testing.assert_array_equal(written["clearcoat"], pixels[..., 0])
+    gloss = _written_png(tmp_path, ctx, table["clearcoat_gloss"]["file"])
+    np.testing.assert_array_equal(gloss, 255 - np.round(pixels[..., 1] * 0.5))
+
+
+def test_spot_cones_in_degrees_and_what_is_not_imported_is_warned(tmp_path):
+    gltf = Gltf()
+    spot = gltf.light(type="spot", intensity=3.0, range=5.0, spot={"innerConeAngle": 0.1, "outerConeAngle": 0.7})
+    gltf.node(extensions={"KHR_lights_punctual": {"light": spot}}, translation=[1, 2, 3])
+    texture = gltf.image_texture(np.zeros((1, 1, 3)))
+    second_set = gltf.material(pbrMetallicRoughness={"baseColorTexture": {"index": texture, "texCoord": 1}})
+    glowing = gltf.material(emissiveFactor=[0.5, 0.5, 0.5], doubleSided=True)
+    gltf.node(mesh=gltf.quad(material=second_set))
+    gltf.node(mesh=gltf.quad(material=glowing))
+    data, ctx = _data(tmp_path, gltf)
+    (light,) = data["lights"]
+    assert light["position"] == [1, 2, 3] and light["target"] == [1, 2, 2]
+    assert light["falloff_start"] == pytest.approx(math.degrees(0.1))
+    assert light["cutoff_angle"] == pytest.approx(math.degrees(0.7))
+    # the texture on the second set is left out: the factor alone
+    assert data["materials"]["material0"]["base_color"] == {"rgb": [1.0, 1.0, 1.0]}
+    assert data["shapes"][1]["emitter"]["two_sided"] is True
+    warned = " ".join(ctx.warnings)
+    assert "range" in warned and "second set of texture coordinates" in warned
