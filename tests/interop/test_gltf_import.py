@@ -463,3 +463,13 @@ def test_spot_cones_in_degrees_and_what_is_not_imported_is_warned(tmp_path):
     assert data["shapes"][1]["emitter"]["two_sided"] is True
     warned = " ".join(ctx.warnings)
     assert "range" in warned and "second set of texture coordinates" in warned
+
+
+def test_mesh_names_become_short_distinct_file_names(tmp_path):
+    gltf = Gltf()
+    for name in ("a/b c", "a/b c", "x" * 400):
+        gltf.node(mesh=gltf.quad(name=name))
+    data, _ = _data(tmp_path, gltf)
+    files = [shape["file"] for shape in data["shapes"]]
+    assert files[:2] == ["out_assets/a_b_c.ply", "out_assets/a_b_c_2.ply"]
+    assert len(set(files)) == 3 and all(len(name) < 100 for name in files)

@@ -57,7 +57,8 @@ class GltfImport:
 
     def file_name(self, base: str, suffix: str) -> str:
         taken = {Path(name).stem: None for name in self.files}
-        return f"{self.assets}/{unique_name(base, taken)}{suffix}"
+        # names come from the file's meshes: kept short enough for any file system with the number a clash adds
+        return f"{self.assets}/{unique_name(base[:64], taken)}{suffix}"
 
     def add_file(self, base: str, suffix: str, content: bytes) -> str:
         name = self.file_name(base, suffix)
