@@ -473,3 +473,21 @@ def test_mesh_names_become_short_distinct_file_names(tmp_path):
     files = [shape["file"] for shape in data["shapes"]]
     assert files[:2] == ["out_assets/a_b_c.ply", "out_assets/a_b_c_2.ply"]
     assert len(set(files)) == 3 and all(len(name) < 100 for name in files)
+
+
+def test_a_volume_s_attenuation_is_the_absorption_of_the_medium_inside(tmp_path):
+    """KHR_materials_volume: light keeps the fraction c after the distance d, so σa = −ln(c) / d (Beer-Lambert);
+    thin-walled (thickness 0) and unattenuated volumes have no medium."""
+    gltf = Gltf()
+    volume = {"thicknessFactor": 0.1, "attenuationDistance": 2.0, "attenuationColor": [0.5, 0.25, 1.0]}
+    glass = {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_volume": volume}
+    thin = {"KHR_materials_volume": {"thicknessFactor": 0.0, "attenuationDistance": 2.0}}
+    mesh = gltf.quad(material=gltf.material(extensions=glass))
+    gltf.node(mesh=mesh)
+    gltf.node(mesh=mesh, translation=[3, 0, 0])
+    gltf.node(mesh=gltf.quad(material=gltf.material(extensions=thin)))
+    data, ctx = _data(tmp_path, gltf)
+    ((name, table),) = data["objects"].items()
+    sigma_a = table["shapes"][0]["interior"]["sigma_a"]["rgb"]
+    np.testing.assert_allclose(np.exp(-np.array(sigma_a) * 2.0), [0.5, 0.25, 1.0])
+    assert "interior" not in data["shapes"][0] and ctx.warnings == []

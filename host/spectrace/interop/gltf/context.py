@@ -39,6 +39,7 @@ class GltfImport:
         self.materials: dict[str, dict] = {}
         self.material_names: dict[int | None, str] = {}
         self.emitters: dict[int | None, dict | None] = {}
+        self.interiors: dict[int | None, dict | None] = {}  # material -> the medium filling the meshes using it
         self.images: dict[tuple, str] = {}  # (image index, role, factor) -> file name
         self.decoded: dict[int, np.ndarray] = {}
         self.meshes: dict[str, MeshData] = {}  # PLY file name -> its MeshData

@@ -89,6 +89,13 @@ def _mesh_files(ctx: GltfImport, index: int) -> list[tuple[str, str, int | None]
     return found
 
 
+def _shape(ctx: GltfImport, file: str, material: str, material_index: int | None) -> dict:
+    table: dict = {"type": "mesh", "file": file, "material": material}
+    if (interior := ctx.interiors[material_index]) is not None:
+        table["interior"] = interior
+    return table
+
+
 def _matrix(world: np.ndarray) -> list[dict]:
     if np.array_equal(world, np.eye(4)):
         return []
@@ -148,11 +155,7 @@ def scene_data(ctx: GltfImport, camera_choice: str | None = None) -> dict:
                 mesh_name = doc.item("meshes", index, placed.pointer).get("name")
                 name = unique_name(mesh_name if isinstance(mesh_name, str) else f"mesh{index}", objects)
                 object_of_mesh[index] = name
-                objects[name] = {
-                    "shapes": [
-                        {"type": "mesh", "file": file, "material": material} for file, material, _ in files[index]
-                    ]
-                }
+                objects[name] = {"shapes": [_shape(ctx, *used) for used in files[index]]}
                 ctx.origins[f"objects.{name}"] = f"/meshes/{index}"
             ctx.origins[f"instances[{len(instances)}]"] = placed.pointer
             instances.append(
@@ -162,7 +165,7 @@ def scene_data(ctx: GltfImport, camera_choice: str | None = None) -> dict:
             )
             continue
         for file, material, material_index in files[index]:
-            table: dict = {"type": "mesh", "file": file, "material": material}
+            table = _shape(ctx, file, material, material_index)
             if transform:
                 table["transform"] = transform
             if (emitter := ctx.emitters[material_index]) is not None:

@@ -13,6 +13,8 @@ colour, as an area emitter on the primitives that use the material."""
 
 from __future__ import annotations
 
+import math
+
 from spectrace.interop.gltf.context import GltfImport, photometric_scale
 from spectrace.interop.gltf.textures import texture
 from spectrace.interop.mitsuba.context import unique_name
@@ -24,6 +26,7 @@ IMPORTED_EXTENSIONS = (
     "KHR_materials_transmission",
     "KHR_materials_clearcoat",
     "KHR_materials_sheen",
+    "KHR_materials_volume",
 )
 
 # The material glTF gives a primitive without one (glTF 2.0, 3.9.6: white, fully metallic, fully rough).
@@ -42,6 +45,7 @@ def material_name(ctx: GltfImport, index: int | None, user: str) -> str:
         table, emitter = convert(ctx, entry, pointer)
         ctx.materials[name] = table
         ctx.material_names[index] = name
+        ctx.interiors[index] = _interior(ctx, entry, pointer, table) if ctx.material_model != "diffuse" else None
         ctx.origins[f"materials.{name}"] = pointer if index is not None else user
         ctx.emitters[index] = emitter
     return ctx.material_names[index]
@@ -213,3 +217,33 @@ def _emitter(ctx: GltfImport, entry: dict, pointer: str, double_sided: bool) -> 
     if double_sided:
         emitter["two_sided"] = True
     return emitter
+
+
+def _interior(ctx: GltfImport, entry: dict, pointer: str, table: dict) -> dict | None:
+    """KHR_materials_volume's absorption as the medium filling the mesh: a colour c reached after the distance d
+    (Beer-Lambert) is σa = −ln(c) / d per scene unit, an `rgb` σa (a smooth spectrum through those three values).
+    A volume of thickness 0 is thin-walled (no medium), and one without an attenuationDistance absorbs nothing."""
+    doc = ctx.doc
+    volume = doc.extension(entry, "KHR_materials_volume", pointer)
+    if volume is None:
+        return None
+    where = f"{pointer}/extensions/KHR_materials_volume"
+    thickness = doc.number(volume, "thicknessFactor", where, 0.0)
+    if thickness <= 0.0 or "attenuationDistance" not in volume:
+        return None
+    distance = doc.number(volume, "attenuationDistance", where)
+    if distance <= 0.0:
+        raise doc.fail(f"{where}/attenuationDistance", "must be > 0")
+    colour = doc.numbers(volume, "attenuationColor", where, 3, [1.0, 1.0, 1.0])
+    if not all(0.0 <= c <= 1.0 for c in colour):
+        raise doc.fail(f"{where}/attenuationColor", "must lie in [0, 1]")
+    if min(colour) == 1.0:
+        return None
+    # a colour of 0 would be an infinite σa: 10⁻⁶ after the distance is as black
+    sigma_a = [-math.log(max(c, 1e-6)) / distance for c in colour]
+    if "opacity" in table:
+        ctx.warn(
+            f"{pointer}/alphaMode", "the alpha of a material with a volume is not imported (media fill opaque shapes)"
+        )
+        del table["opacity"]
+    return {"sigma_a": {"rgb": sigma_a}}
