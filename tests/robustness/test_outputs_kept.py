@@ -110,7 +110,29 @@ def _every_output_option(tmp_path: Path) -> dict[str, tuple[list[str], str, str]
         ),
         "import-pbrt -o": (["import-pbrt", str(tmp_path / "scene.pbrt"), "-o"], "--output", ".toml"),
         "import-mitsuba -o": (["import-mitsuba", str(tmp_path / "scene.xml"), "-o"], "--output", ".toml"),
+        "import-gltf -o": (
+            [*_importing("import-gltf"), str(_gltf_quad(tmp_path / "scene.glb")), "-o"],
+            "--output",
+            ".toml",
+        ),
     }
+
+
+def _importing(command: str) -> list[str]:
+    """The command's words before its input: glTF files import their materials as the base colour, diffuse (these
+    tests are about the files an import writes, not about materials)."""
+    return [command, "--materials", "diffuse"] if command == "import-gltf" else [command]
+
+
+def _gltf_quad(path: Path, size: float = 1.0, aspect: float = 1.0) -> Path:
+    """A glTF file of one quad seen by a camera of aspect ratio `aspect` (the film 640 pixels wide, its height
+    640 / aspect)."""
+    from tests.interop.gltf_builder import Gltf
+
+    gltf = Gltf()
+    gltf.node(mesh=gltf.quad(size=size))
+    gltf.node(camera=gltf.camera(type="perspective", perspective={"yfov": 0.8, "aspectRatio": aspect}))
+    return gltf.write(path)
 
 
 @pytest.mark.slow
@@ -193,10 +215,18 @@ def _importer_cases(tmp_path: Path) -> dict[str, tuple[Path, Path, Path, str]]:
         for name, text in texts.items():
             (sources / f"{name}{suffix}").write_text(text)
         cases[command] = (sources / f"good{suffix}", sources / f"other{suffix}", sources / f"bad{suffix}", files)
+    sources = tmp_path / "sources" / "import-gltf"
+    sources.mkdir(parents=True)
+    cases["import-gltf"] = (
+        _gltf_quad(sources / "good.glb"),
+        _gltf_quad(sources / "other.glb", size=2.0),
+        _gltf_quad(sources / "bad.glb", size=3.0, aspect=0.0064),  # a film 100000 pixels high
+        "out_assets",
+    )
     return cases
 
 
-@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba"])
+@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba", "import-gltf"])
 def test_a_failed_import_leaves_the_earlier_import_whole(command, tmp_path, monkeypatch, capsys):
     """An import whose TOML does not load, over an earlier import: one line, status 2, and the earlier TOML and
     the files it refers to (pbrt's meshes folder, Mitsuba's sensor table) byte for byte as they were, with no
@@ -207,18 +237,18 @@ def test_a_failed_import_leaves_the_earlier_import_whole(command, tmp_path, monk
     out_folder = tmp_path / "out"
     out_folder.mkdir()
     out = out_folder / "out.toml"
-    status, stderr = run_in_process(monkeypatch, capsys, [command, str(good), "-o", str(out)])
+    status, stderr = run_in_process(monkeypatch, capsys, [*_importing(command), str(good), "-o", str(out)])
     assert status == 0 and (out_folder / files).exists(), stderr
     earlier = _tree(out_folder)
 
-    status, stderr = run_in_process(monkeypatch, capsys, [command, str(bad), "-o", str(out)])
+    status, stderr = run_in_process(monkeypatch, capsys, [*_importing(command), str(bad), "-o", str(out)])
     assert status == 2 and stderr.count("\n") == 1 and "100000" in stderr, stderr
     assert _tree(out_folder) == earlier
     assert sorted(path.name for path in out_folder.iterdir()) == sorted(["out.toml", files])
 
     fresh = tmp_path / "fresh" / "out.toml"
     for target in (out, fresh):
-        status, stderr = run_in_process(monkeypatch, capsys, [command, str(other), "-o", str(target)])
+        status, stderr = run_in_process(monkeypatch, capsys, [*_importing(command), str(other), "-o", str(target)])
         assert status == 0, stderr
     replaced = _tree(out_folder)
     assert replaced == _tree(fresh.parent)  # nothing of the earlier import's files is left
@@ -227,7 +257,7 @@ def test_a_failed_import_leaves_the_earlier_import_whole(command, tmp_path, monk
     }
 
 
-@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba"])
+@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba", "import-gltf"])
 def test_an_import_failing_at_its_last_rename_puts_the_earlier_files_back(command, tmp_path, monkeypatch, capsys):
     """The files are swapped in before the TOML is renamed over the earlier one; if that rename fails (a full
     disk cannot, but a file system can), the earlier files come back."""
@@ -235,7 +265,7 @@ def test_an_import_failing_at_its_last_rename_puts_the_earlier_files_back(comman
 
     good, other, _, files = _importer_cases(tmp_path)[command]
     out = tmp_path / "out" / "out.toml"
-    status, stderr = run_in_process(monkeypatch, capsys, [command, str(good), "-o", str(out)])
+    status, stderr = run_in_process(monkeypatch, capsys, [*_importing(command), str(good), "-o", str(out)])
     assert status == 0, stderr
     earlier = _tree(out.parent)
 
@@ -243,7 +273,7 @@ def test_an_import_failing_at_its_last_rename_puts_the_earlier_files_back(comman
         raise OSError(5, "Input/output error", str(target))
 
     monkeypatch.setattr(os, "replace", failing_replace)
-    status, stderr = run_in_process(monkeypatch, capsys, [command, str(other), "-o", str(out)])
+    status, stderr = run_in_process(monkeypatch, capsys, [*_importing(command), str(other), "-o", str(out)])
     assert status == 2 and stderr == f"error: {out}: cannot write the TOML or its files (Input/output error)\n"
     assert _tree(out.parent) == earlier
     assert sorted(path.name for path in out.parent.iterdir()) == sorted(["out.toml", files])
@@ -351,7 +381,7 @@ def test_denoise_replaces_its_own_noisy_image_and_no_other_file(suffix, tmp_path
 
 
 @pytest.mark.subprocess
-@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba"])
+@pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba", "import-gltf"])
 def test_an_import_onto_an_output_in_use_is_refused_naming_the_holder(command, tmp_path, monkeypatch, capsys):
     """While another command writes the import's TOML, or the entry beside it that the import swaps in (pbrt's
     `out_assets`, Mitsuba's `out.sensor.csv`, which `-o out` and `-o out.toml` share), a real import process
@@ -362,18 +392,18 @@ def test_an_import_onto_an_output_in_use_is_refused_naming_the_holder(command, t
 
     good, other, _, files = _importer_cases(tmp_path)[command]
     out = tmp_path / "out" / "out.toml"
-    status, stderr = run_in_process(monkeypatch, capsys, [command, str(good), "-o", str(out)])
+    status, stderr = run_in_process(monkeypatch, capsys, [*_importing(command), str(good), "-o", str(out)])
     assert status == 0, stderr
     earlier = _tree(out.parent)
     for held, says in [(out, "--output"), (out.parent / files, f"{files} beside --output")]:
         with OutputLocks({"held": held}, command="another import"):
-            result = run_spectrace(command, str(other), "-o", str(out), timeout=120)
+            result = run_spectrace(*_importing(command), str(other), "-o", str(out), timeout=120)
         assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
         assert result.stderr.startswith(
             f"error: {held}: {says} is being written by another command (another import, pid {os.getpid()} on "
         ), result.stderr
         assert _tree(out.parent) == earlier
-    status, stderr = run_in_process(monkeypatch, capsys, [command, str(other), "-o", str(out)])
+    status, stderr = run_in_process(monkeypatch, capsys, [*_importing(command), str(other), "-o", str(out)])
     assert status == 0 and _tree(out.parent) != earlier, stderr
     assert _locks(tmp_path) == []
 

@@ -1,5 +1,5 @@
 """Command line: `spectrace render | devices | bench | validate | display | spectra | sweep | import-mitsuba |
-import-pbrt`, one module per command group in this package. Errors print as one line and exit non-zero."""
+import-pbrt | import-gltf`, one module per command group in this package. Errors print as one line and exit non-zero."""
 
 import importlib
 import sys
@@ -46,6 +46,11 @@ LAZY_COMMANDS = {
         "spectrace.cli.import_pbrt",
         "import_pbrt_command",
         "Convert a pbrt-v4 scene to a spectrace TOML scene (docs/pbrt.md).",
+    ),
+    "import-gltf": (
+        "spectrace.cli.import_gltf",
+        "import_gltf_command",
+        "Convert a glTF 2.0 file (.gltf, .glb) to a spectrace TOML scene (docs/gltf.md).",
     ),
 }
 

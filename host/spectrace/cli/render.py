@@ -13,7 +13,7 @@ if TYPE_CHECKING:
 
 
 def render(
-    scene: Annotated[Path, typer.Argument(help="Scene file (TOML).")],
+    scene: Annotated[Path, typer.Argument(help="Scene file (TOML), or a glTF 2.0 file (.gltf, .glb).")],
     output: Annotated[Path, typer.Option("--output", "-o", help="Output image: .png (sRGB) or .exr (linear).")],
     spp: Annotated[int | None, typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
     width: Annotated[int | None, typer.Option(help="Film width in pixels.", min=1)] = None,
@@ -270,8 +270,16 @@ def _job_from_options(
         from spectrace.pixel_filters import parse_filter_option
 
         chosen_filter = parse_filter_option(pixel_filter)
+
+    def loaded():
+        if scene.suffix.lower() in (".gltf", ".glb"):  # glTF 2.0 files render through their import (docs/gltf.md)
+            from spectrace.interop.gltf import load_gltf_scene
+
+            return load_gltf_scene(scene)
+        return load_scene(scene)
+
     job = RenderJob.make(
-        lambda: load_scene(scene),
+        loaded,
         COMMAND_LINE,
         output=output,
         pixel_filter=chosen_filter,
