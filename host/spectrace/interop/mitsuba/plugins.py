@@ -49,6 +49,7 @@ SUPPORTED = {
         "photonmapper",
     ),
     "medium": ("homogeneous",),
+    "volume": ("constvolume",),  # a homogeneous medium's sigma_t or albedo (media.py)
     "phase": ("hg", "isotropic"),
 }
 # The spectrum plugins imported as spectra (spectra.spectrum_element), also when written as <texture type="...">.

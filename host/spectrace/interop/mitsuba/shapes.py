@@ -51,7 +51,7 @@ def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
         steps += cylinder_steps(ctx, properties)
     if "to_world" in properties:
         steps += transform_steps(ctx, properties["to_world"])
-    flip = "flip_normals" in properties and ctx.text(properties["flip_normals"]) == "true"
+    flip = "flip_normals" in properties and ctx.boolean(properties["flip_normals"])
     if flip and kind in ("sphere", "disk", "cylinder"):
         table["flip_normals"] = True
     elif flip:
