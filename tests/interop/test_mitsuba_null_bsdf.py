@@ -119,7 +119,6 @@ def test_every_integrator_sees_the_wall_through_a_lamp_without_material(device, 
 
 
 @pytest.mark.peer
-@pytest.mark.slow
 @pytest.mark.parametrize("integrator", ["path", "ptracer", "bdpt"])
 def test_a_null_emitter_renders_as_in_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral, integrator):
     """REPLICAS independent images from each renderer: 8 x 8-pixel block means, the image mean and the mean over the
