@@ -329,13 +329,26 @@ inline int bdpt_environment_vertex(const Scene *scene, const SampledWavelengths 
 #endif
 }
 
+/* Defined below, where the strategies are joined; the walk counts the lights it sees through with them. */
+inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, const BdptVertex *light,
+                             const BdptVertex *camera, const BdptVertex *sampled, int s, int t, float3 to_q,
+                             float camera_rev, float light_share);
+inline float4 bdpt_hero(float4 value, int hero);
+inline int bdpt_keeps(int s, int t);
+
 /* Follows a subpath from its first vertex path[0] along ray (leaving with solid-angle density pdf_dir and
  * throughput beta) until it has max_vertices vertices, leaves the scene, or Russian roulette or a BSDF ends it.
  * adjoint: a light subpath (the adjoint BSDF). A camera subpath that leaves the scene ends on the environment's
- * vertex at infinity, when the scene has one (beam_pdf: its disk's density, 1/(πR²)). Returns the vertex count. */
+ * vertex at infinity, when the scene has one (beam_pdf: its disk's density, 1/(πR²)). Returns the vertex count.
+ *
+ * A surface without material (a medium's index-matched boundary, a light seen through: Mitsuba's null bsdf) is no
+ * vertex: both subpaths cross it unchanged. A light there is still met by the camera subpath, as the path tracer
+ * meets it: that strategy (s = 0, with the path so far and the light's point as its last vertex, built in
+ * path[count] and then left to be overwritten) is weighted here and added to *seen_through; the strategies that
+ * reach the same point as a light vertex count it among theirs, as for any light. */
 inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray, float4 beta,
                      float pdf_dir, int adjoint, BdptVertex *path, int max_vertices, uint query_base,
-                     float beam_pdf, float light_share, uint *rays_traced)
+                     float beam_pdf, float light_share, float4 *seen_through, uint *rays_traced)
 {
     __global const RenderParams *params = scene->params;
     PathState s = camera_path(ray);
@@ -357,7 +370,8 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
             break;
         }
         PathVertex pv = path_vertex(scene, hit, s.ray);
-        if (pv.info.material == TRIANGLE_NO_MATERIAL && pv.info.light < 0) {
+        int seen_light = !adjoint && pv.info.material == TRIANGLE_NO_MATERIAL && pv.info.light >= 0;
+        if (pv.info.material == TRIANGLE_NO_MATERIAL && !seen_light) {
             if (!cross_null_boundary(&s, &pv)) break;
             continue;
         }
@@ -385,11 +399,17 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         v->pdf_fwd = bdpt_to_area(pdf_dir, prev, v);
         v->pdf_rev = 0.0f;
         v->mis_sum = 0.0f;
-        ++count;
-        if (pv.info.material == TRIANGLE_NO_MATERIAL) {
+        if (seen_light) {
             v->hero = hero;
-            break; /* an emitter without a material ends the subpath */
+            if (bdpt_keeps(0, count + 1) && any(v->le != (float4)(0.0f))) {
+                float weight = bdpt_mis_weight(scene, w, path, path, 0, 0, count + 1, (float3)(0.0f), 0.0f,
+                                               light_share);
+                *seen_through += bdpt_hero(v->beta * v->le, hero) * weight;
+            }
+            if (!cross_null_boundary(&s, &pv)) break;
+            continue;
         }
+        ++count;
         __global const Material *material = &scene->materials[pv.info.material];
         if (material_disperses(material, w)) hero = 1;
         v->hero = hero;
@@ -762,8 +782,9 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
     BdptVertex light[BDPT_MAX_VERTICES - 1];
     bdpt_camera_vertex(params, ray, filter_weight, &camera[0]);
     float camera_pdf = camera[0].beam_pdf > 0.0f ? 0.0f : camera_direction_pdf(params, ray.direction);
+    float4 seen_through = (float4)(0.0f); /* lights the camera subpath crossed (bdpt_walk) */
     int nc = bdpt_walk(scene, &w, &sampler, ray, camera[0].beta, camera_pdf, 0, camera, last_segment + 1, 0u,
-                       beam_pdf, light_share, rays_traced);
+                       beam_pdf, light_share, &seen_through, rays_traced);
 
     int nl = 0;
     if (sample_light_origin(scene, u_position, beam_pdf, &light[0])) {
@@ -772,8 +793,9 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
         float pdf_dir;
         float4 flux;
         if (bdpt_light_ray(scene, &w, scene_sphere, u_direction, &light[0], &lray, &pdf_dir, &flux)) {
+            float4 unused = (float4)(0.0f);
             nl = bdpt_walk(scene, &w, &sampler, lray, flux, pdf_dir, 1, light, last_segment, 0x9e3779b9u, beam_pdf,
-                           light_share, rays_traced);
+                           light_share, &unused, rays_traced);
         }
     }
 
@@ -796,13 +818,14 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
             u_nee_position = sample_2d(&sampler);
             bdpt_camera_vertex(params, ray, filter_weight, &camera[0]);
             camera_pdf = camera[0].beam_pdf > 0.0f ? 0.0f : camera_direction_pdf(params, ray.direction);
+            seen_through = (float4)(0.0f);
             nc = bdpt_walk(scene, &w, &sampler, ray, camera[0].beta, camera_pdf, 0, camera, last_segment + 1, 0u,
-                           beam_pdf, light_share, rays_traced);
+                           beam_pdf, light_share, &seen_through, rays_traced);
         }
         /* Next-event estimation's light point, one for every camera vertex (the same draw for each). */
         BdptVertex sampled;
         int have_sampled = sample_light_origin(scene, u_nee_position, beam_pdf, &sampled);
-        float4 radiance = (float4)(0.0f);
+        float4 radiance = seen_through;
         for (int t = 2; t <= nc; ++t) {
             BdptVertex *pt = &camera[t - 1];
             if (bdpt_keeps(0, t) && pt->light >= 0 && any(pt->le != (float4)(0.0f)) &&

@@ -9,7 +9,7 @@
  * - CAMERA_ORTHOGRAPHIC: parallel rays along camera_forward from the plane through camera_origin; camera_right and
  *   camera_up carry half the view's width and height in scene units.
  * - CAMERA_EQUIRECTANGULAR: latitude-longitude over the whole sphere, in the convention of the environment maps
- *   (kernels/environment.cl) with camera_up as the map's +y, camera_forward as its -z and camera_right as its +x:
+ *   (kernels/light_environment_map.cl) with camera_up as the map's +y, camera_forward as its -z and camera_right as its +x:
  *   the image's centre looks along camera_forward, a column is a longitude (2π over the width), a row a latitude
  *   (π over the height, row 0 at the zenith). An environment rendered so, and put back as an envmap light with the
  *   same frame, is the environment again.

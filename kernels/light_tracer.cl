@@ -134,7 +134,7 @@ inline void environment_seen_directly(const Scene *scene, const SampledWavelengt
     Ray ray = camera_ray(params, film, sampler); /* only the thin lens draws more: its lens point */
     PathState s = camera_path(ray);
     float4 transmittance = (float4)(1.0f);
-    if (SCENE_HAS_MEDIA && params->medium_count > 0) {
+    if (SCENE_HAS_MEDIA && (params->medium_count > 0 || params->null_surfaces)) {
         /* Through index-matched media the light that is not scattered away arrives; the scattered light is the
          * light paths' to bring. */
         transmittance = scene_transmittance(scene, w, -1, ray.origin, ray.origin, ray.direction, 1,

@@ -494,7 +494,7 @@ inline int scene_occluded(const Scene *scene, float3 from, float3 to, float3 dir
 inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *w, int medium, float3 from, float3 to,
                                   float3 direction, int to_infinity, uint query, uint *rays_traced)
 {
-    if (!SCENE_HAS_MEDIA || scene->params->medium_count == 0) {
+    if (!SCENE_HAS_MEDIA || (scene->params->medium_count == 0 && !scene->params->null_surfaces)) {
         return scene_occluded(scene, from, to, direction, to_infinity, query, rays_traced) ? (float4)(0.0f)
                                                                                             : (float4)(1.0f);
     }

@@ -14,7 +14,8 @@
 #ifndef SCENE_LIGHT_TYPES
 #define SCENE_LIGHT_TYPES ((1 << LIGHT_TYPE_COUNT) - 1)
 #endif
-/* Participating media (and with them index-matched boundaries). */
+/* Participating media (and with them index-matched boundaries), or surfaces without material (lights seen through):
+ * what visibility queries must cross. */
 #ifndef SCENE_HAS_MEDIA
 #define SCENE_HAS_MEDIA 1
 #endif

@@ -226,7 +226,8 @@ typedef struct {
     int seed;
     int sample_begin;        /* first sample index of this pass */
     int sample_count;        /* samples per pixel in this pass */
-    int medium_count;        /* media in the scene: 0 lets visibility queries skip looking for medium boundaries */
+    int medium_count;        /* media in the scene: 0 (and no null_surfaces) lets visibility queries skip looking
+                                for surfaces to cross */
     int hide_emitters;       /* HIDE_ENVIRONMENT | HIDE_AREA_EMITTERS bits: what the camera's own rays do not see */
     int shape_count;         /* analytic shapes (AnalyticShape rows) */
     int camera_type;         /* CAMERA_* (kernels/camera.cl) */
@@ -235,7 +236,9 @@ typedef struct {
     int count_thin_passes;   /* path: 1: a pass straight through a thin sheet (thindielectric) is a segment toward
                                 max_depth; 0: it is not (Mitsuba 3's volpath) */
     int instanced_shape_count;  /* analytic shapes of instanced objects (AnalyticShape rows after shape_count) */
-    int pad_params[2];
+    int null_surfaces;       /* 1: some surface has neither material nor medium (a light seen through): visibility
+                                queries cross it, as they cross media's boundaries */
+    int pad_params[1];
     float4 lens;             /* CAMERA_THINLENS: aperture radius, focus distance along camera_forward (scene
                                 units), 0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:

@@ -168,20 +168,23 @@ def shape(
     radius: float | None = None,
     flip_normals: bool = False,
 ) -> Shape:
-    """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z,
-    "cube" [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the
-    Utah teapot standing on the origin, y up, body radius 1; "disk" of radius 1 at z = 0 facing +z, "cylinder" of
-    radius 1 along z from 0 to 1, open), moved by
-    `transform` steps (see `transformed`). Built-ins face outward, as a dielectric needs. `interior` (see `medium`)
-    fills a closed shape, whose faces must wind outward; without a material its boundary is index-matched (rays
-    cross it unchanged). `face_normals` as the scene key: True shades with the face normals (facets), False
-    smoothly (normals computed for a mesh without its own), None keeps the mesh's own normals (the sphere's are
-    radial, the teapot's its surface's; the other built-ins have none). "sphere", "disk" and "cylinder" are exact
-    (analytic) surfaces, unless `tessellated` (or face_normals=True, which asks for facets) makes them triangles; an
-    analytic sphere's transform must scale uniformly. A sphere's `radius` and `center` place it before `transform`;
-    `flip_normals` turns their front (normal, emitting side) inward (the disk's to -z)."""
-    if material is None and interior is None:
-        raise SpectraceError("a shape needs a material (only a shape with an interior may omit it)", where="material")
+    """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z, "cube"
+    [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the Utah
+    teapot standing on the origin, y up, body radius 1; "disk" of radius 1 at z = 0 facing +z, "cylinder" of radius
+    1 along z from 0 to 1, open), moved by `transform` steps (see `transformed`). Built-ins face outward, as a
+    dielectric needs. `interior` (see `medium`) fills a closed shape, whose faces must wind outward; without a
+    material its boundary is index-matched (rays cross it unchanged), and an emitter without a material is a light
+    seen through (it emits, reflects nothing and hides nothing: Mitsuba's null bsdf). `face_normals` as the scene
+    key: True shades with the face normals (facets), False smoothly (normals computed for a mesh without its own),
+    None keeps the mesh's own normals (the sphere's are radial, the teapot's its surface's; the other built-ins have
+    none). "sphere", "disk" and "cylinder" are exact (analytic) surfaces, unless `tessellated` (or
+    face_normals=True, which asks for facets) makes them triangles; an analytic sphere's transform must scale
+    uniformly. A sphere's `radius` and `center` place it before `transform`; `flip_normals` turns their front
+    (normal, emitting side) inward (the disk's to -z)."""
+    if material is None and interior is None and emitter is None:
+        raise SpectraceError(
+            "a shape needs a material (only a shape with an interior or an emitter may omit it)", where="material"
+        )
     if interior is not None and not isinstance(interior, Medium):
         raise SpectraceError(
             f"interior must be a Medium (see medium()), got {type(interior).__name__}", where="interior"

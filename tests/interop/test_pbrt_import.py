@@ -619,7 +619,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
         ('LightSource "goniometric"\n', 5, "light 'goniometric'"),
         # pbrt-v4 resolves named materials after reading the whole file: the shape using one is at fault.
         ('NamedMaterial "x"\nShape "sphere"\n', 6, "which no MakeNamedMaterial defined"),
-        ('Material "conductor" "rgb eta" [0.2 0.4 1.1]\nShape "sphere"\n', 5, "give an index of refraction as a"),
+        ('Material "dielectric" "rgb eta" [1.5 1.5 1.5]\nShape "sphere"\n', 5, "spectrace takes a number or a named"),
     ],
 )
 def test_what_spectrace_cannot_represent_is_refused_at_its_line(tmp_path, body, line, message):

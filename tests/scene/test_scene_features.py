@@ -29,7 +29,8 @@ MATERIAL_BITS = {
     "retroreflector": 32,
     "thindielectric": 64,
     "diffusetransmission": 128,
-    "mix": 256,
+    "principled": 256,
+    "mix": 512,
 }
 LIGHT_BITS = {
     "area": 1,

@@ -88,6 +88,9 @@ class SceneBuffers:
     # analytic shapes of the instanced objects (each object's once), in object space: rows shape_count on of
     # `shapes`, TriangleInfo slots triangle_count + row
     instanced_shape_count: int = 0
+    # Surfaces without material and without a medium inside (lights seen through, Mitsuba's null bsdf): visibility
+    # queries must cross them as they cross media's index-matched boundaries (kernels/scene.cl)
+    null_surfaces: bool = False
 
 
 def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
@@ -137,8 +140,8 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
                 )
         key = id(shape.material)
         if shape.material is None:
-            if shape.interior is None:
-                raise SpectraceError(f"shape '{shape.name}' has neither a material nor an interior")
+            if shape.interior is None and shape.emitter is None:
+                raise SpectraceError(f"shape '{shape.name}' has neither a material nor an interior nor an emitter")
             material_index[key] = TRIANGLE_NO_MATERIAL
         else:
             append_material_rows(shape.material, material_rows, table, textures, material_index)
@@ -336,6 +339,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         cmf=cmf,
         media=np.array(medium_rows, MEDIUM_DTYPE) if medium_rows else np.zeros(1, MEDIUM_DTYPE),
         medium_count=len(medium_rows),
+        null_surfaces=any(shape.material is None and shape.interior is None for shape in scene.shapes),
         textures=textures.array(),
         texture_count=len(textures.rows),
         shapes=shape_rows,
@@ -571,6 +575,7 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["seed"] = scene.seed
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
     params["medium_count"] = buffers.medium_count
+    params["null_surfaces"] = int(buffers.null_surfaces)
     params["hide_emitters"] = (HIDE_ENVIRONMENT if scene.hide_environment or scene.hide_emitters else 0) | (
         HIDE_AREA_EMITTERS if scene.hide_emitters else 0
     )

@@ -199,6 +199,12 @@ def from_pbrt(context, material) -> dict | None:
         )
     eta = context.spectrum(material, "eta", "unbounded") or {"spectrum": "metals/Cu:eta"}
     k = context.spectrum(material, "k", "unbounded") or {"spectrum": "metals/Cu:k"}
+    if "rgb" in eta or "rgb" in k:
+        # As the Mitsuba import takes <rgb> η and k (docs/mitsuba.md, "Conductors given in RGB").
+        context.notes.append(
+            f"{material.location}: a conductor's eta and k given as rgb are uplifted to smooth spectra"
+        )
+        eta, k = uplifted_optical_constants(eta, k, str(material.location))
     table: dict[str, object] = {"type": "conductor"}
     metals = {s.get("spectrum", "").split(":")[0] for s in (eta, k)}
     metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
@@ -216,9 +222,19 @@ _UPLIFT_STEP_NM = 5.0
 
 
 def _rgb_optical_constants(importer, bsdf, eta: dict, k: dict) -> tuple[dict, dict]:
-    """η and k given as <rgb> (Mitsuba's RGB variants use them per channel) as spectra: with both an rgb or a
-    number, `conductor_from_rgb` (the normal-incidence colour an RGB renderer shows, exactly); one beside a measured
-    spectrum is uplifted alone (`uplift_unbounded`)."""
+    """η and k given as <rgb> (Mitsuba's RGB variants use them per channel) as spectra (uplifted_optical_constants),
+    with a note."""
+    importer.notes.append(
+        f"{importer.at(bsdf)}: {bsdf.label()}: eta and k given as rgb are uplifted to smooth spectra "
+        "(docs/mitsuba.md, 'Conductors given in RGB')"
+    )
+    return uplifted_optical_constants(eta, k, importer.where(bsdf))
+
+
+def uplifted_optical_constants(eta: dict, k: dict, where: str | None) -> tuple[dict, dict]:
+    """A conductor's η and k where either is an rgb, as tabulated spectra: with both an rgb or a number,
+    `conductor_from_rgb` (the normal-incidence colour an RGB renderer shows, exactly); one beside a measured
+    spectrum is uplifted alone (`uplift_unbounded`). The Mitsuba and the pbrt importer share it."""
     from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
     from spectrace.spectral.uplift import conductor_from_rgb, uplift_unbounded
 
@@ -227,7 +243,6 @@ def _rgb_optical_constants(importer, bsdf, eta: dict, k: dict) -> tuple[dict, di
             return spectrum["rgb"]
         return [spectrum["value"]] * 3 if list(spectrum) == ["value"] else None
 
-    where = importer.where(bsdf)
     wavelengths = np.arange(GRID_MIN_NM, GRID_MAX_NM + 0.5, _UPLIFT_STEP_NM)
     eta_rgb, k_rgb = triple(eta), triple(k)
     spectra: tuple
@@ -237,10 +252,6 @@ def _rgb_optical_constants(importer, bsdf, eta: dict, k: dict) -> tuple[dict, di
         spectra = tuple(
             uplift_unbounded(spectrum["rgb"], where) if "rgb" in spectrum else None for spectrum in (eta, k)
         )
-    importer.notes.append(
-        f"{importer.at(bsdf)}: {bsdf.label()}: eta and k given as rgb are uplifted to smooth spectra "
-        "(docs/mitsuba.md, 'Conductors given in RGB')"
-    )
     tables = [
         original if spectrum is None else {"values": [[float(w), float(spectrum.evaluate(w))] for w in wavelengths]}
         for original, spectrum in zip((eta, k), spectra)

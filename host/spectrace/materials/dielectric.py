@@ -169,6 +169,8 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     }
     if None in tints.values():
         return None
+    # A tint of exactly 1 is Mitsuba's default, as if it were not written (exporters write it explicitly).
+    tints = {key: tint for key, tint in tints.items() if not _is_one(tint)}
     if len(tints) == 1 or (len(tints) == 2 and tints["specular_reflectance"] != tints["specular_transmittance"]):
         importer.unsupported_plugin(bsdf, " with specular_reflectance different from specular_transmittance")
         return None
@@ -180,6 +182,18 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if tints:
         table["specular_tint"] = tints["specular_reflectance"]
     return table
+
+
+def _is_one(tint: dict) -> bool:
+    """Whether an imported spectrum is 1 at every wavelength: a number, an rgb (uplifted to exactly 1, as in
+    Mitsuba's spectral variants) or a tabulated spectrum; a texture never counts as one."""
+    if "value" in tint:
+        return float(tint["value"]) == 1.0
+    if "rgb" in tint:
+        return all(float(c) == 1.0 for c in tint["rgb"])
+    if "values" in tint:
+        return all(float(pair[1]) == 1.0 for pair in tint["values"])
+    return False
 
 
 def from_pbrt(context, material) -> dict | None:

@@ -93,7 +93,9 @@ class Medium:
 @dataclass(frozen=True)
 class Shape:
     mesh: TriangleMesh  # world space
-    material: Material | None  # None only with an interior: an index-matched boundary that rays cross unchanged
+    # None only with an interior or an emitter: a surface that rays cross unchanged (an index-matched boundary, a
+    # light seen through); it still emits.
+    material: Material | None
     emitter: AreaEmitter | None = None
     name: str = ""
     interior: Medium | None = None  # fills the closed mesh, on the back side of its faces (outward winding)

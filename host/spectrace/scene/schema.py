@@ -432,8 +432,8 @@ class ShapeSpec(Strict):
             raise ValueError(f"a {self.type} shape takes no file")
         if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):
             raise ValueError("shape_index picks a mesh of a Mitsuba .serialized file; this shape has none")
-        if self.material is None and self.interior is None:
-            raise ValueError("a shape needs material (only a shape with an interior may omit it)")
+        if self.material is None and self.interior is None and self.emitter is None:
+            raise ValueError("a shape needs material (only a shape with an interior or an emitter may omit it)")
         if self.type in ("rectangle", "disk", "cylinder") and self.interior is not None:
             raise ValueError(f"a {self.type} encloses no volume: an interior needs a closed shape")
         if (self.center is not None or self.radius is not None) and self.type != "sphere":

@@ -277,10 +277,13 @@ class ImportContext:
         return self.attribute(self.resolve(element), "value") or ""
 
     def boolean(self, element: Element) -> bool:
+        """A boolean as Mitsuba 3's parser reads one: "true" or "false" in any case ("True", "FALSE"), nothing
+        else (no spaces around, no 1 or yes). Its lower-casing is ASCII-only (std::tolower)."""
         value = self.text(element)
-        if value not in ("true", "false"):
+        folded = value.lower() if value.isascii() else value
+        if folded not in ("true", "false"):
             raise self.fail(element, f"expected true or false, got '{shown(value)}'", "value")
-        return value == "true"
+        return folded == "true"
 
     def input_file(self, element: Element, what: str = "file") -> str:
         """A file named by a property's value, relative to the XML: checked to exist, and written relative to the

@@ -217,8 +217,10 @@ def scene_to_mitsuba_dict(
     materials: dict[int, str] = {}
 
     def shape_entry(shape, file_stem: str) -> dict:
+        # A light without material is crossed unchanged by every ray: Mitsuba's null bsdf.
+        seen_through = shape.material is None and getattr(shape, "interior", None) is None
         to_mitsuba = _MATERIAL_EXPORTS.get(type(shape.material))
-        if to_mitsuba is None:
+        if to_mitsuba is None and not seen_through:
             raise exporter.refuse(f"shape '{shape.name}': material {type(shape.material).__name__} is not exported yet")
         if getattr(shape, "interior", None) is not None:
             raise exporter.refuse(f"shape '{shape.name}': an interior medium is not exported yet")
@@ -227,11 +229,13 @@ def scene_to_mitsuba_dict(
             raise exporter.refuse(
                 f"shape '{shape.name}': surface detail (normal or bump map, opacity) is not exported yet"
             )
-        material_key = id(shape.material)
-        if material_key not in materials:
-            name = f"material_{len(materials)}"
-            entries[name] = exporter.material(shape.material)
-            materials[material_key] = name
+        bsdf = {"type": "null"}
+        if not seen_through:
+            if id(shape.material) not in materials:
+                name = f"material_{len(materials)}"
+                entries[name] = exporter.material(shape.material)
+                materials[id(shape.material)] = name
+            bsdf = {"type": "ref", "id": materials[id(shape.material)]}
         # Mitsuba's own analytic shape, in the same object space; one with pbrt's texture coordinates (a disk or
         # sphere imported from pbrt-v4) as its tessellation, which carries them.
         if shape.analytic is not None and not (shape.analytic.pbrt_uv and shape.analytic.kind != "cylinder"):
@@ -243,7 +247,7 @@ def scene_to_mitsuba_dict(
                 "type": shape.analytic.kind,
                 "to_world": _transform(shape.analytic.to_world),
                 "flip_normals": bool(shape.analytic.flip_normals) != bool(mirrored),
-                "bsdf": {"type": "ref", "id": materials[material_key]},
+                "bsdf": bsdf,
             }
         else:
             path = mesh_folder / f"{file_stem}.ply"
@@ -252,7 +256,7 @@ def scene_to_mitsuba_dict(
                 "type": "ply",
                 "filename": str(path),
                 "face_normals": shape.mesh.normals is None,
-                "bsdf": {"type": "ref", "id": materials[material_key]},
+                "bsdf": bsdf,
             }
         if shape.emitter is not None:
             entry["emitter"] = area.to_mitsuba(shape.emitter, exporter, f"shape '{shape.name}'")

@@ -14,7 +14,8 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
     """A shape's `interior` homogeneous medium as spectrace's interior: σs = scale·albedo·σt and
     σa = scale·(1 − albedo)·σt (Mitsuba 3's homogeneous: albedo default 0.75, sigma_t default 1), with its
     Henyey–Greenstein phase (Mitsuba's hg: g default 0.8; isotropic: 0). A constant or rgb sigma_t and a
-    constant or rgb albedo are mapped; other coloured coefficients are reported."""
+    constant or rgb albedo, written in place or in a constvolume, are mapped; other coloured coefficients are
+    reported."""
     ctx.nested(properties, "medium")  # read here, whatever their names
     if "exterior" in properties:
         ctx.unsupported_plugin(ctx.resolve(properties["exterior"]), " as an exterior medium")
@@ -28,10 +29,12 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
     items.understood("sample_emitters")  # how Mitsuba samples, not what it renders
     given: dict = {}
     for key, default in (("sigma_t", 1.0), ("albedo", 0.75)):
-        value: dict | None = spectrum(ctx, items[key], key) if key in items else {"value": default}
+        value: dict | None = _coefficient(ctx, items[key], key) if key in items else {"value": default}
         # An rgb albedo or sigma_t is uplifted as Mitsuba's spectral variants uplift a reflectance (they refuse
         # an rgb sigma_t outside [0, 1], and so does spectrace); `scale` then multiplies sigma_t.
-        if value is None or set(value) not in ({"value"}, {"rgb"}):
+        if value is None:  # recorded where it was read
+            return None
+        if set(value) not in ({"value"}, {"rgb"}):
             ctx.unsupported_plugin(medium, f" with a coloured {key}")
             return None
         if "rgb" in value and not all(0.0 <= c <= 1.0 for c in value["rgb"]):
@@ -59,6 +62,21 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
         return {**_coloured_coefficients(ctx, given["sigma_t"], given["albedo"], scale, medium), "g": g}
     sigma_t = float(given["sigma_t"]["value"]) * scale
     return {"sigma_a": {"value": sigma_t * (1.0 - albedo)}, "sigma_s": {"value": sigma_t * albedo}, "g": g}
+
+
+def _coefficient(ctx: ImportContext, element: Element, key: str) -> dict | None:
+    """A homogeneous medium's sigma_t or albedo: a spectrum written in place, or a `constvolume` holding one (its
+    `value`, Mitsuba's default 1), which is what Mitsuba makes of the spectrum written in place; its to_world moves
+    nothing that is constant. A volume that varies in space (gridvolume) is recorded as unsupported."""
+    resolved = ctx.resolve(element)
+    if resolved.tag != "volume":
+        return spectrum(ctx, element, key)
+    if ctx.kind(resolved) != "constvolume":
+        ctx.unsupported_plugin(resolved, f" as a medium's {key} (spectrace's media are homogeneous: constvolume only)")
+        return None
+    items = ctx.properties(resolved)
+    items.understood("to_world")
+    return spectrum(ctx, items["value"], key) if "value" in items else {"value": 1.0}
 
 
 def _coloured_coefficients(ctx: ImportContext, sigma_t: dict, albedo: dict, scale: float, medium: Element) -> dict:

@@ -31,7 +31,7 @@ BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 CAMERA_PLUGINS = {plugin: name for name, module in CAMERAS.items() for plugin in module.MITSUBA_PLUGINS}
 SUPPORTED = {
     "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"),
-    "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
+    "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS, "null"),  # null: a shape without material (shapes.py)
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
@@ -49,6 +49,7 @@ SUPPORTED = {
         "photonmapper",
     ),
     "medium": ("homogeneous",),
+    "volume": ("constvolume",),  # a homogeneous medium's sigma_t or albedo (media.py)
     "phase": ("hg", "isotropic"),
 }
 # The spectrum plugins imported as spectra (spectra.spectrum_element), also when written as <texture type="...">.

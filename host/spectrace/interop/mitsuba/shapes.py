@@ -51,7 +51,7 @@ def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
         steps += cylinder_steps(ctx, properties)
     if "to_world" in properties:
         steps += transform_steps(ctx, properties["to_world"])
-    flip = "flip_normals" in properties and ctx.text(properties["flip_normals"]) == "true"
+    flip = "flip_normals" in properties and ctx.boolean(properties["flip_normals"])
     if flip and kind in ("sphere", "disk", "cylinder"):
         table["flip_normals"] = True
     elif flip:
@@ -72,15 +72,18 @@ def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
     interior = interior_medium(ctx, properties)
     if interior is not None:
         table["interior"] = interior
-    if interior is not None and bsdf is not None and ctx.kind(ctx.resolve(bsdf)) == "null":
-        table["material"] = None  # Mitsuba's null bsdf: the index-matched boundary of spectrace's media
-    else:
+    # Mitsuba's null bsdf: a surface without material, which every ray crosses unchanged (the index-matched boundary
+    # of a medium, a light seen through), or, with neither, nothing to render.
+    null = bsdf is not None and ctx.kind(ctx.resolve(bsdf)) == "null"
+    if null and interior is None and emitter is None:
+        ctx.notes.append(f"{ctx.at(element)}: shape '{name}' with a null bsdf is invisible: not imported")
+        return None
+    if not null:
         table["material"] = material(ctx, bsdf, name, flip_v=kind in V_UP_SHAPES, emits=emitter is not None)
     if emitter is not None and (emitter_table := shape_emitter(ctx, emitter)) is not None:
         table["emitter"] = emitter_table
-    if table["material"] is None and "interior" in table:
-        del table["material"]
-        return table
+    if null:
+        return table if "emitter" in table or "interior" in table else None  # an emitter not imported is recorded
     return table if table["material"] is not None else None
 
 

@@ -176,7 +176,8 @@ class Context:
 
     def spectrum(self, entity: Entity, name: str, role: str) -> dict | None:
         """A spectrum parameter as a spectrace spectrum table (None when absent). role: "albedo" (an RGB must be in
-        [0, 1]), "unbounded" or "illuminant"."""
+        [0, 1]), "unbounded" (a conductor's η or k: an RGB >= 0, which the conductor uplifts), "medium" or
+        "illuminant"."""
         parameter = entity.find(name, "rgb", "spectrum", "blackbody", "float")
         if parameter is None:
             return None
@@ -192,10 +193,6 @@ class Context:
             if min(rgb) < 0 or (role == "albedo" and max(rgb) > 1):
                 bound = "[0, 1]" if role == "albedo" else ">= 0"
                 raise error(parameter.location, f'"{parameter.label()}" components must lie in {bound}, got {rgb}')
-            if role == "medium":
-                return {"rgb": rgb}
-            if role == "unbounded":
-                raise error(parameter.location, f'"{parameter.label()}": give an index of refraction as a spectrum')
             return {"rgb": rgb}
         if parameter.type == "blackbody":
             if not values[0] > 0:
