@@ -222,3 +222,24 @@ def test_tiles_are_refused_in_one_line(monkeypatch, capsys, tmp_path):
     status, err = run_in_process(monkeypatch, capsys, args)
     assert status != 0
     assert err.strip().count("\n") == 0 and "--display-server" in err and "--workers" in err, err
+
+
+def test_a_frame_larger_than_a_tile_arrives_whole():
+    """Frames beyond one packet's tile (128 px a side) arrive as tiles that together are the frame, edge tiles
+    included; a later frame replaces an earlier one."""
+    from spectrace.io.tev import DisplayServer, TevDisplay
+
+    receiver = Receiver()
+    rng = np.random.default_rng(7)
+    first, last = (rng.random((140, 300, 3), dtype=np.float32) for _ in range(2))
+    seen = []
+    display = TevDisplay(DisplayServer("127.0.0.1", receiver.port), "big", 300, 140, ("R", "G", "B"), seen.append)
+    display.show(first)
+    display.show(last)
+    display.close()
+    receiver.stop()
+    assert seen == []
+    updates = [p for p in receiver.packets if p["type"] == "update"]
+    assert {p["origin"] for p in updates} >= {(0, 0), (128, 0), (256, 0), (0, 128), (256, 128)}
+    assert max(p["pixels"].shape[0] for p in updates) == 128 and max(p["pixels"].shape[1] for p in updates) == 128
+    np.testing.assert_array_equal(frame_of(receiver.packets, 300, 140), last)
