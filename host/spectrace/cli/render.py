@@ -1,5 +1,6 @@
 """`spectrace render`: a scene file to an image, with checkpoints and a clean stop on Ctrl-C, SIGTERM or SIGHUP."""
 
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -318,28 +319,22 @@ def _render_here(job, output: Path, xyz: bool, quiet: bool, state_file, interval
     _say(f"device: {report.key} ({report.device_name})")
     _say(_scene_line(renderer.buffers))
     identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
-    display = _display(job, output)
-    try:
-        with StopOnSignals() as stop:
-            _render_passes(renderer, stop, state_file, interval, quiet, identity, display)
-            interrupted = stop.requested
-            image = renderer.image()
-            if image.spp == 0:
-                raise SpectraceError("interrupted before the first pass finished; nothing written")
-            image = write_render(
-                job,
-                image,
-                output,
-                include_xyz=xyz,
-                state_file=state_file,
-                noisy=noisy,
-                device=renderer.device,
-                log=_say,
-            )
-    except BaseException:
-        if display is not None:
-            display.close()
-        raise
+    with StopOnSignals() as stop, _display(job, output) as display:
+        _render_passes(renderer, stop, state_file, interval, quiet, identity, display)
+        interrupted = stop.requested
+        image = renderer.image()
+        if image.spp == 0:
+            raise SpectraceError("interrupted before the first pass finished; nothing written")
+        image = write_render(
+            job,
+            image,
+            output,
+            include_xyz=xyz,
+            state_file=state_file,
+            noisy=noisy,
+            device=renderer.device,
+            log=_say,
+        )
     if display is not None:
         display.finish(image)
     pixels = image.width * image.height * image.spp
@@ -359,13 +354,21 @@ def _warn(message: str) -> None:
     console.print(f"warning: {message}", highlight=False, markup=False)
 
 
+@contextmanager
 def _display(job, output: Path):
-    """The job's image in tev as it renders (spectrace.engine.display_stream), named as the output file."""
+    """The job's image in tev as it renders (spectrace.engine.display_stream), named as the output file; None
+    without --display-server. A render that fails or is stopped at once leaves tev what it has."""
     if job.display_server is None:
-        return None
+        yield None
+        return
     from spectrace.engine.display_stream import RenderDisplay
 
-    return RenderDisplay(job, output.name, _warn)
+    display = RenderDisplay(job, output.name, _warn)
+    try:
+        yield display
+    except BaseException:
+        display.close()
+        raise
 
 
 def _scene_line(buffers) -> str:
