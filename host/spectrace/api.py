@@ -304,6 +304,7 @@ def render_passes(
     stop: Callable[[], bool] | None = None,
     checkpoints: PeriodicCheckpoints | None = None,
     console: rich.console.Console | None = None,
+    each_pass: Callable[[], None] | None = None,
 ) -> Image:
     """The render loop that `render()` and `spectrace render` share: run `renderer`'s passes up to `spp` samples
     per pixel (default: its scene's) and return the `Image` of the samples done.
@@ -311,7 +312,8 @@ def render_passes(
     progress: as in `render()` (the bar: `spectrace.progress`, drawn on `console` outside Jupyter). stop: asked
     between passes; when it says True the loop ends early with the samples done so far. checkpoints: a
     `spectrace.engine.checkpoint.PeriodicCheckpoints`, offered the state after every pass and saved at the end
-    (also after a stop), so that the file always holds whole passes.
+    (also after a stop), so that the file always holds whole passes. each_pass: called after every pass (the
+    image streamed to a viewer).
     """
     from spectrace.progress import in_notebook, progress_bar
 
@@ -329,6 +331,8 @@ def render_passes(
                 draw(done, total)
             if checkpoints is not None:
                 checkpoints.maybe_save()
+            if each_pass is not None:
+                each_pass()
 
         image = renderer.render(spp=total, pass_spp=pass_spp, progress=on_pass, should_stop=stop)
     if checkpoints is not None and renderer.samples_done > 0:
@@ -350,6 +354,7 @@ def render(
     aovs: str | Sequence[str] | None = None,
     client: Any = None,
     tile_rows: int | None = None,
+    display_server: str | None = None,
 ) -> Image:
     """Render `scene` to `spp` samples per pixel (default: the scene's) and return the `Image`.
 
@@ -366,6 +371,9 @@ def render(
     client: a Dask distributed Client: the render runs split into tiles of `tile_rows` rows on its workers, each
     opening `device` there (docs/distributed.md); the image is bit-identical to one rendered here on the same
     device type, and one progress bar counts tiles.
+    display_server: "HOST:PORT" of a tev viewer (tev's default port is 14158) shown the image as it converges
+    (linear RGB of `colour_space`, as `image.to_rgb()`); a viewer absent or gone is one warning, and the render
+    goes on. Not with `client`.
     """
     if not isinstance(scene, Scene):
         raise SpectraceError(
@@ -385,12 +393,37 @@ def render(
         colour_space=colour_space,
         white_balance=white_balance,
         adaptation=adaptation,
+        display_server=display_server,
     )
     if client is not None:
+        if job.display_server is not None:
+            raise SpectraceError("display_server streams a render in this process; it does not go with client")
         image = _render_on_client(job, client, progress)
+    elif job.display_server is not None:
+        image = _render_shown(job, progress)
     else:
         image = render_passes(job.renderer(), pass_spp=job.pass_spp, progress=progress)
     return job.finish(image)
+
+
+def _render_shown(job: RenderJob, progress: ProgressOption) -> Image:
+    """The render with its image streamed to the job's display server (warnings through `warnings.warn`)."""
+    import warnings
+
+    from spectrace.engine.display_stream import RenderDisplay
+
+    name = job.scene.source.stem if job.scene.source is not None else "spectrace"
+    renderer = job.renderer()
+    display = RenderDisplay(job, name, lambda message: warnings.warn(message, RuntimeWarning, stacklevel=1))
+    try:
+        image = render_passes(
+            renderer, pass_spp=job.pass_spp, progress=progress, each_pass=lambda: display.after_pass(renderer)
+        )
+    except BaseException:
+        display.close()
+        raise
+    display.finish(image)
+    return image
 
 
 def _render_on_client(job: RenderJob, client: Any, progress: ProgressOption) -> Image:

@@ -1,5 +1,6 @@
 """`spectrace render`: a scene file to an image, with checkpoints and a clean stop on Ctrl-C, SIGTERM or SIGHUP."""
 
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -175,6 +176,17 @@ def render(
         float,
         typer.Option(help="Seconds to wait for the --cluster scheduler to answer (0.1 to 86400, a day).", min=0.1),
     ] = 30.0,
+    display_server: Annotated[
+        str | None,
+        typer.Option(
+            "--display-server",
+            metavar="HOST:PORT",
+            help="Show the image in the tev viewer listening there (tev's default: 127.0.0.1:14158) as it "
+            "converges: the output's linear R, G, B as the EXR holds them, the last update the image written. A "
+            "viewer absent or gone is one warning; the render goes on. A render here only (not --workers or "
+            "--cluster).",
+        ),
+    ] = None,
 ) -> None:
     """Render SCENE to an image. Ctrl-C, SIGTERM or SIGHUP (a closed terminal) stops after the current pass and
     writes the samples done so far (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without
@@ -203,6 +215,7 @@ def render(
         denoise=denoise,
         kernel=kernel,
         tile_rows=tile_rows,
+        display_server=display_server,
     )
     state_file = checkpoint or resume
     noisy = None
@@ -220,6 +233,12 @@ def render(
                 "splits a render over --workers or --cluster (or resumes a tiled checkpoint); a render here is one "
                 "piece",
                 where="--tile-rows",
+            )
+        if job.display_server is not None and (cluster is not None or workers is not None or resumes_tiles):
+            raise SpectraceError(
+                "streams a render made here in one piece; it does not go with --workers, --cluster or a tiled "
+                "checkpoint",
+                where="--display-server",
             )
         if cluster is not None or workers is not None or resumes_tiles:
             from spectrace.cli.render_tiles import render_tiled
@@ -308,8 +327,8 @@ def _render_here(job, output: Path, xyz: bool, quiet: bool, state_file, interval
     _say(f"device: {report.key} ({report.device_name})")
     _say(_scene_line(renderer.buffers))
     identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
-    with StopOnSignals() as stop:
-        _render_passes(renderer, stop, state_file, interval, quiet, identity)
+    with StopOnSignals() as stop, _display(job, output) as display:
+        _render_passes(renderer, stop, state_file, interval, quiet, identity, display)
         interrupted = stop.requested
         image = renderer.image()
         if image.spp == 0:
@@ -324,6 +343,8 @@ def _render_here(job, output: Path, xyz: bool, quiet: bool, state_file, interval
             device=renderer.device,
             log=_say,
         )
+    if display is not None:
+        display.finish(image)
     pixels = image.width * image.height * image.spp
     note = " (interrupted: partial image)" if interrupted else ""
     note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
@@ -335,6 +356,27 @@ def _render_here(job, output: Path, xyz: bool, quiet: bool, state_file, interval
         console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
     if interrupted:
         raise typer.Exit(130)
+
+
+def _warn(message: str) -> None:
+    console.print(f"warning: {message}", highlight=False, markup=False)
+
+
+@contextmanager
+def _display(job, output: Path):
+    """The job's image in tev as it renders (spectrace.engine.display_stream), named as the output file; None
+    without --display-server. A render that fails or is stopped at once leaves tev what it has."""
+    if job.display_server is None:
+        yield None
+        return
+    from spectrace.engine.display_stream import RenderDisplay
+
+    display = RenderDisplay(job, output.name, _warn)
+    try:
+        yield display
+    except BaseException:
+        display.close()
+        raise
 
 
 def _scene_line(buffers) -> str:
@@ -430,18 +472,20 @@ def _resume(renderer, restored, path: Path):
     return identity
 
 
-def _render_passes(renderer, stop, state_file: Path | None, interval: float, quiet: bool, identity=None) -> None:
-    """The API's render loop with the bar on this console (none with -q) and checkpoints to `state_file`
-    (`identity`: the render's, when --resume has computed it)."""
+def _render_passes(
+    renderer, stop, state_file: Path | None, interval: float, quiet: bool, identity=None, display=None
+) -> None:
+    """The API's render loop with the bar on this console (none with -q), checkpoints to `state_file`
+    (`identity`: the render's, when --resume has computed it) and each pass shown on `display` (a RenderDisplay)."""
     from spectrace.api import render_passes
     from spectrace.engine.checkpoint import PeriodicCheckpoints
 
-    def warn(message: str) -> None:
-        console.print(f"warning: {message}", highlight=False, markup=False)
-
-    saver = PeriodicCheckpoints(state_file, renderer, interval, warn=warn, identity=identity) if state_file else None
+    saver = PeriodicCheckpoints(state_file, renderer, interval, warn=_warn, identity=identity) if state_file else None
+    each_pass = (lambda: display.after_pass(renderer)) if display is not None else None
     try:
-        render_passes(renderer, progress=not quiet, stop=stop, checkpoints=saver, console=console.rich())
+        render_passes(
+            renderer, progress=not quiet, stop=stop, checkpoints=saver, console=console.rich(), each_pass=each_pass
+        )
     except SpectraceError as error:
         # An OpenCL failure mid-pass may leave part of a pass in the film: the film is not saved now, but the
         # last checkpoint, written between passes, is sound.

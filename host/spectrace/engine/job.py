@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from spectrace.engine.renderer import Renderer
     from spectrace.engine.tiles import TileJob
     from spectrace.film.image import Image
+    from spectrace.io.tev import DisplayServer
     from spectrace.pixel_filters import PixelFilter
     from spectrace.scene.model import Scene
 
@@ -49,6 +50,7 @@ class SettingNames:
     exposure: str | None = None
     sampler: str | None = None
     denoise: str | None = None
+    display_server: str | None = None
 
 
 COMMAND_LINE = SettingNames(
@@ -66,6 +68,7 @@ COMMAND_LINE = SettingNames(
     exposure="--exposure",
     sampler="--sampler",
     denoise="--denoise",
+    display_server="--display-server",
 )
 PYTHON = SettingNames(
     spp=None,
@@ -76,6 +79,7 @@ PYTHON = SettingNames(
     colour_space="colour_space",
     white_balance="white_balance",
     adaptation="adaptation",
+    display_server="display_server",
 )
 
 
@@ -109,6 +113,7 @@ class RenderJob:
     tile_rows: int | None = None
     names: SettingNames = PYTHON
     notes: tuple[str, ...] = ()  # what the front end should tell the user (a setting left unused)
+    display_server: DisplayServer | None = None  # the tev viewer shown the render as it converges
 
     @classmethod
     def make(
@@ -137,11 +142,12 @@ class RenderJob:
         denoise: bool = False,
         tile_rows: int | None = None,
         output: Path | None = None,
+        display_server: str | None = None,
     ) -> RenderJob:
         """Check every setting and build the job. `scene`: the scene, or what loads it (called once the settings
         that need no scene have passed, so that a wrong one is named before any file is read). `output`: the image
         file, when there is one: spectral bands and asked-for AOVs need an .exr, and the scene's own AOVs are left
-        out of another (a note says so)."""
+        out of another (a note says so). `display_server`: HOST:PORT of a tev viewer to stream the render to."""
         from spectrace.film.aovs import parse_aovs
         from spectrace.scene.model import SAMPLER_TYPES
 
@@ -159,6 +165,11 @@ class RenderJob:
         _refuse(seed is not None and limits.seed_problem(seed), names.seed)
         _refuse(max_depth is not None and limits.max_depth_problem(max_depth), names.max_depth)
         _refuse(exposure is not None and limits.exposure_problem(exposure), names.exposure)
+        viewer = None
+        if display_server is not None:
+            from spectrace.io.tev import DisplayServer
+
+            viewer = DisplayServer.parse(display_server, names.display_server)
 
         loaded = scene() if callable(scene) else scene
         loaded = loaded.with_overrides(
@@ -208,7 +219,19 @@ class RenderJob:
             false_colour_scale,
             (names.colour_space, names.white_balance, names.adaptation),
         )
-        return cls(loaded, device, kernel, pass_spp, spectral_bins, outputs, denoise, tile_rows, names, notes)
+        return cls(
+            loaded,
+            device,
+            kernel,
+            pass_spp,
+            spectral_bins,
+            outputs,
+            denoise,
+            tile_rows,
+            names,
+            notes,
+            display_server=viewer,
+        )
 
     @property
     def spp(self) -> int:
