@@ -14,6 +14,7 @@ from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.spectral import spectrum_to_xyz
 from spectrace.spectral.spectrum import Spectrum
 
@@ -140,3 +141,26 @@ def test_the_importer_offers_every_helper_a_plugin_mapping_calls(tmp_path):
     importer = MitsubaImporter(tmp_path / "scene.xml", tmp_path, {})
     assert {"spectrum", "roughness", "fail", "unsupported_plugin"} <= used.keys()  # the walk sees the mappings' calls
     assert {name: module for name, module in used.items() if not hasattr(importer, name)} == {}
+
+
+_RFILTERS = _plugins(PIXEL_FILTERS.values())
+
+
+@pytest.mark.parametrize("module", PIXEL_FILTERS.values(), ids=list(PIXEL_FILTERS))
+def test_every_pixel_filter_declares_its_mitsuba_rfilters_or_why_it_has_none(module):
+    assert_declares_mapping(module, "MITSUBA_PLUGINS", "from_mitsuba", "MITSUBA_NONE")
+
+
+@pytest.mark.parametrize("plugin, module", _RFILTERS, ids=[p for p, _ in _RFILTERS])
+def test_each_declared_rfilter_imports_with_mitsubas_fixed_radius_as_its_module(tmp_path, plugin, module):
+    """Mitsuba 3's rfilters have fixed radii (box 0.5, tent 1, gaussian 4σ with σ = 0.5, mitchell 2, B = C = 1/3)."""
+    path = tmp_path / "scene.xml"
+    path.write_text(
+        f'<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><rfilter type="{plugin}"/>'
+        '</film></sensor><shape type="cube"/><emitter type="constant"/></scene>'
+    )
+    imported = load_mitsuba_scene(path).pixel_filter
+    assert imported.type == module.NAME
+    assert imported.support == {"box": 0.5, "tent": 1.0, "gaussian": 2.0, "mitchell": 2.0}[plugin]
+    if plugin == "mitchell":
+        assert (imported.b, imported.c) == (1.0 / 3.0, 1.0 / 3.0)

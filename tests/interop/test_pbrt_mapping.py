@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 
 from plugin_mappings import assert_declares_mapping
+from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 from spectrace.io.exr import write_exr
 from spectrace.lights import LIGHTS, area, envmap
 from spectrace.materials import MATERIALS
+from spectrace.pixel_filters import PIXEL_FILTERS
 
 MODULES = list(MATERIALS.values())
 LIGHT_MODULES = [*LIGHTS.values(), area]
@@ -111,3 +113,54 @@ def test_the_light_refusal_lists_the_declared_lights(tmp_path):
         pbrt_scene_data(path)
     listed = re.search(r"spectrace imports (.*) and diffuse area lights$", caught.value.message).group(1).split(", ")
     assert sorted(listed) == sorted({kind for kind, module in _LIGHTS if module is not area})
+
+
+_FILTERS = _declared(PIXEL_FILTERS.values(), "PBRT_FILTERS")
+
+
+@pytest.mark.parametrize("module", PIXEL_FILTERS.values(), ids=list(PIXEL_FILTERS))
+def test_every_pixel_filter_declares_its_pbrt_filters_or_why_it_has_none(module):
+    assert_declares_mapping(module, "PBRT_FILTERS", "from_pbrt", "PBRT_NONE")
+
+
+@pytest.mark.parametrize("kind, module", _FILTERS, ids=[k for k, _ in _FILTERS])
+def test_each_declared_pbrt_filter_imports_with_pbrts_defaults_as_its_module(tmp_path, kind, module):
+    """pbrt-v4's filters with their defaults (filters.cpp: box radius 0.5, triangle 2, Gaussian σ = 0.5 radius 1.5,
+    Mitchell radius 2, B = C = 1/3)."""
+    path = tmp_path / "scene.pbrt"
+    path.write_text(f'PixelFilter "{kind}"\n' + HEADER + QUAD)
+    imported = load_pbrt_scene(path).pixel_filter
+    assert imported.type == module.NAME
+    expected = {"box": 0.5, "triangle": 2.0, "gaussian": 1.5, "mitchell": 2.0}[kind]
+    assert imported.support == expected
+    if kind == "gaussian":
+        assert imported.stddev == 0.5
+    if kind == "mitchell":
+        assert (imported.b, imported.c) == (1.0 / 3.0, 1.0 / 3.0)
+
+
+@pytest.mark.parametrize("module", CAMERAS.values(), ids=list(CAMERAS))
+def test_every_camera_declares_its_pbrt_cameras_or_why_it_has_none(module):
+    assert_declares_mapping(module, "PBRT_CAMERAS", "from_pbrt", "PBRT_NONE")
+
+
+# pbrt's perspective camera is two of spectrace's: thinlens for one with a lens; spherical needs mapping "equirect".
+_CAMERA_PARAMETERS = {"thinlens": ' "float lensradius" 0.1', "equirectangular": ' "string mapping" "equirect"'}
+_CAMERAS = _declared(CAMERAS.values(), "PBRT_CAMERAS")
+
+
+@pytest.mark.parametrize("kind, module", _CAMERAS, ids=[f"{k}-{m.NAME}" for k, m in _CAMERAS])
+def test_each_declared_pbrt_camera_imports_as_its_module(tmp_path, kind, module):
+    path = tmp_path / "scene.pbrt"
+    camera = f'Camera "{kind}"{_CAMERA_PARAMETERS.get(module.NAME, "")}\n'
+    path.write_text(HEADER.replace('Camera "perspective" "float fov" 30\n', camera) + QUAD)
+    assert load_pbrt_scene(path).camera.type == module.NAME
+
+
+def test_the_camera_refusal_lists_the_declared_cameras(tmp_path):
+    path = tmp_path / "scene.pbrt"
+    path.write_text(HEADER.replace('Camera "perspective"', 'Camera "realistic"') + QUAD)
+    with pytest.raises(SpectraceError) as caught:
+        pbrt_scene_data(path)
+    listed = re.search(r"spectrace imports pbrt's (.*) cameras$", caught.value.message).group(1)
+    assert re.sub(r" \(.*?\)", "", listed).replace(" and ", ", ").split(", ") == list(dict(_CAMERAS))

@@ -2,6 +2,8 @@
 axis, from a point of the plane through `origin` facing it; the image covers `view_width` scene units across and
 view_width / aspect ratio up, so an object's image size is its world size whatever its distance."""
 
+import math
+
 import numpy as np
 
 from spectrace.cameras.shared import frame
@@ -9,6 +11,7 @@ from spectrace.core.parameters import REQUIRED, Parameter, Range
 
 NAME = "orthographic"
 MITSUBA_PLUGINS = ("orthographic",)
+PBRT_CAMERAS = ("orthographic",)
 VIEW_WIDTH = Parameter(
     "view_width",
     "float",
@@ -28,3 +31,27 @@ def basis(camera, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 def lens(camera) -> tuple[float, float]:
     return 0.0, 0.0
+
+
+def from_pbrt(context, camera, view) -> dict:
+    """pbrt-v4's orthographic camera: its screen window (pbrt's default spans [-1, 1] along the frame's shorter
+    side) sets view_width; an off-centre window moves the view's centre in the camera's plane."""
+    x0, x1, y0, y1 = context.floats(camera, "screenwindow", view.default_window) or view.default_window
+    if not (x1 > x0 and y1 > y0):
+        raise context.error(camera.location, "screenwindow must have x0 < x1 and y0 < y1")
+    if not math.isclose((x1 - x0) / (y1 - y0), view.width / view.height, rel_tol=1e-4):
+        context.warn(
+            camera.location, "the screen window's aspect ratio differs from the film's: the window's width is kept"
+        )
+    # pbrt's camera x is image right.
+    centre = context.point(view.world_from_camera, [(x0 + x1) / 2.0, (y0 + y1) / 2.0, 0.0])
+    table = {
+        "type": "orthographic",
+        "origin": centre,
+        "target": (np.asarray(centre) + np.asarray(view.forward)).tolist(),
+        "up": view.up,
+        "view_width": x1 - x0,
+    }
+    if view.lens_radius > 0.0:
+        context.warn(camera.location, '"lensradius" not imported: spectrace\'s orthographic camera is sharp')
+    return table

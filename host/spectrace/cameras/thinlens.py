@@ -9,11 +9,14 @@ The aperture is `aperture_radius`, or `f_number` with the lens's `focal_length` 
 
 import numpy as np
 
+from spectrace.cameras.perspective import pbrt_perspective
 from spectrace.cameras.shared import FOV, FOV_AXIS, perspective_basis
 from spectrace.core.parameters import Parameter, Range
 
 NAME = "thinlens"
 MITSUBA_PLUGINS = ("thinlens",)
+# pbrt-v4's perspective camera with lensradius > 0 (perspective.py takes one without).
+PBRT_CAMERAS = ("perspective",)
 APERTURE_RADIUS = Parameter(
     "aperture_radius", "float", "scene units", None, Range(0.0), doc="the lens's radius; or give f_number"
 )
@@ -62,3 +65,13 @@ def basis(camera, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 def lens(camera) -> tuple[float, float]:
     return camera.aperture_radius, camera.focus_distance
+
+
+def from_pbrt(context, camera, view) -> dict | None:
+    """pbrt-v4's perspective camera with a lens (lensradius > 0; focaldistance 1e6 by default), or None."""
+    if not view.lens_radius > 0.0:
+        return None
+    table = pbrt_perspective(context, camera, view)
+    if not view.focus > 0.0:
+        raise context.error(camera.location, f"focaldistance must be > 0, got {view.focus:g}")
+    return {"type": "thinlens", **table, "aperture_radius": view.lens_radius, "focus_distance": view.focus}

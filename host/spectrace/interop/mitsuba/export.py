@@ -310,16 +310,13 @@ def _sensor(scene: Scene) -> dict:
 
 
 def _rfilter(scene: Scene) -> dict:
-    """The pixel filter as Mitsuba's rfilter, whose radii are fixed (tent 1, Gaussian 4σ, Mitchell 2)."""
+    """The pixel filter as Mitsuba's rfilter (its module's to_mitsuba), whose radii are fixed: the filters'
+    default radii (tent 1, Gaussian 4σ, Mitchell 2)."""
     f = scene.pixel_filter
-    fixed = {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * f.stddev, "mitchell": 2.0}[f.type]
+    fixed = f.plugin.default_radius(f)
     if abs(f.support - fixed) > 1e-9 * fixed:
         raise _refuse(f"a {f.type} filter of radius {f.support:g} (Mitsuba's is {fixed:g})", scene)
-    if f.type == "gaussian":
-        return {"type": "gaussian", "stddev": float(f.stddev)}
-    if f.type == "mitchell":
-        return {"type": "mitchell", "B": float(f.b), "C": float(f.c)}
-    return {"type": f.type}
+    return f.plugin.to_mitsuba(f)
 
 
 def _lookat(origin, target, up):

@@ -1,8 +1,9 @@
 """Which Mitsuba 3 plugins the import reads, per element, and which spectrace module maps each: the one table that
 the unsupported-plugin error and `spectrace import-mitsuba --help` name, and the tags Mitsuba's parser knows.
 
-The BSDF, emitter, texture and sensor columns come from the registries (each module's MITSUBA_PLUGINS), so a
-material, light, texture or camera that names a plugin there is imported without a change here.
+The BSDF, emitter, texture and sensor columns and the rfilters come from the registries (each module's
+MITSUBA_PLUGINS), so a material, light, texture, camera or pixel filter that names a plugin there is imported without
+a change here.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 from spectrace.cameras import CAMERAS
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.textures import TEXTURES
 
 
@@ -29,6 +31,9 @@ SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 # Mitsuba sensor plugin → spectrace camera type, from the cameras' modules (spectrace.cameras).
 CAMERA_PLUGINS = {plugin: name for name, module in CAMERAS.items() for plugin in module.MITSUBA_PLUGINS}
+# Mitsuba rfilter plugin → spectrace pixel filter, from the filters' modules (spectrace.pixel_filters); another
+# rfilter is replaced by the box filter with a note.
+FILTER_PLUGINS = {plugin: name for name, module in PIXEL_FILTERS.items() for plugin in module.MITSUBA_PLUGINS}
 SUPPORTED = {
     "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),

@@ -10,13 +10,12 @@ import re
 
 import numpy as np
 
-from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba.context import ImportContext, Properties
-from spectrace.interop.mitsuba.plugins import CAMERA_PLUGINS, SPECTRUM_PLUGINS, SUPPORTED
+from spectrace.interop.mitsuba.plugins import CAMERA_PLUGINS, FILTER_PLUGINS, SPECTRUM_PLUGINS, SUPPORTED
 from spectrace.interop.mitsuba.textures import spectrum_element
 from spectrace.interop.mitsuba.transforms import to_world
 from spectrace.interop.mitsuba.tree import Element, shown
-from spectrace.pixel_filters import PixelFilter
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
 # hdrfilm properties about the file Mitsuba writes, not the image: nothing to import.
@@ -173,34 +172,18 @@ def specfilm_sensor(ctx: ImportContext, film: Element, properties: Properties) -
 
 
 def pixel_filter(ctx: ImportContext, rfilter: Element | None) -> dict:
-    """The film's filter: Mitsuba 3's own default, its Gaussian of σ = 0.5, when the file names none."""
+    """The film's filter, from the filter module whose MITSUBA_PLUGINS name it: Mitsuba 3's own default, its
+    Gaussian of σ = 0.5, when the file names none."""
     if rfilter is None:
         return {"type": "gaussian", "stddev": 0.5}
     kind = rfilter.get("type") or ""
     properties = ctx.properties(rfilter)
-    if kind == "box":
-        return {"type": "box"}
-    if kind == "tent":
-        return {"type": "tent"}  # radius 1 in Mitsuba, fixed
-    if kind == "gaussian":
-        stddev = ctx.number(properties["stddev"]) if "stddev" in properties else 0.5
-        try:  # the filters' own range (spectrace.pixel_filters)
-            PixelFilter("gaussian", stddev=stddev)
-        except SpectraceError as exc:
-            raise ctx.fail(rfilter, exc.message, "type") from None
-        return {"type": "gaussian", "stddev": stddev}
-    if kind == "mitchell":
-        table: dict[str, object] = {"type": "mitchell", "radius": 2.0}
-        for key in ("B", "C"):
-            if key in properties:
-                value = ctx.number(properties[key])
-                if not 0.0 <= value <= 1.0:
-                    raise ctx.fail(rfilter, f"{key} must lie in [0, 1], got {value:g}", "type")
-                table[key.lower()] = value
-        return table
+    if kind in FILTER_PLUGINS:
+        return PIXEL_FILTERS[FILTER_PLUGINS[kind]].from_mitsuba(ctx, rfilter, properties)
+    *others, last = PIXEL_FILTERS
     ctx.notes.append(
-        f"{ctx.at(rfilter)}: reconstruction filter '{shown(kind)}' not imported: spectrace has box, tent, "
-        "gaussian and mitchell; a box filter used"
+        f"{ctx.at(rfilter)}: reconstruction filter '{shown(kind)}' not imported: spectrace has {', '.join(others)} "
+        f"and {last}; a box filter used"
     )
     return {"type": "box"}
 
