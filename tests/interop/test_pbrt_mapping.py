@@ -11,6 +11,7 @@ import pytest
 from plugin_mappings import assert_declares_mapping
 from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
+from spectrace.integrators import INTEGRATORS
 from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 from spectrace.io.exr import write_exr
 from spectrace.lights import LIGHTS, area, envmap
@@ -164,3 +165,20 @@ def test_the_camera_refusal_lists_the_declared_cameras(tmp_path):
         pbrt_scene_data(path)
     listed = re.search(r"spectrace imports pbrt's (.*) cameras$", caught.value.message).group(1)
     assert re.sub(r" \(.*?\)", "", listed).replace(" and ", ", ").split(", ") == list(dict(_CAMERAS))
+
+
+@pytest.mark.parametrize("module", INTEGRATORS.values(), ids=list(INTEGRATORS))
+def test_every_integrator_declares_its_pbrt_integrators_or_why_it_has_none(module):
+    assert_declares_mapping(module, "PBRT_INTEGRATORS", "from_pbrt", "PBRT_NONE")
+
+
+_INTEGRATORS = _declared(INTEGRATORS.values(), "PBRT_INTEGRATORS")
+
+
+@pytest.mark.parametrize("kind, module", _INTEGRATORS, ids=[k for k, _ in _INTEGRATORS])
+def test_each_declared_pbrt_integrator_imports_with_pbrts_depth_as_its_module(tmp_path, kind, module):
+    """pbrt-v4's maxdepth (default 5) counts bounces, spectrace's max_depth path segments: 6."""
+    path = tmp_path / "scene.pbrt"
+    path.write_text(f'Integrator "{kind}"\n' + HEADER + QUAD)
+    scene = load_pbrt_scene(path)
+    assert (scene.integrator, scene.max_depth) == (module.NAME, 6)

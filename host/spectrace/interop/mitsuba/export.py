@@ -37,6 +37,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
+from spectrace.integrators import INTEGRATORS
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.scene.model import Scene
@@ -163,8 +164,6 @@ def _light_entry(light, exporter: MitsubaExport) -> dict:
 
 # Mitsuba 3's samplers; "independent" is its default, the stratified ones are its counterparts of spectrace's Sobol.
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
-# spectrace integrator -> Mitsuba 3 plugin with the same max_depth and rr_depth meaning.
-_MITSUBA_INTEGRATORS = {"path": "path", "light": "ptracer"}
 
 
 def scene_to_mitsuba_dict(
@@ -177,9 +176,12 @@ def scene_to_mitsuba_dict(
         raise SpectraceError(
             f"unknown Mitsuba sampler '{sampler}'; samplers: {', '.join(MITSUBA_SAMPLERS)}", where="--peer-sampler"
         )
-    if scene.integrator not in _MITSUBA_INTEGRATORS:
+    # The integrators whose module has a Mitsuba 3 counterpart with the same max_depth and rr_depth meaning.
+    exported = {name: to for name, module in INTEGRATORS.items() if (to := getattr(module, "to_mitsuba", None))}
+    if scene.integrator not in exported:
         raise _refuse(
-            f"integrator '{scene.integrator}' (only 'path' and 'light' map onto Mitsuba's path and particle tracers)",
+            f"integrator '{scene.integrator}' (only {' and '.join(repr(name) for name in exported)} map onto "
+            "Mitsuba's path and particle tracers)",
             scene,
         )
     has_area_lights = any(shape.emitter is not None for shape in scene.shapes)
@@ -191,8 +193,7 @@ def scene_to_mitsuba_dict(
     entries: dict = {
         "type": "scene",
         "integrator": {
-            # Mitsuba's volpath is the path tracer that counts no pass straight through a thin sheet.
-            "type": "volpath" if not scene.count_thin_passes else _MITSUBA_INTEGRATORS[scene.integrator],
+            **exported[scene.integrator](scene),
             "max_depth": int(scene.max_depth),
             "rr_depth": int(scene.rr_depth),
             "hide_emitters": bool(scene.hide_emitters or scene.hide_environment),

@@ -9,6 +9,7 @@ a change here.
 from __future__ import annotations
 
 from spectrace.cameras import CAMERAS
+from spectrace.integrators import INTEGRATORS
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PIXEL_FILTERS
@@ -16,7 +17,8 @@ from spectrace.textures import TEXTURES
 
 
 def _modules_by_plugin(modules) -> dict:
-    """Mitsuba plugin name -> the material or light module that imports it (its MITSUBA_PLUGINS)."""
+    """Mitsuba plugin name -> the module (material, light, texture, integrator) that imports it (its
+    MITSUBA_PLUGINS)."""
     return {plugin: module for module in modules for plugin in module.MITSUBA_PLUGINS}
 
 
@@ -34,6 +36,10 @@ CAMERA_PLUGINS = {plugin: name for name, module in CAMERAS.items() for plugin in
 # Mitsuba rfilter plugin → spectrace pixel filter, from the filters' modules (spectrace.pixel_filters); another
 # rfilter is replaced by the box filter with a note.
 FILTER_PLUGINS = {plugin: name for name, module in PIXEL_FILTERS.items() for plugin in module.MITSUBA_PLUGINS}
+# Mitsuba integrator plugin → spectrace integrator, from the integrators' modules (spectrace.integrators); `moment`
+# and `aov` hold another integrator, whose image they render (integrators.py).
+INTEGRATOR_MODULES = _modules_by_plugin(INTEGRATORS.values())
+INTEGRATOR_WRAPPERS = ("moment", "aov")
 SUPPORTED = {
     "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS),
@@ -41,18 +47,7 @@ SUPPORTED = {
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm", "specfilm"),
-    "integrator": (
-        "path",
-        "direct",
-        "volpath",
-        "volpathmis",
-        "moment",
-        "aov",
-        "ptracer",
-        "bdpt",
-        "sppm",
-        "photonmapper",
-    ),
+    "integrator": (*INTEGRATOR_MODULES, *INTEGRATOR_WRAPPERS),
     "medium": ("homogeneous",),
     "phase": ("hg", "isotropic"),
 }

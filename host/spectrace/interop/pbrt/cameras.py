@@ -8,27 +8,27 @@ integrator tables.
 - Each camera's own parameters are mapped by the camera modules that name its type in PBRT_CAMERAS (their
   `from_pbrt(context, camera, view)`, `view` what pbrt's cameras share), each filter's by the pixel filter module
   naming it in PBRT_FILTERS.
-- Depth: pbrt's `maxdepth` counts bounces (1 = direct light); spectrace's max_depth counts segments: maxdepth + 1.
+- The integrator is mapped by the integrator module naming it in PBRT_INTEGRATORS (path: pbrt's path tracers and
+  the integrators of the same image).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
+from spectrace.integrators import INTEGRATORS
 from spectrace.interop.pbrt.context import Context
 from spectrace.interop.pbrt.graphics_state import Entity
 from spectrace.interop.pbrt.parser import Location, Parameter, error, shown
 from spectrace.pixel_filters import PIXEL_FILTERS, PixelFilter
 
-# Unbiased integrators that converge to the path tracer's image.
-_SAME_IMAGE_INTEGRATORS = ("bdpt", "mlt", "sppm", "lightpath", "randomwalk")
 PBRT_DEFAULT_FILM = (1280, 720)
-PBRT_DEFAULT_MAXDEPTH = 5
 PBRT_DEFAULT_SPP = 16
 _MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 
@@ -182,15 +182,18 @@ def sampler(context: Context, data: dict) -> None:
     data["sampler"] = {**settings, "spp": spp}
 
 
+# pbrt-v4 integrator type -> the integrator module that maps it (spectrace.integrators, each module's
+# PBRT_INTEGRATORS); pbrt-v4's default is volpath.
+_INTEGRATORS: dict[str, Any] = {kind: module for module in INTEGRATORS.values() for kind in module.PBRT_INTEGRATORS}
+PBRT_DEFAULT_INTEGRATOR = "volpath"
+
+
 def integrator(context: Context, data: dict) -> None:
-    integrator = context.scene.integrator
-    depth = PBRT_DEFAULT_MAXDEPTH
-    if integrator is not None:
-        depth = context.integer(integrator, "maxdepth", depth, low=0)
-        kind = shown(integrator.kind)
-        if integrator.kind in _SAME_IMAGE_INTEGRATORS:
-            context.notes.append(f"{integrator.location}: integrator '{kind}' imported as path tracing (same image)")
-        elif integrator.kind not in ("volpath", "path", "simplepath", "simplevolpath"):
-            context.warn(integrator.location, f"integrator '{kind}' renders another quantity; path tracing imported")
-    # pbrt's maxdepth counts bounces (0: emitters only), spectrace's max_depth path segments (1: emitters only).
-    data["integrator"] = {"type": "path", "max_depth": depth + 1}
+    """The [integrator] table, from the module that maps pbrt's integrator; another (ambientocclusion, aov) renders
+    another quantity: pbrt's default is imported, with a warning."""
+    entity = context.scene.integrator
+    kind = entity.kind if entity is not None else PBRT_DEFAULT_INTEGRATOR
+    module = _INTEGRATORS.get(kind, _INTEGRATORS[PBRT_DEFAULT_INTEGRATOR])
+    data["integrator"] = module.from_pbrt(context, entity)
+    if entity is not None and kind not in _INTEGRATORS:
+        context.warn(entity.location, f"integrator '{shown(kind)}' renders another quantity; path tracing imported")
