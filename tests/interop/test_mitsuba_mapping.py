@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from plugin_mappings import assert_declares_mapping
+from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.integrators import INTEGRATORS
 from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
@@ -18,6 +19,7 @@ from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.spectral import spectrum_to_xyz
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures import TEXTURES
 
 MODULES = [*MATERIALS.values(), *LIGHTS.values(), area]
 SENSOR = """<sensor type="perspective"><float name="fov" value="45"/>
@@ -34,7 +36,11 @@ def _plugins(modules) -> list[tuple[str, object]]:
     return [(plugin, module) for module in modules for plugin in module.MITSUBA_PLUGINS]
 
 
-@pytest.mark.parametrize("module", MODULES, ids=[m.NAME for m in MODULES])
+# Every plugin that maps Mitsuba's: materials, lights, textures, cameras, pixel filters and integrators.
+MAPPED = [*MODULES, *TEXTURES.values(), *CAMERAS.values(), *PIXEL_FILTERS.values(), *INTEGRATORS.values()]
+
+
+@pytest.mark.parametrize("module", MAPPED, ids=[f"{m.__name__.split('.')[-2]}-{m.NAME}" for m in MAPPED])
 def test_every_module_declares_its_mitsuba_plugins_or_why_it_has_none(module):
     assert_declares_mapping(module, "MITSUBA_PLUGINS", "from_mitsuba", "MITSUBA_NONE")
 
@@ -125,18 +131,17 @@ def test_the_commands_help_lists_every_plugin_the_importer_takes():
 
 
 def test_the_importer_offers_every_helper_a_plugin_mapping_calls(tmp_path):
-    """A material's, light's, texture's, pixel filter's or integrator's `from_mitsuba` calls helpers on the importer
-    it is given (`importer.spectrum`, `importer.roughness`, ...), which live in the kinds' modules of
+    """A material's, light's, texture's, camera's, pixel filter's or integrator's `from_mitsuba` calls helpers on
+    the importer it is given (`importer.spectrum`, `importer.roughness`, ...), which live in the kinds' modules of
     spectrace.interop.mitsuba: each name a mapping uses must be on the importer, or that plugin would fail only when
     a scene uses it."""
     import ast
     import inspect
 
     from spectrace.interop.mitsuba.importer import MitsubaImporter
-    from spectrace.textures import TEXTURES
 
     used: dict[str, str] = {}
-    for module in {*MODULES, *TEXTURES.values(), *PIXEL_FILTERS.values(), *INTEGRATORS.values()}:
+    for module in {*MODULES, *TEXTURES.values(), *CAMERAS.values(), *PIXEL_FILTERS.values(), *INTEGRATORS.values()}:
         for node in ast.walk(ast.parse(inspect.getsource(module))):
             if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "importer":
                 used.setdefault(node.attr, module.__name__)
@@ -146,11 +151,6 @@ def test_the_importer_offers_every_helper_a_plugin_mapping_calls(tmp_path):
 
 
 _RFILTERS = _plugins(PIXEL_FILTERS.values())
-
-
-@pytest.mark.parametrize("module", PIXEL_FILTERS.values(), ids=list(PIXEL_FILTERS))
-def test_every_pixel_filter_declares_its_mitsuba_rfilters_or_why_it_has_none(module):
-    assert_declares_mapping(module, "MITSUBA_PLUGINS", "from_mitsuba", "MITSUBA_NONE")
 
 
 @pytest.mark.parametrize("plugin, module", _RFILTERS, ids=[p for p, _ in _RFILTERS])
@@ -166,11 +166,6 @@ def test_each_declared_rfilter_imports_with_mitsubas_fixed_radius_as_its_module(
     assert imported.support == {"box": 0.5, "tent": 1.0, "gaussian": 2.0, "mitchell": 2.0}[plugin]
     if plugin == "mitchell":
         assert (imported.b, imported.c) == (1.0 / 3.0, 1.0 / 3.0)
-
-
-@pytest.mark.parametrize("module", INTEGRATORS.values(), ids=list(INTEGRATORS))
-def test_every_integrator_declares_its_mitsuba_integrators_or_why_it_has_none(module):
-    assert_declares_mapping(module, "MITSUBA_PLUGINS", "from_mitsuba", "MITSUBA_NONE")
 
 
 _INTEGRATOR_PLUGINS = _plugins(INTEGRATORS.values())
@@ -192,3 +187,18 @@ def test_the_integrators_that_export_are_those_with_to_mitsuba():
     """An integrator without `to_mitsuba` is refused by the export naming the ones that have it."""
     exported = [name for name, module in INTEGRATORS.items() if hasattr(module, "to_mitsuba")]
     assert exported and all(INTEGRATORS[name].MITSUBA_PLUGINS for name in exported)
+
+
+_SENSORS = _plugins(CAMERAS.values())
+
+
+@pytest.mark.parametrize("plugin, module", _SENSORS, ids=[p for p, _ in _SENSORS])
+def test_each_declared_sensor_imports_as_its_module(tmp_path, plugin, module):
+    """With Mitsuba's defaults (a thinlens needs its aperture_radius, as in Mitsuba)."""
+    aperture = '<float name="aperture_radius" value="0.1"/>' if plugin == "thinlens" else ""
+    path = tmp_path / "scene.xml"
+    path.write_text(
+        f'<scene version="3.0.0"><sensor type="{plugin}">{aperture}</sensor><shape type="cube"/>'
+        '<emitter type="constant"/></scene>'
+    )
+    assert load_mitsuba_scene(path).camera.type == module.NAME

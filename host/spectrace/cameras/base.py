@@ -9,11 +9,13 @@ from spectrace.core.registry import TabledPlugin
 
 
 class CameraPlugin(TabledPlugin, Protocol):
-    """What a camera's module holds, with its importer mappings: MITSUBA_PLUGINS (the Mitsuba 3 sensors it imports,
-    spectrace.interop.mitsuba.sensors) and PBRT_CAMERAS with `from_pbrt` (pbrt-v4's cameras it maps). Beside these,
-    where it applies: SPEC_CHECKS (rules spanning several keys, for the scene schema); PBRT_MIRRORED (its image runs
-    the other way round from pbrt's, so the import mirrors the world the other way) and PBRT_CONDITION (what the
-    refusal of another pbrt camera says it takes of the type)."""
+    """What a camera's module holds, with its importer mappings: MITSUBA_PLUGINS with `from_mitsuba(importer,
+    sensor, properties, camera, linear, aspect)` (the Mitsuba 3 sensors it imports; `camera` the placement read
+    already) and `to_mitsuba(camera, exporter)` (the export), or MITSUBA_NONE saying why it has none; PBRT_CAMERAS
+    with `from_pbrt` (pbrt-v4's cameras it maps). Beside these, where they apply: SPEC_CHECKS (rules spanning
+    several keys, for the scene schema); PBRT_MIRRORED (its image runs the other way round from pbrt's, so the
+    import mirrors the world the other way) and PBRT_CONDITION (what the refusal of another pbrt camera says it
+    takes of the type)."""
 
     @property
     def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802

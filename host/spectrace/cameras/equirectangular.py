@@ -9,7 +9,8 @@ import numpy as np
 from spectrace.cameras.shared import frame
 
 NAME = "equirectangular"
-MITSUBA_PLUGINS: tuple[str, ...] = ()  # Mitsuba 3 has no such sensor
+MITSUBA_PLUGINS: tuple[str, ...] = ()
+MITSUBA_NONE = "Mitsuba 3 has no such sensor"
 # pbrt-v4's spherical camera with mapping "equirect" (its default, equalarea, has no counterpart here).
 PBRT_CAMERAS = ("spherical",)
 PBRT_CONDITION = ' (mapping "equirect")'

@@ -55,3 +55,17 @@ def from_pbrt(context, camera, view) -> dict:
     if view.lens_radius > 0.0:
         context.warn(camera.location, '"lensradius" not imported: spectrace\'s orthographic camera is sharp')
     return table
+
+
+def from_mitsuba(importer, sensor, properties, camera: dict, linear: np.ndarray, aspect: float) -> dict | None:
+    """Mitsuba's view spans [-1, 1] along camera x and [-1/aspect, 1/aspect] along y, then to_world scales it."""
+    half_x, half_y = np.linalg.norm(linear @ [1.0, 0.0, 0.0]), np.linalg.norm(linear @ [0.0, 1.0, 0.0])
+    if not math.isclose(half_x, half_y, rel_tol=1e-6):
+        importer.unsupported_plugin(sensor, " whose to_world scales x and y differently")
+        return None
+    return camera | {"view_width": 2.0 * float(half_x)}
+
+
+def to_mitsuba(camera, exporter) -> dict:
+    """Mitsuba's orthographic view spans [-1, 1] across, scaled by to_world."""
+    return {"type": "orthographic", "to_world": exporter.camera_to_world(camera, float(camera.view_width) / 2.0)}

@@ -41,3 +41,17 @@ def pbrt_perspective(context, camera, view) -> dict:
         "fov": fov,
         "fov_axis": "y" if view.aspect > 1.0 else "x",
     }
+
+
+def from_mitsuba(importer, sensor, properties, camera: dict, linear: np.ndarray, aspect: float) -> dict:
+    """Mitsuba's perspective sensor: its fov (with fov_axis, or from focal_length) as the horizontal fov."""
+    return camera | {"fov": importer.fov_x(properties, aspect, sensor), "fov_axis": "x"}
+
+
+def to_mitsuba(camera, exporter) -> dict:
+    return {
+        "type": camera.type,
+        "fov": float(camera.fov_degrees),
+        "fov_axis": camera.fov_axis,
+        "to_world": exporter.camera_to_world(camera),
+    }

@@ -9,6 +9,7 @@ The aperture is `aperture_radius`, or `f_number` with the lens's `focal_length` 
 
 import numpy as np
 
+from spectrace.cameras import perspective
 from spectrace.cameras.perspective import pbrt_perspective
 from spectrace.cameras.shared import FOV, FOV_AXIS, perspective_basis
 from spectrace.core.parameters import Parameter, Range
@@ -75,3 +76,23 @@ def from_pbrt(context, camera, view) -> dict | None:
     if not view.focus > 0.0:
         raise context.error(camera.location, f"focaldistance must be > 0, got {view.focus:g}")
     return {"type": "thinlens", **table, "aperture_radius": view.lens_radius, "focus_distance": view.focus}
+
+
+def from_mitsuba(importer, sensor, properties, camera: dict, linear: np.ndarray, aspect: float) -> dict | None:
+    """Mitsuba's thinlens: a perspective view, aperture_radius (required, as in Mitsuba) and focus_distance."""
+    camera = perspective.from_mitsuba(importer, sensor, properties, camera, linear, aspect)
+    if "aperture_radius" not in properties:
+        raise importer.fail(sensor, "thinlens needs aperture_radius (Mitsuba 3 requires it too)", "type")
+    aperture = importer.number(properties["aperture_radius"])
+    # Mitsuba's default focus is 10 000 scene units away: as good as infinity for a scene of metres.
+    focus = importer.number(properties["focus_distance"]) if "focus_distance" in properties else 1e4
+    if not aperture >= 0.0 or not focus > 0.0:
+        raise importer.fail(sensor, "thinlens needs aperture_radius >= 0 and focus_distance > 0", "type")
+    return camera | {"aperture_radius": aperture, "focus_distance": focus}
+
+
+def to_mitsuba(camera, exporter) -> dict:
+    return perspective.to_mitsuba(camera, exporter) | {
+        "aperture_radius": float(camera.aperture_radius),
+        "focus_distance": float(camera.focus_distance),
+    }

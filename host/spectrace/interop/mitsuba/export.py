@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.integrators import INTEGRATORS
@@ -96,7 +97,8 @@ def _refuse(what: str, scene: Scene) -> SpectraceError:
 class MitsubaExport:
     """What the modules' `to_mitsuba(model, exporter)` use: `spectrum` (a Mitsuba spectrum entry, or a texture's
     where a parameter holds one), `material` (another material's entry, for a mix), `refuse` (the error for what
-    has no faithful counterpart), and for the texture modules `write_linear_image` and `uv_transform`."""
+    has no faithful counterpart), for the texture modules `write_linear_image` and `uv_transform`, and for the
+    cameras' `camera_to_world`."""
 
     def __init__(self, scene: Scene, folder: Path):
         self.scene = scene
@@ -140,6 +142,17 @@ class MitsubaExport:
         write_exr(path, np.asarray(values, np.float32), None, {})
         self._images.append((values, path))
         return path
+
+    @staticmethod
+    def camera_to_world(camera, scale: float | None = None):
+        """Mitsuba's to_world of a camera: its lookat, scaled by `scale` across the view (an orthographic view's
+        half width)."""
+        to_world = _lookat(camera.origin, camera.target, camera.up)
+        if scale is None:
+            return to_world
+        import mitsuba as mi  # the caller has chosen a variant
+
+        return to_world @ mi.ScalarTransform4f().scale([scale, scale, 1.0])
 
     @staticmethod
     def uv_transform(scale, offset):
@@ -190,6 +203,7 @@ def scene_to_mitsuba_dict(
     mesh_folder = Path(mesh_folder)
     mesh_folder.mkdir(parents=True, exist_ok=True)
     camera = scene.camera
+    exporter = MitsubaExport(scene, mesh_folder)
     entries: dict = {
         "type": "scene",
         "integrator": {
@@ -199,7 +213,7 @@ def scene_to_mitsuba_dict(
             "hide_emitters": bool(scene.hide_emitters or scene.hide_environment),
         },
         "sensor": {
-            **_sensor(scene),
+            **_sensor(scene, exporter),
             # Mitsuba's own default (0.01) where ours is 0: it needs a positive plane.
             **({"near_clip": float(camera.near_clip)} if camera.near_clip > 0.0 else {}),
             # Mitsuba's default far clip is 10 000 scene units; spectrace's none.
@@ -214,7 +228,6 @@ def scene_to_mitsuba_dict(
             },
         },
     }
-    exporter = MitsubaExport(scene, mesh_folder)
     materials: dict[int, str] = {}
 
     def shape_entry(shape, file_stem: str) -> dict:
@@ -292,22 +305,13 @@ def _transform(matrix: np.ndarray):
     return mi.ScalarTransform4f(np.asarray(matrix, float).tolist())
 
 
-def _sensor(scene: Scene) -> dict:
-    """The camera as a Mitsuba 3 sensor: perspective, thinlens, or orthographic (whose view Mitsuba scales by
-    to_world from [-1, 1] across)."""
-    camera = scene.camera
-    to_world = _lookat(camera.origin, camera.target, camera.up)
-    if camera.type == "orthographic":
-        import mitsuba as mi
-
-        half = float(camera.view_width) / 2.0
-        return {"type": "orthographic", "to_world": to_world @ mi.ScalarTransform4f().scale([half, half, 1.0])}
-    if camera.type not in ("perspective", "thinlens"):
-        raise _refuse(f"camera '{camera.type}' (Mitsuba 3 has no such sensor)", scene)
-    sensor = {"type": camera.type, "fov": float(camera.fov_degrees), "fov_axis": camera.fov_axis, "to_world": to_world}
-    if camera.type == "thinlens":
-        sensor |= {"aperture_radius": float(camera.aperture_radius), "focus_distance": float(camera.focus_distance)}
-    return sensor
+def _sensor(scene: Scene, exporter: MitsubaExport) -> dict:
+    """The camera as a Mitsuba 3 sensor, its module's to_mitsuba."""
+    module = CAMERAS[scene.camera.type]
+    to_mitsuba = getattr(module, "to_mitsuba", None)
+    if to_mitsuba is None:
+        raise _refuse(f"camera '{scene.camera.type}' ({getattr(module, 'MITSUBA_NONE', '')})", scene)
+    return to_mitsuba(scene.camera, exporter)
 
 
 def _rfilter(scene: Scene) -> dict:

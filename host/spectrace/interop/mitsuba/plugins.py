@@ -33,6 +33,7 @@ SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 # Mitsuba sensor plugin → spectrace camera type, from the cameras' modules (spectrace.cameras).
 CAMERA_PLUGINS = {plugin: name for name, module in CAMERAS.items() for plugin in module.MITSUBA_PLUGINS}
+CAMERA_MODULES = _modules_by_plugin(CAMERAS.values())
 # Mitsuba rfilter plugin → spectrace pixel filter, from the filters' modules (spectrace.pixel_filters); another
 # rfilter is replaced by the box filter with a note.
 FILTER_PLUGINS = {plugin: name for name, module in PIXEL_FILTERS.items() for plugin in module.MITSUBA_PLUGINS}

@@ -1,7 +1,8 @@
 """The sensor with its film and sampler: the camera (perspective with fov and any fov_axis, or focal_length;
 thinlens; orthographic; to_world as lookat, translate, rotate, scale or matrix), hdrfilm width and height,
 specfilm (its responses as the film's sensor, a CSV beside the TOML), the reconstruction filter, and the sampler's
-sample_count and seed. Mitsuba sensor plugins map to spectrace cameras through the cameras' MITSUBA_PLUGINS."""
+sample_count and seed. Mitsuba sensor plugins map to spectrace cameras through the cameras' MITSUBA_PLUGINS, each
+camera module's `from_mitsuba` reading its own properties, and rfilters through the pixel filters'."""
 
 from __future__ import annotations
 
@@ -11,7 +12,13 @@ import re
 import numpy as np
 
 from spectrace.interop.mitsuba.context import ImportContext, Properties
-from spectrace.interop.mitsuba.plugins import CAMERA_PLUGINS, FILTER_PLUGINS, SPECTRUM_PLUGINS, SUPPORTED
+from spectrace.interop.mitsuba.plugins import (
+    CAMERA_MODULES,
+    CAMERA_PLUGINS,
+    FILTER_PLUGINS,
+    SPECTRUM_PLUGINS,
+    SUPPORTED,
+)
 from spectrace.interop.mitsuba.textures import spectrum_element
 from spectrace.interop.mitsuba.transforms import to_world
 from spectrace.interop.mitsuba.tree import Element, shown
@@ -67,31 +74,22 @@ def sensor(ctx: ImportContext, element: Element, data: dict) -> None:
     origin = matrix[:3, 3]
     forward = linear @ [0.0, 0.0, 1.0]
     up = linear @ [0.0, 1.0, 0.0]
-    data["camera"] = {
-        "type": CAMERA_PLUGINS[kind],
-        "origin": origin.tolist(),
-        "target": (origin + forward / np.linalg.norm(forward)).tolist(),
-        "up": (up / np.linalg.norm(up)).tolist(),
-    }
-    if kind == "orthographic":
-        # Mitsuba's view spans [-1, 1] along camera x and [-1/aspect, 1/aspect] along y, then to_world scales it.
-        half_x, half_y = np.linalg.norm(linear @ [1.0, 0.0, 0.0]), np.linalg.norm(up)
-        if not math.isclose(half_x, half_y, rel_tol=1e-6):
-            ctx.unsupported_plugin(element, " whose to_world scales x and y differently")
-            return
-        data["camera"]["view_width"] = 2.0 * float(half_x)
-    else:
-        data["camera"]["fov"] = fov_x(ctx, properties, width / height, element)
-        data["camera"]["fov_axis"] = "x"
-    if kind == "thinlens":
-        if "aperture_radius" not in properties:
-            raise ctx.fail(element, "thinlens needs aperture_radius (Mitsuba 3 requires it too)", "type")
-        aperture = ctx.number(properties["aperture_radius"])
-        # Mitsuba's default focus is 10 000 scene units away: as good as infinity for a scene of metres.
-        focus = ctx.number(properties["focus_distance"]) if "focus_distance" in properties else 1e4
-        if not aperture >= 0.0 or not focus > 0.0:
-            raise ctx.fail(element, "thinlens needs aperture_radius >= 0 and focus_distance > 0", "type")
-        data["camera"] |= {"aperture_radius": aperture, "focus_distance": focus}
+    camera = CAMERA_MODULES[kind].from_mitsuba(
+        ctx,
+        element,
+        properties,
+        {
+            "type": CAMERA_PLUGINS[kind],
+            "origin": origin.tolist(),
+            "target": (origin + forward / np.linalg.norm(forward)).tolist(),
+            "up": (up / np.linalg.norm(up)).tolist(),
+        },
+        linear,
+        width / height,
+    )
+    if camera is None:
+        return
+    data["camera"] = camera
     if "near_clip" in properties:
         data["camera"]["near_clip"] = ctx.number(properties["near_clip"])
         if not data["camera"]["near_clip"] >= 0.0:
