@@ -17,6 +17,7 @@ from spectrace.io.exr import write_exr
 from spectrace.lights import LIGHTS, area, envmap
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PIXEL_FILTERS
+from spectrace.textures import TEXTURES
 
 MODULES = list(MATERIALS.values())
 LIGHT_MODULES = [*LIGHTS.values(), area]
@@ -119,11 +120,6 @@ def test_the_light_refusal_lists_the_declared_lights(tmp_path):
 _FILTERS = _declared(PIXEL_FILTERS.values(), "PBRT_FILTERS")
 
 
-@pytest.mark.parametrize("module", PIXEL_FILTERS.values(), ids=list(PIXEL_FILTERS))
-def test_every_pixel_filter_declares_its_pbrt_filters_or_why_it_has_none(module):
-    assert_declares_mapping(module, "PBRT_FILTERS", "from_pbrt", "PBRT_NONE")
-
-
 @pytest.mark.parametrize("kind, module", _FILTERS, ids=[k for k, _ in _FILTERS])
 def test_each_declared_pbrt_filter_imports_with_pbrts_defaults_as_its_module(tmp_path, kind, module):
     """pbrt-v4's filters with their defaults (filters.cpp: box radius 0.5, triangle 2, Gaussian σ = 0.5 radius 1.5,
@@ -138,11 +134,6 @@ def test_each_declared_pbrt_filter_imports_with_pbrts_defaults_as_its_module(tmp
         assert imported.stddev == 0.5
     if kind == "mitchell":
         assert (imported.b, imported.c) == (1.0 / 3.0, 1.0 / 3.0)
-
-
-@pytest.mark.parametrize("module", CAMERAS.values(), ids=list(CAMERAS))
-def test_every_camera_declares_its_pbrt_cameras_or_why_it_has_none(module):
-    assert_declares_mapping(module, "PBRT_CAMERAS", "from_pbrt", "PBRT_NONE")
 
 
 # pbrt's perspective camera is two of spectrace's: thinlens for one with a lens; spherical needs mapping "equirect".
@@ -167,11 +158,6 @@ def test_the_camera_refusal_lists_the_declared_cameras(tmp_path):
     assert re.sub(r" \(.*?\)", "", listed).replace(" and ", ", ").split(", ") == list(dict(_CAMERAS))
 
 
-@pytest.mark.parametrize("module", INTEGRATORS.values(), ids=list(INTEGRATORS))
-def test_every_integrator_declares_its_pbrt_integrators_or_why_it_has_none(module):
-    assert_declares_mapping(module, "PBRT_INTEGRATORS", "from_pbrt", "PBRT_NONE")
-
-
 _INTEGRATORS = _declared(INTEGRATORS.values(), "PBRT_INTEGRATORS")
 
 
@@ -182,3 +168,37 @@ def test_each_declared_pbrt_integrator_imports_with_pbrts_depth_as_its_module(tm
     path.write_text(f'Integrator "{kind}"\n' + HEADER + QUAD)
     scene = load_pbrt_scene(path)
     assert (scene.integrator, scene.max_depth) == (module.NAME, 6)
+
+
+_TEXTURES = _declared(TEXTURES.values(), "PBRT_TEXTURES")
+
+
+@pytest.mark.parametrize("kind, module", _TEXTURES, ids=[k for k, _ in _TEXTURES])
+def test_each_declared_pbrt_texture_imports_as_its_module(tmp_path, kind, module):
+    """A diffuse reflectance of the texture, with pbrt-v4's defaults (an imagemap needs its image)."""
+    write_exr(tmp_path / "image.exr", np.full((4, 4, 3), 0.5, np.float32), None, {})
+    image = ' "string filename" "image.exr"' if kind == "imagemap" else ""
+    path = tmp_path / "scene.pbrt"
+    path.write_text(
+        HEADER + f'Texture "t" "spectrum" "{kind}"{image}\nMaterial "diffuse" "texture reflectance" "t"\n' + QUAD
+    )
+    (shape,) = load_pbrt_scene(path).shapes
+    assert isinstance(shape.material.reflectance, module.MODEL)
+
+
+# The other kinds' declarations: (module, the name of its tuple of pbrt types).
+_KINDS = [
+    (module, names)
+    for registry, names in (
+        (CAMERAS, "PBRT_CAMERAS"),
+        (PIXEL_FILTERS, "PBRT_FILTERS"),
+        (INTEGRATORS, "PBRT_INTEGRATORS"),
+        (TEXTURES, "PBRT_TEXTURES"),
+    )
+    for module in registry.values()
+]
+
+
+@pytest.mark.parametrize("module, names", _KINDS, ids=[f"{names}-{m.NAME}" for m, names in _KINDS])
+def test_every_camera_filter_integrator_and_texture_declares_its_pbrt_mapping_or_why_it_has_none(module, names):
+    assert_declares_mapping(module, names, "from_pbrt", "PBRT_NONE")
