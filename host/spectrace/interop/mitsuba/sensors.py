@@ -11,6 +11,7 @@ import re
 
 import numpy as np
 
+from spectrace.integrators import INTEGRATORS
 from spectrace.interop.mitsuba.context import ImportContext, Properties
 from spectrace.interop.mitsuba.plugins import (
     CAMERA_MODULES,
@@ -221,10 +222,11 @@ def fov_x(ctx: ImportContext, properties: dict[str, Element], aspect: float, ele
 
 
 def whole_pixel_filter(ctx: ImportContext, data: dict) -> None:
-    """spectrace's bdpt and sppm estimate whole pixels (spectrace.integrators.light, .sppm): a film filter
-    other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
+    """The integrators that estimate whole pixels (those whose REFUSES names pixel filters: bdpt, sppm): a film
+    filter other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
     film, integrator = data.get("film"), data.get("integrator", {})
-    if film is None or integrator.get("type") not in ("bdpt", "sppm") or film["filter"]["type"] == "box":
+    module = INTEGRATORS.get(integrator.get("type", ""))
+    if film is None or module is None or "pixel filters" not in module.REFUSES or film["filter"]["type"] == "box":
         return
     ctx.notes.append(
         f"{ctx.at(ctx.origins['film'])}: integrator '{integrator['type']}' estimates whole pixels: the film's "
