@@ -10,12 +10,16 @@ import numpy as np
 import pytest
 
 from plugin_mappings import assert_declares_mapping
+from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
+from spectrace.integrators import INTEGRATORS
 from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.spectral import spectrum_to_xyz
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures import TEXTURES
 
 MODULES = [*MATERIALS.values(), *LIGHTS.values(), area]
 SENSOR = """<sensor type="perspective"><float name="fov" value="45"/>
@@ -32,7 +36,11 @@ def _plugins(modules) -> list[tuple[str, object]]:
     return [(plugin, module) for module in modules for plugin in module.MITSUBA_PLUGINS]
 
 
-@pytest.mark.parametrize("module", MODULES, ids=[m.NAME for m in MODULES])
+# Every plugin that maps Mitsuba's: materials, lights, textures, cameras, pixel filters and integrators.
+MAPPED = [*MODULES, *TEXTURES.values(), *CAMERAS.values(), *PIXEL_FILTERS.values(), *INTEGRATORS.values()]
+
+
+@pytest.mark.parametrize("module", MAPPED, ids=[f"{m.__name__.split('.')[-2]}-{m.NAME}" for m in MAPPED])
 def test_every_module_declares_its_mitsuba_plugins_or_why_it_has_none(module):
     assert_declares_mapping(module, "MITSUBA_PLUGINS", "from_mitsuba", "MITSUBA_NONE")
 
@@ -123,20 +131,74 @@ def test_the_commands_help_lists_every_plugin_the_importer_takes():
 
 
 def test_the_importer_offers_every_helper_a_plugin_mapping_calls(tmp_path):
-    """A material's, light's or texture's `from_mitsuba` calls helpers on the importer it is given (`importer.spectrum`,
-    `importer.roughness`, ...), which live in the kinds' modules of spectrace.interop.mitsuba: each name a mapping
-    uses must be on the importer, or that plugin would fail only when a scene uses it."""
+    """A material's, light's, texture's, camera's, pixel filter's or integrator's `from_mitsuba` calls helpers on
+    the importer it is given (`importer.spectrum`, `importer.roughness`, ...), which live in the kinds' modules of
+    spectrace.interop.mitsuba: each name a mapping uses must be on the importer, or that plugin would fail only when
+    a scene uses it."""
     import ast
     import inspect
 
     from spectrace.interop.mitsuba.importer import MitsubaImporter
-    from spectrace.textures import TEXTURES
 
     used: dict[str, str] = {}
-    for module in {*MODULES, *TEXTURES.values()}:
+    for module in {*MODULES, *TEXTURES.values(), *CAMERAS.values(), *PIXEL_FILTERS.values(), *INTEGRATORS.values()}:
         for node in ast.walk(ast.parse(inspect.getsource(module))):
             if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "importer":
                 used.setdefault(node.attr, module.__name__)
     importer = MitsubaImporter(tmp_path / "scene.xml", tmp_path, {})
     assert {"spectrum", "roughness", "fail", "unsupported_plugin"} <= used.keys()  # the walk sees the mappings' calls
     assert {name: module for name, module in used.items() if not hasattr(importer, name)} == {}
+
+
+_RFILTERS = _plugins(PIXEL_FILTERS.values())
+
+
+@pytest.mark.parametrize("plugin, module", _RFILTERS, ids=[p for p, _ in _RFILTERS])
+def test_each_declared_rfilter_imports_with_mitsubas_fixed_radius_as_its_module(tmp_path, plugin, module):
+    """Mitsuba 3's rfilters have fixed radii (box 0.5, tent 1, gaussian 4σ with σ = 0.5, mitchell 2, B = C = 1/3)."""
+    path = tmp_path / "scene.xml"
+    path.write_text(
+        f'<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><rfilter type="{plugin}"/>'
+        '</film></sensor><shape type="cube"/><emitter type="constant"/></scene>'
+    )
+    imported = load_mitsuba_scene(path).pixel_filter
+    assert imported.type == module.NAME
+    assert imported.support == {"box": 0.5, "tent": 1.0, "gaussian": 2.0, "mitchell": 2.0}[plugin]
+    if plugin == "mitchell":
+        assert (imported.b, imported.c) == (1.0 / 3.0, 1.0 / 3.0)
+
+
+_INTEGRATOR_PLUGINS = _plugins(INTEGRATORS.values())
+
+
+@pytest.mark.parametrize("plugin, module", _INTEGRATOR_PLUGINS, ids=[p for p, _ in _INTEGRATOR_PLUGINS])
+def test_each_declared_integrator_imports_with_mitsubas_defaults_as_its_module(tmp_path, plugin, module):
+    """Each with its default max_depth (unbounded, -1, or what the integrator keeps of it) and a scene it renders:
+    a diffuse cube under a constant emitter, seen by a pinhole through the film's box filter."""
+    path = tmp_path / "scene.xml"
+    path.write_text(
+        f'<scene version="3.0.0"><integrator type="{plugin}"/><sensor type="perspective"><film type="hdrfilm">'
+        '<rfilter type="box"/></film></sensor><shape type="cube"/><emitter type="constant"/></scene>'
+    )
+    assert load_mitsuba_scene(path).integrator == module.NAME
+
+
+def test_the_integrators_that_export_are_those_with_to_mitsuba():
+    """An integrator without `to_mitsuba` is refused by the export naming the ones that have it."""
+    exported = [name for name, module in INTEGRATORS.items() if hasattr(module, "to_mitsuba")]
+    assert exported and all(INTEGRATORS[name].MITSUBA_PLUGINS for name in exported)
+
+
+_SENSORS = _plugins(CAMERAS.values())
+
+
+@pytest.mark.parametrize("plugin, module", _SENSORS, ids=[p for p, _ in _SENSORS])
+def test_each_declared_sensor_imports_as_its_module(tmp_path, plugin, module):
+    """With Mitsuba's defaults (a thinlens needs its aperture_radius, as in Mitsuba)."""
+    aperture = '<float name="aperture_radius" value="0.1"/>' if plugin == "thinlens" else ""
+    path = tmp_path / "scene.xml"
+    path.write_text(
+        f'<scene version="3.0.0"><sensor type="{plugin}">{aperture}</sensor><shape type="cube"/>'
+        '<emitter type="constant"/></scene>'
+    )
+    assert load_mitsuba_scene(path).camera.type == module.NAME

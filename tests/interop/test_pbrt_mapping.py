@@ -9,11 +9,15 @@ import numpy as np
 import pytest
 
 from plugin_mappings import assert_declares_mapping
+from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
+from spectrace.integrators import INTEGRATORS
 from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 from spectrace.io.exr import write_exr
 from spectrace.lights import LIGHTS, area, envmap
 from spectrace.materials import MATERIALS
+from spectrace.pixel_filters import PIXEL_FILTERS
+from spectrace.textures import TEXTURES
 
 MODULES = list(MATERIALS.values())
 LIGHT_MODULES = [*LIGHTS.values(), area]
@@ -111,3 +115,90 @@ def test_the_light_refusal_lists_the_declared_lights(tmp_path):
         pbrt_scene_data(path)
     listed = re.search(r"spectrace imports (.*) and diffuse area lights$", caught.value.message).group(1).split(", ")
     assert sorted(listed) == sorted({kind for kind, module in _LIGHTS if module is not area})
+
+
+_FILTERS = _declared(PIXEL_FILTERS.values(), "PBRT_FILTERS")
+
+
+@pytest.mark.parametrize("kind, module", _FILTERS, ids=[k for k, _ in _FILTERS])
+def test_each_declared_pbrt_filter_imports_with_pbrts_defaults_as_its_module(tmp_path, kind, module):
+    """pbrt-v4's filters with their defaults (filters.cpp: box radius 0.5, triangle 2, Gaussian σ = 0.5 radius 1.5,
+    Mitchell radius 2, B = C = 1/3)."""
+    path = tmp_path / "scene.pbrt"
+    path.write_text(f'PixelFilter "{kind}"\n' + HEADER + QUAD)
+    imported = load_pbrt_scene(path).pixel_filter
+    assert imported.type == module.NAME
+    expected = {"box": 0.5, "triangle": 2.0, "gaussian": 1.5, "mitchell": 2.0}[kind]
+    assert imported.support == expected
+    if kind == "gaussian":
+        assert imported.stddev == 0.5
+    if kind == "mitchell":
+        assert (imported.b, imported.c) == (1.0 / 3.0, 1.0 / 3.0)
+
+
+# pbrt's perspective camera is two of spectrace's: thinlens for one with a lens; spherical needs mapping "equirect".
+_CAMERA_PARAMETERS = {"thinlens": ' "float lensradius" 0.1', "equirectangular": ' "string mapping" "equirect"'}
+_CAMERAS = _declared(CAMERAS.values(), "PBRT_CAMERAS")
+
+
+@pytest.mark.parametrize("kind, module", _CAMERAS, ids=[f"{k}-{m.NAME}" for k, m in _CAMERAS])
+def test_each_declared_pbrt_camera_imports_as_its_module(tmp_path, kind, module):
+    path = tmp_path / "scene.pbrt"
+    camera = f'Camera "{kind}"{_CAMERA_PARAMETERS.get(module.NAME, "")}\n'
+    path.write_text(HEADER.replace('Camera "perspective" "float fov" 30\n', camera) + QUAD)
+    assert load_pbrt_scene(path).camera.type == module.NAME
+
+
+def test_the_camera_refusal_lists_the_declared_cameras(tmp_path):
+    path = tmp_path / "scene.pbrt"
+    path.write_text(HEADER.replace('Camera "perspective"', 'Camera "realistic"') + QUAD)
+    with pytest.raises(SpectraceError) as caught:
+        pbrt_scene_data(path)
+    listed = re.search(r"spectrace imports pbrt's (.*) cameras$", caught.value.message).group(1)
+    assert re.sub(r" \(.*?\)", "", listed).replace(" and ", ", ").split(", ") == list(dict(_CAMERAS))
+
+
+_INTEGRATORS = _declared(INTEGRATORS.values(), "PBRT_INTEGRATORS")
+
+
+@pytest.mark.parametrize("kind, module", _INTEGRATORS, ids=[k for k, _ in _INTEGRATORS])
+def test_each_declared_pbrt_integrator_imports_with_pbrts_depth_as_its_module(tmp_path, kind, module):
+    """pbrt-v4's maxdepth (default 5) counts bounces, spectrace's max_depth path segments: 6."""
+    path = tmp_path / "scene.pbrt"
+    path.write_text(f'Integrator "{kind}"\n' + HEADER + QUAD)
+    scene = load_pbrt_scene(path)
+    assert (scene.integrator, scene.max_depth) == (module.NAME, 6)
+
+
+_TEXTURES = _declared(TEXTURES.values(), "PBRT_TEXTURES")
+
+
+@pytest.mark.parametrize("kind, module", _TEXTURES, ids=[k for k, _ in _TEXTURES])
+def test_each_declared_pbrt_texture_imports_as_its_module(tmp_path, kind, module):
+    """A diffuse reflectance of the texture, with pbrt-v4's defaults (an imagemap needs its image)."""
+    write_exr(tmp_path / "image.exr", np.full((4, 4, 3), 0.5, np.float32), None, {})
+    image = ' "string filename" "image.exr"' if kind == "imagemap" else ""
+    path = tmp_path / "scene.pbrt"
+    path.write_text(
+        HEADER + f'Texture "t" "spectrum" "{kind}"{image}\nMaterial "diffuse" "texture reflectance" "t"\n' + QUAD
+    )
+    (shape,) = load_pbrt_scene(path).shapes
+    assert isinstance(shape.material.reflectance, module.MODEL)
+
+
+# The other kinds' declarations: (module, the name of its tuple of pbrt types).
+_KINDS = [
+    (module, names)
+    for registry, names in (
+        (CAMERAS, "PBRT_CAMERAS"),
+        (PIXEL_FILTERS, "PBRT_FILTERS"),
+        (INTEGRATORS, "PBRT_INTEGRATORS"),
+        (TEXTURES, "PBRT_TEXTURES"),
+    )
+    for module in registry.values()
+]
+
+
+@pytest.mark.parametrize("module, names", _KINDS, ids=[f"{names}-{m.NAME}" for m, names in _KINDS])
+def test_every_camera_filter_integrator_and_texture_declares_its_pbrt_mapping_or_why_it_has_none(module, names):
+    assert_declares_mapping(module, names, "from_pbrt", "PBRT_NONE")

@@ -9,11 +9,15 @@ The aperture is `aperture_radius`, or `f_number` with the lens's `focal_length` 
 
 import numpy as np
 
+from spectrace.cameras import perspective
+from spectrace.cameras.perspective import pbrt_perspective
 from spectrace.cameras.shared import FOV, FOV_AXIS, perspective_basis
 from spectrace.core.parameters import Parameter, Range
 
 NAME = "thinlens"
 MITSUBA_PLUGINS = ("thinlens",)
+# pbrt-v4's perspective camera with lensradius > 0 (perspective.py takes one without).
+PBRT_CAMERAS = ("perspective",)
 APERTURE_RADIUS = Parameter(
     "aperture_radius", "float", "scene units", None, Range(0.0), doc="the lens's radius; or give f_number"
 )
@@ -62,3 +66,33 @@ def basis(camera, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 def lens(camera) -> tuple[float, float]:
     return camera.aperture_radius, camera.focus_distance
+
+
+def from_pbrt(context, camera, view) -> dict | None:
+    """pbrt-v4's perspective camera with a lens (lensradius > 0; focaldistance 1e6 by default), or None."""
+    if not view.lens_radius > 0.0:
+        return None
+    table = pbrt_perspective(context, camera, view)
+    if not view.focus > 0.0:
+        raise context.error(camera.location, f"focaldistance must be > 0, got {view.focus:g}")
+    return {"type": "thinlens", **table, "aperture_radius": view.lens_radius, "focus_distance": view.focus}
+
+
+def from_mitsuba(importer, sensor, properties, camera: dict, linear: np.ndarray, aspect: float) -> dict | None:
+    """Mitsuba's thinlens: a perspective view, aperture_radius (required, as in Mitsuba) and focus_distance."""
+    camera = perspective.from_mitsuba(importer, sensor, properties, camera, linear, aspect)
+    if "aperture_radius" not in properties:
+        raise importer.fail(sensor, "thinlens needs aperture_radius (Mitsuba 3 requires it too)", "type")
+    aperture = importer.number(properties["aperture_radius"])
+    # Mitsuba's default focus is 10 000 scene units away: as good as infinity for a scene of metres.
+    focus = importer.number(properties["focus_distance"]) if "focus_distance" in properties else 1e4
+    if not aperture >= 0.0 or not focus > 0.0:
+        raise importer.fail(sensor, "thinlens needs aperture_radius >= 0 and focus_distance > 0", "type")
+    return camera | {"aperture_radius": aperture, "focus_distance": focus}
+
+
+def to_mitsuba(camera, exporter) -> dict:
+    return perspective.to_mitsuba(camera, exporter) | {
+        "aperture_radius": float(camera.aperture_radius),
+        "focus_distance": float(camera.focus_distance),
+    }

@@ -23,7 +23,11 @@ from spectrace.integrators.base import Passes, RenderHost, Scene
 
 
 class IntegratorPlugin(Plugin, Protocol):
-    """What an integrator module holds (mypy checks each module of INTEGRATORS against it)."""
+    """What an integrator module holds (mypy checks each module of INTEGRATORS against it), with its importer
+    mappings: MITSUBA_PLUGINS with `from_mitsuba(importer, element, properties, settings) -> dict` (the Mitsuba
+    integrators it imports; `settings` the shared keys read) or MITSUBA_NONE saying why it has none, and optional
+    `to_mitsuba(scene) -> dict` (the export's integrator); PBRT_INTEGRATORS with `from_pbrt(context, integrator)
+    -> dict` or PBRT_NONE."""
 
     @property
     def PARAMETERS(self) -> tuple[Parameter, ...]: ...  # noqa: N802 (module constants)
@@ -33,6 +37,10 @@ class IntegratorPlugin(Plugin, Protocol):
     def SPLATS(self) -> str | None: ...  # noqa: N802 (what of a pass lands in any pixel; None: its own pixel's)
     @property
     def CHECKPOINT_PROBLEM(self) -> str | None: ...  # noqa: N802 (why it cannot save a checkpoint)
+    @property
+    def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802
+    @property
+    def PBRT_INTEGRATORS(self) -> tuple[str, ...]: ...  # noqa: N802
     @property
     def REFUSES(self) -> tuple[str, ...]: ...  # noqa: N802 (of base.FEATURES: what `problem` refuses in any scene)
 

@@ -9,6 +9,10 @@ from spectrace.integrators import light
 from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene
 
 NAME = "bdpt"
+# Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none), max_depth and rr_depth meaning the same.
+MITSUBA_PLUGINS = ("bdpt",)
+PBRT_INTEGRATORS: tuple[str, ...] = ()
+PBRT_NONE = "pbrt-v4's bdpt converges to the path tracer's image and imports as path (path.py)"
 # The most neighbouring pixels BDPT lets share one light subpath (integrator.pixels_per_light_path).
 MAX_PIXELS_PER_LIGHT_PATH = 16
 PIXELS_PER_LIGHT_PATH = Parameter(
@@ -86,3 +90,20 @@ def pixels_per_light_path(scene: Scene) -> int:
     if scene.pixels_per_light_path is not None:
         return int(scene.pixels_per_light_path)
     return PIXELS_PER_LIGHT_PATH_DIFFUSE if only_diffuse(scene) else PIXELS_PER_LIGHT_PATH_SHARED
+
+
+def from_mitsuba(importer, element, properties, settings: dict) -> dict:
+    """Mitsuba 0.6's bdpt; its per-strategy options change the noise, not the mean."""
+    settings["type"] = NAME
+    depth = settings["max_depth"]
+    if not (isinstance(depth, int) and 0 <= depth <= BDPT_MAX_SEGMENTS):
+        # Unbounded (Mitsuba's default, -1) or deeper than the kernel's subpath arrays: the longest paths this
+        # integrator keeps, so the import renders; the paths left out carry what Russian roulette lets through
+        # beyond that many bounces.
+        importer.notes.append(
+            f"{importer.at(element)}: integrator 'bdpt' with max_depth {depth} imported with "
+            f"max_depth {BDPT_MAX_SEGMENTS}, the longest paths spectrace's bdpt keeps"
+        )
+        settings["max_depth"] = BDPT_MAX_SEGMENTS
+    properties.understood(*importer.with_snake_case("lightImage", "sampleDirect", "samples_per_pass"))
+    return settings

@@ -4,6 +4,13 @@ surfaces and perfect specular chains, one work-item per pixel (spectrace.integra
 from spectrace.integrators.base import SHARED_PARAMETERS, PixelPasses, RenderHost, no_defines, renders_every_scene
 
 NAME = "direct"
+MITSUBA_PLUGINS: tuple[str, ...] = ()
+MITSUBA_NONE = (
+    "Mitsuba 3's `direct` lights every surface and follows no specular chain, where this integrator lights diffuse "
+    "surfaces and follows perfect specular chains: it imports as path tracing with max_depth 2 (path.py)"
+)
+PBRT_INTEGRATORS: tuple[str, ...] = ()
+PBRT_NONE = "pbrt-v4 has no direct-lighting integrator"
 PARAMETERS = SHARED_PARAMETERS
 PROGRAMS = {"megakernel": "integrator_direct.cl"}
 SPLATS = None  # each pixel adds its own samples: tiles and checkpoints as the film's

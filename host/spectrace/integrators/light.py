@@ -20,6 +20,10 @@ import numpy as np
 from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines
 
 NAME = "light"
+# Mitsuba 3's particle tracer, with the same max_depth and rr_depth meaning.
+MITSUBA_PLUGINS = ("ptracer",)
+PBRT_INTEGRATORS: tuple[str, ...] = ()
+PBRT_NONE = "pbrt-v4's lightpath converges to the path tracer's image and imports as path (path.py)"
 PARAMETERS = SHARED_PARAMETERS
 PROGRAMS = {"megakernel": "integrator_light.cl"}
 SPLATS = "splats"  # its camera connections land in any pixel: whole films only
@@ -283,3 +287,15 @@ class LightPasses:
             if bins:
                 host.upload(film.spectral_buffer, bands)
             host.finish()
+
+
+def from_mitsuba(importer, element, properties, settings: dict) -> dict:
+    """Mitsuba's particle tracer: how many light paths one of its passes runs changes the scheduling, not the
+    image."""
+    settings["type"] = NAME
+    properties.understood("samples_per_pass")
+    return settings
+
+
+def to_mitsuba(scene: Scene) -> dict:
+    return {"type": "ptracer"}

@@ -18,6 +18,14 @@ from spectrace.core.parameters import Parameter
 from spectrace.integrators.base import SHARED_PARAMETERS, PixelPasses, RenderHost, no_defines, renders_every_scene
 
 NAME = "path"
+# Mitsuba 3's path tracers, and its `direct` as path tracing with max_depth 2 (emitters seen directly and direct
+# light, as Mitsuba's direct integrator renders them at every surface, which spectrace's `direct` does not).
+MITSUBA_PLUGINS = ("path", "direct", "volpath", "volpathmis")
+# pbrt-v4's path tracers, and its unbiased integrators that converge to the same image (imported as this one, with a
+# note); pbrt-v4's default is volpath.
+PBRT_INTEGRATORS = ("volpath", "path", "simplepath", "simplevolpath", "bdpt", "mlt", "sppm", "lightpath", "randomwalk")
+_PBRT_SAME_IMAGE = ("bdpt", "mlt", "sppm", "lightpath", "randomwalk")
+PBRT_DEFAULT_MAXDEPTH = 5
 COUNT_THIN_PASSES = Parameter(
     "count_thin_passes",
     "bool",
@@ -101,3 +109,41 @@ class WavefrontPasses:
                 )
                 current = following
             host.finish()
+
+
+def from_mitsuba(importer, element, properties, settings: dict) -> dict:
+    """The [integrator] table of Mitsuba's path tracers (`settings`: the shared keys, read already)."""
+    kind = importer.kind(element)
+    if kind == "direct":
+        settings["max_depth"] = 2
+        importer.notes.append(
+            f"{importer.at(element)}: integrator 'direct' imported as path tracing with max_depth 2 "
+            "(emitters seen directly and direct light)"
+        )
+        # Mitsuba's direct integrator's sample counts per technique change the noise, not the mean.
+        properties.understood("emitter_samples", "bsdf_samples", "shading_samples")
+    elif kind.startswith("volpath"):
+        importer.notes.append(f"{importer.at(element)}: integrator '{kind}' imported as 'path', which renders media")
+        # volpath counts no null interaction toward max_depth, and Mitsuba's thindielectric transmits by a
+        # null lobe: a pass straight through a thin sheet is no segment there (path counts it).
+        settings["count_thin_passes"] = False
+    return settings
+
+
+def to_mitsuba(scene) -> dict:
+    """Mitsuba's path tracer; its volpath is the one that counts no pass straight through a thin sheet."""
+    return {"type": "volpath" if not scene.count_thin_passes else "path"}
+
+
+def from_pbrt(context, integrator) -> dict:
+    """pbrt-v4's path tracers (`integrator` None: its default, volpath), or an integrator of the same image, with
+    a note. pbrt's maxdepth counts bounces (0: emitters only), spectrace's max_depth path segments (1)."""
+    depth = PBRT_DEFAULT_MAXDEPTH
+    if integrator is not None:
+        depth = context.integer(integrator, "maxdepth", depth, low=0)
+        if integrator.kind in _PBRT_SAME_IMAGE:
+            context.notes.append(
+                f"{integrator.location}: integrator '{context.shown(integrator.kind)}' imported as path tracing "
+                "(same image)"
+            )
+    return {"type": "path", "max_depth": depth + 1}

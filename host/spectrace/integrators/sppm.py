@@ -20,6 +20,10 @@ from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_
 from spectrace.integrators.light import scene_sphere
 
 NAME = "sppm"
+# Mitsuba 0.6's photon mappers, which converge to the same image.
+MITSUBA_PLUGINS = ("sppm", "photonmapper")
+PBRT_INTEGRATORS: tuple[str, ...] = ()
+PBRT_NONE = "pbrt-v4's sppm converges to the path tracer's image and imports as path (path.py)"
 PARAMETERS = SHARED_PARAMETERS
 PROGRAMS = {"megakernel": "integrator_sppm.cl"}
 SPLATS = "photons"  # a photon adds to every pixel whose radius holds it: whole films only
@@ -227,3 +231,21 @@ class SppmPasses:
                     film.ray_count_buffer,
                 )
                 host.finish()
+
+
+def from_mitsuba(importer, element, properties, settings: dict) -> dict:
+    """Mitsuba 0.6's sppm and photonmapper: the photon counts, radii and lookup sizes are this integrator's own, so
+    they are noted, not followed."""
+    settings["type"] = NAME
+    own = importer.with_snake_case(  # a 0.x file's names arrive upgraded to snake_case
+        "photonCount", "initialRadius", "alpha", "granularity", "maxPasses", "directSamples",
+        "glossySamples", "globalPhotons", "causticPhotons", "volumePhotons", "globalLookupRadius",
+        "causticLookupRadius", "lookupSize",
+    )  # fmt: skip
+    if any(name in properties for name in own):
+        importer.notes.append(
+            f"{importer.at(element)}: integrator '{importer.kind(element)}' imported as 'sppm'; its photon counts "
+            "and radii are spectrace's own choice"
+        )
+    properties.understood(*own)
+    return settings

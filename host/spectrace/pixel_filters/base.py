@@ -1,6 +1,7 @@
 """What a pixel-filter plugin is: the shape of a filter's module (`PixelFilterPlugin`), which mypy checks every
 module of spectrace.pixel_filters.PIXEL_FILTERS against, and the radius range the filters share."""
 
+from collections.abc import Callable
 from typing import Any, Protocol
 
 import numpy as np
@@ -19,7 +20,10 @@ RADIUS = Range(WIDTH_LIMIT, RADIUS_LIMIT)
 
 class PixelFilterPlugin(TabledPlugin, Protocol):
     """What a pixel filter's module holds; each function takes the `PixelFilter` (its `support` the radius in
-    pixels, its own keys as fields). Beside these, where it applies: `check`, the rules spanning several keys."""
+    pixels, its own keys as fields), and its Mitsuba 3 and pbrt-v4 mappings: MITSUBA_PLUGINS (the rfilters it
+    imports) with `from_mitsuba` and `to_mitsuba` (the export; Mitsuba's radii are fixed, each filter's
+    default_radius), PBRT_FILTERS with `from_pbrt`. Beside these, where it applies: `check`, the rules spanning
+    several keys."""
 
     @property
     def TABULATED(self) -> bool:  # noqa: N802
@@ -40,4 +44,23 @@ class PixelFilterPlugin(TabledPlugin, Protocol):
 
     def device_shape(self, pixel_filter: Any) -> tuple[float, float]:
         """RenderParams.filter_shape.zw, what kernels/pixel_filter.cl reads of this filter beside radius and 1/∫f."""
+        ...
+
+    @property
+    def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802
+
+    def from_mitsuba(self, importer: Any, rfilter: Any, properties: Any) -> dict:
+        """The `film.filter` table of a Mitsuba rfilter of MITSUBA_PLUGINS (`importer` reads its properties)."""
+        ...
+
+    def to_mitsuba(self, pixel_filter: Any) -> dict:
+        """Mitsuba's rfilter of the same f (the export checks the radius is Mitsuba's fixed one)."""
+        ...
+
+    @property
+    def PBRT_FILTERS(self) -> tuple[str, ...]: ...  # noqa: N802
+
+    def from_pbrt(self, context: Any, entity: Any, radius: Callable[[float], float]) -> dict:
+        """The `film.filter` table of a pbrt-v4 PixelFilter of PBRT_FILTERS (`entity`, None for pbrt's default);
+        `radius(default)` reads its xradius (pbrt's radius parameters are every filter's)."""
         ...

@@ -2,6 +2,7 @@
 PIXEL_FILTER_GAUSSIAN; pbrt-v4's GaussianFilter has the same form), drawn from the table of |f|. Mitsuba 3's
 default filter is this one with σ = 0.5 px, r = 4σ."""
 
+from collections.abc import Callable
 from math import erf, exp, pi, sqrt
 
 import numpy as np
@@ -25,6 +26,8 @@ PARAMETERS = (
     ),
 )
 TABULATED = True
+MITSUBA_PLUGINS = ("gaussian",)
+PBRT_FILTERS = ("gaussian",)
 # A radius below σ/16 leaves f a peak of 1 - exp(-1/512) ≈ 2^-9 above its cut-off: less than that and its 32-bit
 # evaluation, exp(−x²/2σ²) − exp(−r²/2σ²), is all rounding (radius 1e-4 px under σ = 4 px weighted every sample 0,
 # a black image).
@@ -61,3 +64,23 @@ def device_shape(pixel_filter) -> tuple[float, float]:
     r = pixel_filter.support
     alpha = -1.0 / (2.0 * pixel_filter.stddev**2)
     return alpha, exp(alpha * r * r)
+
+
+def from_mitsuba(importer, rfilter, properties) -> dict:
+    stddev = importer.number(properties["stddev"]) if "stddev" in properties else 0.5
+    try:  # the filter's own range; Mitsuba's radius is fixed at 4σ, this filter's default
+        PARAMETERS[0].check(stddev, where="filter.stddev")
+    except SpectraceError as exc:
+        raise importer.fail(rfilter, exc.message, "type") from None
+    return {"type": "gaussian", "stddev": stddev}
+
+
+def to_mitsuba(pixel_filter) -> dict:
+    return {"type": "gaussian", "stddev": float(pixel_filter.stddev)}
+
+
+def from_pbrt(context, entity, radius: Callable[[float], float]) -> dict:
+    """pbrt-v4's GaussianFilter, σ = 0.5 and radius 1.5 by default (also pbrt's default filter: `entity` None)."""
+    window = radius(1.5)
+    sigma = context.one(entity, "sigma", 0.5) if entity is not None else 0.5
+    return {"type": "gaussian", "stddev": sigma, "radius": window}

@@ -2,6 +2,8 @@
 (kernels/pixel_filter.cl, PIXEL_FILTER_MITCHELL), drawn from the table of |f| and weighted by f/p, negative on its
 lobes."""
 
+from collections.abc import Callable
+
 import numpy as np
 
 from spectrace.core.parameters import Parameter, Range
@@ -14,6 +16,8 @@ PARAMETERS = (
     Parameter("c", "float", "", 1.0 / 3.0, Range(0.0, 1.0), default_doc="1/3", doc="Mitchell–Netravali C"),
 )
 TABULATED = True
+MITSUBA_PLUGINS = ("mitchell",)
+PBRT_FILTERS = ("mitchell",)
 
 
 def default_radius(pixel_filter) -> float:
@@ -39,3 +43,26 @@ def integral(pixel_filter) -> float:
 def device_shape(pixel_filter) -> tuple[float, float]:
     """B and C."""
     return pixel_filter.b, pixel_filter.c
+
+
+def from_mitsuba(importer, rfilter, properties) -> dict:
+    table: dict[str, object] = {"type": "mitchell", "radius": 2.0}  # Mitsuba's, fixed
+    for key in ("B", "C"):
+        if key in properties:
+            value = importer.number(properties[key])
+            if not 0.0 <= value <= 1.0:
+                raise importer.fail(rfilter, f"{key} must lie in [0, 1], got {value:g}", "type")
+            table[key.lower()] = value
+    return table
+
+
+def to_mitsuba(pixel_filter) -> dict:
+    return {"type": "mitchell", "B": float(pixel_filter.b), "C": float(pixel_filter.c)}
+
+
+def from_pbrt(context, entity, radius: Callable[[float], float]) -> dict:
+    """pbrt-v4's MitchellFilter: radius 2 and B = C = 1/3 by default."""
+    window = radius(2.0)
+    b = context.one(entity, "B", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
+    c = context.one(entity, "C", 1.0 / 3.0) if entity is not None else 1.0 / 3.0
+    return {"type": "mitchell", "radius": window, "b": b, "c": c}

@@ -1,5 +1,7 @@
 """`tent`: f(x) = max(0, 1 − |x|/radius) (kernels/pixel_filter.cl, PIXEL_FILTER_TENT), drawn in closed form."""
 
+from collections.abc import Callable
+
 import numpy as np
 
 from spectrace.core.parameters import Parameter
@@ -10,6 +12,8 @@ PARAMETERS = (
     Parameter("radius", "float", "pixels", None, RADIUS, default_doc="1", doc="where f = 1 − |x|/radius reaches 0"),
 )
 TABULATED = False
+MITSUBA_PLUGINS = ("tent",)
+PBRT_FILTERS = ("triangle",)
 
 
 def default_radius(pixel_filter) -> float:
@@ -26,3 +30,16 @@ def integral(pixel_filter) -> float:
 
 def device_shape(pixel_filter) -> tuple[float, float]:
     return 0.0, 0.0
+
+
+def from_mitsuba(importer, rfilter, properties) -> dict:
+    return {"type": "tent"}  # radius 1 in Mitsuba, fixed
+
+
+def to_mitsuba(pixel_filter) -> dict:
+    return {"type": "tent"}
+
+
+def from_pbrt(context, entity, radius: Callable[[float], float]) -> dict:
+    """pbrt-v4's TriangleFilter, of default radius 2."""
+    return {"type": "tent", "radius": radius(2.0)}

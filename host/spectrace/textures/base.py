@@ -8,7 +8,8 @@ from spectrace.core.registry import TabledPlugin
 
 class TexturePlugin(TabledPlugin, Protocol):
     """What a texture's module holds. Beside these, where they apply: `device_texels` (an image texture's texels for
-    one use), `from_mitsuba` or MITSUBA_NONE (why Mitsuba 3 has no such texture), `to_mitsuba`."""
+    one use), `from_mitsuba` or MITSUBA_NONE (why Mitsuba 3 has no such texture), `to_mitsuba`, and
+    `from_pbrt(context, texture, uv)` for the pbrt-v4 textures of PBRT_TEXTURES or PBRT_NONE (why none maps here)."""
 
     @property
     def MODEL(self) -> type[Any]: ...  # noqa: N802
@@ -21,6 +22,9 @@ class TexturePlugin(TabledPlugin, Protocol):
 
     @property
     def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802
+
+    @property
+    def PBRT_TEXTURES(self) -> tuple[str, ...]: ...  # noqa: N802
 
     @property
     def API_NAME(self) -> str:  # noqa: N802

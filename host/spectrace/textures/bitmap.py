@@ -45,6 +45,9 @@ PARAMETERS = (FILE, RAW, LUMINANCE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
 # Mitsuba 3's luminance() uses.
 _LUMINANCE_WEIGHTS = np.array([0.212671, 0.715160, 0.072169])
 MITSUBA_PLUGINS = ("bitmap",)
+PBRT_TEXTURES = ("imagemap",)
+# pbrt-v4's filters -> this texture's (EWA is its trilinear filter's anisotropic refinement).
+PBRT_FILTERS = {"point": "nearest", "bilinear": "bilinear", "trilinear": "trilinear", "ewa": "trilinear"}
 # Mitsuba 3's bitmap filters and wraps, by the names both use; Mitsuba has no MIP mapping (no trilinear).
 MITSUBA_FILTERS = ("bilinear", "nearest")
 MITSUBA_WRAPS = ("repeat", "mirror", "clamp")
@@ -205,3 +208,28 @@ def to_mitsuba(texture: BitmapTexture, exporter) -> dict:
         "wrap_mode": texture.placement.wrap,
         "to_uv": exporter.uv_transform(texture.placement.uv_scale, texture.placement.uv_offset),
     }
+
+
+def from_pbrt(context, texture, uv: tuple[float, float, float, float]) -> dict:
+    """pbrt-v4's imagemap; `uv` its (uscale, vscale, udelta, vdelta)."""
+    path = context.file_path(texture, "filename")
+    if path is None:
+        raise context.error(texture.location, f'{texture.label()} needs "string filename"')
+    table: dict = {"texture": "bitmap", "file": context.relative(path)}
+    encoding = context.string(texture, "encoding")
+    if encoding == "linear":
+        table["raw"] = True
+    elif encoding not in (None, "sRGB"):
+        context.warn(texture.location, f"encoding '{context.shown(encoding)}' not imported (read as sRGB)")
+    filter_name = context.string(texture, "filter", "bilinear")
+    table["filter"] = PBRT_FILTERS.get(filter_name or "", "bilinear")
+    wrap = context.string(texture, "wrap", "repeat")
+    if wrap not in ("repeat", "clamp"):
+        context.warn(texture.location, f"wrap '{context.shown(wrap or '')}' imported as clamp")
+        wrap = "clamp"
+    table["wrap"] = wrap
+    if context.one(texture, "scale", 1.0) != 1.0 or context.boolean(texture, "invert", False):
+        context.warn(texture.location, '"scale" and "invert" of an image texture not imported')
+    # pbrt looks images up at (s, 1 - t), t = vs v + vd; this texture at (u', v') = uv_scale (u, 1 - v) + uv_offset.
+    us, vs, ud, vd = uv
+    return table | {"uv_scale": [us, vs], "uv_offset": [ud, 1.0 - vs - vd]}

@@ -25,6 +25,7 @@ PARAMETERS = (
     UV_OFFSET,
 )
 MITSUBA_PLUGINS = ("checkerboard",)
+PBRT_TEXTURES = ("checkerboard",)
 # Mitsuba 3's checkerboard changes colour where frac(uv') crosses 1/2, uv' = to_uv(uv): twice as many squares per
 # unit of uv' as spectrace's squares per unit of st, so st = 2 uv'.
 MITSUBA_SQUARES_PER_UNIT = 2.0
@@ -107,4 +108,23 @@ def to_mitsuba(texture: CheckerboardTexture, exporter) -> dict:
         "to_uv": exporter.uv_transform(
             [s / MITSUBA_SQUARES_PER_UNIT for s in scale], [o / MITSUBA_SQUARES_PER_UNIT for o in offset]
         ),
+    }
+
+
+def from_pbrt(context, texture, uv: tuple[float, float, float, float]) -> dict:
+    """pbrt-v4's 2D checkerboard (tex1 1, tex2 0 by default); `uv` its (uscale, vscale, udelta, vdelta)."""
+    if context.integer(texture, "dimension", 2) != 2:
+        raise context.error(texture.location, f"{texture.label()}: a 3D checkerboard (spectrace's is 2D)")
+    sides = []
+    for side, default in (("tex1", 1.0), ("tex2", 0.0)):
+        value = context.spectrum(texture, side, "albedo") or context.texture_reference(texture, side)
+        sides.append(value or {"value": default})
+    # This texture's v is 1 - the file's v (mesh files store v up): s = us u + ud, t = vs v + vd.
+    us, vs, ud, vd = uv
+    return {
+        "texture": "checkerboard",
+        "color0": sides[0],
+        "color1": sides[1],
+        "uv_scale": [us, -vs],
+        "uv_offset": [ud, vs + vd],
     }

@@ -26,6 +26,8 @@ PARAMETERS = (
 )
 MITSUBA_PLUGINS: tuple[str, ...] = ()
 MITSUBA_NONE = "Mitsuba 3 has no mix texture"
+PBRT_TEXTURES: tuple[str, ...] = ()
+PBRT_NONE = "pbrt-v4's mix texture is not imported (refused naming its line)"
 
 
 @dataclass(frozen=True, eq=False)

@@ -25,6 +25,11 @@ PARAMETERS = (
 )
 MITSUBA_PLUGINS: tuple[str, ...] = ()
 MITSUBA_NONE = "Mitsuba 3 has no scale texture"
+PBRT_TEXTURES: tuple[str, ...] = ()
+PBRT_NONE = (
+    "pbrt-v4's scale texture imports as the spectrum it scales, scaled, or as a scaled copy of its image "
+    "(spectrace.interop.pbrt.textures)"
+)
 
 
 @dataclass(frozen=True, eq=False)

@@ -33,6 +33,8 @@ MITSUBA_PLUGINS: tuple[str, ...] = ()
 MITSUBA_NONE = (
     "Mitsuba 3 has no spectral image texture (its bitmap holds RGB, uplifted to spectra in its spectral variants)"
 )
+PBRT_TEXTURES: tuple[str, ...] = ()
+PBRT_NONE = "pbrt-v4 has no spectral image texture"
 
 
 @dataclass(frozen=True, eq=False)

@@ -35,8 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
+from spectrace.integrators import INTEGRATORS
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
 from spectrace.scene.model import Scene
@@ -95,7 +97,8 @@ def _refuse(what: str, scene: Scene) -> SpectraceError:
 class MitsubaExport:
     """What the modules' `to_mitsuba(model, exporter)` use: `spectrum` (a Mitsuba spectrum entry, or a texture's
     where a parameter holds one), `material` (another material's entry, for a mix), `refuse` (the error for what
-    has no faithful counterpart), and for the texture modules `write_linear_image` and `uv_transform`."""
+    has no faithful counterpart), for the texture modules `write_linear_image` and `uv_transform`, and for the
+    cameras' `camera_to_world`."""
 
     def __init__(self, scene: Scene, folder: Path):
         self.scene = scene
@@ -141,6 +144,17 @@ class MitsubaExport:
         return path
 
     @staticmethod
+    def camera_to_world(camera, scale: float | None = None):
+        """Mitsuba's to_world of a camera: its lookat, scaled by `scale` across the view (an orthographic view's
+        half width)."""
+        to_world = _lookat(camera.origin, camera.target, camera.up)
+        if scale is None:
+            return to_world
+        import mitsuba as mi  # the caller has chosen a variant
+
+        return to_world @ mi.ScalarTransform4f().scale([scale, scale, 1.0])
+
+    @staticmethod
     def uv_transform(scale, offset):
         """Mitsuba's to_uv for uv' = uv · scale + offset."""
         import mitsuba as mi  # the caller has chosen a variant
@@ -163,8 +177,6 @@ def _light_entry(light, exporter: MitsubaExport) -> dict:
 
 # Mitsuba 3's samplers; "independent" is its default, the stratified ones are its counterparts of spectrace's Sobol.
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
-# spectrace integrator -> Mitsuba 3 plugin with the same max_depth and rr_depth meaning.
-_MITSUBA_INTEGRATORS = {"path": "path", "light": "ptracer"}
 
 
 def scene_to_mitsuba_dict(
@@ -177,9 +189,12 @@ def scene_to_mitsuba_dict(
         raise SpectraceError(
             f"unknown Mitsuba sampler '{sampler}'; samplers: {', '.join(MITSUBA_SAMPLERS)}", where="--peer-sampler"
         )
-    if scene.integrator not in _MITSUBA_INTEGRATORS:
+    # The integrators whose module has a Mitsuba 3 counterpart with the same max_depth and rr_depth meaning.
+    exported = {name: to for name, module in INTEGRATORS.items() if (to := getattr(module, "to_mitsuba", None))}
+    if scene.integrator not in exported:
         raise _refuse(
-            f"integrator '{scene.integrator}' (only 'path' and 'light' map onto Mitsuba's path and particle tracers)",
+            f"integrator '{scene.integrator}' (only {' and '.join(repr(name) for name in exported)} map onto "
+            "Mitsuba's path and particle tracers)",
             scene,
         )
     has_area_lights = any(shape.emitter is not None for shape in scene.shapes)
@@ -188,17 +203,17 @@ def scene_to_mitsuba_dict(
     mesh_folder = Path(mesh_folder)
     mesh_folder.mkdir(parents=True, exist_ok=True)
     camera = scene.camera
+    exporter = MitsubaExport(scene, mesh_folder)
     entries: dict = {
         "type": "scene",
         "integrator": {
-            # Mitsuba's volpath is the path tracer that counts no pass straight through a thin sheet.
-            "type": "volpath" if not scene.count_thin_passes else _MITSUBA_INTEGRATORS[scene.integrator],
+            **exported[scene.integrator](scene),
             "max_depth": int(scene.max_depth),
             "rr_depth": int(scene.rr_depth),
             "hide_emitters": bool(scene.hide_emitters or scene.hide_environment),
         },
         "sensor": {
-            **_sensor(scene),
+            **_sensor(scene, exporter),
             # Mitsuba's own default (0.01) where ours is 0: it needs a positive plane.
             **({"near_clip": float(camera.near_clip)} if camera.near_clip > 0.0 else {}),
             # Mitsuba's default far clip is 10 000 scene units; spectrace's none.
@@ -213,7 +228,6 @@ def scene_to_mitsuba_dict(
             },
         },
     }
-    exporter = MitsubaExport(scene, mesh_folder)
     materials: dict[int, str] = {}
 
     def shape_entry(shape, file_stem: str) -> dict:
@@ -295,35 +309,23 @@ def _transform(matrix: np.ndarray):
     return mi.ScalarTransform4f(np.asarray(matrix, float).tolist())
 
 
-def _sensor(scene: Scene) -> dict:
-    """The camera as a Mitsuba 3 sensor: perspective, thinlens, or orthographic (whose view Mitsuba scales by
-    to_world from [-1, 1] across)."""
-    camera = scene.camera
-    to_world = _lookat(camera.origin, camera.target, camera.up)
-    if camera.type == "orthographic":
-        import mitsuba as mi
-
-        half = float(camera.view_width) / 2.0
-        return {"type": "orthographic", "to_world": to_world @ mi.ScalarTransform4f().scale([half, half, 1.0])}
-    if camera.type not in ("perspective", "thinlens"):
-        raise _refuse(f"camera '{camera.type}' (Mitsuba 3 has no such sensor)", scene)
-    sensor = {"type": camera.type, "fov": float(camera.fov_degrees), "fov_axis": camera.fov_axis, "to_world": to_world}
-    if camera.type == "thinlens":
-        sensor |= {"aperture_radius": float(camera.aperture_radius), "focus_distance": float(camera.focus_distance)}
-    return sensor
+def _sensor(scene: Scene, exporter: MitsubaExport) -> dict:
+    """The camera as a Mitsuba 3 sensor, its module's to_mitsuba."""
+    module = CAMERAS[scene.camera.type]
+    to_mitsuba = getattr(module, "to_mitsuba", None)
+    if to_mitsuba is None:
+        raise _refuse(f"camera '{scene.camera.type}' ({getattr(module, 'MITSUBA_NONE', '')})", scene)
+    return to_mitsuba(scene.camera, exporter)
 
 
 def _rfilter(scene: Scene) -> dict:
-    """The pixel filter as Mitsuba's rfilter, whose radii are fixed (tent 1, Gaussian 4σ, Mitchell 2)."""
+    """The pixel filter as Mitsuba's rfilter (its module's to_mitsuba), whose radii are fixed: the filters'
+    default radii (tent 1, Gaussian 4σ, Mitchell 2)."""
     f = scene.pixel_filter
-    fixed = {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * f.stddev, "mitchell": 2.0}[f.type]
+    fixed = f.plugin.default_radius(f)
     if abs(f.support - fixed) > 1e-9 * fixed:
         raise _refuse(f"a {f.type} filter of radius {f.support:g} (Mitsuba's is {fixed:g})", scene)
-    if f.type == "gaussian":
-        return {"type": "gaussian", "stddev": float(f.stddev)}
-    if f.type == "mitchell":
-        return {"type": "mitchell", "B": float(f.b), "C": float(f.c)}
-    return {"type": f.type}
+    return f.plugin.to_mitsuba(f)
 
 
 def _lookat(origin, target, up):

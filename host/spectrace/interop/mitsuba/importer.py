@@ -10,7 +10,7 @@ from functools import partial
 from pathlib import Path
 
 from spectrace.errors import SpectraceError
-from spectrace.interop.mitsuba import emitters, materials, textures
+from spectrace.interop.mitsuba import emitters, integrators, materials, sensors, textures
 from spectrace.interop.mitsuba.context import ImportContext
 from spectrace.interop.mitsuba.emitters import light
 from spectrace.interop.mitsuba.integrators import integrator
@@ -41,6 +41,8 @@ class MitsubaImporter(ImportContext):
     roughness = materials.roughness
     distribution = materials.distribution
     ior = materials.ior
+    with_snake_case = staticmethod(integrators.with_snake_case)
+    fov_x = sensors.fov_x
 
 
 def report_unknown_tags(ctx: ImportContext, root: Element) -> None:

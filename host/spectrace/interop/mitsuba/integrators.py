@@ -1,14 +1,13 @@
-"""Integrators: path (max_depth, rr_depth, hide_emitters), direct (as path with max_depth 2), volpath and
-volpathmis (as path, which renders media), ptracer (as the light tracer, `light`), moment (its nested integrator),
-aov (its nested integrator, and the AOVs spectrace's film keeps). Mitsuba 0.6's bdpt integrator (Mitsuba 3 has
-none) imports as spectrace's bidirectional path tracer, `bdpt`; its sppm and photonmapper integrators as spectrace's
-stochastic progressive photon mapping, `sppm`."""
+"""Integrators: each integrator module of spectrace.integrators maps the Mitsuba plugins it lists in MITSUBA_PLUGINS
+with its `from_mitsuba` (path: path, direct, volpath, volpathmis; light: ptracer; Mitsuba 0.6's bdpt and its sppm
+and photonmapper: bdpt, sppm); this module reads the keys they share (max_depth, rr_depth, hide_emitters) and the two
+integrators that hold another: moment (its nested integrator) and aov (its nested integrator, and the AOVs
+spectrace's film keeps)."""
 
 from __future__ import annotations
 
-from spectrace.integrators.bdpt import BDPT_MAX_SEGMENTS
 from spectrace.interop.mitsuba.context import ImportContext, Properties
-from spectrace.interop.mitsuba.plugins import SUPPORTED
+from spectrace.interop.mitsuba.plugins import INTEGRATOR_MODULES, SUPPORTED
 from spectrace.interop.mitsuba.tree import Element, camel_to_snake, shown
 
 # Mitsuba's aov integrator's AOV types -> spectrace's film AOVs of the same definition (kernels/aov.cl).
@@ -16,7 +15,7 @@ MITSUBA_AOVS = {"albedo": "albedo", "depth": "depth", "position": "position", "s
 
 
 def integrator(ctx: ImportContext, element: Element, data: dict) -> None:
-    """The <integrator> as the [integrator] table of `data` (the module's docstring says what each becomes)."""
+    """The <integrator> as the [integrator] table of `data`, from the module whose MITSUBA_PLUGINS name it."""
     kind = ctx.kind(element)
     if kind not in SUPPORTED["integrator"]:
         ctx.unsupported_object(element)
@@ -31,55 +30,7 @@ def integrator(ctx: ImportContext, element: Element, data: dict) -> None:
         # Mitsuba's camera rays then see no environment and pass through area lights (measured: behind a
         # hidden area light they see the lit wall it hides, with its path and direct integrators alike).
         settings["hide_emitters"] = True
-    if kind == "direct":
-        settings["max_depth"] = 2
-        ctx.notes.append(
-            f"{ctx.at(element)}: integrator 'direct' imported as path tracing with max_depth 2 "
-            "(emitters seen directly and direct light)"
-        )
-        # Mitsuba's direct integrator's sample counts per technique change the noise, not the mean.
-        properties.understood("emitter_samples", "bsdf_samples", "shading_samples")
-    elif kind == "ptracer":
-        # Mitsuba's particle tracer is spectrace's light tracer, with the same max_depth and rr_depth meaning;
-        # how many light paths one of its passes runs changes the scheduling, not the image.
-        settings["type"] = "light"
-        properties.understood("samples_per_pass")
-    elif kind == "bdpt":
-        # Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none): spectrace's bdpt, max_depth and rr_depth
-        # meaning the same; its per-strategy options change the noise, not the mean.
-        settings["type"] = "bdpt"
-        depth = settings["max_depth"]
-        if not (isinstance(depth, int) and 0 <= depth <= BDPT_MAX_SEGMENTS):
-            # Unbounded (Mitsuba's default, -1) or deeper than the kernel's subpath arrays: the longest paths
-            # spectrace's bdpt keeps, so the import renders; the paths left out carry what Russian roulette
-            # lets through beyond that many bounces.
-            ctx.notes.append(
-                f"{ctx.at(element)}: integrator 'bdpt' with max_depth {depth} imported with "
-                f"max_depth {BDPT_MAX_SEGMENTS}, the longest paths spectrace's bdpt keeps"
-            )
-            settings["max_depth"] = BDPT_MAX_SEGMENTS
-        properties.understood(*_with_snake_case("lightImage", "sampleDirect", "samples_per_pass"))
-    elif kind in ("sppm", "photonmapper"):
-        # Mitsuba 0.6's photon mappers: spectrace's sppm, which converges to the same image; the photon counts,
-        # radii and lookup sizes are its own (spectrace.integrators.sppm), so they are noted, not followed.
-        settings["type"] = "sppm"
-        own = _with_snake_case(  # a 0.x file's names arrive upgraded to snake_case
-            "photonCount", "initialRadius", "alpha", "granularity", "maxPasses", "directSamples",
-            "glossySamples", "globalPhotons", "causticPhotons", "volumePhotons", "globalLookupRadius",
-            "causticLookupRadius", "lookupSize",
-        )  # fmt: skip
-        if any(name in properties for name in own):
-            ctx.notes.append(
-                f"{ctx.at(element)}: integrator '{kind}' imported as 'sppm'; its photon counts and radii are "
-                "spectrace's own choice"
-            )
-        properties.understood(*own)
-    elif kind.startswith("volpath"):
-        ctx.notes.append(f"{ctx.at(element)}: integrator '{kind}' imported as 'path', which renders media")
-        # volpath counts no null interaction toward max_depth, and Mitsuba's thindielectric transmits by a
-        # null lobe: a pass straight through a thin sheet is no segment there (path counts it).
-        settings["count_thin_passes"] = False
-    elif kind == "moment":
+    if kind == "moment":
         # Mitsuba's moment integrator renders its nested integrator's image with the second moment as extra
         # channels: the image is the nested one's.
         nested = ctx.nested(properties, "integrator")
@@ -91,10 +42,10 @@ def integrator(ctx: ImportContext, element: Element, data: dict) -> None:
         )
         integrator(ctx, nested[0], data)
         return
-    elif kind == "aov":
+    if kind == "aov":
         aov_integrator(ctx, element, properties, data)
         return
-    data["integrator"] = settings
+    data["integrator"] = INTEGRATOR_MODULES[kind].from_mitsuba(ctx, element, properties, settings)
     ctx.origins["integrator"] = element
 
 
@@ -128,6 +79,6 @@ def aov_integrator(ctx: ImportContext, element: Element, properties: Properties,
         ctx.origins["integrator"] = element
 
 
-def _with_snake_case(*names: str) -> tuple[str, ...]:
+def with_snake_case(*names: str) -> tuple[str, ...]:
     """Mitsuba 0.6 property names as a 3.x file spells them and as a 0.x file's upgrade turns them (snake_case)."""
     return tuple(dict.fromkeys([*names, *(camel_to_snake(name) for name in names)]))

@@ -1,20 +1,24 @@
 """Which Mitsuba 3 plugins the import reads, per element, and which spectrace module maps each: the one table that
 the unsupported-plugin error and `spectrace import-mitsuba --help` name, and the tags Mitsuba's parser knows.
 
-The BSDF, emitter, texture and sensor columns come from the registries (each module's MITSUBA_PLUGINS), so a
-material, light, texture or camera that names a plugin there is imported without a change here.
+The BSDF, emitter, texture and sensor columns and the rfilters come from the registries (each module's
+MITSUBA_PLUGINS), so a material, light, texture, camera or pixel filter that names a plugin there is imported without
+a change here.
 """
 
 from __future__ import annotations
 
 from spectrace.cameras import CAMERAS
+from spectrace.integrators import INTEGRATORS
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.textures import TEXTURES
 
 
 def _modules_by_plugin(modules) -> dict:
-    """Mitsuba plugin name -> the material or light module that imports it (its MITSUBA_PLUGINS)."""
+    """Mitsuba plugin name -> the module (material, light, texture, integrator) that imports it (its
+    MITSUBA_PLUGINS)."""
     return {plugin: module for module in modules for plugin in module.MITSUBA_PLUGINS}
 
 
@@ -29,6 +33,14 @@ SURFACE_DETAIL_WRAPPERS = ("normalmap", "bumpmap", "mask")
 BSDF_WRAPPERS = ("twosided", *SURFACE_DETAIL_WRAPPERS)
 # Mitsuba sensor plugin → spectrace camera type, from the cameras' modules (spectrace.cameras).
 CAMERA_PLUGINS = {plugin: name for name, module in CAMERAS.items() for plugin in module.MITSUBA_PLUGINS}
+CAMERA_MODULES = _modules_by_plugin(CAMERAS.values())
+# Mitsuba rfilter plugin → spectrace pixel filter, from the filters' modules (spectrace.pixel_filters); another
+# rfilter is replaced by the box filter with a note.
+FILTER_PLUGINS = {plugin: name for name, module in PIXEL_FILTERS.items() for plugin in module.MITSUBA_PLUGINS}
+# Mitsuba integrator plugin → spectrace integrator, from the integrators' modules (spectrace.integrators); `moment`
+# and `aov` hold another integrator, whose image they render (integrators.py).
+INTEGRATOR_MODULES = _modules_by_plugin(INTEGRATORS.values())
+INTEGRATOR_WRAPPERS = ("moment", "aov")
 SUPPORTED = {
     "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS, "null"),  # null: a shape without material (shapes.py)
@@ -36,18 +48,7 @@ SUPPORTED = {
     "texture": tuple(TEXTURE_MODULES),
     "sensor": tuple(CAMERA_PLUGINS),
     "film": ("hdrfilm", "specfilm"),
-    "integrator": (
-        "path",
-        "direct",
-        "volpath",
-        "volpathmis",
-        "moment",
-        "aov",
-        "ptracer",
-        "bdpt",
-        "sppm",
-        "photonmapper",
-    ),
+    "integrator": (*INTEGRATOR_MODULES, *INTEGRATOR_WRAPPERS),
     "medium": ("homogeneous",),
     "volume": ("constvolume",),  # a homogeneous medium's sigma_t or albedo (media.py)
     "phase": ("hg", "isotropic"),

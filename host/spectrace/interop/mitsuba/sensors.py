@@ -1,7 +1,8 @@
 """The sensor with its film and sampler: the camera (perspective with fov and any fov_axis, or focal_length;
 thinlens; orthographic; to_world as lookat, translate, rotate, scale or matrix), hdrfilm width and height,
 specfilm (its responses as the film's sensor, a CSV beside the TOML), the reconstruction filter, and the sampler's
-sample_count and seed. Mitsuba sensor plugins map to spectrace cameras through the cameras' MITSUBA_PLUGINS."""
+sample_count and seed. Mitsuba sensor plugins map to spectrace cameras through the cameras' MITSUBA_PLUGINS, each
+camera module's `from_mitsuba` reading its own properties, and rfilters through the pixel filters'."""
 
 from __future__ import annotations
 
@@ -10,13 +11,19 @@ import re
 
 import numpy as np
 
-from spectrace.errors import SpectraceError
+from spectrace.integrators import INTEGRATORS
 from spectrace.interop.mitsuba.context import ImportContext, Properties
-from spectrace.interop.mitsuba.plugins import CAMERA_PLUGINS, SPECTRUM_PLUGINS, SUPPORTED
+from spectrace.interop.mitsuba.plugins import (
+    CAMERA_MODULES,
+    CAMERA_PLUGINS,
+    FILTER_PLUGINS,
+    SPECTRUM_PLUGINS,
+    SUPPORTED,
+)
 from spectrace.interop.mitsuba.textures import spectrum_element
 from spectrace.interop.mitsuba.transforms import to_world
 from spectrace.interop.mitsuba.tree import Element, shown
-from spectrace.pixel_filters import PixelFilter
+from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.spectral.grid import GRID_MAX_NM, GRID_MIN_NM
 
 # hdrfilm properties about the file Mitsuba writes, not the image: nothing to import.
@@ -68,31 +75,22 @@ def sensor(ctx: ImportContext, element: Element, data: dict) -> None:
     origin = matrix[:3, 3]
     forward = linear @ [0.0, 0.0, 1.0]
     up = linear @ [0.0, 1.0, 0.0]
-    data["camera"] = {
-        "type": CAMERA_PLUGINS[kind],
-        "origin": origin.tolist(),
-        "target": (origin + forward / np.linalg.norm(forward)).tolist(),
-        "up": (up / np.linalg.norm(up)).tolist(),
-    }
-    if kind == "orthographic":
-        # Mitsuba's view spans [-1, 1] along camera x and [-1/aspect, 1/aspect] along y, then to_world scales it.
-        half_x, half_y = np.linalg.norm(linear @ [1.0, 0.0, 0.0]), np.linalg.norm(up)
-        if not math.isclose(half_x, half_y, rel_tol=1e-6):
-            ctx.unsupported_plugin(element, " whose to_world scales x and y differently")
-            return
-        data["camera"]["view_width"] = 2.0 * float(half_x)
-    else:
-        data["camera"]["fov"] = fov_x(ctx, properties, width / height, element)
-        data["camera"]["fov_axis"] = "x"
-    if kind == "thinlens":
-        if "aperture_radius" not in properties:
-            raise ctx.fail(element, "thinlens needs aperture_radius (Mitsuba 3 requires it too)", "type")
-        aperture = ctx.number(properties["aperture_radius"])
-        # Mitsuba's default focus is 10 000 scene units away: as good as infinity for a scene of metres.
-        focus = ctx.number(properties["focus_distance"]) if "focus_distance" in properties else 1e4
-        if not aperture >= 0.0 or not focus > 0.0:
-            raise ctx.fail(element, "thinlens needs aperture_radius >= 0 and focus_distance > 0", "type")
-        data["camera"] |= {"aperture_radius": aperture, "focus_distance": focus}
+    camera = CAMERA_MODULES[kind].from_mitsuba(
+        ctx,
+        element,
+        properties,
+        {
+            "type": CAMERA_PLUGINS[kind],
+            "origin": origin.tolist(),
+            "target": (origin + forward / np.linalg.norm(forward)).tolist(),
+            "up": (up / np.linalg.norm(up)).tolist(),
+        },
+        linear,
+        width / height,
+    )
+    if camera is None:
+        return
+    data["camera"] = camera
     if "near_clip" in properties:
         data["camera"]["near_clip"] = ctx.number(properties["near_clip"])
         if not data["camera"]["near_clip"] >= 0.0:
@@ -173,34 +171,18 @@ def specfilm_sensor(ctx: ImportContext, film: Element, properties: Properties) -
 
 
 def pixel_filter(ctx: ImportContext, rfilter: Element | None) -> dict:
-    """The film's filter: Mitsuba 3's own default, its Gaussian of σ = 0.5, when the file names none."""
+    """The film's filter, from the filter module whose MITSUBA_PLUGINS name it: Mitsuba 3's own default, its
+    Gaussian of σ = 0.5, when the file names none."""
     if rfilter is None:
         return {"type": "gaussian", "stddev": 0.5}
     kind = rfilter.get("type") or ""
     properties = ctx.properties(rfilter)
-    if kind == "box":
-        return {"type": "box"}
-    if kind == "tent":
-        return {"type": "tent"}  # radius 1 in Mitsuba, fixed
-    if kind == "gaussian":
-        stddev = ctx.number(properties["stddev"]) if "stddev" in properties else 0.5
-        try:  # the filters' own range (spectrace.pixel_filters)
-            PixelFilter("gaussian", stddev=stddev)
-        except SpectraceError as exc:
-            raise ctx.fail(rfilter, exc.message, "type") from None
-        return {"type": "gaussian", "stddev": stddev}
-    if kind == "mitchell":
-        table: dict[str, object] = {"type": "mitchell", "radius": 2.0}
-        for key in ("B", "C"):
-            if key in properties:
-                value = ctx.number(properties[key])
-                if not 0.0 <= value <= 1.0:
-                    raise ctx.fail(rfilter, f"{key} must lie in [0, 1], got {value:g}", "type")
-                table[key.lower()] = value
-        return table
+    if kind in FILTER_PLUGINS:
+        return PIXEL_FILTERS[FILTER_PLUGINS[kind]].from_mitsuba(ctx, rfilter, properties)
+    *others, last = PIXEL_FILTERS
     ctx.notes.append(
-        f"{ctx.at(rfilter)}: reconstruction filter '{shown(kind)}' not imported: spectrace has box, tent, "
-        "gaussian and mitchell; a box filter used"
+        f"{ctx.at(rfilter)}: reconstruction filter '{shown(kind)}' not imported: spectrace has {', '.join(others)} "
+        f"and {last}; a box filter used"
     )
     return {"type": "box"}
 
@@ -240,10 +222,11 @@ def fov_x(ctx: ImportContext, properties: dict[str, Element], aspect: float, ele
 
 
 def whole_pixel_filter(ctx: ImportContext, data: dict) -> None:
-    """spectrace's bdpt and sppm estimate whole pixels (spectrace.integrators.light, .sppm): a film filter
-    other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
+    """The integrators that estimate whole pixels (those whose REFUSES names pixel filters: bdpt, sppm): a film
+    filter other than the box (Mitsuba's default is a Gaussian) becomes the box with a note, so the import renders."""
     film, integrator = data.get("film"), data.get("integrator", {})
-    if film is None or integrator.get("type") not in ("bdpt", "sppm") or film["filter"]["type"] == "box":
+    module = INTEGRATORS.get(integrator.get("type", ""))
+    if film is None or module is None or "pixel filters" not in module.REFUSES or film["filter"]["type"] == "box":
         return
     ctx.notes.append(
         f"{ctx.at(ctx.origins['film'])}: integrator '{integrator['type']}' estimates whole pixels: the film's "

@@ -39,8 +39,9 @@ from spectrace.io.output_files import check_output_file
 
 
 class Import(Context):
-    """The context each material and light module's `from_pbrt` is handed: the Context's readers, and what several
-    mappings share (the plugin modules reach the importer only through it)."""
+    """The context each plugin module's `from_pbrt` is handed (material, light, camera, pixel filter, integrator,
+    texture): the Context's readers, and what several mappings share (the plugin modules reach the importer only
+    through it)."""
 
     def reflectance(self, entity: Entity, name: str, default: float) -> dict:
         """A reflectance: a spectrum (an RGB in [0, 1]), a spectrum texture, or the number `default`."""
@@ -65,6 +66,10 @@ class Import(Context):
     def texture_table(self, texture: Entity) -> dict:
         """The TOML table of a pbrt texture."""
         return textures.texture_table(self, texture)
+
+    def texture_reference(self, entity: Entity, name: str) -> dict | None:
+        """A `"texture name" "tex"` parameter as {"texture": key} (spectrum textures), or None."""
+        return textures.texture_reference(self, entity, name)
 
     def environment_map(self, light: Entity, matrix: np.ndarray, scale: float) -> dict:
         """The `envmap` table of an image infinite light, its map resampled and written beside the TOML."""

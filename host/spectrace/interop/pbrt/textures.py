@@ -1,18 +1,23 @@
-"""pbrt-v4's textures as spectrace's: `imagemap` as a bitmap, `checkerboard` (2D), `constant`, and `scale` of a
-spectrum or an image (the scaled image written beside the TOML as OpenEXR); each with pbrt's (u, v) mapping carried
-into spectrace's."""
+"""pbrt-v4's textures as spectrace's: `imagemap` and `checkerboard` (2D) by the texture modules that name them in
+PBRT_TEXTURES (bitmap, checkerboard: their `from_pbrt`, handed pbrt's (u, v) mapping), `constant` as a spectrum, and
+`scale` of a spectrum or an image (the scaled image written beside the TOML as OpenEXR), which are no texture of
+spectrace's."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from spectrace.interop.pbrt.context import Context, unique_name
 from spectrace.interop.pbrt.graphics_state import Entity
 from spectrace.interop.pbrt.parser import error, shown
+from spectrace.textures import TEXTURES as TEXTURE_MODULES
 
-TEXTURES = ("imagemap", "checkerboard", "constant")
+# pbrt-v4 texture type -> the texture module that maps it (spectrace.textures, each module's PBRT_TEXTURES).
+_MODULES: dict[str, Any] = {kind: module for module in TEXTURE_MODULES.values() for kind in module.PBRT_TEXTURES}
+TEXTURES = (*_MODULES, "constant")
 
 
 def texture_reference(context: Context, entity: Entity, name: str) -> dict | None:
@@ -53,47 +58,7 @@ def texture_table(context: Context, texture: Entity) -> dict:
         raise error(texture.location, f"{texture.label()}: mapping '{shown(str(mapping))}' (spectrace takes uv)")
     us, vs = context.one(texture, "uscale", 1.0), context.one(texture, "vscale", 1.0)
     ud, vd = context.one(texture, "udelta", 0.0), context.one(texture, "vdelta", 0.0)
-    if kind == "checkerboard":
-        if context.integer(texture, "dimension", 2) != 2:
-            raise error(texture.location, f"{texture.label()}: a 3D checkerboard (spectrace's is 2D)")
-        sides = []
-        for side, default in (("tex1", 1.0), ("tex2", 0.0)):
-            value = context.spectrum(texture, side, "albedo") or texture_reference(context, texture, side)
-            sides.append(value or {"value": default})
-        # spectrace's texture v is 1 - the file's v (mesh files store v up): s = us u + ud, t = vs v + vd.
-        return {
-            "texture": "checkerboard",
-            "color0": sides[0],
-            "color1": sides[1],
-            "uv_scale": [us, -vs],
-            "uv_offset": [ud, vs + vd],
-        }
-    path = context.file_path(texture, "filename")
-    if path is None:
-        raise error(texture.location, f'{texture.label()} needs "string filename"')
-    table: dict = {"texture": "bitmap", "file": context.relative(path)}
-    encoding = context.string(texture, "encoding")
-    if encoding == "linear":
-        table["raw"] = True
-    elif encoding not in (None, "sRGB"):
-        context.warn(texture.location, f"encoding '{shown(encoding)}' not imported (read as sRGB)")
-    filter_name = context.string(texture, "filter", "bilinear")
-    table["filter"] = {
-        "point": "nearest",
-        "bilinear": "bilinear",
-        "trilinear": "trilinear",
-        "ewa": "trilinear",
-    }.get(filter_name or "", "bilinear")
-    wrap = context.string(texture, "wrap", "repeat")
-    if wrap not in ("repeat", "clamp"):
-        context.warn(texture.location, f"wrap '{shown(wrap or '')}' imported as clamp")
-        wrap = "clamp"
-    table["wrap"] = wrap
-    if context.one(texture, "scale", 1.0) != 1.0 or context.boolean(texture, "invert", False):
-        context.warn(texture.location, '"scale" and "invert" of an image texture not imported')
-    # pbrt looks images up at (s, 1 - t), t = vs v + vd; spectrace at (u', v') = uv_scale (u, 1 - v) + uv_offset.
-    table |= {"uv_scale": [us, vs], "uv_offset": [ud, 1.0 - vs - vd]}
-    return table
+    return _MODULES[kind].from_pbrt(context, texture, (us, vs, ud, vd))
 
 
 def scaled_texture(context: Context, texture: Entity) -> dict:
