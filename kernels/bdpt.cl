@@ -53,8 +53,9 @@
 #define BDPT_PIXELS_PER_LIGHT_PATH 2
 #endif
 
-/* Test builds only: BDPT_ONLY_S / BDPT_ONLY_T (both defined) keep that one strategy; BDPT_UNWEIGHTED drops the MIS
- * weights, so that one strategy alone estimates the light of paths of s + t − 1 segments by itself. */
+/* Test builds only: BDPT_ONE_STRATEGY keeps the one strategy (RenderParams.bdpt_only_s, bdpt_only_t), a run-time
+ * choice so that one program serves every strategy; BDPT_UNWEIGHTED drops the MIS weights, so that one strategy
+ * alone estimates the light of paths of s + t − 1 segments by itself. */
 
 #define BDPT_CAMERA 0
 #define BDPT_LIGHT 1
@@ -334,7 +335,7 @@ inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, co
                              const BdptVertex *camera, const BdptVertex *sampled, int s, int t, float3 to_q,
                              float camera_rev, float light_share);
 inline float4 bdpt_hero(float4 value, int hero);
-inline int bdpt_keeps(int s, int t);
+inline int bdpt_keeps(__global const RenderParams *params, int s, int t);
 
 /* Follows a subpath from its first vertex path[0] along ray (leaving with solid-angle density pdf_dir and
  * throughput beta) until it has max_vertices vertices, leaves the scene, or Russian roulette or a BSDF ends it.
@@ -401,7 +402,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         v->mis_sum = 0.0f;
         if (seen_light) {
             v->hero = hero;
-            if (bdpt_keeps(0, count + 1) && any(v->le != (float4)(0.0f))) {
+            if (bdpt_keeps(scene->params, 0, count + 1) && any(v->le != (float4)(0.0f))) {
                 float weight = bdpt_mis_weight(scene, w, path, path, 0, 0, count + 1, (float3)(0.0f), 0.0f,
                                                light_share);
                 *seen_through += bdpt_hero(v->beta * v->le, hero) * weight;
@@ -565,10 +566,10 @@ inline float4 bdpt_hero(float4 value, int hero)
     return value;
 }
 
-inline int bdpt_keeps(int s, int t)
+inline int bdpt_keeps(__global const RenderParams *params, int s, int t)
 {
-#if defined(BDPT_ONLY_S) && defined(BDPT_ONLY_T)
-    return s == BDPT_ONLY_S && t == BDPT_ONLY_T;
+#ifdef BDPT_ONE_STRATEGY
+    return s == params->bdpt_only_s && t == params->bdpt_only_t;
 #else
     return 1;
 #endif
@@ -801,7 +802,7 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
 
     /* t = 1 first, its records in the order of s (lens points from the first pixel's sampler). */
     for (int s = 2; s <= nl && s <= last_segment; ++s) {
-        if (bdpt_keeps(s, 1)) {
+        if (bdpt_keeps(params, s, 1)) {
             bdpt_splat(scene, &w, &sampler, light, camera, s, light_share, cmf, records, rays_traced);
         }
     }
@@ -828,19 +829,19 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
         float4 radiance = seen_through;
         for (int t = 2; t <= nc; ++t) {
             BdptVertex *pt = &camera[t - 1];
-            if (bdpt_keeps(0, t) && pt->light >= 0 && any(pt->le != (float4)(0.0f)) &&
+            if (bdpt_keeps(params, 0, t) && pt->light >= 0 && any(pt->le != (float4)(0.0f)) &&
                 !(pt->at_infinity && t == 2 && hide_environment)) {
                 float4 value = pt->beta * pt->le;
                 float weight = bdpt_mis_weight(scene, &w, light, camera, 0, 0, t, (float3)(0.0f), 0.0f, light_share);
                 radiance += bdpt_hero(value, pt->hero) * weight;
             }
             if (t > last_segment || !bdpt_joinable(scene, pt)) continue;
-            if (have_sampled && bdpt_keeps(1, t)) {
+            if (have_sampled && bdpt_keeps(params, 1, t)) {
                 uint query = opacity_query(&sampler, (1u << 8) ^ (uint)t, QUERY_SHADOW);
                 radiance += bdpt_connect(scene, &w, light, camera, &sampled, 1, t, query, light_share, rays_traced);
             }
             for (int s = 2; s <= nl && s + t - 1 <= last_segment; ++s) {
-                if (!bdpt_keeps(s, t)) continue;
+                if (!bdpt_keeps(params, s, t)) continue;
                 uint query = opacity_query(&sampler, ((uint)s << 8) ^ (uint)t, QUERY_SHADOW);
                 radiance += bdpt_connect(scene, &w, light, camera, &light[s - 1], s, t, query, light_share,
                                          rays_traced);

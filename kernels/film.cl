@@ -1,39 +1,38 @@
 /* The film on the device: what a finished pixel sample adds, and how. Each pixel holds (ΣX, ΣY, ΣZ, number of
  * dropped samples) in a float4; the host divides by the samples done. The optional spectral film holds
- * SPECTRAL_BINS band sums per pixel. Both kernel shapes (render_pass.cl, wavefront_pass.cl) and the estimator's
+ * RenderParams.spectral_bins band sums per pixel. Both kernel shapes (render_pass.cl, wavefront_pass.cl) and the estimator's
  * test harness add samples only through this file, so they form the same numbers in the same order.
  *
  * Film XYZ = ∫ L(λ) cmf(λ) dλ / ∫ȳ: the CMF table the host uploads is already divided by ∫ȳ, so a constant
  * radiance 1 gives Y = 1. A sample's four wavelengths give four estimates L(λᵢ) cmf(λᵢ) / p(λᵢ), averaged.
  *
- * Film responses (optional): FILM_RESPONSES more curves r_c(λ) (other observers' x̄ȳz̄, a camera's measured channel
- * sensitivities), each estimated the same way, ∫ L r_c dλ, into FILM_RESPONSES floats per pixel of `response_film`.
+ * Film responses (optional): RenderParams.film_responses more curves r_c(λ) (other observers' x̄ȳz̄, a camera's
+ * measured channel sensitivities), each estimated the same way, ∫ L r_c dλ, into that many floats per pixel of
+ * `response_film`.
  * With WAVELENGTH_TABLE the wavelengths follow a tabulated pdf the host shaped after the film's curves (as Mitsuba
  * 3's specfilm samples by its response curves): a piecewise-constant pdf on the grid's intervals, inverted by binary
  * search on its CDF (pbrt-v4's PiecewiseConstant1D does the same). The film table `cmf` then holds, in float4
- * rows: GRID_SAMPLES rows of the XYZ film's CMFs, FILM_RESPONSE_GROUPS × GRID_SAMPLES rows of the response curves
+ * rows: GRID_SAMPLES rows of the XYZ film's CMFs, ⌈film_responses / 4⌉ × GRID_SAMPLES rows of the response curves
  * four at a time, then the sampling table: GRID_SAMPLES floats of CDF at the grid's nodes and GRID_SAMPLES - 1
  * floats of pdf (1/nm) on the intervals between them (host: spectrace.spectral.film_response). Renders of the
- * default CIE 1931 film define neither and carry none of this code. */
+ * default CIE 1931 film define neither and carry none of this code. The counts and the bands' range are run-time
+ * values (RenderParams), so one program serves every film of a kind: only what needs code, not its sizes, is a
+ * build define. */
 #ifndef SPECTRACE_FILM_CL
 #define SPECTRACE_FILM_CL
 
 #include "wavelengths.cl"
 
-/* Optional spectral film: SPECTRAL_BINS equal bands over [SPECTRAL_MIN_NM, SPECTRAL_MAX_NM], each accumulating
- * the band-averaged radiance (1/Δ)∫_band L dλ, estimated per lane as L(λ)·[λ in band] / (p(λ) Δ). Renders that
- * ask for no spectral output build without SPECTRAL_BINS and carry none of its code. */
-#ifndef SPECTRAL_BINS
-#define SPECTRAL_BINS 0
-#define SPECTRAL_MIN_NM GRID_MIN_NM
-#define SPECTRAL_MAX_NM GRID_MAX_NM
-#endif
+/* Optional spectral film (SPECTRAL_FILM): RenderParams.spectral_bins equal bands over [spectral_min_nm,
+ * spectral_max_nm], each accumulating the band-averaged radiance (1/Δ)∫_band L dλ, estimated per lane as
+ * L(λ)·[λ in band] / (p(λ) Δ). Renders that ask for no spectral output build without SPECTRAL_FILM and carry none
+ * of its code. */
 
-#ifndef FILM_RESPONSES
-#define FILM_RESPONSES 0
-#endif
-#define FILM_RESPONSE_GROUPS ((FILM_RESPONSES + 3) / 4)
-#define FILM_TABLE_SAMPLING_ROW (GRID_SAMPLES * (1 + FILM_RESPONSE_GROUPS))
+/* Groups of four response curves in the film table, after its XYZ rows. */
+inline int film_response_groups(int film_responses)
+{
+    return (film_responses + 3) / 4;
+}
 
 inline float4 cmf_at(__global const float4 *cmf, int index, float frac)
 {
@@ -52,27 +51,36 @@ inline float4 spectrum_to_xyz_estimate(float4 radiance, __global const float4 *c
     return 0.25f * (float4)(xyz.x, xyz.y, xyz.z, 0.0f);
 }
 
-inline void add_to_spectral_film(__global float *spectral_film, int pixel, float4 radiance,
-                                 const SampledWavelengths *w)
+/* The width of one band of the spectral film, nm. */
+inline float spectral_band_nm(__global const RenderParams *params)
 {
-#if SPECTRAL_BINS > 0
-    const float band = (SPECTRAL_MAX_NM - SPECTRAL_MIN_NM) / (float)SPECTRAL_BINS;
+    return (params->spectral_max_nm - params->spectral_min_nm) / (float)params->spectral_bins;
+}
+
+inline void add_to_spectral_film(__global float *spectral_film, int pixel, float4 radiance,
+                                 const SampledWavelengths *w, __global const RenderParams *params)
+{
+#ifdef SPECTRAL_FILM
+    const int bins = params->spectral_bins;
+    const float band = spectral_band_nm(params);
     float4 value = 0.25f * radiance / (w->pdf * band);
     float lambda[4] = {w->lambda.x, w->lambda.y, w->lambda.z, w->lambda.w};
     float values[4] = {value.x, value.y, value.z, value.w};
     for (int i = 0; i < 4; ++i) {
-        int bin = (int)floor((lambda[i] - SPECTRAL_MIN_NM) / band);
-        if (bin >= 0 && bin < SPECTRAL_BINS) spectral_film[pixel * SPECTRAL_BINS + bin] += values[i];
+        int bin = (int)floor((lambda[i] - params->spectral_min_nm) / band);
+        if (bin >= 0 && bin < bins) spectral_film[pixel * bins + bin] += values[i];
     }
 #endif
 }
 
 /* The sample's four wavelengths from u ∈ [0, 1): the hero-wavelength rotations, through the film's tabulated pdf
- * when it has one, else the visible-range pdf of wavelengths.cl. */
-inline SampledWavelengths sample_film_wavelengths(float u, __global const float4 *film_table)
+ * when it has one (after the XYZ rows and those of the film's `film_responses` curves), else the visible-range pdf
+ * of wavelengths.cl. */
+inline SampledWavelengths sample_film_wavelengths(float u, __global const float4 *film_table, int film_responses)
 {
 #ifdef WAVELENGTH_TABLE
-    __global const float *cdf = (__global const float *)(film_table + FILM_TABLE_SAMPLING_ROW);
+    __global const float *cdf =
+        (__global const float *)(film_table + GRID_SAMPLES * (1 + film_response_groups(film_responses)));
     __global const float *density = cdf + GRID_SAMPLES;
     const float step_nm = (GRID_MAX_NM - GRID_MIN_NM) / (float)(GRID_SAMPLES - 1);
     float4 us = hero_rotations(u);
@@ -98,19 +106,21 @@ inline SampledWavelengths sample_film_wavelengths(float u, __global const float4
 
 /* Adds the sample's estimates of ∫ L r_c dλ for the film's response curves to the pixel's response sums. */
 inline void add_to_response_film(__global float *response_film, int pixel, float4 radiance,
-                                 __global const float4 *film_table, const SampledWavelengths *w)
+                                 __global const float4 *film_table, const SampledWavelengths *w,
+                                 __global const RenderParams *params)
 {
-#if FILM_RESPONSES > 0
+#ifdef WAVELENGTH_TABLE
+    const int responses = params->film_responses;
     float4 weight = 0.25f * radiance / w->pdf;
-    for (int group = 0; group < FILM_RESPONSE_GROUPS; ++group) {
+    for (int group = 0; group < film_response_groups(responses); ++group) {
         __global const float4 *curves = film_table + (1 + group) * GRID_SAMPLES;
         float4 value = weight.x * cmf_at(curves, w->grid_index.x, w->grid_frac.x)
                      + weight.y * cmf_at(curves, w->grid_index.y, w->grid_frac.y)
                      + weight.z * cmf_at(curves, w->grid_index.z, w->grid_frac.z)
                      + weight.w * cmf_at(curves, w->grid_index.w, w->grid_frac.w);
         float values[4] = {value.x, value.y, value.z, value.w};
-        for (int k = 0; k < 4 && 4 * group + k < FILM_RESPONSES; ++k)
-            response_film[pixel * FILM_RESPONSES + 4 * group + k] += values[k];
+        for (int k = 0; k < 4 && 4 * group + k < responses; ++k)
+            response_film[pixel * responses + 4 * group + k] += values[k];
     }
 #endif
 }
@@ -120,13 +130,14 @@ inline void add_to_response_film(__global float *response_film, int pixel, float
  * estimate (a NaN or inf from a degenerate path) would
  * spoil the pixel for good: it is dropped and counted in w instead, and the host reports the count. */
 inline void add_pixel_sample(float4 *accumulated, __global float *spectral_film, __global float *response_film,
-                             int pixel, float4 radiance, __global const float4 *cmf, const SampledWavelengths *w)
+                             int pixel, float4 radiance, __global const float4 *cmf, const SampledWavelengths *w,
+                             __global const RenderParams *params)
 {
     float4 xyz = spectrum_to_xyz_estimate(radiance, cmf, w);
     if (isfinite(xyz.x) && isfinite(xyz.y) && isfinite(xyz.z)) {
         *accumulated += xyz;
-        add_to_spectral_film(spectral_film, pixel, radiance, w);
-        add_to_response_film(response_film, pixel, radiance, cmf, w);
+        add_to_spectral_film(spectral_film, pixel, radiance, w, params);
+        add_to_response_film(response_film, pixel, radiance, cmf, w, params);
     } else {
         accumulated->w += 1.0f;
     }

@@ -3,7 +3,7 @@
  * One launch runs one pixel sample's light paths: as many as the film has pixels, work-item k tracing path k (the
  * sampler keyed by k as a pixel), or the work-items listed in `items` when the host launches some paths again for
  * their later splat records. Each writes its splat records to its own `capacity` slots and the number it made to
- * counts; the host adds them to the film (spectrace.engine.light_tracer). With SPECTRAL_BINS each record also
+ * counts; the host adds them to the film (spectrace.engine.light_tracer). With SPECTRAL_FILM each record also
  * carries its four lanes' band values and bands (splat_band_value, splat_band), and with a pixel filter other than
  * the box its film position (splat_film); one-element placeholders when not recorded.
  * hide_environment comes from the host as an argument of its own, so this kernel reads no RenderParams field for it. */

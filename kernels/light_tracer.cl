@@ -38,8 +38,8 @@ typedef struct {
     int begin;
     int capacity;
     int count;
-    __global float4 *band_value; /* with SPECTRAL_BINS: each lane's band-averaged radiance estimate, W/(m² sr nm) */
-    __global int4 *band;         /* with SPECTRAL_BINS: each lane's band, -1 outside the bands or when dropped */
+    __global float4 *band_value; /* with SPECTRAL_FILM: each lane's band-averaged radiance estimate, W/(m² sr nm) */
+    __global int4 *band;         /* with SPECTRAL_FILM: each lane's band, -1 outside the bands or when dropped */
     __global float2 *film;       /* with a filter other than the box: the film position, pixels */
 } SplatRecords;
 
@@ -83,12 +83,12 @@ inline void record_splat(SplatRecords *r, int pixel, float2 film, float4 value, 
     int dropped = xyz.w != 0.0f;
     r->xyz[slot] = xyz;
     r->pixel[slot] = pixel;
-#if SPECTRAL_BINS > 0
+#ifdef SPECTRAL_FILM
     /* As add_to_spectral_film (film.cl) adds a camera path's sample, lane by lane; the host adds them in order. */
-    const float band = (SPECTRAL_MAX_NM - SPECTRAL_MIN_NM) / (float)SPECTRAL_BINS;
+    const float band = spectral_band_nm(params);
     float4 lanes = 0.25f * value / (w->pdf * band);
-    int4 bins = convert_int4(floor((w->lambda - (float4)(SPECTRAL_MIN_NM)) / band));
-    bins = select((int4)(-1), bins, bins >= (int4)(0) && bins < (int4)(SPECTRAL_BINS));
+    int4 bins = convert_int4(floor((w->lambda - (float4)(params->spectral_min_nm)) / band));
+    bins = select((int4)(-1), bins, bins >= (int4)(0) && bins < (int4)(params->spectral_bins));
     r->band_value[slot] = lanes;
     r->band[slot] = dropped ? (int4)(-1) : bins;
 #endif

@@ -17,7 +17,7 @@ inline Ray start_pixel_sample(__global const RenderParams *params, __global cons
                               int sample_index, Sampler *sampler, SampledWavelengths *w, float *weight)
 {
     *sampler = sampler_start((uint)params->seed, (uint)pixel, (uint)sample_index);
-    *w = sample_film_wavelengths(sample_1d(sampler), cmf);
+    *w = sample_film_wavelengths(sample_1d(sampler), cmf, params->film_responses);
     float2 film = pixel_filter_sample(params, pixel % params->width, pixel / params->width, sample_2d(sampler),
                                       weight);
     return camera_ray(params, film, sampler);

@@ -41,7 +41,7 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
 #else
         float4 radiance = weight * TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
 #endif
-        add_pixel_sample(&accumulated, spectral_film, response_film, pixel, radiance, cmf, &w);
+        add_pixel_sample(&accumulated, spectral_film, response_film, pixel, radiance, cmf, &w, params);
     }
     film[pixel] = accumulated;
 #if FILM_AOVS

@@ -238,7 +238,14 @@ typedef struct {
     int instanced_shape_count;  /* analytic shapes of instanced objects (AnalyticShape rows after shape_count) */
     int null_surfaces;       /* 1: some surface has neither material nor medium (a light seen through): visibility
                                 queries cross it, as they cross media's boundaries */
-    int pad_params[1];
+    /* The film's sizes (kernels/film.cl), run-time values so that one program serves every film of a kind. */
+    int spectral_bins;       /* SPECTRAL_FILM: equal bands over [spectral_min_nm, spectral_max_nm] */
+    int film_responses;      /* WAVELENGTH_TABLE: response curves after the film table's XYZ rows */
+    float spectral_min_nm;
+    float spectral_max_nm;
+    int bdpt_only_s;         /* test builds with BDPT_ONE_STRATEGY (kernels/bdpt.cl): the one strategy kept */
+    int bdpt_only_t;
+    int pad_params[3];       /* keeps `lens` 16-byte aligned */
     float4 lens;             /* CAMERA_THINLENS: aperture radius, focus distance along camera_forward (scene
                                 units), 0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:

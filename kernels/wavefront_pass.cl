@@ -35,7 +35,8 @@ KERNEL void wavefront_slot_size(__global uint *size)
 
 /* Adds the slot's finished sample to the pixel's film (and AOV sums). */
 inline void add_slot_sample(const PathSlot *slot, int pixel, __global float4 *film, __global float *spectral_film,
-                            __global float *response_film, __global float4 *aov_film, __global const float4 *cmf)
+                            __global float *response_film, __global float4 *aov_film, __global const float4 *cmf,
+                            __global const RenderParams *params)
 {
     float4 radiance = slot->weight * slot->radiance;
 #if FILM_AOVS
@@ -45,7 +46,7 @@ inline void add_slot_sample(const PathSlot *slot, int pixel, __global float4 *fi
     for (int i = 0; i < AOV_FLOAT4S_PER_PIXEL; ++i) aov_film[pixel * AOV_FLOAT4S_PER_PIXEL + i] = sums[i];
 #endif
     float4 accumulated = film[pixel];
-    add_pixel_sample(&accumulated, spectral_film, response_film, pixel, radiance, cmf, &slot->w);
+    add_pixel_sample(&accumulated, spectral_film, response_film, pixel, radiance, cmf, &slot->w, params);
     film[pixel] = accumulated;
 }
 
@@ -61,7 +62,7 @@ inline int start_slot_sample(__global const RenderParams *params, PathSlot *slot
         slot->radiance = (float4)(0.0f);
         slot->sample = sample_index;
         if (slot->path.segments <= max_segments(params)) return 1;
-        add_slot_sample(slot, pixel, film, spectral_film, response_film, aov_film, cmf);
+        add_slot_sample(slot, pixel, film, spectral_film, response_film, aov_film, cmf, params);
     }
     return 0;
 }
@@ -102,7 +103,7 @@ KERNEL void wavefront_advance(SCENE_KERNEL_PARAMS, __global const float4 *cmf, _
     PathSlot slot = slots[pixel];
     int live = path_segment(&scene, &slot.w, &slot.sampler, &slot.path, &slot.radiance, &slot.rays_traced);
     if (!live) {
-        add_slot_sample(&slot, pixel, film, spectral_film, response_film, aov_film, cmf);
+        add_slot_sample(&slot, pixel, film, spectral_film, response_film, aov_film, cmf, params);
         live = start_slot_sample(params, &slot, pixel, slot.sample + 1, film, spectral_film, response_film, aov_film,
                                  cmf);
     }

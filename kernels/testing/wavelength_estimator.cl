@@ -31,12 +31,13 @@ KERNEL void sample_wavelength_pdf(__global const float *u, __global float *lambd
     evaluated_pdf[i] = visible_wavelength_pdf(w.lambda.x);
 }
 
-/* The film's wavelength sampler (film.cl: tabulated when built with WAVELENGTH_TABLE): the hero λ and its pdf. */
-KERNEL void sample_film_wavelength_pdf(__global const float4 *film_table, __global const float *u,
-                                         __global float *lambda, __global float *sampled_pdf)
+/* The film's wavelength sampler (film.cl: tabulated when built with WAVELENGTH_TABLE, after the rows of the film's
+ * `film_responses` curves): the hero λ and its pdf. */
+KERNEL void sample_film_wavelength_pdf(__global const float4 *film_table, int film_responses,
+                                         __global const float *u, __global float *lambda, __global float *sampled_pdf)
 {
     int i = get_global_id(0);
-    SampledWavelengths w = sample_film_wavelengths(u[i], film_table);
+    SampledWavelengths w = sample_film_wavelengths(u[i], film_table, film_responses);
     lambda[i] = w.lambda.x;
     sampled_pdf[i] = w.pdf.x;
 }

@@ -59,8 +59,9 @@ def test_the_unsupported_message_lists_the_declared_plugins(tmp_path):
         part.split(" ", 1)
         for part in re.search(r"\(spectrace imports (.*)\)$", caught.value.message).group(1).split("; ")
     )
-    # Besides the materials' plugins, the adapters that wrap one bsdf (twosided and the surface-detail ones).
-    adapters = {"twosided", "normalmap", "bumpmap", "mask"}
+    # Besides the materials' plugins, the adapters that wrap one bsdf (twosided and the surface-detail ones) and
+    # `null`, a shape without material.
+    adapters = {"twosided", "normalmap", "bumpmap", "mask", "null"}
     assert set(listed["bsdf"].split(", ")) == {p for p, _ in _plugins(MATERIALS.values())} | adapters
     assert set(listed["emitter"].split(", ")) == {p for p, _ in _plugins([*LIGHTS.values(), area])}
 

@@ -44,7 +44,9 @@ from tests.render.test_light_tracer import (
 import spectrace
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from scene_text import camera_film
+from spectrace.engine import renderer as renderer_module
 from spectrace.engine.renderer import Renderer
+from spectrace.engine.scene_buffers import render_params
 from spectrace.errors import SpectraceError
 from spectrace.integrators import bdpt
 from spectrace.integrators import light as light_tracer
@@ -115,14 +117,23 @@ def test_pixels_per_light_subpath_out_of_range_refused_in_python(device, tmp_pat
 
 @pytest.fixture
 def strategy_device(device, monkeypatch):
-    """The device, building its programs with the test defines that keep one strategy (kernels/bdpt.cl)."""
+    """The device, building its programs with the test define that keeps one strategy (kernels/bdpt.cl); the
+    strategy, chosen["s"] and chosen["t"], reaches the passes at run time, so one program serves every strategy.
+    chosen["unweighted"] also drops the MIS weights (a define)."""
     build = device.build_program
     chosen: dict[str, int] = {}
 
     def build_with(entry, defines=None, **kwargs):
-        return build(entry, defines={**(defines or {}), **chosen}, **kwargs)
+        test_defines = {"BDPT_ONE_STRATEGY": 1} | ({"BDPT_UNWEIGHTED": 1} if chosen.get("unweighted") else {})
+        return build(entry, defines={**(defines or {}), **test_defines}, **kwargs)
+
+    def params_with(*args, **kwargs):
+        params = render_params(*args, **kwargs)
+        params["bdpt_only_s"], params["bdpt_only_t"] = chosen["s"], chosen["t"]
+        return params
 
     monkeypatch.setattr(device, "build_program", build_with)
+    monkeypatch.setattr(renderer_module, "render_params", params_with)
     return device, chosen
 
 
@@ -136,7 +147,7 @@ def test_each_strategy_alone_estimates_its_path_length(strategy_device, s):
     it; weighted, the strategies' images add up to it."""
     device, chosen = strategy_device
     t = SEGMENTS + 1 - s
-    chosen |= {"BDPT_ONLY_S": s, "BDPT_ONLY_T": t, "BDPT_UNWEIGHTED": 1}
+    chosen |= {"s": s, "t": t, "unweighted": 1}
     expected = EMITTED * ALBEDO ** (SEGMENTS - 1)
     mean, standard_error = _image_mean(Renderer(_enclosure(SEGMENTS), device), 8, 96)
     assert_within_standard_errors(mean, expected, standard_error, power=0.05)
@@ -147,7 +158,7 @@ def test_weighted_strategies_of_one_length_add_up(strategy_device):
     scene = _enclosure(SEGMENTS).with_overrides(spp=8)
     images = []
     for s in range(SEGMENTS + 1):
-        chosen |= {"BDPT_ONLY_S": s, "BDPT_ONLY_T": SEGMENTS + 1 - s}
+        chosen |= {"s": s, "t": SEGMENTS + 1 - s}
         images.append(Renderer(scene, device).render().xyz[..., 1].astype(np.float64))
     means = np.array([image.mean() for image in images])
     assert np.all(means > 0.0)  # each strategy takes a share of these paths
@@ -156,7 +167,7 @@ def test_weighted_strategies_of_one_length_add_up(strategy_device):
     for seed in range(8):
         total = 0.0
         for s in range(SEGMENTS + 1):
-            chosen |= {"BDPT_ONLY_S": s, "BDPT_ONLY_T": SEGMENTS + 1 - s}
+            chosen |= {"s": s, "t": SEGMENTS + 1 - s}
             total += Renderer(scene.with_overrides(seed=seed + 100), device).render().xyz[..., 1].mean()
         sums.append(total)
     mean, standard_error = mean_and_standard_error(np.array(sums))

@@ -55,3 +55,18 @@ def test_spectral_bands_are_pass_split_invariant(device):
     split.run_pass(1)
     split.run_pass(3)
     assert np.array_equal(one.read_spectral_film(), split.read_spectral_film())
+
+
+def test_halving_the_bands_splits_each_bands_sum_in_two(device):
+    """The same samples into 10 and into 20 bands over one range: each wide band's average radiance is the mean of
+    its two halves' (every lane lands in one band of each film, weighted 1/Δ). The band count and range reach the
+    kernels at run time, so both films come from one program."""
+    scene = load_scene(scenes_dir() / "cornell_box.toml").with_overrides(width=8, height=8, spp=4)
+    span = (420.0, 700.0)
+    wide = Renderer(scene, device, spectral_bins=10, spectral_range_nm=span).render().spectral
+    narrow = Renderer(scene, device, spectral_bins=20, spectral_range_nm=span).render().spectral
+    assert wide is not None and narrow is not None
+    np.testing.assert_allclose(narrow.edges_nm[::2], wide.edges_nm)
+    halves = narrow.radiance.astype(np.float64).reshape(8, 8, 10, 2).mean(axis=-1)
+    assert wide.radiance.max() > 0.0
+    np.testing.assert_allclose(wide.radiance, halves, rtol=1e-5, atol=1e-6 * wide.radiance.max())

@@ -134,8 +134,9 @@ def test_tabulated_sampler_inverts_the_films_cdf(kernel_runner, observers):
     u = ((np.arange(n) + 0.5) / n).astype(np.float32)
     lam, pdf = np.empty(n, np.float32), np.empty(n, np.float32)
     table = response.device_table()
-    args = [runner.buffer(table), runner.buffer(u), runner.buffer(lam, True), runner.buffer(pdf, True)]
-    runner.run("sample_film_wavelength_pdf", n, args, {2: lam, 3: pdf})
+    responses = np.int32(len(response.channel_names))
+    args = [runner.buffer(table), responses, runner.buffer(u), runner.buffer(lam, True), runner.buffer(pdf, True)]
+    runner.run("sample_film_wavelength_pdf", n, args, {3: lam, 4: pdf})
     density = response.sampling_pdf()  # per 1 nm interval of the grid, before rounding to float32
     cdf = np.concatenate([[0.0], np.cumsum(density)]) / density.sum()
     assert np.all(np.diff(lam) >= 0) and lam.min() >= GRID_NM[0] and lam.max() <= GRID_NM[-1]

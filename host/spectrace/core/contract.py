@@ -282,12 +282,18 @@ RENDER_PARAMS_DTYPE = _struct(
         ("count_thin_passes", "<i4"),
         ("instanced_shape_count", "<i4"),
         ("null_surfaces", "<i4"),
-        ("pad_params", ("<i4", (1,))),
+        ("spectral_bins", "<i4"),
+        ("film_responses", "<i4"),
+        ("spectral_min_nm", "<f4"),
+        ("spectral_max_nm", "<f4"),
+        ("bdpt_only_s", "<i4"),
+        ("bdpt_only_t", "<i4"),
+        ("pad_params", ("<i4", (3,))),
         ("lens", ("<f4", (4,))),
         ("filter_shape", ("<f4", (4,))),
         ("filter_cdf", ("<f4", (PIXEL_FILTER_BINS,))),
     ],
-    176 + 4 * PIXEL_FILTER_BINS,
+    208 + 4 * PIXEL_FILTER_BINS,
 )
 
 # MeterParams.type (kernels/meters.cl). IRRADIANCE: W/(m² nm) on a one-sided surface at `point` facing

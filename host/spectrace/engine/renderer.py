@@ -190,6 +190,7 @@ class Renderer:
             )
         done = self.samples_done
         params = render_params(self.scene, self.buffers, done, sample_count)
+        self.film.setup.write_params(params)
         start = time.perf_counter()
         cl.enqueue_copy(self.device.queue, self._params, params)
         yield done

@@ -296,10 +296,11 @@ class FilmResponse:
 
     def defines(self) -> dict[str, int | float]:
         """Kernel defines for this film (none for the default film); a film range of its own sets the grid of
-        every tabulated spectrum (kernels/spectrum.cl) to the film's."""
+        every tabulated spectrum (kernels/spectrum.cl) to the film's. The count of response curves is a run-time
+        value (RenderParams.film_responses), so films of one grid share a program."""
         if self.is_default:
             return {}
-        defines: dict[str, int | float] = {"FILM_RESPONSES": len(self.channel_names), "WAVELENGTH_TABLE": 1}
+        defines: dict[str, int | float] = {"WAVELENGTH_TABLE": 1}
         if self.has_own_grid:
             grid = self.grid_nm
             defines |= {"GRID_MIN_NM": float(grid[0]), "GRID_MAX_NM": float(grid[-1]), "GRID_SAMPLES": int(grid.size)}

@@ -117,6 +117,15 @@ class FilmSetup:
             | self.response.defines()
         )
 
+    def write_params(self, params: np.ndarray) -> None:
+        """Sets the film's run-time values in `params` (a RenderParams array of one): the sizes kernels/film.cl
+        reads there rather than from build defines, so that one program serves every film of a kind."""
+        lo, hi = self.spectral_range_nm
+        params["spectral_bins"] = self.spectral_bins
+        params["spectral_min_nm"] = lo
+        params["spectral_max_nm"] = hi
+        params["film_responses"] = self.response_channels
+
     def metadata(self) -> dict[str, str]:
         """What the film responded to, for the image's metadata (nothing for the default film)."""
         return self.response.metadata()

@@ -65,7 +65,8 @@ def spectral_bins_problem(bins: int, range_nm: tuple[float, float]) -> str | Non
 
 
 def spectral_defines(bins: int, range_nm: tuple[float, float]) -> dict[str, int | float]:
-    """Kernel defines that make kernels/film.cl accumulate `bins` equal bands over `range_nm` (none for 0 bins)."""
+    """Kernel defines that make kernels/film.cl accumulate equal bands (none for 0 bins). Their count and range
+    are run-time values (FilmSetup.write_params), so any `bins` over any `range_nm` shares one program."""
     if bins <= 0:
         return {}
     lo, hi = range_nm
@@ -75,7 +76,7 @@ def spectral_defines(bins: int, range_nm: tuple[float, float]) -> dict[str, int 
         )
     if problem := spectral_bins_problem(bins, range_nm):
         raise SpectraceError(problem, where="--spectral-bins")
-    return {"SPECTRAL_BINS": int(bins), "SPECTRAL_MIN_NM": float(lo), "SPECTRAL_MAX_NM": float(hi)}
+    return {"SPECTRAL_FILM": 1}
 
 
 # A render fails, rather than give its image, when at least this fraction of its samples were NaN or infinite and
