@@ -159,6 +159,21 @@ def materials_box():
     return scene
 
 
+def unsupported():
+    """Two materials whose Roughness a Noise Texture drives, and a Toon BSDF: nodes spectrace does not import."""
+    scene = _reset()
+    for i in range(2):
+        material, principled = _material(f"noisy{i}", "ShaderNodeBsdfPrincipled")
+        noise = material.node_tree.nodes.new("ShaderNodeTexNoise")
+        material.node_tree.links.new(noise.outputs["Fac"], principled.inputs["Roughness"])
+        _object(scene, f"cube{i}", bpy.ops.mesh.primitive_cube_add, material, size=0.5, location=(i - 0.5, 0.0, 0.0))
+    toon, _ = _material("toon", "ShaderNodeBsdfToon")
+    _object(scene, "toon", bpy.ops.mesh.primitive_plane_add, toon, size=4.0, location=(0.0, 0.0, -0.5))
+    _light(scene, "sun", "SUN", (0.0, 0.0, 5.0), energy=3.0)
+    _camera(scene, (0.0, -5.0, 1.0), (math.radians(80), 0.0, 0.0))
+    return scene
+
+
 LIGHT_COLOUR = (1.0, 0.5, 0.25)
 LIGHT_HEIGHT = 2.0
 LIGHTS = {  # kind -> (settings, rotation): each light above the origin, shining down (−z) or tilted 30°
@@ -190,7 +205,12 @@ def dense(triangles):
     return scene
 
 
-SCENES = {"grey_box": grey_box, "materials_box": materials_box, "dense": lambda: dense(1_000_000)}
+SCENES = {
+    "grey_box": grey_box,
+    "materials_box": materials_box,
+    "unsupported": unsupported,
+    "dense": lambda: dense(1_000_000),
+}
 SCENES |= {f"light_{kind}": (lambda kind=kind: light_only(kind)) for kind in LIGHTS}
 
 
