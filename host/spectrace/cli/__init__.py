@@ -1,6 +1,6 @@
 """Command line: `spectrace render | devices | bench | validate | display | spectra | sweep | import-mitsuba |
-import-pbrt | import-gltf | import-blend`, one module per command group in this package. Errors print as one line
-and exit non-zero."""
+import-pbrt | import-gltf | import-blend | blender-addon`, one module per command group in this package. Errors
+print as one line and exit non-zero."""
 
 import importlib
 import sys
@@ -57,6 +57,11 @@ LAZY_COMMANDS = {
         "spectrace.cli.import_blend",
         "import_blend_command",
         "Convert a Blender file (.blend, through the blender extra's bpy) to a spectrace TOML scene (docs/blender.md).",
+    ),
+    "blender-addon": (
+        "spectrace.cli.blender_addon",
+        "blender_addon_command",
+        "Print where spectrace's Blender render-engine add-on lies, to install into Blender (docs/blender.md).",
     ),
 }
 
