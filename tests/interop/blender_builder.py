@@ -174,6 +174,19 @@ def unsupported():
     return scene
 
 
+def environment(image_path):
+    """A world lit by an equirectangular image (an OpenEXR file the test writes) through an Environment Texture."""
+    scene = _reset()
+    tree = scene.world.node_tree
+    background = tree.nodes["Background"]
+    background.inputs["Strength"].default_value = 2.0
+    texture = tree.nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(image_path)
+    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
+    _camera(scene, (0.0, -5.0, 1.0), (math.radians(80), 0.0, 0.0))
+    return scene
+
+
 LIGHT_COLOUR = (1.0, 0.5, 0.25)
 LIGHT_HEIGHT = 2.0
 LIGHTS = {  # kind -> (settings, rotation): each light above the origin, shining down (−z) or tilted 30°
@@ -216,7 +229,7 @@ SCENES |= {f"light_{kind}": (lambda kind=kind: light_only(kind)) for kind in LIG
 
 def main() -> None:
     kind, out = sys.argv[1], sys.argv[2]
-    scene = SCENES[kind]()
+    scene = environment(kind.split(":", 1)[1]) if kind.startswith("environment:") else SCENES[kind]()
     bpy.ops.wm.save_as_mainfile(filepath=out)
     if len(sys.argv) > 3:
         scene.render.engine = "CYCLES"

@@ -34,7 +34,8 @@ def _build(kind: str, blend: Path, cycles: Path | None = None, spp: int = 0) -> 
 
 
 def _import(tmp_path: Path, kind: str) -> tuple[Path, dict]:
-    blend, toml = tmp_path / f"{kind}.blend", tmp_path / f"{kind}.toml"
+    name = kind.split(":")[0]
+    blend, toml = tmp_path / f"{name}.blend", tmp_path / f"{name}.toml"
     _build(kind, blend)
     done = run_spectrace("import-blend", str(blend), "-o", str(toml))
     assert done.returncode == 0, done.stderr
@@ -139,6 +140,34 @@ def test_unsupported_nodes_are_named_once_each_and_strict_refuses(tmp_path):
     assert sum("ShaderNodeBsdfToon" in line for line in warnings) == 1, warnings
     data = tomllib.loads(toml.read_text(encoding="utf-8"))
     assert data["materials"]["noisy0"]["roughness"] == 0.5  # the socket's own value
+
+
+@needs_bpy
+@pytest.mark.subprocess
+def test_an_environment_image_is_turned_as_blender_maps_it(tmp_path, device):
+    """Blender's equirectangular lookup (Cycles' direction_to_equirectangular): u = 0.5 − atan2(y, x) / 2π,
+    v = 0.5 + atan2(z, √(x² + y²)) / π, v up the image. An image lit (radiance 1, × the world Strength 2) in its left
+    half of the upper rows is the quarter of directions y > 0, z > 0: irradiance L π / 2 on a surface facing +y or
+    +z, none facing −y or −z, and the same (L π / 4) facing ±x."""
+    from spectrace.engine.meters import IrradianceMeter, measure
+    from spectrace.interop.gltf.context import photometric_scale
+    from spectrace.io.exr import write_exr
+    from spectrace.scene import load_scene
+
+    image = np.zeros((32, 64, 3), dtype=np.float32)
+    image[:16, :32] = 1.0  # rows top-down
+    write_exr(tmp_path / "sky.exr", image, None, {})
+    toml, data = _import(tmp_path, f"environment:{tmp_path / 'sky.exr'}")
+    assert data["lights"][0]["type"] == "envmap" and data["lights"][0]["scale"] == 2.0
+    scene = load_scene(toml).with_overrides(max_depth=2)
+    expected = {(0, 1, 0): math.pi, (0, 0, 1): math.pi, (0, -1, 0): 0.0, (0, 0, -1): 0.0}
+    expected |= {(1, 0, 0): math.pi / 2.0, (-1, 0, 0): math.pi / 2.0}
+    for normal, irradiance in expected.items():
+        meter = IrradianceMeter((0.0, 0.0, 0.0), tuple(float(v) for v in normal))
+        reading = measure(scene, meter, streams=4, samples_per_item=64, device=device)
+        y, error = reading.photometric / photometric_scale(), float(reading.xyz_standard_error[1]) / photometric_scale()
+        # 2 %: the 64 × 32 texels' staircase along the lit region's edges, and the uplift's Y
+        assert abs(y - irradiance) <= 4.0 * error + 0.02 * math.pi, (normal, y)
 
 
 def _square_irradiance(radiance: float, side: float, height: float) -> float:
