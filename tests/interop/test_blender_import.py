@@ -66,6 +66,20 @@ def test_without_bpy_each_command_names_the_extra_in_one_line(tmp_path):
 
 @needs_bpy
 @pytest.mark.subprocess
+def test_a_file_blender_cannot_open_is_one_line_and_nothing_is_written(tmp_path):
+    not_blend = tmp_path / "notes.blend"
+    not_blend.write_text("not a Blender file\n")
+    out = tmp_path / "out.toml"
+    for source, message in ((not_blend, "Blender cannot open it"), (tmp_path / "missing.blend", "no such file")):
+        done = run_spectrace("import-blend", str(source), "-o", str(out))
+        assert done.returncode != 0
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0] and source.name in lines[0], done.stderr
+    assert not out.exists() and not (tmp_path / "out_assets").exists()
+
+
+@needs_bpy
+@pytest.mark.subprocess
 @pytest.mark.slow
 def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path):
     toml, data = _import(tmp_path, "materials_box")
