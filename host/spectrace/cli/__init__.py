@@ -1,5 +1,6 @@
 """Command line: `spectrace render | devices | bench | validate | display | spectra | sweep | import-mitsuba |
-import-pbrt | import-gltf`, one module per command group in this package. Errors print as one line and exit non-zero."""
+import-pbrt | import-gltf | import-blend | blender-addon`, one module per command group in this package. Errors
+print as one line and exit non-zero."""
 
 import importlib
 import sys
@@ -51,6 +52,16 @@ LAZY_COMMANDS = {
         "spectrace.cli.import_gltf",
         "import_gltf_command",
         "Convert a glTF 2.0 file (.gltf, .glb) to a spectrace TOML scene (docs/gltf.md).",
+    ),
+    "import-blend": (
+        "spectrace.cli.import_blend",
+        "import_blend_command",
+        "Convert a Blender file (.blend, through the blender extra's bpy) to a spectrace TOML scene (docs/blender.md).",
+    ),
+    "blender-addon": (
+        "spectrace.cli.blender_addon",
+        "blender_addon_command",
+        "Print where spectrace's Blender render-engine add-on lies, to install into Blender (docs/blender.md).",
     ),
 }
 

@@ -14,7 +14,9 @@ if TYPE_CHECKING:
 
 
 def render(
-    scene: Annotated[Path, typer.Argument(help="Scene file (TOML), or a glTF 2.0 file (.gltf, .glb).")],
+    scene: Annotated[
+        Path, typer.Argument(help="Scene file (TOML), glTF 2.0 file (.gltf, .glb) or Blender file (.blend).")
+    ],
     output: Annotated[Path, typer.Option("--output", "-o", help="Output image: .png (sRGB) or .exr (linear).")],
     spp: Annotated[int | None, typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
     width: Annotated[int | None, typer.Option(help="Film width in pixels.", min=1)] = None,
@@ -295,6 +297,10 @@ def _job_from_options(
             from spectrace.interop.gltf import load_gltf_scene
 
             return load_gltf_scene(scene)
+        if scene.suffix.lower() == ".blend":  # through Blender's bpy, the blender extra (docs/blender.md)
+            from spectrace.interop.blender import load_blend_scene
+
+            return load_blend_scene(scene)
         return load_scene(scene)
 
     job = RenderJob.make(
