@@ -18,7 +18,9 @@ import pytest
 from tests.cli_runner import run_spectrace
 
 HAS_BPY = importlib.util.find_spec("bpy") is not None
-needs_bpy = pytest.mark.skipif(not HAS_BPY, reason="bpy (Blender as a Python module, the blender extra) is absent")
+needs_bpy = pytest.mark.skipif(
+    not HAS_BPY, reason="bpy (Blender as a Python module, installed apart: pip install bpy) is absent"
+)
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -44,7 +46,7 @@ def _import(tmp_path: Path, kind: str) -> tuple[Path, dict]:
 
 @pytest.mark.subprocess
 def test_without_bpy_each_command_names_the_extra_in_one_line(tmp_path):
-    # a bpy that cannot be imported, first on the path: as where the extra is not installed
+    # a bpy that cannot be imported, first on the path: as where bpy is not installed
     (tmp_path / "stub").mkdir()
     (tmp_path / "stub" / "bpy.py").write_text("raise ImportError('no bpy here')\n")
     blend = tmp_path / "scene.blend"
@@ -59,7 +61,7 @@ def test_without_bpy_each_command_names_the_extra_in_one_line(tmp_path):
         )
         assert done.returncode != 0
         lines = done.stderr.strip().splitlines()
-        assert len(lines) == 1 and "bpy" in lines[0] and "blender extra" in lines[0], done.stderr
+        assert len(lines) == 1 and "bpy" in lines[0] and "pip install bpy" in lines[0], done.stderr
         assert "Traceback" not in done.stderr
     assert out.read_text() == "kept\n"
 

@@ -56,7 +56,7 @@ LAZY_COMMANDS = {
     "import-blend": (
         "spectrace.cli.import_blend",
         "import_blend_command",
-        "Convert a Blender file (.blend, through the blender extra's bpy) to a spectrace TOML scene (docs/blender.md).",
+        "Convert a Blender file (.blend, through Blender's module bpy) to a spectrace TOML scene (docs/blender.md).",
     ),
     "blender-addon": (
         "spectrace.cli.blender_addon",

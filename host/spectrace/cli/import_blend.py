@@ -24,7 +24,7 @@ def import_blend_command(
     """Convert a Blender file's active scene, as Blender evaluates it (modifiers, geometry nodes and instances
     applied), to a spectrace TOML scene, its meshes (PLY) and textures (PNG) in a folder beside it: meshes,
     Principled and other common BSDF nodes with image textures, point, spot, sun and area lights in Blender's
-    units, the world and the camera. Needs Blender's Python module (pip install 'spectrace[blender]'). What the
+    units, the world and the camera. Needs Blender's Python module (pip install bpy; docs/blender.md). What the
     scene holds that is not imported is a warning (--strict: an error)."""
     if output.endswith(("/", os.sep)) or not Path(output).name:
         raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)

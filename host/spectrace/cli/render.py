@@ -297,7 +297,7 @@ def _job_from_options(
             from spectrace.interop.gltf import load_gltf_scene
 
             return load_gltf_scene(scene)
-        if scene.suffix.lower() == ".blend":  # through Blender's bpy, the blender extra (docs/blender.md)
+        if scene.suffix.lower() == ".blend":  # through Blender's bpy (docs/blender.md)
             from spectrace.interop.blender import load_blend_scene
 
             return load_blend_scene(scene)

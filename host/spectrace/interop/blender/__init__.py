@@ -1,6 +1,6 @@
 """Blender in: `spectrace import-blend SCENE.blend -o OUT.toml` and `spectrace render SCENE.blend`, through Blender's
-Python module `bpy` (the `blender` extra; docs/blender.md). One module per kind: meshes, materials, lights,
-cameras, world; importer reads the evaluated scene and writes the TOML."""
+Python module `bpy` (installed apart: `pip install bpy`, docs/blender.md). One module per kind: meshes, materials,
+lights, cameras, world; importer reads the evaluated scene and writes the TOML."""
 
 from spectrace.interop.blender.importer import (
     EXTRA_MESSAGE,

@@ -1,4 +1,4 @@
-"""The import of a .blend file through Blender's own Python module (`bpy`, the `blender` extra): the file opened,
+"""The import of a .blend file through Blender's own Python module (`bpy`, installed apart): the file opened,
 its scene's EVALUATED state read from the depsgraph (modifiers, geometry nodes and collection instances applied),
 each object handed to its kind's module, and the TOML with its folder of PLY meshes and PNG textures written all
 or nothing and checked by loading it (`import_blend`, `load_blend_scene`).
@@ -27,7 +27,7 @@ from spectrace.interop.pbrt.meshes import write_ply
 
 WARNING_PREFIX = "warning: "
 SUFFIXES = (".blend",)
-EXTRA_MESSAGE = "needs Blender's Python module bpy, the blender extra (Python 3.11: pip install bpy)"
+EXTRA_MESSAGE = "needs Blender's Python module bpy (Python 3.11: pip install bpy; docs/blender.md)"
 
 
 @contextlib.contextmanager
@@ -51,7 +51,7 @@ def _quiet():
 
 
 def require_bpy(where: str):
-    """The bpy module, or one line naming the extra that brings it."""
+    """The bpy module, or one line saying how to install it."""
     try:
         with _quiet():
             return importlib.import_module("bpy")  # an optional module, untyped
