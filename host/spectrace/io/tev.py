@@ -36,7 +36,7 @@ CREATE_IMAGE = 4
 UPDATE_IMAGE_V3 = 6
 TILE = 128  # pixels a side: a tile of three float32 channels is 192 KiB, well inside what tev buffers per packet
 RETRY_SECONDS = 5.0
-CONNECT_SECONDS = 2.0  # a viewer on another machine may take a moment; the thread waits, not the render
+CONNECT_SECONDS = 2.0  # a viewer on another machine may take a moment
 SEND_SECONDS = 10.0
 
 
@@ -143,6 +143,10 @@ class TevDisplay:
         self._frame: np.ndarray | None = None
         self._closing = False
         self._ready = threading.Condition()
+        # The first connection is tried here, before the render draws its progress bar: a viewer that is not there
+        # is then one warning on a line of its own, not one printed by the thread into the bar's line. A viewer
+        # that is slow to answer delays the start by CONNECT_SECONDS at most.
+        self._connect()
         self._thread = threading.Thread(target=self._run, name="tev display", daemon=True)
         self._thread.start()
 
