@@ -128,8 +128,9 @@ def check_rough_index(material: DielectricMaterial, where: str) -> DielectricMat
     return material
 
 
-def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
-    ior = material.ior
+def write_ior(row: np.ndarray, ior: IndexOfRefraction) -> None:
+    """The index's model and coefficients in a Material row (kernels/ior.cl's material_ior reads them); the
+    principled material's glass writes its index the same way."""
     if ior.model == "sellmeier":
         row["ior_model"] = IOR_SELLMEIER
         row["ior_coefficients_b"][:3] = ior.coefficients[:3]
@@ -140,6 +141,10 @@ def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTabl
     else:
         row["ior_model"] = IOR_CONSTANT
         row["ior"] = ior.coefficients[0]
+
+
+def write_row(row: np.ndarray, material: DielectricMaterial, table: SpectrumTable) -> None:
+    write_ior(row, material.ior)
     if material.specular_tint is not None:
         row["reflectance_offset"] = table.add(material.specular_tint)
     row["alpha"] = material.roughness

@@ -14,10 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.core.contract import IOR_CAUCHY, IOR_CONSTANT, IOR_SELLMEIER, NO_TEXTURE
+from spectrace.core.contract import NO_TEXTURE
 from spectrace.core.parameters import Parameter, Range, reflectance
 from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
+from spectrace.materials.dielectric import write_ior
 from spectrace.spectral.glasses import IndexOfRefraction, index_of_refraction
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
@@ -204,20 +205,6 @@ def make(
     )
 
 
-def write_eta(row: np.ndarray, ior: IndexOfRefraction) -> None:
-    """The index's model and coefficients in the row (kernels/ior.cl's material_ior reads them)."""
-    if ior.model == "sellmeier":
-        row["ior_model"] = IOR_SELLMEIER
-        row["ior_coefficients_b"][:3] = ior.coefficients[:3]
-        row["ior_coefficients_c"][:3] = ior.coefficients[3:]
-    elif ior.model == "cauchy":
-        row["ior_model"] = IOR_CAUCHY
-        row["ior_coefficients_b"][:2] = ior.coefficients
-    else:
-        row["ior_model"] = IOR_CONSTANT
-        row["ior"] = ior.coefficients[0]
-
-
 def base_luminance(base: Spectrum) -> float:
     """CIE 1931 Y of a reflectance relative to that of the perfect white one."""
     from spectrace.spectral.observers import luminance_cd_m2
@@ -236,7 +223,7 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
         row["reflectance_texture"] = textures.add(material.base_color, "spectrum")
     else:
         row["reflectance_offset"] = table.add(material.base_color)
-    write_eta(row, material.eta)
+    write_ior(row, material.eta)
     # The base colour's luminance, for the tints (c_tint = b / lum b): CIE 1931 Y relative to a white reflector's;
     # a texture's is the mean over each path's wavelengths (-1 here).
     block = np.zeros(2 * len(SCALARS) + 1, np.float32)
