@@ -179,6 +179,18 @@ def write_imported_scene(
         ) from None
 
 
+def check_import_output(toml_path: Path, source: Path | None, source_kind: str, option: str) -> None:
+    """Refuse, before any work, an import's output that could not be written (spectrace.io.output_files) or that
+    is the file being imported, `source` (the `source_kind`, "the pbrt scene", ...), which writing would destroy."""
+    from spectrace.io.output_files import check_output_file
+
+    check_output_file(toml_path, option, create_folders=True)
+    if source is not None and toml_path.exists() and source.exists() and toml_path.samefile(source):
+        raise SpectraceError(
+            f"is {source_kind} being imported; writing it would destroy the input", where=str(toml_path)
+        )
+
+
 def lock_import(toml_path: Path, option: str, command: str):
     """The lock of an import's TOML (spectrace.io.output_lock.OutputLocks), to hold from before the import's work
     until it ends: a second command writing the same file is refused at once, naming this one. The TOML's folder

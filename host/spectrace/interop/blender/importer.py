@@ -209,14 +209,11 @@ def import_blend(
 ) -> list[str]:
     """Write the spectrace TOML scene (and its folder of meshes and textures) for a .blend file's scene and check
     that it loads; returns the notes, the warnings among them starting with "warning: "."""
-    from spectrace.interop.toml_writer import lock_import
-    from spectrace.io.output_files import check_output_file
+    from spectrace.interop.toml_writer import check_import_output, lock_import
 
     blend_path, toml_path = Path(blend_path), Path(toml_path)
     require_bpy(str(blend_path))
-    check_output_file(toml_path, option, create_folders=True)
-    if toml_path.exists() and blend_path.exists() and toml_path.samefile(blend_path):
-        raise SpectraceError("is the .blend file being imported; writing it would destroy the input", str(toml_path))
+    check_import_output(toml_path, blend_path, "the .blend file", option)
     with lock_import(toml_path, option, "spectrace import-blend"):
         bpy, scene = _open(blend_path)
         return write_blend_import(bpy, scene, blend_path, toml_path, strict, option)

@@ -262,15 +262,10 @@ def import_gltf(
 
     The output is checked and locked first (spectrace.io.output_lock); the TOML and its folder are replaced
     together, and only by a complete import whose TOML loads: a failed import leaves an earlier one as it was."""
-    from spectrace.interop.toml_writer import lock_import
-    from spectrace.io.output_files import check_output_file
+    from spectrace.interop.toml_writer import check_import_output, lock_import
 
     gltf_path, toml_path = Path(gltf_path), Path(toml_path)
-    check_output_file(toml_path, option, create_folders=True)
-    if toml_path.exists() and gltf_path.exists() and toml_path.samefile(gltf_path):
-        raise SpectraceError(
-            "is the glTF file being imported; writing it would destroy the input", where=str(toml_path)
-        )
+    check_import_output(toml_path, gltf_path, "the glTF file", option)
     with lock_import(toml_path, option, "spectrace import-gltf"):
         return _import_gltf(gltf_path, toml_path, camera, material_model, strict, option)
 

@@ -18,7 +18,6 @@ from spectrace.interop.mitsuba.plugins import KNOWN_TAGS, OBJECT_TAGS, supported
 from spectrace.interop.mitsuba.sensors import sensor, whole_pixel_filter
 from spectrace.interop.mitsuba.shapes import instance, shape
 from spectrace.interop.mitsuba.tree import Element, SceneTree, read_scene, shown
-from spectrace.io.output_files import check_output_file
 from spectrace.lights import LIGHTS
 
 WARNING_PREFIX = "warning: "
@@ -202,10 +201,9 @@ def check_output_path(toml_path: Path, xml_path: Path | None = None, option: str
     """Refuse, before any work, an output that could not be written or would destroy the input: what every output
     is refused for (spectrace.io.output_files), and the XML itself. Missing folders are created when the TOML is
     written."""
-    where = str(toml_path)
-    check_output_file(toml_path, option, create_folders=True)
-    if xml_path is not None and toml_path.exists() and xml_path.exists() and toml_path.samefile(xml_path):
-        raise SpectraceError("is the Mitsuba scene being imported; writing it would destroy the input", where=where)
+    from spectrace.interop.toml_writer import check_import_output
+
+    check_import_output(toml_path, xml_path, "the Mitsuba scene", option)
 
 
 def _imported(importer: MitsubaImporter, strict: bool) -> dict:

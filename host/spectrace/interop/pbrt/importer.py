@@ -35,7 +35,6 @@ from spectrace.interop.pbrt.lights import light_table
 from spectrace.interop.pbrt.meshes import write_ply
 from spectrace.interop.pbrt.parser import Location, error, shown
 from spectrace.interop.pbrt.shapes import instanced_object, shape_table
-from spectrace.io.output_files import check_output_file
 
 
 class Import(Context):
@@ -197,14 +196,10 @@ def import_pbrt(
     The output is checked and locked first (spectrace.io.output_lock: a second import writing it is refused); the
     TOML and its folder of meshes are replaced together, and only by a complete import whose TOML loads: a failed
     import leaves an earlier one, TOML and folder, as it was."""
-    from spectrace.interop.toml_writer import lock_import
+    from spectrace.interop.toml_writer import check_import_output, lock_import
 
     pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
-    check_output_file(toml_path, option, create_folders=True)
-    if toml_path.exists() and pbrt_path.exists() and toml_path.samefile(pbrt_path):
-        raise SpectraceError(
-            "is the pbrt scene being imported; writing it would destroy the input", where=str(toml_path)
-        )
+    check_import_output(toml_path, pbrt_path, "the pbrt scene", option)
     with lock_import(toml_path, option, "spectrace import-pbrt"):
         return _import_pbrt(pbrt_path, toml_path, strict, option)
 
