@@ -109,6 +109,9 @@ def framing_camera(ctx: GltfImport, points: np.ndarray) -> tuple[dict, dict]:
     """A camera on the +z side of the bounds (glTF's front), looking at their centre along −z, far enough that
     the sphere around them fills the vertical field of view."""
     if len(points) == 0:
+        if ctx.unrendered_modes:
+            kinds = " and ".join(sorted(ctx.unrendered_modes))
+            raise ctx.doc.fail("/", f"nothing to render: the scene's primitives are {kinds}, which have no area")
         raise ctx.doc.fail("/", "the scene has no triangles, and no camera to show anything")
     low, high = points.min(axis=0), points.max(axis=0)
     centre = (low + high) / 2.0

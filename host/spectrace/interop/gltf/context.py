@@ -44,6 +44,7 @@ class GltfImport:
         self.decoded: dict[int, np.ndarray] = {}
         self.meshes: dict[str, MeshData] = {}  # PLY file name -> its MeshData
         self.origins: dict[str, str] = {}  # TOML key path -> the JSON pointer it was imported from
+        self.unrendered_modes: set[str] = set()  # kinds of primitive left out (points, lines), for a file of only them
 
     def warn(self, pointer: str, message: str) -> None:
         """Something in the file that is not imported; each (pointer-free) message once, with its first place."""

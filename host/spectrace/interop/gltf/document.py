@@ -49,6 +49,11 @@ def _shown(value: object) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def _chunk_at(data: bytes, offset: int, length: int) -> bool:
+    """Whether a JSON or BIN chunk's header lies at offset."""
+    return offset + 8 <= length and struct.unpack_from("<I", data, offset + 4)[0] in (CHUNK_JSON, CHUNK_BIN)
+
+
 class GltfDocument:
     """The file's JSON and its buffers; `fail(pointer, message)` makes the error naming the file and pointer."""
 
@@ -175,7 +180,13 @@ class GltfDocument:
                     f"binary glTF chunk at byte {offset} runs past the end of the file", where=str(self.path)
                 )
             chunks.append((kind, data[offset + 8 : offset + 8 + size]))
-            offset += 8 + size + (-size % 4)
+            # A chunk's length includes its padding to 4 bytes (4.4.3), so the next begins right after it; some
+            # writers leave the padding out of the length, or out of the file, and a next chunk found only
+            # after the padding is read there.
+            offset += 8 + size
+            padded = offset + (-size % 4)
+            if padded != offset and not _chunk_at(data, offset, length) and _chunk_at(data, padded, length):
+                offset = padded
         if not chunks or chunks[0][0] != CHUNK_JSON:
             raise SpectraceError("binary glTF whose first chunk is not JSON", where=str(self.path))
         if len(chunks) > 1 and chunks[1][0] == CHUNK_BIN:

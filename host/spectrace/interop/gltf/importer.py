@@ -35,6 +35,8 @@ SUPPORTED_EXTENSIONS = (
     "KHR_lights_punctual",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
+    # Variants only offer other materials; each primitive's own `material` is the default a viewer shows.
+    "KHR_materials_variants",
     *IMPORTED_EXTENSIONS,
 )
 
@@ -72,6 +74,7 @@ def _mesh_files(ctx: GltfImport, index: int) -> list[tuple[str, str, int | None]
         mesh = primitive_mesh(doc, primitive, where)
         if mesh is None:
             ctx.warn(where, f"{MODE_NAMES[primitive['mode']]} are not imported (they have no area to render)")
+            ctx.unrendered_modes.add(MODE_NAMES[primitive["mode"]])
             continue
         for name in unread_attributes(primitive):
             kind = name.split("_")[0]
@@ -108,6 +111,8 @@ def scene_data(ctx: GltfImport, camera_choice: str | None = None) -> dict:
     for i, name in enumerate(doc.array("extensionsUsed")):
         if name not in SUPPORTED_EXTENSIONS and not str(name).startswith("KHR_materials_"):
             ctx.warn(f"/extensionsUsed/{i}", f"extension {name} is not imported")
+    if doc.extension(doc.json, "KHR_materials_variants", "") is not None:
+        ctx.warn("/extensions/KHR_materials_variants", "material variants are not imported (the default materials are)")
     if doc.array("animations"):
         ctx.warn("/animations", "animations are not imported (the nodes keep their rest transforms)")
     nodes = placed_nodes(doc)
