@@ -68,3 +68,19 @@ def test_material_variants_keep_the_default_material_with_a_warning(tmp_path):
     (shape,) = data["shapes"]
     assert data["materials"][shape["material"]]["base_color"] == {"rgb": [1.0, 0.0, 0.0]}
     assert any("variants are not imported" in warning for warning in ctx.warnings)
+
+
+def test_the_sample_script_tabulates_each_file_and_each_refusal_s_line(tmp_path, capsys):
+    from tests.tooling.gltf_samples import main
+
+    gltf = Gltf()
+    gltf.node(mesh=gltf.quad())
+    gltf.write(tmp_path / "good.glb")
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "bad.gltf").write_text('{"asset": {"version": "2.0"}, "scene": "hello"}')
+    assert main([str(tmp_path), "--no-render"]) == 0
+    out = capsys.readouterr().out
+    assert "| good.glb | yes | - | 2 | 0 | 0 | 0 |" in out
+    assert "| broken/bad.gltf | NO | - |" in out
+    assert '- broken/bad.gltf: bad.gltf: /scene: expected an index (an integer >= 0), got "hello"' in out
+    assert "2 files: 1 imported, 0 rendered, 0 crashed" in out
