@@ -84,3 +84,46 @@ def test_the_sample_script_tabulates_each_file_and_each_refusal_s_line(tmp_path,
     assert "| broken/bad.gltf | NO | - |" in out
     assert '- broken/bad.gltf: bad.gltf: /scene: expected an index (an integer >= 0), got "hello"' in out
     assert "2 files: 1 imported, 0 rendered, 0 crashed" in out
+
+
+def test_an_unlit_material_is_a_diffuse_surface_of_its_base_colour_with_a_warning(tmp_path):
+    gltf = Gltf()
+    unlit = gltf.material(
+        pbrMetallicRoughness={"baseColorFactor": [0.2, 0.4, 0.6, 1.0], "metallicFactor": 1.0},
+        extensions={"KHR_materials_unlit": {}},
+    )
+    gltf.json["extensionsUsed"] = gltf.json["extensionsRequired"] = ["KHR_materials_unlit"]
+    gltf.node(mesh=gltf.quad(material=unlit))
+    data, ctx = gltf_scene_data(gltf.write(tmp_path / "unlit.glb"), tmp_path / "out.toml")
+    (shape,) = data["shapes"]
+    material = data["materials"][shape["material"]]
+    assert material == {"type": "diffuse", "reflectance": {"rgb": [0.2, 0.4, 0.6]}, "two_sided": False}
+    assert [w for w in ctx.warnings if "unlit" in w] == [
+        "/materials/0/extensions/KHR_materials_unlit: unlit materials are imported as diffuse surfaces of their "
+        "base colour (lit by the scene's light)"
+    ]
+    with pytest.raises(SpectraceError, match="--strict"):
+        gltf_scene_data(tmp_path / "unlit.glb", tmp_path / "out.toml", strict=True)
+
+
+@pytest.mark.slow
+def test_an_unlit_surface_under_the_default_environment_shows_its_base_colour(tmp_path):
+    """A convex unlit box facing the camera, lit by the uniform white environment a file without lights gets:
+    a Lambertian face of reflectance ρ facing a radiance of 1 over its hemisphere returns ρ."""
+    from spectrace.api import render
+    from spectrace.interop.gltf import load_gltf_scene
+
+    gltf = Gltf()
+    unlit = gltf.material(
+        pbrMetallicRoughness={"baseColorFactor": [0.25, 0.5, 0.75, 1.0]}, extensions={"KHR_materials_unlit": {}}
+    )
+    gltf.json["extensionsUsed"] = ["KHR_materials_unlit"]
+    gltf.node(mesh=gltf.quad(1.0, material=unlit))
+    camera = gltf.camera(type="perspective", perspective={"yfov": 0.3, "aspectRatio": 1.0, "znear": 0.01})
+    gltf.node(camera=camera, translation=[0.0, 0.0, 3.0])
+    scene = load_gltf_scene(gltf.write(tmp_path / "unlit.glb")).with_overrides(width=16, height=16, spp=64)
+    image = render(scene, progress=False, aovs="variance")
+    y = image.to_linear_srgb() @ np.array([0.2126, 0.7152, 0.0722])
+    expected = 0.2126 * 0.25 + 0.7152 * 0.5 + 0.0722 * 0.75
+    stderr = np.sqrt((image.aovs["variance"] ** 2).sum()) / y.size
+    assert abs(y.mean() - expected) < 4 * stderr + 0.01 * expected

@@ -5,7 +5,9 @@ The metallic-roughness model maps onto the `principled` material (Mitsuba 3's pa
 metallic, roughness, eta, spec_trans): glTF's roughness is the perceptual one, which principled squares into the
 microfacet α as glTF does. `material_model = "diffuse"` instead keeps only the base colour as a Lambertian
 reflectance (a preview, and the fallback where spectrace has no principled material): metallic, roughness and the
-extensions are then left out, named in a note.
+extensions are then left out, named in a note. KHR_materials_unlit's colour, shown as it is by a rasteriser, becomes
+such a diffuse reflectance (with a warning): under the uniform white environment a file without lights gets, an
+unshadowed surface shows it.
 
 Emission (emissiveFactor × emissiveTexture × KHR_materials_emissive_strength) is luminance in nits (cd/m²): the
 radiance `{ rgb = ..., scale = 1 / (683 lm/W · ∫ȳ dλ) }` whose luminance is that many nits for a white emissive
@@ -27,7 +29,9 @@ IMPORTED_EXTENSIONS = (
     "KHR_materials_clearcoat",
     "KHR_materials_sheen",
     "KHR_materials_volume",
+    "KHR_materials_unlit",
 )
+UNLIT = "KHR_materials_unlit"
 
 # The material glTF gives a primitive without one (glTF 2.0, 3.9.6: white, fully metallic, fully rough).
 DEFAULT_MATERIAL: dict = {}
@@ -45,7 +49,7 @@ def material_name(ctx: GltfImport, index: int | None, user: str) -> str:
         table, emitter = convert(ctx, entry, pointer)
         ctx.materials[name] = table
         ctx.material_names[index] = name
-        ctx.interiors[index] = _interior(ctx, entry, pointer, table) if ctx.material_model != "diffuse" else None
+        ctx.interiors[index] = _interior(ctx, entry, pointer, table) if table["type"] != "diffuse" else None
         ctx.origins[f"materials.{name}"] = pointer if index is not None else user
         ctx.emitters[index] = emitter
     return ctx.material_names[index]
@@ -63,9 +67,18 @@ def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | No
     base: dict | None = None
     if "baseColorTexture" in pbr:
         base = texture(ctx, pbr["baseColorTexture"], f"{p_pointer}/baseColorTexture", "base", base_factor[:3])
-    table: dict = {"type": ctx.material_model}
+    unlit = UNLIT in extensions
+    table: dict = {"type": "diffuse" if unlit else ctx.material_model}
     colour = base or {"rgb": base_factor[:3]}
-    if ctx.material_model == "diffuse":
+    if unlit:
+        # A path tracer has no surface that shows its colour whatever lights it; a Lambertian one of that colour
+        # shows it where nothing shadows it under a uniform environment of radiance 1 (E = π, L = ρ E / π).
+        table["reflectance"] = colour
+        ctx.warn(
+            f"{pointer}/extensions/{UNLIT}",
+            "unlit materials are imported as diffuse surfaces of their base colour (lit by the scene's light)",
+        )
+    elif ctx.material_model == "diffuse":
         table["reflectance"] = colour
         ctx.note(
             "materials imported as their base colour, diffuse (--materials diffuse): metallic, roughness and the "
