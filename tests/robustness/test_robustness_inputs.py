@@ -705,7 +705,7 @@ def test_unbounded_depth_stays_valid(tmp_path, monkeypatch, capsys):
         (("--max-depth", "99999999999"), "error: --max-depth: max_depth must be at most 2147483647"),
         (("--size", "100000"), "error: --size: film width 100000 px exceeds the limit of 16384 px"),
         (("quality", "--seconds", "inf"), "error: --seconds: must be a finite number, got inf"),
-        (("scaling", "--size", "0"), "error: --size: film width must be at least 1 pixel"),
+        (("scaling", "--size", "0"), "error: --size: width must be ≥ 1, got 0"),
     ],
 )
 def test_bench_applies_the_render_limits(argv, says, monkeypatch, capsys):

@@ -285,9 +285,12 @@ class RenderJob:
         from spectrace.integrators import scene_settings_problem
 
         scene = self.scene
+        if problem := limits.film_size_problem(scene.width, scene.height):
+            # A scene file's size was checked as it was read: this one was set in Python (with_overrides, Scene),
+            # so the message names the field, not the file.
+            raise SpectraceError(problem)
         problem = (
-            limits.film_size_problem(scene.width, scene.height)
-            or limits.scene_settings_problem(scene)
+            limits.scene_settings_problem(scene)
             or scene_settings_problem(scene)
             or limits.scene_geometry_problem(scene)
         )
