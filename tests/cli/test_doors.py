@@ -92,6 +92,15 @@ def test_a_pbrt_file_without_its_suffix_loads_as_pbrt(tmp_path):
     assert len(scene.shapes) == 1 and len(scene.lights) == 1 and scene.source == tmp_path / "quad"
 
 
+def test_a_toml_named_file_of_another_format_says_which_it_is(tmp_path):
+    shutil.copy(scenes_dir() / "veach_mis.xml", tmp_path / "veach.toml")
+    (tmp_path / "quad.toml").write_text(QUAD_PBRT)
+    for name, says in (("veach.toml", "a Mitsuba 3 XML scene: name it veach.xml"), ("quad.toml", "quad.pbrt")):
+        with pytest.raises(SpectraceError) as failure:
+            load_any_scene(tmp_path / name)
+        assert str(failure.value).startswith(f"{tmp_path / name}: TOML syntax error") and says in str(failure.value)
+
+
 def test_set_on_an_imported_scene_names_the_imported_file_not_a_temporary_one(tmp_path):
     (tmp_path / "quad.pbrt").write_text(QUAD_PBRT)
     scene = load_any_scene(tmp_path / "quad.pbrt", {"film.width": 8})

@@ -122,6 +122,28 @@ def scene_format(path: Path) -> str:
     return sniff_format(head)
 
 
+_FORMAT_NAMES = {MITSUBA: "a Mitsuba 3 XML scene", PBRT: "a pbrt-v4 scene", GLTF: "a glTF file", BLENDER: "a .blend"}
+
+
+def _with_format_hint(error: SpectraceError, path: Path) -> SpectraceError:
+    """A TOML syntax error in a file named .toml whose first bytes say it is another format: the error says which,
+    so that the fix (its own suffix) is plain."""
+    if not error.message.startswith("TOML syntax error"):
+        return error
+    try:
+        with open(path, "rb") as file:
+            kind = sniff_format(file.read(_SNIFFED_BYTES))
+    except OSError:
+        return error
+    if kind == TOML:
+        return error
+    suffix = next(suffix for suffix, format_kind in SUFFIX_FORMATS.items() if format_kind == kind)
+    return SpectraceError(
+        f"{error.message}; the file starts like {_FORMAT_NAMES[kind]}: name it {path.stem}{suffix} to import it",
+        where=error.where,
+    )
+
+
 def _importer(kind: str) -> Callable[[Path, Path], object]:
     """The import that writes a TOML scene (and its assets beside it) from a file of `kind`."""
     if kind == MITSUBA:
@@ -151,7 +173,10 @@ def load_any_scene(scene: str | Path, overrides: dict[str, object] | None = None
     path = resolve_scene_path(scene, SCENE_SUFFIXES)
     kind = scene_format(path)
     if kind == TOML:
-        return load_scene(path, overrides)
+        try:
+            return load_scene(path, overrides)
+        except SpectraceError as error:
+            raise _with_format_hint(error, path) from None
     with tempfile.TemporaryDirectory(prefix=f"spectrace-{kind}-") as folder:
         toml_path = Path(folder) / f"{path.stem or 'scene'}.toml"
         _importer(kind)(path, toml_path)
