@@ -101,6 +101,25 @@ def test_a_toml_named_file_of_another_format_says_which_it_is(tmp_path):
         assert str(failure.value).startswith(f"{tmp_path / name}: TOML syntax error") and says in str(failure.value)
 
 
+def test_an_imported_scenes_warnings_are_reported(tmp_path):
+    (tmp_path / "plane.xml").write_text(
+        '<scene version="3.0.0">\n'
+        '  <sensor type="perspective"><float name="fov" value="40"/>\n'
+        '    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="8"/></film>\n'
+        "  </sensor>\n"
+        '  <shape type="rectangle"><bsdf type="diffuse"><float name="bogus" value="1"/></bsdf></shape>\n'
+        '  <emitter type="constant"/>\n'
+        "</scene>\n"
+    )
+    lines: list[str] = []
+    scene = load_any_scene(tmp_path / "plane.xml", report=lines.append)
+    assert (scene.width, scene.height) == (16, 8)
+    assert [line for line in lines if line.startswith("warning: ")] == [
+        f"warning: {tmp_path / 'plane.xml'}:5: bsdf 'diffuse': property 'bogus' is not imported (spectrace does not "
+        "know it)"
+    ]
+
+
 def test_set_on_an_imported_scene_names_the_imported_file_not_a_temporary_one(tmp_path):
     (tmp_path / "quad.pbrt").write_text(QUAD_PBRT)
     scene = load_any_scene(tmp_path / "quad.pbrt", {"film.width": 8})

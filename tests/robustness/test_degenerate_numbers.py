@@ -448,7 +448,7 @@ from spectrace.spectral.spectrum import Spectrum
 wall = apply_transform(primitives.rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]))
 shape = Shape(wall, DiffuseMaterial(Spectrum.constant(0.5)), emitter=AreaEmitter(Spectrum.constant(3e38)), name="sun")
 scene = Scene(Camera(origin=(0, 0, 5), target=(0, 0, 0), fov_degrees=30), width=4, height=3, shapes=[shape], spp=2)
-spectrace.interop.scene_files.load_any_scene = lambda path, overrides=None: scene
+spectrace.interop.scene_files.load_any_scene = lambda path, overrides=None, report=None: scene
 sys.argv = ["spectrace", "render", "built-in-python.toml", "-o", sys.argv[1], "-q"]
 cli.main()
 """

@@ -276,7 +276,7 @@ def metamerism(
         from spectrace.interop.scene_files import load_any_scene
         from spectrace.progress import progress_bar
 
-        loaded = load_any_scene(scene)
+        loaded = load_any_scene(scene, report=console.say)
         bar = (
             nullcontext(None) if quiet else progress_bar(2 * 24, 0, console.rich(), unit="readings", label="measuring")
         )

@@ -328,7 +328,7 @@ def _job_from_options(
 
     def loaded():
         try:
-            return load_any_scene(scene, overrides or None)
+            return load_any_scene(scene, overrides or None, report=_say)
         except SpectraceError as error:
             if not overrides:
                 raise

@@ -163,10 +163,22 @@ def _importer(kind: str) -> Callable[[Path, Path], object]:
     return import_blend
 
 
-def load_any_scene(scene: str | Path, overrides: dict[str, object] | None = None) -> Scene:
+def _import_lines(result: object) -> list[str]:
+    """An import's warnings and notes as lines ("warning: ...", "note: ..."): pbrt's import returns (warnings,
+    notes), the others one list whose warnings carry their prefix."""
+    if isinstance(result, tuple):
+        warnings, notes = result
+        return [f"warning: {text}" for text in warnings] + [f"note: {text}" for text in notes]
+    return [text if text.startswith("warning: ") else f"note: {text}" for text in result or ()]  # type: ignore[attr-defined]
+
+
+def load_any_scene(
+    scene: str | Path, overrides: dict[str, object] | None = None, report: Callable[[str], None] | None = None
+) -> Scene:
     """The scene in the file `scene` (or the bundled scene of that bare name), whatever its format; `overrides`
     replace values at dotted key paths of the scene as a TOML file holds it (`film.width`, `integrator.type`; for an
-    imported file, of the TOML its import writes). Errors name `scene`, never a temporary file."""
+    imported file, of the TOML its import writes). Errors name `scene`, never a temporary file. `report`: given each
+    line of an import's warnings ("warning: ...") and notes ("note: ...")."""
     from spectrace.resources import resolve_scene_path
     from spectrace.scene import load_scene
 
@@ -179,7 +191,10 @@ def load_any_scene(scene: str | Path, overrides: dict[str, object] | None = None
             raise _with_format_hint(error, path) from None
     with tempfile.TemporaryDirectory(prefix=f"spectrace-{kind}-") as folder:
         toml_path = Path(folder) / f"{path.stem or 'scene'}.toml"
-        _importer(kind)(path, toml_path)
+        lines = _import_lines(_importer(kind)(path, toml_path))
+        if report is not None:
+            for line in lines:
+                report(line)
         try:
             return load_scene(toml_path, overrides).with_overrides(source=path)
         except SpectraceError as error:
