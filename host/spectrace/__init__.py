@@ -69,7 +69,7 @@ def _registry_names() -> dict[str, str]:
 
 __version__ = "0.1.0"
 
-__getattr__, __dir__ = lazy_names(
+_names_getattr, _names_dir = lazy_names(
     __name__,
     _LAZY,
     _registry_names,
@@ -102,3 +102,22 @@ __getattr__, __dir__ = lazy_names(
         "delta_e_2000_map",
     ],
 )
+
+# Subpackages and modules a user reaches as attributes after `import spectrace` alone
+# (`spectrace.interop.load_mitsuba_scene`): imported on first use, as the names above.
+SUBMODULES = (
+    *("api", "cameras", "device", "displays", "film", "geometry", "integrators", "interop", "io", "lights"),
+    *("materials", "pixel_filters", "plots", "spectral", "sweep", "textures", "validation"),
+)
+
+
+def __getattr__(name: str) -> object:
+    if name in SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f"spectrace.{name}")
+    return _names_getattr(name)
+
+
+def __dir__() -> list[str]:
+    return sorted({*_names_dir(), *SUBMODULES})

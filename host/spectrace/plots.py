@@ -94,20 +94,25 @@ def text_problem(text: str) -> str | None:
 
 def plot_spectra(
     spectra: Mapping[str, Spectrum] | Sequence[Spectrum],
-    path: str | Path,
+    path: str | Path | None = None,
     normalise: bool = False,
     title: str | None = None,
     y_label: str | None = None,
-) -> Path:
-    """Draw spectra (by label, or a list labelled by their names) on one wavelength axis into an image file
-    (.png, .pdf, .svg). normalise=True divides each by its peak, to compare shapes of different units."""
+):
+    """Draw spectra (by label, or a list labelled by their names) on one wavelength axis; returns the matplotlib
+    Figure (a notebook shows it), also written to `path` (.png, .pdf, .svg) when given. normalise=True divides
+    each by its peak, to compare shapes of different units."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     items = list(spectra.items()) if isinstance(spectra, Mapping) else [(s.name, s) for s in spectra]
     if not items:
         raise SpectraceError("no spectra to plot")
-    pyplot = _pyplot()
-    figure, (axes, strip) = pyplot.subplots(
-        2, 1, figsize=(7.5, 4.8), sharex=True, gridspec_kw={"height_ratios": [14, 1], "hspace": 0.06}
-    )
+    # A Figure of its own, not pyplot's: pyplot would keep every figure returned to a notebook open, and its
+    # backend is the notebook's to choose.
+    figure = Figure(figsize=(7.5, 4.8))
+    FigureCanvasAgg(figure)
+    axes, strip = figure.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [14, 1], "hspace": 0.06})
     for index, (label, spectrum) in enumerate(items):
         values = spectrum.values
         if normalise and values.max() > 0:
@@ -128,7 +133,9 @@ def plot_spectra(
     if title:
         axes.set_title(title)
     _visible_strip(strip)
-    return _save(figure, path)
+    if path is not None:
+        _write_figure(figure, Path(path))
+    return figure
 
 
 # ---------------------------------------------------------------- false colour
@@ -204,16 +211,22 @@ def plot_false_colour_luminance(
     return float(low), float(high)
 
 
-def _save(figure, path: str | Path) -> Path:
+def _write_figure(figure, path: Path) -> None:
+    """`figure` written to `path` (.png, .pdf or .svg), all or nothing."""
     from spectrace.io.atomic import write_atomically
 
-    path = Path(path)
     if path.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise SpectraceError(f"unknown figure format '{path.suffix}' (use .png, .pdf or .svg)", where=str(path))
     try:
         write_atomically(path, lambda temp: figure.savefig(temp, dpi=150, bbox_inches="tight"))
     except OSError as error:
         raise SpectraceError(f"cannot write the figure ({error.strerror or error})", where=str(path)) from None
+
+
+def _save(figure, path: str | Path) -> Path:
+    path = Path(path)
+    try:
+        _write_figure(figure, path)
     finally:
         figure.canvas.figure.clf()
         _pyplot().close(figure)

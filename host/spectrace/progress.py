@@ -33,14 +33,16 @@ def has_ipywidgets() -> bool:
 
 
 @contextmanager
-def text_bar(total_spp: int, done_spp: int, stream=None, unit: str = "spp") -> Iterator[ProgressCallback]:
+def text_bar(
+    total_spp: int, done_spp: int, stream=None, unit: str = "spp", label: str = "rendering"
+) -> Iterator[ProgressCallback]:
     """A one-line text bar redrawn with a carriage return."""
     stream = stream or sys.stderr
     width = 30
 
     def draw(done: int, total: int) -> None:
         filled = width * min(done, total) // max(total, 1)
-        stream.write(f"\rrendering |{'#' * filled}{'.' * (width - filled)}| {done}/{total} {unit}")
+        stream.write(f"\r{label} |{'#' * filled}{'.' * (width - filled)}| {done}/{total} {unit}")
         stream.flush()
 
     draw(done_spp, total_spp)
@@ -53,20 +55,20 @@ def text_bar(total_spp: int, done_spp: int, stream=None, unit: str = "spp") -> I
 
 @contextmanager
 def progress_bar(
-    total_spp: int, done_spp: int, console: Console | None = None, unit: str = "spp"
+    total_spp: int, done_spp: int, console: Console | None = None, unit: str = "spp", label: str = "rendering"
 ) -> Iterator[ProgressCallback]:
     """A progress callback, progress(samples_done, samples_total), drawing the bar for where the render runs.
     `console`: the rich console to draw on outside Jupyter (default: a new one on stderr), so that messages the
     caller prints on it during the render stay above the bar. `unit`: what is counted (a tiled render counts
-    tiles, one bar over all its workers)."""
+    tiles, one bar over all its workers); `label`: what the work is (validating, measuring)."""
     if in_notebook():
         if not (has_ipywidgets() and _installed("tqdm")):
-            with text_bar(total_spp, done_spp, unit=unit) as draw:
+            with text_bar(total_spp, done_spp, unit=unit, label=label) as draw:
                 yield draw
             return
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=total_spp, initial=done_spp, unit=unit, desc="rendering")
+        bar = tqdm(total=total_spp, initial=done_spp, unit=unit, desc=label)
         try:
             yield lambda done, total: bar.update(done - bar.n)
         finally:
@@ -76,7 +78,7 @@ def progress_bar(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     with Progress(
-        TextColumn("rendering"),
+        TextColumn(label),
         BarColumn(),
         TextColumn("{task.completed}/{task.total} " + unit),
         TimeElapsedColumn(),
@@ -84,4 +86,4 @@ def progress_bar(
         console=console or Console(stderr=True, soft_wrap=True, markup=False),
     ) as progress:
         task = progress.add_task("render", total=total_spp, completed=done_spp)
-        yield lambda done, total: progress.update(task, completed=done)
+        yield lambda done, total: progress.update(task, completed=done, total=total)

@@ -31,32 +31,45 @@ def bundled_scene_names() -> list[str]:
     return sorted(path.stem for path in scenes_dir().glob("*.toml"))
 
 
-def resolve_scene_path(scene: "str | Path") -> Path:
+def resolve_scene_path(scene: "str | Path", suffixes: tuple[str, ...] = (".toml",), folder: Path | None = None) -> Path:
     """A scene argument as a file: the path itself when it exists, else, for a bare name such as `cornell_box`
-    or `cornell_box.toml`, the bundled scene of that name, so that the bundled scenes load from any folder.
-    A bare name that is neither raises SpectraceError listing the bundled scenes; a missing path is returned
-    as it is, for the loader to report. A folder of that name does not hide the scene: a scene's meshes and
-    textures live in a folder named after it (scenes/teapot/ beside scenes/teapot.toml)."""
+    or `cornell_box.toml`, the file of that name here or the bundled scene of that name, so that the bundled scenes
+    load from any folder. `suffixes`: the formats the caller reads, tried in turn for a name without one (a command
+    that imports Mitsuba files finds `veach_mis` as veach_mis.xml); `folder`: where a relative path is read from
+    (default: the working folder; a sweep's scene is beside its spec). A bare name that is neither raises
+    SpectraceError listing the bundled scenes; a missing path is returned as it is, for the loader to report. A
+    folder of that name does not hide the scene: a scene's meshes and textures live in a folder named after it
+    (scenes/teapot/ beside scenes/teapot.toml)."""
     from spectrace.errors import SpectraceError
 
-    path = Path(scene)
+    given = Path(scene)
+    path = folder / given if folder is not None else given
     try:
         path.exists()
     except (OSError, ValueError):  # a name the system will not look up (too long): the loader's to report
         return path
-    if path.is_file() or path.parent != Path(".") or str(path) in ("", "."):
+    if path.is_file() or given.parent != Path(".") or str(given) in ("", "."):
         return path
     if path.exists() and not path.is_dir():
         return path  # a pipe or device: the loader refuses it, naming it
-    name = path.name if path.suffix else f"{path.name}.toml"
-    if Path(name).is_file():
-        return Path(name)
-    bundled = scenes_dir() / name
-    if path.suffix.lower() in ("", ".toml") and bundled.is_file():
-        return bundled
+    if path.suffix.lower() in suffixes:
+        names = [path.name]
+    elif path.suffix:
+        names = []
+    else:
+        names = [f"{path.name}{suffix}" for suffix in suffixes]
+    for name in names:
+        if (here := path.parent / name).is_file():
+            return here
+    for name in names:
+        if (bundled := scenes_dir() / name).is_file():
+            return bundled
     if path.is_dir():
         return path  # for the loader's "is a folder, not a file"
+    bundled_names = sorted(
+        {found.stem for suffix in suffixes for found in scenes_dir().glob(f"*{suffix}")} or bundled_scene_names()
+    )
     raise SpectraceError(
-        f"no such scene file, and no bundled scene of that name (bundled: {', '.join(bundled_scene_names())})",
+        f"no such scene file, and no bundled scene of that name (bundled: {', '.join(bundled_names)})",
         where=str(scene),
     )

@@ -789,9 +789,17 @@ CASES: dict[str, Callable[[Device], list[Check]]] = {
 }
 
 
-def run_validation(names: list[str] | None = None, device: Device | str | None = None) -> list[Check]:
+def run_validation(
+    names: list[str] | None = None,
+    device: Device | str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[Check]:
+    """The checks of the cases `names` (default: all); `progress(cases done, cases)` after each case."""
     device = device if isinstance(device, Device) else open_device(device)
     checks = []
-    for name in names or list(CASES):
+    chosen = names or list(CASES)
+    for done, name in enumerate(chosen, start=1):
         checks.extend(CASES[name](device))
+        if progress is not None:
+            progress(done, len(chosen))
     return checks

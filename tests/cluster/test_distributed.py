@@ -123,7 +123,7 @@ def test_the_command_line_resumes_a_tiled_checkpoint_here(device, tmp_path, monk
     PeriodicTileCheckpoints(saved, identity, 0).save(film)
     monkeypatch.setenv("SPECTRACE_DEVICE", device.report.key)
     args = render_cornell_box(tmp_path / "out.exr", 4, 24, 20)
-    status, err = run_in_process(monkeypatch, capsys, [*args, "--resume", str(saved), "-q"])
+    status, err = run_in_process(monkeypatch, capsys, [*args, "--resume", str(saved)])  # not -q: says what it resumed
     assert status == 0, err
     assert "1/5 tiles done" in err
     status, err = run_in_process(monkeypatch, capsys, [*render_cornell_box(tmp_path / "one.exr", 4, 24, 20), "-q"])

@@ -330,7 +330,7 @@ def test_a_spec_of_any_shape_gives_items_or_one_line_naming_the_spec_file(spec, 
         (
             '[sweep]\nkind = "render"\nscene = "screen.toml"\n[grid]\n"film.width" = [4, "wide"]\n',
             'grid."film.width"[1]',
-            "valid integer",
+            "expected a whole number",
         ),
     ],
 )

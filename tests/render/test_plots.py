@@ -102,7 +102,6 @@ def test_render_false_colour(tmp_path):
     out, figure = tmp_path / "box.exr", tmp_path / "luminance.png"
     result = _run(
         *render_cornell_box(out, 1, 8, 6),
-        "-q",
         "--false-color",
         str(figure),
         "--false-color-scale",

@@ -98,14 +98,14 @@ SCENE_CASES = [
         _with_film('filter = { type = "gaussian", stddev = 1e-30, radius = 1 }'),
         (),
         "film.filter.stddev",
-        "greater than or equal to 0.001",
+        "must be ≥ 0.001",
     ),
     (
         "mitchell-radius-tiny",
         _with_film('filter = { type = "mitchell", radius = 1e-30 }'),
         (),
         "film.filter.radius",
-        "greater than or equal to 0.001",
+        "must be ≥ 0.001",
     ),
     (
         "film-range-beyond-the-observer",
@@ -437,7 +437,7 @@ def test_the_fail_fraction_of_dropped_samples():
 _EVERY_SAMPLE_OVERFLOWS = """
 import sys
 import numpy as np
-import spectrace.scene
+import spectrace.interop.scene_files
 from spectrace import cli
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform
@@ -448,7 +448,7 @@ from spectrace.spectral.spectrum import Spectrum
 wall = apply_transform(primitives.rectangle(), np.diag([10.0, 10.0, 1.0, 1.0]))
 shape = Shape(wall, DiffuseMaterial(Spectrum.constant(0.5)), emitter=AreaEmitter(Spectrum.constant(3e38)), name="sun")
 scene = Scene(Camera(origin=(0, 0, 5), target=(0, 0, 0), fov_degrees=30), width=4, height=3, shapes=[shape], spp=2)
-spectrace.scene.load_scene = lambda path: scene
+spectrace.interop.scene_files.load_any_scene = lambda path, overrides=None, report=None: scene
 sys.argv = ["spectrace", "render", "built-in-python.toml", "-o", sys.argv[1], "-q"]
 cli.main()
 """

@@ -179,7 +179,7 @@ def test_a_render_of_dropped_samples_fails_naming_the_emitter(device, tmp_path, 
     message = str(failure.value)
     assert "every one of the render's 90 samples" in message and "shape 'too bright'" in message
 
-    monkeypatch.setattr("spectrace.scene.load_scene", lambda path: scene)
+    monkeypatch.setattr("spectrace.interop.scene_files.load_any_scene", lambda path, overrides=None, report=None: scene)
     monkeypatch.setattr(sys, "argv", ["spectrace", "render", "ignored.toml", "-o", str(tmp_path / "cli.png"), "-q"])
     with pytest.raises(SystemExit) as exit_info:
         cli.main()
@@ -214,7 +214,7 @@ def test_a_few_dropped_samples_are_counted_and_reported(device, tmp_path, monkey
     with PILImage.open(tmp_path / "dropped.png") as written:
         assert written.text["spectrace:dropped_samples"] == str(image.dropped_samples)
 
-    monkeypatch.setattr("spectrace.scene.load_scene", lambda path: scene)
+    monkeypatch.setattr("spectrace.interop.scene_files.load_any_scene", lambda path, overrides=None, report=None: scene)
     monkeypatch.setattr(sys, "argv", ["spectrace", "render", "ignored.toml", "-o", str(tmp_path / "cli.png"), "-q"])
     with pytest.raises(SystemExit) as exit_info:
         cli.main()

@@ -121,12 +121,22 @@ def test_a_real_process_refuses_a_filter_with_a_digit_separator(tmp_path):
 @pytest.mark.parametrize(
     ("old", "new", "where", "says"),
     [
-        ("width = 8", "width = true", "film.width", "valid integer, got true"),
-        ("[film]", "[integrator]\nmax_depth = true\n\n[film]", "integrator.max_depth", "valid integer, got true"),
-        ("[film]", '[sampler]\nspp = "4"\n\n[film]', "sampler.spp", "valid integer, got '4'"),
-        ("[film]", "[sampler]\nspp = 4.0\n\n[film]", "sampler.spp", "valid integer, got 4.0"),
-        ("fov = 40", 'fov = "40"', "camera.fov", "valid number, got '40'"),
-        ('type = "rectangle"', 'type = "rectangle"\nface_normals = 1', "shapes[0].face_normals", "boolean, got 1"),
+        ("width = 8", "width = true", "film.width", "expected a whole number, got true"),
+        (
+            "[film]",
+            "[integrator]\nmax_depth = true\n\n[film]",
+            "integrator.max_depth",
+            "expected a whole number, got true",
+        ),
+        ("[film]", '[sampler]\nspp = "4"\n\n[film]', "sampler.spp", "expected a whole number, got '4'"),
+        ("[film]", "[sampler]\nspp = 4.0\n\n[film]", "sampler.spp", "expected a whole number, got 4.0"),
+        ("fov = 40", 'fov = "40"', "camera.fov", "expected a number, got '40'"),
+        (
+            'type = "rectangle"',
+            'type = "rectangle"\nface_normals = 1',
+            "shapes[0].face_normals",
+            "expected true or false, got 1",
+        ),
     ],
 )
 def test_a_real_process_names_the_file_and_key_of_a_wrongly_typed_value(old, new, where, says, tmp_path):

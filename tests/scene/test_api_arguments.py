@@ -104,7 +104,8 @@ def test_numpy_integers_and_lists_of_aovs_are_settings_of_their_types(scene):
 
 
 @pytest.mark.parametrize(
-    ("field", "value", "says"), [("seed", -1, "seed must lie in 0..2147483647"), ("width", 0, "film width must be")]
+    ("field", "value", "says"),
+    [("seed", -1, "seed must lie in 0..2147483647"), ("width", 0, "width must be ≥ 1, got 0")],
 )
 def test_ranges_are_still_the_renderers(scene, no_device, field, value, says):
     # Types are refused at construction; a value of the right type out of range is refused before the device.

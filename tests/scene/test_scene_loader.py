@@ -188,13 +188,13 @@ def test_reflective_materials_resolve(tmp_path):
         ('type = "conductor"\neta = { rgb = [1, 1, 1] }\nk = { value = 1 }', "materials.grey.eta", "not a colour"),
         ('type = "conductor"\neta = { value = -0.5 }\nk = { value = 1 }', "materials.grey.eta", "negative"),
         ('type = "conductor"\neta = { value = 1 }\nk = { value = -1 }', "materials.grey.k", "negative"),
-        ('type = "conductor"\nmetal = "Au"\nroughness = 2', "materials.grey.roughness", "less than or equal to 1"),
+        ('type = "conductor"\nmetal = "Au"\nroughness = 2', "materials.grey.roughness", "must be ≤ 1"),
         (
             'type = "conductor"\nmetal = "Au"\nspecular_tint = { value = 2 }',
             "materials.grey.specular_tint",
             "exceeds 1",
         ),
-        ('type = "plastic"\nreflectance = { value = 0.5 }\nior = 1.0', "materials.grey.ior", "greater than 1"),
+        ('type = "plastic"\nreflectance = { value = 0.5 }\nior = 1.0', "materials.grey.ior", "must be > 1"),
         (
             'type = "plastic"\nreflectance = { value = 0.5 }\nroughnes = 0.1',
             "materials.grey.roughnes",
@@ -204,7 +204,7 @@ def test_reflective_materials_resolve(tmp_path):
         (
             'type = "glass"',
             "materials.grey.type",
-            "Input tag 'glass' found using 'type' does not match any of the expected tags: 'diffuse', 'conductor'",
+            "unknown type 'glass' (one of 'diffuse', 'conductor'",
         ),
         ("reflectance = { value = 0.5 }", "materials.grey.type", "required key is missing"),
     ],

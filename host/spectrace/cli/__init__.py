@@ -4,6 +4,7 @@ print as one line and exit non-zero."""
 
 import importlib
 import sys
+from typing import Annotated
 
 import typer
 from typer.core import TyperGroup
@@ -100,6 +101,26 @@ app = typer.Typer(
     context_settings={"max_content_width": 200},
     **GROUP_SETTINGS,
 )
+
+
+def _print_version(asked: bool) -> None:
+    if asked:
+        from spectrace import __version__
+
+        print(f"spectrace {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_print_version, is_eager=True, help="Print the version and exit."),
+    ] = False,
+) -> None:
+    """spectrace: a physically based spectral path tracer (OpenCL on CPU or GPU)."""
+
+
 # The light command modules (typer and rich at import) register at once, in the order `--help` lists them.
 app.command("render")(render.render)
 app.command("devices", cls=PlainHelpFlagCommand)(devices.devices)
@@ -115,6 +136,11 @@ def _usage_error_type() -> type[Exception]:
 def _usage_error_line(exc: Exception) -> str:
     """One line, like every other error: the option, what is wrong with its value, and where the help is."""
     param, reason = getattr(exc, "param", None), getattr(exc, "message", "")
+    cause = exc.__cause__
+    if cause is not None and callable(getattr(cause, "errors", None)):  # typer's pydantic check of the value
+        from spectrace.scene.validation_messages import plain_message
+
+        reason = plain_message(cause.errors()[0])  # type: ignore[attr-defined]  # pydantic's, checked above
     if param is not None and param.opts and reason:
         message = f"{param.opts[0]}: {reason}"
     else:  # unknown options, missing arguments: click's own sentence names them

@@ -50,6 +50,9 @@ class _MessageConsole:
     rich costs more than a small render's messages are worth."""
 
     _console: Any = None
+    # -q: what a command says about its work (device, scene, files written, notes) is left out; warnings and errors
+    # still print.
+    quiet = False
 
     def rich(self) -> Any:
         """The Console itself, for what keeps it (a progress bar)."""
@@ -65,6 +68,11 @@ class _MessageConsole:
             _MessageConsole._console.print(*objects, sep=sep, end=end, **options)
         else:
             print(*objects, sep=sep, end=end, file=sys.stderr, flush=True)
+
+    def say(self, text: str) -> None:
+        """A message about the command's work: printed unless -q asked for warnings and errors only."""
+        if not self.quiet or text.startswith(("warning:", "error:")):
+            self.print(text, highlight=False, markup=False)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.rich(), name)

@@ -27,6 +27,9 @@ display_app = typer.Typer(
     **GROUP_SETTINGS,
 )
 
+# Independent meter estimates per patch reading, from which its standard error comes.
+METER_STREAMS = 32
+
 RgbOption = Annotated[
     tuple[float, float, float],
     typer.Option("--rgb", help="The triple R G B, each in [0, 1], read with --encoding."),
@@ -238,11 +241,22 @@ def metamerism(
         Path | None,
         typer.Option(
             help="Also measure the two halves of a rendered scene (shapes named 'left <patch>' / 'right <patch>', "
-            "e.g. scenes/display_lcd_vs_led.toml) with radiance meters."
+            "e.g. the bundled display_lcd_vs_led) with radiance meters: a scene file of any format `render` takes, "
+            "or a bundled scene's name."
         ),
     ] = None,
+    spp: Annotated[
+        int,
+        typer.Option(
+            help="With --scene: samples per patch reading (rounded up to a multiple of 32); the ΔE standard errors "
+            "fall as 1/sqrt(spp).",
+            min=1,
+            max=1 << 20,
+        ),
+    ] = METER_STREAMS * 32,
     device: Annotated[str | None, typer.Option("--device", "-d", help="OpenCL device for --scene.")] = None,
     as_json: JsonOption = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
 ) -> None:
     """Illuminant metamerism: the ColorChecker lit by --from showing the triple vs lit by --to showing the triple
     that matches it (same CIE 1931 XYZ): the per-patch ΔE2000 between the two halves."""
@@ -256,9 +270,18 @@ def metamerism(
     )
     rendered = None
     if scene is not None:
-        from spectrace.scene import load_scene
+        from contextlib import nullcontext
 
-        rendered = measure_scene_patches(load_scene(scene), device)
+        from spectrace.cli.common import console
+        from spectrace.interop.scene_files import load_any_scene
+        from spectrace.progress import progress_bar
+
+        loaded = load_any_scene(scene, report=console.say)
+        bar = (
+            nullcontext(None) if quiet else progress_bar(2 * 24, 0, console.rich(), unit="readings", label="measuring")
+        )
+        with bar as progress:
+            rendered = measure_scene_patches(loaded, device, METER_STREAMS, -(-spp // METER_STREAMS), progress=progress)
     if as_json:
         result = report.to_json()
         if rendered is not None:
@@ -280,7 +303,12 @@ def metamerism(
         title=f"ColorChecker lit by {report.match.source.name} showing {tuple(rgb)} vs by "
         f"{report.match.target.name} showing ({target_rgb}); the screens differ by ΔE2000 {screens:.2f}"
     )
-    for column in ("patch", "L*a*b* (first half)", "L*a*b* (second half)", "ΔE2000"):
+    for column in (
+        "patch",
+        f"L*a*b* under {report.match.source.name}",
+        f"L*a*b* under {report.match.target.name}",
+        "ΔE2000",
+    ):
         table.add_column(column)
     for p in report.patches:
         table.add_row(
@@ -292,7 +320,10 @@ def metamerism(
     table.add_row("mean / max", "", "", f"{report.mean_delta_e:.2f} / {report.max_delta_e:.2f}")
     Console(width=140, markup=False).print(table)
     if rendered is not None:
-        measured = Table(title=f"Measured in the render of {scene} (radiance meters from the camera)")
+        measured = Table(
+            title=f"Measured in the render of {scene} (radiance meters from the camera, "
+            f"{METER_STREAMS * -(-spp // METER_STREAMS)} samples a patch)"
+        )
         for column in ("patch", "L*a*b* left", "L*a*b* right", "ΔE2000 ± s.e."):
             measured.add_column(column)
         for r in rendered:

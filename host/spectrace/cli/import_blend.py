@@ -28,6 +28,10 @@ def import_blend_command(
     scene holds that is not imported is a warning (--strict: an error)."""
     if output.endswith(("/", os.sep)) or not Path(output).name:
         raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
+    from spectrace.interop.blender import SUFFIXES
+    from spectrace.resources import resolve_scene_path
+
+    blend = resolve_scene_path(blend, SUFFIXES)  # a bare name: NAME.blend here
     notes = import_blend(blend, Path(output), strict=strict, option="--output")
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each note on one line
     for note in notes:

@@ -43,6 +43,10 @@ def import_gltf_command(
         raise SpectraceError(
             f"unknown material model '{materials}' (use {' or '.join(MATERIAL_MODELS)})", "--materials"
         )
+    from spectrace.interop.gltf import SUFFIXES
+    from spectrace.resources import resolve_scene_path
+
+    model = resolve_scene_path(model, SUFFIXES)  # a bare name: NAME.gltf or NAME.glb here
     notes = import_gltf(model, Path(output), camera, materials, strict=strict, option="--output")
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each note on one line
     for note in notes:

@@ -12,7 +12,7 @@ from spectrace.interop.mitsuba import WARNING_PREFIX, import_mitsuba, supported_
 
 
 def import_mitsuba_command(
-    scene: Annotated[Path, typer.Argument(help="Mitsuba 3 scene (XML).")],
+    scene: Annotated[Path, typer.Argument(help="Mitsuba 3 scene (XML), or a bundled one's name (veach_mis).")],
     # A string, not a Path: a Path would drop the trailing slash of "-o folder/", which names a folder.
     output: Annotated[
         str, typer.Option("--output", "-o", metavar="OUT.toml", help="spectrace scene file to write (TOML).")
@@ -33,6 +33,9 @@ def import_mitsuba_command(
         if not separator or not name:
             raise SpectraceError(f"expected NAME=VALUE, got '{item}'", where="--define")
         parameters[name] = value
+    from spectrace.resources import resolve_scene_path
+
+    scene = resolve_scene_path(scene, (".xml",))  # a bare name: NAME.xml here, or a bundled scene
     notes = import_mitsuba(scene, Path(output), parameters, strict=strict, option="--output")
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each note on one line
     for note in notes:

@@ -27,6 +27,9 @@ def import_pbrt_command(
 ) -> None:
     if output.endswith(("/", os.sep)) or not Path(output).name:
         raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
+    from spectrace.resources import resolve_scene_path
+
+    scene = resolve_scene_path(scene, (".pbrt",))  # a bare name: NAME.pbrt here
     warnings, notes = import_pbrt(scene, Path(output), strict=strict, option="--output")
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each line on one line
     for warning in warnings:

@@ -15,18 +15,43 @@ if TYPE_CHECKING:
 
 def render(
     scene: Annotated[
-        Path, typer.Argument(help="Scene file (TOML), glTF 2.0 file (.gltf, .glb) or Blender file (.blend).")
+        Path,
+        typer.Argument(
+            help="Scene file: spectrace TOML, Mitsuba 3 XML, pbrt-v4, glTF 2.0 (.gltf, .glb) or Blender (.blend), "
+            "imported on the way in (the format from the suffix, else from the first bytes); or a bundled scene's "
+            "name (cornell_box)."
+        ),
     ],
     output: Annotated[Path, typer.Option("--output", "-o", help="Output image: .png (sRGB) or .exr (linear).")],
     spp: Annotated[int | None, typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
-    width: Annotated[int | None, typer.Option(help="Film width in pixels.", min=1)] = None,
-    height: Annotated[int | None, typer.Option(help="Film height in pixels.", min=1)] = None,
+    width: Annotated[
+        int | None,
+        typer.Option(help="Film width in pixels; alone, the height follows the scene's aspect ratio.", min=1),
+    ] = None,
+    height: Annotated[
+        int | None,
+        typer.Option(help="Film height in pixels; alone, the width follows the scene's aspect ratio.", min=1),
+    ] = None,
     seed: Annotated[int | None, typer.Option(help="Sampler seed.", min=0)] = None,
     max_depth: Annotated[int | None, typer.Option(help="Path segments from the camera; -1 = unbounded.")] = None,
     sampler: Annotated[
         str | None, typer.Option(help="Sampler: sobol or independent (default: the scene's; see docs/sampling.md).")
     ] = None,
     exposure: Annotated[float | None, typer.Option(help="Stops: RGB output x 2**exposure (film XYZ unscaled).")] = None,
+    integrator: Annotated[
+        str | None,
+        typer.Option(help="Integrator, replacing the scene's integrator.type (see docs/integrators.md)."),
+    ] = None,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set",
+            metavar="KEY.PATH=VALUE",
+            help="Replace a value of the scene at a dotted key path, as if the file said so (repeatable), e.g. "
+            "--set film.exposure=1 --set 'materials.red.reflectance={ rgb = [0.6, 0.1, 0.1] }'. VALUE is read as a "
+            "TOML value, or as text when it is none; an imported scene takes the keys of the TOML its import writes.",
+        ),
+    ] = None,
     device: DeviceOption = None,
     xyz: Annotated[
         bool, typer.Option("--xyz/--no-xyz", help="EXR only: also store the film's X, Y, Z channels.")
@@ -98,7 +123,9 @@ def render(
             "gaussian:stddev=0.5,radius=2.",
         ),
     ] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", "-q", help="No progress bar and no messages but warnings and errors.")
+    ] = False,
     checkpoint: Annotated[
         Path | None,
         typer.Option(
@@ -193,9 +220,12 @@ def render(
     """Render SCENE to an image. Ctrl-C, SIGTERM or SIGHUP (a closed terminal) stops after the current pass and
     writes the samples done so far (and a checkpoint, with --checkpoint); a second Ctrl-C stops at once without
     writing."""
+    console.quiet = quiet
     job = _job_from_options(
         scene,
         output,
+        integrator=integrator,
+        settings=settings,
         spp=spp,
         width=width,
         height=height,
@@ -264,7 +294,7 @@ def render(
 
 
 def _say(text: str) -> None:
-    console.print(text, highlight=False, markup=False)
+    console.say(text)
 
 
 def _job_from_options(
@@ -279,12 +309,14 @@ def _job_from_options(
     false_color_scale: str,
     pixel_filter: str | None,
     aov: str | None,
-    **settings,
+    settings: list[str] | None,
+    **options,
 ):
     """The render's RenderJob from the command's options (every check made there, under the options' names), with
     the ΔE map the command adds to the scene's film."""
+    from spectrace.cli.scene_settings import named_by_option, parse_settings
     from spectrace.engine.job import COMMAND_LINE, RenderJob
-    from spectrace.scene import load_scene
+    from spectrace.interop.scene_files import load_any_scene
 
     chosen_filter = None
     if pixel_filter is not None:
@@ -292,16 +324,16 @@ def _job_from_options(
 
         chosen_filter = parse_filter_option(pixel_filter)
 
+    overrides = parse_settings(settings or [], "--set")
+
     def loaded():
-        if scene.suffix.lower() in (".gltf", ".glb"):  # glTF 2.0 files render through their import (docs/gltf.md)
-            from spectrace.interop.gltf import load_gltf_scene
-
-            return load_gltf_scene(scene)
-        if scene.suffix.lower() == ".blend":  # through Blender's bpy (docs/blender.md)
-            from spectrace.interop.blender import load_blend_scene
-
-            return load_blend_scene(scene)
-        return load_scene(scene)
+        try:
+            return load_any_scene(scene, overrides or None, report=_say)
+        except SpectraceError as error:
+            if not overrides:
+                raise
+            where = error.where.split(": ", 1)[0] if error.where else ""
+            raise named_by_option(error, Path(where), overrides, "--set") from None
 
     job = RenderJob.make(
         loaded,
@@ -313,7 +345,7 @@ def _job_from_options(
         white_balance=white_balance or None,
         false_colour=false_color,
         false_colour_scale=false_color_scale,
-        **settings,
+        **options,
     )
     for note in job.notes:
         _say(note)
@@ -466,7 +498,7 @@ def _resume(renderer, restored, path: Path):
     identity = restore_checkpoint(renderer, restored, str(path))
     done, target = restored.state.samples_done, renderer.scene.spp
     note = f" (already at or beyond the {target} spp asked for)" if done >= target else ""
-    console.print(f"resumed {path}: {done} spp done{note}", highlight=False, markup=False)
+    _say(f"resumed {path}: {done} spp done{note}")
     if restored.device != renderer.device.report.key:
         console.print(
             f"warning: the checkpoint was rendered on {restored.device}; continuing on "

@@ -12,7 +12,7 @@ from spectrace.errors import SpectraceError
 
 
 def _say(text: str) -> None:
-    console.print(text, highlight=False, markup=False)
+    console.say(text)
 
 
 def render_tiled(

@@ -24,16 +24,17 @@ SceneOption = Annotated[
     typer.Option(
         "--scene",
         "-s",
-        help="Also the spectra of this scene file, by key path "
+        help="Also the spectra of this scene file (or bundled scene: cornell_box), by key path "
         "(spectra.NAME, materials.NAME.reflectance, shapes[I].emitter.radiance, lights[I].intensity, ...).",
     ),
 ]
 
 
 def _known_spectra(scene: Path | None) -> dict:
+    from spectrace.resources import resolve_scene_path
     from spectrace.scene.spectra_index import scene_spectra
 
-    return scene_spectra(scene) if scene is not None else {}
+    return scene_spectra(resolve_scene_path(scene)) if scene is not None else {}
 
 
 def _resolve(name: str, scene_spectra: dict):

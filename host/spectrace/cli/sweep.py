@@ -22,6 +22,7 @@ from typing import Annotated, Any
 import typer
 
 from spectrace.cli.common import DeviceOption, console
+from spectrace.cli.scene_settings import override_at_fault
 from spectrace.errors import SpectraceError
 
 KINDS = ("display", "render")
@@ -131,21 +132,6 @@ def _check_display_grid(path: Path, grid: dict[str, list]) -> None:
                 raise SpectraceError(message, where=f"{path}: {_key_path('grid', name)}[{index}]") from None
 
 
-def _override_at_fault(error: SpectraceError, scene_file: Path, params: dict[str, Any]) -> str | None:
-    """The grid key whose value the scene's error is about (the error names that key path of the scene), or None
-    when the error lies elsewhere in the scene."""
-    from spectrace.scene.loader import key_path
-
-    if not error.where or not error.where.startswith(f"{scene_file}: "):
-        return None
-    location = error.where[len(f"{scene_file}: ") :]
-    for name in params:
-        forms = {name, key_path(tuple(int(part) if part.isdigit() else part for part in name.split(".")))}
-        if any(location == form or location.startswith((f"{form}.", f"{form}[")) for form in forms):
-            return name
-    return None
-
-
 def sweep_items(path: Path, device: str | None) -> list:
     """The sweep's items; a render sweep's scenes are read here (any error names the file and key now, and the
     workers receive resolved scenes, no files). Each item's key covers what determines it: its parameters, the
@@ -163,9 +149,14 @@ def sweep_items(path: Path, device: str | None) -> list:
             for params in combinations
         ]
     from spectrace.io.input_files import regular_file
+    from spectrace.resources import resolve_scene_path
     from spectrace.scene import load_scene
 
-    scene_file = regular_file(path.parent / settings["scene"], where=f"{path}: sweep.scene", what="scene file")
+    try:  # beside the spec, or a bundled scene's name
+        named = resolve_scene_path(settings["scene"], folder=path.parent)
+    except SpectraceError as error:
+        raise SpectraceError(error.message, where=f"{path}: sweep.scene") from None
+    scene_file = regular_file(named, where=f"{path}: sweep.scene", what="scene file")
     scene_file = scene_file.resolve()
     items = []
     for params in combinations:
@@ -173,7 +164,7 @@ def sweep_items(path: Path, device: str | None) -> list:
             scene = load_scene(scene_file, overrides=params)
             inputs = sweeping.scene_inputs(scene_file, params, digests)
         except SpectraceError as error:
-            name = _override_at_fault(error, scene_file, params)
+            name = override_at_fault(error, scene_file, params)
             if name is None:  # the scene's own fault, named with its key path
                 raise SpectraceError(str(error), where=f"{path}: sweep.scene") from None
             index = grid[name].index(params[name])

@@ -5,7 +5,7 @@ from typing import Annotated
 
 import typer
 
-from spectrace.cli.common import DeviceOption, JsonOption
+from spectrace.cli.common import DeviceOption, JsonOption, console
 from spectrace.errors import SpectraceError
 
 
@@ -13,6 +13,7 @@ def validate(
     case: Annotated[list[str] | None, typer.Option(help="Run only these cases (default: all).")] = None,
     device: DeviceOption = None,
     as_json: JsonOption = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
 ) -> None:
     """Check the laws of radiometry numerically: each law, its analytic value, the renderer's measurement ±
     its standard error, and pass/fail (|difference| <= 4 standard errors). Exits 1 if any check fails."""
@@ -24,7 +25,14 @@ def validate(
     unknown = [c for c in case or [] if c not in CASES]
     if unknown:
         raise SpectraceError(f"unknown validation case(s) {', '.join(unknown)}; cases: {', '.join(CASES)}")
-    checks = run_validation(case, device)
+    from contextlib import nullcontext
+
+    from spectrace.progress import progress_bar
+
+    count = len(case or CASES)
+    bar = nullcontext(None) if quiet else progress_bar(count, 0, console.rich(), unit="cases", label="validating")
+    with bar as progress:
+        checks = run_validation(case, device, progress=progress)
     if as_json:
         print(json.dumps({"checks": [c.as_dict() for c in checks]}, indent=2))
     else:

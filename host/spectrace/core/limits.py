@@ -97,7 +97,7 @@ def film_side_problem(name: str, pixels: int) -> str | None:
     if problem := whole_number_problem(f"film {name}", pixels):
         return problem
     if pixels < 1:
-        return f"film {name} must be at least 1 pixel, got {pixels}"
+        return f"{name} must be ≥ 1, got {pixels}"
     if pixels > MAX_FILM_SIDE_PX:
         return f"film {name} {pixels} px exceeds the limit of {MAX_FILM_SIDE_PX} px"
     return None
@@ -106,6 +106,10 @@ def film_side_problem(name: str, pixels: int) -> str | None:
 def film_size_problem(width: int, height: int) -> str | None:
     """Why a width x height film cannot be rendered, with the memory it would need, or None."""
     if problem := whole_number_problem("film width", width) or whole_number_problem("film height", height):
+        return problem
+    if (width < 1 or height < 1) and (problem := film_side_problem("width", width)):
+        return problem  # a film of no pixels: its side is the fault, not memory
+    if (width < 1 or height < 1) and (problem := film_side_problem("height", height)):
         return problem
     problem = film_side_problem("width", width) or film_side_problem("height", height)
     if problem is None and width * height <= MAX_FILM_PIXELS:

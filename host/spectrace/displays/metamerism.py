@@ -2,6 +2,7 @@
 differently, because their spectra differ. Per ColorChecker patch, the ΔE2000 between the patch lit by display A
 showing a triple and lit by display B showing the triple that matches it (same CIE 1931 XYZ)."""
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import colour
@@ -91,33 +92,45 @@ class RenderedPatch:
     delta_e_standard_error: float
 
 
-def measure_scene_patches(scene, device=None, streams: int = 32, samples_per_item: int = 32) -> list[RenderedPatch]:
+def measure_scene_patches(
+    scene,
+    device=None,
+    streams: int = 32,
+    samples_per_item: int = 32,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[RenderedPatch]:
     """The renderer's view of a two-half metamerism scene: for every shape pair named "left <patch>" / "right
     <patch>" (as in scenes/display_lcd_vs_led.toml), the radiance from the camera toward the patch's centre, by a
     radiance meter (380-780 nm every 5 nm), as CIELAB relative to the left half's brightest neutral patch (one fixed
     white for both halves, as one photograph would have) and the ΔE2000 between the halves. The ΔE's standard error
-    comes from re-evaluating it on the meter readings perturbed by their standard errors."""
+    comes from re-evaluating it on the meter readings perturbed by their standard errors. Each reading takes
+    `streams` x `samples_per_item` samples: the standard errors fall as one over its square root. `progress(readings
+    done, readings)` after each reading."""
     from spectrace.api import measure_radiance
+    from spectrace.device import Device, open_device
 
+    device = device if isinstance(device, Device) else open_device(device)  # once, not once per reading
     wavelengths = np.arange(380.0, 781.0, 5.0)
     origin = np.asarray(scene.camera.origin, float)
     shapes = {shape.name: shape for shape in scene.shapes}
     names = [name[len("left ") :] for name in shapes if name.startswith("left ") and f"right {name[5:]}" in shapes]
     names = [n for n in names if n in colorchecker_patch_names()]
     readings = {}
-    for side in ("left", "right"):
-        for name in names:
-            centre = shapes[f"{side} {name}"].mesh.vertices.mean(axis=0)
-            reading = measure_radiance(
-                scene,
-                origin,
-                centre - origin,
-                wavelengths,
-                streams=streams,
-                samples_per_item=samples_per_item,
-                device=device,
-            )
-            readings[side, name] = (reading.spectral, reading.spectral_standard_error)
+    pairs = [(side, name) for side in ("left", "right") for name in names]
+    for done, (side, name) in enumerate(pairs, start=1):
+        centre = shapes[f"{side} {name}"].mesh.vertices.mean(axis=0)
+        reading = measure_radiance(
+            scene,
+            origin,
+            centre - origin,
+            wavelengths,
+            streams=streams,
+            samples_per_item=samples_per_item,
+            device=device,
+        )
+        readings[side, name] = (reading.spectral, reading.spectral_standard_error)
+        if progress is not None:
+            progress(done, len(pairs))
     white_name = max((n for n in names if n.startswith("white")), default=names[0])
     white = photometric_xyz(np.interp(_grid(), wavelengths, readings["left", white_name][0]))
     rng = np.random.default_rng(0)

@@ -51,6 +51,7 @@ class SettingNames:
     sampler: str | None = None
     denoise: str | None = None
     display_server: str | None = None
+    integrator: str | None = None
 
 
 COMMAND_LINE = SettingNames(
@@ -69,6 +70,7 @@ COMMAND_LINE = SettingNames(
     sampler="--sampler",
     denoise="--denoise",
     display_server="--display-server",
+    integrator="--integrator",
 )
 PYTHON = SettingNames(
     spp=None,
@@ -94,6 +96,20 @@ def _count_problem(name: str, value: object, least: int) -> str | None:
         return problem
     assert isinstance(value, int)
     return f"{name} must be at least {least}, got {value}" if value < least else None
+
+
+def _keeping_aspect(scene: Scene, width: int | None, height: int | None) -> tuple[int | None, int | None]:
+    """(width, height) with the one not given following the scene's aspect ratio (at least 1 pixel); both given or
+    neither: as they are. A scene whose own size is no positive whole number keeps its size, for its check."""
+    own_width, own_height = scene.width, scene.height
+    usable = all(isinstance(n, int) and not isinstance(n, bool) and n > 0 for n in (own_width, own_height))
+    if not usable or (width is None) == (height is None):
+        return width, height
+    if height is None and isinstance(width, int) and width > 0:
+        return width, max(1, round(width * own_height / own_width))
+    if width is None and isinstance(height, int) and height > 0:
+        return max(1, round(height * own_width / own_height)), height
+    return width, height
 
 
 @dataclass(frozen=True)
@@ -128,6 +144,7 @@ class RenderJob:
         max_depth: int | None = None,
         exposure: float | None = None,
         sampler: str | None = None,
+        integrator: str | None = None,
         pixel_filter: PixelFilter | None = None,
         aovs: str | Sequence[str] | None = None,
         spectral_bins: int = 0,
@@ -147,7 +164,8 @@ class RenderJob:
         """Check every setting and build the job. `scene`: the scene, or what loads it (called once the settings
         that need no scene have passed, so that a wrong one is named before any file is read). `output`: the image
         file, when there is one: spectral bands and asked-for AOVs need an .exr, and the scene's own AOVs are left
-        out of another (a note says so). `display_server`: HOST:PORT of a tev viewer to stream the render to."""
+        out of another (a note says so). `display_server`: HOST:PORT of a tev viewer to stream the render to. A
+        width without a height, or a height without a width, keeps the scene's aspect ratio."""
         from spectrace.film.aovs import parse_aovs
         from spectrace.scene.model import SAMPLER_TYPES
 
@@ -162,6 +180,10 @@ class RenderJob:
             _refuse(not denoise_available() and INSTALL_HINT, names.denoise)
         if sampler is not None and sampler not in SAMPLER_TYPES:
             raise SpectraceError(f"unknown sampler '{sampler}' (use {' or '.join(SAMPLER_TYPES)})", where=names.sampler)
+        if integrator is not None:
+            from spectrace.integrators import INTEGRATORS
+
+            _refuse(limits.choice_problem("integrator", integrator, tuple(INTEGRATORS)), names.integrator)
         _refuse(seed is not None and limits.seed_problem(seed), names.seed)
         _refuse(max_depth is not None and limits.max_depth_problem(max_depth), names.max_depth)
         _refuse(exposure is not None and limits.exposure_problem(exposure), names.exposure)
@@ -172,6 +194,7 @@ class RenderJob:
             viewer = DisplayServer.parse(display_server, names.display_server)
 
         loaded = scene() if callable(scene) else scene
+        width, height = _keeping_aspect(loaded, width, height)
         loaded = loaded.with_overrides(
             spp=spp,
             width=width,
@@ -180,6 +203,7 @@ class RenderJob:
             max_depth=max_depth,
             exposure=exposure,
             sampler=sampler,
+            integrator=integrator,
             pixel_filter=pixel_filter,
         )
         if spp is None:  # the scene's own: a file's was checked as it was read, a Scene built in Python was not
@@ -261,9 +285,12 @@ class RenderJob:
         from spectrace.integrators import scene_settings_problem
 
         scene = self.scene
+        if problem := limits.film_size_problem(scene.width, scene.height):
+            # A scene file's size was checked as it was read: this one was set in Python (with_overrides, Scene),
+            # so the message names the field, not the file.
+            raise SpectraceError(problem)
         problem = (
-            limits.film_size_problem(scene.width, scene.height)
-            or limits.scene_settings_problem(scene)
+            limits.scene_settings_problem(scene)
             or scene_settings_problem(scene)
             or limits.scene_geometry_problem(scene)
         )

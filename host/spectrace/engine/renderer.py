@@ -96,9 +96,12 @@ class Renderer:
                 f"the {self.KERNEL_SHAPE} kernel runs the {having} integrator only, not {scene.integrator!r}",
                 where=str(scene.source) if scene.source else None,
             )
-        problem = (
-            limits.film_size_problem(scene.width, scene.height)  # the spp: checked by render(), which is given it
-            or limits.scene_settings_problem(scene)
+        if problem := limits.film_size_problem(scene.width, scene.height):
+            # A scene file's size was checked as it was read: this one was set in Python (with_overrides, Scene),
+            # so the message names the field, not the file.
+            raise SpectraceError(problem)
+        problem = (  # the spp: checked by render(), which is given it
+            limits.scene_settings_problem(scene)
             or scene_settings_problem(scene)
             or limits.scene_geometry_problem(scene)
         )

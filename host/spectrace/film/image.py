@@ -83,6 +83,14 @@ class Image:
         """Linear values of `colour_space` (X, Y, Z for "xyz"), white-balanced if asked, times 2**exposure."""
         return xyz_to_output(self.xyz, self.colour_space, self.white_balance, self.exposure)
 
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        """`np.asarray(image)`: the (height, width, 3) linear values `to_rgb()` gives, as an EXR file holds them (X,
+        Y, Z for an "xyz" image); `to_srgb()` gives what a screen shows."""
+        if copy is False:
+            raise ValueError("an Image's array is computed from its film XYZ: it cannot be given without a copy")
+        values = self.to_rgb()
+        return values if dtype is None else values.astype(dtype, copy=False)
+
     def to_display(self) -> np.ndarray:
         """`to_rgb()` clipped to [0, 1] and encoded with `colour_space`'s transfer curve (what PNG files hold)."""
         return encode_for_display(self.to_rgb(), self.colour_space)

@@ -29,9 +29,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.errors import SpectraceError
 from spectrace.spectral.colorimetry import CIE_1931_CMFS, cmf_table_normalised, spectrum_to_xyz
 from spectrace.spectral.grid import (
@@ -118,6 +120,9 @@ def observer_xyz_curves(label: str, wavelengths_nm: np.ndarray = GRID_NM) -> np.
 class Sensor:
     """Measured channel sensitivities: the file's samples, (wavelengths,) and (wavelengths, channels)."""
 
+    __eq__ = fields_equal  # by value (arrays too), hashed by identity
+    __hash__ = identity_hash
+
     source: str
     channel_names: tuple[str, ...]
     wavelengths_nm: np.ndarray
@@ -138,13 +143,43 @@ class Sensor:
         return self.curves_on(GRID_NM)
 
 
-def load_sensor(path: str | Path) -> Sensor:
-    """A sensor CSV: header `wavelength_nm,<channel>[,<channel>...]`, '#' comment lines, ascending wavelengths.
+def _is_multi_spectral(value: object) -> bool:
+    """Whether `value` is a colour-science MultiSpectralDistributions (read by its attributes: colour-science is
+    imported only by whoever made it)."""
+    return all(hasattr(value, name) for name in ("wavelengths", "values", "labels")) and not isinstance(
+        value, str | Path
+    )
+
+
+def sensor_from_multi_spectral(distributions: Any) -> Sensor:
+    """A Sensor from colour-science's MultiSpectralDistributions, such as a camera's
+    `colour.MSDS_CAMERA_SENSITIVITIES["Nikon 5100 (NPL)"]`: its wavelengths, one channel per label."""
+    source = str(getattr(distributions, "name", "") or "MultiSpectralDistributions")
+    wavelengths = np.asarray(distributions.wavelengths, np.float64)
+    data = np.asarray(distributions.values, np.float64)
+    names = tuple(str(label) for label in distributions.labels)
+    if data.ndim != 2 or data.shape != (len(wavelengths), len(names)) or len(wavelengths) < 2:
+        raise SpectraceError(f"expected (wavelengths, channels) sensitivities, got shape {data.shape}", where=source)
+    if not np.all(np.diff(wavelengths) > 0):
+        raise SpectraceError("wavelengths must ascend", where=source)
+    if not np.all(np.isfinite(data)) or np.any(data < 0):
+        raise SpectraceError("sensitivities must be finite and non-negative", where=source)
+    for name, row in zip(names, data.T):
+        if not row.max() > 0:
+            raise SpectraceError(f"channel '{name}' has no sensitivity", where=source)
+    return Sensor(source, names, wavelengths, data)
+
+
+def load_sensor(path: Any) -> Sensor:
+    """A sensor CSV: header `wavelength_nm,<channel>[,<channel>...]`, '#' comment lines, ascending wavelengths; or
+    colour-science's MultiSpectralDistributions (a camera's `colour.MSDS_CAMERA_SENSITIVITIES[...]`).
 
     A sensor responds only where its file says it does: outside the file's wavelengths its sensitivity is zero.
     """
     from spectrace.spectral.spectrum_io import _check_ascending, _parse_number, _read_csv_table
 
+    if _is_multi_spectral(path):
+        return sensor_from_multi_spectral(path)
     path = Path(path)
     table = _read_csv_table(path)
     width = 1 + len(table.columns)
@@ -175,6 +210,9 @@ def load_sensor(path: str | Path) -> Sensor:
 class FilmResponse:
     """The film's observer (of its X, Y, Z and RGB outputs), extra observers, and an optional measured sensor."""
 
+    __eq__ = fields_equal  # by value (arrays too), hashed by identity
+    __hash__ = identity_hash
+
     observer: str = DEFAULT_OBSERVER
     observers: tuple[str, ...] = ()
     sensor: Sensor | None = None
@@ -185,6 +223,13 @@ class FilmResponse:
     extend_rgb: bool = False  # RGB uplifts continue beyond the visible when the range goes there
 
     def __post_init__(self) -> None:
+        if self.sensor is not None and not isinstance(self.sensor, Sensor):
+            if not _is_multi_spectral(self.sensor):
+                raise SpectraceError(
+                    "sensor must be a Sensor (load_sensor) or colour-science's MultiSpectralDistributions, got "
+                    f"{type(self.sensor).__name__}"
+                )
+            object.__setattr__(self, "sensor", sensor_from_multi_spectral(self.sensor))
         for label in (self.observer, *self.observers):
             if problem := observer_problem(label):
                 raise SpectraceError(problem)

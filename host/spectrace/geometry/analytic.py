@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spectrace.core.contract import ANALYTIC_SHAPE_DTYPE, SHAPE_TYPES
+from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform
 
@@ -42,6 +43,9 @@ def similarity_problem(matrix: np.ndarray) -> str | None:
 
 @dataclass(frozen=True, eq=False)
 class AnalyticSurface:
+    __eq__ = fields_equal  # by value (arrays too), hashed by identity
+    __hash__ = identity_hash
+
     kind: str  # "sphere", "disk" or "cylinder"
     to_world: np.ndarray  # (4, 4) object -> world
     flip_normals: bool = False  # the front (normal, emitting side) inward, or the disk's -z side

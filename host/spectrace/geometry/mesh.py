@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from spectrace.core.equality import fields_equal
 from spectrace.errors import SpectraceError
 from spectrace.io.compressed import COMPRESSED_SUFFIXES, file_inflater
 from spectrace.io.input_files import regular_file
@@ -45,6 +46,13 @@ class TriangleMesh:
     # (N, 3) shading normals per vertex, interpolated across each face (smooth shading); None: every face shades
     # with its geometric normal. Any length; a zero one stands for the face normal at that corner.
     normals: np.ndarray | None = None
+
+    __eq__ = fields_equal  # arrays compared by value: two meshes (and the shapes holding them) compare as equal
+
+    def __repr__(self) -> str:
+        # The dataclass's own repr would print the arrays.
+        extras = "".join(f", {name}" for name in ("uvs", "normals") if getattr(self, name) is not None)
+        return f"TriangleMesh({len(self.vertices)} vertices, {len(self.faces)} faces{extras})"
 
     def __post_init__(self) -> None:
         self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64)

@@ -44,6 +44,7 @@ from spectrace.scene.model import (
     Scene,
     Shape,
 )
+from spectrace.scene.validation_messages import plain_message
 from spectrace.spectral.blackbody import blackbody
 from spectrace.spectral.illuminants import cie_illuminant
 from spectrace.spectral.spectrum import Spectrum
@@ -114,16 +115,12 @@ def _location_in_data(data: object, location: tuple, missing: bool) -> tuple:
     return tuple(kept)
 
 
-# A value of the wrong type where a number, a boolean or a string belongs (`width = true`, `spp = "4"`).
-_SCALAR_TYPE_ERRORS = ("int_type", "float_type", "bool_type", "string_type")
-
-
 def _validation_error(path: Path, error: ValidationError, data: object = None) -> SpectraceError:
     # A misspelt key also shows up as a missing required one; the misspelling is the actionable report. Among
     # the rest, the deepest location is the most specific (a union reports every member's complaint).
     located = [(e, _location_in_data(data, e["loc"], e["type"] == "missing")) for e in error.errors()]
     first, location = min(located, key=lambda item: (item[0]["type"] != "extra_forbidden", -len(item[1])))
-    message = first["msg"].removeprefix("Value error, ")
+    message = plain_message(first)
     if first["type"] == "extra_forbidden":
         allowed = _allowed_keys(schema.SceneSpec, location)
         close = difflib.get_close_matches(str(location[-1]), allowed, n=1)
@@ -139,9 +136,6 @@ def _validation_error(path: Path, error: ValidationError, data: object = None) -
         location = (*location, str(context.get("discriminator", "type")).strip("'"))
     elif first["type"] in ("model_type", "dict_type"):  # pydantic would name a schema class
         message = f"expected a table, got {type(first['input']).__name__} {first['input']!r}"[:200]
-    elif first["type"] in _SCALAR_TYPE_ERRORS:  # the schema is strict: say what the file gave instead
-        given = first["input"]
-        message += ", got " + (str(given).lower() if isinstance(given, bool) else repr(given))[:100]
     extra = f" ({len(error.errors()) - 1} more problem(s))" if len(error.errors()) > 1 else ""
     return SpectraceError(message + extra, where=f"{path}: {key_path(location)}" if location else str(path))
 

@@ -12,6 +12,7 @@ from typing import Literal
 import numpy as np
 
 from spectrace.core import limits
+from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.errors import SpectraceError
 from spectrace.film.aovs import parse_aovs
 from spectrace.film.response import FilmResponse
@@ -111,6 +112,9 @@ class InstancedObject:
     own (kernels/scene.cl, "Instances"), its analytic shapes once, intersected exactly through each instance's map.
     Emitters are refused in objects."""
 
+    __eq__ = fields_equal  # by value (arrays too), hashed by identity
+    __hash__ = identity_hash
+
     shapes: list[Shape]  # object space
     name: str = ""
 
@@ -119,6 +123,9 @@ class InstancedObject:
 class Instance:
     """One placement of an InstancedObject (Mitsuba 3's instance, pbrt-v4's ObjectInstance): its object space taken
     to world space by `to_world`, an invertible 4 x 4 affine matrix (a mirroring one is allowed)."""
+
+    __eq__ = fields_equal  # by value (arrays too), hashed by identity
+    __hash__ = identity_hash
 
     object: InstancedObject
     to_world: np.ndarray  # (4, 4)
@@ -157,6 +164,19 @@ class Scene:
         if problem := settings_type_problem(self):
             raise SpectraceError(problem)
         object.__setattr__(self, "aovs", parse_aovs(self.aovs, where="aovs"))
+
+    def __repr__(self) -> str:
+        # The dataclass's own repr prints every vertex and spectrum (kilobytes in a notebook): the size, the
+        # settings and the counts instead.
+        triangles = sum(len(shape.mesh.faces) for shape in self.shapes)
+        emitters = sum(shape.emitter is not None for shape in self.shapes)
+        instanced = f", {len(self.instances)} instances" if self.instances else ""
+        source = f", source={self.source.name!r}" if self.source is not None else ""
+        return (
+            f"Scene({self.width}x{self.height}, spp={self.spp}, integrator={self.integrator!r}, "
+            f"{len(self.shapes)} shapes ({triangles} triangles, {emitters} emitting), {len(self.lights)} lights"
+            f"{instanced}{source})"
+        )
 
     def with_overrides(self, **changes) -> "Scene":
         """A copy with some settings replaced (spp, width, height, seed, max_depth, ...); None keeps a value."""

@@ -239,6 +239,26 @@ class Spectrum:
     def __len__(self) -> int:
         return GRID_SIZE
 
+    def _repr_png_(self) -> bytes:
+        """A notebook shows a spectrum as its curve against wavelength (spectrace.plots.plot_spectra draws several,
+        in their colours, into a figure or file)."""
+        import io
+
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        figure = Figure(figsize=(5.0, 2.6))
+        FigureCanvasAgg(figure)
+        axes = figure.subplots()
+        axes.plot(GRID_NM, self._values, color="0.2", linewidth=1.4)
+        axes.set_xlim(GRID_NM[0], GRID_NM[-1])
+        axes.set_xlabel("wavelength (nm)")
+        axes.set_title(self.name or "spectrum", fontsize=9)
+        axes.grid(alpha=0.3)
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
+        return buffer.getvalue()
+
     def __repr__(self) -> str:
         return f"Spectrum({self.name!r}, min={self.min():.4g}, mean={self.mean():.4g}, max={self.max():.4g}" + (
             f", source={self.source!r})" if self.source else ")"

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.core.contract import TEXEL_RGB, TEXEL_SCALAR, TEXEL_SIGMOID, TEXEL_VECTOR
+from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.core.parameters import Parameter
 from spectrace.errors import SpectraceError
 from spectrace.textures.shared import (
@@ -58,6 +59,9 @@ _MITSUBA_STORAGE = ("format", "accel")
 @dataclass(frozen=True, eq=False)
 class BitmapTexture:
     """An image of linear values, (height, width, channels) with 1 or 3 channels, row 0 at the top (v = 0)."""
+
+    __eq__ = fields_equal  # by value (arrays too), hashed by identity
+    __hash__ = identity_hash
 
     values: np.ndarray
     placement: Placement = Placement()

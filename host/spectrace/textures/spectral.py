@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.core.contract import TEXEL_BANDS
+from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.errors import SpectraceError
 from spectrace.textures.shared import (
     FILE,
@@ -40,6 +41,9 @@ PBRT_NONE = "pbrt-v4 has no spectral image texture"
 @dataclass(frozen=True, eq=False)
 class SpectralTexture:
     """values (height, width, bands) at equally spaced band centres wavelengths_nm, row 0 at the top (v = 0)."""
+
+    __eq__ = fields_equal  # by value (arrays too), hashed by identity
+    __hash__ = identity_hash
 
     wavelengths_nm: np.ndarray
     values: np.ndarray
