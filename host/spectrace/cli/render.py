@@ -17,7 +17,14 @@ def render(
     scene: Annotated[
         Path, typer.Argument(help="Scene file (TOML), glTF 2.0 file (.gltf, .glb) or Blender file (.blend).")
     ],
-    output: Annotated[Path, typer.Option("--output", "-o", help="Output image: .png (sRGB) or .exr (linear).")],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "--output",
+            "-o",
+            help="Output image: .exr (linear float), .png, .tif, .jpg (display-encoded) or .pfm (linear float RGB).",
+        ),
+    ],
     spp: Annotated[int | None, typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
     width: Annotated[int | None, typer.Option(help="Film width in pixels.", min=1)] = None,
     height: Annotated[int | None, typer.Option(help="Film height in pixels.", min=1)] = None,
@@ -77,6 +84,7 @@ def render(
         ),
     ] = None,
     adaptation: Annotated[str, typer.Option(help="White-balance transform: bradford or von-kries.")] = "bradford",
+    bit_depth: Annotated[int, typer.Option(help="Bits per sample of a .png or .tif output: 8 or 16.")] = 8,
     false_color: Annotated[
         Path | None,
         typer.Option(
@@ -210,6 +218,7 @@ def render(
         colour_space=colour_space,
         white_balance=white_balance,
         adaptation=adaptation,
+        bit_depth=bit_depth,
         false_color=false_color,
         false_color_scale=false_color_scale,
         pixel_filter=pixel_filter,
