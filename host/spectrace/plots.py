@@ -182,24 +182,48 @@ def plot_false_colour_luminance(
     if scale not in ("log", "linear"):
         raise SpectraceError(f"unknown scale '{scale}' (use log or linear)", where="--false-color-scale")
     luminance = luminance_cd_m2(xyz_film)
-    limits = limits_cd_m2 or default_limits(luminance, scale)
-    low, high = limits
+    title = title or f"luminance, {scale} scale; mean {np.nanmean(luminance):.4g} cd/m²"
+    return plot_false_colour_map(luminance, path, "luminance (cd/m²)", scale, limits_cd_m2, title)
+
+
+def plot_delta_e_map(delta_e: np.ndarray, path: str | Path, title: str) -> tuple[float, float]:
+    """Write a per-pixel colour difference (ΔE) as a false-colour map with a scale bar, on a linear scale from 0 to
+    the 99.9th percentile, and at least to 1 (about a just-noticeable difference), so that a map of differences
+    too small to see does not fill the colour map; returns the scale's range."""
+    finite = np.asarray(delta_e, np.float64)[np.isfinite(delta_e)]
+    top = max(float(np.percentile(finite, _UPPER_PERCENTILE)) if finite.size else 0.0, 1.0)
+    return plot_false_colour_map(delta_e, path, "CIEDE2000 ΔE₀₀", "linear", (0.0, top), title)
+
+
+def plot_false_colour_map(
+    values: np.ndarray,
+    path: str | Path,
+    label: str,
+    scale: Scale = "log",
+    limits: tuple[float, float] | None = None,
+    title: str | None = None,
+) -> tuple[float, float]:
+    """Write (H, W) values as a false-colour map, one cell per pixel, with a scale bar labelled `label`; returns
+    the (low, high) range of the scale (by default `default_limits`)."""
+    values = np.asarray(values, np.float64)
+    low, high = limits or default_limits(values, scale)
     if not (np.isfinite(low) and np.isfinite(high) and high > low and (scale == "linear" or low > 0)):
-        raise SpectraceError(f"bad luminance range {low:g}..{high:g} cd/m² for a {scale} scale")
+        raise SpectraceError(f"bad range {low:g}..{high:g} for a {scale} scale of {label}")
     import matplotlib
 
     pyplot = _pyplot()
-    height, width = luminance.shape
+    height, width = values.shape
     inches = 6.0 / max(height, width)
     figure, axes = pyplot.subplots(figsize=(max(width * inches, 3.0) + 1.8, max(height * inches, 3.0) + 0.8))
-    axes.imshow(false_colour(luminance, limits, scale), interpolation="nearest")
+    axes.imshow(false_colour(values, (low, high), scale), interpolation="nearest")
     axes.set_axis_off()
     norm = matplotlib.colors.LogNorm(low, high) if scale == "log" else matplotlib.colors.Normalize(low, high)
-    bar = figure.colorbar(
-        matplotlib.cm.ScalarMappable(norm=norm, cmap=FALSE_COLOUR_MAP), ax=axes, fraction=0.046, pad=0.04, extend="both"
-    )
-    bar.set_label("luminance (cd/m²)")
-    axes.set_title(title or f"luminance, {scale} scale; mean {np.nanmean(luminance):.4g} cd/m²", fontsize=9)
+    extend = "max" if scale == "linear" and low == 0 and not np.nanmin(values) < 0 else "both"
+    mappable = matplotlib.cm.ScalarMappable(norm=norm, cmap=FALSE_COLOUR_MAP)
+    bar = figure.colorbar(mappable, ax=axes, fraction=0.046, pad=0.04, extend=extend)
+    bar.set_label(label)
+    if title:
+        axes.set_title(title, fontsize=9)
     _save(figure, path)
     return float(low), float(high)
 

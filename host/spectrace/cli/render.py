@@ -53,16 +53,17 @@ def render(
         typer.Option(
             "--delta-e-map",
             help="EXR only: also store a deltaE00 channel, the per-pixel CIEDE2000 between the first two observers of "
-            "the scene's film.observers (each in CIELAB against its own D65 white at Y = 1; see docs/colour.md).",
+            "the scene's film.observers (each in CIELAB against its own D65 white at the scene's white Y), and "
+            "write it as a false-colour map <output stem>.deltaE00.png beside the EXR (see docs/colour.md).",
         ),
     ] = False,
     delta_e_white_y: Annotated[
-        float,
+        float | None,
         typer.Option(
-            help="Film Y of the --delta-e-map's reference white (CIELAB's Y_n): e.g. the Y of a white patch in the "
-            "scene.",
+            help="Film Y of the --delta-e-map's reference white (CIELAB's Y_n), e.g. the Y of a white patch in the "
+            "scene (default: the Y of the brightest area of 3x3 pixels or more).",
         ),
-    ] = 1.0,
+    ] = None,
     colour_space: Annotated[
         str,
         typer.Option(
@@ -234,6 +235,11 @@ def render(
         from spectrace.denoising import noisy_path_for
 
         noisy = noisy_path_for(output)
+    if delta_e_map:
+        from spectrace.cli import checks as cli_checks
+        from spectrace.cli.render_output import delta_e_map_path
+
+        cli_checks.check_output_file(delta_e_map_path(output), "--delta-e-map")
     with _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy):
         from spectrace.engine.checkpoint import read_checkpoint
 
@@ -281,7 +287,7 @@ def _job_from_options(
     output: Path,
     *,
     delta_e_map: bool,
-    delta_e_white_y: float,
+    delta_e_white_y: float | None,
     colour_space: str,
     white_balance: str | None,
     false_color: Path | None,
@@ -406,12 +412,12 @@ def _scene_line(buffers) -> str:
     return f"scene: {buffers.triangle_count} triangles{instanced}, BVH built in {buffers.bvh_seconds:.2f} s{peak}"
 
 
-def _with_delta_e_map(response, output: Path, white_y: float):
+def _with_delta_e_map(response, output: Path, white_y: float | None):
     from dataclasses import replace
 
     import numpy as np
 
-    if not (np.isfinite(white_y) and white_y > 0):
+    if white_y is not None and not (np.isfinite(white_y) and white_y > 0):
         raise SpectraceError(f"must be a positive number, got {white_y}", where="--delta-e-white-y")
 
     if output.suffix.lower() != ".exr":
