@@ -100,7 +100,24 @@ def plot_spectra(
     y_label: str | None = None,
 ) -> Path:
     """Draw spectra (by label, or a list labelled by their names) on one wavelength axis into an image file
-    (.png, .pdf, .svg). normalise=True divides each by its peak, to compare shapes of different units."""
+    (.png, .pdf, .svg). normalise=True divides each by its peak, to compare shapes of different units. See
+    `spectra_figure` for when ratios get an axis of their own."""
+    return _save(spectra_figure(spectra, normalise, title, y_label), path)
+
+
+# Spectra whose peak is this many times a ratio's (within [0, 1]) would draw it as a flat line on a shared axis.
+_SECOND_AXIS_RATIO = 2.0
+
+
+def spectra_figure(
+    spectra: Mapping[str, Spectrum] | Sequence[Spectrum],
+    normalise: bool = False,
+    title: str | None = None,
+    y_label: str | None = None,
+):
+    """The matplotlib Figure of `plot_spectra`. Without `normalise`, spectra whose values all lie in [0, 1]
+    (reflectances, transmittances) drawn with others that peak more than twice as high (a light's radiance) go on a
+    second y axis on the right, from 0 to 1, so they do not lie flat along the bottom; the legend marks them."""
     items = list(spectra.items()) if isinstance(spectra, Mapping) else [(s.name, s) for s in spectra]
     if not items:
         raise SpectraceError("no spectra to plot")
@@ -108,27 +125,47 @@ def plot_spectra(
     figure, (axes, strip) = pyplot.subplots(
         2, 1, figsize=(7.5, 4.8), sharex=True, gridspec_kw={"height_ratios": [14, 1], "hspace": 0.06}
     )
+    ratios = {label for label, s in items if s.values.min() >= 0 and s.values.max() <= 1}
+    peak = max((s.values.max() for label, s in items if label not in ratios), default=0.0)
+    second = None
+    if not normalise and ratios and peak > _SECOND_AXIS_RATIO * max(_peak_of(items, ratios), 1e-12):
+        second = axes.twinx()
+        second.set_ylim(0, 1.05)
+        second.set_ylabel("reflectance, transmittance (right axis, 0–1)")
+    lines = []
     for index, (label, spectrum) in enumerate(items):
         values = spectrum.values
         if normalise and values.max() > 0:
             values = values / values.max()
-        axes.plot(
+        target = second if second is not None and label in ratios else axes
+        on_right = target is not axes
+        (line,) = target.plot(
             GRID_NM,
             values,
             color=_line_colour(spectrum),
             linestyle=_LINE_STYLES[index % len(_LINE_STYLES)],
             linewidth=1.6,
-            label=label,
+            label=f"{label} (right axis)" if on_right else label,
         )
+        lines.append(line)
     axes.set_xlim(GRID_NM[0], GRID_NM[-1])
     axes.set_ylim(bottom=0)
-    axes.set_ylabel(y_label or ("value / peak" if normalise else "value (in the spectrum's own unit)"))
+    if y_label:
+        axes.set_ylabel(y_label)
+    elif normalise:
+        axes.set_ylabel("value / peak")
+    else:
+        axes.set_ylabel("value (in the spectrum's own unit)" + (", left axis" if second is not None else ""))
     axes.grid(alpha=0.3)
-    axes.legend(fontsize=8, loc="best")
+    axes.legend(handles=lines, fontsize=8, loc="best")
     if title:
         axes.set_title(title)
     _visible_strip(strip)
-    return _save(figure, path)
+    return figure
+
+
+def _peak_of(items: Sequence[tuple[str, Spectrum]], labels: set[str]) -> float:
+    return max((s.values.max() for label, s in items if label in labels), default=0.0)
 
 
 # ---------------------------------------------------------------- false colour
