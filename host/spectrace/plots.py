@@ -39,12 +39,9 @@ Scale = Literal["log", "linear"]
 
 
 def _pyplot():
-    import matplotlib
+    from spectrace.plot_extra import pyplot
 
-    matplotlib.use("Agg")  # files only; never open a window
-    import matplotlib.pyplot as pyplot
-
-    return pyplot
+    return pyplot("figures")
 
 
 # ---------------------------------------------------------------- spectra
@@ -77,6 +74,9 @@ def _visible_strip(axes) -> None:
 
 def text_problem(text: str) -> str | None:
     """Why matplotlib cannot typeset `text` (text between two $ signs is math, which may not parse), or None."""
+    from spectrace.plot_extra import require_matplotlib
+
+    require_matplotlib("--title")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

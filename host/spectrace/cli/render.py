@@ -424,6 +424,9 @@ def _with_delta_e_map(response, output: Path, white_y: float | None):
         raise SpectraceError("--delta-e-map needs an .exr output", where=str(output))
     if len(response.observers) < 2:
         raise SpectraceError("compares the first two of film.observers; the scene lists fewer", where="--delta-e-map")
+    from spectrace.plot_extra import require_matplotlib
+
+    require_matplotlib("--delta-e-map")  # its picture
     return replace(response, delta_e_pair=(response.observers[0], response.observers[1]), delta_e_white_y=white_y)
 
 

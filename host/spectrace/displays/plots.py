@@ -19,12 +19,9 @@ MARKERS = "os^Dvp<>h*XP"
 
 
 def _pyplot():
-    import matplotlib
+    from spectrace.plot_extra import pyplot
 
-    matplotlib.use("Agg")  # files only; never open a window
-    import matplotlib.pyplot as pyplot
-
-    return pyplot
+    return pyplot("--plot")
 
 
 def _plot_emissions(figure, grid_cell, comparison: Comparison) -> None:

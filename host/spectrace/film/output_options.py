@@ -70,6 +70,10 @@ class RenderOutputOptions:
                 f"unknown scale '{false_colour_scale}' (use {' or '.join(FALSE_COLOUR_SCALES)})",
                 where="--false-color-scale",
             )
+        if false_colour is not None:
+            from spectrace.plot_extra import require_matplotlib
+
+            require_matplotlib("--false-color")
         if false_colour is not None and false_colour.suffix.lower() not in (".png", ".pdf", ".svg"):
             raise SpectraceError(
                 f"unknown figure format '{false_colour.suffix}' (use .png, .pdf or .svg)", where="--false-color"
