@@ -18,7 +18,7 @@ def test_every_picture_the_docs_show_exists():
 
 def test_the_tutorial_and_the_pages_with_pictures_of_their_own_are_tested():
     names = {page.name for page in tested_pages()}
-    assert {"first-scene.md", "plots.md", "displays.md", "python-api.md"} <= names
+    assert {"first-scene.md", "plots.md", "displays.md", "python-api.md", "sampling.md"} <= names
 
 
 def test_a_render_command_is_made_small_and_other_commands_kept():
