@@ -394,9 +394,7 @@ CASES = [
     replace(
         "override-non-integer-width", "", "", "--width", "must be a whole number, got 'wide'", argv=("--width", "wide")
     ),
-    replace(
-        "unknown-output-format", "", "", "out.bmp", "unknown image format '.bmp'", argv=("-o", "{folder}/out.bmp")
-    ),
+    replace("unknown-output-format", "", "", "out.bmp", "unknown image format '.bmp'", argv=("-o", "{folder}/out.bmp")),
     replace(
         "missing-checkpoint",
         "",
