@@ -12,6 +12,13 @@ Scenes can also be built from Python objects (`spectrace.api`: spectrum, diffuse
 docs/python-api.md shows how.
 """
 
+import warnings
+
+# colour-science warns on import that matplotlib, which only its plotting needs, is missing (it comes with the plot
+# extra; a figure asked for without it is refused naming the extra: spectrace.plot_extra). colour is imported late,
+# where first needed (it takes about a second), so the filter stays for the process rather than around one import.
+warnings.filterwarnings("ignore", message=".*Matplotlib.* related API features are not available")
+
 from spectrace.cache_folder import ensure_usable_cache_folder
 from spectrace.lazy_names import lazy_names
 from spectrace.scene import MODEL_NAMES, material_model_names

@@ -39,12 +39,9 @@ Scale = Literal["log", "linear"]
 
 
 def _pyplot():
-    import matplotlib
+    from spectrace.plot_extra import pyplot
 
-    matplotlib.use("Agg")  # files only; never open a window
-    import matplotlib.pyplot as pyplot
-
-    return pyplot
+    return pyplot("figures")
 
 
 # ---------------------------------------------------------------- spectra
@@ -77,6 +74,9 @@ def _visible_strip(axes) -> None:
 
 def text_problem(text: str) -> str | None:
     """Why matplotlib cannot typeset `text` (text between two $ signs is math, which may not parse), or None."""
+    from spectrace.plot_extra import require_matplotlib
+
+    require_matplotlib("--title")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -101,41 +101,82 @@ def plot_spectra(
 ):
     """Draw spectra (by label, or a list labelled by their names) on one wavelength axis; returns the matplotlib
     Figure (a notebook shows it), also written to `path` (.png, .pdf, .svg) when given. normalise=True divides
-    each by its peak, to compare shapes of different units."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    each by its peak, to compare shapes of different units. See `spectra_figure` for when ratios get an axis of
+    their own."""
+    figure = spectra_figure(spectra, normalise, title, y_label)
+    if path is not None:
+        _write_figure(figure, Path(path))
+    return figure
 
+
+# Spectra whose peak is this many times a ratio's (within [0, 1]) would draw it as a flat line on a shared axis.
+_SECOND_AXIS_RATIO = 2.0
+
+
+def spectra_figure(
+    spectra: Mapping[str, Spectrum] | Sequence[Spectrum],
+    normalise: bool = False,
+    title: str | None = None,
+    y_label: str | None = None,
+):
+    """The matplotlib Figure of `plot_spectra`. Without `normalise`, spectra whose values all lie in [0, 1]
+    (reflectances, transmittances) drawn with others that peak more than twice as high (a light's radiance) go on a
+    second y axis on the right, from 0 to 1, so they do not lie flat along the bottom; the legend marks them."""
     items = list(spectra.items()) if isinstance(spectra, Mapping) else [(s.name, s) for s in spectra]
     if not items:
         raise SpectraceError("no spectra to plot")
+    from spectrace.plot_extra import require_matplotlib
+
+    require_matplotlib("figures")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     # A Figure of its own, not pyplot's: pyplot would keep every figure returned to a notebook open, and its
     # backend is the notebook's to choose.
     figure = Figure(figsize=(7.5, 4.8))
     FigureCanvasAgg(figure)
     axes, strip = figure.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [14, 1], "hspace": 0.06})
+    ratios = {label for label, s in items if s.values.min() >= 0 and s.values.max() <= 1}
+    peak = max((s.values.max() for label, s in items if label not in ratios), default=0.0)
+    second = None
+    if not normalise and ratios and peak > _SECOND_AXIS_RATIO * max(_peak_of(items, ratios), 1e-12):
+        second = axes.twinx()
+        second.set_ylim(0, 1.05)
+        second.set_ylabel("reflectance, transmittance (right axis, 0–1)")
+    lines = []
     for index, (label, spectrum) in enumerate(items):
         values = spectrum.values
         if normalise and values.max() > 0:
             values = values / values.max()
-        axes.plot(
+        target = second if second is not None and label in ratios else axes
+        on_right = target is not axes
+        (line,) = target.plot(
             GRID_NM,
             values,
             color=_line_colour(spectrum),
             linestyle=_LINE_STYLES[index % len(_LINE_STYLES)],
             linewidth=1.6,
-            label=label,
+            label=f"{label} (right axis)" if on_right else label,
         )
+        lines.append(line)
     axes.set_xlim(GRID_NM[0], GRID_NM[-1])
     axes.set_ylim(bottom=0)
-    axes.set_ylabel(y_label or ("value / peak" if normalise else "value (in the spectrum's own unit)"))
+    if y_label:
+        axes.set_ylabel(y_label)
+    elif normalise:
+        axes.set_ylabel("value / peak")
+    else:
+        axes.set_ylabel("value (in the spectrum's own unit)" + (", left axis" if second is not None else ""))
     axes.grid(alpha=0.3)
-    axes.legend(fontsize=8, loc="best")
+    axes.legend(handles=lines, fontsize=8, loc="best")
     if title:
         axes.set_title(title)
     _visible_strip(strip)
-    if path is not None:
-        _write_figure(figure, Path(path))
     return figure
+
+
+def _peak_of(items: Sequence[tuple[str, Spectrum]], labels: set[str]) -> float:
+    return max((s.values.max() for label, s in items if label in labels), default=0.0)
 
 
 # ---------------------------------------------------------------- false colour
@@ -189,24 +230,48 @@ def plot_false_colour_luminance(
     if scale not in ("log", "linear"):
         raise SpectraceError(f"unknown scale '{scale}' (use log or linear)", where="--false-color-scale")
     luminance = luminance_cd_m2(xyz_film)
-    limits = limits_cd_m2 or default_limits(luminance, scale)
-    low, high = limits
+    title = title or f"luminance, {scale} scale; mean {np.nanmean(luminance):.4g} cd/m²"
+    return plot_false_colour_map(luminance, path, "luminance (cd/m²)", scale, limits_cd_m2, title)
+
+
+def plot_delta_e_map(delta_e: np.ndarray, path: str | Path, title: str) -> tuple[float, float]:
+    """Write a per-pixel colour difference (ΔE) as a false-colour map with a scale bar, on a linear scale from 0 to
+    the 99.9th percentile, and at least to 1 (about a just-noticeable difference), so that a map of differences
+    too small to see does not fill the colour map; returns the scale's range."""
+    finite = np.asarray(delta_e, np.float64)[np.isfinite(delta_e)]
+    top = max(float(np.percentile(finite, _UPPER_PERCENTILE)) if finite.size else 0.0, 1.0)
+    return plot_false_colour_map(delta_e, path, "CIEDE2000 ΔE₀₀", "linear", (0.0, top), title)
+
+
+def plot_false_colour_map(
+    values: np.ndarray,
+    path: str | Path,
+    label: str,
+    scale: Scale = "log",
+    limits: tuple[float, float] | None = None,
+    title: str | None = None,
+) -> tuple[float, float]:
+    """Write (H, W) values as a false-colour map, one cell per pixel, with a scale bar labelled `label`; returns
+    the (low, high) range of the scale (by default `default_limits`)."""
+    values = np.asarray(values, np.float64)
+    low, high = limits or default_limits(values, scale)
     if not (np.isfinite(low) and np.isfinite(high) and high > low and (scale == "linear" or low > 0)):
-        raise SpectraceError(f"bad luminance range {low:g}..{high:g} cd/m² for a {scale} scale")
+        raise SpectraceError(f"bad range {low:g}..{high:g} for a {scale} scale of {label}")
     import matplotlib
 
     pyplot = _pyplot()
-    height, width = luminance.shape
+    height, width = values.shape
     inches = 6.0 / max(height, width)
     figure, axes = pyplot.subplots(figsize=(max(width * inches, 3.0) + 1.8, max(height * inches, 3.0) + 0.8))
-    axes.imshow(false_colour(luminance, limits, scale), interpolation="nearest")
+    axes.imshow(false_colour(values, (low, high), scale), interpolation="nearest")
     axes.set_axis_off()
     norm = matplotlib.colors.LogNorm(low, high) if scale == "log" else matplotlib.colors.Normalize(low, high)
-    bar = figure.colorbar(
-        matplotlib.cm.ScalarMappable(norm=norm, cmap=FALSE_COLOUR_MAP), ax=axes, fraction=0.046, pad=0.04, extend="both"
-    )
-    bar.set_label("luminance (cd/m²)")
-    axes.set_title(title or f"luminance, {scale} scale; mean {np.nanmean(luminance):.4g} cd/m²", fontsize=9)
+    extend = "max" if scale == "linear" and low == 0 and not np.nanmin(values) < 0 else "both"
+    mappable = matplotlib.cm.ScalarMappable(norm=norm, cmap=FALSE_COLOUR_MAP)
+    bar = figure.colorbar(mappable, ax=axes, fraction=0.046, pad=0.04, extend=extend)
+    bar.set_label(label)
+    if title:
+        axes.set_title(title, fontsize=9)
     _save(figure, path)
     return float(low), float(high)
 

@@ -21,6 +21,7 @@ import io
 import itertools
 import json
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cache
@@ -142,10 +143,48 @@ class SweepItem:
     function: Callable[..., dict[str, Any]]
     arguments: dict[str, Any]
     inputs: dict[str, Any] = field(default_factory=dict)
+    # Files each Image result is written as, by suffix; the first one's name is the row's entry, the others' are
+    # under NAME_SUFFIX (image_png).
+    image_formats: tuple[str, ...] = ("exr",)
 
     @property
     def key(self) -> str:
-        return item_key(self.params, self.function, self.inputs)
+        formats = {} if self.image_formats == ("exr",) else {"image_formats": list(self.image_formats)}
+        return item_key(self.params, self.function, {**self.inputs, **formats})
+
+
+# Characters kept in an image's name; any other run of characters becomes one "-" (file systems and shells
+# take these everywhere).
+_UNSAFE = re.compile(r"[^A-Za-z0-9._=+-]+")
+_STEM_CHARS = 120  # with the result's name and suffix, well inside a file name's 255 bytes
+
+
+def _value_stem(value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    if isinstance(value, list | tuple):
+        return ",".join(_value_stem(v) for v in value)
+    if isinstance(value, dict):  # an inline table of a scene's key: {value = 0.2} -> value=0.2
+        return ",".join(f"{k}={_value_stem(v)}" for k, v in value.items())
+    return value_text(value)
+
+
+def image_stems(items: Sequence[SweepItem]) -> list[str]:
+    """Each item's images' name stem, from its parameters (`spp=64_roughness=0.2`): unsafe characters replaced,
+    cut short, and made unique (also where case is ignored, as on macOS and Windows) by the item's key where two
+    would meet."""
+    stems = []
+    for item in items:
+        parts = (_UNSAFE.sub("-", f"{name}={_value_stem(value)}").strip("-") for name, value in item.params.items())
+        stem = "_".join(parts).strip(".") or "item"
+        stems.append(stem[:_STEM_CHARS])
+    counts: dict[str, int] = {}
+    for stem in stems:
+        counts[stem.casefold()] = counts.get(stem.casefold(), 0) + 1
+    return [
+        stem if counts[stem.casefold()] == 1 and len(stem) < _STEM_CHARS else f"{stem}-{item.key[:12]}"
+        for stem, item in zip(stems, items)
+    ]
 
 
 def _item_file(out: Path, key: str) -> Path:
@@ -156,7 +195,7 @@ def _write_text(path: Path, text: str) -> None:
     write_atomically(path, lambda temp: temp.write_text(text, encoding="utf-8"))
 
 
-def _save_item(out: Path, item: SweepItem, result: Mapping[str, Any]) -> dict[str, Any]:
+def _save_item(out: Path, item: SweepItem, result: Mapping[str, Any], stem: str | None = None) -> dict[str, Any]:
     if not isinstance(result, Mapping):
         raise SpectraceError(
             f"a sweep function must return a dict, got {type(result).__name__}", where=str(item.params)
@@ -168,11 +207,12 @@ def _save_item(out: Path, item: SweepItem, result: Mapping[str, Any]) -> dict[st
     try:
         for name, value in result.items():
             if isinstance(value, Image):
-                relative = Path(IMAGES_FOLDER) / f"{key[:16]}-{name}.exr"
                 (out / IMAGES_FOLDER).mkdir(exist_ok=True)
-                value.write(out / relative)
-                row[name] = relative.as_posix()
-                images.append(relative.as_posix())
+                for index, suffix in enumerate(item.image_formats):
+                    relative = Path(IMAGES_FOLDER) / f"{stem or key[:16]}-{name}.{suffix}"
+                    value.write(out / relative)
+                    row[name if index == 0 else f"{name}_{suffix}"] = relative.as_posix()
+                    images.append(relative.as_posix())
             else:
                 row[name] = value
         # The item's file last: it marks the item done, so its images are complete whenever it exists.
@@ -269,13 +309,14 @@ def _run_items(
     stop: Callable[[], bool] | None,
 ) -> tuple[list[dict[str, Any]], int]:
     rows: list[dict[str, Any] | None] = [_load_row(out, item) for item in items]
+    stems = image_stems(items)
     todo = [index for index, row in enumerate(rows) if row is None]
     should_stop = stop or (lambda: False)
     computed = 0
 
     def finished(index: int, result: Mapping[str, Any]) -> None:
         nonlocal computed
-        rows[index] = _save_item(out, items[index], result)
+        rows[index] = _save_item(out, items[index], result, stems[index])
         computed += 1
         if progress is not None:
             progress(len(items) - len(todo) + computed, len(items))

@@ -389,7 +389,7 @@ import json, os, random, shutil, signal, sys, time
 from pathlib import Path
 import numpy as np
 from spectrace.io.exr import write_exr
-from spectrace.io.png import write_png
+from spectrace.io.raster import write_display_image as write_png
 from spectrace.engine.checkpoint import Checkpoint, RenderIdentity, RenderState, write_checkpoint
 
 folder, delays = Path(sys.argv[1]), json.loads(sys.argv[2])

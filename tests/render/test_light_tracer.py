@@ -33,7 +33,7 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry import primitives
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.integrators import light as light_tracer
-from spectrace.io.png import write_png
+from spectrace.io.raster import write_display_image as write_png
 from spectrace.resources import resolve_scene_path
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape
 from spectrace.spectral.grid import GRID_NM

@@ -1,10 +1,11 @@
-"""The PNG writer (written with zlib, not Pillow) against an independent decoder: Pillow reads back every pixel,
-every text chunk, and a chunk given by type, and libpng's checks (CRCs, chunk order) pass through its loader."""
+"""The display-image writer's PNGs (Pillow's encoder, with the text and extra chunks spectrace adds): Pillow's
+decoder reads back every pixel, every text chunk, and a chunk given by type, and its checks (CRCs, chunk order)
+pass."""
 
 import numpy as np
 from PIL import Image as PILImage
 
-from spectrace.io.png import write_png
+from spectrace.io.raster import write_display_image as write_png
 
 
 def test_pillow_reads_back_pixels_and_text(tmp_path):
@@ -12,7 +13,7 @@ def test_pillow_reads_back_pixels_and_text(tmp_path):
     encoded = rng.uniform(-0.2, 1.2, size=(5, 7, 3))  # values outside [0, 1] are clipped
     metadata = {"spp": "16", "scene": "café ☕ scene"}  # Latin-1 and beyond it
     path = tmp_path / "a.png"
-    write_png(path, encoded, metadata, chunks={b"cICP": bytes([12, 13, 0, 1])})
+    write_png(path, encoded, metadata, png_chunks={b"cICP": bytes([12, 13, 0, 1])})
     expected = np.rint(np.clip(encoded, 0.0, 1.0) * 255).astype(np.uint8)
     with PILImage.open(path) as png:
         png.load()  # verifies every chunk's CRC and the zlib stream

@@ -396,9 +396,7 @@ CASES = [
     replace(
         "override-non-integer-width", "", "", "--width", "must be a whole number, got 'wide'", argv=("--width", "wide")
     ),
-    replace(
-        "unknown-output-format", "", "", "out.tiff", "unknown image format '.tiff'", argv=("-o", "{folder}/out.tiff")
-    ),
+    replace("unknown-output-format", "", "", "out.bmp", "unknown image format '.bmp'", argv=("-o", "{folder}/out.bmp")),
     replace(
         "missing-checkpoint",
         "",
@@ -771,10 +769,10 @@ def test_a_title_matplotlib_cannot_typeset_is_one_line(title, says, tmp_path, mo
 
 def test_a_file_name_with_line_breaks_still_gives_one_line(tmp_path, monkeypatch, capsys):
     scene, argv = _write_case(tmp_path, replace("fine", "", "", "", ""))
-    odd = tmp_path / "line\nbreak\x85\u2028.tiff"
+    odd = tmp_path / "line\nbreak\x85\u2028.bmp"
     status, stderr = _run_in_process(monkeypatch, capsys, [*argv, "-o", str(odd)])
     assert status == 2 and stderr.count("\n") == 1 and len(stderr.splitlines()) == 1, stderr
-    assert f"error: {tmp_path}/line\\nbreak\\x85\\u2028.tiff: unknown image format '.tiff'" in stderr
+    assert f"error: {tmp_path}/line\\nbreak\\x85\\u2028.bmp: unknown image format '.bmp'" in stderr
 
 
 def test_black_on_the_displays(tmp_path, monkeypatch, capsys):

@@ -414,7 +414,7 @@ from pathlib import Path
 signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write beyond the limit then fails instead of killing
 resource.setrlimit(resource.RLIMIT_FSIZE, (16384, 16384))
 from spectrace.io.exr import write_exr
-from spectrace.io.png import write_png
+from spectrace.io.raster import write_display_image as write_png
 out = Path(sys.argv[1])
 pixels = np.random.default_rng(1).random((128, 128, 3), dtype=np.float32)
 try:

@@ -22,12 +22,16 @@ SAMPLERS_DEFAULT_SIZE = 32
 DENOISE_DEFAULT_SIZE = 128
 RENDER_DEFAULT_SIZES = [256, 512]
 
+# spectrace.integrators.INTEGRATORS' names, written out: the help must not import the integrators (and their
+# kernels' host code); tests/cli/test_help_names.py keeps the two the same.
+INTEGRATOR_NAMES = "path, direct, light, bdpt or sppm"
+
 SizesOption = Annotated[list[int] | None, typer.Option("--size", help="Square image size(s) in pixels, repeatable.")]
 SppOption = Annotated[int, typer.Option(help="Samples per pixel per measurement.", min=1)]
 MaxDepthOption = Annotated[int, typer.Option(help="Path segments from the camera.")]
 IntegratorOption = Annotated[
     str | None,
-    typer.Option(help="Integrator to time, one of spectrace.integrators.INTEGRATORS (default: the scene's)."),
+    typer.Option(help=f"Integrator to time: {INTEGRATOR_NAMES} (default: the scene's)."),
 ]
 SceneOption = Annotated[Path | None, typer.Option(help="Scene file (default: the Cornell box).")]
 AllOption = Annotated[bool, typer.Option("--all", help="Every working device in turn.")]

@@ -169,6 +169,9 @@ def compare(
         from spectrace.cli.checks import check_output_file
 
         check_output_file(plot, "--plot")  # before the work, like every output
+        from spectrace.plot_extra import require_matplotlib
+
+        require_matplotlib("--plot")
     displays = [item.with_transfer(encoding) for item in _displays_from_options(display, "--display")]
     viewing = ViewingConditions(white_luminance_cd_m2=white_luminance, keep_measured_radiance=measured_radiance)
     comparison = compare_displays(displays, np.array(rgb), viewing)

@@ -22,7 +22,14 @@ def render(
             "name (cornell_box)."
         ),
     ],
-    output: Annotated[Path, typer.Option("--output", "-o", help="Output image: .png (sRGB) or .exr (linear).")],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "--output",
+            "-o",
+            help="Output image: .exr (linear float), .png, .tif, .jpg (display-encoded) or .pfm (linear float RGB).",
+        ),
+    ],
     spp: Annotated[int | None, typer.Option(help="Samples per pixel (default: the scene's).", min=1)] = None,
     width: Annotated[
         int | None,
@@ -71,16 +78,17 @@ def render(
         typer.Option(
             "--delta-e-map",
             help="EXR only: also store a deltaE00 channel, the per-pixel CIEDE2000 between the first two observers of "
-            "the scene's film.observers (each in CIELAB against its own D65 white at Y = 1; see docs/colour.md).",
+            "the scene's film.observers (each in CIELAB against its own D65 white at the scene's white Y), and "
+            "write it as a false-colour map <output stem>.deltaE00.png beside the EXR (see docs/colour.md).",
         ),
     ] = False,
     delta_e_white_y: Annotated[
-        float,
+        float | None,
         typer.Option(
-            help="Film Y of the --delta-e-map's reference white (CIELAB's Y_n): e.g. the Y of a white patch in the "
-            "scene.",
+            help="Film Y of the --delta-e-map's reference white (CIELAB's Y_n), e.g. the Y of a white patch in the "
+            "scene (default: the Y of the brightest area of 3x3 pixels or more).",
         ),
-    ] = 1.0,
+    ] = None,
     colour_space: Annotated[
         str,
         typer.Option(
@@ -102,6 +110,7 @@ def render(
         ),
     ] = None,
     adaptation: Annotated[str, typer.Option(help="White-balance transform: bradford or von-kries.")] = "bradford",
+    bit_depth: Annotated[int, typer.Option(help="Bits per sample of a .png or .tif output: 8 or 16.")] = 8,
     false_color: Annotated[
         Path | None,
         typer.Option(
@@ -240,6 +249,7 @@ def render(
         colour_space=colour_space,
         white_balance=white_balance,
         adaptation=adaptation,
+        bit_depth=bit_depth,
         false_color=false_color,
         false_color_scale=false_color_scale,
         pixel_filter=pixel_filter,
@@ -255,6 +265,11 @@ def render(
         from spectrace.denoising import noisy_path_for
 
         noisy = noisy_path_for(output)
+    if delta_e_map:
+        from spectrace.cli import checks as cli_checks
+        from spectrace.cli.render_output import delta_e_map_path
+
+        cli_checks.check_output_file(delta_e_map_path(output), "--delta-e-map")
     with _check_output_files(scene, output, false_color, checkpoint, resume, overwrite, noisy):
         from spectrace.engine.checkpoint import read_checkpoint
 
@@ -302,7 +317,7 @@ def _job_from_options(
     output: Path,
     *,
     delta_e_map: bool,
-    delta_e_white_y: float,
+    delta_e_white_y: float | None,
     colour_space: str,
     white_balance: str | None,
     false_color: Path | None,
@@ -429,18 +444,21 @@ def _scene_line(buffers) -> str:
     return f"scene: {buffers.triangle_count} triangles{instanced}, BVH built in {buffers.bvh_seconds:.2f} s{peak}"
 
 
-def _with_delta_e_map(response, output: Path, white_y: float):
+def _with_delta_e_map(response, output: Path, white_y: float | None):
     from dataclasses import replace
 
     import numpy as np
 
-    if not (np.isfinite(white_y) and white_y > 0):
+    if white_y is not None and not (np.isfinite(white_y) and white_y > 0):
         raise SpectraceError(f"must be a positive number, got {white_y}", where="--delta-e-white-y")
 
     if output.suffix.lower() != ".exr":
         raise SpectraceError("--delta-e-map needs an .exr output", where=str(output))
     if len(response.observers) < 2:
         raise SpectraceError("compares the first two of film.observers; the scene lists fewer", where="--delta-e-map")
+    from spectrace.plot_extra import require_matplotlib
+
+    require_matplotlib("--delta-e-map")  # its picture
     return replace(response, delta_e_pair=(response.observers[0], response.observers[1]), delta_e_white_y=white_y)
 
 

@@ -38,6 +38,7 @@ def write_render(
 ) -> Image:
     """Write the render's files and return the image written (the denoised one with `noisy`, where the noisy one
     goes first; its emission pass runs on `device`)."""
+    rendered = image
     if noisy is not None:
         from spectrace.denoising import denoise_with_emission_pass, noisy_image
 
@@ -45,4 +46,31 @@ def write_render(
         image = denoise_with_emission_pass(job.scene, image, device, log=log)
     write_image(job.finish(image), output, include_xyz, state_file)
     job.outputs.write_false_colour(image, log=log)
+    write_delta_e_map(job, rendered, output, log)
     return image
+
+
+def delta_e_map_path(output: Path) -> Path:
+    """Where `--delta-e-map` writes its false-colour picture: `<stem>.deltaE00.png` beside the EXR."""
+    return output.with_name(f"{output.stem}.deltaE00.png")
+
+
+def write_delta_e_map(job: RenderJob, image: Image, output: Path, log: Callable[[str], None]) -> None:
+    """The image's ΔE map (the film response's pair of observers), if it has one, as a false-colour picture."""
+    from spectrace.film.response import DELTA_E_CHANNEL, observer_xyz_image, scene_white_y
+
+    response = job.scene.film_response
+    if DELTA_E_CHANNEL not in image.channels or response.delta_e_pair is None:
+        return
+    import numpy as np
+
+    from spectrace.plots import plot_delta_e_map
+
+    first, second = response.delta_e_pair
+    white = response.delta_e_white_y or scene_white_y(observer_xyz_image(image.channels, first)[..., 1])
+    delta_e = image.channels[DELTA_E_CHANNEL]
+    mean = float(np.nanmean(delta_e))
+    path = delta_e_map_path(output)
+    title = f"CIEDE2000, {first} vs {second}: mean {mean:.3g}; white Y_n = {white:.4g}"
+    low, high = plot_delta_e_map(delta_e, path, title)
+    log(f"wrote {path}: ΔE2000 map, mean {mean:.3g}, scale {low:g}..{high:.3g}, white Y_n = {white:.4g}")

@@ -112,7 +112,10 @@ def plot(
     """Draw spectra against wavelength (360-830 nm, as the renderer samples them: linear between data points,
     end values held) into a figure file; each line takes the spectrum's own colour."""
     from spectrace.cli.checks import check_output_file
+    from spectrace.plot_extra import require_matplotlib
     from spectrace.plots import plot_spectra, text_problem
+
+    require_matplotlib("spectra plot")
 
     if title and (problem := text_problem(title)):
         raise SpectraceError(problem, where="--title")

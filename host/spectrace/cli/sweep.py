@@ -26,7 +26,9 @@ from spectrace.cli.scene_settings import override_at_fault
 from spectrace.errors import SpectraceError
 
 KINDS = ("display", "render")
-SWEEP_KEYS = {"display": ("kind",), "render": ("kind", "scene")}
+SWEEP_KEYS = {"display": ("kind",), "render": ("kind", "scene", "formats")}
+# Image files a render sweep may write for each item (`formats = ["exr", "png"]`; EXR alone by default).
+SWEEP_FORMATS = ("exr", "png", "tif", "jpg", "pfm")
 
 
 def _say(text: str) -> None:
@@ -95,6 +97,18 @@ def read_spec(path: Path) -> tuple[str, dict[str, Any], dict[str, list]]:
             raise SpectraceError(
                 f"the scene is a file name, got {value_text(settings['scene'])}", where=f"{path}: sweep.scene"
             )
+    formats = settings.get("formats", ["exr"])
+    if (
+        not isinstance(formats, list)
+        or not formats
+        or any(f not in SWEEP_FORMATS for f in formats)
+        or len(set(formats)) < len(formats)
+    ):
+        raise SpectraceError(
+            f"formats must be a list of distinct image formats among {', '.join(SWEEP_FORMATS)}, "
+            f"got {value_text(formats)}",
+            where=f"{path}: sweep.formats",
+        )
     return kind, settings, grid
 
 
@@ -173,7 +187,9 @@ def sweep_items(path: Path, device: str | None) -> list:
                 where=f"{path}: {_key_path('grid', name)}[{index}]",
             ) from None
         inputs["device"] = device
-        items.append(sweeping.SweepItem(params, sweeping.render_item, {"scene": scene, "device": device}, inputs))
+        arguments = {"scene": scene, "device": device}
+        formats = tuple(settings.get("formats", ["exr"]))
+        items.append(sweeping.SweepItem(params, sweeping.render_item, arguments, inputs, image_formats=formats))
     return items
 
 

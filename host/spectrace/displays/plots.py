@@ -14,41 +14,62 @@ from spectrace.io.atomic import write_atomically
 from spectrace.spectral import GRID_NM
 
 CHANNEL_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
-SPECTRA_COLUMNS = 3
+SPECTRA_COLUMNS = 4
 MARKERS = "os^Dvp<>h*XP"
 
 
 def _pyplot():
-    import matplotlib
+    from spectrace.plot_extra import pyplot
 
-    matplotlib.use("Agg")  # files only; never open a window
-    import matplotlib.pyplot as pyplot
-
-    return pyplot
+    return pyplot("--plot")
 
 
 def _plot_emissions(figure, grid_cell, comparison: Comparison) -> None:
+    """One panel per display, side by side across the figure's width, each with its own power scale."""
     count = len(comparison.colours)
-    rows = math.ceil(count / SPECTRA_COLUMNS)
-    cells = grid_cell.subgridspec(rows, SPECTRA_COLUMNS, hspace=0.7, wspace=0.35)
+    columns = min(count, SPECTRA_COLUMNS)
+    rows = math.ceil(count / columns)
+    cells = grid_cell.subgridspec(rows, columns, hspace=0.55, wspace=0.22)
+    palette = _display_palette(count)
     for index, colour_on_display in enumerate(comparison.colours):
-        axes = figure.add_subplot(cells[index // SPECTRA_COLUMNS, index % SPECTRA_COLUMNS])
+        row, column = divmod(index, columns)
+        axes = figure.add_subplot(cells[row, column])
         display = colour_on_display.display
         for primary, line_colour in zip(display.primaries, CHANNEL_COLOURS):
             axes.plot(GRID_NM, primary.values, color=line_colour, linewidth=0.8)
-        axes.plot(GRID_NM, display.emission_from_drive(colour_on_display.drive), color="black", linewidth=1.2)
-        axes.set_title(display.name, fontsize=8)
+        axes.plot(GRID_NM, display.emission_from_drive(colour_on_display.drive), color="black", linewidth=1.3)
+        # The display's marker and colour, as in the chromaticity panels, so each panel names its point there.
+        axes.set_title(f"{_marker_symbol(index)}  {display.name}", fontsize=9, color=_darker(palette[index]))
         axes.set_xlim(380, 780)
-        axes.tick_params(labelsize=6)
-        axes.yaxis.get_offset_text().set_fontsize(6)
-        if index % SPECTRA_COLUMNS == 0:
-            axes.set_ylabel("W/(sr m² nm)", fontsize=6)
+        axes.set_ylim(bottom=0)
+        axes.tick_params(labelsize=7)
+        axes.yaxis.get_offset_text().set_fontsize(7)
+        axes.grid(alpha=0.25)
+        if row == rows - 1 or index + columns >= count:
+            axes.set_xlabel("wavelength (nm)", fontsize=8)
+        if column == 0:
+            axes.set_ylabel("radiance (W/(sr m² nm))", fontsize=8)
 
 
-def _plot_chromaticities(figure, grid_cell, comparison: Comparison) -> None:
+_MARKER_SYMBOLS = {"o": "●", "s": "■", "^": "▲", "D": "◆", "v": "▼", "p": "⬟", "<": "◀", ">": "▶", "h": "⬢", "*": "★"}
+
+
+def _marker_symbol(index: int) -> str:
+    return _MARKER_SYMBOLS.get(MARKERS[index % len(MARKERS)], "")
+
+
+def _darker(rgba) -> tuple[float, float, float]:
+    r, g, b = rgba[:3]
+    return (0.75 * r, 0.75 * g, 0.75 * b)
+
+
+def _plot_chromaticities(figure, diagram_cell, zoom_cell, comparison: Comparison) -> None:
+    """The whole diagram with each display's gamut and its point, and beside it (not over it) the points zoomed;
+    the legend's entries carry each display's line and marker, so gamut, point and spectrum panel match."""
     from colour.plotting import plot_chromaticity_diagram_CIE1931
+    from matplotlib.lines import Line2D
 
-    axes = figure.add_subplot(grid_cell)
+    axes = figure.add_subplot(diagram_cell)
     plot_chromaticity_diagram_CIE1931(
         figure=figure,
         axes=axes,
@@ -56,34 +77,60 @@ def _plot_chromaticities(figure, grid_cell, comparison: Comparison) -> None:
         tight_layout=False,
         transparent_background=False,
     )
-    axes.set_title("gamuts and the triple's chromaticity (CIE 1931)", pad=16)
-    zoom = axes.inset_axes((0.52, 0.52, 0.46, 0.46))
+    axes.set_title("gamuts and the triple's chromaticity (CIE 1931)", fontsize=10)
+    zoom = figure.add_subplot(zoom_cell)
     palette = _display_palette(len(comparison.colours))
+    handles = []
     for index, colour_on_display in enumerate(comparison.colours):
         primaries_xy = colour_on_display.display.primaries_xy()
         closed = np.vstack([primaries_xy, primaries_xy[:1]])
-        name = colour_on_display.display.name
-        axes.plot(closed[:, 0], closed[:, 1], linewidth=0.9, color=palette[index], label=name)
-        for panel, size in ((axes, 5), (zoom, 8)):
+        marker = MARKERS[index % len(MARKERS)]
+        axes.plot(closed[:, 0], closed[:, 1], linewidth=1.1, color=palette[index])
+        for panel, size in ((axes, 6), (zoom, 10)):
             panel.plot(
                 *colour_on_display.xy,
-                marker=MARKERS[index % len(MARKERS)],
+                marker=marker,
                 color=palette[index],
                 markeredgecolor="black",
                 markersize=size,
                 linestyle="none",
             )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=palette[index],
+                linewidth=1.1,
+                marker=marker,
+                markeredgecolor="black",
+                markersize=7,
+                label=colour_on_display.display.name,
+            )
+        )
     points = np.array([item.xy for item in comparison.colours])
     points = points[np.isfinite(points).all(axis=1)]  # black (0, 0, 0) emits nothing and has no chromaticity
     if len(points):
         centre, half_width = points.mean(axis=0), max(np.ptp(points, axis=0).max() * 0.6, 0.01)
         zoom.set_xlim(centre[0] - half_width, centre[0] + half_width)
         zoom.set_ylim(centre[1] - half_width, centre[1] + half_width)
-    zoom.set_title("the triple (zoomed)" if len(points) else "the triple: black, no chromaticity", fontsize=7)
-    zoom.tick_params(labelsize=6)
-    axes.set_xlim(-0.05, 0.8)
+        zoom.set_aspect("equal")
+        # Where the zoomed square lies on the diagram.
+        from matplotlib.patches import Rectangle
+
+        axes.add_patch(
+            Rectangle(
+                tuple(centre - half_width), 2 * half_width, 2 * half_width, fill=False, linewidth=0.8, linestyle="--"
+            )
+        )
+    zoom.set_title("the triple, zoomed (dashed square)" if len(points) else "the triple: black, no chromaticity")
+    zoom.title.set_fontsize(10)
+    zoom.set_xlabel("CIE x", fontsize=8)
+    zoom.set_ylabel("CIE y", fontsize=8)
+    zoom.tick_params(labelsize=7)
+    zoom.grid(alpha=0.3)
+    zoom.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=1, frameon=False)
+    axes.set_xlim(-0.1, 0.8)  # room for the 500 and 510 nm labels left of the locus
     axes.set_ylim(-0.05, 0.9)
-    axes.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.02, 1.0))
 
 
 def _display_palette(count: int) -> list:
@@ -111,6 +158,23 @@ def _rectangle(index: int, srgb: np.ndarray):
     return Rectangle((index, 0), 0.9, 1, facecolor=np.clip(srgb, 0, 1), edgecolor="none")
 
 
+def comparison_figure(comparison: Comparison):
+    """The comparison as a matplotlib Figure (for a notebook, or to save): a row of spectra across the width, then
+    the chromaticity diagram, the points zoomed beside it, and the patches."""
+    pyplot = _pyplot()
+    rows = math.ceil(len(comparison.colours) / SPECTRA_COLUMNS)
+    figure = pyplot.figure(figsize=(16, 6.5 + 2.8 * rows))
+    layout = figure.add_gridspec(2, 1, height_ratios=(1.1 * rows, 2.0), hspace=0.3)
+    _plot_emissions(figure, layout[0], comparison)
+    bottom = layout[1].subgridspec(1, 3, width_ratios=(1.15, 0.8, 1.05), wspace=0.28)
+    _plot_chromaticities(figure, bottom[0], bottom[1], comparison)
+    _plot_patches(figure, bottom[2], comparison)
+    figure.suptitle(
+        "each display's primaries at full drive (red, green, blue) and its emission for the triple (black)", fontsize=11
+    )
+    return figure
+
+
 def plot_comparison(comparison: Comparison, path: str | Path) -> Path:
     """Draw the comparison into an image file (format from the suffix: .png, .pdf, .svg)."""
     pyplot = _pyplot()
@@ -121,13 +185,7 @@ def plot_comparison(comparison: Comparison, path: str | Path) -> Path:
     pyplot.close("all")
     if path.suffix.lstrip(".").lower() not in supported:
         raise SpectraceError(f"cannot write a plot as '{path.suffix}' (use .png, .pdf or .svg)", where=str(path))
-
-    figure = pyplot.figure(figsize=(16, 10))
-    layout = figure.add_gridspec(2, 2, width_ratios=(1.25, 1), height_ratios=(2.2, 1), hspace=0.35, wspace=0.15)
-    _plot_emissions(figure, layout[:, 0], comparison)
-    _plot_chromaticities(figure, layout[0, 1], comparison)
-    _plot_patches(figure, layout[1, 1], comparison)
-    figure.suptitle("primaries at full drive (red, green, blue) and the triple's emission (black)", x=0.3, fontsize=10)
+    figure = comparison_figure(comparison)
     try:
         write_atomically(path, lambda temp: figure.savefig(temp, dpi=120, bbox_inches="tight"))
     except OSError as error:

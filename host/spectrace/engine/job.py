@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 from spectrace.core import limits
 from spectrace.errors import SpectraceError
 from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
+from spectrace.film.image import output_format_problem
 from spectrace.film.output_options import RenderOutputOptions
 
 if TYPE_CHECKING:
@@ -156,6 +157,7 @@ class RenderJob:
         adaptation: Adaptation | str = Adaptation.BRADFORD,
         false_colour: Path | None = None,
         false_colour_scale: str = "log",
+        bit_depth: int = 8,
         denoise: bool = False,
         tile_rows: int | None = None,
         output: Path | None = None,
@@ -230,8 +232,8 @@ class RenderJob:
 
             kept = tuple(dict.fromkeys((*kept, *RENDER_AOVS)))
         loaded = loaded.with_overrides(aovs=kept)
-        if output is not None and output.suffix.lower() not in (".exr", ".png"):
-            raise SpectraceError(f"unknown image format '{output.suffix}' (use .exr or .png)", where=str(output))
+        if output is not None and (problem := output_format_problem(output)):
+            raise SpectraceError(problem, where=str(output))
         if (width or height) and (problem := limits.film_size_problem(loaded.width, loaded.height)):
             raise SpectraceError(problem, where=names.size)
         outputs = RenderOutputOptions.parse(
@@ -242,6 +244,7 @@ class RenderJob:
             false_colour,
             false_colour_scale,
             (names.colour_space, names.white_balance, names.adaptation),
+            bit_depth=bit_depth,
         )
         return cls(
             loaded,

@@ -10,8 +10,8 @@ The film is XYZ (see `spectrace.spectral.colorimetry`); every RGB output is deri
    and ITU-R BT.2020 with the matrices colour-science derives from their published primaries and D65 white; `xyz`
    keeps XYZ;
 3. exposure: x 2**stops;
-4. for 8-bit files only, the space's transfer curve: IEC 61966-2-1 sRGB for sRGB and Display P3 (which uses
-   the sRGB curve, SMPTE EG 432-1), the ITU-R BT.2020 (= BT.709) OETF for Rec.2020.
+4. for display files only (PNG, TIFF, JPEG), the space's transfer curve: IEC 61966-2-1 sRGB for sRGB and
+   Display P3 (which uses the sRGB curve, SMPTE EG 432-1), the ITU-R BT.2020 (= BT.709) OETF for Rec.2020.
 
 docs/colour.md documents the options for users.
 """

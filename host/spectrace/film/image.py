@@ -30,6 +30,25 @@ class SpectralBands:
         return 0.5 * (self.edges_nm[:-1] + self.edges_nm[1:])
 
 
+IMAGE_SUFFIXES = (".exr", ".png", ".tif", ".tiff", ".jpg", ".jpeg", ".pfm")
+BIT_DEPTHS = (8, 16)
+
+
+def output_format_problem(path: Path, bit_depth: int = 8, space: ColourSpace | str = ColourSpace.SRGB) -> str | None:
+    """Why an image cannot be written to `path` with that bit depth and colour space, or None."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in IMAGE_SUFFIXES:
+        return f"unknown image format '{Path(path).suffix}' (use {', '.join(IMAGE_SUFFIXES)})"
+    if bit_depth not in BIT_DEPTHS:
+        return f"bit depth must be 8 or 16, got {bit_depth}"
+    if bit_depth == 16 and suffix not in (".png", ".tif", ".tiff"):
+        holds = "32-bit floats" if suffix in (".exr", ".pfm") else "8 bits"
+        return f"16 bits go to .png and .tif files only; {suffix} holds {holds}"
+    if ColourSpace(space) is ColourSpace.XYZ and suffix not in (".exr", ".pfm"):
+        return "XYZ output needs an .exr or .pfm file (the other formats hold display-encoded RGB)"
+    return None
+
+
 @dataclass
 class Image:
     xyz: np.ndarray  # (height, width, 3) float32, mean per pixel
@@ -49,6 +68,7 @@ class Image:
     white_balance: WhiteBalance | None = None  # chromatic adaptation applied to every RGB output
     # AOVs by name (spectrace.film.aovs): albedo (h, w, 3) XYZ, normal and position (h, w, 3), depth and variance (h, w)
     aovs: dict[str, np.ndarray] = field(default_factory=dict)
+    bit_depth: int = 8  # of the PNG and TIFF files `write` makes (8 or 16)
 
     def __repr__(self) -> str:
         # The dataclass's own repr would print every pixel (tens of kilobytes in a notebook).
@@ -108,13 +128,16 @@ class Image:
             **{k: str(v) for k, v in self.extra.items()},
         }
 
-    def write(self, path: str | Path, include_xyz: bool = True) -> None:
-        """Write by suffix: .exr (linear sRGB float32, plus X, Y, Z channels, plus the spectral bands in the
-        Fichet et al. 2021 layout when the image has them, the AOVs' channels (spectrace.film.aovs) and `channels` by
-        name) or .png (sRGB, 8 bit; the colour only)."""
+    def write(self, path: str | Path, include_xyz: bool = True, bit_depth: int | None = None) -> None:
+        """Write by suffix: .exr (linear float32 of the colour space, plus X, Y, Z channels, plus the spectral bands
+        in the Fichet et al. 2021 layout when the image has them, the AOVs' channels (spectrace.film.aovs) and
+        `channels` by name); .png, .tif/.tiff (8 or 16 bits: `bit_depth`, else the image's), .jpg/.jpeg (8 bits),
+        each display-encoded with the colour space's curve and, for Display P3 and Rec.2020, carrying its ICC
+        profile; .pfm (linear float RGB, unclipped). The display formats hold the colour only."""
         path = Path(path)
         suffix = path.suffix.lower()
         space = ColourSpace(self.colour_space)
+        depth = self.bit_depth if bit_depth is None else bit_depth
         # Each writer imported only when used: OpenEXR's module takes longer to import than a small PNG to write.
         if suffix == ".exr":
             from spectrace.film.aovs import aov_channels
@@ -130,13 +153,24 @@ class Image:
                 attributes=attributes,
                 channels={**aov_channels(self.aovs, space), **self.channels},
             )
-        elif suffix == ".png":
-            from spectrace.io.png import write_png
+            return
+        from spectrace.io import raster
 
-            chunks = {} if space is ColourSpace.SRGB else {b"cICP": png_cicp(space)}
-            write_png(path, self.to_display(), self.metadata(), chunks=chunks)
-        else:
-            raise SpectraceError(f"unknown image format '{suffix}' (use .exr or .png)", where=str(path))
+        if (problem := output_format_problem(path, depth, space)) is not None:
+            raise SpectraceError(problem, where=str(path))
+        if suffix in raster.LINEAR_FORMATS:
+            raster.write_pfm(path, self.to_rgb())
+            return
+        from spectrace.film.icc_profile import icc_profile
+
+        raster.write_display_image(
+            path,
+            self.to_display(),
+            self.metadata(),
+            bit_depth=depth,
+            icc_profile=None if space is ColourSpace.SRGB else icc_profile(space),
+            png_chunks={} if space is ColourSpace.SRGB else {b"cICP": png_cicp(space)},
+        )
 
     def _repr_png_(self) -> bytes:
         import io

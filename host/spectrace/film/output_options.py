@@ -17,7 +17,7 @@ from spectrace.film.colour_output import (
     parse_colour_space,
     parse_white_balance,
 )
-from spectrace.film.image import Image
+from spectrace.film.image import BIT_DEPTHS, Image, output_format_problem
 
 FalseColourScale = Literal["log", "linear"]
 FALSE_COLOUR_SCALES: tuple[FalseColourScale, ...] = ("log", "linear")
@@ -29,6 +29,7 @@ class RenderOutputOptions:
     white_balance: WhiteBalance | None = None
     false_colour_path: Path | None = None
     false_colour_scale: FalseColourScale = "log"
+    bit_depth: int = 8
 
     @classmethod
     def parse(
@@ -40,6 +41,8 @@ class RenderOutputOptions:
         false_colour: Path | None = None,
         false_colour_scale: str = "log",
         names: tuple[str | None, str | None, str | None] = ("--colour-space", "--white-balance", "--adaptation"),
+        bit_depth: int = 8,
+        bit_depth_name: str = "--bit-depth",
     ) -> RenderOutputOptions:
         """The options as given on the command line or to spectrace.render (there already parsed or as text);
         `output`: the image file, None for an image kept in memory; `names`: what errors call the colour space,
@@ -48,8 +51,12 @@ class RenderOutputOptions:
         space = (
             parse_colour_space(colour_space, space_name) if isinstance(colour_space, str) else ColourSpace(colour_space)
         )
-        if space is ColourSpace.XYZ and output is not None and output.suffix.lower() == ".png":
-            raise SpectraceError("XYZ output needs an .exr file (PNG holds display-encoded RGB)", where=space_name)
+        if output is not None and (problem := output_format_problem(output, 8, space)):
+            raise SpectraceError(problem, where=space_name)
+        if bit_depth not in BIT_DEPTHS:
+            raise SpectraceError(f"must be 8 or 16, got {bit_depth}", where=bit_depth_name)
+        if output is not None and bit_depth != 8 and (problem := output_format_problem(output, bit_depth)):
+            raise SpectraceError(problem, where=bit_depth_name)
         balance = (
             parse_white_balance(white_balance, adaptation, where=white_name, method_where=method_name)
             if isinstance(white_balance, str)
@@ -63,16 +70,21 @@ class RenderOutputOptions:
                 f"unknown scale '{false_colour_scale}' (use {' or '.join(FALSE_COLOUR_SCALES)})",
                 where="--false-color-scale",
             )
+        if false_colour is not None:
+            from spectrace.plot_extra import require_matplotlib
+
+            require_matplotlib("--false-color")
         if false_colour is not None and false_colour.suffix.lower() not in (".png", ".pdf", ".svg"):
             raise SpectraceError(
                 f"unknown figure format '{false_colour.suffix}' (use .png, .pdf or .svg)", where="--false-color"
             )
-        return cls(space, balance, false_colour, false_colour_scale)
+        return cls(space, balance, false_colour, false_colour_scale, bit_depth)
 
     def apply(self, image: Image) -> Image:
         """Set the image's colour space and white balance (its film XYZ is untouched)."""
         image.colour_space = self.colour_space
         image.white_balance = self.white_balance
+        image.bit_depth = self.bit_depth
         return image
 
     def write_false_colour(self, image: Image, log: Callable[[str], None] = print) -> None:

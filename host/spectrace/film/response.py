@@ -218,7 +218,8 @@ class FilmResponse:
     sensor: Sensor | None = None
     sensor_white: str | None = None  # CIE illuminant for the white balance and colour-correction matrix
     delta_e_pair: tuple[str, str] | None = field(default=None)  # observers whose CIEDE2000 map the image gets
-    delta_e_white_y: float = 1.0  # film Y of the ΔE map's reference white (CIELAB's Y_n)
+    # Film Y of the ΔE map's reference white (CIELAB's Y_n); None: the scene's own white (`scene_white_y`).
+    delta_e_white_y: float | None = None
     wavelengths: tuple[float, float] = (GRID_MIN_NM, GRID_MAX_NM)  # the film's range, nm (a 1 nm grid over it)
     extend_rgb: bool = False  # RGB uplifts continue beyond the visible when the range goes there
 
@@ -237,7 +238,7 @@ class FilmResponse:
             raise SpectraceError("film observers are listed more than once")
         if self.sensor_white is not None and (self.sensor is None or len(self.sensor.channel_names) != 3):
             raise SpectraceError("sensor_white (white balance and colour correction) needs a 3-channel sensor")
-        if not (np.isfinite(self.delta_e_white_y) and self.delta_e_white_y > 0):
+        if self.delta_e_white_y is not None and not (np.isfinite(self.delta_e_white_y) and self.delta_e_white_y > 0):
             raise SpectraceError(f"the ΔE map's white Y must be a positive number, got {self.delta_e_white_y}")
         if problem := wavelength_range_problem(self.wavelengths):
             raise SpectraceError(problem)
@@ -373,9 +374,22 @@ class FilmResponse:
             xyz = ((raw * gains) @ matrix.T).astype(np.float32)
         if self.delta_e_pair is not None:
             first, second = (observer_xyz_image(channels, label) for label in self.delta_e_pair)
-            delta_e = delta_e_2000_map(first, second, *self.delta_e_pair, white_y=self.delta_e_white_y)
+            white_y = self.delta_e_white_y or scene_white_y(first[..., 1])
+            delta_e = delta_e_2000_map(first, second, *self.delta_e_pair, white_y=white_y)
             channels[DELTA_E_CHANNEL] = delta_e.astype(np.float32)
         return xyz, channels
+
+
+def scene_white_y(film_y: np.ndarray) -> float:
+    """The film Y of the scene's own white, CIELAB's Y_n for the ΔE map: the brightest area of at least 3 × 3
+    pixels (the largest Y after a 3 × 3 median filter), so that one bright pixel (a firefly) is not taken for it
+    while a white patch a few pixels across is. A light source seen over 3 × 3 pixels or more is taken for the
+    white too: give the white patch's Y then (`--delta-e-white-y`). 1 for a black image."""
+    from scipy.ndimage import median_filter
+
+    values = np.nan_to_num(np.asarray(film_y, np.float64), nan=0.0, posinf=0.0, neginf=0.0)
+    white = float(median_filter(values, size=3, mode="nearest").max()) if values.size else 0.0
+    return white if white > 0 else 1.0
 
 
 def observer_xyz_image(channels: dict[str, np.ndarray], label: str) -> np.ndarray:

@@ -1,12 +1,6 @@
 """Host-side spectral core: the wavelength grid, CIE colorimetry, spectra loading, RGB uplift (one colour, or a
 whole texture), and the device spectrum table. See the modules for the conventions (grid, film XYZ normalisation)."""
 
-import warnings
-
-# colour-science warns on import that matplotlib, which only its plotting needs, is missing. It is imported late,
-# where first needed (it takes about a second), so the filter stays for the process rather than around one import.
-warnings.filterwarnings("ignore", message=".*Matplotlib.* related API features are not available")
-
 from spectrace.spectral.colorimetry import (
     CIE_1931_CMFS,
     CIE_Y_INTEGRAL,
