@@ -88,7 +88,9 @@ SPECULAR = Parameter(
 SPEC_TINT = _weight("spec_tint", 0.0, "tints the dielectric reflection at normal incidence toward the base colour")
 SHEEN = _weight("sheen", 0.0, "a grazing-angle retro-reflective layer for cloth (Burley's sheen)")
 SHEEN_TINT = _weight("sheen_tint", 0.0, "tints the sheen from white toward the base colour")
-CLEARCOAT = _weight("clearcoat", 0.0, "a clear varnish lobe on top (index 1.5, Schlick Fresnel, GTR1 distribution)")
+CLEARCOAT = _weight(
+    "clearcoat", 0.0, "a clear varnish lobe on top (index 1.5, Schlick Fresnel, GTR1 distribution; Mitsuba 3's)"
+)
 CLEARCOAT_GLOSS = _weight(
     "clearcoat_gloss", 0.0, "glossiness of the clearcoat: its GTR1 α runs from 0.1 (0) to 0.001 (1)"
 )
