@@ -31,6 +31,7 @@
 #define SPECTRACE_BSDF_PRINCIPLED_CL
 
 #include "bsdf_sample.cl"
+#include "burley.cl"
 #include "fresnel.cl"
 #include "ior.cl"
 #include "microfacet_anisotropic.cl"
@@ -68,12 +69,6 @@ inline int principled_flags(__global const Material *m)
     return BSDF_NON_DELTA | BSDF_TRANSMISSION | (material_ior_is_dispersive(m) ? BSDF_DISPERSIVE : 0);
 }
 
-inline float principled_weight(const SurfaceContext *sc, __global const float *block, int k,
-                               const SampledWavelengths *w)
-{
-    return clamp(surface_scalar(sc, (int)block[2 * k + 1], block[2 * k], w), 0.0f, 1.0f);
-}
-
 inline PrincipledParams principled_params(__global const Material *m, const SurfaceContext *sc,
                                           const SampledWavelengths *w)
 {
@@ -95,13 +90,6 @@ inline PrincipledParams principled_params(__global const Material *m, const Surf
     p.coat_alpha = mix(0.1f, 0.001f, principled_weight(sc, block, PRINCIPLED_CLEARCOAT_GLOSS, w));
     p.eta = material_ior(m, w->lambda.x);
     return p;
-}
-
-inline float schlick_weight(float c)
-{
-    float x = clamp(1.0f - c, 0.0f, 1.0f);
-    float x2 = x * x;
-    return x2 * x2 * x;
 }
 
 /* Burley's GTR1 ("Berry") distribution, normalised so that ∫ D cos θh dh = 1. */
