@@ -205,3 +205,20 @@ def test_mitsuba_principledthin_imports_its_weights_and_refuses_flatness(tmp_pat
         with pytest.raises(SpectraceError) as error:
             load_mitsuba_scene(xml)
         assert key in str(error.value) and "scene.xml" in str(error.value)
+
+
+@pytest.mark.peer
+def test_exported_to_mitsuba_as_its_principledthin(tmp_path, mitsuba_scalar_spectral):
+    """The Mitsuba export writes the material back as Mitsuba's principledthin with the same numbers, and Mitsuba
+    loads the scene."""
+    from materials.test_mitsuba_principled import _principled_scene
+    from spectrace.interop.mitsuba import load_mitsuba_scene
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
+
+    parameters = {"spec_trans": 0.5, "diff_trans": 0.6, "roughness": 0.6, "eta": 1.33, "sheen": 0.25}
+    xml = tmp_path / "scene.xml"
+    xml.write_text(_principled_scene(parameters, "principledthin"))
+    exported = scene_to_mitsuba_dict(load_mitsuba_scene(xml), tmp_path / "export", spp=4)
+    (entry,) = [v for v in exported.values() if isinstance(v, dict) and v.get("type") == "principledthin"]
+    assert all(entry[k] == pytest.approx(v) for k, v in parameters.items())
+    mitsuba_scalar_spectral.load_dict(exported)
