@@ -86,6 +86,23 @@ def test_sample_weight_is_eval_over_pdf(bsdf, name, material):
     np.testing.assert_allclose(s.weight[keep], f_cos / pdf[:, None], rtol=2e-3, atol=1e-7)
 
 
+@pytest.mark.parametrize("name, material", CASES[:3], ids=IDS[:3])
+def test_importance_samples_weigh_the_swapped_value(bsdf, name, material):
+    """Drawn for importance (wo the light's side), a sample weighs f(ωi, ωo) |cos θi| / pdf, radiance's value with
+    the directions swapped, which differs from f(ωo, ωi) where the transmission's test passes one way only."""
+    rng = np.random.default_rng(61)
+    wo = _uniform_sphere(rng, 20_000)
+    device = bsdf(material)
+    s = device.sample(wo, len(wo), seed=62, importance=True)
+    keep = s.ok
+    forward, pdf = device.eval_pdf(wo[keep], s.wi[keep])
+    swapped, _ = device.eval_pdf(s.wi[keep], wo[keep])
+    swapped *= (np.abs(s.wi[keep, 2]) / np.abs(wo[keep, 2]))[:, None]
+    assert np.count_nonzero(~np.isclose(forward[:, 0], swapped[:, 0], rtol=1e-2)) > 20, "some pairs differ"
+    np.testing.assert_allclose(s.pdf[keep], pdf, rtol=2e-3)
+    np.testing.assert_allclose(s.weight[keep], swapped / pdf[:, None], rtol=2e-3, atol=1e-6)
+
+
 CHI2_CASES = [(name, material, theta) for name, material in CASES for theta in (35.0, 130.0)]
 CHI2_SAMPLES = 200_000
 BINS_COS, BINS_PHI = 24, 48
