@@ -15,6 +15,7 @@ from replica_agreement import spectrace_replicas
 
 @needs_bpy
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_translucent_sheet_is_principledthin_and_transmits_c_s_over_pi(tmp_path, device):
     from spectrace.engine.renderer import Renderer
     from spectrace.scene import load_scene

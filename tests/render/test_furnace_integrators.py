@@ -111,7 +111,7 @@ CASES = {
             lambda: S.principledthin(1.0, roughness=0.8, spec_trans=1.0),
             False,
             False,
-            fast=("bdpt", "light"),
+            fast=("bdpt",),
         ),
         Case(
             "grey sheet with every lobe",
