@@ -244,7 +244,7 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's `principled`: the same parameters under the same names, each weight a number or a texture; its
-    sampling rates (which change no expected value) are read and left out."""
+    sampling rates (which change no expected value) are read and left out, and `flatness` refused unless 0."""
     base = importer.spectrum(properties["base_color"], "base_color") if "base_color" in properties else {"value": 0.5}
     if base is None:
         return None
@@ -264,11 +264,19 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     for rate in ("main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"):
         if rate in properties:
             importer.number(importer.resolve(properties[rate]))
+    refuse_flatness(importer, bsdf, properties)
     if "eta" in properties:
         table["eta"] = importer.number(importer.resolve(properties["eta"]))
     elif "specular" in properties:
         table["specular"] = importer.number(importer.resolve(properties["specular"]))
     return table
+
+
+def refuse_flatness(importer, bsdf, properties) -> None:
+    """Mitsuba's `flatness` (Hanrahan–Krueger's fake subsurface, blended into Burley's diffuse) has no counterpart
+    here: 0 is read, anything else refused rather than rendered without it."""
+    if "flatness" in properties and importer.number(importer.resolve(properties["flatness"])) != 0.0:
+        raise importer.fail(bsdf, "flatness (the fake subsurface term) is not supported; 0 is")
 
 
 def to_mitsuba(material: PrincipledMaterial, exporter) -> dict:

@@ -194,8 +194,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     for rate in [f"{a}_{b}_sampling_rate" for a in rates for b in ("reflectance", "transmittance")]:
         if rate in properties:
             importer.number(importer.resolve(properties[rate]))
-    if "flatness" in properties and importer.number(importer.resolve(properties["flatness"])) != 0.0:
-        raise importer.fail(bsdf, "flatness (the fake subsurface term) is not supported; 0 is")
+    principled.refuse_flatness(importer, bsdf, properties)
     if "eta" in properties:
         table["eta"] = importer.number(importer.resolve(properties["eta"]))
     return table
