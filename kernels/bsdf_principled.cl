@@ -7,8 +7,11 @@
  *       and bsdf F_d from inside; F_d the exact dielectric Fresnel term of index η (fresnel.cl);
  *   transmission         bsdf √b (1 − F_d) D G2 |ωi·h| |ωo·h| / (|cos θo| (ωo·h + e ωi·h)²)   (Walter et al. 2007
  *       eq. 21 with the radiance's 1/e², e the index seen from ωo, as the dielectric);
- *   clearcoat            0.25 c F_cc D_cc G_cc / (4 cos θo), Schlick F0 = 0.04, Burley's GTR1 D_cc of
- *       α = lerp(0.1, 0.001, clearcoat_gloss), G_cc the GGX G2 of α = 0.25 (Burley 2012, appendix B);
+ *   clearcoat            0.25 c F_cc D_cc G_cc cos θi, Schlick F0 = 0.04, Burley's GTR1 D_cc of
+ *       α = lerp(0.1, 0.001, clearcoat_gloss), G_cc = G1(ωo) G1(ωi) the separable GGX masking of α = 0.25: Mitsuba
+ *       3's clearcoat, which leaves out a microfacet lobe's 1/(4 cos θo cos θi) (Burley's reference code has it,
+ *       folded into its G); so exported scenes look as their author saw them in Mitsuba. Its albedo is at most
+ *       0.035 c, at normal incidence, falling to 0 at grazing (Burley's: 0.009 c there, 0.047 c at grazing);
  *   diffuse              brdf b/π ((1 − Fi/2)(1 − Fo/2) + Rr (Fi + Fo + Fi Fo (Rr − 1))) cos θi,
  *       F = (1 − cos θ)⁵, Rr = 2 r cos²θd (Burley's retro-reflection);
  *   sheen                brdf sheen (1 − cos θd)⁵ lerp(1, c_tint, sheen_tint) cos θi.
@@ -28,6 +31,7 @@
 #define SPECTRACE_BSDF_PRINCIPLED_CL
 
 #include "bsdf_sample.cl"
+#include "burley.cl"
 #include "fresnel.cl"
 #include "ior.cl"
 #include "microfacet_anisotropic.cl"
@@ -65,12 +69,6 @@ inline int principled_flags(__global const Material *m)
     return BSDF_NON_DELTA | BSDF_TRANSMISSION | (material_ior_is_dispersive(m) ? BSDF_DISPERSIVE : 0);
 }
 
-inline float principled_weight(const SurfaceContext *sc, __global const float *block, int k,
-                               const SampledWavelengths *w)
-{
-    return clamp(surface_scalar(sc, (int)block[2 * k + 1], block[2 * k], w), 0.0f, 1.0f);
-}
-
 inline PrincipledParams principled_params(__global const Material *m, const SurfaceContext *sc,
                                           const SampledWavelengths *w)
 {
@@ -92,13 +90,6 @@ inline PrincipledParams principled_params(__global const Material *m, const Surf
     p.coat_alpha = mix(0.1f, 0.001f, principled_weight(sc, block, PRINCIPLED_CLEARCOAT_GLOSS, w));
     p.eta = material_ior(m, w->lambda.x);
     return p;
-}
-
-inline float schlick_weight(float c)
-{
-    float x = clamp(1.0f - c, 0.0f, 1.0f);
-    float x2 = x * x;
-    return x2 * x2 * x;
 }
 
 /* Burley's GTR1 ("Berry") distribution, normalised so that ∫ D cos θh dh = 1. */
@@ -202,8 +193,8 @@ inline float4 principled_eval(const PrincipledParams *p, float3 wo, float3 wi)
     if (p->clearcoat > 0.0f && h.z > 0.0f) {
         float f_cc = 0.04f + 0.96f * schlick_weight(cos_d);
         float d_cc = gtr1_d(hr, p->coat_alpha);
-        value += (float4)(0.25f * p->clearcoat * f_cc * d_cc * ggx_g2(wo, wi, PRINCIPLED_COAT_ALPHA) /
-                          (4.0f * wo.z));
+        float g_cc = ggx_g1(wo, PRINCIPLED_COAT_ALPHA) * ggx_g1(wi, PRINCIPLED_COAT_ALPHA);
+        value += (float4)(0.25f * p->clearcoat * f_cc * d_cc * g_cc * wi.z);
     }
     float brdf = brdf_weight(p);
     if (brdf > 0.0f) {

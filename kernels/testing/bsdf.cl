@@ -37,20 +37,38 @@ KERNEL void bsdf_eval_pdf(__global const Material *material, __global const floa
     pdf[i] = material_pdf(material, &sc, &w, HARNESS_NORMAL, wo[i].xyz, wi[i].xyz);
 }
 
-/* One sample per item from u = (uc, u.x, u.y); wi.w = 1 when a direction was produced. */
-KERNEL void bsdf_sample(__global const Material *material, __global const float *spectra,
-                          __global const float *lambda, __global const float4 *wo, __global const float4 *u,
-                          __global float4 *wi, __global float4 *weight, __global float *pdf, __global int *is_delta)
+/* One sample per item from u = (uc, u.x, u.y); wi.w = 1 when a direction was produced. adjoint: importance
+ * transport (SurfaceContext.adjoint), wo the light's side. */
+inline void harness_sample(__global const Material *material, __global const float *spectra,
+                           __global const float *lambda, __global const float4 *wo, __global const float4 *u,
+                           __global float4 *wi, __global float4 *weight, __global float *pdf,
+                           __global int *is_delta, int adjoint)
 {
     int i = get_global_id(0);
     SampledWavelengths w = harness_wavelengths(lambda);
     BSDFSample s;
     SurfaceContext sc = harness_context(spectra);
+    sc.adjoint = adjoint;
     int ok = material_sample(material, &sc, &w, HARNESS_NORMAL, wo[i].xyz, u[i].x, u[i].yz, &s);
     wi[i] = ok ? (float4)(s.wi, 1.0f) : (float4)(0.0f);
     weight[i] = ok ? s.weight : (float4)(0.0f);
     pdf[i] = ok ? s.pdf : 0.0f;
     is_delta[i] = ok ? s.is_delta : 0;
+}
+
+KERNEL void bsdf_sample(__global const Material *material, __global const float *spectra,
+                          __global const float *lambda, __global const float4 *wo, __global const float4 *u,
+                          __global float4 *wi, __global float4 *weight, __global float *pdf, __global int *is_delta)
+{
+    harness_sample(material, spectra, lambda, wo, u, wi, weight, pdf, is_delta, 0);
+}
+
+KERNEL void bsdf_sample_importance(__global const Material *material, __global const float *spectra,
+                                     __global const float *lambda, __global const float4 *wo,
+                                     __global const float4 *u, __global float4 *wi, __global float4 *weight,
+                                     __global float *pdf, __global int *is_delta)
+{
+    harness_sample(material, spectra, lambda, wo, u, wi, weight, pdf, is_delta, 1);
 }
 
 KERNEL void bsdf_has_non_delta_lobe(__global const Material *material, __global int *result)

@@ -218,7 +218,18 @@ def dense(triangles):
     return scene
 
 
+def translucent():
+    """A sheet of Translucent BSDF (a leaf, a lampshade) under a sun."""
+    scene = _reset()
+    leaf, _ = _material("leaf", "ShaderNodeBsdfTranslucent", Color=(0.5, 0.5, 0.5, 1.0))
+    _object(scene, "leaf", bpy.ops.mesh.primitive_plane_add, leaf, size=1.0)
+    _light(scene, "sun", "SUN", (0.0, 0.0, 3.0), energy=2.0)
+    _camera(scene, (0.0, 0.0, -3.0), (math.pi, 0.0, 0.0))
+    return scene
+
+
 SCENES = {
+    "translucent": translucent,
     "grey_box": grey_box,
     "materials_box": materials_box,
     "unsupported": unsupported,

@@ -166,7 +166,8 @@ class Bsdf:
         self.runner.run("bsdf_eval_pdf", n, args, {5: f_cos, 6: pdf})
         return f_cos.astype(np.float64), pdf.astype(np.float64)
 
-    def sample(self, wo: np.ndarray, n: int, seed: int) -> Samples:
+    def sample(self, wo: np.ndarray, n: int, seed: int, importance: bool = False) -> Samples:
+        """n samples from wo; `importance`: as importance transport draws them (wo the light's side)."""
         u = np.random.default_rng(seed).random((n, 4), dtype=np.float32)
         wos = np.broadcast_to(wo, (n, 3)) if np.ndim(wo) == 1 else wo
         wi, weight = np.zeros((n, 4), np.float32), np.zeros((n, 4), np.float32)
@@ -182,7 +183,8 @@ class Bsdf:
             self.runner.buffer(pdf, True),
             self.runner.buffer(delta, True),
         ]
-        self.runner.run("bsdf_sample", n, args, {5: wi, 6: weight, 7: pdf, 8: delta})
+        kernel = "bsdf_sample_importance" if importance else "bsdf_sample"
+        self.runner.run(kernel, n, args, {5: wi, 6: weight, 7: pdf, 8: delta})
         return Samples(
             wi[:, :3].astype(np.float64),
             wi[:, 3] > 0,

@@ -219,9 +219,12 @@ def test_scene_file_takes_eta_or_specular_and_textured_weights(tmp_path):
     assert error.value.where == f"{path}: materials.m.eta" and "not both" in str(error.value)
 
 
+FLAT = '<float name="flatness" value="0.3"/></bsdf>'
+
+
 def test_mitsuba_principled_imports_its_weights_and_their_textures(tmp_path):
-    """Mitsuba's names map one to one; a bitmap weight becomes a grey texture; an out-of-range weight is an error
-    naming the file."""
+    """Mitsuba's names map one to one; a bitmap weight becomes a grey texture; an out-of-range weight and a
+    flatness other than 0 (the fake subsurface, not modelled) are errors naming the file."""
     from PIL import Image
 
     from spectrace.interop.mitsuba import load_mitsuba_scene
@@ -240,7 +243,8 @@ def test_mitsuba_principled_imports_its_weights_and_their_textures(tmp_path):
     assert isinstance(material, PrincipledMaterial) and is_texture(material.metallic)
     assert (material.roughness, material.spec_trans, material.clearcoat, material.sheen) == (0.3, 0.25, 0.5, 0.75)
     assert material.eta.at(550.0) == pytest.approx(1.33)
-    xml.write_text(scene.format(body=body.format(sheen=1.5)))
-    with pytest.raises(SpectraceError) as error:
-        load_mitsuba_scene(xml)
-    assert "sheen" in str(error.value) and "scene.xml" in str(error.value)
+    for bad, key in ((body.format(sheen=1.5), "sheen"), (body.format(sheen=0.5).replace("</bsdf>", FLAT), "flatness")):
+        xml.write_text(scene.format(body=bad))
+        with pytest.raises(SpectraceError) as error:
+            load_mitsuba_scene(xml)
+        assert key in str(error.value) and "scene.xml" in str(error.value)

@@ -103,6 +103,23 @@ CASES = {
         Case("glass", lambda: S.principled(1.0, roughness=0.5, spec_trans=1.0), False, False, fast=("bdpt",)),
         Case("grey base with clearcoat", lambda: S.principled(0.5, roughness=0.5, clearcoat=1.0), False, False),
     ],
+    # Rough sheets: where the specular transmission's test passes one way only (grazing angles), the light tracer's
+    # and BDPT's light subpaths weigh their samples with the directions swapped (the adjoint BSDF).
+    "principledthin": [
+        Case(
+            "white specular sheet",
+            lambda: S.principledthin(1.0, roughness=0.8, spec_trans=1.0),
+            False,
+            False,
+            fast=("bdpt",),
+        ),
+        Case(
+            "grey sheet with every lobe",
+            lambda: S.principledthin(0.5, roughness=0.7, spec_trans=0.5, diff_trans=1.0, sheen=0.5),
+            False,
+            False,
+        ),
+    ],
     "mix": [
         Case(
             "diffuse and smooth plastic",

@@ -30,7 +30,8 @@ MATERIAL_BITS = {
     "thindielectric": 64,
     "diffusetransmission": 128,
     "principled": 256,
-    "mix": 512,
+    "principledthin": 512,
+    "mix": 1024,
 }
 LIGHT_BITS = {
     "area": 1,

@@ -32,6 +32,7 @@ from spectrace.materials import (
     mix,
     plastic,
     principled,
+    principledthin,
     retroreflector,
     surface,
     thindielectric,
@@ -56,6 +57,7 @@ MATERIALS = Registry[MaterialPlugin](
         thindielectric,
         diffusetransmission,
         principled,
+        principledthin,
         mix,
     ),
 )

@@ -88,7 +88,9 @@ SPECULAR = Parameter(
 SPEC_TINT = _weight("spec_tint", 0.0, "tints the dielectric reflection at normal incidence toward the base colour")
 SHEEN = _weight("sheen", 0.0, "a grazing-angle retro-reflective layer for cloth (Burley's sheen)")
 SHEEN_TINT = _weight("sheen_tint", 0.0, "tints the sheen from white toward the base colour")
-CLEARCOAT = _weight("clearcoat", 0.0, "a clear varnish lobe on top (index 1.5, Schlick Fresnel, GTR1 distribution)")
+CLEARCOAT = _weight(
+    "clearcoat", 0.0, "a clear varnish lobe on top (index 1.5, Schlick Fresnel, GTR1 distribution; Mitsuba 3's)"
+)
 CLEARCOAT_GLOSS = _weight(
     "clearcoat_gloss", 0.0, "glossiness of the clearcoat: its GTR1 α runs from 0.1 (0) to 0.001 (1)"
 )
@@ -242,7 +244,7 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's `principled`: the same parameters under the same names, each weight a number or a texture; its
-    sampling rates (which change no expected value) are read and left out."""
+    sampling rates (which change no expected value) are read and left out, and `flatness` refused unless 0."""
     base = importer.spectrum(properties["base_color"], "base_color") if "base_color" in properties else {"value": 0.5}
     if base is None:
         return None
@@ -262,11 +264,19 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     for rate in ("main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"):
         if rate in properties:
             importer.number(importer.resolve(properties[rate]))
+    refuse_flatness(importer, bsdf, properties)
     if "eta" in properties:
         table["eta"] = importer.number(importer.resolve(properties["eta"]))
     elif "specular" in properties:
         table["specular"] = importer.number(importer.resolve(properties["specular"]))
     return table
+
+
+def refuse_flatness(importer, bsdf, properties) -> None:
+    """Mitsuba's `flatness` (Hanrahan–Krueger's fake subsurface, blended into Burley's diffuse) has no counterpart
+    here: 0 is read, anything else refused rather than rendered without it."""
+    if "flatness" in properties and importer.number(importer.resolve(properties["flatness"])) != 0.0:
+        raise importer.fail(bsdf, "flatness (the fake subsurface term) is not supported; 0 is")
 
 
 def to_mitsuba(material: PrincipledMaterial, exporter) -> dict:

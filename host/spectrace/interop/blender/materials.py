@@ -5,6 +5,7 @@ to the active Material Output's Surface:
   IOR -> eta; Transmission Weight -> spec_trans; Coat -> clearcoat; Sheen -> sheen; Alpha -> opacity);
 - Diffuse BSDF -> `diffuse`; Glossy BSDF -> a `conductor` that reflects everything (η = 0, k = 1) tinted by its
   colour; Glass BSDF -> `dielectric` (Cycles squares Roughness into the microfacet α, as spectrace's α is);
+  Translucent BSDF -> `principledthin` with `diff_trans` 2 (Lambertian transmission alone);
 - Emission, and a Principled BSDF's emission -> an area emitter on the shapes using the material, radiance
   colour × strength in Cycles' units (radiance 1 renders as RGB 1), on both faces as Cycles emits.
 
@@ -83,6 +84,10 @@ def convert(ctx: BlendImport, material) -> tuple[dict, dict | None]:
         if tint != {"rgb": [1.0, 1.0, 1.0]}:
             table["specular_tint"] = tint
         return table, None
+    if kind == "BSDF_TRANSLUCENT":
+        # Lambertian transmission alone, color/π to the other side: the thin principled sheet whose diffuse part
+        # all transmits (diff_trans 2) and that has no specular part.
+        return {"type": "principledthin", "base_color": _colour(ctx, node, "Color", where), "diff_trans": 2.0}, None
     if kind == "EMISSION":
         emitter = _emitter(ctx, node, "Color", "Strength", where)
         return {"type": "diffuse", "reflectance": {"value": 0.0}}, emitter

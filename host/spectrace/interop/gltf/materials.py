@@ -30,6 +30,7 @@ IMPORTED_EXTENSIONS = (
     "KHR_materials_sheen",
     "KHR_materials_volume",
     "KHR_materials_unlit",
+    "KHR_materials_diffuse_transmission",
 )
 UNLIT = "KHR_materials_unlit"
 
@@ -49,7 +50,8 @@ def material_name(ctx: GltfImport, index: int | None, user: str) -> str:
         table, emitter = convert(ctx, entry, pointer)
         ctx.materials[name] = table
         ctx.material_names[index] = name
-        ctx.interiors[index] = _interior(ctx, entry, pointer, table) if table["type"] != "diffuse" else None
+        thin = table["type"] in ("diffuse", "principledthin")  # nothing inside
+        ctx.interiors[index] = None if thin else _interior(ctx, entry, pointer, table)
         ctx.origins[f"materials.{name}"] = pointer if index is not None else user
         ctx.emitters[index] = emitter
     return ctx.material_names[index]
@@ -95,6 +97,7 @@ def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | No
         table["metallic"] = metallic_map or metallic
         table["roughness"] = roughness_map or roughness
         _extensions(ctx, table, entry, pointer)
+        _diffuse_transmission(ctx, table, entry, pointer)
     if "normalTexture" in entry:
         where = f"{pointer}/normalTexture"
         info = entry["normalTexture"]
@@ -180,6 +183,38 @@ def _extensions(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None
         for key in ("sheenColorTexture", "sheenRoughnessTexture"):
             if key in sheen:
                 ctx.warn(f"{where}/{key}", f"the sheen's {key} is not imported")
+
+
+# The principled keys a thin sheet (principledthin) has no counterpart of.
+_NOT_THIN = ("metallic", "clearcoat", "clearcoat_gloss", "specular")
+
+
+def _diffuse_transmission(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
+    """KHR_materials_diffuse_transmission makes the surface a thin sheet whose diffuse part is partly Lambertian
+    transmission: the `principledthin` material, diff_trans = 2 × diffuseTransmissionFactor (its range is 0–2). Its
+    transmission colour is taken to be the base colour; its texture, the metal and the coat are left out, each
+    named."""
+    doc = ctx.doc
+    extension = doc.extension(entry, "KHR_materials_diffuse_transmission", pointer)
+    if extension is None:
+        return
+    where = f"{pointer}/extensions/KHR_materials_diffuse_transmission"
+    factor = _unit(doc, extension, "diffuseTransmissionFactor", where, 0.0)
+    if "diffuseTransmissionTexture" in extension:
+        ctx.warn(
+            f"{where}/diffuseTransmissionTexture", "a diffuse transmission texture is not imported (its factor is)"
+        )
+    if factor == 0.0:
+        return
+    colour = doc.numbers(extension, "diffuseTransmissionColorFactor", where, 3, [1.0, 1.0, 1.0])
+    if colour != [1.0, 1.0, 1.0] or "diffuseTransmissionColorTexture" in extension:
+        ctx.warn(where, "the diffuse transmission's colour is approximated by the base colour")
+    for key in _NOT_THIN:
+        value = table.pop(key, None)
+        if value is not None and value != 0.0 and key != "clearcoat_gloss":
+            ctx.warn(where, f"a diffusely transmitting sheet has no {key} here (principledthin): it is left out")
+    table["type"] = "principledthin"
+    table["diff_trans"] = 2.0 * factor
 
 
 def _alpha(ctx: GltfImport, entry: dict, pbr: dict, table: dict, alpha: float, pointer: str) -> None:
