@@ -133,6 +133,9 @@ def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path):
     assert camera["aperture_radius"] == pytest.approx(0.035 / (2.0 * 4.0))
     assert camera["focus_distance"] == 5.0
     assert data["film"] == {"width": 32, "height": 24}
+    # Blender's default per-kind limits, lower than Max Bounces 12: named, as spectrace has one depth for all
+    assert data["integrator"]["max_depth"] == 14
+    assert "Cycles' diffuse 4, glossy 4 bounce limits are not imported" in toml.read_text(encoding="utf-8")
     rendered = run_spectrace(
         "render", str(tmp_path / "materials_box.blend"), "-o", str(tmp_path / "m.exr"), "--spp", "4"
     )

@@ -160,6 +160,17 @@ def scene_data(ctx: BlendImport, bpy, scene, depsgraph=None) -> dict:
         else:
             ctx.warn("lights", "area lights hidden from the camera in Blender are seen by spectrace's camera")
     max_bounces = int(getattr(scene.cycles, "max_bounces", 12)) if hasattr(scene, "cycles") else 12
+    if hasattr(scene, "cycles"):
+        # spectrace ends every path at one depth; Cycles also ends diffuse, glossy and transmission chains sooner
+        # (4, 4 and 12 by default), which darkens its indirect light where those limits bind
+        lower = [
+            f"{kind} {limit}"
+            for kind in ("diffuse", "glossy", "transmission")
+            if (limit := int(getattr(scene.cycles, f"{kind}_bounces", max_bounces))) < max_bounces
+        ]
+        if lower:
+            limits = ", ".join(lower)
+            ctx.note(f"Cycles' {limits} bounce limits are not imported: paths end at Max Bounces {max_bounces}")
     data: dict = {
         "camera": camera_table,
         "film": film,
