@@ -206,7 +206,6 @@ def main() -> None:
     cycles.use_denoising = False
     cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
     cycles.blur_glossy = 0.0
-    cycles.pixel_filter_type, cycles.filter_width = "BOX", 1.0  # spectrace's default pixel filter
     cycles.caustics_reflective = cycles.caustics_refractive = True
     scene.view_settings.view_transform = "Standard"
     scene.render.image_settings.file_format = "OPEN_EXR"

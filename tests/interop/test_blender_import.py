@@ -132,7 +132,12 @@ def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path):
     assert camera["fov"] == pytest.approx(math.degrees(2.0 * math.atan(36.0 / (2.0 * 35.0))))
     assert camera["aperture_radius"] == pytest.approx(0.035 / (2.0 * 4.0))
     assert camera["focus_distance"] == 5.0
-    assert data["film"] == {"width": 32, "height": 24}
+    # Blender's default pixel filter, Blackman-Harris 1.5 px wide: the Gaussian of its spread over its support
+    assert data["film"] == {
+        "width": 32,
+        "height": 24,
+        "filter": {"type": "gaussian", "stddev": pytest.approx(0.28 * 1.5), "radius": 1.5},
+    }
     # Blender's default per-kind limits, lower than Max Bounces 12: named, as spectrace has one depth for all
     assert data["integrator"]["max_depth"] == 14
     assert "Cycles' diffuse 4, glossy 4 bounce limits are not imported" in toml.read_text(encoding="utf-8")
