@@ -5,7 +5,7 @@ from pathlib import Path
 
 
 def blender_addon_command() -> None:
-    """Print the folder of spectrace's Blender render-engine add-on (a skeleton: final renders, the image shown in
+    """Print the folder of spectrace's Blender render-engine add-on (final renders, their progress and image shown in
     Blender), to install into a Blender whose Python imports spectrace (docs/blender.md)."""
     spec = find_spec("spectrace.interop.blender")
     assert spec is not None and spec.origin is not None

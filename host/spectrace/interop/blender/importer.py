@@ -69,15 +69,15 @@ def _transform(world: np.ndarray) -> list[dict]:
     return [{"matrix": [[float(v) for v in row] for row in world]}]
 
 
-def scene_data(ctx: BlendImport, bpy, scene) -> dict:
-    """The scene table of a Blender scene's evaluated state."""
+def scene_data(ctx: BlendImport, bpy, scene, depsgraph=None) -> dict:
+    """The scene table of a Blender scene's evaluated state (`depsgraph`: a render's, default the view layer's)."""
     from spectrace.interop.blender.cameras import camera
     from spectrace.interop.blender.lights import light
     from spectrace.interop.blender.materials import material_name
     from spectrace.interop.blender.meshes import evaluated_meshes
     from spectrace.interop.blender.world import environment
 
-    depsgraph = bpy.context.evaluated_depsgraph_get()
+    depsgraph = depsgraph if depsgraph is not None else bpy.context.evaluated_depsgraph_get()
     # Each placement of an object: its key (the evaluated data it shows), its object and its world matrix. The
     # iterator's objects live only during the step, so each distinct mesh is read when first met.
     placements: dict[str, list[np.ndarray]] = {}
@@ -160,6 +160,17 @@ def scene_data(ctx: BlendImport, bpy, scene) -> dict:
         else:
             ctx.warn("lights", "area lights hidden from the camera in Blender are seen by spectrace's camera")
     max_bounces = int(getattr(scene.cycles, "max_bounces", 12)) if hasattr(scene, "cycles") else 12
+    if hasattr(scene, "cycles"):
+        # spectrace ends every path at one depth; Cycles also ends diffuse, glossy and transmission chains sooner
+        # (4, 4 and 12 by default), which darkens its indirect light where those limits bind
+        lower = [
+            f"{kind} {limit}"
+            for kind in ("diffuse", "glossy", "transmission")
+            if (limit := int(getattr(scene.cycles, f"{kind}_bounces", max_bounces))) < max_bounces
+        ]
+        if lower:
+            limits = ", ".join(lower)
+            ctx.note(f"Cycles' {limits} bounce limits are not imported: paths end at Max Bounces {max_bounces}")
     data: dict = {
         "camera": camera_table,
         "film": film,
@@ -191,8 +202,8 @@ def _open(blend_path: Path):
     return bpy, bpy.context.scene
 
 
-def blend_scene_data(ctx: BlendImport, bpy, scene, strict: bool = False) -> dict:
-    data = scene_data(ctx, bpy, scene)
+def blend_scene_data(ctx: BlendImport, bpy, scene, strict: bool = False, depsgraph=None) -> dict:
+    data = scene_data(ctx, bpy, scene, depsgraph)
     if strict and ctx.warnings:
         raise SpectraceError(
             f"{len(ctx.warnings)} things not imported (--strict): " + "; ".join(ctx.warnings),
@@ -219,13 +230,16 @@ def import_blend(
         return write_blend_import(bpy, scene, blend_path, toml_path, strict, option)
 
 
-def write_blend_import(bpy, scene, blend_path: Path, toml_path: Path, strict: bool, option: str) -> list[str]:
-    """The import of the scene open in bpy, written to `toml_path` with its files (the caller holds the lock)."""
+def write_blend_import(
+    bpy, scene, blend_path: Path, toml_path: Path, strict: bool, option: str, depsgraph=None
+) -> list[str]:
+    """The import of the scene open in bpy (as `depsgraph` evaluates it, default the view layer's), written to
+    `toml_path` with its files (the caller holds the lock)."""
     from spectrace.interop.mitsuba.tree import shown
     from spectrace.interop.toml_writer import write_imported_scene
 
     ctx = BlendImport(blend_path, assets_folder_name(toml_path))
-    data = blend_scene_data(ctx, bpy, scene, strict)
+    data = blend_scene_data(ctx, bpy, scene, strict, depsgraph)
     notes = [WARNING_PREFIX + text for text in ctx.warnings] + ctx.notes
     header = "\n".join(
         [

@@ -1,15 +1,23 @@
-"""A skeleton of spectrace as a Blender render engine: install this folder as an add-on (Edit > Preferences >
-Add-ons, or copy it into Blender's scripts/addons; `spectrace blender-addon` prints where it is) in a Blender whose
-Python can import spectrace. Rendering exports the evaluated scene through spectrace.interop.blender (the same
-import as `spectrace import-blend`), renders it with `python -m spectrace render` at the scene's Cycles sample count
-and loads the image into Blender's render result. Progress within the render and viewport rendering are not
-implemented yet."""
+"""spectrace as a Blender render engine: install this folder as an add-on (Edit > Preferences > Add-ons, or copy it
+into Blender's scripts/addons; `spectrace blender-addon` prints where it is) in a Blender whose Python can import
+spectrace, and choose "spectrace" as the render engine.
+
+A final render (F12, or bpy.ops.render.render()) exports the evaluated scene of the render's depsgraph (modifiers at
+their render levels) through spectrace.interop.blender, the same export as `spectrace import-blend`, into a
+temporary folder; what it does not export is reported once per kind as a warning. It then renders the scene at the
+Cycles sample count in a child process (spectrace.interop.blender.render_worker, so that Blender's libraries and
+the OpenCL runtime never share a process), shows the samples done on the progress bar and in the status line after
+each pass, and loads the image into the Render Result's Combined pass. Esc stops the render after the pass in
+flight and shows the image of the samples done. Viewport rendering is not implemented."""
 
 from __future__ import annotations
 
+import queue
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 import bpy  # type: ignore[import-not-found, import-untyped, unused-ignore]  # Blender's, untyped; absent outside it
@@ -17,11 +25,19 @@ import bpy  # type: ignore[import-not-found, import-untyped, unused-ignore]  # B
 bl_info = {
     "name": "spectrace",
     "author": "spectrace",
-    "version": (0, 1, 0),
+    "version": (0, 2, 0),
     "blender": (4, 2, 0),
     "category": "Render",
-    "description": "Render with spectrace, a spectral path tracer (a skeleton: final renders only)",
+    "description": "Render with spectrace, a spectral path tracer (final renders)",
 }
+
+_POLL_SECONDS = 0.1  # how often Esc is looked for while the child renders
+
+
+def _lines(stream, found: queue.Queue) -> None:
+    for line in stream:
+        found.put(line)
+    found.put(None)
 
 
 class SpectraceRenderEngine(bpy.types.RenderEngine):
@@ -31,38 +47,77 @@ class SpectraceRenderEngine(bpy.types.RenderEngine):
 
     def render(self, depsgraph):
         from spectrace.errors import SpectraceError
-        from spectrace.interop.blender.importer import write_blend_import
+        from spectrace.interop.blender.cameras import film
+        from spectrace.interop.blender.importer import WARNING_PREFIX, write_blend_import
 
         scene = depsgraph.scene
-        width = int(scene.render.resolution_x * scene.render.resolution_percentage / 100)
-        height = int(scene.render.resolution_y * scene.render.resolution_percentage / 100)
-        spp = int(getattr(getattr(scene, "cycles", None), "samples", 16))
+        width, height = film(scene)
+        spp = max(1, int(getattr(getattr(scene, "cycles", None), "samples", 16)))
         with tempfile.TemporaryDirectory(prefix="spectrace-blender-") as folder:
-            toml, image = Path(folder) / "scene.toml", Path(folder) / "image.exr"
+            toml, image = Path(folder) / "scene.toml", Path(folder) / "image.npy"
             blend = Path(bpy.data.filepath or "untitled.blend")
+            self.update_stats("", "spectrace: exporting the scene")
             try:
-                write_blend_import(bpy, scene, blend, toml, strict=False, option="the exported scene")
+                notes = write_blend_import(
+                    bpy, scene, blend, toml, strict=False, option="the exported scene", depsgraph=depsgraph
+                )
             except SpectraceError as error:
                 self._fail(str(error))
                 return
-            self.update_stats("", "spectrace: rendering")
-            done = subprocess.run(
-                [sys.executable, "-m", "spectrace", "render", str(toml), "-o", str(image), "--spp", str(spp)],
-                capture_output=True,
-                text=True,
-            )
-            if done.returncode != 0:
-                self._fail(done.stderr.strip().splitlines()[-1] if done.stderr.strip() else "the render failed")
+            for note in notes:
+                if note.startswith(WARNING_PREFIX):
+                    self.report({"WARNING"}, note[len(WARNING_PREFIX) :])
+            if self.test_break():
+                return
+            self.update_stats("", "spectrace: building the scene on the device")
+            failure = self._render_child(toml, image, spp)
+            if failure is not None:
+                self._fail(failure)
                 return
             import numpy as np
 
-            from spectrace.io.exr import read_exr
-
-            rgb = read_exr(image)[0]["RGB"][::-1, :, :3]  # Blender's rows run bottom-up
-            rgba = np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,), dtype=rgb.dtype)], axis=2)
+            rgb = np.load(image)[::-1]  # Blender's rows run bottom-up
+            if rgb.shape[:2] != (height, width):
+                self._fail(f"the image is {rgb.shape[1]}x{rgb.shape[0]}, the render {width}x{height}")
+                return
+            rgba = np.concatenate([rgb, np.ones((height, width, 1), dtype=np.float32)], axis=2)
             result = self.begin_result(0, 0, width, height)
-            result.layers[0].passes["Combined"].rect = rgba.reshape(-1, 4).astype(np.float32)
+            result.layers[0].passes["Combined"].rect = rgba.reshape(-1, 4)
             self.end_result(result)
+
+    def _render_child(self, toml: Path, image: Path, spp: int) -> str | None:
+        """Run the render worker, passing its progress on to Blender; None when it wrote the image, else why not."""
+        command = [sys.executable, "-m", "spectrace.interop.blender.render_worker", str(toml), str(image), str(spp)]
+        child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        found: queue.Queue = queue.Queue()
+        reader = threading.Thread(target=_lines, args=(child.stdout, found), daemon=True)
+        reader.start()
+        stopped = False
+        while True:
+            try:
+                line = found.get(timeout=_POLL_SECONDS)
+            except queue.Empty:
+                if not stopped and self.test_break():
+                    child.send_signal(signal.SIGINT)  # ends after the pass in flight, writing what it has
+                    stopped = True
+                continue
+            if line is None:
+                break
+            words = line.split()
+            if len(words) == 3 and words[0] == "progress":
+                self._progress(int(words[1]), int(words[2]))
+            elif len(words) == 3 and words[0] == "done":
+                self.update_stats("", f"spectrace: {words[1]} samples per pixel in {float(words[2]):.2f} s")
+        errors = child.stderr.read() if child.stderr is not None else ""
+        if child.wait() != 0 or not image.is_file():
+            lines = [line for line in errors.strip().splitlines() if line.strip()]
+            return lines[-1] if lines else "the render failed"
+        return None
+
+    def _progress(self, done: int, total: int) -> None:
+        """A pass ended: `done` of `total` samples per pixel."""
+        self.update_progress(done / max(total, 1))
+        self.update_stats("", f"spectrace: {done}/{total} samples per pixel")
 
     def _fail(self, message: str) -> None:
         # shown in Blender's status bar, and on stderr for a render from the command line

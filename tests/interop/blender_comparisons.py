@@ -1,0 +1,220 @@
+"""Scenes built with Blender's own Python module (bpy) to compare spectrace with Cycles, run in a child process:
+`python -m tests.interop.blender_comparisons KIND OUT.blend CYCLES_PREFIX SPP SEEDS [ENVIRONMENT.exr]` saves the
+scene and renders it with Cycles on the CPU once per seed 1..SEEDS, to CYCLES_PREFIX<seed>.exr (linear Rec.709).
+
+Every scene is 48 × 48 pixels, seen by a camera 3.2 units in front of a room 2 units wide (an inward box without
+its front wall) or a floor and a back wall; Cycles' settings that would bias its estimate are turned off (light
+clamping, glossy filtering) and every kind of bounce is limited alike, as spectrace's max_depth limits them."""
+
+import math
+import sys
+
+import bpy
+from tests.interop.blender_builder import _camera, _light, _material, _object, _reset
+
+SIZE = 48
+BOUNCES = 8
+GREY = (0.5, 0.5, 0.5, 1.0)
+
+
+def _scene():
+    scene = _reset()
+    scene.render.resolution_x = scene.render.resolution_y = SIZE
+    return scene
+
+
+def _room(scene, material, front=False):
+    """The inward box [−1, 1]³ without its front wall (−y), unless `front` keeps it."""
+    import bmesh  # importable once bpy is
+
+    room = _object(scene, "room", bpy.ops.mesh.primitive_cube_add, material, size=2.0)
+    mesh = room.data
+    bm = bmesh.new()
+    bm.from_mesh(mesh)
+    bmesh.ops.reverse_faces(bm, faces=bm.faces)
+    if not front:
+        bm.faces.ensure_lookup_table()
+        bmesh.ops.delete(bm, geom=[f for f in bm.faces if f.calc_center_median().y < -0.99], context="FACES_ONLY")
+    bm.to_mesh(mesh)
+    bm.free()
+    return room
+
+
+def _front_camera(scene):
+    return _camera(scene, (0.0, -3.2, 0.0), (math.pi / 2, 0.0, 0.0), lens=30.0)
+
+
+def _floor_and_wall(scene, material):
+    _object(scene, "floor", bpy.ops.mesh.primitive_plane_add, material, size=4.0, location=(0.0, 0.0, -1.0))
+    _object(
+        scene,
+        "wall",
+        bpy.ops.mesh.primitive_plane_add,
+        material,
+        size=4.0,
+        location=(0.0, 1.0, 1.0),
+        rotation=(math.pi / 2, 0.0, 0.0),
+    )
+
+
+def grey_room():
+    """The allowance scene: grey Lambertian walls, a grey block, a white square area light under the ceiling."""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _room(scene, grey)
+    _object(scene, "block", bpy.ops.mesh.primitive_cube_add, grey, size=0.6, location=(0.3, 0.2, -0.7))
+    _light(scene, "panel", "AREA", (0.0, 0.0, 0.95), size=0.8, energy=40.0)
+    _front_camera(scene)
+    return scene
+
+
+GREY_LIGHTS = {  # kind -> (settings, location, rotation): a white light over a grey floor before a grey wall
+    "POINT": ({"energy": 150.0, "shadow_soft_size": 0.0}, (0.3, -0.5, 1.0), (0.0, 0.0, 0.0)),
+    "SPOT": (
+        {"energy": 300.0, "shadow_soft_size": 0.0, "spot_size": math.radians(70.0), "spot_blend": 0.3},
+        (0.0, -0.5, 1.2),
+        (math.radians(-20.0), 0.0, 0.0),
+    ),
+    "SUN": ({"energy": 2.0, "angle": 0.0}, (0.0, 0.0, 3.0), (math.radians(40.0), 0.0, math.radians(30.0))),
+    "AREA": ({"energy": 150.0, "size": 0.6, "shape": "SQUARE"}, (0.0, -0.3, 1.2), (0.0, 0.0, 0.0)),
+}
+
+
+def grey_light(kind):
+    """One white light of `kind` over a grey Lambertian floor before a grey wall (a block casting a shadow)."""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _floor_and_wall(scene, grey)
+    _object(scene, "block", bpy.ops.mesh.primitive_cube_add, grey, size=0.5, location=(-0.3, 0.2, -0.75))
+    settings, location, rotation = GREY_LIGHTS[kind]
+    _light(scene, "light", kind, location, rotation, **settings)
+    _front_camera(scene)
+    return scene
+
+
+def principled_box():
+    """Four spheres of Principled BSDF kinds in a grey room lit by an area light: diffuse-like (rough, not
+    metallic), a rough metal, a plastic (a rough dielectric coat over a colour) and a clear glass."""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _room(scene, grey)
+    kinds = {
+        "diffuse_like": {"Base Color": (0.8, 0.3, 0.2, 1.0), "Roughness": 1.0},
+        "metal": {"Base Color": (0.9, 0.7, 0.3, 1.0), "Metallic": 1.0, "Roughness": 0.3},
+        "plastic": {"Base Color": (0.1, 0.3, 0.8, 1.0), "Roughness": 0.3},
+        "glass": {"Transmission Weight": 1.0, "IOR": 1.5, "Roughness": 0.0},
+    }
+    for (name, inputs), (x, z) in zip(kinds.items(), [(-0.5, 0.1), (0.5, 0.1), (-0.5, -0.6), (0.5, -0.6)]):
+        material, _ = _material(name, "ShaderNodeBsdfPrincipled", **inputs)
+        ball = _object(scene, name, bpy.ops.mesh.primitive_uv_sphere_add, material, radius=0.35, location=(x, 0, z))
+        bpy.ops.object.shade_smooth()
+        ball.name = name
+    _light(scene, "panel", "AREA", (0.0, -0.3, 0.95), size=0.8, energy=60.0)
+    _front_camera(scene)
+    return scene
+
+
+def sky(image_path):
+    """An HDRI world (an OpenEXR file the test writes) and a sun over a grey floor and a green Lambertian cube."""
+    scene = _scene()
+    tree = scene.world.node_tree
+    background = tree.nodes["Background"]
+    background.inputs["Strength"].default_value = 1.0
+    texture = tree.nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(image_path)
+    texture.interpolation = "Closest"  # spectrace looks an environment image up texel by texel
+    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _object(scene, "floor", bpy.ops.mesh.primitive_plane_add, grey, size=6.0, location=(0.0, 0.0, -1.0))
+    paint, _ = _material("paint", "ShaderNodeBsdfDiffuse", Color=(0.2, 0.6, 0.3, 1.0))
+    _object(scene, "cube", bpy.ops.mesh.primitive_cube_add, paint, size=0.8, location=(0.0, 0.3, -0.6))
+    _light(scene, "sun", "SUN", (0, 0, 3), (math.radians(35.0), 0.0, math.radians(-40.0)), energy=2.0, angle=0.0)
+    _front_camera(scene)
+    return scene
+
+
+def textured():
+    """A plane whose Principled Base Color is an image of 4 × 4 colours on the back wall of a grey room."""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _room(scene, grey)
+    material, principled = _material("textured", "ShaderNodeBsdfPrincipled", Roughness=1.0)
+    # 4 × 4 texels of distinct colours (sRGB code values), each seen over about 4 × 4 pixels: the lookup's
+    # orientation and its sRGB decoding, not how the two renderers filter a minified image
+    image = bpy.data.images.new("grid", 4, 4)
+    codes = [((i % 4) * 0.3 + 0.05, ((i * 7) % 16) / 15.0, 1.0 - i / 15.0) for i in range(16)]
+    image.pixels = [value for rgb in codes for value in (*rgb, 1.0)]
+    image.pack()  # saved in the .blend file, which the export reads
+    node = material.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    # Cycles filters an 8-bit sRGB image in its encoded values and then decodes, spectrace in linear values: over
+    # these contrasts up to 30 % apart between texel centres (3 % over the image), so the texels are compared here
+    node.interpolation = "Closest"
+    material.node_tree.links.new(node.outputs["Color"], principled.inputs["Base Color"])
+    _object(
+        scene,
+        "poster",
+        bpy.ops.mesh.primitive_plane_add,
+        material,
+        size=1.6,
+        location=(0.0, 0.98, 0.0),
+        rotation=(math.pi / 2, 0.0, 0.0),
+    )
+    _light(scene, "panel", "AREA", (0.0, -0.3, 0.95), size=0.8, energy=60.0)
+    _front_camera(scene)
+    return scene
+
+
+def glass():
+    """A Glass BSDF sphere (IOR 1.5, smooth) before a coloured back wall of a grey room lit by an area light."""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _room(scene, grey)
+    red, _ = _material("red", "ShaderNodeBsdfDiffuse", Color=(0.7, 0.2, 0.1, 1.0))
+    _object(
+        scene,
+        "backdrop",
+        bpy.ops.mesh.primitive_plane_add,
+        red,
+        size=1.9,
+        location=(0.0, 0.98, 0.0),
+        rotation=(math.pi / 2, 0.0, 0.0),
+    )
+    clear, _ = _material("clear", "ShaderNodeBsdfGlass", IOR=1.5, Roughness=0.0)
+    _object(scene, "ball", bpy.ops.mesh.primitive_uv_sphere_add, clear, radius=0.45, location=(0.0, 0.0, -0.4))
+    bpy.ops.object.shade_smooth()
+    _light(scene, "panel", "AREA", (0.0, -0.3, 0.95), size=0.8, energy=60.0)
+    _front_camera(scene)
+    return scene
+
+
+SCENES = {"grey_room": grey_room, "principled_box": principled_box, "textured": textured, "glass": glass}
+SCENES |= {f"grey_{kind.lower()}": (lambda kind=kind: grey_light(kind)) for kind in GREY_LIGHTS}
+
+
+def main() -> None:
+    kind, out, prefix, spp, seeds = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+    scene = sky(sys.argv[6]) if kind == "sky" else SCENES[kind]()
+    cycles = scene.cycles
+    cycles.max_bounces = cycles.diffuse_bounces = cycles.glossy_bounces = BOUNCES
+    cycles.transmission_bounces = cycles.transparent_max_bounces = BOUNCES
+    bpy.ops.wm.save_as_mainfile(filepath=out)
+    scene.render.engine = "CYCLES"
+    cycles.device = "CPU"
+    cycles.samples = spp
+    cycles.use_adaptive_sampling = False
+    cycles.use_denoising = False
+    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
+    cycles.blur_glossy = 0.0
+    cycles.caustics_reflective = cycles.caustics_refractive = True
+    scene.view_settings.view_transform = "Standard"
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    for seed in range(1, seeds + 1):
+        cycles.seed = seed
+        scene.render.filepath = f"{prefix}{seed}.exr"
+        bpy.ops.render.render(write_still=True)
+
+
+if __name__ == "__main__":
+    main()
