@@ -43,6 +43,7 @@ _LAZY = {
         ["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.film.colour_output"
     ),
     "SpectraceError": "spectrace.errors",
+    "Session": "spectrace.session",
     **dict.fromkeys(["denoise", "directly_seen_emission"], "spectrace.denoising"),
     "Image": "spectrace.film.image",
     "PixelFilter": "spectrace.pixel_filters",
@@ -76,6 +77,7 @@ __getattr__, __dir__ = lazy_names(
     public=[
         "load_scene",
         "render",
+        "Session",
         "Image",
         *MODEL_NAMES,
         "PixelFilter",
