@@ -297,3 +297,15 @@ def test_a_scene_built_in_python_edits_its_camera_and_instances():
         _same_bits(session, spectrace.render(expected, progress=False))
         with pytest.raises(SpectraceError, match="materials"):
             session.update({"materials.grey.reflectance": 0.2})
+
+
+def test_an_unchanged_texture_is_neither_read_nor_stored_again(scene_file):
+    with Session(scene_file, pass_spp=SPP) as session:
+        session.update({"materials.painted.roughness": 0.5, "materials.painted.type": "plastic"})
+        texels = len(session.renderer.buffers.texels)
+        for roughness in (0.3, 0.4, 0.3):  # the picture's table is unchanged: its rows and texels are reused
+            session.update({"materials.painted.roughness": roughness})
+            assert len(session.renderer.buffers.texels) == texels
+        session.step()
+        edited = {"materials.painted.type": "plastic", "materials.painted.roughness": 0.3}
+        _same_bits(session, _fresh(scene_file, edited))

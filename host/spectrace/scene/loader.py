@@ -237,6 +237,7 @@ class _Resolver:
         self.named_textures: dict[str, object] = {}
         self.named_materials: dict[str, Material] = {}
         self.resolving_materials: list[str] = []  # the names being resolved: a mix naming one of them is a cycle
+        self.texture_cache: dict[tuple[str, str], object] | None = None  # see texture_of
         # id(object) -> (the object, kept so that its id stays its own; its box's corners)
         self.object_corners: dict[int, tuple[InstancedObject, np.ndarray]] = {}
 
@@ -315,7 +316,7 @@ class _Resolver:
                     where=self.where(f"{key}.texture"),
                 )
         else:
-            texture = TEXTURES[spec.texture].from_spec(spec, self, key)
+            texture = self.texture_of(spec.texture, spec, key)
         assert is_texture(texture)
         check_texture_values(texture, kind, self.where(key))
         return texture
@@ -329,6 +330,17 @@ class _Resolver:
         check_texture_values(texture, "float", self.where(key), upper=parameter.range.high)
         return texture
 
+    def texture_of(self, type_name: str, spec, key: str):
+        """The texture of a validated table: made from it, or, where the resolver keeps `texture_cache` (a live
+        session's, whose edits resolve materials again), the one made before from the same table, so that an edit
+        elsewhere neither reads its file nor stores its texels again."""
+        if self.texture_cache is None:
+            return TEXTURES[type_name].from_spec(spec, self, key)
+        cache_key = (type_name, spec.model_dump_json())
+        if cache_key not in self.texture_cache:
+            self.texture_cache[cache_key] = TEXTURES[type_name].from_spec(spec, self, key)
+        return self.texture_cache[cache_key]
+
     def named_texture(self, name: str, key: str):
         if name in self.named_textures:
             return self.named_textures[name]
@@ -338,7 +350,7 @@ class _Resolver:
             close = difflib.get_close_matches(name, known + list(TEXTURES), n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else (f"; defined: {', '.join(known)}" if known else "")
             raise SpectraceError(f"undefined texture '{name}'{hint}", where=self.where(key))
-        texture = TEXTURES[entry.type].from_spec(entry, self, f"textures.{name}")
+        texture = self.texture_of(entry.type, entry, f"textures.{name}")
         self.named_textures[name] = texture
         return texture
 
@@ -394,7 +406,7 @@ class _Resolver:
         """An inline texture or a reference to a named one, unchecked: its use checks it."""
         if isinstance(spec, schema.TextureRefSpec):
             return self.named_texture(spec.texture, f"{key}.texture")
-        return TEXTURES[spec.texture].from_spec(spec, self, key)
+        return self.texture_of(spec.texture, spec, key)
 
     def optical_constant(self, spec: schema.SpectrumSpec, key: str, positive: bool) -> Spectrum:
         """η or k of a complex index of refraction: a spectrum without the reflectance bound (rgb has no meaning

@@ -174,6 +174,8 @@ class Session:
         self._source = scene.source if scene.source is not None and scene.source.suffix.lower() == ".toml" else None
         self._data = self._file_data(job.scene) if self._source is not None else self._model_data(job.scene)
         self._materials = self._named_materials(job.scene) if self._source is not None else {}
+        # Textures by their table: a material resolved again reuses its unchanged textures, rows and texels.
+        self._texture_cache: dict[tuple[str, str], object] = {}
         self._renderer = self._build(job.scene)
 
     # ------------------------------------------------------------------ rendering
@@ -429,6 +431,7 @@ class _Plan:
             lights = set(range(len(spec.lights)))
             emitters = {i for i, s in enumerate(spec.shapes) if s.emitter is not None}
         resolver = _Resolver(source, spec)
+        resolver.texture_cache = self.session._texture_cache
         scene = self.scene
         if "camera" in self.kinds:
             from spectrace.scene.loader import _check_camera, camera_from_spec
