@@ -73,7 +73,7 @@ material = "blend"
 radius = 0.35
 center = [0.7, 0.35, 0.2]
 
-[[shapes]]
+{{cloud}}[[shapes]]
 name = "lamp"
 type = "rectangle"
 material = "lamp"
@@ -104,11 +104,32 @@ radiance = {{ value = 0.05 }}
 """
 
 
+# A medium, which the sppm integrator does not render: the scene has it, the one without is for every integrator.
+CLOUD = """[[shapes]]
+name = "cloud"
+type = "sphere"
+radius = 0.2
+center = [-0.3, 0.3, 0.9]
+interior = { sigma_a = { value = 0.5 }, sigma_s = { value = 2.0 }, g = 0.3 }
+
+"""
+
+
+def _write(folder: Path, cloud: str) -> Path:
+    path = folder / "scene.toml"
+    camera = camera_film(origin="[0.3, 1.4, 4.0]", target="[0, 0.5, 0]", width="12", height="10")
+    path.write_text(camera + SCENE.replace("{cloud}", cloud))
+    return path
+
+
 @pytest.fixture(scope="module")
 def scene_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("session") / "scene.toml"
-    path.write_text(camera_film(origin="[0.3, 1.4, 4.0]", target="[0, 0.5, 0]", width="12", height="10") + SCENE)
-    return path
+    return _write(tmp_path_factory.mktemp("session"), CLOUD)
+
+
+@pytest.fixture(scope="module")
+def clear_scene_file(tmp_path_factory):
+    return _write(tmp_path_factory.mktemp("session"), "")
 
 
 def _fresh(path: Path, overrides: dict[str, object], spp: int = SPP) -> spectrace.Image:
@@ -128,6 +149,12 @@ EDITS = [
     pytest.param({"camera.origin": [0.5, 1.2, 3.5]}, {}, "camera", id="camera origin"),
     pytest.param({"camera.target": [0.1, 0.4, 0.0], "camera.fov": 55.0}, {}, "camera", id="camera target and fov"),
     pytest.param({"camera.up": [0.1, 1.0, 0.0]}, {}, "camera", id="camera up"),
+    pytest.param(
+        {"camera.type": "thinlens", "camera.aperture_radius": 0.1, "camera.focus_distance": 3.0},
+        {},
+        "camera",
+        id="thin lens",
+    ),
     pytest.param({"materials.red.reflectance": {"rgb": [0.1, 0.6, 0.2]}}, {}, "materials", id="reflectance"),
     pytest.param({"materials.gold.roughness": 0.05}, {}, "materials", id="roughness"),
     pytest.param({"materials.blend.amount": 0.8}, {}, "materials", id="mix amount"),
@@ -139,7 +166,7 @@ EDITS = [
     pytest.param({"lights.1.radiance": {"rgb": [0.1, 0.05, 0.02]}}, {}, "lights", id="environment colour"),
     pytest.param(
         {"shapes.lamp.emitter.radiance": {"value": 9.0}},
-        {"shapes.3.emitter.radiance": {"value": 9.0}},
+        {"shapes.4.emitter.radiance": {"value": 9.0}},
         "lights",
         id="area light radiance",
     ),
@@ -154,6 +181,12 @@ EDITS = [
         {"instances.0.transform": [{"scale": 4.0}, {"translate": [-6.0, 1.0, -9.0]}]},
         "instances",
         id="instance moving the scene's bounds",
+    ),
+    pytest.param(
+        {"shapes.cloud.interior.sigma_s": {"rgb": [0.5, 2.0, 4.0]}, "shapes.cloud.interior.g": -0.2},
+        {"shapes.3.interior.sigma_s": {"rgb": [0.5, 2.0, 4.0]}, "shapes.3.interior.g": -0.2},
+        "media",
+        id="medium",
     ),
     pytest.param({"sampler.seed": 7}, {}, "seed", id="seed"),
 ]
@@ -176,14 +209,14 @@ def test_an_edit_renders_the_bits_of_a_fresh_render_of_the_edited_file(scene_fil
 
 
 @pytest.mark.parametrize("integrator", ["direct", "bdpt", "light", "sppm"])
-def test_every_integrator_renders_an_edit_as_a_fresh_render(scene_file, integrator):
+def test_every_integrator_renders_an_edit_as_a_fresh_render(clear_scene_file, integrator):
     edit = {"camera.fov": 50.0, "lights.0.power": 35.0, "materials.red.reflectance": {"value": 0.4}}
     base = {"integrator.type": integrator}
-    with Session(spectrace.load_scene(scene_file, base), pass_spp=SPP) as session:
+    with Session(spectrace.load_scene(clear_scene_file, base), pass_spp=SPP) as session:
         session.step()
         assert not session.update(edit).rebuilt
         session.step()
-        _same_bits(session, _fresh(scene_file, base | edit))
+        _same_bits(session, _fresh(clear_scene_file, base | edit))
 
 
 def test_edits_add_up_and_a_layout_change_is_built_again(scene_file):
@@ -309,3 +342,23 @@ def test_an_unchanged_texture_is_neither_read_nor_stored_again(scene_file):
         session.step()
         edited = {"materials.painted.type": "plastic", "materials.painted.roughness": 0.3}
         _same_bits(session, _fresh(scene_file, edited))
+
+
+def test_spectral_bands_restart_with_the_edit_too(scene_file):
+    with Session(scene_file, pass_spp=SPP, spectral_bins=6) as session:
+        session.step()
+        session.update({"materials.red.reflectance": {"rgb": [0.1, 0.2, 0.9]}, "camera.fov": 30.0})
+        session.step()
+        scene = spectrace.load_scene(
+            scene_file, {"materials.red.reflectance": {"rgb": [0.1, 0.2, 0.9]}, "camera.fov": 30.0}
+        )
+        expected = spectrace.render(scene, progress=False, spectral_bins=6)
+        np.testing.assert_array_equal(session.image().spectral.radiance, expected.spectral.radiance)
+
+
+def test_a_closed_session_says_so(scene_file):
+    session = Session(scene_file)
+    session.close()
+    for use in (session.step, session.image, lambda: session.update({"camera.fov": 30.0})):
+        with pytest.raises(SpectraceError, match="closed"):
+            use()

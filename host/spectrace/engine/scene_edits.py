@@ -1,8 +1,9 @@
 """Re-pack the parts of a scene's device buffers that an edit changes, leaving the rest (the triangles and their BVH)
-as built: the material rows, the light rows with their sampling distribution, the instances' top level.
+as built: the material rows, the medium rows, the light rows with their sampling distribution, the instances' top
+level.
 
 Each takes the edited scene (the same shapes, lights and instances as the buffers were built from, in the same
-order, some with other materials, emitters, lights or placements) and the buffers built with their packing
+order, some with other materials, interiors, emitters, lights or placements) and the buffers built with their packing
 (build_scene_buffers(keep_packing=True)), and returns the new buffers with the names of those that changed
 (SCENE_KERNEL_BUFFERS), or None where the edit changed the layout (a row more or fewer), which only a rebuild
 follows. A re-packed row appends its spectra and textures to the table and texels already built, reusing what is
@@ -13,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from spectrace.core.contract import MATERIAL_DTYPE
+from spectrace.core.contract import MATERIAL_DTYPE, MEDIUM_DTYPE
 from spectrace.engine.scene_buffers import SceneBuffers, ScenePacking, _radius_with_instances, light_table
 from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
@@ -51,16 +52,20 @@ def _shared(buffers: SceneBuffers, packing: ScenePacking) -> Edit:
     return edited, changed
 
 
-def materials_in_order(scene: Scene) -> list:
-    """The materials in the order the build first meets them (the scene's shapes, then each instanced object's
-    shapes once), which is the order of their rows."""
-    found = [shape.material for shape in scene.shapes if shape.material is not None]
-    objects: dict[int, object] = {}
+def _shapes_in_order(scene: Scene) -> list:
+    """The shapes in the order the build meets them: the scene's, then each instanced object's once."""
+    shapes = list(scene.shapes)
+    objects: set[int] = set()
     for instance in scene.instances:
         if id(instance.object) not in objects:
-            objects[id(instance.object)] = instance.object
-            found += [shape.material for shape in instance.object.shapes if shape.material is not None]
-    return found
+            objects.add(id(instance.object))
+            shapes += instance.object.shapes
+    return shapes
+
+
+def materials_in_order(scene: Scene) -> list:
+    """The materials in the order the build first meets them, which is the order of their rows."""
+    return [shape.material for shape in _shapes_in_order(scene) if shape.material is not None]
 
 
 def repack_materials(scene: Scene, buffers: SceneBuffers) -> Edit | None:
@@ -76,6 +81,24 @@ def repack_materials(scene: Scene, buffers: SceneBuffers) -> Edit | None:
         return None
     shared, changed = _shared(buffers, packing)
     return replace(shared, materials=np.array(rows, MATERIAL_DTYPE)), changed | {"materials"}
+
+
+def repack_media(scene: Scene, buffers: SceneBuffers) -> Edit | None:
+    """Every medium row written again from `scene`'s interiors."""
+    packing = _packing(buffers)
+    rows: list[tuple[int, int, float, int]] = []
+    index: dict[int, int] = {}
+    for shape in _shapes_in_order(scene):
+        medium = shape.interior
+        if medium is not None and id(medium) not in index:
+            index[id(medium)] = len(rows)
+            rows.append((packing.table.add(medium.sigma_a), packing.table.add(medium.sigma_s), float(medium.g), 0))
+    if len(rows) != buffers.medium_count:
+        return None
+    if not rows:
+        return buffers, set()
+    shared, changed = _shared(buffers, packing)
+    return replace(shared, media=np.array(rows, MEDIUM_DTYPE)), changed | {"media"}
 
 
 def repack_lights(scene: Scene, buffers: SceneBuffers) -> Edit | None:

@@ -176,22 +176,22 @@ class Session:
         self._materials = self._named_materials(job.scene) if self._source is not None else {}
         # Textures by their table: a material resolved again reuses its unchanged textures, rows and texels.
         self._texture_cache: dict[tuple[str, str], object] = {}
-        self._renderer = self._build(job.scene)
+        self._renderer: Renderer | None = self._build(job.scene)
 
     # ------------------------------------------------------------------ rendering
 
     @property
     def scene(self) -> Scene:
         """The scene with every edit applied."""
-        return self._renderer.scene
+        return self._open().scene
 
     @property
     def samples_done(self) -> int:
-        return self._renderer.samples_done
+        return self._open().samples_done
 
     @property
     def renderer(self) -> Renderer:
-        return self._renderer
+        return self._open()
 
     def step(self, spp: int | None = None) -> None:
         """Render one more pass of `spp` samples per pixel (default: pass_spp) into the accumulation."""
@@ -201,17 +201,22 @@ class Session:
         if problem := limits.pass_spp_problem(count):
             raise SpectraceError(problem, where="spp")
         with self._lock:
-            self._renderer.run_pass(count)
+            self._open().run_pass(count)
 
     def image(self) -> Image:
         """The image of the samples so far, in the session's colour space and white balance."""
         with self._lock:
-            return self._outputs.apply(self._renderer.image())
+            return self._outputs.apply(self._open().image())
+
+    def _open(self) -> Renderer:
+        if self._renderer is None:
+            raise SpectraceError("the session is closed")
+        return self._renderer
 
     def close(self) -> None:
         """Let the device buffers go; the session renders no more."""
         with self._lock:
-            self._renderer = None  # type: ignore[assignment]
+            self._renderer = None
 
     def __enter__(self) -> Session:
         return self
@@ -275,8 +280,7 @@ class Session:
             raise SpectraceError(f"update() takes a mapping of key paths to values, got {type(changes).__name__}")
         started = time.perf_counter()
         with self._lock:
-            if self._renderer is None:
-                raise SpectraceError("the session is closed")
+            self._open()
             steps = self._update(changes)
         return UpdateReport(tuple(steps), any(step.how != IMAGE_ONLY for step in steps), time.perf_counter() - started)
 
@@ -396,7 +400,7 @@ class _Plan:
         for key, value in edits.items():
             set_key_path(data, key, value, where=f"{source}: {self.given.get(key, key)}")
         spec = validate_scene_data(source, data)
-        emitters, lights, materials, instances = set(), set(), set(), set()
+        emitters, lights, materials, instances, interiors = set(), set(), set(), set(), set()
         for key in edits:
             parts = key.split(".")
             head = parts[0]
@@ -417,6 +421,9 @@ class _Plan:
             elif head == "shapes" and len(parts) > 3 and parts[2] == "emitter" and self._emits(int(parts[1]), spec):
                 emitters.add(int(parts[1]))
                 self._add("lights", key)
+            elif head == "shapes" and len(parts) > 3 and parts[2] == "interior" and self._filled(int(parts[1]), spec):
+                interiors.add(int(parts[1]))
+                self._add("media", key)
             elif head == "instances" and len(parts) > 2 and parts[2] == "transform":
                 instances.add(int(parts[1]))
                 self._add("instances", key)
@@ -445,6 +452,13 @@ class _Plan:
             scene = replace(scene, seed=spec.sampler.seed)
         if materials:
             scene = self._materials(scene, spec, resolver, materials, source)
+        if interiors:
+            shapes = list(scene.shapes)
+            for i in interiors:
+                interior = spec.shapes[i].interior
+                assert interior is not None  # _filled
+                shapes[i] = replace(shapes[i], interior=resolver.interior(interior, f"shapes[{i}].interior"))
+            scene = replace(scene, shapes=shapes)
         if lights or emitters:
             scene = self._lights(scene, spec, resolver, lights, emitters, source)
         if instances:
@@ -458,6 +472,10 @@ class _Plan:
     def _emits(self, index: int, spec) -> bool:
         """Whether shape `index` emits before and after the edit (a light more or fewer is a rebuild)."""
         return spec.shapes[index].emitter is not None and self.scene.shapes[index].emitter is not None
+
+    def _filled(self, index: int, spec) -> bool:
+        """Whether shape `index` has a medium inside before and after the edit (one more or fewer is a rebuild)."""
+        return spec.shapes[index].interior is not None and self.scene.shapes[index].interior is not None
 
     def _material_name(self, key: str, data: dict) -> str:
         rest = key.removeprefix("materials.")
@@ -582,7 +600,7 @@ class _Plan:
         from spectrace.engine import scene_edits
 
         session = self.session
-        renderer = session._renderer
+        renderer = session._open()
         kinds = self.kinds
         every_key = tuple(key for keys in kinds.values() for key in keys)
         started = time.perf_counter()
@@ -595,10 +613,11 @@ class _Plan:
         shading = kinds.get("shading", [])
         for kind, edit, detail in (
             ("materials", scene_edits.repack_materials, "material rows re-packed"),
+            ("media", scene_edits.repack_media, "medium rows re-packed"),
             ("lights", scene_edits.repack_lights, "light rows and their distribution re-packed"),
             ("instances", scene_edits.place_instances, "top level of the BVH rebuilt"),
         ):
-            if kind not in kinds and not (shading and kind != "instances"):
+            if kind not in kinds and not (shading and kind in ("materials", "lights")):
                 continue
             started = time.perf_counter()
             done = edit(self.scene, buffers)
@@ -637,7 +656,7 @@ class _Plan:
         from spectrace.core import limits
         from spectrace.integrators import scene_settings_problem
 
-        scene, renderer = self.scene, self.session._renderer
+        scene, renderer = self.scene, self.session._open()
         problem = (
             limits.scene_settings_problem(scene)
             or scene_settings_problem(scene)
