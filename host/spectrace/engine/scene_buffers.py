@@ -363,6 +363,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     packing = None
     if keep_packing:
         out.texel_chunks[:] = [texels]  # one chunk from here on: what an edit appends follows it
+        objects.drop_triangles()
         packing = ScenePacking(
             table=table,
             textures=textures,
@@ -541,6 +542,15 @@ class _ObjectTriangles:
         # the top level (-1: no triangles); built once, as a new placement of the instances leaves them as they are.
         self._object_nodes: tuple[list[np.ndarray], list[int]] | None = None
         self.place(instances)
+
+    def drop_triangles(self) -> None:
+        """Let the objects' triangles and BVHs go once they are in the scene's buffers: a new placement needs only
+        their boxes and node buffers."""
+        empty = np.zeros((0, 3, 4), np.float32)
+        self.vertices, self.normals, self.uvs = empty, empty, np.zeros((0, 3, 2), np.float32)
+        self.info = np.zeros(0, TRIANGLE_INFO_DTYPE)
+        if self._object_nodes is not None:
+            self.bvhs = [None] * len(self.bvhs)
 
     def place(self, instances: list[Instance]) -> None:
         """Take `instances` (the same objects as before, in the same order, each with its own map) as the

@@ -34,6 +34,7 @@ from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
 
 if TYPE_CHECKING:
     from spectrace.device import Device
+    from spectrace.engine.job import RenderJob
     from spectrace.engine.renderer import Renderer
     from spectrace.engine.scene_buffers import SceneBuffers
     from spectrace.film.image import Image
@@ -139,10 +140,8 @@ class Session:
         adaptation: Adaptation | str = Adaptation.BRADFORD,
         aovs: str | Sequence[str] | None = None,
     ) -> None:
-        from spectrace.api import _check_camera
         from spectrace.core import limits
-        from spectrace.device import Device, open_device
-        from spectrace.engine.job import RenderJob
+        from spectrace.engine.job import RenderJob, check_camera
         from spectrace.scene import load_scene
         from spectrace.scene.model import Scene
 
@@ -152,7 +151,7 @@ class Session:
             raise SpectraceError(f"Session() needs a spectrace.Scene, got {type(scene).__name__}")
         if problem := limits.pass_spp_problem(pass_spp):
             raise SpectraceError(problem, where="pass_spp")
-        _check_camera(scene)
+        check_camera(scene)
         job = RenderJob.make(
             scene,
             spectral_bins=spectral_bins,
@@ -160,23 +159,60 @@ class Session:
             colour_space=colour_space,
             white_balance=white_balance,
             adaptation=adaptation,
+            device=device,
         )
+        self._start(job, pass_spp)
+
+    @classmethod
+    def for_job(cls, job: RenderJob, pass_spp: int = 1) -> Session:
+        """A session of a render job already checked (what `spectrace.render` renders through)."""
+        session = cls.__new__(cls)
+        session._start(job, pass_spp)
+        return session
+
+    def _start(self, job: RenderJob, pass_spp: int) -> None:
+        from spectrace.device import Device, open_device
+
         self._lock = threading.RLock()
         self.pass_spp = pass_spp
-        self._spectral_bins = spectral_bins
+        self._job = job
         self._outputs = job.outputs
+        white = job.outputs.white_balance
         self._output_values: dict[str, object] = {
             "film.colour_space": ColourSpace(job.outputs.colour_space).value,
-            "film.white_balance": white_balance.label if isinstance(white_balance, WhiteBalance) else white_balance,
-            "film.adaptation": Adaptation(adaptation).value if isinstance(adaptation, str) else adaptation.value,
+            "film.white_balance": white.label if white is not None else None,
+            "film.adaptation": Adaptation(white.method).value if white is not None else Adaptation.BRADFORD.value,
         }
-        self._device = device if isinstance(device, Device) else open_device(device)
-        self._source = scene.source if scene.source is not None and scene.source.suffix.lower() == ".toml" else None
-        self._data = self._file_data(job.scene) if self._source is not None else self._model_data(job.scene)
-        self._materials = self._named_materials(job.scene) if self._source is not None else {}
+        self._device = job.device if isinstance(job.device, Device) else open_device(job.device)
+        source = job.scene.source
+        self._source = source if source is not None and source.suffix.lower() == ".toml" else None
+        # The scene file's keys and its materials by name, read when first asked (an update, parameters()).
+        self._read_data: dict | None = None
+        self._read_materials: dict[str, Any] | None = None
         # Textures by their table: a material resolved again reuses its unchanged textures, rows and texels.
         self._texture_cache: dict[tuple[str, str], object] = {}
         self._renderer: Renderer | None = self._build(job.scene)
+
+    @property
+    def _data(self) -> dict:
+        if self._read_data is None:
+            scene = self._open().scene
+            self._read_data = self._file_data(scene) if self._source is not None else self._model_data(scene)
+        return self._read_data
+
+    @_data.setter
+    def _data(self, data: dict) -> None:
+        self._read_data = data
+
+    @property
+    def _materials(self) -> dict[str, Any]:
+        if self._read_materials is None:
+            self._read_materials = self._named_materials(self._open().scene) if self._source is not None else {}
+        return self._read_materials
+
+    @_materials.setter
+    def _materials(self, materials: dict[str, Any]) -> None:
+        self._read_materials = materials
 
     # ------------------------------------------------------------------ rendering
 
@@ -332,9 +368,10 @@ class Session:
         return self._renderer_of(scene, buffers)
 
     def _renderer_of(self, scene: Scene, buffers: SceneBuffers) -> Renderer:
-        from spectrace.engine.renderer import Renderer
+        from spectrace.engine.wavefront import make_renderer
 
-        return Renderer(scene, self._device, spectral_bins=self._spectral_bins, buffers=buffers)
+        job = self._job
+        return make_renderer(scene, self._device, job.kernel, spectral_bins=job.spectral_bins, buffers=buffers)
 
     def _file_data(self, scene: Scene) -> dict:
         from spectrace.scene.loader import read_scene_data, set_key_path
@@ -582,7 +619,7 @@ class _Plan:
                 scene = replace(scene, instances=placed)
                 self._add("instances", key)
         if "camera" in self.kinds:
-            from spectrace.api import _check_camera
+            from spectrace.engine.job import check_camera
 
             try:
                 camera_spec = TypeAdapter(schema.CameraSpec).validate_python(data["camera"])
@@ -591,7 +628,7 @@ class _Plan:
                 where = ".".join(["camera", *(str(p) for p in error["loc"][1:] if isinstance(p, str))][:2])
                 raise SpectraceError(error["msg"].removeprefix("Value error, "), where=where) from None
             scene = replace(scene, camera=camera_from_spec(camera_spec))
-            _check_camera(scene)
+            check_camera(scene)
         self.scene = scene
 
     # --------------------------------------------------------- carrying it out
