@@ -389,17 +389,19 @@ def _render_shown(job: RenderJob, progress: ProgressOption) -> Image:
     import warnings
 
     from spectrace.engine.display_stream import RenderDisplay
+    from spectrace.session import Session
 
     name = job.scene.source.stem if job.scene.source is not None else "spectrace"
-    renderer = job.renderer()
-    display = RenderDisplay(job, name, lambda message: warnings.warn(message, RuntimeWarning, stacklevel=1))
-    try:
-        image = render_passes(
-            renderer, pass_spp=job.pass_spp, progress=progress, each_pass=lambda: display.after_pass(renderer)
-        )
-    except BaseException:
-        display.close()
-        raise
+    with Session.for_job(job) as session:
+        renderer = session.renderer
+        display = RenderDisplay(job, name, lambda message: warnings.warn(message, RuntimeWarning, stacklevel=1))
+        try:
+            image = render_passes(
+                renderer, pass_spp=job.pass_spp, progress=progress, each_pass=lambda: display.after_pass(renderer)
+            )
+        except BaseException:
+            display.close()
+            raise
     display.finish(image)
     return image
 
