@@ -302,6 +302,11 @@ def test_parameters_name_the_editable_keys(scene_file):
     assert parameters["shapes.lamp.emitter.radiance"] == {"value": 4.0}
     assert parameters["instances.right post.transform"] == [{"translate": [1.3, 0.4, -0.6]}]
     assert parameters["film.exposure"] == 0.0 and parameters["sampler.seed"] == 0
+    # An entry of an array of tables goes by its index too.
+    with Session(scene_file) as session:
+        session.update({"shapes.4.emitter.scale": 3.0, "instances.1.transform": [{"translate": [0, 0.4, 0]}]})
+        assert session.parameters()["shapes.lamp.emitter.scale"] == 3.0
+        assert session.parameters()["instances.right post.transform"] == [{"translate": [0, 0.4, 0]}]
 
 
 def test_a_scene_built_in_python_edits_its_camera_and_instances():

@@ -299,6 +299,9 @@ class Session:
         if part not in _ARRAYS or not rest:
             return key
         entries = self._data.get(part, [])
+        first = rest.split(".")[0]
+        if first.isdigit() and int(first) < len(entries):
+            return key  # by its index
         for i in range(len(entries)):
             label = self._label(part, i)
             if rest.startswith(label + ".") or rest == label:
