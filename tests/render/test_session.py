@@ -225,7 +225,7 @@ def test_edits_add_up_and_a_layout_change_is_built_again(scene_file):
         session.update(first)
         # A shape's geometry and the film's size are no in-place edits: built again, and said so.
         report = session.update({"shapes.ball.radius": 0.5, "film.width": 9})
-        assert report.rebuilt and [step.how for step in report.steps] == ["rebuilt"]
+        assert report.rebuilt and [step.how for step in report.steps] == ["checked", "rebuilt"]
         session.step()
         _same_bits(session, _fresh(scene_file, first | {"shapes.2.radius": 0.5, "film.width": 9}))
         # In-place edits work on the rebuilt scene too.

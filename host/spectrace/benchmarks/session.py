@@ -111,7 +111,7 @@ def _scene_row(path: Path | None, width: int | None, pass_spp: int, repeats: int
                 session.image()
                 costs.append(time.perf_counter() - started)
             update_costs.append(updated - started)
-            how = ", ".join(sorted({step.how for step in report.steps}))
+            how = ", ".join(sorted({step.how for step in report.steps} - {"checked"}))
         session.update(edit)
         edited = session.scene
         started = time.perf_counter()

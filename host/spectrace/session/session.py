@@ -44,6 +44,7 @@ if TYPE_CHECKING:
 IN_PLACE = "in place"  # rewritten device buffers or render parameters; the accumulation restarts
 IMAGE_ONLY = "image only"  # applied to the image of the samples kept
 REBUILT = "rebuilt"  # the scene loaded and built again
+CHECKED = "checked"  # the edited keys checked by the schema and resolved, as the loader does (nothing applied yet)
 
 
 @dataclass(frozen=True)
@@ -321,7 +322,8 @@ class Session:
         with self._lock:
             self._open()
             steps = self._update(changes)
-        return UpdateReport(tuple(steps), any(step.how != IMAGE_ONLY for step in steps), time.perf_counter() - started)
+        restarted = any(step.how in (IN_PLACE, REBUILT) for step in steps)
+        return UpdateReport(tuple(steps), restarted, time.perf_counter() - started)
 
     def _update(self, changes: Mapping[str, object]) -> list[UpdateStep]:
         from spectrace.film.output_options import RenderOutputOptions
@@ -348,11 +350,14 @@ class Session:
                 names=_OUTPUT_KEYS,
             )
         plan = _Plan(self, edits, given) if edits else None
+        if plan is not None:
+            steps.append(UpdateStep("keys", tuple(given.values()), CHECKED, "validated and resolved", 0.0))
+        steps = [replace(step, seconds=time.perf_counter() - started) for step in steps]
         # Everything is checked: from here on it is applied.
         if new_outputs is not None:
             self._outputs = new_outputs
             self._output_values = self._output_values | outputs
-            steps.append(UpdateStep("film", tuple(outputs), IMAGE_ONLY, "colour output", time.perf_counter() - started))
+            steps.append(UpdateStep("film", tuple(outputs), IMAGE_ONLY, "colour output", 0.0))
         if plan is not None:
             steps += plan.apply()
         return steps
