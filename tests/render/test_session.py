@@ -367,3 +367,27 @@ def test_a_closed_session_says_so(scene_file):
     for use in (session.step, session.image, lambda: session.update({"camera.fov": 30.0})):
         with pytest.raises(SpectraceError, match="closed"):
             use()
+
+
+def test_an_environment_map_is_kept_while_another_light_changes(tmp_path):
+    from spectrace.io.exr import write_exr
+
+    rgb = np.random.default_rng(3).uniform(0.0, 0.4, (8, 16, 3)).astype(np.float32)
+    rgb[2, 5] = (30.0, 20.0, 8.0)  # a sun the sampler must find
+    write_exr(tmp_path / "sky.exr", rgb, None, {})
+    path = _write(tmp_path, "")
+    constant = 'type = "constant"\nradiance = { value = 0.05 }'
+    path.write_text(path.read_text().replace(constant, 'type = "envmap"\nfile = "sky.exr"'))
+    with Session(path, pass_spp=SPP) as session:
+        texels, tables = len(session.renderer.buffers.texels), session.renderer.buffers.map_cdf
+        report = session.update({"lights.0.power": 70.0, "shapes.lamp.emitter.scale": 0.5})
+        assert not report.rebuilt
+        # The map was not written again: neither its texels appended nor its sampling tables made anew.
+        assert len(session.renderer.buffers.texels) == texels and session.renderer.buffers.map_cdf is tables
+        session.step()
+        _same_bits(session, _fresh(path, {"lights.0.power": 70.0, "shapes.3.emitter.scale": 0.5}))
+        # The map's own keys write it again.
+        assert not session.update({"lights.1.scale": 2.5, "lights.1.up": [0.3, 1.0, 0.0]}).rebuilt
+        session.step()
+        expected = {"lights.0.power": 70.0, "shapes.3.emitter.scale": 0.5, "lights.1.scale": 2.5}
+        _same_bits(session, _fresh(path, expected | {"lights.1.up": [0.3, 1.0, 0.0]}))

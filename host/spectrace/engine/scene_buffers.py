@@ -113,24 +113,33 @@ class ScenePacking:
     # (emitter index, analytic shape index, surface) of each emitting analytic shape, in light row order
     shape_emitters: list[tuple[int, int, AnalyticSurface]]
     objects: "_ObjectTriangles"
+    area_rows: int  # the light rows of the shapes' emitters, which come first
+    light_spans: list[tuple[int, int]]  # the light rows [start, end) each of the scene's lights wrote
+    light_power: list[float]  # each light row's power estimate, which the rows' pmf is made from
 
 
 def light_table(rows: list[tuple], power: list[float]) -> tuple[np.ndarray, np.ndarray]:
     """The Light rows with the probability of picking each, and the CDF of those probabilities (float64; one dummy
     row and [0, 1] when there are no lights)."""
     lights = np.array(rows, LIGHT_DTYPE) if rows else np.zeros(1, LIGHT_DTYPE)
-    if not rows:
-        return lights, np.array([0.0, 1.0])
+    return lights, light_distribution(lights, power)
+
+
+def light_distribution(lights: np.ndarray, power: list[float]) -> np.ndarray:
+    """Sets the probability of picking each of the Light rows `lights` (`pmf`) from the `power` each emits, and
+    returns the CDF of those probabilities (float64; [0, 1] when there are no lights)."""
+    if not power:
+        return np.array([0.0, 1.0])
     # Next-event estimation picks a light in proportion to an estimate of the power it emits (pbrt-v4's
     # power light sampler); any positive weights would be unbiased, these put samples where the light is.
     weights = np.maximum(np.array(power, float), 0.0)
     if weights.sum() <= 0:
         weights[:] = 1.0
     pmf = weights / weights.sum()
-    lights["pmf"][: len(rows)] = pmf
+    lights["pmf"][: len(power)] = pmf
     cdf = np.concatenate([[0.0], np.cumsum(pmf)])
     cdf[-1] = 1.0
-    return lights, cdf
+    return cdf
 
 
 def _radius_with_instances(
@@ -310,8 +319,12 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     shape_light_rows = area_light.write_shape_rows(
         [(emitters[e], k, surface) for k, (surface, _, e, _) in enumerate(analytic) if e >= 0], out
     )
+    area_rows = len(out.rows)
+    light_spans = []  # the rows each of the scene's lights wrote
     for light in scene.lights:
+        start = len(out.rows)
         light_module(light).write_rows(light, out)
+        light_spans.append((start, len(out.rows)))
     rows, power = out.rows, out.power
 
     lights, cdf = light_table(rows, power)
@@ -374,6 +387,9 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
             triangle_areas=areas,
             emitting=emitting,
             shape_emitters=[(e, k, surface) for k, (surface, _, e, _) in enumerate(analytic) if e >= 0],
+            area_rows=area_rows,
+            light_spans=light_spans,
+            light_power=list(power),
             objects=objects,
         )
     return SceneBuffers(

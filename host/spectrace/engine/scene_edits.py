@@ -14,8 +14,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from spectrace.core.contract import MATERIAL_DTYPE, MEDIUM_DTYPE
-from spectrace.engine.scene_buffers import SceneBuffers, ScenePacking, _radius_with_instances, light_table
+from spectrace.core.contract import LIGHT_DTYPE, MATERIAL_DTYPE, MEDIUM_DTYPE
+from spectrace.engine.scene_buffers import SceneBuffers, ScenePacking, _radius_with_instances, light_distribution
 from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
 from spectrace.lights.base import LightRows
@@ -101,28 +101,51 @@ def repack_media(scene: Scene, buffers: SceneBuffers) -> Edit | None:
     return replace(shared, media=np.array(rows, MEDIUM_DTYPE)), changed | {"media"}
 
 
-def repack_lights(scene: Scene, buffers: SceneBuffers) -> Edit | None:
-    """Every light row written again from `scene`'s emitters and lights, and the distribution lights are picked
-    by."""
+def repack_lights(
+    scene: Scene, buffers: SceneBuffers, lights: set[int] | None = None, emitters: bool = True
+) -> Edit | None:
+    """The light rows of the shapes' emitters (unless not `emitters`) and of the scene's `lights` (their indices;
+    None: all) written again from `scene`, the other rows kept, and the distribution lights are picked by made
+    again. An environment map not written again keeps its texels and sampling tables."""
     packing = _packing(buffers)
+    if not packing.light_power:
+        return buffers, set()
     out = LightRows(
         packing.table, packing.scene_radius, DEVICE_LIGHTS.codes, packing.textures.texel_chunks, packing.textures
     )
-    emitters = [shape.emitter for shape in scene.shapes if shape.emitter is not None]
-    emitting = area_light.write_rows(emitters, packing.triangle_emitter, packing.triangle_areas, out)
-    area_light.write_shape_rows([(emitters[e], k, surface) for e, k, surface in packing.shape_emitters], out)
-    for light in scene.lights:
-        light_module(light).write_rows(light, out)
-    if (
-        len(out.rows) != buffers.light_count
-        or out.environment_light != buffers.environment_light
-        or not np.array_equal(emitting, packing.emitting)
-    ):
+    rows = buffers.lights.copy()
+    power = list(packing.light_power)
+    if emitters:
+        shapes = [shape.emitter for shape in scene.shapes if shape.emitter is not None]
+        emitting = area_light.write_rows(shapes, packing.triangle_emitter, packing.triangle_areas, out)
+        area_light.write_shape_rows([(shapes[e], k, surface) for e, k, surface in packing.shape_emitters], out)
+        if len(out.rows) != packing.area_rows or not np.array_equal(emitting, packing.emitting):
+            return None
+        if out.rows:
+            rows[: packing.area_rows] = np.array(out.rows, LIGHT_DTYPE)
+            power[: packing.area_rows] = out.power
+    if len(scene.lights) != len(packing.light_spans):
         return None
-    lights, cdf = light_table(out.rows, out.power)
+    map_cdf = buffers.map_cdf
+    for i, light in enumerate(scene.lights):
+        if lights is not None and i not in lights:
+            continue
+        start, end = packing.light_spans[i]
+        out.rows, out.power, out.environment_light = [], [], -1
+        light_module(light).write_rows(light, out)
+        written = start + out.environment_light if out.environment_light >= 0 else -1
+        was = buffers.environment_light if start <= buffers.environment_light < end else -1
+        if len(out.rows) != end - start or written != was:
+            return None
+        rows[start:end] = np.array(out.rows, LIGHT_DTYPE)
+        power[start:end] = out.power
+        if out.environment_light >= 0:
+            map_cdf = out.map_cdf
+    cdf = light_distribution(rows, power)
+    packing.light_power = power
     shared, changed = _shared(buffers, packing)
-    edited = replace(shared, lights=lights, light_cdf=cdf.astype(np.float32), map_cdf=out.map_cdf)
-    return edited, changed | {"lights", "light_cdf", "map_cdf"}
+    edited = replace(shared, lights=rows, light_cdf=cdf.astype(np.float32), map_cdf=map_cdf)
+    return edited, changed | {"lights", "light_cdf"} | ({"map_cdf"} if map_cdf is not buffers.map_cdf else set())
 
 
 def place_instances(scene: Scene, buffers: SceneBuffers) -> Edit | None:

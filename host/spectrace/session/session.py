@@ -426,6 +426,8 @@ class _Plan:
         self.given = given
         self.scene = session.scene
         self.kinds: dict[str, list[str]] = {}  # kind -> the keys (as given) that ask for it
+        self.new_materials: dict[str, Any] = {}  # the materials resolved again, by name
+        self.light_edits: tuple[set[int] | None, bool] = (None, True)  # the lights written again (None: all), emitters?
         data = copy.deepcopy(session._data)
         source = session._source
         if source is None:
@@ -506,6 +508,7 @@ class _Plan:
             scene = replace(scene, shapes=shapes)
         if lights or emitters:
             scene = self._lights(scene, spec, resolver, lights, emitters, source)
+        self.light_edits = (None, True) if "shading" in self.kinds else (lights, bool(emitters))
         if instances:
             placed = list(scene.instances)
             for i in instances:
@@ -659,7 +662,7 @@ class _Plan:
         for kind, edit, detail in (
             ("materials", scene_edits.repack_materials, "material rows re-packed"),
             ("media", scene_edits.repack_media, "medium rows re-packed"),
-            ("lights", scene_edits.repack_lights, "light rows and their distribution re-packed"),
+            ("lights", self._repack_lights, "light rows and their distribution re-packed"),
             ("instances", scene_edits.place_instances, "top level of the BVH rebuilt"),
         ):
             if kind not in kinds and not (shading and kind in ("materials", "lights")):
@@ -696,6 +699,12 @@ class _Plan:
         self._commit()
         return steps
 
+    def _repack_lights(self, scene: Scene, buffers: SceneBuffers):
+        from spectrace.engine import scene_edits
+
+        lights, emitters = self.light_edits
+        return scene_edits.repack_lights(scene, buffers, lights, emitters)
+
     def _check(self, buffers: SceneBuffers) -> None:
         """What a renderer refuses of a scene it is built for, asked of the scene edited in place."""
         from spectrace.core import limits
@@ -718,4 +727,4 @@ class _Plan:
 
     def _commit(self) -> None:
         self.session._data = self.data
-        self.session._materials.update(getattr(self, "new_materials", {}))
+        self.session._materials.update(self.new_materials)
