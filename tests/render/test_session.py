@@ -253,6 +253,18 @@ def test_a_light_more_or_a_new_feature_is_built_again(scene_file):
         _same_bits(session, _fresh(scene_file, {"materials.grey.type": "plastic", "materials.grey.roughness": 0.1}))
 
 
+def test_the_films_observer_is_built_again_over_the_same_scene(scene_file):
+    with Session(scene_file, pass_spp=SPP) as session:
+        buffers = session.renderer.buffers
+        report = session.update({"film.observer": "CIE 1964 10°", "film.observers": ["CIE 1931 2°"]})
+        assert [(step.what, step.how) for step in report.steps][-1] == ("film", "rebuilt")
+        assert session.renderer.buffers is buffers  # the BVH and every scene buffer kept
+        session.step()
+        expected = _fresh(scene_file, {"film.observer": "CIE 1964 10°", "film.observers": ["CIE 1931 2°"]})
+        _same_bits(session, expected)
+        np.testing.assert_array_equal(session.image().channels["cie1931_2.Y"], expected.channels["cie1931_2.Y"])
+
+
 def test_image_settings_keep_the_samples(scene_file):
     with Session(scene_file, pass_spp=SPP) as session:
         session.step()

@@ -84,6 +84,8 @@ class UpdateReport:
 
 # Keys of the film that are the image's, not the scene file's (render options there).
 _OUTPUT_KEYS = ("film.colour_space", "film.white_balance", "film.adaptation")
+# Keys of [film] that change what the film responds to (its observers and sensor) and nothing of the scene's buffers.
+_RESPONSE_KEYS = ("observer", "observers", "sensor", "sensor_white")
 # Tables of arrays whose entries a key may name by their `name`.
 _ARRAYS = ("shapes", "lights", "instances")
 
@@ -457,6 +459,8 @@ class _Plan:
                 self._add("exposure", key)
             elif key == "sampler.seed":
                 self._add("seed", key)
+            elif head == "film" and len(parts) >= 2 and parts[1] in _RESPONSE_KEYS:
+                self._add("film response", key)
             elif head == "materials" and len(parts) > 2:
                 materials.add(self._material_name(key, data))
                 self._add("materials", key)
@@ -497,6 +501,10 @@ class _Plan:
             scene = replace(scene, exposure=spec.film.exposure)
         if "seed" in self.kinds:
             scene = replace(scene, seed=spec.sampler.seed)
+        if "film response" in self.kinds:
+            from spectrace.scene.loader import _film_response
+
+            scene = replace(scene, film_response=_film_response(spec.film, resolver))
         if materials:
             scene = self._materials(scene, spec, resolver, materials, source)
         if interiors:
@@ -686,7 +694,12 @@ class _Plan:
         if "exposure" in kinds:
             steps.append(UpdateStep("film", tuple(kinds["exposure"]), IMAGE_ONLY, "exposure", 0.0))
         started = time.perf_counter()
-        if not renderer.program_fits(self.scene, buffers):
+        if "film response" in kinds:  # the film's table and channels are the program's: both made again
+            session._renderer = session._renderer_of(self.scene, buffers)
+            detail = "the film and its program built again over the same scene buffers"
+            seconds = time.perf_counter() - started
+            steps.append(UpdateStep("film", tuple(kinds["film response"]), REBUILT, detail, seconds))
+        elif not renderer.program_fits(self.scene, buffers):
             session._renderer = session._renderer_of(self.scene, buffers)
             detail = "the scene's features changed: program and device buffers built again"
             steps.append(UpdateStep("program", every_key, REBUILT, detail, time.perf_counter() - started))
