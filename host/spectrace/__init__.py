@@ -50,6 +50,7 @@ _LAZY = {
         ["Adaptation", "ColourSpace", "WhiteBalance", "parse_white_balance"], "spectrace.film.colour_output"
     ),
     "SpectraceError": "spectrace.errors",
+    "Session": "spectrace.session",
     **dict.fromkeys(["denoise", "directly_seen_emission"], "spectrace.denoising"),
     "Image": "spectrace.film.image",
     "PixelFilter": "spectrace.pixel_filters",
@@ -83,6 +84,7 @@ _names_getattr, _names_dir = lazy_names(
     public=[
         "load_scene",
         "render",
+        "Session",
         "Image",
         *MODEL_NAMES,
         "PixelFilter",

@@ -7,7 +7,6 @@ like the same scene written as TOML. docs/python-api.md shows it in use.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import contextmanager
@@ -26,7 +25,6 @@ from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.lights.base import vector3
-from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import (
     AreaEmitter,
     Instance,
@@ -266,30 +264,6 @@ globals().update({m.API_NAME: m.make for m in lights.LIGHTS.values() if m.API_NA
 # ---------------------------------------------------------------- rendering
 
 
-def _check_camera(scene: Scene) -> None:
-    camera = scene.camera
-    forward = np.subtract(camera.target, camera.origin)
-    if not np.linalg.norm(forward) > 0:
-        raise SpectraceError("camera target equals origin", where="camera.target")
-    if np.linalg.norm(np.cross(forward, camera.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
-        raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where="camera.up")
-    from spectrace.cameras import CAMERAS
-    from spectrace.cameras.shared import clip_problem
-
-    if problem := clip_problem(camera):
-        raise SpectraceError(problem, where="camera.far_clip")
-    if camera.type not in CAMERAS:
-        raise SpectraceError(f"unknown camera type {camera.type!r}; one of {', '.join(CAMERAS)}", where="camera.type")
-    # The camera's numbers that are fields of the model (a thin lens's f_number is resolved into its aperture).
-    fields = {field.name for field in dataclasses.fields(camera)}
-    for parameter in CAMERAS[camera.type].PARAMETERS:
-        name = parameter.api_name or parameter.name
-        if parameter.type == "float" and name in fields and (value := getattr(camera, name)) is not None:
-            parameter.check(value, where=f"camera.{parameter.name}")
-    if not isinstance(scene.pixel_filter, PixelFilter):
-        raise SpectraceError("expected a spectrace.PixelFilter", where="pixel_filter")
-
-
 @contextmanager
 def _no_bar(callback: Callable[[int, int], None] | None):
     yield callback
@@ -379,9 +353,9 @@ def render(
         raise SpectraceError(
             f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) reads a file)"
         )
-    from spectrace.engine.job import RenderJob
+    from spectrace.engine.job import RenderJob, check_camera
 
-    _check_camera(scene)
+    check_camera(scene)
     job = RenderJob.make(
         scene,
         spp=spp,
@@ -402,7 +376,11 @@ def render(
     elif job.display_server is not None:
         image = _render_shown(job, progress)
     else:
-        image = render_passes(job.renderer(), pass_spp=job.pass_spp, progress=progress)
+        from spectrace.session import Session
+
+        # One render is a session's first passes: the same build, kept open for nothing more.
+        with Session.for_job(job) as session:
+            image = render_passes(session.renderer, pass_spp=job.pass_spp, progress=progress)
     return job.finish(image)
 
 
@@ -411,17 +389,19 @@ def _render_shown(job: RenderJob, progress: ProgressOption) -> Image:
     import warnings
 
     from spectrace.engine.display_stream import RenderDisplay
+    from spectrace.session import Session
 
     name = job.scene.source.stem if job.scene.source is not None else "spectrace"
-    renderer = job.renderer()
-    display = RenderDisplay(job, name, lambda message: warnings.warn(message, RuntimeWarning, stacklevel=1))
-    try:
-        image = render_passes(
-            renderer, pass_spp=job.pass_spp, progress=progress, each_pass=lambda: display.after_pass(renderer)
-        )
-    except BaseException:
-        display.close()
-        raise
+    with Session.for_job(job) as session:
+        renderer = session.renderer
+        display = RenderDisplay(job, name, lambda message: warnings.warn(message, RuntimeWarning, stacklevel=1))
+        try:
+            image = render_passes(
+                renderer, pass_spp=job.pass_spp, progress=progress, each_pass=lambda: display.after_pass(renderer)
+            )
+        except BaseException:
+            display.close()
+            raise
     display.finish(image)
     return image
 

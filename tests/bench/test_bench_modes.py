@@ -6,10 +6,13 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from cli_runner import run_spectrace
+
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
 pytestmark = pytest.mark.subprocess
 
@@ -245,3 +248,30 @@ def test_denoise_mode_reports_what_it_rendered():
     for row in result["rows"]:
         for label in ("equal_time", "whole", "exchanged", "denoised"):
             assert row[f"ratio_{label}"] == pytest.approx(row["noisy"] / row[label])
+
+
+@pytest.mark.slow
+def test_session_mode_times_each_kind_of_edit_done_in_place():
+    out = _bench(
+        "session", "--scene", str(SCENES / "cornell_box.toml"), "--width", "12", "--repeats", "2", "--no-mitsuba"
+    )["session"]
+    box, instanced = out["rows"]
+    assert box["scene"] == "cornell_box.toml" and (box["width"], box["height"]) == (12, 12)
+    assert {kind: cost["how"] for kind, cost in box["kinds"].items()} == {
+        "camera move": "in place",
+        "one reflectance": "in place",
+        "one light's power": "in place",
+        "exposure": "image only",
+    }
+    assert instanced["kinds"]["instance transform"]["how"] == "in place"
+    assert all(cost["rebuild_beyond_pass_seconds"] > 0 for row in out["rows"] for cost in row["kinds"].values())
+
+
+@pytest.mark.slow
+@pytest.mark.peer
+def test_session_mode_times_mitsubas_traverse_and_update():
+    _llvm_variant_or_skip()
+    out = _bench("session", "--scene", str(SCENES / "cornell_box.toml"), "--width", "8", "--repeats", "1")["session"]
+    mitsuba = out["rows"][-1]
+    assert mitsuba["scene"].startswith("Mitsuba 3 cornell_box")
+    assert set(mitsuba["kinds"]) == {"camera move", "one reflectance", "one light's power", "instance transform"}

@@ -397,3 +397,31 @@ def kernel_shapes_bench(
         scene, size or RENDER_DEFAULT_SIZES, spp, max_depth, device, kernel_shape_variants(), log=_log
     )
     _emit("kernel_shapes", results, lambda: [kernel_shape_table(results)], as_json, width=150)
+
+
+@bench_app.command("session")
+def session_bench(
+    scene: Annotated[
+        list[Path] | None,
+        typer.Option(help="Scene file(s), repeatable (default: the living room, the Cornell box, the teapot)."),
+    ] = None,
+    width: Annotated[
+        int | None, typer.Option(help="Film width in pixels, the aspect kept (default: the scene's).")
+    ] = None,
+    pass_spp: Annotated[int, typer.Option(help="Samples per pixel of each pass.", min=1)] = 1,
+    repeats: Annotated[int, typer.Option(help="Edits of each kind timed (the median counts).", min=1)] = 5,
+    mitsuba: Annotated[bool, typer.Option(help="Time Mitsuba 3's traverse/update on its Cornell box.")] = True,
+    device: DeviceOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """What an edit of a live session costs beyond the first pass after it, by kind of edit, against building the
+    edited scene again and against Mitsuba 3's traverse/update (docs/python-api.md, "Live sessions")."""
+    if width is not None:
+        _check([width])
+    for path in scene or []:
+        if not path.is_file():
+            raise SpectraceError("no such scene file", where=str(path))
+    from spectrace.benchmarks.session import run_session_bench, session_tables
+
+    result = run_session_bench(scene, width, pass_spp, repeats, device, mitsuba, log=_log)
+    _emit("session", result, lambda: session_tables(result), as_json, width=200)

@@ -11,6 +11,7 @@ messages name the argument themselves).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -111,6 +112,36 @@ def _keeping_aspect(scene: Scene, width: int | None, height: int | None) -> tupl
     if width is None and isinstance(height, int) and height > 0:
         return max(1, round(height * own_width / own_height)), height
     return width, height
+
+
+def check_camera(scene: Scene) -> None:
+    """Refuses, naming the key, a camera a Scene built in Python may hold that a scene file's loader would refuse
+    (its own checks name the file too): target at the origin, up along the view, clips, type, numbers out of
+    range, and a pixel filter that is none."""
+    import numpy as np
+
+    from spectrace.cameras import CAMERAS
+    from spectrace.cameras.shared import clip_problem
+    from spectrace.pixel_filters import PixelFilter
+
+    camera = scene.camera
+    forward = np.subtract(camera.target, camera.origin)
+    if not np.linalg.norm(forward) > 0:
+        raise SpectraceError("camera target equals origin", where="camera.target")
+    if np.linalg.norm(np.cross(forward, camera.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(camera.up):
+        raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where="camera.up")
+    if problem := clip_problem(camera):
+        raise SpectraceError(problem, where="camera.far_clip")
+    if camera.type not in CAMERAS:
+        raise SpectraceError(f"unknown camera type {camera.type!r}; one of {', '.join(CAMERAS)}", where="camera.type")
+    # The camera's numbers that are fields of the model (a thin lens's f_number is resolved into its aperture).
+    fields = {field.name for field in dataclasses.fields(camera)}
+    for parameter in CAMERAS[camera.type].PARAMETERS:
+        name = parameter.api_name or parameter.name
+        if parameter.type == "float" and name in fields and (value := getattr(camera, name)) is not None:
+            parameter.check(value, where=f"camera.{parameter.name}")
+    if not isinstance(scene.pixel_filter, PixelFilter):
+        raise SpectraceError("expected a spectrace.PixelFilter", where="pixel_filter")
 
 
 @dataclass(frozen=True)

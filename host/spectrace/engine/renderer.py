@@ -2,7 +2,7 @@
 
 import os
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -24,6 +24,7 @@ from spectrace.film.setup import FilmSetup
 from spectrace.film.state import dropped_samples_problem
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.integrators import INTEGRATORS, scene_settings_problem
+from spectrace.integrators.base import PixelPasses
 from spectrace.scene.model import SAMPLER_TYPES, Scene
 
 ProgressCallback = Callable[[int, int], None]  # (samples done, samples total)
@@ -128,10 +129,8 @@ class Renderer:
             self.device,
         )
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
-        if specialise:
-            hides = scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes)
-            defines |= scene_feature_defines(self.buffers, hides)
-            defines |= camera_feature_defines(render_params(scene, self.buffers, 0, 0))
+        self.feature_defines = self._feature_defines(scene, self.buffers)
+        defines |= self.feature_defines
         defines |= film.defines()
         defines |= self.integrator.defines(scene)
         self.program = self.device.build_program(
@@ -150,6 +149,40 @@ class Renderer:
         # same ids either way and adds the same bits.
         self.pixel_range = (0, self.film.pixel_count)
         self.passes = self.integrator.passes(self, self.KERNEL_SHAPE, spectral_bins)
+
+    def _feature_defines(self, scene: Scene, buffers: SceneBuffers) -> dict[str, int]:
+        """The defines of the scene's features its program is specialised to (none for the general kernels)."""
+        if not self.specialised:
+            return {}
+        hides = scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes)
+        return scene_feature_defines(buffers, hides) | camera_feature_defines(render_params(scene, buffers, 0, 0))
+
+    def program_fits(self, scene: Scene, buffers: SceneBuffers) -> bool:
+        """Whether this renderer's program renders `scene` (an edit of its own) with `buffers`: the same features."""
+        return self._feature_defines(scene, buffers) == self.feature_defines
+
+    @translate_opencl_errors("updating the scene")
+    def replace_scene(self, scene: Scene, buffers: SceneBuffers, changed: Iterable[str]) -> None:
+        """Render `scene` from now on, whose buffers differ from those uploaded in `changed` (names among
+        SCENE_KERNEL_BUFFERS) alone: each rewritten where its size is the same, replaced where not. The film and
+        the passes start again."""
+        names = list(SCENE_KERNEL_BUFFERS)
+        replaced = False
+        for name in changed:
+            i = names.index(name)
+            array = np.ascontiguousarray(getattr(buffers, name))
+            if array.nbytes == self._scene[i].size:
+                cl.enqueue_copy(self.device.queue, self._scene[i], array)
+            else:
+                flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+                self._scene[i] = cl.Buffer(self.device.context, flags, hostbuf=array)
+                replaced = True
+        self.scene, self.buffers = scene, buffers
+        # A per-pixel integrator's passes read the scene's buffers at each launch; others may have set their
+        # kernels' arguments to the buffers replaced or kept state derived from the scene.
+        if replaced or not isinstance(self.passes, PixelPasses):
+            self.passes = self.integrator.passes(self, self.KERNEL_SHAPE, self.spectral_bins)
+        self.reset()
 
     def _work_group(self) -> int | None:
         return render_work_group(self.device)

@@ -91,6 +91,71 @@ class SceneBuffers:
     # Surfaces without material and without a medium inside (lights seen through, Mitsuba's null bsdf): visibility
     # queries must cross them as they cross media's index-matched boundaries (kernels/scene.cl)
     null_surfaces: bool = False
+    # What an edit of the scene's materials, lights or instance placements needs to re-pack those rows alone
+    # (spectrace.engine.scene_edits); kept only when asked (build_scene_buffers(keep_packing=True)), never uploaded.
+    packing: "ScenePacking | None" = None
+
+
+@dataclass
+class ScenePacking:
+    """The build's state that the shading rows and the top level depend on: the spectrum table and texture rows they
+    were appended to (so a re-packed row reuses what is unchanged and appends only what is new), the geometry's
+    share of the light rows, and the instanced objects (their BVHs, built once)."""
+
+    table: SpectrumTable
+    textures: TextureRows
+    scene_radius: float
+    own_radius: float  # the scene radius of the shapes without the instances
+    own_box: tuple[np.ndarray, np.ndarray] | None  # the box of the shapes without the instances (None: no shapes)
+    triangle_emitter: np.ndarray  # each triangle's index among the emitting shapes, or -1 (BVH leaf order)
+    triangle_areas: np.ndarray
+    emitting: np.ndarray  # the emitting triangles, in light row order
+    # (emitter index, analytic shape index, surface) of each emitting analytic shape, in light row order
+    shape_emitters: list[tuple[int, int, AnalyticSurface]]
+    objects: "_ObjectTriangles"
+    area_rows: int  # the light rows of the shapes' emitters, which come first
+    light_spans: list[tuple[int, int]]  # the light rows [start, end) each of the scene's lights wrote
+    light_power: list[float]  # each light row's power estimate, which the rows' pmf is made from
+
+
+def light_table(rows: list[tuple], power: list[float]) -> tuple[np.ndarray, np.ndarray]:
+    """The Light rows with the probability of picking each, and the CDF of those probabilities (float64; one dummy
+    row and [0, 1] when there are no lights)."""
+    lights = np.array(rows, LIGHT_DTYPE) if rows else np.zeros(1, LIGHT_DTYPE)
+    return lights, light_distribution(lights, power)
+
+
+def light_distribution(lights: np.ndarray, power: list[float]) -> np.ndarray:
+    """Sets the probability of picking each of the Light rows `lights` (`pmf`) from the `power` each emits, and
+    returns the CDF of those probabilities (float64; [0, 1] when there are no lights)."""
+    if not power:
+        return np.array([0.0, 1.0])
+    # Next-event estimation picks a light in proportion to an estimate of the power it emits (pbrt-v4's
+    # power light sampler); any positive weights would be unbiased, these put samples where the light is.
+    weights = np.maximum(np.array(power, float), 0.0)
+    if weights.sum() <= 0:
+        weights[:] = 1.0
+    pmf = weights / weights.sum()
+    lights["pmf"][: len(power)] = pmf
+    cdf = np.concatenate([[0.0], np.cumsum(pmf)])
+    cdf[-1] = 1.0
+    return cdf
+
+
+def _radius_with_instances(
+    own_radius: float, own_box: tuple[np.ndarray, np.ndarray] | None, instance_boxes: np.ndarray | None
+) -> float:
+    """The scene radius the lights are placed by: the shapes' own, grown to half the diagonal of the box that also
+    holds the instances' world boxes."""
+    radius = own_radius
+    if instance_boxes is not None:
+        lo, hi = instance_boxes[:, 0].min(axis=0), instance_boxes[:, 1].max(axis=0)
+        if own_box is not None:
+            lo, hi = np.minimum(lo, own_box[0]), np.maximum(hi, own_box[1])
+            radius = max(own_radius, 0.5 * float(np.linalg.norm(hi - lo)))
+        else:
+            radius = 0.5 * float(np.linalg.norm(hi - lo))
+    return max(radius, 1e-6)
 
 
 def _unit_normals(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
@@ -108,7 +173,9 @@ def _corner_normals(parts: list[np.ndarray | None], counts: list[int]) -> np.nda
     return np.concatenate([np.full((n, 3, 3), np.nan) if part is None else part for part, n in zip(parts, counts)])
 
 
-def build_scene_buffers(scene: Scene) -> SceneBuffers:
+def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffers:
+    """The scene's device buffers; `keep_packing`: also keep what re-packing its shading rows and its top level
+    takes (SceneBuffers.packing), as a live session does."""
     response = scene.film_response
     # A film range of its own puts every spectrum on the film's grid (refusing those that do not reach it).
     table = (
@@ -215,20 +282,12 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         table,
         textures,
     )
-    if objects.instance_boxes is not None:
-        boxes = objects.instance_boxes
-        corners = [boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)]
-        if len(v0) or analytic:
-            old = scene_radius
-            lo = np.minimum(corners[0], bvh.nodes[0]["bmin"] if len(v0) else corners[0])
-            hi = np.maximum(corners[1], bvh.nodes[0]["bmax"] if len(v0) else corners[1])
-            if analytic:
-                lo = np.minimum(lo, shape_bvh.nodes[0]["bmin"])
-                hi = np.maximum(hi, shape_bvh.nodes[0]["bmax"])
-            scene_radius = max(old, 0.5 * float(np.linalg.norm(hi - lo)))
-        else:
-            scene_radius = 0.5 * float(np.linalg.norm(corners[1] - corners[0]))
-    scene_radius = max(scene_radius, 1e-6)
+    own_radius = scene_radius
+    roots = ([bvh.nodes[0]] if len(v0) else []) + ([shape_bvh.nodes[0]] if analytic else [])
+    own_box = (
+        (np.min([r["bmin"] for r in roots], axis=0), np.max([r["bmax"] for r in roots], axis=0)) if roots else None
+    )
+    scene_radius = _radius_with_instances(own_radius, own_box, objects.instance_boxes)
 
     vertices = np.zeros((max(len(v0), 1), 3, 4), np.float32)
     vertices[: len(v0), 0, :3], vertices[: len(v0), 1, :3], vertices[: len(v0), 2, :3] = v0, v1, v2
@@ -260,25 +319,18 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
     shape_light_rows = area_light.write_shape_rows(
         [(emitters[e], k, surface) for k, (surface, _, e, _) in enumerate(analytic) if e >= 0], out
     )
+    area_rows = len(out.rows)
+    light_spans = []  # the rows each of the scene's lights wrote
     for light in scene.lights:
+        start = len(out.rows)
         light_module(light).write_rows(light, out)
+        light_spans.append((start, len(out.rows)))
     rows, power = out.rows, out.power
 
-    # Next-event estimation picks a light in proportion to an estimate of the power it emits (pbrt-v4's
-    # power light sampler); any positive weights would be unbiased, these put samples where the light is.
-    lights = np.array(rows, LIGHT_DTYPE) if rows else np.zeros(1, LIGHT_DTYPE)
+    lights, cdf = light_table(rows, power)
     light_index = np.full(len(v0), -1, np.int32)
     if rows:
-        weights = np.maximum(np.array(power, float), 0.0)
-        if weights.sum() <= 0:
-            weights[:] = 1.0
-        pmf = weights / weights.sum()
-        lights["pmf"][: len(rows)] = pmf
         light_index[emitting] = np.arange(len(emitting), dtype=np.int32)
-        cdf = np.concatenate([[0.0], np.cumsum(pmf)])
-        cdf[-1] = 1.0
-    else:
-        cdf = np.array([0.0, 1.0])
     triangle_info = np.zeros(max(len(v0) + len(analytic), 1), TRIANGLE_INFO_DTYPE)
     triangle_info["material"][: len(v0)] = tri_material
     triangle_info["light"][: len(v0)] = light_index
@@ -320,6 +372,26 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         table.add(Spectrum.zeros())
     nodes, nodes_seconds, nodes_peak = _measured(lambda: device_nodes(bvh, vertices.reshape(-1, 4)))
     instance_rows, instance_nodes = objects.device_buffers(vertices.reshape(-1, 4))
+    texels = np.concatenate(out.texel_chunks)
+    packing = None
+    if keep_packing:
+        out.texel_chunks[:] = [texels]  # one chunk from here on: what an edit appends follows it
+        objects.drop_triangles()
+        packing = ScenePacking(
+            table=table,
+            textures=textures,
+            scene_radius=scene_radius,
+            own_radius=own_radius,
+            own_box=own_box,
+            triangle_emitter=tri_emitter,
+            triangle_areas=areas,
+            emitting=emitting,
+            shape_emitters=[(e, k, surface) for k, (surface, _, e, _) in enumerate(analytic) if e >= 0],
+            area_rows=area_rows,
+            light_spans=light_spans,
+            light_power=list(power),
+            objects=objects,
+        )
     return SceneBuffers(
         bvh=bvh,
         nodes=nodes,
@@ -331,7 +403,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         light_count=len(rows),
         environment_light=out.environment_light,
         light_cdf=cdf.astype(np.float32),
-        texels=np.concatenate(out.texel_chunks),
+        texels=texels,
         triangle_uvs=triangle_uvs.reshape(-1, 2),
         triangle_normals=triangle_normals.reshape(-1, 4),
         map_cdf=out.map_cdf,
@@ -352,6 +424,7 @@ def build_scene_buffers(scene: Scene) -> SceneBuffers:
         instance_nodes=instance_nodes,
         instanced_triangle_count=objects.count,
         instanced_shape_count=objects.shape_count,
+        packing=packing,
     )
 
 
@@ -480,10 +553,30 @@ class _ObjectTriangles:
         self.uvs = np.concatenate(parts["uvs"]) if parts["uvs"] else np.zeros((0, 3, 2), np.float32)
         self.normals = np.concatenate(parts["normals"]) if parts["normals"] else np.zeros((0, 3, 4), np.float32)
         self.info = np.concatenate(parts["info"]) if parts["info"] else np.zeros(0, TRIANGLE_INFO_DTYPE)
+        self.object_boxes = boxes
+        # Each object's node buffer, its leaves pointing at its triangles' slots, and its offset in float4s after
+        # the top level (-1: no triangles); built once, as a new placement of the instances leaves them as they are.
+        self._object_nodes: tuple[list[np.ndarray], list[int]] | None = None
+        self.place(instances)
+
+    def drop_triangles(self) -> None:
+        """Let the objects' triangles and BVHs go once they are in the scene's buffers: a new placement needs only
+        their boxes and node buffers."""
+        empty = np.zeros((0, 3, 4), np.float32)
+        self.vertices, self.normals, self.uvs = empty, empty, np.zeros((0, 3, 2), np.float32)
+        self.info = np.zeros(0, TRIANGLE_INFO_DTYPE)
+        if self._object_nodes is not None:
+            self.bvhs = [None] * len(self.bvhs)
+
+    def place(self, instances: list[Instance]) -> None:
+        """Take `instances` (the same objects as before, in the same order, each with its own map) as the
+        placements: their maps and world boxes."""
+        self.instances = instances
         self.instance_boxes: np.ndarray | None = None
         self.matrices = np.zeros((0, 4, 4))
         if instances:
             # Each instance's world box: the hull of its object's box corners under its map.
+            boxes = self.object_boxes
             matrices = np.array([np.asarray(instance.to_world, np.float64) for instance in instances])
             lo, hi = (np.array([boxes[k][side] for k in self.object_of]) for side in (0, 1))
             choose = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)  # (8, 3)
@@ -502,20 +595,26 @@ class _ObjectTriangles:
         assert boxes is not None
         top = build_bvh(boxes[:, 0], boxes[:, 1], boxes[:, 0], max_leaf_size=2)
         chunks = [top.nodes.view(np.float32).reshape(-1)]
-        offsets = []
-        float4s = len(chunks[0]) // 4
-        for bvh, first in zip(self.bvhs, self.first):
-            if bvh is None:
-                offsets.append(-1)  # no triangles: the kernels meet its shapes only
-                continue
-            placed = bvh.nodes.copy()
-            leaves = placed["count"] > 0
-            placed["left_first"][leaves] += first
-            shifted = BVH(placed, bvh.prim_order, bvh.depth, bvh.sah_cost, bvh.build_seconds)
-            buffer = np.ascontiguousarray(device_nodes(shifted, triangle_vertices)).view(np.float32).reshape(-1)
-            offsets.append(float4s)
-            chunks.append(buffer)
-            float4s += len(buffer) // 4
+        top_float4s = len(chunks[0]) // 4
+        if self._object_nodes is None:
+            object_chunks, object_offsets, float4s = [], [], 0
+            for bvh, first in zip(self.bvhs, self.first):
+                if bvh is None:
+                    object_offsets.append(-1)  # no triangles: the kernels meet its shapes only
+                    continue
+                placed = bvh.nodes.copy()
+                leaves = placed["count"] > 0
+                placed["left_first"][leaves] += first
+                shifted = BVH(placed, bvh.prim_order, bvh.depth, bvh.sah_cost, bvh.build_seconds)
+                buffer = np.ascontiguousarray(device_nodes(shifted, triangle_vertices)).view(np.float32).reshape(-1)
+                object_offsets.append(float4s)
+                object_chunks.append(buffer)
+                float4s += len(buffer) // 4
+            self._object_nodes = (object_chunks, object_offsets)
+        object_chunks, object_offsets = self._object_nodes
+        chunks += object_chunks
+        offsets = [offset if offset < 0 else offset + top_float4s for offset in object_offsets]
+        float4s = sum(len(chunk) for chunk in chunks) // 4
         if float4s > np.iinfo(np.int32).max:
             raise SpectraceError("the instanced objects' BVHs are too large for 32-bit offsets")
         self.seconds += perf_counter() - started

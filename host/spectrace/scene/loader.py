@@ -177,6 +177,22 @@ def set_key_path(data: dict, dotted: str, value: object, where: str) -> None:
 
 
 def read_scene_spec(path: Path, overrides: dict[str, object] | None = None) -> schema.SceneSpec:
+    data = read_scene_data(path)
+    for dotted, value in (overrides or {}).items():
+        set_key_path(data, dotted, value, where=f"{path}: {dotted}")
+    return validate_scene_data(path, data)
+
+
+def validate_scene_data(path: Path, data: dict) -> schema.SceneSpec:
+    """The spec of a scene file's parsed TOML (`read_scene_data`, perhaps edited); errors name the file and key."""
+    try:
+        return schema.SceneSpec.model_validate(data)
+    except ValidationError as exc:
+        raise _validation_error(path, exc, data) from None
+
+
+def read_scene_data(path: Path) -> dict:
+    """A scene file's parsed TOML, not yet validated."""
     regular_file(path, what="scene file")
     try:
         # utf-8-sig: editors on Windows may start the file with a byte order mark, which TOML does not allow.
@@ -201,12 +217,7 @@ def read_scene_spec(path: Path, overrides: dict[str, object] | None = None) -> s
             f"values nested more than {MAX_NESTING} levels deep (a scene needs only a few)",
             where=f"{path}: {key_path(location[:3])}",
         )
-    for dotted, value in (overrides or {}).items():
-        set_key_path(data, dotted, value, where=f"{path}: {dotted}")
-    try:
-        return schema.SceneSpec.model_validate(data)
-    except ValidationError as exc:
-        raise _validation_error(path, exc, data) from None
+    return data
 
 
 class _Resolver:
@@ -220,6 +231,9 @@ class _Resolver:
         self.named_textures: dict[str, object] = {}
         self.named_materials: dict[str, Material] = {}
         self.resolving_materials: list[str] = []  # the names being resolved: a mix naming one of them is a cycle
+        self.texture_cache: dict[tuple[str, str], object] | None = None  # see texture_of
+        # id(object) -> (the object, kept so that its id stays its own; its box's corners)
+        self.object_corners: dict[int, tuple[InstancedObject, np.ndarray]] = {}
 
     def where(self, key: str) -> str:
         return f"{self.path}: {key}"
@@ -296,7 +310,7 @@ class _Resolver:
                     where=self.where(f"{key}.texture"),
                 )
         else:
-            texture = TEXTURES[spec.texture].from_spec(spec, self, key)
+            texture = self.texture_of(spec.texture, spec, key)
         assert is_texture(texture)
         check_texture_values(texture, kind, self.where(key))
         return texture
@@ -310,6 +324,17 @@ class _Resolver:
         check_texture_values(texture, "float", self.where(key), upper=parameter.range.high)
         return texture
 
+    def texture_of(self, type_name: str, spec, key: str):
+        """The texture of a validated table: made from it, or, where the resolver keeps `texture_cache` (a live
+        session's, whose edits resolve materials again), the one made before from the same table, so that an edit
+        elsewhere neither reads its file nor stores its texels again."""
+        if self.texture_cache is None:
+            return TEXTURES[type_name].from_spec(spec, self, key)
+        cache_key = (type_name, spec.model_dump_json())
+        if cache_key not in self.texture_cache:
+            self.texture_cache[cache_key] = TEXTURES[type_name].from_spec(spec, self, key)
+        return self.texture_cache[cache_key]
+
     def named_texture(self, name: str, key: str):
         if name in self.named_textures:
             return self.named_textures[name]
@@ -319,7 +344,7 @@ class _Resolver:
             close = difflib.get_close_matches(name, known + list(TEXTURES), n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else (f"; defined: {', '.join(known)}" if known else "")
             raise SpectraceError(f"undefined texture '{name}'{hint}", where=self.where(key))
-        texture = TEXTURES[entry.type].from_spec(entry, self, f"textures.{name}")
+        texture = self.texture_of(entry.type, entry, f"textures.{name}")
         self.named_textures[name] = texture
         return texture
 
@@ -375,7 +400,7 @@ class _Resolver:
         """An inline texture or a reference to a named one, unchecked: its use checks it."""
         if isinstance(spec, schema.TextureRefSpec):
             return self.named_texture(spec.texture, f"{key}.texture")
-        return TEXTURES[spec.texture].from_spec(spec, self, key)
+        return self.texture_of(spec.texture, spec, key)
 
     def optical_constant(self, spec: schema.SpectrumSpec, key: str, positive: bool) -> Spectrum:
         """η or k of a complex index of refraction: a spectrum without the reflectance bound (rgb has no meaning
@@ -481,7 +506,6 @@ class _Resolver:
                     )
             objects[name] = InstancedObject(shapes=self.shapes(materials, o.shapes, key), name=name)
         instances = []
-        boxes: dict[str, np.ndarray] = {}
         for i, spec in enumerate(self.spec.instances):
             key = f"instances[{i}]"
             if spec.object not in objects:
@@ -490,25 +514,31 @@ class _Resolver:
                     f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(objects)) or 'none'}"
                 )
                 raise SpectraceError(f"undefined object '{spec.object}'{hint}", where=self.where(f"{key}.object"))
-            matrix = np.eye(4)
-            if spec.transform:
-                steps = [step.model_dump(exclude_none=True) for step in spec.transform]
-                with np.errstate(over="ignore", invalid="ignore"):
-                    matrix = transform_matrix(steps, where=self.where(f"{key}.transform"))
             obj = objects[spec.object]
-            if spec.object not in boxes:  # the object's box corners: an affine map keeps the rest within them
-                points = np.concatenate([sh.mesh.vertices for sh in obj.shapes])
-                lo, hi = points.min(axis=0), points.max(axis=0)
-                boxes[spec.object] = np.array(
-                    [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
-                )
-            corners = boxes[spec.object]
-            with np.errstate(over="ignore", invalid="ignore"):
-                placed = corners @ matrix[:3, :3].T + matrix[:3, 3]
-            if problem := limits.coordinates_problem(placed):
-                raise SpectraceError(f"the placed object has {problem}", where=self.where(f"{key}.transform"))
+            matrix = self.instance_matrix(spec, key, obj)
             instances.append(Instance(object=obj, to_world=matrix, name=spec.name or f"{spec.object}{i}"))
         return instances
+
+    def instance_matrix(self, spec: schema.InstanceSpec, key: str, obj: InstancedObject) -> np.ndarray:
+        """The map of the instance `spec` of `obj`, refused where it places the object out of a scene's range."""
+        matrix = np.eye(4)
+        if spec.transform:
+            steps = [step.model_dump(exclude_none=True) for step in spec.transform]
+            with np.errstate(over="ignore", invalid="ignore"):
+                matrix = transform_matrix(steps, where=self.where(f"{key}.transform"))
+        if id(obj) not in self.object_corners:  # the object's box corners: an affine map keeps the rest within them
+            points = np.concatenate([sh.mesh.vertices for sh in obj.shapes])
+            lo, hi = points.min(axis=0), points.max(axis=0)
+            self.object_corners[id(obj)] = (
+                obj,
+                np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]),
+            )
+        corners = self.object_corners[id(obj)][1]
+        with np.errstate(over="ignore", invalid="ignore"):
+            placed = corners @ matrix[:3, :3].T + matrix[:3, 3]
+        if problem := limits.coordinates_problem(placed):
+            raise SpectraceError(f"the placed object has {problem}", where=self.where(f"{key}.transform"))
+        return matrix
 
     def interior(self, spec: schema.InteriorSpec, key: str) -> Medium:
         """σa, σs in 1/scene unit: a preset's 1/mm table or the given spectra (no upper bound), times scale."""
@@ -641,7 +671,14 @@ def load_scene(path: str | Path, overrides: dict[str, object] | None = None) -> 
     `overrides`: values replacing the file's at dotted key paths ("film.width", "materials.red.reflectance"),
     before validation, as if the file said so (a sweep's grid, spectrace.sweep)."""
     path = Path(path)
-    spec = read_scene_spec(path, overrides)
+    scene = scene_from_spec(path, read_scene_spec(path, overrides))
+    if overrides:  # what the file does not say, for whoever reads the file again (a live session)
+        scene.notes["overrides"] = dict(overrides)
+    return scene
+
+
+def scene_from_spec(path: Path, spec: schema.SceneSpec) -> Scene:
+    """The scene of a validated spec of the file at `path` (whose folder its files are named relative to)."""
     resolver = _Resolver(path, spec)
     for name in spec.textures:
         if name in TEXTURE_TYPE_NAMES:
