@@ -98,7 +98,7 @@ class ViewerWidget:
         """Wait until `spp` samples per pixel (default: the scene's) are done or `timeout` seconds pass; the spp."""
         wanted = self._live.spp if spp is None else spp
         end = time.monotonic() + timeout
-        seen = -1
+        seen: tuple[int, int] | None = None
         while self.samples_done < wanted and time.monotonic() < end and not self._live.closed:
             seen = self._live.wait_for_change(seen, min(1.0, max(0.0, end - time.monotonic())))
         return self.samples_done

@@ -257,10 +257,15 @@ class LiveView:
         with self.changed:
             return self._image
 
-    def wait_for_change(self, seen: int, timeout: float) -> int:
+    def _stamp(self) -> tuple[int, int]:
+        return self.version, self.display_version
+
+    def wait_for_change(self, seen: tuple[int, int] | None, timeout: float) -> tuple[int, int]:
+        """Wait until a pass, a restart or a display change makes the state differ from stamp `seen`, or `timeout`
+        seconds; the stamp now."""
         with self.changed:
-            self.changed.wait_for(lambda: self.version != seen or self.closed, timeout)
-            return self.version
+            self.changed.wait_for(lambda: self._stamp() != seen or self.closed, timeout)
+            return self._stamp()
 
     def state(self) -> dict[str, object]:
         with self.session_lock:

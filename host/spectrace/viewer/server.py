@@ -38,9 +38,13 @@ NO_TOKEN = "403: this page needs the token of the address that spectrace view pr
 OTHER_ORIGIN = "403: requests from another site are refused"
 
 
-def _static_files() -> dict[str, tuple[bytes, str]]:
+def _static_files(token: str) -> dict[str, tuple[bytes, str]]:
+    """The page's files by route, the page's own links carrying the token (every request needs it)."""
     folder = resources.files("spectrace.viewer") / "static"
-    return {route: ((folder / name).read_bytes(), kind) for route, (name, kind) in _STATIC.items()}
+    return {
+        route: ((folder / name).read_bytes().replace(b"__TOKEN__", token.encode()), kind)
+        for route, (name, kind) in _STATIC.items()
+    }
 
 
 class ViewerServer(ThreadingHTTPServer):
@@ -63,7 +67,7 @@ class ViewerServer(ThreadingHTTPServer):
         self.scene_source = scene_source
         self.title = title
         self.token = secrets.token_urlsafe(24)
-        self.files = _static_files()
+        self.files = _static_files(self.token)
         self.log = log
         self.stopping = threading.Event()
         try:
@@ -243,7 +247,8 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("Cache-Control", "no-store")
         self.end_headers()
         self.close_connection = True
-        live, seen = self.server.live, -1
+        live: LiveView = self.server.live
+        seen: tuple[int, int] | None = None
         while not self.server.stopping.is_set():
             version = live.wait_for_change(seen, EVENT_HEARTBEAT_S)
             if version != seen:
