@@ -9,6 +9,7 @@ import json
 import socket
 import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -238,10 +239,12 @@ def test_exposure_changes_the_pixels_without_a_pass(viewer):
 def test_orbit_restarts_the_accumulation_and_keeps_the_distance(fresh_viewer):
     live, _, client = fresh_viewer
     before = client.state()["parameters"]
+    assert client.post("/api/pause", {"paused": True})[0] == 200  # so that the restart can be seen at 0 spp
     status, _ = client.post("/api/camera", {"action": "orbit", "dx": 20, "dy": 5})
     assert status == 200
     restarted = client.state()
-    assert restarted["spp"] < live.spp  # the accumulation began again
+    assert restarted["spp"] == 0 and live.session.samples_done == 0  # the accumulation began again
+    assert client.post("/api/pause", {"paused": False})[0] == 200
     after = restarted["parameters"]
     distance = [np.linalg.norm(np.subtract(p["camera.origin"], p["camera.target"])) for p in (before, after)]
     assert distance[1] == pytest.approx(distance[0], rel=1e-9)
@@ -332,3 +335,83 @@ def test_save_writes_the_image_and_the_edited_scene(fresh_viewer):
     original = next(s for s in live.session.scene.shapes if s.name == "light")
     assert np.array_equal(light.emitter.radiance.values, original.emitter.radiance.values)
     assert sorted(p.name for p in folder.iterdir()) == ["edited.toml", "view.exr", "view.png"]
+
+
+def test_pause_holds_the_samples_and_resume_goes_on(fresh_viewer):
+    live, _, client = fresh_viewer
+    live.spp = 100_000
+    assert client.post("/api/pause", {"paused": False})[0] == 200
+    client.wait_for(lambda s: s["spp"] > 4)
+    assert client.post("/api/pause", {"paused": True})[0] == 200
+    client.wait_for(lambda s: s["paused"])
+    time.sleep(0.5)  # the pass in flight (milliseconds here) ends, and the page is shown it
+    held = client.state()["spp"]
+    time.sleep(0.5)
+    assert client.state()["spp"] == held == live.session.samples_done
+    assert client.post("/api/pause", {"paused": False})[0] == 200
+    client.wait_for(lambda s: s["spp"] > held)
+    client.post("/api/pause", {"paused": True})
+
+
+def test_pan_moves_origin_and_target_alike_and_zoom_scales_the_distance(fresh_viewer):
+    _, _, client = fresh_viewer
+    before = client.state()["parameters"]
+    assert client.post("/api/camera", {"action": "pan", "dx": 0.1, "dy": -0.05})[0] == 200
+    panned = client.state()["parameters"]
+    shift = np.subtract(panned["camera.origin"], before["camera.origin"])
+    assert np.allclose(np.subtract(panned["camera.target"], before["camera.target"]), shift, atol=1e-12)
+    view = np.subtract(before["camera.target"], before["camera.origin"])
+    assert abs(np.dot(shift, view)) < 1e-9 * np.linalg.norm(view) ** 2  # across the view, not along it
+    assert np.linalg.norm(shift) == pytest.approx(np.hypot(0.1, 0.05) * np.linalg.norm(view), rel=1e-9)
+    assert client.post("/api/camera", {"action": "zoom", "dy": 0.5})[0] == 200
+    zoomed = client.state()["parameters"]
+    assert zoomed["camera.target"] == panned["camera.target"]
+    assert np.subtract(zoomed["camera.origin"], zoomed["camera.target"]) == pytest.approx(
+        0.5 * np.subtract(panned["camera.origin"], panned["camera.target"]), rel=1e-12
+    )
+
+
+@pytest.mark.slow  # the film's observers need a program of their own (40 s to build, once)
+def test_another_observer_is_shown_without_a_pass(tmp_path):
+    from tests.viewer.conftest import _close, _open
+    from tests.viewer.viewer_client import small_scene
+
+    from spectrace.film.response import FilmResponse
+
+    scene = small_scene().with_overrides(film_response=FilmResponse(observers=("CIE 1964 10°",)))
+    live, server, client = _open(scene, tmp_path)
+    try:
+        state = client.wait_done()
+        assert state["channels"] == ["CIE 1964 10°"]
+        assert client.post("/api/display", {"channel": "CIE 1964 10°"})[0] == 200
+        shown = _png(client)
+        image = live.image()
+        assert client.state()["version"] == state["version"]  # no new pass
+    finally:
+        _close(live, server)
+    xyz = np.stack([image.channels[f"cie1964_10.{axis}"] for axis in "XYZ"], axis=-1).astype(np.float64)
+    expected = colour.XYZ_to_sRGB(xyz, apply_cctf_encoding=False, chromatic_adaptation_transform=None)
+    expected = np.rint(colour.cctf_encoding(np.clip(expected, 0, 1), function="sRGB") * 255)
+    assert np.abs(shown.astype(float) - expected).max() <= 1
+    assert not np.array_equal(image.channels["cie1964_10.X"], image.xyz[..., 0])
+
+
+def test_false_colour_orders_pixels_by_luminance(viewer):
+    import matplotlib
+
+    from spectrace.plots import FALSE_COLOUR_MAP
+
+    live, _, client = viewer
+    try:
+        assert client.post("/api/display", {"false_colour": True})[0] == 200
+        shown = _png(client).reshape(-1, 3).astype(float)
+    finally:
+        client.post("/api/display", {"false_colour": False})
+    luminance = live.image().xyz[..., 1].reshape(-1)
+    # Each pixel's position along the colour map (its nearest of 256 entries) rises with its luminance.
+    table = matplotlib.colormaps[FALSE_COLOUR_MAP](np.linspace(0, 1, 256))[:, :3] * 255
+    position = np.argmin(((shown[:, None, :] - table[None]) ** 2).sum(-1), axis=1)
+    lit = luminance > 0
+    order = np.argsort(luminance[lit])
+    assert np.all(np.diff(position[lit][order]) >= -2)  # 8-bit rounding may swap neighbours
+    assert position[lit][order][-1] > position[lit][order][0]

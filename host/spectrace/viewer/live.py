@@ -208,6 +208,11 @@ class LiveView:
         self.reference: tuple[int, int, np.ndarray] | None = None
         self._image: Any = None
         self._seconds = 0.0
+        self._read_seconds = 0.0  # what reading the film back took last time
+        self._last_read = 0.0  # render seconds at that read
+        self._generation = 0  # counts updates: a pass of the scene before one is not shown after it
+        self._stale = False  # passes were added since the film was last read
+        self._parameters: dict[str, object] = session.parameters()  # read again after each update only
         self._png: tuple[tuple[int, int], bytes] | None = None
         self._thread = threading.Thread(target=self._run, name="spectrace-view-render", daemon=True)
 
@@ -220,29 +225,41 @@ class LiveView:
     def _run(self) -> None:
         while True:
             with self.changed:
-                while not self.closed and not self._wanted():
+                while not self.closed and not self._wanted() and not self._stale:
                     self.changed.wait()
                 if self.closed:
                     return
             with self.session_lock:
-                if not self._wanted():
-                    continue
-                start = time.perf_counter()
+                generation, elapsed, image = self._generation, 0.0, None
                 try:
-                    self.session.step(min(self.pass_spp, self.spp - self.session.samples_done))
-                    image = self.session.image()
-                except SpectraceError as error:
+                    if self._wanted():
+                        start = time.perf_counter()
+                        self.session.step(min(self.pass_spp, self.spp - self.session.samples_done))
+                        elapsed = time.perf_counter() - start
+                    # The film is read back after a pass when that costs at most a fifth of the time since the
+                    # last read (a large film's spectral bands take long to read), and whenever the render rests.
+                    since = self._seconds + elapsed - self._last_read
+                    if since >= 4 * self._read_seconds or not self._wanted():
+                        read = time.perf_counter()
+                        image = self.session.image()
+                        self._read_seconds = time.perf_counter() - read
+                        self._last_read = self._seconds + elapsed
+                except Exception as error:  # the page says why and waits; the server goes on
+                    problem = str(error) if isinstance(error, SpectraceError) else f"{type(error).__name__}: {error}"
                     with self.changed:
-                        self.error, self.paused = str(error), True
+                        self.error, self.paused, self._stale = problem, True, False
                         self.version += 1
                         self.changed.notify_all()
                     continue
-                elapsed = time.perf_counter() - start
             with self.changed:
-                self._image = image
+                if generation != self._generation:
+                    continue
                 self._seconds += elapsed
-                self.version += 1
-                self.changed.notify_all()
+                self._stale = image is None
+                if image is not None:
+                    self._image = image
+                    self.version += 1
+                    self.changed.notify_all()
 
     def close(self) -> None:
         with self.changed:
@@ -268,9 +285,8 @@ class LiveView:
             return self._stamp()
 
     def state(self) -> dict[str, object]:
-        with self.session_lock:
-            parameters = self.session.parameters()
         with self.changed:
+            parameters = self._parameters
             image, done = self._image, (self._image.spp if self._image is not None else 0)
             rate = self._seconds / done if done else None
             return {
@@ -330,9 +346,13 @@ class LiveView:
             raise SpectraceError("must be a table of key paths and values", where="changes")
         with self.session_lock:
             self.session.update(dict(changes))
+            parameters = self.session.parameters()
+            self._generation += 1
         with self.changed:
             self.edits.update(changes)
-            self._image, self._seconds, self.error = None, 0.0, ""
+            self._parameters = parameters
+            self._image, self._seconds, self._last_read, self.error = None, 0.0, 0.0, ""
+            self._stale = False
             self.version += 1
             self.changed.notify_all()
 
@@ -344,7 +364,7 @@ class LiveView:
         else:
             limit = MAX_ORBIT_DEGREES if action == "orbit" else 10.0
             x, y = _number(dx, "dx", -limit, limit), _number(dy, "dy", -limit, limit)
-        with self.session_lock:
+        with self.session_lock:  # the pose moved from is the one the update replaces
             changes = camera_move(self.session.parameters(), str(action), x, y)
             self.update(changes)
 

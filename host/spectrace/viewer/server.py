@@ -191,8 +191,6 @@ class _Handler(BaseHTTPRequestHandler):
         else:
             self._text(HTTPStatus.NOT_FOUND, "404: not a page of this viewer")
 
-    do_HEAD = do_GET
-
     def do_POST(self) -> None:  # noqa: N802 - http.server's name
         if not self._checked():
             return
