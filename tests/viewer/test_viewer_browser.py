@@ -188,3 +188,38 @@ def test_without_the_token_the_page_is_one_line(browser, tmp_path):
         page.close()
         _close(live, server)
     assert text.startswith("403") and "token" in text and "\n" not in text
+
+
+def test_the_page_shows_in_a_frame_of_a_local_page_as_in_a_notebook(browser, tmp_path):
+    """The notebook shows the page in a frame of Jupyter's page, another origin: its navigation is let through (the
+    token still asked), the page's own requests are then same-origin."""
+    import threading
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+    live, server, client = _open(small_scene(), tmp_path)
+
+    class Notebook(BaseHTTPRequestHandler):
+        def do_GET(self):  # noqa: N802
+            body = f'<iframe id="view" src="{server.url}" width="900" height="600"></iframe>'.encode()
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, *args):
+            pass
+
+    notebook = ThreadingHTTPServer(("127.0.0.1", 0), Notebook)
+    threading.Thread(target=notebook.serve_forever, daemon=True).start()
+    page = browser.new_page()
+    try:
+        page.goto(f"http://localhost:{notebook.server_address[1]}/")
+        frame = page.frame_locator("#view")
+        frame.locator("#status").filter(has_text="4/4 spp").wait_for(timeout=120_000)
+        assert frame.locator("#image").get_attribute("data-spp") == "4"
+    finally:
+        page.close()
+        notebook.shutdown()
+        notebook.server_close()
+        _close(live, server)

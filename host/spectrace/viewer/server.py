@@ -124,7 +124,11 @@ class _Handler(BaseHTTPRequestHandler):
         origin = self.headers.get("Origin")
         if origin is not None and origin not in own:
             return HTTPStatus.FORBIDDEN, OTHER_ORIGIN
-        if self.headers.get("Sec-Fetch-Site", "same-origin") not in ("same-origin", "none"):
+        # The page itself may be opened from another page (the notebook's frame, at Jupyter's address): a
+        # navigation, with the token. Anything else a browser marks as sent from another site is refused.
+        navigation = self.command == "GET" and urlsplit(self.path).path == "/"
+        navigation = navigation and self.headers.get("Sec-Fetch-Mode", "navigate") == "navigate"
+        if not navigation and self.headers.get("Sec-Fetch-Site", "same-origin") not in ("same-origin", "none"):
             return HTTPStatus.FORBIDDEN, OTHER_ORIGIN
         token = parse_qs(urlsplit(self.path).query).get("token", [""])[0] or self.headers.get("X-Spectrace-Token", "")
         if not hmac.compare_digest(token.encode(), self.server.token.encode()):
@@ -140,7 +144,9 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("Referrer-Policy", "no-referrer")  # the token stays out of other sites' logs
         self.send_header(
             "Content-Security-Policy",
-            "default-src 'self'; img-src 'self' blob:; style-src 'self'; script-src 'self'; frame-ancestors *",
+            # Framed only by pages of this machine (a notebook), never by another site's.
+            "default-src 'self'; img-src 'self'; style-src 'self'; script-src 'self'; "
+            "frame-ancestors 'self' http://127.0.0.1:* http://localhost:*",
         )
         for name, value in (extra or {}).items():
             self.send_header(name, value)
