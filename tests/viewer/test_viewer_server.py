@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 from tests.viewer.viewer_client import Client
 
+import spectrace
+
 colour = pytest.importorskip("colour")
 
 
@@ -335,6 +337,26 @@ def test_save_writes_the_image_and_the_edited_scene(fresh_viewer):
     original = next(s for s in live.session.scene.shapes if s.name == "light")
     assert np.array_equal(light.emitter.radiance.values, original.emitter.radiance.values)
     assert sorted(p.name for p in folder.iterdir()) == ["edited.toml", "view.exr", "view.png"]
+    # The saved scene, read back by the loader, renders the bits the view shows (same seed, size and spp).
+    assert (saved.width, saved.height, saved.spp) == (32, 24, 4)
+    fresh = spectrace.render(saved, device=live.session.image().device, progress=False)
+    assert np.array_equal(fresh.xyz, live.image().xyz)
+
+
+def test_a_websocket_upgrade_from_another_site_is_refused(viewer):
+    _, server, client = viewer
+    upgrade = {"Connection": "Upgrade", "Upgrade": "websocket", "Sec-WebSocket-Version": "13"}
+    upgrade["Sec-WebSocket-Key"] = "dGhlIHNhbXBsZSBub25jZQ=="
+    for path in ("/api/events", "/"):
+        status, body, _ = client.request("GET", path, headers={**upgrade, "Origin": "http://evil.example"})
+        assert status == 403 and b"another site" in body
+
+
+@pytest.mark.parametrize("query, where", [("x=abc&y=1", "x and y"), ("x=999&y=1", "x"), ("x=1&y=-1", "y"), ("", "x")])
+def test_a_bad_pixel_is_one_line(viewer, query, where):
+    _, _, client = viewer
+    status, body, _ = client.request("GET", f"/api/pixel?{query}")
+    assert status == 400 and where in json.loads(body)["error"]
 
 
 def test_pause_holds_the_samples_and_resume_goes_on(fresh_viewer):

@@ -102,6 +102,8 @@ def save_scene(source: Path | None, edits: Mapping[str, object], folder: Path, n
         raise SpectraceError("is the scene being viewed; choose another name", where="name")
     with open(source, "rb") as handle:
         document = _relocated(tomllib.load(handle), source.parent, folder)
+    for section in {key.split(".")[0] for key in edits} & {"film", "sampler", "camera"}:
+        document.setdefault(section, {})  # a table the file left out, all its keys at their defaults
     for key, value in edits.items():
         _set(document, key, value)
     header = f"{source.name} with the edits made in spectrace view"

@@ -292,7 +292,15 @@ def _save(server: ViewerServer, data: dict) -> dict[str, object]:
         )
         path = save_image(labelled, server.save_folder, data.get("name"))
     elif kind == "scene":
-        edits = dict(server.live.edits)
+        # The settings a front end may have changed from the file's (spectrace view's --width, --spp, ...) first.
+        scene = server.live.session.scene
+        edits: dict[str, object] = {
+            "film.width": scene.width,
+            "film.height": scene.height,
+            "sampler.spp": server.live.spp,
+            "sampler.seed": scene.seed,
+            **server.live.edits,
+        }
         if server.live.display.exposure != server.live.scene_exposure:
             edits["film.exposure"] = server.live.display.exposure
         path = save_scene(server.scene_source, edits, server.save_folder, data.get("name"))
