@@ -152,7 +152,7 @@ def camera_move(parameters: Mapping[str, Any], action: str, dx: float, dy: float
     a zoom (dy: the factor on that distance), from the session's camera.origin, camera.target and camera.up."""
     origin = np.asarray(parameters["camera.origin"], np.float64)
     target = np.asarray(parameters["camera.target"], np.float64)
-    up = _unit(np.asarray(parameters["camera.up"], np.float64))
+    up = _unit(np.asarray(parameters.get("camera.up", (0.0, 1.0, 0.0)), np.float64))  # the scene format's default
     offset = origin - target
     right = _unit(np.cross(-offset, up))
     if action == "orbit":
@@ -182,8 +182,21 @@ def _json_value(value: object) -> object | None:
     return None
 
 
-def is_light_key(key: str) -> bool:
-    return key.startswith("lights.") or ".emitter." in key
+EMITTER = ".emitter."
+
+
+def light_controls(parameters: Mapping[str, object]) -> dict[str, float]:
+    """The page's light switches, key path -> value: each emitting shape's `emitter.scale` (a key every area
+    emitter takes, 1 where the file leaves it out) and each number of a light's own (`lights.<name>.scale`)."""
+    found: dict[str, float] = {}
+    for key, value in parameters.items():
+        if EMITTER in key:
+            scale = key[: key.index(EMITTER) + len(EMITTER)] + "scale"
+            given = parameters.get(scale, 1.0)
+            found[scale] = float(given) if isinstance(_json_value(given), float) else 1.0  # type: ignore[arg-type]
+        elif key.startswith("lights.") and isinstance(_json_value(value), float):
+            found[key] = float(value)  # type: ignore[arg-type]
+    return found
 
 
 class LiveView:
@@ -301,9 +314,7 @@ class LiveView:
                 "display": self.display.__dict__,
                 "channels": list(image_channels(image)) if image is not None else [],
                 "spaces": list(DISPLAY_SPACES),
-                "lights": {
-                    k: v for k, v in parameters.items() if is_light_key(k) and isinstance(_json_value(v), float)
-                },
+                "lights": light_controls(parameters),
                 "parameters": {k: j for k, v in parameters.items() if (j := _json_value(v)) is not None},
                 "error": self.error,
                 "reference": list(self.reference[:2]) if self.reference is not None else None,

@@ -52,8 +52,10 @@ def _split(table: Any, parts: list[str]) -> tuple[Any, str] | None:
         head, rest = ".".join(parts[:count]), parts[count:]
         if isinstance(table, dict):
             inner = [table[head]] if head in table else []
-        elif isinstance(table, list):
+        elif isinstance(table, list):  # an entry by its name, or by its index where names repeat
             inner = [item for item in table if isinstance(item, dict) and item.get("name") == head]
+            if not inner and head.isdigit() and int(head) < len(table):
+                inner = [table[int(head)]]
         else:
             inner = []
         for item in inner:
