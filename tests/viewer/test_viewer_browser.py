@@ -223,3 +223,26 @@ def test_the_page_shows_in_a_frame_of_a_local_page_as_in_a_notebook(browser, tmp
         notebook.shutdown()
         notebook.server_close()
         _close(live, server)
+
+
+def test_the_wheel_zooms_and_shift_drag_pans(page_on):
+    _, _, client, page = page_on(small_scene())
+    _wait_done(page, 4)
+    before = client.state()["parameters"]
+    box = page.locator("#image").bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.wheel(0, 120)  # away: the camera backs off by 1.1
+    zoomed = client.wait_for(lambda s: s["parameters"]["camera.origin"] != before["camera.origin"])["parameters"]
+
+    def distance(p):
+        return np.linalg.norm(np.subtract(p["camera.origin"], p["camera.target"]))
+
+    assert distance(zoomed) == pytest.approx(1.1 * distance(before), rel=1e-9)
+    page.keyboard.down("Shift")
+    page.mouse.down()
+    page.mouse.move(box["x"] + box["width"] * 0.6, box["y"] + box["height"] / 2, steps=4)
+    page.mouse.up()
+    page.keyboard.up("Shift")
+    panned = client.wait_for(lambda s: s["parameters"]["camera.target"] != zoomed["camera.target"])["parameters"]
+    shift = np.subtract(panned["camera.target"], zoomed["camera.target"])
+    assert np.allclose(np.subtract(panned["camera.origin"], zoomed["camera.origin"]), shift, atol=1e-12)

@@ -292,6 +292,7 @@ def test_delta_e_to_the_chosen_reference(viewer):
     assert red["reference"] == [29, 12]
 
 
+@pytest.mark.slow  # 25 s on PoCL with its program not yet in the cache
 def test_a_light_switched_off_leaves_its_booth_exactly_black(tmp_path):
     from tests.viewer.conftest import _close, _open
     from tests.viewer.viewer_client import small_scene
