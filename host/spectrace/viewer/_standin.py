@@ -38,9 +38,17 @@ def _number(key: str, value: object, low: float, high: float) -> float:
     return float(value)
 
 
+def _check_camera(scene: Scene) -> None:
+    """The camera checks of spectrace.render, wherever the tree keeps them."""
+    import spectrace.api
+    import spectrace.engine.job
+
+    check = vars(spectrace.api).get("_check_camera") or vars(spectrace.engine.job)["check_camera"]
+    check(scene)
+
+
 class Session:
     def __init__(self, scene: Scene, *, device=None, spectral_bins: int = 0, pass_spp: int = 1, **_: object):
-        from spectrace.api import _check_camera
         from spectrace.engine.job import RenderJob
 
         _check_camera(scene)
@@ -85,8 +93,6 @@ class Session:
         return found
 
     def update(self, changes: Mapping[str, object]) -> UpdateReport:
-        from spectrace.api import _check_camera
-
         start = time.perf_counter()
         known = self.parameters()
         camera: dict[str, Any] = {}

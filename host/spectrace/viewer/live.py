@@ -8,6 +8,7 @@ naming the value, before anything changes."""
 
 from __future__ import annotations
 
+import importlib
 import io
 import math
 import threading
@@ -20,10 +21,18 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 
-try:
-    from spectrace.session import Session  # type: ignore[attr-defined,import-not-found,import-untyped,unused-ignore]
-except ImportError:
-    from spectrace.viewer._standin import Session  # noqa: F401 - spectrace.viewer imports it from here
+
+def _session_class() -> Any:
+    """spectrace.session.Session, or the viewer's stand-in with the same API where that module is absent."""
+    try:
+        return importlib.import_module("spectrace.session").Session
+    except ImportError:
+        from spectrace.viewer._standin import Session as StandIn
+
+        return StandIn
+
+
+Session: Any = _session_class()
 
 FILM_OBSERVER = "CIE 1931 2°"  # the film's XYZ; ΔE uses that observer's D65 white
 DISPLAY_SPACES = ("srgb", "display-p3", "rec2020")  # xyz has no display encoding
