@@ -1,5 +1,5 @@
 """Screenshots of `spectrace view`'s page for docs/viewer.md, taken the way the browser tests drive it: Debian's
-chromium through Playwright, headless (the `browser` extra; no browser download).
+chromium through Playwright, headless (the `viewer-test` extra; no browser download).
 
     python -m tests.tooling.viewer_screenshots [--chromium PATH] [--out docs/images]
 

@@ -10,7 +10,7 @@ from tests.viewer.conftest import _close, _open
 from tests.viewer.viewer_client import small_scene
 
 sync_api = pytest.importorskip(
-    "playwright.sync_api", reason="the browser tests need playwright (pip install playwright)"
+    "playwright.sync_api", reason="the browser tests need playwright (the viewer-test extra)"
 )
 CHROMIUM = os.environ.get("SPECTRACE_CHROMIUM") or shutil.which("chromium") or shutil.which("chromium-browser")
 if CHROMIUM is None:

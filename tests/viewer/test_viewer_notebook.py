@@ -7,9 +7,9 @@ import os
 
 import pytest
 
-nbformat = pytest.importorskip("nbformat", reason="the notebook test needs nbformat (the test extra)")
-nbclient = pytest.importorskip("nbclient", reason="the notebook test needs nbclient (the test extra)")
-pytest.importorskip("ipykernel", reason="the notebook test needs ipykernel (the test extra)")
+nbformat = pytest.importorskip("nbformat", reason="the notebook test needs nbformat (the viewer-test extra)")
+nbclient = pytest.importorskip("nbclient", reason="the notebook test needs nbclient (the viewer-test extra)")
+pytest.importorskip("ipykernel", reason="the notebook test needs ipykernel (the viewer-test extra)")
 
 pytestmark = [pytest.mark.subprocess, pytest.mark.slow]
 

@@ -284,6 +284,7 @@ def _job_from_options(
     """The render's RenderJob from the command's options (every check made there, under the options' names), with
     the ΔE map the command adds to the scene's film."""
     from spectrace.engine.job import COMMAND_LINE, RenderJob
+    from spectrace.scene import load_scene
 
     chosen_filter = None
     if pixel_filter is not None:
@@ -291,8 +292,19 @@ def _job_from_options(
 
         chosen_filter = parse_filter_option(pixel_filter)
 
+    def loaded():
+        if scene.suffix.lower() in (".gltf", ".glb"):  # glTF 2.0 files render through their import (docs/gltf.md)
+            from spectrace.interop.gltf import load_gltf_scene
+
+            return load_gltf_scene(scene)
+        if scene.suffix.lower() == ".blend":  # through Blender's bpy (docs/blender.md)
+            from spectrace.interop.blender import load_blend_scene
+
+            return load_blend_scene(scene)
+        return load_scene(scene)
+
     job = RenderJob.make(
-        lambda: load_scene_argument(scene),
+        loaded,
         COMMAND_LINE,
         output=output,
         pixel_filter=chosen_filter,
@@ -309,21 +321,6 @@ def _job_from_options(
         response = _with_delta_e_map(job.scene.film_response, output, delta_e_white_y)
         job = job.with_scene(job.scene.with_overrides(film_response=response))
     return job
-
-
-def load_scene_argument(scene: Path):
-    """The Scene of the SCENE argument: a TOML scene, or a glTF or Blender file through its import."""
-    from spectrace.scene import load_scene
-
-    if scene.suffix.lower() in (".gltf", ".glb"):  # glTF 2.0 files render through their import (docs/gltf.md)
-        from spectrace.interop.gltf import load_gltf_scene
-
-        return load_gltf_scene(scene)
-    if scene.suffix.lower() == ".blend":  # through Blender's bpy (docs/blender.md)
-        from spectrace.interop.blender import load_blend_scene
-
-        return load_blend_scene(scene)
-    return load_scene(scene)
 
 
 def _render_here(job, output: Path, xyz: bool, quiet: bool, state_file, interval: float, saved, resume, noisy):
