@@ -421,8 +421,7 @@ def test_another_observer_is_shown_without_a_pass(tmp_path):
 
 
 def test_false_colour_orders_pixels_by_luminance(viewer):
-    import matplotlib
-
+    matplotlib = pytest.importorskip("matplotlib", reason="false colour uses matplotlib's colour maps")
     from spectrace.plots import FALSE_COLOUR_MAP
 
     live, _, client = viewer

@@ -9,6 +9,7 @@ naming the value, before anything changes."""
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import io
 import math
 import threading
@@ -97,6 +98,8 @@ class Display:
         if "false_colour" in data:
             if not isinstance(data["false_colour"], bool):
                 raise SpectraceError("must be true or false", where="false_colour")
+            if data["false_colour"] and importlib.util.find_spec("matplotlib") is None:
+                raise SpectraceError("needs matplotlib's colour maps (pip install matplotlib)", where="false_colour")
             new = replace(new, false_colour=data["false_colour"])
         if "channel" in data:
             if data["channel"] != "" and data["channel"] not in channels:
