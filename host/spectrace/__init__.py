@@ -56,6 +56,7 @@ _LAZY = {
     "PixelFilter": "spectrace.pixel_filters",
     **dict.fromkeys(MODEL_NAMES, "spectrace.scene.model"),
     "load_scene": "spectrace.scene",
+    "view": "spectrace.viewer",
     "Spectrum": "spectrace.spectral.spectrum",
     **dict.fromkeys(["FilmResponse", "load_sensor", "delta_e_2000_map"], "spectrace.film.response"),
 }

@@ -102,6 +102,7 @@ def _every_output_option(tmp_path: Path) -> dict[str, tuple[list[str], str, str]
         "render -o": ([*render, "-o"], "--output", ".exr"),
         "render --checkpoint": ([*render, "-o", good, "--checkpoint"], "--checkpoint", ".npz"),
         "render --false-color": ([*render, "-o", good, "--false-color"], "--false-color", ".png"),
+        "view -o": (["view", str(scenes_dir() / "cornell_box.toml"), "--no-browser", "-o"], "--output", ".exr"),
         "spectra plot -o": (["spectra", "plot", "cie:D65", "-o"], "--output", ".png"),
         "display compare --plot": (
             ["display", "compare", "--rgb", "0.5", "0.5", "0.5", "-d", "CRT-Dell", "--plot"],

@@ -1,4 +1,4 @@
-"""Command line: `spectrace render | devices | bench | validate | display | spectra | sweep | import-mitsuba |
+"""Command line: `spectrace render | view | devices | bench | validate | display | spectra | sweep | import-mitsuba |
 import-pbrt | import-gltf | import-blend | blender-addon`, one module per command group in this package. Errors
 print as one line and exit non-zero."""
 
@@ -24,6 +24,11 @@ from spectrace.errors import SpectraceError
 # Sub-commands whose modules import colour-science, SciPy or the Mitsuba importer: listed in `--help` from these
 # lines and imported only when run. name -> (module, attribute: a Typer app or a command function, help line).
 LAZY_COMMANDS = {
+    "view": (
+        "spectrace.cli.view",
+        "view_command",
+        "Show a scene rendering in the browser, pass by pass, with controls and a pixel's spectrum (docs/viewer.md).",
+    ),
     "display": (
         "spectrace.cli.display",
         "display_app",
