@@ -18,22 +18,6 @@ def _say(text: str) -> None:
     console.print(text, highlight=False, markup=False, soft_wrap=True)
 
 
-def _load(scene: Path):
-    """The Scene of SCENE, read as `spectrace render` reads it: a TOML scene (or a bundled scene's name), or a glTF
-    or Blender file through its import."""
-    from spectrace.scene import load_scene
-
-    if scene.suffix.lower() in (".gltf", ".glb"):
-        from spectrace.interop.gltf import load_gltf_scene
-
-        return load_gltf_scene(scene)
-    if scene.suffix.lower() == ".blend":
-        from spectrace.interop.blender import load_blend_scene
-
-        return load_blend_scene(scene)
-    return load_scene(scene)
-
-
 def view_command(
     scene: Annotated[
         Path, typer.Argument(help="Scene file (TOML), glTF 2.0 file (.gltf, .glb) or Blender file (.blend).")
@@ -62,6 +46,7 @@ def view_command(
     stops after the pass in flight and writes the samples done to --output."""
     from spectrace.engine.job import COMMAND_LINE, RenderJob
     from spectrace.engine.stop_signals import StopOnSignals
+    from spectrace.interop.scene_files import load_any_scene
     from spectrace.io.output_files import check_output_file
     from spectrace.viewer import start_view
 
@@ -72,7 +57,7 @@ def view_command(
         raise SpectraceError(f"unknown image format '{image_path.suffix}' (use .exr or .png)", where=str(image_path))
     check_output_file(image_path, "--output")
     job = RenderJob.make(
-        lambda: _load(scene),
+        lambda: load_any_scene(scene, report=_say),
         COMMAND_LINE,
         spp=spp,
         width=width,

@@ -11,7 +11,8 @@ from pathlib import Path
 from typing import Any
 
 from spectrace.errors import SpectraceError
-from spectrace.viewer.live import LiveView, Session
+from spectrace.session import Session
+from spectrace.viewer.live import LiveView
 from spectrace.viewer.server import ViewerServer
 
 BAND_NM = 10.0  # the width of the spectral bins the viewer asks of the session

@@ -22,19 +22,6 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 
-
-def _session_class() -> Any:
-    """spectrace.session.Session, or the viewer's stand-in with the same API where that module is absent."""
-    try:
-        return importlib.import_module("spectrace.session").Session
-    except ImportError:
-        from spectrace.viewer._standin import Session as StandIn
-
-        return StandIn
-
-
-Session: Any = _session_class()
-
 FILM_OBSERVER = "CIE 1931 2°"  # the film's XYZ; ΔE uses that observer's D65 white
 DISPLAY_SPACES = ("srgb", "display-p3", "rec2020")  # xyz has no display encoding
 SPECTRAL_BINS = 47  # 10 nm bands over the default 360-830 nm film: a pixel's spectrum in the page
