@@ -13,6 +13,7 @@ import spectrace
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.scene_buffers import build_scene_buffers
 from spectrace.engine.scene_features import scene_feature_defines
+from spectrace.materials import MATERIALS
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import EnvironmentMap
@@ -82,6 +83,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
         "SCENE_HAS_ONE_SIDED": 0,
+        "SCENE_HAS_TANGENT_FRAMES": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
@@ -118,6 +120,21 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
             _environment_map_scene(), shapes=[spectrace.shape("rectangle", spectrace.diffuse(0.5, two_sided=two_sided))]
         )
         assert scene_feature_defines(build_scene_buffers(scene))["SCENE_HAS_ONE_SIDED"] == int(not two_sided)
+    # Only an anisotropic lobe asks for the frame along dp/du: a weight above 0, or a texture of it above 0 somewhere.
+    for material, tangent_frames in (
+        (spectrace.principled(0.5, roughness=0.4, metallic=1.0), 0),
+        (spectrace.principled(0.5, roughness=0.4, metallic=1.0, anisotropic=0.5), 1),
+        (spectrace.principled(0.5, anisotropic=spectrace.bitmap(np.array([[0.0, 0.7]]))), 1),
+        (spectrace.principled(0.5, anisotropic=spectrace.bitmap(np.zeros((1, 2)))), 0),
+        (spectrace.principledthin(0.5, roughness=0.4, anisotropic=0.9), 1),
+        (spectrace.principledthin(0.5, roughness=0.4), 0),
+    ):
+        scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
+        buffers = build_scene_buffers(scene)
+        assert scene_feature_defines(buffers)["SCENE_HAS_TANGENT_FRAMES"] == tangent_frames, material
+        principled_codes = [MATERIALS.codes["principled"], MATERIALS.codes["principledthin"]]
+        rows = buffers.materials[np.isin(buffers.materials["type"], principled_codes)]
+        assert list(rows["tangent_frame"]) == [tangent_frames], material
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():
