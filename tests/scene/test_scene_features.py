@@ -241,6 +241,15 @@ def _surface_detail_scene(cut_out: bool = True) -> spectrace.Scene:
     )
 
 
+def _anisotropic_scene() -> spectrace.Scene:
+    """The analytic shapes' scene with its glass sphere and its floor of anisotropic principled metal."""
+    base = _analytic_shapes_scene()
+    metal = spectrace.principled(0.8, roughness=0.4, metallic=1.0, anisotropic=0.9)
+    sphere = replace(base.shapes[1], material=metal)
+    floor = spectrace.shape("rectangle", metal, transform=[{"rotate": {"axis": [0, 0, 1], "angle": 30}}, {"scale": 3}])
+    return replace(base, shapes=[floor, sphere, *base.shapes[2:]])
+
+
 def _analytic_shapes_scene() -> spectrace.Scene:
     """An analytic sphere light and a disk light over a bump-mapped disk floor, a glass sphere and a textured
     cylinder."""
@@ -363,6 +372,8 @@ SCENES = {
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.
     "hidden_area_light": lambda: replace(_bundled("cornell_box"), hide_emitters=True),
     "instances": _instanced_scene,
+    # Frames along dp/du: the anisotropic sphere's and rectangle's (an analytic shape, triangles with UVs).
+    "anisotropic_principled": _anisotropic_scene,
 }
 
 
@@ -379,7 +390,16 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "name", ["cornell_box", "prism", "environment_map", "distant_and_spot", "trilinear_texture", "analytic_shapes"]
+    "name",
+    [
+        "cornell_box",
+        "prism",
+        "environment_map",
+        "distant_and_spot",
+        "trilinear_texture",
+        "analytic_shapes",
+        "anisotropic_principled",
+    ],
 )
 def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):
     """The same for the light tracer (which refuses media, so no subsurface scene)."""
