@@ -19,6 +19,21 @@ inline ShadingFrame shading_frame(float3 normal)
     return f;
 }
 
+/* The frame whose tangent is d's part normal to `normal` (Gram-Schmidt), as Mitsuba 3 builds its shading frame
+ * from dp/du (SurfaceInteraction::initialize_sh_frame), the bitangent completing a right-handed frame; the
+ * normal's own basis where d has no such part (0, parallel to it, or not finite). */
+inline ShadingFrame shading_frame_along(float3 normal, float3 d)
+{
+    float3 t = d - normal * dot(normal, d);
+    float length_t = length(t);
+    if (!(length_t > 0.0f) || !isfinite(length_t)) return shading_frame(normal);
+    ShadingFrame f;
+    f.normal = normal;
+    f.tangent = t / length_t;
+    f.bitangent = cross(normal, f.tangent);
+    return f;
+}
+
 inline float3 to_local(const ShadingFrame *f, float3 v)
 {
     return (float3)(dot(v, f->tangent), dot(v, f->bitangent), dot(v, f->normal));

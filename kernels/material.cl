@@ -59,10 +59,17 @@ inline float3 facing(float3 n, float3 wo)
 /* The local frame of material m at a surface of (shading) normal n seen from wo. A reflector's frame's normal is
  * turned toward wo (local wo.z ≥ 0): it reflects on both faces, unless one-sided (material_back_is_black). A
  * transmitting one keeps n on the winding's front: which side is the interior (so the sign of the refraction) comes from the winding, so closed meshes need
- * outward normals. */
-inline ShadingFrame material_frame(__global const Material *m, float3 n, float3 wo)
+ * outward normals. A material with Material.tangent_frame (an anisotropic lobe) takes its x axis along the
+ * surface's dp/du (sc->dpdu), Mitsuba 3's convention, so the highlight follows the texture coordinates; every other
+ * frame's tangent is arbitrary, the BSDF being isotropic about the normal. Every integrator's eval, pdf and
+ * sampling come through here, so all see the same frame. */
+inline ShadingFrame material_frame(__global const Material *m, const SurfaceContext *sc, float3 n, float3 wo)
 {
-    return shading_frame((material_flags(m) & BSDF_TRANSMISSION) ? n : facing(n, wo));
+    float3 normal = (material_flags(m) & BSDF_TRANSMISSION) ? n : facing(n, wo);
+#if SCENE_HAS_TANGENT_FRAMES
+    if (m->tangent_frame) return shading_frame_along(normal, sc->dpdu);
+#endif
+    return shading_frame(normal);
 }
 
 /* f(wo, wi)·|cos θi| per wavelength, local directions. */
@@ -146,7 +153,7 @@ inline float4 material_eval(__global const Material *m, const SurfaceContext *sc
                             float3 n, float3 wo, float3 wi)
 {
     if (material_back_is_black(m, n, wo)) return (float4)(0.0f);
-    ShadingFrame frame = material_frame(m, n, wo);
+    ShadingFrame frame = material_frame(m, sc, n, wo);
     return material_eval_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi)) *
            material_shadowing(m, sc, n, wi);
 }
@@ -155,7 +162,7 @@ inline float material_pdf(__global const Material *m, const SurfaceContext *sc, 
                           float3 n, float3 wo, float3 wi)
 {
     if (material_back_is_black(m, n, wo)) return 0.0f;
-    ShadingFrame frame = material_frame(m, n, wo);
+    ShadingFrame frame = material_frame(m, sc, n, wo);
     return material_pdf_local(m, sc, w, to_local(&frame, wo), to_local(&frame, wi));
 }
 
@@ -163,7 +170,7 @@ inline int material_sample(__global const Material *m, const SurfaceContext *sc,
                            float3 n, float3 wo, float uc, float2 u, BSDFSample *s)
 {
     if (material_back_is_black(m, n, wo)) return 0;
-    ShadingFrame frame = material_frame(m, n, wo);
+    ShadingFrame frame = material_frame(m, sc, n, wo);
     if (!material_sample_local(m, sc, w, to_local(&frame, wo), uc, u, s)) return 0;
     s->wi = to_world(&frame, s->wi);
     /* The pdf stays the nested BSDF's, as in Mitsuba: the term is part of the value, so of the weight. */

@@ -83,6 +83,25 @@ inline int max_segments(__global const RenderParams *params)
     return params->max_depth < 0 ? UNBOUNDED_DEPTH : params->max_depth;
 }
 
+/* 1 when the material shading a vertex frames its BSDF along dp/du (Material.tangent_frame): only then is dp/du
+ * formed, so no other material's vertex does more work. */
+inline int vertex_follows_tangent(const Scene *scene, int material)
+{
+#if SCENE_HAS_TANGENT_FRAMES
+    return material != TRIANGLE_NO_MATERIAL && scene->materials[material].tangent_frame;
+#else
+    return 0;
+#endif
+}
+
+/* A triangle's dp/du (object space for an instance's), 0 where its texture coordinates are degenerate, so that
+ * material_frame falls back to the normal's own basis. */
+inline float3 triangle_dpdu(const Scene *scene, int triangle)
+{
+    float3 dpdu = (float3)(0.0f), dpdv = (float3)(0.0f);
+    return triangle_dp_duv(scene, triangle, &dpdu, &dpdv) ? dpdu : (float3)(0.0f);
+}
+
 /* Where a path's ray met a surface. */
 typedef struct {
     TriangleInfo info;  /* the triangle's, but `material`: the BSDF that shades this point, a mix resolved into
@@ -92,6 +111,7 @@ typedef struct {
     float3 ns;  /* shading normal, the BSDF's frame: n itself on a flat triangle (shading_normal.cl), turned by a
                    normal or bump map (surface_detail.cl) */
     float3 ns_base;  /* the shading normal before a normal or bump map turned it: their shadowing term's reference */
+    float3 dpdu;     /* the surface's dp/du where its material's frame follows it (Material.tangent_frame), else 0 */
     float3 wo;  /* back along the ray */
     float2 uv;  /* texture coordinates (only in scenes with material textures) */
     float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; 0 unless SCENE_NEEDS_FOOTPRINT) */
@@ -117,6 +137,7 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
                                               (float2)(0.0f, 1.0f));
     }
     if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
+    v.dpdu = vertex_follows_tangent(scene, v.info.material) ? g.dpdu : (float3)(0.0f);
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         __global const Material *m = &scene->materials[v.info.material];
         if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
@@ -154,6 +175,10 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
         }
     }
     if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
+    v.dpdu = (float3)(0.0f);
+    if (vertex_follows_tangent(scene, v.info.material)) {
+        v.dpdu = affine_vector(instance->to_world, triangle_dpdu(scene, hit.triangle));
+    }
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         __global const Material *m = &scene->materials[v.info.material];
         if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
@@ -190,6 +215,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     }
     if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
     v.ns_base = v.ns;
+    v.dpdu = vertex_follows_tangent(scene, v.info.material) ? triangle_dpdu(scene, hit.triangle) : (float3)(0.0f);
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         v.ns = detailed_normal(scene, &scene->materials[v.info.material], hit.triangle, v.uv, v.footprint, v.n,
                                v.ns, v.wo);
@@ -281,7 +307,7 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
 {
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
-        SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, 0);
+        SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
         *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
                                                            v->info.interior, s->medium, use_mis,
                                                            path_query(sampler, s, QUERY_SHADOW), rays_traced);
@@ -299,7 +325,7 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
-    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, 0);
+    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
     return material_sample(material, &sc, w, v->ns, v->wo, uc, u, bs)
         && shading_side_agrees(v->n, v->ns, bs->wi);
 }

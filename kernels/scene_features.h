@@ -70,6 +70,11 @@
 #define SCENE_HAS_ONE_SIDED 1
 #endif
 
+/* Materials whose frame follows dp/du (Material.tangent_frame, kernels/material.cl): vertices carry dp/du. */
+#ifndef SCENE_HAS_TANGENT_FRAMES
+#define SCENE_HAS_TANGENT_FRAMES 1
+#endif
+
 /* hide_emitters with area lights: the camera's own rays pass through them (kernels/path_tracer.cl). */
 #ifndef SCENE_HIDES_AREA_EMITTERS
 #define SCENE_HIDES_AREA_EMITTERS 1

@@ -285,12 +285,14 @@ inline float4 texture_numbers(const TextureBuffers *b, int index, float2 uv, flo
 
 /* What a material's parameters are looked up with at a surface point: the buffers, the point's texture
  * coordinates and the lookup's footprint (the width of its filter region in uv units; 0 reads the finest level);
- * and what the shadowing term of a normal or bump map needs (material.cl, material_shadowing). */
+ * what the shadowing term of a normal or bump map needs (material.cl, material_shadowing); and the direction an
+ * anisotropic material's frame follows (material.cl, material_frame). */
 typedef struct {
     TextureBuffers buffers;
     float2 uv;
     float footprint;
     float3 base_normal;  /* unit: the shading normal before a normal or bump map turned it; 0: no shadowing term */
+    float3 dpdu;         /* the surface's dp/du at the point, for a material with Material.tangent_frame; 0: none */
     int adjoint;         /* 1: the transport carries importance, so a sampled direction is the viewer's side and
                             wo the light's (light tracer, photons, BDPT light subpaths); 0: radiance */
 } SurfaceContext;

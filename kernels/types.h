@@ -150,7 +150,9 @@ typedef struct {
     int shadowing;              /* 1: with a normal or bump map, the BSDF's value is scaled by the shadowing term of
                                    Conty Estevez et al. 2019 (material.cl, material_shadowing), as Mitsuba 3's
                                    `use_shadowing_function`; 0: it is not */
-    int pad[3];                 /* to the float4 alignment */
+    int tangent_frame;          /* 1: the BSDF's frame turns its x axis along the surface's dp/du (an anisotropic
+                                   lobe's direction, material.cl's material_frame); 0: any frame about the normal */
+    int pad[2];                 /* to the float4 alignment */
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its

@@ -21,6 +21,7 @@ inline SurfaceContext harness_context(__global const float *spectra)
     sc.uv = (float2)(0.0f);
     sc.footprint = 0.0f;
     sc.base_normal = (float3)(0.0f);
+    sc.dpdu = (float3)(0.0f);
     sc.adjoint = 0;
     return sc;
 }

@@ -100,6 +100,13 @@ CASES = {
     "diffusetransmission": [Case("white", lambda: S.diffusetransmission(0.3, 0.7), True, False)],
     "principled": [
         Case("white metal", lambda: S.principled(1.0, roughness=0.5, metallic=1.0), False, False, fast=("bdpt",)),
+        # framed along the sphere's dp/du (material_frame), the same frame in every integrator
+        Case(
+            "anisotropic white metal",
+            lambda: S.principled(1.0, roughness=0.5, metallic=1.0, anisotropic=0.9),
+            False,
+            False,
+        ),
         Case("glass", lambda: S.principled(1.0, roughness=0.5, spec_trans=1.0), False, False, fast=("bdpt",)),
         Case("grey base with clearcoat", lambda: S.principled(0.5, roughness=0.5, clearcoat=1.0), False, False),
     ],

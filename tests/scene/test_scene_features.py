@@ -13,6 +13,7 @@ import spectrace
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.scene_buffers import build_scene_buffers
 from spectrace.engine.scene_features import scene_feature_defines
+from spectrace.materials import MATERIALS
 from spectrace.resources import scenes_dir
 from spectrace.scene import load_scene
 from spectrace.scene.model import EnvironmentMap
@@ -82,6 +83,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
         "SCENE_HAS_ONE_SIDED": 0,
+        "SCENE_HAS_TANGENT_FRAMES": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
     }
     assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
@@ -118,6 +120,21 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
             _environment_map_scene(), shapes=[spectrace.shape("rectangle", spectrace.diffuse(0.5, two_sided=two_sided))]
         )
         assert scene_feature_defines(build_scene_buffers(scene))["SCENE_HAS_ONE_SIDED"] == int(not two_sided)
+    # Only an anisotropic lobe asks for the frame along dp/du: a weight above 0, or a texture of it above 0 somewhere.
+    for material, tangent_frames in (
+        (spectrace.principled(0.5, roughness=0.4, metallic=1.0), 0),
+        (spectrace.principled(0.5, roughness=0.4, metallic=1.0, anisotropic=0.5), 1),
+        (spectrace.principled(0.5, anisotropic=spectrace.bitmap(np.array([[0.0, 0.7]]))), 1),
+        (spectrace.principled(0.5, anisotropic=spectrace.bitmap(np.zeros((1, 2)))), 0),
+        (spectrace.principledthin(0.5, roughness=0.4, anisotropic=0.9), 1),
+        (spectrace.principledthin(0.5, roughness=0.4), 0),
+    ):
+        scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
+        buffers = build_scene_buffers(scene)
+        assert scene_feature_defines(buffers)["SCENE_HAS_TANGENT_FRAMES"] == tangent_frames, material
+        principled_codes = [MATERIALS.codes["principled"], MATERIALS.codes["principledthin"]]
+        rows = buffers.materials[np.isin(buffers.materials["type"], principled_codes)]
+        assert list(rows["tangent_frame"]) == [tangent_frames], material
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():
@@ -222,6 +239,15 @@ def _surface_detail_scene(cut_out: bool = True) -> spectrace.Scene:
         height=16,
         spp=4,
     )
+
+
+def _anisotropic_scene() -> spectrace.Scene:
+    """The analytic shapes' scene with its glass sphere and its floor of anisotropic principled metal."""
+    base = _analytic_shapes_scene()
+    metal = spectrace.principled(0.8, roughness=0.4, metallic=1.0, anisotropic=0.9)
+    sphere = replace(base.shapes[1], material=metal)
+    floor = spectrace.shape("rectangle", metal, transform=[{"rotate": {"axis": [0, 0, 1], "angle": 30}}, {"scale": 3}])
+    return replace(base, shapes=[floor, sphere, *base.shapes[2:]])
 
 
 def _analytic_shapes_scene() -> spectrace.Scene:
@@ -346,6 +372,8 @@ SCENES = {
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.
     "hidden_area_light": lambda: replace(_bundled("cornell_box"), hide_emitters=True),
     "instances": _instanced_scene,
+    # Frames along dp/du: the anisotropic sphere's and rectangle's (an analytic shape, triangles with UVs).
+    "anisotropic_principled": _anisotropic_scene,
 }
 
 
@@ -362,7 +390,16 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "name", ["cornell_box", "prism", "environment_map", "distant_and_spot", "trilinear_texture", "analytic_shapes"]
+    "name",
+    [
+        "cornell_box",
+        "prism",
+        "environment_map",
+        "distant_and_spot",
+        "trilinear_texture",
+        "analytic_shapes",
+        "anisotropic_principled",
+    ],
 )
 def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):
     """The same for the light tracer (which refuses media, so no subsurface scene)."""

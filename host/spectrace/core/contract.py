@@ -139,7 +139,8 @@ MATERIAL_DTYPE = _struct(
         ("opacity_texture", "<i4"),
         ("one_sided", "<i4"),
         ("shadowing", "<i4"),
-        ("pad", ("<i4", (3,))),
+        ("tangent_frame", "<i4"),
+        ("pad", ("<i4", (2,))),
     ],
     128,
 )

@@ -58,7 +58,8 @@ ROUGHNESS = _weight(
 ANISOTROPIC = _weight(
     "anisotropic",
     0.0,
-    "stretches the specular lobe along the shading frame's tangent: αu = α/√(1 − 0.9 a), αv = α √(1 − 0.9 a)",
+    "stretches the specular lobe along the surface's dp/du (its texture coordinates' u): αu = α/√(1 − 0.9 a), "
+    "αv = α √(1 − 0.9 a)",
 )
 METALLIC = _weight("metallic", 0.0, "blend from dielectric (0) to metal (1) whose Schlick F0 is `base_color`")
 SPEC_TRANS = _weight(
@@ -214,6 +215,14 @@ def base_luminance(base: Spectrum) -> float:
     return float(luminance_cd_m2(base) / luminance_cd_m2(Spectrum.constant(1.0)))
 
 
+def is_anisotropic(anisotropic) -> bool:
+    """Whether an `anisotropic` weight (a number or a texture) is above 0 anywhere: such a material's row asks for
+    its frame along dp/du (Material.tangent_frame), so that its highlight follows the texture coordinates."""
+    from spectrace.textures import is_texture, scalar_range
+
+    return bool((scalar_range(anisotropic)[1] if is_texture(anisotropic) else anisotropic) > 0.0)
+
+
 def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTable, textures=None) -> None:
     """base_color in the row's reflectance fields, eta in its index fields; the scalar weights in a parameter block
     of the spectrum table (Material.coat_table_offset): for weight k (SCALARS' order) its value at 2k and its
@@ -240,6 +249,7 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
             block[2 * k + 1] = NO_TEXTURE
     row["coat_table_offset"] = table.add_block(block)
     row["nonlinear"] = int(material.has_transmission)  # the flags' BSDF_TRANSMISSION, from the row alone
+    row["tangent_frame"] = int(is_anisotropic(material.anisotropic))
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:

@@ -166,6 +166,7 @@ def write_row(row: np.ndarray, material: PrincipledthinMaterial, table: Spectrum
             block[2 * k + 1] = NO_TEXTURE
     row["coat_table_offset"] = table.add_block(block)
     row["nonlinear"] = int(material.has_transmission)  # the flags' BSDF_TRANSMISSION, from the row alone
+    row["tangent_frame"] = int(principled.is_anisotropic(material.anisotropic))
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
