@@ -40,12 +40,13 @@ def test_an_unmarked_block_is_found(tmp_path, monkeypatch):
         "```python no-test:\nimport spectrace\n```\n"
         "```python no-test: needs your own scene.toml\nimport spectrace\n```\n"
         "```toml\n# a fragment\n```\n"
-        "```\nscene.toml:3: an error message\n```\n",
+        "```\nscene.toml:3: an error message\n```\n"
+        "```\nSPECTRACE_DEVICE=pocl python -m pytest\n```\n",
         encoding="utf-8",
     )
     monkeypatch.setattr("tooling.docs_examples.PAGES", [page])
     monkeypatch.setattr("tooling.docs_examples.ROOT", tmp_path)
-    assert unmarked_blocks() == ["page.md:1", "page.md:4", "page.md:7"]
+    assert unmarked_blocks() == ["page.md:1", "page.md:4", "page.md:7", "page.md:19"]
 
 
 def test_every_picture_the_docs_show_is_made_by_a_tested_block():

@@ -40,7 +40,8 @@ SMALL_RENDER = "spp=2, width=32, height=20"
 SMALL_OPTIONS = {("render",): SMALL, ("display", "metamerism"): {"--spp": "2"}}
 _FENCE = re.compile(r"^\s*```(\w*)(.*)$")  # indented too: a block inside a list item
 COMMAND_LANGUAGES = ("sh", "bash", "console", "python")
-_COMMAND_LINE = re.compile(r"^\s*(\$ |spectrace |python )", re.MULTILINE)  # a command in a block of no language
+# A command in a block of no language: a prompt, or spectrace, Python or pip after any environment variables.
+_COMMAND_LINE = re.compile(r"^\s*(\$ |(\w+=\S* )*(spectrace|python3?|pip) )", re.MULTILINE)
 _IMAGE = re.compile(r"!\[[^\]]*\]\(([^)\s]+)\)")
 _FILE_COMMENT = re.compile(r"^#\s*([\w.-]+\.(?:toml|pbrt))\b")
 
