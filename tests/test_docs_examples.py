@@ -49,6 +49,19 @@ def test_an_unmarked_block_is_found(tmp_path, monkeypatch):
     assert unmarked_blocks() == ["page.md:1", "page.md:4", "page.md:7", "page.md:19"]
 
 
+@pytest.mark.subprocess
+def test_a_fragment_marked_continues_runs_after_the_examples_above_it(tmp_path, monkeypatch):
+    monkeypatch.setattr("tooling.docs_examples.ROOT", tmp_path)
+    (tmp_path / "run").mkdir()
+    page = tmp_path / "page.md"
+    page.write_text(
+        "```python test\nx = 2\n```\n```python test continues\nassert x == 2\n```\n```python test\nx\n```\n",
+        encoding="utf-8",
+    )
+    with pytest.raises(AssertionError, match=r"(?s)page.md:7.*NameError"):
+        run_page(page, tmp_path / "run", reduced=False)  # the third, not continuing, does not see x
+
+
 def test_every_picture_the_docs_show_is_made_by_a_tested_block():
     made = set().union(*(pictures_made(page) for page in PAGES))
     unmade = [

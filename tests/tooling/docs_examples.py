@@ -9,7 +9,8 @@ and `tests` (linked) and an empty `docs/images`:
 - each command of a shell block (lines joined at a trailing backslash) that starts with `spectrace` runs as
   `python -m spectrace ...`; the commands that render at a small size (`render`'s `--spp`, `--width`, `--height`
   replaced, `display metamerism`'s `--spp`);
-- a Python block runs in a fresh interpreter in which `spectrace.render` renders at that small size.
+- a Python block runs in a fresh interpreter in which `spectrace.render` renders at that small size; one marked
+  ` test continues` (a fragment that goes on from the page's examples above) runs after those examples' code.
 
 Every command must exit 0. A shell or Python block that cannot run here says why in its info string
 (```` ```sh no-test: needs your own scene.xml ````), so that a new example is run unless its page says otherwise.
@@ -63,6 +64,7 @@ class Block:
     language: str
     text: str
     tested: bool = False
+    continues: bool = False  # runs after the page's tested Python blocks above it
     untested_because: str | None = None  # the reason a `no-test:` marker gives; "" when it gives none
 
     @property
@@ -82,11 +84,11 @@ def blocks(page: Path, tested_only: bool = True) -> list[Block]:
             continue
         end = next((k for k in range(index + 1, len(lines)) if lines[k].lstrip().startswith("```")), len(lines))
         marker = match[2].strip()
-        tested = marker == "test"
+        tested = marker in ("test", "test continues")
         reason = marker.removeprefix("no-test:").strip() if marker.startswith("no-test:") else None
         if tested or not tested_only:
             text = textwrap.dedent("\n".join(lines[index + 1 : end]) + "\n")
-            found.append(Block(page, index + 1, match[1], text, tested, reason))
+            found.append(Block(page, index + 1, match[1], text, tested, marker == "test continues", reason))
         index = end + 1
     return found
 
@@ -156,8 +158,9 @@ def prepare(folder: Path) -> None:
     (folder / "docs" / "images").mkdir(parents=True)
 
 
-def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float = 600) -> None:
-    """Run one block in `folder`; an AssertionError naming the block and the command when it fails."""
+def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float = 600, above: str = "") -> None:
+    """Run one block in `folder` (a Python block that continues after the code `above`); an AssertionError naming
+    the block and the command when it fails."""
     environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "host"), os.environ.get("PYTHONPATH", "")])}
     if block.language in ("toml", "pbrt"):
         match = _FILE_COMMENT.match(block.text)
@@ -170,7 +173,8 @@ def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float =
         calls = [([sys.executable, "-m", "spectrace", *arguments[1:]], shown) for arguments, shown in runs]
     elif block.language == "python":
         prelude = _PYTHON_PRELUDE.format(small=SMALL_RENDER) if reduced else ""
-        calls = [([sys.executable, "-c", prelude + block.text], f"the Python block at {block.where}")]
+        code = prelude + (above if block.continues else "") + block.text
+        calls = [([sys.executable, "-c", code], f"the Python block at {block.where}")]
     else:
         raise AssertionError(f"{block.where}: cannot run a {block.language} block")
     for call, shown in calls:
@@ -180,8 +184,11 @@ def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float =
 
 def run_page(page: Path, folder: Path, reduced: bool = True) -> None:
     prepare(folder)
+    python_above = ""
     for block in blocks(page):
-        run_block(block, folder, reduced)
+        run_block(block, folder, reduced, above=python_above)
+        if block.language == "python":
+            python_above += block.text
 
 
 if __name__ == "__main__":
