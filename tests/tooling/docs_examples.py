@@ -4,14 +4,20 @@ A fenced block whose info string ends in ` test` (```` ```sh test ````, ```` ```
 ```` ```toml test ````) is run, in the page's order, in one temporary folder that holds the repository's `scenes`
 and `tests` (linked) and an empty `docs/images`:
 
-- a TOML block whose first line is a comment opening with a file name (`# first.toml: ...`) is written to that file;
+- a TOML or pbrt block whose first line is a comment opening with a file name (`# first.toml: ...`) is written to
+  that file;
 - each command of a shell block (lines joined at a trailing backslash) that starts with `spectrace` runs as
-  `python -m spectrace ...`; `render` commands at a small size (their `--spp`, `--width`, `--height` replaced);
-- a Python block runs in a fresh interpreter in which `spectrace.render` renders at that small size.
+  `python -m spectrace ...`; the commands that render at a small size (`render`'s `--spp`, `--width`, `--height`
+  replaced, `display metamerism`'s `--spp`);
+- a Python block runs in a fresh interpreter in which `spectrace.render` renders at that small size; one marked
+  ` test continues` (a fragment that goes on from the page's examples above) runs after those examples' code.
 
-Every command must exit 0. `python -m tests.tooling.docs_examples PAGE...` runs pages at their full size and copies
-the pictures they write under docs/images into the repository's docs/images: the docs' pictures are made by the
-commands the pages show.
+Every command must exit 0. A shell or Python block that cannot run here says why in its info string
+(```` ```sh no-test: needs your own scene.xml ````), so that a new example is run unless its page says otherwise.
+
+`python -m tests.tooling.docs_examples PAGE...` runs pages at their full size and copies the pictures they write
+under docs/images and show into the repository's docs/images: the docs' pictures are made by the commands the
+pages show.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import shlex
 import shutil
 import subprocess
 import sys
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,9 +36,15 @@ ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 SMALL = {"--spp": "2", "--width": "32", "--height": "20"}
 SMALL_RENDER = "spp=2, width=32, height=20"
-_FENCE = re.compile(r"^```(\w+)(?: (test))?\s*$")
+# The commands that render, by their words, and the options that make them small (`display metamerism` renders
+# with --scene; its --spp is otherwise unused).
+SMALL_OPTIONS = {("render",): SMALL, ("display", "metamerism"): {"--spp": "2"}}
+_FENCE = re.compile(r"^\s*```(\w*)(.*)$")  # indented too: a block inside a list item
+COMMAND_LANGUAGES = ("sh", "bash", "console", "python")
+# A command in a block of no language: a prompt, or spectrace, Python or pip after any environment variables.
+_COMMAND_LINE = re.compile(r"^\s*(\$ |(\w+=\S* )*(spectrace|python3?|pip) )", re.MULTILINE)
 _IMAGE = re.compile(r"!\[[^\]]*\]\(([^)\s]+)\)")
-_FILE_COMMENT = re.compile(r"^#\s*([\w.-]+\.toml)\b")
+_FILE_COMMENT = re.compile(r"^#\s*([\w.-]+\.(?:toml|pbrt))\b")
 
 # A Python example's renders at the small size: the scene's size and samples replaced before it renders.
 _PYTHON_PRELUDE = """
@@ -50,6 +63,9 @@ class Block:
     line: int  # of the opening fence, 1-based
     language: str
     text: str
+    tested: bool = False
+    continues: bool = False  # runs after the page's tested Python blocks above it
+    untested_because: str | None = None  # the reason a `no-test:` marker gives; "" when it gives none
 
     @property
     def where(self) -> str:
@@ -66,11 +82,38 @@ def blocks(page: Path, tested_only: bool = True) -> list[Block]:
         if match is None:
             index += 1
             continue
-        end = next((k for k in range(index + 1, len(lines)) if lines[k].startswith("```")), len(lines))
-        if match[2] or not tested_only:
-            found.append(Block(page, index + 1, match[1], "\n".join(lines[index + 1 : end]) + "\n"))
+        end = next((k for k in range(index + 1, len(lines)) if lines[k].lstrip().startswith("```")), len(lines))
+        marker = match[2].strip()
+        tested = marker in ("test", "test continues")
+        reason = marker.removeprefix("no-test:").strip() if marker.startswith("no-test:") else None
+        if tested or not tested_only:
+            text = textwrap.dedent("\n".join(lines[index + 1 : end]) + "\n")
+            found.append(Block(page, index + 1, match[1], text, tested, marker == "test continues", reason))
         index = end + 1
     return found
+
+
+def unmarked_blocks() -> list[str]:
+    """Where a shell or Python block is neither run nor says why it cannot be."""
+    return [
+        block.where
+        for page in PAGES
+        for block in blocks(page, tested_only=False)
+        if not block.tested
+        and not block.untested_because
+        and (block.language in COMMAND_LANGUAGES or (not block.language and _COMMAND_LINE.search(block.text)))
+    ]
+
+
+def pictures_made(page: Path) -> set[str]:
+    """The names of the pictures the page shows that its tested blocks write: a block names the picture's
+    docs/images path, or that of an image the picture is written beside (`booths.exr` for `booths.deltaE00.png`)."""
+    written = "\n".join(block.text for block in blocks(page))
+    return {
+        path.name
+        for _, path in image_references(page)
+        if re.search(rf"docs/images/{re.escape(path.name.split('.')[0])}\.", written)
+    }
 
 
 def tested_pages() -> list[Path]:
@@ -94,18 +137,19 @@ def commands(block: Block) -> list[list[str]]:
 
 
 def small(arguments: list[str]) -> list[str]:
-    """A render command's arguments with SMALL's options in place of its own."""
-    if arguments[1:2] != ["render"]:
+    """A rendering command's arguments with its small options (SMALL_OPTIONS) in place of its own."""
+    options = next((o for words, o in SMALL_OPTIONS.items() if arguments[1 : 1 + len(words)] == list(words)), None)
+    if options is None:
         return arguments
     kept, skip = [], False
     for argument in arguments:
         if skip:
             skip = False
-        elif argument in SMALL:
+        elif argument in options:
             skip = True
         else:
             kept.append(argument)
-    return kept + [item for pair in SMALL.items() for item in pair]
+    return kept + [item for pair in options.items() for item in pair]
 
 
 def prepare(folder: Path) -> None:
@@ -114,12 +158,13 @@ def prepare(folder: Path) -> None:
     (folder / "docs" / "images").mkdir(parents=True)
 
 
-def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float = 600) -> None:
-    """Run one block in `folder`; an AssertionError naming the block and the command when it fails."""
+def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float = 600, above: str = "") -> None:
+    """Run one block in `folder` (a Python block that continues after the code `above`); an AssertionError naming
+    the block and the command when it fails."""
     environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "host"), os.environ.get("PYTHONPATH", "")])}
-    if block.language == "toml":
+    if block.language in ("toml", "pbrt"):
         match = _FILE_COMMENT.match(block.text)
-        assert match, f"{block.where}: a tested TOML block opens with a comment naming its file (# name.toml)"
+        assert match, f"{block.where}: a tested {block.language} block opens with a comment naming its file"
         (folder / match[1]).write_text(block.text, encoding="utf-8")
         return
     if block.language in ("sh", "bash", "console"):
@@ -128,7 +173,8 @@ def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float =
         calls = [([sys.executable, "-m", "spectrace", *arguments[1:]], shown) for arguments, shown in runs]
     elif block.language == "python":
         prelude = _PYTHON_PRELUDE.format(small=SMALL_RENDER) if reduced else ""
-        calls = [([sys.executable, "-c", prelude + block.text], f"the Python block at {block.where}")]
+        code = prelude + (above if block.continues else "") + block.text
+        calls = [([sys.executable, "-c", code], f"the Python block at {block.where}")]
     else:
         raise AssertionError(f"{block.where}: cannot run a {block.language} block")
     for call, shown in calls:
@@ -138,8 +184,11 @@ def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float =
 
 def run_page(page: Path, folder: Path, reduced: bool = True) -> None:
     prepare(folder)
+    python_above = ""
     for block in blocks(page):
-        run_block(block, folder, reduced)
+        run_block(block, folder, reduced, above=python_above)
+        if block.language == "python":
+            python_above += block.text
 
 
 if __name__ == "__main__":
@@ -149,6 +198,9 @@ if __name__ == "__main__":
         page = (ROOT / name).resolve()
         with tempfile.TemporaryDirectory() as temporary:
             run_page(page, Path(temporary), reduced=False)
+            shown = {path.name for _, path in image_references(page)}
             for picture in (Path(temporary) / "docs" / "images").iterdir():
+                if picture.name not in shown:  # an image the page writes but does not show (an EXR beside its map)
+                    continue
                 shutil.copy2(picture, ROOT / "docs" / "images" / picture.name)
                 print(f"wrote docs/images/{picture.name}")
