@@ -374,37 +374,40 @@ def _render_here(job, output: Path, xyz: bool, quiet: bool, state_file, interval
     """The render in one piece on one device of this machine, then its files."""
     from spectrace.cli.render_output import write_render
     from spectrace.engine.stop_signals import StopOnSignals
+    from spectrace.session import Session
 
-    renderer = job.renderer()
-    report = renderer.device.report
-    _say(f"device: {report.key} ({report.device_name})")
-    _say(_scene_line(renderer.buffers))
-    identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
-    with StopOnSignals() as stop, _display(job, output) as display:
-        _render_passes(renderer, stop, state_file, interval, quiet, identity, display)
-        interrupted = stop.requested
-        image = renderer.image()
-        if image.spp == 0:
-            raise SpectraceError("interrupted before the first pass finished; nothing written")
-        image = write_render(
-            job,
-            image,
-            output,
-            include_xyz=xyz,
-            state_file=state_file,
-            noisy=noisy,
-            device=renderer.device,
-            log=_say,
+    # The same session `spectrace.render` and the viewer render through; a command-line render is its first passes.
+    with Session.for_job(job) as session:
+        renderer = session.renderer
+        report = renderer.device.report
+        _say(f"device: {report.key} ({report.device_name})")
+        _say(_scene_line(renderer.buffers))
+        identity = _resume(renderer, saved, resume) if saved is not None and resume is not None else None
+        with StopOnSignals() as stop, _display(job, output) as display:
+            _render_passes(renderer, stop, state_file, interval, quiet, identity, display)
+            interrupted = stop.requested
+            image = renderer.image()
+            if image.spp == 0:
+                raise SpectraceError("interrupted before the first pass finished; nothing written")
+            image = write_render(
+                job,
+                image,
+                output,
+                include_xyz=xyz,
+                state_file=state_file,
+                noisy=noisy,
+                device=renderer.device,
+                log=_say,
+            )
+        if display is not None:
+            display.finish(image)
+        pixels = image.width * image.height * image.spp
+        note = " (interrupted: partial image)" if interrupted else ""
+        note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
+        _say(
+            f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
+            f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}"
         )
-    if display is not None:
-        display.finish(image)
-    pixels = image.width * image.height * image.spp
-    note = " (interrupted: partial image)" if interrupted else ""
-    note += f" (denoised; the noisy image is {noisy})" if noisy is not None else ""
-    _say(
-        f"wrote {output}: {image.width}x{image.height}, {image.spp} spp, {image.render_seconds:.2f} s, "
-        f"{pixels / max(image.render_seconds, 1e-9) / 1e6:.2f} M samples/s{note}"
-    )
     if image.dropped_samples:
         console.print(f"warning: {image.dropped_samples} non-finite samples were dropped", highlight=False)
     if interrupted:
