@@ -248,7 +248,7 @@ def test_sigterm_writes_the_true_partial_image_and_the_render_resumes_exactly(de
     """A real `spectrace render`, stopped by SIGTERM: the image's spp is the number of samples in it, and the
     checkpoint continues the render to the same floats as an uninterrupted render."""
     partial, resumed, state = tmp_path / "partial.exr", tmp_path / "resumed.exr", tmp_path / "state.npz"
-    size = ["--width", "16", "--height", "12", "--seed", "3", "-q"]
+    size = ["--width", "16", "--height", "12", "--seed", "3"]  # not -q: the test reads the device and wrote lines
     process = subprocess.Popen(
         _spectrace(
             "render",
