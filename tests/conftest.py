@@ -1,6 +1,7 @@
 """Shared fixtures. Every test that runs kernels uses one device for the whole session, chosen as the CLI
 chooses (SPECTRACE_DEVICE, else the automatic pick); the report header names it."""
 
+import math
 import os
 
 import numpy as np
@@ -8,6 +9,7 @@ import pyopencl as cl
 import pytest
 
 from spectrace.device import open_device
+from spectrace.engine.launch import is_pocl
 from spectrace.plugins import generated_sources
 
 # Renders use the kernels built for every scene unless a test asks for a scene's own (the specialisation tests,
@@ -15,6 +17,8 @@ from spectrace.plugins import generated_sources
 # feature set. Set here, so that child processes (the CLI tests) inherit it; SPECTRACE_GENERAL_KERNELS=0 runs the
 # suite on the specialised kernels instead.
 os.environ.setdefault("SPECTRACE_GENERAL_KERNELS", "1")
+
+HARNESS_GROUP = 64
 
 
 def pytest_report_header(config):
@@ -46,12 +50,18 @@ class KernelRunner:
         flags = (cl.mem_flags.READ_WRITE if writable else cl.mem_flags.READ_ONLY) | cl.mem_flags.COPY_HOST_PTR
         return cl.Buffer(self.device.context, flags, hostbuf=np.ascontiguousarray(array))
 
+    def _local_size(self, global_size: int) -> tuple[int] | None:
+        # PoCL compiles a kernel anew for each work-group size, and left to choose it picks one from the global
+        # size, so every test's own item count was one more compile. The harness kernels run one work-item per
+        # item with no bounds check, so the group divides the global size: one of a few sizes for any count.
+        return (math.gcd(global_size, HARNESS_GROUP),) if is_pocl(self.device) else None
+
     def run(self, name: str, global_size: int, args: list, outputs: dict[int, np.ndarray]) -> None:
         """args: buffers or numpy scalars; outputs: {argument index: host array to read that buffer into}."""
         if name not in self.kernels:
             self.kernels[name] = cl.Kernel(self.program, name)
         kernel = self.kernels[name]
-        kernel(self.device.queue, (global_size,), None, *args)
+        kernel(self.device.queue, (global_size,), self._local_size(global_size), *args)
         for index, host in outputs.items():
             cl.enqueue_copy(self.device.queue, host, args[index])
         self.device.queue.finish()

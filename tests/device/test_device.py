@@ -179,6 +179,26 @@ def _fresh_python(code: str, tmp_path: Path) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.subprocess
+@pytest.mark.parametrize("given", [None, "1"])
+def test_pocl_work_group_specialisation_is_off_unless_the_user_sets_it(tmp_path, given, monkeypatch):
+    # PoCL's compile per work-group size, offset and grid class doubled a cold program's cost for the same bits.
+    monkeypatch.delenv("POCL_WORK_GROUP_SPECIALIZATION", raising=False)
+    if given is not None:
+        monkeypatch.setenv("POCL_WORK_GROUP_SPECIALIZATION", given)
+    result = _fresh_python(
+        """
+        import os
+        from spectrace.device import prepare_opencl_environment
+        prepare_opencl_environment()
+        print(os.environ["POCL_WORK_GROUP_SPECIALIZATION"])
+        """,
+        tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == (given or "0")
+
+
+@pytest.mark.subprocess
 @pytest.mark.skipif(not pip_intel_cpu_libraries(), reason="Intel's CPU runtime is not pip-installed")
 def test_pip_intel_runtime_works_in_a_fresh_process(tmp_path):
     result = _fresh_python(

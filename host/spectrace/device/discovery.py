@@ -321,12 +321,20 @@ def preload_dependencies(library: Path) -> list[str]:
 # Entry point
 
 
+POCL_SPECIALISATION_VARIABLE = "POCL_WORK_GROUP_SPECIALIZATION"
+
+
 def prepare_opencl_environment() -> PreparedEnvironment:
     """Expose every OpenCL runtime found through one ``OCL_ICD_VENDORS`` folder. Idempotent; call it
     before anything in this process asks OpenCL for its platforms."""
     global _prepared
     if _prepared is not None and os.environ.get("OCL_ICD_VENDORS") == str(_prepared.vendors_dir):
         return _prepared
+    # PoCL compiles each kernel once for any work-group size (the build the program cache stores) and, unless told
+    # not to, once more for each size, offset and grid class it is launched with: about 7 CPU-s more for a
+    # path-tracing megakernel, for the same bits at the same speed (Cornell box 256x256, 4 spp, depth 8, groups of
+    # 32, PoCL 3.1: 0.445-0.468 CPU-s a pass either way). A value the user set wins.
+    os.environ.setdefault(POCL_SPECIALISATION_VARIABLE, "0")
     libraries = gather_icd_libraries()
     preload_errors: list[str] = []
     for entry in libraries:

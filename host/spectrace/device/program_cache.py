@@ -45,6 +45,9 @@ _CACHE_FORMAT = b"spectrace-program-cache-v2"
 _BASE_OPTIONS = ("-cl-std=CL1.2",)  # no -cl-fast-relaxed-math: the kernels rely on IEEE inf/nan
 _LOG_LINES = 40
 _DEFINE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+# Names a file to which each build from source appends one line (seconds, entry, its own defines): what a test run
+# built and what that cost, to find the programs that differ by a define alone.
+BUILD_LOG_VARIABLE = "SPECTRACE_BUILD_LOG"
 
 DefineValue = int | float | str
 
@@ -275,6 +278,17 @@ def _write_atomically(path: Path, data: bytes) -> None:
         pass  # an unwritable cache costs a rebuild next time, nothing more
 
 
+def _log_build(entry: str, own_options: str, seconds: float, cpu_seconds: float) -> None:
+    """One line in $SPECTRACE_BUILD_LOG per build from source: wall and process CPU seconds, entry and the build's
+    own defines and options (the contract's, which every build gets alike, left out). An unwritable log is skipped."""
+    path = os.environ.get(BUILD_LOG_VARIABLE, "").strip()
+    if not path:
+        return
+    line = f"{seconds:.2f}\t{cpu_seconds:.2f}\t{os.getpid()}\t{entry}\t{own_options}\n"
+    with contextlib.suppress(OSError), open(path, "a", encoding="utf-8") as stream:
+        stream.write(line)  # one short write in append mode: lines of parallel workers do not interleave
+
+
 def _program_binary(program: cl.Program) -> bytes | None:
     try:
         # get_info's answer depends on the query: BINARIES is one bytes object per device.
@@ -333,7 +347,8 @@ class Device:
                 # Another process may have built it while this one waited for the lock.
                 program = None if from_source else self._load_cached(cache_file, option_text)
                 if program is None:
-                    program = self._build_and_store(entry, sources_digest, option_text, cache_file)
+                    own = " ".join(_define_options(defines) + list(options or []))
+                    program = self._build_and_store(entry, sources_digest, option_text, cache_file, own)
         self.last_build_seconds = time.perf_counter() - started
         return program
 
@@ -346,11 +361,15 @@ class Device:
         self.last_build_cached = program is not None
         return program
 
-    def _build_and_store(self, entry: str, sources_digest: str, option_text: str, cache_file: Path) -> cl.Program:
+    def _build_and_store(
+        self, entry: str, sources_digest: str, option_text: str, cache_file: Path, own_options: str
+    ) -> cl.Program:
         self.last_build_cached = False
+        started = time.perf_counter(), time.process_time()
         program = self._build_from_source(entry, sources_digest, option_text)
         self.last_build_log = compiler_log(program, self.cl_device)
-        binary = _program_binary(program)
+        binary = _program_binary(program)  # PoCL compiles every kernel of the program to answer this
+        _log_build(entry, own_options, time.perf_counter() - started[0], time.process_time() - started[1])
         if binary is not None:
             _write_atomically(cache_file, _cache_entry(binary))
         return program

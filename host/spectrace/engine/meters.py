@@ -132,8 +132,9 @@ def measure(
     items = streams * len(wavelengths)
     means = np.empty(items, np.float32)
     out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, means.nbytes)
-    # Groups of one on Intel's CPU runtime: its 16-wide build of this kernel is wrong (see render/launch.py).
-    local = meter_work_group(device)
+    # Groups of one on Intel's CPU runtime (its 16-wide build of this kernel is wrong); on PoCL, groups that divide
+    # the count (spectrace.engine.launch).
+    local = meter_work_group(device, items)
     cl.Kernel(program, "measure")(
         queue, (items,), (local,) if local else None, *inputs, np.int32(len(wavelengths)), out
     )
