@@ -230,7 +230,13 @@ def test_ctrl_c_writes_the_finished_tiles_and_a_checkpoint_that_resume_completes
     import time
 
     partial, saved = tmp_path / "partial.exr", tmp_path / "tiles.npz"
-    args = [*render_cornell_box(partial, 256, 64, 64), "--workers", "2", "--tile-rows", "4", "-q"]
+    args = [
+        *render_cornell_box(partial, 256, 64, 64),
+        "--workers",
+        "2",
+        "--tile-rows",
+        "4",
+    ]  # not -q: its lines are read
     env = {**os.environ, "SPECTRACE_DEVICE": device.report.key}
     command = [sys.executable, "-m", "spectrace", *args, "--checkpoint", str(saved), "--checkpoint-interval", "0"]
     process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)

@@ -335,13 +335,13 @@ def test_unsupported_plugins_are_named_once_with_their_count_and_nested_ones_too
         '<shape type="bsplinecurve"><string name="filename" value="x.txt"/><bsdf type="hair"/><ref id="odd"/></shape>\n'
         for _ in range(3)
     )
-    path = _write(tmp_path, f'<bsdf type="principledthin" id="odd"/>\n{shapes}<shape type="cube"/>')
+    path = _write(tmp_path, f'<bsdf type="measured" id="odd"/>\n{shapes}<shape type="cube"/>')
     with pytest.raises(SpectraceError) as caught:
         mitsuba_scene_data(path)
     message = caught.value.message
     assert "shape 'bsplinecurve' (3 times, first at line 5)" in message, message
     assert "bsdf 'hair' (3 times, first at line 5)" in message, message
-    assert "bsdf 'principledthin' (3 times, first at line 4)" in message, message
+    assert "bsdf 'measured' (3 times, first at line 4)" in message, message
     assert message.count("bsplinecurve") == 1
 
 

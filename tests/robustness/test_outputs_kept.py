@@ -20,7 +20,8 @@ def _start_render(out: Path, state: Path, *options: str) -> subprocess.Popen:
     """A real render of the Cornell box that would run for hours, checkpointing after every pass."""
     argv = render_cornell_box(out, 1000000, 16, 12)
     return subprocess.Popen(
-        [sys.executable, "-m", "spectrace", *argv, "-q", "--checkpoint", str(state), "--checkpoint-interval", "0"]
+        # Not -q: the tests read the lines -q keeps quiet (the interrupted render's "wrote" line).
+        [sys.executable, "-m", "spectrace", *argv, "--checkpoint", str(state), "--checkpoint-interval", "0"]
         + list(options),
         stderr=subprocess.PIPE,
         text=True,

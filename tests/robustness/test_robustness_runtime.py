@@ -294,7 +294,8 @@ _ENOSPC = os.strerror(errno.ENOSPC)
 
 def _fill_the_disk_in(monkeypatch, kind: str) -> None:
     """Make one writer fail as on a full disk, after writing part of its temporary file: OpenEXR with its own
-    RuntimeError (which names the system's reason), the PNG writer and matplotlib with OSError."""
+    RuntimeError (which names the system's reason), the display-image writer (PNG, through its atomic write) and
+    matplotlib with OSError."""
 
     def partial_then_full(path):
         Path(path).write_bytes(b"partial")
@@ -319,12 +320,17 @@ def _fill_the_disk_in(monkeypatch, kind: str) -> None:
 
         monkeypatch.setattr(exr, "OpenEXR", _Namespace(exr.OpenEXR, File=FullFile))
     elif kind == "png":
-        from spectrace.io import png
+        from spectrace.io import raster
 
-        def write_file(path, data):
-            raise partial_then_full(path)
+        atomic_write = raster.write_atomically
 
-        monkeypatch.setattr(png, "_write_file", write_file)
+        def full_disk(path, write):
+            def write_part(temp):
+                raise partial_then_full(temp)
+
+            return atomic_write(path, write_part)
+
+        monkeypatch.setattr(raster, "write_atomically", full_disk)
     else:
         from matplotlib.figure import Figure
 
