@@ -75,7 +75,7 @@ def test_every_picture_the_docs_show_is_made_by_a_tested_block():
 
 def test_the_tutorial_and_the_pages_with_pictures_of_their_own_are_tested():
     names = {page.name for page in pages_with_tests()}
-    assert {"first-scene.md", "plots.md", "displays.md", "python-api.md", "sampling.md"} <= names
+    assert {"first-scene.md", "plots.md", "displays.md", "python-api.md", "sampling.md", "gltf.md"} <= names
 
 
 def test_a_render_command_is_made_small_and_other_commands_kept():
