@@ -27,13 +27,15 @@ from spectrace.scene import Scene
 _ENOSPC = os.strerror(errno.ENOSPC)
 
 
-def _sweep(monkeypatch, capsys, spec: Path, out: Path) -> tuple[int, str]:
-    return run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out), "-q"])
+def _sweep(monkeypatch, capsys, spec: Path, out: Path, quiet: bool = False) -> tuple[int, str]:
+    """The sweep's status and stderr; without -q, for its summary line (-q keeps only warnings and errors)."""
+    return run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out), *(["-q"] if quiet else [])])
 
 
 def _counts(err: str) -> str:
     """'(C computed now, D already done)' of the command's last line."""
-    return err[err.index("(") :].strip()
+    last = err.strip().splitlines()[-1]
+    return last[last.index("(") :].strip()
 
 
 def _display_spec(path: Path, displays: list[str]) -> Path:
@@ -338,7 +340,7 @@ def test_a_malformed_spec_is_one_line_naming_its_key_path(text, where, says, tmp
     (tmp_path / "screen.toml").write_text(_SCENE)
     spec = tmp_path / "sweep.toml"
     spec.write_text(text)
-    status, err = _sweep(monkeypatch, capsys, spec, tmp_path / "out")
+    status, err = _sweep(monkeypatch, capsys, spec, tmp_path / "out", quiet=True)
     assert status == 2 and err.count("\n") == 1, err
     assert err.startswith(f"error: {spec}: {where}: ") and says in err, err
     assert not (tmp_path / "out").exists()
@@ -386,7 +388,7 @@ def test_a_full_disk_while_saving_items_is_one_line_and_a_rerun_resumes(tmp_path
         return real_write_text(self, text, *args, **kwargs)
 
     monkeypatch.setattr(Path, "write_text", fills_up)
-    status, err = _sweep(monkeypatch, capsys, spec, out)
+    status, err = _sweep(monkeypatch, capsys, spec, out, quiet=True)
     monkeypatch.setattr(Path, "write_text", real_write_text)
     assert status == 2 and err.count("\n") == 1 and "Traceback" not in err, err
     assert err.startswith(f"error: {out / 'items'}/") and f"cannot save the sweep item ({_ENOSPC})" in err, err

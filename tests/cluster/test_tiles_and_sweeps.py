@@ -80,7 +80,7 @@ def test_the_sweep_command_writes_one_table_and_a_rerun_computes_nothing(tmp_pat
         'rgb = [[0.0, 1.0, 0.0], [1.0, 1.0, 1.0]]\nobserver = ["cie1964_10"]\n'
     )
     out = tmp_path / "results"
-    status, err = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out), "-q"])
+    status, err = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out)])
     assert status == 0, err
     assert "4/4 items (4 computed now, 0 already done)" in err
     rows = json.loads((out / "results.json").read_text())
@@ -94,6 +94,8 @@ def test_the_sweep_command_writes_one_table_and_a_rerun_computes_nothing(tmp_pat
         expected = display_colour_item(row["display"], row["rgb"], "cie1964_10")
         assert {name: row[name] for name in expected} == expected
     status, err = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out), "-q"])
+    assert (status, err) == (0, "")  # -q: nothing but warnings and errors
+    status, err = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out)])
     assert status == 0 and "(0 computed now, 4 already done)" in err
 
 

@@ -98,6 +98,24 @@ def test_bad_input_is_one_line_without_traceback(tmp_path):
     assert result.returncode == 2 and "[0, 1]" in result.stderr and "Traceback" not in result.stderr
 
 
+@pytest.mark.parametrize(
+    ("command", "triple", "shown"),
+    [
+        (["compare"], ["2", "0", "0"], "(2, 0, 0)"),
+        (["match", "--from", "CRT-Dell", "--to", "CRT-HP"], ["0.5", "-0.5", "1"], "(0.5, -0.5, 1)"),
+        (["metamerism", "--from", "CRT-Dell", "--to", "CRT-HP"], ["1", "1", "1.01"], "(1, 1, 1.01)"),
+    ],
+)
+def test_an_rgb_triple_out_of_range_names_the_option_as_typed(command, triple, shown):
+    """Every display command checks --rgb where it reads it: one line naming the option (not the library's
+    argument name), the values as given and the command's help, before any display is loaded or rendered."""
+    result = _run(*command, "--rgb", *triple, check=False)
+    assert result.returncode == 2 and result.stdout == "", result
+    line = result.stderr
+    assert line.count("\n") == 1 and line.startswith(f"error: --rgb: RGB values must lie in [0, 1], got {shown} (see `")
+    assert line.endswith(f"spectrace display {command[0]} --help`)\n"), line
+
+
 def _file_primaries_on_grid(name: str, white_cd_m2: float) -> np.ndarray:
     """The shipped CSV's three columns on the 1 nm grid (linear, end values held), scaled so that the white has
     `white_cd_m2` by colour-science's integration: an independent route to the display's emission."""

@@ -433,6 +433,6 @@ def test_a_sweep_into_a_folder_in_use_is_refused_naming_the_holder(tmp_path, mon
         f"pid {os.getpid()} on "
     ), result.stderr
     assert _tree(out) == earlier
-    status, stderr = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out), "-q"])
+    status, stderr = run_in_process(monkeypatch, capsys, ["sweep", str(spec), "-o", str(out)])
     assert status == 0 and "2/2 items (1 computed now" in stderr + capsys.readouterr().out, stderr
     assert _locks(tmp_path) == []

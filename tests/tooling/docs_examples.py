@@ -12,6 +12,10 @@ and `tests` (linked) and an empty `docs/images`:
 - a Python block runs in a fresh interpreter in which `spectrace.render` renders at that small size; one marked
   ` test continues` (a fragment that goes on from the page's examples above) runs after those examples' code.
 
+A block that needs a module spectrace does not install says so after its marker (```` ```python test needs: bpy ````,
+names separated by commas): where one is missing the page is skipped, naming it, and where all are present the block
+runs as any other.
+
 Every command must exit 0. A shell or Python block that cannot run here says why in its info string
 (```` ```sh no-test: needs your own scene.xml ````), so that a new example is run unless its page says otherwise.
 
@@ -66,6 +70,7 @@ class Block:
     tested: bool = False
     continues: bool = False  # runs after the page's tested Python blocks above it
     untested_because: str | None = None  # the reason a `no-test:` marker gives; "" when it gives none
+    needs: tuple[str, ...] = ()  # modules the block imports that spectrace does not install (`test needs: bpy`)
 
     @property
     def where(self) -> str:
@@ -83,12 +88,13 @@ def blocks(page: Path, tested_only: bool = True) -> list[Block]:
             index += 1
             continue
         end = next((k for k in range(index + 1, len(lines)) if lines[k].lstrip().startswith("```")), len(lines))
-        marker = match[2].strip()
+        marker, _, needed = match[2].strip().partition(" needs:")
         tested = marker in ("test", "test continues")
+        needs = tuple(name.strip() for name in needed.split(",") if name.strip())
         reason = marker.removeprefix("no-test:").strip() if marker.startswith("no-test:") else None
         if tested or not tested_only:
             text = textwrap.dedent("\n".join(lines[index + 1 : end]) + "\n")
-            found.append(Block(page, index + 1, match[1], text, tested, marker == "test continues", reason))
+            found.append(Block(page, index + 1, match[1], text, tested, marker == "test continues", reason, needs))
         index = end + 1
     return found
 
@@ -114,6 +120,14 @@ def pictures_made(page: Path) -> set[str]:
         for _, path in image_references(page)
         if re.search(rf"docs/images/{re.escape(path.name.split('.')[0])}\.", written)
     }
+
+
+def missing_modules(page: Path) -> list[str]:
+    """The modules the page's tested blocks need (`test needs: NAME`) that cannot be imported here."""
+    import importlib.util
+
+    needed = dict.fromkeys(name for block in blocks(page) for name in block.needs)
+    return [name for name in needed if importlib.util.find_spec(name) is None]
 
 
 def tested_pages() -> list[Path]:

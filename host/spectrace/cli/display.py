@@ -16,9 +16,10 @@ from spectrace.cli.common import GROUP_SETTINGS, JsonOption
 from spectrace.displays.compare import Comparison, compare_displays
 from spectrace.displays.match import MatchResult, match_colour
 from spectrace.displays.viewing import DEFAULT_WHITE_LUMINANCE_CD_M2, ViewingConditions
+from spectrace.errors import SpectraceError
 from spectrace.spectral.display import CHANNELS, Display
 from spectrace.spectral.display_catalog import load_all_displays, load_display
-from spectrace.spectral.display_transfer import Encoding
+from spectrace.spectral.display_transfer import Encoding, checked_rgb
 from spectrace.spectral.observers import ALL_OBSERVERS, Observer
 
 display_app = typer.Typer(
@@ -30,9 +31,20 @@ display_app = typer.Typer(
 # Independent meter estimates per patch reading, from which its standard error comes.
 METER_STREAMS = 32
 
+
+def _checked_rgb_option(value: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The triple checked as the command line reads it, so that a value out of range names the option as typed
+    (the library's own check can only name its argument)."""
+    try:
+        checked_rgb(value)
+    except SpectraceError as error:
+        raise typer.BadParameter(error.message) from None  # click adds the option it was reading
+    return value
+
+
 RgbOption = Annotated[
     tuple[float, float, float],
-    typer.Option("--rgb", help="The triple R G B, each in [0, 1], read with --encoding."),
+    typer.Option("--rgb", help="The triple R G B, each in [0, 1], read with --encoding.", callback=_checked_rgb_option),
 ]
 EncodingOption = Annotated[
     Encoding,
@@ -236,7 +248,11 @@ def metamerism(
     target: Annotated[str, typer.Option("--to", help="Display lighting the second half, matched to --from.")],
     rgb: Annotated[
         tuple[float, float, float],
-        typer.Option("--rgb", help="The triple --from shows (default a light grey, which most displays can match)."),
+        typer.Option(
+            "--rgb",
+            help="The triple --from shows (default a light grey, which most displays can match).",
+            callback=_checked_rgb_option,
+        ),
     ] = (0.8, 0.8, 0.8),
     encoding: EncodingOption = Encoding.LINEAR,
     white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,

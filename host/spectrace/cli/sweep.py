@@ -32,7 +32,7 @@ SWEEP_FORMATS = ("exr", "png", "tif", "jpg", "pfm")
 
 
 def _say(text: str) -> None:
-    console.print(text, highlight=False, markup=False)
+    console.say(text)
 
 
 def _key_path(table: str, name: str) -> str:
@@ -204,7 +204,9 @@ def sweep_command(
     cluster_timeout: Annotated[
         float, typer.Option(help="Seconds to wait for the --cluster scheduler to answer.", min=0.1)
     ] = 30.0,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", "-q", help="No progress bar and no messages but warnings and errors.")
+    ] = False,
 ) -> None:
     """Run a grid of display computations or renders into one results table plus images; items already done in
     the output folder are skipped, so a rerun resumes. Ctrl-C stops after the items in flight."""
@@ -214,6 +216,7 @@ def sweep_command(
     from spectrace.engine.stop_signals import StopOnSignals
     from spectrace.progress import progress_bar
 
+    console.quiet = quiet
     if cluster is not None and workers is not None:
         raise SpectraceError("give --cluster or --workers, not both", where="--workers")
     if cluster is not None or workers is not None:
