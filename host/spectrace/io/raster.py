@@ -66,8 +66,6 @@ def _pillow(kind: str, pixels: np.ndarray, metadata: dict[str, str], icc: bytes 
         from PIL.PngImagePlugin import PngInfo
 
         info = PngInfo()
-        for chunk_type, payload in chunks.items():
-            info.add(chunk_type, payload)
         for key, value in metadata.items():  # tEXt, or iTXt for text beyond Latin-1
             info.add_text(f"spectrace:{key}", value)
         options.update(pnginfo=info, compress_level=6)
@@ -77,7 +75,19 @@ def _pillow(kind: str, pixels: np.ndarray, metadata: dict[str, str], icc: bytes 
         options.update(description=_description(metadata), compression="tiff_deflate")
     buffer = io.BytesIO()
     picture.save(buffer, format=kind, **options)
-    return buffer.getvalue()
+    data = buffer.getvalue()
+    return _before_image_data(data, chunks) if kind == "PNG" and chunks else data
+
+
+def _before_image_data(data: bytes, chunks: dict[bytes, bytes]) -> bytes:
+    """The PNG `data` with `chunks` placed before its first IDAT, as cICP must be: Pillow writes public chunks it
+    does not know of (cICP before Pillow 11) nowhere, so they are added here for every release alike."""
+    first = len(SIGNATURE)
+    while data[first + 4 : first + 8] != b"IDAT":  # chunk by chunk: a text chunk may hold the letters "IDAT"
+        (length,) = struct.unpack(">I", data[first : first + 4])
+        first += 12 + length
+    added = b"".join(make_chunk(chunk_type, payload) for chunk_type, payload in chunks.items())
+    return data[:first] + added + data[first:]
 
 
 def _description(metadata: dict[str, str]) -> str:
