@@ -227,19 +227,35 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
     """base_color in the row's reflectance fields, eta in its index fields; the scalar weights in a parameter block
     of the spectrum table (Material.coat_table_offset): for weight k (SCALARS' order) its value at 2k and its
     texture's index at 2k + 1 (NO_TEXTURE when it has none; a float holds these small integers exactly)."""
+    write_base_color(row, material.base_color, table, textures)
+    write_ior(row, material.eta)
+    write_weights(row, material, SCALARS, table, textures)
+
+
+def write_base_color(row: np.ndarray, base_color, table: SpectrumTable, textures) -> None:
+    """The base colour (a spectrum or a texture) in the row's reflectance fields, as both principled materials
+    keep it."""
+    from spectrace.textures import is_texture
+
+    if is_texture(base_color):
+        row["reflectance_offset"] = table.add(Spectrum.zeros())
+        row["reflectance_texture"] = textures.add(base_color, "spectrum")
+    else:
+        row["reflectance_offset"] = table.add(base_color)
+
+
+def write_weights(row: np.ndarray, material, scalars, table: SpectrumTable, textures, extra=()) -> None:
+    """The parameter block both principled materials keep in the spectrum table (Material.coat_table_offset):
+    weight k of `scalars` at 2k and its texture's index at 2k + 1, then the numbers of `extra`, then the base
+    colour's luminance; and the row's flags that follow from the weights (transmission, a frame along dp/du)."""
     from spectrace.textures import is_texture, scalar_range
 
-    if is_texture(material.base_color):
-        row["reflectance_offset"] = table.add(Spectrum.zeros())
-        row["reflectance_texture"] = textures.add(material.base_color, "spectrum")
-    else:
-        row["reflectance_offset"] = table.add(material.base_color)
-    write_ior(row, material.eta)
     # The base colour's luminance, for the tints (c_tint = b / lum b): CIE 1931 Y relative to a white reflector's;
     # a texture's is the mean over each path's wavelengths (-1 here).
-    block = np.zeros(2 * len(SCALARS) + 1, np.float32)
+    block = np.zeros(2 * len(scalars) + len(extra) + 1, np.float32)
+    block[2 * len(scalars) : -1] = extra
     block[-1] = -1.0 if is_texture(material.base_color) else base_luminance(material.base_color)
-    for k, parameter in enumerate(SCALARS):
+    for k, parameter in enumerate(scalars):
         value = getattr(material, parameter.name)
         if is_texture(value):
             block[2 * k] = scalar_range(value)[1]

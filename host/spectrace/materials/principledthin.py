@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.core.contract import NO_TEXTURE
 from spectrace.core.parameters import Parameter, Range, reflectance
 from spectrace.materials import principled
 from spectrace.materials.base import Material
@@ -146,27 +145,8 @@ def write_row(row: np.ndarray, material: PrincipledthinMaterial, table: Spectrum
     """base_color in the row's reflectance fields; the scalar weights in a parameter block of the spectrum table
     (Material.coat_table_offset): weight k (SCALARS' order) at 2k, its texture's index at 2k + 1 (NO_TEXTURE when
     it has none), then eta and the base colour's luminance (-1 for a texture: the path's mean)."""
-    from spectrace.textures import is_texture, scalar_range
-
-    if is_texture(material.base_color):
-        row["reflectance_offset"] = table.add(Spectrum.zeros())
-        row["reflectance_texture"] = textures.add(material.base_color, "spectrum")
-    else:
-        row["reflectance_offset"] = table.add(material.base_color)
-    block = np.zeros(2 * len(SCALARS) + 2, np.float32)
-    block[-2] = material.eta
-    block[-1] = -1.0 if is_texture(material.base_color) else principled.base_luminance(material.base_color)
-    for k, parameter in enumerate(SCALARS):
-        value = getattr(material, parameter.name)
-        if is_texture(value):
-            block[2 * k] = scalar_range(value)[1]
-            block[2 * k + 1] = textures.add(value, "float")
-        else:
-            block[2 * k] = value
-            block[2 * k + 1] = NO_TEXTURE
-    row["coat_table_offset"] = table.add_block(block)
-    row["nonlinear"] = int(material.has_transmission)  # the flags' BSDF_TRANSMISSION, from the row alone
-    row["tangent_frame"] = int(principled.is_anisotropic(material.anisotropic))
+    principled.write_base_color(row, material.base_color, table, textures)
+    principled.write_weights(row, material, SCALARS, table, textures, extra=(material.eta,))
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
