@@ -353,9 +353,8 @@ def render(
         raise SpectraceError(
             f"render() needs a spectrace.Scene, got {type(scene).__name__} (load_scene(path) reads a file)"
         )
-    from spectrace.engine.job import RenderJob, check_camera
+    from spectrace.engine.job import RenderJob
 
-    check_camera(scene)
     job = RenderJob.make(
         scene,
         spp=spp,

@@ -198,10 +198,13 @@ class RenderJob:
         that need no scene have passed, so that a wrong one is named before any file is read). `output`: the image
         file, when there is one: spectral bands and asked-for AOVs need an .exr, and the scene's own AOVs are left
         out of another (a note says so). `display_server`: HOST:PORT of a tev viewer to stream the render to. A
-        width without a height, or a height without a width, keeps the scene's aspect ratio."""
+        width without a height, or a height without a width, keeps the scene's aspect ratio. A Scene given as it is
+        has its camera checked (`check_camera`); one a loader gives was checked by it."""
         from spectrace.film.aovs import parse_aovs
-        from spectrace.scene.model import SAMPLER_TYPES
+        from spectrace.scene.model import SAMPLER_TYPES, Scene
 
+        if isinstance(scene, Scene):  # built in Python: what a scene file's loader checks of its camera, checked here
+            check_camera(scene)
         _refuse(spp is not None and limits.spp_problem(spp), names.spp)
         _refuse(limits.pass_spp_problem(pass_spp), names.pass_spp)
         _refuse(_count_problem("spectral_bins", spectral_bins, 0), names.spectral_bins)

@@ -144,7 +144,7 @@ class Session:
         aovs: str | Sequence[str] | None = None,
     ) -> None:
         from spectrace.core import limits
-        from spectrace.engine.job import RenderJob, check_camera
+        from spectrace.engine.job import RenderJob
         from spectrace.scene import load_scene
         from spectrace.scene.model import Scene
 
@@ -154,7 +154,6 @@ class Session:
             raise SpectraceError(f"Session() needs a spectrace.Scene, got {type(scene).__name__}")
         if problem := limits.pass_spp_problem(pass_spp):
             raise SpectraceError(problem, where="pass_spp")
-        check_camera(scene)
         job = RenderJob.make(
             scene,
             spectral_bins=spectral_bins,
