@@ -271,22 +271,9 @@ def write_weights(row: np.ndarray, material, scalars, table: SpectrumTable, text
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's `principled`: the same parameters under the same names, each weight a number or a texture; its
     sampling rates (which change no expected value) are read and left out, and `flatness` refused unless 0."""
-    base = importer.spectrum(properties["base_color"], "base_color") if "base_color" in properties else {"value": 0.5}
-    if base is None:
+    table = mitsuba_weights(importer, bsdf, properties, NAME, SCALARS)
+    if table is None:
         return None
-    table: dict = {"type": NAME, "base_color": base}
-    for parameter in SCALARS:
-        if parameter.name not in properties:
-            continue
-        element = importer.resolve(properties[parameter.name])
-        value = importer.scalar_texture(element, parameter.name) if element.tag == "texture" else None
-        if element.tag != "texture":
-            value = importer.number(element)
-            if not UNIT.contains(value):
-                raise importer.fail(bsdf, f"{parameter.name} must lie in {UNIT}, got {value:g}")
-        if value is None:
-            return None
-        table[parameter.name] = value
     for rate in ("main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"):
         if rate in properties:
             importer.number(importer.resolve(properties[rate]))
@@ -295,6 +282,31 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         table["eta"] = importer.number(importer.resolve(properties["eta"]))
     elif "specular" in properties:
         table["specular"] = importer.number(importer.resolve(properties["specular"]))
+    return table
+
+
+def mitsuba_weights(importer, bsdf, properties, name: str, scalars) -> dict | None:
+    """The table of a Mitsuba principled BSDF's base colour (0.5 when absent) and weights (`scalars`, each a number
+    in its parameter's range or a texture), as both principled materials read them; None where an input cannot be
+    imported (the importer has said why)."""
+    base = importer.spectrum(properties["base_color"], "base_color") if "base_color" in properties else {"value": 0.5}
+    if base is None:
+        return None
+    table: dict = {"type": name, "base_color": base}
+    for parameter in scalars:
+        if parameter.name not in properties:
+            continue
+        element = importer.resolve(properties[parameter.name])
+        if element.tag == "texture":
+            value = importer.scalar_texture(element, parameter.name)
+        else:
+            value = importer.number(element)
+            allowed = parameter.range or UNIT
+            if not allowed.contains(value):
+                raise importer.fail(bsdf, f"{parameter.name} must lie in {allowed}, got {value:g}")
+        if value is None:
+            return None
+        table[parameter.name] = value
     return table
 
 

@@ -153,24 +153,9 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's `principledthin`: the same parameters under the same names, each weight a number or a texture
     (`eta` a number); its sampling rates (which change no expected value) are read and left out, and `flatness`
     (Hanrahan–Krueger's fake subsurface) is refused when not 0."""
-    base = importer.spectrum(properties["base_color"], "base_color") if "base_color" in properties else {"value": 0.5}
-    if base is None:
+    table = principled.mitsuba_weights(importer, bsdf, properties, NAME, SCALARS)
+    if table is None:
         return None
-    table: dict = {"type": NAME, "base_color": base}
-    for parameter in SCALARS:
-        if parameter.name not in properties:
-            continue
-        element = importer.resolve(properties[parameter.name])
-        if element.tag == "texture":
-            value = importer.scalar_texture(element, parameter.name)
-        else:
-            value = importer.number(element)
-            allowed = parameter.range or principled.UNIT
-            if not allowed.contains(value):
-                raise importer.fail(bsdf, f"{parameter.name} must lie in {allowed}, got {value:g}")
-        if value is None:
-            return None
-        table[parameter.name] = value
     rates = ("specular", "diffuse")
     for rate in [f"{a}_{b}_sampling_rate" for a in rates for b in ("reflectance", "transmittance")]:
         if rate in properties:
