@@ -197,16 +197,9 @@ inline float4 principled_eval(const PrincipledParams *p, float3 wo, float3 wi)
         value += (float4)(0.25f * p->clearcoat * f_cc * d_cc * g_cc * wi.z);
     }
     float brdf = brdf_weight(p);
-    if (brdf > 0.0f) {
-        float fo = schlick_weight(wo.z), fi = schlick_weight(wi.z);
-        float rr = 2.0f * p->roughness * cos_d * cos_d;
-        float lambert = (1.0f - 0.5f * fi) * (1.0f - 0.5f * fo) + rr * (fo + fi + fo * fi * (rr - 1.0f));
-        value += p->base * (brdf * lambert * INV_PI * wi.z);
-        if (p->sheen > 0.0f) {
-            float4 colour = mix((float4)(1.0f), p->tint, p->sheen_tint);
-            value += colour * (brdf * p->sheen * schlick_weight(cos_d) * wi.z);
-        }
-    }
+    if (brdf > 0.0f)
+        value = burley_diffuse_sheen(value, p->base, p->tint, p->roughness, p->sheen, p->sheen_tint, brdf, wo.z, wi.z,
+                                     cos_d);
     return value;
 }
 

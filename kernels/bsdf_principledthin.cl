@@ -156,15 +156,8 @@ inline float4 principledthin_eval(const PrincipledthinParams *p, float3 wo, floa
     float3 hr = reflection_half_vector(wo, wi);
     float cos_d = dot(hr, wi);
     float weight = diffuse * (1.0f - p->diff_trans);
-    float fo = schlick_weight(wo.z), fi = schlick_weight(wi.z);
-    float rr = 2.0f * p->roughness * cos_d * cos_d;
-    float lambert = (1.0f - 0.5f * fi) * (1.0f - 0.5f * fo) + rr * (fo + fi + fo * fi * (rr - 1.0f));
-    value += p->base * (weight * lambert * INV_PI * wi.z);
-    if (p->sheen > 0.0f) {
-        float4 colour = mix((float4)(1.0f), p->tint, p->sheen_tint);
-        value += colour * (weight * p->sheen * schlick_weight(cos_d) * wi.z);
-    }
-    return value;
+    return burley_diffuse_sheen(value, p->base, p->tint, p->roughness, p->sheen, p->sheen_tint, weight, wo.z, wi.z,
+                                cos_d);
 }
 
 inline float principledthin_pdf(const PrincipledthinParams *p, float3 wo, float3 wi)
