@@ -1,0 +1,124 @@
+"""Displays through a linear polariser: Malus's law on polarised light, one half of unpolarised light at every angle,
+the catalogue's record of each display's polarisation, and the command line's answers and refusals."""
+
+import json
+
+import numpy as np
+import pytest
+
+from cli_runner import run_spectrace
+from spectrace.displays import load_display
+from spectrace.displays.polarizer import through_polarizer
+from spectrace.errors import SpectraceError
+from spectrace.spectral.display_polarization import Polarization, parse_polarization, transmitted_fraction
+
+ANGLES = np.arange(0.0, 181.0, 7.5)
+
+
+@pytest.mark.parametrize("axis", [0.0, 45.0, 90.0, 117.0])
+def test_malus_law_on_linearly_polarised_light(axis):
+    fractions = transmitted_fraction(Polarization("linear", axis), ANGLES)
+    np.testing.assert_allclose(fractions, np.cos(np.radians(ANGLES - axis)) ** 2, atol=1e-15)
+
+
+@pytest.mark.parametrize("kind", ["unpolarized", "circular"])
+def test_unpolarised_and_circular_light_pass_one_half_at_every_angle(kind):
+    np.testing.assert_allclose(transmitted_fraction(Polarization(kind), ANGLES), 0.5, atol=1e-15)
+
+
+def test_catalogue_records_polarisation():
+    assert load_display("LCD-Dell_CCFL").polarization.kind == "linear"
+    assert load_display("LCD-Dell_CCFL").polarization.note.startswith("assumed")
+    assert load_display("CRT-Dell").polarization.kind == "unpolarized"
+    assert load_display("CRT-Brainard1997").polarization.kind == "unpolarized"
+
+
+def test_through_a_polariser_luminance_follows_malus_and_chromaticity_stays():
+    lcd, crt = load_display("LCD-Dell_CCFL"), load_display("CRT-Dell")
+    result = through_polarizer([lcd, crt], tuple(ANGLES), (0.6, 0.3, 0.2))
+    axis = lcd.polarization.axis_deg
+    full = [row[0].xyz_cd_m2 / max(row[0].fraction, 1e-300) for row in result.rows if row[0].fraction > 0.5]
+    unfiltered = full[0]
+    for angle, (seen_lcd, seen_crt) in zip(ANGLES, result.rows):
+        malus = np.cos(np.radians(angle - axis)) ** 2
+        np.testing.assert_allclose(seen_lcd.xyz_cd_m2, malus * unfiltered, rtol=1e-12, atol=1e-12)
+        assert seen_crt.fraction == pytest.approx(0.5)
+        if malus > 1e-6:
+            np.testing.assert_allclose(seen_lcd.xy, result.rows[0][0].xy, atol=1e-12)
+    assert json.dumps(result.to_json())  # plain data
+
+
+def test_polarisation_specs_and_their_errors():
+    assert parse_polarization("linear 90 (assumed)") == Polarization("linear", 90.0, "assumed")
+    assert parse_polarization("Unpolarised").kind == "unpolarized"
+    assert parse_polarization("linear 225").axis_deg == 45.0
+    for text, message in (("linear", "needs its axis"), ("sideways", "must be 'linear"), ("circular 3", "no angle")):
+        with pytest.raises(SpectraceError, match=message):
+            parse_polarization(text, where="f.csv: # polarization")
+
+
+def test_a_bad_polarization_line_in_a_display_file_names_the_file_and_key(tmp_path):
+    path = tmp_path / "screen.csv"
+    path.write_text("# polarization: linear north\nwavelength_nm,red,green,blue\n400,1,0,0\n500,0,1,0\n600,0,0,1\n")
+    with pytest.raises(SpectraceError) as error:
+        load_display(str(path))
+    assert str(error.value).startswith(f"{path}: # polarization: 'linear' needs its axis")
+
+
+def _run(*args):
+    return run_spectrace("display", *args, timeout=300)
+
+
+@pytest.mark.subprocess
+@pytest.mark.slow
+def test_polarizer_command_json_and_refusals():
+    result = _run("polarizer", "-d", "LCD-Apple_WLED", "-d", "CRT-HP", "-a", "0", "-a", "45", "-a", "135", "--json")
+    assert result.returncode == 0, result.stderr
+    angles = json.loads(result.stdout)["angles"]
+    lcd = [angle["displays"][0] for angle in angles]
+    crt = [angle["displays"][1] for angle in angles]
+    assert [item["fraction"] for item in lcd] == pytest.approx([0.5, 1.0, 0.0], abs=1e-12)
+    assert [item["luminance_cd_m2"] for item in crt] == pytest.approx([50.0] * 3)
+    assert lcd[1]["luminance_cd_m2"] == pytest.approx(100.0)
+
+    result = _run(
+        "polarizer", "-d", "CRT-HP", "-d", "CRT-Dell", "--polarization", "crt-hp=linear 90", "-a", "0", "--json"
+    )
+    assert json.loads(result.stdout)["angles"][0]["displays"][0]["fraction"] == pytest.approx(0.0, abs=1e-12)
+
+    for args, expected in (
+        (["--polarization", "CRT-HP=linear up"], "--polarization CRT-HP: 'linear' needs its axis"),
+        (["--polarization", "OLED-SonyPVM2541=circular"], "--polarization: 'oled-sonypvm2541' is not one"),
+        (["--polarization", "CRT-HP=unknown"], "--polarization: the polarisation of CRT-HP's light is unknown"),
+        (["-d", "nope"], "--display: unknown display 'nope'"),
+    ):
+        result = _run("polarizer", "-d", "CRT-HP", *args)
+        assert result.returncode == 2 and result.stdout == ""
+        assert result.stderr.count("\n") == 1 and expected in result.stderr and "Traceback" not in result.stderr
+
+
+@pytest.mark.subprocess
+@pytest.mark.slow
+def test_model_command_json_and_refusals(tmp_path):
+    result = _run("model", "LCD-GeChic1303H_WLED", "--json")
+    assert result.returncode == 0, result.stderr
+    fit = json.loads(result.stdout)
+    assert fit["backlight"] == "wled_yag"
+    assert all(item["delta_xy"] < 0.003 for item in fit["primaries"].values())
+    assert [variant["name"] for variant in fit["variants"]][1:] == [
+        "YAG:Ce phosphor backlight",
+        "CdSe QD film backlight",
+        "filters narrowed 10 nm",
+    ]
+    kept = tmp_path / "kept.png"
+    kept.write_bytes(b"old")
+    for args, expected in (
+        (["OLED-SonyPVM2541"], "NAME: OLED-SonyPVM2541 is not an LCD"),
+        (["LCD-Dell_CCFL", "--backlight", "led"], "--backlight: unknown backlight 'led'"),
+        (["LCD-Dell_CCFL", "--plot", str(tmp_path / "no" / "such.png")], "such.png"),
+        (["LCD-Dell_CCFL", "--plot", str(tmp_path / "plot.xyz")], "plot.xyz"),
+    ):
+        result = _run("model", *args)
+        assert result.returncode != 0 and result.stdout == ""
+        assert result.stderr.count("\n") == 1 and expected in result.stderr and "Traceback" not in result.stderr
+    assert kept.read_bytes() == b"old"
