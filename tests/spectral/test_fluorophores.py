@@ -104,3 +104,13 @@ def test_user_file_and_errors(tmp_path):
         with pytest.raises(SpectraceError, match=message) as error:
             load_fluorophore(str(bad))
         assert str(bad) in str(error.value) and "\n" not in str(error.value)
+
+
+def test_the_files_are_what_their_writer_writes():
+    """The files are written by tests/tooling/fluorescent_spectra.py from its table of cited values: a hand edit to a
+    file, or a changed row not written out, fails here, naming the command that writes them."""
+    from tests.tooling.fluorescent_spectra import FLUOROPHORES, file_text
+
+    for item in FLUOROPHORES:
+        written = (spectra_dir() / "fluorescent" / f"{item.name}.csv").read_text(encoding="utf-8")
+        assert written == file_text(item), f"run `python -m tests.tooling.fluorescent_spectra` ({item.name})"

@@ -76,6 +76,10 @@ WOLFBEIS_1983 = (
     "O. S. Wolfbeis, E. Fürlinger, H. Kroneis, H. Marsoner, 'Fluorimetric analysis 1. A study on fluorescent "
     "indicators for measuring near neutral (physiological) pH values', Fresenius Z. Anal. Chem. 314, 119-124 (1983)"
 )
+BARNADAS_2008 = (
+    "R. Barnadas-Rodríguez, J. Estelrich, 'Effect of salts on the excited state of pyranine as determined by "
+    "steady-state fluorescence', J. Photochem. Photobiol. A 198, 262-267 (2008): the phenolate's emission at 511 nm"
+)
 SMET_2011 = (
     "P. F. Smet, A. B. Parmentier, D. Poelman, 'Selecting conversion phosphors for white light-emitting diodes', "
     "J. Electrochem. Soc. 158(6), R37-R54 (2011)"
@@ -116,7 +120,7 @@ FLUOROPHORES = (
         (Band(511, 50),),
         1.0,
         f"{WOLFBEIS_1983}: near unity for the phenolate form",
-        f"peaks {WOLFBEIS_1983}; {WIDTHS}",
+        f"peaks {WOLFBEIS_1983}; {BARNADAS_2008}; {WIDTHS}",
     ),
     Fluorophore(
         "stilbene_brightener",
