@@ -26,6 +26,25 @@ def test_unpolarised_and_circular_light_pass_one_half_at_every_angle(kind):
     np.testing.assert_allclose(transmitted_fraction(Polarization(kind), ANGLES), 0.5, atol=1e-15)
 
 
+def test_a_real_polariser_passes_k1_parallel_k2_crossed_and_their_mean_of_unpolarised_light():
+    """Its Mueller matrix (a partial polariser rotated by θ, built here from the rotation matrices) applied to the
+    display's Stokes vector."""
+    k1, k2 = 0.86, 0.004
+    for axis in (0.0, 30.0, 45.0):
+        for angle in ANGLES[:5]:
+            c, s = np.cos(np.radians(2 * angle)), np.sin(np.radians(2 * angle))
+            rotation = np.array([[1, 0, 0, 0], [0, c, s, 0], [0, -s, c, 0], [0, 0, 0, 1]])
+            aligned = 0.5 * np.array([[k1 + k2, k1 - k2, 0, 0], [k1 - k2, k1 + k2, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]])
+            stokes = Polarization("linear", axis).stokes()
+            expected = (rotation.T @ aligned @ rotation @ stokes)[0]
+            assert transmitted_fraction(Polarization("linear", axis), angle, k1, k2) == pytest.approx(expected)
+        assert transmitted_fraction(Polarization("linear", axis), axis, k1, k2) == pytest.approx(k1)
+        assert transmitted_fraction(Polarization("linear", axis), axis + 90, k1, k2) == pytest.approx(k2)
+    assert transmitted_fraction(Polarization("unpolarized"), 10.0, k1, k2) == pytest.approx((k1 + k2) / 2)
+    with pytest.raises(SpectraceError, match="0 <= k2 <= k1 <= 1"):
+        through_polarizer([load_display("CRT-Dell")], (0.0,), transmittances=(0.5, 0.6))
+
+
 def test_catalogue_records_polarisation():
     assert load_display("LCD-Dell_CCFL").polarization.kind == "linear"
     assert load_display("LCD-Dell_CCFL").polarization.note.startswith("assumed")

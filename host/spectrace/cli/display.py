@@ -508,6 +508,13 @@ def polarizer_command(
             "('linear 90', 'circular', 'unpolarized'; repeatable).",
         ),
     ] = None,
+    transmittances: Annotated[
+        tuple[float, float],
+        typer.Option(
+            "--transmittances",
+            help="The polariser's principal transmittances K1 K2 (along and across its axis; default ideal, 1 0).",
+        ),
+    ] = (1.0, 0.0),
     encoding: EncodingOption = Encoding.LINEAR,
     white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
     as_json: JsonOption = False,
@@ -525,14 +532,15 @@ def polarizer_command(
     displays = [load_display(spec, where="--display").with_transfer(encoding) for spec in display]
     displays = _with_polarization(displays, polarization)
     viewing = ViewingConditions(white_luminance_cd_m2=white_luminance)
-    result = through_polarizer(displays, angles, np.array(rgb), viewing)
+    result = through_polarizer(displays, angles, np.array(rgb), viewing, transmittances)
     if as_json:
         _print_json(result.to_json() | {"encoding": encoding.value})
         return
     names = [seen.display for seen in result.rows[0]]
     polarizations = ", ".join(f"{seen.display}: {seen.polarization}" for seen in result.rows[0])
     table = Table(
-        title=f"RGB ({', '.join(f'{v:g}' for v in result.rgb)}) through an ideal linear polariser ({polarizations}); "
+        title=f"RGB ({', '.join(f'{v:g}' for v in result.rgb)}) through a linear polariser, k1 {transmittances[0]:g}, "
+        f"k2 {transmittances[1]:g} ({polarizations}); "
         f"white {white_luminance:g} cd/m² without it"
     )
     table.add_column("angle °")

@@ -1,8 +1,9 @@
 """Displays seen through an ideal linear polariser (polarised sunglasses, a camera's filter) turned through a range
 of angles: each display's luminance and chromaticity per angle, and the CIEDE2000 between them.
 
-The analyser passes `transmitted_fraction` of each display's light (Malus's law cos²(θ − φ) for light polarised
-at φ, ½ for unpolarised or circular light; see `spectrace.spectral.display_polarization`); it is neutral, so the
+The analyser passes `transmitted_fraction` of each display's light (for an ideal one Malus's law cos²(θ − φ) for
+light polarised at φ, ½ for unpolarised or circular light; a real one's principal transmittances k1, k2 can be given;
+see `spectrace.spectral.display_polarization`); it is neutral, so the
 chromaticity stays that of the display's colour and only the luminance changes. CIELAB is relative to the viewing
 conditions' white without the polariser, as for a viewer adapted to the room rather than to the filter.
 """
@@ -19,7 +20,7 @@ from spectrace.displays.viewing import ViewingConditions, delta_e_2000
 from spectrace.errors import SpectraceError
 from spectrace.spectral import xyz_to_xy
 from spectrace.spectral.display import Display
-from spectrace.spectral.display_polarization import transmitted_fraction
+from spectrace.spectral.display_polarization import check_principal_transmittances, transmitted_fraction
 from spectrace.spectral.display_transfer import checked_rgb
 from spectrace.spectral.observers import Observer
 
@@ -49,6 +50,7 @@ class PolarizerComparison:
     rgb: np.ndarray
     viewing: ViewingConditions
     angles_deg: tuple[float, ...]
+    transmittances: tuple[float, float]  # the polariser's k1, k2
     rows: list[list[SeenThrough]]  # one list per angle, one entry per display
     pair_delta_e: list[dict[tuple[str, str], float]]  # per angle, CIEDE2000 (1931 2°) of every pair
 
@@ -56,6 +58,7 @@ class PolarizerComparison:
         return {
             "rgb": self.rgb.tolist(),
             "viewing": self.viewing.to_json(),
+            "polarizer_transmittances": list(self.transmittances),
             "angles": [
                 {
                     "angle_deg": angle,
@@ -84,9 +87,12 @@ def through_polarizer(
     angles_deg: tuple[float, ...] = DEFAULT_ANGLES_DEG,
     rgb: np.ndarray | tuple[float, float, float] = (1.0, 1.0, 1.0),
     viewing: ViewingConditions | None = None,
+    transmittances: tuple[float, float] = (1.0, 0.0),
 ) -> PolarizerComparison:
-    """Each display showing `rgb`, seen through an ideal linear polariser at each angle (degrees)."""
+    """Each display showing `rgb`, seen through a linear polariser at each angle (degrees), of principal
+    transmittances `transmittances` = (k1, k2): ideal by default."""
     rgb = checked_rgb(rgb)
+    check_principal_transmittances(*transmittances, where="--transmittances")
     viewing = viewing or ViewingConditions()
     for display in displays:
         if not display.polarization.known:
@@ -103,8 +109,9 @@ def through_polarizer(
                 display=colour.display.name,
                 polarization=colour.display.polarization.text(),
                 angle_deg=float(angle),
-                fraction=float(transmitted_fraction(colour.display.polarization, angle)),
-                xyz_cd_m2=float(transmitted_fraction(colour.display.polarization, angle)) * colour.xyz_cd_m2,
+                fraction=float(transmitted_fraction(colour.display.polarization, angle, *transmittances)),
+                xyz_cd_m2=float(transmitted_fraction(colour.display.polarization, angle, *transmittances))
+                * colour.xyz_cd_m2,
             )
             for colour in colours
         ]
@@ -116,4 +123,4 @@ def through_polarizer(
             }
         )
         rows.append(row)
-    return PolarizerComparison(rgb, viewing, tuple(float(a) for a in angles_deg), rows, pairs)
+    return PolarizerComparison(rgb, viewing, tuple(float(a) for a in angles_deg), transmittances, rows, pairs)

@@ -7,10 +7,12 @@ side, so its light leaves linearly polarised too, unless a further quarter-wave 
 or an LED wall emits unpolarised light. Angles are in degrees, counter-clockwise from the screen's horizontal as the
 viewer sees it.
 
-An ideal linear polariser at angle θ is the Mueller matrix row ½ (1, cos 2θ, sin 2θ, 0), so it passes
-    I(θ) = ½ (S0 + S1 cos 2θ + S2 sin 2θ)
-of the light: cos²(θ − φ) of light linearly polarised at φ (Malus's law), ½ of unpolarised or circular light.
-Being neutral, it changes the luminance and never the chromaticity.
+A linear polariser at angle θ with principal transmittances k1 (along its axis) and k2 (across it; 1 and 0 for an
+ideal one) has the Mueller matrix first row ½ (k1 + k2, (k1 − k2) cos 2θ, (k1 − k2) sin 2θ, 0), so it passes
+    I(θ) = ½ ((k1 + k2) S0 + (k1 − k2) (S1 cos 2θ + S2 sin 2θ))
+of the light: for an ideal one cos²(θ − φ) of light linearly polarised at φ (Malus's law), ½ of unpolarised or
+circular light. Being neutral (k1, k2 the same at every wavelength), it changes the luminance and never the
+chromaticity.
 
 In a display CSV: `# polarization: linear 45`, `# polarization: unpolarized`, `# polarization: circular`, or
 `# polarization: unknown`; text after the value (in parentheses) says how it is known.
@@ -55,15 +57,30 @@ class Polarization:
         return f"linear {self.axis_deg:g}°" if self.kind == "linear" else self.kind
 
 
-def linear_polarizer_row(angle_deg: float | np.ndarray) -> np.ndarray:
-    """The first row of an ideal linear polariser's Mueller matrix at `angle_deg`: (..., 4)."""
+def linear_polarizer_row(angle_deg: float | np.ndarray, k1: float = 1.0, k2: float = 0.0) -> np.ndarray:
+    """The first row of a linear polariser's Mueller matrix at `angle_deg` (principal transmittances k1, k2):
+    (..., 4)."""
     angle = np.radians(2.0 * np.asarray(angle_deg, dtype=np.float64))
-    return 0.5 * np.stack([np.ones_like(angle), np.cos(angle), np.sin(angle), np.zeros_like(angle)], axis=-1)
+    mean, difference = 0.5 * (k1 + k2), 0.5 * (k1 - k2)
+    return np.stack(
+        [np.full_like(angle, mean), difference * np.cos(angle), difference * np.sin(angle), np.zeros_like(angle)],
+        axis=-1,
+    )
 
 
-def transmitted_fraction(polarization: Polarization, analyser_deg: float | np.ndarray) -> np.ndarray:
-    """The fraction of the display's light an ideal linear polariser at `analyser_deg` passes."""
-    return linear_polarizer_row(analyser_deg) @ polarization.stokes()
+def transmitted_fraction(
+    polarization: Polarization, analyser_deg: float | np.ndarray, k1: float = 1.0, k2: float = 0.0
+) -> np.ndarray:
+    """The fraction of the display's light a linear polariser at `analyser_deg` passes (ideal by default)."""
+    return linear_polarizer_row(analyser_deg, k1, k2) @ polarization.stokes()
+
+
+def check_principal_transmittances(k1: float, k2: float, where: str | None = None) -> None:
+    if not (math.isfinite(k1) and math.isfinite(k2) and 0.0 <= k2 <= k1 <= 1.0):
+        raise SpectraceError(
+            f"a polariser's principal transmittances need 0 <= k2 <= k1 <= 1 (k1 along its axis), got {k1:g}, {k2:g}",
+            where=where,
+        )
 
 
 def parse_polarization(text: str, where: str | None = None) -> Polarization:
