@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from cli_runner import run_spectrace
+from cli_runner import run_in_process, run_spectrace
 from spectrace.displays import load_display
 from spectrace.displays.polarizer import through_polarizer
 from spectrace.errors import SpectraceError
@@ -90,7 +90,7 @@ def _run(*args):
 
 @pytest.mark.subprocess
 @pytest.mark.slow
-def test_polarizer_command_json_and_refusals():
+def test_polarizer_command_json():
     result = _run("polarizer", "-d", "LCD-Apple_WLED", "-d", "CRT-HP", "-a", "0", "-a", "45", "-a", "135", "--json")
     assert result.returncode == 0, result.stderr
     angles = json.loads(result.stdout)["angles"]
@@ -100,25 +100,52 @@ def test_polarizer_command_json_and_refusals():
     assert [item["luminance_cd_m2"] for item in crt] == pytest.approx([50.0] * 3)
     assert lcd[1]["luminance_cd_m2"] == pytest.approx(100.0)
 
-    result = _run(
-        "polarizer", "-d", "CRT-HP", "-d", "CRT-Dell", "--polarization", "crt-hp=linear 90", "-a", "0", "--json"
-    )
-    assert json.loads(result.stdout)["angles"][0]["displays"][0]["fraction"] == pytest.approx(0.0, abs=1e-12)
 
-    for args, expected in (
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
         (["--polarization", "CRT-HP=linear up"], "--polarization CRT-HP: 'linear' needs its axis"),
         (["--polarization", "OLED-SonyPVM2541=circular"], "--polarization: 'oled-sonypvm2541' is not one"),
         (["--polarization", "CRT-HP=unknown"], "--polarization: the polarisation of CRT-HP's light is unknown"),
+        (["--transmittances", "0.5", "0.6"], "--transmittances: a polariser's principal transmittances need"),
         (["-d", "nope"], "--display: unknown display 'nope'"),
-    ):
-        result = _run("polarizer", "-d", "CRT-HP", *args)
-        assert result.returncode == 2 and result.stdout == ""
-        assert result.stderr.count("\n") == 1 and expected in result.stderr and "Traceback" not in result.stderr
+    ],
+)
+def test_polarizer_refusals_are_one_line(args, expected, monkeypatch, capsys):
+    status, stderr = run_in_process(monkeypatch, capsys, ["display", "polarizer", "-d", "CRT-HP", *args])
+    assert status == 2 and stderr.count("\n") == 1 and expected in stderr, stderr
+
+
+def test_a_polarisation_given_on_the_command_line_replaces_the_catalogues(monkeypatch, capsys):
+    monkeypatch.setattr(
+        "sys.argv",
+        [
+            "spectrace",
+            "display",
+            "polarizer",
+            "-d",
+            "CRT-HP",
+            "-d",
+            "CRT-Dell",
+            "--polarization",
+            "crt-hp=linear 90",
+            "-a",
+            "0",
+            "--json",
+        ],
+    )
+    from spectrace import cli
+
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main()
+    assert exit_info.value.code in (0, None)
+    shown = json.loads(capsys.readouterr().out)["angles"][0]["displays"]
+    assert shown[0]["fraction"] == pytest.approx(0.0, abs=1e-12) and shown[1]["fraction"] == 0.5
 
 
 @pytest.mark.subprocess
 @pytest.mark.slow
-def test_model_command_json_and_refusals(tmp_path):
+def test_model_command_json():
     result = _run("model", "LCD-GeChic1303H_WLED", "--json")
     assert result.returncode == 0, result.stderr
     fit = json.loads(result.stdout)
@@ -129,6 +156,9 @@ def test_model_command_json_and_refusals(tmp_path):
         "CdSe QD film backlight",
         "filters narrowed 10 nm",
     ]
+
+
+def test_model_refusals_are_one_line_and_keep_files(tmp_path, monkeypatch, capsys):
     kept = tmp_path / "kept.png"
     kept.write_bytes(b"old")
     for args, expected in (
@@ -137,7 +167,6 @@ def test_model_command_json_and_refusals(tmp_path):
         (["LCD-Dell_CCFL", "--plot", str(tmp_path / "no" / "such.png")], "such.png"),
         (["LCD-Dell_CCFL", "--plot", str(tmp_path / "plot.xyz")], "plot.xyz"),
     ):
-        result = _run("model", *args)
-        assert result.returncode != 0 and result.stdout == ""
-        assert result.stderr.count("\n") == 1 and expected in result.stderr and "Traceback" not in result.stderr
-    assert kept.read_bytes() == b"old"
+        status, stderr = run_in_process(monkeypatch, capsys, ["display", "model", *args])
+        assert status == 2 and stderr.count("\n") == 1 and expected in stderr, stderr
+    assert kept.read_bytes() == b"old" and sorted(path.name for path in tmp_path.iterdir()) == ["kept.png"]

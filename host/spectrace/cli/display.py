@@ -435,6 +435,9 @@ def model_command(
         from spectrace.plot_extra import require_matplotlib
 
         require_matplotlib("--plot")
+        from spectrace.displays.plots import check_plot_path
+
+        check_plot_path(plot)  # its format too, before the fit
     if backlight is not None and backlight not in BACKLIGHTS:
         raise SpectraceError(f"unknown backlight '{backlight}' (one of {', '.join(BACKLIGHTS)})", where="--backlight")
     display = load_display(name, where="NAME")
