@@ -110,6 +110,7 @@ def _every_output_option(tmp_path: Path) -> dict[str, tuple[list[str], str, str]
             "--plot",
             ".png",
         ),
+        "display model --plot": (["display", "model", "LCD-Dell_CCFL", "--plot"], "--plot", ".png"),
         "import-pbrt -o": (["import-pbrt", str(tmp_path / "scene.pbrt"), "-o"], "--output", ".toml"),
         "import-mitsuba -o": (["import-mitsuba", str(tmp_path / "scene.xml"), "-o"], "--output", ".toml"),
         "import-gltf -o": (

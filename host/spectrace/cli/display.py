@@ -1,4 +1,5 @@
-"""`spectrace display list | compare | match`: the same RGB on different displays (see docs/displays.md)."""
+"""`spectrace display list | compare | match | metamerism | model | polariser`: displays as spectral emitters (see
+docs/displays.md)."""
 
 from __future__ import annotations
 
@@ -106,6 +107,11 @@ def _listing_json(display: Display) -> dict:
         "primaries_xy": dict(zip(CHANNELS, display.primaries_xy().tolist())),
         "white_xy": display.white_xy().tolist(),
         "source": display.source,
+        "polarization": {
+            "kind": display.polarization.kind,
+            "axis_deg": display.polarization.axis_deg if display.polarization.kind == "linear" else None,
+            "note": display.polarization.note,
+        },
     }
 
 
@@ -122,7 +128,7 @@ def list_displays(
         _print_json({"displays": [_listing_json(display) for display in displays]})
         return
     table = Table(title="displays (CIE 1931 xy; white = RGB (1, 1, 1))")
-    for heading in ("display", "technology", "red xy", "green xy", "blue xy", "white xy", "white cd/m²"):
+    for heading in ("display", "technology", "red xy", "green xy", "blue xy", "white xy", "white cd/m²", "light"):
         table.add_column(heading)
     for display in displays:
         luminance = f"{display.white_luminance_cd_m2:.1f}" if display.absolute else "relative"
@@ -132,6 +138,7 @@ def list_displays(
             *(_xy_text(xy) for xy in display.primaries_xy()),
             _xy_text(display.white_xy()),
             luminance,
+            display.polarization.text() + (" (assumed)" if display.polarization.note.startswith("assumed") else ""),
         )
     _stdout_console().print(table)
 
@@ -353,3 +360,203 @@ def metamerism(
                 f"{r.delta_e_2000:.2f} ± {r.delta_e_standard_error:.2f}",
             )
         Console(width=140, markup=False).print(measured)
+
+
+# ---------------------------------------------------------------- model
+
+
+def _fit_table(fit) -> Table:
+    table = Table(
+        title=f"{fit.measured.name}: measured primaries vs the layer model ({fit.model.backlight.describe()}; "
+        f"spectral rms residual {fit.rms_residual:.3f} of the peak)"
+    )
+    for heading in ("primary", "measured x, y", "model x, y", "Δxy"):
+        table.add_column(heading)
+    for channel, measured, model, delta in zip(CHANNELS, fit.measured_xy(), fit.model_xy(), fit.delta_xy()):
+        table.add_row(channel, _xy_text(measured), _xy_text(model), f"{delta:.4f}")
+    measured, model = fit.white_xy()
+    table.add_row("white", _xy_text(measured), _xy_text(model), f"{np.linalg.norm(model - measured):.4f}")
+    return table
+
+
+def _variants_table(variants) -> Table:
+    table = Table(
+        title="one layer changed (each white balanced to the model's white by channel gains); metamerism against the "
+        "model: a grey (0.8) matched for CIE 1931 2°, seen by CIE 1964 10°, and the ColorChecker lit by each"
+    )
+    for heading in (
+        "variant",
+        "red xy",
+        "green xy",
+        "blue xy",
+        "gamut area xy",
+        "gamut area u'v'",
+        "white efficiency",
+        "grey ΔE00 10°",
+        "ColorChecker ΔE00 mean / max",
+    ):
+        table.add_column(heading)
+    for variant in variants:
+        table.add_row(
+            variant.name,
+            *(_xy_text(xy) for xy in variant.primaries_xy),
+            f"{variant.gamut_xy:.4f}",
+            f"{variant.gamut_uv:.4f}",
+            f"{variant.white_efficiency:.3f}",
+            f"{variant.grey_delta_e_1964:.2f}",
+            f"{variant.colorchecker_mean_delta_e:.2f} / {variant.colorchecker_max_delta_e:.2f}",
+        )
+    return table
+
+
+@display_app.command("model")
+def model_command(
+    name: Annotated[str, typer.Argument(help="An LCD's name or CSV file (see `display list`).")],
+    backlight: Annotated[
+        str | None,
+        typer.Option(
+            "--backlight",
+            help="wled_yag (blue LED + YAG:Ce), qd (blue LED + quantum-dot films) or ccfl; "
+            "default: from the display's technology.",
+        ),
+    ] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the model into this image file.")] = None,
+    as_json: JsonOption = False,
+) -> None:
+    """An LCD described by its layers (backlight × colour filters × polarisers), fitted to its measured primaries:
+    measured vs modelled xy, and how the gamut and metamerism change when one layer changes."""
+    from spectrace.displays.layer_experiments import layer_variants
+    from spectrace.displays.layers import BACKLIGHTS, fit_layer_model
+
+    if plot is not None:
+        from spectrace.cli.checks import check_output_file
+
+        check_output_file(plot, "--plot")
+        from spectrace.plot_extra import require_matplotlib
+
+        require_matplotlib("--plot")
+        from spectrace.displays.plots import check_plot_path
+
+        check_plot_path(plot)  # its format too, before the fit
+    if backlight is not None and backlight not in BACKLIGHTS:
+        raise SpectraceError(f"unknown backlight '{backlight}' (one of {', '.join(BACKLIGHTS)})", where="--backlight")
+    display = load_display(name, where="NAME")
+    if backlight is None and "lcd" not in f"{display.name} {display.technology}".casefold():
+        raise SpectraceError(
+            f"{display.name} is not an LCD (technology: {display.technology}): a layer model is a backlight behind "
+            "colour filters; give --backlight to fit one anyway",
+            where="NAME",
+        )
+    fit = fit_layer_model(display, backlight)
+    variants = layer_variants(fit)
+    if plot is not None:
+        from spectrace.displays.layer_plots import plot_layer_model
+
+        plot_layer_model(fit, variants, plot)
+    if as_json:
+        _print_json(fit.to_json() | {"variants": [v.to_json() for v in variants], "plot": str(plot) if plot else None})
+        return
+    console = _stdout_console()
+    console.print(_fit_table(fit))
+    console.print(_variants_table(variants))
+    if plot is not None:
+        console.print(f"wrote {plot}", highlight=False, markup=False)
+
+
+# ---------------------------------------------------------------- polarizer
+
+
+def _with_polarization(displays: list[Display], overrides: list[str] | None) -> list[Display]:
+    """Each display with the polarisation `NAME=SPEC` gives it, for the displays it names."""
+    from dataclasses import replace
+
+    from spectrace.spectral.display_polarization import parse_polarization
+
+    given = {}
+    for item in overrides or []:
+        name, separator, spec = item.partition("=")
+        if not separator or not name.strip():
+            raise SpectraceError(f"expected NAME=SPEC (as 'LCD-Dell_CCFL=linear 90'), got '{item}'", "--polarization")
+        given[name.strip().casefold()] = parse_polarization(spec, where=f"--polarization {name.strip()}")
+    unknown = set(given) - {display.name.casefold() for display in displays}
+    if unknown:
+        raise SpectraceError(f"'{sorted(unknown)[0]}' is not one of the displays compared", where="--polarization")
+    return [
+        replace(display, polarization=given[display.name.casefold()]) if display.name.casefold() in given else display
+        for display in displays
+    ]
+
+
+@display_app.command("polarizer")
+def polarizer_command(
+    display: Annotated[
+        list[str],
+        typer.Option("--display", "-d", help="Display name or CSV file (repeatable; two or more to compare)."),
+    ],
+    angle: Annotated[
+        list[float] | None,
+        typer.Option(
+            "--angle", "-a", help="Polariser angle in degrees from horizontal (repeatable; default 0..180 every 15)."
+        ),
+    ] = None,
+    rgb: Annotated[
+        tuple[float, float, float],
+        typer.Option("--rgb", help="The triple each display shows (default white).", callback=_checked_rgb_option),
+    ] = (1.0, 1.0, 1.0),
+    polarization: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--polarization",
+            help="NAME=SPEC: the polarisation of a display's light instead of the catalogue's "
+            "('linear 90', 'circular', 'unpolarized'; repeatable).",
+        ),
+    ] = None,
+    transmittances: Annotated[
+        tuple[float, float],
+        typer.Option(
+            "--transmittances",
+            help="The polariser's principal transmittances K1 K2 (along and across its axis; default ideal, 1 0).",
+        ),
+    ] = (1.0, 0.0),
+    encoding: EncodingOption = Encoding.LINEAR,
+    white_luminance: WhiteLuminanceOption = DEFAULT_WHITE_LUMINANCE_CD_M2,
+    as_json: JsonOption = False,
+) -> None:
+    """Displays seen through a linear polariser at each angle: luminance and chromaticity (Malus's law on polarised
+    light, ½ of unpolarised light), and the CIEDE2000 between each pair."""
+    import math
+
+    from spectrace.displays.polarizer import DEFAULT_ANGLES_DEG, through_polarizer
+
+    angles = tuple(angle) if angle else DEFAULT_ANGLES_DEG
+    bad = next((value for value in angles if not math.isfinite(value)), None)
+    if bad is not None:
+        raise SpectraceError(f"an angle must be a finite number of degrees, got {bad}", where="--angle")
+    displays = [load_display(spec, where="--display").with_transfer(encoding) for spec in display]
+    displays = _with_polarization(displays, polarization)
+    viewing = ViewingConditions(white_luminance_cd_m2=white_luminance)
+    result = through_polarizer(displays, angles, np.array(rgb), viewing, transmittances)
+    if as_json:
+        _print_json(result.to_json() | {"encoding": encoding.value})
+        return
+    names = [seen.display for seen in result.rows[0]]
+    polarizations = ", ".join(f"{seen.display}: {seen.polarization}" for seen in result.rows[0])
+    table = Table(
+        title=f"RGB ({', '.join(f'{v:g}' for v in result.rgb)}) through a linear polariser, k1 {transmittances[0]:g}, "
+        f"k2 {transmittances[1]:g} ({polarizations}); "
+        f"white {white_luminance:g} cd/m² without it"
+    )
+    table.add_column("angle °")
+    for name in names:
+        table.add_column(f"{name} cd/m²")
+        table.add_column(f"{name} x, y")
+    pairs = list(result.pair_delta_e[0])
+    for first, second in pairs:
+        table.add_column(f"ΔE00 {first} / {second}")
+    for angle_deg, row, deltas in zip(result.angles_deg, result.rows, result.pair_delta_e):
+        cells = [f"{angle_deg:g}"]
+        for seen in row:
+            cells += [f"{seen.luminance_cd_m2:.2f}", _xy_text(seen.xy) if seen.luminance_cd_m2 > 0 else "black"]
+        cells += [f"{deltas[pair]:.2f}" for pair in pairs]
+        table.add_row(*cells)
+    _stdout_console().print(table)

@@ -177,6 +177,11 @@ def comparison_figure(comparison: Comparison):
 
 def plot_comparison(comparison: Comparison, path: str | Path) -> Path:
     """Draw the comparison into an image file (format from the suffix: .png, .pdf, .svg)."""
+    return save_figure(lambda: comparison_figure(comparison), path)
+
+
+def check_plot_path(path: str | Path) -> Path:
+    """One line naming the file unless its folder exists and matplotlib writes its suffix's format."""
     pyplot = _pyplot()
     path = Path(path)
     if not path.parent.is_dir():
@@ -185,7 +190,15 @@ def plot_comparison(comparison: Comparison, path: str | Path) -> Path:
     pyplot.close("all")
     if path.suffix.lstrip(".").lower() not in supported:
         raise SpectraceError(f"cannot write a plot as '{path.suffix}' (use .png, .pdf or .svg)", where=str(path))
-    figure = comparison_figure(comparison)
+    return path
+
+
+def save_figure(make_figure, path: str | Path) -> Path:
+    """The figure `make_figure()` returns, written atomically to an image file (format from the suffix), its folder
+    and format checked before the figure is made."""
+    pyplot = _pyplot()
+    path = check_plot_path(path)
+    figure = make_figure()
     try:
         write_atomically(path, lambda temp: figure.savefig(temp, dpi=120, bbox_inches="tight"))
     except OSError as error:

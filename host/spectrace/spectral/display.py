@@ -15,6 +15,7 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.spectral import Spectrum, spectrum_to_xyz, xyz_to_xy
+from spectrace.spectral.display_polarization import Polarization
 from spectrace.spectral.display_transfer import Encoding, checked_rgb, decode_to_drive
 from spectrace.spectral.observers import Observer, luminance_cd_m2, photometric_xyz
 
@@ -31,6 +32,7 @@ class Display:
     radiance_scale: how that scale came about, for reports ("measured", "relative", "white set to 100 cd/m²").
     transfer: how `emission`/`drive` read an RGB triple (see `spectrace.spectral.display_transfer`).
     technology: a short label ("LCD with CCFL backlight (inferred)"); source: where the data come from.
+    polarization: of the light it emits (see `spectrace.spectral.display_polarization`).
     """
 
     name: str
@@ -40,6 +42,7 @@ class Display:
     radiance_scale: str
     transfer: Encoding = Encoding.LINEAR
     source: str = ""
+    polarization: Polarization = Polarization()
 
     def __post_init__(self) -> None:
         if len(self.primaries) != 3:

@@ -3,6 +3,7 @@ colour-science at load time, and any user CSV of three primaries.
 
 Display CSV format (the spectrum CSV of `spectrace.spectral.spectrum_io`, with three named columns):
     # technology: LCD with white-LED backlight (inferred from the spectrum)     <- optional, shown by `list`
+    # polarization: linear 45 (assumed)                                         <- optional, default unknown
     # units: W/(sr m^2 nm)                                                      <- marks absolute radiance
     wavelength_nm,red,green,blue
     380,1.2e-05,3.1e-06,4.4e-05
@@ -25,23 +26,27 @@ from spectrace.io.input_files import is_regular_file, regular_file
 from spectrace.resources import spectra_dir
 from spectrace.spectral import load_spectrum_csv, spectrum_from_colour
 from spectrace.spectral.display import CHANNELS, Display
+from spectrace.spectral.display_polarization import Polarization, parse_polarization
 
 DISPLAYS_FOLDER = "displays"
 RELATIVE = "relative"
 MEASURED = "measured"
 
-# spectrace name -> (colour-science key in MSDS_DISPLAY_PRIMARIES, technology, reference). Relative data.
+# spectrace name -> (colour-science key in MSDS_DISPLAY_PRIMARIES, technology, reference, polarisation). Relative
+# data.
 _COLOUR_SCIENCE_DISPLAYS = {
     "CRT-Brainard1997": (
         "Typical CRT Brainard 1997",
         "CRT",
         "colour-science MSDS_DISPLAY_PRIMARIES 'Typical CRT Brainard 1997' (Brainard's typical CRT phosphors,"
         " as tabulated by Machado 2010)",
+        "unpolarized (a CRT's phosphors emit unpolarised light)",
     ),
     "LCD-AppleStudioDisplay_CCFL": (
         "Apple Studio Display",
         "LCD with CCFL backlight (inferred)",
         "colour-science MSDS_DISPLAY_PRIMARIES 'Apple Studio Display' (Fairchild & Wyble 1998)",
+        "linear 45 (assumed: an LCD's front polariser; the axis is not in the source)",
     ),
 }
 
@@ -95,7 +100,7 @@ def _load_named_display(name: str) -> Display:
 
 
 def _colour_science_display(name: str) -> Display:
-    key, technology, reference = _COLOUR_SCIENCE_DISPLAYS[name]
+    key, technology, reference, polarization = _COLOUR_SCIENCE_DISPLAYS[name]
     multi_sd = colour.MSDS_DISPLAY_PRIMARIES[key]
     red, green, blue = (
         spectrum_from_colour(sd, name=f"{name}:{channel}") for channel, sd in zip(CHANNELS, multi_sd.to_sds())
@@ -107,6 +112,7 @@ def _colour_science_display(name: str) -> Display:
         absolute=False,
         radiance_scale=RELATIVE,
         source=reference,
+        polarization=parse_polarization(polarization),
     )
 
 
@@ -167,4 +173,10 @@ def load_display_csv(path: str | Path, name: str | None = None) -> Display:
         absolute=absolute,
         radiance_scale=MEASURED if absolute else RELATIVE,
         source=str(path),
+        polarization=_polarization(keys, path),
     )
+
+
+def _polarization(keys: dict[str, str], path: Path) -> Polarization:
+    text = keys.get("polarization")
+    return Polarization() if text is None else parse_polarization(text, where=f"{path}: # polarization")
