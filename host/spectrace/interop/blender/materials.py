@@ -137,6 +137,7 @@ def _principled(ctx: BlendImport, node, where: str) -> tuple[dict, dict | None]:
             if abs(_number(ctx, source, "Strength", where) - 1.0) > 1e-6:
                 ctx.warn(where, "a Normal Map's strength other than 1 is not imported")
             table["normal_map"] = _image(ctx, image_socket.links[0].from_node, "normal", where)
+            table["normal_map_handedness"] = True  # Blender's tangent space is MikkTSpace's, signed per face
         else:
             ctx.warn(where, f"a normal from node {source.bl_idname} is not imported")
     emitter = _emitter(ctx, node, "Emission Color", "Emission Strength", where)

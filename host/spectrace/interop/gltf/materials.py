@@ -106,6 +106,8 @@ def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | No
         normal = texture(ctx, info, where, "normal")
         if normal is not None:
             table["normal_map"] = normal
+            # glTF's bitangent is cross(normal, tangent) · w, w following the texture layout's handedness
+            table["normal_map_handedness"] = True
     for key in ("occlusionTexture",):
         if key in entry:
             ctx.warn(

@@ -1,0 +1,80 @@
+"""glTF normal maps in glTF's tangent frame (glTF 2.0, 3.7.2.1 and 3.9.3): the map's x along the tangent (the
+direction in which u grows), its y along the bitangent cross(normal, tangent) · w, which points up the image (the
+direction in which glTF's v falls) on every face, mirrored layouts included, as MikkTSpace's sign makes it.
+
+A plane under a directional light, seen from above, with a constant normal map tilted off its normal: a
+Lambertian surface's radiance is ρ E cos θ / π with θ the angle between the light and the turned normal, so the
+normal-mapped plane over the plain one is (n · l) / (N · l), n = a T + b U + c N written here from the texture
+layout alone (T along dp/du, U up the image), (a, b, c) the texel's 2c/255 − 1. The same layouts turned by 90°,
+mirrored in u and mirrored in v each give another value; a frame that ignored the layout's handedness gives the
+mirrored ones the wrong sign of b. Each image is one bounce from a delta light, so the ratio of two renders with the
+same seed is exact to float rounding."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from tests.interop.gltf_builder import Gltf
+
+TEXEL = np.array([185, 166, 230])  # (a, b, c) = 2 c / 255 − 1, a tilt of about 28° toward +x and +y
+LIGHT = np.array([0.4, 0.5, 1.0]) / np.linalg.norm([0.4, 0.5, 1.0])  # toward the light
+S = 3.0
+CORNERS = np.array([[-S, -S], [S, -S], [S, S], [-S, S]])
+# glTF texture coordinates of the four corners, and the layout's (T, U): where u grows, and up the image (v falls)
+LAYOUTS = {
+    "upright": ([[0, 1], [1, 1], [1, 0], [0, 0]], [1, 0, 0], [0, 1, 0]),
+    "turned": ([[0, 0], [0, 1], [1, 1], [1, 0]], [0, 1, 0], [-1, 0, 0]),
+    "mirrored_u": ([[1, 1], [0, 1], [0, 0], [1, 0]], [-1, 0, 0], [0, 1, 0]),
+    "mirrored_v": ([[0, 0], [1, 0], [1, 1], [0, 1]], [1, 0, 0], [0, -1, 0]),
+}
+
+
+def _quaternion_to(direction: np.ndarray) -> list[float]:
+    """The rotation taking a node's −z (a glTF light's direction) to `direction`."""
+    a, b = np.array([0.0, 0.0, -1.0]), direction / np.linalg.norm(direction)
+    axis = np.cross(a, b)
+    w = 1.0 + float(a @ b)
+    q = np.append(axis, w)
+    return (q / np.linalg.norm(q)).tolist()
+
+
+def _plane(path, uvs, normal_map: bool):
+    gltf = Gltf()
+    material: dict = {
+        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0},
+        "doubleSided": True,
+    }
+    if normal_map:
+        pixels = np.broadcast_to(TEXEL.astype(np.uint8), (4, 4, 3))
+        material["normalTexture"] = {"index": gltf.image_texture(pixels, {"magFilter": 9728, "minFilter": 9728})}
+    positions = np.column_stack([CORNERS, np.zeros(4)])
+    mesh = gltf.mesh(positions, [0, 1, 2, 0, 2, 3], [[0, 0, 1]] * 4, uvs, gltf.material(**material))
+    gltf.node(mesh=mesh)
+    sun = gltf.light(type="directional", intensity=100.0)
+    gltf.node(extensions={"KHR_lights_punctual": {"light": sun}}, rotation=_quaternion_to(-LIGHT))
+    camera = gltf.camera(type="perspective", perspective={"yfov": 0.5, "aspectRatio": 1.0, "znear": 0.01})
+    gltf.node(camera=camera, translation=[0.0, 0.0, 2.0])
+    return gltf.write(path)
+
+
+def _render(path, tmp_path) -> np.ndarray:
+    from spectrace.api import render
+    from spectrace.interop.gltf import import_gltf
+    from spectrace.scene import load_scene
+
+    toml = tmp_path / f"{path.stem}.toml"
+    import_gltf(path, toml, material_model="diffuse")
+    scene = load_scene(toml).with_overrides(width=8, height=8, spp=4, seed=3)
+    return render(scene, progress=False).xyz[..., 1]
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_a_tilted_normal_map_lights_the_plane_as_its_turned_normal(tmp_path, layout):
+    uvs, tangent, up = LAYOUTS[layout]
+    mapped = _render(_plane(tmp_path / "mapped.glb", uvs, True), tmp_path)
+    plain = _render(_plane(tmp_path / "plain.glb", uvs, False), tmp_path)
+    a, b, c = 2.0 * TEXEL / 255.0 - 1.0
+    n = a * np.array(tangent) + b * np.array(up) + c * np.array([0.0, 0.0, 1.0])
+    expected = (n / np.linalg.norm(n)) @ LIGHT / LIGHT[2]
+    assert plain.min() > 0.0
+    np.testing.assert_allclose(mapped / plain, expected, rtol=2e-5)
