@@ -98,6 +98,9 @@ def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path):
     assert (metal["metallic"], metal["roughness"], metal["clearcoat"]) == (1.0, 0.2, 0.5)
     assert metal["clearcoat_gloss"] == pytest.approx(1.0 - 0.03)  # Blender's default Coat Roughness
     assert (materials["glassy"]["spec_trans"], materials["glassy"]["eta"]) == (1.0, 1.45)
+    # Anisotropic Rotation in turns, Cycles' counter-clockwise turn of the tangent: 0.125 is 45°
+    brushed = materials["brushed"]
+    assert (brushed["anisotropic"], brushed["anisotropic_rotation"]) == (pytest.approx(0.6), 45.0)
     # Glass and Glossy: Cycles squares Roughness into α
     assert materials["glass"]["type"] == "dielectric" and materials["glass"]["ior"] == 1.5
     assert materials["glass"]["roughness"] == pytest.approx(0.2**2)

@@ -141,7 +141,7 @@ MATERIAL_DTYPE = _struct(
         ("shadowing", "<i4"),
         ("tangent_frame", "<i4"),
         ("normal_map_handedness", "<i4"),
-        ("pad", "<i4"),
+        ("tangent_rotation", "<f4"),
     ],
     128,
 )

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+from spectrace.interop.gltf import material_extensions
 from spectrace.interop.gltf.context import GltfImport, photometric_scale
 from spectrace.interop.gltf.textures import texture
 from spectrace.interop.mitsuba.context import unique_name
@@ -31,6 +32,7 @@ IMPORTED_EXTENSIONS = (
     "KHR_materials_volume",
     "KHR_materials_unlit",
     "KHR_materials_diffuse_transmission",
+    *material_extensions.EXTENSIONS,
 )
 UNLIT = "KHR_materials_unlit"
 
@@ -97,6 +99,7 @@ def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | No
         table["metallic"] = metallic_map or metallic
         table["roughness"] = roughness_map or roughness
         _extensions(ctx, table, entry, pointer)
+        material_extensions.apply(ctx, table, entry, pointer, roughness)
         _diffuse_transmission(ctx, table, entry, pointer)
     if "normalTexture" in entry:
         where = f"{pointer}/normalTexture"
@@ -188,7 +191,7 @@ def _extensions(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None
 
 
 # The principled keys a thin sheet (principledthin) has no counterpart of.
-_NOT_THIN = ("metallic", "clearcoat", "clearcoat_gloss", "specular")
+_NOT_THIN = ("metallic", "clearcoat", "clearcoat_gloss", "specular", "anisotropic_rotation")
 
 
 def _diffuse_transmission(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
