@@ -123,11 +123,13 @@ def test_a_mirrored_normal_map_renders_as_cycles_renders_it(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["NormalTangentTest.glb", "NormalTangentMirrorTest.glb"])
 def test_khronos_normal_tangent_models_render_as_cycles_renders_them(tmp_path, name):
-    """Khronos' two models of normal-mapped spheres (the second with mirrored texture layouts and its own TANGENT
-    attribute, which spectrace does not read: its per-triangle frame follows the same layout and sign), under the
-    uniform white environment, against Cycles, with the sample assets' allowance (tests/interop/
-    test_gltf_cycles.py: 7 % a block besides 4 σ, 2 % the mean). The files are public sample models kept outside
-    the repository (SPECTRACE_GLTF_SAMPLES)."""
+    """Khronos' two models of normal-mapped cells under the uniform white environment, against Cycles, with the
+    sample assets' allowance (tests/interop/test_gltf_cycles.py: 7 % a block besides 4 σ, 2 % the mean). The
+    second's "mirror" cells are mirrored geometry with unmirrored texture coordinates, whose supplied TANGENT w says
+    so; spectrace does not read TANGENT, and Blender's importer does not either (Blender computes MikkTSpace
+    tangents from the UV map), so both render those cells as the model's README shows "supplied tangents ignored":
+    this compares the two renderers, not the file's intent. The files are public sample models kept outside the
+    repository (SPECTRACE_GLTF_SAMPLES)."""
     pytest.importorskip("bpy", reason="bpy (Blender as a Python module, installed apart: pip install bpy) is absent")
     from tests.interop.test_gltf_cycles import _check, _sample, compare
 
