@@ -67,7 +67,17 @@ inline ShadingFrame material_frame(__global const Material *m, const SurfaceCont
 {
     float3 normal = (material_flags(m) & BSDF_TRANSMISSION) ? n : facing(n, wo);
 #if SCENE_HAS_TANGENT_FRAMES
-    if (m->tangent_frame) return shading_frame_along(normal, sc->dpdu);
+    if (m->tangent_frame) {
+        ShadingFrame frame = shading_frame_along(normal, sc->dpdu);
+        /* Turned about the normal by the material's rotation: x = cos θ x + sin θ y, y = n × x. */
+        if (m->tangent_rotation != 0.0f) {
+            float c, s = sincos(m->tangent_rotation, &c);
+            float3 x = c * frame.tangent + s * frame.bitangent;
+            frame.bitangent = cross(frame.normal, x);
+            frame.tangent = x;
+        }
+        return frame;
+    }
 #endif
     return shading_frame(normal);
 }

@@ -65,6 +65,12 @@
 #define SCENE_HAS_OPACITY 1
 #endif
 
+/* Normal maps whose bitangent follows the texture layout's handedness (Material.normal_map_handedness, glTF's
+ * frame: kernels/surface_detail.cl). */
+#ifndef SCENE_HAS_NORMAL_MAP_HANDEDNESS
+#define SCENE_HAS_NORMAL_MAP_HANDEDNESS 1
+#endif
+
 /* Materials that reflect on one face only (Material.one_sided, kernels/material.cl). */
 #ifndef SCENE_HAS_ONE_SIDED
 #define SCENE_HAS_ONE_SIDED 1

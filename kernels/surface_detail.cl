@@ -31,6 +31,17 @@ inline float3 in_plane(float3 n, float3 d)
     return d - n * dot(n, d);
 }
 
+#if SCENE_HAS_NORMAL_MAP_HANDEDNESS
+/* w of glTF 2.0's bitangent = cross(normal, tangent.xyz) · w (3.7.2.1), for material m whose normal map asks for it:
+ * −1 where the texture layout is mirrored, i.e. where n × dp/du points down the image, along +dp/dv (spectrace's
+ * v runs down the image, as glTF's does), so that the map's +y (green) points up the image on both halves of a
+ * mirrored layout, as MikkTSpace's sign makes it in Blender; 1 otherwise, and for every other material. */
+inline float normal_map_handedness(__global const Material *m, float3 bitangent, float3 dpdv)
+{
+    return (m->normal_map_handedness && dot(bitangent, dpdv) > 0.0f) ? -1.0f : 1.0f;
+}
+#endif
+
 /* ∂h/∂u and ∂h/∂v of bump map `index` at uv: a bitmap's is the exact gradient of its lookup (image_texture_gradient:
  * the bilinear interpolant's, 0 for nearest), as Mitsuba 3's bumpmap takes it. A checkerboard's heights are flat
  * but for their edges, whose relief a derivative would miss: forward differences over half the footprint (about a
@@ -66,6 +77,9 @@ inline float3 detailed_normal_at(const Scene *scene, __global const Material *m,
         if (length_s > 0.0f) {
             frame.tangent = s / length_s;
             frame.bitangent = cross(ns, frame.tangent);
+#if SCENE_HAS_NORMAL_MAP_HANDEDNESS
+            frame.bitangent *= normal_map_handedness(m, frame.bitangent, dpdv);
+#endif
         }
         n = to_world(&frame, mapped);
     } else {

@@ -152,7 +152,10 @@ typedef struct {
                                    `use_shadowing_function`; 0: it is not */
     int tangent_frame;          /* 1: the BSDF's frame turns its x axis along the surface's dp/du (an anisotropic
                                    lobe's direction, material.cl's material_frame); 0: any frame about the normal */
-    int pad[2];                 /* to the float4 alignment */
+    int normal_map_handedness;  /* 1: the normal map's bitangent is w (n × tangent), w the sign of the texture layout's
+                                   handedness (glTF's frame, surface_detail.cl); 0: n × tangent (Mitsuba's) */
+    float tangent_rotation;     /* with tangent_frame: radians the frame's x axis turns from dp/du, counter-clockwise
+                                   about the normal (principled's anisotropic_rotation) */
 } Material;
 
 /* One texture (kernels/texture.cl; its host side: host/spectrace/textures). An image's texels are values of its

@@ -108,6 +108,11 @@ def materials_box():
     glassy, _ = _material(
         "glassy", "ShaderNodeBsdfPrincipled", **{"Transmission Weight": 1.0, "IOR": 1.45, "Roughness": 0.0}
     )
+    brushed, _ = _material(
+        "brushed",
+        "ShaderNodeBsdfPrincipled",
+        **{"Metallic": 1.0, "Roughness": 0.4, "Anisotropic": 0.6, "Anisotropic Rotation": 0.125},
+    )
     glass, _ = _material("glass", "ShaderNodeBsdfGlass", IOR=1.5, Roughness=0.2)
     glossy, _ = _material("glossy", "ShaderNodeBsdfGlossy", Roughness=0.4)
     lamp, _ = _material("lamp", "ShaderNodeEmission", Color=(1.0, 0.9, 0.8, 1.0), Strength=3.0)
@@ -124,6 +129,7 @@ def materials_box():
     _object(scene, "jar", bpy.ops.mesh.primitive_cylinder_add, glassy, radius=0.2, depth=0.6, location=(0, 1, -0.7))
     _object(scene, "tile", bpy.ops.mesh.primitive_plane_add, textured, size=0.8, location=(0.0, -0.5, -0.99))
     _object(scene, "bulb", bpy.ops.mesh.primitive_plane_add, lamp, size=0.3, location=(0.0, 0.0, 1.5))
+    _object(scene, "plate", bpy.ops.mesh.primitive_plane_add, brushed, size=0.4, location=(1.5, 1.5, -0.99))
     # one mesh in a collection, placed twice by collection instances
     pebbles = bpy.data.collections.new("pebbles")
     bpy.ops.mesh.primitive_cube_add(size=0.2)

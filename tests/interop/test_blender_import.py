@@ -98,6 +98,9 @@ def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path):
     assert (metal["metallic"], metal["roughness"], metal["clearcoat"]) == (1.0, 0.2, 0.5)
     assert metal["clearcoat_gloss"] == pytest.approx(1.0 - 0.03)  # Blender's default Coat Roughness
     assert (materials["glassy"]["spec_trans"], materials["glassy"]["eta"]) == (1.0, 1.45)
+    # Anisotropic Rotation in turns, Cycles' counter-clockwise turn of the tangent: 0.125 is 45°
+    brushed = materials["brushed"]
+    assert (brushed["anisotropic"], brushed["anisotropic_rotation"]) == (pytest.approx(0.6), 45.0)
     # Glass and Glossy: Cycles squares Roughness into α
     assert materials["glass"]["type"] == "dielectric" and materials["glass"]["ior"] == 1.5
     assert materials["glass"]["roughness"] == pytest.approx(0.2**2)
@@ -261,7 +264,20 @@ def record(engine, done, total):
     reported(engine, done, total)
 
 
+shown = []
+show = addon.SpectraceRenderEngine._show
+
+
+def record_show(engine, result, image):
+    shown.append(Path(image).name)
+    return show(engine, result, image)
+
+
 addon.SpectraceRenderEngine._progress = record
+addon.SpectraceRenderEngine._show = record_show
+if sys.argv[5] == "esc":
+    # Esc pressed once the first pass has been reported (what the engine's test_break would then say)
+    addon.SpectraceRenderEngine._stop_asked = lambda engine: bool(seen)
 addon.register()
 bpy.ops.wm.open_mainfile(filepath=sys.argv[2])
 scene = bpy.context.scene
@@ -272,7 +288,30 @@ scene.render.image_settings.color_depth = "32"
 bpy.ops.render.render()
 bpy.data.images["Render Result"].save_render(sys.argv[3])
 print("progress", json.dumps(seen))
+print("shown", json.dumps(shown))
 """
+
+
+def _addon_render(tmp_path: Path, blend: Path, saved: Path, spp: int, esc: bool = False) -> tuple[list, list]:
+    """F12 in Blender with the add-on registered (ADDON_RENDER): the (done, total) reported after each pass and the
+    image files shown in the Render Result, in order; `esc`: Esc pressed once the first pass is reported."""
+    import json
+
+    folder = run_spectrace("blender-addon").stdout.strip()
+    env = os.environ.copy()
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT / "host"), env.get("PYTHONPATH")]))
+    done = subprocess.run(
+        [sys.executable, "-c", ADDON_RENDER, folder, str(blend), str(saved), str(spp), "esc" if esc else "-"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    progress = json.loads(done.stdout.split("progress ", 1)[1].splitlines()[0])
+    shown = json.loads(done.stdout.split("shown ", 1)[1].splitlines()[0])
+    return progress, shown
 
 
 @pytest.mark.subprocess
@@ -290,29 +329,18 @@ def test_the_add_on_renders_into_blenders_render_result_telling_its_progress(tmp
     """The render engine inside Blender, registered from the folder `spectrace blender-addon` prints: F12
     (bpy.ops.render.render) on the grey room gives in Blender's Render Result the image `spectrace render` gives for
     the same file (same export, seed and device: equal to float32 rounding, rows in Blender's bottom-up order), and
-    Blender is told the samples done after each pass, up to the scene's Cycles sample count."""
-    import json
-
+    Blender is told the samples done after each pass, up to the scene's Cycles sample count, and shown the image
+    so far while the render goes on (RenderEngine.update_result)."""
     from spectrace.io.exr import read_exr
 
     spp = 16
     blend, saved, direct = tmp_path / "grey.blend", tmp_path / "addon.exr", tmp_path / "direct.exr"
     _build("grey_box", blend)
-    folder = run_spectrace("blender-addon").stdout.strip()
-    env = os.environ.copy()
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT / "host"), env.get("PYTHONPATH")]))
-    done = subprocess.run(
-        [sys.executable, "-c", ADDON_RENDER, folder, str(blend), str(saved), str(spp)],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=300,
-        cwd=tmp_path,
-    )
-    assert done.returncode == 0, done.stderr[-2000:]
-    progress = json.loads(done.stdout.split("progress ", 1)[1].splitlines()[0])
+    progress, shown = _addon_render(tmp_path, blend, saved, spp)
     assert len(progress) >= 2 and progress[-1] == [spp, spp], progress
     assert all(b[0] > a[0] for a, b in zip(progress, progress[1:], strict=False)), progress
+    # the image after the first pass shown while the render went on, then the final one
+    assert shown[0] == "image.partial.npy" and shown[-1] == "image.npy", shown
     rendered = run_spectrace("render", str(blend), "-o", str(direct), "--spp", str(spp))
     assert rendered.returncode == 0, rendered.stderr
     image = read_exr(saved)[0]["RGBA"][..., :3]
@@ -320,3 +348,22 @@ def test_the_add_on_renders_into_blenders_render_result_telling_its_progress(tmp
     assert image.shape == reference.shape == (24, 32, 3)
     assert reference.mean() > 0.05  # a lit room, not two black images
     np.testing.assert_allclose(image, reference, rtol=1e-3, atol=1e-6)
+
+
+@needs_bpy
+@pytest.mark.subprocess
+@pytest.mark.slow
+def test_esc_in_blender_stops_the_render_with_the_image_of_the_samples_done(tmp_path):
+    """Esc once the first pass is reported (the add-on's _stop_asked, which asks RenderEngine.test_break(), made to
+    say so: bpy offers no way to press Esc headless): the add-on passes it on to the worker (SIGINT), which ends
+    after the pass in flight, and the Render Result holds the image of the samples done, far short of the million
+    asked for."""
+    from spectrace.io.exr import read_exr
+
+    blend, saved = tmp_path / "grey.blend", tmp_path / "stopped.exr"
+    _build("grey_box", blend)
+    progress, shown = _addon_render(tmp_path, blend, saved, 1_000_000, esc=True)
+    assert progress and progress[-1][0] < 1_000_000, progress
+    assert shown[-1] == "image.npy", shown
+    image = read_exr(saved)[0]["RGBA"][..., :3]
+    assert np.all(np.isfinite(image)) and image.mean() > 0.05

@@ -47,8 +47,12 @@ def test_progress_after_each_pass_and_the_image_as_linear_rgb(tmp_path):
     out, err = worker.communicate(timeout=300)
     assert worker.returncode == 0, err
     lines = [line.split() for line in out.splitlines()]
-    progress = [(int(done), int(total)) for word, done, total in lines[:-1] if word == "progress"]
-    assert len(progress) == len(lines) - 1 >= 2 and progress[-1] == (16, 16), out
+    progress = [(int(words[1]), int(words[2])) for words in lines[:-1] if words[0] == "progress"]
+    partial = [int(words[1]) for words in lines[:-1] if words[0] == "partial"]
+    assert len(progress) + len(partial) == len(lines) - 1 and len(progress) >= 2 and progress[-1] == (16, 16), out
+    # the first pass's image, and never one after the last pass (the final image is the one to show then)
+    assert partial and partial[0] == progress[0][0] and max(partial) < 16, out
+    assert np.load(tmp_path / "image.partial.npy").shape == (16, 24, 3)
     assert all(b[0] > a[0] for a, b in zip(progress, progress[1:], strict=False)), out
     assert lines[-1][:2] == ["done", "16"], out
     image = np.load(tmp_path / "image.npy")

@@ -140,7 +140,8 @@ MATERIAL_DTYPE = _struct(
         ("one_sided", "<i4"),
         ("shadowing", "<i4"),
         ("tangent_frame", "<i4"),
-        ("pad", ("<i4", (2,))),
+        ("normal_map_handedness", "<i4"),
+        ("tangent_rotation", "<f4"),
     ],
     128,
 )

@@ -156,6 +156,7 @@ def write_detail(row: np.ndarray, detail, textures) -> None:
     row["shadowing"] = int(detail.shadowing_function and (detail.normal_map is not None or detail.bump_map is not None))
     if detail.normal_map is not None:
         row["normal_map"] = textures.add(detail.normal_map, "vector")
+        row["normal_map_handedness"] = int(detail.normal_map_handedness)
     if detail.bump_map is not None:
         row["bump_map"] = textures.add(detail.bump_map, "float")
         row["bump_scale"] = detail.bump_scale

@@ -86,6 +86,15 @@ SPECULAR = Parameter(
     doc="the index written as a reflectance level instead of `eta` (Mitsuba 3's and Blender's): "
     "eta = 2/(1 − √(0.08 specular)) − 1, so 0.5 gives 1.5; give `eta` or `specular`, not both",
 )
+ANISOTROPIC_ROTATION = Parameter(
+    "anisotropic_rotation",
+    "float",
+    "degrees",
+    default=0.0,
+    range=Range(-360.0, 360.0),
+    doc="turns the direction `anisotropic` stretches along, counter-clockwise about the normal from dp/du: "
+    "the tangent is cos θ x + sin θ (n × x) (glTF's anisotropyRotation, Blender's Anisotropic Rotation × 360°)",
+)
 SPEC_TINT = _weight("spec_tint", 0.0, "tints the dielectric reflection at normal incidence toward the base colour")
 SHEEN = _weight("sheen", 0.0, "a grazing-angle retro-reflective layer for cloth (Burley's sheen)")
 SHEEN_TINT = _weight("sheen_tint", 0.0, "tints the sheen from white toward the base colour")
@@ -97,7 +106,7 @@ CLEARCOAT_GLOSS = _weight(
 )
 # The scalar weights in the order of the kernel's parameter block (PRINCIPLED_* in kernels/bsdf_principled.cl).
 SCALARS = (ROUGHNESS, ANISOTROPIC, METALLIC, SPEC_TRANS, SPEC_TINT, SHEEN, SHEEN_TINT, CLEARCOAT, CLEARCOAT_GLOSS)
-PARAMETERS = (BASE_COLOR, *SCALARS[:4], ETA, SPECULAR, *SCALARS[4:])
+PARAMETERS = (BASE_COLOR, *SCALARS[:4], ETA, SPECULAR, *SCALARS[4:], ANISOTROPIC_ROTATION)
 # α never falls below 0.001 (Mitsuba's clamp): no smooth (delta) case, whatever the roughness.
 ALWAYS_ROUGH = True
 # The material places its own textures: its scalars' texture indices go into its parameter block, not row fields.
@@ -125,6 +134,7 @@ class PrincipledMaterial(Material):
     sheen_tint: float = 0.0
     clearcoat: float = 0.0
     clearcoat_gloss: float = 0.0
+    anisotropic_rotation: float = 0.0  # degrees
 
     is_delta = False  # α never falls below 0.001 (Mitsuba's clamp): every lobe has a density
 
@@ -165,6 +175,9 @@ def from_spec(spec, resolver, key: str) -> PrincipledMaterial:
         resolver.spectrum_or_texture(spec.base_color, f"{key}.base_color", "spectrum"),
         _check_eta(_index(explicit_eta, spec.specular, where), where),
         **{p.name: resolver.number_or_texture(getattr(spec, p.name), f"{key}.{p.name}", p) for p in SCALARS},
+        anisotropic_rotation=ANISOTROPIC_ROTATION.check(
+            spec.anisotropic_rotation, resolver.where(f"{key}.anisotropic_rotation")
+        ),
     )
 
 
@@ -181,12 +194,14 @@ def make(
     sheen_tint: float = 0.0,
     clearcoat: float = 0.0,
     clearcoat_gloss: float = 0.0,
+    anisotropic_rotation: float = 0.0,
 ) -> PrincipledMaterial:
     """Mitsuba 3's principled BSDF (docs/materials.md): `base_color` (a reflectance or a texture), `roughness`
     (perceptual: GGX α = max(0.001, roughness²)), `anisotropic`, `metallic`, `spec_trans` (transmission through a
     dielectric of index `eta`: a number, a glass name or coefficients as the dielectric's `ior`; or `specular`, the
     index as a reflectance level, 0.5 for 1.5), `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`:
-    each weight a number in [0, 1] or a grey texture."""
+    each weight a number in [0, 1] or a grey texture; `anisotropic_rotation` (degrees) turns the stretch's
+    direction about the normal."""
     values = {
         "roughness": roughness,
         "anisotropic": anisotropic,
@@ -205,6 +220,7 @@ def make(
         reflectance_or_texture(base_color, "base_color"),
         _check_eta(_index(given_eta, specular, "eta"), "eta"),
         **{p.name: number_or_texture(values[p.name], p) for p in SCALARS},
+        anisotropic_rotation=ANISOTROPIC_ROTATION.check(anisotropic_rotation, "anisotropic_rotation"),
     )
 
 
@@ -230,6 +246,8 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
     write_base_color(row, material.base_color, table, textures)
     write_ior(row, material.eta)
     write_weights(row, material, SCALARS, table, textures)
+    if row["tangent_frame"]:
+        row["tangent_rotation"] = np.radians(material.anisotropic_rotation)
 
 
 def write_base_color(row: np.ndarray, base_color, table: SpectrumTable, textures) -> None:
@@ -326,6 +344,8 @@ def to_mitsuba(material: PrincipledMaterial, exporter) -> dict:
         raise exporter.refuse("a principled material with a dispersive eta")
     if any(is_texture(getattr(material, p.name)) for p in SCALARS):
         raise exporter.refuse("a principled material with a textured weight is not exported yet")
+    if material.anisotropic_rotation != 0.0:
+        raise exporter.refuse("a principled material with an anisotropic_rotation (Mitsuba's has none)")
     entry: dict = {
         "type": NAME,
         "base_color": exporter.spectrum(material.base_color),

@@ -10,7 +10,10 @@ nature and ignore it.
 
 A normal map holds tangent-space directions n = 2 c − 1 per texel, +z out of the surface, x along the direction
 in which u grows, y = z × x (the OpenGL convention, green up in an image seen upright from the front; Mitsuba 3's
-`normalmap` builds the same frame). A bump map holds heights: `bump_scale` scene units per texture value.
+`normalmap` and pbrt-v4 build the same frame). With `normal_map_handedness`, y = w (z × x), w = ±1 the handedness
+of the triangle's texture layout (−1 where the layout is mirrored, so that green stays up the image there too), the
+bitangent glTF 2.0 (3.7.2.1: cross(normal, tangent.xyz) · w) and Blender's MikkTSpace tangents define. A bump map
+holds heights: `bump_scale` scene units per texture value.
 """
 
 import dataclasses
@@ -73,6 +76,14 @@ PARAMETERS = (
         "Pearce & Kulla 2019 of the light's direction (Mitsuba 3's `use_shadowing_function`, which Mitsuba turns "
         "on by default): it darkens steep maps under grazing light",
     ),
+    Parameter(
+        "normal_map_handedness",
+        "bool",
+        default=False,
+        doc="true: a normal map's y axis is w (z × x), w = −1 on faces whose texture layout is mirrored, so green "
+        "points up the image on both halves of a mirrored layout (glTF 2.0's and Blender's tangent frame; the glTF "
+        "importer sets it); false: y = z × x everywhere (Mitsuba 3's and pbrt-v4's)",
+    ),
 )
 NAMES = tuple(p.name for p in PARAMETERS)
 _BY_NAME = {p.name: p for p in PARAMETERS}
@@ -88,6 +99,7 @@ class SurfaceDetail:
     opacity: object = 1.0  # a float, or a scalar texture
     two_sided: bool = True
     shadowing_function: bool = False
+    normal_map_handedness: bool = False
 
     @property
     def is_cut_out(self) -> bool:
@@ -144,6 +156,7 @@ def detail(
     two_sided=True,
     where=None,
     shadowing_function=False,
+    normal_map_handedness=False,
 ) -> SurfaceDetail | None:
     """The SurfaceDetail of checked values, or None when every one is at its default. `where(name)` is the key
     path of a key in errors (the Python API's keyword names when None)."""
@@ -164,12 +177,17 @@ def detail(
         check_texture(opacity, "opacity", at("opacity"))
     else:
         opacity = _BY_NAME["opacity"].check(opacity, at("opacity"))
-    for name, flag in (("two_sided", two_sided), ("shadowing_function", shadowing_function)):
+    flags = (
+        ("two_sided", two_sided),
+        ("shadowing_function", shadowing_function),
+        ("normal_map_handedness", normal_map_handedness),
+    )
+    for name, flag in flags:
         if not isinstance(flag, bool):
             raise SpectraceError(f"{name} must be true or false, got {flag!r}", where=at(name))
     if normal_map is None and bump_map is None and not is_texture(opacity) and opacity == 1.0 and two_sided:
         return None
-    return SurfaceDetail(normal_map, bump_map, scale, opacity, two_sided, shadowing_function)
+    return SurfaceDetail(normal_map, bump_map, scale, opacity, two_sided, shadowing_function, normal_map_handedness)
 
 
 def cut_out_problem(material, emits: bool, has_interior: bool) -> str | None:
@@ -203,11 +221,20 @@ def accepting_detail(make: Callable) -> Callable:
         opacity=1.0,
         two_sided=True,
         shadowing_function=False,
+        normal_map_handedness=False,
         **kwargs,
     ):
         return with_detail(
             make(*args, **kwargs),
-            detail(normal_map, bump_map, bump_scale, opacity, two_sided, shadowing_function=shadowing_function),
+            detail(
+                normal_map,
+                bump_map,
+                bump_scale,
+                opacity,
+                two_sided,
+                shadowing_function=shadowing_function,
+                normal_map_handedness=normal_map_handedness,
+            ),
         )
 
     signature = inspect.signature(make)
@@ -219,7 +246,8 @@ def accepting_detail(make: Callable) -> Callable:
     detailed.__doc__ = (make.__doc__ or "") + (
         "\n\nEvery material also takes normal_map or bump_map (with bump_scale, scene units), opacity (a number "
         "or texture in [0, 1]), two_sided (False: black from the back, for reflecting materials) and "
-        "shadowing_function (True: Mitsuba 3's shadowing term on normal- and bump-mapped surfaces): "
+        "shadowing_function (True: Mitsuba 3's shadowing term on normal- and bump-mapped surfaces), "
+        "normal_map_handedness (True: glTF's tangent frame, green up the image on mirrored layouts): "
         'docs/textures.md, "Surface detail".'
     )
     return detailed

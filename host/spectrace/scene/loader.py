@@ -394,6 +394,7 @@ class _Resolver:
             spec.two_sided,
             where=lambda name: self.where(f"{key}.{name}"),
             shadowing_function=spec.shadowing_function,
+            normal_map_handedness=spec.normal_map_handedness,
         )
 
     def texture(self, spec, key: str):

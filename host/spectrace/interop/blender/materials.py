@@ -15,6 +15,8 @@ Non-Color). Any other node in the way is named once in a warning and its input's
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from spectrace.interop.blender.context import BlendImport
@@ -115,6 +117,13 @@ def _principled(ctx: BlendImport, node, where: str) -> tuple[dict, dict | None]:
         value = _grey(ctx, node, socket, where)
         if value != 0.0:
             table[key] = value
+    if "anisotropic" in table:
+        # Cycles turns the tangent about the normal by Anisotropic Rotation × 2π (counter-clockwise)
+        turns = _number(ctx, node, "Anisotropic Rotation", where)
+        if math.fmod(turns, 1.0) != 0.0:
+            table["anisotropic_rotation"] = 360.0 * math.fmod(turns, 1.0)
+        if node.inputs["Tangent"].is_linked:
+            ctx.warn(where, "a Principled BSDF's Tangent input is not imported (anisotropy follows the UV map's u)")
     coat = _grey(ctx, node, "Coat Weight", where)
     if coat != 0.0:
         table["clearcoat"] = coat
@@ -137,6 +146,7 @@ def _principled(ctx: BlendImport, node, where: str) -> tuple[dict, dict | None]:
             if abs(_number(ctx, source, "Strength", where) - 1.0) > 1e-6:
                 ctx.warn(where, "a Normal Map's strength other than 1 is not imported")
             table["normal_map"] = _image(ctx, image_socket.links[0].from_node, "normal", where)
+            table["normal_map_handedness"] = True  # Blender's tangent space is MikkTSpace's, signed per face
         else:
             ctx.warn(where, f"a normal from node {source.bl_idname} is not imported")
     emitter = _emitter(ctx, node, "Emission Color", "Emission Strength", where)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+from spectrace.interop.gltf import material_extensions
 from spectrace.interop.gltf.context import GltfImport, photometric_scale
 from spectrace.interop.gltf.textures import texture
 from spectrace.interop.mitsuba.context import unique_name
@@ -31,6 +32,7 @@ IMPORTED_EXTENSIONS = (
     "KHR_materials_volume",
     "KHR_materials_unlit",
     "KHR_materials_diffuse_transmission",
+    *material_extensions.EXTENSIONS,
 )
 UNLIT = "KHR_materials_unlit"
 
@@ -97,6 +99,7 @@ def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | No
         table["metallic"] = metallic_map or metallic
         table["roughness"] = roughness_map or roughness
         _extensions(ctx, table, entry, pointer)
+        material_extensions.apply(ctx, table, entry, pointer, roughness)
         _diffuse_transmission(ctx, table, entry, pointer)
     if "normalTexture" in entry:
         where = f"{pointer}/normalTexture"
@@ -106,6 +109,8 @@ def convert(ctx: GltfImport, entry: dict, pointer: str) -> tuple[dict, dict | No
         normal = texture(ctx, info, where, "normal")
         if normal is not None:
             table["normal_map"] = normal
+            # glTF's bitangent is cross(normal, tangent) · w, w following the texture layout's handedness
+            table["normal_map_handedness"] = True
     for key in ("occlusionTexture",):
         if key in entry:
             ctx.warn(
@@ -186,7 +191,7 @@ def _extensions(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None
 
 
 # The principled keys a thin sheet (principledthin) has no counterpart of.
-_NOT_THIN = ("metallic", "clearcoat", "clearcoat_gloss", "specular")
+_NOT_THIN = ("metallic", "clearcoat", "clearcoat_gloss", "specular", "anisotropic_rotation")
 
 
 def _diffuse_transmission(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:

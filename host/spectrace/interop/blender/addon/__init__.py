@@ -7,8 +7,9 @@ their render levels) through spectrace.interop.blender, the same export as `spec
 temporary folder; what it does not export is reported once per kind as a warning. It then renders the scene at the
 Cycles sample count in a child process (spectrace.interop.blender.render_worker, so that Blender's libraries and
 the OpenCL runtime never share a process), shows the samples done on the progress bar and in the status line after
-each pass, and loads the image into the Render Result's Combined pass. Esc stops the render after the pass in
-flight and shows the image of the samples done. Viewport rendering is not implemented."""
+each pass, the image so far in the Render Result as the worker sends it (after the first pass, then about once a
+second), and the final image in its Combined pass. Esc stops the render after the pass in flight and shows the
+image of the samples done. Viewport rendering is not implemented."""
 
 from __future__ import annotations
 
@@ -70,23 +71,31 @@ class SpectraceRenderEngine(bpy.types.RenderEngine):
             if self.test_break():
                 return
             self.update_stats("", "spectrace: building the scene on the device")
-            failure = self._render_child(toml, image, spp)
+            result = self.begin_result(0, 0, width, height)
+            failure = self._render_child(toml, image, spp, result)
+            if failure is None:
+                failure = self._show(result, image)
+            self.end_result(result)
             if failure is not None:
                 self._fail(failure)
-                return
-            import numpy as np
 
-            rgb = np.load(image)[::-1]  # Blender's rows run bottom-up
-            if rgb.shape[:2] != (height, width):
-                self._fail(f"the image is {rgb.shape[1]}x{rgb.shape[0]}, the render {width}x{height}")
-                return
-            rgba = np.concatenate([rgb, np.ones((height, width, 1), dtype=np.float32)], axis=2)
-            result = self.begin_result(0, 0, width, height)
-            result.layers[0].passes["Combined"].rect = rgba.reshape(-1, 4)
-            self.end_result(result)
+    def _show(self, result, image: Path) -> str | None:
+        """The worker's image file in the Render Result's Combined pass; None, or why it could not be shown."""
+        import numpy as np
 
-    def _render_child(self, toml: Path, image: Path, spp: int) -> str | None:
-        """Run the render worker, passing its progress on to Blender; None when it wrote the image, else why not."""
+        rgb = np.load(image)[::-1]  # Blender's rows run bottom-up
+        height, width = result.resolution_y, result.resolution_x
+        if rgb.shape[:2] != (height, width):
+            return f"the image is {rgb.shape[1]}x{rgb.shape[0]}, the render {width}x{height}"
+        rgba = np.concatenate([rgb, np.ones((height, width, 1), dtype=np.float32)], axis=2)
+        result.layers[0].passes["Combined"].rect = rgba.reshape(-1, 4)
+        return None
+
+    def _render_child(self, toml: Path, image: Path, spp: int, result) -> str | None:
+        """Run the render worker, passing its progress and partial images on to Blender; None when it wrote the
+        image, else why not."""
+        from spectrace.interop.blender.render_worker import partial_path
+
         command = [sys.executable, "-m", "spectrace.interop.blender.render_worker", str(toml), str(image), str(spp)]
         child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         found: queue.Queue = queue.Queue()
@@ -97,7 +106,7 @@ class SpectraceRenderEngine(bpy.types.RenderEngine):
             try:
                 line = found.get(timeout=_POLL_SECONDS)
             except queue.Empty:
-                if not stopped and self.test_break():
+                if not stopped and self._stop_asked():
                     child.send_signal(signal.SIGINT)  # ends after the pass in flight, writing what it has
                     stopped = True
                 continue
@@ -106,6 +115,8 @@ class SpectraceRenderEngine(bpy.types.RenderEngine):
             words = line.split()
             if len(words) == 3 and words[0] == "progress":
                 self._progress(int(words[1]), int(words[2]))
+            elif len(words) == 2 and words[0] == "partial" and self._show(result, partial_path(image)) is None:
+                self.update_result(result)
             elif len(words) == 3 and words[0] == "done":
                 self.update_stats("", f"spectrace: {words[1]} samples per pixel in {float(words[2]):.2f} s")
         errors = child.stderr.read() if child.stderr is not None else ""
@@ -113,6 +124,10 @@ class SpectraceRenderEngine(bpy.types.RenderEngine):
             lines = [line for line in errors.strip().splitlines() if line.strip()]
             return lines[-1] if lines else "the render failed"
         return None
+
+    def _stop_asked(self) -> bool:
+        """Esc pressed (Blender's test_break), asked every _POLL_SECONDS while the child renders."""
+        return bool(self.test_break())
 
     def _progress(self, done: int, total: int) -> None:
         """A pass ended: `done` of `total` samples per pixel."""

@@ -1,0 +1,148 @@
+"""glTF material extensions that move the principled material's index and lobe shape rather than add a lobe:
+KHR_materials_specular (the dielectric reflectance), KHR_materials_dispersion (the index's dependence on λ) and
+KHR_materials_anisotropy (the specular lobe's stretch and direction); KHR_materials_iridescence is named, as
+spectrace has no thin-film layer. docs/materials.md's mapping table and docs/gltf.md give each row.
+
+Called after the index, the transmission and the roughness are in the table, which they read."""
+
+from __future__ import annotations
+
+import math
+
+from spectrace.interop.gltf.context import GltfImport
+
+SPECULAR = "KHR_materials_specular"
+DISPERSION = "KHR_materials_dispersion"
+ANISOTROPY = "KHR_materials_anisotropy"
+IRIDESCENCE = "KHR_materials_iridescence"
+EXTENSIONS = (SPECULAR, DISPERSION, ANISOTROPY, IRIDESCENCE)
+# KHR_materials_dispersion's n(λ) = n_d + (n_d − 1)/V_d · (523655 nm² / λ² − 1.5168): Cauchy's a + b/λ² with λ
+# in µm once its terms are collected
+DISPERSION_B_UM2 = 0.523655
+DISPERSION_OFFSET = 1.5168
+ETA_MAX = 4.0  # the principled material's largest index
+ETA_MIN = 1.0001  # its index exceeds 1; this one reflects nothing short of grazing
+REC709_Y = (0.2126, 0.7152, 0.0722)
+
+
+def apply(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughness: float) -> None:
+    """The four extensions of glTF material `entry` into its principled `table`; `roughness` is its
+    roughnessFactor (the anisotropy's mapping depends on it)."""
+    _specular(ctx, table, entry, pointer)
+    _dispersion(ctx, table, entry, pointer)
+    _anisotropy(ctx, table, entry, pointer, roughness)
+    if ctx.doc.extension(entry, IRIDESCENCE, pointer) is not None:
+        ctx.warn(
+            f"{pointer}/extensions/{IRIDESCENCE}",
+            f"{IRIDESCENCE} (thin-film interference) is not imported: spectrace has no thin-film layer, so the "
+            "surface renders without its colours",
+        )
+
+
+def _eta(table: dict) -> float:
+    eta = table.get("eta", 1.5)
+    return float(eta) if isinstance(eta, (int, float)) else 1.5
+
+
+def eta_from_f0(f0: float) -> float:
+    """The index whose normal-incidence Fresnel reflectance ((η − 1)/(η + 1))² is f0, within principled's range."""
+    root = math.sqrt(min(max(f0, 0.0), 1.0))
+    eta = (1.0 + root) / (1.0 - root) if root < 1.0 else math.inf
+    return min(ETA_MAX, max(ETA_MIN, eta))
+
+
+def _specular(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
+    """glTF's dielectric F0 = min(R0(η) · specularColorFactor, 1) · specularFactor, R0 = ((η − 1)/(η + 1))², with
+    F90 = specularFactor: the index whose R0 is that F0's luminance (a grey colour and a factor of 0 or 1 are
+    exact; a coloured F0 and a factor between 0 and 1, whose grazing reflectance glTF lowers too, approximated and
+    named). A transmitting material keeps its index for the refraction, so there the extension is named instead."""
+    doc = ctx.doc
+    extension = doc.extension(entry, SPECULAR, pointer)
+    if extension is None:
+        return
+    where = f"{pointer}/extensions/{SPECULAR}"
+    factor = doc.number(extension, "specularFactor", where, 1.0)
+    if not 0.0 <= factor <= 1.0:
+        raise doc.fail(f"{where}/specularFactor", f"must lie in [0, 1], got {factor:g}")
+    colour = doc.numbers(extension, "specularColorFactor", where, 3, [1.0, 1.0, 1.0])
+    for i, value in enumerate(colour):
+        if not (value >= 0.0 and math.isfinite(value)):
+            raise doc.fail(f"{where}/specularColorFactor/{i}", f"must be a number ≥ 0, got {value:g}")
+    for key in ("specularTexture", "specularColorTexture"):
+        if key in extension:
+            ctx.warn(f"{where}/{key}", f"{SPECULAR}'s {key} is not imported (its factor is)")
+    if factor == 1.0 and colour == [1.0, 1.0, 1.0]:
+        return
+    if "spec_trans" in table:
+        ctx.warn(where, f"{SPECULAR} on a transmitting material is not imported (its ior sets the refraction)")
+        return
+    r0 = ((_eta(table) - 1.0) / (_eta(table) + 1.0)) ** 2
+    f0 = factor * sum(w * min(r0 * c, 1.0) for w, c in zip(REC709_Y, colour, strict=True))
+    table["eta"] = eta_from_f0(f0)
+    if 0.0 < factor < 1.0 or max(colour) - min(colour) > 1e-6:
+        ctx.warn(
+            where,
+            f"{SPECULAR} is approximated by the index of its F0's luminance (a coloured F0, and a specularFactor's "
+            "lower grazing reflectance, are not modelled)",
+        )
+
+
+def _dispersion(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
+    """dispersion D = 20/V_d (V_d the Abbe number): the extension's n(λ) = n_d + (n_d − 1)/V_d (523655/λ² − 1.5168),
+    λ in nm, is the Cauchy index a + b/λ² (λ in µm) with b = 0.523655 (n_d − 1)/V_d and a = n_d − 1.5168 (n_d − 1)/
+    V_d, exactly. Without transmission nothing refracts and the index stays a number."""
+    doc = ctx.doc
+    extension = doc.extension(entry, DISPERSION, pointer)
+    if extension is None:
+        return
+    where = f"{pointer}/extensions/{DISPERSION}"
+    dispersion = doc.number(extension, "dispersion", where, 0.0)
+    if not (dispersion >= 0.0 and math.isfinite(dispersion)):
+        raise doc.fail(f"{where}/dispersion", f"must be a number ≥ 0, got {dispersion:g}")
+    if dispersion == 0.0:
+        return
+    if "spec_trans" not in table:
+        ctx.note(f"{DISPERSION} on a material that does not transmit changes nothing (nothing refracts)")
+        return
+    n_d = _eta(table)
+    spread = (n_d - 1.0) * dispersion / 20.0  # (n_d − 1)/V_d
+    table["eta"] = {"cauchy": [n_d - DISPERSION_OFFSET * spread, DISPERSION_B_UM2 * spread]}
+
+
+def anisotropic_weight(strength: float, roughness: float) -> float:
+    """principled's `anisotropic` a for glTF's anisotropyStrength s at perceptual roughness r: glTF stretches the
+    tangent's α alone, α_t = mix(α, 1, s²), α_b = α (α = r²); principled stretches both ways, α_x / α_y =
+    1/(1 − 0.9 a). The same ratio α_t/α_b gives a (at most 1, a ratio of 10)."""
+    alpha = max(0.001, roughness * roughness)
+    ratio = (alpha + strength * strength * (1.0 - alpha)) / alpha
+    return min(1.0, (1.0 - 1.0 / ratio) / 0.9)
+
+
+def _anisotropy(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughness: float) -> None:
+    doc = ctx.doc
+    extension = doc.extension(entry, ANISOTROPY, pointer)
+    if extension is None:
+        return
+    where = f"{pointer}/extensions/{ANISOTROPY}"
+    strength = doc.number(extension, "anisotropyStrength", where, 0.0)
+    if not 0.0 <= strength <= 1.0:
+        raise doc.fail(f"{where}/anisotropyStrength", f"must lie in [0, 1], got {strength:g}")
+    rotation = doc.number(extension, "anisotropyRotation", where, 0.0)
+    if not math.isfinite(rotation):
+        raise doc.fail(f"{where}/anisotropyRotation", "must be a finite number of radians")
+    if "anisotropyTexture" in extension:
+        ctx.warn(
+            f"{where}/anisotropyTexture",
+            f"{ANISOTROPY}'s texture (a direction and strength per texel) is not imported (its factors are)",
+        )
+    if strength == 0.0:
+        return
+    table["anisotropic"] = anisotropic_weight(strength, roughness)
+    degrees = math.fmod(math.degrees(rotation), 360.0)
+    if degrees != 0.0:
+        table["anisotropic_rotation"] = degrees
+    ctx.warn(
+        where,
+        f"{ANISOTROPY} is approximated: principled's lobe stretches along and across its direction (the ratio of "
+        "the two roughnesses is glTF's), turned from dp/du by anisotropyRotation",
+    )
