@@ -11,8 +11,9 @@ starts the accumulation again.
 
 Keys follow the scene file: `camera.fov`, `materials.red.reflectance`, `lights.0.power`,
 `shapes.<name>.emitter.scale`, `instances.<name>.transform`, `film.exposure`, `sampler.seed`; an entry of an array of
-tables ([[shapes]], [[lights]], [[instances]]) goes by its name or its index. A scene built in Python has no file to
-name its materials and lights by: its camera, film, seed and instance transforms are editable.
+tables ([[shapes]], [[lights]], [[instances]]) goes by its name or its index. A scene built in Python names its
+materials, lights, emitters and media by their place and their parameters by their constructors' arguments
+(spectrace.session.python_scene).
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
+from spectrace.session import python_scene
+from spectrace.session.python_scene import ModelEdits
 
 if TYPE_CHECKING:
     from spectrace.device import Device
@@ -276,6 +279,8 @@ class Session:
         found["sampler.seed"] = data.get("sampler", {}).get("seed", 0)
         for name, table in data.get("materials", {}).items():
             found |= {f"materials.{name}.{key}": value for key, value in table.items() if key != "type"}
+        if self._source is None:
+            found |= python_scene.parameters(self.scene)
         for array in _ARRAYS:
             for i, entry in enumerate(data.get(array, [])):
                 label = self._label(array, i)
@@ -398,6 +403,9 @@ class Session:
             "camera": _camera_table(scene.camera),
             "film": {"exposure": scene.exposure},
             "sampler": {"seed": scene.seed},
+            # Names only: the keys of shapes and lights that a session edits are their objects' (python_scene).
+            "shapes": [{"name": python_scene.shape_label(list(scene.shapes), i)} for i in range(len(scene.shapes))],
+            "lights": [{} for _ in scene.lights],
             "instances": [
                 {"name": instance.name, "transform": [{"matrix": _plain(np.asarray(instance.to_world))}]}
                 for instance in scene.instances
@@ -600,15 +608,20 @@ class _Plan:
         from spectrace.scene.loader import camera_from_spec, set_key_path
 
         scene = self.scene
+        objects = ModelEdits(scene)
         for key, value in edits.items():
             given = self.given.get(key, key)
             parts = key.split(".")
             placement = parts[0] == "instances" and len(parts) == 3 and parts[2] == "transform"
             if key in ("film.exposure", "sampler.seed") or (parts[0] == "camera" and len(parts) == 2) or placement:
                 set_key_path(data, key, value, where=given)
+            elif parts[0] in ("materials", "lights", "shapes") and len(parts) > 2:
+                objects.stage(key, value, given)
+                continue
             else:
                 raise SpectraceError(
-                    "a scene built in Python edits its camera, film.exposure, sampler.seed and instance transforms; "
+                    "a scene built in Python edits its camera, film.exposure, sampler.seed, instance transforms and "
+                    "the parameters of its materials, lights, emitters and media (session.parameters() lists them); "
                     "other keys name a scene file's tables (load_scene)",
                     where=given,
                 )
@@ -647,6 +660,13 @@ class _Plan:
                 raise SpectraceError(error["msg"].removeprefix("Value error, "), where=where) from None
             scene = replace(scene, camera=camera_from_spec(camera_spec))
             check_camera(scene)
+        if objects.kinds:
+            scene, lights, emitters = objects.apply(scene)
+            for kind, keys in objects.kinds.items():
+                self.kinds.setdefault(kind, []).extend(keys)
+            if lights or emitters:
+                self.kinds.setdefault("lights", [])
+            self.light_edits = (lights, emitters)
         self.scene = scene
 
     # --------------------------------------------------------- carrying it out

@@ -12,6 +12,7 @@ scene into one Texture array and the shared texel buffer, each texture once howe
 
 import numpy as np
 
+from spectrace.core.api_calls import recorded
 from spectrace.core.contract import (
     NO_TEXTURE,
     TEXEL_BANDS,
@@ -38,6 +39,9 @@ from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module; the position is the Texture.type code.
 TEXTURES = Registry[TexturePlugin]("texture", (bitmap, spectral, checkerboard, scale, mix))
+# Each texture an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
+for _module in TEXTURES.values():
+    _module.make = recorded(_module.make)  # type: ignore[method-assign]
 # Those made of other textures: their operands are spectra and image textures only (the kernel does not recurse).
 COMPOSITE_TEXTURES = tuple(name for name, module in TEXTURES.items() if module.COMPOSITE)
 IMAGE_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if not module.COMPOSITE)
