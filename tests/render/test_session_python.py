@@ -203,3 +203,73 @@ def test_a_bad_edit_of_a_python_scene_is_one_error_and_changes_nothing(base_imag
         assert session.parameters()["lights.0.power"] == 20.0
         session.step()
         np.testing.assert_array_equal(session.image().xyz, base_image.xyz)
+
+
+def test_many_image_edits_keep_the_texel_buffer_its_size():
+    # Fifty distinct images of the same size: each takes the slot of the one it replaces.
+    rng = np.random.default_rng(5)
+    images = [rng.uniform(0.05, 0.95, (8, 8, 3)) for _ in range(50)]
+    with Session(build(picture=images[0]), pass_spp=SPP) as session:
+        texels, rows = len(session.renderer.buffers.texels), session.renderer.buffers.texture_count
+        for image in images[1:]:
+            assert not session.update({"materials.panel.reflectance.source": image}).rebuilt
+            assert len(session.renderer.buffers.texels) == texels
+            assert session.renderer.buffers.texture_count == rows
+        session.step()
+        expected = _render(build(picture=images[-1]))
+        assert not np.array_equal(expected.xyz, _render(build(picture=images[0])).xyz)
+        np.testing.assert_array_equal(session.image().xyz, expected.xyz)
+
+
+def test_a_scene_files_texture_and_emitter_images_edited_many_times_keep_the_texel_buffer_its_size(tmp_path):
+    from PIL import Image as PILImage
+
+    from scene_text import camera_film
+
+    rng = np.random.default_rng(9)
+    for i in range(12):
+        pixels = rng.integers(20, 235, (8, 8, 3), dtype=np.uint8)
+        PILImage.fromarray(pixels).save(tmp_path / f"picture{i}.png")
+    scene = tmp_path / "scene.toml"
+    scene.write_text(
+        camera_film(origin="[0, 0.5, 4]", target="[0, 0.5, 0]", width="12", height="10")
+        + """
+[sampler]
+spp = 2
+
+[textures.picture]
+type = "bitmap"
+file = "picture0.png"
+
+[materials.painted]
+type = "diffuse"
+reflectance = { texture = "picture" }
+
+[[shapes]]
+name = "panel"
+type = "rectangle"
+material = "painted"
+
+[[shapes]]
+name = "screen"
+type = "rectangle"
+material = "painted"
+transform = [{ scale = 0.3 }, { translate = [0.5, 0.5, 0.5] }]
+emitter = { radiance = { texture = "picture" }, scale = 0.5 }
+
+[[lights]]
+type = "point"
+position = [0, 1, 3]
+power = 30.0
+"""
+    )
+    with Session(scene, pass_spp=SPP) as session:
+        texels = len(session.renderer.buffers.texels)
+        for i in range(1, 12):
+            assert not session.update({"textures.picture.file": f"picture{i}.png"}).rebuilt
+            assert len(session.renderer.buffers.texels) == texels
+        session.step()
+        edited = {"textures.picture.file": "picture11.png"}
+        expected = spectrace.render(spectrace.load_scene(scene, edited), progress=False)
+        assert not np.array_equal(expected.xyz, spectrace.render(spectrace.load_scene(scene), progress=False).xyz)
+        np.testing.assert_array_equal(session.image().xyz, expected.xyz)

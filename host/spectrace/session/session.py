@@ -294,6 +294,13 @@ class Session:
                         found[f"{array}.{label}.{key}"] = value
         return copy.deepcopy(found)
 
+    def _value(self, key: object, value: object) -> object:
+        """A value as the edit takes it: a scene file's as TOML gives it; a Python scene's object's argument as the
+        caller gave it (an image's array, a Spectrum) for its constructor."""
+        if self._source is None and str(key).split(".")[0] in ("materials", "lights", "shapes"):
+            return value
+        return _plain(value)
+
     def _label(self, array: str, index: int) -> str:
         """How a key names entry `index` of `array`: its name where no other entry has it, else its index."""
         entries = self._data.get(array, [])
@@ -336,7 +343,11 @@ class Session:
 
         started = time.perf_counter()
         outputs = {key: _plain(value) for key, value in changes.items() if key in _OUTPUT_KEYS}
-        edits = {self._data_key(str(key)): _plain(value) for key, value in changes.items() if key not in _OUTPUT_KEYS}
+        edits = {
+            self._data_key(str(key)): self._value(key, value)
+            for key, value in changes.items()
+            if key not in _OUTPUT_KEYS
+        }
         given = {self._data_key(str(key)): str(key) for key in changes if key not in _OUTPUT_KEYS}
         steps: list[UpdateStep] = []
         new_outputs = None
@@ -684,6 +695,7 @@ class _Plan:
             return [UpdateStep("scene", every_key, REBUILT, "loaded and built again", time.perf_counter() - started)]
         steps: list[UpdateStep] = []
         buffers = renderer.buffers
+        scene_edits.release_textures(renderer.scene, self.scene, buffers)  # their slots go to the edit's textures
         changed: set[str] = set()
         shading = kinds.get("shading", [])
         for kind, edit, detail in (
