@@ -128,11 +128,25 @@ def display_rgb(image, display: Display) -> np.ndarray:
     return encode_for_display(xyz_to_output(xyz, space, white, display.exposure), space)
 
 
-def png_bytes(rgb: np.ndarray) -> bytes:
+def shown_space(display: Display) -> str:
+    """The colour space of the values `display_rgb` gives: false colour's map is sRGB."""
+    return "srgb" if display.false_colour else display.colour_space
+
+
+def png_bytes(rgb: np.ndarray, space: str = "srgb") -> bytes:
+    """8-bit PNG of display-encoded `rgb` in colour space `space`. A space other than sRGB is tagged with its ICC
+    profile, which browsers apply to an <img> (and to a canvas it is drawn into), so Display P3 and Rec.2020 values
+    are shown as those colours rather than taken for sRGB ones; an untagged PNG is sRGB."""
     from PIL import Image as PILImage
 
+    from spectrace.film.colour_output import ColourSpace
+    from spectrace.film.icc_profile import icc_profile
+
+    colour_space = ColourSpace(space)
+    options = {} if colour_space is ColourSpace.SRGB else {"icc_profile": icc_profile(colour_space)}
     buffer = io.BytesIO()
-    PILImage.fromarray(np.rint(np.clip(rgb, 0, 1) * 255).astype(np.uint8), "RGB").save(buffer, format="PNG")
+    pixels = np.rint(np.clip(rgb, 0, 1) * 255).astype(np.uint8)
+    PILImage.fromarray(pixels, "RGB").save(buffer, format="PNG", **options)
     return buffer.getvalue()
 
 
@@ -326,7 +340,7 @@ class LiveView:
                 return self._png[1]
         if image is None:
             return None
-        data = png_bytes(display_rgb(image, display))
+        data = png_bytes(display_rgb(image, display), shown_space(display))
         with self.changed:
             self._png = (key, data)
         return data
