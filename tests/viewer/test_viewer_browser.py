@@ -143,6 +143,14 @@ def test_clicking_the_red_wall_shows_a_spectrum_peaking_in_the_red(page_on):
     page.wait_for_function("() => document.getElementById('pixel-text').dataset.peak !== undefined")
     assert float(page.get_attribute("#pixel-text", "data-peak")) > 600
     assert "XYZ" in page.inner_text("#pixel-text") and "xy" in page.inner_text("#pixel-text")
+    # Averaged over 5 x 5 pixels: the same pixel again, its mean and a band of one standard error about it.
+    band_pixels = "() => { const g = document.getElementById('spectrum').getContext('2d');"
+    band_pixels += " const d = g.getImageData(0, 0, 360, 200).data; let n = 0;"
+    band_pixels += " for (let i = 0; i < d.length; i += 4) if (d[i + 3] >= 36 && d[i + 3] <= 40) n++; return n; }"
+    lines_only = page.evaluate(band_pixels)  # some of the lines' antialiased edges
+    page.select_option("#average", "5")
+    page.wait_for_function("() => document.getElementById('pixel-text').textContent.includes('mean of 25 pixels')")
+    assert page.evaluate(band_pixels) > lines_only + 500  # the band: black at 15 % opacity
 
 
 def test_switching_off_the_lcd_darkens_its_booth(page_on):

@@ -27,6 +27,7 @@ DISPLAY_SPACES = ("srgb", "display-p3", "rec2020")  # xyz has no display encodin
 SPECTRAL_BINS = 47  # 10 nm bands over the default 360-830 nm film: a pixel's spectrum in the page
 MAX_ORBIT_DEGREES = 360.0
 ZOOM_LIMITS = (0.01, 100.0)
+AVERAGE_SIZES = (1, 3, 5)  # the pixel windows a spectrum may be averaged over
 
 
 def _number(value: object, where: str, low: float, high: float) -> float:
@@ -392,40 +393,58 @@ class LiveView:
             changes = camera_move(self.session.parameters(), str(action), x, y)
             self.update(changes)
 
-    def _pixel_at(self, x: object, y: object):
+    def _pixel_at(self, x: object, y: object, size: object = 1):
+        """The image, the pixel's column and row, and the window of `size` x `size` pixels about it (clipped to
+        the image) as row and column slices."""
         image = self.image()
         if image is None:
             raise SpectraceError("no pass has finished yet", where="pixel")
         column = _whole(x, "x", 0, image.width - 1)
         row = _whole(y, "y", 0, image.height - 1)
-        return image, column, row
+        if size not in AVERAGE_SIZES or isinstance(size, bool):
+            raise SpectraceError(f"must be {', '.join(map(str, AVERAGE_SIZES))}, got {size!r}", where="size")
+        half = int(size) // 2
+        window = (slice(max(row - half, 0), row + half + 1), slice(max(column - half, 0), column + half + 1))
+        return image, column, row, window
 
-    def set_reference(self, x: object, y: object) -> None:
-        image, column, row = self._pixel_at(x, y)
+    def set_reference(self, x: object, y: object, size: object = 1) -> None:
+        image, column, row, window = self._pixel_at(x, y, size)
+        xyz = image.xyz[window].reshape(-1, 3).astype(np.float64).mean(axis=0)
         with self.changed:
-            self.reference = (column, row, image.xyz[row, column].astype(np.float64))
+            self.reference = (column, row, xyz)
 
-    def pixel(self, x: object, y: object) -> dict[str, object]:
+    def pixel(self, x: object, y: object, size: object = 1) -> dict[str, object]:
         """A pixel's XYZ, xy, spectrum (band-averaged radiance, W/(m² sr nm)) with the observer's curves on the
-        same bands, and its CIEDE2000 to the reference pixel in CIELAB of the displayed white (Y = 2^-exposure)."""
+        same bands, and its CIEDE2000 to the reference pixel in CIELAB of the displayed white (Y = 2^-exposure).
+        With `size` 3 or 5, each is the mean over the size x size pixels about it (those inside the image), and
+        `radiance_error` the standard error of the spectrum's mean, from the spread between those pixels: one
+        pixel's estimate is as noisy as its samples are few, and the mean of n neighbours on an even surface is
+        √n times less so."""
         from spectrace.film.response import delta_e_2000_map
         from spectrace.spectral.grid import GRID_NM
         from spectrace.spectral.observers import Observer, observer_cmfs
 
-        image, column, row = self._pixel_at(x, y)
-        xyz = image.xyz[row, column].astype(np.float64)
+        image, column, row, window = self._pixel_at(x, y, size)
+        pixels = image.xyz[window].reshape(-1, 3).astype(np.float64)
+        xyz = pixels.mean(axis=0)
         total = float(xyz.sum())
         result: dict[str, object] = {
             "x": column,
             "y": row,
+            "size": size,
+            "pixels": len(pixels),
             "xyz": [float(v) for v in xyz],
             "xy": [float(xyz[0] / total), float(xyz[1] / total)] if total > 0 else None,
         }
         if image.spectral is not None:
             centres = image.spectral.centres_nm
             cmfs = observer_cmfs(Observer.CIE_1931_2)
+            spectra = image.spectral.radiance[window].reshape(len(pixels), -1).astype(np.float64)
             result["wavelengths_nm"] = [float(v) for v in centres]
-            result["radiance"] = [float(v) for v in image.spectral.radiance[row, column]]
+            result["radiance"] = [float(v) for v in spectra.mean(axis=0)]
+            if len(spectra) > 1:
+                error = spectra.std(axis=0, ddof=1) / np.sqrt(len(spectra))
+                result["radiance_error"] = [float(v) for v in error]
             result["observer"] = {
                 "label": FILM_OBSERVER,
                 "curves": [[float(v) for v in np.interp(centres, GRID_NM, cmfs[:, i])] for i in range(3)],
