@@ -273,3 +273,20 @@ power = 30.0
         expected = spectrace.render(spectrace.load_scene(scene, edited), progress=False)
         assert not np.array_equal(expected.xyz, spectrace.render(spectrace.load_scene(scene), progress=False).xyz)
         np.testing.assert_array_equal(session.image().xyz, expected.xyz)
+
+
+def test_a_python_scenes_film_observers_are_edited_over_the_same_buffers():
+    edit = {"film.observer": "CIE 1964 10°", "film.observers": ["CIE 1931 2°"]}
+    with Session(build(), pass_spp=SPP) as session:
+        buffers = session.renderer.buffers
+        report = session.update(edit)
+        assert [(step.what, step.how) for step in report.steps][-1] == ("film", "rebuilt")
+        assert session.renderer.buffers is buffers  # the BVH and every scene buffer kept
+        session.step()
+        response = spectrace.FilmResponse(observer="CIE 1964 10°", observers=("CIE 1931 2°",))
+        expected = _render(spectrace.Scene(**{**build().__dict__, "film_response": response}))
+        assert not np.array_equal(expected.xyz, _render(build()).xyz)
+        np.testing.assert_array_equal(session.image().xyz, expected.xyz)
+        np.testing.assert_array_equal(session.image().channels["cie1931_2.Y"], expected.channels["cie1931_2.Y"])
+        with pytest.raises(SpectraceError, match="film.observer"):
+            session.update({"film.observer": "no such observer"})

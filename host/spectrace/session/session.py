@@ -127,6 +127,22 @@ def _camera_table(camera) -> dict[str, object]:
     return table
 
 
+def _film_response(response, key: str, value: object, where: str):
+    """A Python scene's film response with `key` set to `value`, checked as FilmResponse checks its fields."""
+    if key == "observers":
+        if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+            raise SpectraceError(f"expected a list of observers' names, got {value!r}", where=where)
+        value = tuple(value)
+    elif key in ("observer", "sensor_white") and not (
+        isinstance(value, str) or (key == "sensor_white" and value is None)
+    ):
+        raise SpectraceError(f"expected a name, got {value!r}", where=where)
+    try:
+        return replace(response, **{key: value})
+    except SpectraceError as error:
+        raise SpectraceError(error.message, where=where) from None
+
+
 class Session:
     """A live render of one scene: built once on the device, rendered a pass at a time (`step`), its image read
     at any time (`image`), and edited by key path (`update`), each edit rebuilding or re-uploading only what it
@@ -629,11 +645,16 @@ class _Plan:
             elif parts[0] in ("materials", "lights", "shapes") and len(parts) > 2:
                 objects.stage(key, value, given)
                 continue
+            elif parts[0] == "film" and len(parts) == 2 and parts[1] in _RESPONSE_KEYS:
+                scene = replace(scene, film_response=_film_response(scene.film_response, parts[1], value, given))
+                self._add("film response", key)
+                continue
             else:
                 raise SpectraceError(
-                    "a scene built in Python edits its camera, film.exposure, sampler.seed, instance transforms and "
-                    "the parameters of its materials, lights, emitters and media (session.parameters() lists them); "
-                    "other keys name a scene file's tables (load_scene)",
+                    "a scene built in Python edits its camera, film.exposure, the film's observer, observers, sensor "
+                    "and sensor_white, sampler.seed, instance transforms and the parameters of its materials, "
+                    "lights, emitters and media (session.parameters() lists them); other keys name a scene file's "
+                    "tables (load_scene)",
                     where=given,
                 )
             if parts[0] == "camera":
