@@ -479,3 +479,24 @@ def test_false_colour_orders_pixels_by_luminance(viewer):
     order = np.argsort(luminance[lit])
     assert np.all(np.diff(position[lit][order]) >= -2)  # 8-bit rounding may swap neighbours
     assert position[lit][order][-1] > position[lit][order][0]
+
+
+def test_switching_the_observer_renders_again_and_the_spectrum_integrates_with_its_functions(fresh_viewer):
+    live, _, client = fresh_viewer
+    assert client.state()["observer"] == "CIE 1931 2°" and "CIE 1964 10°" in client.state()["observers"]
+    assert client.post("/api/update", {"changes": {"film.observer": "CIE 1964 10°"}})[0] == 200
+    state = client.wait_done()
+    assert state["observer"] == "CIE 1964 10°" and live.session.scene.film_response.observer == "CIE 1964 10°"
+    red = client.get_json("/api/pixel?x=3&y=12&size=3")
+    assert red["observer"]["label"] == "CIE 1964 10°"
+    # The bands integrated with colour-science's CIE 1964 10° functions give the film's XYZ, now that observer's.
+    wavelengths, radiance = np.array(red["wavelengths_nm"]), np.array(red["radiance"])
+    cmfs = colour.MSDS_CMFS["CIE 1964 10 Degree Standard Observer"]
+    curves = np.stack([np.interp(wavelengths, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)])
+    from_bands = (
+        curves @ radiance * (wavelengths[1] - wavelengths[0]) / np.trapezoid(cmfs.values[:, 1], cmfs.wavelengths)
+    )
+    assert from_bands == pytest.approx(red["xyz"], rel=0.03)
+    np.testing.assert_allclose(np.array(red["observer"]["curves"]), curves, rtol=1e-6, atol=1e-9)
+    status, body, _ = client.request("POST", "/api/update", {"changes": {"film.observer": "CIE 1999 3°"}})
+    assert status == 400 and "film.observer" in json.loads(body)["error"]

@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.film.response import OBSERVERS
 
-FILM_OBSERVER = "CIE 1931 2°"  # the film's XYZ; ΔE uses that observer's D65 white
 DISPLAY_SPACES = ("srgb", "display-p3", "rec2020")  # xyz has no display encoding
 SPECTRAL_BINS = 47  # 10 nm bands over the default 360-830 nm film: a pixel's spectrum in the page
 MAX_ORBIT_DEGREES = 360.0
@@ -240,6 +240,7 @@ class LiveView:
         self._generation = 0  # counts updates: a pass of the scene before one is not shown after it
         self._stale = False  # passes were added since the film was last read
         self._parameters: dict[str, object] = session.parameters()  # read again after each update only
+        self._observer: str = session.scene.film_response.observer  # of the film's XYZ; ΔE uses its D65 white
         self._png: tuple[tuple[int, int], bytes] | None = None
         self._thread = threading.Thread(target=self._run, name="spectrace-view-render", daemon=True)
 
@@ -328,6 +329,8 @@ class LiveView:
                 "display": self.display.__dict__,
                 "channels": list(image_channels(image)) if image is not None else [],
                 "spaces": list(DISPLAY_SPACES),
+                "observer": self._observer,
+                "observers": list(OBSERVERS),
                 "lights": light_controls(parameters),
                 "parameters": {k: j for k, v in parameters.items() if (j := _json_value(v)) is not None},
                 "error": self.error,
@@ -372,10 +375,11 @@ class LiveView:
         with self.session_lock:
             self.session.update(dict(changes))
             parameters = self.session.parameters()
+            observer = self.session.scene.film_response.observer
             self._generation += 1
         with self.changed:
             self.edits.update(changes)
-            self._parameters = parameters
+            self._parameters, self._observer = parameters, observer
             self._image, self._seconds, self._last_read, self.error = None, 0.0, 0.0, ""
             self._stale = False
             self.version += 1
@@ -420,9 +424,8 @@ class LiveView:
         `radiance_error` the standard error of the spectrum's mean, from the spread between those pixels: one
         pixel's estimate is as noisy as its samples are few, and the mean of n neighbours on an even surface is
         √n times less so."""
-        from spectrace.film.response import delta_e_2000_map
+        from spectrace.film.response import delta_e_2000_map, observer_cmfs
         from spectrace.spectral.grid import GRID_NM
-        from spectrace.spectral.observers import Observer, observer_cmfs
 
         image, column, row, window = self._pixel_at(x, y, size)
         pixels = image.xyz[window].reshape(-1, 3).astype(np.float64)
@@ -438,7 +441,9 @@ class LiveView:
         }
         if image.spectral is not None:
             centres = image.spectral.centres_nm
-            cmfs = observer_cmfs(Observer.CIE_1931_2)
+            with self.changed:
+                observer = self._observer
+            cmfs = observer_cmfs(observer)
             spectra = image.spectral.radiance[window].reshape(len(pixels), -1).astype(np.float64)
             result["wavelengths_nm"] = [float(v) for v in centres]
             result["radiance"] = [float(v) for v in spectra.mean(axis=0)]
@@ -446,14 +451,14 @@ class LiveView:
                 error = spectra.std(axis=0, ddof=1) / np.sqrt(len(spectra))
                 result["radiance_error"] = [float(v) for v in error]
             result["observer"] = {
-                "label": FILM_OBSERVER,
+                "label": observer,
                 "curves": [[float(v) for v in np.interp(centres, GRID_NM, cmfs[:, i])] for i in range(3)],
             }
         with self.changed:
-            reference, exposure = self.reference, self.display.exposure
+            reference, exposure, observer = self.reference, self.display.exposure, self._observer
         if reference is not None:
             white_y = 2.0**-exposure
-            delta = delta_e_2000_map(xyz[None], reference[2][None], FILM_OBSERVER, FILM_OBSERVER, white_y=white_y)
+            delta = delta_e_2000_map(xyz[None], reference[2][None], observer, observer, white_y=white_y)
             result["delta_e"] = float(np.asarray(delta).reshape(-1)[0])
             result["reference"] = [reference[0], reference[1]]
         return result

@@ -90,6 +90,8 @@ function show(next) {
   $("pause").textContent = state.paused ? "resume" : "pause";
   if (state.error) showError(state.error);
   fillSelect($("colour-space"), state.spaces);
+  fillSelect($("observer"), state.observers);
+  if (document.activeElement !== $("observer")) $("observer").value = state.observer;
   fillSelect($("channel"), ["", ...state.channels], ["film XYZ", ...state.channels]);
   $("colour-space").value = state.display.colour_space;
   $("channel").value = state.display.channel;
@@ -130,6 +132,7 @@ $("colour-space").addEventListener("change", () => post("/api/display", { colour
 $("channel").addEventListener("change", () => post("/api/display", { channel: $("channel").value }));
 $("false-colour").addEventListener("change", () => post("/api/display", { false_colour: $("false-colour").checked }));
 $("white-balance").addEventListener("change", () => post("/api/display", { white_balance: $("white-balance").value }));
+$("observer").addEventListener("change", () => post("/api/update", { changes: { "film.observer": $("observer").value } }));
 $("pause").addEventListener("click", () => post("/api/pause", { paused: !(state && state.paused) }));
 
 // ------------------------------------------------------------------ save
