@@ -716,6 +716,8 @@ class _Plan:
             return [UpdateStep("scene", every_key, REBUILT, "loaded and built again", time.perf_counter() - started)]
         steps: list[UpdateStep] = []
         buffers = renderer.buffers
+        # Refused before anything of the session's buffers changes (the in-place edits keep the media's count).
+        self._check(buffers)
         scene_edits.release_textures(renderer.scene, self.scene, buffers)  # their slots go to the edit's textures
         changed: set[str] = set()
         shading = kinds.get("shading", [])
@@ -739,7 +741,6 @@ class _Plan:
             keys = tuple(kinds.get(kind, []) + shading)
             seconds = time.perf_counter() - started
             steps.append(UpdateStep(kind, keys, IN_PLACE, f"{detail} ({', '.join(sorted(more))})", seconds))
-        self._check(buffers)
         for kind in ("camera", "seed"):
             if kind in kinds:
                 steps.append(UpdateStep(kind, tuple(kinds[kind]), IN_PLACE, "render parameters", 0.0))
