@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 import numpy as np
 
 from spectrace import lights, materials, textures
+from spectrace.core.api_calls import recorded
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
@@ -100,6 +101,7 @@ def transformed(mesh: TriangleMesh, steps: Iterable[Mapping[str, Any]]) -> Trian
 globals().update({name: module.make for name, module in materials.MATERIALS.items()})
 
 
+@recorded
 def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
     """Makes a shape a light of radiance L(λ) x scale, W/(m² sr nm); one-sided emitters shine toward the side
     their triangles' winding faces. `radiance` may be an emission texture (docs/textures.md): a bitmap of linear
@@ -114,6 +116,7 @@ def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float =
     return AreaEmitter(radiance=spectrum_input.emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
 
 
+@recorded
 def medium(
     sigma_a: SpectrumLike = 0.0,
     sigma_s: SpectrumLike = 0.0,

@@ -58,17 +58,19 @@ def _wait_done(page, spp: int) -> None:
     )
 
 
-def _shown_pixels(page) -> np.ndarray:
-    """The pixels the page's <img> shows, read back through a canvas."""
+def _shown_pixels(page, space: str = "srgb") -> np.ndarray:
+    """The pixels the page's <img> shows, read back through a canvas of colour space `space` (the browser converts
+    the image's colours into it)."""
     data = page.evaluate(
-        """() => {
+        """space => {
             const image = document.getElementById('image');
             const canvas = document.createElement('canvas');
             canvas.width = image.naturalWidth; canvas.height = image.naturalHeight;
-            const context = canvas.getContext('2d');
+            const context = canvas.getContext('2d', { colorSpace: space });
             context.drawImage(image, 0, 0);
             return Array.from(context.getImageData(0, 0, canvas.width, canvas.height).data);
-        }"""
+        }""",
+        space,
     )
     return np.array(data, np.uint8)
 
@@ -141,6 +143,14 @@ def test_clicking_the_red_wall_shows_a_spectrum_peaking_in_the_red(page_on):
     page.wait_for_function("() => document.getElementById('pixel-text').dataset.peak !== undefined")
     assert float(page.get_attribute("#pixel-text", "data-peak")) > 600
     assert "XYZ" in page.inner_text("#pixel-text") and "xy" in page.inner_text("#pixel-text")
+    # Averaged over 5 x 5 pixels: the same pixel again, its mean and a band of one standard error about it.
+    band_pixels = "() => { const g = document.getElementById('spectrum').getContext('2d');"
+    band_pixels += " const d = g.getImageData(0, 0, 360, 200).data; let n = 0;"
+    band_pixels += " for (let i = 0; i < d.length; i += 4) if (d[i + 3] >= 36 && d[i + 3] <= 40) n++; return n; }"
+    lines_only = page.evaluate(band_pixels)  # some of the lines' antialiased edges
+    page.select_option("#average", "5")
+    page.wait_for_function("() => document.getElementById('pixel-text').textContent.includes('mean of 25 pixels')")
+    assert page.evaluate(band_pixels) > lines_only + 500  # the band: black at 15 % opacity
 
 
 def test_switching_off_the_lcd_darkens_its_booth(page_on):
@@ -246,3 +256,38 @@ def test_the_wheel_zooms_and_shift_drag_pans(page_on):
     panned = client.wait_for(lambda s: s["parameters"]["camera.target"] != zoomed["camera.target"])["parameters"]
     shift = np.subtract(panned["camera.target"], zoomed["camera.target"])
     assert np.allclose(np.subtract(panned["camera.origin"], zoomed["camera.origin"]), shift, atol=1e-12)
+
+
+@pytest.mark.parametrize("space", ["display-p3", "rec2020"])
+def test_a_wide_gamut_image_is_shown_as_its_colours_not_as_srgb(page_on, space):
+    from spectrace.film.colour_output import ColourSpace, encode_for_display, xyz_to_output
+    from spectrace.io.raster import quantise
+
+    live, _, _, page = page_on(small_scene())
+    _wait_done(page, 4)
+    shown = page.get_attribute("#image", "src")
+    page.select_option("#colour-space", space)
+    page.wait_for_function(
+        "old => { const i = document.getElementById('image'); return i.getAttribute('src') !== old && i.complete; }",
+        arg=shown,
+    )
+    xyz, exposure = live.image().xyz, live.display.exposure
+
+    def expected(colour_space: ColourSpace) -> np.ndarray:
+        encoded = encode_for_display(xyz_to_output(xyz, colour_space, None, exposure), colour_space)
+        return quantise(encoded, 8).astype(int)
+
+    sent, srgb = expected(ColourSpace(space)), expected(ColourSpace.SRGB)
+    as_srgb = _shown_pixels(page, "srgb").reshape(*xyz.shape[:2], 4)[..., :3].astype(int)
+    if space == "display-p3":  # a canvas colour space of Chromium's (Rec.2020 is none)
+        # Read back in Display P3, the pixels are the P3 values sent.
+        as_p3 = _shown_pixels(page, "display-p3").reshape(*xyz.shape[:2], 4)[..., :3].astype(int)
+        assert np.abs(as_p3 - sent).max() <= 1
+    # Read back in sRGB, the colours inside sRGB's gamut are their sRGB values: the browser took the image for what
+    # it is, not for sRGB, where the walls' values differ by far more than a rounding.
+    inside = np.all((srgb > 0) & (srgb < 255), axis=-1)
+    assert inside.sum() > xyz.shape[0] * xyz.shape[1] // 2
+    assert np.abs(sent - srgb)[inside].max() > 10
+    # Within 3 levels: the sent 8-bit values are rounded once in their space, where a level of the wider gamut (and
+    # of Rec.2020's steeper curve near black) spans more than one sRGB level, and again in sRGB.
+    assert np.abs(as_srgb - srgb)[inside].max() <= 3

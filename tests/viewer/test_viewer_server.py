@@ -276,6 +276,47 @@ def test_a_red_wall_pixel_shows_a_spectrum_peaking_in_the_red(viewer):
     assert np.array(red["observer"]["curves"]).shape == (3, wavelengths.size)
 
 
+def test_a_red_walls_spectrum_averaged_over_its_neighbours_is_nearer_the_converged_one(viewer):
+    from tests.viewer.viewer_client import small_scene
+
+    _, _, client = viewer
+    one = _pixel(client, 3, 12)
+    mean = client.get_json("/api/pixel?x=3&y=12&size=5")  # rows 10-14, columns 1-5: all on the red wall
+    assert mean["pixels"] == 25 and "radiance_error" not in one
+    wavelengths = np.array(mean["wavelengths_nm"])
+    radiance, error = np.array(mean["radiance"]), np.array(mean["radiance_error"])
+    # The same bands converged: 64 times the viewer's samples.
+    converged = spectrace.render(small_scene(spp=256), spectral_bins=wavelengths.size, progress=False).spectral
+    assert np.allclose(converged.centres_nm, wavelengths)
+    window = converged.radiance[10:15, 1:6].reshape(25, -1).astype(np.float64)
+    truth, truth_error = window.mean(axis=0), window.std(axis=0, ddof=1) / 5
+    # Where the wall reflects and the film's wavelengths are dense enough: at 4 spp, 25 pixels draw 400 wavelengths,
+    # and beyond 750 nm some 10 nm bands get none (their mean and spread both 0, no estimate of an error).
+    red = (wavelengths > 600) & (wavelengths < 750)
+    # The mean of 25 pixels is nearer its converged value than one pixel is to its own, by far.
+    one_off = np.abs(np.array(one["radiance"]) - converged.radiance[12, 3])[red]
+    assert np.sqrt(np.mean((radiance - truth)[red] ** 2)) < 0.5 * np.sqrt(np.mean(one_off**2))
+    # Its band is a standard error: the converged mean lies within it as a standard error should (the mean of z²
+    # over those bands about 1; the spread between neighbours also holds the wall's shading, which widens it).
+    z = (radiance - truth) / np.hypot(error, truth_error)
+    assert np.mean(z[red] ** 2) < 4.0
+    assert np.all(error[red] < one_off.max())
+    # The averaged bands integrated with colour-science's CIE 1931 functions give the averaged XYZ (the 10 nm bands'
+    # width apart).
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    curves = np.stack([np.interp(wavelengths, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)])
+    step = wavelengths[1] - wavelengths[0]
+    from_bands = curves @ radiance * step / np.trapezoid(cmfs.values[:, 1], cmfs.wavelengths)
+    assert from_bands == pytest.approx(mean["xyz"], rel=0.03)
+
+
+@pytest.mark.parametrize("size", ["2", "7", "0", "three"])
+def test_a_bad_average_size_is_one_line(viewer, size):
+    _, _, client = viewer
+    status, body, _ = client.request("GET", f"/api/pixel?x=3&y=12&size={size}")
+    assert status == 400 and "size" in json.loads(body)["error"]
+
+
 def test_delta_e_to_the_chosen_reference(viewer):
     live, _, client = viewer
     try:
@@ -438,3 +479,24 @@ def test_false_colour_orders_pixels_by_luminance(viewer):
     order = np.argsort(luminance[lit])
     assert np.all(np.diff(position[lit][order]) >= -2)  # 8-bit rounding may swap neighbours
     assert position[lit][order][-1] > position[lit][order][0]
+
+
+def test_switching_the_observer_renders_again_and_the_spectrum_integrates_with_its_functions(fresh_viewer):
+    live, _, client = fresh_viewer
+    assert client.state()["observer"] == "CIE 1931 2°" and "CIE 1964 10°" in client.state()["observers"]
+    assert client.post("/api/update", {"changes": {"film.observer": "CIE 1964 10°"}})[0] == 200
+    state = client.wait_done()
+    assert state["observer"] == "CIE 1964 10°" and live.session.scene.film_response.observer == "CIE 1964 10°"
+    red = client.get_json("/api/pixel?x=3&y=12&size=3")
+    assert red["observer"]["label"] == "CIE 1964 10°"
+    # The bands integrated with colour-science's CIE 1964 10° functions give the film's XYZ, now that observer's.
+    wavelengths, radiance = np.array(red["wavelengths_nm"]), np.array(red["radiance"])
+    cmfs = colour.MSDS_CMFS["CIE 1964 10 Degree Standard Observer"]
+    curves = np.stack([np.interp(wavelengths, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)])
+    from_bands = (
+        curves @ radiance * (wavelengths[1] - wavelengths[0]) / np.trapezoid(cmfs.values[:, 1], cmfs.wavelengths)
+    )
+    assert from_bands == pytest.approx(red["xyz"], rel=0.03)
+    np.testing.assert_allclose(np.array(red["observer"]["curves"]), curves, rtol=1e-6, atol=1e-9)
+    status, body, _ = client.request("POST", "/api/update", {"changes": {"film.observer": "CIE 1999 3°"}})
+    assert status == 400 and "film.observer" in json.loads(body)["error"]

@@ -7,9 +7,11 @@ order, some with other materials, interiors, emitters, lights or placements) and
 (build_scene_buffers(keep_packing=True)), and returns the new buffers with the names of those that changed
 (SCENE_KERNEL_BUFFERS), or None where the edit changed the layout (a row more or fewer), which only a rebuild
 follows. A re-packed row appends its spectra and textures to the table and texels already built, reusing what is
-there (the table keeps each spectrum once): a kernel reads the same numbers as from a fresh build, so the image is
-the same bits."""
+there (the table keeps each spectrum once), and a texture the edit brings takes the slot of one it let go where
+their texels are as long (release_textures), so editing an image does not grow the texel buffer: a kernel reads the
+same numbers as from a fresh build, so the image is the same bits."""
 
+import dataclasses
 from dataclasses import replace
 
 import numpy as np
@@ -21,6 +23,7 @@ from spectrace.lights import area as area_light
 from spectrace.lights.base import LightRows
 from spectrace.materials import append_material_rows
 from spectrace.scene.model import Scene
+from spectrace.textures import is_texture
 
 Edit = tuple[SceneBuffers, set[str]]
 
@@ -38,9 +41,10 @@ def _shared(buffers: SceneBuffers, packing: ScenePacking) -> Edit:
     texels = np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
     chunks[:] = [texels]
     changed = {"spectra"} if len(packing.table.data) != len(buffers.spectra) else set()
-    if len(packing.textures.rows) != buffers.texture_count:
+    rewritten, packing.textures.rewritten = packing.textures.rewritten, False
+    if len(packing.textures.rows) != buffers.texture_count or rewritten:
         changed.add("textures")
-    if len(texels) != len(buffers.texels):
+    if len(texels) != len(buffers.texels) or rewritten:
         changed.add("texels")
     edited = replace(
         buffers,
@@ -169,3 +173,33 @@ def place_instances(scene: Scene, buffers: SceneBuffers) -> Edit | None:
         edited, more = lit
         changed |= more
     return edited, changed
+
+
+def scene_textures(scene: Scene) -> set:
+    """Every texture the scene's materials, emitters and lights hold, and the textures those hold in turn."""
+    found: set = set()
+
+    def walk(value: object) -> None:
+        if isinstance(value, (list, tuple)):
+            for item in value:
+                walk(item)
+        elif is_texture(value):
+            if value not in found:
+                found.add(value)
+                for field in dataclasses.fields(value):  # type: ignore[arg-type]
+                    walk(getattr(value, field.name))
+        elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+            for field in dataclasses.fields(value):
+                walk(getattr(value, field.name))
+
+    for shape in _shapes_in_order(scene):
+        walk((shape.material, shape.emitter))
+    walk(scene.lights)
+    return found
+
+
+def release_textures(before: Scene, after: Scene, buffers: SceneBuffers) -> None:
+    """Let the textures `before` held and `after` does not go, for those an edit brings to take their slots."""
+    gone = scene_textures(before) - scene_textures(after)
+    if gone and buffers.packing is not None:
+        buffers.packing.textures.release(gone)

@@ -16,6 +16,7 @@ X-macro lists through which kernels/lights.cl, light_emission.cl and bdpt.cl dis
 Adding a light: its module here and its line in LIGHTS, its kernel file, tests (docs/lights.md).
 """
 
+from spectrace.core.api_calls import recorded
 from spectrace.core.contract import GeneratedSources
 from spectrace.core.registry import Registry
 from spectrace.lights import area, constant, distant, envmap, point, spot
@@ -36,6 +37,10 @@ __all__ = [
 # Scene-file `type` -> module, in the order the schema lists them.
 LIGHTS = Registry[LightPlugin]("light", (point, spot, distant, constant, envmap))
 light_module = LIGHTS.for_model
+# Each light an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
+for _module in LIGHTS.values():
+    if _module.make is not None:
+        _module.make = recorded(_module.make)  # type: ignore[misc]
 
 # Every module that writes Light rows: the shapes' emitters, then the `[[lights]]`.
 LIGHT_SOURCES: tuple[LightSource, ...] = (area, *LIGHTS.values())

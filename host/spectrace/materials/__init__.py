@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from spectrace.core.api_calls import recorded
 from spectrace.core.contract import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEXTURE, GeneratedSources
 from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
@@ -65,9 +66,10 @@ MATERIALS = Registry[MaterialPlugin](
 BSDFS = {name: m for name, m in MATERIALS.items() if not getattr(m, "COMPOSITE", False)}
 MATERIAL_CODES = MATERIALS.codes
 material_module = MATERIALS.for_model
-# Every material takes the surface-detail keys (surface.py) besides its own: its API constructor too.
+# Every material takes the surface-detail keys (surface.py) besides its own: its API constructor too. Each object
+# it makes remembers its arguments, by which a live session edits a scene built in Python (core/api_calls.py).
 for _module in MATERIALS.values():
-    _module.make = surface.accepting_detail(_module.make)  # type: ignore[method-assign]
+    _module.make = recorded(surface.accepting_detail(_module.make))  # type: ignore[method-assign]
 
 
 def _parameter_textures(material) -> dict:

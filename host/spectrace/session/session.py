@@ -11,8 +11,9 @@ starts the accumulation again.
 
 Keys follow the scene file: `camera.fov`, `materials.red.reflectance`, `lights.0.power`,
 `shapes.<name>.emitter.scale`, `instances.<name>.transform`, `film.exposure`, `sampler.seed`; an entry of an array of
-tables ([[shapes]], [[lights]], [[instances]]) goes by its name or its index. A scene built in Python has no file to
-name its materials and lights by: its camera, film, seed and instance transforms are editable.
+tables ([[shapes]], [[lights]], [[instances]]) goes by its name or its index. A scene built in Python names its
+materials, lights, emitters and media by their place and their parameters by their constructors' arguments
+(spectrace.session.python_scene).
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
+from spectrace.session import python_scene
+from spectrace.session.python_scene import ModelEdits
 
 if TYPE_CHECKING:
     from spectrace.device import Device
@@ -122,6 +125,22 @@ def _camera_table(camera) -> dict[str, object]:
         if name in fields and parameter.name not in table:
             table[parameter.name] = _plain(getattr(camera, name))
     return table
+
+
+def _film_response(response, key: str, value: object, where: str):
+    """A Python scene's film response with `key` set to `value`, checked as FilmResponse checks its fields."""
+    if key == "observers":
+        if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+            raise SpectraceError(f"expected a list of observers' names, got {value!r}", where=where)
+        value = tuple(value)
+    elif key in ("observer", "sensor_white") and not (
+        isinstance(value, str) or (key == "sensor_white" and value is None)
+    ):
+        raise SpectraceError(f"expected a name, got {value!r}", where=where)
+    try:
+        return replace(response, **{key: value})
+    except SpectraceError as error:
+        raise SpectraceError(error.message, where=where) from None
 
 
 class Session:
@@ -276,6 +295,8 @@ class Session:
         found["sampler.seed"] = data.get("sampler", {}).get("seed", 0)
         for name, table in data.get("materials", {}).items():
             found |= {f"materials.{name}.{key}": value for key, value in table.items() if key != "type"}
+        if self._source is None:
+            found |= python_scene.parameters(self.scene)
         for array in _ARRAYS:
             for i, entry in enumerate(data.get(array, [])):
                 label = self._label(array, i)
@@ -288,6 +309,13 @@ class Session:
                     else:
                         found[f"{array}.{label}.{key}"] = value
         return copy.deepcopy(found)
+
+    def _value(self, key: object, value: object) -> object:
+        """A value as the edit takes it: a scene file's as TOML gives it; a Python scene's object's argument as the
+        caller gave it (an image's array, a Spectrum) for its constructor."""
+        if self._source is None and str(key).split(".")[0] in ("materials", "lights", "shapes"):
+            return value
+        return _plain(value)
 
     def _label(self, array: str, index: int) -> str:
         """How a key names entry `index` of `array`: its name where no other entry has it, else its index."""
@@ -331,7 +359,11 @@ class Session:
 
         started = time.perf_counter()
         outputs = {key: _plain(value) for key, value in changes.items() if key in _OUTPUT_KEYS}
-        edits = {self._data_key(str(key)): _plain(value) for key, value in changes.items() if key not in _OUTPUT_KEYS}
+        edits = {
+            self._data_key(str(key)): self._value(key, value)
+            for key, value in changes.items()
+            if key not in _OUTPUT_KEYS
+        }
         given = {self._data_key(str(key)): str(key) for key in changes if key not in _OUTPUT_KEYS}
         steps: list[UpdateStep] = []
         new_outputs = None
@@ -398,6 +430,9 @@ class Session:
             "camera": _camera_table(scene.camera),
             "film": {"exposure": scene.exposure},
             "sampler": {"seed": scene.seed},
+            # Names only: the keys of shapes and lights that a session edits are their objects' (python_scene).
+            "shapes": [{"name": python_scene.shape_label(list(scene.shapes), i)} for i in range(len(scene.shapes))],
+            "lights": [{} for _ in scene.lights],
             "instances": [
                 {"name": instance.name, "transform": [{"matrix": _plain(np.asarray(instance.to_world))}]}
                 for instance in scene.instances
@@ -600,16 +635,26 @@ class _Plan:
         from spectrace.scene.loader import camera_from_spec, set_key_path
 
         scene = self.scene
+        objects = ModelEdits(scene)
         for key, value in edits.items():
             given = self.given.get(key, key)
             parts = key.split(".")
             placement = parts[0] == "instances" and len(parts) == 3 and parts[2] == "transform"
             if key in ("film.exposure", "sampler.seed") or (parts[0] == "camera" and len(parts) == 2) or placement:
                 set_key_path(data, key, value, where=given)
+            elif parts[0] in ("materials", "lights", "shapes") and len(parts) > 2:
+                objects.stage(key, value, given)
+                continue
+            elif parts[0] == "film" and len(parts) == 2 and parts[1] in _RESPONSE_KEYS:
+                scene = replace(scene, film_response=_film_response(scene.film_response, parts[1], value, given))
+                self._add("film response", key)
+                continue
             else:
                 raise SpectraceError(
-                    "a scene built in Python edits its camera, film.exposure, sampler.seed and instance transforms; "
-                    "other keys name a scene file's tables (load_scene)",
+                    "a scene built in Python edits its camera, film.exposure, the film's observer, observers, sensor "
+                    "and sensor_white, sampler.seed, instance transforms and the parameters of its materials, "
+                    "lights, emitters and media (session.parameters() lists them); other keys name a scene file's "
+                    "tables (load_scene)",
                     where=given,
                 )
             if parts[0] == "camera":
@@ -647,6 +692,13 @@ class _Plan:
                 raise SpectraceError(error["msg"].removeprefix("Value error, "), where=where) from None
             scene = replace(scene, camera=camera_from_spec(camera_spec))
             check_camera(scene)
+        if objects.kinds:
+            scene, lights, emitters = objects.apply(scene)
+            for kind, keys in objects.kinds.items():
+                self.kinds.setdefault(kind, []).extend(keys)
+            if lights or emitters:
+                self.kinds.setdefault("lights", [])
+            self.light_edits = (lights, emitters)
         self.scene = scene
 
     # --------------------------------------------------------- carrying it out
@@ -664,6 +716,9 @@ class _Plan:
             return [UpdateStep("scene", every_key, REBUILT, "loaded and built again", time.perf_counter() - started)]
         steps: list[UpdateStep] = []
         buffers = renderer.buffers
+        # Refused before anything of the session's buffers changes (the in-place edits keep the media's count).
+        self._check(buffers)
+        scene_edits.release_textures(renderer.scene, self.scene, buffers)  # their slots go to the edit's textures
         changed: set[str] = set()
         shading = kinds.get("shading", [])
         for kind, edit, detail in (
@@ -686,7 +741,6 @@ class _Plan:
             keys = tuple(kinds.get(kind, []) + shading)
             seconds = time.perf_counter() - started
             steps.append(UpdateStep(kind, keys, IN_PLACE, f"{detail} ({', '.join(sorted(more))})", seconds))
-        self._check(buffers)
         for kind in ("camera", "seed"):
             if kind in kinds:
                 steps.append(UpdateStep(kind, tuple(kinds[kind]), IN_PLACE, "render parameters", 0.0))

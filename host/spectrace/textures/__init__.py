@@ -12,6 +12,7 @@ scene into one Texture array and the shared texel buffer, each texture once howe
 
 import numpy as np
 
+from spectrace.core.api_calls import recorded
 from spectrace.core.contract import (
     NO_TEXTURE,
     TEXEL_BANDS,
@@ -38,6 +39,9 @@ from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module; the position is the Texture.type code.
 TEXTURES = Registry[TexturePlugin]("texture", (bitmap, spectral, checkerboard, scale, mix))
+# Each texture an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
+for _module in TEXTURES.values():
+    _module.make = recorded(_module.make)  # type: ignore[method-assign]
 # Those made of other textures: their operands are spectra and image textures only (the kernel does not recurse).
 COMPOSITE_TEXTURES = tuple(name for name, module in TEXTURES.items() if module.COMPOSITE)
 IMAGE_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if not module.COMPOSITE)
@@ -209,6 +213,21 @@ class TextureRows:
         # would be handed on to a new texture once the first was freed, and the new one given the old one's row.
         self.index: dict[tuple[object, str, tuple[int, ...]], int] = {}
         self.bytes = 0
+        self.sizes: list[int] = []  # each row's texels in float4s (0: a composite's row, which has none)
+        self.free: list[int] = []  # rows whose texture the scene uses no more (`release`): slots to take again
+        self.rewritten = False  # a free slot was taken: rows and texels changed where they lie
+
+    def release(self, textures: set) -> None:
+        """Let `textures` go (nothing of the scene uses them any more): their rows, and their texels, are taken by
+        the next textures added whose texels are as long, so that editing an image does not grow the buffer."""
+        for key in [key for key in self.index if key[0] in textures]:
+            self.free.append(self.index.pop(key))
+
+    def _free_slot(self, size: int) -> int | None:
+        slot = next((row for row in self.free if self.sizes[row] == size), None)
+        if slot is not None:
+            self.free.remove(slot)
+        return slot
 
     def _check_budget(self, total: int, texture, where: str | None) -> None:
         if total > MAX_TEXTURE_BYTES:
@@ -234,6 +253,7 @@ class TextureRows:
         row["side_spectrum"] = -1
         row["side_texture"] = NO_TEXTURE
         row["type"] = TEXTURES.codes[texture_module(texture).NAME]
+        size, slot = 0, None
         if isinstance(texture, CheckerboardTexture):
             for i, side in enumerate((texture.color0, texture.color1)):
                 if isinstance(side, Spectrum):
@@ -274,13 +294,30 @@ class TextureRows:
                     texture.wavelengths_nm[1] - texture.wavelengths_nm[0] if texture.channels > 1 else 1.0
                 )
             row["storage"] = storage.storage(texel_format, levels, texture.values)
-            row["data_offset"] = 4 * sum(len(c) for c in self.texel_chunks)
             stored = storage.encode(texel_format, int(row["storage"]), levels)
             chunk = np.zeros(((len(stored) + 15) // 16, 4), np.float32)
             chunk.view(np.uint8).ravel()[: len(stored)] = stored
-            self._check_budget(self.bytes + len(stored), texture, where)
-            self.bytes += len(stored)
-            self.texel_chunks.append(chunk)
-        self.rows.append(row)
-        self.index[key] = len(self.rows) - 1
-        return len(self.rows) - 1
+            size = len(chunk)
+            slot = self._free_slot(size)
+            if slot is not None:  # over the texels of a texture let go
+                row["data_offset"] = self.rows[slot]["data_offset"]
+                texels = np.concatenate(self.texel_chunks)  # a copy: buffers handed out before keep theirs
+                start = int(row["data_offset"]) // 4
+                texels[start : start + size] = chunk
+                self.texel_chunks[:] = [texels]
+            else:
+                row["data_offset"] = 4 * sum(len(c) for c in self.texel_chunks)
+                self._check_budget(self.bytes + len(stored), texture, where)
+                self.bytes += len(stored)
+                self.texel_chunks.append(chunk)
+        if not size:  # a composite's row, with no texels of its own
+            slot = self._free_slot(0)
+        if slot is not None:
+            self.rows[slot] = row
+            self.rewritten = True
+        else:
+            self.rows.append(row)
+            self.sizes.append(size)
+            slot = len(self.rows) - 1
+        self.index[key] = slot
+        return slot

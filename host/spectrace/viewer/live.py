@@ -21,12 +21,13 @@ from typing import Any
 import numpy as np
 
 from spectrace.errors import SpectraceError
+from spectrace.film.response import OBSERVERS
 
-FILM_OBSERVER = "CIE 1931 2°"  # the film's XYZ; ΔE uses that observer's D65 white
 DISPLAY_SPACES = ("srgb", "display-p3", "rec2020")  # xyz has no display encoding
 SPECTRAL_BINS = 47  # 10 nm bands over the default 360-830 nm film: a pixel's spectrum in the page
 MAX_ORBIT_DEGREES = 360.0
 ZOOM_LIMITS = (0.01, 100.0)
+AVERAGE_SIZES = (1, 3, 5)  # the pixel windows a spectrum may be averaged over
 
 
 def _number(value: object, where: str, low: float, high: float) -> float:
@@ -128,11 +129,25 @@ def display_rgb(image, display: Display) -> np.ndarray:
     return encode_for_display(xyz_to_output(xyz, space, white, display.exposure), space)
 
 
-def png_bytes(rgb: np.ndarray) -> bytes:
+def shown_space(display: Display) -> str:
+    """The colour space of the values `display_rgb` gives: false colour's map is sRGB."""
+    return "srgb" if display.false_colour else display.colour_space
+
+
+def png_bytes(rgb: np.ndarray, space: str = "srgb") -> bytes:
+    """8-bit PNG of display-encoded `rgb` in colour space `space`. A space other than sRGB is tagged with its ICC
+    profile, which browsers apply to an <img> (and to a canvas it is drawn into), so Display P3 and Rec.2020 values
+    are shown as those colours rather than taken for sRGB ones; an untagged PNG is sRGB."""
     from PIL import Image as PILImage
 
+    from spectrace.film.colour_output import ColourSpace
+    from spectrace.film.icc_profile import icc_profile
+
+    colour_space = ColourSpace(space)
+    options = {} if colour_space is ColourSpace.SRGB else {"icc_profile": icc_profile(colour_space)}
     buffer = io.BytesIO()
-    PILImage.fromarray(np.rint(np.clip(rgb, 0, 1) * 255).astype(np.uint8), "RGB").save(buffer, format="PNG")
+    pixels = np.rint(np.clip(rgb, 0, 1) * 255).astype(np.uint8)
+    PILImage.fromarray(pixels, "RGB").save(buffer, format="PNG", **options)
     return buffer.getvalue()
 
 
@@ -225,6 +240,7 @@ class LiveView:
         self._generation = 0  # counts updates: a pass of the scene before one is not shown after it
         self._stale = False  # passes were added since the film was last read
         self._parameters: dict[str, object] = session.parameters()  # read again after each update only
+        self._observer: str = session.scene.film_response.observer  # of the film's XYZ; ΔE uses its D65 white
         self._png: tuple[tuple[int, int], bytes] | None = None
         self._thread = threading.Thread(target=self._run, name="spectrace-view-render", daemon=True)
 
@@ -313,6 +329,8 @@ class LiveView:
                 "display": self.display.__dict__,
                 "channels": list(image_channels(image)) if image is not None else [],
                 "spaces": list(DISPLAY_SPACES),
+                "observer": self._observer,
+                "observers": list(OBSERVERS),
                 "lights": light_controls(parameters),
                 "parameters": {k: j for k, v in parameters.items() if (j := _json_value(v)) is not None},
                 "error": self.error,
@@ -326,7 +344,7 @@ class LiveView:
                 return self._png[1]
         if image is None:
             return None
-        data = png_bytes(display_rgb(image, display))
+        data = png_bytes(display_rgb(image, display), shown_space(display))
         with self.changed:
             self._png = (key, data)
         return data
@@ -357,10 +375,11 @@ class LiveView:
         with self.session_lock:
             self.session.update(dict(changes))
             parameters = self.session.parameters()
+            observer = self.session.scene.film_response.observer
             self._generation += 1
         with self.changed:
             self.edits.update(changes)
-            self._parameters = parameters
+            self._parameters, self._observer = parameters, observer
             self._image, self._seconds, self._last_read, self.error = None, 0.0, 0.0, ""
             self._stale = False
             self.version += 1
@@ -378,49 +397,68 @@ class LiveView:
             changes = camera_move(self.session.parameters(), str(action), x, y)
             self.update(changes)
 
-    def _pixel_at(self, x: object, y: object):
+    def _pixel_at(self, x: object, y: object, size: object = 1):
+        """The image, the pixel's column and row, and the window of `size` x `size` pixels about it (clipped to
+        the image) as row and column slices."""
         image = self.image()
         if image is None:
             raise SpectraceError("no pass has finished yet", where="pixel")
         column = _whole(x, "x", 0, image.width - 1)
         row = _whole(y, "y", 0, image.height - 1)
-        return image, column, row
+        if size not in AVERAGE_SIZES or isinstance(size, bool):
+            raise SpectraceError(f"must be {', '.join(map(str, AVERAGE_SIZES))}, got {size!r}", where="size")
+        half = int(size) // 2
+        window = (slice(max(row - half, 0), row + half + 1), slice(max(column - half, 0), column + half + 1))
+        return image, column, row, window
 
-    def set_reference(self, x: object, y: object) -> None:
-        image, column, row = self._pixel_at(x, y)
+    def set_reference(self, x: object, y: object, size: object = 1) -> None:
+        image, column, row, window = self._pixel_at(x, y, size)
+        xyz = image.xyz[window].reshape(-1, 3).astype(np.float64).mean(axis=0)
         with self.changed:
-            self.reference = (column, row, image.xyz[row, column].astype(np.float64))
+            self.reference = (column, row, xyz)
 
-    def pixel(self, x: object, y: object) -> dict[str, object]:
+    def pixel(self, x: object, y: object, size: object = 1) -> dict[str, object]:
         """A pixel's XYZ, xy, spectrum (band-averaged radiance, W/(m² sr nm)) with the observer's curves on the
-        same bands, and its CIEDE2000 to the reference pixel in CIELAB of the displayed white (Y = 2^-exposure)."""
-        from spectrace.film.response import delta_e_2000_map
+        same bands, and its CIEDE2000 to the reference pixel in CIELAB of the displayed white (Y = 2^-exposure).
+        With `size` 3 or 5, each is the mean over the size x size pixels about it (those inside the image), and
+        `radiance_error` the standard error of the spectrum's mean, from the spread between those pixels: one
+        pixel's estimate is as noisy as its samples are few, and the mean of n neighbours on an even surface is
+        √n times less so."""
+        from spectrace.film.response import delta_e_2000_map, observer_cmfs
         from spectrace.spectral.grid import GRID_NM
-        from spectrace.spectral.observers import Observer, observer_cmfs
 
-        image, column, row = self._pixel_at(x, y)
-        xyz = image.xyz[row, column].astype(np.float64)
+        image, column, row, window = self._pixel_at(x, y, size)
+        pixels = image.xyz[window].reshape(-1, 3).astype(np.float64)
+        xyz = pixels.mean(axis=0)
         total = float(xyz.sum())
         result: dict[str, object] = {
             "x": column,
             "y": row,
+            "size": size,
+            "pixels": len(pixels),
             "xyz": [float(v) for v in xyz],
             "xy": [float(xyz[0] / total), float(xyz[1] / total)] if total > 0 else None,
         }
         if image.spectral is not None:
             centres = image.spectral.centres_nm
-            cmfs = observer_cmfs(Observer.CIE_1931_2)
+            with self.changed:
+                observer = self._observer
+            cmfs = observer_cmfs(observer)
+            spectra = image.spectral.radiance[window].reshape(len(pixels), -1).astype(np.float64)
             result["wavelengths_nm"] = [float(v) for v in centres]
-            result["radiance"] = [float(v) for v in image.spectral.radiance[row, column]]
+            result["radiance"] = [float(v) for v in spectra.mean(axis=0)]
+            if len(spectra) > 1:
+                error = spectra.std(axis=0, ddof=1) / np.sqrt(len(spectra))
+                result["radiance_error"] = [float(v) for v in error]
             result["observer"] = {
-                "label": FILM_OBSERVER,
+                "label": observer,
                 "curves": [[float(v) for v in np.interp(centres, GRID_NM, cmfs[:, i])] for i in range(3)],
             }
         with self.changed:
-            reference, exposure = self.reference, self.display.exposure
+            reference, exposure, observer = self.reference, self.display.exposure, self._observer
         if reference is not None:
             white_y = 2.0**-exposure
-            delta = delta_e_2000_map(xyz[None], reference[2][None], FILM_OBSERVER, FILM_OBSERVER, white_y=white_y)
+            delta = delta_e_2000_map(xyz[None], reference[2][None], observer, observer, white_y=white_y)
             result["delta_e"] = float(np.asarray(delta).reshape(-1)[0])
             result["reference"] = [reference[0], reference[1]]
         return result

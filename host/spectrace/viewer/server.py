@@ -191,7 +191,12 @@ class _Handler(BaseHTTPRequestHandler):
             except ValueError:
                 self._json({"error": "pixel: x and y must be whole numbers"}, HTTPStatus.BAD_REQUEST)
                 return
-            self._answer(lambda: live.pixel(x, y))
+            try:
+                size = int(query.get("size", ["1"])[0])
+            except ValueError:
+                self._json({"error": "size: must be a whole number"}, HTTPStatus.BAD_REQUEST)
+                return
+            self._answer(lambda: live.pixel(x, y, size))
         elif route == "/api/events":
             self._events()
         else:
@@ -227,7 +232,7 @@ class _Handler(BaseHTTPRequestHandler):
             "/api/pause": lambda: live.set_paused(data.get("paused")),
             "/api/update": lambda: live.update(data.get("changes")),  # type: ignore[arg-type]
             "/api/camera": lambda: live.move_camera(data.get("action"), data.get("dx", 0), data.get("dy", 0)),
-            "/api/reference": lambda: live.set_reference(data.get("x"), data.get("y")),
+            "/api/reference": lambda: live.set_reference(data.get("x"), data.get("y"), data.get("size", 1)),
             "/api/save": lambda: _save(server, data),
         }
         if route not in actions:

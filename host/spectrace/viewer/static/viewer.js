@@ -90,6 +90,8 @@ function show(next) {
   $("pause").textContent = state.paused ? "resume" : "pause";
   if (state.error) showError(state.error);
   fillSelect($("colour-space"), state.spaces);
+  fillSelect($("observer"), state.observers);
+  if (document.activeElement !== $("observer")) $("observer").value = state.observer;
   fillSelect($("channel"), ["", ...state.channels], ["film XYZ", ...state.channels]);
   $("colour-space").value = state.display.colour_space;
   $("channel").value = state.display.channel;
@@ -130,6 +132,7 @@ $("colour-space").addEventListener("change", () => post("/api/display", { colour
 $("channel").addEventListener("change", () => post("/api/display", { channel: $("channel").value }));
 $("false-colour").addEventListener("change", () => post("/api/display", { false_colour: $("false-colour").checked }));
 $("white-balance").addEventListener("change", () => post("/api/display", { white_balance: $("white-balance").value }));
+$("observer").addEventListener("change", () => post("/api/update", { changes: { "film.observer": $("observer").value } }));
 $("pause").addEventListener("click", () => post("/api/pause", { paused: !(state && state.paused) }));
 
 // ------------------------------------------------------------------ save
@@ -190,7 +193,7 @@ image.addEventListener(
 
 async function pickPixel(x, y) {
   try {
-    const reply = await fetch(api("/api/pixel", { x, y }));
+    const reply = await fetch(api("/api/pixel", { x, y, size: $("average").value }));
     const answer = await reply.json();
     if (answer.error) return showError(answer.error);
     pixel = answer;
@@ -207,7 +210,8 @@ function number(value) {
 
 function showPixel() {
   const p = pixel;
-  const lines = [`pixel (${p.x}, ${p.y})`, `XYZ ${p.xyz.map(number).join(" ")}`];
+  const where = p.pixels > 1 ? `mean of ${p.pixels} pixels about (${p.x}, ${p.y})` : `pixel (${p.x}, ${p.y})`;
+  const lines = [where, `XYZ ${p.xyz.map(number).join(" ")}`];
   lines.push(p.xy ? `xy ${p.xy.map((v) => v.toFixed(4)).join(" ")}` : "xy – (black)");
   if (p.delta_e !== undefined) lines.push(`ΔE2000 ${p.delta_e.toFixed(2)} to pixel (${p.reference.join(", ")})`);
   if (p.wavelengths_nm) {
@@ -240,18 +244,35 @@ function drawSpectrum(p) {
     line(curves[i], colour, curveTop);
   });
   g.setLineDash([]);
+  const error = p.radiance_error;
+  const top = Math.max(...p.radiance.map((v, i) => v + (error ? error[i] : 0)));
+  if (error) {
+    // The mean ± one standard error, from the spread between the averaged pixels.
+    const y = (v) => bottom - (top > 0 ? v / top : 0) * height;
+    g.fillStyle = "rgba(0, 0, 0, 0.15)";
+    g.beginPath();
+    p.radiance.forEach((v, i) => g.lineTo(x(w[i]), y(v + error[i])));
+    for (let i = w.length - 1; i >= 0; i--) g.lineTo(x(w[i]), y(Math.max(p.radiance[i] - error[i], 0)));
+    g.closePath();
+    g.fill();
+  }
   g.lineWidth = 2;
-  line(p.radiance, "#000", Math.max(...p.radiance));
+  line(p.radiance, "#000", top);
   g.lineWidth = 1;
   g.fillStyle = "#000";
   g.font = "11px sans-serif";
   for (const nm of [400, 500, 600, 700, 800]) if (nm >= w[0] && nm <= w[w.length - 1]) g.fillText(String(nm), x(nm) - 10, canvas.height - 5);
-  g.fillText("radiance (solid), " + p.observer.label + " (dashed)", left, 12);
+  const band = error ? " ± standard error (grey)" : "";
+  g.fillText("radiance (solid)" + band + ", " + p.observer.label + " (dashed)", left, 12);
 }
+
+$("average").addEventListener("change", () => {
+  if (pixel) pickPixel(pixel.x, pixel.y);
+});
 
 $("reference").addEventListener("click", async () => {
   if (!pixel) return;
-  const answer = await post("/api/reference", { x: pixel.x, y: pixel.y });
+  const answer = await post("/api/reference", { x: pixel.x, y: pixel.y, size: Number($("average").value) });
   if (!answer.error) pickPixel(pixel.x, pixel.y);
 });
 
