@@ -1,0 +1,97 @@
+/* Fluorescent (bispectral) surfaces in the path tracer (host: spectrace.materials.fluorescent, which states the
+ * model): a dye of excitation a(λ) (fraction of photons absorbed, dimensionless), normalised emission e(λ) (1/nm) and
+ * quantum yield Q over a non-fluorescent base, whose bispectral BSDF is
+ *     f(λi → λo) = f_base(λo) δ(λi − λo) + a(λi) Q e(λo) (λi / λo) / π.
+ *
+ * A camera path carries radiance backward, so where it meets the dye its wavelength λo is the one the dye emits
+ * toward the camera, and what it must gather is the light arriving at every excitation wavelength λi. As Mojzík,
+ * Fichet and Wilkie 2018 ("Handling Fluorescence in a Uni-directional Spectral Path Tracer", Computer Graphics
+ * Forum 37(4), EGSR) do in a hero-wavelength tracer, the vertex chooses between the elastic part (the base BSDF, every
+ * wavelength going on as it was) and the re-emission, by a probability P drawn from the hero λo alone; the
+ * re-emission keeps only the hero wavelength (terminate_secondary, as dispersion does: each wavelength would change
+ * to its own λi) and switches it to λi drawn from a density ∝ a(λi)·λi, the path then going on from a white
+ * Lambertian lobe at λi, its next-event estimation and every emission it meets read at λi. The estimator's weights:
+ *     elastic:     1 / (1 − P)                                        on every lane, then the base's BSDF
+ *     re-emission: Q e(λo) a(λi) (λi / λo) / (p(λi) P)               on the hero (x4), then the white lobe
+ * unbiased as long as P < 1 (secondary lanes reach their elastic part only through it) and P > 0 where e(λo) > 0.
+ * P = F / (1 + F) with F = Q e(λo) ∫a dλ, the expected re-emitted photons toward λo per photon of a flat
+ * illuminant, against the base's at most 1. The film keeps the wavelengths the camera path started with: the
+ * radiance found at λi, weighted as above, is L(λo).
+ *
+ * The fluorescent row (kernels/types.h, spectrace.materials.fluorescent): eta_offset the base's row, k_offset the
+ * white lobe's, reflectance_offset a(λ), transmittance_offset e(λ), coat_table_offset the CDF of a(λ)·λ at the grid's
+ * GRID_SAMPLES wavelengths (1 nm cells), coat_internal_reflectance ∫a dλ (nm), alpha Q (0: the base alone).
+ * Only the path tracer includes this file; SCENE_HAS_FLUORESCENCE (scene_features.h) leaves it out of every scene
+ * without the material, whose kernels and bits stay as they were. */
+#ifndef SPECTRACE_FLUORESCENCE_CL
+#define SPECTRACE_FLUORESCENCE_CL
+
+#include "path_state.cl"
+
+#if SCENE_HAS_FLUORESCENCE
+
+/* The wavelengths path s carries: its own after a fluorescent re-emission, those it started with (w) before. */
+inline const SampledWavelengths *path_wavelengths(const PathState *s, const SampledWavelengths *w)
+{
+    return s->fluoresced ? &s->fluorescent_wavelengths : w;
+}
+
+/* The grid cell a uniform u ∈ [0, 1) falls in by the CDF `cdf` (GRID_SAMPLES values from 0 to 1), and a wavelength
+ * uniform within it (nm); *pdf its density (1/nm, the cell's mass over its 1 nm). A cell that u can reach has a
+ * mass above 0: cdf[lo] ≤ u < cdf[lo + 1]. */
+inline float sample_excitation_wavelength(__global const float *cdf, float u, float *pdf)
+{
+    int lo = 0, hi = GRID_SAMPLES - 1;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) >> 1;
+        if (cdf[mid] <= u) lo = mid;
+        else hi = mid;
+    }
+    float mass = cdf[lo + 1] - cdf[lo];
+    *pdf = mass;
+    float t = mass > 0.0f ? (u - cdf[lo]) / mass : 0.5f;
+    return GRID_MIN_NM + (float)lo + clamp(t, 0.0f, 1.0f);
+}
+
+/* At a vertex of a fluorescent material: v->info.material becomes what shades it (the base, a mix of them
+ * resolved, or the white re-emission lobe), s->throughput takes the choice's weight, and a re-emission switches the
+ * path's wavelength (path_wavelengths). w: the path's wavelengths at the vertex. Any other vertex is left alone
+ * and draws nothing, as does a yield of 0 (the base, with its bits). */
+inline void fluorescent_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                               PathVertex *v)
+{
+    __global const Material *m = &scene->materials[v->info.material];
+    if (m->type != MATERIAL_FLUORESCENT) return;
+    int base = m->eta_offset;
+    if (SCENE_HAS_MIX) base = mix_resolve(scene, base, v->p, v->wo, v->uv, v->footprint);
+    float quantum_yield = m->alpha;
+    if (!(quantum_yield > 0.0f)) {
+        v->info.material = base;
+        return;
+    }
+    float u_choice = sample_1d(sampler);
+    float u_lambda = sample_1d(sampler);
+    __global const float *table = scene->spectra;
+    float lambda_out = w->lambda.x;
+    float emitted = quantum_yield * table_lerp(table, m->transmittance_offset + w->grid_index.x, w->grid_frac.x);
+    float expected = emitted * m->coat_internal_reflectance;
+    float p_fluoresce = expected / (1.0f + expected);
+    if (!(u_choice < p_fluoresce)) {
+        s->throughput /= 1.0f - p_fluoresce;
+        v->info.material = base;
+        return;
+    }
+    float pdf;
+    float lambda_in = sample_excitation_wavelength(table + m->coat_table_offset, u_lambda, &pdf);
+    SampledWavelengths in = wavelengths_on_grid((float4)(lambda_in), (float4)(pdf));
+    float absorbed = table_lerp(table, m->reflectance_offset + in.grid_index.x, in.grid_frac.x);
+    terminate_secondary(&s->throughput, &s->secondary_terminated);
+    s->throughput *= emitted * absorbed * (lambda_in / lambda_out) / (pdf * p_fluoresce);
+    s->fluorescent_wavelengths = in;
+    s->fluoresced = 1;
+    v->info.material = m->k_offset;
+}
+
+#endif
+
+#endif
