@@ -20,7 +20,8 @@
  *
  * The fluorescent row (kernels/types.h, spectrace.materials.fluorescent): eta_offset the base's row, k_offset the
  * white lobe's, reflectance_offset a(λ), transmittance_offset e(λ), coat_table_offset the CDF of a(λ)·λ at the grid's
- * GRID_SAMPLES wavelengths (1 nm cells), coat_internal_reflectance ∫a dλ (nm), alpha Q (0: the base alone).
+ * GRID_SAMPLES wavelengths (1 nm cells), coat_internal_reflectance ∫a dλ (nm), alpha Q (0: the base alone; with
+ * roughness_texture, a grey texture of Q per point, alpha its largest value).
  * Only the path tracer includes this file; SCENE_HAS_FLUORESCENCE (scene_features.h) leaves it out of every scene
  * without the material, whose kernels and bits stay as they were. */
 #ifndef SPECTRACE_FLUORESCENCE_CL
@@ -68,6 +69,10 @@ inline void fluorescent_vertex(const Scene *scene, const SampledWavelengths *w, 
     if (!(quantum_yield > 0.0f)) {
         v->info.material = base;
         return;
+    }
+    if (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE) {
+        SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+        quantum_yield = texture_numbers(&sc.buffers, m->roughness_texture, v->uv, v->footprint).x;
     }
     float u_choice = sample_1d(sampler);
     float u_lambda = sample_1d(sampler);

@@ -156,6 +156,16 @@ def test_yield_zero_renders_its_base_bit_for_bit(device):
     np.testing.assert_array_equal(dyed, plain)
 
 
+def test_a_texture_of_the_yield_holding_one_number_renders_that_number_bit_for_bit(device):
+    light = np.ones_like(GRID_NM)
+    base = S.diffuse(0.3)
+    _, _, number = _bands(device, _scene(_dye(base, Q), light, spp=8))
+    _, _, textured = _bands(device, _scene(_dye(base, S.checkerboard(Q, Q)), light, spp=8))
+    _, _, other = _bands(device, _scene(_dye(base, S.checkerboard(Q, 0.5 * Q)), light, spp=8))
+    np.testing.assert_array_equal(textured, number)
+    assert not np.array_equal(other, number)  # the texture is read
+
+
 def test_a_render_split_into_passes_has_the_same_bits(device):
     scene = _scene(_dye(S.diffuse(0.3)), np.ones_like(GRID_NM), spp=8)
     whole = Renderer(scene, device, spectral_bins=BANDS)

@@ -48,6 +48,12 @@ def test_the_scene_file_and_the_api_resolve_the_same_material(tmp_path):
     assert made == material
 
 
+def test_the_yield_takes_a_grey_texture(tmp_path):
+    texture = '{ texture = "checkerboard", color0 = { value = 0.2 }, color1 = { value = 0.9 } }'
+    material = load_scene(_scene_file(tmp_path, quantum_yield=texture)).shapes[0].material
+    assert spectrace.textures.is_texture(material.quantum_yield)
+
+
 @pytest.mark.parametrize(
     "base, quantum_yield, key",
     [("nothing", "0.7", "materials.dye.base"), ("dye", "0.7", "materials.dye.base"), ("paper", "2", "quantum_yield")],

@@ -17,7 +17,8 @@ elastic part) or by the Lambertian re-emission at a wavelength drawn from the ex
 wavelength changes there). Its row (kernels/types.h) holds the base's row index in `eta_offset` and that of a
 white Lambertian row (the re-emission's lobe) in `k_offset`; `reflectance_offset` the excitation a(λ),
 `transmittance_offset` the normalised emission e(λ), `coat_table_offset` the CDF of a(λ)·λ over the spectrum
-table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance` ∫ a dλ (nm), `alpha` Q.
+table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance` ∫ a dλ (nm), `alpha` Q
+(a textured Q: its largest value, the texture in `roughness_texture`).
 spectrace.materials appends the two rows after it. Only the path tracer transports light through it; the other
 integrators refuse a scene holding one (`integrator_problem`).
 """
@@ -66,7 +67,10 @@ PARAMETERS = (
         "float",
         default=1.0,
         range=YIELD_RANGE,
-        doc="Q, photons re-emitted per photon absorbed",
+        doc="Q, photons re-emitted per photon absorbed (a grey texture: the dye's yield, or its concentration, "
+        "varying over the surface)",
+        textured=True,
+        texture_field="roughness_texture",
     ),
 )
 _YIELD = PARAMETERS[3]
@@ -79,7 +83,7 @@ class FluorescentMaterial(Material):
     base: Material
     excitation: Spectrum
     emission: Spectrum
-    quantum_yield: float = 1.0
+    quantum_yield: object = 1.0  # a float in [0, 1], or a one-channel texture of it
     key: str = field(default="", compare=False)  # where the scene file defined it, for the integrators' refusals
 
     @property
@@ -125,7 +129,12 @@ def check(base, excitation, emission, quantum_yield, where, key: str = "") -> Fl
         )
     if not np.any(emission.values > 0):
         raise SpectraceError("emission is zero at every wavelength", where=where("emission"))
-    quantum_yield = _YIELD.check(quantum_yield, where("quantum_yield"))
+    from spectrace.textures import check_texture_values, is_texture
+
+    if is_texture(quantum_yield):
+        check_texture_values(quantum_yield, "float", where("quantum_yield"), upper=1.0)
+    else:
+        quantum_yield = _YIELD.check(quantum_yield, where("quantum_yield"))
     return FluorescentMaterial(base, excitation, emission, quantum_yield, key=key)
 
 
@@ -141,13 +150,17 @@ def from_spec(spec, resolver, key: str) -> FluorescentMaterial:
     base = resolver.material_named(spec.base, f"{key}.base")
     excitation = resolver.spectrum(spec.excitation, f"{key}.excitation", emission=False)
     emission = resolver.spectrum(spec.emission, f"{key}.emission", emission=True)
-    return check(base, excitation, emission, spec.quantum_yield, lambda name: resolver.where(f"{key}.{name}"), key)
+    quantum_yield = spec.quantum_yield
+    if not isinstance(quantum_yield, float):
+        quantum_yield = resolver.texture(quantum_yield, f"{key}.quantum_yield")
+    return check(base, excitation, emission, quantum_yield, lambda name: resolver.where(f"{key}.{name}"), key)
 
 
 def make(base, excitation, emission, quantum_yield=1.0) -> FluorescentMaterial:
     """A fluorescent dye over `base` (a non-fluorescent material): photons arriving at λ_in are absorbed with
     probability `excitation` a(λ_in) and re-emitted, `quantum_yield` of them, diffusely at λ_out distributed as
-    `emission` (its shape only). Spectra as every material takes them (a Spectrum, a constant, a name)."""
+    `emission` (its shape only). Spectra as every material takes them (a Spectrum, a constant, a name); the yield a
+    number in [0, 1] or a grey texture of it."""
     from spectrace.spectral.spectrum_input import role_spectrum
 
     excitation = role_spectrum(excitation, False, "excitation")
@@ -183,7 +196,8 @@ def write_row(row: np.ndarray, material: FluorescentMaterial, table: SpectrumTab
     row["coat_table_offset"] = table.add_block(excitation_cdf(excitation, grid))
     row["coat_internal_reflectance"] = absorbed_total
     absorbs = absorbed_total > 0.0 and emission_total > 0.0
-    row["alpha"] = material.quantum_yield if absorbs else 0.0
+    # A textured yield stands here as its largest value (material_row): 0 only where the texture is 0 everywhere.
+    row["alpha"] = float(material.quantum_yield) if absorbs else 0.0  # type: ignore[arg-type]
 
 
 def reemission_lobe() -> Material:
