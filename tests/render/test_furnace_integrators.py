@@ -149,7 +149,7 @@ CASES = {
         ),
     ],
     # Green light re-emitted in the red, where Y weighs it less: the image's Y stays below 1 as its energy does
-    # (light moved toward a larger ȳ would raise Y without creating energy). Only the path tracer transports it.
+    # (light moved toward a larger ȳ would raise Y without creating energy). The path and light tracers transport it.
     "fluorescent": [
         Case(
             "green to red dye over its complement",
@@ -157,7 +157,7 @@ CASES = {
             False,
             False,
             fast=("path",),
-            only=("path",),
+            only=("path", "light"),
         )
     ],
 }

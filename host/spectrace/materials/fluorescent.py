@@ -16,11 +16,11 @@ It has no BSDF of its own: kernels/fluorescence.cl replaces it, where a path mee
 elastic part) or by the Lambertian re-emission at a wavelength drawn from the excitation spectrum (the path's
 wavelength changes there). Its row (kernels/types.h) holds the base's row index in `eta_offset` and that of a
 white Lambertian row (the re-emission's lobe) in `k_offset`; `reflectance_offset` the excitation a(λ),
-`transmittance_offset` the normalised emission e(λ), `coat_table_offset` the CDF of a(λ)·λ over the spectrum
-table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance` ∫ a dλ (nm), `alpha` Q
-(a textured Q: its largest value, the texture in `roughness_texture`).
-spectrace.materials appends the two rows after it. Only the path tracer transports light through it; the other
-integrators refuse a scene holding one (`integrator_problem`).
+`transmittance_offset` the normalised emission e(λ) and, a row on, its CDF, `coat_table_offset` the CDF of
+a(λ)·λ over the spectrum table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance`
+∫ a dλ (nm), `alpha` Q (a textured Q: its largest value, the texture in `roughness_texture`).
+spectrace.materials appends the two rows after it. The path tracer and the light tracer transport light through
+it; the other integrators refuse a scene holding one (`integrator_problem`).
 """
 
 from dataclasses import dataclass, field
@@ -44,7 +44,7 @@ PBRT_NONE = "pbrt-v4 has no fluorescent material: each of its wavelengths is tra
 # The Material row fields holding the base's row index and the re-emission lobe's.
 ROW_FIELDS = ("eta_offset", "k_offset")
 # The integrators that transport light through a change of wavelength.
-INTEGRATORS = ("path",)
+INTEGRATORS = ("path", "light")
 YIELD_RANGE = Range(0.0, 1.0)
 PARAMETERS = (
     Parameter(
@@ -168,10 +168,10 @@ def make(base, excitation, emission, quantum_yield=1.0) -> FluorescentMaterial:
     return check(base, excitation, emission, quantum_yield, lambda name: name)
 
 
-def excitation_cdf(excitation: np.ndarray, wavelengths_nm: np.ndarray) -> np.ndarray:
-    """The CDF, at each grid wavelength, of the density ∝ a(λ)·λ that is constant over each 1 nm cell (its value
+def cell_cdf(weighted: np.ndarray, wavelengths_nm: np.ndarray) -> np.ndarray:
+    """The CDF, at each grid wavelength, of the density ∝ `weighted` that is constant over each 1 nm cell (its value
     the cell's mean of the grid values): the kernel picks a cell by it and a point uniformly within the cell."""
-    weighted = np.asarray(excitation, np.float64) * wavelengths_nm
+    weighted = np.asarray(weighted, np.float64)
     cells = 0.5 * (weighted[1:] + weighted[:-1]) * np.diff(wavelengths_nm)
     cdf = np.concatenate([[0.0], np.cumsum(cells)])
     total = cdf[-1]
@@ -191,9 +191,11 @@ def write_row(row: np.ndarray, material: FluorescentMaterial, table: SpectrumTab
     emission_total = float(np.trapezoid(emission, grid))
     absorbed_total = float(np.trapezoid(excitation, grid))
     row["reflectance_offset"] = table.add_block(excitation)
-    # Zero emission within the film's range: nothing is re-emitted where the film sees.
-    row["transmittance_offset"] = table.add_block(emission / emission_total if emission_total > 0 else emission)
-    row["coat_table_offset"] = table.add_block(excitation_cdf(excitation, grid))
+    # Zero emission within the film's range: nothing is re-emitted where the film sees. Its CDF follows it, one row
+    # on (the light tracer draws the re-emitted wavelength by it).
+    emission = emission / emission_total if emission_total > 0 else emission
+    row["transmittance_offset"] = table.add_block(np.concatenate([emission, cell_cdf(emission, grid)]))
+    row["coat_table_offset"] = table.add_block(cell_cdf(excitation * grid, grid))
     row["coat_internal_reflectance"] = absorbed_total
     absorbs = absorbed_total > 0.0 and emission_total > 0.0
     # A textured yield stands here as its largest value (material_row): 0 only where the texture is 0 everywhere.
@@ -253,5 +255,5 @@ def integrator_problem(scene, integrator: str) -> str | None:
     where = materials[0].key or "a material"
     return (
         f"integrator '{integrator}' does not transport light through a change of wavelength ({where} is "
-        f"fluorescent); use integrator 'path'"
+        f"fluorescent); use integrator 'path' or 'light'"
     )
