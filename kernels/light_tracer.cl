@@ -29,6 +29,7 @@
 #include "film.cl"
 #include "light_emission.cl"
 #include "path_state.cl"
+#include "fluorescence.cl"
 
 /* Where a work-item's splat records go: slots [0, capacity) of its own, for the records numbered begin .. begin +
  * capacity − 1 of its path (the host launches the path again for later ones); count is every record it makes. */
@@ -301,6 +302,9 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
         int met = light_path_meets(scene, &w, &s, hit, &v);
         if (met == LIGHT_PATH_ENDS) return;
         if (met == LIGHT_PATH_CROSSES) continue;
+#if SCENE_HAS_FLUORESCENCE
+        fluorescent_light_vertex(scene, &w, &sampler, &s, &v, &scatter);
+#endif
         __global const Material *material = &scene->materials[v.info.material];
         SurfaceContext sc = shading_context(scene, v.uv, v.footprint, v.ns_base, v.dpdu, 1);
         if (material_has_non_delta_lobe(material)) {

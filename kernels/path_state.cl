@@ -26,6 +26,10 @@ typedef struct {
 #if FILM_AOVS
     AovRecord aov;           /* what the camera path records for the AOVs (aov.cl) */
 #endif
+#if SCENE_HAS_FLUORESCENCE
+    int fluoresced;          /* a fluorescent re-emission changed the path's wavelength (fluorescence.cl) */
+    SampledWavelengths fluorescent_wavelengths;  /* the path's wavelengths since then */
+#endif
 } PathState;
 
 /* hit, or a miss where it lies beyond the camera's far clip on the camera's own ray (s's first segment, before any
@@ -53,6 +57,9 @@ inline PathState camera_path(Ray ray)
     s.null_crossings = 0;
 #if FILM_AOVS
     s.aov = aov_start();
+#endif
+#if SCENE_HAS_FLUORESCENCE
+    s.fluoresced = 0;
 #endif
     return s;
 }

@@ -5,6 +5,7 @@
 #define SPECTRACE_PATH_TRACER_CL
 
 #include "path_state.cl"
+#include "fluorescence.cl"
 
 /* Russian roulette once `segments` bounces have happened (Mitsuba 3's rr_depth): 0 ends the path. The survival
  * probability follows the throughput without the radiance compression of refraction, which light undoes when it
@@ -65,6 +66,9 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     __global const RenderParams *params = scene->params;
     int last_segment = max_segments(params);
     int ended = 0;
+#if SCENE_HAS_FLUORESCENCE
+    w = path_wavelengths(s, w);
+#endif
 
     Hit hit = far_clipped(params, s, scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced));
     if (scatter_in_medium(scene, w, sampler, s, hit.t, last_segment, radiance, &ended, rays_traced)) {
@@ -105,6 +109,10 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     }
     /* Beyond a material-less boundary the same segment goes on. */
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
+#if SCENE_HAS_FLUORESCENCE
+    fluorescent_vertex(scene, w, sampler, s, &v);
+    w = path_wavelengths(s, w);
+#endif
     int uncounted_passes = !params->count_thin_passes
                         && MATERIAL_IS(&scene->materials[v.info.material], MATERIAL_THINDIELECTRIC);
     if (s->segments >= last_segment && !uncounted_passes) return 0;

@@ -38,12 +38,16 @@ def _material_scene(tmp_path, name: str, key: str, value: float) -> Path:
     required = {"reflectance": "{ value = 0.5 }"} if name in ("diffuse", "plastic") else {}
     if name == "conductor":
         required = {"metal": '"Au"'}
+    if name == "fluorescent":
+        required = {"base": '"b"', "excitation": "{ value = 0.5 }", "emission": "{ value = 1 }"}
     lines = "".join(f"{k} = {v}\n" for k, v in {**required, key: repr(value)}.items())
+    # A fluorescent material's base, which it names.
+    base = '[materials.b]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n' if name == "fluorescent" else ""
     path = tmp_path / "scene.toml"
     path.write_text(
         camera_film(width="4", height="4")
         + f"""
-[materials.m]
+{base}[materials.m]
 type = "{name}"
 {lines}
 [[shapes]]

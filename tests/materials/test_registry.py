@@ -22,15 +22,15 @@ def _generated_list() -> list[tuple[str, str, str]]:
 
 
 def test_the_generated_kernel_list_is_the_registry_in_code_order():
-    """The BSDFs come first, in code order; the composites (a mix), which have no BSDF, after them and outside the
-    list, with codes of their own."""
+    """The BSDFs come first, in code order; the composites (a mix, a fluorescent dye over its base), which have no
+    BSDF, after them and outside the list, with codes of their own."""
     expected = [(f"MATERIAL_{name.upper()}", name, f"{name.capitalize()}Params") for name in BSDFS]
     assert _generated_list() == expected
     contract = kernel_contract(generated_sources())
     assert [contract[code] for code, _, _ in _generated_list()] == list(range(len(BSDFS)))
     assert contract["MATERIAL_TYPE_COUNT"] == len(MATERIALS) == len(set(MATERIAL_CODES.values()))
     composites = [name for name in MATERIALS if name not in BSDFS]
-    assert composites == ["mix"]
+    assert composites == ["mix", "fluorescent"]
     assert [contract[f"MATERIAL_{name.upper()}"] for name in composites] == list(range(len(BSDFS), len(MATERIALS)))
 
 

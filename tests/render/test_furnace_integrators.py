@@ -45,6 +45,7 @@ from spectrace.integrators.base import FEATURES
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PixelFilter
 from spectrace.scene.model import Scene
+from spectrace.spectral.grid import GRID_NM
 from stats_toolkit import (
     assert_at_most_within_standard_errors,
     assert_within_standard_errors,
@@ -70,9 +71,12 @@ class Case:
     delta_lobe: bool  # has a delta lobe, which the light tracer cannot see from the camera
     sppm_refused: bool = False  # delta and non-delta lobes on one surface
     fast: tuple[str, ...] = ()  # the integrators of the quick subset; the others are marked slow
+    only: tuple[str, ...] = ()  # the integrators that render it, where the others refuse it (empty: all)
 
 
 S = spectrace
+_GREEN_BAND = np.where((GRID_NM >= 500) & (GRID_NM <= 560), 0.9, 0.0)
+_RED_EMISSION = S.Spectrum(np.exp(-0.5 * ((GRID_NM - 650.0) / 20.0) ** 2))
 # One list per registry entry: test_every_material_has_a_furnace_case keeps it complete.
 CASES = {
     "diffuse": [Case("white", lambda: S.diffuse(1.0), True, False, fast=("bdpt",))],
@@ -144,6 +148,18 @@ CASES = {
             False,
         ),
     ],
+    # Green light re-emitted in the red, where Y weighs it less: the image's Y stays below 1 as its energy does
+    # (light moved toward a larger ȳ would raise Y without creating energy). The path and light tracers transport it.
+    "fluorescent": [
+        Case(
+            "green to red dye over its complement",
+            lambda: S.fluorescent(S.diffuse(S.Spectrum(1.0 - _GREEN_BAND)), S.Spectrum(_GREEN_BAND), _RED_EMISSION),
+            False,
+            False,
+            fast=("path",),
+            only=("path", "light"),
+        )
+    ],
 }
 ALL_CASES = [(name, case) for name, cases in CASES.items() for case in cases]
 
@@ -187,6 +203,8 @@ def _params():
                 continue  # seen in a delta lobe, black to the light tracer by design
             if integrator == "sppm" and case.sppm_refused:
                 continue
+            if case.only and integrator not in case.only:
+                continue  # refused by the integrator (spectrace.integrators.scene_settings_problem)
             marks = () if integrator in case.fast else (pytest.mark.slow,)
             yield pytest.param(name, case.name, integrator, marks=marks, id=f"{_id(name, case)}-{integrator}")
 

@@ -110,7 +110,12 @@ def scene_settings_problem(scene: Scene) -> str | None:
     """settings_problem for a scene about to be rendered. A render switched to another integrator (with_overrides,
     --integrator) leaves the number keys of the scene's own unused (a bdpt scene's pixels_per_light_path rendered by
     'path'); their ranges still hold. A flag set away from its default changes what a path is, so another
-    integrator refuses it rather than render something else than asked."""
+    integrator refuses it rather than render something else than asked. A fluorescent material is refused by the
+    integrators that transport each wavelength on its own (spectrace.materials.fluorescent.INTEGRATORS)."""
+    from spectrace.materials.fluorescent import integrator_problem
+
+    if problem := integrator_problem(scene, scene.integrator):
+        return problem
     for key, parameter in _own_keys().items():
         value = getattr(scene, key)
         owner_problem = key_problem(scene.integrator, key, value) if parameter.type == "bool" else None

@@ -29,6 +29,7 @@ from spectrace.materials import (
     dielectric,
     diffuse,
     diffusetransmission,
+    fluorescent,
     mirror,
     mix,
     plastic,
@@ -44,8 +45,9 @@ from spectrace.spectral.table import SpectrumTable
 
 # Scene-file `type` -> module. A module's position is its Material.type code (MATERIAL_<NAME> in the kernels), and
 # the order in which the schema lists the types and the kernels' dispatch tests them.
-# The mix comes last: a composite of other materials (COMPOSITE), it has no BSDF and is no entry of the kernels'
-# MATERIAL_LIST; kernels/material_mix.cl resolves it into one of its materials at each vertex.
+# The composites come last: made of other materials (COMPOSITE), they have no BSDF and are no entries of the
+# kernels' MATERIAL_LIST; kernels/material_mix.cl resolves a mix into one of its materials at each vertex,
+# kernels/fluorescence.cl a fluorescent material into its base or its re-emission.
 MATERIALS = Registry[MaterialPlugin](
     "material",
     (
@@ -60,6 +62,7 @@ MATERIALS = Registry[MaterialPlugin](
         principled,
         principledthin,
         mix,
+        fluorescent,
     ),
 )
 # The BSDFs: the materials with a bsdf_<name>.cl and an entry in MATERIAL_LIST.
@@ -91,6 +94,8 @@ def material_textures(material) -> dict:
     if isinstance(material, mix.MixMaterial):
         for i, part in enumerate(material.materials):
             found |= {f"materials[{i}].{name}": texture for name, texture in material_textures(part).items()}
+    if isinstance(material, fluorescent.FluorescentMaterial):
+        found |= {f"base.{name}": texture for name, texture in material_textures(material.base).items()}
     return found
 
 
@@ -103,9 +108,18 @@ def append_material_rows(material, rows: list[np.ndarray], table: SpectrumTable,
     at = index[key] = len(rows)
     if isinstance(material, mix.MixMaterial) and (problem := mix.surface_detail_problem(material)) is not None:
         raise SpectraceError(problem)
+    if (
+        isinstance(material, fluorescent.FluorescentMaterial)
+        and (problem := fluorescent.surface_detail_problem(material)) is not None
+    ):
+        raise SpectraceError(problem)
     rows.append(material_row(material, table, textures))
     if isinstance(material, mix.MixMaterial):
         for field, part in zip(mix.ROW_FIELDS, material.materials):
+            rows[at][field] = append_material_rows(part, rows, table, textures, index)
+    if isinstance(material, fluorescent.FluorescentMaterial):
+        parts = (material.base, fluorescent.reemission_lobe())
+        for field, part in zip(fluorescent.ROW_FIELDS, parts):
             rows[at][field] = append_material_rows(part, rows, table, textures, index)
     return at
 

@@ -152,6 +152,7 @@ _ANNOTATIONS = {
     "filter": Literal["nearest", "bilinear", "trilinear"],
     "axis": Literal["x", "y"],
     "materials": Annotated[tuple[str, str], StrictMode(False)],  # a mix's two materials, by their names in [materials]
+    "material": str,  # a fluorescent material's base, by its name in [materials]
 }
 
 
