@@ -8,9 +8,10 @@
  * Across work-items does not pay for these kernels: forced 16 wide, the Cornell box's render kernel grew from 2,831
  * to 59,097 instructions (1,668 gathers) and took 8x the CPU time per pass. Left to itself, the compiler keeps the
  * scene kernels scalar (same code with and without the hint) but vectorises the all-features kernels 8 wide, and
- * those rendered wrong images (the Cornell box 33 % too dark), as did a BSDF test kernel once (pdf values in other
- * work-items' slots); PoCL is right on the same source. SPECTRACE_VECTORISE_ACROSS_ITEMS (set by the host from the
- * environment variable of that name, docs/devices.md) drops the hint to study that. */
+ * those rendered wrong images (the Cornell box 33 % too dark; analytic shapes' and instances' kernels too, wrong
+ * shading normals at instanced hits), as did a BSDF test kernel once (pdf values in other work-items' slots); PoCL
+ * is right on the same source. SPECTRACE_VECTORISE_ACROSS_ITEMS (set by the host from the environment variable of
+ * that name, docs/devices.md) drops the hint to study that. */
 #ifndef SPECTRACE_KERNEL_ENTRY_H
 #define SPECTRACE_KERNEL_ENTRY_H
 
