@@ -115,6 +115,8 @@ def test_peer_mitsuba_mode_agrees():
     assert peer["width"] == 32 and peer["spp"] == 16 and peer["max_depth"] == 4
     assert peer["mitsuba"], peer["notes"]  # scalar_spectral needs no LLVM, so at least it runs
     assert len(peer["ratios"]) == len(peer["spectrace"]) * len(peer["mitsuba"])
+    assert peer["rounds"] == 5 and {"before", "after", "cores", "busy"} <= peer["load"].keys()
+    assert all(row["rounds"] == 5 for row in peer["mitsuba"])
     for pair in peer["agreement"]:
         assert pair["agrees"], pair
 
@@ -129,7 +131,7 @@ def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it
     assert [row["spp"] for row in peer["spectrace"]] == [5]
     assert peer["mitsuba"] and all(row["spp"] == 6 for row in peer["mitsuba"])
     for row in peer["mitsuba"]:
-        assert row["samples_per_second"] == pytest.approx(8 * 8 * 6 / row["seconds"])
+        assert row["samples_per_second"] == pytest.approx(8 * 8 * 6 / row["seconds"]["median"])
 
 
 @pytest.mark.slow

@@ -111,11 +111,12 @@ BENCH_OPTIONS = {
     "--ray-count": st.one_of(INTEGERS, JUNK),
     "--seconds": st.one_of(FLOATS, JUNK),
     "--peer-sampler": TEXT,
+    "--rounds": st.one_of(INTEGERS, JUNK),
 }
 # Each mode's own options and flags ("" is the plain render bench); the others are click's usage errors.
 BENCH_MODES = {
     "": (["--size", "--spp", "--max-depth"], ["--all"]),
-    "peer": (["--size", "--spp", "--max-depth", "--peer-sampler"], ["--all"]),
+    "peer": (["--size", "--spp", "--max-depth", "--peer-sampler", "--rounds"], ["--all", "--per-core"]),
     "quality": (["--size", "--seconds", "--max-depth", "--peer-sampler"], []),
     "rays": (["--triangles", "--ray-count"], ["--all"]),
     "scaling": (["--size", "--spp", "--max-depth", "--triangles"], []),

@@ -250,6 +250,7 @@ class MitsubaContestant:
         import mitsuba as mi
 
         self.variant, self.spp, self.seed = variant, spp, seed
+        self.name = variant
         mi.set_variant(variant)
         start = time.perf_counter()
         self.scene = mi.load_dict(scene_dict)
@@ -277,13 +278,19 @@ class MitsubaContestant:
     def render_untimed(self) -> None:
         self._render()
 
-    def render_once(self) -> None:
-        """One timed render; keeps the fastest."""
+    renderer = "mitsuba"
+
+    def render_timed(self) -> tuple[float, float]:
+        """One timed render: (wall seconds, process CPU seconds); keeps the fastest's figures and image."""
         start, cpu = time.perf_counter(), time.process_time()
         xyz = self._render()
         seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
         if seconds < self.seconds:
             self.seconds, self.cpu_seconds, self.xyz = seconds, cpu, xyz
+        return seconds, cpu
+
+    def render_once(self) -> None:
+        self.render_timed()
 
     def result(self) -> MitsubaRender:
         import drjit as dr

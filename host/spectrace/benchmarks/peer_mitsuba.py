@@ -1,13 +1,17 @@
 """`spectrace bench peer`: the same scene rendered by spectrace and by Mitsuba 3, timed side by side.
 
 Both render the scene exported by spectrace.interop.mitsuba.export (same triangles, camera, measured spectra,
-resolution, spp, max_depth and Russian roulette start). Figures are wall-clock times of warm renders, film
-read-back included, the best of `repeats` identical renders (default 2) in rounds that alternate spectrace and
-Mitsuba, as the CPU may be shared. spectrace's renders follow its kernel build and one 1-spp warm-up pass;
-Mitsuba's JIT variant follows one identical warm-up render (its first render compiles kernels, or loads them
-from Dr.Jit's disk cache). samples/s = pixels × spp / time. The images must agree (mean XYZ of a few regions
-within 4 standard errors), so that the ratio compares equal work. The process CPU time of the same renders (all
-threads) gives a second ratio, which a shared machine's load disturbs less.
+resolution, spp, max_depth and Russian roulette start). Figures are times of warm renders, film read-back
+included, in `rounds` rounds (default 5) that alternate spectrace and Mitsuba (bench_rounds.py): the median and
+spread of each, and ratios taken round by round, with the load average before and after and a warning when the
+machine was busy. spectrace's renders follow its kernel build and one 1-spp warm-up pass; Mitsuba's JIT variant
+follows one identical warm-up render (its first render compiles kernels, or loads them from Dr.Jit's disk cache).
+samples/s = pixels × spp / time. The images must agree (mean XYZ of a few regions within 4 standard errors), so
+that the ratio compares equal work. The process CPU time of the same renders (all threads) gives a second ratio,
+which a shared machine's load disturbs less. It counts whatever a runtime's threads spend waiting: with Intel's
+runtime the thread that waits for a pass is as busy as the wall clock (per-thread CPU time from /proc), so its
+CPU-time figures understate spectrace. `per_core` runs each renderer on one core (single_core.py): one compute unit
+of each OpenCL runtime against Dr.Jit with one thread.
 """
 
 from __future__ import annotations
@@ -16,10 +20,12 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from spectrace.benchmarks import bench_rounds
+from spectrace.benchmarks.bench_rounds import DEFAULT_ROUNDS, LoadCheck, alternate_rounds, paired_ratios, timing_summary
 from spectrace.benchmarks.image_agreement import SIGMA_LIMIT, compare_regions, regions_for
 from spectrace.device import discover_devices, open_device
 from spectrace.engine.renderer import Renderer
@@ -29,6 +35,7 @@ from spectrace.scene.model import Scene
 
 if TYPE_CHECKING:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant
+    from spectrace.device.program_cache import Device
     from spectrace.film.image import Image
 
 
@@ -45,52 +52,68 @@ def device_keys(device: str | None, all_devices: bool) -> list[str | None]:
 
 
 class SpectraceContestant:
-    """A renderer with its kernels built and warmed up, rendering the scene on demand; keeps the fastest run."""
+    """A renderer with its kernels built and warmed up, rendering the scene on demand."""
 
-    def __init__(self, scene: Scene, device_key: str | None):
+    renderer = "spectrace"
+
+    def __init__(self, scene: Scene, device_key: str | None, device: Device | None = None, how: str = ""):
         self.scene = scene
-        self.device = open_device(device_key)
+        self.device = device if device is not None else open_device(device_key)
+        self.name = self.device.report.key
+        self.how = how  # how the device was restricted (per-core runs), else ""
         start = time.perf_counter()
-        self.renderer = Renderer(scene, self.device)
+        self.engine = Renderer(scene, self.device)
         self.setup_seconds = time.perf_counter() - start
         self.build_seconds, self.build_cached = self.device.last_build_seconds, self.device.last_build_cached
-        self.renderer.run_pass(1)  # warm-up: PoCL compiles kernels lazily at the first launch
-        self.seconds, self.cpu_seconds = float("inf"), float("inf")
+        self.engine.run_pass(1)  # warm-up: PoCL compiles kernels lazily at the first launch
         self.image: Image | None = None
 
-    def render_once(self) -> None:
-        self.renderer.reset()
+    def render_timed(self) -> tuple[float, float]:
+        """One render: (wall seconds, process CPU seconds). Every render of the same seed is the same image; the
+        first is kept."""
+        self.engine.reset()
         start, cpu = time.perf_counter(), time.process_time()
-        image = self.renderer.render(spp=self.scene.spp)
+        image = self.engine.render(spp=self.scene.spp)
         seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
-        if seconds < self.seconds:
-            self.seconds, self.cpu_seconds, self.image = seconds, cpu, image
+        if self.image is None:
+            self.image = image
+        return seconds, cpu
 
     @property
-    def best_image(self) -> Image:
-        """The image of the fastest timed render."""
+    def first_image(self) -> Image:
         if self.image is None:
-            raise RuntimeError("no timed render yet (render_once)")
+            raise RuntimeError("no timed render yet (render_timed)")
         return self.image
 
-    def row(self) -> dict:
-        scene, samples = self.scene, self.scene.width * self.scene.height * self.best_image.spp
+    @property
+    def samples(self) -> int:
+        return self.scene.width * self.scene.height * self.first_image.spp
+
+    def row(self, timings: list) -> dict:
+        scene = self.scene
         return {
             "renderer": "spectrace",
-            "runtime": self.device.report.key,
+            "runtime": self.name,
             "device_name": self.device.report.device_name,
+            "compute_units": self.device.report.compute_units,
+            "restricted": self.how,
             "width": scene.width,
             "height": scene.height,
-            "spp": self.best_image.spp,
+            "spp": self.first_image.spp,
             "max_depth": scene.max_depth,
-            "seconds": self.seconds,
-            "samples_per_second": samples / self.seconds,
-            "cpu_seconds": self.cpu_seconds,
-            "samples_per_cpu_second": samples / self.cpu_seconds,
+            **timing_summary(timings, self.name, self.samples),
             "setup_seconds": self.setup_seconds,
             "kernel_build_seconds": self.build_seconds,
             "kernel_build_cached": self.build_cached,
         }
+
+
+def _our_contestants(scene: Scene, keys: list[str | None], per_core: bool) -> list[SpectraceContestant]:
+    if not per_core:
+        return [SpectraceContestant(scene, key) for key in keys]
+    from spectrace.benchmarks.single_core import open_one_compute_unit
+
+    return [SpectraceContestant(scene, key, *open_one_compute_unit(key)) for key in keys]
 
 
 def run_peer_bench(
@@ -101,46 +124,45 @@ def run_peer_bench(
     device: str | None,
     all_devices: bool,
     variants: list[str] | None = None,
-    repeats: int = 2,
+    rounds: int = DEFAULT_ROUNDS,
     log: Callable[[str], None] = lambda text: None,
     peer_sampler: str = "independent",
+    per_core: bool = False,
 ) -> dict:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant, usable_variants
+    from spectrace.benchmarks.single_core import drjit_threads
     from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
     scene = bench_scene(scene_path, size, spp, max_depth)
     usable = usable_variants(variants)  # before any render: it may set DRJIT_LIBLLVM_PATH
     notes = list(usable.notes) + [f"Mitsuba's sampler: {peer_sampler}; spectrace's: {scene.sampler}"]
-    ours = [SpectraceContestant(scene, key) for key in device_keys(device, all_devices)]
-    with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
-        theirs: list[MitsubaContestant] = []
-        for variant in usable.available:
-            import mitsuba as mi
+    ours = _our_contestants(scene, device_keys(device, all_devices), per_core)
+    with drjit_threads(1 if per_core else None):
+        with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
+            theirs: list[MitsubaContestant] = []
+            for variant in usable.available:
+                import mitsuba as mi
 
-            mi.set_variant(variant)
-            scene_dict = scene_to_mitsuba_dict(scene, Path(folder), spp=spp, sampler=peer_sampler)
-            theirs.append(MitsubaContestant(scene_dict, variant, spp, seed=scene.seed))
-    # Interleaved rounds, spectrace then one Mitsuba variant, so a shared machine's load falls on both alike.
-    # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so each
-    # variant gets its rounds in one go, after one untimed render.
-    peers: list[MitsubaContestant | None] = [*theirs] or [None]
-    for peer in peers:
-        if peer is not None:
-            peer.render_untimed()
-        for round_index in range(max(1, repeats)):
-            contestants: list[SpectraceContestant | MitsubaContestant] = [*ours, *([peer] if peer else [])]
-            for contestant in contestants:
-                contestant.render_once()
-                name = contestant.variant if isinstance(contestant, MitsubaContestant) else contestant.device.report.key
-                log(f"round {round_index + 1}: {name} {contestant.seconds:.2f} s (best so far)")
-    images = {c.device.report.key: c.best_image.xyz for c in ours}
-    our_rows = [c.row() for c in ours]
+                mi.set_variant(variant)
+                scene_dict = scene_to_mitsuba_dict(scene, Path(folder), spp=spp, sampler=peer_sampler)
+                theirs.append(MitsubaContestant(scene_dict, variant, spp, seed=scene.seed))
+        # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so each
+        # variant gets its rounds in one block, after one untimed render.
+        load_before = bench_rounds.load_average()
+        warm_up = lambda peer: cast("MitsubaContestant", peer).render_untimed()  # noqa: E731
+        timings = alternate_rounds(ours, theirs, max(1, rounds), log, before_block=warm_up)
+        load = LoadCheck(load_before, bench_rounds.load_average(), bench_rounds.core_count())
+        their_results = [contestant.result() for contestant in theirs]
+    if load.busy:
+        notes.append(bench_rounds.load_text(load.as_dict()))
+    images = {c.name: c.first_image.xyz for c in ours}
+    our_rows = [c.row(timings) for c in ours]
     their_images: dict[str, np.ndarray] = {}
     their_rows: list[dict[str, Any]] = []
-    for contestant in theirs:
-        result = contestant.result()
+    for result in their_results:
         import mitsuba as mi
 
+        samples = scene.width * scene.height * result.spp
         their_rows.append(
             {
                 "renderer": "mitsuba",
@@ -149,10 +171,7 @@ def run_peer_bench(
                 "height": scene.height,
                 "spp": result.spp,
                 "max_depth": scene.max_depth,
-                "seconds": result.seconds,
-                "samples_per_second": scene.width * scene.height * result.spp / result.seconds,
-                "cpu_seconds": result.cpu_seconds,
-                "samples_per_cpu_second": scene.width * scene.height * result.spp / result.cpu_seconds,
+                **timing_summary(timings, result.variant, samples),
                 "scene_load_seconds": result.load_seconds,
                 "first_render_seconds": result.first_render_seconds,
                 "threads": result.threads,
@@ -162,16 +181,10 @@ def run_peer_bench(
         their_images[result.variant] = result.xyz
     if not their_rows:
         notes.append("no Mitsuba variant ran: only spectrace's figures are shown")
-    ratios = [
-        {
-            "spectrace": a["runtime"],
-            "mitsuba": b["runtime"],
-            "ratio": a["samples_per_second"] / b["samples_per_second"],
-            "cpu_time_ratio": a["samples_per_cpu_second"] / b["samples_per_cpu_second"],
-        }
-        for a in our_rows
-        for b in their_rows
-    ]
+    samples_of = {c.name: c.samples for c in ours} | {
+        r.variant: scene.width * scene.height * r.spp for r in their_results
+    }
+    ratios = [paired_ratios(timings, a, samples_of[a], b, samples_of[b]) for a in images for b in their_images]
     regions = regions_for(scene.source)
     agreement: list[dict[str, Any]] = [
         {
@@ -186,12 +199,15 @@ def run_peer_bench(
         pair["agrees"] = all(r["agrees"] for r in pair["regions"])
     return {
         "scene": str(scene.source),
-        "width": size,
-        "height": size,
+        "width": scene.width,
+        "height": scene.height,
         "spp": spp,
         "max_depth": max_depth,
         "rr_depth": scene.rr_depth,
-        "repeats": repeats,
+        "rounds": max(1, rounds),
+        "per_core": per_core,
+        "load": load.as_dict(),
+        "order": [f"{t.renderer} {t.name}" for t in timings],
         "spectrace": our_rows,
         "mitsuba": their_rows,
         "ratios": ratios,
@@ -201,25 +217,36 @@ def run_peer_bench(
     }
 
 
+def _median_and_spread(figure: dict) -> str:
+    return f"{figure['median']:.3g} ({figure['min']:.3g}-{figure['max']:.3g})"
+
+
 def peer_tables(result: dict) -> list:
     from rich.table import Table
 
+    from spectrace.benchmarks.bench_rounds import load_text
+
+    per_core = result.get("per_core", False)
+    mode = "one core each: sub-device of 1 compute unit vs Dr.Jit 1 thread, " if per_core else ""
     timing = Table(
         title=f"spectrace vs Mitsuba 3: {result['width']}x{result['height']}, {result['spp']} spp, "
-        f"max_depth {result['max_depth']}, rr_depth {result['rr_depth']} (warm renders, best of "
-        f"{result['repeats']})"
+        f"max_depth {result['max_depth']}, rr_depth {result['rr_depth']} ({mode}warm renders, {result['rounds']} "
+        f"alternated rounds: median (min-max))",
+        caption=load_text(result["load"]),
     )
-    for column in ("renderer", "runtime", "M samples/s", "wall s", "CPU s", "notes"):
+    for column in ("renderer", "runtime", "M samples/s", "wall s", "CPU s", "cores used", "notes"):
         timing.add_column(column, justify="left" if column in ("renderer", "runtime", "notes") else "right")
     for row in result["spectrace"]:
         build = f"build {row['kernel_build_seconds']:.2f} s" + (" (cached)" if row["kernel_build_cached"] else "")
+        note = f"{row['restricted']}; {build}" if row.get("restricted") else build
         timing.add_row(
             "spectrace",
             row["runtime"],
             f"{row['samples_per_second'] / 1e6:.3f}",
-            f"{row['seconds']:.2f}",
-            f"{row['cpu_seconds']:.2f}",
-            build,
+            _median_and_spread(row["seconds"]),
+            _median_and_spread(row["cpu_seconds"]),
+            f"{row['cores_used']:.2f}",
+            note,
         )
     for row in result["mitsuba"]:
         first = row["first_render_seconds"]
@@ -228,17 +255,27 @@ def peer_tables(result: dict) -> list:
             f"mitsuba {row['mitsuba_version']}",
             row["runtime"],
             f"{row['samples_per_second'] / 1e6:.3f}",
-            f"{row['seconds']:.2f}",
-            f"{row['cpu_seconds']:.2f}",
+            _median_and_spread(row["seconds"]),
+            _median_and_spread(row["cpu_seconds"]),
+            f"{row['cores_used']:.2f}",
             note,
         )
-    tables = [timing]
+    tables: list = [timing]
     if result["ratios"]:
-        ratios = Table(title="ratio = spectrace samples/s ÷ Mitsuba samples/s (and per CPU second)")
-        for column in ("spectrace", "mitsuba", "ratio", "per CPU s"):
+        ratios = Table(
+            title="ratio = spectrace samples/s ÷ Mitsuba samples/s, round by round: median (min-max)"
+            + (", one core each" if per_core else ""),
+            caption=load_text(result["load"]),
+        )
+        for column in ("spectrace", "mitsuba", "wall clock", "per CPU second"):
             ratios.add_column(column)
         for r in result["ratios"]:
-            ratios.add_row(r["spectrace"], r["mitsuba"], f"{r['ratio']:.2f}x", f"{r['cpu_time_ratio']:.2f}x")
+            ratios.add_row(
+                r["spectrace"],
+                r["mitsuba"],
+                _median_and_spread(r["ratio"]) + "x",
+                _median_and_spread(r["cpu_time_ratio"]) + "x",
+            )
         tables.append(ratios)
     for pair in result["agreement"]:
         table = Table(

@@ -11,10 +11,12 @@ from typing import Annotated
 
 import typer
 
+from spectrace.benchmarks.bench_rounds import DEFAULT_ROUNDS
 from spectrace.cli.common import GROUP_SETTINGS, DeviceOption, JsonOption, console
 from spectrace.errors import SpectraceError
 
 PEER_DEFAULT_SIZE = 512
+PEER_DEFAULT_ROUNDS = DEFAULT_ROUNDS
 QUALITY_DEFAULT_SIZE = 128
 QUALITY_REFERENCE_SPP = 1024
 COLD_DEFAULT_SIZE = 256
@@ -163,10 +165,21 @@ def peer_bench(
     device: DeviceOption = None,
     all_devices: AllOption = False,
     peer_sampler: PeerSamplerOption = "independent",
+    rounds: Annotated[
+        int, typer.Option(help="Alternated rounds (spectrace, Mitsuba, spectrace, ...); median and spread.", min=1)
+    ] = PEER_DEFAULT_ROUNDS,
+    per_core: Annotated[
+        bool,
+        typer.Option(
+            "--per-core",
+            help="One core each: one compute unit of each OpenCL runtime (device fission) against Dr.Jit with one "
+            "thread.",
+        ),
+    ] = False,
     as_json: JsonOption = False,
 ) -> None:
-    """The same scene rendered by spectrace and by Mitsuba 3 (needs the bench extra), timed side by side, with a
-    check that the images agree."""
+    """The same scene rendered by spectrace and by Mitsuba 3 (needs the bench extra), timed side by side in
+    alternated rounds with the load average before and after, with a check that the images agree."""
     _check(_one(size), max_depth)
     from spectrace.benchmarks.peer_mitsuba import peer_tables, run_peer_bench
 
@@ -178,8 +191,10 @@ def peer_bench(
             max_depth,
             device,
             all_devices,
+            rounds=rounds,
             log=_log,
             peer_sampler=peer_sampler,
+            per_core=per_core,
         )
     except ImportError:
         raise SpectraceError(

@@ -48,6 +48,9 @@ _DEFINE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 # Names a file to which each build from source appends one line (seconds, entry, its own defines): what a test run
 # built and what that cost, to find the programs that differ by a define alone.
 BUILD_LOG_VARIABLE = "SPECTRACE_BUILD_LOG"
+# Set to 1: kernels are declared without vec_type_hint (kernels/kernel_entry.h), so a compiler may vectorise them
+# across work-items. A define, so such builds have cache keys of their own.
+VECTORISE_VARIABLE = "SPECTRACE_VECTORISE_ACROSS_ITEMS"
 
 DefineValue = int | float | str
 
@@ -188,7 +191,8 @@ def _with_contract(
     clash = sorted((set(contract) - RENDER_SETTABLE_CONTRACT) & set(defines or {}))
     if clash:
         raise SpectraceError(f"kernel define {clash[0]} is fixed by the host/device contract")
-    return contract | dict(defines or {})
+    across_items = {VECTORISE_VARIABLE: 1} if os.environ.get(VECTORISE_VARIABLE, "").strip() == "1" else {}
+    return contract | across_items | dict(defines or {})
 
 
 def _headers_digest(headers: Mapping[str, str]) -> str:
