@@ -1,0 +1,361 @@
+"""Heterogeneous (grid) media (docs/media.md): the free flights and the ratio-tracked transmittance of
+kernels/medium_grid.cl against closed forms and an independent quadrature of the trilinear density, whole
+renders of grid media against the homogeneous medium and Beer–Lambert, and the scene keys and their errors."""
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+import spectrace
+from scene_text import CAMERA_FILM_GREY
+from spectrace.core.contract import MEDIUM_DTYPE
+from spectrace.engine.meters import RadianceMeter, measure
+from spectrace.errors import SpectraceError
+from spectrace.geometry import primitives
+from spectrace.geometry.grid_volume import box_matrix, majorant_grid, make_grid, medium_row, read_vol, vol_bytes
+from spectrace.geometry.transforms import apply_transform, transform_matrix
+from spectrace.scene import load_scene
+from spectrace.scene.model import Camera, ConstantEnvironment, Medium, Scene, Shape
+from spectrace.spectral.grid import GRID_NM
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.table import SpectrumTable
+from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
+
+LANES_NM = np.array([420.0, 500.0, 580.0, 680.0])
+
+
+def _wavy(mean: float, phase: float = 0.0) -> Spectrum:
+    return Spectrum(mean * (1.0 + 0.7 * np.sin((GRID_NM - 360.0) / 40.0 + phase)))
+
+
+def _two_valued(low: float, high: float, n: int = 16) -> np.ndarray:
+    """A grid whose lower half in z holds `low`, its upper half `high` (shape (n, 2, 2))."""
+    density = np.full((n, 2, 2), low, np.float32)
+    density[n // 2 :] = high
+    return density
+
+
+def _device_medium(medium: Medium) -> tuple[np.ndarray, np.ndarray]:
+    table = SpectrumTable()
+    table.add(Spectrum.zeros())  # a non-zero offset exercises the indexing
+    row = np.array([medium_row(medium, table)], MEDIUM_DTYPE)
+    return table.data, row
+
+
+def _density_along(grid, origin, direction, t):
+    """The trilinear density at origin + t·direction, computed apart from the kernels: scipy's linear
+    interpolation of the voxel centres, clamped at the faces, 0 outside the box."""
+    points = origin + t[:, None] * direction
+    unit = (np.c_[points, np.ones(len(t))] @ np.linalg.inv(grid.to_world).T)[:, :3]
+    nz, ny, nx = grid.density.shape
+    coords = np.stack([unit[:, 2] * nz - 0.5, unit[:, 1] * ny - 0.5, unit[:, 0] * nx - 0.5])
+    values = ndimage.map_coordinates(grid.density.astype(np.float64), coords, order=1, mode="nearest")
+    inside = np.all((unit >= 0.0) & (unit <= 1.0), axis=1)
+    return np.where(inside, values, 0.0)
+
+
+def _random_grid():
+    rng = np.random.default_rng(7)
+    density = rng.uniform(0.0, 2.0, (5, 6, 7)).astype(np.float32)
+    density[2, 3] = 0.0  # empty voxels: cells whose majorant is low
+    matrix = transform_matrix([{"rotate": {"axis": [1, 2, 0.5], "angle": 35}}], where="t") @ box_matrix(
+        (-1.0, -0.5, -0.8), (1.2, 0.6, 0.9)
+    )
+    return make_grid(density, matrix)
+
+
+CASES = {
+    # a ray along z through the middle of a two-valued slab: the closed form exp(−σt (ρ1 d1 + ρ2 d2))
+    "two-valued-slab": (
+        lambda: make_grid(_two_valued(0.4, 1.5), box_matrix((-1, -1, -1), (1, 1, 1))),
+        np.array([0.1, -0.2, -3.0]),
+        np.array([0.0, 0.0, 1.0]),
+    ),
+    # an oblique ray through a rotated random grid: quadrature of the trilinear density
+    "random-rotated-grid": (
+        _random_grid,
+        np.array([-2.0, -1.5, -1.0]),
+        np.array([2.0, 1.6, 1.9]) / np.linalg.norm([2.0, 1.6, 1.9]),
+    ),
+}
+
+
+def _optical_depth(case, t_end, points=40_001):
+    make, origin, direction = CASES[case]
+    t = np.linspace(0.0, t_end, points)
+    return t, _density_along(make(), origin, direction, t)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_ratio_tracking_gives_the_transmittance(kernel_runner, case):
+    """The mean of the ratio-tracking estimates is exp(−σt(λ) ∫ρ dt) for each lane; for the two-valued slab the
+    integral is ρ1 d1 + ρ2 d2 = 0.4 + 1.5 (the trilinear ramp between the halves integrates to the step's value)."""
+    make, origin, direction = CASES[case]
+    sigma_a, sigma_s = _wavy(0.5, 1.0), _wavy(0.4)
+    spectra, medium = _device_medium(Medium(sigma_a, sigma_s, density=make()))
+    runner = kernel_runner("testing/medium_grid_sampling.cl")
+    n, length = 100_000, 6.0
+    out = np.empty((n, 4), np.float32)
+    args = [
+        runner.buffer(spectra),
+        runner.buffer(medium),
+        LANES_NM.astype(np.float32),
+        np.array([*origin, 0.0], np.float32),
+        np.array([*direction, 0.0], np.float32),
+        np.float32(length),
+        np.uint32(11),
+        runner.buffer(out, True),
+    ]
+    runner.run("grid_transmittances", n, args, {7: out})
+    sigma_t = sigma_a.evaluate(LANES_NM) + sigma_s.evaluate(LANES_NM)
+    if case == "two-valued-slab":
+        depth = 0.4 * 1.0 + 1.5 * 1.0
+    else:
+        t, rho = _optical_depth(case, length)
+        depth = np.trapezoid(rho, t)
+        assert depth > 0.5  # the ray crosses the grid
+    expected = np.exp(-sigma_t * depth)
+    assert np.all(out >= 0.0) and np.all(out <= 1.0 + 1e-6)
+    mean, se = mean_and_standard_error(out)
+    assert_within_standard_errors(mean, expected, se, slack=2e-4 * expected, what=case, power=0.05)
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("hero_only", [0, 1])
+def test_grid_free_flights_are_unbiased_for_every_lane(kernel_runner, case, hero_only):
+    """Delta tracking against the majorant: each lane's expected weight for reaching the surface is its
+    transmittance, and for scattering within each stretch [a, b] of the ray ∫_a^b σs(λ) ρ(t) T_λ(t) dt (the
+    density of the free flight, bin by bin), with T_λ from a quadrature of the trilinear density."""
+    make, origin, direction = CASES[case]
+    sigma_a, sigma_s = _wavy(0.5, 1.0), _wavy(0.6)
+    spectra, medium = _device_medium(Medium(sigma_a, sigma_s, density=make()))
+    runner = kernel_runner("testing/medium_grid_sampling.cl")
+    n, t_surface = 200_000, 4.5  # the surface inside the grid for the oblique ray
+    scattered = np.empty((n, 4), np.float32)
+    surface = np.empty((n, 4), np.float32)
+    distance = np.empty(n, np.float32)
+    args = [
+        runner.buffer(spectra),
+        runner.buffer(medium),
+        LANES_NM.astype(np.float32),
+        np.array([*origin, 0.0], np.float32),
+        np.array([*direction, 0.0], np.float32),
+        np.float32(t_surface),
+        np.int32(hero_only),
+        np.uint32(5),
+        runner.buffer(scattered, True),
+        runner.buffer(surface, True),
+        runner.buffer(distance, True),
+    ]
+    runner.run("grid_flights", n, args, {8: scattered, 9: surface, 10: distance})
+    alive = np.array([1.0, 0.0, 0.0, 0.0]) if hero_only else np.ones(4)
+    sigma_t = sigma_a.evaluate(LANES_NM) + sigma_s.evaluate(LANES_NM)
+    t, rho = _optical_depth(case, t_surface)
+    depth = np.concatenate([[0.0], np.cumsum((rho[1:] + rho[:-1]) / 2 * np.diff(t))])
+    transmittance = np.exp(-np.outer(depth, sigma_t))
+    mean, se = mean_and_standard_error(surface)
+    assert_within_standard_errors(mean, alive * transmittance[-1], se, slack=1e-4, what="reached the surface")
+    integrand = sigma_s.evaluate(LANES_NM) * rho[:, None] * transmittance
+    steps = (integrand[1:] + integrand[:-1]) / 2 * np.diff(t)[:, None]
+    cumulative = np.concatenate([np.zeros((1, 4)), np.cumsum(steps, 0)])
+    edges = np.linspace(0.0, t_surface, 10)
+    expected_bins = np.diff(np.array([np.interp(edges, t, cumulative[:, lane]) for lane in range(4)]).T, axis=0)
+    which = np.digitize(distance, edges) - 1
+    for b in range(len(edges) - 1):
+        in_bin = np.where((which == b)[:, None], scattered, 0.0)
+        mean, se = mean_and_standard_error(in_bin)
+        assert_within_standard_errors(mean, alive * expected_bins[b], se, slack=1e-4, what=f"{case} bin {b}")
+    assert np.all(scattered[distance < 0] == 0.0) and np.all(distance < t_surface)
+    assert expected_bins.sum() > 0.2  # the flights scatter often enough to test the density
+
+
+def test_the_majorant_bounds_the_trilinear_density_everywhere():
+    """Every cell's majorant is at least the density anywhere in it (a dense sampling of points), and at most the
+    grid's largest voxel."""
+    grid = _random_grid()
+    majorant = majorant_grid(grid.density)
+    rng = np.random.default_rng(3)
+    unit = rng.uniform(0.0, 1.0, (200_000, 3))
+    world = (np.c_[unit, np.ones(len(unit))] @ grid.to_world.T)[:, :3]
+    origin = np.zeros(3)
+    rho = _density_along(grid, origin, world, np.ones(len(world)))
+    cells = np.minimum((unit * np.array(majorant.shape[::-1])).astype(int), np.array(majorant.shape[::-1]) - 1)
+    bound = majorant[cells[:, 2], cells[:, 1], cells[:, 0]]
+    assert np.all(rho <= bound + 1e-6)
+    assert majorant.max() == grid.density.max()
+
+
+# ---------------------------------------------------------------- whole renders
+
+
+def _scene(shapes, max_depth=-1, k=1.0):
+    return Scene(
+        camera=Camera((0.0, 0.0, -1.0), (0.0, 0.0, 0.0)),
+        width=1,
+        height=1,
+        shapes=list(shapes),
+        lights=[ConstantEnvironment(Spectrum.constant(k))],
+        max_depth=max_depth,
+    )
+
+
+def _cube(medium: Medium) -> Shape:
+    return Shape(mesh=primitives.cube(), material=None, interior=medium)
+
+
+@pytest.mark.parametrize(
+    ("sigma_s", "max_depth"), [(0.0, -1), (0.5, 1)], ids=["pure-absorber", "scattering-slab-unscattered-part"]
+)
+def test_light_through_a_two_valued_slab_follows_the_closed_form(device, sigma_s, max_depth):
+    """A meter looking along z through an index-matched cube [-1, 1]³ whose density is 0.4 in its lower half and 1.5
+    in its upper, at an environment of radiance k: L = k exp(−σt(λ) (0.4 · 1 + 1.5 · 1)) (with emitters-only depth
+    for the scattering slab: its unscattered part)."""
+    sigma_a = _wavy(0.4)
+    medium = Medium(
+        sigma_a,
+        _wavy(sigma_s, 2.0) if sigma_s else Spectrum.zeros(),
+        density=make_grid(_two_valued(0.4, 1.5), box_matrix((-1, -1, -1), (1, 1, 1))),
+    )
+    reading = measure(
+        _scene([_cube(medium)], max_depth=max_depth),
+        RadianceMeter((0.1, 0.05, -3.0), (0.0, 0.0, 1.0)),
+        wavelengths_nm=LANES_NM,
+        streams=32,
+        samples_per_item=8192,
+        device=device,
+    )
+    sigma_t = medium.sigma_a.evaluate(LANES_NM) + medium.sigma_s.evaluate(LANES_NM)
+    expected = np.exp(-sigma_t * (0.4 + 1.5))
+    assert_within_standard_errors(
+        reading.spectral, expected, reading.spectral_standard_error, slack=1e-4, what=sigma_s, power=0.05
+    )
+
+
+def test_a_constant_grid_renders_as_the_homogeneous_medium(device):
+    """A scattering cube whose grid holds 0.5 everywhere (its box the cube's) with coefficients 2σ gives the same
+    radiance, all bounces, as the homogeneous medium of σ (within 4 standard errors of their difference)."""
+    sigma_a, sigma_s = _wavy(0.3, 1.0), _wavy(1.2)
+    grid = make_grid(np.full((4, 5, 6), 0.5, np.float32), box_matrix((-1, -1, -1), (1, 1, 1)))
+    readings = [
+        measure(
+            _scene([_cube(medium)], max_depth=16),
+            RadianceMeter((0.3, 0.2, -3.0), (0.0, 0.0, 1.0)),
+            wavelengths_nm=LANES_NM,
+            streams=32,
+            samples_per_item=512,
+            device=device,
+        )
+        for medium in (
+            Medium(sigma_a, sigma_s, g=0.4),
+            Medium(sigma_a.scaled(2.0), sigma_s.scaled(2.0), g=0.4, density=grid),
+        )
+    ]
+    homogeneous, gridded = readings
+    se = np.hypot(homogeneous.spectral_standard_error, gridded.spectral_standard_error)
+    assert_within_standard_errors(gridded.spectral, homogeneous.spectral, se, power=0.05, what="constant grid")
+    assert np.all(homogeneous.spectral < 0.9)  # the medium dims the environment: the comparison sees it
+
+
+# ---------------------------------------------------------------- scene keys, the API and the .vol reader
+
+
+def _scene_text(interior: str) -> str:
+    return (
+        CAMERA_FILM_GREY
+        + f"""
+[[shapes]]
+type = "cube"
+interior = {interior}
+"""
+    )
+
+
+def test_scene_file_reads_a_vol_file_and_inline_values(tmp_path):
+    values = np.arange(24, dtype=np.float32).reshape(2, 3, 4) / 24
+    (tmp_path / "smoke.vol").write_bytes(vol_bytes(values, (-1, -1, -1), (1, 1, 1)))
+    inline = ", ".join(repr(float(v)) for v in values.ravel())
+    for density in (
+        '{ file = "smoke.vol", box = [[-1, -1, -1], [1, 1, 1]] }',
+        f"{{ values = [{inline}], resolution = [4, 3, 2], box = [[-1, -1, -1], [1, 1, 1]] }}",
+    ):
+        path = tmp_path / "scene.toml"
+        path.write_text(_scene_text(f"{{ sigma_s = {{ value = 2.0 }}, density = {density} }}"))
+        grid = load_scene(path).shapes[0].interior.density
+        assert np.array_equal(grid.density, values)
+        assert np.allclose(grid.to_world, box_matrix((-1, -1, -1), (1, 1, 1)))
+    decoded, p0, p1 = read_vol(tmp_path / "smoke.vol", where="w")
+    assert decoded.shape == (2, 3, 4, 1) and list(p0) == [-1, -1, -1] and list(p1) == [1, 1, 1]
+
+
+@pytest.mark.parametrize(
+    ("density", "files", "message"),
+    [
+        ('{ file = "cut.vol" }', {"cut.vol": vol_bytes(np.ones((2, 2, 2)))[:-3]}, "density.file: the volume file has"),
+        ('{ file = "bad.vol" }', {"bad.vol": b"NOTAVOLUME" * 10}, "density.file: not a Mitsuba volume file"),
+        ('{ file = "none.vol" }', {}, "density.file: cannot read the volume file"),
+        ("{ values = [1, 2, 3], resolution = [2, 2, 1] }", {}, "density.values: 3 values for resolution 2×2×1"),
+        ("{ values = [1, -2], resolution = [2, 1, 1] }", {}, "density: the density holds negative values"),
+        ("{ values = [1, 2] }", {}, "values need resolution"),
+        (
+            "{ values = [1, 2], resolution = [2, 1, 1], albedo_values = [0.5, 1.5] }",
+            {},
+            "density: the albedo holds values above 1",
+        ),
+        ("{ values = [1], resolution = [1, 1, 1], box = [[0, 0, 0], [1, 0, 1]] }", {}, "invertible"),
+    ],
+)
+def test_bad_grids_are_refused_in_one_line_naming_the_key(tmp_path, density, files, message):
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    path = tmp_path / "scene.toml"
+    path.write_text(_scene_text(f"{{ sigma_s = {{ value = 1.0 }}, density = {density} }}"))
+    with pytest.raises(SpectraceError) as caught:
+        load_scene(path)
+    text = str(caught.value)
+    assert "\n" not in text and "shapes[0].interior" in text and message in text, text
+
+
+def test_api_density_grid_matches_the_scene_file(tmp_path):
+    values = np.random.default_rng(1).uniform(0, 1, (3, 2, 4)).astype(np.float32)
+    albedo = np.full_like(values, 0.25)
+    steps = [{"rotate": {"axis": [0, 1, 0], "angle": 30}}, {"translate": [0.5, 0, 0]}]
+    grid = spectrace.density_grid(values, albedo=albedo, box=((-1, -2, -1), (1, 2, 3)), transform=steps)
+    medium = spectrace.medium(sigma_s=1.0, density=grid)
+    assert medium.density is grid
+    (tmp_path / "d.vol").write_bytes(vol_bytes(values))
+    (tmp_path / "a.vol").write_bytes(vol_bytes(albedo))
+    path = tmp_path / "scene.toml"
+    path.write_text(
+        _scene_text(
+            '{ sigma_s = { value = 1.0 }, density = { file = "d.vol", albedo_file = "a.vol", '
+            "box = [[-1, -2, -1], [1, 2, 3]], transform = [{ rotate = { axis = [0, 1, 0], angle = 30 } }, "
+            "{ translate = [0.5, 0, 0] }] } }"
+        )
+    )
+    assert load_scene(path).shapes[0].interior.density == grid
+    with pytest.raises(SpectraceError, match="density must be a grid"):
+        spectrace.medium(sigma_s=1.0, density=values)
+    with pytest.raises(SpectraceError, match="albedo grid's shape"):
+        spectrace.density_grid(values, albedo=albedo[:2])
+
+
+def test_an_instanced_grid_medium_is_refused():
+    grid = make_grid(np.ones((2, 2, 2), np.float32), np.eye(4))
+    cube = Shape(
+        mesh=apply_transform(primitives.cube(), np.eye(4)),
+        material=None,
+        interior=Medium(Spectrum.zeros(), Spectrum.constant(1.0), density=grid),
+    )
+    obj = spectrace.instanced_object([cube], name="puff")
+    scene = Scene(
+        camera=Camera((0.0, 0.0, -4.0), (0.0, 0.0, 0.0)),
+        width=4,
+        height=4,
+        shapes=[],
+        instances=[spectrace.instance(obj)],
+        lights=[ConstantEnvironment(Spectrum.constant(1.0))],
+    )
+    from spectrace.engine.scene_buffers import build_scene_buffers
+
+    with pytest.raises(SpectraceError, match="density grid cannot be instanced"):
+        build_scene_buffers(scene)
