@@ -231,6 +231,26 @@ def test_light_through_a_two_valued_slab_follows_the_closed_form(device, sigma_s
     )
 
 
+def test_a_scattering_grid_in_a_uniform_environment_is_a_furnace(device):
+    """A cube of a random, rotated density grid that scatters without absorbing (σs varying over the spectrum,
+    g = 0.6) in an environment of radiance k: every path leaves with all its light, so the meter reads k at each
+    lane, all bounces (the white furnace of the delta-tracking weights, albedo grid 1 by default)."""
+    grid = _random_grid()
+    medium = Medium(Spectrum.zeros(), _wavy(3.0, 0.5), g=0.6, density=grid)
+    k = 0.7
+    reading = measure(
+        _scene([_cube(medium)], k=k),
+        RadianceMeter((0.2, 0.1, -3.0), (0.0, 0.0, 1.0)),
+        wavelengths_nm=LANES_NM,
+        streams=32,
+        samples_per_item=512,
+        device=device,
+    )
+    assert_within_standard_errors(
+        reading.spectral, np.full(4, k), reading.spectral_standard_error, slack=1e-4, what="furnace", power=0.05
+    )
+
+
 def test_a_constant_grid_renders_as_the_homogeneous_medium(device):
     """A scattering cube whose grid holds 0.5 everywhere (its box the cube's) with coefficients 2σ gives the same
     radiance, all bounces, as the homogeneous medium of σ (within 4 standard errors of their difference)."""
