@@ -310,9 +310,9 @@ def test_scene_file_reads_a_vol_file_and_inline_values(tmp_path):
 @pytest.mark.parametrize(
     ("density", "files", "message"),
     [
-        ('{ file = "cut.vol" }', {"cut.vol": vol_bytes(np.ones((2, 2, 2)))[:-3]}, "density.file: the volume file has"),
-        ('{ file = "bad.vol" }', {"bad.vol": b"NOTAVOLUME" * 10}, "density.file: not a Mitsuba volume file"),
-        ('{ file = "none.vol" }', {}, "density.file: cannot read the volume file"),
+        ('{ file = "cut.vol" }', {"cut.vol": vol_bytes(np.ones((2, 2, 2)))[:-3]}, "the volume file 'cut.vol' has"),
+        ('{ file = "bad.vol" }', {"bad.vol": b"NOTAVOLUME" * 10}, "file: 'bad.vol' is not a Mitsuba volume file"),
+        ('{ file = "none.vol" }', {}, "density.file: cannot read the volume file 'none.vol'"),
         ("{ values = [1, 2, 3], resolution = [2, 2, 1] }", {}, "density.values: 3 values for resolution 2×2×1"),
         ("{ values = [1, -2], resolution = [2, 1, 1] }", {}, "density: the density holds negative values"),
         ("{ values = [1, 2] }", {}, "values need resolution"),

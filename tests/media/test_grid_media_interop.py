@@ -81,7 +81,7 @@ def test_a_truncated_vol_file_is_one_line_naming_the_file(tmp_path):
     with pytest.raises(SpectraceError) as caught:
         mitsuba_scene_data(path, tmp_path)
     text = str(caught.value)
-    assert "\n" not in text and "grid.xml" in text and "the volume file has" in text, text
+    assert "\n" not in text and "grid_volpath.xml" in text and "the volume file 'density.vol' has" in text, text
 
 
 def test_unsupported_grid_forms_are_reported(tmp_path):

@@ -95,12 +95,15 @@ def read_vol(path: Path, where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """Mitsuba's volume file: 'VOL', version 3, encoding (1 float32, 3 uint8 as value/255), resolution x y z,
     channel count, bounding box (min xyz, max xyz), then the values, x fastest, channels interleaved. Returns the
     values as (nz, ny, nx, channels) float32 and the box's two corners; `where` names the file and key."""
+    name = Path(path).name
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
-        raise SpectraceError(f"cannot read the volume file: {exc.strerror or exc}", where=where) from None
+        raise SpectraceError(f"cannot read the volume file '{name}': {exc.strerror or exc}", where=where) from None
     if len(data) < _VOL_HEADER.size or data[:3] != b"VOL":
-        raise SpectraceError("not a Mitsuba volume file (it does not start with 'VOL' and a full header)", where=where)
+        raise SpectraceError(
+            f"'{name}' is not a Mitsuba volume file (it does not start with 'VOL' and a full header)", where=where
+        )
     _, version, encoding, nx, ny, nz, channels, *box = _VOL_HEADER.unpack_from(data)
     if version != 3:
         raise SpectraceError(f"volume file version {version} (spectrace reads version 3)", where=where)
@@ -115,7 +118,7 @@ def read_vol(path: Path, where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray
     expected = _VOL_HEADER.size + count * dtype.itemsize
     if len(data) != expected:
         raise SpectraceError(
-            f"the volume file has {len(data)} bytes; its header ({nx}×{ny}×{nz}×{channels}) needs {expected}",
+            f"the volume file '{name}' has {len(data)} bytes; its header ({nx}×{ny}×{nz}×{channels}) needs {expected}",
             where=where,
         )
     values = np.frombuffer(data, dtype, count, _VOL_HEADER.size).astype(np.float32)
