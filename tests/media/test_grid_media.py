@@ -379,3 +379,34 @@ def test_an_instanced_grid_medium_is_refused():
 
     with pytest.raises(SpectraceError, match="density grid cannot be instanced"):
         build_scene_buffers(scene)
+
+
+@pytest.mark.subprocess
+@pytest.mark.parametrize("suffix", ["toml", "xml"])
+def test_render_of_a_truncated_vol_file_is_one_line_and_keeps_the_output(tmp_path, suffix):
+    """`spectrace render` of a scene file or a Mitsuba XML whose volume file is cut short: exit status 2 (bad
+    input), one line naming the scene file and the volume file, no traceback, and the image already at the output
+    path untouched."""
+    from cli_runner import run_spectrace
+
+    (tmp_path / "density.vol").write_bytes(vol_bytes(np.ones((3, 3, 3)))[:-4])
+    if suffix == "toml":
+        scene = tmp_path / "scene.toml"
+        scene.write_text(_scene_text('{ sigma_s = { value = 1.0 }, density = { file = "density.vol" } }'))
+    else:
+        scene = tmp_path / "scene.xml"
+        scene.write_text(
+            """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">
+<integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+<shape type="cube"><bsdf type="null"/><medium type="heterogeneous" name="interior">
+<volume type="gridvolume" name="sigma_t"><string name="filename" value="density.vol"/></volume></medium></shape>
+</scene>"""
+        )
+    out = tmp_path / "out.png"
+    out.write_bytes(b"an earlier image")
+    result = run_spectrace("render", str(scene), "-o", str(out), "--spp", "1")
+    assert result.returncode == 2, result.stderr  # the status of bad input
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+    assert scene.name in lines[0] and "'density.vol' has" in lines[0], lines[0]
+    assert out.read_bytes() == b"an earlier image"
