@@ -74,6 +74,8 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
     density = _density_table(ctx, grids, medium)
     if density is None and grids:
         return None
+    if ctx.kind(medium) == "heterogeneous" and not grids:
+        density = _constant_box(ctx, ctx.resolve(items["sigma_t"]) if "sigma_t" in items else None)
     extra = {"density": density} if density is not None else {}
     if "rgb" in given["albedo"] or "rgb" in given["sigma_t"]:
         return {**_coloured_coefficients(ctx, given["sigma_t"], given["albedo"], scale, medium), "g": g, **extra}
@@ -109,6 +111,18 @@ def _grid_volume(ctx: ImportContext, volume: Element, key: str) -> dict | None:
     return table
 
 
+def _constant_box(ctx: ImportContext, volume: Element | None) -> dict:
+    """A heterogeneous medium of constant sigma_t fills only its volume's box (Mitsuba 3 bounds the medium by
+    sigma_t's bounding box: a constvolume's unit box moved by its to_world; a spectrum written in place, the unit
+    box): a grid of one voxel of density 1 there."""
+    table: dict = {"values": [1.0], "resolution": [1, 1, 1]}
+    if volume is not None and volume.tag == "volume":
+        matrix = to_world(ctx, ctx.properties(volume))
+        if not np.array_equal(matrix, np.eye(4)):
+            table["transform"] = [{"matrix": matrix.tolist()}]
+    return table
+
+
 def _density_table(ctx: ImportContext, grids: dict[str, dict], medium: Element) -> dict | None:
     """spectrace's `density` from a heterogeneous medium's grids: sigma_t's grid is the density, albedo's the
     albedo grid, which needs sigma_t's grid in the same place."""
@@ -123,7 +137,7 @@ def _density_table(ctx: ImportContext, grids: dict[str, dict], medium: Element) 
         if {k: v for k, v in albedo.items() if k != "file"} != {k: v for k, v in density.items() if k != "file"}:
             ctx.unsupported_plugin(medium, " whose albedo grid is placed unlike its sigma_t grid")
             return None
-        density["albedo_file"] = albedo["file"]
+        density["albedo_file"] = albedo["file"]  # sigma_t's is a file too: a constant one makes no albedo grid
     return density
 
 
