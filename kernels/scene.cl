@@ -534,17 +534,22 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
         }
         if (hit.triangle < 0) {
 #if SCENE_HAS_GRID_MEDIA
-            if (medium_ahead >= 0 && scene->media[medium_ahead].grid >= 0 && !isinf(t_end)) {
+            /* As below, times the grid media's factor (exactly 1 where the segment crossed none). */
+            if (medium_ahead < 0) return exp(-optical_depth) * ratio;
+            if (isinf(t_end)) return (float4)(0.0f);
+            if (scene->media[medium_ahead].grid >= 0) {
                 return exp(-optical_depth) * ratio
                      * grid_stretch(scene->media, scene->spectra, w, medium_ahead, segment.origin,
                                     segment.direction, STRETCH(0.0f), t_end - t_origin, query, crossing);
             }
-            if (medium_ahead < 0) return exp(-optical_depth) * ratio;
-#endif
+            float4 sigma_t_ahead = medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w);
+            return exp(-(optical_depth + sigma_t_ahead * STRETCH(fmax(t_end - t_origin, 0.0f)))) * ratio;
+#else
             if (medium_ahead < 0) return exp(-optical_depth);
             if (isinf(t_end)) return (float4)(0.0f);  /* a leak out of a closed medium: light cannot get through */
             float4 sigma_t = medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w);
             return exp(-(optical_depth + sigma_t * STRETCH(fmax(t_end - t_origin, 0.0f))));
+#endif
         }
         TriangleInfo info = scene->triangle_info[hit.triangle];
 #if SCENE_HAS_OPACITY

@@ -251,6 +251,52 @@ def test_a_scattering_grid_in_a_uniform_environment_is_a_furnace(device):
     )
 
 
+def test_light_inside_a_medium_seen_through_a_grid_slab_is_attenuated_by_both(device):
+    """A diffuse floor lit by a lamp standing inside an absorbing homogeneous cube, with an absorbing slab between
+    them, seen from just above the floor and below the slab (one bounce): a slab of a constant grid gives what the
+    same homogeneous slab gives. Next-event estimation's shadow rays from the floor cross the grid, then end inside
+    the other medium, and must carry both transmittances."""
+    from spectrace.scene.model import AreaEmitter, DiffuseMaterial
+
+    def placed(mesh, steps):
+        return apply_transform(mesh, transform_matrix(steps, where="test"))
+
+    lamp = Shape(
+        mesh=placed(
+            primitives.rectangle(),
+            [{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"scale": 0.4}, {"translate": [0.0, 1.0, 0.0]}],
+        ),
+        material=DiffuseMaterial(Spectrum.zeros()),
+        emitter=AreaEmitter(Spectrum.constant(2.0)),
+    )
+    around = Shape(
+        mesh=placed(primitives.cube(), [{"scale": 0.7}, {"translate": [0.0, 1.0, 0.0]}]),
+        material=None,
+        interior=Medium(_wavy(0.6), Spectrum.zeros()),
+    )
+    floor = Shape(
+        mesh=placed(primitives.rectangle(), [{"rotate": {"axis": [1, 0, 0], "angle": -90}}, {"scale": 2.0}]),
+        material=DiffuseMaterial(Spectrum.constant(0.8)),
+    )
+    slab_mesh = placed(primitives.cube(), [{"scale": [1.5, 0.05, 1.5]}, {"translate": [0.0, 0.15, 0.0]}])
+    grid = make_grid(np.ones((2, 3, 4), np.float32), box_matrix((-1.5, 0.1, -1.5), (1.5, 0.2, 1.5)))
+    eye = np.array([0.0, 0.05, -0.4])
+    readings = [
+        measure(
+            _scene([lamp, around, floor, Shape(slab_mesh, None, interior=slab)], max_depth=2, k=0.0),
+            RadianceMeter(tuple(eye), tuple(-eye / np.linalg.norm(eye))),
+            wavelengths_nm=LANES_NM,
+            streams=32,
+            samples_per_item=1024,
+            device=device,
+        )
+        for slab in (Medium(_wavy(5.0, 2.0), Spectrum.zeros()), Medium(_wavy(5.0, 2.0), Spectrum.zeros(), density=grid))
+    ]
+    homogeneous, gridded = readings
+    se = np.hypot(homogeneous.spectral_standard_error, gridded.spectral_standard_error)
+    assert_within_standard_errors(gridded.spectral, homogeneous.spectral, se, power=0.05, what="slab under a lamp")
+
+
 def test_a_constant_grid_renders_as_the_homogeneous_medium(device):
     """A scattering cube whose grid holds 0.5 everywhere (its box the cube's) with coefficients 2σ gives the same
     radiance, all bounces, as the homogeneous medium of σ (within 4 standard errors of their difference)."""
