@@ -117,4 +117,6 @@ inline float3 sample_henyey_greenstein(float3 direction, float g, float2 u)
     return normalize(around.x * tangent + around.y * bitangent + cos_theta * direction);
 }
 
+#include "medium_grid.cl"
+
 #endif

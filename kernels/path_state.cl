@@ -72,8 +72,14 @@ inline FreeFlight path_free_flight(const Scene *scene, const SampledWavelengths 
 {
     float u_lane = sample_1d(sampler);
     float u_distance = sample_1d(sampler);
-    FreeFlight flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane,
-                                             u_distance);
+    FreeFlight flight;
+#if SCENE_HAS_GRID_MEDIA
+    if (medium->grid >= 0) {
+        flight = grid_sample_flight(medium, scene->spectra, w, s->ray.origin, s->ray.direction, hit_t,
+                                    s->secondary_terminated, s->throughput, u_lane, u_distance);
+    } else
+#endif
+    flight = medium_sample_flight(medium, scene->spectra, w, hit_t, s->secondary_terminated, u_lane, u_distance);
     s->throughput *= flight.weight;
     return flight;
 }

@@ -522,6 +522,9 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
 #else
 #define STRETCH(t) (t)
 #endif
+#if SCENE_HAS_GRID_MEDIA
+    float4 ratio = (float4)(1.0f);  /* the grid media's tracked transmittance (medium_grid.cl) */
+#endif
     for (int crossing = 0; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
         Hit hit;
         hit.triangle = -1;
@@ -530,10 +533,23 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
             hit = trace_scene(scene, segment, fmax(t_end - t_origin, 0.0f), 0);
         }
         if (hit.triangle < 0) {
+#if SCENE_HAS_GRID_MEDIA
+            /* As below, times the grid media's factor (exactly 1 where the segment crossed none). */
+            if (medium_ahead < 0) return exp(-optical_depth) * ratio;
+            if (isinf(t_end)) return (float4)(0.0f);
+            if (scene->media[medium_ahead].grid >= 0) {
+                return exp(-optical_depth) * ratio
+                     * grid_stretch(scene->media, scene->spectra, w, medium_ahead, segment.origin,
+                                    segment.direction, STRETCH(0.0f), t_end - t_origin, query, crossing);
+            }
+            float4 sigma_t_ahead = medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w);
+            return exp(-(optical_depth + sigma_t_ahead * STRETCH(fmax(t_end - t_origin, 0.0f)))) * ratio;
+#else
             if (medium_ahead < 0) return exp(-optical_depth);
             if (isinf(t_end)) return (float4)(0.0f);  /* a leak out of a closed medium: light cannot get through */
             float4 sigma_t = medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w);
             return exp(-(optical_depth + sigma_t * STRETCH(fmax(t_end - t_origin, 0.0f))));
+#endif
         }
         TriangleInfo info = scene->triangle_info[hit.triangle];
 #if SCENE_HAS_OPACITY
@@ -549,6 +565,12 @@ inline float4 scene_transmittance(const Scene *scene, const SampledWavelengths *
         if (info.material != TRIANGLE_NO_MATERIAL) return (float4)(0.0f);
 #endif
         float3 n = hit_normal(scene, hit);
+#if SCENE_HAS_GRID_MEDIA
+        if (medium_ahead >= 0 && scene->media[medium_ahead].grid >= 0) {
+            ratio *= grid_stretch(scene->media, scene->spectra, w, medium_ahead, segment.origin, segment.direction,
+                                  STRETCH(0.0f), hit.t, query, crossing);
+        } else
+#endif
         if (medium_ahead >= 0) {
             optical_depth += medium_sigma_t(&scene->media[medium_ahead], scene->spectra, w) * STRETCH(hit.t);
         }

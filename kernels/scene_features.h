@@ -19,6 +19,10 @@
 #ifndef SCENE_HAS_MEDIA
 #define SCENE_HAS_MEDIA 1
 #endif
+/* Media whose density varies, read from a voxel grid (medium_grid.cl). */
+#ifndef SCENE_HAS_GRID_MEDIA
+#define SCENE_HAS_GRID_MEDIA SCENE_HAS_MEDIA
+#endif
 /* Lights showing an image (environment maps; area lights' emission textures, pictures on screens among them). */
 #ifndef SCENE_HAS_LIGHT_IMAGES
 #define SCENE_HAS_LIGHT_IMAGES 1

@@ -103,7 +103,7 @@ typedef struct {
     int sigma_a_offset;  /* absorption coefficient σa(λ) */
     int sigma_s_offset;  /* scattering coefficient σs(λ) */
     float g;             /* Henyey–Greenstein asymmetry parameter in (−1, 1); 0 = isotropic */
-    int pad0;
+    int grid;            /* a grid medium's block in the spectra table (medium_grid.cl); -1: homogeneous */
 } Medium;
 
 /* One material; which fields a BSDF reads is listed beside each (docs/scene-format.md gives the scene keys). */

@@ -15,6 +15,12 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
     Hit hit = far_clipped(params, s, scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced));
     /* The local model carries only the light a medium does not scatter: its transmittance to the surface. */
     if (s->medium >= 0) {
+#if SCENE_HAS_GRID_MEDIA
+        if (scene->media[s->medium].grid >= 0) {
+            s->throughput *= grid_transmittance(&scene->media[s->medium], scene->spectra, w, s->ray.origin,
+                                                s->ray.direction, hit.t, sampler_identity(sampler));
+        } else
+#endif
         s->throughput *= beer_lambert(medium_sigma_t(&scene->media[s->medium], scene->spectra, w), hit.t);
     }
     if (hit.triangle < 0) {

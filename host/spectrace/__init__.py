@@ -34,6 +34,7 @@ _LAZY = {
         [
             "area_emitter",
             "medium",
+            "density_grid",
             "mesh_from_trimesh",
             "render",
             "rgb_emission",
@@ -100,6 +101,7 @@ _names_getattr, _names_dir = lazy_names(
         "instanced_object",
         "instance",
         "medium",
+        "density_grid",
         "area_emitter",
         "ColourSpace",
         "Adaptation",

@@ -23,6 +23,7 @@ from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
 from spectrace.film.image import Image
 from spectrace.geometry import primitives
 from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
+from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.lights.base import vector3
@@ -41,6 +42,7 @@ from spectrace.spectral.spectrum_input import SpectrumLike, rgb_emission, rgb_re
 if TYPE_CHECKING:
     import rich.console
     import trimesh
+    from numpy.typing import ArrayLike
 
     from spectrace.device import Device
     from spectrace.engine.checkpoint import PeriodicCheckpoints
@@ -123,22 +125,28 @@ def medium(
     scale: float = 1.0,
     g: float = 0.0,
     preset: str | None = None,
+    density: GridVolume | None = None,
 ) -> Medium:
     """A homogeneous medium for a closed shape's `interior` (docs/media.md), as a scene file's `interior` key:
     absorption σa(λ) and scattering σs(λ) in 1/scene unit (a linear sRGB triple becomes a smooth spectrum with
     that colour, unbounded), or a measured `preset` ("skin1", "marble", "wholemilk", ...: Jensen et al. 2001,
-    in 1/mm); either times `scale`. g: Henyey–Greenstein asymmetry in (−1, 1), 0 isotropic."""
+    in 1/mm); either times `scale`. g: Henyey–Greenstein asymmetry in (−1, 1), 0 isotropic. `density` (see
+    `density_grid`) makes the medium heterogeneous: its coefficients times the grid's density."""
     from spectrace.spectral.media_presets import coefficient_spectrum, preset_coefficients
 
     if not (isinstance(scale, Real) and math.isfinite(scale) and scale > 0):
         raise SpectraceError(f"scale must be a finite number > 0, got {scale!r}", where="scale")
     if not (isinstance(g, Real) and -1.0 < g < 1.0):
         raise SpectraceError(f"g must lie in (-1, 1), got {g!r}", where="g")
+    if density is not None and not isinstance(density, GridVolume):
+        raise SpectraceError(
+            f"density must be a grid (see density_grid()), got {type(density).__name__}", where="density"
+        )
     if preset is not None:
         if not (_is_zero(sigma_a) and _is_zero(sigma_s)):
             raise SpectraceError("give either preset or sigma_a/sigma_s", where="preset")
         sigma_a_spectrum, sigma_s_spectrum = preset_coefficients(preset, float(scale), float(g), where="preset")
-        return Medium(sigma_a=sigma_a_spectrum, sigma_s=sigma_s_spectrum, g=float(g), name=preset)
+        return Medium(sigma_a=sigma_a_spectrum, sigma_s=sigma_s_spectrum, g=float(g), name=preset, density=density)
 
     def coefficient(source: SpectrumLike, what: str) -> Spectrum:
         if spectrum_input.is_rgb(source):
@@ -147,7 +155,28 @@ def medium(
             result = spectrum_input.within_bounds(spectrum(source), True, what)
         return result.scaled(float(scale))
 
-    return Medium(sigma_a=coefficient(sigma_a, "sigma_a"), sigma_s=coefficient(sigma_s, "sigma_s"), g=float(g))
+    return Medium(
+        sigma_a=coefficient(sigma_a, "sigma_a"), sigma_s=coefficient(sigma_s, "sigma_s"), g=float(g), density=density
+    )
+
+
+def density_grid(
+    density: ArrayLike,
+    albedo: ArrayLike | None = None,
+    box: Sequence[Sequence[float]] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0)),
+    transform: Iterable[Mapping[str, Any]] = (),
+) -> GridVolume:
+    """A voxel grid for `medium(density=...)` (docs/media.md): `density` shaped (nz, ny, nx) (x fastest, as
+    numpy's C order), values ≥ 0 at the voxels' centres, looked up trilinearly; `albedo` an optional grid of the
+    same shape in [0, 1] multiplying σs; filling `box` (two corners), then moved by `transform` steps (as
+    `transformed`), in the scene's space."""
+    if np.shape(box) != (2, 3):
+        raise SpectraceError(f"box must be two corners [x, y, z], got shape {np.shape(box)}", where="box")
+    matrix = box_matrix(*np.asarray(box, np.float64))
+    steps = [dict(step) for step in transform]
+    if steps:
+        matrix = transform_matrix(steps, where="transform") @ matrix
+    return make_grid(np.asarray(density), matrix, None if albedo is None else np.asarray(albedo), where="density")
 
 
 def _is_zero(source: SpectrumLike) -> bool:

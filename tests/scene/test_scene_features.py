@@ -71,6 +71,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_MATERIAL_TYPES": MATERIAL_BITS["diffuse"],
         "SCENE_LIGHT_TYPES": LIGHT_BITS["area"],
         "SCENE_HAS_MEDIA": 0,
+        "SCENE_HAS_GRID_MEDIA": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
         "SCENE_HAS_BECKMANN": 0,
         "SCENE_HAS_NONLINEAR_PLASTIC": 0,
@@ -87,7 +88,9 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_NORMAL_MAP_HANDEDNESS": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
     }
-    assert scene_feature_defines(build_scene_buffers(_bundled("subsurface")))["SCENE_HAS_MEDIA"] == 1
+    subsurface = scene_feature_defines(build_scene_buffers(_bundled("subsurface")))
+    assert subsurface["SCENE_HAS_MEDIA"] == 1 and subsurface["SCENE_HAS_GRID_MEDIA"] == 0
+    assert scene_feature_defines(build_scene_buffers(_grid_medium_scene()))["SCENE_HAS_GRID_MEDIA"] == 1
     analytic = scene_feature_defines(build_scene_buffers(_analytic_shapes_scene()))
     assert analytic["SCENE_HAS_SHAPES"] == 1
     assert analytic["SCENE_LIGHT_TYPES"] == LIGHT_BITS["sphere"] | LIGHT_BITS["shape"]
@@ -251,6 +254,31 @@ def _anisotropic_scene() -> spectrace.Scene:
     return replace(base, shapes=[floor, sphere, *base.shapes[2:]])
 
 
+def _grid_medium_scene() -> spectrace.Scene:
+    """A scattering cube of a random density grid beside a homogeneous sphere, under a lamp."""
+    density = np.random.default_rng(4).uniform(0.0, 3.0, (4, 5, 6))
+    grid = spectrace.density_grid(density, box=((-1, -1, -1), (1, 1, 1)))
+    cloud = spectrace.shape("cube", interior=spectrace.medium(sigma_a=0.2, sigma_s=(0.5, 1.0, 2.0), density=grid))
+    milk = spectrace.shape(
+        "sphere",
+        interior=spectrace.medium(preset="wholemilk", scale=2.0),
+        transform=[{"scale": 0.5}, {"translate": [1.6, 0, 0]}],
+    )
+    lamp = spectrace.shape(
+        "rectangle",
+        spectrace.diffuse(0.0),
+        emitter=spectrace.area_emitter(5.0),
+        transform=[{"rotate": {"axis": [1, 0, 0], "angle": 90}}, {"translate": [0, 3, 0]}],
+    )
+    return spectrace.Scene(
+        camera=spectrace.Camera((0.5, 1.0, -5.0), (0.5, 0.0, 0.0)),
+        width=16,
+        height=16,
+        shapes=[cloud, milk, lamp],
+        lights=[spectrace.constant_environment(0.1)],
+    )
+
+
 def _analytic_shapes_scene() -> spectrace.Scene:
     """An analytic sphere light and a disk light over a bump-mapped disk floor, a glass sphere and a textured
     cylinder."""
@@ -370,6 +398,7 @@ SCENES = {
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
     "beckmann_and_nonlinear_plastic": _beckmann_scene,
     "analytic_shapes": _analytic_shapes_scene,
+    "grid_medium": _grid_medium_scene,
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.
     "hidden_area_light": lambda: replace(_bundled("cornell_box"), hide_emitters=True),
     "instances": _instanced_scene,

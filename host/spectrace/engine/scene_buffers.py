@@ -24,6 +24,7 @@ from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
+from spectrace.geometry.grid_volume import medium_row
 from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
 from spectrace.lights.area import AreaEmitter
@@ -202,9 +203,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
         if shape.interior is not None:
             interior = medium_index.setdefault(id(shape.interior), len(medium_rows))
             if interior == len(medium_rows):
-                medium_rows.append(
-                    (table.add(shape.interior.sigma_a), table.add(shape.interior.sigma_s), float(shape.interior.g), 0)
-                )
+                medium_rows.append(medium_row(shape.interior, table))
         key = id(shape.material)
         if shape.material is None:
             if shape.interior is None and shape.emitter is None:
@@ -476,8 +475,9 @@ class _ObjectTriangles:
                 if shape.interior is not None:
                     interior = medium_index.setdefault(id(shape.interior), len(medium_rows))
                     if interior == len(medium_rows):
-                        m = shape.interior
-                        medium_rows.append((table.add(m.sigma_a), table.add(m.sigma_s), float(m.g), 0))
+                        if shape.interior.density is not None:  # its grid is placed in the world, not per instance
+                            raise SpectraceError(f"{where}: a medium with a density grid cannot be instanced")
+                        medium_rows.append(medium_row(shape.interior, table))
                 key = id(shape.material)
                 if shape.material is None:
                     if shape.interior is None:

@@ -18,6 +18,7 @@ import numpy as np
 
 from spectrace.core.contract import LIGHT_DTYPE, MATERIAL_DTYPE, MEDIUM_DTYPE
 from spectrace.engine.scene_buffers import SceneBuffers, ScenePacking, _radius_with_instances, light_distribution
+from spectrace.geometry.grid_volume import medium_row
 from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
 from spectrace.lights.base import LightRows
@@ -96,7 +97,7 @@ def repack_media(scene: Scene, buffers: SceneBuffers) -> Edit | None:
         medium = shape.interior
         if medium is not None and id(medium) not in index:
             index[id(medium)] = len(rows)
-            rows.append((packing.table.add(medium.sigma_a), packing.table.add(medium.sigma_s), float(medium.g), 0))
+            rows.append(medium_row(medium, packing.table))
     if len(rows) != buffers.medium_count:
         return None
     if not rows:

@@ -23,6 +23,7 @@ from spectrace.geometry.analytic import (
     pbrt_uv_from_mitsuba,
     similarity_problem,
 )
+from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid, read_vol
 from spectrace.geometry.mesh import TriangleMesh, load_mesh, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
@@ -555,7 +556,32 @@ class _Resolver:
         for name, spectrum in (("sigma_a", sigma_a), ("sigma_s", sigma_s)):
             if problem := limits.spectrum_magnitude_problem(spectrum.values):
                 raise SpectraceError(problem, where=self.where(f"{key}.{name}"))
-        return Medium(sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "")
+        density = self.density_grid(spec.density, f"{key}.density") if spec.density is not None else None
+        return Medium(sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "", density=density)
+
+    def density_grid(self, spec: schema.DensityGridSpec, key: str) -> GridVolume:
+        """A grid medium's density (and albedo) from a .vol file's first channel or inline values."""
+
+        def values(file: str | None, inline: list[float] | None, name: str) -> np.ndarray:
+            if file is not None:
+                return read_vol(self.folder / file, where=self.where(f"{key}.{name}file"))[0][..., 0]
+            nx, ny, nz = spec.resolution or (0, 0, 0)
+            if min(nx, ny, nz) < 1 or len(inline or ()) != nx * ny * nz:
+                raise SpectraceError(
+                    f"{len(inline or ())} values for resolution {nx}×{ny}×{nz} (need {max(nx * ny * nz, 0)})",
+                    where=self.where(f"{key}.{name}values"),
+                )
+            return np.asarray(inline, np.float32).reshape(nz, ny, nx)
+
+        density = values(spec.file, spec.values, "")
+        albedo = None
+        if spec.albedo_file is not None or spec.albedo_values is not None:
+            albedo = values(spec.albedo_file, spec.albedo_values, "albedo_")
+        matrix = box_matrix(*spec.box)
+        if spec.transform:
+            steps = [step.model_dump(exclude_none=True) for step in spec.transform]
+            matrix = transform_matrix(steps, where=self.where(f"{key}.transform")) @ matrix
+        return make_grid(density, matrix, albedo, where=self.where(key))
 
     def coefficient(self, spec: schema.SpectrumSpec | None, key: str, scale: float) -> Spectrum:
         """A medium coefficient, 1/scene unit: like an emission it has no upper bound (rgb: a smooth spectrum

@@ -17,6 +17,7 @@ from spectrace.errors import SpectraceError
 from spectrace.film.aovs import parse_aovs
 from spectrace.film.response import FilmResponse
 from spectrace.geometry.analytic import AnalyticSurface
+from spectrace.geometry.grid_volume import GridVolume
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.integrators import INTEGRATORS
 from spectrace.lights.area import AreaEmitter, EmitterImage  # noqa: F401 (part of the model's names)
@@ -89,6 +90,8 @@ class Medium:
     sigma_s: Spectrum
     g: float = 0.0
     name: str = ""
+    # A heterogeneous medium: the coefficients times a voxel grid's density (and σs times its albedo).
+    density: GridVolume | None = None
 
 
 @dataclass(frozen=True)

@@ -383,6 +383,30 @@ class TransformStep(Strict):
         return self
 
 
+class DensityGridSpec(Strict):
+    """A heterogeneous medium's voxel grid (docs/media.md): a Mitsuba volume `file` (.vol) or inline `values` (x
+    fastest) of `resolution` [nx, ny, nz]; an optional albedo grid of the same size; filling `box` (two corners),
+    then moved by `transform` (in the scene's space, not the shape's)."""
+
+    file: str | None = None
+    values: list[FiniteFloat] | None = None
+    resolution: Annotated[tuple[int, int, int], StrictMode(False)] | None = None
+    albedo_file: str | None = None
+    albedo_values: list[FiniteFloat] | None = None
+    box: Annotated[tuple[Vector3, Vector3], StrictMode(False)] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    transform: list[TransformStep] = []
+
+    @model_validator(mode="after")
+    def _one_source(self) -> "DensityGridSpec":
+        if (self.file is None) == (self.values is None):
+            raise ValueError("give either file or values")
+        if self.values is not None and self.resolution is None:
+            raise ValueError("values need resolution = [nx, ny, nz]")
+        if self.albedo_file is not None and self.albedo_values is not None:
+            raise ValueError("give albedo_file or albedo_values, not both")
+        return self
+
+
 class InteriorSpec(Strict):
     """A homogeneous medium filling a closed shape (docs/media.md): coefficients sigma_a, sigma_s in 1/scene unit
     (each a spectrum; an omitted one is 0), or a measured `preset` (its table is in 1/mm); either way times
@@ -393,6 +417,7 @@ class InteriorSpec(Strict):
     sigma_s: SpectrumSpec | None = None
     scale: FiniteFloat = Field(default=1.0, gt=0.0, description="multiplies the coefficients")
     g: FiniteFloat = Field(default=0.0, gt=-1.0, lt=1.0)
+    density: DensityGridSpec | None = None
 
     @model_validator(mode="after")
     def _preset_or_coefficients(self) -> "InteriorSpec":

@@ -1,5 +1,6 @@
 """Media: a shape's interior homogeneous medium (constant or rgb sigma_t and albedo, `scale`, an hg or isotropic
-phase) as spectrace's interior; with a null bsdf the shape is the medium's index-matched boundary (shapes.py)."""
+phase) as spectrace's interior, and a heterogeneous one whose sigma_t (and albedo) is a one-channel `gridvolume`
+as a density grid; with a null bsdf the shape is the medium's index-matched boundary (shapes.py)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import numpy as np
 
 from spectrace.interop.mitsuba.context import ImportContext, Properties
 from spectrace.interop.mitsuba.textures import spectrum
+from spectrace.interop.mitsuba.transforms import to_world
 from spectrace.interop.mitsuba.tree import Element
 
 
@@ -22,14 +24,25 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
     if "interior" not in properties:
         return None
     medium = ctx.resolve(properties["interior"])
-    if ctx.kind(medium) != "homogeneous":
+    if ctx.kind(medium) not in ("homogeneous", "heterogeneous"):
         ctx.unsupported_object(medium)
         return None
     items = ctx.properties(medium)
-    items.understood("sample_emitters")  # how Mitsuba samples, not what it renders
+    items.understood("sample_emitters", "sample_emitted")  # how Mitsuba samples, not what it renders
+    grids: dict[str, dict] = {}
+    if ctx.kind(medium) == "heterogeneous":
+        for key in ("sigma_t", "albedo"):
+            volume = ctx.resolve(items[key]) if key in items else None
+            if volume is not None and volume.tag == "volume" and ctx.kind(volume) == "gridvolume":
+                grid = _grid_volume(ctx, volume, key)
+                if grid is None:
+                    return None
+                grids[key] = grid
     given: dict = {}
     for key, default in (("sigma_t", 1.0), ("albedo", 0.75)):
-        value: dict | None = _coefficient(ctx, items[key], key) if key in items else {"value": default}
+        value: dict | None = {"value": 1.0} if key in grids else None
+        if value is None:
+            value = _coefficient(ctx, items[key], key) if key in items else {"value": default}
         # An rgb albedo or sigma_t is uplifted as Mitsuba's spectral variants uplift a reflectance (they refuse
         # an rgb sigma_t outside [0, 1], and so does spectrace); `scale` then multiplies sigma_t.
         if value is None:  # recorded where it was read
@@ -58,10 +71,74 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
     elif phase is not None and ctx.kind(phase) != "isotropic":
         ctx.unsupported_object(phase)
         return None
+    density = _density_table(ctx, grids, medium)
+    if density is None and grids:
+        return None
+    if ctx.kind(medium) == "heterogeneous" and not grids:
+        density = _constant_box(ctx, ctx.resolve(items["sigma_t"]) if "sigma_t" in items else None)
+    extra = {"density": density} if density is not None else {}
     if "rgb" in given["albedo"] or "rgb" in given["sigma_t"]:
-        return {**_coloured_coefficients(ctx, given["sigma_t"], given["albedo"], scale, medium), "g": g}
+        return {**_coloured_coefficients(ctx, given["sigma_t"], given["albedo"], scale, medium), "g": g, **extra}
     sigma_t = float(given["sigma_t"]["value"]) * scale
-    return {"sigma_a": {"value": sigma_t * (1.0 - albedo)}, "sigma_s": {"value": sigma_t * albedo}, "g": g}
+    return {"sigma_a": {"value": sigma_t * (1.0 - albedo)}, "sigma_s": {"value": sigma_t * albedo}, "g": g, **extra}
+
+
+def _grid_volume(ctx: ImportContext, volume: Element, key: str) -> dict | None:
+    """A `gridvolume` as spectrace's grid keys: its file, and its to_world (after the file's own box when
+    use_grid_bbox is set, else the unit box, as Mitsuba 3 places it). One channel, trilinear, clamped only."""
+    from spectrace.geometry.grid_volume import read_vol
+
+    items = ctx.properties(volume)
+    items.understood("raw", "accel")  # raw: the uplift of colour data, which one channel has none of
+    if "filter_type" in items and ctx.choice(items["filter_type"], ("trilinear", "nearest")) != "trilinear":
+        ctx.unsupported_plugin(volume, " with filter_type nearest")
+        return None
+    if "wrap_mode" in items and ctx.choice(items["wrap_mode"], ("clamp", "repeat", "mirror")) != "clamp":
+        ctx.unsupported_plugin(volume, " with a wrap_mode other than clamp")
+        return None
+    filename = ctx.child(items, "filename", volume)
+    file = ctx.input_file(filename, "volume file")
+    values, p0, p1 = read_vol(ctx.find_file(filename, ctx.required(filename, "value")), where=ctx.where(filename))
+    if values.shape[3] != 1:
+        ctx.unsupported_plugin(volume, f" with {values.shape[3]} channels as a medium's {key} (one channel only)")
+        return None
+    table: dict = {"file": file}
+    if "use_grid_bbox" in items and ctx.boolean(items["use_grid_bbox"]):
+        table["box"] = [[float(v) for v in p0], [float(v) for v in p1]]
+    matrix = to_world(ctx, items)
+    if not np.array_equal(matrix, np.eye(4)):
+        table["transform"] = [{"matrix": matrix.tolist()}]
+    return table
+
+
+def _constant_box(ctx: ImportContext, volume: Element | None) -> dict:
+    """A heterogeneous medium of constant sigma_t fills only its volume's box (Mitsuba 3 bounds the medium by
+    sigma_t's bounding box: a constvolume's unit box moved by its to_world; a spectrum written in place, the unit
+    box): a grid of one voxel of density 1 there."""
+    table: dict = {"values": [1.0], "resolution": [1, 1, 1]}
+    if volume is not None and volume.tag == "volume":
+        matrix = to_world(ctx, ctx.properties(volume))
+        if not np.array_equal(matrix, np.eye(4)):
+            table["transform"] = [{"matrix": matrix.tolist()}]
+    return table
+
+
+def _density_table(ctx: ImportContext, grids: dict[str, dict], medium: Element) -> dict | None:
+    """spectrace's `density` from a heterogeneous medium's grids: sigma_t's grid is the density, albedo's the
+    albedo grid, which needs sigma_t's grid in the same place."""
+    if not grids:
+        return None
+    if "sigma_t" not in grids:
+        ctx.unsupported_plugin(medium, " with an albedo grid but a constant sigma_t")
+        return None
+    density = dict(grids["sigma_t"])
+    if "albedo" in grids:
+        albedo = grids["albedo"]
+        if {k: v for k, v in albedo.items() if k != "file"} != {k: v for k, v in density.items() if k != "file"}:
+            ctx.unsupported_plugin(medium, " whose albedo grid is placed unlike its sigma_t grid")
+            return None
+        density["albedo_file"] = albedo["file"]  # sigma_t's is a file too: a constant one makes no albedo grid
+    return density
 
 
 def _coefficient(ctx: ImportContext, element: Element, key: str) -> dict | None:
@@ -72,7 +149,9 @@ def _coefficient(ctx: ImportContext, element: Element, key: str) -> dict | None:
     if resolved.tag != "volume":
         return spectrum(ctx, element, key)
     if ctx.kind(resolved) != "constvolume":
-        ctx.unsupported_plugin(resolved, f" as a medium's {key} (spectrace's media are homogeneous: constvolume only)")
+        ctx.unsupported_plugin(
+            resolved, f" as a homogeneous medium's {key} (constvolume only; a heterogeneous medium takes a gridvolume)"
+        )
         return None
     items = ctx.properties(resolved)
     items.understood("to_world")

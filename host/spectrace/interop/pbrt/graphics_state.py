@@ -161,6 +161,7 @@ class PbrtScene:
     named_materials: dict[str, Entity] = field(default_factory=dict)
     textures: dict[tuple[str, str], Texture] = field(default_factory=dict)  # (value type, name)
     media: dict[str, Entity] = field(default_factory=dict)  # MakeNamedMedium
+    world_from_medium: dict[str, np.ndarray] = field(default_factory=dict)  # the CTM at each MakeNamedMedium
     camera_medium: str = ""  # the medium the camera sits in (MediumInterface's outside at Camera)
     entities: list[Entity] = field(default_factory=list)  # every entity read, for the unread-parameter report
     unsupported: list[str] = field(default_factory=list)  # "file:line: what" for directives not imported
@@ -297,6 +298,7 @@ def read_scene(path: str | Path) -> PbrtScene:
             if arguments[0] in scene.media:
                 raise error(location, f"medium '{shown(arguments[0])}' defined twice")
             scene.media[arguments[0]] = entity(directive, "", arguments[0], target="medium")
+            scene.world_from_medium[arguments[0]] = state.ctm.copy()
         elif name == "MediumInterface":
             state.inside = arguments[0]
             state.outside = arguments[1] if len(arguments) > 1 else arguments[0]

@@ -1,5 +1,5 @@
-"""pbrt-v4's homogeneous media (MakeNamedMedium, inside a shape through MediumInterface) as spectrace's `interior`
-tables."""
+"""pbrt-v4's homogeneous and `uniformgrid` media (MakeNamedMedium, inside a shape through MediumInterface) as
+spectrace's `interior` tables (a uniformgrid's density as an inline grid, placed by the CTM at MakeNamedMedium)."""
 
 from __future__ import annotations
 
@@ -30,9 +30,13 @@ def medium_table(context: Context, medium: Entity) -> dict:
 
     context.read.add(id(medium))
     kind = context.string(medium, "type", "")
-    if kind != "homogeneous":
-        raise error(medium.location, f"medium '{shown(kind or '')}': spectrace imports homogeneous media")
+    if kind not in ("homogeneous", "uniformgrid"):
+        raise error(
+            medium.location, f"medium '{shown(kind or '')}': spectrace imports homogeneous and uniformgrid media"
+        )
     table: dict = {}
+    if kind == "uniformgrid":
+        table["density"] = _uniform_grid(context, medium)
     if (preset := context.string(medium, "preset")) is not None:
         # pbrt's Jensen et al. presets are the same measurements as spectrace's, in 1/mm (pbrt: per scene unit
         # times scale; spectrace: per mm times scale, its millimetres per scene unit: the same numbers).
@@ -54,6 +58,36 @@ def medium_table(context: Context, medium: Entity) -> dict:
         table["g"] = g
     emission = context.spectrum(medium, "Le", "medium")
     medium.find("Lescale")
+    if kind == "uniformgrid" and (medium.find("temperature") or medium.find("temperaturescale")):
+        context.warn(medium.location, "a medium's temperature grid (emission) not imported")
     if emission is not None and emission not in ({"value": 0.0}, {"rgb": [0.0, 0.0, 0.0]}):
         context.warn(medium.location, "a medium's emission (Le) not imported")
     return table
+
+
+def _uniform_grid(context: Context, medium: Entity) -> dict:
+    """A uniformgrid's `density` (nx·ny·nz values, x fastest) over the box p0–p1 of the medium's space, as
+    spectrace's inline grid; the CTM at MakeNamedMedium places it. pbrt-v4 fades the density to 0 over the
+    outermost half voxel, spectrace holds the face's value there (docs/media.md)."""
+    resolution = [context.integer(medium, axis, 1, low=1) for axis in ("nx", "ny", "nz")]
+    density = context.floats(medium, "density")
+    if density is None:
+        raise error(
+            medium.location, 'a uniformgrid medium needs "float density" (spectrace imports no temperature grid)'
+        )
+    count = resolution[0] * resolution[1] * resolution[2]
+    if len(density) != count:
+        parameter = medium.find("density")
+        raise error(
+            parameter.location if parameter else medium.location,
+            f'"float density" has {len(density)} values; nx·ny·nz = {count}',
+        )
+    p0 = context.vector(medium, "p0", [0.0, 0.0, 0.0])
+    p1 = context.vector(medium, "p1", [1.0, 1.0, 1.0])
+    matrix = context.world @ context.scene.world_from_medium[medium.name]
+    return {
+        "values": density,
+        "resolution": resolution,
+        "box": [p0, p1],
+        "transform": [{"matrix": matrix.tolist()}],
+    }

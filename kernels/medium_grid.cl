@@ -1,0 +1,259 @@
+/* Heterogeneous media: a medium whose coefficients are the homogeneous medium's spectra σa(λ), σs(λ) times a density
+ * d(x) read from a voxel grid (and σs times an optional albedo grid a(x)), inside a box placed by an affine map:
+ *   σt(λ, x) = d(x) (σa(λ) + σs(λ)),   σs(λ, x) = a(x) d(x) σs(λ),   0 outside the box.
+ *
+ * Sources (read to learn, not copied): Woodcock et al. 1965 and Novák et al. 2014, "Residual ratio tracking for
+ * estimating attenuation in participating media" (delta and ratio tracking against a majorant); Kutz et al. 2017,
+ * "Spectral and decomposition tracking for rendering heterogeneous volumes" (one majorant for several wavelengths,
+ * collision probabilities from the path's throughput); pbrt-v4's GridMedium and DDAMajorantIterator (a coarse grid of
+ * per-cell maximum densities walked by a 3D DDA, Amanatides & Woo 1987).
+ *
+ * Contract. The grid's block lives in the scene's float table (`spectra`) at Medium.grid (-1: homogeneous), laid out
+ * by spectrace.geometry.grid_volume: the world → unit-box map (3 rows of 4), then as int bits: nx, ny, nz (voxels),
+ * mx, my, mz (majorant cells), the offsets of the density, albedo (-1: none) and majorant arrays, x fastest.
+ * Voxel values sit at cell centres, lookups are trilinear and clamp at the box's faces (Mitsuba 3's gridvolume).
+ * Each majorant cell holds the largest voxel value that any trilinear lookup inside the cell reads, so
+ * μ = max_cell d · max_lanes σt(λ) bounds σt at all four wavelengths of the path there.
+ *
+ * Free flights: tentative collisions are drawn at rate μ, cell by cell (a flight past a cell's end restarts at the
+ * next cell, the exponential being memoryless). At a collision the path scatters with probability
+ * Ps = Σ h σs / (Σ h σs + Σ h σn) (h: the path's throughput per lane, σn = μ − σt ≥ 0 the null coefficient) and
+ * goes on otherwise; each lane is weighted by σs/(μ Ps) or σn/(μ (1 − Ps)) (Kutz et al.'s spectral tracking):
+ * unbiased for every lane, absorption carried by the weights, and the throughput summed over lanes never grows.
+ * Transmittance (shadow rays): ratio tracking, Π σn/μ over the collisions, per lane. Their random numbers after the
+ * flight's first come from a hash chain seeded by the sampler's draws (or the shadow ray's query), so a flight takes
+ * the same two sampler draws as in a homogeneous medium and renders stay deterministic. */
+#ifndef SPECTRACE_MEDIUM_GRID_CL
+#define SPECTRACE_MEDIUM_GRID_CL
+
+#include "hash.cl"
+
+/* A guard against a flight that never ends (a NaN, a majorant of 0 with an infinite box): far above any scene's. */
+#define GRID_MAX_COLLISIONS 1048576
+
+#define GRID_HEADER_INT(spectra, grid, i) as_int((spectra)[(grid) + 12 + (i)])
+
+/* The point of world position p in the grid's unit box. */
+inline float3 grid_unit_point(__global const float *spectra, int grid, float3 p)
+{
+    __global const float *m = spectra + grid;
+    return (float3)(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                    m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+
+inline float3 grid_unit_vector(__global const float *spectra, int grid, float3 d)
+{
+    __global const float *m = spectra + grid;
+    return (float3)(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                    m[8] * d.x + m[9] * d.y + m[10] * d.z);
+}
+
+/* The trilinear value of the voxel array at `offset` (dimensions n) at unit-box point u, 0 outside the box. */
+inline float grid_lookup(__global const float *spectra, int offset, int3 n, float3 u)
+{
+    if (any(u < (float3)(0.0f)) || any(u > (float3)(1.0f))) return 0.0f;
+    float3 q = clamp(u * convert_float3(n) - 0.5f, (float3)(0.0f), convert_float3(n - 1));
+    int3 i0 = min(convert_int3(floor(q)), n - 1);
+    int3 i1 = min(i0 + 1, n - 1);
+    float3 f = q - convert_float3(i0);
+    __global const float *v = spectra + offset;
+#define GRID_AT(ix, iy, iz) v[((iz) * n.y + (iy)) * n.x + (ix)]
+    float c00 = mix(GRID_AT(i0.x, i0.y, i0.z), GRID_AT(i1.x, i0.y, i0.z), f.x);
+    float c10 = mix(GRID_AT(i0.x, i1.y, i0.z), GRID_AT(i1.x, i1.y, i0.z), f.x);
+    float c01 = mix(GRID_AT(i0.x, i0.y, i1.z), GRID_AT(i1.x, i0.y, i1.z), f.x);
+    float c11 = mix(GRID_AT(i0.x, i1.y, i1.z), GRID_AT(i1.x, i1.y, i1.z), f.x);
+#undef GRID_AT
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+}
+
+/* Density d(x) and albedo a(x) (1 without an albedo grid) at world point x. */
+inline float2 grid_density_albedo(__global const float *spectra, int grid, float3 x)
+{
+    float3 u = grid_unit_point(spectra, grid, x);
+    int3 n = (int3)(GRID_HEADER_INT(spectra, grid, 0), GRID_HEADER_INT(spectra, grid, 1),
+                    GRID_HEADER_INT(spectra, grid, 2));
+    float density = grid_lookup(spectra, GRID_HEADER_INT(spectra, grid, 6), n, u);
+    int albedo = GRID_HEADER_INT(spectra, grid, 7);
+    return (float2)(density, albedo >= 0 && density > 0.0f ? grid_lookup(spectra, albedo, n, u) : 1.0f);
+}
+
+/* The majorant cells a ray crosses inside the unit box, in order (a 3D DDA). t is the ray's own parameter. */
+typedef struct {
+    float3 next;    /* t at which the ray enters the next cell along each axis */
+    float3 delta;   /* t across one cell along each axis */
+    int3 cell;
+    int3 step;
+    int3 cells;
+    float t;        /* where the current cell starts */
+    float t_end;    /* where the walk ends: the box's far face or the caller's limit */
+    int majorant;   /* offset of the majorant array */
+} GridWalk;
+
+/* A walk along origin + t·direction for t in [0, t_max]; returns 0 when the ray misses the box in that range. */
+inline int grid_walk_start(__global const float *spectra, int grid, float3 origin, float3 direction, float t_max,
+                           GridWalk *walk)
+{
+    float3 o = grid_unit_point(spectra, grid, origin);
+    float3 d = grid_unit_vector(spectra, grid, direction);
+    float3 inv = 1.0f / d;  /* ±∞ along an axis the ray does not move along */
+    float3 ta = -o * inv, tb = (1.0f - o) * inv;
+    float3 lo = select(fmin(ta, tb), (float3)(-INFINITY), d == (float3)(0.0f));
+    float3 hi = select(fmax(ta, tb), (float3)(INFINITY), d == (float3)(0.0f));
+    if (any(d == (float3)(0.0f) & (o < (float3)(0.0f) | o > (float3)(1.0f)))) return 0;
+    float t0 = fmax(fmax(fmax(lo.x, lo.y), lo.z), 0.0f);
+    float t1 = fmin(fmin(fmin(hi.x, hi.y), hi.z), t_max);
+    if (!(t0 < t1)) return 0;
+    walk->cells = (int3)(GRID_HEADER_INT(spectra, grid, 3), GRID_HEADER_INT(spectra, grid, 4),
+                         GRID_HEADER_INT(spectra, grid, 5));
+    walk->majorant = GRID_HEADER_INT(spectra, grid, 8);
+    float3 m = convert_float3(walk->cells);
+    float3 start = clamp((o + t0 * d) * m, (float3)(0.0f), m);
+    walk->cell = clamp(convert_int3(floor(start)), (int3)(0), walk->cells - 1);
+    walk->step = select((int3)(-1), (int3)(1), d >= (float3)(0.0f));
+    float3 md = d * m;
+    float3 face = convert_float3(walk->cell + select((int3)(0), (int3)(1), walk->step > (int3)(0)));
+    walk->next = select((face - o * m) / md, (float3)(INFINITY), md == (float3)(0.0f));
+    walk->delta = select(fabs(1.0f / md), (float3)(INFINITY), md == (float3)(0.0f));
+    walk->t = t0;
+    walk->t_end = t1;
+    return 1;
+}
+
+/* The current cell's span [*t_enter, *t_exit] and its majorant density, then a step to the next cell. Returns 0 when
+ * the walk has ended. */
+inline int grid_walk_cell(__global const float *spectra, GridWalk *walk, float *t_enter, float *t_exit,
+                          float *majorant)
+{
+    if (!(walk->t < walk->t_end)) return 0;
+    int3 c = walk->cell;
+    *majorant = spectra[walk->majorant + (c.z * walk->cells.y + c.y) * walk->cells.x + c.x];
+    float exit = fmin(fmin(walk->next.x, walk->next.y), fmin(walk->next.z, walk->t_end));
+    *t_enter = walk->t;
+    *t_exit = exit;
+    int axis = walk->next.x <= walk->next.y ? (walk->next.x <= walk->next.z ? 0 : 2)
+                                            : (walk->next.y <= walk->next.z ? 1 : 2);
+    if (axis == 0) {
+        walk->cell.x += walk->step.x;
+        walk->next.x += walk->delta.x;
+    } else if (axis == 1) {
+        walk->cell.y += walk->step.y;
+        walk->next.y += walk->delta.y;
+    } else {
+        walk->cell.z += walk->step.z;
+        walk->next.z += walk->delta.z;
+    }
+    walk->t = exit;
+    if (any(walk->cell < (int3)(0)) || any(walk->cell >= walk->cells)) walk->t_end = exit;
+    return 1;
+}
+
+/* A uniform number in [0, 1) from a hash chain. */
+inline float grid_random(uint *state)
+{
+    *state = hash_u32(*state + 0x9e3779b9U);
+    return (float)(*state >> 8) * 0x1.0p-24f;
+}
+
+/* One free flight through grid medium m from `origin` along unit `direction` toward the surface at t_surface, with
+ * medium_sample_flight's contract (the flight's first distance from u_distance); `throughput`, the path's per
+ * lane, weighs the collision probabilities. */
+inline FreeFlight grid_sample_flight(__global const Medium *m, __global const float *spectra,
+                                     const SampledWavelengths *w, float3 origin, float3 direction, float t_surface,
+                                     int hero_only, float4 throughput, float u_lane, float u_distance)
+{
+    FreeFlight flight;
+    flight.distance = t_surface;
+    flight.scattered = 0;
+    float4 lanes = hero_only ? (float4)(1.0f, 0.0f, 0.0f, 0.0f) : (float4)(1.0f);
+    flight.weight = lanes;  /* lanes a dispersive event ended carry nothing, as in medium_sample_flight */
+    float4 sigma_s = medium_sigma_s(m, spectra, w) * lanes;
+    float4 sigma_t = medium_sigma_t(m, spectra, w) * lanes;
+    float sigma_bound = fmax(fmax(sigma_t.x, sigma_t.y), fmax(sigma_t.z, sigma_t.w));
+    GridWalk walk;
+    if (!(sigma_bound > 0.0f) || !grid_walk_start(spectra, m->grid, origin, direction, t_surface, &walk)) {
+        return flight;
+    }
+    uint state = hash_u32(as_uint(u_lane) ^ hash_u32(as_uint(u_distance)));
+    float u = u_distance;
+    int collisions = 0;
+    float t_enter, t_exit, cell_density;
+    while (grid_walk_cell(spectra, &walk, &t_enter, &t_exit, &cell_density)) {
+        float majorant = cell_density * sigma_bound;
+        if (!(majorant > 0.0f)) continue;
+        float t = t_enter;
+        for (;;) {
+            t -= log(1.0f - u) / majorant;
+            u = grid_random(&state);
+            if (!(t < t_exit)) break;  /* past the cell: the next cell draws afresh from its start */
+            if (++collisions > GRID_MAX_COLLISIONS) {
+                flight.weight = (float4)(0.0f);
+                return flight;
+            }
+            float2 da = grid_density_albedo(spectra, m->grid, origin + t * direction);
+            float4 sigma_t_x = da.x * sigma_t;
+            float4 sigma_s_x = da.x * da.y * sigma_s;
+            float4 sigma_n_x = fmax((float4)(majorant) - sigma_t_x, (float4)(0.0f));
+            float4 h = fabs(throughput * flight.weight);
+            float scatter = dot(h, sigma_s_x), null = dot(h, sigma_n_x);
+            if (!(scatter + null > 0.0f)) {
+                flight.weight = (float4)(0.0f);
+                return flight;
+            }
+            float p_scatter = scatter / (scatter + null);
+            if (u < p_scatter) {
+                flight.weight *= sigma_s_x / (majorant * p_scatter);
+                flight.distance = t;
+                flight.scattered = 1;
+                return flight;
+            }
+            flight.weight *= sigma_n_x / (majorant * (1.0f - p_scatter));
+            u = grid_random(&state);
+        }
+    }
+    return flight;
+}
+
+/* The transmittance per lane of the stretch origin + t·direction, t in [0, length], through grid medium m, by ratio
+ * tracking with random numbers from `seed`: an unbiased estimate of exp(−∫ σt). */
+inline float4 grid_transmittance(__global const Medium *m, __global const float *spectra,
+                                 const SampledWavelengths *w, float3 origin, float3 direction, float length,
+                                 uint seed)
+{
+    float4 sigma_t = medium_sigma_t(m, spectra, w);
+    float sigma_bound = fmax(fmax(sigma_t.x, sigma_t.y), fmax(sigma_t.z, sigma_t.w));
+    GridWalk walk;
+    float4 transmittance = (float4)(1.0f);
+    if (!(sigma_bound > 0.0f) || !grid_walk_start(spectra, m->grid, origin, direction, length, &walk)) {
+        return transmittance;
+    }
+    uint state = hash_u32(seed ^ 0x6a09e667U);
+    int collisions = 0;
+    float t_enter, t_exit, cell_density;
+    while (grid_walk_cell(spectra, &walk, &t_enter, &t_exit, &cell_density)) {
+        float majorant = cell_density * sigma_bound;
+        if (!(majorant > 0.0f)) continue;
+        float t = t_enter;
+        for (;;) {
+            t -= log(1.0f - grid_random(&state)) / majorant;
+            if (!(t < t_exit)) break;
+            if (++collisions > GRID_MAX_COLLISIONS) return (float4)(0.0f);
+            float density = grid_density_albedo(spectra, m->grid, origin + t * direction).x;
+            transmittance *= fmax((float4)(majorant) - density * sigma_t, (float4)(0.0f)) / majorant;
+            if (all(transmittance == (float4)(0.0f))) return transmittance;
+        }
+    }
+    return transmittance;
+}
+
+/* scene_transmittance's stretch through grid medium `medium`: from `carried` before `origin` (cut-outs passed since
+ * the last medium boundary) to `length` past it along unit `direction`; the shadow ray's query and the boundary
+ * count seed the tracking. */
+inline float4 grid_stretch(__global const Medium *media, __global const float *spectra, const SampledWavelengths *w,
+                           int medium, float3 origin, float3 direction, float carried, float length, uint query,
+                           int crossing)
+{
+    return grid_transmittance(&media[medium], spectra, w, origin - carried * direction, direction,
+                              carried + fmax(length, 0.0f), hash_u32(query ^ hash_u32((uint)crossing)));
+}
+
+#endif
