@@ -60,7 +60,6 @@ def test_compare_table_of_all_displays():
     assert "CIEDE2000" in output
 
 
-@pytest.mark.slow
 def test_match_in_gamut_and_out_of_gamut():
     exact = _json("match", "--rgb", *TRIPLE, "--from", "CRT-Dell", "--to", "LCD-HP_narrowband", "--encoding", "srgb")
     assert exact["in_gamut"] and exact["delta_e_2000"]["cie1931_2"] < 0.5
