@@ -16,7 +16,7 @@
  *   pixel and is written as a splat record, reduced on the host in a fixed order;
  * - s, t >= 2: a light vertex joined to a camera vertex through a shadow ray.
  * The sum of each pixel's own strategies goes to the pixel's row of own_xyz. A work-item renders a pixel
- * sample of BDPT_PIXELS_PER_LIGHT_PATH neighbouring pixels whose camera subpaths share one light subpath
+ * sample of bdpt_pixels_per_light_path neighbouring pixels whose camera subpaths share one light subpath
  * (trace_bdpt): the light walk and the t = 1 joins are made once for those pixel samples, which the t = 1 strategy's
  * value and MIS weight count.
  *
@@ -47,11 +47,13 @@
 /* max_depth 16 at most: a camera subpath of 17 vertices (the eye and 16 surfaces), a light one of 16. */
 #define BDPT_MAX_SEGMENTS 16
 #define BDPT_MAX_VERTICES (BDPT_MAX_SEGMENTS + 1)
-/* Neighbouring pixels (in row-major order) whose camera subpaths share one light subpath (trace_bdpt), 1..16: the
- * host defines it from the scene (spectrace.engine.bdpt.pixels_per_light_path). */
-#ifndef BDPT_PIXELS_PER_LIGHT_PATH
-#define BDPT_PIXELS_PER_LIGHT_PATH 2
-#endif
+/* Neighbouring pixels (in row-major order) whose camera subpaths share one light subpath (trace_bdpt), 1..16:
+ * RenderParams.bdpt_pixels_per_light_path, which the host sets from the scene
+ * (spectrace.integrators.bdpt.pixels_per_light_path); a run-time value, so that one program serves every grouping. */
+inline int bdpt_pixels_per_light_path(__global const RenderParams *params)
+{
+    return params->bdpt_pixels_per_light_path;
+}
 
 /* Test builds only: BDPT_ONE_STRATEGY keeps the one strategy (RenderParams.bdpt_only_s, bdpt_only_t), a run-time
  * choice so that one program serves every strategy; BDPT_UNWEIGHTED drops the MIS weights, so that one strategy
@@ -216,12 +218,12 @@ inline void bdpt_extend_mis_sum(BdptVertex *path, int k, int adjoint, float ligh
     v->mis_sum = rho * rho * (before_sum + c);
 }
 
-/* Light subpaths per pixel sample, n_light / n_pixels: trace_bdpt traces one for each BDPT_PIXELS_PER_LIGHT_PATH
- * pixels. */
+/* Light subpaths per pixel sample, n_light / n_pixels: trace_bdpt traces one for each
+ * bdpt_pixels_per_light_path pixels. */
 inline float bdpt_light_share(__global const RenderParams *params)
 {
     int pixels = params->width * params->height;
-    int group = BDPT_PIXELS_PER_LIGHT_PATH;
+    int group = bdpt_pixels_per_light_path(params);
     return (float)((pixels + group - 1) / group) / (float)pixels;
 }
 
@@ -754,7 +756,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
     return bdpt_hero(value, pt->hero || qs->hero) * weight;
 }
 
-/* One pixel sample of the pixels of `group` (BDPT_PIXELS_PER_LIGHT_PATH consecutive ones from group × that, those
+/* One pixel sample of the pixels of `group` (bdpt_pixels_per_light_path consecutive ones from group × that, those
  * the film has): the light-to-camera strategies (t = 1) written to records as it makes them, each pixel's sum of the
  * others (XYZ, w = 1 where dropped) to its row of own_xyz. The camera subpaths share one light subpath (and its wavelengths): every strategy with s >= 2
  * and t >= 2 joins each camera subpath to a whole light subpath, as with one light subpath per pixel sample, while
@@ -770,7 +772,8 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
     int last_segment = min(max_segments(params), BDPT_MAX_SEGMENTS);
     float beam_pdf = 1.0f / (PI_F * scene_sphere.w * scene_sphere.w);
     float light_share = bdpt_light_share(params);
-    int pixel = BDPT_PIXELS_PER_LIGHT_PATH * group;
+    int group_size = bdpt_pixels_per_light_path(params);
+    int pixel = group_size * group;
     Sampler sampler;
     SampledWavelengths w;
     float filter_weight;
@@ -811,7 +814,7 @@ inline void trace_bdpt(const Scene *scene, int group, int sample_index, float4 s
     }
 
     int pixels = params->width * params->height;
-    for (int k = 0; k < BDPT_PIXELS_PER_LIGHT_PATH && pixel < pixels; ++k, ++pixel) {
+    for (int k = 0; k < group_size && pixel < pixels; ++k, ++pixel) {
         if (k > 0) {
             /* The next pixel's camera subpath, with the first one's wavelengths (the light subpath's); its own
              * draws at the dimensions the first pixel's took, the light subpath's start left unused. */

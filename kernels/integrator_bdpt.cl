@@ -1,6 +1,6 @@
 /* Render-pass program of the `bdpt` integrator (bidirectional path tracing, kernels/bdpt.cl).
  *
- * One launch runs one pixel sample: work-item k is a pixel sample of the BDPT_PIXELS_PER_LIGHT_PATH pixels from
+ * One launch runs one pixel sample: work-item k is a pixel sample of the bdpt_pixels_per_light_path pixels from
  * k × that, which share a light subpath (or of the group listed in `items` when the host launches some again for their later records). Its
  * light-to-camera connections land in any pixel, so, as for the `light` integrator (integrator_light.cl), they are
  * written as splat records in its own `capacity` slots, in the order it makes them; its pixels' own estimates go
@@ -23,5 +23,5 @@ KERNEL void bdpt_pass(SCENE_KERNEL_PARAMS, SPLAT_PASS_PARAMS)
     trace_bdpt(&scene, item, sample_index, scene_sphere, hide_environment, cmf, &records, own_xyz, &rays_traced);
     splat_counts[slot] = records.count;
     /* The group's rays, counted in its first pixel. */
-    if (record_begin == 0) ray_counts[BDPT_PIXELS_PER_LIGHT_PATH * item] += rays_traced;
+    if (record_begin == 0) ray_counts[bdpt_pixels_per_light_path(scene.params) * item] += rays_traced;
 }

@@ -250,7 +250,8 @@ typedef struct {
     float spectral_max_nm;
     int bdpt_only_s;         /* test builds with BDPT_ONE_STRATEGY (kernels/bdpt.cl): the one strategy kept */
     int bdpt_only_t;
-    int pad_params[3];       /* keeps `lens` 16-byte aligned */
+    int bdpt_pixels_per_light_path;  /* bdpt: neighbouring pixels sharing one light subpath (kernels/bdpt.cl) */
+    int pad_params[2];       /* keeps `lens` 16-byte aligned */
     float4 lens;             /* CAMERA_THINLENS: aperture radius, focus distance along camera_forward (scene
                                 units), 0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_runner import run_here
 from spectrace.errors import SpectraceError
 from spectrace.interop.scene_files import load_any_scene, scene_format, sniff_format
 from spectrace.resources import scenes_dir
@@ -130,14 +131,14 @@ def test_set_on_an_imported_scene_names_the_imported_file_not_a_temporary_one(tm
     assert "spectrace-pbrt-" not in str(failure.value)
 
 
-@pytest.mark.subprocess
-def test_render_takes_a_mitsuba_file_by_its_bytes_and_a_pbrt_file_by_its_suffix(tmp_path):
+def test_render_takes_a_mitsuba_file_by_its_bytes_and_a_pbrt_file_by_its_suffix(tmp_path, monkeypatch):
     from PIL import Image
 
     shutil.copy(scenes_dir() / "veach_mis.xml", tmp_path / "veach.txt")
     (tmp_path / "quad.pbrt").write_text(QUAD_PBRT)
+    monkeypatch.chdir(tmp_path)
     for scene, size in (("veach.txt", (24, 16)), ("quad.pbrt", (24, 12))):
-        result = _spectrace("render", scene, "-o", "out.png", "--width", "24", "--spp", "1", "-q", cwd=tmp_path)
+        result = run_here("render", scene, "-o", "out.png", "--width", "24", "--spp", "1", "-q")
         assert result.returncode == 0 and "TOML" not in result.stderr, result.stderr
         with Image.open(tmp_path / "out.png") as image:
             assert image.size == size  # the width asked for, the height after the scene's aspect
@@ -176,7 +177,6 @@ def test_version_is_the_installed_distributions():
     assert result.stdout.strip() == f"spectrace {importlib.metadata.version('spectrace')}"
 
 
-@pytest.mark.subprocess
 @pytest.mark.parametrize(
     ("arguments", "line"),
     [
@@ -189,8 +189,10 @@ def test_version_is_the_installed_distributions():
         (("--spp", "0"), "error: --spp: must be ≥ 1, got '0'"),
     ],
 )
-def test_a_bad_setting_is_one_line_naming_it(tmp_path, arguments, line):
-    result = _spectrace("render", "cornell_box", "-o", "x.png", *arguments, cwd=tmp_path)
+def test_a_bad_setting_is_one_line_naming_it(tmp_path, monkeypatch, arguments, line):
+    """The messages, through the entry point in this process (test_set_and_quiet runs the command as a process)."""
+    monkeypatch.chdir(tmp_path)
+    result = run_here("render", "cornell_box", "-o", "x.png", *arguments)
     assert _one_error_line(result).startswith(line)
     assert not (tmp_path / "x.png").exists()
 

@@ -8,10 +8,8 @@ import math
 import numpy as np
 import pytest
 from PIL import Image
-from tests.cli_runner import run_spectrace
+from tests.cli_runner import run_in_process, run_spectrace
 from tests.interop.gltf_builder import Gltf
-
-pytestmark = pytest.mark.subprocess
 
 
 def _model(tmp_path, with_mesh: bool = True):
@@ -33,6 +31,7 @@ def _one_line_error(result) -> str:
     return lines[0]
 
 
+@pytest.mark.subprocess
 def test_import_writes_the_toml_and_its_assets(tmp_path):
     model = _model(tmp_path)
     out = tmp_path / "out" / "scene.toml"
@@ -43,6 +42,7 @@ def test_import_writes_the_toml_and_its_assets(tmp_path):
     assert 'file = "scene_assets/mesh0.ply"' in text and 'type = "point"' in text
 
 
+@pytest.mark.subprocess
 def test_bad_input_and_options_are_one_line_and_keep_the_earlier_import(tmp_path):
     model = _model(tmp_path)
     out = tmp_path / "scene.toml"
@@ -59,6 +59,7 @@ def test_bad_input_and_options_are_one_line_and_keep_the_earlier_import(tmp_path
     assert out.read_bytes() == before
 
 
+@pytest.mark.subprocess
 def test_render_a_glb_directly(tmp_path):
     """The file's camera (aspect 2) and light; no meshes, so no material: the dispatch from `render`, whatever
     materials this build has. The image is black: nothing reflects the light."""
@@ -69,19 +70,21 @@ def test_render_a_glb_directly(tmp_path):
     assert np.asarray(Image.open(image)).shape[:2] == (4, 8)
 
 
-def test_render_of_the_glb_equals_the_render_of_its_import(tmp_path):
-    """Rendering MODEL.glb is rendering its imported TOML: the same bits (metallic-roughness as principled)."""
+def test_render_of_the_glb_equals_the_render_of_its_import(tmp_path, monkeypatch, capsys):
+    """Rendering MODEL.glb is rendering its imported TOML: the same bits (metallic-roughness as principled). In this
+    process: the other tests run the commands as real processes; this one is about the images."""
     from spectrace.materials import MATERIALS
 
     if "principled" not in MATERIALS:
         pytest.skip("this build has no principled material, which glTF's metallic-roughness imports as")
     model = _model(tmp_path)
     out = tmp_path / "scene.toml"
-    assert run_spectrace("import-gltf", str(model), "-o", str(out)).returncode == 0
+    assert run_in_process(monkeypatch, capsys, ["import-gltf", str(model), "-o", str(out)])[0] == 0
     size = ["--spp", "2", "--width", "8", "--height", "4"]
     direct, imported = tmp_path / "direct.exr", tmp_path / "imported.exr"
-    assert run_spectrace("render", str(model), "-o", str(direct), *size).returncode == 0
-    assert run_spectrace("render", str(out), "-o", str(imported), *size).returncode == 0
+    for scene, image in ((model, direct), (out, imported)):
+        status, stderr = run_in_process(monkeypatch, capsys, ["render", str(scene), "-o", str(image), *size])
+        assert status == 0, stderr
     from spectrace.io.exr import read_exr
 
     (a, _), (b, _) = read_exr(direct), read_exr(imported)
@@ -90,6 +93,7 @@ def test_render_of_the_glb_equals_the_render_of_its_import(tmp_path):
         np.testing.assert_array_equal(a[name], b[name], err_msg=name)
 
 
+@pytest.mark.subprocess
 def test_an_output_that_is_the_input_or_a_folder_is_refused(tmp_path):
     model = _model(tmp_path)
     before = model.read_bytes()

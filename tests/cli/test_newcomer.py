@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import spectrace
+from cli_runner import run_here
 from spectrace import progress
 from spectrace.resources import bundled_scene_names
 
@@ -114,10 +115,10 @@ def test_a_folder_named_like_a_bundled_scene_does_not_hide_it(tmp_path, monkeypa
 
 
 @pytest.mark.subprocess
-def test_render_a_bundled_scene_by_name_from_another_folder(tmp_path):
-    result = _spectrace(
-        "render", "cornell_box", "-o", "x.png", "--width", "8", "--height", "8", "--spp", "1", "-q", cwd=tmp_path
-    )
+def test_render_a_bundled_scene_by_name_from_another_folder(tmp_path, monkeypatch):
+    """The render through the entry point in this process; the unknown name's refusal in a real one."""
+    monkeypatch.chdir(tmp_path)
+    result = run_here("render", "cornell_box", "-o", "x.png", "--width", "8", "--height", "8", "--spp", "1", "-q")
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "x.png").is_file()
     unknown = _spectrace("render", "no_such_scene", "-o", "x.png", cwd=tmp_path)

@@ -1,4 +1,5 @@
-"""`spectrace display list | compare | match`, run as a user would, in a subprocess."""
+"""`spectrace display list | compare | match | metamerism` as a user runs them: what they print, through the command
+line's entry point in this process; their refusals (exit status, one line on stderr) in a subprocess."""
 
 import json
 
@@ -6,18 +7,17 @@ import colour
 import numpy as np
 import pytest
 
-from cli_runner import run_spectrace
+from cli_runner import run_here, run_spectrace
 from spectrace.displays import display_names
-
-pytestmark = pytest.mark.subprocess
 
 TRIPLE = ["0.6", "0.3", "0.2"]
 
 
 def _run(*args, check=True):
-    result = run_spectrace("display", *args, timeout=300)
-    if check:
-        assert result.returncode == 0, result.stderr
+    if not check:
+        return run_spectrace("display", *args, timeout=300)
+    result = run_here("display", *args)
+    assert result.returncode == 0, result.stderr
     return result
 
 
@@ -60,7 +60,6 @@ def test_compare_table_of_all_displays():
     assert "CIEDE2000" in output
 
 
-@pytest.mark.slow
 def test_match_in_gamut_and_out_of_gamut():
     exact = _json("match", "--rgb", *TRIPLE, "--from", "CRT-Dell", "--to", "LCD-HP_narrowband", "--encoding", "srgb")
     assert exact["in_gamut"] and exact["delta_e_2000"]["cie1931_2"] < 0.5
@@ -85,6 +84,7 @@ def test_user_csv_display_from_the_command_line(tmp_path):
     assert listing[-1]["name"] == "three_lines" and listing[-1]["absolute"]
 
 
+@pytest.mark.subprocess
 @pytest.mark.slow
 def test_bad_input_is_one_line_without_traceback(tmp_path):
     path = tmp_path / "bad_display.csv"
@@ -98,6 +98,7 @@ def test_bad_input_is_one_line_without_traceback(tmp_path):
     assert result.returncode == 2 and "[0, 1]" in result.stderr and "Traceback" not in result.stderr
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize(
     ("command", "triple", "shown"),
     [
@@ -137,7 +138,7 @@ def _xyz_683(sd: colour.SpectralDistribution) -> np.ndarray:
 
 @pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
 def test_metamerism_per_patch_delta_e_matches_colour_science():
-    """`display metamerism` in a subprocess: the two matched lights have one XYZ, and every patch's ΔE2000 is the
+    """`display metamerism`: the two matched lights have one XYZ, and every patch's ΔE2000 is the
     one colour-science gives for Ohta's ColorChecker reflectance times each light, relative to the light itself."""
     report = _json("metamerism", "--from", "LCD-Dell_CCFL", "--to", "LCD-Apple_WLED")
     grid = np.arange(360.0, 831.0)

@@ -5,7 +5,7 @@ import colour
 import numpy as np
 import pytest
 
-from cli_runner import render_cornell_box, run_spectrace
+from cli_runner import render_cornell_box, run_here, run_spectrace
 from spectrace.errors import SpectraceError
 from spectrace.film.colour_output import (
     Adaptation,
@@ -155,7 +155,7 @@ def test_xyz_output_keeps_the_film(tmp_path):
 
 @pytest.mark.subprocess
 def test_render_command_colour_options(tmp_path):
-
+    """The options' image through the command's entry point here; their refusal, an exit status, in a process."""
     out = tmp_path / "balanced.exr"
     args = [
         *render_cornell_box(out, 1, 8, 6),
@@ -167,7 +167,7 @@ def test_render_command_colour_options(tmp_path):
         "--adaptation",
         "von-kries",
     ]
-    result = run_spectrace(*args)
+    result = run_here(*args)
     assert result.returncode == 0, result.stderr
     channels, header = read_exr(out)
     assert header["spectrace:colour_space"] == "rec2020"

@@ -9,7 +9,7 @@ import pytest
 from PIL import Image as PILImage
 from PIL import ImageCms
 
-from cli_runner import render_cornell_box, run_spectrace
+from cli_runner import render_cornell_box, run_here, run_spectrace
 from spectrace.errors import SpectraceError
 from spectrace.film.colour_output import ColourSpace
 from spectrace.film.image import Image
@@ -128,10 +128,11 @@ def test_refusals_name_the_file(tmp_path):
 
 @pytest.mark.subprocess
 def test_render_command_writes_each_format(tmp_path):
-    """`spectrace render -o` with each suffix, and --bit-depth refused for JPEG in one line before any work."""
+    """`spectrace render -o` with each suffix (through the entry point in this process), and --bit-depth refused for
+    JPEG in one line before any work (a real process)."""
     outputs = {"film.tif": ("--bit-depth", "16"), "film.jpg": (), "film.pfm": ()}
     for name, extra in outputs.items():
-        result = run_spectrace(*render_cornell_box(tmp_path / name, 1, 8, 6), "-q", *extra)
+        result = run_here(*render_cornell_box(tmp_path / name, 1, 8, 6), "-q", *extra)
         assert result.returncode == 0, result.stderr
         assert (tmp_path / name).stat().st_size > 0
     bad = run_spectrace(*render_cornell_box(tmp_path / "deep.jpg", 1, 8, 6), "--bit-depth", "16")

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from cli_runner import render_cornell_box
+from cli_runner import render_cornell_box, run_here
 from cli_runner import run_spectrace as _cli
 from spectrace.benchmarks.kernel_shapes import Variant, run_kernel_shape_bench
 from spectrace.engine.launch import render_work_group
@@ -119,10 +119,9 @@ def test_unknown_kernel_shape_is_refused(device):
         make_renderer(_scene("cornell_box"), device, "persistent")
 
 
-@pytest.mark.subprocess
 def test_render_command_runs_the_wavefront(tmp_path):
     out = tmp_path / "wavefront.exr"
-    result = _cli(
+    result = run_here(
         *render_cornell_box(out, 2, 16, 12),
         "--kernel",
         "wavefront",

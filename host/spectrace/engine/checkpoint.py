@@ -101,7 +101,8 @@ def buffers_digest(
     """scene_digest of a render not yet on a device (a tiled render's client holds no renderer)."""
     digest = hashlib.sha256(_SCENE_DIGEST_SALT.encode())
     settings: tuple = (scene.integrator, spectral_bins, tuple(spectral_range_nm), scene.sampler)
-    # The integrator's own build settings decide its numbers too (BDPT's light subpaths shared by groups of pixels).
+    # The integrator's own build settings decide its numbers too; its run-time ones (BDPT's light subpaths shared by
+    # groups of pixels) are fields of the params hashed below.
     settings += tuple(INTEGRATORS[scene.integrator].defines(scene).values())
     digest.update(repr(settings).encode())
     _update_with_array(digest, "params", render_params(scene, buffers, 0, 0))

@@ -25,6 +25,7 @@ from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
 from spectrace.geometry.grid_volume import medium_row
+from spectrace.integrators import INTEGRATORS
 from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
 from spectrace.lights.area import AreaEmitter
@@ -691,4 +692,6 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["instance_count"] = buffers.instance_count
     params["instanced_shape_count"] = buffers.instanced_shape_count
     params["count_thin_passes"] = int(getattr(scene, "count_thin_passes", True))
+    for name, value in INTEGRATORS[scene.integrator].params(scene).items():
+        params[name] = value
     return params

@@ -5,8 +5,9 @@ ones of base.py and its own) and owns the rest of what the renderer asks of it (
 programs by kernel shape (PROGRAMS) and their build `defines`, what it refuses (`problem`, one line naming the way
 out; REFUSES, the features it refuses in any scene), whether its contributions land in any pixel (SPLATS: then it
 renders whole films, never tiles), why it cannot save a checkpoint (CHECKPOINT_PROBLEM; a checkpoint holds the
-film's state and matches the program's `defines`), and its `passes`: the device state and the pass loop over a
-renderer (base.RenderHost). The engine asks these, never an integrator's name.
+film's state and matches the program's `defines` and `params`), its run-time `params` (RenderParams fields of its
+own), and its `passes`: the device state and the pass loop over a renderer (base.RenderHost). The engine asks these,
+never an integrator's name.
 
 Adding an integrator: its module here, its line in INTEGRATORS, its kernel program (kernels/integrator_<NAME>.cl),
 tests (docs/integrators.md, "Adding an integrator").
@@ -50,6 +51,11 @@ class IntegratorPlugin(Plugin, Protocol):
 
     def defines(self, scene: Scene) -> dict[str, int]:
         """Build defines of its program for `scene` beyond the renderer's (a checkpoint must match them too)."""
+        ...
+
+    def params(self, scene: Scene) -> dict[str, int]:
+        """Fields of RenderParams its kernels read for `scene`: settings of its own passed at run time rather than
+        as defines, so that one program serves every value (a checkpoint must match them too)."""
         ...
 
     def passes(self, host: RenderHost, shape: str, spectral_bins: int) -> Passes:

@@ -124,6 +124,11 @@ def no_defines(scene: Scene) -> dict[str, int]:
     return {}
 
 
+def no_params(scene: Scene) -> dict[str, int]:
+    """The `params` of an integrator whose kernels read no RenderParams field of their own."""
+    return {}
+
+
 # What an integrator may refuse whatever else the scene holds: each module's REFUSES lists those it does (and its
 # `problem` says so in one line), which tests/render/test_furnace_integrators.py holds it to.
 FEATURES = ("spectral bands", "AOVs", "pixel filters", "film responses", "media", "hidden area lights")

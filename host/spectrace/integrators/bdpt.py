@@ -6,7 +6,7 @@ order (every pixel's own estimate, then the records)."""
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.integrators import light
-from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene
+from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines
 
 NAME = "bdpt"
 # Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none), max_depth and rr_depth meaning the same.
@@ -33,11 +33,11 @@ CHECKPOINT_PROBLEM = None
 
 # Subpaths live in fixed arrays in the kernel (kernels/bdpt.cl's BDPT_MAX_SEGMENTS).
 BDPT_MAX_SEGMENTS = 16
-# Consecutive pixels whose camera subpaths share one light subpath, a work-item each group (kernels/bdpt.cl's
-# BDPT_PIXELS_PER_LIGHT_PATH), unless the scene sets integrator.pixels_per_light_path: where some path of light
-# can reach the camera through a smooth or glossy surface or a medium (a caustic that mostly the light-to-camera
-# strategy finds), and where every surface is diffuse and no medium fills a shape (the light-to-camera strategy
-# then adds little that the others do not). Measured in docs/integrators.md ("Sharing light subpaths").
+# Consecutive pixels whose camera subpaths share one light subpath, a work-item each group (RenderParams'
+# bdpt_pixels_per_light_path, kernels/bdpt.cl), unless the scene sets integrator.pixels_per_light_path: where some
+# path of light can reach the camera through a smooth or glossy surface or a medium (a caustic that mostly the
+# light-to-camera strategy finds), and where every surface is diffuse and no medium fills a shape (the light-to-camera
+# strategy then adds little that the others do not). Measured in docs/integrators.md ("Sharing light subpaths").
 PIXELS_PER_LIGHT_PATH_SHARED = 2
 PIXELS_PER_LIGHT_PATH_DIFFUSE = 4
 
@@ -67,8 +67,11 @@ def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     return None
 
 
-def defines(scene: Scene) -> dict[str, int]:
-    return {"BDPT_PIXELS_PER_LIGHT_PATH": pixels_per_light_path(scene)}
+defines = no_defines
+
+
+def params(scene: Scene) -> dict[str, int]:
+    return {"bdpt_pixels_per_light_path": pixels_per_light_path(scene)}
 
 
 def passes(host: RenderHost, shape: str, spectral_bins: int) -> light.LightPasses:

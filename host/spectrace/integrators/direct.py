@@ -1,7 +1,14 @@
 """The `direct` integrator, the local model (kernels/integrator_direct.cl): emission, direct light at diffuse
 surfaces and perfect specular chains, one work-item per pixel (spectrace.integrators.base.PixelPasses)."""
 
-from spectrace.integrators.base import SHARED_PARAMETERS, PixelPasses, RenderHost, no_defines, renders_every_scene
+from spectrace.integrators.base import (
+    SHARED_PARAMETERS,
+    PixelPasses,
+    RenderHost,
+    no_defines,
+    no_params,
+    renders_every_scene,
+)
 
 NAME = "direct"
 MITSUBA_PLUGINS: tuple[str, ...] = ()
@@ -19,6 +26,7 @@ REFUSES: tuple[str, ...] = ()
 CHECKPOINT_PROBLEM = None
 problem = renders_every_scene
 defines = no_defines
+params = no_params
 
 
 def passes(host: RenderHost, shape: str, spectral_bins: int) -> PixelPasses:

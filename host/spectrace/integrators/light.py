@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines
+from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines, no_params
 
 NAME = "light"
 # Mitsuba 3's particle tracer, with the same max_depth and rr_depth meaning.
@@ -31,6 +31,7 @@ SPLATS = "splats"  # its camera connections land in any pixel: whole films only
 REFUSES: tuple[str, ...] = ("AOVs", "film responses", "hidden area lights")
 CHECKPOINT_PROBLEM = None
 defines = no_defines
+params = no_params
 
 # Splat record slots per light path and launch: a path longer than this is launched again for its later records
 # (rare: Russian roulette ends most paths sooner), so memory stays bounded for unbounded max_depth.

@@ -15,7 +15,14 @@ the AOV sums).
 import numpy as np
 
 from spectrace.core.parameters import Parameter
-from spectrace.integrators.base import SHARED_PARAMETERS, PixelPasses, RenderHost, no_defines, renders_every_scene
+from spectrace.integrators.base import (
+    SHARED_PARAMETERS,
+    PixelPasses,
+    RenderHost,
+    no_defines,
+    no_params,
+    renders_every_scene,
+)
 
 NAME = "path"
 # Mitsuba 3's path tracers, and its `direct` as path tracing with max_depth 2 (emitters seen directly and direct
@@ -41,6 +48,7 @@ REFUSES: tuple[str, ...] = ()
 CHECKPOINT_PROBLEM = None
 problem = renders_every_scene
 defines = no_defines
+params = no_params
 QUEUE_ENTRY_BYTES = 4  # one int (a pixel index) per live path
 
 

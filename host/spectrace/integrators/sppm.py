@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines
+from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines, no_params
 from spectrace.integrators.light import scene_sphere
 
 NAME = "sppm"
@@ -35,6 +35,7 @@ CHECKPOINT_PROBLEM = (
     "render without --checkpoint/--resume"
 )
 defines = no_defines
+params = no_params
 
 # The initial gather radius, in pixel footprints at the visible point's distance along the camera path: wide enough
 # to find photons from the first iterations, narrow enough that the blur it starts with is a pixel or two.
