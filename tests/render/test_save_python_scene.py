@@ -28,17 +28,25 @@ def _python_scene() -> spectrace.Scene:
         face_normals=False,
         name="tent",
     )
+    # Spectra given as samples: a Spectrum object and (wavelengths, values) arrays.
+    lights = [
+        spectrace.point_light((-1.0, 1.5, 1.0), power_w=15.0, spectrum=(np.array([400, 600, 700]), [1, 2, 0.5])),
+        *scene.lights,
+    ]
+    sampled = spectrace.diffuse(spectrace.spectrum({450: 0.2, 550: 0.7, 650: 0.4}))
+    shapes = [replace(s, material=sampled) if s.name == "floor" else s for s in scene.shapes]
     post = scene.instances[0].object
     again = spectrace.instance(post, [{"rotate": {"axis": [0, 1, 0], "angle": 45}}, {"translate": [-1.1, 0.4, 0.6]}])
-    return replace(scene, shapes=[*scene.shapes, tent], instances=[*scene.instances, again], spp=2)
+    return replace(scene, shapes=[*shapes, tent], lights=lights, instances=[*scene.instances, again], spp=2)
 
 
 def test_a_python_scene_saved_renders_the_same_bits(tmp_path):
     scene = _python_scene()
     path = spectrace.save_scene(scene, tmp_path / "built.toml")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["built.toml", "built_meshes"]
+    assert path.read_text().count("values = [[360.0, ") == 2  # the floor's and the light's samples
     loaded = spectrace.load_scene(path)
-    assert len(loaded.shapes) == len(scene.shapes) and len(loaded.instances) == 2 and len(loaded.lights) == 2
+    assert len(loaded.shapes) == len(scene.shapes) and len(loaded.instances) == 2 and len(loaded.lights) == 3
     expected = spectrace.render(scene, progress=False)
     saved = spectrace.render(loaded, progress=False)
     assert expected.xyz.any()

@@ -5,9 +5,9 @@ spectrace.interop.toml_writer).
 Materials, textures, lights, emitters and media are written from the arguments their API constructors were given
 (spectrace.core.api_calls), under the scene file's names of those arguments, so the loader makes them through the
 same checks and uplifts; a built-in or exact shape is written as its type placed by its matrix, any other shape as
-its triangles (positions, normals and texture coordinates in doubles) with no transform. An object that no API
-constructor made, or an argument that has no scene-file form (an image given as an array, a Spectrum object), is
-refused in one line naming it.
+its triangles (positions, normals and texture coordinates in doubles) with no transform; a spectrum given as
+samples as its values on the 1 nm grid. An object that no API constructor made, or an argument that has no
+scene-file form (an image given as an array), is refused in one line naming it.
 """
 
 from __future__ import annotations
@@ -86,13 +86,7 @@ class _Writer:
                 return {"spectrum": value}
             if isinstance(value, (list, tuple, np.ndarray)) and np.shape(value) == (3,):
                 return {"rgb": [float(v) for v in np.asarray(value, np.float64)]}
-            if isinstance(value, dict):
-                return dict(value)
-            raise SpectraceError(
-                f"is a {type(value).__name__}, which a scene file cannot hold (give a number, an RGB triple or a "
-                "library spectrum's name to write the scene)",
-                where=where,
-            )
+            return self.samples(value, where)
         if isinstance(value, Path):
             return value.as_posix()
         if isinstance(value, np.ndarray):
@@ -104,6 +98,19 @@ class _Writer:
         if value is None or isinstance(value, (bool, int, float, str, dict)):
             return value
         raise SpectraceError(f"is a {type(value).__name__}, which a scene file cannot hold", where=where)
+
+    def samples(self, value: Any, where: str) -> dict:
+        """A spectrum given as samples (a Spectrum, a colour-science distribution, (wavelengths, values) arrays,
+        pairs, a mapping) as the values on the 1 nm grid its constructor put it on: the loader's `values`, read at
+        those wavelengths, gives back the same numbers."""
+        from spectrace.spectral.grid import GRID_NM
+        from spectrace.spectral.spectrum_input import spectrum
+
+        try:
+            made = spectrum(value)
+        except (SpectraceError, TypeError, ValueError):
+            raise SpectraceError(f"is a {type(value).__name__} that is no spectrum a scene file holds", where) from None
+        return {"values": [[float(nm), float(v)] for nm, v in zip(GRID_NM, made.values)]}
 
     def file_name(self, value: str | Path) -> str:
         """A file an argument names, as the scene file finds it from its folder."""
