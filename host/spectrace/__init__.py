@@ -52,6 +52,7 @@ _LAZY = {
     ),
     "SpectraceError": "spectrace.errors",
     "Session": "spectrace.session",
+    "save_scene": "spectrace.session.scene_toml",
     **dict.fromkeys(["denoise", "directly_seen_emission"], "spectrace.denoising"),
     "Image": "spectrace.film.image",
     "PixelFilter": "spectrace.pixel_filters",
@@ -85,6 +86,7 @@ _names_getattr, _names_dir = lazy_names(
     _registry_names,
     public=[
         "load_scene",
+        "save_scene",
         "render",
         "Session",
         "Image",

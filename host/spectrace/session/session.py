@@ -386,14 +386,46 @@ class Session:
         if plan is not None:
             steps.append(UpdateStep("keys", tuple(given.values()), CHECKED, "validated and resolved", 0.0))
         steps = [replace(step, seconds=time.perf_counter() - started) for step in steps]
-        # Everything is checked: from here on it is applied.
-        if new_outputs is not None:
-            self._outputs = new_outputs
-            self._output_values = self._output_values | outputs
-            steps.append(UpdateStep("film", tuple(outputs), IMAGE_ONLY, "colour output", 0.0))
-        if plan is not None:
-            steps += plan.apply()
+        # Everything is checked: from here on it is applied, all or nothing (_undo).
+        undo = self._undo()
+        try:
+            if new_outputs is not None:
+                self._outputs = new_outputs
+                self._output_values = self._output_values | outputs
+                steps.append(UpdateStep("film", tuple(outputs), IMAGE_ONLY, "colour output", 0.0))
+            if plan is not None:
+                steps += plan.apply()
+        except BaseException:
+            undo(plan.uploading if plan is not None else set())
+            raise
         return steps
+
+    def _undo(self):
+        """A function putting the session back as it is now, for an update that fails part-way (a texture over the
+        budget, a program the device cannot build, an upload that fails): its renderer and the scene and buffers
+        that renderer holds, the packing the next edit starts from, the keys and the image's settings. Handed the
+        device buffers the update had begun to rewrite, it uploads them again from the buffers kept, so that the
+        next pass renders the unedited scene bit for bit."""
+        from spectrace.engine.packing_checkpoint import checkpoint
+
+        renderer = self._open()
+        scene, buffers = renderer.scene, renderer.buffers
+        packing = checkpoint(buffers)
+        kept = (self._outputs, self._output_values, self._read_data, self._read_materials)
+        materials = dict(self._read_materials or {})
+
+        def undo(uploading: set[str]) -> None:
+            packing()
+            self._renderer = renderer
+            self._outputs, self._output_values, self._read_data, self._read_materials = kept
+            if self._read_materials is not None:  # updated in place by a plan's commit
+                self._read_materials.clear()
+                self._read_materials.update(materials)
+            if uploading:
+                renderer.replace_scene(scene, buffers, uploading)
+            renderer.scene, renderer.buffers = scene, buffers
+
+        return undo
 
     # ------------------------------------------------------------------ building
 
@@ -464,6 +496,7 @@ class _Plan:
         self.kinds: dict[str, list[str]] = {}  # kind -> the keys (as given) that ask for it
         self.new_materials: dict[str, Any] = {}  # the materials resolved again, by name
         self.light_edits: tuple[set[int] | None, bool] = (None, True)  # the lights written again (None: all), emitters?
+        self.uploading: set[str] = set()  # the device buffers apply() began to rewrite
         data = copy.deepcopy(session._data)
         source = session._source
         if source is None:
@@ -757,6 +790,7 @@ class _Plan:
             detail = "the scene's features changed: program and device buffers built again"
             steps.append(UpdateStep("program", every_key, REBUILT, detail, time.perf_counter() - started))
         elif set(kinds) - {"exposure"}:
+            self.uploading = set(changed)  # from here the device's buffers may be part rewritten
             renderer.replace_scene(self.scene, buffers, changed)
             detail = f"uploaded {', '.join(sorted(changed)) or 'nothing'}; accumulation cleared"
             steps.append(UpdateStep("device", (), IN_PLACE, detail, time.perf_counter() - started))

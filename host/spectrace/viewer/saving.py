@@ -122,3 +122,14 @@ def save_scene(source: Path | None, edits: Mapping[str, object], folder: Path, n
     except OSError as error:
         raise SpectraceError(f"cannot write the scene ({error.strerror or error})", where=str(path)) from None
     return path
+
+
+def save_built_scene(scene: Any, folder: Path, name: object) -> Path:
+    """Write a scene built in Python, with the edits made to it, as `folder/name` (spectrace.save_scene: its meshes
+    beside it, all or nothing)."""
+    from spectrace.io.output_files import check_output_file
+    from spectrace.session.scene_toml import save_scene as save_python_scene
+
+    path = folder / checked_name(name, SCENE_SUFFIXES)
+    check_output_file(path, "name")
+    return save_python_scene(scene, path, header="A scene built in Python, with the edits made in spectrace view")

@@ -279,7 +279,7 @@ def _no_constant(name: str) -> object:
 
 
 def _save(server: ViewerServer, data: dict) -> dict[str, object]:
-    from spectrace.viewer.saving import save_image, save_scene
+    from spectrace.viewer.saving import save_built_scene, save_image, save_scene
 
     kind = data.get("kind")
     if kind == "image":
@@ -308,7 +308,12 @@ def _save(server: ViewerServer, data: dict) -> dict[str, object]:
         }
         if server.live.display.exposure != server.live.scene_exposure:
             edits["film.exposure"] = server.live.display.exposure
-        path = save_scene(server.scene_source, edits, server.save_folder, data.get("name"))
+        if server.scene_source is None:  # built in Python: written from its objects, with the page's edits in them
+            exposure = server.live.display.exposure
+            built = replace(scene, spp=server.live.spp, exposure=exposure)
+            path = save_built_scene(built, server.save_folder, data.get("name"))
+        else:
+            path = save_scene(server.scene_source, edits, server.save_folder, data.get("name"))
     else:
         raise SpectraceError(f"unknown kind {kind!r} (use image or scene)", where="kind")
     return {"ok": True, "saved": path.name}
