@@ -70,6 +70,7 @@ class Case:
     delta_lobe: bool  # has a delta lobe, which the light tracer cannot see from the camera
     sppm_refused: bool = False  # delta and non-delta lobes on one surface
     fast: tuple[str, ...] = ()  # the integrators of the quick subset; the others are marked slow
+    path_only: bool = False  # polarises: a polarised scene, which only the path tracer renders (tests/polarization)
 
 
 S = spectrace
@@ -127,6 +128,13 @@ CASES = {
             False,
         ),
     ],
+    # Sheets that only absorb: an ideal polariser passes at most what arrives, one of extinction 1 and a retarder
+    # all of it, whatever the polarisation the other sphere left.
+    "polarizer": [
+        Case("ideal", lambda: S.polarizer(30.0), False, True, path_only=True),
+        Case("extinction 1", lambda: S.polarizer(30.0, extinction=1.0), True, True, path_only=True),
+    ],
+    "retarder": [Case("quarter wave", lambda: S.retarder(20.0), True, True, path_only=True)],
     "mix": [
         Case(
             "diffuse and smooth plastic",
@@ -186,6 +194,8 @@ def _params():
             if integrator == "light" and case.delta_lobe:
                 continue  # seen in a delta lobe, black to the light tracer by design
             if integrator == "sppm" and case.sppm_refused:
+                continue
+            if integrator != "path" and case.path_only:
                 continue
             marks = () if integrator in case.fast else (pytest.mark.slow,)
             yield pytest.param(name, case.name, integrator, marks=marks, id=f"{_id(name, case)}-{integrator}")
