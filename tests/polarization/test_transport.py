@@ -69,14 +69,17 @@ def test_depolarizing_scene_renders_its_unpolarized_image(tmp_path):
 
 
 def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
-    """Deterministic: 16 samples in one pass and in passes of 4 give the same bits in every Stokes image."""
+    """Deterministic: 16 samples in one pass, in passes of 4 and in tiles of 3 rows give the same bits in every
+    Stokes image."""
     path = tmp_path / "sheets.toml"
     path.write_text(sheets('type = "polarizer"\nangle = 20', 'type = "retarder"\nangle = 65\nretardance = 70'))
     scene = load_scene(path)
     whole = spectrace.render(scene, progress=False, colour_space="xyz")
     split = spectrace.render(scene, progress=False, colour_space="xyz", pass_spp=4)
-    assert np.array_equal(whole.aovs["stokes"], split.aovs["stokes"])
-    assert np.array_equal(np.asarray(whole.xyz), np.asarray(split.xyz))
+    tiles = spectrace.render(scene, progress=False, colour_space="xyz", tile_rows=3)
+    for other in (split, tiles):
+        assert np.array_equal(whole.aovs["stokes"], other.aovs["stokes"])
+        assert np.array_equal(np.asarray(whole.xyz), np.asarray(other.xyz))
 
 
 @pytest.mark.subprocess
@@ -92,6 +95,7 @@ def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
             "roughness",
         ),
     ],
+    ids=["other integrator", "rough conductor"],
 )
 def test_unrenderable_polarized_scenes_are_refused_in_one_line(tmp_path, edit, key):
     scene = tmp_path / "scene.toml"
