@@ -1,10 +1,11 @@
 /* The Mueller matrix of a sampled BSDF event, for polarised transport (SCENE_POLARIZED): the materials whose events
- * polarise (smooth dielectrics and conductors by the Fresnel equations, the mirror as a perfect conductor,
- * polarisers, retarders) give theirs as an aligned element (mueller.cl) with the bases of the two beams; every
+ * polarise (smooth dielectrics and conductors by the Fresnel equations, a smooth plastic's coat, the mirror as a
+ * perfect conductor, polarisers, retarders) give theirs as an aligned element (mueller.cl) with the bases of the two beams; every
  * other event depolarises, as Mitsuba 3's BSDFs without a polarised model do (their value becomes the depolariser
  * diag(f, 0, 0, 0)). The element is returned divided by its (0, 0) entry, the event's response to unpolarised
  * light, which the BSDF's own sample weight already carries (its sampling is the unpolarised one, as in Mitsuba).
- * Rough lobes depolarise here; the host refuses them in polarised scenes (spectrace.engine.scene_features). */
+ * Rough lobes depolarise here: the host refuses rough conductors and dielectrics in polarised scenes
+ * (spectrace.engine.scene_features); a rough plastic's coat depolarises. */
 #ifndef SPECTRACE_MATERIAL_POLARIZED_CL
 #define SPECTRACE_MATERIAL_POLARIZED_CL
 
@@ -83,6 +84,12 @@ inline int material_polarization(__global const Material *m, const SurfaceContex
                                  fresnel_reflection_shape(c, (float2)(p.eta.y, p.k.y)),
                                  fresnel_reflection_shape(c, (float2)(p.eta.z, p.k.z)),
                                  fresnel_reflection_shape(c, (float2)(p.eta.w, p.k.w)));
+        return 1;
+    }
+    if (MATERIAL_IS(m, MATERIAL_PLASTIC)) {
+        /* The smooth coat's reflection (the only delta event); its base's diffuse light depolarises, as in
+         * Mitsuba 3's polarised plastic. */
+        *e = aligned_uniform(fresnel_reflection_shape(fabs(lo.z), (float2)(m->ior, 0.0f)));
         return 1;
     }
     if (MATERIAL_IS(m, MATERIAL_MIRROR)) {

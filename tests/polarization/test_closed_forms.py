@@ -132,6 +132,15 @@ def test_dielectric_reflection_against_fresnel(tmp_path, incidence):
     assert_stokes(measured, expected, floor=1e-4 * expected[0])
 
 
+@pytest.mark.parametrize("incidence", [30, 70])
+def test_smooth_plastic_coat_reflection_against_fresnel(tmp_path, incidence):
+    """A black smooth plastic reflects by its coat alone: the dielectric's Fresnel reflection."""
+    plastic = 'type = "plastic"\nreflectance = { value = 0 }\nior = 1.5'
+    measured = measure(tmp_path, reflection_scene(incidence, plastic))
+    expected = fresnel_reflection(np.cos(np.radians(incidence)), 1.5) @ UNPOLARIZED
+    assert_stokes(measured, expected, floor=1e-4 * expected[0])
+
+
 def test_conductor_mueller_matrix_against_fresnel(tmp_path):
     """Light polarised at 45° to the plane of incidence (a polariser across the reflected beam) reflected by a
     smooth conductor of index 0.2 + 3.5i at 45°: all four Stokes parameters follow the Fresnel Mueller matrix
