@@ -108,3 +108,14 @@ def test_unrenderable_polarized_scenes_are_refused_in_one_line(tmp_path, edit, k
     assert len(lines) == 1 and key in lines[0] and str(scene) in lines[0], result.stderr
     assert "Traceback" not in result.stderr
     assert out.read_bytes() == b"kept"
+
+
+def test_meters_refuse_a_polarized_scene(tmp_path):
+    """A meter has no camera basis for Stokes vectors: it refuses rather than treat a polariser as a grey filter."""
+    from spectrace.api import measure_radiance
+    from spectrace.errors import SpectraceError
+
+    path = tmp_path / "sheets.toml"
+    path.write_text(sheets('type = "polarizer"'))
+    with pytest.raises(SpectraceError, match="meters measure unpolarised transport"):
+        measure_radiance(load_scene(path), (0, 0, 3), (0, 0, -1))
