@@ -42,7 +42,12 @@
 
 #include "film.cl"
 
-#define AOV_FLOAT4S_PER_PIXEL 5
+/* FILM_STOKES (a polarised render's Stokes images, polarized_path.cl): four more sums, the film XYZ of S0..S3. */
+#ifndef FILM_STOKES
+#define FILM_STOKES 0
+#endif
+#define AOV_STOKES 5
+#define AOV_FLOAT4S_PER_PIXEL (FILM_STOKES ? 9 : 5)
 
 typedef struct {
     float4 albedo;         /* albedo estimate at the four wavelengths (dimensionless) */

@@ -8,6 +8,12 @@
 #include "direct_lighting.cl"
 #include "surface_detail.cl"
 #include "material_mix.cl"
+#if SCENE_POLARIZED
+#include "polarized_path.cl"
+#define IF_POLARIZED(statement) statement
+#else
+#define IF_POLARIZED(statement)
+#endif
 
 /* Longest path when max_depth is unbounded (-1): Russian roulette ends paths long before this. */
 #define UNBOUNDED_DEPTH 1024
@@ -30,7 +36,23 @@ typedef struct {
     int fluoresced;          /* a fluorescent re-emission changed the path's wavelength (fluorescence.cl) */
     SampledWavelengths fluorescent_wavelengths;  /* the path's wavelengths since then */
 #endif
+#if SCENE_POLARIZED
+    PolarizedPath pol;       /* the path's Mueller matrix and the Stokes vector it gathers (polarized_path.cl) */
+#endif
 } PathState;
+
+/* *radiance += s->throughput * value, the unpolarised light a path gathers, which a polarised path also adds to
+ * its Stokes vector. */
+#if SCENE_POLARIZED
+#define PATH_GATHER(s, radiance, value)                       \
+    do {                                                      \
+        float4 gathered_ = (s)->throughput * (value);         \
+        *(radiance) += gathered_;                             \
+        polarized_gather(&(s)->pol, gathered_);               \
+    } while (0)
+#else
+#define PATH_GATHER(s, radiance, value) (*(radiance) += (s)->throughput * (value))
+#endif
 
 /* hit, or a miss where it lies beyond the camera's far clip on the camera's own ray (s's first segment, before any
  * medium boundary is crossed: Mitsuba 3 limits only the sensor's ray). Call it on camera paths only. */
@@ -61,6 +83,7 @@ inline PathState camera_path(Ray ray)
 #if SCENE_HAS_FLUORESCENCE
     s.fluoresced = 0;
 #endif
+    IF_POLARIZED(s.pol = polarized_start(ray.direction));
     return s;
 }
 
@@ -321,9 +344,9 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
         SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
-        *radiance += s->throughput * estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
-                                                           v->info.interior, s->medium, use_mis,
-                                                           path_query(sampler, s, QUERY_SHADOW), rays_traced);
+        PATH_GATHER(s, radiance, estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
+                                                       v->info.interior, s->medium, use_mis,
+                                                       path_query(sampler, s, QUERY_SHADOW), rays_traced));
     }
 }
 
@@ -342,6 +365,16 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     return material_sample(material, &sc, w, v->ns, v->wo, uc, u, bs)
         && shading_side_agrees(v->n, v->ns, bs->wi);
 }
+
+#if SCENE_POLARIZED
+/* The path scatters at v by bs: the event's Mueller matrix joins the path's (polarized_path.cl). */
+inline void polarized_scatter_vertex(const Scene *scene, const SampledWavelengths *w, PathState *s,
+                                     const PathVertex *v, const BSDFSample *bs)
+{
+    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
+    polarized_scatter(&s->pol, &s->throughput, &scene->materials[v->info.material], &sc, w, v->ns, v->wo, bs);
+}
+#endif
 
 /* The path leaves the vertex along a BSDF sample: its weight and radiance compression join the throughput, and
  * the next ray starts off the surface in the medium on that side. */

@@ -38,12 +38,13 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     }
     float3 x = s->ray.origin + flight.distance * s->ray.direction;
     float3 travel = s->ray.direction;
-    *radiance += s->throughput * estimate_direct_light_in_medium(scene, w, sampler, x, travel, s->medium, medium->g,
-                                                                 path_query(sampler, s, QUERY_SHADOW), rays_traced);
+    PATH_GATHER(s, radiance, estimate_direct_light_in_medium(scene, w, sampler, x, travel, s->medium, medium->g,
+                                                             path_query(sampler, s, QUERY_SHADOW), rays_traced));
 #if FILM_AOVS
     aov_at_medium_scatter(&s->aov, flight.distance, x, s->throughput / s->radiance_scale);
 #endif
     s->ray.direction = sample_henyey_greenstein(travel, medium->g, sample_2d(sampler));
+    IF_POLARIZED(polarized_depolarize(&s->pol, s->ray.direction));
     s->ray.origin = x;
     s->previous_point = x;
     s->previous_pdf = henyey_greenstein(dot(travel, s->ray.direction), medium->g);
@@ -84,6 +85,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
                          ? 1.0f : power_heuristic(s->previous_pdf, environment_pdf(env, scene->map_cdf, d));
             float4 emitted = environment_radiance(env, scene->spectra, scene->texels, w, d);
             *radiance += s->throughput * emitted * weight;
+            IF_POLARIZED(polarized_gather(&s->pol, s->throughput * emitted * weight));
 #if FILM_AOVS
             record_camera_emission(scene, w, s, emitted, weight, 0, hit);
 #endif
@@ -103,6 +105,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
             weight = power_heuristic(s->previous_pdf, pdf_light);
         }
         *radiance += s->throughput * emitted * weight;
+        IF_POLARIZED(polarized_gather(&s->pol, s->throughput * emitted * weight));
 #if FILM_AOVS
         record_camera_emission(scene, w, s, emitted, weight, &v, hit);
 #endif
@@ -129,6 +132,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
      * segment number, even from its last segment. */
     int uncounted = uncounted_passes && dot(bs.wi, v.n) * dot(v.wo, v.n) < 0.0f;
     if (s->segments >= last_segment && !uncounted) return 0;
+    IF_POLARIZED(polarized_scatter_vertex(scene, w, s, &v, &bs));
     follow_bsdf_sample(s, &v, &bs);
     if (!survives_russian_roulette(s, params, sample_1d(sampler))) return 0;
     if (all(s->throughput == (float4)(0.0f))) return 0;

@@ -34,10 +34,17 @@ KERNEL void render_pass(SCENE_KERNEL_PARAMS, __global const float4 *cmf, __globa
         float weight;
         Ray ray = start_pixel_sample(params, cmf, pixel, s, &sampler, &w, &weight);
         /* weight: the pixel filter's sample weight, × 1 for box and tent filters, which changes no bits. */
-#if FILM_AOVS
+#if FILM_AOVS || SCENE_POLARIZED
         PathState path = camera_path(ray);
+        IF_POLARIZED(polarized_camera(&path.pol, params, ray.direction));
         float4 radiance = weight * TRACE_PATH_STATE(&scene, &w, &sampler, &path, &rays_traced);
+#if FILM_STOKES
+        add_stokes_sample(aov_sums, &path.pol, radiance, weight, cmf, &w);
+#endif
+        IF_POLARIZED(radiance = polarized_film_radiance(&path.pol, params, radiance, weight));
+#if FILM_AOVS
         add_aov_sample(aov_sums, &path.aov, radiance, weight, cmf, &w);
+#endif
 #else
         float4 radiance = weight * TRACE_RADIANCE(&scene, &w, &sampler, ray, &rays_traced);
 #endif

@@ -113,6 +113,12 @@
 #define SCENE_HAS_INSTANCES 1
 #endif
 
+/* Polarised transport (kernels/polarized_path.cl): camera paths carry a Mueller matrix. Not a specialisation of
+ * the general kernels, which leave it out: a polarised scene's build always defines it, whichever kernels it takes. */
+#ifndef SCENE_POLARIZED
+#define SCENE_POLARIZED 0
+#endif
+
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 /* Fluorescent materials: a path's wavelength may change at a vertex (kernels/fluorescence.cl). */
 #define SCENE_HAS_FLUORESCENCE SCENE_USES_MATERIAL(MATERIAL_FLUORESCENT)

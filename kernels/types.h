@@ -253,7 +253,8 @@ typedef struct {
     int bdpt_pixels_per_light_path;  /* bdpt: neighbouring pixels sharing one light subpath (kernels/bdpt.cl) */
     int pad_params[2];       /* keeps `lens` 16-byte aligned */
     float4 lens;             /* CAMERA_THINLENS: aperture radius, focus distance along camera_forward (scene
-                                units), 0, 0 */
+                                units); a camera polariser's axis angle (radians) and 1 (polarized_path.cl), else
+                                0, 0 */
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:
                                 gaussian: -1/(2σ²), exp(-radius²/(2σ²)) (σ in pixels); mitchell: B, C */
     float filter_cdf[PIXEL_FILTER_BINS];  /* gaussian, mitchell: CDF of |f| over [0, radius] at each bin's end */

@@ -42,6 +42,12 @@ inline void add_slot_sample(const PathSlot *slot, int pixel, __global float4 *fi
 #if FILM_AOVS
     float4 sums[AOV_FLOAT4S_PER_PIXEL];
     for (int i = 0; i < AOV_FLOAT4S_PER_PIXEL; ++i) sums[i] = aov_film[pixel * AOV_FLOAT4S_PER_PIXEL + i];
+#if FILM_STOKES
+    add_stokes_sample(sums, &slot->path.pol, radiance, slot->weight, cmf, &slot->w);
+#endif
+#endif
+    IF_POLARIZED(radiance = polarized_film_radiance(&slot->path.pol, params, radiance, slot->weight));
+#if FILM_AOVS
     add_aov_sample(sums, &slot->path.aov, radiance, slot->weight, cmf, &slot->w);
     for (int i = 0; i < AOV_FLOAT4S_PER_PIXEL; ++i) aov_film[pixel * AOV_FLOAT4S_PER_PIXEL + i] = sums[i];
 #endif
@@ -59,6 +65,7 @@ inline int start_slot_sample(__global const RenderParams *params, PathSlot *slot
     for (; sample_index < params->sample_begin + params->sample_count; ++sample_index) {
         Ray ray = start_pixel_sample(params, cmf, pixel, sample_index, &slot->sampler, &slot->w, &slot->weight);
         slot->path = camera_path(ray);
+        IF_POLARIZED(polarized_camera(&slot->path.pol, params, ray.direction));
         slot->radiance = (float4)(0.0f);
         slot->sample = sample_index;
         if (slot->path.segments <= max_segments(params)) return 1;

@@ -131,6 +131,13 @@ CASES = {
             False,
         ),
     ],
+    # Sheets that only absorb: an ideal polariser passes at most what arrives, one of extinction 1 and a retarder
+    # all of it, whatever the polarisation the other sphere left.
+    "polarizer": [
+        Case("ideal", lambda: S.polarizer(30.0), False, True, only=("path",)),
+        Case("extinction 1", lambda: S.polarizer(30.0, extinction=1.0), True, True, only=("path",)),
+    ],
+    "retarder": [Case("quarter wave", lambda: S.retarder(20.0), True, True, only=("path",))],
     "mix": [
         Case(
             "diffuse and smooth plastic",

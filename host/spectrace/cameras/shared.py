@@ -23,7 +23,17 @@ FAR_CLIP = Parameter(
     Range(0.0, low_open=True),
     doc="distance along the view axis beyond which nothing is seen (none: no limit); more than near_clip",
 )
-PARAMETERS = (ORIGIN, TARGET, UP, NEAR_CLIP, FAR_CLIP)
+POLARIZER_ANGLE = Parameter(
+    "polarizer_angle",
+    "float",
+    "degrees",
+    None,
+    Range(-360.0, 360.0),
+    default_doc="none",
+    doc="a linear polariser in front of the lens, its axis this far from the image's right toward its up (a "
+    "polarised render: [polarization.md](polarization.md)); none: no filter",
+)
+PARAMETERS = (ORIGIN, TARGET, UP, NEAR_CLIP, FAR_CLIP, POLARIZER_ANGLE)
 
 FOV = Parameter(
     "fov",

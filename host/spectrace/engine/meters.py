@@ -15,6 +15,8 @@ from spectrace.device import Device, open_device
 from spectrace.engine.launch import meter_work_group
 from spectrace.engine.renderer import upload_scene
 from spectrace.engine.scene_buffers import build_scene_buffers, render_params
+from spectrace.engine.scene_features import is_polarized
+from spectrace.errors import SpectraceError
 from spectrace.film.response import FilmResponse
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.plugins import generated_sources
@@ -121,6 +123,13 @@ def measure(
     if scene.film_response.has_own_grid:  # meters read spectra on the common grid, whatever the film's range
         scene = scene.with_overrides(film_response=FilmResponse())
     buffers = build_scene_buffers(scene)
+    if is_polarized(scene, buffers):
+        # A meter has no basis to measure Stokes vectors in: its paths would treat polarisers as grey filters.
+        raise SpectraceError(
+            "meters measure unpolarised transport: this scene is polarised (integrator.polarized, a polarizer or "
+            "retarder, a Stokes AOV or camera.polarizer_angle); render it with the path integrator instead",
+            where=str(scene.source) if scene.source else None,
+        )
     program = device.build_program("meters.cl", defines=traversal_defines() or None, generated=generated_sources())
     ctx, queue = device.context, device.queue
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR

@@ -17,7 +17,7 @@ from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.engine.scene_buffers import SceneBuffers, build_scene_buffers, render_params
-from spectrace.engine.scene_features import camera_feature_defines, scene_feature_defines
+from spectrace.engine.scene_features import camera_feature_defines, polarization_defines, scene_feature_defines
 from spectrace.errors import SpectraceError
 from spectrace.film.image import Image
 from spectrace.film.setup import FilmSetup
@@ -152,10 +152,15 @@ class Renderer:
 
     def _feature_defines(self, scene: Scene, buffers: SceneBuffers) -> dict[str, int]:
         """The defines of the scene's features its program is specialised to (none for the general kernels)."""
+        polarized = polarization_defines(scene, buffers)
         if not self.specialised:
-            return {}
+            return polarized
         hides = scene.hide_emitters and any(shape.emitter is not None for shape in scene.shapes)
-        return scene_feature_defines(buffers, hides) | camera_feature_defines(render_params(scene, buffers, 0, 0))
+        return (
+            scene_feature_defines(buffers, hides)
+            | camera_feature_defines(render_params(scene, buffers, 0, 0))
+            | polarized
+        )
 
     def program_fits(self, scene: Scene, buffers: SceneBuffers) -> bool:
         """Whether this renderer's program renders `scene` (an edit of its own) with `buffers`: the same features."""

@@ -685,6 +685,8 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     camera = CAMERAS[scene.camera.type]
     params["camera_type"] = CAMERAS.codes[scene.camera.type]
     params["lens"][0, :2] = camera.lens(scene.camera)
+    if scene.camera.polarizer_angle is not None:  # kernels/polarized_path.cl: the camera's polariser
+        params["lens"][0, 2:] = (np.radians(scene.camera.polarizer_angle), 1.0)
     pixel_filter = scene.pixel_filter
     params["pixel_filter"] = pixel_filter.code
     params["filter_shape"][0] = pixel_filter.device_shape()

@@ -5,7 +5,9 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 import numpy as np
 
 from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
+from spectrace.core.parameters import SMOOTH_ALPHA
 from spectrace.engine.scene_buffers import SceneBuffers
+from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES
 from spectrace.textures import TEXTURES
 
@@ -66,3 +68,53 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
             bool(np.any((materials["normal_map_handedness"] != 0) & (materials["normal_map"] >= 0)))
         ),
     }
+
+
+# Materials that exist to polarise: a scene with one renders polarised without being asked.
+POLARIZING_MATERIALS = ("polarizer", "retarder")
+# Those whose rough lobes would need the polarised Fresnel term in their value as well as in their samples.
+_FRESNEL_MATERIALS = ("conductor", "dielectric")
+
+
+def is_polarized(scene, buffers: SceneBuffers) -> bool:
+    """Whether `scene` renders with polarised transport (kernels/polarized_path.cl): asked for by
+    integrator.polarized, or implied by a polarising material, a polarisation AOV or a camera polariser."""
+    from spectrace.film.aovs import POLARIZATION_AOVS
+
+    codes = [MATERIAL_CODES[name] for name in POLARIZING_MATERIALS]
+    return bool(
+        scene.polarized
+        or scene.camera.polarizer_angle is not None
+        or any(aov in POLARIZATION_AOVS for aov in scene.aovs)
+        or np.isin(buffers.materials["type"], codes).any()
+    )
+
+
+def polarization_defines(scene, buffers: SceneBuffers) -> dict[str, int]:
+    """SCENE_POLARIZED for a polarised scene, in the general kernels' builds too (they leave it out); a scene the
+    polarised kernels cannot render raises SpectraceError naming the key."""
+    if not is_polarized(scene, buffers):
+        return {}
+    where = str(scene.source) if scene.source else None
+    if scene.integrator != "path":
+        raise SpectraceError(
+            f"integrator.type = {scene.integrator!r}: polarised transport (integrator.polarized, a polarizer or "
+            "retarder, a Stokes AOV or camera.polarizer_angle) is rendered by the path integrator only",
+            where=where,
+        )
+    materials = buffers.materials
+    if "fluorescent" in MATERIAL_CODES and (materials["type"] == MATERIAL_CODES["fluorescent"]).any():
+        raise SpectraceError(
+            "integrator.polarized: a fluorescent material in a polarised scene is not rendered (a re-emission's "
+            "polarisation is not modelled)",
+            where=where,
+        )
+    fresnel = np.isin(materials["type"], [MATERIAL_CODES[name] for name in _FRESNEL_MATERIALS])
+    rough = fresnel & ((materials["alpha"] >= SMOOTH_ALPHA) | (materials["roughness_texture"] != NO_TEXTURE))
+    if rough.any():
+        raise SpectraceError(
+            "roughness: polarised transport renders smooth conductors and dielectrics only (a rough one's "
+            "polarised microfacet term is not modelled)",
+            where=where,
+        )
+    return {"SCENE_POLARIZED": 1}

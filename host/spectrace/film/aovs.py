@@ -6,6 +6,12 @@ albedo is kept as XYZ, each channel the reflectance's x̄-, ȳ- or z̄-weighted 
 (1, 1, 1)); files and the denoiser get it in the output colour space, adapted from the equal-energy white to the
 space's white, so that white stays (1, 1, 1). variance is the standard error of the pixel's mean Y.
 
+stokes, dolp and aolp belong to a polarised render (docs/polarization.md): `stokes` the Stokes images S0..S3 of
+the light reaching the camera (before its polariser, when it has one), each as film XYZ, in the camera's basis (S1 >
+0: polarised along the image's right; S2 > 0: along the diagonal between its right and up); `dolp` the degree of
+linear polarisation √(S1² + S2²) / S0 and `aolp` its angle ½ atan2(S2, S1) (radians from the image's right toward
+its up), both of the Y channels.
+
 emission is the film XYZ of the emission the camera rays meet directly (area lights, the environment), as its
 expected value over the wavelengths: free of the colour noise four sampled wavelengths give it. Asking for it also
 keeps `emission_sampled`, the same emission as the image's own estimate holds it, which the denoiser exchanges for
@@ -18,10 +24,13 @@ import numpy as np
 
 from spectrace.errors import SpectraceError
 
-AOV_NAMES = ("albedo", "normal", "depth", "position", "variance", "emission")
+AOV_NAMES = ("albedo", "normal", "depth", "position", "variance", "emission", "stokes", "dolp", "aolp")
+# The AOVs of a polarised render: kernels/aov.cl keeps four more float4 sums for them (FILM_STOKES).
+POLARIZATION_AOVS = ("stokes", "dolp", "aolp")
 # Images an AOV brings along besides its own (kept with it, written beside it).
 AOV_COMPANIONS = {"emission": ("emission_sampled",)}
 AOV_FLOATS_PER_PIXEL = 20  # kernels/aov.cl: AOV_FLOAT4S_PER_PIXEL float4s
+STOKES_AOV_FLOATS_PER_PIXEL = 36  # the same with FILM_STOKES
 # EXR channels of each AOV but the albedo, whose channel names follow the colour space (aov_channels).
 AOV_CHANNELS = {
     "normal": ("normal.X", "normal.Y", "normal.Z"),
@@ -30,6 +39,9 @@ AOV_CHANNELS = {
     "variance": ("Y.stderr",),
     "emission": ("emission.X", "emission.Y", "emission.Z"),
     "emission_sampled": ("emission_sampled.X", "emission_sampled.Y", "emission_sampled.Z"),
+    "stokes": tuple(f"S{i}.{c}" for i in range(4) for c in "XYZ"),
+    "dolp": ("dolp",),
+    "aolp": ("aolp",),
 }
 
 
@@ -49,9 +61,19 @@ def parse_aovs(names: str | Sequence[str] | None, where: str | None = None) -> t
     return tuple(n for n in AOV_NAMES if n in items)
 
 
+def aov_floats_per_pixel(aovs: Sequence[str]) -> int:
+    """Floats per pixel of the AOV film that records `aovs` (none asked: 0)."""
+    if not aovs:
+        return 0
+    return STOKES_AOV_FLOATS_PER_PIXEL if any(a in POLARIZATION_AOVS for a in aovs) else AOV_FLOATS_PER_PIXEL
+
+
 def aov_defines(aovs: Sequence[str]) -> dict[str, int]:
-    """Kernel defines that make the render kernels record the AOVs (kernels/aov.cl records all of them at once)."""
-    return {"FILM_AOVS": 1} if aovs else {}
+    """Kernel defines that make the render kernels record the AOVs (kernels/aov.cl records all of them at once;
+    the Stokes sums only when a polarisation AOV is asked)."""
+    if not aovs:
+        return {}
+    return {"FILM_AOVS": 1} | ({"FILM_STOKES": 1} if any(a in POLARIZATION_AOVS for a in aovs) else {})
 
 
 def albedo_channel_scale(cmf: np.ndarray) -> np.ndarray:
@@ -69,7 +91,7 @@ def aov_images(sums: np.ndarray, film: np.ndarray, samples: int, albedo_scale: n
     mean Y (inf below 2 samples)."""
     n = max(samples, 1)
     height, width = shape
-    per = sums.astype(np.float64).reshape(-1, AOV_FLOATS_PER_PIXEL // 4, 4) / n
+    per = sums.astype(np.float64).reshape(height * width, -1, 4) / n
 
     def image(values: np.ndarray) -> np.ndarray:
         return values.reshape(height, width, *values.shape[1:]).astype(np.float32)
@@ -80,7 +102,7 @@ def aov_images(sums: np.ndarray, film: np.ndarray, samples: int, albedo_scale: n
         stderr = np.sqrt(variance / n)
     else:
         stderr = np.full(mean_y.shape, np.inf)
-    return {
+    images = {
         "albedo": image(per[:, 0, :3] * albedo_scale),
         "normal": image(per[:, 1, :3]),
         "depth": image(per[:, 2, 3]),
@@ -89,6 +111,14 @@ def aov_images(sums: np.ndarray, film: np.ndarray, samples: int, albedo_scale: n
         "emission": image(per[:, 4, :3]),
         "emission_sampled": image(per[:, 3, :3]),
     }
+    if per.shape[1] * 4 == STOKES_AOV_FLOATS_PER_PIXEL:
+        stokes = per[:, 5:9, :3]  # (pixels, S0..S3, XYZ)
+        images["stokes"] = image(stokes.reshape(-1, 12))
+        s0, s1, s2 = stokes[:, 0, 1], stokes[:, 1, 1], stokes[:, 2, 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            images["dolp"] = image(np.where(s0 > 0.0, np.hypot(s1, s2) / s0, 0.0))
+        images["aolp"] = image(0.5 * np.arctan2(s2, s1))
+    return images
 
 
 def with_companions(aovs: Sequence[str]) -> tuple[str, ...]:

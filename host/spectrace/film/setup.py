@@ -17,7 +17,7 @@ from spectrace.device import Device
 from spectrace.engine.memory import SPECTRAL_BAND_BYTES
 from spectrace.engine.opencl_errors import translate_opencl_errors
 from spectrace.errors import SpectraceError
-from spectrace.film.aovs import AOV_FLOATS_PER_PIXEL, albedo_channel_scale, aov_defines
+from spectrace.film.aovs import albedo_channel_scale, aov_defines, aov_floats_per_pixel
 from spectrace.film.image import Image
 from spectrace.film.response import FilmResponse
 from spectrace.film.state import (
@@ -178,7 +178,8 @@ class Film:
         # Allocated even without bands (one float), since the kernels always take the argument.
         self.spectral_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * self.spectral_bins, 1) * SPECTRAL_BAND_BYTES)
         # Likewise one float4 without AOVs.
-        aov_floats = self.pixel_count * AOV_FLOATS_PER_PIXEL if self.aovs else 4
+        self.aov_floats_per_pixel = aov_floats_per_pixel(self.aovs)
+        aov_floats = self.pixel_count * self.aov_floats_per_pixel if self.aovs else 4
         self.aov_buffer = cl.Buffer(ctx, rw, aov_floats * 4)
         self.response_buffer = cl.Buffer(ctx, rw, max(self.pixel_count * self.response_channels, 1) * 4)
         self.samples_done = 0
@@ -234,8 +235,8 @@ class Film:
 
     @translate_opencl_errors("reading the AOV film")
     def read_aovs(self) -> np.ndarray:
-        """(pixels, AOV_FLOATS_PER_PIXEL) AOV sums (kernels/aov.cl's layout); divide by samples_done for the means."""
-        return self._read(self.aov_buffer, (self.pixel_count, AOV_FLOATS_PER_PIXEL))
+        """(pixels, floats per pixel) AOV sums (kernels/aov.cl's layout); divide by samples_done for the means."""
+        return self._read(self.aov_buffer, (self.pixel_count, self.aov_floats_per_pixel))
 
     @translate_opencl_errors("reading the response film")
     def read_responses(self) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 
 from spectrace.core import limits
 from spectrace.errors import SpectraceError
-from spectrace.film.aovs import AOV_FLOATS_PER_PIXEL, aov_images, with_companions
+from spectrace.film.aovs import AOV_FLOATS_PER_PIXEL, STOKES_AOV_FLOATS_PER_PIXEL, aov_images, with_companions
 from spectrace.film.image import Image, SpectralBands
 from spectrace.film.response import WAVELENGTH_LIMITS_NM, FilmResponse
 
@@ -157,6 +157,8 @@ def state_problem(state: RenderState, width: int, height: int) -> str | None:
         if name not in STATE_LAYOUT:
             return f"unknown buffer '{name}'"
         dtype, per_pixel = STATE_LAYOUT[name]
+        if name == "aov_film" and array.ndim == 2 and array.shape[1] == STOKES_AOV_FLOATS_PER_PIXEL:
+            per_pixel = STOKES_AOV_FLOATS_PER_PIXEL  # a polarised render's (spectrace.film.aovs)
         shape = (pixels, per_pixel) if per_pixel and per_pixel > 1 else (pixels,)
         if per_pixel is None:
             fits = array.ndim == 1 and array.size > 0 and array.size % pixels == 0

@@ -40,7 +40,14 @@ COUNT_THIN_PASSES = Parameter(
     doc="a pass straight through a thindielectric counts toward max_depth (false: Mitsuba 3's volpath, where it "
     "does not)",
 )
-PARAMETERS = (*SHARED_PARAMETERS, COUNT_THIN_PASSES)
+POLARIZED = Parameter(
+    "polarized",
+    "bool",
+    default=False,
+    doc="polarised transport: paths carry Stokes vectors and Mueller matrices ([polarization.md](polarization.md)); "
+    "polarising materials, Stokes AOVs and camera.polarizer_angle imply it",
+)
+PARAMETERS = (*SHARED_PARAMETERS, COUNT_THIN_PASSES, POLARIZED)
 PROGRAMS = {"megakernel": "integrator_path.cl", "wavefront": "integrator_path_wavefront.cl"}
 SPLATS = None  # each pixel adds its own samples: tiles and checkpoints as the film's
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).

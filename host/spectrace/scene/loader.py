@@ -745,6 +745,7 @@ def scene_from_spec(path: Path, spec: schema.SceneSpec) -> Scene:
         hide_environment=spec.integrator.hide_environment,
         hide_emitters=spec.integrator.hide_emitters,
         count_thin_passes=spec.integrator.count_thin_passes,
+        polarized=spec.integrator.polarized,
         pixels_per_light_path=spec.integrator.pixels_per_light_path,
         spp=spec.sampler.spp,
         seed=spec.sampler.seed,
@@ -759,6 +760,7 @@ def camera_from_spec(spec) -> Camera:
     keys = spec.model_dump()
     fields: dict = {"origin": spec.origin, "target": spec.target, "up": spec.up, "near_clip": spec.near_clip}
     fields["far_clip"] = spec.far_clip
+    fields["polarizer_angle"] = spec.polarizer_angle
     fields["type"] = spec.type
     if "fov" in keys:
         fields["fov_degrees"], fields["fov_axis"] = spec.fov, spec.fov_axis

@@ -52,6 +52,7 @@ class Camera:
     aperture_radius: float = 0.0  # thinlens: scene units
     focus_distance: float = 1.0  # thinlens: scene units along the view axis
     view_width: float = 2.0  # orthographic: scene units across the image
+    polarizer_angle: float | None = None  # a linear polariser in front of the lens, degrees from the image's right
 
     def basis(self, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """origin, forward, and the right and up vectors the kernels read for an image of width/height =
@@ -148,6 +149,7 @@ class Scene:
     hide_environment: bool = False  # camera rays that leave the scene see black
     hide_emitters: bool = False  # Mitsuba 3's hide_emitters: the environment hidden, area lights seen through
     count_thin_passes: bool = True  # path: a pass straight through a thindielectric counts toward max_depth
+    polarized: bool = False  # path: polarised transport (also implied by polarising materials, Stokes AOVs, a filter)
     pixels_per_light_path: int | None = None  # bdpt: pixels sharing one light subpath; None: chosen from the scene
     pixel_filter: PixelFilter = BOX_FILTER  # the pixel's reconstruction filter (spectrace.pixel_filters)
     exposure: float = 0.0  # stops applied to the RGB outputs (not to the film's XYZ)
@@ -205,7 +207,7 @@ def settings_type_problem(scene: Scene) -> str | None:
         or next(
             (
                 problem
-                for name in ("hide_environment", "hide_emitters", "count_thin_passes")
+                for name in ("hide_environment", "hide_emitters", "count_thin_passes", "polarized")
                 if (problem := limits.flag_problem(name, getattr(scene, name)))
             ),
             None,

@@ -552,7 +552,7 @@ class FilmSpec(Strict):
         description="stops: RGB output x 2**exposure",
     )
     filter: PixelFilterSpec = Field(default=None, description="the pixel's reconstruction filter (default box)")
-    aovs: list[Literal["albedo", "normal", "depth", "position", "variance"]] = Field(
+    aovs: list[Literal["albedo", "normal", "depth", "position", "variance", "stokes", "dolp", "aolp"]] = Field(
         default_factory=list, description="AOVs written beside the image (EXR channels)"
     )
     observer: str = Field(default="CIE 1931 2°", description="CIE observer of the film's X, Y, Z and RGB outputs")

@@ -1,8 +1,8 @@
 """Integrators: each integrator module of spectrace.integrators maps the Mitsuba plugins it lists in MITSUBA_PLUGINS
 with its `from_mitsuba` (path: path, direct, volpath, volpathmis; light: ptracer; Mitsuba 0.6's bdpt and its sppm
 and photonmapper: bdpt, sppm); this module reads the keys they share (max_depth, rr_depth, hide_emitters) and the two
-integrators that hold another: moment (its nested integrator) and aov (its nested integrator, and the AOVs
-spectrace's film keeps)."""
+integrators that hold another: moment (its nested integrator), aov (its nested integrator, and the AOVs
+spectrace's film keeps) and stokes (its nested integrator, polarised, with the Stokes images)."""
 
 from __future__ import annotations
 
@@ -45,6 +45,9 @@ def integrator(ctx: ImportContext, element: Element, data: dict) -> None:
     if kind == "aov":
         aov_integrator(ctx, element, properties, data)
         return
+    if kind == "stokes":
+        stokes_integrator(ctx, element, properties, data)
+        return
     data["integrator"] = INTEGRATOR_MODULES[kind].from_mitsuba(ctx, element, properties, settings)
     ctx.origins["integrator"] = element
 
@@ -77,6 +80,19 @@ def aov_integrator(ctx: ImportContext, element: Element, properties: Properties,
         ctx.warnings.append(f"{where}: it holds no integrator; its image is spectrace's path tracer's")
         data["integrator"] = {"type": "path", "max_depth": -1}
         ctx.origins["integrator"] = element
+
+
+def stokes_integrator(ctx: ImportContext, element: Element, properties: Properties, data: dict) -> None:
+    """Mitsuba's `stokes` integrator (its polarised variants): the integrator it holds, rendered with polarised
+    transport, and the `stokes` AOV, S0..S3 as film XYZ each (docs/polarization.md) where Mitsuba writes each
+    Stokes component's colour after its image's."""
+    nested = ctx.nested(properties, "integrator")
+    if len(nested) != 1:
+        raise ctx.fail(element, f"integrator 'stokes' needs exactly one nested integrator, got {len(nested)}")
+    integrator(ctx, nested[0], data)
+    if "integrator" in data:
+        data["integrator"]["polarized"] = True
+    ctx.film_aovs = [*ctx.film_aovs, "stokes"] if "stokes" not in ctx.film_aovs else ctx.film_aovs
 
 
 def with_snake_case(*names: str) -> tuple[str, ...]:

@@ -38,9 +38,9 @@ CAMERA_MODULES = _modules_by_plugin(CAMERAS.values())
 # rfilter is replaced by the box filter with a note.
 FILTER_PLUGINS = {plugin: name for name, module in PIXEL_FILTERS.items() for plugin in module.MITSUBA_PLUGINS}
 # Mitsuba integrator plugin → spectrace integrator, from the integrators' modules (spectrace.integrators); `moment`
-# and `aov` hold another integrator, whose image they render (integrators.py).
+# and `aov` hold another integrator, whose image they render, `stokes` one it renders polarised (integrators.py).
 INTEGRATOR_MODULES = _modules_by_plugin(INTEGRATORS.values())
-INTEGRATOR_WRAPPERS = ("moment", "aov")
+INTEGRATOR_WRAPPERS = ("moment", "aov", "stokes")
 SUPPORTED = {
     "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS, "null"),  # null: a shape without material (shapes.py)

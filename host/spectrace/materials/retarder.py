@@ -1,0 +1,117 @@
+"""`retarder`: a linear retarder (a wave plate), a sheet passing light straight through with transmittance T(λ),
+delaying the field across its fast axis by the retardance (docs/materials.md, kernels/bsdf_retarder.cl).
+Unpolarised transport sees T; a polarised render (docs/polarization.md) applies its Mueller matrix."""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from spectrace.core.parameters import Parameter, Range, reflectance
+from spectrace.materials.base import Material
+from spectrace.materials.polarizer import ANGLE, mitsuba_sheet, write_sheet_row
+from spectrace.spectral import spectrum_input
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import SpectrumLike
+from spectrace.spectral.table import SpectrumTable
+
+NAME = "retarder"
+MITSUBA_PLUGINS = ("retarder",)
+PBRT_MATERIALS = ()
+PBRT_NONE = "pbrt-v4 does not render polarisation"
+FAST_AXIS = Parameter(
+    "angle",
+    "float",
+    "degrees",
+    0.0,
+    ANGLE.range,
+    doc="of the fast axis from the surface's dp/du (its u direction) toward dp/dv, as Mitsuba 3's theta",
+)
+RETARDANCE = Parameter(
+    "retardance",
+    "float",
+    "degrees",
+    90.0,
+    Range(-360.0, 360.0),
+    doc="phase delay of the field across the fast axis (90: a quarter-wave plate, 180: a half-wave plate), as "
+    "Mitsuba 3's delta",
+)
+TRANSMITTANCE = reflectance(1.0, "transmittance T(λ)", name="transmittance")
+PARAMETERS = (FAST_AXIS, RETARDANCE, TRANSMITTANCE)
+
+
+@dataclass(frozen=True)
+class RetarderMaterial(Material):
+    """A linear retarder: fast axis `angle` degrees from dp/du, `retardance` degrees, transmittance T(λ)."""
+
+    angle: float = FAST_AXIS.number_default
+    retardance: float = RETARDANCE.number_default
+    transmittance: Spectrum = field(default_factory=lambda: Spectrum.constant(1.0))
+
+    is_delta = True
+    has_transmission = True
+    is_dispersive = False
+
+
+MODEL = RetarderMaterial
+
+
+def from_spec(spec, resolver, key: str) -> RetarderMaterial:
+    return RetarderMaterial(
+        spec.angle, spec.retardance, resolver.spectrum(spec.transmittance, f"{key}.transmittance", emission=False)
+    )
+
+
+def make(
+    angle: float = FAST_AXIS.number_default,
+    retardance: float = RETARDANCE.number_default,
+    transmittance: SpectrumLike = 1.0,
+) -> RetarderMaterial:
+    """A linear retarder whose fast axis lies `angle` degrees from the surface's dp/du toward dp/dv, delaying the
+    field across it by `retardance` degrees (90: a quarter-wave plate), passing T(λ) (`transmittance`)."""
+    return RetarderMaterial(
+        FAST_AXIS.check(angle),
+        RETARDANCE.check(retardance),
+        spectrum_input.reflectance(transmittance, "transmittance"),
+    )
+
+
+def write_row(row: np.ndarray, material: RetarderMaterial, table: SpectrumTable) -> None:
+    write_sheet_row(row, material.angle, math.radians(material.retardance), material.transmittance, table)
+
+
+def mitsuba_angle(theta: float) -> float:
+    """The fast axis' angle of Mitsuba 3's retarder of `theta` (and the same delta): Mitsuba's renders of a
+    retarder (theta, delta) equal spectrace's of (-theta, -delta) (measured with its scalar_spectral_polarized
+    variant; its polarizer's theta is spectrace's angle), which is the retarder (90 - theta, delta), folded into
+    [-90, 90) (a retarder is the same turned by 180°)."""
+    return (90.0 - theta + 90.0) % 180.0 - 90.0
+
+
+def from_mitsuba(importer, bsdf, properties) -> dict | None:
+    """Mitsuba 3's retarder: delta in degrees (90 by default), theta as mitsuba_angle turns it, its
+    transmittance."""
+    table: dict = {"type": NAME}
+    if "delta" in properties:
+        delta = importer.resolve(properties["delta"])
+        if delta.tag == "texture":
+            importer.unsupported_plugin(bsdf, " with a textured delta")
+            return None
+        retardance = importer.number(delta)
+        if RETARDANCE.range_problem(retardance):
+            raise importer.fail(bsdf, f"delta = {retardance:g}: spectrace's retarder needs {RETARDANCE.range} degrees")
+        table["retardance"] = retardance
+    sheet = mitsuba_sheet(importer, bsdf, properties, table)
+    if sheet is not None:
+        sheet["angle"] = round(mitsuba_angle(sheet.get("angle", 0.0)), 9)
+    return sheet
+
+
+def to_mitsuba(material: RetarderMaterial, exporter) -> dict:
+    # mitsuba_angle is its own inverse (up to the 180° a retarder's axis repeats by).
+    return {
+        "type": NAME,
+        "theta": mitsuba_angle(float(material.angle)),
+        "delta": float(material.retardance),
+        "transmittance": exporter.spectrum(material.transmittance),
+    }

@@ -1,0 +1,102 @@
+/* What a camera path carries for polarised transport (SCENE_POLARIZED), as Mitsuba 3's polarised variants trace it
+ * from the sensor: the Mueller matrix of the path so far, mapping the Stokes vector of light arriving along the
+ * current ray to the one the camera receives, with the basis that light's Stokes vector is expressed in (mueller.cl
+ * conventions); each scattering event multiplies its Mueller matrix in on the right, after a rotation from the
+ * event's basis into the path's (Mitsuba 3, "Polarization" developer guide). Lights emit unpolarised light, so what
+ * a path gathers is the matrix's first column times the scalar radiance it gathers anyway.
+ *
+ * The path's scalar throughput stays the matrix's (0, 0) entry, the response to unpolarised light (Mitsuba 3's
+ * Russian roulette and every unpolarised quantity read the same entry): `p` holds the matrix divided by it, so
+ * that everything that scales the throughput (media, Russian roulette, dispersion) needs no hook here. The S0 the
+ * path gathers is its radiance as without polarisation; S1..S3 are kept here, in the camera's basis: x = d × up
+ * for a camera ray along d (the image's right), y = k × x (the image's up; k = −d, the way light travels).
+ *
+ * Camera polariser (RenderParams.lens.w = 1): a linear polariser in front of the lens, its axis lens.z radians from
+ * the camera's right toward its up; the film records ½ (S0 + cos 2φ S1 + sin 2φ S2) (Collett, linear polariser). */
+#ifndef SPECTRACE_POLARIZED_PATH_CL
+#define SPECTRACE_POLARIZED_PATH_CL
+
+#include "material_polarized.cl"
+
+typedef struct {
+    Mueller p;        /* the path's Mueller matrix divided by its (0, 0) entry, the scalar throughput */
+    float4 stokes[3]; /* S1, S2, S3 gathered (per wavelength, radiance units), camera basis */
+    float3 basis;     /* x axis of the basis of light arriving along the path's ray */
+} PolarizedPath;
+
+inline PolarizedPath polarized_start(float3 d)
+{
+    PolarizedPath q;
+    q.p = mueller_identity();
+    for (int i = 0; i < 3; ++i) q.stokes[i] = (float4)(0.0f);
+    q.basis = stokes_basis_from(-d, (float3)(1.0f, 0.0f, 0.0f));
+    return q;
+}
+
+/* A camera ray along d: the camera's basis, x = d × up normalised (the image's right on the view axis), as Mitsuba 3
+ * turns a sensor's Stokes vectors to its up vector, so that every pixel's basis is the same function of its ray. */
+inline void polarized_camera(PolarizedPath *q, __global const RenderParams *params, float3 d)
+{
+    q->basis = stokes_basis_from(-d, cross(d, params->camera_up.xyz));
+}
+
+/* The path gathers `radiance` of unpolarised light (its throughput already applied). */
+inline void polarized_gather(PolarizedPath *q, float4 radiance)
+{
+    for (int i = 0; i < 3; ++i) q->stokes[i] += q->p.m[4 * (i + 1)] * radiance;
+}
+
+/* A depolarising event; the path goes on along `d`. */
+inline void polarized_depolarize(PolarizedPath *q, float3 d)
+{
+    mueller_then_depolarize(&q->p);
+    q->basis = stokes_basis_from(-d, q->basis);
+}
+
+/* The path scatters at a surface by bs (material m, shading normal n, seen from wo): the event's Mueller matrix
+ * joins the path's, and *throughput takes the change of the (0, 0) entry (0 where crossed polarisers pass
+ * nothing); the BSDF's sample weight is the caller's to apply, as without polarisation. */
+inline void polarized_scatter(PolarizedPath *q, float4 *throughput, __global const Material *m,
+                              const SurfaceContext *sc, const SampledWavelengths *w, float3 n, float3 wo,
+                              const BSDFSample *bs)
+{
+    AlignedElement e;
+    float3 x_out, x_in;
+    if (!material_polarization(m, sc, w, n, wo, bs, &e, &x_out, &x_in)) {
+        polarized_depolarize(q, bs->wi);
+        return;
+    }
+    mueller_then_rotate(&q->p, stokes_basis_turn(wo, x_out, q->basis));
+    mueller_then_element(&q->p, &e);
+    float4 f = fmax(q->p.m[0], 0.0f);
+    *throughput *= f;
+    mueller_scale(&q->p, f);
+    q->basis = x_in;
+}
+
+/* What the film records of a finished sample whose S0 is `radiance` (pixel filter weight applied; S1..S3 get
+ * `weight`): through the camera polariser when there is one. */
+inline float4 polarized_film_radiance(const PolarizedPath *q, __global const RenderParams *params, float4 radiance,
+                                      float weight)
+{
+    if (!(params->lens.w > 0.0f)) return radiance;
+    float c = cos(2.0f * params->lens.z), s = sin(2.0f * params->lens.z);
+    return 0.5f * (radiance + weight * (c * q->stokes[0] + s * q->stokes[1]));
+}
+
+#if FILM_STOKES
+/* Adds the sample's Stokes images' film XYZ (S0 `radiance`, S1..S3 the path's times `weight`) to the AOV sums
+ * from AOV_STOKES on (aov.cl); a non-finite one adds nothing. */
+inline void add_stokes_sample(float4 *sums, const PolarizedPath *q, float4 radiance, float weight,
+                              __global const float4 *cmf, const SampledWavelengths *w)
+{
+    float4 xyz[4];
+    xyz[0] = spectrum_to_xyz_estimate(radiance, cmf, w);
+    for (int i = 0; i < 3; ++i) xyz[i + 1] = spectrum_to_xyz_estimate(weight * q->stokes[i], cmf, w);
+    for (int i = 0; i < 4; ++i)
+        if (!(isfinite(xyz[i].x) && isfinite(xyz[i].y) && isfinite(xyz[i].z))) return;
+    for (int i = 0; i < 4; ++i) sums[AOV_STOKES + i] += xyz[i];
+}
+#endif
+
+#endif
