@@ -94,8 +94,19 @@ def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
             ),
             "roughness",
         ),
+        (
+            lambda text: (
+                text + '\n[materials.card]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
+                '\n[materials.dye]\ntype = "fluorescent"\nbase = "card"\n'
+                "excitation = { values = [[360, 0.8], [450, 0.8], [500, 0.0], [830, 0.0]] }\n"
+                "emission = { values = [[360, 0.0], [500, 0.0], [540, 1.0], [600, 0.0], [830, 0.0]] }\n"
+                "quantum_yield = 0.9\n"
+                '\n[[shapes]]\ntype = "sphere"\nmaterial = "dye"\ntransform = [{ translate = [0, 0, -3] }]\n'
+            ),
+            "fluorescent",
+        ),
     ],
-    ids=["other integrator", "rough conductor"],
+    ids=["other integrator", "rough conductor", "fluorescent"],
 )
 def test_unrenderable_polarized_scenes_are_refused_in_one_line(tmp_path, edit, key):
     scene = tmp_path / "scene.toml"
