@@ -178,7 +178,8 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
         __global const Material *m = &scene->materials[v.info.material];
         if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
             int parametrised = all(isfinite(g.dpdu)) && length(g.dpdu) > 0.0f && length(g.dpdv) > 0.0f;
-            v.ns = detailed_normal_at(scene, m, parametrised, g.dpdu, g.dpdv, v.uv, v.footprint, v.n, v.ns, v.wo);
+            v.ns = detailed_normal_at(scene, m, parametrised, g.dpdu, g.dpdv, v.uv, v.footprint, v.n, v.ns, v.wo,
+                                      (float3)(0.0f), 0.0f);
         }
     }
     return v;
@@ -211,9 +212,14 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
         }
     }
     if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
+    float3 file_t = (float3)(0.0f);
+    float file_w = 0.0f;
+#if SCENE_HAS_FILE_TANGENTS
+    file_w = instance_file_tangent(scene, instance, v.info.normals, hit.b12, &file_t);
+#endif
     v.dpdu = (float3)(0.0f);
     if (vertex_follows_tangent(scene, v.info.material)) {
-        v.dpdu = affine_vector(instance->to_world, triangle_dpdu(scene, hit.triangle));
+        v.dpdu = file_w != 0.0f ? file_t : affine_vector(instance->to_world, triangle_dpdu(scene, hit.triangle));
     }
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         __global const Material *m = &scene->materials[v.info.material];
@@ -222,7 +228,8 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
             int parametrised = triangle_dp_duv(scene, hit.triangle, &dpdu, &dpdv);
             dpdu = affine_vector(instance->to_world, dpdu);
             dpdv = affine_vector(instance->to_world, dpdv);
-            v.ns = detailed_normal_at(scene, m, parametrised, dpdu, dpdv, v.uv, v.footprint, v.n, v.ns, v.wo);
+            v.ns = detailed_normal_at(scene, m, parametrised, dpdu, dpdv, v.uv, v.footprint, v.n, v.ns, v.wo, file_t,
+                                      file_w);
         }
     }
     return v;
@@ -251,10 +258,16 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     }
     if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
     v.ns_base = v.ns;
+    float3 file_t = (float3)(0.0f);
+    float file_w = 0.0f;
+#if SCENE_HAS_FILE_TANGENTS
+    file_w = file_tangent(scene, v.info.normals, hit.b12, &file_t);
+#endif
     v.dpdu = vertex_follows_tangent(scene, v.info.material) ? triangle_dpdu(scene, hit.triangle) : (float3)(0.0f);
+    if (file_w != 0.0f && vertex_follows_tangent(scene, v.info.material)) v.dpdu = file_t;
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         v.ns = detailed_normal(scene, &scene->materials[v.info.material], hit.triangle, v.uv, v.footprint, v.n,
-                               v.ns, v.wo);
+                               v.ns, v.wo, file_t, file_w);
     }
     return v;
 }

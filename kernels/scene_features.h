@@ -75,6 +75,11 @@
 #define SCENE_HAS_NORMAL_MAP_HANDEDNESS 1
 #endif
 
+/* Triangles whose tangent frame a mesh file supplies (glTF's TANGENT, kernels/vertex_tangents.cl). */
+#ifndef SCENE_HAS_FILE_TANGENTS
+#define SCENE_HAS_FILE_TANGENTS 1
+#endif
+
 /* Materials that reflect on one face only (Material.one_sided, kernels/material.cl). */
 #ifndef SCENE_HAS_ONE_SIDED
 #define SCENE_HAS_ONE_SIDED 1

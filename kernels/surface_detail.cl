@@ -9,6 +9,7 @@
 
 #include "scene.cl"
 #include "frame.cl"
+#include "vertex_tangents.cl"
 
 /* dp/du and dp/dv of a triangle: p = v0 + a e1 + b e2 and uv = t0 + a d1 + b d2 solved for (a, b). 0 when its
  * texture coordinates do not span the plane (a degenerate parametrisation). */
@@ -62,9 +63,11 @@ inline float2 bump_gradient(const TextureBuffers *b, int index, float2 uv, float
 
 /* The shading normal of material m at a point with tangents dpdu, dpdv (when `parametrised`), texture coordinates
  * uv and footprint, turned from ns by its normal map or bump map; ns itself when it has neither or the turn cannot
- * be formed. */
+ * be formed. `file_w` ≠ 0: the normal map's frame is the file's tangent `file_t` with bitangent
+ * cross(ns, tangent) · file_w (vertex_tangents.cl); 0: dp/du's. */
 inline float3 detailed_normal_at(const Scene *scene, __global const Material *m, int parametrised, float3 dpdu,
-                                 float3 dpdv, float2 uv, float footprint, float3 n_geometric, float3 ns, float3 wo)
+                                 float3 dpdv, float2 uv, float footprint, float3 n_geometric, float3 ns, float3 wo,
+                                 float3 file_t, float file_w)
 {
     SurfaceContext sc = surface_context(scene, uv, footprint);
     float3 n;
@@ -73,13 +76,23 @@ inline float3 detailed_normal_at(const Scene *scene, __global const Material *m,
         float3 mapped = 2.0f * texture_numbers(&sc.buffers, m->normal_map, uv, footprint).xyz - 1.0f;
         ShadingFrame frame = shading_frame(ns);
         float3 s = parametrised ? in_plane(ns, dpdu) : (float3)(0.0f);
+#if SCENE_HAS_FILE_TANGENTS
+        if (file_w != 0.0f) s = in_plane(ns, file_t);  /* Gram-Schmidt against the shading normal */
+#endif
         float length_s = length(s);
         if (length_s > 0.0f) {
             frame.tangent = s / length_s;
             frame.bitangent = cross(ns, frame.tangent);
-#if SCENE_HAS_NORMAL_MAP_HANDEDNESS
-            frame.bitangent *= normal_map_handedness(m, frame.bitangent, dpdv);
+#if SCENE_HAS_FILE_TANGENTS
+            if (file_w != 0.0f) {
+                frame.bitangent *= file_w;
+            } else
 #endif
+            {
+#if SCENE_HAS_NORMAL_MAP_HANDEDNESS
+                frame.bitangent *= normal_map_handedness(m, frame.bitangent, dpdv);
+#endif
+            }
         }
         n = to_world(&frame, mapped);
     } else {
@@ -99,14 +112,14 @@ inline float3 detailed_normal_at(const Scene *scene, __global const Material *m,
     return dot(n, wo) * dot(n_geometric, wo) > 0.0f ? n : n_geometric;
 }
 
-/* detailed_normal_at a hit of `triangle`, in its tangent frame. */
+/* detailed_normal_at a hit of `triangle`, in its tangent frame (the file's where file_w ≠ 0). */
 inline float3 detailed_normal(const Scene *scene, __global const Material *m, int triangle, float2 uv,
-                              float footprint, float3 n_geometric, float3 ns, float3 wo)
+                              float footprint, float3 n_geometric, float3 ns, float3 wo, float3 file_t, float file_w)
 {
     if (m->normal_map == NO_TEXTURE && m->bump_map == NO_TEXTURE) return ns;
     float3 dpdu, dpdv;
     int parametrised = triangle_dp_duv(scene, triangle, &dpdu, &dpdv);
-    return detailed_normal_at(scene, m, parametrised, dpdu, dpdv, uv, footprint, n_geometric, ns, wo);
+    return detailed_normal_at(scene, m, parametrised, dpdu, dpdv, uv, footprint, n_geometric, ns, wo, file_t, file_w);
 }
 
 #endif

@@ -86,6 +86,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_ONE_SIDED": 0,
         "SCENE_HAS_TANGENT_FRAMES": 0,
         "SCENE_HAS_NORMAL_MAP_HANDEDNESS": 0,
+        "SCENE_HAS_FILE_TANGENTS": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
     }
     subsurface = scene_feature_defines(build_scene_buffers(_bundled("subsurface")))

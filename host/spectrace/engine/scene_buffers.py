@@ -20,6 +20,7 @@ from spectrace.core.contract import (
     TRIANGLE_INFO_DTYPE,
     TRIANGLE_NO_MATERIAL,
 )
+from spectrace.engine.vertex_tangents import corner_tangents, smooth_rows
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
@@ -56,7 +57,7 @@ class SceneBuffers:
     triangle_uvs: np.ndarray  # (3·M, 2) float32 texture coordinates, BVH leaf order
     # (3·S, 4) float32 unit shading normals (x, y, z, 0) at the corners of the S triangles that have vertex normals,
     # in BVH leaf order; a triangle's TriangleInfo.normals is its index here, -1 for flat shading (one dummy entry
-    # when no triangle has any)
+    # when no triangle has any); a triangle with file tangents owns the next slot too (engine/vertex_tangents.py)
     triangle_normals: np.ndarray
     texels: np.ndarray  # (n, 4) float32: images of environment maps and textured emitters, after one dummy texel;
     # material textures' texels, addressed in floats (kernels/texture.cl)
@@ -192,6 +193,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     v2s: list[np.ndarray] = []
     uvs: list[np.ndarray] = []
     normal_parts: list[np.ndarray | None] = []
+    tangent_parts: list[np.ndarray | None] = []
     material_parts: list[np.ndarray] = []
     emitter_parts: list[np.ndarray] = []
     interior_parts: list[np.ndarray] = []
@@ -236,6 +238,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
         v2s.append(v2)
         uvs.append(corner_uvs)
         normal_parts.append(corner_normals)
+        tangent_parts.append(shape.mesh.corner_tangents())
         material_parts.append(np.full(len(v0), material_index[key], np.int32))
         interior_parts.append(np.full(len(v0), interior, np.int32))
         emitter_parts.append(np.full(len(v0), emitter_id, np.int32))
@@ -243,6 +246,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     if v0s and sum(len(v) for v in v0s):
         v0, v1, v2, uv = (np.concatenate(a) for a in (v0s, v1s, v2s, uvs))
         corner_normals = _corner_normals(normal_parts, [len(v) for v in v0s])
+        tangents = corner_tangents(tangent_parts, [len(v) for v in v0s])
         tri_material, tri_emitter = np.concatenate(material_parts), np.concatenate(emitter_parts)
         tri_interior = np.concatenate(interior_parts)
         bvh, bvh_seconds, bvh_peak = _measured(
@@ -251,12 +255,13 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
         order = bvh.prim_order
         v0, v1, v2, uv = v0[order], v1[order], v2[order], uv[order]
         corner_normals = corner_normals[order] if corner_normals is not None else None
+        tangents = tangents[order] if tangents is not None else None
         tri_material, tri_emitter, tri_interior = tri_material[order], tri_emitter[order], tri_interior[order]
         scene_radius = 0.5 * float(np.linalg.norm(bvh.nodes[0]["bmax"] - bvh.nodes[0]["bmin"]))
     else:
         v0 = v1 = v2 = np.zeros((0, 3))
         uv = np.zeros((0, 3, 2))
-        corner_normals = None
+        corner_normals = tangents = None
         tri_material = tri_emitter = tri_interior = np.zeros(0, np.int32)
         bvh, bvh_seconds, bvh_peak = _empty_bvh(), 0.0, 0
         scene_radius = 1.0
@@ -305,11 +310,9 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     smooth = np.zeros(len(v0), bool)
     if corner_normals is not None:
         smooth = ~np.isnan(corner_normals).any(axis=(1, 2)) & (np.linalg.norm(corner_normals, axis=-1) > 0).all(axis=1)
-    normal_slot = np.full(len(v0), -1, np.int32)
-    normal_slot[smooth] = np.arange(int(smooth.sum()), dtype=np.int32)
-    triangle_normals = np.zeros((max(int(smooth.sum()), 1), 3, 4), np.float32)
-    if corner_normals is not None:
-        triangle_normals[: int(smooth.sum()), :, :3] = corner_normals[smooth]
+    normal_slot, smooth_block = smooth_rows(corner_normals, tangents, smooth)
+    triangle_normals = np.zeros((max(len(smooth_block), 1), 3, 4), np.float32)
+    triangle_normals[: len(smooth_block)] = smooth_block
 
     # Each light writes its own rows (spectrace.lights); images shown by emitters and environment maps share one
     # texel buffer, each light knowing its offset.
@@ -349,7 +352,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
         # the triangle arrays keep unused entries for the shapes.
         own = len(v0) + len(analytic)
         shapes = len(analytic) + objects.shape_count
-        world_smooth = int(smooth.sum())
+        world_smooth = len(smooth_block)
         vertices = np.concatenate([vertices[: len(v0)], np.zeros((shapes, 3, 4), np.float32), objects.vertices])
         triangle_uvs = np.concatenate([triangle_uvs[: len(v0)], np.zeros((shapes, 3, 2), np.float32), objects.uvs])
         object_info = objects.info.copy()
@@ -466,6 +469,7 @@ class _ObjectTriangles:
         boxes = []
         for obj in self.objects:
             v0s, v1s, v2s, uvs, normals, info = [], [], [], [], [], []
+            tangent_parts: list[np.ndarray | None] = []
             analytic_boxes = []
             self.shapes_of.append((first_shape + len(shape_rows), 0))
             for shape in obj.shapes:
@@ -504,6 +508,7 @@ class _ObjectTriangles:
                 v2s.append(c)
                 uvs.append(corner_uvs)
                 normals.append(corner_normals)
+                tangent_parts.append(shape.mesh.corner_tangents())
                 rows = np.zeros(len(a), TRIANGLE_INFO_DTYPE)
                 rows["material"], rows["light"], rows["interior"] = material_index[key], -1, interior
                 info.append(rows)
@@ -528,13 +533,15 @@ class _ObjectTriangles:
             block[:, 0, :3], block[:, 1, :3], block[:, 2, :3] = v0, v1, v2
             block[:, :, 3] = _unit_normals(v0, v1, v2)
             smooth = np.zeros(len(v0), bool)
+            tangents = corner_tangents(tangent_parts, [len(v) for v in v0s])
             if corner is not None:
                 corner = corner[order]
                 smooth = ~np.isnan(corner).any(axis=(1, 2)) & (np.linalg.norm(corner, axis=-1) > 0).all(axis=1)
-                parts["normals"].append(np.pad(corner[smooth], ((0, 0), (0, 0), (0, 1))).astype(np.float32))
-            rows["normals"] = -1
-            rows["normals"][smooth] = smooth_slot + np.arange(int(smooth.sum()), dtype=np.int32)
-            smooth_slot += int(smooth.sum())
+            slots, block_rows = smooth_rows(corner, None if tangents is None else tangents[order], smooth)
+            if len(block_rows):
+                parts["normals"].append(block_rows)
+            rows["normals"] = np.where(slots >= 0, slots + smooth_slot, -1)
+            smooth_slot += len(block_rows)
             parts["vertices"].append(block)
             parts["uvs"].append(uv.astype(np.float32))
             parts["info"].append(rows)

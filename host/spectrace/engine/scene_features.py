@@ -64,6 +64,8 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
         "SCENE_HAS_ONE_SIDED": int(bool(np.any(materials["one_sided"] != 0))),
         "SCENE_HAS_TANGENT_FRAMES": int(bool(np.any(materials["tangent_frame"] != 0))),
+        # A smooth triangle with file tangents marks its first corner normal's w (engine/vertex_tangents.py).
+        "SCENE_HAS_FILE_TANGENTS": int(bool(np.any(buffers.triangle_normals[::3, 3] != 0))),
         "SCENE_HAS_NORMAL_MAP_HANDEDNESS": int(
             bool(np.any((materials["normal_map_handedness"] != 0) & (materials["normal_map"] >= 0)))
         ),

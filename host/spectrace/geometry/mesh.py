@@ -46,12 +46,16 @@ class TriangleMesh:
     # (N, 3) shading normals per vertex, interpolated across each face (smooth shading); None: every face shades
     # with its geometric normal. Any length; a zero one stands for the face normal at that corner.
     normals: np.ndarray | None = None
+    # (N, 4) tangents per vertex as glTF 2.0 stores them (3.7.2.1): xyz along +u in the surface, w = ±1 the
+    # handedness, the bitangent being cross(normal, xyz) · w. Used with the vertex normals only (a flat face has no
+    # normal to make them orthogonal to); None: the frame follows each triangle's dp/du.
+    tangents: np.ndarray | None = None
 
     __eq__ = fields_equal  # arrays compared by value: two meshes (and the shapes holding them) compare as equal
 
     def __repr__(self) -> str:
         # The dataclass's own repr would print the arrays.
-        extras = "".join(f", {name}" for name in ("uvs", "normals") if getattr(self, name) is not None)
+        extras = "".join(f", {name}" for name in ("uvs", "normals", "tangents") if getattr(self, name) is not None)
         return f"TriangleMesh({len(self.vertices)} vertices, {len(self.faces)} faces{extras})"
 
     def __post_init__(self) -> None:
@@ -67,6 +71,12 @@ class TriangleMesh:
                 raise ValueError(f"normals must be (N, 3) like the vertices, got {self.normals.shape}")
             if not np.all(np.isfinite(self.normals)):
                 raise ValueError("normals must be finite")
+        if self.tangents is not None:
+            self.tangents = np.ascontiguousarray(self.tangents, dtype=np.float64)
+            if self.tangents.shape != (len(self.vertices), 4):
+                raise ValueError(f"tangents must be (N, 4) like the vertices, got {self.tangents.shape}")
+            if not np.all(np.isfinite(self.tangents)):
+                raise ValueError("tangents must be finite")
         if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
             raise ValueError(f"vertices must be (N, 3), got {self.vertices.shape}")
         if self.faces.ndim != 2 or self.faces.shape[1] != 3:
@@ -119,15 +129,31 @@ class TriangleMesh:
                 normals[back] = normals[back][:, [0, 2, 1]]
         return v0, v1, v2, uvs, normals
 
+    def corner_tangents(self) -> np.ndarray | None:
+        """(M, 3, 4) tangents of each triangle's corners in the order corners() gives them (corners 1 and 2 swapped
+        where it swaps them); None when the mesh has no tangents or no vertex normals to go with them."""
+        if self.tangents is None or self.normals is None:
+            return None
+        tangents = self.tangents[self.faces]
+        normals = self.triangle_normals()
+        assert normals is not None  # checked above
+        back = winding_against_normals(*self.triangles(), normals)
+        tangents[back] = tangents[back][:, [0, 2, 1]]
+        return tangents
+
     def flipped(self) -> "TriangleMesh":
         """The same surface with its front on the other side: the winding reversed and the vertex normals turned
-        (a shape's `flip_normals`, Mitsuba 3's alike: both its normals change sign)."""
+        (a shape's `flip_normals`, Mitsuba 3's alike: both its normals change sign). The tangents keep their
+        direction and change handedness, so the bitangent cross(normal, tangent) · w keeps pointing where the
+        texture's v does."""
         normals = None if self.normals is None else -self.normals
-        return TriangleMesh(self.vertices, self.faces[:, ::-1].copy(), uvs=self.uvs, normals=normals)
+        tangents = None if self.tangents is None else self.tangents * [1.0, 1.0, 1.0, -1.0]
+        return TriangleMesh(self.vertices, self.faces[:, ::-1].copy(), uvs=self.uvs, normals=normals, tangents=tangents)
 
     def with_normals(self, normals: np.ndarray | None) -> "TriangleMesh":
-        """The same mesh with other vertex normals (None: flat shading)."""
-        return TriangleMesh(vertices=self.vertices, faces=self.faces, uvs=self.uvs, normals=normals)
+        """The same mesh with other vertex normals (None: flat shading, which leaves no use for the tangents)."""
+        tangents = None if normals is None else self.tangents
+        return TriangleMesh(vertices=self.vertices, faces=self.faces, uvs=self.uvs, normals=normals, tangents=tangents)
 
     def smooth_normals(self) -> np.ndarray:
         """(N, 3) vertex normals computed from the faces: each face's unit normal weighted by the angle of its corner
@@ -331,6 +357,9 @@ def _direct_ply(path: Path, where: str) -> TriangleMesh | None:
     mesh = _validated_mesh(read.vertices, read.faces, path, where, read.normals)
     if read.uvs is not None and np.all(np.isfinite(read.uvs)):
         mesh.uvs = np.column_stack([read.uvs[:, 0], 1.0 - read.uvs[:, 1]])  # v up in the file, down in spectrace
+    if read.tangents is not None and mesh.normals is not None:
+        _refuse_non_finite(read.tangents, "vertex tangents with NaN or infinite components", path, where)
+        mesh.tangents = read.tangents
     return mesh
 
 

@@ -42,6 +42,9 @@ class PlyTriangles:
     faces: np.ndarray  # (M, 3) int64
     normals: np.ndarray | None  # (N, 3) float64 unit (zero stays zero); None when the file has none
     uvs: np.ndarray | None  # (N, 2) float64 as stored (v up the image, as mesh files store it)
+    # (N, 4) float64 tangents (tx, ty, tz, tw: glTF's xyz and handedness w, along +u) as stored; None when the file
+    # has none. Only this reader takes them: a PLY file read through trimesh loses them.
+    tangents: np.ndarray | None = None
 
 
 # A PLY header is searched for this far into a file (real headers are a few hundred bytes).
@@ -146,4 +149,5 @@ def read_binary_ply(data: bytes) -> PlyTriangles | None:
         stored = columns(("nx", "ny", "nz")) @ np.eye(3)
         length = np.linalg.norm(stored, axis=-1, keepdims=True)
         normals = np.divide(stored, length, out=np.zeros_like(stored), where=length > 0)
-    return PlyTriangles(columns(("x", "y", "z")), faces, normals, uvs)
+    tangents = columns(("tx", "ty", "tz", "tw")) if {"tx", "ty", "tz", "tw"} <= set(names) else None
+    return PlyTriangles(columns(("x", "y", "z")), faces, normals, uvs, tangents)

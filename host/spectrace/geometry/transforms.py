@@ -56,7 +56,15 @@ def apply_transform(mesh: TriangleMesh, matrix: np.ndarray) -> TriangleMesh:
         normals = mesh.normals @ np.linalg.inv(linear)  # rows: (L⁻ᵀ n)ᵀ = nᵀ L⁻¹
         length = np.linalg.norm(normals, axis=-1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    return TriangleMesh(vertices=vertices, faces=faces.copy(), uvs=mesh.uvs, normals=normals)
+    tangents = None
+    if mesh.tangents is not None:
+        # A tangent lies in the surface and moves with it (the linear part, not the normals' inverse transpose); a
+        # mirror reverses the handedness that cross(normal, tangent) · w must keep.
+        tangents = mesh.tangents.copy()
+        tangents[:, :3] = mesh.tangents[:, :3] @ linear.T
+        if np.linalg.det(linear) < 0:
+            tangents[:, 3] = -tangents[:, 3]
+    return TriangleMesh(vertices=vertices, faces=faces.copy(), uvs=mesh.uvs, normals=normals, tangents=tangents)
 
 
 def _translate(value: object, where: str) -> np.ndarray:

@@ -1,5 +1,5 @@
-"""Mesh primitives (glTF 2.0, 3.7.2): triangles, strips and fans with their positions, normals and first texture
-coordinates, as the PLY files an import writes beside its TOML. glTF puts v = 0 at the top of the image, as
+"""Mesh primitives (glTF 2.0, 3.7.2): triangles, strips and fans with their positions, normals, first texture
+coordinates and tangents, as the PLY files an import writes beside its TOML. glTF puts v = 0 at the top of the image, as
 spectrace does; a PLY's v runs up (spectrace's reader turns it), so v is written as 1 − v."""
 
 from __future__ import annotations
@@ -65,17 +65,20 @@ def primitive_mesh(doc: GltfDocument, primitive: dict, pointer: str) -> MeshData
     else:
         indices = np.arange(count)
     faces = triangle_indices(mode, indices)
-    normals = uvs = None
-    for name, width in (("NORMAL", 3), ("TEXCOORD_0", 2)):
+    normals = uvs = tangents = None
+    for name, width in (("NORMAL", 3), ("TEXCOORD_0", 2), ("TANGENT", 4)):
         if name in attributes:
             values = read(name, width)
             if len(values) != count:
                 raise doc.fail(f"{pointer}/attributes/{name}", f"has {len(values)} elements, POSITION {count}")
             if name == "NORMAL":
                 normals = values
+            elif name == "TANGENT":
+                tangents = values
             else:
                 uvs = np.column_stack([values[:, 0], 1.0 - values[:, 1]])
-    return MeshData(positions, faces.astype(np.int64), normals, uvs)
+    # Without normals the supplied tangents are ignored (glTF 2.0, 3.7.2.1: flat normals are computed then).
+    return MeshData(positions, faces.astype(np.int64), normals, uvs, tangents if normals is not None else None)
 
 
 def unread_attributes(primitive: dict) -> list[str]:

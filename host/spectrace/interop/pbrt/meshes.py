@@ -20,6 +20,7 @@ class MeshData:
     faces: np.ndarray  # (m, 3) int, winding = front (pbrt's rules applied)
     normals: np.ndarray | None = None
     uvs: np.ndarray | None = None  # pbrt's (u, v) as stored
+    tangents: np.ndarray | None = None  # (n, 4) glTF's tangents (xyz along +u, w the handedness), with normals
 
     def world_area(self, matrix: np.ndarray) -> float:
         points = self.vertices @ matrix[:3, :3].T
@@ -122,7 +123,7 @@ def with_default_uvs(mesh: MeshData, kind: str) -> MeshData:
 
 def write_ply(path: Path, mesh: MeshData) -> None:
     """A binary PLY spectrace's mesh reader takes: positions, optional normals and texture coordinates (v as pbrt
-    stores it, up the image; the reader turns it into spectrace's)."""
+    stores it, up the image; the reader turns it into spectrace's) and tangents with normals (tx, ty, tz, tw)."""
     columns = [mesh.vertices]
     names = ["x", "y", "z"]
     if mesh.normals is not None:
@@ -131,6 +132,9 @@ def write_ply(path: Path, mesh: MeshData) -> None:
     if mesh.uvs is not None:
         columns.append(mesh.uvs)
         names += ["u", "v"]
+    if mesh.tangents is not None and mesh.normals is not None:
+        columns.append(mesh.tangents)
+        names += ["tx", "ty", "tz", "tw"]
     vertex_data = np.ascontiguousarray(np.column_stack(columns), dtype="<f4")
     face_data = np.zeros(len(mesh.faces), dtype=[("n", "u1"), ("i", "<i4", (3,))])
     face_data["n"] = 3
