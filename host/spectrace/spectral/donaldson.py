@@ -14,6 +14,7 @@ diagonal's elastic reflectance is the material's `base`):
 
 M[λ_in, λ_out] is photons re-emitted per nm of λ_out per photon arriving at λ_in (1/nm): rows are excitation,
 columns emission. Some publications print the transpose (emission down the rows); transpose such a table first.
+The spectra made from it are resampled onto the grid as a spectrum CSV is, its end values held beyond its range.
 
 The material's device form holds one emission spectrum e(λ_out) for every λ_in, the separable (rank-one) matrix
 a(λ_in)·Q·e(λ_out): the matrix's excitation spectrum a·Q is each row's photon total, ∫ M dλ_out, and e the
