@@ -10,7 +10,9 @@ distribution of the emitted photons over wavelength, 1/nm), and λ_in / λ_out t
 relative to an absorbed one (the Stokes shift's energy loss: photons are conserved, energy is not). The base
 holds what is reflected without a change of wavelength, the diagonal of the Donaldson matrix: for a dyed surface it
 is the surface's measured (non-fluorescent) reflectance, which already includes the dye's absorption, so that a
-yield of 0 renders the base exactly. Energy is conserved where the base's albedo plus a(λ) stays within 1.
+yield of 0 renders the base exactly. Energy is conserved where the base's albedo plus a(λ) stays within 1. A
+measured matrix (`matrix`, spectrace.spectral.donaldson) gives a(λ)·Q and e(λ) when it is separable; its yield is
+in it, so Q then scales it.
 
 It has no BSDF of its own: kernels/fluorescence.cl replaces it, where a path meets it, either by its base (the
 elastic part) or by the Lambertian re-emission at a wavelength drawn from the excitation spectrum (the path's
@@ -27,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from spectrace.core.parameters import REQUIRED, Parameter, Range, reflectance
+from spectrace.core.parameters import Parameter, Range, reflectance
 from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
 from spectrace.spectral.spectrum import Spectrum
@@ -54,13 +56,18 @@ PARAMETERS = (
         "without a change of wavelength",
         type_doc="material name",
     ),
-    reflectance(REQUIRED, "a(λ), the fraction of the photons arriving at λ that the dye absorbs", name="excitation"),
+    reflectance(
+        None,
+        "a(λ), the fraction of the photons arriving at λ that the dye absorbs (required without `matrix`)",
+        name="excitation",
+    ),
     Parameter(
         "emission",
         "spectrum",
-        default=REQUIRED,
+        default=None,
         range=Range(0.0, None),
-        doc="e(λ), the spectrum of the re-emitted photons (its shape only: it is normalised to ∫ e dλ = 1)",
+        doc="e(λ), the spectrum of the re-emitted photons (its shape only: it is normalised to ∫ e dλ = 1; required "
+        "without `matrix`)",
     ),
     Parameter(
         "quantum_yield",
@@ -68,9 +75,17 @@ PARAMETERS = (
         default=1.0,
         range=YIELD_RANGE,
         doc="Q, photons re-emitted per photon absorbed (a grey texture: the dye's yield, or its concentration, "
-        "varying over the surface)",
+        "varying over the surface); with `matrix`, a factor on the matrix, which holds the yield already",
         textured=True,
         texture_field="roughness_texture",
+    ),
+    Parameter(
+        "matrix",
+        "string",
+        default=None,
+        doc="a measured re-radiation (Donaldson) matrix, a CSV file (rows λ_in, columns λ_out, photons re-emitted "
+        "per nm per photon arriving), instead of excitation and emission; it must be separable",
+        type_doc="file",
     ),
 )
 _YIELD = PARAMETERS[3]
@@ -148,21 +163,48 @@ def _holds_fluorescent(material) -> bool:
 
 def from_spec(spec, resolver, key: str) -> FluorescentMaterial:
     base = resolver.material_named(spec.base, f"{key}.base")
-    excitation = resolver.spectrum(spec.excitation, f"{key}.excitation", emission=False)
-    emission = resolver.spectrum(spec.emission, f"{key}.emission", emission=True)
+    if spec.matrix is not None:
+        excitation, emission = matrix_spectra(resolver.folder / spec.matrix, resolver.where(f"{key}.matrix"))
+    else:
+        excitation = resolver.spectrum(spec.excitation, f"{key}.excitation", emission=False)
+        emission = resolver.spectrum(spec.emission, f"{key}.emission", emission=True)
     quantum_yield = spec.quantum_yield
     if not isinstance(quantum_yield, float):
         quantum_yield = resolver.texture(quantum_yield, f"{key}.quantum_yield")
     return check(base, excitation, emission, quantum_yield, lambda name: resolver.where(f"{key}.{name}"), key)
 
 
-def make(base, excitation, emission, quantum_yield=1.0) -> FluorescentMaterial:
+def matrix_spectra(path, where: str | None = None) -> tuple[Spectrum, Spectrum]:
+    """The excitation a(λ)·Q and the emission e(λ) of a separable re-radiation (Donaldson) matrix CSV
+    (spectrace.spectral.donaldson); its errors, which name the file, also name `where`."""
+    from spectrace.spectral.donaldson import separable_matrix
+
+    try:
+        separable = separable_matrix(path)
+    except SpectraceError as exc:
+        raise SpectraceError(str(exc), where=where) from None
+    return separable.excitation, separable.emission
+
+
+def make(base, excitation=None, emission=None, quantum_yield=1.0, matrix=None) -> FluorescentMaterial:
     """A fluorescent dye over `base` (a non-fluorescent material): photons arriving at λ_in are absorbed with
     probability `excitation` a(λ_in) and re-emitted, `quantum_yield` of them, diffusely at λ_out distributed as
     `emission` (its shape only). Spectra as every material takes them (a Spectrum, a constant, a name); the yield a
-    number in [0, 1] or a grey texture of it."""
+    number in [0, 1] or a grey texture of it. Or, instead of the two spectra, `matrix`: the path of a measured
+    re-radiation (Donaldson) matrix CSV (rows λ_in, columns λ_out, photons re-emitted per nm of λ_out per photon
+    arriving at λ_in; spectrace.spectral.donaldson), which holds the yield already: `quantum_yield` scales it."""
     from spectrace.spectral.spectrum_input import role_spectrum
 
+    if matrix is not None:
+        if excitation is not None or emission is not None:
+            raise SpectraceError("give either matrix or excitation and emission, not both", where="matrix")
+        excitation, emission = matrix_spectra(matrix, "matrix")
+        return check(base, excitation, emission, quantum_yield, lambda name: name)
+    if excitation is None or emission is None:
+        raise SpectraceError(
+            "a fluorescent material needs excitation and emission, or a matrix",
+            where="excitation" if excitation is None else "emission",
+        )
     excitation = role_spectrum(excitation, False, "excitation")
     emission = role_spectrum(emission, True, "emission")
     return check(base, excitation, emission, quantum_yield, lambda name: name)
@@ -220,6 +262,11 @@ def surface_detail_problem(material: FluorescentMaterial) -> str | None:
 def check_spec(spec) -> None:
     if spec.normal_map is not None or spec.bump_map is not None:
         raise ValueError("a fluorescent material takes no normal or bump map of its own; give them to its base")
+    spectra = [name for name in ("excitation", "emission") if getattr(spec, name) is not None]
+    if spec.matrix is not None and spectra:
+        raise ValueError(f"give either matrix or excitation and emission, not both ({', '.join(spectra)} given)")
+    if spec.matrix is None and len(spectra) < 2:
+        raise ValueError("a fluorescent material needs excitation and emission, or a matrix")
 
 
 SPEC_CHECKS = (check_spec,)
