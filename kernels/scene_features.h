@@ -53,6 +53,11 @@
 #define SCENE_HAS_TEXTURES 1
 #endif
 
+/* Procedural textures built on noise (dots: kernels/noise.cl). */
+#ifndef SCENE_HAS_PROCEDURAL_TEXTURES
+#define SCENE_HAS_PROCEDURAL_TEXTURES 1
+#endif
+
 /* Lookups that read the texture footprint (trilinear filtering, a checkerboard bump map's differences): only then
  * does a hit pay for camera_footprint (kernels/scene.cl); elsewhere the footprint stays 0, which no other lookup
  * reads. */

@@ -17,6 +17,9 @@
 #include "types.h"
 #include "rgb_spectrum.cl"
 #include "spectrum.cl"
+#if SCENE_HAS_PROCEDURAL_TEXTURES
+#include "noise.cl"
+#endif
 #ifndef TEXTURE_TYPE_COUNT
 #error "built without the textures' generated sources (spectrace.plugins.generated_sources)"
 #endif
@@ -253,7 +256,7 @@ inline float4 texture_side(const TextureBuffers *b, __global const Texture *t, i
     return image_texture_spectrum(&b->textures[inner], b, uv, footprint, w);
 }
 
-/* Texture `index` at uv, at the path's four wavelengths. Composites (checkerboard, scale, mix) read their operands,
+/* Texture `index` at uv, at the path's four wavelengths. Composites (checkerboard, scale, mix, dots) read their operands,
  * which are never composites, so nothing recurses. */
 inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, float footprint,
                                const SampledWavelengths *w)
@@ -262,6 +265,11 @@ inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, fl
     if (t->type == TEXTURE_CHECKERBOARD) {
         return texture_side(b, t, checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, footprint, w);
     }
+#if SCENE_HAS_PROCEDURAL_TEXTURES
+    if (t->type == TEXTURE_DOTS) {
+        return texture_side(b, t, dots_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, footprint, w);
+    }
+#endif
     if (t->type == TEXTURE_SCALE || t->type == TEXTURE_MIX) {
         /* The factor is a number, the same at every wavelength: a scalar texture's first lane. */
         float factor = t->factor_texture == NO_TEXTURE

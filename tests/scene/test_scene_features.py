@@ -79,6 +79,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_MIX": 0,
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
+        "SCENE_HAS_PROCEDURAL_TEXTURES": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_INSTANCES": 0,
@@ -103,6 +104,9 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.bitmap(np.full((2, 2), 0.5))))],
     )
     assert scene_feature_defines(build_scene_buffers(textured))["SCENE_HAS_TEXTURES"] == 1
+    assert scene_feature_defines(build_scene_buffers(textured))["SCENE_HAS_PROCEDURAL_TEXTURES"] == 0
+    dotted = replace(textured, shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.dots_texture()))])
+    assert scene_feature_defines(build_scene_buffers(dotted))["SCENE_HAS_PROCEDURAL_TEXTURES"] == 1
     detailed = scene_feature_defines(build_scene_buffers(_surface_detail_scene()))
     assert detailed["SCENE_HAS_SURFACE_NORMALS"] == 1 and detailed["SCENE_HAS_OPACITY"] == 1
     for material, normals, opacity in (

@@ -15,6 +15,7 @@ API = {
     "checkerboard": spectrace.checkerboard,
     "scale": spectrace.scale_texture,
     "mix": spectrace.mix_texture,
+    "dots": spectrace.dots_texture,
 }
 
 

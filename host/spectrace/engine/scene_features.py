@@ -57,6 +57,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_MIX": int(bool(np.any(materials["type"] == MATERIAL_CODES["mix"]))),
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or checkerboard_bumps),
+        "SCENE_HAS_PROCEDURAL_TEXTURES": int(bool(np.any(textures["type"] == TEXTURES.codes["dots"]))),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_SHAPES": int(buffers.shape_count + buffers.instanced_shape_count > 0),
         "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),

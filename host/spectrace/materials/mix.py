@@ -20,6 +20,9 @@ from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
 from spectrace.spectral.table import SpectrumTable
 
+# The textures a `mix` texture cannot take as an operand (the kernel does not recurse: docs/textures.md).
+_COMPOSITES = ("checkerboard", "scale", "mix", "dots")
+
 NAME = "mix"
 # No bsdf_mix.cl: the mix is resolved before any BSDF is called (kernels/material_mix.cl).
 COMPOSITE = True
@@ -216,7 +219,7 @@ def from_pbrt(context, material) -> dict | None:
     if (
         all(table["type"] == "diffuse" for table in pair)
         and (not isinstance(amount, dict) or amount.get("texture") == "bitmap")
-        and not any(context.texture_kind(table["reflectance"]) in ("checkerboard", "scale", "mix") for table in pair)
+        and not any(context.texture_kind(table["reflectance"]) in _COMPOSITES for table in pair)
     ):
         return {
             "type": "diffuse",

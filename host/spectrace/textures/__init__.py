@@ -28,23 +28,26 @@ from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
-from spectrace.textures import bitmap, checkerboard, mix, scale, spectral, storage
+from spectrace.textures import bitmap, checkerboard, dots, mix, scale, spectral, storage
 from spectrace.textures.base import TexturePlugin
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
+from spectrace.textures.dots import DotsTexture
 from spectrace.textures.mix import MixTexture
 from spectrace.textures.scale import ScaleTexture
 from spectrace.textures.shared import FILTERS, WRAPS, ImageTextures, value_problem
 from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module; the position is the Texture.type code.
-TEXTURES = Registry[TexturePlugin]("texture", (bitmap, spectral, checkerboard, scale, mix))
+TEXTURES = Registry[TexturePlugin]("texture", (bitmap, spectral, checkerboard, scale, mix, dots))
 # Each texture an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
 for _module in TEXTURES.values():
     _module.make = recorded(_module.make)  # type: ignore[method-assign]
 # Those made of other textures: their operands are spectra and image textures only (the kernel does not recurse).
 COMPOSITE_TEXTURES = tuple(name for name, module in TEXTURES.items() if module.COMPOSITE)
 IMAGE_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if not module.COMPOSITE)
+# Those that pick one of two sides (color0, color1) at the point: their rows and checks are alike.
+TWO_SIDED = (CheckerboardTexture, DotsTexture)
 _MODELS = tuple(module.MODEL for module in TEXTURES.values())
 
 
@@ -68,21 +71,21 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
     if isinstance(texture, (ScaleTexture, MixTexture)):
         _check_composite(texture, kind, where, upper)
         return
-    if isinstance(texture, CheckerboardTexture):
+    if isinstance(texture, TWO_SIDED):
         if kind == "float":
             for side in (texture.color0, texture.color1):
                 if isinstance(side, Spectrum):
                     if np.ptp(side.values) > 0.0:
                         raise SpectraceError(
-                            "a scalar checkerboard's sides are numbers ({ value = ... }) or grey images, not spectra "
-                            "that vary with the wavelength",
+                            f"a scalar {texture.source}'s sides are numbers ({{ value = ... }}) or grey images, not "
+                            "spectra that vary with the wavelength",
                             where=where,
                         )
                 else:
                     check_texture_values(side, kind, where, upper)
             if upper is not None and (high := scalar_range(texture)[1]) > upper:
-                raise SpectraceError(f"checkerboard has values above {upper:g} (max {high:.4g})", where=where)
-        return  # a reflectance checkerboard's sides were checked as they were resolved
+                raise SpectraceError(f"{texture.source} has values above {upper:g} (max {high:.4g})", where=where)
+        return  # a reflectance checkerboard's or dots' sides were checked as they were resolved
     if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
         raise SpectraceError(
             f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
@@ -156,7 +159,7 @@ def scalar_range(value) -> tuple[float, float]:
     """The smallest and largest value a scalar parameter (a number, or a one-channel texture checked by
     check_texture_values) takes anywhere on a surface: every filter blends texels with convex weights and every MIP
     level averages the one before, so no lookup leaves the texels' range."""
-    if isinstance(value, CheckerboardTexture):
+    if isinstance(value, TWO_SIDED):
         ranges = [scalar_range(side) for side in (value.color0, value.color1)]
         return min(r[0] for r in ranges), max(r[1] for r in ranges)
     if isinstance(value, (ScaleTexture, MixTexture)):
@@ -184,7 +187,7 @@ def device_bytes(texture, kind: str) -> int:
     and values before anything is converted (its storage as `storage.predicted_storage` says: a sigmoid texture
     predicted half may need float, twice this, once converted): what the scene's texture budget is checked
     against before anything is converted."""
-    if isinstance(texture, CheckerboardTexture):
+    if isinstance(texture, TWO_SIDED):
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
     if isinstance(texture, (ScaleTexture, MixTexture)):
         factor = _factor(texture)
@@ -254,14 +257,14 @@ class TextureRows:
         row["side_texture"] = NO_TEXTURE
         row["type"] = TEXTURES.codes[texture_module(texture).NAME]
         size, slot = 0, None
-        if isinstance(texture, CheckerboardTexture):
+        if isinstance(texture, TWO_SIDED):
             for i, side in enumerate((texture.color0, texture.color1)):
                 if isinstance(side, Spectrum):
                     row["side_spectrum"][i] = self.table.add(side)
                 elif isinstance(side, IMAGE_TEXTURES):
                     row["side_texture"][i] = self.add(side, kind, where)
                 else:
-                    raise SpectraceError("a checkerboard's sides are spectra or image textures", where=where)
+                    raise SpectraceError(f"a {texture.source}'s sides are spectra or image textures", where=where)
         elif isinstance(texture, (ScaleTexture, MixTexture)):
             sides = (texture.tex,) if isinstance(texture, ScaleTexture) else (texture.tex1, texture.tex2)
             for i, side in enumerate(sides):
