@@ -63,10 +63,19 @@ PROFILE = Parameter(
     doc="`irradiance`: I = intensity·image/cos³θ, the plane at unit distance lit by intensity·image (Mitsuba 3); "
     "`intensity`: I = intensity·image (pbrt-v4)",
 )
+FOV_AXES = ("width", "shorter")
+FOV_AXIS = Parameter(
+    "fov_axis",
+    "string",
+    "",
+    "width",
+    doc="the side `fov` spans: `width` (Mitsuba 3's default) or `shorter` (pbrt-v4's)",
+)
 PARAMETERS = (
     *point.PARAMETERS,
     Parameter("target", "vector", "scene units", REQUIRED, doc="the point the axis goes through"),
     FOV,
+    FOV_AXIS,
     IMAGE,
     UP,
     ASPECT,
@@ -118,8 +127,14 @@ def _profile(profile: str, where: str | None) -> str:
     return profile
 
 
-def _check_fov(fov: float, where: str | None) -> float:
-    return FOV.check(fov, where)
+def _half_fields(fov: float, fov_axis: str, aspect: float, where: str | None, axis_where: str | None):
+    """(tan_x, tan_y): the tangents of the half-fields across the width and the height."""
+    if fov_axis not in FOV_AXES:
+        raise SpectraceError(f"fov_axis must be one of {', '.join(FOV_AXES)}, got {fov_axis!r}", where=axis_where)
+    tan_half = math.tan(math.radians(FOV.check(fov, where)) / 2.0)
+    if fov_axis == "shorter" and aspect > 1.0:
+        return tan_half * aspect, tan_half
+    return tan_half, tan_half / aspect
 
 
 def from_spec(spec, resolver, key: str) -> ProjectorLight:
@@ -132,8 +147,13 @@ def from_spec(spec, resolver, key: str) -> ProjectorLight:
         if isinstance(image, Spectrum):
             where = resolver.where(f"{key}.image")
             raise SpectraceError("an image is a texture (a constant one is a factor of the intensity)", where=where)
-    tan_x = math.tan(math.radians(_check_fov(spec.fov, resolver.where(f"{key}.fov"))) / 2.0)
-    tan_y = tan_x / _aspect(image, spec.aspect)
+    tan_x, tan_y = _half_fields(
+        spec.fov,
+        spec.fov_axis,
+        _aspect(image, spec.aspect),
+        resolver.where(f"{key}.fov"),
+        resolver.where(f"{key}.fov_axis"),
+    )
     intensity = point.spec_intensity(spec, resolver, key, effective_solid_angle(tan_x, tan_y, profile))
     x = spot.slide_x(direction, spec.up, resolver.where(f"{key}.up"))
     return ProjectorLight(tuple(spec.position), direction, intensity, tan_x, tan_y, image, x, profile)
@@ -169,8 +189,10 @@ def make(
     up: Sequence[float] = (0.0, 1.0, 0.0),
     aspect: float | None = None,
     profile: str = "irradiance",
+    fov_axis: str = "width",
 ) -> ProjectorLight:
-    """Projector at `position` aimed at `target`, `fov` degrees across the image's width, the image's top toward
+    """Projector at `position` aimed at `target`, `fov` degrees across the image's width (its shorter side with
+    `fov_axis="shorter"`), the image's top toward
     `up`: I(ω) = intensity·image(uv)/cos³θ (profile `irradiance`, Mitsuba 3's) or intensity·image(uv) (`intensity`,
     pbrt-v4's), W/(sr nm); or `power_w` W, that of a white image."""
     origin = np.asarray(vector3(position, "position"))
@@ -178,10 +200,9 @@ def make(
         np.asarray(vector3(target, "target")) - origin, None, "projector target equals its position"
     )
     profile = _profile(profile, "profile")
-    tan_x = math.tan(math.radians(_check_fov(fov, "fov")) / 2.0)
     if aspect is not None:
         aspect = ASPECT.check(aspect, "aspect")
-    tan_y = tan_x / _aspect(image, aspect)
+    tan_x, tan_y = _half_fields(fov, fov_axis, _aspect(image, aspect), "fov", "fov_axis")
     emitted = point.make_intensity(intensity, power_w, spectrum, effective_solid_angle(tan_x, tan_y, profile))
     x = spot.slide_x(direction, vector3(up, "up"), "up")
     origin_t = (float(origin[0]), float(origin[1]), float(origin[2]))
@@ -233,6 +254,30 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
 
 
 def from_pbrt(context, light, matrix) -> dict | None:
-    """pbrt-v4's projection light: its frame the light's own (looking down +z, x to the right, y up... see docs),
-    `fov` across the image's shorter side, I = scale·image(uv) (the intensity profile)."""
-    return None
+    """pbrt-v4's projection light: its own frame looks down +z, the image's u along +x and v (rows, top first) along
+    +y, so its top faces −y; `fov` spans the image's shorter side; I = scale·image(uv) (the intensity profile), the
+    texels RGB illuminants of the colour space (its D65 under a reflectance image, read nearest as pbrt reads it)."""
+    from spectrace.interop.pbrt.context import error, unique_name
+
+    if context.one(light, "power", -1.0) > 0:
+        raise error(light.location, 'a projection light\'s "power" is not imported: give "scale"')
+    path = context.file_path(light, "filename")
+    if path is None:
+        raise error(light.location, 'a projection light needs "filename"')
+    name = unique_name(f"projection_{path.stem}", set(context.textures))
+    texture: dict = {"type": "bitmap", "file": context.relative(path), "filter": "nearest"}
+    if np.linalg.det((context.world @ matrix)[:3, :3]) < 0.0:
+        # A mirroring frame (pbrt's handedness turned into spectrace's) turns the image's u the other way.
+        texture |= {"uv_scale": [-1.0, 1.0], "uv_offset": [1.0, 0.0]}
+    context.textures[name] = texture
+    return {
+        "type": NAME,
+        "position": context.point(matrix, [0.0, 0.0, 0.0]),
+        "target": context.point(matrix, [0.0, 0.0, 1.0]),
+        "up": [-c for c in context.direction(matrix, [0.0, 1.0, 0.0])],
+        "fov": context.one(light, "fov", 90.0),
+        "fov_axis": "shorter",
+        "profile": "intensity",
+        "intensity": context.emission(light, "I", context.one(light, "scale", 1.0)),
+        "image": {"texture": name},
+    }
