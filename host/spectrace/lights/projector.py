@@ -137,6 +137,14 @@ def _half_fields(fov: float, fov_axis: str, aspect: float, where: str | None, ax
     return tan_half, tan_half / aspect
 
 
+def _image_x(direction, up, where: str | None) -> tuple[float, float, float]:
+    """The image's u direction across the axis, as a spot's slide has it (spot.slide_x), `up` its top."""
+    up_vector = np.asarray(up, float)
+    if not float(np.linalg.norm(np.cross(up_vector, direction))) > 1e-6 * float(np.linalg.norm(up_vector)):
+        raise SpectraceError("up must not lie along the axis", where=where)
+    return spot.slide_x(direction, up, where)
+
+
 def from_spec(spec, resolver, key: str) -> ProjectorLight:
     check_position(spec.position, resolver.where(f"{key}.position"))
     direction = unit_direction(np.subtract(spec.target, spec.position), resolver.where(f"{key}.target"))
@@ -155,7 +163,7 @@ def from_spec(spec, resolver, key: str) -> ProjectorLight:
         resolver.where(f"{key}.fov_axis"),
     )
     intensity = point.spec_intensity(spec, resolver, key, effective_solid_angle(tan_x, tan_y, profile))
-    x = spot.slide_x(direction, spec.up, resolver.where(f"{key}.up"))
+    x = _image_x(direction, spec.up, resolver.where(f"{key}.up"))
     return ProjectorLight(tuple(spec.position), direction, intensity, tan_x, tan_y, image, x, profile)
 
 
@@ -204,7 +212,7 @@ def make(
         aspect = ASPECT.check(aspect, "aspect")
     tan_x, tan_y = _half_fields(fov, fov_axis, _aspect(image, aspect), "fov", "fov_axis")
     emitted = point.make_intensity(intensity, power_w, spectrum, effective_solid_angle(tan_x, tan_y, profile))
-    x = spot.slide_x(direction, vector3(up, "up"), "up")
+    x = _image_x(direction, vector3(up, "up"), "up")
     origin_t = (float(origin[0]), float(origin[1]), float(origin[2]))
     return ProjectorLight(origin_t, direction, emitted, tan_x, tan_y, image, x, profile)
 
