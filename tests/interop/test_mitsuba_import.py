@@ -76,7 +76,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
         <bsdf type="hair" id="metal"/>
         <shape type="bsplinecurve"><string name="filename" value="x.txt"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
-        <emitter type="projector"><float name="fov" value="30"/></emitter>""",
+        <emitter type="sky"><float name="turbidity" value="3"/></emitter>""",
     )
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
@@ -84,7 +84,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
     for named in (
         "shape 'bsplinecurve' (line 6)",
         "bsdf 'hair' (line 5)",
-        "emitter 'projector' (line 8)",
+        "emitter 'sky' (line 8)",
     ):
         assert named in message
     assert "\n" not in message

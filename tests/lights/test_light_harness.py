@@ -23,6 +23,7 @@ from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.geometry.analytic import ANALYTIC_SHAPES
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.lights import LIGHTS
+from spectrace.lights.projector import ProjectorLight
 from spectrace.scene.model import (
     Camera,
     ConstantEnvironment,
@@ -133,6 +134,37 @@ def _spot_case() -> Case:
     # From the axis, inside the falloff start, and two points within the transition.
     points = [(0, 0, 0), (0.3, 0.0, 0.2), (1.2, 0.0, 0.3), (0.0, 0.5, -1.1)]
     return Case("spot", _scene(lights=[light]), points, True, arriving=arriving)
+
+
+def _projector_case(profile: str) -> Case:
+    """A white projector looking down −y, 60° across a 3:2 field: I = I₀/cos³θ (irradiance profile, Mitsuba 3's) or
+    I₀ (intensity profile, pbrt-v4's) within the field (docs/scene-format.md)."""
+    position, axis = np.array([0.0, 2.0, 0.0]), np.array([0.0, -1.0, 0.0])
+    light = spectrace.projector_light(
+        tuple(position), (0.0, 0.0, 0.0), 60.0, intensity="cie:D65", up=(0.0, 0.0, -1.0), aspect=1.5, profile=profile
+    )
+
+    def arriving(p, wi, q):
+        to_p = p - position
+        d2 = np.sum(to_p**2, axis=1, keepdims=True)
+        cos_theta = (_unit(to_p) @ axis)[:, None]
+        shape = 1.0 / cos_theta**3 if profile == "irradiance" else 1.0
+        return _at(light.intensity)[None, :] * shape / d2
+
+    # The field's half-widths at the origin's depth are 2 tan 30° and that over 1.5: every point lies inside.
+    points = [(0, 0, 0), (0.3, 0.0, 0.2), (1.0, 0.0, -0.6), (-0.4, 0.5, 0.3)]
+    return Case(f"projector-{profile}", _scene(lights=[light]), points, True, arriving=arriving)
+
+
+def _projector_flux_factor(tan_x: float, tan_y: float, profile: str) -> float:
+    """∫ I/I₀ dω over the field, by the midpoint rule on the plane z = 1 (dω = cos³θ dA): the image's area for the
+    irradiance profile, the field's solid angle for the intensity profile."""
+    n = 2000
+    x = (np.arange(n) + 0.5) / n * 2.0 * tan_x - tan_x
+    y = (np.arange(n) + 0.5) / n * 2.0 * tan_y - tan_y
+    cos3 = (1.0 + x[:, None] ** 2 + y[None, :] ** 2) ** -1.5
+    shape = np.ones_like(cos3) if profile == "irradiance" else cos3
+    return float(shape.sum() * (2.0 * tan_x / n) * (2.0 * tan_y / n))
 
 
 def _distant_case() -> Case:
@@ -321,6 +353,7 @@ def _textured_cases() -> list[Case]:
 CASES: dict[str, list[Case]] = {
     "point": [_point_case()],
     "spot": [_spot_case()],
+    "projector": [_projector_case("irradiance"), _projector_case("intensity")],
     "distant": [_distant_case()],
     "constant": [_constant_case()],
     "envmap": [_envmap_case("envmap"), _envmap_case("envmap-turned", up=(0.3, 0.9, 0.2), front=(1.0, 0.0, 0.4))],
@@ -622,6 +655,9 @@ def _flux(case: Case, radius: float) -> np.ndarray:
         if isinstance(light, SpotLight):
             cos_s, cos_c = np.cos(np.radians([light.falloff_start_degrees, light.cutoff_degrees]))
             return _at(light.intensity) * 2.0 * np.pi * ((1.0 - cos_s) + 0.5 * (cos_s - cos_c))
+        if isinstance(light, ProjectorLight):
+            tan_x = np.tan(np.radians(60.0) / 2.0)
+            return _at(light.intensity) * _projector_flux_factor(tan_x, tan_x / 1.5, light.profile)
         if isinstance(light, DistantLight):
             return _at(light.irradiance) * np.pi * radius**2
         if isinstance(light, ConstantEnvironment):

@@ -19,7 +19,7 @@ Adding a light: its module here and its line in LIGHTS, its kernel file, tests (
 from spectrace.core.api_calls import recorded
 from spectrace.core.contract import GeneratedSources
 from spectrace.core.registry import Registry
-from spectrace.lights import area, constant, distant, envmap, point, spot
+from spectrace.lights import area, constant, distant, envmap, point, projector, spot
 from spectrace.lights.base import DEVICE_LIGHT_KINDS, DeviceLight, LightPlugin, LightSource
 
 __all__ = [
@@ -31,11 +31,12 @@ __all__ = [
     "envmap",
     "generated_sources",
     "point",
+    "projector",
     "spot",
 ]
 
 # Scene-file `type` -> module, in the order the schema lists them.
-LIGHTS = Registry[LightPlugin]("light", (point, spot, distant, constant, envmap))
+LIGHTS = Registry[LightPlugin]("light", (point, spot, distant, constant, envmap, projector))
 light_module = LIGHTS.for_model
 # Each light an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
 for _module in LIGHTS.values():
