@@ -99,7 +99,7 @@ inline int grid_walk_start(__global const float *spectra, int grid, float3 origi
     float3 ta = -o * inv, tb = (1.0f - o) * inv;
     float3 lo = select(fmin(ta, tb), (float3)(-INFINITY), d == (float3)(0.0f));
     float3 hi = select(fmax(ta, tb), (float3)(INFINITY), d == (float3)(0.0f));
-    if (any(d == (float3)(0.0f) & (o < (float3)(0.0f) | o > (float3)(1.0f)))) return 0;
+    if (any((d == (float3)(0.0f)) & (o < (float3)(0.0f) | o > (float3)(1.0f)))) return 0;
     float t0 = fmax(fmax(fmax(lo.x, lo.y), lo.z), 0.0f);
     float t1 = fmin(fmin(fmin(hi.x, hi.y), hi.z), t_max);
     if (!(t0 < t1)) return 0;
