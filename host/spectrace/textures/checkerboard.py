@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
-from spectrace.textures.shared import UV_OFFSET, Placement, api_operand, uv_pair, uv_scale
+from spectrace.textures.shared import UV_OFFSET, Placement, api_operand, two_sided_from_spec, uv_pair, uv_scale
 
 NAME = "checkerboard"
 API_NAME = NAME
@@ -45,19 +45,7 @@ MODEL = CheckerboardTexture
 
 
 def from_spec(spec, resolver, key: str) -> CheckerboardTexture:
-    sides = [
-        resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
-        for name in ("color0", "color1")
-    ]
-    where = resolver.where(key)
-    return CheckerboardTexture(
-        sides[0],
-        sides[1],
-        placement=Placement(
-            uv_scale=uv_pair(spec.uv_scale, "uv_scale", f"{where}.uv_scale"),
-            uv_offset=uv_pair(spec.uv_offset, "uv_offset", f"{where}.uv_offset"),
-        ),
-    )
+    return two_sided_from_spec(CheckerboardTexture, ("color0", "color1"), spec, resolver, key)
 
 
 def make(

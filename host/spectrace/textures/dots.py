@@ -8,7 +8,7 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
-from spectrace.textures.shared import UV_OFFSET, Placement, api_operand, uv_pair, uv_scale
+from spectrace.textures.shared import UV_OFFSET, Placement, api_operand, two_sided_from_spec, uv_pair, uv_scale
 
 NAME = "dots"
 API_NAME = "dots_texture"  # spectrace.dots would read as a shape
@@ -47,19 +47,7 @@ MODEL = DotsTexture
 
 
 def from_spec(spec, resolver, key: str) -> DotsTexture:
-    sides = [
-        resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
-        for name in ("inside", "outside")
-    ]
-    where = resolver.where(key)
-    return DotsTexture(
-        sides[0],
-        sides[1],
-        placement=Placement(
-            uv_scale=uv_pair(spec.uv_scale, "uv_scale", f"{where}.uv_scale"),
-            uv_offset=uv_pair(spec.uv_offset, "uv_offset", f"{where}.uv_offset"),
-        ),
-    )
+    return two_sided_from_spec(DotsTexture, ("inside", "outside"), spec, resolver, key)
 
 
 def make(inside=1.0, outside=0.0, *, uv_scale: float | tuple[float, float] = 1.0, uv_offset=(0.0, 0.0)) -> DotsTexture:

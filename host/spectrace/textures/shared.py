@@ -208,3 +208,20 @@ def composite_factor(value, resolver, key: str, upper: float | None):
         bound = f"[0, {upper:g}]" if upper is not None else ">= 0"
         raise SpectraceError(f"{name} must be {'in ' if upper is not None else ''}{bound}, got {value:g}", where)
     return float(value)
+
+
+def two_sided_from_spec(model, sides: tuple[str, str], spec, resolver, key: str):
+    """A texture of two sides (checkerboard, dots) from its scene-file table: each side a spectrum or an inner
+    texture under `key`.NAME, and its placement."""
+    values = [
+        resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True) for name in sides
+    ]
+    where = resolver.where(key)
+    return model(
+        values[0],
+        values[1],
+        placement=Placement(
+            uv_scale=uv_pair(spec.uv_scale, "uv_scale", f"{where}.uv_scale"),
+            uv_offset=uv_pair(spec.uv_offset, "uv_offset", f"{where}.uv_offset"),
+        ),
+    )
