@@ -21,6 +21,26 @@ os.environ.setdefault("SPECTRACE_GENERAL_KERNELS", "1")
 HARNESS_GROUP = 64
 
 
+# How long a test is known to take, for the order below: marked slow (over ~5 s: docs pages, Cycles comparisons,
+# fuzzers), then comparisons with a peer renderer, then the rest.
+_LONG_MARKS = ("slow", "peer")
+
+
+def _weight(item: pytest.Item) -> int:
+    return next((rank for rank, mark in enumerate(_LONG_MARKS) if item.get_closest_marker(mark)), len(_LONG_MARKS))
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Modules holding known-long tests run first. xdist hands out the tests in this order (the first quarter
+    dealt in turn to the workers, the rest as they ask), so long ones left at the end kept one worker busy while
+    the other stood idle. Whole modules move, in their own order, so their module-scoped fixtures are set up once."""
+    modules: dict[str, list[pytest.Item]] = {}
+    for item in items:
+        modules.setdefault(item.nodeid.split("::")[0], []).append(item)
+    ranked = sorted(modules.values(), key=lambda group: min(_weight(item) for item in group))
+    items[:] = [item for group in ranked for item in group]
+
+
 def pytest_report_header(config):
     try:
         device = open_device()

@@ -98,19 +98,27 @@ def test_bad_input_is_one_line_without_traceback(tmp_path):
     assert result.returncode == 2 and "[0, 1]" in result.stderr and "Traceback" not in result.stderr
 
 
-@pytest.mark.subprocess
-@pytest.mark.parametrize(
-    ("command", "triple", "shown"),
-    [
-        (["compare"], ["2", "0", "0"], "(2, 0, 0)"),
-        (["match", "--from", "CRT-Dell", "--to", "CRT-HP"], ["0.5", "-0.5", "1"], "(0.5, -0.5, 1)"),
-        (["metamerism", "--from", "CRT-Dell", "--to", "CRT-HP"], ["1", "1", "1.01"], "(1, 1, 1.01)"),
-    ],
-)
+RGB_OUT_OF_RANGE = [
+    (["compare"], ["2", "0", "0"], "(2, 0, 0)"),
+    (["match", "--from", "CRT-Dell", "--to", "CRT-HP"], ["0.5", "-0.5", "1"], "(0.5, -0.5, 1)"),
+    (["metamerism", "--from", "CRT-Dell", "--to", "CRT-HP"], ["1", "1", "1.01"], "(1, 1, 1.01)"),
+]
+
+
+@pytest.mark.parametrize(("command", "triple", "shown"), RGB_OUT_OF_RANGE)
 def test_an_rgb_triple_out_of_range_names_the_option_as_typed(command, triple, shown):
     """Every display command checks --rgb where it reads it: one line naming the option (not the library's
     argument name), the values as given and the command's help, before any display is loaded or rendered."""
-    result = _run(*command, "--rgb", *triple, check=False)
+    _check_rgb_refusal(run_here("display", *command, "--rgb", *triple), command, shown)
+
+
+@pytest.mark.subprocess
+def test_a_real_process_refuses_an_rgb_triple_out_of_range_in_one_line():
+    command, triple, shown = RGB_OUT_OF_RANGE[1]
+    _check_rgb_refusal(_run(*command, "--rgb", *triple, check=False), command, shown)
+
+
+def _check_rgb_refusal(result, command, shown):
     assert result.returncode == 2 and result.stdout == "", result
     line = result.stderr
     assert line.count("\n") == 1 and line.startswith(f"error: --rgb: RGB values must lie in [0, 1], got {shown} (see `")

@@ -1,6 +1,7 @@
 """Test scenes built with Blender's own Python module (bpy), run in a child process: `python -m
 tests.interop.blender_builder KIND OUT.blend [CYCLES.exr SPP]` saves the scene, and renders it with Cycles on the
-CPU when given an image path. Kept out of the test process so that Blender's libraries never meet the renderer's."""
+CPU when given an image path; `--many FOLDER KIND...` saves each scene as FOLDER/KIND.blend in one process (bpy's
+start-up paid once). Kept out of the test process so that Blender's libraries never meet the renderer's."""
 
 import math
 import sys
@@ -245,6 +246,11 @@ SCENES |= {f"light_{kind}": (lambda kind=kind: light_only(kind)) for kind in LIG
 
 
 def main() -> None:
+    if sys.argv[1] == "--many":
+        for kind in sys.argv[3:]:
+            SCENES[kind]()
+            bpy.ops.wm.save_as_mainfile(filepath=f"{sys.argv[2]}/{kind}.blend")
+        return
     kind, out = sys.argv[1], sys.argv[2]
     scene = environment(kind.split(":", 1)[1]) if kind.startswith("environment:") else SCENES[kind]()
     bpy.ops.wm.save_as_mainfile(filepath=out)

@@ -25,15 +25,19 @@ needs_bpy = pytest.mark.skipif(
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _build(kind: str, blend: Path, cycles: Path | None = None, spp: int = 0) -> None:
-    """Run the builder in its own process (bpy stays out of the test process)."""
-    args = [sys.executable, "-m", "tests.interop.blender_builder", kind, str(blend)]
-    if cycles is not None:
-        args += [str(cycles), str(spp)]
+def _child(*args: str) -> None:
+    """Run `python ARGS` in its own process (bpy stays out of the test process)."""
     env = os.environ.copy()
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
-    done = subprocess.run(args, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
+    done = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
     assert done.returncode == 0, done.stderr[-2000:]
+
+
+def _build(kind: str, blend: Path, cycles: Path | None = None, spp: int = 0) -> None:
+    args = ["-m", "tests.interop.blender_builder", kind, str(blend)]
+    if cycles is not None:
+        args += [str(cycles), str(spp)]
+    _child(*args)
 
 
 def _import(tmp_path: Path, kind: str) -> tuple[Path, dict]:
@@ -206,10 +210,30 @@ def _square_irradiance(radiance: float, side: float, height: float) -> float:
     return 4.0 * radiance / 2.0 * 2.0 * x / math.sqrt(1 + x * x) * math.atan(x / math.sqrt(1 + x * x))
 
 
+LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
+
+
+@pytest.fixture(scope="module")
+def light_scenes(tmp_path_factory) -> Path:
+    """The light-unit scenes, each light_KIND.blend and its import light_KIND.toml in one folder: one Blender
+    process builds them all and one process imports them all (each start of bpy costs seconds)."""
+    folder = tmp_path_factory.mktemp("blender_lights")
+    kinds = [f"light_{kind}" for kind in LIGHT_KINDS]
+    _child("-m", "tests.interop.blender_builder", "--many", str(folder), *kinds)
+    _child(
+        "-c",
+        "import sys\nfrom spectrace.interop.blender import import_blend\n"
+        "for name in sys.argv[2:]:\n    import_blend(f'{sys.argv[1]}/{name}.blend', f'{sys.argv[1]}/{name}.toml')",
+        str(folder),
+        *kinds,
+    )
+    return folder
+
+
 @needs_bpy
 @pytest.mark.subprocess
-@pytest.mark.parametrize("kind", ["POINT", "SPOT", "SUN", "AREA"])
-def test_light_units_give_the_irradiance_of_their_closed_form(tmp_path, device, kind):
+@pytest.mark.parametrize("kind", LIGHT_KINDS)
+def test_light_units_give_the_irradiance_of_their_closed_form(light_scenes, device, kind):
     """Blender's units as Cycles renders them (a point or spot light's P W: I = P / 4π; a sun's S W/m²: E = S facing
     it; an area light's P W out of its face: L = P / (π A)), read by spectrace's irradiance meter at the origin,
     LIGHT_HEIGHT below the light, as film Y: the light colour's luminance Y(c) times the closed form."""
@@ -219,7 +243,7 @@ def test_light_units_give_the_irradiance_of_their_closed_form(tmp_path, device, 
     from spectrace.interop.gltf.context import photometric_scale
     from spectrace.scene import load_scene
 
-    toml, _ = _import(tmp_path, f"light_{kind}")
+    toml = light_scenes / f"light_{kind}.toml"
     settings, _ = LIGHTS[kind]
     power, h = settings["energy"], LIGHT_HEIGHT
     if kind in ("POINT", "SPOT"):

@@ -9,7 +9,7 @@ import typing
 import pytest
 import typer
 
-from cli_runner import run_in_process, run_spectrace
+from cli_runner import run_here, run_in_process, run_spectrace
 from scene_text import glowing_rectangle
 from spectrace import cli
 from spectrace.cli.common import strict_number_options
@@ -117,7 +117,6 @@ def test_a_real_process_refuses_a_filter_with_a_digit_separator(tmp_path):
     assert list(tmp_path.iterdir()) == [scene]
 
 
-@pytest.mark.subprocess
 @pytest.mark.parametrize(
     ("old", "new", "where", "says"),
     [
@@ -139,12 +138,23 @@ def test_a_real_process_refuses_a_filter_with_a_digit_separator(tmp_path):
         ),
     ],
 )
-def test_a_real_process_names_the_file_and_key_of_a_wrongly_typed_value(old, new, where, says, tmp_path):
+def test_the_file_and_key_of_a_wrongly_typed_value_are_named(old, new, where, says, tmp_path):
+    _check_wrongly_typed_value(run_here, old, new, where, says, tmp_path)
+
+
+@pytest.mark.subprocess
+def test_a_real_process_names_the_file_and_key_of_a_wrongly_typed_value(tmp_path):
+    _check_wrongly_typed_value(
+        run_spectrace, "width = 8", "width = true", "film.width", "expected a whole number, got true", tmp_path
+    )
+
+
+def _check_wrongly_typed_value(run, old, new, where, says, tmp_path):
     text = glowing_rectangle()
     assert old in text
     scene = tmp_path / "scene.toml"
     scene.write_text(text.replace(old, new, 1))
-    result = run_spectrace("render", str(scene), "-o", str(tmp_path / "o.png"))
+    result = run("render", str(scene), "-o", str(tmp_path / "o.png"))
     assert result.returncode == 2 and result.stdout == "", result.stderr
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr, result.stderr
     assert result.stderr.startswith(f"error: {scene}: {where}: "), result.stderr
