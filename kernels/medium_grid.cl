@@ -11,12 +11,10 @@
  * Contract. The grid's block lives in the scene's float table (`spectra`) at Medium.grid (-1: homogeneous), laid out
  * by spectrace.geometry.grid_volume: the world → unit-box map (3 rows of 4), then as int bits: nx, ny, nz (voxels),
  * mx, my, mz (majorant cells), the offsets of the density, albedo (-1: none) and majorant arrays, x fastest, and
- * the albedo's channels: 1 (a grey value a voxel) or 3 (a colour's sigmoid coefficients a voxel, dimensionless:
- * rgb_spectrum.cl). A colour albedo is evaluated at the path's wavelengths at the eight voxels around a point and
- * those values interpolated (as Mitsuba 3's spectral gridvolume): a mix of spectra has the mix of their colours.
- * Voxel values sit at cell centres, lookups are trilinear and clamp at the box's faces (Mitsuba 3's gridvolume).
- * Each majorant cell holds the largest voxel value that any trilinear lookup inside the cell reads, so
- * μ = max_cell d · max_lanes σt(λ) bounds σt at all four wavelengths of the path there.
+ * the albedo's channels: 1 (a grey value a voxel) or 3 (a colour, stored as 4 floats a voxel: the dimensionless
+ * sigmoid coefficients (rgb_spectrum.cl) of the colour over s, then s = 2 × its largest channel). A colour albedo is
+ * the mix of the eight surrounding voxels' spectra at the path's wavelengths times the mix of their s, as Mitsuba 3's
+ * spectral gridvolume evaluates it: a mix of spectra has the mix of their colours.
  *
  * Free flights: tentative collisions are drawn at rate μ, cell by cell (a flight past a cell's end restarts at the
  * next cell, the exponential being memoryless). At a collision the path scatters with probability
@@ -77,20 +75,28 @@ inline float grid_lookup(__global const float *spectra, int offset, int3 n, floa
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
-/* The trilinear mix of the colour voxels' spectra at the four wavelengths, at unit-box point u inside the box. */
+/* A colour albedo at unit-box point u inside the box: the trilinear mix of the voxels' spectra at the four
+ * wavelengths times the trilinear mix of their scales. */
 inline float4 grid_lookup_colour(__global const float *spectra, int offset, int3 n, float3 u, float4 lambda)
 {
     int3 i0, i1;
     float3 f = grid_corners(n, u, &i0, &i1);
     __global const float *v = spectra + offset;
-#define GRID_SPECTRUM(ix, iy, iz) \
-    sigmoid_polynomial_dimensionless(vload3(((iz) * n.y + (iy)) * n.x + (ix), v), lambda)
-    float4 c00 = mix(GRID_SPECTRUM(i0.x, i0.y, i0.z), GRID_SPECTRUM(i1.x, i0.y, i0.z), f.x);
-    float4 c10 = mix(GRID_SPECTRUM(i0.x, i1.y, i0.z), GRID_SPECTRUM(i1.x, i1.y, i0.z), f.x);
-    float4 c01 = mix(GRID_SPECTRUM(i0.x, i0.y, i1.z), GRID_SPECTRUM(i1.x, i0.y, i1.z), f.x);
-    float4 c11 = mix(GRID_SPECTRUM(i0.x, i1.y, i1.z), GRID_SPECTRUM(i1.x, i1.y, i1.z), f.x);
+#define GRID_VOXEL(ix, iy, iz) vload4(((iz) * n.y + (iy)) * n.x + (ix), v)
+#define GRID_SPECTRUM(c) sigmoid_polynomial_dimensionless((c).xyz, lambda)
+    float4 v000 = GRID_VOXEL(i0.x, i0.y, i0.z), v100 = GRID_VOXEL(i1.x, i0.y, i0.z);
+    float4 v010 = GRID_VOXEL(i0.x, i1.y, i0.z), v110 = GRID_VOXEL(i1.x, i1.y, i0.z);
+    float4 v001 = GRID_VOXEL(i0.x, i0.y, i1.z), v101 = GRID_VOXEL(i1.x, i0.y, i1.z);
+    float4 v011 = GRID_VOXEL(i0.x, i1.y, i1.z), v111 = GRID_VOXEL(i1.x, i1.y, i1.z);
+    float4 c00 = mix(GRID_SPECTRUM(v000), GRID_SPECTRUM(v100), f.x);
+    float4 c10 = mix(GRID_SPECTRUM(v010), GRID_SPECTRUM(v110), f.x);
+    float4 c01 = mix(GRID_SPECTRUM(v001), GRID_SPECTRUM(v101), f.x);
+    float4 c11 = mix(GRID_SPECTRUM(v011), GRID_SPECTRUM(v111), f.x);
+    float s00 = mix(v000.w, v100.w, f.x), s10 = mix(v010.w, v110.w, f.x);
+    float s01 = mix(v001.w, v101.w, f.x), s11 = mix(v011.w, v111.w, f.x);
 #undef GRID_SPECTRUM
-    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+#undef GRID_VOXEL
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z) * mix(mix(s00, s10, f.y), mix(s01, s11, f.y), f.z);
 }
 
 /* Density d(x) at world point x. */

@@ -167,18 +167,22 @@ def majorant_grid(density: np.ndarray, cells: int = MAJORANT_CELLS) -> np.ndarra
 
 
 def albedo_block(albedo: np.ndarray) -> np.ndarray:
-    """The albedo grid as the kernels read it: a grey one as is; a colour one as each voxel's sigmoid coefficients
-    (dimensionless, 3 floats a voxel), fitted as a texture's texels are (Jakob & Hanika 2019). The kernel evaluates
-    the eight voxels' spectra at the path's wavelengths and interpolates those values, as Mitsuba 3's spectral
-    gridvolume does: a trilinear mix of spectra has the trilinear mix of their colours, while interpolating the
-    coefficients would not (the sigmoid is not linear)."""
+    """The albedo grid as the kernels read it: a grey one as is; a colour one as 4 floats a voxel, Mitsuba 3's
+    spectral gridvolume's form: the sigmoid coefficients (dimensionless, fitted as a texture's texels are, Jakob &
+    Hanika 2019) of the colour divided by s = 2 × its largest channel, then s. The kernel evaluates the eight voxels'
+    spectra at the path's wavelengths, interpolates those values and s apart, and multiplies them, as Mitsuba does:
+    a mix of spectra has the mix of their colours, while mixing the coefficients would not (the sigmoid is not
+    linear). Dividing by s keeps every fit away from the saturated ends; the spectrum's shape, not only its colour,
+    then matches Mitsuba's, which matters after many scatterings (the albedo's powers)."""
     if albedo.ndim == 3:
         return albedo
     from spectrace.spectral.rgb_texture import reflectance_coefficients
     from spectrace.textures.storage import dimensionless
 
-    coefficients = dimensionless(reflectance_coefficients(albedo.reshape(-1, 3).astype(np.float64)))
-    return np.ascontiguousarray(coefficients, np.float32)
+    rgb = albedo.reshape(-1, 3).astype(np.float64)
+    scale = 2.0 * rgb.max(axis=1)
+    coefficients = dimensionless(reflectance_coefficients(rgb / np.maximum(scale, 1e-8)[:, None]))
+    return np.ascontiguousarray(np.concatenate([coefficients, scale[:, None]], axis=1), np.float32)
 
 
 def add_grid_block(table: SpectrumTable, grid: GridVolume) -> int:
