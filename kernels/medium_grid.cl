@@ -10,10 +10,11 @@
  *
  * Contract. The grid's block lives in the scene's float table (`spectra`) at Medium.grid (-1: homogeneous), laid out
  * by spectrace.geometry.grid_volume: the world → unit-box map (3 rows of 4), then as int bits: nx, ny, nz (voxels),
- * mx, my, mz (majorant cells), the offsets of the density, albedo (-1: none) and majorant arrays, x fastest.
- * Voxel values sit at cell centres, lookups are trilinear and clamp at the box's faces (Mitsuba 3's gridvolume).
- * Each majorant cell holds the largest voxel value that any trilinear lookup inside the cell reads, so
- * μ = max_cell d · max_lanes σt(λ) bounds σt at all four wavelengths of the path there.
+ * mx, my, mz (majorant cells), the offsets of the density, albedo (-1: none) and majorant arrays, x fastest, and
+ * the albedo's channels: 1 (a grey value a voxel) or 3 (a colour, stored as 4 floats a voxel: the dimensionless
+ * sigmoid coefficients (rgb_spectrum.cl) of the colour over s, then s = 2 × its largest channel). A colour albedo is
+ * the mix of the eight surrounding voxels' spectra at the path's wavelengths times the mix of their s, as Mitsuba 3's
+ * spectral gridvolume evaluates it: a mix of spectra has the mix of their colours.
  *
  * Free flights: tentative collisions are drawn at rate μ, cell by cell (a flight past a cell's end restarts at the
  * next cell, the exponential being memoryless). At a collision the path scatters with probability
@@ -27,6 +28,7 @@
 #define SPECTRACE_MEDIUM_GRID_CL
 
 #include "hash.cl"
+#include "rgb_spectrum.cl"
 
 /* A guard against a flight that never ends (a NaN, a majorant of 0 with an infinite box): far above any scene's. */
 #define GRID_MAX_COLLISIONS 1048576
@@ -48,14 +50,21 @@ inline float3 grid_unit_vector(__global const float *spectra, int grid, float3 d
                     m[8] * d.x + m[9] * d.y + m[10] * d.z);
 }
 
+/* The eight voxels around unit-box point u (inside the box) and the weights between them. */
+inline float3 grid_corners(int3 n, float3 u, int3 *i0, int3 *i1)
+{
+    float3 q = clamp(u * convert_float3(n) - 0.5f, (float3)(0.0f), convert_float3(n - 1));
+    *i0 = min(convert_int3(floor(q)), n - 1);
+    *i1 = min(*i0 + 1, n - 1);
+    return q - convert_float3(*i0);
+}
+
 /* The trilinear value of the voxel array at `offset` (dimensions n) at unit-box point u, 0 outside the box. */
 inline float grid_lookup(__global const float *spectra, int offset, int3 n, float3 u)
 {
     if (any(u < (float3)(0.0f)) || any(u > (float3)(1.0f))) return 0.0f;
-    float3 q = clamp(u * convert_float3(n) - 0.5f, (float3)(0.0f), convert_float3(n - 1));
-    int3 i0 = min(convert_int3(floor(q)), n - 1);
-    int3 i1 = min(i0 + 1, n - 1);
-    float3 f = q - convert_float3(i0);
+    int3 i0, i1;
+    float3 f = grid_corners(n, u, &i0, &i1);
     __global const float *v = spectra + offset;
 #define GRID_AT(ix, iy, iz) v[((iz) * n.y + (iy)) * n.x + (ix)]
     float c00 = mix(GRID_AT(i0.x, i0.y, i0.z), GRID_AT(i1.x, i0.y, i0.z), f.x);
@@ -66,15 +75,55 @@ inline float grid_lookup(__global const float *spectra, int offset, int3 n, floa
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
-/* Density d(x) and albedo a(x) (1 without an albedo grid) at world point x. */
-inline float2 grid_density_albedo(__global const float *spectra, int grid, float3 x)
+/* A colour albedo at unit-box point u inside the box: the trilinear mix of the voxels' spectra at the four
+ * wavelengths times the trilinear mix of their scales. */
+inline float4 grid_lookup_colour(__global const float *spectra, int offset, int3 n, float3 u, float4 lambda)
+{
+    int3 i0, i1;
+    float3 f = grid_corners(n, u, &i0, &i1);
+    __global const float *v = spectra + offset;
+#define GRID_VOXEL(ix, iy, iz) vload4(((iz) * n.y + (iy)) * n.x + (ix), v)
+#define GRID_SPECTRUM(c) sigmoid_polynomial_dimensionless((c).xyz, lambda)
+    float4 v000 = GRID_VOXEL(i0.x, i0.y, i0.z), v100 = GRID_VOXEL(i1.x, i0.y, i0.z);
+    float4 v010 = GRID_VOXEL(i0.x, i1.y, i0.z), v110 = GRID_VOXEL(i1.x, i1.y, i0.z);
+    float4 v001 = GRID_VOXEL(i0.x, i0.y, i1.z), v101 = GRID_VOXEL(i1.x, i0.y, i1.z);
+    float4 v011 = GRID_VOXEL(i0.x, i1.y, i1.z), v111 = GRID_VOXEL(i1.x, i1.y, i1.z);
+    float4 c00 = mix(GRID_SPECTRUM(v000), GRID_SPECTRUM(v100), f.x);
+    float4 c10 = mix(GRID_SPECTRUM(v010), GRID_SPECTRUM(v110), f.x);
+    float4 c01 = mix(GRID_SPECTRUM(v001), GRID_SPECTRUM(v101), f.x);
+    float4 c11 = mix(GRID_SPECTRUM(v011), GRID_SPECTRUM(v111), f.x);
+    float s00 = mix(v000.w, v100.w, f.x), s10 = mix(v010.w, v110.w, f.x);
+    float s01 = mix(v001.w, v101.w, f.x), s11 = mix(v011.w, v111.w, f.x);
+#undef GRID_SPECTRUM
+#undef GRID_VOXEL
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z) * mix(mix(s00, s10, f.y), mix(s01, s11, f.y), f.z);
+}
+
+/* Density d(x) at world point x. */
+inline float grid_density(__global const float *spectra, int grid, float3 x)
+{
+    float3 u = grid_unit_point(spectra, grid, x);
+    int3 n = (int3)(GRID_HEADER_INT(spectra, grid, 0), GRID_HEADER_INT(spectra, grid, 1),
+                    GRID_HEADER_INT(spectra, grid, 2));
+    return grid_lookup(spectra, GRID_HEADER_INT(spectra, grid, 6), n, u);
+}
+
+/* Density d(x) at world point x, and in *albedo a(λ, x) at the four wavelengths (1 without an albedo grid). */
+inline float grid_density_albedo(__global const float *spectra, int grid, float3 x, float4 lambda, float4 *albedo)
 {
     float3 u = grid_unit_point(spectra, grid, x);
     int3 n = (int3)(GRID_HEADER_INT(spectra, grid, 0), GRID_HEADER_INT(spectra, grid, 1),
                     GRID_HEADER_INT(spectra, grid, 2));
     float density = grid_lookup(spectra, GRID_HEADER_INT(spectra, grid, 6), n, u);
-    int albedo = GRID_HEADER_INT(spectra, grid, 7);
-    return (float2)(density, albedo >= 0 && density > 0.0f ? grid_lookup(spectra, albedo, n, u) : 1.0f);
+    int offset = GRID_HEADER_INT(spectra, grid, 7);
+    if (offset < 0 || !(density > 0.0f)) {
+        *albedo = (float4)(1.0f);
+    } else if (GRID_HEADER_INT(spectra, grid, 9) == 3) {
+        *albedo = grid_lookup_colour(spectra, offset, n, u, lambda);  /* density > 0: u is inside the box */
+    } else {
+        *albedo = (float4)(grid_lookup(spectra, offset, n, u));
+    }
+    return density;
 }
 
 /* The majorant cells a ray crosses inside the unit box, in order (a 3D DDA). t is the ray's own parameter. */
@@ -189,9 +238,10 @@ inline FreeFlight grid_sample_flight(__global const Medium *m, __global const fl
                 flight.weight = (float4)(0.0f);
                 return flight;
             }
-            float2 da = grid_density_albedo(spectra, m->grid, origin + t * direction);
-            float4 sigma_t_x = da.x * sigma_t;
-            float4 sigma_s_x = da.x * da.y * sigma_s;
+            float4 albedo;
+            float density = grid_density_albedo(spectra, m->grid, origin + t * direction, w->lambda, &albedo);
+            float4 sigma_t_x = density * sigma_t;
+            float4 sigma_s_x = density * albedo * sigma_s;
             float4 sigma_n_x = fmax((float4)(majorant) - sigma_t_x, (float4)(0.0f));
             float4 h = fabs(throughput * flight.weight);
             float scatter = dot(h, sigma_s_x), null = dot(h, sigma_n_x);
@@ -237,7 +287,7 @@ inline float4 grid_transmittance(__global const Medium *m, __global const float 
             t -= log(1.0f - grid_random(&state)) / majorant;
             if (!(t < t_exit)) break;
             if (++collisions > GRID_MAX_COLLISIONS) return (float4)(0.0f);
-            float density = grid_density_albedo(spectra, m->grid, origin + t * direction).x;
+            float density = grid_density(spectra, m->grid, origin + t * direction);
             transmittance *= fmax((float4)(majorant) - density * sigma_t, (float4)(0.0f)) / majorant;
             if (all(transmittance == (float4)(0.0f))) return transmittance;
         }

@@ -94,7 +94,8 @@ def assert_renders_like_mitsuba(
     from spectrace.spectral import xyz_to_linear_srgb
 
     scene = mi.load_file(str(path))
-    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed)) for seed in range(replicas)])
+    # [..., :3]: the image, before any channels an integrator adds (Mitsuba's `moment` appends its moments)
+    by_mitsuba = np.stack([np.array(mi.render(scene, spp=replica_spp, seed=seed))[..., :3] for seed in range(replicas)])
     renderer = Renderer(load_mitsuba_scene(path if ours is None else ours), device)
     ours_images = xyz_to_linear_srgb(spectrace_replicas(renderer, replicas, replica_spp))
     assert_replicas_agree(ours_images, by_mitsuba, block, region=region, power=power, what=path.name)

@@ -168,8 +168,8 @@ def density_grid(
 ) -> GridVolume:
     """A voxel grid for `medium(density=...)` (docs/media.md): `density` shaped (nz, ny, nx) (x fastest, as
     numpy's C order), values ≥ 0 at the voxels' centres, looked up trilinearly; `albedo` an optional grid of the
-    same shape in [0, 1] multiplying σs; filling `box` (two corners), then moved by `transform` steps (as
-    `transformed`), in the scene's space."""
+    same shape in [0, 1] multiplying σs, or shaped (nz, ny, nx, 3) for a linear sRGB albedo uplifted per voxel;
+    filling `box` (two corners), then moved by `transform` steps (as `transformed`), in the scene's space."""
     if np.shape(box) != (2, 3):
         raise SpectraceError(f"box must be two corners [x, y, z], got shape {np.shape(box)}", where="box")
     matrix = box_matrix(*np.asarray(box, np.float64))

@@ -206,3 +206,41 @@ def test_a_uniformgrid_of_the_wrong_size_is_one_line_naming_the_parameter(tmp_pa
         pbrt_scene_data(path)
     text = str(caught.value)
     assert "\n" not in text and "slab.pbrt:" in text and "61 values; nx·ny·nz = 64" in text, text
+
+
+def test_a_colour_albedo_gridvolume_imports_as_a_colour_albedo_grid(tmp_path):
+    """A 3-channel gridvolume is accepted as the albedo (an RGB grid the loader uplifts per voxel), still refused
+    as sigma_t (test_unsupported_grid_forms_are_reported) and as raw colour data."""
+    from spectrace.interop.mitsuba import load_mitsuba_scene
+
+    (tmp_path / "albedo.vol").write_bytes(vol_bytes(COLOUR_ALBEDO))
+    path = _xml(tmp_path, 8, _medium(_colour_albedo()))
+    grid = load_mitsuba_scene(path).shapes[0].interior.density
+    assert grid.albedo.shape == (*DENSITY.shape, 3) and np.array_equal(grid.albedo, COLOUR_ALBEDO)
+    raw = _medium(_colour_albedo('<boolean name="raw" value="true"/>'))
+    with pytest.raises(SpectraceError, match="raw colour") as caught:
+        mitsuba_scene_data(_xml(tmp_path, 8, raw), tmp_path)
+    assert "\n" not in str(caught.value)
+
+
+COLOUR_ALBEDO = np.random.default_rng(5).uniform(0.2, 1.0, (*DENSITY.shape, 3)).astype(np.float32)
+COLOUR_ALBEDO[..., :3, 1] *= 0.3  # a magenta region and a paler one
+
+
+def _colour_albedo(extra: str = "") -> str:
+    return (
+        f'<volume type="gridvolume" name="albedo"><string name="filename" value="albedo.vol"/>{GRID_TO_WORLD}'
+        f"{extra}</volume>"
+    )
+
+
+@pytest.mark.peer
+@pytest.mark.slow
+def test_a_colour_albedo_grid_renders_like_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral):
+    """The random density cube with a random RGB albedo grid (Mitsuba 3 uplifts each voxel and interpolates the
+    spectra): 16 images each, 8 x 8-pixel block means and the image mean within 5 standard errors."""
+    (tmp_path / "albedo.vol").write_bytes(vol_bytes(COLOUR_ALBEDO))
+    path = _xml(tmp_path, 32, _medium(_colour_albedo()))
+    by_mitsuba = assert_renders_like_mitsuba(mitsuba_scalar_spectral, path, device, 16, 8, 8)
+    centre = by_mitsuba[:, 12:20, 12:20].mean(axis=(0, 1, 2))
+    assert np.ptp(centre) > 0.1 * centre.mean()  # the medium's colour is seen

@@ -37,8 +37,9 @@ _VOL_UINT8 = 3
 
 @dataclass(frozen=True, eq=False)
 class GridVolume:
-    """density: float32 (nz, ny, nx), ≥ 0, multiplying the medium's coefficients; albedo: None or the same shape
-    in [0, 1], multiplying its scattering coefficient; to_world: 4×4 map of the unit box into the scene."""
+    """density: float32 (nz, ny, nx), ≥ 0, multiplying the medium's coefficients; albedo: None, the same shape in
+    [0, 1] (a grey albedo), or shaped (nz, ny, nx, 3) (a linear sRGB albedo in [0, 1], uplifted per voxel),
+    multiplying its scattering coefficient; to_world: 4×4 map of the unit box into the scene."""
 
     density: np.ndarray
     to_world: np.ndarray
@@ -79,12 +80,16 @@ def make_grid(
         raise SpectraceError(problem, where=where)
     if albedo is not None:
         albedo = np.ascontiguousarray(albedo, np.float32)
-        if albedo.shape != density.shape:
+        if albedo.shape not in (density.shape, (*density.shape, 3)):
             raise SpectraceError(
-                f"the albedo grid's shape {albedo.shape} differs from the density's {density.shape}", where=where
+                f"the albedo grid's shape {albedo.shape} is neither the density's {density.shape} nor that with 3"
+                " colour channels",
+                where=where,
             )
-        if problem := grid_problem(albedo, "the albedo", upper=1.0):
-            raise SpectraceError(problem, where=where)
+        channels = albedo.reshape(*density.shape, -1)
+        for channel in range(channels.shape[3]):
+            if problem := grid_problem(channels[..., channel], "the albedo", upper=1.0):
+                raise SpectraceError(problem, where=where)
     to_world = np.asarray(to_world, np.float64)
     if to_world.shape != (4, 4) or not np.all(np.isfinite(to_world)) or abs(np.linalg.det(to_world[:3, :3])) < 1e-12:
         raise SpectraceError("the grid's placement must be an invertible 4×4 transform", where=where)
@@ -161,16 +166,36 @@ def majorant_grid(density: np.ndarray, cells: int = MAJORANT_CELLS) -> np.ndarra
     return result
 
 
+def albedo_block(albedo: np.ndarray) -> np.ndarray:
+    """The albedo grid as the kernels read it: a grey one as is; a colour one as 4 floats a voxel, Mitsuba 3's
+    spectral gridvolume's form: the sigmoid coefficients (dimensionless, fitted as a texture's texels are, Jakob &
+    Hanika 2019) of the colour divided by s = 2 × its largest channel, then s. The kernel evaluates the eight voxels'
+    spectra at the path's wavelengths, interpolates those values and s apart, and multiplies them, as Mitsuba does:
+    a mix of spectra has the mix of their colours, while mixing the coefficients would not (the sigmoid is not
+    linear). Dividing by s keeps every fit away from the saturated ends; the spectrum's shape, not only its colour,
+    then matches Mitsuba's, which matters after many scatterings (the albedo's powers)."""
+    if albedo.ndim == 3:
+        return albedo
+    from spectrace.spectral.rgb_texture import reflectance_coefficients
+    from spectrace.textures.storage import dimensionless
+
+    rgb = albedo.reshape(-1, 3).astype(np.float64)
+    scale = 2.0 * rgb.max(axis=1)
+    coefficients = dimensionless(reflectance_coefficients(rgb / np.maximum(scale, 1e-8)[:, None]))
+    return np.ascontiguousarray(np.concatenate([coefficients, scale[:, None]], axis=1), np.float32)
+
+
 def add_grid_block(table: SpectrumTable, grid: GridVolume) -> int:
     """Store the grid in the scene's float table (kernels/medium_grid.cl's layout) and return its header's offset."""
     density = table.add_block(grid.density)
-    albedo = table.add_block(grid.albedo) if grid.albedo is not None else -1
+    albedo = table.add_block(albedo_block(grid.albedo)) if grid.albedo is not None else -1
     majorant = majorant_grid(grid.density)
     majorant_offset = table.add_block(majorant)
     to_unit = np.linalg.inv(grid.to_world)[:3].astype(np.float32).ravel()
     nz, ny, nx = grid.density.shape
     mz, my, mx = majorant.shape
-    ints = np.array([nx, ny, nz, mx, my, mz, density, albedo, majorant_offset], np.int32)
+    channels = 3 if grid.albedo is not None and grid.albedo.ndim == 4 else 1
+    ints = np.array([nx, ny, nz, mx, my, mz, density, albedo, majorant_offset, channels], np.int32)
     return table.add_block(np.concatenate([to_unit, ints.view(np.float32)]))
 
 

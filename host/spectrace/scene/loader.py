@@ -562,13 +562,20 @@ class _Resolver:
     def density_grid(self, spec: schema.DensityGridSpec, key: str) -> GridVolume:
         """A grid medium's density (and albedo) from a .vol file's first channel or inline values."""
 
-        def values(file: str | None, inline: list[float] | None, name: str) -> np.ndarray:
+        def values(file: str | None, inline: list[float] | None, name: str, colour: bool = False) -> np.ndarray:
+            """The grid's values; with `colour`, 3 channels (a file's or 3 inline values a voxel) give an RGB
+            grid shaped (nz, ny, nx, 3)."""
             if file is not None:
-                return read_vol(self.folder / file, where=self.where(f"{key}.{name}file"))[0][..., 0]
+                grid = read_vol(self.folder / file, where=self.where(f"{key}.{name}file"))[0]
+                return grid if colour and grid.shape[3] == 3 else grid[..., 0]
             nx, ny, nz = spec.resolution or (0, 0, 0)
-            if min(nx, ny, nz) < 1 or len(inline or ()) != nx * ny * nz:
+            count = nx * ny * nz
+            if colour and count >= 1 and len(inline or ()) == 3 * count:
+                return np.asarray(inline, np.float32).reshape(nz, ny, nx, 3)
+            if min(nx, ny, nz) < 1 or len(inline or ()) != count:
+                need = f"{max(count, 0)}" + (f" or {3 * max(count, 0)} for a colour" if colour else "")
                 raise SpectraceError(
-                    f"{len(inline or ())} values for resolution {nx}×{ny}×{nz} (need {max(nx * ny * nz, 0)})",
+                    f"{len(inline or ())} values for resolution {nx}×{ny}×{nz} (need {need})",
                     where=self.where(f"{key}.{name}values"),
                 )
             return np.asarray(inline, np.float32).reshape(nz, ny, nx)
@@ -576,7 +583,7 @@ class _Resolver:
         density = values(spec.file, spec.values, "")
         albedo = None
         if spec.albedo_file is not None or spec.albedo_values is not None:
-            albedo = values(spec.albedo_file, spec.albedo_values, "albedo_")
+            albedo = values(spec.albedo_file, spec.albedo_values, "albedo_", colour=True)
         matrix = box_matrix(*spec.box)
         if spec.transform:
             steps = [step.model_dump(exclude_none=True) for step in spec.transform]

@@ -85,11 +85,12 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
 
 def _grid_volume(ctx: ImportContext, volume: Element, key: str) -> dict | None:
     """A `gridvolume` as spectrace's grid keys: its file, and its to_world (after the file's own box when
-    use_grid_bbox is set, else the unit box, as Mitsuba 3 places it). One channel, trilinear, clamped only."""
+    use_grid_bbox is set, else the unit box, as Mitsuba 3 places it). One channel (three for an albedo: an RGB grid
+    uplifted per voxel), trilinear, clamped only."""
     from spectrace.geometry.grid_volume import read_vol
 
     items = ctx.properties(volume)
-    items.understood("raw", "accel")  # raw: the uplift of colour data, which one channel has none of
+    items.understood("raw", "accel")  # raw: whether colour data is uplifted, which one channel has none of
     if "filter_type" in items and ctx.choice(items["filter_type"], ("trilinear", "nearest")) != "trilinear":
         ctx.unsupported_plugin(volume, " with filter_type nearest")
         return None
@@ -99,8 +100,12 @@ def _grid_volume(ctx: ImportContext, volume: Element, key: str) -> dict | None:
     filename = ctx.child(items, "filename", volume)
     file = ctx.input_file(filename, "volume file")
     values, p0, p1 = read_vol(ctx.find_file(filename, ctx.required(filename, "value")), where=ctx.where(filename))
-    if values.shape[3] != 1:
-        ctx.unsupported_plugin(volume, f" with {values.shape[3]} channels as a medium's {key} (one channel only)")
+    if values.shape[3] != 1 and not (key == "albedo" and values.shape[3] == 3):
+        allowed = "one channel, or three for an RGB albedo"
+        ctx.unsupported_plugin(volume, f" with {values.shape[3]} channels as a medium's {key} ({allowed})")
+        return None
+    if values.shape[3] == 3 and "raw" in items and ctx.boolean(items["raw"]):
+        ctx.unsupported_plugin(volume, " with raw colour data (Mitsuba 3 evaluates only uplifted colour as spectra)")
         return None
     table: dict = {"file": file}
     if "use_grid_bbox" in items and ctx.boolean(items["use_grid_bbox"]):
