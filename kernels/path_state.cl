@@ -387,6 +387,22 @@ inline void polarized_scatter_vertex(const Scene *scene, const SampledWavelength
     SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
     polarized_scatter(&s->pol, &s->throughput, &scene->materials[v->info.material], &sc, w, v->ns, v->wo, bs);
 }
+
+/* The path meets the area light `light` at v (hit): the Stokes basis of a polarised light follows the surface's own
+ * dp/du, whatever its material's frame; returns what scales its S0 (polarized_gather_emitter). */
+inline float4 polarized_emitter_vertex(const Scene *scene, PathState *s, __global const Light *light,
+                                       const PathVertex *v, Hit hit, float4 contribution)
+{
+    float3 dpdu = (float3)(0.0f);
+    if (light->direction.w > 0.0f) {
+#if SCENE_HAS_SHAPES
+        if (light->type != LIGHT_TRIANGLE) dpdu = hit_shape_surface(scene, hit).dpdu;
+        else
+#endif
+            dpdu = triangle_dpdu(scene, hit.triangle);
+    }
+    return polarized_gather_emitter(&s->pol, light, dpdu, v->wo, contribution);
+}
 #endif
 
 /* The path leaves the vertex along a BSDF sample: its weight and radiance compression join the throughput, and

@@ -104,8 +104,8 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
             float pdf_light = emitter_hit_pdf(light, scene->shapes, s->previous_point, v.p, v.n, v.wo, hit.b12);
             weight = power_heuristic(s->previous_pdf, pdf_light);
         }
+        IF_POLARIZED(emitted *= polarized_emitter_vertex(scene, s, light, &v, hit, s->throughput * emitted * weight));
         *radiance += s->throughput * emitted * weight;
-        IF_POLARIZED(polarized_gather(&s->pol, s->throughput * emitted * weight));
 #if FILM_AOVS
         record_camera_emission(scene, w, s, emitted, weight, &v, hit);
 #endif

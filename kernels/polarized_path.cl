@@ -2,8 +2,9 @@
  * from the sensor: the Mueller matrix of the path so far, mapping the Stokes vector of light arriving along the
  * current ray to the one the camera receives, with the basis that light's Stokes vector is expressed in (mueller.cl
  * conventions); each scattering event multiplies its Mueller matrix in on the right, after a rotation from the
- * event's basis into the path's (Mitsuba 3, "Polarization" developer guide). Lights emit unpolarised light, so what
- * a path gathers is the matrix's first column times the scalar radiance it gathers anyway.
+ * event's basis into the path's (Mitsuba 3, "Polarization" developer guide). What a path gathers of unpolarised light
+ * is the matrix's first column times the scalar radiance it gathers anyway; an area light may emit a given Stokes
+ * state, which the path meets through the whole matrix (polarized_gather_emitter).
  *
  * The path's scalar throughput stays the matrix's (0, 0) entry, the response to unpolarised light (Mitsuba 3's
  * Russian roulette and every unpolarised quantity read the same entry): `p` holds the matrix divided by it, so
@@ -44,6 +45,27 @@ inline void polarized_camera(PolarizedPath *q, __global const RenderParams *para
 inline void polarized_gather(PolarizedPath *q, float4 radiance)
 {
     for (int i = 0; i < 3; ++i) q->stokes[i] += q->p.m[4 * (i + 1)] * radiance;
+}
+
+/* The path meets an area light whose light leaves along wo, the light's u tangent dpdu there: `contribution` is
+ * what it gathers of unpolarised light of the same radiance (throughput applied). A polarised light (Light.direction.w
+ * > 0) emits S0 (1, s1, s2, s3) with (s1, s2, s3) = Light.direction.xyz in the basis x = dpdu's part normal to wo (a
+ * picture's right), y = wo × x (its up, seen from the front). Gathers S1..S3 and returns what scales the radiance's
+ * S0: the path's first row times the normalised Stokes vector, exactly 1 for an unpolarised light. */
+inline float4 polarized_gather_emitter(PolarizedPath *q, __global const Light *light, float3 dpdu, float3 wo,
+                                       float4 contribution)
+{
+    if (!(light->direction.w > 0.0f)) {
+        polarized_gather(q, contribution);
+        return (float4)(1.0f);
+    }
+    float2 turn = stokes_basis_turn(wo, stokes_basis_from(wo, dpdu), q->basis);
+    float3 e = light->direction.xyz;
+    float3 s = (float3)(turn.x * e.x + turn.y * e.y, -turn.y * e.x + turn.x * e.y, e.z);
+    float4 row[4];
+    for (int i = 0; i < 4; ++i) row[i] = q->p.m[4 * i] + s.x * q->p.m[4 * i + 1] + s.y * q->p.m[4 * i + 2] + s.z * q->p.m[4 * i + 3];
+    for (int i = 0; i < 3; ++i) q->stokes[i] += row[i + 1] * contribution;
+    return row[0];
 }
 
 /* A depolarising event; the path goes on along `d`. */

@@ -192,7 +192,8 @@ typedef struct {
 typedef struct {
     float4 position;       /* point, spot; LIGHT_SPHERE: centre (xyz) and radius (w); LIGHT_ENVIRONMENT_MAP: row 0 of
                               the world-to-map rotation */
-    float4 direction;      /* spot: unit axis; distant: unit direction the light travels; LIGHT_ENVIRONMENT_MAP:
+    float4 direction;      /* spot: unit axis; distant: unit direction the light travels; area lights: polarised
+                              light's normalised S1..S3 and w = 1 (polarized_path.cl), else w = 0; LIGHT_ENVIRONMENT_MAP:
                               row 1 of the world-to-map rotation */
     int type;              /* LIGHT_* */
     int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays; LIGHT_SPHERE, LIGHT_SHAPE: index of its

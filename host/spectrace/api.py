@@ -104,18 +104,29 @@ globals().update({name: module.make for name, module in materials.MATERIALS.item
 
 
 @recorded
-def area_emitter(radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0) -> AreaEmitter:
+def area_emitter(
+    radiance: SpectrumLike, two_sided: bool = False, scale: float = 1.0, polarization: str | None = None
+) -> AreaEmitter:
     """Makes a shape a light of radiance L(λ) x scale, W/(m² sr nm); one-sided emitters shine toward the side
     their triangles' winding faces. `radiance` may be an emission texture (docs/textures.md): a bitmap of linear
-    sRGB (each texel the D65-based emission of its colour) or a spectral texture (each texel its radiance)."""
+    sRGB (each texel the D65-based emission of its colour) or a spectral texture (each texel its radiance).
+    `polarization`: the Stokes state of its light, "linear <degrees>", "circular" or "unpolarized"
+    (docs/polarization.md)."""
+    import dataclasses
+
     from spectrace.lights import area
     from spectrace.textures import check_texture_values, is_texture
 
     scale = area.PARAMETERS[2].check(scale)
     if is_texture(radiance):
         check_texture_values(radiance, "emission", "radiance")
-        return area.emitter(radiance, two_sided, scale)
-    return AreaEmitter(radiance=spectrum_input.emission(radiance, "radiance").scaled(scale), two_sided=bool(two_sided))
+        made = area.emitter(radiance, two_sided, scale)
+    else:
+        radiance_spectrum = spectrum_input.emission(radiance, "radiance").scaled(scale)
+        made = AreaEmitter(radiance=radiance_spectrum, two_sided=bool(two_sided))
+    if polarization is None:
+        return made
+    return dataclasses.replace(made, stokes=area.emitter_stokes(str(polarization), None, "polarization"))
 
 
 @recorded

@@ -86,6 +86,9 @@ def test_what_mitsuba_cannot_match_is_refused(tmp_path, mitsuba_scalar_spectral)
     two_sided = replace(light, emitter=replace(light.emitter, two_sided=True))
     with pytest.raises(SpectraceError, match="one-sided"):
         scene_to_mitsuba_dict(replace(scene, shapes=[two_sided]), tmp_path)
+    polarised = replace(light, emitter=replace(light.emitter, stokes=(1.0, 0.0, 0.0)))
+    with pytest.raises(SpectraceError, match="Mitsuba's area light is unpolarised"):
+        scene_to_mitsuba_dict(replace(scene, shapes=[polarised]), tmp_path)
 
 
 def test_ply_files_hold_the_triangles(tmp_path):

@@ -90,7 +90,18 @@ def is_polarized(scene, buffers: SceneBuffers) -> bool:
         or scene.camera.polarizer_angle is not None
         or any(aov in POLARIZATION_AOVS for aov in scene.aovs)
         or np.isin(buffers.materials["type"], codes).any()
+        or _polarized_emitters(buffers)
     )
+
+
+def _polarized_emitters(buffers: SceneBuffers) -> bool:
+    """Whether an area light emits polarised light (its row's direction.w, spectrace.lights.area)."""
+    from spectrace.lights import DEVICE_LIGHTS
+    from spectrace.lights.area import DEVICE_TYPES
+
+    lights = buffers.lights
+    area = np.isin(lights["type"], [DEVICE_LIGHTS.codes[t.name] for t in DEVICE_TYPES])
+    return bool((area & (lights["direction"][:, 3] > 0.0)).any())
 
 
 def polarization_defines(scene, buffers: SceneBuffers) -> dict[str, int]:

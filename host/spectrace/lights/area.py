@@ -50,6 +50,15 @@ PARAMETERS = (
         doc="emit on both faces; by default only on the side the triangles' winding faces",
     ),
     Parameter("scale", "float", "", 1.0, Range(0.0), doc="multiplies the radiance"),
+    Parameter(
+        "polarization",
+        "string",
+        "",
+        None,
+        doc="the Stokes state of its light: `linear <degrees>` (counter-clockwise from the surface's u direction "
+        "as seen facing its emitting side: a picture's right toward its up), `circular`, `unpolarized`, or `display` "
+        "(the record of the radiance's display); makes the scene polarised ([polarization.md](polarization.md))",
+    ),
 )
 
 
@@ -88,9 +97,42 @@ class AreaEmitter:
     radiance: Spectrum  # W/(m² sr nm), scale applied; with an image, its mean emission
     two_sided: bool = False
     image: EmitterImage | None = None
+    stokes: tuple[float, float, float] | None = None  # (S1, S2, S3) / S0 of its light, or None: unpolarised
 
 
 MODEL = AreaEmitter
+
+
+def emitter_stokes(text: str, display, where: str | None) -> tuple[float, float, float] | None:
+    """The normalised (S1, S2, S3) of an emitter's `polarization` (None for unpolarised light): a display's
+    catalogue text, or `display` for the record of `display` (None when the radiance names no display)."""
+    from spectrace.errors import SpectraceError
+    from spectrace.spectral.display_polarization import parse_polarization
+
+    if text.strip().lower() == "display":
+        if display is None:
+            raise SpectraceError("polarization = 'display' needs a radiance that names a display", where=where)
+        polarization = display.polarization
+        if not polarization.known:
+            raise SpectraceError(
+                "the display's catalogue record leaves its polarisation unknown; give it here (linear <axis>, "
+                "circular, unpolarized)",
+                where=where,
+            )
+    else:
+        polarization = parse_polarization(text, where=where)
+        if not polarization.known:
+            raise SpectraceError(
+                "polarization = 'unknown' renders nothing: give linear <axis>, circular or unpolarized", where=where
+            )
+    s = polarization.stokes()
+    return None if not np.any(s[1:]) else (float(s[1]), float(s[2]), float(s[3]))
+
+
+def _polarization_fields(e: AreaEmitter) -> dict:
+    """Light.direction of an area light: its normalised Stokes vector and w = 1 when it emits polarised light
+    (kernels/polarized_path.cl); otherwise light_row's default, so unpolarised rows keep their bytes."""
+    return {} if e.stokes is None else {"direction": e.stokes, "direction_w": 1.0}
 
 
 def peak_radiance(e: AreaEmitter) -> float:
@@ -156,6 +198,7 @@ def write_rows(
                 two_sided=e.two_sided,
                 scale=scale,
                 texture=texture,
+                **_polarization_fields(e),
             ),
             np.pi * areas[t] * e.radiance.mean() * (2.0 if e.two_sided else 1.0),
         )
@@ -183,6 +226,7 @@ def write_shape_rows(emitters: list[tuple[AreaEmitter, int, "AnalyticSurface"]],
             two_sided=e.two_sided,
             scale=scale,
             texture=texture,
+            **_polarization_fields(e),
         )
         if surface.kind == "sphere":  # Light.position: the centre, with the radius in w
             centre, radius = surface.sphere_centre_radius()
@@ -226,4 +270,6 @@ def to_mitsuba(emitter: AreaEmitter, exporter, owner: str) -> dict:
         raise exporter.refuse(f"{owner} shows an image; Mitsuba's area light has one spectrum")
     if emitter.two_sided:
         raise exporter.refuse(f"{owner} emits on both faces; Mitsuba's area light is one-sided")
+    if emitter.stokes is not None:
+        raise exporter.refuse(f"{owner} emits polarised light; Mitsuba's area light is unpolarised")
     return {"type": "area", "radiance": exporter.spectrum(emitter.radiance)}

@@ -1,5 +1,6 @@
 """TOML scene file -> resolved Scene. Every error names the file and the key path of the offending value."""
 
+import dataclasses
 import difflib
 import tomllib
 import typing
@@ -30,7 +31,7 @@ from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
 from spectrace.lights.area import emitter as area_emitter
-from spectrace.lights.area import peak_radiance
+from spectrace.lights.area import emitter_stokes, peak_radiance
 from spectrace.materials import MATERIALS, material_textures, surface
 from spectrace.scene import schema
 from spectrace.scene.model import (
@@ -650,6 +651,12 @@ class _Resolver:
         """A shape's emitter: a radiance spectrum, a display's picture, or an emission texture, times scale; the
         radiance is checked once more with the scale applied, which alone may carry it past 32-bit range."""
         emitter = self._emitter(spec, key)
+        if spec.polarization is not None:
+            radiance = spec.radiance
+            named = isinstance(radiance, schema.SpectrumSpec) and radiance.display is not None
+            display = self.display(radiance, f"{key}.radiance") if named else None
+            stokes = emitter_stokes(spec.polarization, display, self.where(f"{key}.polarization"))
+            emitter = dataclasses.replace(emitter, stokes=stokes)
         if problem := limits.spectrum_magnitude_problem(np.array([peak_radiance(emitter)])):
             raise SpectraceError(problem, where=self.where(f"{key}.scale" if spec.scale != 1.0 else f"{key}.radiance"))
         return emitter

@@ -223,6 +223,14 @@ class _Writer:
             integrator["count_thin_passes"] = False
         if scene.pixels_per_light_path is not None:
             integrator["pixels_per_light_path"] = scene.pixels_per_light_path
+        # What makes a render polarised or adds images beside it (docs/polarization.md) is the scene's, not a plugin's.
+        camera = _camera_table(scene.camera)
+        if scene.camera.polarizer_angle is not None:
+            camera["polarizer_angle"] = scene.camera.polarizer_angle
+        if scene.polarized:
+            integrator["polarized"] = True
+        if scene.aovs:
+            film["aovs"] = list(scene.aovs)
         shapes = [self.shape(s, f"shapes[{i}]", f"shape_{i}") for i, s in enumerate(scene.shapes)]
         objects: dict[str, dict] = {}
         object_names: dict[int, str] = {}
@@ -246,7 +254,7 @@ class _Writer:
             instances.append(placed)
         lights = [self.table(light, f"lights[{i}]") for i, light in enumerate(scene.lights)]
         data: dict[str, Any] = {
-            "camera": _camera_table(scene.camera),
+            "camera": camera,
             "film": film,
             "integrator": integrator,
             "sampler": {"type": scene.sampler, "spp": scene.spp, "seed": scene.seed},
