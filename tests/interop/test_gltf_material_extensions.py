@@ -198,3 +198,79 @@ def test_specular_factor_renders_as_cycles_renders_it(tmp_path):
     from tests.interop.test_gltf_cycles import _check, compare
 
     _check(compare(_specular_panels(tmp_path / "panels.glb"), tmp_path, width=64, spp=64), 0.07, 0.02)
+
+
+def _textured_anisotropy(tmp_path, blues: list[int], strength: float, roughness: float):
+    """A quad whose anisotropyTexture is a row of texels with these B values (RG the tangent's own direction)."""
+    gltf = Gltf()
+    gltf.json["extensionsUsed"] = ["KHR_materials_anisotropy"]
+    pixels = np.array([[[255, 128, b] for b in blues]])
+    index = gltf.image_texture(pixels, sampler={"magFilter": 9728, "minFilter": 9728})
+    extension = {"anisotropyStrength": strength, "anisotropyTexture": {"index": index}}
+    material = gltf.material(
+        pbrMetallicRoughness={"metallicFactor": 0.0, "roughnessFactor": roughness},
+        extensions={"KHR_materials_anisotropy": extension},
+    )
+    gltf.node(mesh=gltf.quad(1.0, material))
+    return gltf.write(tmp_path / "textured.glb")
+
+
+def test_the_anisotropy_textures_strength_keeps_glTFs_ratio_texel_by_texel(tmp_path):
+    """Each texel's strength s = anisotropyStrength × B gives the ratio α_t/α_b = (α + s²(1 − α))/α of glTF's
+    definition as principled's 1/(1 − 0.9 a), within the 8-bit PNG's step; the direction (RG) is named."""
+    from PIL import Image
+
+    blues = [0, 64, 128, 200, 255]
+    strength, roughness = 0.8, 0.5
+    data, ctx = gltf_scene_data(_textured_anisotropy(tmp_path, blues, strength, roughness), tmp_path / "out.toml")
+    (table,) = data["materials"].values()
+    bitmap = table["anisotropic"]
+    assert bitmap["texture"] == "bitmap" and bitmap["raw"] is True
+    ctx.files[bitmap["file"]](tmp_path / "weights.png")
+    weights = np.asarray(Image.open(tmp_path / "weights.png"), dtype=np.float64)[0] / 255.0
+    alpha = roughness**2
+    s = strength * np.array(blues) / 255.0
+    expected = (alpha + s**2 * (1.0 - alpha)) / alpha
+    np.testing.assert_allclose(weights, (1.0 - 1.0 / expected) / 0.9, atol=0.5 / 255.0 + 1e-12)
+    assert any("per-texel direction (RG) is not imported" in w for w in ctx.warnings)
+    assert not any("texture (a direction and strength per texel) is not imported" in w for w in ctx.warnings)
+
+
+def _anisotropy_plane_two_halves(path, blues: list[int] | None, strength: float):
+    """The lit metal plane of _anisotropic_plane with anisotropyTexture's B `blues` over its halves (u < ½, u > ½),
+    or no texture; roughness 0.3 (α = 0.09), where strength 1 gives principled's largest weight, a = 1, exactly."""
+    gltf = Gltf()
+    gltf.json["extensionsUsed"] = ["KHR_materials_anisotropy"]
+    extension: dict = {"anisotropyStrength": strength}
+    if blues is not None:
+        pixels = np.array([[[255, 128, b] for b in blues]])
+        extension["anisotropyTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
+    material = gltf.material(
+        pbrMetallicRoughness={"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.3},
+        extensions={"KHR_materials_anisotropy": extension},
+        doubleSided=True,
+    )
+    corners = [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]
+    uvs = [[0, 1], [1, 1], [1, 0], [0, 0]]  # u along +x: the texture's left texel on the left half
+    gltf.node(mesh=gltf.mesh(corners, [0, 1, 2, 0, 2, 3], [[0, 0, 1]] * 4, uvs, material))
+    light = gltf.light(type="point", intensity=2000.0)
+    gltf.node(extensions={"KHR_lights_punctual": {"light": light}}, translation=[0.3, 0.3, 1.0])
+    camera = gltf.camera(type="perspective", perspective={"yfov": 1.2, "aspectRatio": 1.0, "znear": 0.01})
+    gltf.node(camera=camera, translation=[0.0, 0.0, 1.5])
+    return gltf.write(path)
+
+
+def test_a_two_valued_anisotropy_texture_renders_each_half_as_its_untextured_strength(tmp_path):
+    """B = 255 on the left half, 0 on the right: the left renders as anisotropyStrength 1 without a texture, the
+    right as an isotropic lobe (strength 0), to float rounding (the same paths; the texels hold a = 1 and 0
+    exactly); columns beside the seam, where a pixel's samples fall on both texels, are left out. The two untextured
+    images differ on each side, so each half shows which weight it got."""
+    textured = _render(_anisotropy_plane_two_halves(tmp_path / "halves.glb", [255, 0], 1.0), tmp_path)
+    stretched = _render(_anisotropy_plane_two_halves(tmp_path / "stretched.glb", None, 1.0), tmp_path)
+    round_lobe = _render(_anisotropy_plane_two_halves(tmp_path / "round.glb", None, 0.0), tmp_path)
+    left, right = slice(0, 7), slice(9, 16)
+    scale = stretched.max()
+    np.testing.assert_allclose(textured[:, left], stretched[:, left], rtol=1e-3, atol=1e-6 * scale)
+    np.testing.assert_allclose(textured[:, right], round_lobe[:, right], rtol=1e-3, atol=1e-6 * scale)
+    for half in (left, right):
+        assert np.abs(stretched[:, half] - round_lobe[:, half]).max() > 0.05 * scale
