@@ -69,6 +69,7 @@ typedef struct {
     float3 ns;          /* shading normal (surfaces) */
     float3 ns_base;     /* surfaces: the shading normal before a normal or bump map turned it (PathVertex) */
     float3 dpdu;        /* surfaces: dp/du where the material's frame follows it, else 0 (PathVertex) */
+    float tangent_w;    /* surfaces: dpdu's handedness (PathVertex) */
     float3 wo;          /* unit, back toward the previous vertex of its subpath (surfaces); at infinity: toward the
                            light, from the scene */
     float4 beta;        /* subpath throughput arriving here, per wavelength (see the top of the file) */
@@ -387,6 +388,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         v->ns = pv.ns;
         v->ns_base = pv.ns_base;
         v->dpdu = pv.dpdu;
+        v->tangent_w = pv.tangent_w;
         v->wo = pv.wo;
         v->uv = pv.uv;
         v->footprint = pv.footprint;
@@ -419,7 +421,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         if (material_disperses(material, w)) hero = 1;
         v->hero = hero;
         if (count >= max_vertices) break;
-        SurfaceContext sc = shading_context(scene, pv.uv, pv.footprint, pv.ns_base, pv.dpdu, adjoint);
+        SurfaceContext sc = shading_context(scene, pv.uv, pv.footprint, pv.ns_base, pv.dpdu, pv.tangent_w, adjoint);
         float uc = sample_1d(sampler);
         float2 u = sample_2d(sampler);
         BSDFSample bs;
@@ -474,6 +476,7 @@ inline float bdpt_vertex_pdf(const Scene *scene, const SampledWavelengths *w, co
     __global const Material *material = &scene->materials[v->material];
     SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
     sc.dpdu = v->dpdu;
+    sc.tangent_w = v->tangent_w;
     return bdpt_to_area(material_pdf(material, &sc, w, v->ns, wo, wi), v, next);
 }
 
@@ -673,7 +676,7 @@ inline void bdpt_splat(const Scene *scene, const SampledWavelengths *w, Sampler 
     if (!material_has_non_delta_lobe(material)) return;
     CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, sampler));
     if (c.pixel < 0 || !shading_side_agrees(qs->n, qs->ns, c.to_camera)) return;
-    SurfaceContext sc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, qs->dpdu, 0);
+    SurfaceContext sc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, qs->dpdu, qs->tangent_w, 0);
     float4 f_cos = material_eval(material, &sc, w, qs->ns, c.to_camera, qs->wo);
     float cos_light = fabs(dot(qs->wo, qs->n));
     float cos_camera = fabs(dot(c.to_camera, qs->n));
@@ -734,7 +737,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
     if (pt_medium) {
         f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
     } else {
-        SurfaceContext psc = shading_context(scene, pt->uv, pt->footprint, pt->ns_base, pt->dpdu, 0);
+        SurfaceContext psc = shading_context(scene, pt->uv, pt->footprint, pt->ns_base, pt->dpdu, pt->tangent_w, 0);
         f_p = material_eval(pm, &psc, w, pt->ns, pt->wo, to_q);
     }
     if (all(f_p == (float4)(0.0f))) return (float4)(0.0f);
@@ -745,7 +748,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
         f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
     } else {
         __global const Material *qm = &scene->materials[qs->material];
-        SurfaceContext qsc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, qs->dpdu, 0);
+        SurfaceContext qsc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, qs->dpdu, qs->tangent_w, 0);
         f_q = material_eval(qm, &qsc, w, qs->ns, -to_q, qs->wo) / cos_in;
     }
     float4 value = qs->beta * f_q * pt->beta * f_p * g;

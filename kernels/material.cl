@@ -69,9 +69,13 @@ inline ShadingFrame material_frame(__global const Material *m, const SurfaceCont
 #if SCENE_HAS_TANGENT_FRAMES
     if (m->tangent_frame) {
         ShadingFrame frame = shading_frame_along(normal, sc->dpdu);
-        /* Turned about the normal by the material's rotation: x = cos θ x + sin θ y, y = n × x. */
+        /* Turned about the normal by the material's rotation: x = cos θ x + sin θ w y, y = n × x, w the
+         * tangent's handedness (glTF's KHR_materials_anisotropy turns toward the signed bitangent). */
         if (m->tangent_rotation != 0.0f) {
             float c, s = sincos(m->tangent_rotation, &c);
+#if SCENE_HAS_FILE_TANGENTS
+            s *= sc->tangent_w;
+#endif
             float3 x = c * frame.tangent + s * frame.bitangent;
             frame.bitangent = cross(frame.normal, x);
             frame.tangent = x;

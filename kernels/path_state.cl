@@ -148,6 +148,7 @@ typedef struct {
                    normal or bump map (surface_detail.cl) */
     float3 ns_base;  /* the shading normal before a normal or bump map turned it: their shadowing term's reference */
     float3 dpdu;     /* the surface's dp/du where its material's frame follows it (Material.tangent_frame), else 0 */
+    float tangent_w; /* ±1: dpdu's handedness, a file tangent's w where dpdu is one, else 1 (SurfaceContext) */
     float3 wo;  /* back along the ray */
     float2 uv;  /* texture coordinates (only in scenes with material textures) */
     float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; 0 unless SCENE_NEEDS_FOOTPRINT) */
@@ -174,6 +175,7 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
     }
     if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
     v.dpdu = vertex_follows_tangent(scene, v.info.material) ? g.dpdu : (float3)(0.0f);
+    v.tangent_w = 1.0f;
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         __global const Material *m = &scene->materials[v.info.material];
         if (m->normal_map != NO_TEXTURE || m->bump_map != NO_TEXTURE) {
@@ -218,8 +220,10 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
     file_w = instance_file_tangent(scene, instance, v.info.normals, hit.b12, &file_t);
 #endif
     v.dpdu = (float3)(0.0f);
+    v.tangent_w = 1.0f;
     if (vertex_follows_tangent(scene, v.info.material)) {
         v.dpdu = file_w != 0.0f ? file_t : affine_vector(instance->to_world, triangle_dpdu(scene, hit.triangle));
+        if (file_w != 0.0f) v.tangent_w = file_w;
     }
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         __global const Material *m = &scene->materials[v.info.material];
@@ -264,7 +268,11 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
     file_w = file_tangent(scene, v.info.normals, hit.b12, &file_t);
 #endif
     v.dpdu = vertex_follows_tangent(scene, v.info.material) ? triangle_dpdu(scene, hit.triangle) : (float3)(0.0f);
-    if (file_w != 0.0f && vertex_follows_tangent(scene, v.info.material)) v.dpdu = file_t;
+    v.tangent_w = 1.0f;
+    if (file_w != 0.0f && vertex_follows_tangent(scene, v.info.material)) {
+        v.dpdu = file_t;
+        v.tangent_w = file_w;
+    }
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
         v.ns = detailed_normal(scene, &scene->materials[v.info.material], hit.triangle, v.uv, v.footprint, v.n,
                                v.ns, v.wo, file_t, file_w);
@@ -356,7 +364,7 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
 {
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
-        SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
+        SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
         PATH_GATHER(s, radiance, estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
                                                        v->info.interior, s->medium, use_mis,
                                                        path_query(sampler, s, QUERY_SHADOW), rays_traced));
@@ -374,7 +382,7 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
-    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
+    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
     return material_sample(material, &sc, w, v->ns, v->wo, uc, u, bs)
         && shading_side_agrees(v->n, v->ns, bs->wi);
 }
@@ -384,7 +392,7 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
 inline void polarized_scatter_vertex(const Scene *scene, const SampledWavelengths *w, PathState *s,
                                      const PathVertex *v, const BSDFSample *bs)
 {
-    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, 0);
+    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
     polarized_scatter(&s->pol, &s->throughput, &scene->materials[v->info.material], &sc, w, v->ns, v->wo, bs);
 }
 

@@ -301,6 +301,8 @@ typedef struct {
     float footprint;
     float3 base_normal;  /* unit: the shading normal before a normal or bump map turned it; 0: no shadowing term */
     float3 dpdu;         /* the surface's dp/du at the point, for a material with Material.tangent_frame; 0: none */
+    float tangent_w;     /* ±1: the handedness of dpdu's frame (a file tangent's w, vertex_tangents.cl), toward whose
+                            signed bitangent an anisotropic frame turns; 1 where dpdu is not a file's */
     int adjoint;         /* 1: the transport carries importance, so a sampled direction is the viewer's side and
                             wo the light's (light tracer, photons, BDPT light subpaths); 0: radiance */
 } SurfaceContext;

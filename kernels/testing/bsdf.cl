@@ -22,6 +22,7 @@ inline SurfaceContext harness_context(__global const float *spectra)
     sc.footprint = 0.0f;
     sc.base_normal = (float3)(0.0f);
     sc.dpdu = (float3)(0.0f);
+    sc.tangent_w = 1.0f;
     sc.adjoint = 0;
     return sc;
 }

@@ -198,3 +198,116 @@ def test_specular_factor_renders_as_cycles_renders_it(tmp_path):
     from tests.interop.test_gltf_cycles import _check, compare
 
     _check(compare(_specular_panels(tmp_path / "panels.glb"), tmp_path, width=64, spp=64), 0.07, 0.02)
+
+
+def _textured_anisotropy(tmp_path, blues: list[int], strength: float, roughness: float):
+    """A quad whose anisotropyTexture is a row of texels with these B values (RG the tangent's own direction)."""
+    gltf = Gltf()
+    gltf.json["extensionsUsed"] = ["KHR_materials_anisotropy"]
+    pixels = np.array([[[255, 128, b] for b in blues]])
+    index = gltf.image_texture(pixels, sampler={"magFilter": 9728, "minFilter": 9728})
+    extension = {"anisotropyStrength": strength, "anisotropyTexture": {"index": index}}
+    material = gltf.material(
+        pbrMetallicRoughness={"metallicFactor": 0.0, "roughnessFactor": roughness},
+        extensions={"KHR_materials_anisotropy": extension},
+    )
+    gltf.node(mesh=gltf.quad(1.0, material))
+    return gltf.write(tmp_path / "textured.glb")
+
+
+def test_the_anisotropy_textures_strength_keeps_glTFs_ratio_texel_by_texel(tmp_path):
+    """Each texel's strength s = anisotropyStrength × B gives the ratio α_t/α_b = (α + s²(1 − α))/α of glTF's
+    definition as principled's 1/(1 − 0.9 a), within the 8-bit PNG's step; the direction (RG) is named."""
+    from PIL import Image
+
+    blues = [0, 64, 128, 200, 255]
+    strength, roughness = 0.8, 0.5
+    data, ctx = gltf_scene_data(_textured_anisotropy(tmp_path, blues, strength, roughness), tmp_path / "out.toml")
+    (table,) = data["materials"].values()
+    bitmap = table["anisotropic"]
+    assert bitmap["texture"] == "bitmap" and bitmap["raw"] is True
+    ctx.files[bitmap["file"]](tmp_path / "weights.png")
+    weights = np.asarray(Image.open(tmp_path / "weights.png"), dtype=np.float64)[0] / 255.0
+    alpha = roughness**2
+    s = strength * np.array(blues) / 255.0
+    expected = (alpha + s**2 * (1.0 - alpha)) / alpha
+    np.testing.assert_allclose(weights, (1.0 - 1.0 / expected) / 0.9, atol=0.5 / 255.0 + 1e-12)
+    assert any("per-texel direction (RG) is not imported" in w for w in ctx.warnings)
+    assert not any("texture (a direction and strength per texel) is not imported" in w for w in ctx.warnings)
+
+
+def _anisotropy_plane_two_halves(path, blues: list[int] | None, strength: float):
+    """The lit metal plane of _anisotropic_plane with anisotropyTexture's B `blues` over its halves (u < ½, u > ½),
+    or no texture; roughness 0.3 (α = 0.09), where strength 1 gives principled's largest weight, a = 1, exactly."""
+    gltf = Gltf()
+    gltf.json["extensionsUsed"] = ["KHR_materials_anisotropy"]
+    extension: dict = {"anisotropyStrength": strength}
+    if blues is not None:
+        pixels = np.array([[[255, 128, b] for b in blues]])
+        extension["anisotropyTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
+    material = gltf.material(
+        pbrMetallicRoughness={"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.3},
+        extensions={"KHR_materials_anisotropy": extension},
+        doubleSided=True,
+    )
+    corners = [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]
+    uvs = [[0, 1], [1, 1], [1, 0], [0, 0]]  # u along +x: the texture's left texel on the left half
+    gltf.node(mesh=gltf.mesh(corners, [0, 1, 2, 0, 2, 3], [[0, 0, 1]] * 4, uvs, material))
+    light = gltf.light(type="point", intensity=2000.0)
+    gltf.node(extensions={"KHR_lights_punctual": {"light": light}}, translation=[0.3, 0.3, 1.0])
+    camera = gltf.camera(type="perspective", perspective={"yfov": 1.2, "aspectRatio": 1.0, "znear": 0.01})
+    gltf.node(camera=camera, translation=[0.0, 0.0, 1.5])
+    return gltf.write(path)
+
+
+def test_a_two_valued_anisotropy_texture_renders_each_half_as_its_untextured_strength(tmp_path):
+    """B = 255 on the left half, 0 on the right: the left renders as anisotropyStrength 1 without a texture, the
+    right as an isotropic lobe (strength 0), to float rounding (the same paths; the texels hold a = 1 and 0
+    exactly); columns beside the seam, where a pixel's samples fall on both texels, are left out. The two untextured
+    images differ on each side, so each half shows which weight it got."""
+    textured = _render(_anisotropy_plane_two_halves(tmp_path / "halves.glb", [255, 0], 1.0), tmp_path)
+    stretched = _render(_anisotropy_plane_two_halves(tmp_path / "stretched.glb", None, 1.0), tmp_path)
+    round_lobe = _render(_anisotropy_plane_two_halves(tmp_path / "round.glb", None, 0.0), tmp_path)
+    left, right = slice(0, 7), slice(9, 16)
+    scale = stretched.max()
+    np.testing.assert_allclose(textured[:, left], stretched[:, left], rtol=1e-3, atol=1e-6 * scale)
+    np.testing.assert_allclose(textured[:, right], round_lobe[:, right], rtol=1e-3, atol=1e-6 * scale)
+    for half in (left, right):
+        assert np.abs(stretched[:, half] - round_lobe[:, half]).max() > 0.05 * scale
+
+
+def _anisotropic_plane_with_tangents(path, uvs, tangent):
+    """_anisotropic_plane turned 30° by anisotropyRotation, with TANGENT `tangent` (xyz, w) at every corner, the
+    light and camera on the plane x = 0, so the scene but the anisotropic frame is its own mirror image in x."""
+    gltf = Gltf()
+    gltf.json["extensionsUsed"] = ["KHR_materials_anisotropy"]
+    material = gltf.material(
+        pbrMetallicRoughness={"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.5},
+        extensions={"KHR_materials_anisotropy": {"anisotropyStrength": 0.9, "anisotropyRotation": math.pi / 6}},
+        doubleSided=True,
+    )
+    corners = [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]
+    mesh = gltf.mesh(corners, [0, 1, 2, 0, 2, 3], [[0, 0, 1]] * 4, uvs, material)
+    gltf.json["meshes"][mesh]["primitives"][0]["attributes"]["TANGENT"] = gltf.accessor([tangent] * 4)
+    gltf.node(mesh=mesh)
+    light = gltf.light(type="point", intensity=2000.0)
+    gltf.node(extensions={"KHR_lights_punctual": {"light": light}}, translation=[0.0, 0.4, 1.0])
+    camera = gltf.camera(type="perspective", perspective={"yfov": 1.2, "aspectRatio": 1.0, "znear": 0.01})
+    gltf.node(camera=camera, translation=[0.0, 0.0, 1.5])
+    return gltf.write(path)
+
+
+def test_the_anisotropy_rotation_turns_toward_the_signed_bitangent_on_a_mirrored_layout(tmp_path):
+    """glTF turns the anisotropy direction from the tangent t toward the bitangent b = (n × t) w. A layout whose u
+    runs along −x with w = −1 (the mirror image in x of one whose u runs along +x with w = 1: b = +y on both) must
+    render the mirror image of the other's highlight (to the noise of 16 × 16 pixels at 16 spp); turning toward n × t
+    instead renders the unmirrored image."""
+    upright = [[0, 1], [1, 1], [1, 0], [0, 0]]  # u along +x
+    mirrored = [[1, 1], [0, 1], [0, 0], [1, 0]]  # u along −x
+    plain = _render(_anisotropic_plane_with_tangents(tmp_path / "plain.glb", upright, [1, 0, 0, 1]), tmp_path)
+    mirror = _render(_anisotropic_plane_with_tangents(tmp_path / "mirror.glb", mirrored, [-1, 0, 0, -1]), tmp_path)
+    flipped = plain[:, ::-1]
+    wrong = np.abs(plain - flipped).mean()  # the highlight's asymmetry: 1.2 × the image's mean
+    assert wrong > 0.5 * plain.mean()
+    # measured: 0.007 × that asymmetry (the two renders' noise); 1.0, the unmirrored image bit for bit, without w
+    assert np.abs(mirror - flipped).mean() < 0.05 * wrong

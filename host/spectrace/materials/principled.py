@@ -93,7 +93,8 @@ ANISOTROPIC_ROTATION = Parameter(
     default=0.0,
     range=Range(-360.0, 360.0),
     doc="turns the direction `anisotropic` stretches along, counter-clockwise about the normal from dp/du: "
-    "the tangent is cos θ x + sin θ (n × x) (glTF's anisotropyRotation, Blender's Anisotropic Rotation × 360°)",
+    "the tangent is cos θ x + sin θ (n × x), or cos θ x + sin θ w (n × x) where the mesh supplies tangents of "
+    "handedness w (glTF's anisotropyRotation, Blender's Anisotropic Rotation × 360°)",
 )
 SPEC_TINT = _weight("spec_tint", 0.0, "tints the dielectric reflection at normal incidence toward the base colour")
 SHEEN = _weight("sheen", 0.0, "a grazing-angle retro-reflective layer for cloth (Burley's sheen)")

@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from spectrace.interop.gltf.context import GltfImport
+from spectrace.interop.gltf.textures import texture
 
 SPECULAR = "KHR_materials_specular"
 DISPERSION = "KHR_materials_dispersion"
@@ -109,16 +112,20 @@ def _dispersion(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None
     table["eta"] = {"cauchy": [n_d - DISPERSION_OFFSET * spread, DISPERSION_B_UM2 * spread]}
 
 
-def anisotropic_weight(strength: float, roughness: float) -> float:
-    """principled's `anisotropic` a for glTF's anisotropyStrength s at perceptual roughness r: glTF stretches the
-    tangent's α alone, α_t = mix(α, 1, s²), α_b = α (α = r²); principled stretches both ways, α_x / α_y =
-    1/(1 − 0.9 a). The same ratio α_t/α_b gives a (at most 1, a ratio of 10)."""
+def anisotropic_weight(strength, roughness: float):
+    """principled's `anisotropic` a for glTF's anisotropyStrength s (a number or an array) at perceptual roughness
+    r: glTF stretches the tangent's α alone, α_t = mix(α, 1, s²), α_b = α (α = r²); principled stretches both ways,
+    α_x / α_y = 1/(1 − 0.9 a). The same ratio α_t/α_b gives a (at most 1, a ratio of 10)."""
     alpha = max(0.001, roughness * roughness)
-    ratio = (alpha + strength * strength * (1.0 - alpha)) / alpha
-    return min(1.0, (1.0 - 1.0 / ratio) / 0.9)
+    ratio = (alpha + np.square(strength) * (1.0 - alpha)) / alpha
+    weight = np.minimum(1.0, (1.0 - 1.0 / ratio) / 0.9)
+    return float(weight) if np.ndim(weight) == 0 else weight
 
 
 def _anisotropy(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughness: float) -> None:
+    """The strength (anisotropyStrength times the texture's B) becomes principled's `anisotropic`, a texture baked
+    texel by texel where the file has one; the direction (anisotropyRotation; the texture's RG) turns the lobe by
+    `anisotropic_rotation`, a number, so the texture's per-texel direction is named and left out."""
     doc = ctx.doc
     extension = doc.extension(entry, ANISOTROPY, pointer)
     if extension is None:
@@ -130,14 +137,17 @@ def _anisotropy(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughne
     rotation = doc.number(extension, "anisotropyRotation", where, 0.0)
     if not math.isfinite(rotation):
         raise doc.fail(f"{where}/anisotropyRotation", "must be a finite number of radians")
-    if "anisotropyTexture" in extension:
-        ctx.warn(
-            f"{where}/anisotropyTexture",
-            f"{ANISOTROPY}'s texture (a direction and strength per texel) is not imported (its factors are)",
-        )
     if strength == 0.0:
         return
-    table["anisotropic"] = anisotropic_weight(strength, roughness)
+    weight: float | dict = anisotropic_weight(strength, roughness)
+    if (info := extension.get("anisotropyTexture")) is not None:
+        at = f"{where}/anisotropyTexture"
+        curve = (f"anisotropy{strength:.6g}_{roughness:.6g}", lambda b: anisotropic_weight(strength * b, roughness))
+        mapped = texture(ctx, info, at, "blue", curve=curve)
+        if mapped is not None:
+            weight = mapped
+            ctx.warn(at, f"{ANISOTROPY}'s per-texel direction (RG) is not imported (its strength, B, is)")
+    table["anisotropic"] = weight
     degrees = math.fmod(math.degrees(rotation), 360.0)
     if degrees != 0.0:
         table["anisotropic_rotation"] = degrees

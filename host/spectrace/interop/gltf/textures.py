@@ -8,6 +8,7 @@ bitmap's `wrap`, `filter`, `uv_offset` and `uv_scale` (glTF's (u, v), v down the
 from __future__ import annotations
 
 import io
+from collections.abc import Callable
 
 import numpy as np
 
@@ -25,6 +26,7 @@ ROLES = {
     "metallic": ((2,), False),
     "red": ((0,), False),  # KHR_materials_transmission, _clearcoat: their factor in R
     "gloss": ((1,), False),  # KHR_materials_clearcoat's roughness texture: G, written as 1 − roughness
+    "blue": ((2,), False),  # KHR_materials_anisotropy's strength: B
 }
 
 
@@ -67,10 +69,12 @@ def texture(
     role: str,
     factor: list[float] | float = 1.0,
     cutoff: float | None = None,
+    curve: tuple[str, Callable[[np.ndarray], np.ndarray]] | None = None,
 ) -> dict | None:
     """The `bitmap` for a textureInfo (`{ index, texCoord, extensions }`) read in `role`, its values times
-    `factor` (and with `cutoff`, 1 where that is at least the cutoff, else 0: an alpha mask); None (with a warning)
-    for one spectrace cannot read."""
+    `factor` (and with `cutoff`, 1 where that is at least the cutoff, else 0: an alpha mask; with `curve`, a name
+    and a map of [0, 1] onto [0, 1], that map of each value: a parameter glTF defines another way); None (with a
+    warning) for one spectrace cannot read."""
     doc = ctx.doc
     if not isinstance(info, dict):
         raise doc.fail(pointer, "a texture reference must be an object with an 'index'")
@@ -92,7 +96,7 @@ def texture(
         ctx.warn(f"{pointer}/texCoord", "textures on a second set of texture coordinates are not imported")
         return None
     factors = np.broadcast_to(np.asarray(factor, dtype=np.float64), (len(ROLES[role][0]),))
-    key = (source, role, tuple(factors), cutoff)
+    key = (source, role, tuple(factors), cutoff, curve[0] if curve else None)
     if key not in ctx.images:
         channels, colour = ROLES[role]
         pixels = decoded_image(ctx, source, f"{where}/source")[..., list(channels)]
@@ -104,7 +108,9 @@ def texture(
             pixels = 255.0 - pixels
         if cutoff is not None:
             pixels = (pixels >= cutoff * 255.0) * 255.0
-        base = f"image{source}_{role if cutoff is None else 'mask'}"
+        if curve is not None:
+            pixels = np.round(np.clip(curve[1](pixels / 255.0), 0.0, 1.0) * 255.0)
+        base = f"image{source}_{curve[0] if curve else role if cutoff is None else 'mask'}"
         ctx.images[key] = ctx.add_png(base, pixels[..., 0] if pixels.shape[2] == 1 else pixels)
     table: dict = {"texture": "bitmap", "file": ctx.images[key]}
     if not ROLES[role][1]:
