@@ -23,6 +23,8 @@
  * Parameters: base colour in the row's reflectance fields, η in its index fields (kernels/ior.cl: dispersive where
  * it names a glass, steered by the hero wavelength), the weights in a block of the spectrum table
  * (Material.coat_table_offset; host: spectrace.materials.principled): weight k at 2k, its texture at 2k + 1.
+ * A textured specular level s (Burley's; glTF's specularTexture) sits in the row's roughness_texture and gives η
+ * per hit as principled_eta_from_specular; the index fields then hold its largest value's η for the host's use.
  * Sampling: a lobe with probability proportional to brdf max(b̄, 0.05) (cosine-weighted hemisphere, for diffuse and
  * sheen), 0.25 clearcoat (GTR1's D cos θh) and 1 − brdf (1 − F_d(cos θo)) (visible normals, then reflection with
  * probability 1 − bsdf (1 − F_d(ωo·h)), else refraction); from inside only the last, reflecting with F_d. The
@@ -52,6 +54,13 @@
 #define PRINCIPLED_LUMINANCE 18
 #define PRINCIPLED_MIN_ALPHA 1e-3f
 #define PRINCIPLED_COAT_ALPHA 0.25f
+
+/* The index whose Schlick F0 = ((η − 1)/(η + 1))² is 0.08 s (spectrace.materials.principled.eta_from_specular),
+ * kept above 1 so that a texel of 0 (no specular reflection) stays a valid interface. */
+inline float principled_eta_from_specular(float s)
+{
+    return fmax(2.0f / (1.0f - sqrt(0.08f * s)) - 1.0f, 1.0f + 1e-4f);
+}
 
 typedef struct {
     float4 base;
@@ -88,7 +97,9 @@ inline PrincipledParams principled_params(__global const Material *m, const Surf
     p.sheen_tint = principled_weight(sc, block, PRINCIPLED_SHEEN_TINT, w);
     p.clearcoat = principled_weight(sc, block, PRINCIPLED_CLEARCOAT, w);
     p.coat_alpha = mix(0.1f, 0.001f, principled_weight(sc, block, PRINCIPLED_CLEARCOAT_GLOSS, w));
-    p.eta = material_ior(m, w->lambda.x);
+    p.eta = (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE)
+                ? principled_eta_from_specular(surface_scalar(sc, m->roughness_texture, 0.5f, w))
+                : material_ior(m, w->lambda.x);
     return p;
 }
 

@@ -125,7 +125,8 @@ typedef struct {
     int reflectance_texture;    /* index into the texture array that replaces reflectance_offset (the reflectance, or
                                    the conductor's and dielectric's specular tint), or NO_TEXTURE */
     int roughness_texture;      /* conductor, plastic, dielectric, retroreflector: a scalar texture of α per point
-                                   that replaces alpha there, or NO_TEXTURE; mix: a scalar texture of its amount */
+                                   that replaces alpha there, or NO_TEXTURE; mix: a scalar texture of its amount;
+                                   principled: a scalar texture of its specular level (bsdf_principled.cl) */
     int distribution;           /* conductor, plastic, dielectric: MICROFACET_* of the rough lobe */
     int nonlinear;              /* plastic: 1 = the base's internal scattering depends on its albedo (Mitsuba's
                                    `nonlinear`), 0 = it does not; principled: 1 = it transmits (spec_trans above 0

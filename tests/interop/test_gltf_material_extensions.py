@@ -311,3 +311,75 @@ def test_the_anisotropy_rotation_turns_toward_the_signed_bitangent_on_a_mirrored
     assert wrong > 0.5 * plain.mean()
     # measured: 0.007 × that asymmetry (the two renders' noise); 1.0, the unmirrored image bit for bit, without w
     assert np.abs(mirror - flipped).mean() < 0.05 * wrong
+
+
+def _specular_plane_two_halves(path, alphas: list[int] | None, factor: float):
+    """A near-black dielectric plane (index 1.5, roughness 0.3) lit by a point light, with KHR_materials_specular's
+    factor `factor` and specularTexture's A `alphas` over its halves (u < ½, u > ½), or no texture: what it shows
+    is mostly its specular reflection."""
+    gltf = Gltf()
+    gltf.json["extensionsUsed"] = ["KHR_materials_specular"]
+    extension: dict = {"specularFactor": factor}
+    if alphas is not None:
+        pixels = np.array([[[255, 255, 255, a] for a in alphas]])
+        extension["specularTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
+    material = gltf.material(
+        pbrMetallicRoughness={
+            "baseColorFactor": [0.02, 0.02, 0.02, 1.0],
+            "metallicFactor": 0.0,
+            "roughnessFactor": 0.3,
+        },
+        extensions={"KHR_materials_specular": extension},
+        doubleSided=True,
+    )
+    corners = [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]
+    uvs = [[0, 1], [1, 1], [1, 0], [0, 0]]  # u along +x: the texture's left texel on the left half
+    gltf.node(mesh=gltf.mesh(corners, [0, 1, 2, 0, 2, 3], [[0, 0, 1]] * 4, uvs, material))
+    light = gltf.light(type="point", intensity=2000.0)
+    gltf.node(extensions={"KHR_lights_punctual": {"light": light}}, translation=[0.0, 0.3, 1.0])
+    camera = gltf.camera(type="perspective", perspective={"yfov": 1.2, "aspectRatio": 1.0, "znear": 0.01})
+    gltf.node(camera=camera, translation=[0.0, 0.0, 1.5])
+    return gltf.write(path)
+
+
+def test_a_two_valued_specular_texture_renders_each_half_as_its_untextured_factor(tmp_path):
+    """specularTexture's A = 204 on the left half and 102 on the right scale F0 = 0.04 (index 1.5) by 0.8 and 0.4:
+    principled's specular levels 0.4 and 0.2, which the 8-bit texels hold exactly (102/255, 51/255). Each half
+    renders as the untextured specularFactor 0.8 or 0.4, whose index the host computes, to float rounding (the same
+    paths); columns beside the seam are left out. The two untextured images differ on each side (F0 twice as
+    large), so each half shows which level it got."""
+    textured = _render(_specular_plane_two_halves(tmp_path / "halves.glb", [204, 102], 1.0), tmp_path)
+    strong = _render(_specular_plane_two_halves(tmp_path / "strong.glb", None, 0.8), tmp_path)
+    weak = _render(_specular_plane_two_halves(tmp_path / "weak.glb", None, 0.4), tmp_path)
+    left, right = slice(0, 7), slice(9, 16)
+    scale = strong.max()
+    np.testing.assert_allclose(textured[:, left], strong[:, left], rtol=1e-3, atol=1e-6 * scale)
+    np.testing.assert_allclose(textured[:, right], weak[:, right], rtol=1e-3, atol=1e-6 * scale)
+    for half in (left, right):
+        assert np.abs(strong[:, half] - weak[:, half]).max() > 0.05 * scale
+
+
+def test_the_specular_texture_becomes_a_grey_specular_level_and_the_colour_texture_is_named(tmp_path):
+    """specularTexture (A) times specularFactor becomes principled's textured `specular` in place of the index; a
+    specularColorTexture, a colour principled cannot carry, is named; the TOML loads."""
+    gltf = Gltf()
+    gltf.json["extensionsUsed"] = ["KHR_materials_specular"]
+    index = gltf.image_texture(np.array([[[255, 255, 255, 255], [255, 255, 255, 0]]]))
+    extension = {"specularFactor": 0.5, "specularTexture": {"index": index}, "specularColorTexture": {"index": index}}
+    material = gltf.material(
+        pbrMetallicRoughness={"metallicFactor": 0.0}, extensions={"KHR_materials_specular": extension}
+    )
+    gltf.node(mesh=gltf.quad(1.0, material))
+    from spectrace.interop.gltf import import_gltf
+    from spectrace.scene import load_scene
+
+    path = gltf.write(tmp_path / "model.glb")
+    data, ctx = gltf_scene_data(path, tmp_path / "out.toml")
+    (table,) = data["materials"].values()
+    assert table["specular"]["texture"] == "bitmap" and "eta" not in table
+    assert any("specularColorTexture is not imported" in w for w in ctx.warnings)
+    assert not any("specularTexture is not imported" in w for w in ctx.warnings)
+    import_gltf(path, tmp_path / "loads.toml")
+    (loaded,) = {shape.material for shape in load_scene(tmp_path / "loads.toml").shapes}
+    # the row's index is the largest texel's: F0 = 0.5 · 0.04 (within the 8-bit texel's rounding)
+    assert loaded.specular_texture is not None and _r0(loaded.eta.at(550.0)) == pytest.approx(0.02, rel=0.01)

@@ -248,3 +248,14 @@ def test_mitsuba_principled_imports_its_weights_and_their_textures(tmp_path):
         with pytest.raises(SpectraceError) as error:
             load_mitsuba_scene(xml)
         assert key in str(error.value) and "scene.xml" in str(error.value)
+
+
+def test_kernel_index_from_a_textured_specular_level_is_the_hosts(kernel_runner):
+    """A textured specular level becomes the index per hit in the kernel by the formula the host applies to an
+    untextured one: both give the index whose Schlick F0 is 0.08 specular."""
+    runner = kernel_runner("testing/principled_specular.cl")
+    levels = np.array([1e-3, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0], np.float32)
+    out = np.zeros_like(levels)
+    runner.run("eta_from_specular", levels.size, [runner.buffer(levels), runner.buffer(out, True)], {1: out})
+    np.testing.assert_allclose(out, [eta_from_specular(float(s)) for s in levels], rtol=2e-6)
+    np.testing.assert_allclose(((out - 1) / (out + 1)) ** 2, 0.08 * levels, rtol=1e-4)

@@ -11,6 +11,7 @@ emissive factor and Blender's emission into one); transparency (alpha) is the su
 """
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -84,7 +85,9 @@ SPECULAR = Parameter(
     range=Range(0.0, 1.0, low_open=True),
     default_doc="none",
     doc="the index written as a reflectance level instead of `eta` (Mitsuba 3's and Blender's): "
-    "eta = 2/(1 − √(0.08 specular)) − 1, so 0.5 gives 1.5; give `eta` or `specular`, not both",
+    "eta = 2/(1 − √(0.08 specular)) − 1, so 0.5 gives 1.5; give `eta` or `specular`, not both; a grey texture "
+    "gives the index per point (a texel of 0: no dielectric reflection), a constant one over wavelength",
+    textured=True,
 )
 ANISOTROPIC_ROTATION = Parameter(
     "anisotropic_rotation",
@@ -136,6 +139,8 @@ class PrincipledMaterial(Material):
     clearcoat: float = 0.0
     clearcoat_gloss: float = 0.0
     anisotropic_rotation: float = 0.0  # degrees
+    # A grey texture of the specular level that sets the index per point (eta then holds its largest value's).
+    specular_texture: object = None
 
     is_delta = False  # α never falls below 0.001 (Mitsuba's clamp): every lobe has a density
 
@@ -154,6 +159,10 @@ MODEL = PrincipledMaterial
 
 
 def _index(eta, specular, where: str) -> IndexOfRefraction:
+    from spectrace.textures import is_texture, scalar_range
+
+    if is_texture(specular):
+        specular = max(scalar_range(specular)[1], 1e-6)
     if specular is not None:
         if eta is not None:
             raise SpectraceError("give eta or specular, not both (specular is the index written another way)", where)
@@ -172,14 +181,24 @@ def from_spec(spec, resolver, key: str) -> PrincipledMaterial:
     eta = spec.eta if isinstance(spec.eta, (float, str)) else spec.eta.model_dump()
     explicit_eta = eta if "eta" in spec.model_fields_set else None
     where = resolver.where(f"{key}.eta")
+    specular = spec.specular
+    if specular is not None and not isinstance(specular, (int, float)):
+        specular = resolver.number_or_texture(specular, f"{key}.specular", SPECULAR)
     return PrincipledMaterial(
         resolver.spectrum_or_texture(spec.base_color, f"{key}.base_color", "spectrum"),
-        _check_eta(_index(explicit_eta, spec.specular, where), where),
+        _check_eta(_index(explicit_eta, specular, where), where),
         **{p.name: resolver.number_or_texture(getattr(spec, p.name), f"{key}.{p.name}", p) for p in SCALARS},
         anisotropic_rotation=ANISOTROPIC_ROTATION.check(
             spec.anisotropic_rotation, resolver.where(f"{key}.anisotropic_rotation")
         ),
+        specular_texture=_texture_or_none(specular),
     )
+
+
+def _texture_or_none(value):
+    from spectrace.textures import is_texture
+
+    return value if is_texture(value) else None
 
 
 def make(
@@ -189,7 +208,7 @@ def make(
     metallic: float = 0.0,
     spec_trans: float = 0.0,
     eta: float | str | dict = ETA.number_default,
-    specular: float | None = None,
+    specular: float | Any | None = None,
     spec_tint: float = 0.0,
     sheen: float = 0.0,
     sheen_tint: float = 0.0,
@@ -215,13 +234,14 @@ def make(
         "clearcoat_gloss": clearcoat_gloss,
     }
     if specular is not None:
-        specular = SPECULAR.check(specular)
+        specular = number_or_texture(specular, SPECULAR)
     given_eta = None if specular is not None and eta == ETA.number_default else eta
     return PrincipledMaterial(
         reflectance_or_texture(base_color, "base_color"),
         _check_eta(_index(given_eta, specular, "eta"), "eta"),
         **{p.name: number_or_texture(values[p.name], p) for p in SCALARS},
         anisotropic_rotation=ANISOTROPIC_ROTATION.check(anisotropic_rotation, "anisotropic_rotation"),
+        specular_texture=_texture_or_none(specular),
     )
 
 
@@ -247,6 +267,8 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
     write_base_color(row, material.base_color, table, textures)
     write_ior(row, material.eta)
     write_weights(row, material, SCALARS, table, textures)
+    if material.specular_texture is not None:
+        row["roughness_texture"] = textures.add(material.specular_texture, "float")
     if row["tangent_frame"]:
         row["tangent_rotation"] = np.radians(material.anisotropic_rotation)
 
@@ -343,7 +365,7 @@ def to_mitsuba(material: PrincipledMaterial, exporter) -> dict:
 
     if material.eta.dispersive:
         raise exporter.refuse("a principled material with a dispersive eta")
-    if any(is_texture(getattr(material, p.name)) for p in SCALARS):
+    if material.specular_texture is not None or any(is_texture(getattr(material, p.name)) for p in SCALARS):
         raise exporter.refuse("a principled material with a textured weight is not exported yet")
     if material.anisotropic_rotation != 0.0:
         raise exporter.refuse("a principled material with an anisotropic_rotation (Mitsuba's has none)")

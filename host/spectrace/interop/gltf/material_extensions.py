@@ -71,23 +71,38 @@ def _specular(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
     for i, value in enumerate(colour):
         if not (value >= 0.0 and math.isfinite(value)):
             raise doc.fail(f"{where}/specularColorFactor/{i}", f"must be a number ≥ 0, got {value:g}")
-    for key in ("specularTexture", "specularColorTexture"):
-        if key in extension:
-            ctx.warn(f"{where}/{key}", f"{SPECULAR}'s {key} is not imported (its factor is)")
-    if factor == 1.0 and colour == [1.0, 1.0, 1.0]:
+    if "specularColorTexture" in extension:
+        ctx.warn(
+            f"{where}/specularColorTexture",
+            f"{SPECULAR}'s specularColorTexture is not imported (principled's specular level is grey; its factor is)",
+        )
+    info = extension.get("specularTexture")
+    if info is None and factor == 1.0 and colour == [1.0, 1.0, 1.0]:
         return
     if "spec_trans" in table:
         ctx.warn(where, f"{SPECULAR} on a transmitting material is not imported (its ior sets the refraction)")
         return
     r0 = ((_eta(table) - 1.0) / (_eta(table) + 1.0)) ** 2
     f0 = factor * sum(w * min(r0 * c, 1.0) for w, c in zip(REC709_Y, colour, strict=True))
-    table["eta"] = eta_from_f0(f0)
     if 0.0 < factor < 1.0 or max(colour) - min(colour) > 1e-6:
         ctx.warn(
             where,
             f"{SPECULAR} is approximated by the index of its F0's luminance (a coloured F0, and a specularFactor's "
             "lower grazing reflectance, are not modelled)",
         )
+    if info is not None:
+        # F0 = A · f0 per texel is principled's specular level 12.5 F0 (its F0 is 0.08 specular), the index that
+        # level gives per hit (bsdf_principled.cl); above the level 1 (F0 0.08, an index of 1.8) it is clipped.
+        level = f0 / 0.08
+        at = f"{where}/specularTexture"
+        mapped = texture(ctx, info, at, "alpha", curve=(f"specular{level:.6g}", lambda a: level * a))
+        if mapped is not None:
+            if level > 1.0:
+                ctx.warn(at, f"{SPECULAR}'s F0 above 0.08 (an index above 1.8) is clipped there in the texture")
+            table.pop("eta", None)
+            table["specular"] = mapped
+            return
+    table["eta"] = eta_from_f0(f0)
 
 
 def _dispersion(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
