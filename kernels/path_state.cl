@@ -404,7 +404,7 @@ inline float4 polarized_emitter_vertex(const Scene *scene, PathState *s, __globa
     float3 dpdu = (float3)(0.0f);
     if (light->direction.w > 0.0f) {
 #if SCENE_HAS_SHAPES
-        if (light->type != LIGHT_TRIANGLE) dpdu = hit_shape_surface(scene, hit).dpdu;
+        if (hit_is_shape(scene, hit.triangle)) dpdu = hit_shape_surface(scene, hit).dpdu;
         else
 #endif
             dpdu = triangle_dpdu(scene, hit.triangle);

@@ -14,7 +14,7 @@ from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.integrators import INTEGRATORS
 from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
-from spectrace.lights import LIGHTS, area
+from spectrace.lights import LIGHTS, area, projector
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.spectral import spectrum_to_xyz
@@ -81,10 +81,10 @@ def test_each_declared_bsdf_reaches_its_module(tmp_path, plugin, module):
         assert type(scene.shapes[0].material) in {m.MODEL for m in MATERIALS.values()}
 
 
-def _d65_of_unit_luminance(spectrum: Spectrum) -> None:
+def _d65_of_unit_luminance(spectrum: Spectrum, luminance: float = 1.0) -> None:
     """Mitsuba's default emission: D65 (x, y = 0.3127, 0.3290) with luminance 1, film Y = 1 in spectrace."""
     x, y, z = spectrum_to_xyz(spectrum)
-    assert y == pytest.approx(1.0, rel=1e-3)
+    assert y == pytest.approx(luminance, rel=1e-3)
     np.testing.assert_allclose((x / (x + y + z), y / (x + y + z)), (0.3127, 0.3290), atol=1e-3)
 
 
@@ -103,7 +103,9 @@ def test_each_declared_emitter_imports_with_mitsubas_default_emission(tmp_path, 
     assert isinstance(light, module.MODEL)
     spectra = _spectra(light)
     assert len(spectra) == 1
-    _d65_of_unit_luminance(spectra[0])
+    # A projector's intensity is π·scale·irradiance (the irradiance its unit-distance plane receives, Mitsuba's
+    # projector.cpp), so its default irradiance of 1 is an intensity of π.
+    _d65_of_unit_luminance(spectra[0], np.pi if module is projector else 1.0)
 
 
 def test_the_shape_emitter_imports_on_a_shape(tmp_path):

@@ -64,6 +64,17 @@ def test_projector_maps_frame_field_and_intensity(tmp_path):
     np.testing.assert_allclose(white["intensity"]["rgb"], [0.5 * np.pi] * 3, rtol=1e-12)
 
 
+@pytest.mark.parametrize(("focal", "expected"), [(None, 34.0220566), ("35mm", 47.2163162)])
+def test_a_projector_without_fov_takes_mitsubas_focal_length_field(tmp_path, focal, expected):
+    """Mitsuba 3 gives a focal length (default 50mm) the field of a 36 x 24 mm film's diagonal on the image's aspect
+    (a constant irradiance: square); the expected degrees are Mitsuba 3.9's perspective sensor's x_fov on a square
+    film at those focal lengths."""
+    extra = "" if focal is None else f'<string name="focal_length" value="{focal}"/>'
+    emitter = WHITE_PROJECTOR.replace('<float name="fov" value="60"/>', extra)
+    light = mitsuba_scene_data(_xml(tmp_path, 8, emitter))[0]["lights"][0]
+    assert light["fov"] == pytest.approx(expected, rel=1e-6)
+
+
 @pytest.mark.peer
 @pytest.mark.parametrize("emitter", [WHITE_PROJECTOR, PROJECTOR], ids=["white", "image"])
 def test_projector_over_a_floor_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral, emitter):

@@ -14,7 +14,7 @@ from spectrace.errors import SpectraceError
 from spectrace.integrators import INTEGRATORS
 from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 from spectrace.io.exr import write_exr
-from spectrace.lights import LIGHTS, area, envmap
+from spectrace.lights import LIGHTS, area, envmap, projector
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PIXEL_FILTERS
 from spectrace.textures import TEXTURES
@@ -100,7 +100,7 @@ def test_each_declared_pbrt_light_imports_with_pbrts_defaults_as_its_module(tmp_
         assert isinstance(shape.emitter, area.MODEL)
         return
     light = f'LightSource "{kind}"'
-    if module is envmap:
+    if module is envmap or module is projector:  # pbrt-v4 requires the projection light's image too
         write_exr(tmp_path / "sky.exr", np.ones((8, 8, 3), np.float32), None, {})
         light += ' "string filename" "sky.exr"'
     path.write_text(CAMERA + light + "\n" + QUAD)

@@ -32,7 +32,10 @@ MATERIAL_BITS = {
     "diffusetransmission": 128,
     "principled": 256,
     "principledthin": 512,
-    "mix": 1024,
+    "polarizer": 1024,
+    "retarder": 2048,
+    "mix": 4096,
+    "fluorescent": 8192,
 }
 LIGHT_BITS = {
     "area": 1,

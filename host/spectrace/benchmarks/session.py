@@ -38,8 +38,10 @@ def _edits(parameters: dict[str, object]) -> dict[str, tuple[dict, dict]]:
         if isinstance(value, dict) and "texture" in value:  # a textured one: its texture's placement
             scale = float(value.get("uv_scale", 1.0))
             found["one reflectance"] = ({reflectance: value | {"uv_scale": 1.25 * scale}}, {reflectance: value})
-        else:
+        elif isinstance(value, dict):  # a scene file's spectrum table
             found["one reflectance"] = ({reflectance: {"rgb": [0.6, 0.2, 0.1]}}, {reflectance: value})
+        elif isinstance(value, (int, float)):  # a scene built in Python: its constructor's argument
+            found["one reflectance"] = ({reflectance: 0.5 * float(value) or 0.3}, {reflectance: value})
     power = next(
         (k for k in parameters if k.startswith("lights.") and k.rsplit(".", 1)[1] in ("power", "intensity")), None
     )

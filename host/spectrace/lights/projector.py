@@ -217,15 +217,28 @@ def make(
     return ProjectorLight(origin_t, direction, emitted, tan_x, tan_y, image, x, profile)
 
 
+def _mitsuba_focal_length_fov(focal_length: str) -> float | None:
+    """The field across the width Mitsuba 3 gives a focal length (default 50mm) on a 36 × 24 mm film's diagonal, for
+    a square image (a constant irradiance's): tan(fov/2) = (d/2f)·a/√(1+a²), a = 1. None: not in mm."""
+    text = focal_length.strip()
+    if not text.endswith("mm"):
+        return None
+    try:
+        millimetres = float(text[:-2])
+    except ValueError:
+        return None
+    if not millimetres > 0.0:
+        return None
+    diagonal = math.hypot(36.0, 24.0)
+    return math.degrees(2.0 * math.atan(diagonal / (2.0 * millimetres) / math.sqrt(2.0)))
+
+
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     """Mitsuba 3's projector: the perspective camera's frame (to_world's lookat: local x to the image's left, y up
     it, z the axis) and its `fov` across the image's width (fov_axis x, its default); its intensity
     π·scale·irradiance(uv)/cos³θ is the irradiance profile, the image its `irradiance` texture, whose texels are
     reflectance spectra under a flat scale (no illuminant), or a constant folded into the intensity (an <rgb> in an
     emitter being an illuminant's colour)."""
-    if "fov" not in properties:
-        importer.unsupported_plugin(emitter, " without fov (focal_length)")
-        return None
     if "fov_axis" in properties and importer.text(properties["fov_axis"]) != "x":
         importer.unsupported_plugin(emitter, " with fov_axis other than x")
         return None
@@ -248,6 +261,17 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     else:
         importer.unsupported_plugin(emitter, " with a spectral irradiance")
         return None
+    if "fov" in properties:
+        fov = importer.number(properties["fov"])
+    elif "image" in table:
+        importer.unsupported_plugin(emitter, " with an image and a focal_length instead of fov")
+        return None
+    else:
+        focal_length = properties.get("focal_length")
+        fov = _mitsuba_focal_length_fov(importer.text(focal_length) if focal_length is not None else "50mm")
+        if fov is None:
+            importer.unsupported_plugin(emitter, " with a focal_length not in mm")
+            return None
     matrix = np.asarray(to_world, dtype=float)
     position = matrix[:3, 3]
     return {
@@ -255,7 +279,7 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
         "position": position.tolist(),
         "target": (position + matrix[:3, 2]).tolist(),
         "up": matrix[:3, 1].tolist(),
-        "fov": importer.number(properties["fov"]),
+        "fov": fov,
         "intensity": intensity,
         **table,
     }
