@@ -259,3 +259,14 @@ def test_kernel_index_from_a_textured_specular_level_is_the_hosts(kernel_runner)
     runner.run("eta_from_specular", levels.size, [runner.buffer(levels), runner.buffer(out, True)], {1: out})
     np.testing.assert_allclose(out, [eta_from_specular(float(s)) for s in levels], rtol=2e-6)
     np.testing.assert_allclose(((out - 1) / (out + 1)) ** 2, 0.08 * levels, rtol=1e-4)
+
+
+def test_a_textured_specular_level_is_one_of_the_materials_textures():
+    """A mesh without texture coordinates is refused for a textured material: the specular level's texture counts
+    (materials.material_textures), a number does not."""
+    import spectrace
+    from spectrace.materials import material_textures
+
+    textured = make(specular=spectrace.bitmap(np.full((2, 2), 0.5)))
+    assert set(material_textures(textured)) == {"specular"}
+    assert material_textures(make(specular=0.5)) == {}

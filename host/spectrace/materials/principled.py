@@ -145,6 +145,11 @@ class PrincipledMaterial(Material):
     is_delta = False  # α never falls below 0.001 (Mitsuba's clamp): every lobe has a density
 
     @property
+    def specular(self) -> object:
+        """The textured `specular` parameter as the materials' shared code reads it (a number lives in `eta`)."""
+        return self.specular_texture
+
+    @property
     def has_transmission(self) -> bool:
         from spectrace.textures import scalar_range
 
