@@ -6,7 +6,15 @@ from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
-from spectrace.textures.shared import UV_OFFSET, Placement, api_operand, two_sided_from_spec, uv_pair, uv_scale
+from spectrace.textures.shared import (
+    UV_OFFSET,
+    Placement,
+    api_operand,
+    pbrt_two_sided,
+    two_sided_from_spec,
+    uv_pair,
+    uv_scale,
+)
 
 NAME = "checkerboard"
 API_NAME = NAME
@@ -103,16 +111,4 @@ def from_pbrt(context, texture, uv: tuple[float, float, float, float]) -> dict:
     """pbrt-v4's 2D checkerboard (tex1 1, tex2 0 by default); `uv` its (uscale, vscale, udelta, vdelta)."""
     if context.integer(texture, "dimension", 2) != 2:
         raise context.error(texture.location, f"{texture.label()}: a 3D checkerboard (spectrace's is 2D)")
-    sides = []
-    for side, default in (("tex1", 1.0), ("tex2", 0.0)):
-        value = context.spectrum(texture, side, "albedo") or context.texture_reference(texture, side)
-        sides.append(value or {"value": default})
-    # This texture's v is 1 - the file's v (mesh files store v up): s = us u + ud, t = vs v + vd.
-    us, vs, ud, vd = uv
-    return {
-        "texture": "checkerboard",
-        "color0": sides[0],
-        "color1": sides[1],
-        "uv_scale": [us, -vs],
-        "uv_offset": [ud, vs + vd],
-    }
+    return pbrt_two_sided(context, texture, uv, "checkerboard", {"tex1": "color0", "tex2": "color1"})

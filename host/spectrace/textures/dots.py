@@ -8,7 +8,15 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
-from spectrace.textures.shared import UV_OFFSET, Placement, api_operand, two_sided_from_spec, uv_pair, uv_scale
+from spectrace.textures.shared import (
+    UV_OFFSET,
+    Placement,
+    api_operand,
+    pbrt_two_sided,
+    two_sided_from_spec,
+    uv_pair,
+    uv_scale,
+)
 
 NAME = "dots"
 API_NAME = "dots_texture"  # spectrace.dots would read as a shape
@@ -62,17 +70,4 @@ def make(inside=1.0, outside=0.0, *, uv_scale: float | tuple[float, float] = 1.0
 
 def from_pbrt(context, texture, uv: tuple[float, float, float, float]) -> dict:
     """pbrt-v4's `dots` (inside 1, outside 0 by default); `uv` its (uscale, vscale, udelta, vdelta)."""
-    sides = []
-    for side, default in (("inside", 1.0), ("outside", 0.0)):
-        value = context.spectrum(texture, side, "albedo") or context.texture_reference(texture, side)
-        sides.append(value or {"value": default})
-    # pbrt's t runs up the file's v, this texture's v down it (mesh files store v up): s = us u + ud,
-    # t = vs (1 - v) + vd.
-    us, vs, ud, vd = uv
-    return {
-        "texture": "dots",
-        "inside": sides[0],
-        "outside": sides[1],
-        "uv_scale": [us, -vs],
-        "uv_offset": [ud, vs + vd],
-    }
+    return pbrt_two_sided(context, texture, uv, "dots", {"inside": "inside", "outside": "outside"})

@@ -225,3 +225,15 @@ def two_sided_from_spec(model, sides: tuple[str, str], spec, resolver, key: str)
             uv_offset=uv_pair(spec.uv_offset, "uv_offset", f"{where}.uv_offset"),
         ),
     )
+
+
+def pbrt_two_sided(context, texture, uv: tuple[float, float, float, float], name: str, sides: dict) -> dict:
+    """A two-sided texture's table from a pbrt-v4 one: `sides` maps each of pbrt's side names to ours, in order
+    (pbrt's defaults 1 then 0); `uv` pbrt's (uscale, vscale, udelta, vdelta). This texture's v is 1 − the file's v
+    (mesh files store v up), so s = us u + ud, t = vs (1 − v) + vd."""
+    table: dict = {"texture": name}
+    for (side, ours), default in zip(sides.items(), (1.0, 0.0), strict=True):
+        value = context.spectrum(texture, side, "albedo") or context.texture_reference(texture, side)
+        table[ours] = value or {"value": default}
+    us, vs, ud, vd = uv
+    return table | {"uv_scale": [us, -vs], "uv_offset": [ud, vs + vd]}
