@@ -209,6 +209,8 @@ def test_a_non_separable_matrix_is_kept_as_its_table(tmp_path):
     np.testing.assert_allclose(material.excitation.values, expected, atol=1e-7)
     separable = S.fluorescent(S.diffuse(0.0), matrix=_written(tmp_path / "dye.csv", _separable()))
     assert separable.matrix is None
+    from_file = load_scene(_scene_file(tmp_path, 'matrix = "dyes.csv"\nquantum_yield = 0.5')).shapes[0].material
+    assert from_file.matrix == material.matrix and from_file.quantum_yield == 0.5
 
 
 def _written(path, matrix: np.ndarray):
