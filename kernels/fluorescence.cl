@@ -21,7 +21,8 @@
  * The fluorescent row (kernels/types.h, spectrace.materials.fluorescent): eta_offset the base's row, k_offset the
  * white lobe's, reflectance_offset a(λ), transmittance_offset e(λ), coat_table_offset the CDF of a(λ)·λ at the grid's
  * GRID_SAMPLES wavelengths (1 nm cells), coat_internal_reflectance ∫a dλ (nm), alpha Q (0: the base alone; with
- * roughness_texture, a grey texture of Q per point, alpha its largest value).
+ * roughness_texture, a grey texture of Q per point, alpha its largest value), ior_model a non-separable matrix's
+ * block (fluorescence_matrix.cl, which then replaces the dye's spectra) or MATERIAL_NO_SPECTRUM.
  * The path tracer and the light tracer include this file; SCENE_HAS_FLUORESCENCE (scene_features.h) leaves it out
  * of every scene without the material, whose kernels and bits stay as they were. */
 #ifndef SPECTRACE_FLUORESCENCE_CL
@@ -30,6 +31,8 @@
 #include "path_state.cl"
 
 #if SCENE_HAS_FLUORESCENCE
+
+#include "fluorescence_matrix.cl"
 
 /* The wavelengths path s carries: its own after a fluorescent re-emission, those it started with (w) before. */
 inline const SampledWavelengths *path_wavelengths(const PathState *s, const SampledWavelengths *w)
@@ -89,6 +92,12 @@ inline void fluorescent_vertex(const Scene *scene, const SampledWavelengths *w, 
         return;
     }
     float quantum_yield = fluorescent_yield(scene, m, v);
+#if SCENE_HAS_FLUORESCENCE_MATRIX
+    if (m->ior_model != MATERIAL_NO_SPECTRUM) {  /* a non-separable matrix (fluorescence_matrix.cl) */
+        fluorescent_matrix_vertex(scene, m, base, quantum_yield, w, sampler, s, v);
+        return;
+    }
+#endif
     float u_choice = sample_1d(sampler);
     float u_lambda = sample_1d(sampler);
     __global const float *table = scene->spectra;
@@ -129,6 +138,12 @@ inline void fluorescent_light_vertex(const Scene *scene, SampledWavelengths *w, 
         return;
     }
     float quantum_yield = fluorescent_yield(scene, m, v);
+#if SCENE_HAS_FLUORESCENCE_MATRIX
+    if (m->ior_model != MATERIAL_NO_SPECTRUM) {
+        fluorescent_matrix_light_vertex(scene, m, base, quantum_yield, w, sampler, s, v, scatter);
+        return;
+    }
+#endif
     float u_choice = sample_1d(sampler);
     float u_lambda = sample_1d(sampler);
     __global const float *table = scene->spectra;

@@ -132,6 +132,10 @@
 #define SCENE_USES_MATERIAL(type) ((SCENE_MATERIAL_TYPES >> (type)) & 1)
 /* Fluorescent materials: a path's wavelength may change at a vertex (kernels/fluorescence.cl). */
 #define SCENE_HAS_FLUORESCENCE SCENE_USES_MATERIAL(MATERIAL_FLUORESCENT)
+/* A fluorescent material given by a non-separable re-radiation matrix (kernels/fluorescence_matrix.cl). */
+#ifndef SCENE_HAS_FLUORESCENCE_MATRIX
+#define SCENE_HAS_FLUORESCENCE_MATRIX SCENE_HAS_FLUORESCENCE
+#endif
 #define SCENE_USES_LIGHT(type) ((SCENE_LIGHT_TYPES >> (type)) & 1)
 /* LIGHT_ENVIRONMENT_TYPES: the bits of the device light types of environments (spectrace.lights). */
 #define SCENE_HAS_ENVIRONMENT ((SCENE_LIGHT_TYPES & LIGHT_ENVIRONMENT_TYPES) != 0)

@@ -120,7 +120,8 @@ typedef struct {
     float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe). With roughness_texture: the texture's
                                    largest α, which decides the flags (smooth only if smooth everywhere); mix: the
                                    probability of its second material, `amount` */
-    int ior_model;              /* IOR_*: dielectric interior, plastic coating */
+    int ior_model;              /* IOR_*: dielectric interior, plastic coating; fluorescent: a non-separable
+                                   matrix's block, or MATERIAL_NO_SPECTRUM (fluorescence_matrix.cl) */
     float ior;                  /* IOR_CONSTANT: interior index relative to the exterior */
     int reflectance_texture;    /* index into the texture array that replaces reflectance_offset (the reflectance, or
                                    the conductor's and dielectric's specular tint), or NO_TEXTURE */

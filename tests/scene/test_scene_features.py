@@ -80,6 +80,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_NONLINEAR_PLASTIC": 0,
         "SCENE_HAS_ROUGH_COAT": 0,
         "SCENE_HAS_MIX": 0,
+        "SCENE_HAS_FLUORESCENCE_MATRIX": 0,
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_PROCEDURAL_TEXTURES": 0,

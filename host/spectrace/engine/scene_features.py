@@ -55,6 +55,10 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_NONLINEAR_PLASTIC": int(bool(np.any(materials["nonlinear"] != 0))),
         "SCENE_HAS_ROUGH_COAT": int(bool(np.any(materials["coat_table_offset"] >= 0))),
         "SCENE_HAS_MIX": int(bool(np.any(materials["type"] == MATERIAL_CODES["mix"]))),
+        # A fluorescent row's ior_model holds its non-separable matrix's block (kernels/fluorescence_matrix.cl).
+        "SCENE_HAS_FLUORESCENCE_MATRIX": int(
+            bool(np.any((materials["type"] == MATERIAL_CODES["fluorescent"]) & (materials["ior_model"] >= 0)))
+        ),
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or checkerboard_bumps),
         "SCENE_HAS_PROCEDURAL_TEXTURES": int(bool(np.any(textures["type"] == TEXTURES.codes["dots"]))),

@@ -11,8 +11,9 @@ relative to an absorbed one (the Stokes shift's energy loss: photons are conserv
 holds what is reflected without a change of wavelength, the diagonal of the Donaldson matrix: for a dyed surface it
 is the surface's measured (non-fluorescent) reflectance, which already includes the dye's absorption, so that a
 yield of 0 renders the base exactly. Energy is conserved where the base's albedo plus a(λ) stays within 1. A
-measured matrix (`matrix`, spectrace.spectral.donaldson) gives a(λ)·Q and e(λ) when it is separable; its yield is
-in it, so Q then scales it.
+measured matrix (`matrix`, spectrace.spectral.donaldson) gives a(λ)·Q and e(λ) when it is separable; one that is
+not replaces a(λ_in)·Q·e(λ_out) by its own table D(λ_in, λ_out) (`FluorescentMaterial.matrix`,
+kernels/fluorescence_matrix.cl). Its yield is in it, so Q then scales it.
 
 It has no BSDF of its own: kernels/fluorescence.cl replaces it, where a path meets it, either by its base (the
 elastic part) or by the Lambertian re-emission at a wavelength drawn from the excitation spectrum (the path's
@@ -20,7 +21,8 @@ wavelength changes there). Its row (kernels/types.h) holds the base's row index 
 white Lambertian row (the re-emission's lobe) in `k_offset`; `reflectance_offset` the excitation a(λ),
 `transmittance_offset` the normalised emission e(λ) and, a row on, its CDF, `coat_table_offset` the CDF of
 a(λ)·λ over the spectrum table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance`
-∫ a dλ (nm), `alpha` Q (a textured Q: its largest value, the texture in `roughness_texture`).
+∫ a dλ (nm), `alpha` Q (a textured Q: its largest value, the texture in `roughness_texture`), `ior_model` a
+non-separable matrix's block in the spectra table (MATERIAL_NO_SPECTRUM: none).
 spectrace.materials appends the two rows after it. The path tracer and the light tracer transport light through
 it; the other integrators refuse a scene holding one (`integrator_problem`).
 """
@@ -29,9 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from spectrace.core.contract import MATERIAL_NO_SPECTRUM
 from spectrace.core.parameters import Parameter, Range, reflectance
 from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
+from spectrace.spectral.donaldson import TabulatedMatrix, device_block
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 
@@ -84,7 +88,7 @@ PARAMETERS = (
         "string",
         default=None,
         doc="a measured re-radiation (Donaldson) matrix, a CSV file (rows λ_in, columns λ_out, photons re-emitted "
-        "per nm per photon arriving), instead of excitation and emission; it must be separable",
+        "per nm per photon arriving), instead of excitation and emission; separable or not",
         type_doc="file",
     ),
 )
@@ -100,6 +104,9 @@ class FluorescentMaterial(Material):
     emission: Spectrum
     quantum_yield: object = 1.0  # a float in [0, 1], or a one-channel texture of it
     key: str = field(default="", compare=False)  # where the scene file defined it, for the integrators' refusals
+    # A non-separable re-radiation matrix, which the device renders instead of excitation ⊗ emission (these two
+    # then its row and column totals); None for the parametric (separable) dye.
+    matrix: TabulatedMatrix | None = None
 
     @property
     def is_delta(self) -> bool:
@@ -121,7 +128,7 @@ class FluorescentMaterial(Material):
 MODEL = FluorescentMaterial
 
 
-def check(base, excitation, emission, quantum_yield, where, key: str = "") -> FluorescentMaterial:
+def check(base, excitation, emission, quantum_yield, where, key: str = "", matrix=None) -> FluorescentMaterial:
     """The fluorescent material, or a SpectraceError naming the key (`where(name)`): a non-fluorescent base
     (a mix of such materials included), an excitation in [0, 1], an emission that is not zero everywhere."""
     from spectrace.materials import mix
@@ -150,7 +157,7 @@ def check(base, excitation, emission, quantum_yield, where, key: str = "") -> Fl
         check_texture_values(quantum_yield, "float", where("quantum_yield"), upper=1.0)
     else:
         quantum_yield = _YIELD.check(quantum_yield, where("quantum_yield"))
-    return FluorescentMaterial(base, excitation, emission, quantum_yield, key=key)
+    return FluorescentMaterial(base, excitation, emission, quantum_yield, key=key, matrix=matrix)
 
 
 def _holds_fluorescent(material) -> bool:
@@ -163,27 +170,29 @@ def _holds_fluorescent(material) -> bool:
 
 def from_spec(spec, resolver, key: str) -> FluorescentMaterial:
     base = resolver.material_named(spec.base, f"{key}.base")
+    matrix = None
     if spec.matrix is not None:
-        excitation, emission = matrix_spectra(resolver.folder / spec.matrix, resolver.where(f"{key}.matrix"))
+        excitation, emission, matrix = matrix_spectra(resolver.folder / spec.matrix, resolver.where(f"{key}.matrix"))
     else:
         excitation = resolver.spectrum(spec.excitation, f"{key}.excitation", emission=False)
         emission = resolver.spectrum(spec.emission, f"{key}.emission", emission=True)
     quantum_yield = spec.quantum_yield
     if not isinstance(quantum_yield, float):
         quantum_yield = resolver.texture(quantum_yield, f"{key}.quantum_yield")
-    return check(base, excitation, emission, quantum_yield, lambda name: resolver.where(f"{key}.{name}"), key)
+    return check(base, excitation, emission, quantum_yield, lambda name: resolver.where(f"{key}.{name}"), key, matrix)
 
 
-def matrix_spectra(path, where: str | None = None) -> tuple[Spectrum, Spectrum]:
-    """The excitation a(λ)·Q and the emission e(λ) of a separable re-radiation (Donaldson) matrix CSV
-    (spectrace.spectral.donaldson); its errors, which name the file, also name `where`."""
-    from spectrace.spectral.donaldson import separable_matrix
+def matrix_spectra(path, where: str | None = None) -> tuple[Spectrum, Spectrum, TabulatedMatrix | None]:
+    """The excitation a(λ)·Q and the emission e(λ) of a re-radiation (Donaldson) matrix CSV
+    (spectrace.spectral.donaldson), and the matrix itself where it is not separable; its errors, which name the
+    file, also name `where`."""
+    from spectrace.spectral.donaldson import donaldson_matrix
 
     try:
-        separable = separable_matrix(path)
+        measured = donaldson_matrix(path)
     except SpectraceError as exc:
         raise SpectraceError(str(exc), where=where) from None
-    return separable.excitation, separable.emission
+    return measured.excitation, measured.emission, measured.tabulated
 
 
 def make(base, excitation=None, emission=None, quantum_yield=1.0, matrix=None) -> FluorescentMaterial:
@@ -192,14 +201,15 @@ def make(base, excitation=None, emission=None, quantum_yield=1.0, matrix=None) -
     `emission` (its shape only). Spectra as every material takes them (a Spectrum, a constant, a name); the yield a
     number in [0, 1] or a grey texture of it. Or, instead of the two spectra, `matrix`: the path of a measured
     re-radiation (Donaldson) matrix CSV (rows λ_in, columns λ_out, photons re-emitted per nm of λ_out per photon
-    arriving at λ_in; spectrace.spectral.donaldson), which holds the yield already: `quantum_yield` scales it."""
+    arriving at λ_in; spectrace.spectral.donaldson, separable or not), which holds the yield already:
+    `quantum_yield` scales it."""
     from spectrace.spectral.spectrum_input import role_spectrum
 
     if matrix is not None:
         if excitation is not None or emission is not None:
             raise SpectraceError("give either matrix or excitation and emission, not both", where="matrix")
-        excitation, emission = matrix_spectra(matrix, "matrix")
-        return check(base, excitation, emission, quantum_yield, lambda name: name)
+        excitation, emission, tabulated = matrix_spectra(matrix, "matrix")
+        return check(base, excitation, emission, quantum_yield, lambda name: name, matrix=tabulated)
     if excitation is None or emission is None:
         raise SpectraceError(
             "a fluorescent material needs excitation and emission, or a matrix",
@@ -240,6 +250,12 @@ def write_row(row: np.ndarray, material: FluorescentMaterial, table: SpectrumTab
     row["coat_table_offset"] = table.add_block(cell_cdf(excitation * grid, grid))
     row["coat_internal_reflectance"] = absorbed_total
     absorbs = absorbed_total > 0.0 and emission_total > 0.0
+    row["ior_model"] = MATERIAL_NO_SPECTRUM
+    if material.matrix is not None:
+        block = device_block(material.matrix, grid)
+        absorbs = block is not None
+        if block is not None:
+            row["ior_model"] = table.add_block(block)
     # A textured yield stands here as its largest value (material_row): 0 only where the texture is 0 everywhere.
     row["alpha"] = float(material.quantum_yield) if absorbs else 0.0  # type: ignore[arg-type]
 

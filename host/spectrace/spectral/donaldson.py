@@ -16,10 +16,15 @@ M[λ_in, λ_out] is photons re-emitted per nm of λ_out per photon arriving at �
 columns emission. Some publications print the transpose (emission down the rows); transpose such a table first.
 The spectra made from it are resampled onto the grid as a spectrum CSV is, its end values held beyond its range.
 
-The material's device form holds one emission spectrum e(λ_out) for every λ_in, the separable (rank-one) matrix
-a(λ_in)·Q·e(λ_out): the matrix's excitation spectrum a·Q is each row's photon total, ∫ M dλ_out, and e the
-leading right singular vector. A matrix further than SEPARABILITY_TOLERANCE from its rank-one approximation (the
-Frobenius norm of the remainder relative to the matrix's) is refused rather than rendered wrong.
+The material takes a matrix in one of two forms. A separable (rank-one) matrix a(λ_in)·Q·e(λ_out) becomes the
+parametric dye: its excitation spectrum a·Q is each row's photon total, ∫ M dλ_out, and e the leading right singular
+vector, and it renders exactly as that dye. A matrix further than SEPARABILITY_TOLERANCE from its rank-one
+approximation (the Frobenius norm of the remainder relative to the matrix's), whose emission changes with the
+excitation wavelength, is kept as the table it is (`TabulatedMatrix`): the device holds it on the film's 1 nm grid,
+bilinear between the file's samples and 0 outside them, with the marginals and CDFs its sampling needs
+(kernels/fluorescence_matrix.cl). Its material's excitation and emission spectra are then its row totals and
+its column totals (the emission under an excitation of one photon per nm at every λ_in), which describe it but do
+not render it.
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.errors import SpectraceError
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_io import (
@@ -42,13 +48,39 @@ from spectrace.spectral.spectrum_io import (
 SEPARABILITY_TOLERANCE = 0.02
 
 
+@dataclass(frozen=True, eq=False)
+class TabulatedMatrix:
+    """A non-separable Donaldson matrix as the file gives it: M[λ_in, λ_out] (1/nm)."""
+
+    wavelengths_in: np.ndarray  # nm, ascending
+    wavelengths_out: np.ndarray  # nm, ascending
+    values: np.ndarray  # (len(wavelengths_in), len(wavelengths_out))
+    source: str  # the file
+
+    __eq__ = fields_equal
+    __hash__ = identity_hash
+
+    def on_grid(self, grid_nm: np.ndarray) -> tuple[int, int, np.ndarray]:
+        """(i0, j0, D): the matrix bilinear at the points of `grid_nm` within its wavelengths, D's rows starting at
+        grid point i0, its columns at j0; D is empty where fewer than 2 points of the grid fall within it."""
+        grid_nm = np.asarray(grid_nm, np.float64)
+        rows = (grid_nm >= self.wavelengths_in[0]) & (grid_nm <= self.wavelengths_in[-1])
+        columns = (grid_nm >= self.wavelengths_out[0]) & (grid_nm <= self.wavelengths_out[-1])
+        if rows.sum() < 2 or columns.sum() < 2:
+            return 0, 0, np.zeros((0, 0))
+        along_in = np.stack([np.interp(grid_nm[rows], self.wavelengths_in, column) for column in self.values.T], axis=1)
+        table = np.stack([np.interp(grid_nm[columns], self.wavelengths_out, row) for row in along_in])
+        return int(np.argmax(rows)), int(np.argmax(columns)), table
+
+
 @dataclass(frozen=True)
-class SeparableMatrix:
+class DonaldsonMatrix:
     """A Donaldson matrix as the fluorescent material takes it."""
 
     excitation: Spectrum  # a(λ_in)·Q: photons re-emitted (at any λ_out) per photon arriving at λ_in
-    emission: Spectrum  # e(λ_out), the re-emitted photons' spectrum (shape only)
+    emission: Spectrum  # e(λ_out), the re-emitted photons' spectrum (shape only; a tabulated matrix's column totals)
     separability_error: float  # ‖M − rank-one M‖ / ‖M‖
+    tabulated: TabulatedMatrix | None  # the matrix itself where it is not separable; None where it is
 
 
 def read_matrix(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -85,10 +117,9 @@ def read_matrix(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.array(wavelengths_in), np.array(wavelengths_out), np.array(rows)
 
 
-def separable_matrix(path: str | Path, name: str | None = None) -> SeparableMatrix:
-    """The excitation a·Q and emission e of the Donaldson matrix CSV at `path` (see the module's text), or a
-    SpectraceError naming the file: a row re-emitting more photons than arrive, a matrix of zeros, or one that is
-    not separable."""
+def donaldson_matrix(path: str | Path, name: str | None = None) -> DonaldsonMatrix:
+    """The Donaldson matrix CSV at `path` in the material's form (see the module's text), or a SpectraceError naming
+    the file: a row re-emitting more photons than arrive, or a matrix of zeros."""
     path = Path(path)
     label = name or path.stem
     wavelengths_in, wavelengths_out, matrix = read_matrix(path)
@@ -104,16 +135,14 @@ def separable_matrix(path: str | Path, name: str | None = None) -> SeparableMatr
         raise SpectraceError("the matrix is zero everywhere: nothing is re-emitted", where=str(path))
     _, singular, right = np.linalg.svd(matrix, full_matrices=False)
     error = float(np.sqrt(np.sum(singular[1:] ** 2) / np.sum(singular**2)))
+    tabulated = None
     if error > SEPARABILITY_TOLERANCE:
-        raise SpectraceError(
-            f"the matrix is not separable (its rank-one remainder is {100 * error:.3g} % of it, more than "
-            f"{100 * SEPARABILITY_TOLERANCE:g} %): its emission spectrum changes with the excitation wavelength, "
-            "which the fluorescent material cannot hold",
-            where=str(path),
-        )
-    emission = right[0] * np.sign(right[0][np.argmax(np.abs(right[0]))])
+        tabulated = TabulatedMatrix(wavelengths_in, wavelengths_out, matrix, str(path))
+        emission = np.trapezoid(matrix, wavelengths_in, axis=0)
+    else:
+        emission = right[0] * np.sign(right[0][np.argmax(np.abs(right[0]))])
     where = str(path)
-    return SeparableMatrix(
+    return DonaldsonMatrix(
         excitation=_spectrum_from_samples(
             list(wavelengths_in), list(photons), name=f"{label} excitation", source=f"{path} rows", where=where
         ),
@@ -125,4 +154,30 @@ def separable_matrix(path: str | Path, name: str | None = None) -> SeparableMatr
             where=where,
         ),
         separability_error=error,
+        tabulated=tabulated,
     )
+
+
+def device_block(matrix: TabulatedMatrix, grid_nm: np.ndarray) -> np.ndarray | None:
+    """The block kernels/fluorescence_matrix.cl reads (its layout is stated there) for `matrix` on the spectra
+    table's 1 nm grid `grid_nm`, or None where the matrix holds fewer than 2 of the grid's points each way (nothing
+    is re-emitted within the film's wavelengths)."""
+    i0, j0, table = matrix.on_grid(grid_nm)
+    if table.size == 0 or not np.any(table > 0.0):
+        return None
+    row_cells = 0.5 * (table[:, 1:] + table[:, :-1])  # the 1 nm cells' masses, trapezoid rule
+    column_cells = 0.5 * (table[1:, :] + table[:-1, :]).T
+    row_totals, column_totals = row_cells.sum(axis=1), column_cells.sum(axis=1)
+    header = np.array([i0, table.shape[0], j0, table.shape[1]], np.float64)
+    return np.concatenate(
+        [header, table.ravel(), row_totals, column_totals, _cdfs(row_cells).ravel(), _cdfs(column_cells).ravel()]
+    )
+
+
+def _cdfs(cells: np.ndarray) -> np.ndarray:
+    """Each line's CDF over its cells (one value more than cells, 0 to 1); a line of zeros stays zeros."""
+    cdf = np.concatenate([np.zeros((cells.shape[0], 1)), np.cumsum(cells, axis=1)], axis=1)
+    totals = cdf[:, -1:]
+    normalised = np.divide(cdf, totals, out=np.zeros_like(cdf), where=totals > 0.0)
+    normalised[totals[:, 0] > 0.0, -1] = 1.0
+    return normalised
