@@ -73,3 +73,28 @@ def test_a_scene_that_cannot_be_written_leaves_the_earlier_save(tmp_path):
         assert where in str(caught.value) and "\n" not in str(caught.value)
     after = {p.relative_to(tmp_path): p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
     assert after == before | {tmp_path.joinpath("file").relative_to(tmp_path): b"not a folder"}
+
+
+def test_a_fluorescent_dye_saved_names_its_base_and_renders_the_same_bits(tmp_path):
+    """A material that holds another (a fluorescent dye's base) is written as the scene file names it: by the
+    base's table name, the dye's spectra and yield beside it."""
+    from tests.fluorescence.test_donaldson_matrix import _separable, _write_matrix
+
+    _write_matrix(tmp_path / "dye.csv", _separable())
+    scene = build()
+    base = spectrace.diffuse(0.4)
+    dyes = {
+        "floor": spectrace.fluorescent(
+            base, excitation={400: 0.8, 480: 0.7, 520: 0.0}, emission={510: 0, 560: 1, 600: 0}
+        ),
+        "panel": spectrace.fluorescent(base, matrix=tmp_path / "dye.csv", quantum_yield=0.5),
+    }
+    shapes = [replace(s, material=dyes[s.name]) if s.name in dyes else s for s in scene.shapes]
+    dyed = replace(scene, shapes=shapes)
+    path = spectrace.save_scene(dyed, tmp_path / "saved" / "dyed.toml")
+    loaded = spectrace.load_scene(path)
+    bases = {s.name: s.material.base for s in loaded.shapes if s.name in dyes}
+    assert bases["floor"] is bases["panel"]  # one base, written once and named by both
+    expected = spectrace.render(dyed, progress=False)
+    assert expected.xyz.any()
+    np.testing.assert_array_equal(spectrace.render(loaded, progress=False).xyz, expected.xyz)

@@ -146,6 +146,9 @@ class _Writer:
             elif argument == "materials":
                 out[name] = [self.material(m, f"{where}.materials.{i}") for i, m in enumerate(value)]
                 continue
+            elif kind == "material":  # another material, as the scene file names it (a fluorescent dye's base)
+                out[name] = self.material(value, f"{where}.{name}")
+                continue
             out[name] = self.value(value, kind, f"{where}.{name}")
         return out
 
