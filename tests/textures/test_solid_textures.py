@@ -216,22 +216,19 @@ def test_pbrt_solid_textures_import(tmp_path):
     load_scene(toml)  # the table resolves
 
 
-@pytest.mark.slow  # builds the scene's own kernels
-def test_a_wrinkled_mix_renders_where_the_reference_puts_it(device):
-    """A diffuse quad (z = 0, x and y in [−1, 1]) of reflectance 0.2 + 0.6 · clamp(wrinkled(p)) seen head-on under a
-    uniform environment of radiance 1 (one bounce: Y = ρ at the point): every pixel within the texture's range, and
-    the image minus the reference averaged over each pixel (8 × 8 points) has mean 0 within 4 standard errors."""
+SIDE = 32
+
+
+def _render_quad(texture, device) -> np.ndarray:
+    """Y of a diffuse quad (z = 0, x and y in [−1, 1]) of reflectance `texture` seen head-on under a uniform
+    environment of radiance 1 (one bounce: Y is the reflectance's Y at the point), 16 independent samples a pixel."""
     from spectrace.engine.renderer import Renderer
     from spectrace.scene.model import Camera, Scene
-    from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
-    side = 32
-    wrinkled = spectrace.wrinkled_texture(octaves=4, transform=[{"scale": 0.25}])
-    texture = spectrace.mix_texture(0.2, 0.8, wrinkled)
     scene = Scene(
         camera=Camera(origin=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0),
-        width=side,
-        height=side,
+        width=SIDE,
+        height=SIDE,
         shapes=[spectrace.shape("rectangle", spectrace.diffuse(texture))],
         lights=[spectrace.constant_environment(1.0)],
         max_depth=2,
@@ -239,14 +236,54 @@ def test_a_wrinkled_mix_renders_where_the_reference_puts_it(device):
         seed=3,
         sampler="independent",
     )
-    y = Renderer(scene, device).render().xyz[..., 1]
-    half = 3.0 * np.tan(np.radians(15.0))
-    sub = (np.arange(side * 8) + 0.5) / (side * 8)
-    x, y_world = np.meshgrid((2 * sub - 1) * half, (1 - 2 * sub) * half)
-    p = np.stack([x.ravel(), y_world.ravel(), np.zeros(x.size)], axis=1) / 0.25
-    reflectance = 0.2 + 0.6 * np.clip(turbulence(p, 0.5, 4), 0.0, 1.0)
-    expected = reflectance.reshape(side, 8, side, 8).mean(axis=(1, 3))
-    assert np.ptp(expected) > 0.3  # the texture varies across the view
+    return Renderer(scene, device).render().xyz[..., 1]
+
+
+def _pixel_reference(value) -> np.ndarray:
+    """`value` at the quad's points (N, 3) averaged over 8 × 8 points of each pixel."""
+    half = 3.0 * np.tan(np.radians(15.0))  # the view's half width at z = 0
+    sub = (np.arange(SIDE * 8) + 0.5) / (SIDE * 8)
+    x, y = np.meshgrid((2 * sub - 1) * half, (1 - 2 * sub) * half)
+    p = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
+    return value(p).reshape(SIDE, 8, SIDE, 8).mean(axis=(1, 3))
+
+
+def _assert_image_is(y: np.ndarray, expected: np.ndarray, correlation: float = 0.9) -> None:
+    """The image minus the reference has mean 0 within 4 standard errors and follows the reference's pattern (a
+    texture misplaced or mirrored would correlate about 0)."""
+    from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
+
+    assert np.ptp(expected) > 0.1  # the texture varies across the view
     mean, error = mean_and_standard_error((y - expected).ravel())
     assert_within_standard_errors(mean, 0.0, error, slack=2e-3, what="image")
-    assert np.corrcoef(y.ravel(), expected.ravel())[0, 1] > 0.9
+    assert np.corrcoef(y.ravel(), expected.ravel())[0, 1] > correlation
+
+
+@pytest.mark.slow  # builds the scene's own kernels
+def test_a_wrinkled_mix_renders_where_the_reference_puts_it(device):
+    """A quad of reflectance 0.2 + 0.6 · clamp(wrinkled(p / 0.25)) (a texture scaled up 4 times)."""
+    wrinkled = spectrace.wrinkled_texture(octaves=4, transform=[{"scale": 0.25}])
+    y = _render_quad(spectrace.mix_texture(0.2, 0.8, wrinkled), device)
+    _assert_image_is(y, _pixel_reference(lambda p: 0.2 + 0.6 * np.clip(turbulence(p / 0.25, 0.5, 4), 0.0, 1.0)))
+
+
+@pytest.mark.slow  # builds the scene's own kernels
+def test_marble_renders_the_luminance_of_its_spline(device):
+    """A quad of marble (scale 1.5, variation 0.5): Y at a point is the spline of the nine colours' Y (Y is linear in
+    the spectrum), each colour's Y its uplifted spectrum weighed by CIE 1931 ȳ from colour-science."""
+    colour = pytest.importorskip("colour")
+    from spectrace.spectral.spectrum_input import reflectance
+
+    ybar = (
+        colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+        .copy()
+        .align(colour.SpectralShape(360, 830, 1))
+        .values[:, 1]
+    )
+    luminance = np.array([reflectance(tuple(1.5 * c), "colour").values @ ybar / ybar.sum() for c in MARBLE_RGB])
+    assert len(ybar) == 471  # the spectra's 360-830 nm grid
+    y = _render_quad(spectrace.marble_texture(scale=1.5, variation=0.5), device)
+    expected = _pixel_reference(lambda p: marble(p, 0.5, 8, 1.5, 0.5, luminance[:, None])[0][:, 0])
+    # 16 samples leave a pixel's Y a noise of about 0.05 (the wavelengths drawn) against the pattern's 0.085: a
+    # correlation of about 0.85 is expected.
+    _assert_image_is(y, expected, correlation=0.7)
