@@ -421,7 +421,8 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         if (material_disperses(material, w)) hero = 1;
         v->hero = hero;
         if (count >= max_vertices) break;
-        SurfaceContext sc = shading_context(scene, pv.uv, pv.footprint, pv.ns_base, pv.dpdu, pv.tangent_w, adjoint);
+        SurfaceContext sc = shading_context(scene, pv.uv, pv.p, pv.footprint,
+                                            pv.ns_base, pv.dpdu, pv.tangent_w, adjoint);
         float uc = sample_1d(sampler);
         float2 u = sample_2d(sampler);
         BSDFSample bs;
@@ -475,6 +476,7 @@ inline float bdpt_vertex_pdf(const Scene *scene, const SampledWavelengths *w, co
     if (v->kind == BDPT_MEDIUM) return bdpt_to_area(bdpt_phase(scene, v, -wo, wi), v, next);
     __global const Material *material = &scene->materials[v->material];
     SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+    sc.p = v->p;
     sc.dpdu = v->dpdu;
     sc.tangent_w = v->tangent_w;
     return bdpt_to_area(material_pdf(material, &sc, w, v->ns, wo, wi), v, next);
@@ -676,7 +678,7 @@ inline void bdpt_splat(const Scene *scene, const SampledWavelengths *w, Sampler 
     if (!material_has_non_delta_lobe(material)) return;
     CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, sampler));
     if (c.pixel < 0 || !shading_side_agrees(qs->n, qs->ns, c.to_camera)) return;
-    SurfaceContext sc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, qs->dpdu, qs->tangent_w, 0);
+    SurfaceContext sc = shading_context(scene, qs->uv, qs->p, qs->footprint, qs->ns_base, qs->dpdu, qs->tangent_w, 0);
     float4 f_cos = material_eval(material, &sc, w, qs->ns, c.to_camera, qs->wo);
     float cos_light = fabs(dot(qs->wo, qs->n));
     float cos_camera = fabs(dot(c.to_camera, qs->n));
@@ -737,7 +739,8 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
     if (pt_medium) {
         f_p = (float4)(bdpt_phase(scene, pt, -to_q, pt->wo));
     } else {
-        SurfaceContext psc = shading_context(scene, pt->uv, pt->footprint, pt->ns_base, pt->dpdu, pt->tangent_w, 0);
+        SurfaceContext psc = shading_context(scene, pt->uv, pt->p, pt->footprint,
+                                             pt->ns_base, pt->dpdu, pt->tangent_w, 0);
         f_p = material_eval(pm, &psc, w, pt->ns, pt->wo, to_q);
     }
     if (all(f_p == (float4)(0.0f))) return (float4)(0.0f);
@@ -748,7 +751,8 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
         f_q = (float4)(bdpt_phase(scene, qs, -qs->wo, -to_q));
     } else {
         __global const Material *qm = &scene->materials[qs->material];
-        SurfaceContext qsc = shading_context(scene, qs->uv, qs->footprint, qs->ns_base, qs->dpdu, qs->tangent_w, 0);
+        SurfaceContext qsc = shading_context(scene, qs->uv, qs->p, qs->footprint,
+                                             qs->ns_base, qs->dpdu, qs->tangent_w, 0);
         f_q = material_eval(qm, &qsc, w, qs->ns, -to_q, qs->wo) / cos_in;
     }
     float4 value = qs->beta * f_q * pt->beta * f_p * g;

@@ -72,7 +72,7 @@ inline float fluorescent_yield(const Scene *scene, __global const Material *m, c
     float quantum_yield = m->alpha;
     if (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE) {
         SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
-        quantum_yield = texture_numbers(&sc.buffers, m->roughness_texture, v->uv, v->footprint).x;
+        quantum_yield = texture_numbers_at(&sc.buffers, m->roughness_texture, v->uv, v->p, v->footprint).x;
     }
     return quantum_yield;
 }

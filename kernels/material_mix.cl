@@ -41,7 +41,7 @@ inline int mix_resolve(const Scene *scene, int material, float3 p, float3 wo, fl
         float amount = m->alpha;
         if (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE) {
             SurfaceContext sc = surface_context(scene, uv, footprint);
-            amount = texture_numbers(&sc.buffers, m->roughness_texture, uv, footprint).x;
+            amount = texture_numbers_at(&sc.buffers, m->roughness_texture, uv, p, footprint).x;
         }
         material = mix_hash(p, wo, material) < amount ? m->k_offset : m->eta_offset;
     }

@@ -364,7 +364,7 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
 {
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
-        SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
+        SurfaceContext sc = shading_context(scene, v->uv, v->p, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
         PATH_GATHER(s, radiance, estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
                                                        v->info.interior, s->medium, use_mis,
                                                        path_query(sampler, s, QUERY_SHADOW), rays_traced));
@@ -382,7 +382,7 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     light_vertex(scene, w, sampler, s, v, material, use_mis, radiance, rays_traced);
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
-    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
+    SurfaceContext sc = shading_context(scene, v->uv, v->p, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
     return material_sample(material, &sc, w, v->ns, v->wo, uc, u, bs)
         && shading_side_agrees(v->n, v->ns, bs->wi);
 }
@@ -392,7 +392,7 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
 inline void polarized_scatter_vertex(const Scene *scene, const SampledWavelengths *w, PathState *s,
                                      const PathVertex *v, const BSDFSample *bs)
 {
-    SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
+    SurfaceContext sc = shading_context(scene, v->uv, v->p, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
     polarized_scatter(&s->pol, &s->throughput, &scene->materials[v->info.material], &sc, w, v->ns, v->wo, bs);
 }
 

@@ -74,6 +74,7 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
     sc.buffers.texels = (__global const float *)scene->texels;
     sc.buffers.spectra = scene->spectra;
     sc.uv = uv;
+    sc.p = (float3)(0.0f);
     sc.footprint = footprint;
     sc.base_normal = (float3)(0.0f);
     sc.dpdu = (float3)(0.0f);
@@ -82,13 +83,14 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
     return sc;
 }
 
-/* surface_context at a surface point whose shading normal before its surface detail was base_normal and whose
+/* surface_context at the world-space surface point p whose shading normal before its surface detail was base_normal and whose
  * dp/du is dpdu (0 where its material does not ask for it) of handedness tangent_w, for the transport `adjoint` (SurfaceContext): what
  * material_eval and material_sample take, for the shadowing term and an anisotropic frame. */
-inline SurfaceContext shading_context(const Scene *scene, float2 uv, float footprint, float3 base_normal,
+inline SurfaceContext shading_context(const Scene *scene, float2 uv, float3 p, float footprint, float3 base_normal,
                                       float3 dpdu, float tangent_w, int adjoint)
 {
     SurfaceContext sc = surface_context(scene, uv, footprint);
+    sc.p = p;
     sc.base_normal = base_normal;
     sc.dpdu = dpdu;
     sc.tangent_w = tangent_w;

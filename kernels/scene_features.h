@@ -58,6 +58,11 @@
 #define SCENE_HAS_PROCEDURAL_TEXTURES 1
 #endif
 
+/* Solid textures, looked up at the surface point (fbm, wrinkled, windy, marble: kernels/texture_solid.cl). */
+#ifndef SCENE_HAS_SOLID_TEXTURES
+#define SCENE_HAS_SOLID_TEXTURES 1
+#endif
+
 /* Lookups that read the texture footprint (trilinear filtering, a checkerboard bump map's differences): only then
  * does a hit pay for camera_footprint (kernels/scene.cl); elsewhere the footprint stays 0, which no other lookup
  * reads. */

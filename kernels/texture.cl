@@ -247,48 +247,83 @@ inline int checkerboard_side(float2 st)
     return (k - 2.0f * floor(0.5f * k)) != 0.0f;
 }
 
-/* Side `side` of a composite texture: its image texture, or its spectrum. */
-inline float4 texture_side(const TextureBuffers *b, __global const Texture *t, int side, float2 uv, float footprint,
-                           const SampledWavelengths *w)
+#if SCENE_HAS_SOLID_TEXTURES
+#include "texture_solid.cl"
+#endif
+
+/* A texture that is no composite (an image texture, or a solid texture looked up at the world-space point p). */
+inline float4 inner_texture_spectrum(const TextureBuffers *b, __global const Texture *t, float2 uv, float3 p,
+                                     float footprint, const SampledWavelengths *w)
+{
+#if SCENE_HAS_SOLID_TEXTURES
+    if (texture_is_solid(t)) return solid_texture_spectrum(b, t, p, w);
+#endif
+    return image_texture_spectrum(t, b, uv, footprint, w);
+}
+
+/* Side `side` of a composite texture: its inner texture, or its spectrum. */
+inline float4 texture_side(const TextureBuffers *b, __global const Texture *t, int side, float2 uv, float3 p,
+                           float footprint, const SampledWavelengths *w)
 {
     int inner = t->side_texture[side];
     if (inner == NO_TEXTURE) return spectrum_at(b->spectra, t->side_spectrum[side], w);
-    return image_texture_spectrum(&b->textures[inner], b, uv, footprint, w);
+    return inner_texture_spectrum(b, &b->textures[inner], uv, p, footprint, w);
 }
 
-/* Texture `index` at uv, at the path's four wavelengths. Composites (checkerboard, scale, mix, dots) read their operands,
- * which are never composites, so nothing recurses. */
-inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, float footprint,
-                               const SampledWavelengths *w)
+/* Texture `index` at uv and the world-space point p (which only solid textures read), at the path's four
+ * wavelengths. Composites (checkerboard, scale, mix, dots) read their operands, which are never composites, so
+ * nothing recurses. */
+inline float4 texture_spectrum_at(const TextureBuffers *b, int index, float2 uv, float3 p, float footprint,
+                                  const SampledWavelengths *w)
 {
     __global const Texture *t = &b->textures[index];
     if (t->type == TEXTURE_CHECKERBOARD) {
-        return texture_side(b, t, checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, footprint, w);
+        return texture_side(b, t, checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, p, footprint,
+                            w);
     }
 #if SCENE_HAS_PROCEDURAL_TEXTURES
     if (t->type == TEXTURE_DOTS) {
-        return texture_side(b, t, dots_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, footprint, w);
+        return texture_side(b, t, dots_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, p, footprint, w);
     }
 #endif
     if (t->type == TEXTURE_SCALE || t->type == TEXTURE_MIX) {
         /* The factor is a number, the same at every wavelength: a scalar texture's first lane. */
         float factor = t->factor_texture == NO_TEXTURE
                      ? t->factor
-                     : image_texture_spectrum(&b->textures[t->factor_texture], b, uv, footprint, w).x;
-        float4 first = texture_side(b, t, 0, uv, footprint, w);
+                     : inner_texture_spectrum(b, &b->textures[t->factor_texture], uv, p, footprint, w).x;
+#if SCENE_HAS_SOLID_TEXTURES
+        /* A solid texture's amount (fbm's about [−2, 2]) is held to [0, 1], so that a mix stays a blend. */
+        if (t->type == TEXTURE_MIX && t->factor_texture != NO_TEXTURE
+            && texture_is_solid(&b->textures[t->factor_texture])) {
+            factor = clamp(factor, 0.0f, 1.0f);
+        }
+#endif
+        float4 first = texture_side(b, t, 0, uv, p, footprint, w);
         if (t->type == TEXTURE_SCALE) return factor * first;
-        return mix(first, texture_side(b, t, 1, uv, footprint, w), factor);
+        return mix(first, texture_side(b, t, 1, uv, p, footprint, w), factor);
     }
-    return image_texture_spectrum(t, b, uv, footprint, w);
+    return inner_texture_spectrum(b, t, uv, p, footprint, w);
+}
+
+/* Texture `index` where no surface point is at hand (lights' images, which are never solid textures). */
+inline float4 texture_spectrum(const TextureBuffers *b, int index, float2 uv, float footprint,
+                               const SampledWavelengths *w)
+{
+    return texture_spectrum_at(b, index, uv, (float3)(0.0f), footprint, w);
 }
 
 /* A texture read as numbers rather than a spectrum: scalars (heights, opacity) and vectors (normal maps) are the
  * same at every wavelength; a checkerboard side that is a spectrum is read at one fixed wavelength (a constant
  * `{ value = ... }` is what such a side should be). */
-inline float4 texture_numbers(const TextureBuffers *b, int index, float2 uv, float footprint)
+inline float4 texture_numbers_at(const TextureBuffers *b, int index, float2 uv, float3 p, float footprint)
 {
     SampledWavelengths w = fixed_wavelengths((float4)(560.0f));
-    return texture_spectrum(b, index, uv, footprint, &w);
+    return texture_spectrum_at(b, index, uv, p, footprint, &w);
+}
+
+inline float4 texture_numbers(const TextureBuffers *b, int index, float2 uv, float footprint)
+{
+    return texture_numbers_at(b, index, uv, (float3)(0.0f), footprint);
 }
 
 /* What a material's parameters are looked up with at a surface point: the buffers, the point's texture
@@ -298,6 +333,7 @@ inline float4 texture_numbers(const TextureBuffers *b, int index, float2 uv, flo
 typedef struct {
     TextureBuffers buffers;
     float2 uv;
+    float3 p;  /* the world-space surface point, where solid textures are looked up (0 where none is at hand) */
     float footprint;
     float3 base_normal;  /* unit: the shading normal before a normal or bump map turned it; 0: no shadowing term */
     float3 dpdu;         /* the surface's dp/du at the point, for a material with Material.tangent_frame; 0: none */
@@ -313,7 +349,7 @@ inline float4 surface_spectrum(const SurfaceContext *sc, int texture, int spectr
                                const SampledWavelengths *w)
 {
     if (SCENE_HAS_TEXTURES && texture != NO_TEXTURE) {
-        return texture_spectrum(&sc->buffers, texture, sc->uv, sc->footprint, w);
+        return texture_spectrum_at(&sc->buffers, texture, sc->uv, sc->p, sc->footprint, w);
     }
     return spectrum_at(sc->buffers.spectra, spectrum_offset, w);
 }
@@ -322,7 +358,7 @@ inline float4 surface_spectrum(const SurfaceContext *sc, int texture, int spectr
 inline float surface_scalar(const SurfaceContext *sc, int texture, float value, const SampledWavelengths *w)
 {
     if (SCENE_HAS_TEXTURES && texture != NO_TEXTURE) {
-        return texture_spectrum(&sc->buffers, texture, sc->uv, sc->footprint, w).x;
+        return texture_spectrum_at(&sc->buffers, texture, sc->uv, sc->p, sc->footprint, w).x;
     }
     return value;
 }

@@ -19,6 +19,7 @@ inline SurfaceContext harness_context(__global const float *spectra)
     sc.buffers.texels = 0;
     sc.buffers.spectra = spectra;
     sc.uv = (float2)(0.0f);
+    sc.p = (float3)(0.0f);
     sc.footprint = 0.0f;
     sc.base_normal = (float3)(0.0f);
     sc.dpdu = (float3)(0.0f);

@@ -22,6 +22,20 @@ KERNEL void texture_lookup(__global const Texture *textures, __global const floa
     value[i] = texture_spectrum(&b, index, point[i].xy, point[i].z, &w);
 }
 
+/* Texture `index` at the world-space point point.xyz (uv 0, footprint 0): the solid textures' lookup. */
+KERNEL void texture_lookup_point(__global const Texture *textures, __global const float4 *texels,
+                                 __global const float *spectra, int index, __global const float *lambda,
+                                 __global const float4 *point, __global float4 *value)
+{
+    int i = get_global_id(0);
+    TextureBuffers b;
+    b.textures = textures;
+    b.texels = (__global const float *)texels;
+    b.spectra = spectra;
+    SampledWavelengths w = harness_wavelengths(lambda);
+    value[i] = texture_spectrum_at(&b, index, (float2)(0.0f), point[i].xyz, 0.0f, &w);
+}
+
 /* S(c0 λ² + c1 λ + c2) of coefficients.xyz at the four wavelengths. */
 KERNEL void sigmoid_spectrum(__global const float4 *coefficients, __global const float *lambda,
                                __global float4 *value)

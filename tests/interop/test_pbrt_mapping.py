@@ -175,10 +175,18 @@ _TEXTURES = _declared(TEXTURES.values(), "PBRT_TEXTURES")
 
 @pytest.mark.parametrize("kind, module", _TEXTURES, ids=[k for k, _ in _TEXTURES])
 def test_each_declared_pbrt_texture_imports_as_its_module(tmp_path, kind, module):
-    """A diffuse reflectance of the texture, with pbrt-v4's defaults (an imagemap needs its image)."""
+    """A diffuse reflectance of the texture, with pbrt-v4's defaults (an imagemap needs its image); pbrt-v4's float
+    noise textures (fbm, wrinkled, windy: no spectrum texture of theirs) as a mix material's amount."""
     write_exr(tmp_path / "image.exr", np.full((4, 4, 3), 0.5, np.float32), None, {})
     image = ' "string filename" "image.exr"' if kind == "imagemap" else ""
     path = tmp_path / "scene.pbrt"
+    if kind in ("fbm", "wrinkled", "windy"):
+        materials = 'MakeNamedMaterial "a" "string type" "diffuse"\nMakeNamedMaterial "b" "string type" "conductor"\n'
+        materials += 'Material "mix" "string materials" ["a" "b"] "texture amount" "t"\n'
+        path.write_text(HEADER + f'Texture "t" "float" "{kind}"\n' + materials + QUAD)
+        (shape,) = load_pbrt_scene(path).shapes
+        assert isinstance(shape.material.amount, module.MODEL)
+        return
     path.write_text(
         HEADER + f'Texture "t" "spectrum" "{kind}"{image}\nMaterial "diffuse" "texture reflectance" "t"\n' + QUAD
     )

@@ -84,6 +84,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_TEXTURES": 0,
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_PROCEDURAL_TEXTURES": 0,
+        "SCENE_HAS_SOLID_TEXTURES": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_INSTANCES": 0,
@@ -111,6 +112,9 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     assert scene_feature_defines(build_scene_buffers(textured))["SCENE_HAS_PROCEDURAL_TEXTURES"] == 0
     dotted = replace(textured, shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.dots_texture()))])
     assert scene_feature_defines(build_scene_buffers(dotted))["SCENE_HAS_PROCEDURAL_TEXTURES"] == 1
+    assert scene_feature_defines(build_scene_buffers(dotted))["SCENE_HAS_SOLID_TEXTURES"] == 0
+    solid = replace(textured, shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.marble_texture()))])
+    assert scene_feature_defines(build_scene_buffers(solid))["SCENE_HAS_SOLID_TEXTURES"] == 1
     detailed = scene_feature_defines(build_scene_buffers(_surface_detail_scene()))
     assert detailed["SCENE_HAS_SURFACE_NORMALS"] == 1 and detailed["SCENE_HAS_OPACITY"] == 1
     for material, normals, opacity in (

@@ -45,6 +45,23 @@ class TextureHarness:
         self.runner.run("texture_lookup", len(uv), args, {6: out})
         return out.astype(np.float64)
 
+    def lookup_points(self, which: int, points: np.ndarray, lambdas=(400.0, 500.0, 600.0, 700.0)) -> np.ndarray:
+        """(N, 4) values at the world-space points (N, 3) (a solid texture's lookup), at the four wavelengths."""
+        padded = np.zeros((len(points), 4), np.float32)
+        padded[:, :3] = points
+        out = np.zeros((len(points), 4), np.float32)
+        args = [
+            self.textures,
+            self.texels,
+            self.spectra,
+            np.int32(self.indices[which]),
+            self.runner.buffer(np.asarray(lambdas, np.float32)),
+            self.runner.buffer(padded),
+            self.runner.buffer(out, True),
+        ]
+        self.runner.run("texture_lookup_point", len(points), args, {6: out})
+        return out.astype(np.float64)
+
 
 # ---------------------------------------------------------------- the reference
 

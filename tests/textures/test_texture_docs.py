@@ -16,6 +16,10 @@ API = {
     "scale": spectrace.scale_texture,
     "mix": spectrace.mix_texture,
     "dots": spectrace.dots_texture,
+    "fbm": spectrace.fbm_texture,
+    "wrinkled": spectrace.wrinkled_texture,
+    "windy": spectrace.windy_texture,
+    "marble": spectrace.marble_texture,
 }
 
 

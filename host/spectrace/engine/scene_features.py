@@ -9,7 +9,7 @@ from spectrace.core.parameters import SMOOTH_ALPHA
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES
-from spectrace.textures import TEXTURES
+from spectrace.textures import SOLID_TEXTURE_CODES, TEXTURES
 
 
 def _type_bits(types: np.ndarray) -> int:
@@ -62,6 +62,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or checkerboard_bumps),
         "SCENE_HAS_PROCEDURAL_TEXTURES": int(bool(np.any(textures["type"] == TEXTURES.codes["dots"]))),
+        "SCENE_HAS_SOLID_TEXTURES": int(bool(np.isin(textures["type"], SOLID_TEXTURE_CODES).any())),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_SHAPES": int(buffers.shape_count + buffers.instanced_shape_count > 0),
         "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),

@@ -103,7 +103,7 @@ def check(materials, amount, where) -> MixMaterial:
             message = "a mixed material cannot have an opacity (cut-outs): give the opacity to the mix"
             raise SpectraceError(message, where=where("materials"))
     if is_texture(amount):
-        check_texture_values(amount, "float", where("amount"), upper=1.0)
+        check_texture_values(amount, "amount", where("amount"))
     else:
         amount = _AMOUNT.check(amount, where("amount"))
     mixed = MixMaterial((materials[0], materials[1]), amount)
@@ -179,6 +179,11 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     return table
 
 
+# The pbrt-v4 float textures a mix's amount may be, and spectrace's textures they become.
+_PBRT_AMOUNT_TEXTURES = ("imagemap", "checkerboard", "fbm", "wrinkled", "windy")
+_AMOUNT_TEXTURES = ("bitmap", "checkerboard", "fbm", "wrinkled", "windy")
+
+
 def from_pbrt(context, material) -> dict | None:
     """pbrt-v4's `mix`: at each intersection one of `materials` is chosen by a hash of the point and direction, the
     second with probability `amount` (its MixMaterial::ChooseMaterial), as this material chooses. Two diffuse
@@ -206,8 +211,10 @@ def from_pbrt(context, material) -> dict | None:
                 f"\"{amount_texture.label()}\" names '{context.shown(key[1])}', which no Texture defined",
             )
         texture: dict = context.texture_table(context.scene.textures[key].entity)
-        if texture.get("texture") not in ("bitmap", "checkerboard"):
-            raise context.error(amount_texture.location, "a mix's amount texture must be an imagemap or a checkerboard")
+        if texture.get("texture") not in _AMOUNT_TEXTURES:
+            raise context.error(
+                amount_texture.location, f"a mix's amount texture is one of {', '.join(_PBRT_AMOUNT_TEXTURES)}"
+            )
         amount = texture
     elif number <= 0.0 or number >= 1.0:
         return tables[number >= 1.0]

@@ -122,6 +122,7 @@ def check_texture(texture, name: str, where: str) -> None:
     from spectrace.textures import check_texture_values
     from spectrace.textures.bitmap import BitmapTexture
     from spectrace.textures.checkerboard import CheckerboardTexture
+    from spectrace.textures.solid import refuse_solid
 
     if name == "normal_map":
         if not isinstance(texture, BitmapTexture):
@@ -135,6 +136,8 @@ def check_texture(texture, name: str, where: str) -> None:
     elif not isinstance(texture, (BitmapTexture, CheckerboardTexture)):
         raise SpectraceError(f"{name} takes a `bitmap` or `checkerboard` texture", where=where)
     else:
+        for side in (texture.color0, texture.color1) if isinstance(texture, CheckerboardTexture) else ():
+            refuse_solid(side, name, where)
         check_texture_values(texture, "float", where)
         if name == "opacity" and isinstance(texture, BitmapTexture) and float(texture.values.max()) > 1.0 + 1e-6:
             raise SpectraceError(

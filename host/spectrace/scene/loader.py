@@ -53,7 +53,7 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import from_rgb, optical_constant, within_bounds
 from spectrace.spectral.spectrum_io import library_spectrum, load_spectrum_csv, parse_inline_spectrum
 from spectrace.textures import (
-    IMAGE_TEXTURES,
+    INNER_TEXTURES,
     TEXTURES,
     BitmapTexture,
     check_texture_values,
@@ -701,7 +701,7 @@ def _float32(values: np.ndarray) -> np.ndarray:
 
 
 def is_texture_image(texture) -> bool:
-    return isinstance(texture, IMAGE_TEXTURES)
+    return isinstance(texture, INNER_TEXTURES)
 
 
 TEXTURE_TYPE_NAMES = tuple(TEXTURES)

@@ -134,6 +134,20 @@ class CauchySpec(Strict):
     cauchy: FloatPair = Field(description="a, b of n = a + b/λ², λ in µm, b in µm²")
 
 
+class TransformStep(Strict):
+    translate: Vector3 | None = None
+    scale: FiniteFloat | Vector3 | None = None
+    rotate: dict | None = None
+    matrix: list[list[FiniteFloat]] | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> "TransformStep":
+        given = [k for k in ("translate", "scale", "rotate", "matrix") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("each transform step has exactly one of translate, scale, rotate, matrix")
+        return self
+
+
 # Materials and lights: one spec per module of spectrace.materials / spectrace.lights, told apart by `type`, its
 # fields made from the module's parameter table (docs/materials.md describes each model).
 _ANNOTATIONS = {
@@ -148,6 +162,7 @@ _ANNOTATIONS = {
     "coat_transmission": Literal["smooth", "rough"],
     "ior": FiniteFloat | str | SellmeierSpec | CauchySpec,
     "uv": FiniteFloat | FloatPair,
+    "transform": list[TransformStep],  # a solid texture's placement, as a shape's transform
     "wrap": Literal["repeat", "mirror", "clamp"],
     "filter": Literal["nearest", "bilinear", "trilinear"],
     "axis": Literal["x", "y"],
@@ -367,20 +382,6 @@ if TYPE_CHECKING:  # the models are made at import, so a type checker sees them 
 else:
     MaterialSpec = Annotated[functools.reduce(operator.or_, MATERIAL_SPECS.values()), Field(discriminator="type")]
     EmitterSpec = _spec_model(area, "EmitterSpec", type_default="area")  # a shape's area light
-
-
-class TransformStep(Strict):
-    translate: Vector3 | None = None
-    scale: FiniteFloat | Vector3 | None = None
-    rotate: dict | None = None
-    matrix: list[list[FiniteFloat]] | None = None
-
-    @model_validator(mode="after")
-    def _exactly_one(self) -> "TransformStep":
-        given = [k for k in ("translate", "scale", "rotate", "matrix") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError("each transform step has exactly one of translate, scale, rotate, matrix")
-        return self
 
 
 class DensityGridSpec(Strict):

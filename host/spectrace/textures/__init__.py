@@ -28,7 +28,7 @@ from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
-from spectrace.textures import bitmap, checkerboard, dots, mix, scale, spectral, storage
+from spectrace.textures import bitmap, checkerboard, dots, fbm, marble, mix, scale, spectral, storage, windy, wrinkled
 from spectrace.textures.base import TexturePlugin
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
@@ -36,16 +36,26 @@ from spectrace.textures.dots import DotsTexture
 from spectrace.textures.mix import MixTexture
 from spectrace.textures.scale import ScaleTexture
 from spectrace.textures.shared import FILTERS, WRAPS, ImageTextures, value_problem
+from spectrace.textures.solid import SolidTexture
 from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module; the position is the Texture.type code.
-TEXTURES = Registry[TexturePlugin]("texture", (bitmap, spectral, checkerboard, scale, mix, dots))
+TEXTURES = Registry[TexturePlugin](
+    "texture", (bitmap, spectral, checkerboard, scale, mix, dots, fbm, wrinkled, windy, marble)
+)
 # Each texture an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
 for _module in TEXTURES.values():
     _module.make = recorded(_module.make)  # type: ignore[method-assign]
 # Those made of other textures: their operands are spectra and image textures only (the kernel does not recurse).
 COMPOSITE_TEXTURES = tuple(name for name, module in TEXTURES.items() if module.COMPOSITE)
-IMAGE_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if not module.COMPOSITE)
+# Solid textures are looked up at the surface point, not at uv (textures/solid.py); like image textures they are
+# operands of composites, but have no texels.
+SOLID_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if getattr(module, "SOLID", False))
+SOLID_TEXTURE_CODES = [TEXTURES.codes[name] for name, module in TEXTURES.items() if getattr(module, "SOLID", False)]
+IMAGE_TEXTURES = tuple(
+    module.MODEL for module in TEXTURES.values() if not module.COMPOSITE and not getattr(module, "SOLID", False)
+)
+INNER_TEXTURES = IMAGE_TEXTURES + SOLID_TEXTURES  # what a composite's operands may be
 # Those that pick one of two sides (color0, color1) at the point: their rows and checks are alike.
 TWO_SIDED = (CheckerboardTexture, DotsTexture)
 _MODELS = tuple(module.MODEL for module in TEXTURES.values())
@@ -63,13 +73,21 @@ def is_texture(value: object) -> bool:
 def check_texture_values(texture, kind: str, where: str, upper: float | None = None) -> None:
     """A texture's values fit a use: a reflectance's lie in [0, 1]; a scalar texture ("float") has one channel
     (a checkerboard's sides: constant spectra or one-channel images) and its values lie in [0, upper]; an emission
-    is an image texture (a bitmap or a spectral texture) of values >= 0."""
+    is an image texture (a bitmap or a spectral texture) of values >= 0. An "amount" (a mix's) is a float in
+    [0, 1], or a solid noise texture of any values, which the mix holds to [0, 1] as pbrt-v4's does."""
+    if kind == "amount":
+        if isinstance(texture, SolidTexture) and texture.channels == 1:
+            return
+        kind, upper = "float", 1.0
     if kind == "emission" and not isinstance(texture, IMAGE_TEXTURES):
         raise SpectraceError(
             f"an emission texture is a bitmap or a spectral texture, not a {texture_module(texture).NAME}", where=where
         )
     if isinstance(texture, (ScaleTexture, MixTexture)):
         _check_composite(texture, kind, where, upper)
+        return
+    if isinstance(texture, SolidTexture):
+        _check_solid(texture, kind, where, upper)
         return
     if isinstance(texture, TWO_SIDED):
         if kind == "float":
@@ -95,7 +113,23 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
         raise SpectraceError(f"texture '{texture.source}' {problem}", where=where)
 
 
-ImageTextures.models, ImageTextures.check = IMAGE_TEXTURES, check_texture_values
+ImageTextures.models, ImageTextures.check = INNER_TEXTURES, check_texture_values
+
+
+def _check_solid(texture: SolidTexture, kind: str, where: str, upper: float | None) -> None:
+    """A solid texture fits a use: marble is a reflectance; the noise textures are numbers, whose range must lie
+    within the use's bound (a reflectance's [0, 1], a number's [0, upper])."""
+    low, high = texture.value_range()
+    if kind == "float" and texture.channels != 1:
+        raise SpectraceError(f"a {texture.source} texture is a colour; this parameter needs a number", where=where)
+    bound = 1.0 if kind == "spectrum" else upper
+    if low < 0.0 or (bound is not None and high > bound + 1e-6):
+        use = "a reflectance" if kind == "spectrum" else "this parameter"
+        raise SpectraceError(
+            f"a {texture.source} texture takes values in [{low:.3g}, {high:.3g}], outside what {use} takes "
+            f"([0, {bound if bound is not None else 'inf'}]); use it as a mix's amount",
+            where=where,
+        )
 
 
 def reflectance_or_texture(source, where: str):
@@ -129,6 +163,8 @@ def _check_composite(texture, kind: str, where: str, upper: float | None) -> Non
                     "with the wavelength",
                     where=where,
                 )
+        elif is_texture(operand) and isinstance(texture, MixTexture) and operand is texture.amount:
+            check_texture_values(operand, "amount", where)
         elif is_texture(operand):
             check_texture_values(operand, "float" if kind == "float" or operand is _factor(texture) else kind, where)
     bound = 1.0 if kind == "spectrum" else upper
@@ -164,6 +200,8 @@ def scalar_range(value) -> tuple[float, float]:
         return min(r[0] for r in ranges), max(r[1] for r in ranges)
     if isinstance(value, (ScaleTexture, MixTexture)):
         return value_range(value)
+    if isinstance(value, SolidTexture):
+        return value.value_range()
     if isinstance(value, Spectrum):
         return float(value.values.min()), float(value.values.max())
     if isinstance(value, IMAGE_TEXTURES):
@@ -189,6 +227,8 @@ def device_bytes(texture, kind: str) -> int:
     against before anything is converted."""
     if isinstance(texture, TWO_SIDED):
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
+    if isinstance(texture, SolidTexture):
+        return 0  # a few numbers, no texels
     if isinstance(texture, (ScaleTexture, MixTexture)):
         factor = _factor(texture)
         return sum(
@@ -261,7 +301,7 @@ class TextureRows:
             for i, side in enumerate((texture.color0, texture.color1)):
                 if isinstance(side, Spectrum):
                     row["side_spectrum"][i] = self.table.add(side)
-                elif isinstance(side, IMAGE_TEXTURES):
+                elif isinstance(side, INNER_TEXTURES):
                     row["side_texture"][i] = self.add(side, kind, where)
                 else:
                     raise SpectraceError(f"a {texture.source}'s sides are spectra or image textures", where=where)
@@ -270,18 +310,23 @@ class TextureRows:
             for i, side in enumerate(sides):
                 if isinstance(side, Spectrum):
                     row["side_spectrum"][i] = self.table.add(side)
-                elif isinstance(side, IMAGE_TEXTURES):
+                elif isinstance(side, INNER_TEXTURES):
                     row["side_texture"][i] = self.add(side, kind, where)
                 else:
                     raise SpectraceError(f"a {texture.source} texture's operands are spectra or image textures", where)
             factor = _factor(texture)
             row["factor_texture"] = NO_TEXTURE
-            if isinstance(factor, IMAGE_TEXTURES):
+            if isinstance(factor, INNER_TEXTURES):
                 row["factor_texture"] = self.add(factor, "float", where)
             elif isinstance(factor, Spectrum):
                 row["factor"] = float(factor.values[0])  # a constant (checked)
             else:
                 row["factor"] = float(factor)
+        elif isinstance(texture, SolidTexture):
+            values = np.asarray(texture_module(texture).device_solid(texture, self.table), np.float32)
+            chunk = values.reshape(-1, 4)
+            row["data_offset"] = 4 * sum(len(c) for c in self.texel_chunks)
+            self.texel_chunks.append(chunk)
         else:
             texel_format, channels, levels = texture_module(texture).device_texels(texture, kind)
             if basis is not None:

@@ -54,10 +54,11 @@ def from_spec(spec, resolver, key: str) -> MixTexture:
         resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True)
         for name in ("tex1", "tex2")
     ]
-    return MixTexture(sides[0], sides[1], composite_factor(spec.amount, resolver, f"{key}.amount", upper=1.0))
+    amount = composite_factor(spec.amount, resolver, f"{key}.amount", upper=1.0, kind="amount")
+    return MixTexture(sides[0], sides[1], amount)
 
 
 def make(tex1=0.0, tex2=1.0, amount=0.5) -> MixTexture:
     """(1 − amount) · tex1 + amount · tex2, as pbrt-v4's `mix` texture: tex1, tex2 reflectances (anything `spectrum`
     takes, an RGB triple, or an image texture), amount a number in [0, 1] or a grey image texture."""
-    return MixTexture(api_operand(tex1, "tex1"), api_operand(tex2, "tex2"), api_factor(amount, "amount", 1.0))
+    return MixTexture(api_operand(tex1, "tex1"), api_operand(tex2, "tex2"), api_factor(amount, "amount", 1.0, "amount"))

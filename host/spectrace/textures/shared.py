@@ -175,11 +175,11 @@ def api_operand(value, name: str):
     return value if isinstance(value, ImageTextures.models) else spectrum_input.reflectance(value, name)
 
 
-def api_factor(value, name: str, upper: float | None):
+def api_factor(value, name: str, upper: float | None, kind: str = "float"):
     """A composite's number given to the Python API: a float within [0, upper], or a one-channel image texture."""
     if isinstance(value, ImageTextures.models):
         assert ImageTextures.check is not None
-        ImageTextures.check(value, "float", name, upper)
+        ImageTextures.check(value, kind, name, upper)
         return value
     number = float(value)
     if not (number >= 0.0 and (upper is None or number <= upper)):
@@ -187,18 +187,18 @@ def api_factor(value, name: str, upper: float | None):
     return number
 
 
-def composite_factor(value, resolver, key: str, upper: float | None):
+def composite_factor(value, resolver, key: str, upper: float | None, kind: str = "float"):
     """A scale's factor or a mix's amount from its validated scene value: a number in [0, upper], or a one-channel
-    image texture (checked by the resolver); a spectrum given instead (`{ value = ... }`) must be constant and is its
-    number."""
+    image texture (checked by the resolver as `kind`: a mix's "amount" also takes a solid noise texture); a spectrum
+    given instead (`{ value = ... }`) must be constant and is its number."""
     from spectrace.spectral.spectrum import Spectrum
 
     name = key.rsplit(".", 1)[-1]
     where = resolver.where(key)
     if not isinstance(value, (int, float)):
-        value = resolver.spectrum_or_texture(value, key, "float", inner=True)
+        value = resolver.spectrum_or_texture(value, key, kind, inner=True)
         if not isinstance(value, Spectrum):
-            if upper is not None and (high := float(value.values.max())) > upper + 1e-6:
+            if kind == "float" and upper is not None and (high := float(value.values.max())) > upper + 1e-6:
                 raise SpectraceError(f"texture '{value.source}' has values above {upper:g} (max {high:.4g})", where)
             return value
         if np.ptp(value.values) > 0.0:

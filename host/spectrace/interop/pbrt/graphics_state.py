@@ -144,6 +144,7 @@ class Light:
 class Texture:
     entity: Entity
     value_type: str  # "spectrum" or "float"
+    world_from_texture: np.ndarray = field(default_factory=lambda: np.eye(4))  # the CTM where it was declared
 
 
 @dataclass
@@ -288,7 +289,7 @@ def read_scene(path: str | Path) -> PbrtScene:
             if value_type not in ("spectrum", "float"):
                 raise error(location, f'texture type \'{shown(value_type)}\' (pbrt-v4 takes "spectrum" or "float")')
             scene.textures[(value_type, texture_name)] = Texture(
-                entity(directive, kind, texture_name, target="texture"), value_type
+                entity(directive, kind, texture_name, target="texture"), value_type, state.ctm.copy()
             )
         elif name == "AreaLightSource":
             state.area_light = entity(directive, arguments[0], target="light")
