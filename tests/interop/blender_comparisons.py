@@ -114,6 +114,48 @@ def principled_box():
     return scene
 
 
+LEVELS = (0.0, 0.25, 0.75, 1.0)
+
+
+def specular_levels():
+    """Specular IOR Level, constant and textured, over a dark Principled base: four spheres of levels 0, 0.25,
+    0.75 and 1 (IOR 1.5), and a poster on the back wall (IOR 1.45) whose level is an image of four stripes of those
+    levels, where the area light's highlight falls."""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _room(scene, grey)
+    dark = (0.05, 0.1, 0.3, 1.0)
+    for i, level in enumerate(LEVELS):
+        inputs = {"Base Color": dark, "Roughness": 0.3, "Specular IOR Level": level}
+        material, _ = _material(f"level{i}", "ShaderNodeBsdfPrincipled", **inputs)
+        x = -0.75 + 0.5 * i
+        _object(scene, f"ball{i}", bpy.ops.mesh.primitive_uv_sphere_add, material, radius=0.22, location=(x, 0, -0.6))
+        bpy.ops.object.shade_smooth()
+    material, principled = _material(
+        "striped", "ShaderNodeBsdfPrincipled", **{"Base Color": dark, "Roughness": 0.3, "IOR": 1.45}
+    )
+    image = bpy.data.images.new("levels", 4, 1)
+    image.colorspace_settings.name = "Non-Color"
+    image.pixels = [value for level in LEVELS for value in (level, level, level, 1.0)]
+    image.pack()
+    node = material.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    node.interpolation = "Closest"
+    material.node_tree.links.new(node.outputs["Color"], principled.inputs["Specular IOR Level"])
+    _object(
+        scene,
+        "poster",
+        bpy.ops.mesh.primitive_plane_add,
+        material,
+        size=1.8,
+        location=(0.0, 0.98, 0.2),
+        rotation=(math.pi / 2, 0.0, 0.0),
+    )
+    _light(scene, "panel", "AREA", (0.0, -0.3, 0.95), size=0.8, energy=60.0)
+    _front_camera(scene)
+    return scene
+
+
 def sky(image_path):
     """An HDRI world (an OpenEXR file the test writes) and a sun over a grey floor and a green Lambertian cube."""
     scene = _scene()
@@ -189,6 +231,7 @@ def glass():
 
 
 SCENES = {"grey_room": grey_room, "principled_box": principled_box, "textured": textured, "glass": glass}
+SCENES["specular_levels"] = specular_levels
 SCENES |= {f"grey_{kind.lower()}": (lambda kind=kind: grey_light(kind)) for kind in GREY_LIGHTS}
 
 

@@ -120,6 +120,7 @@ SCENES = {
     "grey_sun": GREY,
     "grey_area": GREY,
     "principled_box": PRINCIPLED,
+    "specular_levels": PRINCIPLED,
     "textured": COLOURED,
     "glass": COLOURED,
     "sky": COLOURED,
