@@ -121,6 +121,7 @@ SCENES = {
     "grey_area": GREY,
     "principled_box": PRINCIPLED,
     "specular_levels": PRINCIPLED,
+    "normal_mapped": GREY,
     "textured": COLOURED,
     "glass": COLOURED,
     "sky": COLOURED,

@@ -24,6 +24,8 @@ from spectrace.interop.blender.context import BlendImport
 from spectrace.interop.mitsuba.context import unique_name
 
 DEFAULT: dict = {"type": "diffuse", "reflectance": {"rgb": [0.8, 0.8, 0.8]}}
+# The shader nodes imported; each takes a normal map on its Normal input.
+_READ_SHADERS = ("BSDF_PRINCIPLED", "BSDF_DIFFUSE", "BSDF_GLOSSY", "BSDF_GLASS", "BSDF_TRANSLUCENT")
 
 
 def material_name(ctx: BlendImport, material) -> str:
@@ -62,6 +64,30 @@ def convert(ctx: BlendImport, material) -> tuple[dict, dict | None]:
         n.type == "OUTPUT_MATERIAL" and n.inputs["Volume"].is_linked for n in material.node_tree.nodes
     ):
         ctx.warn(where, "volume shaders are not imported")
+    table, emitter = _shader(ctx, node, where)
+    if node.type in _READ_SHADERS and "Normal" in node.inputs and node.inputs["Normal"].is_linked:
+        _normal_map(ctx, node.inputs["Normal"].links[0].from_node, table, where)
+    return table, emitter
+
+
+def _normal_map(ctx: BlendImport, source, table: dict, where: str) -> None:
+    """A shader's Normal input from a tangent-space Normal Map node of an Image Texture: the material's
+    `normal_map`, framed by the mesh's tangents and bitangent signs (MikkTSpace's, which the mesh export hands
+    where a material has a normal map) or, without them, by its texture coordinates with their handedness."""
+    image_socket = source.inputs["Color"] if source.type == "NORMAL_MAP" else None
+    if image_socket is None or not image_socket.is_linked or image_socket.links[0].from_node.type != "TEX_IMAGE":
+        ctx.warn(where, f"a normal from node {source.bl_idname} is not imported")
+        return
+    if source.space != "TANGENT":
+        ctx.warn(where, f"a Normal Map in {source.space.lower()} space is not imported (tangent space is)")
+        return
+    if abs(_number(ctx, source, "Strength", where) - 1.0) > 1e-6:
+        ctx.warn(where, "a Normal Map's strength other than 1 is not imported")
+    table["normal_map"] = _image(ctx, image_socket.links[0].from_node, "normal", where)
+    table["normal_map_handedness"] = True  # Blender's tangent space is MikkTSpace's, signed per face
+
+
+def _shader(ctx: BlendImport, node, where: str) -> tuple[dict, dict | None]:
     kind = node.type
     if kind == "BSDF_PRINCIPLED":
         return _principled(ctx, node, where)
@@ -135,17 +161,6 @@ def _principled(ctx: BlendImport, node, where: str) -> tuple[dict, dict | None]:
     alpha = _grey(ctx, node, "Alpha", where)
     if alpha != 1.0:
         table["opacity"] = alpha
-    normal = node.inputs["Normal"]
-    if normal.is_linked:
-        source = normal.links[0].from_node
-        image_socket = source.inputs["Color"] if source.type == "NORMAL_MAP" else None
-        if image_socket is not None and image_socket.is_linked and image_socket.links[0].from_node.type == "TEX_IMAGE":
-            if abs(_number(ctx, source, "Strength", where) - 1.0) > 1e-6:
-                ctx.warn(where, "a Normal Map's strength other than 1 is not imported")
-            table["normal_map"] = _image(ctx, image_socket.links[0].from_node, "normal", where)
-            table["normal_map_handedness"] = True  # Blender's tangent space is MikkTSpace's, signed per face
-        else:
-            ctx.warn(where, f"a normal from node {source.bl_idname} is not imported")
     emitter = _emitter(ctx, node, "Emission Color", "Emission Strength", where)
     if emitter is not None and "opacity" in table:
         ctx.warn(where, "an emissive material's alpha is not imported (emitters are opaque)")
@@ -178,6 +193,25 @@ def _specular_level(ctx: BlendImport, node, transmission, where: str) -> dict:
         ctx.warn(where, f"a Specular IOR Level of {socket.default_value:g} gives an index above 4: clamped to 4")
     root = math.sqrt(min(f0, 0.36))
     return {"eta": max(1.0001, (1.0 + root) / (1.0 - root))}
+
+
+def normal_mapped(ctx: BlendImport, obj, where: str) -> bool:
+    """Whether a material of the object shades it through a Normal Map node in tangent space (the import then
+    hands the mesh's MikkTSpace tangents). A Normal Map naming a UV map other than the active one is warned of:
+    the export reads the active map, for the textures and the tangents alike."""
+    found = False
+    for slot in obj.material_slots:
+        material = slot.material
+        if material is None or not material.use_nodes or material.node_tree is None:
+            continue
+        for node in material.node_tree.nodes:
+            if node.type == "NORMAL_MAP" and node.space == "TANGENT" and node.outputs["Normal"].is_linked:
+                found = True
+                layers = getattr(obj.data, "uv_layers", None)
+                active = layers.active.name if layers is not None and layers.active is not None else ""
+                if node.uv_map and node.uv_map != active:
+                    ctx.warn(where, f"a Normal Map's UV map '{node.uv_map}' is not imported (the active one is)")
+    return found
 
 
 def _emitter(ctx: BlendImport, node, colour_socket: str, strength_socket: str, where: str) -> dict | None:
