@@ -6,6 +6,7 @@ the texture layout it stands for."""
 from __future__ import annotations
 
 import math
+import tomllib
 
 import numpy as np
 import pytest
@@ -313,7 +314,7 @@ def test_the_anisotropy_rotation_turns_toward_the_signed_bitangent_on_a_mirrored
     assert np.abs(mirror - flipped).mean() < 0.05 * wrong
 
 
-def _specular_plane_two_halves(path, alphas: list[int] | None, factor: float):
+def _specular_plane_two_halves(path, alphas: list[int] | None, factor: float, colours=None, colour_factor=None):
     """A near-black dielectric plane (index 1.5, roughness 0.3) lit by a point light, with KHR_materials_specular's
     factor `factor` and specularTexture's A `alphas` over its halves (u < ½, u > ½), or no texture: what it shows
     is mostly its specular reflection."""
@@ -323,6 +324,11 @@ def _specular_plane_two_halves(path, alphas: list[int] | None, factor: float):
     if alphas is not None:
         pixels = np.array([[[255, 255, 255, a] for a in alphas]])
         extension["specularTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
+    if colours is not None:
+        pixels = np.array([[[c, c, c, 255] for c in colours]])
+        extension["specularColorTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
+    if colour_factor is not None:
+        extension["specularColorFactor"] = [colour_factor] * 3
     material = gltf.material(
         pbrMetallicRoughness={
             "baseColorFactor": [0.02, 0.02, 0.02, 1.0],
@@ -359,9 +365,12 @@ def test_a_two_valued_specular_texture_renders_each_half_as_its_untextured_facto
         assert np.abs(strong[:, half] - weak[:, half]).max() > 0.05 * scale
 
 
-def test_the_specular_texture_becomes_a_grey_specular_level_and_the_colour_texture_is_named(tmp_path):
-    """specularTexture (A) times specularFactor becomes principled's textured `specular` in place of the index; a
-    specularColorTexture, a colour principled cannot carry, is named; the TOML loads."""
+def test_the_specular_textures_become_a_grey_specular_level_their_product(tmp_path):
+    """specularTexture (A) and specularColorTexture together become principled's textured `specular` in place of the
+    index: a scale texture of the colour texture's level (the luminance of F0 = specularFactor · R0 · texel, over
+    0.08) times A; the TOML loads."""
+    from PIL import Image
+
     gltf = Gltf()
     gltf.json["extensionsUsed"] = ["KHR_materials_specular"]
     index = gltf.image_texture(np.array([[[255, 255, 255, 255], [255, 255, 255, 0]]]))
@@ -376,10 +385,30 @@ def test_the_specular_texture_becomes_a_grey_specular_level_and_the_colour_textu
     path = gltf.write(tmp_path / "model.glb")
     data, ctx = gltf_scene_data(path, tmp_path / "out.toml")
     (table,) = data["materials"].values()
-    assert table["specular"]["texture"] == "bitmap" and "eta" not in table
-    assert any("specularColorTexture is not imported" in w for w in ctx.warnings)
-    assert not any("specularTexture is not imported" in w for w in ctx.warnings)
+    specular = table["specular"]
+    assert specular["texture"] == "scale" and "eta" not in table
+    assert not any("Texture is not imported" in w for w in ctx.warnings)
     import_gltf(path, tmp_path / "loads.toml")
+    (written,) = tomllib.loads((tmp_path / "loads.toml").read_text(encoding="utf-8"))["materials"].values()
+    with Image.open(tmp_path / written["specular"]["tex"]["file"]) as image:  # white texels: 0.5 · 0.04 / 0.08
+        assert np.asarray(image).ravel().tolist() == [64, 64]  # 0.25 to the 8-bit texel
     (loaded,) = {shape.material for shape in load_scene(tmp_path / "loads.toml").shapes}
     # the row's index is the largest texel's: F0 = 0.5 · 0.04 (within the 8-bit texel's rounding)
     assert loaded.specular_texture is not None and _r0(loaded.eta.at(550.0)) == pytest.approx(0.02, rel=0.01)
+
+
+def test_a_two_valued_specular_colour_texture_renders_each_half_as_its_untextured_colour_factor(tmp_path):
+    """specularColorTexture's grey texels, sRGB codes 255 and 170 (linear 1 and 0.40198), with specularFactor 0.8
+    give F0 = 0.8 · 0.04 · texel: principled's specular levels 0.4 and 0.16079, which the 8-bit texels hold to
+    4e-5 (102/255, 41/255). Each half renders as the untextured specularColorFactor of its texel's linear value to
+    float rounding and that texel's rounding; the two untextured images differ on each side."""
+    texel = ((170 / 255 + 0.055) / 1.055) ** 2.4
+    textured = _render(_specular_plane_two_halves(tmp_path / "halves.glb", None, 0.8, colours=[255, 170]), tmp_path)
+    strong = _render(_specular_plane_two_halves(tmp_path / "strong.glb", None, 0.8, colour_factor=1.0), tmp_path)
+    weak = _render(_specular_plane_two_halves(tmp_path / "weak.glb", None, 0.8, colour_factor=texel), tmp_path)
+    left, right = slice(0, 7), slice(9, 16)
+    scale = strong.max()
+    np.testing.assert_allclose(textured[:, left], strong[:, left], rtol=1e-3, atol=1e-6 * scale)
+    np.testing.assert_allclose(textured[:, right], weak[:, right], rtol=1e-3, atol=1e-6 * scale)
+    for half in (left, right):
+        assert np.abs(strong[:, half] - weak[:, half]).max() > 0.05 * scale
