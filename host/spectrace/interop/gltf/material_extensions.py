@@ -161,8 +161,8 @@ def anisotropic_weight(strength, roughness: float):
 
 def _anisotropy(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughness: float) -> None:
     """The strength (anisotropyStrength times the texture's B) becomes principled's `anisotropic`, a texture baked
-    texel by texel where the file has one; the direction (anisotropyRotation; the texture's RG) turns the lobe by
-    `anisotropic_rotation`, a number, so the texture's per-texel direction is named and left out."""
+    texel by texel where the file has one; the direction turns the lobe by `anisotropic_rotation`
+    (anisotropyRotation) and, per texel, by `anisotropic_direction` (the texture's RG, raw)."""
     doc = ctx.doc
     extension = doc.extension(entry, ANISOTROPY, pointer)
     if extension is None:
@@ -183,7 +183,9 @@ def _anisotropy(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughne
         mapped = texture(ctx, info, at, "blue", curve=curve)
         if mapped is not None:
             weight = mapped
-            ctx.warn(at, f"{ANISOTROPY}'s per-texel direction (RG) is not imported (its strength, B, is)")
+            # RG: the direction per texel, turned by anisotropyRotation (kernels/anisotropy_direction.cl)
+            if (direction := texture(ctx, info, at, "rgb")) is not None:
+                table["anisotropic_direction"] = direction
     table["anisotropic"] = weight
     degrees = math.fmod(math.degrees(rotation), 360.0)
     if degrees != 0.0:
