@@ -34,6 +34,7 @@ def _child(*args: str) -> None:
 
 @needs_bpy
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_normal_mapped_meshes_carry_blenders_tangents_and_signs(tmp_path):
     from spectrace.geometry.mesh import load_mesh
 
