@@ -20,6 +20,7 @@
 #error "built without the materials' generated sources (spectrace.plugins.generated_sources)"
 #endif
 #include "material_list.h"
+#include "anisotropy_direction.cl"
 
 /* MATERIAL_LIST(X) (material_list.h) holds X(code, name, Params) for every BSDF: its Material.type code, the prefix
  * of its functions and its params struct. Each dispatch below is this list expanded, one test per type; a type the
@@ -80,6 +81,9 @@ inline ShadingFrame material_frame(__global const Material *m, const SurfaceCont
             frame.bitangent = cross(frame.normal, x);
             frame.tangent = x;
         }
+#if SCENE_HAS_DIRECTION_TEXTURES
+        turn_by_direction_texture(m, sc, &frame);
+#endif
         return frame;
     }
 #endif

@@ -99,6 +99,10 @@
 #ifndef SCENE_HAS_TANGENT_FRAMES
 #define SCENE_HAS_TANGENT_FRAMES 1
 #endif
+/* Principled materials whose anisotropy turns by a direction texture (kernels/anisotropy_direction.cl). */
+#ifndef SCENE_HAS_DIRECTION_TEXTURES
+#define SCENE_HAS_DIRECTION_TEXTURES 1
+#endif
 
 /* hide_emitters with area lights: the camera's own rays pass through them (kernels/path_tracer.cl). */
 #ifndef SCENE_HIDES_AREA_EMITTERS

@@ -116,7 +116,8 @@ typedef struct {
                                    optional tint of its reflection (MATERIAL_NO_SPECTRUM: none) */
     int eta_offset;             /* conductor: real part η(λ) of the complex index of refraction; mix: its first
                                    material's row index (material_mix.cl) */
-    int k_offset;               /* conductor: imaginary part k(λ) (absorption); mix: its second material's row */
+    int k_offset;               /* conductor: imaginary part k(λ) (absorption); mix: its second material's row;
+                                   principled: the texture of its anisotropy's direction (or NO_TEXTURE) */
     float alpha;                /* GGX roughness α; 0 = smooth (a delta lobe). With roughness_texture: the texture's
                                    largest α, which decides the flags (smooth only if smooth everywhere); mix: the
                                    probability of its second material, `amount` */

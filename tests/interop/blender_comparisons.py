@@ -114,6 +114,100 @@ def principled_box():
     return scene
 
 
+LEVELS = (0.0, 0.25, 0.75, 1.0)
+
+
+def specular_levels():
+    """Specular IOR Level, constant and textured, over a dark Principled base: four spheres of levels 0, 0.25,
+    0.75 and 1 (IOR 1.5), and a poster on the back wall (IOR 1.45) whose level is an image of four stripes of those
+    levels, where the area light's highlight falls."""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _room(scene, grey)
+    dark = (0.05, 0.1, 0.3, 1.0)
+    for i, level in enumerate(LEVELS):
+        inputs = {"Base Color": dark, "Roughness": 0.3, "Specular IOR Level": level}
+        material, _ = _material(f"level{i}", "ShaderNodeBsdfPrincipled", **inputs)
+        x = -0.75 + 0.5 * i
+        _object(scene, f"ball{i}", bpy.ops.mesh.primitive_uv_sphere_add, material, radius=0.22, location=(x, 0, -0.6))
+        bpy.ops.object.shade_smooth()
+    material, principled = _material(
+        "striped", "ShaderNodeBsdfPrincipled", **{"Base Color": dark, "Roughness": 0.3, "IOR": 1.45}
+    )
+    image = bpy.data.images.new("levels", 4, 1)
+    image.colorspace_settings.name = "Non-Color"
+    image.pixels = [value for level in LEVELS for value in (level, level, level, 1.0)]
+    image.pack()
+    node = material.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    node.interpolation = "Closest"
+    material.node_tree.links.new(node.outputs["Color"], principled.inputs["Specular IOR Level"])
+    _object(
+        scene,
+        "poster",
+        bpy.ops.mesh.primitive_plane_add,
+        material,
+        size=1.8,
+        location=(0.0, 0.98, 0.2),
+        rotation=(math.pi / 2, 0.0, 0.0),
+    )
+    _light(scene, "panel", "AREA", (0.0, -0.3, 0.95), size=0.8, energy=60.0)
+    _front_camera(scene)
+    return scene
+
+
+# A tangent-space normal tilted 17° toward +u and 17° toward +v, as a Normal Map node reads the image's colour
+TILTED = (0.3, 0.3, math.sqrt(1.0 - 0.18))
+
+
+def _mirrored_poster(material):
+    """Two quads on the back wall facing the camera, x in [−0.9, 0] and [0, 0.9], z in [−0.1, 0.9]: u runs right on
+    the left one and left on the right one (a mirrored UV layout, handedness −1 there); v runs up on both."""
+    mesh = bpy.data.meshes.new("poster")
+    xs, bottom, top, y = (-0.9, 0.0, 0.9), -0.1, 0.9, 0.98
+    mesh.from_pydata([(x, y, z) for z in (bottom, top) for x in xs], [], [(0, 1, 4, 3), (1, 2, 5, 4)])
+    layer = mesh.uv_layers.new(name="UVMap")
+    uv = {0: (0, 0), 1: (1, 0), 4: (1, 1), 3: (0, 1)}  # left quad: vertex -> (u, v)
+    uv_right = {1: (1, 0), 2: (0, 0), 5: (0, 1), 4: (1, 1)}
+    for polygon, table in zip(mesh.polygons, (uv, uv_right)):
+        for corner in polygon.loop_indices:
+            layer.data[corner].uv = table[mesh.loops[corner].vertex_index]
+    mesh.materials.append(material)
+    poster = bpy.data.objects.new("poster", mesh)
+    bpy.context.scene.collection.objects.link(poster)
+    return poster
+
+
+def normal_mapped(ball=False):
+    """A Normal Map of a constant tilt (TILTED) on a grey Lambertian mirrored-UV poster (flat faces) and, with
+    `ball`, a smooth sphere, in a grey room under an area light: Cycles frames the map with the mesh's MikkTSpace
+    tangents and bitangent signs. (The sphere is left out of the comparison with Cycles: below its terminator,
+    where the tilted normal sees the light the surface does not, the two renderers differ by up to 10 %, with
+    Blender's tangents and with those of the texture coordinates alike.)"""
+    scene = _scene()
+    grey, _ = _material("grey", "ShaderNodeBsdfDiffuse", Color=GREY)
+    _room(scene, grey)
+    material, shader = _material("bumpy", "ShaderNodeBsdfDiffuse", Color=(0.7, 0.7, 0.7, 1.0))
+    image = bpy.data.images.new("tilt", 4, 4)
+    image.colorspace_settings.name = "Non-Color"
+    image.pixels = [v for _ in range(16) for v in (*(0.5 + 0.5 * c for c in TILTED), 1.0)]
+    image.pack()
+    tree = material.node_tree
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Closest"
+    normal_map = tree.nodes.new("ShaderNodeNormalMap")
+    tree.links.new(texture.outputs["Color"], normal_map.inputs["Color"])
+    tree.links.new(normal_map.outputs["Normal"], shader.inputs["Normal"])
+    _mirrored_poster(material)
+    if ball:
+        _object(scene, "ball", bpy.ops.mesh.primitive_uv_sphere_add, material, radius=0.35, location=(0, 0, -0.6))
+        bpy.ops.object.shade_smooth()
+    _light(scene, "panel", "AREA", (0.0, -0.3, 0.95), size=0.8, energy=60.0)
+    _front_camera(scene)
+    return scene
+
+
 def sky(image_path):
     """An HDRI world (an OpenEXR file the test writes) and a sun over a grey floor and a green Lambertian cube."""
     scene = _scene()
@@ -189,10 +283,36 @@ def glass():
 
 
 SCENES = {"grey_room": grey_room, "principled_box": principled_box, "textured": textured, "glass": glass}
+SCENES["specular_levels"] = specular_levels
+SCENES["normal_mapped"] = normal_mapped
+SCENES["normal_mapped_ball"] = lambda: normal_mapped(ball=True)
 SCENES |= {f"grey_{kind.lower()}": (lambda kind=kind: grey_light(kind)) for kind in GREY_LIGHTS}
 
 
+def corner_tangents(blend, out):
+    """`--tangents IN.blend OUT.npz`: each mesh object's face corners as Blender holds them after evaluation, in
+    object space: position, UV (active map) and MikkTSpace tangent with bitangent sign (Mesh.calc_tangents), under
+    the object's name."""
+    import numpy as np
+
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    found = {}
+    for obj in bpy.context.scene.objects:
+        if obj.type != "MESH":
+            continue
+        mesh = obj.evaluated_get(depsgraph).to_mesh()
+        mesh.calc_tangents(uvmap=mesh.uv_layers.active.name)
+        corners = [(*mesh.vertices[c.vertex_index].co, *mesh.uv_layers.active.uv[c.index].vector, *c.tangent,
+                    c.bitangent_sign) for c in mesh.loops]  # fmt: skip
+        found[obj.name] = np.array(corners, dtype=np.float64)
+    np.savez(out, **found)
+
+
 def main() -> None:
+    if sys.argv[1] == "--tangents":
+        corner_tangents(sys.argv[2], sys.argv[3])
+        return
     kind, out, prefix, spp, seeds = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
     scene = sky(sys.argv[6]) if kind == "sky" else SCENES[kind]()
     cycles = scene.cycles

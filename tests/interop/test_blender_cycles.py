@@ -120,6 +120,8 @@ SCENES = {
     "grey_sun": GREY,
     "grey_area": GREY,
     "principled_box": PRINCIPLED,
+    "specular_levels": PRINCIPLED,
+    "normal_mapped": GREY,
     "textured": COLOURED,
     "glass": COLOURED,
     "sky": COLOURED,

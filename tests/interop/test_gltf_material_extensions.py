@@ -6,6 +6,7 @@ the texture layout it stands for."""
 from __future__ import annotations
 
 import math
+import tomllib
 
 import numpy as np
 import pytest
@@ -232,18 +233,28 @@ def test_the_anisotropy_textures_strength_keeps_glTFs_ratio_texel_by_texel(tmp_p
     s = strength * np.array(blues) / 255.0
     expected = (alpha + s**2 * (1.0 - alpha)) / alpha
     np.testing.assert_allclose(weights, (1.0 - 1.0 / expected) / 0.9, atol=0.5 / 255.0 + 1e-12)
-    assert any("per-texel direction (RG) is not imported" in w for w in ctx.warnings)
+    # RG, the direction per texel: the texture's own RGB, raw (the kernel reads 2 (r, g) − 1)
+    direction = table["anisotropic_direction"]
+    assert direction["texture"] == "bitmap" and direction["raw"] is True
+    ctx.files[direction["file"]](tmp_path / "direction.png")
+    rgb = np.asarray(Image.open(tmp_path / "direction.png"))[0]
+    assert rgb[:, :2].tolist() == [[255, 128]] * len(blues)
     assert not any("texture (a direction and strength per texel) is not imported" in w for w in ctx.warnings)
 
 
-def _anisotropy_plane_two_halves(path, blues: list[int] | None, strength: float):
-    """The lit metal plane of _anisotropic_plane with anisotropyTexture's B `blues` over its halves (u < ½, u > ½),
-    or no texture; roughness 0.3 (α = 0.09), where strength 1 gives principled's largest weight, a = 1, exactly."""
+# The texel (255, 128) glTF writes for "along the tangent": d = 2 (r, g) − 1 = (1, 1/255), turned 0.22° from it
+ALONG_TANGENT = math.atan2(1.0 / 255.0, 1.0)
+
+
+def _anisotropy_plane_two_halves(path, blues: list[int] | None, strength: float, rotation=0.0, texels=None):
+    """The lit metal plane of _anisotropic_plane with anisotropyTexture's B `blues` (RG 255, 128) or RGB `texels`
+    over its halves (u < ½, u > ½), or no texture, turned by anisotropyRotation `rotation`; roughness 0.3
+    (α = 0.09), where strength 1 gives principled's largest weight, a = 1, exactly."""
     gltf = Gltf()
     gltf.json["extensionsUsed"] = ["KHR_materials_anisotropy"]
-    extension: dict = {"anisotropyStrength": strength}
-    if blues is not None:
-        pixels = np.array([[[255, 128, b] for b in blues]])
+    extension: dict = {"anisotropyStrength": strength, "anisotropyRotation": rotation}
+    if blues is not None or texels is not None:
+        pixels = np.array([texels if texels is not None else [[255, 128, b] for b in blues]])
         extension["anisotropyTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
     material = gltf.material(
         pbrMetallicRoughness={"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.3},
@@ -261,12 +272,12 @@ def _anisotropy_plane_two_halves(path, blues: list[int] | None, strength: float)
 
 
 def test_a_two_valued_anisotropy_texture_renders_each_half_as_its_untextured_strength(tmp_path):
-    """B = 255 on the left half, 0 on the right: the left renders as anisotropyStrength 1 without a texture, the
-    right as an isotropic lobe (strength 0), to float rounding (the same paths; the texels hold a = 1 and 0
-    exactly); columns beside the seam, where a pixel's samples fall on both texels, are left out. The two untextured
-    images differ on each side, so each half shows which weight it got."""
+    """B = 255 on the left half, 0 on the right: the left renders as anisotropyStrength 1 without a texture (turned
+    by the texels' direction, ALONG_TANGENT), the right as an isotropic lobe (strength 0), to float rounding (the
+    same paths; the texels hold a = 1 and 0 exactly); columns beside the seam, where a pixel's samples fall on both
+    texels, are left out. The two untextured images differ on each side, so each half shows which weight it got."""
     textured = _render(_anisotropy_plane_two_halves(tmp_path / "halves.glb", [255, 0], 1.0), tmp_path)
-    stretched = _render(_anisotropy_plane_two_halves(tmp_path / "stretched.glb", None, 1.0), tmp_path)
+    stretched = _render(_anisotropy_plane_two_halves(tmp_path / "stretched.glb", None, 1.0, ALONG_TANGENT), tmp_path)
     round_lobe = _render(_anisotropy_plane_two_halves(tmp_path / "round.glb", None, 0.0), tmp_path)
     left, right = slice(0, 7), slice(9, 16)
     scale = stretched.max()
@@ -274,6 +285,25 @@ def test_a_two_valued_anisotropy_texture_renders_each_half_as_its_untextured_str
     np.testing.assert_allclose(textured[:, right], round_lobe[:, right], rtol=1e-3, atol=1e-6 * scale)
     for half in (left, right):
         assert np.abs(stretched[:, half] - round_lobe[:, half]).max() > 0.05 * scale
+
+
+def test_a_two_valued_anisotropy_direction_renders_each_half_as_its_untextured_rotation(tmp_path):
+    """anisotropyTexture's RG: (255, 128) on the left half, (128, 255) on the right, d = (1, 1/255) and (1/255, 1),
+    with anisotropyRotation 30°: the left renders as the untextured rotation 30° + atan2(1, 255), the right as
+    30° + atan2(255, 1) (the lobe across the tangent), to float rounding (the same paths); columns beside the seam
+    are left out. The two untextured images differ on each side, so each half shows which direction it got."""
+    turn = math.pi / 6
+    texels = [[255, 128, 255], [128, 255, 255]]
+    textured = _render(_anisotropy_plane_two_halves(tmp_path / "dir.glb", None, 1.0, turn, texels=texels), tmp_path)
+    along = _render(_anisotropy_plane_two_halves(tmp_path / "along.glb", None, 1.0, turn + ALONG_TANGENT), tmp_path)
+    across = math.atan2(1.0, 1.0 / 255.0)
+    turned = _render(_anisotropy_plane_two_halves(tmp_path / "across.glb", None, 1.0, turn + across), tmp_path)
+    left, right = slice(0, 7), slice(9, 16)
+    scale = along.max()
+    np.testing.assert_allclose(textured[:, left], along[:, left], rtol=1e-3, atol=1e-6 * scale)
+    np.testing.assert_allclose(textured[:, right], turned[:, right], rtol=1e-3, atol=1e-6 * scale)
+    for half in (left, right):
+        assert np.abs(along[:, half] - turned[:, half]).max() > 0.05 * scale
 
 
 def _anisotropic_plane_with_tangents(path, uvs, tangent):
@@ -313,7 +343,7 @@ def test_the_anisotropy_rotation_turns_toward_the_signed_bitangent_on_a_mirrored
     assert np.abs(mirror - flipped).mean() < 0.05 * wrong
 
 
-def _specular_plane_two_halves(path, alphas: list[int] | None, factor: float):
+def _specular_plane_two_halves(path, alphas: list[int] | None, factor: float, colours=None, colour_factor=None):
     """A near-black dielectric plane (index 1.5, roughness 0.3) lit by a point light, with KHR_materials_specular's
     factor `factor` and specularTexture's A `alphas` over its halves (u < ½, u > ½), or no texture: what it shows
     is mostly its specular reflection."""
@@ -323,6 +353,11 @@ def _specular_plane_two_halves(path, alphas: list[int] | None, factor: float):
     if alphas is not None:
         pixels = np.array([[[255, 255, 255, a] for a in alphas]])
         extension["specularTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
+    if colours is not None:
+        pixels = np.array([[[c, c, c, 255] for c in colours]])
+        extension["specularColorTexture"] = {"index": gltf.image_texture(pixels, sampler={"magFilter": 9728})}
+    if colour_factor is not None:
+        extension["specularColorFactor"] = [colour_factor] * 3
     material = gltf.material(
         pbrMetallicRoughness={
             "baseColorFactor": [0.02, 0.02, 0.02, 1.0],
@@ -359,9 +394,12 @@ def test_a_two_valued_specular_texture_renders_each_half_as_its_untextured_facto
         assert np.abs(strong[:, half] - weak[:, half]).max() > 0.05 * scale
 
 
-def test_the_specular_texture_becomes_a_grey_specular_level_and_the_colour_texture_is_named(tmp_path):
-    """specularTexture (A) times specularFactor becomes principled's textured `specular` in place of the index; a
-    specularColorTexture, a colour principled cannot carry, is named; the TOML loads."""
+def test_the_specular_textures_become_a_grey_specular_level_their_product(tmp_path):
+    """specularTexture (A) and specularColorTexture together become principled's textured `specular` in place of the
+    index: a scale texture of the colour texture's level (the luminance of F0 = specularFactor · R0 · texel, over
+    0.08) times A; the TOML loads."""
+    from PIL import Image
+
     gltf = Gltf()
     gltf.json["extensionsUsed"] = ["KHR_materials_specular"]
     index = gltf.image_texture(np.array([[[255, 255, 255, 255], [255, 255, 255, 0]]]))
@@ -376,10 +414,30 @@ def test_the_specular_texture_becomes_a_grey_specular_level_and_the_colour_textu
     path = gltf.write(tmp_path / "model.glb")
     data, ctx = gltf_scene_data(path, tmp_path / "out.toml")
     (table,) = data["materials"].values()
-    assert table["specular"]["texture"] == "bitmap" and "eta" not in table
-    assert any("specularColorTexture is not imported" in w for w in ctx.warnings)
-    assert not any("specularTexture is not imported" in w for w in ctx.warnings)
+    specular = table["specular"]
+    assert specular["texture"] == "scale" and "eta" not in table
+    assert not any("Texture is not imported" in w for w in ctx.warnings)
     import_gltf(path, tmp_path / "loads.toml")
+    (written,) = tomllib.loads((tmp_path / "loads.toml").read_text(encoding="utf-8"))["materials"].values()
+    with Image.open(tmp_path / written["specular"]["tex"]["file"]) as image:  # white texels: 0.5 · 0.04 / 0.08
+        assert np.asarray(image).ravel().tolist() == [64, 64]  # 0.25 to the 8-bit texel
     (loaded,) = {shape.material for shape in load_scene(tmp_path / "loads.toml").shapes}
     # the row's index is the largest texel's: F0 = 0.5 · 0.04 (within the 8-bit texel's rounding)
     assert loaded.specular_texture is not None and _r0(loaded.eta.at(550.0)) == pytest.approx(0.02, rel=0.01)
+
+
+def test_a_two_valued_specular_colour_texture_renders_each_half_as_its_untextured_colour_factor(tmp_path):
+    """specularColorTexture's grey texels, sRGB codes 255 and 170 (linear 1 and 0.40198), with specularFactor 0.8
+    give F0 = 0.8 · 0.04 · texel: principled's specular levels 0.4 and 0.16079, which the 8-bit texels hold to
+    4e-5 (102/255, 41/255). Each half renders as the untextured specularColorFactor of its texel's linear value to
+    float rounding and that texel's rounding; the two untextured images differ on each side."""
+    texel = ((170 / 255 + 0.055) / 1.055) ** 2.4
+    textured = _render(_specular_plane_two_halves(tmp_path / "halves.glb", None, 0.8, colours=[255, 170]), tmp_path)
+    strong = _render(_specular_plane_two_halves(tmp_path / "strong.glb", None, 0.8, colour_factor=1.0), tmp_path)
+    weak = _render(_specular_plane_two_halves(tmp_path / "weak.glb", None, 0.8, colour_factor=texel), tmp_path)
+    left, right = slice(0, 7), slice(9, 16)
+    scale = strong.max()
+    np.testing.assert_allclose(textured[:, left], strong[:, left], rtol=1e-3, atol=1e-6 * scale)
+    np.testing.assert_allclose(textured[:, right], weak[:, right], rtol=1e-3, atol=1e-6 * scale)
+    for half in (left, right):
+        assert np.abs(strong[:, half] - weak[:, half]).max() > 0.05 * scale

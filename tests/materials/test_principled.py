@@ -270,3 +270,18 @@ def test_a_textured_specular_level_is_one_of_the_materials_textures():
     textured = make(specular=spectrace.bitmap(np.full((2, 2), 0.5)))
     assert set(material_textures(textured)) == {"specular"}
     assert material_textures(make(specular=0.5)) == {}
+
+
+def test_a_direction_texture_is_one_of_the_materials_textures_and_must_be_raw_rgb():
+    """anisotropic_direction counts among the material's textures (a mesh without texture coordinates is refused
+    for it); it takes a 3-channel bitmap of data: a grey one, or one read as sRGB colours, is refused in one line."""
+    import spectrace
+    from spectrace.errors import SpectraceError
+    from spectrace.materials import material_textures
+
+    direction = spectrace.bitmap(np.full((2, 2, 3), 0.5))
+    assert set(material_textures(make(anisotropic=0.5, anisotropic_direction=direction))) == {"anisotropic_direction"}
+    with pytest.raises(SpectraceError, match="3-channel"):
+        make(anisotropic=0.5, anisotropic_direction=spectrace.bitmap(np.full((2, 2), 0.5)))
+    with pytest.raises(SpectraceError, match="raw = true"):
+        make(anisotropic=0.5, anisotropic_direction=spectrace.bitmap(np.full((2, 2, 3), 128, np.uint8), srgb=True))

@@ -91,6 +91,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_OPACITY": 0,
         "SCENE_HAS_ONE_SIDED": 0,
         "SCENE_HAS_TANGENT_FRAMES": 0,
+        "SCENE_HAS_DIRECTION_TEXTURES": 0,
         "SCENE_HAS_NORMAL_MAP_HANDEDNESS": 0,
         "SCENE_HAS_FILE_TANGENTS": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
@@ -152,6 +153,17 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         principled_codes = [MATERIALS.codes["principled"], MATERIALS.codes["principledthin"]]
         rows = buffers.materials[np.isin(buffers.materials["type"], principled_codes)]
         assert list(rows["tangent_frame"]) == [tangent_frames], material
+    # A direction texture turns only an anisotropic principled lobe; it is a texture the vertices must look up.
+    direction = spectrace.bitmap(np.array([[[1.0, 0.5, 1.0], [0.5, 1.0, 1.0]]]))
+    for material, turned in (
+        (spectrace.principled(0.5, anisotropic=0.5, anisotropic_direction=direction), 1),
+        (spectrace.principled(0.5, anisotropic_direction=direction), 0),
+        (spectrace.principled(0.5, anisotropic=0.5), 0),
+    ):
+        scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
+        defines = scene_feature_defines(build_scene_buffers(scene))
+        assert defines["SCENE_HAS_DIRECTION_TEXTURES"] == turned, material
+        assert defines["SCENE_HAS_TEXTURES"] == turned, material
 
 
 def test_beckmann_lobes_and_nonlinear_plastics_are_features():

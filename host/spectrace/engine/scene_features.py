@@ -21,7 +21,13 @@ def _materials_have_textures(materials: np.ndarray) -> bool:
     """Some material reads a texture (any of its `*_texture` fields, or a normal or bump map): only then do the path
     vertices need texture coordinates and footprints (the lights' images are looked up at the light's own uv)."""
     fields = [name for name in materials.dtype.names or () if name.endswith("_texture")] + ["normal_map", "bump_map"]
-    return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields)
+    return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields) or _direction_textures(materials)
+
+
+def _direction_textures(materials: np.ndarray) -> bool:
+    """A principled material whose anisotropy turns by a direction texture (its row's k_offset)."""
+    principled = (materials["type"] == MATERIAL_CODES["principled"]) & (materials["tangent_frame"] != 0)
+    return bool(np.any(principled & (materials["k_offset"] != NO_TEXTURE)))
 
 
 def camera_feature_defines(params: np.ndarray) -> dict[str, int]:
@@ -70,6 +76,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),
         "SCENE_HAS_ONE_SIDED": int(bool(np.any(materials["one_sided"] != 0))),
         "SCENE_HAS_TANGENT_FRAMES": int(bool(np.any(materials["tangent_frame"] != 0))),
+        "SCENE_HAS_DIRECTION_TEXTURES": int(_direction_textures(materials)),
         # A smooth triangle with file tangents marks its first corner normal's w (engine/vertex_tangents.py).
         "SCENE_HAS_FILE_TANGENTS": int(bool(np.any(buffers.triangle_normals[::3, 3] != 0))),
         "SCENE_HAS_NORMAL_MAP_HANDEDNESS": int(

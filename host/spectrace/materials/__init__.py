@@ -86,7 +86,7 @@ def _parameter_textures(material) -> dict:
     return {
         p.name: getattr(material, p.name)
         for p in module.PARAMETERS
-        if p.textured and is_texture(getattr(material, p.name))
+        if (p.textured or p.type == "texture") and is_texture(getattr(material, p.name))
     }
 
 

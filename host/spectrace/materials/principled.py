@@ -99,6 +99,15 @@ ANISOTROPIC_ROTATION = Parameter(
     "the tangent is cos θ x + sin θ (n × x), or cos θ x + sin θ w (n × x) where the mesh supplies tangents of "
     "handedness w (glTF's anisotropyRotation, Blender's Anisotropic Rotation × 360°)",
 )
+ANISOTROPIC_DIRECTION = Parameter(
+    "anisotropic_direction",
+    "texture",
+    default=None,
+    type_doc="texture",
+    doc="a raw 3-channel `bitmap` whose red and green give the direction `anisotropic` stretches along per point, "
+    "d = 2 (r, g) − 1 in the frame `anisotropic_rotation` turned (x along it, y toward the signed bitangent), as "
+    "glTF's anisotropyTexture; blue is not read, and a texel of d = 0 leaves the direction as it was",
+)
 SPEC_TINT = _weight("spec_tint", 0.0, "tints the dielectric reflection at normal incidence toward the base colour")
 SHEEN = _weight("sheen", 0.0, "a grazing-angle retro-reflective layer for cloth (Burley's sheen)")
 SHEEN_TINT = _weight("sheen_tint", 0.0, "tints the sheen from white toward the base colour")
@@ -110,7 +119,7 @@ CLEARCOAT_GLOSS = _weight(
 )
 # The scalar weights in the order of the kernel's parameter block (PRINCIPLED_* in kernels/bsdf_principled.cl).
 SCALARS = (ROUGHNESS, ANISOTROPIC, METALLIC, SPEC_TRANS, SPEC_TINT, SHEEN, SHEEN_TINT, CLEARCOAT, CLEARCOAT_GLOSS)
-PARAMETERS = (BASE_COLOR, *SCALARS[:4], ETA, SPECULAR, *SCALARS[4:], ANISOTROPIC_ROTATION)
+PARAMETERS = (BASE_COLOR, *SCALARS[:4], ETA, SPECULAR, *SCALARS[4:], ANISOTROPIC_ROTATION, ANISOTROPIC_DIRECTION)
 # α never falls below 0.001 (Mitsuba's clamp): no smooth (delta) case, whatever the roughness.
 ALWAYS_ROUGH = True
 # The material places its own textures: its scalars' texture indices go into its parameter block, not row fields.
@@ -141,6 +150,9 @@ class PrincipledMaterial(Material):
     anisotropic_rotation: float = 0.0  # degrees
     # A grey texture of the specular level that sets the index per point (eta then holds its largest value's).
     specular_texture: object = None
+    # A raw RGB bitmap turning the anisotropic frame per point by the direction of its (r, g) (kernels'
+    # anisotropy_direction.cl), or None.
+    anisotropic_direction: object = None
 
     is_delta = False  # α never falls below 0.001 (Mitsuba's clamp): every lobe has a density
 
@@ -197,7 +209,27 @@ def from_spec(spec, resolver, key: str) -> PrincipledMaterial:
             spec.anisotropic_rotation, resolver.where(f"{key}.anisotropic_rotation")
         ),
         specular_texture=_texture_or_none(specular),
+        anisotropic_direction=_direction(
+            None if spec.anisotropic_direction is None else resolver.texture(spec.anisotropic_direction, key),
+            resolver.where(f"{key}.anisotropic_direction"),
+        ),
     )
+
+
+def _direction(texture, where: str):
+    """A direction texture: a raw 3-channel bitmap (its values data, as a normal map's are), or None."""
+    if texture is None:
+        return None
+    from spectrace.textures.bitmap import BitmapTexture
+
+    if not isinstance(texture, BitmapTexture) or texture.channels != 3:
+        raise SpectraceError("anisotropic_direction takes a 3-channel (RGB) `bitmap` texture", where=where)
+    if texture.srgb_decoded:
+        raise SpectraceError(
+            f"anisotropic_direction '{texture.source}' is read as sRGB colours; it holds data: give raw = true",
+            where=where,
+        )
+    return texture
 
 
 def _texture_or_none(value):
@@ -220,13 +252,14 @@ def make(
     clearcoat: float = 0.0,
     clearcoat_gloss: float = 0.0,
     anisotropic_rotation: float = 0.0,
+    anisotropic_direction: Any = None,
 ) -> PrincipledMaterial:
     """Mitsuba 3's principled BSDF (docs/materials.md): `base_color` (a reflectance or a texture), `roughness`
     (perceptual: GGX α = max(0.001, roughness²)), `anisotropic`, `metallic`, `spec_trans` (transmission through a
     dielectric of index `eta`: a number, a glass name or coefficients as the dielectric's `ior`; or `specular`, the
     index as a reflectance level, 0.5 for 1.5), `spec_tint`, `sheen`, `sheen_tint`, `clearcoat`, `clearcoat_gloss`:
     each weight a number in [0, 1] or a grey texture; `anisotropic_rotation` (degrees) turns the stretch's
-    direction about the normal."""
+    direction about the normal, and `anisotropic_direction` (a raw RGB bitmap) per point by its (r, g)."""
     values = {
         "roughness": roughness,
         "anisotropic": anisotropic,
@@ -247,6 +280,7 @@ def make(
         **{p.name: number_or_texture(values[p.name], p) for p in SCALARS},
         anisotropic_rotation=ANISOTROPIC_ROTATION.check(anisotropic_rotation, "anisotropic_rotation"),
         specular_texture=_texture_or_none(specular),
+        anisotropic_direction=_direction(anisotropic_direction, "anisotropic_direction"),
     )
 
 
@@ -276,6 +310,8 @@ def write_row(row: np.ndarray, material: PrincipledMaterial, table: SpectrumTabl
         row["roughness_texture"] = textures.add(material.specular_texture, "float")
     if row["tangent_frame"]:
         row["tangent_rotation"] = np.radians(material.anisotropic_rotation)
+        if material.anisotropic_direction is not None:  # the row's k_offset: principled has no k
+            row["k_offset"] = textures.add(material.anisotropic_direction, "vector")
 
 
 def write_base_color(row: np.ndarray, base_color, table: SpectrumTable, textures) -> None:
@@ -372,8 +408,8 @@ def to_mitsuba(material: PrincipledMaterial, exporter) -> dict:
         raise exporter.refuse("a principled material with a dispersive eta")
     if material.specular_texture is not None or any(is_texture(getattr(material, p.name)) for p in SCALARS):
         raise exporter.refuse("a principled material with a textured weight is not exported yet")
-    if material.anisotropic_rotation != 0.0:
-        raise exporter.refuse("a principled material with an anisotropic_rotation (Mitsuba's has none)")
+    if material.anisotropic_rotation != 0.0 or material.anisotropic_direction is not None:
+        raise exporter.refuse("a principled material with an anisotropic_rotation or direction (Mitsuba's has none)")
     entry: dict = {
         "type": NAME,
         "base_color": exporter.spectrum(material.base_color),

@@ -231,6 +231,8 @@ def _number_or_texture(number, textured):
 
 
 def _field(parameter: Parameter) -> tuple:
+    if parameter.type == "texture":  # a material's own texture of data (principled's anisotropic_direction)
+        return SpectrumOrTexture | None, Field(default=None, description=parameter.doc)
     annotation: Any = _ANNOTATIONS[parameter.type]
     default: object
     if parameter.required:

@@ -73,7 +73,7 @@ def scene_data(ctx: BlendImport, bpy, scene, depsgraph=None) -> dict:
     """The scene table of a Blender scene's evaluated state (`depsgraph`: a render's, default the view layer's)."""
     from spectrace.interop.blender.cameras import camera
     from spectrace.interop.blender.lights import light
-    from spectrace.interop.blender.materials import material_name
+    from spectrace.interop.blender.materials import material_name, normal_mapped
     from spectrace.interop.blender.meshes import evaluated_meshes
     from spectrace.interop.blender.world import environment
 
@@ -107,7 +107,9 @@ def scene_data(ctx: BlendImport, bpy, scene, depsgraph=None) -> dict:
         if key not in pieces:
             found = []
             slots = obj.material_slots
-            for slot, mesh in evaluated_meshes(obj).items():
+            where = f"object '{obj.original.name}'"
+            tangents = normal_mapped(ctx, obj, where)
+            for slot, mesh in evaluated_meshes(obj, tangents, partial(ctx.warn, where)).items():
                 material = slots[slot].material if slot < len(slots) else None
                 base = obj.original.name
                 file = ctx.file_name(f"{base}_{slot}" if len(slots) > 1 else base, ".ply")

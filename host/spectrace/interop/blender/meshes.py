@@ -81,8 +81,14 @@ def _compact(faces: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
     return np.flatnonzero(used), relabel[faces]
 
 
-def evaluated_meshes(obj) -> dict[int, MeshData]:
-    """Material slot index -> the triangles of that slot, of an evaluated object (one that has a mesh)."""
+def evaluated_meshes(obj, with_tangents: bool = False, warn=None) -> dict[int, MeshData]:
+    """Material slot index -> the triangles of that slot, of an evaluated object (one that has a mesh).
+
+    `with_tangents` (a normal map shades it) adds each corner's MikkTSpace tangent and bitangent sign on the UV map
+    the export uses, as Cycles frames its normal maps (xyz along +u, w the sign: the bitangent is w (n × t), up the
+    image), with the corner normals MikkTSpace was given, flat faces' included (a file's tangents go with vertex
+    normals). Blender computes tangents on triangles and quads only: a mesh with larger polygons keeps the frame
+    of its texture coordinates, and `warn` is told."""
     mesh = obj.to_mesh()
     try:
         if mesh is None or len(mesh.polygons) == 0:
@@ -103,15 +109,19 @@ def evaluated_meshes(obj) -> dict[int, MeshData]:
         normals = None if domain == "FACE" else _read(mesh.corner_normals, "vector", corner_count, 3, np.float32)
         uv_layer = mesh.uv_layers.active
         uvs = _read(uv_layer.uv, "vector", corner_count, 2, np.float32) if uv_layer is not None else None
+        tangents = _tangents(mesh, uv_layer, corner_count, warn) if with_tangents and uvs is not None else None
+        if tangents is not None and normals is None:
+            normals, domain = _read(mesh.corner_normals, "vector", corner_count, 3, np.float32), "CORNER"
     finally:
         obj.to_mesh_clear()
     # smooth shading (normals per vertex) needs no normal in the key: corners of one vertex hold the same one
-    keyed = [a for a in (normals if domain == "CORNER" else None, uvs) if a is not None]
+    keyed = [a for a in (normals if domain == "CORNER" else None, uvs, tangents) if a is not None]
     label, first = shared_corners(corner_vertex, np.column_stack(keyed) if keyed else None, vertex_count)
     faces_all = label[corners]
     vertices_all = positions[corner_vertex[first]].astype(np.float64)
     normals_all = normals[first].astype(np.float64) if normals is not None else None
     uvs_all = uvs[first].astype(np.float64) if uvs is not None else None
+    tangents_all = tangents[first].astype(np.float64) if tangents is not None else None
     if slots is None or np.all(slots == slots[0]):
         groups = [(int(slots[0]) if slots is not None else 0, faces_all)]
     else:
@@ -127,5 +137,22 @@ def evaluated_meshes(obj) -> dict[int, MeshData]:
             faces=local.astype(np.int64),
             normals=normals_all[used] if normals_all is not None else None,
             uvs=uvs_all[used] if uvs_all is not None else None,
+            tangents=tangents_all[used] if tangents_all is not None else None,
         )
     return found
+
+
+def _tangents(mesh, uv_layer, corner_count: int, warn) -> np.ndarray | None:
+    """(corners, 4): each corner's MikkTSpace tangent and bitangent sign on `uv_layer`, or None (a warning) where
+    Blender cannot compute them."""
+    try:
+        mesh.calc_tangents(uvmap=uv_layer.name)
+    except RuntimeError as error:
+        if warn is not None:
+            warn(f"{error}".strip().removeprefix("Error: ") + " (its normal map follows the texture coordinates)")
+        return None
+    tangents = np.empty((corner_count, 4), dtype=np.float32)
+    tangents[:, :3] = _read(mesh.loops, "tangent", corner_count, 3, np.float32)
+    tangents[:, 3] = _read(mesh.loops, "bitangent_sign", corner_count, 1, np.float32)
+    mesh.free_tangents()
+    return tangents

@@ -71,38 +71,60 @@ def _specular(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
     for i, value in enumerate(colour):
         if not (value >= 0.0 and math.isfinite(value)):
             raise doc.fail(f"{where}/specularColorFactor/{i}", f"must be a number ≥ 0, got {value:g}")
-    if "specularColorTexture" in extension:
-        ctx.warn(
-            f"{where}/specularColorTexture",
-            f"{SPECULAR}'s specularColorTexture is not imported (principled's specular level is grey; its factor is)",
-        )
     info = extension.get("specularTexture")
-    if info is None and factor == 1.0 and colour == [1.0, 1.0, 1.0]:
+    colour_info = extension.get("specularColorTexture")
+    if info is None and colour_info is None and factor == 1.0 and colour == [1.0, 1.0, 1.0]:
         return
     if "spec_trans" in table:
         ctx.warn(where, f"{SPECULAR} on a transmitting material is not imported (its ior sets the refraction)")
         return
     r0 = ((_eta(table) - 1.0) / (_eta(table) + 1.0)) ** 2
     f0 = factor * sum(w * min(r0 * c, 1.0) for w, c in zip(REC709_Y, colour, strict=True))
-    if 0.0 < factor < 1.0 or max(colour) - min(colour) > 1e-6:
+    if 0.0 < factor < 1.0 or max(colour) - min(colour) > 1e-6 or colour_info is not None:
         ctx.warn(
             where,
             f"{SPECULAR} is approximated by the index of its F0's luminance (a coloured F0, and a specularFactor's "
             "lower grazing reflectance, are not modelled)",
         )
+    level = f0 / 0.08  # principled's specular level: its F0 is 0.08 specular
+    mapped = None
+    if colour_info is not None:
+        mapped = _specular_colour(ctx, colour_info, f"{where}/specularColorTexture", factor, r0, colour)
+        # the level's other factor, specularTexture's A, multiplies in as a scale texture's factor
+        level = 1.0 if mapped is not None else level
     if info is not None:
-        # F0 = A · f0 per texel is principled's specular level 12.5 F0 (its F0 is 0.08 specular), the index that
-        # level gives per hit (bsdf_principled.cl); above the level 1 (F0 0.08, an index of 1.8) it is clipped.
-        level = f0 / 0.08
+        # F0 = A · f0 per texel is principled's specular level 12.5 F0, the index that level gives per hit
+        # (bsdf_principled.cl); above the level 1 (F0 0.08, an index of 1.8) it is clipped.
         at = f"{where}/specularTexture"
-        mapped = texture(ctx, info, at, "alpha", curve=(f"specular{level:.6g}", lambda a: level * a))
-        if mapped is not None:
-            if level > 1.0:
-                ctx.warn(at, f"{SPECULAR}'s F0 above 0.08 (an index above 1.8) is clipped there in the texture")
-            table.pop("eta", None)
-            table["specular"] = mapped
-            return
+        alpha = texture(ctx, info, at, "alpha", curve=(f"specular{level:.6g}", lambda a: level * a))
+        if alpha is not None and level > 1.0:
+            ctx.warn(at, f"{SPECULAR}'s F0 above 0.08 (an index above 1.8) is clipped there in the texture")
+        if alpha is not None:
+            mapped = alpha if mapped is None else {"texture": "scale", "tex": mapped, "scale": alpha}
+    if mapped is not None:
+        table.pop("eta", None)
+        table["specular"] = mapped
+        return
     table["eta"] = eta_from_f0(f0)
+
+
+def _specular_colour(ctx: GltfImport, info, at: str, factor: float, r0: float, colour: list[float]) -> dict | None:
+    """specularColorTexture (sRGB) as a grey texture of principled's specular level, texel by texel the luminance
+    of glTF's F0 = specularFactor · min(R0 · specularColorFactor · texel, 1) over 0.08 (clipped at 1, F0 0.08):
+    what the factor alone maps to, with the texel's colour in it. The hue, which principled's tint (toward the
+    base colour) cannot carry, is left out with the warning above."""
+    weights = np.asarray(REC709_Y) * factor / 0.08
+    scale = r0 * np.asarray(colour)
+
+    def level(codes: np.ndarray) -> np.ndarray:
+        c = np.where(codes <= 0.04045, codes / 12.92, ((codes + 0.055) / 1.055) ** 2.4)
+        return (np.minimum(scale * c, 1.0) @ weights)[..., None]
+
+    name = f"specular_colour{factor:.6g}_{r0:.6g}_" + "_".join(f"{c:.6g}" for c in colour)
+    mapped = texture(ctx, info, at, "rgb", curve=(name, level))
+    if mapped is not None and float(np.minimum(scale, 1.0) @ weights) > 1.0:  # a white texel's level
+        ctx.warn(at, f"{SPECULAR}'s F0 above 0.08 (an index above 1.8) is clipped where the texture reaches it")
+    return mapped
 
 
 def _dispersion(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:
@@ -139,8 +161,8 @@ def anisotropic_weight(strength, roughness: float):
 
 def _anisotropy(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughness: float) -> None:
     """The strength (anisotropyStrength times the texture's B) becomes principled's `anisotropic`, a texture baked
-    texel by texel where the file has one; the direction (anisotropyRotation; the texture's RG) turns the lobe by
-    `anisotropic_rotation`, a number, so the texture's per-texel direction is named and left out."""
+    texel by texel where the file has one; the direction turns the lobe by `anisotropic_rotation`
+    (anisotropyRotation) and, per texel, by `anisotropic_direction` (the texture's RG, raw)."""
     doc = ctx.doc
     extension = doc.extension(entry, ANISOTROPY, pointer)
     if extension is None:
@@ -161,7 +183,9 @@ def _anisotropy(ctx: GltfImport, table: dict, entry: dict, pointer: str, roughne
         mapped = texture(ctx, info, at, "blue", curve=curve)
         if mapped is not None:
             weight = mapped
-            ctx.warn(at, f"{ANISOTROPY}'s per-texel direction (RG) is not imported (its strength, B, is)")
+            # RG: the direction per texel, turned by anisotropyRotation (kernels/anisotropy_direction.cl)
+            if (direction := texture(ctx, info, at, "rgb")) is not None:
+                table["anisotropic_direction"] = direction
     table["anisotropic"] = weight
     degrees = math.fmod(math.degrees(rotation), 360.0)
     if degrees != 0.0:

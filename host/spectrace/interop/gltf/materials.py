@@ -191,7 +191,7 @@ def _extensions(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None
 
 
 # The principled keys a thin sheet (principledthin) has no counterpart of.
-_NOT_THIN = ("metallic", "clearcoat", "clearcoat_gloss", "specular", "anisotropic_rotation")
+_NOT_THIN = ("metallic", "clearcoat", "clearcoat_gloss", "specular", "anisotropic_rotation", "anisotropic_direction")
 
 
 def _diffuse_transmission(ctx: GltfImport, table: dict, entry: dict, pointer: str) -> None:

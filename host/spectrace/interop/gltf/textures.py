@@ -27,6 +27,7 @@ ROLES = {
     "red": ((0,), False),  # KHR_materials_transmission, _clearcoat: their factor in R
     "gloss": ((1,), False),  # KHR_materials_clearcoat's roughness texture: G, written as 1 − roughness
     "blue": ((2,), False),  # KHR_materials_anisotropy's strength: B
+    "rgb": ((0, 1, 2), False),  # code values for a curve of all three (which decodes an sRGB colour itself)
 }
 
 
@@ -108,7 +109,7 @@ def texture(
             pixels = 255.0 - pixels
         if cutoff is not None:
             pixels = (pixels >= cutoff * 255.0) * 255.0
-        if curve is not None:
+        if curve is not None:  # a curve of several channels may return one
             pixels = np.round(np.clip(curve[1](pixels / 255.0), 0.0, 1.0) * 255.0)
         base = f"image{source}_{curve[0] if curve else role if cutoff is None else 'mask'}"
         ctx.images[key] = ctx.add_png(base, pixels[..., 0] if pixels.shape[2] == 1 else pixels)
