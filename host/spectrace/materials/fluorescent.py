@@ -21,8 +21,8 @@ white Lambertian row (the re-emission's lobe) in `k_offset`; `reflectance_offset
 `transmittance_offset` the normalised emission e(λ) and, a row on, its CDF, `coat_table_offset` the CDF of
 a(λ)·λ over the spectrum table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance`
 ∫ a dλ (nm), `alpha` Q (a textured Q: its largest value, the texture in `roughness_texture`).
-spectrace.materials appends the two rows after it. The path tracer and the light tracer transport light through
-it; the other integrators refuse a scene holding one (`integrator_problem`).
+spectrace.materials appends the two rows after it. The path tracer, the light tracer and BDPT transport light
+through it (kernels/bdpt_fluorescence.cl); the other integrators refuse a scene holding one (`integrator_problem`).
 """
 
 from dataclasses import dataclass, field
@@ -46,7 +46,7 @@ PBRT_NONE = "pbrt-v4 has no fluorescent material: each of its wavelengths is tra
 # The Material row fields holding the base's row index and the re-emission lobe's.
 ROW_FIELDS = ("eta_offset", "k_offset")
 # The integrators that transport light through a change of wavelength.
-INTEGRATORS = ("path", "light")
+INTEGRATORS = ("path", "light", "bdpt")
 YIELD_RANGE = Range(0.0, 1.0)
 PARAMETERS = (
     Parameter(
@@ -302,5 +302,5 @@ def integrator_problem(scene, integrator: str) -> str | None:
     where = materials[0].key or "a material"
     return (
         f"integrator '{integrator}' does not transport light through a change of wavelength ({where} is "
-        f"fluorescent); use integrator 'path' or 'light'"
+        f"fluorescent); use integrator " + ", ".join(f"'{name}'" for name in INTEGRATORS)
     )
