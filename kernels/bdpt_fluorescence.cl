@@ -77,11 +77,13 @@ inline int bdpt_dye_choice(const Scene *scene, const SampledWavelengths *w, Samp
         *scatter *= before.x != 0.0f ? s->throughput.x / before.x : 1.0f;
         return 0;
     }
+#ifndef BDPT_ONE_STRATEGY /* test builds keep one of BDPT's strategies, which this part is none of */
     float4 radiance = (float4)(0.0f);
     if (path_scatter(scene, path_wavelengths(s, w), sampler, s, pv, &radiance, rays_traced)) {
         radiance += trace_path_state(scene, w, sampler, s, rays_traced);
     }
     *inelastic += radiance;
+#endif
     return 1;
 }
 

@@ -9,12 +9,23 @@ XYZ is compared with that radiance integrated here against colour-science's CIE 
 blocks) dyed and its lamp replaced by one that shines in the dye's excitation band alone, so that the green the
 image shows is re-emitted light (nine tenths of its Y) and the blue is reflected: BDPT, the path tracer and the
 light tracer, which reach the two parts by different strategies, agree region and block by block within 5 standard
-errors from independent replicas (tests/replica_agreement.py)."""
+errors from independent replicas (tests/replica_agreement.py).
+
+The closed enclosure of tests/render/test_bdpt.py (walls emitting Le and reflecting ρ diffusely) with its walls dyed
+(excitation at 400-460 nm, emission around 560 nm, so that a path re-emits at most once): its elastic paths of k
+segments still carry Le ρ^(k−1) at every wavelength (the base is the whole elastic part), so each BDPT strategy
+kept alone estimates that for k = 3, and their MIS-weighted images add up to it: the weights, whose densities at the
+dyes carry each side's probability of keeping the base, still sum to one. The whole render adds the paths that
+re-emit once, at any of their k − 1 inner vertices: L(λo) = Le Σ_{k≤d} ρ^(k−1) + Le C(λo) Σ_{2≤k≤d} (k − 1) ρ^(k−2)
+with C(λo) = Q e(λo)/λo ∫ a λ dλ."""
 
 import dataclasses
 
 import numpy as np
 import pytest
+from tests.render import test_bdpt
+from tests.render.test_bdpt import SEGMENTS, _enclosure, _image_mean
+from tests.render.test_light_tracer import ALBEDO, EMITTED
 
 import spectrace as S
 from replica_agreement import assert_replicas_agree, spectrace_replicas
@@ -25,6 +36,8 @@ from spectrace.scene.model import Scene
 from spectrace.spectral.grid import GRID_NM
 from spectrace.spectral.spectrum import Spectrum
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
+
+one_strategy = test_bdpt.strategy_device  # the fixture building BDPT with one strategy kept
 
 SIDE = 16
 REGION = (slice(4, 12), slice(4, 12))  # 64 pixels, all on the sphere
@@ -158,3 +171,58 @@ def test_a_bdpt_render_split_into_passes_has_the_same_bits(device):
     split = Renderer(scene, device)
     split.render(spp=8, pass_spp=3)
     np.testing.assert_array_equal(whole.image().xyz, split.image().xyz)
+
+
+ENCLOSURE_EXCITATION = np.where((GRID_NM >= 400) & (GRID_NM <= 460), 0.8, 0.0)
+
+
+def _dyed_enclosure(max_depth: int) -> Scene:
+    scene = _enclosure(max_depth)
+    dyed = [
+        dataclasses.replace(
+            shape, material=S.fluorescent(shape.material, Spectrum(ENCLOSURE_EXCITATION), Spectrum(EMISSION), 1.0)
+        )
+        for shape in scene.shapes
+    ]
+    return scene.with_overrides(shapes=dyed)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("s", range(SEGMENTS + 1))
+def test_each_strategy_alone_estimates_the_elastic_paths_of_its_length_in_a_dyed_enclosure(one_strategy, s):
+    device, chosen = one_strategy
+    chosen |= {"s": s, "t": SEGMENTS + 1 - s, "unweighted": 1}
+    # unweighted next-event estimation's 1/d² near the box's edges makes its replicas the noisiest
+    replica_spp = 384 if s == 1 else 96
+    mean, standard_error = _image_mean(Renderer(_dyed_enclosure(SEGMENTS), device), 8, replica_spp)
+    assert_within_standard_errors(mean, EMITTED * ALBEDO ** (SEGMENTS - 1), standard_error, power=0.05)
+
+
+@pytest.mark.slow
+def test_weighted_strategies_add_up_in_a_dyed_enclosure(one_strategy):
+    device, chosen = one_strategy
+    scene = _dyed_enclosure(SEGMENTS).with_overrides(spp=8)
+    sums = []
+    for seed in range(8):
+        total = 0.0
+        for s in range(SEGMENTS + 1):
+            chosen |= {"s": s, "t": SEGMENTS + 1 - s}
+            total += Renderer(scene.with_overrides(seed=seed + 100), device).render().xyz[..., 1].mean()
+        sums.append(total)
+    mean, standard_error = mean_and_standard_error(np.array(sums))
+    assert_within_standard_errors(mean, EMITTED * ALBEDO ** (SEGMENTS - 1), standard_error, power=0.05)
+
+
+def test_a_dyed_enclosure_holds_its_closed_form(device):
+    colour = pytest.importorskip("colour")
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    y_bar = np.interp(GRID_NM, cmfs.wavelengths, cmfs.values[:, 1], left=0.0, right=0.0)
+    emission = EMISSION / np.trapezoid(EMISSION, GRID_NM)
+    reemitted = emission / GRID_NM * np.trapezoid(ENCLOSURE_EXCITATION * GRID_NM, GRID_NM)  # C(λo), Q = 1
+    depth = 3
+    elastic = sum(ALBEDO ** (k - 1) for k in range(1, depth + 1))
+    inelastic = sum((k - 1) * ALBEDO ** (k - 2) for k in range(2, depth + 1))
+    expected = EMITTED * (elastic + inelastic * np.trapezoid(reemitted * y_bar, GRID_NM) / np.trapezoid(y_bar, GRID_NM))
+    mean, standard_error = _image_mean(Renderer(_dyed_enclosure(depth), device), 16, 16)
+    assert_within_standard_errors(mean, expected, standard_error, power=0.02)
+    assert expected > 1.1 * EMITTED * elastic  # the re-emission is a tenth of it or more
