@@ -1,15 +1,17 @@
 """Fluorescent materials in BDPT (kernels/bdpt_fluorescence.cl): elastic paths by every strategy, inelastic ones by
 the path tracer's estimator from the camera side, checked against a closed form, the path and light tracers, and the
-base's own bits.
+base's own bits; and in the local model (`direct`), whose direct light a dye re-emits, against the same closed form.
 
 The closed form is test_fluorescent_path.py's: a Lambertian sphere in a uniform environment E(λ) sends
-L(λo) = ρ(λo) E(λo) + Q e(λo)/λo ∫ a(λi) E(λi) λi dλi toward the camera; BDPT has no spectral bands, so its film
-XYZ is compared with that radiance integrated here against colour-science's CIE 1931 2° functions (film XYZ is
-∫ L cmf dλ / ∫ ȳ dλ, docs/colour.md). The Cornell box has its white surfaces (floor, ceiling, back wall and both
-blocks) dyed and its lamp replaced by one that shines in the dye's excitation band alone, so that the green the
-image shows is re-emitted light (nine tenths of its Y) and the blue is reflected: BDPT, the path tracer and the
-light tracer, which reach the two parts by different strategies, agree region and block by block within 5 standard
-errors from independent replicas (tests/replica_agreement.py).
+L(λo) = ρ(λo) E(λo) + Q e(λo)/λo ∫ a(λi) E(λi) λi dλi toward the camera, all of it direct light; BDPT has no
+spectral bands, so its film XYZ (and the local model's) is compared with that radiance integrated here against
+colour-science's CIE 1931 2° functions (film XYZ is ∫ L cmf dλ / ∫ ȳ dλ, docs/colour.md).
+
+The Cornell box has its white surfaces (floor, ceiling, back wall and both blocks) dyed and its lamp replaced by one
+that shines in the dye's excitation band alone, so that the green the image shows is re-emitted light (nine tenths
+of its Y) and the blue is reflected: BDPT, the path tracer and the light tracer, which reach the two parts by
+different strategies, agree region and block by block within 5 standard errors from independent replicas
+(tests/replica_agreement.py).
 
 The closed enclosure of tests/render/test_bdpt.py (walls emitting Le and reflecting ρ diffusely) with its walls dyed
 (excitation at 400-460 nm, emission around 560 nm, so that a path re-emits at most once): its elastic paths of k
@@ -53,7 +55,7 @@ def _dye(base, quantum_yield=Q):
     return S.fluorescent(base, Spectrum(EXCITATION), Spectrum(EMISSION), quantum_yield=quantum_yield)
 
 
-def _sphere(material, environment: np.ndarray, spp: int) -> Scene:
+def _sphere(material, environment: np.ndarray, spp: int, integrator: str = "bdpt") -> Scene:
     return Scene(
         camera=S.Camera(origin=(0.0, 0.0, -4.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0),
         width=SIDE,
@@ -63,8 +65,8 @@ def _sphere(material, environment: np.ndarray, spp: int) -> Scene:
         max_depth=2,
         spp=spp,
         seed=3,
-        integrator="bdpt",
-        pixels_per_light_path=1,
+        integrator=integrator,
+        pixels_per_light_path=1 if integrator == "bdpt" else None,
     )
 
 
@@ -82,6 +84,7 @@ def _fluorescent_radiance(environment: np.ndarray, quantum_yield: float) -> np.n
     return quantum_yield * normalised / GRID_NM * np.trapezoid(EXCITATION * environment * GRID_NM, GRID_NM)
 
 
+@pytest.mark.parametrize("integrator", ["bdpt", "direct"])
 @pytest.mark.parametrize(
     "case",
     [
@@ -91,7 +94,7 @@ def _fluorescent_radiance(environment: np.ndarray, quantum_yield: float) -> np.n
         "furnace, base of albedo 1 - a",
     ],
 )
-def test_bdpt_renders_the_closed_form_of_a_dyed_sphere(device, case):
+def test_the_closed_form_of_a_dyed_sphere(device, case, integrator):
     if case.startswith("blue"):
         light, base, quantum_yield = np.exp(-0.5 * ((GRID_NM - 445.0) / 8.0) ** 2), S.diffuse(0.0), Q
         elastic = np.zeros_like(GRID_NM)
@@ -99,8 +102,9 @@ def test_bdpt_renders_the_closed_form_of_a_dyed_sphere(device, case):
         light, base, quantum_yield = np.ones_like(GRID_NM), S.diffuse(Spectrum(1.0 - EXCITATION)), 1.0
         elastic = (1.0 - EXCITATION) * light
     expected = _closed_form_xyz(elastic + _fluorescent_radiance(light, quantum_yield))
-    scene = _sphere(_dye(base, quantum_yield), light, spp=16)
-    images = spectrace_replicas(Renderer(scene, device), REPLICAS, 16)
+    spp = {"bdpt": 16, "direct": 64}[integrator]  # the local model's re-emission has next-event estimation alone
+    scene = _sphere(_dye(base, quantum_yield), light, spp=spp, integrator=integrator)
+    images = spectrace_replicas(Renderer(scene, device), REPLICAS, spp)
     for k in range(3):
         mean, error = mean_and_standard_error(images[:, REGION[0], REGION[1], k].mean(axis=(1, 2)))
         assert_within_standard_errors(mean, expected[k], error, sigmas=SIGMAS, what=f"{case}: XYZ[{k}]")
@@ -108,9 +112,10 @@ def test_bdpt_renders_the_closed_form_of_a_dyed_sphere(device, case):
         assert expected[k] < 0.1 * expected.max() or error < 0.05 * expected[k]
 
 
-def test_light_outside_the_excitation_band_is_not_re_emitted_in_bdpt(device):
+@pytest.mark.parametrize("integrator", ["bdpt", "direct"])
+def test_light_outside_the_excitation_band_is_not_re_emitted(device, integrator):
     light = np.exp(-0.5 * ((GRID_NM - 620.0) / 4.0) ** 2)
-    renderer = Renderer(_sphere(_dye(S.diffuse(0.0)), light, spp=16), device)
+    renderer = Renderer(_sphere(_dye(S.diffuse(0.0)), light, spp=16, integrator=integrator), device)
     renderer.render(spp=16)
     assert np.all(renderer.image().xyz[REGION] == 0.0)
 
@@ -155,8 +160,9 @@ def test_bdpt_the_path_tracer_and_the_light_tracer_agree_on_a_fluorescent_cornel
     assert plain[..., 1].mean() < 0.2 * bdpt[..., 1].mean()
 
 
-def test_yield_zero_renders_its_base_bit_for_bit_in_bdpt(device):
-    scene = _box(0.0, 16).with_overrides(integrator="bdpt")
+@pytest.mark.parametrize("integrator", ["bdpt", "direct"])
+def test_yield_zero_renders_its_base_bit_for_bit(device, integrator):
+    scene = _box(0.0, 16).with_overrides(integrator=integrator)
     dyed = Renderer(scene, device)
     dyed.render(spp=8)
     plain = Renderer(_undyed(scene), device)

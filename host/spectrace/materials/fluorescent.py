@@ -21,8 +21,9 @@ white Lambertian row (the re-emission's lobe) in `k_offset`; `reflectance_offset
 `transmittance_offset` the normalised emission e(λ) and, a row on, its CDF, `coat_table_offset` the CDF of
 a(λ)·λ over the spectrum table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance`
 ∫ a dλ (nm), `alpha` Q (a textured Q: its largest value, the texture in `roughness_texture`).
-spectrace.materials appends the two rows after it. The path tracer, the light tracer and BDPT transport light
-through it (kernels/bdpt_fluorescence.cl); the other integrators refuse a scene holding one (`integrator_problem`).
+spectrace.materials appends the two rows after it. The path tracer, the light tracer, BDPT
+(kernels/bdpt_fluorescence.cl) and the local model (`direct`, the dye's re-emission of direct light) transport light
+through it; the other integrators refuse a scene holding one (`integrator_problem`).
 """
 
 from dataclasses import dataclass, field
@@ -46,7 +47,7 @@ PBRT_NONE = "pbrt-v4 has no fluorescent material: each of its wavelengths is tra
 # The Material row fields holding the base's row index and the re-emission lobe's.
 ROW_FIELDS = ("eta_offset", "k_offset")
 # The integrators that transport light through a change of wavelength.
-INTEGRATORS = ("path", "light", "bdpt")
+INTEGRATORS = ("path", "light", "bdpt", "direct")
 YIELD_RANGE = Range(0.0, 1.0)
 PARAMETERS = (
     Parameter(
