@@ -18,9 +18,9 @@
  *   tracer's own estimator (path_scatter, trace_path_state: next-event estimation at λ_in with MIS against BSDF hits,
  *   hero wavelength only), added with weight 1: no BDPT strategy makes such a path, whose first re-emission (seen
  *   from the camera) lies at that vertex.
- * The camera subpath up to the re-emission is the path tracer's too (BSDF sampling, the same choice at each dye), so
- * the inelastic part is estimated exactly as the path tracer estimates it, its paths bounded by max_depth as BDPT's
- * own are (BDPT takes max_depth 1..16).
+ * The camera subpath up to the re-emission is drawn as the path tracer's (BSDF sampling, the same choice at each
+ * dye; only its Russian roulette starts earlier), so the inelastic part is the path tracer's estimate, its paths
+ * bounded by max_depth as BDPT's own are (BDPT takes max_depth 1..16).
  *
  * Units: keeping probabilities are dimensionless; densities as in bdpt.cl. bdpt.cl includes this file only in scenes
  * with the material (SCENE_HAS_FLUORESCENCE), whose other kernels and bits stay as they were. */
@@ -39,7 +39,8 @@ inline float bdpt_dye_keep(const BdptVertex *v, int light_side)
 
 /* A subpath meets surface pv, stored as v: a dye's vertex is shaded by its base (a join evaluates that alone), and
  * keeps both sides' probabilities of choosing the base there, at the hero wavelength: the camera's 1 / (1 + Q e(λ)
- * ∫a) and the light's 1 / (1 + Q a(λ)), fluorescence.cl's 1 − P. */
+ * ∫a) and the light's 1 / (1 + Q a(λ)), fluorescence.cl's 1 − P. Only the MIS densities read them (the walks'
+ * weights are fluorescence.cl's own), so were that choice to change, the weights would still sum to one. */
 inline void bdpt_dye_resolve(const Scene *scene, const SampledWavelengths *w, const PathVertex *pv, BdptVertex *v)
 {
     v->keep_camera = 1.0f;
