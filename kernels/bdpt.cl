@@ -38,7 +38,8 @@
  * Cameras: the pinhole, the thin lens (the eye vertex is the lens point, the t = 1 strategy draws its own
  * lens point as the light tracer does) and the orthographic camera (camera_importance.cl's connections).
  * Homogeneous media: bdpt_medium.cl (scattering points as vertices, transmittance on every connection, to a light
- * at infinity too). Subpaths hold at most BDPT_MAX_VERTICES vertices. */
+ * at infinity too). Fluorescent surfaces: bdpt_fluorescence.cl (paths without a re-emission by every strategy, those
+ * with one by the path tracer from the camera side). Subpaths hold at most BDPT_MAX_VERTICES vertices. */
 #ifndef SPECTRACE_BDPT_CL
 #define SPECTRACE_BDPT_CL
 
@@ -97,6 +98,9 @@ typedef struct {
     int medium;         /* the medium around it: a surface's subpath arrived in it (bdpt_medium.cl) */
     int interior;       /* surfaces: the shape's interior medium, or -1 */
     int at_infinity;    /* a distant or environment light's vertex (its direction in wo) */
+#if SCENE_HAS_FLUORESCENCE
+    float keep_camera, keep_light; /* surfaces: each side's probability of keeping a dye's base (bdpt_fluorescence.cl) */
+#endif
 } BdptVertex;
 
 /* The density with which a solid-angle density pdf_dir at `from` reaches `to`, for the MIS ratios: the area density
@@ -229,6 +233,9 @@ inline float bdpt_light_share(__global const RenderParams *params)
 }
 
 #include "bdpt_medium.cl"
+#if SCENE_HAS_FLUORESCENCE
+#include "bdpt_fluorescence.cl"
+#endif
 
 /* A light's point as the origin of a light subpath, from one 2D draw that picks the light and then the point
  * (pick_light_reusing; the position part of sample_emission), or for a light at infinity its direction (an
@@ -350,7 +357,9 @@ inline int bdpt_keeps(__global const RenderParams *params, int s, int t);
  * vertex: both subpaths cross it unchanged. A light there is still met by the camera subpath, as the path tracer
  * meets it: that strategy (s = 0, with the path so far and the light's point as its last vertex, built in
  * path[count] and then left to be overwritten) is weighted here and added to *seen_through; the strategies that
- * reach the same point as a light vertex count it among theirs, as for any light. */
+ * reach the same point as a light vertex count it among theirs, as for any light. A camera subpath's re-emission at
+ * a fluorescent surface ends it, the path tracer's estimate of the rest added to *seen_through too
+ * (bdpt_fluorescence.cl). */
 inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, Ray ray, float4 beta,
                      float pdf_dir, int adjoint, BdptVertex *path, int max_vertices, uint query_base,
                      float beam_pdf, float light_share, float4 *seen_through, uint *rays_traced)
@@ -406,6 +415,9 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         v->pdf_fwd = bdpt_to_area(pdf_dir, prev, v);
         v->pdf_rev = 0.0f;
         v->mis_sum = 0.0f;
+#if SCENE_HAS_FLUORESCENCE
+        bdpt_dye_resolve(scene, w, &pv, v);
+#endif
         if (seen_light) {
             v->hero = hero;
             if (bdpt_keeps(scene->params, 0, count + 1) && any(v->le != (float4)(0.0f))) {
@@ -417,10 +429,13 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
             continue;
         }
         ++count;
-        __global const Material *material = &scene->materials[pv.info.material];
+        __global const Material *material = &scene->materials[v->material];
         if (material_disperses(material, w)) hero = 1;
         v->hero = hero;
         if (count >= max_vertices) break;
+#if SCENE_HAS_FLUORESCENCE
+        if (bdpt_dye_choice(scene, w, sampler, &s, &pv, adjoint, &scatter, seen_through, rays_traced)) break;
+#endif
         SurfaceContext sc = shading_context(scene, pv.uv, pv.p, pv.footprint,
                                             pv.ns_base, pv.dpdu, pv.tangent_w, adjoint);
         float uc = sample_1d(sampler);
@@ -440,6 +455,10 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
             pdf_dir = bs.pdf;
             pdf_reverse = material_pdf(material, &sc, w, pv.ns, bs.wi, pv.wo);
         }
+#if SCENE_HAS_FLUORESCENCE
+        pdf_dir *= bdpt_dye_keep(v, adjoint);
+        pdf_reverse *= bdpt_dye_keep(v, !adjoint);
+#endif
         prev->pdf_rev = bdpt_to_area(pdf_reverse, v, prev);
         bdpt_extend_mis_sum(path, count - 2, adjoint, light_share);
         s.throughput *= weight;
@@ -541,6 +560,9 @@ inline float bdpt_mis_weight(const Scene *scene, const SampledWavelengths *w, co
         else qs_rev = bdpt_vertex_pdf(scene, w, pt, pt->wo, to_q, qs);
         if (s > 1) qs_minus_rev = bdpt_vertex_pdf(scene, w, qs, -to_q, qs->wo, qs_minus);
     }
+#if SCENE_HAS_FLUORESCENCE
+    bdpt_dye_join_pdfs(pt, qs, s, t, &pt_rev, &pt_minus_rev, &qs_rev, &qs_minus_rev);
+#endif
 
     /* The ratios at the two vertices either side of the connection and their neighbours, then the rest of each
      * subpath's sum as its walk kept it (mis_sum): O(1) per strategy. */

@@ -54,6 +54,38 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     return 1;
 }
 
+/* The rest of path_segment at surface vertex v once its material is settled (a fluorescent one resolved): its
+ * direct light, then the next segment drawn from its BSDF. Returns 1 when the path goes on from the updated state.
+ * BDPT (bdpt_fluorescence.cl) goes on from a camera subpath's re-emission through it. */
+inline int path_scatter(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                        const PathVertex *v, float4 *radiance, uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    int last_segment = max_segments(params);
+    int uncounted_passes = !params->count_thin_passes
+                        && MATERIAL_IS(&scene->materials[v->info.material], MATERIAL_THINDIELECTRIC);
+    if (s->segments >= last_segment && !uncounted_passes) return 0;
+
+    BSDFSample bs;
+    int sampled = light_and_sample_vertex(scene, w, sampler, s, v, 1, radiance, rays_traced, &bs);
+#if FILM_AOVS
+    aov_at_bsdf_sample(&s->aov, material_has_non_delta_lobe(&scene->materials[v->info.material]), sampled,
+                       s->throughput / s->radiance_scale, bs.weight);
+#endif
+    if (!sampled) return 0;
+    /* Straight through a thin sheet, when such passes do not count toward max_depth (count_thin_passes off, as
+     * Mitsuba 3's volpath, whose thindielectric transmission is a null lobe): the path goes on with the same
+     * segment number, even from its last segment. */
+    int uncounted = uncounted_passes && dot(bs.wi, v->n) * dot(v->wo, v->n) < 0.0f;
+    if (s->segments >= last_segment && !uncounted) return 0;
+    IF_POLARIZED(polarized_scatter_vertex(scene, w, s, v, &bs));
+    follow_bsdf_sample(s, v, &bs);
+    if (!survives_russian_roulette(s, params, sample_1d(sampler))) return 0;
+    if (all(s->throughput == (float4)(0.0f))) return 0;
+    if (!uncounted) ++s->segments;  /* below last_segment here, so the next one is allowed */
+    return 1;
+}
+
 /* One segment of a path: trace s->ray, add the light it finds (emission met, next-event estimation at the vertex
  * or scattering point) to *radiance, then draw the next segment. Returns 1 when the path goes on from the updated
  * state, 0 when it has ended. Call it only while s->segments <= max_segments(params).
@@ -116,28 +148,7 @@ inline int path_segment(const Scene *scene, const SampledWavelengths *w, Sampler
     fluorescent_vertex(scene, w, sampler, s, &v);
     w = path_wavelengths(s, w);
 #endif
-    int uncounted_passes = !params->count_thin_passes
-                        && MATERIAL_IS(&scene->materials[v.info.material], MATERIAL_THINDIELECTRIC);
-    if (s->segments >= last_segment && !uncounted_passes) return 0;
-
-    BSDFSample bs;
-    int sampled = light_and_sample_vertex(scene, w, sampler, s, &v, 1, radiance, rays_traced, &bs);
-#if FILM_AOVS
-    aov_at_bsdf_sample(&s->aov, material_has_non_delta_lobe(&scene->materials[v.info.material]), sampled,
-                       s->throughput / s->radiance_scale, bs.weight);
-#endif
-    if (!sampled) return 0;
-    /* Straight through a thin sheet, when such passes do not count toward max_depth (count_thin_passes off, as
-     * Mitsuba 3's volpath, whose thindielectric transmission is a null lobe): the path goes on with the same
-     * segment number, even from its last segment. */
-    int uncounted = uncounted_passes && dot(bs.wi, v.n) * dot(v.wo, v.n) < 0.0f;
-    if (s->segments >= last_segment && !uncounted) return 0;
-    IF_POLARIZED(polarized_scatter_vertex(scene, w, s, &v, &bs));
-    follow_bsdf_sample(s, &v, &bs);
-    if (!survives_russian_roulette(s, params, sample_1d(sampler))) return 0;
-    if (all(s->throughput == (float4)(0.0f))) return 0;
-    if (!uncounted) ++s->segments;  /* below last_segment here, so the next one is allowed */
-    return 1;
+    return path_scatter(scene, w, sampler, s, &v, radiance, rays_traced);
 }
 
 /* Radiance carried back along the path from state `*s` onward, including emission met by s->ray; the state is the

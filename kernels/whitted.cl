@@ -5,6 +5,7 @@
 #define SPECTRACE_WHITTED_CL
 
 #include "path_state.cl"
+#include "fluorescence.cl"
 
 /* One segment of the local model: the counterpart of path_segment (path_tracer.cl), with the same contract. */
 inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
@@ -47,6 +48,11 @@ inline int direct_segment(const Scene *scene, const SampledWavelengths *w, Sampl
     }
     if (v.info.material == TRIANGLE_NO_MATERIAL) return cross_null_boundary(s, &v);
     if (s->segments >= last_segment) return 0;
+#if SCENE_HAS_FLUORESCENCE
+    /* a dye's re-emission of the direct light at λi (its diffuse lobe ends the path), or its base */
+    fluorescent_vertex(scene, w, sampler, s, &v);
+    w = path_wavelengths(s, w);
+#endif
 
     /* Follow the specular lobes only: a sampled non-specular direction ends the path (its light was counted
      * by next-event estimation), which keeps the specular part unbiased. */

@@ -156,7 +156,8 @@ CASES = {
         ),
     ],
     # Green light re-emitted in the red, where Y weighs it less: the image's Y stays below 1 as its energy does
-    # (light moved toward a larger ȳ would raise Y without creating energy). The path and light tracers transport it.
+    # (light moved toward a larger ȳ would raise Y without creating energy). The path and light tracers and BDPT
+    # transport it.
     "fluorescent": [
         Case(
             "green to red dye over its complement",
@@ -164,7 +165,7 @@ CASES = {
             False,
             False,
             fast=("path",),
-            only=("path", "light"),
+            only=("path", "light", "bdpt"),
         )
     ],
 }

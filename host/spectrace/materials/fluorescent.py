@@ -23,8 +23,9 @@ white Lambertian row (the re-emission's lobe) in `k_offset`; `reflectance_offset
 a(λ)·λ over the spectrum table's grid (the excitation wavelength's sampling density), `coat_internal_reflectance`
 ∫ a dλ (nm), `alpha` Q (a textured Q: its largest value, the texture in `roughness_texture`), `ior_model` a
 non-separable matrix's block in the spectra table (MATERIAL_NO_SPECTRUM: none).
-spectrace.materials appends the two rows after it. The path tracer and the light tracer transport light through
-it; the other integrators refuse a scene holding one (`integrator_problem`).
+spectrace.materials appends the two rows after it. The path tracer, the light tracer, BDPT
+(kernels/bdpt_fluorescence.cl) and the local model (`direct`, the dye's re-emission of direct light) transport light
+through it; the other integrators refuse a scene holding one (`integrator_problem`).
 """
 
 from dataclasses import dataclass, field
@@ -50,7 +51,7 @@ PBRT_NONE = "pbrt-v4 has no fluorescent material: each of its wavelengths is tra
 # The Material row fields holding the base's row index and the re-emission lobe's.
 ROW_FIELDS = ("eta_offset", "k_offset")
 # The integrators that transport light through a change of wavelength.
-INTEGRATORS = ("path", "light")
+INTEGRATORS = ("path", "light", "bdpt", "direct")
 YIELD_RANGE = Range(0.0, 1.0)
 PARAMETERS = (
     Parameter(
@@ -318,5 +319,5 @@ def integrator_problem(scene, integrator: str) -> str | None:
     where = materials[0].key or "a material"
     return (
         f"integrator '{integrator}' does not transport light through a change of wavelength ({where} is "
-        f"fluorescent); use integrator 'path' or 'light'"
+        f"fluorescent); use integrator " + ", ".join(f"'{name}'" for name in INTEGRATORS)
     )
