@@ -355,6 +355,27 @@ inline int record_surface_reached(PathState *s, const PathVertex *v, float t, __
     return 0;
 }
 
+#if SCENE_POLARIZED
+/* Next-event estimation's `gathered` (throughput applied) at v, whose light sample `replay` draws again: through the
+ * event's Mueller matrix where it polarises (a rough conductor or dielectric, microfacet_polarized.cl), else
+ * depolarised. Returns the S0 to add to the radiance. Lights reached this way are unpolarised (the host refuses a
+ * polarised area light beside a rough conductor or dielectric). */
+inline float4 polarized_direct_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *replay,
+                                      PathState *s, const PathVertex *v, __global const Material *material,
+                                      const SurfaceContext *sc, float4 gathered)
+{
+    __global const Light *light;
+    LightSample ls;
+    AlignedElement e;
+    float3 x;
+    if (any(gathered != (float4)(0.0f)) && sample_one_light(scene, w, replay, v->p, &light, &ls)
+        && microfacet_polarization(material, sc, w, v->ns, v->wo, ls.wi, &e, &x))
+        return gathered * polarized_gather_event(&s->pol, &e, x, v->wo, gathered);
+    polarized_gather(&s->pol, gathered);
+    return gathered;
+}
+#endif
+
 /* What a path does at a surface before choosing where to go: a dispersive surface keeps only the hero wavelength
  * for everything that follows, direct light included (its BSDF is evaluated at the hero's index of refraction);
  * then next-event estimation, MIS-weighted when use_mis, unless every lobe is a delta lobe. */
@@ -365,9 +386,17 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
         SurfaceContext sc = shading_context(scene, v->uv, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
-        PATH_GATHER(s, radiance, estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
-                                                       v->info.interior, s->medium, use_mis,
-                                                       path_query(sampler, s, QUERY_SHADOW), rays_traced));
+#if SCENE_POLARIZED
+        Sampler replay = *sampler;  /* draws the estimate's light sample again, for its direction */
+#endif
+        float4 direct = estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
+                                              v->info.interior, s->medium, use_mis,
+                                              path_query(sampler, s, QUERY_SHADOW), rays_traced);
+#if SCENE_POLARIZED
+        *radiance += polarized_direct_vertex(scene, w, &replay, s, v, material, &sc, s->throughput * direct);
+#else
+        PATH_GATHER(s, radiance, direct);
+#endif
     }
 }
 

@@ -68,6 +68,22 @@ inline float4 polarized_gather_emitter(PolarizedPath *q, __global const Light *l
     return row[0];
 }
 
+/* Next-event estimation at a vertex seen from wo whose event toward the sampled light (along wi) polarises: the
+ * light's unpolarised S0 leaves the event as E (1, 0, 0, 0) = (1, b, 0, 0) in the event's basis x (e: its aligned
+ * element divided by its (0, 0) entry), which turns into the path's basis and meets the path's matrix. Gathers
+ * S1..S3 of `contribution` (the estimate, throughput applied) and returns what scales its S0, the path's first row
+ * times that Stokes vector. */
+inline float4 polarized_gather_event(PolarizedPath *q, const AlignedElement *e, float3 x, float3 wo,
+                                     float4 contribution)
+{
+    float2 turn = stokes_basis_turn(wo, x, q->basis);
+    float4 s1 = turn.x * e->b, s2 = -turn.y * e->b;
+    float4 row[4];
+    for (int i = 0; i < 4; ++i) row[i] = q->p.m[4 * i] + s1 * q->p.m[4 * i + 1] + s2 * q->p.m[4 * i + 2];
+    for (int i = 0; i < 3; ++i) q->stokes[i] += row[i + 1] * contribution;
+    return row[0];
+}
+
 /* A depolarising event; the path goes on along `d`. */
 inline void polarized_depolarize(PolarizedPath *q, float3 d)
 {

@@ -89,10 +89,11 @@ def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
         (lambda text: text.replace("[integrator]", '[integrator]\ntype = "direct"'), "integrator.type"),
         (
             lambda text: (
-                text + '\n[materials.rough]\ntype = "conductor"\nmetal = "Au"\nroughness = 0.2\n'
+                text.replace("radiance = { value = 1 } }", 'radiance = { value = 1 }, polarization = "linear 0" }')
+                + '\n[materials.rough]\ntype = "conductor"\nmetal = "Au"\nroughness = 0.2\n'
                 '\n[[shapes]]\ntype = "sphere"\nmaterial = "rough"\ntransform = [{ translate = [0, 0, -3] }]\n'
             ),
-            "roughness",
+            "emitter.polarization",
         ),
         (
             lambda text: (
@@ -106,7 +107,7 @@ def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
             "fluorescent",
         ),
     ],
-    ids=["other integrator", "rough conductor", "fluorescent"],
+    ids=["other integrator", "rough conductor beside a polarised light", "fluorescent"],
 )
 def test_unrenderable_polarized_scenes_are_refused_in_one_line(tmp_path, edit, key):
     scene = tmp_path / "scene.toml"

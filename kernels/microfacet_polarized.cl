@@ -1,0 +1,71 @@
+/* The Mueller matrix of a rough conductor's or rough dielectric's microfacet event, for polarised transport
+ * (SCENE_POLARIZED).
+ *
+ * Sources: B. Walter et al., "Microfacet Models for Refraction through Rough Surfaces" (EGSR 2007): a pair of
+ * directions (ωo, ωi) is linked by the one microfacet normal h that reflects (h ∝ ωo + ωi) or refracts
+ * (h ∝ ωo + e ωi, e the index ratio seen from ωo) one into the other, and the event is the smooth interface's on
+ * that microfacet; Mitsuba 3's documentation, developer guide "Polarization" and its rough conductor: the Fresnel
+ * term becomes the Fresnel Mueller matrix at h, in the plane of incidence spanned by the two directions and h.
+ *
+ * Contract: the unpolarised BSDF (bsdf_conductor.cl, bsdf_dielectric.cl) is unchanged and gives the event's (0, 0)
+ * entry, D G F / (4 cos θo) and its refraction twin; D, G and the Jacobians are scalars common to every entry, so
+ * the Mueller matrix is that entry times the smooth Fresnel shape (1, b, c, d) at h (fresnel_polarized.cl), in the
+ * basis x = the unit normal of the plane of incidence, y = k × x, for both beams (mueller.cl's conventions). The
+ * shape is a function of (ωo, ωi) alone, so BSDF sampling, next-event estimation and MIS hits on emitters all see
+ * the same matrix. Units: dimensionless. */
+#ifndef SPECTRACE_MICROFACET_POLARIZED_CL
+#define SPECTRACE_MICROFACET_POLARIZED_CL
+
+#include "material.cl"
+#include "fresnel_polarized.cl"
+
+/* The normal of the plane of incidence through h and wo (world space), or any direction normal to wo when h is
+ * along wo (normal incidence on the microfacet, where every plane is one). */
+inline float3 microfacet_plane_normal(float3 h, float3 wo, float3 fallback)
+{
+    float3 s = cross(h, wo);
+    float l = length(s);
+    return l > 1.0e-6f ? s / l : stokes_basis_from(wo, fallback);
+}
+
+/* The event of a rough conductor or dielectric m between wo (toward the viewer) and wi (toward the light), at a
+ * surface of shading normal n, as an aligned element with the x axis *x of both beams. Returns 0 for any other
+ * material, a smooth one (its delta events are material_polarization's) or a pair no microfacet links. */
+inline int microfacet_polarization(__global const Material *m, const SurfaceContext *sc,
+                                   const SampledWavelengths *w, float3 n, float3 wo, float3 wi, AlignedElement *e,
+                                   float3 *x)
+{
+    int conductor = MATERIAL_IS(m, MATERIAL_CONDUCTOR);
+    if (!conductor && !MATERIAL_IS(m, MATERIAL_DIELECTRIC)) return 0;
+    ShadingFrame frame = material_frame(m, sc, n, wo);
+    float3 lo = to_local(&frame, wo), li = to_local(&frame, wi);
+    if (conductor) {
+        ConductorParams p = conductor_params(m, sc, w);
+        if (ggx_is_smooth(p.alpha) || !(lo.z > 0.0f && li.z > 0.0f)) return 0;
+        float3 h = normalize(lo + li);
+        float c = fabs(dot(lo, h));
+        *e = aligned_from_shapes(fresnel_reflection_shape(c, (float2)(p.eta.x, p.k.x)),
+                                 fresnel_reflection_shape(c, (float2)(p.eta.y, p.k.y)),
+                                 fresnel_reflection_shape(c, (float2)(p.eta.z, p.k.z)),
+                                 fresnel_reflection_shape(c, (float2)(p.eta.w, p.k.w)));
+        *x = microfacet_plane_normal(to_world(&frame, h), wo, frame.tangent);
+        return 1;
+    }
+    DielectricParams p = dielectric_params(m, sc, w);
+    if (ggx_is_smooth(p.alpha) || lo.z == 0.0f || li.z == 0.0f) return 0;
+    int reflection = lo.z * li.z > 0.0f;
+    float3 h = reflection ? lo + li : lo + dielectric_eta_from(lo.z, p.eta) * li;
+    float l = length(h);
+    if (!(l > 0.0f)) return 0;
+    h /= l;
+    /* The light comes from wi's side: its index ratio and its cosine on the microfacet (the normalised shape of a
+     * refraction is the same both ways). */
+    float eta = dielectric_eta_from(li.z, p.eta);
+    float c = fabs(dot(li, h));
+    float4 shape = reflection ? fresnel_reflection_shape(c, (float2)(eta, 0.0f)) : fresnel_transmission_shape(c, eta);
+    *e = aligned_from_shapes(shape, shape, shape, shape);
+    *x = microfacet_plane_normal(to_world(&frame, h), wo, frame.tangent);
+    return 1;
+}
+
+#endif
