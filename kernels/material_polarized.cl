@@ -1,18 +1,16 @@
-/* The Mueller matrix of a sampled BSDF event, for polarised transport (SCENE_POLARIZED): the materials whose events
- * polarise (dielectrics and conductors by the Fresnel equations, smooth or rough, a smooth plastic's coat, the mirror as a
+/* The Mueller matrix of a sampled delta event, for polarised transport (SCENE_POLARIZED): the materials whose events
+ * polarise (smooth dielectrics and conductors by the Fresnel equations, a smooth plastic's coat, the mirror as a
  * perfect conductor, polarisers, retarders) give theirs as an aligned element (mueller.cl) with the bases of the two beams; every
  * other event depolarises, as Mitsuba 3's BSDFs without a polarised model do (their value becomes the depolariser
  * diag(f, 0, 0, 0)). The element is returned divided by its (0, 0) entry, the event's response to unpolarised
  * light, which the BSDF's own sample weight already carries (its sampling is the unpolarised one, as in Mitsuba).
- * Rough conductors and dielectrics give the Fresnel matrix at the microfacet normal linking the two directions
- * (microfacet_polarized.cl); every other non-delta lobe depolarises, a rough plastic's coat included (as Mitsuba 3's
- * roughplastic). */
+ * Non-delta events are microfacet_polarized.cl's (rough conductors and dielectrics, pplastic); every other one
+ * depolarises, a rough plastic's coat included (as Mitsuba 3's roughplastic). */
 #ifndef SPECTRACE_MATERIAL_POLARIZED_CL
 #define SPECTRACE_MATERIAL_POLARIZED_CL
 
 #include "material.cl"
 #include "fresnel_polarized.cl"
-#include "microfacet_polarized.cl"
 
 /* (1, b, c, d) of every lane as one aligned element. */
 inline AlignedElement aligned_uniform(float4 shape)
@@ -47,11 +45,7 @@ inline int material_polarization(__global const Material *m, const SurfaceContex
                                  float3 n, float3 wo, const BSDFSample *bs, AlignedElement *e, float3 *x_out,
                                  float3 *x_in)
 {
-    if (!bs->is_delta) {
-        if (!microfacet_polarization(m, sc, w, n, wo, bs->wi, e, x_out)) return 0;
-        *x_in = *x_out;
-        return 1;
-    }
+    if (!bs->is_delta) return 0;
     ShadingFrame frame = material_frame(m, sc, n, wo);
     float3 lo = to_local(&frame, wo), li = to_local(&frame, bs->wi);
 #ifdef MATERIAL_POLARIZER

@@ -357,7 +357,7 @@ inline int record_surface_reached(PathState *s, const PathVertex *v, float t, __
 
 #if SCENE_POLARIZED
 /* Next-event estimation's `gathered` (throughput applied) at v, whose light sample `replay` draws again: through the
- * event's Mueller matrix where it polarises (a rough conductor or dielectric, microfacet_polarized.cl), else
+ * event's Mueller matrix where it polarises (a rough conductor or dielectric, pplastic: microfacet_polarized.cl), else
  * depolarised. Returns the S0 to add to the radiance. Lights reached this way are unpolarised (the host refuses a
  * polarised area light beside a rough conductor or dielectric). */
 inline float4 polarized_direct_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *replay,
@@ -366,10 +366,10 @@ inline float4 polarized_direct_vertex(const Scene *scene, const SampledWavelengt
 {
     __global const Light *light;
     LightSample ls;
-    AlignedElement e;
+    Mueller e;
     float3 x;
     if (any(gathered != (float4)(0.0f)) && sample_one_light(scene, w, replay, v->p, &light, &ls)
-        && microfacet_polarization(material, sc, w, v->ns, v->wo, ls.wi, &e, &x))
+        && glossy_polarization(material, sc, w, v->ns, v->wo, ls.wi, &e, &x))
         return gathered * polarized_gather_event(&s->pol, &e, x, v->wo, gathered);
     polarized_gather(&s->pol, gathered);
     return gathered;

@@ -18,6 +18,7 @@
 #define SPECTRACE_POLARIZED_PATH_CL
 
 #include "material_polarized.cl"
+#include "microfacet_polarized.cl"
 
 typedef struct {
     Mueller p;        /* the path's Mueller matrix divided by its (0, 0) entry, the scalar throughput */
@@ -68,18 +69,17 @@ inline float4 polarized_gather_emitter(PolarizedPath *q, __global const Light *l
     return row[0];
 }
 
-/* Next-event estimation at a vertex seen from wo whose event toward the sampled light (along wi) polarises: the
- * light's unpolarised S0 leaves the event as E (1, 0, 0, 0) = (1, b, 0, 0) in the event's basis x (e: its aligned
- * element divided by its (0, 0) entry), which turns into the path's basis and meets the path's matrix. Gathers
- * S1..S3 of `contribution` (the estimate, throughput applied) and returns what scales its S0, the path's first row
- * times that Stokes vector. */
-inline float4 polarized_gather_event(PolarizedPath *q, const AlignedElement *e, float3 x, float3 wo,
-                                     float4 contribution)
+/* Next-event estimation at a vertex seen from wo whose event toward the sampled light polarises: the light's
+ * unpolarised S0 leaves the event as its matrix's first column (e: divided by its (0, 0) entry, in the basis x),
+ * which turns into the path's basis and meets the path's matrix. Gathers S1..S3 of `contribution` (the estimate,
+ * throughput applied) and returns what scales its S0, the path's first row times that Stokes vector. */
+inline float4 polarized_gather_event(PolarizedPath *q, const Mueller *e, float3 x, float3 wo, float4 contribution)
 {
     float2 turn = stokes_basis_turn(wo, x, q->basis);
-    float4 s1 = turn.x * e->b, s2 = -turn.y * e->b;
+    float4 s1 = turn.x * e->m[4] + turn.y * e->m[8], s2 = -turn.y * e->m[4] + turn.x * e->m[8], s3 = e->m[12];
     float4 row[4];
-    for (int i = 0; i < 4; ++i) row[i] = q->p.m[4 * i] + s1 * q->p.m[4 * i + 1] + s2 * q->p.m[4 * i + 2];
+    for (int i = 0; i < 4; ++i)
+        row[i] = q->p.m[4 * i] + s1 * q->p.m[4 * i + 1] + s2 * q->p.m[4 * i + 2] + s3 * q->p.m[4 * i + 3];
     for (int i = 0; i < 3; ++i) q->stokes[i] += row[i + 1] * contribution;
     return row[0];
 }
@@ -98,14 +98,25 @@ inline void polarized_scatter(PolarizedPath *q, float4 *throughput, __global con
                               const SurfaceContext *sc, const SampledWavelengths *w, float3 n, float3 wo,
                               const BSDFSample *bs)
 {
-    AlignedElement e;
     float3 x_out, x_in;
-    if (!material_polarization(m, sc, w, n, wo, bs, &e, &x_out, &x_in)) {
-        polarized_depolarize(q, bs->wi);
-        return;
+    if (bs->is_delta) {
+        AlignedElement e;
+        if (!material_polarization(m, sc, w, n, wo, bs, &e, &x_out, &x_in)) {
+            polarized_depolarize(q, bs->wi);
+            return;
+        }
+        mueller_then_rotate(&q->p, stokes_basis_turn(wo, x_out, q->basis));
+        mueller_then_element(&q->p, &e);
+    } else {
+        Mueller e;
+        if (!glossy_polarization(m, sc, w, n, wo, bs->wi, &e, &x_out)) {
+            polarized_depolarize(q, bs->wi);
+            return;
+        }
+        mueller_then_rotate(&q->p, stokes_basis_turn(wo, x_out, q->basis));
+        mueller_then_matrix(&q->p, &e);
+        x_in = x_out;
     }
-    mueller_then_rotate(&q->p, stokes_basis_turn(wo, x_out, q->basis));
-    mueller_then_element(&q->p, &e);
     float4 f = fmax(q->p.m[0], 0.0f);
     *throughput *= f;
     mueller_scale(&q->p, f);

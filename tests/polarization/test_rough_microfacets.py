@@ -28,6 +28,7 @@ def _toward(incidence: float, azimuth: float) -> np.ndarray:
 LIGHT = 2.5 * _toward(60, 25)
 CONDUCTOR = 'type = "conductor"\neta = { value = 1.2 }\nk = { value = 2.0 }\nroughness = 0.15'
 GLASS = 'type = "dielectric"\nior = 1.5\nroughness = 0.15'
+PPLASTIC = 'type = "pplastic"\nreflectance = { value = 0.5 }\nior = 1.5\nroughness = 0.15'
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -149,7 +150,7 @@ def test_rough_dielectric_refraction_follows_fresnel_on_the_microfacet(tmp_path)
     _assert_linear(stokes, (s1, s2))
 
 
-@pytest.mark.parametrize("material", [CONDUCTOR, GLASS], ids=["conductor", "glass"])
+@pytest.mark.parametrize("material", [CONDUCTOR, GLASS, PPLASTIC], ids=["conductor", "glass", "pplastic"])
 def test_rough_plate_in_a_box_renders_its_unpolarized_image(tmp_path, material):
     """A flat rough plate in a box of diffuse walls: no path meets two polarising events in a row (a plane cannot
     see itself, the walls depolarise), so S0 is the unpolarised render's within 4 standard errors of the
@@ -184,3 +185,17 @@ def _load(tmp_path, text: str, name: str):
     path = tmp_path / f"{name}.toml"
     path.write_text(text)
     return load_scene(path)
+
+
+@pytest.mark.parametrize("material", [CONDUCTOR, PPLASTIC], ids=["conductor", "pplastic"])
+def test_wavefront_renders_rough_polarising_surfaces_as_the_megakernel(tmp_path, device, material):
+    """Both kernel shapes run the same segment function, next-event estimation's polarised gather included: the
+    same bits in the image through the camera's polariser and in every Stokes image."""
+    from spectrace.engine.wavefront import WavefrontRenderer
+
+    scene = _load(tmp_path, _scene(material, LIGHT).replace("fov = 2", "fov = 2\npolarizer_angle = 30"), "scene")
+    megakernel = spectrace.render(scene, progress=False, colour_space="xyz")
+    wavefront = WavefrontRenderer(scene, device).render()
+    assert np.asarray(megakernel.xyz)[..., 1].mean() > 0.01
+    assert np.array_equal(np.asarray(megakernel.xyz), np.asarray(wavefront.xyz))
+    assert np.array_equal(megakernel.aovs["stokes"], wavefront.aovs["stokes"])

@@ -125,12 +125,14 @@ def polarization_defines(scene, buffers: SceneBuffers) -> dict[str, int]:
         )
     fresnel = np.isin(materials["type"], [MATERIAL_CODES[name] for name in _FRESNEL_MATERIALS])
     rough = fresnel & ((materials["alpha"] >= SMOOTH_ALPHA) | (materials["roughness_texture"] != NO_TEXTURE))
+    rough |= materials["type"] == MATERIAL_CODES["pplastic"]
     if rough.any() and _polarized_emitters(buffers):
         # Next-event estimation from a rough surface meets the light through the surface's Mueller matrix, which
         # needs the light's Stokes basis at the sampled point; light samples do not carry it.
         raise SpectraceError(
-            "emitter.polarization: a polarised area light in a scene with a rough conductor or dielectric is not "
-            "rendered (next-event estimation from a rough surface toward a polarised light is not modelled)",
+            "emitter.polarization: a polarised area light in a scene with a rough conductor or dielectric or a "
+            "pplastic is not rendered (next-event estimation from a rough surface toward a polarised light is not "
+            "modelled)",
             where=where,
         )
     return {"SCENE_POLARIZED": 1}
