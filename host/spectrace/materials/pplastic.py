@@ -52,6 +52,8 @@ SPECULAR_REFLECTANCE = reflectance(
     name="specular_reflectance",
     default_doc="none (1)",
 )
+# α never falls below the smooth limit: no smooth (delta) case, whatever the roughness.
+ALWAYS_ROUGH = True
 PARAMETERS = (
     reflectance(0.5, "albedo ρ of the diffuse base", textured=True),
     IOR,
