@@ -356,10 +356,24 @@ inline int record_surface_reached(PathState *s, const PathVertex *v, float t, __
 }
 
 #if SCENE_POLARIZED
+/* dp/du of the area light `light` at the point its sample ls reached from p: a triangle's own, an analytic shape's
+ * where the ray toward the point meets it. The Stokes basis of a polarised light follows it (polarized_path.cl). */
+inline float3 light_sample_dpdu(const Scene *scene, __global const Light *light, float3 p, const LightSample *ls)
+{
+#if SCENE_HAS_SHAPES
+    if (!LIGHT_IS(light, LIGHT_TRIANGLE)) {
+        __global const AnalyticShape *shape = &scene->shapes[light->triangle];
+        float2 uv = (float2)(0.5f);
+        intersect_shape(shape, p, ls->wi, 1.001f * ls->distance + 1.0e-4f, &uv);
+        return shape_surface(shape, uv).dpdu;
+    }
+#endif
+    return triangle_dpdu(scene, light->triangle);
+}
+
 /* Next-event estimation's `gathered` (throughput applied) at v, whose light sample `replay` draws again: through the
- * event's Mueller matrix where it polarises (a rough conductor or dielectric, pplastic: microfacet_polarized.cl), else
- * depolarised. Returns the S0 to add to the radiance. Lights reached this way are unpolarised (the host refuses a
- * polarised area light beside a rough conductor or dielectric). */
+ * event's Mueller matrix where it polarises (a rough conductor or dielectric, pplastic: microfacet_polarized.cl),
+ * the light's own Stokes vector where it is polarised, else depolarised. Returns the S0 to add to the radiance. */
 inline float4 polarized_direct_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *replay,
                                       PathState *s, const PathVertex *v, __global const Material *material,
                                       const SurfaceContext *sc, float4 gathered)
@@ -369,8 +383,15 @@ inline float4 polarized_direct_vertex(const Scene *scene, const SampledWavelengt
     Mueller e;
     float3 x;
     if (any(gathered != (float4)(0.0f)) && sample_one_light(scene, w, replay, v->p, &light, &ls)
-        && glossy_polarization(material, sc, w, v->ns, v->wo, ls.wi, &e, &x))
-        return gathered * polarized_gather_event(&s->pol, &e, x, v->wo, gathered);
+        && glossy_polarization(material, sc, w, v->ns, v->wo, ls.wi, &e, &x)) {
+        float4 in[4] = {(float4)(1.0f), (float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
+        if (LIGHT_ON_SURFACE(light) && light->direction.w > 0.0f)
+            polarized_light_stokes(light, light_sample_dpdu(scene, light, v->p, &ls), ls.wi, x, in);
+        float4 out[4];
+        for (int i = 0; i < 4; ++i)
+            out[i] = e.m[4 * i] * in[0] + e.m[4 * i + 1] * in[1] + e.m[4 * i + 2] * in[2] + e.m[4 * i + 3] * in[3];
+        return gathered * polarized_gather_event(&s->pol, out, x, v->wo, gathered);
+    }
     polarized_gather(&s->pol, gathered);
     return gathered;
 }

@@ -69,19 +69,34 @@ inline float4 polarized_gather_emitter(PolarizedPath *q, __global const Light *l
     return row[0];
 }
 
-/* Next-event estimation at a vertex seen from wo whose event toward the sampled light polarises: the light's
- * unpolarised S0 leaves the event as its matrix's first column (e: divided by its (0, 0) entry, in the basis x),
- * which turns into the path's basis and meets the path's matrix. Gathers S1..S3 of `contribution` (the estimate,
- * throughput applied) and returns what scales its S0, the path's first row times that Stokes vector. */
-inline float4 polarized_gather_event(PolarizedPath *q, const Mueller *e, float3 x, float3 wo, float4 contribution)
+/* Next-event estimation at a vertex seen from wo whose event toward the sampled light polarises: the Stokes vector
+ * `out` leaving the event toward wo (in the basis x, per unit of the light's S0: the event's matrix divided by its
+ * (0, 0) entry times the light's normalised Stokes vector) turns into the path's basis and meets the path's matrix.
+ * Gathers S1..S3 of `contribution` (the unpolarised estimate, throughput applied) and returns what scales its S0,
+ * the path's first row times that Stokes vector. */
+inline float4 polarized_gather_event(PolarizedPath *q, const float4 *out, float3 x, float3 wo, float4 contribution)
 {
     float2 turn = stokes_basis_turn(wo, x, q->basis);
-    float4 s1 = turn.x * e->m[4] + turn.y * e->m[8], s2 = -turn.y * e->m[4] + turn.x * e->m[8], s3 = e->m[12];
+    float4 s1 = turn.x * out[1] + turn.y * out[2], s2 = -turn.y * out[1] + turn.x * out[2];
     float4 row[4];
     for (int i = 0; i < 4; ++i)
-        row[i] = q->p.m[4 * i] + s1 * q->p.m[4 * i + 1] + s2 * q->p.m[4 * i + 2] + s3 * q->p.m[4 * i + 3];
+        row[i] = q->p.m[4 * i] * out[0] + s1 * q->p.m[4 * i + 1] + s2 * q->p.m[4 * i + 2] + out[3] * q->p.m[4 * i + 3];
     for (int i = 0; i < 3; ++i) q->stokes[i] += row[i + 1] * contribution;
     return row[0];
+}
+
+/* The normalised Stokes vector (1, s1, s2, s3) of an area light's light (polarized_gather_emitter's convention:
+ * Light.direction.xyz in the basis of the surface's dp/du made normal to the way it leaves) arriving along −wi,
+ * re-expressed in the basis with x axis x (normal to wi). */
+inline void polarized_light_stokes(__global const Light *light, float3 dpdu, float3 wi, float3 x, float4 *stokes)
+{
+    float3 leaving = -wi;
+    float2 turn = stokes_basis_turn(leaving, stokes_basis_from(leaving, dpdu), x);
+    float3 e = light->direction.xyz;
+    stokes[0] = (float4)(1.0f);
+    stokes[1] = (float4)(turn.x * e.x + turn.y * e.y);
+    stokes[2] = (float4)(-turn.y * e.x + turn.x * e.y);
+    stokes[3] = (float4)(e.z);
 }
 
 /* A depolarising event; the path goes on along `d`. */

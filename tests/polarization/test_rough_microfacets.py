@@ -199,3 +199,51 @@ def test_wavefront_renders_rough_polarising_surfaces_as_the_megakernel(tmp_path,
     assert np.asarray(megakernel.xyz)[..., 1].mean() > 0.01
     assert np.array_equal(np.asarray(megakernel.xyz), np.asarray(wavefront.xyz))
     assert np.array_equal(megakernel.aovs["stokes"], wavefront.aovs["stokes"])
+
+
+def _rotation(k: np.ndarray, x_from: np.ndarray, x_to: np.ndarray) -> np.ndarray:
+    """Re-expresses a Stokes vector of a beam along k given in the basis x_from in the basis x_to (both normal to
+    k, y = k × x)."""
+    theta = np.arctan2(np.dot(np.cross(k, x_from), x_to), np.dot(x_from, x_to))
+    c, s = np.cos(2 * theta), np.sin(2 * theta)
+    return np.array([[1, 0, 0, 0], [0, c, s, 0], [0, -s, c, 0], [0, 0, 0, 1]], float)
+
+
+def test_polarised_light_in_a_rough_conductor_follows_the_full_mueller_matrix(tmp_path):
+    """A small area light emitting light polarised at 30° from its dp/du, seen in a rough conductor: next-event
+    estimation and BSDF sampling both reach it, through the conductor's whole Fresnel matrix on the microfacet (its
+    retardance turns part of the linear light circular). Each pixel's S1..S3 over S0 against the Mueller product
+    computed here at the light's centre: the light's 0.05-wide face, 2.5 away, bounds the tolerance."""
+    normal = _unit(-LIGHT)  # facing the plate's centre
+    u_axis = _unit(np.cross([0.0, 0.0, 1.0], normal))
+    v_axis = np.cross(normal, u_axis)
+    rows = np.column_stack([0.025 * u_axis, 0.025 * v_axis, normal, LIGHT])
+    matrix = ", ".join("[" + ", ".join(f"{x:.9f}" for x in row) + "]" for row in rows)
+    light = f"""
+[[shapes]]
+type = "rectangle"
+material = "black"
+emitter = {{ radiance = {{ value = 4000 }}, polarization = "linear 30" }}
+transform = [{{ matrix = [{matrix}, [0, 0, 0, 1]] }}]
+"""
+    text = _scene(CONDUCTOR, LIGHT, spp=64).split("[[lights]]")[0] + light
+    stokes, _ = _render(tmp_path, text)
+    points, wo, x, _ = _pixel_geometry()
+    phi = np.radians(30.0)
+    emitted = np.array([1.0, np.cos(2 * phi), np.sin(2 * phi), 0.0])
+    expected = np.zeros((SIZE, SIZE, 4))
+    for i in range(SIZE):
+        for j in range(SIZE):
+            k = _unit(points[i, j] - LIGHT)  # the light's way
+            w_o = wo[i, j]
+            h = _unit(w_o - k)
+            s = _unit(np.cross(h, w_o))
+            light_basis = _unit(u_axis - k * np.dot(k, u_axis))
+            into_plane = _rotation(k, light_basis, s)
+            out_of_plane = _rotation(w_o, s, x[i, j])
+            fresnel = fresnel_reflection(np.dot(w_o, h), complex(1.2, 2.0))
+            expected[i, j] = out_of_plane @ fresnel @ into_plane @ emitted
+    expected = expected[..., 1:] / expected[..., :1]
+    measured = stokes[..., 1:] / stokes[..., :1]
+    assert np.abs(expected[..., 2]).min() > 0.05  # circular light: the retardance is tested
+    assert np.all(np.abs(measured - expected) <= 0.02 * np.abs(expected) + 3e-3), (measured, expected)

@@ -89,14 +89,6 @@ def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
         (lambda text: text.replace("[integrator]", '[integrator]\ntype = "direct"'), "integrator.type"),
         (
             lambda text: (
-                text.replace("radiance = { value = 1 } }", 'radiance = { value = 1 }, polarization = "linear 0" }')
-                + '\n[materials.rough]\ntype = "conductor"\nmetal = "Au"\nroughness = 0.2\n'
-                '\n[[shapes]]\ntype = "sphere"\nmaterial = "rough"\ntransform = [{ translate = [0, 0, -3] }]\n'
-            ),
-            "emitter.polarization",
-        ),
-        (
-            lambda text: (
                 text + '\n[materials.card]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
                 '\n[materials.dye]\ntype = "fluorescent"\nbase = "card"\n'
                 "excitation = { values = [[360, 0.8], [450, 0.8], [500, 0.0], [830, 0.0]] }\n"
@@ -107,7 +99,7 @@ def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
             "fluorescent",
         ),
     ],
-    ids=["other integrator", "rough conductor beside a polarised light", "fluorescent"],
+    ids=["other integrator", "fluorescent"],
 )
 def test_unrenderable_polarized_scenes_are_refused_in_one_line(tmp_path, edit, key):
     scene = tmp_path / "scene.toml"

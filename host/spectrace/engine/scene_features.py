@@ -5,7 +5,6 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 import numpy as np
 
 from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
-from spectrace.core.parameters import SMOOTH_ALPHA
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES
@@ -75,8 +74,6 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
 
 # Materials that exist to polarise: a scene with one renders polarised without being asked.
 POLARIZING_MATERIALS = ("polarizer", "retarder")
-# Those whose rough lobes would need the polarised Fresnel term in their value as well as in their samples.
-_FRESNEL_MATERIALS = ("conductor", "dielectric")
 
 
 def is_polarized(scene, buffers: SceneBuffers) -> bool:
@@ -121,18 +118,6 @@ def polarization_defines(scene, buffers: SceneBuffers) -> dict[str, int]:
         raise SpectraceError(
             "integrator.polarized: a fluorescent material in a polarised scene is not rendered (a re-emission's "
             "polarisation is not modelled)",
-            where=where,
-        )
-    fresnel = np.isin(materials["type"], [MATERIAL_CODES[name] for name in _FRESNEL_MATERIALS])
-    rough = fresnel & ((materials["alpha"] >= SMOOTH_ALPHA) | (materials["roughness_texture"] != NO_TEXTURE))
-    rough |= materials["type"] == MATERIAL_CODES["pplastic"]
-    if rough.any() and _polarized_emitters(buffers):
-        # Next-event estimation from a rough surface meets the light through the surface's Mueller matrix, which
-        # needs the light's Stokes basis at the sampled point; light samples do not carry it.
-        raise SpectraceError(
-            "emitter.polarization: a polarised area light in a scene with a rough conductor or dielectric or a "
-            "pplastic is not rendered (next-event estimation from a rough surface toward a polarised light is not "
-            "modelled)",
             where=where,
         )
     return {"SCENE_POLARIZED": 1}
