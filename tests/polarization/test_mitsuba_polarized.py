@@ -189,3 +189,13 @@ def test_pplastic_under_the_sky_renders_like_mitsuba(tmp_path, mitsuba_polarized
     text = _scene(GLASS_AND_METAL.format(plate=plate), origin, up, 2, 256)
     means = _compare(tmp_path, mitsuba_polarized, text)
     assert abs(means[1]) > 0.03 * means[0]
+
+
+def test_rough_plastic_depolarises_as_in_mitsuba(tmp_path, mitsuba_polarized):
+    """Mitsuba 3's roughplastic has no polarised model (its BSDF returns a depolariser), nor has spectrace's rough
+    plastic: the same S0 under the sky at 70°, and S1..S3 zero in both."""
+    plate = """<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/>
+        <spectrum name="diffuse_reflectance" value="0.3"/><float name="int_ior" value="1.5"/></bsdf>"""
+    origin, up = _reflection(70.0)
+    means = _compare(tmp_path, mitsuba_polarized, _scene(GLASS_AND_METAL.format(plate=plate), origin, up, 2, 256))
+    assert means[0] > 0.1 and np.all(means[1:] == 0.0)
