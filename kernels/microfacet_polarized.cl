@@ -5,7 +5,9 @@
  * directions (ωo, ωi) is linked by the one microfacet normal h that reflects (h ∝ ωo + ωi) or refracts
  * (h ∝ ωo + e ωi, e the index ratio seen from ωo) one into the other, and the event is the smooth interface's on
  * that microfacet; Mitsuba 3's documentation, developer guide "Polarization" and its rough conductor: the Fresnel
- * term becomes the Fresnel Mueller matrix at h, in the plane of incidence spanned by the two directions and h.
+ * term becomes the Fresnel Mueller matrix at h, in the plane of incidence spanned by the two directions and h;
+ * S.-H. Baek et al., "Simultaneous Acquisition of Polarimetric SVBRDF and Normals" (SIGGRAPH Asia 2018), and
+ * Mitsuba 3's pplastic for pplastic's two lobes.
  *
  * Contract: the unpolarised BSDF (bsdf_conductor.cl, bsdf_dielectric.cl) is unchanged and gives the event's (0, 0)
  * entry, D G F / (4 cos θo) and its refraction twin; D, G and the Jacobians are scalars common to every entry, so
