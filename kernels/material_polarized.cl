@@ -1,11 +1,11 @@
-/* The Mueller matrix of a sampled BSDF event, for polarised transport (SCENE_POLARIZED): the materials whose events
+/* The Mueller matrix of a sampled delta event, for polarised transport (SCENE_POLARIZED): the materials whose events
  * polarise (smooth dielectrics and conductors by the Fresnel equations, a smooth plastic's coat, the mirror as a
  * perfect conductor, polarisers, retarders) give theirs as an aligned element (mueller.cl) with the bases of the two beams; every
  * other event depolarises, as Mitsuba 3's BSDFs without a polarised model do (their value becomes the depolariser
  * diag(f, 0, 0, 0)). The element is returned divided by its (0, 0) entry, the event's response to unpolarised
  * light, which the BSDF's own sample weight already carries (its sampling is the unpolarised one, as in Mitsuba).
- * Rough lobes depolarise here: the host refuses rough conductors and dielectrics in polarised scenes
- * (spectrace.engine.scene_features); a rough plastic's coat depolarises. */
+ * Non-delta events are microfacet_polarized.cl's (rough conductors and dielectrics, pplastic); every other one
+ * depolarises, a rough plastic's coat included (as Mitsuba 3's roughplastic). */
 #ifndef SPECTRACE_MATERIAL_POLARIZED_CL
 #define SPECTRACE_MATERIAL_POLARIZED_CL
 

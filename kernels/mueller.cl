@@ -73,6 +73,29 @@ inline void mueller_then_element(Mueller *a, const AlignedElement *e)
     }
 }
 
+/* a · b for any b. */
+inline void mueller_then_matrix(Mueller *a, const Mueller *b)
+{
+    for (int i = 0; i < 4; ++i) {
+        float4 r0 = a->m[4 * i], r1 = a->m[4 * i + 1], r2 = a->m[4 * i + 2], r3 = a->m[4 * i + 3];
+        for (int j = 0; j < 4; ++j)
+            a->m[4 * i + j] = r0 * b->m[j] + r1 * b->m[4 + j] + r2 * b->m[8 + j] + r3 * b->m[12 + j];
+    }
+}
+
+/* The aligned element e as a matrix. */
+inline Mueller mueller_from_aligned(const AlignedElement *e)
+{
+    Mueller r;
+    for (int i = 0; i < 16; ++i) r.m[i] = (float4)(0.0f);
+    r.m[0] = r.m[5] = e->a;
+    r.m[1] = r.m[4] = e->b;
+    r.m[10] = r.m[15] = e->c;
+    r.m[11] = e->d;
+    r.m[14] = -e->d;
+    return r;
+}
+
 /* a · D, D the ideal depolariser diag(1, 0, 0, 0): only the response to unpolarised light (column 0) remains. */
 inline void mueller_then_depolarize(Mueller *a)
 {

@@ -355,6 +355,48 @@ inline int record_surface_reached(PathState *s, const PathVertex *v, float t, __
     return 0;
 }
 
+#if SCENE_POLARIZED
+/* dp/du of the area light `light` at the point its sample ls reached from p: a triangle's own, an analytic shape's
+ * where the ray toward the point meets it. The Stokes basis of a polarised light follows it (polarized_path.cl). */
+inline float3 light_sample_dpdu(const Scene *scene, __global const Light *light, float3 p, const LightSample *ls)
+{
+#if SCENE_HAS_SHAPES
+    if (!LIGHT_IS(light, LIGHT_TRIANGLE)) {
+        __global const AnalyticShape *shape = &scene->shapes[light->triangle];
+        float2 uv = (float2)(0.5f);
+        intersect_shape(shape, p, ls->wi, 1.001f * ls->distance + 1.0e-4f, &uv);
+        return shape_surface(shape, uv).dpdu;
+    }
+#endif
+    return triangle_dpdu(scene, light->triangle);
+}
+
+/* Next-event estimation's `gathered` (throughput applied) at v, whose light sample `replay` draws again: through the
+ * event's Mueller matrix where it polarises (a rough conductor or dielectric, pplastic: microfacet_polarized.cl),
+ * the light's own Stokes vector where it is polarised, else depolarised. Returns the S0 to add to the radiance. */
+inline float4 polarized_direct_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *replay,
+                                      PathState *s, const PathVertex *v, __global const Material *material,
+                                      const SurfaceContext *sc, float4 gathered)
+{
+    __global const Light *light;
+    LightSample ls;
+    Mueller e;
+    float3 x;
+    if (any(gathered != (float4)(0.0f)) && sample_one_light(scene, w, replay, v->p, &light, &ls)
+        && glossy_polarization(material, sc, w, v->ns, v->wo, ls.wi, &e, &x)) {
+        float4 in[4] = {(float4)(1.0f), (float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
+        if (LIGHT_ON_SURFACE(light) && light->direction.w > 0.0f)
+            polarized_light_stokes(light, light_sample_dpdu(scene, light, v->p, &ls), ls.wi, x, in);
+        float4 out[4];
+        for (int i = 0; i < 4; ++i)
+            out[i] = e.m[4 * i] * in[0] + e.m[4 * i + 1] * in[1] + e.m[4 * i + 2] * in[2] + e.m[4 * i + 3] * in[3];
+        return gathered * polarized_gather_event(&s->pol, out, x, v->wo, gathered);
+    }
+    polarized_gather(&s->pol, gathered);
+    return gathered;
+}
+#endif
+
 /* What a path does at a surface before choosing where to go: a dispersive surface keeps only the hero wavelength
  * for everything that follows, direct light included (its BSDF is evaluated at the hero's index of refraction);
  * then next-event estimation, MIS-weighted when use_mis, unless every lobe is a delta lobe. */
@@ -365,9 +407,17 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
         SurfaceContext sc = shading_context(scene, v->uv, v->p, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
-        PATH_GATHER(s, radiance, estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
-                                                       v->info.interior, s->medium, use_mis,
-                                                       path_query(sampler, s, QUERY_SHADOW), rays_traced));
+#if SCENE_POLARIZED
+        Sampler replay = *sampler;  /* draws the estimate's light sample again, for its direction */
+#endif
+        float4 direct = estimate_direct_light(scene, w, sampler, v->p, v->n, v->ns, v->wo, material, &sc,
+                                              v->info.interior, s->medium, use_mis,
+                                              path_query(sampler, s, QUERY_SHADOW), rays_traced);
+#if SCENE_POLARIZED
+        *radiance += polarized_direct_vertex(scene, w, &replay, s, v, material, &sc, s->throughput * direct);
+#else
+        PATH_GATHER(s, radiance, direct);
+#endif
     }
 }
 

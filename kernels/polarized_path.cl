@@ -18,6 +18,7 @@
 #define SPECTRACE_POLARIZED_PATH_CL
 
 #include "material_polarized.cl"
+#include "microfacet_polarized.cl"
 
 typedef struct {
     Mueller p;        /* the path's Mueller matrix divided by its (0, 0) entry, the scalar throughput */
@@ -68,6 +69,36 @@ inline float4 polarized_gather_emitter(PolarizedPath *q, __global const Light *l
     return row[0];
 }
 
+/* Next-event estimation at a vertex seen from wo whose event toward the sampled light polarises: the Stokes vector
+ * `out` leaving the event toward wo (in the basis x, per unit of the light's S0: the event's matrix divided by its
+ * (0, 0) entry times the light's normalised Stokes vector) turns into the path's basis and meets the path's matrix.
+ * Gathers S1..S3 of `contribution` (the unpolarised estimate, throughput applied) and returns what scales its S0,
+ * the path's first row times that Stokes vector. */
+inline float4 polarized_gather_event(PolarizedPath *q, const float4 *out, float3 x, float3 wo, float4 contribution)
+{
+    float2 turn = stokes_basis_turn(wo, x, q->basis);
+    float4 s1 = turn.x * out[1] + turn.y * out[2], s2 = -turn.y * out[1] + turn.x * out[2];
+    float4 row[4];
+    for (int i = 0; i < 4; ++i)
+        row[i] = q->p.m[4 * i] * out[0] + s1 * q->p.m[4 * i + 1] + s2 * q->p.m[4 * i + 2] + out[3] * q->p.m[4 * i + 3];
+    for (int i = 0; i < 3; ++i) q->stokes[i] += row[i + 1] * contribution;
+    return row[0];
+}
+
+/* The normalised Stokes vector (1, s1, s2, s3) of an area light's light (polarized_gather_emitter's convention:
+ * Light.direction.xyz in the basis of the surface's dp/du made normal to the way it leaves) arriving along −wi,
+ * re-expressed in the basis with x axis x (normal to wi). */
+inline void polarized_light_stokes(__global const Light *light, float3 dpdu, float3 wi, float3 x, float4 *stokes)
+{
+    float3 leaving = -wi;
+    float2 turn = stokes_basis_turn(leaving, stokes_basis_from(leaving, dpdu), x);
+    float3 e = light->direction.xyz;
+    stokes[0] = (float4)(1.0f);
+    stokes[1] = (float4)(turn.x * e.x + turn.y * e.y);
+    stokes[2] = (float4)(-turn.y * e.x + turn.x * e.y);
+    stokes[3] = (float4)(e.z);
+}
+
 /* A depolarising event; the path goes on along `d`. */
 inline void polarized_depolarize(PolarizedPath *q, float3 d)
 {
@@ -82,14 +113,25 @@ inline void polarized_scatter(PolarizedPath *q, float4 *throughput, __global con
                               const SurfaceContext *sc, const SampledWavelengths *w, float3 n, float3 wo,
                               const BSDFSample *bs)
 {
-    AlignedElement e;
     float3 x_out, x_in;
-    if (!material_polarization(m, sc, w, n, wo, bs, &e, &x_out, &x_in)) {
-        polarized_depolarize(q, bs->wi);
-        return;
+    if (bs->is_delta) {
+        AlignedElement e;
+        if (!material_polarization(m, sc, w, n, wo, bs, &e, &x_out, &x_in)) {
+            polarized_depolarize(q, bs->wi);
+            return;
+        }
+        mueller_then_rotate(&q->p, stokes_basis_turn(wo, x_out, q->basis));
+        mueller_then_element(&q->p, &e);
+    } else {
+        Mueller e;
+        if (!glossy_polarization(m, sc, w, n, wo, bs->wi, &e, &x_out)) {
+            polarized_depolarize(q, bs->wi);
+            return;
+        }
+        mueller_then_rotate(&q->p, stokes_basis_turn(wo, x_out, q->basis));
+        mueller_then_matrix(&q->p, &e);
+        x_in = x_out;
     }
-    mueller_then_rotate(&q->p, stokes_basis_turn(wo, x_out, q->basis));
-    mueller_then_element(&q->p, &e);
     float4 f = fmax(q->p.m[0], 0.0f);
     *throughput *= f;
     mueller_scale(&q->p, f);

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from spectrace.materials import material_row
+from spectrace.materials.pplastic import PPlasticMaterial
 from spectrace.resources import spectra_dir
 from spectrace.scene.model import (
     ConductorMaterial,
@@ -71,6 +72,8 @@ NON_DELTA = [
         PlasticMaterial(_constant(0.6), roughness=0.5, nonlinear=True, coat_transmission="rough"),
     ),
     *[(f"retroreflector-a{a}", RetroreflectorMaterial(_constant(1.0), roughness=a)) for a in (0.1, 0.3, 0.7)],
+    *[(f"pplastic-a{a}", PPlasticMaterial(_constant(0.8), ior=1.5, roughness=a)) for a in (0.05, 0.3)],
+    ("pplastic-white-beckmann-a0.2", PPlasticMaterial(_constant(1.0), roughness=0.2, distribution="beckmann")),
     *[(f"principled-r{r}", _principled(base_color=_constant(0.8), roughness=r)) for r in (0.35, 0.7)],
     ("principled-metal-r0.4", _principled(base_color=_constant(0.9), metallic=1.0, roughness=0.4)),
     ("principled-anisotropic", _principled(base_color=_constant(0.9), metallic=1.0, roughness=0.5, anisotropic=0.8)),

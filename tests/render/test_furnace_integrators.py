@@ -138,6 +138,8 @@ CASES = {
         Case("extinction 1", lambda: S.polarizer(30.0, extinction=1.0), True, True, only=("path",)),
     ],
     "retarder": [Case("quarter wave", lambda: S.retarder(20.0), True, True, only=("path",))],
+    # Unpolarised here (the furnace has no polarising element): Mitsuba 3's unpolarised pplastic.
+    "pplastic": [Case("white", lambda: S.pplastic(1.0, roughness=0.3), False, False, fast=("path",))],
     "mix": [
         Case(
             "diffuse and smooth plastic",

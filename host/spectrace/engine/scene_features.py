@@ -5,7 +5,6 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 import numpy as np
 
 from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
-from spectrace.core.parameters import SMOOTH_ALPHA
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES
@@ -87,8 +86,6 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
 
 # Materials that exist to polarise: a scene with one renders polarised without being asked.
 POLARIZING_MATERIALS = ("polarizer", "retarder")
-# Those whose rough lobes would need the polarised Fresnel term in their value as well as in their samples.
-_FRESNEL_MATERIALS = ("conductor", "dielectric")
 
 
 def is_polarized(scene, buffers: SceneBuffers) -> bool:
@@ -133,14 +130,6 @@ def polarization_defines(scene, buffers: SceneBuffers) -> dict[str, int]:
         raise SpectraceError(
             "integrator.polarized: a fluorescent material in a polarised scene is not rendered (a re-emission's "
             "polarisation is not modelled)",
-            where=where,
-        )
-    fresnel = np.isin(materials["type"], [MATERIAL_CODES[name] for name in _FRESNEL_MATERIALS])
-    rough = fresnel & ((materials["alpha"] >= SMOOTH_ALPHA) | (materials["roughness_texture"] != NO_TEXTURE))
-    if rough.any():
-        raise SpectraceError(
-            "roughness: polarised transport renders smooth conductors and dielectrics only (a rough one's "
-            "polarised microfacet term is not modelled)",
             where=where,
         )
     return {"SCENE_POLARIZED": 1}

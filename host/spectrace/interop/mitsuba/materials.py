@@ -25,6 +25,11 @@ from spectrace.materials import MATERIALS
 
 # Mitsuba BSDFs whose spectrace counterparts are being written; until then they are reported as unsupported.
 PLANNED_BSDFS: tuple[str, ...] = ()
+# Mitsuba BSDFs refused for want of their data, with the reason the error gives.
+UNAVAILABLE_BSDFS = {
+    "measured_polarized": " (its measured pBRDF files, Baek et al. 2020, are published only on the authors' lab site, "
+    "not in a public repository, and spectrace has no reader for them)",
+}
 # Mitsuba 3's named indices of refraction (its documentation's table, at about 589 nm), for int_ior / ext_ior.
 NAMED_IOR = {
     "vacuum": 1.0,
@@ -127,7 +132,9 @@ def _material_table(ctx: ImportContext, bsdf: Element, two_sided: bool) -> dict 
         if not two_sided and not MATERIALS[table["type"]].MODEL.has_transmission:
             table["two_sided"] = False
         return table
-    ctx.unsupported_object(bsdf, " (not yet in spectrace)" if kind in PLANNED_BSDFS else "")
+    ctx.unsupported_object(
+        bsdf, " (not yet in spectrace)" if kind in PLANNED_BSDFS else UNAVAILABLE_BSDFS.get(kind or "", "")
+    )
     return None
 
 
