@@ -1,6 +1,11 @@
 """`spectrace bench peer`'s measurement: rounds that alternate the renderers, medians and spreads, ratios taken
-round by round, and the load average around the rounds with its warning. Fake contestants with given times stand
-for the renderers, and the load is faked through bench_rounds.load_average; speed is never asserted."""
+round by round, and the load around the rounds with its warning. Fake contestants with given times stand for the
+renderers, and the load is faked through bench_rounds.load_average and bench_rounds.others_runnable; speed is never
+asserted."""
+
+import subprocess
+import sys
+import threading
 
 import pytest
 
@@ -9,8 +14,10 @@ from spectrace.benchmarks.bench_rounds import (
     BUSY_WARNING,
     DEFAULT_ROUNDS,
     LoadCheck,
+    PauseLoad,
     alternate_rounds,
     load_text,
+    other_runnable_threads,
     paired_ratios,
     timing_summary,
 )
@@ -66,41 +73,153 @@ def test_medians_spreads_and_round_by_round_ratios():
     assert paired_ratios(timings, "intel", 1000, "llvm", 1500)["ratio"]["median"] == pytest.approx(2.0 / 1.5)
 
 
+def test_a_pause_before_each_render_and_after_the_last():
+    calls: list[str] = []
+    ours = [FakeContestant("intel", "spectrace", [1.0] * 6, calls)]
+    peers = [FakeContestant(n, "mitsuba", [1.0] * 3, calls) for n in ("llvm", "scalar")]
+    alternate_rounds(ours, peers, 3, pause=lambda: calls.append("pause"))
+    assert calls == ["pause", "intel", "pause", "llvm"] * 3 + ["pause", "intel", "pause", "scalar"] * 3 + ["pause"]
+
+
+@pytest.mark.parametrize(
+    ("loadavg", "own", "others"),
+    [
+        ("0.39 1.79 2.06 1/512 77", ["R", "S", "S"], 0),  # only the reading thread runs
+        ("2.00 1.10 0.70 3/512 77", ["R", "R", "R", "S"], 0),  # the bench's own workers
+        ("2.00 1.10 0.70 5/512 77", ["R", "R", "S"], 3),
+        ("0.10 0.10 0.10 1/98 12", ["R", "R"], 0),  # a thread of ours began running after /proc/loadavg was read
+    ],
+)
+def test_other_processes_runnable_threads_leave_out_the_bench_own(loadavg, own, others):
+    assert other_runnable_threads(loadavg, own) == others
+
+
+@pytest.mark.subprocess
+def test_a_busy_process_beside_the_bench_is_counted_and_its_own_waiting_threads_are_not():
+    """Sampled from /proc: a child process that spins is another process's runnable thread (at least one in every
+    sample, whatever else the machine runs); this process's threads asleep in a wait are no one's."""
+    if bench_rounds.others_runnable() is None:
+        pytest.skip("no /proc/loadavg here: the bench falls back on the load average")
+    assert "R" in bench_rounds._own_thread_states()  # the reading thread counts itself running
+    stop = threading.Event()
+    sleepers = [threading.Thread(target=stop.wait) for _ in range(4)]
+    for thread in sleepers:
+        thread.start()
+    spin = "import time\nend = time.time() + 30\nwhile time.time() < end: pass"
+    child = subprocess.Popen([sys.executable, "-c", spin])
+    try:
+        states = bench_rounds._own_thread_states()
+        assert len(states) >= 5 and states.count("S") >= 4
+        others = bench_rounds.others_runnable()
+        assert others is not None and others >= 1.0
+    finally:
+        child.kill()
+        child.wait()
+        stop.set()
+        for thread in sleepers:
+            thread.join()
+
+
+@pytest.mark.parametrize(
+    ("others", "busy"), [(0.0, False), (0.4, False), (1.0, False), (1.01, True), (1.5, True), (6.0, True)]
+)
+def test_busy_when_other_processes_keep_more_than_half_a_thread_per_core_runnable(others, busy):
+    """The bench's own threads lift the 1-minute load average (here to 1.9 after the rounds, on 2 cores): that alone
+    does not make the machine busy; other processes' runnable threads between renders do."""
+    pauses = PauseLoad([others] * 3)
+    load = LoadCheck.of(0.2, 1.9, 2, pauses).as_dict()
+    assert load["limit"] == 1.0 and load["busy"] is busy and load["pauses"] == 3
+    text = load_text(load)
+    assert text.startswith(BUSY_WARNING) is busy
+    assert f"runnable threads {others:.2f} between renders (mean of 3 pauses), on 2 cores (quiet: at most 1.00)" in text
+    assert "load average (1 min) before 0.20, after 1.90 (the bench's own threads included)" in text
+
+
 @pytest.mark.parametrize(
     ("before", "after", "busy"),
     [(0.2, 0.3, False), (1.0, 1.0, False), (1.5, 0.2, True), (0.2, 1.01, True), (8.0, 12.0, True)],
 )
-def test_busy_when_the_load_exceeds_half_a_thread_per_core_before_or_after(before, after, busy):
-    load = LoadCheck(before, after, cores=2).as_dict()
-    assert load["limit"] == 1.0 and load["busy"] is busy
+def test_without_samples_the_load_average_decides_before_or_after(before, after, busy):
+    load = LoadCheck.of(before, after, 2, PauseLoad()).as_dict()
+    assert load["others"] is None and load["limit"] == 1.0 and load["busy"] is busy
     text = load_text(load)
     assert text.startswith(BUSY_WARNING) is busy
     assert f"before {before:.2f}, after {after:.2f}, on 2 cores" in text
 
 
+def test_one_core_pins_every_thread_and_those_started_meanwhile_then_gives_the_cores_back():
+    single_core = pytest.importorskip("spectrace.benchmarks.single_core")
+    import os
+
+    if not hasattr(os, "sched_setaffinity"):
+        pytest.skip("this platform cannot pin threads")
+    allowed = os.sched_getaffinity(0)
+    stop = threading.Event()
+    early = threading.Thread(target=stop.wait)
+    early.start()
+    seen: list[set[int]] = []
+    try:
+        with single_core.one_core() as core:
+            assert core in allowed
+            late = threading.Thread(target=lambda: seen.append(os.sched_getaffinity(0)))
+            late.start()
+            late.join()
+            assert {frozenset(os.sched_getaffinity(t)) for t in single_core._thread_ids()} == {frozenset({core})}
+            assert seen == [{core}]
+        assert os.sched_getaffinity(0) == allowed and os.sched_getaffinity(early.native_id) == allowed
+    finally:
+        stop.set()
+        early.join()
+
+
 @pytest.mark.peer
-def test_peer_bench_reports_load_rounds_and_the_busy_warning(monkeypatch):
-    """The real bench at 8x8 on Mitsuba's scalar variant with a faked load: the load it read before and after, the
-    rounds in alternation, and the warning in its notes and its tables."""
+@pytest.mark.parametrize("busy", [True, False])
+def test_peer_bench_reports_load_rounds_and_the_busy_warning(monkeypatch, busy):
+    """The real bench at 8x8 on Mitsuba's scalar variant with a faked load: the load it read, the rounds in
+    alternation, and the warning in its notes and its tables when other processes kept the cores busy, none when
+    only the bench's own threads lifted the load average. The quiet run is one core each: pinned meanwhile, every
+    renderer's CPU time is at most its wall time."""
     pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
+    import os
+
     from rich.console import Console
 
     from spectrace.benchmarks.peer_mitsuba import peer_tables, run_peer_bench
 
-    loads = iter([3.0, 0.1])
+    loads = iter([0.1, 3.0])  # the bench's own threads lift the load average
+    # Other processes' runnable threads in the pauses: mean 2.2 (busy on 4 cores), or none.
+    others = iter([0.5, 2.5, 3.0, 2.0, 3.0] if busy else [0.0] * 5)
     monkeypatch.setattr(bench_rounds, "load_average", lambda: next(loads))
+    monkeypatch.setattr(bench_rounds, "others_runnable", lambda: next(others))
     monkeypatch.setattr(bench_rounds, "core_count", lambda: 4)
-    result = run_peer_bench(None, 8, 2, 2, None, False, variants=["scalar_spectral"], rounds=2)
+    pin = not busy and hasattr(os, "sched_setaffinity")
+    allowed = os.sched_getaffinity(0) if pin else None
+    result = run_peer_bench(None, 8, 2, 2, None, False, variants=["scalar_spectral"], rounds=2, per_core=not busy)
     ours = result["spectrace"][0]["runtime"]
-    assert result["load"] == {"before": 3.0, "after": 0.1, "cores": 4, "limit": 2.0, "busy": True}
+    assert result["load"] == {
+        "before": 0.1,
+        "after": 3.0,
+        "cores": 4,
+        "others": pytest.approx(2.2 if busy else 0.0),
+        "pauses": 5,
+        "limit": 2.0,
+        "busy": busy,
+    }
     assert result["order"] == [f"spectrace {ours}", "mitsuba scalar_spectral"] * 2
     assert result["rounds"] == 2 and result["spectrace"][0]["rounds"] == result["mitsuba"][0]["rounds"] == 2
-    assert any(note.startswith(BUSY_WARNING) for note in result["notes"])
-    console = Console(width=200, record=True, markup=False)
+    assert any(note.startswith(BUSY_WARNING) for note in result["notes"]) is busy
+    console = Console(width=300, record=True, markup=False)
     for table in peer_tables(result):
         console.print(table)
-    text = console.export_text()
+    text = " ".join(console.export_text().split())  # captions wrap at their table's width
     assert "2 alternated rounds: median (min-max)" in text
-    assert f"{BUSY_WARNING}: load average (1 min) before 3.00, after 0.10, on 4 cores" in text
+    assert (BUSY_WARNING in text) is busy
+    assert f"other processes' runnable threads {2.2 if busy else 0.0:.2f} between renders (mean of 5 pauses)" in text
+    assert "load average (1 min) before 0.10, after 3.00 (the bench's own threads included)" in text
     for column in ("M samples/s", "wall s", "CPU s", "cores used", "wall clock", "per CPU second"):
         assert column in text
+    if pin:
+        assert result["core"] in allowed and f"one core each: every thread on core {result['core']}" in text
+        assert os.sched_getaffinity(0) == allowed
+        for row in (*result["spectrace"], *result["mitsuba"]):
+            assert row["cpu_seconds"]["max"] <= row["seconds"]["max"] * 1.05 + 0.005

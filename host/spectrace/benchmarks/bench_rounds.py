@@ -3,21 +3,31 @@
 A ratio of two renderers' speeds holds only when both ran under the same conditions. The rounds alternate
 (each of ours, then the peer, then each of ours again, ...), so a load that comes and goes falls on both alike,
 and every ratio is taken round by round (our render ÷ the peer's render of the same round), its median reported
-with the smallest and largest. The 1-minute load average is read before the first round and after the last: above
-half a runnable thread per core at either end, other work competed for the cores and the figures say so.
+with the smallest and largest.
+
+Whether other work competed for the cores is judged in the pauses before each render and after the last: the
+threads the kernel counts runnable at that moment (/proc/loadavg's fourth field) less this process's own threads
+in state R, a few samples each pause. The 1-minute load average cannot judge it: it trails the bench's own threads
+for a minute (two busy threads for the 30 s of a bench lift it by about 0.8), so read after the rounds it called an
+idle two-core machine busy. It is still read before the bench's first build and after its last render, and
+printed; above half a runnable thread of other processes per core the figures say "machine busy".
 """
 
 from __future__ import annotations
 
 import os
 import statistics
-from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Protocol
 
 DEFAULT_ROUNDS = 5
 BUSY_LOAD_PER_CORE = 0.5
 BUSY_WARNING = "machine busy: ratio not reliable"
+PAUSE_SAMPLES = 5  # samples of the runnable threads per pause, PAUSE_SAMPLE_SECONDS apart
+PAUSE_SAMPLE_SECONDS = 0.01
 
 
 def load_average() -> float:
@@ -30,11 +40,62 @@ def core_count() -> int:
     return os.cpu_count() or 1
 
 
+def other_runnable_threads(loadavg: str, own_states: Iterable[str]) -> int:
+    """Runnable threads of other processes: the runnable count of /proc/loadavg's text ("0.39 1.79 2.06 3/512 77",
+    the reading thread among them) less this process's threads whose state is R."""
+    runnable = int(loadavg.split()[3].split("/")[0])
+    return max(0, runnable - sum(state == "R" for state in own_states))
+
+
+def _own_thread_states() -> list[str]:
+    states = []
+    for task in os.listdir("/proc/self/task"):
+        try:
+            stat = Path(f"/proc/self/task/{task}/stat").read_text()
+        except OSError:  # the thread ended meanwhile
+            continue
+        states.append(stat[stat.rindex(")") + 2])
+    return states
+
+
+def others_runnable() -> float | None:
+    """Other processes' runnable threads now: the mean of PAUSE_SAMPLES samples, or None where /proc cannot tell.
+    A seam the tests replace."""
+    counts = []
+    try:
+        for index in range(PAUSE_SAMPLES):
+            if index:
+                time.sleep(PAUSE_SAMPLE_SECONDS)
+            states = _own_thread_states()
+            counts.append(other_runnable_threads(Path("/proc/loadavg").read_text(), states))
+    except (OSError, ValueError, IndexError):
+        return None
+    return statistics.fmean(counts)
+
+
+@dataclass
+class PauseLoad:
+    """Other processes' runnable threads, sampled at each call (a pause between renders)."""
+
+    samples: list[float] = field(default_factory=list)
+
+    def __call__(self) -> None:
+        if (value := others_runnable()) is not None:
+            self.samples.append(value)
+
+
 @dataclass(frozen=True)
 class LoadCheck:
-    before: float
-    after: float
+    before: float  # 1-minute load average before the bench's first build
+    after: float  # the same after its last render (its own threads of the last minute included)
     cores: int
+    others: float | None = None  # other processes' runnable threads, mean over the pauses (None: not sampled)
+    pauses: int = 0
+
+    @classmethod
+    def of(cls, before: float, after: float, cores: int, pauses: PauseLoad) -> LoadCheck:
+        others = statistics.fmean(pauses.samples) if pauses.samples else None
+        return cls(before, after, cores, others, len(pauses.samples))
 
     @property
     def limit(self) -> float:
@@ -42,18 +103,25 @@ class LoadCheck:
 
     @property
     def busy(self) -> bool:
-        return max(self.before, self.after) > self.limit
+        # Without samples (no /proc) only the load average is left, which counts the bench's own threads.
+        return (self.others if self.others is not None else max(self.before, self.after)) > self.limit
 
     def as_dict(self) -> dict:
         return {**asdict(self), "limit": self.limit, "busy": self.busy}
 
 
 def load_text(load: dict) -> str:
-    """One line: the load before and after, and the warning when either end was above the limit."""
-    text = (
-        f"load average (1 min) before {load['before']:.2f}, after {load['after']:.2f}, on {load['cores']} cores "
-        f"(quiet: at most {load['limit']:.2f})"
-    )
+    """One line: other processes' runnable threads between renders, the load average before and after, and the
+    warning when the machine was busy."""
+    average = f"load average (1 min) before {load['before']:.2f}, after {load['after']:.2f}"
+    quiet = f"on {load['cores']} cores (quiet: at most {load['limit']:.2f})"
+    if load.get("others") is None:
+        text = f"{average}, {quiet}"
+    else:
+        text = (
+            f"other processes' runnable threads {load['others']:.2f} between renders (mean of {load['pauses']} "
+            f"pauses), {quiet}; {average} (the bench's own threads included)"
+        )
     return f"{BUSY_WARNING}: {text}" if load["busy"] else text
 
 
@@ -84,9 +152,11 @@ def alternate_rounds(
     rounds: int,
     log: Callable[[str], None] = lambda text: None,
     before_block: Callable[[Contestant], None] = lambda peer: None,
+    pause: Callable[[], None] = lambda: None,
 ) -> list[Timing]:
     """`rounds` rounds per peer, each ours in turn and then the peer; the peers one after another, each in a block
-    of its own (Mitsuba re-traces its kernels when its variant changes). Without peers, ours alone."""
+    of its own (Mitsuba re-traces its kernels when its variant changes). Without peers, ours alone. `pause` is
+    called before each render and after the last."""
     timings = []
     blocks: list[Contestant | None] = [*peers] or [None]
     for peer in blocks:
@@ -94,11 +164,13 @@ def alternate_rounds(
             before_block(peer)
         for index in range(1, rounds + 1):
             for contestant in [*ours, *([peer] if peer is not None else [])]:
+                pause()
                 seconds, cpu = contestant.render_timed()
                 timings.append(
                     Timing(contestant.renderer, contestant.name, peer.name if peer else "", index, seconds, cpu)
                 )
                 log(f"round {index}: {contestant.name} {seconds:.2f} s, CPU {cpu:.2f} s")
+    pause()
     return timings
 
 

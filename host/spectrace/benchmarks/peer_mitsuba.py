@@ -3,19 +3,20 @@
 Both render the scene exported by spectrace.interop.mitsuba.export (same triangles, camera, measured spectra,
 resolution, spp, max_depth and Russian roulette start). Figures are times of warm renders, film read-back
 included, in `rounds` rounds (default 5) that alternate spectrace and Mitsuba (bench_rounds.py): the median and
-spread of each, and ratios taken round by round, with the load average before and after and a warning when the
-machine was busy. spectrace's renders follow its kernel build and one 1-spp warm-up pass; Mitsuba's JIT variant
+spread of each, and ratios taken round by round, with the load around them and a warning when other processes
+kept the machine busy. spectrace's renders follow its kernel build and one 1-spp warm-up pass; Mitsuba's JIT variant
 follows one identical warm-up render (its first render compiles kernels, or loads them from Dr.Jit's disk cache).
 samples/s = pixels × spp / time. The images must agree (mean XYZ of a few regions within 4 standard errors), so
 that the ratio compares equal work. The process CPU time of the same renders (all threads) gives a second ratio,
-which a shared machine's load disturbs less. It counts whatever a runtime's threads spend waiting: with Intel's
-runtime the thread that waits for a pass is as busy as the wall clock (per-thread CPU time from /proc), so its
-CPU-time figures understate spectrace. `per_core` runs each renderer on one core (single_core.py): one compute unit
-of each OpenCL runtime against Dr.Jit with one thread.
+which a shared machine's load disturbs less. With Intel's runtime the thread that waits for a pass is busy for the
+whole pass: it runs work-groups beside the runtime's own worker threads, its CPU time is the render's.
+`per_core` runs each renderer on one core (single_core.py): every thread of the process pinned to one core, one
+compute unit of each OpenCL runtime against Dr.Jit with one thread.
 """
 
 from __future__ import annotations
 
+import contextlib
 import tempfile
 import time
 from collections.abc import Callable
@@ -130,29 +131,31 @@ def run_peer_bench(
     per_core: bool = False,
 ) -> dict:
     from spectrace.benchmarks.mitsuba_runtime import MitsubaContestant, usable_variants
-    from spectrace.benchmarks.single_core import drjit_threads
+    from spectrace.benchmarks.single_core import drjit_threads, one_core
     from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
-    scene = bench_scene(scene_path, size, spp, max_depth)
-    usable = usable_variants(variants)  # before any render: it may set DRJIT_LIBLLVM_PATH
-    notes = list(usable.notes) + [f"Mitsuba's sampler: {peer_sampler}; spectrace's: {scene.sampler}"]
-    ours = _our_contestants(scene, device_keys(device, all_devices), per_core)
-    with drjit_threads(1 if per_core else None):
-        with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
-            theirs: list[MitsubaContestant] = []
-            for variant in usable.available:
-                import mitsuba as mi
+    load_before = bench_rounds.load_average()  # before the builds and JIT warm-ups add the bench's own threads
+    with one_core() if per_core else contextlib.nullcontext() as core:
+        scene = bench_scene(scene_path, size, spp, max_depth)
+        usable = usable_variants(variants)  # before any render: it may set DRJIT_LIBLLVM_PATH
+        notes = list(usable.notes) + [f"Mitsuba's sampler: {peer_sampler}; spectrace's: {scene.sampler}"]
+        ours = _our_contestants(scene, device_keys(device, all_devices), per_core)
+        with drjit_threads(1 if per_core else None):
+            with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
+                theirs: list[MitsubaContestant] = []
+                for variant in usable.available:
+                    import mitsuba as mi
 
-                mi.set_variant(variant)
-                scene_dict = scene_to_mitsuba_dict(scene, Path(folder), spp=spp, sampler=peer_sampler)
-                theirs.append(MitsubaContestant(scene_dict, variant, spp, seed=scene.seed))
-        # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so each
-        # variant gets its rounds in one block, after one untimed render.
-        load_before = bench_rounds.load_average()
-        warm_up = lambda peer: cast("MitsubaContestant", peer).render_untimed()  # noqa: E731
-        timings = alternate_rounds(ours, theirs, max(1, rounds), log, before_block=warm_up)
-        load = LoadCheck(load_before, bench_rounds.load_average(), bench_rounds.core_count())
-        their_results = [contestant.result() for contestant in theirs]
+                    mi.set_variant(variant)
+                    scene_dict = scene_to_mitsuba_dict(scene, Path(folder), spp=spp, sampler=peer_sampler)
+                    theirs.append(MitsubaContestant(scene_dict, variant, spp, seed=scene.seed))
+            # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so
+            # each variant gets its rounds in one block, after one untimed render.
+            pauses = bench_rounds.PauseLoad()
+            warm_up = lambda peer: cast("MitsubaContestant", peer).render_untimed()  # noqa: E731
+            timings = alternate_rounds(ours, theirs, max(1, rounds), log, before_block=warm_up, pause=pauses)
+            load = LoadCheck.of(load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses)
+            their_results = [contestant.result() for contestant in theirs]
     if load.busy:
         notes.append(bench_rounds.load_text(load.as_dict()))
     images = {c.name: c.first_image.xyz for c in ours}
@@ -206,6 +209,7 @@ def run_peer_bench(
         "rr_depth": scene.rr_depth,
         "rounds": max(1, rounds),
         "per_core": per_core,
+        "core": core,
         "load": load.as_dict(),
         "order": [f"{t.renderer} {t.name}" for t in timings],
         "spectrace": our_rows,
@@ -227,7 +231,8 @@ def peer_tables(result: dict) -> list:
     from spectrace.benchmarks.bench_rounds import load_text
 
     per_core = result.get("per_core", False)
-    mode = "one core each: sub-device of 1 compute unit vs Dr.Jit 1 thread, " if per_core else ""
+    pinned = f"every thread on core {result['core']}, " if result.get("core") is not None else ""
+    mode = f"one core each: {pinned}sub-device of 1 compute unit vs Dr.Jit 1 thread, " if per_core else ""
     timing = Table(
         title=f"spectrace vs Mitsuba 3: {result['width']}x{result['height']}, {result['spp']} spp, "
         f"max_depth {result['max_depth']}, rr_depth {result['rr_depth']} ({mode}warm renders, {result['rounds']} "

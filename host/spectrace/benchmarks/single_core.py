@@ -1,21 +1,23 @@
-"""One core each, for `spectrace bench peer --per-core`: one compute unit of an OpenCL CPU runtime, and Dr.Jit's
-thread pool of one thread.
+"""One core each, for `spectrace bench peer --per-core`: every thread of the process pinned to one core, one
+compute unit of an OpenCL CPU runtime, and Dr.Jit's thread pool of one thread.
 
 An OpenCL 1.2 device may be split into sub-devices (device fission, clCreateSubDevices); partitioned by counts
-[1], the sub-device has one compute unit. With Intel's CPU runtime two threads are then busy for the whole render
-(per-thread CPU time from /proc, each equal to the wall time): the pass's and the calling thread, which spins while
-it waits. PoCL's CPU driver (system and PyPI builds) accepts the partition, but its sub-device still ran the
-kernels on both of its worker threads (0.18 and 0.17 CPU-s in a 0.35 s render, 128x128, 16 spp), and neither
-POCL_CPU_MAX_CU_COUNT nor POCL_MAX_CPU_CU_COUNT took its device below two compute units. So the per-core figures
-are these: Intel's, the wall clock on a quiet machine (its spinning thread has a core of its own there); PoCL's,
-samples per CPU-second (its wall clock had two threads). Samples per CPU-second, which other processes' load
-disturbs least, charge Intel's runtime for its spinning thread too: they understate spectrace, never the peer. A
-runtime without fission keeps its whole device, which the table says.
+[1], the sub-device has one compute unit. That alone does not confine a runtime to one core. Intel's CPU runtime
+runs a one-unit sub-device's kernels on its worker thread and on the thread that waits for them (clFinish, a
+blocking read or clWaitForEvents): that thread runs work-groups until the queue is done, it does not spin. Waiting
+instead by polling the event with sleeps left one thread busy and doubled the wall time at the same total CPU time
+(Cornell box 128x128, 16 spp: 0.13 s on two busy threads against 0.24 s on one, 0.25 CPU-s both, whole device or
+sub-device alike). PoCL's CPU driver accepts the partition but still runs the kernels on both of its worker
+threads, and neither POCL_CPU_MAX_CU_COUNT nor POCL_MAX_CPU_CU_COUNT took its device below two compute units. So
+`one_core` pins every thread of the process, and those they start, to one core (sched_setaffinity): each
+renderer's wall time is then one core's work, whatever threads its runtime keeps. A platform without
+sched_setaffinity is not pinned, and the figures to read there are the samples per CPU-second.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any, cast
 
@@ -64,3 +66,34 @@ def drjit_threads(count: int | None) -> Iterator[None]:
         yield
     finally:
         dr.set_thread_count(before)
+
+
+def _thread_ids() -> list[int]:
+    return [int(task) for task in os.listdir("/proc/self/task")]
+
+
+@contextmanager
+def one_core() -> Iterator[int | None]:
+    """Every thread of this process on one core meanwhile (the highest-numbered it may use; threads started
+    meanwhile inherit it), giving that core's number; then each thread back on the cores it had. None where the
+    platform cannot pin threads."""
+    if not hasattr(os, "sched_setaffinity") or not os.path.isdir("/proc/self/task"):
+        yield None
+        return
+    allowed = os.sched_getaffinity(0)
+    core = max(allowed)
+    before: dict[int, set[int]] = {}
+    for thread in _thread_ids():
+        try:  # a thread may end meanwhile
+            before[thread] = os.sched_getaffinity(thread)
+            os.sched_setaffinity(thread, {core})
+        except OSError:
+            continue
+    try:
+        yield core
+    finally:
+        for thread in _thread_ids():
+            try:
+                os.sched_setaffinity(thread, before.get(thread, allowed))
+            except OSError:
+                continue

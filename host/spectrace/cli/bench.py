@@ -172,14 +172,14 @@ def peer_bench(
         bool,
         typer.Option(
             "--per-core",
-            help="One core each: one compute unit of each OpenCL runtime (device fission) against Dr.Jit with one "
-            "thread.",
+            help="One core each: every thread pinned to one core, one compute unit of each OpenCL runtime (device "
+            "fission) against Dr.Jit with one thread.",
         ),
     ] = False,
     as_json: JsonOption = False,
 ) -> None:
     """The same scene rendered by spectrace and by Mitsuba 3 (needs the bench extra), timed side by side in
-    alternated rounds with the load average before and after, with a check that the images agree."""
+    alternated rounds with the load between them, with a check that the images agree."""
     _check(_one(size), max_depth)
     from spectrace.benchmarks.peer_mitsuba import peer_tables, run_peer_bench
 
