@@ -317,7 +317,50 @@ def _area_cases() -> list[Case]:
             )
         else:
             cases.append(Case(f"area-{kind}-missing", _scene(), [], False))
-    return cases
+    return cases + _partial_area_cases(radiance)
+
+
+def _partial_area_cases(radiance) -> list[Case]:
+    """Partial shapes (kernels/shape_partial.cl), each seen from where a direction meets it at most once: an annulus
+    sector from above its front, a cut sphere and a cut cylinder from inside. Some of the points lie beyond a cut,
+    where only parts of the surface are seen."""
+    one_sided, two_sided = spectrace.area_emitter(radiance), spectrace.area_emitter(radiance, two_sided=True)
+    disk = spectrace.shape(
+        "disk", GREY, one_sided, transform=[{"translate": [0.0, 0.0, 1.0]}], phi_max=270.0, inner_radius=0.4
+    )
+    p0 = (0.3, 0.2, 2.5)
+    # A bounding cone about a point off the hole's centre: its edge then lies where the quadrature's cells are
+    # small (near the cone's axis a cell of uniform cos θ spans many degrees).
+    axis, cos_min = _cone_toward((-0.6, 0.0, 1.0), 1.6, p0)
+    up = _area_arriving(radiance, lambda q: np.broadcast_to([0.0, 0.0, 1.0], q.shape), False)
+    centre = np.array([0.0, 0.5, 0.0])
+    sphere = spectrace.shape(
+        "sphere",
+        GREY,
+        one_sided,
+        center=tuple(centre),
+        radius=0.6,
+        flip_normals=True,
+        phi_max=200.0,
+        z_min=-0.3,
+        z_max=0.5,
+    )
+    inward = _area_arriving(radiance, lambda q: _unit(centre - q), False)
+    cylinder = spectrace.shape("cylinder", GREY, two_sided, transform=[{"scale": [1.0, 1.0, 3.0]}], phi_max=150.0)
+    radial = _area_arriving(radiance, lambda q: _unit(q * [1.0, 1.0, 0.0]), True)
+    return [
+        Case("area-partialdisk", _scene([disk]), [p0, (-1.5, 0.4, 1.6)], False, axis, cos_min, up, [(0.0, 0.0, 0.0)]),
+        Case(
+            "area-partialsphere-inside", _scene([sphere]), [(0.1, 0.6, 0.2), (-0.2, 0.3, -0.1)], False, arriving=inward
+        ),
+        Case(
+            "area-partialcylinder-inside",
+            _scene([cylinder]),
+            [(0.1, -0.2, 1.5), (0.4, 0.3, 1.0)],
+            False,
+            arriving=radial,
+        ),
+    ]
 
 
 # Two texels: the left half of the image bright red-ish, the right half blue-ish; seen through nearest lookups, every
@@ -641,6 +684,10 @@ EMITTING_AREA = {
     "sphere": 4.0 * np.pi * 0.6**2,
     "disk": np.pi,
     "cylinder": 2.0 * np.pi * 3.0,
+    # φmax (1 − r_inner²)/2, φmax r (zmax − zmin), φmax · length
+    "partialdisk": np.radians(270.0) * (1.0 - 0.4**2) / 2.0,
+    "partialsphere": np.radians(200.0) * 0.6 * 0.8,
+    "partialcylinder": np.radians(150.0) * 3.0,
 }
 
 

@@ -85,6 +85,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_PROCEDURAL_TEXTURES": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
+        "SCENE_HAS_PARTIAL_SHAPES": 0,
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
         "SCENE_HAS_ONE_SIDED": 0,

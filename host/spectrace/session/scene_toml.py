@@ -179,6 +179,7 @@ class _Writer:
                 out["flip_normals"] = True
             if surface.pbrt_uv:
                 out["uv_convention"] = "pbrt"
+            out |= surface.cut_keys()
         else:
             mesh = shape.mesh
             file = f"{self.assets}/{folder_name}.ply"
