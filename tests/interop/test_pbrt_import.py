@@ -622,7 +622,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
         ('Material "coatedconductor"\nShape "sphere"\n', 5, "spectrace has no coated conductor"),
         ('Shape "curve"\n', 5, "shape 'curve'"),
         ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),
-        ('LightSource "goniometric"\n', 5, "light 'goniometric'"),
+        ('LightSource "sunsky"\n', 5, "light 'sunsky'"),
         # pbrt-v4 resolves named materials after reading the whole file: the shape using one is at fault.
         ('NamedMaterial "x"\nShape "sphere"\n', 6, "which no MakeNamedMaterial defined"),
         ('Material "dielectric" "rgb eta" [1.5 1.5 1.5]\nShape "sphere"\n', 5, "spectrace takes a number or a named"),
@@ -657,7 +657,7 @@ def test_realistic_camera_is_one_line(tmp_path, monkeypatch, capsys):
     assert code != 0
     assert stderr.strip() == (
         f"error: {path}:2: camera 'realistic': spectrace imports pbrt's perspective, orthographic and spherical "
-        '(mapping "equirect") cameras'
+        '(mapping "equirect" or "equalarea") cameras'
     )
 
 
