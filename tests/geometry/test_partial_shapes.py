@@ -260,3 +260,22 @@ def test_a_python_scene_with_partial_shapes_is_saved_with_its_cuts(tmp_path):
         assert after.analytic.cut_keys() == pytest.approx(before.analytic.cut_keys())
         assert after.analytic.area() == pytest.approx(before.analytic.area(), rel=1e-9)
         assert after.analytic.flip_normals == before.analytic.flip_normals
+
+
+@pytest.mark.peer
+def test_the_mitsuba_export_writes_a_partial_shape_as_its_tessellation(tmp_path, mitsuba_scalar_spectral):
+    """Mitsuba 3 has no partial shapes: the export writes the cut shape's triangles (their area the partial
+    surface's, to the tessellation's chord error), a whole one stays Mitsuba's own disk."""
+    import spectrace
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
+
+    material = spectrace.diffuse(0.5)
+    cut = spectrace.shape("disk", material, inner_radius=0.5, phi_max=180, transform=[{"scale": [2, 1, 1]}])
+    whole = spectrace.shape("disk", material)
+    camera = spectrace.Camera(origin=(0, 0, 5), target=(0, 0, 0))
+    scene = spectrace.Scene(camera=camera, width=4, height=4, shapes=[cut, whole])
+    exported = scene_to_mitsuba_dict(scene, tmp_path)
+    shapes = [entry for entry in exported.values() if isinstance(entry, dict) and entry.get("type") in ("ply", "disk")]
+    assert sorted(entry["type"] for entry in shapes) == ["disk", "ply"]
+    assert cut.mesh.area() == pytest.approx(cut.analytic.area(), rel=2e-3)
+    mitsuba_scalar_spectral.load_dict(exported)  # Mitsuba reads what was written
