@@ -81,3 +81,30 @@ def test_a_python_scene_with_a_goniometric_light_is_saved_with_its_file(tmp_path
         (loaded,) = spectrace.load_scene(tmp_path / "saved.toml").lights
         np.testing.assert_array_equal(loaded.image, light.image)
         assert loaded.mirrored and loaded.up == (1.0, 0.0, 0.0)
+
+
+@pytest.mark.subprocess
+def test_a_non_square_image_is_refused_in_one_line_naming_the_key(tmp_path):
+    """An equal-area map is square: another image is refused by `spectrace render` in one line naming the file and
+    key, with a non-zero exit and no traceback."""
+    import subprocess
+    import sys
+
+    write_exr(tmp_path / "wide.exr", np.ones((4, 8, 3), np.float32), None, {})
+    scene = tmp_path / "scene.toml"
+    scene.write_text(
+        "[camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 4\nheight = 4\n"
+        '[materials.m]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
+        '[[shapes]]\ntype = "rectangle"\nmaterial = "m"\n'
+        '[[lights]]\ntype = "goniometric"\nposition = [0, 0, 1]\nintensity = { value = 1 }\nfile = "wide.exr"\n'
+    )
+    done = subprocess.run(
+        [sys.executable, "-m", "spectrace", "render", str(scene), "-o", str(tmp_path / "out.exr")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode != 0 and "Traceback" not in done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert "lights[0].file" in line and "must be square" in line and str(scene) in line
+    assert not (tmp_path / "out.exr").exists()
