@@ -8,7 +8,8 @@
  * b² − c of two large numbers, and the smaller root as c / q; the hit point is then projected back onto the sphere
  * (pbrt-v4's refinement). The disk and cylinder are intersected in object space, so any affine placement works.
  * A hit stores the shape's texture coordinates in Hit.b12, from which its surface is rebuilt; a shape imported from
- * pbrt-v4 may keep pbrt's texture coordinates instead of Mitsuba's (pbrt_uv). Partial shapes (phi_max > 0): shape_partial.cl. */
+ * pbrt-v4 may keep pbrt's texture coordinates instead of Mitsuba's (pbrt_uv). Partial shapes (phi_max > 0) are
+ * shape_partial.cl's. */
 #ifndef SPECTRACE_SHAPES_CL
 #define SPECTRACE_SHAPES_CL
 
