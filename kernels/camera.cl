@@ -13,6 +13,8 @@
  *   the image's centre looks along camera_forward, a column is a longitude (2π over the width), a row a latitude
  *   (π over the height, row 0 at the zenith). An environment rendered so, and put back as an envmap light with the
  *   same frame, is the environment again.
+ * - CAMERA_EQUALAREA: the whole sphere on a square film by Clarberg's equal-area octahedral mapping, pbrt-v4's
+ *   "equalarea" spherical camera (camera_equal_area.cl); near and far clip along the ray, as the equirectangular.
  * camera_origin.w is the near clip distance (Mitsuba 3's near_clip): rays start where they cross the plane that far
  * along camera_forward (equirectangular: that far along the ray), so nothing nearer is seen (0: at the lens).
  * camera_forward.w is the far clip distance (Mitsuba 3's far_clip; 0: none), measured the same way: the camera's own
@@ -26,6 +28,7 @@
 #include "ray.cl"
 #include "rng.cl"
 #include "sampling.cl"
+#include "camera_equal_area.cl"
 #ifndef CAMERA_TYPE_COUNT
 #error "built without the cameras' generated sources (spectrace.plugins.generated_sources)"
 #endif
@@ -63,6 +66,11 @@ inline Ray camera_ray(__global const RenderParams *p, float2 film, Sampler *samp
         ray.origin = p->camera_origin.xyz + p->camera_origin.w * ray.direction;
         return ray;
     }
+    if (CAMERA_IS(p, CAMERA_EQUALAREA)) {
+        ray.direction = equal_area_camera_direction(p, film);
+        ray.origin = p->camera_origin.xyz + p->camera_origin.w * ray.direction;
+        return ray;
+    }
     float3 direction = pinhole_direction(p, film);
     if (CAMERA_IS(p, CAMERA_THINLENS)) {
         float2 u = sample_2d(sampler);
@@ -89,7 +97,7 @@ inline float camera_ray_reach(__global const RenderParams *p, Ray ray)
     float far = p->camera_forward.w;
     if (!(far > 0.0f)) return INFINITY;
     float near = p->camera_origin.w;
-    if (CAMERA_IS(p, CAMERA_EQUIRECTANGULAR)) return far - near;
+    if (CAMERA_IS(p, CAMERA_EQUIRECTANGULAR) || CAMERA_IS(p, CAMERA_EQUALAREA)) return far - near;
     /* Every other camera's rays start on the near plane. */
     return (far - near) / dot(ray.direction, p->camera_forward.xyz);
 #else
@@ -122,6 +130,19 @@ inline int camera_neighbour_rays(__global const RenderParams *p, float3 point, f
         *o_y = origin;
         *d_x = d + d_phi * (2.0f * CAMERA_PI / (float)p->width);
         *d_y = d + d_theta * (CAMERA_PI / (float)p->height);
+        return 1;
+    }
+    if (CAMERA_IS(p, CAMERA_EQUALAREA)) {
+        float distance = length(to_p);
+        if (!(distance > 0.0f)) return 0;
+        /* The rays one pixel over (back where that would leave the film: the map folds at its edges). */
+        float2 film = equal_area_camera_film(p, to_p / distance);
+        float step_x = film.x + 1.0f <= (float)p->width ? 1.0f : -1.0f;
+        float step_y = film.y + 1.0f <= (float)p->height ? 1.0f : -1.0f;
+        *o_x = origin;
+        *o_y = origin;
+        *d_x = equal_area_camera_direction(p, film + (float2)(step_x, 0.0f));
+        *d_y = equal_area_camera_direction(p, film + (float2)(0.0f, step_y));
         return 1;
     }
     float depth = dot(to_p, forward);

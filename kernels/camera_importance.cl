@@ -22,6 +22,10 @@
  *   p(ω) = 1 / (2π² sin θ) (dω = sin θ dθ dφ = 2π² sin θ du dv): that is We, with no film plane to add a cosine,
  *   and the estimate is 1 / (2π² sin θ d²). Points on the axis (sin θ = 0) are not seen. The host takes it with the
  *   box filter only: a wider filter would have to wrap around the seam and the poles, as a camera path's does.
+
+ * - The equal-area camera (camera_equal_area.cl): uniform film positions give directions uniform over the sphere,
+ *   p(ω) = 1 / (4π): the estimate is 1 / (4π d²); the host takes it with the box filter only, as the
+ *   equirectangular.
  *
  * With a pixel filter wider than the box, a point up to (radius − ½) pixels beyond the film's edge still adds to the
  * edge pixels (as a camera path's filter-sampled position may fall there): such points are seen too. */
@@ -105,6 +109,19 @@ inline CameraConnection connect_to_camera_sampled(__global const RenderParams *p
         c.distance = dist;
         c.lens = eye + near * dir;
         c.importance = 1.0f / (2.0f * CAMERA_PI * CAMERA_PI * sin_theta * dist * dist);
+        return c;
+    }
+    if (CAMERA_IS(params, CAMERA_EQUALAREA)) {
+        float3 d = x - eye;
+        float dist = length(d);
+        if (!(dist > near) || dist > far) return c;
+        float3 dir = d / dist;
+        float2 film = equal_area_camera_film(params, dir);
+        if (!land_on_film(params, film.x, film.y, &c)) return c;
+        c.to_camera = -dir;
+        c.distance = dist;
+        c.lens = eye + near * dir;
+        c.importance = 1.0f / (4.0f * CAMERA_PI * dist * dist);
         return c;
     }
     float3 lens_point = eye;

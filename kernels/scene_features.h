@@ -23,6 +23,10 @@
 #ifndef SCENE_HAS_GRID_MEDIA
 #define SCENE_HAS_GRID_MEDIA SCENE_HAS_MEDIA
 #endif
+/* Partial analytic shapes (kernels/shape_partial.cl: pbrt's phimax, zmin/zmax, innerradius cuts). */
+#ifndef SCENE_HAS_PARTIAL_SHAPES
+#define SCENE_HAS_PARTIAL_SHAPES 1
+#endif
 /* Lights showing an image (environment maps; area lights' emission textures, pictures on screens among them). */
 #ifndef SCENE_HAS_LIGHT_IMAGES
 #define SCENE_HAS_LIGHT_IMAGES 1

@@ -8,7 +8,8 @@
  * b² − c of two large numbers, and the smaller root as c / q; the hit point is then projected back onto the sphere
  * (pbrt-v4's refinement). The disk and cylinder are intersected in object space, so any affine placement works.
  * A hit stores the shape's texture coordinates in Hit.b12, from which its surface is rebuilt; a shape imported from
- * pbrt-v4 may keep pbrt's texture coordinates instead of Mitsuba's (pbrt_uv). */
+ * pbrt-v4 may keep pbrt's texture coordinates instead of Mitsuba's (pbrt_uv). Partial shapes (phi_max > 0) are
+ * shape_partial.cl's. */
 #ifndef SPECTRACE_SHAPES_CL
 #define SPECTRACE_SHAPES_CL
 
@@ -85,11 +86,18 @@ inline int stable_roots(float a, float b, float c, float sqrt_discriminant, floa
     return 1;
 }
 
+#if SCENE_HAS_PARTIAL_SHAPES
+#include "shape_partial.cl"
+#endif
+
 /* The nearest hit of the shape in (0, t_max) along the ray (unit direction), or t_max; its texture coordinates in
  * *uv. */
 inline float intersect_shape(__global const AnalyticShape *s, float3 origin, float3 direction, float t_max,
                              float2 *uv)
 {
+#if SCENE_HAS_PARTIAL_SHAPES
+    if (s->phi_max > 0.0f) return intersect_partial_shape(s, origin, direction, t_max, uv);
+#endif
     if (s->type == SHAPE_SPHERE) {
         float3 centre = s->sphere.xyz;
         float radius = s->sphere.w;
@@ -153,9 +161,10 @@ typedef struct {
     float area_stretch;  /* world area per object-space area here: abs_det · |M⁻ᵀ n_object| */
 } ShapeSurface;
 
-/* The surface at the shape's texture coordinates (shape_uv_from_mitsuba), in Mitsuba's: sphere u = φ/2π, v = θ/π
- * (θ from +z); disk u = r, v = φ/2π; cylinder u = φ/2π, v = z. */
-inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_uv)
+/* The whole shape's object-space point, normal and tangents along its texture coordinates (shape_uv_from_mitsuba),
+ * from Mitsuba's: sphere u = φ/2π, v = θ/π (θ from +z); disk u = r, v = φ/2π; cylinder u = φ/2π, v = z. */
+inline void whole_shape_local(__global const AnalyticShape *s, float2 shape_uv, float3 *point, float3 *normal,
+                              float3 *tangent_u, float3 *tangent_v)
 {
     float2 uv = shape_uv_to_mitsuba(s, shape_uv);
     float3 object_point, n_local, dpdu, dpdv;
@@ -179,12 +188,6 @@ inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_
         dpdu = SHAPE_TWO_PI * (float3)(-azimuth.y, azimuth.x, 0.0f);
         dpdv = (float3)(0.0f, 0.0f, 1.0f);
     }
-    ShapeSurface g;
-    g.p = shape_point_to_world(s, object_point);
-    float3 n = shape_normal_to_world(s, n_local);
-    float length_n = length(n);
-    g.n = (s->flip_normals ? -1.0f : 1.0f) * n / length_n;
-    g.area_stretch = s->abs_det * length_n;
     if (s->pbrt_uv && s->type == SHAPE_DISK) {  /* pbrt's (u, v) = (Mitsuba's v, 1 − Mitsuba's u) */
         float3 dpdr = dpdu;
         dpdu = dpdv;
@@ -192,6 +195,28 @@ inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_
     } else if (s->pbrt_uv && s->type == SHAPE_SPHERE) {
         dpdv = -dpdv;
     }
+    *point = object_point;
+    *normal = n_local;
+    *tangent_u = dpdu;
+    *tangent_v = dpdv;
+}
+
+/* The surface at the shape's texture coordinates (whole_shape_local; a partial shape's: shape_partial.cl). */
+inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_uv)
+{
+    float3 object_point, n_local, dpdu, dpdv;
+#if SCENE_HAS_PARTIAL_SHAPES
+    if (s->phi_max > 0.0f)
+        partial_shape_local(s, shape_uv, &object_point, &n_local, &dpdu, &dpdv);
+    else
+#endif
+        whole_shape_local(s, shape_uv, &object_point, &n_local, &dpdu, &dpdv);
+    ShapeSurface g;
+    g.p = shape_point_to_world(s, object_point);
+    float3 n = shape_normal_to_world(s, n_local);
+    float length_n = length(n);
+    g.n = (s->flip_normals ? -1.0f : 1.0f) * n / length_n;
+    g.area_stretch = s->abs_det * length_n;
     g.dpdu = shape_vector_to_world(s, dpdu);
     g.dpdv = shape_vector_to_world(s, dpdv);
     return g;
@@ -200,6 +225,9 @@ inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_
 /* Texture coordinates of a point drawn uniformly over the shape's object-space area from u in [0, 1)². */
 inline float2 shape_sample_uv(__global const AnalyticShape *s, float2 u)
 {
+#if SCENE_HAS_PARTIAL_SHAPES
+    if (s->phi_max > 0.0f) return partial_shape_sample_uv(s, u);
+#endif
     float2 uv;
     if (s->type == SHAPE_SPHERE) {
         uv = (float2)(u.y, acos(clamp(1.0f - 2.0f * u.x, -1.0f, 1.0f)) * (1.0f / SHAPE_PI));

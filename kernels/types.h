@@ -76,10 +76,13 @@ typedef struct {
     float4 sphere;        /* SHAPE_SPHERE: world centre (xyz) and radius (w), scene units (to_world is a similarity) */
     int type;             /* SHAPE_* */
     float abs_det;        /* |det| of to_world's linear part: world area = object area · abs_det · |M⁻ᵀ n_object| */
-    float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder) */
+    float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder); a partial shape's own */
     int flip_normals;     /* 1: the front (normal, emitting side) faces the other way: inward, the disk's −z */
     int pbrt_uv;          /* 1: texture coordinates as pbrt-v4 gives them (shapes.cl, shape_uv_from_mitsuba) */
-    int pad0, pad1, pad2;
+    float phi_max;        /* > 0: a partial shape (shape_partial.cl), kept for azimuths φ in [0, phi_max] (radians); 0:
+                             the whole shape */
+    float cut_min;        /* a partial sphere: kept for object z in [cut_min, cut_max]; a partial disk: for radii */
+    float cut_max;        /*   r in [cut_min, 1] */
 } AnalyticShape;
 
 /* A placed copy of an instanced object (kernels/scene.cl, "Instances"): the object's triangles are stored once, at

@@ -22,7 +22,14 @@ from spectrace.errors import SpectraceError
 from spectrace.film.colour_output import Adaptation, ColourSpace, WhiteBalance
 from spectrace.film.image import Image
 from spectrace.geometry import primitives
-from spectrace.geometry.analytic import ANALYTIC_SHAPES, AnalyticSurface, object_tessellation, similarity_problem
+from spectrace.geometry.analytic import (
+    ANALYTIC_SHAPES,
+    AnalyticSurface,
+    CutError,
+    cut_parameters,
+    object_tessellation,
+    similarity_problem,
+)
 from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.transforms import apply_transform, transform_matrix
@@ -208,6 +215,10 @@ def shape(
     center: Sequence[float] | None = None,
     radius: float | None = None,
     flip_normals: bool = False,
+    phi_max: float | None = None,
+    z_min: float | None = None,
+    z_max: float | None = None,
+    inner_radius: float | None = None,
 ) -> Shape:
     """A shape: a `TriangleMesh`, a trimesh mesh, or a built-in ("rectangle" [-1, 1]² at z = 0 facing +z, "cube"
     [-1, 1]³, "sphere" of radius 1, "prism" the equilateral prism of side 2 and length 2 along z, "teapot" the Utah
@@ -221,7 +232,9 @@ def shape(
     none). "sphere", "disk" and "cylinder" are exact (analytic) surfaces, unless `tessellated` (or
     face_normals=True, which asks for facets) makes them triangles; an analytic sphere's transform must scale
     uniformly. A sphere's `radius` and `center` place it before `transform`; `flip_normals` turns their front
-    (normal, emitting side) inward (the disk's to -z)."""
+    (normal, emitting side) inward (the disk's to -z). Partial shapes, as pbrt-v4's: `phi_max` (degrees) keeps the
+    azimuths [0, phi_max]; a sphere's `z_min`, `z_max` (heights in [-radius, radius]) the band between; a disk's
+    `inner_radius` (a fraction of its radius) cuts a hole."""
     if material is None and interior is None and emitter is None:
         raise SpectraceError(
             "a shape needs a material (only a shape with an interior or an emitter may omit it)", where="material"
@@ -232,7 +245,23 @@ def shape(
         )
     if face_normals is not None and not isinstance(face_normals, bool):
         raise SpectraceError(f"face_normals must be True, False or None, got {face_normals!r}", where="face_normals")
+    cut_keys = (phi_max, z_min, z_max, inner_radius)
+    if any(key is not None for key in cut_keys) and not (isinstance(geometry, str) and geometry in ANALYTIC_SHAPES):
+        raise SpectraceError("phi_max, z_min, z_max and inner_radius cut a sphere, disk or cylinder", where="phi_max")
     if isinstance(geometry, str) and geometry in ANALYTIC_SHAPES:
+        for key, value in zip(("phi_max", "z_min", "z_max", "inner_radius"), cut_keys, strict=True):
+            if value is not None and not (isinstance(value, Real) and math.isfinite(value)):
+                raise SpectraceError(f"{key} must be a finite number, got {value!r}", where=key)
+        # A bad radius is reported below, by its own key.
+        sphere_radius = float(radius) if isinstance(radius, Real) and radius > 0 else 1.0
+        try:
+            cuts = cut_parameters(geometry, *cut_keys, radius=sphere_radius)
+        except CutError as cut_problem:
+            raise SpectraceError(str(cut_problem), where=cut_problem.key) from None
+        if cuts and interior is not None:
+            raise SpectraceError(
+                "a partial shape encloses no volume: an interior needs a closed shape", where="interior"
+            )
         if interior is not None and geometry != "sphere":
             raise SpectraceError(f"a {geometry} encloses no volume: an interior needs a closed shape", where="interior")
         steps = [dict(step) for step in transform]
@@ -248,7 +277,7 @@ def shape(
         if not (tessellated or face_normals):
             if geometry == "sphere" and (problem := similarity_problem(matrix)):
                 raise SpectraceError(f"{problem}; tessellated=True takes any", where="transform")
-            surface = AnalyticSurface(geometry, matrix, flip_normals=bool(flip_normals))
+            surface = AnalyticSurface(geometry, matrix, flip_normals=bool(flip_normals), **cuts)
             return Shape(
                 mesh=surface.tessellation(),
                 material=material,
@@ -257,7 +286,8 @@ def shape(
                 interior=interior,
                 analytic=surface,
             )
-        mesh = apply_transform(object_tessellation(geometry), matrix)
+        local = AnalyticSurface(geometry, np.eye(4), **cuts).tessellation() if cuts else object_tessellation(geometry)
+        mesh = apply_transform(local, matrix)
         if flip_normals:
             mesh = mesh.flipped()
         mesh = shading_normals(mesh, face_normals, computed=False)

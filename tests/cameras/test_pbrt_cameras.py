@@ -125,10 +125,13 @@ AttributeEnd
 
 
 @pytest.mark.parametrize("camera", ['Camera "spherical"', 'Camera "spherical" "string mapping" "equalarea"'])
-def test_spherical_equal_area_camera_is_refused_in_one_line(tmp_path, camera):
+def test_spherical_equal_area_camera_is_the_equalarea_camera(tmp_path, camera):
+    """pbrt-v4's default mapping and "equalarea" are spectrace's equalarea camera (its mapping checked in
+    tests/cameras/test_equal_area_camera.py); another mapping is refused in one line naming the two there are."""
     from spectrace.errors import SpectraceError
 
+    assert load_pbrt_scene(_write(tmp_path, camera)).camera.type == "equalarea"
     with pytest.raises(SpectraceError) as caught:
-        load_pbrt_scene(_write(tmp_path, camera))
+        load_pbrt_scene(_write(tmp_path, 'Camera "spherical" "string mapping" "octahedral"'))
     message = str(caught.value)
     assert "\n" not in message and "scene.pbrt:3" in message and "equalarea" in message and "equirect" in message

@@ -167,13 +167,18 @@ def test_disks_and_cylinders_in_objects_stay_analytic_under_instances(tmp_path, 
     _compare(kernel_runner, only, kind, placed, flip, seed=7)
 
 
-def test_partial_disks_and_cylinders_stay_tessellated(tmp_path):
+def test_partial_disks_and_cylinders_are_analytic_with_their_cuts(tmp_path):
+    """phimax and innerradius become the analytic shapes' keys (the unit disk's hole a fraction of its radius);
+    a degenerate disk (innerradius >= radius) stays triangles."""
     body = (
-        'Shape "disk" "float innerradius" 0.3\nShape "disk" "float phimax" 180\n'
-        'Shape "cylinder" "float phimax" 90\nShape "disk"\nShape "cylinder"\n'
+        'Shape "disk" "float innerradius" 0.3 "float radius" 0.6\nShape "disk" "float phimax" 180\n'
+        'Shape "cylinder" "float phimax" 90\nShape "disk"\nShape "cylinder"\nShape "disk" "float innerradius" 2\n'
     )
     data, _ = pbrt_scene_data(_write(tmp_path, body))
-    assert [s["type"] for s in data["shapes"]] == ["mesh", "mesh", "mesh", "disk", "cylinder"]
+    assert [s["type"] for s in data["shapes"]] == ["disk", "disk", "cylinder", "disk", "cylinder", "mesh"]
+    assert data["shapes"][0]["inner_radius"] == pytest.approx(0.5) and "phi_max" not in data["shapes"][0]
+    assert data["shapes"][1]["phi_max"] == 180 and data["shapes"][2]["phi_max"] == 90
+    assert not {"phi_max", "inner_radius"} & (data["shapes"][3].keys() | data["shapes"][4].keys())
 
 
 def test_cylinder_projected_area_seen_orthographically(tmp_path, kernel_runner):

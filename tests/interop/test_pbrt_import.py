@@ -180,16 +180,21 @@ def _placed_triangles(scene) -> np.ndarray:
     meshes = [shape.mesh for shape in scene.shapes]
     meshes += [apply_transform(s.mesh, i.to_world) for i in scene.instances for s in i.object.shapes]
     triangles = np.concatenate([np.stack(m.triangles(), axis=1) for m in meshes])  # (M, 3 corners, 3)
+    # Corners in a fixed order: a mirrored copy's front (pbrt flips it by the placement's handedness) may wind a
+    # triangle the other way round than its instanced twin, whose front follows the object's own placement.
+    corners = np.round(triangles, 9)
+    order = np.lexsort((corners[..., 2], corners[..., 1], corners[..., 0]), axis=1)
+    triangles = np.take_along_axis(triangles, order[..., None], axis=1)
     triangles = np.sort(np.round(triangles, 9).reshape(len(triangles), -1).view("f8,f8,f8,f8,f8,f8,f8,f8,f8"), axis=0)
     return triangles.view(np.float64).reshape(-1, 9)
 
 
 def test_objects_are_imported_once_and_placed_by_instances(tmp_path):
-    """An object of a mesh and a partial sphere placed three times (once mirrored) imports as one spectrace object with
+    """An object of a mesh and a partial disk placed three times (once mirrored) imports as one spectrace object with
     three instances, its mesh written once, and places the same triangles as the same shapes written out in
     world space; an area light in an object is left out, as pbrt-v4 leaves it out."""
     mesh = 'Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0  1 1 0] "integer indices" [0 1 2 2 1 3]\n'
-    sphere = 'Shape "sphere" "float radius" 0.5 "float phimax" 300\n'
+    sphere = 'Shape "disk" "float radius" 0.5 "float phimax" 300\n'
     placements = ["Translate 1 0 0", "Rotate 30 0 1 0\nScale 2 1 1", "Scale -1 1 1\nTranslate 0 2 0"]
     defined = 'ObjectBegin "thing"\nTranslate 0 0 1\n' + mesh + sphere + "ObjectEnd\n"
     uses = "".join(f'AttributeBegin\n{p}\nObjectInstance "thing"\nAttributeEnd\n' for p in placements)
@@ -200,8 +205,9 @@ def test_objects_are_imported_once_and_placed_by_instances(tmp_path):
 
     instanced = load_scene(toml)
     assert len(instanced.instances) == 3 and len({id(i.object) for i in instanced.instances}) == 1
-    # The plane, the object's mesh and its (partial, so tessellated) sphere.
-    assert len(instanced.shapes) == 1 and len(list((tmp_path / "out").rglob("*.ply"))) == 3
+    # The plane and the object's mesh; its partial disk is analytic.
+    assert len(instanced.shapes) == 1 and len(list((tmp_path / "out").rglob("*.ply"))) == 2
+    assert instanced.instances[0].object.shapes[1].analytic.phi_max == pytest.approx(np.radians(300))
     toml2 = tmp_path / "out2" / "scene.toml"
     import_pbrt(_write(tmp_path, PLANE + written_out, name="copies.pbrt"), toml2)
     copies = load_scene(toml2)
@@ -439,27 +445,27 @@ Shape "trianglemesh" "point3 P" [0 0 0  1 0 0  0 1 0] "normal N" [0 0 1  0 0 1  
     assert np.all(normals[2][:, 2] < 0)
 
 
-def test_partial_and_reversed_spheres_are_tessellated_as_pbrt_defines_them(tmp_path):
-    """A hemisphere (zmax 0) of radius 2 has area 2π r² and faces out; ReverseOrientation turns a sphere's front in
-    (the analytic sphere's flip_normals, or a tessellation's winding); a whole, plain sphere stays spectrace's
-    built-in one."""
+def test_partial_and_reversed_spheres_import_as_pbrt_defines_them(tmp_path):
+    """A hemisphere (zmax 0) of radius 2 is the analytic sphere cut at the unit sphere's z = 0, of area 2π r²;
+    ReverseOrientation turns a sphere's front in (the analytic sphere's flip_normals, or a tessellation's winding);
+    a whole, plain sphere stays spectrace's built-in one; an ellipsoid with cuts needs triangles."""
+    from spectrace.scene import load_scene
+
     body = 'Shape "sphere" "float radius" 2 "float zmax" 0\nShape "sphere"\nReverseOrientation\nShape "sphere"\n'
-    body += 'Scale 1 2 1\nShape "sphere"\n'
+    body += 'Scale 1 2 1\nShape "sphere"\nShape "sphere" "float phimax" 90\n'
     data, importer = pbrt_scene_data(_write(tmp_path, body))
-    hemisphere, plain, reversed_sphere, reversed_ellipsoid = data["shapes"]
-    assert plain["type"] == reversed_sphere["type"] == "sphere" and "flip_normals" not in plain
+    hemisphere, plain, reversed_sphere, reversed_ellipsoid, cut_ellipsoid = data["shapes"]
+    assert plain["type"] == reversed_sphere["type"] == hemisphere["type"] == "sphere" and "flip_normals" not in plain
     assert reversed_sphere["flip_normals"] is True
-    assert hemisphere["type"] == reversed_ellipsoid["type"] == "mesh"
-    for table, area, outward in ((hemisphere, 2 * math.pi * 4, True), (reversed_ellipsoid, None, False)):
-        mesh = importer.meshes[Path(table["file"]).name]
-        a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
-        normals = np.cross(b - a, c - a)
-        if area is not None:
-            assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(area, rel=2e-3)
-        facing = np.einsum("ij,ij->i", normals, a + b + c)
-        assert np.all(facing > 0) if outward else np.all(facing < 0)
-    hemisphere_mesh = importer.meshes[Path(hemisphere["file"]).name]
-    assert hemisphere_mesh.vertices[:, 2].max() <= 1e-9 and hemisphere_mesh.vertices[:, 2].min() == pytest.approx(-2)
+    assert (hemisphere["z_min"], hemisphere["z_max"]) == (-1.0, 0.0)
+    assert reversed_ellipsoid["type"] == cut_ellipsoid["type"] == "mesh"
+    mesh = importer.meshes[Path(reversed_ellipsoid["file"]).name]
+    a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
+    assert np.all(np.einsum("ij,ij->i", np.cross(b - a, c - a), a + b + c) < 0)
+    toml = tmp_path / "out" / "scene.toml"
+    import_pbrt(_write(tmp_path, 'Shape "sphere" "float radius" 2 "float zmax" 0\n', name="h.pbrt"), toml)
+    (shape,) = load_scene(toml).shapes
+    assert shape.analytic.area() == pytest.approx(2 * math.pi * 4, rel=1e-9)
 
 
 def test_loop_subdivision_refines_the_control_mesh(tmp_path):
@@ -616,7 +622,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
         ('Material "coatedconductor"\nShape "sphere"\n', 5, "spectrace has no coated conductor"),
         ('Shape "curve"\n', 5, "shape 'curve'"),
         ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),
-        ('LightSource "goniometric"\n', 5, "light 'goniometric'"),
+        ('LightSource "sunsky"\n', 5, "light 'sunsky'"),
         # pbrt-v4 resolves named materials after reading the whole file: the shape using one is at fault.
         ('NamedMaterial "x"\nShape "sphere"\n', 6, "which no MakeNamedMaterial defined"),
         ('Material "dielectric" "rgb eta" [1.5 1.5 1.5]\nShape "sphere"\n', 5, "spectrace takes a number or a named"),
@@ -651,7 +657,7 @@ def test_realistic_camera_is_one_line(tmp_path, monkeypatch, capsys):
     assert code != 0
     assert stderr.strip() == (
         f"error: {path}:2: camera 'realistic': spectrace imports pbrt's perspective, orthographic and spherical "
-        '(mapping "equirect") cameras'
+        '(mapping "equirect" or "equalarea") cameras'
     )
 
 

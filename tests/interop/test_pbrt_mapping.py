@@ -110,7 +110,7 @@ def test_each_declared_pbrt_light_imports_with_pbrts_defaults_as_its_module(tmp_
 
 def test_the_light_refusal_lists_the_declared_lights(tmp_path):
     path = tmp_path / "scene.pbrt"
-    path.write_text(CAMERA + 'LightSource "goniometric"\n' + QUAD)
+    path.write_text(CAMERA + 'LightSource "sunsky"\n' + QUAD)
     with pytest.raises(SpectraceError) as caught:
         pbrt_scene_data(path)
     listed = re.search(r"spectrace imports (.*) and diffuse area lights$", caught.value.message).group(1).split(", ")

@@ -23,6 +23,7 @@ from spectrace.engine.scene_buffers import build_scene_buffers, render_params
 from spectrace.geometry.analytic import ANALYTIC_SHAPES
 from spectrace.geometry.bvh4 import traversal_defines
 from spectrace.lights import LIGHTS
+from spectrace.lights.goniometric import GoniometricLight
 from spectrace.lights.projector import ProjectorLight
 from spectrace.scene.model import (
     Camera,
@@ -154,6 +155,43 @@ def _projector_case(profile: str) -> Case:
     # The field's half-widths at the origin's depth are 2 tan 30° and that over 1.5: every point lies inside.
     points = [(0, 0, 0), (0.3, 0.0, 0.2), (1.0, 0.0, -0.6), (-0.4, 0.5, 0.3)]
     return Case(f"projector-{profile}", _scene(lights=[light]), points, True, arriving=arriving)
+
+
+# A goniometric light's image: 8 x 8 texels of an equal-area map, random values, a bright one at [2, 5].
+GONIO_IMAGE = np.random.default_rng(9).uniform(0.2, 1.5, (8, 8))
+GONIO_IMAGE[2, 5] = 6.0
+
+
+def _goniometric_case(mirrored: bool) -> Case:
+    """A goniometric light at (0.3, 1.0, −0.2), its map's pole along (0.2, 1, 0.1), its v axis toward +x (turned
+    round when mirrored): I(ω) = I₀·image[texel of the equal-area square at ω in that frame] / d², the map written
+    here from Clarberg's paper (tests/cameras/test_equal_area_camera.py)."""
+    from tests.cameras.test_equal_area_camera import sphere_to_square
+
+    position, up, front = np.array([0.3, 1.0, -0.2]), np.array([0.2, 1.0, 0.1]), np.array([1.0, 0.0, 0.0])
+    light = spectrace.goniometric_light(
+        tuple(position), "cie:D65", image=GONIO_IMAGE, up=tuple(up), front=tuple(front), mirrored=mirrored
+    )
+    z = _unit(up)
+    y = _unit(front - (front @ z) * z)
+    x = np.cross(y, z)
+    y = -y if mirrored else y
+
+    def arriving(p, wi, q):
+        d = _unit(p - position)
+        uv = sphere_to_square(np.stack([d @ x, d @ y, d @ z], axis=1))
+        n = GONIO_IMAGE.shape[0]
+        texel = GONIO_IMAGE[
+            np.clip((uv[:, 1] * n).astype(int), 0, n - 1), np.clip((uv[:, 0] * n).astype(int), 0, n - 1)
+        ]
+        d2 = np.sum((p - position) ** 2, axis=1, keepdims=True)
+        return _at(light.intensity)[None, :] * texel[:, None] / d2
+
+    rng = np.random.default_rng(4 + mirrored)
+    points = [tuple(position + 1.5 * _unit(v)) for v in rng.normal(size=(24, 3))]
+    return Case(
+        f"goniometric{'-mirrored' if mirrored else ''}", _scene(lights=[light]), points, True, arriving=arriving
+    )
 
 
 def _projector_flux_factor(tan_x: float, tan_y: float, profile: str) -> float:
@@ -317,7 +355,50 @@ def _area_cases() -> list[Case]:
             )
         else:
             cases.append(Case(f"area-{kind}-missing", _scene(), [], False))
-    return cases
+    return cases + _partial_area_cases(radiance)
+
+
+def _partial_area_cases(radiance) -> list[Case]:
+    """Partial shapes (kernels/shape_partial.cl), each seen from where a direction meets it at most once: an annulus
+    sector from above its front, a cut sphere and a cut cylinder from inside. Some of the points lie beyond a cut,
+    where only parts of the surface are seen."""
+    one_sided, two_sided = spectrace.area_emitter(radiance), spectrace.area_emitter(radiance, two_sided=True)
+    disk = spectrace.shape(
+        "disk", GREY, one_sided, transform=[{"translate": [0.0, 0.0, 1.0]}], phi_max=270.0, inner_radius=0.4
+    )
+    p0 = (0.3, 0.2, 2.5)
+    # A bounding cone about a point off the hole's centre: its edge then lies where the quadrature's cells are
+    # small (near the cone's axis a cell of uniform cos θ spans many degrees).
+    axis, cos_min = _cone_toward((-0.6, 0.0, 1.0), 1.6, p0)
+    up = _area_arriving(radiance, lambda q: np.broadcast_to([0.0, 0.0, 1.0], q.shape), False)
+    centre = np.array([0.0, 0.5, 0.0])
+    sphere = spectrace.shape(
+        "sphere",
+        GREY,
+        one_sided,
+        center=tuple(centre),
+        radius=0.6,
+        flip_normals=True,
+        phi_max=200.0,
+        z_min=-0.3,
+        z_max=0.5,
+    )
+    inward = _area_arriving(radiance, lambda q: _unit(centre - q), False)
+    cylinder = spectrace.shape("cylinder", GREY, two_sided, transform=[{"scale": [1.0, 1.0, 3.0]}], phi_max=150.0)
+    radial = _area_arriving(radiance, lambda q: _unit(q * [1.0, 1.0, 0.0]), True)
+    return [
+        Case("area-partialdisk", _scene([disk]), [p0, (-1.5, 0.4, 1.6)], False, axis, cos_min, up, [(0.0, 0.0, 0.0)]),
+        Case(
+            "area-partialsphere-inside", _scene([sphere]), [(0.1, 0.6, 0.2), (-0.2, 0.3, -0.1)], False, arriving=inward
+        ),
+        Case(
+            "area-partialcylinder-inside",
+            _scene([cylinder]),
+            [(0.1, -0.2, 1.5), (0.4, 0.3, 1.0)],
+            False,
+            arriving=radial,
+        ),
+    ]
 
 
 # Two texels: the left half of the image bright red-ish, the right half blue-ish; seen through nearest lookups, every
@@ -354,6 +435,7 @@ CASES: dict[str, list[Case]] = {
     "point": [_point_case()],
     "spot": [_spot_case()],
     "projector": [_projector_case("irradiance"), _projector_case("intensity")],
+    "goniometric": [_goniometric_case(False), _goniometric_case(True)],
     "distant": [_distant_case()],
     "constant": [_constant_case()],
     "envmap": [_envmap_case("envmap"), _envmap_case("envmap-turned", up=(0.3, 0.9, 0.2), front=(1.0, 0.0, 0.4))],
@@ -641,6 +723,10 @@ EMITTING_AREA = {
     "sphere": 4.0 * np.pi * 0.6**2,
     "disk": np.pi,
     "cylinder": 2.0 * np.pi * 3.0,
+    # φmax (1 − r_inner²)/2, φmax r (zmax − zmin), φmax · length
+    "partialdisk": np.radians(270.0) * (1.0 - 0.4**2) / 2.0,
+    "partialsphere": np.radians(200.0) * 0.6 * 0.8,
+    "partialcylinder": np.radians(150.0) * 3.0,
 }
 
 
@@ -658,6 +744,8 @@ def _flux(case: Case, radius: float) -> np.ndarray:
         if isinstance(light, ProjectorLight):
             tan_x = np.tan(np.radians(60.0) / 2.0)
             return _at(light.intensity) * _projector_flux_factor(tan_x, tan_x / 1.5, light.profile)
+        if isinstance(light, GoniometricLight):  # every texel covers 4π / texel count
+            return _at(light.intensity) * 4.0 * np.pi * GONIO_IMAGE.mean()
         if isinstance(light, DistantLight):
             return _at(light.irradiance) * np.pi * radius**2
         if isinstance(light, ConstantEnvironment):

@@ -114,7 +114,14 @@ def test_the_api_constructors_are_the_modules_make():
     """spectrace.<API_NAME> is the module's own `make` (no second list of its parameters in the API), and each is a
     public name of the package."""
     constructors = {m.API_NAME: m.make for m in LIGHTS.values() if m.API_NAME is not None}
-    expected = {"point_light", "spot_light", "distant_light", "constant_environment", "projector_light"}
+    expected = {
+        "point_light",
+        "spot_light",
+        "distant_light",
+        "constant_environment",
+        "projector_light",
+        "goniometric_light",
+    }
     assert set(constructors) == expected
     for api_name, make in constructors.items():
         assert getattr(api, api_name) is make and getattr(spectrace, api_name) is make

@@ -88,6 +88,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_SOLID_TEXTURES": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
+        "SCENE_HAS_PARTIAL_SHAPES": 0,
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
         "SCENE_HAS_ONE_SIDED": 0,
@@ -101,7 +102,8 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     assert subsurface["SCENE_HAS_MEDIA"] == 1 and subsurface["SCENE_HAS_GRID_MEDIA"] == 0
     assert scene_feature_defines(build_scene_buffers(_grid_medium_scene()))["SCENE_HAS_GRID_MEDIA"] == 1
     analytic = scene_feature_defines(build_scene_buffers(_analytic_shapes_scene()))
-    assert analytic["SCENE_HAS_SHAPES"] == 1
+    assert analytic["SCENE_HAS_SHAPES"] == 1 and analytic["SCENE_HAS_PARTIAL_SHAPES"] == 0
+    assert scene_feature_defines(build_scene_buffers(_partial_shapes_scene()))["SCENE_HAS_PARTIAL_SHAPES"] == 1
     assert analytic["SCENE_LIGHT_TYPES"] == LIGHT_BITS["sphere"] | LIGHT_BITS["shape"]
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
@@ -305,6 +307,33 @@ def _grid_medium_scene() -> spectrace.Scene:
     )
 
 
+def _partial_shapes_scene() -> spectrace.Scene:
+    """A cut sphere light over an annulus-sector floor and a cut cylinder (kernels/shape_partial.cl)."""
+    floor = spectrace.shape("disk", spectrace.diffuse(0.6), transform=[{"scale": 3}], inner_radius=0.2, phi_max=300)
+    can = spectrace.shape("cylinder", spectrace.diffuse(0.4), transform=[{"scale": [0.5, 0.5, 1.0]}], phi_max=200)
+    bulb = spectrace.shape(
+        "sphere",
+        spectrace.diffuse(0.0),
+        emitter=spectrace.area_emitter(20.0),
+        center=(0, 0, 3),
+        radius=1.0,
+        z_min=-0.8,
+        z_max=0.5,
+        phi_max=270,
+    )
+    camera = spectrace.Camera(origin=(0, -5, 3), target=(0, 0, 0.5), up=(0, 0, 1))
+    return spectrace.Scene(camera=camera, width=16, height=16, shapes=[floor, can, bulb])
+
+
+def _equal_area_scene() -> spectrace.Scene:
+    """A goniometric light over a floor, seen by the equal-area camera."""
+    floor = spectrace.shape("rectangle", spectrace.diffuse(0.6), transform=[{"scale": 3}])
+    image = np.random.default_rng(3).uniform(0.2, 2.0, (4, 4))
+    lamp = spectrace.goniometric_light((0.2, 0.1, 1.0), intensity=3.0, image=image, up=(0, 0, -1), front=(1, 0, 0))
+    camera = spectrace.Camera(origin=(0, 0, 0.5), target=(0, 0, 0), up=(0, 1, 0), type="equalarea")
+    return spectrace.Scene(camera=camera, width=16, height=16, shapes=[floor], lights=[lamp])
+
+
 def _analytic_shapes_scene() -> spectrace.Scene:
     """An analytic sphere light and a disk light over a bump-mapped disk floor, a glass sphere and a textured
     cylinder."""
@@ -424,6 +453,8 @@ SCENES = {
     "trilinear_texture": lambda: _textured_scene(("trilinear",)),
     "beckmann_and_nonlinear_plastic": _beckmann_scene,
     "analytic_shapes": _analytic_shapes_scene,
+    "partial_shapes": _partial_shapes_scene,
+    "equal_area_camera_and_goniometric_light": _equal_area_scene,
     "grid_medium": _grid_medium_scene,
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.
     "hidden_area_light": lambda: replace(_bundled("cornell_box"), hide_emitters=True),
@@ -454,6 +485,8 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
         "distant_and_spot",
         "trilinear_texture",
         "analytic_shapes",
+        "partial_shapes",
+        "equal_area_camera_and_goniometric_light",
         "anisotropic_principled",
     ],
 )

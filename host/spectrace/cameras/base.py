@@ -14,8 +14,9 @@ class CameraPlugin(TabledPlugin, Protocol):
     already) and `to_mitsuba(camera, exporter)` (the export), or MITSUBA_NONE saying why it has none; PBRT_CAMERAS
     with `from_pbrt` (pbrt-v4's cameras it maps). Beside these, where they apply: SPEC_CHECKS (rules spanning
     several keys, for the scene schema); PBRT_MIRRORED (its image runs the other way round from pbrt's, so the
-    import mirrors the world the other way) and PBRT_CONDITION (what the refusal of another pbrt camera says it
-    takes of the type)."""
+    import mirrors the world the other way), pbrt_maps(context, camera) (whether it maps this camera of a pbrt type
+    that several modules share, before the world's mirror is chosen) and PBRT_CONDITION (what the refusal of
+    another pbrt camera says it takes of the type)."""
 
     @property
     def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802

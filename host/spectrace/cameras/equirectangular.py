@@ -11,9 +11,9 @@ from spectrace.cameras.shared import frame
 NAME = "equirectangular"
 MITSUBA_PLUGINS: tuple[str, ...] = ()
 MITSUBA_NONE = "Mitsuba 3 has no such sensor"
-# pbrt-v4's spherical camera with mapping "equirect" (its default, equalarea, has no counterpart here).
+# pbrt-v4's spherical camera with mapping "equirect" (its default, equalarea: spectrace.cameras.equalarea).
 PBRT_CAMERAS = ("spherical",)
-PBRT_CONDITION = ' (mapping "equirect")'
+PBRT_CONDITION = ' (mapping "equirect" or "equalarea")'
 # pbrt's longitude runs from +x toward +z, from right to left as seen from inside, where this camera's runs left to
 # right: the import mirrors the world exactly when it does not for pbrt's other cameras (from_pbrt).
 PBRT_MIRRORED = True
@@ -28,18 +28,25 @@ def lens(camera) -> tuple[float, float]:
     return 0.0, 0.0
 
 
-def from_pbrt(context, camera, view) -> dict:
+def pbrt_maps(context, camera) -> bool:
+    """Whether this module maps the pbrt-v4 spherical camera: its mapping "equirect"."""
+    return context.string(camera, "mapping") == "equirect"
+
+
+def from_pbrt(context, camera, view) -> dict | None:
     """pbrt-v4's spherical camera with mapping "equirect". pbrt-v4 (cameras.cpp, SphericalCamera::GenerateRay)
     sends film position (u, v) in [0, 1]² along θ = π v, φ = 2π u, camera direction (sin θ cos φ, cos θ,
     sin θ sin φ): row 0 toward the camera's +y, the image's centre (φ = π) along its −x, φ growing from +x toward +z.
     This camera (kernels/camera.cl) sends (u, v) along θ = π v, φ' = 2π u − π, sin θ sin φ' right + cos θ up +
     sin θ cos φ' forward. The two agree with up = the camera's +y, forward = its −x and right = forward × up = its
     −z, which holds when the world is mirrored exactly when the perspective camera's is not (PBRT_MIRRORED)."""
-    if (mapping := context.string(camera, "mapping") or "equalarea") != "equirect":
+    if (mapping := context.string(camera, "mapping") or "equalarea") == "equalarea":
+        return None  # the equalarea camera's
+    if mapping != "equirect":
         raise context.error(
             camera.location,
-            f"spherical camera mapping '{context.shown(mapping)}' (pbrt-v4's default is equalarea): spectrace "
-            'imports only "equirect", as its equirectangular camera',
+            f"spherical camera mapping '{context.shown(mapping)}': spectrace imports \"equirect\" (its "
+            'equirectangular camera) and "equalarea" (its equalarea camera)',
         )
     if view.lens_radius > 0.0:
         context.warn(camera.location, '"lensradius" not imported: the spherical camera is a pinhole')

@@ -209,9 +209,9 @@ ANALYTIC_SHAPE_DTYPE = _struct(
         ("object_area", "<f4"),
         ("flip_normals", "<i4"),
         ("pbrt_uv", "<i4"),
-        ("pad0", "<i4"),
-        ("pad1", "<i4"),
-        ("pad2", "<i4"),
+        ("phi_max", "<f4"),
+        ("cut_min", "<f4"),
+        ("cut_max", "<f4"),
     ],
     144,
 )

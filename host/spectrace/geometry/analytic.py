@@ -4,6 +4,9 @@ In object space (Mitsuba 3's plugins, checked against Mitsuba itself in tests/ge
 - sphere: radius 1 at the origin; u = φ/2π with φ = atan2(y, x) in [0, 2π), v = θ/π with θ the angle from +z;
 - disk: radius 1 in the plane z = 0, facing +z (one face); u = r, v = φ/2π;
 - cylinder: radius 1 around the z axis from z = 0 to z = 1, open (no caps), facing outward; u = φ/2π, v = z.
+A partial shape (pbrt-v4's phimax, zmin/zmax, innerradius; kernels/shape_partial.cl) keeps the azimuths φ in
+[0, phi_max] (radians), the sphere's object z in `z_range`, the disk's radii in [inner_radius, 1]; its texture
+coordinates are pbrt's with pbrt_uv (u = φ/φmax, ...), else the whole shape's.
 `to_world` places the shape: any affine map for the disk and cylinder (intersected in object space, normals by the
 inverse transpose, so a non-uniform scale gives an exact elliptic disk or cylinder); a similarity for the sphere
 (translation, rotation, uniform scale), whose centre and radius the kernels use in world space.
@@ -41,6 +44,54 @@ def similarity_problem(matrix: np.ndarray) -> str | None:
     return None
 
 
+class CutError(ValueError):
+    """A partial shape's key that does not fit: `key` names it."""
+
+    def __init__(self, key: str, message: str):
+        super().__init__(message)
+        self.key = key
+
+
+def cut_parameters(
+    kind: str,
+    phi_max: float | None = None,
+    z_min: float | None = None,
+    z_max: float | None = None,
+    inner_radius: float | None = None,
+    radius: float = 1.0,
+) -> dict:
+    """AnalyticSurface's keywords of a partial shape from the scene keys (phi_max in degrees; a sphere's z_min,
+    z_max heights in [-radius, radius], as pbrt's; a disk's inner_radius a fraction of its radius 1); {} for the
+    whole shape.
+    Raises CutError naming the key that does not fit."""
+    cuts: dict = {}
+    if phi_max is not None:
+        if not 0.0 < phi_max <= 360.0:
+            raise CutError("phi_max", f"phi_max must be in (0, 360] degrees, got {phi_max:g}")
+        if phi_max < 360.0:
+            cuts["phi_max"] = float(np.radians(phi_max))
+    if (z_min is not None or z_max is not None) and kind != "sphere":
+        raise CutError("z_min", f"z_min and z_max cut a sphere, not a {kind} (a cylinder's height is its transform's)")
+    if inner_radius is not None and kind != "disk":
+        raise CutError("inner_radius", f"inner_radius is a disk's, not a {kind}'s")
+    if kind == "sphere" and (z_min is not None or z_max is not None):
+        lo = -radius if z_min is None else z_min
+        hi = radius if z_max is None else z_max
+        if not -radius <= lo < hi <= radius:
+            raise CutError("z_min", f"z_min < z_max must lie in [-radius, radius] = [{-radius:g}, {radius:g}]")
+        if (lo, hi) != (-radius, radius):
+            cuts["z_range"] = (lo / radius, hi / radius)
+    if inner_radius is not None:
+        if not 0.0 <= inner_radius < 1.0:
+            raise CutError(
+                "inner_radius",
+                f"inner_radius must be in [0, 1) (a fraction of the disk's radius), got {inner_radius:g}",
+            )
+        if inner_radius > 0.0:
+            cuts["inner_radius"] = float(inner_radius)
+    return cuts
+
+
 @dataclass(frozen=True, eq=False)
 class AnalyticSurface:
     __eq__ = fields_equal  # by value (arrays too), hashed by identity
@@ -52,6 +103,32 @@ class AnalyticSurface:
     # Texture coordinates as pbrt-v4 gives them (kernels/shapes.cl, shape_uv_from_mitsuba): the disk's u = φ/2π,
     # v = 1 - r, the sphere's v = 1 - θ/π; Mitsuba's otherwise (the cylinders agree).
     pbrt_uv: bool = False
+    phi_max: float = 2.0 * np.pi  # radians, in (0, 2π]
+    z_range: tuple[float, float] = (-1.0, 1.0)  # the sphere's object z kept
+    inner_radius: float = 0.0  # the disk's object radius below which it is cut away
+
+    @property
+    def partial(self) -> bool:
+        return self.phi_max < 2.0 * np.pi or tuple(self.z_range) != (-1.0, 1.0) or self.inner_radius > 0.0
+
+    def cut_keys(self) -> dict:
+        """The scene keys of a partial shape in its object space (cut_parameters' inverse); {} for a whole one."""
+        keys: dict = {}
+        if self.phi_max < 2.0 * np.pi:
+            keys["phi_max"] = float(np.degrees(self.phi_max))
+        if tuple(self.z_range) != (-1.0, 1.0):
+            keys["z_min"], keys["z_max"] = (float(z) for z in self.z_range)
+        if self.inner_radius > 0.0:
+            keys["inner_radius"] = float(self.inner_radius)
+        return keys
+
+    def object_area(self) -> float:
+        """Object-space area of the (partial) surface."""
+        if self.kind == "sphere":
+            return float(self.phi_max * (self.z_range[1] - self.z_range[0]))
+        if self.kind == "disk":
+            return float(0.5 * self.phi_max * (1.0 - self.inner_radius**2))
+        return float(self.phi_max)
 
     @property
     def linear(self) -> np.ndarray:
@@ -65,12 +142,14 @@ class AnalyticSurface:
     def area(self) -> float:
         """World-space area, scene units²."""
         if self.kind == "disk":
-            return float(OBJECT_AREA["disk"] * self.normal_stretch(np.array([[0.0, 0.0, 1.0]]))[0])
+            return float(self.object_area() * self.normal_stretch(np.array([[0.0, 0.0, 1.0]]))[0])
         if self.kind == "sphere":
-            return float(OBJECT_AREA["sphere"] * abs(np.linalg.det(self.linear)) ** (2.0 / 3.0))
-        phi = 2.0 * np.pi * (np.arange(_AREA_STEPS) + 0.5) / _AREA_STEPS
+            return float(self.object_area() * abs(np.linalg.det(self.linear)) ** (2.0 / 3.0))
+        # The midpoint rule over [0, φmax]; exact to float precision for the whole period, and for a part to
+        # O(1/steps²) of the stretch's variation.
+        phi = self.phi_max * (np.arange(_AREA_STEPS) + 0.5) / _AREA_STEPS
         normals = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
-        return float(OBJECT_AREA["cylinder"] * self.normal_stretch(normals).mean())
+        return float(self.object_area() * self.normal_stretch(normals).mean())
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """The exact axis-aligned box (lower, upper corner) of the placed shape, widened by a relative 1e-6 so that
@@ -102,6 +181,11 @@ class AnalyticSurface:
         row["object_area"] = OBJECT_AREA[self.kind]
         row["flip_normals"] = int(self.flip_normals)
         row["pbrt_uv"] = int(self.pbrt_uv)
+        if self.partial:  # whole shapes keep phi_max = 0, and with it shapes.cl's own arithmetic
+            row["object_area"] = self.object_area()
+            row["phi_max"] = self.phi_max
+            row["cut_min"] = self.z_range[0] if self.kind == "sphere" else self.inner_radius
+            row["cut_max"] = self.z_range[1]
         if self.kind == "sphere":
             centre, radius = self.sphere_centre_radius()
             row["sphere"] = (*centre, radius)
@@ -110,6 +194,9 @@ class AnalyticSurface:
     def tessellation(self) -> TriangleMesh:
         """Triangles close to the surface, in world space, facing as the surface does, with its normals and texture
         coordinates."""
+        if self.partial:
+            mesh = apply_transform(self.partial_tessellation(), self.to_world)
+            return mesh.flipped() if self.flip_normals else mesh
         mesh = apply_transform(object_tessellation(self.kind), self.to_world)
         if self.pbrt_uv:
             mesh = TriangleMesh(
@@ -118,6 +205,46 @@ class AnalyticSurface:
         if self.flip_normals:
             mesh = mesh.flipped()
         return mesh
+
+    def parameters_uv(self, phi, q):
+        """The shape's texture coordinates at azimuth φ and q (θ of the sphere, r of the disk, z of the cylinder) as
+        kernels/shape_partial.cl gives them for a partial shape."""
+        phi, q = np.asarray(phi, float), np.asarray(q, float)
+        if not self.pbrt_uv:
+            if self.kind == "disk":
+                return np.stack([q, phi / (2 * np.pi)], axis=-1)
+            return np.stack([phi / (2 * np.pi), q / np.pi if self.kind == "sphere" else q], axis=-1)
+        u = phi / self.phi_max
+        if self.kind == "sphere":
+            theta_min, theta_max = np.arccos(np.clip(self.z_range, -1.0, 1.0))
+            return np.stack([u, (q - theta_min) / (theta_max - theta_min)], axis=-1)
+        if self.kind == "disk":
+            return np.stack([u, (1.0 - q) / (1.0 - self.inner_radius)], axis=-1)
+        return np.stack([u, q], axis=-1)
+
+    def partial_tessellation(self) -> TriangleMesh:
+        """A partial shape in object space as a grid of quads over (φ, q), with its normals and texture
+        coordinates."""
+        sectors = max(2, int(np.ceil(64 * self.phi_max / (2 * np.pi))))
+        rings = {"sphere": 32, "disk": 8, "cylinder": 1}[self.kind]
+        phi = np.linspace(0.0, self.phi_max, sectors + 1)
+        if self.kind == "sphere":
+            theta_top, theta_bottom = (float(np.arccos(np.clip(z, -1.0, 1.0))) for z in self.z_range[::-1])
+            q = np.linspace(theta_top, theta_bottom, rings + 1)
+        else:
+            q = np.linspace(self.inner_radius if self.kind == "disk" else 0.0, 1.0, rings + 1)
+        pp, qq = np.meshgrid(phi, q, indexing="ij")
+        c, s = np.cos(pp), np.sin(pp)
+        if self.kind == "sphere":
+            points = np.stack([np.sin(qq) * c, np.sin(qq) * s, np.cos(qq)], axis=-1)
+            normals = points
+        elif self.kind == "disk":
+            points = np.stack([qq * c, qq * s, np.zeros_like(qq)], axis=-1)
+            normals = np.broadcast_to([0.0, 0.0, 1.0], points.shape)
+        else:
+            points = np.stack([c, s, qq], axis=-1)
+            normals = np.stack([c, s, np.zeros_like(qq)], axis=-1)
+        return _grid_mesh(points, np.array(normals), self.parameters_uv(pp, qq))
 
 
 def pbrt_uv_from_mitsuba(kind: str, uvs):
@@ -149,6 +276,11 @@ def object_tessellation(kind: str) -> TriangleMesh:
         points = np.stack([np.cos(phi), np.sin(phi), u], axis=-1)
         normals = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(u)], axis=-1)
         uvs = np.stack([v, u], axis=-1)
+    return _grid_mesh(points, normals, uvs)
+
+
+def _grid_mesh(points, normals, uvs) -> TriangleMesh:
+    """Triangles over a grid of points (two per cell), wound to face along the normals; cells of no area dropped."""
     index = np.arange(points.shape[0] * points.shape[1]).reshape(points.shape[:2])
     a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
     faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])

@@ -60,10 +60,12 @@ def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
             f"integrator 'bdpt' keeps paths of at most {BDPT_MAX_SEGMENTS} segments: "
             f"set integrator.max_depth between 1 and {BDPT_MAX_SEGMENTS}, not {scene.max_depth}"
         )
-    if scene.camera.type == "equirectangular":
+    if scene.camera.type in light.SPHERICAL_CAMERAS:
         # Its importance is over the sphere of directions: kernels/bdpt.cl's eye vertex and MIS densities are the
         # film-plane cameras'.
-        return "integrator 'bdpt' supports the perspective, thinlens and orthographic cameras, not 'equirectangular'"
+        return (
+            f"integrator 'bdpt' supports the perspective, thinlens and orthographic cameras, not {scene.camera.type!r}"
+        )
     return None
 
 

@@ -37,7 +37,9 @@ params = no_params
 # (rare: Russian roulette ends most paths sooner), so memory stays bounded for unbounded max_depth.
 MAX_RECORD_SLOTS = 16
 # The cameras a point can connect to (kernels/camera_importance.cl).
-LIGHT_TRACED_CAMERAS = ("perspective", "thinlens", "orthographic", "equirectangular")
+LIGHT_TRACED_CAMERAS = ("perspective", "thinlens", "orthographic", "equirectangular", "equalarea")
+# Cameras over the whole sphere, whose film wraps at its edges (a wider filter's spread would have to follow).
+SPHERICAL_CAMERAS = ("equirectangular", "equalarea")
 RECORD_BYTES = 16 + 4  # float4 XYZ + int pixel
 BAND_RECORD_BYTES = 16 + 16  # with spectral bands: float4 lane values + int4 lane bands
 
@@ -110,10 +112,10 @@ def splatting_problem(scene: Scene, name: str) -> str | None:
     if camera_type not in LIGHT_TRACED_CAMERAS:
         known = ", ".join(LIGHT_TRACED_CAMERAS)
         return f"integrator '{name}' supports the {known} cameras, not {camera_type!r}"
-    if camera_type == "equirectangular" and scene.pixel_filter.type != "box":
+    if camera_type in SPHERICAL_CAMERAS and scene.pixel_filter.type != "box":
         # A wider filter's spread would have to wrap around the image's seam and poles (filter_spread does not).
         return (
-            f"integrator '{name}' takes the equirectangular camera with the box filter only, not a "
+            f"integrator '{name}' takes the {camera_type} camera with the box filter only, not a "
             f"{scene.pixel_filter.type} filter; use film.filter = \"box\" or 'path'"
         )
     if scene.pixel_filter.type != "box" and _has_environment(scene):

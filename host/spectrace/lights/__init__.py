@@ -19,7 +19,7 @@ Adding a light: its module here and its line in LIGHTS, its kernel file, tests (
 from spectrace.core.api_calls import recorded
 from spectrace.core.contract import GeneratedSources
 from spectrace.core.registry import Registry
-from spectrace.lights import area, constant, distant, envmap, point, projector, spot
+from spectrace.lights import area, constant, distant, envmap, goniometric, point, projector, spot
 from spectrace.lights.base import DEVICE_LIGHT_KINDS, DeviceLight, LightPlugin, LightSource
 
 __all__ = [
@@ -30,13 +30,14 @@ __all__ = [
     "distant",
     "envmap",
     "generated_sources",
+    "goniometric",
     "point",
     "projector",
     "spot",
 ]
 
 # Scene-file `type` -> module, in the order the schema lists them.
-LIGHTS = Registry[LightPlugin]("light", (point, spot, distant, constant, envmap, projector))
+LIGHTS = Registry[LightPlugin]("light", (point, spot, distant, constant, envmap, projector, goniometric))
 light_module = LIGHTS.for_model
 # Each light an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
 for _module in LIGHTS.values():

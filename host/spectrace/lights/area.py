@@ -207,8 +207,8 @@ def write_rows(
 
 def write_shape_rows(emitters: list[tuple[AreaEmitter, int, "AnalyticSurface"]], out: LightRows) -> list[int]:
     """One row per emitting analytic shape (its emitter, its index among the scene's analytic shapes, its surface):
-    SPHERE for a sphere (sampled by the cone it subtends), SHAPE for a disk or cylinder (sampled by
-    area); returns the row indices, in order."""
+    SPHERE for a whole sphere (sampled by the cone it subtends), SHAPE for a disk, a cylinder or a partial sphere
+    (sampled by area); returns the row indices, in order."""
     indices = []
     for e, shape_index, surface in emitters:
         if e.image is None:
@@ -219,7 +219,7 @@ def write_shape_rows(emitters: list[tuple[AreaEmitter, int, "AnalyticSurface"]],
             spectrum_offset, scale = (basis[0] if basis else 0), e.image.scale
         area = surface.area()
         row = light_row(
-            out.code(SPHERE if surface.kind == "sphere" else SHAPE),
+            out.code(SPHERE if surface.kind == "sphere" and not surface.partial else SHAPE),
             spectrum_offset,
             triangle=shape_index,
             area=area,
@@ -228,7 +228,7 @@ def write_shape_rows(emitters: list[tuple[AreaEmitter, int, "AnalyticSurface"]],
             texture=texture,
             **_polarization_fields(e),
         )
-        if surface.kind == "sphere":  # Light.position: the centre, with the radius in w
+        if surface.kind == "sphere" and not surface.partial:  # Light.position: the centre, with the radius in w
             centre, radius = surface.sphere_centre_radius()
             row = ((*centre, radius), *row[1:])
         indices.append(len(out.rows))

@@ -20,6 +20,7 @@ from spectrace.geometry import primitives
 from spectrace.geometry.analytic import (
     ANALYTIC_SHAPES,
     AnalyticSurface,
+    cut_parameters,
     object_tessellation,
     pbrt_uv_from_mitsuba,
     similarity_problem,
@@ -426,6 +427,8 @@ class _Resolver:
             if s.type == "mesh":
                 assert s.file is not None  # the schema wants a file for a mesh
                 mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"), shape_index=s.shape_index or 0)
+            elif s.type in ANALYTIC_SHAPES and (cuts := _cuts(s)):
+                mesh = AnalyticSurface(s.type, np.eye(4), pbrt_uv=s.uv_convention == "pbrt", **cuts).tessellation()
             elif s.type in ANALYTIC_SHAPES:
                 mesh = object_tessellation(s.type)
                 if s.uv_convention == "pbrt":
@@ -451,7 +454,7 @@ class _Resolver:
                         f"{problem}; tessellated = true takes any", where=self.where(f"{key}.transform")
                     )
                 surface_of = AnalyticSurface(
-                    s.type, matrix, flip_normals=bool(s.flip_normals), pbrt_uv=s.uv_convention == "pbrt"
+                    s.type, matrix, flip_normals=bool(s.flip_normals), pbrt_uv=s.uv_convention == "pbrt", **_cuts(s)
                 )
                 mesh = surface_of.tessellation()
             else:
@@ -832,3 +835,11 @@ def _check_camera(camera: Camera, path: Path) -> None:
         raise SpectraceError("camera up is parallel to the viewing direction (or zero)", where=f"{path}: camera.up")
     if problem := clip_problem(camera):
         raise SpectraceError(problem, where=f"{path}: camera.far_clip")
+
+
+def _cuts(spec: schema.ShapeSpec) -> dict:
+    """A sphere's, disk's or cylinder's partial-shape keywords (the schema has checked them)."""
+    if spec.type not in ANALYTIC_SHAPES:
+        return {}
+    keys = (spec.phi_max, spec.z_min, spec.z_max, spec.inner_radius)
+    return cut_parameters(spec.type, *keys, radius=spec.radius or 1.0)

@@ -28,6 +28,7 @@ from spectrace.cameras import shared as camera_shared
 from spectrace.core import limits
 from spectrace.core.parameters import DISTRIBUTIONS, Parameter
 from spectrace.film.response import observer_problem, wavelength_range_problem
+from spectrace.geometry.analytic import cut_parameters
 from spectrace.integrators import INTEGRATORS, settings_problem
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS, surface
@@ -452,6 +453,12 @@ class ShapeSpec(Strict):
     # sphere only: placed before `transform`, as Mitsuba 3's center and radius are before its to_world
     center: Vector3 | None = None
     radius: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
+    # partial shapes (pbrt-v4's phimax, zmin/zmax, innerradius; docs/scene-format.md): the azimuths kept, degrees;
+    # the sphere's heights kept, in [-radius, radius]; the disk's hole, a fraction of its radius
+    phi_max: FiniteFloat | None = None
+    z_min: FiniteFloat | None = None
+    z_max: FiniteFloat | None = None
+    inner_radius: FiniteFloat | None = None
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
@@ -475,6 +482,14 @@ class ShapeSpec(Strict):
             raise ValueError(f"uv_convention is for sphere, disk and cylinder, not a {self.type}")
         if self.tessellated is not None and self.type not in ("sphere", "disk", "cylinder"):
             raise ValueError(f"tessellated is for the analytic shapes (sphere, disk, cylinder), not a {self.type}")
+        cut_keys = (self.phi_max, self.z_min, self.z_max, self.inner_radius)
+        if any(key is not None for key in cut_keys):
+            if self.type not in ("sphere", "disk", "cylinder"):
+                raise ValueError(
+                    f"phi_max, z_min, z_max and inner_radius cut a sphere, disk or cylinder, not a {self.type}"
+                )
+            if cut_parameters(self.type, *cut_keys, radius=self.radius or 1.0) and self.interior is not None:
+                raise ValueError("a partial shape encloses no volume: an interior needs a closed shape")
         return self
 
 

@@ -133,15 +133,16 @@ class _Writer:
             if value is None or argument in skip:
                 continue
             name, kind = kinds.get(argument, (argument, ""))
-            if argument == "source":  # an image texture's: a file, or pixels that no scene file can name
+            # An image texture's source, or a light's image file: a file, or pixels that no scene file can name.
+            if argument == "source" or (name == "file" and not isinstance(value, (str, Path))):
                 if not isinstance(value, (str, Path)):
                     raise SpectraceError(
                         f"is an image given as a {type(value).__name__}, which a scene file cannot hold: save the "
-                        "image as a file and make the texture from its path",
+                        "image as a file and give its path",
                         where=where,
                     )
                 name, kind = "file", "file"
-            elif kind == "file" or (argument == "file" and isinstance(value, (str, Path))):
+            elif kind == "file" or (name == "file" and isinstance(value, (str, Path))):
                 kind = "file"
             elif argument == "materials":
                 out[name] = [self.material(m, f"{where}.materials.{i}") for i, m in enumerate(value)]
@@ -182,6 +183,7 @@ class _Writer:
                 out["flip_normals"] = True
             if surface.pbrt_uv:
                 out["uv_convention"] = "pbrt"
+            out |= surface.cut_keys()
         else:
             mesh = shape.mesh
             file = f"{self.assets}/{folder_name}.ply"

@@ -251,8 +251,9 @@ def scene_to_mitsuba_dict(
                 materials[id(shape.material)] = name
             bsdf = {"type": "ref", "id": materials[id(shape.material)]}
         # Mitsuba's own analytic shape, in the same object space; one with pbrt's texture coordinates (a disk or
-        # sphere imported from pbrt-v4) as its tessellation, which carries them.
-        if shape.analytic is not None and not (shape.analytic.pbrt_uv and shape.analytic.kind != "cylinder"):
+        # sphere imported from pbrt-v4) or a partial one (Mitsuba has none) as its tessellation.
+        analytic = shape.analytic
+        if analytic is not None and not analytic.partial and not (analytic.pbrt_uv and analytic.kind != "cylinder"):
             # Mitsuba turns a sphere's normals inward under a mirroring to_world (measured: an emitting sphere
             # scaled by (-1, 1, 1) renders black from outside); spectrace's sphere faces out whatever the matrix.
             # Its disk and cylinder keep their fronts under a mirror, as spectrace's do.

@@ -74,6 +74,9 @@ def camera(context: Context, data: dict) -> None:
             camera.location, f"camera '{shown(camera.kind)}': spectrace imports pbrt's {_imported_cameras()} cameras"
         )
     modules = _CAMERAS[camera.kind]
+    # The modules that say which of a type's cameras they map (pbrt_maps: the spherical camera's mapping) decide the
+    # world's mirror below; where none takes it, the first module's from_pbrt says why.
+    modules = [m for m in modules if getattr(m, "pbrt_maps", None) is None or m.pbrt_maps(context, camera)] or modules
     width, height = PBRT_DEFAULT_FILM
     film = scene.film
     if film is not None:

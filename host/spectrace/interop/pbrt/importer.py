@@ -13,7 +13,7 @@ folder beside the TOML, as PLY and OpenEXR.
 
 Anything the file states that is not imported is reported: a parameter no mapping read, or a directive spectrace
 has no counterpart for, as a warning naming file:line (an error with strict=True); an entity of a type spectrace
-cannot represent (a realistic camera, a `measured` material, a goniometric light, a `curve` shape) as an error
+cannot represent (a realistic camera, a `measured` material, a `curve` shape) as an error
 naming file:line.
 """
 

@@ -47,13 +47,17 @@ def area_light(context: Context, light: Entity, mesh: MeshData | None, matrix: n
 
 
 def _analytic_area(context: Context, entity: Entity) -> float:
-    """pbrt-v4's Area() of a whole sphere, disk or cylinder: object-space, whatever the transform scales."""
+    """pbrt-v4's Area() of a sphere, disk or cylinder, partial ones included (φmax r (zmax − zmin) for the sphere
+    and cylinder, φmax (r² − r_inner²) / 2 for the disk): object-space, whatever the transform scales."""
     radius = context.one(entity, "radius", 1.0)
+    phimax = math.radians(min(max(context.one(entity, "phimax", 360.0), 0.0), 360.0))
     if entity.kind == "sphere":
-        return 4.0 * math.pi * radius**2
+        z = sorted((context.one(entity, "zmin", -radius), context.one(entity, "zmax", radius)))
+        zmin, zmax = (min(max(value, -radius), radius) for value in z)
+        return phimax * radius * (zmax - zmin)
     if entity.kind == "disk":
-        return math.pi * radius**2
-    return 2.0 * math.pi * radius * abs(context.one(entity, "zmax", 1.0) - context.one(entity, "zmin", -1.0))
+        return 0.5 * phimax * (radius**2 - context.one(entity, "innerradius", 0.0) ** 2)
+    return phimax * radius * abs(context.one(entity, "zmax", 1.0) - context.one(entity, "zmin", -1.0))
 
 
 def light_table(context: Context, light: Light) -> dict:

@@ -1,8 +1,8 @@
-"""pbrt-v4's shapes as spectrace's: whole spheres, disks and cylinders as its analytic shapes; meshes pbrt gives
-inline (trianglemesh, bilinearmesh), `loopsubdiv` and the shapes spectrace has no exact surface for (partial
-spheres, disks and cylinders) as binary PLY files beside the TOML (spectrace.interop.pbrt.meshes); PLY files a scene
-names rewritten there too (pbrt's ReverseOrientation and normal-facing rules applied, gzipped files read). Object
-instances become spectrace objects and instances.
+"""pbrt-v4's shapes as spectrace's: spheres, disks and cylinders, whole or partial, as its analytic shapes; meshes
+pbrt gives inline (trianglemesh, bilinearmesh), `loopsubdiv` and the few shapes spectrace has no exact surface for
+(degenerate ones, an ellipsoid with cuts or texture coordinates) as binary PLY files beside the TOML
+(spectrace.interop.pbrt.meshes); PLY files a scene names rewritten there too (pbrt's ReverseOrientation and
+normal-facing rules applied, gzipped files read). Object instances become spectrace objects and instances.
 """
 
 from __future__ import annotations
@@ -111,10 +111,10 @@ def shape_geometry(context: Context, shape: Shape, needs_uv: bool = False) -> tu
 
 
 def analytic_geometry(context: Context, shape: Shape, matrix: np.ndarray, needs_uv: bool) -> dict | None:
-    """The spectrace analytic sphere, disk or cylinder for a whole pbrt one (exact surface, smooth normals,
-    pbrt's texture coordinates and front side), or None when it needs triangles: partial shapes (phimax < 360,
-    a disk's innerradius > 0, a sphere's zmin/zmax cuts), degenerate ones, and a sphere under a map that is no
-    similarity (an ellipsoid: the built-in tessellation when nothing depends on its orientation or uv)."""
+    """The spectrace analytic sphere, disk or cylinder for a pbrt one, whole or partial (phimax, a sphere's
+    zmin/zmax, a disk's innerradius: exact surface, smooth normals, pbrt's texture coordinates and front side), or
+    None when it needs triangles: degenerate ones, and a sphere under a map that is no similarity (an ellipsoid: the
+    built-in tessellation when nothing depends on its orientation, uv or cuts)."""
     entity = shape.entity
     kind = entity.kind
     if kind not in ("sphere", "disk", "cylinder"):
@@ -122,25 +122,34 @@ def analytic_geometry(context: Context, shape: Shape, matrix: np.ndarray, needs_
     radius = context.one(entity, "radius", 1.0)
     if kind == "sphere" and not radius > 0:
         raise error(entity.location, f"a sphere's radius must be > 0, got {radius:g}")
-    if not radius > 0 or context.one(entity, "phimax", 360.0) < 360.0:
+    phimax = min(context.one(entity, "phimax", 360.0), 360.0)
+    if not radius > 0 or not phimax > 0:
         return None
+    cuts: dict = {"phi_max": phimax} if phimax < 360.0 else {}
     # pbrt's front: the object-space normal (outward; the disk's +z), flipped when ReverseOrientation is set
     # or the shape's own placement swaps handedness (Disk/Cylinder/Sphere InteractionFromIntersection), then
     # carried to the world by the inverse transpose, which is what spectrace's flip_normals does. The mirror
     # into spectrace's world (context.world) is not pbrt's and does not count.
     flip = shape.reverse_orientation != bool(np.linalg.det(shape.world_from_object[:3, :3]) < 0)
     if kind == "sphere":
+        # pbrt-v4's Sphere: zmin, zmax ordered and clamped to [-radius, radius]; the unit sphere's heights here.
         zmin, zmax = context.one(entity, "zmin", -radius), context.one(entity, "zmax", radius)
-        if zmin > -radius or zmax < radius:
+        zmin, zmax = (float(np.clip(z, -radius, radius)) / radius for z in sorted((zmin, zmax)))
+        if not zmax > zmin:
             return None
+        if (zmin, zmax) != (-1.0, 1.0):
+            cuts |= {"z_min": zmin, "z_max": zmax}
         steps: list[dict] = [{"scale": radius}, {"matrix": matrix.tolist()}]
         if similarity_problem(matrix) is not None:
-            if needs_uv or flip:
+            if needs_uv or flip or cuts:
                 return None
             return {"type": "sphere", "transform": steps, "tessellated": True}
     elif kind == "disk":
-        if context.one(entity, "innerradius", 0.0) > 0.0:
+        inner = context.one(entity, "innerradius", 0.0)
+        if not 0.0 <= inner < radius:
             return None
+        if inner > 0.0:
+            cuts["inner_radius"] = inner / radius
         # Spectrace's unit disk (z = 0, facing +z) scaled to the radius and lifted to z = height.
         height = context.one(entity, "height", 0.0)
         steps = [{"scale": [radius, radius, 1.0]}, {"translate": [0.0, 0.0, height]}, {"matrix": matrix.tolist()}]
@@ -150,10 +159,10 @@ def analytic_geometry(context: Context, shape: Shape, matrix: np.ndarray, needs_
         if not z1 > z0:
             return None
         steps = [{"scale": [radius, radius, z1 - z0]}, {"translate": [0.0, 0.0, z0]}, {"matrix": matrix.tolist()}]
-    table: dict = {"type": kind, "transform": steps}
+    table: dict = {"type": kind, "transform": steps} | cuts
     if flip:
         table["flip_normals"] = True
-    if needs_uv and kind != "cylinder":  # the cylinders' (u, v) already agree
+    if needs_uv and (kind != "cylinder" or cuts):  # the whole cylinders' (u, v) already agree
         table["uv_convention"] = "pbrt"
     return table
 
