@@ -34,8 +34,9 @@ MATERIAL_BITS = {
     "principledthin": 512,
     "polarizer": 1024,
     "retarder": 2048,
-    "mix": 4096,
-    "fluorescent": 8192,
+    "hair": 4096,
+    "mix": 8192,
+    "fluorescent": 16384,
 }
 LIGHT_BITS = {
     "area": 1,
