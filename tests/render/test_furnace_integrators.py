@@ -140,6 +140,12 @@ CASES = {
     "retarder": [Case("quarter wave", lambda: S.retarder(20.0), True, True, only=("path",))],
     # Unpolarised here (the furnace has no polarising element): Mitsuba 3's unpolarised pplastic.
     "pplastic": [Case("white", lambda: S.pplastic(1.0, roughness=0.3), False, False, fast=("path",))],
+    # Fibres along the spheres' dp/du, h from their v: S is not reciprocal, so the light tracer's and BDPT's light
+    # subpaths weigh their samples by the adjoint (kernels/bsdf_hair.cl).
+    "hair": [
+        Case("white fibre", lambda: S.hair(sigma_a=0.0, beta_m=0.2, beta_n=0.5), True, False, fast=("bdpt", "light")),
+        Case("brown fibre", lambda: S.hair(eumelanin=0.6), False, False),
+    ],
     "mix": [
         Case(
             "diffuse and smooth plastic",

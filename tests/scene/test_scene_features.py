@@ -35,8 +35,9 @@ MATERIAL_BITS = {
     "polarizer": 1024,
     "retarder": 2048,
     "pplastic": 4096,
-    "mix": 8192,
-    "fluorescent": 16384,
+    "hair": 8192,
+    "mix": 16384,
+    "fluorescent": 32768,
 }
 LIGHT_BITS = {
     "area": 1,

@@ -20,6 +20,9 @@ def _materials_have_textures(materials: np.ndarray) -> bool:
     """Some material reads a texture (any of its `*_texture` fields, or a normal or bump map): only then do the path
     vertices need texture coordinates and footprints (the lights' images are looked up at the light's own uv)."""
     fields = [name for name in materials.dtype.names or () if name.endswith("_texture")] + ["normal_map", "bump_map"]
+    # Hair reads its offset across the fibre from the v coordinate (kernels/bsdf_hair.cl).
+    if "hair" in MATERIAL_CODES and bool(np.any(materials["type"] == MATERIAL_CODES["hair"])):
+        return True
     return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields) or _direction_textures(materials)
 
 

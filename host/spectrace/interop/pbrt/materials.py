@@ -33,7 +33,6 @@ IMPORTED_MATERIALS = (*_MAPPINGS, "interface")
 _NO_EQUIVALENT = {
     "coatedconductor": "spectrace has no coated conductor",
     "measured": "spectrace has no measured BRDFs",
-    "hair": "spectrace has no hair model",
     "subsurface": "spectrace's subsurface scattering is a medium inside a shape, not a material",
 }
 
