@@ -130,3 +130,20 @@ def test_pbrt_conductor_carries_both_roughnesses(tmp_path, parameters, expected)
     assert material["roughness"] == pytest.approx(expected[0])
     assert material.get("roughness_v") == (None if expected[1] is None else pytest.approx(expected[1]))
     assert not [note for note in context.notes if "anisotropic" in note]
+
+
+def test_the_mitsuba_export_keeps_both_widths(tmp_path, mitsuba_scalar_spectral):
+    """Exported as Mitsuba's alpha_u (along dp/du, as spectrace's frame) and alpha_v; a textured width is refused,
+    not flattened."""
+    from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
+
+    scene = _scene(tmp_path, "roughness = 0.1\nroughness_v = 0.4")
+    exported = scene_to_mitsuba_dict(scene, tmp_path)
+    bsdf = exported["material_0"]["bsdf"]
+    assert (bsdf["type"], bsdf["alpha_u"], bsdf["alpha_v"]) == ("roughconductor", pytest.approx(0.1), 0.4)
+    assert "alpha" not in bsdf
+    mitsuba_scalar_spectral.load_dict(exported)  # Mitsuba takes it
+    textures = '\n[textures.v]\ntype = "checkerboard"\ncolor0 = { value = 0.4 }\ncolor1 = { value = 0.2 }\n'
+    textured = _scene(tmp_path, 'roughness = 0.1\nroughness_v = { texture = "v" }', textures)
+    with pytest.raises(SpectraceError, match="textured roughness"):
+        scene_to_mitsuba_dict(textured, tmp_path)

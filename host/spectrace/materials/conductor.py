@@ -321,18 +321,22 @@ def uplifted_optical_constants(eta: dict, k: dict, where: str | None) -> tuple[d
 
 
 def to_mitsuba(material: ConductorMaterial, exporter) -> dict:
-    """Mitsuba's `conductor` or `roughconductor` with the same η, k (as spectra on spectrace's grid), α and
-    distribution, sampling visible normals as Mitsuba does by default; `twosided` because spectrace's conductor
-    reflects on both faces and Mitsuba's is black from behind."""
+    """Mitsuba's `conductor` or `roughconductor` with the same η, k (as spectra on spectrace's grid), α (αu and αv
+    of an anisotropic lobe) and distribution, sampling visible normals as Mitsuba does by default; `twosided`
+    because spectrace's conductor reflects on both faces and Mitsuba's is black from behind."""
     from spectrace.textures import is_texture
 
     entry: dict = {"eta": exporter.spectrum(material.eta), "k": exporter.spectrum(material.k)}
     if material.specular_tint is not None:
         entry["specular_reflectance"] = exporter.spectrum(material.specular_tint)
-    if is_texture(material.roughness):
+    if is_texture(material.roughness) or is_texture(material.roughness_v):
         raise exporter.refuse("a conductor with textured roughness is not exported yet")
     if material.is_delta:
         entry["type"] = "conductor"
     else:
-        entry.update(type="roughconductor", alpha=float(material.roughness), distribution=material.distribution)
+        entry.update(type="roughconductor", distribution=material.distribution)
+        if material.roughness_v is None:
+            entry["alpha"] = float(material.roughness)
+        else:  # Mitsuba's u is dp/du, as spectrace's frame
+            entry.update(alpha_u=float(material.roughness), alpha_v=float(material.roughness_v))
     return {"type": "twosided", "bsdf": entry}
