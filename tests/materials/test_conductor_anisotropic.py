@@ -108,6 +108,7 @@ Camera "perspective" "float fov" 40
 Film "rgb" "integer xresolution" 8 "integer yresolution" 8
 WorldBegin
 LightSource "point" "point3 from" [0.5 2 1] "float power" 40
+Texture "r" "float" "constant" "float value" 0.09
 Material "conductor" {parameters}
 Shape "sphere"
 """
@@ -120,6 +121,7 @@ Shape "sphere"
         ('"float uroughness" 0.04 "float vroughness" 0.25 "bool remaproughness" false', (0.04, 0.25)),
         ('"float roughness" 0.09 "float vroughness" 0.25', (0.3, 0.5)),  # roughness stands for a missing axis
         ('"float uroughness" 0.16 "float vroughness" 0.16', (0.4, None)),
+        ('"texture uroughness" "r" "float vroughness" 0.25', (0.3, 0.5)),  # a constant float texture: 0.09
     ],
 )
 def test_pbrt_conductor_carries_both_roughnesses(tmp_path, parameters, expected):
