@@ -43,7 +43,7 @@ inline int microfacet_polarization(__global const Material *m, const SurfaceCont
     float3 lo = to_local(&frame, wo), li = to_local(&frame, wi);
     if (conductor) {
         ConductorParams p = conductor_params(m, sc, w);
-        if (ggx_is_smooth(p.alpha) || !(lo.z > 0.0f && li.z > 0.0f)) return 0;
+        if (conductor_is_smooth(&p) || !(lo.z > 0.0f && li.z > 0.0f)) return 0;
         float3 h = normalize(lo + li);
         float c = fabs(dot(lo, h));
         *e = aligned_from_shapes(fresnel_reflection_shape(c, (float2)(p.eta.x, p.k.x)),

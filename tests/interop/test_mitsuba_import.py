@@ -177,23 +177,41 @@ def test_unrepresentable_conductors_are_named(tmp_path):
     assert "with material 'Cr'" in str(error.value)
 
 
-def test_anisotropic_roughness_is_approximated_with_a_warning(tmp_path):
-    """spectrace's lobes are isotropic: alpha_u, alpha_v become their geometric mean, which keeps the distribution's
-    peak 1 / (π αu αv), and a warning names the BSDF and both values; --strict refuses it."""
+def test_anisotropic_roughconductor_carries_both_alphas(tmp_path):
+    """A roughconductor's alpha_u and alpha_v become roughness and roughness_v (spectrace's anisotropic lobe, along
+    dp/du and the bitangent as Mitsuba's), with no warning, so --strict takes it; either one alone stands for both,
+    as in Mitsuba, and equal ones make an isotropic lobe."""
     path = _write(
         tmp_path,
         """
         <bsdf type="roughconductor" id="brushed"><string name="material" value="Al"/>
             <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.4"/></bsdf>
-        <shape type="cube"><ref id="brushed"/></shape>""",
+        <bsdf type="roughconductor" id="one"><float name="alpha_v" value="0.3"/></bsdf>
+        <shape type="cube"><ref id="brushed"/></shape>
+        <shape type="sphere"><ref id="one"/></shape>""",
     )
-    data, notes = mitsuba_scene_data(path)
-    assert data["materials"]["brushed"]["roughness"] == pytest.approx(0.2)
-    warnings = [note for note in notes if note.startswith("warning: ")]
-    assert len(warnings) == 1
-    assert "bsdf 'roughconductor': anisotropic roughness alpha_u = 0.1, alpha_v = 0.4" in warnings[0]
-    with pytest.raises(SpectraceError, match="anisotropic"):
-        mitsuba_scene_data(path, strict=True)
+    for strict in (False, True):
+        data, notes = mitsuba_scene_data(path, strict=strict)
+        assert not [note for note in notes if note.startswith("warning: ")]
+        brushed, one = data["materials"]["brushed"], data["materials"]["one"]
+        assert (brushed["roughness"], brushed["roughness_v"]) == (pytest.approx(0.1), pytest.approx(0.4))
+        assert one["roughness"] == pytest.approx(0.3) and "roughness_v" not in one
+
+
+def test_textured_anisotropic_roughconductor_imports_its_texture(tmp_path):
+    """A textured alpha_u is the conductor's roughness texture, alpha_v its number."""
+    path = _write(
+        tmp_path,
+        """
+        <bsdf type="roughconductor" id="brushed"><texture type="checkerboard" name="alpha_u">
+            <float name="color0" value="0.05"/><float name="color1" value="0.3"/></texture>
+            <float name="alpha_v" value="0.4"/></bsdf>
+        <shape type="sphere"><ref id="brushed"/></shape>""",
+    )
+    data, notes = mitsuba_scene_data(path, strict=True)
+    brushed = data["materials"]["brushed"]
+    assert brushed["roughness_v"] == pytest.approx(0.4)
+    assert data["textures"][brushed["roughness"]["texture"]]["type"] == "checkerboard"
 
 
 @pytest.mark.parametrize(
@@ -340,7 +358,7 @@ def test_dielectrics(tmp_path):
         with pytest.raises(SpectraceError, match=message) as error:
             mitsuba_scene_data(_write(tmp_path, f'<shape type="cube">{bsdf}</bsdf></shape>'))
         assert "\n" not in str(error.value)
-    # Anisotropic roughness is approximated (the geometric mean) with a warning, on dielectrics as on conductors.
+    # A dielectric's lobe is isotropic: its anisotropic roughness is approximated (the geometric mean), with a warning.
     brushed = _write(
         tmp_path,
         """<shape type="cube"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>

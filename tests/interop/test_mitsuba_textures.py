@@ -561,9 +561,9 @@ DETAIL_UNSUPPORTED = [
     ),
     (
         "textured-anisotropic-alpha",
-        '<bsdf type="roughconductor"><texture type="checkerboard" name="alpha_u"/>'
+        '<bsdf type="roughdielectric"><texture type="checkerboard" name="alpha_u"/>'
         '<float name="alpha_v" value="0.2"/></bsdf>',
-        "bsdf 'roughconductor' with a textured alpha_u or alpha_v (anisotropic roughness)",
+        "bsdf 'roughdielectric' with a textured alpha_u or alpha_v (anisotropic roughness)",
     ),
 ]
 

@@ -29,6 +29,8 @@ LIGHT = 2.5 * _toward(60, 25)
 CONDUCTOR = 'type = "conductor"\neta = { value = 1.2 }\nk = { value = 2.0 }\nroughness = 0.15'
 GLASS = 'type = "dielectric"\nior = 1.5\nroughness = 0.15'
 PPLASTIC = 'type = "pplastic"\nreflectance = { value = 0.5 }\nior = 1.5\nroughness = 0.15'
+# Stretched along the plate's dp/du: the Fresnel matrix is the microfacet's at h whatever the distribution of h.
+ANISOTROPIC_CONDUCTOR = CONDUCTOR.replace("roughness = 0.15", "roughness = 0.05\nroughness_v = 0.3")
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -123,11 +125,17 @@ def _assert_linear(stokes: np.ndarray, expected: tuple[np.ndarray, np.ndarray]) 
     assert np.all(np.abs(stokes[..., 3]) <= 1e-6 * s0)  # unpolarised light in: no circular part out
 
 
-@pytest.mark.parametrize("filter_angle", [0, 60, 120])
-def test_rough_conductor_through_the_camera_polarizer_follows_fresnel_on_the_microfacet(tmp_path, filter_angle):
+@pytest.mark.parametrize(
+    "conductor, filter_angle",
+    [(CONDUCTOR, 0), (CONDUCTOR, 60), (CONDUCTOR, 120), (ANISOTROPIC_CONDUCTOR, 60)],
+    ids=["0", "60", "120", "anisotropic-60"],
+)
+def test_rough_conductor_through_the_camera_polarizer_follows_fresnel_on_the_microfacet(
+    tmp_path, conductor, filter_angle
+):
     """The image through a camera polariser at φ is ½ (S0 + cos 2φ S1 + sin 2φ S2) of the Fresnel matrix at h."""
     more = f"polarizer_angle = {filter_angle}"
-    stokes, image = _render(tmp_path, _scene(CONDUCTOR, LIGHT).replace("fov = 2", f"fov = 2\n{more}"))
+    stokes, image = _render(tmp_path, _scene(conductor, LIGHT).replace("fov = 2", f"fov = 2\n{more}"))
     s1, s2 = _expected_linear(_reflection_b(complex(1.2, 2.0)), LIGHT)
     assert np.abs(s2).mean() > 0.05 and np.abs(s1).mean() > 0.05  # the case turns h's plane off the image's axes
     _assert_linear(stokes, (s1, s2))
@@ -150,7 +158,11 @@ def test_rough_dielectric_refraction_follows_fresnel_on_the_microfacet(tmp_path)
     _assert_linear(stokes, (s1, s2))
 
 
-@pytest.mark.parametrize("material", [CONDUCTOR, GLASS, PPLASTIC], ids=["conductor", "glass", "pplastic"])
+@pytest.mark.parametrize(
+    "material",
+    [CONDUCTOR, GLASS, PPLASTIC, ANISOTROPIC_CONDUCTOR],
+    ids=["conductor", "glass", "pplastic", "anisotropic-conductor"],
+)
 def test_rough_plate_in_a_box_renders_its_unpolarized_image(tmp_path, material):
     """A flat rough plate in a box of diffuse walls: no path meets two polarising events in a row (a plane cannot
     see itself, the walls depolarise), so S0 is the unpolarised render's within 4 standard errors of the

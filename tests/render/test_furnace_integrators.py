@@ -83,6 +83,14 @@ CASES = {
     "conductor": [
         Case("gold", lambda: S.conductor("Au"), False, True),
         Case("rough gold", lambda: S.conductor("Au", roughness=0.3), False, False),
+        # framed along the sphere's dp/du (material_frame), the same frame in every integrator
+        Case("anisotropic gold", lambda: S.conductor("Au", roughness=0.05, roughness_v=0.5), False, False),
+        Case(
+            "anisotropic beckmann gold",
+            lambda: S.conductor("Au", roughness=0.4, roughness_v=0.1, distribution="beckmann"),
+            False,
+            False,
+        ),
     ],
     "mirror": [Case("white", lambda: S.mirror(1.0), True, True)],
     "plastic": [

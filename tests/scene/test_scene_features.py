@@ -150,11 +150,14 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         (spectrace.principled(0.5, anisotropic=spectrace.bitmap(np.zeros((1, 2)))), 0),
         (spectrace.principledthin(0.5, roughness=0.4, anisotropic=0.9), 1),
         (spectrace.principledthin(0.5, roughness=0.4), 0),
+        (spectrace.conductor("Au", roughness=0.2, roughness_v=0.5), 1),
+        (spectrace.conductor("Au", roughness=0.2, roughness_v=0.2), 0),
+        (spectrace.conductor("Au", roughness=0.2), 0),
     ):
         scene = replace(_environment_map_scene(), shapes=[spectrace.shape("rectangle", material)])
         buffers = build_scene_buffers(scene)
         assert scene_feature_defines(buffers)["SCENE_HAS_TANGENT_FRAMES"] == tangent_frames, material
-        principled_codes = [MATERIALS.codes["principled"], MATERIALS.codes["principledthin"]]
+        principled_codes = [MATERIALS.codes[n] for n in ("principled", "principledthin", "conductor")]
         rows = buffers.materials[np.isin(buffers.materials["type"], principled_codes)]
         assert list(rows["tangent_frame"]) == [tangent_frames], material
     # A direction texture turns only an anisotropic principled lobe; it is a texture the vertices must look up.
@@ -280,6 +283,17 @@ def _anisotropic_scene() -> spectrace.Scene:
     metal = spectrace.principled(0.8, roughness=0.4, metallic=1.0, anisotropic=0.9)
     sphere = replace(base.shapes[1], material=metal)
     floor = spectrace.shape("rectangle", metal, transform=[{"rotate": {"axis": [0, 0, 1], "angle": 30}}, {"scale": 3}])
+    return replace(base, shapes=[floor, sphere, *base.shapes[2:]])
+
+
+def _anisotropic_conductor_scene() -> spectrace.Scene:
+    """The anisotropic scene with conductors: a GGX sphere and a floor of Beckmann metal, each stretched along its
+    dp/du."""
+    base = _anisotropic_scene()
+    sphere = replace(base.shapes[1], material=spectrace.conductor("Au", roughness=0.05, roughness_v=0.4))
+    floor = replace(
+        base.shapes[0], material=spectrace.conductor("Al", roughness=0.3, roughness_v=0.08, distribution="beckmann")
+    )
     return replace(base, shapes=[floor, sphere, *base.shapes[2:]])
 
 
@@ -462,6 +476,7 @@ SCENES = {
     "instances": _instanced_scene,
     # Frames along dp/du: the anisotropic sphere's and rectangle's (an analytic shape, triangles with UVs).
     "anisotropic_principled": _anisotropic_scene,
+    "anisotropic_conductor": _anisotropic_conductor_scene,
 }
 
 
@@ -489,6 +504,7 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
         "partial_shapes",
         "equal_area_camera_and_goniometric_light",
         "anisotropic_principled",
+        "anisotropic_conductor",
     ],
 )
 def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):

@@ -8,6 +8,7 @@ import numpy as np
 from spectrace.core.contract import MICROFACET_DISTRIBUTIONS
 from spectrace.core.parameters import (
     DEFAULT_DISTRIBUTION,
+    ROUGHNESS_RANGE,
     Parameter,
     Range,
     check_distribution,
@@ -16,7 +17,7 @@ from spectrace.core.parameters import (
     specular_tint,
 )
 from spectrace.errors import SpectraceError
-from spectrace.materials.opaque import RoughOpaque
+from spectrace.materials.opaque import RoughOpaque, smooth_everywhere
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.metals import METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
@@ -29,7 +30,20 @@ MITSUBA_PLUGINS = ("conductor", "roughconductor")
 PBRT_MATERIALS = ("conductor",)
 # Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
 MITSUBA_METALS = ("Au", "Ag", "Cu", "Al")
-ROUGHNESS = roughness(0.0, "microfacet α; 0 = polished")
+ROUGHNESS = roughness(0.0, "microfacet α (along the surface's dp/du when `roughness_v` is given); 0 = polished")
+# The second width of an anisotropic lobe: its Material row keeps it in `ior` and its texture in
+# `transmittance_offset`, fields a conductor has no other use for (kernels/bsdf_conductor.cl).
+ROUGHNESS_V = Parameter(
+    "roughness_v",
+    "float",
+    default=None,
+    default_doc="`roughness`",
+    range=ROUGHNESS_RANGE,
+    doc="microfacet α along the bitangent n × t, t the surface's dp/du (or the mesh file's tangent): with "
+    "`roughness` ≠ `roughness_v` the lobe is anisotropic (Mitsuba's `alpha_v`, pbrt's `vroughness`)",
+    textured=True,
+    texture_field="transmittance_offset",
+)
 DISTRIBUTION = distribution()
 PARAMETERS = (
     Parameter(
@@ -58,6 +72,7 @@ PARAMETERS = (
         doc="imaginary part k(λ) (extinction coefficient)",
     ),
     ROUGHNESS,
+    ROUGHNESS_V,
     DISTRIBUTION,
     specular_tint("multiplies the Fresnel reflectance (an artistic control; physical metals leave it out)"),
 )
@@ -73,6 +88,15 @@ class ConductorMaterial(RoughOpaque):
     roughness: float = ROUGHNESS.number_default  # or a one-channel texture
     specular_tint: Spectrum | None = None  # or a texture
     distribution: str = DEFAULT_DISTRIBUTION
+    roughness_v: float | None = None  # or a texture; None: isotropic, `roughness` along both axes
+
+    @property
+    def is_anisotropic(self) -> bool:
+        return self.roughness_v is not None
+
+    @property
+    def is_delta(self) -> bool:
+        return smooth_everywhere(self.roughness) and (self.roughness_v is None or smooth_everywhere(self.roughness_v))
 
 
 MODEL = ConductorMaterial
@@ -85,6 +109,16 @@ def source_problem(metal, eta, k) -> str | None:
     if metal is None and (eta is None or k is None):
         return f"give metal ({', '.join(METALS)}) or both eta and k"
     return None
+
+
+def anisotropic_roughness(roughness, roughness_v):
+    """`roughness_v` where it differs from `roughness` (an anisotropic lobe), else None: an isotropic lobe keeps
+    the isotropic kernel code, and so its renders."""
+    if roughness_v is None or roughness_v is roughness:
+        return None
+    if isinstance(roughness_v, (int, float)) and isinstance(roughness, (int, float)) and roughness_v == roughness:
+        return None
+    return roughness_v
 
 
 def check_spec(spec) -> None:
@@ -107,7 +141,19 @@ def from_spec(spec, resolver, key: str) -> ConductorMaterial:
         else None
     )
     roughness = resolver.number_or_texture(spec.roughness, f"{key}.roughness", ROUGHNESS)
-    return ConductorMaterial(eta, k, roughness=roughness, specular_tint=tint, distribution=spec.distribution)
+    roughness_v = (
+        resolver.number_or_texture(spec.roughness_v, f"{key}.roughness_v", ROUGHNESS_V)
+        if spec.roughness_v is not None
+        else None
+    )
+    return ConductorMaterial(
+        eta,
+        k,
+        roughness=roughness,
+        specular_tint=tint,
+        distribution=spec.distribution,
+        roughness_v=anisotropic_roughness(roughness, roughness_v),
+    )
 
 
 def make(
@@ -118,11 +164,14 @@ def make(
     roughness: float = ROUGHNESS.number_default,
     distribution: str = DISTRIBUTION.default,  # type: ignore[assignment]
     specular_tint: SpectrumLike | None = None,
+    roughness_v: float | None = None,
 ) -> ConductorMaterial:
     """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
     index of refraction η + ik relative to the outside, dimensionless); `roughness` is the microfacet α (0 =
     smooth mirror-like metal; a number or a grey texture) of the `distribution` ("ggx" or "beckmann");
-    `specular_tint` (a reflectance or a texture) multiplies the Fresnel term."""
+    `specular_tint` (a reflectance or a texture) multiplies the Fresnel term; `roughness_v` (a number or a grey
+    texture) makes the lobe anisotropic, `roughness` then its α along the surface's dp/du and `roughness_v` along
+    the bitangent."""
     if problem := source_problem(metal, eta, k):
         raise SpectraceError(problem)
     if metal is not None:
@@ -132,12 +181,15 @@ def make(
         eta_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(eta), False, "eta")
         k_spectrum = spectrum_input.optical_constant(spectrum_input.spectrum(k), False, "k")
     tint = reflectance_or_texture(specular_tint, "specular_tint") if specular_tint is not None else None
+    alpha = number_or_texture(roughness, ROUGHNESS)
+    alpha_v = number_or_texture(roughness_v, ROUGHNESS_V) if roughness_v is not None else None
     return ConductorMaterial(
         eta_spectrum,
         k_spectrum,
-        roughness=number_or_texture(roughness, ROUGHNESS),
+        roughness=alpha,
         specular_tint=tint,
         distribution=check_distribution(distribution),
+        roughness_v=anisotropic_roughness(alpha, alpha_v),
     )
 
 
@@ -148,6 +200,10 @@ def write_row(row: np.ndarray, material: ConductorMaterial, table: SpectrumTable
         row["reflectance_offset"] = table.add(material.specular_tint)
     row["alpha"] = material.roughness
     row["distribution"] = MICROFACET_DISTRIBUTIONS.index(material.distribution)
+    if material.roughness_v is not None:
+        # The frame along dp/du that orients the lobe (kernels/material.cl, material_frame); α along it in `alpha`.
+        row["tangent_frame"] = 1
+        row["ior"] = material.roughness_v
 
 
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
@@ -157,9 +213,12 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         tint = importer.spectrum(properties["specular_reflectance"], "specular_reflectance")
         if tint is None:
             return None
-    roughness = importer.roughness(bsdf, properties) if importer.kind(bsdf) == "roughconductor" else 0.0
-    if roughness is None:
+    alphas = importer.roughnesses(bsdf, properties) if importer.kind(bsdf) == "roughconductor" else (0.0, 0.0)
+    if alphas is None:
         return None
+    roughness, roughness_v = alphas
+    if roughness_v == roughness:
+        roughness_v = None
     if "eta" in properties or "k" in properties:
         if "eta" not in properties or "k" not in properties:
             raise importer.fail(bsdf, "a conductor needs both eta and k")
@@ -172,7 +231,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     else:
         material = importer.text(properties["material"]) if "material" in properties else "none"
         if material == "none":  # Mitsuba's default: η = 0, k = 1, whose Fresnel term is 1 at every angle
-            if roughness == 0.0:  # a perfect mirror scaled by specular_reflectance
+            if roughness == 0.0 and roughness_v is None:  # a perfect mirror scaled by specular_reflectance
                 return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
             table = {"type": "conductor", "eta": {"value": 0.0}, "k": {"value": 1.0}}
         elif material not in MITSUBA_METALS:
@@ -182,8 +241,10 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
             return None
         else:
             table = {"type": "conductor", "metal": material}
-    if roughness != 0.0:  # a number above 0, or a texture
+    if roughness != 0.0 or roughness_v is not None:  # a number above 0, or a texture
         table["roughness"] = roughness
+        if roughness_v is not None:  # Mitsuba's u is the surface's dp/du, as spectrace's frame
+            table["roughness_v"] = roughness_v
         if (kind := importer.distribution(bsdf, properties)) != DEFAULT_DISTRIBUTION:
             table["distribution"] = kind
     if tint is not None:
@@ -214,7 +275,7 @@ def from_pbrt(context, material) -> dict | None:
         table |= {"eta": eta, "k": k}
     if "glass" in eta or "glass" in k:
         raise context.error(material.location, "a glass's index given as a conductor's eta or k")
-    return table | context.rough(material)
+    return table | context.rough_anisotropic(material)
 
 
 # Wavelengths at which an uplifted η or k is written into the imported scene (smooth curves: 5 nm loses nothing).
@@ -260,18 +321,22 @@ def uplifted_optical_constants(eta: dict, k: dict, where: str | None) -> tuple[d
 
 
 def to_mitsuba(material: ConductorMaterial, exporter) -> dict:
-    """Mitsuba's `conductor` or `roughconductor` with the same η, k (as spectra on spectrace's grid), α and
-    distribution, sampling visible normals as Mitsuba does by default; `twosided` because spectrace's conductor
-    reflects on both faces and Mitsuba's is black from behind."""
+    """Mitsuba's `conductor` or `roughconductor` with the same η, k (as spectra on spectrace's grid), α (αu and αv
+    of an anisotropic lobe) and distribution, sampling visible normals as Mitsuba does by default; `twosided`
+    because spectrace's conductor reflects on both faces and Mitsuba's is black from behind."""
     from spectrace.textures import is_texture
 
     entry: dict = {"eta": exporter.spectrum(material.eta), "k": exporter.spectrum(material.k)}
     if material.specular_tint is not None:
         entry["specular_reflectance"] = exporter.spectrum(material.specular_tint)
-    if is_texture(material.roughness):
+    if is_texture(material.roughness) or is_texture(material.roughness_v):
         raise exporter.refuse("a conductor with textured roughness is not exported yet")
     if material.is_delta:
         entry["type"] = "conductor"
     else:
-        entry.update(type="roughconductor", alpha=float(material.roughness), distribution=material.distribution)
+        entry.update(type="roughconductor", distribution=material.distribution)
+        if material.roughness_v is None:
+            entry["alpha"] = float(material.roughness)
+        else:  # Mitsuba's u is dp/du, as spectrace's frame
+            entry.update(alpha_u=float(material.roughness), alpha_v=float(material.roughness_v))
     return {"type": "twosided", "bsdf": entry}

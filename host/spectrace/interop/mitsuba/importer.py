@@ -26,8 +26,8 @@ WARNING_PREFIX = "warning: "
 class MitsubaImporter(ImportContext):
     """What a plugin module's `from_mitsuba` receives: the import's context (context.py) with the helpers of the
     kinds that a mapping calls as methods: `spectrum` and `emission` for a colour or spectrum property, the rough
-    BSDFs' shared `roughness`, `distribution` and `ior`, a one-number texture's `scalar_texture`, a blend's nested
-    `material`, a texture's `uv_placement`."""
+    BSDFs' shared `roughness` (`roughnesses` for an anisotropic lobe), `distribution` and `ior`, a one-number
+    texture's `scalar_texture`, a blend's nested `material`, a texture's `uv_placement`."""
 
     NAMED_IOR = materials.NAMED_IOR  # Mitsuba 3's named indices of refraction, for int_ior / ext_ior
     spectrum = textures.spectrum
@@ -38,6 +38,7 @@ class MitsubaImporter(ImportContext):
     emission = emitters.emission
     material = materials.material
     roughness = materials.roughness
+    roughnesses = materials.roughnesses
     distribution = materials.distribution
     ior = materials.ior
     with_snake_case = staticmethod(integrators.with_snake_case)

@@ -257,37 +257,59 @@ def opacity(ctx: ImportContext, element: Element) -> float | dict | None:
 
 def roughness(ctx: ImportContext, bsdf: Element, properties: dict[str, Element]) -> float | dict | None:
     """Microfacet α of a rough Mitsuba BSDF (its default 0.1), or a texture reference for a textured `alpha`; None
-    when spectrace cannot represent it (recorded)."""
-    alpha: float | dict | None
-    if "alpha_u" in properties or "alpha_v" in properties:
-        u_element = properties.get("alpha_u", properties.get("alpha_v"))
-        v_element = properties.get("alpha_v", properties.get("alpha_u"))
-        assert u_element is not None and v_element is not None  # one of them is given, standing for both
-        if "texture" in (ctx.resolve(u_element).tag, ctx.resolve(v_element).tag):
-            ctx.unsupported_plugin(bsdf, " with a textured alpha_u or alpha_v (anisotropic roughness)")
-            return None
-        alpha_u = ctx.number(ctx.resolve(u_element))
-        alpha_v = ctx.number(ctx.resolve(v_element))
-        alpha = alpha_u
-        if alpha_u != alpha_v:
-            # spectrace's microfacet lobes are isotropic: the geometric mean keeps the distribution's peak
-            # D(0) = 1 / (π αu αv), so the highlight's height, and loses its stretch.
-            alpha = math.sqrt(alpha_u * alpha_v)
-            ctx.warnings.append(
-                f"{shown(str(bsdf.file or ctx.xml_path), 200)}:{bsdf.line}: {bsdf.label()}: anisotropic "
-                f"roughness alpha_u = {alpha_u:g}, alpha_v = {alpha_v:g} approximated by the isotropic "
-                f"alpha = sqrt(alpha_u alpha_v) = {alpha:.4g} (spectrace's microfacet lobes are isotropic)"
-            )
-    elif "alpha" in properties:
-        element = ctx.resolve(properties["alpha"])
-        # A texture's α is checked against the range when the scene loads, as any roughness texture is.
-        alpha = scalar_texture(ctx, element, "roughness") if element.tag == "texture" else ctx.number(element)
-        if alpha is None:
-            return None
-        if isinstance(alpha, dict) and list(alpha) == ["value"]:  # a spectrum plugin standing for a number
-            alpha = float(alpha["value"])
-    else:
-        alpha = 0.1
+    when spectrace cannot represent it (recorded). An anisotropic α (alpha_u ≠ alpha_v) becomes the isotropic
+    sqrt(alpha_u alpha_v) with a warning: the BSDFs that call this have isotropic lobes (the conductor, whose lobe
+    may be anisotropic, calls roughnesses)."""
+    if "alpha_u" not in properties and "alpha_v" not in properties:
+        return _alpha(ctx, bsdf, properties["alpha"]) if "alpha" in properties else 0.1
+    alphas = roughnesses(ctx, bsdf, properties)
+    if alphas is None:
+        return None
+    alpha_u, alpha_v = alphas
+    if alpha_u == alpha_v:
+        return alpha_u
+    if not isinstance(alpha_u, float) or not isinstance(alpha_v, float):
+        ctx.unsupported_plugin(bsdf, " with a textured alpha_u or alpha_v (anisotropic roughness)")
+        return None
+    # The geometric mean keeps the distribution's peak D(0) = 1 / (π αu αv), so the highlight's height, and
+    # loses its stretch.
+    alpha = math.sqrt(alpha_u * alpha_v)
+    ctx.warnings.append(
+        f"{shown(str(bsdf.file or ctx.xml_path), 200)}:{bsdf.line}: {bsdf.label()}: anisotropic "
+        f"roughness alpha_u = {alpha_u:g}, alpha_v = {alpha_v:g} approximated by the isotropic "
+        f"alpha = sqrt(alpha_u alpha_v) = {alpha:.4g} (spectrace's {ctx.kind(bsdf)} lobe is isotropic)"
+    )
+    return alpha
+
+
+def roughnesses(
+    ctx: ImportContext, bsdf: Element, properties: dict[str, Element]
+) -> tuple[float | dict, float | dict] | None:
+    """Microfacet α along u and along v of a rough Mitsuba BSDF, each a number or a texture reference: alpha_u and
+    alpha_v (either one alone standing for both, as in Mitsuba), else `alpha` (default 0.1) for both; None when
+    spectrace cannot represent one (recorded)."""
+    if "alpha_u" not in properties and "alpha_v" not in properties:
+        alpha = _alpha(ctx, bsdf, properties["alpha"]) if "alpha" in properties else 0.1
+        return None if alpha is None else (alpha, alpha)
+    u_element = properties.get("alpha_u", properties.get("alpha_v"))
+    v_element = properties.get("alpha_v", properties.get("alpha_u"))
+    assert u_element is not None and v_element is not None  # one of them is given, standing for both
+    alpha_u = _alpha(ctx, bsdf, u_element)
+    alpha_v = alpha_u if v_element is u_element else _alpha(ctx, bsdf, v_element)
+    if alpha_u is None or alpha_v is None:
+        return None
+    return alpha_u, alpha_v
+
+
+def _alpha(ctx: ImportContext, bsdf: Element, element: Element) -> float | dict | None:
+    """One α property: a number in the range spectrace takes, or a texture reference (whose values are checked
+    against the range when the scene loads, as any roughness texture's are); None when not representable."""
+    element = ctx.resolve(element)
+    alpha = scalar_texture(ctx, element, "roughness") if element.tag == "texture" else ctx.number(element)
+    if alpha is None:
+        return None
+    if isinstance(alpha, dict) and list(alpha) == ["value"]:  # a spectrum plugin standing for a number
+        alpha = float(alpha["value"])
     if isinstance(alpha, float) and not ROUGHNESS_RANGE.contains(alpha):
         raise ctx.fail(bsdf, f"alpha must lie in {ROUGHNESS_RANGE} for spectrace, got {alpha:g}")
     return alpha

@@ -50,6 +50,10 @@ class Import(Context):
         """{"roughness": α} for a rough surface (pbrt's roughness remapped to the GGX α), {} for a smooth one."""
         return materials.rough(self, material)
 
+    def rough_anisotropic(self, material: Entity) -> dict:
+        """As `rough`, with "roughness_v" too where uroughness and vroughness differ (an anisotropic lobe)."""
+        return materials.rough_anisotropic(self, material)
+
     def ior(self, material: Entity) -> float | str:
         """`eta`: a number, or a named glass spectrace has (its name)."""
         return materials.ior(self, material)

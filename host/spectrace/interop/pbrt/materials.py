@@ -89,6 +89,26 @@ def rough(context: Context, material: Entity) -> dict:
     return {"roughness": alpha} if isinstance(alpha, dict) or alpha > 0 else {}
 
 
+def rough_anisotropic(context: Context, material: Entity) -> dict:
+    """{"roughness": α along dp/du, "roughness_v": α along the bitangent} where pbrt's uroughness and vroughness
+    differ (pbrt-v4 frames its BSDFs along the shading dp/du, as spectrace's anisotropic conductor), else as
+    `rough`. Each is a number or a float texture, remapped as pbrt remaps it (`remaproughness`)."""
+    u, v = (_axis_roughness(context, material, key) for key in ("uroughness", "vroughness"))
+    if u == v:
+        return rough(context, material)
+    return {"roughness": u, "roughness_v": v}
+
+
+def _axis_roughness(context: Context, material: Entity, key: str) -> float | dict:
+    """One axis's GGX α: `key` (a number or a float texture), else `roughness`, else 0."""
+    for name in (key, "roughness"):
+        if (texture := material.find(name, "texture")) is not None:
+            return roughness_texture(context, material, texture)
+        if (number := context.one(material, name, -1.0)) >= 0:
+            return min(math.sqrt(number) if context.boolean(material, "remaproughness", True) else number, 1.0)
+    return 0.0
+
+
 def roughness(context: Context, material: Entity) -> float | dict:
     """The GGX α: a number, or for a `"texture roughness"` a one-channel texture of α per point."""
     if (texture := material.find("roughness", "texture")) is not None and not any(
