@@ -957,3 +957,37 @@ def test_what_mitsuba_textures_cannot_match_is_refused(tmp_path, mitsuba_scalar_
         with pytest.raises(SpectraceError) as error:
             scene_to_mitsuba_dict(scene, tmp_path)
         assert says in str(error.value) and "\n" not in str(error.value), str(error.value)
+
+
+def test_a_checkerboard_read_as_a_number_imports_its_sides_as_mitsuba_looks_them_up(folder):
+    """Mitsuba 3's checkerboard gives its number lookup (an α, a blend's weight) color1 where its colour lookup gives
+    color0: asked here of Mitsuba itself at the centre of the first square. A shared checkerboard used both ways
+    becomes two tables, the colour one as written and the number one with its sides swapped."""
+    mi = pytest.importorskip(
+        "mitsuba", reason="the comparison with Mitsuba's lookups needs `pip install spectrace[test]`"
+    )
+    mi.set_variant("scalar_rgb")
+    board = mi.load_dict({"type": "checkerboard", "color0": 0.1, "color1": 0.9})
+    si = mi.SurfaceInteraction3f()
+    si.uv = mi.Point2f(0.25, 0.25)
+    colour_there, number_there = float(board.eval(si)[0]), float(board.eval_1(si))
+    assert (colour_there, number_there) == pytest.approx((0.1, 0.9))  # the two lookups disagree
+    body = (
+        """<texture type="checkerboard" id="board">
+            <float name="color0" value="0.1"/><float name="color1" value="0.9"/></texture>
+        <bsdf type="roughconductor" id="metal"><ref name="alpha" id="board"/></bsdf>
+        <bsdf type="diffuse" id="paint"><ref name="reflectance" id="board"/></bsdf>
+        <bsdf type="blendbsdf" id="blend"><ref name="weight" id="board"/>
+            <bsdf type="diffuse"/><bsdf type="conductor"/></bsdf>
+        """
+        + QUAD.format('<ref id="metal"/>')
+        + QUAD.format('<ref id="paint"/>')
+        + QUAD.format('<ref id="blend"/>')
+    )
+    data, _ = mitsuba_scene_data(_write(folder, body))
+    textures, materials = data["textures"], data["materials"]
+    number = materials["metal"]["roughness"]["texture"]
+    colour = materials["paint"]["reflectance"]["texture"]
+    assert materials["blend"]["amount"] == {"texture": number} and colour != number
+    assert textures[colour]["color0"] == {"value": pytest.approx(colour_there)}
+    assert textures[number]["color0"] == {"value": pytest.approx(number_there)}

@@ -168,7 +168,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if "weight" in properties:
         weight = importer.resolve(properties["weight"])
         if weight.tag == "texture":
-            texture = importer.texture(weight, "weight")
+            texture = importer.scalar_texture(weight, "weight")
             if texture is None:
                 return None
             table["amount"] = texture

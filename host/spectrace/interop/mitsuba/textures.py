@@ -75,15 +75,18 @@ def texture(ctx: ImportContext, element: Element, key: str) -> dict | None:
 
 
 def scalar_texture(ctx: ImportContext, element: Element, key: str) -> dict | None:
-    """A texture where Mitsuba reads one number per point (a bump map's height, an opacity, an α): an RGB bitmap
-    there gives its luminance in Mitsuba, so it is imported as a texture of its own with luminance = true (a
-    grey one as it is)."""
+    """A texture where Mitsuba reads one number per point (a bump map's height, an opacity, an α, a blend's
+    weight): an RGB bitmap there gives its luminance in Mitsuba, so it is imported as a texture of its own with
+    luminance = true (a grey one as it is); a checkerboard there shows its sides the other way round (Mitsuba 3's
+    number lookup puts color1 where its colour lookup puts color0), so it is imported with them swapped."""
     known = set(ctx.textures)
     reference = texture(ctx, element, key)
     if reference is None or list(reference) != ["texture"]:
         return reference
     name = reference["texture"]
     table = ctx.textures[name]
+    if table["type"] == "checkerboard":
+        return _checkerboard_as_number(ctx, name, name not in known)
     if table["type"] != "bitmap" or table.get("luminance"):
         return reference
     from spectrace.io.images import read_texture_image
@@ -280,3 +283,21 @@ def spd_file(ctx: ImportContext, element: Element) -> list[list[float]]:
     if not wavelengths:
         raise ctx.fail(element, f"spectrum file '{shown(name)}' holds no 'wavelength value' lines", "filename")
     return pairs(ctx, element, wavelengths, values, "filename")
+
+
+def _checkerboard_as_number(ctx: ImportContext, name: str, made_here: bool) -> dict:
+    table = ctx.textures[name]
+    swapped = table | {"color0": table["color1"], "color1": table["color0"]}
+    if made_here:  # made for this use: it becomes the number's, and a colour use makes its own
+        ctx.textures[name] = swapped
+        ctx.texture_of_element = {k: v for k, v in ctx.texture_of_element.items() if v != name}
+        return {"texture": name}
+    for other, made in ctx.textures.items():  # the number's table an earlier use made
+        if made == swapped:
+            return {"texture": other}
+    number = f"{name}_as_number"
+    if number not in ctx.textures:
+        ctx.textures[number] = swapped
+        ctx.texture_elements[number] = ctx.texture_elements[name]
+        ctx.origins[f"textures.{number}"] = ctx.texture_elements[name]
+    return {"texture": number}
