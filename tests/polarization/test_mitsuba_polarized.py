@@ -4,10 +4,13 @@ same XML rendered by Mitsuba and by spectrace's import of it (which turns `stoke
 the difference (each renderer's pixel spread within the block; its pixels see one value up to a fraction of a
 degree of angle). Mitsuba writes each Stokes image as linear sRGB, whose Y is the film's.
 
-Conventions (measured with Mitsuba 3's scalar_spectral_polarized): Mitsuba's S2 has the opposite sign of
-spectrace's, S0, S1 and S3 agree (the conductor's retardance, circular light from a wave plate), so the comparison
-flips Mitsuba's S2; Mitsuba's retarder (theta, delta) renders as spectrace's (-theta, -delta), which the importer
-maps (spectrace.materials.retarder.mitsuba_angle)."""
+Conventions (measured with Mitsuba 3's scalar_spectral_polarized): the two renderers' Stokes images are in the same
+camera basis and the same sense of S3 (Collett's), so they are compared as they are: S1 and S2 of reflections seen
+by a camera turned about its view axis, and S3 of light reflected by two conductors in turned planes of incidence,
+agree with no sheet in the scene (test_handedness checks that sense against Maxwell's equations); Mitsuba's
+polarizer measures its theta the other way round from spectrace's angle (spectrace.materials.polarizer.mitsuba_angle),
+its retarder's theta and delta are spectrace's. The last tests render Mitsuba's own polarisation docs scenes when
+their files are at hand (SPECTRACE_MITSUBA_DATA)."""
 
 from pathlib import Path
 
@@ -62,7 +65,7 @@ def _compare(tmp_path: Path, mi, text: str, components: tuple[int, ...] = (0, 1,
     xml = tmp_path / "scene.xml"
     xml.write_text(text)
     theirs_rgb = np.asarray(mi.render(mi.load_file(str(xml)), seed=3), np.float64)[..., 3:15]
-    theirs = (theirs_rgb.reshape(SIZE, SIZE, 4, 3) @ SRGB_Y) * np.array([1.0, 1.0, -1.0, 1.0])
+    theirs = theirs_rgb.reshape(SIZE, SIZE, 4, 3) @ SRGB_Y
     image = spectrace.render(load_mitsuba_scene(xml), progress=False, colour_space="xyz")
     ours = image.aovs["stokes"].reshape(SIZE, SIZE, 4, 3)[..., 1].astype(np.float64)
     (a, sa), (b, sb) = _blocks(ours), _blocks(theirs)
