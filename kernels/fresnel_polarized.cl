@@ -7,7 +7,10 @@
  * reflected and refracted beams), and y = k × s, each beam's own p direction. With these p directions Born & Wolf's
  * signs hold: at normal incidence r_p = −r_s, so a mirror turns right-circular light into left-circular.
  * Light arrives at cos θi ∈ [0, 1] from the side of index 1 onto the side of relative complex index η = n + ik
- * (n_t / n_i; k = 0 for a dielectric). Units: dimensionless. */
+ * (n_t / n_i; k = 0 for a dielectric). Units: dimensionless.
+ * Handedness: Born & Wolf's amplitudes are for fields exp(−iωt), Collett's Stokes vectors (mueller.cl) for
+ * exp(iωt), whose amplitudes are the complex conjugates: the retardance entry d is Im(r_s* r_p), not Im(r_s r_p*)
+ * (checked against Maxwell's boundary conditions solved directly, tests/polarization/test_handedness.py). */
 #ifndef SPECTRACE_FRESNEL_POLARIZED_CL
 #define SPECTRACE_FRESNEL_POLARIZED_CL
 
@@ -57,10 +60,11 @@ inline float4 fresnel_reflection_shape(float cos_i, float2 eta)
     float pp = rp.x * rp.x + rp.y * rp.y;
     float a = 0.5f * (ss + pp);
     if (!(a > 0.0f)) return (float4)(1.0f, 0.0f, 0.0f, 0.0f);
-    /* r_s r_p*: its real part keeps the diagonal, its imaginary part the retardance between s and p. */
+    /* r_s* r_p: its real part keeps the diagonal, its imaginary part the retardance between s and p. An exact zero
+     * (no retardance) keeps the sign it had with r_s r_p*, so that those scenes keep their bits. */
     float re = rs.x * rp.x + rs.y * rp.y;
     float im = rs.y * rp.x - rs.x * rp.y;
-    return (float4)(a, 0.5f * (ss - pp), re, im) / a;
+    return (float4)(a, 0.5f * (ss - pp), re, im == 0.0f ? im : -im) / a;
 }
 
 /* The refraction's Mueller matrix into a dielectric (real eta, no total internal reflection), divided by its

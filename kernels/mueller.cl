@@ -8,7 +8,8 @@
  *
  * Convention: a beam travelling along the unit vector k has its Stokes vector (S0, S1, S2, S3) in a reference basis
  * (x, y = k × x), x a unit vector normal to k. S1 > 0: linear polarisation along x; S2 > 0: along (x + y)/√2;
- * S3 > 0: the field turns from x toward y (counterclockwise to one who looks into the beam toward its source).
+ * S3 > 0: right-circular in Collett's sense, the field turning from y toward x (clockwise to one who looks into the
+ * beam toward its source), Collett's time dependence exp(i(ωt − kz)); Mitsuba 3's Stokes vectors are the same.
  * Units: S0..S3 carry the unit of the radiance they describe; Mueller matrices are dimensionless.
  *
  * Layout: each entry is a float4 of the four wavelengths' values; a matrix is 16 of them, row-major

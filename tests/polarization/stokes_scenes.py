@@ -127,8 +127,10 @@ def fresnel_amplitudes(cos_i: float, eta: complex) -> tuple[complex, complex]:
 
 
 def fresnel_reflection(cos_i: float, eta: complex) -> np.ndarray:
-    """The reflection's Mueller matrix in the s/p basis (x = s for both beams)."""
+    """The reflection's Mueller matrix in the s/p basis (x = s for both beams), Stokes vectors in Collett's
+    convention: his fields go as exp(iωt), Born & Wolf's as exp(−iωt), so his amplitudes are the conjugates of these
+    (the retardance entry Im(r_s* r_p); test_handedness checks the sense against Maxwell's equations)."""
     r_s, r_p = fresnel_amplitudes(cos_i, eta)
-    ss, pp, cross = abs(r_s) ** 2, abs(r_p) ** 2, r_s * np.conj(r_p)
+    ss, pp, cross = abs(r_s) ** 2, abs(r_p) ** 2, np.conj(r_s) * r_p
     a, b, c, d = (ss + pp) / 2, (ss - pp) / 2, cross.real, cross.imag
     return np.array([[a, b, 0, 0], [b, a, 0, 0], [0, 0, c, d], [0, 0, -d, c]], float)

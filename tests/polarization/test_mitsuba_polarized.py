@@ -4,18 +4,24 @@ same XML rendered by Mitsuba and by spectrace's import of it (which turns `stoke
 the difference (each renderer's pixel spread within the block; its pixels see one value up to a fraction of a
 degree of angle). Mitsuba writes each Stokes image as linear sRGB, whose Y is the film's.
 
-Conventions (measured with Mitsuba 3's scalar_spectral_polarized): Mitsuba's S2 has the opposite sign of
-spectrace's, S0, S1 and S3 agree (the conductor's retardance, circular light from a wave plate), so the comparison
-flips Mitsuba's S2; Mitsuba's retarder (theta, delta) renders as spectrace's (-theta, -delta), which the importer
-maps (spectrace.materials.retarder.mitsuba_angle)."""
+Conventions (measured with Mitsuba 3's scalar_spectral_polarized): the two renderers' Stokes images are in the same
+camera basis and the same sense of S3 (Collett's), so they are compared as they are: S1 and S2 of reflections seen
+by a camera turned about its view axis, and S3 of light reflected by two conductors in turned planes of incidence,
+agree with no sheet in the scene (test_handedness checks that sense against Maxwell's equations); Mitsuba's
+polarizer measures its theta the other way round from spectrace's angle (spectrace.materials.polarizer.mitsuba_angle),
+its retarder's theta and delta are spectrace's. The last tests render Mitsuba's own polarisation docs scenes when
+their files are at hand (SPECTRACE_MITSUBA_DATA)."""
 
 from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.polarization.stokes_scenes import sheets
 
 import spectrace
 from spectrace.interop.mitsuba import load_mitsuba_scene
+from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
+from spectrace.scene.loader import load_scene
 
 pytestmark = pytest.mark.peer
 
@@ -62,7 +68,7 @@ def _compare(tmp_path: Path, mi, text: str, components: tuple[int, ...] = (0, 1,
     xml = tmp_path / "scene.xml"
     xml.write_text(text)
     theirs_rgb = np.asarray(mi.render(mi.load_file(str(xml)), seed=3), np.float64)[..., 3:15]
-    theirs = (theirs_rgb.reshape(SIZE, SIZE, 4, 3) @ SRGB_Y) * np.array([1.0, 1.0, -1.0, 1.0])
+    theirs = theirs_rgb.reshape(SIZE, SIZE, 4, 3) @ SRGB_Y
     image = spectrace.render(load_mitsuba_scene(xml), progress=False, colour_space="xyz")
     ours = image.aovs["stokes"].reshape(SIZE, SIZE, 4, 3)[..., 1].astype(np.float64)
     (a, sa), (b, sb) = _blocks(ours), _blocks(theirs)
@@ -199,3 +205,24 @@ def test_rough_plastic_depolarises_as_in_mitsuba(tmp_path, mitsuba_polarized):
     origin, up = _reflection(70.0)
     means = _compare(tmp_path, mitsuba_polarized, _scene(GLASS_AND_METAL.format(plate=plate), origin, up, 2, 256))
     assert means[0] > 0.1 and np.all(means[1:] == 0.0)
+
+
+def test_exported_polarizer_and_retarder_render_like_spectrace(tmp_path, mitsuba_polarized):
+    """The other way: spectrace's polariser at 30° and retarder (20°, 60°) exported to Mitsuba (its `polarizer`'s
+    theta negated, its `retarder`'s as it is), the export's integrator wrapped in `stokes`: S0..S3 as spectrace's."""
+    path = tmp_path / "scene.toml"
+    # A view 2° wide, as above: the renderers' sheets crossed obliquely part at the edges of a wider one.
+    camera = "origin = [0, 0, 3]\ntarget = [0, 0, 0]\nfov = 2"
+    path.write_text(
+        sheets('type = "polarizer"\nangle = 30', 'type = "retarder"\nangle = 20\nretardance = 60', camera=camera)
+    )
+    scene = load_scene(path)
+    exported = scene_to_mitsuba_dict(scene, tmp_path, spp=64)
+    exported["integrator"] = {"type": "stokes", "nested": exported["integrator"]}
+    theirs_rgb = np.asarray(mitsuba_polarized.render(mitsuba_polarized.load_dict(exported), seed=3), np.float64)
+    theirs = theirs_rgb[..., 3:15].reshape(SIZE, SIZE, 4, 3) @ SRGB_Y
+    ours = spectrace.render(scene, progress=False, colour_space="xyz").aovs["stokes"]
+    (a, sa), (b, sb) = _blocks(ours.reshape(SIZE, SIZE, 4, 3)[..., 1].astype(np.float64)), _blocks(theirs)
+    tolerance = 5.0 * np.sqrt(sa**2 + sb**2) + ALLOWANCE * np.abs(b[..., :1])
+    assert np.all(np.abs(a - b) <= tolerance), (a.mean(axis=(0, 1)), b.mean(axis=(0, 1)))
+    assert abs(b[..., 2].mean()) > 0.3 * b[..., 0].mean() and abs(b[..., 3].mean()) > 0.1 * b[..., 0].mean()

@@ -25,7 +25,8 @@ ANGLE = Parameter(
     "degrees",
     0.0,
     Range(-360.0, 360.0),
-    doc="of the transmission axis from the surface's dp/du (its u direction) toward dp/dv, as Mitsuba 3's theta",
+    doc="of the transmission axis from the surface's dp/du (its u direction) toward dp/dv (Mitsuba 3's polarizer "
+    "measures its theta the other way: mitsuba_angle)",
 )
 TRANSMITTANCE = reflectance(1.0, "transmittance along the axis T(λ)", name="transmittance")
 EXTINCTION = Parameter(
@@ -109,16 +110,31 @@ def mitsuba_sheet(importer, bsdf, properties, table: dict) -> dict | None:
     return table
 
 
+def mitsuba_angle(theta: float) -> float:
+    """The axis angle of Mitsuba 3's polarizer of `theta`: measured, its scalar_spectral_polarized renders of a
+    polarizer of theta equal spectrace's of -theta, from either side of the sheet, while the two agree on the
+    camera's Stokes basis, on S1..S3 of Fresnel reflections and on its retarder's theta and delta
+    (tests/polarization/test_mitsuba_polarized.py). Its own inverse."""
+    return 0.0 - theta
+
+
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
-    """Mitsuba 3's polarizer: an ideal linear polariser (extinction 0); `polarizing = false` (a plain attenuator)
-    has no counterpart here."""
+    """Mitsuba 3's polarizer: an ideal linear polariser (extinction 0), theta as mitsuba_angle turns it;
+    `polarizing = false` (a plain attenuator) has no counterpart here."""
     if "polarizing" in properties and not importer.boolean(properties["polarizing"]):
         importer.unsupported_plugin(bsdf, " with polarizing = false")
         return None
-    return mitsuba_sheet(importer, bsdf, properties, {"type": NAME})
+    sheet = mitsuba_sheet(importer, bsdf, properties, {"type": NAME})
+    if sheet is not None and "angle" in sheet:
+        sheet["angle"] = mitsuba_angle(sheet["angle"])
+    return sheet
 
 
 def to_mitsuba(material: PolarizerMaterial, exporter) -> dict:
     if material.extinction != 0.0:
         raise exporter.refuse(f"a polarizer of extinction {material.extinction:g} (Mitsuba 3's is ideal)")
-    return {"type": NAME, "theta": float(material.angle), "transmittance": exporter.spectrum(material.transmittance)}
+    return {
+        "type": NAME,
+        "theta": mitsuba_angle(float(material.angle)),
+        "transmittance": exporter.spectrum(material.transmittance),
+    }

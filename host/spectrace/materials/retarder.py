@@ -25,7 +25,8 @@ FAST_AXIS = Parameter(
     "degrees",
     0.0,
     ANGLE.range,
-    doc="of the fast axis from the surface's dp/du (its u direction) toward dp/dv, as Mitsuba 3's theta",
+    doc="of the fast axis from the surface's dp/du (its u direction) toward dp/dv, as Mitsuba 3's retarder "
+    "measures its theta",
 )
 RETARDANCE = Parameter(
     "retardance",
@@ -80,17 +81,9 @@ def write_row(row: np.ndarray, material: RetarderMaterial, table: SpectrumTable)
     write_sheet_row(row, material.angle, math.radians(material.retardance), material.transmittance, table)
 
 
-def mitsuba_angle(theta: float) -> float:
-    """The fast axis' angle of Mitsuba 3's retarder of `theta` (and the same delta): Mitsuba's renders of a
-    retarder (theta, delta) equal spectrace's of (-theta, -delta) (measured with its scalar_spectral_polarized
-    variant; its polarizer's theta is spectrace's angle), which is the retarder (90 - theta, delta), folded into
-    [-90, 90) (a retarder is the same turned by 180°)."""
-    return (90.0 - theta + 90.0) % 180.0 - 90.0
-
-
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
-    """Mitsuba 3's retarder: delta in degrees (90 by default), theta as mitsuba_angle turns it, its
-    transmittance."""
+    """Mitsuba 3's retarder: delta in degrees (90 by default), theta, its transmittance, all as spectrace's
+    (measured with its scalar_spectral_polarized variant: tests/polarization/test_mitsuba_polarized.py)."""
     table: dict = {"type": NAME}
     if "delta" in properties:
         delta = importer.resolve(properties["delta"])
@@ -101,17 +94,13 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         if RETARDANCE.range_problem(retardance):
             raise importer.fail(bsdf, f"delta = {retardance:g}: spectrace's retarder needs {RETARDANCE.range} degrees")
         table["retardance"] = retardance
-    sheet = mitsuba_sheet(importer, bsdf, properties, table)
-    if sheet is not None:
-        sheet["angle"] = round(mitsuba_angle(sheet.get("angle", 0.0)), 9)
-    return sheet
+    return mitsuba_sheet(importer, bsdf, properties, table)
 
 
 def to_mitsuba(material: RetarderMaterial, exporter) -> dict:
-    # mitsuba_angle is its own inverse (up to the 180° a retarder's axis repeats by).
     return {
         "type": NAME,
-        "theta": mitsuba_angle(float(material.angle)),
+        "theta": float(material.angle),
         "delta": float(material.retardance),
         "transmittance": exporter.spectrum(material.transmittance),
     }
