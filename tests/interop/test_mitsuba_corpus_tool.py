@@ -53,7 +53,8 @@ def test_each_file_is_tabulated_with_what_each_renderer_makes_of_it(corpus, tmp_
     assert depth["reason"].startswith("unsupported Mitsuba 3 plugins: integrator 'depth' (line 2)")
     assert velvet["mitsuba"] == "refuses" and "velvet" in velvet["mitsuba_reason"]
     assert not velvet["imported"] and velvet["features"] == ["bsdf 'velvet'"]
-    assert "| 3 | 2 | 0 | 1 | 1 | 1 |" in out  # files, Mitsuba renders, no sensor, refuses, imports, both
+    # files, Mitsuba renders (polarised only), loads without a sensor, refuses, spectrace imports, both take
+    assert "| 3 | 2 | 0 | 0 | 1 | 1 | 1 |" in out
     # Grouped by what is lacking: the depth integrator keeps out one file Mitsuba renders, velvet one it refuses.
     assert "| integrator 'depth' | 1 | 1 |" in out
     assert "| bsdf 'velvet' | 1 | 0 |" in out

@@ -48,12 +48,13 @@ from spectrace.errors import SpectraceError  # noqa: E402
 SIGMAS = 5.0
 POWER = 0.05  # as tests/replica_agreement.py asks of a test: weaker comparisons are flagged
 UNSUPPORTED = "unsupported Mitsuba 3 plugins: "
+POLARISED = "scalar_spectral_polarized"
 
 
 @dataclass
 class Row:
     file: str
-    mitsuba: str = ""  # "renders", "no sensor" (loads, renders nothing), "refuses", "timeout"
+    mitsuba: str = ""  # "renders", "renders polarised", "no sensor" (loads, renders nothing), "refuses", "timeout"
     mitsuba_reason: str = ""
     imported: bool = False
     features: list[str] = field(default_factory=list)  # what the refusal names
@@ -111,11 +112,23 @@ def _first_line(text: str, shown: dict[str, str]) -> str:
 
 
 def mitsuba_load(mi, path: Path, shown: dict[str, str]) -> tuple[str, str]:
-    """(status, reason): whether Mitsuba 3 loads the file as `mitsuba scene.xml` would, and has a sensor."""
+    """(status, reason): whether Mitsuba 3 loads the file as `mitsuba scene.xml` would, and has a sensor. A file
+    whose plugins ask for Mitsuba's polarised mode (the stokes integrator) is tried in scalar_spectral_polarized,
+    where Mitsuba renders it: "renders polarised"."""
     try:
         scene = mi.load_file(str(path), parallel=False)
     except Exception as failure:  # Mitsuba's refusals are RuntimeErrors of many kinds
-        return "refuses", _first_line(str(failure), shown)
+        reason = _first_line(str(failure), shown)
+        if "polarized mode" not in reason or POLARISED not in mi.variants():
+            return "refuses", reason
+        mi.set_variant(POLARISED)
+        try:
+            scene = mi.load_file(str(path), parallel=False)
+        except Exception as polarised_failure:
+            return "refuses", f"{reason}; in {POLARISED}: {_first_line(str(polarised_failure), shown)}"
+        finally:
+            mi.set_variant("scalar_spectral")
+        return ("renders polarised", "") if scene.sensors() else ("no sensor", "a scene without a sensor")
     if not isinstance(scene, mi.Scene):
         return "no sensor", f"the root is a {type(scene).__name__}, not a scene"
     return ("renders", "") if scene.sensors() else ("no sensor", "a scene without a sensor (a fragment)")
@@ -228,7 +241,9 @@ def survey(path: Path, shown: dict[str, str], mi, args, device) -> Row:
             setattr(row, key, value)
         if args.render and scene is not None:
             if row.mitsuba != "renders":
-                row.compared = "not compared: Mitsuba does not render it"
+                row.compared = "not compared: " + (
+                    "Mitsuba renders it polarised only" if row.mitsuba == "renders polarised" else "Mitsuba refuses it"
+                )
             else:
                 try:
                     with time_limit(args.timeout * 4):
@@ -260,22 +275,23 @@ def feature_groups(rows: list[Row]) -> list[tuple[str, int, int]]:
         for feature in dict.fromkeys(row.features):
             counts = groups.setdefault(feature, [0, 0])
             counts[0] += 1
-            counts[1] += row.mitsuba == "renders"
+            counts[1] += row.mitsuba.startswith("renders")
     return sorted(((name, *counts) for name, counts in groups.items()), key=lambda g: (-g[2], -g[1], g[0]))
 
 
 def summary(rows: list[Row], rendered: bool) -> list[str]:
-    renders = [row for row in rows if row.mitsuba == "renders"]
+    renders = [row for row in rows if row.mitsuba.startswith("renders")]
     both = [row for row in renders if row.imported]
     lines = [
-        "| files | Mitsuba 3 renders | loads without a sensor | refuses | spectrace imports | "
-        + "of those Mitsuba renders |"
+        "| files | Mitsuba 3 renders | of which polarised only | loads without a sensor | refuses | "
+        + "spectrace imports | of those Mitsuba renders |"
         + (" agree | differ | not compared |" if rendered else ""),
-        "|---|---|---|---|---|---|" + ("---|---|---|" if rendered else ""),
+        "|---|---|---|---|---|---|---|" + ("---|---|---|" if rendered else ""),
     ]
     counts = [
         len(rows),
         len(renders),
+        sum(row.mitsuba == "renders polarised" for row in rows),
         sum(row.mitsuba == "no sensor" for row in rows),
         sum(row.mitsuba in ("refuses", "timeout") for row in rows),
         sum(row.imported for row in rows),
@@ -296,7 +312,7 @@ def table(rows: list[Row], rendered: bool) -> str:
     head = "| file | Mitsuba 3 | spectrace imports |" + (" compared | z | power |" if rendered else "") + " reason |"
     lines = [head, "|---|---|---|" + ("---|---|---|" if rendered else "") + "---|"]
     for row in rows:
-        mitsuba = f"Mitsuba: {row.mitsuba_reason}" if row.mitsuba != "renders" and row.mitsuba_reason else ""
+        mitsuba = f"Mitsuba: {row.mitsuba_reason}" if row.mitsuba_reason else ""
         reason = "; ".join(text for text in (mitsuba, row.reason) if text)
         cells = [row.file, row.mitsuba or "-", mark(row.imported)]
         if rendered:
