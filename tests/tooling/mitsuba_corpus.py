@@ -4,8 +4,9 @@
     python -m tests.tooling.mitsuba_corpus ROOT... [--json OUT] [--render] [--size 16] [--spp 4] [--replicas 8]
                                                    [--timeout 60] [--device intel-cpu]
 
-For each *.xml (recursively, in name order): whether Mitsuba 3's scalar_spectral variant loads it (and whether it has
-a sensor, without which Mitsuba renders nothing: a fragment for <include>); whether spectrace imports it
+For each *.xml (recursively, in name order): whether Mitsuba 3's scalar_spectral variant loads it (a file whose
+stokes integrator asks for the polarised mode: scalar_spectral_polarized), and whether it has a sensor, without which
+Mitsuba renders nothing (a fragment for <include>); whether spectrace imports it
 (`load_mitsuba_scene`, in this process, with a time limit per file); and where it refuses, its one line and the
 features it lacks: the unsupported plugins the importer names, each once, or the first words of any other refusal.
 The refusals are then grouped by feature, counting the files each keeps out, and among them those Mitsuba renders.
@@ -15,11 +16,12 @@ independent images of `spp` samples, and the whole-image means (each channel and
 errors of the difference (tests/replica_agreement.py, the comparison the Mitsuba tests make): agrees within 5,
 with the comparison's power (the smallest relative error 5 standard errors would catch) beside it, so that a noisy
 agreement is seen as one. Mitsuba's film gives linear sRGB (or XYZ, as its pixel_format says), compared with
-spectrace's film XYZ converted alike.
+spectrace's film XYZ converted alike. A scene the import renders polarised (a polariser, a retarder, the stokes
+integrator) is rendered by Mitsuba's scalar_spectral_polarized, where its polarisers polarise.
 
-One process, one file at a time, one render at a time. The files are public scenes
-fetched apart from the project; nothing here writes into their folders. A Python exception other than spectrace's
-own error is a bug: it is counted as a crash, its last line shown, and the run exits 1."""
+One process, one file at a time, one render at a time. The files are public scenes fetched apart from the project;
+nothing here writes into their folders. A Python exception other than spectrace's own error is a bug: it is counted
+as a crash, its last line shown, and the run exits 1."""
 
 from __future__ import annotations
 
@@ -175,7 +177,7 @@ def _mitsuba_images(mi, path: Path, width: int, height: int, spp: int, replicas:
     first film. The file is read by Mitsuba's own parser, as load_file reads it, and instantiated after the change."""
     import mitsuba.parser as parser
 
-    config = parser.ParserConfig("scalar_spectral")
+    config = parser.ParserConfig(mi.variant())
     config.parallel = False
     resolver = mi.file_resolver()
     kept = mi.FileResolver(resolver)
@@ -198,10 +200,19 @@ def compare(mi, path: Path, scene, size: int, spp: int, replicas: int, device, r
     """Both renderers' whole-image means, compared (row.compared, row.z, row.power, row.means)."""
     from replica_agreement import difference_and_power, spectrace_replicas
     from spectrace.engine.renderer import Renderer
+    from spectrace.engine.scene_features import is_polarized
     from spectrace.spectral import xyz_to_linear_srgb
 
     width, height = size, max(1, round(size * scene.height / scene.width))
-    theirs, pixel_format = _mitsuba_images(mi, path, width, height, spp, replicas)
+    renderer = Renderer(scene.with_overrides(width=width, height=height), device)
+    # Where the import renders polarised (a polariser, a retarder, Mitsuba's stokes integrator), so does Mitsuba:
+    # in its other variants its polarisers do not polarise.
+    polarised = is_polarized(renderer.scene, renderer.buffers) or row.mitsuba == "renders polarised"
+    mi.set_variant(POLARISED if polarised else "scalar_spectral")
+    try:
+        theirs, pixel_format = _mitsuba_images(mi, path, width, height, spp, replicas)
+    finally:
+        mi.set_variant("scalar_spectral")
     if pixel_format.startswith("xyz"):
         convert = lambda xyz: xyz  # noqa: E731
     elif pixel_format.startswith("rgb"):
@@ -209,7 +220,6 @@ def compare(mi, path: Path, scene, size: int, spp: int, replicas: int, device, r
     else:
         row.compared = f"not compared: Mitsuba's film gives {pixel_format}"
         return
-    renderer = Renderer(scene.with_overrides(width=width, height=height), device)
     ours = convert(spectrace_replicas(renderer, replicas, spp))
     ours_means = ours.mean(axis=(1, 2))
     theirs_means = theirs[..., :3].mean(axis=(1, 2))  # before any channels an integrator adds
@@ -240,10 +250,8 @@ def survey(path: Path, shown: dict[str, str], mi, args, device) -> Row:
         for key, value in found.items():
             setattr(row, key, value)
         if args.render and scene is not None:
-            if row.mitsuba != "renders":
-                row.compared = "not compared: " + (
-                    "Mitsuba renders it polarised only" if row.mitsuba == "renders polarised" else "Mitsuba refuses it"
-                )
+            if not row.mitsuba.startswith("renders"):
+                row.compared = "not compared: Mitsuba does not render it"
             else:
                 try:
                     with time_limit(args.timeout * 4):
