@@ -1,0 +1,52 @@
+"""Light paths that follow a light's image (kernels/distribution_2d.cl): a projector and a goniometric light whose
+images are sparse (a few bright texels on black) lighting the floor; the light tracer and BDPT agree with the path
+tracer (next-event estimation only) within 5 standard errors per 8 × 8-pixel block (tests/replica_agreement.py),
+from 2 (projector) and 4 (goniometric) samples a pixel per replica of light paths: the light tracer's image has 9 to
+28 times less standard deviation than with light paths drawn uniformly, which carry light only when they leave
+through a bright texel."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from tests.render.test_light_tracer import _floor_scene
+
+import spectrace
+from replica_agreement import assert_replicas_agree, spectrace_replicas
+from spectrace.engine.renderer import Renderer
+
+PROJECTOR_IMAGE = np.zeros((6, 8, 3))
+PROJECTOR_IMAGE[1, 2] = (0.9, 0.3, 0.1)
+PROJECTOR_IMAGE[4, 5] = (0.2, 0.8, 0.6)
+PROJECTOR_IMAGE[3, 7] = (0.5, 0.5, 0.9)
+GONIO_IMAGE = np.zeros((8, 8))
+# Samples a pixel per replica: the path tracer's reference needs more than the light paths drawn by the image.
+PATH_SPP = {"projector": 16, "goniometric": 4}
+LIGHT_PATH_SPP = {"projector": 2, "goniometric": 4}
+GONIO_IMAGE[3, 4], GONIO_IMAGE[4, 3], GONIO_IMAGE[2, 3], GONIO_IMAGE[0, 6] = 4.0, 2.0, 1.0, 3.0
+
+
+def _light(kind: str):
+    if kind == "projector":
+        image = spectrace.bitmap(PROJECTOR_IMAGE, filter="nearest")
+        return spectrace.projector_light(
+            (0.0, -0.5, 1.2), (0.3, -0.2, 0.0), 50.0, intensity=20.0, image=image, profile="intensity"
+        )
+    return spectrace.goniometric_light((0.1, -0.3, 1.0), intensity=2.0, image=GONIO_IMAGE, up=(0.3, 0.2, -1.0))
+
+
+def _scene(tmp_path: Path, integrator: str, kind: str):
+    scene = spectrace.load_scene(_floor_scene(tmp_path, integrator)).with_overrides(seed=7)
+    return scene.with_overrides(lights=[_light(kind)])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("kind", "integrator"),
+    [("projector", "light"), ("projector", "bdpt"), ("goniometric", "light"), ("goniometric", "bdpt")],
+)
+def test_light_paths_through_a_sparse_image_agree_with_the_path_tracer(device, tmp_path, kind, integrator):
+    path = spectrace_replicas(Renderer(_scene(tmp_path, "path", kind), device), 8, PATH_SPP[kind])
+    other = spectrace_replicas(Renderer(_scene(tmp_path, integrator, kind), device), 8, LIGHT_PATH_SPP[kind])
+    assert path.mean() > 0.005
+    assert_replicas_agree(other, path, block=8, what=f"{kind}, {integrator}")
