@@ -3,7 +3,8 @@ distribution_2d.cl through light_projector.cl and light_goniometric.cl), checked
 texels on black) through kernels/testing/light_directions.cl and kernels/testing/lights.cl:
 - the directions drawn fall in the image's texels with the probabilities the documented weights give (chi-square):
   a goniometric texel's value (every texel covers the same solid angle), a projector texel's luminance floored at
-  1e-3 of the mean (docs/lights.md), the texels a lookup reaches through uv_scale, uv_offset and the filter;
+  1e-3 of the mean (docs/scene-format.md), the texels a lookup reaches through uv_scale, uv_offset and the filter,
+  times cos³θ at the texel's centre for the intensity profile;
 - the density BDPT's MIS reads for a direction is that texel's probability over the solid angle it covers;
 - the first rays of light paths carry on average the light's flux, its intensity as next-event estimation reads it
   integrated over the image, within 4 standard errors, and with a much smaller variance than uniform directions."""
@@ -20,7 +21,7 @@ from stats_toolkit import assert_chi_square_fits, assert_within_standard_errors,
 
 DIRECTIONS = "testing/light_directions.cl"
 SAMPLES = 40_000
-SIGNIFICANCE = 0.01 / 5  # Bonferroni over the five chi-square tests
+SIGNIFICANCE = 0.01 / 6  # Bonferroni over the six chi-square tests
 
 # 8 x 6 texels, black but for three: a projector's grey reflectance image (values in [0, 1]).
 PROJECTOR_IMAGE = np.zeros((6, 8))
@@ -107,13 +108,18 @@ PROJECTOR_CASES = {
         _floored(PROJECTOR_IMAGE[:, ::-1]),
     ),
     "bilinear": ({"filter": "bilinear"}, _floored(_dilated(PROJECTOR_IMAGE))),
+    "intensity-profile": ({"filter": "nearest"}, _floored(PROJECTOR_IMAGE)),
 }
 
 
 @pytest.mark.parametrize("case", PROJECTOR_CASES, ids=list(PROJECTOR_CASES))
 def test_projector_light_paths_follow_the_image(runners, case):
     placement, weights = PROJECTOR_CASES[case]
-    light = _projector(placement)
+    light = _projector(placement, "intensity" if case == "intensity-profile" else "irradiance")
+    if light.profile == "intensity":  # I = intensity·image: the weights take dω/dA = cos³θ at each cell's centre
+        height, width = weights.shape
+        u, v = np.meshgrid((np.arange(width) + 0.5) / width, (np.arange(height) + 0.5) / height)
+        weights = weights * np.cos(np.arctan(np.hypot((2 * u - 1) * light.tan_x, (2 * v - 1) * light.tan_y))) ** 3
     d, pdf = Directions(runners[0], _scene(lights=[light])).sample(SAMPLES, seed=31)
     rows, columns, cos_theta = _projector_texels(light, d)
     observed = np.zeros(weights.shape)

@@ -1,8 +1,8 @@
 """Light paths that follow a light's image (kernels/distribution_2d.cl): a projector and a goniometric light whose
 images are sparse (a few bright texels on black) lighting the floor; the light tracer and BDPT agree with the path
 tracer (next-event estimation only) within 5 standard errors per 8 × 8-pixel block (tests/replica_agreement.py),
-from 2 (projector) and 4 (goniometric) samples a pixel per replica of light paths: the light tracer's image has 9 to
-28 times less standard deviation than with light paths drawn uniformly, which carry light only when they leave
+from 2 (projector) and 4 (goniometric) samples a pixel per replica of light paths: the light tracer's image has about
+10 times less standard deviation than with light paths drawn uniformly, which carry light only when they leave
 through a bright texel."""
 
 from pathlib import Path

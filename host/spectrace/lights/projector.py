@@ -175,6 +175,10 @@ def write_rows(light: ProjectorLight, out: LightRows) -> None:
     table = image_weights(light.image) if light.image is not None else None
     table_fields: dict = {}
     if table is not None:
+        if light.profile == "intensity":
+            # I = intensity·image here, and dω = cos³θ dA on the plane: the cells' weights take the Jacobian (the
+            # irradiance profile's 1/cos³θ cancels it).
+            table = table * _cos_cubed(table.shape, light.tan_x, light.tan_y)
         table_fields = {"triangle": add_distribution(table, out), "map_fields": (0, 0, table.shape[1], table.shape[0])}
     out.add(
         light_row(
@@ -220,6 +224,14 @@ def image_weights(image) -> np.ndarray | None:
     if not luminance.max(initial=0.0) > 0:
         return None
     return np.maximum(luminance, 1e-3 * luminance.mean())
+
+
+def _cos_cubed(shape: tuple[int, ...], tan_x: float, tan_y: float) -> np.ndarray:
+    """cos³θ at the centres of the (height, width) cells of the image's rectangle on the plane z = 1."""
+    height, width = shape
+    x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * tan_x
+    y = (2.0 * (np.arange(height) + 0.5) / height - 1.0) * tan_y
+    return (1.0 + x[None, :] ** 2 + y[:, None] ** 2) ** -1.5
 
 
 def _wrapped(index: np.ndarray, size: int, wrap: str) -> np.ndarray:
