@@ -50,3 +50,31 @@ def test_light_paths_through_a_sparse_image_agree_with_the_path_tracer(device, t
     other = spectrace_replicas(Renderer(_scene(tmp_path, integrator, kind), device), 8, LIGHT_PATH_SPP[kind])
     assert path.mean() > 0.005
     assert_replicas_agree(other, path, block=8, what=f"{kind}, {integrator}")
+
+
+def test_a_projectors_edits_reuse_its_sampling_table():
+    """Editing a projector's other keys in a live session finds its image's table in the texel buffer (which keeps
+    its size) and renders the bits of the scene built edited."""
+    from spectrace.session import Session
+
+    image = spectrace.bitmap(PROJECTOR_IMAGE, filter="nearest")
+
+    def build(power: float) -> spectrace.Scene:
+        return spectrace.Scene(
+            camera=spectrace.Camera(origin=(0.3, -0.2, 3.0), target=(0.3, -0.2, 0.0), fov_degrees=50.0),
+            width=16,
+            height=16,
+            shapes=[spectrace.shape("rectangle", spectrace.diffuse(0.5), transform=[{"scale": 4}])],
+            lights=[spectrace.projector_light((0.0, -0.5, 1.2), (0.3, -0.2, 0.0), 50.0, power_w=power, image=image)],
+            integrator="light",
+            max_depth=2,
+        )
+
+    with Session(build(5.0), pass_spp=1) as session:
+        texels = len(session.renderer.buffers.texels)
+        for power in (8.0, 13.0, 21.0):
+            assert not session.update({"lights.0.power": power}).rebuilt
+            assert len(session.renderer.buffers.texels) == texels
+        session.step()
+        edited = session.image().xyz
+    np.testing.assert_array_equal(edited, spectrace.render(build(21.0), spp=1, progress=False).xyz)
