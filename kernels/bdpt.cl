@@ -155,10 +155,10 @@ inline float3 bdpt_direction(const BdptVertex *a, const BdptVertex *b)
 
 /* Solid-angle density with which light `light`'s emission sampling (light_emission.cl) leaves its point (normal n,
  * 0 for point and spot lights) along unit d. */
-inline float light_direction_pdf(__global const Light *light, float3 n, float3 d)
+inline float light_direction_pdf(__global const Light *light, __global const float4 *texels, float3 n, float3 d)
 {
     if (LIGHT_ON_SURFACE(light)) return area_light_pdf_direction(light, n, d);
-#define X(name, NAME) if (LIGHT_IS(light, LIGHT_##NAME)) return light_##name##_pdf_direction(light, d);
+#define X(name, NAME) if (LIGHT_IS(light, LIGHT_##NAME)) return light_##name##_pdf_direction(light, texels, d);
     LIGHT_LIST_POSITION(X)
 #undef X
     return 0.0f;
@@ -506,7 +506,7 @@ inline float bdpt_vertex_pdf(const Scene *scene, const SampledWavelengths *w, co
 inline float bdpt_light_pdf(const Scene *scene, const BdptVertex *v, float3 d, const BdptVertex *next)
 {
     if (v->at_infinity) return bdpt_to_area(0.0f, v, next);
-    return bdpt_to_area(light_direction_pdf(&scene->lights[v->light], v->n, d), v, next);
+    return bdpt_to_area(light_direction_pdf(&scene->lights[v->light], scene->texels, v->n, d), v, next);
 }
 
 /* Vertex v as the last vertex of its subpath in a strategy that joins it to the other side (or, on a camera subpath,
@@ -661,11 +661,11 @@ inline int bdpt_light_ray(const Scene *scene, const SampledWavelengths *w, float
         d = area_light_sample_direction(l, origin->n, u_direction, &side);
     } else {
         d = (float3)(0.0f);
-#define X(name, NAME) if (LIGHT_IS(l, LIGHT_##NAME)) d = light_##name##_sample_direction(l, u_direction);
+#define X(name, NAME) if (LIGHT_IS(l, LIGHT_##NAME)) d = light_##name##_sample_direction(l, scene->texels, u_direction);
         LIGHT_LIST_POSITION(X)
 #undef X
     }
-    *pdf_dir = light_direction_pdf(l, origin->n, d);
+    *pdf_dir = light_direction_pdf(l, scene->texels, origin->n, d);
     float cos_light = LIGHT_ON_SURFACE(l) ? fabs(dot(origin->n, d)) : 1.0f;
     *flux = light_vertex_emitted(scene, w, origin, d) * (cos_light / *pdf_dir) * origin->beta;
     ray->origin = LIGHT_ON_SURFACE(l) ? offset_ray_origin(origin->p, origin->n, d) : origin->p;

@@ -5,14 +5,16 @@
  * column u = (φ + π) / 2π, row v = θ / π, row 0 at the top. Each texel's radiance is r·R(λ) + g·G(λ) + b·B(λ), with
  * R, G, B the emission spectra uplifted from the three primaries (Light.spectrum_offset, basis_green_offset,
  * basis_blue_offset), so the map's linear sRGB is reproduced exactly. The map is importance-sampled by a
- * piecewise-constant density ∝ luminance × sin θ (marginal CDF over rows, then a conditional CDF within the row), as
- * in pbrt-v4's image infinite light. A map may be turned: the light's `position` and `direction` hold the first two
- * rows of the rotation from world to map directions (the third is their cross product), the identity unless the
- * scene turns it. Contract: Light.map_width, map_height >= 1; texels from Light.texel_offset; map_cdf as below. */
+ * piecewise-constant density ∝ luminance × sin θ (distribution_2d.cl: marginal CDF over rows, then a conditional CDF
+ * within the row), as in pbrt-v4's image infinite light. A map may be turned: the light's `position` and `direction`
+ * hold the first two rows of the rotation from world to map directions (the third is their cross product), the
+ * identity unless the scene turns it. Contract: Light.map_width, map_height >= 1; texels from Light.texel_offset;
+ * map_cdf as below. */
 #ifndef SPECTRACE_LIGHT_ENVIRONMENT_MAP_CL
 #define SPECTRACE_LIGHT_ENVIRONMENT_MAP_CL
 
 #include "light_sample.cl"
+#include "distribution_2d.cl"
 
 #define LIGHT_ENVIRONMENT_MAP_DELTA 0
 
@@ -72,12 +74,7 @@ inline float4 light_environment_map_radiance(__global const Light *light, __glob
 inline float light_environment_map_pdf_wi(__global const Light *light, __global const float *map_cdf, float3 d)
 {
     float2 uv = direction_to_map_uv(world_to_map(light, d));
-    int width = light->map_width, height = light->map_height;
-    int row = clamp((int)(uv.y * (float)height), 0, height - 1);
-    int column = clamp((int)(uv.x * (float)width), 0, width - 1);
-    __global const float *row_cdf = map_cdf + (height + 1) + row * (width + 1);
-    float density_uv = (map_cdf[row + 1] - map_cdf[row]) * (row_cdf[column + 1] - row_cdf[column])
-                     * (float)(width * height);
+    float density_uv = distribution_2d_density(map_cdf, light->map_width, light->map_height, uv);
     float sin_theta = sin(uv.y * PI_F);
     if (!(sin_theta > 0.0f)) return 0.0f;
     return light->pmf * density_uv / (2.0f * PI_F * PI_F * sin_theta);
@@ -88,13 +85,9 @@ inline float3 light_environment_map_sample_wi(__global const Light *light, __glo
                                               float *pdf)
 {
     int width = light->map_width, height = light->map_height;
-    int row = cdf_search(map_cdf, height, u.x);
-    float row_mass = map_cdf[row + 1] - map_cdf[row];
-    float v = ((float)row + clamp((u.x - map_cdf[row]) / row_mass, 0.0f, 0.99999994f)) / (float)height;
-    __global const float *row_cdf = map_cdf + (height + 1) + row * (width + 1);
-    int column = cdf_search(row_cdf, width, u.y);
-    float column_mass = row_cdf[column + 1] - row_cdf[column];
-    float uu = ((float)column + clamp((u.y - row_cdf[column]) / column_mass, 0.0f, 0.99999994f)) / (float)width;
+    float row_mass, column_mass;
+    float2 uv = distribution_2d_sample(map_cdf, width, height, u, &row_mass, &column_mass);
+    float uu = uv.x, v = uv.y;
     float sin_theta = sin(v * PI_F);
     *pdf = sin_theta > 0.0f
          ? light->pmf * row_mass * column_mass * (float)(width * height) / (2.0f * PI_F * PI_F * sin_theta)

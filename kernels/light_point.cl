@@ -45,12 +45,12 @@ inline float4 light_point_sample_le(__global const Light *light, const LightBuff
 }
 
 /* A direction leaving the light, as light_point_sample_le draws it, and its density per steradian. */
-inline float3 light_point_sample_direction(__global const Light *light, float2 u)
+inline float3 light_point_sample_direction(__global const Light *light, __global const float4 *texels, float2 u)
 {
     return sample_uniform_sphere(u);
 }
 
-inline float light_point_pdf_direction(__global const Light *light, float3 d)
+inline float light_point_pdf_direction(__global const Light *light, __global const float4 *texels, float3 d)
 {
     return 1.0f / (4.0f * PI_F);
 }

@@ -7,12 +7,16 @@
  * Light.linear_falloff is set (Mitsuba's profile: the plane z = 1 receives I(λ)·image(uv) in W/(m² nm)), else
  * I(λ)·image(uv) (pbrt-v4's); 0 outside the field and behind the light. Light.texture: the image, a reflectance
  * texture, or NO_TEXTURE for a white one.
- * A delta position, as light_point.cl; light paths leave through a point uniform over the image's rectangle on
- * z = 1, whose solid-angle density is 1/(A cos³θ), A = 4 tan_x tan_y (dω = cos³θ dA on that plane). */
+ * A delta position, as light_point.cl; light paths leave through a point of the image's rectangle on z = 1 drawn
+ * with the density p(uv) of the image's table (distribution_2d.cl; its floats from texel Light.triangle of the
+ * texel buffer, Light.map_width × map_height cells, ∝ the image's luminance), or uniformly where Light.triangle is
+ * NO_DISTRIBUTION (-1); the solid-angle density is p(uv)/(A cos³θ), A = 4 tan_x tan_y (dω = cos³θ dA on that
+ * plane). */
 #ifndef SPECTRACE_LIGHT_PROJECTOR_CL
 #define SPECTRACE_LIGHT_PROJECTOR_CL
 
 #include "light_point.cl"
+#include "distribution_2d.cl"
 
 /* The projector's frame (x across the image's width, y down it, z its axis). */
 inline void projector_frame(__global const Light *light, float3 *x, float3 *y, float3 *z)
@@ -56,34 +60,56 @@ inline int light_projector_sample_li(__global const Light *light, const LightBuf
     return any(s->arriving != (float4)(0.0f));
 }
 
-/* A direction through a point uniform over the image's rectangle on the plane z = 1. */
-inline float3 light_projector_sample_direction(__global const Light *light, float2 u)
+/* A direction through a point of the image's rectangle on the plane z = 1, drawn by the image's table (uniformly
+ * without one), and its density per steradian in *pdf (0 outside the field, which a table's point never is). */
+inline float3 light_projector_draw_direction(__global const Light *light, __global const float4 *texels, float2 u,
+                                             float *pdf)
 {
     float3 x, y, z;
     projector_frame(light, &x, &y, &z);
+    float density_uv = 1.0f, row_mass, column_mass;
+    if (light->triangle >= 0) {
+        u = distribution_2d_sample((__global const float *)(texels + light->triangle), light->map_width,
+                                   light->map_height, u, &row_mass, &column_mass);
+        density_uv = row_mass * column_mass * (float)(light->map_width * light->map_height);
+    }
     float2 plane = (2.0f * u - 1.0f) * (float2)(light->cos_falloff_start, light->cos_cutoff);
-    return normalize(plane.x * x + plane.y * y + z);
+    float3 d = normalize(plane.x * x + plane.y * y + z);
+    float cos_theta = dot(d, z);
+    float area = 4.0f * light->cos_falloff_start * light->cos_cutoff;
+    *pdf = density_uv / (area * cos_theta * cos_theta * cos_theta);
+    return d;
 }
 
-/* Its density per steradian: 1/(A cos³θ) within the field, 0 outside. */
-inline float light_projector_pdf_direction(__global const Light *light, float3 d)
+inline float3 light_projector_sample_direction(__global const Light *light, __global const float4 *texels, float2 u)
+{
+    float pdf;
+    return light_projector_draw_direction(light, texels, u, &pdf);
+}
+
+/* Its density per steradian: p(uv)/(A cos³θ) within the field, 0 outside. */
+inline float light_projector_pdf_direction(__global const Light *light, __global const float4 *texels, float3 d)
 {
     float3 x, y, z;
     projector_frame(light, &x, &y, &z);
     float cos_theta = dot(d, z);
     if (!(cos_theta > 0.0f)) return 0.0f;
+    float2 half_size = (float2)(light->cos_falloff_start, light->cos_cutoff);
     float2 plane = (float2)(dot(d, x), dot(d, y)) / cos_theta;
-    if (fabs(plane.x) > light->cos_falloff_start || fabs(plane.y) > light->cos_cutoff) return 0.0f;
-    float area = 4.0f * light->cos_falloff_start * light->cos_cutoff;
-    return 1.0f / (area * cos_theta * cos_theta * cos_theta);
+    if (fabs(plane.x) > half_size.x || fabs(plane.y) > half_size.y) return 0.0f;
+    float density_uv = light->triangle < 0 ? 1.0f
+                     : distribution_2d_density((__global const float *)(texels + light->triangle), light->map_width,
+                                               light->map_height, 0.5f + 0.5f * plane / half_size);
+    float area = 4.0f * half_size.x * half_size.y;
+    return density_uv / (area * cos_theta * cos_theta * cos_theta);
 }
 
-/* A light path's direction into *d: returns I(d) over its density, I(d)·A cos³θ. */
+/* A light path's direction into *d: returns I(d) over its density. */
 inline float4 light_projector_sample_le(__global const Light *light, const LightBuffers *buffers,
                                         const SampledWavelengths *w, float2 u, float3 *d)
 {
-    *d = light_projector_sample_direction(light, u);
-    float pdf = light_projector_pdf_direction(light, *d);
+    float pdf;
+    *d = light_projector_draw_direction(light, buffers->texels, u, &pdf);
     if (!(pdf > 0.0f)) return (float4)(0.0f);
     return light_projector_intensity(light, &buffers->textures, w, *d) / pdf;
 }

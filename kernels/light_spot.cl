@@ -76,12 +76,12 @@ inline float4 light_spot_sample_le(__global const Light *light, const LightBuffe
 }
 
 /* A direction leaving the light, as light_spot_sample_le draws it, and its density per steradian. */
-inline float3 light_spot_sample_direction(__global const Light *light, float2 u)
+inline float3 light_spot_sample_direction(__global const Light *light, __global const float4 *texels, float2 u)
 {
     return sample_uniform_cone_about(light->direction.xyz, light->cos_cutoff, u);
 }
 
-inline float light_spot_pdf_direction(__global const Light *light, float3 d)
+inline float light_spot_pdf_direction(__global const Light *light, __global const float4 *texels, float3 d)
 {
     if (dot(d, light->direction.xyz) < light->cos_cutoff) return 0.0f;
     return 1.0f / (TWO_PI * (1.0f - light->cos_cutoff));

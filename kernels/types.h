@@ -203,7 +203,8 @@ typedef struct {
                               row 1 of the world-to-map rotation */
     int type;              /* LIGHT_* */
     int triangle;          /* LIGHT_TRIANGLE: slot in the triangle arrays; LIGHT_SPHERE, LIGHT_SHAPE: index of its
-                              AnalyticShape */
+                              AnalyticShape; LIGHT_PROJECTOR, LIGHT_GONIOMETRIC: the texel where the image's
+                              sampling table starts (distribution_2d.cl), -1: none */
     int spectrum_offset;
     float scale;
     float pmf;             /* probability that next-event estimation picks this light */
@@ -213,7 +214,7 @@ typedef struct {
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
     int basis_blue_offset;    /*   spectrum_offset: the uplifted emission spectra of the three primaries */
-    int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude): texels */
+    int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude): texels; LIGHT_PROJECTOR: its table's cells */
     int map_height;
     int texel_offset;         /* LIGHT_ENVIRONMENT_MAP: first texel of the image in the texel buffer */
     int texture;              /* LIGHT_TRIANGLE: its emission texture (an image on the surface, e.g. a screen's

@@ -10,6 +10,7 @@ from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.io.images import read_environment_map
 from spectrace.lights.base import DeviceLight, Light, LightRows, light_row
+from spectrace.lights.distribution import piecewise_constant_2d
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.uplift import uplift_illuminant
 
@@ -128,16 +129,7 @@ def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, flo
     weights = luminance * sin_theta
     if weights.sum() <= 0:
         weights = np.broadcast_to(sin_theta, (height, width)).copy()
-    row_mass = weights.sum(axis=1)
-    row_cdf = np.zeros((height, width + 1))
-    row_cdf[:, 1:] = np.cumsum(weights, axis=1)
-    row_cdf = np.divide(
-        row_cdf, row_cdf[:, -1:], out=np.tile(np.linspace(0, 1, width + 1), (height, 1)), where=row_cdf[:, -1:] > 0
-    )
-    marginal = np.concatenate([[0.0], np.cumsum(row_mass)]) / row_mass.sum()
-    marginal[-1] = 1.0
-    row_cdf[:, -1] = 1.0
-    return texels, np.concatenate([marginal, row_cdf.ravel()]).astype(np.float32), float(luminance.mean())
+    return texels, piecewise_constant_2d(weights), float(luminance.mean())
 
 
 def write_rows(light: EnvironmentMap, out: LightRows) -> None:

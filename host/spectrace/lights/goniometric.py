@@ -18,6 +18,7 @@ from spectrace.core.parameters import Parameter
 from spectrace.errors import SpectraceError
 from spectrace.lights import point, spot
 from spectrace.lights.base import DeviceLight, Light, LightRows, check_position, light_row, vector3
+from spectrace.lights.distribution import add_distribution
 from spectrace.lights.envmap import magnitude_problem, orientation_problem
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
@@ -134,13 +135,19 @@ def from_spec(spec, resolver, key: str) -> GoniometricLight:
 
 def write_rows(light: GoniometricLight, out: LightRows) -> None:
     # The map's frame rides in the direction (its pole and the angle of its x axis, as a spot's slide), the mirror in
-    # the projector's falloff switch, the image in the environment map's fields (kernels/types.h).
+    # the projector's falloff switch, the image in the environment map's fields, its sampling table's texel in the
+    # triangle's (kernels/types.h).
     x, _, z = light.frame()
     fields: dict = {}
     if light.image is not None:
         n = light.image.shape[0]
         texels = np.repeat(light.image[..., None], 3, axis=2).astype(np.float32)
-        fields = {"map_fields": (0, 0, n, n), "texel_offset": out.add_texels(texels)}
+        fields = {
+            "map_fields": (0, 0, n, n),
+            "texel_offset": out.add_texels(texels),
+            # Light paths are drawn by the image: every texel covers the same solid angle, so its value is its weight.
+            "triangle": add_distribution(light.image, out),
+        }
     out.add(
         light_row(
             out.code(GONIOMETRIC),

@@ -22,6 +22,8 @@ from spectrace.core.parameters import REQUIRED, Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.lights import point, spot
 from spectrace.lights.base import DeviceLight, Light, LightRows, check_position, light_row, unit_direction, vector3
+from spectrace.lights.distribution import add_distribution
+from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 
@@ -168,7 +170,20 @@ def from_spec(spec, resolver, key: str) -> ProjectorLight:
 
 
 def write_rows(light: ProjectorLight, out: LightRows) -> None:
-    # The half-field tangents ride in the spot's cone fields and the profile in its falloff switch (kernels/types.h).
+    # The half-field tangents ride in the spot's cone fields, the profile in its falloff switch, the image's sampling
+    # table in the triangle's texel and the environment map's size fields (kernels/types.h).
+    table = image_weights(light.image) if light.image is not None else None
+    table_fields: dict = {}
+    if table is not None:
+        if light.profile == "intensity":
+            # I = intensity·image here, and dω = cos³θ dA on the plane: the cells' weights take the Jacobian (the
+            # irradiance profile's 1/cos³θ cancels it).
+            table = table * _cos_cubed(table.shape, light.tan_x, light.tan_y)
+        key = (light.image, light.profile, light.tan_x, light.tan_y)
+        table_fields = {
+            "triangle": add_distribution(table, out, key),
+            "map_fields": (0, 0, table.shape[1], table.shape[0]),
+        }
     out.add(
         light_row(
             out.code(PROJECTOR),
@@ -180,10 +195,56 @@ def write_rows(light: ProjectorLight, out: LightRows) -> None:
             cos_cutoff=light.tan_y,
             linear_falloff=light.profile == "irradiance",
             texture=out.textures.add(light.image, "spectrum") if light.image is not None else NO_TEXTURE,
+            **table_fields,
         ),
         # An image only dims (a reflectance): the white image's power bounds the light's for its pick probability.
         light.effective_solid_angle() * light.intensity.mean(),
     )
+
+
+def image_weights(image) -> np.ndarray | None:
+    """Weights (height, width) over the image's uv square for drawing light paths, one cell per texel of a bitmap:
+    the largest luminance of the reflectance any lookup in the cell can read (its texels and, filtered, their
+    neighbours, through uv_scale, uv_offset and wrap), with a floor of 1e-3 of their mean so that no lit direction
+    goes undrawn (a black texel's smooth spectrum is small, not zero). None for other textures: uniform."""
+    from spectrace.textures.bitmap import BitmapTexture
+
+    if not isinstance(image, BitmapTexture):
+        return None
+    values = np.clip(np.asarray(image.values, np.float64), 0.0, 1.0)
+    luminance = values[..., 0] if values.shape[-1] == 1 else values @ LINEAR_SRGB_TO_XYZ[1]
+    placement = image.placement
+    reach = 0.0 if placement.filter == "nearest" else 0.5
+    for axis, scale, offset in zip((1, 0), placement.uv_scale, placement.uv_offset, strict=True):
+        size = luminance.shape[axis]
+        edges = (np.arange(size + 1) / size * scale + offset) * size
+        low = np.floor(np.minimum(edges[:-1], edges[1:]) - reach).astype(np.int64)
+        high = np.ceil(np.maximum(edges[:-1], edges[1:]) + reach).astype(np.int64) - 1
+        cells = []
+        for a, b in zip(low, high, strict=True):
+            taps = _wrapped(np.arange(a, b + 1), size, placement.wrap)
+            cells.append(np.take(luminance, taps, axis=axis).max(axis=axis))
+        luminance = np.stack(cells, axis=axis)
+    if not luminance.max(initial=0.0) > 0:
+        return None
+    return np.maximum(luminance, 1e-3 * luminance.mean())
+
+
+def _cos_cubed(shape: tuple[int, ...], tan_x: float, tan_y: float) -> np.ndarray:
+    """cos³θ at the centres of the (height, width) cells of the image's rectangle on the plane z = 1."""
+    height, width = shape
+    x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * tan_x
+    y = (2.0 * (np.arange(height) + 0.5) / height - 1.0) * tan_y
+    return (1.0 + x[None, :] ** 2 + y[:, None] ** 2) ** -1.5
+
+
+def _wrapped(index: np.ndarray, size: int, wrap: str) -> np.ndarray:
+    if wrap == "clamp":
+        return np.clip(index, 0, size - 1)
+    if wrap == "mirror":
+        period = np.mod(index, 2 * size)
+        return np.where(period < size, period, 2 * size - 1 - period)
+    return np.mod(index, size)
 
 
 def make(

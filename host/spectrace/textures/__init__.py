@@ -259,6 +259,7 @@ class TextureRows:
         self.sizes: list[int] = []  # each row's texels in float4s (0: a composite's row, which has none)
         self.free: list[int] = []  # rows whose texture the scene uses no more (`release`): slots to take again
         self.rewritten = False  # a free slot was taken: rows and texels changed where they lie
+        self.light_tables: dict = {}  # lights' sampling tables in the texels (spectrace.lights.distribution), by source
 
     def release(self, textures: set) -> None:
         """Let `textures` go (nothing of the scene uses them any more): their rows, and their texels, are taken by
