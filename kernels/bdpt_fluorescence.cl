@@ -38,9 +38,10 @@ inline float bdpt_dye_keep(const BdptVertex *v, int light_side)
 }
 
 /* A subpath meets surface pv, stored as v: a dye's vertex is shaded by its base (a join evaluates that alone), and
- * keeps both sides' probabilities of choosing the base there, at the hero wavelength: the camera's 1 / (1 + Q e(λ)
- * ∫a) and the light's 1 / (1 + Q a(λ)), fluorescence.cl's 1 − P. Only the MIS densities read them (the walks'
- * weights are fluorescence.cl's own), so were that choice to change, the weights would still sum to one. */
+ * keeps both sides' probabilities of choosing the base there, at the hero wavelength: fluorescence.cl's 1 − P,
+ * 1 / (1 + F) from the same odds F the camera's and the light's choices draw with (a separable dye's or a matrix's).
+ * Only the MIS densities read them (the walks' weights are fluorescence.cl's own), so were that choice to change,
+ * the weights would still sum to one. */
 inline void bdpt_dye_resolve(const Scene *scene, const SampledWavelengths *w, const PathVertex *pv, BdptVertex *v)
 {
     v->keep_camera = 1.0f;
@@ -51,11 +52,8 @@ inline void bdpt_dye_resolve(const Scene *scene, const SampledWavelengths *w, co
     v->material = fluorescent_base(scene, m, pv);
     if (!(m->alpha > 0.0f)) return;
     float quantum_yield = fluorescent_yield(scene, m, pv);
-    __global const float *table = scene->spectra;
-    float emitted = quantum_yield * table_lerp(table, m->transmittance_offset + w->grid_index.x, w->grid_frac.x);
-    float absorbed = quantum_yield * table_lerp(table, m->reflectance_offset + w->grid_index.x, w->grid_frac.x);
-    v->keep_camera = 1.0f / (1.0f + emitted * m->coat_internal_reflectance);
-    v->keep_light = 1.0f / (1.0f + absorbed);
+    v->keep_camera = 1.0f / (1.0f + fluorescent_odds(scene, m, quantum_yield, w, 0).odds);
+    v->keep_light = 1.0f / (1.0f + fluorescent_odds(scene, m, quantum_yield, w, 1).odds);
 }
 
 /* The choice at a dye's vertex pv of a subpath about to sample onward from it (s its walk's state, scatter its

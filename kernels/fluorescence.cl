@@ -77,12 +77,66 @@ inline float fluorescent_yield(const Scene *scene, __global const Material *m, c
     return quantum_yield;
 }
 
-/* At a vertex of a fluorescent material: v->info.material becomes what shades it (the base, a mix of them
- * resolved, or the white re-emission lobe), s->throughput takes the choice's weight, and a re-emission switches the
- * path's wavelength (path_wavelengths). w: the path's wavelengths at the vertex. Any other vertex is left alone
- * and draws nothing, as does a yield of 0 (the base, with its bits). */
-inline void fluorescent_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
-                               PathVertex *v)
+/* What a dye's choice at a vertex is made from, at the hero wavelength of the side that meets it (light_side: a light
+ * path's λi; otherwise a camera path's λo): the odds F of the re-emission against the base, whose probabilities are
+ * P = F / (1 + F) and 1 − P = 1 / (1 + F), and what the draw of the other wavelength reads again. */
+typedef struct {
+    float odds;      /* F: camera side Q e(λo) ∫a dλ, light side Q a(λi) (a matrix: its column's or row's total) */
+    float spectral;  /* a separable dye's Q e(λo) (camera side) or Q a(λi) (light side) */
+    int line;        /* a matrix's column (camera side) or row (light side) below the hero wavelength */
+    float t;         /* and the hero wavelength's fraction toward the next */
+} DyeOdds;
+
+/* The odds at dye m (its yield factor quantum_yield at the vertex) at w's hero wavelength. */
+inline DyeOdds fluorescent_odds(const Scene *scene, __global const Material *m, float quantum_yield,
+                                const SampledWavelengths *w, int light_side)
+{
+    DyeOdds o;
+#if SCENE_HAS_FLUORESCENCE_MATRIX
+    if (m->ior_model != MATERIAL_NO_SPECTRUM) {  /* a non-separable matrix (fluorescence_matrix.cl) */
+        o.odds = fluorescent_matrix_odds(scene->spectra, m->ior_model, quantum_yield, w->lambda.x, light_side,
+                                         &o.line, &o.t);
+        return o;
+    }
+#endif
+    int offset = light_side ? m->reflectance_offset : m->transmittance_offset;
+    o.spectral = quantum_yield * table_lerp(scene->spectra, offset + w->grid_index.x, w->grid_frac.x);
+    o.odds = light_side ? o.spectral : o.spectral * m->coat_internal_reflectance;
+    return o;
+}
+
+/* The re-emission's other wavelength, drawn with u after the choice o (camera side: λi ∝ a(λ)·λ; light side: λo
+ * from e(λ), its CDF a row after it; a matrix: fluorescent_matrix_draw), as the wavelengths the path goes on with:
+ * the hero's density of the draw on the camera side, that of the light path's own draw (film.cl) on the light side.
+ * *pdf the draw's density (1/nm); *value Q a(λi) e(λo), or Q D(λi, λo). */
+inline SampledWavelengths fluorescent_draw(const Scene *scene, __global const Material *m, float quantum_yield,
+                                           const DyeOdds *o, const SampledWavelengths *w, int light_side, float u,
+                                           float *pdf, float *value)
+{
+    __global const float *table = scene->spectra;
+#if SCENE_HAS_FLUORESCENCE_MATRIX
+    if (m->ior_model != MATERIAL_NO_SPECTRUM) {
+        float lambda = fluorescent_matrix_draw(table, m->ior_model, quantum_yield, o->line, o->t, light_side, u,
+                                               pdf, value);
+        return wavelengths_on_grid((float4)(lambda), (float4)(light_side ? w->pdf.x : *pdf));
+    }
+#endif
+    int cdf = light_side ? m->transmittance_offset + GRID_SAMPLES : m->coat_table_offset;
+    float lambda = sample_grid_cell_wavelength(table + cdf, u, pdf);
+    SampledWavelengths next = wavelengths_on_grid((float4)(lambda), (float4)(light_side ? w->pdf.x : *pdf));
+    int other = light_side ? m->transmittance_offset : m->reflectance_offset;
+    *value = o->spectral * table_lerp(table, other + next.grid_index.x, next.grid_frac.x);
+    return next;
+}
+
+/* A dye's choice where a path meets it, the camera's (light_side 0) or a light path's: v->info.material becomes what
+ * shades the vertex (the base, a mix of them resolved, or the white re-emission lobe), s->throughput takes the
+ * choice's weight, and so does *scatter, a light path's scattering weights for Russian roulette. A re-emission
+ * switches a camera path's wavelength (path_wavelengths) and *w of a light path, in every lane, to the wavelength
+ * drawn (fluorescent_draw). Any other vertex is left alone and draws nothing, as does a yield of 0 (the base, with
+ * its bits). */
+inline void fluorescent_choose(const Scene *scene, SampledWavelengths *w, Sampler *sampler, PathState *s,
+                               PathVertex *v, float4 *scatter, int light_side)
 {
     __global const Material *m = &scene->materials[v->info.material];
     if (m->type != MATERIAL_FLUORESCENT) return;
@@ -92,81 +146,56 @@ inline void fluorescent_vertex(const Scene *scene, const SampledWavelengths *w, 
         return;
     }
     float quantum_yield = fluorescent_yield(scene, m, v);
-#if SCENE_HAS_FLUORESCENCE_MATRIX
-    if (m->ior_model != MATERIAL_NO_SPECTRUM) {  /* a non-separable matrix (fluorescence_matrix.cl) */
-        fluorescent_matrix_vertex(scene, m, base, quantum_yield, w, sampler, s, v);
-        return;
-    }
-#endif
     float u_choice = sample_1d(sampler);
     float u_lambda = sample_1d(sampler);
-    __global const float *table = scene->spectra;
-    float lambda_out = w->lambda.x;
-    float emitted = quantum_yield * table_lerp(table, m->transmittance_offset + w->grid_index.x, w->grid_frac.x);
-    float expected = emitted * m->coat_internal_reflectance;
-    float p_fluoresce = expected / (1.0f + expected);
+    DyeOdds o = fluorescent_odds(scene, m, quantum_yield, w, light_side);
+    float p_fluoresce = o.odds / (1.0f + o.odds);
     if (!(u_choice < p_fluoresce)) {
-        s->throughput /= 1.0f - p_fluoresce;
+        if (light_side) {  /* the same factor on both of a light path's weights */
+            float elastic = 1.0f / (1.0f - p_fluoresce);
+            s->throughput *= elastic;
+            *scatter *= elastic;
+        } else {
+            s->throughput /= 1.0f - p_fluoresce;
+        }
         v->info.material = base;
         return;
     }
-    float pdf;
-    float lambda_in = sample_grid_cell_wavelength(table + m->coat_table_offset, u_lambda, &pdf);
-    SampledWavelengths in = wavelengths_on_grid((float4)(lambda_in), (float4)(pdf));
-    float absorbed = table_lerp(table, m->reflectance_offset + in.grid_index.x, in.grid_frac.x);
+    float pdf, value;
+    SampledWavelengths next = fluorescent_draw(scene, m, quantum_yield, &o, w, light_side, u_lambda, &pdf, &value);
+    float lambda_in = light_side ? w->lambda.x : next.lambda.x;
+    float lambda_out = light_side ? next.lambda.x : w->lambda.x;
+    float weight = value * (lambda_in / lambda_out) / (pdf * p_fluoresce);
     terminate_secondary(&s->throughput, &s->secondary_terminated);
-    s->throughput *= emitted * absorbed * (lambda_in / lambda_out) / (pdf * p_fluoresce);
-    s->fluorescent_wavelengths = in;
-    s->fluoresced = 1;
+    s->throughput *= weight;
+    if (light_side) {
+        *scatter *= weight;
+        *w = next;
+    } else {
+        s->fluorescent_wavelengths = next;
+        s->fluoresced = 1;
+    }
     v->info.material = m->k_offset;
 }
 
-/* The same vertex met by a light path (light_tracer.cl), which carries light forward: its hero wavelength is the
- * absorbed λi, and a re-emission draws λo from e(λ) (its CDF a row after it) and goes on at λo, weighted by
+/* fluorescent_choose for a camera path, whose wavelengths at the vertex are *w. */
+inline void fluorescent_vertex(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
+                               PathVertex *v)
+{
+    SampledWavelengths hero = *w;
+    float4 unused = (float4)(1.0f);
+    fluorescent_choose(scene, &hero, sampler, s, v, &unused, 0);
+}
+
+/* fluorescent_choose for a light path, which carries light forward: its hero wavelength is the absorbed λi, and a
+ * re-emission draws λo and goes on at it, weighted by
  *     Q a(λi) e(λo) (λi / λo) / (p(λo) P),  P = F / (1 + F),  F = Q a(λi)
  * on the hero alone (x4), the elastic part by 1 / (1 − P) on every lane. *w becomes λo in every lane with the
- * density the hero was drawn with: the camera sees λo, and the film divides by the density of the path's own
- * draw (film.cl). *scatter, the light path's scattering weights for Russian roulette, takes the same factor. */
+ * density the hero was drawn with: the camera sees λo, and the film divides by the density of the path's own draw. */
 inline void fluorescent_light_vertex(const Scene *scene, SampledWavelengths *w, Sampler *sampler, PathState *s,
                                      PathVertex *v, float4 *scatter)
 {
-    __global const Material *m = &scene->materials[v->info.material];
-    if (m->type != MATERIAL_FLUORESCENT) return;
-    int base = fluorescent_base(scene, m, v);
-    if (!(m->alpha > 0.0f)) {
-        v->info.material = base;
-        return;
-    }
-    float quantum_yield = fluorescent_yield(scene, m, v);
-#if SCENE_HAS_FLUORESCENCE_MATRIX
-    if (m->ior_model != MATERIAL_NO_SPECTRUM) {
-        fluorescent_matrix_light_vertex(scene, m, base, quantum_yield, w, sampler, s, v, scatter);
-        return;
-    }
-#endif
-    float u_choice = sample_1d(sampler);
-    float u_lambda = sample_1d(sampler);
-    __global const float *table = scene->spectra;
-    float lambda_in = w->lambda.x;
-    float absorbed = quantum_yield * table_lerp(table, m->reflectance_offset + w->grid_index.x, w->grid_frac.x);
-    float p_fluoresce = absorbed / (1.0f + absorbed);
-    if (!(u_choice < p_fluoresce)) {
-        float elastic = 1.0f / (1.0f - p_fluoresce);
-        s->throughput *= elastic;
-        *scatter *= elastic;
-        v->info.material = base;
-        return;
-    }
-    float pdf;
-    float lambda_out = sample_grid_cell_wavelength(table + m->transmittance_offset + GRID_SAMPLES, u_lambda, &pdf);
-    SampledWavelengths out = wavelengths_on_grid((float4)(lambda_out), (float4)(w->pdf.x));
-    float emitted = table_lerp(table, m->transmittance_offset + out.grid_index.x, out.grid_frac.x);
-    float weight = absorbed * emitted * (lambda_in / lambda_out) / (pdf * p_fluoresce);
-    terminate_secondary(&s->throughput, &s->secondary_terminated);
-    s->throughput *= weight;
-    *scatter *= weight;
-    *w = out;
-    v->info.material = m->k_offset;
+    fluorescent_choose(scene, w, sampler, s, v, scatter, 1);
 }
 
 #endif

@@ -115,72 +115,33 @@ inline float matrix_value(const DonaldsonMatrix *dm, float x, float y)
     return mad(s, lower - upper, upper);
 }
 
-/* fluorescent_vertex's choice for a tabulated matrix (its contract; `base` the elastic part's row, `quantum_yield`
- * the factor at the vertex). */
-inline void fluorescent_matrix_vertex(const Scene *scene, __global const Material *m, int base, float quantum_yield,
-                                      const SampledWavelengths *w, Sampler *sampler, PathState *s, PathVertex *v)
+/* The odds of a re-emission at the matrix block at `offset` (fluorescence.cl's fluorescent_odds): at a camera path's
+ * λo, Q times its column total F; at a light path's λi (light_side), Q times its row total R; 0 outside the matrix.
+ * *line and *t the column or row below the wavelength and its fraction toward the next, which the draw reads. */
+inline float fluorescent_matrix_odds(__global const float *table, int offset, float quantum_yield, float lambda,
+                                     int light_side, int *line, float *t)
 {
-    float u_choice = sample_1d(sampler);
-    float u_lambda = sample_1d(sampler);
-    DonaldsonMatrix dm = donaldson_matrix(scene->spectra, m->ior_model);
-    float lambda_out = w->lambda.x;
-    int j;
-    float t;
-    float column = 0.0f;
-    int inside = matrix_cell(lambda_out - GRID_MIN_NM - (float)dm.j0, dm.n_out, &j, &t);
-    if (inside) column = quantum_yield * mad(t, dm.columns[j + 1] - dm.columns[j], dm.columns[j]);
-    float p_fluoresce = column / (1.0f + column);
-    if (!(u_choice < p_fluoresce)) {
-        s->throughput /= 1.0f - p_fluoresce;
-        v->info.material = base;
-        return;
-    }
-    /* The column CDFs run over λi: n_in values per column. */
-    float pdf;
-    float x = matrix_sample_between(dm.column_cdf, dm.n_in, dm.columns, j, t, u_lambda, &pdf);
-    float lambda_in = GRID_MIN_NM + (float)dm.i0 + x;
-    float value = quantum_yield * matrix_value(&dm, x, (float)j + t);
-    SampledWavelengths in = wavelengths_on_grid((float4)(lambda_in), (float4)(pdf));
-    terminate_secondary(&s->throughput, &s->secondary_terminated);
-    s->throughput *= value * (lambda_in / lambda_out) / (pdf * p_fluoresce);
-    s->fluorescent_wavelengths = in;
-    s->fluoresced = 1;
-    v->info.material = m->k_offset;
+    DonaldsonMatrix dm = donaldson_matrix(table, offset);
+    int first = light_side ? dm.i0 : dm.j0, count = light_side ? dm.n_in : dm.n_out;
+    __global const float *totals = light_side ? dm.rows : dm.columns;
+    if (!matrix_cell(lambda - GRID_MIN_NM - (float)first, count, line, t)) return 0.0f;
+    return quantum_yield * mad(*t, totals[*line + 1] - totals[*line], totals[*line]);
 }
 
-/* fluorescent_light_vertex's choice for a tabulated matrix (its contract). */
-inline void fluorescent_matrix_light_vertex(const Scene *scene, __global const Material *m, int base,
-                                            float quantum_yield, SampledWavelengths *w, Sampler *sampler,
-                                            PathState *s, PathVertex *v, float4 *scatter)
+/* The other wavelength (nm) of a re-emission chosen at (line, t) by fluorescent_matrix_odds, drawn with u: λi along
+ * the column for a camera path, λo along the row for a light path. *pdf its density (1/nm), *value Q D(λi, λo). */
+inline float fluorescent_matrix_draw(__global const float *table, int offset, float quantum_yield, int line, float t,
+                                     int light_side, float u, float *pdf, float *value)
 {
-    float u_choice = sample_1d(sampler);
-    float u_lambda = sample_1d(sampler);
-    DonaldsonMatrix dm = donaldson_matrix(scene->spectra, m->ior_model);
-    float lambda_in = w->lambda.x;
-    int k;
-    float t;
-    float row = 0.0f;
-    int inside = matrix_cell(lambda_in - GRID_MIN_NM - (float)dm.i0, dm.n_in, &k, &t);
-    if (inside) row = quantum_yield * mad(t, dm.rows[k + 1] - dm.rows[k], dm.rows[k]);
-    float p_fluoresce = row / (1.0f + row);
-    if (!(u_choice < p_fluoresce)) {
-        float elastic = 1.0f / (1.0f - p_fluoresce);
-        s->throughput *= elastic;
-        *scatter *= elastic;
-        v->info.material = base;
-        return;
-    }
-    float pdf;
-    float y = matrix_sample_between(dm.row_cdf, dm.n_out, dm.rows, k, t, u_lambda, &pdf);
-    float lambda_out = GRID_MIN_NM + (float)dm.j0 + y;
-    float value = quantum_yield * matrix_value(&dm, (float)k + t, y);
-    SampledWavelengths out = wavelengths_on_grid((float4)(lambda_out), (float4)(w->pdf.x));
-    float weight = value * (lambda_in / lambda_out) / (pdf * p_fluoresce);
-    terminate_secondary(&s->throughput, &s->secondary_terminated);
-    s->throughput *= weight;
-    *scatter *= weight;
-    *w = out;
-    v->info.material = m->k_offset;
+    DonaldsonMatrix dm = donaldson_matrix(table, offset);
+    /* A row's CDF runs over λo (n_out values), a column's over λi (n_in values). */
+    __global const float *cdfs = light_side ? dm.row_cdf : dm.column_cdf;
+    __global const float *totals = light_side ? dm.rows : dm.columns;
+    int count = light_side ? dm.n_out : dm.n_in, first = light_side ? dm.j0 : dm.i0;
+    float drawn = matrix_sample_between(cdfs, count, totals, line, t, u, pdf);
+    float along = (float)line + t;
+    *value = quantum_yield * (light_side ? matrix_value(&dm, along, drawn) : matrix_value(&dm, drawn, along));
+    return GRID_MIN_NM + (float)first + drawn;
 }
 
 #endif

@@ -203,6 +203,51 @@ inline float grid_random(uint *state)
     return (float)(*state >> 8) * 0x1.0p-24f;
 }
 
+/* Tentative collisions at the majorant along a ray, cell by cell: the walk of the free flights and of ratio tracking
+ * alike. A collision's distance past the last one is exponential at the current cell's rate μ = its maximum density
+ * × sigma_bound; a flight past the cell's end restarts at the next cell (the exponential being memoryless), which
+ * spends the uniform it drew. */
+typedef struct {
+    GridWalk walk;
+    float sigma_bound;  /* the largest σt over the lanes: μ's factor */
+    float majorant;     /* μ in the current cell (1/m) */
+    float t;            /* the last tentative collision, or the current cell's start */
+    float t_exit;       /* the current cell's end */
+    int collisions;
+} GridTracking;
+
+/* Tracking along origin + t·direction for t in [0, t_max] through grid `grid`; returns 0 when nothing can collide
+ * there (σt of 0, or the ray misses the box). */
+inline int grid_tracking_start(__global const float *spectra, int grid, float3 origin, float3 direction, float t_max,
+                               float sigma_bound, GridTracking *k)
+{
+    if (!(sigma_bound > 0.0f) || !grid_walk_start(spectra, grid, origin, direction, t_max, &k->walk)) return 0;
+    k->sigma_bound = sigma_bound;
+    k->majorant = 0.0f;  /* no cell yet: the first call enters the first */
+    k->t = 0.0f;
+    k->t_exit = 0.0f;
+    k->collisions = 0;
+    return 1;
+}
+
+/* The next tentative collision, at k->t with rate k->majorant: 1; the walk's end: 0; past GRID_MAX_COLLISIONS: -1.
+ * Each distance is drawn from *u, which then takes the chain's next number (state), so the caller's own decisions
+ * read the uniforms that follow. */
+inline int grid_next_collision(__global const float *spectra, GridTracking *k, float *u, uint *state)
+{
+    for (;;) {
+        if (k->majorant > 0.0f) {
+            k->t -= log(1.0f - *u) / k->majorant;
+            *u = grid_random(state);
+            if (k->t < k->t_exit) return ++k->collisions > GRID_MAX_COLLISIONS ? -1 : 1;
+        }
+        float t_enter, cell_density;
+        if (!grid_walk_cell(spectra, &k->walk, &t_enter, &k->t_exit, &cell_density)) return 0;
+        k->majorant = cell_density * k->sigma_bound;
+        k->t = t_enter;
+    }
+}
+
 /* One free flight through grid medium m from `origin` along unit `direction` toward the surface at t_surface, with
  * medium_sample_flight's contract (the flight's first distance from u_distance); `throughput`, the path's per
  * lane, weighs the collision probabilities. */
@@ -218,48 +263,35 @@ inline FreeFlight grid_sample_flight(__global const Medium *m, __global const fl
     float4 sigma_s = medium_sigma_s(m, spectra, w) * lanes;
     float4 sigma_t = medium_sigma_t(m, spectra, w) * lanes;
     float sigma_bound = fmax(fmax(sigma_t.x, sigma_t.y), fmax(sigma_t.z, sigma_t.w));
-    GridWalk walk;
-    if (!(sigma_bound > 0.0f) || !grid_walk_start(spectra, m->grid, origin, direction, t_surface, &walk)) {
-        return flight;
-    }
+    GridTracking k;
+    if (!grid_tracking_start(spectra, m->grid, origin, direction, t_surface, sigma_bound, &k)) return flight;
     uint state = hash_u32(as_uint(u_lane) ^ hash_u32(as_uint(u_distance)));
     float u = u_distance;
-    int collisions = 0;
-    float t_enter, t_exit, cell_density;
-    while (grid_walk_cell(spectra, &walk, &t_enter, &t_exit, &cell_density)) {
-        float majorant = cell_density * sigma_bound;
-        if (!(majorant > 0.0f)) continue;
-        float t = t_enter;
-        for (;;) {
-            t -= log(1.0f - u) / majorant;
-            u = grid_random(&state);
-            if (!(t < t_exit)) break;  /* past the cell: the next cell draws afresh from its start */
-            if (++collisions > GRID_MAX_COLLISIONS) {
-                flight.weight = (float4)(0.0f);
-                return flight;
-            }
-            float4 albedo;
-            float density = grid_density_albedo(spectra, m->grid, origin + t * direction, w->lambda, &albedo);
-            float4 sigma_t_x = density * sigma_t;
-            float4 sigma_s_x = density * albedo * sigma_s;
-            float4 sigma_n_x = fmax((float4)(majorant) - sigma_t_x, (float4)(0.0f));
-            float4 h = fabs(throughput * flight.weight);
-            float scatter = dot(h, sigma_s_x), null = dot(h, sigma_n_x);
-            if (!(scatter + null > 0.0f)) {
-                flight.weight = (float4)(0.0f);
-                return flight;
-            }
-            float p_scatter = scatter / (scatter + null);
-            if (u < p_scatter) {
-                flight.weight *= sigma_s_x / (majorant * p_scatter);
-                flight.distance = t;
-                flight.scattered = 1;
-                return flight;
-            }
-            flight.weight *= sigma_n_x / (majorant * (1.0f - p_scatter));
-            u = grid_random(&state);
+    int found;
+    while ((found = grid_next_collision(spectra, &k, &u, &state)) > 0) {
+        float majorant = k.majorant, t = k.t;
+        float4 albedo;
+        float density = grid_density_albedo(spectra, m->grid, origin + t * direction, w->lambda, &albedo);
+        float4 sigma_t_x = density * sigma_t;
+        float4 sigma_s_x = density * albedo * sigma_s;
+        float4 sigma_n_x = fmax((float4)(majorant) - sigma_t_x, (float4)(0.0f));
+        float4 h = fabs(throughput * flight.weight);
+        float scatter = dot(h, sigma_s_x), null = dot(h, sigma_n_x);
+        if (!(scatter + null > 0.0f)) {
+            flight.weight = (float4)(0.0f);
+            return flight;
         }
+        float p_scatter = scatter / (scatter + null);
+        if (u < p_scatter) {
+            flight.weight *= sigma_s_x / (majorant * p_scatter);
+            flight.distance = t;
+            flight.scattered = 1;
+            return flight;
+        }
+        flight.weight *= sigma_n_x / (majorant * (1.0f - p_scatter));
+        u = grid_random(&state);
     }
+    if (found < 0) flight.weight = (float4)(0.0f);
     return flight;
 }
 
@@ -271,28 +303,18 @@ inline float4 grid_transmittance(__global const Medium *m, __global const float 
 {
     float4 sigma_t = medium_sigma_t(m, spectra, w);
     float sigma_bound = fmax(fmax(sigma_t.x, sigma_t.y), fmax(sigma_t.z, sigma_t.w));
-    GridWalk walk;
+    GridTracking k;
     float4 transmittance = (float4)(1.0f);
-    if (!(sigma_bound > 0.0f) || !grid_walk_start(spectra, m->grid, origin, direction, length, &walk)) {
-        return transmittance;
-    }
+    if (!grid_tracking_start(spectra, m->grid, origin, direction, length, sigma_bound, &k)) return transmittance;
     uint state = hash_u32(seed ^ 0x6a09e667U);
-    int collisions = 0;
-    float t_enter, t_exit, cell_density;
-    while (grid_walk_cell(spectra, &walk, &t_enter, &t_exit, &cell_density)) {
-        float majorant = cell_density * sigma_bound;
-        if (!(majorant > 0.0f)) continue;
-        float t = t_enter;
-        for (;;) {
-            t -= log(1.0f - grid_random(&state)) / majorant;
-            if (!(t < t_exit)) break;
-            if (++collisions > GRID_MAX_COLLISIONS) return (float4)(0.0f);
-            float density = grid_density(spectra, m->grid, origin + t * direction);
-            transmittance *= fmax((float4)(majorant) - density * sigma_t, (float4)(0.0f)) / majorant;
-            if (all(transmittance == (float4)(0.0f))) return transmittance;
-        }
+    float u = grid_random(&state);
+    int found;
+    while ((found = grid_next_collision(spectra, &k, &u, &state)) > 0) {
+        float density = grid_density(spectra, m->grid, origin + k.t * direction);
+        transmittance *= fmax((float4)(k.majorant) - density * sigma_t, (float4)(0.0f)) / k.majorant;
+        if (all(transmittance == (float4)(0.0f))) return transmittance;
     }
-    return transmittance;
+    return found < 0 ? (float4)(0.0f) : transmittance;
 }
 
 /* scene_transmittance's stretch through grid medium `medium`: from `carried` before `origin` (cut-outs passed since

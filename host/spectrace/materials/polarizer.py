@@ -1,16 +1,22 @@
 """`polarizer`: a linear polariser, a sheet passing light straight through, the field along its axis with
 transmittance T(λ) and across it with e·T(λ) (docs/materials.md, kernels/bsdf_polarizer.cl). Unpolarised transport
-sees (1 + e)/2 · T; a polarised render (docs/polarization.md) applies its Mueller matrix. The keys the retarder
-shares (its axis angle, its transmittance) and their Mitsuba mapping live here."""
+sees (1 + e)/2 · T; a polarised render (docs/polarization.md) applies its Mueller matrix. What it shares with the
+retarder lives in sheet.py."""
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from spectrace.core.parameters import Parameter, Range, reflectance
+from spectrace.core.parameters import Parameter, Range
 from spectrace.materials.base import Material
-from spectrace.spectral import spectrum_input
+from spectrace.materials.sheet import (
+    axis_parameter,
+    make_sheet,
+    mitsuba_sheet,
+    sheet_from_spec,
+    transmittance_parameter,
+    write_sheet_row,
+)
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
@@ -19,16 +25,8 @@ NAME = "polarizer"
 MITSUBA_PLUGINS = ("polarizer",)
 PBRT_MATERIALS = ()
 PBRT_NONE = "pbrt-v4 does not render polarisation"
-ANGLE = Parameter(
-    "angle",
-    "float",
-    "degrees",
-    0.0,
-    Range(-360.0, 360.0),
-    doc="of the transmission axis from the surface's dp/du (its u direction) toward dp/dv (Mitsuba 3's polarizer "
-    "measures its theta the other way: mitsuba_angle)",
-)
-TRANSMITTANCE = reflectance(1.0, "transmittance along the axis T(λ)", name="transmittance")
+ANGLE = axis_parameter("transmission axis", " (Mitsuba 3's polarizer measures its theta the other way: mitsuba_angle)")
+TRANSMITTANCE = transmittance_parameter("transmittance along the axis T(λ)")
 EXTINCTION = Parameter(
     "extinction",
     "float",
@@ -56,10 +54,7 @@ class PolarizerMaterial(Material):
 MODEL = PolarizerMaterial
 
 
-def from_spec(spec, resolver, key: str) -> PolarizerMaterial:
-    return PolarizerMaterial(
-        spec.angle, resolver.spectrum(spec.transmittance, f"{key}.transmittance", emission=False), spec.extinction
-    )
+from_spec = sheet_from_spec(PolarizerMaterial, PARAMETERS)
 
 
 def make(
@@ -69,45 +64,11 @@ def make(
 ) -> PolarizerMaterial:
     """A linear polariser whose transmission axis lies `angle` degrees from the surface's dp/du toward dp/dv,
     passing T(λ) (`transmittance`, in [0, 1]) along it and `extinction`·T across it (0: ideal)."""
-    return PolarizerMaterial(
-        ANGLE.check(angle),
-        spectrum_input.reflectance(transmittance, "transmittance"),
-        EXTINCTION.check(extinction),
-    )
-
-
-def write_sheet_row(row: np.ndarray, angle_degrees: float, second: float, transmittance: Spectrum, table) -> None:
-    """The row of a polarising sheet (kernels/bsdf_polarizer.cl, bsdf_retarder.cl): its axis angle and second
-    number (extinction, retardance in radians) in ior_coefficients_b, its transmittance, and a frame along dp/du."""
-    row["ior_coefficients_b"] = (math.radians(angle_degrees), second, 0.0, 0.0)
-    row["transmittance_offset"] = table.add(transmittance)
-    row["tangent_frame"] = 1
+    return make_sheet(PolarizerMaterial, PARAMETERS, angle=angle, transmittance=transmittance, extinction=extinction)
 
 
 def write_row(row: np.ndarray, material: PolarizerMaterial, table: SpectrumTable) -> None:
     write_sheet_row(row, material.angle, material.extinction, material.transmittance, table)
-
-
-def mitsuba_sheet(importer, bsdf, properties, table: dict) -> dict | None:
-    """The keys a Mitsuba polarizer and retarder share: theta (degrees, a number) and transmittance."""
-    if "theta" in properties:
-        theta = importer.resolve(properties["theta"])
-        if theta.tag == "texture":
-            importer.unsupported_plugin(bsdf, " with a textured theta")
-            return None
-        angle = importer.number(theta)
-        if ANGLE.range_problem(angle):
-            raise importer.fail(bsdf, f"theta = {angle:g}: spectrace's {table['type']} needs an angle in {ANGLE.range}")
-        table["angle"] = angle
-    if "transmittance" in properties:
-        if importer.resolve(properties["transmittance"]).tag == "texture":
-            importer.unsupported_plugin(bsdf, " with a textured transmittance")
-            return None
-        tint = importer.spectrum(properties["transmittance"], "transmittance")
-        if tint is None:
-            return None
-        table["transmittance"] = tint
-    return table
 
 
 def mitsuba_angle(theta: float) -> float:

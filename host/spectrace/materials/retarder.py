@@ -7,10 +7,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from spectrace.core.parameters import Parameter, Range, reflectance
+from spectrace.core.parameters import Parameter, Range
 from spectrace.materials.base import Material
-from spectrace.materials.polarizer import ANGLE, mitsuba_sheet, write_sheet_row
-from spectrace.spectral import spectrum_input
+from spectrace.materials.sheet import (
+    axis_parameter,
+    make_sheet,
+    mitsuba_sheet,
+    sheet_from_spec,
+    transmittance_parameter,
+    write_sheet_row,
+)
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
@@ -19,15 +25,7 @@ NAME = "retarder"
 MITSUBA_PLUGINS = ("retarder",)
 PBRT_MATERIALS = ()
 PBRT_NONE = "pbrt-v4 does not render polarisation"
-FAST_AXIS = Parameter(
-    "angle",
-    "float",
-    "degrees",
-    0.0,
-    ANGLE.range,
-    doc="of the fast axis from the surface's dp/du (its u direction) toward dp/dv, as Mitsuba 3's retarder "
-    "measures its theta",
-)
+FAST_AXIS = axis_parameter("fast axis", ", as Mitsuba 3's retarder measures its theta")
 RETARDANCE = Parameter(
     "retardance",
     "float",
@@ -37,7 +35,7 @@ RETARDANCE = Parameter(
     doc="phase delay of the field across the fast axis (90: a quarter-wave plate, 180: a half-wave plate), as "
     "Mitsuba 3's delta",
 )
-TRANSMITTANCE = reflectance(1.0, "transmittance T(λ)", name="transmittance")
+TRANSMITTANCE = transmittance_parameter("transmittance T(λ)")
 PARAMETERS = (FAST_AXIS, RETARDANCE, TRANSMITTANCE)
 
 
@@ -57,10 +55,7 @@ class RetarderMaterial(Material):
 MODEL = RetarderMaterial
 
 
-def from_spec(spec, resolver, key: str) -> RetarderMaterial:
-    return RetarderMaterial(
-        spec.angle, spec.retardance, resolver.spectrum(spec.transmittance, f"{key}.transmittance", emission=False)
-    )
+from_spec = sheet_from_spec(RetarderMaterial, PARAMETERS)
 
 
 def make(
@@ -70,11 +65,7 @@ def make(
 ) -> RetarderMaterial:
     """A linear retarder whose fast axis lies `angle` degrees from the surface's dp/du toward dp/dv, delaying the
     field across it by `retardance` degrees (90: a quarter-wave plate), passing T(λ) (`transmittance`)."""
-    return RetarderMaterial(
-        FAST_AXIS.check(angle),
-        RETARDANCE.check(retardance),
-        spectrum_input.reflectance(transmittance, "transmittance"),
-    )
+    return make_sheet(RetarderMaterial, PARAMETERS, angle=angle, retardance=retardance, transmittance=transmittance)
 
 
 def write_row(row: np.ndarray, material: RetarderMaterial, table: SpectrumTable) -> None:
