@@ -66,12 +66,12 @@ def test_a_bad_key_is_named(tmp_path, base, quantum_yield, key):
 
 @pytest.mark.subprocess
 @pytest.mark.slow
-def test_bdpt_refuses_it_in_one_line_and_writes_nothing(tmp_path):
+def test_sppm_refuses_it_in_one_line_and_writes_nothing(tmp_path):
     out = tmp_path / "out.png"
     out.write_bytes(b"kept")
-    result = run_spectrace("render", str(_scene_file(tmp_path, integrator="bdpt")), "-o", str(out))
+    result = run_spectrace("render", str(_scene_file(tmp_path, integrator="sppm")), "-o", str(out))
     assert result.returncode != 0
     lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and "materials.dye" in lines[0] and "integrator 'bdpt'" in lines[0], result.stderr
+    assert len(lines) == 1 and "materials.dye" in lines[0] and "integrator 'sppm'" in lines[0], result.stderr
     assert "Traceback" not in result.stderr
     assert out.read_bytes() == b"kept"
