@@ -214,5 +214,5 @@ def test_light_paths_carry_the_flux_with_less_variance_than_uniform_directions(r
         mean, standard_error = mean_and_standard_error(weight)
         assert_within_standard_errors(mean, expected, standard_error, slack=1e-4 * expected, what=(case, uniform))
         variances.append(weight.var(axis=0).sum())
-    record_property("variance_ratio", variances[1] / variances[0])
+    record_property("variance_ratio", float(variances[1] / variances[0]))
     assert variances[1] >= 5.0 * variances[0], (case, variances)
