@@ -37,7 +37,14 @@ EXTINCTION = Parameter(
     Range(0.0, 1.0),
     doc="transmittance across the axis over that along it (0: an ideal polariser; 1: a neutral filter)",
 )
-PARAMETERS = (ANGLE, TRANSMITTANCE, EXTINCTION)
+ABOUT_BEAM = Parameter(
+    "angle_about_beam",
+    "bool",
+    default=False,
+    doc="`angle` turns the axis about the beam seen, from the axis normal to the projected dp/dv (Mitsuba 3's "
+    "polarizer), instead of within the sheet; the two differ only when the sheet is seen obliquely",
+)
+PARAMETERS = (ANGLE, TRANSMITTANCE, EXTINCTION, ABOUT_BEAM)
 
 
 @dataclass(frozen=True)
@@ -47,6 +54,7 @@ class PolarizerMaterial(Material):
     angle: float = ANGLE.number_default
     transmittance: Spectrum = field(default_factory=lambda: Spectrum.constant(1.0))
     extinction: float = EXTINCTION.number_default
+    angle_about_beam: bool = False
 
     is_delta = True
     has_transmission = True
@@ -58,7 +66,10 @@ MODEL = PolarizerMaterial
 
 def from_spec(spec, resolver, key: str) -> PolarizerMaterial:
     return PolarizerMaterial(
-        spec.angle, resolver.spectrum(spec.transmittance, f"{key}.transmittance", emission=False), spec.extinction
+        spec.angle,
+        resolver.spectrum(spec.transmittance, f"{key}.transmittance", emission=False),
+        spec.extinction,
+        bool(spec.angle_about_beam),
     )
 
 
@@ -66,26 +77,34 @@ def make(
     angle: float = ANGLE.number_default,
     transmittance: SpectrumLike = 1.0,
     extinction: float = EXTINCTION.number_default,
+    angle_about_beam: bool = False,
 ) -> PolarizerMaterial:
     """A linear polariser whose transmission axis lies `angle` degrees from the surface's dp/du toward dp/dv,
-    passing T(λ) (`transmittance`, in [0, 1]) along it and `extinction`·T across it (0: ideal)."""
+    passing T(λ) (`transmittance`, in [0, 1]) along it and `extinction`·T across it (0: ideal);
+    `angle_about_beam`: the angle turns the axis about the beam instead (Mitsuba 3's reading)."""
     return PolarizerMaterial(
         ANGLE.check(angle),
         spectrum_input.reflectance(transmittance, "transmittance"),
         EXTINCTION.check(extinction),
+        bool(angle_about_beam),
     )
 
 
-def write_sheet_row(row: np.ndarray, angle_degrees: float, second: float, transmittance: Spectrum, table) -> None:
-    """The row of a polarising sheet (kernels/bsdf_polarizer.cl, bsdf_retarder.cl): its axis angle and second
-    number (extinction, retardance in radians) in ior_coefficients_b, its transmittance, and a frame along dp/du."""
-    row["ior_coefficients_b"] = (math.radians(angle_degrees), second, 0.0, 0.0)
+def write_sheet_row(
+    row: np.ndarray, angle_degrees: float, second: float, transmittance: Spectrum, table, third: float = 0.0
+) -> None:
+    """The row of a polarising sheet (kernels/bsdf_polarizer.cl, bsdf_retarder.cl): its axis angle, second number
+    (extinction, retardance in radians) and third (the polariser's angle_about_beam) in ior_coefficients_b, its
+    transmittance, and a frame along dp/du."""
+    row["ior_coefficients_b"] = (math.radians(angle_degrees), second, third, 0.0)
     row["transmittance_offset"] = table.add(transmittance)
     row["tangent_frame"] = 1
 
 
 def write_row(row: np.ndarray, material: PolarizerMaterial, table: SpectrumTable) -> None:
-    write_sheet_row(row, material.angle, material.extinction, material.transmittance, table)
+    write_sheet_row(
+        row, material.angle, material.extinction, material.transmittance, table, float(material.angle_about_beam)
+    )
 
 
 def mitsuba_sheet(importer, bsdf, properties, table: dict) -> dict | None:
@@ -124,7 +143,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if "polarizing" in properties and not importer.boolean(properties["polarizing"]):
         importer.unsupported_plugin(bsdf, " with polarizing = false")
         return None
-    sheet = mitsuba_sheet(importer, bsdf, properties, {"type": NAME})
+    sheet = mitsuba_sheet(importer, bsdf, properties, {"type": NAME, "angle_about_beam": True})
     if sheet is not None and "angle" in sheet:
         sheet["angle"] = mitsuba_angle(sheet["angle"])
     return sheet
