@@ -38,6 +38,23 @@ inline float3 plane_of_incidence_normal(const ShadingFrame *frame, float3 wo)
     return l > 1.0e-6f ? s / l : frame->tangent;
 }
 
+#ifdef MATERIAL_POLARIZER
+/* The transmission axis, a unit vector normal to the beam along k (either sense), of the sheet in `frame`. k is
+ * turned to the frame's normal side so that the angle's sense is the sheet's from either side; at normal incidence
+ * both readings give cos(angle) tangent + sin(angle) bitangent. */
+inline float3 polarizer_axis(const PolarizerParams *p, const ShadingFrame *frame, float3 k)
+{
+    float3 kn = dot(k, frame->normal) < 0.0f ? -k : k;
+    float c = cos(p->angle), s = sin(p->angle);
+    if (p->about_ray) {
+        float3 a0 = stokes_basis_from(kn, frame->bitangent);
+        return c * cross(a0, kn) + s * a0;
+    }
+    float3 a = stokes_basis_from(kn, c * frame->bitangent - s * frame->tangent);
+    return cross(a, kn);
+}
+#endif
+
 /* The event of `bs` (drawn at a surface of shading normal n, seen from wo) as an aligned element in the bases with x
  * axes *x_out (the beam leaving along wo) and *x_in (the beam arriving along −bs->wi), world space. Returns 0 when
  * the event depolarises. */
@@ -51,8 +68,7 @@ inline int material_polarization(__global const Material *m, const SurfaceContex
 #ifdef MATERIAL_POLARIZER
     if (MATERIAL_IS(m, MATERIAL_POLARIZER)) {
         PolarizerParams p = polarizer_params(m, sc, w);
-        float3 axis = cos(p.angle) * frame.tangent + sin(p.angle) * frame.bitangent;
-        *x_out = *x_in = stokes_basis_from(wo, axis);
+        *x_out = *x_in = polarizer_axis(&p, &frame, wo);
         *e = aligned_normalised(linear_polarizer_element(p.k1, p.k2));
         return 1;
     }

@@ -35,7 +35,14 @@ EXTINCTION = Parameter(
     Range(0.0, 1.0),
     doc="transmittance across the axis over that along it (0: an ideal polariser; 1: a neutral filter)",
 )
-PARAMETERS = (ANGLE, TRANSMITTANCE, EXTINCTION)
+ABOUT_BEAM = Parameter(
+    "angle_about_beam",
+    "bool",
+    default=False,
+    doc="`angle` turns the axis about the beam seen, from the axis normal to the projected dp/dv (Mitsuba 3's "
+    "polarizer), instead of within the sheet; the two differ only when the sheet is seen obliquely",
+)
+PARAMETERS = (ANGLE, TRANSMITTANCE, EXTINCTION, ABOUT_BEAM)
 
 
 @dataclass(frozen=True)
@@ -45,6 +52,7 @@ class PolarizerMaterial(Material):
     angle: float = ANGLE.number_default
     transmittance: Spectrum = field(default_factory=lambda: Spectrum.constant(1.0))
     extinction: float = EXTINCTION.number_default
+    angle_about_beam: bool = False
 
     is_delta = True
     has_transmission = True
@@ -61,14 +69,25 @@ def make(
     angle: float = ANGLE.number_default,
     transmittance: SpectrumLike = 1.0,
     extinction: float = EXTINCTION.number_default,
+    angle_about_beam: bool = False,
 ) -> PolarizerMaterial:
     """A linear polariser whose transmission axis lies `angle` degrees from the surface's dp/du toward dp/dv,
-    passing T(λ) (`transmittance`, in [0, 1]) along it and `extinction`·T across it (0: ideal)."""
-    return make_sheet(PolarizerMaterial, PARAMETERS, angle=angle, transmittance=transmittance, extinction=extinction)
+    passing T(λ) (`transmittance`, in [0, 1]) along it and `extinction`·T across it (0: ideal);
+    `angle_about_beam`: the angle turns the axis about the beam instead (Mitsuba 3's reading)."""
+    return make_sheet(
+        PolarizerMaterial,
+        PARAMETERS,
+        angle=angle,
+        transmittance=transmittance,
+        extinction=extinction,
+        angle_about_beam=angle_about_beam,
+    )
 
 
 def write_row(row: np.ndarray, material: PolarizerMaterial, table: SpectrumTable) -> None:
-    write_sheet_row(row, material.angle, material.extinction, material.transmittance, table)
+    write_sheet_row(
+        row, material.angle, material.extinction, material.transmittance, table, float(material.angle_about_beam)
+    )
 
 
 def mitsuba_angle(theta: float) -> float:
@@ -85,7 +104,7 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
     if "polarizing" in properties and not importer.boolean(properties["polarizing"]):
         importer.unsupported_plugin(bsdf, " with polarizing = false")
         return None
-    sheet = mitsuba_sheet(importer, bsdf, properties, {"type": NAME})
+    sheet = mitsuba_sheet(importer, bsdf, properties, {"type": NAME, "angle_about_beam": True})
     if sheet is not None and "angle" in sheet:
         sheet["angle"] = mitsuba_angle(sheet["angle"])
     return sheet

@@ -53,17 +53,25 @@ def sheet_from_spec(model: Callable[..., Any], parameters: tuple[Parameter, ...]
 
 def make_sheet(model: Callable[..., Any], parameters: tuple[Parameter, ...], **values: Any) -> Any:
     """The API's sheet of `model` from `values` by parameter name, each checked (a bad one names its key)."""
-    checked = {}
+    checked: dict[str, Any] = {}
     for p in parameters:
         value = values[p.name]
-        checked[p.name] = spectrum_input.reflectance(value, p.name) if p.type == "spectrum" else p.check(value)
+        if p.type == "spectrum":
+            checked[p.name] = spectrum_input.reflectance(value, p.name)
+        elif p.type == "bool":
+            checked[p.name] = bool(value)
+        else:
+            checked[p.name] = p.check(value)
     return model(**checked)
 
 
-def write_sheet_row(row: np.ndarray, angle_degrees: float, second: float, transmittance: Spectrum, table) -> None:
-    """The row of a polarising sheet (kernels/bsdf_polarizer.cl, bsdf_retarder.cl): its axis angle and second
-    number (extinction, retardance in radians) in ior_coefficients_b, its transmittance, and a frame along dp/du."""
-    row["ior_coefficients_b"] = (math.radians(angle_degrees), second, 0.0, 0.0)
+def write_sheet_row(
+    row: np.ndarray, angle_degrees: float, second: float, transmittance: Spectrum, table, third: float = 0.0
+) -> None:
+    """The row of a polarising sheet (kernels/bsdf_polarizer.cl, bsdf_retarder.cl): its axis angle, second number
+    (extinction, retardance in radians) and third (the polariser's angle_about_beam) in ior_coefficients_b, its
+    transmittance, and a frame along dp/du."""
+    row["ior_coefficients_b"] = (math.radians(angle_degrees), second, third, 0.0)
     row["transmittance_offset"] = table.add(transmittance)
     row["tangent_frame"] = 1
 
