@@ -72,4 +72,11 @@ inline float light_triangle_pdf_point(__global const Light *light, __global cons
     return light->pmf / light->area;
 }
 
+/* Whether `light` is an emitting triangle (else an analytic shape's emitter, light_shape.cl): for code outside the
+ * lights that needs the surface a sample came from. */
+inline int light_is_triangle(__global const Light *light)
+{
+    return LIGHT_IS(light, LIGHT_TRIANGLE);
+}
+
 #endif

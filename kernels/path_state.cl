@@ -361,7 +361,7 @@ inline int record_surface_reached(PathState *s, const PathVertex *v, float t, __
 inline float3 light_sample_dpdu(const Scene *scene, __global const Light *light, float3 p, const LightSample *ls)
 {
 #if SCENE_HAS_SHAPES
-    if (!LIGHT_IS(light, LIGHT_TRIANGLE)) {
+    if (!light_is_triangle(light)) {
         __global const AnalyticShape *shape = &scene->shapes[light->triangle];
         float2 uv = (float2)(0.5f);
         intersect_shape(shape, p, ls->wi, 1.001f * ls->distance + 1.0e-4f, &uv);
