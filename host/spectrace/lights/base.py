@@ -63,9 +63,9 @@ class LightPlugin(LightSource, Protocol):
     """What a `[[lights]]` light module holds: its parameter table, its resolved dataclass (MODEL), `from_spec` (a
     validated scene-file table to the dataclass), `write_rows` (its Light rows and power, through LightRows), whether
     it is an environment (a scene has at most one), its Python API constructor `make` (`spectrace.<API_NAME>`, or
-    None where it has none) and its Mitsuba 3 and pbrt-v4 mappings (MITSUBA_PLUGINS, `from_mitsuba`; PBRT_LIGHTS,
-    `from_pbrt`). Optional: SPEC_CHECKS (rules spanning several keys) and `to_mitsuba` (the export, where Mitsuba can
-    do the same)."""
+    None where it has none) and its Mitsuba 3 and pbrt-v4 mappings (MITSUBA_PLUGINS with `from_mitsuba`, or
+    MITSUBA_NONE saying why there is none; PBRT_LIGHTS, `from_pbrt`). Optional: SPEC_CHECKS (rules spanning several
+    keys) and `to_mitsuba` (the export, where Mitsuba can do the same)."""
 
     @property
     def PARAMETERS(self) -> tuple[Parameter, ...]: ...  # noqa: N802
@@ -88,8 +88,6 @@ class LightPlugin(LightSource, Protocol):
     def from_spec(self, spec: Any, resolver: Any, key: str) -> Light: ...
 
     def write_rows(self, light: Any, out: "LightRows") -> None: ...
-
-    def from_mitsuba(self, importer: Any, emitter: Any, properties: Any, to_world: Any) -> dict | None: ...
 
     @property
     def PBRT_LIGHTS(self) -> tuple[str, ...]: ...  # noqa: N802

@@ -26,6 +26,7 @@ from spectrace.spectral.spectrum_input import SpectrumLike
 NAME = "goniometric"
 API_NAME = "goniometric_light"
 MITSUBA_PLUGINS: tuple[str, ...] = ()
+MITSUBA_NONE = "Mitsuba 3 has no goniometric emitter"
 PBRT_LIGHTS = ("goniometric",)
 IS_ENVIRONMENT = False
 GONIOMETRIC = DeviceLight("goniometric", "position")
@@ -189,11 +190,6 @@ def make(
         mirrored,
         "front",
     )
-
-
-def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
-    """Mitsuba 3 has no goniometric emitter (MITSUBA_PLUGINS is empty): nothing to map."""
-    return None
 
 
 def from_pbrt(context, light, matrix) -> dict | None:
