@@ -32,7 +32,17 @@ class TextureHarness:
         points = np.zeros((len(uv), 4), np.float32)
         points[:, :2] = uv
         points[:, 2] = footprint
-        out = np.zeros((len(uv), 4), np.float32)
+        return self._run("texture_lookup", which, points, lambdas)
+
+    def lookup_points(self, which: int, points: np.ndarray, lambdas=(400.0, 500.0, 600.0, 700.0)) -> np.ndarray:
+        """(N, 4) values at the world-space points (N, 3) (a solid texture's lookup), at the four wavelengths."""
+        padded = np.zeros((len(points), 4), np.float32)
+        padded[:, :3] = points
+        return self._run("texture_lookup_point", which, padded, lambdas)
+
+    def _run(self, kernel: str, which: int, points: np.ndarray, lambdas) -> np.ndarray:
+        """Texture `which` looked up by `kernel` at each float4 of `points`: (N, 4) values at the four wavelengths."""
+        out = np.zeros((len(points), 4), np.float32)
         args = [
             self.textures,
             self.texels,
@@ -42,24 +52,7 @@ class TextureHarness:
             self.runner.buffer(points),
             self.runner.buffer(out, True),
         ]
-        self.runner.run("texture_lookup", len(uv), args, {6: out})
-        return out.astype(np.float64)
-
-    def lookup_points(self, which: int, points: np.ndarray, lambdas=(400.0, 500.0, 600.0, 700.0)) -> np.ndarray:
-        """(N, 4) values at the world-space points (N, 3) (a solid texture's lookup), at the four wavelengths."""
-        padded = np.zeros((len(points), 4), np.float32)
-        padded[:, :3] = points
-        out = np.zeros((len(points), 4), np.float32)
-        args = [
-            self.textures,
-            self.texels,
-            self.spectra,
-            np.int32(self.indices[which]),
-            self.runner.buffer(np.asarray(lambdas, np.float32)),
-            self.runner.buffer(padded),
-            self.runner.buffer(out, True),
-        ]
-        self.runner.run("texture_lookup_point", len(points), args, {6: out})
+        self.runner.run(kernel, len(points), args, {6: out})
         return out.astype(np.float64)
 
 
@@ -137,3 +130,27 @@ def trilinear(levels: list[np.ndarray], st: np.ndarray, footprint_st: float, mod
     if frac > 0:
         value = (1 - frac) * value + frac * bilinear(levels[lower + 1], st, mode)
     return value
+
+
+SIDE = 32
+
+
+def render_quad(texture, device) -> np.ndarray:
+    """Y of a diffuse quad (z = 0, x and y in [−1, 1]) of reflectance `texture` seen head-on under a uniform
+    environment of radiance 1 (one bounce: Y is the reflectance's Y at the point), 16 independent samples a pixel."""
+    import spectrace
+    from spectrace.engine.renderer import Renderer
+    from spectrace.scene.model import Camera, Scene
+
+    scene = Scene(
+        camera=Camera(origin=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0),
+        width=SIDE,
+        height=SIDE,
+        shapes=[spectrace.shape("rectangle", spectrace.diffuse(texture))],
+        lights=[spectrace.constant_environment(1.0)],
+        max_depth=2,
+        spp=16,
+        seed=3,
+        sampler="independent",
+    )
+    return Renderer(scene, device).render().xyz[..., 1]

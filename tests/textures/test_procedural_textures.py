@@ -5,7 +5,7 @@ area against its closed form; and the pbrt-v4 import of a `dots` texture."""
 
 import numpy as np
 import pytest
-from tests.textures.lookup import HARNESS, TextureHarness
+from tests.textures.lookup import HARNESS, SIDE, TextureHarness, render_quad
 
 from spectrace.interop.pbrt import import_pbrt, pbrt_scene_data
 from spectrace.spectral.spectrum import Spectrum
@@ -192,24 +192,10 @@ def test_dots_render_where_the_reference_puts_them(device):
     wholly on a dot average 0.75, wholly off one 0.25, and the image's mean is 0.25 + 0.5 × the covered fraction of
     the view, each within 4 standard errors. The scene's own kernels build the noise in (the feature define)."""
     import spectrace
-    from spectrace.engine.renderer import Renderer
-    from spectrace.scene.model import Camera, Scene
     from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
-    side, scale = 32, 10.0
-    texture = spectrace.dots_texture(0.75, 0.25, uv_scale=scale)
-    scene = Scene(
-        camera=Camera(origin=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0),
-        width=side,
-        height=side,
-        shapes=[spectrace.shape("rectangle", spectrace.diffuse(texture))],
-        lights=[spectrace.constant_environment(1.0)],
-        max_depth=2,
-        spp=16,
-        seed=3,
-        sampler="independent",
-    )
-    y = Renderer(scene, device).render().xyz[..., 1]
+    side, scale = SIDE, 10.0
+    y = render_quad(spectrace.dots_texture(0.75, 0.25, uv_scale=scale), device)
     # The rectangle's uv: u = (x + 1)/2, v = (1 − y)/2; the view's half width at z = 0 is 3 tan 15°. 8 × 8 points
     # per pixel give each pixel's covered fraction.
     half = 3.0 * np.tan(np.radians(15.0))

@@ -6,7 +6,7 @@ format, the Python API and the pbrt-v4 import."""
 
 import numpy as np
 import pytest
-from tests.textures.lookup import HARNESS, TextureHarness
+from tests.textures.lookup import HARNESS, SIDE, TextureHarness, render_quad
 from tests.textures.test_procedural_textures import noise
 
 import spectrace
@@ -216,29 +216,6 @@ def test_pbrt_solid_textures_import(tmp_path):
     load_scene(toml)  # the table resolves
 
 
-SIDE = 32
-
-
-def _render_quad(texture, device) -> np.ndarray:
-    """Y of a diffuse quad (z = 0, x and y in [−1, 1]) of reflectance `texture` seen head-on under a uniform
-    environment of radiance 1 (one bounce: Y is the reflectance's Y at the point), 16 independent samples a pixel."""
-    from spectrace.engine.renderer import Renderer
-    from spectrace.scene.model import Camera, Scene
-
-    scene = Scene(
-        camera=Camera(origin=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), fov_degrees=30.0),
-        width=SIDE,
-        height=SIDE,
-        shapes=[spectrace.shape("rectangle", spectrace.diffuse(texture))],
-        lights=[spectrace.constant_environment(1.0)],
-        max_depth=2,
-        spp=16,
-        seed=3,
-        sampler="independent",
-    )
-    return Renderer(scene, device).render().xyz[..., 1]
-
-
 def _pixel_reference(value) -> np.ndarray:
     """`value` at the quad's points (N, 3) averaged over 8 × 8 points of each pixel."""
     half = 3.0 * np.tan(np.radians(15.0))  # the view's half width at z = 0
@@ -263,7 +240,7 @@ def _assert_image_is(y: np.ndarray, expected: np.ndarray, correlation: float = 0
 def test_a_wrinkled_mix_renders_where_the_reference_puts_it(device):
     """A quad of reflectance 0.2 + 0.6 · clamp(wrinkled(p / 0.25)) (a texture scaled up 4 times)."""
     wrinkled = spectrace.wrinkled_texture(octaves=4, transform=[{"scale": 0.25}])
-    y = _render_quad(spectrace.mix_texture(0.2, 0.8, wrinkled), device)
+    y = render_quad(spectrace.mix_texture(0.2, 0.8, wrinkled), device)
     _assert_image_is(y, _pixel_reference(lambda p: 0.2 + 0.6 * np.clip(turbulence(p / 0.25, 0.5, 4), 0.0, 1.0)))
 
 
@@ -282,7 +259,7 @@ def test_marble_renders_the_luminance_of_its_spline(device):
     )
     luminance = np.array([reflectance(tuple(1.5 * c), "colour").values @ ybar / ybar.sum() for c in MARBLE_RGB])
     assert len(ybar) == 471  # the spectra's 360-830 nm grid
-    y = _render_quad(spectrace.marble_texture(scale=1.5, variation=0.5), device)
+    y = render_quad(spectrace.marble_texture(scale=1.5, variation=0.5), device)
     expected = _pixel_reference(lambda p: marble(p, 0.5, 8, 1.5, 0.5, luminance[:, None])[0][:, 0])
     # 16 samples leave a pixel's Y a noise of about 0.05 (the wavelengths drawn) against the pattern's 0.085: a
     # correlation of about 0.85 is expected.
