@@ -14,6 +14,7 @@ from materials.test_bsdfs import HARNESS, LAMBDA_NM, Bsdf, _uniform_hemisphere
 from rgl_tensor import ggx_brdf_cos, ggx_file, ggx_measurement, ramp_reflectance, tensor_file_bytes
 from scene_text import emitting_screen
 from spectrace.errors import SpectraceError
+from spectrace.scene import load_scene
 
 ALPHAS = (0.2, 0.5)
 
@@ -198,3 +199,20 @@ def test_render_of_a_scene_naming_an_rgb_file_fails_in_one_line_naming_the_key(t
     assert "scene.toml" in lines[0] and "materials.paint.filename" in lines[0], lines[0]
     assert "'_spec.bsdf'" in lines[0] and "Traceback" not in result.stderr
     assert not (tmp_path / "out.png").exists()
+
+
+def test_a_scene_built_in_python_saves_the_file_as_its_scene_file_finds_it(tmp_path, monkeypatch):
+    """The API's `filename` is relative to the working folder, the scene file's to the scene file's folder: a saved
+    scene names the file from where it is written, and loads the same tables."""
+    monkeypatch.chdir(ggx_file(0.5).parent)
+    material = spectrace.measured(ggx_file(0.5).name)
+    scene = spectrace.Scene(
+        camera=spectrace.Camera(origin=(0.0, 1.0, -4.0), target=(0.0, 0.0, 0.0), fov_degrees=40.0),
+        width=8,
+        height=8,
+        shapes=[spectrace.shape("sphere", material)],
+        lights=[spectrace.constant_environment(1.0)],
+    )
+    path = spectrace.save_scene(scene, tmp_path / "saved" / "scene.toml")
+    loaded = load_scene(path).shapes[0].material
+    assert loaded.tables == material.tables
