@@ -118,13 +118,18 @@ def ggx_measurement(
     wavelengths=None,
     size: int = 32,
     theta_count: int = 12,
+    phi_i=None,
 ) -> dict[str, np.ndarray]:
-    """The fields of an isotropic GGX measurement of roughness `alpha` and reflectance F(λ) (default: rising
-    linearly from 0.5 at 360 nm to 0.9 at 830 nm, which the readers' linear interpolation between `wavelengths`
-    reproduces), every table `size` × `size`, at `theta_count` viewer elevations up to 85°."""
+    """The fields of a GGX measurement of roughness `alpha` and reflectance F(λ) (default: rising linearly from 0.5
+    at 360 nm to 0.9 at 830 nm, which the readers' linear interpolation between `wavelengths` reproduces), every
+    table `size` × `size`, at `theta_count` viewer elevations up to 85°. `phi_i`: the viewer azimuths of a file
+    written as an anisotropic one (its microfacet azimuths absolute, not from φo), spanning 2π, or π or π/2 for a
+    file folded by the symmetries GGX has (the readers mirror directions into φ ∈ [−π, 0] or [−π, −π/2]); none: an
+    isotropic file."""
     if reflectance is None:
         reflectance = ramp_reflectance
     wavelengths = np.linspace(360.0, 830.0, 5) if wavelengths is None else np.asarray(wavelengths, np.float64)
+    phi_values = np.array([0.0]) if phi_i is None else np.asarray(phi_i, np.float64)
     theta_i = np.linspace(0.0, np.radians(85.0), theta_count)
     grid = np.linspace(0.0, 1.0, size)
     ux, uy = np.meshgrid(grid, grid)  # [row = φ coordinate, column = θ coordinate]
@@ -132,27 +137,28 @@ def ggx_measurement(
     ndf = ggx_d(np.cos(theta), alpha)
     sigma = ggx_projected_area(np.cos(theta), alpha)
     m = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
-    vndf = np.empty((1, theta_count, size, size))
-    spectra = np.empty((1, theta_count, wavelengths.size, size, size))
-    luminance = np.empty((1, theta_count, size, size))
+    shape = (phi_values.size, theta_count)
+    vndf, luminance = np.empty((*shape, size, size)), np.empty((*shape, size, size))
+    spectra = np.empty((*shape, wavelengths.size, size, size))
     s = np.stack([ux.ravel(), uy.ravel()], axis=-1)
-    for t, th in enumerate(theta_i):
-        wo = np.array([np.sin(th), 0.0, np.cos(th)])
-        visible = np.clip(m @ wo, 0.0, None)
-        jacobian = 2.0 * np.pi**2 * ux * np.sin(theta)
-        vndf[0, t] = ndf * visible / ggx_projected_area(np.cos(th), alpha) * jacobian
-        point = _sampling_map(vndf[0, t], s)
-        th_m, ph_m = _u_to_angles(point[:, 0], point[:, 1])
-        mm = np.stack([np.sin(th_m) * np.cos(ph_m), np.sin(th_m) * np.sin(ph_m), np.cos(th_m)], axis=-1)
-        wi = 2.0 * (mm @ wo)[:, None] * mm - wo
-        lam_o, lam_i = ggx_lambda(np.cos(th), alpha), ggx_lambda(wi[:, 2], alpha)
-        shadowing = np.where(wi[:, 2] > 0, (1.0 + lam_o) / (1.0 + lam_o + lam_i), 0.0).reshape(size, size)
-        spectra[0, t] = reflectance(wavelengths)[:, None, None] * shadowing
-        luminance[0, t] = shadowing
+    for p, ph in enumerate(phi_values):
+        for t, th in enumerate(theta_i):
+            wo = np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
+            visible = np.clip(m @ wo, 0.0, None)
+            jacobian = 2.0 * np.pi**2 * ux * np.sin(theta)
+            vndf[p, t] = ndf * visible / ggx_projected_area(np.cos(th), alpha) * jacobian
+            point = _sampling_map(vndf[p, t], s)
+            th_m, ph_m = _u_to_angles(point[:, 0], point[:, 1])
+            mm = np.stack([np.sin(th_m) * np.cos(ph_m), np.sin(th_m) * np.sin(ph_m), np.cos(th_m)], axis=-1)
+            wi = 2.0 * (mm @ wo)[:, None] * mm - wo
+            lam_o, lam_i = ggx_lambda(np.cos(th), alpha), ggx_lambda(wi[:, 2], alpha)
+            shadowing = np.where(wi[:, 2] > 0, (1.0 + lam_o) / (1.0 + lam_o + lam_i), 0.0).reshape(size, size)
+            spectra[p, t] = reflectance(wavelengths)[:, None, None] * shadowing
+            luminance[p, t] = shadowing
     return {
         "description": np.frombuffer(f"GGX alpha {alpha}".encode(), np.uint8),
         "jacobian": np.array([1], np.uint8),
-        "phi_i": np.array([0.0], np.float32),
+        "phi_i": phi_values.astype(np.float32),
         "theta_i": theta_i.astype(np.float32),
         "wavelengths": wavelengths.astype(np.float32),
         "ndf": ndf.astype(np.float32),
