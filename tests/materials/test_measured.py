@@ -272,3 +272,54 @@ def test_anisotropic_sampling_follows_its_density(device_bsdf, anisotropic_files
     material = spectrace.measured(anisotropic_files[reduction])
     laws.test_sampler_matches_its_pdf_chi_square(device_bsdf, f"measured-r{reduction}", material)
     laws.test_pdf_integrates_to_the_samplers_success_rate(device_bsdf, f"measured-r{reduction}", material)
+
+
+def test_a_live_sessions_edits_store_the_tables_once(tmp_path):
+    """Each edit of a material writes every material's row again: the measured tables stay one block of the
+    spectrum table (a database file's are tens of MB), and the image after the edits is a fresh render's."""
+    from spectrace.session import Session
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text(
+        f"""[film]
+width = 8
+height = 8
+
+[camera]
+origin = [0, 0, 4]
+target = [0, 0, 0]
+fov = 30
+
+[materials.paint]
+type = "measured"
+filename = "{ggx_file(0.5).as_posix()}"
+
+[materials.grey]
+type = "diffuse"
+reflectance = {{ value = 0.5 }}
+
+[[shapes]]
+type = "sphere"
+material = "paint"
+transform = [{{ translate = [-0.5, 0, 0] }}]
+
+[[shapes]]
+type = "sphere"
+material = "grey"
+transform = [{{ translate = [0.6, 0, 0] }}]
+
+[[lights]]
+type = "constant"
+radiance = {{ value = 1.0 }}
+"""
+    )
+    with Session(scene, pass_spp=1) as session:
+        size = len(session.renderer.buffers.spectra)
+        for value in (0.2, 0.4, 0.6):
+            session.update({"materials.grey.reflectance": {"value": value}})
+        assert len(session.renderer.buffers.spectra) <= size + 3 * 471  # three new reflectances at most
+        session.step()
+        image = session.image().xyz
+    fresh = spectrace.render(spectrace.load_scene(scene, {"materials.grey.reflectance": {"value": 0.6}}), spp=1)
+    assert image[..., 1].mean() > 0
+    np.testing.assert_array_equal(image, fresh.xyz)

@@ -20,6 +20,7 @@ its layout in HEADER."""
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +92,12 @@ class MeasuredTables:
     @property
     def isotropic(self) -> bool:
         return self.phi_i.size <= 2
+
+    @cached_property
+    def device_block(self) -> np.ndarray:
+        """What the kernel reads (device_block), made once: a live session writes every material's row again at
+        each edit."""
+        return device_block(self)
 
 
 @dataclass(frozen=True)
@@ -279,4 +286,4 @@ def device_block(tables: MeasuredTables) -> np.ndarray:
 
 def write_row(row: np.ndarray, material: MeasuredMaterial, table: SpectrumTable) -> None:
     """The block (device_block) in the spectrum table, its offset in eta_offset."""
-    row["eta_offset"] = table.add_block(device_block(material.tables))
+    row["eta_offset"] = table.add_block(material.tables.device_block, key=material.tables)
