@@ -73,7 +73,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
     path = _write(
         tmp_path,
         """
-        <bsdf type="measured" id="metal"/>
+        <bsdf type="custom_bsdf" id="metal"/>
         <shape type="bsplinecurve"><string name="filename" value="x.txt"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
         <emitter type="sky"><float name="turbidity" value="3"/></emitter>""",
@@ -83,7 +83,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
     message = str(error.value)
     for named in (
         "shape 'bsplinecurve' (line 6)",
-        "bsdf 'measured' (line 5)",
+        "bsdf 'custom_bsdf' (line 5)",
         "emitter 'sky' (line 8)",
     ):
         assert named in message

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from plugin_mappings import assert_declares_mapping
+from rgl_tensor import ggx_file
 from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.integrators import INTEGRATORS
@@ -73,8 +74,13 @@ def test_each_declared_bsdf_reaches_its_module(tmp_path, plugin, module):
     """With Mitsuba's defaults the BSDF imports into a scene that loads, or is refused for a stated reason (a
     roughconductor's default material "none" is a mirror, which spectrace has only smooth), never as an unknown
     plugin."""
+    properties = ""
+    if plugin == "measured":  # no default file, in Mitsuba either: one written from GGX (tests/rgl_tensor.py)
+        properties = f'<string name="filename" value="{ggx_file(0.3)}"/>'
     try:
-        scene = load_mitsuba_scene(_scene(tmp_path, f'<shape type="cube"><bsdf type="{plugin}"/></shape>'))
+        scene = load_mitsuba_scene(
+            _scene(tmp_path, f'<shape type="cube"><bsdf type="{plugin}">{properties}</bsdf></shape>')
+        )
     except SpectraceError as error:
         assert f"bsdf '{plugin}' with " in error.message, error.message
     else:

@@ -336,13 +336,14 @@ def test_unsupported_plugins_are_named_once_with_their_count_and_nested_ones_too
         '<bsdf type="measured_polarized"/><ref id="odd"/></shape>\n'
         for _ in range(3)
     )
-    path = _write(tmp_path, f'<bsdf type="measured" id="odd"/>\n{shapes}<shape type="cube"/>')
+    # custom_bsdf: a plugin of the user's own (Mitsuba 3 loads Python plugins by name)
+    path = _write(tmp_path, f'<bsdf type="custom_bsdf" id="odd"/>\n{shapes}<shape type="cube"/>')
     with pytest.raises(SpectraceError) as caught:
         mitsuba_scene_data(path)
     message = caught.value.message
     assert "shape 'bsplinecurve' (3 times, first at line 5)" in message, message
     assert "bsdf 'measured_polarized' (3 times, first at line 5)" in message, message
-    assert "bsdf 'measured' (3 times, first at line 4)" in message, message
+    assert "bsdf 'custom_bsdf' (3 times, first at line 4)" in message, message
     assert message.count("bsplinecurve") == 1
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from plugin_mappings import assert_declares_mapping
+from rgl_tensor import ggx_file
 from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
 from spectrace.integrators import INTEGRATORS
@@ -57,6 +58,8 @@ def test_no_pbrt_material_is_claimed_twice():
 def test_each_declared_pbrt_material_imports_with_pbrts_defaults_as_its_module(tmp_path, kind, module):
     path = tmp_path / "scene.pbrt"
     material = _MIX_PARTS if kind == "mix" else f'Material "{kind}"\n'
+    if kind == "measured":  # no default file, in pbrt either: one written from GGX (tests/rgl_tensor.py)
+        material = f'Material "measured" "string filename" "{ggx_file(0.3)}"\n'
     path.write_text(HEADER + material + QUAD)
     (shape,) = load_pbrt_scene(path).shapes
     assert isinstance(shape.material, module.MODEL)

@@ -5,6 +5,7 @@ estimation runs at a hit, and has_transmission / is_dispersive with what the BSD
 import numpy as np
 import pytest
 
+from rgl_tensor import ggx_material
 from spectrace.materials import material_row
 from spectrace.scene.model import (
     ConductorMaterial,
@@ -56,6 +57,8 @@ CASES = [
     ("principled-glass-1.5", PrincipledMaterial(GREY, index_of_refraction(1.5), roughness=0.0, spec_trans=1.0)),
     ("principled-glass-SF11", PrincipledMaterial(GREY, index_of_refraction("SF11"), spec_trans=0.5)),
     ("principled-glass-texture", PrincipledMaterial(GREY, index_of_refraction(1.5), spec_trans=MIXED_MAP)),
+    # A measured reflector (tests/rgl_tensor.py): one glossy lobe, no transmission.
+    ("measured-ggx", ggx_material(0.3)),
 ]
 
 

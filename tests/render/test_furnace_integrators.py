@@ -35,6 +35,7 @@ import pytest
 
 import spectrace
 from replica_agreement import spectrace_replicas
+from rgl_tensor import ggx_file
 from spectrace.engine.checkpoint import read_checkpoint, save_checkpoint
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.tiles import whole_film_rows
@@ -154,6 +155,9 @@ CASES = {
         Case("white fibre", lambda: S.hair(sigma_a=0.0, beta_m=0.2, beta_n=0.5), True, False, fast=("bdpt", "light")),
         Case("brown fibre", lambda: S.hair(eumelanin=0.6), False, False),
     ],
+    # A measurement written from GGX (tests/rgl_tensor.py): the sampler follows the file's luminance and visible
+    # normals, and light subpaths weigh their samples by the adjoint (kernels/bsdf_measured.cl).
+    "measured": [Case("ggx measurement", lambda: S.measured(ggx_file(0.3)), False, False, fast=("path",))],
     "mix": [
         Case(
             "diffuse and smooth plastic",

@@ -49,8 +49,23 @@ def _instanced_cornell_box():
     return replace(scene, instances=[spectrace.instance(obj, p) for p in placements])
 
 
+def _measured_cornell_box():
+    """The Cornell box with every other unlit surface a measured GGX reflector (tests/rgl_tensor.py)."""
+    import spectrace
+    from rgl_tensor import ggx_file
+
+    scene = _scene("cornell_box", spp=16, max_depth=8)
+    measured = spectrace.measured(ggx_file(0.3))
+    shapes = [
+        replace(shape, material=measured) if shape.emitter is None and i % 2 == 0 else shape
+        for i, shape in enumerate(scene.shapes)
+    ]
+    return replace(scene, shapes=shapes)
+
+
 SCENES = {
     "cornell_box": lambda: _scene("cornell_box", spp=16, max_depth=8),
+    "measured": _measured_cornell_box,
     "subsurface": lambda: _scene("subsurface", spp=16, max_depth=16),
     "instances": _instanced_cornell_box,
 }

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import spectrace
+from rgl_tensor import ggx_file
 from spectrace.engine.renderer import Renderer
 from spectrace.engine.scene_buffers import build_scene_buffers
 from spectrace.engine.scene_features import scene_feature_defines
@@ -36,8 +37,9 @@ MATERIAL_BITS = {
     "retarder": 2048,
     "pplastic": 4096,
     "hair": 8192,
-    "mix": 16384,
-    "fluorescent": 32768,
+    "measured": 16384,
+    "mix": 32768,
+    "fluorescent": 65536,
 }
 LIGHT_BITS = {
     "area": 1,
@@ -297,6 +299,14 @@ def _anisotropic_conductor_scene() -> spectrace.Scene:
     return replace(base, shapes=[floor, sphere, *base.shapes[2:]])
 
 
+def _measured_scene() -> spectrace.Scene:
+    """The anisotropic scene with a measured sphere and floor (a GGX measurement, tests/rgl_tensor.py)."""
+    base = _anisotropic_scene()
+    measured = spectrace.measured(ggx_file(0.3))
+    shapes = [replace(shape, material=measured) for shape in base.shapes[:2]]
+    return replace(base, shapes=[*shapes, *base.shapes[2:]])
+
+
 def _grid_medium_scene() -> spectrace.Scene:
     """A scattering cube of a random density grid beside a homogeneous sphere, under a lamp."""
     density = np.random.default_rng(4).uniform(0.0, 3.0, (4, 5, 6))
@@ -477,6 +487,7 @@ SCENES = {
     # Frames along dp/du: the anisotropic sphere's and rectangle's (an analytic shape, triangles with UVs).
     "anisotropic_principled": _anisotropic_scene,
     "anisotropic_conductor": _anisotropic_conductor_scene,
+    "measured": _measured_scene,
 }
 
 
@@ -505,6 +516,7 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
         "equal_area_camera_and_goniometric_light",
         "anisotropic_principled",
         "anisotropic_conductor",
+        "measured",
     ],
 )
 def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):

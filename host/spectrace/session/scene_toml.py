@@ -142,7 +142,7 @@ class _Writer:
                         where=where,
                     )
                 name, kind = "file", "file"
-            elif kind == "file" or (name == "file" and isinstance(value, (str, Path))):
+            elif kind == "file" or (name in ("file", "filename") and isinstance(value, (str, Path))):
                 kind = "file"
             elif argument == "materials":
                 out[name] = [self.material(m, f"{where}.materials.{i}") for i, m in enumerate(value)]

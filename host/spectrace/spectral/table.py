@@ -21,6 +21,7 @@ class SpectrumTable:
         self._common_grid = wavelengths_nm is None or np.array_equal(self.wavelengths_nm, GRID_NM)
         self.extend_rgb = extend_rgb
         self._offsets_by_content: dict[bytes, int] = {}
+        self._blocks_by_key: dict[int, tuple[object, int]] = {}
         self._rows: list[np.ndarray] = []
         self._data: np.ndarray | None = None  # built on demand, dropped on add
 
@@ -42,9 +43,13 @@ class SpectrumTable:
             values = np.interp(np.linspace(0.0, 1.0, self.row_size), np.linspace(0.0, 1.0, GRID_SIZE), values)
         return self._add(values)
 
-    def add_block(self, values: np.ndarray) -> int:
+    def add_block(self, values: np.ndarray, key: object = None) -> int:
         """Store floats that are no function of the wavelength or of anything else (a material's parameter block,
-        read by index) and return their offset: consecutive, padded to whole rows, shared with no other entry."""
+        read by index) and return their offset: consecutive, padded to whole rows, shared with no other entry.
+        `key`: an object standing for the block's content (held here), whose block is stored once however often it
+        is added, as a live session's edits add every material's again."""
+        if key is not None and (known := self._blocks_by_key.get(id(key))) is not None and known[0] is key:
+            return known[1]
         values = np.asarray(values, np.float32).ravel()
         rows = max(1, -(-values.size // self.row_size))
         padded = np.zeros(rows * self.row_size, np.float32)
@@ -52,6 +57,8 @@ class SpectrumTable:
         offset = len(self._rows) * self.row_size
         self._rows.extend(padded.reshape(rows, self.row_size))
         self._data = None
+        if key is not None:
+            self._blocks_by_key[id(key)] = (key, offset)
         return offset
 
     def _add(self, values: np.ndarray) -> int:
