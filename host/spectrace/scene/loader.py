@@ -33,7 +33,7 @@ from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
 from spectrace.lights.area import emitter as area_emitter
 from spectrace.lights.area import emitter_stokes, peak_radiance
-from spectrace.materials import MATERIALS, material_textures, surface
+from spectrace.materials import MATERIALS, surface, uv_material_textures
 from spectrace.scene import schema
 from spectrace.scene.model import (
     AreaEmitter,
@@ -465,10 +465,10 @@ class _Resolver:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
                 raise SpectraceError(f"undefined material '{s.material}'{hint}", where=self.where(f"{key}.material"))
-            if s.material is not None and mesh.uvs is None and material_textures(materials[s.material]):
+            if s.material is not None and mesh.uvs is None and uv_material_textures(materials[s.material]):
                 raise SpectraceError(
                     f"shape '{s.name or f'{s.type}{i}'}' has no texture coordinates, but material '{s.material}' has "
-                    f"a texture ({', '.join(material_textures(materials[s.material]))})",
+                    f"a texture ({', '.join(uv_material_textures(materials[s.material]))})",
                     where=self.where(f"{key}.material"),
                 )
             emitter = None
