@@ -123,9 +123,14 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
                         )
                 else:
                     check_texture_values(side, kind, where, upper)
-            if upper is not None and (high := scalar_range(texture)[1]) > upper:
-                raise SpectraceError(f"{texture.source} has values above {upper:g} (max {high:.4g})", where=where)
-        return  # a reflectance checkerboard's or dots' sides were checked as they were resolved
+        elif kind == "spectrum":
+            upper = 1.0
+        # Its sides were resolved as values >= 0: the bound is the using parameter's (a reflectance's 1, a number's
+        # range), checked here for every use.
+        if upper is not None and (high := scalar_range(texture)[1]) > upper + 1e-6:
+            why = ", which as a reflectance would create energy" if kind == "spectrum" else ""
+            raise SpectraceError(f"{texture.source} has values above {upper:g} (max {high:.4g}){why}", where=where)
+        return
     if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
         raise SpectraceError(
             f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
