@@ -76,6 +76,8 @@ typedef struct {
     float4 beta;        /* subpath throughput arriving here, per wavelength (see the top of the file) */
     float4 le;          /* camera vertices on emitters: radiance emitted toward wo, W/(m² sr nm) */
     float2 uv;          /* texture coordinates, or an analytic shape's own (u, v) */
+    int triangle;       /* surfaces: the hit's triangle slot and barycentrics (PathVertex) */
+    float2 b12;
     float footprint;    /* texture footprint in uv units */
     float pdf_fwd;      /* area density (1/m²) of reaching it along its own subpath; the light's point: pmf · p_A;
                            where `delta`, per projected solid angle at the vertex before (bdpt_to_area) */
@@ -400,6 +402,8 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         v->tangent_w = pv.tangent_w;
         v->wo = pv.wo;
         v->uv = pv.uv;
+        v->triangle = pv.triangle;
+        v->b12 = pv.b12;
         v->footprint = pv.footprint;
         v->beta = s.throughput;
         v->material = pv.info.material;
@@ -438,6 +442,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
 #endif
         SurfaceContext sc = shading_context(scene, pv.uv, pv.p, pv.footprint,
                                             pv.ns_base, pv.dpdu, pv.tangent_w, adjoint);
+        SURFACE_AT_HIT(sc, pv);
         float uc = sample_1d(sampler);
         float2 u = sample_2d(sampler);
         BSDFSample bs;
@@ -495,6 +500,7 @@ inline float bdpt_vertex_pdf(const Scene *scene, const SampledWavelengths *w, co
     if (v->kind == BDPT_MEDIUM) return bdpt_to_area(bdpt_phase(scene, v, -wo, wi), v, next);
     __global const Material *material = &scene->materials[v->material];
     SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+    SURFACE_AT_HIT(sc, *v);
     sc.p = v->p;
     sc.dpdu = v->dpdu;
     sc.tangent_w = v->tangent_w;
@@ -701,6 +707,7 @@ inline void bdpt_splat(const Scene *scene, const SampledWavelengths *w, Sampler 
     CameraConnection c = connect_to_camera_sampled(params, qs->p, lens_sample(params, sampler));
     if (c.pixel < 0 || !shading_side_agrees(qs->n, qs->ns, c.to_camera)) return;
     SurfaceContext sc = shading_context(scene, qs->uv, qs->p, qs->footprint, qs->ns_base, qs->dpdu, qs->tangent_w, 0);
+    SURFACE_AT_HIT(sc, *qs);
     float4 f_cos = material_eval(material, &sc, w, qs->ns, c.to_camera, qs->wo);
     float cos_light = fabs(dot(qs->wo, qs->n));
     float cos_camera = fabs(dot(c.to_camera, qs->n));
@@ -763,6 +770,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
     } else {
         SurfaceContext psc = shading_context(scene, pt->uv, pt->p, pt->footprint,
                                              pt->ns_base, pt->dpdu, pt->tangent_w, 0);
+        SURFACE_AT_HIT(psc, *pt);
         f_p = material_eval(pm, &psc, w, pt->ns, pt->wo, to_q);
     }
     if (all(f_p == (float4)(0.0f))) return (float4)(0.0f);
@@ -775,6 +783,7 @@ inline float4 bdpt_connect(const Scene *scene, const SampledWavelengths *w, cons
         __global const Material *qm = &scene->materials[qs->material];
         SurfaceContext qsc = shading_context(scene, qs->uv, qs->p, qs->footprint,
                                              qs->ns_base, qs->dpdu, qs->tangent_w, 0);
+        SURFACE_AT_HIT(qsc, *qs);
         f_q = material_eval(qm, &qsc, w, qs->ns, -to_q, qs->wo) / cos_in;
     }
     float4 value = qs->beta * f_q * pt->beta * f_p * g;

@@ -62,7 +62,7 @@ inline float sample_grid_cell_wavelength(__global const float *cdf, float u, flo
 inline int fluorescent_base(const Scene *scene, __global const Material *m, const PathVertex *v)
 {
     int base = m->eta_offset;
-    if (SCENE_HAS_MIX) base = mix_resolve(scene, base, v->p, v->wo, v->uv, v->footprint);
+    if (SCENE_HAS_MIX) base = mix_resolve(scene, base, v->p, v->wo, v->uv, v->footprint, v->triangle, v->b12);
     return base;
 }
 
@@ -72,6 +72,7 @@ inline float fluorescent_yield(const Scene *scene, __global const Material *m, c
     float quantum_yield = m->alpha;
     if (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE) {
         SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
+        SURFACE_AT_HIT(sc, *v);
         quantum_yield = texture_numbers_at(&sc.buffers, m->roughness_texture, v->uv, v->p, v->footprint).x;
     }
     return quantum_yield;

@@ -307,6 +307,7 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
 #endif
         __global const Material *material = &scene->materials[v.info.material];
         SurfaceContext sc = shading_context(scene, v.uv, v.p, v.footprint, v.ns_base, v.dpdu, v.tangent_w, 1);
+        SURFACE_AT_HIT(sc, v);
         if (material_has_non_delta_lobe(material)) {
             CameraConnection c = connect_to_camera_sampled(params, v.p, lens_sample(params, &sampler));
             if (c.pixel >= 0 && shading_side_agrees(v.n, v.ns, c.to_camera)) {

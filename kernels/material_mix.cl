@@ -33,7 +33,8 @@ inline float mix_hash(float3 p, float3 wo, int row)
 /* The row of the BSDF that shades point p seen from wo (uv, footprint: its texture lookup) where the surface's
  * material is row `material`: `material` itself unless it is a mix. Contract: a mix's materials are rows of the
  * scene; mixes nest at most MIX_MAX_DEPTH deep (a deeper one would leave a mix row, which shades black). */
-inline int mix_resolve(const Scene *scene, int material, float3 p, float3 wo, float2 uv, float footprint)
+inline int mix_resolve(const Scene *scene, int material, float3 p, float3 wo, float2 uv, float footprint, int triangle,
+                       float2 b12)
 {
     for (int depth = 0; depth < MIX_MAX_DEPTH && material != TRIANGLE_NO_MATERIAL; ++depth) {
         __global const Material *m = &scene->materials[material];
@@ -41,6 +42,10 @@ inline int mix_resolve(const Scene *scene, int material, float3 p, float3 wo, fl
         float amount = m->alpha;
         if (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE) {
             SurfaceContext sc = surface_context(scene, uv, footprint);
+#if SCENE_HAS_MESH_ATTRIBUTES
+            sc.buffers.triangle = triangle;
+            sc.buffers.b12 = b12;
+#endif
             amount = texture_numbers_at(&sc.buffers, m->roughness_texture, uv, p, footprint).x;
         }
         material = mix_hash(p, wo, material) < amount ? m->k_offset : m->eta_offset;

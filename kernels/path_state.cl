@@ -151,6 +151,8 @@ typedef struct {
     float tangent_w; /* ±1: dpdu's handedness, a file tangent's w where dpdu is one, else 1 (SurfaceContext) */
     float3 wo;  /* back along the ray */
     float2 uv;  /* texture coordinates (only in scenes with material textures) */
+    int triangle;  /* the hit's triangle slot and barycentrics of v1, v2 (an analytic shape's: its uv), where mesh */
+    float2 b12;    /* attributes are read (texture_mesh_attribute.cl) */
     float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; 0 unless SCENE_NEEDS_FOOTPRINT) */
 } PathVertex;
 
@@ -161,6 +163,8 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
 {
     PathVertex v;
     v.info = scene->triangle_info[hit.triangle];
+    v.triangle = hit.triangle;
+    v.b12 = hit.b12;
     ShapeSurface g = hit_shape_surface(scene, hit);
     v.p = g.p;
     v.n = g.n;
@@ -173,7 +177,7 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
         v.footprint = footprint_from_tangents(scene->params, v.p, v.n, g.dpdu, g.dpdv, (float2)(1.0f, 0.0f),
                                               (float2)(0.0f, 1.0f));
     }
-    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
+    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint, hit.triangle, hit.b12);
     v.dpdu = vertex_follows_tangent(scene, v.info.material) ? g.dpdu : (float3)(0.0f);
     v.tangent_w = 1.0f;
     if (SCENE_HAS_SURFACE_NORMALS && v.info.material != TRIANGLE_NO_MATERIAL) {
@@ -196,6 +200,8 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
     __global const Instance *instance = &scene->instances[hit.instance];
     PathVertex v;
     v.info = scene->triangle_info[hit.triangle];
+    v.triangle = hit.triangle;
+    v.b12 = hit.b12;
     v.p = affine_point(instance->to_world, triangle_point(scene->triangle_vertices, hit.triangle, hit.b12));
     v.n = instance_normal(instance, triangle_normal(scene->triangle_vertices, hit.triangle));
     v.wo = -ray.direction;
@@ -213,7 +219,7 @@ inline PathVertex instance_vertex(const Scene *scene, Hit hit, Ray ray)
             v.footprint = footprint_from_tangents(scene->params, v.p, v.n, e1, e2, t[1] - t[0], t[2] - t[0]);
         }
     }
-    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
+    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint, hit.triangle, hit.b12);
     float3 file_t = (float3)(0.0f);
     float file_w = 0.0f;
 #if SCENE_HAS_FILE_TANGENTS
@@ -250,6 +256,8 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
 #endif
     PathVertex v;
     v.info = scene->triangle_info[hit.triangle];
+    v.triangle = hit.triangle;
+    v.b12 = hit.b12;
     v.p = triangle_point(scene->triangle_vertices, hit.triangle, hit.b12);
     v.n = triangle_normal(scene->triangle_vertices, hit.triangle);
     v.wo = -ray.direction;
@@ -260,7 +268,7 @@ inline PathVertex path_vertex(const Scene *scene, Hit hit, Ray ray)
         v.uv = triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
         if (SCENE_NEEDS_FOOTPRINT) v.footprint = camera_footprint(scene, hit.triangle, v.p, v.n);
     }
-    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint);
+    if (SCENE_HAS_MIX) v.info.material = mix_resolve(scene, v.info.material, v.p, v.wo, v.uv, v.footprint, hit.triangle, hit.b12);
     v.ns_base = v.ns;
     float3 file_t = (float3)(0.0f);
     float file_w = 0.0f;
@@ -407,6 +415,7 @@ inline void light_vertex(const Scene *scene, const SampledWavelengths *w, Sample
     if (material_disperses(material, w)) terminate_secondary(&s->throughput, &s->secondary_terminated);
     if (material_has_non_delta_lobe(material)) {
         SurfaceContext sc = shading_context(scene, v->uv, v->p, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
+        SURFACE_AT_HIT(sc, *v);
 #if SCENE_POLARIZED
         Sampler replay = *sampler;  /* draws the estimate's light sample again, for its direction */
 #endif
@@ -433,6 +442,7 @@ inline int light_and_sample_vertex(const Scene *scene, const SampledWavelengths 
     float uc = sample_1d(sampler);
     float2 u = sample_2d(sampler);
     SurfaceContext sc = shading_context(scene, v->uv, v->p, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
+    SURFACE_AT_HIT(sc, *v);
     return material_sample(material, &sc, w, v->ns, v->wo, uc, u, bs)
         && shading_side_agrees(v->n, v->ns, bs->wi);
 }
@@ -443,6 +453,7 @@ inline void polarized_scatter_vertex(const Scene *scene, const SampledWavelength
                                      const PathVertex *v, const BSDFSample *bs)
 {
     SurfaceContext sc = shading_context(scene, v->uv, v->p, v->footprint, v->ns_base, v->dpdu, v->tangent_w, 0);
+    SURFACE_AT_HIT(sc, *v);
     polarized_scatter(&s->pol, &s->throughput, &scene->materials[v->info.material], &sc, w, v->ns, v->wo, bs);
 }
 

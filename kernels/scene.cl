@@ -80,6 +80,9 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
     sc.dpdu = (float3)(0.0f);
     sc.tangent_w = 1.0f;
     sc.adjoint = 0;
+#if SCENE_HAS_MESH_ATTRIBUTES
+    sc.buffers.triangle = -1;
+#endif
     return sc;
 }
 
@@ -409,6 +412,7 @@ inline float surface_opacity(const Scene *scene, int triangle, float2 b12)
         at.instance = -1;  /* hit_uv reads only the slot */
 #endif
         SurfaceContext sc = surface_context(scene, hit_uv(scene, at), 0.0f);
+        SURFACE_AT_HIT(sc, at);
         return texture_numbers(&sc.buffers, m->opacity_texture, sc.uv, 0.0f).x;
     }
     return m->opacity;

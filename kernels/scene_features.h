@@ -67,6 +67,11 @@
 #define SCENE_HAS_SOLID_TEXTURES 1
 #endif
 
+/* Mesh attribute textures, read at the hit's triangle (kernels/texture_mesh_attribute.cl). */
+#ifndef SCENE_HAS_MESH_ATTRIBUTES
+#define SCENE_HAS_MESH_ATTRIBUTES SCENE_HAS_TEXTURES
+#endif
+
 /* Lookups that read the texture footprint (trilinear filtering, a checkerboard bump map's differences): only then
  * does a hit pay for camera_footprint (kernels/scene.cl); elsewhere the footprint stays 0, which no other lookup
  * reads. */

@@ -114,6 +114,7 @@ inline void trace_photon(const Scene *scene, int stream, int sample_index, const
         }
         if (s.segments + 2 > last_segment) return;
         SurfaceContext sc = shading_context(scene, v.uv, v.p, v.footprint, v.ns_base, v.dpdu, v.tangent_w, 1);
+        SURFACE_AT_HIT(sc, v);
         if (!continue_light_path(&v, material, &sc, w, params, &sampler, &s, &scatter)) return;
     }
 }
@@ -234,6 +235,7 @@ inline void sppm_gather(const Scene *scene, const PhotonGrid *grid, __global con
         __global const Material *material = &scene->materials[v.info.material];
         if (material_disperses(material, w)) terminate_secondary(&s.throughput, &s.secondary_terminated);
         SurfaceContext sc = shading_context(scene, v.uv, v.p, v.footprint, v.ns_base, v.dpdu, v.tangent_w, 0);
+        SURFACE_AT_HIT(sc, v);
         if (material_has_non_delta_lobe(material)) {
             /* The visible point: no BSDF sample leaves it, so next-event estimation is not MIS-weighted. */
             direct += s.throughput * estimate_direct_light(scene, w, &sampler, v.p, v.n, v.ns, v.wo, material, &sc,

@@ -30,6 +30,10 @@ typedef struct {
     __global const Texture *textures;
     __global const float *texels;
     __global const float *spectra;
+#if SCENE_HAS_MESH_ATTRIBUTES
+    int triangle;  /* the hit's triangle slot, whose mesh attributes are read (texture_mesh_attribute.cl); -1: none */
+    float2 b12;    /* the hit's barycentrics of its corners v1 and v2 */
+#endif
 } TextureBuffers;
 
 /* Beyond ±2^30 texels an int index would overflow; a texture repeated that often is a constant to any filter. */
@@ -250,6 +254,9 @@ inline int checkerboard_side(float2 st)
 #if SCENE_HAS_SOLID_TEXTURES
 #include "texture_solid.cl"
 #endif
+#if SCENE_HAS_MESH_ATTRIBUTES
+#include "texture_mesh_attribute.cl"
+#endif
 
 /* A texture that is no composite (an image texture, or a solid texture looked up at the world-space point p). */
 inline float4 inner_texture_spectrum(const TextureBuffers *b, __global const Texture *t, float2 uv, float3 p,
@@ -257,6 +264,9 @@ inline float4 inner_texture_spectrum(const TextureBuffers *b, __global const Tex
 {
 #if SCENE_HAS_SOLID_TEXTURES
     if (texture_is_solid(t)) return solid_texture_spectrum(b, t, p, w);
+#endif
+#if SCENE_HAS_MESH_ATTRIBUTES
+    if (t->type == TEXTURE_MESH_ATTRIBUTE) return mesh_attribute_spectrum(b, t, w);
 #endif
     return image_texture_spectrum(t, b, uv, footprint, w);
 }
@@ -342,6 +352,13 @@ typedef struct {
     int adjoint;         /* 1: the transport carries importance, so a sampled direction is the viewer's side and
                             wo the light's (light tracer, photons, BDPT light subpaths); 0: radiance */
 } SurfaceContext;
+
+/* Where a surface context's lookups read mesh attributes: the hit of vertex v (a PathVertex or BdptVertex). */
+#if SCENE_HAS_MESH_ATTRIBUTES
+#define SURFACE_AT_HIT(sc, v) ((sc).buffers.triangle = (v).triangle, (sc).buffers.b12 = (v).b12)
+#else
+#define SURFACE_AT_HIT(sc, v) ((void)0)
+#endif
 
 /* A textured parameter: its texture when it has one, else its tabulated spectrum. In a scene without textures the
  * test folds away (SCENE_HAS_TEXTURES) and this is the plain table lookup. */

@@ -16,6 +16,8 @@ PROJECTOR = """<emitter type="projector">
   <float name="fov" value="50"/><float name="scale" value="0.8"/>
   <texture name="irradiance" type="bitmap"><string name="filename" value="image.png"/></texture>
 </emitter>"""
+# Mitsuba's field for a focal length on the 3:2 image's aspect (the film diagonal's field, on the image's width).
+FOCAL_PROJECTOR = PROJECTOR.replace('<float name="fov" value="50"/>', '<string name="focal_length" value="35mm"/>')
 WHITE_PROJECTOR = """<emitter type="projector">
   <transform name="to_world"><lookat origin="0, 0, 1" target="0, 0, 0" up="0, 1, 0"/></transform>
   <float name="fov" value="60"/><rgb name="irradiance" value="0.5"/>
@@ -76,7 +78,20 @@ def test_a_projector_without_fov_takes_mitsubas_focal_length_field(tmp_path, foc
 
 
 @pytest.mark.peer
-@pytest.mark.parametrize("emitter", [WHITE_PROJECTOR, PROJECTOR], ids=["white", "image"])
+def test_an_image_projectors_focal_length_field_is_mitsubas_on_the_images_aspect(tmp_path, mitsuba_scalar_spectral):
+    """The field across the 3:2 image's width for 35mm is the x_fov Mitsuba's perspective sensor gives a 3:2 film."""
+    mi = mitsuba_scalar_spectral
+    _image(tmp_path)
+    light = mitsuba_scene_data(_xml(tmp_path, 8, FOCAL_PROJECTOR))[0]["lights"][0]
+    film = {"type": "hdrfilm", "width": 12, "height": 8}
+    sensor = mi.load_dict({"type": "perspective", "focal_length": "35mm", "film": film})
+    assert light["fov"] == pytest.approx(float(mi.traverse(sensor)["x_fov"]), rel=1e-5)
+
+
+@pytest.mark.peer
+@pytest.mark.parametrize(
+    "emitter", [WHITE_PROJECTOR, PROJECTOR, FOCAL_PROJECTOR], ids=["white", "image", "image, focal length"]
+)
 def test_projector_over_a_floor_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral, emitter):
     """Both renderers, spectral, independent replicas; 8 x 8-pixel block means and the image mean agree within 5
     standard errors (tests/replica_agreement.py): the field's edges, the image's colours and orientation."""

@@ -263,8 +263,8 @@ UNSUPPORTED = [
     ),
     (
         "other-texture-type",
-        QUAD.format('<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf>'),
-        "texture 'mesh_attribute' as reflectance (line",
+        QUAD.format('<bsdf type="diffuse"><texture type="volume" name="reflectance"/></bsdf>'),
+        "texture 'volume' as reflectance (line",
     ),
     (
         "unknown-bitmap-property",

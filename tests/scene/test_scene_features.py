@@ -89,6 +89,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_PROCEDURAL_TEXTURES": 0,
         "SCENE_HAS_SOLID_TEXTURES": 0,
+        "SCENE_HAS_MESH_ATTRIBUTES": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_PARTIAL_SHAPES": 0,
@@ -457,7 +458,27 @@ def _instanced_scene() -> spectrace.Scene:
     )
 
 
+def _mesh_attribute_scene():
+    """The cornell box's tall block wearing random vertex colours, blended by face weights with a rough conductor."""
+    base = _bundled("cornell_box")
+    block = base.shapes[-1]
+    rng = np.random.default_rng(4)
+    mesh = replace(
+        block.mesh,
+        attributes={
+            "vertex_color": rng.random((len(block.mesh.vertices), 3)),
+            "face_w": rng.random(len(block.mesh.faces)),
+        },
+    )
+    material = spectrace.mix(
+        [spectrace.diffuse(spectrace.mesh_attribute("vertex_color")), spectrace.conductor("Cu", roughness=0.2)],
+        spectrace.mesh_attribute("face_w"),
+    )
+    return replace(base, shapes=[*base.shapes[:-1], replace(block, mesh=mesh, material=material)])
+
+
 SCENES = {
+    "mesh_attributes": _mesh_attribute_scene,
     "thin_lens_and_gaussian": lambda: _with_camera(_bundled("cornell_box"), "thinlens", "gaussian"),
     "orthographic_trilinear_and_mitchell": lambda: _with_camera(
         _textured_scene(("trilinear",)), "orthographic", "mitchell"

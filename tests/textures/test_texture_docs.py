@@ -20,6 +20,7 @@ API = {
     "wrinkled": spectrace.wrinkled_texture,
     "windy": spectrace.windy_texture,
     "marble": spectrace.marble_texture,
+    "mesh_attribute": spectrace.mesh_attribute,
 }
 
 

@@ -20,6 +20,7 @@ from spectrace.core.contract import (
     TRIANGLE_INFO_DTYPE,
     TRIANGLE_NO_MATERIAL,
 )
+from spectrace.engine.mesh_attribute_rows import write_attribute_tables
 from spectrace.engine.vertex_tangents import corner_tangents, smooth_rows
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
@@ -31,7 +32,7 @@ from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
 from spectrace.lights.area import AreaEmitter
 from spectrace.lights.base import LightRows
-from spectrace.materials import append_material_rows, material_textures, write_detail
+from spectrace.materials import append_material_rows, uv_material_textures, write_detail
 from spectrace.materials.surface import cut_out_problem
 from spectrace.scene.model import Instance, InstancedObject, Scene
 from spectrace.spectral.colorimetry import cmf_table_normalised
@@ -201,6 +202,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     medium_index: dict[int, int] = {}
     medium_rows: list[tuple[int, int, float, int]] = []
     analytic: list[tuple[AnalyticSurface, int, int, int]] = []  # surface, material, emitter, interior
+    meshed: list[tuple] = []  # (shape, first triangle, count): where mesh attributes are read (mesh_attribute_rows)
     for shape in scene.shapes:
         interior = -1
         if shape.interior is not None:
@@ -218,10 +220,10 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
             problem := cut_out_problem(shape.material, shape.emitter is not None, shape.interior is not None)
         ) is not None:
             raise SpectraceError(f"shape '{shape.name}': {problem}")
-        if shape.material is not None and shape.mesh.uvs is None and material_textures(shape.material):
+        if shape.material is not None and shape.mesh.uvs is None and uv_material_textures(shape.material):
             raise SpectraceError(
                 f"shape '{shape.name}' has no texture coordinates, but its material has a texture "
-                f"({', '.join(material_textures(shape.material))})"
+                f"({', '.join(uv_material_textures(shape.material))})"
             )
         if shape.emitter is not None and shape.emitter.image is not None and shape.mesh.uvs is None:
             raise SpectraceError(f"shape '{shape.name}' has no texture coordinates, but its emitter shows an image")
@@ -233,6 +235,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
             analytic.append((shape.analytic, material_index[key], emitter_id, interior))
             continue
         v0, v1, v2, corner_uvs, corner_normals = shape.mesh.corners()
+        meshed.append((shape, sum(len(v) for v in v0s), len(v0)))
         v0s.append(v0)
         v1s.append(v1)
         v2s.append(v2)
@@ -366,6 +369,15 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     if objects.shape_rows is not None:
         shape_rows[len(analytic) : len(analytic) + objects.shape_count] = objects.shape_rows
 
+    write_attribute_tables(
+        textures,
+        out.texel_chunks,
+        meshed,
+        bvh.prim_order,
+        len(triangle_info),
+        [s for s in scene.shapes if s.analytic is not None]
+        + [s for instance in scene.instances for s in instance.object.shapes],
+    )
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
     materials = np.array(material_rows, MATERIAL_DTYPE) if material_rows else np.zeros(1, MATERIAL_DTYPE)
@@ -492,7 +504,7 @@ class _ObjectTriangles:
                     append_material_rows(shape.material, material_rows, table, textures, material_index)
                 if (problem := cut_out_problem(shape.material, False, shape.interior is not None)) is not None:
                     raise SpectraceError(f"{where}: {problem}")
-                if shape.material is not None and shape.mesh.uvs is None and material_textures(shape.material):
+                if shape.material is not None and shape.mesh.uvs is None and uv_material_textures(shape.material):
                     raise SpectraceError(f"{where} has no texture coordinates, but its material has a texture")
                 if shape.analytic is not None:
                     shape_rows.append(shape.analytic.device_row())

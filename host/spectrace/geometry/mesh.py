@@ -50,12 +50,17 @@ class TriangleMesh:
     # handedness, the bitangent being cross(normal, xyz) · w. Used with the vertex normals only (a flat face has no
     # normal to make them orthogonal to); None: the frame follows each triangle's dp/du.
     tangents: np.ndarray | None = None
+    # Named per-vertex and per-face values, as Mitsuba 3 names a mesh's attributes: "vertex_<name>" (N, C) values
+    # interpolated across each face, "face_<name>" (M, C) one value per face; C is 1 or 3. What a
+    # `mesh_attribute` texture reads (textures/mesh_attribute.py).
+    attributes: dict[str, np.ndarray] | None = None
 
     __eq__ = fields_equal  # arrays compared by value: two meshes (and the shapes holding them) compare as equal
 
     def __repr__(self) -> str:
         # The dataclass's own repr would print the arrays.
         extras = "".join(f", {name}" for name in ("uvs", "normals", "tangents") if getattr(self, name) is not None)
+        extras += "".join(f", {name}" for name in self.attributes or {})
         return f"TriangleMesh({len(self.vertices)} vertices, {len(self.faces)} faces{extras})"
 
     def __post_init__(self) -> None:
@@ -79,10 +84,38 @@ class TriangleMesh:
                 raise ValueError("tangents must be finite")
         if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
             raise ValueError(f"vertices must be (N, 3), got {self.vertices.shape}")
+        if self.attributes is not None:
+            self.attributes = {name: self._checked_attribute(name, values) for name, values in self.attributes.items()}
         if self.faces.ndim != 2 or self.faces.shape[1] != 3:
             raise ValueError(f"faces must be (M, 3), got {self.faces.shape}")
         if problem := faces_problem(self.faces, len(self.vertices)):
             raise ValueError(problem)
+
+    def _checked_attribute(self, name: str, values: np.ndarray) -> np.ndarray:
+        values = np.asarray(values, dtype=np.float64)
+        if values.ndim == 1:
+            values = values[:, None]
+        count = {"vertex": len(self.vertices), "face": len(self.faces)}.get(name.split("_", 1)[0])
+        if count is None or "_" not in name:
+            raise ValueError(f"attribute '{name}': an attribute's name starts with vertex_ or face_")
+        if values.shape not in ((count, 1), (count, 3)):
+            raise ValueError(f"attribute '{name}' must be ({count},), ({count}, 1) or ({count}, 3), got {values.shape}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"attribute '{name}' must be finite")
+        return np.ascontiguousarray(values)
+
+    def corner_attribute(self, name: str) -> np.ndarray:
+        """(M, 3, C) values of attribute `name` at each triangle's corners, in the order corners() gives them (a
+        face attribute's value at all three): what the renderer interpolates with the hit's barycentrics."""
+        values = (self.attributes or {})[name]
+        if name.startswith("face_"):
+            return np.repeat(values[:, None, :], 3, axis=1)
+        corners = values[self.faces]
+        normals = self.triangle_normals()
+        if normals is not None:
+            back = winding_against_normals(*self.triangles(), normals)
+            corners[back] = corners[back][:, [0, 2, 1]]
+        return corners
 
     def triangles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Corner positions (v0, v1, v2), each (M, 3) float64."""
@@ -148,12 +181,26 @@ class TriangleMesh:
         texture's v does."""
         normals = None if self.normals is None else -self.normals
         tangents = None if self.tangents is None else self.tangents * [1.0, 1.0, 1.0, -1.0]
-        return TriangleMesh(self.vertices, self.faces[:, ::-1].copy(), uvs=self.uvs, normals=normals, tangents=tangents)
+        return TriangleMesh(
+            self.vertices,
+            self.faces[:, ::-1].copy(),
+            uvs=self.uvs,
+            normals=normals,
+            tangents=tangents,
+            attributes=self.attributes,
+        )
 
     def with_normals(self, normals: np.ndarray | None) -> "TriangleMesh":
         """The same mesh with other vertex normals (None: flat shading, which leaves no use for the tangents)."""
         tangents = None if normals is None else self.tangents
-        return TriangleMesh(vertices=self.vertices, faces=self.faces, uvs=self.uvs, normals=normals, tangents=tangents)
+        return TriangleMesh(
+            vertices=self.vertices,
+            faces=self.faces,
+            uvs=self.uvs,
+            normals=normals,
+            tangents=tangents,
+            attributes=self.attributes,
+        )
 
     def smooth_normals(self) -> np.ndarray:
         """(N, 3) vertex normals computed from the faces: each face's unit normal weighted by the angle of its corner
@@ -360,6 +407,11 @@ def _direct_ply(path: Path, where: str) -> TriangleMesh | None:
     if read.tangents is not None and mesh.normals is not None:
         _refuse_non_finite(read.tangents, "vertex tangents with NaN or infinite components", path, where)
         mesh.tangents = read.tangents
+    if read.attributes:
+        for name, values in read.attributes.items():
+            if not np.all(np.isfinite(values)):
+                raise SpectraceError(f"mesh file '{path}' has NaN or infinite values in its {name} attribute", where)
+        mesh.attributes = read.attributes
     return mesh
 
 

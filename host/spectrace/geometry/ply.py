@@ -1,8 +1,11 @@
 """A direct reader for the common binary PLY triangle mesh: one `vertex` element of scalar properties and one `face`
-element holding only a vertex-index list of three per face (what pbrt-v4's and Mitsuba 3's exporters and most tools
-write). The whole body is read as two numpy record arrays, with no per-element Python work, which makes a million
-triangles a fraction of a second where trimesh's general reader takes seconds. Anything else (ASCII, quads, extra
-elements or face properties, unreferenced vertices beside texture coordinates) returns None and goes to trimesh.
+element holding a vertex-index list of three per face and any scalar properties (what pbrt-v4's and Mitsuba 3's
+exporters and most tools write). The whole body is read as two numpy record arrays, with no per-element Python work,
+which makes a million triangles a fraction of a second where trimesh's general reader takes seconds. Anything else
+(ASCII, quads, extra elements, unreferenced vertices beside texture coordinates) returns None and goes to trimesh.
+
+Properties beyond positions, normals, texture coordinates and tangents are the mesh's attributes, named as Mitsuba 3's
+PLY reader names them (`attributes`).
 
 Format: Greg Turk's PLY description (paulbourke.net/dataformats/ply/). The result matches what spectrace's trimesh
 path makes of the same file (a test compares both on written files), so the reader changes speed only.
@@ -45,6 +48,53 @@ class PlyTriangles:
     # (N, 4) float64 tangents (tx, ty, tz, tw: glTF's xyz and handedness w, along +u) as stored; None when the file
     # has none. Only this reader takes them: a PLY file read through trimesh loses them.
     tangents: np.ndarray | None = None
+    # Mitsuba 3's mesh attributes: "vertex_<name>" (N, C) and "face_<name>" (M, C), C 1 or 3 (mesh_attributes).
+    attributes: dict[str, np.ndarray] | None = None
+
+
+# The vertex properties the mesh itself reads; the others are attributes.
+_GEOMETRY_NAMES = {"x", "y", "z", "nx", "ny", "nz", "tx", "ty", "tz", "tw"} | {n for pair in _UV_NAMES for n in pair}
+# The suffixes that make consecutive properties `<prefix>_<suffix>` one attribute's channels (Mitsuba 3's ply.h):
+# an attribute of r, g, b channels is named `<prefix>_color` (`color` alone without a prefix, as `r g b` or
+# `red green blue` vertex colours are).
+_CHANNEL_SUFFIXES: tuple[tuple[str, ...], ...] = (
+    ("0", "1", "2"),
+    ("x", "y", "z"),
+    ("r", "g", "b"),
+    ("red", "green", "blue"),
+)
+_COLOUR_SUFFIXES: tuple[tuple[str, ...], ...] = (("r", "g", "b"), ("red", "green", "blue"))
+
+
+def mesh_attributes(element: str, names: list[str], columns) -> dict[str, np.ndarray]:
+    """The attributes that properties `names` of a PLY element ("vertex" or "face") make, as Mitsuba 3 groups them:
+    consecutive properties `<prefix>_<suffix>` with suffixes 0, 1, 2 (or x, y, z; r, g, b; red, green, blue) are one
+    attribute `<element>_<prefix>` of as many channels (`<element>_<prefix>_color` for r, g, b), kept when it has 1
+    or 3; a property with no such suffix is not an attribute (Mitsuba ignores it). Integer values are kept as they
+    are stored (not normalised), as Mitsuba keeps them. `columns(keys)` gives the (count, len(keys)) values."""
+    groups: list[tuple[str, tuple[str, ...], list[str]]] = []  # (prefix, suffix set, property names)
+    for name in names:
+        if name in _GEOMETRY_NAMES and element == "vertex":
+            continue
+        prefix, _, suffix = name.rpartition("_")
+        suffixes = next((group for group in _CHANNEL_SUFFIXES if suffix in group), None)
+        if suffixes is None:
+            continue
+        last = groups[-1] if groups else None
+        if last is not None and last[:2] == (prefix, suffixes) and suffixes.index(suffix) == len(last[2]):
+            last[2].append(name)
+            continue
+        if suffixes.index(suffix) == 0:
+            groups.append((prefix, suffixes, [name]))
+    attributes = {}
+    for prefix, suffixes, members in groups:
+        if len(members) not in (1, 3):
+            continue
+        if suffixes in _COLOUR_SUFFIXES:
+            prefix = f"{prefix}_color" if prefix else "color"
+        if prefix:
+            attributes[f"{element}_{prefix}"] = columns(tuple(members))
+    return attributes
 
 
 # A PLY header is searched for this far into a file (real headers are a few hundred bytes).
@@ -109,15 +159,20 @@ def read_binary_ply(data: bytes) -> PlyTriangles | None:
     if byte_order is None or [e[0] for e in elements] != ["vertex", "face"]:
         return None
     (_, vertex_count, vertex_properties), (_, face_count, face_properties) = elements
-    if vertex_count == 0 or face_count == 0 or len(face_properties) != 1:
+    if vertex_count == 0 or face_count == 0 or sum(p[0] == "list" for p in face_properties) != 1:
         return None
     if any(len(p) != 2 or p[0] not in _TYPES for p in vertex_properties):
         return None
     names = [p[1] for p in vertex_properties]
     if len(set(names)) != len(names) or not {"x", "y", "z"} <= set(names):
         return None
-    face = face_properties[0]
-    if len(face) != 4 or face[0] != "list" or face[3] not in _INDEX_NAMES:
+    face = next(p for p in face_properties if p[0] == "list")
+    if len(face) != 4 or face[3] not in _INDEX_NAMES:
+        return None
+    face_scalars = [p for p in face_properties if p is not face]
+    if any(len(p) != 2 or p[0] not in _TYPES for p in face_scalars) or len({p[1] for p in face_scalars}) < len(
+        face_scalars
+    ):
         return None
     count_type, index_type = _TYPES.get(face[1]), _TYPES.get(face[2])
     if count_type is None or index_type is None or count_type[0] not in _INTEGER_KINDS:
@@ -125,7 +180,7 @@ def read_binary_ply(data: bytes) -> PlyTriangles | None:
     if index_type[0] not in _INTEGER_KINDS:
         return None
     vertex_type = np.dtype([(name, byte_order + _TYPES[kind]) for kind, name in vertex_properties])
-    face_type = np.dtype([("n", byte_order + count_type), ("i", byte_order + index_type, (3,))])
+    face_type = np.dtype(_face_fields(face_properties, face, byte_order, count_type, index_type))
     if len(data) < body + vertex_count * vertex_type.itemsize + face_count * face_type.itemsize:
         return None
     vertex_data = np.frombuffer(data, vertex_type, vertex_count, body)
@@ -150,4 +205,21 @@ def read_binary_ply(data: bytes) -> PlyTriangles | None:
         length = np.linalg.norm(stored, axis=-1, keepdims=True)
         normals = np.divide(stored, length, out=np.zeros_like(stored), where=length > 0)
     tangents = columns(("tx", "ty", "tz", "tw")) if {"tx", "ty", "tz", "tw"} <= set(names) else None
-    return PlyTriangles(columns(("x", "y", "z")), faces, normals, uvs, tangents)
+
+    def face_columns(keys: tuple[str, ...]) -> np.ndarray:
+        return np.column_stack([face_data[f"p_{key}"] for key in keys]).astype(np.float64)
+
+    attributes = mesh_attributes("vertex", names, columns)
+    attributes |= mesh_attributes("face", [p[1] for p in face_scalars], face_columns)
+    return PlyTriangles(columns(("x", "y", "z")), faces, normals, uvs, tangents, attributes or None)
+
+
+def _face_fields(properties: list[list[str]], face: list[str], byte_order: str, count_type: str, index_type: str):
+    """The record of a face element whose vertex-index list (three per face) sits among scalar properties."""
+    fields: list = []
+    for p in properties:
+        if p is face:
+            fields += [("n", byte_order + count_type), ("i", byte_order + index_type, (3,))]
+        else:
+            fields.append((f"p_{p[1]}", byte_order + _TYPES[p[0]]))
+    return fields

@@ -64,7 +64,14 @@ def apply_transform(mesh: TriangleMesh, matrix: np.ndarray) -> TriangleMesh:
         tangents[:, :3] = mesh.tangents[:, :3] @ linear.T
         if np.linalg.det(linear) < 0:
             tangents[:, 3] = -tangents[:, 3]
-    return TriangleMesh(vertices=vertices, faces=faces.copy(), uvs=mesh.uvs, normals=normals, tangents=tangents)
+    return TriangleMesh(
+        vertices=vertices,
+        faces=faces.copy(),
+        uvs=mesh.uvs,
+        normals=normals,
+        tangents=tangents,
+        attributes=mesh.attributes,
+    )
 
 
 def _translate(value: object, where: str) -> np.ndarray:

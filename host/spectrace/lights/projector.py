@@ -278,9 +278,10 @@ def make(
     return ProjectorLight(origin_t, direction, emitted, tan_x, tan_y, image, x, profile)
 
 
-def _mitsuba_focal_length_fov(focal_length: str) -> float | None:
+def _mitsuba_focal_length_fov(focal_length: str, aspect: float = 1.0) -> float | None:
     """The field across the width Mitsuba 3 gives a focal length (default 50mm) on a 36 × 24 mm film's diagonal, for
-    a square image (a constant irradiance's): tan(fov/2) = (d/2f)·a/√(1+a²), a = 1. None: not in mm."""
+    an image `aspect` (width / height) wide: tan(fov/2) = (d/2f)·a/√(1+a²) (a = 1 for a constant irradiance's
+    square). None: not in mm."""
     text = focal_length.strip()
     if not text.endswith("mm"):
         return None
@@ -291,7 +292,18 @@ def _mitsuba_focal_length_fov(focal_length: str) -> float | None:
     if not millimetres > 0.0:
         return None
     diagonal = math.hypot(36.0, 24.0)
-    return math.degrees(2.0 * math.atan(diagonal / (2.0 * millimetres) / math.sqrt(2.0)))
+    return math.degrees(2.0 * math.atan(diagonal / (2.0 * millimetres) * aspect / math.sqrt(1.0 + aspect * aspect)))
+
+
+def _mitsuba_image_aspect(importer, reference: dict) -> float | None:
+    """Width / height of the bitmap an imported irradiance texture reads; None for another texture."""
+    table = importer.textures.get(reference["texture"], {})
+    if table.get("type") != "bitmap" or "file" not in table:
+        return None
+    from spectrace.io.images import read_texture_image
+
+    values, _ = read_texture_image(importer.toml_folder / table["file"], f"{importer.xml_path}: irradiance")
+    return values.shape[1] / values.shape[0]
 
 
 def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
@@ -324,12 +336,13 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
         return None
     if "fov" in properties:
         fov = importer.number(properties["fov"])
-    elif "image" in table:
-        importer.unsupported_plugin(emitter, " with an image and a focal_length instead of fov")
-        return None
     else:
+        aspect = _mitsuba_image_aspect(importer, table["image"]) if "image" in table else 1.0
+        if aspect is None:
+            importer.unsupported_plugin(emitter, " with an image that is not a bitmap and a focal_length")
+            return None
         focal_length = properties.get("focal_length")
-        fov = _mitsuba_focal_length_fov(importer.text(focal_length) if focal_length is not None else "50mm")
+        fov = _mitsuba_focal_length_fov(importer.text(focal_length) if focal_length is not None else "50mm", aspect)
         if fov is None:
             importer.unsupported_plugin(emitter, " with a focal_length not in mm")
             return None

@@ -109,6 +109,14 @@ def material_textures(material) -> dict:
     return found
 
 
+def uv_material_textures(material) -> dict:
+    """material_textures looked up at texture coordinates: what a shape wearing `material` needs them for (a mesh
+    attribute is read from the mesh itself)."""
+    from spectrace.textures import uv_textures
+
+    return uv_textures(material_textures(material))
+
+
 def append_material_rows(material, rows: list[np.ndarray], table: SpectrumTable, textures, index: dict) -> int:
     """The row index of `material` in `rows`, appending its row (material_row) on first use, keyed by id() in
     `index`; a mix's materials are appended after it, recursively, and their indices written into its row."""

@@ -33,7 +33,7 @@ from spectrace.io.input_files import regular_file
 from spectrace.lights import LIGHTS
 from spectrace.lights.area import emitter as area_emitter
 from spectrace.lights.area import emitter_stokes, peak_radiance
-from spectrace.materials import MATERIALS, material_textures, surface
+from spectrace.materials import MATERIALS, surface, uv_material_textures
 from spectrace.scene import schema
 from spectrace.scene.model import (
     AreaEmitter,
@@ -276,7 +276,10 @@ class _Resolver:
         except SpectraceError as exc:
             raise SpectraceError(str(exc), where=self.where(key)) from None
 
-    def spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool) -> Spectrum:
+    def spectrum(self, spec: schema.SpectrumSpec, key: str, emission: bool, bounded: bool = True) -> Spectrum:
+        """A spectrum table's Spectrum: an emission's or a reflectance's (an RGB triple uplifted for that role),
+        refused where negative and, for a reflectance that is `bounded`, above 1 (a composite texture's operand is
+        bounded by the parameter that uses the texture instead: textures.check_texture_values)."""
         if spec.display is not None:
             result = self.display_spectrum(spec, key, emission)
         elif spec.rgb is not None:
@@ -296,14 +299,14 @@ class _Resolver:
             if problem := limits.spectrum_magnitude_problem(result.values * spec.scale):
                 raise SpectraceError(problem, where=self.where(key))
         result = result * spec.scale if spec.scale != 1.0 else result
-        return within_bounds(result, emission, self.where(key))
+        return within_bounds(result, emission or not bounded, self.where(key))
 
     def spectrum_or_texture(self, spec, key: str, kind: str, inner: bool = False):
         """A textured parameter's value (kind "spectrum": a reflectance, or "float": a scalar): a Spectrum, or a
         texture whose values are checked for that use. inner: an operand of a composite (a checkerboard's side, a
         scale's or mix's operand), which takes no composite."""
         if isinstance(spec, schema.SpectrumSpec):
-            return self.spectrum(spec, key, emission=False)
+            return self.spectrum(spec, key, emission=False, bounded=not inner)
         if isinstance(spec, schema.TextureRefSpec):
             texture = self.named_texture(spec.texture, f"{key}.texture")
             if inner and not is_texture_image(texture):
@@ -465,10 +468,10 @@ class _Resolver:
                 close = difflib.get_close_matches(s.material, list(materials), n=1)
                 hint = f" (did you mean '{close[0]}'?)" if close else f"; defined: {', '.join(sorted(materials))}"
                 raise SpectraceError(f"undefined material '{s.material}'{hint}", where=self.where(f"{key}.material"))
-            if s.material is not None and mesh.uvs is None and material_textures(materials[s.material]):
+            if s.material is not None and mesh.uvs is None and uv_material_textures(materials[s.material]):
                 raise SpectraceError(
                     f"shape '{s.name or f'{s.type}{i}'}' has no texture coordinates, but material '{s.material}' has "
-                    f"a texture ({', '.join(material_textures(materials[s.material]))})",
+                    f"a texture ({', '.join(uv_material_textures(materials[s.material]))})",
                     where=self.where(f"{key}.material"),
                 )
             emitter = None

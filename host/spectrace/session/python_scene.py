@@ -217,11 +217,11 @@ def _recorded_in(values: Iterable[Any]) -> Iterable[Any]:
 
 
 def _check_texture_coordinates(shape: Any, material: Any, where: str) -> None:
-    from spectrace.materials import material_textures
+    from spectrace.materials import uv_material_textures
 
-    if material is not None and shape.mesh.uvs is None and material_textures(material):
+    if material is not None and shape.mesh.uvs is None and uv_material_textures(material):
         raise SpectraceError(
             f"shape '{shape.name}' has no texture coordinates, but its material has a texture "
-            f"({', '.join(material_textures(material))})",
+            f"({', '.join(uv_material_textures(material))})",
             where=where or None,
         )

@@ -606,7 +606,7 @@ class _Plan:
         return max(names, key=len)
 
     def _materials(self, scene: Scene, spec, resolver, names: set[str], source: Path) -> Scene:
-        from spectrace.materials import material_textures
+        from spectrace.materials import uv_material_textures
 
         named = self.session._materials
         # A mix holds its parts: every mix is resolved again, from the parts as they are now.
@@ -619,10 +619,10 @@ class _Plan:
             out = []
             for shape, shape_spec in zip(shapes, specs):
                 material = swap.get(id(shape.material), shape.material)
-                if material is not shape.material and shape.mesh.uvs is None and material_textures(material):
+                if material is not shape.material and shape.mesh.uvs is None and uv_material_textures(material):
                     raise SpectraceError(
                         f"shape '{shape.name}' has no texture coordinates, but material '{shape_spec.material}' "
-                        f"has a texture ({', '.join(material_textures(material))})",
+                        f"has a texture ({', '.join(uv_material_textures(material))})",
                         where=f"{source}: materials.{shape_spec.material}",
                     )
                 out.append(replace(shape, material=material))

@@ -28,11 +28,25 @@ from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
-from spectrace.textures import bitmap, checkerboard, dots, fbm, marble, mix, scale, spectral, storage, windy, wrinkled
+from spectrace.textures import (
+    bitmap,
+    checkerboard,
+    dots,
+    fbm,
+    marble,
+    mesh_attribute,
+    mix,
+    scale,
+    spectral,
+    storage,
+    windy,
+    wrinkled,
+)
 from spectrace.textures.base import TexturePlugin
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
 from spectrace.textures.dots import DotsTexture
+from spectrace.textures.mesh_attribute import MeshAttributeTexture
 from spectrace.textures.mix import MixTexture
 from spectrace.textures.scale import ScaleTexture
 from spectrace.textures.shared import FILTERS, WRAPS, ImageTextures, value_problem
@@ -41,7 +55,7 @@ from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module; the position is the Texture.type code.
 TEXTURES = Registry[TexturePlugin](
-    "texture", (bitmap, spectral, checkerboard, scale, mix, dots, fbm, wrinkled, windy, marble)
+    "texture", (bitmap, spectral, checkerboard, scale, mix, dots, fbm, wrinkled, windy, marble, mesh_attribute)
 )
 # Each texture an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
 for _module in TEXTURES.values():
@@ -52,10 +66,15 @@ COMPOSITE_TEXTURES = tuple(name for name, module in TEXTURES.items() if module.C
 # operands of composites, but have no texels.
 SOLID_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if getattr(module, "SOLID", False))
 SOLID_TEXTURE_CODES = [TEXTURES.codes[name] for name, module in TEXTURES.items() if getattr(module, "SOLID", False)]
+# Attribute textures read the mesh at the hit (textures/mesh_attribute.py): operands of composites too, with neither
+# texels nor texture coordinates.
+ATTRIBUTE_TEXTURES = tuple(module.MODEL for module in TEXTURES.values() if getattr(module, "ATTRIBUTE", False))
 IMAGE_TEXTURES = tuple(
-    module.MODEL for module in TEXTURES.values() if not module.COMPOSITE and not getattr(module, "SOLID", False)
+    module.MODEL
+    for module in TEXTURES.values()
+    if not module.COMPOSITE and not getattr(module, "SOLID", False) and not getattr(module, "ATTRIBUTE", False)
 )
-INNER_TEXTURES = IMAGE_TEXTURES + SOLID_TEXTURES  # what a composite's operands may be
+INNER_TEXTURES = IMAGE_TEXTURES + SOLID_TEXTURES + ATTRIBUTE_TEXTURES  # what a composite's operands may be
 # Those that pick one of two sides (color0, color1) at the point: their rows and checks are alike.
 TWO_SIDED = (CheckerboardTexture, DotsTexture)
 _MODELS = tuple(module.MODEL for module in TEXTURES.values())
@@ -79,6 +98,9 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
         if isinstance(texture, SolidTexture) and texture.channels == 1:
             return
         kind, upper = "float", 1.0
+    if isinstance(texture, MeshAttributeTexture):
+        mesh_attribute.record_use(texture, kind, where, upper)
+        return
     if kind == "emission" and not isinstance(texture, IMAGE_TEXTURES):
         raise SpectraceError(
             f"an emission texture is a bitmap or a spectral texture, not a {texture_module(texture).NAME}", where=where
@@ -101,9 +123,14 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
                         )
                 else:
                     check_texture_values(side, kind, where, upper)
-            if upper is not None and (high := scalar_range(texture)[1]) > upper:
-                raise SpectraceError(f"{texture.source} has values above {upper:g} (max {high:.4g})", where=where)
-        return  # a reflectance checkerboard's or dots' sides were checked as they were resolved
+        elif kind == "spectrum":
+            upper = 1.0
+        # Its sides were resolved as values >= 0: the bound is the using parameter's (a reflectance's 1, a number's
+        # range), checked here for every use.
+        if upper is not None and (high := scalar_range(texture)[1]) > upper + 1e-6:
+            why = ", which as a reflectance would create energy" if kind == "spectrum" else ""
+            raise SpectraceError(f"{texture.source} has values above {upper:g} (max {high:.4g}){why}", where=where)
+        return
     if kind == "float" and not (isinstance(texture, BitmapTexture) and texture.channels == 1):
         raise SpectraceError(
             f"texture '{texture.source}' has {texture.channels} channels; this parameter needs one (a grey image)",
@@ -202,11 +229,27 @@ def scalar_range(value) -> tuple[float, float]:
         return value_range(value)
     if isinstance(value, SolidTexture):
         return value.value_range()
+    if isinstance(value, MeshAttributeTexture):
+        return 0.0, 0.0  # its values are the meshes', checked against each use once they meet (mesh_attribute.py)
     if isinstance(value, Spectrum):
         return float(value.values.min()), float(value.values.max())
     if isinstance(value, IMAGE_TEXTURES):
         return float(value.values.min()), float(value.values.max())
     return float(value), float(value)
+
+
+def uv_textures(textures: dict) -> dict:
+    """Those of `textures` (by name) that are looked up at texture coordinates: all but mesh attributes (and
+    composites made of nothing else)."""
+    return {
+        name: texture
+        for name, texture in textures.items()
+        if not isinstance(texture, MeshAttributeTexture)
+        and not (
+            isinstance(texture, (ScaleTexture, MixTexture))
+            and all(isinstance(o, (MeshAttributeTexture, Spectrum, int, float)) for o in texture.operands)
+        )
+    }
 
 
 def texture_module(texture):
@@ -227,8 +270,8 @@ def device_bytes(texture, kind: str) -> int:
     against before anything is converted."""
     if isinstance(texture, TWO_SIDED):
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
-    if isinstance(texture, SolidTexture):
-        return 0  # a few numbers, no texels
+    if isinstance(texture, (SolidTexture, MeshAttributeTexture)):
+        return 0  # a few numbers, no texels (a mesh attribute's values are counted as they are stored)
     if isinstance(texture, (ScaleTexture, MixTexture)):
         factor = _factor(texture)
         return sum(
@@ -260,6 +303,7 @@ class TextureRows:
         self.free: list[int] = []  # rows whose texture the scene uses no more (`release`): slots to take again
         self.rewritten = False  # a free slot was taken: rows and texels changed where they lie
         self.light_tables: dict = {}  # lights' sampling tables in the texels (spectrace.lights.distribution), by source
+        self.attribute_rows: list[tuple[int, object, str]] = []  # mesh attribute rows to fill: (row, texture, kind)
 
     def release(self, textures: set) -> None:
         """Let `textures` go (nothing of the scene uses them any more): their rows, and their texels, are taken by
@@ -323,6 +367,9 @@ class TextureRows:
                 row["factor"] = float(factor.values[0])  # a constant (checked)
             else:
                 row["factor"] = float(factor)
+        elif isinstance(texture, MeshAttributeTexture):
+            # Its table and values are written once the triangles' slots are known (engine/mesh_attribute_rows.py).
+            row["factor"] = texture.scale
         elif isinstance(texture, SolidTexture):
             values = np.asarray(texture_module(texture).device_solid(texture, self.table), np.float32)
             chunk = values.reshape(-1, 4)
@@ -369,4 +416,6 @@ class TextureRows:
             self.sizes.append(size)
             slot = len(self.rows) - 1
         self.index[key] = slot
+        if isinstance(texture, MeshAttributeTexture):
+            self.attribute_rows.append((slot, texture, kind))
         return slot

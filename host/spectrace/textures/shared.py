@@ -169,10 +169,15 @@ class ImageTextures:
 
 def api_operand(value, name: str):
     """An operand given to the Python API's constructor of a composite: an image texture as it is, anything else a
-    reflectance (anything `spectrace.spectrum` takes, an RGB triple)."""
+    spectrum (anything `spectrace.spectrum` takes, an RGB triple uplifted as a reflectance) of values >= 0, whose
+    upper bound is the using parameter's (checked where the texture is used: textures.check_texture_values)."""
     from spectrace.spectral import spectrum_input
 
-    return value if isinstance(value, ImageTextures.models) else spectrum_input.reflectance(value, name)
+    if isinstance(value, ImageTextures.models):
+        return value
+    if spectrum_input.is_rgb(value):
+        return spectrum_input.reflectance(value, name)
+    return spectrum_input.within_bounds(spectrum_input.spectrum(value), True, name)
 
 
 def api_factor(value, name: str, upper: float | None, kind: str = "float"):
