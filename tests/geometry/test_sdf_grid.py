@@ -122,9 +122,14 @@ def test_hits_are_the_interpolants_first_zero(kernel_runner, instanced):
         scene = _scene([spectrace.sdf_grid(values, material, transform=steps)])
     origins, directions = _rays(300, 5)
     t_ref, slope = reference_hits(values, matrix, origins, directions)
-    _, (hit, point, normal, shading, _) = _trace(kernel_runner, scene, origins, directions, np.full(300, 100.0))
+    _, (hit, point, normal, shading, occluded) = _trace(kernel_runner, scene, origins, directions, np.full(300, 100.0))
     t = hit[:, 0].astype(np.float64)
     clear = slope > 0.05  # grazing rays (a double root) may be met or missed by either
+    # Shadow rays (the any-hit query): blocked up to 100, not up to just short of the first zero.
+    np.testing.assert_array_equal(occluded[clear].astype(bool), np.isfinite(t_ref[clear]))
+    short = np.where(np.isfinite(t_ref), t_ref * 0.999, 100.0)
+    occluded_short = _trace(kernel_runner, scene, origins, directions, short)[1][4]
+    assert not occluded_short[clear].any()
     assert np.isfinite(t_ref[clear]).sum() > 100
     np.testing.assert_array_equal(np.isfinite(t[clear]), np.isfinite(t_ref[clear]))
     both = clear & np.isfinite(t_ref)
