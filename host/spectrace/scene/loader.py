@@ -426,7 +426,7 @@ class _Resolver:
             # Analytic unless asked for triangles: facets (face_normals = true) exist only on a tessellation.
             analytic = s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals)
             sdf_values = None
-            if s.type == "sdfgrid":  # its tessellation follows from the placed grid, below
+            if s.type == "sdfgrid":  # a stand-in for the range check; its tessellation follows from the placed grid
                 sdf_values = self.sdf_grid_values(s, key)
                 mesh = primitives.BUILTIN_SHAPES["cube"]()
             elif s.type == "mesh":
