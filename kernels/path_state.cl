@@ -156,6 +156,10 @@ typedef struct {
     float footprint;  /* texture footprint in uv units (scene.cl's camera_footprint; 0 unless SCENE_NEEDS_FOOTPRINT) */
 } PathVertex;
 
+#if SCENE_HAS_SDF_GRIDS
+#include "shape_sdf_grid_vertex.cl"
+#endif
+
 #if SCENE_HAS_SHAPES
 /* path_vertex at a hit of an analytic shape, placed by itself or by an instance (hit_shape_surface): its exact
  * normal shades (no interpolation to correct), and its dp/du, dp/dv frame the surface detail and the footprint. */
@@ -172,6 +176,9 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
     v.ns_base = v.ns;
     v.wo = -ray.direction;
     v.uv = hit.b12;
+#if SCENE_HAS_SDF_GRIDS
+    if (hit_shape(scene, hit.triangle)->type == SHAPE_SDFGRID) sdf_grid_vertex_shading(scene, hit, &v);
+#endif
     v.footprint = 0.0f;
     if (SCENE_NEEDS_FOOTPRINT) {
         v.footprint = footprint_from_tangents(scene->params, v.p, v.n, g.dpdu, g.dpdv, (float2)(1.0f, 0.0f),

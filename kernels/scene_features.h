@@ -122,6 +122,10 @@
 #ifndef SCENE_HAS_SHAPES
 #define SCENE_HAS_SHAPES 1
 #endif
+/* Signed-distance grids among the analytic shapes (kernels/shape_sdf_grid.cl). */
+#ifndef SCENE_HAS_SDF_GRIDS
+#define SCENE_HAS_SDF_GRIDS SCENE_HAS_SHAPES
+#endif
 
 /* Bit t set: the camera is of type CAMERA_t / the pixel filter is PIXEL_FILTER_t (one bit each in a scene's build;
  * every bit without the defines). */

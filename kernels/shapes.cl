@@ -89,12 +89,18 @@ inline int stable_roots(float a, float b, float c, float sqrt_discriminant, floa
 #if SCENE_HAS_PARTIAL_SHAPES
 #include "shape_partial.cl"
 #endif
+#if SCENE_HAS_SDF_GRIDS
+#include "shape_sdf_grid.cl"
+#endif
 
 /* The nearest hit of the shape in (0, t_max) along the ray (unit direction), or t_max; its texture coordinates in
  * *uv. */
 inline float intersect_shape(__global const AnalyticShape *s, float3 origin, float3 direction, float t_max,
                              float2 *uv)
 {
+#if SCENE_HAS_SDF_GRIDS
+    if (s->type == SHAPE_SDFGRID) return intersect_sdf_grid(s, origin, direction, t_max, uv);
+#endif
 #if SCENE_HAS_PARTIAL_SHAPES
     if (s->phi_max > 0.0f) return intersect_partial_shape(s, origin, direction, t_max, uv);
 #endif
@@ -205,6 +211,11 @@ inline void whole_shape_local(__global const AnalyticShape *s, float2 shape_uv, 
 inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_uv)
 {
     float3 object_point, n_local, dpdu, dpdv;
+#if SCENE_HAS_SDF_GRIDS
+    if (s->type == SHAPE_SDFGRID)
+        sdf_grid_local(s, shape_uv, &object_point, &n_local, &dpdu, &dpdv);
+    else
+#endif
 #if SCENE_HAS_PARTIAL_SHAPES
     if (s->phi_max > 0.0f)
         partial_shape_local(s, shape_uv, &object_point, &n_local, &dpdu, &dpdv);

@@ -73,7 +73,8 @@ typedef struct {
 typedef struct {
     float4 to_world[3];   /* rows of the object-to-world map: world coordinate i = dot(to_world[i], (p, 1)) */
     float4 to_object[3];  /* rows of its inverse */
-    float4 sphere;        /* SHAPE_SPHERE: world centre (xyz) and radius (w), scene units (to_world is a similarity) */
+    float4 sphere;        /* SHAPE_SPHERE: world centre (xyz) and radius (w), scene units (to_world is a similarity);
+                             SHAPE_SDFGRID: x's int bits, the offset to its samples (shape_sdf_grid.cl) */
     int type;             /* SHAPE_* */
     float abs_det;        /* |det| of to_world's linear part: world area = object area · abs_det · |M⁻ᵀ n_object| */
     float object_area;    /* object-space area: 4π (sphere), π (disk), 2π (cylinder); a partial shape's own */

@@ -11,6 +11,7 @@ import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import contextmanager
 from numbers import Real
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
@@ -32,6 +33,7 @@ from spectrace.geometry.analytic import (
 )
 from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
+from spectrace.geometry.sdf_grid import make_sdf_grid, read_sdf_grid
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.lights.base import vector3
 from spectrace.scene.model import (
@@ -303,6 +305,30 @@ def shape(
         mesh = mesh_from_trimesh(geometry)
     mesh = shading_normals(transformed(mesh, transform), face_normals, computed=not isinstance(geometry, str))
     return Shape(mesh=mesh, material=material, emitter=emitter, name=name, interior=interior)
+
+
+def sdf_grid(
+    values: ArrayLike | str | Path,
+    material=None,
+    transform: Iterable[Mapping[str, Any]] = (),
+    normals: Literal["smooth", "analytic"] = "smooth",
+    name: str = "",
+    interior: Medium | None = None,
+) -> Shape:
+    """A signed-distance grid shape (Mitsuba 3's sdfgrid; docs/scene-format.md): `values` shaped (nz, ny, nx) (x
+    fastest, as numpy's C order), or a one-channel Mitsuba volume file, sampled at the voxels' corners over the unit
+    cube, positive outside; the surface is the zero set of their trilinear interpolant. `transform` steps (as
+    `transformed`) place the cube; `normals` shade with the blended voxel gradients ("smooth") or the interpolant's
+    own ("analytic"). It has no texture coordinates and cannot emit."""
+    if material is None and interior is None:
+        raise SpectraceError("an SDF grid needs a material (or an interior)", where="material")
+    if isinstance(values, (str, Path)):
+        values = read_sdf_grid(Path(values), where="values")
+    matrix = transform_matrix([dict(step) for step in transform], where="transform") if transform else np.eye(4)
+    surface = make_sdf_grid(values, matrix, normals, where="values")
+    return Shape(
+        mesh=surface.tessellation(), material=material, name=name or "sdfgrid", interior=interior, analytic=surface
+    )
 
 
 def instanced_object(shapes: Sequence[Shape], name: str = "") -> InstancedObject:

@@ -101,6 +101,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_NORMAL_MAP_HANDEDNESS": 0,
         "SCENE_HAS_FILE_TANGENTS": 0,
         "SCENE_HIDES_AREA_EMITTERS": 0,
+        "SCENE_HAS_SDF_GRIDS": 0,
     }
     subsurface = scene_feature_defines(build_scene_buffers(_bundled("subsurface")))
     assert subsurface["SCENE_HAS_MEDIA"] == 1 and subsurface["SCENE_HAS_GRID_MEDIA"] == 0
@@ -108,6 +109,10 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     analytic = scene_feature_defines(build_scene_buffers(_analytic_shapes_scene()))
     assert analytic["SCENE_HAS_SHAPES"] == 1 and analytic["SCENE_HAS_PARTIAL_SHAPES"] == 0
     assert scene_feature_defines(build_scene_buffers(_partial_shapes_scene()))["SCENE_HAS_PARTIAL_SHAPES"] == 1
+    assert analytic["SCENE_HAS_SDF_GRIDS"] == 0
+    # The grids' samples follow the shape rows: only the rows themselves say what the scene has.
+    sdf = scene_feature_defines(build_scene_buffers(_sdf_grid_scene()))
+    assert sdf["SCENE_HAS_SDF_GRIDS"] == 1 and sdf["SCENE_HAS_PARTIAL_SHAPES"] == 0
     assert analytic["SCENE_LIGHT_TYPES"] == LIGHT_BITS["sphere"] | LIGHT_BITS["shape"]
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
@@ -333,6 +338,19 @@ def _grid_medium_scene() -> spectrace.Scene:
     )
 
 
+def _sdf_grid_scene() -> spectrace.Scene:
+    """The analytic shapes' scene with a lumpy SDF grid (kernels/shape_sdf_grid.cl) placed directly and instanced."""
+    x = np.linspace(0.0, 1.0, 12)
+    z, y, x = np.meshgrid(x, x, x, indexing="ij")
+    values = np.sqrt((x - 0.5) ** 2 + (y - 0.5) ** 2 + (z - 0.5) ** 2) - 0.35 - 0.05 * np.sin(13 * x) * np.cos(9 * y)
+    base = _analytic_shapes_scene()
+    grid = spectrace.sdf_grid(values, spectrace.diffuse(0.6), transform=[{"translate": [-1.2, -0.5, 0.0]}])
+    obj = spectrace.instanced_object([spectrace.sdf_grid(values, spectrace.diffuse(0.3), normals="analytic")])
+    return replace(
+        base, shapes=[*base.shapes, grid], instances=[spectrace.instance(obj, [{"translate": [0.4, -0.6, 0.1]}])]
+    )
+
+
 def _partial_shapes_scene() -> spectrace.Scene:
     """A cut sphere light over an annulus-sector floor and a cut cylinder (kernels/shape_partial.cl)."""
     floor = spectrace.shape("disk", spectrace.diffuse(0.6), transform=[{"scale": 3}], inner_radius=0.2, phi_max=300)
@@ -500,6 +518,7 @@ SCENES = {
     "beckmann_and_nonlinear_plastic": _beckmann_scene,
     "analytic_shapes": _analytic_shapes_scene,
     "partial_shapes": _partial_shapes_scene,
+    "sdf_grids": _sdf_grid_scene,
     "equal_area_camera_and_goniometric_light": _equal_area_scene,
     "grid_medium": _grid_medium_scene,
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.
@@ -534,6 +553,7 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
         "trilinear_texture",
         "analytic_shapes",
         "partial_shapes",
+        "sdf_grids",
         "equal_area_camera_and_goniometric_light",
         "anisotropic_principled",
         "anisotropic_conductor",

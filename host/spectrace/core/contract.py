@@ -196,8 +196,8 @@ TEXTURE_DTYPE = _struct(
 )
 
 # AnalyticShape.type (kernels/shapes.cl): Mitsuba 3's sphere, disk and cylinder in their object space.
-SHAPE_TYPES = ("sphere", "disk", "cylinder")
-SHAPE_SPHERE, SHAPE_DISK, SHAPE_CYLINDER = range(len(SHAPE_TYPES))
+SHAPE_TYPES = ("sphere", "disk", "cylinder", "sdfgrid")
+SHAPE_SPHERE, SHAPE_DISK, SHAPE_CYLINDER, SHAPE_SDFGRID = range(len(SHAPE_TYPES))
 
 ANALYTIC_SHAPE_DTYPE = _struct(
     [

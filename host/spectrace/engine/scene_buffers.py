@@ -27,6 +27,7 @@ from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
 from spectrace.geometry.grid_volume import medium_row
+from spectrace.geometry.sdf_grid import append_grid_blocks
 from spectrace.integrators import INTEGRATORS
 from spectrace.lights import DEVICE_LIGHTS, light_module
 from spectrace.lights import area as area_light
@@ -368,6 +369,8 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
         shape_rows[k] = surface.device_row()
     if objects.shape_rows is not None:
         shape_rows[len(analytic) : len(analytic) + objects.shape_count] = objects.shape_rows
+    # SDF grids' samples follow the rows (geometry/sdf_grid.py).
+    shape_rows = append_grid_blocks(shape_rows, [surface for surface, *_ in analytic] + objects.shape_surfaces)
 
     write_attribute_tables(
         textures,
@@ -475,6 +478,7 @@ class _ObjectTriangles:
         self.seconds = 0.0  # building the objects' BVHs and the top level, for the acceleration structure's cost
         parts: dict[str, list[np.ndarray]] = {k: [] for k in ("vertices", "uvs", "normals", "info")}
         shape_rows: list[np.ndarray] = []
+        self.shape_surfaces: list[AnalyticSurface] = []  # each of shape_rows' surfaces
         shape_info: list[np.ndarray] = []
         self.shape_count = sum(shape.analytic is not None for obj in self.objects for shape in obj.shapes)
         slot, smooth_slot = first_slot + self.shape_count, 0
@@ -508,6 +512,7 @@ class _ObjectTriangles:
                     raise SpectraceError(f"{where} has no texture coordinates, but its material has a texture")
                 if shape.analytic is not None:
                     shape_rows.append(shape.analytic.device_row())
+                    self.shape_surfaces.append(shape.analytic)
                     row = np.zeros((), TRIANGLE_INFO_DTYPE)
                     row["material"], row["interior"] = material_index[key], interior
                     row["light"] = row["normals"] = -1

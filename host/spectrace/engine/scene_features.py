@@ -4,7 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE
+from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, SHAPE_SDFGRID
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES
@@ -51,6 +51,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
     trilinear = bool(np.any((textures["filter"] == FILTER_TRILINEAR) & (textures["levels"] > 1)))
     bump_textures = materials["bump_map"][materials["bump_map"] >= 0]
     checkerboard_bumps = bool(np.any(textures["type"][bump_textures] == TEXTURES.codes["checkerboard"]))
+    shape_rows = buffers.shapes[: buffers.shape_count + buffers.instanced_shape_count]  # SDF grids' samples follow
     return {
         "SCENE_MATERIAL_TYPES": _type_bits(buffers.materials["type"]),
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
@@ -74,7 +75,8 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_MESH_ATTRIBUTES": int(bool(np.any(textures["type"] == TEXTURES.codes["mesh_attribute"]))),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_SHAPES": int(buffers.shape_count + buffers.instanced_shape_count > 0),
-        "SCENE_HAS_PARTIAL_SHAPES": int(bool(np.any(buffers.shapes["phi_max"] > 0.0))),
+        "SCENE_HAS_PARTIAL_SHAPES": int(bool(np.any(shape_rows["phi_max"] > 0.0))),
+        "SCENE_HAS_SDF_GRIDS": int(bool(np.any(shape_rows["type"] == SHAPE_SDFGRID))),
         "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),
         "SCENE_HAS_INSTANCES": int(buffers.instance_count > 0),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),

@@ -24,7 +24,9 @@ from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.geometry.transforms import apply_transform
 
-ANALYTIC_SHAPES = SHAPE_TYPES  # ("sphere", "disk", "cylinder"): scene types that are analytic
+# ("sphere", "disk", "cylinder"): the quadrics, scene types that are analytic unless tessellated; the device's other
+# shape, the SDF grid, is geometry/sdf_grid.py's.
+ANALYTIC_SHAPES = SHAPE_TYPES[:3]
 OBJECT_AREA = {"sphere": 4.0 * np.pi, "disk": np.pi, "cylinder": 2.0 * np.pi}
 # A sphere's map is a similarity when its linear part's columns are orthogonal and of equal length to this relative
 # tolerance (a float transform built from rotations and a uniform scale is far within it).

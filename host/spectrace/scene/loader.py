@@ -27,6 +27,7 @@ from spectrace.geometry.analytic import (
 )
 from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid, read_vol
 from spectrace.geometry.mesh import TriangleMesh, load_mesh, shading_normals
+from spectrace.geometry.sdf_grid import make_sdf_grid, read_sdf_grid
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
 from spectrace.io.input_files import regular_file
@@ -427,7 +428,11 @@ class _Resolver:
             key = f"{prefix}[{i}]"
             # Analytic unless asked for triangles: facets (face_normals = true) exist only on a tessellation.
             analytic = s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals)
-            if s.type == "mesh":
+            sdf_values = None
+            if s.type == "sdfgrid":  # a stand-in for the range check; its tessellation follows from the placed grid
+                sdf_values = self.sdf_grid_values(s, key)
+                mesh = primitives.BUILTIN_SHAPES["cube"]()
+            elif s.type == "mesh":
                 assert s.file is not None  # the schema wants a file for a mesh
                 mesh = load_mesh(self.folder / s.file, where=self.where(f"{key}.file"), shape_index=s.shape_index or 0)
             elif s.type in ANALYTIC_SHAPES and (cuts := _cuts(s)):
@@ -459,6 +464,10 @@ class _Resolver:
                 surface_of = AnalyticSurface(
                     s.type, matrix, flip_normals=bool(s.flip_normals), pbrt_uv=s.uv_convention == "pbrt", **_cuts(s)
                 )
+                mesh = surface_of.tessellation()
+            elif sdf_values is not None:
+                where = self.where(f"{key}.{'file' if s.file is not None else 'grid'}")
+                surface_of = make_sdf_grid(sdf_values, matrix, s.normals or "smooth", where=where)
                 mesh = surface_of.tessellation()
             else:
                 if s.flip_normals:
@@ -501,6 +510,18 @@ class _Resolver:
                 )
             )
         return shapes
+
+    def sdf_grid_values(self, s: schema.ShapeSpec, key: str) -> np.ndarray:
+        """An sdfgrid's samples (nz, ny, nx): its volume file's or its inline grid."""
+        if s.file is not None:
+            return read_sdf_grid(self.folder / s.file, where=self.where(f"{key}.file"))
+        where = self.where(f"{key}.grid")
+        rows = {len(row) for plane in s.grid or [] for row in plane}
+        if len(rows) != 1 or len({len(plane) for plane in s.grid or []}) != 1:
+            raise SpectraceError(
+                "an SDF grid's values must be a box of numbers: [z][y][x], rows of equal length", where=where
+            )
+        return np.array(s.grid, np.float64)
 
     def instances(self, materials: dict[str, Material]) -> list[Instance]:
         """The objects, each resolved once in its own space, and the instances that place them."""

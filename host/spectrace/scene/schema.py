@@ -432,7 +432,7 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot", "sdfgrid"]
     file: str | None = None
     shape_index: Annotated[int, Field(ge=0, strict=True)] | None = None  # which mesh of a .serialized file
     material: str | None = None
@@ -459,12 +459,21 @@ class ShapeSpec(Strict):
     z_min: FiniteFloat | None = None
     z_max: FiniteFloat | None = None
     inner_radius: FiniteFloat | None = None
+    # sdfgrid (geometry/sdf_grid.py): its samples inline, [z][y][x], instead of a volume file; its shading normals
+    grid: list[list[list[FiniteFloat]]] | None = None
+    normals: Literal["smooth", "analytic"] | None = None
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
         if self.type == "mesh" and self.file is None:
             raise ValueError("a mesh shape needs file")
-        if self.type != "mesh" and self.file is not None:
+        if self.type == "sdfgrid" and (self.file is None) == (self.grid is None):
+            raise ValueError("an sdfgrid shape needs either file (a volume file) or grid (its samples), not both")
+        if self.type != "sdfgrid" and (self.grid is not None or self.normals is not None):
+            raise ValueError(f"grid and normals are an sdfgrid's, not a {self.type}'s")
+        if self.type == "sdfgrid" and self.emitter is not None:
+            raise ValueError("an sdfgrid cannot emit (it has no area sampling, as in Mitsuba 3)")
+        if self.type not in ("mesh", "sdfgrid") and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
         if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):
             raise ValueError("shape_index picks a mesh of a Mitsuba .serialized file; this shape has none")

@@ -24,6 +24,7 @@ import numpy as np
 
 from spectrace.core.api_calls import call_of
 from spectrace.errors import SpectraceError
+from spectrace.geometry.sdf_grid import SdfGridSurface
 
 if TYPE_CHECKING:
     from spectrace.scene.model import Scene
@@ -176,7 +177,12 @@ class _Writer:
         from spectrace.interop.pbrt.meshes import MeshData
 
         out: dict[str, Any] = {"name": shape.name} if shape.name else {}
-        if shape.analytic is not None:
+        if isinstance(shape.analytic, SdfGridSurface):  # its samples as a volume file beside the scene
+            file = f"{self.assets}/{folder_name}.vol"
+            self.files[file] = partial(_write_vol, values=shape.analytic.values)
+            out |= {"type": "sdfgrid", "file": file, "normals": shape.analytic.normals}
+            out["transform"] = [{"matrix": np.asarray(shape.analytic.to_world).tolist()}]
+        elif shape.analytic is not None:
             surface = shape.analytic
             out |= {"type": surface.kind, "transform": [{"matrix": np.asarray(surface.to_world).tolist()}]}
             if surface.flip_normals:
@@ -271,6 +277,13 @@ class _Writer:
             "instances": instances,
         }
         return {key: value for key, value in data.items() if value != [] and value != {}}
+
+
+def _write_vol(path: Path, values: np.ndarray) -> None:
+    """An SDF grid's samples as a float32 Mitsuba volume file (the grid's own precision)."""
+    from spectrace.geometry.grid_volume import vol_bytes
+
+    path.write_bytes(vol_bytes(values))
 
 
 def _write_ply(path: Path, mesh: Any) -> None:

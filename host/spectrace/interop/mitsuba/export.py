@@ -37,7 +37,9 @@ import numpy as np
 
 from spectrace.cameras import CAMERAS
 from spectrace.errors import SpectraceError
+from spectrace.geometry.grid_volume import vol_bytes
 from spectrace.geometry.mesh import TriangleMesh
+from spectrace.geometry.sdf_grid import SdfGridSurface
 from spectrace.integrators import INTEGRATORS
 from spectrace.lights import LIGHTS, area
 from spectrace.materials import MATERIALS
@@ -253,7 +255,17 @@ def scene_to_mitsuba_dict(
         # Mitsuba's own analytic shape, in the same object space; one with pbrt's texture coordinates (a disk or
         # sphere imported from pbrt-v4) or a partial one (Mitsuba has none) as its tessellation.
         analytic = shape.analytic
-        if analytic is not None and not analytic.partial and not (analytic.pbrt_uv and analytic.kind != "cylinder"):
+        if isinstance(analytic, SdfGridSurface):  # Mitsuba's sdfgrid, from a volume file of the same samples
+            path = mesh_folder / f"{file_stem}.vol"
+            path.write_bytes(vol_bytes(analytic.values))
+            entry = {
+                "type": "sdfgrid",
+                "filename": str(path),
+                "normals": analytic.normals,
+                "to_world": _transform(analytic.to_world),
+                "bsdf": bsdf,
+            }
+        elif analytic is not None and not analytic.partial and not (analytic.pbrt_uv and analytic.kind != "cylinder"):
             # Mitsuba turns a sphere's normals inward under a mirroring to_world (measured: an emitting sphere
             # scaled by (-1, 1, 1) renders black from outside); spectrace's sphere faces out whatever the matrix.
             # Its disk and cylinder keep their fronts under a mirror, as spectrace's do.

@@ -1,7 +1,7 @@
-"""Shapes: obj, ply, serialized (shape_index), rectangle, cube, and the analytic sphere (center, radius), disk and
-cylinder (p0, p1, radius), face_normals on obj, ply, serialized and sphere; each with its bsdf (materials.py), its
-emitter (emitters.py) and its interior medium (media.py). A shapegroup is a spectrace object, placed by each
-instance."""
+"""Shapes: obj, ply, serialized (shape_index), rectangle, cube, the analytic sphere (center, radius), disk and
+cylinder (p0, p1, radius), the sdfgrid (filename, normals), face_normals on obj, ply, serialized and sphere; each
+with its bsdf (materials.py), its emitter (emitters.py) and its interior medium (media.py). A shapegroup is a
+spectrace object, placed by each instance."""
 
 from __future__ import annotations
 
@@ -39,6 +39,12 @@ def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
         table |= {"type": "mesh", "file": ctx.input_file(filename, "mesh file")}
         if kind == "serialized" and "shape_index" in properties:
             table["shape_index"] = ctx.integer(properties["shape_index"], low=0)
+    elif kind == "sdfgrid":  # Mitsuba's grid tensor exists only in Python; XML gives a volume file
+        table |= {"type": "sdfgrid", "file": ctx.input_file(ctx.child(properties, "filename", element), "volume file")}
+        if "normals" in properties:
+            table["normals"] = ctx.choice(properties["normals"], ("smooth", "analytic"))
+        if ctx.nested(properties, "emitter"):
+            raise ctx.fail(ctx.nested(properties, "emitter")[0], "an sdfgrid cannot emit (nor in Mitsuba 3)")
     else:
         table["type"] = kind
     if kind == "sphere":
