@@ -36,8 +36,10 @@ MATERIAL_BITS = {
     "retarder": 2048,
     "pplastic": 4096,
     "hair": 8192,
-    "mix": 16384,
-    "fluorescent": 32768,
+    "coatedconductor": 16384,
+    "coateddiffuse": 32768,
+    "mix": 65536,
+    "fluorescent": 131072,
 }
 LIGHT_BITS = {
     "area": 1,

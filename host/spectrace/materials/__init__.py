@@ -25,6 +25,8 @@ from spectrace.core.contract import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEX
 from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
 from spectrace.materials import (
+    coatedconductor,
+    coateddiffuse,
     conductor,
     dielectric,
     diffuse,
@@ -69,6 +71,8 @@ MATERIALS = Registry[MaterialPlugin](
         retarder,
         pplastic,
         hair,
+        coatedconductor,
+        coateddiffuse,
         mix,
         fluorescent,
     ),
