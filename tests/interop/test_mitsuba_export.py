@@ -19,6 +19,7 @@ from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, SpotLight
 from spectrace.spectral import spectrum_to_xyz
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import rgb_reflectance
 
 
 @pytest.mark.peer
@@ -229,7 +230,7 @@ def test_exported_dielectrics_and_plastics_render_like_spectrace(tmp_path, devic
     scene = load_pbrt_scene(path).with_overrides(pixel_filter=BOX_FILTER)
     if not material.startswith("Material"):
         rough = {"roughness": 0.2, "coat_transmission": "rough"} if material == "roughplastic" else {}
-        plastic = make_plastic({"rgb": [0.7, 0.2, 0.1]}, nonlinear=True, **rough)
+        plastic = make_plastic(rgb_reflectance([0.7, 0.2, 0.1]), nonlinear=True, **rough)
         scene = replace(scene, shapes=[*scene.shapes[:-1], replace(scene.shapes[-1], material=plastic)])
     mitsuba_scene = mi.load_dict(scene_to_mitsuba_dict(scene, tmp_path, spp=16))
     by_mitsuba = np.stack([mitsuba_film_xyz(mi.render(mitsuba_scene, spp=16, seed=seed), mi) for seed in range(8)])
