@@ -1,7 +1,7 @@
 """pbrt-v4's `coatedconductor` and `coateddiffuse` imported as spectrace's stochastic layered materials
 (docs/materials.md#coatedconductor): every parameter under its name, pbrt-v4's defaults, the roughness remapped, a
 conductor given by its reflectance, and a coated gold sphere from a pbrt file rendering as the same material built
-in Python (the import changes nothing the walk reads)."""
+in Python (the import changes nothing the walk reads), the same bits however the render is split."""
 
 import numpy as np
 import pytest
@@ -78,6 +78,12 @@ def test_pbrt_coateddiffuse_defaults(tmp_path):
     }
 
 
+def test_a_named_glass_coat_takes_its_index_at_550_nm(tmp_path):
+    """The coat takes one index: N-BK7's at 550 nm (SCHOTT's n_e = 1.51872 at 546.07 nm, n_d = 1.5168 at 587.56)."""
+    (table,) = _materials(tmp_path, 'Material "coateddiffuse" "spectrum eta" "glass-BK7"\nShape "sphere"\n')
+    assert 1.5168 < table["ior"] < 1.51872
+
+
 def test_a_conductor_by_reflectance_reflects_that_reflectance_at_normal_incidence():
     """pbrt's mapping η = 1, k = 2√r/√(1 − r) gives ((η − 1)² + k²)/((η + 1)² + k²) = r in air."""
     material = spectrace.coatedconductor(reflectance=0.64)
@@ -94,5 +100,8 @@ def test_an_imported_coated_conductor_renders_as_the_same_material_built_in_pyth
     scene = load_pbrt_scene(path)
     built = spectrace.coatedconductor("Au", roughness=0.2, thickness=0.1)
     assert scene.shapes[0].material == built
-    image = Renderer(scene, device).render(4)
+    image = Renderer(scene, device).render(4, pass_spp=4)
     assert np.all(np.isfinite(image.xyz)) and image.xyz[..., 1].mean() > 0.05
+    # The walks' random numbers come from hashes of their directions and the sampler's numbers: a render split
+    # into passes of one sample is the same, bit for bit.
+    assert np.array_equal(Renderer(scene, device).render(4, pass_spp=1).xyz, image.xyz)
