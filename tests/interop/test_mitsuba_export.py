@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from replica_agreement import assert_replicas_agree, spectrace_replicas
+from spectrace import plastic as make_plastic
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.geometry.primitives import rectangle, sphere
@@ -18,6 +19,7 @@ from spectrace.scene import load_scene
 from spectrace.scene.model import AreaEmitter, Camera, DiffuseMaterial, Scene, Shape, SpotLight
 from spectrace.spectral import spectrum_to_xyz
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.spectral.spectrum_input import rgb_reflectance
 
 
 @pytest.mark.peer
@@ -198,19 +200,22 @@ def test_an_emitting_sphere_under_a_mirror_exports_facing_out(tmp_path, device, 
     [
         'Material "dielectric" "float eta" 1.5',
         'Material "dielectric" "float eta" 1.5 "float roughness" 0.04',
-        'Material "coateddiffuse" "rgb reflectance" [0.7 0.2 0.1]',
-        'Material "coateddiffuse" "rgb reflectance" [0.7 0.2 0.1] "float roughness" 0.04',
+        # Plastics (a smooth coat, a rough one crossed by its own transmittance), put on the sphere after the
+        # import: pbrt's coateddiffuse is the stochastic layered material, which Mitsuba 3 does not have.
+        "plastic",
+        "roughplastic",
     ],
 )
 def test_exported_dielectrics_and_plastics_render_like_spectrace(tmp_path, device, mitsuba_scalar_spectral, material):
-    """A sphere of glass (smooth, rough) or of plastic (pbrt's coateddiffuse: a smooth coat, a rough one crossed
-    by its own transmittance) on a diffuse floor under a sky, imported from pbrt text and exported: 8 replicas of
+    """A sphere of glass (smooth, rough) or of plastic (a smooth coat, a rough one crossed by its own
+    transmittance) on a diffuse floor under a sky, imported from pbrt text and exported: 8 replicas of
     16 spp from each renderer, 8 x 8-pixel block means and the image mean within 5 standard errors."""
     from spectrace.interop.pbrt import load_pbrt_scene
     from spectrace.pixel_filters import BOX_FILTER
 
     mi = mitsuba_scalar_spectral
     path = tmp_path / "sphere.pbrt"
+    sphere_material = material if material.startswith("Material") else 'Material "diffuse"'
     path.write_text(
         'LookAt 0 1 4  0 0.5 0  0 1 0\nCamera "perspective" "float fov" 35\n'
         'Film "rgb" "integer xresolution" 16 "integer yresolution" 16\nIntegrator "path" "integer maxdepth" 6\n'
@@ -219,9 +224,14 @@ def test_exported_dielectrics_and_plastics_render_like_spectrace(tmp_path, devic
         'Translate 1 3 1\nShape "sphere" "float radius" 0.4\nAttributeEnd\n'
         'Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]\n'
         'Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2  0 2 3]\n'
-        f'{material}\nAttributeBegin\nTranslate 0 0.6 0\nShape "sphere" "float radius" 0.6\nAttributeEnd\n'
+        f"{sphere_material}\n"
+        'AttributeBegin\nTranslate 0 0.6 0\nShape "sphere" "float radius" 0.6\nAttributeEnd\n'
     )
     scene = load_pbrt_scene(path).with_overrides(pixel_filter=BOX_FILTER)
+    if not material.startswith("Material"):
+        rough = {"roughness": 0.2, "coat_transmission": "rough"} if material == "roughplastic" else {}
+        plastic = make_plastic(rgb_reflectance([0.7, 0.2, 0.1]), nonlinear=True, **rough)
+        scene = replace(scene, shapes=[*scene.shapes[:-1], replace(scene.shapes[-1], material=plastic)])
     mitsuba_scene = mi.load_dict(scene_to_mitsuba_dict(scene, tmp_path, spp=16))
     by_mitsuba = np.stack([mitsuba_film_xyz(mi.render(mitsuba_scene, spp=16, seed=seed), mi) for seed in range(8)])
     assert_replicas_agree(spectrace_replicas(Renderer(scene, device), 8, 16), by_mitsuba, 8)

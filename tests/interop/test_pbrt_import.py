@@ -371,11 +371,18 @@ Shape "sphere"
     assert materials[1]["k"]["values"] == [[400.0, 2.0], [700.0, 3.0]]
     assert any("400-700 nm" in note for note in importer.notes)
     assert materials[2] == {"type": "dielectric", "ior": "N-SF11", "roughness": 0.01}
-    # pbrt's random walk between coat and base meets the albedo at every return: the plastic's nonlinear series.
-    assert materials[3] == {"type": "plastic", "reflectance": {"rgb": [0.2, 0.3, 0.4]}, "ior": 1.4, "nonlinear": True}
+    # pbrt's random walk between coat and base: the same layered model, with pbrt's defaults for its slab and walk.
+    assert materials[3] == {
+        "type": "coateddiffuse",
+        "reflectance": {"rgb": [0.2, 0.3, 0.4]},
+        "ior": 1.4,
+        "thickness": 0.01,
+        "g": 0.0,
+        "max_depth": 10,
+        "samples": 1,
+    }
     assert materials[4] == {"type": "thindielectric", "ior": 1.33}
-    # A rough coat is crossed by its own microfacet transmission.
-    assert materials[5]["roughness"] == pytest.approx(0.3) and materials[5]["coat_transmission"] == "rough"
+    assert materials[5]["type"] == "coateddiffuse" and materials[5]["roughness"] == pytest.approx(0.3)
     assert load_pbrt_scene(_write(tmp_path, body)).shapes[4].material == spectrace.thindielectric(1.33)
 
 
@@ -619,7 +626,8 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     [
         ('Material "mix"\nShape "sphere"\n', 5, 'Material "mix" needs "string materials" naming two materials'),
         ('Material "thindielectric" "spectrum eta" "glass-BK7"\nShape "sphere"\n', 5, "eta must be a number"),
-        ('Material "coatedconductor"\nShape "sphere"\n', 5, "spectrace has no coated conductor"),
+        ('Material "coatedconductor" "float interface.eta" 5\nShape "sphere"\n', 5, "ior must lie in [1, 4]"),
+        ('Material "coatedconductor" "integer nsamples" 0\nShape "sphere"\n', 5, "must be an integer >= 1"),
         ('Shape "curve"\n', 5, "shape 'curve'"),
         ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),
         ('LightSource "sunsky"\n', 5, "light 'sunsky'"),

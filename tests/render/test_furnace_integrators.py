@@ -158,6 +158,25 @@ CASES = {
     # A measurement written from GGX (tests/rgl_tensor.py): the sampler follows the file's luminance and visible
     # normals, and light subpaths weigh their samples by the adjoint (kernels/bsdf_measured.cl).
     "measured": [Case("ggx measurement", lambda: S.measured(ggx_file(0.3)), False, False, fast=("path",))],
+    # Stochastic layered BSDFs (kernels/layered.cl): each integrator sees the same estimates of eval and pdf, and
+    # the sampler's weights are right in expectation, so each agrees with the path tracer within its errors. A
+    # metal that reflects everything (η = 0) under a clear coat and a slab of albedo 1 loses only the walks max_depth
+    # cuts off (tests/materials/test_layered.py), not a closed form within SLACK: compared with the path tracer.
+    "coatedconductor": [
+        Case(
+            "lossless smooth layers",
+            lambda: S.coatedconductor(eta=0.0, k=1.0, albedo=1.0, thickness=0.2, max_depth=100),
+            False,
+            True,
+            sppm_refused=True,
+            fast=("path",),
+        ),
+        Case("rough gold", lambda: S.coatedconductor("Au", roughness=0.3, conductor_roughness=0.2), False, False),
+    ],
+    "coateddiffuse": [
+        Case("white rough", lambda: S.coateddiffuse(1.0, roughness=0.3, thickness=0.0), False, False, fast=("bdpt",)),
+        Case("grey smooth coat", lambda: S.coateddiffuse(0.5, albedo=0.5, g=0.3), False, True, sppm_refused=True),
+    ],
     "mix": [
         Case(
             "diffuse and smooth plastic",

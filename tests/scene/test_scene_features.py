@@ -38,8 +38,10 @@ MATERIAL_BITS = {
     "pplastic": 4096,
     "hair": 8192,
     "measured": 16384,
-    "mix": 32768,
-    "fluorescent": 65536,
+    "coatedconductor": 32768,
+    "coateddiffuse": 65536,
+    "mix": 131072,
+    "fluorescent": 262144,
 }
 LIGHT_BITS = {
     "area": 1,

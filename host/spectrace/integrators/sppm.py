@@ -68,7 +68,9 @@ def _mixes_delta_and_non_delta(material: Any) -> bool:
     textured = roughness is not None and not isinstance(roughness, (int, float))
     # kernels/microfacet.cl's ggx_lobe_flags: a textured width may be delta at some points and not at others; a
     # plastic's coat adds its lobe to the diffuse base's.
-    return textured or (isinstance(material, PlasticMaterial) and smooth_everywhere(roughness))
+    # A material may state it (a smooth coat over a layered BSDF's non-delta rest: spectrace.materials.layered).
+    stated = getattr(material, "mixes_delta_and_non_delta", False)
+    return textured or stated or (isinstance(material, PlasticMaterial) and smooth_everywhere(roughness))
 
 
 def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:

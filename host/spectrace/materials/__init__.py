@@ -25,6 +25,8 @@ from spectrace.core.contract import MATERIAL_DTYPE, MATERIAL_NO_SPECTRUM, NO_TEX
 from spectrace.core.registry import Registry
 from spectrace.errors import SpectraceError
 from spectrace.materials import (
+    coatedconductor,
+    coateddiffuse,
     conductor,
     dielectric,
     diffuse,
@@ -71,6 +73,8 @@ MATERIALS = Registry[MaterialPlugin](
         pplastic,
         hair,
         measured,
+        coatedconductor,
+        coateddiffuse,
         mix,
         fluorescent,
     ),

@@ -27,7 +27,8 @@ from spectrace.textures import number_or_texture, reflectance_or_texture
 
 NAME = "plastic"
 MITSUBA_PLUGINS = ("plastic", "roughplastic")
-PBRT_MATERIALS = ("coateddiffuse",)
+PBRT_MATERIALS: tuple[str, ...] = ()
+PBRT_NONE = "pbrt-v4's coateddiffuse is the stochastic layered model (coateddiffuse.py); pbrt-v4 has no plastic"
 # Above 4 the coat's hemispherical Fresnel average leaves the range its quadrature is exact for (docs/materials.md).
 IOR = Parameter(
     "ior",
@@ -219,31 +220,6 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
         table["nonlinear"] = True
     if specular is not None and specular != {"value": 1.0}:
         table["specular_reflectance"] = specular
-    return table
-
-
-def from_pbrt(context, material) -> dict | None:
-    """coateddiffuse: pbrt-v4 simulates a dielectric coat over a Lambertian base (random walk between the layers);
-    the plastic is the same two layers in closed form (docs/pbrt.md). The walk meets the base's albedo at every
-    return to it, which is the plastic's nonlinear series, and crosses a rough coat by its own microfacet
-    transmission, which is coat_transmission "rough"."""
-    eta = context.ior(material)
-    if not isinstance(eta, (int, float)):
-        eta = 1.5
-        context.warn(material.location, "coateddiffuse with a spectral eta imported with 1.5")
-    albedo = context.spectrum(material, "albedo", "albedo")
-    if albedo is not None and albedo != {"value": 0.0}:
-        context.warn(material.location, 'coateddiffuse "albedo" (an absorbing coat) not imported')
-    for key in ("thickness", "g", "maxdepth", "nsamples"):
-        material.find(key)
-    table = {
-        "type": "plastic",
-        "reflectance": context.reflectance(material, "reflectance", 0.5),
-        "ior": eta,
-        "nonlinear": True,
-    } | context.rough(material)
-    if "roughness" in table:
-        table["coat_transmission"] = "rough"
     return table
 
 

@@ -31,7 +31,6 @@ _MAPPINGS: dict[str, Any] = {
 IMPORTED_MATERIALS = (*_MAPPINGS, "interface")
 # Materials spectrace has no counterpart for, refused with this reason.
 _NO_EQUIVALENT = {
-    "coatedconductor": "spectrace has no coated conductor",
     "subsurface": "spectrace's subsurface scattering is a medium inside a shape, not a material",
 }
 
