@@ -126,17 +126,21 @@ def test_a_vertex_attribute_is_the_barycentric_blend_at_each_pixel(device):
 
 def test_missing_attribute_and_wrong_use_are_refused_naming_the_shape(device):
     """A mesh without the attribute, a colour where a number is needed (a roughness), values above 1 as a
-    reflectance: one error each, naming the shape."""
+    reflectance or above a mix's amount range, an analytic sphere (which has no mesh): one error each, naming the
+    shape."""
     rgb = np.full((6, 3), 0.5)
     mesh = TriangleMesh(GRID_VERTICES, HALF_FACES, attributes={"vertex_color": rgb, "vertex_big": np.full(6, 1.5)})
+    pair = [spectrace.diffuse(0.5), spectrace.diffuse(0.2)]
     cases = [
-        (spectrace.diffuse(spectrace.mesh_attribute("vertex_missing")), "has no attribute 'vertex_missing'"),
-        (spectrace.conductor("Au", roughness=spectrace.mesh_attribute("vertex_color")), "needs one"),
-        (spectrace.diffuse(spectrace.mesh_attribute("vertex_big")), "above 1"),
+        (mesh, spectrace.diffuse(spectrace.mesh_attribute("vertex_missing")), "has no attribute 'vertex_missing'"),
+        (mesh, spectrace.conductor("Au", roughness=spectrace.mesh_attribute("vertex_color")), "needs one"),
+        (mesh, spectrace.diffuse(spectrace.mesh_attribute("vertex_big")), "above 1"),
+        (mesh, spectrace.mix(pair, spectrace.mesh_attribute("vertex_big")), "above 1"),
+        ("sphere", spectrace.diffuse(spectrace.mesh_attribute("vertex_color")), "not a triangle mesh"),
     ]
-    for material, message in cases:
+    for geometry, material, message in cases:
         with pytest.raises(SpectraceError, match=message) as raised:
-            Renderer(_scene(spectrace.shape(mesh, material, name="panel"), spp=1), device)
+            Renderer(_scene(spectrace.shape(geometry, material, name="panel"), spp=1), device)
         assert "panel" in str(raised.value)
 
 
