@@ -80,6 +80,23 @@ def test_a_face_attribute_is_constant_per_face_across_shared_vertices(device):
         _assert_region(region, np.full_like(GRID, value), what)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator", ["light", "bdpt"])
+def test_light_paths_read_mesh_attributes_as_camera_paths_do(device, integrator):
+    """The light tracer and BDPT read the attributes at their own vertices: a mix of a vertex-coloured diffuse and a
+    grey 0.9 by a face weight (0.15 left, 0.4 right) reflects (1 − w) ρ(λ) + 0.9 w in each half (colour-science)."""
+    colour = np.array([0.8, 0.2, 0.1])
+    weights = np.array([0.15, 0.15, 0.4, 0.4])
+    attributes = {"face_weight": weights, "vertex_color": np.tile(colour, (6, 1))}
+    mesh = TriangleMesh(GRID_VERTICES, HALF_FACES, attributes=attributes)
+    textured = spectrace.diffuse(spectrace.mesh_attribute("vertex_color"))
+    material = spectrace.mix([textured, spectrace.diffuse(0.9)], spectrace.mesh_attribute("face_weight"))
+    scene = _scene(spectrace.shape(mesh, material), spp=32).with_overrides(integrator=integrator)
+    image = Renderer(scene, device).render()
+    for region, w, what in zip(_halves(image.xyz), (0.15, 0.4), ("left", "right"), strict=True):
+        _assert_region(region, (1.0 - w) * _sigmoid_spectrum(colour) + 0.9 * w, what)
+
+
 def _distance_to_line(point, p, q) -> float:
     edge, offset = q - p, point - p
     return abs(edge[0] * offset[1] - edge[1] * offset[0]) / float(np.linalg.norm(edge))
