@@ -80,6 +80,23 @@ def test_a_face_attribute_is_constant_per_face_across_shared_vertices(device):
         _assert_region(region, np.full_like(GRID, value), what)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator", ["light", "bdpt"])
+def test_light_paths_read_mesh_attributes_as_camera_paths_do(device, integrator):
+    """The light tracer and BDPT read the attributes at their own vertices: a mix of a vertex-coloured diffuse and a
+    grey 0.9 by a face weight (0.15 left, 0.4 right) reflects (1 − w) ρ(λ) + 0.9 w in each half (colour-science)."""
+    colour = np.array([0.8, 0.2, 0.1])
+    weights = np.array([0.15, 0.15, 0.4, 0.4])
+    attributes = {"face_weight": weights, "vertex_color": np.tile(colour, (6, 1))}
+    mesh = TriangleMesh(GRID_VERTICES, HALF_FACES, attributes=attributes)
+    textured = spectrace.diffuse(spectrace.mesh_attribute("vertex_color"))
+    material = spectrace.mix([textured, spectrace.diffuse(0.9)], spectrace.mesh_attribute("face_weight"))
+    scene = _scene(spectrace.shape(mesh, material), spp=32).with_overrides(integrator=integrator)
+    image = Renderer(scene, device).render()
+    for region, w, what in zip(_halves(image.xyz), (0.15, 0.4), ("left", "right"), strict=True):
+        _assert_region(region, (1.0 - w) * _sigmoid_spectrum(colour) + 0.9 * w, what)
+
+
 def _distance_to_line(point, p, q) -> float:
     edge, offset = q - p, point - p
     return abs(edge[0] * offset[1] - edge[1] * offset[0]) / float(np.linalg.norm(edge))
@@ -126,17 +143,21 @@ def test_a_vertex_attribute_is_the_barycentric_blend_at_each_pixel(device):
 
 def test_missing_attribute_and_wrong_use_are_refused_naming_the_shape(device):
     """A mesh without the attribute, a colour where a number is needed (a roughness), values above 1 as a
-    reflectance: one error each, naming the shape."""
+    reflectance or above a mix's amount range, an analytic sphere (which has no mesh): one error each, naming the
+    shape."""
     rgb = np.full((6, 3), 0.5)
     mesh = TriangleMesh(GRID_VERTICES, HALF_FACES, attributes={"vertex_color": rgb, "vertex_big": np.full(6, 1.5)})
+    pair = [spectrace.diffuse(0.5), spectrace.diffuse(0.2)]
     cases = [
-        (spectrace.diffuse(spectrace.mesh_attribute("vertex_missing")), "has no attribute 'vertex_missing'"),
-        (spectrace.conductor("Au", roughness=spectrace.mesh_attribute("vertex_color")), "needs one"),
-        (spectrace.diffuse(spectrace.mesh_attribute("vertex_big")), "above 1"),
+        (mesh, spectrace.diffuse(spectrace.mesh_attribute("vertex_missing")), "has no attribute 'vertex_missing'"),
+        (mesh, spectrace.conductor("Au", roughness=spectrace.mesh_attribute("vertex_color")), "needs one"),
+        (mesh, spectrace.diffuse(spectrace.mesh_attribute("vertex_big")), "above 1"),
+        (mesh, spectrace.mix(pair, spectrace.mesh_attribute("vertex_big")), "above 1"),
+        ("sphere", spectrace.diffuse(spectrace.mesh_attribute("vertex_color")), "not a triangle mesh"),
     ]
-    for material, message in cases:
+    for geometry, material, message in cases:
         with pytest.raises(SpectraceError, match=message) as raised:
-            Renderer(_scene(spectrace.shape(mesh, material, name="panel"), spp=1), device)
+            Renderer(_scene(spectrace.shape(geometry, material, name="panel"), spp=1), device)
         assert "panel" in str(raised.value)
 
 
@@ -276,3 +297,44 @@ def test_the_scene_format_names_the_attribute_and_refuses_a_bad_name(tmp_path):
     assert result.returncode != 0
     assert "vertex_ or face_" in result.stderr and "Traceback" not in result.stderr
     assert "attribute" in result.stderr
+
+
+@pytest.mark.peer
+def test_an_exported_mesh_carries_its_attributes_to_mitsuba(tmp_path):
+    """The Mitsuba export's PLY writes each attribute as `<name>_0..` properties: Mitsuba 3 reads back the same
+    attributes and values (float32), and so does spectrace's reader."""
+    from spectrace.interop.mitsuba.export import write_binary_ply
+
+    mi = pytest.importorskip("mitsuba")
+    mi.set_variant("scalar_rgb")
+    rng = np.random.default_rng(9)
+    attributes = {"vertex_color": rng.random((6, 3)), "vertex_w": rng.random(6), "face_weight": rng.random(4)}
+    path = tmp_path / "panel.ply"
+    write_binary_ply(TriangleMesh(GRID_VERTICES, HALF_FACES, attributes=attributes), path)
+    params = mi.traverse(mi.load_dict({"type": "ply", "filename": str(path)}))
+    ours = load_mesh(path, "panel").attributes or {}
+    assert set(ours) == set(attributes)
+    for name, values in attributes.items():
+        stored = np.asarray(values, np.float32).ravel()
+        np.testing.assert_array_equal(np.array(params[name]), stored, err_msg=name)
+        np.testing.assert_array_equal(ours[name].ravel(), stored, err_msg=name)
+
+
+def test_a_live_edit_that_adds_a_mesh_attribute_is_one_error_and_changes_nothing(tmp_path):
+    """A live session's material edit that would add a mesh_attribute texture (whose tables follow the triangles')
+    is refused in one error naming the reason, and the session renders on as before."""
+    from spectrace.session import Session
+
+    path = tmp_path / "scene.toml"
+    path.write_text(
+        "[camera]\norigin = [0, 0, 3]\ntarget = [0, 0, 0]\nfov = 30\n[film]\nwidth = 8\nheight = 8\n"
+        '[[shapes]]\ntype = "rectangle"\nmaterial = "m"\n'
+        '[materials.m]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
+        '[[lights]]\ntype = "constant"\nradiance = { value = 1 }\n'
+    )
+    with Session(path) as session:
+        session.step(1)
+        with pytest.raises(SpectraceError, match="mesh_attribute|has no attribute"):
+            session.update({"materials.m.reflectance": {"texture": "mesh_attribute", "attribute": "vertex_color"}})
+        session.step(1)
+        assert session.image().xyz[..., 1].mean() > 0.0

@@ -46,6 +46,7 @@ def write_attribute_tables(
     as (shape, first triangle, count) in the order their triangles were concatenated, `order` the BVH's permutation
     of those triangles (slot k holds triangle order[k]); `others`: the shapes without triangle slots of their own
     here (analytic shapes, instanced objects' shapes), which cannot wear a mesh attribute."""
+    textures.attributes_written = True
     if not textures.attribute_rows:
         return
     from spectrace.spectral.rgb_texture import texture_reflectance_coefficients

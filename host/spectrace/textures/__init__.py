@@ -304,6 +304,7 @@ class TextureRows:
         self.rewritten = False  # a free slot was taken: rows and texels changed where they lie
         self.light_tables: dict = {}  # lights' sampling tables in the texels (spectrace.lights.distribution), by source
         self.attribute_rows: list[tuple[int, object, str]] = []  # mesh attribute rows to fill: (row, texture, kind)
+        self.attributes_written = False  # their tables follow the triangles', written once the scene is built
 
     def release(self, textures: set) -> None:
         """Let `textures` go (nothing of the scene uses them any more): their rows, and their texels, are taken by
@@ -369,6 +370,12 @@ class TextureRows:
                 row["factor"] = float(factor)
         elif isinstance(texture, MeshAttributeTexture):
             # Its table and values are written once the triangles' slots are known (engine/mesh_attribute_rows.py).
+            if self.attributes_written:
+                raise SpectraceError(
+                    "a live edit cannot add a mesh_attribute texture (its tables are written with the triangles): "
+                    "load the scene again",
+                    where=where,
+                )
             row["factor"] = texture.scale
         elif isinstance(texture, SolidTexture):
             values = np.asarray(texture_module(texture).device_solid(texture, self.table), np.float32)

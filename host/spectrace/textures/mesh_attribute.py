@@ -78,7 +78,8 @@ def record_use(texture: MeshAttributeTexture, kind: str, where: str, upper: floa
     if kind == "emission":
         raise SpectraceError("an emission texture is a bitmap or a spectral texture, not a mesh_attribute", where=where)
     bound = 1.0 if kind == "spectrum" else upper
-    texture.uses.append((kind, bound, where))
+    if (kind, bound, where) not in texture.uses:  # a scene resolved again (a live session) adds none
+        texture.uses.append((kind, bound, where))
 
 
 def use_problem(texture: MeshAttributeTexture, values) -> tuple[str, str] | None:

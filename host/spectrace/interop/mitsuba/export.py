@@ -65,7 +65,8 @@ def regular_spectrum(spectrum: Spectrum) -> dict:
 
 def write_binary_ply(mesh: TriangleMesh, path: Path) -> None:
     """Float32 positions (and unit normals nx, ny, nz when the mesh has vertex normals; texture coordinates u, v,
-    spectrace's, when it has them) and int32 triangles."""
+    spectrace's, when it has them), the mesh's attributes as `<name>_0..` properties of its vertices or faces (which
+    Mitsuba 3's PLY reader names `vertex_<name>`, `face_<name>` again) and int32 triangles."""
     columns, names = [mesh.vertices], ["x", "y", "z"]
     if mesh.normals is not None:
         length = np.linalg.norm(mesh.normals, axis=1, keepdims=True)
@@ -74,15 +75,28 @@ def write_binary_ply(mesh: TriangleMesh, path: Path) -> None:
     if mesh.uvs is not None:
         columns.append(mesh.uvs)
         names += ["u", "v"]
+    face_columns: list[np.ndarray] = []
+    face_names: list[str] = []
+    for attribute, values in (mesh.attributes or {}).items():
+        element, stem = attribute.split("_", 1)
+        channels = [f"{stem}_{k}" for k in range(values.shape[1])]
+        (columns if element == "vertex" else face_columns).append(values)
+        (names if element == "vertex" else face_names).extend(channels)
     vertices = np.ascontiguousarray(np.concatenate(columns, axis=1), dtype="<f4")
-    faces = np.empty(len(mesh.faces), dtype=[("n", "u1"), ("index", "<i4", (3,))])
+    faces = np.empty(
+        len(mesh.faces), dtype=[("n", "u1"), ("index", "<i4", (3,))] + [(name, "<f4") for name in face_names]
+    )
     faces["n"] = 3
     faces["index"] = mesh.faces
+    if face_columns:
+        for name, column in zip(face_names, np.concatenate(face_columns, axis=1).T, strict=True):
+            faces[name] = column
     properties = "".join(f"property float {name}\n" for name in names)
+    face_properties = "".join(f"property float {name}\n" for name in face_names)
     header = (
         "ply\nformat binary_little_endian 1.0\n"
         f"element vertex {len(vertices)}\n{properties}"
-        f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+        f"element face {len(faces)}\nproperty list uchar int vertex_indices\n{face_properties}end_header\n"
     )
     with open(path, "wb") as out:
         out.write(header.encode("ascii"))
