@@ -183,18 +183,23 @@ def density_grid(
     albedo: ArrayLike | None = None,
     box: Sequence[Sequence[float]] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0)),
     transform: Iterable[Mapping[str, Any]] = (),
+    outside: str = "empty",
 ) -> GridVolume:
     """A voxel grid for `medium(density=...)` (docs/media.md): `density` shaped (nz, ny, nx) (x fastest, as
-    numpy's C order), values ≥ 0 at the voxels' centres, looked up trilinearly; `albedo` an optional grid of the
-    same shape in [0, 1] multiplying σs, or shaped (nz, ny, nx, 3) for a linear sRGB albedo uplifted per voxel;
-    filling `box` (two corners), then moved by `transform` steps (as `transformed`), in the scene's space."""
+    numpy's C order), values ≥ 0 at the voxels' centres, looked up trilinearly, or (nz, ny, nx, 3) for a linear
+    sRGB density uplifted per voxel (σt varying with λ); `albedo` an optional grid of the same shape in [0, 1]
+    multiplying σs, or shaped (nz, ny, nx, 3) for a linear sRGB albedo uplifted per voxel; filling `box` (two
+    corners), then moved by `transform` steps (as `transformed`), in the scene's space; `outside` what it holds
+    outside the box: "empty" (the medium ends there), "clamp" (its faces' values) or "repeat" (copies of itself)."""
     if np.shape(box) != (2, 3):
         raise SpectraceError(f"box must be two corners [x, y, z], got shape {np.shape(box)}", where="box")
     matrix = box_matrix(*np.asarray(box, np.float64))
     steps = [dict(step) for step in transform]
     if steps:
         matrix = transform_matrix(steps, where="transform") @ matrix
-    return make_grid(np.asarray(density), matrix, None if albedo is None else np.asarray(albedo), where="density")
+    return make_grid(
+        np.asarray(density), matrix, None if albedo is None else np.asarray(albedo), where="density", outside=outside
+    )
 
 
 def _is_zero(source: SpectrumLike) -> bool:

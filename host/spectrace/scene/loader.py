@@ -564,35 +564,39 @@ class _Resolver:
         return Medium(sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "", density=density)
 
     def density_grid(self, spec: schema.DensityGridSpec, key: str) -> GridVolume:
-        """A grid medium's density (and albedo) from a .vol file's first channel or inline values."""
+        """A grid medium's density (and albedo) from a .vol file (one channel, or three: a colour) or inline
+        values."""
 
-        def values(file: str | None, inline: list[float] | None, name: str, colour: bool = False) -> np.ndarray:
-            """The grid's values; with `colour`, 3 channels (a file's or 3 inline values a voxel) give an RGB
-            grid shaped (nz, ny, nx, 3)."""
+        def values(file: str | None, inline: list[float] | None, name: str) -> np.ndarray:
+            """The grid's values; 3 channels (a file's or 3 inline values a voxel) give an RGB grid shaped
+            (nz, ny, nx, 3); a file's other channel counts, its first channel."""
             if file is not None:
                 grid = read_vol(self.folder / file, where=self.where(f"{key}.{name}file"))[0]
-                return grid if colour and grid.shape[3] == 3 else grid[..., 0]
+                return grid if grid.shape[3] == 3 else grid[..., 0]
             nx, ny, nz = spec.resolution or (0, 0, 0)
             count = nx * ny * nz
-            if colour and count >= 1 and len(inline or ()) == 3 * count:
+            if count >= 1 and len(inline or ()) == 3 * count:
                 return np.asarray(inline, np.float32).reshape(nz, ny, nx, 3)
             if min(nx, ny, nz) < 1 or len(inline or ()) != count:
-                need = f"{max(count, 0)}" + (f" or {3 * max(count, 0)} for a colour" if colour else "")
+                need = f"{max(count, 0)} or {3 * max(count, 0)} for a colour"
                 raise SpectraceError(
                     f"{len(inline or ())} values for resolution {nx}×{ny}×{nz} (need {need})",
                     where=self.where(f"{key}.{name}values"),
                 )
             return np.asarray(inline, np.float32).reshape(nz, ny, nx)
 
-        density = values(spec.file, spec.values, "")
         albedo = None
         if spec.albedo_file is not None or spec.albedo_values is not None:
-            albedo = values(spec.albedo_file, spec.albedo_values, "albedo_", colour=True)
+            albedo = values(spec.albedo_file, spec.albedo_values, "albedo_")
+        if spec.file is None and spec.values is None and albedo is not None:
+            density = np.ones(albedo.shape[:3], np.float32)  # an albedo grid over a homogeneous medium
+        else:
+            density = values(spec.file, spec.values, "")
         matrix = box_matrix(*spec.box)
         if spec.transform:
             steps = [step.model_dump(exclude_none=True) for step in spec.transform]
             matrix = transform_matrix(steps, where=self.where(f"{key}.transform")) @ matrix
-        return make_grid(density, matrix, albedo, where=self.where(key))
+        return make_grid(density, matrix, albedo, where=self.where(key), outside=spec.outside)
 
     def coefficient(self, spec: schema.SpectrumSpec | None, key: str, scale: float) -> Spectrum:
         """A medium coefficient, 1/scene unit: like an emission it has no upper bound (rgb: a smooth spectrum

@@ -389,8 +389,10 @@ else:
 
 class DensityGridSpec(Strict):
     """A heterogeneous medium's voxel grid (docs/media.md): a Mitsuba volume `file` (.vol) or inline `values` (x
-    fastest) of `resolution` [nx, ny, nz]; an optional albedo grid of the same size; filling `box` (two corners),
-    then moved by `transform` (in the scene's space, not the shape's)."""
+    fastest) of `resolution` [nx, ny, nz], one value a voxel or three (a colour), or neither: a density of 1; an
+    optional albedo grid of the same size; filling `box` (two corners), then moved by `transform` (in the scene's
+    space, not the shape's); `outside`: what it holds outside the box (empty, clamp: its faces' values, repeat:
+    copies of itself)."""
 
     file: str | None = None
     values: list[FiniteFloat] | None = None
@@ -399,12 +401,15 @@ class DensityGridSpec(Strict):
     albedo_values: list[FiniteFloat] | None = None
     box: Annotated[tuple[Vector3, Vector3], StrictMode(False)] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
     transform: list[TransformStep] = []
+    outside: Literal["empty", "clamp", "repeat"] = "empty"
 
     @model_validator(mode="after")
     def _one_source(self) -> "DensityGridSpec":
-        if (self.file is None) == (self.values is None):
+        if self.file is not None and self.values is not None:
             raise ValueError("give either file or values")
-        if self.values is not None and self.resolution is None:
+        if self.file is None and self.values is None and self.albedo_file is None and self.albedo_values is None:
+            raise ValueError("give either file or values (or only an albedo grid, over a density of 1)")
+        if (self.values is not None or self.albedo_values is not None) and self.resolution is None:
             raise ValueError("values need resolution = [nx, ny, nz]")
         if self.albedo_file is not None and self.albedo_values is not None:
             raise ValueError("give albedo_file or albedo_values, not both")
