@@ -208,6 +208,8 @@ inline float4 grid_density_albedo(__global const float *spectra, int grid, float
     return (float4)(density);
 }
 
+#include "medium_emission.cl"
+
 /* The majorant cells a ray crosses inside the unit box, in order (a 3D DDA). t is the ray's own parameter. */
 typedef struct {
     float3 next;    /* t at which the ray enters the next cell along each axis */
@@ -355,6 +357,9 @@ inline FreeFlight grid_sample_flight(__global const Medium *m, __global const fl
     flight.scattered = 0;
     float4 lanes = hero_only ? (float4)(1.0f, 0.0f, 0.0f, 0.0f) : (float4)(1.0f);
     flight.weight = lanes;  /* lanes a dispersive event ended carry nothing, as in medium_sample_flight */
+#if SCENE_HAS_MEDIUM_EMISSION
+    flight.emitted = (float4)(0.0f);
+#endif
     float4 sigma_s = medium_sigma_s(m, spectra, w) * lanes;
     float4 sigma_t = medium_sigma_t(m, spectra, w) * lanes;
     float sigma_bound = fmax(fmax(sigma_t.x, sigma_t.y), fmax(sigma_t.z, sigma_t.w));
@@ -370,6 +375,14 @@ inline FreeFlight grid_sample_flight(__global const Medium *m, __global const fl
         float4 sigma_t_x = density * sigma_t;
         float4 sigma_s_x = density * albedo * sigma_s;
         float4 sigma_n_x = fmax((float4)(majorant) - sigma_t_x, (float4)(0.0f));
+#if SCENE_HAS_MEDIUM_EMISSION
+        if (m->emission >= 0) {
+            /* before this collision's choice: the weight so far estimates the transmittance to it */
+            float4 le = medium_emission_spectrum(m, spectra, w)
+                      * grid_emission_factor(spectra, m->grid, origin + t * direction, w->lambda);
+            flight.emitted += flight.weight * (sigma_t_x - sigma_s_x) * le / majorant;
+        }
+#endif
         float4 h = fabs(throughput * flight.weight);
         float scatter = dot(h, sigma_s_x), null = dot(h, sigma_n_x);
         if (!(scatter + null > 0.0f)) {

@@ -47,12 +47,16 @@ class GridVolume:
     in [0, 1] (a grey albedo), or (nz, ny, nx, 3) (a linear sRGB albedo in [0, 1], uplifted per voxel), multiplying
     its scattering coefficient; to_world: 4×4 map of the unit box into the scene; outside: what the grid holds
     outside its box (GRID_OUTSIDE: "empty", the medium ends there; "clamp", its faces' values; "repeat", copies of
-    itself), where "clamp" and "repeat" make the grid fill all space (an albedo over a homogeneous σt)."""
+    itself), where "clamp" and "repeat" make the grid fill all space (an albedo over a homogeneous σt); emission:
+    None or (nz, ny, nx) ≥ 0, scaling a glowing medium's emission spectrum per voxel (pbrt-v4's Lescale grid);
+    temperature: None or (nz, ny, nx) in kelvin ≥ 0, making its emission a blackbody's normalised to its peak."""
 
     density: np.ndarray
     to_world: np.ndarray
     albedo: np.ndarray | None = None
     outside: str = "empty"
+    emission: np.ndarray | None = None
+    temperature: np.ndarray | None = None
 
     __eq__ = fields_equal
 
@@ -65,7 +69,7 @@ def box_matrix(p0: ArrayLike, p1: ArrayLike) -> np.ndarray:
     return matrix
 
 
-def grid_problem(values: np.ndarray, what: str, upper: float | None = None) -> str | None:
+def grid_problem(values: np.ndarray, what: str, upper: float | None = None, signed: bool = False) -> str | None:
     """Why `values` cannot be a grid of `what` (a message), or None."""
     if values.ndim != 3 or min(values.shape) < 1:
         return f"{what} must be a 3-D grid of at least one voxel, got shape {values.shape}"
@@ -73,7 +77,7 @@ def grid_problem(values: np.ndarray, what: str, upper: float | None = None) -> s
         return f"{what} has {values.size} voxels, more than the {MAX_VOXELS} a grid may have"
     if not np.all(np.isfinite(values)):
         return f"{what} holds values that are not finite"
-    if np.any(values < 0.0):
+    if not signed and np.any(values < 0.0):
         return f"{what} holds negative values (the smallest is {float(values.min()):g})"
     if upper is not None and np.any(values > upper):
         return f"{what} holds values above {upper:g} (the largest is {float(values.max()):g})"
@@ -86,6 +90,8 @@ def make_grid(
     albedo: np.ndarray | None = None,
     where: str | None = None,
     outside: str = "empty",
+    emission: np.ndarray | None = None,
+    temperature: np.ndarray | None = None,
 ) -> GridVolume:
     """A checked GridVolume; `where` names the input in the one-line errors."""
     density = np.ascontiguousarray(density, np.float32)
@@ -110,10 +116,20 @@ def make_grid(
         for channel in range(channels.shape[3]):
             if problem := grid_problem(channels[..., channel], "the albedo", upper=1.0):
                 raise SpectraceError(problem, where=where)
+    scalars = {}
+    for name, grid in (("emission", emission), ("temperature", temperature)):
+        if grid is not None:
+            grid = np.ascontiguousarray(grid, np.float32)
+            if grid.shape != voxels:
+                raise SpectraceError(f"the {name} grid's shape {grid.shape} is not the density's {voxels}", where=where)
+            # a temperature at or below 0 K (pbrt-v4's offset may take it there) glows nowhere
+            if problem := grid_problem(grid, f"the {name}", signed=name == "temperature"):
+                raise SpectraceError(problem, where=where)
+        scalars[name] = grid
     to_world = np.asarray(to_world, np.float64)
     if to_world.shape != (4, 4) or not np.all(np.isfinite(to_world)) or abs(np.linalg.det(to_world[:3, :3])) < 1e-12:
         raise SpectraceError("the grid's placement must be an invertible 4×4 transform", where=where)
-    return GridVolume(density=density, to_world=to_world, albedo=albedo, outside=outside)
+    return GridVolume(density=density, to_world=to_world, albedo=albedo, outside=outside, **scalars)
 
 
 def read_vol(path: Path, where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -246,8 +262,11 @@ def add_grid_block(table: SpectrumTable, grid: GridVolume) -> int:
     channels = 3 if grid.albedo is not None and grid.albedo.ndim == 4 else 1
     density_channels = 3 if grid.density.ndim == 4 else 1
     outside = GRID_OUTSIDE.index(grid.outside)
+    emission, temperature = (table.add_block(g) if g is not None else -1 for g in (grid.emission, grid.temperature))
     ints = np.array(
-        [nx, ny, nz, mx, my, mz, density, albedo, majorant_offset, channels, density_channels, outside], np.int32
+        [nx, ny, nz, mx, my, mz, density, albedo, majorant_offset, channels, density_channels, outside]
+        + [emission, temperature],
+        np.int32,
     )
     return table.add_block(np.concatenate([to_unit, ints.view(np.float32)]))
 
@@ -263,10 +282,14 @@ class MediumFields(Protocol):
     def g(self) -> float: ...
     @property
     def density(self) -> GridVolume | None: ...
+    @property
+    def emission(self) -> Spectrum | None: ...
 
 
-def medium_row(medium: MediumFields, table: SpectrumTable) -> tuple[int, int, float, int]:
-    """A medium's device row (MEDIUM_DTYPE): its spectra's offsets, g, and its grid's block (-1: homogeneous)."""
+def medium_row(medium: MediumFields, table: SpectrumTable) -> tuple[int, int, float, int, int]:
+    """A medium's device row (MEDIUM_DTYPE): its spectra's offsets, g, its grid's block (-1: homogeneous) and its
+    emission spectrum's offset (-1: it does not glow)."""
     sigma_a, sigma_s = table.add(medium.sigma_a), table.add(medium.sigma_s)
     grid = add_grid_block(table, medium.density) if medium.density is not None else -1
-    return (sigma_a, sigma_s, float(medium.g), grid)
+    emission = table.add(medium.emission) if medium.emission is not None else -1
+    return (sigma_a, sigma_s, float(medium.g), grid, emission)

@@ -561,7 +561,16 @@ class _Resolver:
             if problem := limits.spectrum_magnitude_problem(spectrum.values):
                 raise SpectraceError(problem, where=self.where(f"{key}.{name}"))
         density = self.density_grid(spec.density, f"{key}.density") if spec.density is not None else None
-        return Medium(sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "", density=density)
+        emission = self.spectrum(spec.emission, f"{key}.emission", emission=True) if spec.emission else None
+        if (
+            emission is None
+            and density is not None
+            and (density.emission is not None or density.temperature is not None)
+        ):
+            emission = Spectrum.constant(1.0)  # the grids' glow as they give it
+        return Medium(
+            sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "", density=density, emission=emission
+        )
 
     def density_grid(self, spec: schema.DensityGridSpec, key: str) -> GridVolume:
         """A grid medium's density (and albedo) from a .vol file (one channel, or three: a colour) or inline
@@ -596,7 +605,17 @@ class _Resolver:
         if spec.transform:
             steps = [step.model_dump(exclude_none=True) for step in spec.transform]
             matrix = transform_matrix(steps, where=self.where(f"{key}.transform")) @ matrix
-        return make_grid(density, matrix, albedo, where=self.where(key), outside=spec.outside)
+        scalars = {}
+        for name in ("emission", "temperature"):
+            file, inline = getattr(spec, f"{name}_file"), getattr(spec, f"{name}_values")
+            if file is not None or inline is not None:
+                grid = values(file, inline, f"{name}_")
+                if grid.ndim != 3:
+                    raise SpectraceError(
+                        f"the {name} grid takes one value a voxel", where=self.where(f"{key}.{name}_values")
+                    )
+                scalars[name] = grid
+        return make_grid(density, matrix, albedo, where=self.where(key), outside=spec.outside, **scalars)
 
     def coefficient(self, spec: schema.SpectrumSpec | None, key: str, scale: float) -> Spectrum:
         """A medium coefficient, 1/scene unit: like an emission it has no upper bound (rgb: a smooth spectrum
