@@ -393,7 +393,7 @@ class DensityGridSpec(Strict):
     optional albedo grid of the same size, and for a glowing medium an emission scale grid and a temperature grid
     (kelvin: blackbody emission); filling `box` (two corners), then moved by `transform` (in the scene's
     space, not the shape's); `outside`: what it holds outside the box (empty, clamp: its faces' values, repeat:
-    copies of itself)."""
+    copies of itself). A NanoVDB `file` (.nvdb) is placed by its own index-to-world map instead of `box`."""
 
     file: str | None = None
     values: list[FiniteFloat] | None = None
@@ -404,6 +404,9 @@ class DensityGridSpec(Strict):
     emission_values: list[FiniteFloat] | None = None
     temperature_file: str | None = None
     temperature_values: list[FiniteFloat] | None = None
+    grid: str | None = Field(default=None, description="a NanoVDB file's float grid to read (default: density)")
+    temperature_offset: FiniteFloat = 0.0
+    temperature_scale: FiniteFloat = 1.0
     box: Annotated[tuple[Vector3, Vector3], StrictMode(False)] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
     transform: list[TransformStep] = []
     outside: Literal["empty", "clamp", "repeat"] = "empty"

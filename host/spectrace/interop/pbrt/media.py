@@ -33,13 +33,16 @@ def medium_table(context: Context, medium: Entity) -> dict:
 
     context.read.add(id(medium))
     kind = context.string(medium, "type", "")
-    if kind not in ("homogeneous", "uniformgrid"):
+    if kind not in ("homogeneous", "uniformgrid", "nanovdb"):
         raise error(
-            medium.location, f"medium '{shown(kind or '')}': spectrace imports homogeneous and uniformgrid media"
+            medium.location,
+            f"medium '{shown(kind or '')}': spectrace imports homogeneous, uniformgrid and nanovdb media",
         )
     table: dict = {}
     if kind == "uniformgrid":
         table["density"] = _uniform_grid(context, medium)
+    elif kind == "nanovdb":
+        table["density"] = _nanovdb(context, medium)
     if (preset := context.string(medium, "preset")) is not None:
         # pbrt's Jensen et al. presets are the same measurements as spectrace's, in 1/mm (pbrt: per scene unit
         # times scale; spectrace: per mm times scale, its millimetres per scene unit: the same numbers).
@@ -59,7 +62,42 @@ def medium_table(context: Context, medium: Entity) -> dict:
         table["scale"] = scale
     if (g := context.one(medium, "g", 0.0)) != 0.0:
         table["g"] = g
-    _emission(context, medium, kind, table)
+    if kind == "nanovdb":
+        # pbrt-v4's NanoVDB medium glows where it has a temperature grid: Lescale times the normalised black body
+        scale = context.one(medium, "Lescale", 1.0)
+        if "temperature_file" in table["density"] and scale > 0.0:
+            table["emission"] = {"value": scale}
+    else:
+        _emission(context, medium, kind, table)
+    return table
+
+
+def _nanovdb(context: Context, medium: Entity) -> dict:
+    """A nanovdb medium's grids (its `gridname`, default density, and `temperaturename`, default temperature, when
+    the file has it) read from its file, placed by the grid's own map and the CTM at MakeNamedMedium."""
+    from spectrace.geometry.nanovdb import nanovdb_grid, read_nanovdb
+
+    path = context.file_path(medium, "filename")
+    if path is None:
+        raise error(medium.location, 'a nanovdb medium needs "string filename"')
+    grid = context.string(medium, "gridname", "density") or "density"
+    temperature = context.string(medium, "temperaturename", "temperature") or "temperature"
+    grids = read_nanovdb(path, where=str(medium.location))
+    nanovdb_grid(path, grid, where=str(medium.location))  # the density grid is there (or the file's only one)
+    matrix = context.world @ context.scene.world_from_medium[medium.name]
+    table: dict = {"file": context.relative(path), "transform": [{"matrix": matrix.tolist()}]}
+    if grid != "density":
+        table["grid"] = grid
+    offset = context.one(medium, "temperatureoffset", context.one(medium, "temperaturecutoff", 0.0))
+    scale = context.one(medium, "temperaturescale", 1.0)
+    if temperature in grids:
+        if temperature != "temperature":
+            raise error(medium.location, f"temperaturename '{shown(temperature)}': spectrace reads 'temperature'")
+        table["temperature_file"] = table["file"]
+        if offset != 0.0:
+            table["temperature_offset"] = offset
+        if scale != 1.0:
+            table["temperature_scale"] = scale
     return table
 
 
