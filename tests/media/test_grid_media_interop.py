@@ -167,6 +167,8 @@ def test_unsupported_grid_forms_are_reported(tmp_path):
         ("volpath", "constant-box"),
         ("volpath", "colour-sigma-t"),
         ("volpath", "albedo-grid"),
+        ("bdpt", "colour-sigma-t"),
+        ("ptracer", "albedo-grid"),
     ],
 )
 def test_grid_medium_cube_renders_like_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral, integrator, medium):
