@@ -218,3 +218,21 @@ def test_pbrt_uniformgrid_temperature_and_lescale_import_as_grids(tmp_path):
         with pytest.raises(SpectraceError, match=words) as caught:
             pbrt_scene_data(_pbrt_cube(tmp_path, "uniformgrid", grid + extra))
         assert "\n" not in str(caught.value) and "glow.pbrt" in str(caught.value)
+
+
+def test_a_glowing_medium_built_in_python_saves_and_loads_its_emission(tmp_path):
+    """save_scene writes the medium's emission as a spectrum table the scene format reads back: the same values
+    on the wavelength grid."""
+    from spectrace.scene.model import Camera, Scene
+
+    medium = spectrace.medium(sigma_a=0.5, emission=[0.2, 0.5, 0.9])
+    scene = Scene(
+        camera=Camera((0.0, 0.0, -4.0), (0.0, 0.0, 0.0)),
+        width=4,
+        height=4,
+        shapes=[spectrace.shape("cube", None, interior=medium), spectrace.shape("sphere", spectrace.diffuse(0.5))],
+    )
+    spectrace.save_scene(scene, tmp_path / "glow.toml")
+    loaded = spectrace.load_scene(tmp_path / "glow.toml").shapes[0].interior
+    np.testing.assert_allclose(loaded.emission.values, medium.emission.values, rtol=1e-6)
+    assert np.ptp(medium.emission.values) > 0.1  # a coloured glow, not a constant
