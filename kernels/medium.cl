@@ -49,6 +49,9 @@ typedef struct {
     float distance;  /* where the flight ends: a scattering point, or the surface at t_surface */
     int scattered;   /* 1: a real scattering event before the surface */
     float4 weight;   /* throughput multiplier per lane: T·σs / p(t) at a scattering point, T / P(t ≥ t_surface) else */
+#if SCENE_HAS_MEDIUM_EMISSION
+    float4 emitted;  /* a glowing grid's emission gathered on the way, per lane, before `weight` (medium_emission.cl) */
+#endif
 } FreeFlight;
 
 /* One free flight from the ray's origin toward the next surface at t_surface (∞ when none); `hero_only` when a
@@ -60,6 +63,9 @@ inline FreeFlight medium_sample_flight(__global const Medium *m, __global const 
     float4 sigma_s = medium_sigma_s(m, spectra, w);
     float4 sigma_t = medium_sigma_t(m, spectra, w);
     FreeFlight flight;
+#if SCENE_HAS_MEDIUM_EMISSION
+    flight.emitted = (float4)(0.0f);  /* a homogeneous medium's is added in closed form (medium_emission.cl) */
+#endif
     if (all(sigma_s == (float4)(0.0f))) {
         /* A pure absorber scatters nowhere: the flight surely reaches the surface, weighted by its transmittance
          * (the expectation of the sampled estimate, without its noise). */

@@ -12,9 +12,12 @@
  * by spectrace.geometry.grid_volume: the world → unit-box map (3 rows of 4), then as int bits: nx, ny, nz (voxels),
  * mx, my, mz (majorant cells), the offsets of the density, albedo (-1: none) and majorant arrays, x fastest, and
  * the albedo's channels: 1 (a grey value a voxel) or 3 (a colour, stored as 4 floats a voxel: the dimensionless
- * sigmoid coefficients (rgb_spectrum.cl) of the colour over s, then s = 2 × its largest channel). A colour albedo is
- * the mix of the eight surrounding voxels' spectra at the path's wavelengths times the mix of their s, as Mitsuba 3's
- * spectral gridvolume evaluates it: a mix of spectra has the mix of their colours.
+ * sigmoid coefficients (rgb_spectrum.cl) of the colour over s, then s = 2 × its largest channel), the density's
+ * channels in the same sense (1, or 3: a colour density, σt varying with λ voxel by voxel), and what lies outside the
+ * box (GRID_OUTSIDE_*). A colour is the mix of the eight surrounding voxels' spectra at the path's wavelengths times
+ * the mix of their s, as Mitsuba 3's spectral gridvolume evaluates it: a mix of spectra has the mix of their colours.
+ * A colour density's majorant cell holds the cell's largest s times the largest value any of its voxels' spectra
+ * takes over the wavelength grid (host side), which bounds that product at every wavelength a path can carry.
  *
  * Free flights: tentative collisions are drawn at rate μ, cell by cell (a flight past a cell's end restarts at the
  * next cell, the exponential being memoryless). At a collision the path scatters with probability
@@ -34,6 +37,13 @@
 #define GRID_MAX_COLLISIONS 1048576
 
 #define GRID_HEADER_INT(spectra, grid, i) as_int((spectra)[(grid) + 12 + (i)])
+
+/* What a grid holds outside its box: nothing (the medium ends there), the values at its faces (the grid fills all
+ * space), or copies of itself (it tiles space). The last two are for an albedo over a homogeneous σt (Mitsuba 3's
+ * gridvolume lookups, clamped or repeated); their majorant is one cell, unbounded, of the grid's largest value. */
+#define GRID_OUTSIDE_EMPTY 0
+#define GRID_OUTSIDE_CLAMP 1
+#define GRID_OUTSIDE_REPEAT 2
 
 /* The point of world position p in the grid's unit box. */
 inline float3 grid_unit_point(__global const float *spectra, int grid, float3 p)
@@ -59,12 +69,26 @@ inline float3 grid_corners(int3 n, float3 u, int3 *i0, int3 *i1)
     return q - convert_float3(*i0);
 }
 
-/* The trilinear value of the voxel array at `offset` (dimensions n) at unit-box point u, 0 outside the box. */
-inline float grid_lookup(__global const float *spectra, int offset, int3 n, float3 u)
+/* grid_corners for a grid that tiles space: the lookup wraps around at the faces (Mitsuba 3's repeat mode). */
+inline float3 grid_corners_repeat(int3 n, float3 u, int3 *i0, int3 *i1)
 {
-    if (any(u < (float3)(0.0f)) || any(u > (float3)(1.0f))) return 0.0f;
-    int3 i0, i1;
-    float3 f = grid_corners(n, u, &i0, &i1);
+    float3 q = u * convert_float3(n) - 0.5f;
+    float3 low = floor(q);
+    int3 i = convert_int3(low) % n;
+    *i0 = select(i, i + n, i < (int3)(0));
+    *i1 = select(*i0 + 1, (int3)(0), *i0 + 1 >= n);
+    return q - low;
+}
+
+/* The eight voxels around any unit-box point u of a grid whose outside is `outside` (not empty). */
+inline float3 grid_corners_outside(int outside, int3 n, float3 u, int3 *i0, int3 *i1)
+{
+    return outside == GRID_OUTSIDE_REPEAT ? grid_corners_repeat(n, u, i0, i1) : grid_corners(n, u, i0, i1);
+}
+
+/* The trilinear value of the voxel array at `offset` (dimensions n) between voxels i0 and i1 at weights f. */
+inline float grid_trilinear(__global const float *spectra, int offset, int3 n, int3 i0, int3 i1, float3 f)
+{
     __global const float *v = spectra + offset;
 #define GRID_AT(ix, iy, iz) v[((iz) * n.y + (iy)) * n.x + (ix)]
     float c00 = mix(GRID_AT(i0.x, i0.y, i0.z), GRID_AT(i1.x, i0.y, i0.z), f.x);
@@ -75,12 +99,20 @@ inline float grid_lookup(__global const float *spectra, int offset, int3 n, floa
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
-/* A colour albedo at unit-box point u inside the box: the trilinear mix of the voxels' spectra at the four
- * wavelengths times the trilinear mix of their scales. */
-inline float4 grid_lookup_colour(__global const float *spectra, int offset, int3 n, float3 u, float4 lambda)
+/* The trilinear value of the voxel array at `offset` (dimensions n) at unit-box point u, 0 outside the box. */
+inline float grid_lookup(__global const float *spectra, int offset, int3 n, float3 u)
 {
+    if (any(u < (float3)(0.0f)) || any(u > (float3)(1.0f))) return 0.0f;
     int3 i0, i1;
     float3 f = grid_corners(n, u, &i0, &i1);
+    return grid_trilinear(spectra, offset, n, i0, i1, f);
+}
+
+/* A colour between voxels i0 and i1 at weights f: the trilinear mix of the voxels' spectra at the four wavelengths
+ * times the trilinear mix of their scales. */
+inline float4 grid_trilinear_colour(__global const float *spectra, int offset, int3 n, int3 i0, int3 i1, float3 f,
+                                    float4 lambda)
+{
     __global const float *v = spectra + offset;
 #define GRID_VOXEL(ix, iy, iz) vload4(((iz) * n.y + (iy)) * n.x + (ix), v)
 #define GRID_SPECTRUM(c) sigmoid_polynomial_dimensionless((c).xyz, lambda)
@@ -99,18 +131,68 @@ inline float4 grid_lookup_colour(__global const float *spectra, int offset, int3
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z) * mix(mix(s00, s10, f.y), mix(s01, s11, f.y), f.z);
 }
 
-/* Density d(x) at world point x. */
-inline float grid_density(__global const float *spectra, int grid, float3 x)
+/* A colour at unit-box point u inside the box (grid_trilinear_colour). */
+inline float4 grid_lookup_colour(__global const float *spectra, int offset, int3 n, float3 u, float4 lambda)
+{
+    int3 i0, i1;
+    float3 f = grid_corners(n, u, &i0, &i1);
+    return grid_trilinear_colour(spectra, offset, n, i0, i1, f, lambda);
+}
+
+/* A value of the array at `offset` with `channels` (1 or 3) at the four wavelengths. */
+inline float4 grid_value(__global const float *spectra, int offset, int channels, int3 n, int3 i0, int3 i1, float3 f,
+                         float4 lambda)
+{
+    return channels == 3 ? grid_trilinear_colour(spectra, offset, n, i0, i1, f, lambda)
+                         : (float4)(grid_trilinear(spectra, offset, n, i0, i1, f));
+}
+
+/* Density d(λ, x) and, where `albedo` is not 0, albedo a(λ, x) (1 without an albedo grid) of a grid that is not
+ * empty outside its box or has a colour density. */
+inline float4 grid_density_albedo_general(__global const float *spectra, int grid, float3 x, float4 lambda,
+                                          float4 *albedo)
 {
     float3 u = grid_unit_point(spectra, grid, x);
     int3 n = (int3)(GRID_HEADER_INT(spectra, grid, 0), GRID_HEADER_INT(spectra, grid, 1),
                     GRID_HEADER_INT(spectra, grid, 2));
-    return grid_lookup(spectra, GRID_HEADER_INT(spectra, grid, 6), n, u);
+    int outside = GRID_HEADER_INT(spectra, grid, 11);
+    if (outside == GRID_OUTSIDE_EMPTY && (any(u < (float3)(0.0f)) || any(u > (float3)(1.0f)))) {
+        if (albedo) *albedo = (float4)(1.0f);
+        return (float4)(0.0f);
+    }
+    int3 i0, i1;
+    float3 f = grid_corners_outside(outside, n, u, &i0, &i1);
+    float4 density = grid_value(spectra, GRID_HEADER_INT(spectra, grid, 6), GRID_HEADER_INT(spectra, grid, 10), n, i0,
+                                i1, f, lambda);
+    if (albedo) {
+        int offset = GRID_HEADER_INT(spectra, grid, 7);
+        *albedo = offset < 0 || !any(density > (float4)(0.0f))
+                      ? (float4)(1.0f)
+                      : grid_value(spectra, offset, GRID_HEADER_INT(spectra, grid, 9), n, i0, i1, f, lambda);
+    }
+    return density;
 }
 
-/* Density d(x) at world point x, and in *albedo a(λ, x) at the four wavelengths (1 without an albedo grid). */
-inline float grid_density_albedo(__global const float *spectra, int grid, float3 x, float4 lambda, float4 *albedo)
+/* Whether a grid takes the general lookups: a colour density, or values outside its box. */
+inline int grid_is_general(__global const float *spectra, int grid)
 {
+    return GRID_HEADER_INT(spectra, grid, 10) != 1 || GRID_HEADER_INT(spectra, grid, 11) != GRID_OUTSIDE_EMPTY;
+}
+
+/* Density d(λ, x) at world point x, at the four wavelengths. */
+inline float4 grid_density(__global const float *spectra, int grid, float3 x, float4 lambda)
+{
+    if (grid_is_general(spectra, grid)) return grid_density_albedo_general(spectra, grid, x, lambda, 0);
+    float3 u = grid_unit_point(spectra, grid, x);
+    int3 n = (int3)(GRID_HEADER_INT(spectra, grid, 0), GRID_HEADER_INT(spectra, grid, 1),
+                    GRID_HEADER_INT(spectra, grid, 2));
+    return (float4)(grid_lookup(spectra, GRID_HEADER_INT(spectra, grid, 6), n, u));
+}
+
+/* Density d(λ, x) at world point x, and in *albedo a(λ, x) at the four wavelengths (1 without an albedo grid). */
+inline float4 grid_density_albedo(__global const float *spectra, int grid, float3 x, float4 lambda, float4 *albedo)
+{
+    if (grid_is_general(spectra, grid)) return grid_density_albedo_general(spectra, grid, x, lambda, albedo);
     float3 u = grid_unit_point(spectra, grid, x);
     int3 n = (int3)(GRID_HEADER_INT(spectra, grid, 0), GRID_HEADER_INT(spectra, grid, 1),
                     GRID_HEADER_INT(spectra, grid, 2));
@@ -123,8 +205,10 @@ inline float grid_density_albedo(__global const float *spectra, int grid, float3
     } else {
         *albedo = (float4)(grid_lookup(spectra, offset, n, u));
     }
-    return density;
+    return (float4)(density);
 }
+
+#include "medium_emission.cl"
 
 /* The majorant cells a ray crosses inside the unit box, in order (a 3D DDA). t is the ray's own parameter. */
 typedef struct {
@@ -142,6 +226,19 @@ typedef struct {
 inline int grid_walk_start(__global const float *spectra, int grid, float3 origin, float3 direction, float t_max,
                            GridWalk *walk)
 {
+    if (GRID_HEADER_INT(spectra, grid, 11) != GRID_OUTSIDE_EMPTY) {
+        /* The grid fills all space: one cell, the whole ray, never stepped out of by the DDA. */
+        if (!(t_max > 0.0f)) return 0;
+        walk->cells = (int3)(1);
+        walk->majorant = GRID_HEADER_INT(spectra, grid, 8);
+        walk->cell = (int3)(0);
+        walk->step = (int3)(1);
+        walk->next = (float3)(INFINITY);
+        walk->delta = (float3)(INFINITY);
+        walk->t = 0.0f;
+        walk->t_end = t_max;
+        return 1;
+    }
     float3 o = grid_unit_point(spectra, grid, origin);
     float3 d = grid_unit_vector(spectra, grid, direction);
     float3 inv = 1.0f / d;  /* ±∞ along an axis the ray does not move along */
@@ -260,6 +357,9 @@ inline FreeFlight grid_sample_flight(__global const Medium *m, __global const fl
     flight.scattered = 0;
     float4 lanes = hero_only ? (float4)(1.0f, 0.0f, 0.0f, 0.0f) : (float4)(1.0f);
     flight.weight = lanes;  /* lanes a dispersive event ended carry nothing, as in medium_sample_flight */
+#if SCENE_HAS_MEDIUM_EMISSION
+    flight.emitted = (float4)(0.0f);
+#endif
     float4 sigma_s = medium_sigma_s(m, spectra, w) * lanes;
     float4 sigma_t = medium_sigma_t(m, spectra, w) * lanes;
     float sigma_bound = fmax(fmax(sigma_t.x, sigma_t.y), fmax(sigma_t.z, sigma_t.w));
@@ -271,10 +371,18 @@ inline FreeFlight grid_sample_flight(__global const Medium *m, __global const fl
     while ((found = grid_next_collision(spectra, &k, &u, &state)) > 0) {
         float majorant = k.majorant, t = k.t;
         float4 albedo;
-        float density = grid_density_albedo(spectra, m->grid, origin + t * direction, w->lambda, &albedo);
+        float4 density = grid_density_albedo(spectra, m->grid, origin + t * direction, w->lambda, &albedo);
         float4 sigma_t_x = density * sigma_t;
         float4 sigma_s_x = density * albedo * sigma_s;
         float4 sigma_n_x = fmax((float4)(majorant) - sigma_t_x, (float4)(0.0f));
+#if SCENE_HAS_MEDIUM_EMISSION
+        if (m->emission >= 0) {
+            /* before this collision's choice: the weight so far estimates the transmittance to it */
+            float4 le = medium_emission_spectrum(m, spectra, w)
+                      * grid_emission_factor(spectra, m->grid, origin + t * direction, w->lambda);
+            flight.emitted += flight.weight * (sigma_t_x - sigma_s_x) * le / majorant;
+        }
+#endif
         float4 h = fabs(throughput * flight.weight);
         float scatter = dot(h, sigma_s_x), null = dot(h, sigma_n_x);
         if (!(scatter + null > 0.0f)) {
@@ -310,7 +418,7 @@ inline float4 grid_transmittance(__global const Medium *m, __global const float 
     float u = grid_random(&state);
     int found;
     while ((found = grid_next_collision(spectra, &k, &u, &state)) > 0) {
-        float density = grid_density(spectra, m->grid, origin + k.t * direction);
+        float4 density = grid_density(spectra, m->grid, origin + k.t * direction, w->lambda);
         transmittance *= fmax((float4)(k.majorant) - density * sigma_t, (float4)(0.0f)) / k.majorant;
         if (all(transmittance == (float4)(0.0f))) return transmittance;
     }

@@ -30,7 +30,20 @@ inline int scatter_in_medium(const Scene *scene, const SampledWavelengths *w, Sa
     *ended = 0;
     if (!SCENE_HAS_MEDIA || s->medium < 0) return 0;
     __global const Medium *medium = &scene->media[s->medium];
+#if SCENE_HAS_MEDIUM_EMISSION
+    float4 before = s->throughput;
+#endif
     FreeFlight flight = path_free_flight(scene, w, sampler, s, medium, hit_t);
+#if SCENE_HAS_MEDIUM_EMISSION
+    if (medium->emission >= 0) {
+        float4 lanes = s->secondary_terminated ? (float4)(1.0f, 0.0f, 0.0f, 0.0f) : (float4)(1.0f);
+        float4 emitted = before * (medium->grid >= 0 ? flight.emitted
+                                                     : medium_emitted_homogeneous(medium, scene->spectra, w, lanes,
+                                                                                  hit_t));
+        *radiance += emitted;
+        IF_POLARIZED(polarized_gather(&s->pol, emitted));
+    }
+#endif
     if (!flight.scattered) return 0;
     if (s->segments >= last_segment) {
         *ended = 1;

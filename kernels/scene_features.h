@@ -23,6 +23,10 @@
 #ifndef SCENE_HAS_GRID_MEDIA
 #define SCENE_HAS_GRID_MEDIA SCENE_HAS_MEDIA
 #endif
+/* Media that glow (medium_emission.cl). */
+#ifndef SCENE_HAS_MEDIUM_EMISSION
+#define SCENE_HAS_MEDIUM_EMISSION SCENE_HAS_MEDIA
+#endif
 /* Partial analytic shapes (kernels/shape_partial.cl: pbrt's phimax, zmin/zmax, innerradius cuts). */
 #ifndef SCENE_HAS_PARTIAL_SHAPES
 #define SCENE_HAS_PARTIAL_SHAPES 1

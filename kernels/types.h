@@ -108,6 +108,7 @@ typedef struct {
     int sigma_s_offset;  /* scattering coefficient σs(λ) */
     float g;             /* Henyey–Greenstein asymmetry parameter in (−1, 1); 0 = isotropic */
     int grid;            /* a grid medium's block in the spectra table (medium_grid.cl); -1: homogeneous */
+    int emission;        /* a glowing medium's emission spectrum Le(λ) (medium_emission.cl); -1: none */
 } Medium;
 
 /* One material; which fields a BSDF reads is listed beside each (docs/scene-format.md gives the scene keys). */

@@ -146,12 +146,15 @@ def medium(
     g: float = 0.0,
     preset: str | None = None,
     density: GridVolume | None = None,
+    emission: SpectrumLike | None = None,
 ) -> Medium:
     """A homogeneous medium for a closed shape's `interior` (docs/media.md), as a scene file's `interior` key:
     absorption σa(λ) and scattering σs(λ) in 1/scene unit (a linear sRGB triple becomes a smooth spectrum with
     that colour, unbounded), or a measured `preset` ("skin1", "marble", "wholemilk", ...: Jensen et al. 2001,
     in 1/mm); either times `scale`. g: Henyey–Greenstein asymmetry in (−1, 1), 0 isotropic. `density` (see
-    `density_grid`) makes the medium heterogeneous: its coefficients times the grid's density."""
+    `density_grid`) makes the medium heterogeneous: its coefficients times the grid's density. `emission` (any
+    spectrum form of an emitter's radiance) makes it glow: σa Le of radiance per unit length, Le the emission times
+    the grid's emission scale and normalised blackbody where it has them (default 1 with such grids)."""
     from spectrace.spectral.media_presets import coefficient_spectrum, preset_coefficients
 
     if not (isinstance(scale, Real) and math.isfinite(scale) and scale > 0):
@@ -162,11 +165,16 @@ def medium(
         raise SpectraceError(
             f"density must be a grid (see density_grid()), got {type(density).__name__}", where="density"
         )
+    glow = None if emission is None else spectrum_input.emission(emission, "emission")
+    if glow is None and density is not None and (density.emission is not None or density.temperature is not None):
+        glow = Spectrum.constant(1.0)  # the grids' glow as they give it
     if preset is not None:
         if not (_is_zero(sigma_a) and _is_zero(sigma_s)):
             raise SpectraceError("give either preset or sigma_a/sigma_s", where="preset")
         sigma_a_spectrum, sigma_s_spectrum = preset_coefficients(preset, float(scale), float(g), where="preset")
-        return Medium(sigma_a=sigma_a_spectrum, sigma_s=sigma_s_spectrum, g=float(g), name=preset, density=density)
+        return Medium(
+            sigma_a=sigma_a_spectrum, sigma_s=sigma_s_spectrum, g=float(g), name=preset, density=density, emission=glow
+        )
 
     def coefficient(source: SpectrumLike, what: str) -> Spectrum:
         if spectrum_input.is_rgb(source):
@@ -176,7 +184,11 @@ def medium(
         return result.scaled(float(scale))
 
     return Medium(
-        sigma_a=coefficient(sigma_a, "sigma_a"), sigma_s=coefficient(sigma_s, "sigma_s"), g=float(g), density=density
+        sigma_a=coefficient(sigma_a, "sigma_a"),
+        sigma_s=coefficient(sigma_s, "sigma_s"),
+        g=float(g),
+        density=density,
+        emission=glow,
     )
 
 
@@ -185,18 +197,33 @@ def density_grid(
     albedo: ArrayLike | None = None,
     box: Sequence[Sequence[float]] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0)),
     transform: Iterable[Mapping[str, Any]] = (),
+    outside: str = "empty",
+    emission: ArrayLike | None = None,
+    temperature: ArrayLike | None = None,
 ) -> GridVolume:
     """A voxel grid for `medium(density=...)` (docs/media.md): `density` shaped (nz, ny, nx) (x fastest, as
-    numpy's C order), values ≥ 0 at the voxels' centres, looked up trilinearly; `albedo` an optional grid of the
-    same shape in [0, 1] multiplying σs, or shaped (nz, ny, nx, 3) for a linear sRGB albedo uplifted per voxel;
-    filling `box` (two corners), then moved by `transform` steps (as `transformed`), in the scene's space."""
+    numpy's C order), values ≥ 0 at the voxels' centres, looked up trilinearly, or (nz, ny, nx, 3) for a linear
+    sRGB density uplifted per voxel (σt varying with λ); `albedo` an optional grid of the same shape in [0, 1]
+    multiplying σs, or shaped (nz, ny, nx, 3) for a linear sRGB albedo uplifted per voxel; filling `box` (two
+    corners), then moved by `transform` steps (as `transformed`), in the scene's space; `outside` what it holds
+    outside the box: "empty" (the medium ends there), "clamp" (its faces' values) or "repeat" (copies of itself);
+    `emission` (≥ 0) and `temperature` (kelvin) optional grids of the density's shape making a glowing medium's
+    emission vary: its spectrum times the scale, times a blackbody at the temperature normalised to its peak."""
     if np.shape(box) != (2, 3):
         raise SpectraceError(f"box must be two corners [x, y, z], got shape {np.shape(box)}", where="box")
     matrix = box_matrix(*np.asarray(box, np.float64))
     steps = [dict(step) for step in transform]
     if steps:
         matrix = transform_matrix(steps, where="transform") @ matrix
-    return make_grid(np.asarray(density), matrix, None if albedo is None else np.asarray(albedo), where="density")
+    return make_grid(
+        np.asarray(density),
+        matrix,
+        None if albedo is None else np.asarray(albedo),
+        where="density",
+        outside=outside,
+        emission=None if emission is None else np.asarray(emission),
+        temperature=None if temperature is None else np.asarray(temperature),
+    )
 
 
 def _is_zero(source: SpectrumLike) -> bool:

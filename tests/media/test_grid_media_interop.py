@@ -35,9 +35,28 @@ CONSTANT_BOX = """<medium type="heterogeneous" name="interior">
   </medium>"""
 
 
+# sigma_t of three channels: each voxel's colour uplifted (σt varies with λ voxel by voxel), reddish so it does.
+COLOUR_DENSITY = (DENSITY[..., None] * np.random.default_rng(5).uniform(0.2, 1.0, (*DENSITY.shape, 3))).astype(
+    np.float32
+) * np.array([1.0, 0.6, 0.25], np.float32)
+COLOUR_SIGMA_T = _medium('<rgb name="albedo" value="0.9, 0.7, 0.8"/>').replace("density.vol", "colour.vol")
+
+# A homogeneous medium whose albedo is a colour gridvolume of 0.6 units a side, repeated through the cube.
+ALBEDO = np.random.default_rng(9).uniform(0.1, 1.0, (3, 4, 2, 3)).astype(np.float32)
+ALBEDO_GRID = """<medium type="homogeneous" name="interior">
+    <volume type="gridvolume" name="albedo"><string name="filename" value="albedo_grid.vol"/>
+      <string name="wrap_mode" value="repeat"/>
+      <transform name="to_world"><scale value="0.6"/><translate value="0.1, -0.2, 0"/></transform></volume>
+    <rgb name="sigma_t" value="0.9, 0.6, 0.7"/><float name="scale" value="2"/>
+    <phase type="hg"><float name="g" value="0.3"/></phase>
+  </medium>"""
+
+
 def _xml(folder: Path, size: int, medium: str, integrator: str = "volpath", environment: bool = True) -> Path:
     """The cube holding `medium` under a point light, and a constant environment unless told otherwise."""
     (folder / "density.vol").write_bytes(vol_bytes(DENSITY, (-3, -3, -3), (3, 3, 3)))
+    (folder / "colour.vol").write_bytes(vol_bytes(COLOUR_DENSITY, (-3, -3, -3), (3, 3, 3)))
+    (folder / "albedo_grid.vol").write_bytes(vol_bytes(ALBEDO))
     path = folder / f"grid_{integrator}.xml"
     path.write_text(
         f"""<scene version="3.0.0">
@@ -107,11 +126,31 @@ def test_a_truncated_vol_file_is_one_line_naming_the_file(tmp_path):
     assert "\n" not in text and "grid_volpath.xml" in text and "the volume file 'density.vol' has" in text, text
 
 
+def test_a_homogeneous_mediums_albedo_grid_fills_space_over_a_density_of_1(tmp_path):
+    """Mitsuba 3's homogeneous medium looks its albedo volume up everywhere (wrap_mode: clamped or repeated):
+    scale·sigma_t all scattering, the albedo grid alone (over a density of 1) moving part of it to absorption."""
+    interior = mitsuba_scene_data(_xml(tmp_path, 8, ALBEDO_GRID), tmp_path)[0]["shapes"][0]["interior"]
+    density = interior["density"]
+    assert density["albedo_file"] == "albedo_grid.vol" and density["outside"] == "repeat"
+    assert "file" not in density and "values" not in density
+    assert np.allclose(np.array(density["transform"][0]["matrix"])[:3, :3], 0.6 * np.eye(3))
+    assert all(a == 0.0 for _, a in interior["sigma_a"]["values"])
+    clamped = mitsuba_scene_data(_xml(tmp_path, 8, ALBEDO_GRID.replace("repeat", "clamp")), tmp_path)[0]
+    assert clamped["shapes"][0]["interior"]["density"]["outside"] == "clamp"
+
+
 def test_unsupported_grid_forms_are_reported(tmp_path):
-    (tmp_path / "rgb.vol").write_bytes(vol_bytes(np.ones((2, 2, 2, 3))))
-    rgb = _medium().replace("density.vol", "rgb.vol")
+    (tmp_path / "six.vol").write_bytes(vol_bytes(np.ones((2, 2, 2, 6))))
+    six = _medium().replace("density.vol", "six.vol")
     nearest = _medium(extra='<string name="filter_type" value="nearest"/>')
-    for medium, words in ((rgb, "3 channels"), (nearest, "filter_type nearest")):
+    mirror = ALBEDO_GRID.replace("repeat", "mirror")
+    repeat = _medium(extra='<string name="wrap_mode" value="repeat"/>')
+    for medium, words in (
+        (six, "6 channels"),
+        (nearest, "filter_type nearest"),
+        (mirror, "wrap_mode mirror"),
+        (repeat, "wrap_mode repeat in a heterogeneous medium"),
+    ):
         with pytest.raises(SpectraceError, match=words) as caught:
             mitsuba_scene_data(_xml(tmp_path, 8, medium), tmp_path)
         assert "\n" not in str(caught.value)
@@ -121,7 +160,16 @@ def test_unsupported_grid_forms_are_reported(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("integrator", "medium"),
-    [("volpath", "grid"), ("bdpt", "grid"), ("ptracer", "grid"), ("volpath", "constant-box")],
+    [
+        ("volpath", "grid"),
+        ("bdpt", "grid"),
+        ("ptracer", "grid"),
+        ("volpath", "constant-box"),
+        ("volpath", "colour-sigma-t"),
+        ("volpath", "albedo-grid"),
+        ("bdpt", "colour-sigma-t"),
+        ("ptracer", "albedo-grid"),
+    ],
 )
 def test_grid_medium_cube_renders_like_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral, integrator, medium):
     """Both renderers, spectral, 16 independent images each of a cube holding a random density grid (thin and
@@ -130,9 +178,15 @@ def test_grid_medium_cube_renders_like_mitsuba_volpath(tmp_path, device, mitsuba
     the XML with volpath (its path tracer), bdpt and ptracer (its light tracer), Mitsuba always with volpath.
     constant-box: a heterogeneous medium of constant sigma_t, which fills only its constvolume's box, lit by the
     point light alone (an environment seen directly differs between the renderers' colour pipelines by about
-    0.1 % in green, which this case's low noise would resolve)."""
+    0.1 % in green, which this case's low noise would resolve). colour-sigma-t: a three-channel sigma_t grid,
+    each voxel uplifted; albedo-grid: a homogeneous medium whose colour albedo grid repeats through the cube."""
     mi = mitsuba_scalar_spectral
-    text, lit = (_medium(), True) if medium == "grid" else (CONSTANT_BOX, False)
+    text, lit = {
+        "grid": (_medium(), True),
+        "constant-box": (CONSTANT_BOX, False),
+        "colour-sigma-t": (COLOUR_SIGMA_T, True),
+        "albedo-grid": (ALBEDO_GRID, True),
+    }[medium]
     replicas, replica_spp, size, block = 16, 8 if lit else 24, 32, 8
     path, ours = _xml(tmp_path, size, text, environment=lit), _xml(tmp_path, size, text, integrator, lit)
     by_mitsuba = assert_renders_like_mitsuba(mi, path, device, replicas, replica_spp, block, ours=ours)

@@ -111,7 +111,9 @@ HIDE_ENVIRONMENT, HIDE_AREA_EMITTERS = 1, 2
 
 TRIANGLE_INFO_DTYPE = _struct([("material", "<i4"), ("light", "<i4"), ("interior", "<i4"), ("normals", "<i4")], 16)
 
-MEDIUM_DTYPE = _struct([("sigma_a_offset", "<i4"), ("sigma_s_offset", "<i4"), ("g", "<f4"), ("grid", "<i4")], 16)
+MEDIUM_DTYPE = _struct(
+    [("sigma_a_offset", "<i4"), ("sigma_s_offset", "<i4"), ("g", "<f4"), ("grid", "<i4"), ("emission", "<i4")], 20
+)
 
 MATERIAL_DTYPE = _struct(
     [

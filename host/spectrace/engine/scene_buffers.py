@@ -201,7 +201,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     interior_parts: list[np.ndarray] = []
     emitters: list[AreaEmitter] = []
     medium_index: dict[int, int] = {}
-    medium_rows: list[tuple[int, int, float, int]] = []
+    medium_rows: list[tuple[int, int, float, int, int]] = []
     analytic: list[tuple[AnalyticSurface, int, int, int]] = []  # surface, material, emitter, interior
     meshed: list[tuple] = []  # (shape, first triangle, count): where mesh attributes are read (mesh_attribute_rows)
     for shape in scene.shapes:
@@ -460,7 +460,7 @@ class _ObjectTriangles:
         material_index: dict[int, int],
         material_rows: list[np.ndarray],
         medium_index: dict[int, int],
-        medium_rows: list[tuple[int, int, float, int]],
+        medium_rows: list[tuple[int, int, float, int, int]],
         table: SpectrumTable,
         textures: TextureRows,
     ) -> None:

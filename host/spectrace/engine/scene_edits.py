@@ -91,7 +91,7 @@ def repack_materials(scene: Scene, buffers: SceneBuffers) -> Edit | None:
 def repack_media(scene: Scene, buffers: SceneBuffers) -> Edit | None:
     """Every medium row written again from `scene`'s interiors."""
     packing = _packing(buffers)
-    rows: list[tuple[int, int, float, int]] = []
+    rows: list[tuple[int, int, float, int, int]] = []
     index: dict[int, int] = {}
     for shape in _shapes_in_order(scene):
         medium = shape.interior

@@ -57,6 +57,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_LIGHT_TYPES": _type_bits(buffers.lights["type"]),
         "SCENE_HAS_MEDIA": int(buffers.medium_count > 0 or buffers.null_surfaces),
         "SCENE_HAS_GRID_MEDIA": int(bool(np.any(buffers.media["grid"][: buffers.medium_count] >= 0))),
+        "SCENE_HAS_MEDIUM_EMISSION": int(bool(np.any(buffers.media["emission"][: buffers.medium_count] >= 0))),
         "SCENE_HAS_LIGHT_IMAGES": int(
             bool(np.any(buffers.lights["texture"] != NO_TEXTURE) or np.any(buffers.lights["map_width"] > 0))
         ),

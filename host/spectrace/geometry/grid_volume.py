@@ -30,6 +30,11 @@ MAJORANT_CELLS = 16
 # The most voxels one grid may have: its floats go into the device's spectrum table, indexed by 32-bit offsets.
 MAX_VOXELS = 256**3
 
+# What a grid holds outside its box (kernels/medium_grid.cl's GRID_OUTSIDE_*): nothing, its faces' values, copies.
+GRID_OUTSIDE = ("empty", "clamp", "repeat")
+# Room for float32 rounding between the host's bound of a colour voxel's spectrum and the kernel's evaluation of it.
+_SPECTRUM_BOUND_MARGIN = 1.0 + 1e-5
+
 _VOL_HEADER = struct.Struct("<3sBiiiii6f")
 _VOL_FLOAT32 = 1
 _VOL_UINT8 = 3
@@ -37,13 +42,21 @@ _VOL_UINT8 = 3
 
 @dataclass(frozen=True, eq=False)
 class GridVolume:
-    """density: float32 (nz, ny, nx), ≥ 0, multiplying the medium's coefficients; albedo: None, the same shape in
-    [0, 1] (a grey albedo), or shaped (nz, ny, nx, 3) (a linear sRGB albedo in [0, 1], uplifted per voxel),
-    multiplying its scattering coefficient; to_world: 4×4 map of the unit box into the scene."""
+    """density: float32 (nz, ny, nx), ≥ 0, multiplying the medium's coefficients, or shaped (nz, ny, nx, 3) (a
+    linear sRGB colour ≥ 0 uplifted per voxel: σt varies with λ voxel by voxel); albedo: None, shaped (nz, ny, nx)
+    in [0, 1] (a grey albedo), or (nz, ny, nx, 3) (a linear sRGB albedo in [0, 1], uplifted per voxel), multiplying
+    its scattering coefficient; to_world: 4×4 map of the unit box into the scene; outside: what the grid holds
+    outside its box (GRID_OUTSIDE: "empty", the medium ends there; "clamp", its faces' values; "repeat", copies of
+    itself), where "clamp" and "repeat" make the grid fill all space (an albedo over a homogeneous σt); emission:
+    None or (nz, ny, nx) ≥ 0, scaling a glowing medium's emission spectrum per voxel (pbrt-v4's Lescale grid);
+    temperature: None or (nz, ny, nx) in kelvin ≥ 0, making its emission a blackbody's normalised to its peak."""
 
     density: np.ndarray
     to_world: np.ndarray
     albedo: np.ndarray | None = None
+    outside: str = "empty"
+    emission: np.ndarray | None = None
+    temperature: np.ndarray | None = None
 
     __eq__ = fields_equal
 
@@ -56,7 +69,7 @@ def box_matrix(p0: ArrayLike, p1: ArrayLike) -> np.ndarray:
     return matrix
 
 
-def grid_problem(values: np.ndarray, what: str, upper: float | None = None) -> str | None:
+def grid_problem(values: np.ndarray, what: str, upper: float | None = None, signed: bool = False) -> str | None:
     """Why `values` cannot be a grid of `what` (a message), or None."""
     if values.ndim != 3 or min(values.shape) < 1:
         return f"{what} must be a 3-D grid of at least one voxel, got shape {values.shape}"
@@ -64,7 +77,7 @@ def grid_problem(values: np.ndarray, what: str, upper: float | None = None) -> s
         return f"{what} has {values.size} voxels, more than the {MAX_VOXELS} a grid may have"
     if not np.all(np.isfinite(values)):
         return f"{what} holds values that are not finite"
-    if np.any(values < 0.0):
+    if not signed and np.any(values < 0.0):
         return f"{what} holds negative values (the smallest is {float(values.min()):g})"
     if upper is not None and np.any(values > upper):
         return f"{what} holds values above {upper:g} (the largest is {float(values.max()):g})"
@@ -72,28 +85,51 @@ def grid_problem(values: np.ndarray, what: str, upper: float | None = None) -> s
 
 
 def make_grid(
-    density: np.ndarray, to_world: np.ndarray, albedo: np.ndarray | None = None, where: str | None = None
+    density: np.ndarray,
+    to_world: np.ndarray,
+    albedo: np.ndarray | None = None,
+    where: str | None = None,
+    outside: str = "empty",
+    emission: np.ndarray | None = None,
+    temperature: np.ndarray | None = None,
 ) -> GridVolume:
     """A checked GridVolume; `where` names the input in the one-line errors."""
     density = np.ascontiguousarray(density, np.float32)
-    if problem := grid_problem(density, "the density"):
+    if outside not in GRID_OUTSIDE:
+        raise SpectraceError(f"outside must be one of {', '.join(GRID_OUTSIDE)}, got {outside!r}", where=where)
+    if density.ndim == 4 and density.shape[3] == 3:
+        for channel in range(3):
+            if problem := grid_problem(density[..., channel], "the density"):
+                raise SpectraceError(problem, where=where)
+    elif problem := grid_problem(density, "the density"):
         raise SpectraceError(problem, where=where)
+    voxels = density.shape[:3]
     if albedo is not None:
         albedo = np.ascontiguousarray(albedo, np.float32)
-        if albedo.shape not in (density.shape, (*density.shape, 3)):
+        if albedo.shape not in (voxels, (*voxels, 3)):
             raise SpectraceError(
-                f"the albedo grid's shape {albedo.shape} is neither the density's {density.shape} nor that with 3"
+                f"the albedo grid's shape {albedo.shape} is neither the density's {voxels} nor that with 3"
                 " colour channels",
                 where=where,
             )
-        channels = albedo.reshape(*density.shape, -1)
+        channels = albedo.reshape(*voxels, -1)
         for channel in range(channels.shape[3]):
             if problem := grid_problem(channels[..., channel], "the albedo", upper=1.0):
                 raise SpectraceError(problem, where=where)
+    scalars = {}
+    for name, grid in (("emission", emission), ("temperature", temperature)):
+        if grid is not None:
+            grid = np.ascontiguousarray(grid, np.float32)
+            if grid.shape != voxels:
+                raise SpectraceError(f"the {name} grid's shape {grid.shape} is not the density's {voxels}", where=where)
+            # a temperature at or below 0 K (pbrt-v4's offset may take it there) glows nowhere
+            if problem := grid_problem(grid, f"the {name}", signed=name == "temperature"):
+                raise SpectraceError(problem, where=where)
+        scalars[name] = grid
     to_world = np.asarray(to_world, np.float64)
     if to_world.shape != (4, 4) or not np.all(np.isfinite(to_world)) or abs(np.linalg.det(to_world[:3, :3])) < 1e-12:
         raise SpectraceError("the grid's placement must be an invertible 4×4 transform", where=where)
-    return GridVolume(density=density, to_world=to_world, albedo=albedo)
+    return GridVolume(density=density, to_world=to_world, albedo=albedo, outside=outside, **scalars)
 
 
 def read_vol(path: Path, where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -166,14 +202,42 @@ def majorant_grid(density: np.ndarray, cells: int = MAJORANT_CELLS) -> np.ndarra
     return result
 
 
+def colour_bound(block: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per voxel of a colour block (albedo_block's form): the largest value its spectrum takes at any wavelength
+    of the grid (the sigmoid at the largest value of its quadratic over t in [−1, 1]: an end, or the vertex
+    inside; the sigmoid rises monotonically), with a margin for the kernel's float32 rounding, and its s."""
+    from spectrace.spectral.uplift import sigmoid
+
+    a, b, c = (block[..., i].astype(np.float64) for i in range(3))
+    candidates = [a - b + c, a + b + c]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        vertex = np.where(a != 0.0, -b / (2.0 * a), 2.0)
+    inside = np.abs(vertex) <= 1.0
+    candidates.append(np.where(inside, (a * vertex + b) * vertex + c, -np.inf))
+    peak = np.maximum.reduce(candidates)
+    return (sigmoid(peak) * _SPECTRUM_BOUND_MARGIN).astype(np.float32), block[..., 3]
+
+
+def grid_majorant(grid: GridVolume, density_block: np.ndarray) -> np.ndarray:
+    """The majorant grid of `grid`: per cell, a bound on its density at every wavelength (majorant_grid); a colour
+    density's cell takes its largest s times the largest value of its voxels' spectra, since the lookup multiplies
+    a mix of the spectra by a mix of the s. A grid that fills all space has one cell, for all of it."""
+    cells = MAJORANT_CELLS if grid.outside == "empty" else 1
+    nz, ny, nx = grid.density.shape[:3]
+    if grid.density.ndim == 3:
+        return majorant_grid(grid.density, cells)
+    spectrum_peak, scale = colour_bound(density_block.reshape(nz, ny, nx, 4))
+    return majorant_grid(spectrum_peak, cells) * majorant_grid(scale, cells)
+
+
 def albedo_block(albedo: np.ndarray) -> np.ndarray:
-    """The albedo grid as the kernels read it: a grey one as is; a colour one as 4 floats a voxel, Mitsuba 3's
-    spectral gridvolume's form: the sigmoid coefficients (dimensionless, fitted as a texture's texels are, Jakob &
-    Hanika 2019) of the colour divided by s = 2 × its largest channel, then s. The kernel evaluates the eight voxels'
-    spectra at the path's wavelengths, interpolates those values and s apart, and multiplies them, as Mitsuba does:
-    a mix of spectra has the mix of their colours, while mixing the coefficients would not (the sigmoid is not
-    linear). Dividing by s keeps every fit away from the saturated ends; the spectrum's shape, not only its colour,
-    then matches Mitsuba's, which matters after many scatterings (the albedo's powers)."""
+    """An albedo (or density) grid as the kernels read it: a grey one as is; a colour one as 4 floats a voxel,
+    Mitsuba 3's spectral gridvolume's form: the sigmoid coefficients (dimensionless, fitted as a texture's texels
+    are, Jakob & Hanika 2019) of the colour divided by s = 2 × its largest channel, then s. The kernel evaluates the
+    eight voxels' spectra at the path's wavelengths, interpolates those values and s apart, and multiplies them, as
+    Mitsuba does: a mix of spectra has the mix of their colours, while mixing the coefficients would not (the
+    sigmoid is not linear). Dividing by s keeps every fit away from the saturated ends; the spectrum's shape, not
+    only its colour, then matches Mitsuba's, which matters after many scatterings (the albedo's powers)."""
     if albedo.ndim == 3:
         return albedo
     from spectrace.spectral.rgb_texture import reflectance_coefficients
@@ -187,15 +251,23 @@ def albedo_block(albedo: np.ndarray) -> np.ndarray:
 
 def add_grid_block(table: SpectrumTable, grid: GridVolume) -> int:
     """Store the grid in the scene's float table (kernels/medium_grid.cl's layout) and return its header's offset."""
-    density = table.add_block(grid.density)
+    density_block = albedo_block(grid.density)
+    density = table.add_block(density_block)
     albedo = table.add_block(albedo_block(grid.albedo)) if grid.albedo is not None else -1
-    majorant = majorant_grid(grid.density)
+    majorant = grid_majorant(grid, density_block)
     majorant_offset = table.add_block(majorant)
     to_unit = np.linalg.inv(grid.to_world)[:3].astype(np.float32).ravel()
-    nz, ny, nx = grid.density.shape
+    nz, ny, nx = grid.density.shape[:3]
     mz, my, mx = majorant.shape
     channels = 3 if grid.albedo is not None and grid.albedo.ndim == 4 else 1
-    ints = np.array([nx, ny, nz, mx, my, mz, density, albedo, majorant_offset, channels], np.int32)
+    density_channels = 3 if grid.density.ndim == 4 else 1
+    outside = GRID_OUTSIDE.index(grid.outside)
+    emission, temperature = (table.add_block(g) if g is not None else -1 for g in (grid.emission, grid.temperature))
+    ints = np.array(
+        [nx, ny, nz, mx, my, mz, density, albedo, majorant_offset, channels, density_channels, outside]
+        + [emission, temperature],
+        np.int32,
+    )
     return table.add_block(np.concatenate([to_unit, ints.view(np.float32)]))
 
 
@@ -210,10 +282,14 @@ class MediumFields(Protocol):
     def g(self) -> float: ...
     @property
     def density(self) -> GridVolume | None: ...
+    @property
+    def emission(self) -> Spectrum | None: ...
 
 
-def medium_row(medium: MediumFields, table: SpectrumTable) -> tuple[int, int, float, int]:
-    """A medium's device row (MEDIUM_DTYPE): its spectra's offsets, g, and its grid's block (-1: homogeneous)."""
+def medium_row(medium: MediumFields, table: SpectrumTable) -> tuple[int, int, float, int, int]:
+    """A medium's device row (MEDIUM_DTYPE): its spectra's offsets, g, its grid's block (-1: homogeneous) and its
+    emission spectrum's offset (-1: it does not glow)."""
     sigma_a, sigma_s = table.add(medium.sigma_a), table.add(medium.sigma_s)
     grid = add_grid_block(table, medium.density) if medium.density is not None else -1
-    return (sigma_a, sigma_s, float(medium.g), grid)
+    emission = table.add(medium.emission) if medium.emission is not None else -1
+    return (sigma_a, sigma_s, float(medium.g), grid, emission)

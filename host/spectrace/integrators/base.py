@@ -119,6 +119,15 @@ def renders_every_scene(scene: Scene, medium_count: int, spectral_bins: int) -> 
     return None
 
 
+def glowing_media_problem(scene: Scene, name: str) -> str | None:
+    """Why integrator `name`, whose paths cannot gather a medium's emission (only the path tracer's camera paths
+    do: kernels/medium_emission.cl), refuses this scene, or None."""
+    shapes = [*scene.shapes, *(shape for instance in scene.instances for shape in instance.object.shapes)]
+    if any(shape.interior is not None and shape.interior.emission is not None for shape in shapes):
+        return f"integrator '{name}' does not render glowing media (a medium's emission); use 'path'"
+    return None
+
+
 def no_defines(scene: Scene) -> dict[str, int]:
     """The `defines` of an integrator whose program needs none."""
     return {}

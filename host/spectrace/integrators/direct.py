@@ -5,9 +5,10 @@ from spectrace.integrators.base import (
     SHARED_PARAMETERS,
     PixelPasses,
     RenderHost,
+    Scene,
+    glowing_media_problem,
     no_defines,
     no_params,
-    renders_every_scene,
 )
 
 NAME = "direct"
@@ -24,9 +25,13 @@ SPLATS = None  # each pixel adds its own samples: tiles and checkpoints as the f
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
 REFUSES: tuple[str, ...] = ()
 CHECKPOINT_PROBLEM = None
-problem = renders_every_scene
 defines = no_defines
 params = no_params
+
+
+def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
+    """Why the local model cannot render this scene: a glowing medium, whose emission its paths do not gather."""
+    return glowing_media_problem(scene, NAME)
 
 
 def passes(host: RenderHost, shape: str, spectral_bins: int) -> PixelPasses:

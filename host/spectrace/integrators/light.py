@@ -17,7 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines, no_params
+from spectrace.integrators.base import (
+    SHARED_PARAMETERS,
+    RenderHost,
+    Scene,
+    glowing_media_problem,
+    no_defines,
+    no_params,
+)
 
 NAME = "light"
 # Mitsuba 3's particle tracer, with the same max_depth and rr_depth meaning.
@@ -97,7 +104,7 @@ def add_in_order(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> N
 
 def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the light tracer cannot render this scene as asked, or None."""
-    return splatting_problem(scene, NAME)
+    return glowing_media_problem(scene, NAME) or splatting_problem(scene, NAME)
 
 
 def passes(host: RenderHost, shape: str, spectral_bins: int) -> LightPasses:

@@ -27,6 +27,7 @@ from spectrace.geometry.analytic import (
 )
 from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid, read_vol
 from spectrace.geometry.mesh import TriangleMesh, load_mesh, shading_normals
+from spectrace.geometry.nanovdb import NanoGrid, nanovdb_grid
 from spectrace.geometry.sdf_grid import make_sdf_grid, read_sdf_grid
 from spectrace.geometry.transforms import apply_transform, transform_matrix
 from spectrace.io.images import read_picture
@@ -585,38 +586,89 @@ class _Resolver:
             if problem := limits.spectrum_magnitude_problem(spectrum.values):
                 raise SpectraceError(problem, where=self.where(f"{key}.{name}"))
         density = self.density_grid(spec.density, f"{key}.density") if spec.density is not None else None
-        return Medium(sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "", density=density)
+        emission = self.spectrum(spec.emission, f"{key}.emission", emission=True) if spec.emission else None
+        if (
+            emission is None
+            and density is not None
+            and (density.emission is not None or density.temperature is not None)
+        ):
+            emission = Spectrum.constant(1.0)  # the grids' glow as they give it
+        return Medium(
+            sigma_a=sigma_a, sigma_s=sigma_s, g=spec.g, name=spec.preset or "", density=density, emission=emission
+        )
 
     def density_grid(self, spec: schema.DensityGridSpec, key: str) -> GridVolume:
-        """A grid medium's density (and albedo) from a .vol file's first channel or inline values."""
+        """A grid medium's density (and albedo) from a .vol file (one channel, or three: a colour) or inline
+        values."""
 
-        def values(file: str | None, inline: list[float] | None, name: str, colour: bool = False) -> np.ndarray:
-            """The grid's values; with `colour`, 3 channels (a file's or 3 inline values a voxel) give an RGB
-            grid shaped (nz, ny, nx, 3)."""
+        def values(file: str | None, inline: list[float] | None, name: str) -> np.ndarray:
+            """The grid's values; 3 channels (a file's or 3 inline values a voxel) give an RGB grid shaped
+            (nz, ny, nx, 3); a file's other channel counts, its first channel."""
             if file is not None:
                 grid = read_vol(self.folder / file, where=self.where(f"{key}.{name}file"))[0]
-                return grid if colour and grid.shape[3] == 3 else grid[..., 0]
+                return grid if grid.shape[3] == 3 else grid[..., 0]
             nx, ny, nz = spec.resolution or (0, 0, 0)
             count = nx * ny * nz
-            if colour and count >= 1 and len(inline or ()) == 3 * count:
+            if count >= 1 and len(inline or ()) == 3 * count:
                 return np.asarray(inline, np.float32).reshape(nz, ny, nx, 3)
             if min(nx, ny, nz) < 1 or len(inline or ()) != count:
-                need = f"{max(count, 0)}" + (f" or {3 * max(count, 0)} for a colour" if colour else "")
+                need = f"{max(count, 0)} or {3 * max(count, 0)} for a colour"
                 raise SpectraceError(
                     f"{len(inline or ())} values for resolution {nx}×{ny}×{nz} (need {need})",
                     where=self.where(f"{key}.{name}values"),
                 )
             return np.asarray(inline, np.float32).reshape(nz, ny, nx)
 
-        density = values(spec.file, spec.values, "")
         albedo = None
         if spec.albedo_file is not None or spec.albedo_values is not None:
-            albedo = values(spec.albedo_file, spec.albedo_values, "albedo_", colour=True)
-        matrix = box_matrix(*spec.box)
+            albedo = values(spec.albedo_file, spec.albedo_values, "albedo_")
+        nano = None
+        if spec.file is not None and _is_nanovdb(spec.file):
+            if "box" in spec.model_fields_set:
+                raise SpectraceError(
+                    "a NanoVDB grid is placed by its own index-to-world map, not by box (move it with transform)",
+                    where=self.where(f"{key}.box"),
+                )
+            nano = nanovdb_grid(self.folder / spec.file, spec.grid or "density", where=self.where(f"{key}.file"))
+            density, matrix = nano.dense_grid()
+        elif spec.grid is not None:
+            raise SpectraceError("grid names a grid of a NanoVDB file (.nvdb)", where=self.where(f"{key}.grid"))
+        elif spec.file is None and spec.values is None and albedo is not None:
+            density = np.ones(albedo.shape[:3], np.float32)  # an albedo grid over a homogeneous medium
+            matrix = box_matrix(*spec.box)
+        else:
+            density = values(spec.file, spec.values, "")
+            matrix = box_matrix(*spec.box)
         if spec.transform:
             steps = [step.model_dump(exclude_none=True) for step in spec.transform]
             matrix = transform_matrix(steps, where=self.where(f"{key}.transform")) @ matrix
-        return make_grid(density, matrix, albedo, where=self.where(key))
+        scalars = {}
+        for name in ("emission", "temperature"):
+            file, inline = getattr(spec, f"{name}_file"), getattr(spec, f"{name}_values")
+            if file is not None and _is_nanovdb(file):
+                scalars[name] = self.nanovdb_companion(file, name, nano, f"{key}.{name}_file")
+            elif file is not None or inline is not None:
+                grid = values(file, inline, f"{name}_")
+                if grid.ndim != 3:
+                    raise SpectraceError(
+                        f"the {name} grid takes one value a voxel", where=self.where(f"{key}.{name}_values")
+                    )
+                scalars[name] = grid
+        if "temperature" in scalars and (spec.temperature_offset != 0.0 or spec.temperature_scale != 1.0):
+            scalars["temperature"] = (scalars["temperature"] - spec.temperature_offset) * spec.temperature_scale
+        return make_grid(density, matrix, albedo, where=self.where(key), outside=spec.outside, **scalars)
+
+    def nanovdb_companion(self, file: str, name: str, density: NanoGrid | None, key: str) -> np.ndarray:
+        """A NanoVDB file's grid named `name` over the voxels of the density read from a NanoVDB file (the same
+        index-to-world map)."""
+        if density is None:
+            raise SpectraceError(f"a NanoVDB {name} grid needs the density from a NanoVDB file", where=self.where(key))
+        grid = nanovdb_grid(self.folder / file, name, where=self.where(key))
+        if not np.allclose(grid.index_to_world, density.index_to_world):
+            raise SpectraceError(
+                f"the NanoVDB {name} grid's index-to-world map differs from the density's", where=self.where(key)
+            )
+        return grid.dense(np.array(density.index_min) - 1, np.array(density.index_max) + 1)
 
     def coefficient(self, spec: schema.SpectrumSpec | None, key: str, scale: float) -> Spectrum:
         """A medium coefficient, 1/scene unit: like an emission it has no upper bound (rgb: a smooth spectrum
@@ -867,3 +919,7 @@ def _cuts(spec: schema.ShapeSpec) -> dict:
         return {}
     keys = (spec.phi_max, spec.z_min, spec.z_max, spec.inner_radius)
     return cut_parameters(spec.type, *keys, radius=spec.radius or 1.0)
+
+
+def _is_nanovdb(file: str) -> bool:
+    return file.lower().endswith(".nvdb")

@@ -93,6 +93,9 @@ class Medium:
     name: str = ""
     # A heterogeneous medium: the coefficients times a voxel grid's density (and σs times its albedo).
     density: GridVolume | None = None
+    # A glowing medium: radiance σa(λ, x) Le(λ, x) per unit length, Le = emission(λ) times the grid's emission
+    # scale and normalised blackbody at its temperature where it has them (kernels/medium_emission.cl).
+    emission: Spectrum | None = None
 
 
 @dataclass(frozen=True)

@@ -389,32 +389,50 @@ else:
 
 class DensityGridSpec(Strict):
     """A heterogeneous medium's voxel grid (docs/media.md): a Mitsuba volume `file` (.vol) or inline `values` (x
-    fastest) of `resolution` [nx, ny, nz]; an optional albedo grid of the same size; filling `box` (two corners),
-    then moved by `transform` (in the scene's space, not the shape's)."""
+    fastest) of `resolution` [nx, ny, nz], one value a voxel or three (a colour), or neither: a density of 1; an
+    optional albedo grid of the same size, and for a glowing medium an emission scale grid and a temperature grid
+    (kelvin: blackbody emission); filling `box` (two corners), then moved by `transform` (in the scene's
+    space, not the shape's); `outside`: what it holds outside the box (empty, clamp: its faces' values, repeat:
+    copies of itself). A NanoVDB `file` (.nvdb) is placed by its own index-to-world map instead of `box`."""
 
     file: str | None = None
     values: list[FiniteFloat] | None = None
     resolution: Annotated[tuple[int, int, int], StrictMode(False)] | None = None
     albedo_file: str | None = None
     albedo_values: list[FiniteFloat] | None = None
+    emission_file: str | None = None
+    emission_values: list[FiniteFloat] | None = None
+    temperature_file: str | None = None
+    temperature_values: list[FiniteFloat] | None = None
+    grid: str | None = Field(default=None, description="a NanoVDB file's float grid to read (default: density)")
+    temperature_offset: FiniteFloat = 0.0
+    temperature_scale: FiniteFloat = 1.0
     box: Annotated[tuple[Vector3, Vector3], StrictMode(False)] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
     transform: list[TransformStep] = []
+    outside: Literal["empty", "clamp", "repeat"] = "empty"
 
     @model_validator(mode="after")
     def _one_source(self) -> "DensityGridSpec":
-        if (self.file is None) == (self.values is None):
+        if self.file is not None and self.values is not None:
             raise ValueError("give either file or values")
-        if self.values is not None and self.resolution is None:
+        if self.file is None and self.values is None and self.albedo_file is None and self.albedo_values is None:
+            raise ValueError("give either file or values (or only an albedo grid, over a density of 1)")
+        if (self.values is not None or self.albedo_values is not None) and self.resolution is None:
             raise ValueError("values need resolution = [nx, ny, nz]")
-        if self.albedo_file is not None and self.albedo_values is not None:
-            raise ValueError("give albedo_file or albedo_values, not both")
+        for name in ("albedo", "emission", "temperature"):
+            if getattr(self, f"{name}_file") is not None and getattr(self, f"{name}_values") is not None:
+                raise ValueError(f"give {name}_file or {name}_values, not both")
+            if getattr(self, f"{name}_values") is not None and self.resolution is None:
+                raise ValueError(f"{name}_values need resolution = [nx, ny, nz]")
         return self
 
 
 class InteriorSpec(Strict):
     """A homogeneous medium filling a closed shape (docs/media.md): coefficients sigma_a, sigma_s in 1/scene unit
     (each a spectrum; an omitted one is 0), or a measured `preset` (its table is in 1/mm); either way times
-    `scale`. g: Henyey–Greenstein asymmetry (0 isotropic, > 0 forward)."""
+    `scale`. g: Henyey–Greenstein asymmetry (0 isotropic, > 0 forward). emission: a glowing medium's radiance
+    spectrum Le, emitted as σa Le per unit length (default 1 where the density grid has emission or temperature
+    grids)."""
 
     preset: str | None = None
     sigma_a: SpectrumSpec | None = None
@@ -422,6 +440,7 @@ class InteriorSpec(Strict):
     scale: FiniteFloat = Field(default=1.0, gt=0.0, description="multiplies the coefficients")
     g: FiniteFloat = Field(default=0.0, gt=-1.0, lt=1.0)
     density: DensityGridSpec | None = None
+    emission: SpectrumSpec | None = None
 
     @model_validator(mode="after")
     def _preset_or_coefficients(self) -> "InteriorSpec":

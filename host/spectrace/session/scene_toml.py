@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
 # The spectra among the arguments of the constructors spectrace.api defines itself (area_emitter, medium), whose
 # scene-file keys have no parameter table.
-_API_KINDS = {name: (name, "spectrum") for name in ("radiance", "sigma_a", "sigma_s")}
+_API_KINDS = {name: (name, "spectrum") for name in ("radiance", "sigma_a", "sigma_s", "emission")}
 
 
 def _module_of(made: object) -> Any:

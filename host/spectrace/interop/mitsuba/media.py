@@ -1,6 +1,8 @@
 """Media: a shape's interior homogeneous medium (constant or rgb sigma_t and albedo, `scale`, an hg or isotropic
-phase) as spectrace's interior, and a heterogeneous one whose sigma_t (and albedo) is a one-channel `gridvolume`
-as a density grid; with a null bsdf the shape is the medium's index-matched boundary (shapes.py)."""
+phase) as spectrace's interior, its albedo also a `gridvolume` (a grid of density 1 that fills all space, clamped
+or repeated as the volume's wrap_mode), and a heterogeneous one whose sigma_t (one channel, or three: a colour
+uplifted per voxel) and albedo are `gridvolume`s as a density grid; with a null bsdf the shape is the medium's
+index-matched boundary (shapes.py)."""
 
 from __future__ import annotations
 
@@ -28,16 +30,17 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
         ctx.unsupported_object(medium)
         return None
     items = ctx.properties(medium)
-    items.understood("sample_emitters", "sample_emitted")  # how Mitsuba samples, not what it renders
+    # How Mitsuba samples, not what it renders (has_spectral_extinction: whether its majorant may vary with λ).
+    items.understood("sample_emitters", "sample_emitted", "has_spectral_extinction")
+    homogeneous = ctx.kind(medium) == "homogeneous"
     grids: dict[str, dict] = {}
-    if ctx.kind(medium) == "heterogeneous":
-        for key in ("sigma_t", "albedo"):
-            volume = ctx.resolve(items[key]) if key in items else None
-            if volume is not None and volume.tag == "volume" and ctx.kind(volume) == "gridvolume":
-                grid = _grid_volume(ctx, volume, key)
-                if grid is None:
-                    return None
-                grids[key] = grid
+    for key in ("albedo",) if homogeneous else ("sigma_t", "albedo"):
+        volume = ctx.resolve(items[key]) if key in items else None
+        if volume is not None and volume.tag == "volume" and ctx.kind(volume) == "gridvolume":
+            grid = _grid_volume(ctx, volume, key, fills_space=homogeneous)
+            if grid is None:
+                return None
+            grids[key] = grid
     given: dict = {}
     for key, default in (("sigma_t", 1.0), ("albedo", 0.75)):
         value: dict | None = {"value": 1.0} if key in grids else None
@@ -71,7 +74,7 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
     elif phase is not None and ctx.kind(phase) != "isotropic":
         ctx.unsupported_object(phase)
         return None
-    density = _density_table(ctx, grids, medium)
+    density = grids["albedo"] if homogeneous and grids else _density_table(ctx, grids, medium)
     if density is None and grids:
         return None
     if ctx.kind(medium) == "heterogeneous" and not grids:
@@ -83,10 +86,12 @@ def interior_medium(ctx: ImportContext, properties: Properties) -> dict | None:
     return {"sigma_a": {"value": sigma_t * (1.0 - albedo)}, "sigma_s": {"value": sigma_t * albedo}, "g": g, **extra}
 
 
-def _grid_volume(ctx: ImportContext, volume: Element, key: str) -> dict | None:
+def _grid_volume(ctx: ImportContext, volume: Element, key: str, fills_space: bool = False) -> dict | None:
     """A `gridvolume` as spectrace's grid keys: its file, and its to_world (after the file's own box when
-    use_grid_bbox is set, else the unit box, as Mitsuba 3 places it). One channel (three for an albedo: an RGB grid
-    uplifted per voxel), trilinear, clamped only."""
+    use_grid_bbox is set, else the unit box, as Mitsuba 3 places it). One channel or three (an RGB grid uplifted
+    per voxel), trilinear. A heterogeneous medium ends at its sigma_t volume's box, whose lookups are clamped; a
+    homogeneous medium's albedo volume (`fills_space`) is looked up everywhere, clamped or repeated as its
+    wrap_mode says (`outside`)."""
     from spectrace.geometry.grid_volume import read_vol
 
     items = ctx.properties(volume)
@@ -94,20 +99,21 @@ def _grid_volume(ctx: ImportContext, volume: Element, key: str) -> dict | None:
     if "filter_type" in items and ctx.choice(items["filter_type"], ("trilinear", "nearest")) != "trilinear":
         ctx.unsupported_plugin(volume, " with filter_type nearest")
         return None
-    if "wrap_mode" in items and ctx.choice(items["wrap_mode"], ("clamp", "repeat", "mirror")) != "clamp":
-        ctx.unsupported_plugin(volume, " with a wrap_mode other than clamp")
+    wrap = ctx.choice(items["wrap_mode"], ("clamp", "repeat", "mirror")) if "wrap_mode" in items else "clamp"
+    if wrap == "mirror" or (wrap != "clamp" and not fills_space):
+        where = "" if fills_space else " in a heterogeneous medium"
+        ctx.unsupported_plugin(volume, f" with wrap_mode {wrap}{where}")
         return None
     filename = ctx.child(items, "filename", volume)
     file = ctx.input_file(filename, "volume file")
     values, p0, p1 = read_vol(ctx.find_file(filename, ctx.required(filename, "value")), where=ctx.where(filename))
-    if values.shape[3] != 1 and not (key == "albedo" and values.shape[3] == 3):
-        allowed = "one channel, or three for an RGB albedo"
-        ctx.unsupported_plugin(volume, f" with {values.shape[3]} channels as a medium's {key} ({allowed})")
+    if values.shape[3] not in (1, 3):
+        ctx.unsupported_plugin(volume, f" with {values.shape[3]} channels as a medium's {key} (one or three)")
         return None
     if values.shape[3] == 3 and "raw" in items and ctx.boolean(items["raw"]):
         ctx.unsupported_plugin(volume, " with raw colour data (Mitsuba 3 evaluates only uplifted colour as spectra)")
         return None
-    table: dict = {"file": file}
+    table: dict = {"albedo_file": file, "outside": wrap} if fills_space else {"file": file}
     if "use_grid_bbox" in items and ctx.boolean(items["use_grid_bbox"]):
         table["box"] = [[float(v) for v in p0], [float(v) for v in p1]]
     matrix = to_world(ctx, items)

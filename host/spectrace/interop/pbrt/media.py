@@ -1,5 +1,8 @@
 """pbrt-v4's homogeneous and `uniformgrid` media (MakeNamedMedium, inside a shape through MediumInterface) as
-spectrace's `interior` tables (a uniformgrid's density as an inline grid, placed by the CTM at MakeNamedMedium)."""
+spectrace's `interior` tables (a uniformgrid's density as an inline grid, placed by the CTM at MakeNamedMedium),
+with their emission: `Le` normalised as a light's spectrum and `Lescale` (a number for a homogeneous medium, a grid
+for a uniformgrid), or a uniformgrid's `temperature` grid (blackbody emission, after `temperatureoffset` and
+`temperaturescale`)."""
 
 from __future__ import annotations
 
@@ -30,13 +33,16 @@ def medium_table(context: Context, medium: Entity) -> dict:
 
     context.read.add(id(medium))
     kind = context.string(medium, "type", "")
-    if kind not in ("homogeneous", "uniformgrid"):
+    if kind not in ("homogeneous", "uniformgrid", "nanovdb"):
         raise error(
-            medium.location, f"medium '{shown(kind or '')}': spectrace imports homogeneous and uniformgrid media"
+            medium.location,
+            f"medium '{shown(kind or '')}': spectrace imports homogeneous, uniformgrid and nanovdb media",
         )
     table: dict = {}
     if kind == "uniformgrid":
         table["density"] = _uniform_grid(context, medium)
+    elif kind == "nanovdb":
+        table["density"] = _nanovdb(context, medium)
     if (preset := context.string(medium, "preset")) is not None:
         # pbrt's Jensen et al. presets are the same measurements as spectrace's, in 1/mm (pbrt: per scene unit
         # times scale; spectrace: per mm times scale, its millimetres per scene unit: the same numbers).
@@ -56,13 +62,80 @@ def medium_table(context: Context, medium: Entity) -> dict:
         table["scale"] = scale
     if (g := context.one(medium, "g", 0.0)) != 0.0:
         table["g"] = g
-    emission = context.spectrum(medium, "Le", "medium")
-    medium.find("Lescale")
-    if kind == "uniformgrid" and (medium.find("temperature") or medium.find("temperaturescale")):
-        context.warn(medium.location, "a medium's temperature grid (emission) not imported")
-    if emission is not None and emission not in ({"value": 0.0}, {"rgb": [0.0, 0.0, 0.0]}):
-        context.warn(medium.location, "a medium's emission (Le) not imported")
+    if kind == "nanovdb":
+        # pbrt-v4's NanoVDB medium glows where it has a temperature grid: Lescale times the normalised black body
+        scale = context.one(medium, "Lescale", 1.0)
+        if "temperature_file" in table["density"] and scale > 0.0:
+            table["emission"] = {"value": scale}
+    else:
+        _emission(context, medium, kind, table)
     return table
+
+
+def _nanovdb(context: Context, medium: Entity) -> dict:
+    """A nanovdb medium's grids (its `gridname`, default density, and `temperaturename`, default temperature, when
+    the file has it) read from its file, placed by the grid's own map and the CTM at MakeNamedMedium."""
+    from spectrace.geometry.nanovdb import nanovdb_grid, read_nanovdb
+
+    path = context.file_path(medium, "filename")
+    if path is None:
+        raise error(medium.location, 'a nanovdb medium needs "string filename"')
+    grid = context.string(medium, "gridname", "density") or "density"
+    temperature = context.string(medium, "temperaturename", "temperature") or "temperature"
+    grids = read_nanovdb(path, where=str(medium.location))
+    nanovdb_grid(path, grid, where=str(medium.location))  # the density grid is there (or the file's only one)
+    matrix = context.world @ context.scene.world_from_medium[medium.name]
+    table: dict = {"file": context.relative(path), "transform": [{"matrix": matrix.tolist()}]}
+    if grid != "density":
+        table["grid"] = grid
+    offset = context.one(medium, "temperatureoffset", context.one(medium, "temperaturecutoff", 0.0))
+    scale = context.one(medium, "temperaturescale", 1.0)
+    if temperature in grids:
+        if temperature != "temperature":
+            raise error(medium.location, f"temperaturename '{shown(temperature)}': spectrace reads 'temperature'")
+        table["temperature_file"] = table["file"]
+        if offset != 0.0:
+            table["temperature_offset"] = offset
+        if scale != 1.0:
+            table["temperature_scale"] = scale
+    return table
+
+
+def _emission(context: Context, medium: Entity, kind: str, table: dict) -> None:
+    """pbrt-v4's medium emission into `table`: Le (an illuminant spectrum divided by its photometric integral, as a
+    light's) times Lescale, a number for a homogeneous medium and a grid of nx·ny·nz values for a uniformgrid; or a
+    uniformgrid's temperature grid, (T − temperatureoffset) · temperaturescale kelvin of normalised blackbody
+    emission (times its Lescale grid). A zero Le glows nowhere, as in pbrt."""
+    le = medium.find("Le", "rgb", "spectrum", "blackbody", "float")
+    temperature = context.floats(medium, "temperature") if kind == "uniformgrid" else None
+    if le is not None and temperature is not None:
+        raise error(medium.location, 'a medium takes "Le" or "temperature", not both (as in pbrt-v4)')
+    zero = le is not None and le.type in ("rgb", "float") and not any(float(v) for v in le.values)
+    glows = temperature is not None or (le is not None and not zero)
+    if kind != "uniformgrid":
+        scale = context.one(medium, "Lescale", 1.0)
+        if glows:
+            table["emission"] = context.emission(medium, "Le", scale)
+        return
+    count = len(table["density"]["values"])
+    grids = {"Lescale": context.floats(medium, "Lescale"), "temperature": temperature}
+    for name, values in grids.items():
+        if values is not None and len(values) != count:
+            parameter = medium.find(name)
+            raise error(
+                parameter.location if parameter else medium.location,
+                f'"float {name}" has {len(values)} values; nx·ny·nz = {count}',
+            )
+    offset = context.one(medium, "temperatureoffset", context.one(medium, "temperaturecutoff", 0.0))
+    temperature_scale = context.one(medium, "temperaturescale", 1.0)
+    if not glows:
+        return
+    if temperature is not None:
+        table["density"]["temperature_values"] = [(t - offset) * temperature_scale for t in temperature]
+    else:
+        table["emission"] = context.emission(medium, "Le", 1.0)
+    if grids["Lescale"] is not None:
+        table["density"]["emission_values"] = grids["Lescale"]
 
 
 def _uniform_grid(context: Context, medium: Entity) -> dict:
