@@ -2,13 +2,15 @@
  *
  * Why: PoCL from PyPI (pocl-binary-distribution, a "distro" build) compiles kernels for the CPU LLVM names (znver3 on
  * a Zen 3) but links the kernel library variant it built for a family of CPUs (avx2: target-cpu haswell; avx512:
- * skylake-avx512). LLVM inlines a callee only when the caller's CPU implies every feature the callee's CPU does
+ * skylake-avx512). LLVM inlines a callee only when the caller's CPU implies every feature bit the callee's CPU does
  * (X86TTIImpl::areInlineCompatible), which neither pair meets, so every builtin call stays a call: dot, mad, fmax, any,
- * shuffle, length... took about a fifth of a Cornell box render's CPU samples. The host builds every program with
- * SPECTRACE_INLINE_BUILTINS and this header first on that runtime only (spectrace.device.builtin_inlining).
+ * shuffle, length... took about a fifth of the CPU samples of a process rendering the Cornell box. The host builds
+ * every program with SPECTRACE_INLINE_BUILTINS and this header first on that runtime only
+ * (spectrace.device.builtin_inlining).
  *
  * Contract: same bits as PoCL's library. Each twin repeats the arithmetic of PoCL 3.0's kernel library as its bitcode
- * holds it (the .cl files of its lib/kernel folder, compiled without FP contraction), operation for operation and in the same order:
+ * holds it (the .cl files of its lib/kernel folder, compiled without FP contraction), operation for operation and in
+ * the same order:
  *   - mad(a, b, c) = a*b + c, rounded twice (not fused); dot = products summed as (x+y)+z, (x+y)+(z+w);
  *   - fmax(a, b) = (a > b or b is NaN) ? a : b, fmin likewise with <, clamp = fmin(fmax(x, lo), hi);
  *   - length, distance, normalize of float3 rescale by 2^86 below FLT_MIN and by 2^-65 (2^-66) at overflow, as PoCL;
@@ -16,7 +18,8 @@
  * A NaN result may carry another NaN operand's payload: x86 returns the first of two NaN operands, and the compiler
  * orders a commutative operation as it likes, in PoCL's inlined library as here.
  * The products and sums are separate statements, so even a build that contracts within a statement keeps them
- * unfused. tests/device/test_inline_builtins.py compares every twin with the builtin on edge values, bit for bit.
+ * unfused. tests/device/test_inline_builtins.py compares every twin with the builtin on edge values, bit for bit
+ * (NaN payloads aside).
  * Other types reach PoCL's own function (`_cl_<name>`: its headers rename each builtin to that, with a macro this
  * header replaces). cospi, sinpi and log stay calls: their polynomials are PoCL's to change.
  * Source: the OpenCL C 1.2 specification, 6.12 (the builtins' definitions). */
