@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, cast
 import pyopencl as cl
 
 from spectrace import resources
+from spectrace.device.builtin_inlining import runtime_defines, source_prelude
 from spectrace.device.discovery import cache_root
 from spectrace.device.report import DeviceReport
 from spectrace.errors import SpectraceError
@@ -338,7 +339,7 @@ class Device:
         headers = dict(generated.headers) if generated is not None else {}
         headers_digest = _headers_digest(headers)
         generated_dir = _write_generated_headers(headers, headers_digest) if headers else None
-        all_defines = _with_contract(defines, generated)
+        all_defines = _with_contract(defines, generated) | runtime_defines(self.report)
         option_text = build_options(kernels_dir, all_defines, options, generated_dir)
         sources_digest = hashlib.sha256(f"{kernels_digest(kernels_dir)} {headers_digest}".encode()).hexdigest()
         key_options = keyed_options(all_defines, options)
@@ -352,7 +353,8 @@ class Device:
                 program = None if from_source else self._load_cached(cache_file, option_text)
                 if program is None:
                     own = " ".join(_define_options(defines) + list(options or []))
-                    program = self._build_and_store(entry, sources_digest, option_text, cache_file, own)
+                    prelude = source_prelude(all_defines)
+                    program = self._build_and_store(entry, sources_digest, option_text, cache_file, own, prelude)
         self.last_build_seconds = time.perf_counter() - started
         return program
 
@@ -366,11 +368,11 @@ class Device:
         return program
 
     def _build_and_store(
-        self, entry: str, sources_digest: str, option_text: str, cache_file: Path, own_options: str
+        self, entry: str, sources_digest: str, option_text: str, cache_file: Path, own_options: str, prelude: str = ""
     ) -> cl.Program:
         self.last_build_cached = False
         started = time.perf_counter(), time.process_time()
-        program = self._build_from_source(entry, sources_digest, option_text)
+        program = self._build_from_source(entry, sources_digest, option_text, prelude)
         self.last_build_log = compiler_log(program, self.cl_device)
         binary = _program_binary(program)  # PoCL compiles every kernel of the program to answer this
         _log_build(entry, own_options, time.perf_counter() - started[0], time.process_time() - started[1])
@@ -378,10 +380,10 @@ class Device:
             _write_atomically(cache_file, _cache_entry(binary))
         return program
 
-    def _build_from_source(self, entry: str, sources_digest: str, option_text: str) -> cl.Program:
+    def _build_from_source(self, entry: str, sources_digest: str, option_text: str, prelude: str = "") -> cl.Program:
         # Including the entry (rather than pasting its text) keeps file names in compiler messages; the
         # digest line makes any runtime's own source-keyed cache miss when an included header changes.
-        source = f'// spectrace kernels {sources_digest}\n#include "{entry}"\n'
+        source = f'// spectrace kernels {sources_digest}\n{prelude}#include "{entry}"\n'
         try:
             return compile_source(self.context, self.cl_device, source, option_text)
         except KernelBuildError as error:
