@@ -63,14 +63,14 @@ def test_each_declared_pbrt_material_imports_with_pbrts_defaults_as_its_module(t
 
 
 def test_the_refusal_lists_the_declared_materials(tmp_path):
-    """An unknown material is refused naming what the import takes: the modules' declarations and `interface`, a
-    boundary without a surface."""
+    """An unknown material is refused naming what the import takes: the modules' declarations, `interface`, a
+    boundary without a surface, and `subsurface`, a dielectric around a medium."""
     path = tmp_path / "scene.pbrt"
     path.write_text(HEADER + 'Material "no-such-material"\n' + QUAD)
     with pytest.raises(SpectraceError) as caught:
         pbrt_scene_data(path)
     listed = re.search(r"\(spectrace imports (.*)\)$", caught.value.message).group(1).split(", ")
-    assert set(listed) == {kind for kind, _ in _declared(MODULES)} | {"interface"}
+    assert set(listed) == {kind for kind, _ in _declared(MODULES)} | {"interface", "subsurface"}
 
 
 def test_the_commands_help_lists_every_declared_material():

@@ -28,12 +28,11 @@ _MAPPINGS: dict[str, Any] = {
     kind: module for module in MATERIALS.values() for kind in getattr(module, "PBRT_MATERIALS", ())
 }
 # What the import takes: the modules' types and `interface`, a boundary without a surface.
-IMPORTED_MATERIALS = (*_MAPPINGS, "interface")
+IMPORTED_MATERIALS = (*_MAPPINGS, "interface", "subsurface")
 # Materials spectrace has no counterpart for, refused with this reason.
 _NO_EQUIVALENT = {
     "coatedconductor": "spectrace has no coated conductor",
     "measured": "spectrace has no measured BRDFs",
-    "subsurface": "spectrace's subsurface scattering is a medium inside a shape, not a material",
 }
 
 
@@ -77,6 +76,10 @@ def material_table(context: Context, material: Entity) -> dict | None:
             context.warn(parameter.location, f'"{parameter.label()}" not imported')
     if kind == "interface":
         return None
+    if kind == "subsurface":  # a dielectric around a medium (the shape's interior: interop/pbrt/subsurface.py)
+        from spectrace.interop.pbrt.subsurface import subsurface_table
+
+        return subsurface_table(context, material, rough(context, material))
     return _MAPPINGS[kind].from_pbrt(context, material)
 
 
