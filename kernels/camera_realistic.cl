@@ -8,8 +8,12 @@
  * [1..n] the surfaces from the film side: (radius of curvature, 0 for the stop; vertex distance from the film;
  * n_scene side / n_film side; aperture radius). A radius > 0 has its centre of curvature on the film side.
  *
- * Contract: `weight` is multiplied by the ray's weight cos⁴θ · A / z² (θ: the film-to-rear-disk segment's angle to
- * the axis; A: the rear disk's area, which the draw covers uniformly; z: the rear vertex's distance), or set to 0
+ * lens_pupils[i]: the bounds (x0, y0, x1, y1) on the rear vertex's plane of what a film point at radius r in ring
+ * i = ⌊r / (half diagonal) · LENS_PUPIL_BINS⌋ sees through the lens, for a point on the +x axis (turned to the
+ * film point's azimuth here; all zero: nothing).
+ *
+ * Contract: `weight` is multiplied by the ray's weight cos⁴θ · A / z² (θ: the film-to-pupil segment's angle to
+ * the axis; A: the bounds' area, which the draw covers uniformly; z: the rear vertex's distance), or set to 0
  * where the lens stops the ray (outside an aperture, a missed surface, total internal reflection); a stopped ray is
  * still a ray (from the film along the axis), so the caller traces it and adds nothing. Draws one 2D sample. */
 #ifndef SPECTRACE_CAMERA_REALISTIC_CL
@@ -19,8 +23,6 @@
 #include "ray.cl"
 #include "rng.cl"
 #include "sampling.cl"
-
-#define REALISTIC_PI 3.14159265358979f
 
 /* The ray (o, d), d unit and toward +z, through surface `s`: 0 where it is stopped, else o on the surface and d
  * refracted into the scene-side medium. */
@@ -72,13 +74,19 @@ inline Ray realistic_camera_ray(__global const RenderParams *p, float2 film, Sam
     float3 o = (float3)(-(2.0f * film.x / (float)p->width - 1.0f) * head.x,
                         (2.0f * film.y / (float)p->height - 1.0f) * head.y, 0.0f);
     float2 u = sample_2d(sampler);
-    float2 disk = head.w * sqrt(u.x) * cos_sin_turns(u.y);
+    float r = length(o.xy);
+    int ring = min((int)(r / length(head.xy) * (float)LENS_PUPIL_BINS), LENS_PUPIL_BINS - 1);
+    float4 box = p->lens_pupils[ring];
+    float area = (box.z - box.x) * (box.w - box.y);
+    float2 q = (float2)(box.x + u.x * (box.z - box.x), box.y + u.y * (box.w - box.y));
+    float2 azimuth = r > 0.0f ? o.xy / r : (float2)(1.0f, 0.0f);
+    float2 rear = (float2)(azimuth.x * q.x - azimuth.y * q.y, azimuth.y * q.x + azimuth.x * q.y);
     float z_rear = p->lens_elements[1].y;
-    float3 d = (float3)(disk.x, disk.y, z_rear) - o;
+    float3 d = (float3)(rear.x, rear.y, z_rear) - o;
     float cos_theta = d.z / length(d);
     float cos2 = cos_theta * cos_theta;
     d = normalize(d);
-    int passed = 1;
+    int passed = area > 0.0f;
     for (int i = 1; i <= count && passed; ++i) passed = realistic_surface(p->lens_elements[i], &o, &d);
     float3 right = normalize(p->camera_right.xyz), up = normalize(p->camera_up.xyz), forward = p->camera_forward.xyz;
     Ray ray;
@@ -88,7 +96,7 @@ inline Ray realistic_camera_ray(__global const RenderParams *p, float2 film, Sam
         ray.direction = forward;
         return ray;
     }
-    *weight *= cos2 * cos2 * (REALISTIC_PI * head.w * head.w) / (z_rear * z_rear);
+    *weight *= cos2 * cos2 * area / (z_rear * z_rear);
     ray.origin = p->camera_origin.xyz + o.x * right + o.y * up + o.z * forward;
     ray.direction = normalize(d.x * right + d.y * up + d.z * forward);
     return ray;

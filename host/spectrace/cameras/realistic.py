@@ -7,13 +7,15 @@ the surface, clear aperture diameter, all lengths in mm; `#` starts a comment; s
 prescriptions). Lengths in the file are millimetres and scene units metres (as pbrt-v4). `origin` is the centre
 of the film, which faces `target`; the film is `film_diagonal` mm across its diagonal with the image's aspect ratio.
 
-A camera ray starts at its film position toward a point drawn uniformly on the rear element's clear disk (one 2D
-draw after the film position's, as the thin lens draws its lens point), and is refracted at each surface in turn
-(Snell's law, the surface's normal; total internal reflection loses the ray) or stopped by the stop; a ray that
+A camera ray starts at its film position toward a point drawn uniformly in the bounds of the exit pupil seen from
+that film position on the rear vertex's plane (one 2D draw after the film position's, as the thin lens draws its lens
+point; the bounds are traced when the lens is focused, per ring of film radius, as pbrt-v4 does), and is refracted
+at each surface in turn (Snell's law, the surface's normal; total internal reflection loses the ray) or stopped by
+the stop; a ray that
 meets a surface outside its clear aperture is lost (vignetting). Its weight is cos⁴θ · A / z², θ the angle of the
-film-to-disk segment to the axis, A the disk's area and z the film-to-rear-vertex distance (pbrt-v4's weight), so
-the image of a uniform radiance L is L times the film's irradiance factor E(x) = ∫ cos⁴θ / z² dA over the part of
-the rear disk whose rays pass.
+film-to-pupil segment to the axis, A the bounds' area and z the film-to-rear-vertex distance (pbrt-v4's weight), so
+the image of a uniform radiance L is L times the film's irradiance factor E(x) = ∫ cos⁴θ / z² dA over the points of
+the rear plane whose rays pass.
 
 Focus: the lens group moves along the axis (the last surface's thickness changes) until a point at
 `focus_distance` in front of the film images on it, by the Gaussian thick-lens relation between the principal planes
@@ -65,6 +67,10 @@ class LensSystem:
 
     surfaces: tuple[tuple[float, float, float, float], ...]
     film_diagonal: float  # scene units
+    # Per ring of film radius (LENS_PUPIL_BINS equal rings out to half the diagonal): the bounds (x0, y0, x1, y1) on
+    # the rear vertex's plane of the points a film point on the ring's +x half-axis sees through the lens (all zero
+    # where none): camera rays are drawn there, turned to the film point's azimuth (`exit_pupils`).
+    pupils: tuple[tuple[float, float, float, float], ...] = ()
 
     @property
     def rear_distance(self) -> float:
@@ -160,7 +166,38 @@ def lens_system(
     image = (span - math.sqrt(discriminant)) / 2.0
     radius, thickness, eta, aperture = surfaces[-1]
     surfaces[-1] = (radius, thickness + image - principal_image, eta, aperture)
-    return LensSystem(tuple(surfaces), diagonal)
+    focused = tuple(surfaces)
+    return LensSystem(focused, diagonal, exit_pupils(focused, diagonal))
+
+
+def exit_pupils(surfaces, film_diagonal: float, side: int = 64) -> tuple[tuple[float, float, float, float], ...]:
+    """The exit pupil's bounds for each ring of film radius (LensSystem.pupils): rays from film points spread over
+    the ring's +x segment to a side × side grid over 1.5 times the rear element's clear square, those that pass
+    bounded, the bounds widened by two grid steps (a pupil's edge may fall between points)."""
+    from spectrace.core.contract import LENS_PUPIL_BINS
+
+    rear, rear_radius = surfaces[-1][1], surfaces[-1][3]
+    extent = 1.5 * rear_radius
+    steps = (np.arange(side) + 0.5) / side * 2.0 - 1.0
+    gx, gy = (np.tile(extent * a.ravel(), LENS_PUPIL_BINS) for a in np.meshgrid(steps, steps))
+    count = side * side
+    ring = np.repeat(np.arange(LENS_PUPIL_BINS), count)
+    # Film positions within each ring paired with the grid points by a golden-ratio sequence (no alignment).
+    spread = (np.arange(count * LENS_PUPIL_BINS) * 0.6180339887498949) % 1.0
+    film_x = (ring + spread) / LENS_PUPIL_BINS * film_diagonal / 2.0
+    origins = np.column_stack([film_x, np.zeros_like(film_x), np.zeros_like(film_x)])
+    directions = np.column_stack([gx - film_x, gy, np.full_like(film_x, rear)])
+    _, _, passed = trace(surfaces, origins, directions, from_film=True)
+    margin = 2.0 * (2.0 * extent / side)
+    pupils = []
+    for index in range(LENS_PUPIL_BINS):
+        hits = passed & (ring == index)
+        if not hits.any():
+            pupils.append((0.0, 0.0, 0.0, 0.0))
+            continue
+        x, y = gx[hits], gy[hits]
+        pupils.append((x.min() - margin, y.min() - margin, x.max() + margin, y.max() + margin))
+    return tuple((float(x0), float(y0), float(x1), float(y1)) for x0, y0, x1, y1 in pupils)
 
 
 def _vertices(surfaces) -> np.ndarray:
@@ -249,10 +286,11 @@ def lens(camera) -> tuple[float, float]:
     return 0.0, 0.0
 
 
-def device_rows(camera, aspect_ratio: float) -> np.ndarray:
+def device_lens(camera, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray]:
     """RenderParams.lens_elements: a header (half film width, half film height, surface count, rear aperture
     radius), then each surface from the film side: (radius, vertex distance from the film, n_scene side /
-    n_film side, aperture radius), radius 0 for the stop."""
+    n_film side, aperture radius), radius 0 for the stop; and RenderParams.lens_pupils, the exit pupil's bounds per
+    ring of film radius (LensSystem.pupils)."""
     system: LensSystem = camera.lens_system
     surfaces = system.surfaces
     rows = np.zeros((MAX_SURFACES + 1, 4), np.float32)
@@ -262,7 +300,7 @@ def device_rows(camera, aspect_ratio: float) -> np.ndarray:
         radius, _, eta, aperture = surfaces[i]
         scene_side = surfaces[i - 1][2] if i > 0 else 1.0
         rows[row] = (radius, z_vertex[i], scene_side / eta, aperture)
-    return rows
+    return rows, np.asarray(system.pupils, np.float32)
 
 
 def from_pbrt(context, camera, view) -> dict:
