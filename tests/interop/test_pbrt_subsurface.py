@@ -243,3 +243,24 @@ def test_a_named_medium_preset_of_either_table_imports(tmp_path):
     medium = load_pbrt_scene(path).shapes[0].interior
     assert _srgb(medium.sigma_s) == pytest.approx(np.array([0.89187, 1.5136, 2.532]) * 2, rel=2e-3)
     assert _srgb(medium.sigma_a) == pytest.approx(np.array([0.002875, 0.00575, 0.0115]) * 2, rel=2e-3)
+
+
+def test_a_reflectance_image_imports_as_its_mean_colour_with_a_warning(tmp_path):
+    """pbrt-v4's head scene gives its skin's reflectance as an image: spectrace's medium is uniform, so the image's
+    mean linear colour (sRGB decoded here by the standard's formula) is inverted instead."""
+    from PIL import Image
+
+    codes = np.array([[[200, 120, 90], [180, 100, 60]], [[220, 150, 120], [160, 90, 70]]], np.uint8)
+    Image.fromarray(codes).save(tmp_path / "albedo.png")
+    c = codes / 255.0
+    linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).reshape(-1, 3).mean(axis=0)
+    material = '"float mfp" 0.5 "float eta" 1.33'
+    textured = 'Texture "albedo" "spectrum" "imagemap" "string filename" "albedo.png"\n'
+    textured += f'Material "subsurface" "texture reflectance" "albedo" {material}'
+    data, result = pbrt_scene_data(_write(tmp_path, textured))
+    plain = 'Material "subsurface" "rgb reflectance" [{} {} {}] {}'.format(*linear, material)
+    _, expected = _imported(tmp_path, plain)
+    interior = data["shapes"][0]["interior"]
+    for key in ("sigma_a", "sigma_s"):
+        np.testing.assert_allclose(interior[key]["rgb"], expected[key]["rgb"], rtol=1e-3)
+    assert any("mean colour" in warning for warning in result.warnings)

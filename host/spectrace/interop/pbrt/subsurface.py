@@ -6,7 +6,8 @@ homogeneous medium (docs/media.md) in one of pbrt's four mutually exclusive form
    al. 2006, spectrace's presets of the same numbers), in 1/mm read as 1/scene unit times `scale`; pbrt ignores `g`
    for these and so does the import;
 2. `sigma_a` and `sigma_s` (both or neither), in 1/scene unit, times `scale`, with `g`;
-3. `reflectance` with `mfp` (mean free path, default 1): pbrt builds a medium of extinction σt = 1/mfp whose
+3. `reflectance` with `mfp` (mean free path, default 1; a reflectance texture, an `imagemap`, as its image's mean
+   colour, with a warning): pbrt builds a medium of extinction σt = 1/mfp whose
    single-scattering albedo α gives that effective (multiple-scattering) albedo under its photon beam diffusion
    profile (Habel, Christensen & Jarosz 2013; Pharr, Jakob & Humphreys, 3rd ed., 15.5): ρ_eff(α) = ∫ 2πr S(r) dr
    with S the profile's single- and multiple-scattering terms for σt = 1, σs = α, g and eta. The import solves
@@ -79,7 +80,7 @@ def _interior(context: Context, material: Entity) -> dict:
     g = context.one(material, "g", 0.0)
     if not -1.0 < g < 1.0:
         raise error(material.location, f'subsurface "g" must lie in (-1, 1), got {g:g}')
-    for key in ("sigma_a", "sigma_s", "reflectance", "mfp"):
+    for key in ("sigma_a", "sigma_s", "mfp"):
         if (parameter := material.find(key, "texture")) is not None:
             raise error(parameter.location, f'"{parameter.label()}": spectrace imports no textured medium')
     table: dict
@@ -130,8 +131,38 @@ def _components(context: Context, material: Entity, key: str, role: str, default
     raise error(parameter.location, f'"{parameter.label()}": spectrace inverts an rgb or a number here, not a spectrum')
 
 
+def _image_mean(context: Context, parameter) -> list[float]:
+    """The mean linear RGB of the `imagemap` a spectrum texture parameter names, with a warning: a medium is the
+    same throughout, where pbrt varies the albedo over the surface."""
+    from spectrace.interop.pbrt.textures import texture_table
+    from spectrace.io.images import read_texture_image
+    from spectrace.textures.bitmap import decoded
+
+    name = str(parameter.values[0])
+    texture = context.scene.textures.get(("spectrum", name))
+    if texture is None:
+        raise error(parameter.location, f"\"{parameter.label()}\" names '{shown(name)}', which no Texture defined")
+    table = texture_table(context, texture.entity)
+    if table.get("texture") != "bitmap" or str(table["file"]).startswith(f"{context.mesh_folder}/"):
+        raise error(parameter.location, f'"{parameter.label()}": spectrace takes an imagemap of a file here')
+    values, encoded = read_texture_image((context.toml_folder / table["file"]).resolve(), str(texture.entity.location))
+    linear = decoded(values, encoded, bool(table.get("raw", False)))
+    mean = np.clip(linear.reshape(-1, linear.shape[-1]).mean(axis=0), 0.0, 1.0)
+    rgb = [float(v) for v in (np.repeat(mean, 3) if len(mean) == 1 else mean[:3])]
+    context.warn(
+        parameter.location,
+        f'"{parameter.label()}" imported as its image\'s mean colour {[round(v, 4) for v in rgb]} '
+        "(spectrace's medium is the same throughout)",
+    )
+    return rgb
+
+
 def _from_reflectance(context: Context, material: Entity, g: float) -> dict:
-    reflectance = _components(context, material, "reflectance", "albedo", 0.0)
+    texture = material.find("reflectance", "texture")
+    if texture is not None:
+        reflectance = _image_mean(context, texture)
+    else:
+        reflectance = _components(context, material, "reflectance", "albedo", 0.0)
     mfp = _components(context, material, "mfp", "medium", 1.0)
     if min(mfp) <= 0.0:
         parameter = material.find("mfp")
