@@ -5,7 +5,6 @@
 #define SPECTRACE_PIXEL_SAMPLE_CL
 
 #include "camera.cl"
-#include "camera_realistic.cl"
 #include "film.cl"
 #include "pixel_filter.cl"
 #include "rng.cl"
@@ -21,8 +20,7 @@ inline Ray start_pixel_sample(__global const RenderParams *params, __global cons
     *w = sample_film_wavelengths(sample_1d(sampler), cmf, params->film_responses);
     float2 film = pixel_filter_sample(params, pixel % params->width, pixel / params->width, sample_2d(sampler),
                                       weight);
-    if (CAMERA_IS(params, CAMERA_REALISTIC)) return realistic_camera_ray(params, film, sampler, weight);
-    return camera_ray(params, film, sampler);
+    return weighted_camera_ray(params, film, sampler, weight);
 }
 
 #endif
