@@ -272,3 +272,16 @@ def test_pbrt_realistic_camera_imports_and_renders_as_its_toml(tmp_path, device)
     assert imported.camera.lens_system.film_diagonal == pytest.approx(0.030)
     image = Renderer(imported, device).render().xyz
     assert image[..., 1].mean() > 0.01
+
+
+def test_a_lens_made_in_python_renders_and_is_not_saved_without_its_file(tmp_path, device):
+    from spectrace.cameras.realistic import lens_system, read_lens_file
+
+    lens = lens_system(read_lens_file(DGAUSS, "lens"), aperture_diameter=8.0, focus_distance=2.0)
+    camera = spectrace.Camera(origin=(0, 0, 0), target=(0, 0, 1), type="realistic", lens_system=lens)
+    scene = spectrace.Scene(camera=camera, width=6, height=4, shapes=[], spp=4, max_depth=1)
+    scene = scene.with_overrides(lights=[spectrace.constant_environment(1.0)])
+    assert Renderer(scene, device).render().xyz[..., 1].mean() > 0.01
+    with pytest.raises(SpectraceError, match="lens_file") as failure:
+        spectrace.save_scene(scene, tmp_path / "lens.toml")
+    assert "\n" not in str(failure.value) and not (tmp_path / "lens.toml").exists()
