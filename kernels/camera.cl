@@ -15,6 +15,9 @@
  *   same frame, is the environment again.
  * - CAMERA_EQUALAREA: the whole sphere on a square film by Clarberg's equal-area octahedral mapping, pbrt-v4's
  *   "equalarea" spherical camera (camera_equal_area.cl); near and far clip along the ray, as the equirectangular.
+ * - CAMERA_REALISTIC: a thick lens system traced from the film (camera_realistic.cl), whose rays carry a weight:
+ *   weighted_camera_ray makes them; camera_ray, which the light tracer calls, does not know it (the light tracer and
+ *   BDPT refuse it). Its rays start at the front lens: near_clip is not applied.
  * camera_origin.w is the near clip distance (Mitsuba 3's near_clip): rays start where they cross the plane that far
  * along camera_forward (equirectangular: that far along the ray), so nothing nearer is seen (0: at the lens).
  * camera_forward.w is the far clip distance (Mitsuba 3's far_clip; 0: none), measured the same way: the camera's own
@@ -29,6 +32,7 @@
 #include "rng.cl"
 #include "sampling.cl"
 #include "camera_equal_area.cl"
+#include "camera_realistic.cl"
 #ifndef CAMERA_TYPE_COUNT
 #error "built without the cameras' generated sources (spectrace.plugins.generated_sources)"
 #endif
@@ -87,6 +91,13 @@ inline Ray camera_ray(__global const RenderParams *p, float2 film, Sampler *samp
     ray.origin = p->camera_origin.xyz + p->camera_origin.w * direction;
     ray.direction = normalize(direction);
     return ray;
+}
+
+/* A pixel sample's camera ray: camera_ray's, or a lens system's, which multiplies `weight` by its own. */
+inline Ray weighted_camera_ray(__global const RenderParams *p, float2 film, Sampler *sampler, float *weight)
+{
+    if (CAMERA_IS(p, CAMERA_REALISTIC)) return realistic_camera_ray(p, film, sampler, weight);
+    return camera_ray(p, film, sampler);
 }
 
 /* How far along `ray`, a ray camera_ray made, from its start, the camera sees: to the far clip plane (INFINITY

@@ -12,7 +12,7 @@
 
 /* Sample `sample_index` of a pixel: its random stream, its four wavelengths (drawn as the film table `cmf` says,
  * film.cl) and its camera ray; `weight` is what its radiance is multiplied by before it reaches the film (the pixel
- * filter's, 1 for box and tent). */
+ * filter's, 1 for box and tent; a lens system's ray weight, kernels/camera_realistic.cl). */
 inline Ray start_pixel_sample(__global const RenderParams *params, __global const float4 *cmf, int pixel,
                               int sample_index, Sampler *sampler, SampledWavelengths *w, float *weight)
 {
@@ -20,7 +20,7 @@ inline Ray start_pixel_sample(__global const RenderParams *params, __global cons
     *w = sample_film_wavelengths(sample_1d(sampler), cmf, params->film_responses);
     float2 film = pixel_filter_sample(params, pixel % params->width, pixel / params->width, sample_2d(sampler),
                                       weight);
-    return camera_ray(params, film, sampler);
+    return weighted_camera_ray(params, film, sampler, weight);
 }
 
 #endif

@@ -268,6 +268,8 @@ typedef struct {
     float4 filter_shape;     /* radius (pixels), 1 / ∫f over [-radius, radius] (per axis), then the filter's own:
                                 gaussian: -1/(2σ²), exp(-radius²/(2σ²)) (σ in pixels); mitchell: B, C */
     float filter_cdf[PIXEL_FILTER_BINS];  /* gaussian, mitchell: CDF of |f| over [0, radius] at each bin's end */
+    float4 lens_elements[LENS_ELEMENT_ROWS];  /* CAMERA_REALISTIC: kernels/camera_realistic.cl */
+    float4 lens_pupils[LENS_PUPIL_BINS];      /* CAMERA_REALISTIC: its exit pupil's bounds per ring of the film */
 } RenderParams;
 
 typedef struct {

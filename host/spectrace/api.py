@@ -150,9 +150,10 @@ def medium(
 ) -> Medium:
     """A homogeneous medium for a closed shape's `interior` (docs/media.md), as a scene file's `interior` key:
     absorption σa(λ) and scattering σs(λ) in 1/scene unit (a linear sRGB triple becomes a smooth spectrum with
-    that colour, unbounded), or a measured `preset` ("skin1", "marble", "wholemilk", ...: Jensen et al. 2001,
-    in 1/mm); either times `scale`. g: Henyey–Greenstein asymmetry in (−1, 1), 0 isotropic. `density` (see
-    `density_grid`) makes the medium heterogeneous: its coefficients times the grid's density. `emission` (any
+    that colour, unbounded), or a measured `preset` ("skin1", "marble", "wholemilk", ...: Jensen et al. 2001;
+    "lowfat_milk", "espresso", ...: Narasimhan et al. 2006; in 1/mm); either times `scale`. g: Henyey–Greenstein
+    asymmetry in (−1, 1), 0 isotropic. `density` (see `density_grid`) makes the medium heterogeneous: its
+    coefficients times the grid's density. `emission` (any
     spectrum form of an emitter's radiance) makes it glow: σa Le of radiance per unit length, Le the emission times
     the grid's emission scale and normalised blackbody where it has them (default 1 with such grids)."""
     from spectrace.spectral.media_presets import coefficient_spectrum, preset_coefficients

@@ -18,6 +18,7 @@ from spectrace.io.exr import write_exr
 from spectrace.lights import LIGHTS, area, envmap, projector
 from spectrace.materials import MATERIALS
 from spectrace.pixel_filters import PIXEL_FILTERS
+from spectrace.resources import scenes_dir
 from spectrace.textures import TEXTURES
 
 MODULES = list(MATERIALS.values())
@@ -66,14 +67,14 @@ def test_each_declared_pbrt_material_imports_with_pbrts_defaults_as_its_module(t
 
 
 def test_the_refusal_lists_the_declared_materials(tmp_path):
-    """An unknown material is refused naming what the import takes: the modules' declarations and `interface`, a
-    boundary without a surface."""
+    """An unknown material is refused naming what the import takes: the modules' declarations, `interface`, a
+    boundary without a surface, and `subsurface`, a dielectric around a medium."""
     path = tmp_path / "scene.pbrt"
     path.write_text(HEADER + 'Material "no-such-material"\n' + QUAD)
     with pytest.raises(SpectraceError) as caught:
         pbrt_scene_data(path)
     listed = re.search(r"\(spectrace imports (.*)\)$", caught.value.message).group(1).split(", ")
-    assert set(listed) == {kind for kind, _ in _declared(MODULES)} | {"interface"}
+    assert set(listed) == {kind for kind, _ in _declared(MODULES)} | {"interface", "subsurface"}
 
 
 def test_the_commands_help_lists_every_declared_material():
@@ -139,8 +140,13 @@ def test_each_declared_pbrt_filter_imports_with_pbrts_defaults_as_its_module(tmp
         assert (imported.b, imported.c) == (1.0 / 3.0, 1.0 / 3.0)
 
 
-# pbrt's perspective camera is two of spectrace's: thinlens for one with a lens; spherical needs mapping "equirect".
-_CAMERA_PARAMETERS = {"thinlens": ' "float lensradius" 0.1', "equirectangular": ' "string mapping" "equirect"'}
+# pbrt's perspective camera is two of spectrace's: thinlens for one with a lens; spherical needs mapping "equirect";
+# realistic a lens file.
+_CAMERA_PARAMETERS = {
+    "thinlens": ' "float lensradius" 0.1',
+    "equirectangular": ' "string mapping" "equirect"',
+    "realistic": f' "string lensfile" "{scenes_dir() / "lenses" / "dgauss.50mm.dat"}"',
+}
 _CAMERAS = _declared(CAMERAS.values(), "PBRT_CAMERAS")
 
 
@@ -154,7 +160,7 @@ def test_each_declared_pbrt_camera_imports_as_its_module(tmp_path, kind, module)
 
 def test_the_camera_refusal_lists_the_declared_cameras(tmp_path):
     path = tmp_path / "scene.pbrt"
-    path.write_text(HEADER.replace('Camera "perspective"', 'Camera "realistic"') + QUAD)
+    path.write_text(HEADER.replace('Camera "perspective"', 'Camera "no-such-camera"') + QUAD)
     with pytest.raises(SpectraceError) as caught:
         pbrt_scene_data(path)
     listed = re.search(r"spectrace imports pbrt's (.*) cameras$", caught.value.message).group(1)

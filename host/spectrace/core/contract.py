@@ -260,6 +260,9 @@ LIGHT_DTYPE = _struct(
 # filter's position in spectrace.pixel_filters.PIXEL_FILTERS (kernels/pixel_filter.cl). Those the kernel draws from
 # a table (TABULATED) use PIXEL_FILTER_BINS piecewise-constant bins of |f| over [0, radius] (RenderParams.filter_cdf).
 PIXEL_FILTER_BINS = 32
+# RenderParams.lens_elements: CAMERA_REALISTIC's header row and lens surfaces (spectrace.cameras.realistic).
+LENS_ELEMENT_ROWS = 32
+LENS_PUPIL_BINS = 32  # RenderParams.lens_pupils: its exit pupil's bounds per ring of film radius
 
 RENDER_PARAMS_DTYPE = _struct(
     [
@@ -297,8 +300,10 @@ RENDER_PARAMS_DTYPE = _struct(
         ("lens", ("<f4", (4,))),
         ("filter_shape", ("<f4", (4,))),
         ("filter_cdf", ("<f4", (PIXEL_FILTER_BINS,))),
+        ("lens_elements", ("<f4", (LENS_ELEMENT_ROWS, 4))),
+        ("lens_pupils", ("<f4", (LENS_PUPIL_BINS, 4))),
     ],
-    208 + 4 * PIXEL_FILTER_BINS,
+    208 + 4 * PIXEL_FILTER_BINS + 16 * (LENS_ELEMENT_ROWS + LENS_PUPIL_BINS),
 )
 
 # MeterParams.type (kernels/meters.cl). IRRADIANCE: W/(m² nm) on a one-sided surface at `point` facing
@@ -402,6 +407,8 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "FILTER_BILINEAR": FILTER_BILINEAR,
         "FILTER_TRILINEAR": FILTER_TRILINEAR,
         "PIXEL_FILTER_BINS": PIXEL_FILTER_BINS,
+        "LENS_ELEMENT_ROWS": LENS_ELEMENT_ROWS,
+        "LENS_PUPIL_BINS": LENS_PUPIL_BINS,
         # Buffer layouts and bounds the geometry builders guarantee (spectrace.geometry).
         "LEAF_BLOCK_FLOAT4S": LEAF_BLOCK_FLOAT4S,
         "BVH_STACK_SIZE": MAX_DEPTH,

@@ -709,6 +709,9 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     camera = CAMERAS[scene.camera.type]
     params["camera_type"] = CAMERAS.codes[scene.camera.type]
     params["lens"][0, :2] = camera.lens(scene.camera)
+    if hasattr(camera, "device_lens"):  # a lens system's surfaces and exit pupil (kernels/camera_realistic.cl)
+        aspect = scene.width / scene.height
+        params["lens_elements"][0], params["lens_pupils"][0] = camera.device_lens(scene.camera, aspect)
     if scene.camera.polarizer_angle is not None:  # kernels/polarized_path.cl: the camera's polariser
         params["lens"][0, 2:] = (np.radians(scene.camera.polarizer_angle), 1.0)
     pixel_filter = scene.pixel_filter

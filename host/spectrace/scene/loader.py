@@ -815,7 +815,7 @@ def scene_from_spec(path: Path, spec: schema.SceneSpec) -> Scene:
         resolver.named_spectrum(name, f"spectra.{name}")
     for name in spec.textures:
         resolver.named_texture(name, f"textures.{name}")
-    camera = camera_from_spec(spec.camera)
+    camera = camera_from_spec(spec.camera, resolver.folder, resolver.where)
     _check_camera(camera, path)
     film_response = _film_response(spec.film, resolver)
     try:  # the rules between a filter's keys; the schema checked each key alone
@@ -848,8 +848,9 @@ def scene_from_spec(path: Path, spec: schema.SceneSpec) -> Scene:
     )
 
 
-def camera_from_spec(spec) -> Camera:
-    """The model camera of a `[camera]` table (any type: spectrace.cameras)."""
+def camera_from_spec(spec, folder: Path = Path("."), where=lambda key: key) -> Camera:
+    """The model camera of a `[camera]` table (any type: spectrace.cameras); `folder` the scene file's, which
+    files it names are relative to; `where(key path)` names a key in errors."""
     keys = spec.model_dump()
     fields: dict = {"origin": spec.origin, "target": spec.target, "up": spec.up, "near_clip": spec.near_clip}
     fields["far_clip"] = spec.far_clip
@@ -863,7 +864,20 @@ def camera_from_spec(spec) -> Camera:
         fields["focus_distance"] = spec.focus_distance if spec.focus_distance is not None else distance
     if spec.type == "orthographic":
         fields["view_width"] = spec.view_width
+    if spec.type == "realistic":
+        fields["lens_system"] = _lens_system(spec, folder, where)
     return Camera(**fields)
+
+
+def _lens_system(spec, folder: Path, where):
+    from spectrace.cameras import realistic
+
+    path = realistic.lens_file_path(spec.lens_file, folder)
+    rows = realistic.read_lens_file(path, where("camera.lens_file"))
+    try:
+        return realistic.lens_system(rows, spec.aperture_diameter, spec.focus_distance, spec.film_diagonal)
+    except SpectraceError as exc:
+        raise SpectraceError(exc.message, where=where("camera.focus_distance")) from None
 
 
 def _film_response(film: schema.FilmSpec, resolver: _Resolver) -> FilmResponse:

@@ -7,7 +7,7 @@ these, never the file format.
 from dataclasses import dataclass, field
 from numbers import Real
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -53,6 +53,7 @@ class Camera:
     focus_distance: float = 1.0  # thinlens: scene units along the view axis
     view_width: float = 2.0  # orthographic: scene units across the image
     polarizer_angle: float | None = None  # a linear polariser in front of the lens, degrees from the image's right
+    lens_system: Any = None  # realistic: its focused spectrace.cameras.realistic.LensSystem
 
     def basis(self, aspect_ratio: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """origin, forward, and the right and up vectors the kernels read for an image of width/height =

@@ -235,6 +235,8 @@ class _Writer:
         if scene.pixels_per_light_path is not None:
             integrator["pixels_per_light_path"] = scene.pixels_per_light_path
         # What makes a render polarised or adds images beside it (docs/polarization.md) is the scene's, not a plugin's.
+        if scene.camera.lens_system is not None:  # a scene file names a lens file, which a lens made in Python lacks
+            raise SpectraceError("a realistic camera is written by its lens_file: load its scene from a file", "camera")
         camera = _camera_table(scene.camera)
         if scene.camera.polarizer_angle is not None:
             camera["polarizer_angle"] = scene.camera.polarizer_angle

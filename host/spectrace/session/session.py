@@ -561,7 +561,7 @@ class _Plan:
         if "camera" in self.kinds:
             from spectrace.scene.loader import _check_camera, camera_from_spec
 
-            camera = camera_from_spec(spec.camera)
+            camera = camera_from_spec(spec.camera, Path(source).parent)
             _check_camera(camera, source)
             scene = replace(scene, camera=camera)
         if "exposure" in self.kinds:

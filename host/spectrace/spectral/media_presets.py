@@ -1,10 +1,12 @@
-"""Measured media for subsurface scattering: Jensen et al. 2001's table (spectra/media/jensen2001.csv).
+"""Measured media for subsurface scattering: Jensen et al. 2001's table (spectra/media/jensen2001.csv) and
+Narasimhan et al. 2006's (spectra/media/narasimhan2006.csv), the named media pbrt-v4 knows.
 
-The table gives the reduced scattering coefficient σs' = σs(1 − g) and the absorption coefficient σa in 1/mm at
-the red, green and blue of a colour camera. A preset keeps σs' whatever phase function it is given:
+Both give coefficients in 1/mm at the red, green and blue of a colour camera. Jensen et al. give the reduced
+scattering coefficient σs' = σs(1 − g): such a preset keeps σs' whatever phase function it is given,
 σs = σs' / (1 − g), so g = 0 (the default) uses σs = σs' in an isotropic medium; by the similarity relation
-(Wyman, Patterson & Wilson 1989) media of equal σs' look alike once light has scattered many times. Each RGB
-triple becomes a smooth spectrum whose linear sRGB is that triple (`coefficient_spectrum`).
+(Wyman, Patterson & Wilson 1989) media of equal σs' look alike once light has scattered many times. Narasimhan et
+al. give σs itself (they measure g apart), which such a preset keeps for any g. Each RGB triple becomes a smooth
+spectrum whose linear sRGB is that triple (`coefficient_spectrum`).
 """
 
 import csv
@@ -19,25 +21,32 @@ from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.uplift import uplift_reflectance
 
 PRESETS_FILE = "media/jensen2001.csv"
+# The second table: σs not reduced (its column sigma_s, where the first has sigma_s_prime).
+UNREDUCED_PRESETS_FILE = "media/narasimhan2006.csv"
 
 
 @dataclass(frozen=True)
 class MediumPreset:
     name: str
-    sigma_s_prime_per_mm: tuple[float, float, float]  # reduced scattering, R, G, B
+    sigma_s_prime_per_mm: tuple[float, float, float]  # reduced scattering (σs itself where not `reduced`), R, G, B
     sigma_a_per_mm: tuple[float, float, float]
+    reduced: bool = True
 
 
 @cache
 def medium_presets() -> dict[str, MediumPreset]:
-    path = spectra_dir() / PRESETS_FILE
-    lines = [line for line in path.read_text(encoding="utf-8").splitlines() if line and not line.startswith("#")]
     presets = {}
-    for row in csv.DictReader(lines):
-        values = [float(row[f"{q}_{c}"]) for q in ("sigma_s_prime", "sigma_a") for c in "rgb"]
-        presets[row["name"]] = MediumPreset(
-            row["name"], (values[0], values[1], values[2]), (values[3], values[4], values[5])
-        )
+    for file, scattering in ((PRESETS_FILE, "sigma_s_prime"), (UNREDUCED_PRESETS_FILE, "sigma_s")):
+        text = (spectra_dir() / file).read_text(encoding="utf-8")
+        lines = [line for line in text.splitlines() if line and not line.startswith("#")]
+        for row in csv.DictReader(lines):
+            values = [float(row[f"{q}_{c}"]) for q in (scattering, "sigma_a") for c in "rgb"]
+            presets[row["name"]] = MediumPreset(
+                row["name"],
+                (values[0], values[1], values[2]),
+                (values[3], values[4], values[5]),
+                reduced=scattering == "sigma_s_prime",
+            )
     return presets
 
 
@@ -56,11 +65,12 @@ def coefficient_spectrum(rgb, name: str = "", where: str | None = None) -> Spect
 
 def preset_coefficients(name: str, scale: float, g: float = 0.0, where: str | None = None) -> tuple[Spectrum, Spectrum]:
     """(σa, σs) of a preset in 1/scene unit for the Henyey–Greenstein asymmetry g: the table's 1/mm values times
-    `scale`, the millimetres in one scene unit (1000 for a scene in metres), with σs = σs' / (1 − g)."""
+    `scale`, the millimetres in one scene unit (1000 for a scene in metres), with σs = σs' / (1 − g) for a table of
+    reduced coefficients."""
     presets = medium_presets()
     if name not in presets:
         raise SpectraceError(f"unknown medium preset '{name}' (presets: {', '.join(presets)})", where=where)
     preset = presets[name]
     sigma_a = coefficient_spectrum(preset.sigma_a_per_mm, name=f"{name} sigma_a", where=where)
     sigma_s = coefficient_spectrum(preset.sigma_s_prime_per_mm, name=f"{name} sigma_s", where=where)
-    return sigma_a.scaled(scale), sigma_s.scaled(scale / (1.0 - g))
+    return sigma_a.scaled(scale), sigma_s.scaled(scale / (1.0 - g) if preset.reduced else scale)

@@ -99,6 +99,7 @@ class Context:
         self.textures: dict[str, dict] = {}
         self.texture_of: dict[tuple[str, str], str] = {}
         self.interior_of: dict[str, dict] = {}
+        self.material_interiors: dict[int, dict] = {}  # id of a subsurface material -> its medium (subsurface.py)
         self.world = np.eye(4)  # spectrace world from pbrt world: the handedness mirror, or not
         self.origins: dict[str, Location] = {}  # TOML key path -> where in the pbrt files it came from
         self.read: set[int] = set()  # the entities mapped (their unread parameters are reported)

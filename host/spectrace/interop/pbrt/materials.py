@@ -28,11 +28,7 @@ _MAPPINGS: dict[str, Any] = {
     kind: module for module in MATERIALS.values() for kind in getattr(module, "PBRT_MATERIALS", ())
 }
 # What the import takes: the modules' types and `interface`, a boundary without a surface.
-IMPORTED_MATERIALS = (*_MAPPINGS, "interface")
-# Materials spectrace has no counterpart for, refused with this reason.
-_NO_EQUIVALENT = {
-    "subsurface": "spectrace's subsurface scattering is a medium inside a shape, not a material",
-}
+IMPORTED_MATERIALS = (*_MAPPINGS, "interface", "subsurface")
 
 
 def material_name(context: Context, reference: Entity | str | None, location: Location) -> str | None:
@@ -66,8 +62,6 @@ def material_table(context: Context, material: Entity) -> dict | None:
         if not kind:
             raise error(material.location, f"named material '{shown(material.name)}' needs \"string type\"")
     imported = ", ".join(IMPORTED_MATERIALS)
-    if kind in _NO_EQUIVALENT:
-        raise error(material.location, f"material '{kind}': {_NO_EQUIVALENT[kind]} (spectrace imports {imported})")
     if kind not in IMPORTED_MATERIALS:
         raise error(material.location, f"unknown material '{shown(kind)}' (spectrace imports {imported})")
     for key in ("normalmap", "displacement"):
@@ -75,6 +69,10 @@ def material_table(context: Context, material: Entity) -> dict | None:
             context.warn(parameter.location, f'"{parameter.label()}" not imported')
     if kind == "interface":
         return None
+    if kind == "subsurface":  # a dielectric around a medium (the shape's interior: interop/pbrt/subsurface.py)
+        from spectrace.interop.pbrt.subsurface import subsurface_table
+
+        return subsurface_table(context, material, rough(context, material))
     return _MAPPINGS[kind].from_pbrt(context, material)
 
 

@@ -29,6 +29,7 @@ def interior_table(context: Context, shape: Shape) -> dict | None:
 
 
 def medium_table(context: Context, medium: Entity) -> dict:
+    from spectrace.interop.pbrt.subsurface import preset_name
     from spectrace.spectral.media_presets import medium_presets
 
     context.read.add(id(medium))
@@ -44,13 +45,14 @@ def medium_table(context: Context, medium: Entity) -> dict:
     elif kind == "nanovdb":
         table["density"] = _nanovdb(context, medium)
     if (preset := context.string(medium, "preset")) is not None:
-        # pbrt's Jensen et al. presets are the same measurements as spectrace's, in 1/mm (pbrt: per scene unit
-        # times scale; spectrace: per mm times scale, its millimetres per scene unit: the same numbers).
-        if preset.lower() not in medium_presets():
+        # pbrt's named media (Jensen et al. 2001, Narasimhan et al. 2006) are the same measurements as spectrace's
+        # presets, in 1/mm (pbrt: per scene unit times scale; spectrace: per mm times scale, its millimetres per
+        # scene unit: the same numbers).
+        if preset_name(preset) not in medium_presets():
             raise error(
                 medium.location, f"medium preset '{shown(preset)}' (spectrace has {', '.join(medium_presets())})"
             )
-        table["preset"] = preset.lower()
+        table["preset"] = preset_name(preset)
     else:
         # pbrt's coefficients default to 1 per scene unit, spectrace's to 0.
         table["sigma_a"] = context.spectrum(medium, "sigma_a", "medium") or {"value": 1.0}

@@ -28,6 +28,7 @@ from spectrace.interop.pbrt.meshes import (
     with_default_uvs,
 )
 from spectrace.interop.pbrt.parser import error, shown
+from spectrace.interop.pbrt.subsurface import interior_of_material
 
 SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
 
@@ -39,6 +40,10 @@ def shape_table(context: Context, shape: Shape, index: int) -> dict | None:
         raise error(entity.location, f"shape '{shown(entity.kind)}': spectrace imports {', '.join(SHAPES)}")
     material = material_name(context, shape.material, entity.location)
     interior = interior_table(context, shape)
+    if (own := interior_of_material(context, shape.material)) is not None:
+        if interior is not None:
+            context.warn(entity.location, "a MediumInterface inside a subsurface material: the material's medium used")
+        interior = own
     if material is None and shape.area_light is None and interior is None:
         context.notes.append(f"{entity.location}: a shape with the interface material (no surface) left out")
         return None
