@@ -382,6 +382,10 @@ inline float3 hit_point(const Scene *scene, Hit hit)
 /* Texture coordinates of a hit. */
 inline float2 hit_uv(const Scene *scene, Hit hit)
 {
+#if SCENE_HAS_CURVES
+    if (hit_is_shape(scene, hit.triangle) && hit_shape(scene, hit.triangle)->type == SHAPE_CURVE)
+        return curve_axis_uv(hit_shape(scene, hit.triangle), hit.b12);
+#endif
     if (hit_is_shape(scene, hit.triangle)) return hit.b12;
     return triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
 }
