@@ -1,7 +1,10 @@
 /* Curve segments as analytic shapes: an AnalyticShape row of type SHAPE_CURVE is one linear swept-sphere segment
  * (kernels/curve.cl) of a curve shape (host: spectrace.geometry.curves), a primitive of the shapes' BVH like a
- * sphere. Row layout: sphere = (a, ra), to_world[0] = (b, rb), to_world[1] = (u0, u1, ·, ·), the curve's texture u
- * at a and b; world (or an instanced object's) space, scene units.
+ * sphere. Row layout: sphere = (a, ra), to_world[0] = (b, rb), to_world[1] = (u0, u1, cap a, cap b): the curve's
+ * texture u at a and b, and whether the end sphere at a (b) is surface (1) or not (0: the tube is open there, a
+ * B-spline curve's ends); to_object[0], [1] = the two control points (x, y, z, radius) before a, to_object[2],
+ * to_world[2] the two after b (radius 0: none), whose segments' insides are not this segment's surface, so that
+ * (but for curves bent within two segments' length) no surface lies inside the tube; world (or an instanced object's) space, scene units.
  *
  * Back faces are culled, as Mitsuba 3's curves (Embree, OptiX) and pbrt-v4's ribbons do: a ray leaving a fibre's
  * surface inward (the hair BSDF's transmission) crosses the fibre, whose interior that BSDF already accounts for.
@@ -30,6 +33,18 @@ inline void curve_frame(float3 w, float3 *e1, float3 *e2)
     *e2 = (float3)(b, sign + w.y * w.y * a, -w.y);
 }
 
+/* Whether p lies inside the swept sphere from (a.xyz, radius a.w) to (b.xyz, b.w) by more than a thousandth of
+ * its radius there: |p − c(s)| − r(s) at the s of p's projection on the axis, an upper bound of the distance to the
+ * surface, so a point it calls inside is. False where either radius is 0 (no segment). */
+inline int curve_inside_segment(float3 p, float4 a, float4 b)
+{
+    if (!(a.w > 0.0f && b.w > 0.0f)) return 0;
+    float3 axis = b.xyz - a.xyz;
+    float s = clamp(dot(p - a.xyz, axis) / dot(axis, axis), 0.0f, 1.0f);
+    float r = a.w + s * (b.w - a.w);
+    return length(p - (a.xyz + s * axis)) < 0.999f * r;
+}
+
 /* The nearest front-facing hit of the segment in (0, t_max) along the ray (unit direction), or t_max; where it lies
  * in *uv (profile coordinate, azimuth). */
 inline float intersect_curve_shape(__global const AnalyticShape *s, float3 origin, float3 direction, float t_max,
@@ -50,6 +65,16 @@ inline float intersect_curve_shape(__global const AnalyticShape *s, float3 origi
         float phi = asin(sin_phi);
         profile = 1.0f + (asin(sin_psi) - phi) / (CURVE_HALF_PI - phi);
     }
+    /* An open end (a B-spline curve's first and last point) has no sphere: the ray that meets it enters the tube
+     * and meets only back faces after. */
+    if ((profile < 0.0f && s->to_world[1].z == 0.0f) || (profile > 1.0f && s->to_world[1].w == 0.0f)) return t_max;
+    /* Surface inside a neighbouring segment (the inner side of a bend, most of a joint's sphere) is inside the tube,
+     * not its surface. */
+    float3 p = origin + hit.t * direction;
+    float4 before2 = s->to_object[0], before = s->to_object[1], after = s->to_object[2], after2 = s->to_world[2];
+    if (curve_inside_segment(p, before, s->sphere) || curve_inside_segment(p, before2, before) ||
+        curve_inside_segment(p, s->to_world[0], after) || curve_inside_segment(p, after, after2))
+        return t_max;
     float3 e1, e2;
     curve_frame(hit.w, &e1, &e2);
     float turns = atan2(dot(hit.n, e2), dot(hit.n, e1)) * (1.0f / SHAPE_TWO_PI);

@@ -5,7 +5,8 @@ BVH primitive per segment (kernels/shape_curve.cl).
 Control points are (x, y, z, radius) in scene units. A linear curve is the sphere swept from point to point, its
 radius varying linearly: cylinders with rounded joints and ends (Mitsuba 3's `linearcurve`). A B-spline curve of n
 points has n − 3 spans, span i the uniform cubic B-spline of points i..i+3 for both the centre and the radius
-(Mitsuba 3's `bsplinecurve`, pbrt-v4's `curve` with basis "bspline"); it is rendered as linear segments, each span
+(Mitsuba 3's `bsplinecurve`, pbrt-v4's `curve` with basis "bspline"), open at its ends as Mitsuba's (Embree's) are
+(no end sphere: the tube ends where its cone does); it is rendered as linear segments, each span
 cut into enough pieces that the surface of the segments lies within BSPLINE_TOLERANCE of the radius of the true
 swept surface (bspline_polyline). A transform moves the points and leaves the radii as they are, as Mitsuba 3 does
 (pbrt-v4 scales its widths with the transform; its importer does so before handing them on).
@@ -122,27 +123,52 @@ class CurveSurface:
     rb: np.ndarray
     u0: np.ndarray
     u1: np.ndarray
+    # Whether the end sphere at a (at b) is part of the surface: a B-spline's ends have none.
+    cap_a: np.ndarray | None = None  # (n,) bool; None: all
+    cap_b: np.ndarray | None = None
+    # (n, 4, 4): the two points (x, y, z, radius) before a and the two after b along the curve, in order, radius 0
+    # where there is none; None: none anywhere.
+    neighbours: np.ndarray | None = None
     kind: str = "curve"
     flip_normals: bool = False
     pbrt_uv: bool = True
     partial: bool = False
 
     @classmethod
-    def from_polylines(cls, polylines: list[np.ndarray]) -> "CurveSurface":
+    def from_polylines(cls, polylines: list[np.ndarray], open_ends: bool = False) -> "CurveSurface":
         """Segments joining consecutive (x, y, z, radius) points of each polyline; u along each from 0 to 1 by arc
-        length of the centre. Segments one of whose end spheres holds the other add nothing to the surface (their
-        neighbours' spheres cover them) and are left out."""
+        length of the centre; open_ends: no sphere closes a polyline's first and last point (the tube ends where
+        its cone does). Each segment knows the two points before and after it (`neighbours`), so that the kernels
+        drop the parts of its surface inside the two segments on either side (at a joint, the inner side of the
+        bend), where a ray that entered the tube (a hair's transmission, a look into an open end) would meet them.
+        Segments one of whose end spheres holds the other add nothing to the surface and are left out."""
         parts = []
         for line in polylines:
             line = np.asarray(line, float)
             lengths = np.linalg.norm(np.diff(line[:, :3], axis=0), axis=1)
+            keep = lengths > np.abs(line[:-1, 3] - line[1:, 3]) * (1 + 1e-6)
             total = lengths.sum()
             u = np.concatenate([[0.0], np.cumsum(lengths)]) / total if total > 0 else np.linspace(0, 1, len(line))
-            parts.append(np.concatenate([line[:-1], line[1:], u[:-1, None], u[1:, None]], axis=1))
-        rows = np.concatenate(parts) if parts else np.zeros((0, 10))
-        keep = np.linalg.norm(rows[:, 4:7] - rows[:, 0:3], axis=1) > np.abs(rows[:, 3] - rows[:, 7]) * (1 + 1e-6)
-        rows = rows[keep]
-        return cls(rows[:, 0:3], rows[:, 3], rows[:, 4:7], rows[:, 7], rows[:, 8], rows[:, 9])
+            n = len(lengths)
+            caps = np.ones((n, 2))
+            if open_ends:
+                caps[0, 0] = caps[-1, 1] = 0.0
+            # The two points before each segment's a and after its b, radius 0 where there is none.
+            padded = np.concatenate([np.zeros((2, 4)), line, np.zeros((2, 4))])
+            around = [padded[k : k + n] for k in (0, 1)] + [padded[k : k + n] for k in (4, 5)]
+            parts.append(np.concatenate([line[:-1], line[1:], u[:-1, None], u[1:, None], caps, *around], axis=1)[keep])
+        rows = np.concatenate(parts) if parts else np.zeros((0, 28))
+        return cls(
+            rows[:, 0:3],
+            rows[:, 3],
+            rows[:, 4:7],
+            rows[:, 7],
+            rows[:, 8],
+            rows[:, 9],
+            rows[:, 10] > 0.5,
+            rows[:, 11] > 0.5,
+            rows[:, 12:28].reshape(-1, 4, 4),
+        )
 
     @property
     def count(self) -> int:
@@ -161,12 +187,18 @@ class CurveSurface:
 
     def device_rows(self) -> np.ndarray:
         """The AnalyticShape rows (kernels/shape_curve.cl): sphere = (a, ra), to_world[0] = (b, rb),
-        to_world[1] = (u0, u1, 0, 0)."""
+        to_world[1] = (u0, u1, 1 if the sphere at a is surface else 0, the same for b); the neighbours in
+        to_object[0], [1] (before a) and to_object[2], to_world[2] (after b)."""
         rows = np.zeros(self.count, ANALYTIC_SHAPE_DTYPE)
         rows["type"] = SHAPE_CURVE
         rows["sphere"][:, :3], rows["sphere"][:, 3] = self.a, self.ra
         rows["to_world"][:, 0, :3], rows["to_world"][:, 0, 3] = self.b, self.rb
         rows["to_world"][:, 1, 0], rows["to_world"][:, 1, 1] = self.u0, self.u1
+        rows["to_world"][:, 1, 2] = 1.0 if self.cap_a is None else self.cap_a
+        rows["to_world"][:, 1, 3] = 1.0 if self.cap_b is None else self.cap_b
+        if self.neighbours is not None:
+            rows["to_object"] = self.neighbours[:, :3]
+            rows["to_world"][:, 2] = self.neighbours[:, 3]
         rows["abs_det"] = 1.0
         rows["object_area"] = 1.0
         rows["pbrt_uv"] = 1
@@ -213,7 +245,7 @@ def curve_surface(
         if matrix is not None:
             points[:, :3] = points[:, :3] @ matrix[:3, :3].T + matrix[:3, 3]
         placed.append(bspline_polyline(points, tolerance) if basis == "bspline" else points)
-    return CurveSurface.from_polylines(placed)
+    return CurveSurface.from_polylines(placed, open_ends=basis == "bspline")
 
 
 CURVE_BASES = ("linear", "bspline")

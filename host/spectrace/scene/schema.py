@@ -432,7 +432,7 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot", "curve"]
     file: str | None = None
     shape_index: Annotated[int, Field(ge=0, strict=True)] | None = None  # which mesh of a .serialized file
     material: str | None = None
@@ -459,12 +459,20 @@ class ShapeSpec(Strict):
     z_min: FiniteFloat | None = None
     z_max: FiniteFloat | None = None
     inner_radius: FiniteFloat | None = None
+    # curve (docs/scene-format.md, "Curves"): one curve's control points, rows of x, y, z, radius (or `file`, a
+    # Mitsuba 3 curve file of many); "linear" joins them, "bspline" is their uniform cubic B-spline
+    points: list[list[FiniteFloat]] | None = None
+    basis: Literal["linear", "bspline"] | None = None
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
         if self.type == "mesh" and self.file is None:
             raise ValueError("a mesh shape needs file")
-        if self.type != "mesh" and self.file is not None:
+        if self.type == "curve":
+            curve_spec_problem(self)
+        elif self.points is not None or self.basis is not None:
+            raise ValueError(f"points and basis are a curve's, not a {self.type}'s")
+        if self.type not in ("mesh", "curve") and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
         if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):
             raise ValueError("shape_index picks a mesh of a Mitsuba .serialized file; this shape has none")
@@ -491,6 +499,18 @@ class ShapeSpec(Strict):
             if cut_parameters(self.type, *cut_keys, radius=self.radius or 1.0) and self.interior is not None:
                 raise ValueError("a partial shape encloses no volume: an interior needs a closed shape")
         return self
+
+
+def curve_spec_problem(spec: ShapeSpec) -> None:
+    """A curve shape's keys that cannot go together (raises ValueError)."""
+    if (spec.file is None) == (spec.points is None):
+        raise ValueError("a curve needs either file (a curve file) or points (one curve's x, y, z, radius rows)")
+    if spec.emitter is not None:
+        raise ValueError("a curve cannot emit light")
+    if spec.interior is not None:
+        raise ValueError("a curve holds no interior (its back faces are not intersected)")
+    if spec.shape_index is not None or spec.face_normals is not None or spec.tessellated is not None:
+        raise ValueError("shape_index, face_normals and tessellated are not a curve's keys")
 
 
 _LIGHT_SPEC_NAMES = {"constant": "ConstantEnvironmentSpec", "envmap": "EnvironmentMapSpec"}

@@ -42,7 +42,20 @@ FILTER_PLUGINS = {plugin: name for name, module in PIXEL_FILTERS.items() for plu
 INTEGRATOR_MODULES = _modules_by_plugin(INTEGRATORS.values())
 INTEGRATOR_WRAPPERS = ("moment", "aov", "stokes")
 SUPPORTED = {
-    "shape": ("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"),
+    "shape": (
+        "obj",
+        "ply",
+        "serialized",
+        "rectangle",
+        "cube",
+        "sphere",
+        "disk",
+        "cylinder",
+        "linearcurve",
+        "bsplinecurve",
+        "shapegroup",
+        "instance",
+    ),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS, "null"),  # null: a shape without material (shapes.py)
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),
     "texture": tuple(TEXTURE_MODULES),

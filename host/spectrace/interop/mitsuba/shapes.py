@@ -1,5 +1,6 @@
 """Shapes: obj, ply, serialized (shape_index), rectangle, cube, and the analytic sphere (center, radius), disk and
-cylinder (p0, p1, radius), face_normals on obj, ply, serialized and sphere; each with its bsdf (materials.py), its
+cylinder (p0, p1, radius), the linearcurve and bsplinecurve (their curve files), face_normals on obj, ply, serialized
+and sphere; each with its bsdf (materials.py), its
 emitter (emitters.py) and its interior medium (media.py). A shapegroup is a spectrace object, placed by each
 instance."""
 
@@ -21,6 +22,8 @@ from spectrace.interop.mitsuba.tree import Element
 # Mitsuba's rectangle has v = 0 at y = -1, spectrace's at y = +1; Mitsuba reads a PLY's v as stored, spectrace
 # flips it (as both do an OBJ's vt). Textures on them are imported with v flipped.
 V_UP_SHAPES = ("rectangle", "ply", "serialized")
+# Mitsuba 3's curve plugins and their basis in spectrace's curve shape.
+CURVE_BASES = {"linearcurve": "linear", "bsplinecurve": "bspline"}
 
 
 def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
@@ -39,6 +42,11 @@ def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
         table |= {"type": "mesh", "file": ctx.input_file(filename, "mesh file")}
         if kind == "serialized" and "shape_index" in properties:
             table["shape_index"] = ctx.integer(properties["shape_index"], low=0)
+    elif kind in CURVE_BASES:
+        # Mitsuba 3's curve file, read as it reads it; its to_world moves the points, not the radii, as spectrace's
+        # transform does.
+        filename = ctx.child(properties, "filename", element)
+        table |= {"type": "curve", "file": ctx.input_file(filename, "curve file"), "basis": CURVE_BASES[kind]}
     else:
         table["type"] = kind
     if kind == "sphere":
