@@ -4,6 +4,7 @@ functions here) has a sphere of the segments within BSPLINE_TOLERANCE of its rad
 way round, which bounds the distance between the two surfaces by that fraction of the radius."""
 
 import numpy as np
+import pytest
 from scipy.spatial import cKDTree
 
 from spectrace.geometry.curves import BSPLINE_TOLERANCE, curve_surface
@@ -64,3 +65,33 @@ def test_linear_curve_points_move_and_radii_stay():
     placed = points[:, :3] * [2.0, 3.0, 0.5] + [1.0, -1.0, 0.5]
     assert np.allclose(surface.a, placed[:2]) and np.allclose(surface.b, placed[1:])
     assert np.allclose(surface.ra, [0.1, 0.2]) and np.allclose(surface.rb, [0.2, 0.3])
+
+
+@pytest.mark.subprocess
+def test_bad_curves_in_a_scene_file_are_one_line_naming_the_key_and_nothing_is_written(tmp_path):
+    """A curve too short for its basis, and a curve file with a bad line: exit 2, one line naming the key (and the
+    file's line), no image written."""
+    from cli_runner import run_spectrace
+
+    head = "[camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 8\nheight = 8\n"
+    head += '[materials.m]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
+    (tmp_path / "hair.txt").write_text("0 0 0 0.1\n1 0 0 0.1\n\n0 1 0 0.1\n1 1 x 0.1\n")
+    cases = {
+        "short.toml": (
+            '[[shapes]]\ntype = "curve"\nbasis = "bspline"\nmaterial = "m"\n'
+            "points = [[0, 0, 0, 0.1], [1, 0, 0, 0.1], [2, 1, 0, 0.1]]\n",
+            "shapes[0].points: curve 0: a bspline curve needs at least 4 points, got 3",
+        ),
+        "file.toml": (
+            '[[shapes]]\ntype = "curve"\nfile = "hair.txt"\nmaterial = "m"\n',
+            "line 5: expected 4 finite numbers",
+        ),
+    }
+    for name, (shape, message) in cases.items():
+        (tmp_path / name).write_text(head + shape)
+        image = tmp_path / f"{name}.png"
+        result = run_spectrace("render", str(tmp_path / name), "-o", str(image), "-q")
+        assert result.returncode == 2, result.stderr
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0] and "Traceback" not in result.stderr, result.stderr
+        assert not image.exists()

@@ -45,24 +45,33 @@ def bspline_evaluate(points: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def bspline_polyline(points: np.ndarray, tolerance: float = BSPLINE_TOLERANCE) -> np.ndarray:
-    """The polyline (m, 4) of (x, y, z, radius) that stands for a B-spline curve's control points (n >= 4, 4):
-    each span cut uniformly in its parameter into k pieces, k the least for which linear interpolation errs by at
-    most tolerance × the span's smallest radius: on [t0, t0 + h] the interpolant of a C² function f errs by at most
-    h² max|f''| / 8, and f'' of a cubic is linear in t, so its largest size over the span is at an end; the bound
-    is applied to |c''| + |r''| together."""
+    """The polyline (m, 4) of (x, y, z, radius) that stands for a B-spline curve's control points (n >= 4, 4): its
+    spans (points i..i+3) cut by polynomial_polyline."""
     points = np.asarray(points, float)
+    return polynomial_polyline([_BSPLINE @ points[i : i + 4] for i in range(len(points) - 3)], tolerance)
+
+
+def polynomial_polyline(spans: list[np.ndarray], tolerance: float = BSPLINE_TOLERANCE) -> np.ndarray:
+    """The polyline (m, 4) of (x, y, z, radius) that stands for consecutive polynomial spans, each given by its
+    coefficients (4, 4) of 1, t, t², t³ for t in [0, 1]: each span cut uniformly in t into k pieces, k the least
+    for which linear interpolation errs by at most tolerance × the span's smallest radius: on [t0, t0 + h] the
+    interpolant of a C² function f errs by at most h² max|f''| / 8, and f'' of a cubic is linear in t, so its
+    largest size over the span is at an end; the bound is applied to |c''| + |r''| together."""
     pieces = []
-    for i in range(len(points) - 3):
-        span = points[i : i + 4]
-        second = np.array([[0.0, 0.0, 2.0, 0.0], [0.0, 0.0, 2.0, 6.0]]) @ _BSPLINE @ span  # f''(0), f''(1)
+    for i, coefficients in enumerate(spans):
+        second = np.array([[0.0, 0.0, 2.0, 0.0], [0.0, 0.0, 2.0, 6.0]]) @ coefficients  # f''(0), f''(1)
         curvature = float((np.linalg.norm(second[:, :3], axis=1) + np.abs(second[:, 3])).max())
-        ends = bspline_evaluate(span, np.linspace(0.0, 1.0, 9))[:, 3]
-        radius = max(float(ends.min()), 1e-12)
+        radius = max(float(_power_evaluate(coefficients, np.linspace(0.0, 1.0, 9))[:, 3].min()), 1e-12)
         k = int(np.ceil(np.sqrt(curvature / (8.0 * tolerance * radius)))) if curvature > 0 else 1
         k = min(max(k, 1), MAX_PIECES_PER_SPAN)
         t = np.linspace(0.0, 1.0, k + 1)
-        pieces.append(bspline_evaluate(span, t if i == 0 else t[1:]))
+        pieces.append(_power_evaluate(coefficients, t if i == 0 else t[1:]))
     return np.concatenate(pieces)
+
+
+def _power_evaluate(coefficients: np.ndarray, t: np.ndarray) -> np.ndarray:
+    t = np.asarray(t, float)
+    return np.stack([np.ones_like(t), t, t * t, t * t * t], axis=-1) @ coefficients
 
 
 def read_curve_file(path: Path, where: str, minimum: int) -> list[np.ndarray]:
@@ -235,17 +244,22 @@ class CurveSurface:
 
 
 def curve_surface(
-    curves: list[np.ndarray], basis: str, matrix: np.ndarray | None = None, tolerance: float = BSPLINE_TOLERANCE
+    curves: list[np.ndarray],
+    basis: str,
+    matrix: np.ndarray | None = None,
+    tolerance: float = BSPLINE_TOLERANCE,
+    open_ends: bool | None = None,
 ) -> CurveSurface:
     """The segments of curves given by control points (each (n, 4): x, y, z, radius) in the basis "linear" or
-    "bspline", their points placed by the 4 x 4 `matrix` (radii unchanged)."""
+    "bspline", their points placed by the 4 x 4 `matrix` (radii unchanged); open_ends (default: a B-spline's):
+    the tubes stop at their ends without a sphere."""
     placed = []
     for points in curves:
         points = np.array(points, float)
         if matrix is not None:
             points[:, :3] = points[:, :3] @ matrix[:3, :3].T + matrix[:3, 3]
         placed.append(bspline_polyline(points, tolerance) if basis == "bspline" else points)
-    return CurveSurface.from_polylines(placed, open_ends=basis == "bspline")
+    return CurveSurface.from_polylines(placed, open_ends=basis == "bspline" if open_ends is None else open_ends)
 
 
 CURVE_BASES = ("linear", "bspline")

@@ -463,6 +463,7 @@ class ShapeSpec(Strict):
     # Mitsuba 3 curve file of many); "linear" joins them, "bspline" is their uniform cubic B-spline
     points: list[list[FiniteFloat]] | None = None
     basis: Literal["linear", "bspline"] | None = None
+    open_ends: StrictBool | None = None  # curve: no sphere closes its ends (default: a B-spline's)
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
@@ -470,8 +471,8 @@ class ShapeSpec(Strict):
             raise ValueError("a mesh shape needs file")
         if self.type == "curve":
             curve_spec_problem(self)
-        elif self.points is not None or self.basis is not None:
-            raise ValueError(f"points and basis are a curve's, not a {self.type}'s")
+        elif self.points is not None or self.basis is not None or self.open_ends is not None:
+            raise ValueError(f"points, basis and open_ends are a curve's, not a {self.type}'s")
         if self.type not in ("mesh", "curve") and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
         if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):
