@@ -188,3 +188,33 @@ def test_diffuse_curve_under_a_distant_light_matches_the_cylinder_closed_form():
     assert expected.max() > 0.3 and np.count_nonzero(expected == 0.0) >= 4  # lit rows and empty ones
     tolerance = 5.0 * standard_error + 1e-4 * expected.max()
     assert np.all(np.abs(mean - expected) <= tolerance), (mean, expected, standard_error)
+
+
+def test_white_hair_curves_in_a_white_furnace_vanish():
+    """Chiang et al.'s white furnace on curves: fibres of a hair BSDF that absorbs nothing, lit by a uniform sky
+    of radiance 1, scatter all they receive, so every pixel they cover has radiance 1 (within 5 standard errors
+    of the covered pixels' mean): the hit record's frame and h, and the culled back faces that let transmitted
+    light cross a fibre, lose or add nothing. The covered pixels are those the same curves in black hide."""
+    strands = [
+        np.array([[x, -1.0, 0.0, 0.08], [x + 0.1, -0.3, 0.1, 0.08], [x - 0.1, 0.3, -0.1, 0.08], [x, 1.0, 0.0, 0.08]])
+        for x in np.linspace(-0.6, 0.6, 6)
+    ]
+
+    def render(material, spp):
+        scene = spectrace.Scene(
+            camera=spectrace.Camera(origin=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0)),
+            width=32,
+            height=32,
+            spp=spp,
+            shapes=[spectrace.curve(strands, material)],
+            lights=[spectrace.constant_environment(1.0)],
+            max_depth=100,
+            rr_depth=100,
+        )
+        return np.asarray(spectrace.render(scene, progress=False).xyz)[..., 1]
+
+    covered = render(spectrace.diffuse(0.0), 4) < 0.05
+    assert np.count_nonzero(covered) > 60
+    furnace = render(spectrace.hair(sigma_a=0.0, beta_m=0.3, beta_n=0.3), 64)[covered]
+    assert furnace.std() > 0.005  # the fibres scatter (not a sky seen straight through)
+    assert abs(furnace.mean() - 1.0) <= 5.0 * furnace.std(ddof=1) / np.sqrt(furnace.size)
