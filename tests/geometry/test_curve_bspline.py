@@ -95,3 +95,23 @@ def test_bad_curves_in_a_scene_file_are_one_line_naming_the_key_and_nothing_is_w
         lines = result.stderr.strip().splitlines()
         assert len(lines) == 1 and message in lines[0] and "Traceback" not in result.stderr, result.stderr
         assert not image.exists()
+
+
+def test_a_scene_of_curves_saved_as_a_scene_file_reads_back_the_same_segments(tmp_path):
+    """spectrace.save_scene writes a curve as a curve file of its segments' polylines, which read back as the same
+    segments (open ends and radii included)."""
+    import spectrace
+
+    rng = np.random.default_rng(2)
+    points = np.concatenate([np.cumsum(rng.normal(size=(6, 3)), axis=0), rng.uniform(0.05, 0.1, (6, 1))], axis=1)
+    shapes = [
+        spectrace.curve(points, spectrace.diffuse(0.5), basis="bspline", name="spline"),
+        spectrace.curve([points[:3], points[3:]], spectrace.diffuse(0.5), name="wires"),
+    ]
+    scene = spectrace.Scene(
+        camera=spectrace.Camera(origin=(0, 0, 9), target=(0, 0, 0)), width=8, height=8, shapes=shapes
+    )
+    spectrace.save_scene(scene, tmp_path / "curves.toml")
+    again = spectrace.load_scene(tmp_path / "curves.toml")
+    for before, after in zip(scene.shapes, again.shapes, strict=True):
+        assert before.analytic == after.analytic, before.name

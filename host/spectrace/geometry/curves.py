@@ -183,6 +183,23 @@ class CurveSurface:
     def count(self) -> int:
         return len(self.ra)
 
+    def polylines(self) -> list[np.ndarray]:
+        """The segments as runs of joined (x, y, z, radius) points, a run ending where the next segment does not
+        start at its b: the curves as linear ones (what a scene file's curve of basis "linear" takes back)."""
+        starts = np.ones(self.count, bool)
+        starts[1:] = ~(np.all(self.a[1:] == self.b[:-1], axis=1) & (self.ra[1:] == self.rb[:-1]))
+        runs = np.split(np.arange(self.count), np.nonzero(starts)[0][1:])
+        return [
+            np.concatenate([np.c_[self.a[run], self.ra[run]], np.c_[self.b[run[-1:]], self.rb[run[-1:]]]])
+            for run in runs
+            if len(run)
+        ]
+
+    @property
+    def open_ends(self) -> bool:
+        """Whether the curves stop at their ends without a sphere (a B-spline's, pbrt's)."""
+        return self.cap_a is not None and self.count > 0 and not bool(self.cap_a[0])
+
     def bounds_array(self) -> np.ndarray:
         """(n, 2, 3): each segment's box (both end spheres'), widened by a relative 1e-6 against float32 rounding."""
         lo = np.minimum(self.a - self.ra[:, None], self.b - self.rb[:, None])

@@ -24,6 +24,7 @@ import numpy as np
 
 from spectrace.core.api_calls import call_of
 from spectrace.errors import SpectraceError
+from spectrace.geometry.curves import CurveSurface
 
 if TYPE_CHECKING:
     from spectrace.scene.model import Scene
@@ -176,7 +177,12 @@ class _Writer:
         from spectrace.interop.pbrt.meshes import MeshData
 
         out: dict[str, Any] = {"name": shape.name} if shape.name else {}
-        if shape.analytic is not None:
+        if isinstance(shape.analytic, CurveSurface):
+            # Its segments as linear curves in a curve file, which read back as the same segments.
+            file = f"{self.assets}/{folder_name}.txt"
+            self.files[file] = partial(_write_curves, polylines=shape.analytic.polylines())
+            out |= {"type": "curve", "file": file, "basis": "linear", "open_ends": shape.analytic.open_ends}
+        elif shape.analytic is not None:
             surface = shape.analytic
             out |= {"type": surface.kind, "transform": [{"matrix": np.asarray(surface.to_world).tolist()}]}
             if surface.flip_normals:
@@ -271,6 +277,13 @@ class _Writer:
             "instances": instances,
         }
         return {key: value for key, value in data.items() if value != [] and value != {}}
+
+
+def _write_curves(path: Path, polylines: list) -> None:
+    """A curve file (geometry/curves.py read_curve_file): `x y z radius` per line in shortest round-trip form, a
+    blank line between curves."""
+    text = "\n\n".join("\n".join(" ".join(repr(float(v)) for v in row) for row in line) for line in polylines)
+    path.write_text(text + "\n", encoding="utf-8")
 
 
 def _write_ply(path: Path, mesh: Any) -> None:
