@@ -179,6 +179,10 @@ inline PathVertex shape_vertex(const Scene *scene, Hit hit, Ray ray)
 #if SCENE_HAS_SDF_GRIDS
     if (hit_shape(scene, hit.triangle)->type == SHAPE_SDFGRID) sdf_grid_vertex_shading(scene, hit, &v);
 #endif
+#if SCENE_HAS_CURVES
+    if (hit_shape(scene, hit.triangle)->type == SHAPE_CURVE)
+        v.uv = curve_texture_uv(hit_shape(scene, hit.triangle), hit.b12, g.n, g.dpdu, v.wo);
+#endif
     v.footprint = 0.0f;
     if (SCENE_NEEDS_FOOTPRINT) {
         v.footprint = footprint_from_tangents(scene->params, v.p, v.n, g.dpdu, g.dpdv, (float2)(1.0f, 0.0f),

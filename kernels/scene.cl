@@ -389,6 +389,10 @@ inline float2 hit_uv(const Scene *scene, Hit hit)
     /* An SDF grid's b12 holds its hit point: it has no texture coordinates (shape_sdf_grid.cl). */
     if (hit_is_shape(scene, hit.triangle) && hit_shape(scene, hit.triangle)->type == SHAPE_SDFGRID) return 0.0f;
 #endif
+#if SCENE_HAS_CURVES
+    if (hit_is_shape(scene, hit.triangle) && hit_shape(scene, hit.triangle)->type == SHAPE_CURVE)
+        return curve_axis_uv(hit_shape(scene, hit.triangle), hit.b12);
+#endif
     if (hit_is_shape(scene, hit.triangle)) return hit.b12;
     return triangle_uv(scene->triangle_uvs, hit.triangle, hit.b12);
 }

@@ -31,6 +31,10 @@
 #ifndef SCENE_HAS_PARTIAL_SHAPES
 #define SCENE_HAS_PARTIAL_SHAPES 1
 #endif
+/* Curve segments among the analytic shapes (kernels/shape_curve.cl: hair, fur, wires). */
+#ifndef SCENE_HAS_CURVES
+#define SCENE_HAS_CURVES 1
+#endif
 /* Lights showing an image (environment maps; area lights' emission textures, pictures on screens among them). */
 #ifndef SCENE_HAS_LIGHT_IMAGES
 #define SCENE_HAS_LIGHT_IMAGES 1

@@ -92,6 +92,9 @@ inline int stable_roots(float a, float b, float c, float sqrt_discriminant, floa
 #if SCENE_HAS_SDF_GRIDS
 #include "shape_sdf_grid.cl"
 #endif
+#if SCENE_HAS_CURVES
+#include "shape_curve.cl"
+#endif
 
 /* The nearest hit of the shape in (0, t_max) along the ray (unit direction), or t_max; its texture coordinates in
  * *uv. */
@@ -103,6 +106,9 @@ inline float intersect_shape(__global const AnalyticShape *s, float3 origin, flo
 #endif
 #if SCENE_HAS_PARTIAL_SHAPES
     if (s->phi_max > 0.0f) return intersect_partial_shape(s, origin, direction, t_max, uv);
+#endif
+#if SCENE_HAS_CURVES
+    if (s->type == SHAPE_CURVE) return intersect_curve_shape(s, origin, direction, t_max, uv);
 #endif
     if (s->type == SHAPE_SPHERE) {
         float3 centre = s->sphere.xyz;
@@ -210,6 +216,14 @@ inline void whole_shape_local(__global const AnalyticShape *s, float2 shape_uv, 
 /* The surface at the shape's texture coordinates (whole_shape_local; a partial shape's: shape_partial.cl). */
 inline ShapeSurface shape_surface(__global const AnalyticShape *s, float2 shape_uv)
 {
+#if SCENE_HAS_CURVES
+    if (s->type == SHAPE_CURVE) {  /* its rows hold the segment itself, in the space the row is in */
+        ShapeSurface c;
+        curve_shape_local(s, shape_uv, &c.p, &c.n, &c.dpdu, &c.dpdv);
+        c.area_stretch = 1.0f;
+        return c;
+    }
+#endif
     float3 object_point, n_local, dpdu, dpdv;
 #if SCENE_HAS_SDF_GRIDS
     if (s->type == SHAPE_SDFGRID)

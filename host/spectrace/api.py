@@ -31,6 +31,7 @@ from spectrace.geometry.analytic import (
     object_tessellation,
     similarity_problem,
 )
+from spectrace.geometry.curves import checked_curves, curve_surface
 from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.sdf_grid import make_sdf_grid, read_sdf_grid
@@ -356,6 +357,31 @@ def sdf_grid(
     surface = make_sdf_grid(values, matrix, normals, where="values")
     return Shape(
         mesh=surface.tessellation(), material=material, name=name or "sdfgrid", interior=interior, analytic=surface
+    )
+
+
+def curve(
+    points,
+    material=None,
+    basis: Literal["linear", "bspline"] = "linear",
+    transform: Iterable[Mapping[str, Any]] = (),
+    name: str = "",
+    interior: Medium | None = None,
+) -> Shape:
+    """Curves (hair, fur, wires: docs/scene-format.md, "Curves"): `points` one curve's control points, rows of
+    (x, y, z, radius), or a list of curves; `basis` "linear" (a sphere swept from point to point: Mitsuba 3's
+    linearcurve) or "bspline" (the uniform cubic B-spline of the points, centre and radius: Mitsuba 3's
+    bsplinecurve). `transform` moves the points and leaves the radii as given (as Mitsuba 3 does). Intersected
+    exactly as swept spheres, one BVH primitive per segment; a curve cannot emit."""
+    if material is None and interior is None:
+        raise SpectraceError("a curve needs a material", where="material")
+    curves = checked_curves(points, basis, "points")
+    matrix = transform_matrix([dict(step) for step in transform], where="transform") if transform else None
+    surface = curve_surface(curves, basis, matrix)
+    if surface.count == 0:
+        raise SpectraceError("the curves have no segment of any length", where="points")
+    return Shape(
+        mesh=surface.tessellation(), material=material, name=name or "curve", interior=interior, analytic=surface
     )
 
 

@@ -74,7 +74,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
         tmp_path,
         """
         <bsdf type="custom_bsdf" id="metal"/>
-        <shape type="bsplinecurve"><string name="filename" value="x.txt"/></shape>
+        <shape type="ellipsoids"><string name="filename" value="x.ply"/></shape>
         <shape type="cube"><ref id="metal"/></shape>
         <emitter type="sky"><float name="turbidity" value="3"/></emitter>""",
     )
@@ -82,7 +82,7 @@ def test_unsupported_plugins_are_all_named(tmp_path):
         mitsuba_scene_data(path)
     message = str(error.value)
     for named in (
-        "shape 'bsplinecurve' (line 6)",
+        "shape 'ellipsoids' (line 6)",
         "bsdf 'custom_bsdf' (line 5)",
         "emitter 'sky' (line 8)",
     ):

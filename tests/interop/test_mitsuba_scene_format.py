@@ -332,7 +332,7 @@ def test_unknown_properties_are_warnings_and_strict_refuses_them(tmp_path):
 
 def test_unsupported_plugins_are_named_once_with_their_count_and_nested_ones_too(tmp_path):
     shapes = "".join(
-        '<shape type="bsplinecurve"><string name="filename" value="x.txt"/>'
+        '<shape type="ellipsoids"><string name="filename" value="x.ply"/>'
         '<bsdf type="measured_polarized"/><ref id="odd"/></shape>\n'
         for _ in range(3)
     )
@@ -341,10 +341,10 @@ def test_unsupported_plugins_are_named_once_with_their_count_and_nested_ones_too
     with pytest.raises(SpectraceError) as caught:
         mitsuba_scene_data(path)
     message = caught.value.message
-    assert "shape 'bsplinecurve' (3 times, first at line 5)" in message, message
+    assert "shape 'ellipsoids' (3 times, first at line 5)" in message, message
     assert "bsdf 'measured_polarized' (3 times, first at line 5)" in message, message
     assert "bsdf 'custom_bsdf' (3 times, first at line 4)" in message, message
-    assert message.count("bsplinecurve") == 1
+    assert message.count("ellipsoids") == 1
 
 
 # ---------------------------------------------------------------- envmap

@@ -628,7 +628,8 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
         ('Material "thindielectric" "spectrum eta" "glass-BK7"\nShape "sphere"\n', 5, "eta must be a number"),
         ('Material "coatedconductor" "float interface.eta" 5\nShape "sphere"\n', 5, "ior must lie in [1, 4]"),
         ('Material "coatedconductor" "integer nsamples" 0\nShape "sphere"\n', 5, "must be an integer >= 1"),
-        ('Shape "curve"\n', 5, "shape 'curve'"),
+        ('Shape "hyperboloid"\n', 5, "shape 'hyperboloid'"),
+        ('Shape "curve"\n', 5, 'a curve needs "point3 P"'),
         ('Shape "loopsubdiv" "point3 P" [0 0 0  1 0 0  0 1 0] "integer indices" [0 1 3]\n', 5, "whole numbers below 3"),
         ('LightSource "sunsky"\n', 5, "light 'sunsky'"),
         # pbrt-v4 resolves named materials after reading the whole file: the shape using one is at fault.

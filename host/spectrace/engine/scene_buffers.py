@@ -4,7 +4,7 @@ import tracemalloc
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from time import perf_counter
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -20,12 +20,14 @@ from spectrace.core.contract import (
     TRIANGLE_INFO_DTYPE,
     TRIANGLE_NO_MATERIAL,
 )
+from spectrace.engine.curve_buffers import curve_segments
 from spectrace.engine.mesh_attribute_rows import write_attribute_tables
 from spectrace.engine.vertex_tangents import corner_tangents, smooth_rows
 from spectrace.errors import SpectraceError
 from spectrace.geometry.analytic import AnalyticSurface
 from spectrace.geometry.bvh import BVH, BVH_NODE_DTYPE, build_bvh
 from spectrace.geometry.bvh4 import LEAF_BLOCK, LEAF_SIZE, device_nodes
+from spectrace.geometry.curves import CurveSurface
 from spectrace.geometry.grid_volume import medium_row
 from spectrace.geometry.sdf_grid import append_grid_blocks
 from spectrace.integrators import INTEGRATORS
@@ -202,7 +204,8 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     emitters: list[AreaEmitter] = []
     medium_index: dict[int, int] = {}
     medium_rows: list[tuple[int, int, float, int, int]] = []
-    analytic: list[tuple[AnalyticSurface, int, int, int]] = []  # surface, material, emitter, interior
+    # surface (a curve: its segments, engine/curve_buffers.py), material, emitter, interior
+    analytic: list[tuple[Any, int, int, int]] = []
     meshed: list[tuple] = []  # (shape, first triangle, count): where mesh attributes are read (mesh_attribute_rows)
     for shape in scene.shapes:
         interior = -1
@@ -233,6 +236,8 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
             emitter_id = len(emitters)
             emitters.append(shape.emitter)
         if shape.analytic is not None:
+            if isinstance(shape.analytic, CurveSurface) and emitter_id >= 0:
+                raise SpectraceError(f"shape '{shape.name}': a curve cannot emit light (give it no emitter)")
             analytic.append((shape.analytic, material_index[key], emitter_id, interior))
             continue
         v0, v1, v2, corner_uvs, corner_normals = shape.mesh.corners()
@@ -273,6 +278,8 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
     if analytic:
         # The analytic shapes get a BVH of their own over their exact boxes, from the same builder (a box as the
         # triangle (lower, upper, lower) has that box as its bounds); they are stored in its leaf order.
+        # A curve is one primitive per segment (geometry/curves.py).
+        analytic = curve_segments(analytic)
         boxes = np.array([surface.bounds() for surface, *_ in analytic])
         shape_bvh = build_bvh(boxes[:, 0], boxes[:, 1], boxes[:, 0], max_leaf_size=2)
         analytic = [analytic[i] for i in shape_bvh.prim_order]
@@ -492,6 +499,8 @@ class _ObjectTriangles:
                 where = f"object '{obj.name}', shape '{shape.name}'"
                 if shape.emitter is not None:
                     raise SpectraceError(f"{where}: emitters cannot be instanced (place the emitting shape itself)")
+                if isinstance(shape.analytic, CurveSurface):  # an object's shapes are tested one by one, not by a BVH
+                    raise SpectraceError(f"{where}: curves cannot be instanced (place the curve shape itself)")
                 interior = -1
                 if shape.interior is not None:
                     interior = medium_index.setdefault(id(shape.interior), len(medium_rows))

@@ -4,7 +4,7 @@ exactly what the kernels will read; any row (dummy rows included) keeps its type
 
 import numpy as np
 
-from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, SHAPE_SDFGRID
+from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, SHAPE_CURVE, SHAPE_SDFGRID
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES
@@ -78,6 +78,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_SHAPES": int(buffers.shape_count + buffers.instanced_shape_count > 0),
         "SCENE_HAS_PARTIAL_SHAPES": int(bool(np.any(shape_rows["phi_max"] > 0.0))),
         "SCENE_HAS_SDF_GRIDS": int(bool(np.any(shape_rows["type"] == SHAPE_SDFGRID))),
+        "SCENE_HAS_CURVES": int(bool(np.any(shape_rows["type"] == SHAPE_CURVE))),
         "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),
         "SCENE_HAS_INSTANCES": int(buffers.instance_count > 0),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),

@@ -37,6 +37,7 @@ from spectrace.lights.area import emitter as area_emitter
 from spectrace.lights.area import emitter_stokes, peak_radiance
 from spectrace.materials import MATERIALS, surface, uv_material_textures
 from spectrace.scene import schema
+from spectrace.scene.curve_shapes import curve_shape
 from spectrace.scene.model import (
     AreaEmitter,
     Camera,
@@ -427,6 +428,9 @@ class _Resolver:
         shapes = []
         for i, s in enumerate(self.spec.shapes if specs is None else specs):
             key = f"{prefix}[{i}]"
+            if s.type == "curve":
+                shapes.append(curve_shape(s, self.folder, self.where, key, materials, i))
+                continue
             # Analytic unless asked for triangles: facets (face_normals = true) exist only on a tessellation.
             analytic = s.type in ANALYTIC_SHAPES and not (s.tessellated or s.face_normals)
             sdf_values = None

@@ -17,6 +17,7 @@ from spectrace.errors import SpectraceError
 from spectrace.film.aovs import parse_aovs
 from spectrace.film.response import FilmResponse
 from spectrace.geometry.analytic import AnalyticSurface
+from spectrace.geometry.curves import CurveSurface
 from spectrace.geometry.grid_volume import GridVolume
 from spectrace.geometry.mesh import TriangleMesh
 from spectrace.integrators import INTEGRATORS
@@ -109,8 +110,8 @@ class Shape:
     name: str = ""
     interior: Medium | None = None  # fills the closed mesh, on the back side of its faces (outward winding)
     # An analytic sphere, disk or cylinder that the kernels intersect exactly; `mesh` is then its tessellation, for
-    # what reads triangles (bounds, export), and is not rendered.
-    analytic: AnalyticSurface | None = None
+    # what reads triangles (bounds, export), and is not rendered. Curves (geometry/curves.py) are analytic too.
+    analytic: AnalyticSurface | CurveSurface | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -451,7 +451,7 @@ class InteriorSpec(Strict):
 
 
 class ShapeSpec(Strict):
-    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot", "sdfgrid"]
+    type: Literal["mesh", "rectangle", "cube", "sphere", "disk", "cylinder", "prism", "teapot", "sdfgrid", "curve"]
     file: str | None = None
     shape_index: Annotated[int, Field(ge=0, strict=True)] | None = None  # which mesh of a .serialized file
     material: str | None = None
@@ -481,6 +481,11 @@ class ShapeSpec(Strict):
     # sdfgrid (geometry/sdf_grid.py): its samples inline, [z][y][x], instead of a volume file; its shading normals
     grid: list[list[list[FiniteFloat]]] | None = None
     normals: Literal["smooth", "analytic"] | None = None
+    # curve (docs/scene-format.md, "Curves"): one curve's control points, rows of x, y, z, radius (or `file`, a
+    # Mitsuba 3 curve file of many); "linear" joins them, "bspline" is their uniform cubic B-spline
+    points: list[list[FiniteFloat]] | None = None
+    basis: Literal["linear", "bspline"] | None = None
+    open_ends: StrictBool | None = None  # curve: no sphere closes its ends (default: a B-spline's)
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
@@ -492,7 +497,11 @@ class ShapeSpec(Strict):
             raise ValueError(f"grid and normals are an sdfgrid's, not a {self.type}'s")
         if self.type == "sdfgrid" and self.emitter is not None:
             raise ValueError("an sdfgrid cannot emit (it has no area sampling, as in Mitsuba 3)")
-        if self.type not in ("mesh", "sdfgrid") and self.file is not None:
+        if self.type == "curve":
+            curve_spec_problem(self)
+        elif self.points is not None or self.basis is not None or self.open_ends is not None:
+            raise ValueError(f"points, basis and open_ends are a curve's, not a {self.type}'s")
+        if self.type not in ("mesh", "sdfgrid", "curve") and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
         if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):
             raise ValueError("shape_index picks a mesh of a Mitsuba .serialized file; this shape has none")
@@ -519,6 +528,18 @@ class ShapeSpec(Strict):
             if cut_parameters(self.type, *cut_keys, radius=self.radius or 1.0) and self.interior is not None:
                 raise ValueError("a partial shape encloses no volume: an interior needs a closed shape")
         return self
+
+
+def curve_spec_problem(spec: ShapeSpec) -> None:
+    """A curve shape's keys that cannot go together (raises ValueError)."""
+    if (spec.file is None) == (spec.points is None):
+        raise ValueError("a curve needs either file (a curve file) or points (one curve's x, y, z, radius rows)")
+    if spec.emitter is not None:
+        raise ValueError("a curve cannot emit light")
+    if spec.interior is not None:
+        raise ValueError("a curve holds no interior (its back faces are not intersected)")
+    if spec.shape_index is not None or spec.face_normals is not None or spec.tessellated is not None:
+        raise ValueError("shape_index, face_normals and tessellated are not a curve's keys")
 
 
 _LIGHT_SPEC_NAMES = {"constant": "ConstantEnvironmentSpec", "envmap": "EnvironmentMapSpec"}

@@ -24,6 +24,7 @@ import numpy as np
 
 from spectrace.core.api_calls import call_of
 from spectrace.errors import SpectraceError
+from spectrace.geometry.curves import CurveSurface
 from spectrace.geometry.sdf_grid import SdfGridSurface
 
 if TYPE_CHECKING:
@@ -182,6 +183,11 @@ class _Writer:
             self.files[file] = partial(_write_vol, values=shape.analytic.values)
             out |= {"type": "sdfgrid", "file": file, "normals": shape.analytic.normals}
             out["transform"] = [{"matrix": np.asarray(shape.analytic.to_world).tolist()}]
+        elif isinstance(shape.analytic, CurveSurface):
+            # Its segments as linear curves in a curve file, which read back as the same segments.
+            file = f"{self.assets}/{folder_name}.txt"
+            self.files[file] = partial(_write_curves, polylines=shape.analytic.polylines())
+            out |= {"type": "curve", "file": file, "basis": "linear", "open_ends": shape.analytic.open_ends}
         elif shape.analytic is not None:
             surface = shape.analytic
             out |= {"type": surface.kind, "transform": [{"matrix": np.asarray(surface.to_world).tolist()}]}
@@ -286,6 +292,13 @@ def _write_vol(path: Path, values: np.ndarray) -> None:
     from spectrace.geometry.grid_volume import vol_bytes
 
     path.write_bytes(vol_bytes(values))
+
+
+def _write_curves(path: Path, polylines: list) -> None:
+    """A curve file (geometry/curves.py read_curve_file): `x y z radius` per line in shortest round-trip form, a
+    blank line between curves."""
+    text = "\n\n".join("\n".join(" ".join(repr(float(v)) for v in row) for row in line) for line in polylines)
+    path.write_text(text + "\n", encoding="utf-8")
 
 
 def _write_ply(path: Path, mesh: Any) -> None:

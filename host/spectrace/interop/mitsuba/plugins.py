@@ -44,7 +44,7 @@ INTEGRATOR_WRAPPERS = ("moment", "aov", "stokes")
 SUPPORTED = {
     "shape": (
         *("obj", "ply", "serialized", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid"),
-        *("shapegroup", "instance"),
+        *("linearcurve", "bsplinecurve", "shapegroup", "instance"),
     ),
     "bsdf": (*BSDF_MODULES, *BSDF_WRAPPERS, "null"),  # null: a shape without material (shapes.py)
     "emitter": (*SHAPE_EMITTER_MODULES, *EMITTER_MODULES),

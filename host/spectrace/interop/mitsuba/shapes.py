@@ -1,7 +1,7 @@
-"""Shapes: obj, ply, serialized (shape_index), rectangle, cube, the analytic sphere (center, radius), disk and
-cylinder (p0, p1, radius), the sdfgrid (filename, normals), face_normals on obj, ply, serialized and sphere; each
-with its bsdf (materials.py), its emitter (emitters.py) and its interior medium (media.py). A shapegroup is a
-spectrace object, placed by each instance."""
+"""Shapes: obj, ply, serialized (shape_index), rectangle, cube, the analytic sphere (center, radius), disk and cylinder
+(p0, p1, radius), the sdfgrid (filename, normals), the linearcurve and bsplinecurve (their curve files),
+face_normals on obj, ply, serialized and sphere; each with its bsdf (materials.py), its emitter (emitters.py) and
+its interior medium (media.py). A shapegroup is a spectrace object, placed by each instance."""
 
 from __future__ import annotations
 
@@ -21,6 +21,8 @@ from spectrace.interop.mitsuba.tree import Element
 # Mitsuba's rectangle has v = 0 at y = -1, spectrace's at y = +1; Mitsuba reads a PLY's v as stored, spectrace
 # flips it (as both do an OBJ's vt). Textures on them are imported with v flipped.
 V_UP_SHAPES = ("rectangle", "ply", "serialized")
+# Mitsuba 3's curve plugins and their basis in spectrace's curve shape.
+CURVE_BASES = {"linearcurve": "linear", "bsplinecurve": "bspline"}
 
 
 def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
@@ -45,6 +47,11 @@ def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
             table["normals"] = ctx.choice(properties["normals"], ("smooth", "analytic"))
         if ctx.nested(properties, "emitter"):
             raise ctx.fail(ctx.nested(properties, "emitter")[0], "an sdfgrid cannot emit (nor in Mitsuba 3)")
+    elif kind in CURVE_BASES:
+        # Mitsuba 3's curve file, read as it reads it; its to_world moves the points, not the radii, as spectrace's
+        # transform does.
+        filename = ctx.child(properties, "filename", element)
+        table |= {"type": "curve", "file": ctx.input_file(filename, "curve file"), "basis": CURVE_BASES[kind]}
     else:
         table["type"] = kind
     if kind == "sphere":

@@ -1,4 +1,5 @@
-"""pbrt-v4's shapes as spectrace's: spheres, disks and cylinders, whole or partial, as its analytic shapes; meshes
+"""pbrt-v4's shapes as spectrace's: spheres, disks and cylinders, whole or partial, as its analytic shapes; curves
+as its curves (spectrace.interop.pbrt.curves); meshes
 pbrt gives inline (trianglemesh, bilinearmesh), `loopsubdiv` and the few shapes spectrace has no exact surface for
 (degenerate ones, an ellipsoid with cuts or texture coordinates) as binary PLY files beside the TOML
 (spectrace.interop.pbrt.meshes); PLY files a scene names rewritten there too (pbrt's ReverseOrientation and
@@ -15,6 +16,7 @@ import numpy as np
 from spectrace.geometry.analytic import similarity_problem
 from spectrace.geometry.mesh import winding_against_normals
 from spectrace.interop.pbrt.context import Context, unique_name
+from spectrace.interop.pbrt.curves import curve_geometry
 from spectrace.interop.pbrt.graphics_state import Entity, Shape
 from spectrace.interop.pbrt.lights import area_light
 from spectrace.interop.pbrt.materials import material_name
@@ -30,7 +32,7 @@ from spectrace.interop.pbrt.meshes import (
 from spectrace.interop.pbrt.parser import error, shown
 from spectrace.interop.pbrt.subsurface import interior_of_material
 
-SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder")
+SHAPES = ("trianglemesh", "plymesh", "bilinearmesh", "loopsubdiv", "sphere", "disk", "cylinder", "curve")
 
 
 def shape_table(context: Context, shape: Shape, index: int) -> dict | None:
@@ -97,6 +99,8 @@ def shape_geometry(context: Context, shape: Shape, needs_uv: bool = False) -> tu
     The one place that decides how each pbrt shape becomes spectrace geometry (analytic shapes change it)."""
     entity = shape.entity
     matrix = context.world @ shape.world_from_object
+    if entity.kind == "curve":
+        return curve_geometry(context, shape, matrix), None
     if (analytic := analytic_geometry(context, shape, matrix, needs_uv)) is not None:
         return analytic, None
     key = id(entity), shape.reverse_orientation, needs_uv
