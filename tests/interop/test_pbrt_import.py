@@ -660,14 +660,11 @@ def test_command_prints_warnings_and_strict_fails_in_one_line(tmp_path, monkeypa
     assert code != 0 and len(stderr.strip().splitlines()) == 1 and "sigma" in stderr
 
 
-def test_realistic_camera_is_one_line(tmp_path, monkeypatch, capsys):
+def test_realistic_camera_without_its_lens_file_is_one_line(tmp_path, monkeypatch, capsys):
     path = _write(tmp_path, PLANE, HEADER.replace('"perspective"', '"realistic"'))
     code, stderr = run_in_process(monkeypatch, capsys, ["import-pbrt", str(path), "-o", str(tmp_path / "x.toml")])
     assert code != 0
-    assert stderr.strip() == (
-        f"error: {path}:2: camera 'realistic': spectrace imports pbrt's perspective, orthographic and spherical "
-        '(mapping "equirect" or "equalarea") cameras'
-    )
+    assert stderr.strip() == f'error: {path}:2: the realistic camera needs "string lensfile" (as pbrt-v4)'
 
 
 SQUARE_PLY_WITHOUT_UV = """ply
