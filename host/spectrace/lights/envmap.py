@@ -38,7 +38,18 @@ PARAMETERS = (
         list(DEFAULT_FRONT),
         doc="the direction the image's centre shows (made perpendicular to `up`)",
     ),
+    Parameter(
+        "rows",
+        "string",
+        "",
+        "bands",
+        type_doc='`"bands"` or `"poles"`',
+        default_doc='`"bands"`',
+        doc="where the rows lie: `bands`, H bands of equal angle; `poles` (Mitsuba 3's), samples from the zenith "
+        "to the nadir, read as the H − 1 bands between them",
+    ),
 )
+ROWS = ("bands", "poles")
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,10 +113,37 @@ def magnitude_problem(rgb: np.ndarray, scale: float) -> str | None:
     return None
 
 
+def pole_rows_as_bands(rgb: np.ndarray) -> np.ndarray:
+    """A map whose H rows are samples at the angles θᵢ = π i / (H − 1) from the zenith, interpolated linearly in θ
+    between them (Mitsuba 3's envmap), as the H − 1 bands of equal angle between neighbouring rows: each band the
+    interpolation's mean over the band's solid angle, so that every band sends the light the interpolated map sends
+    through it (the map's power and any band's irradiance kept, up to how the light varies within one band).
+    Columns are left as they are: both conventions centre column j on the azimuth (j + ½)/W of a turn."""
+    height = rgb.shape[0]
+    step = np.pi / (height - 1)
+    top = np.arange(height - 1) * step  # each band's θ from its upper row to its lower one
+    bottom = top + step
+    # ∫ sin θ dθ over the band, and ∫ (θ − top)/step sin θ dθ: the weight of the lower row in the band's mean.
+    solid = np.cos(top) - np.cos(bottom)
+    lower = (np.sin(bottom) - np.sin(top) - step * np.cos(bottom)) / (step * solid)
+    lower = lower[:, None, None]
+    return ((1.0 - lower) * rgb[:-1] + lower * rgb[1:]).astype(rgb.dtype)
+
+
 def from_spec(spec, resolver, key: str) -> EnvironmentMap:
     if problem := orientation_problem(spec.up, spec.front):
         raise SpectraceError(problem, where=resolver.where(f"{key}.front"))
+    if spec.rows not in ROWS:
+        raise SpectraceError(
+            f"rows must be one of {', '.join(ROWS)}, got {spec.rows!r}", where=resolver.where(f"{key}.rows")
+        )
     rgb = read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file"))
+    if spec.rows == "poles":
+        if rgb.shape[0] < 2:
+            raise SpectraceError(
+                f"rows = poles needs a map of 2 rows or more, got {rgb.shape[0]}", where=resolver.where(f"{key}.rows")
+            )
+        rgb = pole_rows_as_bands(rgb)
     if problem := magnitude_problem(rgb, spec.scale):
         name = "file" if float(np.max(rgb, initial=0.0)) > limits.MAX_SPECTRUM_VALUE else "scale"
         raise SpectraceError(problem, where=resolver.where(f"{key}.{name}"))
@@ -158,6 +196,8 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     +z at half, −x at three quarters); its to_world turns those into world directions, which become `front` and
     `up` (a translation does nothing to light from infinitely far away)."""
     table: dict = {"type": NAME, "file": importer.input_file(importer.child(properties, "filename", emitter), "image")}
+    # Mitsuba's first and last rows sit on the poles (its texel rows are π / (height − 1) apart).
+    table["rows"] = "poles"
     if "scale" in properties:
         scale = importer.number(properties["scale"])
         if not scale >= 0.0:
@@ -172,8 +212,9 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     if not np.allclose(up, DEFAULT_UP, atol=0.0) or not np.allclose(front, DEFAULT_FRONT, atol=0.0):
         table |= {"up": up, "front": front}
     importer.notes.append(
-        f"{importer.at(emitter)}: envmap: spectrace looks the map up at the nearest texel (Mitsuba interpolates "
-        "bilinearly)"
+        f"{importer.at(emitter)}: envmap: spectrace reads the map as the bands between its rows, each the mean of "
+        "Mitsuba's interpolation over it, "
+        "looked up at the nearest band (Mitsuba interpolates bilinearly between the rows)"
     )
     return table
 
