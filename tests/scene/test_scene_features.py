@@ -319,6 +319,24 @@ def _measured_scene() -> spectrace.Scene:
     return replace(base, shapes=[*shapes, *base.shapes[2:]])
 
 
+def _textured_weights_scene() -> spectrace.Scene:
+    """The anisotropic scene with principled and principledthin materials of plain base colours whose weights are
+    textured: textures kept in the materials' own parameter blocks, named by no row field (Mitsuba's textured
+    principled test scenes)."""
+    base = _anisotropic_scene()
+    rng = np.random.default_rng(11)
+
+    def weight():
+        return spectrace.bitmap(rng.uniform(0.0, 1.0, (4, 4)))
+
+    diff_trans = spectrace.bitmap(rng.uniform(0.0, 2.0, (4, 4)))
+    sheet = spectrace.principledthin((0.7, 0.1, 0.1), anisotropic=weight(), spec_trans=weight(), diff_trans=diff_trans)
+    metal = spectrace.principled(0.8, roughness=weight(), metallic=weight(), anisotropic=0.5)
+    sphere = replace(base.shapes[1], material=sheet)
+    # Without the textured can, whose texture would keep the uvs in anyway.
+    return replace(base, shapes=[replace(base.shapes[0], material=metal), sphere, *base.shapes[3:]])
+
+
 def _grid_medium_scene() -> spectrace.Scene:
     """A scattering cube of a random density grid beside a homogeneous sphere, under a lamp."""
     density = np.random.default_rng(4).uniform(0.0, 3.0, (4, 5, 6))
@@ -552,6 +570,8 @@ SCENES = {
     "anisotropic_principled": _anisotropic_scene,
     "anisotropic_conductor": _anisotropic_conductor_scene,
     "measured": _measured_scene,
+    # Textures that only the materials' parameter blocks name (their weights'): the scene's kernels look them up.
+    "textured_principled_weights": _textured_weights_scene,
 }
 
 
@@ -583,6 +603,7 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
         "anisotropic_principled",
         "anisotropic_conductor",
         "measured",
+        "textured_principled_weights",
     ],
 )
 def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):

@@ -2,12 +2,14 @@
 kernels carry code only for its own materials, lights and media. Derived from the uploaded buffers, which are
 exactly what the kernels will read; any row (dummy rows included) keeps its type's code in."""
 
+from typing import Any
+
 import numpy as np
 
 from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, SHAPE_CURVE, SHAPE_SDFGRID
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
-from spectrace.materials import MATERIAL_CODES
+from spectrace.materials import MATERIAL_CODES, MATERIALS
 from spectrace.textures import SOLID_TEXTURE_CODES, TEXTURES
 
 
@@ -16,14 +18,30 @@ def _type_bits(types: np.ndarray) -> int:
     return sum(1 << code for code in {int(t) for t in types.ravel()})
 
 
-def _materials_have_textures(materials: np.ndarray) -> bool:
-    """Some material reads a texture (any of its `*_texture` fields, or a normal or bump map): only then do the path
-    vertices need texture coordinates and footprints (the lights' images are looked up at the light's own uv)."""
+def _materials_have_textures(materials: np.ndarray, spectra: np.ndarray) -> bool:
+    """Some material reads a texture (any of its `*_texture` fields, a normal or bump map, or a texture it keeps in
+    a parameter block of its own): only then do the path vertices need texture coordinates and footprints (the
+    lights' images are looked up at the light's own uv)."""
     fields = [name for name in materials.dtype.names or () if name.endswith("_texture")] + ["normal_map", "bump_map"]
     # Hair reads its offset across the fibre from the v coordinate (kernels/bsdf_hair.cl).
     if "hair" in MATERIAL_CODES and bool(np.any(materials["type"] == MATERIAL_CODES["hair"])):
         return True
-    return any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields) or _direction_textures(materials)
+    if any(bool(np.any(materials[name] != NO_TEXTURE)) for name in fields) or _direction_textures(materials):
+        return True
+    return _block_textures(materials, spectra)
+
+
+def _block_textures(materials: np.ndarray, spectra: np.ndarray) -> bool:
+    """A material that places its own textures (WRITES_OWN_TEXTURES: the principled weights' go into a parameter
+    block of the spectrum table) reads one."""
+    for name, module in MATERIALS.items():
+        if not getattr(module, "WRITES_OWN_TEXTURES", False):
+            continue
+        own: Any = module  # block_textures comes with WRITES_OWN_TEXTURES, beyond what MaterialPlugin states
+        for row in materials[materials["type"] == MATERIAL_CODES[name]]:
+            if np.any(own.block_textures(row, spectra) != NO_TEXTURE):
+                return True
+    return False
 
 
 def _direction_textures(materials: np.ndarray) -> bool:
@@ -69,7 +87,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_FLUORESCENCE_MATRIX": int(
             bool(np.any((materials["type"] == MATERIAL_CODES["fluorescent"]) & (materials["ior_model"] >= 0)))
         ),
-        "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials)),
+        "SCENE_HAS_TEXTURES": int(_materials_have_textures(buffers.materials, buffers.spectra)),
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or checkerboard_bumps),
         "SCENE_HAS_PROCEDURAL_TEXTURES": int(bool(np.any(textures["type"] == TEXTURES.codes["dots"]))),
         "SCENE_HAS_SOLID_TEXTURES": int(bool(np.isin(textures["type"], SOLID_TEXTURE_CODES).any())),

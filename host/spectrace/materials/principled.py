@@ -350,6 +350,20 @@ def write_weights(row: np.ndarray, material, scalars, table: SpectrumTable, text
     row["tangent_frame"] = int(is_anisotropic(material.anisotropic))
 
 
+def weight_textures(row: np.ndarray, spectra: np.ndarray, scalars=SCALARS) -> np.ndarray:
+    """The texture indices write_weights left in `row`'s parameter block of the uploaded spectrum table, one per
+    weight of `scalars` (NO_TEXTURE for a number): textures no `*_texture` field of the row names."""
+    offset = int(row["coat_table_offset"])
+    if offset < 0:  # no block written (a dummy row)
+        return np.full(len(scalars), NO_TEXTURE, np.int64)
+    return spectra[offset + 1 : offset + 2 * len(scalars) : 2].astype(np.int64)
+
+
+def block_textures(row: np.ndarray, spectra: np.ndarray) -> np.ndarray:
+    """The textures this material keeps outside its row's fields (WRITES_OWN_TEXTURES): its weights'."""
+    return weight_textures(row, spectra, SCALARS)
+
+
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's `principled`: the same parameters under the same names, each weight a number or a texture; its
     sampling rates (which change no expected value) are read and left out, and `flatness` refused unless 0."""

@@ -149,6 +149,11 @@ def write_row(row: np.ndarray, material: PrincipledthinMaterial, table: Spectrum
     principled.write_weights(row, material, SCALARS, table, textures, extra=(material.eta,))
 
 
+def block_textures(row: np.ndarray, spectra: np.ndarray) -> np.ndarray:
+    """The textures this material keeps outside its row's fields (WRITES_OWN_TEXTURES): its weights'."""
+    return principled.weight_textures(row, spectra, SCALARS)
+
+
 def from_mitsuba(importer, bsdf, properties) -> dict | None:
     """Mitsuba's `principledthin`: the same parameters under the same names, each weight a number or a texture
     (`eta` a number); its sampling rates (which change no expected value) are read and left out, and `flatness`
