@@ -1,10 +1,9 @@
 /* A goniometric light (pbrt-v4's GoniometricLight, lights.h): a point light at Light.position whose radiant
  * intensity, W/(sr nm), varies over directions as a grey image in Clarberg's equal-area octahedral mapping
  * (equal_area.cl): I(d) = I(λ)·scale·image(uv(d)), the texel nearest to uv (pbrt-v4 reads it so). The map's frame:
- * z = Light.direction (the image's centre), x at the angle direction.w from the tangent of its orthonormal basis
- * toward the bitangent (as a spot's slide, light_spot.cl), y = z × x, or −(z × x) where Light.linear_falloff marks a
- * mirrored (left-handed) frame. The image: map_width × map_height texels from Light.texel_offset, grey in the red
- * channel; map_width 0: none (isotropic).
+ * a spot's slide's (light_slide_frame.cl), z = Light.direction the image's centre, with y = −(z × x) where
+ * Light.linear_falloff marks a mirrored (left-handed) frame. The image: map_width × map_height texels from
+ * Light.texel_offset, grey in the red channel; map_width 0: none (isotropic).
  * A delta position, as light_point.cl; light paths leave in directions drawn by the image's table
  * (distribution_2d.cl over the equal-area square, its floats from texel Light.triangle of the texel buffer, ∝ the
  * image), density p(uv)/(4π) per steradian as every cell covers the same solid angle, or uniformly over the sphere
@@ -15,15 +14,13 @@
 #include "light_point.cl"
 #include "equal_area.cl"
 #include "distribution_2d.cl"
+#include "light_slide_frame.cl"
 
-/* The map's frame (see the header). */
+/* The map's frame (see the header): the slide's, its y turned round where mirrored. */
 inline void goniometric_frame(__global const Light *light, float3 *x, float3 *y, float3 *z)
 {
-    float3 tangent, bitangent;
-    *z = light->direction.xyz;
-    orthonormal_basis(*z, &tangent, &bitangent);
-    *x = cos(light->direction.w) * tangent + sin(light->direction.w) * bitangent;
-    *y = (light->linear_falloff ? -1.0f : 1.0f) * cross(*z, *x);
+    light_slide_frame(light, x, y, z);
+    *y *= light->linear_falloff ? -1.0f : 1.0f;
 }
 
 /* I(d), W/(sr nm), along unit d leaving the light. */

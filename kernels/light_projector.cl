@@ -1,7 +1,6 @@
 /* A projector (Mitsuba 3's `projector`, projector.cpp; pbrt-v4's ProjectionLight, lights.cpp): a point light at
- * Light.position sending an image through a rectangular field of view about the unit axis Light.direction. Its frame:
- * z the axis, x at the angle direction.w from the tangent of the axis' orthonormal basis toward its bitangent (as a
- * spot's slide, light_spot.cl), y = z × x, down the image. A direction d meets the plane z = 1 at (x, y) = d.xy/d.z;
+ * Light.position sending an image through a rectangular field of view about the unit axis Light.direction. Its frame
+ * is a spot's slide's (light_slide_frame.cl): z the axis, x across the image, y = z × x down it. A direction d meets the plane z = 1 at (x, y) = d.xy/d.z;
  * the image spans |x| <= tan_x = Light.cos_falloff_start, |y| <= tan_y = Light.cos_cutoff there, at
  * uv = (0.5, 0.5) + ½ (x/tan_x, y/tan_y). Radiant intensity, W/(sr nm), I(d) = I(λ)·image(uv)/cos³θ where
  * Light.linear_falloff is set (Mitsuba's profile: the plane z = 1 receives I(λ)·image(uv) in W/(m² nm)), else
@@ -17,23 +16,14 @@
 
 #include "light_point.cl"
 #include "distribution_2d.cl"
-
-/* The projector's frame (x across the image's width, y down it, z its axis). */
-inline void projector_frame(__global const Light *light, float3 *x, float3 *y, float3 *z)
-{
-    float3 tangent, bitangent;
-    *z = light->direction.xyz;
-    orthonormal_basis(*z, &tangent, &bitangent);
-    *x = cos(light->direction.w) * tangent + sin(light->direction.w) * bitangent;
-    *y = cross(*z, *x);
-}
+#include "light_slide_frame.cl"
 
 /* I(d), W/(sr nm), along unit d leaving the light (see the header); 0 outside the field of view. */
 inline float4 light_projector_intensity(__global const Light *light, const TextureBuffers *textures,
                                         const SampledWavelengths *w, float3 d)
 {
     float3 x, y, z;
-    projector_frame(light, &x, &y, &z);
+    light_slide_frame(light, &x, &y, &z);
     float cos_theta = dot(d, z);
     if (!(cos_theta > 0.0f)) return (float4)(0.0f);
     float2 plane = (float2)(dot(d, x), dot(d, y)) / cos_theta;
@@ -66,7 +56,7 @@ inline float3 light_projector_draw_direction(__global const Light *light, __glob
                                              float *pdf)
 {
     float3 x, y, z;
-    projector_frame(light, &x, &y, &z);
+    light_slide_frame(light, &x, &y, &z);
     float density_uv = 1.0f, row_mass, column_mass;
     if (light->triangle >= 0) {
         u = distribution_2d_sample((__global const float *)(texels + light->triangle), light->map_width,
@@ -91,7 +81,7 @@ inline float3 light_projector_sample_direction(__global const Light *light, __gl
 inline float light_projector_pdf_direction(__global const Light *light, __global const float4 *texels, float3 d)
 {
     float3 x, y, z;
-    projector_frame(light, &x, &y, &z);
+    light_slide_frame(light, &x, &y, &z);
     float cos_theta = dot(d, z);
     if (!(cos_theta > 0.0f)) return 0.0f;
     float2 half_size = (float2)(light->cos_falloff_start, light->cos_cutoff);

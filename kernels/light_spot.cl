@@ -7,6 +7,7 @@
 #define SPECTRACE_LIGHT_SPOT_CL
 
 #include "light_point.cl"
+#include "light_slide_frame.cl"
 
 /* Spot falloff between the cutoff and the falloff start: smoothstep in cos θ (pbrt-v4's profile), or, where
  * linear_falloff is set, linear in the angle θ itself (Mitsuba 3's spot.cpp profile, so its scenes import exactly).
@@ -24,17 +25,14 @@ inline float spot_falloff(__global const Light *light, float cos_theta)
 }
 
 /* A spot's slide, Mitsuba 3's spot `texture` (spot.cpp): a reflectance image the intensity passes through,
- * projected over the cone at uv = (0.5, 0.5) + ½ (x, y) / (z tan θ_cutoff) in the light's frame: z its axis, x at
- * the angle direction.w from the tangent of the axis' orthonormal basis toward its bitangent (the host's
- * lights/spot.py measures it so), y = z × x, down the image. Looked up at its finest level.
+ * projected over the cone at uv = (0.5, 0.5) + ½ (x, y) / (z tan θ_cutoff) in the light's frame (light_slide_frame.cl:
+ * z its axis, y = z × x down the image). Looked up at its finest level.
  * Contract: light->texture is a reflectance texture, d unit and leaving the light; 0 behind the light. */
 inline float4 spot_slide(__global const Light *light, const TextureBuffers *textures, const SampledWavelengths *w,
                          float3 d)
 {
-    float3 z = light->direction.xyz, tangent, bitangent;
-    orthonormal_basis(z, &tangent, &bitangent);
-    float3 x = cos(light->direction.w) * tangent + sin(light->direction.w) * bitangent;
-    float3 y = cross(z, x);
+    float3 x, y, z;
+    light_slide_frame(light, &x, &y, &z);
     float cos_theta = dot(d, z);
     if (!(cos_theta > 0.0f)) return (float4)(0.0f);
     float tan_cutoff = sqrt(fmax(0.0f, 1.0f - light->cos_cutoff * light->cos_cutoff)) / light->cos_cutoff;

@@ -2,6 +2,7 @@
 checks each module of spectrace.lights.LIGHTS against), the device light types (`DeviceLight`), its Light rows
 (kernels/types.h) and the checks of positions and directions."""
 
+import hashlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -170,11 +171,24 @@ class LightRows:
         self.power.append(power)
 
     def add_texels(self, rgb: np.ndarray) -> int:
-        """Appends an (height, width, 3) image to the texel buffer; its offset there."""
-        offset = sum(len(c) for c in self.texel_chunks)
+        """Puts an (height, width, 3) image in the texel buffer (see add_chunk); its offset there."""
         chunk = np.zeros((rgb.shape[0] * rgb.shape[1], 4), np.float32)
         chunk[:, :3] = np.maximum(rgb.reshape(-1, 3), 0.0)
-        self.texel_chunks.append(chunk)
+        return self.add_chunk(chunk)
+
+    def add_chunk(self, chunk: np.ndarray) -> int:
+        """Puts (n, 4) float32 texels of a light (an image, a sampling table) in the texel buffer unless the same
+        numbers are there from a light already; their offset in float4s. A live session's edit writes a light's rows
+        again, and so its images and tables: found by their content, they are stored once however often that is,
+        and a kernel reading the first copy reads the same bits as from a fresh build."""
+        chunk = np.ascontiguousarray(chunk, np.float32)
+        key = (chunk.shape, hashlib.blake2b(chunk.tobytes(), digest_size=32).digest())
+        stored = self.textures.light_texels
+        offset = stored.get(key)
+        if offset is None:
+            offset = sum(len(c) for c in self.texel_chunks)
+            self.texel_chunks.append(chunk)
+            stored[key] = offset
         return offset
 
 

@@ -24,22 +24,14 @@ def piecewise_constant_2d(weights: np.ndarray) -> np.ndarray:
     return np.concatenate([marginal, row_cdf.ravel()]).astype(np.float32)
 
 
-def add_distribution(weights: np.ndarray, out, key: tuple | None = None) -> int:
-    """Appends the tables of `weights` to the texel buffer of LightRows `out` (four floats a texel); the first
-    texel's index, which a Light row's `triangle` holds; NO_DISTRIBUTION when the weights are all zero. A `key` (what
-    the weights were made from, holding the image itself, which compares by identity) finds tables added before, so
-    that a live session's edits of a light's other keys do not grow the buffer."""
-    tables = out.textures.light_tables
-    if key is not None and key in tables:
-        return tables[key]
+def add_distribution(weights: np.ndarray, out) -> int:
+    """Puts the tables of `weights` in the texel buffer of LightRows `out` (four floats a texel, once: see
+    LightRows.add_chunk); the first texel's index, which a Light row's `triangle` holds; NO_DISTRIBUTION when the
+    weights are all zero."""
     weights = np.asarray(weights, np.float64)
-    offset = NO_DISTRIBUTION
-    if weights.sum() > 0:
-        floats = piecewise_constant_2d(weights)
-        chunk = np.zeros((len(floats) + 3) // 4 * 4, np.float32)
-        chunk[: len(floats)] = floats
-        offset = sum(len(c) for c in out.texel_chunks)
-        out.texel_chunks.append(chunk.reshape(-1, 4))
-    if key is not None:
-        tables[key] = offset
-    return offset
+    if not weights.sum() > 0:
+        return NO_DISTRIBUTION
+    floats = piecewise_constant_2d(weights)
+    chunk = np.zeros((len(floats) + 3) // 4 * 4, np.float32)
+    chunk[: len(floats)] = floats
+    return out.add_chunk(chunk.reshape(-1, 4))

@@ -179,9 +179,8 @@ def write_rows(light: ProjectorLight, out: LightRows) -> None:
             # I = intensity·image here, and dω = cos³θ dA on the plane: the cells' weights take the Jacobian (the
             # irradiance profile's 1/cos³θ cancels it).
             table = table * _cos_cubed(table.shape, light.tan_x, light.tan_y)
-        key = (light.image, light.profile, light.tan_x, light.tan_y)
         table_fields = {
-            "triangle": add_distribution(table, out, key),
+            "triangle": add_distribution(table, out),
             "map_fields": (0, 0, table.shape[1], table.shape[0]),
         }
     out.add(

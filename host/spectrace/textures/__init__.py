@@ -302,7 +302,7 @@ class TextureRows:
         self.sizes: list[int] = []  # each row's texels in float4s (0: a composite's row, which has none)
         self.free: list[int] = []  # rows whose texture the scene uses no more (`release`): slots to take again
         self.rewritten = False  # a free slot was taken: rows and texels changed where they lie
-        self.light_tables: dict = {}  # lights' sampling tables in the texels (spectrace.lights.distribution), by source
+        self.light_texels: dict = {}  # lights' images and sampling tables in the texels, by content (LightRows)
         self.attribute_rows: list[tuple[int, object, str]] = []  # mesh attribute rows to fill: (row, texture, kind)
         self.attributes_written = False  # their tables follow the triangles', written once the scene is built
 
