@@ -10,7 +10,7 @@ from spectrace.errors import SpectraceError
 from spectrace.materials import layered
 from spectrace.materials.layered import LayeredMaterial
 from spectrace.spectral import spectrum_input
-from spectrace.spectral.metals import METALS, metal_ior, metal_names_doc
+from spectrace.spectral.metals import COMMON_METALS, metal_ior, metal_names_doc
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
@@ -196,7 +196,7 @@ def from_pbrt(context, material) -> dict | None:
             eta, k = uplifted_optical_constants(eta, k, str(material.location))
         metals = {s.get("spectrum", "").split(":")[0] for s in (eta, k)}
         metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
-        table |= {"metal": metal} if metal in METALS else {"eta": eta, "k": k}
+        table |= {"metal": metal} if metal in COMMON_METALS else {"eta": eta, "k": k}
     if (alpha := layered.pbrt_roughness(context, material, "conductor.")) > 0.0:
         table["conductor_roughness"] = alpha
     table |= layered.pbrt_layers(context, material, "interface.eta")

@@ -267,7 +267,7 @@ def from_pbrt(context, material) -> dict | None:
     table: dict[str, object] = {"type": "conductor"}
     metals = {s.get("spectrum", "").split(":")[0] for s in (eta, k)}
     metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
-    if metal in METALS:
+    if metal in COMMON_METALS:  # pbrt's other named metals (CuZn, MgO, TiO2) stay spectra, as pbrt names them
         table["metal"] = metal
     else:
         table |= {"eta": eta, "k": k}
