@@ -169,12 +169,12 @@ def test_unrepresentable_conductors_are_named(tmp_path):
     path = _write(
         tmp_path,
         """
-        <bsdf type="conductor" id="chrome"><string name="material" value="Cr"/></bsdf>
+        <bsdf type="conductor" id="chrome"><string name="material" value="Pt"/></bsdf>
         <shape type="cube"><ref id="chrome"/></shape>""",
     )
     with pytest.raises(SpectraceError) as error:
         mitsuba_scene_data(path)
-    assert "with material 'Cr'" in str(error.value)
+    assert "with material 'Pt'" in str(error.value)
 
 
 def test_anisotropic_roughconductor_carries_both_alphas(tmp_path):

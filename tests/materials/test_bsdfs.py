@@ -26,7 +26,7 @@ from spectrace.scene.model import (
     RetroreflectorMaterial,
 )
 from spectrace.spectral.glasses import index_of_refraction
-from spectrace.spectral.metals import METALS, metal_ior
+from spectrace.spectral.metals import COMMON_METALS, metal_ior
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.table import SpectrumTable
 from stats_toolkit import (
@@ -435,7 +435,7 @@ def _fresnel_complex(cos_i: float, eta: np.ndarray, k: np.ndarray) -> np.ndarray
     return 0.5 * (np.abs(r_s) ** 2 + np.abs(r_p) ** 2)
 
 
-@pytest.mark.parametrize("metal", METALS)
+@pytest.mark.parametrize("metal", COMMON_METALS)
 def test_conductor_normal_incidence_reflectance(bsdf, metal):
     eta, k = _csv_optical_constants(metal)
     expected = ((eta - 1.0) ** 2 + k**2) / ((eta + 1.0) ** 2 + k**2)
@@ -444,7 +444,7 @@ def test_conductor_normal_incidence_reflectance(bsdf, metal):
     np.testing.assert_allclose(s.weight[0], expected, rtol=1e-5)
 
 
-@pytest.mark.parametrize("metal", METALS)
+@pytest.mark.parametrize("metal", COMMON_METALS)
 def test_conductor_oblique_reflectance(bsdf, metal):
     eta, k = _csv_optical_constants(metal)
     for theta in (30.0, 60.0, 75.0, 85.0):

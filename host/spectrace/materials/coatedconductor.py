@@ -10,7 +10,7 @@ from spectrace.errors import SpectraceError
 from spectrace.materials import layered
 from spectrace.materials.layered import LayeredMaterial
 from spectrace.spectral import spectrum_input
-from spectrace.spectral.metals import METALS, metal_ior
+from spectrace.spectral.metals import COMMON_METALS, metal_ior, metal_names_doc
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
@@ -31,7 +31,7 @@ PARAMETERS = (
         "metal",
         default=None,
         default_doc=f'`"{DEFAULT_METAL}"` where no `eta`, `k` or `reflectance` is given',
-        type_doc=", ".join(f'`"{m}"`' for m in METALS[:-1]) + f' or `"{METALS[-1]}"`',
+        type_doc=metal_names_doc(),
         doc="the metal's measured complex index of refraction (`spectra/metals/`); give one of `metal`, `eta` and "
         "`k`, or `reflectance`",
     ),
@@ -145,11 +145,12 @@ def make(
     max_depth: int = 10,
     samples: int = 1,
 ) -> CoatedConductorMaterial:
-    """A metal under a dielectric coat (pbrt-v4's coatedconductor): the metal as `metal` ("Au", "Ag", "Cu", "Al";
-    none given: copper), `eta` and `k` (relative to the outside) or `reflectance` (pbrt's η = 1, k = 2√r/√(1 − r)),
-    of GGX α `conductor_roughness`; the coat of index `ior` and GGX α `roughness`; between them a slab `thickness`
-    mean free paths thick of single-scattering `albedo` (none: it only absorbs) and Henyey-Greenstein `g`. The BSDF
-    is a random walk of at most `max_depth` events, `samples` walks per evaluation."""
+    """A metal under a dielectric coat (pbrt-v4's coatedconductor): the metal as `metal` ("Au", "Ag", "Cu", "Al"
+    or another of the conductor's names; none given: copper), `eta` and `k` (relative to the outside) or
+    `reflectance` (pbrt's η = 1, k = 2√r/√(1 − r)), of GGX α `conductor_roughness`; the coat of index `ior` and GGX
+    α `roughness`; between them a slab `thickness` mean free paths thick of single-scattering `albedo` (none: it
+    only absorbs) and Henyey-Greenstein `g`. The BSDF is a random walk of at most `max_depth` events, `samples`
+    walks per evaluation."""
     if problem := source_problem(metal, eta, k, reflectance):
         raise SpectraceError(problem)
     eta_spectrum = (
@@ -195,7 +196,7 @@ def from_pbrt(context, material) -> dict | None:
             eta, k = uplifted_optical_constants(eta, k, str(material.location))
         metals = {s.get("spectrum", "").split(":")[0] for s in (eta, k)}
         metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
-        table |= {"metal": metal} if metal in METALS else {"eta": eta, "k": k}
+        table |= {"metal": metal} if metal in COMMON_METALS else {"eta": eta, "k": k}
     if (alpha := layered.pbrt_roughness(context, material, "conductor.")) > 0.0:
         table["conductor_roughness"] = alpha
     table |= layered.pbrt_layers(context, material, "interface.eta")

@@ -19,7 +19,7 @@ from spectrace.core.parameters import (
 from spectrace.errors import SpectraceError
 from spectrace.materials.opaque import RoughOpaque, smooth_everywhere
 from spectrace.spectral import spectrum_input
-from spectrace.spectral.metals import METALS, metal_ior
+from spectrace.spectral.metals import COMMON_METALS, METALS, metal_ior, metal_names_doc
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
@@ -28,8 +28,6 @@ from spectrace.textures import number_or_texture, reflectance_or_texture
 NAME = "conductor"
 MITSUBA_PLUGINS = ("conductor", "roughconductor")
 PBRT_MATERIALS = ("conductor",)
-# Mitsuba's `material` names for conductors that spectrace ships measured data for ("none" is a perfect mirror).
-MITSUBA_METALS = ("Au", "Ag", "Cu", "Al")
 ROUGHNESS = roughness(0.0, "microfacet α (along the surface's dp/du when `roughness_v` is given); 0 = polished")
 # The second width of an anisotropic lobe: its Material row keeps it in `ior` and its texture in
 # `transmittance_offset`, fields a conductor has no other use for (kernels/bsdf_conductor.cl).
@@ -51,8 +49,9 @@ PARAMETERS = (
         "metal",
         default=None,
         default_doc="—",
-        type_doc=", ".join(f'`"{m}"`' for m in METALS[:-1]) + f' or `"{METALS[-1]}"`',
-        doc="measured complex index of refraction η + ik (`spectra/metals/`); give `metal` or both `eta` and `k`",
+        type_doc=metal_names_doc(),
+        doc="measured complex index of refraction η + ik (`spectra/metals/`): every conductor name of Mitsuba 3 "
+        '(`"none"`: η = 0, k = 1, a perfect mirror); give `metal` or both `eta` and `k`',
     ),
     Parameter(
         "eta",
@@ -107,7 +106,7 @@ def source_problem(metal, eta, k) -> str | None:
     if metal is not None and (eta is not None or k is not None):
         return "give either metal or eta and k, not both"
     if metal is None and (eta is None or k is None):
-        return f"give metal ({', '.join(METALS)}) or both eta and k"
+        return f"give metal ({', '.join(COMMON_METALS)}, ...: spectra/metals/) or both eta and k"
     return None
 
 
@@ -166,9 +165,10 @@ def make(
     specular_tint: SpectrumLike | None = None,
     roughness_v: float | None = None,
 ) -> ConductorMaterial:
-    """A metal: `metal` ("Au", "Ag", "Cu", "Al": measured η and k) or explicit `eta` and `k` spectra (complex
-    index of refraction η + ik relative to the outside, dimensionless); `roughness` is the microfacet α (0 =
-    smooth mirror-like metal; a number or a grey texture) of the `distribution` ("ggx" or "beckmann");
+    """A metal: `metal` ("Au", "Ag", "Cu", "Al" or any other conductor name of Mitsuba 3: measured η and k) or
+    explicit `eta` and `k` spectra (complex index of refraction η + ik relative to the outside, dimensionless);
+    `roughness` is the microfacet α (0 = smooth mirror-like metal; a number or a grey texture) of the
+    `distribution` ("ggx" or "beckmann");
     `specular_tint` (a reflectance or a texture) multiplies the Fresnel term; `roughness_v` (a number or a grey
     texture) makes the lobe anisotropic, `roughness` then its α along the surface's dp/du and `roughness_v` along
     the bitangent."""
@@ -234,10 +234,8 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
             if roughness == 0.0 and roughness_v is None:  # a perfect mirror scaled by specular_reflectance
                 return {"type": "mirror", "reflectance": tint or {"value": 1.0}}
             table = {"type": "conductor", "eta": {"value": 0.0}, "k": {"value": 1.0}}
-        elif material not in MITSUBA_METALS:
-            importer.unsupported_plugin(
-                bsdf, f" with material '{material}' (spectrace has {', '.join(MITSUBA_METALS)})"
-            )
+        elif material not in METALS:
+            importer.unsupported_plugin(bsdf, f" with material '{material}' (spectrace has {', '.join(METALS)})")
             return None
         else:
             table = {"type": "conductor", "metal": material}
@@ -269,7 +267,7 @@ def from_pbrt(context, material) -> dict | None:
     table: dict[str, object] = {"type": "conductor"}
     metals = {s.get("spectrum", "").split(":")[0] for s in (eta, k)}
     metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
-    if metal in METALS:
+    if metal in COMMON_METALS:  # pbrt's other named metals (CuZn, MgO, TiO2) stay spectra, as pbrt names them
         table["metal"] = metal
     else:
         table |= {"eta": eta, "k": k}
