@@ -25,6 +25,8 @@
 #define SPECTRACE_BSDF_MEASURED_CL
 
 #include "bsdf_sample.cl"
+#include "spectrum.cl"
+#include "texture.cl"
 #include "warp_bilinear_2d.cl"
 
 /* The header fields of the block (spectrace.materials.measured.HEADER), in its order. */

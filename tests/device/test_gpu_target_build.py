@@ -59,11 +59,19 @@ def _compile(target: list[str], entry: str, options: list[str]) -> None:
 
 def _program_files() -> list[str]:
     """Every .cl file that no other includes: the files programs are built from (the rest are read through them,
-    some as templates that need their includer's macros)."""
+    some as templates that need their includer's macros). A BSDF built on another's functions (the coated BSDFs on
+    the dielectric's, through layered.cl) is read only through the generated material list, which orders it after
+    that BSDF; a file it includes says so with an `#error "... included first"`: such files are built through the
+    programs' entries (integrator_path.cl's list holds every registered BSDF), not alone."""
     root = resources.kernels_dir()
     files = {p.relative_to(root).as_posix(): p.read_text() for p in root.rglob("*.cl")}
     included = set(re.findall(r'#include\s+"([^"]+)"', "\n".join(files.values())))
-    return sorted(name for name in files if name not in included)
+
+    def needs_an_includer(name: str) -> bool:
+        reads = [files[name]] + [files.get(i, "") for i in re.findall(r'#include\s+"([^"]+)"', files[name])]
+        return any(re.search(r'#error\s+"[^"]*included first', text) for text in reads)
+
+    return sorted(name for name in files if name not in included and not needs_an_includer(name))
 
 
 @needs_clang
