@@ -197,11 +197,10 @@ TEXTURE_DTYPE = _struct(
     112,
 )
 
-# AnalyticShape.type (kernels/shapes.cl): Mitsuba 3's sphere, disk and cylinder in their object space.
-SHAPE_TYPES = ("sphere", "disk", "cylinder", "sdfgrid")
-SHAPE_SPHERE, SHAPE_DISK, SHAPE_CYLINDER, SHAPE_SDFGRID = range(len(SHAPE_TYPES))
-# A linear curve segment (kernels/shape_curve.cl, geometry/curves.py): an AnalyticShape row, not a scene type.
-SHAPE_CURVE = 8
+# AnalyticShape.type (kernels/shapes.cl): Mitsuba 3's sphere, disk and cylinder in their object space, an SDF grid
+# (kernels/shape_sdf_grid.cl) and one linear curve segment (kernels/shape_curve.cl, geometry/curves.py).
+SHAPE_TYPES = ("sphere", "disk", "cylinder", "sdfgrid", "curve")
+SHAPE_SPHERE, SHAPE_DISK, SHAPE_CYLINDER, SHAPE_SDFGRID, SHAPE_CURVE = range(len(SHAPE_TYPES))
 
 ANALYTIC_SHAPE_DTYPE = _struct(
     [
@@ -418,5 +417,4 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "BVH8_STACK_SIZE": BVH8_STACK_SIZE,
     }
     values |= {f"SHAPE_{name.upper()}": code for code, name in enumerate(SHAPE_TYPES)}
-    values["SHAPE_CURVE"] = SHAPE_CURVE
     return {name: _c_value(value) for name, value in values.items()}
