@@ -123,6 +123,9 @@ def read_lens_file(path: Path, where: str) -> np.ndarray:
     return rows
 
 
+PLACEHOLDER_LENS = "dgauss.50mm.dat"  # the bundled lens that stands in for a missing lens file (pbrt import)
+
+
 def lens_file_path(name: str, folder: Path) -> Path:
     """`name` relative to the scene's folder; a bare name found only among the bundled lenses is that one."""
     from spectrace.resources import scenes_dir
@@ -307,8 +310,11 @@ def from_pbrt(context, camera, view) -> dict:
     """pbrt-v4's realistic camera: `lensfile` (relative to the pbrt file), `aperturediameter` (mm, default 1),
     `focusdistance` (default 10) and the film's `diagonal` (mm, default 35); its camera space's origin is the
     film's centre. A diaphragm image (`aperture`) is not imported."""
-    path = context.file_path(camera, "lensfile")
-    if path is None:
+    if context.absent(camera, "lensfile", f"the bundled lens {PLACEHOLDER_LENS}"):
+        lens_file = PLACEHOLDER_LENS  # a bare name: the bundled lens (lens_file_path)
+    elif (path := context.file_path(camera, "lensfile")) is not None:
+        lens_file = context.relative(path)
+    else:
         raise context.error(camera.location, 'the realistic camera needs "string lensfile" (as pbrt-v4)')
     if (shape := camera.find("aperture")) is not None:
         context.warn(shape.location, f'"{shape.label()}" (a diaphragm image) not imported: the stop is round')
@@ -318,7 +324,7 @@ def from_pbrt(context, camera, view) -> dict:
         "origin": view.origin,
         "target": (np.asarray(view.origin) + np.asarray(view.forward)).tolist(),
         "up": view.up,
-        "lens_file": context.relative(path),
+        "lens_file": lens_file,
         "aperture_diameter": context.one(camera, "aperturediameter", 1.0),
         "focus_distance": context.one(camera, "focusdistance", 10.0),
         "film_diagonal": context.one(film, "diagonal", 35.0) if film is not None else 35.0,

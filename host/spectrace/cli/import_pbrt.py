@@ -11,6 +11,7 @@ from spectrace.errors import SpectraceError
 from spectrace.interop.pbrt import import_pbrt
 from spectrace.interop.pbrt.lights import AREA_LIGHTS, LIGHTS
 from spectrace.interop.pbrt.materials import IMPORTED_MATERIALS
+from spectrace.interop.pbrt.placeholders import MISSING_ASSETS
 from spectrace.interop.pbrt.shapes import SHAPES
 from spectrace.interop.pbrt.textures import TEXTURES
 
@@ -24,13 +25,24 @@ def import_pbrt_command(
     strict: Annotated[
         bool, typer.Option("--strict", help="Fail if anything in the file is not imported (default: warn).")
     ] = False,
+    missing_assets: Annotated[
+        str,
+        typer.Option(
+            "--missing-assets",
+            metavar="refuse|placeholder",
+            help="A missing mesh, image or data file: refuse the scene (default), or import a placeholder for it, "
+            "each one a warning (for surveys of scene collections without their assets).",
+        ),
+    ] = "refuse",
 ) -> None:
+    if missing_assets not in MISSING_ASSETS:
+        raise SpectraceError(f"'{missing_assets}': give one of {', '.join(MISSING_ASSETS)}", where="--missing-assets")
     if output.endswith(("/", os.sep)) or not Path(output).name:
         raise SpectraceError("names a folder; give the path of the TOML file to write", where=output)
     from spectrace.resources import resolve_scene_path
 
     scene = resolve_scene_path(scene, (".pbrt",))  # a bare name: NAME.pbrt here
-    warnings, notes = import_pbrt(scene, Path(output), strict=strict, option="--output")
+    warnings, notes = import_pbrt(scene, Path(output), strict=strict, option="--output", missing_assets=missing_assets)
     console = Console(stderr=True, soft_wrap=True, markup=False)  # each line on one line
     for warning in warnings:
         console.print(f"warning: {warning}", highlight=False, markup=False)

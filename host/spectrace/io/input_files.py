@@ -75,6 +75,7 @@ class Inclusions:
         self.stack: list[Path] = []
         self.files = 0
         self.bytes = 0
+        self.skipped: list[str] | None = None  # pbrt's missing_assets="placeholder": missing includes told here
 
     def enter(self, path: Path, where: str, size: int | None = None) -> None:
         """Count `path` (of `size` bytes, else its size on disk) as read once more, after the checks."""

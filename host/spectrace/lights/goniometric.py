@@ -210,7 +210,8 @@ def from_pbrt(context, light, matrix) -> dict | None:
         "mirrored": mirrored,
     }
     mean = 1.0
-    path = context.file_path(light, "filename")
+    absent = context.absent(light, "filename", "none (an isotropic light)")
+    path = None if absent else context.file_path(light, "filename")
     if path is not None:
         table["file"] = context.relative(path)
         where = f"{light.location}"

@@ -218,6 +218,8 @@ def from_mitsuba(importer, bsdf, properties) -> dict | None:
 
 def from_pbrt(context, material) -> dict | None:
     """pbrt-v4's `measured` (MeasuredBxDF): its `filename`; pbrt reflects on both faces, as spectrace does."""
+    if context.absent(material, "filename", "a diffuse material of reflectance 0.5"):
+        return {"type": "diffuse", "reflectance": {"value": 0.5}}
     path = context.file_path(material, "filename")
     if path is None:
         raise context.error(material.location, 'measured material needs "filename"')

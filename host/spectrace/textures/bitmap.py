@@ -216,6 +216,8 @@ def to_mitsuba(texture: BitmapTexture, exporter) -> dict:
 
 def from_pbrt(context, texture, uv: tuple[float, float, float, float]) -> dict:
     """pbrt-v4's imagemap; `uv` its (uscale, vscale, udelta, vdelta)."""
+    if context.absent(texture, "filename", "the constant 0.5"):
+        return {"value": 0.5}
     path = context.file_path(texture, "filename")
     if path is None:
         raise context.error(texture.location, f'{texture.label()} needs "string filename"')

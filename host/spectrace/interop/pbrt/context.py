@@ -84,12 +84,16 @@ class Context:
     mapping (the modules of spectrace.interop.pbrt, and through `Import` each plugin's `from_pbrt`) reads pbrt's
     parameters through it, so that what none read is reported."""
 
-    def __init__(self, scene: PbrtScene, source: Path, toml_folder: Path, mesh_folder: str):
+    def __init__(
+        self, scene: PbrtScene, source: Path, toml_folder: Path, mesh_folder: str, missing_assets: str = "refuse"
+    ):
         self.scene = scene
+        self.missing_assets = missing_assets  # "placeholder": missing asset files stood in for (placeholders.py)
+        self.placeholders: list[str] = list(scene.skipped)
         self.source = source
         self.toml_folder = toml_folder
         self.mesh_folder = mesh_folder
-        self.warnings: list[str] = list(scene.unsupported)
+        self.warnings: list[str] = [*scene.unsupported, *(f"placeholder: {text}" for text in scene.skipped)]
         self.notes: list[str] = []
         self.meshes: dict[str, MeshData] = {}  # file name in mesh_folder -> data
         self.files: dict[str, np.ndarray] = {}  # environment maps (EXR) to write beside the meshes
@@ -161,6 +165,22 @@ class Context:
             parameter = entity.find(name)
             raise error(parameter.location if parameter else entity.location, f"'{shown(value, 200)}' is not a file")
         return path
+
+    def absent(self, entity: Entity, name: str, stand_in: str) -> bool:
+        """Whether the file parameter `name` names is missing and stood in for (`missing_assets="placeholder"`,
+        reported as a warning); False where it is there, or missing without placeholders (file_path refuses it)."""
+        from spectrace.interop.pbrt.placeholders import is_missing
+
+        value = self.string(entity, name)
+        if self.missing_assets != "placeholder" or value is None:
+            return False
+        if not is_missing(value, entity.location.file.parent):
+            return False
+        parameter = entity.find(name)
+        text = f"{parameter.location if parameter else entity.location}: '{shown(value, 200)}' is missing: {stand_in}"
+        self.placeholders.append(text)
+        self.warnings.append(f"placeholder: {text}")
+        return True
 
     def relative(self, path: Path) -> str:
         try:
@@ -234,6 +254,11 @@ class Context:
         if name in GLASSES:
             return {"glass": GLASSES[name]}
         path = Path(name) if Path(name).is_absolute() else location.file.parent / name
+        if self.missing_assets == "placeholder" and not path.is_file() and path.suffix:
+            text = f"{location}: '{shown(name, 200)}' is missing: the constant 1"
+            self.placeholders.append(text)
+            self.warnings.append(f"placeholder: {text}")
+            return {"value": 1.0}
         if path.is_file():
             try:
                 numbers = [float(x) for x in re.sub(r"#[^\n]*", " ", path.read_text()).split()]

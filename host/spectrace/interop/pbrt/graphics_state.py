@@ -166,6 +166,7 @@ class PbrtScene:
     camera_medium: str = ""  # the medium the camera sits in (MediumInterface's outside at Camera)
     entities: list[Entity] = field(default_factory=list)  # every entity read, for the unread-parameter report
     unsupported: list[str] = field(default_factory=list)  # "file:line: what" for directives not imported
+    skipped: list[str] = field(default_factory=list)  # "file:line: ..." for Includes of missing files skipped
     has_world: bool = False
 
 
@@ -207,8 +208,9 @@ _IGNORED = {
 }
 
 
-def read_scene(path: str | Path) -> PbrtScene:
-    """The scene a pbrt-v4 file describes, objects and their instances, every entity with its file:line."""
+def read_scene(path: str | Path, skip_missing: bool = False) -> PbrtScene:
+    """The scene a pbrt-v4 file describes, objects and their instances, every entity with its file:line;
+    skip_missing: an Include or Import of a missing file is skipped (listed in `skipped`), not refused."""
     scene = PbrtScene()
     state = _State(np.eye(4))
     stack: list[_State] = []
@@ -227,7 +229,7 @@ def read_scene(path: str | Path) -> PbrtScene:
         scene.entities.append(made)
         return made
 
-    for directive in parse_directives(path):
+    for directive in parse_directives(path, scene.skipped if skip_missing else None):
         name, arguments, location = directive.name, directive.arguments, directive.location
         if name in _TRANSFORMS:
             with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported just below

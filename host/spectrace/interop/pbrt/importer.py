@@ -34,6 +34,7 @@ from spectrace.interop.pbrt.graphics_state import Entity, read_scene
 from spectrace.interop.pbrt.lights import light_table
 from spectrace.interop.pbrt.meshes import write_ply
 from spectrace.interop.pbrt.parser import Location, error, shown
+from spectrace.interop.pbrt.placeholders import check_policy
 from spectrace.interop.pbrt.shapes import instanced_object, shape_table
 
 
@@ -169,11 +170,16 @@ def mesh_folder_name(toml_path: Path) -> str:
     return f"{toml_path.stem}_assets"
 
 
-def pbrt_scene_data(pbrt_path: str | Path, toml_path: str | Path | None = None) -> tuple[dict, Import]:
-    """(scene data in the TOML format's structure, the importer with its warnings, notes and meshes to write)."""
+def pbrt_scene_data(
+    pbrt_path: str | Path, toml_path: str | Path | None = None, missing_assets: str = "refuse"
+) -> tuple[dict, Import]:
+    """(scene data in the TOML format's structure, the importer with its warnings, notes and meshes to write).
+    missing_assets: "refuse" (a missing file is an error naming it) or "placeholder" (placeholders.py)."""
     pbrt_path = Path(pbrt_path)
     toml_path = Path(toml_path) if toml_path is not None else pbrt_path.with_suffix(".toml")
-    importer = Import(read_scene(pbrt_path), pbrt_path, toml_path.parent, mesh_folder_name(toml_path))
+    placeholder = check_policy(missing_assets) == "placeholder"
+    scene = read_scene(pbrt_path, skip_missing=placeholder)
+    importer = Import(scene, pbrt_path, toml_path.parent, mesh_folder_name(toml_path), missing_assets)
     return scene_data(importer), importer
 
 
@@ -191,11 +197,16 @@ def _write_image_file(path: Path, image: np.ndarray) -> None:
 
 
 def import_pbrt(
-    pbrt_path: str | Path, toml_path: str | Path, strict: bool = False, option: str = "the TOML file"
+    pbrt_path: str | Path,
+    toml_path: str | Path,
+    strict: bool = False,
+    option: str = "the TOML file",
+    missing_assets: str = "refuse",
 ) -> tuple[list[str], list[str]]:
     """Write the spectrace TOML scene (and its folder of meshes) for a pbrt-v4 scene and check that it loads;
     returns (warnings, notes). strict: every warning (something in the file not imported) is an error instead.
-    option: what errors about the output call it (the command line's --output).
+    option: what errors about the output call it (the command line's --output). missing_assets: "placeholder"
+    stands in for missing meshes, images and data files, each a warning (placeholders.py; default "refuse").
 
     The output is checked and locked first (spectrace.io.output_lock: a second import writing it is refused); the
     TOML and its folder of meshes are replaced together, and only by a complete import whose TOML loads: a failed
@@ -205,13 +216,15 @@ def import_pbrt(
     pbrt_path, toml_path = Path(pbrt_path), Path(toml_path)
     check_import_output(toml_path, pbrt_path, "the pbrt scene", option)
     with lock_import(toml_path, option, "spectrace import-pbrt"):
-        return _import_pbrt(pbrt_path, toml_path, strict, option)
+        return _import_pbrt(pbrt_path, toml_path, strict, option, missing_assets)
 
 
-def _import_pbrt(pbrt_path: Path, toml_path: Path, strict: bool, option: str) -> tuple[list[str], list[str]]:
+def _import_pbrt(
+    pbrt_path: Path, toml_path: Path, strict: bool, option: str, missing_assets: str
+) -> tuple[list[str], list[str]]:
     from spectrace.interop.toml_writer import write_imported_scene
 
-    data, importer = pbrt_scene_data(pbrt_path, toml_path)
+    data, importer = pbrt_scene_data(pbrt_path, toml_path, missing_assets)
     if strict and importer.warnings:
         raise SpectraceError(
             f"{len(importer.warnings)} things not imported (--strict): " + "; ".join(importer.warnings),
@@ -236,11 +249,11 @@ def _import_pbrt(pbrt_path: Path, toml_path: Path, strict: bool, option: str) ->
     return importer.warnings, importer.notes
 
 
-def load_pbrt_scene(pbrt_path: str | Path, strict: bool = False):
+def load_pbrt_scene(pbrt_path: str | Path, strict: bool = False, missing_assets: str = "refuse"):
     """A `Scene` from a pbrt-v4 file (through a temporary TOML file and mesh folder)."""
     from spectrace.scene import load_scene
 
     with tempfile.TemporaryDirectory(prefix="spectrace-pbrt-") as folder:
         toml_path = Path(folder) / (Path(pbrt_path).stem + ".toml")
-        import_pbrt(pbrt_path, toml_path, strict=strict)
+        import_pbrt(pbrt_path, toml_path, strict=strict, missing_assets=missing_assets)
         return load_scene(toml_path).with_overrides(source=Path(pbrt_path))

@@ -81,14 +81,20 @@ def environment_map(context: Context, entity: Entity, matrix: np.ndarray, scale:
     spectrace.lights.envmap's from_pbrt asks for."""
     from spectrace.io.images import read_environment_map
 
-    path = context.file_path(entity, "filename")
-    assert path is not None
-    if path.suffix.lower() not in (".exr", ".hdr", ".rgbe"):
-        raise error(
-            entity.location,
-            f"infinite light image '{shown(path.name)}': spectrace reads OpenEXR and Radiance HDR maps",
-        )
-    square = read_environment_map(path, str(entity.location))
+    if context.absent(entity, "filename", "a constant grey map"):
+        from spectrace.interop.pbrt.placeholders import grey_square
+
+        path, square = Path("placeholder.exr"), grey_square()
+    else:
+        found = context.file_path(entity, "filename")
+        assert found is not None
+        path = found
+        if path.suffix.lower() not in (".exr", ".hdr", ".rgbe"):
+            raise error(
+                entity.location,
+                f"infinite light image '{shown(path.name)}': spectrace reads OpenEXR and Radiance HDR maps",
+            )
+        square = read_environment_map(path, str(entity.location))
     height, width = square.shape[:2]
     if height != width:
         raise error(entity.location, f"'{shown(path.name)}' is {width} x {height}: pbrt-v4's maps are square")

@@ -61,6 +61,10 @@ def material_table(context: Context, material: Entity) -> dict | None:
         kind = context.string(material, "type") or ""
         if not kind:
             raise error(material.location, f"named material '{shown(material.name)}' needs \"string type\"")
+    if material.directive == "Material" and kind in ("", "none"):
+        # pbrt-v4's deprecated names of `interface` (Material::Create warns and makes no material)
+        context.notes.append(f'{material.location}: Material "{kind}" is pbrt-v4\'s former name of "interface"')
+        kind = "interface"
     imported = ", ".join(IMPORTED_MATERIALS)
     if kind not in IMPORTED_MATERIALS:
         raise error(material.location, f"unknown material '{shown(kind)}' (spectrace imports {imported})")

@@ -42,7 +42,7 @@ def medium_table(context: Context, medium: Entity) -> dict:
     table: dict = {}
     if kind == "uniformgrid":
         table["density"] = _uniform_grid(context, medium)
-    elif kind == "nanovdb":
+    elif kind == "nanovdb" and not context.absent(medium, "filename", "the homogeneous medium"):
         table["density"] = _nanovdb(context, medium)
     if (preset := context.string(medium, "preset")) is not None:
         # pbrt's named media (Jensen et al. 2001, Narasimhan et al. 2006) are the same measurements as spectrace's
@@ -67,7 +67,7 @@ def medium_table(context: Context, medium: Entity) -> dict:
     if kind == "nanovdb":
         # pbrt-v4's NanoVDB medium glows where it has a temperature grid: Lescale times the normalised black body
         scale = context.one(medium, "Lescale", 1.0)
-        if "temperature_file" in table["density"] and scale > 0.0:
+        if "temperature_file" in table.get("density", {}) and scale > 0.0:
             table["emission"] = {"value": scale}
     else:
         _emission(context, medium, kind, table)

@@ -380,15 +380,42 @@ def _file_directives(text: str, path: Path, inclusions: Inclusions):
             included = Path(arguments[0])
             if not included.is_absolute():
                 included = path.parent / included
+            # pbrt-v4 splices an Include into the token stream: parameters after it continue the included file's
+            # last directive (a medium's coefficients given beside the file that holds its grid).
+            trailing = []
+            if token.text == "Include":
+                while (following := stream.peek()) is not None and following.kind == "string":
+                    trailing.append(_parameter(stream, stream.next("a parameter")))
+            if not included.is_file() and inclusions.skipped is not None:
+                # missing_assets="placeholder" (placeholders.py): the survey judges the rest of the scene.
+                what = f" (and the {len(trailing)} parameters after it)" if trailing else ""
+                inclusions.skipped.append(
+                    f"{token.location}: '{shown(str(arguments[0]), 200)}' is missing: skipped{what}"
+                )
+                continue
             if not included.is_file():
                 raise error(
                     token.location, f"{token.text} names '{shown(str(arguments[0]), 200)}', which is not a file"
                 )
-            yield from _directives(included, inclusions, str(token.location))
+            if not trailing:
+                yield from _directives(included, inclusions, str(token.location))
+                continue
+            directives = list(_directives(included, inclusions, str(token.location)))
+            if not directives:
+                raise error(
+                    trailing[0].location,
+                    f"parameters after Include, but '{shown(str(arguments[0]), 200)}' "
+                    "has no directive for them to continue",
+                )
+            directives[-1].parameters.extend(trailing)
+            yield from directives
             continue
         yield Directive(token.text, arguments, parameters, token.location)
 
 
-def parse_directives(path: str | Path) -> list[Directive]:
-    """Every directive of a pbrt-v4 scene, its Include and Import files followed in place."""
-    return list(_directives(Path(path), Inclusions(MAX_INCLUDE_DEPTH, "Include/Import")))
+def parse_directives(path: str | Path, skipped: list[str] | None = None) -> list[Directive]:
+    """Every directive of a pbrt-v4 scene, its Include and Import files followed in place; with a list `skipped`,
+    an Include or Import of a missing file is skipped and told there instead of refused."""
+    inclusions = Inclusions(MAX_INCLUDE_DEPTH, "Include/Import")
+    inclusions.skipped = skipped
+    return list(_directives(Path(path), inclusions))

@@ -281,6 +281,10 @@ def subdivided_mesh(context: Context, entity: Entity) -> MeshData:
 def ply_mesh(context: Context, entity: Entity) -> MeshData:
     from spectrace.geometry.mesh import load_mesh
 
+    if context.absent(entity, "filename", "a one-triangle placeholder mesh"):
+        from spectrace.interop.pbrt.placeholders import triangle
+
+        return triangle()
     path = context.file_path(entity, "filename")
     if path is None:
         raise error(entity.location, 'plymesh needs "string filename"')

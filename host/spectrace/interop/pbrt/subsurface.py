@@ -143,6 +143,8 @@ def _image_mean(context: Context, parameter) -> list[float]:
     if texture is None:
         raise error(parameter.location, f"\"{parameter.label()}\" names '{shown(name)}', which no Texture defined")
     table = texture_table(context, texture.entity)
+    if "texture" not in table and ("rgb" in table or "value" in table):  # a constant (or a missing image's stand-in)
+        return [float(v) for v in table["rgb"]] if "rgb" in table else [float(table["value"])] * 3
     if table.get("texture") != "bitmap" or str(table["file"]).startswith(f"{context.mesh_folder}/"):
         raise error(parameter.location, f'"{parameter.label()}": spectrace takes an imagemap of a file here')
     values, encoded = read_texture_image((context.toml_folder / table["file"]).resolve(), str(texture.entity.location))
