@@ -19,6 +19,7 @@
 #define SPECTRACE_SHAPE_CURVE_CL
 
 #include "curve.cl"
+#include "ray.cl"
 
 #define CURVE_HALF_PI 1.57079632679489661923f
 
@@ -33,16 +34,21 @@ inline void curve_frame(float3 w, float3 *e1, float3 *e2)
     *e2 = (float3)(b, sign + w.y * w.y * a, -w.y);
 }
 
-/* Whether p lies inside the swept sphere from (a.xyz, radius a.w) to (b.xyz, b.w) by more than a thousandth of
- * its radius there: |p − c(s)| − r(s) at the s of p's projection on the axis, an upper bound of the distance to the
- * surface, so a point it calls inside is. False where either radius is 0 (no segment). */
+/* Whether p lies inside the swept sphere from (a.xyz, radius a.w) to (b.xyz, b.w) by more than the rounding of
+ * its coordinates: |p − c(s)| − r(s) at the s of p's projection on the axis, an upper bound of the distance to the
+ * surface, so a point it calls inside is. The margin is a tenth of the step a spawned ray takes off its surface
+ * (ray.cl): a ray sent into the fibre (the hair BSDF's transmission) starts that far inside this segment, and a
+ * neighbour's surface it then crosses lies at least about that deep inside, so it is not taken for surface. A
+ * margin in proportion to the radius let the neighbours' surfaces, which cross at grazing angles where a curve
+ * bends a little per segment, stop such rays within a thousandth of the radius. False where either radius is 0
+ * (no segment). */
 inline int curve_inside_segment(float3 p, float4 a, float4 b)
 {
     if (!(a.w > 0.0f && b.w > 0.0f)) return 0;
     float3 axis = b.xyz - a.xyz;
     float s = clamp(dot(p - a.xyz, axis) / dot(axis, axis), 0.0f, 1.0f);
     float r = a.w + s * (b.w - a.w);
-    return length(p - (a.xyz + s * axis)) < 0.999f * r;
+    return length(p - (a.xyz + s * axis)) < r - 1.0e-6f * (1.0f + max_abs_component(p));
 }
 
 /* The nearest front-facing hit of the segment in (0, t_max) along the ray (unit direction), or t_max; where it lies
