@@ -61,8 +61,6 @@ def from_pbrt(context, light, matrix) -> dict | None:
     if light.find("filename", "string") is not None:
         return None
     scale = context.one(light, "scale", 1.0)
-    if light.find("portal") is not None:
-        context.warn(light.location, '"portal" not imported')
     illuminance = context.one(light, "illuminance", -1.0)
     if illuminance > 0:
         scale *= illuminance / math.pi

@@ -97,6 +97,8 @@ class Context:
         self.notes: list[str] = []
         self.meshes: dict[str, MeshData] = {}  # file name in mesh_folder -> data
         self.files: dict[str, np.ndarray] = {}  # environment maps (EXR) to write beside the meshes
+        # file in `files` -> the equal-area square it was resampled from, spectrace-from-light, the image's path
+        self.environment_sources: dict[str, tuple[np.ndarray, np.ndarray, str]] = {}
         self.mesh_of: dict[tuple[int, bool, bool], tuple[str, MeshData]] = {}
         self.materials: dict[str, dict] = {}
         self.material_of: dict[int | str, str | None] = {}

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.errors import SpectraceError
-from spectrace.interop.pbrt import lights, materials, textures
+from spectrace.interop.pbrt import infinite_lights, lights, materials, textures
 from spectrace.interop.pbrt.cameras import camera, integrator, sampler
 from spectrace.interop.pbrt.context import Context, grouped
 from spectrace.interop.pbrt.graphics_state import Entity, read_scene
@@ -105,12 +105,10 @@ def scene_data(context: Context) -> dict:
             transform = [{"matrix": (context.world @ use.world_from_instance).tolist()}]
             instances.append({"object": placed[use.name], "transform": transform})
     objects = {name: table for name, table in objects.items() if table["shapes"]}
-    for light in context.scene.lights:
+    entries = [(light, light_table(context, light)) for light in context.scene.lights]
+    for light, table in infinite_lights.combine(context, entries):
         context.origins[f"lights[{len(lights)}]"] = light.entity.location
-        lights.append(light_table(context, light))
-    if sum(light["type"] in ("constant", "envmap") for light in lights) > 1:
-        extra = [light.entity for light in context.scene.lights if light.entity.kind == "infinite"][1]
-        raise error(extra.location, "a second infinite light; spectrace takes one environment light")
+        lights.append(table)
     if not shapes and not lights and not instances:
         raise SpectraceError("the scene has no shapes or lights spectrace imports", where=str(context.source))
     for entity in (

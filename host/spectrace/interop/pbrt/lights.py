@@ -100,8 +100,6 @@ def environment_map(context: Context, entity: Entity, matrix: np.ndarray, scale:
         raise error(entity.location, f"'{shown(path.name)}' is {width} x {height}: pbrt-v4's maps are square")
     if entity.find("L") is not None:
         raise error(entity.location, 'both "L" and "filename" given (pbrt-v4 refuses them too)')
-    if entity.find("portal") is not None:
-        context.warn(entity.location, '"portal" not imported')
     illuminance = context.one(entity, "illuminance", -1.0)
     if illuminance > 0:
         reference = upper_illuminance(square)
@@ -114,7 +112,9 @@ def environment_map(context: Context, entity: Entity, matrix: np.ndarray, scale:
     # RGB texels are illuminants of the colour space's D65, normalised as an RGB light's L: spectrace's envmap
     # texels are D65-based with RGB (1, 1, 1) at Y = 1, so pbrt's scale carries over.
     linear = (context.world @ matrix)[:3, :3]
-    image = to_latitude_longitude(square, linear / np.cbrt(abs(np.linalg.det(linear))), min(height, 2048))
+    spectrace_from_light = linear / np.cbrt(abs(np.linalg.det(linear)))
+    image = to_latitude_longitude(square, spectrace_from_light, min(height, 2048))
     file = unique_name(path.stem, {Path(n).stem for n in context.files}) + ".exr"
     context.files[file] = image
+    context.environment_sources[file] = (square, spectrace_from_light, str(path))
     return {"type": "envmap", "file": f"{context.mesh_folder}/{file}", "scale": scale}
