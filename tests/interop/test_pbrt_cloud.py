@@ -153,15 +153,18 @@ def test_the_clouds_scenes_medium_imports_as_a_grid_of_the_formula(tmp_path, mon
 
 
 def test_a_wispless_clouds_box_and_frequency_are_read(tmp_path):
-    """p0, p1, frequency and wispiness (0: no warp) set the grid's box and resolution; g the phase function."""
+    """p0, p1, frequency and wispiness (0: no warp) set the grid's box and resolution; g the phase function; a
+    scale or emission, which pbrt-v4's cloud does not read, is reported as not imported."""
     path = _write(tmp_path, '"float wispiness" 0 "float frequency" 0.5 "point3 p0" [0 0 0] "point3 p1" [1 .5 2]'
-                            ' "float g" 0.3')  # fmt: skip
+                            ' "float g" 0.3 "float scale" 4 "rgb Le" [1 1 1]')  # fmt: skip
     data, importer = pbrt_scene_data(path, tmp_path / "clouds.toml")
     interior = data["shapes"][0]["interior"]
     assert interior["g"] == 0.3 and interior["density"]["box"] == [[0.0, 0.0, 0.0], [1.0, 0.5, 2.0]]
     values = importer.files[Path(interior["density"]["file"]).name]
     assert values.shape == (63, 16, 32)  # ceil(4 · 0.5 · 1.99⁴ · extent): 32, 16, 63 along x, y, z
     assert not any("capped" in w for w in importer.warnings)
+    assert any('"float scale" not imported' in w for w in importer.warnings)
+    assert any('"rgb Le" not imported' in w for w in importer.warnings)
 
 
 @pytest.mark.parametrize(
