@@ -167,11 +167,30 @@ def test_a_wispless_clouds_box_and_frequency_are_read(tmp_path):
     assert any('"rgb Le" not imported' in w for w in importer.warnings)
 
 
+@pytest.mark.parametrize("kind", ["cloud", "uniformgrid"])
+def test_a_box_given_from_other_corners_is_the_same_box(tmp_path, kind):
+    """pbrt-v4 makes a medium's box of p0 and p1's smallest and largest coordinates: corners given the other way
+    round give the same grid, not a mirrored one (a cloud's values and a uniformgrid's box alike)."""
+    grid = ' "float density" [0 1 2 3 4 5 6 7] "integer nx" 2 "integer ny" 2 "integer nz" 2' if kind != "cloud" else ""
+    tables, values = [], []
+    for corners in ('"point3 p0" [0 0 0] "point3 p1" [1 0.5 2]', '"point3 p0" [1 0.5 0] "point3 p1" [0 0 2]'):
+        text = CLOUDS.format(extra=f'{corners} "float frequency" 0.5{grid}')
+        if kind != "cloud":
+            text = text.replace('"cloud"', f'"{kind}"').replace('"float density" 2', "")
+        (tmp_path / "box.pbrt").write_text(text)
+        data, importer = pbrt_scene_data(tmp_path / "box.pbrt", tmp_path / "box.toml")
+        density = data["shapes"][0]["interior"]["density"]
+        tables.append(density)
+        values.append(importer.files.get(Path(density.get("file", "none")).name))
+    assert tables[0]["box"] == tables[1]["box"] == [[0.0, 0.0, 0.0], [1.0, 0.5, 2.0]]
+    if kind == "cloud":
+        np.testing.assert_array_equal(values[0], values[1])
+
+
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        ('"point3 p0" [0 1 0] "point3 p1" [1 0 1]', "box p0 [0.0, 1.0, 0.0] – p1 [1.0, 0.0, 1.0] is empty"),
-        ('"point3 p0" [0 0 0] "point3 p1" [1 1 0]', "p1 [1.0, 1.0, 0.0] is empty"),
+        ('"point3 p0" [0 0 0] "point3 p1" [1 1 0]', "box p0 [0.0, 0.0, 0.0] – p1 [1.0, 1.0, 0.0] is empty"),
     ],
 )
 def test_a_bad_cloud_is_one_line_naming_the_file(tmp_path, extra, message):

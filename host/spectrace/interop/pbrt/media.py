@@ -86,8 +86,7 @@ def _cloud(context: Context, medium: Entity) -> dict:
     density = context.one(medium, "density", 1.0)
     wispiness = context.one(medium, "wispiness", 1.0)
     frequency = context.one(medium, "frequency", 5.0)
-    p0 = context.vector(medium, "p0", [0.0, 0.0, 0.0])
-    p1 = context.vector(medium, "p1", [1.0, 1.0, 1.0])
+    p0, p1 = _box(context, medium)
     if any(high <= low for low, high in zip(p0, p1, strict=True)):
         raise error(medium.location, f"a cloud medium's box p0 {p0} – p1 {p1} is empty")
     resolution, capped = cloud_resolution(p0, p1, wispiness, frequency)
@@ -185,6 +184,14 @@ def _emission(context: Context, medium: Entity, kind: str, table: dict) -> None:
         table["density"]["emission_values"] = grids["Lescale"]
 
 
+def _box(context: Context, medium: Entity) -> tuple[list[float], list[float]]:
+    """A grid medium's box, p0 to p1 (default the unit cube), as pbrt-v4 takes two corners: their smallest and
+    largest coordinates, whichever corner holds them (so a box given from its far corner is not mirrored)."""
+    p0 = context.vector(medium, "p0", [0.0, 0.0, 0.0])
+    p1 = context.vector(medium, "p1", [1.0, 1.0, 1.0])
+    return [min(a, b) for a, b in zip(p0, p1, strict=True)], [max(a, b) for a, b in zip(p0, p1, strict=True)]
+
+
 def _uniform_grid(context: Context, medium: Entity) -> dict:
     """A uniformgrid's `density` (nx·ny·nz values, x fastest) over the box p0–p1 of the medium's space, as
     spectrace's inline grid; the CTM at MakeNamedMedium places it. pbrt-v4 fades the density to 0 over the
@@ -202,8 +209,7 @@ def _uniform_grid(context: Context, medium: Entity) -> dict:
             parameter.location if parameter else medium.location,
             f'"float density" has {len(density)} values; nx·ny·nz = {count}',
         )
-    p0 = context.vector(medium, "p0", [0.0, 0.0, 0.0])
-    p1 = context.vector(medium, "p1", [1.0, 1.0, 1.0])
+    p0, p1 = _box(context, medium)
     matrix = context.world @ context.scene.world_from_medium[medium.name]
     return {
         "values": density,
