@@ -218,6 +218,7 @@ RAYS = [
 ]
 
 
+@pytest.mark.slow
 def test_transmittance_through_the_imported_cloud_is_the_formulas(tmp_path, kernel_runner):
     """Ratio tracking through the imported grid on the device gives exp(−σt ∫ρ dt) of the formula ρ (a quadrature
     of 20001 points a ray), within 4 standard errors plus what the tabulation changes: the quadrature of
