@@ -182,9 +182,13 @@ def pbrt_scene_data(
 
 
 def _write_image_file(path: Path, image: np.ndarray) -> None:
-    """An image the import made: a one-channel float TIFF for a `.tif` (a roughness: one number per texel), else
-    an OpenEXR."""
-    if path.suffix == ".tif":
+    """An image the import made: a one-channel float TIFF for a `.tif` (a roughness: one number per texel), a
+    volume file for a `.vol` (a tabulated medium's density), else an OpenEXR."""
+    if path.suffix == ".vol":
+        from spectrace.geometry.grid_volume import vol_bytes
+
+        path.write_bytes(vol_bytes(image))
+    elif path.suffix == ".tif":
         from PIL import Image
 
         Image.fromarray(image, mode="F").save(path)

@@ -6,7 +6,9 @@ for a uniformgrid), or a uniformgrid's `temperature` grid (blackbody emission, a
 
 from __future__ import annotations
 
-from spectrace.interop.pbrt.context import Context
+from pathlib import Path
+
+from spectrace.interop.pbrt.context import Context, unique_name
 from spectrace.interop.pbrt.graphics_state import Entity, Shape
 from spectrace.interop.pbrt.parser import error, shown
 
@@ -34,11 +36,13 @@ def medium_table(context: Context, medium: Entity) -> dict:
 
     context.read.add(id(medium))
     kind = context.string(medium, "type", "")
-    if kind not in ("homogeneous", "uniformgrid", "nanovdb"):
+    if kind not in ("homogeneous", "uniformgrid", "nanovdb", "cloud"):
         raise error(
             medium.location,
-            f"medium '{shown(kind or '')}': spectrace imports homogeneous, uniformgrid and nanovdb media",
+            f"medium '{shown(kind or '')}': spectrace imports homogeneous, uniformgrid, nanovdb and cloud media",
         )
+    if kind == "cloud":
+        return _cloud(context, medium)
     table: dict = {}
     if kind == "uniformgrid":
         table["density"] = _uniform_grid(context, medium)
@@ -71,6 +75,46 @@ def medium_table(context: Context, medium: Entity) -> dict:
             table["emission"] = {"value": scale}
     else:
         _emission(context, medium, kind, table)
+    return table
+
+
+def _cloud(context: Context, medium: Entity) -> dict:
+    """A cloud medium (cloud.py) as a density grid tabulated over its box p0–p1, written beside the TOML; pbrt-v4
+    reads no preset, scale or emission for it (left unread, so reported as not imported)."""
+    from spectrace.interop.pbrt.cloud import cloud_resolution, finest_frequency, tabulate_cloud
+
+    density = context.one(medium, "density", 1.0)
+    wispiness = context.one(medium, "wispiness", 1.0)
+    frequency = context.one(medium, "frequency", 5.0)
+    p0, p1 = _box(context, medium)
+    if any(high <= low for low, high in zip(p0, p1, strict=True)):
+        raise error(medium.location, f"a cloud medium's box p0 {p0} – p1 {p1} is empty")
+    resolution, capped = cloud_resolution(p0, p1, wispiness, frequency)
+    cells = finest_frequency(wispiness, frequency)
+    shape = "×".join(map(str, resolution))
+    note = ""
+    if capped:
+        samples = min(n / ((high - low) * cells) for n, low, high in zip(resolution, p0, p1, strict=True))
+        note = f": capped, {samples:.2g} samples a cell of its finest noise ({cells:.3g} cells a unit), not 4"
+    context.warn(
+        medium.location,
+        f"cloud medium '{shown(medium.name)}' tabulated as a {shape} density grid (trilinear between samples){note}",
+    )
+    values = tabulate_cloud(p0, p1, resolution, density, wispiness, frequency)
+    name = unique_name(f"cloud_{medium.name}", {Path(n).stem for n in context.files}) + ".vol"
+    context.files[name] = values
+    matrix = context.world @ context.scene.world_from_medium[medium.name]
+    table: dict = {
+        "sigma_a": context.spectrum(medium, "sigma_a", "medium") or {"value": 1.0},
+        "sigma_s": context.spectrum(medium, "sigma_s", "medium") or {"value": 1.0},
+        "density": {
+            "file": f"{context.mesh_folder}/{name}",
+            "box": [p0, p1],
+            "transform": [{"matrix": matrix.tolist()}],
+        },
+    }
+    if (g := context.one(medium, "g", 0.0)) != 0.0:
+        table["g"] = g
     return table
 
 
@@ -140,6 +184,14 @@ def _emission(context: Context, medium: Entity, kind: str, table: dict) -> None:
         table["density"]["emission_values"] = grids["Lescale"]
 
 
+def _box(context: Context, medium: Entity) -> tuple[list[float], list[float]]:
+    """A grid medium's box, p0 to p1 (default the unit cube), as pbrt-v4 takes two corners: their smallest and
+    largest coordinates, whichever corner holds them (so a box given from its far corner is not mirrored)."""
+    p0 = context.vector(medium, "p0", [0.0, 0.0, 0.0])
+    p1 = context.vector(medium, "p1", [1.0, 1.0, 1.0])
+    return [min(a, b) for a, b in zip(p0, p1, strict=True)], [max(a, b) for a, b in zip(p0, p1, strict=True)]
+
+
 def _uniform_grid(context: Context, medium: Entity) -> dict:
     """A uniformgrid's `density` (nx·ny·nz values, x fastest) over the box p0–p1 of the medium's space, as
     spectrace's inline grid; the CTM at MakeNamedMedium places it. pbrt-v4 fades the density to 0 over the
@@ -157,8 +209,7 @@ def _uniform_grid(context: Context, medium: Entity) -> dict:
             parameter.location if parameter else medium.location,
             f'"float density" has {len(density)} values; nx·ny·nz = {count}',
         )
-    p0 = context.vector(medium, "p0", [0.0, 0.0, 0.0])
-    p1 = context.vector(medium, "p1", [1.0, 1.0, 1.0])
+    p0, p1 = _box(context, medium)
     matrix = context.world @ context.scene.world_from_medium[medium.name]
     return {
         "values": density,
