@@ -17,7 +17,7 @@ from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 from spectrace.scene.model import Camera, Scene
-from stats_toolkit import assert_within_standard_errors
+from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
 
 SIDE = 20
 VIEW = 2.4  # scene units across the image
@@ -79,6 +79,28 @@ def test_sphere_pixels_follow_the_closed_form(device):
     # The sides swapped, or n · dir without its absolute value, are far outside the noise: the check can fail.
     for wrong in (_expected(TEX2, TEX1)[0], _expected(fold=lambda c: np.clip(c, 0.0, None))[0]):
         assert np.max(np.abs(mean - wrong)[inside] / error[inside]) > 20.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator", ["light", "bdpt"])
+def test_light_tracer_and_bdpt_read_the_normal_too(device, integrator):
+    """Their surface vertices (camera and light subpaths, and BDPT's densities) look textures up with the normal:
+    each quadrant of the sphere's lit pixels, over 16 replicates, averages the closed form within 4 standard
+    errors of the replicates."""
+    expected, inside = _expected()
+    renders = np.stack(
+        [
+            Renderer(_scene(seed).with_overrides(integrator=integrator, aovs=(), spp=16), device).render().xyz[..., 1]
+            for seed in range(16)
+        ]
+    )
+    half = SIDE // 2
+    for rows in (slice(0, half), slice(half, SIDE)):
+        for columns in (slice(0, half), slice(half, SIDE)):
+            block = inside[rows, columns]
+            means = (renders[:, rows, columns][:, block] - expected[rows, columns][block]).mean(axis=1)
+            mean, error = mean_and_standard_error(means)
+            assert_within_standard_errors(mean, 0.0, error, slack=2e-5, what=(integrator, rows, columns))
 
 
 def test_scene_file_directionmix(tmp_path):
