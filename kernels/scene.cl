@@ -83,6 +83,7 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
 #if SCENE_HAS_MESH_ATTRIBUTES
     sc.buffers.triangle = -1;
 #endif
+    SURFACE_NORMAL(sc, (float3)(0.0f));
     return sc;
 }
 
@@ -95,6 +96,7 @@ inline SurfaceContext shading_context(const Scene *scene, float2 uv, float3 p, f
     SurfaceContext sc = surface_context(scene, uv, footprint);
     sc.p = p;
     sc.base_normal = base_normal;
+    SURFACE_NORMAL(sc, base_normal);
     sc.dpdu = dpdu;
     sc.tangent_w = tangent_w;
     sc.adjoint = adjoint;

@@ -80,6 +80,11 @@
 #define SCENE_HAS_MESH_ATTRIBUTES SCENE_HAS_TEXTURES
 #endif
 
+/* Textures that read the shading normal (directionmix: kernels/texture_direction_mix.cl). */
+#ifndef SCENE_HAS_DIRECTION_MIX
+#define SCENE_HAS_DIRECTION_MIX SCENE_HAS_TEXTURES
+#endif
+
 /* Lookups that read the texture footprint (trilinear filtering, a checkerboard bump map's differences): only then
  * does a hit pay for camera_footprint (kernels/scene.cl); elsewhere the footprint stays 0, which no other lookup
  * reads. */

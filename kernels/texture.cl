@@ -34,6 +34,9 @@ typedef struct {
     int triangle;  /* the hit's triangle slot, whose mesh attributes are read (texture_mesh_attribute.cl); -1: none */
     float2 b12;    /* the hit's barycentrics of its corners v1 and v2 */
 #endif
+#if SCENE_HAS_DIRECTION_MIX
+    float3 normal; /* unit: the surface's shading normal, which a directionmix reads (texture_direction_mix.cl); 0: none */
+#endif
 } TextureBuffers;
 
 /* Beyond ±2^30 texels an int index would overflow; a texture repeated that often is a constant to any filter. */
@@ -280,6 +283,10 @@ inline float4 texture_side(const TextureBuffers *b, __global const Texture *t, i
     return inner_texture_spectrum(b, &b->textures[inner], uv, p, footprint, w);
 }
 
+#if SCENE_HAS_DIRECTION_MIX
+#include "texture_direction_mix.cl"
+#endif
+
 /* Texture `index` at uv and the world-space point p (which only solid textures read), at the path's four
  * wavelengths. Composites (checkerboard, scale, mix, dots) read their operands, which are never composites, so
  * nothing recurses. */
@@ -295,6 +302,9 @@ inline float4 texture_spectrum_at(const TextureBuffers *b, int index, float2 uv,
     if (t->type == TEXTURE_DOTS) {
         return texture_side(b, t, dots_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, p, footprint, w);
     }
+#endif
+#if SCENE_HAS_DIRECTION_MIX
+    if (t->type == TEXTURE_DIRECTIONMIX) return direction_mix_spectrum(b, t, uv, p, footprint, w);
 #endif
     if (t->type == TEXTURE_SCALE || t->type == TEXTURE_MIX) {
         /* The factor is a number, the same at every wavelength: a scalar texture's first lane. */
@@ -358,6 +368,12 @@ typedef struct {
 #define SURFACE_AT_HIT(sc, v) ((sc).buffers.triangle = (v).triangle, (sc).buffers.b12 = (v).b12)
 #else
 #define SURFACE_AT_HIT(sc, v) ((void)0)
+#endif
+/* Where a surface context's lookups take the shading normal n from (a directionmix's). */
+#if SCENE_HAS_DIRECTION_MIX
+#define SURFACE_NORMAL(sc, n) ((sc).buffers.normal = (n))
+#else
+#define SURFACE_NORMAL(sc, n) ((void)0)
 #endif
 
 /* A textured parameter: its texture when it has one, else its tabulated spectrum. In a scene without textures the

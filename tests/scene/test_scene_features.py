@@ -93,6 +93,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_PROCEDURAL_TEXTURES": 0,
         "SCENE_HAS_SOLID_TEXTURES": 0,
         "SCENE_HAS_MESH_ATTRIBUTES": 0,
+        "SCENE_HAS_DIRECTION_MIX": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_PARTIAL_SHAPES": 0,
@@ -134,6 +135,8 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     assert scene_feature_defines(build_scene_buffers(dotted))["SCENE_HAS_SOLID_TEXTURES"] == 0
     solid = replace(textured, shapes=[spectrace.shape("rectangle", spectrace.diffuse(spectrace.marble_texture()))])
     assert scene_feature_defines(build_scene_buffers(solid))["SCENE_HAS_SOLID_TEXTURES"] == 1
+    assert scene_feature_defines(build_scene_buffers(solid))["SCENE_HAS_DIRECTION_MIX"] == 0
+    assert scene_feature_defines(build_scene_buffers(_direction_mix_scene()))["SCENE_HAS_DIRECTION_MIX"] == 1
     detailed = scene_feature_defines(build_scene_buffers(_surface_detail_scene()))
     assert detailed["SCENE_HAS_SURFACE_NORMALS"] == 1 and detailed["SCENE_HAS_OPACITY"] == 1
     for material, normals, opacity in (
@@ -536,8 +539,19 @@ def _mesh_attribute_scene():
     return replace(base, shapes=[*base.shapes[:-1], replace(block, mesh=mesh, material=material)])
 
 
+def _direction_mix_scene():
+    """The cornell box's white surfaces in a directionmix of two reflectances (walls, floor and blocks face dir at
+    different angles), and a sphere of a coated conductor whose metal's roughness is a checkerboard."""
+    base = _bundled("cornell_box")
+    mixed = spectrace.diffuse(spectrace.directionmix_texture((0.8, 0.3, 0.1), 0.4, dir=(1.0, 1.0, 0.5)))
+    coated = spectrace.coatedconductor("Au", conductor_roughness=spectrace.checkerboard(0.05, 0.4), roughness=0.1)
+    sphere = spectrace.shape("sphere", coated, transform=[{"scale": 90.0}, {"translate": [380.0, 90.0, 200.0]}])
+    return replace(base, shapes=[replace(base.shapes[0], material=mixed), *base.shapes[1:], sphere])
+
+
 SCENES = {
     "mesh_attributes": _mesh_attribute_scene,
+    "direction_mix": _direction_mix_scene,
     "thin_lens_and_gaussian": lambda: _with_camera(_bundled("cornell_box"), "thinlens", "gaussian"),
     "orthographic_trilinear_and_mitchell": lambda: _with_camera(
         _textured_scene(("trilinear",)), "orthographic", "mitchell"
@@ -604,6 +618,7 @@ def test_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name
         "anisotropic_conductor",
         "measured",
         "textured_principled_weights",
+        "direction_mix",
     ],
 )
 def test_light_tracer_scene_kernels_render_the_general_kernels_image_bit_for_bit(device, name):

@@ -21,6 +21,7 @@ API = {
     "windy": spectrace.windy_texture,
     "marble": spectrace.marble_texture,
     "mesh_attribute": spectrace.mesh_attribute,
+    "directionmix": spectrace.directionmix_texture,
 }
 
 

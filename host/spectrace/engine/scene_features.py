@@ -92,6 +92,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_PROCEDURAL_TEXTURES": int(bool(np.any(textures["type"] == TEXTURES.codes["dots"]))),
         "SCENE_HAS_SOLID_TEXTURES": int(bool(np.isin(textures["type"], SOLID_TEXTURE_CODES).any())),
         "SCENE_HAS_MESH_ATTRIBUTES": int(bool(np.any(textures["type"] == TEXTURES.codes["mesh_attribute"]))),
+        "SCENE_HAS_DIRECTION_MIX": int(bool(np.any(textures["type"] == TEXTURES.codes["directionmix"]))),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),
         "SCENE_HAS_SHAPES": int(buffers.shape_count + buffers.instanced_shape_count > 0),
         "SCENE_HAS_PARTIAL_SHAPES": int(bool(np.any(shape_rows["phi_max"] > 0.0))),

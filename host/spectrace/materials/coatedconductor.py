@@ -5,15 +5,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spectrace.core.parameters import SMOOTH_ALPHA, Parameter, Range, reflectance
+from spectrace.core.parameters import ROUGHNESS_RANGE, Parameter, Range, reflectance
 from spectrace.errors import SpectraceError
 from spectrace.materials import layered
 from spectrace.materials.layered import LayeredMaterial
+from spectrace.materials.opaque import smooth_everywhere
 from spectrace.spectral import spectrum_input
 from spectrace.spectral.metals import COMMON_METALS, metal_ior, metal_names_doc
 from spectrace.spectral.spectrum import Spectrum
 from spectrace.spectral.spectrum_input import SpectrumLike
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import number_or_texture
 
 NAME = "coatedconductor"
 MITSUBA_PLUGINS: tuple[str, ...] = ()
@@ -22,8 +24,16 @@ PBRT_MATERIALS = ("coatedconductor",)
 DEFAULT_METAL = "Cu"  # pbrt-v4's default conductor
 # pbrt-v4 clamps a reflectance below 1, where its k = 2√r / √(1 − r) is finite.
 MAX_REFLECTANCE = 0.9999
+# Its texture's index is in the row's reflectance_texture, which a coated conductor's reflectance (turned into η and
+# k on the host) leaves free.
 CONDUCTOR_ROUGHNESS = Parameter(
-    "conductor_roughness", "float", default=0.0, range=Range(0.0, 1.0), doc="GGX α of the metal under the coat"
+    "conductor_roughness",
+    "float",
+    default=0.0,
+    range=ROUGHNESS_RANGE,
+    doc="GGX α of the metal under the coat",
+    textured=True,
+    texture_field="reflectance_texture",
 )
 PARAMETERS = (
     Parameter(
@@ -62,7 +72,7 @@ class CoatedConductorMaterial(LayeredMaterial):
 
     eta: Spectrum
     k: Spectrum
-    conductor_roughness: float = 0.0
+    conductor_roughness: float = 0.0  # or a one-channel texture
     ior: float = 1.5
     roughness: float = 0.0  # or a one-channel texture
     thickness: float = 0.01
@@ -73,7 +83,7 @@ class CoatedConductorMaterial(LayeredMaterial):
 
     @property
     def base_is_smooth(self) -> bool:
-        return self.conductor_roughness < SMOOTH_ALPHA
+        return smooth_everywhere(self.conductor_roughness)
 
 
 MODEL = CoatedConductorMaterial
@@ -126,7 +136,12 @@ def from_spec(spec, resolver, key: str) -> CoatedConductorMaterial:
     )
     eta, k = _optical_constants(spec.metal, eta, k, colour, resolver.where(f"{key}.metal"))
     return CoatedConductorMaterial(
-        eta, k, conductor_roughness=spec.conductor_roughness, **layered.layers_from_spec(spec, resolver, key)
+        eta,
+        k,
+        conductor_roughness=resolver.number_or_texture(
+            spec.conductor_roughness, f"{key}.conductor_roughness", CONDUCTOR_ROUGHNESS
+        ),
+        **layered.layers_from_spec(spec, resolver, key),
     )
 
 
@@ -136,9 +151,9 @@ def make(
     eta: SpectrumLike | None = None,
     k: SpectrumLike | None = None,
     reflectance: SpectrumLike | None = None,
-    conductor_roughness: float = 0.0,
+    conductor_roughness=0.0,
     ior: float = 1.5,
-    roughness: float = 0.0,
+    roughness=0.0,
     thickness: float = 0.01,
     albedo: SpectrumLike | None = None,
     g: float = 0.0,
@@ -148,9 +163,9 @@ def make(
     """A metal under a dielectric coat (pbrt-v4's coatedconductor): the metal as `metal` ("Au", "Ag", "Cu", "Al"
     or another of the conductor's names; none given: copper), `eta` and `k` (relative to the outside) or
     `reflectance` (pbrt's η = 1, k = 2√r/√(1 − r)), of GGX α `conductor_roughness`; the coat of index `ior` and GGX
-    α `roughness`; between them a slab `thickness` mean free paths thick of single-scattering `albedo` (none: it
-    only absorbs) and Henyey-Greenstein `g`. The BSDF is a random walk of at most `max_depth` events, `samples`
-    walks per evaluation."""
+    α `roughness` (each roughness a number or a grey texture); between them a slab `thickness` mean free paths thick
+    of single-scattering `albedo` (none: it only absorbs) and Henyey-Greenstein `g`. The BSDF is a random walk of at
+    most `max_depth` events, `samples` walks per evaluation."""
     if problem := source_problem(metal, eta, k, reflectance):
         raise SpectraceError(problem)
     eta_spectrum = (
@@ -161,7 +176,7 @@ def make(
     optical = _optical_constants(metal, eta_spectrum, k_spectrum, colour, "metal")
     return CoatedConductorMaterial(
         *optical,
-        conductor_roughness=CONDUCTOR_ROUGHNESS.check(conductor_roughness),
+        conductor_roughness=number_or_texture(conductor_roughness, CONDUCTOR_ROUGHNESS),
         **layered.make_layers(ior, roughness, thickness, albedo, g, max_depth, samples),
     )
 
@@ -197,9 +212,6 @@ def from_pbrt(context, material) -> dict | None:
         metals = {s.get("spectrum", "").split(":")[0] for s in (eta, k)}
         metal = next(iter(metals)).removeprefix("metals/") if len(metals) == 1 else ""
         table |= {"metal": metal} if metal in COMMON_METALS else {"eta": eta, "k": k}
-    if (alpha := layered.pbrt_roughness(context, material, "conductor.")) > 0.0:
-        table["conductor_roughness"] = alpha
-    table |= layered.pbrt_layers(context, material, "interface.eta")
-    if (alpha := layered.pbrt_roughness(context, material, "interface.")) > 0.0:
-        table["roughness"] = alpha
-    return table
+    if conductor := context.rough(material, "conductor."):
+        table["conductor_roughness"] = conductor["roughness"]
+    return table | layered.pbrt_layers(context, material, "interface.eta") | context.rough(material, "interface.")

@@ -2,8 +2,6 @@
 dielectric coat over a base with a slab of medium between, evaluated by a random walk, kernels/layered.cl): the
 coat's and the slab's parameters, their row fields, and their pbrt-v4 keys."""
 
-import math
-
 import numpy as np
 
 from spectrace.core.contract import IOR_CONSTANT
@@ -141,24 +139,6 @@ def write_layers(row: np.ndarray, material: LayeredMaterial, table: SpectrumTabl
         row["transmittance_offset"] = table.add(material.albedo)
     row["ior_coefficients_b"] = (material.thickness, material.g, base_roughness, 0.0)
     row["ior_coefficients_c"] = (float(material.max_depth), float(material.samples), 0.0, 0.0)
-
-
-def pbrt_roughness(context, material, prefix: str) -> float:
-    """The GGX α of pbrt-v4's `<prefix>roughness` (or the mean of its u- and vroughness, with a warning where they
-    differ: the layered BSDFs here are isotropic), remapped as pbrt remaps it (`remaproughness`, α = √roughness)."""
-    for key in ("roughness", "uroughness", "vroughness"):
-        if (parameter := material.find(prefix + key, "texture")) is not None:
-            raise context.error(parameter.location, f'"{parameter.label()}": a layered material takes a number here')
-    base = context.one(material, prefix + "roughness", 0.0)
-    u = context.one(material, prefix + "uroughness", base)
-    v = context.one(material, prefix + "vroughness", base)
-    if u != v:
-        context.warn(
-            material.location,
-            f"{material.label()}: anisotropic {prefix}roughness ({u:g}, {v:g}) imported as their mean",
-        )
-    value = max((u + v) / 2.0, 0.0)
-    return min(math.sqrt(value) if context.boolean(material, "remaproughness", True) else value, 1.0)
 
 
 def pbrt_layers(context, material, eta_key: str) -> dict:

@@ -19,9 +19,10 @@ from spectrace.core.parameters import Parameter, Range
 from spectrace.errors import SpectraceError
 from spectrace.materials.base import Material
 from spectrace.spectral.table import SpectrumTable
+from spectrace.textures import COMPOSITE_TEXTURES
 
 # The textures a `mix` texture cannot take as an operand (the kernel does not recurse: docs/textures.md).
-_COMPOSITES = ("checkerboard", "scale", "mix", "dots")
+_COMPOSITES = COMPOSITE_TEXTURES
 
 NAME = "mix"
 # No bsdf_mix.cl: the mix is resolved before any BSDF is called (kernels/material_mix.cl).

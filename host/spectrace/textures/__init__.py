@@ -31,6 +31,7 @@ from spectrace.spectral.table import SpectrumTable
 from spectrace.textures import (
     bitmap,
     checkerboard,
+    directionmix,
     dots,
     fbm,
     marble,
@@ -45,6 +46,7 @@ from spectrace.textures import (
 from spectrace.textures.base import TexturePlugin
 from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
+from spectrace.textures.directionmix import DirectionMixTexture
 from spectrace.textures.dots import DotsTexture
 from spectrace.textures.mesh_attribute import MeshAttributeTexture
 from spectrace.textures.mix import MixTexture
@@ -55,7 +57,8 @@ from spectrace.textures.spectral import SpectralTexture
 
 # Scene-file type -> module; the position is the Texture.type code.
 TEXTURES = Registry[TexturePlugin](
-    "texture", (bitmap, spectral, checkerboard, scale, mix, dots, fbm, wrinkled, windy, marble, mesh_attribute)
+    "texture",
+    (bitmap, spectral, checkerboard, scale, mix, dots, fbm, wrinkled, windy, marble, mesh_attribute, directionmix),
 )
 # Each texture an API constructor makes remembers its arguments, by which a live session edits it (core/api_calls.py).
 for _module in TEXTURES.values():
@@ -77,6 +80,8 @@ IMAGE_TEXTURES = tuple(
 INNER_TEXTURES = IMAGE_TEXTURES + SOLID_TEXTURES + ATTRIBUTE_TEXTURES  # what a composite's operands may be
 # Those that pick one of two sides (color0, color1) at the point: their rows and checks are alike.
 TWO_SIDED = (CheckerboardTexture, DotsTexture)
+# Those whose value is computed from their operands' (spectra or inner textures) at the point.
+BLENDS = (ScaleTexture, MixTexture, DirectionMixTexture)
 _MODELS = tuple(module.MODEL for module in TEXTURES.values())
 
 
@@ -97,6 +102,9 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
     if kind == "amount":
         if isinstance(texture, SolidTexture) and texture.channels == 1:
             return
+        if isinstance(texture, DirectionMixTexture):
+            # A mix material chooses its material before the hit's shading normal is formed.
+            raise SpectraceError("a mix's amount takes no directionmix texture", where=where)
         kind, upper = "float", 1.0
     if isinstance(texture, MeshAttributeTexture):
         mesh_attribute.record_use(texture, kind, where, upper)
@@ -105,7 +113,7 @@ def check_texture_values(texture, kind: str, where: str, upper: float | None = N
         raise SpectraceError(
             f"an emission texture is a bitmap or a spectral texture, not a {texture_module(texture).NAME}", where=where
         )
-    if isinstance(texture, (ScaleTexture, MixTexture)):
+    if isinstance(texture, BLENDS):
         _check_composite(texture, kind, where, upper)
         return
     if isinstance(texture, SolidTexture):
@@ -212,7 +220,7 @@ def value_range(value) -> tuple[float, float]:
     if isinstance(value, ScaleTexture):
         (low, high), (f_low, f_high) = value_range(value.tex), value_range(value.scale)
         return low * f_low, high * f_high
-    if isinstance(value, MixTexture):
+    if isinstance(value, (MixTexture, DirectionMixTexture)):
         ranges = [value_range(side) for side in (value.tex1, value.tex2)]
         return min(r[0] for r in ranges), max(r[1] for r in ranges)
     return scalar_range(value)
@@ -225,7 +233,7 @@ def scalar_range(value) -> tuple[float, float]:
     if isinstance(value, TWO_SIDED):
         ranges = [scalar_range(side) for side in (value.color0, value.color1)]
         return min(r[0] for r in ranges), max(r[1] for r in ranges)
-    if isinstance(value, (ScaleTexture, MixTexture)):
+    if isinstance(value, BLENDS):
         return value_range(value)
     if isinstance(value, SolidTexture):
         return value.value_range()
@@ -246,7 +254,7 @@ def uv_textures(textures: dict) -> dict:
         for name, texture in textures.items()
         if not isinstance(texture, MeshAttributeTexture)
         and not (
-            isinstance(texture, (ScaleTexture, MixTexture))
+            isinstance(texture, BLENDS)
             and all(isinstance(o, (MeshAttributeTexture, Spectrum, int, float)) for o in texture.operands)
         )
     }
@@ -272,7 +280,7 @@ def device_bytes(texture, kind: str) -> int:
         return sum(device_bytes(side, kind) for side in (texture.color0, texture.color1) if is_texture(side))
     if isinstance(texture, (SolidTexture, MeshAttributeTexture)):
         return 0  # a few numbers, no texels (a mesh attribute's values are counted as they are stored)
-    if isinstance(texture, (ScaleTexture, MixTexture)):
+    if isinstance(texture, BLENDS):
         factor = _factor(texture)
         return sum(
             device_bytes(operand, "float" if operand is factor else kind)
@@ -351,7 +359,7 @@ class TextureRows:
                     row["side_texture"][i] = self.add(side, kind, where)
                 else:
                     raise SpectraceError(f"a {texture.source}'s sides are spectra or image textures", where=where)
-        elif isinstance(texture, (ScaleTexture, MixTexture)):
+        elif isinstance(texture, BLENDS):
             sides = (texture.tex,) if isinstance(texture, ScaleTexture) else (texture.tex1, texture.tex2)
             for i, side in enumerate(sides):
                 if isinstance(side, Spectrum):
@@ -362,7 +370,9 @@ class TextureRows:
                     raise SpectraceError(f"a {texture.source} texture's operands are spectra or image textures", where)
             factor = _factor(texture)
             row["factor_texture"] = NO_TEXTURE
-            if isinstance(factor, INNER_TEXTURES):
+            if isinstance(texture, DirectionMixTexture):
+                row["uv_transform"] = (*texture.dir, 0.0)  # the kernel's dir (texture_direction_mix.cl)
+            elif isinstance(factor, INNER_TEXTURES):
                 row["factor_texture"] = self.add(factor, "float", where)
             elif isinstance(factor, Spectrum):
                 row["factor"] = float(factor.values[0])  # a constant (checked)

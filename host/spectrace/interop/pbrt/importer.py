@@ -47,9 +47,10 @@ class Import(Context):
         """A reflectance: a spectrum (an RGB in [0, 1]), a spectrum texture, or the number `default`."""
         return materials.reflectance(self, entity, name, default)
 
-    def rough(self, material: Entity) -> dict:
-        """{"roughness": α} for a rough surface (pbrt's roughness remapped to the GGX α), {} for a smooth one."""
-        return materials.rough(self, material)
+    def rough(self, material: Entity, prefix: str = "") -> dict:
+        """{"roughness": α} for a rough surface (pbrt's roughness remapped to the GGX α, a number or a float
+        texture), {} for a smooth one; `prefix` names a layer's keys (`interface.`, `conductor.`)."""
+        return materials.rough(self, material, prefix)
 
     def rough_anisotropic(self, material: Entity) -> dict:
         """As `rough`, with "roughness_v" too where uroughness and vroughness differ (an anisotropic lobe)."""

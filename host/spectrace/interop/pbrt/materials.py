@@ -84,8 +84,8 @@ def reflectance(context: Context, entity: Entity, name: str, default: float) -> 
     return context.spectrum(entity, name, "albedo") or texture_reference(context, entity, name) or {"value": default}
 
 
-def rough(context: Context, material: Entity) -> dict:
-    alpha = roughness(context, material)
+def rough(context: Context, material: Entity, prefix: str = "") -> dict:
+    alpha = roughness(context, material, prefix)
     return {"roughness": alpha} if isinstance(alpha, dict) or alpha > 0 else {}
 
 
@@ -109,21 +109,24 @@ def _axis_roughness(context: Context, material: Entity, key: str) -> float | dic
     return 0.0
 
 
-def roughness(context: Context, material: Entity) -> float | dict:
-    """The GGX α: a number, or for a `"texture roughness"` a one-channel texture of α per point."""
-    if (texture := material.find("roughness", "texture")) is not None and not any(
-        material.find(key, "texture", "float") for key in ("uroughness", "vroughness")
+def roughness(context: Context, material: Entity, prefix: str = "") -> float | dict:
+    """The GGX α: a number, or for a `"texture roughness"` a one-channel texture of α per point; `prefix` names a
+    layer's keys (a coated conductor's `interface.` and `conductor.`)."""
+    keys = [prefix + key for key in ("roughness", "uroughness", "vroughness")]
+    if (texture := material.find(keys[0], "texture")) is not None and not any(
+        material.find(key, "texture", "float") for key in keys[1:]
     ):
         return roughness_texture(context, material, texture)
-    values = [context.one(material, key, -1.0) for key in ("roughness", "uroughness", "vroughness")]
-    for key in ("roughness", "uroughness", "vroughness"):
+    values = [context.one(material, key, -1.0) for key in keys]
+    for key in keys:
         if (parameter := material.find(key, "texture")) is not None:
             context.warn(parameter.location, f'"{parameter.label()}": a roughness texture is not imported (0 used)')
     u = values[1] if values[1] >= 0 else max(values[0], 0.0)
     v = values[2] if values[2] >= 0 else max(values[0], 0.0)
     if u != v:
         context.warn(
-            material.location, f"{material.label()}: anisotropic roughness ({u:g}, {v:g}) imported as their mean"
+            material.location,
+            f"{material.label()}: anisotropic {prefix}roughness ({u:g}, {v:g}) imported as their mean",
         )
     roughness = (u + v) / 2.0
     # pbrt-v4 remaps a roughness to the Trowbridge-Reitz (GGX) alpha as sqrt(roughness) unless told not to.
