@@ -377,7 +377,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         Hit hit = scene_intersect(scene, s.ray, path_query(sampler, &s, QUERY_PATH) ^ query_base, rays_traced);
         if (!adjoint) hit = far_clipped(params, &s, hit);
         int in_medium = bdpt_medium_step(scene, w, sampler, &s, hit.t, path, &count, max_vertices, &pdf_dir,
-                                         &scatter, hero, adjoint, light_share);
+                                         &scatter, hero, adjoint, light_share, seen_through);
         if (in_medium < 0) break;
         if (in_medium > 0) continue;
         if (hit.triangle < 0) {
