@@ -15,7 +15,8 @@
  * cosine, whichever way a path is traced).
  *
  * max_depth counts path segments from the camera as the path integrator does: light vertex i (1 = the first surface
- * the light reaches, 0 = a point on an area light) seen by the camera closes a path of i + 1 segments.
+ * the light reaches, 0 = a point on an area light or in a glowing medium: light_glowing_media.cl) seen by the camera
+ * closes a path of i + 1 segments.
  *
  * The splats a path makes land in arbitrary pixels. To keep the film deterministic they are not added here: each
  * is written as a record (pixel, XYZ) in its work-item's slots, in the order the path makes them, and the host adds
