@@ -38,8 +38,9 @@
  * Cameras: the pinhole, the thin lens (the eye vertex is the lens point, the t = 1 strategy draws its own
  * lens point as the light tracer does) and the orthographic camera (camera_importance.cl's connections).
  * Homogeneous media: bdpt_medium.cl (scattering points as vertices, transmittance on every connection, to a light
- * at infinity too). Fluorescent surfaces: bdpt_fluorescence.cl (paths without a re-emission by every strategy, those
- * with one by the path tracer from the camera side). Subpaths hold at most BDPT_MAX_VERTICES vertices. */
+ * at infinity too). Glowing media: light_glowing_media.cl (the camera subpaths gather their glow). Fluorescent
+ * surfaces: bdpt_fluorescence.cl (paths without a re-emission by every strategy, those with one by the path tracer
+ * from the camera side). Subpaths hold at most BDPT_MAX_VERTICES vertices. */
 #ifndef SPECTRACE_BDPT_CL
 #define SPECTRACE_BDPT_CL
 
@@ -377,7 +378,7 @@ inline int bdpt_walk(const Scene *scene, const SampledWavelengths *w, Sampler *s
         Hit hit = scene_intersect(scene, s.ray, path_query(sampler, &s, QUERY_PATH) ^ query_base, rays_traced);
         if (!adjoint) hit = far_clipped(params, &s, hit);
         int in_medium = bdpt_medium_step(scene, w, sampler, &s, hit.t, path, &count, max_vertices, &pdf_dir,
-                                         &scatter, hero, adjoint, light_share);
+                                         &scatter, hero, adjoint, light_share, seen_through);
         if (in_medium < 0) break;
         if (in_medium > 0) continue;
         if (hit.triangle < 0) {

@@ -19,6 +19,10 @@
 
 #define BDPT_MEDIUM 3
 
+#if SCENE_HAS_MEDIUM_EMISSION
+inline float4 bdpt_hero(float4 value, int hero);
+#endif
+
 /* The medium a segment leaving vertex v along unit d starts in: a surface's side (medium_beyond of the medium its
  * subpath arrived in); a scattering point's, a light point's or the eye's own medium otherwise. */
 inline int bdpt_side_medium(const BdptVertex *v, float3 d)
@@ -63,14 +67,21 @@ inline float4 bdpt_transmittance(const Scene *scene, const SampledWavelengths *w
  * (the throughput carries the flight's weight) or the subpath is outside media; 1 when it scattered: the point is
  * vertex path[*count] (*count then counts it) and the subpath goes on from it along a phase-sampled direction
  * (*pdf_dir its density); -1 when the subpath ends (no vertex left, Russian roulette, nothing carried). The vertex
- * before it gets its reverse density and running MIS sum as bdpt_walk's surfaces do; adjoint: a light subpath. */
+ * before it gets its reverse density and running MIS sum as bdpt_walk's surfaces do; adjoint: a light subpath.
+ * A camera subpath adds the glow of a glowing medium it crosses to *seen_through (light_glowing_media.cl). */
 inline int bdpt_medium_step(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, PathState *s,
                             float hit_t, BdptVertex *path, int *count, int max_vertices, float *pdf_dir,
-                            float4 *scatter, int hero, int adjoint, float light_share)
+                            float4 *scatter, int hero, int adjoint, float light_share, float4 *seen_through)
 {
     if (!SCENE_HAS_MEDIA || s->medium < 0) return 0;
     __global const Medium *medium = &scene->media[s->medium];
+#if SCENE_HAS_MEDIUM_EMISSION
+    float4 before = s->throughput;
+#endif
     FreeFlight flight = path_free_flight(scene, w, sampler, s, medium, hit_t);
+#if SCENE_HAS_MEDIUM_EMISSION
+    *seen_through += bdpt_hero(bdpt_glow_on_flight(scene, w, medium, &flight, before, hit_t, adjoint), hero);
+#endif
     *scatter *= flight.weight;
     if (all(s->throughput == (float4)(0.0f))) return -1;
     if (!flight.scattered) return 0;

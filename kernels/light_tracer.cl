@@ -15,7 +15,8 @@
  * cosine, whichever way a path is traced).
  *
  * max_depth counts path segments from the camera as the path integrator does: light vertex i (1 = the first surface
- * the light reaches, 0 = a point on an area light) seen by the camera closes a path of i + 1 segments.
+ * the light reaches, 0 = a point on an area light or in a glowing medium: light_glowing_media.cl) seen by the camera
+ * closes a path of i + 1 segments.
  *
  * The splats a path makes land in arbitrary pixels. To keep the film deterministic they are not added here: each
  * is written as a record (pixel, XYZ) in its work-item's slots, in the order the path makes them, and the host adds
@@ -244,6 +245,57 @@ inline int scatter_light_in_medium(const Scene *scene, const SampledWavelengths 
     return 1;
 }
 
+/* A light path from its vertex s->segments on (a light's point, or a glowing medium's): each vertex joined to
+ * the camera, until max_depth, Russian roulette or the scene's edge ends it. */
+inline void light_path_walk(const Scene *scene, SampledWavelengths *w, Sampler *sampler, PathState *s,
+                            float4 *scatter, int last_segment, __global const float4 *cmf, SplatRecords *records,
+                            uint *rays_traced)
+{
+    __global const RenderParams *params = scene->params;
+    /* s->segments: the index of the vertex s->ray is about to reach. */
+    while (s->segments + 1 <= last_segment) {
+        Hit hit = scene_intersect(scene, s->ray, path_query(sampler, s, QUERY_PATH), rays_traced);
+        int scattered = 0;
+        if (!scatter_light_in_medium(scene, w, sampler, s, hit.t, last_segment, cmf, records, scatter,
+                                     &scattered, rays_traced)) {
+            return;
+        }
+        if (scattered) continue;
+        PathVertex v;
+        int met = light_path_meets(scene, w, s, hit, &v);
+        if (met == LIGHT_PATH_ENDS) return;
+        if (met == LIGHT_PATH_CROSSES) continue;
+#if SCENE_HAS_FLUORESCENCE
+        fluorescent_light_vertex(scene, w, sampler, s, &v, scatter);
+#endif
+        __global const Material *material = &scene->materials[v.info.material];
+        SurfaceContext sc = shading_context(scene, v.uv, v.p, v.footprint, v.ns_base, v.dpdu, v.tangent_w, 1);
+        SURFACE_AT_HIT(sc, v);
+        if (material_has_non_delta_lobe(material)) {
+            CameraConnection c = connect_to_camera_sampled(params, v.p, lens_sample(params, sampler));
+            if (c.pixel >= 0 && shading_side_agrees(v.n, v.ns, c.to_camera)) {
+                float4 f_cos = material_eval(material, &sc, w, v.ns, c.to_camera, v.wo);
+                /* f_cos holds |ωlight·ns|: times |ωcamera·ng| / |ωlight·ng| (see the top of this file). */
+                float cos_light = fabs(dot(v.wo, v.n));
+                float cosines = cos_light > 0.0f ? fabs(dot(c.to_camera, v.n)) / cos_light : 0.0f;
+                float4 value = s->throughput * f_cos * (cosines * c.importance);
+                if (any(value != (float4)(0.0f))) {
+                    int medium = medium_beyond(v.info.interior, v.n, c.to_camera, s->medium);
+                    value *= camera_transmittance(scene, w, medium, &c, offset_ray_origin(v.p, v.n, c.to_camera),
+                                                  path_query(sampler, s, QUERY_SHADOW), rays_traced);
+                    if (any(value != (float4)(0.0f))) record_splat(records, c.pixel, c.film, value, cmf, w, params);
+                }
+            }
+        }
+        if (s->segments + 2 > last_segment) return;
+        if (!continue_light_path(&v, material, &sc, w, params, sampler, s, scatter)) return;
+    }
+}
+
+#if SCENE_HAS_MEDIUM_EMISSION
+#include "light_glowing_media.cl"
+#endif
+
 /* One light path of pixel sample `sample_index` of work-item `item`: its splats go to `records`. hide_environment:
  * the camera's own rays see black where they leave the scene (the scene's hide_environment). */
 inline void trace_light_path(const Scene *scene, int item, int sample_index, float4 scene_sphere,
@@ -258,6 +310,17 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
 
     float2 u_pick = sample_2d(&sampler);
     float2 u_direction = sample_2d(&sampler);
+    float4 scatter = (float4)(1.0f);  /* product of the adjoint BSDF weights alone, for Russian roulette */
+    float light_odds = 1.0f;          /* the probability of starting on a light (light_glowing_media.cl) */
+#if SCENE_HAS_MEDIUM_EMISSION
+    PathState glowing;
+    int glow = glowing_light_path_start(scene, &w, &sampler, &u_pick, u_direction, &light_odds, cmf, records,
+                                        &glowing, rays_traced);
+    if (glow != 0) {
+        if (glow > 0) light_path_walk(scene, &w, &sampler, &glowing, &scatter, last_segment, cmf, records, rays_traced);
+        return;
+    }
+#endif
     if (params->light_count == 0) return;
     __global const Light *light = &scene->lights[pick_light_reusing(scene->light_cdf, params->light_count, &u_pick)];
     LightBuffers buffers = light_buffers(scene);
@@ -266,9 +329,8 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
 
     /* The path's state as a camera path keeps it (path_state.cl), for the same queries and medium bookkeeping. */
     PathState s = camera_path(e.ray);
-    s.throughput = e.weight;
+    s.throughput = e.weight / light_odds;
     s.medium = scene_medium_at(scene, e.ray.origin); /* the light's medium, on the side its light leaves */
-    float4 scatter = (float4)(1.0f);  /* product of the adjoint BSDF weights alone, for Russian roulette */
 
     if (e.first_vertex) {
         CameraConnection c = connect_to_camera_sampled(params, e.point, lens_sample(params, &sampler));
@@ -282,51 +344,14 @@ inline void trace_light_path(const Scene *scene, int item, int sample_index, flo
                                                             offset_ray_origin(e.point, e.normal, c.to_camera),
                                                             path_query(&sampler, &s, QUERY_SHADOW), rays_traced);
                 if (any(transmittance != (float4)(0.0f))) {
-                    record_splat(records, c.pixel, c.film,
-                                 emitted * transmittance * (cos_light * c.importance / e.pdf_area), cmf, &w, params);
+                    float weight = cos_light * c.importance / (e.pdf_area * light_odds);
+                    record_splat(records, c.pixel, c.film, emitted * transmittance * weight, cmf, &w, params);
                 }
             }
         }
     }
 
-    /* s.segments: the index of the vertex s.ray is about to reach. */
-    while (s.segments + 1 <= last_segment) {
-        Hit hit = scene_intersect(scene, s.ray, path_query(&sampler, &s, QUERY_PATH), rays_traced);
-        int scattered = 0;
-        if (!scatter_light_in_medium(scene, &w, &sampler, &s, hit.t, last_segment, cmf, records, &scatter,
-                                     &scattered, rays_traced)) {
-            return;
-        }
-        if (scattered) continue;
-        PathVertex v;
-        int met = light_path_meets(scene, &w, &s, hit, &v);
-        if (met == LIGHT_PATH_ENDS) return;
-        if (met == LIGHT_PATH_CROSSES) continue;
-#if SCENE_HAS_FLUORESCENCE
-        fluorescent_light_vertex(scene, &w, &sampler, &s, &v, &scatter);
-#endif
-        __global const Material *material = &scene->materials[v.info.material];
-        SurfaceContext sc = shading_context(scene, v.uv, v.p, v.footprint, v.ns_base, v.dpdu, v.tangent_w, 1);
-        SURFACE_AT_HIT(sc, v);
-        if (material_has_non_delta_lobe(material)) {
-            CameraConnection c = connect_to_camera_sampled(params, v.p, lens_sample(params, &sampler));
-            if (c.pixel >= 0 && shading_side_agrees(v.n, v.ns, c.to_camera)) {
-                float4 f_cos = material_eval(material, &sc, &w, v.ns, c.to_camera, v.wo);
-                /* f_cos holds |ωlight·ns|: times |ωcamera·ng| / |ωlight·ng| (see the top of this file). */
-                float cos_light = fabs(dot(v.wo, v.n));
-                float cosines = cos_light > 0.0f ? fabs(dot(c.to_camera, v.n)) / cos_light : 0.0f;
-                float4 value = s.throughput * f_cos * (cosines * c.importance);
-                if (any(value != (float4)(0.0f))) {
-                    int medium = medium_beyond(v.info.interior, v.n, c.to_camera, s.medium);
-                    value *= camera_transmittance(scene, &w, medium, &c, offset_ray_origin(v.p, v.n, c.to_camera),
-                                                  path_query(&sampler, &s, QUERY_SHADOW), rays_traced);
-                    if (any(value != (float4)(0.0f))) record_splat(records, c.pixel, c.film, value, cmf, &w, params);
-                }
-            }
-        }
-        if (s.segments + 2 > last_segment) return;
-        if (!continue_light_path(&v, material, &sc, &w, params, &sampler, &s, &scatter)) return;
-    }
+    light_path_walk(scene, &w, &sampler, &s, &scatter, last_segment, cmf, records, rays_traced);
 }
 
 #endif

@@ -261,7 +261,8 @@ typedef struct {
     int bdpt_only_s;         /* test builds with BDPT_ONE_STRATEGY (kernels/bdpt.cl): the one strategy kept */
     int bdpt_only_t;
     int bdpt_pixels_per_light_path;  /* bdpt: neighbouring pixels sharing one light subpath (kernels/bdpt.cl) */
-    int pad_params[2];       /* keeps `lens` 16-byte aligned */
+    int glow_table;          /* glowing media: their light paths' table in the spectra (light_glowing_media.cl); -1 */
+    int pad_params[1];       /* keeps `lens` 16-byte aligned */
     float4 lens;             /* CAMERA_THINLENS: aperture radius, focus distance along camera_forward (scene
                                 units); a camera polariser's axis angle (radians) and 1 (polarized_path.cl), else
                                 0, 0 */

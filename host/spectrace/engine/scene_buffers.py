@@ -21,6 +21,7 @@ from spectrace.core.contract import (
     TRIANGLE_NO_MATERIAL,
 )
 from spectrace.engine.curve_buffers import curve_segments
+from spectrace.engine.glowing_media import glow_table
 from spectrace.engine.mesh_attribute_rows import write_attribute_tables
 from spectrace.engine.vertex_tangents import corner_tangents, smooth_rows
 from spectrace.errors import SpectraceError
@@ -98,6 +99,8 @@ class SceneBuffers:
     # Surfaces without material and without a medium inside (lights seen through, Mitsuba's null bsdf): visibility
     # queries must cross them as they cross media's index-matched boundaries (kernels/scene.cl)
     null_surfaces: bool = False
+    # The glowing media's table in `spectra` where light paths start (engine/glowing_media.py), -1: none
+    glow_table: int = -1
     # What an edit of the scene's materials, lights or instance placements needs to re-pack those rows alone
     # (spectrace.engine.scene_edits); kept only when asked (build_scene_buffers(keep_packing=True)), never uploaded.
     packing: "ScenePacking | None" = None
@@ -388,6 +391,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
         [s for s in scene.shapes if s.analytic is not None]
         + [s for instance in scene.instances for s in instance.object.shapes],
     )
+    glow = glow_table(scene, table, list(power))
     cmf = np.zeros((cmf_table_normalised().shape[0], 4), np.float32)
     cmf[:, :3] = cmf_table_normalised()
     materials = np.array(material_rows, MATERIAL_DTYPE) if material_rows else np.zeros(1, MATERIAL_DTYPE)
@@ -449,6 +453,7 @@ def build_scene_buffers(scene: Scene, keep_packing: bool = False) -> SceneBuffer
         instance_nodes=instance_nodes,
         instanced_triangle_count=objects.count,
         instanced_shape_count=objects.shape_count,
+        glow_table=glow,
         packing=packing,
     )
 
@@ -709,6 +714,7 @@ def render_params(scene: Scene, buffers: SceneBuffers, sample_begin: int, sample
     params["sample_begin"], params["sample_count"] = sample_begin, sample_count
     params["medium_count"] = buffers.medium_count
     params["null_surfaces"] = int(buffers.null_surfaces)
+    params["glow_table"] = buffers.glow_table
     params["hide_emitters"] = (HIDE_ENVIRONMENT if scene.hide_environment or scene.hide_emitters else 0) | (
         HIDE_AREA_EMITTERS if scene.hide_emitters else 0
     )

@@ -119,12 +119,17 @@ def renders_every_scene(scene: Scene, medium_count: int, spectral_bins: int) -> 
     return None
 
 
-def glowing_media_problem(scene: Scene, name: str) -> str | None:
-    """Why integrator `name`, whose paths cannot gather a medium's emission (only the path tracer's camera paths
-    do: kernels/medium_emission.cl), refuses this scene, or None."""
-    shapes = [*scene.shapes, *(shape for instance in scene.instances for shape in instance.object.shapes)]
+def glowing_media_problem(scene: Scene, name: str, placed_only: bool = False) -> str | None:
+    """Why integrator `name`, whose paths cannot gather a medium's emission (the path tracer's and BDPT's camera
+    paths do: kernels/medium_emission.cl; the light tracer's start in the scene's own shapes' glowing media:
+    kernels/light_glowing_media.cl), refuses this scene, or None. placed_only: only glowing media in placed
+    objects (instances) are refused."""
+    placed = [shape for instance in scene.instances for shape in instance.object.shapes]
+    shapes = placed if placed_only else [*scene.shapes, *placed]
     if any(shape.interior is not None and shape.interior.emission is not None for shape in shapes):
-        return f"integrator '{name}' does not render glowing media (a medium's emission); use 'path'"
+        if placed_only:
+            return f"integrator '{name}' does not render glowing media inside placed objects; use 'path' or 'bdpt'"
+        return f"integrator '{name}' does not render glowing media (a medium's emission); use 'path' or 'bdpt'"
     return None
 
 
@@ -140,7 +145,7 @@ def no_params(scene: Scene) -> dict[str, int]:
 
 # What an integrator may refuse whatever else the scene holds: each module's REFUSES lists those it does (and its
 # `problem` says so in one line), which tests/render/test_furnace_integrators.py holds it to.
-FEATURES = ("spectral bands", "AOVs", "pixel filters", "film responses", "media", "hidden area lights")
+FEATURES = ("spectral bands", "AOVs", "pixel filters", "film responses", "media", "hidden area lights", "glowing media")
 
 # The keys every integrator takes (the schema's IntegratorSpec, docs/scene-format.md's [integrator] table).
 MAX_DEPTH = Parameter(

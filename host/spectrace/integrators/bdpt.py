@@ -6,7 +6,7 @@ order (every pixel's own estimate, then the records)."""
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.integrators import light
-from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, glowing_media_problem, no_defines
+from spectrace.integrators.base import SHARED_PARAMETERS, RenderHost, Scene, no_defines
 
 NAME = "bdpt"
 # Mitsuba 0.6's bidirectional path tracer (Mitsuba 3 has none), max_depth and rr_depth meaning the same.
@@ -53,7 +53,7 @@ def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
             f"integrator 'bdpt' adds whole pixels (the box filter), not a {scene.pixel_filter.type} filter; "
             "use film.filter = \"box\" or 'path'"
         )
-    if found := glowing_media_problem(scene, NAME) or light.splatting_problem(scene, NAME):
+    if found := light.splatting_problem(scene, NAME):
         return found
     if scene.max_depth < 0 or scene.max_depth > BDPT_MAX_SEGMENTS:
         return (

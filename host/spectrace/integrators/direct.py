@@ -23,7 +23,7 @@ PARAMETERS = SHARED_PARAMETERS
 PROGRAMS = {"megakernel": "integrator_direct.cl"}
 SPLATS = None  # each pixel adds its own samples: tiles and checkpoints as the film's
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
-REFUSES: tuple[str, ...] = ()
+REFUSES: tuple[str, ...] = ("glowing media",)
 CHECKPOINT_PROBLEM = None
 defines = no_defines
 params = no_params

@@ -29,7 +29,7 @@ PROGRAMS = {"megakernel": "integrator_sppm.cl"}
 SPLATS = "photons"  # a photon adds to every pixel whose radius holds it: whole films only
 # Its per-pixel photon statistics (radius, photon count, flux) are not in the film's saved state.
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
-REFUSES: tuple[str, ...] = ("spectral bands", "AOVs", "pixel filters", "film responses", "media")
+REFUSES: tuple[str, ...] = ("spectral bands", "AOVs", "pixel filters", "film responses", "media", "glowing media")
 CHECKPOINT_PROBLEM = (
     "integrator 'sppm' cannot save or resume checkpoints (its photon statistics are not in the film's state); "
     "render without --checkpoint/--resume"
