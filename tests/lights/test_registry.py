@@ -77,7 +77,14 @@ def test_the_codes_are_each_type_s_place_among_every_light_module_s_device_types
 
 
 def test_every_light_kernel_file_is_a_registered_device_type():
-    shared = {"light_sample.cl", "light_area.cl", "light_emission.cl", "light_tracer.cl", "light_slide_frame.cl"}
+    shared = {
+        "light_sample.cl",
+        "light_area.cl",
+        "light_emission.cl",
+        "light_tracer.cl",
+        "light_slide_frame.cl",
+        "light_glowing_media.cl",
+    }
     files = {path.name for path in KERNELS.glob("light_*.cl")} - shared
     assert files == {t.kernel_file for t in DEVICE_LIGHTS.values()}
 
