@@ -1,6 +1,6 @@
-"""pbrt-v4's textures as spectrace's: `imagemap` and `checkerboard` (2D) by the texture modules that name them in
-PBRT_TEXTURES (bitmap, checkerboard: their `from_pbrt`, handed pbrt's (u, v) mapping), `constant` as a spectrum, and
-`scale` of a spectrum or an image (the scaled image written beside the TOML as OpenEXR), which are no texture of
+"""pbrt-v4's textures as spectrace's: those the texture modules name in PBRT_TEXTURES (imagemap, checkerboard,
+dots, mix, the solid ones: their `from_pbrt`, handed pbrt's (u, v) mapping), `constant` as a spectrum, and `scale`
+of a spectrum or an image (the scaled image written beside the TOML as OpenEXR), which are no texture of
 spectrace's."""
 
 from __future__ import annotations
