@@ -13,6 +13,7 @@ from spectrace.core.contract import TEXEL_RGB, TEXEL_SCALAR, TEXEL_SIGMOID, TEXE
 from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.core.parameters import Parameter
 from spectrace.errors import SpectraceError
+from spectrace.textures.mapping import PARAMETERS as MAPPING_PARAMETERS
 from spectrace.textures.shared import (
     FILE,
     FILTER,
@@ -41,7 +42,7 @@ LUMINANCE = Parameter(
     doc="read an RGB image as one channel, the luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of its linear values "
     "(as Mitsuba 3 reads an RGB bitmap where it needs one number, e.g. a bump map); a grey image stays as it is",
 )
-PARAMETERS = (FILE, RAW, LUMINANCE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
+PARAMETERS = (FILE, RAW, LUMINANCE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET, *MAPPING_PARAMETERS)
 # The Y row of the linear sRGB -> XYZ matrix (IEC 61966-2-1; Rec. ITU-R BT.709 primaries, D65 white), the weights
 # Mitsuba 3's luminance() uses.
 _LUMINANCE_WEIGHTS = np.array([0.212671, 0.715160, 0.072169])

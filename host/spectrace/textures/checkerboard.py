@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures.mapping import PARAMETERS as MAPPING_PARAMETERS
 from spectrace.textures.shared import (
     UV_OFFSET,
     Placement,
@@ -31,6 +32,7 @@ PARAMETERS = (
     Parameter("color1", "spectrum", default=0.2, range=Range(0.0, 1.0), doc="the other squares", textured=True),
     uv_scale(2.0),
     UV_OFFSET,
+    *MAPPING_PARAMETERS,
 )
 MITSUBA_PLUGINS = ("checkerboard",)
 PBRT_TEXTURES = ("checkerboard",)

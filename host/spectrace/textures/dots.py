@@ -8,6 +8,7 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
+from spectrace.textures.mapping import PARAMETERS as MAPPING_PARAMETERS
 from spectrace.textures.shared import (
     UV_OFFSET,
     Placement,
@@ -26,6 +27,7 @@ PARAMETERS = (
     Parameter("outside", "spectrum", default=0.0, range=Range(0.0, 1.0), doc="the value elsewhere", textured=True),
     uv_scale(1.0),
     UV_OFFSET,
+    *MAPPING_PARAMETERS,
 )
 MITSUBA_PLUGINS: tuple[str, ...] = ()
 MITSUBA_NONE = "Mitsuba 3 has no procedural textures"

@@ -1,0 +1,129 @@
+"""Texture mappings (textures/mapping.py, kernels/texture_mapping.cl), against their closed forms: a checkerboard
+whose (u, v) a mapping makes from the surface point, seen by an orthographic camera, so each pixel's points are
+known. Where the closed form (pbrt-v4's TextureMapping2D formulas, written here from the book, not the code under
+test) puts one side of the board over the whole pixel, the pixel is bit for bit the render of a surface of that
+side's albedo (same seed: the same paths, the texture reading no random numbers); the pixels the edges cross are
+left out. Both sides must cover many pixels, so a mapping that put the board anywhere else fails."""
+
+import numpy as np
+import pytest
+
+import spectrace
+from spectrace.engine.renderer import Renderer
+from spectrace.errors import SpectraceError
+from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
+from spectrace.scene.model import Camera, Scene
+from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures.checkerboard import CheckerboardTexture
+from spectrace.textures.mapping import mapping_rows
+from spectrace.textures.shared import Placement
+
+SIDE = 32
+SUBSAMPLES = 6  # per pixel and axis: where the closed form is checked to be one side over the whole pixel
+ALBEDOS = (0.8, 0.1)
+
+
+def _scene(geometry: str, reflectance) -> Scene:
+    # Seen from +z, image right +x and up +y, the view 2 units across: pixel (i, j) covers x in -1 + 2 [j, j + 1]/SIDE,
+    # y in 1 - 2 [i + 1, i]/SIDE.
+    camera = Camera(origin=(0.0, 0.0, 5.0), target=(0.0, 0.0, 0.0), type="orthographic", view_width=2.0)
+    return Scene(
+        camera=camera,
+        width=SIDE,
+        height=SIDE,
+        shapes=[spectrace.shape(geometry, spectrace.diffuse(reflectance))],
+        lights=[spectrace.constant_environment(1.0)],
+        max_depth=2,  # one bounce
+        spp=2,
+        seed=5,
+        sampler="independent",
+    )
+
+
+def _render(device, geometry: str, reflectance) -> np.ndarray:
+    return Renderer(_scene(geometry, reflectance), device).render().xyz
+
+
+def _pixel_points() -> tuple[np.ndarray, np.ndarray]:
+    """x, y of SUBSAMPLES² points spanning each pixel, inset from its border by a hair: [SIDE, SIDE, n]."""
+    offsets = (np.arange(SUBSAMPLES) + 0.5) / SUBSAMPLES
+    i = np.arange(SIDE)[:, None, None, None] + offsets[None, None, :, None]
+    j = np.arange(SIDE)[None, :, None, None] + offsets[None, None, None, :]
+    x = np.broadcast_to(-1.0 + 2.0 * j / SIDE, (SIDE, SIDE, SUBSAMPLES, SUBSAMPLES))
+    y = np.broadcast_to(1.0 - 2.0 * i / SIDE, (SIDE, SIDE, SUBSAMPLES, SUBSAMPLES))
+    return x.reshape(SIDE, SIDE, -1), y.reshape(SIDE, SIDE, -1)
+
+
+def _check(device, geometry: str, mapping: str, to_texture, st_of, uv_scale, v1=(1, 0, 0), v2=(0, 1, 0)):
+    """st_of(x, y) -> (s, t) pbrt's mapping gives at the visible point over (x, y), NaN off the surface; the board's
+    side is floor(S) + floor(T) mod 2 at (S, T) = uv_scale · (s, 1 − t) (the mapping's v down the image, as a
+    mesh's)."""
+    placement = Placement(
+        uv_scale=uv_scale, mapping=mapping, mapping_rows=mapping_rows(mapping, np.asarray(to_texture), v1, v2)
+    )
+    sides = [Spectrum.constant(a) for a in ALBEDOS]
+    image = _render(device, geometry, CheckerboardTexture(sides[0], sides[1], placement))
+    plain = [_render(device, geometry, a) for a in ALBEDOS]
+    x, y = _pixel_points()
+    s, t = st_of(x, y)
+    side = (np.floor(uv_scale[0] * s) + np.floor(uv_scale[1] * (1.0 - t))) % 2
+    for k in (0, 1):
+        clean = np.all(side == k, axis=-1)
+        assert clean.sum() >= 40, (mapping, k, clean.sum())
+        np.testing.assert_array_equal(image[clean], plain[k][clean])
+    # And the board is not the same everywhere: the two sides' pixels differ.
+    assert not np.array_equal(plain[0], plain[1])
+
+
+def _sphere_point(x, y):
+    """The unit sphere's point seen over (x, y) from +z: (x, y, √(1 − x² − y²)), NaN beyond its outline."""
+    with np.errstate(invalid="ignore"):
+        return x, y, np.sqrt(1.0 - x * x - y * y)
+
+
+def test_planar_mapping_puts_the_board_where_p_dot_v1_and_p_dot_v2_say(device):
+    """A rectangle in z = 0, its texture space moved by (0.3, -0.2, 0) and v1, v2 turned and scaled: s = q · v1,
+    t = q · v2, q = p − (0.3, −0.2, 0)."""
+    v1, v2 = np.array([1.5, 0.5, 0.0]), np.array([-0.5, 1.5, 0.0])
+    to_texture = np.eye(4)
+    to_texture[:3, 3] = (-0.3, 0.2, 0.0)
+
+    def st_of(x, y):
+        q = np.stack([x - 0.3, y + 0.2, np.zeros_like(x)], axis=-1)
+        return q @ v1, q @ v2
+
+    _check(device, "rectangle", "planar", to_texture, st_of, (1.0, 1.0), v1, v2)
+
+
+def test_spherical_mapping_puts_the_board_at_theta_over_pi_and_phi_over_two_pi(device):
+    """The unit sphere about the texture space's origin: s = θ/π (θ from +z), t = φ/2π (φ from +x toward +y, in
+    [0, 2π)), the board 4 × 8 squares over them."""
+
+    def st_of(x, y):
+        px, py, pz = _sphere_point(x, y)
+        phi = np.mod(np.arctan2(py, px), 2 * np.pi)
+        return np.arccos(np.clip(pz, -1, 1)) / np.pi, phi / (2 * np.pi)
+
+    _check(device, "sphere", "spherical", np.eye(4), st_of, (4.0, 8.0))
+
+
+def test_cylindrical_mapping_puts_the_board_at_phi_and_height(device):
+    """The unit sphere with a cylindrical mapping whose texture space is turned about x (texture x' = x, y' = z,
+    z' = −y: the cylinder's axis across the image): s = (π + atan2(y', x'))/2π, t = z'."""
+    rotate = np.eye(4)
+    rotate[1:3, 1:3] = [[0.0, 1.0], [-1.0, 0.0]]  # world to texture: y' = z, z' = -y
+
+    def st_of(x, y):
+        px, py, pz = _sphere_point(x, y)
+        tx, ty, tz = px, pz, -py
+        return (np.pi + np.arctan2(ty, tx)) / (2 * np.pi), tz
+
+    _check(device, "sphere", "cylindrical", rotate, st_of, (6.0, 3.0))
+
+
+def test_a_mapped_texture_is_refused_by_the_mitsuba_export(tmp_path, mitsuba_scalar_spectral):
+    """Mitsuba 3's textures read the surface's uv only: a mapping would be lost, so the export says so."""
+    placement = Placement(mapping="spherical", mapping_rows=mapping_rows("spherical", np.eye(4)))
+    board = CheckerboardTexture(Spectrum.constant(0.8), Spectrum.constant(0.1), placement)
+    with pytest.raises(SpectraceError, match="with a spherical mapping"):
+        scene_to_mitsuba_dict(_scene("sphere", board), tmp_path)
