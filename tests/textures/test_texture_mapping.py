@@ -13,10 +13,6 @@ from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 from spectrace.scene.model import Camera, Scene
-from spectrace.spectral.spectrum import Spectrum
-from spectrace.textures.checkerboard import CheckerboardTexture
-from spectrace.textures.mapping import mapping_rows
-from spectrace.textures.shared import Placement
 
 SIDE = 32
 SUBSAMPLES = 6  # per pixel and axis: where the closed form is checked to be one side over the whole pixel
@@ -58,11 +54,10 @@ def _check(device, geometry: str, mapping: str, to_texture, st_of, uv_scale, v1=
     """st_of(x, y) -> (s, t) pbrt's mapping gives at the visible point over (x, y), NaN off the surface; the board's
     side is floor(S) + floor(T) mod 2 at (S, T) = uv_scale · (s, 1 − t) (the mapping's v down the image, as a
     mesh's)."""
-    placement = Placement(
-        uv_scale=uv_scale, mapping=mapping, mapping_rows=mapping_rows(mapping, np.asarray(to_texture), v1, v2)
-    )
-    sides = [Spectrum.constant(a) for a in ALBEDOS]
-    image = _render(device, geometry, CheckerboardTexture(sides[0], sides[1], placement))
+    # Through the API: the texture space placed by the inverse of the world-to-texture matrix.
+    placed = [{"matrix": np.linalg.inv(np.asarray(to_texture, np.float64)).tolist()}]
+    board = spectrace.checkerboard(*ALBEDOS, uv_scale=uv_scale, mapping=mapping, transform=placed, v1=v1, v2=v2)
+    image = _render(device, geometry, board)
     plain = [_render(device, geometry, a) for a in ALBEDOS]
     x, y = _pixel_points()
     s, t = st_of(x, y)
@@ -123,7 +118,69 @@ def test_cylindrical_mapping_puts_the_board_at_phi_and_height(device):
 
 def test_a_mapped_texture_is_refused_by_the_mitsuba_export(tmp_path, mitsuba_scalar_spectral):
     """Mitsuba 3's textures read the surface's uv only: a mapping would be lost, so the export says so."""
-    placement = Placement(mapping="spherical", mapping_rows=mapping_rows("spherical", np.eye(4)))
-    board = CheckerboardTexture(Spectrum.constant(0.8), Spectrum.constant(0.1), placement)
+    board = spectrace.checkerboard(0.8, 0.1, mapping="spherical")
     with pytest.raises(SpectraceError, match="with a spherical mapping"):
         scene_to_mitsuba_dict(_scene("sphere", board), tmp_path)
+
+
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        ({"mapping": "conical"}, "mapping must be one of 'uv', 'spherical', 'cylindrical', 'planar'"),
+        ({"transform": [{"translate": [1, 0, 0]}]}, 'a transform is read with a mapping other than "uv"'),
+        ({"mapping": "planar", "v1": (1, 0)}, "v1 and v2 are three finite numbers each"),
+    ],
+)
+def test_the_api_refuses_a_bad_mapping_in_one_line(arguments, message):
+    with pytest.raises(SpectraceError, match=message):
+        spectrace.checkerboard(0.8, 0.1, **arguments)
+
+
+@pytest.mark.parametrize(
+    "keys, key_path, message",
+    [
+        ("transform = [{ translate = [1, 0, 0] }]", "materials.board.reflectance.transform", "a mapping other"),
+        ('mapping = "conical"', "materials.board.reflectance.mapping", ""),
+        ('mapping = "planar", transform = [{ scale = 0 }]', "materials.board.reflectance.transform", ""),
+    ],
+)
+def test_the_scene_file_refuses_a_bad_mapping_naming_its_key(tmp_path, keys, key_path, message):
+    from scene_text import camera_film
+    from spectrace.scene.loader import load_scene
+
+    path = tmp_path / "s.toml"
+    path.write_text(
+        camera_film()
+        + '[materials.board]\ntype = "diffuse"\n'
+        + f'reflectance = {{ texture = "checkerboard", {keys} }}\n'
+        + '[[shapes]]\ntype = "rectangle"\nmaterial = "board"\n'
+    )
+    with pytest.raises(SpectraceError) as failure:
+        load_scene(path)
+    assert key_path in str(failure.value) and message in str(failure.value), str(failure.value)
+    assert "\n" not in str(failure.value)
+
+
+def test_a_scene_file_mapping_loads_as_the_apis(tmp_path):
+    from scene_text import camera_film
+    from spectrace.scene.loader import load_scene
+
+    path = tmp_path / "s.toml"
+    path.write_text(
+        camera_film()
+        + '[materials.board]\ntype = "diffuse"\n'
+        + 'reflectance = { texture = "dots", mapping = "planar", v1 = [0, 2, 0], '
+        + "transform = [{ translate = [1, 2, 3] }] }\n"
+        + '[[shapes]]\ntype = "rectangle"\nmaterial = "board"\n'
+    )
+    (shape,) = load_scene(path).shapes
+    api = spectrace.dots_texture(mapping="planar", v1=(0, 2, 0), transform=[{"translate": [1, 2, 3]}])
+    assert shape.material.reflectance.placement == api.placement
+    assert np.allclose(np.reshape(api.placement.mapping_rows, (3, 4))[:2], [[0, 2, 0, -4], [0, 1, 0, -2]])
+
+
+def test_surface_detail_refuses_a_mapped_texture_in_one_line():
+    """Normal and bump maps and opacity are read at the surface's own uv (kernels/surface_detail.cl)."""
+    board = spectrace.checkerboard(0.8, 0.1, mapping="cylindrical")
+    with pytest.raises(SpectraceError, match="bump_map takes no cylindrical mapping"):
+        spectrace.diffuse(0.5, bump_map=board)

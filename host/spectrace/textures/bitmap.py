@@ -14,6 +14,7 @@ from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.core.parameters import Parameter
 from spectrace.errors import SpectraceError
 from spectrace.textures.mapping import PARAMETERS as MAPPING_PARAMETERS
+from spectrace.textures.mapping import api_mapping
 from spectrace.textures.shared import (
     FILE,
     FILTER,
@@ -108,12 +109,16 @@ def make(
     filter: str = "bilinear",
     uv_scale: float | tuple[float, float] = 1.0,
     uv_offset: tuple[float, float] = (0.0, 0.0),
+    mapping: str = "uv",
+    transform=(),
+    v1=(1.0, 0.0, 0.0),
+    v2=(0.0, 1.0, 0.0),
 ) -> BitmapTexture:
     """An image texture (docs/textures.md), `spectrace.bitmap`: a file path (PNG, JPEG, TIFF, OpenEXR, Radiance .hdr;
     integer-coded files are sRGB-decoded unless raw), a numpy array (H, W), (H, W, 1) or (H, W, 3) of linear values
     (srgb=True: sRGB-encoded values in [0, 1]), or a PIL image (decoded from sRGB unless raw). st = uv · uv_scale +
     uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest", "bilinear" or "trilinear"; luminance=True: an RGB
-    image as one channel, its luminance."""
+    image as one channel, its luminance; mapping (with transform, v1, v2): where (u, v) come from (docs/textures.md)."""
     from spectrace.io.images import pil_image_values, read_texture_image
 
     where = "texture"
@@ -139,7 +144,7 @@ def make(
     linear = decoded(values, encoded, raw)
     return BitmapTexture(
         _read_only(_luminance(linear) if luminance else linear),
-        checked_placement(uv_scale, uv_offset, wrap, filter),
+        api_mapping(checked_placement(uv_scale, uv_offset, wrap, filter), mapping, transform, v1, v2),
         source=name,
         srgb_decoded=encoded and not raw,
     )

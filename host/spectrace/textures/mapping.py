@@ -74,5 +74,25 @@ def with_mapping(placement, spec, where: str | None):
     return replace(placement, mapping=mapping, mapping_rows=rows)
 
 
+def api_mapping(placement, mapping: str, transform, v1, v2):
+    """The placement of an API constructor's texture with its mapping (the keyword arguments `mapping`,
+    `transform`: transform steps as a scene file writes them, `v1`, `v2`)."""
+    from spectrace.textures.solid import to_texture_matrix
+
+    if mapping not in MAPPINGS:
+        known = ", ".join(repr(m) for m in MAPPINGS)
+        raise SpectraceError(f"mapping must be one of {known}, got {mapping!r}", "mapping")
+    steps = [dict(step) for step in transform]
+    if mapping == "uv":
+        if steps:
+            raise SpectraceError('a transform is read with a mapping other than "uv"', "transform")
+        return placement
+    vectors = [np.asarray(v, np.float64) for v in (v1, v2)]
+    if any(v.shape != (3,) or not np.all(np.isfinite(v)) for v in vectors):
+        raise SpectraceError("v1 and v2 are three finite numbers each", "v1")
+    rows = mapping_rows(mapping, to_texture_matrix(steps, "transform"), *vectors)
+    return replace(placement, mapping=mapping, mapping_rows=rows)
+
+
 def device_floats(placement) -> np.ndarray:
     return np.asarray(placement.mapping_rows, np.float32)
