@@ -184,3 +184,27 @@ def test_surface_detail_refuses_a_mapped_texture_in_one_line():
     board = spectrace.checkerboard(0.8, 0.1, mapping="cylindrical")
     with pytest.raises(SpectraceError, match="bump_map takes no cylindrical mapping"):
         spectrace.diffuse(0.5, bump_map=board)
+
+
+def test_the_scene_kernels_of_a_mapped_texture_render_the_general_kernels_image_bit_for_bit(device):
+    """SCENE_HAS_TEXTURE_MAPPINGS builds the mapping in only where a texture has one; the general kernels, which
+    always have it, must give the same bits."""
+    board = spectrace.checkerboard(*ALBEDOS, uv_scale=(4.0, 8.0), mapping="spherical")
+    scene = _scene("sphere", board)
+    specialised = Renderer(scene, device, specialise=True).render().xyz
+    general = Renderer(scene, device, specialise=False).render().xyz
+    assert specialised[..., 1].mean() > 0
+    assert np.array_equal(specialised.view(np.uint32), general.view(np.uint32))
+
+
+def test_a_mapped_image_as_a_mix_operand_is_looked_up_through_its_mapping(device):
+    """A composite's operands map themselves (texture.cl's inner lookup): a mix with amount 0 of a planar-mapped
+    image renders the image's own render bit for bit (mix(a, b, 0) = a), and differs from the unmapped image."""
+    texels = np.array([[[0.9, 0.2, 0.1], [0.1, 0.3, 0.8]]])
+    mapped = {"mapping": "planar", "v1": (2.0, 0.0, 0.0), "v2": (0.0, 2.0, 0.0), "filter": "nearest"}
+    image = spectrace.bitmap(texels, **mapped)
+    alone = _render(device, "rectangle", image)
+    mixed = _render(device, "rectangle", spectrace.mix_texture(image, 0.1, 0.0))
+    np.testing.assert_array_equal(mixed, alone)
+    unmapped = _render(device, "rectangle", spectrace.bitmap(texels, filter="nearest"))
+    assert not np.array_equal(alone, unmapped)
