@@ -108,3 +108,10 @@ def test_what_spectraces_mix_cannot_take_is_refused_at_its_line(tmp_path, textur
         pbrt_scene_data(path)
     assert failure.value.where == f"{path}:{line}"
     assert message in failure.value.message
+
+
+def test_the_composites_the_mix_import_refuses_are_the_registrys():
+    from spectrace.textures import COMPOSITE_TEXTURES
+    from spectrace.textures.mix import PBRT_COMPOSITES
+
+    assert sorted(PBRT_COMPOSITES) == sorted(COMPOSITE_TEXTURES)

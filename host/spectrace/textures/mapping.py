@@ -8,7 +8,9 @@ scaled and offset by uv_scale and uv_offset; v runs up the image, as a mesh file
 Device form (TextureRows.add): the row's `mapping` code and `mapping_offset`, which points at MAPPING_FLOATS floats of
 the texel buffer laid out as kernels/texture_mapping.cl states."""
 
+from collections.abc import Iterable, Mapping
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -45,6 +47,17 @@ PARAMETERS = (
 )
 
 
+def to_texture_matrix(steps: Iterable[Mapping[str, Any]], where: str | None) -> np.ndarray:
+    """The inverse of the placement's matrix (steps as a scene file writes them, checked as a shape's are): a
+    mapped or solid texture's world-to-texture matrix."""
+    from spectrace.geometry.transforms import transform_matrix
+
+    as_dicts = [dict(step) for step in steps]
+    with np.errstate(over="ignore", invalid="ignore"):
+        matrix = transform_matrix(as_dicts, where=where or "transform")
+    return np.linalg.inv(matrix)
+
+
 def mapping_rows(mapping: str, to_texture: np.ndarray, v1=(1.0, 0.0, 0.0), v2=(0.0, 1.0, 0.0)) -> tuple:
     """The 12 floats kernels/texture_mapping.cl reads: the world-to-texture matrix's three rows, for `planar` with
     v1ᵀ and v2ᵀ times it as its first two rows (s, t the first two coordinates)."""
@@ -58,8 +71,6 @@ def mapping_rows(mapping: str, to_texture: np.ndarray, v1=(1.0, 0.0, 0.0), v2=(0
 
 def with_mapping(placement, spec, where: str | None):
     """The placement of a validated scene table with its mapping (`mapping`, `transform`, `v1`, `v2`)."""
-    from spectrace.textures.solid import to_texture_matrix
-
     mapping = getattr(spec, "mapping", "uv")
     steps = [step.model_dump(exclude_none=True) for step in getattr(spec, "transform", ())]
     if mapping == "uv":
@@ -77,8 +88,6 @@ def with_mapping(placement, spec, where: str | None):
 def api_mapping(placement, mapping: str, transform, v1, v2):
     """The placement of an API constructor's texture with its mapping (the keyword arguments `mapping`,
     `transform`: transform steps as a scene file writes them, `v1`, `v2`)."""
-    from spectrace.textures.solid import to_texture_matrix
-
     if mapping not in MAPPINGS:
         known = ", ".join(repr(m) for m in MAPPINGS)
         raise SpectraceError(f"mapping must be one of {known}, got {mapping!r}", "mapping")

@@ -29,6 +29,9 @@ MITSUBA_NONE = "Mitsuba 3 has no mix texture"
 PBRT_TEXTURES = ("mix",)
 # pbrt-v4's defaults (MixTexture::Create): tex1 0, tex2 1, amount 0.5.
 PBRT_DEFAULTS = {"tex1": 0.0, "tex2": 1.0, "amount": 0.5}
+# What an imported operand may come out as that spectrace's mix does not nest (textures.COMPOSITE_TEXTURES, which
+# this module cannot import: tests/interop/test_pbrt_mix_texture.py holds the two equal).
+PBRT_COMPOSITES = ("checkerboard", "dots", "scale", "mix")
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,8 +82,6 @@ def from_pbrt(context, texture, uv) -> dict:
 
 
 def _pbrt_operand(context, texture, name: str) -> dict:
-    from spectrace.textures import COMPOSITE_TEXTURES
-
     default = PBRT_DEFAULTS[name]
     if name == "amount":
         if texture.find(name, "texture") is None:
@@ -97,7 +98,7 @@ def _pbrt_operand(context, texture, name: str) -> dict:
             reference.location, f"\"{reference.label()}\" names '{context.shown(key[1])}', which no Texture defined"
         )
     inner = context.texture_table(context.scene.textures[key].entity)
-    if inner.get("texture") in COMPOSITE_TEXTURES:
+    if inner.get("texture") in PBRT_COMPOSITES:
         raise context.error(
             reference.location,
             f'{texture.label()}: a {inner["texture"]} texture as "{name}" (spectrace\'s mix takes spectra, image '
