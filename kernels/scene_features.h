@@ -70,6 +70,10 @@
 #define SCENE_HAS_PROCEDURAL_TEXTURES 1
 #endif
 
+/* 2D textures looked up at coordinates a mapping makes from the surface point (kernels/texture_mapping.cl). */
+#ifndef SCENE_HAS_TEXTURE_MAPPINGS
+#define SCENE_HAS_TEXTURE_MAPPINGS 1
+#endif
 /* Solid textures, looked up at the surface point (fbm, wrinkled, windy, marble: kernels/texture_solid.cl). */
 #ifndef SCENE_HAS_SOLID_TEXTURES
 #define SCENE_HAS_SOLID_TEXTURES 1

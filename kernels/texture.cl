@@ -260,6 +260,11 @@ inline int checkerboard_side(float2 st)
 #if SCENE_HAS_MESH_ATTRIBUTES
 #include "texture_mesh_attribute.cl"
 #endif
+#if SCENE_HAS_TEXTURE_MAPPINGS
+#include "texture_mapping.cl"
+#else
+#define texture_uv(b, t, uv, p) (uv)
+#endif
 
 /* A texture that is no composite (an image texture, or a solid texture looked up at the world-space point p). */
 inline float4 inner_texture_spectrum(const TextureBuffers *b, __global const Texture *t, float2 uv, float3 p,
@@ -271,7 +276,7 @@ inline float4 inner_texture_spectrum(const TextureBuffers *b, __global const Tex
 #if SCENE_HAS_MESH_ATTRIBUTES
     if (t->type == TEXTURE_MESH_ATTRIBUTE) return mesh_attribute_spectrum(b, t, w);
 #endif
-    return image_texture_spectrum(t, b, uv, footprint, w);
+    return image_texture_spectrum(t, b, texture_uv(b, t, uv, p), footprint, w);
 }
 
 /* Side `side` of a composite texture: its inner texture, or its spectrum. */
@@ -295,12 +300,12 @@ inline float4 texture_spectrum_at(const TextureBuffers *b, int index, float2 uv,
 {
     __global const Texture *t = &b->textures[index];
     if (t->type == TEXTURE_CHECKERBOARD) {
-        return texture_side(b, t, checkerboard_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, p, footprint,
+        return texture_side(b, t, checkerboard_side(texture_uv(b, t, uv, p) * t->uv_transform.xy + t->uv_transform.zw), uv, p, footprint,
                             w);
     }
 #if SCENE_HAS_PROCEDURAL_TEXTURES
     if (t->type == TEXTURE_DOTS) {
-        return texture_side(b, t, dots_side(uv * t->uv_transform.xy + t->uv_transform.zw), uv, p, footprint, w);
+        return texture_side(b, t, dots_side(texture_uv(b, t, uv, p) * t->uv_transform.xy + t->uv_transform.zw), uv, p, footprint, w);
     }
 #endif
 #if SCENE_HAS_DIRECTION_MIX

@@ -191,7 +191,9 @@ typedef struct {
     int storage;          /* STORAGE_*: how each value is stored (float, half, 8- or 16-bit unsigned normalised) */
     float factor;         /* TEXTURE_SCALE: the factor; TEXTURE_MIX: the amount (when factor_texture is NO_TEXTURE) */
     int factor_texture;   /* TEXTURE_SCALE, TEXTURE_MIX: a scalar image texture giving the factor, or NO_TEXTURE */
-    int pad[3];
+    int mapping;          /* TEXTURE_MAPPING_* (texture_mapping.cl): where the (u, v) are taken from; 0: the surface's */
+    int mapping_offset;   /* a mapping's 12 floats in the texel buffer (texture_mapping.cl) */
+    int pad[1];
 } Texture;
 
 /* One light; its emission is scale * table[spectrum_offset + ...](λ) in the unit of its type (`type`: a device

@@ -92,6 +92,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_NEEDS_FOOTPRINT": 0,
         "SCENE_HAS_PROCEDURAL_TEXTURES": 0,
         "SCENE_HAS_SOLID_TEXTURES": 0,
+        "SCENE_HAS_TEXTURE_MAPPINGS": 0,
         "SCENE_HAS_MESH_ATTRIBUTES": 0,
         "SCENE_HAS_DIRECTION_MIX": 0,
         "SCENE_HAS_SURFACE_NORMALS": 0,

@@ -192,7 +192,9 @@ TEXTURE_DTYPE = _struct(
         ("storage", "<i4"),
         ("factor", "<f4"),
         ("factor_texture", "<i4"),
-        ("pad", ("<i4", (3,))),
+        ("mapping", "<i4"),
+        ("mapping_offset", "<i4"),
+        ("pad", ("<i4", (1,))),
     ],
     112,
 )

@@ -91,6 +91,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_NEEDS_FOOTPRINT": int(trilinear or checkerboard_bumps),
         "SCENE_HAS_PROCEDURAL_TEXTURES": int(bool(np.any(textures["type"] == TEXTURES.codes["dots"]))),
         "SCENE_HAS_SOLID_TEXTURES": int(bool(np.isin(textures["type"], SOLID_TEXTURE_CODES).any())),
+        "SCENE_HAS_TEXTURE_MAPPINGS": int(bool(np.any(textures["mapping"] != 0))),
         "SCENE_HAS_MESH_ATTRIBUTES": int(bool(np.any(textures["type"] == TEXTURES.codes["mesh_attribute"]))),
         "SCENE_HAS_DIRECTION_MIX": int(bool(np.any(textures["type"] == TEXTURES.codes["directionmix"]))),
         "SCENE_HAS_SURFACE_NORMALS": int(bool(np.any(materials["normal_map"] >= 0)) or bump_maps),

@@ -124,6 +124,8 @@ def check_texture(texture, name: str, where: str) -> None:
     from spectrace.textures.checkerboard import CheckerboardTexture
     from spectrace.textures.solid import refuse_solid
 
+    if getattr(texture.placement, "mapping", "uv") != "uv":  # surface_detail.cl reads these at the surface's uv
+        raise SpectraceError(f"{name} takes no {texture.placement.mapping} mapping (it reads the surface's uv)", where)
     if name == "normal_map":
         if not isinstance(texture, BitmapTexture):
             raise SpectraceError("a normal map is a `bitmap` texture", where=where)

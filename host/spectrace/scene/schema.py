@@ -166,6 +166,7 @@ _ANNOTATIONS = {
     "transform": list[TransformStep],  # a solid texture's placement, as a shape's transform
     "wrap": Literal["repeat", "mirror", "clamp"],
     "filter": Literal["nearest", "bilinear", "trilinear"],
+    "mapping": Literal["uv", "spherical", "cylindrical", "planar"],  # a 2D texture's (textures/mapping.py)
     "axis": Literal["x", "y"],
     "materials": Annotated[tuple[str, str], StrictMode(False)],  # a mix's two materials, by their names in [materials]
     "material": str,  # a fluorescent material's base, by its name in [materials]

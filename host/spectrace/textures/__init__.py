@@ -48,6 +48,8 @@ from spectrace.textures.bitmap import BitmapTexture
 from spectrace.textures.checkerboard import CheckerboardTexture
 from spectrace.textures.directionmix import DirectionMixTexture
 from spectrace.textures.dots import DotsTexture
+from spectrace.textures.mapping import MAPPINGS
+from spectrace.textures.mapping import device_floats as mapping_floats
 from spectrace.textures.mesh_attribute import MeshAttributeTexture
 from spectrace.textures.mix import MixTexture
 from spectrace.textures.scale import ScaleTexture
@@ -350,6 +352,10 @@ class TextureRows:
         row["side_spectrum"] = -1
         row["side_texture"] = NO_TEXTURE
         row["type"] = TEXTURES.codes[texture_module(texture).NAME]
+        if texture.placement.mapping != "uv":  # its rows ahead of its texels (kernels/texture_mapping.cl)
+            row["mapping"] = MAPPINGS[texture.placement.mapping]
+            row["mapping_offset"] = 4 * sum(len(c) for c in self.texel_chunks)
+            self.texel_chunks.append(mapping_floats(texture.placement).reshape(-1, 4))
         size, slot = 0, None
         if isinstance(texture, TWO_SIDED):
             for i, side in enumerate((texture.color0, texture.color1)):

@@ -13,6 +13,8 @@ from spectrace.core.contract import TEXEL_RGB, TEXEL_SCALAR, TEXEL_SIGMOID, TEXE
 from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.core.parameters import Parameter
 from spectrace.errors import SpectraceError
+from spectrace.textures.mapping import PARAMETERS as MAPPING_PARAMETERS
+from spectrace.textures.mapping import api_mapping
 from spectrace.textures.shared import (
     FILE,
     FILTER,
@@ -41,7 +43,7 @@ LUMINANCE = Parameter(
     doc="read an RGB image as one channel, the luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of its linear values "
     "(as Mitsuba 3 reads an RGB bitmap where it needs one number, e.g. a bump map); a grey image stays as it is",
 )
-PARAMETERS = (FILE, RAW, LUMINANCE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET)
+PARAMETERS = (FILE, RAW, LUMINANCE, WRAP, FILTER, uv_scale(1.0), UV_OFFSET, *MAPPING_PARAMETERS)
 # The Y row of the linear sRGB -> XYZ matrix (IEC 61966-2-1; Rec. ITU-R BT.709 primaries, D65 white), the weights
 # Mitsuba 3's luminance() uses.
 _LUMINANCE_WEIGHTS = np.array([0.212671, 0.715160, 0.072169])
@@ -107,12 +109,16 @@ def make(
     filter: str = "bilinear",
     uv_scale: float | tuple[float, float] = 1.0,
     uv_offset: tuple[float, float] = (0.0, 0.0),
+    mapping: str = "uv",
+    transform=(),
+    v1=(1.0, 0.0, 0.0),
+    v2=(0.0, 1.0, 0.0),
 ) -> BitmapTexture:
     """An image texture (docs/textures.md), `spectrace.bitmap`: a file path (PNG, JPEG, TIFF, OpenEXR, Radiance .hdr;
     integer-coded files are sRGB-decoded unless raw), a numpy array (H, W), (H, W, 1) or (H, W, 3) of linear values
     (srgb=True: sRGB-encoded values in [0, 1]), or a PIL image (decoded from sRGB unless raw). st = uv · uv_scale +
     uv_offset; wrap "repeat", "mirror" or "clamp"; filter "nearest", "bilinear" or "trilinear"; luminance=True: an RGB
-    image as one channel, its luminance."""
+    image as one channel, its luminance; mapping (with transform, v1, v2): where (u, v) come from (docs/textures.md)."""
     from spectrace.io.images import pil_image_values, read_texture_image
 
     where = "texture"
@@ -138,7 +144,7 @@ def make(
     linear = decoded(values, encoded, raw)
     return BitmapTexture(
         _read_only(_luminance(linear) if luminance else linear),
-        checked_placement(uv_scale, uv_offset, wrap, filter),
+        api_mapping(checked_placement(uv_scale, uv_offset, wrap, filter), mapping, transform, v1, v2),
         source=name,
         srgb_decoded=encoded and not raw,
     )

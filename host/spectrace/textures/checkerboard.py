@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.spectral.spectrum import Spectrum
+from spectrace.textures.mapping import PARAMETERS as MAPPING_PARAMETERS
+from spectrace.textures.mapping import api_mapping
 from spectrace.textures.shared import (
     UV_OFFSET,
     Placement,
@@ -31,6 +33,7 @@ PARAMETERS = (
     Parameter("color1", "spectrum", default=0.2, range=Range(0.0, 1.0), doc="the other squares", textured=True),
     uv_scale(2.0),
     UV_OFFSET,
+    *MAPPING_PARAMETERS,
 )
 MITSUBA_PLUGINS = ("checkerboard",)
 PBRT_TEXTURES = ("checkerboard",)
@@ -57,14 +60,28 @@ def from_spec(spec, resolver, key: str) -> CheckerboardTexture:
 
 
 def make(
-    color0=0.4, color1=0.2, *, uv_scale: float | tuple[float, float] = 2.0, uv_offset=(0.0, 0.0)
+    color0=0.4,
+    color1=0.2,
+    *,
+    uv_scale: float | tuple[float, float] = 2.0,
+    uv_offset=(0.0, 0.0),
+    mapping: str = "uv",
+    transform=(),
+    v1=(1.0, 0.0, 0.0),
+    v2=(0.0, 1.0, 0.0),
 ) -> CheckerboardTexture:
     """Squares of color0 and color1 (reflectances: anything `spectrum` takes, an RGB triple, or an image texture)
     over the texture coordinates: color0 where floor(s) + floor(t) is even, st = uv · uv_scale + uv_offset."""
     return CheckerboardTexture(
         api_operand(color0, "color0"),
         api_operand(color1, "color1"),
-        Placement(uv_scale=uv_pair(uv_scale, "uv_scale", None), uv_offset=uv_pair(uv_offset, "uv_offset", None)),
+        api_mapping(
+            Placement(uv_scale=uv_pair(uv_scale, "uv_scale", None), uv_offset=uv_pair(uv_offset, "uv_offset", None)),
+            mapping,
+            transform,
+            v1,
+            v2,
+        ),
     )
 
 

@@ -8,6 +8,8 @@ docs/textures.md."""
 from dataclasses import dataclass
 
 from spectrace.core.parameters import Parameter, Range
+from spectrace.textures.mapping import PARAMETERS as MAPPING_PARAMETERS
+from spectrace.textures.mapping import api_mapping
 from spectrace.textures.shared import (
     UV_OFFSET,
     Placement,
@@ -26,6 +28,7 @@ PARAMETERS = (
     Parameter("outside", "spectrum", default=0.0, range=Range(0.0, 1.0), doc="the value elsewhere", textured=True),
     uv_scale(1.0),
     UV_OFFSET,
+    *MAPPING_PARAMETERS,
 )
 MITSUBA_PLUGINS: tuple[str, ...] = ()
 MITSUBA_NONE = "Mitsuba 3 has no procedural textures"
@@ -58,13 +61,29 @@ def from_spec(spec, resolver, key: str) -> DotsTexture:
     return two_sided_from_spec(DotsTexture, ("inside", "outside"), spec, resolver, key)
 
 
-def make(inside=1.0, outside=0.0, *, uv_scale: float | tuple[float, float] = 1.0, uv_offset=(0.0, 0.0)) -> DotsTexture:
+def make(
+    inside=1.0,
+    outside=0.0,
+    *,
+    uv_scale: float | tuple[float, float] = 1.0,
+    uv_offset=(0.0, 0.0),
+    mapping: str = "uv",
+    transform=(),
+    v1=(1.0, 0.0, 0.0),
+    v2=(0.0, 1.0, 0.0),
+) -> DotsTexture:
     """pbrt-v4's polka dots: `inside` on the dots, `outside` elsewhere (reflectances: anything `spectrum` takes, an
     RGB triple, or an image texture), one cell per unit of st = uv · uv_scale + uv_offset."""
     return DotsTexture(
         api_operand(inside, "inside"),
         api_operand(outside, "outside"),
-        Placement(uv_scale=uv_pair(uv_scale, "uv_scale", None), uv_offset=uv_pair(uv_offset, "uv_offset", None)),
+        api_mapping(
+            Placement(uv_scale=uv_pair(uv_scale, "uv_scale", None), uv_offset=uv_pair(uv_offset, "uv_offset", None)),
+            mapping,
+            transform,
+            v1,
+            v2,
+        ),
     )
 
 

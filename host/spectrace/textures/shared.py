@@ -89,6 +89,8 @@ class Placement:
     uv_offset: tuple[float, float] = (0.0, 0.0)
     wrap: str = "repeat"
     filter: str = "bilinear"
+    mapping: str = "uv"  # where uv comes from (textures/mapping.py)
+    mapping_rows: tuple[float, ...] = ()  # a mapping's world-to-texture rows, as the kernel reads them
 
     @property
     def uv_transform(self) -> tuple[float, float, float, float]:
@@ -97,7 +99,9 @@ class Placement:
 
 def placement(spec, where: str) -> Placement:
     """The Placement of a validated scene table; `where` (file and key path) is named in errors."""
-    return checked_placement(spec.uv_scale, spec.uv_offset, spec.wrap, spec.filter, where)
+    from spectrace.textures.mapping import with_mapping
+
+    return with_mapping(checked_placement(spec.uv_scale, spec.uv_offset, spec.wrap, spec.filter, where), spec, where)
 
 
 def checked_placement(uv_scale, uv_offset, wrap: str, filter: str, where: str | None = None) -> Placement:
@@ -218,6 +222,8 @@ def composite_factor(value, resolver, key: str, upper: float | None, kind: str =
 def two_sided_from_spec(model, sides: tuple[str, str], spec, resolver, key: str):
     """A texture of two sides (checkerboard, dots) from its scene-file table: each side a spectrum or an inner
     texture under `key`.NAME, and its placement."""
+    from spectrace.textures.mapping import with_mapping
+
     values = [
         resolver.spectrum_or_texture(getattr(spec, name), f"{key}.{name}", "spectrum", inner=True) for name in sides
     ]
@@ -225,9 +231,13 @@ def two_sided_from_spec(model, sides: tuple[str, str], spec, resolver, key: str)
     return model(
         values[0],
         values[1],
-        placement=Placement(
-            uv_scale=uv_pair(spec.uv_scale, "uv_scale", f"{where}.uv_scale"),
-            uv_offset=uv_pair(spec.uv_offset, "uv_offset", f"{where}.uv_offset"),
+        placement=with_mapping(
+            Placement(
+                uv_scale=uv_pair(spec.uv_scale, "uv_scale", f"{where}.uv_scale"),
+                uv_offset=uv_pair(spec.uv_offset, "uv_offset", f"{where}.uv_offset"),
+            ),
+            spec,
+            where,
         ),
     )
 

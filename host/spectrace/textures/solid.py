@@ -7,14 +7,14 @@ texture was declared), so the texture moves with it; the octaves' count and weig
 Device form (TextureRows.add): the Texture row's data_offset points at SOLID_FLOATS floats of the texel buffer,
 laid out as kernels/texture_solid.cl states."""
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from spectrace.core.parameters import Parameter, Range
 from spectrace.errors import SpectraceError
+from spectrace.textures.mapping import to_texture_matrix
 from spectrace.textures.shared import Placement
 
 SOLID_FLOATS = 28  # TEXTURE_SOLID_FLOATS
@@ -62,16 +62,6 @@ class SolidTexture:
 def octave_sum(omega: float, octaves: int) -> float:
     """Σ_{i<octaves} ω^i: the most that many octaves of noise in [−1, 1] can add up to."""
     return float(sum(omega**i for i in range(octaves)))
-
-
-def to_texture_matrix(steps: Iterable[Mapping[str, Any]], where: str | None) -> np.ndarray:
-    """The inverse of the placement's matrix (steps as a scene file writes them, checked as a shape's are)."""
-    from spectrace.geometry.transforms import transform_matrix
-
-    as_dicts = [dict(step) for step in steps]
-    with np.errstate(over="ignore", invalid="ignore"):
-        matrix = transform_matrix(as_dicts, where=where or "transform")
-    return np.linalg.inv(matrix)
 
 
 def spec_matrix(spec, resolver, key: str) -> np.ndarray:

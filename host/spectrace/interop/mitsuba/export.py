@@ -129,6 +129,8 @@ class MitsubaExport:
         module = texture_module(value)
         if not hasattr(module, "to_mitsuba"):
             raise self.refuse(f"a {module.NAME} texture ('{value.source}'): {module.MITSUBA_NONE}")
+        if value.placement.mapping != "uv":  # Mitsuba 3 textures read the surface's uv only
+            raise self.refuse(f"a {module.NAME} texture ('{value.source}') with a {value.placement.mapping} mapping")
         return module.to_mitsuba(value, self)
 
     def material(self, material) -> dict:

@@ -1,6 +1,6 @@
-"""pbrt-v4's textures as spectrace's: `imagemap` and `checkerboard` (2D) by the texture modules that name them in
-PBRT_TEXTURES (bitmap, checkerboard: their `from_pbrt`, handed pbrt's (u, v) mapping), `constant` as a spectrum, and
-`scale` of a spectrum or an image (the scaled image written beside the TOML as OpenEXR), which are no texture of
+"""pbrt-v4's textures as spectrace's: those the texture modules name in PBRT_TEXTURES (imagemap, checkerboard,
+dots, mix, the solid ones: their `from_pbrt`, handed pbrt's (u, v) mapping), `constant` as a spectrum, and `scale`
+of a spectrum or an image (the scaled image written beside the TOML as OpenEXR), which are no texture of
 spectrace's."""
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from spectrace.interop.pbrt.context import Context, unique_name
 from spectrace.interop.pbrt.graphics_state import Entity
 from spectrace.interop.pbrt.parser import error, shown
 from spectrace.textures import TEXTURES as TEXTURE_MODULES
+from spectrace.textures.mapping import MAPPINGS
 
 # pbrt-v4 texture type -> the texture module that maps it (spectrace.textures, each module's PBRT_TEXTURES).
 _MODULES: dict[str, Any] = {kind: module for module in TEXTURE_MODULES.values() for kind in module.PBRT_TEXTURES}
@@ -53,12 +54,33 @@ def texture_table(context: Context, texture: Entity) -> dict:
         return context.spectrum(texture, "value", "albedo") or {"value": 1.0}
     if kind not in TEXTURES:
         raise error(texture.location, f"texture '{shown(kind)}': spectrace imports {', '.join(TEXTURES)}")
+    if not any(parameter.name == "mapping" for parameter in _MODULES[kind].PARAMETERS):
+        return _MODULES[kind].from_pbrt(context, texture, (1.0, 1.0, 0.0, 0.0))  # pbrt reads no mapping of theirs
     mapping = context.string(texture, "mapping", "uv")
-    if mapping != "uv":
-        raise error(texture.location, f"{texture.label()}: mapping '{shown(str(mapping))}' (spectrace takes uv)")
-    us, vs = context.one(texture, "uscale", 1.0), context.one(texture, "vscale", 1.0)
-    ud, vd = context.one(texture, "udelta", 0.0), context.one(texture, "vdelta", 0.0)
-    return _MODULES[kind].from_pbrt(context, texture, (us, vs, ud, vd))
+    if mapping not in MAPPINGS:
+        raise error(
+            texture.location,
+            f"{texture.label()}: mapping '{shown(str(mapping))}' (spectrace takes {', '.join(MAPPINGS)})",
+        )
+    if mapping == "uv":
+        us, vs = context.one(texture, "uscale", 1.0), context.one(texture, "vscale", 1.0)
+        ud, vd = context.one(texture, "udelta", 0.0), context.one(texture, "vdelta", 0.0)
+        return _MODULES[kind].from_pbrt(context, texture, (us, vs, ud, vd))
+    # The mapping's (s, t) stand where a mesh's (u, v) would, so each module's uv handling applies with pbrt's
+    # planar offsets as its udelta and vdelta (pbrt's other mappings read none).
+    ud, vd = (context.one(texture, key, 0.0) for key in ("udelta", "vdelta")) if mapping == "planar" else (0.0, 0.0)
+    table = _MODULES[kind].from_pbrt(context, texture, (1.0, 1.0, ud, vd))
+    if "texture" not in table:  # a constant stand-in (an absent image)
+        return table
+    table["mapping"] = mapping
+    if mapping == "planar":
+        table["v1"] = [float(v) for v in context.vector(texture, "v1", [1.0, 0.0, 0.0])]
+        table["v2"] = [float(v) for v in context.vector(texture, "v2", [0.0, 1.0, 0.0])]
+    declared = next(t for t in context.scene.textures.values() if t.entity is texture)
+    matrix = np.asarray(declared.world_from_texture, np.float64)
+    if not np.allclose(matrix, np.eye(4)):
+        table["transform"] = [{"matrix": matrix.tolist()}]
+    return table
 
 
 def scaled_texture(context: Context, texture: Entity) -> dict:
