@@ -31,7 +31,7 @@ PBRT_TEXTURES = ("mix",)
 PBRT_DEFAULTS = {"tex1": 0.0, "tex2": 1.0, "amount": 0.5}
 # What an imported operand may come out as that spectrace's mix does not nest (textures.COMPOSITE_TEXTURES, which
 # this module cannot import: tests/interop/test_pbrt_mix_texture.py holds the two equal).
-PBRT_COMPOSITES = ("checkerboard", "dots", "scale", "mix")
+PBRT_COMPOSITES = ("checkerboard", "dots", "directionmix", "scale", "mix")
 
 
 @dataclass(frozen=True, eq=False)
