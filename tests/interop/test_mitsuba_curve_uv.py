@@ -89,3 +89,15 @@ def test_checkerboard_on_linear_curves_renders_as_in_mitsuba(tmp_path, device, m
     by_mitsuba = assert_renders_like_mitsuba(mi, path, device, 8, 16, 4)
     grey = by_mitsuba.mean(axis=(0, 3))
     assert np.count_nonzero(grey < 0.15) > 40 and np.count_nonzero((grey > 0.4) & (grey < 0.95)) > 40
+
+
+def test_a_curve_with_mitsuba_coordinates_is_saved_with_them(tmp_path):
+    """The scene file written for a Python scene keeps the convention and Mitsuba's v of each segment (two curves,
+    2 + 1 segments: v steps by 1/3 across both)."""
+    curves = [[[0, 0, 0, 0.1], [1, 0, 0, 0.1], [2, 1, 0, 0.1]], [[0, 2, 0, 0.1], [1, 2, 0, 0.1]]]
+    shape = spectrace.curve(curves, spectrace.diffuse(0.5), uv_convention="mitsuba")
+    camera = spectrace.Camera(origin=(0, 0, 5), target=(0, 0, 0))
+    spectrace.save_scene(spectrace.Scene(camera=camera, width=8, height=8, shapes=[shape]), tmp_path / "s.toml")
+    back = load_scene(tmp_path / "s.toml").shapes[0].analytic
+    assert not back.pbrt_uv
+    assert np.allclose(back.u0, [0, 1 / 3, 2 / 3]) and np.allclose(back.u1, [1 / 3, 2 / 3, 1])
