@@ -15,7 +15,9 @@
  * scattering S(ωo, ωi) depends only on angles about x (θ from the normal plane of the fibre: sin θ = ω.x; φ about x)
  * and on h, so it is the same whichever way the frame turns about the fibre. S is what the integrators see as
  * f·|cos θi| (pbrt's f is S / |cos θi|). h ∈ [−1, 1] comes from the v texture coordinate, h = 2v − 1, as pbrt's
- * curves set it (its ribbons' v runs across the fibre).
+ * curves set it (its ribbons' v runs across the fibre); on a curve with Mitsuba 3's coordinates (v along it) from
+ * ωo's offset across the fibre in the cross-section, −ωo.y / |(ωo.y, ωo.z)|, as Mitsuba 3's hair takes it
+ * (hair_from_wo): the same h as the v of a curve with pbrt's coordinates (shape_curve.cl, curve_texture_uv).
  *
  * S is not reciprocal (Ap and Np depend on ωo alone): importance transport (SurfaceContext.adjoint) weighs its
  * samples by S with the directions swapped, as the adjoint BSDF is defined. σa is per unit fibre radius (the path
@@ -40,6 +42,9 @@ typedef struct {
     float sin2k_alpha[3];  /* sin(2^k α), k = 0, 1, 2: the scale tilt's shifts */
     float cos2k_alpha[3];
     int adjoint;         /* importance transport: a sample weighs S with its directions swapped */
+#if SCENE_HAS_MITSUBA_CURVE_UV
+    int h_from_wo;       /* SurfaceContext.fibre_h_from_geometry: h from ωo, not from v (hair_from_wo) */
+#endif
 } HairParams;
 
 /* Light crosses the fibre: its frame keeps the surface's own normal (S does not depend on it, but turning it
@@ -73,8 +78,29 @@ inline HairParams hair_params(__global const Material *m, const SurfaceContext *
         p.cos2k_alpha[k] = p.cos2k_alpha[k - 1] * p.cos2k_alpha[k - 1] - p.sin2k_alpha[k - 1] * p.sin2k_alpha[k - 1];
     }
     p.adjoint = sc->adjoint;
+#if SCENE_HAS_MITSUBA_CURVE_UV
+    p.h_from_wo = sc->fibre_h_from_geometry;
+#endif
     return p;
 }
+
+#if SCENE_HAS_MITSUBA_CURVE_UV
+/* p with h (and γo) taken from ωo where p says so: the entry points below call it, so that an adjoint sample, which
+ * weighs S with its directions swapped, keeps the h of the vertex's own ωo, as v would give it. */
+inline HairParams hair_from_wo(const HairParams *p, float3 wo)
+{
+    HairParams q = *p;
+    if (p->h_from_wo) {
+        float across = sqrt(wo.y * wo.y + wo.z * wo.z);
+        q.h = across > 0.0f ? clamp(-wo.y / across, -1.0f, 1.0f) : 0.0f;
+        q.gamma_o = asin(q.h);
+    }
+    return q;
+}
+#define HAIR_H_FROM_WO(p, wo) HairParams p##_at_wo = hair_from_wo(p, wo); p = &p##_at_wo
+#else
+#define HAIR_H_FROM_WO(p, wo) ((void)0)
+#endif
 
 /* Modified Bessel function I0 by its power series Σ (x²/4)^i / (i!)², summed until the terms stop counting (at
  * most 40: x ≤ 12 here). pbrt-v4 stops at 10 terms, 2 % short at x = 12. */
@@ -228,6 +254,7 @@ inline void hair_lobe_probabilities(const HairOutgoing *o, float pick[HAIR_P_MAX
 
 inline float4 hair_eval(const HairParams *p, float3 wo, float3 wi)
 {
+    HAIR_H_FROM_WO(p, wo);
     return hair_scattering(p, wo, wi);
 }
 
@@ -251,6 +278,7 @@ inline float hair_pdf_given(const HairParams *p, const HairOutgoing *o, float3 w
 
 inline float hair_pdf(const HairParams *p, float3 wo, float3 wi)
 {
+    HAIR_H_FROM_WO(p, wo);
     HairOutgoing o = hair_outgoing(p, wo);
     return hair_pdf_given(p, &o, wi);
 }
@@ -259,6 +287,7 @@ inline float hair_pdf(const HairParams *p, float3 wo, float3 wi)
  * from Mp exactly (d'Eon et al. 2013's sampling of the von Mises-Fisher lobe). The pdf is the mixture's. */
 inline int hair_sample(const HairParams *p, float3 wo, float uc, float2 u, BSDFSample *s)
 {
+    HAIR_H_FROM_WO(p, wo);
     HairOutgoing o = hair_outgoing(p, wo);
     float pick[HAIR_P_MAX + 1];
     hair_lobe_probabilities(&o, pick);

@@ -84,6 +84,9 @@ inline SurfaceContext surface_context(const Scene *scene, float2 uv, float footp
     sc.buffers.triangle = -1;
 #endif
     SURFACE_NORMAL(sc, (float3)(0.0f));
+#if SCENE_HAS_MITSUBA_CURVE_UV
+    sc.fibre_h_from_geometry = 0;
+#endif
     return sc;
 }
 
@@ -173,6 +176,14 @@ inline __global const AnalyticShape *hit_shape(const Scene *scene, int slot)
 {
     return &scene->shapes[slot - scene->params->triangle_count];
 }
+
+#if SCENE_HAS_MITSUBA_CURVE_UV
+/* Whether hit slot `slot` is a curve with Mitsuba 3's texture coordinates (shape_curve.cl; SURFACE_AT_HIT). */
+inline int curve_slot_has_mitsuba_uv(const Scene *scene, int slot)
+{
+    return hit_is_shape(scene, slot) && hit_shape(scene, slot)->type == SHAPE_CURVE && !hit_shape(scene, slot)->pbrt_uv;
+}
+#endif
 
 /* The closest analytic shape the ray meets before t_max (any of them when any_hit): bvh.cl's binary traversal
  * (trace_bvh_binary) over the shapes' own BVH, whose leaves are runs of shapes. */

@@ -35,6 +35,10 @@
 #ifndef SCENE_HAS_CURVES
 #define SCENE_HAS_CURVES 1
 #endif
+/* Curves with Mitsuba 3's texture coordinates (shape_curve.cl), on which the hair BSDF takes h from wo. */
+#ifndef SCENE_HAS_MITSUBA_CURVE_UV
+#define SCENE_HAS_MITSUBA_CURVE_UV 1
+#endif
 /* Lights showing an image (environment maps; area lights' emission textures, pictures on screens among them). */
 #ifndef SCENE_HAS_LIGHT_IMAGES
 #define SCENE_HAS_LIGHT_IMAGES 1

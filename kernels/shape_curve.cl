@@ -13,8 +13,12 @@
  * x the profile coordinate s (−1..0 over the end sphere at a, from its pole opposite b to where the cone touches it;
  * 0..1 the cone, s the parameter of the centre of the sphere the point lies on, as CurveHit.u; 1..2 the end sphere
  * at b, out to its pole), y the azimuth about the axis in turns (frame: curve_frame). The texture coordinates a
- * material sees are pbrt-v4's curves': u along the curve, v = (1 + h) / 2 across it (curve_texture_uv); h depends
- * on the ray, so the path vertex sets them (path_state.cl shape_vertex). */
+ * material sees are, with the row's pbrt_uv, pbrt-v4's curves': u along the curve, v = (1 + h) / 2 across it
+ * (curve_texture_uv); h depends on the ray, so the path vertex sets them (path_state.cl shape_vertex). Without
+ * pbrt_uv they are Mitsuba 3's (its linearcurve.cpp; curve_mitsuba_uv): u the azimuth in turns about the axis,
+ * v along all the file's segments, (segment index + position within it) / segment
+ * count, which the host writes as the row's u0, u1; the hair BSDF then takes h from the geometry at the hit
+ * (bsdf_hair.cl, SurfaceContext.fibre_h_from_geometry). */
 #ifndef SPECTRACE_SHAPE_CURVE_CL
 #define SPECTRACE_SHAPE_CURVE_CL
 
@@ -126,11 +130,27 @@ inline void curve_shape_local(__global const AnalyticShape *s, float2 where, flo
     *tangent_v = 2.0f * r * cross(w, radial);
 }
 
+/* Mitsuba 3's texture coordinates at a hit's (profile, azimuth), v along the curve given: u the azimuth of the
+ * normal about the segment's axis w in turns, measured from rad = rot × w toward rot, rot the part of +z across
+ * the axis (+y where the axis is along z), so that neighbouring segments agree. In the row's space, as Mitsuba
+ * takes it in the shape's. */
+inline float2 curve_mitsuba_uv(__global const AnalyticShape *s, float2 where, float v)
+{
+    float3 n, p, dpdu, dpdv;
+    curve_shape_local(s, where, &p, &n, &dpdu, &dpdv);
+    float3 w = normalize(s->to_world[0].xyz - s->sphere.xyz);
+    float3 rot = fabs(w.z) == 1.0f ? (float3)(0.0f, 1.0f, 0.0f) : normalize((float3)(0.0f, 0.0f, 1.0f) - w * w.z);
+    float turns = atan2(dot(rot, n), dot(cross(rot, w), n)) * (1.0f / SHAPE_TWO_PI);
+    return (float2)(turns < 0.0f ? turns + 1.0f : turns, v);
+}
+
 /* The texture coordinates at a hit seen along -wo: u along the curve, v = (1 + h) / 2 with h the signed offset
- * across the fibre (curve.cl's, from the normal n and the fibre's direction). */
+ * across the fibre (curve.cl's, from the normal n and the fibre's direction); without pbrt_uv Mitsuba 3's, u
+ * around the fibre and v along it, which do not depend on the ray. */
 inline float2 curve_texture_uv(__global const AnalyticShape *s, float2 where, float3 n, float3 dpdu, float3 wo)
 {
     float u = s->to_world[1].x + clamp(where.x, 0.0f, 1.0f) * (s->to_world[1].y - s->to_world[1].x);
+    if (!s->pbrt_uv) return curve_mitsuba_uv(s, where, u);
     float3 w = normalize(dpdu);
     float3 across = cross(n, w);
     float across_length = length(across);
@@ -142,11 +162,12 @@ inline float2 curve_texture_uv(__global const AnalyticShape *s, float2 where, fl
     return (float2)(u, 0.5f * (1.0f + h));
 }
 
-/* u along the curve with v = ½ (the axis), for lookups that have no ray (cut-outs). */
+/* u along the curve with v = ½ (the axis), for lookups that have no ray (cut-outs); without pbrt_uv Mitsuba 3's
+ * coordinates, which need none. */
 inline float2 curve_axis_uv(__global const AnalyticShape *s, float2 where)
 {
     float u = s->to_world[1].x + clamp(where.x, 0.0f, 1.0f) * (s->to_world[1].y - s->to_world[1].x);
-    return (float2)(u, 0.5f);
+    return s->pbrt_uv ? (float2)(u, 0.5f) : curve_mitsuba_uv(s, where, u);
 }
 
 #endif

@@ -366,13 +366,24 @@ typedef struct {
                             signed bitangent an anisotropic frame turns; 1 where dpdu is not a file's */
     int adjoint;         /* 1: the transport carries importance, so a sampled direction is the viewer's side and
                             wo the light's (light tracer, photons, BDPT light subpaths); 0: radiance */
+#if SCENE_HAS_MITSUBA_CURVE_UV
+    int fibre_h_from_geometry;  /* 1: a curve whose v is Mitsuba 3's (along it): the hair BSDF's h comes from wo */
+#endif
 } SurfaceContext;
 
-/* Where a surface context's lookups read mesh attributes: the hit of vertex v (a PathVertex or BdptVertex). */
+/* Where a surface context's lookups read mesh attributes: the hit of vertex v (a PathVertex or BdptVertex); and
+ * whether it is on a curve with Mitsuba 3's texture coordinates (scene.cl, curve_slot_has_mitsuba_uv, of the
+ * caller's `scene`). */
 #if SCENE_HAS_MESH_ATTRIBUTES
-#define SURFACE_AT_HIT(sc, v) ((sc).buffers.triangle = (v).triangle, (sc).buffers.b12 = (v).b12)
+#define SURFACE_MESH_AT_HIT(sc, v) ((sc).buffers.triangle = (v).triangle, (sc).buffers.b12 = (v).b12)
 #else
-#define SURFACE_AT_HIT(sc, v) ((void)0)
+#define SURFACE_MESH_AT_HIT(sc, v) ((void)0)
+#endif
+#if SCENE_HAS_MITSUBA_CURVE_UV
+#define SURFACE_AT_HIT(sc, v) \
+    (SURFACE_MESH_AT_HIT(sc, v), (sc).fibre_h_from_geometry = curve_slot_has_mitsuba_uv(scene, (v).triangle))
+#else
+#define SURFACE_AT_HIT(sc, v) SURFACE_MESH_AT_HIT(sc, v)
 #endif
 /* Where a surface context's lookups take the shading normal n from (a directionmix's). */
 #if SCENE_HAS_DIRECTION_MIX

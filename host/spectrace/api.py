@@ -367,17 +367,21 @@ def curve(
     transform: Iterable[Mapping[str, Any]] = (),
     name: str = "",
     interior: Medium | None = None,
+    uv_convention: Literal["pbrt", "mitsuba"] = "pbrt",
 ) -> Shape:
     """Curves (hair, fur, wires: docs/scene-format.md, "Curves"): `points` one curve's control points, rows of
     (x, y, z, radius), or a list of curves; `basis` "linear" (a sphere swept from point to point: Mitsuba 3's
     linearcurve) or "bspline" (the uniform cubic B-spline of the points, centre and radius: Mitsuba 3's
     bsplinecurve). `transform` moves the points and leaves the radii as given (as Mitsuba 3 does). Intersected
-    exactly as swept spheres, one BVH primitive per segment; a curve cannot emit."""
+    exactly as swept spheres, one BVH primitive per segment; a curve cannot emit. `uv_convention`: pbrt-v4's
+    texture coordinates (u along each curve, v across it) or Mitsuba 3's (u around, v along all the curves)."""
     if material is None and interior is None:
         raise SpectraceError("a curve needs a material", where="material")
+    if uv_convention not in ("pbrt", "mitsuba"):
+        raise SpectraceError(f"uv_convention must be pbrt or mitsuba, got {uv_convention!r}", where="uv_convention")
     curves = checked_curves(points, basis, "points")
     matrix = transform_matrix([dict(step) for step in transform], where="transform") if transform else None
-    surface = curve_surface(curves, basis, matrix)
+    surface = curve_surface(curves, basis, matrix, uv_convention=uv_convention)
     if surface.count == 0:
         raise SpectraceError("the curves have no segment of any length", where="points")
     return Shape(

@@ -99,6 +99,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_PARTIAL_SHAPES": 0,
         "SCENE_HAS_CURVES": 0,
+        "SCENE_HAS_MITSUBA_CURVE_UV": 0,
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
         "SCENE_HAS_ONE_SIDED": 0,
@@ -120,7 +121,9 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     sdf = scene_feature_defines(build_scene_buffers(_sdf_grid_scene()))
     assert sdf["SCENE_HAS_SDF_GRIDS"] == 1 and sdf["SCENE_HAS_PARTIAL_SHAPES"] == 0
     assert analytic["SCENE_HAS_CURVES"] == 0
-    assert scene_feature_defines(build_scene_buffers(_curves_scene()))["SCENE_HAS_CURVES"] == 1
+    curves = scene_feature_defines(build_scene_buffers(_curves_scene()))
+    assert curves["SCENE_HAS_CURVES"] == 1 and curves["SCENE_HAS_MITSUBA_CURVE_UV"] == 0
+    assert scene_feature_defines(build_scene_buffers(_curves_scene("mitsuba")))["SCENE_HAS_MITSUBA_CURVE_UV"] == 1
     assert analytic["SCENE_LIGHT_TYPES"] == LIGHT_BITS["sphere"] | LIGHT_BITS["shape"]
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
     assert lights["SCENE_LIGHT_TYPES"] == LIGHT_BITS["environment_map"] and lights["SCENE_HAS_LIGHT_IMAGES"] == 1
@@ -397,15 +400,17 @@ def _partial_shapes_scene() -> spectrace.Scene:
     return spectrace.Scene(camera=camera, width=16, height=16, shapes=[floor, can, bulb])
 
 
-def _curves_scene() -> spectrace.Scene:
+def _curves_scene(uv_convention: str = "pbrt") -> spectrace.Scene:
     """Hair (B-spline curves of the hair BSDF) and a diffuse wire (a linear curve) over a floor, under a sphere light
-    (kernels/shape_curve.cl)."""
+    (kernels/shape_curve.cl); the curves' texture coordinates pbrt-v4's or Mitsuba 3's (h then from the geometry)."""
     rng = np.random.default_rng(5)
     roots = rng.uniform(-0.8, 0.8, (12, 2))
     strands = [
         np.array([[x + 0.1 * k * np.sin(k + x), y, 0.15 * k, 0.03 - 0.004 * k] for k in range(5)]) for x, y in roots
     ]
-    hair = spectrace.curve(strands, spectrace.hair(eumelanin=0.8), basis="bspline", name="hair")
+    hair = spectrace.curve(
+        strands, spectrace.hair(eumelanin=0.8), basis="bspline", name="hair", uv_convention=uv_convention
+    )
     wire_points = [[-1.5, -1.0, 0.2, 0.05], [0.0, -0.6, 0.5, 0.08], [1.5, -1.0, 0.2, 0.05]]
     wire = spectrace.curve(wire_points, spectrace.diffuse(0.7))
     floor = spectrace.shape("rectangle", spectrace.diffuse(0.5), transform=[{"scale": 3}])
@@ -576,6 +581,7 @@ SCENES = {
     "partial_shapes": _partial_shapes_scene,
     "sdf_grids": _sdf_grid_scene,
     "curves": _curves_scene,
+    "mitsuba_curves": lambda: _curves_scene("mitsuba"),
     "equal_area_camera_and_goniometric_light": _equal_area_scene,
     "grid_medium": _grid_medium_scene,
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.

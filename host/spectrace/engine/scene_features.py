@@ -99,6 +99,9 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_PARTIAL_SHAPES": int(bool(np.any(shape_rows["phi_max"] > 0.0))),
         "SCENE_HAS_SDF_GRIDS": int(bool(np.any(shape_rows["type"] == SHAPE_SDFGRID))),
         "SCENE_HAS_CURVES": int(bool(np.any(shape_rows["type"] == SHAPE_CURVE))),
+        "SCENE_HAS_MITSUBA_CURVE_UV": int(
+            bool(np.any((shape_rows["type"] == SHAPE_CURVE) & (shape_rows["pbrt_uv"] == 0)))
+        ),
         "SCENE_HIDES_AREA_EMITTERS": int(hides_area_emitters),
         "SCENE_HAS_INSTANCES": int(buffers.instance_count > 0),
         "SCENE_HAS_OPACITY": int(bool(np.any((materials["opacity_texture"] >= 0) | (materials["opacity"] < 1.0)))),

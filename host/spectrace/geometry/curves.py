@@ -11,9 +11,11 @@ cut into enough pieces that the surface of the segments lies within BSPLINE_TOLE
 swept surface (bspline_polyline). A transform moves the points and leaves the radii as they are, as Mitsuba 3 does
 (pbrt-v4 scales its widths with the transform; its importer does so before handing them on).
 
-Texture coordinates at a hit are pbrt-v4's: u along each curve from 0 to 1, v = (1 + h) / 2 across it, h the
-ray's signed offset from the fibre's axis over the radius, which the hair BSDF reads (kernels/bsdf_hair.cl); dp/du
-runs along the fibre.
+Texture coordinates at a hit are pbrt-v4's by default: u along each curve from 0 to 1, v = (1 + h) / 2 across
+it, h the ray's signed offset from the fibre's axis over the radius, which the hair BSDF reads (kernels/bsdf_hair.cl).
+With Mitsuba 3's (pbrt_uv false) u runs around the fibre in turns and v along all the curves together,
+(segment index + position within the segment) / segment count, a B-spline's segment being its span, and the hair
+BSDF takes h from the geometry, as Mitsuba's does. Either way dp/du runs along the fibre.
 """
 
 from dataclasses import dataclass
@@ -47,17 +49,28 @@ def bspline_evaluate(points: np.ndarray, t: np.ndarray) -> np.ndarray:
 def bspline_polyline(points: np.ndarray, tolerance: float = BSPLINE_TOLERANCE) -> np.ndarray:
     """The polyline (m, 4) of (x, y, z, radius) that stands for a B-spline curve's control points (n >= 4, 4): its
     spans (points i..i+3) cut by polynomial_polyline."""
+    return bspline_pieces(points, tolerance)[0]
+
+
+def bspline_pieces(points: np.ndarray, tolerance: float = BSPLINE_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+    """bspline_polyline with each point's curve parameter (m,): span index + the span's own parameter t."""
     points = np.asarray(points, float)
-    return polynomial_polyline([_BSPLINE @ points[i : i + 4] for i in range(len(points) - 3)], tolerance)
+    return polynomial_pieces([_BSPLINE @ points[i : i + 4] for i in range(len(points) - 3)], tolerance)
 
 
 def polynomial_polyline(spans: list[np.ndarray], tolerance: float = BSPLINE_TOLERANCE) -> np.ndarray:
+    """The polyline of polynomial_pieces."""
+    return polynomial_pieces(spans, tolerance)[0]
+
+
+def polynomial_pieces(spans: list[np.ndarray], tolerance: float = BSPLINE_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
     """The polyline (m, 4) of (x, y, z, radius) that stands for consecutive polynomial spans, each given by its
     coefficients (4, 4) of 1, t, t², t³ for t in [0, 1]: each span cut uniformly in t into k pieces, k the least
     for which linear interpolation errs by at most tolerance × the span's smallest radius: on [t0, t0 + h] the
     interpolant of a C² function f errs by at most h² max|f''| / 8, and f'' of a cubic is linear in t, so its
-    largest size over the span is at an end; the bound is applied to |c''| + |r''| together."""
-    pieces = []
+    largest size over the span is at an end; the bound is applied to |c''| + |r''| together. Returns the points
+    and each point's parameter, span index + t."""
+    pieces, parameters = [], []
     for i, coefficients in enumerate(spans):
         second = np.array([[0.0, 0.0, 2.0, 0.0], [0.0, 0.0, 2.0, 6.0]]) @ coefficients  # f''(0), f''(1)
         curvature = float((np.linalg.norm(second[:, :3], axis=1) + np.abs(second[:, 3])).max())
@@ -66,7 +79,8 @@ def polynomial_polyline(spans: list[np.ndarray], tolerance: float = BSPLINE_TOLE
         k = min(max(k, 1), MAX_PIECES_PER_SPAN)
         t = np.linspace(0.0, 1.0, k + 1)
         pieces.append(_power_evaluate(coefficients, t if i == 0 else t[1:]))
-    return np.concatenate(pieces)
+        parameters.append(i + (t if i == 0 else t[1:]))
+    return np.concatenate(pieces), np.concatenate(parameters)
 
 
 def _power_evaluate(coefficients: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -144,20 +158,26 @@ class CurveSurface:
     partial: bool = False
 
     @classmethod
-    def from_polylines(cls, polylines: list[np.ndarray], open_ends: bool = False) -> "CurveSurface":
+    def from_polylines(
+        cls, polylines: list[np.ndarray], open_ends: bool = False, along: list[np.ndarray] | None = None
+    ) -> "CurveSurface":
         """Segments joining consecutive (x, y, z, radius) points of each polyline; u along each from 0 to 1 by arc
-        length of the centre; open_ends: no sphere closes a polyline's first and last point (the tube ends where
-        its cone does). Each segment knows the two points before and after it (`neighbours`), so that the kernels
-        drop the parts of its surface inside the two segments on either side (at a joint, the inner side of the
-        bend), where a ray that entered the tube (a hair's transmission, a look into an open end) would meet them.
-        Segments one of whose end spheres holds the other add nothing to the surface and are left out."""
+        length of the centre, or, given `along` (each polyline's points' coordinate along the curves), Mitsuba 3's
+        texture coordinates with v = along (pbrt_uv false); open_ends: no sphere closes a polyline's first and last
+        point (the tube ends where its cone does). Each segment knows the two points before and after it
+        (`neighbours`), so that the kernels drop the parts of its surface inside the two segments on either side (at
+        a joint, the inner side of the bend), where a ray that entered the tube (a hair's transmission, a look into
+        an open end) would meet them. Segments one of whose end spheres holds the other add nothing to the surface
+        and are left out."""
         parts = []
-        for line in polylines:
+        for index, line in enumerate(polylines):
             line = np.asarray(line, float)
             lengths = np.linalg.norm(np.diff(line[:, :3], axis=0), axis=1)
             keep = lengths > np.abs(line[:-1, 3] - line[1:, 3]) * (1 + 1e-6)
             total = lengths.sum()
             u = np.concatenate([[0.0], np.cumsum(lengths)]) / total if total > 0 else np.linspace(0, 1, len(line))
+            if along is not None:
+                u = np.asarray(along[index], float)
             n = len(lengths)
             caps = np.ones((n, 2))
             if open_ends:
@@ -177,6 +197,7 @@ class CurveSurface:
             rows[:, 10] > 0.5,
             rows[:, 11] > 0.5,
             rows[:, 12:28].reshape(-1, 4, 4),
+            pbrt_uv=along is None,
         )
 
     @property
@@ -227,7 +248,7 @@ class CurveSurface:
             rows["to_world"][:, 2] = self.neighbours[:, 3]
         rows["abs_det"] = 1.0
         rows["object_area"] = 1.0
-        rows["pbrt_uv"] = 1
+        rows["pbrt_uv"] = int(self.pbrt_uv)
         return rows
 
     def area(self) -> float:
@@ -266,17 +287,31 @@ def curve_surface(
     matrix: np.ndarray | None = None,
     tolerance: float = BSPLINE_TOLERANCE,
     open_ends: bool | None = None,
+    uv_convention: str = "pbrt",
 ) -> CurveSurface:
     """The segments of curves given by control points (each (n, 4): x, y, z, radius) in the basis "linear" or
     "bspline", their points placed by the 4 x 4 `matrix` (radii unchanged); open_ends (default: a B-spline's):
-    the tubes stop at their ends without a sphere."""
-    placed = []
+    the tubes stop at their ends without a sphere; uv_convention "pbrt" or "mitsuba": whose texture coordinates
+    (Mitsuba 3's v counts the segments of all the curves, a B-spline's spans, in order)."""
+    spans_before = 3 if basis == "bspline" else 1
+    segment_count = sum(len(points) - spans_before for points in curves)
+    placed, along = [], []
+    segments_before = 0
     for points in curves:
         points = np.array(points, float)
         if matrix is not None:
             points[:, :3] = points[:, :3] @ matrix[:3, :3].T + matrix[:3, 3]
-        placed.append(bspline_polyline(points, tolerance) if basis == "bspline" else points)
-    return CurveSurface.from_polylines(placed, open_ends=basis == "bspline" if open_ends is None else open_ends)
+        line, parameter = (
+            bspline_pieces(points, tolerance) if basis == "bspline" else (points, np.arange(len(points), dtype=float))
+        )
+        placed.append(line)
+        along.append((segments_before + parameter) / segment_count)
+        segments_before += len(points) - spans_before
+    return CurveSurface.from_polylines(
+        placed,
+        open_ends=basis == "bspline" if open_ends is None else open_ends,
+        along=along if uv_convention == "mitsuba" else None,
+    )
 
 
 CURVE_BASES = ("linear", "bspline")

@@ -28,7 +28,9 @@ def curve_shape(
         steps = [step.model_dump(exclude_none=True) for step in spec.transform]
         matrix = transform_matrix(steps, where=where(f"{key}.transform"))
     with np.errstate(over="ignore", invalid="ignore"):
-        surface = curve_surface(curves, basis, matrix, open_ends=spec.open_ends)
+        surface = curve_surface(
+            curves, basis, matrix, open_ends=spec.open_ends, uv_convention=spec.uv_convention or "pbrt"
+        )
     if not (np.all(np.isfinite(surface.a)) and np.all(np.isfinite(surface.b))):
         raise SpectraceError("the transform takes control points beyond float range", where=where(f"{key}.transform"))
     culprit = "file" if spec.file is not None else "points"

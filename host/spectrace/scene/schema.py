@@ -468,7 +468,8 @@ class ShapeSpec(Strict):
     tessellated: StrictBool | None = None
     # sphere, disk, cylinder: their front (normal, emitting side) faces inward, or the disk's -z side
     flip_normals: StrictBool | None = None
-    # sphere, disk: "pbrt" gives them pbrt-v4's texture coordinates instead of Mitsuba 3's (docs/scene-format.md)
+    # sphere, disk, cylinder: "pbrt" gives them pbrt-v4's texture coordinates instead of Mitsuba 3's; curve:
+    # "mitsuba" gives it Mitsuba 3's instead of pbrt-v4's (docs/scene-format.md)
     uv_convention: Literal["mitsuba", "pbrt"] | None = None
     # sphere only: placed before `transform`, as Mitsuba 3's center and radius are before its to_world
     center: Vector3 | None = None
@@ -516,8 +517,8 @@ class ShapeSpec(Strict):
             raise ValueError(
                 f"flip_normals is for sphere, disk and cylinder (a mirroring transform turns a {self.type})"
             )
-        if self.uv_convention is not None and self.type not in ("sphere", "disk", "cylinder"):
-            raise ValueError(f"uv_convention is for sphere, disk and cylinder, not a {self.type}")
+        if self.uv_convention is not None and self.type not in ("sphere", "disk", "cylinder", "curve"):
+            raise ValueError(f"uv_convention is for sphere, disk, cylinder and curve, not a {self.type}")
         if self.tessellated is not None and self.type not in ("sphere", "disk", "cylinder"):
             raise ValueError(f"tessellated is for the analytic shapes (sphere, disk, cylinder), not a {self.type}")
         cut_keys = (self.phi_max, self.z_min, self.z_max, self.inner_radius)

@@ -188,6 +188,8 @@ class _Writer:
             file = f"{self.assets}/{folder_name}.txt"
             self.files[file] = partial(_write_curves, polylines=shape.analytic.polylines())
             out |= {"type": "curve", "file": file, "basis": "linear", "open_ends": shape.analytic.open_ends}
+            if not shape.analytic.pbrt_uv:
+                out["uv_convention"] = "mitsuba"
         elif shape.analytic is not None:
             surface = shape.analytic
             out |= {"type": surface.kind, "transform": [{"matrix": np.asarray(surface.to_world).tolist()}]}

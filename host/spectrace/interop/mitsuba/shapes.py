@@ -52,6 +52,7 @@ def shape(ctx: ImportContext, element: Element, index: int) -> dict | None:
         # transform does.
         filename = ctx.child(properties, "filename", element)
         table |= {"type": "curve", "file": ctx.input_file(filename, "curve file"), "basis": CURVE_BASES[kind]}
+        table["uv_convention"] = "mitsuba"
     else:
         table["type"] = kind
     if kind == "sphere":
