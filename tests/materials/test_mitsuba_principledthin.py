@@ -14,7 +14,8 @@ height-correlated masking, docs/materials.md). The scene tells wrong models apar
 left out fails at 7.2 σ over the image, with η 1.5 for 1.33 at 13 σ in a block.
 
 Mitsuba's test scene itself differs from spectrace under its museum environment map, and so does a plain `diffuse`
-of the same RGB colour in the sheet's place (docs/materials.md#principledthin): the map's light, not this BSDF.
+of the same RGB colour in the sheet's place (docs/mitsuba.md#coverage-of-public-scenes): the map's light, not this
+BSDF, whose every lobe evaluates as Mitsuba's for that scene's weights, `diff_trans` above 1 included (the last test).
 
 The specular tint: c_tint = b / lum(b) needs the base colour's luminance. Mitsuba's spectral variants take for it
 the mean of ȳ(λ) b(λ) over the path's four wavelengths, which for a white base is not 1 (0.50 at 450, 500, 550 and
@@ -28,11 +29,15 @@ its own scalar_rgb.
 import numpy as np
 import pytest
 
+from materials.test_bsdfs import Bsdf
 from materials.test_mitsuba_materials import _scene
+from materials.test_principled import _uniform_sphere
 from replica_agreement import assert_replicas_agree, spectrace_replicas
 from spectrace.engine.renderer import Renderer
 from spectrace.interop.mitsuba import load_mitsuba_scene
 from spectrace.interop.mitsuba.export import mitsuba_film_xyz
+from spectrace.materials.principledthin import PrincipledthinMaterial
+from spectrace.spectral.spectrum import Spectrum
 
 pytestmark = pytest.mark.peer
 
@@ -113,3 +118,77 @@ def test_spec_tint_of_a_white_sheet_is_mitsubas_rgb_variants(tmp_path, device, m
     ours, theirs = _replicas(tmp_path, device, mitsuba_scalar_rgb, _sheet_scene(bsdf))
     luminance = lambda images: np.repeat(images[..., 1:2], 3, axis=-1)  # noqa: E731
     assert_replicas_agree(luminance(ours), luminance(theirs), BLOCK, what=f"white tinted sheet r {roughness}")
+
+
+# The weights of Mitsuba's test scene (each checkerboard's two colours), diff_trans above 1 among them, and the
+# tints it leaves at 0; a grey base, so that a flat spectrum and Mitsuba's RGB are the same colour (c_tint = 1).
+LOBE_CASES = [
+    dict(diff_trans=1.4),
+    dict(diff_trans=1.8, sheen=0.8),
+    dict(diff_trans=2.0, sheen=0.1),
+    dict(spec_trans=0.2, anisotropic=0.05, diff_trans=1.4, sheen=0.8),
+    dict(spec_trans=0.8, anisotropic=0.8, diff_trans=1.8, sheen=0.1),
+    dict(spec_trans=0.2, anisotropic=0.8, diff_trans=0.4, sheen=0.8, spec_tint=0.5, sheen_tint=0.5),
+    dict(spec_trans=0.8, anisotropic=0.05, diff_trans=1.4, sheen=0.1, roughness=0.2),
+]
+BASE, ETA = 0.7, 1.33
+
+
+def _lambda(w: np.ndarray, alpha: tuple[float, float]) -> np.ndarray:
+    """Smith's Λ of anisotropic GGX (Heitz 2014, eq. 86), the same from both sides of the sheet."""
+    x, y = alpha[0] * w[:, 0], alpha[1] * w[:, 1]
+    return 0.5 * (np.sqrt(1.0 + (x * x + y * y) / (w[:, 2] * w[:, 2])) - 1.0)
+
+
+def _alpha(roughness: float, anisotropic: float) -> tuple[float, float]:
+    aspect = np.sqrt(1.0 - 0.9 * anisotropic)
+    r2 = roughness * roughness
+    return max(1e-3, r2 / aspect), max(1e-3, r2 * aspect)
+
+
+def _height_correlated_over_separable(wo, wi, weights) -> np.ndarray:
+    """G2 / (G1(ωo) G1(ωi)): spectrace's height-correlated masking (1 + Λo + Λi)⁻¹ over Mitsuba's separable
+    (1 + Λo)⁻¹ (1 + Λi)⁻¹, per pair, with the transmission's roughness (0.65 η − 0.35) r across the sheet."""
+    r, a = weights.get("roughness", 0.5), weights.get("anisotropic", 0.0)
+    across = wo[:, 2] * wi[:, 2] < 0
+    lo = np.where(across, _lambda(wo, _alpha((0.65 * ETA - 0.35) * r, a)), _lambda(wo, _alpha(r, a)))
+    li = np.where(across, _lambda(wi, _alpha((0.65 * ETA - 0.35) * r, a)), _lambda(wi, _alpha(r, a)))
+    return (1.0 + lo) * (1.0 + li) / (1.0 + lo + li)
+
+
+def _mitsubas(mi, weights: dict, wo: np.ndarray, wi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mitsuba's f cos θi and pdf for each pair, its si.wi being the viewer's ωo and its wo the light's ωi."""
+    bsdf = mi.load_dict(
+        {"type": "principledthin", "base_color": {"type": "rgb", "value": [BASE] * 3}, "eta": ETA} | weights
+    )
+    ctx, si = mi.BSDFContext(), mi.SurfaceInteraction3f()
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0.0, 0.0, 1.0))  # s = +x, t = +y: the anisotropy's axes
+    f, pdf = np.zeros(len(wo)), np.zeros(len(wo))
+    for k, (o, i) in enumerate(zip(wo, wi, strict=True)):
+        si.wi = mi.Vector3f(*o)
+        f[k] = bsdf.eval(ctx, si, mi.Vector3f(*i))[1]
+        pdf[k] = bsdf.pdf(ctx, si, mi.Vector3f(*i))
+    return f, pdf
+
+
+@pytest.mark.parametrize("weights", LOBE_CASES, ids=lambda w: ",".join(f"{k}{v}" for k, v in w.items()))
+def test_each_lobe_and_diff_trans_above_1_evaluate_as_mitsubas(kernel_runner, mitsuba_scalar_rgb, weights):
+    """f cos θi and the pdf of every lobe at once, on both sides of the sheet and across it, against Mitsuba 3's
+    own `principledthin` for 300 direction pairs over the whole sphere, to float32 rounding. Mitsuba splits the
+    diffuse part by diff_trans / 2 over its whole 0–2 range ((1 − t) reflected with the sheen, t transmitted), as
+    spectrace does. The one difference in value is the specular lobes' masking, spectrace's height-correlated G2
+    for Mitsuba's separable G1 G1 (docs/materials.md): Mitsuba's specular part, its value less the diffuse part
+    (which is (1 − spec_trans) times its value with spec_trans 0), is scaled by G2 / (G1 G1) in closed form."""
+    mi = mitsuba_scalar_rgb
+    rng = np.random.default_rng(61)
+    wo, wi = _uniform_sphere(rng, 300), _uniform_sphere(rng, 300)
+    material = PrincipledthinMaterial(Spectrum.constant(BASE), eta=ETA, **weights)
+    ours, our_pdf = Bsdf(kernel_runner("testing/bsdf.cl"), material).eval_pdf(wo, wi)
+    theirs, their_pdf = _mitsubas(mi, weights, wo, wi)
+    s = weights.get("spec_trans", 0.0)
+    if s > 0.0:
+        diffuse = (1.0 - s) * _mitsubas(mi, weights | {"spec_trans": 0.0}, wo, wi)[0]
+        theirs = diffuse + (theirs - diffuse) * _height_correlated_over_separable(wo, wi, weights)
+    assert np.count_nonzero(theirs) > 150 and np.count_nonzero((wo[:, 2] * wi[:, 2] < 0) & (theirs > 0)) > 50
+    np.testing.assert_allclose(ours[:, 1], theirs, rtol=2e-4, atol=1e-6)
+    np.testing.assert_allclose(our_pdf, their_pdf, rtol=2e-4, atol=1e-6)
