@@ -25,6 +25,11 @@ inline SurfaceContext harness_context(__global const float *spectra)
     sc.dpdu = (float3)(0.0f);
     sc.tangent_w = 1.0f;
     sc.adjoint = 0;
+    /* what scene.cl's surface_context sets for a plain surface: the harness builds its own context */
+    SURFACE_NORMAL(sc, (float3)(0.0f));
+#if SCENE_HAS_MITSUBA_CURVE_UV
+    sc.fibre_h_from_geometry = 0;
+#endif
     return sc;
 }
 

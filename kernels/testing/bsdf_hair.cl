@@ -16,6 +16,11 @@ inline SurfaceContext hair_harness_context(__global const float *spectra, float 
     sc.dpdu = (float3)(1.0f, 0.0f, 0.0f);
     sc.tangent_w = 1.0f;
     sc.adjoint = adjoint;
+    /* what scene.cl's surface_context sets for a plain surface: the harness builds its own context */
+    SURFACE_NORMAL(sc, (float3)(0.0f));
+#if SCENE_HAS_MITSUBA_CURVE_UV
+    sc.fibre_h_from_geometry = 0;
+#endif
     return sc;
 }
 
