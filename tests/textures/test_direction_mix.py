@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import spectrace
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
@@ -106,14 +107,8 @@ def test_light_tracer_and_bdpt_read_the_normal_too(device, integrator):
 def test_scene_file_directionmix(tmp_path):
     path = tmp_path / "scene.toml"
     path.write_text(
-        """
-[camera]
-origin = [0, 0, 3]
-target = [0, 0, 0]
-fov = 30
-[film]
-width = 8
-height = 8
+        camera_film(origin="[0, 0, 3]", fov="30", width="8", height="8")
+        + """
 [textures.facing]
 type = "directionmix"
 tex1 = { rgb = [0.8, 0.2, 0.1] }

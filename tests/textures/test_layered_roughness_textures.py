@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import spectrace
+from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
 from spectrace.interop.pbrt import pbrt_scene_data
@@ -101,14 +102,8 @@ def test_a_smooth_conductor_roughness_texture_keeps_the_material_delta():
 def test_scene_file_roughness_textures(tmp_path):
     path = tmp_path / "scene.toml"
     path.write_text(
-        """
-[camera]
-origin = [0, 0, 3]
-target = [0, 0, 0]
-fov = 30
-[film]
-width = 8
-height = 8
+        camera_film(origin="[0, 0, 3]", fov="30", width="8", height="8")
+        + """
 [textures.tiles]
 type = "checkerboard"
 color0 = { value = 0.1 }
