@@ -178,3 +178,32 @@ def test_strip_curves_saved_as_a_scene_file_read_back_the_same_segments(tmp_path
         assert np.array_equal(a.a, b.a) and np.array_equal(a.b, b.b) and np.array_equal(a.ra, b.ra)
         if a.ribbon_normals is not None:
             assert np.allclose(a.ribbon_normals, b.ribbon_normals, atol=1e-12)
+
+
+def test_a_strip_gives_the_tube_s_offset_across_the_fibre(kernel_runner):
+    """The v a path vertex gets (v = (1 + h)/2, the hair BSDF's h) at offset y across a fibre along x, for rays at
+    right angles to it from either side: the tube's h is y / r seen from +z and −y / r from −z (the offset along
+    ωo × the fibre's direction); a flat strip and a ribbon (normal +z, so seen from its back from −z) give the same,
+    and u the same position along the fibre. A flat strip's hit lies on its plane through the axis, facing the ray
+    (t = 5 from either side); a ribbon's on its plane z = 0."""
+    from tests.geometry.test_curve_shapes import _scene, _scene_hits
+
+    radius = 0.5
+    points = [[-1.0, 0.0, 0.0, radius], [1.0, 0.0, 0.0, radius]]
+    y = np.linspace(-0.45, 0.45, 7)
+    x = np.linspace(-0.8, 0.8, 7)
+    for side in (1.0, -1.0):
+        origins = np.stack([x, y, np.full(7, 5.0 * side)], axis=1)
+        directions = np.tile([0.0, 0.0, -side], (7, 1))
+        found = {}
+        for curve_type in ("tube", "flat", "ribbon"):
+            normals = [[0.0, 0.0, 1.0]] * 2 if curve_type == "ribbon" else None
+            curve = spectrace.curve(points, spectrace.diffuse(0.5), curve_type=curve_type, curve_normals=normals)
+            hits = _scene_hits(kernel_runner, _scene([curve]), origins, directions, np.full(7, 100.0))[0]
+            found[curve_type] = hits
+        want_v = 0.5 * (1.0 + side * y / radius)
+        for curve_type, hits in found.items():
+            assert np.allclose(hits[:, 2], want_v, atol=2e-3), (side, curve_type, hits[:, 2], want_v)
+            assert np.allclose(hits[:, 1], (x + 1.0) / 2.0, atol=1e-5), (curve_type, hits[:, 1])
+        assert np.allclose(found["flat"][:, 0], 5.0, atol=1e-5) and np.allclose(found["ribbon"][:, 0], 5.0, atol=1e-5)
+        assert np.allclose(found["tube"][:, 0], 5.0 - np.sqrt(radius**2 - y**2), atol=1e-4)
