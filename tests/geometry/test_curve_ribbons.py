@@ -207,3 +207,30 @@ def test_a_strip_gives_the_tube_s_offset_across_the_fibre(kernel_runner):
             assert np.allclose(hits[:, 1], (x + 1.0) / 2.0, atol=1e-5), (curve_type, hits[:, 1])
         assert np.allclose(found["flat"][:, 0], 5.0, atol=1e-5) and np.allclose(found["ribbon"][:, 0], 5.0, atol=1e-5)
         assert np.allclose(found["tube"][:, 0], 5.0 - np.sqrt(radius**2 - y**2), atol=1e-4)
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_bad_strip_keys_in_a_scene_file_are_one_line_naming_the_key_and_nothing_is_written(tmp_path):
+    """A ribbon without its normals (the loader's check) and curve_type on a sphere (the schema's): exit 2, one
+    line naming the key path, no image written. The other bad keys: test_bad_strip_keys_name_the_key."""
+    from cli_runner import run_spectrace
+
+    head = "[camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 8\nheight = 8\n"
+    head += '[materials.m]\ntype = "diffuse"\nreflectance = { value = 0.5 }\n'
+    curve = '[[shapes]]\ntype = "curve"\nmaterial = "m"\npoints = [[0, 0, 0, 0.1], [1, 0, 0, 0.1]]\n'
+    cases = {
+        "bare.toml": (curve + 'curve_type = "ribbon"\n', "shapes[0].curve_normals: a ribbon curve needs"),
+        "sphere.toml": (
+            '[[shapes]]\ntype = "sphere"\nmaterial = "m"\ncurve_type = "flat"\n',
+            "curve_type and curve_normals are a curve's, not a sphere's",
+        ),
+    }
+    for name, (shape, message) in cases.items():
+        (tmp_path / name).write_text(head + shape)
+        image = tmp_path / f"{name}.png"
+        result = run_spectrace("render", str(tmp_path / name), "-o", str(image), "-q")
+        assert result.returncode == 2, result.stderr
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0] and "Traceback" not in result.stderr, result.stderr
+        assert not image.exists()
