@@ -45,8 +45,9 @@ def _points(text: list[list[float]]) -> str:
     return " ".join(str(v) for p in text for v in p)
 
 
-def test_a_bspline_curve_renders_as_the_same_curve_in_the_scene_format(tmp_path, device):
-    pbrt = _write(tmp_path, BSPLINE_CURVE)
+@pytest.mark.parametrize("kind", ["cylinder", "flat"])
+def test_a_bspline_curve_renders_as_the_same_curve_in_the_scene_format(tmp_path, device, kind):
+    pbrt = _write(tmp_path, BSPLINE_CURVE.replace('"cylinder"', f'"{kind}"'))
     imported = tmp_path / "imported.toml"
     import_pbrt(pbrt, imported)
     data = tomllib.loads(imported.read_text())
@@ -61,7 +62,7 @@ def test_a_bspline_curve_renders_as_the_same_curve_in_the_scene_format(tmp_path,
         "transform": [{"scale": 0.8}, {"translate": [0, 0.4, 0]}, {"scale": [-1, 1, 1]}],
         "material": data["shapes"][index]["material"],
         "name": "by hand",
-    }
+    } | ({"curve_type": "flat"} if kind == "flat" else {})
     data["shapes"][index] = by_hand
     written = tmp_path / "by_hand.toml"
     written.write_text(dumps(data))
