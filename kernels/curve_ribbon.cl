@@ -19,10 +19,11 @@
  * bilinear patch of its four corners. It is intersected exactly as such (Reshetov 2019, "Cool Patches: A Geometric
  * Approach to Ray/Bilinear Patch Intersections", Ray Tracing Gems ch. 8): the ray meets the ruling at s where d,
  * P(s, 0) − o and ∂P/∂x are coplanar, d · ((P(s, 0) − o) × ∂P/∂x) = 0, a quadratic in s; x and t then follow from
- * the two lines' meeting. This is chosen over pbrt's own test, which widens the projected axis by r |n·d|, because
- * pbrt's is exact only for rays at right angles to the axis (a strip seen along its length is narrower by the sine
- * of the angle, which pbrt leaves out), and the bilinear patch shares its edges with the next piece's, so a ribbon
- * has no gaps or overlaps at the pieces' joins. Seen edge-on (d in the strip's plane) the quadratic vanishes: no hit.
+ * the two lines' meeting. This is chosen over pbrt's own test, which widens the projected axis by r |n·d| and
+ * puts the hit at the axis point's depth: that is exact only for rays at right angles to the axis (seen at an angle
+ * θ to it, pbrt's strip is sin θ narrower than the strip itself, and its hits lie off the strip), while the bilinear
+ * patch is the strip itself and shares its edges with the next piece's, so a ribbon has no gaps or overlaps at the
+ * pieces' joins. Seen edge-on (d in the strip's plane) the quadratic vanishes: no hit.
  * The normal is the patch's, ∂P/∂s × ∂P/∂x, which is the interpolated strip normal on the axis.
  *
  * Both are two-sided. A strip stands for a fibre's silhouette (pbrt offsets its spawned rays by the whole width for
