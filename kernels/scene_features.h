@@ -35,6 +35,10 @@
 #ifndef SCENE_HAS_CURVES
 #define SCENE_HAS_CURVES 1
 #endif
+/* Flat and ribbon curves among them (pbrt-v4's curve types: kernels/curve_ribbon.cl). */
+#ifndef SCENE_HAS_CURVE_RIBBONS
+#define SCENE_HAS_CURVE_RIBBONS SCENE_HAS_CURVES
+#endif
 /* Curves with Mitsuba 3's texture coordinates (shape_curve.cl), on which the hair BSDF takes h from wo. */
 #ifndef SCENE_HAS_MITSUBA_CURVE_UV
 #define SCENE_HAS_MITSUBA_CURVE_UV 1

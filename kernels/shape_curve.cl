@@ -5,6 +5,9 @@
  * B-spline curve's ends); to_object[0], [1] = the two control points (x, y, z, radius) before a, to_object[2],
  * to_world[2] the two after b (radius 0: none), whose segments' insides are not this segment's surface, so that
  * (but for curves bent within two segments' length) no surface lies inside the tube; world (or an instanced object's) space, scene units.
+ * cut_min holds the curve's type, CURVE_TYPE_TUBE (0) for these; a flat or ribbon row (pbrt-v4's strips,
+ * curve_ribbon.cl) has the same ends and u0, u1, no caps or neighbours, and a ribbon's unit normals at a and b in
+ * to_object[0].xyz and to_object[1].xyz.
  *
  * Back faces are culled, as Mitsuba 3's curves (Embree, OptiX) and pbrt-v4's ribbons do: a ray leaving a fibre's
  * surface inward (the hair BSDF's transmission) crosses the fibre, whose interior that BSDF already accounts for.
@@ -38,6 +41,10 @@ inline void curve_frame(float3 w, float3 *e1, float3 *e2)
     *e2 = (float3)(b, sign + w.y * w.y * a, -w.y);
 }
 
+#if SCENE_HAS_CURVE_RIBBONS
+#include "curve_ribbon.cl"
+#endif
+
 /* Whether p lies inside the swept sphere from (a.xyz, radius a.w) to (b.xyz, b.w) by more than the rounding of
  * its coordinates: |p − c(s)| − r(s) at the s of p's projection on the axis, an upper bound of the distance to the
  * surface, so a point it calls inside is. The margin is a tenth of the step a spawned ray takes off its surface
@@ -60,6 +67,9 @@ inline int curve_inside_segment(float3 p, float4 a, float4 b)
 inline float intersect_curve_shape(__global const AnalyticShape *s, float3 origin, float3 direction, float t_max,
                                    float2 *uv)
 {
+#if SCENE_HAS_CURVE_RIBBONS
+    if (curve_row_type(s) != CURVE_TYPE_TUBE) return intersect_curve_ribbon(s, origin, direction, t_max, uv);
+#endif
     float3 a = s->sphere.xyz, b = s->to_world[0].xyz;
     float ra = s->sphere.w, rb = s->to_world[0].w;
     CurveHit hit = intersect_curve_segment(origin, direction, 0.0f, t_max, a, ra, b, rb);
@@ -97,6 +107,12 @@ inline float intersect_curve_shape(__global const AnalyticShape *s, float3 origi
 inline void curve_shape_local(__global const AnalyticShape *s, float2 where, float3 *point, float3 *normal,
                               float3 *tangent_u, float3 *tangent_v)
 {
+#if SCENE_HAS_CURVE_RIBBONS
+    if (curve_row_type(s) != CURVE_TYPE_TUBE) {
+        curve_ribbon_local(s, where, point, normal, tangent_u, tangent_v);
+        return;
+    }
+#endif
     float3 a = s->sphere.xyz, b = s->to_world[0].xyz;
     float ra = s->sphere.w, rb = s->to_world[0].w;
     float3 axis = b - a;
@@ -149,6 +165,9 @@ inline float2 curve_mitsuba_uv(__global const AnalyticShape *s, float2 where, fl
  * around the fibre and v along it, which do not depend on the ray. */
 inline float2 curve_texture_uv(__global const AnalyticShape *s, float2 where, float3 n, float3 dpdu, float3 wo)
 {
+#if SCENE_HAS_CURVE_RIBBONS
+    if (curve_row_type(s) != CURVE_TYPE_TUBE) return curve_ribbon_uv(s, where, n, wo);
+#endif
     float u = s->to_world[1].x + clamp(where.x, 0.0f, 1.0f) * (s->to_world[1].y - s->to_world[1].x);
     if (!s->pbrt_uv) return curve_mitsuba_uv(s, where, u);
     float3 w = normalize(dpdu);

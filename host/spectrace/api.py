@@ -31,7 +31,7 @@ from spectrace.geometry.analytic import (
     object_tessellation,
     similarity_problem,
 )
-from spectrace.geometry.curves import checked_curves, curve_surface
+from spectrace.geometry.curves import checked_curve_type, checked_curves, curve_surface
 from spectrace.geometry.grid_volume import GridVolume, box_matrix, make_grid
 from spectrace.geometry.mesh import TriangleMesh, faces_problem, shading_normals
 from spectrace.geometry.sdf_grid import make_sdf_grid, read_sdf_grid
@@ -368,20 +368,25 @@ def curve(
     name: str = "",
     interior: Medium | None = None,
     uv_convention: Literal["pbrt", "mitsuba"] = "pbrt",
+    curve_type: Literal["tube", "flat", "ribbon"] = "tube",
+    curve_normals=None,
 ) -> Shape:
     """Curves (hair, fur, wires: docs/scene-format.md, "Curves"): `points` one curve's control points, rows of
     (x, y, z, radius), or a list of curves; `basis` "linear" (a sphere swept from point to point: Mitsuba 3's
     linearcurve) or "bspline" (the uniform cubic B-spline of the points, centre and radius: Mitsuba 3's
     bsplinecurve). `transform` moves the points and leaves the radii as given (as Mitsuba 3 does). Intersected
     exactly as swept spheres, one BVH primitive per segment; a curve cannot emit. `uv_convention`: pbrt-v4's
-    texture coordinates (u along each curve, v across it) or Mitsuba 3's (u around, v along all the curves)."""
+    texture coordinates (u along each curve, v across it) or Mitsuba 3's (u around, v along all the curves).
+    `curve_type` "tube" (the swept sphere), or pbrt-v4's "flat" (a strip of the same width facing each ray) or
+    "ribbon" (a strip oriented by `curve_normals`, an (x, y, z) row per point of each linear curve)."""
     if material is None and interior is None:
         raise SpectraceError("a curve needs a material", where="material")
     if uv_convention not in ("pbrt", "mitsuba"):
         raise SpectraceError(f"uv_convention must be pbrt or mitsuba, got {uv_convention!r}", where="uv_convention")
     curves = checked_curves(points, basis, "points")
+    normals = checked_curve_type(curve_type, curves, curve_normals, basis, uv_convention, lambda name: name)
     matrix = transform_matrix([dict(step) for step in transform], where="transform") if transform else None
-    surface = curve_surface(curves, basis, matrix, uv_convention=uv_convention)
+    surface = curve_surface(curves, basis, matrix, uv_convention=uv_convention, curve_type=curve_type, normals=normals)
     if surface.count == 0:
         raise SpectraceError("the curves have no segment of any length", where="points")
     return Shape(

@@ -1,8 +1,9 @@
 """pbrt-v4's `curve` shape imported as spectrace's curve (spectrace.interop.pbrt.curves): a cubic B-spline of one
 width renders bit for bit as the same curve written in the scene format by hand; a Bézier curve and a quadratic
 B-spline become polylines within 1 % of their radius of the float64 curve (widths varying linearly along it, in
-object space, scaled with the transform); flat and ribbon curves are imported as tubes with a warning;
-splitdepth is read and ignored; bad curves are one line naming the file and line."""
+object space, scaled with the transform); `flat` (pbrt's default) and `ribbon` curves become spectrace's strips of
+those types, a ribbon's `N` slerped along each segment as pbrt does and turned into spectrace's world, `cylinder`
+a tube; splitdepth is read and ignored; bad curves are one line naming the file and line."""
 
 import tomllib
 from pathlib import Path
@@ -44,8 +45,9 @@ def _points(text: list[list[float]]) -> str:
     return " ".join(str(v) for p in text for v in p)
 
 
-def test_a_bspline_curve_renders_as_the_same_curve_in_the_scene_format(tmp_path, device):
-    pbrt = _write(tmp_path, BSPLINE_CURVE)
+@pytest.mark.parametrize("kind", ["cylinder", "flat"])
+def test_a_bspline_curve_renders_as_the_same_curve_in_the_scene_format(tmp_path, device, kind):
+    pbrt = _write(tmp_path, BSPLINE_CURVE.replace('"cylinder"', f'"{kind}"'))
     imported = tmp_path / "imported.toml"
     import_pbrt(pbrt, imported)
     data = tomllib.loads(imported.read_text())
@@ -60,7 +62,7 @@ def test_a_bspline_curve_renders_as_the_same_curve_in_the_scene_format(tmp_path,
         "transform": [{"scale": 0.8}, {"translate": [0, 0.4, 0]}, {"scale": [-1, 1, 1]}],
         "material": data["shapes"][index]["material"],
         "name": "by hand",
-    }
+    } | ({"curve_type": "flat"} if kind == "flat" else {})
     data["shapes"][index] = by_hand
     written = tmp_path / "by_hand.toml"
     written.write_text(dumps(data))
@@ -110,11 +112,81 @@ def test_a_bezier_curve_is_a_polyline_within_the_stated_fraction_of_its_radius(t
     assert np.allclose(polyline[0, :3], control[0]) and np.allclose(polyline[-1, :3], control[-1])
 
 
-def test_flat_curves_warn_and_splitdepth_is_ignored(tmp_path):
-    body = f'Shape "curve" "point3 P" [{_points(BEZIER[:4])}] "integer splitdepth" 2\n'
-    _, importer = pbrt_scene_data(_write(tmp_path, body))
-    assert any('curve type "flat" imported as a tube' in w for w in importer.warnings)
-    assert not any("splitdepth" in w for w in importer.warnings)
+def test_flat_is_the_default_type_and_splitdepth_is_ignored(tmp_path):
+    body = (
+        f'Shape "curve" "point3 P" [{_points(BEZIER[:4])}] "integer splitdepth" 2\n'
+        f'Shape "curve" "string type" "flat" "string basis" "bspline" "point3 P" [{_points(BSPLINE)}]\n'
+        f'Shape "curve" "string type" "cylinder" "point3 P" [{_points(BEZIER[:4])}]\n'
+    )
+    data, importer = pbrt_scene_data(_write(tmp_path, body))
+    curves = [shape for shape in data["shapes"] if shape["type"] == "curve"]
+    assert [curve.get("curve_type", "tube") for curve in curves] == ["flat", "flat", "tube"]
+    assert curves[1]["basis"] == "bspline"
+    assert importer.warnings == []
+    scene = _imported(tmp_path, body)
+    assert [shape.analytic.curve_type for shape in scene.shapes if shape.analytic is not None] == [
+        "flat",
+        "flat",
+        "tube",
+    ]
+
+
+def _imported(folder: Path, body: str):
+    """The scene the importer writes for `body`, loaded."""
+    imported = folder / "imported.toml"
+    import_pbrt(_write(folder, body), imported)
+    return load_scene(imported)
+
+
+def _slerp(n0: np.ndarray, n1: np.ndarray, t: np.ndarray) -> np.ndarray:
+    angle = np.arccos(np.clip(n0 @ n1, -1.0, 1.0))
+    return (np.sin((1 - t)[:, None] * angle) * n0 + np.sin(t[:, None] * angle) * n1) / np.sin(angle)
+
+
+def test_a_ribbon_takes_its_normals_slerped_along_each_segment(tmp_path):
+    """Two straight Bézier segments along x whose control points are evenly spaced (so the curve parameter of a
+    point is its x over the segment's length) and widths that vary (so the polyline has points inside them), N
+    turning by 90° then 60° about x, under a rotation of 90° about z: every segment end the scene holds has the
+    normal pbrt's slerp gives at its parameter, rotated (and mirrored in x, spectrace's world being pbrt's with x
+    reversed), within 1e-6."""
+    control = [[float(i), 0.0, 0.0] for i in range(7)]
+    normals = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [0.0, np.cos(np.radians(150.0)), np.sin(np.radians(150.0))]]
+    body = (
+        'AttributeBegin\nRotate 90 0 0 1\nShape "curve" "string type" "ribbon" "float width0" 0.1 "float width1" 0.4 '
+        f'"point3 P" [{_points(control)}] "normal N" [{_points(normals)}]\nAttributeEnd\n'
+    )
+    data, importer = pbrt_scene_data(_write(tmp_path, body))
+    (curve,) = [shape for shape in data["shapes"] if shape["type"] == "curve"]
+    assert curve["curve_type"] == "ribbon" and importer.warnings == []
+    (surface,) = [s.analytic for s in _imported(tmp_path, body).shapes if s.analytic is not None]
+    assert surface.curve_type == "ribbon" and surface.count >= 15  # 150° of turn in pieces of at most 10°
+    # pbrt's object x runs along the world's y after the rotation; the mirror leaves y alone, flips x.
+    to_world = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) * [[-1.0], [1.0], [1.0]]
+    ends = np.concatenate([surface.a, surface.b[-1:]])
+    x_object = ends @ np.linalg.inv(to_world).T
+    parameter = x_object[:, 0] / 3.0
+    units = np.array(normals)
+    segment = np.minimum(parameter.astype(int), 1)
+    want = np.array([_slerp(units[k], units[k + 1], np.array([p - k]))[0] for k, p in zip(segment, parameter)])
+    want = want @ to_world.T  # a rotation and a mirror: the inverse transpose is the matrix itself
+    got = np.concatenate([surface.ribbon_normals[:, 0], surface.ribbon_normals[-1:, 1]])
+    assert np.allclose(got, want, atol=1e-6), np.abs(got - want).max()
+
+
+@pytest.mark.parametrize(
+    "normals, message",
+    [
+        (None, r'a ribbon curve needs "normal N"'),
+        ([[0, 0, 1]], r"needs 2 normals"),
+        ([[0, 0, 1], [0, 0, 0]], r"finite and non-zero"),
+    ],
+)
+def test_a_ribbon_without_its_normals_is_one_line(tmp_path, normals, message):
+    given = f' "normal N" [{_points(normals)}]' if normals else ""
+    body = f'Shape "curve" "string type" "ribbon" "point3 P" [{_points(BEZIER[:4])}]{given}\n'
+    with pytest.raises(SpectraceError, match=message) as caught:
+        pbrt_scene_data(_write(tmp_path, body))
+    assert "\n" not in str(caught.value)
 
 
 @pytest.mark.parametrize(

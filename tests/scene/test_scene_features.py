@@ -99,6 +99,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_SHAPES": 0,
         "SCENE_HAS_PARTIAL_SHAPES": 0,
         "SCENE_HAS_CURVES": 0,
+        "SCENE_HAS_CURVE_RIBBONS": 0,
         "SCENE_HAS_MITSUBA_CURVE_UV": 0,
         "SCENE_HAS_INSTANCES": 0,
         "SCENE_HAS_OPACITY": 0,
@@ -123,6 +124,8 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
     assert analytic["SCENE_HAS_CURVES"] == 0
     curves = scene_feature_defines(build_scene_buffers(_curves_scene()))
     assert curves["SCENE_HAS_CURVES"] == 1 and curves["SCENE_HAS_MITSUBA_CURVE_UV"] == 0
+    assert curves["SCENE_HAS_CURVE_RIBBONS"] == 0
+    assert scene_feature_defines(build_scene_buffers(_strip_curves_scene()))["SCENE_HAS_CURVE_RIBBONS"] == 1
     assert scene_feature_defines(build_scene_buffers(_curves_scene("mitsuba")))["SCENE_HAS_MITSUBA_CURVE_UV"] == 1
     assert analytic["SCENE_LIGHT_TYPES"] == LIGHT_BITS["sphere"] | LIGHT_BITS["shape"]
     lights = scene_feature_defines(build_scene_buffers(_environment_map_scene()))
@@ -419,6 +422,19 @@ def _curves_scene(uv_convention: str = "pbrt") -> spectrace.Scene:
     return spectrace.Scene(camera=camera, width=16, height=16, shapes=[hair, wire, floor, bulb])
 
 
+def _strip_curves_scene() -> spectrace.Scene:
+    """The curves scene with pbrt-v4's strips: hair as flat curves, the wire a twisting ribbon
+    (kernels/curve_ribbon.cl)."""
+    scene = _curves_scene()
+    hair, wire, *rest = scene.shapes
+    strands = [[-0.5, 0.0, 0.0, 0.03], [0.0, 0.1, 0.6, 0.03], [0.4, 0.0, 1.0, 0.03]]
+    flat = spectrace.curve(strands, spectrace.hair(eumelanin=0.8), curve_type="flat", name="flat hair")
+    normals = [[0.0, 1.0, 0.0], [0.0, 0.6, 0.8], [0.0, 0.0, 1.0]]
+    points = [[-1.5, -1.0, 0.2, 0.15], [0.0, -0.6, 0.5, 0.2], [1.5, -1.0, 0.2, 0.15]]
+    ribbon = spectrace.curve(points, spectrace.diffuse(0.7), curve_type="ribbon", curve_normals=normals)
+    return replace(scene, shapes=[flat, ribbon, *rest])
+
+
 def _equal_area_scene() -> spectrace.Scene:
     """A goniometric light over a floor, seen by the equal-area camera."""
     floor = spectrace.shape("rectangle", spectrace.diffuse(0.6), transform=[{"scale": 3}])
@@ -582,6 +598,7 @@ SCENES = {
     "sdf_grids": _sdf_grid_scene,
     "curves": _curves_scene,
     "mitsuba_curves": lambda: _curves_scene("mitsuba"),
+    "strip_curves": _strip_curves_scene,
     "equal_area_camera_and_goniometric_light": _equal_area_scene,
     "grid_medium": _grid_medium_scene,
     # Camera rays pass through the area light (hide_emitters): the general kernels test the flag at run time.

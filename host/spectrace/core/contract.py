@@ -203,6 +203,10 @@ TEXTURE_DTYPE = _struct(
 # (kernels/shape_sdf_grid.cl) and one linear curve segment (kernels/shape_curve.cl, geometry/curves.py).
 SHAPE_TYPES = ("sphere", "disk", "cylinder", "sdfgrid", "curve")
 SHAPE_SPHERE, SHAPE_DISK, SHAPE_CYLINDER, SHAPE_SDFGRID, SHAPE_CURVE = range(len(SHAPE_TYPES))
+# A curve segment's row (kernels/shape_curve.cl): a round tube, or pbrt-v4's flat and ribbon strips
+# (kernels/curve_ribbon.cl); the code is kept in the row's cut_min.
+CURVE_TYPES = ("tube", "flat", "ribbon")
+CURVE_TYPE_TUBE, CURVE_TYPE_FLAT, CURVE_TYPE_RIBBON = range(len(CURVE_TYPES))
 
 ANALYTIC_SHAPE_DTYPE = _struct(
     [
@@ -420,4 +424,5 @@ def device_contract_defines() -> dict[str, int | float | str]:
         "BVH8_STACK_SIZE": BVH8_STACK_SIZE,
     }
     values |= {f"SHAPE_{name.upper()}": code for code, name in enumerate(SHAPE_TYPES)}
+    values |= {f"CURVE_TYPE_{name.upper()}": code for code, name in enumerate(CURVE_TYPES)}
     return {name: _c_value(value) for name, value in values.items()}

@@ -6,7 +6,14 @@ from typing import Any
 
 import numpy as np
 
-from spectrace.core.contract import FILTER_TRILINEAR, MICROFACET_BECKMANN, NO_TEXTURE, SHAPE_CURVE, SHAPE_SDFGRID
+from spectrace.core.contract import (
+    CURVE_TYPE_TUBE,
+    FILTER_TRILINEAR,
+    MICROFACET_BECKMANN,
+    NO_TEXTURE,
+    SHAPE_CURVE,
+    SHAPE_SDFGRID,
+)
 from spectrace.engine.scene_buffers import SceneBuffers
 from spectrace.errors import SpectraceError
 from spectrace.materials import MATERIAL_CODES, MATERIALS
@@ -99,6 +106,9 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_PARTIAL_SHAPES": int(bool(np.any(shape_rows["phi_max"] > 0.0))),
         "SCENE_HAS_SDF_GRIDS": int(bool(np.any(shape_rows["type"] == SHAPE_SDFGRID))),
         "SCENE_HAS_CURVES": int(bool(np.any(shape_rows["type"] == SHAPE_CURVE))),
+        "SCENE_HAS_CURVE_RIBBONS": int(
+            bool(np.any((shape_rows["type"] == SHAPE_CURVE) & (shape_rows["cut_min"] != CURVE_TYPE_TUBE)))
+        ),
         "SCENE_HAS_MITSUBA_CURVE_UV": int(
             bool(np.any((shape_rows["type"] == SHAPE_CURVE) & (shape_rows["pbrt_uv"] == 0)))
         ),

@@ -11,6 +11,12 @@ cut into enough pieces that the surface of the segments lies within BSPLINE_TOLE
 swept surface (bspline_polyline). A transform moves the points and leaves the radii as they are, as Mitsuba 3 does
 (pbrt-v4 scales its widths with the transform; its importer does so before handing them on).
 
+A curve's `curve_type` says what each segment is: "tube" the swept sphere above; "flat" and "ribbon" pbrt-v4's
+strips of the same width with no thickness (kernels/curve_ribbon.cl), a flat strip turned to face each ray, a ribbon
+oriented by a normal at each point, interpolated by slerp along the curve as pbrt-v4 does (a segment whose end normals
+differ by more than RIBBON_MAX_TURN is cut into pieces so that each is its bilinear patch within a fraction of a
+percent of its width: ribbon_pieces).
+
 Texture coordinates at a hit are pbrt-v4's by default: u along each curve from 0 to 1, v = (1 + h) / 2 across
 it, h the ray's signed offset from the fibre's axis over the radius, which the hair BSDF reads (kernels/bsdf_hair.cl).
 With Mitsuba 3's (pbrt_uv false) u runs around the fibre in turns and v along all the curves together,
@@ -23,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spectrace.core.contract import ANALYTIC_SHAPE_DTYPE, SHAPE_CURVE
+from spectrace.core.contract import ANALYTIC_SHAPE_DTYPE, CURVE_TYPES, SHAPE_CURVE
 from spectrace.core.equality import fields_equal, identity_hash
 from spectrace.errors import SpectraceError
 from spectrace.geometry.mesh import TriangleMesh
@@ -34,6 +40,10 @@ BSPLINE_TOLERANCE = 0.01
 # At most this many linear pieces per B-spline span, whatever the tolerance asks (a span bent within a radius or two
 # of its own length is not hair; it is then drawn coarser than the tolerance).
 MAX_PIECES_PER_SPAN = 64
+
+# The most a ribbon's normal turns along one segment: a bilinear patch's width at the middle of a segment whose
+# normal turns by θ is cos(θ/2) of the slerped strip's, 0.4 % short at 10°.
+RIBBON_MAX_TURN = np.radians(10.0)
 
 # The uniform cubic B-spline basis: span points P0..P3, c(t) = [1 t t² t³] M [P0 P1 P2 P3]ᵀ, t in [0, 1].
 _BSPLINE = np.array([[1.0, 4.0, 1.0, 0.0], [-3.0, 0.0, 3.0, 0.0], [3.0, -6.0, 3.0, 0.0], [-1.0, 3.0, -3.0, 1.0]]) / 6
@@ -156,10 +166,18 @@ class CurveSurface:
     flip_normals: bool = False
     pbrt_uv: bool = True
     partial: bool = False
+    curve_type: str = "tube"  # CURVE_TYPES
+    # (n, 2, 3): a ribbon's unit normals at a and at b; None for a tube or a flat strip
+    ribbon_normals: np.ndarray | None = None
 
     @classmethod
     def from_polylines(
-        cls, polylines: list[np.ndarray], open_ends: bool = False, along: list[np.ndarray] | None = None
+        cls,
+        polylines: list[np.ndarray],
+        open_ends: bool = False,
+        along: list[np.ndarray] | None = None,
+        curve_type: str = "tube",
+        normals: list[np.ndarray] | None = None,
     ) -> "CurveSurface":
         """Segments joining consecutive (x, y, z, radius) points of each polyline; u along each from 0 to 1 by arc
         length of the centre, or, given `along` (each polyline's points' coordinate along the curves), Mitsuba 3's
@@ -168,19 +186,25 @@ class CurveSurface:
         (`neighbours`), so that the kernels drop the parts of its surface inside the two segments on either side (at
         a joint, the inner side of the bend), where a ray that entered the tube (a hair's transmission, a look into
         an open end) would meet them. Segments one of whose end spheres holds the other add nothing to the surface
-        and are left out."""
-        parts = []
+        and are left out. curve_type "flat" or "ribbon": strips (no caps, no neighbours), a ribbon oriented by
+        `normals`, one (x, y, z) per point of each polyline."""
+        parts, normal_parts = [], []
+        strip = curve_type != "tube"
         for index, line in enumerate(polylines):
             line = np.asarray(line, float)
             lengths = np.linalg.norm(np.diff(line[:, :3], axis=0), axis=1)
-            keep = lengths > np.abs(line[:-1, 3] - line[1:, 3]) * (1 + 1e-6)
+            keep = lengths > (0.0 if strip else np.abs(line[:-1, 3] - line[1:, 3]) * (1 + 1e-6))
+            if normals is not None:
+                unit = np.asarray(normals[index], float)
+                unit = unit / np.linalg.norm(unit, axis=1, keepdims=True)
+                normal_parts.append(np.stack([unit[:-1], unit[1:]], axis=1)[keep])
             total = lengths.sum()
             u = np.concatenate([[0.0], np.cumsum(lengths)]) / total if total > 0 else np.linspace(0, 1, len(line))
             if along is not None:
                 u = np.asarray(along[index], float)
             n = len(lengths)
             caps = np.ones((n, 2))
-            if open_ends:
+            if open_ends or strip:
                 caps[0, 0] = caps[-1, 1] = 0.0
             # The two points before each segment's a and after its b, radius 0 where there is none.
             padded = np.concatenate([np.zeros((2, 4)), line, np.zeros((2, 4))])
@@ -196,8 +220,10 @@ class CurveSurface:
             rows[:, 9],
             rows[:, 10] > 0.5,
             rows[:, 11] > 0.5,
-            rows[:, 12:28].reshape(-1, 4, 4),
+            None if strip else rows[:, 12:28].reshape(-1, 4, 4),
             pbrt_uv=along is None,
+            curve_type=curve_type,
+            ribbon_normals=np.concatenate(normal_parts) if normal_parts else None,
         )
 
     @property
@@ -246,6 +272,10 @@ class CurveSurface:
         if self.neighbours is not None:
             rows["to_object"] = self.neighbours[:, :3]
             rows["to_world"][:, 2] = self.neighbours[:, 3]
+        rows["cut_min"] = CURVE_TYPES.index(self.curve_type)
+        if self.ribbon_normals is not None:
+            rows["to_object"][:, 0, :3] = self.ribbon_normals[:, 0]
+            rows["to_object"][:, 1, :3] = self.ribbon_normals[:, 1]
         rows["abs_det"] = 1.0
         rows["object_area"] = 1.0
         rows["pbrt_uv"] = int(self.pbrt_uv)
@@ -281,6 +311,27 @@ class CurveSurface:
         return TriangleMesh(vertices.reshape(-1, 3), faces, uvs=uvs.reshape(-1, 2))
 
 
+def ribbon_pieces(points: np.ndarray, normals: np.ndarray, max_turn: float = RIBBON_MAX_TURN):
+    """A ribbon's polyline (m, 4) and its normals (m, 3) with every segment whose end normals differ by more than
+    max_turn (radians) cut evenly into as many pieces as keep each within it: points and radii linear along the
+    segment, normals by slerp, as pbrt-v4 interpolates them."""
+    points, normals = np.asarray(points, float), np.asarray(normals, float)
+    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    out_points, out_normals = [points[:1]], [normals[:1]]
+    for i in range(len(points) - 1):
+        n0, n1 = normals[i], normals[i + 1]
+        angle = float(np.arctan2(np.linalg.norm(np.cross(n0, n1)), np.dot(n0, n1)))
+        k = max(1, int(np.ceil(angle / max_turn - 1e-9)))
+        t = np.linspace(0.0, 1.0, k + 1)[1:, None]
+        out_points.append((1.0 - t) * points[i] + t * points[i + 1])
+        if angle > 0.0:
+            slerped = (np.sin((1.0 - t) * angle) * n0 + np.sin(t * angle) * n1) / np.sin(angle)
+        else:
+            slerped = np.repeat(n0[None], k, axis=0)
+        out_normals.append(slerped)
+    return np.concatenate(out_points), np.concatenate(out_normals)
+
+
 def curve_surface(
     curves: list[np.ndarray],
     basis: str,
@@ -288,22 +339,32 @@ def curve_surface(
     tolerance: float = BSPLINE_TOLERANCE,
     open_ends: bool | None = None,
     uv_convention: str = "pbrt",
+    curve_type: str = "tube",
+    normals: list[np.ndarray] | None = None,
 ) -> CurveSurface:
     """The segments of curves given by control points (each (n, 4): x, y, z, radius) in the basis "linear" or
     "bspline", their points placed by the 4 x 4 `matrix` (radii unchanged); open_ends (default: a B-spline's):
     the tubes stop at their ends without a sphere; uv_convention "pbrt" or "mitsuba": whose texture coordinates
-    (Mitsuba 3's v counts the segments of all the curves, a B-spline's spans, in order)."""
+    (Mitsuba 3's v counts the segments of all the curves, a B-spline's spans, in order); curve_type "tube",
+    "flat" or "ribbon", a ribbon's `normals` one per control point of each (linear) curve, turned by the matrix's
+    inverse transpose."""
     spans_before = 3 if basis == "bspline" else 1
     segment_count = sum(len(points) - spans_before for points in curves)
-    placed, along = [], []
+    placed, along, placed_normals = [], [], []
     segments_before = 0
-    for points in curves:
+    for index, points in enumerate(curves):
         points = np.array(points, float)
         if matrix is not None:
             points[:, :3] = points[:, :3] @ matrix[:3, :3].T + matrix[:3, 3]
         line, parameter = (
             bspline_pieces(points, tolerance) if basis == "bspline" else (points, np.arange(len(points), dtype=float))
         )
+        if curve_type == "ribbon" and normals is not None:
+            turned = np.asarray(normals[index], float)
+            if matrix is not None:
+                turned = turned @ np.linalg.inv(matrix[:3, :3])
+            line, turned = ribbon_pieces(line, turned)
+            placed_normals.append(turned)
         placed.append(line)
         along.append((segments_before + parameter) / segment_count)
         segments_before += len(points) - spans_before
@@ -311,6 +372,8 @@ def curve_surface(
         placed,
         open_ends=basis == "bspline" if open_ends is None else open_ends,
         along=along if uv_convention == "mitsuba" else None,
+        curve_type=curve_type,
+        normals=placed_normals if curve_type == "ribbon" else None,
     )
 
 
@@ -344,4 +407,55 @@ def checked_curves(curves, basis: str, where: str) -> list[np.ndarray]:
             )
         if not np.all(np.isfinite(points)) or not np.all(points[:, 3] > 0.0):
             raise SpectraceError(f"curve {i}: coordinates must be finite and radii > 0", where=where)
+    return listed
+
+
+def checked_curve_type(curve_type: str, curves: list[np.ndarray], normals, basis: str, uv_convention: str, where):
+    """A curve shape's type and, for a ribbon, its normals (one (x, y, z) per control point of each curve, rows as
+    `curves`; None otherwise) checked: raises SpectraceError naming `where(key)` (key "curve_type", "curve_normals",
+    "uv_convention" or "basis")."""
+    if curve_type not in CURVE_TYPES:
+        raise SpectraceError(
+            f"curve_type must be one of {', '.join(CURVE_TYPES)}, got {curve_type!r}", where=where("curve_type")
+        )
+    if curve_type != "tube" and uv_convention == "mitsuba":
+        raise SpectraceError(
+            f"a {curve_type} curve has pbrt-v4's texture coordinates only (Mitsuba 3 has no {curve_type} curves)",
+            where=where("uv_convention"),
+        )
+    if curve_type != "ribbon":
+        if normals is not None:
+            raise SpectraceError(
+                f"curve_normals orient a ribbon; this curve is a {curve_type}", where=where("curve_normals")
+            )
+        return None
+    if normals is None:
+        raise SpectraceError("a ribbon curve needs curve_normals, one per control point", where=where("curve_normals"))
+    if basis != "linear":
+        raise SpectraceError('a ribbon curve takes basis "linear" (its normals are per point)', where=where("basis"))
+    try:
+        as_array = np.asarray(normals, float)
+        listed = [as_array] if as_array.ndim == 2 else [np.asarray(n, float) for n in normals]
+    except (TypeError, ValueError):
+        raise SpectraceError("curve_normals must be rows of 3 numbers", where=where("curve_normals")) from None
+    if len(listed) != len(curves):
+        raise SpectraceError(
+            f"curve_normals has {len(listed)} curves' normals for {len(curves)} curves", where=where("curve_normals")
+        )
+    for i, (points, unit) in enumerate(zip(curves, listed)):
+        if unit.shape != (len(points), 3) or not np.all(np.isfinite(unit)):
+            raise SpectraceError(
+                f"curve {i}: curve_normals needs {len(points)} rows of 3 finite numbers (one per point)",
+                where=where("curve_normals"),
+            )
+        axis = np.diff(points[:, :3], axis=0)
+        axis = axis / np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), 1e-300)
+        length = np.linalg.norm(unit, axis=1)
+        across = np.concatenate(
+            [np.linalg.norm(np.cross(unit[:-1], axis), axis=1), np.linalg.norm(np.cross(unit[1:], axis), axis=1)]
+        )
+        if not np.all(length > 0.0) or not np.all(across > 1e-6 * np.concatenate([length[:-1], length[1:]])):
+            raise SpectraceError(
+                f"curve {i}: a ribbon's normals must be non-zero and not along the curve", where=where("curve_normals")
+            )
     return listed

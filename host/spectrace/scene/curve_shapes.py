@@ -9,7 +9,13 @@ from pathlib import Path
 import numpy as np
 
 from spectrace.errors import SpectraceError
-from spectrace.geometry.curves import MINIMUM_POINTS, checked_curves, curve_surface, read_curve_file
+from spectrace.geometry.curves import (
+    MINIMUM_POINTS,
+    checked_curve_type,
+    checked_curves,
+    curve_surface,
+    read_curve_file,
+)
 from spectrace.geometry.transforms import transform_matrix
 from spectrace.scene.model import Material, Shape
 
@@ -23,13 +29,24 @@ def curve_shape(
         curves = read_curve_file(folder / spec.file, where(f"{key}.file"), MINIMUM_POINTS[basis])
     else:
         curves = checked_curves(spec.points, basis, where(f"{key}.points"))
+    curve_type = spec.curve_type or "tube"
+    uv_convention = spec.uv_convention or "pbrt"
+    normals = checked_curve_type(
+        curve_type, curves, spec.curve_normals, basis, uv_convention, lambda name: where(f"{key}.{name}")
+    )
     matrix = None
     if spec.transform:
         steps = [step.model_dump(exclude_none=True) for step in spec.transform]
         matrix = transform_matrix(steps, where=where(f"{key}.transform"))
     with np.errstate(over="ignore", invalid="ignore"):
         surface = curve_surface(
-            curves, basis, matrix, open_ends=spec.open_ends, uv_convention=spec.uv_convention or "pbrt"
+            curves,
+            basis,
+            matrix,
+            open_ends=spec.open_ends,
+            uv_convention=uv_convention,
+            curve_type=curve_type,
+            normals=normals,
         )
     if not (np.all(np.isfinite(surface.a)) and np.all(np.isfinite(surface.b))):
         raise SpectraceError("the transform takes control points beyond float range", where=where(f"{key}.transform"))

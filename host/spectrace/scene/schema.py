@@ -488,6 +488,10 @@ class ShapeSpec(Strict):
     points: list[list[FiniteFloat]] | None = None
     basis: Literal["linear", "bspline"] | None = None
     open_ends: StrictBool | None = None  # curve: no sphere closes its ends (default: a B-spline's)
+    # curve: a round "tube" (default) or pbrt-v4's "flat" strip facing each ray or "ribbon" oriented by
+    # curve_normals, one x, y, z row per point (kernels/curve_ribbon.cl)
+    curve_type: Literal["tube", "flat", "ribbon"] | None = None
+    curve_normals: list[list[FiniteFloat]] | None = None
 
     @model_validator(mode="after")
     def _file_for_meshes(self) -> "ShapeSpec":
@@ -503,6 +507,8 @@ class ShapeSpec(Strict):
             curve_spec_problem(self)
         elif self.points is not None or self.basis is not None or self.open_ends is not None:
             raise ValueError(f"points, basis and open_ends are a curve's, not a {self.type}'s")
+        elif self.curve_type is not None or self.curve_normals is not None:
+            raise ValueError(f"curve_type and curve_normals are a curve's, not a {self.type}'s")
         if self.type not in ("mesh", "sdfgrid", "curve") and self.file is not None:
             raise ValueError(f"a {self.type} shape takes no file")
         if self.shape_index is not None and not (self.file or "").lower().endswith(".serialized"):

@@ -183,11 +183,20 @@ class _Writer:
             self.files[file] = partial(_write_vol, values=shape.analytic.values)
             out |= {"type": "sdfgrid", "file": file, "normals": shape.analytic.normals}
             out["transform"] = [{"matrix": np.asarray(shape.analytic.to_world).tolist()}]
+        elif isinstance(shape.analytic, CurveSurface) and shape.analytic.curve_type == "ribbon":
+            # A ribbon's normals have no place in a curve file: its one curve inline, a normal per point.
+            lines, normals = shape.analytic.polylines(), shape.analytic.ribbon_normals
+            if len(lines) != 1 or normals is None:
+                raise SpectraceError("a ribbon curve shape of several curves: a scene file holds one per shape", where)
+            out |= {"type": "curve", "points": lines[0].tolist(), "basis": "linear", "curve_type": "ribbon"}
+            out["curve_normals"] = np.concatenate([normals[:, 0], normals[-1:, 1]]).tolist()
         elif isinstance(shape.analytic, CurveSurface):
             # Its segments as linear curves in a curve file, which read back as the same segments.
             file = f"{self.assets}/{folder_name}.txt"
             self.files[file] = partial(_write_curves, polylines=shape.analytic.polylines())
             out |= {"type": "curve", "file": file, "basis": "linear", "open_ends": shape.analytic.open_ends}
+            if shape.analytic.curve_type != "tube":
+                out["curve_type"] = shape.analytic.curve_type
             if not shape.analytic.pbrt_uv:
                 out["uv_convention"] = "mitsuba"
         elif shape.analytic is not None:

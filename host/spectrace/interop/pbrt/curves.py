@@ -3,12 +3,14 @@
 (default 1) or `width0` and `width1`, its diameter, varying linearly along the whole curve, in object space (so
 scaled with the transform). A tube ends where pbrt's does, without a cap (open_ends).
 
-pbrt intersects a curve as a ribbon: `cylinder` (shaded as a tube), `flat` (facing the ray) and `ribbon` (oriented
-by `N`); spectrace's curve is a true tube, the same silhouette as all three, so `flat` and `ribbon` are imported as
-tubes with a warning. `splitdepth` is pbrt's own recursion depth for its ribbon test, which spectrace's exact
-segment test has no use for; it is read and ignored. A cubic B-spline of constant width is written as its control
+pbrt's `type`s map onto spectrace's curve types: `cylinder` (pbrt shades a strip as a tube) onto the true tube,
+`flat` (the default: a strip facing each ray) and `ribbon` (a strip oriented by `N`, one normal per Bézier or
+B-spline segment's end, interpolated by slerp along each) onto the strips of the same names (kernels/curve_ribbon.cl);
+a ribbon's normals are turned by the transform's inverse transpose and given at every point of its polyline.
+`splitdepth` is pbrt's own recursion depth for its strip test, which spectrace's exact segment tests have no use
+for; it is read and ignored. A cubic B-spline of constant width that is not a ribbon is written as its control
 points (basis "bspline"); any other curve as the polyline that stands for it within 1 % of its radius
-(geometry/curves.py polynomial_polyline).
+(geometry/curves.py polynomial_pieces).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from spectrace.geometry.analytic import similarity_problem
-from spectrace.geometry.curves import BSPLINE_TOLERANCE, polynomial_polyline
+from spectrace.geometry.curves import BSPLINE_TOLERANCE, polynomial_pieces
 from spectrace.interop.pbrt.context import Context
 from spectrace.interop.pbrt.graphics_state import Shape
 from spectrace.interop.pbrt.parser import error, shown
@@ -65,9 +67,23 @@ def curve_geometry(context: Context, shape: Shape, matrix: np.ndarray) -> dict:
     kind = context.string(entity, "type", "flat")
     if kind not in ("flat", "cylinder", "ribbon"):
         raise error(entity.location, f'curve: type "{shown(str(kind))}" (pbrt-v4 has "flat", "cylinder", "ribbon")')
-    if kind != "cylinder":
-        context.warn(entity.location, f'curve type "{kind}" imported as a tube ("cylinder": the same silhouette)')
-    entity.find("N", "normal3", "normal")  # a ribbon's orientation: a tube has none
+    curve_type = "tube" if kind == "cylinder" else kind
+    given_normals = context.floats(entity, "N", None, "normal3", "normal")
+    segment_count = len(starts)
+    normals = np.zeros((0, 3))
+    if kind == "ribbon":
+        if given_normals is None:
+            raise error(entity.location, 'a ribbon curve needs "normal N", one per segment end')
+        normals = np.array(given_normals, float).reshape(-1, 3)
+        if len(normals) != segment_count + 1:
+            raise error(
+                entity.location,
+                f'a ribbon curve of {segment_count} segments needs {segment_count + 1} normals "N", got {len(normals)}',
+            )
+        if not np.all(np.isfinite(normals)) or not np.all(np.linalg.norm(normals, axis=1) > 0.0):
+            raise error(entity.location, 'a ribbon curve\'s normals "N" must be finite and non-zero')
+    elif given_normals is not None:
+        context.warn(entity.location, f'"N" orients a "ribbon" curve; this one is "{kind}": ignored')
     entity.find("splitdepth", "integer")  # pbrt's own subdivision of its ribbon test: nothing to split here
     if shape.area_light is not None:
         raise error(entity.location, "an area light on a curve: spectrace's curves cannot emit")
@@ -77,11 +93,12 @@ def curve_geometry(context: Context, shape: Shape, matrix: np.ndarray) -> dict:
         context.warn(entity.location, "curve under a non-uniform scale: its width scaled by the mean scale")
     scale = float(abs(np.linalg.det(linear)) ** (1.0 / 3.0))
     radius0, radius1 = 0.5 * width0 * scale, 0.5 * width1 * scale
-    if basis == "bspline" and degree == 3 and width0 == width1:
+    typed = {} if curve_type == "tube" else {"curve_type": curve_type}
+    if basis == "bspline" and degree == 3 and width0 == width1 and kind != "ribbon":
         rows = np.c_[placed[:, :3], np.full(len(control), radius0)]
-        return {"type": "curve", "points": rows.tolist(), "basis": "bspline"}
+        return {"type": "curve", "points": rows.tolist(), "basis": "bspline"} | typed
     spans = []
-    count = len(starts)
+    count = segment_count
     for i, start in enumerate(starts):
         coefficients = np.zeros((4, 4))
         coefficients[:, :3] = _SPANS[basis, degree] @ placed[start : start + order, :3]
@@ -90,5 +107,23 @@ def curve_geometry(context: Context, shape: Shape, matrix: np.ndarray) -> dict:
         r_end = radius0 + (radius1 - radius0) * (i + 1) / count
         coefficients[:2, 3] = r_start, r_end - r_start
         spans.append(coefficients)
-    polyline = polynomial_polyline(spans, BSPLINE_TOLERANCE)
-    return {"type": "curve", "points": polyline.tolist(), "basis": "linear", "open_ends": True}
+    polyline, parameters = polynomial_pieces(spans, BSPLINE_TOLERANCE)
+    table = {"type": "curve", "points": polyline.tolist(), "basis": "linear", "open_ends": True} | typed
+    if kind == "ribbon":
+        table["curve_normals"] = _ribbon_normals(normals, parameters, linear).tolist()
+    return table
+
+
+def _ribbon_normals(normals: np.ndarray, parameters: np.ndarray, linear: np.ndarray) -> np.ndarray:
+    """The normal at each polyline point of curve parameter (segment index + t): pbrt's slerp of the segment's two
+    end normals, turned into spectrace's world by the inverse transpose of `linear`."""
+    unit = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    segment = np.minimum(np.floor(parameters).astype(int), len(unit) - 2)
+    t = (parameters - segment)[:, None]
+    n0, n1 = unit[segment], unit[segment + 1]
+    angle = np.arctan2(np.linalg.norm(np.cross(n0, n1), axis=1), np.sum(n0 * n1, axis=1))[:, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        slerped = (np.sin((1.0 - t) * angle) * n0 + np.sin(t * angle) * n1) / np.sin(angle)
+    slerped = np.where(angle > 1e-6, slerped, (1.0 - t) * n0 + t * n1)
+    turned = slerped @ np.linalg.inv(linear)
+    return turned / np.linalg.norm(turned, axis=1, keepdims=True)
