@@ -97,7 +97,7 @@ reflectance = {{ rgb = [{BLUE[0]}, {BLUE[1]}, {BLUE[2]}] }}
 [[shapes]]
 type = "rectangle"
 material = "blue"
-transform = [{{ scale = [100, 100, 1] }}]
+transform = [{{ scale = [2, 2, 1] }}]
 
 [[lights]]
 type = "envmap"
@@ -110,10 +110,19 @@ texel_spectra = "{texel_spectra}"
     return load_scene(path)
 
 
-def test_coloured_plate_under_a_uniform_map_renders_the_closed_form_of_its_texel_spectrum(tmp_path, device):
+@pytest.mark.parametrize(
+    ("integrator", "kernel"),
+    [("path", "megakernel"), ("path", "wavefront"), ("bdpt", "megakernel"), ("sppm", "megakernel")],
+)
+def test_coloured_plate_under_a_uniform_map_renders_the_closed_form_of_its_texel_spectrum(
+    tmp_path, device, integrator, kernel
+):
     """Film XYZ of the plate = ∫ ρ(λ) L(λ) (x̄, ȳ, z̄) dλ / ∫ ȳ dλ, with L the texel's spectrum of each kind, within
-    4 standard errors (from 8 replicas); the two kinds' closed forms are more than 10 of them apart."""
-    from spectrace.engine.renderer import Renderer
+    4 standard errors (from 8 replicas), from camera paths (both kernel shapes) and from light paths; the two kinds'
+    closed forms are more than 6 of them apart."""
+    import dataclasses
+
+    from spectrace.engine.wavefront import make_renderer
 
     reflectance = uplift_reflectance(BLUE)[0].values
     expected = {
@@ -121,13 +130,13 @@ def test_coloured_plate_under_a_uniform_map_renders_the_closed_form_of_its_texel
         "primaries": spectrum_to_xyz(reflectance * _primaries_spectrum(SKY)),
     }
     for texel_spectra, xyz in expected.items():
-        renderer = Renderer(_plate_scene(tmp_path, texel_spectra), device)
-        replicas = spectrace_replicas(renderer, 8, 16).mean(axis=(1, 2))
+        scene = dataclasses.replace(_plate_scene(tmp_path, texel_spectra), integrator=integrator)
+        replicas = spectrace_replicas(make_renderer(scene, device, kernel), 8, 64).mean(axis=(1, 2))
         mean = replicas.mean(axis=0)
         standard_error = replicas.std(axis=0, ddof=1) / np.sqrt(len(replicas))
         assert np.all(np.abs(mean - xyz) < 4 * standard_error), (texel_spectra, mean, xyz, standard_error)
         other = expected["primaries" if texel_spectra == "smooth" else "smooth"]
-        assert np.max(np.abs(other - xyz) / standard_error) > 10
+        assert np.max(np.abs(other - xyz) / standard_error) > 6
 
 
 def test_texel_spectra_in_a_scene_file(tmp_path):
