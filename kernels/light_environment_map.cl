@@ -4,7 +4,10 @@
  * Map convention (+y up): a direction d has θ = acos(d.y) (0 at the zenith) and φ = atan2(d.x, −d.z); texel
  * column u = (φ + π) / 2π, row v = θ / π, row 0 at the top. Each texel's radiance is r·R(λ) + g·G(λ) + b·B(λ), with
  * R, G, B the emission spectra uplifted from the three primaries (Light.spectrum_offset, basis_green_offset,
- * basis_blue_offset), so the map's linear sRGB is reproduced exactly. The map is importance-sampled by a
+ * basis_blue_offset), so the map's linear sRGB is reproduced exactly; or, for `texel_spectra = "smooth"`
+ * (basis_green_offset SMOOTH_TEXELS, -1), as Mitsuba 3's spectral variants and pbrt-v4's RGBIlluminantSpectrum
+ * (Jakob & Hanika 2019): s · S(a t² + b t + c) · D65(λ), the texel holding the dimensionless sigmoid coefficients
+ * (a, b, c) of its colour over s = 2 max(r, g, b) and s (rgb_spectrum.cl), D65 at Light.spectrum_offset. The map is importance-sampled by a
  * piecewise-constant density ∝ luminance × sin θ (distribution_2d.cl: marginal CDF over rows, then a conditional CDF
  * within the row), as in pbrt-v4's image infinite light. A map may be turned: the light's `position` and `direction`
  * hold the first two rows of the rotation from world to map directions (the third is their cross product), the
@@ -15,6 +18,7 @@
 
 #include "light_sample.cl"
 #include "distribution_2d.cl"
+#include "rgb_spectrum.cl"
 
 #define LIGHT_ENVIRONMENT_MAP_DELTA 0
 
@@ -53,10 +57,16 @@ inline int map_texel(__global const Light *light, float2 uv)
     return row * light->map_width + column;
 }
 
-/* r·R(λ) + g·G(λ) + b·B(λ) of a texel: the light's three basis spectra weighted by the texel's RGB. */
+/* r·R(λ) + g·G(λ) + b·B(λ) of a texel: the light's three basis spectra weighted by the texel's RGB (or its smooth
+ * spectrum, above). */
 inline float4 texel_radiance(__global const Light *light, __global const float *spectra, float4 rgb,
                              const SampledWavelengths *w)
 {
+#if SCENE_HAS_SMOOTH_ENVIRONMENT_MAP
+    if (light->basis_green_offset < 0)
+        return (light->scale * rgb.w) * sigmoid_polynomial_dimensionless(rgb.xyz, w->lambda)
+             * spectrum_at(spectra, light->spectrum_offset, w);
+#endif
     return light->scale * (rgb.x * spectrum_at(spectra, light->spectrum_offset, w)
                          + rgb.y * spectrum_at(spectra, light->basis_green_offset, w)
                          + rgb.z * spectrum_at(spectra, light->basis_blue_offset, w));

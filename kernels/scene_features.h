@@ -47,6 +47,10 @@
 #ifndef SCENE_HAS_LIGHT_IMAGES
 #define SCENE_HAS_LIGHT_IMAGES 1
 #endif
+/* Environment maps whose texels are smooth spectra (`texel_spectra = "smooth"`, light_environment_map.cl). */
+#ifndef SCENE_HAS_SMOOTH_ENVIRONMENT_MAP
+#define SCENE_HAS_SMOOTH_ENVIRONMENT_MAP SCENE_HAS_LIGHT_IMAGES
+#endif
 
 /* Rough lobes with the Beckmann microfacet distribution (kernels/microfacet.cl); without them every rough lobe is
  * GGX and the distribution is not read. */

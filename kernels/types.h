@@ -217,7 +217,8 @@ typedef struct {
     float cos_falloff_start;  /* LIGHT_SPOT: full intensity inside this cone */
     float cos_cutoff;         /* LIGHT_SPOT: none outside this cone */
     int basis_green_offset;   /* LIGHT_ENVIRONMENT_MAP: texel radiance = r·R(λ) + g·G(λ) + b·B(λ), with R at */
-    int basis_blue_offset;    /*   spectrum_offset: the uplifted emission spectra of the three primaries */
+    int basis_blue_offset;    /*   spectrum_offset: the uplifted emission spectra of the three primaries; both -1:
+                                   smooth texels, D65 at spectrum_offset (light_environment_map.cl) */
     int map_width;            /* LIGHT_ENVIRONMENT_MAP (latitude-longitude): texels; LIGHT_PROJECTOR: its table's cells */
     int map_height;
     int texel_offset;         /* LIGHT_ENVIRONMENT_MAP: first texel of the image in the texel buffer */

@@ -136,6 +136,18 @@ def _pbrt_portal_radiance(
     return np.where(lit[:, None], rectified[row, column], 0.0)
 
 
+@pytest.mark.parametrize("constant", ["", 'LightSource "infinite" "rgb L" [0.3 0.2 0.1]\n'], ids=["alone", "summed"])
+def test_image_lights_import_with_pbrt_s_texel_spectra(tmp_path, constant):
+    """pbrt-v4 reads an image light's texels as RGBIlluminantSpectrum (the smooth uplift of the colour times the
+    colour space's illuminant): an image light alone, and the map of a sum with one, import as smooth texels."""
+    _smooth_square(tmp_path / "sky.exr", 16)
+    light = 'LightSource "infinite" "string filename" "sky.exr"\n'
+    (table,) = pbrt_scene_data(_write(tmp_path, light + constant + SPHERE, "sky.pbrt"), tmp_path / "out.toml")[0][
+        "lights"
+    ]
+    assert table["type"] == "envmap" and table["texel_spectra"] == "smooth"
+
+
 def test_portal_lights_import_as_pbrt_s_radiance_on_their_side(tmp_path):
     """Two portal lights of one map (as pbrt-v4's watercolor scene has), under a light transform (pbrt reads the
     portal's points in world space, the map through the light's transform): for directions leaving through either

@@ -26,10 +26,14 @@ def _direction(u, v):
     return np.stack([np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)], axis=-1)
 
 
-def _quadrature_irradiance(rgb, scale, normal, wavelength_nm, sub=24):
-    """∫ L cos⁺ dω over the sphere, each texel split into sub × sub cells with their exact solid angles."""
-    height, width = rgb.shape[:2]
-    radiance = scale * rgb @ _basis_at(wavelength_nm)
+def _quadrature_irradiance(rgb, scale, normal, wavelength_nm):
+    return quadrature_irradiance(scale * rgb @ _basis_at(wavelength_nm), normal)
+
+
+def quadrature_irradiance(radiance, normal, sub=24):
+    """∫ L cos⁺ dω over the sphere of a map of (height, width) texel radiances, each texel split into sub × sub
+    cells with their exact solid angles."""
+    height, width = radiance.shape[:2]
     total = 0.0
     for row in range(height):
         v_edges = (row + np.arange(sub + 1) / sub) / height

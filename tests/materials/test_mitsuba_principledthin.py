@@ -13,9 +13,11 @@ Measured (12 replicas of 64 spp each, Intel's CPU runtime): largest block 1.8 σ
 height-correlated masking, docs/materials.md). The scene tells wrong models apart: the sheet with `anisotropic`
 left out fails at 7.2 σ over the image, with η 1.5 for 1.33 at 13 σ in a block.
 
-Mitsuba's test scene itself differs from spectrace under its museum environment map, and so does a plain `diffuse`
-of the same RGB colour in the sheet's place (docs/mitsuba.md#coverage-of-public-scenes): the map's light, not this
-BSDF, whose every lobe evaluates as Mitsuba's for that scene's weights, `diff_trans` above 1 included (the last test).
+Mitsuba's test scene itself, under its museum environment map, agrees once the map's texels are Mitsuba's smooth
+spectra (`texel_spectra = "smooth"`, which the import writes; docs/mitsuba.md#coverage-of-public-scenes); with the
+primaries' spectra it differs, and so does a plain `diffuse` of the same RGB colour in the sheet's place: the map's
+light, not this BSDF, whose every lobe evaluates as Mitsuba's for that scene's weights, `diff_trans` above 1
+included (the last test).
 
 The specular tint: c_tint = b / lum(b) needs the base colour's luminance. Mitsuba's spectral variants take for it
 the mean of ȳ(λ) b(λ) over the path's four wavelengths, which for a white base is not 1 (0.50 at 450, 500, 550 and

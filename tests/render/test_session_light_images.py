@@ -124,3 +124,16 @@ def test_a_goniometric_image_edited_back_and_forth_is_stored_once_per_image(scen
             assert not session.update({"lights.0.file": file}).rebuilt
             assert _texels(session) == grown
         _same_bits_as_fresh(session, scene_file, {"lights.0.file": "lamp.exr"})
+
+
+def test_the_environment_maps_texel_spectra_edited_back_and_forth(scene_file):
+    """Smooth texels are other numbers in the texel buffer and another kernel branch: the edit renders the bits of
+    a fresh render either way, and going back stores nothing again."""
+    with Session(scene_file, pass_spp=SPP) as session:
+        session.update({"lights.1.texel_spectra": "smooth"})
+        _same_bits_as_fresh(session, scene_file, {"lights.1.texel_spectra": "smooth"})
+        texels = _texels(session)
+        for texel_spectra in ("primaries", "smooth"):
+            session.update({"lights.1.texel_spectra": texel_spectra})
+            assert _texels(session) <= texels
+        _same_bits_as_fresh(session, scene_file, {"lights.1.texel_spectra": "smooth"})

@@ -83,6 +83,7 @@ def test_defines_of_the_cornell_box_and_of_a_scene_with_media_and_pictures():
         "SCENE_HAS_GRID_MEDIA": 0,
         "SCENE_HAS_MEDIUM_EMISSION": 0,
         "SCENE_HAS_LIGHT_IMAGES": 0,
+        "SCENE_HAS_SMOOTH_ENVIRONMENT_MAP": 0,
         "SCENE_HAS_BECKMANN": 0,
         "SCENE_HAS_NONLINEAR_PLASTIC": 0,
         "SCENE_HAS_ROUGH_COAT": 0,

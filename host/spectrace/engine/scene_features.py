@@ -57,6 +57,15 @@ def _direction_textures(materials: np.ndarray) -> bool:
     return bool(np.any(principled & (materials["k_offset"] != NO_TEXTURE)))
 
 
+def _smooth_environment_maps(lights: np.ndarray) -> bool:
+    """An environment map whose texels are smooth spectra (spectrace.lights.envmap's texel_spectra)."""
+    from spectrace.lights import DEVICE_LIGHTS
+    from spectrace.lights.envmap import ENVIRONMENT_MAP, SMOOTH_TEXELS
+
+    maps = lights["type"] == DEVICE_LIGHTS.codes[ENVIRONMENT_MAP.name]
+    return bool(np.any(maps & (lights["basis_green_offset"] == SMOOTH_TEXELS)))
+
+
 def camera_feature_defines(params: np.ndarray) -> dict[str, int]:
     """The camera type and pixel filter of a scene's RenderParams (kernels/scene_features.h)."""
     return {
@@ -86,6 +95,7 @@ def scene_feature_defines(buffers: SceneBuffers, hides_area_emitters: bool = Fal
         "SCENE_HAS_LIGHT_IMAGES": int(
             bool(np.any(buffers.lights["texture"] != NO_TEXTURE) or np.any(buffers.lights["map_width"] > 0))
         ),
+        "SCENE_HAS_SMOOTH_ENVIRONMENT_MAP": int(_smooth_environment_maps(buffers.lights)),
         "SCENE_HAS_BECKMANN": int(bool(np.any(materials["distribution"] == MICROFACET_BECKMANN))),
         "SCENE_HAS_NONLINEAR_PLASTIC": int(bool(np.any(materials["nonlinear"] != 0))),
         "SCENE_HAS_ROUGH_COAT": int(bool(np.any(materials["coat_table_offset"] >= 0))),

@@ -12,6 +12,7 @@ from spectrace.io.images import read_environment_map
 from spectrace.lights.base import DeviceLight, Light, LightRows, light_row
 from spectrace.lights.distribution import piecewise_constant_2d
 from spectrace.spectral.colorimetry import LINEAR_SRGB_TO_XYZ
+from spectrace.spectral.illuminants import d65_normalised
 from spectrace.spectral.uplift import uplift_illuminant
 
 NAME = "envmap"
@@ -48,24 +49,43 @@ PARAMETERS = (
         doc="where the rows lie: `bands`, H bands of equal angle; `poles` (Mitsuba 3's), samples from the zenith "
         "to the nadir, read as the H − 1 bands between them",
     ),
+    Parameter(
+        "texel_spectra",
+        "string",
+        "",
+        "primaries",
+        type_doc='`"primaries"` or `"smooth"`',
+        default_doc='`"primaries"`',
+        doc="each texel's spectrum: `primaries`, r·R(λ) + g·G(λ) + b·B(λ) from the emission uplifts of the three "
+        "primaries; `smooth` (Mitsuba 3's spectral variants and pbrt-v4's), the emission uplift of the texel's own "
+        "colour, a smooth spectrum times D65",
+    ),
 )
 ROWS = ("bands", "poles")
+TEXEL_SPECTRA = ("primaries", "smooth")
 
 
 @dataclass(frozen=True, eq=False)
 class EnvironmentMap(Light):
     """Light from a latitude-longitude image at infinity: `rgb` (height, width, 3) linear sRGB, times `scale`;
-    each texel's radiance is the D65-based emission uplift of its colour (RGB (1,1,1) = D65 at Y = 1), in
-    W/(m² sr nm). +y is up; the image centre looks along −z (see kernels/light_environment_map.cl)."""
+    each texel's radiance is a D65-based emission uplift of its colour (RGB (1,1,1) = D65 at Y = 1), in
+    W/(m² sr nm): the primaries' uplifts weighted by its channels, or with `texel_spectra = "smooth"` the uplift
+    of the colour itself. +y is up; the image centre looks along −z (see kernels/light_environment_map.cl)."""
 
     rgb: np.ndarray
     scale: float = 1.0
     up: tuple[float, float, float] = DEFAULT_UP
     front: tuple[float, float, float] = DEFAULT_FRONT
+    texel_spectra: str = "primaries"
 
     def __post_init__(self) -> None:
         if problem := magnitude_problem(self.rgb, self.scale):
             raise SpectraceError(problem, where="scale")
+        if self.texel_spectra not in TEXEL_SPECTRA:
+            raise SpectraceError(
+                f"texel_spectra must be one of {', '.join(TEXEL_SPECTRA)}, got {self.texel_spectra!r}",
+                where="texel_spectra",
+            )
 
     def world_to_map_rows(self) -> tuple[np.ndarray, np.ndarray]:
         """The first two rows (x, y) of the rotation from world directions to the map's frame (+y its zenith, −z
@@ -137,6 +157,11 @@ def from_spec(spec, resolver, key: str) -> EnvironmentMap:
         raise SpectraceError(
             f"rows must be one of {', '.join(ROWS)}, got {spec.rows!r}", where=resolver.where(f"{key}.rows")
         )
+    if spec.texel_spectra not in TEXEL_SPECTRA:
+        raise SpectraceError(
+            f"texel_spectra must be one of {', '.join(TEXEL_SPECTRA)}, got {spec.texel_spectra!r}",
+            where=resolver.where(f"{key}.texel_spectra"),
+        )
     rgb = read_environment_map(resolver.folder / spec.file, resolver.where(f"{key}.file"))
     if spec.rows == "poles":
         if rgb.shape[0] < 2:
@@ -152,6 +177,7 @@ def from_spec(spec, resolver, key: str) -> EnvironmentMap:
         spec.scale,
         tuple(float(v) for v in spec.up),  # type: ignore[arg-type]
         tuple(float(v) for v in spec.front),  # type: ignore[arg-type]
+        spec.texel_spectra,
     )
 
 
@@ -170,19 +196,47 @@ def environment_map_tables(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, flo
     return texels, piecewise_constant_2d(weights), float(luminance.mean())
 
 
+def smooth_texels(rgb: np.ndarray) -> np.ndarray:
+    """(n, 4) float32 texels of `texel_spectra = "smooth"` from (n, 3) non-negative linear sRGB: each texel's
+    emission uplift (pbrt-v4's RGBIlluminantSpectrum, `uplift_illuminant`'s scheme) as the sigmoid coefficients
+    of its colour over 2 × its largest channel, in the dimensionless form (t = (λ − centre) / half span, which
+    float32 holds far better than powers of λ in nm), then that multiplier; the kernel multiplies by the D65 the
+    light's spectrum slot holds."""
+    from spectrace.spectral.rgb_texture import texture_illuminant_coefficients
+    from spectrace.textures.storage import dimensionless
+
+    coefficients, multiplier = texture_illuminant_coefficients(rgb)
+    texels = np.empty((len(rgb), 4), np.float32)
+    texels[:, :3] = dimensionless(coefficients)
+    texels[:, 3] = multiplier
+    return texels
+
+
+# Light.basis_green_offset of a map whose texels are smooth spectra (kernels/light_environment_map.cl).
+SMOOTH_TEXELS = -1
+
+
 def write_rows(light: EnvironmentMap, out: LightRows) -> None:
     map_texels, out.map_cdf, mean_luminance = environment_map_tables(light.rgb)
-    basis = [out.table.add(uplift_illuminant(primary)) for primary in np.eye(3)]
     height, width = light.rgb.shape[:2]
+    if light.texel_spectra == "smooth":
+        # The map's power estimate stays the RGB luminance's: the uplift keeps each texel's colour.
+        spectrum = out.table.add(d65_normalised())
+        map_fields = (SMOOTH_TEXELS, SMOOTH_TEXELS, width, height)
+        texel_offset = out.add_chunk(smooth_texels(map_texels[:, :3]))
+    else:
+        basis = [out.table.add(uplift_illuminant(primary)) for primary in np.eye(3)]
+        spectrum, map_fields = basis[0], (basis[1], basis[2], width, height)
+        texel_offset = out.add_texels(map_texels[:, :3].reshape(height, width, 3))
     row_x, row_y = light.world_to_map_rows()
     out.add(
         light_row(
             out.code(ENVIRONMENT_MAP),
-            basis[0],
+            spectrum,
             position=tuple(row_x),
             direction=tuple(row_y),
-            map_fields=(basis[1], basis[2], width, height),
-            texel_offset=out.add_texels(map_texels[:, :3].reshape(height, width, 3)),
+            map_fields=map_fields,
+            texel_offset=texel_offset,
             scale=light.scale,
         ),
         4.0 * np.pi**2 * out.scene_radius**2 * light.scale * mean_luminance,
@@ -196,8 +250,10 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
     +z at half, −x at three quarters); its to_world turns those into world directions, which become `front` and
     `up` (a translation does nothing to light from infinitely far away)."""
     table: dict = {"type": NAME, "file": importer.input_file(importer.child(properties, "filename", emitter), "image")}
-    # Mitsuba's first and last rows sit on the poles (its texel rows are π / (height − 1) apart).
+    # Mitsuba's first and last rows sit on the poles (its texel rows are π / (height − 1) apart); its spectral
+    # variants give each texel the smooth uplift of its own colour times D65.
     table["rows"] = "poles"
+    table["texel_spectra"] = "smooth"
     if "scale" in properties:
         scale = importer.number(properties["scale"])
         if not scale >= 0.0:
@@ -221,7 +277,8 @@ def from_mitsuba(importer, emitter, properties, to_world) -> dict | None:
 
 def from_pbrt(context, light, matrix) -> dict | None:
     """pbrt-v4's `infinite` light with an image (None without one: constant's), its equal-area square resampled
-    into a latitude-longitude map in spectrace's world (context.environment_map)."""
+    into a latitude-longitude map in spectrace's world (context.environment_map). pbrt-v4 reads each texel as an
+    RGBIlluminantSpectrum: the smooth uplift of its colour times the colour space's illuminant."""
     if light.find("filename", "string") is None:
         return None
-    return context.environment_map(light, matrix, context.one(light, "scale", 1.0))
+    return context.environment_map(light, matrix, context.one(light, "scale", 1.0)) | {"texel_spectra": "smooth"}

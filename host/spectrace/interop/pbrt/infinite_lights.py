@@ -176,7 +176,9 @@ def combine(context: Context, entries: list[tuple[Light, dict]]) -> list[tuple[L
         context.warn(where, f"{message}: {'; '.join(sorted(set(approximate)))}")
     elif len(indices) > 1:
         context.notes.append(f"{where}: {message}")
-    return _replaced(entries, indices, {"type": "envmap", "file": f"{context.mesh_folder}/{file}", "scale": scale})
+    # Texels as pbrt's image lights' (RGBIlluminantSpectrum), where the summed constants' colours go too.
+    table = {"type": "envmap", "file": f"{context.mesh_folder}/{file}", "scale": scale, "texel_spectra": "smooth"}
+    return _replaced(entries, indices, table)
 
 
 def _file(table: dict) -> str:
