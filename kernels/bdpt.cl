@@ -502,7 +502,6 @@ inline float bdpt_vertex_pdf(const Scene *scene, const SampledWavelengths *w, co
     __global const Material *material = &scene->materials[v->material];
     SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
     SURFACE_AT_HIT(sc, *v);
-    SURFACE_NORMAL(sc, v->ns_base);
     sc.p = v->p;
     sc.dpdu = v->dpdu;
     sc.tangent_w = v->tangent_w;

@@ -73,7 +73,6 @@ inline float fluorescent_yield(const Scene *scene, __global const Material *m, c
     if (SCENE_HAS_TEXTURES && m->roughness_texture != NO_TEXTURE) {
         SurfaceContext sc = surface_context(scene, v->uv, v->footprint);
         SURFACE_AT_HIT(sc, *v);
-        SURFACE_NORMAL(sc, v->ns_base);
         quantum_yield = texture_numbers_at(&sc.buffers, m->roughness_texture, v->uv, v->p, v->footprint).x;
     }
     return quantum_yield;

@@ -99,7 +99,6 @@ inline SurfaceContext shading_context(const Scene *scene, float2 uv, float3 p, f
     SurfaceContext sc = surface_context(scene, uv, footprint);
     sc.p = p;
     sc.base_normal = base_normal;
-    SURFACE_NORMAL(sc, base_normal);
     sc.dpdu = dpdu;
     sc.tangent_w = tangent_w;
     sc.adjoint = adjoint;
@@ -433,7 +432,7 @@ inline float surface_opacity(const Scene *scene, int triangle, float2 b12)
         at.instance = -1;  /* hit_uv reads only the slot */
 #endif
         SurfaceContext sc = surface_context(scene, hit_uv(scene, at), 0.0f);
-        SURFACE_AT_HIT(sc, at);
+        SURFACE_HIT_DETAIL(sc, at);  /* an opacity is no directionmix: no normal */
         return texture_numbers(&sc.buffers, m->opacity_texture, sc.uv, 0.0f).x;
     }
     return m->opacity;

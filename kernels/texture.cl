@@ -35,7 +35,7 @@ typedef struct {
     float2 b12;    /* the hit's barycentrics of its corners v1 and v2 */
 #endif
 #if SCENE_HAS_DIRECTION_MIX
-    float3 normal; /* unit: the surface's shading normal, which a directionmix reads (texture_direction_mix.cl); 0: none */
+    float3 normal; /* the surface's geometric normal, which a directionmix reads (texture_direction_mix.cl); 0: none */
 #endif
 } TextureBuffers;
 
@@ -379,18 +379,20 @@ typedef struct {
 #else
 #define SURFACE_MESH_AT_HIT(sc, v) ((void)0)
 #endif
-#if SCENE_HAS_MITSUBA_CURVE_UV
-#define SURFACE_AT_HIT(sc, v) \
-    (SURFACE_MESH_AT_HIT(sc, v), (sc).fibre_h_from_geometry = curve_slot_has_mitsuba_uv(scene, (v).triangle))
-#else
-#define SURFACE_AT_HIT(sc, v) SURFACE_MESH_AT_HIT(sc, v)
-#endif
-/* Where a surface context's lookups take the shading normal n from (a directionmix's). */
+/* Where a surface context's lookups take the normal n from (a directionmix's): SURFACE_AT_HIT gives them the
+ * vertex's geometric normal, as pbrt-v4's TextureEvalContext carries its interaction's n. */
 #if SCENE_HAS_DIRECTION_MIX
 #define SURFACE_NORMAL(sc, n) ((sc).buffers.normal = (n))
 #else
 #define SURFACE_NORMAL(sc, n) ((void)0)
 #endif
+#if SCENE_HAS_MITSUBA_CURVE_UV
+#define SURFACE_HIT_DETAIL(sc, v) \
+    (SURFACE_MESH_AT_HIT(sc, v), (sc).fibre_h_from_geometry = curve_slot_has_mitsuba_uv(scene, (v).triangle))
+#else
+#define SURFACE_HIT_DETAIL(sc, v) SURFACE_MESH_AT_HIT(sc, v)
+#endif
+#define SURFACE_AT_HIT(sc, v) (SURFACE_HIT_DETAIL(sc, v), SURFACE_NORMAL(sc, (v).n))
 
 /* A textured parameter: its texture when it has one, else its tabulated spectrum. In a scene without textures the
  * test folds away (SCENE_HAS_TEXTURES) and this is the plain table lookup. */

@@ -6,8 +6,9 @@
  *
  * Contract (host: host/spectrace/textures/directionmix.py): a TEXTURE_DIRECTIONMIX row's side_spectrum /
  * side_texture are tex1 and tex2 (spectra or non-composite textures, as a mix's), and uv_transform.xyz the unit
- * world-space dir. n is the lookup's TextureBuffers.normal: the unit shading normal before a normal or bump map
- * turned it (shading_context), 0 where a lookup has no surface at hand (then a = 0: tex2). */
+ * world-space dir. n is the lookup's TextureBuffers.normal: the vertex's unit geometric normal (SURFACE_AT_HIT), as
+ * pbrt-v4 evaluates textures with its interaction's n (TextureEvalContext), not the shading normal that vertex
+ * normals interpolate or a normal or bump map turns; 0 where a lookup has no surface at hand (then a = 0: tex2). */
 #ifndef SPECTRACE_TEXTURE_DIRECTION_MIX_CL
 #define SPECTRACE_TEXTURE_DIRECTION_MIX_CL
 

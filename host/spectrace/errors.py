@@ -20,3 +20,8 @@ class SpectraceError(Exception):
         self.message = message
         self.where = where
         super().__init__(one_line(f"{where}: {message}" if where else message))
+
+
+class SpectraceWarning(UserWarning):
+    """Something the user may not have meant that spectrace goes on with (a scene in which nothing emits); the
+    Python API warns with it, the command line prints it as one "warning:" line."""

@@ -115,13 +115,6 @@ CASES = [
         "unknown type 'laser' (one of",
     ),
     replace(
-        "nothing-emits",
-        '[[shapes]]\ntype = "rectangle"\nmaterial = "grey"\nemitter = { radiance = { value = 1.0 } }\n',
-        "",
-        "",
-        "the scene has neither shapes nor lights",
-    ),
-    replace(
         "toml-nested-too-deep",
         "fov = 40",
         "fov = 40\nx = " + "[" * 5000 + "]" * 5000,

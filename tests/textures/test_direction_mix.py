@@ -1,4 +1,4 @@
-"""pbrt-v4's `directionmix` texture: a · tex1 + (1 − a) · tex2, a = |n · dir| of the unit shading normal n.
+"""pbrt-v4's `directionmix` texture: a · tex1 + (1 − a) · tex2, a = |n · dir| of the unit geometric normal n.
 
 - A diffuse unit sphere whose reflectance is a directionmix of two constants, lit by a distant light only (direct
   light, max_depth 2) and seen by an orthographic camera: each pixel's value is the box-filtered closed form
@@ -6,6 +6,8 @@
   fine grid here), within 4 of the render's own per-pixel standard errors (256 independent samples each). dir is
   chosen so that n · dir takes both signs over the visible half, and the two constants differ: the sides swapped
   or the absolute value dropped are far outside the noise.
+- A smooth-shaded tent of two facets tilted 50° each way whose vertex normals all point straight up: a is each
+  facet's own |n · dir|, not the shading normal's, so each facet shows its closed-form reflectance.
 - The scene format and pbrt-v4's import (dir taken through the declaring transform, normalised), and the refusals.
 """
 
@@ -16,6 +18,7 @@ import spectrace
 from scene_text import camera_film
 from spectrace.engine.renderer import Renderer
 from spectrace.errors import SpectraceError
+from spectrace.geometry.mesh import TriangleMesh
 from spectrace.interop.pbrt import load_pbrt_scene, pbrt_scene_data
 from spectrace.scene.model import Camera, Scene
 from stats_toolkit import assert_within_standard_errors, mean_and_standard_error
@@ -102,6 +105,57 @@ def test_light_tracer_and_bdpt_read_the_normal_too(device, integrator):
             means = (renders[:, rows, columns][:, block] - expected[rows, columns][block]).mean(axis=1)
             mean, error = mean_and_standard_error(means)
             assert_within_standard_errors(mean, 0.0, error, slack=2e-5, what=(integrator, rows, columns))
+
+
+TILT = np.radians(50.0)
+TENT_DIR = np.array([0.9, 0.0, 0.2]) / np.linalg.norm([0.9, 0.0, 0.2])
+
+
+def _tent(seed: int, texture) -> Scene:
+    """Two facets meeting along the y axis, each tilted TILT from the xy plane (left facing −x, right +x), their
+    vertex normals all +z: shading and geometric normals differ by 50°. An orthographic camera looks straight down
+    on it, lit by a distant light travelling −z; the ridge lies on a pixel boundary."""
+    half = np.tan(TILT)
+    vertices = np.array(
+        [[-1, -1, -half], [0, -1, 0], [0, 1, 0], [-1, 1, -half], [1, -1, -half], [1, 1, -half]], np.float64
+    )
+    faces = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    mesh = TriangleMesh(
+        vertices, faces, uvs=(vertices[:, :2] + 1.0) / 2.0, normals=np.tile([0.0, 0.0, 1.0], (len(vertices), 1))
+    )
+    return Scene(
+        camera=Camera(origin=(0.0, 0.0, 5.0), target=(0.0, 0.0, 0.0), type="orthographic", view_width=1.6),
+        width=8,
+        height=8,
+        shapes=[spectrace.shape(mesh, spectrace.diffuse(texture))],
+        lights=[spectrace.distant_light((0.0, 0.0, -1.0), IRRADIANCE)],
+        max_depth=2,
+        spp=64,
+        seed=seed,
+        sampler="independent",
+        aovs=("variance",),
+    )
+
+
+def test_the_weight_is_the_geometric_normals_on_a_smooth_shaded_mesh(device):
+    """pbrt-v4 looks textures up with its interaction's n, the geometric normal (TextureEvalContext), so a
+    facet's weight is |n_facet · dir| wherever its shading normal points. The shading normal (+z here) shades:
+    each pixel is ρ/π E with ρ = a tex1 + (1 − a) tex2 of its facet, within 4 of its own standard errors; the
+    shading normal's weight, |z · dir|, is far outside them on both facets."""
+    left, right = np.array([-np.sin(TILT), 0.0, np.cos(TILT)]), np.array([np.sin(TILT), 0.0, np.cos(TILT)])
+    image = Renderer(_tent(5, spectrace.directionmix_texture(TEX1, TEX2, dir=tuple(TENT_DIR))), device).render()
+    mean, error = image.xyz[..., 1], image.aovs["variance"].astype(np.float64)
+
+    def expected(a_left: float, a_right: float) -> np.ndarray:
+        a = np.where(np.arange(8)[None, :] < 4, a_left, a_right) * np.ones((8, 1))
+        return (a * TEX1 + (1.0 - a) * TEX2) / np.pi * IRRADIANCE
+
+    geometric = expected(abs(left @ TENT_DIR), abs(right @ TENT_DIR))
+    assert abs(left @ TENT_DIR - right @ TENT_DIR) > 0.5  # the facets differ from each other too
+    assert_within_standard_errors(mean, geometric, error, slack=2e-5, what="directionmix on a tent")
+    shading = expected(TENT_DIR[2], TENT_DIR[2])
+    for columns in (slice(0, 4), slice(4, 8)):
+        assert np.min(np.abs(mean - shading)[:, columns] / error[:, columns]) > 20.0
 
 
 def test_scene_file_directionmix(tmp_path):

@@ -102,7 +102,7 @@ def refusal_feature(reason: str) -> str:
 def spectrace_import(path: Path, shown: dict[str, str], missing_assets: str) -> dict:
     """The row's fields from spectrace's import of the file (through a temporary TOML), loaded as a scene."""
     from spectrace.interop.pbrt import import_pbrt
-    from spectrace.scene import load_scene
+    from spectrace.scene.loader import load_scene  # the import tells its own warnings
 
     with tempfile.TemporaryDirectory(prefix="pbrt-corpus-") as folder:
         toml_path = Path(folder) / (path.stem + ".toml")

@@ -1,5 +1,8 @@
 """Glowing media as a source of light paths (kernels/light_glowing_media.cl): the boxes around the shapes whose
 interior glows, where the light tracer starts a share of its paths, and how likely each box and that share are.
+A shape of a placed object glows once per placement: its box is the world-space box around its object-space box
+taken through the instance's map, and the kernel finds the medium at a point in it as for any shape (a probe ray
+to the boundary around it, which the instance's map places).
 
 The table, a block of the scene's float table (RenderParams.glow_table its offset, -1 without glowing media):
   [0] n, the boxes; [1] the probability that a light path starts in a glowing medium rather than on a light;
@@ -9,6 +12,7 @@ The probabilities follow an estimate of the power each source emits (pbrt-v4's p
 density they sampled with; the estimates only put paths where the light is."""
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -24,6 +28,24 @@ def _box(shape: Shape) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = shape.analytic.bounds()
         return np.asarray(lo, float), np.asarray(hi, float)
     return shape.mesh.vertices.min(axis=0), shape.mesh.vertices.max(axis=0)
+
+
+def _placed_box(lo: np.ndarray, hi: np.ndarray, to_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The world-space box around the box [lo, hi] taken through the affine map `to_world`: its 8 corners mapped."""
+    corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    placed = corners @ np.asarray(to_world, float).T
+    return placed[:, :3].min(axis=0), placed[:, :3].max(axis=0)
+
+
+def _glowing_boxes(scene: Scene) -> Iterator[tuple[np.ndarray, np.ndarray, Shape]]:
+    """Each glowing shape's world-space box: the scene's own shapes, then each placement of an object's."""
+    for shape in scene.shapes:
+        if shape.interior is not None and shape.interior.emission is not None:
+            yield (*_box(shape), shape)
+    for instance in scene.instances:
+        for shape in instance.object.shapes:
+            if shape.interior is not None and shape.interior.emission is not None:
+                yield (*_placed_box(*_box(shape), instance.to_world), shape)
 
 
 def _power(shape: Shape, volume: float) -> float:
@@ -42,10 +64,7 @@ def _power(shape: Shape, volume: float) -> float:
 def glow_table(scene: Scene, table: SpectrumTable, light_power: list[float]) -> int:
     """Adds the glowing media's table to `table`; its offset, or -1 when no shape of the scene glows inside."""
     boxes = []
-    for shape in scene.shapes:
-        if shape.interior is None or shape.interior.emission is None:
-            continue
-        lo, hi = _box(shape)
+    for lo, hi, shape in _glowing_boxes(scene):
         volume = float(np.prod(hi - lo))
         if not (volume > 0.0 and math.isfinite(volume)):
             continue  # a flat shape holds no volume to glow in

@@ -119,16 +119,12 @@ def renders_every_scene(scene: Scene, medium_count: int, spectral_bins: int) -> 
     return None
 
 
-def glowing_media_problem(scene: Scene, name: str, placed_only: bool = False) -> str | None:
+def glowing_media_problem(scene: Scene, name: str) -> str | None:
     """Why integrator `name`, whose paths cannot gather a medium's emission (the path tracer's and BDPT's camera
-    paths do: kernels/medium_emission.cl; the light tracer's start in the scene's own shapes' glowing media:
-    kernels/light_glowing_media.cl), refuses this scene, or None. placed_only: only glowing media in placed
-    objects (instances) are refused."""
+    paths do: kernels/medium_emission.cl; the light tracer's start in glowing media: kernels/light_glowing_media.cl),
+    refuses this scene, or None."""
     placed = [shape for instance in scene.instances for shape in instance.object.shapes]
-    shapes = placed if placed_only else [*scene.shapes, *placed]
-    if any(shape.interior is not None and shape.interior.emission is not None for shape in shapes):
-        if placed_only:
-            return f"integrator '{name}' does not render glowing media inside placed objects; use 'path' or 'bdpt'"
+    if any(shape.interior is not None and shape.interior.emission is not None for shape in [*scene.shapes, *placed]):
         return f"integrator '{name}' does not render glowing media (a medium's emission); use 'path' or 'bdpt'"
     return None
 

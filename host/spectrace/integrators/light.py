@@ -21,7 +21,6 @@ from spectrace.integrators.base import (
     SHARED_PARAMETERS,
     RenderHost,
     Scene,
-    glowing_media_problem,
     no_defines,
     no_params,
 )
@@ -104,7 +103,7 @@ def add_in_order(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> N
 
 def problem(scene: Scene, medium_count: int, spectral_bins: int) -> str | None:
     """Why the light tracer cannot render this scene as asked, or None."""
-    return glowing_media_problem(scene, NAME, placed_only=True) or splatting_problem(scene, NAME)
+    return splatting_problem(scene, NAME)
 
 
 def passes(host: RenderHost, shape: str, spectral_bins: int) -> LightPasses:

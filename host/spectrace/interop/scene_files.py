@@ -178,25 +178,34 @@ def load_any_scene(
     """The scene in the file `scene` (or the bundled scene of that bare name), whatever its format; `overrides`
     replace values at dotted key paths of the scene as a TOML file holds it (`film.width`, `integrator.type`; for an
     imported file, of the TOML its import writes). Errors name `scene`, never a temporary file. `report`: given each
-    line of an import's warnings ("warning: ...") and notes ("note: ...")."""
+    line of an import's warnings ("warning: ...") and notes ("note: ..."), and the loaded scene's warnings
+    (spectrace.scene.scene_warnings)."""
     from spectrace.resources import resolve_scene_path
-    from spectrace.scene import load_scene
+    from spectrace.scene.loader import load_scene
+    from spectrace.scene.scene_warnings import scene_warnings
 
     path = resolve_scene_path(scene, SCENE_SUFFIXES)
     kind = scene_format(path)
     if kind == TOML:
         try:
-            return load_scene(path, overrides)
+            loaded = load_scene(path, overrides)
         except SpectraceError as error:
             raise _with_format_hint(error, path) from None
-    with tempfile.TemporaryDirectory(prefix=f"spectrace-{kind}-") as folder:
-        toml_path = Path(folder) / f"{path.stem or 'scene'}.toml"
-        lines = _import_lines(_importer(kind)(path, toml_path))
-        if report is not None:
-            for line in lines:
-                report(line)
-        try:
-            return load_scene(toml_path, overrides).with_overrides(source=path)
-        except SpectraceError as error:
-            where = error.where.replace(str(toml_path), str(path)) if error.where else str(path)
-            raise SpectraceError(error.message.replace(str(toml_path), str(path)), where=where) from None
+        lines: list[str] = []
+    else:
+        with tempfile.TemporaryDirectory(prefix=f"spectrace-{kind}-") as folder:
+            toml_path = Path(folder) / f"{path.stem or 'scene'}.toml"
+            lines = _import_lines(_importer(kind)(path, toml_path))
+            if report is not None:
+                for line in lines:
+                    report(line)
+            try:
+                loaded = load_scene(toml_path, overrides).with_overrides(source=path)
+            except SpectraceError as error:
+                where = error.where.replace(str(toml_path), str(path)) if error.where else str(path)
+                raise SpectraceError(error.message.replace(str(toml_path), str(path)), where=where) from None
+    if report is not None:  # an import's lines told what its own load found; overrides may tell more
+        for text in scene_warnings(loaded):
+            if f"warning: {text}" not in lines:
+                report(f"warning: {text}")
+    return loaded

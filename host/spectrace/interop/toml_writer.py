@@ -153,11 +153,13 @@ def write_imported_scene(
     told_at: Callable[[SpectraceError, Path], SpectraceError],
     option: str,
     command: str,
-) -> None:
+) -> list[str]:
     """An importer's last step, the same for every format: refuse a number that overflowed on the way, write the
     TOML and its files all or nothing (write_scene), loading the TOML first; told_at(error, path) turns the loader's
-    complaint about the TOML at `path` into one at the place in the imported file the value came from."""
-    from spectrace.scene import load_scene
+    complaint about the TOML at `path` into one at the place in the imported file the value came from. Returns the
+    loaded scene's warnings (spectrace.scene.scene_warnings), for the importer to tell with its own."""
+    from spectrace.scene.loader import load_scene
+    from spectrace.scene.scene_warnings import scene_warnings
 
     if (key := non_finite_key(data)) is not None:
         failure = SpectraceError(
@@ -165,11 +167,14 @@ def write_imported_scene(
         )
         raise told_at(failure, toml_path)
 
+    found: list[str] = []
+
     def check(temp: Path) -> None:
         try:
-            load_scene(temp)  # from the output's folder, where its relative file paths lead
+            scene = load_scene(temp)  # from the output's folder, where its relative file paths lead
         except SpectraceError as error:
             raise told_at(error, temp) from None
+        found[:] = scene_warnings(scene)
 
     try:
         write_scene(toml_path, data, header, files, check, option, command)
@@ -177,6 +182,7 @@ def write_imported_scene(
         raise SpectraceError(
             f"cannot write the TOML or its files ({error.strerror or error})", where=str(toml_path)
         ) from None
+    return found
 
 
 def check_import_output(toml_path: Path, source: Path | None, source_kind: str, option: str) -> None:

@@ -22,16 +22,20 @@ def material_model_names() -> dict[str, str]:
 def load_scene(path: str | Path, overrides: dict | None = None):
     """Read, validate and resolve a TOML scene file; a bare name (`cornell_box`, `cornell_box.toml`) that is no file
     here names a bundled scene. Raises SpectraceError naming the file and key path. `overrides`: values replacing
-    the file's at dotted key paths ("film.width": 64), as if the file said so."""
+    the file's at dotted key paths ("film.width": 64), as if the file said so. A scene in which nothing emits loads
+    with a SpectraceWarning (spectrace.scene.scene_warnings)."""
     from spectrace.errors import SpectraceError
     from spectrace.resources import resolve_scene_path
     from spectrace.scene.loader import load_scene as load_scene_file
+    from spectrace.scene.scene_warnings import warn
 
     if not isinstance(path, str | os.PathLike):
         raise SpectraceError(f"load_scene() reads a file: give its path (a str or a Path), got {path!r}"[:200])
     if overrides is not None and not (isinstance(overrides, dict) and all(isinstance(k, str) for k in overrides)):
         raise SpectraceError(f"overrides must map dotted key paths (str) to values, got {overrides!r}"[:200])
-    return load_scene_file(resolve_scene_path(path), overrides)
+    scene = load_scene_file(resolve_scene_path(path), overrides)
+    warn(scene, scene.source or path)
+    return scene
 
 
 __getattr__, __dir__ = lazy_names(

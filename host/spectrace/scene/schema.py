@@ -704,16 +704,14 @@ class SceneSpec(Strict):
     sampler: SamplerSpec = SamplerSpec()
     spectra: dict[str, NamedSpectrumSpec] = {}
     textures: dict[str, NamedTextureSpec] = {}
-    materials: dict[str, MaterialSpec]
+    materials: dict[str, MaterialSpec] = {}
     shapes: list[ShapeSpec] = []
     lights: list[LightSpec] = []
     objects: dict[str, ObjectSpec] = {}
     instances: list[InstanceSpec] = []
 
     @model_validator(mode="after")
-    def _something_emits(self) -> "SceneSpec":
-        if not self.shapes and not self.lights and not self.instances:
-            raise ValueError("the scene has neither shapes nor lights")
+    def _one_environment(self) -> "SceneSpec":
         if sum(1 for light in self.lights if LIGHTS[light.type].IS_ENVIRONMENT) > 1:
             raise ValueError("at most one environment light (constant or envmap)")
         return self

@@ -1,11 +1,11 @@
 """`directionmix`: two textures (or spectra) blended by how the surface faces a direction, pbrt-v4's `directionmix`
 (its DirectionMixTexture, "Physically Based Rendering", 4th ed., sec. 10.3.3): value = a · tex1 + (1 − a) · tex2
-with a = |n · dir|, n the unit shading normal at the point and dir a unit world-space direction (pbrt-v4 normalises
+with a = |n · dir|, n the unit geometric normal at the point and dir a unit world-space direction (pbrt-v4 normalises
 its `dir` after taking it to world space, and defaults it to +y). tex1 shows where the surface faces along ±dir,
 tex2 where it lies edge-on to it; as a mix's, its operands are spectra or image textures and a blend of
-reflectances in [0, 1] stays in [0, 1]. The normal is the one before a normal or bump map turns it (the
-interpolated normal of a smooth mesh; pbrt-v4 reads its surface's geometric normal, which differs only on meshes
-with vertex normals). Mitsuba 3 has no such texture. kernels/texture_direction_mix.cl, docs/textures.md."""
+reflectances in [0, 1] stays in [0, 1]. The normal is the surface's own, as pbrt-v4's TextureEvalContext carries
+its interaction's n: a smooth mesh blends by its facets, not by the normals its vertices interpolate, and a normal
+or bump map does not turn it. Mitsuba 3 has no such texture. kernels/texture_direction_mix.cl, docs/textures.md."""
 
 from dataclasses import dataclass
 
@@ -43,7 +43,7 @@ PARAMETERS = (
         DEFAULT_DIR,
         default_doc="[0, 1, 0]",
         doc="the world-space direction (normalised; not zero): the value is a · tex1 + (1 − a) · tex2, a = |n · dir| "
-        "of the unit shading normal n",
+        "of the unit geometric normal n (a facet's own on a smooth mesh)",
     ),
 )
 MITSUBA_PLUGINS: tuple[str, ...] = ()
@@ -91,7 +91,7 @@ def from_spec(spec, resolver, key: str) -> DirectionMixTexture:
 
 
 def make(tex1=0.0, tex2=1.0, dir=DEFAULT_DIR) -> DirectionMixTexture:  # noqa: A002 (pbrt-v4's name)
-    """|n · dir| · tex1 + (1 − |n · dir|) · tex2 at a surface of unit shading normal n, as pbrt-v4's `directionmix`
+    """|n · dir| · tex1 + (1 − |n · dir|) · tex2 at a surface of unit geometric normal n, as pbrt-v4's `directionmix`
     texture: tex1, tex2 reflectances (anything `spectrum` takes, an RGB triple, or an image texture), dir a
     world-space direction (normalised)."""
     return DirectionMixTexture(api_operand(tex1, "tex1"), api_operand(tex2, "tex2"), unit_dir(dir, "dir"))

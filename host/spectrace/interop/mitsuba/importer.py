@@ -273,8 +273,10 @@ def _import_mitsuba(
         ]
     )
     files = {name: partial(_write_side, content=content) for name, content in importer.side_files.items()}
-    write_imported_scene(toml_path, data, header, files, importer.imported_error, option, "spectrace import-mitsuba")
-    return importer.notes
+    found = write_imported_scene(
+        toml_path, data, header, files, importer.imported_error, option, "spectrace import-mitsuba"
+    )
+    return [*importer.notes, *(f"{WARNING_PREFIX}{text}" for text in found)]
 
 
 def _write_side(path: Path, content: str | bytes) -> None:
@@ -286,9 +288,12 @@ def _write_side(path: Path, content: str | bytes) -> None:
 
 def load_mitsuba_scene(xml_path: str | Path, parameters: dict[str, str] | None = None, strict: bool = False):
     """A `Scene` from a Mitsuba 3 XML file (through a temporary TOML file)."""
-    from spectrace.scene import load_scene
+    from spectrace.scene.loader import load_scene
+    from spectrace.scene.scene_warnings import warn
 
     with tempfile.TemporaryDirectory(prefix="spectrace-mitsuba-") as folder:
         toml_path = Path(folder) / (Path(xml_path).stem + ".toml")
         import_mitsuba(xml_path, toml_path, parameters, strict)
-        return load_scene(toml_path).with_overrides(source=Path(xml_path))
+        scene = load_scene(toml_path).with_overrides(source=Path(xml_path))
+    warn(scene, xml_path)
+    return scene

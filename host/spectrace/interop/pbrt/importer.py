@@ -110,8 +110,6 @@ def scene_data(context: Context) -> dict:
     for light, table in infinite_lights.combine(context, entries):
         context.origins[f"lights[{len(lights)}]"] = light.entity.location
         lights.append(table)
-    if not shapes and not lights and not instances:
-        raise SpectraceError("the scene has no shapes or lights spectrace imports", where=str(context.source))
     for entity in (
         context.scene.camera,
         context.scene.film,
@@ -246,17 +244,20 @@ def _import_pbrt(
     for name, image in importer.files.items():
         files[f"{importer.mesh_folder}/{name}"] = partial(_write_image_file, image=image)
 
-    write_imported_scene(
+    found = write_imported_scene(
         toml_path, data, header, files, partial(imported_error, importer), option, "spectrace import-pbrt"
     )
-    return importer.warnings, importer.notes
+    return [*importer.warnings, *found], importer.notes
 
 
 def load_pbrt_scene(pbrt_path: str | Path, strict: bool = False, missing_assets: str = "refuse"):
     """A `Scene` from a pbrt-v4 file (through a temporary TOML file and mesh folder)."""
-    from spectrace.scene import load_scene
+    from spectrace.scene.loader import load_scene
+    from spectrace.scene.scene_warnings import warn
 
     with tempfile.TemporaryDirectory(prefix="spectrace-pbrt-") as folder:
         toml_path = Path(folder) / (Path(pbrt_path).stem + ".toml")
         import_pbrt(pbrt_path, toml_path, strict=strict, missing_assets=missing_assets)
-        return load_scene(toml_path).with_overrides(source=Path(pbrt_path))
+        scene = load_scene(toml_path).with_overrides(source=Path(pbrt_path))
+    warn(scene, pbrt_path)
+    return scene
