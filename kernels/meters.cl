@@ -8,9 +8,13 @@
 #include "path_tracer.cl"
 
 /* E(p, n) = ∫ L cos θ dω over the hemisphere of n = π × the radiance an albedo-1, one-sided Lambertian surface at p
- * would reflect: next-event estimation plus a cosine-sampled path, weighted by MIS as on any diffuse surface. */
-inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
-                                  float3 n, uint *rays_traced)
+ * would reflect: next-event estimation plus a cosine-sampled path, weighted by MIS as on any diffuse surface. This
+ * is the first part, the light point's share (the sum so far of that radiance); the path leaving along the
+ * cosine-sampled direction is *path (throughput 1: albedo 1, f cos / pdf = 1), to follow when *follow. The caller
+ * traces it, so the program holds one copy of the path tracer for every kind of meter: each inlined call is
+ * another, and the build's time grows faster than the program (three copies took 124 s on PoCL). */
+inline float4 irradiance_start(const Scene *scene, const SampledWavelengths *w, Sampler *sampler, float3 p,
+                               float3 n, uint *rays_traced, PathState *path, int *follow)
 {
     __global const RenderParams *params = scene->params;
     float4 reflected = (float4)(0.0f);
@@ -35,16 +39,14 @@ inline float4 estimate_irradiance(const Scene *scene, const SampledWavelengths *
     }
     float3 wi = sample_cosine_about(n, sample_2d(sampler));
     float pdf = cosine_hemisphere_pdf(dot(n, wi));
-    if (pdf > 0.0f) {
-        Ray ray;
-        ray.origin = p;
-        ray.direction = wi;
-        PathState s = camera_path(ray);  /* throughput 1: albedo 1, f cos / pdf = 1 */
-        s.previous_pdf = pdf;
-        s.previous_delta = 0;
-        reflected += continue_path(scene, w, sampler, s, rays_traced);
-    }
-    return M_PI_F * reflected;
+    Ray ray;
+    ray.origin = p;
+    ray.direction = wi;
+    *path = camera_path(ray);
+    path->previous_pdf = pdf;
+    path->previous_delta = 0;
+    *follow = pdf > 0.0f;
+    return reflected;
 }
 
 KERNEL void measure(SCENE_KERNEL_PARAMS, __global const MeterParams *meter, __global const float *wavelengths,
@@ -59,21 +61,34 @@ KERNEL void measure(SCENE_KERNEL_PARAMS, __global const MeterParams *meter, __gl
         Sampler sampler = sampler_start((uint)meter->seed, (uint)item, (uint)s);
         /* A sensor's rays can repeat exactly from sample to sample; its cut-out choices still differ, since each
          * query's identity holds the sample's (opacity_query). */
-        float4 value;
+        PathState path;
+        int follow = 1;
+        float4 direct = (float4)(0.0f);
+        float area = 0.0f; /* the flux meter's sphere; 0: irradiance at the meter's point */
         if (meter->type == METER_RADIANCE) {
             Ray ray;
             ray.origin = meter->point.xyz;
             ray.direction = normalize(meter->direction.xyz);
-            value = trace_path(&scene, &w, &sampler, ray, &rays_traced);
-        } else if (meter->type == METER_IRRADIANCE) {
-            value = estimate_irradiance(&scene, &w, &sampler, meter->point.xyz, normalize(meter->direction.xyz),
-                                        &rays_traced);
+            path = camera_path(ray);
         } else {
-            float radius = meter->point.w;
-            float3 outward = sample_uniform_sphere(sample_2d(&sampler));
-            float3 q = meter->point.xyz + radius * outward;
-            value = (4.0f * M_PI_F * radius * radius)
-                  * estimate_irradiance(&scene, &w, &sampler, q, -outward, &rays_traced);
+            float3 p = meter->point.xyz;
+            float3 n = normalize(meter->direction.xyz);
+            if (meter->type != METER_IRRADIANCE) {
+                float radius = meter->point.w;
+                float3 outward = sample_uniform_sphere(sample_2d(&sampler));
+                p = meter->point.xyz + radius * outward;
+                n = -outward;
+                area = 4.0f * M_PI_F * radius * radius;
+            }
+            direct = irradiance_start(&scene, &w, &sampler, p, n, &rays_traced, &path, &follow);
+        }
+        float4 value = follow ? continue_path(&scene, &w, &sampler, path, &rays_traced) : (float4)(0.0f);
+        if (meter->type != METER_RADIANCE) {
+            /* As E = π (direct + path) was summed: the light point's share first. */
+            float4 reflected = direct;
+            if (follow) reflected += value;
+            value = M_PI_F * reflected;
+            if (meter->type != METER_IRRADIANCE) value = area * value;
         }
         sum += 0.25f * (value.x + value.y + value.z + value.w);
     }

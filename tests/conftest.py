@@ -13,10 +13,12 @@ from spectrace.engine.launch import is_pocl
 from spectrace.plugins import generated_sources
 
 # Renders use the kernels built for every scene unless a test asks for a scene's own (the specialisation tests,
-# which check that both give the same bits): one program per integrator and option set instead of one per scene's
-# feature set. Set here, so that child processes (the CLI tests) inherit it; SPECTRACE_GENERAL_KERNELS=0 runs the
-# suite on the specialised kernels instead.
-os.environ.setdefault("SPECTRACE_GENERAL_KERNELS", "1")
+# which check that both give the same bits): one program per integrator and sampler instead of one per scene's
+# feature set. A build with a film or polarisation define (a spectral film, AOVs, Stokes, a film range of its own)
+# takes the scene's own kernels ("common"): each such general program took 40-100 s on PoCL for the few tests that
+# share it, a scene's own 3-9 s. Set here, so that child processes (the CLI tests) inherit it;
+# SPECTRACE_GENERAL_KERNELS=0 runs the suite on the specialised kernels instead, 1 on the general ones alone.
+os.environ.setdefault("SPECTRACE_GENERAL_KERNELS", "common")
 
 HARNESS_GROUP = 64
 

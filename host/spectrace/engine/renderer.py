@@ -42,15 +42,23 @@ def sampler_defines(sampler: str) -> dict[str, int]:
 
 
 GENERAL_KERNELS_VARIABLE = "SPECTRACE_GENERAL_KERNELS"
+GENERAL_KERNELS_SETTINGS = ("", "0", "1", "common")
 
 
-def specialise_by_default() -> bool:
-    """Whether a renderer builds its scene's own kernels when not told: yes, unless $SPECTRACE_GENERAL_KERNELS is 1.
-    The images are the same bits either way; the general kernels save a build per distinct scene (the test suite
-    renders hundreds) at the cost of a longer one, shared by them all."""
+def specialise_by_default(rare_variant: bool = False) -> bool:
+    """Whether a renderer builds its scene's own kernels when not told: yes, unless $SPECTRACE_GENERAL_KERNELS is 1,
+    or is `common` and the build is of no rare variant. The images are the same bits either way; the general kernels
+    save a build per distinct scene (the test suite renders hundreds) at the cost of a longer one, shared by them all.
+    rare_variant: the build carries a film or polarisation define (a spectral film, AOVs, Stokes, a film range of its
+    own), each a general program of its own that few scenes share: a scene's own build costs a tenth of one."""
     value = os.environ.get(GENERAL_KERNELS_VARIABLE, "").strip()
-    if value not in ("", "0", "1"):
-        raise SpectraceError(f"{GENERAL_KERNELS_VARIABLE}={value!r}: use 1 (general kernels) or 0 (the scene's own)")
+    if value not in GENERAL_KERNELS_SETTINGS:
+        raise SpectraceError(
+            f"{GENERAL_KERNELS_VARIABLE}={value!r}: use 1 (general kernels), 0 (the scene's own) or common (general "
+            "kernels for the common builds, the scene's own for a rare film or polarised one)"
+        )
+    if value == "common":
+        return rare_variant
     return value != "1"
 
 
@@ -86,9 +94,9 @@ class Renderer:
         only this scene's features (the same bits; one program for all scenes rather than one per feature set);
         None: as $SPECTRACE_GENERAL_KERNELS says (`specialise_by_default`). `buffers`: the scene's buffers when
         already built (build_scene_buffers(scene)), as a cluster's workers receive them."""
-        if specialise is None:
-            specialise = specialise_by_default()
-        self.specialised = specialise
+        # The setting is checked now, before the device opens; under `common` it is decided again below, once the
+        # film's defines are known.
+        self.specialised = specialise_by_default() if specialise is None else specialise
         self.scene = scene
         self.integrator = INTEGRATORS.named(scene.integrator)
         if self.KERNEL_SHAPE not in self.integrator.PROGRAMS:
@@ -129,6 +137,9 @@ class Renderer:
             self.device,
         )
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
+        if specialise is None:
+            rare = bool(film.defines()) or bool(polarization_defines(scene, self.buffers))
+            self.specialised = specialise_by_default(rare)
         self.feature_defines = self._feature_defines(scene, self.buffers)
         defines |= self.feature_defines
         defines |= film.defines()
