@@ -71,3 +71,21 @@ type = "rectangle"
 material = "grey"
 emitter = {{ radiance = {{ value = 1.0 }} }}
 """
+
+
+def mitsuba_envmap_over_plate(image_file: str, reflectance_rgb: str, size: int) -> str:
+    """A Mitsuba 3 scene: an orthographic camera looking down at a level diffuse plate (an `<rgb>` reflectance,
+    "r, g, b") that fills its view, lit by the envmap `image_file` only. Mitsuba's map has its rows along local +y:
+    turned so that they run down from the world's +z, each row a ring of equal elevation over the plate."""
+    return f"""<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="2"/></integrator>
+<sensor type="orthographic">
+  <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+  <film type="hdrfilm"><integer name="width" value="{size}"/><integer name="height" value="{size}"/>
+  <rfilter type="box"/></film></sensor>
+<emitter type="envmap"><string name="filename" value="{image_file}"/>
+  <transform name="to_world"><rotate x="1" angle="90"/></transform></emitter>
+<shape type="rectangle"><transform name="to_world"><scale value="10"/></transform>
+  <bsdf type="diffuse"><rgb name="reflectance" value="{reflectance_rgb}"/></bsdf></shape>
+</scene>
+"""

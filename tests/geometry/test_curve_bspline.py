@@ -69,8 +69,9 @@ def test_linear_curve_points_move_and_radii_stay():
 
 @pytest.mark.subprocess
 def test_bad_curves_in_a_scene_file_are_one_line_naming_the_key_and_nothing_is_written(tmp_path):
-    """A curve too short for its basis, and a curve file with a bad line: exit 2, one line naming the key (and the
-    file's line), no image written."""
+    """A curve too short for its basis, a curve file with a bad line, a ribbon without its normals (the loader's
+    check) and curve_type on a sphere (the schema's): exit 2, one line naming the key (and the file's line), no
+    image written."""
     from cli_runner import run_spectrace
 
     head = "[camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\nfov = 40\n[film]\nwidth = 8\nheight = 8\n"
@@ -85,6 +86,15 @@ def test_bad_curves_in_a_scene_file_are_one_line_naming_the_key_and_nothing_is_w
         "file.toml": (
             '[[shapes]]\ntype = "curve"\nfile = "hair.txt"\nmaterial = "m"\n',
             "line 5: expected 4 finite numbers",
+        ),
+        "bare.toml": (
+            '[[shapes]]\ntype = "curve"\nmaterial = "m"\npoints = [[0, 0, 0, 0.1], [1, 0, 0, 0.1]]\n'
+            'curve_type = "ribbon"\n',
+            "shapes[0].curve_normals: a ribbon curve needs",
+        ),
+        "sphere.toml": (
+            '[[shapes]]\ntype = "sphere"\nmaterial = "m"\ncurve_type = "flat"\n',
+            "curve_type and curve_normals are a curve's, not a sphere's",
         ),
     }
     for name, (shape, message) in cases.items():

@@ -191,11 +191,14 @@ def test_diffuse_curve_under_a_distant_light_matches_the_cylinder_closed_form():
     assert np.all(np.abs(mean - expected) <= tolerance), (mean, expected, standard_error)
 
 
-def test_white_hair_curves_in_a_white_furnace_vanish():
+@pytest.mark.parametrize("curve_type, spp", [("tube", 64), ("flat", 32)])
+def test_white_hair_curves_in_a_white_furnace_vanish(curve_type, spp):
     """Chiang et al.'s white furnace on curves: fibres of a hair BSDF that absorbs nothing, lit by a uniform sky
     of radiance 1, scatter all they receive, so every pixel they cover has radiance 1 (within 5 standard errors
     of the covered pixels' mean): the hit record's frame and h, and the culled back faces that let transmitted
-    light cross a fibre, lose or add nothing. The covered pixels are those the same curves in black hide."""
+    light cross a fibre, lose or add nothing. The covered pixels are those the same curves in black hide. On
+    pbrt's flat strips h comes from v across the strip, which stands for the fibre, so light it transmits or
+    reflects leaves it."""
     strands = [
         np.array([[x, -1.0, 0.0, 0.08], [x + 0.1, -0.3, 0.1, 0.08], [x - 0.1, 0.3, -0.1, 0.08], [x, 1.0, 0.0, 0.08]])
         for x in np.linspace(-0.6, 0.6, 6)
@@ -207,7 +210,7 @@ def test_white_hair_curves_in_a_white_furnace_vanish():
             width=32,
             height=32,
             spp=spp,
-            shapes=[spectrace.curve(strands, material)],
+            shapes=[spectrace.curve(strands, material, curve_type=curve_type)],
             lights=[spectrace.constant_environment(1.0)],
             max_depth=100,
             rr_depth=100,
@@ -216,7 +219,7 @@ def test_white_hair_curves_in_a_white_furnace_vanish():
 
     covered = render(spectrace.diffuse(0.0), 4) < 0.05
     assert np.count_nonzero(covered) > 60
-    furnace = render(spectrace.hair(sigma_a=0.0, beta_m=0.3, beta_n=0.3), 64)[covered]
+    furnace = render(spectrace.hair(sigma_a=0.0, beta_m=0.3, beta_n=0.3), spp)[covered]
     assert furnace.std() > 0.005  # the fibres scatter (not a sky seen straight through)
     assert abs(furnace.mean() - 1.0) <= 5.0 * furnace.std(ddof=1) / np.sqrt(furnace.size)
 

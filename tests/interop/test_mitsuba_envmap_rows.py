@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from replica_agreement import assert_renders_like_mitsuba
+from scene_text import mitsuba_envmap_over_plate
 from spectrace.errors import SpectraceError
 from spectrace.interop.mitsuba import load_mitsuba_scene, mitsuba_scene_data
 from spectrace.lights.envmap import pole_rows_as_bands
@@ -30,22 +31,7 @@ def _xml(folder, size: int):
     image = np.repeat(np.repeat(_rows()[:, None, None], WIDTH, axis=1), 3, axis=2).astype(np.float32)
     write_exr(folder / "glow.exr", image, None, {})
     path = folder / "level_plane.xml"
-    # Mitsuba's map has its rows along local +y: turned so that they run down from the world's +z, over a level
-    # plane seen from above by an orthographic camera that sees nothing but the plane.
-    path.write_text(
-        f"""<scene version="3.0.0">
-<integrator type="path"><integer name="max_depth" value="2"/></integrator>
-<sensor type="orthographic">
-  <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
-  <film type="hdrfilm"><integer name="width" value="{size}"/><integer name="height" value="{size}"/>
-  <rfilter type="box"/></film></sensor>
-<emitter type="envmap"><string name="filename" value="glow.exr"/>
-  <transform name="to_world"><rotate x="1" angle="90"/></transform></emitter>
-<shape type="rectangle"><transform name="to_world"><scale value="10"/></transform>
-  <bsdf type="diffuse"><rgb name="reflectance" value="{ALBEDO}"/></bsdf></shape>
-</scene>
-"""
-    )
+    path.write_text(mitsuba_envmap_over_plate("glow.exr", f"{ALBEDO}", size))
     return path
 
 

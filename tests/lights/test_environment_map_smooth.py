@@ -10,7 +10,7 @@ import pytest
 from tests.lights.test_environment_map import quadrature_irradiance
 
 from replica_agreement import assert_renders_like_mitsuba, spectrace_replicas
-from scene_text import camera_film
+from scene_text import camera_film, mitsuba_envmap_over_plate
 from spectrace.engine.meters import IrradianceMeter, measure
 from spectrace.errors import SpectraceError
 from spectrace.io.exr import write_exr
@@ -152,21 +152,7 @@ def test_texel_spectra_in_a_scene_file(tmp_path):
 def _mitsuba_xml(folder, rgb: np.ndarray, size: int = 8):
     write_exr(folder / "sky.exr", rgb, None, {})
     path = folder / "blue_plate.xml"
-    # The map's rows turned to run down from the world's +z, over a level plate seen from above.
-    path.write_text(
-        f"""<scene version="3.0.0">
-<integrator type="path"><integer name="max_depth" value="2"/></integrator>
-<sensor type="orthographic">
-  <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
-  <film type="hdrfilm"><integer name="width" value="{size}"/><integer name="height" value="{size}"/>
-  <rfilter type="box"/></film></sensor>
-<emitter type="envmap"><string name="filename" value="sky.exr"/>
-  <transform name="to_world"><rotate x="1" angle="90"/></transform></emitter>
-<shape type="rectangle"><transform name="to_world"><scale value="10"/></transform>
-  <bsdf type="diffuse"><rgb name="reflectance" value="{BLUE[0]}, {BLUE[1]}, {BLUE[2]}"/></bsdf></shape>
-</scene>
-"""
-    )
+    path.write_text(mitsuba_envmap_over_plate("sky.exr", f"{BLUE[0]}, {BLUE[1]}, {BLUE[2]}", size))
     return path
 
 
