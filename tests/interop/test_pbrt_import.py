@@ -613,7 +613,7 @@ def test_unsupported_parameters_warn_and_strict_refuses(tmp_path):
     assert f'{path}:6: Shape "sphere": parameter "float frobs" not imported' in warnings
     assert any(w.startswith(f"{path}:5: pixel filter 'sinc' not imported") for w in warnings)
     # The same message at many lines is one warning.
-    body = "".join(f'Shape "sphere" "float frobs" {i}\n' for i in range(50))
+    body = "".join(f'Shape "sphere" "float frobs" {i}\n' for i in range(50)) + 'LightSource "point"\n'
     warnings, _ = import_pbrt(_write(tmp_path, body), tmp_path / "c.toml")
     assert warnings == [f'{path}:5: Shape "sphere": parameter "float frobs" not imported (and 49 more like it)']
     with pytest.raises(SpectraceError, match="frobs"):
