@@ -16,7 +16,8 @@ from spectrace.plugins import generated_sources
 # which check that both give the same bits): one program per integrator and sampler instead of one per scene's
 # feature set. A build with a film or polarisation define (a spectral film, AOVs, Stokes, a film range of its own)
 # takes the scene's own kernels ("common"): each such general program took 40-100 s on PoCL for the few tests that
-# share it, a scene's own 3-9 s. Set here, so that child processes (the CLI tests) inherit it;
+# share it, a scene's own 3-9 s; so does BDPT, whose general program took 330-390 s, a scene's own 3-5. Set here,
+# so that child processes (the CLI tests) inherit it;
 # SPECTRACE_GENERAL_KERNELS=0 runs the suite on the specialised kernels instead, 1 on the general ones alone.
 os.environ.setdefault("SPECTRACE_GENERAL_KERNELS", "common")
 

@@ -50,7 +50,8 @@ def specialise_by_default(rare_variant: bool = False) -> bool:
     or is `common` and the build is of no rare variant. The images are the same bits either way; the general kernels
     save a build per distinct scene (the test suite renders hundreds) at the cost of a longer one, shared by them all.
     rare_variant: the build carries a film or polarisation define (a spectral film, AOVs, Stokes, a film range of its
-    own), each a general program of its own that few scenes share: a scene's own build costs a tenth of one."""
+    own), each a general program of its own that few scenes share: a scene's own build costs a tenth of one; or its
+    integrator's general program costs more than its scenes' own builds together (not SHARES_GENERAL_PROGRAM)."""
     value = os.environ.get(GENERAL_KERNELS_VARIABLE, "").strip()
     if value not in GENERAL_KERNELS_SETTINGS:
         raise SpectraceError(
@@ -138,7 +139,11 @@ class Renderer:
         )
         defines: dict[str, int | float] = {**sampler_defines(scene.sampler), **traversal_defines()}
         if specialise is None:
-            rare = bool(film.defines()) or bool(polarization_defines(scene, self.buffers))
+            rare = (
+                bool(film.defines())
+                or bool(polarization_defines(scene, self.buffers))
+                or not self.integrator.SHARES_GENERAL_PROGRAM
+            )
             self.specialised = specialise_by_default(rare)
         self.feature_defines = self._feature_defines(scene, self.buffers)
         defines |= self.feature_defines

@@ -39,6 +39,8 @@ class IntegratorPlugin(Plugin, Protocol):
     @property
     def CHECKPOINT_PROBLEM(self) -> str | None: ...  # noqa: N802 (why it cannot save a checkpoint)
     @property
+    def SHARES_GENERAL_PROGRAM(self) -> bool: ...  # noqa: N802 (whether `common` renders on its general program)
+    @property
     def MITSUBA_PLUGINS(self) -> tuple[str, ...]: ...  # noqa: N802
     @property
     def PBRT_INTEGRATORS(self) -> tuple[str, ...]: ...  # noqa: N802

@@ -30,6 +30,9 @@ SPLATS = "splats"  # its light-to-camera joins land in any pixel: whole films on
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
 REFUSES: tuple[str, ...] = ("spectral bands", "AOVs", "pixel filters", "film responses", "hidden area lights")
 CHECKPOINT_PROBLEM = None
+# Its general program, every material and light joined at every strategy, took 330-390 CPU-s to build on PoCL, a
+# scene's own 3-5 (the Cornell box, the material showcase): SPECTRACE_GENERAL_KERNELS=common builds each scene's own.
+SHARES_GENERAL_PROGRAM = False
 
 # Subpaths live in fixed arrays in the kernel (kernels/bdpt.cl's BDPT_MAX_SEGMENTS).
 BDPT_MAX_SEGMENTS = 16

@@ -25,6 +25,8 @@ SPLATS = None  # each pixel adds its own samples: tiles and checkpoints as the f
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
 REFUSES: tuple[str, ...] = ("glowing media",)
 CHECKPOINT_PROBLEM = None
+# Its general program costs a few of its scenes' own builds: SPECTRACE_GENERAL_KERNELS=common shares it.
+SHARES_GENERAL_PROGRAM = True
 defines = no_defines
 params = no_params
 

@@ -36,6 +36,8 @@ SPLATS = "splats"  # its camera connections land in any pixel: whole films only
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
 REFUSES: tuple[str, ...] = ("AOVs", "film responses", "hidden area lights")
 CHECKPOINT_PROBLEM = None
+# Its general program costs a few of its scenes' own builds: SPECTRACE_GENERAL_KERNELS=common shares it.
+SHARES_GENERAL_PROGRAM = True
 defines = no_defines
 params = no_params
 

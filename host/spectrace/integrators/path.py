@@ -53,6 +53,8 @@ SPLATS = None  # each pixel adds its own samples: tiles and checkpoints as the f
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
 REFUSES: tuple[str, ...] = ()
 CHECKPOINT_PROBLEM = None
+# Its general program costs a few of its scenes' own builds: SPECTRACE_GENERAL_KERNELS=common shares it.
+SHARES_GENERAL_PROGRAM = True
 problem = renders_every_scene
 defines = no_defines
 params = no_params

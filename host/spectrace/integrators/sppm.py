@@ -30,6 +30,8 @@ SPLATS = "photons"  # a photon adds to every pixel whose radius holds it: whole 
 # Its per-pixel photon statistics (radius, photon count, flux) are not in the film's saved state.
 # Of base.FEATURES, what it refuses in any scene (`problem` says why; it refuses more in some scenes).
 REFUSES: tuple[str, ...] = ("spectral bands", "AOVs", "pixel filters", "film responses", "media", "glowing media")
+# Its general program costs a few of its scenes' own builds: SPECTRACE_GENERAL_KERNELS=common shares it.
+SHARES_GENERAL_PROGRAM = True
 CHECKPOINT_PROBLEM = (
     "integrator 'sppm' cannot save or resume checkpoints (its photon statistics are not in the film's state); "
     "render without --checkpoint/--resume"
