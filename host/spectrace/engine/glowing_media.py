@@ -40,11 +40,11 @@ def _placed_box(lo: np.ndarray, hi: np.ndarray, to_world: np.ndarray) -> tuple[n
 def _glowing_boxes(scene: Scene) -> Iterator[tuple[np.ndarray, np.ndarray, Shape]]:
     """Each glowing shape's world-space box: the scene's own shapes, then each placement of an object's."""
     for shape in scene.shapes:
-        if shape.interior is not None and shape.interior.emission is not None:
+        if shape.glows_inside:
             yield (*_box(shape), shape)
     for instance in scene.instances:
         for shape in instance.object.shapes:
-            if shape.interior is not None and shape.interior.emission is not None:
+            if shape.glows_inside:
                 yield (*_placed_box(*_box(shape), instance.to_world), shape)
 
 

@@ -123,8 +123,7 @@ def glowing_media_problem(scene: Scene, name: str) -> str | None:
     """Why integrator `name`, whose paths cannot gather a medium's emission (the path tracer's and BDPT's camera
     paths do: kernels/medium_emission.cl; the light tracer's start in glowing media: kernels/light_glowing_media.cl),
     refuses this scene, or None."""
-    placed = [shape for instance in scene.instances for shape in instance.object.shapes]
-    if any(shape.interior is not None and shape.interior.emission is not None for shape in [*scene.shapes, *placed]):
+    if any(shape.glows_inside for shape in scene.every_shape):
         return f"integrator '{name}' does not render glowing media (a medium's emission); use 'path' or 'bdpt'"
     return None
 

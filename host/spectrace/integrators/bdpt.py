@@ -88,8 +88,10 @@ def passes(host: RenderHost, shape: str, spectral_bins: int) -> light.LightPasse
 
 def only_diffuse(scene: Scene) -> bool:
     """Every surface of the scene (its instanced objects' too) is diffuse, and no medium fills a shape."""
-    shapes = list(scene.shapes) + [shape for instance in scene.instances for shape in instance.object.shapes]
-    return all(shape.material is not None and shape.material.is_diffuse and shape.interior is None for shape in shapes)
+    return all(
+        shape.material is not None and shape.material.is_diffuse and shape.interior is None
+        for shape in scene.every_shape
+    )
 
 
 def pixels_per_light_path(scene: Scene) -> int:

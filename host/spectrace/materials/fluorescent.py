@@ -302,8 +302,7 @@ def fluorescent_materials(scene) -> list[FluorescentMaterial]:
             for part in material.materials:
                 visit(part)
 
-    shapes = list(scene.shapes) + [shape for instance in scene.instances for shape in instance.object.shapes]
-    for shape in shapes:
+    for shape in scene.every_shape:
         visit(shape.material)
     return found
 

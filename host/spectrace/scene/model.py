@@ -113,6 +113,11 @@ class Shape:
     # what reads triangles (bounds, export), and is not rendered. Curves (geometry/curves.py) are analytic too.
     analytic: AnalyticSurface | CurveSurface | None = None
 
+    @property
+    def glows_inside(self) -> bool:
+        """Whether a medium that emits fills it (a glowing medium)."""
+        return self.interior is not None and self.interior.emission is not None
+
 
 @dataclass(frozen=True, eq=False)
 class InstancedObject:
@@ -187,6 +192,11 @@ class Scene:
             f"{len(self.shapes)} shapes ({triangles} triangles, {emitters} emitting), {len(self.lights)} lights"
             f"{instanced}{source})"
         )
+
+    @property
+    def every_shape(self) -> list[Shape]:
+        """Its own shapes, then each placed object's (in object space), once per placement."""
+        return [*self.shapes, *(shape for instance in self.instances for shape in instance.object.shapes)]
 
     def with_overrides(self, **changes) -> "Scene":
         """A copy with some settings replaced (spp, width, height, seed, max_depth, ...); None keeps a value."""

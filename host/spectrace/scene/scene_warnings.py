@@ -7,19 +7,15 @@ import warnings
 from pathlib import Path
 
 from spectrace.errors import SpectraceWarning
-from spectrace.scene.model import Scene, Shape
-
-
-def _glows(shape: Shape) -> bool:
-    return shape.emitter is not None or (shape.interior is not None and shape.interior.emission is not None)
+from spectrace.scene.model import Scene
 
 
 def scene_warnings(scene: Scene) -> list[str]:
     """The warnings loading `scene` gives (without the "warning: " a command line prints before each)."""
-    placed = [shape for instance in scene.instances for shape in instance.object.shapes]
-    if scene.lights or any(_glows(shape) for shape in (*scene.shapes, *placed)):
+    shapes = scene.every_shape
+    if scene.lights or any(shape.emitter is not None or shape.glows_inside for shape in shapes):
         return []
-    if not scene.shapes and not placed:
+    if not shapes:
         return ["the scene has neither shapes nor lights: it renders black"]
     return ["nothing in the scene emits light (no lights, emitting shapes or glowing media): it renders black"]
 
