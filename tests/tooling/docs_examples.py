@@ -7,10 +7,16 @@ and `tests` (linked) and an empty `docs/images`:
 - a TOML or pbrt block whose first line is a comment opening with a file name (`# first.toml: ...`) is written to
   that file;
 - each command of a shell block (lines joined at a trailing backslash) that starts with `spectrace` runs as
-  `python -m spectrace ...`; the commands that render at a small size (`render`'s `--spp`, `--width`, `--height`
-  replaced, `display metamerism`'s `--spp`);
-- a Python block runs in a fresh interpreter in which `spectrace.render` renders at that small size; one marked
-  ` test continues` (a fragment that goes on from the page's examples above) runs after those examples' code.
+  `spectrace ...` would, through the command's entry point; the commands that render at a small size (`render`'s
+  `--spp`, `--width`, `--height` replaced, `display metamerism`'s `--spp`);
+- a Python block runs as a script of its own (fresh globals) in which `spectrace.render` renders at that small
+  size; one marked ` test continues` (a fragment that goes on from the page's examples above) runs after those
+  examples' code.
+
+A page's blocks run one after another in one interpreter of their own, started for the page: a reader's commands
+are separate processes, but what a process adds to them (start-up, imports, opening the device, reading the cached
+kernels: 2-4 s a command, two thirds of the pages' time) is the same for every command, and the command line's own
+process behaviour (exit statuses, signals, one-line errors) has tests of its own.
 
 A block that needs a module spectrace does not install says so after its marker (```` ```python test needs: bpy ````,
 names separated by commas): where one is missing the page is skipped, naming it, and where all are present the block
@@ -26,6 +32,7 @@ pages show.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shlex
@@ -51,13 +58,16 @@ _IMAGE = re.compile(r"!\[[^\]]*\]\(([^)\s]+)\)")
 _FILE_COMMENT = re.compile(r"^#\s*([\w.-]+\.(?:toml|pbrt))\b")
 
 # A Python example's renders at the small size: the scene's size and samples replaced before it renders.
+# The blocks of a page share one interpreter: the first block's prelude replaces the function, the others find it.
 _PYTHON_PRELUDE = """
 import spectrace, spectrace.api
-_render = spectrace.api.render
-def _small_render(scene, spp=None, *args, **options):
-    small = dict({small})
-    return _render(scene.with_overrides(width=small["width"], height=small["height"]), small["spp"], *args, **options)
-spectrace.render = spectrace.api.render = _small_render
+if not hasattr(spectrace.api.render, "small"):
+    def _small_render(scene, spp=None, *args, _render=spectrace.api.render, **options):
+        small = dict({small})
+        scene = scene.with_overrides(width=small["width"], height=small["height"])
+        return _render(scene, small["spp"], *args, **options)
+    _small_render.small = True
+    spectrace.render = spectrace.api.render = _small_render
 """
 
 
@@ -172,37 +182,79 @@ def prepare(folder: Path) -> None:
     (folder / "docs" / "images").mkdir(parents=True)
 
 
-def run_block(block: Block, folder: Path, reduced: bool = True, timeout: float = 600, above: str = "") -> None:
-    """Run one block in `folder` (a Python block that continues after the code `above`); an AssertionError naming
-    the block and the command when it fails."""
-    environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "host"), os.environ.get("PYTHONPATH", "")])}
-    if block.language in ("toml", "pbrt"):
-        match = _FILE_COMMENT.match(block.text)
-        assert match, f"{block.where}: a tested {block.language} block opens with a comment naming its file"
-        (folder / match[1]).write_text(block.text, encoding="utf-8")
-        return
+# The child interpreter that runs a page's steps, in order, in the page's folder: a step is ("file", where, name,
+# [name, text]), ("cli", where, shown, argv) or ("python", where, shown, code). It stops at the first that fails,
+# writing which and why to stderr.
+_PAGE_RUNNER = """
+import json, sys, traceback
+steps = json.loads(sys.stdin.read())
+for kind, where, shown, payload in steps:
+    try:
+        if kind == "file":
+            name, text = payload
+            with open(name, "w", encoding="utf-8") as file:
+                file.write(text)
+        elif kind == "cli":
+            sys.argv = ["spectrace", *payload]
+            from spectrace.launch import main
+            try:
+                main()
+            except SystemExit as exit_info:
+                code = exit_info.code
+                if code not in (0, None):
+                    raise RuntimeError(f"exit status {code}") from None
+        else:
+            sys.argv = ["-c"]
+            exec(compile(payload, where, "exec"), {"__name__": "__main__", "__builtins__": __builtins__})
+    except BaseException:
+        sys.stdout.flush()
+        print(f"{where}: `{shown}` failed:", file=sys.stderr)
+        traceback.print_exc()
+        sys.exit(1)
+    sys.stdout.flush()
+    sys.stderr.flush()
+"""
+
+
+def _steps(block: Block, reduced: bool, above: str) -> list[tuple[str, str, str, object]]:
+    """What one block runs, as steps for _PAGE_RUNNER."""
     if block.language in ("sh", "bash", "console"):
         runs = [(small(c) if reduced else c, " ".join(c)) for c in commands(block)]
         assert runs, f"{block.where}: a tested shell block holds no spectrace command"
-        calls = [([sys.executable, "-m", "spectrace", *arguments[1:]], shown) for arguments, shown in runs]
-    elif block.language == "python":
+        return [("cli", block.where, shown, arguments[1:]) for arguments, shown in runs]
+    if block.language == "python":
         prelude = _PYTHON_PRELUDE.format(small=SMALL_RENDER) if reduced else ""
         code = prelude + (above if block.continues else "") + block.text
-        calls = [([sys.executable, "-c", code], f"the Python block at {block.where}")]
-    else:
-        raise AssertionError(f"{block.where}: cannot run a {block.language} block")
-    for call, shown in calls:
-        result = subprocess.run(call, cwd=folder, capture_output=True, text=True, env=environment, timeout=timeout)
-        assert result.returncode == 0, f"{block.where}: `{shown}` failed:\n{result.stderr[-3000:]}"
+        return [("python", block.where, f"the Python block at {block.where}", code)]
+    raise AssertionError(f"{block.where}: cannot run a {block.language} block")
 
 
-def run_page(page: Path, folder: Path, reduced: bool = True) -> None:
+def run_page(page: Path, folder: Path, reduced: bool = True, timeout: float = 1800) -> None:
+    """Run the page's tested blocks in `folder`, in one interpreter; an AssertionError naming the block and the
+    command that failed, with its error."""
     prepare(folder)
+    steps: list[tuple[str, str, str, object]] = []
     python_above = ""
     for block in blocks(page):
-        run_block(block, folder, reduced, above=python_above)
+        if block.language in ("toml", "pbrt"):
+            match = _FILE_COMMENT.match(block.text)
+            assert match, f"{block.where}: a tested {block.language} block opens with a comment naming its file"
+            steps.append(("file", block.where, match[1], [match[1], block.text]))
+            continue
+        steps += _steps(block, reduced, python_above)
         if block.language == "python":
             python_above += block.text
+    environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "host"), os.environ.get("PYTHONPATH", "")])}
+    result = subprocess.run(
+        [sys.executable, "-c", _PAGE_RUNNER],
+        input=json.dumps(steps),
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        env=environment,
+        timeout=timeout,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
 
 
 if __name__ == "__main__":
