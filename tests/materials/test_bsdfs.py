@@ -364,22 +364,22 @@ CHI2_CASES = [c for c in NON_DELTA]
 CHI2_SIGNIFICANCE = 0.01 / (len(CHI2_CASES) * len(CHI2_ANGLES))  # Bonferroni over every chi-square test
 
 
-def _bin_probabilities(device: Bsdf, wo: np.ndarray) -> np.ndarray:
-    cell = (1.0 / GRID_COS) * (2.0 * np.pi / GRID_PHI)
-    grid = device.pdf_grid(wo, GRID_COS, GRID_PHI) * cell
-    return grid.reshape(CHI2_COS_BINS, GRID_COS // CHI2_COS_BINS, CHI2_PHI_BINS, GRID_PHI // CHI2_PHI_BINS).sum(
-        axis=(1, 3)
-    )
+def _bin_probabilities(device: Bsdf, wo: np.ndarray, grid: tuple[int, int] = (GRID_COS, GRID_PHI)) -> np.ndarray:
+    """The pdf integrated over each chi-square bin by the midpoint rule on a `grid` of cells (cos θ, φ)."""
+    n_cos, n_phi = grid
+    cell = (1.0 / n_cos) * (2.0 * np.pi / n_phi)
+    pdf = device.pdf_grid(wo, n_cos, n_phi) * cell
+    return pdf.reshape(CHI2_COS_BINS, n_cos // CHI2_COS_BINS, CHI2_PHI_BINS, n_phi // CHI2_PHI_BINS).sum(axis=(1, 3))
 
 
 @pytest.mark.parametrize("name, material", CHI2_CASES, ids=[c[0] for c in CHI2_CASES])
-def test_sampler_matches_its_pdf_chi_square(bsdf, name, material):
+def test_sampler_matches_its_pdf_chi_square(bsdf, name, material, grid=(GRID_COS, GRID_PHI)):
     """Histogram of sampled directions (plus one bin for 'no continuous direction': failures and delta picks)
-    against N × the pdf integrated over each bin."""
+    against N × the pdf integrated over each bin (on `grid`)."""
     device = bsdf(material)
     for index, theta in enumerate(CHI2_ANGLES):
         wo = _wo(theta)
-        probabilities = _bin_probabilities(device, wo)
+        probabilities = _bin_probabilities(device, wo, grid)
         s = device.sample(wo, CHI2_SAMPLES, seed=100 + index)
         continuous = s.ok & ~s.is_delta
         wi = s.wi[continuous]
@@ -397,14 +397,14 @@ def test_sampler_matches_its_pdf_chi_square(bsdf, name, material):
 
 
 @pytest.mark.parametrize("name, material", NON_DELTA, ids=[c[0] for c in NON_DELTA])
-def test_pdf_integrates_to_the_samplers_success_rate(bsdf, name, material):
-    """∫ pdf dω ≤ 1, and equals the fraction of samples that produce a non-delta direction (1 where the sampler
-    loses nothing, as the diffuse lobe at any angle and every lobe at normal incidence for small α)."""
+def test_pdf_integrates_to_the_samplers_success_rate(bsdf, name, material, grid=(GRID_COS, GRID_PHI)):
+    """∫ pdf dω ≤ 1 (on `grid`), and equals the fraction of samples that produce a non-delta direction (1 where the
+    sampler loses nothing, as the diffuse lobe at any angle and every lobe at normal incidence for small α)."""
     device = bsdf(material)
     n = 50000
     for theta in (0.0, 45.0, 85.0):
         wo = _wo(theta)
-        integral = _bin_probabilities(device, wo).sum()
+        integral = _bin_probabilities(device, wo, grid).sum()
         s = device.sample(wo, n, seed=200 + int(theta))
         rate = np.mean(s.ok & ~s.is_delta)
         se = max(np.sqrt(rate * (1.0 - rate) / n), 1.0 / n)
