@@ -59,14 +59,35 @@ def _copy(built: Path, kind: str, tmp_path: Path) -> Path:
 
 
 def _import(tmp_path: Path, kind: str, built: Path | None = None) -> tuple[Path, dict]:
-    name = kind.split(":")[0]
-    blend, toml = tmp_path / f"{name}.blend", tmp_path / f"{name}.toml"
+    """`spectrace import-blend` of a scene of the builder (copied from `built` where it is one of BUILT): its TOML,
+    and what it holds."""
+    blend, toml = tmp_path / f"{kind}.blend", tmp_path / f"{kind}.toml"
     if built is None:
         _build(kind, blend)
     else:
         _copy(built, kind, tmp_path)
     done = run_spectrace("import-blend", str(blend), "-o", str(toml))
     assert done.returncode == 0, done.stderr
+    return toml, tomllib.loads(toml.read_text(encoding="utf-8"))
+
+
+BUILD_AND_IMPORT = """
+import sys
+from tests.interop import blender_builder
+from spectrace.interop.blender import import_blend
+
+kind, blend, toml = sys.argv[1:4]
+sys.argv = [sys.argv[0], kind, blend]
+blender_builder.main()
+import_blend(blend, toml)
+"""
+
+
+def _build_and_import(tmp_path: Path, kind: str) -> tuple[Path, dict]:
+    """A scene of the builder saved and imported by one Blender process (each start of bpy costs seconds)."""
+    name = kind.split(":")[0]
+    blend, toml = tmp_path / f"{name}.blend", tmp_path / f"{name}.toml"
+    _child("-c", BUILD_AND_IMPORT, kind, str(blend), str(toml))
     return toml, tomllib.loads(toml.read_text(encoding="utf-8"))
 
 
@@ -209,7 +230,7 @@ def test_an_environment_image_is_turned_as_blender_maps_it(tmp_path, device):
     image = np.zeros((32, 64, 3), dtype=np.float32)
     image[:16, :32] = 1.0  # rows top-down
     write_exr(tmp_path / "sky.exr", image, None, {})
-    toml, data = _import(tmp_path, f"environment:{tmp_path / 'sky.exr'}")
+    toml, data = _build_and_import(tmp_path, f"environment:{tmp_path / 'sky.exr'}")
     assert data["lights"][0]["type"] == "envmap" and data["lights"][0]["scale"] == 2.0
     scene = load_scene(toml).with_overrides(max_depth=2)
     expected = {(0, 1, 0): math.pi, (0, 0, 1): math.pi, (0, -1, 0): 0.0, (0, 0, -1): 0.0}
