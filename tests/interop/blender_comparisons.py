@@ -1,6 +1,8 @@
 """Scenes built with Blender's own Python module (bpy) to compare spectrace with Cycles, run in a child process:
 `python -m tests.interop.blender_comparisons KIND OUT.blend CYCLES_PREFIX SPP SEEDS [ENVIRONMENT.exr]` saves the
-scene and renders it with Cycles on the CPU once per seed 1..SEEDS, to CYCLES_PREFIX<seed>.exr (linear Rec.709).
+scene and renders it with Cycles on the CPU once per seed 1..SEEDS, to CYCLES_PREFIX<seed>.exr (linear Rec.709);
+`--import OUT.toml` before KIND then runs `spectrace import-blend OUT.blend -o OUT.toml` through its entry point in
+this process, which has paid for bpy already.
 
 Every scene is 48 × 48 pixels, seen by a camera 3.2 units in front of a room 2 units wide (an inward box without
 its front wall) or a floor and a back wall; Cycles' settings that would bias its estimate are turned off (light
@@ -313,8 +315,12 @@ def main() -> None:
     if sys.argv[1] == "--tangents":
         corner_tangents(sys.argv[2], sys.argv[3])
         return
-    kind, out, prefix, spp, seeds = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
-    scene = sky(sys.argv[6]) if kind == "sky" else SCENES[kind]()
+    args = sys.argv[1:]
+    toml = None
+    if args[0] == "--import":
+        toml, args = args[1], args[2:]
+    kind, out, prefix, spp, seeds = args[0], args[1], args[2], int(args[3]), int(args[4])
+    scene = sky(args[5]) if kind == "sky" else SCENES[kind]()
     cycles = scene.cycles
     cycles.max_bounces = cycles.diffuse_bounces = cycles.glossy_bounces = BOUNCES
     cycles.transmission_bounces = cycles.transparent_max_bounces = BOUNCES
@@ -334,6 +340,11 @@ def main() -> None:
         cycles.seed = seed
         scene.render.filepath = f"{prefix}{seed}.exr"
         bpy.ops.render.render(write_still=True)
+    if toml is not None:
+        from spectrace import cli
+
+        sys.argv = ["spectrace", "import-blend", out, "-o", toml]
+        cli.main()
 
 
 if __name__ == "__main__":

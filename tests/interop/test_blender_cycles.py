@@ -12,6 +12,7 @@ Each skips, saying why, where bpy is absent."""
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import os
 import subprocess
@@ -20,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.cli_runner import run_spectrace
 
 HAS_BPY = importlib.util.find_spec("bpy") is not None
 needs_bpy = pytest.mark.skipif(
@@ -48,28 +48,34 @@ def _block_error(images: np.ndarray) -> np.ndarray:
 
 def render_both(tmp_path: Path, kind: str, device, extra: tuple[str, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
     """(Cycles' images, spectrace's images), each (seeds, h, w, 3) linear Rec.709."""
-    from spectrace.api import render
     from spectrace.io.exr import read_exr
     from spectrace.scene import load_scene
+    from spectrace.session import Session
 
     blend, toml = tmp_path / f"{kind}.blend", tmp_path / f"{kind}.toml"
     env = os.environ.copy()
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
-    args = [sys.executable, "-m", "tests.interop.blender_comparisons", kind, str(blend), str(tmp_path / "cycles")]
+    # The child that builds the scene and renders it with Cycles imports it too: bpy's start-up paid once.
+    args = [sys.executable, "-m", "tests.interop.blender_comparisons", "--import", str(toml), kind, str(blend)]
     done = subprocess.run(
-        [*args, str(SPP), str(SEEDS), *extra], capture_output=True, text=True, env=env, timeout=300, cwd=ROOT
+        [*args, str(tmp_path / "cycles"), str(SPP), str(SEEDS), *extra],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+        cwd=ROOT,
     )
     assert done.returncode == 0, done.stderr[-2000:]
     cycles = np.stack([read_exr(tmp_path / f"cycles{seed}.exr")[0]["RGBA"][..., :3] for seed in range(1, SEEDS + 1)])
-    imported = run_spectrace("import-blend", str(blend), "-o", str(toml))
-    assert imported.returncode == 0, imported.stderr
-    scene = load_scene(toml)
-    ours = np.stack(
-        [
-            render(scene.with_overrides(seed=seed), spp=SPP, device=device, progress=False).to_rgb()
-            for seed in range(1, SEEDS + 1)
-        ]
-    ).astype(np.float64)
+    # One build renders every seed: a seed edit goes with the passes' parameters, the same bits as a fresh render.
+    # Edited as a scene in memory, since the imported file has no [sampler] table for the key path to name.
+    images = []
+    with Session(dataclasses.replace(load_scene(toml), source=None), device=device) as session:
+        for seed in range(1, SEEDS + 1):
+            session.update({"sampler.seed": seed})
+            session.step(SPP)
+            images.append(session.image().to_rgb())
+    ours = np.stack(images).astype(np.float64)
     assert ours.shape == cycles.shape
     return cycles.astype(np.float64), ours
 

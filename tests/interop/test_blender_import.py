@@ -9,6 +9,7 @@ from __future__ import annotations
 import importlib.util
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tomllib
@@ -16,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.cli_runner import run_spectrace
+from tests.cli_runner import run_here, run_spectrace
 
 HAS_BPY = importlib.util.find_spec("bpy") is not None
 needs_bpy = pytest.mark.skipif(
@@ -40,12 +41,53 @@ def _build(kind: str, blend: Path, cycles: Path | None = None, spp: int = 0) -> 
     _child(*args)
 
 
-def _import(tmp_path: Path, kind: str) -> tuple[Path, dict]:
-    name = kind.split(":")[0]
-    blend, toml = tmp_path / f"{name}.blend", tmp_path / f"{name}.toml"
-    _build(kind, blend)
+LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
+BUILT = ("grey_box", "materials_box", "unsupported", *(f"light_{kind}" for kind in LIGHT_KINDS))
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory) -> Path:
+    """Every scene of BUILT saved as KIND.blend in one folder by one Blender process (each start of bpy costs
+    seconds); a test copies the file it needs, so that nothing it writes beside it meets another test's files."""
+    folder = tmp_path_factory.mktemp("blender_scenes")
+    _child("-m", "tests.interop.blender_builder", "--many", str(folder), *BUILT)
+    return folder
+
+
+def _copy(built: Path, kind: str, tmp_path: Path) -> Path:
+    return Path(shutil.copy(built / f"{kind}.blend", tmp_path / f"{kind}.blend"))
+
+
+def _import(tmp_path: Path, kind: str, built: Path | None = None) -> tuple[Path, dict]:
+    """`spectrace import-blend` of a scene of the builder (copied from `built` where it is one of BUILT): its TOML,
+    and what it holds."""
+    blend, toml = tmp_path / f"{kind}.blend", tmp_path / f"{kind}.toml"
+    if built is None:
+        _build(kind, blend)
+    else:
+        _copy(built, kind, tmp_path)
     done = run_spectrace("import-blend", str(blend), "-o", str(toml))
     assert done.returncode == 0, done.stderr
+    return toml, tomllib.loads(toml.read_text(encoding="utf-8"))
+
+
+BUILD_AND_IMPORT = """
+import sys
+from tests.interop import blender_builder
+from spectrace.interop.blender import import_blend
+
+kind, blend, toml = sys.argv[1:4]
+sys.argv = [sys.argv[0], kind, blend]
+blender_builder.main()
+import_blend(blend, toml)
+"""
+
+
+def _build_and_import(tmp_path: Path, kind: str) -> tuple[Path, dict]:
+    """A scene of the builder saved and imported by one Blender process (each start of bpy costs seconds)."""
+    name = kind.split(":")[0]
+    blend, toml = tmp_path / f"{name}.blend", tmp_path / f"{name}.toml"
+    _child("-c", BUILD_AND_IMPORT, kind, str(blend), str(toml))
     return toml, tomllib.loads(toml.read_text(encoding="utf-8"))
 
 
@@ -88,8 +130,8 @@ def test_a_file_blender_cannot_open_is_one_line_and_nothing_is_written(tmp_path)
 @needs_bpy
 @pytest.mark.subprocess
 @pytest.mark.slow
-def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path):
-    toml, data = _import(tmp_path, "materials_box")
+def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path, built):
+    toml, data = _import(tmp_path, "materials_box", built)
     materials = data["materials"]
     assert materials["plastic"] == {
         "type": "principled",
@@ -156,9 +198,8 @@ def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path):
 
 @needs_bpy
 @pytest.mark.subprocess
-def test_unsupported_nodes_are_named_once_each_and_strict_refuses(tmp_path):
-    blend, toml = tmp_path / "unsupported.blend", tmp_path / "out.toml"
-    _build("unsupported", blend)
+def test_unsupported_nodes_are_named_once_each_and_strict_refuses(tmp_path, built):
+    blend, toml = _copy(built, "unsupported", tmp_path), tmp_path / "out.toml"
     toml.write_text("kept\n")
     refused = run_spectrace("import-blend", str(blend), "-o", str(toml), "--strict")
     assert refused.returncode != 0
@@ -189,7 +230,7 @@ def test_an_environment_image_is_turned_as_blender_maps_it(tmp_path, device):
     image = np.zeros((32, 64, 3), dtype=np.float32)
     image[:16, :32] = 1.0  # rows top-down
     write_exr(tmp_path / "sky.exr", image, None, {})
-    toml, data = _import(tmp_path, f"environment:{tmp_path / 'sky.exr'}")
+    toml, data = _build_and_import(tmp_path, f"environment:{tmp_path / 'sky.exr'}")
     assert data["lights"][0]["type"] == "envmap" and data["lights"][0]["scale"] == 2.0
     scene = load_scene(toml).with_overrides(max_depth=2)
     expected = {(0, 1, 0): math.pi, (0, 0, 1): math.pi, (0, -1, 0): 0.0, (0, 0, -1): 0.0}
@@ -210,16 +251,14 @@ def _square_irradiance(radiance: float, side: float, height: float) -> float:
     return 4.0 * radiance / 2.0 * 2.0 * x / math.sqrt(1 + x * x) * math.atan(x / math.sqrt(1 + x * x))
 
 
-LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
-
-
 @pytest.fixture(scope="module")
-def light_scenes(tmp_path_factory) -> Path:
-    """The light-unit scenes, each light_KIND.blend and its import light_KIND.toml in one folder: one Blender
-    process builds them all and one process imports them all (each start of bpy costs seconds)."""
+def light_scenes(tmp_path_factory, built) -> Path:
+    """The light-unit scenes, each light_KIND.blend and its import light_KIND.toml in one folder: one process
+    imports them all (each start of bpy costs seconds)."""
     folder = tmp_path_factory.mktemp("blender_lights")
     kinds = [f"light_{kind}" for kind in LIGHT_KINDS]
-    _child("-m", "tests.interop.blender_builder", "--many", str(folder), *kinds)
+    for kind in kinds:
+        _copy(built, kind, folder)
     _child(
         "-c",
         "import sys\nfrom spectrace.interop.blender import import_blend\n"
@@ -321,7 +360,7 @@ def _addon_render(tmp_path: Path, blend: Path, saved: Path, spp: int, esc: bool 
     image files shown in the Render Result, in order; `esc`: Esc pressed once the first pass is reported."""
     import json
 
-    folder = run_spectrace("blender-addon").stdout.strip()
+    folder = run_here("blender-addon").stdout.strip()
     env = os.environ.copy()
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT / "host"), env.get("PYTHONPATH")]))
     done = subprocess.run(
@@ -349,7 +388,7 @@ def test_blender_addon_prints_the_add_on_folder():
 @needs_bpy
 @pytest.mark.subprocess
 @pytest.mark.slow
-def test_the_add_on_renders_into_blenders_render_result_telling_its_progress(tmp_path):
+def test_the_add_on_renders_into_blenders_render_result_telling_its_progress(tmp_path, built):
     """The render engine inside Blender, registered from the folder `spectrace blender-addon` prints: F12
     (bpy.ops.render.render) on the grey room gives in Blender's Render Result the image `spectrace render` gives for
     the same file (same export, seed and device: equal to float32 rounding, rows in Blender's bottom-up order), and
@@ -358,8 +397,7 @@ def test_the_add_on_renders_into_blenders_render_result_telling_its_progress(tmp
     from spectrace.io.exr import read_exr
 
     spp = 16
-    blend, saved, direct = tmp_path / "grey.blend", tmp_path / "addon.exr", tmp_path / "direct.exr"
-    _build("grey_box", blend)
+    blend, saved, direct = _copy(built, "grey_box", tmp_path), tmp_path / "addon.exr", tmp_path / "direct.exr"
     progress, shown = _addon_render(tmp_path, blend, saved, spp)
     assert len(progress) >= 2 and progress[-1] == [spp, spp], progress
     assert all(b[0] > a[0] for a, b in zip(progress, progress[1:], strict=False)), progress
@@ -377,15 +415,14 @@ def test_the_add_on_renders_into_blenders_render_result_telling_its_progress(tmp
 @needs_bpy
 @pytest.mark.subprocess
 @pytest.mark.slow
-def test_esc_in_blender_stops_the_render_with_the_image_of_the_samples_done(tmp_path):
+def test_esc_in_blender_stops_the_render_with_the_image_of_the_samples_done(tmp_path, built):
     """Esc once the first pass is reported (the add-on's _stop_asked, which asks RenderEngine.test_break(), made to
     say so: bpy offers no way to press Esc headless): the add-on passes it on to the worker (SIGINT), which ends
     after the pass in flight, and the Render Result holds the image of the samples done, far short of the million
     asked for."""
     from spectrace.io.exr import read_exr
 
-    blend, saved = tmp_path / "grey.blend", tmp_path / "stopped.exr"
-    _build("grey_box", blend)
+    blend, saved = _copy(built, "grey_box", tmp_path), tmp_path / "stopped.exr"
     progress, shown = _addon_render(tmp_path, blend, saved, 1_000_000, esc=True)
     assert progress and progress[-1][0] < 1_000_000, progress
     assert shown[-1] == "image.npy", shown

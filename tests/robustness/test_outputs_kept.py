@@ -291,8 +291,9 @@ def _locks(folder: Path) -> list[str]:
 def test_a_second_render_on_an_output_in_use_is_refused_naming_the_holder(device, tmp_path):
     """While a render writes out.exr and state.npz, a second render naming either (-o, however spelled;
     --resume of the checkpoint) stops at once: one line naming the option, the file and the first render's pid,
-    status 2; the first render goes on, and once it has stopped the lock files are gone and the output is free."""
-    from cli_runner import run_spectrace
+    status 2; the first render goes on, and once it has stopped the lock files are gone and the output is free.
+    The first is a real process, as its lock and its SIGTERM must be; the others run here, held off by its lock."""
+    from cli_runner import run_here
 
     out, state = tmp_path / "out.exr", tmp_path / "state.npz"
     (tmp_path / "link").symlink_to(tmp_path, target_is_directory=True)
@@ -304,7 +305,7 @@ def test_a_second_render_on_an_output_in_use_is_refused_naming_the_holder(device
             ("--output", tmp_path / "link" / "out.exr", render_cornell_box(tmp_path / "link" / "out.exr", 1, 8, 6)),
             ("--resume", state, [*render_cornell_box(tmp_path / "other.exr", 1, 8, 6), "--resume", str(state)]),
         ]:
-            second = run_spectrace(*argv, timeout=120)
+            second = run_here(*argv)
             assert second.returncode == 2 and "Traceback" not in second.stderr, second.stderr
             assert second.stderr.count("\n") == 1, second.stderr
             line = second.stderr
@@ -318,7 +319,7 @@ def test_a_second_render_on_an_output_in_use_is_refused_naming_the_holder(device
         first.kill()
     assert first.returncode == 130, stderr
     assert _locks(tmp_path) == []
-    again = run_spectrace(*render_cornell_box(out, 1, 8, 6), timeout=120)
+    again = run_here(*render_cornell_box(out, 1, 8, 6))
     assert again.returncode == 0, again.stderr
     assert _locks(tmp_path) == []
 
