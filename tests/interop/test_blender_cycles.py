@@ -12,7 +12,6 @@ Each skips, saying why, where bpy is absent."""
 
 from __future__ import annotations
 
-import dataclasses
 import importlib.util
 import os
 import subprocess
@@ -49,7 +48,6 @@ def _block_error(images: np.ndarray) -> np.ndarray:
 def render_both(tmp_path: Path, kind: str, device, extra: tuple[str, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
     """(Cycles' images, spectrace's images), each (seeds, h, w, 3) linear Rec.709."""
     from spectrace.io.exr import read_exr
-    from spectrace.scene import load_scene
     from spectrace.session import Session
 
     blend, toml = tmp_path / f"{kind}.blend", tmp_path / f"{kind}.toml"
@@ -68,9 +66,8 @@ def render_both(tmp_path: Path, kind: str, device, extra: tuple[str, ...] = ()) 
     assert done.returncode == 0, done.stderr[-2000:]
     cycles = np.stack([read_exr(tmp_path / f"cycles{seed}.exr")[0]["RGBA"][..., :3] for seed in range(1, SEEDS + 1)])
     # One build renders every seed: a seed edit goes with the passes' parameters, the same bits as a fresh render.
-    # Edited as a scene in memory, since the imported file has no [sampler] table for the key path to name.
     images = []
-    with Session(dataclasses.replace(load_scene(toml), source=None), device=device) as session:
+    with Session(toml, device=device) as session:
         for seed in range(1, SEEDS + 1):
             session.update({"sampler.seed": seed})
             session.step(SPP)

@@ -208,6 +208,23 @@ def test_an_edit_renders_the_bits_of_a_fresh_render_of_the_edited_file(scene_fil
         np.testing.assert_array_equal(spectrace.render(session.scene, spp=SPP, progress=False).xyz, session.image().xyz)
 
 
+def test_a_seed_edits_a_file_without_a_sampler_table_as_one_that_writes_the_seed(tmp_path, clear_scene_file):
+    """[sampler] may be left out (importers leave it out): its keys are still there to set, from a session and as a
+    load override, and give the bits of the file that writes them."""
+    bare = tmp_path / "bare.toml"
+    bare.write_text(clear_scene_file.read_text().replace(f"[sampler]\nspp = {SPP}\n", ""))
+    assert "[sampler]" not in bare.read_text()
+    written = tmp_path / "written.toml"
+    written.write_text(bare.read_text() + "\n[sampler]\nseed = 7\n")
+    expected = _fresh(written, {})
+    assert not np.array_equal(expected.xyz, _fresh(bare, {}).xyz)  # the seed shows in the image
+    np.testing.assert_array_equal(_fresh(bare, {"sampler.seed": 7}).xyz, expected.xyz)
+    with Session(bare) as session:
+        session.update({"sampler.seed": 7})
+        session.step(SPP)
+        _same_bits(session, expected)
+
+
 @pytest.mark.parametrize("integrator", ["direct", "bdpt", "light", "sppm"])
 def test_every_integrator_renders_an_edit_as_a_fresh_render(clear_scene_file, integrator):
     edit = {"camera.fov": 50.0, "lights.0.power": 35.0, "materials.red.reflectance": {"value": 0.4}}

@@ -161,10 +161,22 @@ def _too_deep(data: object) -> tuple | None:
     return None
 
 
+# The top-level tables a scene file may leave out, which then hold their defaults ([sampler], [integrator]): a key
+# path into one of them is there to set whether the file writes the table or not.
+_DEFAULTED_TABLES = frozenset(
+    name
+    for name, field in schema.SceneSpec.model_fields.items()
+    if not field.is_required() and isinstance(field.annotation, type) and issubclass(field.annotation, BaseModel)
+)
+
+
 def set_key_path(data: dict, dotted: str, value: object, where: str) -> None:
     """Replace the value at a dotted key path of parsed TOML ("materials.red.reflectance", "shapes.0.material";
-    a number indexes an array of tables). The path must exist up to its last key, which may be new."""
+    a number indexes an array of tables). The path must exist up to its last key, which may be new, except that a
+    defaulted top-level table the file leaves out ("sampler.seed") is added."""
     parts = dotted.split(".")
+    if len(parts) > 1 and parts[0] in _DEFAULTED_TABLES and data.get(parts[0]) is None:
+        data[parts[0]] = {}
     node: object = data
     for depth, part in enumerate(parts):
         last = depth == len(parts) - 1
