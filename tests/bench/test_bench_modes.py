@@ -108,6 +108,7 @@ def test_cold_mode_builds_without_caches():
     assert cold["spp"] == warm["spp"] == 1
 
 
+@pytest.mark.slow
 @pytest.mark.peer
 def test_peer_mitsuba_mode_agrees():
     pytest.importorskip("mitsuba", reason="the peer comparison needs `pip install spectrace[bench]`")
@@ -122,6 +123,7 @@ def test_peer_mitsuba_mode_agrees():
         assert pair["agrees"], pair
 
 
+@pytest.mark.slow
 @pytest.mark.peer
 def test_peer_sampler_that_rounds_its_count_keeps_stdout_json_and_counts_what_it_rendered():
     """Mitsuba's multi-jittered sampler rounds 5 spp up to 6 and logs a warning: the warning must not reach stdout
@@ -241,6 +243,7 @@ def test_peer_mode_renders_the_living_room_scene():
         assert pair["agrees"], pair
 
 
+@pytest.mark.slow
 def test_denoise_mode_reports_what_it_rendered():
     """Tiny sizes, figures not judged: the emission pass has max(32, 2 spp) samples, the equal-time render at least
     the asked spp, and each ratio is the noisy RMSE over that column's."""

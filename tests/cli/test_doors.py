@@ -144,6 +144,7 @@ def test_render_takes_a_mitsuba_file_by_its_bytes_and_a_pbrt_file_by_its_suffix(
             assert image.size == size  # the width asked for, the height after the scene's aspect
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_bare_scene_names_work_in_spectra_and_import_mitsuba(tmp_path):
     listed = _spectrace("spectra", "list", "--scene", "cornell_box", "--json", cwd=tmp_path)
@@ -246,6 +247,7 @@ def test_integrator_replaces_the_scenes():
     assert RenderJob.make(scene, COMMAND_LINE, integrator="bdpt").scene.integrator == "bdpt"
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_quiet_render_prints_nothing_but_warnings_and_errors(tmp_path):
     arguments = ["render", "cornell_box", "-o", "x.png", "--width", "8", "--spp", "1"]

@@ -42,6 +42,7 @@ def test_import_writes_the_toml_and_its_assets(tmp_path):
     assert 'file = "scene_assets/mesh0.ply"' in text and 'type = "point"' in text
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_bad_input_and_options_are_one_line_and_keep_the_earlier_import(tmp_path):
     model = _model(tmp_path)

@@ -110,6 +110,7 @@ def test_a_dispatch_built_without_the_registries_sources_stops_with_a_clear_erro
         compile_source(device.context, device.cl_device, f'#include "{entry}"\n', options)
 
 
+@pytest.mark.slow
 def test_scene_kernels_take_the_scene_buffers_in_the_hosts_order(device):
     """The host sets a scene kernel's first arguments from SCENE_KERNEL_BUFFERS; SCENE_KERNEL_PARAMS (kernels/scene.cl)
     declares them, and its parameter names, as the compiler reports them for a kernel declared with it, must be those

@@ -67,6 +67,7 @@ def test_linear_curve_points_move_and_radii_stay():
     assert np.allclose(surface.ra, [0.1, 0.2]) and np.allclose(surface.rb, [0.2, 0.3])
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_bad_curves_in_a_scene_file_are_one_line_naming_the_key_and_nothing_is_written(tmp_path):
     """A curve too short for its basis, a curve file with a bad line, a ribbon without its normals (the loader's

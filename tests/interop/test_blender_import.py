@@ -196,6 +196,7 @@ def test_materials_lights_camera_and_instances_as_blender_holds_them(tmp_path, b
     assert rendered.returncode == 0, rendered.stderr
 
 
+@pytest.mark.slow
 @needs_bpy
 @pytest.mark.subprocess
 def test_unsupported_nodes_are_named_once_each_and_strict_refuses(tmp_path, built):

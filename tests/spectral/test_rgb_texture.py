@@ -77,6 +77,7 @@ def cold_built_table(tmp_path_factory):
     uplift_table.coefficient_table.cache_clear()
 
 
+@pytest.mark.slow
 def test_cold_build_writes_the_table_it_returns(cold_built_table):
     path = uplift_table.table_path()
     assert path.is_file()

@@ -166,6 +166,7 @@ def test_a_scalar_use_needs_one_channel():
     check_texture_values(bitmap.make(np.zeros((2, 2)), raw=True), "float", "x")  # grey passes
 
 
+@pytest.mark.slow
 def test_textures_beyond_a_gibibyte_are_refused_before_conversion():
     """The budget is checked from the image's size before any texel is converted: a 20000² RGB reflectance texture
     (broadcast, so the test allocates nothing) would need 20000² × 3 half-float coefficients, 2.2 GiB."""
