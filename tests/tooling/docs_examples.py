@@ -184,7 +184,7 @@ def prepare(folder: Path) -> None:
 
 # The child interpreter that runs a page's steps, in order, in the page's folder: a step is ("file", where, name,
 # [name, text]), ("cli", where, shown, argv) or ("python", where, shown, code). It stops at the first that fails,
-# writing which and why to stderr.
+# writing why to stderr and, last, which (the line run_page puts first, however long the traceback).
 _PAGE_RUNNER = """
 import json, sys, traceback
 steps = json.loads(sys.stdin.read())
@@ -208,8 +208,8 @@ for kind, where, shown, payload in steps:
             exec(compile(payload, where, "exec"), {"__name__": "__main__", "__builtins__": __builtins__})
     except BaseException:
         sys.stdout.flush()
-        print(f"{where}: `{shown}` failed:", file=sys.stderr)
         traceback.print_exc()
+        print(f"{where}: `{shown}` failed", file=sys.stderr)
         sys.exit(1)
     sys.stdout.flush()
     sys.stderr.flush()
@@ -217,7 +217,11 @@ for kind, where, shown, payload in steps:
 
 
 def _steps(block: Block, reduced: bool, above: str) -> list[tuple[str, str, str, object]]:
-    """What one block runs, as steps for _PAGE_RUNNER."""
+    """What one block runs, as steps for _PAGE_RUNNER (a Python block that continues after the code `above`)."""
+    if block.language in ("toml", "pbrt"):
+        match = _FILE_COMMENT.match(block.text)
+        assert match, f"{block.where}: a tested {block.language} block opens with a comment naming its file"
+        return [("file", block.where, match[1], [match[1], block.text])]
     if block.language in ("sh", "bash", "console"):
         runs = [(small(c) if reduced else c, " ".join(c)) for c in commands(block)]
         assert runs, f"{block.where}: a tested shell block holds no spectrace command"
@@ -236,11 +240,6 @@ def run_page(page: Path, folder: Path, reduced: bool = True, timeout: float = 18
     steps: list[tuple[str, str, str, object]] = []
     python_above = ""
     for block in blocks(page):
-        if block.language in ("toml", "pbrt"):
-            match = _FILE_COMMENT.match(block.text)
-            assert match, f"{block.where}: a tested {block.language} block opens with a comment naming its file"
-            steps.append(("file", block.where, match[1], [match[1], block.text]))
-            continue
         steps += _steps(block, reduced, python_above)
         if block.language == "python":
             python_above += block.text
@@ -254,7 +253,8 @@ def run_page(page: Path, folder: Path, reduced: bool = True, timeout: float = 18
         env=environment,
         timeout=timeout,
     )
-    assert result.returncode == 0, result.stderr[-3000:]
+    failed = result.stderr.rstrip().rpartition("\n")[2]
+    assert result.returncode == 0, f"{failed}:\n{result.stderr[-3000:]}"
 
 
 if __name__ == "__main__":
