@@ -30,6 +30,7 @@ from spectrace.device import (
     discover_devices,
     open_device,
     prepare_opencl_environment,
+    program_cache,
 )
 from spectrace.device import probe as probing
 from spectrace.device.discovery import elf_needed_libraries, find_devices, pip_intel_cpu_libraries
@@ -61,6 +62,7 @@ def isolated_device_state(tmp_path, monkeypatch):
     monkeypatch.setenv("SPECTRACE_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.delenv("SPECTRACE_DEVICE", raising=False)
     monkeypatch.setattr(probing, "probe_function", _real_probe)
+    monkeypatch.setattr(program_cache, "_SHARED", {})  # as a fresh process: no program built yet
     probing.forget_probe_results()
     yield
     probing.forget_probe_results()
@@ -457,6 +459,7 @@ def test_a_corrupt_cached_binary_is_rebuilt(device, kernels_folder, damage):
     [binary] = _cached_binaries()
     whole = binary.read_bytes()
     binary.write_bytes(damage(whole))
+    device = Device(device.report, device.cl_device, private=True)  # as the next process: it reads the disk
     program = device.build_program("tests/affine.cl", {"OFFSET": 1})
     assert device.last_build_cached is False
     np.testing.assert_array_equal(_run_affine(device, program), np.arange(16, dtype=np.float32) * 3.0 + 1.0)
@@ -469,7 +472,7 @@ def test_a_corrupt_cached_binary_is_rebuilt(device, kernels_folder, damage):
 
 def test_two_builders_of_one_program_build_it_once(device, kernels_folder, monkeypatch):
     """A second builder of the same program (another test worker, a parallel sweep) waits for the first one's
-    binary instead of building it too: each opened device here is a separate context, as in two processes."""
+    binary instead of building it too: each device here has a context of its own, as in two processes."""
     builds = []
     original = Device._build_from_source
 
@@ -479,7 +482,7 @@ def test_two_builders_of_one_program_build_it_once(device, kernels_folder, monke
         return original(self, *args)
 
     monkeypatch.setattr(Device, "_build_from_source", slow_build)
-    builders = [device, Device(device.report, device.cl_device)]
+    builders = [Device(device.report, device.cl_device, private=True) for _ in range(2)]
     start = threading.Barrier(len(builders))
     programs = {}
 
@@ -521,6 +524,32 @@ def test_the_same_kernels_in_another_folder_reuse_the_cached_binary(
     rebuilt = device.build_program("tests/affine.cl", {"OFFSET": 0.25})
     assert device.last_build_cached is False and len(_cached_binaries()) == 2
     np.testing.assert_array_equal(_run_affine(device, rebuilt), np.arange(16, dtype=np.float32) * 7.0 + 0.25)
+
+
+def test_a_process_builds_a_program_once_for_every_device_it_opens(device, kernels_folder, monkeypatch):
+    """Devices opened on one OpenCL device in one process share its context and the programs built there: the
+    second device's build neither compiles nor loads the binary again, and renders with a queue of its own."""
+    first = device.build_program("tests/affine.cl", {"OFFSET": 0.75})
+    loads = []
+    original = Device._load_cached
+    monkeypatch.setattr(Device, "_load_cached", lambda self, *args: loads.append(args) or original(self, *args))
+    other = open_device()
+    assert other.queue is not device.queue and other.context is device.context
+    program = other.build_program("tests/affine.cl", {"OFFSET": 0.75})
+    assert program is first and other.last_build_cached is True and loads == []
+    np.testing.assert_array_equal(_run_affine(other, program), np.arange(16, dtype=np.float32) * 3.0 + 0.75)
+    # A build from source is never answered from what the process holds, nor replaces it.
+    fresh = other.build_program("tests/affine.cl", {"OFFSET": 0.75}, from_source=True)
+    assert fresh is not first and other.build_program("tests/affine.cl", {"OFFSET": 0.75}) is first
+
+
+def test_a_process_keeps_a_bounded_number_of_programs(device, kernels_folder, monkeypatch):
+    monkeypatch.setattr(program_cache, "_PROGRAMS_KEPT", 2)
+    programs = [device.build_program("tests/affine.cl", {"OFFSET": k}) for k in range(3)]
+    assert device.build_program("tests/affine.cl", {"OFFSET": 2}) is programs[2]
+    assert device.build_program("tests/affine.cl", {"OFFSET": 0}) is not programs[0]  # the oldest was let go
+    assert device.last_build_cached is True  # from the binary on disk
+    np.testing.assert_array_equal(_run_affine(device, programs[1]), np.arange(16, dtype=np.float32) * 3.0 + 1.0)
 
 
 def test_a_failing_build_raises_with_the_compiler_log(device, kernels_folder):

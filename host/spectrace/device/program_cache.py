@@ -9,7 +9,8 @@ version). pyopencl's own cache is bypassed so that only this one decides.
 The key names the kernels by their content, not by where they lie: the ``-I`` folders the compiler is given are left
 out of it, so a fresh clone, a wheel's copy or a second worktree with the same sources reuses the binaries already
 built (the binaries carry no path: builds are without debug information). A cached file carries the digest of its
-binary, so a damaged entry is rebuilt without ever reaching the runtime's loader.
+binary, so a damaged entry is rebuilt without ever reaching the runtime's loader. Within a process, the devices opened
+on one OpenCL device share a context and the programs already built in it.
 """
 
 from __future__ import annotations
@@ -20,8 +21,10 @@ import math
 import os
 import re
 import tempfile
+import threading
 import time
 import warnings
+from collections import OrderedDict
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
@@ -54,6 +57,49 @@ BUILD_LOG_VARIABLE = "SPECTRACE_BUILD_LOG"
 VECTORISE_VARIABLE = "SPECTRACE_VECTORISE_ACROSS_ITEMS"
 
 DefineValue = int | float | str
+
+# Programs a process keeps built, most recently used last: loading even a cached binary costs the runtime tens of
+# milliseconds (PoCL: ~60 ms for the path program), and one process renders the same program many times (a session's
+# edits, a sweep, a test run). Bounded, because a long session that respecialises its kernels makes new ones.
+_PROGRAMS_KEPT = 32
+
+
+class _SharedContext:
+    """The one OpenCL context a process opens on a device, and the programs built in it: every `Device` opened on
+    that device shares them (each with a queue of its own), so a program built for one is built for all."""
+
+    def __init__(self, cl_device: cl.Device):
+        self.context = cl.Context([cl_device])
+        self.programs: OrderedDict[str, cl.Program] = OrderedDict()
+        self.lock = threading.Lock()
+
+    def kept(self, key: str) -> cl.Program | None:
+        with self.lock:
+            program = self.programs.get(key)
+            if program is not None:
+                self.programs.move_to_end(key)
+            return program
+
+    def keep(self, key: str, program: cl.Program) -> None:
+        with self.lock:
+            self.programs[key] = program
+            self.programs.move_to_end(key)
+            while len(self.programs) > _PROGRAMS_KEPT:
+                self.programs.popitem(last=False)
+
+
+# Keyed by process too: a forked child must not use its parent's context.
+_SHARED: dict[tuple[int, int], _SharedContext] = {}
+_SHARED_LOCK = threading.Lock()
+
+
+def _shared_context(cl_device: cl.Device) -> _SharedContext:
+    key = (os.getpid(), cl_device.int_ptr)
+    with _SHARED_LOCK:
+        shared = _SHARED.get(key)
+        if shared is None:
+            shared = _SHARED[key] = _SharedContext(cl_device)
+        return shared
 
 
 class KernelBuildError(SpectraceError):
@@ -306,10 +352,13 @@ def _program_binary(program: cl.Program) -> bytes | None:
 class Device:
     """One opened OpenCL device: its context, in-order queue, report, and cached program builds."""
 
-    def __init__(self, report: DeviceReport, cl_device: cl.Device):
+    def __init__(self, report: DeviceReport, cl_device: cl.Device, private: bool = False):
+        """`private`: a context of its own, as another process would have, which reuses no program built by
+        another device (the binaries on disk it does)."""
         self.report = report
         self.cl_device = cl_device
-        self.context = cl.Context([cl_device])
+        self._shared = _SharedContext(cl_device) if private else _shared_context(cl_device)
+        self.context = self._shared.context
         self.queue = cl.CommandQueue(self.context)
         self.last_build_seconds: float | None = None
         self.last_build_cached: bool | None = None
@@ -346,7 +395,11 @@ class Device:
         key = program_cache_key(sources_digest, entry, key_options, device_identity(self.report))
         cache_file = program_cache_dir() / f"{key}.bin"
 
-        program = None if from_source else self._load_cached(cache_file, option_text)
+        program = None if from_source else self._shared.kept(key)
+        if program is not None:
+            self.last_build_cached = True
+        else:
+            program = None if from_source else self._load_cached(cache_file, option_text)
         if program is None:
             with contextlib.nullcontext() if from_source else _building(cache_file):
                 # Another process may have built it while this one waited for the lock.
@@ -355,6 +408,8 @@ class Device:
                     own = " ".join(_define_options(defines) + list(options or []))
                     prelude = source_prelude(all_defines)
                     program = self._build_and_store(entry, sources_digest, option_text, cache_file, own, prelude)
+        if not from_source:
+            self._shared.keep(key, program)
         self.last_build_seconds = time.perf_counter() - started
         return program
 
