@@ -5,6 +5,8 @@ All have outward (front-side) winding: the geometric normal (v1 - v0) x (v2 - v0
 or along +z for the rectangle. All but the teapot (which stands on the origin) are centred on it.
 """
 
+import functools
+
 import numpy as np
 
 from spectrace.errors import SpectraceError
@@ -74,10 +76,25 @@ def sphere(subdivisions: int = 4) -> TriangleMesh:
     seam cuts them), vertices on the sphere (but those cuts, on chords), and the sphere's radial normals at its
     vertices, so it shades smoothly. Texture coordinates are Mitsuba 3's sphere's: u = φ / 2π with
     φ = atan2(y, x) in [0, 2π), v = θ / π with θ the angle from +z (v = 0 at the +z pole, the image's top row)."""
+    _check_subdivisions(subdivisions)
+    if subdivisions > _SPHERES_KEPT_UP_TO:
+        vertices, faces, uvs, normals = _sphere_arrays.__wrapped__(subdivisions)
+    else:  # copies: a caller may transform its mesh in place
+        vertices, faces, uvs, normals = (array.copy() for array in _sphere_arrays(subdivisions))
+    return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs, normals=normals)
+
+
+# Spheres up to this size are made once per process: cutting the seam walks the straddling triangles in Python
+# (~5 ms at the default size, 4), and scenes, sessions and sweeps place spheres again and again; larger ones would
+# keep tens of megabytes.
+_SPHERES_KEPT_UP_TO = 5
+
+
+@functools.lru_cache(maxsize=_SPHERES_KEPT_UP_TO + 1)
+def _sphere_arrays(subdivisions: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     plain = icosphere(subdivisions)
     points, faces, normals = _cut_at_seam(plain.vertices, plain.faces)
-    vertices, faces, uvs, normals = _sphere_uvs(points, faces, normals)
-    return TriangleMesh(vertices=vertices, faces=faces, uvs=uvs, normals=normals)
+    return _sphere_uvs(points, faces, normals)
 
 
 def icosphere(subdivisions: int) -> TriangleMesh:
@@ -85,6 +102,14 @@ def icosphere(subdivisions: int) -> TriangleMesh:
     no texture coordinates (what the benchmarks count triangles on)."""
     import trimesh  # deferred: importing trimesh costs a noticeable fraction of a second
 
+    _check_subdivisions(subdivisions)
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    points = np.asarray(mesh.vertices, dtype=np.float64)
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    return TriangleMesh(vertices=points, faces=np.asarray(mesh.faces, dtype=np.int64), normals=points.copy())
+
+
+def _check_subdivisions(subdivisions: object) -> None:
     if (
         isinstance(subdivisions, bool)
         or not isinstance(subdivisions, int)
@@ -93,10 +118,6 @@ def icosphere(subdivisions: int) -> TriangleMesh:
         raise SpectraceError(
             f"sphere subdivisions must be an integer from 0 to {MAX_SPHERE_SUBDIVISIONS}, got {subdivisions!r}"
         )
-    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    points = np.asarray(mesh.vertices, dtype=np.float64)
-    points /= np.linalg.norm(points, axis=1, keepdims=True)
-    return TriangleMesh(vertices=points, faces=np.asarray(mesh.faces, dtype=np.int64), normals=points.copy())
 
 
 def _cut_at_seam(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
