@@ -8,6 +8,7 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
+from spectrace.cache_folder import cache_root
 from spectrace.device import open_device
 from spectrace.engine.launch import is_pocl
 from spectrace.plugins import generated_sources
@@ -20,6 +21,15 @@ from spectrace.plugins import generated_sources
 # so that child processes (the CLI tests) inherit it;
 # SPECTRACE_GENERAL_KERNELS=0 runs the suite on the specialised kernels instead, 1 on the general ones alone.
 os.environ.setdefault("SPECTRACE_GENERAL_KERNELS", "common")
+
+# The suite starts hundreds of Python processes: its workers and the `python -m spectrace` children of the command
+# line tests. Where the environment forbids bytecode files (PYTHONDONTWRITEBYTECODE), each child compiled the package
+# from source again (~0.2 s of a 1 s command) and each worker rewrote every test module's assertions (~15 s): they
+# keep their bytecode in spectrace's cache folder instead, never beside the sources. Set here, before the workers
+# start, so that they and their children inherit it.
+if os.environ.get("PYTHONDONTWRITEBYTECODE") and not os.environ.get("PYTHONPYCACHEPREFIX"):
+    del os.environ["PYTHONDONTWRITEBYTECODE"]
+    os.environ["PYTHONPYCACHEPREFIX"] = str(cache_root() / "pycache")
 
 HARNESS_GROUP = 64
 
