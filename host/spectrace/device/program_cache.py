@@ -163,13 +163,34 @@ def kernels_digest(kernels_dir: Path) -> str:
 
 def files_digest(folder: Path, suffixes: tuple[str, ...]) -> str:
     """Hash of every file under `folder` whose name ends in one of `suffixes` (relative names and contents)."""
+    # Every build asks (~7 ms to read and hash the kernels): the files are read again only when one of them was
+    # written, added, removed or replaced since, as far as their sizes, times and inodes tell.
+    stats = tuple(sorted(_listing(folder, suffixes)))
+    known = _DIGESTS.get((folder, suffixes))
+    if known is not None and known[0] == stats:
+        return known[1]
     digest = hashlib.sha256()
-    files = sorted(p for p in folder.rglob("*") if p.suffix in suffixes and p.is_file())
-    for path in files:
+    for path in sorted(folder / name for name, _ in stats):
         content = path.read_bytes()
         digest.update(path.relative_to(folder).as_posix().encode() + b"\0")
         digest.update(len(content).to_bytes(8, "little") + content)
+    _DIGESTS[(folder, suffixes)] = (stats, digest.hexdigest())
     return digest.hexdigest()
+
+
+_DIGESTS: dict[tuple[Path, tuple[str, ...]], tuple[tuple, str]] = {}
+
+
+def _listing(folder: Path, suffixes: tuple[str, ...], prefix: str = "") -> Iterator[tuple[str, tuple[int, ...]]]:
+    """(name relative to `folder`, size, times and inode) of each file under it whose name ends in one of
+    `suffixes`: one stat per file, where a path walk takes three."""
+    with os.scandir(folder) as entries:
+        for entry in entries:
+            if entry.is_dir(follow_symlinks=False):
+                yield from _listing(Path(entry.path), suffixes, f"{prefix}{entry.name}/")
+            elif entry.name.endswith(suffixes) and entry.is_file():
+                status = entry.stat()
+                yield f"{prefix}{entry.name}", (status.st_size, status.st_mtime_ns, status.st_ctime_ns, status.st_ino)
 
 
 def _define_value(name: str, value: DefineValue) -> str:
