@@ -2,6 +2,7 @@
 included): what the layer and import-graph tests inspect."""
 
 import ast
+import functools
 from pathlib import Path
 
 import spectrace
@@ -17,7 +18,8 @@ def _module_name(path: Path) -> str:
 MODULES = {_module_name(path): path for path in sorted(ROOT.rglob("*.py"))}
 
 
-def imports(name: str) -> list[tuple[str, str, int]]:
+@functools.cache  # several tests walk every module's imports; the sources do not change during a run
+def imports(name: str) -> tuple[tuple[str, str, int], ...]:
     """(module imported, name taken from it or "", line) for each import anywhere in module `name`."""
     path = MODULES[name]
     tree = ast.parse(path.read_text(encoding="utf-8"))
@@ -32,7 +34,7 @@ def imports(name: str) -> list[tuple[str, str, int]]:
                 anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
                 base = ".".join(anchor + ([base] if base else []))
             found += [(base, alias.name, node.lineno) for alias in node.names]
-    return found
+    return tuple(found)
 
 
 def targets(name: str) -> set[str]:
