@@ -34,8 +34,8 @@ if os.environ.get("PYTHONDONTWRITEBYTECODE") and not os.environ.get("PYTHONPYCAC
 HARNESS_GROUP = 64
 
 
-# How long a test is known to take, for the order below: marked slow (over ~5 s: docs pages, Cycles comparisons,
-# fuzzers), then comparisons with a peer renderer, then the rest.
+# How long a test is known to take, for the order below: marked slow (over ~1 s: docs pages, Cycles comparisons,
+# fuzzers, real processes), then comparisons with a peer renderer, then the rest.
 _LONG_MARKS = ("slow", "peer")
 
 

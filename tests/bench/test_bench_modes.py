@@ -165,6 +165,7 @@ def test_options_outside_their_mode_are_one_line_errors(argv, says):
     assert result.stderr.startswith(says) and result.stderr.count("\n") == 1, result.stderr
 
 
+@pytest.mark.slow
 def test_quality_mode_compares_the_integrators_asked_for():
     """One row per --integrator at equal time and at equal spp, against a reference of the integrator asked for."""
     quality = _bench(
@@ -202,6 +203,7 @@ def build_mode() -> dict:
     return _bench("build", "--triangles", "100", "--rounds", "1")["build"]
 
 
+@pytest.mark.slow
 def test_build_mode_reports_the_build_of_the_asked_mesh(build_mode):
     assert build_mode["triangles"] == 320  # the smallest icosphere of at least 100 triangles: 20 * 4**2
     ours = build_mode["best"]["spectrace"]
@@ -211,6 +213,7 @@ def test_build_mode_reports_the_build_of_the_asked_mesh(build_mode):
 
 
 @pytest.mark.peer
+@pytest.mark.slow
 def test_build_mode_times_mitsuba_loading_the_same_mesh(build_mode):
     pytest.importorskip("mitsuba", reason="the comparison needs `pip install spectrace[bench]`")
     assert not build_mode["notes"], build_mode["notes"]

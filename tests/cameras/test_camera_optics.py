@@ -69,6 +69,7 @@ def _second_moment(image: np.ndarray) -> float:
     return float(np.sum((x * x + y * y) * image) / np.sum(image))
 
 
+@pytest.mark.slow
 def test_a_point_off_focus_spreads_to_the_circle_of_confusion(device):
     """Focused at F = 4 with aperture radius A = 0.2, a point at z = 2 spreads over a disk of radius A|z − F|/z on
     the plane of focus (Pharr et al., 4th ed., 5.2.3), here 9.2 pixels. The image of a small sphere is that disk

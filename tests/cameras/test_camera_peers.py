@@ -126,6 +126,7 @@ def test_orthographic_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spec
 
 
 @pytest.mark.peer
+@pytest.mark.slow
 def test_gaussian_filtered_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
     """Mitsuba's Cornell box with its film's own filter (the Gaussian, its default), written as XML by Mitsuba's
     serialiser, at 32 x 32, compared in 4 x 4-pixel blocks: fine enough that our box-filtered render of the same

@@ -215,6 +215,7 @@ def test_a_uniform_sky_images_as_the_lens_passes_light(tmp_path, device):
     assert np.all(np.abs(image - expected) < 5 * sigma + 2e-3 * expected), (image / expected).round(3)
 
 
+@pytest.mark.slow
 def test_light_tracing_and_bdpt_refuse_the_lens_in_one_line(tmp_path, device):
     for integrator in ("light", "bdpt"):
         scene = _scene(tmp_path, SKY).with_overrides(integrator=integrator)
@@ -248,6 +249,7 @@ LightSource "infinite" "rgb L" [1 1 1]
 """
 
 
+@pytest.mark.slow
 def test_pbrt_realistic_camera_imports_and_renders_as_its_toml(tmp_path, device):
     (tmp_path / "lenses").mkdir()
     shutil.copy(DGAUSS, tmp_path / "lenses" / "dgauss.50mm.dat")

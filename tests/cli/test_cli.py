@@ -18,6 +18,7 @@ def _run(*args, check=True):
     return result
 
 
+@pytest.mark.slow
 def test_render_writes_exr_with_metadata(tmp_path):
     out = tmp_path / "cornell.exr"
     result = _run(
@@ -35,6 +36,7 @@ def test_render_writes_exr_with_metadata(tmp_path):
     assert np.all(np.isfinite(channels["RGB"])) and channels["Y"].mean() > 0
 
 
+@pytest.mark.slow
 def test_render_png(tmp_path):
     from PIL import Image
 
@@ -49,6 +51,7 @@ def test_render_png(tmp_path):
         assert float(image.text["spectrace:render_seconds"]) >= 0  # 3 decimals: a tiny render may show 0.000
 
 
+@pytest.mark.slow
 def test_bad_scene_is_one_line_without_traceback(tmp_path):
     scene = tmp_path / "bad.toml"
     scene.write_text("[camera]\norigin = [0, 0, 0]\ntarget = [0, 0, 1]\nfov = 40\nbogus = 1\n")
@@ -64,6 +67,7 @@ def test_devices_lists_the_device_in_use():
     assert any(d["ok"] for d in listing["devices"])
 
 
+@pytest.mark.slow
 def test_bench_reports_throughput():
     result = _run("bench", "--size", "16", "--spp", "1", "--max-depth", "3", "--json")
     rows = json.loads(result.stdout)["render"]

@@ -60,6 +60,7 @@ def test_top_level_help_lists_every_command():
 
 @pytest.mark.subprocess
 @pytest.mark.parametrize("group", [[], ["spectra"], ["display"]])
+@pytest.mark.slow
 def test_a_group_without_a_command_prints_its_help(group):
     result = run_spectrace(*group)
     assert result.returncode == 2

@@ -150,6 +150,7 @@ def test_render_streams_its_image_and_ends_with_the_file(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_no_viewer_is_one_warning_and_the_render_goes_on(tmp_path):
     out = tmp_path / "box.exr"
     result = run_spectrace(*render_cornell_box(out, 4, 8, 8), "--display-server", f"127.0.0.1:{free_port()}")

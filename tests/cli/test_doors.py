@@ -199,6 +199,7 @@ def test_a_bad_setting_is_one_line_naming_it(tmp_path, monkeypatch, arguments, l
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_set_and_quiet(tmp_path):
     """--set replaces the scene's values as the file would (a TOML array, a number); -q prints nothing."""
     from PIL import Image
@@ -258,6 +259,7 @@ def test_quiet_render_prints_nothing_but_warnings_and_errors(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_validate_shows_progress_unless_quiet():
     shown = _spectrace("validate", "--case", "distant")
     assert shown.returncode == 0, shown.stderr
@@ -267,6 +269,7 @@ def test_validate_shows_progress_unless_quiet():
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_metamerism_columns_are_headed_by_the_displays_names():
     result = _spectrace("display", "metamerism", "--from", "LCD-Dell_CCFL", "--to", "LCD-Apple_WLED")
     assert result.returncode == 0, result.stderr

@@ -32,6 +32,7 @@ def _one_line_error(result) -> str:
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_import_writes_the_toml_and_its_assets(tmp_path):
     model = _model(tmp_path)
     out = tmp_path / "out" / "scene.toml"
@@ -61,6 +62,7 @@ def test_bad_input_and_options_are_one_line_and_keep_the_earlier_import(tmp_path
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_render_a_glb_directly(tmp_path):
     """The file's camera (aspect 2) and light; no meshes, so no material: the dispatch from `render`, whatever
     materials this build has. The image is black: nothing reflects the light."""
@@ -95,6 +97,7 @@ def test_render_of_the_glb_equals_the_render_of_its_import(tmp_path, monkeypatch
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_an_output_that_is_the_input_or_a_folder_is_refused(tmp_path):
     model = _model(tmp_path)
     before = model.read_bytes()

@@ -30,6 +30,7 @@ def _spectrace(*args, cwd=None) -> subprocess.CompletedProcess:
     )
 
 
+@pytest.mark.slow
 def test_every_rich_console_prints_text_as_it_is():
     """rich reads '[bench]' in "pip install 'spectrace[bench]'" as a style and drops it: every Console the package
     makes has markup off (messages, tables and notes are plain text)."""
@@ -115,6 +116,7 @@ def test_a_folder_named_like_a_bundled_scene_does_not_hide_it(tmp_path, monkeypa
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_render_a_bundled_scene_by_name_from_another_folder(tmp_path, monkeypatch):
     """The render through the entry point in this process; the unknown name's refusal in a real one."""
     monkeypatch.chdir(tmp_path)

@@ -23,6 +23,7 @@ def _run(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(command, capture_output=True, text=True, env=os.environ.copy(), timeout=600)
 
 
+@pytest.mark.slow
 def test_figures_without_matplotlib_name_the_plot_extra(tmp_path):
     figure = tmp_path / "figure.png"
     image = tmp_path / "image.png"
@@ -39,6 +40,7 @@ def test_figures_without_matplotlib_name_the_plot_extra(tmp_path):
         assert not figure.exists() and not image.exists()
 
 
+@pytest.mark.slow
 def test_a_render_needs_no_matplotlib(tmp_path):
     image = tmp_path / "image.png"
     result = _run(*render_cornell_box(image, 1, 8, 6), "-q")

@@ -5,11 +5,9 @@ named as each front end spells it (the option on the command line; in Python the
 import pytest
 
 import spectrace
-from cli_runner import render_cornell_box, run_spectrace
+from cli_runner import render_cornell_box, run_here
 from spectrace.errors import SpectraceError
 from spectrace.resources import scenes_dir
-
-pytestmark = pytest.mark.subprocess
 
 EARLIER = b"an earlier image"
 
@@ -63,7 +61,7 @@ def test_a_wrong_setting_gets_one_message_from_the_command_line_and_from_python(
 ):
     out = tmp_path / "out.exr"
     out.write_bytes(EARLIER)
-    result = run_spectrace(*render_cornell_box(out, 2, 8, 6), *options, "-q")
+    result = run_here(*render_cornell_box(out, 2, 8, 6), *options, "-q")  # the command, in this process
     assert result.returncode == 2, result.stderr
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {option}: "), result.stderr

@@ -44,6 +44,7 @@ def _heavy(modules: set[str]) -> set[str]:
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_spectrace_devices_with_remembered_probes_imports_neither_numpy_nor_pyopencl(tmp_path):
     """The listing is read through ctypes and the probes' answers come from the cache folder, so only a probe that
     really runs (the first time) loads numpy and pyopencl; pydantic (typer's option coercion) is not loaded either."""
@@ -140,6 +141,7 @@ _COLOUR_SCIENCE_AND_WHAT_IT_BRINGS = ("colour", "scipy", "matplotlib")
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_importing_and_loading_scenes_with_rgb_colours_does_not_import_colour_science(tmp_path):
     """RGB colours are uplifted against D65 and the bundled scenes' lamps are CIE A: both come without colour-science
     (and the SciPy and matplotlib it brings). import-mitsuba loads the TOML it writes, so that is a load too."""

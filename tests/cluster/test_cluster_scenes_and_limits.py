@@ -142,6 +142,7 @@ def test_a_distributed_option_out_of_bounds_is_one_line(scene, argv, says, tmp_p
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_hundred_thousand_workers_are_refused_in_a_real_process(tmp_path):
     args, out = _limit_case("cornell_box", ["--workers", "100000"], tmp_path)
     result = run_spectrace(*args, timeout=120)  # it once started processes until memory ran out

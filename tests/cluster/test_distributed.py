@@ -48,6 +48,7 @@ def _assert_same_bits(tiled, whole):
         assert np.array_equal(tiled.spectral.radiance, whole.spectral.radiance)
 
 
+@pytest.mark.slow
 def test_cornell_box_on_two_workers_is_bit_identical_to_one_render(client, device):
     scene = _cornell()
     whole = render(scene, device=device, progress=False, spectral_bins=5)
@@ -65,6 +66,7 @@ def test_a_media_scene_on_two_workers_is_bit_identical_to_one_render(client, dev
     _assert_same_bits(tiled, whole)
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_render_loses_only_time(client, device):
     scene = _cornell(width=32, height=32, spp=8)
     whole = render(scene, device=device, progress=False)

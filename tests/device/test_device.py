@@ -218,6 +218,7 @@ def test_pip_intel_runtime_works_in_a_fresh_process(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_runtime_that_cannot_load_is_listed_with_the_reason(tmp_path):
     vendors = tmp_path / "vendors"
     vendors.mkdir()
@@ -470,6 +471,7 @@ def test_a_corrupt_cached_binary_is_rebuilt(device, kernels_folder, damage):
     np.testing.assert_array_equal(_run_affine(device, again), np.arange(16, dtype=np.float32) * 3.0 + 1.0)
 
 
+@pytest.mark.slow
 def test_two_builders_of_one_program_build_it_once(device, kernels_folder, monkeypatch):
     """A second builder of the same program (another test worker, a parallel sweep) waits for the first one's
     binary instead of building it too: each device here has a context of its own, as in two processes."""

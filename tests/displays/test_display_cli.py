@@ -38,6 +38,7 @@ def test_list_shows_every_display_with_its_chromaticities():
     assert by_name["LCD-CCFL_HDRVDP2"]["white_xy"] == pytest.approx([0.3127, 0.3290], abs=2e-4)  # D65 by design
 
 
+@pytest.mark.slow
 def test_compare_json_and_plot(tmp_path):
     plot = tmp_path / "compare.png"
     result = _json(
@@ -113,6 +114,7 @@ def test_an_rgb_triple_out_of_range_names_the_option_as_typed(command, triple, s
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_real_process_refuses_an_rgb_triple_out_of_range_in_one_line():
     command, triple, shown = RGB_OUT_OF_RANGE[1]
     _check_rgb_refusal(_run(*command, "--rgb", *triple, check=False), command, shown)

@@ -226,6 +226,7 @@ def test_instanced_hits_match_brute_force_and_the_expanded_copies(kernel_runner,
     assert np.unique(inst[0][sel, 3]).size == 5  # every material of the object and the ground were hit
 
 
+@pytest.mark.slow
 def test_an_object_is_stored_once_however_many_instances_place_it():
     few = build_scene_buffers(_scenes(PLACEMENTS[:2])[0])
     many, expanded = (build_scene_buffers(scene) for scene in _scenes(PLACEMENTS * 20))

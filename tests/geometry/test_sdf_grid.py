@@ -109,6 +109,7 @@ def _scene(shapes=(), instances=()):
 
 
 @pytest.mark.parametrize("instanced", [False, True], ids=["placed", "instanced"])
+@pytest.mark.slow
 def test_hits_are_the_interpolants_first_zero(kernel_runner, instanced):
     values = wavy_samples()
     steps = [{"translate": [-0.5, -0.5, -0.5]}, *PLACEMENT]

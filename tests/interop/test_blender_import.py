@@ -92,6 +92,7 @@ def _build_and_import(tmp_path: Path, kind: str) -> tuple[Path, dict]:
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_without_bpy_each_command_names_the_extra_in_one_line(tmp_path):
     # a bpy that cannot be imported, first on the path: as where bpy is not installed
     (tmp_path / "stub").mkdir()
@@ -115,6 +116,7 @@ def test_without_bpy_each_command_names_the_extra_in_one_line(tmp_path):
 
 @needs_bpy
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_file_blender_cannot_open_is_one_line_and_nothing_is_written(tmp_path):
     not_blend = tmp_path / "notes.blend"
     not_blend.write_text("not a Blender file\n")
@@ -218,6 +220,7 @@ def test_unsupported_nodes_are_named_once_each_and_strict_refuses(tmp_path, buil
 
 @needs_bpy
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_an_environment_image_is_turned_as_blender_maps_it(tmp_path, device):
     """Blender's equirectangular lookup (Cycles' direction_to_equirectangular): u = 0.5 − atan2(y, x) / 2π,
     v = 0.5 + atan2(z, √(x² + y²)) / π, v up the image. An image lit (radiance 1, × the world Strength 2) in its left
@@ -273,6 +276,7 @@ def light_scenes(tmp_path_factory, built) -> Path:
 @needs_bpy
 @pytest.mark.subprocess
 @pytest.mark.parametrize("kind", LIGHT_KINDS)
+@pytest.mark.slow
 def test_light_units_give_the_irradiance_of_their_closed_form(light_scenes, device, kind):
     """Blender's units as Cycles renders them (a point or spot light's P W: I = P / 4π; a sun's S W/m²: E = S facing
     it; an area light's P W out of its face: L = P / (π A)), read by spectrace's irradiance meter at the origin,

@@ -42,6 +42,7 @@ def _worker(tmp_path, spp: int) -> subprocess.Popen:
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_progress_after_each_pass_and_the_image_as_linear_rgb(tmp_path):
     worker = _worker(tmp_path, 16)
     out, err = worker.communicate(timeout=300)
@@ -64,6 +65,7 @@ def test_progress_after_each_pass_and_the_image_as_linear_rgb(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_sigint_stops_after_the_pass_in_flight_with_the_image_of_the_samples_done(tmp_path):
     worker = _worker(tmp_path, 1_000_000)
     assert worker.stdout is not None
@@ -79,6 +81,7 @@ def test_sigint_stops_after_the_pass_in_flight_with_the_image_of_the_samples_don
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_scene_it_cannot_load_is_one_line_naming_the_file(tmp_path):
     (tmp_path / "scene.toml").write_text("[camera\n", encoding="utf-8")
     command = [sys.executable, "-m", "spectrace.interop.blender.render_worker", "scene.toml", "image.npy", "4"]

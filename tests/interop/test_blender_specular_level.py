@@ -30,6 +30,7 @@ def _f0(eta: float) -> float:
 
 @needs_bpy
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_specular_ior_level_gives_the_index_of_cycles_scaled_f0(tmp_path):
     from tests.interop.blender_comparisons import LEVELS
 

@@ -41,6 +41,7 @@ def corpus(tmp_path, mitsuba_scalar_spectral):
     return root
 
 
+@pytest.mark.slow
 def test_each_file_is_tabulated_with_what_each_renderer_makes_of_it(corpus, tmp_path, capsys):
     assert main([str(corpus), "--json", str(tmp_path / "rows.json")]) == 0
     out = capsys.readouterr().out

@@ -23,6 +23,7 @@ from spectrace.spectral.spectrum_input import rgb_reflectance
 
 
 @pytest.mark.peer
+@pytest.mark.slow
 def test_exported_cornell_box_renders_like_spectrace(tmp_path, device, mitsuba_scalar_spectral):
     """REPLICAS independent images of REPLICA_SPP samples from each renderer, depth 5 with Russian roulette from
     bounce 2 (so the roulette's semantics matter); film XYZ means over 8 x 8-pixel blocks and over the whole image

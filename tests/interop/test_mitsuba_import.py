@@ -370,6 +370,7 @@ def test_dielectrics(tmp_path):
 
 
 @pytest.mark.peer
+@pytest.mark.slow
 def test_imported_cornell_box_renders_like_mitsuba(tmp_path, device, mitsuba_scalar_spectral):
     """Mitsuba's Cornell box (its own scene dict, written as XML by its own serialiser, at 32 x 32 with a box pixel
     filter so both renderers average over the same pixel areas) rendered by both in spectral mode. Each renderer
@@ -621,6 +622,7 @@ def test_unreadable_xml_is_one_line(tmp_path, monkeypatch, capsys, text, says):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_real_process_prints_only_the_line_and_keeps_the_old_output(tmp_path):
     """A failed import (elements 2000 deep, once a RecursionError; a value the loader refuses in the final check)
     exits with status 2 and one line, and the TOML already there is left as it was, with no temporary file."""

@@ -145,6 +145,7 @@ LAMP_INSIDE = """<shape type="sphere"><float name="radius" value="0.25"/>
     [LAMP_OUTSIDE, LAMP_OUTSIDE + CUBE_INSIDE, LAMP_INSIDE],
     ids=["lamp_outside", "cube_in_fog", "lamp_in_fog"],
 )
+@pytest.mark.slow
 def test_fog_behind_a_thin_sheet_renders_like_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral, inside):
     """Shapes without media inside the fog keep rays in it, shadow rays start in the path's medium, and passes
     through the sheet do not count toward max_depth: 16 replicas each, 4 x 4-pixel blocks and the image mean within

@@ -120,6 +120,7 @@ def test_every_integrator_sees_the_wall_through_a_lamp_without_material(device, 
 
 @pytest.mark.peer
 @pytest.mark.parametrize("integrator", ["path", "ptracer", "bdpt"])
+@pytest.mark.slow
 def test_a_null_emitter_renders_as_in_mitsuba_volpath(tmp_path, device, mitsuba_scalar_spectral, integrator):
     """REPLICAS independent images from each renderer: 8 x 8-pixel block means, the image mean and the mean over the
     quad within 5 standard errors (tests/replica_agreement.py); every spectrace integrator against Mitsuba's

@@ -618,6 +618,7 @@ def test_unknown_tags_are_reported_at_every_level_and_strict_refuses_them(tmp_pa
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_strict_refuses_a_misspelt_tag_on_the_command_line(tmp_path):
     from cli_runner import run_spectrace
 

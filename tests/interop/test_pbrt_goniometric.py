@@ -84,6 +84,7 @@ def test_a_python_scene_with_a_goniometric_light_is_saved_with_its_file(tmp_path
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_non_square_image_is_refused_in_one_line_naming_the_key(tmp_path):
     """An equal-area map is square: another image is refused by `spectrace render` in one line naming the file and
     key, with a non-zero exit and no traceback."""

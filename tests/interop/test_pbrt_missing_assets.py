@@ -117,6 +117,7 @@ def test_an_unknown_policy_is_refused(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_command_line_option_and_its_refusals_are_one_line(tmp_path):
     path = _write(tmp_path, ASSETS["mesh"][0] + PLANE)
     out = tmp_path / "out.toml"
@@ -190,6 +191,7 @@ def test_material_none_and_empty_are_interface(tmp_path, name):
     assert any('former name of "interface"' in note for note in importer.notes)
 
 
+@pytest.mark.slow
 def test_subsurface_reflectance_from_a_constant_texture_is_that_constant(tmp_path):
     material = 'Material "subsurface" "float eta" 1.33 "rgb mfp" [0.5 0.4 0.3] '
     textured = 'Texture "albedo" "spectrum" "constant" "rgb value" [0.6 0.5 0.4]\n'

@@ -52,6 +52,7 @@ def test_bad_projector_keys_name_file_and_key(tmp_path, key, message):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_bad_projector_key_exits_with_one_line(tmp_path):
     key, message = BAD[0]
     scene = tmp_path / "projector.toml"

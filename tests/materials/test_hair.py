@@ -150,6 +150,7 @@ CHI2_SIGNIFICANCE = 0.01 / (len(CHI2_CASES) * len(CHI2_DIRECTIONS))
 
 
 @pytest.mark.parametrize("name, material", CHI2_CASES, ids=[c[0] for c in CHI2_CASES])
+@pytest.mark.slow
 def test_sampler_matches_its_pdf_chi_square(hair, name, material):
     """Histogram of sampled directions against N × the pdf integrated over each bin (midpoint rule on a fine grid),
     plus one bin for samples that produced no direction."""

@@ -265,6 +265,7 @@ def test_anisotropic_files_are_the_ggx_and_mitsubas(device_bsdf, mitsuba_scalar_
 
 
 @pytest.mark.parametrize("reduction", list(FOLDS))
+@pytest.mark.slow
 def test_anisotropic_sampling_follows_its_density(device_bsdf, anisotropic_files, reduction):
     """The registry's sampling laws (tests/materials/test_bsdfs.py) on the anisotropic files: the chi-square of
     sampled directions against the pdf, and the pdf's integral against the sampler's success rate, from a viewer

@@ -116,6 +116,7 @@ def _albedo_by_quadrature(theta_o: float, alpha: float, distribution: str) -> fl
 
 
 @pytest.mark.parametrize("alpha", (0.3, 0.7))
+@pytest.mark.slow
 def test_white_rough_conductor_loses_what_single_scattering_loses(kernel_runner, alpha):
     """The device's albedo (mean sample weight) of a white rough conductor matches the quadrature above within 4σ
     plus the approximation's allowance (0.5 % for Beckmann's G1, on top of the quadrature's 1e-3), for both

@@ -5,6 +5,8 @@ it, and no other list of the materials is kept by hand, on the host or in the ke
 import ast
 import re
 
+import pytest
+
 import spectrace
 from package_imports import MODULES
 from spectrace import api, resources
@@ -70,6 +72,7 @@ def test_no_kernel_file_lists_the_bsdfs():
     assert listed == []
 
 
+@pytest.mark.slow
 def test_no_host_module_but_the_registry_names_every_material():
     """A module holding every material's name as a string, or importing every material module, keeps a list."""
     names = set(MATERIALS)

@@ -429,6 +429,7 @@ def test_an_instanced_grid_medium_is_refused():
 
 @pytest.mark.subprocess
 @pytest.mark.parametrize("suffix", ["toml", "xml"])
+@pytest.mark.slow
 def test_render_of_a_truncated_vol_file_is_one_line_and_keeps_the_output(tmp_path, suffix):
     """`spectrace render` of a scene file or a Mitsuba XML whose volume file is cut short: exit status 2 (bad
     input), one line naming the scene file and the volume file, no traceback, and the image already at the output

@@ -32,6 +32,7 @@ def _scene(medium: Medium) -> Scene:
     )
 
 
+@pytest.mark.slow
 def test_a_constant_colour_albedo_grid_renders_as_the_homogeneous_medium_of_that_colour(device):
     """A cube of density 1 whose albedo grid holds one colour everywhere gives, all bounces, the radiance of the
     homogeneous medium σs(λ) = a(λ) σt, σa(λ) = (1 − a(λ)) σt with a(λ) = s S(λ), S the uplifted spectrum of the

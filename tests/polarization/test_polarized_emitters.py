@@ -104,6 +104,7 @@ def test_display_emitter_takes_the_catalogue_polarization(tmp_path, display, exp
     ],
     ids=["not a state", "display without a display", "unknown"],
 )
+@pytest.mark.slow
 def test_bad_emitter_polarization_is_refused_in_one_line(tmp_path, polarization, radiance, message):
     scene = tmp_path / "scene.toml"
     scene.write_text(emitter_scene(polarization, radiance=radiance))
@@ -118,6 +119,7 @@ def test_bad_emitter_polarization_is_refused_in_one_line(tmp_path, polarization,
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_polarized_emitter_with_another_integrator_is_refused(tmp_path):
     """A polarised emitter alone (no Stokes AOV, polariser or camera filter) makes the scene polarised, which only
     the path integrator renders."""

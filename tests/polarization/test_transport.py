@@ -101,6 +101,7 @@ def test_stokes_images_do_not_depend_on_the_pass_split(tmp_path):
     ],
     ids=["other integrator", "fluorescent"],
 )
+@pytest.mark.slow
 def test_unrenderable_polarized_scenes_are_refused_in_one_line(tmp_path, edit, key):
     scene = tmp_path / "scene.toml"
     scene.write_text(edit(sheets('type = "polarizer"')))

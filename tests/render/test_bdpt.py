@@ -153,6 +153,7 @@ def test_each_strategy_alone_estimates_its_path_length(strategy_device, s):
     assert_within_standard_errors(mean, expected, standard_error, power=0.05)
 
 
+@pytest.mark.slow
 def test_weighted_strategies_of_one_length_add_up(strategy_device):
     device, chosen = strategy_device
     scene = _enclosure(SEGMENTS).with_overrides(spp=8)
@@ -174,6 +175,7 @@ def test_weighted_strategies_of_one_length_add_up(strategy_device):
     assert_within_standard_errors(mean, EMITTED * ALBEDO ** (SEGMENTS - 1), standard_error, power=0.05)
 
 
+@pytest.mark.slow
 def test_point_light_through_a_glass_slab(device, tmp_path):
     """Only the light-to-camera strategy reaches the caustic, with MIS weight one."""
     reflectance = ((IOR - 1) / (IOR + 1)) ** 2

@@ -244,6 +244,7 @@ def _spectrace(*args):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_sigterm_writes_the_true_partial_image_and_the_render_resumes_exactly(device, tmp_path):
     """A real `spectrace render`, stopped by SIGTERM: the image's spp is the number of samples in it, and the
     checkpoint continues the render to the same floats as an uninterrupted render."""
@@ -311,6 +312,7 @@ def _one_error_line(result) -> str:
     return lines[0]
 
 
+@pytest.mark.slow
 def test_a_fresh_render_never_replaces_an_existing_checkpoint(device, tmp_path, monkeypatch, capsys):
     """A fresh render naming an existing checkpoint would replace its samples with its own first pass: refused
     (in a real process: status, one line naming --resume and --overwrite); --overwrite starts again; the same file
@@ -348,6 +350,7 @@ def test_a_fresh_render_never_replaces_an_existing_checkpoint(device, tmp_path, 
     assert status == 2 and stderr == "error: --overwrite: starts the render afresh, so it cannot go with --resume\n"
 
 
+@pytest.mark.slow
 def test_resuming_a_damaged_checkpoint_is_one_line_naming_it(device, tmp_path):
     renderer = Renderer(_cornell(width=8, height=6), device)
     renderer.run_pass(1)
@@ -467,6 +470,7 @@ def _version_of(path) -> int:
 
 @pytest.mark.subprocess
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork()")
+@pytest.mark.slow
 def test_sigkill_at_any_moment_leaves_the_old_or_the_new_file(tmp_path):
     rng = np.random.default_rng(2024)
     landed = []

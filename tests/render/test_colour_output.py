@@ -154,6 +154,7 @@ def test_xyz_output_keeps_the_film(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_render_command_colour_options(tmp_path):
     """The options' image through the command's entry point here; their refusal, an exit status, in a process."""
     out = tmp_path / "balanced.exr"

@@ -163,6 +163,7 @@ def test_a_mitsuba_sensor_alone_imports_and_renders_black_in_both(tmp_path, devi
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_the_command_line_warns_in_one_line_and_writes_the_black_image(tmp_path):
     """`import-mitsuba` and `render` of a scene with nothing in it: exit 0, one warning line each, the image."""
     xml = tmp_path / "sensor.xml"

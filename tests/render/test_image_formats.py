@@ -127,6 +127,7 @@ def test_refusals_name_the_file(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_render_command_writes_each_format(tmp_path):
     """`spectrace render -o` with each suffix (through the entry point in this process), and --bit-depth refused for
     JPEG in one line before any work (a real process)."""

@@ -149,6 +149,7 @@ def test_render_command_runs_the_wavefront(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_render_command_refuses_an_unknown_kernel_shape_in_one_line(tmp_path):
     result = _cli(
         "render", str(scenes_dir() / "cornell_box.toml"), "-o", str(tmp_path / "x.png"), "--kernel", "persistent"

@@ -404,6 +404,7 @@ radiance = {{ value = 0.1 }}
     )
 
 
+@pytest.mark.slow
 def test_other_lights_and_adjoint_bsdfs_agree_with_the_path_tracer(device, tmp_path):
     """The camera fills its view with the smooth-shaded cube on the plastic floor, under the distant, constant and
     spherical area lights; the image's mean is held to 5 %. The rough glass sphere stays out of view: lit by large

@@ -98,6 +98,7 @@ def test_spectra_commands(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_render_false_colour(tmp_path):
     out, figure = tmp_path / "box.exr", tmp_path / "luminance.png"
     result = _run(

@@ -211,6 +211,7 @@ def test_render_mean_agrees_with_the_independent_sampler(cornell, device):
     assert_within_standard_errors(mean, 0.0, standard_error, what="X, Y, Z")
 
 
+@pytest.mark.slow
 def test_render_error_at_equal_spp_is_lower_than_independent(cornell, device):
     """RMSE against a 1024-spp reference (Sobol, other seeds: its error is independent of the measured ones) over
     two seeds at 16 spp. The ratio measures 0.2-0.5 over sets of seeds; 0.8 leaves room for the noise of the
@@ -264,6 +265,7 @@ def test_scene_selects_the_sampler(tmp_path):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_cli_sampler_option(tmp_path):
     def run(*args):
         return subprocess.run(

@@ -39,6 +39,7 @@ def _independent_renders(scene, device, renders: int, spp: int) -> np.ndarray:
     )  # fmt: skip
 
 
+@pytest.mark.slow
 def test_spot_light_through_a_glass_slab(device, tmp_path):
     """Light through glass onto a screen (L S S D E): the photons alone carry it."""
     reflectance = ((IOR - 1) / (IOR + 1)) ** 2

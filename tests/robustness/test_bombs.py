@@ -249,6 +249,7 @@ def _repacked(source, target, bombs: dict[str, tuple[tuple[int, ...], str]]) -> 
                     stream.write(ZEROS)
 
 
+@pytest.mark.slow
 def test_a_checkpoint_member_inflating_past_its_role_is_refused_unread(tmp_path):
     from spectrace.engine.checkpoint import read_checkpoint
 

@@ -455,6 +455,7 @@ cli.main()
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_real_process_fails_when_every_sample_is_dropped(tmp_path):
     import os
     import subprocess

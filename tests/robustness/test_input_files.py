@@ -118,6 +118,7 @@ def special_loads(tmp_path_factory):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_pipes_and_devices_are_refused_without_reading(special_loads):
     """A FIFO with no writer would block the reader forever, /dev/zero would be read without end: every reader
     (scene, spectrum CSV, display CSV, mesh, picture, environment map) refuses both at once, naming the key."""
@@ -129,6 +130,7 @@ def test_pipes_and_devices_are_refused_without_reading(special_loads):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_an_image_whose_header_claims_a_huge_size_is_refused_before_decoding(special_loads):
     """A 12000x12000 PNG of zeros is a few kilobytes on disk; decoding it into the float RGB the screen needs
     would take about 10 GB. The size is read from the header, so the child's peak memory stays that of a
@@ -234,6 +236,7 @@ def test_a_large_mesh_says_it_is_loading(tmp_path, monkeypatch, capsys):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_an_unwritable_cache_folder_falls_back_and_rendering_works(tmp_path):
     """XDG_CACHE_HOME naming a file made PoCL and pyopencl fail, reported as 'no working OpenCL device'."""
     from spectrace.device.discovery import cache_root

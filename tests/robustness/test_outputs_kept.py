@@ -160,6 +160,7 @@ def test_outputs_through_a_symlink_loop_or_too_long_are_one_line(tmp_path, monke
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_an_output_in_a_symlink_loop_is_one_line_from_a_real_process(tmp_path):
     from cli_runner import run_spectrace
 
@@ -386,6 +387,7 @@ def test_denoise_replaces_its_own_noisy_image_and_no_other_file(suffix, tmp_path
 
 @pytest.mark.subprocess
 @pytest.mark.parametrize("command", ["import-pbrt", "import-mitsuba", "import-gltf"])
+@pytest.mark.slow
 def test_an_import_onto_an_output_in_use_is_refused_naming_the_holder(command, tmp_path, monkeypatch, capsys):
     """While another command writes the import's TOML, or the entry beside it that the import swaps in (pbrt's
     `out_assets`, Mitsuba's `out.sensor.csv`, which `-o out` and `-o out.toml` share), a real import process
@@ -413,6 +415,7 @@ def test_an_import_onto_an_output_in_use_is_refused_naming_the_holder(command, t
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_sweep_into_a_folder_in_use_is_refused_naming_the_holder(tmp_path, monkeypatch, capsys):
     """A second sweep into a results folder another sweep is writing would rewrite its table without the first
     one's rows: a real sweep process stops at once, one line naming the folder and the holder's pid, status 2,

@@ -645,6 +645,7 @@ def test_bad_input_is_one_line_naming_file_and_key(case, tmp_path, monkeypatch, 
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_real_process_prints_only_the_line(tmp_path):
     case = next(c for c in CASES if c.name == "nan-mesh-vertex")
     scene, argv = _write_case(tmp_path, case)

@@ -453,6 +453,7 @@ def test_a_real_failed_write_is_an_os_error_and_leaves_the_old_file(suffix, tmp_
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGXFSZ"), reason="needs a file size limit (POSIX)")
+@pytest.mark.slow
 def test_a_real_process_whose_figure_cannot_be_written_prints_one_line(tmp_path):
     import resource
 

@@ -664,6 +664,7 @@ def test_the_environment_picks_general_or_scene_kernels_and_an_argument_wins(dev
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_bad_general_kernels_setting_is_one_line_naming_the_variable(tmp_path, monkeypatch):
     from cli_runner import render_cornell_box, run_spectrace
 

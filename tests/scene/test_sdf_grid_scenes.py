@@ -119,6 +119,7 @@ def test_bad_grids_are_one_line_naming_the_key(tmp_path, shape, where, says):
 
 
 @pytest.mark.subprocess
+@pytest.mark.slow
 def test_a_bad_grid_ends_a_real_process_with_one_line(tmp_path):
     (tmp_path / "bad.toml").write_text(_toml('type = "sdfgrid"\ngrid = [[[1.0, 2.0]]]'))
     result = run_spectrace("render", str(tmp_path / "bad.toml"), "-o", str(tmp_path / "out.png"), timeout=300)

@@ -86,6 +86,7 @@ def test_cold_build_writes_the_table_it_returns(cold_built_table):
     )
 
 
+@pytest.mark.slow
 def test_table_nodes_are_the_one_colour_fits(cold_built_table):
     """Each node is fitted to the colorimetry `uplift_reflectance` fits one colour to: at nodes whose spectrum the
     colour pins down (not the darkest, where many spectra give one colour, nor next to white) both give the same

@@ -423,6 +423,7 @@ def test_a_scene_file_turns_the_shadowing_term_on(tmp_path):
         assert load_scene(scene).shapes[0].material.detail.shadowing_function is value
 
 
+@pytest.mark.slow
 def test_a_one_channel_normal_map_is_one_line_from_a_real_process(tmp_path):
     PILImage.fromarray(np.full((2, 2), 128, np.uint8)).save(tmp_path / "grey.png")
     scene = tmp_path / "scene.toml"

@@ -92,6 +92,7 @@ def test_named_texture_is_shared_and_a_checkerboard_takes_it(tmp_path):
     np.testing.assert_allclose(board.color0.values, 0.25)  # an EXR is linear: no decoding
 
 
+@pytest.mark.slow
 def test_textured_scene_renders_from_the_command_line(tmp_path):
     _png(tmp_path / "wood.png", np.array([[[200, 120, 40], [90, 60, 30]]], np.uint8))
     scene = _scene(tmp_path, '{ texture = "bitmap", file = "wood.png", filter = "trilinear" }')
@@ -135,6 +136,7 @@ def _bad_inputs(tmp_path) -> list[tuple[str, str, str, str]]:
     ]
 
 
+@pytest.mark.slow
 def test_bad_texture_input_is_one_line(tmp_path, monkeypatch, capsys):
     for reflectance, textures, shape, expected in _bad_inputs(tmp_path):
         scene = _scene(tmp_path, reflectance, textures, shape)
@@ -146,6 +148,7 @@ def test_bad_texture_input_is_one_line(tmp_path, monkeypatch, capsys):
         assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.slow
 def test_bad_texture_is_one_line_from_a_real_process(tmp_path):
     """The same through `python -m spectrace`: exit status 1 or 2, one line, nothing written."""
     (tmp_path / "garbage.png").write_bytes(b"\x89PNG\r\n\x1a\nbroken")
@@ -233,6 +236,7 @@ def _more(tmp_path, roughness: str, radiance: str, emitter_shape: str = "rectang
     return path
 
 
+@pytest.mark.slow
 def test_roughness_tint_and_emission_textures_in_a_scene_file(tmp_path):
     """A raw grey roughness keeps its code values / 255, the tint and emission are decoded from sRGB, the
     emitter's scale multiplies the image's mean radiance, and the scene renders."""

@@ -182,6 +182,7 @@ def test_malformed_requests_are_refused(viewer, body, headers):
     assert live.display.exposure == 0.0
 
 
+@pytest.mark.slow
 def test_twenty_clients_and_disconnects_mid_pass_leave_it_working(fresh_viewer):
     live, server, client = fresh_viewer
     live.spp = 400  # passes keep coming while the clients come and go
@@ -402,6 +403,7 @@ def test_a_bad_pixel_is_one_line(viewer, query, where):
     assert status == 400 and where in json.loads(body)["error"]
 
 
+@pytest.mark.slow
 def test_pause_holds_the_samples_and_resume_goes_on(fresh_viewer):
     live, _, client = fresh_viewer
     live.spp = 100_000
