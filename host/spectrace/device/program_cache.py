@@ -161,6 +161,10 @@ def kernels_digest(kernels_dir: Path) -> str:
     return files_digest(kernels_dir, (".cl", ".h"))
 
 
+# Each folder's last digest, with the listing (names, sizes, times, inodes) it was made from.
+_DIGESTS: dict[tuple[Path, tuple[str, ...]], tuple[tuple, str]] = {}
+
+
 def files_digest(folder: Path, suffixes: tuple[str, ...]) -> str:
     """Hash of every file under `folder` whose name ends in one of `suffixes` (relative names and contents)."""
     # Every build asks (~7 ms to read and hash the kernels): the files are read again only when one of them was
@@ -170,15 +174,12 @@ def files_digest(folder: Path, suffixes: tuple[str, ...]) -> str:
     if known is not None and known[0] == stats:
         return known[1]
     digest = hashlib.sha256()
-    for path in sorted(folder / name for name, _ in stats):
+    for path in sorted(folder / name for name, _ in stats):  # in path order, as the digest always was
         content = path.read_bytes()
         digest.update(path.relative_to(folder).as_posix().encode() + b"\0")
         digest.update(len(content).to_bytes(8, "little") + content)
     _DIGESTS[(folder, suffixes)] = (stats, digest.hexdigest())
     return digest.hexdigest()
-
-
-_DIGESTS: dict[tuple[Path, tuple[str, ...]], tuple[tuple, str]] = {}
 
 
 def _listing(folder: Path, suffixes: tuple[str, ...], prefix: str = "") -> Iterator[tuple[str, tuple[int, ...]]]:
@@ -408,19 +409,20 @@ class Device:
             raise SpectraceError(f"kernel file '{entry}' not found in the kernels folder", where=entry)
         headers = dict(generated.headers) if generated is not None else {}
         headers_digest = _headers_digest(headers)
-        generated_dir = _write_generated_headers(headers, headers_digest) if headers else None
         all_defines = _with_contract(defines, generated) | runtime_defines(self.report)
-        option_text = build_options(kernels_dir, all_defines, options, generated_dir)
         sources_digest = hashlib.sha256(f"{kernels_digest(kernels_dir)} {headers_digest}".encode()).hexdigest()
         key_options = keyed_options(all_defines, options)
         key = program_cache_key(sources_digest, entry, key_options, device_identity(self.report))
-        cache_file = program_cache_dir() / f"{key}.bin"
-
-        program = None if from_source else self._shared.kept(key)
-        if program is not None:
+        kept = None if from_source else self._shared.kept(key)
+        if kept is not None:  # built in this process already: nothing to write, read or load
             self.last_build_cached = True
-        else:
-            program = None if from_source else self._load_cached(cache_file, option_text)
+            self.last_build_seconds = time.perf_counter() - started
+            return kept
+
+        generated_dir = _write_generated_headers(headers, headers_digest) if headers else None
+        option_text = build_options(kernels_dir, all_defines, options, generated_dir)
+        cache_file = program_cache_dir() / f"{key}.bin"
+        program = None if from_source else self._load_cached(cache_file, option_text)
         if program is None:
             with contextlib.nullcontext() if from_source else _building(cache_file):
                 # Another process may have built it while this one waited for the lock.
