@@ -382,27 +382,26 @@ def _bin_probabilities(device: Bsdf, wo: np.ndarray, grid: tuple[int, int] = (GR
     """The pdf integrated over each chi-square bin by the midpoint rule on a `grid` of cells (cos θ, φ), each bin
     on coarser cells where they give its integral within REFINE_BELOW (above)."""
 
+    def cell(n_cos: int, n_phi: int) -> float:
+        return (1.0 / n_cos) * (2.0 * np.pi / n_phi)
+
     def on_grid(n_cos: int, n_phi: int) -> np.ndarray:
-        cell = (1.0 / n_cos) * (2.0 * np.pi / n_phi)
-        pdf = device.pdf_grid(wo, n_cos, n_phi) * cell
+        pdf = device.pdf_grid(wo, n_cos, n_phi) * cell(n_cos, n_phi)
         return pdf.reshape(CHI2_COS_BINS, n_cos // CHI2_COS_BINS, CHI2_PHI_BINS, n_phi // CHI2_PHI_BINS).sum(
             axis=(1, 3)
         )
 
     n_cos, n_phi = grid
-    coarse, finer = on_grid(n_cos // 10, n_phi // 8), on_grid(n_cos // 5, n_phi // 4)
-    tolerance = np.minimum(REFINE_BELOW, 0.05 * np.sqrt(np.maximum(finer, 0.0) / CHI2_SAMPLES))
-    rough = np.abs(finer - coarse) / 3.0 > tolerance
-    probabilities = finer
-    if rough.any():
+    coarse, probabilities = on_grid(n_cos // 10, n_phi // 8), on_grid(n_cos // 5, n_phi // 4)
+    tolerance = np.minimum(REFINE_BELOW, 0.05 * np.sqrt(np.maximum(probabilities, 0.0) / CHI2_SAMPLES))
+    i, j = np.nonzero(np.abs(probabilities - coarse) / 3.0 > tolerance)
+    if len(i):
         # The rough bins' cells of `grid`, all in one evaluation: (bins, cells in cos θ, cells in φ).
         per_cos, per_phi = n_cos // CHI2_COS_BINS, n_phi // CHI2_PHI_BINS
-        i, j = np.nonzero(rough)
         cos_theta = (i[:, None] * per_cos + np.arange(per_cos) + 0.5) / n_cos
         phi = 2.0 * np.pi * (j[:, None] * per_phi + np.arange(per_phi) + 0.5) / n_phi
         pdf = device.pdf_at(wo, cos_theta[:, :, None], phi[:, None, :])
-        probabilities = finer.copy()
-        probabilities[i, j] = pdf.sum(axis=(1, 2)) * (1.0 / n_cos) * (2.0 * np.pi / n_phi)
+        probabilities[i, j] = pdf.sum(axis=(1, 2)) * cell(n_cos, n_phi)
     return probabilities
 
 
