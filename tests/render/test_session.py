@@ -9,6 +9,7 @@ import pytest
 
 import spectrace
 from scene_text import camera_film
+from spectrace.device import host_memory
 from spectrace.errors import SpectraceError
 from spectrace.session import Session
 
@@ -206,6 +207,22 @@ def test_an_edit_renders_the_bits_of_a_fresh_render_of_the_edited_file(scene_fil
         _same_bits(session, _fresh(scene_file, file_keys or changes))
         # session.scene is the edited scene: a render of it is the same bits too.
         np.testing.assert_array_equal(spectrace.render(session.scene, spp=SPP, progress=False).xyz, session.image().xyz)
+
+
+def test_edits_of_buffers_in_huge_pages_render_the_bits_of_a_fresh_copied_render(scene_file, monkeypatch):
+    # Every scene buffer in huge-page host memory used in place (on a CPU device; spectrace.device.host_memory), the
+    # edits rewriting them there; the fresh render's buffers are copied to the runtime's memory.
+    changes = {"materials.red.reflectance": {"rgb": [0.1, 0.6, 0.2]}, "lights.0.power": 55.0}
+    changes |= {"instances.right post.transform": [{"translate": [0.2, 0.4, 1.1]}]}
+    file_keys = {key: value for key, value in changes.items() if not key.startswith("instances")}
+    file_keys |= {"instances.1.transform": [{"translate": [0.2, 0.4, 1.1]}]}
+    expected = _fresh(scene_file, file_keys)
+    monkeypatch.setattr(host_memory, "MIN_HUGE_PAGE_ARRAY_BYTES", 0)
+    with Session(scene_file) as session:
+        report = session.update(changes)
+        assert not report.rebuilt, str(report)
+        session.step(SPP)
+        _same_bits(session, expected)
 
 
 def test_a_seed_edits_a_file_without_a_sampler_table_as_one_that_writes_the_seed(tmp_path, clear_scene_file):

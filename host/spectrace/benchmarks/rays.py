@@ -22,6 +22,7 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.device import open_device
+from spectrace.device.host_memory import read_only_buffer
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.geometry.bvh import build_bvh
 from spectrace.geometry.bvh4 import (
@@ -141,8 +142,8 @@ def trace_with_spectrace(
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     count = len(origins)
     buffers = [
-        cl.Buffer(ctx, ro, hostbuf=node_buffer),
-        cl.Buffer(ctx, ro, hostbuf=vertices),
+        read_only_buffer(ctx, node_buffer),  # as a render's scene buffers: in huge pages on a CPU
+        read_only_buffer(ctx, vertices),
         cl.Buffer(ctx, ro, hostbuf=_float4(origins)),
         cl.Buffer(ctx, ro, hostbuf=_float4(directions)),
     ]

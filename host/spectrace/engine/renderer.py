@@ -13,6 +13,7 @@ from spectrace import plugins
 from spectrace.core import limits
 from spectrace.core.contract import SCENE_KERNEL_BUFFERS
 from spectrace.device import Device, open_device
+from spectrace.device.host_memory import read_only_buffer
 from spectrace.engine.launch import launch_shape, render_work_group
 from spectrace.engine.memory import check_device_memory, device_memory_need
 from spectrace.engine.opencl_errors import translate_opencl_errors
@@ -65,11 +66,9 @@ def specialise_by_default(rare_variant: bool = False) -> bool:
 
 def upload_scene(context: cl.Context, buffers: SceneBuffers) -> list[cl.Buffer]:
     """Read-only device copies of the scene's buffers in the order every scene kernel takes them after the
-    RenderParams buffer (SCENE_KERNEL_BUFFERS; kernels/scene.cl's SCENE_KERNEL_PARAMS)."""
-    flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-    return [
-        cl.Buffer(context, flags, hostbuf=np.ascontiguousarray(getattr(buffers, name))) for name in SCENE_KERNEL_BUFFERS
-    ]
+    RenderParams buffer (SCENE_KERNEL_BUFFERS; kernels/scene.cl's SCENE_KERNEL_PARAMS); on a CPU the large ones (the
+    nodes, the triangles) in huge pages (spectrace.device.host_memory)."""
+    return [read_only_buffer(context, getattr(buffers, name)) for name in SCENE_KERNEL_BUFFERS]
 
 
 class Renderer:
@@ -195,8 +194,7 @@ class Renderer:
             if array.nbytes == self._scene[i].size:
                 cl.enqueue_copy(self.device.queue, self._scene[i], array)
             else:
-                flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-                self._scene[i] = cl.Buffer(self.device.context, flags, hostbuf=array)
+                self._scene[i] = read_only_buffer(self.device.context, array)
                 replaced = True
         self.scene, self.buffers = scene, buffers
         # A per-pixel integrator's passes read the scene's buffers at each launch; others may have set their
