@@ -14,7 +14,10 @@ from spectrace.device import host_memory
 from spectrace.engine.renderer import Renderer
 from spectrace.resources import scenes_dir
 
-linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc/self/smaps and MADV_HUGEPAGE")
+linux_only = pytest.mark.skipif(
+    not (sys.platform.startswith("linux") and host_memory.HUGE_PAGES_ADVISABLE),
+    reason="/proc/self/smaps, MADV_HUGEPAGE",
+)
 
 
 def _vm_flags(address: int) -> list[str]:
@@ -41,19 +44,23 @@ def test_a_copy_in_aligned_memory_advised_for_huge_pages():
     assert "hg" in _vm_flags(copy.ctypes.data)  # VM_HUGEPAGE: madvise(MADV_HUGEPAGE) took
 
 
-def test_only_large_arrays_for_cpu_devices_go_to_huge_pages():
+@linux_only
+def test_only_large_arrays_for_cpu_devices_go_to_huge_pages(monkeypatch):
     cpu = SimpleNamespace(devices=[SimpleNamespace(type=cl.device_type.CPU)])
     gpu = SimpleNamespace(devices=[SimpleNamespace(type=cl.device_type.GPU)])
     large, small = host_memory.MIN_HUGE_PAGE_ARRAY_BYTES, host_memory.MIN_HUGE_PAGE_ARRAY_BYTES - 1
     assert host_memory.wants_huge_pages(cpu, large)
     assert not host_memory.wants_huge_pages(cpu, small)
     assert not host_memory.wants_huge_pages(gpu, large)
+    monkeypatch.setattr(host_memory, "HUGE_PAGES_ADVISABLE", False)  # a system without madvise's huge pages
+    assert not host_memory.wants_huge_pages(cpu, large)
 
 
 def _uses_host_memory(buffer: cl.Buffer) -> bool:
     return bool(buffer.get_info(cl.mem_info.FLAGS) & cl.mem_flags.USE_HOST_PTR)
 
 
+@linux_only
 def test_a_large_buffer_reads_back_its_array(device):
     if not device.cl_device.type & cl.device_type.CPU:
         pytest.skip("huge pages are for CPU devices; a GPU's buffers are copied")
@@ -66,6 +73,7 @@ def test_a_large_buffer_reads_back_its_array(device):
     np.testing.assert_array_equal(back, array)
 
 
+@linux_only
 def test_a_render_from_huge_page_buffers_has_the_bits_of_one_from_copies(device, monkeypatch):
     if not device.cl_device.type & cl.device_type.CPU:
         pytest.skip("huge pages are for CPU devices; a GPU's buffers are copied")

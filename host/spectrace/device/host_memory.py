@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     import pyopencl as cl
 
 HUGE_PAGE_BYTES = 2 << 20
+HUGE_PAGES_ADVISABLE = hasattr(mmap, "MADV_HUGEPAGE") and hasattr(mmap, "MAP_ANONYMOUS")
 # Arrays smaller than this stay in the runtime's own memory: at most a quarter of a huge page-backed copy is then the
 # rounding of its last page.
 MIN_HUGE_PAGE_ARRAY_BYTES = 8 << 20
@@ -29,13 +30,12 @@ MIN_HUGE_PAGE_ARRAY_BYTES = 8 << 20
 
 def huge_page_array(array: np.ndarray) -> np.ndarray:
     """A copy of `array` in anonymous memory starting on a 2 MiB boundary and advised for huge pages; the copy keeps
-    its mapping alive. Without MADV_HUGEPAGE (not Linux) the memory is only aligned."""
+    its mapping alive. Needs MADV_HUGEPAGE (HUGE_PAGES_ADVISABLE)."""
     array = np.ascontiguousarray(array)
     pages = -(-max(array.nbytes, 1) // HUGE_PAGE_BYTES)
     # One page more than the data needs, for the alignment: the kernel gives untouched pages no memory.
     mapping = mmap.mmap(-1, (pages + 1) * HUGE_PAGE_BYTES, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
-    if hasattr(mmap, "MADV_HUGEPAGE"):
-        mapping.madvise(mmap.MADV_HUGEPAGE)
+    mapping.madvise(mmap.MADV_HUGEPAGE)
     raw = np.frombuffer(mapping, np.uint8)
     start = -raw.ctypes.data % HUGE_PAGE_BYTES
     copy = raw[start : start + array.nbytes].view(array.dtype).reshape(array.shape)
@@ -44,10 +44,15 @@ def huge_page_array(array: np.ndarray) -> np.ndarray:
 
 
 def wants_huge_pages(context: cl.Context, nbytes: int) -> bool:
-    """Whether an array of `nbytes` goes into huge pages for `context`: large, and every device of it a CPU."""
+    """Whether an array of `nbytes` goes into huge pages for `context`: large, every device of it a CPU, and a system
+    that can advise huge pages (Linux)."""
     import pyopencl as cl
 
-    return nbytes >= MIN_HUGE_PAGE_ARRAY_BYTES and all(device.type & cl.device_type.CPU for device in context.devices)
+    return (
+        HUGE_PAGES_ADVISABLE
+        and nbytes >= MIN_HUGE_PAGE_ARRAY_BYTES
+        and all(device.type & cl.device_type.CPU for device in context.devices)
+    )
 
 
 def read_only_buffer(context: cl.Context, array: np.ndarray) -> cl.Buffer:
