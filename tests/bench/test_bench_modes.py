@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cli_runner import run_spectrace
@@ -34,7 +35,7 @@ def modes() -> dict:
     """The scaling, rays and quality modes, each its own run: the checks below read their parts."""
     return {
         **_bench("scaling", "--size", "8", "--spp", "1", "--triangles", "100"),
-        **_bench("rays", "--triangles", "100", "--ray-count", "3000"),
+        **_bench("rays", "--triangles", "100", "--ray-count", "3000", "--rounds", "3"),
         **_bench("quality", "--size", "8", "--seconds", "0.05"),
     }
 
@@ -68,6 +69,10 @@ def test_scaling_rays_and_quality_modes(modes):
     assert 1 <= rays["bvh"]["nodes_wide"] < rays["bvh"]["nodes"] and rays["bvh"]["depth_wide"] <= rays["bvh"]["depth"]
     assert 320 // 8 <= rays["bvh"]["leaf_blocks"] <= 320
     assert len(rays["spectrace"]) == 1 and rays["spectrace"][0]["rays_per_second"] > 0
+    # Three timed traces, whose median the figures are.
+    ours = rays["spectrace"][0]
+    assert rays["rounds"] == 3 and len(ours["round_seconds"]) == len(ours["round_cores"]) == 3
+    assert ours["seconds"] == np.median(ours["round_seconds"]) and ours["rays_per_second"] == 3000 / ours["seconds"]
 
     quality = out["quality"]
     assert quality["reference"]["spp"] == 1024
@@ -85,6 +90,11 @@ def test_rays_agree_with_embree(modes):
     assert agreement["rays"] == 3000
     # Same rays, same mesh: a ray may disagree only where it grazes an edge.
     assert agreement["same_hit_or_miss"] >= 0.998 and agreement["within_1e-4"] >= 0.998
+    # The per-core ratio is the median of the rounds' ratios, inside their range.
+    ours, theirs = modes["rays"]["spectrace"][0], modes["rays"]["embree"]
+    ratios = np.divide(ours["round_rays_per_second_per_core"], theirs["round_rays_per_second_per_core"])
+    assert agreement["per_core_ratio"] == np.median(ratios)
+    assert agreement["per_core_ratio_range"] == [ratios.min(), ratios.max()]
 
 
 @pytest.mark.slow

@@ -6,7 +6,9 @@ cross the mesh from every direction. spectrace traces them with its BVH kernel (
 watertight triangle test the path tracer uses, kernels/bvh.cl, through the closest-hit harness kernel);
 Embree 4 (the `embreex` package) traces the same float32 rays as the practical limit of CPU ray tracing.
 Cores used are measured as process CPU time ÷ wall time during each timed trace, so per-core figures divide
-by what each one actually used. The BVH build is timed (wall and CPU time), and built once more under tracemalloc
+by what each one actually used. Each tracer traces the rays once per round, the tracers in turn within a round, and
+the per-core ratio to Embree is taken round by round (median, smallest, largest), so a load that comes and goes falls
+on both alike. The BVH build is timed (wall and CPU time), and built once more under tracemalloc
 (which numpy reports its arrays to) for its peak memory, with the process's peak resident size; the SAH cost is
 spectrace.geometry.bvh's.
 """
@@ -149,15 +151,15 @@ def trace_with_spectrace(
     ]
     t_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
     hit_out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * count)
-    kernel.set_args(*buffers, t_out, hit_out, np.int32(count))
     global_size, local_size = launch_shape(count, render_work_group(device))
 
     def launch():
+        # Arguments set at each launch: the closure holds the buffers for as long as it may launch.
+        kernel.set_args(*buffers, t_out, hit_out, np.int32(count))
         cl.enqueue_nd_range_kernel(queue, kernel, global_size, local_size)
         queue.finish()
 
-    launch()  # warm-up: lazy compilation on PoCL, page faults on the buffers
-    _, seconds, cores = _timed(launch)
+    launch()  # warm-up: lazy compilation on PoCL, page faults on the buffers; every launch gives these answers
     t = np.empty(count, np.float32)
     hit = np.empty(count, np.int32)
     cl.enqueue_copy(queue, t, t_out)
@@ -166,13 +168,10 @@ def trace_with_spectrace(
     triangle = np.where(hit >= 0, bvh.prim_order[np.maximum(hit, 0)], -1)
     return {
         "runtime": device.report.key,
-        "seconds": seconds,
-        "rays_per_second": count / seconds,
-        "cores_used": cores,
-        "rays_per_second_per_core": count / seconds / max(cores, 1e-9),
         "kernel_build_cached": device.last_build_cached,
         "t": np.where(hit >= 0, t, np.inf),
         "triangle": triangle,
+        "trace": launch,
     }
 
 
@@ -187,21 +186,35 @@ def trace_with_embree(mesh: TriangleMesh, origins, directions) -> dict:
         return scene
 
     scene, build_seconds, _ = _timed(build)
-    scene.run(origins[:1000], directions[:1000])  # warm-up
-    result, seconds, cores = _timed(lambda: scene.run(origins, directions, output=1))
+
+    def trace():
+        return scene.run(origins, directions, output=1)
+
+    result = trace()  # warm-up; every run gives these answers
     hit = result["primID"].astype(np.int64)
     hit = np.where(result["geomID"] >= 0, hit, -1)  # a miss has geomID -1 (RTC_INVALID_GEOMETRY_ID)
     t = np.where(hit >= 0, result["tfar"], np.inf)
-    return {
-        "runtime": "embree (embreex)",
-        "build_seconds": build_seconds,
-        "seconds": seconds,
-        "rays_per_second": len(origins) / seconds,
-        "cores_used": cores,
-        "rays_per_second_per_core": len(origins) / seconds / max(cores, 1e-9),
-        "t": t,
-        "triangle": hit,
-    }
+    return {"runtime": "embree (embreex)", "build_seconds": build_seconds, "t": t, "triangle": hit, "trace": trace}
+
+
+def time_in_rounds(tracers: list[dict], ray_count: int, rounds: int) -> None:
+    """Times each tracer's `trace` `rounds` times, the tracers in turn within each round (as `bench peer` alternates
+    its renderers), so a load that comes and goes falls on all alike; sets each one's median seconds, cores used
+    (process CPU time ÷ wall time) and rays/s, overall and per core, and its per-round rays/s per core."""
+    for tracer in tracers:
+        tracer["round_rays_per_second_per_core"] = []
+        tracer["round_seconds"], tracer["round_cores"] = [], []
+    for _ in range(rounds):
+        for tracer in tracers:
+            _, seconds, cores = _timed(tracer["trace"])
+            tracer["round_seconds"].append(seconds)
+            tracer["round_cores"].append(cores)
+            tracer["round_rays_per_second_per_core"].append(ray_count / seconds / max(cores, 1e-9))
+    for tracer in tracers:
+        tracer["seconds"] = float(np.median(tracer["round_seconds"]))
+        tracer["cores_used"] = float(np.median(tracer["round_cores"]))
+        tracer["rays_per_second"] = ray_count / tracer["seconds"]
+        tracer["rays_per_second_per_core"] = float(np.median(tracer["round_rays_per_second_per_core"]))
 
 
 def distance_agreement(ours: dict, theirs: dict, count: int) -> dict:
@@ -224,6 +237,7 @@ def run_rays_bench(
     device_keys: list[str | None],
     with_embree: bool = True,
     log: Callable[[str], None] = lambda text: None,
+    rounds: int = 5,
 ) -> dict:
     subdivisions = subdivisions_for(triangles)
     mesh = displaced_sphere(subdivisions)
@@ -252,25 +266,30 @@ def run_rays_bench(
     node_buffer = device_nodes(bvh, vertices)
     result["bvh"].update(traversal_tree_stats(bvh, node_buffer))
     log(f"BVH: {bvh.build_seconds:.2f} s ({build_cpu_seconds:.2f} s CPU), peak {peak_bytes / 2**20:.0f} MiB traced")
-    traced = []
-    for key in device_keys:
-        row = trace_with_spectrace(key, bvh, vertices, node_buffer, origins, directions)
-        log(f"spectrace {row['runtime']}: {row['rays_per_second'] / 1e6:.2f} M rays/s")
-        traced.append(row)
+    traced = [trace_with_spectrace(key, bvh, vertices, node_buffer, origins, directions) for key in device_keys]
+    embree = None
     if with_embree:
         try:
             embree = trace_with_embree(mesh, origins, directions)
         except ImportError:
             result["notes"].append("embreex is not installed (pip install 'spectrace[bench]'): no Embree figures")
-        else:
-            log(f"embree: {embree['rays_per_second'] / 1e6:.2f} M rays/s")
-            result["embree"] = {k: v for k, v in embree.items() if k not in ("t", "triangle")}
-            for row in traced:
-                agreement = distance_agreement(row, embree, min(DISTANCE_CHECK_RAYS, ray_count))
-                agreement["spectrace"] = row["runtime"]
-                agreement["per_core_ratio"] = row["rays_per_second_per_core"] / embree["rays_per_second_per_core"]
-                result["agreement"].append(agreement)
-    result["spectrace"] = [{k: v for k, v in row.items() if k not in ("t", "triangle")} for row in traced]
+    result["rounds"] = rounds
+    time_in_rounds(traced + ([embree] if embree else []), ray_count, rounds)
+    for row in traced:
+        log(f"spectrace {row['runtime']}: {row['rays_per_second'] / 1e6:.2f} M rays/s")
+    kept = ("t", "triangle", "trace")
+    if embree:
+        log(f"embree: {embree['rays_per_second'] / 1e6:.2f} M rays/s")
+        result["embree"] = {k: v for k, v in embree.items() if k not in kept}
+        for row in traced:
+            agreement = distance_agreement(row, embree, min(DISTANCE_CHECK_RAYS, ray_count))
+            agreement["spectrace"] = row["runtime"]
+            # Round by round, spectrace's rays/s per core over Embree's in the same round: median (min, max).
+            ratios = np.divide(row["round_rays_per_second_per_core"], embree["round_rays_per_second_per_core"])
+            agreement["per_core_ratio"] = float(np.median(ratios))
+            agreement["per_core_ratio_range"] = [float(ratios.min()), float(ratios.max())]
+            result["agreement"].append(agreement)
+    result["spectrace"] = [{k: v for k, v in row.items() if k not in kept} for row in traced]
     return result
 
 
@@ -306,7 +325,10 @@ def rays_tables(result: dict) -> list:
         str(bvh["leaf_blocks"]),
         f"{bvh['node_buffer_bytes'] / 2**20:.0f}",
     )
-    rays = Table(title=f"closest-hit rays: {result['rays']} random rays, {result['triangles']} triangles")
+    rays = Table(
+        title=f"closest-hit rays: {result['rays']} random rays, {result['triangles']} triangles "
+        f"({result['rounds']} alternated rounds: medians)"
+    )
     for column in ("tracer", "M rays/s", "cores used", "M rays/s per core", "time s"):
         rays.add_column(column, justify="left" if column == "tracer" else "right")
     rows = [(f"spectrace {r['runtime']}", r) for r in result["spectrace"]]
@@ -323,7 +345,8 @@ def rays_tables(result: dict) -> list:
     tables = [build, rays]
     if result["agreement"]:
         check = Table(title="same rays, same answers? (spectrace vs Embree)")
-        for column in ("spectrace", "rays", "same hit/miss", "same triangle", "|Δt|/t ≤ 1e-4", "per-core ratio"):
+        columns = ("spectrace", "rays", "same hit/miss", "same triangle", "|Δt|/t ≤ 1e-4", "per-core ratio (min-max)")
+        for column in columns:
             check.add_column(column, justify="left" if column == "spectrace" else "right")
         for a in result["agreement"]:
             check.add_row(
@@ -332,7 +355,7 @@ def rays_tables(result: dict) -> list:
                 f"{100 * a['same_hit_or_miss']:.3f} %",
                 f"{100 * a['same_triangle']:.3f} %",
                 f"{100 * a['within_1e-4']:.3f} %",
-                f"{a['per_core_ratio']:.2f}x",
+                f"{a['per_core_ratio']:.2f}x ({a['per_core_ratio_range'][0]:.2f}-{a['per_core_ratio_range'][1]:.2f})",
             )
         tables.append(check)
     return tables

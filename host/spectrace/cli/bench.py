@@ -253,6 +253,9 @@ def quality_bench(
 def rays_bench(
     triangles: TrianglesOption = 1_000_000,
     ray_count: Annotated[int, typer.Option(help="Random rays to trace.", min=1)] = 1_000_000,
+    rounds: Annotated[
+        int, typer.Option(help="Timed traces of each tracer, the tracers in turn within each round.", min=1)
+    ] = 5,
     device: DeviceOption = None,
     all_devices: AllOption = False,
     as_json: JsonOption = False,
@@ -261,7 +264,7 @@ def rays_bench(
     from spectrace.benchmarks.peer_mitsuba import device_keys
     from spectrace.benchmarks.rays import rays_tables, run_rays_bench
 
-    result = run_rays_bench(triangles, ray_count, device_keys(device, all_devices), log=_log)
+    result = run_rays_bench(triangles, ray_count, device_keys(device, all_devices), log=_log, rounds=rounds)
     _emit("rays", result, lambda: rays_tables(result), as_json)
 
 
