@@ -277,10 +277,10 @@ def run_rays_bench(
     time_in_rounds(traced + ([embree] if embree else []), ray_count, rounds)
     for row in traced:
         log(f"spectrace {row['runtime']}: {row['rays_per_second'] / 1e6:.2f} M rays/s")
-    kept = ("t", "triangle", "trace")
+    unreported = ("t", "triangle", "trace")  # the answers and the timed call: not part of the result
     if embree:
         log(f"embree: {embree['rays_per_second'] / 1e6:.2f} M rays/s")
-        result["embree"] = {k: v for k, v in embree.items() if k not in kept}
+        result["embree"] = {k: v for k, v in embree.items() if k not in unreported}
         for row in traced:
             agreement = distance_agreement(row, embree, min(DISTANCE_CHECK_RAYS, ray_count))
             agreement["spectrace"] = row["runtime"]
@@ -289,7 +289,7 @@ def run_rays_bench(
             agreement["per_core_ratio"] = float(np.median(ratios))
             agreement["per_core_ratio_range"] = [float(ratios.min()), float(ratios.max())]
             result["agreement"].append(agreement)
-    result["spectrace"] = [{k: v for k, v in row.items() if k not in kept} for row in traced]
+    result["spectrace"] = [{k: v for k, v in row.items() if k not in unreported} for row in traced]
     return result
 
 
