@@ -85,3 +85,38 @@ def test_a_render_from_huge_page_buffers_has_the_bits_of_one_from_copies(device,
     in_place = Renderer(scene, device)
     assert all(_uses_host_memory(buffer) for buffer in in_place._scene)
     np.testing.assert_array_equal(in_place.render().xyz, expected)
+
+
+@linux_only
+@pytest.mark.parametrize("refused", ["mmap", "madvise"])
+def test_where_the_system_refuses_huge_pages_the_buffer_is_copied(device, monkeypatch, refused):
+    """An anonymous mapping refused (ENOMEM: memory or the map count exhausted), or the advice refused (EINVAL: a
+    kernel without transparent huge pages), costs the speed-up only: the buffer is copied and holds the array."""
+    import errno
+    import mmap
+
+    if not device.cl_device.type & cl.device_type.CPU:
+        pytest.skip("huge pages are for CPU devices; a GPU's buffers are copied")
+    real_mmap = mmap.mmap
+
+    class Refusing:
+        def __init__(self, *args, **kwargs):
+            if refused == "mmap":
+                raise OSError(errno.ENOMEM, "Cannot allocate memory")
+            self._mapping = real_mmap(*args, **kwargs)
+
+        def madvise(self, *args):
+            raise OSError(errno.EINVAL, "Invalid argument")
+
+        def __getattr__(self, name):
+            return getattr(self._mapping, name)
+
+    monkeypatch.setattr(host_memory.mmap, "mmap", Refusing)
+    with pytest.raises(OSError):
+        host_memory.huge_page_array(np.zeros(16, np.float32))  # the refusal is real for the copy itself
+    array = np.arange(host_memory.MIN_HUGE_PAGE_ARRAY_BYTES // 4, dtype=np.int32)
+    buffer = host_memory.read_only_buffer(device.context, array)
+    assert not _uses_host_memory(buffer)
+    back = np.empty_like(array)
+    cl.enqueue_copy(device.queue, back, buffer)
+    np.testing.assert_array_equal(back, array)

@@ -56,12 +56,18 @@ def wants_huge_pages(context: cl.Context, nbytes: int) -> bool:
 
 
 def read_only_buffer(context: cl.Context, array: np.ndarray) -> cl.Buffer:
-    """A read-only buffer holding `array`: on a CPU device a large one in huge pages (the buffer keeps them), else
-    copied to the runtime's memory."""
+    """A read-only buffer holding `array`: on a CPU device a large one in huge pages (the buffer keeps them), else,
+    or where the system gives none, copied to the runtime's memory."""
     import pyopencl as cl
 
     array = np.ascontiguousarray(array)
     if wants_huge_pages(context, array.nbytes):
-        flags = cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR
-        return cl.Buffer(context, flags, hostbuf=huge_page_array(array))
+        try:
+            in_huge_pages = huge_page_array(array)
+        except OSError:
+            # No anonymous mapping to be had (memory or map count exhausted), or a kernel built without transparent
+            # huge pages refusing the advice: the huge pages are only a speed-up, so the buffer is copied instead.
+            pass
+        else:
+            return cl.Buffer(context, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=in_huge_pages)
     return cl.Buffer(context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=array)
