@@ -73,6 +73,12 @@ def test_scaling_rays_and_quality_modes(modes):
     ours = rays["spectrace"][0]
     assert rays["rounds"] == 3 and len(ours["round_seconds"]) == len(ours["round_cores"]) == 3
     assert ours["seconds"] == np.median(ours["round_seconds"]) and ours["rays_per_second"] == 3000 / ours["seconds"]
+    # The load judged as `bench peer` judges it: a pause before each trace and after the last.
+    load = rays["load"]
+    assert set(load) == {"before", "after", "cores", "others", "pauses", "limit", "busy", "steal"}
+    traces = 3 * (1 + (rays["embree"] is not None))
+    assert load["pauses"] == (traces + 1 if os.path.exists("/proc/loadavg") else 0)
+    assert any(note.startswith("machine busy") for note in rays["notes"]) is load["busy"]
 
     quality = out["quality"]
     assert quality["reference"]["spp"] == 1024

@@ -1,7 +1,7 @@
 """`spectrace bench peer`'s measurement: rounds that alternate the renderers, medians and spreads, ratios taken
 round by round, and the load around the rounds with its warning. Fake contestants with given times stand for the
-renderers, and the load is faked through bench_rounds.load_average and bench_rounds.others_runnable; speed is never
-asserted."""
+renderers, and the load is faked through bench_rounds.load_average, bench_rounds.others_runnable and
+bench_rounds.cpu_times; speed is never asserted."""
 
 import subprocess
 import sys
@@ -11,6 +11,7 @@ import pytest
 
 from spectrace.benchmarks import bench_rounds
 from spectrace.benchmarks.bench_rounds import (
+    BUSY_STEAL_SHARE,
     BUSY_WARNING,
     DEFAULT_ROUNDS,
     LoadCheck,
@@ -19,6 +20,7 @@ from spectrace.benchmarks.bench_rounds import (
     load_text,
     other_runnable_threads,
     paired_ratios,
+    steal_share,
     timing_summary,
 )
 
@@ -147,6 +149,56 @@ def test_without_samples_the_load_average_decides_before_or_after(before, after,
     assert f"before {before:.2f}, after {after:.2f}, on 2 cores" in text
 
 
+# /proc/stat's "cpu" columns: user nice system idle iowait irq softirq steal guest guest_nice.
+QUIET_START = [1000, 10, 200, 5000, 30, 0, 5, 40, 0, 0]
+
+
+@pytest.mark.parametrize(
+    ("delta", "share"),
+    [
+        ([900, 0, 50, 1000, 0, 0, 0, 50, 0, 0], 50 / 1000),  # the host took 5 % of the time the CPUs wanted
+        ([900, 0, 50, 1000, 20, 0, 0, 0, 0, 0], 0.0),  # iowait is idle: not wanted time
+        ([600, 0, 100, 9000, 0, 50, 50, 200, 300, 0], 200 / 1000),  # guest time is inside user: not counted twice
+        ([0, 0, 0, 2000, 0, 0, 0, 0, 0, 0], None),  # nothing wanted the CPUs: no share to tell
+    ],
+)
+def test_steal_share_is_the_hypervisors_part_of_the_time_the_cpus_wanted(delta, share):
+    after = [a + d for a, d in zip(QUIET_START, delta, strict=True)]
+    assert steal_share(QUIET_START, after) == (pytest.approx(share) if share is not None else None)
+    assert steal_share(None, after) is None and steal_share(QUIET_START, None) is None
+
+
+def test_cpu_times_reads_the_machine_s_cpu_line():
+    """The real /proc/stat where there is one: at least the eight columns up to steal, and time only goes forward."""
+    import os
+
+    if not os.path.exists("/proc/stat"):
+        assert bench_rounds.cpu_times() is None
+        return
+    first = bench_rounds.cpu_times()
+    sum(range(2_000_000))  # some CPU time between the readings
+    second = bench_rounds.cpu_times()
+    assert first is not None and second is not None and len(first) >= 8 and len(second) == len(first)
+    assert all(b >= a for a, b in zip(first, second, strict=True)) and sum(second) > sum(first)
+    share = steal_share(first, second)
+    assert share is None or 0.0 <= share <= 1.0
+
+
+@pytest.mark.parametrize(("steal", "busy"), [(None, False), (0.0, False), (0.05, False), (0.051, True), (0.3, True)])
+def test_busy_when_the_hypervisor_took_more_than_its_share(steal, busy):
+    """No other process runnable here, but the host's other guests may still have had the CPUs: above
+    BUSY_STEAL_SHARE of the wanted time the figures are flagged too, and the line says how much the host took."""
+    assert BUSY_STEAL_SHARE == 0.05
+    load = LoadCheck.of(0.1, 1.9, 2, PauseLoad([0.0] * 3), steal).as_dict()
+    assert load["steal"] == steal and load["busy"] is busy
+    text = load_text(load)
+    assert text.startswith(BUSY_WARNING) is busy
+    if steal is None:
+        assert "hypervisor" not in text
+    else:
+        assert f"taken by the hypervisor: {100 * steal:.1f} % of the CPU time wanted (quiet: at most 5 %)" in text
+
+
 def test_one_core_pins_every_thread_and_those_started_meanwhile_then_gives_the_cores_back():
     single_core = pytest.importorskip("spectrace.benchmarks.single_core")
     import os
@@ -192,6 +244,9 @@ def test_peer_bench_reports_load_rounds_and_the_busy_warning(monkeypatch, busy):
     monkeypatch.setattr(bench_rounds, "load_average", lambda: next(loads))
     monkeypatch.setattr(bench_rounds, "others_runnable", lambda: next(others))
     monkeypatch.setattr(bench_rounds, "core_count", lambda: 4)
+    # Around the rounds the host took 2 % of the wanted time: below its limit, so only the runnable threads decide.
+    times = iter([QUIET_START, [a + d for a, d in zip(QUIET_START, [900, 0, 80, 500, 0, 0, 0, 20, 0, 0], strict=True)]])
+    monkeypatch.setattr(bench_rounds, "cpu_times", lambda: next(times))
     pin = not busy and hasattr(os, "sched_setaffinity")
     allowed = os.sched_getaffinity(0) if pin else None
     result = run_peer_bench(None, 8, 2, 2, None, False, variants=["scalar_spectral"], rounds=2, per_core=not busy)
@@ -204,6 +259,7 @@ def test_peer_bench_reports_load_rounds_and_the_busy_warning(monkeypatch, busy):
         "pauses": 5,
         "limit": 2.0,
         "busy": busy,
+        "steal": pytest.approx(0.02),
     }
     assert result["order"] == [f"spectrace {ours}", "mitsuba scalar_spectral"] * 2
     assert result["rounds"] == 2 and result["spectrace"][0]["rounds"] == result["mitsuba"][0]["rounds"] == 2
@@ -216,6 +272,7 @@ def test_peer_bench_reports_load_rounds_and_the_busy_warning(monkeypatch, busy):
     assert (BUSY_WARNING in text) is busy
     assert f"other processes' runnable threads {2.2 if busy else 0.0:.2f} between renders (mean of 5 pauses)" in text
     assert "load average (1 min) before 0.10, after 3.00 (the bench's own threads included)" in text
+    assert "taken by the hypervisor: 2.0 % of the CPU time wanted" in text
     for column in ("M samples/s", "wall s", "CPU s", "cores used", "wall clock", "per CPU second"):
         assert column in text
     if pin:

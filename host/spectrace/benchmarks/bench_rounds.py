@@ -11,6 +11,11 @@ in state R, a few samples each pause. The 1-minute load average cannot judge it:
 for a minute (two busy threads for the 30 s of a bench lift it by about 0.8), so read after the rounds it called an
 idle two-core machine busy. It is still read before the bench's first build and after its last render, and
 printed; above half a runnable thread of other processes per core the figures say "machine busy".
+
+In a virtual machine the host's other guests can slow both renderers without a runnable thread to show for it
+here. Where the host reports it (/proc/stat's steal column), the share of the time the machine's CPUs wanted to run
+during the rounds that the host gave to others is read too; above BUSY_STEAL_SHARE the figures say "machine busy"
+as well. Neighbours that share the caches and memory without taking CPU time stay unseen.
 """
 
 from __future__ import annotations
@@ -28,6 +33,11 @@ BUSY_LOAD_PER_CORE = 0.5
 BUSY_WARNING = "machine busy: ratio not reliable"
 PAUSE_SAMPLES = 5  # samples of the runnable threads per pause, PAUSE_SAMPLE_SECONDS apart
 PAUSE_SAMPLE_SECONDS = 0.01
+# Above this share of the CPUs' wanted time taken by the hypervisor, a ratio's two sides may have run on different
+# machines in effect: a share that comes and goes falls unevenly on alternated rounds.
+BUSY_STEAL_SHARE = 0.05
+_STEAL_FIELD = 7  # /proc/stat's "cpu" line: user nice system idle iowait irq softirq steal guest guest_nice
+_IDLE_FIELDS = (3, 4)
 
 
 def load_average() -> float:
@@ -73,6 +83,39 @@ def others_runnable() -> float | None:
     return statistics.fmean(counts)
 
 
+def cpu_times() -> list[int] | None:
+    """The machine's CPU time by kind in clock ticks, /proc/stat's "cpu" line (user, nice, system, idle, iowait,
+    irq, softirq, steal, ...); None where /proc cannot tell. A seam the tests replace."""
+    try:
+        with open("/proc/stat") as stat:
+            fields = stat.readline().split()
+        times = [int(value) for value in fields[1:]]
+    except (OSError, ValueError):
+        return None
+    return times if fields[:1] == ["cpu"] and len(times) > _STEAL_FIELD else None
+
+
+def steal_share(before: Sequence[int] | None, after: Sequence[int] | None) -> float | None:
+    """Of the CPU time the machine wanted between two cpu_times() readings (all but idle and iowait), the share the
+    hypervisor gave to other guests (steal); None without both readings or with no time wanted. The guest and
+    guest_nice columns are already inside user and nice, so only the first eight columns are summed."""
+    if before is None or after is None:
+        return None
+    delta = [b - a for a, b in zip(before[: _STEAL_FIELD + 1], after[: _STEAL_FIELD + 1], strict=True)]
+    wanted = sum(delta) - sum(delta[i] for i in _IDLE_FIELDS)
+    return max(0.0, delta[_STEAL_FIELD] / wanted) if wanted > 0 else None
+
+
+@dataclass
+class StealWatch:
+    """The steal share from its creation to each call of share()."""
+
+    start: list[int] | None = field(default_factory=lambda: cpu_times())
+
+    def share(self) -> float | None:
+        return steal_share(self.start, cpu_times())
+
+
 @dataclass
 class PauseLoad:
     """Other processes' runnable threads, sampled at each call (a pause between renders)."""
@@ -91,11 +134,12 @@ class LoadCheck:
     cores: int
     others: float | None = None  # other processes' runnable threads, mean over the pauses (None: not sampled)
     pauses: int = 0
+    steal: float | None = None  # share of the CPUs' wanted time the hypervisor took meanwhile (None: not reported)
 
     @classmethod
-    def of(cls, before: float, after: float, cores: int, pauses: PauseLoad) -> LoadCheck:
+    def of(cls, before: float, after: float, cores: int, pauses: PauseLoad, steal: float | None = None) -> LoadCheck:
         others = statistics.fmean(pauses.samples) if pauses.samples else None
-        return cls(before, after, cores, others, len(pauses.samples))
+        return cls(before, after, cores, others, len(pauses.samples), steal)
 
     @property
     def limit(self) -> float:
@@ -104,15 +148,16 @@ class LoadCheck:
     @property
     def busy(self) -> bool:
         # Without samples (no /proc) only the load average is left, which counts the bench's own threads.
-        return (self.others if self.others is not None else max(self.before, self.after)) > self.limit
+        loaded = (self.others if self.others is not None else max(self.before, self.after)) > self.limit
+        return loaded or (self.steal is not None and self.steal > BUSY_STEAL_SHARE)
 
     def as_dict(self) -> dict:
         return {**asdict(self), "limit": self.limit, "busy": self.busy}
 
 
 def load_text(load: dict) -> str:
-    """One line: other processes' runnable threads between renders, the load average before and after, and the
-    warning when the machine was busy."""
+    """One line: other processes' runnable threads between renders, the load average before and after, the
+    hypervisor's share where it is reported, and the warning when the machine was busy."""
     average = f"load average (1 min) before {load['before']:.2f}, after {load['after']:.2f}"
     quiet = f"on {load['cores']} cores (quiet: at most {load['limit']:.2f})"
     if load.get("others") is None:
@@ -121,6 +166,11 @@ def load_text(load: dict) -> str:
         text = (
             f"other processes' runnable threads {load['others']:.2f} between renders (mean of {load['pauses']} "
             f"pauses), {quiet}; {average} (the bench's own threads included)"
+        )
+    if load.get("steal") is not None:
+        text += (
+            f"; taken by the hypervisor: {100 * load['steal']:.1f} % of the CPU time wanted "
+            f"(quiet: at most {100 * BUSY_STEAL_SHARE:.0f} %)"
         )
     return f"{BUSY_WARNING}: {text}" if load["busy"] else text
 

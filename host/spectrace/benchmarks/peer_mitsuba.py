@@ -151,10 +151,12 @@ def run_peer_bench(
                     theirs.append(MitsubaContestant(scene_dict, variant, spp, seed=scene.seed))
             # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so
             # each variant gets its rounds in one block, after one untimed render.
-            pauses = bench_rounds.PauseLoad()
+            pauses, steal = bench_rounds.PauseLoad(), bench_rounds.StealWatch()
             warm_up = lambda peer: cast("MitsubaContestant", peer).render_untimed()  # noqa: E731
             timings = alternate_rounds(ours, theirs, max(1, rounds), log, before_block=warm_up, pause=pauses)
-            load = LoadCheck.of(load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses)
+            load = LoadCheck.of(
+                load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses, steal.share()
+            )
             their_results = [contestant.result() for contestant in theirs]
     if load.busy:
         notes.append(bench_rounds.load_text(load.as_dict()))

@@ -8,9 +8,10 @@ Embree 4 (the `embreex` package) traces the same float32 rays as the practical l
 Cores used are measured as process CPU time ÷ wall time during each timed trace, so per-core figures divide
 by what each one actually used. Each tracer traces the rays once per round, the tracers in turn within a round, and
 the per-core ratio to Embree is taken round by round (median, smallest, largest), so a load that comes and goes falls
-on both alike. The BVH build is timed (wall and CPU time), and built once more under tracemalloc
-(which numpy reports its arrays to) for its peak memory, with the process's peak resident size; the SAH cost is
-spectrace.geometry.bvh's.
+on both alike; the load around the rounds is judged as `bench peer` judges it (bench_rounds.py), and a busy machine
+is named in the notes and under the table. The BVH build is timed (wall and CPU time), and built once more under
+tracemalloc (which numpy reports its arrays to) for its peak memory, with the process's peak resident size; the SAH
+cost is spectrace.geometry.bvh's.
 """
 
 import math
@@ -23,6 +24,8 @@ from typing import Any, TypeVar
 import numpy as np
 import pyopencl as cl
 
+from spectrace.benchmarks import bench_rounds
+from spectrace.benchmarks.bench_rounds import LoadCheck
 from spectrace.device import open_device
 from spectrace.device.host_memory import read_only_buffer
 from spectrace.engine.launch import launch_shape, render_work_group
@@ -197,19 +200,22 @@ def trace_with_embree(mesh: TriangleMesh, origins, directions) -> dict:
     return {"runtime": "embree (embreex)", "build_seconds": build_seconds, "t": t, "triangle": hit, "trace": trace}
 
 
-def time_in_rounds(tracers: list[dict], ray_count: int, rounds: int) -> None:
+def time_in_rounds(tracers: list[dict], ray_count: int, rounds: int, pause: Callable[[], None] = lambda: None) -> None:
     """Times each tracer's `trace` `rounds` times, the tracers in turn within each round (as `bench peer` alternates
     its renderers), so a load that comes and goes falls on all alike; sets each one's median seconds, cores used
-    (process CPU time ÷ wall time) and rays/s, overall and per core, and its per-round rays/s per core."""
+    (process CPU time ÷ wall time) and rays/s, overall and per core, and its per-round rays/s per core. `pause` is
+    called before each trace and after the last (bench_rounds.PauseLoad samples the load there)."""
     for tracer in tracers:
         tracer["round_rays_per_second_per_core"] = []
         tracer["round_seconds"], tracer["round_cores"] = [], []
     for _ in range(rounds):
         for tracer in tracers:
+            pause()
             _, seconds, cores = _timed(tracer["trace"])
             tracer["round_seconds"].append(seconds)
             tracer["round_cores"].append(cores)
             tracer["round_rays_per_second_per_core"].append(ray_count / seconds / max(cores, 1e-9))
+    pause()
     for tracer in tracers:
         tracer["seconds"] = float(np.median(tracer["round_seconds"]))
         tracer["cores_used"] = float(np.median(tracer["round_cores"]))
@@ -239,6 +245,7 @@ def run_rays_bench(
     log: Callable[[str], None] = lambda text: None,
     rounds: int = 5,
 ) -> dict:
+    load_before = bench_rounds.load_average()  # before the build and the kernel builds add the bench's own threads
     subdivisions = subdivisions_for(triangles)
     mesh = displaced_sphere(subdivisions)
     log(f"mesh: displaced icosphere, {len(mesh.faces)} triangles; building the BVH")
@@ -274,7 +281,12 @@ def run_rays_bench(
         except ImportError:
             result["notes"].append("embreex is not installed (pip install 'spectrace[bench]'): no Embree figures")
     result["rounds"] = rounds
-    time_in_rounds(traced + ([embree] if embree else []), ray_count, rounds)
+    pauses, steal = bench_rounds.PauseLoad(), bench_rounds.StealWatch()
+    time_in_rounds(traced + ([embree] if embree else []), ray_count, rounds, pause=pauses)
+    load = LoadCheck.of(load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses, steal.share())
+    result["load"] = load.as_dict()
+    if load.busy:
+        result["notes"].append(bench_rounds.load_text(result["load"]))
     for row in traced:
         log(f"spectrace {row['runtime']}: {row['rays_per_second'] / 1e6:.2f} M rays/s")
     unreported = ("t", "triangle", "trace")  # the answers and the timed call: not part of the result
@@ -327,7 +339,8 @@ def rays_tables(result: dict) -> list:
     )
     rays = Table(
         title=f"closest-hit rays: {result['rays']} random rays, {result['triangles']} triangles "
-        f"({result['rounds']} alternated rounds: medians)"
+        f"({result['rounds']} alternated rounds: medians)",
+        caption=bench_rounds.load_text(result["load"]),
     )
     for column in ("tracer", "M rays/s", "cores used", "M rays/s per core", "time s"):
         rays.add_column(column, justify="left" if column == "tracer" else "right")
