@@ -86,6 +86,29 @@ def test_scaling_rays_and_quality_modes(modes):
     assert ours["renderer"] == "spectrace" and ours["spp"] >= 1 and ours["rmse"] > 0
     assert ours["spp"] & (ours["spp"] - 1) == 0  # the default Sobol sampler renders a power of two
     assert ours["above"]["spp"] == 2 * ours["spp"]  # and the next, bracketing the budget
+    # The load judged as `bench peer` judges it: a pause before each timed render (spectrace's two and its equal-spp
+    # render, each Mitsuba variant's timed and equal-spp renders) and after the last.
+    load = quality["load"]
+    assert set(load) == {"before", "after", "cores", "others", "pauses", "limit", "busy", "steal"}
+    peers = sum(row["renderer"] == "mitsuba" for row in quality["renderers"])
+    assert load["pauses"] == (3 + 2 * peers + 1 if os.path.exists("/proc/loadavg") else 0)
+    assert any(note.startswith("machine busy") for note in quality["notes"]) is load["busy"]
+
+
+@pytest.mark.slow
+def test_the_rays_and_quality_tables_print_the_load_line(modes):
+    from rich.console import Console
+
+    from spectrace.benchmarks.bench_rounds import load_text
+    from spectrace.benchmarks.quality import quality_tables
+    from spectrace.benchmarks.rays import rays_tables
+
+    for tables, result in ((rays_tables, modes["rays"]), (quality_tables, modes["quality"])):
+        console = Console(width=400, record=True, markup=False)
+        for table in tables(result):
+            console.print(table)
+        text = " ".join(console.export_text().split())  # captions wrap at their table's width
+        assert " ".join(load_text(result["load"]).split()) in text
 
 
 @pytest.mark.slow

@@ -18,7 +18,9 @@ Where lights are in view, each error is also given over the pixels that see none
 directly puts most of the RMSE into the few pixels its edge crosses. Each renderer also renders `equal_spp` samples
 per pixel, for the error at equal spp (the estimators' variance,
 whatever their speed), with the reference's noise taken out the same way ("RMSE net"). The image keeps the scene's
-aspect ratio, `size` pixels wide.
+aspect ratio, `size` pixels wide. The timed renders are not alternated (each renderer's budget is one render), so the
+load around them is judged as `bench peer` judges it (bench_rounds.py: a pause before each timed render and after
+the last) and printed, a busy machine named in the notes.
 """
 
 import tempfile
@@ -29,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from spectrace.benchmarks import bench_rounds
+from spectrace.benchmarks.bench_rounds import LoadCheck
 from spectrace.benchmarks.image_agreement import compare_regions, regions_for
 from spectrace.benchmarks.peer_mitsuba import bench_scene
 from spectrace.core import limits
@@ -57,9 +61,10 @@ def _spp_for_budget(seconds_for_probe: float, probe_spp: int, budget_seconds: fl
     return max(1, int(round(budget_seconds * probe_spp / max(seconds_for_probe, 1e-9))))
 
 
-def _time_spectrace(scene, device, seconds: float, equal_spp: int, result: dict, errors, log) -> None:
+def _time_spectrace(scene, device, seconds: float, equal_spp: int, result: dict, errors, log, pause) -> None:
     """One integrator's rows: the spp that fit the budget (from a warm probe), and equal_spp. With the Sobol sampler,
-    the powers of two either side of the budget: the row is the lower one's, with the upper one's as "above"."""
+    the powers of two either side of the budget: the row is the lower one's, with the upper one's as "above".
+    `pause` is called before each timed render."""
     renderer = Renderer(scene, device)
     renderer.run_pass(1)
     renderer.reset()
@@ -73,6 +78,7 @@ def _time_spectrace(scene, device, seconds: float, equal_spp: int, result: dict,
     timed = []
     for count in counts:
         renderer.reset()
+        pause()
         start = time.perf_counter()
         image = renderer.render(spp=count)
         elapsed = time.perf_counter() - start
@@ -80,6 +86,7 @@ def _time_spectrace(scene, device, seconds: float, equal_spp: int, result: dict,
         log(f"spectrace {scene.integrator}: {image.spp} spp in {elapsed:.2f} s")
     result["renderers"].append({**row, **timed[0], **({"above": timed[1]} if len(timed) > 1 else {})})
     renderer.reset()
+    pause()
     start = time.perf_counter()
     image = renderer.render(spp=equal_spp)
     elapsed = time.perf_counter() - start
@@ -102,6 +109,7 @@ def run_quality_bench(
 ) -> dict:
     """integrators: spectrace's integrators to compare (default: the scene's own), each a row; reference_integrator:
     the one rendering the reference (default: the scene's; any unbiased one converges to the same image)."""
+    load_before = bench_rounds.load_average()  # before the kernel builds and the reference add the bench's threads
     scene = bench_scene(scene_path, size, 1, max_depth, keep_aspect=True)
     device = open_device(device_key)
     reference_integrator = reference_integrator or scene.integrator
@@ -146,8 +154,11 @@ def run_quality_bench(
         "notes": [],
     }
 
+    pauses, steal = bench_rounds.PauseLoad(), bench_rounds.StealWatch()
     for integrator in result["integrators"]:
-        _time_spectrace(scene.with_overrides(integrator=integrator), device, seconds, equal_spp, result, errors, log)
+        _time_spectrace(
+            scene.with_overrides(integrator=integrator), device, seconds, equal_spp, result, errors, log, pauses
+        )
 
     usable = None
     if not peer:
@@ -172,6 +183,7 @@ def run_quality_bench(
                 spp = _spp_for_budget(peer_probe.seconds, PROBE_SPP, seconds)
                 # Warm, as spectrace's timed renders are: a JIT variant compiles its kernels again for a new sample
                 # count, which the first render at that count would otherwise pay inside the budget.
+                pauses()
                 timed = render_with_mitsuba(scene_dict, variant, spp=spp)
                 result["renderers"].append(
                     {
@@ -183,6 +195,7 @@ def run_quality_bench(
                     }
                 )
                 log(f"mitsuba {variant}: {timed.spp} spp in {timed.seconds:.2f} s")
+                pauses()
                 same = render_with_mitsuba(scene_dict, variant, spp=equal_spp)
                 result["equal_spp"]["renderers"].append(
                     {
@@ -204,6 +217,11 @@ def run_quality_bench(
                         "agrees": all(r.agrees for r in regions),
                         "regions": [r.as_dict() for r in regions],
                     }
+    pauses()
+    load = LoadCheck.of(load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses, steal.share())
+    result["load"] = load.as_dict()
+    if load.busy:
+        result["notes"].append(bench_rounds.load_text(result["load"]))
     noise = result["reference"]["noise_rms"]
     for row in result["renderers"]:
         row["relative_rmse"] = row["rmse"] / max(result["reference"]["mean_y"], 1e-30)
@@ -278,7 +296,8 @@ def quality_tables(result: dict) -> list:
         title=f"equal time: {result['budget_seconds']:g} s each, {result['width']}x{result['height']}, "
         f"max_depth {result['max_depth']}; reference {ref['spp']} spp of {ref['integrator']} (its noise RMS "
         f"{ref['noise_rms']:.3g}{_off_lights_note(ref)}); samplers: spectrace {result['samplers']['spectrace']}, "
-        f"Mitsuba {result['samplers']['mitsuba']}"
+        f"Mitsuba {result['samplers']['mitsuba']}",
+        caption=bench_rounds.load_text(result["load"]),
     )
     off = "pixels_off_lights" in ref
     tables = [_error_table(table, result["renderers"], "at budget", "rmse_at_budget", off)]
