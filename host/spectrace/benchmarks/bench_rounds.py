@@ -155,6 +155,27 @@ class LoadCheck:
         return {**asdict(self), "limit": self.limit, "busy": self.busy}
 
 
+class LoadWatch:
+    """The load around a bench's timed part, as every bench judges it: made before the bench's builds (the load
+    average then); start() before the first timed render (the hypervisor's share counts from there); pause() before
+    each timed render and after the last; check() the verdict."""
+
+    def __init__(self) -> None:
+        self.before = load_average()
+        self.pauses = PauseLoad()
+        self.steal: StealWatch | None = None
+
+    def start(self) -> None:
+        self.steal = StealWatch()
+
+    def pause(self) -> None:
+        self.pauses()
+
+    def check(self) -> LoadCheck:
+        steal = self.steal.share() if self.steal is not None else None
+        return LoadCheck.of(self.before, load_average(), core_count(), self.pauses, steal)
+
+
 def load_text(load: dict) -> str:
     """One line: other processes' runnable threads between renders, the load average before and after, the
     hypervisor's share where it is reported, and the warning when the machine was busy."""

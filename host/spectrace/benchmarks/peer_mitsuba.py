@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from spectrace.benchmarks import bench_rounds
-from spectrace.benchmarks.bench_rounds import DEFAULT_ROUNDS, LoadCheck, alternate_rounds, paired_ratios, timing_summary
+from spectrace.benchmarks.bench_rounds import DEFAULT_ROUNDS, alternate_rounds, paired_ratios, timing_summary
 from spectrace.benchmarks.image_agreement import SIGMA_LIMIT, compare_regions, regions_for
 from spectrace.device import discover_devices, open_device
 from spectrace.engine.renderer import Renderer
@@ -134,7 +134,7 @@ def run_peer_bench(
     from spectrace.benchmarks.single_core import drjit_threads, one_core
     from spectrace.interop.mitsuba.export import scene_to_mitsuba_dict
 
-    load_before = bench_rounds.load_average()  # before the builds and JIT warm-ups add the bench's own threads
+    watch = bench_rounds.LoadWatch()  # before the builds and JIT warm-ups add the bench's own threads
     with one_core() if per_core else contextlib.nullcontext() as core:
         scene = bench_scene(scene_path, size, spp, max_depth)
         usable = usable_variants(variants)  # before any render: it may set DRJIT_LIBLLVM_PATH
@@ -151,12 +151,10 @@ def run_peer_bench(
                     theirs.append(MitsubaContestant(scene_dict, variant, spp, seed=scene.seed))
             # Switching Mitsuba's variant makes the next LLVM render re-trace (measured 0.3 s extra at 32x32), so
             # each variant gets its rounds in one block, after one untimed render.
-            pauses, steal = bench_rounds.PauseLoad(), bench_rounds.StealWatch()
+            watch.start()
             warm_up = lambda peer: cast("MitsubaContestant", peer).render_untimed()  # noqa: E731
-            timings = alternate_rounds(ours, theirs, max(1, rounds), log, before_block=warm_up, pause=pauses)
-            load = LoadCheck.of(
-                load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses, steal.share()
-            )
+            timings = alternate_rounds(ours, theirs, max(1, rounds), log, before_block=warm_up, pause=watch.pause)
+            load = watch.check()
             their_results = [contestant.result() for contestant in theirs]
     if load.busy:
         notes.append(bench_rounds.load_text(load.as_dict()))

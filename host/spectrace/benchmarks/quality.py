@@ -32,7 +32,6 @@ from typing import Any
 import numpy as np
 
 from spectrace.benchmarks import bench_rounds
-from spectrace.benchmarks.bench_rounds import LoadCheck
 from spectrace.benchmarks.image_agreement import compare_regions, regions_for
 from spectrace.benchmarks.peer_mitsuba import bench_scene
 from spectrace.core import limits
@@ -109,7 +108,7 @@ def run_quality_bench(
 ) -> dict:
     """integrators: spectrace's integrators to compare (default: the scene's own), each a row; reference_integrator:
     the one rendering the reference (default: the scene's; any unbiased one converges to the same image)."""
-    load_before = bench_rounds.load_average()  # before the kernel builds and the reference add the bench's threads
+    watch = bench_rounds.LoadWatch()  # before the kernel builds and the reference add the bench's own threads
     scene = bench_scene(scene_path, size, 1, max_depth, keep_aspect=True)
     device = open_device(device_key)
     reference_integrator = reference_integrator or scene.integrator
@@ -154,10 +153,10 @@ def run_quality_bench(
         "notes": [],
     }
 
-    pauses, steal = bench_rounds.PauseLoad(), bench_rounds.StealWatch()
+    watch.start()
     for integrator in result["integrators"]:
         _time_spectrace(
-            scene.with_overrides(integrator=integrator), device, seconds, equal_spp, result, errors, log, pauses
+            scene.with_overrides(integrator=integrator), device, seconds, equal_spp, result, errors, log, watch.pause
         )
 
     usable = None
@@ -183,7 +182,7 @@ def run_quality_bench(
                 spp = _spp_for_budget(peer_probe.seconds, PROBE_SPP, seconds)
                 # Warm, as spectrace's timed renders are: a JIT variant compiles its kernels again for a new sample
                 # count, which the first render at that count would otherwise pay inside the budget.
-                pauses()
+                watch.pause()
                 timed = render_with_mitsuba(scene_dict, variant, spp=spp)
                 result["renderers"].append(
                     {
@@ -195,7 +194,7 @@ def run_quality_bench(
                     }
                 )
                 log(f"mitsuba {variant}: {timed.spp} spp in {timed.seconds:.2f} s")
-                pauses()
+                watch.pause()
                 same = render_with_mitsuba(scene_dict, variant, spp=equal_spp)
                 result["equal_spp"]["renderers"].append(
                     {
@@ -217,8 +216,8 @@ def run_quality_bench(
                         "agrees": all(r.agrees for r in regions),
                         "regions": [r.as_dict() for r in regions],
                     }
-    pauses()
-    load = LoadCheck.of(load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses, steal.share())
+    watch.pause()
+    load = watch.check()
     result["load"] = load.as_dict()
     if load.busy:
         result["notes"].append(bench_rounds.load_text(result["load"]))

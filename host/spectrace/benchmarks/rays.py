@@ -25,7 +25,6 @@ import numpy as np
 import pyopencl as cl
 
 from spectrace.benchmarks import bench_rounds
-from spectrace.benchmarks.bench_rounds import LoadCheck
 from spectrace.device import open_device
 from spectrace.device.host_memory import read_only_buffer
 from spectrace.engine.launch import launch_shape, render_work_group
@@ -204,7 +203,7 @@ def time_in_rounds(tracers: list[dict], ray_count: int, rounds: int, pause: Call
     """Times each tracer's `trace` `rounds` times, the tracers in turn within each round (as `bench peer` alternates
     its renderers), so a load that comes and goes falls on all alike; sets each one's median seconds, cores used
     (process CPU time ÷ wall time) and rays/s, overall and per core, and its per-round rays/s per core. `pause` is
-    called before each trace and after the last (bench_rounds.PauseLoad samples the load there)."""
+    called before each trace and after the last (bench_rounds.LoadWatch samples the load there)."""
     for tracer in tracers:
         tracer["round_rays_per_second_per_core"] = []
         tracer["round_seconds"], tracer["round_cores"] = [], []
@@ -245,7 +244,7 @@ def run_rays_bench(
     log: Callable[[str], None] = lambda text: None,
     rounds: int = 5,
 ) -> dict:
-    load_before = bench_rounds.load_average()  # before the build and the kernel builds add the bench's own threads
+    watch = bench_rounds.LoadWatch()  # before the build and the kernel builds add the bench's own threads
     subdivisions = subdivisions_for(triangles)
     mesh = displaced_sphere(subdivisions)
     log(f"mesh: displaced icosphere, {len(mesh.faces)} triangles; building the BVH")
@@ -281,9 +280,9 @@ def run_rays_bench(
         except ImportError:
             result["notes"].append("embreex is not installed (pip install 'spectrace[bench]'): no Embree figures")
     result["rounds"] = rounds
-    pauses, steal = bench_rounds.PauseLoad(), bench_rounds.StealWatch()
-    time_in_rounds(traced + ([embree] if embree else []), ray_count, rounds, pause=pauses)
-    load = LoadCheck.of(load_before, bench_rounds.load_average(), bench_rounds.core_count(), pauses, steal.share())
+    watch.start()
+    time_in_rounds(traced + ([embree] if embree else []), ray_count, rounds, pause=watch.pause)
+    load = watch.check()
     result["load"] = load.as_dict()
     if load.busy:
         result["notes"].append(bench_rounds.load_text(result["load"]))
