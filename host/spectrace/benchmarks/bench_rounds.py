@@ -107,16 +107,6 @@ def steal_share(before: Sequence[int] | None, after: Sequence[int] | None) -> fl
 
 
 @dataclass
-class StealWatch:
-    """The steal share from its creation to each call of share()."""
-
-    start: list[int] | None = field(default_factory=lambda: cpu_times())
-
-    def share(self) -> float | None:
-        return steal_share(self.start, cpu_times())
-
-
-@dataclass
 class PauseLoad:
     """Other processes' runnable threads, sampled at each call (a pause between renders)."""
 
@@ -163,16 +153,16 @@ class LoadWatch:
     def __init__(self) -> None:
         self.before = load_average()
         self.pauses = PauseLoad()
-        self.steal: StealWatch | None = None
+        self.cpu_times_at_start: list[int] | None = None
 
     def start(self) -> None:
-        self.steal = StealWatch()
+        self.cpu_times_at_start = cpu_times()
 
     def pause(self) -> None:
         self.pauses()
 
     def check(self) -> LoadCheck:
-        steal = self.steal.share() if self.steal is not None else None
+        steal = steal_share(self.cpu_times_at_start, cpu_times())
         return LoadCheck.of(self.before, load_average(), core_count(), self.pauses, steal)
 
 
